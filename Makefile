@@ -1,0 +1,50 @@
+# kinema — every target sets up what it needs from Python 3.11+, Rust and the package registries.
+#   make demo   set up, build (release), run the demonstration; writes to out/
+#   make test   set up, build, then cargo test and pytest
+#   make bench  set up, build, run the benchmarks (kinema beside its peers, one table each)
+#   make fmt    format Rust and Python sources
+
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+PIP    := $(VENV)/bin/pip
+STAMP  := $(VENV)/.deps-installed
+BUILT  := $(VENV)/.kinema-built
+RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml pyproject.toml
+
+.PHONY: demo test test-rust test-python bench fmt setup build clean
+
+setup: $(STAMP)
+
+$(STAMP): requirements/dev.txt
+	$(PYTHON) -m venv $(VENV)
+	$(PIP) install --disable-pip-version-check -q -r requirements/dev.txt
+	touch $@
+
+# Release build of the extension, installed into the venv in editable mode (python/ is used in place).
+build: $(BUILT)
+
+$(BUILT): $(STAMP) $(RUST_SOURCES)
+	$(VENV)/bin/maturin develop --release -q
+	touch $@
+
+demo: build
+	$(VENV)/bin/kinema demo --out out
+
+test: test-rust test-python
+
+test-rust:
+	cargo test --workspace --exclude kinema-py --release
+
+test-python: build
+	$(PY) -m pytest -q
+
+bench: build
+	$(PY) benchmarks/ode_overhead.py
+
+fmt: $(STAMP)
+	cargo fmt --all
+	$(VENV)/bin/ruff format python tests benchmarks 2>/dev/null || true
+
+clean:
+	rm -rf target $(VENV) out

@@ -1,0 +1,19 @@
+//! kinema._core: the PyO3 glue between the kinema engine and the Python package.
+//!
+//! Only conversions, classes and error mapping live here; the public, documented API is the
+//! Python package `kinema`. The module function only registers one area after another.
+
+mod callbacks;
+mod errors;
+mod ode;
+mod stability;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    ode::register(m)?;
+    stability::register(m)?;
+    Ok(())
+}

@@ -1,0 +1,224 @@
+//! Bindings of the ODE solvers, the method registry and Butcher tableaux.
+
+use kinema::ode::{self, ButcherTableau, Integrator, Method, MethodKind, Solution, SolveOptions};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::callbacks::{PyAccel, PyOde};
+use crate::errors::to_py;
+
+/// An explicit Runge–Kutta method given by its Butcher tableau (A, b, c), checked when built.
+#[pyclass(name = "ButcherTableau", module = "kinema._core", frozen)]
+pub struct PyButcherTableau {
+    pub inner: ButcherTableau,
+}
+
+#[pymethods]
+impl PyButcherTableau {
+    #[new]
+    #[pyo3(signature = (a, b, c, order, name = "custom".to_string()))]
+    fn new(a: Vec<Vec<f64>>, b: Vec<f64>, c: Vec<f64>, order: u32, name: String) -> PyResult<Self> {
+        ButcherTableau::new(name, a, b, c, order)
+            .map(|inner| Self { inner })
+            .map_err(to_py)
+    }
+
+    /// The tableau of a registered explicit method (`euler`, `midpoint`, `heun`, `rk4`, `rk45`).
+    #[staticmethod]
+    fn of(method: &str) -> PyResult<Self> {
+        let m = Method::from_name(method).map_err(to_py)?;
+        m.tableau().map(|inner| Self { inner }).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "method '{method}' is not an explicit Runge-Kutta method and has no Butcher tableau"
+            ))
+        })
+    }
+
+    #[getter]
+    fn name(&self) -> &str {
+        self.inner.name()
+    }
+    #[getter]
+    fn order(&self) -> u32 {
+        self.inner.order()
+    }
+    #[getter]
+    fn stages(&self) -> usize {
+        self.inner.stages()
+    }
+    #[getter(A)]
+    fn a<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let s = self.inner.stages();
+        let rows: Vec<Vec<f64>> = (0..s).map(|i| self.inner.a_row(i).to_vec()).collect();
+        Ok(PyArray2::from_vec2(py, &rows)?)
+    }
+    #[getter]
+    fn b<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.inner.b())
+    }
+    #[getter]
+    fn c<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, self.inner.c())
+    }
+    /// Coefficients γ_0..γ_s of the stability polynomial R(z) = Σ γ_k z^k.
+    fn stability_polynomial<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.inner.stability_polynomial())
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "ButcherTableau(name='{}', stages={}, order={})",
+            self.inner.name(),
+            self.inner.stages(),
+            self.inner.order()
+        )
+    }
+}
+
+/// A method argument from Python: a registered name or a `ButcherTableau`.
+pub fn integrator_from(obj: &Bound<'_, PyAny>) -> PyResult<Integrator> {
+    if let Ok(name) = obj.extract::<String>() {
+        return Method::from_name(&name).map(Integrator::Named).map_err(to_py);
+    }
+    if let Ok(t) = obj.cast::<PyButcherTableau>() {
+        return Ok(Integrator::Tableau(t.get().inner.clone()));
+    }
+    Err(PyTypeError::new_err(format!(
+        "method must be a method name (str) or a kinema.ButcherTableau, got {}",
+        obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into())
+    )))
+}
+
+fn kind_name(k: MethodKind) -> &'static str {
+    match k {
+        MethodKind::ExplicitRk => "explicit",
+        MethodKind::Implicit => "implicit",
+        MethodKind::Adaptive => "adaptive",
+        MethodKind::SecondOrder => "second_order",
+    }
+}
+
+/// The registry: one dict per method (name, order, kind, evals_per_step, summary).
+#[pyfunction]
+fn methods<'py>(py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    Method::ALL
+        .iter()
+        .map(|m| {
+            let d = PyDict::new(py);
+            d.set_item("name", m.name())?;
+            d.set_item("order", m.order())?;
+            d.set_item("kind", kind_name(m.kind()))?;
+            d.set_item("evals_per_step", m.evals_per_step())?;
+            d.set_item("summary", m.summary())?;
+            Ok(d)
+        })
+        .collect()
+}
+
+fn options(t_span: (f64, f64), h: Option<f64>, rtol: f64, atol: f64, t_eval: Option<Vec<f64>>) -> SolveOptions {
+    SolveOptions {
+        t_span,
+        h,
+        rtol,
+        atol,
+        t_eval,
+    }
+}
+
+fn solution_dict<'py>(py: Python<'py>, sol: Solution) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let rows = sol.t.len();
+    d.set_item("success", sol.success())?;
+    d.set_item("message", sol.message())?;
+    d.set_item("method", &sol.method)?;
+    d.set_item("nfev", sol.stats.nfev)?;
+    d.set_item("njev", sol.stats.njev)?;
+    d.set_item("nlu", sol.stats.nlu)?;
+    d.set_item("nsteps", sol.stats.nsteps)?;
+    d.set_item("nrejected", sol.stats.nrejected)?;
+    d.set_item("t", PyArray1::from_vec(py, sol.t))?;
+    d.set_item("y", PyArray1::from_vec(py, sol.y).reshape([rows, sol.dim])?)?;
+    Ok(d)
+}
+
+/// Flat copy of an initial state, and its shape (checked: 1-D, or 2-D when batched).
+fn initial_state(name: &str, arr: &PyReadonlyArrayDyn<'_, f64>, vectorized: bool) -> PyResult<(Vec<f64>, Vec<usize>)> {
+    let shape = arr.shape().to_vec();
+    match (shape.len(), vectorized) {
+        (1, _) => {}
+        (2, true) => {}
+        (2, false) => return Err(PyValueError::new_err(format!(
+            "{name} has shape {shape:?}: a 2-D initial state is a batch of initial conditions (batch, n); pass vectorized=True \
+                 and a function that takes and returns (batch, n) arrays"
+        ))),
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "{name} has shape {shape:?}; it must be 1-D (n,) or, with vectorized=True, 2-D (batch, n)"
+            )))
+        }
+    }
+    Ok((arr.as_array().iter().copied().collect(), shape))
+}
+
+/// Solves y' = f(t, y); returns a dict (see kinema.ode.Solution).
+#[pyfunction]
+#[pyo3(signature = (f, y0, t_span, h, method, jac, rtol, atol, t_eval, vectorized))]
+#[allow(clippy::too_many_arguments)]
+fn solve<'py>(
+    py: Python<'py>,
+    f: Bound<'py, PyAny>,
+    y0: PyReadonlyArrayDyn<'py, f64>,
+    t_span: (f64, f64),
+    h: Option<f64>,
+    method: Bound<'py, PyAny>,
+    jac: Option<Bound<'py, PyAny>>,
+    rtol: f64,
+    atol: f64,
+    t_eval: Option<Vec<f64>>,
+    vectorized: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let integrator = integrator_from(&method)?;
+    let (y, shape) = initial_state("y0", &y0, vectorized)?;
+    let mut sys = PyOde { py, f, jac, shape };
+    let sol = ode::solve(&mut sys, &y, &integrator, &options(t_span, h, rtol, atol, t_eval)).map_err(to_py)?;
+    solution_dict(py, sol)
+}
+
+/// Solves x'' = a(t, x, v); the dict's y rows are [x, v] per block.
+#[pyfunction]
+#[pyo3(signature = (a, x0, v0, t_span, h, method, rtol, atol, t_eval, vectorized))]
+#[allow(clippy::too_many_arguments)]
+fn solve_second_order<'py>(
+    py: Python<'py>,
+    a: Bound<'py, PyAny>,
+    x0: PyReadonlyArrayDyn<'py, f64>,
+    v0: PyReadonlyArrayDyn<'py, f64>,
+    t_span: (f64, f64),
+    h: Option<f64>,
+    method: Bound<'py, PyAny>,
+    rtol: f64,
+    atol: f64,
+    t_eval: Option<Vec<f64>>,
+    vectorized: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let integrator = integrator_from(&method)?;
+    let (x, shape) = initial_state("x0", &x0, vectorized)?;
+    let (v, vshape) = initial_state("v0", &v0, vectorized)?;
+    if vshape != shape {
+        return Err(PyValueError::new_err(format!(
+            "v0 has shape {vshape:?} but x0 has shape {shape:?}; they must match"
+        )));
+    }
+    let mut sys = PyAccel { py, a, shape };
+    let sol = ode::solve_second_order(&mut sys, &x, &v, &integrator, &options(t_span, h, rtol, atol, t_eval)).map_err(to_py)?;
+    solution_dict(py, sol)
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyButcherTableau>()?;
+    m.add_function(wrap_pyfunction!(methods, m)?)?;
+    m.add_function(wrap_pyfunction!(solve, m)?)?;
+    m.add_function(wrap_pyfunction!(solve_second_order, m)?)?;
+    Ok(())
+}

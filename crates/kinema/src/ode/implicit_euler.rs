@@ -1,0 +1,204 @@
+//! Backward (implicit) Euler: y_{n+1} = y_n + h f(t_{n+1}, y_{n+1}), solved by Newton.
+//!
+//! The step is the root of G(y) = y − y_n − h f(t_{n+1}, y). Newton's iteration
+//!
+//! ```text
+//!   (I − h J) Δ = −G(y_k),   y_{k+1} = y_k + Δ,   J = ∂f/∂y
+//! ```
+//!
+//! starts from y_n and keeps J (and the LU factors of I − hJ) fixed over the iterations
+//! (simplified Newton). J comes from the system when it provides one, else from forward
+//! differences of f. If the iteration stalls, J is re-evaluated at the current iterate once;
+//! if it still fails, the step is split into two halves (recursively, up to
+//! [`MAX_HALVINGS`] times) and the solve stops with a clear reason only after that.
+//! Stability: R(z) = 1/(1 − z), |R| ≤ 1 on the whole left half-plane (A-stable) and R → 0 as
+//! z → −∞ (L-stable), so stiff components are damped at any step.
+
+use faer::linalg::solvers::{PartialPivLu, Solve};
+use faer::Mat;
+
+use super::stepper::{first_non_finite, Stats, StepFailure, Stepper, Termination};
+use super::system::OdeSystem;
+use crate::error::Error;
+
+/// Newton iterations allowed per attempt.
+pub const MAX_NEWTON_ITERATIONS: usize = 10;
+/// How many times a step whose Newton iteration fails may be halved before the solve stops.
+pub const MAX_HALVINGS: u32 = 10;
+/// Newton converges when the weighted max-norm of the update, with weights
+/// 1/(atol + rtol |y|), is at most this.
+pub const NEWTON_TOL: f64 = 1e-3;
+
+/// Backward Euler bound to its system.
+pub struct ImplicitEuler<'s> {
+    sys: &'s mut dyn OdeSystem,
+    rtol: f64,
+    atol: f64,
+    block: usize,
+    /// J's diagonal blocks, each block × block row-major.
+    jac: Vec<f64>,
+    lu: Vec<PartialPivLu<f64>>,
+    f: Vec<f64>,
+    f_pert: Vec<f64>,
+    y_pert: Vec<f64>,
+    delta: Mat<f64>,
+}
+
+enum Newton {
+    Converged,
+    Failed,
+}
+
+impl<'s> ImplicitEuler<'s> {
+    /// Binds backward Euler to `sys`; `rtol`, `atol` set the Newton tolerance.
+    pub fn new(sys: &'s mut dyn OdeSystem, rtol: f64, atol: f64) -> Self {
+        let n = sys.dim();
+        let block = sys.block_len();
+        Self {
+            sys,
+            rtol,
+            atol,
+            block,
+            jac: vec![0.0; n * block],
+            lu: Vec::new(),
+            f: vec![0.0; n],
+            f_pert: vec![0.0; n],
+            y_pert: vec![0.0; n],
+            delta: Mat::zeros(block, n / block.max(1)),
+        }
+    }
+
+    /// J at (t, y) into `self.jac`; `self.f` must hold f(t, y) (used by finite differences).
+    fn jacobian(&mut self, t: f64, y: &[f64], stats: &mut Stats) -> Result<(), Error> {
+        let b = self.block;
+        if self.sys.has_jacobian() {
+            self.sys.jacobian(t, y, &mut self.jac)?;
+            stats.njev += 1;
+            return Ok(());
+        }
+        // Forward differences, column j of every block at once (blocks do not couple):
+        // J_ij ≈ (f_i(y + δ e_j) − f_i(y)) / δ with δ = √ε max(|y_j|, 1).
+        let nblocks = y.len() / b;
+        for j in 0..b {
+            self.y_pert.copy_from_slice(y);
+            for m in 0..nblocks {
+                let yj = y[m * b + j];
+                let delta = f64::EPSILON.sqrt() * yj.abs().max(1.0);
+                // exactly representable δ: (y + δ) − y
+                self.y_pert[m * b + j] = yj + delta;
+            }
+            self.sys.rhs(t, &self.y_pert, &mut self.f_pert)?;
+            stats.nfev += 1;
+            for m in 0..nblocks {
+                let delta = self.y_pert[m * b + j] - y[m * b + j];
+                for i in 0..b {
+                    let r = m * b + i;
+                    self.jac[m * b * b + i * b + j] = (self.f_pert[r] - self.f[r]) / delta;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// LU factors of I − hJ, one per block.
+    fn factor(&mut self, h: f64, stats: &mut Stats) {
+        let b = self.block;
+        self.lu = self
+            .jac
+            .chunks_exact(b * b)
+            .map(|jb| {
+                let m = Mat::<f64>::from_fn(b, b, |i, j| if i == j { 1.0 } else { 0.0 } - h * jb[i * b + j]);
+                m.partial_piv_lu()
+            })
+            .collect();
+        stats.nlu += self.lu.len();
+    }
+
+    /// One attempt at y_out = y + h f(t + h, y_out).
+    fn newton(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<Newton, Error> {
+        let b = self.block;
+        let t1 = t + h;
+        y_out.copy_from_slice(y);
+        let mut fresh_jacobian_at_iterate = false;
+        let mut prev_norm = f64::INFINITY;
+        for iter in 0..MAX_NEWTON_ITERATIONS {
+            self.sys.rhs(t1, y_out, &mut self.f)?;
+            stats.nfev += 1;
+            if first_non_finite(&self.f).is_some() {
+                return Ok(Newton::Failed);
+            }
+            if iter == 0 {
+                self.jacobian(t1, y_out, stats)?;
+                self.factor(h, stats);
+            }
+            // Δ = −(I − hJ)⁻¹ G(y_k), G = y_k − y_n − h f(t_{n+1}, y_k); one column per block.
+            for (m, lu) in self.lu.iter().enumerate() {
+                for i in 0..b {
+                    let r = m * b + i;
+                    self.delta[(i, m)] = -(y_out[r] - y[r] - h * self.f[r]);
+                }
+                lu.solve_in_place(self.delta.as_mut().subcols_mut(m, 1));
+            }
+            let mut norm = 0.0_f64;
+            for (m, chunk) in y_out.chunks_exact_mut(b).enumerate() {
+                for (i, yo) in chunk.iter_mut().enumerate() {
+                    let d = self.delta[(i, m)];
+                    *yo += d;
+                    norm = norm.max(d.abs() / (self.atol + self.rtol * yo.abs()));
+                }
+            }
+            if !norm.is_finite() {
+                return Ok(Newton::Failed); // singular I − hJ or overflow
+            }
+            if norm <= NEWTON_TOL {
+                return Ok(Newton::Converged);
+            }
+            if iter > 0 && norm >= prev_norm {
+                // Not contracting: the Jacobian from the start of the step is too far off.
+                if fresh_jacobian_at_iterate {
+                    return Ok(Newton::Failed);
+                }
+                fresh_jacobian_at_iterate = true;
+                self.sys.rhs(t1, y_out, &mut self.f)?;
+                stats.nfev += 1;
+                let yk = y_out.to_vec();
+                self.jacobian(t1, &yk, stats)?;
+                self.factor(h, stats);
+            }
+            prev_norm = norm;
+        }
+        Ok(Newton::Failed)
+    }
+
+    fn step_with_halving(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_out: &mut [f64],
+        stats: &mut Stats,
+        depth: u32,
+    ) -> Result<(), StepFailure> {
+        match self.newton(t, y, h, y_out, stats)? {
+            Newton::Converged => Ok(()),
+            Newton::Failed if depth < MAX_HALVINGS => {
+                stats.nrejected += 1;
+                let mut mid = vec![0.0; y.len()];
+                self.step_with_halving(t, y, 0.5 * h, &mut mid, stats, depth + 1)?;
+                self.step_with_halving(t + 0.5 * h, &mid, 0.5 * h, y_out, stats, depth + 1)
+            }
+            Newton::Failed => Err(StepFailure::Stop(Termination::NewtonFailed { t, h, halvings: depth })),
+        }
+    }
+}
+
+impl Stepper for ImplicitEuler<'_> {
+    fn step(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure> {
+        self.step_with_halving(t, y, h, y_out, stats, 0)
+    }
+
+    fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error> {
+        stats.nfev += 1;
+        Ok(self.sys.rhs(t, y, dydt)?)
+    }
+}

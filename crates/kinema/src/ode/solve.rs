@@ -1,0 +1,372 @@
+//! Drivers: integrate a system over an interval with a method, record the solution.
+//!
+//! The system (what), the method (how one step advances) and the step control (when) are
+//! separate: [`solve`] picks the stepper from the registry, the fixed-step loop here or the
+//! adaptive loop in `adaptive` decides the steps, and a [`Recorder`] stores the output.
+
+use super::adaptive;
+use super::dense;
+use super::explicit_rk::ExplicitRk;
+use super::implicit_euler::ImplicitEuler;
+use super::method::{Integrator, Method, MethodKind};
+use super::stepper::{first_non_finite, Stats, StepFailure, Stepper, Termination};
+use super::symplectic_euler::SymplecticEuler;
+use super::system::{FirstOrderForm, OdeSystem, SecondOrderSystem};
+use super::verlet::Verlet;
+use crate::error::Error;
+
+/// Options of a solve. Times in the problem's unit (s by default).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolveOptions {
+    /// (t0, t_end); t_end < t0 integrates backwards.
+    pub t_span: (f64, f64),
+    /// Step size > 0. Required by fixed-step methods (the last step is shortened to end at
+    /// t_end); for `rk45` the first step (chosen automatically when `None`).
+    pub h: Option<f64>,
+    /// Relative tolerance (rk45 error control; implicit Euler's Newton tolerance). Default 1e-6.
+    pub rtol: f64,
+    /// Absolute tolerance, same roles. Default 1e-9.
+    pub atol: f64,
+    /// Times at which to report the solution, inside t_span and ordered in the direction of
+    /// integration. `None`: every step. Points between steps are interpolated (Hermite cubic;
+    /// rk45: its own fourth-order dense output).
+    pub t_eval: Option<Vec<f64>>,
+}
+
+impl Default for SolveOptions {
+    fn default() -> Self {
+        Self {
+            t_span: (0.0, 1.0),
+            h: None,
+            rtol: 1e-6,
+            atol: 1e-9,
+            t_eval: None,
+        }
+    }
+}
+
+/// The result of a solve.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Solution {
+    /// Times of the recorded states.
+    pub t: Vec<f64>,
+    /// States, `t.len() × dim` row-major.
+    pub y: Vec<f64>,
+    /// Number of unknowns per state.
+    pub dim: usize,
+    /// Work counters.
+    pub stats: Stats,
+    /// Why the solve ended early; `None` when it reached t_end.
+    pub termination: Option<Termination>,
+    /// Name of the method used.
+    pub method: String,
+}
+
+impl Solution {
+    /// Whether t_end was reached.
+    pub fn success(&self) -> bool {
+        self.termination.is_none()
+    }
+    /// A one-line account of how the solve ended.
+    pub fn message(&self) -> String {
+        match &self.termination {
+            None => "the solver reached the end of the interval".to_string(),
+            Some(t) => t.to_string(),
+        }
+    }
+    /// The i-th recorded state.
+    pub fn state(&self, i: usize) -> &[f64] {
+        &self.y[i * self.dim..(i + 1) * self.dim]
+    }
+    /// The last recorded state.
+    pub fn last(&self) -> &[f64] {
+        self.state(self.t.len() - 1)
+    }
+}
+
+/// Solves y' = f(t, y), y(t0) = y0 with a first-order method (every method but the
+/// second-order-only `symplectic_euler` and `verlet`).
+pub fn solve(sys: &mut dyn OdeSystem, y0: &[f64], integrator: &Integrator, opts: &SolveOptions) -> Result<Solution, Error> {
+    validate(sys.dim(), sys.block_len(), y0, opts)?;
+    match integrator {
+        Integrator::Tableau(tab) => {
+            let h = fixed_step(integrator, opts)?;
+            run_fixed(&mut ExplicitRk::new(sys, tab.clone()), y0, h, opts, integrator.name())
+        }
+        Integrator::Named(m) => match m.kind() {
+            MethodKind::ExplicitRk => {
+                let h = fixed_step(integrator, opts)?;
+                let tab = m.tableau().expect("explicit methods have tableaux");
+                run_fixed(&mut ExplicitRk::new(sys, tab), y0, h, opts, m.name())
+            }
+            MethodKind::Implicit => {
+                let h = fixed_step(integrator, opts)?;
+                run_fixed(&mut ImplicitEuler::new(sys, opts.rtol, opts.atol), y0, h, opts, m.name())
+            }
+            MethodKind::Adaptive => adaptive::run(sys, y0, opts),
+            MethodKind::SecondOrder => Err(Error::MethodNotApplicable {
+                method: m.name().into(),
+                reason: "it integrates second-order systems x'' = a(t, x, v) only; use solve_second_order, \
+                         or a first-order method (euler, midpoint, heun, rk4, implicit_euler, rk45)"
+                    .into(),
+            }),
+        },
+    }
+}
+
+/// Solves x'' = a(t, x, v), x(t0) = x0, v(t0) = v0 with any method: `symplectic_euler` and
+/// `verlet` directly, the others through the first-order form y = [x, v].
+///
+/// The solution's states are [x, v] per block (without batching: the n positions, then the
+/// n velocities).
+pub fn solve_second_order(
+    sys: &mut dyn SecondOrderSystem,
+    x0: &[f64],
+    v0: &[f64],
+    integrator: &Integrator,
+    opts: &SolveOptions,
+) -> Result<Solution, Error> {
+    let n = sys.dim();
+    let b = sys.block_len();
+    if x0.len() != n || v0.len() != n {
+        return Err(Error::invalid(
+            "v0",
+            format!("an array of {} values", v0.len()),
+            format!("x0 and v0 must both have {n} values (x0 has {})", x0.len()),
+        ));
+    }
+    if b == 0 || n % b != 0 {
+        return Err(Error::invalid("block_len", b, format!("must divide the dimension {n}")));
+    }
+    let mut y0 = vec![0.0; 2 * n];
+    FirstOrderForm::join(x0, v0, b, &mut y0);
+    match integrator {
+        Integrator::Named(m @ (Method::SymplecticEuler | Method::Verlet)) => {
+            validate(2 * n, 2 * b, &y0, opts)?;
+            let h = fixed_step(integrator, opts)?;
+            if *m == Method::Verlet {
+                run_fixed(&mut Verlet::new(sys), &y0, h, opts, m.name())
+            } else {
+                run_fixed(&mut SymplecticEuler::new(sys), &y0, h, opts, m.name())
+            }
+        }
+        _ => solve(&mut FirstOrderForm::new(sys), &y0, integrator, opts),
+    }
+}
+
+fn fixed_step(integrator: &Integrator, opts: &SolveOptions) -> Result<f64, Error> {
+    opts.h.ok_or_else(|| {
+        Error::invalid(
+            "h",
+            "None",
+            format!(
+                "method '{}' takes a fixed step: give a step size h > 0, or use method 'rk45' for an adaptive step",
+                integrator.name()
+            ),
+        )
+    })
+}
+
+fn validate(dim: usize, block: usize, y0: &[f64], opts: &SolveOptions) -> Result<(), Error> {
+    if y0.is_empty() {
+        return Err(Error::invalid("y0", "[]", "the initial state needs at least one value"));
+    }
+    if y0.len() != dim {
+        return Err(Error::invalid(
+            "y0",
+            format!("an array of {} values", y0.len()),
+            format!("the system has {dim} unknowns"),
+        ));
+    }
+    if block == 0 || dim % block != 0 {
+        return Err(Error::invalid("block_len", block, format!("must divide the dimension {dim}")));
+    }
+    if let Some(i) = first_non_finite(y0) {
+        return Err(Error::invalid(
+            format!("y0[{i}]"),
+            y0[i],
+            "initial values must be finite (no NaN or inf)",
+        ));
+    }
+    let (t0, t1) = opts.t_span;
+    if !t0.is_finite() || !t1.is_finite() {
+        return Err(Error::invalid("t_span", format!("({t0}, {t1})"), "both ends must be finite"));
+    }
+    if let Some(h) = opts.h {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(Error::invalid(
+                "h",
+                h,
+                "the step size must be a finite number > 0 (the direction comes from t_span)",
+            ));
+        }
+    }
+    if !(opts.rtol.is_finite() && opts.rtol > 0.0) {
+        return Err(Error::invalid("rtol", opts.rtol, "must be a finite number > 0"));
+    }
+    if !(opts.atol.is_finite() && opts.atol >= 0.0) {
+        return Err(Error::invalid("atol", opts.atol, "must be a finite number >= 0"));
+    }
+    if let Some(te) = &opts.t_eval {
+        let dir = if t1 >= t0 { 1.0 } else { -1.0 };
+        let (lo, hi) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+        for (i, &t) in te.iter().enumerate() {
+            if !(t >= lo && t <= hi) {
+                return Err(Error::invalid(
+                    format!("t_eval[{i}]"),
+                    t,
+                    format!("every t_eval point must lie within t_span [{lo}, {hi}]"),
+                ));
+            }
+            if i > 0 && dir * (t - te[i - 1]) < 0.0 {
+                return Err(Error::invalid(
+                    format!("t_eval[{i}]"),
+                    t,
+                    "t_eval must be sorted in the direction of integration (ascending when t_span increases)",
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Stores the output: every step, or the `t_eval` points (interpolated inside steps).
+pub(crate) struct Recorder<'a> {
+    t_eval: Option<&'a [f64]>,
+    next: usize,
+    dir: f64,
+    dim: usize,
+    pub(crate) t: Vec<f64>,
+    pub(crate) y: Vec<f64>,
+    buf: Vec<f64>,
+}
+
+impl<'a> Recorder<'a> {
+    pub(crate) fn new(opts: &'a SolveOptions, t0: f64, y0: &[f64]) -> Self {
+        let (a, b) = opts.t_span;
+        let mut rec = Self {
+            t_eval: opts.t_eval.as_deref(),
+            next: 0,
+            dir: if b >= a { 1.0 } else { -1.0 },
+            dim: y0.len(),
+            t: Vec::new(),
+            y: Vec::new(),
+            buf: vec![0.0; y0.len()],
+        };
+        match rec.t_eval {
+            None => rec.push(t0, y0),
+            Some(te) => {
+                while rec.next < te.len() && te[rec.next] == t0 {
+                    rec.push(t0, y0);
+                    rec.next += 1;
+                }
+            }
+        }
+        rec
+    }
+
+    fn push(&mut self, t: f64, y: &[f64]) {
+        self.t.push(t);
+        self.y.extend_from_slice(y);
+    }
+
+    /// Whether some output time falls strictly inside the step ending at `t_b` (so the
+    /// step's dense output is needed).
+    pub(crate) fn needs_dense(&self, t_b: f64) -> bool {
+        match self.t_eval {
+            Some(te) => self.next < te.len() && self.dir * (te[self.next] - t_b) < 0.0,
+            None => false,
+        }
+    }
+
+    /// Records the step [t_a, t_b = t_a + h]; `dense(θ, out)` evaluates the state at
+    /// t_a + θh for output times inside the step.
+    pub(crate) fn step(&mut self, t_a: f64, h: f64, t_b: f64, y_b: &[f64], mut dense: impl FnMut(f64, &mut [f64])) {
+        let Some(te) = self.t_eval else {
+            self.push(t_b, y_b);
+            return;
+        };
+        while self.next < te.len() && self.dir * (te[self.next] - t_b) <= 0.0 {
+            let t = te[self.next];
+            if t == t_b {
+                self.push(t, y_b);
+            } else {
+                let mut buf = std::mem::take(&mut self.buf);
+                dense((t - t_a) / h, &mut buf);
+                self.push(t, &buf);
+                self.buf = buf;
+            }
+            self.next += 1;
+        }
+    }
+
+    pub(crate) fn finish(self, stats: Stats, termination: Option<Termination>, method: &str) -> Solution {
+        Solution {
+            t: self.t,
+            y: self.y,
+            dim: self.dim,
+            stats,
+            termination,
+            method: method.to_string(),
+        }
+    }
+}
+
+/// The fixed-step loop: steps t_k = t0 + k h, the last one shortened to end at t_end.
+fn run_fixed(stepper: &mut dyn Stepper, y0: &[f64], h: f64, opts: &SolveOptions, name: &str) -> Result<Solution, Error> {
+    let (t0, t_end) = opts.t_span;
+    let dir = if t_end >= t0 { 1.0 } else { -1.0 };
+    let span = (t_end - t0).abs();
+    // ceil with a little slack so that h = span/N gives N steps despite rounding of span/h.
+    let nsteps = if span == 0.0 {
+        0
+    } else {
+        ((span / h) * (1.0 - 1e-12)).ceil().max(1.0) as usize
+    };
+    let n = y0.len();
+    let mut rec = Recorder::new(opts, t0, y0);
+    let mut stats = Stats::default();
+    let mut termination = None;
+    let (mut y, mut y_next) = (y0.to_vec(), vec![0.0; n]);
+    let (mut f_a, mut f_b) = (vec![0.0; n], vec![0.0; n]);
+    // f at the start of the current step, when it is already known from the previous one.
+    let mut f_a_known = false;
+    for k in 0..nsteps {
+        let t_a = t0 + dir * k as f64 * h;
+        let t_b = if k + 1 == nsteps {
+            t_end
+        } else {
+            t0 + dir * (k + 1) as f64 * h
+        };
+        let hk = t_b - t_a;
+        match stepper.step(t_a, &y, hk, &mut y_next, &mut stats) {
+            Ok(()) => {}
+            Err(StepFailure::Stop(t)) => {
+                termination = Some(t);
+                break;
+            }
+            Err(StepFailure::Error(e)) => return Err(e),
+        }
+        if let Some(index) = first_non_finite(&y_next) {
+            termination = Some(Termination::NonFinite { t: t_a, h: hk, index });
+            break;
+        }
+        stats.nsteps += 1;
+        if rec.needs_dense(t_b) {
+            if !f_a_known {
+                stepper.derivative(t_a, &y, &mut f_a, &mut stats)?;
+            }
+            stepper.derivative(t_b, &y_next, &mut f_b, &mut stats)?;
+            rec.step(t_a, hk, t_b, &y_next, |theta, out| {
+                dense::hermite(theta, hk, &y, &y_next, &f_a, &f_b, out)
+            });
+            std::mem::swap(&mut f_a, &mut f_b);
+            f_a_known = true;
+        } else {
+            rec.step(t_a, hk, t_b, &y_next, |_, _| unreachable!("no output inside this step"));
+            f_a_known = false;
+        }
+        std::mem::swap(&mut y, &mut y_next);
+    }
+    Ok(rec.finish(stats, termination, name))
+}

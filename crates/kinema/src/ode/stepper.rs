@@ -1,0 +1,109 @@
+//! The contract between the solve drivers and the methods: one fixed step at a time.
+
+use std::fmt;
+
+use crate::error::Error;
+
+/// Work counters of a solve.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Right-hand-side (or acceleration) evaluations, finite-difference Jacobians included.
+    pub nfev: usize,
+    /// Evaluations of a user-supplied Jacobian.
+    pub njev: usize,
+    /// LU factorizations.
+    pub nlu: usize,
+    /// Accepted steps.
+    pub nsteps: usize,
+    /// Rejected steps (error control) and Newton failures that halved a step.
+    pub nrejected: usize,
+}
+
+/// Why a solve ended before reaching the end of its interval.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Termination {
+    /// Newton iterations of an implicit step did not converge, even after halving the step
+    /// `halvings` times.
+    NewtonFailed {
+        /// Time at the start of the failing step.
+        t: f64,
+        /// The smallest step tried.
+        h: f64,
+        /// How many times the step was halved.
+        halvings: u32,
+    },
+    /// The adaptive step size fell below what the floating-point time can resolve.
+    StepTooSmall {
+        /// Time where it happened.
+        t: f64,
+        /// The step size.
+        h: f64,
+    },
+    /// A step produced NaN or ±inf (the method is unstable at this step, or f returned them).
+    NonFinite {
+        /// Time at the start of the step.
+        t: f64,
+        /// The step size.
+        h: f64,
+        /// Index of the first non-finite component.
+        index: usize,
+    },
+}
+
+impl fmt::Display for Termination {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Termination::NewtonFailed { t, h, halvings } => write!(
+                f,
+                "implicit step at t = {t}: Newton iterations did not converge (step halved {halvings} times down to h = {h:e}); \
+                 give the Jacobian (jac=...), or a smaller h"
+            ),
+            Termination::StepTooSmall { t, h } => write!(
+                f,
+                "required step size {h:e} at t = {t} is below what the time variable can resolve; the problem may be stiff \
+                 (try method='implicit_euler') or singular at this time"
+            ),
+            Termination::NonFinite { t, h, index } => write!(
+                f,
+                "the step from t = {t} with h = {h} produced a non-finite value in component {index}; the solution \
+                 diverged (h beyond the method's stability limit, see kinema.stability.max_step) or f returned NaN/inf"
+            ),
+        }
+    }
+}
+
+/// A step that did not complete: either a hard error (bad callback) or a stop.
+#[derive(Debug)]
+pub enum StepFailure {
+    /// Propagate to the caller as an error.
+    Error(Error),
+    /// End the solve here, keep what was computed.
+    Stop(Termination),
+}
+
+impl From<Error> for StepFailure {
+    fn from(e: Error) -> Self {
+        StepFailure::Error(e)
+    }
+}
+
+impl From<crate::error::CallbackError> for StepFailure {
+    fn from(e: crate::error::CallbackError) -> Self {
+        StepFailure::Error(Error::Callback(e))
+    }
+}
+
+/// A fixed-step method bound to its system. The state is flat: y for first-order systems,
+/// [x, v] per block for second-order ones.
+pub trait Stepper {
+    /// Advances y(t) by h into `y_out`.
+    fn step(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure>;
+
+    /// dy/dt at (t, y), for Hermite interpolation between steps.
+    fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error>;
+}
+
+/// Index of the first non-finite value, if any.
+pub fn first_non_finite(y: &[f64]) -> Option<usize> {
+    y.iter().position(|v| !v.is_finite())
+}

@@ -1,0 +1,40 @@
+"""kinema: particle systems that move by honest numerical methods.
+
+The public API (everything else is private):
+
+- ODEs: ``solve``, ``solve_second_order``, ``Solution``, ``ButcherTableau``, ``methods``,
+  ``method_names``, ``MethodInfo``, ``SolverWarning``
+- Stability on p' = λp: the module ``kinema.stability``
+- Measured orders of accuracy: ``convergence``, ``ConvergenceResult``, the module
+  ``kinema.problems`` (problems with exact solutions)
+"""
+
+from . import problems, stability
+from ._core import __version__
+from .convergence import ConvergenceResult, convergence
+from .ode import (
+    ButcherTableau,
+    MethodInfo,
+    Solution,
+    SolverWarning,
+    method_names,
+    methods,
+    solve,
+    solve_second_order,
+)
+
+__all__ = [
+    "__version__",
+    "ButcherTableau",
+    "ConvergenceResult",
+    "MethodInfo",
+    "Solution",
+    "SolverWarning",
+    "convergence",
+    "method_names",
+    "methods",
+    "problems",
+    "solve",
+    "solve_second_order",
+    "stability",
+]

@@ -1,0 +1,208 @@
+"""Numerical solution of ODEs: ``solve`` for y' = f(t, y), ``solve_second_order`` for
+x'' = a(t, x, v).
+
+Every method of the registry (``kinema.methods()``) is available by name, and any explicit
+Runge-Kutta method by its Butcher tableau (``kinema.ButcherTableau``). The stepping runs in
+the Rust engine; a Python right-hand side is called once per stage with a NumPy array.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from . import _core
+
+ButcherTableau = _core.ButcherTableau
+
+Method = "str | ButcherTableau"
+
+
+class SolverWarning(RuntimeWarning):
+    """A solve stopped before the end of its interval (``Solution.success`` is False)."""
+
+
+@dataclass(frozen=True)
+class MethodInfo:
+    """One entry of the method registry."""
+
+    name: str
+    order: int
+    kind: str  # "explicit", "implicit", "adaptive" or "second_order"
+    evals_per_step: int
+    summary: str
+
+
+def methods() -> list[MethodInfo]:
+    """The registered methods, with their order, kind and cost per step."""
+    return [MethodInfo(**m) for m in _core.methods()]
+
+
+def method_names() -> list[str]:
+    """Names accepted wherever a method is asked for."""
+    return [m.name for m in methods()]
+
+
+@dataclass
+class Solution:
+    """Result of ``solve`` / ``solve_second_order``.
+
+    ``t`` has shape (T,); ``y`` has shape (T, n), or (T, batch, n) for a batch. For
+    second-order problems ``y`` is [x, v] along the last axis and ``x``, ``v`` are its halves.
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    nfev: int
+    njev: int
+    nlu: int
+    nsteps: int
+    nrejected: int
+    method: str
+    success: bool
+    message: str
+    x: np.ndarray | None = field(default=None, repr=False)
+    v: np.ndarray | None = field(default=None, repr=False)
+
+    def __repr__(self) -> str:
+        return (
+            f"Solution(method={self.method!r}, success={self.success}, t=[{self.t[0]:g} .. {self.t[-1]:g}] "
+            f"({self.t.size} points), y.shape={self.y.shape}, nsteps={self.nsteps}, nfev={self.nfev})"
+        )
+
+
+def _t_span(t_span: Sequence[float]) -> tuple[float, float]:
+    try:
+        t0, t1 = (float(v) for v in t_span)
+    except (TypeError, ValueError):
+        raise ValueError(f"t_span = {t_span!r} is invalid: it must be a pair (t0, t_end) of numbers") from None
+    return t0, t1
+
+
+def _state(name: str, value: Any) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} = {value!r} is invalid: it must be an array of numbers") from None
+    if arr.ndim == 0:
+        arr = arr.reshape(1)
+    return np.ascontiguousarray(arr)
+
+
+def _t_eval(t_eval: Any) -> list[float] | None:
+    if t_eval is None:
+        return None
+    arr = np.asarray(t_eval, dtype=np.float64)
+    if arr.ndim != 1:
+        raise ValueError(f"t_eval has shape {arr.shape}; it must be a 1-D array of times")
+    return arr.tolist()
+
+
+def _finish(raw: dict, shape: tuple[int, ...]) -> Solution:
+    y = raw["y"].reshape((raw["t"].size, *shape))
+    sol = Solution(**{k: raw[k] for k in ("t", "nfev", "njev", "nlu", "nsteps", "nrejected", "method", "success", "message")}, y=y)
+    if not sol.success:
+        warnings.warn(f"kinema.solve stopped early: {sol.message}", SolverWarning, stacklevel=3)
+    return sol
+
+
+def solve(
+    f: Callable[[float, np.ndarray], Any],
+    y0: Any,
+    t_span: Sequence[float],
+    *,
+    h: float | None = None,
+    method: str | ButcherTableau = "rk4",
+    jac: Callable[[float, np.ndarray], Any] | None = None,
+    rtol: float = 1e-6,
+    atol: float = 1e-9,
+    t_eval: Any = None,
+    vectorized: bool = False,
+) -> Solution:
+    """Solve the initial value problem y' = f(t, y), y(t0) = y0 over ``t_span = (t0, t_end)``.
+
+    Parameters
+    ----------
+    f : callable ``f(t, y) -> array``
+        Right-hand side; returns dy/dt with y's shape.
+    y0 : array_like, shape (n,), or (batch, n) with ``vectorized=True``
+        Initial state.
+    t_span : (t0, t_end)
+        Interval; ``t_end < t0`` integrates backwards.
+    h : float, optional
+        Step size (> 0). Required by the fixed-step methods (the last step is shortened to end
+        at t_end); for ``rk45`` the first step (chosen automatically when omitted).
+    method : str or ButcherTableau
+        A registered name (``kinema.method_names()``) or an explicit tableau. Default ``rk4``.
+    jac : callable ``jac(t, y) -> (n, n) array``, optional
+        ∂f/∂y for ``implicit_euler`` ((batch, n, n) with a batch); finite differences otherwise.
+    rtol, atol : float
+        Tolerances: rk45's error control, implicit Euler's Newton iterations.
+    t_eval : array_like, optional
+        Times at which to report the solution (interpolated between steps); default: every step.
+    vectorized : bool
+        With a 2-D ``y0`` of shape (batch, n): solve every row as its own initial condition,
+        calling ``f`` once per stage with the whole (batch, n) array.
+
+    Returns
+    -------
+    Solution
+        ``t``, ``y`` (shape (len(t), n) or (len(t), batch, n)), counters and status. A solve that
+        stops early (Newton failure, step too small, a non-finite state) returns what it had
+        with ``success=False`` and a ``message``, and warns with ``SolverWarning``.
+    """
+    _callable("f", f)
+    if jac is not None:
+        _callable("jac", jac)
+    y = _state("y0", y0)
+    raw = _core.solve(f, y, _t_span(t_span), _float_or_none("h", h), method, jac, float(rtol), float(atol), _t_eval(t_eval), bool(vectorized))
+    return _finish(raw, y.shape)
+
+
+def solve_second_order(
+    a: Callable[[float, np.ndarray, np.ndarray], Any],
+    x0: Any,
+    v0: Any,
+    t_span: Sequence[float],
+    *,
+    h: float | None = None,
+    method: str | ButcherTableau = "verlet",
+    rtol: float = 1e-6,
+    atol: float = 1e-9,
+    t_eval: Any = None,
+    vectorized: bool = False,
+) -> Solution:
+    """Solve x'' = a(t, x, v), x(t0) = x0, x'(t0) = v0 — Newton's law with a = F/m.
+
+    Takes every method: ``symplectic_euler`` and ``verlet`` (default) work on x and v
+    directly; the others integrate the first-order form y = [x, v]. The solution has ``x`` and
+    ``v`` (each with x0's shape per time) besides ``y`` = [x, v] along the last axis.
+    Parameters are those of ``solve``.
+    """
+    _callable("a", a)
+    x = _state("x0", x0)
+    v = _state("v0", v0)
+    raw = _core.solve_second_order(a, x, v, _t_span(t_span), _float_or_none("h", h), method, float(rtol), float(atol), _t_eval(t_eval), bool(vectorized))
+    shape = (*x.shape[:-1], 2 * x.shape[-1])
+    sol = _finish(raw, shape)
+    n = x.shape[-1]
+    sol.x = sol.y[..., :n]
+    sol.v = sol.y[..., n:]
+    return sol
+
+
+def _float_or_none(name: str, value: Any) -> float | None:
+    if value is None:
+        return None
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} = {value!r} is invalid: it must be a number") from None
+
+
+def _callable(name: str, value: Any) -> None:
+    if not callable(value):
+        raise TypeError(f"{name} must be a callable, got {type(value).__name__}")

@@ -1,0 +1,106 @@
+"""Linear stability of a time step on the test equation p' = λp.
+
+A method applied to p' = λp multiplies p by R(z), z = hλ, every step; the step is stable when
+|R(z)| ≤ 1. ``amplification`` evaluates R, ``max_step`` gives the largest stable h for a λ,
+``real_interval`` / ``imag_interval`` the stable stretches of the axes, and ``plot_regions``
+draws the regions {z : |R(z)| ≤ 1}.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple, Sequence
+
+import numpy as np
+
+from . import _core
+from .ode import ButcherTableau
+
+
+class Interval(NamedTuple):
+    """A stretch [lo, hi] of an axis of the z = hλ plane (lo = hi = 0: none)."""
+
+    lo: float
+    hi: float
+
+    @property
+    def empty(self) -> bool:
+        """True when only z = 0 is stable on this axis."""
+        return self.lo == 0.0 and self.hi == 0.0
+
+
+def amplification(method: str | ButcherTableau, z: Any) -> np.ndarray:
+    """R(z) for every z of a (complex) array; same shape as ``z``.
+
+    Explicit Runge-Kutta (any tableau): R(z) = 1 + z bᵀ(I − zA)⁻¹𝟙, a polynomial.
+    Implicit Euler: 1/(1 − z). Symplectic Euler and Verlet, which integrate x'' = λ²x only:
+    the eigenvalue of larger modulus of the one-step matrix (its modulus is the spectral
+    radius), a function of w = z².
+    """
+    arr = np.asarray(z, dtype=np.complex128)
+    out = _core.amplification(method, np.ascontiguousarray(arr.reshape(arr.shape or (1,))))
+    return out.reshape(arr.shape) if arr.shape else out.reshape(())[()]
+
+
+def max_step(method: str | ButcherTableau, lam: Any) -> Any:
+    """Largest h with |R(sλ)| ≤ 1 for all 0 < s ≤ h; elementwise over an array of λ.
+
+    ``inf`` where no step is too large (e.g. implicit Euler for Re λ ≤ 0), ``0`` where no
+    positive step is stable (e.g. forward Euler on the imaginary axis).
+    """
+    arr = np.asarray(lam, dtype=np.complex128)
+    out = _core.max_step(method, np.ascontiguousarray(arr.reshape(arr.shape or (1,))))
+    return out.reshape(arr.shape) if arr.shape else float(out[0])
+
+
+def real_interval(method: str | ButcherTableau) -> Interval:
+    """The stable interval of the real axis containing 0 (Euler: [−2, 0])."""
+    return Interval(*_core.real_interval(method))
+
+
+def imag_interval(method: str | ButcherTableau) -> Interval:
+    """The stable interval [lo, hi] of the imaginary axis, z = iy (RK4: ±2√2; Euler: none)."""
+    return Interval(*_core.imag_interval(method))
+
+
+def _name(method: str | ButcherTableau) -> str:
+    return method if isinstance(method, str) else method.name
+
+
+def plot_regions(
+    methods: Sequence[str | ButcherTableau] = ("euler", "midpoint", "rk4", "implicit_euler"),
+    ax: Any = None,
+    *,
+    extent: tuple[float, float, float, float] = (-5.0, 3.0, -4.0, 4.0),
+    resolution: int = 600,
+) -> Any:
+    """Draw the stability regions {z : |R(z)| ≤ 1} of ``methods`` in the z = hλ plane.
+
+    Each region is filled (translucent, so overlaps show) and outlined, with a legend; axes
+    are equal. ``extent`` = (re_min, re_max, im_min, im_max). Returns the matplotlib Axes.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7, 6))
+    re = np.linspace(extent[0], extent[1], resolution)
+    im = np.linspace(extent[2], extent[3], resolution)
+    z = re[None, :] + 1j * im[:, None]
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    handles = []
+    for k, m in enumerate(methods):
+        color = colors[k % len(colors)]
+        mag = np.abs(amplification(m, z))
+        ax.contourf(re, im, mag, levels=[0.0, 1.0], colors=[color], alpha=0.25)
+        ax.contour(re, im, mag, levels=[1.0], colors=[color], linewidths=1.5)
+        handles.append(Patch(facecolor=color, edgecolor=color, alpha=0.5, label=_name(m)))
+    ax.axhline(0.0, color="0.3", lw=0.6)
+    ax.axvline(0.0, color="0.3", lw=0.6)
+    ax.set_aspect("equal")
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_xlabel("Re(hλ)")
+    ax.set_ylabel("Im(hλ)")
+    ax.set_title("Stability regions |R(hλ)| ≤ 1 on p′ = λp")
+    ax.legend(handles=handles, loc="upper left")
+    return ax
