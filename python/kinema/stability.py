@@ -75,10 +75,12 @@ def plot_regions(
 ) -> Any:
     """Draw the stability regions {z : |R(z)| ≤ 1} of ``methods`` in the z = hλ plane.
 
-    Each region is filled (translucent, so overlaps show) and outlined, with a legend; axes
-    are equal. ``extent`` = (re_min, re_max, im_min, im_max). Returns the matplotlib Axes.
+    Each bounded region is filled (translucent, so overlaps show), an unbounded one (e.g.
+    implicit Euler's, the outside of a disc) hatched; all are outlined, with a legend; axes are
+    equal. ``extent`` = (re_min, re_max, im_min, im_max). Returns the matplotlib Axes.
     """
     import matplotlib.pyplot as plt
+    from matplotlib.colors import to_rgba
     from matplotlib.patches import Patch
 
     if ax is None:
@@ -91,9 +93,20 @@ def plot_regions(
     for k, m in enumerate(methods):
         color = colors[k % len(colors)]
         mag = np.abs(amplification(m, z))
-        ax.contourf(re, im, mag, levels=[0.0, 1.0], colors=[color], alpha=0.25)
+        stable = mag <= 1.0
+        # A region that reaches the frame on every side (implicit Euler: the outside of a
+        # disc) is hatched rather than filled, so it does not tint the bounded regions.
+        unbounded = stable[0, :].any() and stable[-1, :].any() and stable[:, 0].any() and stable[:, -1].any()
+        if unbounded:
+            faint = to_rgba(color, 0.4)
+            cs = ax.contourf(re, im, mag, levels=[0.0, 1.0], colors="none", hatches=["/"])
+            cs.set_edgecolor(faint)
+            cs.set_linewidth(0.0)
+            handles.append(Patch(facecolor="none", edgecolor=faint, hatch="/", label=_name(m)))
+        else:
+            ax.contourf(re, im, mag, levels=[0.0, 1.0], colors=[color], alpha=0.25)
+            handles.append(Patch(facecolor=color, edgecolor=color, alpha=0.5, label=_name(m)))
         ax.contour(re, im, mag, levels=[1.0], colors=[color], linewidths=1.5)
-        handles.append(Patch(facecolor=color, edgecolor=color, alpha=0.5, label=_name(m)))
     ax.axhline(0.0, color="0.3", lw=0.6)
     ax.axvline(0.0, color="0.3", lw=0.6)
     ax.set_aspect("equal")

@@ -187,14 +187,20 @@ impl<'s> ImplicitEuler<'s> {
                 self.step_with_halving(t, y, 0.5 * h, &mut mid, stats, depth + 1)?;
                 self.step_with_halving(t + 0.5 * h, &mid, 0.5 * h, y_out, stats, depth + 1)
             }
-            Newton::Failed => Err(StepFailure::Stop(Termination::NewtonFailed { t, h, halvings: depth })),
+            Newton::Failed => Err(StepFailure::Stop(Termination::NewtonFailed { t, h, h_min: h, t_fail: t, halvings: depth })),
         }
     }
 }
 
 impl Stepper for ImplicitEuler<'_> {
     fn step(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure> {
-        self.step_with_halving(t, y, h, y_out, stats, 0)
+        match self.step_with_halving(t, y, h, y_out, stats, 0) {
+            // Report the step the driver asked for; the sub-step that failed is in t_fail/h_min.
+            Err(StepFailure::Stop(Termination::NewtonFailed { h_min, t_fail, halvings, .. })) => {
+                Err(StepFailure::Stop(Termination::NewtonFailed { t, h, h_min, t_fail, halvings }))
+            }
+            other => other,
+        }
     }
 
     fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error> {

@@ -25,10 +25,14 @@ pub enum Termination {
     /// Newton iterations of an implicit step did not converge, even after halving the step
     /// `halvings` times.
     NewtonFailed {
-        /// Time at the start of the failing step.
+        /// Time at the start of the failing step (the last recorded state).
         t: f64,
-        /// The smallest step tried.
+        /// The step that was asked for.
         h: f64,
+        /// The smallest step tried.
+        h_min: f64,
+        /// Time at the start of the sub-step that could not be solved.
+        t_fail: f64,
         /// How many times the step was halved.
         halvings: u32,
     },
@@ -53,10 +57,11 @@ pub enum Termination {
 impl fmt::Display for Termination {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Termination::NewtonFailed { t, h, halvings } => write!(
+            Termination::NewtonFailed { t, h, h_min, t_fail, halvings } => write!(
                 f,
-                "implicit step at t = {t}: Newton iterations did not converge (step halved {halvings} times down to h = {h:e}); \
-                 give the Jacobian (jac=...), or a smaller h"
+                "the implicit step from t = {t} with h = {h} failed: Newton iterations did not converge at t = {t_fail} \
+                 even with the step halved {halvings} times (down to h = {h_min:e}); the solution may blow up there, \
+                 or f is not smooth enough: give the Jacobian (jac=...) or a smaller h"
             ),
             Termination::StepTooSmall { t, h } => write!(
                 f,

@@ -1,0 +1,5 @@
+"""``python -m kinema`` runs the ``kinema`` command."""
+
+from .cli import main
+
+main()
