@@ -44,7 +44,8 @@ bench: build
 
 fmt: $(STAMP)
 	cargo fmt --all
-	$(VENV)/bin/ruff format python tests benchmarks 2>/dev/null || true
+	$(VENV)/bin/ruff format python tests benchmarks
+	$(VENV)/bin/ruff check --fix python tests benchmarks
 
 clean:
 	rm -rf target $(VENV) out

@@ -101,7 +101,10 @@ def test_second_order_method_on_a_first_order_problem():
         kinema.solve(f, [1.0], (0, 1), h=0.1, method="verlet")
 
 
-@pytest.mark.parametrize("t_eval, what", [([0.5, 2.0], r"t_eval\[1\] = 2 is invalid: every t_eval point must lie within"), ([0.5, 0.2], r"t_eval\[1\] = 0.2 is invalid: t_eval must be sorted")])
+@pytest.mark.parametrize(
+    "t_eval, what",
+    [([0.5, 2.0], r"t_eval\[1\] = 2 is invalid: every t_eval point must lie within"), ([0.5, 0.2], r"t_eval\[1\] = 0.2 is invalid: t_eval must be sorted")],
+)
 def test_bad_t_eval(t_eval, what):
     with pytest.raises(ValueError, match=what):
         kinema.solve(f, [1.0], (0, 1), h=0.1, t_eval=t_eval)

@@ -7,8 +7,9 @@ the slopes by least squares on log(error) against log(h).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 

@@ -32,7 +32,7 @@ def _phase_portraits(results: dict, out: Path) -> Path:
     rows = (len(names) + cols - 1) // cols
     fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 3.2 * rows), sharex=True, sharey=True)
     circle = np.linspace(0.0, 2.0 * np.pi, 200)
-    for ax, name in zip(axes.flat, names):
+    for ax, name in zip(axes.flat, names, strict=False):
         sol = results[name]
         ax.plot(np.cos(circle), -np.sin(circle), color="0.75", lw=3, label="exact")
         ax.plot(sol.x[:, 0], sol.v[:, 0], lw=0.8)
@@ -40,7 +40,7 @@ def _phase_portraits(results: dict, out: Path) -> Path:
         ax.set_aspect("equal")
         ax.set_xlim(-2, 2)
         ax.set_ylim(-2, 2)
-    for ax in list(axes.flat)[len(names):]:
+    for ax in list(axes.flat)[len(names) :]:
         ax.axis("off")
     fig.suptitle(f"x'' = -x, {PERIODS} periods, h = {H}: phase portraits (x, v)")
     path = save_figure_atomically(fig, out / "phase_portraits.png")

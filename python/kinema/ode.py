@@ -9,8 +9,9 @@ the Rust engine; a Python right-hand side is called once per stage with a NumPy 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import numpy as np
 

@@ -7,8 +7,8 @@ second-order form (then y = [x, v]).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

@@ -8,7 +8,8 @@ draws the regions {z : |R(z)| ≤ 1}.
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple, Sequence
+from collections.abc import Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 

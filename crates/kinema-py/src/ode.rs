@@ -148,10 +148,12 @@ fn initial_state(name: &str, arr: &PyReadonlyArrayDyn<'_, f64>, vectorized: bool
     match (shape.len(), vectorized) {
         (1, _) => {}
         (2, true) => {}
-        (2, false) => return Err(PyValueError::new_err(format!(
+        (2, false) => {
+            return Err(PyValueError::new_err(format!(
             "{name} has shape {shape:?}: a 2-D initial state is a batch of initial conditions (batch, n); pass vectorized=True \
                  and a function that takes and returns (batch, n) arrays"
-        ))),
+        )))
+        }
         _ => {
             return Err(PyValueError::new_err(format!(
                 "{name} has shape {shape:?}; it must be 1-D (n,) or, with vectorized=True, 2-D (batch, n)"

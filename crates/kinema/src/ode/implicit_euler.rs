@@ -44,9 +44,15 @@ pub struct ImplicitEuler<'s> {
     delta: Mat<f64>,
 }
 
-enum Newton {
+/// Where a block's Newton iteration stands.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Block {
+    Iterating,
     Converged,
+    /// Not converged (diverging, singular, or out of iterations).
     Failed,
+    /// f was NaN or ±inf at this component.
+    NonFinite(usize),
 }
 
 impl<'s> ImplicitEuler<'s> {
@@ -114,50 +120,81 @@ impl<'s> ImplicitEuler<'s> {
         stats.nlu += self.lu.len();
     }
 
-    /// One attempt at y_out = y + h f(t + h, y_out).
-    fn newton(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<Newton, Error> {
+    /// One attempt at y_out = y + h f(t + h, y_out), block by block.
+    ///
+    /// Blocks are independent systems (a batch), so each converges or fails on its own;
+    /// only the blocks marked in `active` are judged (the others ride along, since f is
+    /// evaluated for the whole state at once, and their values are discarded by the caller).
+    fn newton(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_out: &mut [f64],
+        active: &[bool],
+        stats: &mut Stats,
+    ) -> Result<Vec<Block>, Error> {
         let b = self.block;
         let t1 = t + h;
         y_out.copy_from_slice(y);
+        let mut status: Vec<Block> = active
+            .iter()
+            .map(|&a| if a { Block::Iterating } else { Block::Converged })
+            .collect();
+        let mut prev_norm = vec![f64::INFINITY; active.len()];
         let mut fresh_jacobian_at_iterate = false;
-        let mut prev_norm = f64::INFINITY;
         for iter in 0..MAX_NEWTON_ITERATIONS {
             self.sys.rhs(t1, y_out, &mut self.f)?;
             stats.nfev += 1;
-            if first_non_finite(&self.f).is_some() {
-                return Ok(Newton::Failed);
+            for (m, st) in status.iter_mut().enumerate() {
+                if *st == Block::Iterating {
+                    if let Some(i) = first_non_finite(&self.f[m * b..(m + 1) * b]) {
+                        *st = Block::NonFinite(m * b + i);
+                    }
+                }
             }
             if iter == 0 {
                 self.jacobian(t1, y_out, stats)?;
                 self.factor(h, stats);
             }
-            // Δ = −(I − hJ)⁻¹ G(y_k), G = y_k − y_n − h f(t_{n+1}, y_k); one column per block.
+            let mut diverging = false;
             for (m, lu) in self.lu.iter().enumerate() {
+                if status[m] != Block::Iterating {
+                    continue;
+                }
+                // Δ = −(I − hJ)⁻¹ G(y_k), G = y_k − y_n − h f(t_{n+1}, y_k)
                 for i in 0..b {
                     let r = m * b + i;
                     self.delta[(i, m)] = -(y_out[r] - y[r] - h * self.f[r]);
                 }
                 lu.solve_in_place(self.delta.as_mut().subcols_mut(m, 1));
-            }
-            let mut norm = 0.0_f64;
-            for (m, chunk) in y_out.chunks_exact_mut(b).enumerate() {
-                for (i, yo) in chunk.iter_mut().enumerate() {
+                let mut norm = 0.0_f64;
+                for i in 0..b {
+                    let r = m * b + i;
                     let d = self.delta[(i, m)];
-                    *yo += d;
-                    norm = norm.max(d.abs() / (self.atol + self.rtol * yo.abs()));
+                    y_out[r] += d;
+                    let w = d.abs() / (self.atol + self.rtol * y_out[r].abs());
+                    // NaN-propagating max: a NaN update (singular I − hJ, overflow) must fail.
+                    norm = if w.is_nan() || w > norm { w } else { norm };
                 }
-            }
-            if !norm.is_finite() {
-                return Ok(Newton::Failed); // singular I − hJ or overflow
-            }
-            if norm <= NEWTON_TOL {
-                return Ok(Newton::Converged);
-            }
-            if iter > 0 && norm >= prev_norm {
-                // Not contracting: the Jacobian from the start of the step is too far off.
-                if fresh_jacobian_at_iterate {
-                    return Ok(Newton::Failed);
+                if !norm.is_finite() {
+                    status[m] = Block::Failed;
+                } else if norm <= NEWTON_TOL {
+                    status[m] = Block::Converged;
+                } else if iter > 0 && norm >= prev_norm[m] {
+                    // Not contracting: the Jacobian from the start of the step is too far off.
+                    if fresh_jacobian_at_iterate {
+                        status[m] = Block::Failed;
+                    } else {
+                        diverging = true;
+                    }
                 }
+                prev_norm[m] = norm;
+            }
+            if !status.contains(&Block::Iterating) {
+                return Ok(status);
+            }
+            if diverging {
                 fresh_jacobian_at_iterate = true;
                 self.sys.rhs(t1, y_out, &mut self.f)?;
                 stats.nfev += 1;
@@ -165,39 +202,77 @@ impl<'s> ImplicitEuler<'s> {
                 self.jacobian(t1, &yk, stats)?;
                 self.factor(h, stats);
             }
-            prev_norm = norm;
         }
-        Ok(Newton::Failed)
+        for st in status.iter_mut() {
+            if *st == Block::Iterating {
+                *st = Block::Failed;
+            }
+        }
+        Ok(status)
     }
 
+    /// A step of the blocks in `active`; a block whose Newton iteration fails is redone as two
+    /// half steps (the others keep their full-step result, so a batch member's answer does
+    /// not depend on the other members).
+    #[allow(clippy::too_many_arguments)]
     fn step_with_halving(
         &mut self,
         t: f64,
         y: &[f64],
         h: f64,
         y_out: &mut [f64],
+        active: &[bool],
         stats: &mut Stats,
         depth: u32,
     ) -> Result<(), StepFailure> {
-        match self.newton(t, y, h, y_out, stats)? {
-            Newton::Converged => Ok(()),
-            Newton::Failed if depth < MAX_HALVINGS => {
-                stats.nrejected += 1;
-                let mut mid = vec![0.0; y.len()];
-                self.step_with_halving(t, y, 0.5 * h, &mut mid, stats, depth + 1)?;
-                self.step_with_halving(t + 0.5 * h, &mid, 0.5 * h, y_out, stats, depth + 1)
-            }
-            Newton::Failed => Err(StepFailure::Stop(Termination::NewtonFailed { t, h, h_min: h, t_fail: t, halvings: depth })),
+        let b = self.block;
+        let status = self.newton(t, y, h, y_out, active, stats)?;
+        let failing: Vec<bool> = status.iter().map(|s| *s != Block::Converged).collect();
+        let Some(first) = failing.iter().position(|&f| f) else {
+            return Ok(());
+        };
+        if depth == MAX_HALVINGS {
+            return Err(StepFailure::Stop(match status[first] {
+                Block::NonFinite(index) => Termination::NonFinite { t, h, index },
+                _ => Termination::NewtonFailed {
+                    t,
+                    h,
+                    h_min: h,
+                    t_fail: t,
+                    halvings: depth,
+                },
+            }));
         }
+        stats.nrejected += 1;
+        let mut mid = y.to_vec();
+        self.step_with_halving(t, y, 0.5 * h, &mut mid, &failing, stats, depth + 1)?;
+        let mut end = mid.clone();
+        self.step_with_halving(t + 0.5 * h, &mid, 0.5 * h, &mut end, &failing, stats, depth + 1)?;
+        for (m, &f) in failing.iter().enumerate() {
+            if f {
+                y_out[m * b..(m + 1) * b].copy_from_slice(&end[m * b..(m + 1) * b]);
+            }
+        }
+        Ok(())
     }
 }
 
 impl Stepper for ImplicitEuler<'_> {
     fn step(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure> {
-        match self.step_with_halving(t, y, h, y_out, stats, 0) {
+        let active = vec![true; y.len() / self.block];
+        match self.step_with_halving(t, y, h, y_out, &active, stats, 0) {
             // Report the step the driver asked for; the sub-step that failed is in t_fail/h_min.
-            Err(StepFailure::Stop(Termination::NewtonFailed { h_min, t_fail, halvings, .. })) => {
-                Err(StepFailure::Stop(Termination::NewtonFailed { t, h, h_min, t_fail, halvings }))
+            Err(StepFailure::Stop(Termination::NewtonFailed {
+                h_min, t_fail, halvings, ..
+            })) => Err(StepFailure::Stop(Termination::NewtonFailed {
+                t,
+                h,
+                h_min,
+                t_fail,
+                halvings,
+            })),
+            Err(StepFailure::Stop(Termination::NonFinite { index, .. })) => {
+                Err(StepFailure::Stop(Termination::NonFinite { t, h, index }))
             }
             other => other,
         }

@@ -138,6 +138,15 @@ pub fn solve_second_order(
     if b == 0 || n % b != 0 {
         return Err(Error::invalid("block_len", b, format!("must divide the dimension {n}")));
     }
+    for (name, values) in [("x0", x0), ("v0", v0)] {
+        if let Some(i) = first_non_finite(values) {
+            return Err(Error::invalid(
+                format!("{name}[{i}]"),
+                values[i],
+                "initial values must be finite (no NaN or inf)",
+            ));
+        }
+    }
     let mut y0 = vec![0.0; 2 * n];
     FirstOrderForm::join(x0, v0, b, &mut y0);
     match integrator {

@@ -57,7 +57,13 @@ pub enum Termination {
 impl fmt::Display for Termination {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Termination::NewtonFailed { t, h, h_min, t_fail, halvings } => write!(
+            Termination::NewtonFailed {
+                t,
+                h,
+                h_min,
+                t_fail,
+                halvings,
+            } => write!(
                 f,
                 "the implicit step from t = {t} with h = {h} failed: Newton iterations did not converge at t = {t_fail} \
                  even with the step halved {halvings} times (down to h = {h_min:e}); the solution may blow up there, \
