@@ -139,3 +139,24 @@ def test_a_newton_failure_shrinks_the_step_then_reports():
     assert not sol.success
     assert "Newton iterations did not converge" in sol.message
     assert np.all(np.isfinite(sol.y)) and sol.t[-1] < 3
+
+
+def test_rk45_with_f_nan_at_the_start_stops_at_once():
+    with pytest.warns(kinema.SolverWarning, match="non-finite value in component 0"):
+        sol = kinema.solve(lambda t, y: np.array([np.nan]), [1.0], (1.0, 2.0), method="rk45")
+    assert not sol.success and sol.t.tolist() == [1.0]
+
+
+def test_rk45_with_f_nan_midway_stops_with_the_last_state_finite():
+    with pytest.warns(kinema.SolverWarning, match="non-finite"):
+        sol = kinema.solve(lambda t, y: -y if t < 0.5 else np.array([np.nan]), [1.0], (0.0, 1.0), method="rk45")
+    assert not sol.success and sol.t[-1] < 0.5 and np.all(np.isfinite(sol.y))
+
+
+def test_max_step_of_a_non_finite_lambda_is_nan():
+    assert np.isnan(kinema.stability.max_step("rk4", np.nan))
+
+
+def test_convergence_refuses_the_adaptive_method():
+    with pytest.raises(ValueError, match=r"ButcherTableau.of\('rk45'\)"):
+        kinema.convergence("rk45")

@@ -190,3 +190,17 @@ def test_the_registry_lists_every_method_once():
     assert names == ["euler", "midpoint", "heun", "rk4", "implicit_euler", "rk45", "symplectic_euler", "verlet"]
     orders = {m.name: m.order for m in kinema.methods()}
     assert orders["rk4"] == 4 and orders["verlet"] == 2 and orders["implicit_euler"] == 1
+
+
+def test_implicit_euler_solves_a_strongly_nonlinear_stiff_step():
+    # y' = -c y³ at h = 0.5 from y = 1: the step equation y - y_n + h c y³ = 0 has its root
+    # near 0.058, where J = -3c y² is 300 times smaller than at y_n; simplified Newton with the
+    # Jacobian of y_n crawls, so the solver must switch to full Newton and still converge.
+    c, h = 1e4, 0.5
+    sol = kinema.solve(lambda t, y: -c * y**3, [1.0], (0.0, 5.0), h=h, method="implicit_euler", jac=lambda t, y: np.array([[-3 * c * y[0] ** 2]]))
+    assert sol.success, sol.message
+    y = sol.y[:, 0]
+    residual = y[1:] - y[:-1] + h * c * y[1:] ** 3
+    assert np.max(np.abs(residual / y[1:])) < 1e-8
+    # the exact solution 1/sqrt(1 + 2ct) decays monotonically; so does backward Euler's
+    assert np.all(np.diff(y) < 0) and np.all(y > 0)

@@ -74,6 +74,11 @@ def convergence(
     problems run through ``solve_second_order`` (so ``verlet`` and ``symplectic_euler`` apply),
     others through ``solve``.
     """
+    if isinstance(method, str) and method == "rk45":
+        raise ValueError(
+            "method = 'rk45' is adaptive, so its step is not the h of a convergence study; measure the "
+            "Dormand-Prince method at fixed steps with method=kinema.ButcherTableau.of('rk45')"
+        )
     prob = _problems.get(problem) if isinstance(problem, str) else problem
     t0, t1 = prob.t_span
     span = t1 - t0

@@ -102,11 +102,11 @@ def _t_eval(t_eval: Any) -> list[float] | None:
     return arr.tolist()
 
 
-def _finish(raw: dict, shape: tuple[int, ...]) -> Solution:
+def _finish(raw: dict, shape: tuple[int, ...], caller: str) -> Solution:
     y = raw["y"].reshape((raw["t"].size, *shape))
     sol = Solution(**{k: raw[k] for k in ("t", "nfev", "njev", "nlu", "nsteps", "nrejected", "method", "success", "message")}, y=y)
     if not sol.success:
-        warnings.warn(f"kinema.solve stopped early: {sol.message}", SolverWarning, stacklevel=3)
+        warnings.warn(f"kinema.{caller} stopped early: {sol.message}", SolverWarning, stacklevel=3)
     return sol
 
 
@@ -160,7 +160,7 @@ def solve(
         _callable("jac", jac)
     y = _state("y0", y0)
     raw = _core.solve(f, y, _t_span(t_span), _float_or_none("h", h), method, jac, float(rtol), float(atol), _t_eval(t_eval), bool(vectorized))
-    return _finish(raw, y.shape)
+    return _finish(raw, y.shape, "solve")
 
 
 def solve_second_order(
@@ -188,7 +188,7 @@ def solve_second_order(
     v = _state("v0", v0)
     raw = _core.solve_second_order(a, x, v, _t_span(t_span), _float_or_none("h", h), method, float(rtol), float(atol), _t_eval(t_eval), bool(vectorized))
     shape = (*x.shape[:-1], 2 * x.shape[-1])
-    sol = _finish(raw, shape)
+    sol = _finish(raw, shape, "solve_second_order")
     n = x.shape[-1]
     sol.x = sol.y[..., :n]
     sol.v = sol.y[..., n:]

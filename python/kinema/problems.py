@@ -69,7 +69,7 @@ def logistic(r: float = 1.0, y0: float = 0.1, t_end: float = 2.0) -> Problem:
     )
 
 
-def pendulum_small_time(t_end: float = 1.0) -> Problem:
+def driven_oscillator(t_end: float = 1.0) -> Problem:
     """x'' = −x + t (a driven oscillator with time-dependent forcing): x = t + cos t − sin t,
     from x(0) = 1, v(0) = 0. Exercises the time argument of a(t, x, v)."""
 
@@ -89,7 +89,7 @@ BY_NAME: dict[str, Callable[[], Problem]] = {
     "harmonic_oscillator": harmonic_oscillator,
     "exponential": exponential,
     "logistic": logistic,
-    "driven_oscillator": pendulum_small_time,
+    "driven_oscillator": driven_oscillator,
 }
 """Problems by name, with their default parameters."""
 

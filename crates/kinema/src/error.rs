@@ -40,16 +40,6 @@ pub enum Error {
     /// A Butcher tableau whose coefficients are inconsistent.
     #[error("invalid Butcher tableau: {0}")]
     InvalidTableau(String),
-    /// A callback returned an array of the wrong length.
-    #[error("{what} returned {got} values but {expected} were expected")]
-    CallbackShape {
-        /// Which callback (`f(t, y)`, `jac(t, y)`).
-        what: String,
-        /// Number of values it returned.
-        got: usize,
-        /// Number of values required.
-        expected: usize,
-    },
     /// The user's callback failed; the inner error is its own.
     #[error("callback failed: {0}")]
     Callback(#[source] CallbackError),

@@ -117,6 +117,11 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
     let mut y_new = vec![0.0; n];
     let mut err = vec![0.0; n];
     rk.first_stage(t0, y0, &mut stats)?;
+    if let Some(index) = first_non_finite(&rk.k()[0]) {
+        // f(t0, y0) itself is NaN/inf: no step can be taken.
+        let termination = Some(Termination::NonFinite { t: t0, h: 0.0, index });
+        return Ok(rec.finish(stats, termination, "rk45"));
+    }
     let mut h = match opts.h {
         Some(h) => h,
         None if t_end == t0 => 0.0,
@@ -135,7 +140,7 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
         // (at t = 0 the smallest subnormal, so a step that keeps failing ends after a few
         // hundred rejections at worst).
         let h_min = 10.0 * (t.abs().next_up() - t.abs());
-        if h < h_min {
+        if !(h >= h_min) {
             termination = Some(match non_finite_at {
                 // The last attempts failed because f or the stages produced NaN/inf: say so.
                 Some(index) => Termination::NonFinite { t, h, index },

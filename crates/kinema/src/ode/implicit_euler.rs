@@ -7,10 +7,12 @@
 //! ```
 //!
 //! starts from y_n and keeps J (and the LU factors of I − hJ) fixed over the iterations
-//! (simplified Newton). J comes from the system when it provides one, else from forward
-//! differences of f. If the iteration stalls, J is re-evaluated at the current iterate once;
-//! if it still fails, the step is split into two halves (recursively, up to
-//! [`MAX_HALVINGS`] times) and the solve stops with a clear reason only after that.
+//! (simplified Newton) while they contract fast. J comes from the system when it provides
+//! one, else from forward differences of f. When the contraction is slow
+//! (θ > [`SLOW_CONTRACTION`]), J is re-evaluated at the current iterate (full Newton); when
+//! even that does not contract, or after [`MAX_NEWTON_ITERATIONS`], the step is split into two
+//! halves (recursively, up to [`MAX_HALVINGS`] times) and the solve stops with a clear reason
+//! only after that.
 //! Stability: R(z) = 1/(1 − z), |R| ≤ 1 on the whole left half-plane (A-stable) and R → 0 as
 //! z → −∞ (L-stable), so stiff components are damped at any step.
 
@@ -22,7 +24,9 @@ use super::system::OdeSystem;
 use crate::error::Error;
 
 /// Newton iterations allowed per attempt.
-pub const MAX_NEWTON_ITERATIONS: usize = 10;
+pub const MAX_NEWTON_ITERATIONS: usize = 20;
+/// A contraction rate ‖Δ_k‖/‖Δ_{k−1}‖ above this re-evaluates the Jacobian at the iterate.
+pub const SLOW_CONTRACTION: f64 = 0.1;
 /// How many times a step whose Newton iteration fails may be halved before the solve stops.
 pub const MAX_HALVINGS: u32 = 10;
 /// Newton converges when the weighted max-norm of the update, with weights
@@ -142,7 +146,9 @@ impl<'s> ImplicitEuler<'s> {
             .map(|&a| if a { Block::Iterating } else { Block::Converged })
             .collect();
         let mut prev_norm = vec![f64::INFINITY; active.len()];
-        let mut fresh_jacobian_at_iterate = false;
+        // Whether a block's last measured contraction rate was ≥ 1 (it then gets one more
+        // chance with a Jacobian evaluated at its current iterate).
+        let mut diverged = vec![false; active.len()];
         for iter in 0..MAX_NEWTON_ITERATIONS {
             self.sys.rhs(t1, y_out, &mut self.f)?;
             stats.nfev += 1;
@@ -157,7 +163,7 @@ impl<'s> ImplicitEuler<'s> {
                 self.jacobian(t1, y_out, stats)?;
                 self.factor(h, stats);
             }
-            let mut diverging = false;
+            let mut slow = false;
             for (m, lu) in self.lu.iter().enumerate() {
                 if status[m] != Block::Iterating {
                     continue;
@@ -177,16 +183,21 @@ impl<'s> ImplicitEuler<'s> {
                     // NaN-propagating max: a NaN update (singular I − hJ, overflow) must fail.
                     norm = if w.is_nan() || w > norm { w } else { norm };
                 }
+                // Contraction rate θ = ‖Δ_k‖ / ‖Δ_{k−1}‖ (only meaningful from the second
+                // iteration on).
+                let theta = (prev_norm[m].is_finite()).then(|| norm / prev_norm[m]);
                 if !norm.is_finite() {
                     status[m] = Block::Failed;
                 } else if norm <= NEWTON_TOL {
                     status[m] = Block::Converged;
-                } else if iter > 0 && norm >= prev_norm[m] {
-                    // Not contracting: the Jacobian from the start of the step is too far off.
-                    if fresh_jacobian_at_iterate {
+                } else if let Some(theta) = theta {
+                    if theta >= 1.0 && diverged[m] {
+                        // Not contracting even after the Jacobian was re-evaluated at the
+                        // iterate: the step is too large for this nonlinearity.
                         status[m] = Block::Failed;
                     } else {
-                        diverging = true;
+                        diverged[m] = theta >= 1.0;
+                        slow |= theta > SLOW_CONTRACTION;
                     }
                 }
                 prev_norm[m] = norm;
@@ -194,8 +205,12 @@ impl<'s> ImplicitEuler<'s> {
             if !status.contains(&Block::Iterating) {
                 return Ok(status);
             }
-            if diverging {
-                fresh_jacobian_at_iterate = true;
+            // Simplified Newton converges linearly at the rate θ, which is slow when J has
+            // changed much since the start of the step (strongly nonlinear f): re-evaluate J
+            // at the current iterate, i.e. switch to full Newton (quadratic near the root).
+            if slow {
+                // θ compares updates made with the same Jacobian only.
+                prev_norm.fill(f64::INFINITY);
                 self.sys.rhs(t1, y_out, &mut self.f)?;
                 stats.nfev += 1;
                 let yk = y_out.to_vec();

@@ -100,8 +100,8 @@ impl Method {
     }
 
     /// Right-hand-side evaluations per step (FSAL reuse counted; rk45 per accepted step
-    /// without rejections; implicit Euler: per Newton iteration, plus n for a
-    /// finite-difference Jacobian).
+    /// without rejections; implicit Euler: per Newton iteration, plus one per unknown of a
+    /// system (of a batch member, in a batch) for each finite-difference Jacobian).
     pub fn evals_per_step(self) -> u32 {
         match self {
             Method::Euler | Method::ImplicitEuler | Method::SymplecticEuler | Method::Verlet => 1,

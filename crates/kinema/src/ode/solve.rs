@@ -128,12 +128,14 @@ pub fn solve_second_order(
 ) -> Result<Solution, Error> {
     let n = sys.dim();
     let b = sys.block_len();
-    if x0.len() != n || v0.len() != n {
-        return Err(Error::invalid(
-            "v0",
-            format!("an array of {} values", v0.len()),
-            format!("x0 and v0 must both have {n} values (x0 has {})", x0.len()),
-        ));
+    for (name, values) in [("x0", x0), ("v0", v0)] {
+        if values.len() != n {
+            return Err(Error::invalid(
+                name,
+                format!("an array of {} values", values.len()),
+                format!("the system has {n} coordinates, so x0 and v0 need {n} values each"),
+            ));
+        }
     }
     if b == 0 || n % b != 0 {
         return Err(Error::invalid("block_len", b, format!("must divide the dimension {n}")));

@@ -86,10 +86,14 @@ impl StabilityFunction {
 
     /// The largest h ≥ 0 such that |R(sλ)| ≤ 1 for every 0 < s ≤ h, in the unit of 1/λ.
     ///
-    /// `f64::INFINITY` when the whole ray is stable, 0 when no positive step is.
+    /// `f64::INFINITY` when the whole ray is stable, 0 when no positive step is, NaN for a
+    /// non-finite λ.
     pub fn max_step(&self, lam: Complex64) -> f64 {
+        if !(lam.re.is_finite() && lam.im.is_finite()) {
+            return f64::NAN;
+        }
         let r = lam.norm();
-        if !(r > 0.0) {
+        if r == 0.0 {
             return f64::INFINITY; // p' = 0: every step is exact
         }
         let dir = lam / r;

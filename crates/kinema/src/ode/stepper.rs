@@ -65,21 +65,39 @@ impl fmt::Display for Termination {
                 halvings,
             } => write!(
                 f,
-                "the implicit step from t = {t} with h = {h} failed: Newton iterations did not converge at t = {t_fail} \
-                 even with the step halved {halvings} times (down to h = {h_min:e}); the solution may blow up there, \
-                 or f is not smooth enough: give the Jacobian (jac=...) or a smaller h"
+                "the implicit step from t = {} with h = {} failed: Newton iterations did not converge at t = {} even with \
+                 the step halved {halvings} times (down to h = {}); the solution may blow up there or f may not be smooth; \
+                 a smaller h helps when the solution changes too much in one step, the exact Jacobian (jac=...) when \
+                 finite differences of f are inaccurate",
+                num(t),
+                num(h),
+                num(t_fail),
+                num(h_min)
             ),
             Termination::StepTooSmall { t, h } => write!(
                 f,
-                "required step size {h:e} at t = {t} is below what the time variable can resolve; the problem may be stiff \
-                 (try method='implicit_euler') or singular at this time"
+                "required step size {} at t = {} is below what the time variable can resolve; the problem may be stiff \
+                 (try method='implicit_euler') or singular at this time",
+                num(h),
+                num(t)
             ),
             Termination::NonFinite { t, h, index } => write!(
                 f,
-                "the step from t = {t} with h = {h} produced a non-finite value in component {index}; the solution \
-                 diverged (h beyond the method's stability limit, see kinema.stability.max_step) or f returned NaN/inf"
+                "the step from t = {} with h = {} produced a non-finite value in component {index}; the solution \
+                 diverged (h beyond the method's stability limit, see kinema.stability.max_step) or f returned NaN/inf",
+                num(t),
+                num(h)
             ),
         }
+    }
+}
+
+/// A number for a message: plain where that reads well, scientific otherwise.
+fn num(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e5).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }
 

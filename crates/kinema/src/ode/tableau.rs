@@ -294,7 +294,7 @@ pub mod catalogue {
             187.0 / 2100.0,
             1.0 / 40.0,
         ];
-        build("rk45", a, b, c, 5)
+        build("dopri5", a, b, c, 5)
             .with_embedded(b_hat)
             .expect("Dormand–Prince embedded weights are consistent")
     }
