@@ -160,3 +160,25 @@ def test_max_step_of_a_non_finite_lambda_is_nan():
 def test_convergence_refuses_the_adaptive_method():
     with pytest.raises(ValueError, match=r"ButcherTableau.of\('rk45'\)"):
         kinema.convergence("rk45")
+
+
+def test_a_step_so_small_it_would_never_finish_is_refused():
+    with pytest.raises(ValueError, match=r"h = 1e-300 is invalid: over t_span \(0, 1\) it would take 1.000e300 steps"):
+        kinema.solve(f, [1.0], (0, 1), h=1e-300)
+
+
+def test_f_returning_none_or_complex_values():
+    with pytest.raises(TypeError, match="it returned None"):
+        kinema.solve(lambda t, y: None, [1.0], (0, 1), h=0.1)
+    with pytest.raises(TypeError, match="it returned complex values"):
+        kinema.solve(lambda t, y: np.array([1j]), [1.0], (0, 1), h=0.1)
+
+
+def test_negative_declared_order():
+    with pytest.raises(ValueError, match="order = -1 is invalid"):
+        kinema.ButcherTableau([[0]], [1], [0], order=-1)
+
+
+def test_amplification_of_something_that_is_not_a_number():
+    with pytest.raises(ValueError, match="z = 'x' is invalid"):
+        kinema.stability.amplification("rk4", "x")

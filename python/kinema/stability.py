@@ -29,6 +29,13 @@ class Interval(NamedTuple):
         return self.lo == 0.0 and self.hi == 0.0
 
 
+def _complex(name: str, value: Any) -> np.ndarray:
+    try:
+        return np.asarray(value, dtype=np.complex128)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} = {value!r} is invalid: it must be a number or an array of (complex) numbers") from None
+
+
 def amplification(method: str | ButcherTableau, z: Any) -> np.ndarray:
     """R(z) for every z of a (complex) array; same shape as ``z``.
 
@@ -37,7 +44,7 @@ def amplification(method: str | ButcherTableau, z: Any) -> np.ndarray:
     the eigenvalue of larger modulus of the one-step matrix (its modulus is the spectral
     radius), a function of w = z².
     """
-    arr = np.asarray(z, dtype=np.complex128)
+    arr = _complex("z", z)
     out = _core.amplification(method, np.ascontiguousarray(arr.reshape(arr.shape or (1,))))
     return out.reshape(arr.shape) if arr.shape else out.reshape(())[()]
 
@@ -48,7 +55,7 @@ def max_step(method: str | ButcherTableau, lam: Any) -> Any:
     ``inf`` where no step is too large (e.g. implicit Euler for Re λ ≤ 0), ``0`` where no
     positive step is stable (e.g. forward Euler on the imaginary axis).
     """
-    arr = np.asarray(lam, dtype=np.complex128)
+    arr = _complex("lam", lam)
     out = _core.max_step(method, np.ascontiguousarray(arr.reshape(arr.shape or (1,))))
     return out.reshape(arr.shape) if arr.shape else float(out[0])
 

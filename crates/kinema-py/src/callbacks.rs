@@ -25,7 +25,7 @@ fn to_array<'py>(py: Python<'py>, data: &[f64], shape: &[usize]) -> PyResult<Bou
     }
 }
 
-fn shape_str(shape: &[usize]) -> String {
+pub fn shape_str(shape: &[usize]) -> String {
     match shape {
         [n] => format!("({n},)"),
         _ => format!("({})", shape.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(", ")),
@@ -36,17 +36,7 @@ fn shape_str(shape: &[usize]) -> String {
 fn copy_result(py: Python<'_>, what: &str, value: &Bound<'_, PyAny>, shape: &[usize], out: &mut [f64]) -> PyResult<()> {
     let arr = match value.cast::<PyArrayDyn<f64>>() {
         Ok(a) => a.clone(),
-        Err(_) => {
-            let np = py.import("numpy")?;
-            let converted = np.call_method1("asarray", (value, "float64")).map_err(|_| {
-                PyTypeError::new_err(format!(
-                    "{what} must return an array of floats of shape {}; it returned {}",
-                    shape_str(shape),
-                    value.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into())
-                ))
-            })?;
-            converted.cast_into::<PyArrayDyn<f64>>()?
-        }
+        Err(_) => slow_convert(py, what, value, shape)?,
     };
     if arr.shape() != shape {
         return Err(PyValueError::new_err(format!(
@@ -65,6 +55,40 @@ fn copy_result(py: Python<'_>, what: &str, value: &Bound<'_, PyAny>, shape: &[us
         }
     }
     Ok(())
+}
+
+/// Anything but a float64 array: lists, tuples, integer arrays — once through numpy.asarray.
+/// None and complex values are refused rather than silently turned into NaN or their real part.
+fn slow_convert<'py>(
+    py: Python<'py>,
+    what: &str,
+    value: &Bound<'py, PyAny>,
+    shape: &[usize],
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let type_name = || value.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
+    let expected = || format!("{what} must return an array of floats of shape {}", shape_str(shape));
+    if value.is_none() {
+        return Err(PyTypeError::new_err(format!(
+            "{}; it returned None (a missing return statement?)",
+            expected()
+        )));
+    }
+    let np = py.import("numpy")?;
+    let raw = np
+        .call_method1("asarray", (value,))
+        .map_err(|_| PyTypeError::new_err(format!("{}; it returned {}", expected(), type_name())))?;
+    let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
+    match kind.as_str() {
+        "f" | "i" | "u" | "b" => {}
+        "c" => {
+            return Err(PyTypeError::new_err(format!(
+                "{}; it returned complex values (write a complex system as its real and imaginary parts)",
+                expected()
+            )))
+        }
+        _ => return Err(PyTypeError::new_err(format!("{}; it returned {}", expected(), type_name()))),
+    }
+    Ok(np.call_method1("asarray", (raw, "float64"))?.cast_into::<PyArrayDyn<f64>>()?)
 }
 
 /// f(t, y) (and optionally jac(t, y)) as an [`OdeSystem`].

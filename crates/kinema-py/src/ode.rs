@@ -6,7 +6,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::callbacks::{PyAccel, PyOde};
+use crate::callbacks::{shape_str, PyAccel, PyOde};
 use crate::errors::to_py;
 
 /// An explicit Runge–Kutta method given by its Butcher tableau (A, b, c), checked when built.
@@ -19,7 +19,12 @@ pub struct PyButcherTableau {
 impl PyButcherTableau {
     #[new]
     #[pyo3(signature = (a, b, c, order, name = "custom".to_string()))]
-    fn new(a: Vec<Vec<f64>>, b: Vec<f64>, c: Vec<f64>, order: u32, name: String) -> PyResult<Self> {
+    fn new(a: Vec<Vec<f64>>, b: Vec<f64>, c: Vec<f64>, order: i64, name: String) -> PyResult<Self> {
+        let order = u32::try_from(order).map_err(|_| {
+            PyValueError::new_err(format!(
+                "order = {order} is invalid: the declared order must be an integer >= 1"
+            ))
+        })?;
         ButcherTableau::new(name, a, b, c, order)
             .map(|inner| Self { inner })
             .map_err(to_py)
@@ -150,13 +155,15 @@ fn initial_state(name: &str, arr: &PyReadonlyArrayDyn<'_, f64>, vectorized: bool
         (2, true) => {}
         (2, false) => {
             return Err(PyValueError::new_err(format!(
-            "{name} has shape {shape:?}: a 2-D initial state is a batch of initial conditions (batch, n); pass vectorized=True \
-                 and a function that takes and returns (batch, n) arrays"
-        )))
+                "{name} has shape {}: a 2-D initial state is a batch of initial conditions (batch, n); pass vectorized=True \
+                 and a function that takes and returns (batch, n) arrays",
+                shape_str(&shape)
+            )))
         }
         _ => {
             return Err(PyValueError::new_err(format!(
-                "{name} has shape {shape:?}; it must be 1-D (n,) or, with vectorized=True, 2-D (batch, n)"
+                "{name} has shape {}; it must be 1-D (n,) or, with vectorized=True, 2-D (batch, n)",
+                shape_str(&shape)
             )))
         }
     }

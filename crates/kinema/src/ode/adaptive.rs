@@ -140,7 +140,7 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
         // (at t = 0 the smallest subnormal, so a step that keeps failing ends after a few
         // hundred rejections at worst).
         let h_min = 10.0 * (t.abs().next_up() - t.abs());
-        if !(h >= h_min) {
+        if h.is_nan() || h < h_min {
             termination = Some(match non_finite_at {
                 // The last attempts failed because f or the stages produced NaN/inf: say so.
                 Some(index) => Termination::NonFinite { t, h, index },

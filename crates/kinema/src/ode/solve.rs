@@ -165,8 +165,12 @@ pub fn solve_second_order(
     }
 }
 
+/// Most steps a fixed-step solve may take (beyond this, h is almost surely a mistake: 10¹²
+/// steps take hours even with the cheapest right-hand side).
+pub const MAX_FIXED_STEPS: f64 = 1e12;
+
 fn fixed_step(integrator: &Integrator, opts: &SolveOptions) -> Result<f64, Error> {
-    opts.h.ok_or_else(|| {
+    let h = opts.h.ok_or_else(|| {
         Error::invalid(
             "h",
             "None",
@@ -175,7 +179,20 @@ fn fixed_step(integrator: &Integrator, opts: &SolveOptions) -> Result<f64, Error
                 integrator.name()
             ),
         )
-    })
+    })?;
+    let (t0, t1) = opts.t_span;
+    let steps = (t1 - t0).abs() / h;
+    if steps > MAX_FIXED_STEPS || t0 + h == t0 || t1 + h == t1 {
+        return Err(Error::invalid(
+            "h",
+            format!("{h:e}"),
+            format!(
+                "over t_span ({t0}, {t1}) it would take {steps:.3e} steps (at most {MAX_FIXED_STEPS:e} are allowed) or be below the \
+                 resolution of t; choose a larger h"
+            ),
+        ));
+    }
+    Ok(h)
 }
 
 fn validate(dim: usize, block: usize, y0: &[f64], opts: &SolveOptions) -> Result<(), Error> {
