@@ -204,3 +204,22 @@ def test_implicit_euler_solves_a_strongly_nonlinear_stiff_step():
     assert np.max(np.abs(residual / y[1:])) < 1e-8
     # the exact solution 1/sqrt(1 + 2ct) decays monotonically; so does backward Euler's
     assert np.all(np.diff(y) < 0) and np.all(y > 0)
+
+
+def test_rk45_h_max_resolves_a_short_pulse_the_error_control_would_step_over():
+    # y' = 1 during [5, 5.01), else 0: y(10) = 0.01 exactly. Far from the pulse the error
+    # estimate is 0 and the step grows, so without a limit the pulse falls between stages.
+    def pulse(t, y):
+        return np.array([1.0 if 5.0 <= t < 5.01 else 0.0])
+
+    blind = kinema.solve(pulse, [0.0], (0.0, 10.0), method="rk45")
+    limited = kinema.solve(pulse, [0.0], (0.0, 10.0), method="rk45", h_max=0.004)
+    assert blind.y[-1, 0] == 0.0
+    assert np.max(np.diff(limited.t)) <= 0.004 * (1 + 1e-12)
+    # the error control then shrinks the steps at the pulse edges (measured error 8e-7)
+    assert abs(limited.y[-1, 0] - 0.01) < 1e-5
+
+
+def test_h_max_must_be_positive():
+    with pytest.raises(ValueError, match="h_max = 0 is invalid"):
+        kinema.solve(decay, [1.0], (0.0, 1.0), method="rk45", h_max=0.0)

@@ -116,6 +116,7 @@ def solve(
     t_span: Sequence[float],
     *,
     h: float | None = None,
+    h_max: float | None = None,
     method: str | ButcherTableau = "rk4",
     jac: Callable[[float, np.ndarray], Any] | None = None,
     rtol: float = 1e-6,
@@ -136,6 +137,8 @@ def solve(
     h : float, optional
         Step size (> 0). Required by the fixed-step methods (the last step is shortened to end
         at t_end); for ``rk45`` the first step (chosen automatically when omitted).
+    h_max : float, optional
+        Largest step ``rk45`` may take (default: no limit); fixed-step methods ignore it.
     method : str or ButcherTableau
         A registered name (``kinema.method_names()``) or an explicit tableau. Default ``rk4``.
     jac : callable ``jac(t, y) -> (n, n) array``, optional
@@ -159,7 +162,9 @@ def solve(
     if jac is not None:
         _callable("jac", jac)
     y = _state("y0", y0)
-    raw = _core.solve(f, y, _t_span(t_span), _float_or_none("h", h), method, jac, float(rtol), float(atol), _t_eval(t_eval), bool(vectorized))
+    raw = _core.solve(
+        f, y, _t_span(t_span), _float_or_none("h", h), _float_or_none("h_max", h_max), method, jac, float(rtol), float(atol), _t_eval(t_eval), bool(vectorized)
+    )
     return _finish(raw, y.shape, "solve")
 
 
@@ -170,6 +175,7 @@ def solve_second_order(
     t_span: Sequence[float],
     *,
     h: float | None = None,
+    h_max: float | None = None,
     method: str | ButcherTableau = "verlet",
     rtol: float = 1e-6,
     atol: float = 1e-9,
@@ -186,7 +192,9 @@ def solve_second_order(
     _callable("a", a)
     x = _state("x0", x0)
     v = _state("v0", v0)
-    raw = _core.solve_second_order(a, x, v, _t_span(t_span), _float_or_none("h", h), method, float(rtol), float(atol), _t_eval(t_eval), bool(vectorized))
+    raw = _core.solve_second_order(
+        a, x, v, _t_span(t_span), _float_or_none("h", h), _float_or_none("h_max", h_max), method, float(rtol), float(atol), _t_eval(t_eval), bool(vectorized)
+    )
     shape = (*x.shape[:-1], 2 * x.shape[-1])
     sol = _finish(raw, shape, "solve_second_order")
     n = x.shape[-1]

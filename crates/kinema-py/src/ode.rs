@@ -121,10 +121,18 @@ fn methods<'py>(py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         .collect()
 }
 
-fn options(t_span: (f64, f64), h: Option<f64>, rtol: f64, atol: f64, t_eval: Option<Vec<f64>>) -> SolveOptions {
+fn options(
+    t_span: (f64, f64),
+    h: Option<f64>,
+    h_max: Option<f64>,
+    rtol: f64,
+    atol: f64,
+    t_eval: Option<Vec<f64>>,
+) -> SolveOptions {
     SolveOptions {
         t_span,
         h,
+        h_max,
         rtol,
         atol,
         t_eval,
@@ -172,7 +180,7 @@ fn initial_state(name: &str, arr: &PyReadonlyArrayDyn<'_, f64>, vectorized: bool
 
 /// Solves y' = f(t, y); returns a dict (see kinema.ode.Solution).
 #[pyfunction]
-#[pyo3(signature = (f, y0, t_span, h, method, jac, rtol, atol, t_eval, vectorized))]
+#[pyo3(signature = (f, y0, t_span, h, h_max, method, jac, rtol, atol, t_eval, vectorized))]
 #[allow(clippy::too_many_arguments)]
 fn solve<'py>(
     py: Python<'py>,
@@ -180,6 +188,7 @@ fn solve<'py>(
     y0: PyReadonlyArrayDyn<'py, f64>,
     t_span: (f64, f64),
     h: Option<f64>,
+    h_max: Option<f64>,
     method: Bound<'py, PyAny>,
     jac: Option<Bound<'py, PyAny>>,
     rtol: f64,
@@ -190,13 +199,13 @@ fn solve<'py>(
     let integrator = integrator_from(&method)?;
     let (y, shape) = initial_state("y0", &y0, vectorized)?;
     let mut sys = PyOde { py, f, jac, shape };
-    let sol = ode::solve(&mut sys, &y, &integrator, &options(t_span, h, rtol, atol, t_eval)).map_err(to_py)?;
+    let sol = ode::solve(&mut sys, &y, &integrator, &options(t_span, h, h_max, rtol, atol, t_eval)).map_err(to_py)?;
     solution_dict(py, sol)
 }
 
 /// Solves x'' = a(t, x, v); the dict's y rows are [x, v] per block.
 #[pyfunction]
-#[pyo3(signature = (a, x0, v0, t_span, h, method, rtol, atol, t_eval, vectorized))]
+#[pyo3(signature = (a, x0, v0, t_span, h, h_max, method, rtol, atol, t_eval, vectorized))]
 #[allow(clippy::too_many_arguments)]
 fn solve_second_order<'py>(
     py: Python<'py>,
@@ -205,6 +214,7 @@ fn solve_second_order<'py>(
     v0: PyReadonlyArrayDyn<'py, f64>,
     t_span: (f64, f64),
     h: Option<f64>,
+    h_max: Option<f64>,
     method: Bound<'py, PyAny>,
     rtol: f64,
     atol: f64,
@@ -220,7 +230,8 @@ fn solve_second_order<'py>(
         )));
     }
     let mut sys = PyAccel { py, a, shape };
-    let sol = ode::solve_second_order(&mut sys, &x, &v, &integrator, &options(t_span, h, rtol, atol, t_eval)).map_err(to_py)?;
+    let sol =
+        ode::solve_second_order(&mut sys, &x, &v, &integrator, &options(t_span, h, h_max, rtol, atol, t_eval)).map_err(to_py)?;
     solution_dict(py, sol)
 }
 

@@ -148,6 +148,9 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
             });
             break;
         }
+        if let Some(h_max) = opts.h_max {
+            h = h.min(h_max);
+        }
         let remaining = (t_end - t).abs();
         let (h_step, last) = if h >= remaining { (remaining, true) } else { (h, false) };
         let t_b = if last { t_end } else { t + dir * h_step };

@@ -23,6 +23,9 @@ pub struct SolveOptions {
     /// Step size > 0. Required by fixed-step methods (the last step is shortened to end at
     /// t_end); for `rk45` the first step (chosen automatically when `None`).
     pub h: Option<f64>,
+    /// Largest step rk45 may take (`None`: no limit), e.g. to resolve a short forcing pulse
+    /// the error estimate would step over. Fixed-step methods ignore it.
+    pub h_max: Option<f64>,
     /// Relative tolerance (rk45 error control; implicit Euler's Newton tolerance). Default 1e-6.
     pub rtol: f64,
     /// Absolute tolerance, same roles. Default 1e-9.
@@ -38,6 +41,7 @@ impl Default for SolveOptions {
         Self {
             t_span: (0.0, 1.0),
             h: None,
+            h_max: None,
             rtol: 1e-6,
             atol: 1e-9,
             t_eval: None,
@@ -226,6 +230,15 @@ fn validate(dim: usize, block: usize, y0: &[f64], opts: &SolveOptions) -> Result
                 "h",
                 h,
                 "the step size must be a finite number > 0 (the direction comes from t_span)",
+            ));
+        }
+    }
+    if let Some(h_max) = opts.h_max {
+        if !(h_max > 0.0) {
+            return Err(Error::invalid(
+                "h_max",
+                h_max,
+                "the largest step must be a number > 0 (or None for no limit)",
             ));
         }
     }
