@@ -223,3 +223,42 @@ def test_rk45_h_max_resolves_a_short_pulse_the_error_control_would_step_over():
 def test_h_max_must_be_positive():
     with pytest.raises(ValueError, match="h_max = 0 is invalid"):
         kinema.solve(decay, [1.0], (0.0, 1.0), method="rk45", h_max=0.0)
+
+
+@pytest.mark.parametrize("method", ["rk4", "heun", "implicit_euler", "rk45"])
+def test_dense_output_reproduces_the_steps_and_interpolates_between_them(method):
+    f = lambda t, y: np.array([y[1], -y[0]])  # noqa: E731  (x = cos t)
+    kwargs = {"rtol": 1e-9, "atol": 1e-12} if method == "rk45" else {"h": 0.01}
+    plain = kinema.solve(f, [1.0, 0.0], (0.0, 10.0), method=method, **kwargs)
+    dense = kinema.solve(f, [1.0, 0.0], (0.0, 10.0), method=method, dense_output=True, **kwargs)
+    assert plain.sol is None and dense.sol.span == (0.0, 10.0)
+    np.testing.assert_array_equal(dense.y, plain.y)  # asking for it does not change the steps
+    np.testing.assert_allclose(dense.sol(dense.t), dense.y, rtol=0, atol=1e-15)
+    t = np.linspace(0.0, 10.0, 777)
+    between = dense.sol(t)[:, 0]
+    # between the steps the interpolant is as good as the steps themselves (Hermite: O(h^4);
+    # Dormand-Prince's extension: order 4, within the tolerance)
+    grid_err = np.max(np.abs(dense.y[:, 0] - np.cos(dense.t)))
+    assert np.max(np.abs(between - np.cos(t))) < max(2 * grid_err, 1e-8)
+
+
+def test_dense_output_costs_nothing_extra_for_explicit_runge_kutta():
+    f = lambda t, y: -y  # noqa: E731
+    plain = kinema.solve(f, [1.0], (0.0, 1.0), h=0.01, method="rk4")
+    dense = kinema.solve(f, [1.0], (0.0, 1.0), h=0.01, method="rk4", dense_output=True)
+    assert dense.nfev == plain.nfev + 1  # only f at the last point
+
+
+def test_dense_output_shapes_and_range():
+    sol = kinema.solve_second_order(lambda t, x, v: -x, np.ones((3, 2)), np.zeros((3, 2)), (0.0, 1.0), h=0.01, vectorized=True, dense_output=True)
+    assert sol.sol(0.5).shape == (3, 4)
+    assert sol.sol([0.1, 0.2]).shape == (2, 3, 4)
+    np.testing.assert_allclose(sol.sol(0.505)[:, :2], np.cos(0.505), atol=1e-5)
+    with pytest.raises(ValueError, match=r"t = 1.5 is invalid: the dense output covers \[0, 1\]"):
+        sol.sol(1.5)
+
+
+def test_dense_output_backwards_in_time():
+    sol = kinema.solve(lambda t, y: -y, [1.0], (2.0, 0.0), h=0.01, method="rk4", dense_output=True)
+    assert sol.sol.span == (2.0, 0.0)
+    np.testing.assert_allclose(sol.sol([1.0, 0.0])[:, 0], np.exp([1.0, 2.0]), rtol=1e-9)

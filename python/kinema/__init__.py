@@ -2,7 +2,7 @@
 
 The public API (everything else is private):
 
-- ODEs: ``solve``, ``solve_second_order``, ``Solution``, ``ButcherTableau``, ``methods``,
+- ODEs: ``solve``, ``solve_second_order``, ``Solution``, ``DenseSolution``, ``ButcherTableau``, ``methods``,
   ``method_names``, ``MethodInfo``, ``SolverWarning``
 - Stability on p' = λp: the module ``kinema.stability``
 - Measured orders of accuracy: ``convergence``, ``ConvergenceResult``, the module
@@ -14,6 +14,7 @@ from ._core import __version__
 from .convergence import ConvergenceResult, convergence
 from .ode import (
     ButcherTableau,
+    DenseSolution,
     MethodInfo,
     Solution,
     SolverWarning,
@@ -27,6 +28,7 @@ __all__ = [
     "__version__",
     "ButcherTableau",
     "ConvergenceResult",
+    "DenseSolution",
     "MethodInfo",
     "Solution",
     "SolverWarning",

@@ -28,6 +28,13 @@ class ButcherTableau:
     def c(self) -> npt.NDArray[np.float64]: ...
     def stability_polynomial(self) -> npt.NDArray[np.float64]: ...
 
+class DenseOutput:
+    """The continuous solution of a solve with dense_output."""
+
+    def __call__(self, t: list[float]) -> npt.NDArray[np.float64]: ...
+    @property
+    def span(self) -> tuple[float, float]: ...
+
 def methods() -> list[dict[str, Any]]: ...
 def solve(
     f: Callable[..., Any],
@@ -41,6 +48,7 @@ def solve(
     atol: float,
     t_eval: list[float] | None,
     vectorized: bool,
+    dense_output: bool,
 ) -> dict[str, Any]: ...
 def solve_second_order(
     a: Callable[..., Any],
@@ -54,6 +62,7 @@ def solve_second_order(
     atol: float,
     t_eval: list[float] | None,
     vectorized: bool,
+    dense_output: bool,
 ) -> dict[str, Any]: ...
 def amplification(method: str | ButcherTableau, z: npt.NDArray[np.complex128]) -> npt.NDArray[np.complex128]: ...
 def max_step(method: str | ButcherTableau, lam: npt.NDArray[np.complex128]) -> npt.NDArray[np.float64]: ...

@@ -47,12 +47,38 @@ def method_names() -> list[str]:
     return [m.name for m in methods()]
 
 
+class DenseSolution:
+    """The continuous solution of a solve with ``dense_output=True``: ``sol(t)``.
+
+    A scalar ``t`` gives one state (y0's shape); an array of times gives one state per time,
+    stacked along the first axis (as ``Solution.y``; SciPy's ``OdeSolution`` puts time last).
+    """
+
+    def __init__(self, core: Any, shape: tuple[int, ...]):
+        self._core = core
+        self._shape = shape
+
+    @property
+    def span(self) -> tuple[float, float]:
+        """The first and last time covered."""
+        return self._core.span
+
+    def __call__(self, t: Any) -> np.ndarray:
+        ts = np.asarray(t, dtype=np.float64)
+        out = self._core(ts.reshape(-1).tolist())
+        return out.reshape((*ts.shape, *self._shape))
+
+    def __repr__(self) -> str:
+        return f"DenseSolution(span={self.span})"
+
+
 @dataclass
 class Solution:
     """Result of ``solve`` / ``solve_second_order``.
 
     ``t`` has shape (T,); ``y`` has shape (T, n), or (T, batch, n) for a batch. For
     second-order problems ``y`` is [x, v] along the last axis and ``x``, ``v`` are its halves.
+    ``sol`` is the continuous solution when ``dense_output=True`` was given, else None.
     """
 
     t: np.ndarray
@@ -65,6 +91,7 @@ class Solution:
     method: str
     success: bool
     message: str
+    sol: DenseSolution | None = field(default=None, repr=False)
     x: np.ndarray | None = field(default=None, repr=False)
     v: np.ndarray | None = field(default=None, repr=False)
 
@@ -104,7 +131,8 @@ def _t_eval(t_eval: Any) -> list[float] | None:
 
 def _finish(raw: dict, shape: tuple[int, ...], caller: str) -> Solution:
     y = raw["y"].reshape((raw["t"].size, *shape))
-    sol = Solution(**{k: raw[k] for k in ("t", "nfev", "njev", "nlu", "nsteps", "nrejected", "method", "success", "message")}, y=y)
+    dense = DenseSolution(raw["sol"], shape) if raw["sol"] is not None else None
+    sol = Solution(**{k: raw[k] for k in ("t", "nfev", "njev", "nlu", "nsteps", "nrejected", "method", "success", "message")}, y=y, sol=dense)
     if not sol.success:
         warnings.warn(f"kinema.{caller} stopped early: {sol.message}", SolverWarning, stacklevel=3)
     return sol
@@ -123,6 +151,7 @@ def solve(
     atol: float = 1e-9,
     t_eval: Any = None,
     vectorized: bool = False,
+    dense_output: bool = False,
 ) -> Solution:
     """Solve the initial value problem y' = f(t, y), y(t0) = y0 over ``t_span = (t0, t_end)``.
 
@@ -150,6 +179,11 @@ def solve(
     vectorized : bool
         With a 2-D ``y0`` of shape (batch, n): solve every row as its own initial condition,
         calling ``f`` once per stage with the whole (batch, n) array.
+    dense_output : bool
+        Keep every step's interpolant: ``Solution.sol(t)`` then gives the state at any time of
+        the interval (rk45: Dormand-Prince's fourth-order extension; fixed-step methods: cubic
+        Hermite, which costs one extra evaluation of f per step except for explicit
+        Runge-Kutta methods).
 
     Returns
     -------
@@ -163,7 +197,18 @@ def solve(
         _callable("jac", jac)
     y = _state("y0", y0)
     raw = _core.solve(
-        f, y, _t_span(t_span), _float_or_none("h", h), _float_or_none("h_max", h_max), method, jac, float(rtol), float(atol), _t_eval(t_eval), bool(vectorized)
+        f,
+        y,
+        _t_span(t_span),
+        _float_or_none("h", h),
+        _float_or_none("h_max", h_max),
+        method,
+        jac,
+        float(rtol),
+        float(atol),
+        _t_eval(t_eval),
+        bool(vectorized),
+        bool(dense_output),
     )
     return _finish(raw, y.shape, "solve")
 
@@ -181,6 +226,7 @@ def solve_second_order(
     atol: float = 1e-9,
     t_eval: Any = None,
     vectorized: bool = False,
+    dense_output: bool = False,
 ) -> Solution:
     """Solve x'' = a(t, x, v), x(t0) = x0, x'(t0) = v0 — Newton's law with a = F/m.
 
@@ -193,7 +239,18 @@ def solve_second_order(
     x = _state("x0", x0)
     v = _state("v0", v0)
     raw = _core.solve_second_order(
-        a, x, v, _t_span(t_span), _float_or_none("h", h), _float_or_none("h_max", h_max), method, float(rtol), float(atol), _t_eval(t_eval), bool(vectorized)
+        a,
+        x,
+        v,
+        _t_span(t_span),
+        _float_or_none("h", h),
+        _float_or_none("h_max", h_max),
+        method,
+        float(rtol),
+        float(atol),
+        _t_eval(t_eval),
+        bool(vectorized),
+        bool(dense_output),
     )
     shape = (*x.shape[:-1], 2 * x.shape[-1])
     sol = _finish(raw, shape, "solve_second_order")

@@ -81,6 +81,30 @@ impl PyButcherTableau {
     }
 }
 
+/// The continuous solution of a solve with `dense_output=True`.
+#[pyclass(name = "DenseOutput", module = "kinema._core", frozen)]
+pub struct PyDenseOutput {
+    inner: kinema::ode::DenseOutput,
+}
+
+#[pymethods]
+impl PyDenseOutput {
+    /// The states at the times `t` (a 1-D array), one row per time.
+    fn __call__<'py>(&self, py: Python<'py>, t: Vec<f64>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let n = self.inner.dim();
+        let mut out = vec![0.0; t.len() * n];
+        for (ti, row) in t.iter().zip(out.chunks_exact_mut(n.max(1))) {
+            self.inner.eval(*ti, row).map_err(to_py)?;
+        }
+        Ok(PyArray1::from_vec(py, out).reshape([t.len(), n])?)
+    }
+    /// (first, last) time covered.
+    #[getter]
+    fn span(&self) -> (f64, f64) {
+        self.inner.span()
+    }
+}
+
 /// A method argument from Python: a registered name or a `ButcherTableau`.
 pub fn integrator_from(obj: &Bound<'_, PyAny>) -> PyResult<Integrator> {
     if let Ok(name) = obj.extract::<String>() {
@@ -128,11 +152,13 @@ fn options(
     rtol: f64,
     atol: f64,
     t_eval: Option<Vec<f64>>,
+    dense_output: bool,
 ) -> SolveOptions {
     SolveOptions {
         t_span,
         h,
         h_max,
+        dense_output,
         rtol,
         atol,
         t_eval,
@@ -150,6 +176,7 @@ fn solution_dict<'py>(py: Python<'py>, sol: Solution) -> PyResult<Bound<'py, PyD
     d.set_item("nlu", sol.stats.nlu)?;
     d.set_item("nsteps", sol.stats.nsteps)?;
     d.set_item("nrejected", sol.stats.nrejected)?;
+    d.set_item("sol", sol.dense.map(|inner| PyDenseOutput { inner }))?;
     d.set_item("t", PyArray1::from_vec(py, sol.t))?;
     d.set_item("y", PyArray1::from_vec(py, sol.y).reshape([rows, sol.dim])?)?;
     Ok(d)
@@ -180,7 +207,7 @@ fn initial_state(name: &str, arr: &PyReadonlyArrayDyn<'_, f64>, vectorized: bool
 
 /// Solves y' = f(t, y); returns a dict (see kinema.ode.Solution).
 #[pyfunction]
-#[pyo3(signature = (f, y0, t_span, h, h_max, method, jac, rtol, atol, t_eval, vectorized))]
+#[pyo3(signature = (f, y0, t_span, h, h_max, method, jac, rtol, atol, t_eval, vectorized, dense_output))]
 #[allow(clippy::too_many_arguments)]
 fn solve<'py>(
     py: Python<'py>,
@@ -195,17 +222,24 @@ fn solve<'py>(
     atol: f64,
     t_eval: Option<Vec<f64>>,
     vectorized: bool,
+    dense_output: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let integrator = integrator_from(&method)?;
     let (y, shape) = initial_state("y0", &y0, vectorized)?;
     let mut sys = PyOde { py, f, jac, shape };
-    let sol = ode::solve(&mut sys, &y, &integrator, &options(t_span, h, h_max, rtol, atol, t_eval)).map_err(to_py)?;
+    let sol = ode::solve(
+        &mut sys,
+        &y,
+        &integrator,
+        &options(t_span, h, h_max, rtol, atol, t_eval, dense_output),
+    )
+    .map_err(to_py)?;
     solution_dict(py, sol)
 }
 
 /// Solves x'' = a(t, x, v); the dict's y rows are [x, v] per block.
 #[pyfunction]
-#[pyo3(signature = (a, x0, v0, t_span, h, h_max, method, rtol, atol, t_eval, vectorized))]
+#[pyo3(signature = (a, x0, v0, t_span, h, h_max, method, rtol, atol, t_eval, vectorized, dense_output))]
 #[allow(clippy::too_many_arguments)]
 fn solve_second_order<'py>(
     py: Python<'py>,
@@ -220,6 +254,7 @@ fn solve_second_order<'py>(
     atol: f64,
     t_eval: Option<Vec<f64>>,
     vectorized: bool,
+    dense_output: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let integrator = integrator_from(&method)?;
     let (x, shape) = initial_state("x0", &x0, vectorized)?;
@@ -230,13 +265,20 @@ fn solve_second_order<'py>(
         )));
     }
     let mut sys = PyAccel { py, a, shape };
-    let sol =
-        ode::solve_second_order(&mut sys, &x, &v, &integrator, &options(t_span, h, h_max, rtol, atol, t_eval)).map_err(to_py)?;
+    let sol = ode::solve_second_order(
+        &mut sys,
+        &x,
+        &v,
+        &integrator,
+        &options(t_span, h, h_max, rtol, atol, t_eval, dense_output),
+    )
+    .map_err(to_py)?;
     solution_dict(py, sol)
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyButcherTableau>()?;
+    m.add_class::<PyDenseOutput>()?;
     m.add_function(wrap_pyfunction!(methods, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_second_order, m)?)?;

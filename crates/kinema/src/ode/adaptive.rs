@@ -20,7 +20,7 @@
 //! oscillation of the step size that a pure I controller (β = 0) shows on problems at the
 //! edge of stability. After a rejection the step does not grow.
 
-use super::dense;
+use super::dense::{self, DenseOutput};
 use super::explicit_rk::ExplicitRk;
 use super::solve::{Recorder, Solution, SolveOptions};
 use super::stepper::{first_non_finite, Stats, Termination};
@@ -130,6 +130,7 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
             initial_step(rk.system(), t0, y0, &f0, dir, opts, &mut stats)?
         }
     };
+    let mut dense_out = opts.dense_output.then(|| DenseOutput::dopri5(n, t0));
     let mut err_prev = 1e-4_f64;
     let mut last_rejected = false;
     // Component that was non-finite in the last rejected attempt, if that was the reason.
@@ -167,6 +168,9 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
             stats.nsteps += 1;
             let k = rk.k();
             rec.step(t, hs, t_b, &y_new, |theta, out| dense::dopri5(theta, hs, &y, k, out));
+            if let Some(d) = &mut dense_out {
+                d.push_dopri5(t_b, &y, k);
+            }
             t = t_b;
             std::mem::swap(&mut y, &mut y_new);
             let k = rk.k_mut();
@@ -192,5 +196,7 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
             last_rejected = true;
         }
     }
-    Ok(rec.finish(stats, termination, "rk45"))
+    let mut sol = rec.finish(stats, termination, "rk45");
+    sol.dense = dense_out;
+    Ok(sol)
 }

@@ -117,6 +117,11 @@ impl Stepper for ExplicitRk<'_> {
         Ok(())
     }
 
+    fn derivative_at_start(&self) -> Option<&[f64]> {
+        // A is strictly lower triangular and c_1 = Σ_j a_1j = 0, so k_1 = f(t_a, y_a).
+        Some(&self.k[0])
+    }
+
     fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error> {
         stats.nfev += 1;
         Ok(self.sys.rhs(t, y, dydt)?)

@@ -22,6 +22,7 @@ pub mod system;
 pub mod tableau;
 pub mod verlet;
 
+pub use dense::DenseOutput;
 pub use method::{Integrator, Method, MethodKind};
 pub use solve::{solve, solve_second_order, Solution, SolveOptions};
 pub use stability::{amplification, imag_interval, max_step, real_interval, StabilityFunction};

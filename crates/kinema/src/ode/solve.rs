@@ -5,7 +5,7 @@
 //! adaptive loop in `adaptive` decides the steps, and a [`Recorder`] stores the output.
 
 use super::adaptive;
-use super::dense;
+use super::dense::{self, DenseOutput};
 use super::explicit_rk::ExplicitRk;
 use super::implicit_euler::ImplicitEuler;
 use super::method::{Integrator, Method, MethodKind};
@@ -30,6 +30,11 @@ pub struct SolveOptions {
     pub rtol: f64,
     /// Absolute tolerance, same roles. Default 1e-9.
     pub atol: f64,
+    /// Keep the interpolant of every step, so that the solution can be evaluated at any time
+    /// afterwards ([`Solution::dense`]). Costs memory, and for fixed-step methods one
+    /// evaluation of f per step where the method does not already compute f at the grid
+    /// points (every explicit Runge–Kutta method does). Default false.
+    pub dense_output: bool,
     /// Times at which to report the solution, inside t_span and ordered in the direction of
     /// integration. `None`: every step. Points between steps are interpolated (Hermite cubic;
     /// rk45: its own fourth-order dense output).
@@ -42,6 +47,7 @@ impl Default for SolveOptions {
             t_span: (0.0, 1.0),
             h: None,
             h_max: None,
+            dense_output: false,
             rtol: 1e-6,
             atol: 1e-9,
             t_eval: None,
@@ -64,6 +70,8 @@ pub struct Solution {
     pub termination: Option<Termination>,
     /// Name of the method used.
     pub method: String,
+    /// The continuous solution, when `dense_output` was asked for.
+    pub dense: Option<DenseOutput>,
 }
 
 impl Solution {
@@ -349,6 +357,7 @@ impl<'a> Recorder<'a> {
             stats,
             termination,
             method: method.to_string(),
+            dense: None,
         }
     }
 }
@@ -372,6 +381,8 @@ fn run_fixed(stepper: &mut dyn Stepper, y0: &[f64], h: f64, opts: &SolveOptions,
     let (mut f_a, mut f_b) = (vec![0.0; n], vec![0.0; n]);
     // f at the start of the current step, when it is already known from the previous one.
     let mut f_a_known = false;
+    // With dense_output: the grid (t, y, f) of every step boundary, for Hermite pieces.
+    let mut grid: Option<(Vec<f64>, Vec<f64>, Vec<f64>)> = opts.dense_output.then(|| (Vec::new(), Vec::new(), Vec::new()));
     for k in 0..nsteps {
         let t_a = t0 + dir * k as f64 * h;
         let t_b = if k + 1 == nsteps {
@@ -393,6 +404,18 @@ fn run_fixed(stepper: &mut dyn Stepper, y0: &[f64], h: f64, opts: &SolveOptions,
             break;
         }
         stats.nsteps += 1;
+        if let Some((gt, gy, gf)) = &mut grid {
+            gt.push(t_a);
+            gy.extend_from_slice(&y);
+            match stepper.derivative_at_start() {
+                Some(f) => gf.extend_from_slice(f),
+                None => {
+                    stepper.derivative(t_a, &y, &mut f_a, &mut stats)?;
+                    f_a_known = true; // f_a = f(t_a, y_a), as the t_eval interpolation needs
+                    gf.extend_from_slice(&f_a);
+                }
+            }
+        }
         if rec.needs_dense(t_b) {
             if !f_a_known {
                 stepper.derivative(t_a, &y, &mut f_a, &mut stats)?;
@@ -409,5 +432,17 @@ fn run_fixed(stepper: &mut dyn Stepper, y0: &[f64], h: f64, opts: &SolveOptions,
         }
         std::mem::swap(&mut y, &mut y_next);
     }
-    Ok(rec.finish(stats, termination, name))
+    let mut sol = rec.finish(stats, termination, name);
+    if let Some((mut gt, mut gy, mut gf)) = grid {
+        // Close the grid with the last state reached: the end, or where the solve stopped
+        // (after gt.len() completed steps).
+        let t_stop = t0 + dir * gt.len() as f64 * h;
+        let t_stop = if gt.len() == nsteps { t_end } else { t_stop };
+        gt.push(t_stop);
+        gy.extend_from_slice(&y);
+        stepper.derivative(t_stop, &y, &mut f_b, &mut sol.stats)?;
+        gf.extend_from_slice(&f_b);
+        sol.dense = Some(DenseOutput::hermite(n, gt, gy, gf));
+    }
+    Ok(sol)
 }

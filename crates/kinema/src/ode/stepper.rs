@@ -128,6 +128,13 @@ pub trait Stepper {
     /// Advances y(t) by h into `y_out`.
     fn step(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure>;
 
+    /// f(t_a, y_a) at the start of the last step taken, when the method computed it anyway
+    /// (the first stage of an explicit Runge–Kutta method); saves an evaluation for dense
+    /// output.
+    fn derivative_at_start(&self) -> Option<&[f64]> {
+        None
+    }
+
     /// dy/dt at (t, y), for Hermite interpolation between steps.
     fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error>;
 }
