@@ -96,7 +96,7 @@ impl PyDenseOutput {
         for (ti, row) in t.iter().zip(out.chunks_exact_mut(n.max(1))) {
             self.inner.eval(*ti, row).map_err(to_py)?;
         }
-        Ok(PyArray1::from_vec(py, out).reshape([t.len(), n])?)
+        PyArray1::from_vec(py, out).reshape([t.len(), n])
     }
     /// (first, last) time covered.
     #[getter]

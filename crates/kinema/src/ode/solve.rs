@@ -242,7 +242,7 @@ fn validate(dim: usize, block: usize, y0: &[f64], opts: &SolveOptions) -> Result
         }
     }
     if let Some(h_max) = opts.h_max {
-        if !(h_max > 0.0) {
+        if h_max.is_nan() || h_max <= 0.0 {
             return Err(Error::invalid(
                 "h_max",
                 h_max,
