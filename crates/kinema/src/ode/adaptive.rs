@@ -111,12 +111,12 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
     let mut stats = Stats::default();
     let mut rec = Recorder::new(opts, t0, y0);
     let mut termination = None;
-    let mut rk = ExplicitRk::new(sys, tab);
+    let mut rk = ExplicitRk::new(tab, n);
 
     let (mut t, mut y) = (t0, y0.to_vec());
     let mut y_new = vec![0.0; n];
     let mut err = vec![0.0; n];
-    rk.first_stage(t0, y0, &mut stats)?;
+    rk.first_stage(sys, t0, y0, &mut stats)?;
     if let Some(index) = first_non_finite(&rk.k()[0]) {
         // f(t0, y0) itself is NaN/inf: no step can be taken.
         let termination = Some(Termination::NonFinite { t: t0, h: 0.0, index });
@@ -127,7 +127,7 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
         None if t_end == t0 => 0.0,
         None => {
             let f0 = rk.k()[0].clone();
-            initial_step(rk.system(), t0, y0, &f0, dir, opts, &mut stats)?
+            initial_step(sys, t0, y0, &f0, dir, opts, &mut stats)?
         }
     };
     let mut dense_out = opts.dense_output.then(|| DenseOutput::dopri5(n, t0));
@@ -157,7 +157,7 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
         let t_b = if last { t_end } else { t + dir * h_step };
         let hs = t_b - t; // signed
 
-        rk.stages(t, &y, hs, true, &mut stats)?;
+        rk.stages(sys, t, &y, hs, true, &mut stats)?;
         rk.combine(&y, hs, &b_weights, &mut y_new);
         rk.increment(hs, &e_weights, &mut err);
         let norm = error_norm(&err, &y, &y_new, opts.rtol, opts.atol, block);

@@ -5,22 +5,19 @@ use super::system::OdeSystem;
 use super::tableau::ButcherTableau;
 use crate::error::Error;
 
-/// Runs a [`ButcherTableau`] on an [`OdeSystem`].
-pub struct ExplicitRk<'s> {
-    sys: &'s mut dyn OdeSystem,
+/// Runs a [`ButcherTableau`] on an [`OdeSystem`] of a given dimension.
+pub struct ExplicitRk {
     tab: ButcherTableau,
     /// Stage derivatives k_1..k_s (each of length n).
     k: Vec<Vec<f64>>,
     ytmp: Vec<f64>,
 }
 
-impl<'s> ExplicitRk<'s> {
-    /// Binds `tab` to `sys`.
-    pub fn new(sys: &'s mut dyn OdeSystem, tab: ButcherTableau) -> Self {
-        let n = sys.dim();
+impl ExplicitRk {
+    /// The method `tab` for systems of `n` unknowns.
+    pub fn new(tab: ButcherTableau, n: usize) -> Self {
         let s = tab.stages();
         Self {
-            sys,
             tab,
             k: vec![vec![0.0; n]; s],
             ytmp: vec![0.0; n],
@@ -43,14 +40,22 @@ impl<'s> ExplicitRk<'s> {
     }
 
     /// k_1 = f(t, y) alone (to start a first-same-as-last sequence of steps).
-    pub fn first_stage(&mut self, t: f64, y: &[f64], stats: &mut Stats) -> Result<(), Error> {
+    pub fn first_stage(&mut self, sys: &mut dyn OdeSystem, t: f64, y: &[f64], stats: &mut Stats) -> Result<(), Error> {
         stats.nfev += 1;
-        Ok(self.sys.rhs(t, y, &mut self.k[0])?)
+        Ok(sys.rhs(t, y, &mut self.k[0])?)
     }
 
     /// Computes the stages k_i = f(t + c_i h, y + h Σ_{j<i} a_ij k_j).
     /// With `first_known`, k_1 already holds f(t, y) (first same as last) and is not recomputed.
-    pub fn stages(&mut self, t: f64, y: &[f64], h: f64, first_known: bool, stats: &mut Stats) -> Result<(), Error> {
+    pub fn stages(
+        &mut self,
+        sys: &mut dyn OdeSystem,
+        t: f64,
+        y: &[f64],
+        h: f64,
+        first_known: bool,
+        stats: &mut Stats,
+    ) -> Result<(), Error> {
         for i in 0..self.tab.stages() {
             if i == 0 && first_known {
                 continue;
@@ -59,7 +64,7 @@ impl<'s> ExplicitRk<'s> {
             let (done, rest) = self.k.split_at_mut(i);
             let ki = &mut rest[0];
             if row[..i].iter().all(|&a| a == 0.0) {
-                self.sys.rhs(t + self.tab.c()[i] * h, y, ki)?;
+                sys.rhs(t + self.tab.c()[i] * h, y, ki)?;
             } else {
                 self.ytmp.copy_from_slice(y);
                 for (j, kj) in done.iter().enumerate() {
@@ -71,7 +76,7 @@ impl<'s> ExplicitRk<'s> {
                         }
                     }
                 }
-                self.sys.rhs(t + self.tab.c()[i] * h, &self.ytmp, ki)?;
+                sys.rhs(t + self.tab.c()[i] * h, &self.ytmp, ki)?;
             }
             stats.nfev += 1;
         }
@@ -103,16 +108,19 @@ impl<'s> ExplicitRk<'s> {
             }
         }
     }
-
-    /// The system being integrated.
-    pub fn system(&mut self) -> &mut dyn OdeSystem {
-        self.sys
-    }
 }
 
-impl Stepper for ExplicitRk<'_> {
-    fn step(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure> {
-        self.stages(t, y, h, false, stats)?;
+impl<'a> Stepper<dyn OdeSystem + 'a> for ExplicitRk {
+    fn step(
+        &mut self,
+        sys: &mut (dyn OdeSystem + 'a),
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_out: &mut [f64],
+        stats: &mut Stats,
+    ) -> Result<(), StepFailure> {
+        self.stages(sys, t, y, h, false, stats)?;
         self.combine(y, h, self.tab.b(), y_out);
         Ok(())
     }
@@ -122,8 +130,15 @@ impl Stepper for ExplicitRk<'_> {
         Some(&self.k[0])
     }
 
-    fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error> {
+    fn derivative(
+        &mut self,
+        sys: &mut (dyn OdeSystem + 'a),
+        t: f64,
+        y: &[f64],
+        dydt: &mut [f64],
+        stats: &mut Stats,
+    ) -> Result<(), Error> {
         stats.nfev += 1;
-        Ok(self.sys.rhs(t, y, dydt)?)
+        Ok(sys.rhs(t, y, dydt)?)
     }
 }

@@ -33,9 +33,8 @@ pub const MAX_HALVINGS: u32 = 10;
 /// 1/(atol + rtol |y|), is at most this.
 pub const NEWTON_TOL: f64 = 1e-3;
 
-/// Backward Euler bound to its system.
-pub struct ImplicitEuler<'s> {
-    sys: &'s mut dyn OdeSystem,
+/// Backward Euler for systems of a given dimension and block length.
+pub struct ImplicitEuler {
     rtol: f64,
     atol: f64,
     block: usize,
@@ -59,13 +58,11 @@ enum Block {
     NonFinite(usize),
 }
 
-impl<'s> ImplicitEuler<'s> {
-    /// Binds backward Euler to `sys`; `rtol`, `atol` set the Newton tolerance.
-    pub fn new(sys: &'s mut dyn OdeSystem, rtol: f64, atol: f64) -> Self {
-        let n = sys.dim();
-        let block = sys.block_len();
+impl ImplicitEuler {
+    /// Backward Euler for systems of `n` unknowns in independent blocks of `block` (n for
+    /// one system); `rtol`, `atol` set the Newton tolerance.
+    pub fn new(n: usize, block: usize, rtol: f64, atol: f64) -> Self {
         Self {
-            sys,
             rtol,
             atol,
             block,
@@ -79,10 +76,10 @@ impl<'s> ImplicitEuler<'s> {
     }
 
     /// J at (t, y) into `self.jac`; `self.f` must hold f(t, y) (used by finite differences).
-    fn jacobian(&mut self, t: f64, y: &[f64], stats: &mut Stats) -> Result<(), Error> {
+    fn jacobian(&mut self, sys: &mut dyn OdeSystem, t: f64, y: &[f64], stats: &mut Stats) -> Result<(), Error> {
         let b = self.block;
-        if self.sys.has_jacobian() {
-            self.sys.jacobian(t, y, &mut self.jac)?;
+        if sys.has_jacobian() {
+            sys.jacobian(t, y, &mut self.jac)?;
             stats.njev += 1;
             return Ok(());
         }
@@ -97,7 +94,7 @@ impl<'s> ImplicitEuler<'s> {
                 // exactly representable δ: (y + δ) − y
                 self.y_pert[m * b + j] = yj + delta;
             }
-            self.sys.rhs(t, &self.y_pert, &mut self.f_pert)?;
+            sys.rhs(t, &self.y_pert, &mut self.f_pert)?;
             stats.nfev += 1;
             for m in 0..nblocks {
                 let delta = self.y_pert[m * b + j] - y[m * b + j];
@@ -129,8 +126,10 @@ impl<'s> ImplicitEuler<'s> {
     /// Blocks are independent systems (a batch), so each converges or fails on its own;
     /// only the blocks marked in `active` are judged (the others ride along, since f is
     /// evaluated for the whole state at once, and their values are discarded by the caller).
+    #[allow(clippy::too_many_arguments)]
     fn newton(
         &mut self,
+        sys: &mut dyn OdeSystem,
         t: f64,
         y: &[f64],
         h: f64,
@@ -150,7 +149,7 @@ impl<'s> ImplicitEuler<'s> {
         // chance with a Jacobian evaluated at its current iterate).
         let mut diverged = vec![false; active.len()];
         for iter in 0..MAX_NEWTON_ITERATIONS {
-            self.sys.rhs(t1, y_out, &mut self.f)?;
+            sys.rhs(t1, y_out, &mut self.f)?;
             stats.nfev += 1;
             for (m, st) in status.iter_mut().enumerate() {
                 if *st == Block::Iterating {
@@ -160,7 +159,7 @@ impl<'s> ImplicitEuler<'s> {
                 }
             }
             if iter == 0 {
-                self.jacobian(t1, y_out, stats)?;
+                self.jacobian(sys, t1, y_out, stats)?;
                 self.factor(h, stats);
             }
             let mut slow = false;
@@ -211,10 +210,10 @@ impl<'s> ImplicitEuler<'s> {
             if slow {
                 // θ compares updates made with the same Jacobian only.
                 prev_norm.fill(f64::INFINITY);
-                self.sys.rhs(t1, y_out, &mut self.f)?;
+                sys.rhs(t1, y_out, &mut self.f)?;
                 stats.nfev += 1;
                 let yk = y_out.to_vec();
-                self.jacobian(t1, &yk, stats)?;
+                self.jacobian(sys, t1, &yk, stats)?;
                 self.factor(h, stats);
             }
         }
@@ -232,6 +231,7 @@ impl<'s> ImplicitEuler<'s> {
     #[allow(clippy::too_many_arguments)]
     fn step_with_halving(
         &mut self,
+        sys: &mut dyn OdeSystem,
         t: f64,
         y: &[f64],
         h: f64,
@@ -241,7 +241,7 @@ impl<'s> ImplicitEuler<'s> {
         depth: u32,
     ) -> Result<(), StepFailure> {
         let b = self.block;
-        let status = self.newton(t, y, h, y_out, active, stats)?;
+        let status = self.newton(sys, t, y, h, y_out, active, stats)?;
         let failing: Vec<bool> = status.iter().map(|s| *s != Block::Converged).collect();
         let Some(first) = failing.iter().position(|&f| f) else {
             return Ok(());
@@ -260,9 +260,9 @@ impl<'s> ImplicitEuler<'s> {
         }
         stats.nrejected += 1;
         let mut mid = y.to_vec();
-        self.step_with_halving(t, y, 0.5 * h, &mut mid, &failing, stats, depth + 1)?;
+        self.step_with_halving(sys, t, y, 0.5 * h, &mut mid, &failing, stats, depth + 1)?;
         let mut end = mid.clone();
-        self.step_with_halving(t + 0.5 * h, &mid, 0.5 * h, &mut end, &failing, stats, depth + 1)?;
+        self.step_with_halving(sys, t + 0.5 * h, &mid, 0.5 * h, &mut end, &failing, stats, depth + 1)?;
         for (m, &f) in failing.iter().enumerate() {
             if f {
                 y_out[m * b..(m + 1) * b].copy_from_slice(&end[m * b..(m + 1) * b]);
@@ -272,10 +272,18 @@ impl<'s> ImplicitEuler<'s> {
     }
 }
 
-impl Stepper for ImplicitEuler<'_> {
-    fn step(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure> {
+impl<'a> Stepper<dyn OdeSystem + 'a> for ImplicitEuler {
+    fn step(
+        &mut self,
+        sys: &mut (dyn OdeSystem + 'a),
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_out: &mut [f64],
+        stats: &mut Stats,
+    ) -> Result<(), StepFailure> {
         let active = vec![true; y.len() / self.block];
-        match self.step_with_halving(t, y, h, y_out, &active, stats, 0) {
+        match self.step_with_halving(sys, t, y, h, y_out, &active, stats, 0) {
             // Report the step the driver asked for; the sub-step that failed is in t_fail/h_min.
             Err(StepFailure::Stop(Termination::NewtonFailed {
                 h_min, t_fail, halvings, ..
@@ -293,8 +301,15 @@ impl Stepper for ImplicitEuler<'_> {
         }
     }
 
-    fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error> {
+    fn derivative(
+        &mut self,
+        sys: &mut (dyn OdeSystem + 'a),
+        t: f64,
+        y: &[f64],
+        dydt: &mut [f64],
+        stats: &mut Stats,
+    ) -> Result<(), Error> {
         stats.nfev += 1;
-        Ok(self.sys.rhs(t, y, dydt)?)
+        Ok(sys.rhs(t, y, dydt)?)
     }
 }

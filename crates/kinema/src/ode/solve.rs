@@ -103,17 +103,25 @@ pub fn solve(sys: &mut dyn OdeSystem, y0: &[f64], integrator: &Integrator, opts:
     match integrator {
         Integrator::Tableau(tab) => {
             let h = fixed_step(integrator, opts)?;
-            run_fixed(&mut ExplicitRk::new(sys, tab.clone()), y0, h, opts, integrator.name())
+            run_fixed(
+                &mut ExplicitRk::new(tab.clone(), y0.len()),
+                sys,
+                y0,
+                h,
+                opts,
+                integrator.name(),
+            )
         }
         Integrator::Named(m) => match m.kind() {
             MethodKind::ExplicitRk => {
                 let h = fixed_step(integrator, opts)?;
                 let tab = m.tableau().expect("explicit methods have tableaux");
-                run_fixed(&mut ExplicitRk::new(sys, tab), y0, h, opts, m.name())
+                run_fixed(&mut ExplicitRk::new(tab, y0.len()), sys, y0, h, opts, m.name())
             }
             MethodKind::Implicit => {
                 let h = fixed_step(integrator, opts)?;
-                run_fixed(&mut ImplicitEuler::new(sys, opts.rtol, opts.atol), y0, h, opts, m.name())
+                let stepper = &mut ImplicitEuler::new(y0.len(), sys.block_len(), opts.rtol, opts.atol);
+                run_fixed(stepper, sys, y0, h, opts, m.name())
             }
             MethodKind::Adaptive => adaptive::run(sys, y0, opts),
             MethodKind::SecondOrder => Err(Error::MethodNotApplicable {
@@ -168,9 +176,9 @@ pub fn solve_second_order(
             validate(2 * n, 2 * b, &y0, opts)?;
             let h = fixed_step(integrator, opts)?;
             if *m == Method::Verlet {
-                run_fixed(&mut Verlet::new(sys), &y0, h, opts, m.name())
+                run_fixed(&mut Verlet::new(n), sys, &y0, h, opts, m.name())
             } else {
-                run_fixed(&mut SymplecticEuler::new(sys), &y0, h, opts, m.name())
+                run_fixed(&mut SymplecticEuler::new(n), sys, &y0, h, opts, m.name())
             }
         }
         _ => solve(&mut FirstOrderForm::new(sys), &y0, integrator, opts),
@@ -363,7 +371,14 @@ impl<'a> Recorder<'a> {
 }
 
 /// The fixed-step loop: steps t_k = t0 + k h, the last one shortened to end at t_end.
-fn run_fixed(stepper: &mut dyn Stepper, y0: &[f64], h: f64, opts: &SolveOptions, name: &str) -> Result<Solution, Error> {
+fn run_fixed<S: ?Sized>(
+    stepper: &mut dyn Stepper<S>,
+    sys: &mut S,
+    y0: &[f64],
+    h: f64,
+    opts: &SolveOptions,
+    name: &str,
+) -> Result<Solution, Error> {
     let (t0, t_end) = opts.t_span;
     let dir = if t_end >= t0 { 1.0 } else { -1.0 };
     let span = (t_end - t0).abs();
@@ -391,7 +406,7 @@ fn run_fixed(stepper: &mut dyn Stepper, y0: &[f64], h: f64, opts: &SolveOptions,
             t0 + dir * (k + 1) as f64 * h
         };
         let hk = t_b - t_a;
-        match stepper.step(t_a, &y, hk, &mut y_next, &mut stats) {
+        match stepper.step(sys, t_a, &y, hk, &mut y_next, &mut stats) {
             Ok(()) => {}
             Err(StepFailure::Stop(t)) => {
                 termination = Some(t);
@@ -410,7 +425,7 @@ fn run_fixed(stepper: &mut dyn Stepper, y0: &[f64], h: f64, opts: &SolveOptions,
             match stepper.derivative_at_start() {
                 Some(f) => gf.extend_from_slice(f),
                 None => {
-                    stepper.derivative(t_a, &y, &mut f_a, &mut stats)?;
+                    stepper.derivative(sys, t_a, &y, &mut f_a, &mut stats)?;
                     f_a_known = true; // f_a = f(t_a, y_a), as the t_eval interpolation needs
                     gf.extend_from_slice(&f_a);
                 }
@@ -418,9 +433,9 @@ fn run_fixed(stepper: &mut dyn Stepper, y0: &[f64], h: f64, opts: &SolveOptions,
         }
         if rec.needs_dense(t_b) {
             if !f_a_known {
-                stepper.derivative(t_a, &y, &mut f_a, &mut stats)?;
+                stepper.derivative(sys, t_a, &y, &mut f_a, &mut stats)?;
             }
-            stepper.derivative(t_b, &y_next, &mut f_b, &mut stats)?;
+            stepper.derivative(sys, t_b, &y_next, &mut f_b, &mut stats)?;
             rec.step(t_a, hk, t_b, &y_next, |theta, out| {
                 dense::hermite(theta, hk, &y, &y_next, &f_a, &f_b, out)
             });
@@ -442,7 +457,7 @@ fn run_fixed(stepper: &mut dyn Stepper, y0: &[f64], h: f64, opts: &SolveOptions,
         let t_stop = if gt.len() == nsteps { t_end } else { t_stop };
         gt.push(t_stop);
         gy.extend_from_slice(&y);
-        stepper.derivative(t_stop, &y, &mut f_b, &mut sol.stats)?;
+        stepper.derivative(sys, t_stop, &y, &mut f_b, &mut sol.stats)?;
         gf.extend_from_slice(&f_b);
         sol.dense = Some(DenseOutput::hermite(n, gt, gy, gf));
     }

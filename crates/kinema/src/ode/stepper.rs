@@ -122,11 +122,16 @@ impl From<crate::error::CallbackError> for StepFailure {
     }
 }
 
-/// A fixed-step method bound to its system. The state is flat: y for first-order systems,
-/// [x, v] per block for second-order ones.
-pub trait Stepper {
+/// A fixed-step method: its coefficients, work buffers and caches, apart from the system it
+/// integrates (`S`: an [`OdeSystem`](super::OdeSystem) or a
+/// [`SecondOrderSystem`](super::SecondOrderSystem)), which each call receives. So an owner of
+/// a system (a world of particles) can keep a stepper across steps, and a method's cache
+/// (Verlet's last acceleration) survives between them.
+///
+/// The state is flat: y for first-order systems, [x, v] per block for second-order ones.
+pub trait Stepper<S: ?Sized> {
     /// Advances y(t) by h into `y_out`.
-    fn step(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure>;
+    fn step(&mut self, sys: &mut S, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure>;
 
     /// f(t_a, y_a) at the start of the last step taken, when the method computed it anyway
     /// (the first stage of an explicit Runge–Kutta method); saves an evaluation for dense
@@ -136,7 +141,7 @@ pub trait Stepper {
     }
 
     /// dy/dt at (t, y), for Hermite interpolation between steps.
-    fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error>;
+    fn derivative(&mut self, sys: &mut S, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error>;
 }
 
 /// Index of the first non-finite value, if any.

@@ -13,20 +13,17 @@ use super::stepper::{Stats, StepFailure, Stepper};
 use super::system::{FirstOrderForm, SecondOrderSystem};
 use crate::error::Error;
 
-/// Symplectic Euler bound to its system; state [x, v] per block.
-pub struct SymplecticEuler<'s> {
-    sys: &'s mut dyn SecondOrderSystem,
+/// Symplectic Euler for second-order systems of n coordinates; state [x, v] per block.
+pub struct SymplecticEuler {
     x: Vec<f64>,
     v: Vec<f64>,
     a: Vec<f64>,
 }
 
-impl<'s> SymplecticEuler<'s> {
-    /// Binds the method to `sys`.
-    pub fn new(sys: &'s mut dyn SecondOrderSystem) -> Self {
-        let n = sys.dim();
+impl SymplecticEuler {
+    /// The method for systems of `n` coordinates.
+    pub fn new(n: usize) -> Self {
         Self {
-            sys,
             x: vec![0.0; n],
             v: vec![0.0; n],
             a: vec![0.0; n],
@@ -34,11 +31,19 @@ impl<'s> SymplecticEuler<'s> {
     }
 }
 
-impl Stepper for SymplecticEuler<'_> {
-    fn step(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure> {
-        let b = self.sys.block_len();
+impl<'a> Stepper<dyn SecondOrderSystem + 'a> for SymplecticEuler {
+    fn step(
+        &mut self,
+        sys: &mut (dyn SecondOrderSystem + 'a),
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_out: &mut [f64],
+        stats: &mut Stats,
+    ) -> Result<(), StepFailure> {
+        let b = sys.block_len();
         FirstOrderForm::split(y, b, &mut self.x, &mut self.v);
-        self.sys.accel(t, &self.x, &self.v, &mut self.a)?;
+        sys.accel(t, &self.x, &self.v, &mut self.a)?;
         stats.nfev += 1;
         for ((x, v), a) in self.x.iter_mut().zip(self.v.iter_mut()).zip(&self.a) {
             *v += h * a; // kick
@@ -48,8 +53,15 @@ impl Stepper for SymplecticEuler<'_> {
         Ok(())
     }
 
-    fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error> {
-        second_order_derivative(self.sys, t, y, dydt, stats, (&mut self.x, &mut self.v, &mut self.a))
+    fn derivative(
+        &mut self,
+        sys: &mut (dyn SecondOrderSystem + 'a),
+        t: f64,
+        y: &[f64],
+        dydt: &mut [f64],
+        stats: &mut Stats,
+    ) -> Result<(), Error> {
+        second_order_derivative(sys, t, y, dydt, stats, (&mut self.x, &mut self.v, &mut self.a))
     }
 }
 

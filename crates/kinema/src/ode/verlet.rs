@@ -21,9 +21,8 @@ use super::symplectic_euler::second_order_derivative;
 use super::system::{FirstOrderForm, SecondOrderSystem};
 use crate::error::Error;
 
-/// Velocity Verlet bound to its system; state [x, v] per block.
-pub struct Verlet<'s> {
-    sys: &'s mut dyn SecondOrderSystem,
+/// Velocity Verlet for second-order systems of n coordinates; state [x, v] per block.
+pub struct Verlet {
     x: Vec<f64>,
     v: Vec<f64>,
     a: Vec<f64>,
@@ -33,12 +32,10 @@ pub struct Verlet<'s> {
     cached: Option<(f64, Vec<f64>)>,
 }
 
-impl<'s> Verlet<'s> {
-    /// Binds the method to `sys`.
-    pub fn new(sys: &'s mut dyn SecondOrderSystem) -> Self {
-        let n = sys.dim();
+impl Verlet {
+    /// The method for systems of `n` coordinates.
+    pub fn new(n: usize) -> Self {
         Self {
-            sys,
             x: vec![0.0; n],
             v: vec![0.0; n],
             a: vec![0.0; n],
@@ -49,14 +46,22 @@ impl<'s> Verlet<'s> {
     }
 }
 
-impl Stepper for Verlet<'_> {
-    fn step(&mut self, t: f64, y: &[f64], h: f64, y_out: &mut [f64], stats: &mut Stats) -> Result<(), StepFailure> {
-        let b = self.sys.block_len();
+impl<'a> Stepper<dyn SecondOrderSystem + 'a> for Verlet {
+    fn step(
+        &mut self,
+        sys: &mut (dyn SecondOrderSystem + 'a),
+        t: f64,
+        y: &[f64],
+        h: f64,
+        y_out: &mut [f64],
+        stats: &mut Stats,
+    ) -> Result<(), StepFailure> {
+        let b = sys.block_len();
         FirstOrderForm::split(y, b, &mut self.x, &mut self.v);
         // Same state and (to rounding of the time grid) the same time: a_n is already known.
         let reuse = matches!(&self.cached, Some((tc, yc)) if (tc - t).abs() <= 8.0 * f64::EPSILON * t.abs().max(h.abs()) && yc.as_slice() == y);
         if !reuse {
-            self.sys.accel(t, &self.x, &self.v, &mut self.a)?;
+            sys.accel(t, &self.x, &self.v, &mut self.a)?;
             stats.nfev += 1;
         }
         for i in 0..self.x.len() {
@@ -64,7 +69,7 @@ impl Stepper for Verlet<'_> {
             self.v_pred[i] = self.v[i] + h * self.a[i];
         }
         let t1 = t + h;
-        self.sys.accel(t1, &self.x, &self.v_pred, &mut self.a_next)?;
+        sys.accel(t1, &self.x, &self.v_pred, &mut self.a_next)?;
         stats.nfev += 1;
         for i in 0..self.v.len() {
             self.v[i] += 0.5 * h * (self.a[i] + self.a_next[i]);
@@ -81,9 +86,16 @@ impl Stepper for Verlet<'_> {
         Ok(())
     }
 
-    fn derivative(&mut self, t: f64, y: &[f64], dydt: &mut [f64], stats: &mut Stats) -> Result<(), Error> {
+    fn derivative(
+        &mut self,
+        sys: &mut (dyn SecondOrderSystem + 'a),
+        t: f64,
+        y: &[f64],
+        dydt: &mut [f64],
+        stats: &mut Stats,
+    ) -> Result<(), Error> {
         let mut scratch = vec![0.0; self.a.len()];
         let (mut x, mut v) = (vec![0.0; self.a.len()], vec![0.0; self.a.len()]);
-        second_order_derivative(self.sys, t, y, dydt, stats, (&mut x, &mut v, &mut scratch))
+        second_order_derivative(sys, t, y, dydt, stats, (&mut x, &mut v, &mut scratch))
     }
 }
