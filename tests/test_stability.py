@@ -159,3 +159,38 @@ def test_plot_regions_draws_every_method(tmp_path):
     ax.figure.savefig(tmp_path / "r.png")
     plt.close(ax.figure)
     assert (tmp_path / "r.png").stat().st_size > 10_000
+
+
+def test_oscillator_limits_undamped_equal_the_imaginary_intervals():
+    assert abs(stability.max_step_oscillator("verlet", 10.0) - 0.2) < 1e-9
+    assert abs(stability.max_step_oscillator("rk4", 10.0) - 2 * np.sqrt(2) / 10) < 1e-9
+    assert stability.max_step_oscillator("euler", 10.0) == 0.0
+    # forward Euler on the damped oscillator: |1 + hλ| ≤ 1 with λ = ω(−ζ ± i√(1−ζ²)) gives hω ≤ 2ζ
+    assert abs(stability.max_step_oscillator("euler", 10.0, 0.1) - 0.02) < 1e-12
+
+
+@pytest.mark.parametrize("method", ["verlet", "symplectic_euler", "rk4"])
+def test_damped_oscillator_limit_is_where_the_motion_starts_to_grow(method):
+    omega, zeta = 10.0, 0.1
+    h_max = stability.max_step_oscillator(method, omega, zeta)
+    assert stability.oscillator_amplification(method, 0.98 * h_max, omega, zeta) <= 1.0
+    assert stability.oscillator_amplification(method, 1.02 * h_max, omega, zeta) > 1.0
+
+    def last_over_first(h):
+        with warnings.catch_warnings(), np.errstate(over="ignore", invalid="ignore"):
+            warnings.simplefilter("ignore", kinema.SolverWarning)
+            sol = kinema.solve_second_order(lambda t, x, v: -(omega**2) * x - 2 * zeta * omega * v, [1.0], [0.0], (0, 10_000 * h), h=h, method=method)
+        if not sol.success:
+            return np.inf
+        x = np.abs(sol.x[:, 0])
+        return x[-1000:].max() / x[:1000].max()
+
+    assert last_over_first(0.98 * h_max) <= 1.0
+    assert last_over_first(1.02 * h_max) > 10.0
+
+
+def test_oscillator_bad_input():
+    with pytest.raises(ValueError, match="omega = -1.0 is invalid"):
+        stability.max_step_oscillator("verlet", -1.0)
+    with pytest.raises(ValueError, match="zeta = -0.5 is invalid"):
+        stability.max_step_oscillator("verlet", 1.0, -0.5)

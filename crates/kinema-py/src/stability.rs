@@ -43,10 +43,29 @@ fn imag_interval(method: Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
     Ok(kinema::ode::imag_interval(&integrator_from(&method)?))
 }
 
+/// Largest stable h on the damped oscillator x'' = −ω²x − 2ζω v.
+#[pyfunction]
+fn oscillator_max_step(method: Bound<'_, PyAny>, omega: f64, zeta: f64) -> PyResult<f64> {
+    Ok(kinema::ode::oscillator_max_step(&integrator_from(&method)?, omega, zeta))
+}
+
+/// Spectral radius of one step of size h on the damped oscillator.
+#[pyfunction]
+fn oscillator_amplification(method: Bound<'_, PyAny>, h: f64, omega: f64, zeta: f64) -> PyResult<f64> {
+    Ok(kinema::ode::oscillator_amplification(
+        &integrator_from(&method)?,
+        h,
+        omega,
+        zeta,
+    ))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(amplification, m)?)?;
     m.add_function(wrap_pyfunction!(max_step, m)?)?;
     m.add_function(wrap_pyfunction!(real_interval, m)?)?;
     m.add_function(wrap_pyfunction!(imag_interval, m)?)?;
+    m.add_function(wrap_pyfunction!(oscillator_max_step, m)?)?;
+    m.add_function(wrap_pyfunction!(oscillator_amplification, m)?)?;
     Ok(())
 }

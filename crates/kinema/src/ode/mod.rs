@@ -25,7 +25,9 @@ pub mod verlet;
 pub use dense::DenseOutput;
 pub use method::{Integrator, Method, MethodKind};
 pub use solve::{solve, solve_second_order, Solution, SolveOptions};
-pub use stability::{amplification, imag_interval, max_step, real_interval, StabilityFunction};
+pub use stability::{
+    amplification, imag_interval, max_step, oscillator_amplification, oscillator_max_step, real_interval, StabilityFunction,
+};
 pub use stepper::{Stats, Termination};
 pub use system::{FirstOrderForm, FnSecondOrder, FnSystem, OdeSystem, SecondOrderSystem};
 pub use tableau::ButcherTableau;

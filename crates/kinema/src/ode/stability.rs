@@ -227,12 +227,126 @@ pub fn imag_interval(integrator: &Integrator) -> (f64, f64) {
     (-f.max_step(Complex64::new(0.0, -1.0)), f.max_step(Complex64::new(0.0, 1.0)))
 }
 
+/// The damped oscillator x'' = −ω²x − 2ζω v, the test problem of a spring with a dashpot
+/// (ω² = k/m, 2ζω = c/m), for which a second-order method's step is not a function of one
+/// λ alone.
+///
+/// One step of a method is a linear map M(h) of its state; the step is stable when the
+/// spectral radius ρ(M) ≤ 1:
+///
+/// ```text
+///   first-order methods (through y = [x, v]): ρ = max |R(hλ±)|, λ± = ω(−ζ ± √(ζ² − 1))
+///   symplectic Euler on (x, v):  v₁ = v + h a(x, v),  x₁ = x + h v₁
+///       M = [[1 − h²ω², h(1 − hγ)], [−hω², 1 − hγ]]                       (γ = 2ζω)
+///   velocity Verlet on (x, v, a), a carried from step to step (first same as last), with
+///   the velocity predictor v + h a for a(t_{n+1}):
+///       x₁ = x + h v + h²a/2,   a₁ = −ω²x₁ − γ(v + h a),   v₁ = v + h(a + a₁)/2
+/// ```
+///
+/// Returns ρ(M(h)) for `h` in the time unit of 1/ω.
+pub fn oscillator_amplification(integrator: &Integrator, h: f64, omega: f64, zeta: f64) -> f64 {
+    let gamma = 2.0 * zeta * omega;
+    let w2 = omega * omega;
+    let m: Vec<Vec<f64>> = match integrator {
+        Integrator::Named(Method::SymplecticEuler) => {
+            vec![vec![1.0 - h * h * w2, h * (1.0 - h * gamma)], vec![-h * w2, 1.0 - h * gamma]]
+        }
+        Integrator::Named(Method::Verlet) => {
+            let x1 = [1.0, h, 0.5 * h * h];
+            // a₁ = −ω² x₁ − γ (v + h a)
+            let a1 = [-w2 * x1[0], -w2 * x1[1] - gamma, -w2 * x1[2] - gamma * h];
+            let v1 = [0.5 * h * a1[0], 1.0 + 0.5 * h * a1[1], 0.5 * h + 0.5 * h * a1[2]];
+            vec![x1.to_vec(), v1.to_vec(), a1.to_vec()]
+        }
+        other => {
+            let f = StabilityFunction::of(other);
+            return oscillator_eigenvalues(omega, zeta)
+                .iter()
+                .map(|&l| f.eval(h * l).norm())
+                .fold(0.0, f64::max);
+        }
+    };
+    let n = m.len();
+    let mat = faer::Mat::<f64>::from_fn(n, n, |i, j| m[i][j]);
+    match mat.eigenvalues() {
+        Ok(ev) => ev.iter().map(|c| c.norm()).fold(0.0, f64::max),
+        Err(_) => f64::NAN,
+    }
+}
+
+/// The eigenvalues ω(−ζ ± √(ζ² − 1)) of the damped oscillator's first-order form.
+fn oscillator_eigenvalues(omega: f64, zeta: f64) -> [Complex64; 2] {
+    let root = Complex64::new(zeta * zeta - 1.0, 0.0).sqrt();
+    [omega * (-zeta + root), omega * (-zeta - root)]
+}
+
+/// The largest h with ρ(M(s)) ≤ 1 for every 0 < s ≤ h on the damped oscillator (see
+/// [`oscillator_amplification`]); `INFINITY` when no step is too large, NaN for ω ≤ 0,
+/// ζ < 0 or non-finite input.
+pub fn oscillator_max_step(integrator: &Integrator, omega: f64, zeta: f64) -> f64 {
+    if !(omega.is_finite() && zeta.is_finite() && omega > 0.0 && zeta >= 0.0) {
+        return f64::NAN;
+    }
+    match integrator {
+        Integrator::Named(Method::SymplecticEuler | Method::Verlet) => {}
+        other => {
+            // The exact polynomial machinery of max_step, on both eigenvalues.
+            let f = StabilityFunction::of(other);
+            return oscillator_eigenvalues(omega, zeta)
+                .iter()
+                .map(|&l| f.max_step(l))
+                .fold(f64::INFINITY, f64::min);
+        }
+    }
+    // Scan s·ω over (0, 4 + 4ζ] (beyond every limit of these explicit methods: ρ grows like
+    // (hω)² there), then bisect the first crossing of ρ = 1. Inside the stable range of an
+    // undamped oscillator ρ = 1 exactly, so "unstable" means ρ > 1 + 1e-9.
+    let unstable = |s: f64| oscillator_amplification(integrator, s, omega, zeta) > 1.0 + 1e-9;
+    let top = (4.0 + 4.0 * zeta) / omega;
+    const SAMPLES: usize = 4000;
+    let mut prev = 0.0;
+    for k in 1..=SAMPLES {
+        let s = top * k as f64 / SAMPLES as f64;
+        if unstable(s) {
+            let (mut a, mut b) = (prev, s);
+            for _ in 0..100 {
+                let mid = 0.5 * (a + b);
+                if mid <= a || mid >= b {
+                    break;
+                }
+                if unstable(mid) {
+                    b = mid;
+                } else {
+                    a = mid;
+                }
+            }
+            return a;
+        }
+        prev = s;
+    }
+    f64::INFINITY
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn named(m: Method) -> Integrator {
         Integrator::Named(m)
+    }
+
+    #[test]
+    fn undamped_oscillator_limits_are_the_imaginary_intervals() {
+        for (m, limit) in [
+            (Method::Verlet, 2.0),
+            (Method::SymplecticEuler, 2.0),
+            (Method::Rk4, 2.0 * 2f64.sqrt()),
+        ] {
+            let h = oscillator_max_step(&named(m), 10.0, 0.0);
+            assert!((h - limit / 10.0).abs() < 1e-9, "{m}: {h}");
+        }
+        assert_eq!(oscillator_max_step(&named(Method::Euler), 10.0, 0.0), 0.0);
+        assert!(oscillator_max_step(&named(Method::ImplicitEuler), 10.0, 0.3).is_infinite());
     }
 
     #[test]
