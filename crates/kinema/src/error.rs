@@ -40,6 +40,24 @@ pub enum Error {
     /// A Butcher tableau whose coefficients are inconsistent.
     #[error("invalid Butcher tableau: {0}")]
     InvalidTableau(String),
+    /// A world step produced a non-finite state (the time step is beyond the stability limit
+    /// of the method for these forces, or a force returned NaN/inf). The world keeps the state
+    /// from before the step.
+    #[error(
+        "the simulation diverged at step {step} (t = {time} s, dt = {dt} s){}: the state became non-finite; \
+         reduce dt, or use a more stable method (implicit_euler for stiff springs)",
+        particle.map(|p| format!(", first at particle {p}")).unwrap_or_default()
+    )]
+    Diverged {
+        /// The step that failed (1 = the first step).
+        step: u64,
+        /// Time at the start of the failed step, s.
+        time: f64,
+        /// First particle whose position or velocity became non-finite, when known.
+        particle: Option<usize>,
+        /// The time step, s.
+        dt: f64,
+    },
     /// The user's callback failed; the inner error is its own.
     #[error("callback failed: {0}")]
     Callback(#[source] CallbackError),

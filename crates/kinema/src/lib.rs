@@ -1,11 +1,17 @@
 //! kinema: a particle-system simulation engine — numerical ODE integrators with their
-//! stability analysis, and (in later modules) particles, forces and collisions.
+//! stability analysis, particles and the forces on them (collisions come later).
 //!
 //! The engine is pure Rust; Python reaches it through the `kinema-py` crate only.
 //! Units are SI (m, kg, s) and every number is `f64`.
 #![warn(missing_docs)]
 
+pub mod diagnostics;
 pub mod error;
+pub mod forces;
 pub mod ode;
+pub mod particles;
+pub mod world;
 
 pub use error::{CallbackError, Error};
+pub use particles::Particles;
+pub use world::{World, WorldParams};

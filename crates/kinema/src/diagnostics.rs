@@ -1,0 +1,61 @@
+//! Diagnostics of a particle state: kinetic and potential energy, linear and angular momentum.
+
+use crate::forces::{Force, State};
+
+/// Energies (J) and momenta of one instant.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnostics {
+    /// Time, s.
+    pub t: f64,
+    /// Kinetic energy Σ ½ m |v|², J.
+    pub kinetic: f64,
+    /// Potential energy of each conservative force, J, by force name in the order they were added.
+    pub potential: Vec<(String, f64)>,
+    /// Linear momentum Σ m v, kg·m/s.
+    pub momentum: [f64; 3],
+    /// Angular momentum about the origin Σ m x × v, kg·m²/s.
+    pub angular_momentum: [f64; 3],
+}
+
+impl Diagnostics {
+    /// Measures the state `s` under `forces`.
+    pub fn measure(s: &State, forces: &[Box<dyn Force>]) -> Self {
+        let mut kinetic = 0.0;
+        let mut p = [0.0; 3];
+        let mut l = [0.0; 3];
+        for i in 0..s.len() {
+            let m = s.mass[i];
+            let x = &s.x[3 * i..3 * i + 3];
+            let v = &s.v[3 * i..3 * i + 3];
+            kinetic += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            for k in 0..3 {
+                p[k] += m * v[k];
+            }
+            // x × v
+            l[0] += m * (x[1] * v[2] - x[2] * v[1]);
+            l[1] += m * (x[2] * v[0] - x[0] * v[2]);
+            l[2] += m * (x[0] * v[1] - x[1] * v[0]);
+        }
+        let potential = forces
+            .iter()
+            .filter_map(|f| f.potential_energy(s).map(|u| (f.name().to_string(), u)))
+            .collect();
+        Self {
+            t: s.t,
+            kinetic,
+            potential,
+            momentum: p,
+            angular_momentum: l,
+        }
+    }
+
+    /// Total potential energy, J.
+    pub fn potential_total(&self) -> f64 {
+        self.potential.iter().map(|(_, u)| u).sum()
+    }
+
+    /// Kinetic plus potential energy, J (the energy conserved by conservative forces).
+    pub fn total_energy(&self) -> f64 {
+        self.kinetic + self.potential_total()
+    }
+}

@@ -1,0 +1,100 @@
+//! Forces on particles: the [`Force`] trait and the catalogue, one force per file.
+//!
+//! A force adds its contribution F (N) to a flat force array, x y z per particle. Forces that
+//! are conservative report their potential energy (J); forces that can, give their Jacobian
+//! as products (∂F/∂x)·dx + (∂F/∂v)·dv for implicit integration; the others are
+//! differentiated numerically where that is needed.
+
+use crate::error::{CallbackError, Error};
+
+pub mod attractor;
+pub mod drag;
+pub mod gravity;
+pub mod spring;
+pub mod wind;
+
+#[cfg(test)]
+pub(crate) mod testing;
+
+pub use attractor::Attractor;
+pub use drag::Drag;
+pub use gravity::Gravity;
+pub use spring::{SpringRates, Springs};
+pub use wind::Wind;
+
+/// What a force sees of the particles at one instant.
+#[derive(Debug, Clone, Copy)]
+pub struct State<'a> {
+    /// Time, s.
+    pub t: f64,
+    /// Positions, m (3 per particle).
+    pub x: &'a [f64],
+    /// Velocities, m/s (3 per particle).
+    pub v: &'a [f64],
+    /// Masses, kg (pinned particles keep theirs).
+    pub mass: &'a [f64],
+}
+
+impl State<'_> {
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.mass.len()
+    }
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.mass.is_empty()
+    }
+}
+
+/// A force acting on the particles of a world.
+pub trait Force {
+    /// Short name for diagnostics and messages (`"gravity"`, `"spring"`).
+    fn name(&self) -> &str;
+
+    /// Adds this force to `f` (N, 3 per particle).
+    fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError>;
+
+    /// Checks the force against a world of `n` particles (indices in range, ...).
+    fn validate(&self, _n: usize) -> Result<(), Error> {
+        Ok(())
+    }
+
+    /// Potential energy, J, for a conservative force (F = −∇U); `None` otherwise.
+    fn potential_energy(&self, _s: &State) -> Option<f64> {
+        None
+    }
+
+    /// Whether F depends on the velocities.
+    fn depends_on_velocity(&self) -> bool {
+        false
+    }
+
+    /// Whether this force is internal: a sum of pairs acting equally and oppositely, so that
+    /// it changes no total momentum.
+    fn is_internal(&self) -> bool {
+        false
+    }
+
+    /// Adds (∂F/∂x)·dx + (∂F/∂v)·dv to `out` when the force knows its Jacobian; returns
+    /// `false` (and adds nothing) when it does not.
+    fn jacobian_product(&self, _s: &State, _dx: &[f64], _dv: &[f64], _out: &mut [f64]) -> bool {
+        false
+    }
+}
+
+/// Checks that the positions and velocities of `s` and every named buffer hold 3 values per
+/// particle, so that a force can index them without panicking. The error names the force, the
+/// buffer and its length.
+pub(crate) fn check_buffers(force: &str, s: &State, buffers: &[(&str, usize)]) -> Result<(), Error> {
+    let n = s.len();
+    for &(name, len) in [("x", s.x.len()), ("v", s.v.len())].iter().chain(buffers) {
+        if len != 3 * n {
+            return Err(Error::invalid(
+                format!("{force}: {name}"),
+                format!("{len} values"),
+                format!("3 per particle for {n} particles ({} values)", 3 * n),
+            ));
+        }
+    }
+    Ok(())
+}

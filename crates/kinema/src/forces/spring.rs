@@ -1,0 +1,660 @@
+//! Springs: Hooke springs with a dashpot along each, many in one force from index arrays.
+//!
+//! Spring s joins particles i and j. With d = x_j − x_i, L = |d|, n = d / L (unit, from i
+//! toward j) and u = v_j − v_i,
+//!
+//! ```text
+//!   F_i = [ k (L − L₀) + c (u·n) ] n,     F_j = −F_i
+//! ```
+//!
+//! A stretched spring (L > L₀) pulls i toward j; separating ends (u·n > 0) are held back by
+//! the dashpot. F_i is computed once and added to i and subtracted from j, so action equals
+//! minus reaction to the last bit and the springs change no total momentum. The elastic part
+//! has the potential ½ k (L − L₀)²; the dashpot's power is −c (u·n)² ≤ 0, it only dissipates.
+//!
+//! Coincident ends (L = 0) give no direction: such a spring adds no force. For L₀ = 0 this is
+//! exact (the force k d vanishes with d); for L₀ > 0 the force is discontinuous there and
+//! zero is the choice that adds no energy.
+
+use super::{check_buffers, Force, State};
+use crate::error::{CallbackError, Error};
+
+/// A set of damped springs between pairs of particles.
+///
+/// Spring s joins particles `i[s]` and `j[s]` (distinct) with stiffness `k[s]` (N/m, > 0),
+/// rest length `rest_length[s]` (m, ≥ 0) and dashpot coefficient `damping[s]` (N·s/m = kg/s,
+/// ≥ 0), all finite. The force on i is F_i = [k (L − L₀) + c (v_j − v_i)·n] n, N,
+/// with n the unit vector from i to j and L their distance; F_j = −F_i. Potential energy
+/// U = Σ ½ k (L − L₀)², J (the elastic part; the dashpot has none). Internal: the springs
+/// change no total momentum.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Springs {
+    i: Vec<usize>,
+    j: Vec<usize>,
+    k: Vec<f64>,
+    rest_length: Vec<f64>,
+    damping: Vec<f64>,
+    /// 1 + the largest index, the fewest particles the springs need (0 without springs).
+    min_particles: usize,
+}
+
+/// Rates of the motion of particles joined by springs, for choosing a stable time step.
+///
+/// For one spring with inverse masses w_i, w_j at its ends, the stretch r = L − L₀ obeys
+/// r'' = −ω² r − γ r' along the spring, with ω² = k (w_i + w_j) and γ = c (w_i + w_j) (the
+/// relative acceleration is w_j F_j − w_i F_i = −(w_i + w_j) F_i). A pinned end has w = 0,
+/// infinite mass. Explicit methods need h ω below their stability limit (2 for symplectic Euler
+/// and Verlet) and h γ below theirs for the damping (2 for forward Euler on r' = −γ r).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SpringRates {
+    /// ω², 1/s²: the squared angular frequency of the spring's oscillation.
+    pub omega_squared: f64,
+    /// γ, 1/s: the decay rate of the relative velocity along the spring due to the dashpot.
+    pub damping_rate: f64,
+}
+
+impl Springs {
+    /// Springs from per-spring arrays (all of the same length): ends `i`, `j` (particle
+    /// indices, i ≠ j), stiffness `k` (N/m, > 0), rest length `rest_length` (m, ≥ 0) and
+    /// dashpot coefficient `damping` (N·s/m, ≥ 0), all finite. Errors name the array, the
+    /// spring and the value. Indices are checked against the particles by
+    /// [`Force::validate`].
+    pub fn new(i: Vec<usize>, j: Vec<usize>, k: Vec<f64>, rest_length: Vec<f64>, damping: Vec<f64>) -> Result<Self, Error> {
+        let count = i.len();
+        for (name, len) in [
+            ("j", j.len()),
+            ("k", k.len()),
+            ("rest_length", rest_length.len()),
+            ("damping", damping.len()),
+        ] {
+            if len != count {
+                return Err(Error::invalid(
+                    name,
+                    format!("{len} values"),
+                    format!("one per spring ({count}, the length of i)"),
+                ));
+            }
+        }
+        for s in 0..count {
+            if i[s] == j[s] {
+                return Err(Error::invalid(
+                    format!("j[{s}]"),
+                    j[s],
+                    format!(
+                        "spring {s} joins particle {} to itself; its ends i[{s}] and j[{s}] must differ",
+                        i[s]
+                    ),
+                ));
+            }
+            if !(k[s].is_finite() && k[s] > 0.0) {
+                return Err(Error::invalid(
+                    format!("k[{s}]"),
+                    k[s],
+                    "spring stiffness must be finite and > 0 N/m",
+                ));
+            }
+            if !(rest_length[s].is_finite() && rest_length[s] >= 0.0) {
+                return Err(Error::invalid(
+                    format!("rest_length[{s}]"),
+                    rest_length[s],
+                    "rest lengths must be finite and >= 0 m",
+                ));
+            }
+            if !(damping[s].is_finite() && damping[s] >= 0.0) {
+                return Err(Error::invalid(
+                    format!("damping[{s}]"),
+                    damping[s],
+                    "dashpot coefficients must be finite and >= 0 N·s/m",
+                ));
+            }
+        }
+        let min_particles = i.iter().chain(&j).map(|p| p + 1).max().unwrap_or(0);
+        Ok(Springs {
+            i,
+            j,
+            k,
+            rest_length,
+            damping,
+            min_particles,
+        })
+    }
+
+    /// Springs joining `i[s]` to `j[s]`, all with the same stiffness `k` (N/m, > 0), rest
+    /// length `rest_length` (m, ≥ 0) and dashpot coefficient `damping` (N·s/m, ≥ 0).
+    pub fn uniform(i: Vec<usize>, j: Vec<usize>, k: f64, rest_length: f64, damping: f64) -> Result<Self, Error> {
+        let count = i.len();
+        Springs::new(i, j, vec![k; count], vec![rest_length; count], vec![damping; count])
+    }
+
+    /// Springs at rest in the configuration `x` (m, 3 per particle): each rest length is the
+    /// current distance |x_j − x_i|. Stiffness `k` (N/m, > 0) and dashpot coefficient
+    /// `damping` (N·s/m, ≥ 0) are the same for all springs; indices must be < the number of
+    /// particles in `x`.
+    pub fn with_rest_from_positions(i: Vec<usize>, j: Vec<usize>, k: f64, damping: f64, x: &[f64]) -> Result<Self, Error> {
+        if x.len() % 3 != 0 {
+            return Err(Error::invalid(
+                "x",
+                format!("{} values", x.len()),
+                "3 coordinates per particle",
+            ));
+        }
+        if let Some(p) = x.iter().position(|c| !c.is_finite()) {
+            return Err(Error::invalid(
+                format!("x[{}][{}]", p / 3, p % 3),
+                x[p],
+                "coordinates must be finite",
+            ));
+        }
+        let mut springs = Springs::uniform(i, j, k, 0.0, damping)?;
+        springs.validate(x.len() / 3)?;
+        for s in 0..springs.len() {
+            springs.rest_length[s] = distance(x, springs.i[s], springs.j[s]);
+        }
+        Ok(springs)
+    }
+
+    /// Number of springs.
+    pub fn len(&self) -> usize {
+        self.i.len()
+    }
+
+    /// Whether there are no springs.
+    pub fn is_empty(&self) -> bool {
+        self.i.is_empty()
+    }
+
+    /// First ends (particle indices).
+    pub fn i(&self) -> &[usize] {
+        &self.i
+    }
+
+    /// Second ends (particle indices).
+    pub fn j(&self) -> &[usize] {
+        &self.j
+    }
+
+    /// Stiffnesses, N/m.
+    pub fn stiffness(&self) -> &[f64] {
+        &self.k
+    }
+
+    /// Rest lengths, m.
+    pub fn rest_length(&self) -> &[f64] {
+        &self.rest_length
+    }
+
+    /// Dashpot coefficients, N·s/m.
+    pub fn damping(&self) -> &[f64] {
+        &self.damping
+    }
+
+    /// Per spring, ω² = k (w_i + w_j) (1/s²) and γ = c (w_i + w_j) (1/s), with `inv_mass` the
+    /// particles' inverse masses w (1/kg; 0 for a pinned particle, which counts as infinitely
+    /// heavy). See [`SpringRates`].
+    ///
+    /// These are exact for an isolated spring's motion along its axis (and bound the motion
+    /// across it while the spring is longer than half its rest length: the transverse
+    /// stiffness is k (1 − L₀/L), below k in magnitude there). In a network a particle shared
+    /// by several springs moves faster than any one spring says (a uniform chain reaches
+    /// ω² → 4k/m, twice the 2k/m of each spring): use [`Springs::max_rates`] for a step bound.
+    pub fn stiffness_bounds(&self, inv_mass: &[f64]) -> Result<Vec<SpringRates>, Error> {
+        self.validate(inv_mass.len())?;
+        Ok((0..self.len())
+            .map(|s| {
+                let w = inv_mass[self.i[s]] + inv_mass[self.j[s]];
+                SpringRates {
+                    omega_squared: self.k[s] * w,
+                    damping_rate: self.damping[s] * w,
+                }
+            })
+            .collect())
+    }
+
+    /// Upper bounds for the whole network on ω²_max (1/s²), the largest eigenvalue of M⁻¹K,
+    /// and on γ_max (1/s), the largest of M⁻¹C, with K and C the springs' stiffness and damping
+    /// matrices; `inv_mass` as in [`Springs::stiffness_bounds`]. Zero without springs.
+    ///
+    /// Block Gershgorin on M⁻¹K: row block p holds w_p K_s on the diagonal and −w_p K_s
+    /// off it for each spring s at p, with |K_s| = k_s max(1, |1 − L₀/L|) = k_s while the spring
+    /// is longer than L₀/2. Every eigenvalue is then within Σ_s w_p k_s of a diagonal one, so
+    ///
+    /// ```text
+    ///   ω²_max ≤ max_p 2 w_p Σ_{s at p} k_s,      γ_max ≤ max_p 2 w_p Σ_{s at p} c_s
+    /// ```
+    ///
+    /// The bound is reached by the highest mode of a long uniform chain (4k/m).
+    pub fn max_rates(&self, inv_mass: &[f64]) -> Result<SpringRates, Error> {
+        self.validate(inv_mass.len())?;
+        let mut k_sum = vec![0.0; inv_mass.len()];
+        let mut c_sum = vec![0.0; inv_mass.len()];
+        for s in 0..self.len() {
+            for p in [self.i[s], self.j[s]] {
+                k_sum[p] += self.k[s];
+                c_sum[p] += self.damping[s];
+            }
+        }
+        let mut rates = SpringRates::default();
+        for (p, w) in inv_mass.iter().enumerate() {
+            rates.omega_squared = rates.omega_squared.max(2.0 * w * k_sum[p]);
+            rates.damping_rate = rates.damping_rate.max(2.0 * w * c_sum[p]);
+        }
+        Ok(rates)
+    }
+
+    /// Unit vector n from i to j and the distance L of spring s; `None` for coincident ends.
+    fn axis(&self, x: &[f64], s: usize) -> Option<([f64; 3], f64)> {
+        let (a, b) = (3 * self.i[s], 3 * self.j[s]);
+        let d = [x[b] - x[a], x[b + 1] - x[a + 1], x[b + 2] - x[a + 2]];
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        (len > 0.0).then(|| ([d[0] / len, d[1] / len, d[2] / len], len))
+    }
+
+    /// u = v_j − v_i of spring s.
+    fn relative(&self, v: &[f64], s: usize) -> [f64; 3] {
+        let (a, b) = (3 * self.i[s], 3 * self.j[s]);
+        [v[b] - v[a], v[b + 1] - v[a + 1], v[b + 2] - v[a + 2]]
+    }
+
+    /// Adds `g` to particle i's entries of `out` and subtracts it from j's (action = −reaction).
+    fn apply_pair(&self, out: &mut [f64], s: usize, g: [f64; 3]) {
+        let (a, b) = (3 * self.i[s], 3 * self.j[s]);
+        for k in 0..3 {
+            out[a + k] += g[k];
+            out[b + k] -= g[k];
+        }
+    }
+
+    /// Errors (naming the first bad spring) unless every index is below `n`.
+    fn check_indices(&self, n: usize) -> Result<(), Error> {
+        if self.min_particles <= n {
+            return Ok(());
+        }
+        for s in 0..self.len() {
+            for (name, p) in [("i", self.i[s]), ("j", self.j[s])] {
+                if p >= n {
+                    return Err(Error::invalid(
+                        format!("{name}[{s}]"),
+                        p,
+                        format!("spring {s}'s ends must be indices of the {n} particles (< {n})"),
+                    ));
+                }
+            }
+        }
+        unreachable!("min_particles is 1 + the largest index")
+    }
+}
+
+fn distance(x: &[f64], i: usize, j: usize) -> f64 {
+    let (a, b) = (3 * i, 3 * j);
+    ((x[b] - x[a]).powi(2) + (x[b + 1] - x[a + 1]).powi(2) + (x[b + 2] - x[a + 2]).powi(2)).sqrt()
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+impl Force for Springs {
+    fn name(&self) -> &str {
+        "spring"
+    }
+
+    /// Adds F_i = [k (L − L₀) + c (u·n)] n to each spring's first end and −F_i to its second.
+    fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
+        check_buffers(self.name(), s, &[("f", f.len())])?;
+        self.check_indices(s.len())?;
+        for sp in 0..self.len() {
+            let Some((n, len)) = self.axis(s.x, sp) else { continue };
+            let u = self.relative(s.v, sp);
+            let tension = self.k[sp] * (len - self.rest_length[sp]) + self.damping[sp] * dot(u, n);
+            self.apply_pair(f, sp, [tension * n[0], tension * n[1], tension * n[2]]);
+        }
+        Ok(())
+    }
+
+    /// Checks that every index is below `n`; the error names the spring and the index.
+    fn validate(&self, n: usize) -> Result<(), Error> {
+        self.check_indices(n)
+    }
+
+    /// U = Σ ½ k (L − L₀)², J: the elastic energy. The dashpot is dissipative and has no
+    /// potential, so for damped springs F ≠ −∇U while the ends move; the total energy then
+    /// decays by the dashpot's work. `None` if an index is out of range.
+    fn potential_energy(&self, s: &State) -> Option<f64> {
+        if self.check_indices(s.len()).is_err() || s.x.len() != 3 * s.len() {
+            return None;
+        }
+        let u = (0..self.len()).map(|sp| {
+            let stretch = distance(s.x, self.i[sp], self.j[sp]) - self.rest_length[sp];
+            0.5 * self.k[sp] * stretch * stretch
+        });
+        Some(u.sum())
+    }
+
+    /// True when some spring has a dashpot (c > 0).
+    fn depends_on_velocity(&self) -> bool {
+        self.damping.iter().any(|c| *c != 0.0)
+    }
+
+    fn is_internal(&self) -> bool {
+        true
+    }
+
+    /// Adds (∂F/∂x)·dx + (∂F/∂v)·dv, from each spring's blocks (P = I − n nᵀ, the projector
+    /// across the spring; ∂n/∂d = P / L; ∂L/∂d = nᵀ):
+    ///
+    /// ```text
+    ///   elastic   ∂[k (L − L₀) n]/∂d = k [ n nᵀ + (1 − L₀/L) P ]
+    ///   dashpot   ∂[c (u·n) n]/∂d    = c [ (u·n) P + n (P u)ᵀ ] / L
+    ///             ∂[c (u·n) n]/∂u    = c n nᵀ
+    /// ```
+    ///
+    /// Since d = x_j − x_i and u = v_j − v_i, with K the sum of the first two blocks,
+    /// δF_i = K (dx_j − dx_i) + c n nᵀ (dv_j − dv_i) and δF_j = −δF_i. K is not symmetric
+    /// when the ends move (the n (P u)ᵀ term): the dashpot's axis turns with the spring.
+    ///
+    /// At L = 0 (coincident ends, no force, see the module doc) a spring of rest length 0
+    /// adds k (dx_j − dx_i), the exact derivative of its force k d; any other adds nothing.
+    /// Returns false, adding nothing, if a buffer's length or an index does not fit `s`.
+    fn jacobian_product(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64]) -> bool {
+        if check_buffers(self.name(), s, &[("dx", dx.len()), ("dv", dv.len()), ("out", out.len())]).is_err()
+            || self.check_indices(s.len()).is_err()
+        {
+            return false;
+        }
+        for sp in 0..self.len() {
+            let (k, rest, c) = (self.k[sp], self.rest_length[sp], self.damping[sp]);
+            let e = self.relative(dx, sp); // dx_j − dx_i
+            let Some((n, len)) = self.axis(s.x, sp) else {
+                if rest == 0.0 {
+                    self.apply_pair(out, sp, [k * e[0], k * e[1], k * e[2]]);
+                }
+                continue;
+            };
+            let u = self.relative(s.v, sp);
+            let w = self.relative(dv, sp); // dv_j − dv_i
+            let (ne, un, nw) = (dot(n, e), dot(u, n), dot(n, w));
+            let pe = [e[0] - ne * n[0], e[1] - ne * n[1], e[2] - ne * n[2]]; // P e
+            let transverse = k * (1.0 - rest / len) + c * un / len; // coefficient of P e
+            let axial = k * ne + c * dot(u, pe) / len + c * nw; // coefficient of n; (P u)·e = u·(P e)
+            self.apply_pair(
+                out,
+                sp,
+                [
+                    axial * n[0] + transverse * pe[0],
+                    axial * n[1] + transverse * pe[1],
+                    axial * n[2] + transverse * pe[2],
+                ],
+            );
+        }
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::{
+        assert_close, assert_force_is_minus_gradient, assert_jacobian_matches_differences, forces, max_abs, Rng,
+    };
+    use super::*;
+
+    fn state<'a>(x: &'a [f64], v: &'a [f64], m: &'a [f64]) -> State<'a> {
+        State { t: 0.0, x, v, mass: m }
+    }
+
+    /// A random network of `n` particles in the unit cube and `count` springs with random
+    /// stiffness, rest length (some 0) and damping; random velocities.
+    fn network(rng: &mut Rng, n: usize, count: usize, damped: bool) -> (Springs, Vec<f64>, Vec<f64>, Vec<f64>) {
+        let x = rng.vec(3 * n, -1.0, 1.0);
+        let v = rng.vec(3 * n, -1.0, 1.0);
+        let m = rng.vec(n, 0.5, 2.0);
+        let mut i = Vec::new();
+        let mut j = Vec::new();
+        while i.len() < count {
+            let (a, b) = (rng.index(n), rng.index(n));
+            if a != b {
+                i.push(a);
+                j.push(b);
+            }
+        }
+        let k = rng.vec(count, 10.0, 100.0);
+        // Rest lengths around the typical distance (≈ 0.9), so that springs are both stretched
+        // and compressed; every fifth spring has rest length 0.
+        let rest = (0..count)
+            .map(|s| if s % 5 == 0 { 0.0 } else { rng.uniform(0.2, 1.6) })
+            .collect();
+        let c = if damped { rng.vec(count, 0.5, 3.0) } else { vec![0.0; count] };
+        (Springs::new(i, j, k, rest, c).unwrap(), x, v, m)
+    }
+
+    /// Theory: Hooke's law plus a dashpot. Ends 5 m apart along n = (0.6, 0.8, 0), rest 2 m,
+    /// k = 10 N/m: a pull of k (L − L₀) = 30 N on i toward j, and the opposite on j. With
+    /// c = 2 N·s/m and v_j − v_i = (1, 0, 0), u·n = 0.6 m/s adds c u·n = 1.2 N of tension.
+    /// Compressed to 1 m, the spring pushes the ends apart with 10 N.
+    #[test]
+    fn stretched_and_compressed_spring_closed_form() {
+        let x = [1.0, 1.0, 1.0, 4.0, 5.0, 1.0];
+        let v = [0.0; 6];
+        let m = [1.0, 1.0];
+        let mut sp = Springs::uniform(vec![0], vec![1], 10.0, 2.0, 0.0).unwrap();
+        let f = forces(&mut sp, &state(&x, &v, &m));
+        assert_close(&f, &[18.0, 24.0, 0.0, -18.0, -24.0, 0.0], 1e-15, "stretched");
+        assert!((sp.potential_energy(&state(&x, &v, &m)).unwrap() - 45.0).abs() < 1e-12);
+
+        let vm = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0];
+        let mut damped = Springs::uniform(vec![0], vec![1], 10.0, 2.0, 2.0).unwrap();
+        let f = forces(&mut damped, &state(&x, &vm, &m));
+        assert_close(
+            &f,
+            &[31.2 * 0.6, 31.2 * 0.8, 0.0, -31.2 * 0.6, -31.2 * 0.8, 0.0],
+            1e-15,
+            "damped",
+        );
+
+        let xc = [0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        let f = forces(&mut sp, &state(&xc, &v, &m));
+        assert_close(&f, &[0.0, 0.0, -10.0, 0.0, 0.0, 10.0], 1e-15, "compressed");
+    }
+
+    /// Theory: action = −reaction, so Σ_p F_p = 0 up to rounding (relative 1e-12 of Σ|F_p|),
+    /// on a random damped network in motion; the force must not be trivially zero.
+    #[test]
+    fn total_force_of_a_random_network_is_zero() {
+        let mut rng = Rng::new(42);
+        let (mut sp, x, v, m) = network(&mut rng, 12, 40, true);
+        let f = forces(&mut sp, &state(&x, &v, &m));
+        assert!(max_abs(&f) > 1.0);
+        for c in 0..3 {
+            let total: f64 = f.iter().skip(c).step_by(3).sum();
+            let scale: f64 = f.iter().skip(c).step_by(3).map(|x| x.abs()).sum();
+            assert!(
+                total.abs() <= 1e-12 * scale,
+                "component {c}: Σ F = {total:e}, Σ |F| = {scale:e}"
+            );
+        }
+        assert!(sp.is_internal() && sp.depends_on_velocity());
+    }
+
+    /// Theory: F = −∇U with U = Σ ½ k (L − L₀)², by central differences; for undamped springs
+    /// in motion, and for damped springs at rest (where the dashpot adds nothing).
+    #[test]
+    fn force_is_minus_gradient_of_elastic_energy() {
+        let mut rng = Rng::new(5);
+        let (mut sp, x, v, m) = network(&mut rng, 8, 20, false);
+        assert!(!sp.depends_on_velocity());
+        assert_force_is_minus_gradient(&mut sp, &state(&x, &v, &m), 1e-6, 1e-6);
+        let (mut sp, x, _, m) = network(&mut rng, 8, 20, true);
+        assert_force_is_minus_gradient(&mut sp, &state(&x, &[0.0; 24], &m), 1e-6, 1e-6);
+    }
+
+    /// Theory: the derived blocks k [n nᵀ + (1 − L₀/L) P], c [(u·n) P + n (P u)ᵀ] / L and
+    /// c n nᵀ are the derivatives of the force: central differences of F along random dx, dv,
+    /// on a damped network in motion with stretched, compressed and zero-rest-length springs.
+    ///
+    /// The check is sensitive to the dashpot's position term: that term (the difference of the
+    /// damped and undamped x-Jacobians, less nothing else) is far above the tolerance here,
+    /// so a product that left it out would fail.
+    #[test]
+    fn jacobian_matches_finite_differences_for_damped_springs_in_motion() {
+        let mut rng = Rng::new(9);
+        let (mut sp, x, v, m) = network(&mut rng, 10, 30, true);
+        let s = state(&x, &v, &m);
+        assert_jacobian_matches_differences(&mut sp, &s, &mut rng, 1e-6, 1e-6);
+
+        let undamped = Springs::new(
+            sp.i.clone(),
+            sp.j.clone(),
+            sp.k.clone(),
+            sp.rest_length.clone(),
+            vec![0.0; sp.len()],
+        )
+        .unwrap();
+        let dx = rng.vec(30, -1.0, 1.0);
+        let (mut jd, mut ju) = (vec![0.0; 30], vec![0.0; 30]);
+        assert!(sp.jacobian_product(&s, &dx, &[0.0; 30], &mut jd));
+        assert!(undamped.jacobian_product(&s, &dx, &[0.0; 30], &mut ju));
+        let term: Vec<f64> = jd.iter().zip(&ju).map(|(a, b)| a - b).collect();
+        assert!(
+            max_abs(&term) > 1e-2 * max_abs(&jd),
+            "dashpot position term {} vs {}",
+            max_abs(&term),
+            max_abs(&jd)
+        );
+    }
+
+    /// Coincident ends: no NaN anywhere. The spring of rest length 0 has force k d = 0 and
+    /// Jacobian k I; the one of rest length 1 adds nothing (documented convention).
+    #[test]
+    fn coincident_ends_give_no_nan() {
+        let x = [0.5, 0.5, 0.5, 0.5, 0.5, 0.5];
+        let v = [0.0, 0.0, 0.0, 1.0, 2.0, 3.0];
+        let m = [1.0, 1.0];
+        let s = state(&x, &v, &m);
+        for (rest, expect) in [(0.0, [-4.0, 4.0, 2.0, 4.0, -4.0, -2.0]), (1.0, [0.0; 6])] {
+            let mut sp = Springs::uniform(vec![0], vec![1], 2.0, rest, 1.0).unwrap();
+            assert_eq!(forces(&mut sp, &s), vec![0.0; 6]);
+            assert_eq!(sp.potential_energy(&s).unwrap(), 0.5 * 2.0 * rest * rest);
+            let mut out = [0.0; 6];
+            assert!(sp.jacobian_product(&s, &[1.0, -1.0, 0.0, -1.0, 1.0, 1.0], &[1.0; 6], &mut out));
+            assert_eq!(out, expect);
+        }
+    }
+
+    /// Theory: an isolated spring's stretch obeys r'' = −ω² r − γ r' with ω² = k (w_i + w_j),
+    /// γ = c (w_i + w_j). Measured from the accelerations w F of a small stretch and of a
+    /// separating velocity, for free ends and for a pinned end (w = 0).
+    #[test]
+    fn per_spring_rates_match_the_relative_motion() {
+        let (k, c, rest) = (50.0, 0.4, 1.0);
+        let sp = Springs::uniform(vec![0], vec![1], k, rest, c).unwrap();
+        for inv_mass in [[0.5, 0.25], [0.5, 0.0]] {
+            let rates = sp.stiffness_bounds(&inv_mass).unwrap()[0];
+            let n = [0.0, 0.6, 0.8];
+            let (delta, speed) = (1e-3, 0.7);
+            let x = [
+                0.0,
+                0.0,
+                0.0,
+                (rest + delta) * n[0],
+                (rest + delta) * n[1],
+                (rest + delta) * n[2],
+            ];
+            let v = [0.0, 0.0, 0.0, speed * n[0], speed * n[1], speed * n[2]];
+            let f = forces(&mut sp.clone(), &state(&x, &v, &[2.0, 4.0]));
+            let rel_acc: f64 = (0..3).map(|q| (inv_mass[1] * f[3 + q] - inv_mass[0] * f[q]) * n[q]).sum();
+            let expect = -rates.omega_squared * delta - rates.damping_rate * speed;
+            assert!((rel_acc - expect).abs() < 1e-12 * expect.abs(), "{rel_acc} vs {expect}");
+            assert_eq!(rates.omega_squared, k * (inv_mass[0] + inv_mass[1]));
+        }
+    }
+
+    /// Theory: the largest eigenvalue of M⁻¹K of a chain at rest (found by power iteration on
+    /// the symmetric M^{-1/2} K M^{-1/2}, K = −∂F/∂x from `jacobian_product`) lies below the
+    /// Gershgorin bound of `max_rates`, and above every per-spring ω², which is why the
+    /// network bound exists.
+    #[test]
+    fn network_bound_covers_the_fastest_chain_mode() {
+        let n = 12;
+        let x: Vec<f64> = (0..n).flat_map(|p| [p as f64 * 0.5, 0.0, 0.0]).collect();
+        let mut rng = Rng::new(17);
+        let inv_mass: Vec<f64> = (0..n)
+            .map(|p| if p == 0 { 0.0 } else { 1.0 / rng.uniform(0.8, 1.2) })
+            .collect();
+        let sp = Springs::with_rest_from_positions((0..n - 1).collect(), (1..n).collect(), 30.0, 0.0, &x).unwrap();
+        let mass = vec![1.0; n];
+        let s = state(&x, &x, &mass);
+        let root_w: Vec<f64> = inv_mass.iter().flat_map(|w| [w.sqrt(); 3]).collect();
+        let mut y = rng.vec(3 * n, -1.0, 1.0);
+        let mut lambda = 0.0;
+        for _ in 0..2000 {
+            let z: Vec<f64> = y.iter().zip(&root_w).map(|(y, r)| y * r).collect();
+            let mut jz = vec![0.0; 3 * n];
+            assert!(sp.jacobian_product(&s, &z, &vec![0.0; 3 * n], &mut jz));
+            let ay: Vec<f64> = jz.iter().zip(&root_w).map(|(j, r)| -j * r).collect();
+            let norm = ay.iter().map(|a| a * a).sum::<f64>().sqrt();
+            lambda = ay.iter().zip(&y).map(|(a, y)| a * y).sum::<f64>() / y.iter().map(|y| y * y).sum::<f64>();
+            y = ay.iter().map(|a| a / norm).collect();
+        }
+        let bound = sp.max_rates(&inv_mass).unwrap().omega_squared;
+        let per_spring = sp
+            .stiffness_bounds(&inv_mass)
+            .unwrap()
+            .iter()
+            .fold(0.0, |m: f64, r| m.max(r.omega_squared));
+        assert!(lambda <= bound, "λ_max = {lambda} > bound {bound}");
+        assert!(lambda > per_spring, "λ_max = {lambda} <= per-spring {per_spring}");
+        assert!(lambda > 0.6 * bound, "bound {bound} is loose: λ_max = {lambda}");
+    }
+
+    #[test]
+    fn rest_lengths_from_positions() {
+        let x = [0.0, 0.0, 0.0, 3.0, 4.0, 0.0, 3.0, 4.0, 12.0];
+        let sp = Springs::with_rest_from_positions(vec![0, 1], vec![1, 2], 5.0, 0.1, &x).unwrap();
+        assert_eq!(sp.rest_length(), &[5.0, 12.0]);
+        let f = forces(&mut sp.clone(), &state(&x, &[0.0; 9], &[1.0; 3]));
+        assert_eq!(f, vec![0.0; 9]);
+        let e = Springs::with_rest_from_positions(vec![0], vec![3], 5.0, 0.0, &x)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("j[0] = 3 is invalid: spring 0's ends must be indices of the 3 particles"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn validation_errors_name_the_spring_and_the_value() {
+        let ok = |k: f64, rest: f64, c: f64| Springs::new(vec![0, 1], vec![1, 2], vec![1.0, k], vec![1.0, rest], vec![0.0, c]);
+        let e = ok(-2.0, 1.0, 0.0).unwrap_err().to_string();
+        assert!(e.starts_with("k[1] = -2 is invalid"), "{e}");
+        let e = ok(1.0, f64::NAN, 0.0).unwrap_err().to_string();
+        assert!(e.starts_with("rest_length[1] = NaN is invalid"), "{e}");
+        let e = ok(1.0, 1.0, -0.5).unwrap_err().to_string();
+        assert!(e.starts_with("damping[1] = -0.5 is invalid"), "{e}");
+        let e = ok(f64::INFINITY, 1.0, 0.0).unwrap_err().to_string();
+        assert!(e.starts_with("k[1] = inf is invalid"), "{e}");
+        let e = Springs::uniform(vec![0, 4], vec![1, 4], 1.0, 1.0, 0.0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("j[1] = 4 is invalid: spring 1 joins particle 4 to itself"),
+            "{e}"
+        );
+        let e = Springs::new(vec![0, 1], vec![1], vec![1.0; 2], vec![1.0; 2], vec![0.0; 2])
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("j = 1 values is invalid"), "{e}");
+
+        let sp = Springs::uniform(vec![0, 1, 2], vec![1, 7, 0], 1.0, 1.0, 0.0).unwrap();
+        assert!(sp.validate(8).is_ok());
+        let e = sp.validate(5).unwrap_err().to_string();
+        assert!(e.starts_with("j[1] = 7 is invalid: spring 1's ends"), "{e}");
+        // accumulate reports the same instead of panicking on an out-of-range index
+        let x = [0.0; 15];
+        let e = sp
+            .clone()
+            .accumulate(&state(&x, &x, &[1.0; 5]), &mut [0.0; 15])
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("j[1] = 7 is invalid"), "{e}");
+    }
+}
