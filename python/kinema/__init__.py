@@ -5,6 +5,8 @@ The public API (everything else is private):
 - ODEs: ``solve``, ``solve_second_order``, ``Solution``, ``DenseSolution``, ``ButcherTableau``, ``methods``,
   ``method_names``, ``MethodInfo``, ``SolverWarning``
 - Stability on p' = λp: the module ``kinema.stability``
+- Particle worlds: ``World``, the forces ``Gravity``, ``Drag``, ``Spring``, ``Attractor``,
+  ``Wind``, ``PythonForce``, the recorded ``Trajectory`` and ``SimulationDiverged``
 - Measured orders of accuracy: ``convergence``, ``ConvergenceResult``, the module
   ``kinema.problems`` (problems with exact solutions)
 """
@@ -12,6 +14,7 @@ The public API (everything else is private):
 from . import problems, stability
 from ._core import __version__
 from .convergence import ConvergenceResult, convergence
+from .forces import Attractor, Drag, Gravity, PythonForce, Spring, Wind
 from .ode import (
     ButcherTableau,
     DenseSolution,
@@ -23,9 +26,20 @@ from .ode import (
     solve,
     solve_second_order,
 )
+from .trajectory import Trajectory
+from .world import SimulationDiverged, World
 
 __all__ = [
     "__version__",
+    "Attractor",
+    "Drag",
+    "Gravity",
+    "PythonForce",
+    "SimulationDiverged",
+    "Spring",
+    "Trajectory",
+    "Wind",
+    "World",
     "ButcherTableau",
     "ConvergenceResult",
     "DenseSolution",

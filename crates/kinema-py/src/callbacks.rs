@@ -33,7 +33,7 @@ pub fn shape_str(shape: &[usize]) -> String {
 }
 
 /// Copies a callable's result into `out`, checking its shape.
-fn copy_result(py: Python<'_>, what: &str, value: &Bound<'_, PyAny>, shape: &[usize], out: &mut [f64]) -> PyResult<()> {
+pub fn copy_result(py: Python<'_>, what: &str, value: &Bound<'_, PyAny>, shape: &[usize], out: &mut [f64]) -> PyResult<()> {
     let arr = match value.cast::<PyArrayDyn<f64>>() {
         Ok(a) => a.clone(),
         Err(_) => slow_convert(py, what, value, shape)?,

@@ -7,6 +7,7 @@ mod callbacks;
 mod errors;
 mod ode;
 mod stability;
+mod world;
 
 use pyo3::prelude::*;
 
@@ -15,5 +16,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     ode::register(m)?;
     stability::register(m)?;
+    world::register(m)?;
     Ok(())
 }

@@ -1,0 +1,264 @@
+//! Bindings of the particle world: World, the force catalogue, Python forces, diagnostics.
+
+use kinema::error::CallbackError;
+use kinema::forces::{Attractor, Drag, Force, Gravity, Springs, State, Wind};
+use kinema::{Error, World, WorldParams};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::callbacks::copy_result;
+use crate::errors::to_py;
+use crate::ode::integrator_from;
+
+pyo3::create_exception!(
+    kinema,
+    SimulationDiverged,
+    pyo3::exceptions::PyRuntimeError,
+    "A world step produced a non-finite state; the world keeps the state from before it."
+);
+
+/// Engine errors of a world: divergence gets its own exception.
+fn world_err(e: Error) -> PyErr {
+    match e {
+        Error::Diverged { .. } => SimulationDiverged::new_err(e.to_string()),
+        other => to_py(other),
+    }
+}
+
+/// A force computed by a Python callable `fn(t, x, v) -> F` on whole (N, 3) arrays.
+struct PythonForce {
+    f: Py<PyAny>,
+    name: String,
+}
+
+impl Force for PythonForce {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
+        let n = s.len();
+        Python::attach(|py| -> PyResult<()> {
+            let x = PyArray1::from_slice(py, s.x).reshape([n, 3])?;
+            let v = PyArray1::from_slice(py, s.v).reshape([n, 3])?;
+            let out = self.f.bind(py).call1((s.t, x, v))?;
+            let mut buf = vec![0.0; 3 * n];
+            copy_result(py, &format!("force '{}' fn(t, x, v)", self.name), &out, &[n, 3], &mut buf)?;
+            for (fi, bi) in f.iter_mut().zip(&buf) {
+                *fi += bi;
+            }
+            Ok(())
+        })
+        .map_err(|e| Box::new(e) as CallbackError)
+    }
+    fn depends_on_velocity(&self) -> bool {
+        true // unknown: assume it may
+    }
+}
+
+/// The particle world (see kinema.World).
+#[pyclass(name = "World", module = "kinema._core", unsendable)]
+pub struct PyWorld {
+    inner: World,
+}
+
+fn rows<'py>(py: Python<'py>, flat: &[f64]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    PyArray1::from_slice(py, flat).reshape([flat.len() / 3, 3])
+}
+
+fn flat3(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<f64>> {
+    let shape = a.shape();
+    if shape[1] != 3 {
+        return Err(PyValueError::new_err(format!(
+            "{name} has shape ({}, {}); it must be (N, 3)",
+            shape[0], shape[1]
+        )));
+    }
+    Ok(a.as_array().iter().copied().collect())
+}
+
+#[pymethods]
+impl PyWorld {
+    #[new]
+    fn new(dim: usize, dt: f64, method: Bound<'_, PyAny>) -> PyResult<Self> {
+        let method = integrator_from(&method)?;
+        Ok(Self {
+            inner: World::new(WorldParams { dt, method, dim }).map_err(world_err)?,
+        })
+    }
+
+    /// Appends particles; returns (first, end) indices.
+    fn add_particles(
+        &mut self,
+        x: PyReadonlyArray2<'_, f64>,
+        v: PyReadonlyArray2<'_, f64>,
+        mass: Vec<f64>,
+        radius: Vec<f64>,
+        pinned: Vec<bool>,
+    ) -> PyResult<(usize, usize)> {
+        let (x, v) = (flat3("position", &x)?, flat3("velocity", &v)?);
+        let r = self.inner.add_particles(&x, &v, &mass, &radius, &pinned).map_err(world_err)?;
+        Ok((r.start, r.end))
+    }
+
+    fn add_gravity(&mut self, g: [f64; 3]) -> PyResult<()> {
+        self.inner.add_force(Box::new(Gravity::new(g).map_err(to_py)?)).map_err(to_py)
+    }
+
+    fn add_drag(&mut self, linear: f64, quadratic: f64) -> PyResult<()> {
+        self.inner
+            .add_force(Box::new(Drag::new(linear, quadratic).map_err(to_py)?))
+            .map_err(to_py)
+    }
+
+    #[pyo3(signature = (i, j, k, rest_length, damping))]
+    fn add_springs(
+        &mut self,
+        i: Vec<usize>,
+        j: Vec<usize>,
+        k: Vec<f64>,
+        rest_length: Option<Vec<f64>>,
+        damping: Vec<f64>,
+    ) -> PyResult<()> {
+        let rest = match rest_length {
+            Some(r) => r,
+            None => {
+                // rest lengths from the current positions (a spring at rest as built)
+                let x = &self.inner.particles().x;
+                let n = self.inner.particles().len();
+                i.iter()
+                    .zip(&j)
+                    .enumerate()
+                    .map(|(s, (&a, &b))| {
+                        if a >= n || b >= n {
+                            return Err(PyValueError::new_err(format!(
+                                "spring {s} joins particles {a} and {b}, but the world has {n} particles"
+                            )));
+                        }
+                        Ok((0..3).map(|c| (x[3 * b + c] - x[3 * a + c]).powi(2)).sum::<f64>().sqrt())
+                    })
+                    .collect::<PyResult<Vec<f64>>>()?
+            }
+        };
+        let springs = Springs::new(i, j, k, rest, damping).map_err(to_py)?;
+        self.inner.add_force(Box::new(springs)).map_err(to_py)
+    }
+
+    fn add_attractor(&mut self, point: [f64; 3], strength: f64, softening: f64) -> PyResult<()> {
+        self.inner
+            .add_force(Box::new(Attractor::new(point, strength, softening).map_err(to_py)?))
+            .map_err(to_py)
+    }
+
+    fn add_wind(&mut self, velocity: [f64; 3], coefficient: f64) -> PyResult<()> {
+        self.inner
+            .add_force(Box::new(Wind::new(velocity, coefficient).map_err(to_py)?))
+            .map_err(to_py)
+    }
+
+    fn add_python_force(&mut self, f: Py<PyAny>, name: String) -> PyResult<()> {
+        self.inner.add_force(Box::new(PythonForce { f, name })).map_err(to_py)
+    }
+
+    /// Advances n steps; stops at the first failing one (the state before it is kept).
+    fn step(&mut self, n: u64) -> PyResult<()> {
+        for _ in 0..n {
+            self.inner.step().map_err(world_err)?;
+        }
+        Ok(())
+    }
+
+    #[getter]
+    fn time(&self) -> f64 {
+        self.inner.time()
+    }
+    #[getter]
+    fn steps(&self) -> u64 {
+        self.inner.steps()
+    }
+    #[getter]
+    fn nfev(&self) -> usize {
+        self.inner.stats().nfev
+    }
+    #[getter]
+    fn dt(&self) -> f64 {
+        self.inner.params().dt
+    }
+    #[getter]
+    fn dim(&self) -> usize {
+        self.inner.params().dim
+    }
+    #[getter]
+    fn method(&self) -> String {
+        self.inner.params().method.name().to_string()
+    }
+    #[getter]
+    fn len(&self) -> usize {
+        self.inner.particles().len()
+    }
+    #[getter]
+    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        rows(py, &self.inner.particles().x)
+    }
+    #[getter]
+    fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        rows(py, &self.inner.particles().v)
+    }
+    #[getter]
+    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.inner.particles().mass)
+    }
+    #[getter]
+    fn inverse_masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.inner.particles().inv_mass)
+    }
+
+    /// Sets positions and velocities (both (N, 3)); method caches restart.
+    fn set_state(&mut self, x: PyReadonlyArray2<'_, f64>, v: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
+        let (x, v) = (flat3("positions", &x)?, flat3("velocities", &v)?);
+        let n = self.inner.particles().len();
+        if x.len() != 3 * n || v.len() != 3 * n {
+            return Err(PyValueError::new_err(format!(
+                "positions and velocities must have shape ({n}, 3)"
+            )));
+        }
+        if let Some(i) = x.iter().chain(&v).position(|c| !c.is_finite()) {
+            return Err(PyValueError::new_err(format!("state value {i} is not finite")));
+        }
+        let p = self.inner.particles_mut();
+        p.x.copy_from_slice(&x);
+        for (k, (dst, src)) in p.v.iter_mut().zip(&v).enumerate() {
+            *dst = if p.inv_mass[k / 3] == 0.0 { 0.0 } else { *src }; // pinned particles stay at rest
+        }
+        Ok(())
+    }
+
+    fn accelerations<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let a = self.inner.accelerations().map_err(world_err)?;
+        rows(py, &a)
+    }
+
+    /// Energies and momenta now, as a dict.
+    fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = self.inner.diagnostics();
+        let out = PyDict::new(py);
+        out.set_item("t", d.t)?;
+        out.set_item("kinetic", d.kinetic)?;
+        let pot = PyDict::new(py);
+        for (name, u) in &d.potential {
+            let prev: f64 = pot.get_item(name)?.map(|v| v.extract()).transpose()?.unwrap_or(0.0);
+            pot.set_item(name, prev + u)?;
+        }
+        out.set_item("potential", pot)?;
+        out.set_item("momentum", d.momentum.to_vec())?;
+        out.set_item("angular_momentum", d.angular_momentum.to_vec())?;
+        Ok(out)
+    }
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyWorld>()?;
+    m.add("SimulationDiverged", m.py().get_type::<SimulationDiverged>())?;
+    Ok(())
+}
