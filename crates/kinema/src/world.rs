@@ -41,7 +41,8 @@ struct Dynamics<'a> {
     mass: &'a [f64],
     inv_mass: &'a [f64],
     dim: usize,
-    force: Vec<f64>,
+    /// Scratch for the summed forces, N (owned by the World, so a step allocates nothing).
+    force: &'a mut Vec<f64>,
 }
 
 impl SecondOrderSystem for Dynamics<'_> {
@@ -50,7 +51,8 @@ impl SecondOrderSystem for Dynamics<'_> {
     }
 
     fn accel(&mut self, t: f64, x: &[f64], v: &[f64], acc: &mut [f64]) -> Result<(), CallbackError> {
-        self.force.fill(0.0);
+        self.force.clear();
+        self.force.resize(x.len(), 0.0);
         let s = State {
             t,
             x,
@@ -58,7 +60,7 @@ impl SecondOrderSystem for Dynamics<'_> {
             mass: self.mass,
         };
         for f in self.forces.iter_mut() {
-            f.accumulate(&s, &mut self.force)?;
+            f.accumulate(&s, self.force)?;
         }
         // Newton's second law, a = F/m, with 1/m = 0 for pinned particles.
         for (i, inv_m) in self.inv_mass.iter().enumerate() {
@@ -110,6 +112,7 @@ pub struct World {
     stepper: Option<WorldStepper>,
     y: Vec<f64>,
     y_next: Vec<f64>,
+    force: Vec<f64>,
 }
 
 impl World {
@@ -131,6 +134,7 @@ impl World {
             stepper: None,
             y: Vec::new(),
             y_next: Vec::new(),
+            force: Vec::new(),
         })
     }
 
@@ -229,7 +233,7 @@ impl World {
             mass: &p.mass,
             inv_mass: &p.inv_mass,
             dim: self.params.dim,
-            force: vec![0.0; p.x.len()],
+            force: &mut self.force,
         };
         let mut a = vec![0.0; p.x.len()];
         dynamics.accel(self.time, &p.x, &p.v, &mut a)?;
@@ -276,7 +280,7 @@ impl World {
             mass: &p.mass,
             inv_mass: &p.inv_mass,
             dim: self.params.dim,
-            force: vec![0.0; n],
+            force: &mut self.force,
         };
         let outcome = match stepper {
             WorldStepper::SecondOrder(s) => s.step(&mut dynamics, t, &self.y, h, &mut self.y_next, &mut self.stats),
