@@ -40,27 +40,76 @@ pub enum Error {
     /// A Butcher tableau whose coefficients are inconsistent.
     #[error("invalid Butcher tableau: {0}")]
     InvalidTableau(String),
-    /// A world step produced a non-finite state (the time step is beyond the stability limit
-    /// of the method for these forces, or a force returned NaN/inf). The world keeps the state
-    /// from before the step.
+    /// A world step produced a non-finite state or runaway energy (the time step is beyond
+    /// the stability limit of the method for these forces, or a force returned NaN/inf). The
+    /// world keeps the state from before the step.
     #[error(
-        "the simulation diverged at step {step} (t = {time} s, dt = {dt} s){}: the state became non-finite; \
-         reduce dt, or use a more stable method (implicit_euler for stiff springs)",
-        particle.map(|p| format!(", first at particle {p}")).unwrap_or_default()
+        "the simulation diverged at step {step} (t = {time} s, dt = {dt} s){}: {reason}; {}",
+        particle.map(|p| format!(", first at particle {p}")).unwrap_or_default(),
+        advice(*dt, *advised_dt)
     )]
     Diverged {
         /// The step that failed (1 = the first step).
         step: u64,
         /// Time at the start of the failed step, s.
         time: f64,
-        /// First particle whose position or velocity became non-finite, when known.
+        /// First offending particle: the first with a non-finite position or velocity, or the
+        /// fastest one when the energy ran away.
         particle: Option<usize>,
         /// The time step, s.
         dt: f64,
+        /// What went wrong.
+        reason: Divergence,
+        /// The stable-step advisor's largest stable step for the world's method at the state
+        /// before the step, s, when it could be estimated.
+        advised_dt: Option<f64>,
     },
     /// The user's callback failed; the inner error is its own.
     #[error("callback failed: {0}")]
     Callback(#[source] CallbackError),
+}
+
+/// Why a world step was refused.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Divergence {
+    /// A position or velocity became NaN or ±inf.
+    NonFinite,
+    /// The mechanical energy grew far beyond anything the forces can supply.
+    RunawayEnergy {
+        /// Kinetic plus potential energy after the step, J.
+        energy: f64,
+        /// Energy at the reference state (the start of the run), J.
+        reference: f64,
+        /// The energy scale the growth is measured against, J.
+        scale: f64,
+    },
+}
+
+impl fmt::Display for Divergence {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Divergence::NonFinite => write!(f, "the state became non-finite"),
+            Divergence::RunawayEnergy {
+                energy,
+                reference,
+                scale,
+            } => write!(
+                f,
+                "the energy ran away to {energy:.6e} J from {reference:.6e} J (scale {scale:.3e} J), \
+                 which none of the forces can supply"
+            ),
+        }
+    }
+}
+
+/// The advice of a divergence message: the advisor's step when known.
+fn advice(dt: f64, advised: Option<f64>) -> String {
+    match advised {
+        Some(h) if h.is_finite() && h < dt => {
+            format!("the stable-step advisor gives dt <= {h:.4e} s for this method; reduce dt, or use implicit_euler for stiff springs")
+        }
+        _ => "reduce dt, or use a more stable method (implicit_euler for stiff springs)".to_string(),
+    }
 }
 
 impl Error {

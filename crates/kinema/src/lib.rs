@@ -12,6 +12,6 @@ pub mod ode;
 pub mod particles;
 pub mod world;
 
-pub use error::{CallbackError, Error};
+pub use error::{CallbackError, Divergence, Error};
 pub use particles::Particles;
 pub use world::{World, WorldParams};

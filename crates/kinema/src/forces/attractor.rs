@@ -6,7 +6,7 @@
 //! ε > 0 (Plummer's) caps the force near the point: |F| peaks at 2μm/(3√3 ε²), for |r| = ε/√2,
 //! and falls to zero at the point, so close passes need no tiny steps.
 
-use super::{check_buffers, Force, State};
+use super::{check_buffers, Force, SpringRates, State};
 use crate::error::{CallbackError, Error};
 
 /// Softened inverse-square attraction toward a fixed point: F_i = −μ m_i r / (|r|² + ε²)^{3/2},
@@ -105,6 +105,28 @@ impl Force for Attractor {
                 .zip(s.mass)
                 .map(|(xi, m)| -self.strength * m / self.offset(xi).1.sqrt());
         Some(u.sum())
+    }
+
+    /// Conservative: its work is −ΔU.
+    fn can_add_energy(&self) -> bool {
+        false
+    }
+
+    /// ω² ≤ max over movable particles of 2μ / s³: the eigenvalues of M⁻¹∂F/∂x (see
+    /// [`Force::jacobian_product`] below) are μ (3|r|²/s² − 1)/s³ ≤ 2μ/s³ along r and −μ/s³
+    /// across it. No velocity dependence.
+    fn rate_bound(&self, s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
+        let mut omega_squared: f64 = 0.0;
+        for (xi, w) in s.x.chunks_exact(3).zip(inv_mass) {
+            if *w > 0.0 {
+                let s2 = self.offset(xi).1;
+                omega_squared = omega_squared.max(2.0 * self.strength / (s2 * s2.sqrt()));
+            }
+        }
+        Some(SpringRates {
+            omega_squared,
+            damping_rate: 0.0,
+        })
     }
 
     /// Adds (∂F/∂x)·dx; ∂F/∂v = 0.

@@ -6,7 +6,7 @@
 //! density ρ. Both oppose the velocity, so the force only removes energy: its power is
 //! F·v = −b₁ |v|² − b₂ |v|³ ≤ 0. The coefficients are the same for every particle.
 
-use super::{check_buffers, Force, State};
+use super::{check_buffers, Force, SpringRates, State};
 use crate::error::{CallbackError, Error};
 
 /// Linear plus quadratic drag: F_i = −b₁ v_i − b₂ |v_i| v_i, N.
@@ -73,6 +73,41 @@ impl Force for Drag {
     }
 
     fn depends_on_velocity(&self) -> bool {
+        true
+    }
+
+    /// Dissipative: its power −b₁|v|² − b₂|v|³ is never positive.
+    fn can_add_energy(&self) -> bool {
+        false
+    }
+
+    /// γ ≤ max_p w_p (b₁ + 2 b₂ |v_p|): the eigenvalues of ∂F/∂v are −(b₁ + b₂ s) across v
+    /// and −(b₁ + 2 b₂ s) along it. No position dependence.
+    fn rate_bound(&self, s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
+        let mut damping_rate: f64 = 0.0;
+        for (vi, w) in s.v.chunks_exact(3).zip(inv_mass) {
+            let speed = (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]).sqrt();
+            damping_rate = damping_rate.max(w * (self.linear + 2.0 * self.quadratic * speed));
+        }
+        Some(SpringRates {
+            omega_squared: 0.0,
+            damping_rate,
+        })
+    }
+
+    /// Adds c_v·diag(∂F/∂v) = −c_v (b₁ + b₂ (s + v_k²/s)) per component (see
+    /// [`Force::jacobian_product`] below for ∂F/∂v).
+    fn jacobian_diagonal(&self, s: &State, _cx: f64, cv: f64, out: &mut [f64]) -> bool {
+        if check_buffers(self.name(), s, &[("out", out.len())]).is_err() {
+            return false;
+        }
+        for (oi, vi) in out.chunks_exact_mut(3).zip(s.v.chunks_exact(3)) {
+            let speed = (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]).sqrt();
+            for k in 0..3 {
+                let along = if speed > 0.0 { vi[k] * vi[k] / speed } else { 0.0 };
+                oi[k] -= cv * (self.linear + self.quadratic * (speed + along));
+            }
+        }
         true
     }
 

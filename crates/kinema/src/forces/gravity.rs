@@ -5,7 +5,7 @@
 //! mass, and the world keeps them still through their inverse mass 0, not by skipping them
 //! here (so that the reaction a support must provide can be read off the force array).
 
-use super::{check_buffers, Force, State};
+use super::{check_buffers, Force, SpringRates, State};
 use crate::error::{CallbackError, Error};
 
 /// Standard gravity near the Earth's surface, m/s² (the rounded value 9.81 used throughout
@@ -90,6 +90,21 @@ impl Force for Gravity {
     /// The field is uniform and constant: ∂F/∂x = ∂F/∂v = 0, nothing to add.
     fn jacobian_product(&self, _s: &State, _dx: &[f64], _dv: &[f64], _out: &mut [f64]) -> bool {
         true
+    }
+
+    /// Zero diagonal: nothing to add.
+    fn jacobian_diagonal(&self, _s: &State, _cx: f64, _cv: f64, _out: &mut [f64]) -> bool {
+        true
+    }
+
+    /// Conservative: its work is −ΔU.
+    fn can_add_energy(&self) -> bool {
+        false
+    }
+
+    /// A uniform constant field adds no rates.
+    fn rate_bound(&self, _s: &State, _inv_mass: &[f64]) -> Option<SpringRates> {
+        Some(SpringRates::default())
     }
 }
 

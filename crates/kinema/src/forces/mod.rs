@@ -80,6 +80,36 @@ pub trait Force {
     fn jacobian_product(&self, _s: &State, _dx: &[f64], _dv: &[f64], _out: &mut [f64]) -> bool {
         false
     }
+
+    /// Like [`Force::jacobian_product`], but with the parts that can make the implicit
+    /// system indefinite dropped, so that conjugate gradients can solve it (Choi & Ko 2002:
+    /// a spring in compression loses its transverse stiffness). Defaults to the exact product.
+    fn definite_jacobian_product(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64]) -> bool {
+        self.jacobian_product(s, dx, dv, out)
+    }
+
+    /// Adds c_x·diag(∂F/∂x) + c_v·diag(∂F/∂v) of the definite Jacobian (see
+    /// [`Force::definite_jacobian_product`]) to `out`, for the Jacobi preconditioner of the
+    /// implicit solve; returns `false` (adding nothing) when the force does not provide it.
+    fn jacobian_diagonal(&self, _s: &State, _cx: f64, _cv: f64, _out: &mut [f64]) -> bool {
+        false
+    }
+
+    /// Whether the force can add mechanical energy to the particles (wind, a user's force).
+    /// Conservative forces (their work is counted in their potential energy) and dissipative
+    /// ones (drag, dashpots) cannot; the world watches for runaway energy only when no force
+    /// can add it.
+    fn can_add_energy(&self) -> bool {
+        true
+    }
+
+    /// Closed-form upper bounds, at state `s`, on the rates this force gives the particles
+    /// (inverse masses `inv_mass`, 0 for pinned ones): ω² ≥ every |eigenvalue| of M⁻¹ ∂F/∂x
+    /// and γ ≥ every |eigenvalue| of M⁻¹ ∂F/∂v, each an ∞-norm (Gershgorin) bound so that the
+    /// bounds of several forces add. `None` when the force has none (a user's force).
+    fn rate_bound(&self, _s: &State, _inv_mass: &[f64]) -> Option<SpringRates> {
+        None
+    }
 }
 
 /// Checks that the positions and velocities of `s` and every named buffer hold 3 values per

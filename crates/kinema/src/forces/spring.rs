@@ -356,6 +356,64 @@ impl Force for Springs {
     /// adds k (dx_j − dx_i), the exact derivative of its force k d; any other adds nothing.
     /// Returns false, adding nothing, if a buffer's length or an index does not fit `s`.
     fn jacobian_product(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64]) -> bool {
+        self.product(s, dx, dv, out, false)
+    }
+
+    /// The product with the definite part of the Jacobian: each spring's transverse
+    /// stiffness k (1 − L₀/L) is clamped at 0 (a compressed spring would otherwise make
+    /// M − h²∂F/∂x indefinite for large h; Choi & Ko 2002), and the dashpot keeps only its
+    /// symmetric c n nᵀ (the terms from the turning axis are dropped). What is left is
+    /// −(k n nᵀ + k max(0, 1 − L₀/L) P) and −c n nᵀ per spring: negative semi-definite.
+    fn definite_jacobian_product(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64]) -> bool {
+        self.product(s, dx, dv, out, true)
+    }
+
+    /// Adds c_x·diag(∂F/∂x) + c_v·diag(∂F/∂v) of the definite Jacobian: each end of a spring
+    /// has the diagonal blocks −(k n nᵀ + k_t P) and −c n nᵀ, k_t = k max(0, 1 − L₀/L), whose
+    /// k-th diagonal entries are −(k n_k² + k_t (1 − n_k²)) and −c n_k².
+    fn jacobian_diagonal(&self, s: &State, cx: f64, cv: f64, out: &mut [f64]) -> bool {
+        if check_buffers(self.name(), s, &[("out", out.len())]).is_err() || self.check_indices(s.len()).is_err() {
+            return false;
+        }
+        for sp in 0..self.len() {
+            let (k, rest, c) = (self.k[sp], self.rest_length[sp], self.damping[sp]);
+            let mut diag = [0.0; 3];
+            match self.axis(s.x, sp) {
+                Some((n, len)) => {
+                    let kt = k * (1.0 - rest / len).max(0.0);
+                    for q in 0..3 {
+                        let nn = n[q] * n[q];
+                        diag[q] = -cx * (k * nn + kt * (1.0 - nn)) - cv * c * nn;
+                    }
+                }
+                None if rest == 0.0 => diag = [-cx * k; 3],
+                None => {}
+            }
+            for p in [self.i[sp], self.j[sp]] {
+                for q in 0..3 {
+                    out[3 * p + q] += diag[q];
+                }
+            }
+        }
+        true
+    }
+
+    /// The network's Gershgorin bounds, [`Springs::max_rates`].
+    fn rate_bound(&self, _s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
+        self.max_rates(inv_mass).ok()
+    }
+
+    /// Dissipative and conservative parts only: the dashpot's power −c (u·n)² ≤ 0 and the
+    /// elastic work is −ΔU.
+    fn can_add_energy(&self) -> bool {
+        false
+    }
+}
+
+impl Springs {
+    /// The Jacobian product of [`Force::jacobian_product`] (`definite = false`) or of
+    /// [`Force::definite_jacobian_product`] (`definite = true`).
+    fn product(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64], definite: bool) -> bool {
         if check_buffers(self.name(), s, &[("dx", dx.len()), ("dv", dv.len()), ("out", out.len())]).is_err()
             || self.check_indices(s.len()).is_err()
         {
@@ -374,8 +432,12 @@ impl Force for Springs {
             let w = self.relative(dv, sp); // dv_j − dv_i
             let (ne, un, nw) = (dot(n, e), dot(u, n), dot(n, w));
             let pe = [e[0] - ne * n[0], e[1] - ne * n[1], e[2] - ne * n[2]]; // P e
-            let transverse = k * (1.0 - rest / len) + c * un / len; // coefficient of P e
-            let axial = k * ne + c * dot(u, pe) / len + c * nw; // coefficient of n; (P u)·e = u·(P e)
+            let (transverse, axial) = if definite {
+                (k * (1.0 - rest / len).max(0.0), k * ne + c * nw)
+            } else {
+                // coefficient of P e; coefficient of n, with (P u)·e = u·(P e)
+                (k * (1.0 - rest / len) + c * un / len, k * ne + c * dot(u, pe) / len + c * nw)
+            };
             self.apply_pair(
                 out,
                 sp,

@@ -5,7 +5,7 @@
 //! v_i = w (plus whatever the other forces add: under gravity, v → w + m g / b). With w = 0 it
 //! is the linear part of [`Drag`](super::Drag).
 
-use super::{check_buffers, Force, State};
+use super::{check_buffers, Force, SpringRates, State};
 use crate::error::{CallbackError, Error};
 
 /// Uniform wind field: F_i = b (w − v_i), N.
@@ -69,6 +69,23 @@ impl Force for Wind {
     }
 
     fn depends_on_velocity(&self) -> bool {
+        true
+    }
+
+    /// γ ≤ b · max_p w_p (∂F/∂v = −b I). No position dependence.
+    fn rate_bound(&self, _s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
+        Some(SpringRates {
+            omega_squared: 0.0,
+            damping_rate: self.coefficient * inv_mass.iter().fold(0.0_f64, |a, w| a.max(*w)),
+        })
+    }
+
+    /// Adds c_v·diag(∂F/∂v) = −c_v b per component.
+    fn jacobian_diagonal(&self, s: &State, _cx: f64, cv: f64, out: &mut [f64]) -> bool {
+        if check_buffers(self.name(), s, &[("out", out.len())]).is_err() {
+            return false;
+        }
+        out.iter_mut().for_each(|o| *o -= cv * self.coefficient);
         true
     }
 

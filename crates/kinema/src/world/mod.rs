@@ -1,16 +1,27 @@
 //! The world: particles, the forces on them, and `World::step`, the seed's four stages.
 
+mod advisor;
+mod dynamics;
+mod implicit;
+
+pub use advisor::Rates;
+pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
+
 use crate::diagnostics::Diagnostics;
-use crate::error::{CallbackError, Error};
+use crate::error::{Divergence, Error};
 use crate::forces::{Force, State};
 use crate::ode::explicit_rk::ExplicitRk;
-use crate::ode::implicit_euler::ImplicitEuler;
 use crate::ode::stepper::{first_non_finite, Stats, StepFailure, Stepper};
 use crate::ode::symplectic_euler::SymplecticEuler;
 use crate::ode::system::{FirstOrderForm, OdeSystem, SecondOrderSystem};
 use crate::ode::verlet::Verlet;
 use crate::ode::{self, Integrator, Method, MethodKind, SolveOptions};
 use crate::particles::Particles;
+use dynamics::Dynamics;
+use implicit::BaraffWitkin;
+
+/// The energy may grow by this many times its scale before a step counts as a runaway.
+pub const RUNAWAY_FACTOR: f64 = 1e3;
 
 /// Parameters of a world. Units SI.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,54 +44,14 @@ impl Default for WorldParams {
     }
 }
 
-/// The dynamics of the particles as a second-order system: x'' = F(t, x, v) / m.
-///
-/// Pinned particles (inverse mass 0) get no acceleration; in 2D the z acceleration is 0.
-struct Dynamics<'a> {
-    forces: &'a mut [Box<dyn Force>],
-    mass: &'a [f64],
-    inv_mass: &'a [f64],
-    dim: usize,
-    /// Scratch for the summed forces, N (owned by the World, so a step allocates nothing).
-    force: &'a mut Vec<f64>,
-}
-
-impl SecondOrderSystem for Dynamics<'_> {
-    fn dim(&self) -> usize {
-        3 * self.mass.len()
-    }
-
-    fn accel(&mut self, t: f64, x: &[f64], v: &[f64], acc: &mut [f64]) -> Result<(), CallbackError> {
-        self.force.clear();
-        self.force.resize(x.len(), 0.0);
-        let s = State {
-            t,
-            x,
-            v,
-            mass: self.mass,
-        };
-        for f in self.forces.iter_mut() {
-            f.accumulate(&s, self.force)?;
-        }
-        // Newton's second law, a = F/m, with 1/m = 0 for pinned particles.
-        for (i, inv_m) in self.inv_mass.iter().enumerate() {
-            for k in 0..3 {
-                acc[3 * i + k] = self.force[3 * i + k] * inv_m;
-            }
-            if self.dim == 2 {
-                acc[3 * i + 2] = 0.0;
-            }
-        }
-        Ok(())
-    }
-}
-
 /// The stepper a world keeps between steps (so that a method's cache survives).
 enum WorldStepper {
     SecondOrder(Box<dyn for<'a> Stepper<dyn SecondOrderSystem + 'a>>),
     FirstOrder(Box<dyn for<'a> Stepper<dyn OdeSystem + 'a>>),
     /// rk45 substeps adaptively inside each world step.
     Adaptive,
+    /// implicit_euler: Baraff & Witkin's linearised step with conjugate gradients.
+    Implicit(Box<BaraffWitkin>),
 }
 
 impl WorldStepper {
@@ -94,7 +65,7 @@ impl WorldStepper {
                     m.tableau().expect("explicit methods have tableaux"),
                     2 * n,
                 ))),
-                MethodKind::Implicit => WorldStepper::FirstOrder(Box::new(ImplicitEuler::new(2 * n, 2 * n, 1e-9, 1e-12))),
+                MethodKind::Implicit => WorldStepper::Implicit(Box::default()),
                 MethodKind::Adaptive => WorldStepper::Adaptive,
             },
         }
@@ -113,6 +84,17 @@ pub struct World {
     y: Vec<f64>,
     y_next: Vec<f64>,
     force: Vec<f64>,
+    /// The energy reference of the runaway check; `None` until the next step sets it.
+    watch: Option<EnergyWatch>,
+}
+
+/// The reference of the runaway-energy check (see [`World::step`]).
+#[derive(Debug, Clone, Copy)]
+struct EnergyWatch {
+    /// Kinetic plus potential energy at the reference state, J.
+    energy: f64,
+    /// Kinetic energy plus the magnitudes of the potential energies there, J.
+    scale: f64,
 }
 
 impl World {
@@ -135,6 +117,7 @@ impl World {
             y: Vec::new(),
             y_next: Vec::new(),
             force: Vec::new(),
+            watch: None,
         })
     }
 
@@ -162,7 +145,7 @@ impl World {
         for f in &self.forces {
             f.validate(self.particles.len())?;
         }
-        self.stepper = None; // the state changed size: caches are void
+        self.reset_caches(); // the state changed size
         Ok(range)
     }
 
@@ -170,7 +153,7 @@ impl World {
     pub fn add_force(&mut self, force: Box<dyn Force>) -> Result<(), Error> {
         force.validate(self.particles.len())?;
         self.forces.push(force);
-        self.stepper = None;
+        self.reset_caches();
         Ok(())
     }
 
@@ -182,8 +165,14 @@ impl World {
     /// Mutable particles: after changing positions or velocities the method caches are
     /// dropped, so the next step starts afresh.
     pub fn particles_mut(&mut self) -> &mut Particles {
-        self.stepper = None;
+        self.reset_caches();
         &mut self.particles
+    }
+
+    /// Drops what depends on the state: the method's caches and the energy reference.
+    fn reset_caches(&mut self) {
+        self.stepper = None;
+        self.watch = None;
     }
 
     /// The forces, in the order they were added.
@@ -240,6 +229,34 @@ impl World {
         Ok(a)
     }
 
+    /// The stable-step advisor's rates at the current state: the highest natural frequency of
+    /// the linearised forces, its damping ratio and the largest damping rate (see [`Rates`]).
+    pub fn rates(&mut self) -> Result<Rates, Error> {
+        let p = &self.particles;
+        let s = State {
+            t: self.time,
+            x: &p.x,
+            v: &p.v,
+            mass: &p.mass,
+        };
+        Ok(advisor::estimate(&mut self.forces, &s, &p.inv_mass, self.params.dim)?)
+    }
+
+    /// The largest stable time step (s) of `method` at the current state, by the advisor
+    /// ([`Rates::max_step`]); infinite when no step is too large.
+    pub fn stable_step(&mut self, method: &Integrator) -> Result<f64, Error> {
+        Ok(self.rates()?.max_step(method))
+    }
+
+    /// Conjugate-gradient iterations of the last implicit_euler step, and whether they met
+    /// [`CG_TOLERANCE`]; `None` for the other methods.
+    pub fn linear_solve(&self) -> Option<(usize, bool)> {
+        match &self.stepper {
+            Some(WorldStepper::Implicit(bw)) => Some((bw.iterations, bw.converged)),
+            _ => None,
+        }
+    }
+
     /// Advances the world by one time step `dt`, in the seed's order:
     ///
     /// 1. integrate — the state (t) → (t + dt) by the chosen method, under the forces;
@@ -249,9 +266,20 @@ impl World {
     ///
     /// Stages 2–4 come with the collision module; today a step is stage 1.
     ///
-    /// A step that would produce a non-finite state fails with [`Error::Diverged`] and leaves
-    /// the world as it was before the step.
+    /// A step that would produce a non-finite state, or runaway energy, fails with
+    /// [`Error::Diverged`] and leaves the world as it was before the step. Runaway energy is
+    /// checked when no force can add energy ([`Force::can_add_energy`]): the mechanical energy
+    /// E = kinetic + potential can then only fall, and a step is refused when it would raise E
+    /// above its value at the first step by more than [`RUNAWAY_FACTOR`] times the scale S₀
+    /// (kinetic energy plus the magnitudes of the potential energies there) plus
+    /// 1e-9·RUNAWAY_FACTOR times the scale now (so that rounding in large energies is not a
+    /// runaway). Integration errors of a stable step stay far below that; an unstable method
+    /// crosses it a few dozen steps after it starts to grow, well before overflow.
     pub fn step(&mut self) -> Result<(), Error> {
+        if self.watch.is_none() && !self.particles.is_empty() && self.forces.iter().all(|f| !f.can_add_energy()) {
+            let (energy, scale) = self.energy_and_scale(&self.particles.x, &self.particles.v);
+            self.watch = Some(EnergyWatch { energy, scale });
+        }
         self.integrate()?;
         self.time = self.params_time_after(self.steps + 1);
         self.steps += 1;
@@ -288,6 +316,11 @@ impl World {
                 let mut first = FirstOrderForm::new(&mut dynamics);
                 s.step(&mut first, t, &self.y, h, &mut self.y_next, &mut self.stats)
             }
+            WorldStepper::Implicit(bw) => {
+                let (x_next, v_next) = self.y_next.split_at_mut(n);
+                bw.step(&mut dynamics, t, &p.x, &p.v, h, x_next, v_next, &mut self.stats)
+                    .map_err(|e| StepFailure::Error(e.into()))
+            }
             WorldStepper::Adaptive => {
                 let opts = SolveOptions {
                     t_span: (t, t + h),
@@ -309,25 +342,78 @@ impl World {
         match outcome {
             Ok(()) => {}
             Err(StepFailure::Error(e)) => return Err(e),
-            Err(StepFailure::Stop(_)) => return Err(self.diverged(None)),
+            Err(StepFailure::Stop(_)) => return Err(self.diverged(Divergence::NonFinite, None)),
         }
         if let Some(index) = first_non_finite(&self.y_next) {
-            return Err(self.diverged(Some(index)));
+            let particle = (index % n) / 3; // y_next = [x, v]
+            return Err(self.diverged(Divergence::NonFinite, Some(particle)));
+        }
+        if let Some(watch) = self.watch {
+            let (x_next, v_next) = self.y_next.split_at(n);
+            let (energy, scale) = self.energy_and_scale(x_next, v_next);
+            if energy - watch.energy > RUNAWAY_FACTOR * (watch.scale + 1e-9 * scale) {
+                let fastest = self.fastest(v_next);
+                let reason = Divergence::RunawayEnergy {
+                    energy,
+                    reference: watch.energy,
+                    scale: watch.scale,
+                };
+                return Err(self.diverged(reason, fastest));
+            }
         }
         FirstOrderForm::split(&self.y_next, n, &mut self.particles.x, &mut self.particles.v);
         Ok(())
     }
 
-    fn diverged(&mut self, index: Option<usize>) -> Error {
+    /// Mechanical energy (kinetic plus every potential, J) at (x, v), and its scale: kinetic
+    /// plus the magnitudes of the potentials.
+    fn energy_and_scale(&self, x: &[f64], v: &[f64]) -> (f64, f64) {
+        let p = &self.particles;
+        let kinetic: f64 = v
+            .chunks_exact(3)
+            .zip(&p.mass)
+            .zip(&p.inv_mass)
+            .filter(|(_, w)| **w > 0.0)
+            .map(|((vi, m), _)| 0.5 * m * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]))
+            .sum();
+        let s = State {
+            t: self.time,
+            x,
+            v,
+            mass: &p.mass,
+        };
+        let (mut energy, mut scale) = (kinetic, kinetic);
+        for f in &self.forces {
+            if let Some(u) = f.potential_energy(&s) {
+                energy += u;
+                scale += u.abs();
+            }
+        }
+        (energy, scale)
+    }
+
+    /// The movable particle with the largest speed in `v`.
+    fn fastest(&self, v: &[f64]) -> Option<usize> {
+        v.chunks_exact(3)
+            .map(|vi| vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2])
+            .enumerate()
+            .filter(|(i, _)| self.particles.inv_mass[*i] > 0.0)
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, _)| i)
+    }
+
+    /// The error of a refused step, with the advisor's step at the kept state.
+    fn diverged(&mut self, reason: Divergence, particle: Option<usize>) -> Error {
         self.stepper = None;
-        let n = 3 * self.particles.len();
-        // y_next = [x, v]: component c belongs to particle (c mod n) / 3.
-        let particle = index.map(|c| (c % n) / 3);
+        let method = self.params.method.clone();
+        let advised_dt = self.stable_step(&method).ok().filter(|h| h.is_finite());
         Error::Diverged {
             step: self.steps + 1,
             time: self.time,
             particle,
             dt: self.params.dt,
+            reason,
+            advised_dt,
         }
     }
 }

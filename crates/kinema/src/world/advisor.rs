@@ -1,0 +1,180 @@
+//! The stable-step advisor: the stiffest rates of a world's linearised dynamics, and the
+//! largest stable time step of each method for them.
+
+use super::dynamics::{free_components, ForceJacobian};
+use crate::error::CallbackError;
+use crate::forces::{Force, SpringRates, State};
+use crate::ode::stability::{oscillator_max_step, StabilityFunction};
+use crate::ode::{Integrator, Method, MethodKind};
+use num_complex::Complex64;
+
+/// Power iterations at most, per estimate.
+const MAX_ITERATIONS: usize = 500;
+/// Power iteration stops when the estimate changes by less than this, relatively.
+const RELATIVE_CHANGE: f64 = 1e-7;
+
+/// The rates that limit the time step of an explicit method, at one state.
+///
+/// Linearised about the state, the particles move by M δx'' = K δx + C δv with K = ∂F/∂x and
+/// C = ∂F/∂v. A mode u of the symmetrised stiffness M^(−½)(−K)M^(−½) with eigenvalue ω² is an
+/// oscillator δx'' = −ω² δx − 2ζω δx', whose damping 2ζω = uᵀ M^(−½)(−C)M^(−½) u is exact
+/// when C is diagonal in the modes (proportional damping, as for springs with dashpots in
+/// proportion to their stiffness) and the modal estimate otherwise. Methods lose stability
+/// first on the stiffest mode; a mode of pure damping (drag) at rate γ is the second limit.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Rates {
+    /// ω, rad/s: the highest natural angular frequency, √|λ_max| of M^(−½)(−K)M^(−½) by
+    /// power iteration on Jacobian–vector products (a negative λ, an unstable direction such
+    /// as an attractor's tidal stretching, counts by its magnitude).
+    pub omega: f64,
+    /// ζ: the damping ratio of that mode (≥ 0).
+    pub zeta: f64,
+    /// γ, 1/s: the largest damping rate, the top eigenvalue of M^(−½)(−C)M^(−½).
+    pub damping_rate: f64,
+    /// Closed-form upper bounds on ω² (1/s²) and γ (1/s), the sum of every force's
+    /// [`Force::rate_bound`]; `None` when some force has none.
+    pub bound: Option<SpringRates>,
+    /// Power iterations used (both estimates together).
+    pub iterations: usize,
+}
+
+impl Rates {
+    /// The largest stable step for `method` on these rates, s: the smaller of the stiffest
+    /// mode's limit (the damped-oscillator analysis of [`oscillator_max_step`], which covers
+    /// symplectic Euler and Verlet as well as the Runge–Kutta methods) and the pure-damping
+    /// limit on λ = −γ. Infinite when nothing limits it: implicit Euler is A-stable, and rk45
+    /// chooses its own sub-steps inside a world step.
+    pub fn max_step(&self, method: &Integrator) -> f64 {
+        if matches!(method, Integrator::Named(m) if m.kind() == MethodKind::Adaptive) {
+            return f64::INFINITY;
+        }
+        let oscillation = if self.omega > 0.0 {
+            oscillator_max_step(method, self.omega, self.zeta)
+        } else {
+            f64::INFINITY
+        };
+        let damping = if self.damping_rate > 0.0 {
+            match method {
+                // v' = −γ v: symplectic Euler multiplies v by 1 − hγ; Verlet, with its velocity
+                // predictor, by 1 − hγ + (hγ)²/2. Both are stable for hγ ≤ 2.
+                Integrator::Named(Method::SymplecticEuler | Method::Verlet) => 2.0 / self.damping_rate,
+                other => StabilityFunction::of(other).max_step(Complex64::new(-self.damping_rate, 0.0)),
+            }
+        } else {
+            f64::INFINITY
+        };
+        oscillation.min(damping)
+    }
+}
+
+/// Estimates the [`Rates`] of the forces at state `s` for particles of inverse masses
+/// `inv_mass` (0 = pinned), in `dim` dimensions.
+pub(crate) fn estimate(forces: &mut [Box<dyn Force>], s: &State, inv_mass: &[f64], dim: usize) -> Result<Rates, CallbackError> {
+    let mut bound = Some(SpringRates::default());
+    for f in forces.iter() {
+        bound = match (bound, f.rate_bound(s, inv_mass)) {
+            (Some(a), Some(b)) => Some(SpringRates {
+                omega_squared: a.omega_squared + b.omega_squared,
+                damping_rate: a.damping_rate + b.damping_rate,
+            }),
+            _ => None,
+        };
+    }
+    let mut rates = Rates {
+        bound,
+        ..Rates::default()
+    };
+    let n = s.x.len();
+    let mut free = Vec::new();
+    free_components(inv_mass, dim, &mut free);
+    // Symmetric scaling M^(−½) on free components (0 on the filtered ones).
+    let scale: Vec<f64> = (0..n).map(|k| free[k] * inv_mass[k / 3].sqrt()).collect();
+    let mut jac = ForceJacobian::default();
+    jac.prepare(forces, s, false)?;
+    let zero = vec![0.0; n];
+    let mut dx = vec![0.0; n];
+    let mut out = vec![0.0; n];
+
+    // y = M^(−½)(−J_·)M^(−½) u for the stiffness (position) or the damping (velocity) part.
+    let mut apply = |forces: &mut [Box<dyn Force>], u: &[f64], velocity: bool, y: &mut [f64]| {
+        for k in 0..n {
+            dx[k] = scale[k] * u[k];
+        }
+        if velocity {
+            jac.apply(forces, s, &zero, &dx, &mut out)?;
+        } else {
+            jac.apply(forces, s, &dx, &zero, &mut out)?;
+        }
+        for k in 0..n {
+            y[k] = -scale[k] * out[k];
+        }
+        Ok::<(), CallbackError>(())
+    };
+
+    let skip = |b: Option<SpringRates>, damping: bool| {
+        b.is_some_and(|b| {
+            if damping {
+                b.damping_rate == 0.0
+            } else {
+                b.omega_squared == 0.0
+            }
+        })
+    };
+    let mut y = vec![0.0; n];
+    for velocity in [false, true] {
+        if skip(bound, velocity) {
+            continue;
+        }
+        // Power iteration from a fixed pseudo-random start (reproducible advice): for a
+        // symmetric operator ‖A u_k‖ rises monotonically to |λ|max.
+        let mut u: Vec<f64> = (0..n).map(|k| free[k] * start(k)).collect();
+        let norm = dot(&u, &u).sqrt();
+        if norm == 0.0 {
+            break; // nothing is free to move
+        }
+        u.iter_mut().for_each(|a| *a /= norm);
+        let mut lambda = 0.0;
+        for it in 0..MAX_ITERATIONS {
+            apply(forces, &u, velocity, &mut y)?;
+            rates.iterations += 1;
+            let next = dot(&y, &y).sqrt();
+            if next == 0.0 || !next.is_finite() {
+                lambda = if next.is_finite() { 0.0 } else { f64::INFINITY };
+                break;
+            }
+            let done = it > 5 && (next - lambda).abs() <= RELATIVE_CHANGE * next;
+            lambda = next;
+            for k in 0..n {
+                u[k] = y[k] / next;
+            }
+            if done {
+                break;
+            }
+        }
+        if velocity {
+            rates.damping_rate = lambda;
+        } else {
+            rates.omega = lambda.sqrt();
+            if rates.omega > 0.0 {
+                // The mode's own damping, uᵀ M^(−½)(−C)M^(−½) u = 2ζω.
+                apply(forces, &u, true, &mut y)?;
+                let modal = dot(&u, &y).max(0.0);
+                rates.zeta = modal / (2.0 * rates.omega);
+            }
+        }
+    }
+    Ok(rates)
+}
+
+/// A deterministic pseudo-random number in [−1, 1) for component k (a SplitMix64 hash).
+fn start(k: usize) -> f64 {
+    let mut z = (k as u64).wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
