@@ -1,5 +1,7 @@
 """kinema.World: particles moved by forces, against closed forms and conservation laws."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -64,16 +66,115 @@ def test_pinned_particles_and_a_hanging_spring():
 
 
 def test_divergence_raises_and_keeps_the_state_before_it():
+    # Forward Euler on an undamped spring multiplies its energy by 1 + (hω)² per step (here
+    # hω = 14): the energy runs away and the world refuses the step that would take it beyond
+    # 1000 times its scale, long before it overflows.
     w = kinema.World(dt=0.01, method="euler")
     w.add_particles([[0, 0, 0], [1, 0, 0]])
     w.add(kinema.Spring(0, 1, k=1e6, rest_length=0.5))
     before = None
-    with pytest.raises(kinema.SimulationDiverged, match="diverged at step"):
+    with pytest.warns(kinema.StabilityWarning), pytest.raises(kinema.SimulationDiverged, match="diverged at step") as info:
         for _ in range(10_000):
-            before = (w.positions, w.time)
+            before = (w.positions.copy(), w.velocities.copy(), w.time)
             w.step()
+    err = info.value
     np.testing.assert_array_equal(w.positions, before[0])
-    assert w.time == before[1] and np.all(np.isfinite(w.positions))
+    np.testing.assert_array_equal(w.velocities, before[1])
+    assert w.time == before[2] and np.all(np.isfinite(w.positions))
+    assert err.reason == "runaway energy" and err.step == w._core.steps + 1 and err.time == w.time
+    assert err.particle in (0, 1) and err.dt == 0.01
+    # Euler is unstable on an undamped oscillator at every step: the advisor says 0 s.
+    assert err.advised_dt == 0.0
+
+
+def test_a_nan_force_is_named_as_a_non_finite_divergence():
+    w = kinema.World(dt=0.01, method="rk4")
+    w.add_particles([[0, 0, 0], [1, 0, 0]])
+    w.add(kinema.PythonForce(lambda t, x, v: np.where(np.arange(len(x))[:, None] == 1, np.nan, 0.0) * np.ones_like(x)))
+    with pytest.raises(kinema.SimulationDiverged, match="non-finite") as info:
+        w.step()
+    assert info.value.reason == "non-finite" and info.value.particle == 1 and info.value.step == 1
+
+
+def test_stable_step_of_two_masses_on_a_spring_is_the_closed_form():
+    # Two masses m on a spring k: the stretch oscillates at ω² = k (1/m + 1/m). Theory:
+    # Verlet and symplectic Euler are stable for hω ≤ 2, RK4 for hω ≤ 2√2 (its imaginary
+    # interval), forward Euler never (|1 + ihω| > 1), implicit Euler always.
+    m, k = 0.5, 200.0
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[0, 0, 0], [1, 0, 0]], mass=m)
+    w.add(kinema.Spring(0, 1, k=k))
+    omega = np.sqrt(2 * k / m)
+    limits = w.stable_step()
+    assert set(limits) == set(kinema.method_names())
+    assert limits["verlet"] == pytest.approx(2 / omega, rel=1e-6)
+    assert limits["symplectic_euler"] == pytest.approx(2 / omega, rel=1e-6)
+    assert limits["rk4"] == pytest.approx(2 * np.sqrt(2) / omega, rel=1e-6)
+    assert limits["euler"] == 0.0
+    assert limits["implicit_euler"] == np.inf and limits["rk45"] == np.inf
+    assert w.stable_step("verlet") == limits["verlet"]
+    rates = w.rates()
+    assert rates["omega"] == pytest.approx(omega, rel=1e-9) and rates["omega_bound"] == pytest.approx(omega, rel=1e-12)
+
+
+def test_the_stability_warning_comes_once():
+    # ω² = k (1/m + 1/m) = 200/s²: Verlet's limit is 2/ω = 0.1414 s.
+    w = kinema.World(dt=0.2, method="verlet")
+    w.add_particles([[0, 0, 0], [1, 0, 0]], mass=0.5)
+    w.add(kinema.Spring(0, 1, k=50.0))
+    with pytest.warns(kinema.StabilityWarning, match="exceeds the stable-step advisor's limit 0.1414 s"):
+        w.step()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        w.step()
+        w.add(kinema.Spring(0, 1, k=500.0))
+        w.step()  # once in a world's lifetime
+    quiet = kinema.World(dt=0.1, method="verlet")
+    quiet.add_particles([[0, 0, 0], [1, 0, 0]], mass=0.5)
+    quiet.add(kinema.Spring(0, 1, k=50.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        quiet.step(10)
+
+
+def test_state_arrays_are_live_views():
+    w = kinema.World(dt=0.01, method="verlet")
+    w.add_particles([[0, 0, 0], [1, 0, 0]], velocity=[[1, 0, 0], [0, 0, 0]], mass=[1.0, 2.0])
+    x, v, m = w.positions, w.velocities, w.masses
+    w.step(10)
+    assert x is w.positions and x[0, 0] == pytest.approx(0.1, abs=1e-12)  # updated in place
+    x[1] = [5.0, 0.0, 0.0]  # a write moves the particle
+    v[1, 1] = 2.0
+    w.step(1)
+    np.testing.assert_allclose(w.positions[1], [5.0, 0.02, 0.0], atol=1e-12)
+    m[1] = 4.0
+    np.testing.assert_allclose(w.momenta[1], [0.0, 8.0, 0.0])
+    assert not w.momenta.flags.writeable and not w.accelerations.flags.writeable
+    # a bad write is refused whole, named, and the views show the world's state again
+    x[0, 2] = np.nan
+    with pytest.raises(ValueError, match=r"positions\[0\]\[2\] = NaN is invalid"):
+        w.step()
+    assert np.all(np.isfinite(w.positions)) and w.positions[1, 0] == pytest.approx(5.0)
+    with pytest.raises(ValueError, match=r"masses\[0\] = -1"):
+        w.masses = [-1.0, 1.0]
+    np.testing.assert_array_equal(w.masses, [1.0, 4.0])
+
+
+def test_implicit_euler_holds_a_stiff_hanging_chain_at_a_large_step():
+    # 20 masses of 10 g on k = 1e4 N/m springs hanging from a pin, h = 1/60 s: hω ≈ 30 is far
+    # beyond every explicit method, but Baraff–Witkin's implicit Euler settles at Hooke's
+    # equilibrium (each spring stretched by the weight below it over k).
+    n, m, k, g = 20, 0.01, 1e4, 9.81
+    w = kinema.World(dt=1 / 60, method="implicit_euler")
+    w.add_particles([[0, 0, -0.05 * i] for i in range(n + 1)], mass=m, pinned=[i == 0 for i in range(n + 1)])
+    w.add(kinema.Gravity())
+    w.add(kinema.Spring(np.arange(n), np.arange(1, n + 1), k=k))
+    assert w.stable_step("rk4") < w.dt / 10
+    w.step(600)
+    stretch = m * g * np.arange(n, 0, -1) / k
+    np.testing.assert_allclose(-np.diff(w.positions[:, 2]) - 0.05, stretch, rtol=1e-6)
+    iterations, converged = w._core.linear_solve()
+    assert converged and iterations <= n * 3
 
 
 def test_two_dimensional_worlds_stay_in_the_plane():

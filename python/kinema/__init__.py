@@ -27,7 +27,7 @@ from .ode import (
     solve_second_order,
 )
 from .trajectory import Trajectory
-from .world import SimulationDiverged, World
+from .world import SimulationDiverged, StabilityWarning, World
 
 __all__ = [
     "__version__",
@@ -36,6 +36,7 @@ __all__ = [
     "Gravity",
     "PythonForce",
     "SimulationDiverged",
+    "StabilityWarning",
     "Spring",
     "Trajectory",
     "Wind",

@@ -53,7 +53,7 @@ class _Recorder:
 
     def add(self, world: Any) -> None:
         d = world.diagnostics()
-        self.frames.append((d["t"], world.positions, world.velocities, d["kinetic"], d["potential"], d["momentum"], d["angular_momentum"]))
+        self.frames.append((d["t"], world.positions.copy(), world.velocities.copy(), d["kinetic"], d["potential"], d["momentum"], d["angular_momentum"]))
 
     def finish(self) -> Trajectory:
         t, x, v, ke, pot, p, ang = zip(*self.frames, strict=True)

@@ -4,16 +4,21 @@ any integration method of the registry.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from . import _core
-from .ode import ButcherTableau
+from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
 
 SimulationDiverged = _core.SimulationDiverged
+
+
+class StabilityWarning(UserWarning):
+    """The time step exceeds the stable-step advisor's limit for the world's method."""
 
 
 class World:
@@ -22,11 +27,61 @@ class World:
     ``World(dim=3, dt=1e-3, method="verlet")``: ``dim`` 2 keeps every particle in the
     xy-plane (z = 0 exactly); ``dt`` in s; ``method`` any name of ``kinema.method_names()`` or
     a ``ButcherTableau``.
+
+    ``positions``, ``velocities`` and ``masses`` are live NumPy views of the state: stepping
+    updates them in place, and writing into them changes the world (checked at the next step).
+    Adding particles makes new arrays; views taken before no longer follow the world.
+
+    Before its first step (and after particles or forces are added) the world asks the
+    stable-step advisor (:meth:`stable_step`) for the largest stable step of its method and
+    issues one ``StabilityWarning`` in its lifetime if ``dt`` exceeds it.
     """
 
     def __init__(self, dim: int = 3, dt: float = 1e-3, method: str | ButcherTableau = "verlet"):
         self._core = _core.World(int(dim), float(dt), method)
         self._forces: list[Any] = []
+        self._method_arg = method
+        self._warned = False
+        self._advice_due = True
+        self._new_views()
+
+    def _new_views(self) -> None:
+        n = self._core.len
+        self._x = np.empty((n, 3))
+        self._v = np.empty((n, 3))
+        self._core.read_state(self._x, self._v)
+        self._m = np.array(self._core.masses)
+
+    def _push(self) -> None:
+        """Hands what the user wrote into the views to the world (a no-op when unchanged). A
+        bad value is refused whole: the world keeps its state and the views show it again."""
+        try:
+            self._core.sync(self._x, self._v, self._m)
+        except ValueError:
+            self._pull()
+            self._m[...] = self._core.masses
+            raise
+
+    def _pull(self) -> None:
+        self._core.read_state(self._x, self._v)
+
+    def _advise(self) -> None:
+        """Warns once if dt is beyond the advisor's limit for the world's method."""
+        if not self._advice_due:
+            return
+        self._advice_due = False
+        if self._warned or len(self) == 0 or not self._forces:
+            return
+        limit = self._core.stable_step(self._method_arg)
+        if self.dt > limit:
+            self._warned = True
+            warnings.warn(
+                f"dt = {self.dt:.4g} s exceeds the stable-step advisor's limit {limit:.4g} s for method "
+                f"{self.method!r} on these forces (stiffest mode: omega = {self._core.rates()['omega']:.4g} rad/s); "
+                "the simulation will likely blow up: reduce dt or use method='implicit_euler'",
+                StabilityWarning,
+                stacklevel=3,
+            )
 
     # -- building ---------------------------------------------------------------------------
     def add_particles(self, position: Any, velocity: Any = None, mass: Any = 1.0, radius: Any = 0.0, pinned: Any = None) -> np.ndarray:
@@ -48,7 +103,10 @@ class World:
             p = np.broadcast_to(np.asarray(False if pinned is None else pinned, dtype=bool), (n,))
         except ValueError as e:
             raise ValueError(f"velocity, mass, radius and pinned must broadcast to {n} particles: {e}") from None
+        self._push()
         start, end = self._core.add_particles(np.ascontiguousarray(x), np.ascontiguousarray(v), m.tolist(), r.tolist(), p.tolist())
+        self._new_views()
+        self._advice_due = True
         return np.arange(start, end)
 
     def add(self, force: Any) -> Any:
@@ -57,8 +115,10 @@ class World:
         attach = getattr(force, "_attach", None)
         if attach is None:
             raise TypeError(f"{type(force).__name__} is not a kinema force; use kinema.Gravity, Drag, Spring, Attractor, Wind or PythonForce")
+        self._push()
         attach(self._core)
         self._forces.append(force)
+        self._advice_due = True
         return force
 
     # -- running ----------------------------------------------------------------------------
@@ -67,7 +127,12 @@ class World:
         would leave a non-finite state; the world then keeps the state from before it."""
         if int(n) < 0:
             raise ValueError(f"n = {n} is invalid: the number of steps must be >= 0")
-        self._core.step(int(n))
+        self._push()
+        self._advise()
+        try:
+            self._core.step(int(n))
+        finally:
+            self._pull()
 
     def run(self, duration: float, fps: float = 60.0, callback: Callable[[World], Any] | None = None) -> Trajectory:
         """Simulate ``duration`` seconds from now, recording a frame every 1/fps s (rounded to
@@ -80,48 +145,102 @@ class World:
             raise ValueError(f"fps = {fps} is invalid: frames per second must be > 0")
         per_frame = max(1, round(1.0 / (fps * self.dt)))
         frames = int(np.floor(duration / (per_frame * self.dt) + 1e-9))
+        self._push()
+        self._advise()
         rec = Trajectory._recorder()
         rec.add(self)
         for _ in range(frames):
-            self._core.step(per_frame)
+            try:
+                self._core.step(per_frame)
+            finally:
+                self._pull()
             rec.add(self)
             if callback is not None:
                 callback(self)
+                self._push()
         return rec.finish()
+
+    # -- stability --------------------------------------------------------------------------
+    def stable_step(self, method: str | ButcherTableau | None = None) -> float | dict[str, float]:
+        """The largest stable time step, s, at the current state: for ``method`` (a name or a
+        ``ButcherTableau``), or, with ``method=None``, a dict over every registered method.
+
+        The advisor estimates the stiffest mode of the linearised forces (power iteration on
+        Jacobian-vector products, with closed-form bounds such as ω² ≤ k(1/mᵢ + 1/mⱼ) for
+        springs) and its damping ratio, then applies each method's stability function on the
+        damped oscillator (``kinema.stability.max_step_oscillator``). ``inf`` when no step is
+        too large (implicit_euler; rk45, which sub-steps adaptively).
+        """
+        self._push()
+        if method is None:
+            return {name: self._core.stable_step(name) for name in method_names()}
+        return self._core.stable_step(method)
+
+    def rates(self) -> dict:
+        """The advisor's estimate at the current state: ``omega`` (rad/s, the highest natural
+        frequency), its damping ratio ``zeta``, the largest damping rate ``damping_rate``
+        (1/s), closed-form upper bounds ``omega_bound`` and ``damping_rate_bound`` (None when a
+        force has none) and the power ``iterations`` used."""
+        self._push()
+        return self._core.rates()
 
     # -- state ------------------------------------------------------------------------------
     @property
     def positions(self) -> np.ndarray:
-        """Positions (N, 3), m (a copy; assign to change them)."""
-        return self._core.positions
+        """Positions (N, 3), m: a live view (updated by each step; writes move the particles)."""
+        return self._x
 
     @positions.setter
     def positions(self, value: Any) -> None:
-        self._core.set_state(np.ascontiguousarray(np.asarray(value, dtype=np.float64)), self._core.velocities)
+        self._assign(self._x, value, "positions", (len(self), 3))
 
     @property
     def velocities(self) -> np.ndarray:
-        """Velocities (N, 3), m/s (a copy; assign to change them)."""
-        return self._core.velocities
+        """Velocities (N, 3), m/s: a live view (pinned particles keep 0)."""
+        return self._v
 
     @velocities.setter
     def velocities(self, value: Any) -> None:
-        self._core.set_state(self._core.positions, np.ascontiguousarray(np.asarray(value, dtype=np.float64)))
+        self._assign(self._v, value, "velocities", (len(self), 3))
 
     @property
     def masses(self) -> np.ndarray:
-        """Masses (N,), kg (pinned particles keep theirs)."""
-        return self._core.masses
+        """Masses (N,), kg: a live view (pinned particles keep theirs and stay pinned)."""
+        return self._m
+
+    @masses.setter
+    def masses(self, value: Any) -> None:
+        self._assign(self._m, value, "masses", (len(self),))
+
+    def _assign(self, view: np.ndarray, value: Any, name: str, shape: tuple[int, ...]) -> None:
+        try:
+            new = np.broadcast_to(np.asarray(value, dtype=np.float64), shape)
+        except ValueError:
+            raise ValueError(f"{name} has shape {np.shape(value)}; it must be {shape}") from None
+        old = view.copy()
+        view[...] = new
+        try:
+            self._push()
+        except ValueError:
+            view[...] = old  # nothing half-written
+            raise
+        self._pull()
 
     @property
     def momenta(self) -> np.ndarray:
-        """Momenta L = m v (N, 3), kg·m/s (0 for pinned particles)."""
-        return self._core.masses[:, None] * self._core.velocities
+        """Momenta L = m v (N, 3), kg·m/s (0 for pinned particles); a new read-only array."""
+        out = self._m[:, None] * self._v
+        out.flags.writeable = False
+        return out
 
     @property
     def accelerations(self) -> np.ndarray:
-        """Accelerations a = F/m (N, 3), m/s², under the forces now (0 for pinned particles)."""
-        return self._core.accelerations()
+        """Accelerations a = F/m (N, 3), m/s², under the forces now (0 for pinned particles); a
+        new read-only array."""
+        self._push()
+        out = self._core.accelerations()
+        out.flags.writeable = False
+        return out
 
     @property
     def time(self) -> float:
@@ -148,6 +267,7 @@ class World:
 
     def diagnostics(self) -> dict:
         """Kinetic energy, potential energy per conservative force, linear and angular momentum now."""
+        self._push()
         return self._core.diagnostics()
 
     def __repr__(self) -> str:

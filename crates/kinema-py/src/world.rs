@@ -2,8 +2,9 @@
 
 use kinema::error::CallbackError;
 use kinema::forces::{Attractor, Drag, Force, Gravity, Springs, State, Wind};
+use kinema::Divergence;
 use kinema::{Error, World, WorldParams};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -16,13 +17,40 @@ pyo3::create_exception!(
     kinema,
     SimulationDiverged,
     pyo3::exceptions::PyRuntimeError,
-    "A world step produced a non-finite state; the world keeps the state from before it."
+    "A world step produced a non-finite state or runaway energy; the world keeps the state from before it. \
+     Attributes: step, time, particle, dt, advised_dt, reason."
 );
 
-/// Engine errors of a world: divergence gets its own exception.
+/// Engine errors of a world: divergence gets its own exception, with its facts as attributes.
 fn world_err(e: Error) -> PyErr {
     match e {
-        Error::Diverged { .. } => SimulationDiverged::new_err(e.to_string()),
+        Error::Diverged {
+            step,
+            time,
+            particle,
+            dt,
+            reason,
+            advised_dt,
+        } => {
+            let err = SimulationDiverged::new_err(e.to_string());
+            Python::attach(|py| {
+                let value = err.value(py);
+                let reason = match reason {
+                    Divergence::NonFinite => "non-finite",
+                    Divergence::RunawayEnergy { .. } => "runaway energy",
+                };
+                let set = || -> PyResult<()> {
+                    value.setattr("step", step)?;
+                    value.setattr("time", time)?;
+                    value.setattr("particle", particle)?;
+                    value.setattr("dt", dt)?;
+                    value.setattr("advised_dt", advised_dt)?;
+                    value.setattr("reason", reason)?;
+                    Ok(())
+                };
+                set().err().unwrap_or(err.clone_ref(py))
+            })
+        }
         other => to_py(other),
     }
 }
@@ -212,6 +240,102 @@ impl PyWorld {
     #[getter]
     fn inverse_masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.inner.particles().inv_mass)
+    }
+
+    /// Copies positions, velocities and masses from the caller's arrays into the world when
+    /// they differ from its own (the method caches then restart); returns whether they did.
+    /// Checks every value first: nothing is changed by a bad one.
+    fn sync(
+        &mut self,
+        x: PyReadonlyArray2<'_, f64>,
+        v: PyReadonlyArray2<'_, f64>,
+        m: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<bool> {
+        let n = self.inner.particles().len();
+        let (x, v, m) = (x.as_array(), v.as_array(), m.as_array());
+        if x.shape() != [n, 3] || v.shape() != [n, 3] || m.shape() != [n] {
+            return Err(PyValueError::new_err(format!(
+                "positions, velocities and masses must keep their shapes ({n}, 3), ({n}, 3) and ({n},); \
+                 assign new values into them instead of resizing"
+            )));
+        }
+        let p = self.inner.particles();
+        let same = x.iter().zip(&p.x).all(|(a, b)| a.to_bits() == b.to_bits())
+            && v.iter().zip(&p.v).all(|(a, b)| a.to_bits() == b.to_bits())
+            && m.iter().zip(&p.mass).all(|(a, b)| a.to_bits() == b.to_bits());
+        if same {
+            return Ok(false);
+        }
+        for (name, arr) in [("positions", &x), ("velocities", &v)] {
+            if let Some(((i, k), c)) = arr.indexed_iter().find(|(_, c)| !c.is_finite()) {
+                return Err(PyValueError::new_err(format!(
+                    "{name}[{i}][{k}] = {c} is invalid: it must be finite"
+                )));
+            }
+            if self.inner.params().dim == 2 {
+                if let Some(i) = (0..n).find(|&i| arr[[i, 2]] != 0.0) {
+                    return Err(PyValueError::new_err(format!(
+                        "{name}[{i}][2] = {} is invalid: a 2D world keeps z = 0",
+                        arr[[i, 2]]
+                    )));
+                }
+            }
+        }
+        if let Some((i, c)) = m.iter().enumerate().find(|(_, c)| !(c.is_finite() && **c > 0.0)) {
+            return Err(PyValueError::new_err(format!(
+                "masses[{i}] = {c} is invalid: a mass must be finite and > 0 kg"
+            )));
+        }
+        let p = self.inner.particles_mut();
+        p.x.iter_mut().zip(x.iter()).for_each(|(d, s)| *d = *s);
+        for (k, (dst, src)) in p.v.iter_mut().zip(v.iter()).enumerate() {
+            *dst = if p.inv_mass[k / 3] == 0.0 { 0.0 } else { *src }; // pinned particles stay at rest
+        }
+        for (i, mi) in m.iter().enumerate() {
+            p.mass[i] = *mi;
+            if p.inv_mass[i] != 0.0 {
+                p.inv_mass[i] = 1.0 / mi;
+            }
+        }
+        Ok(true)
+    }
+
+    /// Writes the positions and velocities into the caller's (N, 3) arrays.
+    fn read_state(&self, mut x: PyReadwriteArray2<'_, f64>, mut v: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
+        let p = self.inner.particles();
+        let n = p.len();
+        let (mut x, mut v) = (x.as_array_mut(), v.as_array_mut());
+        if x.shape() != [n, 3] || v.shape() != [n, 3] {
+            return Err(PyValueError::new_err(format!("state arrays must have shape ({n}, 3)")));
+        }
+        x.iter_mut().zip(&p.x).for_each(|(d, s)| *d = *s);
+        v.iter_mut().zip(&p.v).for_each(|(d, s)| *d = *s);
+        Ok(())
+    }
+
+    /// The advisor's largest stable step (s) for `method` (a name or tableau) at the current
+    /// state; inf when no step is too large.
+    fn stable_step(&mut self, method: Bound<'_, PyAny>) -> PyResult<f64> {
+        let method = integrator_from(&method)?;
+        self.inner.stable_step(&method).map_err(world_err)
+    }
+
+    /// The advisor's rates at the current state, as a dict.
+    fn rates<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let r = self.inner.rates().map_err(world_err)?;
+        let out = PyDict::new(py);
+        out.set_item("omega", r.omega)?;
+        out.set_item("zeta", r.zeta)?;
+        out.set_item("damping_rate", r.damping_rate)?;
+        out.set_item("omega_bound", r.bound.map(|b| b.omega_squared.sqrt()))?;
+        out.set_item("damping_rate_bound", r.bound.map(|b| b.damping_rate))?;
+        out.set_item("iterations", r.iterations)?;
+        Ok(out)
+    }
+
+    /// CG iterations of the last implicit_euler step and whether they converged, or None.
+    fn linear_solve(&self) -> Option<(usize, bool)> {
+        self.inner.linear_solve()
     }
 
     /// Sets positions and velocities (both (N, 3)); method caches restart.
