@@ -124,7 +124,8 @@ class World:
     # -- running ----------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
         """Advance ``n`` steps of ``dt``. Raises ``kinema.SimulationDiverged`` at a step that
-        would leave a non-finite state; the world then keeps the state from before it."""
+        would leave a non-finite state or make the energy run away (see docs/world.md); the
+        world then keeps the state from before it."""
         if int(n) < 0:
             raise ValueError(f"n = {n} is invalid: the number of steps must be >= 0")
         self._push()
@@ -165,11 +166,12 @@ class World:
         """The largest stable time step, s, at the current state: for ``method`` (a name or a
         ``ButcherTableau``), or, with ``method=None``, a dict over every registered method.
 
-        The advisor estimates the stiffest mode of the linearised forces (power iteration on
-        Jacobian-vector products, with closed-form bounds such as ω² ≤ k(1/mᵢ + 1/mⱼ) for
-        springs) and its damping ratio, then applies each method's stability function on the
-        damped oscillator (``kinema.stability.max_step_oscillator``). ``inf`` when no step is
-        too large (implicit_euler; rk45, which sub-steps adaptively).
+        The advisor estimates the stiffest mode of the linearised forces and its damping ratio
+        by power iteration on Jacobian-vector products, then applies each method's stability
+        function on that damped oscillator (``kinema.stability.max_step_oscillator``) and on
+        the largest pure damping rate. ``inf`` when no step is too large (implicit_euler;
+        rk45, which sub-steps adaptively). Closed-form upper bounds (Gershgorin: for springs
+        ω² ≤ max_p 2 Σ k/m_p) are reported by :meth:`rates`.
         """
         self._push()
         if method is None:
@@ -229,6 +231,7 @@ class World:
     @property
     def momenta(self) -> np.ndarray:
         """Momenta L = m v (N, 3), kg·m/s (0 for pinned particles); a new read-only array."""
+        self._push()
         out = self._m[:, None] * self._v
         out.flags.writeable = False
         return out

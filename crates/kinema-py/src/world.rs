@@ -37,6 +37,7 @@ fn world_err(e: Error) -> PyErr {
                 let value = err.value(py);
                 let reason = match reason {
                     Divergence::NonFinite => "non-finite",
+                    Divergence::StepTooSmall => "step too small",
                     Divergence::RunawayEnergy { .. } => "runaway energy",
                 };
                 let set = || -> PyResult<()> {

@@ -74,11 +74,14 @@ pub enum Error {
 pub enum Divergence {
     /// A position or velocity became NaN or ±inf.
     NonFinite,
+    /// rk45 could not finish the step: its adaptive step fell below what the time resolves.
+    StepTooSmall,
     /// The mechanical energy grew far beyond anything the forces can supply.
     RunawayEnergy {
         /// Kinetic plus potential energy after the step, J.
         energy: f64,
-        /// Energy at the reference state (the start of the run), J.
+        /// Energy at the reference state (the first step after the last change of particles,
+        /// forces or state), J.
         reference: f64,
         /// The energy scale the growth is measured against, J.
         scale: f64,
@@ -89,6 +92,7 @@ impl fmt::Display for Divergence {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Divergence::NonFinite => write!(f, "the state became non-finite"),
+            Divergence::StepTooSmall => write!(f, "rk45's adaptive step became too small to finish it"),
             Divergence::RunawayEnergy {
                 energy,
                 reference,

@@ -106,7 +106,9 @@ pub trait Force {
     /// Closed-form upper bounds, at state `s`, on the rates this force gives the particles
     /// (inverse masses `inv_mass`, 0 for pinned ones): ω² ≥ every |eigenvalue| of M⁻¹ ∂F/∂x
     /// and γ ≥ every |eigenvalue| of M⁻¹ ∂F/∂v, each an ∞-norm (Gershgorin) bound so that the
-    /// bounds of several forces add. `None` when the force has none (a user's force).
+    /// bounds of several forces add. `None` when the force has none (a user's force). A bound
+    /// holds where its force documents it (springs: while longer than half their rest
+    /// length, dashpot position terms aside).
     fn rate_bound(&self, _s: &State, _inv_mass: &[f64]) -> Option<SpringRates> {
         None
     }

@@ -8,8 +8,9 @@ use crate::ode::stepper::Stats;
 
 /// Relative residual ‖b − A Δv‖ ≤ tol ‖b‖ at which conjugate gradients stop.
 pub const CG_TOLERANCE: f64 = 1e-6;
-/// Most CG iterations per step, beyond the number of free components; in exact arithmetic CG
-/// needs at most that many, so the cap only matters when rounding slows it.
+/// CG iterations per step at most: this many, or the number of state components (3N) if
+/// larger. In exact arithmetic CG needs at most the number of free components, so the cap
+/// only matters when rounding slows it.
 pub const CG_MAX_ITERATIONS: usize = 2000;
 
 /// One backward-Euler step of M x'' = F(t, x, v), linearised as in Baraff & Witkin (1998),

@@ -11,7 +11,7 @@ use crate::diagnostics::Diagnostics;
 use crate::error::{Divergence, Error};
 use crate::forces::{Force, State};
 use crate::ode::explicit_rk::ExplicitRk;
-use crate::ode::stepper::{first_non_finite, Stats, StepFailure, Stepper};
+use crate::ode::stepper::{first_non_finite, Stats, StepFailure, Stepper, Termination};
 use crate::ode::symplectic_euler::SymplecticEuler;
 use crate::ode::system::{FirstOrderForm, OdeSystem, SecondOrderSystem};
 use crate::ode::verlet::Verlet;
@@ -20,7 +20,8 @@ use crate::particles::Particles;
 use dynamics::Dynamics;
 use implicit::BaraffWitkin;
 
-/// The energy may grow by this many times its scale before a step counts as a runaway.
+/// The energy may grow by this many times its reference scale before a step counts as a
+/// runaway (see [`World::step`]).
 pub const RUNAWAY_FACTOR: f64 = 1e3;
 
 /// Parameters of a world. Units SI.
@@ -267,18 +268,28 @@ impl World {
     /// Stages 2–4 come with the collision module; today a step is stage 1.
     ///
     /// A step that would produce a non-finite state, or runaway energy, fails with
-    /// [`Error::Diverged`] and leaves the world as it was before the step. Runaway energy is
-    /// checked when no force can add energy ([`Force::can_add_energy`]): the mechanical energy
-    /// E = kinetic + potential can then only fall, and a step is refused when it would raise E
-    /// above its value at the first step by more than [`RUNAWAY_FACTOR`] times the scale S₀
-    /// (kinetic energy plus the magnitudes of the potential energies there) plus
-    /// 1e-9·RUNAWAY_FACTOR times the scale now (so that rounding in large energies is not a
-    /// runaway). Integration errors of a stable step stay far below that; an unstable method
-    /// crosses it a few dozen steps after it starts to grow, well before overflow.
+    /// [`Error::Diverged`] and leaves the world as it was before the step.
+    ///
+    /// Runaway energy is checked when no force can add energy ([`Force::can_add_energy`]): the
+    /// mechanical energy E = kinetic + potential can then only fall, and what an integrator
+    /// adds is an error. The reference E₀ and its scale S₀ (kinetic energy plus the
+    /// magnitudes of the potential energies) are taken at the first step after the last change
+    /// of particles, forces or state at which S₀ > 0. A step is refused when
+    ///
+    /// ```text
+    ///   E − E₀ > RUNAWAY_FACTOR · S₀ + S / 2        (S: the scale after the step)
+    /// ```
+    ///
+    /// An unstable mode's energy is all new (E − E₀ ≈ S) and crosses this once it has grown
+    /// about 2·RUNAWAY_FACTOR-fold, long before overflow. The S/2 term keeps out first-order
+    /// errors that are large only against a tiny S₀: forward Euler in free fall from rest adds
+    /// ½ m g² h² per step, a fraction 1/(2n) of S after n steps.
     pub fn step(&mut self) -> Result<(), Error> {
         if self.watch.is_none() && !self.particles.is_empty() && self.forces.iter().all(|f| !f.can_add_energy()) {
             let (energy, scale) = self.energy_and_scale(&self.particles.x, &self.particles.v);
-            self.watch = Some(EnergyWatch { energy, scale });
+            if scale > 0.0 {
+                self.watch = Some(EnergyWatch { energy, scale });
+            }
         }
         self.integrate()?;
         self.time = self.params_time_after(self.steps + 1);
@@ -342,7 +353,10 @@ impl World {
         match outcome {
             Ok(()) => {}
             Err(StepFailure::Error(e)) => return Err(e),
-            Err(StepFailure::Stop(_)) => return Err(self.diverged(Divergence::NonFinite, None)),
+            Err(StepFailure::Stop(Termination::NonFinite { index, .. })) => {
+                return Err(self.diverged(Divergence::NonFinite, Some((index % n) / 3)))
+            }
+            Err(StepFailure::Stop(_)) => return Err(self.diverged(Divergence::StepTooSmall, None)),
         }
         if let Some(index) = first_non_finite(&self.y_next) {
             let particle = (index % n) / 3; // y_next = [x, v]
@@ -351,7 +365,7 @@ impl World {
         if let Some(watch) = self.watch {
             let (x_next, v_next) = self.y_next.split_at(n);
             let (energy, scale) = self.energy_and_scale(x_next, v_next);
-            if energy - watch.energy > RUNAWAY_FACTOR * (watch.scale + 1e-9 * scale) {
+            if energy - watch.energy > RUNAWAY_FACTOR * watch.scale + 0.5 * scale {
                 let fastest = self.fastest(v_next);
                 let reason = Divergence::RunawayEnergy {
                     energy,
