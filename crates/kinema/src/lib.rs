@@ -1,10 +1,11 @@
 //! kinema: a particle-system simulation engine — numerical ODE integrators with their
-//! stability analysis, particles and the forces on them (collisions come later).
+//! stability analysis, particles, the forces on them and their collisions.
 //!
 //! The engine is pure Rust; Python reaches it through the `kinema-py` crate only.
 //! Units are SI (m, kg, s) and every number is `f64`.
 #![warn(missing_docs)]
 
+pub mod collide;
 pub mod diagnostics;
 pub mod error;
 pub mod forces;

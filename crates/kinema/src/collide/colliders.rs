@@ -1,0 +1,477 @@
+//! Static colliders: planes, box containers and sphere obstacles, and their contacts.
+//!
+//! A collider never moves and has infinite mass, so a particle's relative velocity against
+//! it is its own: u_n = v_i·n. Each contact's normal points into the free side (the side the
+//! particles belong to), so that an impulse +j n with j > 0 pushes the particle back there.
+//!
+//! In 2D give planes normals in the xy-plane, sphere obstacles centres with z = 0 (they are
+//! then circles), and boxes no walls along z ([`BoxContainer::rect`]).
+
+use super::contact::{Contact, Partner};
+use super::vec3;
+use crate::error::Error;
+
+/// A collider's own restitution and friction; `None` uses the particle's value (the world's
+/// global value where particles have none). See [`crate::collide::response::MaterialTable`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Surface {
+    restitution: Option<f64>,
+    friction: Option<f64>,
+}
+
+impl Surface {
+    /// A surface with restitution e ∈ [0, 1] and Coulomb friction coefficient μ ≥ 0 (finite),
+    /// each `None` to use the particle's value.
+    pub fn new(restitution: Option<f64>, friction: Option<f64>) -> Result<Self, Error> {
+        if let Some(e) = restitution {
+            if !(0.0..=1.0).contains(&e) {
+                return Err(Error::invalid(
+                    "restitution",
+                    e,
+                    "the coefficient of restitution must be in [0, 1]",
+                ));
+            }
+        }
+        if let Some(mu) = friction {
+            if !(mu.is_finite() && mu >= 0.0) {
+                return Err(Error::invalid(
+                    "friction",
+                    mu,
+                    "the friction coefficient must be finite and >= 0",
+                ));
+            }
+        }
+        Ok(Surface { restitution, friction })
+    }
+
+    /// Restitution e, if the surface sets its own.
+    pub fn restitution(&self) -> Option<f64> {
+        self.restitution
+    }
+
+    /// Friction coefficient μ, if the surface sets its own.
+    pub fn friction(&self) -> Option<f64> {
+        self.friction
+    }
+}
+
+/// Where a particle touches a collider: the normal into the free side and the overlap.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Touch {
+    /// Unit normal into the free side.
+    pub normal: [f64; 3],
+    /// Penetration depth, m (> 0 when overlapping; < 0 for a gap within the tolerance).
+    pub overlap: f64,
+}
+
+/// A plane through `point` with unit normal n: particles belong to the side n points to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plane {
+    point: [f64; 3],
+    normal: [f64; 3],
+    surface: Surface,
+}
+
+impl Plane {
+    /// The plane through `point` (m, finite) with normal `normal` (finite, non-zero; it is
+    /// normalised here), keeping particles on the side `normal` points to.
+    pub fn new(point: [f64; 3], normal: [f64; 3], surface: Surface) -> Result<Self, Error> {
+        if let Some((k, value)) = vec3::first_non_finite(&point) {
+            return Err(Error::invalid(format!("point[{k}]"), value, "a plane's point must be finite"));
+        }
+        if let Some((k, value)) = vec3::first_non_finite(&normal) {
+            return Err(Error::invalid(
+                format!("normal[{k}]"),
+                value,
+                "a plane's normal must be finite",
+            ));
+        }
+        // Dividing by the largest component first keeps |n|² from underflowing (or
+        // overflowing) for normals of any finite size.
+        let largest = normal.iter().fold(0.0, |m: f64, c| m.max(c.abs()));
+        if largest == 0.0 {
+            return Err(Error::invalid(
+                "normal",
+                format!("{normal:?}"),
+                "a plane's normal must be non-zero (it points to the side the particles stay on)",
+            ));
+        }
+        let scaled = vec3::scale(1.0 / largest, normal);
+        Ok(Plane {
+            point,
+            normal: vec3::scale(1.0 / vec3::norm(scaled), scaled),
+            surface,
+        })
+    }
+
+    /// A point of the plane, m.
+    pub fn point(&self) -> [f64; 3] {
+        self.point
+    }
+
+    /// Unit normal, towards the free side.
+    pub fn normal(&self) -> [f64; 3] {
+        self.normal
+    }
+
+    /// Its restitution and friction.
+    pub fn surface(&self) -> Surface {
+        self.surface
+    }
+
+    /// Signed distance of `p` from the plane, m: (p − point)·n, > 0 on the free side.
+    pub fn signed_distance(&self, p: [f64; 3]) -> f64 {
+        vec3::dot(vec3::sub(p, self.point), self.normal)
+    }
+
+    /// The touch of a sphere at `p` (m) of radius `r` (m) when its signed distance is below
+    /// r + `tolerance`: overlap r − s, normal n.
+    pub fn touch(&self, p: [f64; 3], r: f64, tolerance: f64) -> Option<Touch> {
+        let s = self.signed_distance(p);
+        (s < r + tolerance).then_some(Touch {
+            normal: self.normal,
+            overlap: r - s,
+        })
+    }
+}
+
+/// An axis-aligned box that keeps particles inside: six inward planes, one per face.
+///
+/// A bound may be infinite (−∞ for `lo`, +∞ for `hi`): that face has no wall.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoxContainer {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    walls: Vec<Plane>,
+    surface: Surface,
+}
+
+impl BoxContainer {
+    /// The box [lo, hi] (m; `lo[k] < hi[k]`, not NaN; lo may be −∞ and hi +∞ for no wall),
+    /// particles inside.
+    pub fn new(lo: [f64; 3], hi: [f64; 3], surface: Surface) -> Result<Self, Error> {
+        for k in 0..3 {
+            if lo[k].is_nan() || lo[k] == f64::INFINITY {
+                return Err(Error::invalid(
+                    format!("lo[{k}]"),
+                    lo[k],
+                    "a lower bound must be a number < +inf",
+                ));
+            }
+            if hi[k].is_nan() || hi[k] <= lo[k] {
+                return Err(Error::invalid(
+                    format!("hi[{k}]"),
+                    hi[k],
+                    format!("the box needs hi > lo along each axis (lo[{k}] = {})", lo[k]),
+                ));
+            }
+        }
+        // Wall order: −x, +x, −y, +y, −z, +z faces; each normal points into the box.
+        let mut walls = Vec::with_capacity(6);
+        for k in 0..3 {
+            let mut inward = [0.0; 3];
+            for (bound, sign) in [(lo[k], 1.0), (hi[k], -1.0)] {
+                if bound.is_finite() {
+                    let mut point = [0.0; 3];
+                    point[k] = bound;
+                    inward[k] = sign;
+                    walls.push(Plane::new(point, inward, surface)?);
+                }
+            }
+        }
+        Ok(BoxContainer { lo, hi, walls, surface })
+    }
+
+    /// The rectangle [lo, hi] of a 2D domain (m), with no walls along z.
+    pub fn rect(lo: [f64; 2], hi: [f64; 2], surface: Surface) -> Result<Self, Error> {
+        BoxContainer::new([lo[0], lo[1], f64::NEG_INFINITY], [hi[0], hi[1], f64::INFINITY], surface)
+    }
+
+    /// Lower corner, m.
+    pub fn lo(&self) -> [f64; 3] {
+        self.lo
+    }
+
+    /// Upper corner, m.
+    pub fn hi(&self) -> [f64; 3] {
+        self.hi
+    }
+
+    /// The walls, inward planes in the order −x, +x, −y, +y, −z, +z (faces at infinity left out).
+    pub fn walls(&self) -> &[Plane] {
+        &self.walls
+    }
+
+    /// Its restitution and friction.
+    pub fn surface(&self) -> Surface {
+        self.surface
+    }
+}
+
+/// A static sphere (a circle in 2D) that keeps particles outside.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SphereObstacle {
+    center: [f64; 3],
+    radius: f64,
+    surface: Surface,
+}
+
+impl SphereObstacle {
+    /// The sphere of centre `center` (m, finite) and radius `radius` (m, finite, ≥ 0).
+    pub fn new(center: [f64; 3], radius: f64, surface: Surface) -> Result<Self, Error> {
+        if let Some((k, value)) = vec3::first_non_finite(&center) {
+            return Err(Error::invalid(
+                format!("center[{k}]"),
+                value,
+                "an obstacle's centre must be finite",
+            ));
+        }
+        if !(radius.is_finite() && radius >= 0.0) {
+            return Err(Error::invalid(
+                "radius",
+                radius,
+                "an obstacle's radius must be finite and >= 0 m",
+            ));
+        }
+        Ok(SphereObstacle { center, radius, surface })
+    }
+
+    /// Centre, m.
+    pub fn center(&self) -> [f64; 3] {
+        self.center
+    }
+
+    /// Radius, m.
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// Its restitution and friction.
+    pub fn surface(&self) -> Surface {
+        self.surface
+    }
+
+    /// The touch of a sphere at `p` (m) of radius `r` (m) when its centre is closer than
+    /// R + r + `tolerance` to the obstacle's: normal (p − c)/|p − c| (+x for p = c, as for
+    /// coincident particles), overlap R + r − |p − c|.
+    pub fn touch(&self, p: [f64; 3], r: f64, tolerance: f64) -> Option<Touch> {
+        let d = vec3::sub(p, self.center);
+        let sum = self.radius + r;
+        let reach = sum + tolerance;
+        let dist2 = vec3::dot(d, d);
+        if dist2 >= reach * reach {
+            return None;
+        }
+        let dist = dist2.sqrt();
+        Some(Touch {
+            normal: if dist > 0.0 {
+                vec3::scale(1.0 / dist, d)
+            } else {
+                [1.0, 0.0, 0.0]
+            },
+            overlap: sum - dist,
+        })
+    }
+}
+
+/// Any static collider.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Collider {
+    /// A half-space boundary.
+    Plane(Plane),
+    /// A container.
+    Box(BoxContainer),
+    /// An obstacle.
+    Sphere(SphereObstacle),
+}
+
+impl Collider {
+    /// Its restitution and friction.
+    pub fn surface(&self) -> Surface {
+        match self {
+            Collider::Plane(p) => p.surface(),
+            Collider::Box(b) => b.surface(),
+            Collider::Sphere(s) => s.surface(),
+        }
+    }
+
+    /// Calls `each` with every touch of a sphere at `p` (m) of radius `r` (m) within
+    /// `tolerance` (m): at most one for a plane or an obstacle, up to three for a box (a
+    /// particle in a corner touches three walls).
+    pub fn for_each_touch(&self, p: [f64; 3], r: f64, tolerance: f64, each: impl FnMut(Touch)) {
+        match self {
+            Collider::Plane(plane) => plane.touch(p, r, tolerance).into_iter().for_each(each),
+            Collider::Box(b) => b.walls().iter().filter_map(|w| w.touch(p, r, tolerance)).for_each(each),
+            Collider::Sphere(s) => s.touch(p, r, tolerance).into_iter().for_each(each),
+        }
+    }
+}
+
+impl From<Plane> for Collider {
+    fn from(p: Plane) -> Self {
+        Collider::Plane(p)
+    }
+}
+
+impl From<BoxContainer> for Collider {
+    fn from(b: BoxContainer) -> Self {
+        Collider::Box(b)
+    }
+}
+
+impl From<SphereObstacle> for Collider {
+    fn from(s: SphereObstacle) -> Self {
+        Collider::Sphere(s)
+    }
+}
+
+/// Appends to `contacts` (not cleared, so that it can follow the particle pairs' contacts)
+/// every particle–collider contact within `tolerance`, particle by particle, then collider
+/// by collider, then wall by wall: `Partner::Collider(k)` is the index in `colliders`, and
+/// u_n = v_i·n.
+///
+/// `x`, `v`: positions (m) and velocities (m/s), 3 per particle; `radius`: m, one per
+/// particle; `tolerance`: m (finite, ≥ 0).
+pub fn collider_contacts(
+    colliders: &[Collider],
+    x: &[f64],
+    v: &[f64],
+    radius: &[f64],
+    tolerance: f64,
+    contacts: &mut Vec<Contact>,
+) -> Result<(), Error> {
+    let n = radius.len();
+    for (name, len) in [("x", x.len()), ("v", v.len())] {
+        if len != 3 * n {
+            return Err(Error::invalid(
+                name,
+                format!("{len} values"),
+                format!("3 per particle ({} for the {n} radii)", 3 * n),
+            ));
+        }
+    }
+    if !(tolerance.is_finite() && tolerance >= 0.0) {
+        return Err(Error::invalid(
+            "tolerance",
+            tolerance,
+            "the contact tolerance must be finite and >= 0 m",
+        ));
+    }
+    for (i, &r) in radius.iter().enumerate() {
+        let (p, vi) = (vec3::get(x, i), vec3::get(v, i));
+        for (k, collider) in colliders.iter().enumerate() {
+            collider.for_each_touch(p, r, tolerance, |t| {
+                contacts.push(Contact {
+                    i,
+                    other: Partner::Collider(k),
+                    normal: t.normal,
+                    overlap: t.overlap,
+                    u_n: vec3::dot(vi, t.normal),
+                })
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_contact_by_hand() {
+        // plane z = 1 with normal (0, 0, 2) → (0, 0, 1); sphere r = 0.5 at z = 1.3 overlaps 0.2
+        let floor = Plane::new([5.0, 5.0, 1.0], [0.0, 0.0, 2.0], Surface::default()).unwrap();
+        assert_eq!(floor.normal(), [0.0, 0.0, 1.0]);
+        let mut out = Vec::new();
+        let x = [0.0, 0.0, 1.3, 0.0, 0.0, 1.6];
+        let v = [1.0, 0.0, -3.0, 0.0, 0.0, -1.0];
+        collider_contacts(&[floor.into()], &x, &v, &[0.5, 0.5], 0.0, &mut out).unwrap();
+        assert_eq!(out.len(), 1);
+        let c = out[0];
+        assert_eq!((c.i, c.other), (0, Partner::Collider(0)));
+        assert!((c.overlap - 0.2).abs() < 1e-15);
+        assert_eq!(c.u_n, -3.0);
+        // the second sphere's gap is 0.1: found with a tolerance of 0.15
+        collider_contacts(&[floor.into()], &x, &v, &[0.5, 0.5], 0.15, &mut out).unwrap();
+        assert_eq!(out.len(), 3);
+        assert!((out[2].overlap + 0.1).abs() < 1e-15);
+    }
+
+    #[test]
+    fn box_corner_gives_three_inward_contacts() {
+        let b = BoxContainer::new([0.0; 3], [1.0, 2.0, 3.0], Surface::default()).unwrap();
+        assert_eq!(b.walls().len(), 6);
+        let mut out = Vec::new();
+        collider_contacts(
+            &[b.into()],
+            &[0.0625, 1.9375, 2.9375],
+            &[-1.0, 2.0, 3.0],
+            &[0.125],
+            0.0,
+            &mut out,
+        )
+        .unwrap();
+        let normals: Vec<[f64; 3]> = out.iter().map(|c| c.normal).collect();
+        assert_eq!(normals, vec![[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]);
+        let u_n: Vec<f64> = out.iter().map(|c| c.u_n).collect();
+        assert_eq!(u_n, vec![-1.0, -2.0, -3.0]);
+        for c in &out {
+            assert_eq!(c.overlap, 0.0625, "{c:?}");
+        }
+        // a particle that escaped through +x is pushed back through that face
+        out.clear();
+        collider_contacts(
+            &[BoxContainer::rect([0.0, 0.0], [1.0, 1.0], Surface::default()).unwrap().into()],
+            &[3.0, 0.5, 0.0],
+            &[0.0; 3],
+            &[0.1],
+            0.0,
+            &mut out,
+        )
+        .unwrap();
+        assert_eq!(out.len(), 1);
+        assert_eq!(out[0].normal, [-1.0, 0.0, 0.0]);
+        assert!((out[0].overlap - 2.1).abs() < 1e-15);
+    }
+
+    #[test]
+    fn sphere_obstacle_pushes_outwards() {
+        let s = SphereObstacle::new([1.0, 1.0, 0.0], 2.0, Surface::default()).unwrap();
+        let t = s.touch([1.0, 3.2, 0.0], 0.5, 0.0).unwrap();
+        assert_eq!(t.normal, [0.0, 1.0, 0.0]);
+        assert!((t.overlap - 0.3).abs() < 1e-15);
+        assert!(s.touch([1.0, 3.6, 0.0], 0.5, 0.0).is_none());
+        assert_eq!(s.touch([1.0, 1.0, 0.0], 0.5, 0.0).unwrap().normal, [1.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn constructors_name_bad_values() {
+        let e = Plane::new([0.0; 3], [0.0; 3], Surface::default()).unwrap_err().to_string();
+        assert!(
+            e.starts_with("normal = [0.0, 0.0, 0.0] is invalid: a plane's normal must be non-zero"),
+            "{e}"
+        );
+        let e = Plane::new([0.0, f64::NAN, 0.0], [1.0, 0.0, 0.0], Surface::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("point[1] = NaN is invalid"), "{e}");
+        let e = BoxContainer::new([0.0; 3], [1.0, 0.0, 1.0], Surface::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("hi[1] = 0 is invalid"), "{e}");
+        let e = SphereObstacle::new([0.0; 3], -1.0, Surface::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("radius = -1 is invalid"), "{e}");
+        let e = Surface::new(Some(1.5), None).unwrap_err().to_string();
+        assert!(e.starts_with("restitution = 1.5 is invalid"), "{e}");
+        let e = Surface::new(None, Some(-0.1)).unwrap_err().to_string();
+        assert!(e.starts_with("friction = -0.1 is invalid"), "{e}");
+        // tiny but non-zero normals are fine
+        assert_eq!(
+            Plane::new([0.0; 3], [0.0, 1e-300, 0.0], Surface::default()).unwrap().normal(),
+            [0.0, 1.0, 0.0]
+        );
+    }
+}

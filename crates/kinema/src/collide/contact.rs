@@ -1,0 +1,71 @@
+//! Contact: what the narrow phase and the colliders hand to the response — one touching pair.
+
+/// What particle `i` of a [`Contact`] touches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Partner {
+    /// Another particle, by index (for particle pairs from the narrow phase, always > `i`).
+    Particle(usize),
+    /// A static collider, by its index in the caller's collider list.
+    Collider(usize),
+}
+
+/// One contact between particle `i` and its partner, as seen at the positions and velocities
+/// it was computed from.
+///
+/// The normal points from the partner towards particle `i`, so that an impulse `+j n` on `i`
+/// (and `−j n` on a particle partner) pushes the two apart for j > 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// The particle, by index.
+    pub i: usize,
+    /// What it touches.
+    pub other: Partner,
+    /// Unit normal n, from the partner towards particle `i`.
+    pub normal: [f64; 3],
+    /// Penetration depth δ, m: > 0 when the two overlap (for two spheres δ = r_i + r_j − |x_i − x_j|),
+    /// < 0 for a gap that is still within the contact tolerance that found it.
+    pub overlap: f64,
+    /// Relative normal velocity u_n = (v_i − v_j)·n, m/s (v_j = 0 for a static collider):
+    /// < 0 while they approach, > 0 while they separate.
+    pub u_n: f64,
+}
+
+impl Contact {
+    /// The partner particle's index, or `None` for a collider.
+    pub fn partner_particle(&self) -> Option<usize> {
+        match self.other {
+            Partner::Particle(j) => Some(j),
+            Partner::Collider(_) => None,
+        }
+    }
+
+    /// Whether the two approach (u_n < 0).
+    pub fn is_approaching(&self) -> bool {
+        self.u_n < 0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn partner_and_approach() {
+        let c = Contact {
+            i: 0,
+            other: Partner::Particle(3),
+            normal: [1.0, 0.0, 0.0],
+            overlap: 0.1,
+            u_n: -2.0,
+        };
+        assert_eq!(c.partner_particle(), Some(3));
+        assert!(c.is_approaching());
+        let w = Contact {
+            other: Partner::Collider(1),
+            u_n: 0.0,
+            ..c
+        };
+        assert_eq!(w.partner_particle(), None);
+        assert!(!w.is_approaching());
+    }
+}

@@ -1,0 +1,245 @@
+//! Domain: the space particles collide in — 2D or 3D, open or periodic along each axis.
+//!
+//! Along a periodic axis of period L = hi − lo, a particle at x is also at x + kL for every
+//! integer k. Two particles interact through their nearest images only: the minimum-image
+//! displacement d − L·round(d / L), which lies in [−L/2, L/2]. When two particles could
+//! touch through two images at once (r_i + r_j + margin > L/2) only the nearest one counts.
+
+use super::vec3;
+use crate::error::Error;
+
+/// A box [lo, hi) whose opposite faces are identified along the axes marked periodic.
+///
+/// Bounds along the other axes are not used (they may be any finite numbers).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Periodic {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    axes: [bool; 3],
+    /// 1 / (hi − lo) on periodic axes (0 on the others), 1/m.
+    inv_period: [f64; 3],
+}
+
+impl Periodic {
+    /// Periodic along the axes with `axes[k]` true, with period `hi[k] − lo[k]` (m); `lo`,
+    /// `hi` finite, and `hi[k] > lo[k]` on every periodic axis.
+    pub fn new(lo: [f64; 3], hi: [f64; 3], axes: [bool; 3]) -> Result<Self, Error> {
+        for (name, b) in [("lo", lo), ("hi", hi)] {
+            if let Some((k, value)) = vec3::first_non_finite(&b) {
+                return Err(Error::invalid(format!("{name}[{k}]"), value, "box bounds must be finite"));
+            }
+        }
+        for k in 0..3 {
+            if axes[k] && hi[k] <= lo[k] {
+                return Err(Error::invalid(
+                    format!("hi[{k}]"),
+                    hi[k],
+                    format!("a periodic axis needs hi > lo (lo[{k}] = {}); its period is hi − lo", lo[k]),
+                ));
+            }
+        }
+        let inv_period = [0, 1, 2].map(|k| if axes[k] { 1.0 / (hi[k] - lo[k]) } else { 0.0 });
+        Ok(Periodic {
+            lo,
+            hi,
+            axes,
+            inv_period,
+        })
+    }
+
+    /// Lower corner, m.
+    pub fn lo(&self) -> [f64; 3] {
+        self.lo
+    }
+
+    /// Upper corner, m.
+    pub fn hi(&self) -> [f64; 3] {
+        self.hi
+    }
+
+    /// Which axes are periodic.
+    pub fn axes(&self) -> [bool; 3] {
+        self.axes
+    }
+
+    /// Period along axis k, m (`hi[k] − lo[k]`; meaningful on periodic axes).
+    pub fn period(&self, k: usize) -> f64 {
+        self.hi[k] - self.lo[k]
+    }
+
+    /// The minimum image of the displacement `d` (m): along each periodic axis
+    /// d − L·round(d / L), in [−L/2, L/2] (to rounding); unchanged along the others.
+    #[inline]
+    pub fn min_image(&self, d: [f64; 3]) -> [f64; 3] {
+        let mut out = d;
+        for k in 0..3 {
+            if self.axes[k] {
+                out[k] = d[k] - self.period(k) * nearest_integer(d[k] * self.inv_period[k]);
+            }
+        }
+        out
+    }
+
+    /// Coordinate `c` (m) of axis `k` wrapped into [lo, hi) when the axis is periodic.
+    pub fn wrap_coordinate(&self, k: usize, c: f64) -> f64 {
+        if !self.axes[k] {
+            return c;
+        }
+        let (lo, hi, l) = (self.lo[k], self.hi[k], self.period(k));
+        let w = c - l * ((c - lo) / l).floor();
+        // c just below lo gives floor = −1 and w = c + L, which can round up to hi itself;
+        // that point is lo's image.
+        if w >= hi {
+            lo
+        } else {
+            w.max(lo)
+        }
+    }
+
+    /// The position `p` (m) wrapped into [lo, hi) along the periodic axes.
+    pub fn wrap(&self, p: [f64; 3]) -> [f64; 3] {
+        [
+            self.wrap_coordinate(0, p[0]),
+            self.wrap_coordinate(1, p[1]),
+            self.wrap_coordinate(2, p[2]),
+        ]
+    }
+
+    /// Wraps every position of the flat array `x` (m, 3 per particle) into the box along
+    /// the periodic axes, in place.
+    pub fn wrap_positions(&self, x: &mut [f64]) {
+        for p in x.chunks_exact_mut(3) {
+            for (k, c) in p.iter_mut().enumerate() {
+                *c = self.wrap_coordinate(k, *c);
+            }
+        }
+    }
+}
+
+/// The integer nearest to `v` (ties to even). For |v| < 2⁵¹, adding 1.5·2⁵² lands in
+/// [2⁵², 2⁵³), where doubles are spaced exactly 1 apart, so the addition itself rounds v to
+/// an integer and subtracting the constant again is exact. This is plain arithmetic, where
+/// `f64::round` is a library call on x86-64 without SSE4.1, and the broad phase's pair test
+/// calls it three times per candidate pair.
+#[inline]
+fn nearest_integer(v: f64) -> f64 {
+    const SHIFT: f64 = 6_755_399_441_055_744.0; // 1.5 · 2⁵²
+    if v.abs() < 2_251_799_813_685_248.0 {
+        (v + SHIFT) - SHIFT
+    } else {
+        v.round()
+    }
+}
+
+/// The space of a collision query: its dimension and its periodic axes, if any.
+///
+/// In 2D (`dim` = 2) particles are circles in the xy-plane (z = 0 kept exactly); the stages
+/// then search no neighbours along z.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Domain {
+    dim: usize,
+    periodic: Option<Periodic>,
+}
+
+impl Domain {
+    /// An unbounded domain of dimension `dim` (2 or 3).
+    pub fn open(dim: usize) -> Result<Self, Error> {
+        if dim != 2 && dim != 3 {
+            return Err(Error::invalid("dim", dim, "2 (circles in the xy-plane) or 3 (spheres)"));
+        }
+        Ok(Domain { dim, periodic: None })
+    }
+
+    /// A domain of dimension `dim` (2 or 3) with the periodic axes of `periodic`.
+    pub fn periodic(dim: usize, periodic: Periodic) -> Result<Self, Error> {
+        Ok(Domain {
+            periodic: Some(periodic),
+            ..Domain::open(dim)?
+        })
+    }
+
+    /// 2 or 3.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// The periodic box, if any.
+    pub fn periodic_box(&self) -> Option<&Periodic> {
+        self.periodic.as_ref()
+    }
+
+    /// The displacement x_i − x_j (m), as its minimum image along periodic axes.
+    #[inline]
+    pub fn displacement(&self, xi: [f64; 3], xj: [f64; 3]) -> [f64; 3] {
+        let d = vec3::sub(xi, xj);
+        match &self.periodic {
+            Some(p) => p.min_image(d),
+            None => d,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_box() -> Periodic {
+        Periodic::new([0.0, -1.0, 5.0], [2.0, 1.0, 6.0], [true, true, false]).unwrap()
+    }
+
+    #[test]
+    fn min_image_is_the_nearest_copy() {
+        let p = unit_box();
+        // period 2 along x and y: 1.5 → −0.5, −1.7 → 0.3, 4.2 → 0.2; z is open.
+        let d = p.min_image([1.5, -1.7, 4.2]);
+        assert!((d[0] + 0.5).abs() < 1e-15 && (d[1] - 0.3).abs() < 1e-15, "{d:?}");
+        assert_eq!(d[2], 4.2);
+        assert!(d[..2].iter().all(|c| c.abs() <= 1.0));
+    }
+
+    #[test]
+    fn nearest_integers() {
+        for (v, n) in [
+            (0.4, 0.0),
+            (0.6, 1.0),
+            (-0.6, -1.0),
+            (2.5, 2.0),
+            (3.5, 4.0),
+            (-1e15 - 0.7, -1e15 - 1.0),
+            (1e300, 1e300),
+        ] {
+            assert_eq!(nearest_integer(v), n, "{v}");
+        }
+        assert_eq!(nearest_integer(-0.2), 0.0);
+    }
+
+    #[test]
+    fn wrapping_lands_in_the_half_open_box() {
+        let p = unit_box();
+        assert_eq!(p.wrap([2.0, 1.0, 9.0]), [0.0, -1.0, 9.0]);
+        assert_eq!(p.wrap([-0.5, 2.5, 9.0]), [1.5, 0.5, 9.0]);
+        // just below lo: c + L rounds to hi in floating point, which is lo's image
+        let w = p.wrap_coordinate(0, -1e-17);
+        assert!((0.0..2.0).contains(&w), "{w}");
+        let mut x = vec![7.0, -3.0, 0.0, 0.5, 0.5, 0.5];
+        p.wrap_positions(&mut x);
+        assert_eq!(&x[..3], &[1.0, -1.0, 0.0]);
+        assert_eq!(&x[3..], &[0.5, 0.5, 0.5]);
+    }
+
+    #[test]
+    fn bad_boxes_are_named() {
+        let e = Periodic::new([0.0; 3], [1.0, 0.0, 1.0], [true, true, false])
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("hi[1] = 0 is invalid: a periodic axis needs hi > lo"), "{e}");
+        let e = Periodic::new([0.0, f64::NAN, 0.0], [1.0; 3], [false; 3])
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("lo[1] = NaN is invalid"), "{e}");
+        // a flat box is fine along an open axis
+        assert!(Periodic::new([0.0; 3], [1.0, 1.0, 0.0], [true, true, false]).is_ok());
+        let e = Domain::open(4).unwrap_err().to_string();
+        assert!(e.starts_with("dim = 4 is invalid"), "{e}");
+    }
+}

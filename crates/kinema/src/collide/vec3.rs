@@ -1,0 +1,49 @@
+//! Small 3-vector helpers shared by the collision stages (flat arrays, 3 values per particle).
+
+/// The 3 coordinates of particle `i` in a flat array (`a[3i..3i+3]`).
+#[inline]
+pub(crate) fn get(a: &[f64], i: usize) -> [f64; 3] {
+    [a[3 * i], a[3 * i + 1], a[3 * i + 2]]
+}
+
+/// Adds `s · d` to particle `i`'s 3 entries of the flat array `a`.
+#[inline]
+pub(crate) fn add_scaled(a: &mut [f64], i: usize, s: f64, d: [f64; 3]) {
+    for k in 0..3 {
+        a[3 * i + k] += s * d[k];
+    }
+}
+
+#[inline]
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline]
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[inline]
+pub(crate) fn scale(s: f64, a: [f64; 3]) -> [f64; 3] {
+    [s * a[0], s * a[1], s * a[2]]
+}
+
+#[inline]
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline]
+pub(crate) fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// Index and value of the first non-finite entry of `a`, for error messages.
+pub(crate) fn first_non_finite(a: &[f64]) -> Option<(usize, f64)> {
+    a.iter().position(|c| !c.is_finite()).map(|p| (p, a[p]))
+}
