@@ -1,12 +1,15 @@
 //! The world: particles, the forces on them, and `World::step`, the seed's four stages.
 
 mod advisor;
+mod collisions;
 mod dynamics;
 mod implicit;
 
 pub use advisor::Rates;
+pub use collisions::{CollisionParams, CollisionStats};
 pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
 
+use crate::collide::{Collider, Contact, Periodic};
 use crate::diagnostics::Diagnostics;
 use crate::error::{Divergence, Error};
 use crate::forces::{Force, State};
@@ -17,6 +20,7 @@ use crate::ode::system::{FirstOrderForm, OdeSystem, SecondOrderSystem};
 use crate::ode::verlet::Verlet;
 use crate::ode::{self, Integrator, Method, MethodKind, SolveOptions};
 use crate::particles::Particles;
+use collisions::CollisionStage;
 use dynamics::Dynamics;
 use implicit::BaraffWitkin;
 
@@ -87,6 +91,8 @@ pub struct World {
     force: Vec<f64>,
     /// The energy reference of the runaway check; `None` until the next step sets it.
     watch: Option<EnergyWatch>,
+    /// Stages 2–4, when collisions are on.
+    collisions: Option<CollisionStage>,
 }
 
 /// The reference of the runaway-energy check (see [`World::step`]).
@@ -119,6 +125,7 @@ impl World {
             y_next: Vec::new(),
             force: Vec::new(),
             watch: None,
+            collisions: None,
         })
     }
 
@@ -265,7 +272,9 @@ impl World {
     /// 3. respond — Newton's restitution law u_n⁺ = −e u_n⁻ gives each contact's impulse;
     /// 4. distribute — each impulse acts on both particles, equal and opposite.
     ///
-    /// Stages 2–4 come with the collision module; today a step is stage 1.
+    /// Stages 2–4 run when collisions are on ([`World::set_collisions`], or a collider was
+    /// added) with the impulse model; see `collisions.rs` for how impacts inside the step are
+    /// found (continuous detection) and resolved in time order.
     ///
     /// A step that would produce a non-finite state, or runaway energy, fails with
     /// [`Error::Diverged`] and leaves the world as it was before the step.
@@ -291,7 +300,12 @@ impl World {
                 self.watch = Some(EnergyWatch { energy, scale });
             }
         }
-        self.integrate()?;
+        self.integrate()?; // 1: the integrated state, in y_next
+        self.collide()?; // 2–4: detect, respond, distribute, on y_next
+        let n = 3 * self.particles.len();
+        if n > 0 {
+            FirstOrderForm::split(&self.y_next, n, &mut self.particles.x, &mut self.particles.v);
+        }
         self.time = self.params_time_after(self.steps + 1);
         self.steps += 1;
         Ok(())
@@ -375,8 +389,129 @@ impl World {
                 return Err(self.diverged(reason, fastest));
             }
         }
-        FirstOrderForm::split(&self.y_next, n, &mut self.particles.x, &mut self.particles.v);
         Ok(())
+    }
+
+    /// Stages 2–4 on the integrated state in `y_next` (a no-op without collisions): impacts
+    /// inside the step and contacts at its end get Newton's restitution impulses, equal and
+    /// opposite on the two particles (see [`CollisionParams`]).
+    fn collide(&mut self) -> Result<(), Error> {
+        let n = 3 * self.particles.len();
+        let Some(stage) = self.collisions.as_mut() else {
+            return Ok(());
+        };
+        if n == 0 {
+            return Ok(());
+        }
+        let p = &self.particles;
+        let (x1, v1) = self.y_next.split_at_mut(n);
+        let changed = stage.run(&p.x, &p.v, x1, v1, &p.radius, &p.inv_mass, &p.mass, self.params.dt)?;
+        if changed {
+            // A method's cache (Verlet's last acceleration) holds F at the integrated state;
+            // it stays right only if no force depends on positions or velocities.
+            let s = State {
+                t: self.time,
+                x: x1,
+                v: v1,
+                mass: &p.mass,
+            };
+            let uniform = self.forces.iter().all(|f| {
+                f.rate_bound(&s, &p.inv_mass)
+                    .is_some_and(|r| r.omega_squared == 0.0 && r.damping_rate == 0.0)
+            });
+            if !uniform {
+                self.stepper = None;
+            }
+        }
+        Ok(())
+    }
+
+    /// Turns collisions on (or changes their settings): stages 2–4 of every step.
+    pub fn set_collisions(&mut self, params: CollisionParams) -> Result<(), Error> {
+        match &mut self.collisions {
+            Some(stage) => stage.set_params(params),
+            None => {
+                self.collisions = Some(CollisionStage::new(params, self.params.dim)?);
+                Ok(())
+            }
+        }
+    }
+
+    /// The collision settings, when collisions are on.
+    pub fn collision_params(&self) -> Option<CollisionParams> {
+        self.collisions.as_ref().map(|c| c.params)
+    }
+
+    /// Adds a static collider and returns its index; turns collisions on with the default
+    /// settings if they are off.
+    pub fn add_collider(&mut self, collider: impl Into<Collider>) -> Result<usize, Error> {
+        if self.collisions.is_none() {
+            self.set_collisions(CollisionParams::default())?;
+        }
+        let stage = self.collisions.as_mut().expect("collisions are on");
+        stage.colliders.push(collider.into());
+        Ok(stage.colliders.len() - 1)
+    }
+
+    /// The colliders, in the order they were added.
+    pub fn colliders(&self) -> &[Collider] {
+        self.collisions.as_ref().map_or(&[], |c| &c.colliders)
+    }
+
+    /// Makes the axes with `axes[k]` true periodic, with the cell of the world's box collider
+    /// (its walls along those axes then vanish: a particle leaving one side comes back on the
+    /// other). All false makes space open again.
+    pub fn set_periodic(&mut self, axes: [bool; 3]) -> Result<(), Error> {
+        if self.collisions.is_none() {
+            self.set_collisions(CollisionParams::default())?;
+        }
+        let stage = self.collisions.as_mut().expect("collisions are on");
+        if !axes.iter().any(|a| *a) {
+            return stage.set_periodic(None);
+        }
+        if self.params.dim == 2 && axes[2] {
+            return Err(Error::invalid(
+                "periodic",
+                format!("{axes:?}"),
+                "a 2D world has no periodic z axis",
+            ));
+        }
+        let Some((lo, hi)) = stage.colliders.iter().find_map(|c| match c {
+            Collider::Box(b) => Some((b.lo(), b.hi())),
+            _ => None,
+        }) else {
+            return Err(Error::invalid(
+                "periodic",
+                format!("{axes:?}"),
+                "periodic axes need a box collider (kinema.Box) whose sides give the periodic cell; add one first",
+            ));
+        };
+        stage.set_periodic(Some(Periodic::new(lo, hi, axes)?))?;
+        if let Some(p) = stage.domain.periodic_box() {
+            p.wrap_positions(&mut self.particles.x);
+        }
+        self.reset_caches();
+        Ok(())
+    }
+
+    /// The periodic axes (all false for open space).
+    pub fn periodic(&self) -> [bool; 3] {
+        self.collisions
+            .as_ref()
+            .and_then(|c| c.domain.periodic_box().map(|p| p.axes()))
+            .unwrap_or([false; 3])
+    }
+
+    /// The contacts found at the end of the last step (after its impulses; their `u_n` is
+    /// the approach speed before them).
+    pub fn contacts(&self) -> &[Contact] {
+        self.collisions.as_ref().map_or(&[], |c| &c.contacts)
+    }
+
+    /// What the collision stages did in the last step, and summed over all steps; `None`
+    /// without collisions.
+    pub fn collision_stats(&self) -> Option<(CollisionStats, CollisionStats)> {
+        self.collisions.as_ref().map(|c| (c.last, c.total))
     }
 
     /// Mechanical energy (kinetic plus every potential, J) at (x, v), and its scale: kinetic
