@@ -8,9 +8,27 @@ use crate::collide::{
 };
 use crate::error::Error;
 
+/// The contact model: how a collision changes the motion.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactModel {
+    /// Newton's restitution law by impulses after integration (stages 2–4), the seed's model.
+    Impulse,
+    /// A spring–dashpot force while bodies overlap (the DEM way), integrated with the other
+    /// forces in stage 1: F_n = k_n δ − m_eff γ_n u_n with γ_n from the requested e by the
+    /// damped oscillator's closed form ([`crate::collide::PenaltyLaw`]), or given.
+    SpringDashpot {
+        /// Normal stiffness k_n, N/m (> 0).
+        stiffness: f64,
+        /// Damping rate γ_n, 1/s (≥ 0), instead of the one the restitution implies.
+        damping: Option<f64>,
+    },
+}
+
 /// How collisions between particles, and with colliders, are handled. Units SI.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CollisionParams {
+    /// The contact model. Default [`ContactModel::Impulse`].
+    pub model: ContactModel,
     /// Coefficient of restitution e ∈ [0, 1] of every particle without its own (1: elastic,
     /// 0: plastic). Default 1.
     pub restitution: f64,
@@ -29,6 +47,7 @@ pub struct CollisionParams {
 impl Default for CollisionParams {
     fn default() -> Self {
         CollisionParams {
+            model: ContactModel::Impulse,
             restitution: 1.0,
             friction: 0.0,
             ccd: true,
@@ -40,6 +59,16 @@ impl Default for CollisionParams {
 impl CollisionParams {
     /// Checks the values; the error names the parameter.
     pub fn check(&self) -> Result<Material, Error> {
+        if let ContactModel::SpringDashpot { stiffness, damping } = self.model {
+            if !(stiffness.is_finite() && stiffness > 0.0) {
+                return Err(Error::invalid("stiffness", stiffness, "the contact stiffness must be finite and > 0 N/m"));
+            }
+            if let Some(g) = damping {
+                if !(g.is_finite() && g >= 0.0) {
+                    return Err(Error::invalid("damping", g, "the contact damping rate must be finite and >= 0 1/s"));
+                }
+            }
+        }
         if let Some(t) = self.restitution_threshold {
             if !(t.is_finite() && t >= 0.0) {
                 return Err(Error::invalid(
@@ -104,8 +133,11 @@ struct Event {
 pub(crate) struct CollisionStage {
     pub params: CollisionParams,
     material: Material,
-    /// Per-particle materials, if any were set.
-    pub particle_materials: Option<Vec<Material>>,
+    /// Per-particle restitution and friction where set (`None`: the global value).
+    pub own: Vec<(Option<f64>, Option<f64>)>,
+    /// The materials of all particles, built from `own` and the global value when some
+    /// particle has its own.
+    particle_materials: Option<Vec<Material>>,
     pub colliders: Vec<Collider>,
     pub domain: Domain,
     grid: Grid,
@@ -143,6 +175,7 @@ impl CollisionStage {
         Ok(CollisionStage {
             params,
             material,
+            own: Vec::new(),
             particle_materials: None,
             colliders: Vec::new(),
             domain: Domain::open(dim)?,
@@ -166,6 +199,22 @@ impl CollisionStage {
     pub fn set_params(&mut self, params: CollisionParams) -> Result<(), Error> {
         self.material = params.check()?;
         self.params = params;
+        self.refresh_materials()
+    }
+
+    /// Rebuilds the per-particle materials from `own` and the global value.
+    pub fn refresh_materials(&mut self) -> Result<(), Error> {
+        if self.own.iter().all(|(e, m)| e.is_none() && m.is_none()) {
+            self.particle_materials = None;
+            return Ok(());
+        }
+        let global = self.material;
+        self.particle_materials = Some(
+            self.own
+                .iter()
+                .map(|(e, m)| Material::new(e.unwrap_or(global.restitution()), m.unwrap_or(global.friction())))
+                .collect::<Result<_, _>>()?,
+        );
         Ok(())
     }
 

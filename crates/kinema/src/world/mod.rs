@@ -6,7 +6,7 @@ mod dynamics;
 mod implicit;
 
 pub use advisor::Rates;
-pub use collisions::{CollisionParams, CollisionStats};
+pub use collisions::{CollisionParams, CollisionStats, ContactModel};
 pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
 
 use crate::collide::{Collider, Contact, Periodic};
@@ -154,6 +154,9 @@ impl World {
             f.validate(self.particles.len())?;
         }
         self.reset_caches(); // the state changed size
+        if let Some(stage) = &mut self.collisions {
+            stage.own.resize(self.particles.len(), (None, None));
+        }
         Ok(range)
     }
 
@@ -431,10 +434,52 @@ impl World {
         match &mut self.collisions {
             Some(stage) => stage.set_params(params),
             None => {
-                self.collisions = Some(CollisionStage::new(params, self.params.dim)?);
+                let mut stage = CollisionStage::new(params, self.params.dim)?;
+                stage.own.resize(self.particles.len(), (None, None));
+                self.collisions = Some(stage);
                 Ok(())
             }
         }
+    }
+
+    /// Gives particles `start..start + len` their own restitution e ∈ [0, 1] and friction μ ≥ 0
+    /// (`None` keeps the global value of [`CollisionParams`]); `restitution` and `friction`
+    /// have one entry per particle. A pair combines its two values by Box2D's rule
+    /// (e = max, μ = √(μ_i μ_j), [`crate::collide::Material::combine`]); a collider's own
+    /// values override the particle's. Turns collisions on if they are off.
+    pub fn set_particle_materials(
+        &mut self,
+        start: usize,
+        restitution: &[Option<f64>],
+        friction: &[Option<f64>],
+    ) -> Result<(), Error> {
+        let n = self.particles.len();
+        if restitution.len() != friction.len() || start + restitution.len() > n {
+            return Err(Error::invalid(
+                "restitution",
+                format!("{} values from particle {start}", restitution.len()),
+                format!("one value per particle, with as many frictions ({}), within the {n} particles", friction.len()),
+            ));
+        }
+        for (k, (e, m)) in restitution.iter().zip(friction).enumerate() {
+            // Each value alone must make a valid material.
+            crate::collide::Material::new(e.unwrap_or(0.0), m.unwrap_or(0.0)).map_err(|err| match err {
+                Error::InvalidParameter { parameter, value, allowed } => Error::InvalidParameter {
+                    parameter: format!("{parameter}[{}]", start + k),
+                    value,
+                    allowed,
+                },
+                other => other,
+            })?;
+        }
+        if self.collisions.is_none() {
+            self.set_collisions(CollisionParams::default())?;
+        }
+        let stage = self.collisions.as_mut().expect("collisions are on");
+        for (k, (e, m)) in restitution.iter().zip(friction).enumerate() {
+            stage.own[start + k] = (*e, *m);
+        }
+        stage.refresh_materials()
     }
 
     /// The collision settings, when collisions are on.
