@@ -112,6 +112,13 @@ pub trait Force {
     fn rate_bound(&self, _s: &State, _inv_mass: &[f64]) -> Option<SpringRates> {
         None
     }
+
+    /// The stiffest oscillation this force can have in states other than the current one —
+    /// a contact that is not touching yet — as (ω², 1/s²; ζ), for the stable-step advisor;
+    /// `None` when the current state tells all (every force of the catalogue).
+    fn standby_rates(&self, _inv_mass: &[f64]) -> Option<(f64, f64)> {
+        None
+    }
 }
 
 /// Checks that the positions and velocities of `s` and every named buffer hold 3 values per

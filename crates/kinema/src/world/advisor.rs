@@ -36,6 +36,9 @@ pub struct Rates {
     pub bound: Option<SpringRates>,
     /// Power iterations used (both estimates together).
     pub iterations: usize,
+    /// The stiffest mode a force can reach from other states (a contact not touching yet),
+    /// as (ω, rad/s; ζ): [`Force::standby_rates`]. It limits the step like the others.
+    pub standby: Option<(f64, f64)>,
 }
 
 impl Rates {
@@ -63,7 +66,11 @@ impl Rates {
         } else {
             f64::INFINITY
         };
-        oscillation.min(damping)
+        let standby = match self.standby {
+            Some((omega, zeta)) if omega > 0.0 => oscillator_max_step(method, omega, zeta),
+            _ => f64::INFINITY,
+        };
+        oscillation.min(damping).min(standby)
     }
 }
 
@@ -80,8 +87,14 @@ pub(crate) fn estimate(forces: &mut [Box<dyn Force>], s: &State, inv_mass: &[f64
             _ => None,
         };
     }
+    let standby = forces
+        .iter()
+        .filter_map(|f| f.standby_rates(inv_mass))
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(omega_squared, zeta)| (omega_squared.sqrt(), zeta));
     let mut rates = Rates {
         bound,
+        standby,
         ..Rates::default()
     };
     let n = s.x.len();

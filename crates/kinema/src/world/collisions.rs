@@ -61,11 +61,19 @@ impl CollisionParams {
     pub fn check(&self) -> Result<Material, Error> {
         if let ContactModel::SpringDashpot { stiffness, damping } = self.model {
             if !(stiffness.is_finite() && stiffness > 0.0) {
-                return Err(Error::invalid("stiffness", stiffness, "the contact stiffness must be finite and > 0 N/m"));
+                return Err(Error::invalid(
+                    "stiffness",
+                    stiffness,
+                    "the contact stiffness must be finite and > 0 N/m",
+                ));
             }
             if let Some(g) = damping {
                 if !(g.is_finite() && g >= 0.0) {
-                    return Err(Error::invalid("damping", g, "the contact damping rate must be finite and >= 0 1/s"));
+                    return Err(Error::invalid(
+                        "damping",
+                        g,
+                        "the contact damping rate must be finite and >= 0 1/s",
+                    ));
                 }
             }
         }
@@ -200,6 +208,11 @@ impl CollisionStage {
         self.material = params.check()?;
         self.params = params;
         self.refresh_materials()
+    }
+
+    /// The global material and the per-particle ones (if any particle has its own).
+    pub fn materials_parts(&self) -> (Material, Option<Vec<Material>>) {
+        (self.material, self.particle_materials.clone())
     }
 
     /// Rebuilds the per-particle materials from `own` and the global value.

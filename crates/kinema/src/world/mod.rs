@@ -2,6 +2,7 @@
 
 mod advisor;
 mod collisions;
+mod contact_force;
 mod dynamics;
 mod implicit;
 
@@ -21,6 +22,7 @@ use crate::ode::verlet::Verlet;
 use crate::ode::{self, Integrator, Method, MethodKind, SolveOptions};
 use crate::particles::Particles;
 use collisions::CollisionStage;
+use contact_force::ContactForce;
 use dynamics::Dynamics;
 use implicit::BaraffWitkin;
 
@@ -93,6 +95,10 @@ pub struct World {
     watch: Option<EnergyWatch>,
     /// Stages 2–4, when collisions are on.
     collisions: Option<CollisionStage>,
+    /// Index in `forces` of the spring–dashpot contact force, with that model.
+    contact_force: Option<usize>,
+    /// The contact force must be rebuilt before the next step (particles changed).
+    contact_dirty: bool,
 }
 
 /// The reference of the runaway-energy check (see [`World::step`]).
@@ -126,6 +132,8 @@ impl World {
             force: Vec::new(),
             watch: None,
             collisions: None,
+            contact_force: None,
+            contact_dirty: false,
         })
     }
 
@@ -156,7 +164,9 @@ impl World {
         self.reset_caches(); // the state changed size
         if let Some(stage) = &mut self.collisions {
             stage.own.resize(self.particles.len(), (None, None));
+            stage.refresh_materials()?;
         }
+        self.rebuild_contact_force()?;
         Ok(range)
     }
 
@@ -177,6 +187,7 @@ impl World {
     /// dropped, so the next step starts afresh.
     pub fn particles_mut(&mut self) -> &mut Particles {
         self.reset_caches();
+        self.contact_dirty = self.contact_force.is_some();
         &mut self.particles
     }
 
@@ -297,6 +308,9 @@ impl World {
     /// errors that are large only against a tiny S₀: forward Euler in free fall from rest adds
     /// ½ m g² h² per step, a fraction 1/(2n) of S after n steps.
     pub fn step(&mut self) -> Result<(), Error> {
+        if self.contact_dirty {
+            self.rebuild_contact_force()?;
+        }
         if self.watch.is_none() && !self.particles.is_empty() && self.forces.iter().all(|f| !f.can_add_energy()) {
             let (energy, scale) = self.energy_and_scale(&self.particles.x, &self.particles.v);
             if scale > 0.0 {
@@ -403,8 +417,8 @@ impl World {
         let Some(stage) = self.collisions.as_mut() else {
             return Ok(());
         };
-        if n == 0 {
-            return Ok(());
+        if n == 0 || stage.params.model != ContactModel::Impulse {
+            return Ok(()); // the spring–dashpot model acts in stage 1, as a force
         }
         let p = &self.particles;
         let (x1, v1) = self.y_next.split_at_mut(n);
@@ -429,17 +443,59 @@ impl World {
         Ok(())
     }
 
-    /// Turns collisions on (or changes their settings): stages 2–4 of every step.
+    /// Turns collisions on (or changes their settings): stages 2–4 of every step with the
+    /// impulse model, a contact force in stage 1 with the spring–dashpot model.
     pub fn set_collisions(&mut self, params: CollisionParams) -> Result<(), Error> {
         match &mut self.collisions {
-            Some(stage) => stage.set_params(params),
+            Some(stage) => stage.set_params(params)?,
             None => {
                 let mut stage = CollisionStage::new(params, self.params.dim)?;
                 stage.own.resize(self.particles.len(), (None, None));
                 self.collisions = Some(stage);
-                Ok(())
             }
         }
+        self.rebuild_contact_force()
+    }
+
+    /// Makes the spring–dashpot contact force match the collision settings, colliders and
+    /// particles (added to the forces, replaced, or removed).
+    fn rebuild_contact_force(&mut self) -> Result<(), Error> {
+        self.contact_dirty = false;
+        let wanted = match self.collisions.as_ref().map(|c| c.params.model) {
+            Some(ContactModel::SpringDashpot { stiffness, damping }) => Some((stiffness, damping)),
+            _ => None,
+        };
+        match (wanted, self.contact_force) {
+            (None, None) => return Ok(()),
+            (None, Some(k)) => {
+                self.forces.remove(k);
+                self.contact_force = None;
+            }
+            (Some((stiffness, damping)), index) => {
+                let stage = self.collisions.as_ref().expect("collisions are on");
+                let (global, own) = stage.materials_parts();
+                let p = &self.particles;
+                let force = Box::new(ContactForce::new(
+                    stiffness,
+                    damping,
+                    global,
+                    own,
+                    p.radius.clone(),
+                    p.inv_mass.clone(),
+                    stage.colliders.clone(),
+                    stage.domain,
+                ));
+                match index {
+                    Some(k) => self.forces[k] = force,
+                    None => {
+                        self.forces.push(force);
+                        self.contact_force = Some(self.forces.len() - 1);
+                    }
+                }
+            }
+        }
+        self.reset_caches();
+        Ok(())
     }
 
     /// Gives particles `start..start + len` their own restitution e ∈ [0, 1] and friction μ ≥ 0
@@ -458,13 +514,20 @@ impl World {
             return Err(Error::invalid(
                 "restitution",
                 format!("{} values from particle {start}", restitution.len()),
-                format!("one value per particle, with as many frictions ({}), within the {n} particles", friction.len()),
+                format!(
+                    "one value per particle, with as many frictions ({}), within the {n} particles",
+                    friction.len()
+                ),
             ));
         }
         for (k, (e, m)) in restitution.iter().zip(friction).enumerate() {
             // Each value alone must make a valid material.
             crate::collide::Material::new(e.unwrap_or(0.0), m.unwrap_or(0.0)).map_err(|err| match err {
-                Error::InvalidParameter { parameter, value, allowed } => Error::InvalidParameter {
+                Error::InvalidParameter {
+                    parameter,
+                    value,
+                    allowed,
+                } => Error::InvalidParameter {
                     parameter: format!("{parameter}[{}]", start + k),
                     value,
                     allowed,
@@ -479,7 +542,8 @@ impl World {
         for (k, (e, m)) in restitution.iter().zip(friction).enumerate() {
             stage.own[start + k] = (*e, *m);
         }
-        stage.refresh_materials()
+        stage.refresh_materials()?;
+        self.rebuild_contact_force()
     }
 
     /// The collision settings, when collisions are on.
@@ -495,7 +559,9 @@ impl World {
         }
         let stage = self.collisions.as_mut().expect("collisions are on");
         stage.colliders.push(collider.into());
-        Ok(stage.colliders.len() - 1)
+        let index = stage.colliders.len() - 1;
+        self.rebuild_contact_force()?;
+        Ok(index)
     }
 
     /// The colliders, in the order they were added.
@@ -512,7 +578,8 @@ impl World {
         }
         let stage = self.collisions.as_mut().expect("collisions are on");
         if !axes.iter().any(|a| *a) {
-            return stage.set_periodic(None);
+            stage.set_periodic(None)?;
+            return self.rebuild_contact_force();
         }
         if self.params.dim == 2 && axes[2] {
             return Err(Error::invalid(
@@ -535,6 +602,7 @@ impl World {
         if let Some(p) = stage.domain.periodic_box() {
             p.wrap_positions(&mut self.particles.x);
         }
+        self.rebuild_contact_force()?;
         self.reset_caches();
         Ok(())
     }
