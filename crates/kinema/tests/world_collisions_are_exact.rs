@@ -260,3 +260,45 @@ fn a_periodic_gas_conserves_momentum_and_energy() {
     // Positions stay in the periodic cell.
     assert!(w.particles().x.iter().all(|c| (0.0..side).contains(c)));
 }
+
+#[test]
+fn a_resting_pile_neither_sinks_nor_gains_energy() {
+    // 100 balls (r = 5 cm, 50 g) stacked 5 × 5 × 4, touching each other and the floor, under
+    // gravity for 10 s with e = 0.5. Each step the integrator lets every ball fall ½ g h²
+    // and gain g h of downward speed; the end-of-step contacts take that speed away (below
+    // the restitution threshold: plastic) and the overlap is removed by moving positions:
+    // the kinetic energy lost, ½ m g² h², is exactly the potential energy the push gives
+    // back, so the total energy may only fall (to rounding), and nothing sinks.
+    let (r, m, g) = (0.05, 0.05, 9.81);
+    let mut w = world(1e-3, 3, 0.5);
+    let mut x = Vec::new();
+    for layer in 0..4 {
+        for a in 0..5 {
+            for b in 0..5 {
+                x.extend([2.0 * r * a as f64, 2.0 * r * b as f64, r + 2.0 * r * layer as f64]);
+            }
+        }
+    }
+    w.add_particles(&x, &[0.0; 300], &[m; 100], &[r; 100], &[false; 100]).unwrap();
+    w.add_force(Box::new(Gravity::new([0.0, 0.0, -g]).unwrap())).unwrap();
+    w.add_collider(Plane::new([0.0; 3], [0.0, 0.0, 1.0], Surface::default()).unwrap())
+        .unwrap();
+    let e0 = w.diagnostics().total_energy();
+    let mut worst_rise: f64 = 0.0;
+    let mut worst_sink: f64 = 0.0;
+    for _ in 0..10_000 {
+        w.step().unwrap();
+        worst_rise = worst_rise.max(w.diagnostics().total_energy() - e0);
+        let p = w.particles();
+        for i in 0..100 {
+            worst_sink = worst_sink.max(r - p.x[3 * i + 2]);
+            for j in i + 1..100 {
+                let d: f64 = (0..3).map(|k| (p.x[3 * i + k] - p.x[3 * j + k]).powi(2)).sum::<f64>().sqrt();
+                worst_sink = worst_sink.max(2.0 * r - d);
+            }
+        }
+    }
+    eprintln!("pile: worst sink {worst_sink:e} m, worst energy rise {worst_rise:e} J of {e0} J");
+    assert!(worst_sink <= 0.01 * r, "sank {worst_sink} m");
+    assert!(worst_rise <= 1e-9 * e0, "energy rose by {worst_rise} J");
+}
