@@ -119,6 +119,20 @@ pub trait Force {
     fn standby_rates(&self, _inv_mass: &[f64]) -> Option<(f64, f64)> {
         None
     }
+
+    /// The Jacobian at state `s` prepared for many products (the implicit solve and the
+    /// advisor take hundreds at one state): what depends only on `s` — a spring's axis and
+    /// length — is computed once. Its products equal [`Force::jacobian_product`] (or the
+    /// definite variant with `definite`). `None` when the force has nothing to prepare.
+    fn linearize(&self, _s: &State, _definite: bool) -> Option<Box<dyn Linearized>> {
+        None
+    }
+}
+
+/// A force's Jacobian prepared at one state (see [`Force::linearize`]).
+pub trait Linearized {
+    /// Adds (∂F/∂x)·dx + (∂F/∂v)·dv to `out` (3 values per particle each).
+    fn apply(&self, dx: &[f64], dv: &[f64], out: &mut [f64]);
 }
 
 /// Checks that the positions and velocities of `s` and every named buffer hold 3 values per

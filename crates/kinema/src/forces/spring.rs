@@ -16,7 +16,7 @@
 //! exact (the force k d vanishes with d); for L₀ > 0 the force is discontinuous there and
 //! zero is the choice that adds no energy.
 
-use super::{check_buffers, Force, State};
+use super::{check_buffers, Force, Linearized, State};
 use crate::error::{CallbackError, Error};
 
 /// A set of damped springs between pairs of particles.
@@ -284,6 +284,43 @@ impl Springs {
     }
 }
 
+/// One spring's Jacobian blocks at a state: with e = dx_j − dx_i, w = dv_j − dv_i and
+/// P e = e − (n·e) n, the product on i is (k n·e + turn·P e + c n·w) n + transverse P e.
+#[derive(Debug, Clone, Copy)]
+struct SpringBlock {
+    i: usize,
+    j: usize,
+    n: [f64; 3],
+    k: f64,
+    c: f64,
+    transverse: f64,
+    /// c u / L, the dashpot's turning-axis term ((P u)·e = u·(P e)); 0 when definite.
+    turn: [f64; 3],
+}
+
+/// Springs linearised at one state (see [`Force::linearize`]).
+struct LinearizedSprings {
+    blocks: Vec<SpringBlock>,
+}
+
+impl Linearized for LinearizedSprings {
+    fn apply(&self, dx: &[f64], dv: &[f64], out: &mut [f64]) {
+        for b in &self.blocks {
+            let (a, c) = (3 * b.i, 3 * b.j);
+            let e = [dx[c] - dx[a], dx[c + 1] - dx[a + 1], dx[c + 2] - dx[a + 2]];
+            let w = [dv[c] - dv[a], dv[c + 1] - dv[a + 1], dv[c + 2] - dv[a + 2]];
+            let ne = dot(b.n, e);
+            let pe = [e[0] - ne * b.n[0], e[1] - ne * b.n[1], e[2] - ne * b.n[2]];
+            let axial = b.k * ne + dot(b.turn, pe) + b.c * dot(b.n, w);
+            for q in 0..3 {
+                let g = axial * b.n[q] + b.transverse * pe[q];
+                out[a + q] += g;
+                out[c + q] -= g;
+            }
+        }
+    }
+}
+
 fn distance(x: &[f64], i: usize, j: usize) -> f64 {
     let (a, b) = (3 * i, 3 * j);
     ((x[b] - x[a]).powi(2) + (x[b + 1] - x[a + 1]).powi(2) + (x[b + 2] - x[a + 2]).powi(2)).sqrt()
@@ -396,6 +433,53 @@ impl Force for Springs {
             }
         }
         true
+    }
+
+    /// Each spring's axis n, its transverse coefficient and the dashpot's turning-axis term,
+    /// computed once (see [`Force::jacobian_product`] for the blocks).
+    fn linearize(&self, s: &State, definite: bool) -> Option<Box<dyn Linearized>> {
+        if check_buffers(self.name(), s, &[]).is_err() || self.check_indices(s.len()).is_err() {
+            return None;
+        }
+        let mut blocks = Vec::with_capacity(self.len());
+        for sp in 0..self.len() {
+            let (k, rest, c) = (self.k[sp], self.rest_length[sp], self.damping[sp]);
+            let block = match self.axis(s.x, sp) {
+                // Coincident ends: k I for rest length 0, nothing otherwise (module doc).
+                None => SpringBlock {
+                    i: self.i[sp],
+                    j: self.j[sp],
+                    n: [0.0; 3],
+                    k: 0.0,
+                    c: 0.0,
+                    transverse: if rest == 0.0 { k } else { 0.0 },
+                    turn: [0.0; 3],
+                },
+                Some((n, len)) => {
+                    let (transverse, turn) = if definite {
+                        (k * (1.0 - rest / len).max(0.0), [0.0; 3])
+                    } else {
+                        let u = self.relative(s.v, sp);
+                        let scale = c / len;
+                        (
+                            k * (1.0 - rest / len) + c * dot(u, n) / len,
+                            [scale * u[0], scale * u[1], scale * u[2]],
+                        )
+                    };
+                    SpringBlock {
+                        i: self.i[sp],
+                        j: self.j[sp],
+                        n,
+                        k,
+                        c,
+                        transverse,
+                        turn,
+                    }
+                }
+            };
+            blocks.push(block);
+        }
+        Some(Box::new(LinearizedSprings { blocks }))
     }
 
     /// The network's Gershgorin bounds, [`Springs::max_rates`].
@@ -552,6 +636,35 @@ mod tests {
     /// c n nᵀ are the derivatives of the force: central differences of F along random dx, dv,
     /// on a damped network in motion with stretched, compressed and zero-rest-length springs.
     ///
+    /// The prepared Jacobian is the same linear map as the products it replaces: exact and
+    /// definite, for a damped network in motion with compressed and stretched springs, and
+    /// with coincident ends of rest length 0.
+    #[test]
+    fn linearized_products_equal_the_direct_ones() {
+        let mut rng = Rng::new(21);
+        let (sp, mut x, v, m) = network(&mut rng, 12, 40, true);
+        let (a, b) = (3 * sp.i[0], 3 * sp.j[0]);
+        let end: Vec<f64> = x[a..a + 3].to_vec();
+        x[b..b + 3].copy_from_slice(&end); // spring 0's ends coincide
+        let s = state(&x, &v, &m);
+        for definite in [false, true] {
+            let op = sp.linearize(&s, definite).unwrap();
+            for _ in 0..5 {
+                let (dx, dv) = (rng.vec(36, -1.0, 1.0), rng.vec(36, -1.0, 1.0));
+                let (mut direct, mut prepared) = (vec![0.0; 36], vec![0.0; 36]);
+                if definite {
+                    assert!(sp.definite_jacobian_product(&s, &dx, &dv, &mut direct));
+                } else {
+                    assert!(sp.jacobian_product(&s, &dx, &dv, &mut direct));
+                }
+                op.apply(&dx, &dv, &mut prepared);
+                for (p, d) in prepared.iter().zip(&direct) {
+                    assert!((p - d).abs() <= 1e-12 * (1.0 + d.abs()), "definite {definite}: {p} vs {d}");
+                }
+            }
+        }
+    }
+
     /// The check is sensitive to the dashpot's position term: that term (the difference of the
     /// damped and undamped x-Jacobians, less nothing else) is far above the tolerance here,
     /// so a product that left it out would fail.

@@ -1,7 +1,7 @@
 //! The particles' equations of motion, x'' = F(t, x, v) / m, and Jacobian–vector products of F.
 
 use crate::error::CallbackError;
-use crate::forces::{Force, State};
+use crate::forces::{Force, Linearized, State};
 use crate::ode::system::SecondOrderSystem;
 
 /// The dynamics of the particles as a second-order system: x'' = F(t, x, v) / m.
@@ -75,6 +75,8 @@ pub(crate) fn free_components(inv_mass: &[f64], dim: usize, out: &mut Vec<f64>) 
 pub(crate) struct ForceJacobian {
     /// Whether force k provides its own product (decided when prepared).
     analytic: Vec<bool>,
+    /// Force k's Jacobian prepared at the state, when it prepares one ([`Force::linearize`]).
+    prepared: Vec<Option<Box<dyn Linearized>>>,
     /// The numerically differentiated forces summed at the state, N.
     base: Vec<f64>,
     /// Whether some force is differentiated numerically.
@@ -101,13 +103,17 @@ impl ForceJacobian {
         self.fp.resize(n, 0.0);
         self.xp.clear();
         self.xp.resize(n, 0.0); // zero directions: probing adds nothing
+        self.prepared.clear();
         for f in forces.iter() {
-            let has = if definite {
-                f.definite_jacobian_product(s, &self.xp, &self.xp, &mut self.fp)
-            } else {
-                f.jacobian_product(s, &self.xp, &self.xp, &mut self.fp)
-            };
+            let op = f.linearize(s, definite);
+            let has = op.is_some()
+                || if definite {
+                    f.definite_jacobian_product(s, &self.xp, &self.xp, &mut self.fp)
+                } else {
+                    f.jacobian_product(s, &self.xp, &self.xp, &mut self.fp)
+                };
             self.analytic.push(has);
+            self.prepared.push(op);
         }
         self.numeric = self.analytic.iter().any(|a| !a);
         self.base.clear();
@@ -134,8 +140,10 @@ impl ForceJacobian {
         out: &mut [f64],
     ) -> Result<(), CallbackError> {
         out.fill(0.0);
-        for (f, has) in forces.iter().zip(&self.analytic) {
-            if *has {
+        for ((f, has), op) in forces.iter().zip(&self.analytic).zip(&self.prepared) {
+            if let Some(op) = op {
+                op.apply(dx, dv, out);
+            } else if *has {
                 if self.definite {
                     f.definite_jacobian_product(s, dx, dv, out);
                 } else {
