@@ -99,6 +99,17 @@ pub struct World {
     contact_force: Option<usize>,
     /// The contact force must be rebuilt before the next step (particles changed).
     contact_dirty: bool,
+    /// Wall-clock time spent in each stage so far.
+    times: StageTimes,
+}
+
+/// Wall-clock time spent in the stages of [`World::step`], summed over all steps.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Stage 1: integration (force evaluations included).
+    pub integrate: std::time::Duration,
+    /// Stages 2–4: detection, response and distribution of collisions.
+    pub collide: std::time::Duration,
 }
 
 /// The reference of the runaway-energy check (see [`World::step`]).
@@ -134,6 +145,7 @@ impl World {
             collisions: None,
             contact_force: None,
             contact_dirty: false,
+            times: StageTimes::default(),
         })
     }
 
@@ -220,6 +232,11 @@ impl World {
     /// Work counters of all steps so far (force evaluations in `nfev`).
     pub fn stats(&self) -> Stats {
         self.stats
+    }
+
+    /// Wall-clock time spent in each stage of the steps so far.
+    pub fn stage_times(&self) -> StageTimes {
+        self.times
     }
 
     /// Energies and momenta now.
@@ -317,8 +334,12 @@ impl World {
                 self.watch = Some(EnergyWatch { energy, scale });
             }
         }
+        let start = std::time::Instant::now();
         self.integrate()?; // 1: the integrated state, in y_next
+        let integrated = std::time::Instant::now();
         self.collide()?; // 2–4: detect, respond, distribute, on y_next
+        self.times.integrate += integrated - start;
+        self.times.collide += integrated.elapsed();
         let n = 3 * self.particles.len();
         if n > 0 {
             FirstOrderForm::split(&self.y_next, n, &mut self.particles.x, &mut self.particles.v);
