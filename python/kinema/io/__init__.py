@@ -1,0 +1,18 @@
+"""Trajectory files: H5MD (HDF5) to save and load runs, and exports for other programs.
+
+- ``save_h5md(traj, path)`` / ``load_h5md(path)``: the H5MD 1.1 layout, read back exactly
+  (needs h5py).
+- ``export(traj, path, format)``: VTK PolyData series with a .pvd collection (ParaView), PLY
+  per frame (Blender, Houdini), extended XYZ (OVITO, ASE), CSV.
+- ``TrajectoryFileError``: a file that cannot be read or written (a ``ValueError`` whose
+  message is one line naming the file).
+
+Every writer writes under a temporary name and renames at the end: a failed write leaves no
+partial file behind and the previous file as it was.
+"""
+
+from ._files import TrajectoryFileError
+from .exports import FORMATS, export
+from .h5md import LoadedTrajectory, load_h5md, save_h5md
+
+__all__ = ["FORMATS", "LoadedTrajectory", "TrajectoryFileError", "export", "load_h5md", "save_h5md"]

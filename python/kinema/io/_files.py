@@ -1,0 +1,186 @@
+"""Atomic writes (a temporary name, then a rename) and the frames of a trajectory-like object."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+class TrajectoryFileError(ValueError):
+    """A trajectory file that cannot be read or written. The message is one line naming the
+    file and what is wrong with it (a command line prints it and exits with status 2)."""
+
+    __module__ = "kinema.io"
+
+
+def _umask() -> int:
+    # Read-and-restore is the only way to learn the umask; files made by mkstemp are 0600 and
+    # get the mode an ordinary open() would have given them.
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _writable_parent(path: Path) -> Path:
+    if path.is_dir():
+        raise TrajectoryFileError(f"cannot write {path}: it is a directory; give a file name such as {path / 'run.h5'}")
+    parent = path.parent
+    if not parent.is_dir():
+        raise TrajectoryFileError(f"cannot write {path}: the folder {parent} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise TrajectoryFileError(f"cannot write {path}: the folder {parent} is not writable")
+    return parent
+
+
+@contextmanager
+def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
+    """Yields a temporary path in the folder of ``path``; when the block ends without an
+    exception the temporary file is renamed to ``path`` (``os.replace``, atomic on one file
+    system), otherwise it is removed and ``path`` is left as it was. An ``OSError`` while
+    writing becomes a ``TrajectoryFileError`` naming ``path``."""
+    path = Path(path)
+    parent = _writable_parent(path)
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=parent)
+    except OSError as e:
+        raise TrajectoryFileError(f"cannot write {path}: {e.strerror}") from None
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException as e:
+        tmp.unlink(missing_ok=True)
+        if isinstance(e, OSError) and not isinstance(e, TrajectoryFileError):
+            raise TrajectoryFileError(f"cannot write {path}: {e.strerror or e}") from e
+        raise
+
+
+@contextmanager
+def atomic_folder(folder: str | os.PathLike, pattern: str) -> Iterator[Path]:
+    """Yields a temporary folder beside ``folder``; when the block ends without an exception
+    it takes the place of ``folder``, otherwise it is removed with all it holds. An existing
+    ``folder`` is replaced only if every file in it matches the regular expression
+    ``pattern`` (a series written before), so no other file is ever deleted."""
+    folder = Path(folder)
+    if folder.exists():
+        if not folder.is_dir():
+            raise TrajectoryFileError(f"cannot write the series folder {folder}: a file of that name exists")
+        others = [p.name for p in folder.iterdir() if not re.fullmatch(pattern, p.name)]
+        if others:
+            raise TrajectoryFileError(
+                f"cannot write the series folder {folder}: it exists and holds other files ({', '.join(sorted(others)[:3])}); remove them or choose another name"
+            )
+    parent = folder.parent
+    if not parent.is_dir():
+        raise TrajectoryFileError(f"cannot write {folder}: the folder {parent} does not exist")
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".part", dir=parent))
+    except OSError as e:
+        raise TrajectoryFileError(f"cannot write {folder}: {e.strerror}") from None
+    try:
+        yield tmp
+        os.chmod(tmp, 0o777 & ~_umask())
+        for p in tmp.iterdir():
+            os.chmod(p, 0o666 & ~_umask())
+        old = None
+        if folder.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".old", dir=parent))
+            os.replace(folder, old / folder.name)
+        os.replace(tmp, folder)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    except BaseException as e:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(e, OSError) and not isinstance(e, TrajectoryFileError):
+            raise TrajectoryFileError(f"cannot write {folder}: {e.strerror or e}") from e
+        raise
+
+
+@dataclass(frozen=True)
+class Frames:
+    """The per-particle data of a trajectory-like object, checked and in SI units: ``t``
+    (F,) s; ``positions`` (F, N, 3) m and ``velocities`` (F, N, 3) m/s (z = 0 in 2D worlds);
+    ``masses`` (N,) kg and ``radii`` (N,) m, ``None`` when the object has none; ``ids`` (N,)
+    (0..N-1 by default); ``dim`` 2 or 3; ``dt`` s and ``method``, ``None`` when unknown."""
+
+    t: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray
+    masses: np.ndarray | None
+    radii: np.ndarray | None
+    ids: np.ndarray
+    dim: int
+    dt: float | None
+    method: str | None
+
+    @property
+    def n_frames(self) -> int:
+        return self.t.shape[0]
+
+    @property
+    def n_particles(self) -> int:
+        return self.positions.shape[1]
+
+
+def _per_frame_vectors(traj: Any, name: str, n_frames: int) -> np.ndarray:
+    a = np.asarray(getattr(traj, name), dtype=np.float64)
+    if a.ndim != 3 or a.shape[0] != n_frames or a.shape[2] not in (2, 3):
+        raise ValueError(f"{name} has shape {a.shape}; it must be (F, N, 3) with F = {n_frames} frames")
+    if a.shape[2] == 2:
+        a = np.concatenate([a, np.zeros(a.shape[:2] + (1,))], axis=2)
+    return a
+
+
+def _per_particle(traj: Any, names: tuple[str, ...], n: int, dtype: Any) -> np.ndarray | None:
+    for name in names:
+        value = getattr(traj, name, None)
+        if value is not None:
+            a = np.asarray(value, dtype=dtype)
+            if a.shape != (n,):
+                raise ValueError(f"{name} has shape {a.shape}; it must be ({n},), one value per particle")
+            return a
+    return None
+
+
+def frames_of(traj: Any) -> Frames:
+    """Reads ``t``, ``positions``, ``velocities`` and the optional ``masses`` (or ``mass``),
+    ``radii`` (or ``radius``), ``ids``, ``dim``, ``dt`` and ``method`` of a trajectory-like
+    object and checks their shapes; raises ``ValueError`` naming the attribute that is wrong."""
+    t = np.asarray(traj.t, dtype=np.float64)
+    if t.ndim != 1:
+        raise ValueError(f"t has shape {t.shape}; it must be (F,), one time per frame")
+    x = _per_frame_vectors(traj, "positions", t.shape[0])
+    v = _per_frame_vectors(traj, "velocities", t.shape[0])
+    if v.shape != x.shape:
+        raise ValueError(f"velocities have shape {v.shape} but positions {x.shape}; they must match")
+    n = x.shape[1]
+    dim = int(getattr(traj, "dim", None) or 3)
+    if dim not in (2, 3):
+        raise ValueError(f"dim = {dim} is invalid: it must be 2 or 3")
+    if dim == 2 and (np.any(x[..., 2] != 0) or np.any(v[..., 2] != 0)):
+        raise ValueError("dim = 2 but some positions or velocities have z != 0; a 2D trajectory lies in the xy-plane")
+    ids = _per_particle(traj, ("ids", "id"), n, np.int64)
+    dt = getattr(traj, "dt", None)
+    method = getattr(traj, "method", None)
+    return Frames(
+        t=t,
+        positions=x,
+        velocities=v,
+        masses=_per_particle(traj, ("masses", "mass"), n, np.float64),
+        radii=_per_particle(traj, ("radii", "radius"), n, np.float64),
+        ids=np.arange(n, dtype=np.int64) if ids is None else ids,
+        dim=dim,
+        dt=None if dt is None else float(dt),
+        method=None if method is None else str(method),
+    )

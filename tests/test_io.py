@@ -1,0 +1,432 @@
+"""kinema.io: H5MD files read back exactly, exports read back by other readers, and failed
+reads and writes that say what is wrong and leave nothing half-written behind."""
+
+import base64
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+
+import kinema
+from kinema.io import TrajectoryFileError, export, load_h5md, save_h5md
+
+h5py = pytest.importorskip("h5py")
+
+F, N = 5, 7
+
+
+@dataclass
+class Synthetic:
+    """A trajectory-like object with every optional attribute kinema.io reads."""
+
+    t: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray
+    kinetic: np.ndarray
+    potential: dict
+    momentum: np.ndarray
+    angular_momentum: np.ndarray
+    contacts: np.ndarray
+    impulse_balance: np.ndarray
+    collision_energy_lost: np.ndarray
+    masses: np.ndarray
+    radii: np.ndarray
+    ids: np.ndarray
+    dim: int = 3
+    dt: float = 0.01
+    method: str = "verlet"
+    total: np.ndarray = field(init=False)
+
+    def __post_init__(self):
+        self.total = self.kinetic + sum(self.potential.values())
+
+
+def synthetic(dim=3, seed=0):
+    rng = np.random.default_rng(seed)
+    x, v = rng.normal(size=(F, N, 3)), rng.normal(size=(F, N, 3))
+    if dim == 2:
+        x[..., 2] = v[..., 2] = 0.0
+    return Synthetic(
+        t=np.arange(F) * 0.02,  # every 2 steps of dt = 0.01 s
+        positions=x,
+        velocities=v,
+        kinetic=rng.random(F),
+        potential={"spring": rng.random(F), "gravity": rng.normal(size=F)},  # not alphabetical
+        momentum=rng.normal(size=(F, 3)),
+        angular_momentum=rng.normal(size=(F, 3)),
+        contacts=rng.integers(0, 9, F),
+        impulse_balance=rng.normal(size=(F, 3)) * 1e-17,
+        collision_energy_lost=np.cumsum(rng.random(F)),
+        masses=rng.random(N) + 0.5,
+        radii=rng.random(N) * 0.1,
+        ids=rng.permutation(N) + 100,
+        dim=dim,
+    )
+
+
+def world_run(dim=3):
+    w = kinema.World(dim=dim, dt=0.01)
+    rng = np.random.default_rng(1)
+    x = rng.normal(size=(4, 3))
+    if dim == 2:
+        x[:, 2] = 0
+    w.add_particles(x, velocity=[1.0, 2.0, 0.0], mass=[1.0, 2.0, 3.0, 4.0], radius=0.05)
+    w.add(kinema.Gravity())
+    return w.run(0.1, fps=50)
+
+
+ARRAYS = ("t", "positions", "velocities", "kinetic", "total", "momentum", "angular_momentum", "contacts", "impulse_balance", "collision_energy_lost")
+
+
+def assert_same_trajectory(a, b):
+    for name in ARRAYS:
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert list(a.potential) == list(b.potential)
+    for name in a.potential:
+        np.testing.assert_array_equal(a.potential[name], b.potential[name], err_msg=name)
+
+
+def listing(folder):
+    return sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*"))
+
+
+# -- H5MD round trips -----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("dim", [3, 2])
+def test_h5md_round_trip_is_exact(tmp_path, dim):
+    tr = synthetic(dim)
+    save_h5md(tr, tmp_path / "run.h5", author="Ada")
+    back = load_h5md(tmp_path / "run.h5")
+    assert_same_trajectory(tr, back)
+    for name in ("masses", "radii", "ids"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(tr, name), err_msg=name)
+    np.testing.assert_array_equal(back.step, np.arange(F) * 2)
+    assert (back.dim, back.dt, back.method, back.author, back.group) == (dim, 0.01, "verlet", "Ada", "all")
+    assert back.creator == f"kinema {kinema.__version__}"
+    with h5py.File(tmp_path / "run.h5") as f:
+        assert f["particles/all/position/value"].shape == (F, N, dim)
+        assert f["particles/all/velocity/value"].shape == (F, N, dim)
+
+
+@pytest.mark.parametrize("dim", [3, 2])
+def test_h5md_round_trip_of_a_world_run(tmp_path, dim):
+    tr = world_run(dim)
+    save_h5md(tr, tmp_path / "run.h5", compression=None)
+    back = load_h5md(tmp_path / "run.h5", group="all")
+    assert_same_trajectory(tr, back)
+    again = back.to_trajectory()
+    assert isinstance(again, kinema.Trajectory)
+    assert_same_trajectory(tr, again)
+
+
+def test_h5md_layout_follows_the_spec(tmp_path):
+    tr = synthetic()
+    save_h5md(tr, tmp_path / "run.h5", group="balls", author="Ada")
+    with h5py.File(tmp_path / "run.h5") as f:
+        h5md = f["h5md"]
+        np.testing.assert_array_equal(h5md.attrs["version"], [1, 1])
+        assert h5md["author"].attrs["name"] == "Ada"
+        assert dict(h5md["creator"].attrs) == {"name": "kinema", "version": kinema.__version__}
+        assert h5md["modules/units"].attrs["system"] == "SI"
+        p = f["particles/balls"]
+        assert p["box"].attrs["dimension"] == 3
+        assert list(p["box"].attrs["boundary"]) == ["none"] * 3
+        for element, unit in (("position", "m"), ("velocity", "m s-1")):
+            g = p[element]
+            assert isinstance(g, h5py.Group) and set(g) == {"step", "time", "value"}
+            assert g["step"].dtype.kind == "i" and g["step"].shape == (F,)
+            assert g["time"].dtype == np.float64 and g["time"].attrs["unit"] == "s"
+            assert g["value"].attrs["unit"] == unit and g["value"].chunks is not None
+            assert g["value"].compression == "gzip" and g["value"].maxshape[0] is None
+        # step and time are one dataset, hard-linked into every element
+        assert p["velocity/step"] == p["position/step"] and f["observables/momentum/time"] == p["position/time"]
+        for name, unit in (("mass", "kg"), ("radius", "m"), ("id", None)):
+            assert isinstance(p[name], h5py.Dataset) and p[name].shape == (N,)
+            assert p[name].attrs.get("unit") == unit
+        obs = f["observables"]
+        units = {
+            "kinetic_energy": "J",
+            "potential_energy": "J",
+            "total_energy": "J",
+            "momentum": "kg m s-1",
+            "angular_momentum": "kg m2 s-1",
+            "impulse_balance": "kg m s-1",
+            "collision_energy_lost": "J",
+            "potential_energy_by_force/spring": "J",
+            "potential_energy_by_force/gravity": "J",
+            "contacts": None,
+        }
+        for name, unit in units.items():
+            assert set(obs[name]) == {"step", "time", "value"}, name
+            assert obs[name]["value"].attrs.get("unit") == unit, name
+        assert obs["momentum/value"].shape == (F, 3)
+        np.testing.assert_array_equal(obs["potential_energy/value"], tr.potential["spring"] + tr.potential["gravity"])
+        assert dict(f["parameters/kinema"].attrs) == {"dt": 0.01, "dt_unit": "s", "method": "verlet"}
+
+
+def test_h5md_without_optional_fields_reads_back_what_is_there(tmp_path):
+    # today's kinema.Trajectory has no masses, radii, ids, dim or dt
+    tr = world_run()
+    save_h5md(tr, tmp_path / "run.h5")
+    back = load_h5md(tmp_path / "run.h5")
+    assert back.masses is None and back.radii is None and back.dt is None
+    np.testing.assert_array_equal(back.ids, np.arange(4))
+    np.testing.assert_array_equal(back.step, np.arange(tr.t.size))
+
+
+# -- reading errors: one line naming the file ----------------------------------------------------
+
+
+def _corrupt(tmp_path):
+    p = tmp_path / "noise.h5"
+    p.write_bytes(np.random.default_rng(0).bytes(4096))
+    return p, "not an HDF5 file"
+
+
+def _truncated(tmp_path):
+    save_h5md(synthetic(), tmp_path / "whole.h5")
+    p = tmp_path / "cut.h5"
+    p.write_bytes((tmp_path / "whole.h5").read_bytes()[:3000])
+    return p, "corrupt HDF5 file"
+
+
+def _foreign(tmp_path):
+    p = tmp_path / "foreign.h5"
+    with h5py.File(p, "w") as f:
+        f["data"] = np.arange(3)
+    return p, "foreign HDF5 file"
+
+
+def _missing(tmp_path):
+    return tmp_path / "absent.h5", "no such file"
+
+
+def _directory(tmp_path):
+    return tmp_path, "is a directory"
+
+
+@pytest.mark.parametrize("make", [_missing, _directory, _corrupt, _truncated, _foreign])
+def test_unreadable_files_raise_one_clear_line(tmp_path, make):
+    path, what = make(tmp_path)
+    with pytest.raises(TrajectoryFileError) as e:
+        load_h5md(path)
+    message = str(e.value)
+    assert isinstance(e.value, ValueError)
+    assert "\n" not in message and str(path) in message and what in message
+
+
+def test_a_missing_group_lists_the_groups_there(tmp_path):
+    save_h5md(synthetic(), tmp_path / "run.h5", group="balls")
+    with pytest.raises(TrajectoryFileError, match=r"no particle group 'dust'; available: balls$"):
+        load_h5md(tmp_path / "run.h5", group="dust")
+
+
+# -- failed writes leave nothing behind -----------------------------------------------------------
+
+
+def test_writing_into_a_missing_folder_fails_clearly_and_creates_nothing(tmp_path):
+    target = tmp_path / "nowhere" / "run.h5"
+    for write in (lambda: save_h5md(synthetic(), target), lambda: export(synthetic(), tmp_path / "nowhere" / "run.pvd")):
+        with pytest.raises(TrajectoryFileError, match="nowhere.*does not exist"):
+            write()
+    with pytest.raises(TrajectoryFileError, match="is a directory"):
+        save_h5md(synthetic(), tmp_path)
+    assert listing(tmp_path) == []
+
+
+def test_an_error_mid_write_keeps_the_previous_file_and_leaves_no_temporary(tmp_path, monkeypatch):
+    import kinema.io.h5md as h5md_module
+
+    target = tmp_path / "run.h5"
+    save_h5md(synthetic(seed=1), target)
+    before = target.read_bytes()
+    calls = []
+    real = h5md_module._element
+
+    def failing(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise RuntimeError("disk on fire")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(h5md_module, "_element", failing)
+    with pytest.raises(RuntimeError, match="disk on fire"):
+        save_h5md(synthetic(seed=2), target)
+    assert listing(tmp_path) == ["run.h5"] and target.read_bytes() == before
+
+
+@pytest.mark.parametrize("fmt, frame_writer", [("pvd", "_vtp"), ("ply", "_ply"), ("xyz", "_xyz"), ("csv", "_csv")])
+def test_an_error_mid_export_leaves_nothing_behind(tmp_path, monkeypatch, fmt, frame_writer):
+    import kinema.io.exports as exports_module
+
+    real = getattr(exports_module, frame_writer)
+
+    def fail_at_frame_3(fr, i, *args):
+        if i == 3:
+            raise RuntimeError("interrupted")
+        return real(fr, i, *args)
+
+    monkeypatch.setattr(exports_module, frame_writer, fail_at_frame_3)
+    with pytest.raises(RuntimeError, match="interrupted"):
+        export(synthetic(), tmp_path / f"run.{fmt}")
+    assert listing(tmp_path) == []
+
+
+def test_a_series_replaces_an_earlier_series_but_never_other_files(tmp_path):
+    export(synthetic(), tmp_path / "run.ply")
+    short = synthetic(seed=3)
+    short.t, short.positions, short.velocities = short.t[:2], short.positions[:2], short.velocities[:2]
+    export(short, tmp_path / "run.ply")
+    assert listing(tmp_path) == ["run", "run/run_00000.ply", "run/run_00001.ply"]
+    (tmp_path / "run" / "notes.txt").write_text("mine")
+    with pytest.raises(TrajectoryFileError, match="holds other files"):
+        export(synthetic(), tmp_path / "run.ply")
+    assert (tmp_path / "run" / "notes.txt").read_text() == "mine"
+
+
+def test_a_bad_format_names_the_allowed_values(tmp_path):
+    with pytest.raises(ValueError, match=r"format = 'obj' is invalid: the allowed values are 'vtk', 'ply', 'xyz', 'csv'"):
+        export(synthetic(), tmp_path / "run.obj", format="obj")
+    with pytest.raises(ValueError, match=r"format: cannot tell it from the suffix '.obj'"):
+        export(synthetic(), tmp_path / "run.obj")
+    assert listing(tmp_path) == []
+
+
+# -- exports read back ---------------------------------------------------------------------------
+
+
+def read_vtp(path):
+    """The DataArrays of an XML PolyData file with inline base64 binary data (UInt64 header)."""
+    root = ET.parse(path).getroot()
+    assert root.get("type") == "PolyData" and root.get("header_type") == "UInt64"
+    dtypes = {"Float64": "<f8", "Int64": "<i8"}
+    out = {}
+    for da in root.iter("DataArray"):
+        raw = base64.b64decode(da.text)
+        nbytes = int(np.frombuffer(raw[:8], "<u8")[0])
+        a = np.frombuffer(raw[8:], dtypes[da.get("type")])
+        assert a.nbytes == nbytes
+        k = int(da.get("NumberOfComponents", 1))
+        out[da.get("Name")] = a.reshape(-1, k) if k > 1 else a
+    piece = root.find("PolyData/Piece")
+    return out, int(piece.get("NumberOfPoints")), int(piece.get("NumberOfVerts"))
+
+
+@pytest.mark.parametrize("dim", [3, 2])
+def test_vtk_series_reads_back(tmp_path, dim):
+    tr = synthetic(dim)
+    written = export(tr, tmp_path / "run.pvd")
+    assert written[0] == tmp_path / "run.pvd" and len(written) == F + 1
+    datasets = ET.parse(tmp_path / "run.pvd").getroot().findall("Collection/DataSet")
+    assert [float(d.get("timestep")) for d in datasets] == tr.t.tolist()
+    for i, d in enumerate(datasets):
+        arrays, n_points, n_verts = read_vtp(tmp_path / d.get("file"))
+        assert n_points == n_verts == N
+        np.testing.assert_array_equal(arrays["Points"], tr.positions[i])
+        np.testing.assert_array_equal(arrays["velocity"], tr.velocities[i])
+        np.testing.assert_array_equal(arrays["speed"], np.linalg.norm(tr.velocities[i], axis=1))
+        np.testing.assert_array_equal(arrays["radius"], tr.radii)
+        np.testing.assert_array_equal(arrays["mass"], tr.masses)
+        np.testing.assert_array_equal(arrays["id"], tr.ids)
+        np.testing.assert_array_equal(arrays["connectivity"], np.arange(N))
+        np.testing.assert_array_equal(arrays["offsets"], np.arange(1, N + 1))
+        assert arrays["TimeValue"].tolist() == [tr.t[i]]
+
+
+def test_ply_frames_read_back_with_meshio(tmp_path):
+    meshio = pytest.importorskip("meshio")
+    tr = synthetic()
+    written = export(tr, tmp_path / "run.ply")
+    assert [p.name for p in written] == [f"run_{i:05d}.ply" for i in range(F)]
+    for i, p in enumerate(written):
+        mesh = meshio.read(p)
+        np.testing.assert_array_equal(mesh.points, tr.positions[i].astype(np.float32))
+        v = np.column_stack([mesh.point_data[c] for c in ("vx", "vy", "vz")])
+        np.testing.assert_array_equal(v, tr.velocities[i].astype(np.float32))
+        np.testing.assert_array_equal(mesh.point_data["radius"], tr.radii.astype(np.float32))
+        np.testing.assert_array_equal(mesh.point_data["id"], tr.ids)
+
+
+def read_extxyz(path):
+    """Frames of an extended XYZ file as (comment keys, rows as float columns)."""
+    lines = path.read_text().splitlines()
+    frames, i = [], 0
+    while i < len(lines):
+        n = int(lines[i])
+        keys = dict(kv.split("=", 1) for kv in lines[i + 1].replace('"F F F"', "FFF").split())
+        rows = np.array([line.split()[1:] for line in lines[i + 2 : i + 2 + n]], dtype=float)
+        frames.append((keys, rows))
+        i += 2 + n
+    return frames
+
+
+def test_extended_xyz_reads_back(tmp_path):
+    tr = synthetic()
+    export(tr, tmp_path / "run.xyz")
+    frames = read_extxyz(tmp_path / "run.xyz")
+    assert len(frames) == F
+    for i, (keys, rows) in enumerate(frames):
+        assert keys["Properties"] == "species:S:1:pos:R:3:velo:R:3:radius:R:1:mass:R:1:id:I:1"
+        assert float(keys["Time"]) == tr.t[i]
+        np.testing.assert_array_equal(rows[:, 0:3], tr.positions[i])
+        np.testing.assert_array_equal(rows[:, 3:6], tr.velocities[i])
+        np.testing.assert_array_equal(rows[:, 6], tr.radii)
+        np.testing.assert_array_equal(rows[:, 7], tr.masses)
+        np.testing.assert_array_equal(rows[:, 8], tr.ids)
+
+
+def test_extended_xyz_reads_back_with_ase(tmp_path):
+    ase_io = pytest.importorskip("ase.io")
+    tr = synthetic()
+    export(tr, tmp_path / "run.extxyz")
+    frames = ase_io.read(tmp_path / "run.extxyz", index=":", format="extxyz")
+    assert len(frames) == F
+    for i, atoms in enumerate(frames):
+        np.testing.assert_array_equal(atoms.positions, tr.positions[i])
+        np.testing.assert_array_equal(atoms.arrays["velo"], tr.velocities[i])
+        np.testing.assert_array_equal(atoms.arrays["id"], tr.ids)
+        assert atoms.info["Time"] == tr.t[i] and not atoms.pbc.any()
+
+
+def test_csv_reads_back(tmp_path):
+    tr = world_run()
+    export(tr, tmp_path / "run.csv")
+    with open(tmp_path / "run.csv") as f:
+        assert f.readline().strip() == "frame,time,id,x,y,z,vx,vy,vz"
+    table = np.loadtxt(tmp_path / "run.csv", delimiter=",", skiprows=1)
+    f_, n = tr.positions.shape[:2]
+    assert table.shape == (f_ * n, 9)
+    np.testing.assert_array_equal(table[:, 0], np.repeat(np.arange(f_), n))
+    np.testing.assert_array_equal(table[:, 1], np.repeat(tr.t, n))
+    np.testing.assert_array_equal(table[:, 2], np.tile(np.arange(n), f_))
+    np.testing.assert_array_equal(table[:, 3:6], tr.positions.reshape(-1, 3))
+    np.testing.assert_array_equal(table[:, 6:9], tr.velocities.reshape(-1, 3))
+
+
+def test_written_files_get_ordinary_permissions(tmp_path):
+    save_h5md(synthetic(), tmp_path / "run.h5")
+    export(synthetic(), tmp_path / "run.pvd")
+    mask = os.umask(0)
+    os.umask(mask)
+    for p in (tmp_path / "run.h5", tmp_path / "run.pvd", tmp_path / "run" / "run_00000.vtp"):
+        assert p.stat().st_mode & 0o777 == 0o666 & ~mask
+
+
+def test_a_periodic_box_is_written_with_its_edges(tmp_path):
+    tr = synthetic()
+    tr.periodic, tr.box_edges = (True, True, False), np.array([2.0, 3.0, 4.0])
+    save_h5md(tr, tmp_path / "run.h5")
+    with h5py.File(tmp_path / "run.h5") as f:
+        box = f["particles/all/box"]
+        assert list(box.attrs["boundary"]) == ["periodic", "periodic", "none"]
+        np.testing.assert_array_equal(box["edges"], [2.0, 3.0, 4.0])
+    export(tr, tmp_path / "run.xyz")
+    first = (tmp_path / "run.xyz").read_text().splitlines()[1]
+    assert first.startswith('Lattice="2.0 0.0 0.0 0.0 3.0 0.0 0.0 0.0 4.0" ') and 'pbc="T T F"' in first
+    del tr.box_edges
+    with pytest.raises(ValueError, match="periodic boundaries need the box edges"):
+        save_h5md(tr, tmp_path / "other.h5")
+    assert not (tmp_path / "other.h5").exists()
