@@ -7,12 +7,17 @@ The public API (everything else is private):
 - Stability on p' = λp: the module ``kinema.stability``
 - Particle worlds: ``World``, the forces ``Gravity``, ``Drag``, ``Spring``, ``Attractor``,
   ``Wind``, ``PythonForce``, the recorded ``Trajectory`` and ``SimulationDiverged``
+- Collisions: the colliders ``Plane``, ``Box``, ``SphereObstacle`` (added with
+  ``World.add``); ``World.set_collisions``, ``World.collisions``, ``World.periodic``,
+  ``World.contacts``, ``World.collision_stats``; per-particle ``restitution`` and ``friction``
+  in ``World.add_particles``
 - Measured orders of accuracy: ``convergence``, ``ConvergenceResult``, the module
   ``kinema.problems`` (problems with exact solutions)
 """
 
 from . import problems, stability
 from ._core import __version__
+from .colliders import Box, Plane, SphereObstacle
 from .convergence import ConvergenceResult, convergence
 from .forces import Attractor, Drag, Gravity, PythonForce, Spring, Wind
 from .ode import (
@@ -32,10 +37,13 @@ from .world import SimulationDiverged, StabilityWarning, World
 __all__ = [
     "__version__",
     "Attractor",
+    "Box",
     "Drag",
     "Gravity",
+    "Plane",
     "PythonForce",
     "SimulationDiverged",
+    "SphereObstacle",
     "StabilityWarning",
     "Spring",
     "Trajectory",

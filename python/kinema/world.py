@@ -1,5 +1,5 @@
 """The particle world: particles with mass, position and velocity, moved by forces through
-any integration method of the registry.
+any integration method of the registry, colliding with each other and with static colliders.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
+from .colliders import Collider
 from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
 
@@ -35,11 +36,16 @@ class World:
     Before its first step (and after particles or forces are added) the world asks the
     stable-step advisor (:meth:`stable_step`) for the largest stable step of its method and
     issues one ``StabilityWarning`` in its lifetime if ``dt`` exceeds it.
+
+    Collisions are off until :meth:`set_collisions` is called, a collider (``kinema.Plane``,
+    ``Box``, ``SphereObstacle``) is added, or particles get their own ``restitution`` or
+    ``friction``; particles then collide as spheres of their ``radius``.
     """
 
     def __init__(self, dim: int = 3, dt: float = 1e-3, method: str | ButcherTableau = "verlet"):
         self._core = _core.World(int(dim), float(dt), method)
         self._forces: list[Any] = []
+        self._colliders: list[Collider] = []
         self._method_arg = method
         self._warned = False
         self._advice_due = True
@@ -70,7 +76,8 @@ class World:
         if not self._advice_due:
             return
         self._advice_due = False
-        if self._warned or len(self) == 0 or not self._forces:
+        contact_springs = (self._core.collisions or {}).get("model") == "spring_dashpot"
+        if self._warned or len(self) == 0 or not (self._forces or contact_springs):
             return
         limit = self._core.stable_step(self._method_arg)
         if self.dt > limit:
@@ -84,12 +91,27 @@ class World:
             )
 
     # -- building ---------------------------------------------------------------------------
-    def add_particles(self, position: Any, velocity: Any = None, mass: Any = 1.0, radius: Any = 0.0, pinned: Any = None) -> np.ndarray:
+    def add_particles(
+        self,
+        position: Any,
+        velocity: Any = None,
+        mass: Any = 1.0,
+        radius: Any = 0.0,
+        pinned: Any = None,
+        restitution: Any = None,
+        friction: Any = None,
+    ) -> np.ndarray:
         """Add particles; returns their indices.
 
         ``position`` (N, 3) in m (a single (3,) point adds one particle); ``velocity`` (N, 3)
         in m/s (default 0); ``mass`` in kg and ``radius`` in m, scalars or (N,); ``pinned``
         bool, scalar or (N,): a pinned particle never moves (inverse mass 0).
+
+        ``restitution`` e ∈ [0, 1] and ``friction`` μ ≥ 0: each particle's own collision
+        values, scalars or (N,) (``None`` or NaN entries: the world's values of
+        :meth:`set_collisions`). A pair combines its two by Box2D's rule, e = max(e_i, e_j) and
+        μ = √(μ_i μ_j); a collider's own value overrides the particle's. Giving any turns
+        collisions on.
         """
         x = np.atleast_2d(np.asarray(position, dtype=np.float64))
         if x.ndim != 2 or x.shape[1] != 3:
@@ -101,25 +123,130 @@ class World:
             m = np.broadcast_to(np.asarray(mass, dtype=np.float64), (n,))
             r = np.broadcast_to(np.asarray(radius, dtype=np.float64), (n,))
             p = np.broadcast_to(np.asarray(False if pinned is None else pinned, dtype=bool), (n,))
+            e, mu = (None if a is None else np.broadcast_to(np.asarray(a, dtype=np.float64), (n,)).tolist() for a in (restitution, friction))
         except ValueError as e:
-            raise ValueError(f"velocity, mass, radius and pinned must broadcast to {n} particles: {e}") from None
+            raise ValueError(f"velocity, mass, radius, pinned, restitution and friction must broadcast to {n} particles: {e}") from None
         self._push()
-        start, end = self._core.add_particles(np.ascontiguousarray(x), np.ascontiguousarray(v), m.tolist(), r.tolist(), p.tolist())
+        start, end = self._core.add_particles(np.ascontiguousarray(x), np.ascontiguousarray(v), m.tolist(), r.tolist(), p.tolist(), e, mu)
         self._new_views()
         self._advice_due = True
         return np.arange(start, end)
 
-    def add(self, force: Any) -> Any:
+    def add(self, item: Any) -> Any:
         """Add a force (``kinema.Gravity``, ``Drag``, ``Spring``, ``Attractor``, ``Wind``,
-        ``PythonForce``); returns it."""
-        attach = getattr(force, "_attach", None)
+        ``PythonForce``) or a collider (``kinema.Plane``, ``Box``, ``SphereObstacle``; this
+        turns collisions on); returns it."""
+        attach = getattr(item, "_attach", None)
         if attach is None:
-            raise TypeError(f"{type(force).__name__} is not a kinema force; use kinema.Gravity, Drag, Spring, Attractor, Wind or PythonForce")
+            raise TypeError(
+                f"{type(item).__name__} is not a kinema force or collider; use kinema.Gravity, Drag, Spring, Attractor, "
+                "Wind, PythonForce, Plane, Box or SphereObstacle"
+            )
         self._push()
         attach(self._core)
-        self._forces.append(force)
-        self._advice_due = True
-        return force
+        if isinstance(item, Collider):
+            self._colliders.append(item)
+        else:
+            self._forces.append(item)
+            self._advice_due = True
+        return item
+
+    # -- collisions -------------------------------------------------------------------------
+    def set_collisions(
+        self,
+        model: str = "impulse",
+        restitution: float = 1.0,
+        friction: float = 0.0,
+        ccd: bool = True,
+        restitution_threshold: float | None = None,
+        stiffness: float | None = None,
+        damping: float | None = None,
+    ) -> None:
+        """Turn collisions on, or replace every one of their settings.
+
+        ``model``: ``"impulse"`` (Newton's restitution law u_n⁺ = −e u_n⁻ by impulses after
+        each integration step) or ``"spring_dashpot"`` (a force k_n δ − m_eff γ_n u_n while
+        two bodies overlap by δ, integrated with the other forces; it needs ``stiffness`` k_n
+        in N/m, and ``damping`` γ_n in 1/s defaults to the value that gives ``restitution``).
+        ``restitution`` e ∈ [0, 1] and ``friction`` (Coulomb μ ≥ 0) are the values of every
+        particle without its own. ``ccd``: find impacts at their time inside the step, so
+        nothing passes through a particle or a wall however fast. ``restitution_threshold``
+        (m/s): approach speeds below it bounce with e = 0, so resting contacts stay at rest;
+        ``None`` takes twice the largest speed change the forces gave a particle in the step.
+
+        With ``"spring_dashpot"`` the contacts are a force (its elastic energy is the potential
+        ``"contact"`` of :meth:`diagnostics` and of the ``Trajectory``), which the stable-step
+        advisor and the ``StabilityWarning`` count; :meth:`contacts` and
+        :meth:`collision_stats` report the impulse model only.
+
+        ``w.set_collisions(**w.collisions)`` changes nothing.
+        """
+        self._push()
+        self._core.set_collisions(
+            str(model),
+            float(restitution),
+            float(friction),
+            bool(ccd),
+            None if restitution_threshold is None else float(restitution_threshold),
+            None if stiffness is None else float(stiffness),
+            None if damping is None else float(damping),
+        )
+        self._advice_due = True  # the spring-dashpot model's contacts are stiff springs
+
+    @property
+    def collisions(self) -> dict | None:
+        """The collision settings, a dict of :meth:`set_collisions`' keyword arguments, or
+        ``None`` while collisions are off."""
+        return self._core.collisions
+
+    @property
+    def colliders(self) -> list[Collider]:
+        """The colliders, in the order added (a collider's index in :meth:`contacts`)."""
+        return list(self._colliders)
+
+    @property
+    def periodic(self) -> tuple[bool, bool, bool]:
+        """The periodic axes (x, y, z). Set ``w.periodic = (True, True, False)`` to make axes
+        periodic with the cell of the world's ``Box`` (added first): its walls along those
+        axes vanish and a particle leaving one side comes back on the other; positions are
+        wrapped into [lo, hi) at once. All false makes space open again."""
+        return self._core.periodic
+
+    @periodic.setter
+    def periodic(self, axes: Any) -> None:
+        flags = np.asarray(axes).reshape(-1)
+        if self.dim == 2 and flags.size == 2:
+            flags = np.append(flags, False)
+        if flags.size != 3 or flags.dtype != bool:
+            raise ValueError(f"periodic = {axes!r} is invalid: it must be 3 bools (x, y, z){' or 2 in a 2D world' if self.dim == 2 else ''}")
+        self._push()
+        try:
+            self._core.set_periodic(flags.tolist())
+        finally:
+            self._pull()
+
+    def contacts(self) -> dict[str, np.ndarray]:
+        """The K contacts found at the end of the last step, after its impulses and after the
+        overlap was removed, as arrays: ``i`` (K,), the particle; ``j`` (K,), the other
+        particle or −1 for a collider; ``collider`` (K,), the collider's index in
+        :attr:`colliders` or −1 between particles; ``normal`` (K, 3), the unit normal from
+        the partner towards i; ``overlap`` (K,), m, what is left of the penetration (< 0: a
+        gap); ``u_n`` (K,), m/s, (v_i − v_j)·n when the contact was found, before its own
+        impulse (< 0: approaching). Impacts that continuous detection (``ccd``) found inside
+        the step were resolved before, so a particle that bounced there shows u_n > 0."""
+        self._push()
+        return self._core.contacts()
+
+    def collision_stats(self) -> dict | None:
+        """What the collision stages did in the last step (``"last"``) and over all steps
+        (``"total"``), each a dict: ``contacts`` (at the end of the step), ``impacts`` (found
+        inside steps by continuous detection), ``impulses``, ``impulse_balance`` ((3,), N·s:
+        the sum of the impulses between movable particles, 0 by action and reaction up to
+        rounding), ``energy_lost`` (J, kinetic energy removed) and ``max_overlap`` (m, left
+        after the step). ``total``'s ``contacts`` and ``max_overlap`` are the last step's.
+        ``None`` while collisions are off."""
+        self._push()
+        return self._core.collision_stats()
 
     # -- running ----------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:

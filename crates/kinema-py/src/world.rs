@@ -1,7 +1,10 @@
-//! Bindings of the particle world: World, the force catalogue, Python forces, diagnostics.
+//! Bindings of the particle world: World, the force catalogue, Python forces, diagnostics,
+//! collisions (conversions in `collisions.rs`).
 
+use kinema::collide::Surface;
 use kinema::error::CallbackError;
 use kinema::forces::{Attractor, Drag, Force, Gravity, Springs, State, Wind};
+use kinema::world::CollisionParams;
 use kinema::Divergence;
 use kinema::{Error, World, WorldParams};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods};
@@ -10,6 +13,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::callbacks::copy_result;
+use crate::collisions;
 use crate::errors::to_py;
 use crate::ode::integrator_from;
 
@@ -117,7 +121,10 @@ impl PyWorld {
         })
     }
 
-    /// Appends particles; returns (first, end) indices.
+    /// Appends particles; returns (first, end) indices. `restitution` and `friction` (one per
+    /// particle, NaN: the world's global value) are checked before anything is added.
+    #[pyo3(signature = (x, v, mass, radius, pinned, restitution=None, friction=None))]
+    #[allow(clippy::too_many_arguments)]
     fn add_particles(
         &mut self,
         x: PyReadonlyArray2<'_, f64>,
@@ -125,9 +132,15 @@ impl PyWorld {
         mass: Vec<f64>,
         radius: Vec<f64>,
         pinned: Vec<bool>,
+        restitution: Option<Vec<f64>>,
+        friction: Option<Vec<f64>>,
     ) -> PyResult<(usize, usize)> {
         let (x, v) = (flat3("position", &x)?, flat3("velocity", &v)?);
+        let own = collisions::materials(mass.len(), restitution, friction).map_err(to_py)?;
         let r = self.inner.add_particles(&x, &v, &mass, &radius, &pinned).map_err(world_err)?;
+        if let Some((e, mu)) = own {
+            self.inner.set_particle_materials(r.start, &e, &mu).map_err(to_py)?;
+        }
         Ok((r.start, r.end))
     }
 
@@ -188,6 +201,99 @@ impl PyWorld {
 
     fn add_python_force(&mut self, f: Py<PyAny>, name: String) -> PyResult<()> {
         self.inner.add_force(Box::new(PythonForce { f, name })).map_err(to_py)
+    }
+
+    /// Turns collisions on, or changes their settings (every one of them).
+    #[pyo3(signature = (model, restitution, friction, ccd, restitution_threshold, stiffness, damping))]
+    #[allow(clippy::too_many_arguments)]
+    fn set_collisions(
+        &mut self,
+        model: &str,
+        restitution: f64,
+        friction: f64,
+        ccd: bool,
+        restitution_threshold: Option<f64>,
+        stiffness: Option<f64>,
+        damping: Option<f64>,
+    ) -> PyResult<()> {
+        let model = collisions::contact_model(model, stiffness, damping).map_err(to_py)?;
+        let params = CollisionParams {
+            model,
+            restitution,
+            friction,
+            ccd,
+            restitution_threshold,
+        };
+        self.inner.set_collisions(params).map_err(to_py)
+    }
+
+    /// The collision settings as set_collisions' keyword arguments, or None when off.
+    #[getter]
+    fn collisions<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.inner
+            .collision_params()
+            .map(|p| collisions::params_dict(py, &p))
+            .transpose()
+    }
+
+    /// Adds a plane; returns the collider's index.
+    fn add_plane(
+        &mut self,
+        point: [f64; 3],
+        normal: [f64; 3],
+        restitution: Option<f64>,
+        friction: Option<f64>,
+    ) -> PyResult<usize> {
+        let surface = Surface::new(restitution, friction).map_err(to_py)?;
+        let plane = collisions::plane(self.inner.params().dim, point, normal, surface).map_err(to_py)?;
+        self.inner.add_collider(plane).map_err(to_py)
+    }
+
+    /// Adds a box container (2 values per corner in 2D, 3 in 3D); returns its index.
+    fn add_box(&mut self, lo: Vec<f64>, hi: Vec<f64>, restitution: Option<f64>, friction: Option<f64>) -> PyResult<usize> {
+        let surface = Surface::new(restitution, friction).map_err(to_py)?;
+        let b = collisions::box_container(self.inner.params().dim, &lo, &hi, surface).map_err(to_py)?;
+        self.inner.add_collider(b).map_err(to_py)
+    }
+
+    /// Adds a sphere obstacle; returns its index.
+    fn add_sphere_obstacle(
+        &mut self,
+        center: [f64; 3],
+        radius: f64,
+        restitution: Option<f64>,
+        friction: Option<f64>,
+    ) -> PyResult<usize> {
+        let surface = Surface::new(restitution, friction).map_err(to_py)?;
+        let s = collisions::sphere_obstacle(self.inner.params().dim, center, radius, surface).map_err(to_py)?;
+        self.inner.add_collider(s).map_err(to_py)
+    }
+
+    /// Makes the axes periodic with the cell of the box collider (wraps the positions).
+    fn set_periodic(&mut self, axes: [bool; 3]) -> PyResult<()> {
+        self.inner.set_periodic(axes).map_err(to_py)
+    }
+
+    #[getter]
+    fn periodic(&self) -> (bool, bool, bool) {
+        let [x, y, z] = self.inner.periodic();
+        (x, y, z)
+    }
+
+    /// The contacts at the end of the last step, as arrays.
+    fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        collisions::contacts_dict(py, self.inner.contacts())
+    }
+
+    /// {"last": ..., "total": ...} of the collision stages, or None without collisions.
+    fn collision_stats<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some((last, total)) = self.inner.collision_stats() else {
+            return Ok(None);
+        };
+        let out = PyDict::new(py);
+        out.set_item("last", collisions::stats_dict(py, &last)?)?;
+        out.set_item("total", collisions::stats_dict(py, &total)?)?;
+        Ok(Some(out))
     }
 
     /// Advances n steps; stops at the first failing one (the state before it is kept).

@@ -21,12 +21,17 @@ pub struct Periodic {
 }
 
 impl Periodic {
-    /// Periodic along the axes with `axes[k]` true, with period `hi[k] − lo[k]` (m); `lo`,
-    /// `hi` finite, and `hi[k] > lo[k]` on every periodic axis.
+    /// Periodic along the axes with `axes[k]` true, with period `hi[k] − lo[k]` (m); on every
+    /// periodic axis `lo[k]`, `hi[k]` finite and `hi[k] > lo[k]`. The bounds of the other axes
+    /// are not used (a 2D rectangle's z bounds are infinite).
     pub fn new(lo: [f64; 3], hi: [f64; 3], axes: [bool; 3]) -> Result<Self, Error> {
         for (name, b) in [("lo", lo), ("hi", hi)] {
-            if let Some((k, value)) = vec3::first_non_finite(&b) {
-                return Err(Error::invalid(format!("{name}[{k}]"), value, "box bounds must be finite"));
+            if let Some(k) = (0..3).find(|&k| axes[k] && !b[k].is_finite()) {
+                return Err(Error::invalid(
+                    format!("{name}[{k}]"),
+                    b[k],
+                    "the bounds of a periodic axis must be finite",
+                ));
             }
         }
         for k in 0..3 {
@@ -233,10 +238,12 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("hi[1] = 0 is invalid: a periodic axis needs hi > lo"), "{e}");
-        let e = Periodic::new([0.0, f64::NAN, 0.0], [1.0; 3], [false; 3])
+        let e = Periodic::new([0.0, f64::NAN, 0.0], [1.0; 3], [false, true, false])
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("lo[1] = NaN is invalid"), "{e}");
+        // the bounds of an axis that is not periodic are not used: a 2D rectangle's ±inf z
+        assert!(Periodic::new([0.0, 0.0, f64::NEG_INFINITY], [1.0, 1.0, f64::INFINITY], [true, true, false]).is_ok());
         // a flat box is fine along an open axis
         assert!(Periodic::new([0.0; 3], [1.0, 1.0, 0.0], [true, true, false]).is_ok());
         let e = Domain::open(4).unwrap_err().to_string();

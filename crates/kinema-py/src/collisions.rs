@@ -1,0 +1,191 @@
+//! Conversions of the collision stages: settings, colliders, materials, contacts, statistics.
+//!
+//! The `World` methods that use them are thin wrappers in `world.rs` (one `#[pymethods]` block
+//! per class); every rule is the engine's, and its errors name the parameter.
+
+use kinema::collide::{BoxContainer, Contact, Material, Partner, Plane, SphereObstacle, Surface};
+use kinema::world::{CollisionParams, CollisionStats, ContactModel};
+use kinema::Error;
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// The names `model` accepts, in the order the error lists them.
+const MODELS: &str = "'impulse', 'spring_dashpot'";
+
+/// The contact model of `model`, with the spring–dashpot's stiffness (N/m) and damping rate
+/// (1/s). Each parameter belongs to one model: giving it to the other is an error too.
+pub fn contact_model(model: &str, stiffness: Option<f64>, damping: Option<f64>) -> Result<ContactModel, Error> {
+    match model {
+        "impulse" => {
+            for (name, value) in [("stiffness", stiffness), ("damping", damping)] {
+                if let Some(v) = value {
+                    return Err(Error::invalid(
+                        name,
+                        v,
+                        "only model='spring_dashpot' uses it; the impulse model has no contact spring",
+                    ));
+                }
+            }
+            Ok(ContactModel::Impulse)
+        }
+        "spring_dashpot" => match stiffness {
+            Some(stiffness) => Ok(ContactModel::SpringDashpot { stiffness, damping }),
+            None => Err(Error::invalid(
+                "stiffness",
+                "None",
+                "model='spring_dashpot' needs the contact stiffness k_n, finite and > 0 N/m",
+            )),
+        },
+        other => Err(Error::invalid(
+            "model",
+            format!("'{other}'"),
+            format!("the contact model must be one of {MODELS}"),
+        )),
+    }
+}
+
+/// The settings as the keyword arguments of `World.set_collisions` (so that they round-trip).
+pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    let (model, stiffness, damping) = match p.model {
+        ContactModel::Impulse => ("impulse", None, None),
+        ContactModel::SpringDashpot { stiffness, damping } => ("spring_dashpot", Some(stiffness), damping),
+    };
+    out.set_item("model", model)?;
+    out.set_item("restitution", p.restitution)?;
+    out.set_item("friction", p.friction)?;
+    out.set_item("ccd", p.ccd)?;
+    out.set_item("restitution_threshold", p.restitution_threshold)?;
+    out.set_item("stiffness", stiffness)?;
+    out.set_item("damping", damping)?;
+    Ok(out)
+}
+
+/// In a 2D world the component `name[2]` must be 0 (normals in the xy-plane, centres on it):
+/// the engine's colliders are 3D and would push particles out of the plane.
+fn planar(dim: usize, name: &str, v: [f64; 3], what: &str) -> Result<(), Error> {
+    if dim == 2 && v[2] != 0.0 {
+        return Err(Error::invalid(
+            format!("{name}[2]"),
+            v[2],
+            format!("a 2D world keeps z = 0: {what}"),
+        ));
+    }
+    Ok(())
+}
+
+pub fn plane(dim: usize, point: [f64; 3], normal: [f64; 3], surface: Surface) -> Result<Plane, Error> {
+    planar(dim, "normal", normal, "a plane's normal must lie in the xy-plane")?;
+    Plane::new(point, normal, surface)
+}
+
+pub fn sphere_obstacle(dim: usize, center: [f64; 3], radius: f64, surface: Surface) -> Result<SphereObstacle, Error> {
+    planar(dim, "center", center, "an obstacle's centre must lie in the xy-plane")?;
+    SphereObstacle::new(center, radius, surface)
+}
+
+/// A box of a 3D world from 3 values per corner, a rectangle of a 2D world (no walls along z)
+/// from 2.
+pub fn box_container(dim: usize, lo: &[f64], hi: &[f64], surface: Surface) -> Result<BoxContainer, Error> {
+    for (name, c) in [("lo", lo), ("hi", hi)] {
+        if c.len() != dim {
+            return Err(Error::invalid(
+                name,
+                format!("{c:?}"),
+                format!(
+                    "a {dim}D world's box has {dim} values per corner ({})",
+                    if dim == 2 {
+                        "x, y: a rectangle, open along z"
+                    } else {
+                        "x, y, z"
+                    }
+                ),
+            ));
+        }
+    }
+    if dim == 2 {
+        BoxContainer::rect([lo[0], lo[1]], [hi[0], hi[1]], surface)
+    } else {
+        BoxContainer::new([lo[0], lo[1], lo[2]], [hi[0], hi[1], hi[2]], surface)
+    }
+}
+
+/// Per-particle restitution and friction of `n` new particles (NaN: the world's global value),
+/// checked with the engine's rule before anything is added; `None` when no particle has its
+/// own (the world then keeps collisions as they are).
+#[allow(clippy::type_complexity)]
+pub fn materials(
+    n: usize,
+    restitution: Option<Vec<f64>>,
+    friction: Option<Vec<f64>>,
+) -> Result<Option<(Vec<Option<f64>>, Vec<Option<f64>>)>, Error> {
+    let own = |name: &str, values: Option<Vec<f64>>| -> Result<Vec<Option<f64>>, Error> {
+        let values = values.unwrap_or_else(|| vec![f64::NAN; n]);
+        if values.len() != n {
+            return Err(Error::invalid(
+                name,
+                format!("{} values", values.len()),
+                format!("one per new particle ({n})"),
+            ));
+        }
+        Ok(values.into_iter().map(|v| (!v.is_nan()).then_some(v)).collect())
+    };
+    let (e, mu) = (own("restitution", restitution)?, own("friction", friction)?);
+    if e.iter().chain(&mu).all(Option::is_none) {
+        return Ok(None);
+    }
+    for (k, (ek, mk)) in e.iter().zip(&mu).enumerate() {
+        Material::new(ek.unwrap_or(0.0), mk.unwrap_or(0.0)).map_err(|err| match err {
+            Error::InvalidParameter {
+                parameter,
+                value,
+                allowed,
+            } => Error::InvalidParameter {
+                parameter: format!("{parameter}[{k}]"),
+                value,
+                allowed,
+            },
+            other => other,
+        })?;
+    }
+    Ok(Some((e, mu)))
+}
+
+/// The contacts as arrays: `i`, `j` (−1 against a collider), `collider` (−1 between
+/// particles), `normal` (K, 3), `overlap` and `u_n`.
+pub fn contacts_dict<'py>(py: Python<'py>, contacts: &[Contact]) -> PyResult<Bound<'py, PyDict>> {
+    let (mut i, mut j, mut collider) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut normal, mut overlap, mut u_n) = (Vec::new(), Vec::new(), Vec::new());
+    for c in contacts {
+        i.push(c.i as i64);
+        let (pj, pk) = match c.other {
+            Partner::Particle(j) => (j as i64, -1),
+            Partner::Collider(k) => (-1, k as i64),
+        };
+        j.push(pj);
+        collider.push(pk);
+        normal.extend_from_slice(&c.normal);
+        overlap.push(c.overlap);
+        u_n.push(c.u_n);
+    }
+    let out = PyDict::new(py);
+    out.set_item("i", PyArray1::from_vec(py, i))?;
+    out.set_item("j", PyArray1::from_vec(py, j))?;
+    out.set_item("collider", PyArray1::from_vec(py, collider))?;
+    out.set_item("normal", PyArray1::from_vec(py, normal).reshape([contacts.len(), 3])?)?;
+    out.set_item("overlap", PyArray1::from_vec(py, overlap))?;
+    out.set_item("u_n", PyArray1::from_vec(py, u_n))?;
+    Ok(out)
+}
+
+pub fn stats_dict<'py>(py: Python<'py>, s: &CollisionStats) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    out.set_item("contacts", s.contacts)?;
+    out.set_item("impacts", s.impacts)?;
+    out.set_item("impulses", s.impulses)?;
+    out.set_item("impulse_balance", PyArray1::from_slice(py, &s.impulse_balance))?;
+    out.set_item("energy_lost", s.energy_lost)?;
+    out.set_item("max_overlap", s.max_overlap)?;
+    Ok(out)
+}

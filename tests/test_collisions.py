@@ -1,0 +1,367 @@
+"""Collisions in kinema.World from Python, against Newton's restitution law, conservation laws
+and the guarantees of continuous detection."""
+
+import numpy as np
+import pytest
+
+import kinema
+
+G = 9.81
+
+
+def head_on(m1, m2, u1, u2, e_own=(None, None), **settings):
+    """Two balls of radius 0.1 m on the x-axis, 1 m apart, closing at u1 − u2 > 0 (no forces);
+    returns the world after 0.5 s, well after their single impact."""
+    w = kinema.World(dt=1e-3)
+    w.add_particles(
+        [[0, 0, 0], [1, 0, 0]],
+        velocity=[[u1, 0, 0], [u2, 0, 0]],
+        mass=[m1, m2],
+        radius=0.1,
+        restitution=list(e_own),
+    )
+    w.set_collisions(**settings)
+    w.step(500)
+    return w
+
+
+def restitution_closed_form(m1, m2, u1, u2, e):
+    # Momentum m1 u1 + m2 u2 is kept and the relative velocity reverses times e:
+    # v1 = (P − m2 e u)/M, v2 = (P + m1 e u)/M, u = u1 − u2, M = m1 + m2.
+    p, u, m = m1 * u1 + m2 * u2, u1 - u2, m1 + m2
+    return (p - m2 * e * u) / m, (p + m1 * e * u) / m
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 1.0])
+def test_head_on_impact_follows_newtons_restitution_law(e):
+    # Newton's law u_n⁺ = −e u_n⁻ with momentum conservation fixes both velocities after the
+    # impact; the kinetic energy removed is (1 − e²)·½ μ u², μ = m1 m2/(m1 + m2).
+    m1, m2, u1, u2 = 1.0, 3.0, 2.0, -1.0
+    w = head_on(m1, m2, u1, u2, restitution=e)
+    v1, v2 = restitution_closed_form(m1, m2, u1, u2, e)
+    np.testing.assert_allclose(w.velocities[:, 0], [v1, v2], rtol=1e-12, atol=0)
+    assert np.all(w.velocities[:, 1:] == 0.0)
+    stats = w.collision_stats()
+    mu, u = m1 * m2 / (m1 + m2), u1 - u2
+    assert stats["total"]["energy_lost"] == pytest.approx((1 - e**2) * 0.5 * mu * u**2, rel=1e-12, abs=1e-14)
+    assert stats["total"]["impacts"] == 1 and stats["total"]["impulses"] == 1
+    assert np.abs(stats["total"]["impulse_balance"]).max() <= 1e-15 * (m1 * abs(u1) + m2 * abs(u2))
+    assert stats["last"]["impacts"] == 0  # the impact was in an earlier step
+
+
+def test_a_dropped_ball_loses_e_squared_of_its_height_at_each_bounce():
+    # The rebound speed is e times the impact speed, so the bounce height (z + v_z²/2g above
+    # the contact, constant in flight) falls by e² per bounce. Verlet is exact under uniform
+    # gravity and continuous detection finds the impact on the exact parabola, so the ratio is
+    # e² to rounding.
+    e, r = 0.8, 0.1
+    w = kinema.World(dt=1e-3, method="verlet")
+    w.add_particles([0.0, 0.0, 1.0], radius=r)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution=e))
+    heights, before = [], w.velocities[0, 2]
+    while len(heights) < 5:
+        w.step()
+        vz = w.velocities[0, 2]
+        if before < 0 < vz:  # right after a bounce
+            heights.append(w.positions[0, 2] - r + vz**2 / (2 * G))
+        before = vz
+        assert w.time < 5.0, "the ball stopped bouncing"
+    heights = np.array(heights)
+    np.testing.assert_allclose(heights[1:] / heights[:-1], e**2, rtol=1e-6)
+    assert heights[0] == pytest.approx(e**2 * (1.0 - r), rel=1e-6)  # dropped from 0.9 m above contact
+
+
+def test_trajectory_accounts_for_the_energy_lost_in_bounces():
+    # kinetic + potential + lost is the initial energy: each bounce removes (1 − e²) of the
+    # kinetic energy m g h it arrives with (two bounces within 1.5 s from 0.9 m).
+    e, r, m, h0 = 0.8, 0.1, 2.0, 0.9
+    w = kinema.World(dt=1e-3)
+    w.add_particles([0.0, 0.0, h0 + r], radius=r, mass=m)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution=e))
+    tr = w.run(1.5, fps=100)
+    np.testing.assert_allclose(tr.total + tr.collision_energy_lost, tr.total[0], rtol=1e-9)
+    lost = (1 - e**2) * m * G * (h0 + e**2 * h0)
+    assert tr.collision_energy_lost[-1] == pytest.approx(lost, rel=1e-9)
+    assert np.all(np.diff(tr.collision_energy_lost) >= 0) and tr.collision_energy_lost[0] == 0.0
+    assert tr.contacts.shape == tr.t.shape and tr.impulse_balance.shape == (tr.t.size, 3)
+    np.testing.assert_array_equal(tr.impulse_balance, 0.0)  # a collider's impulses are external
+    ax = tr.plot_energy()
+    assert [line.get_label() for line in ax.get_lines()][-1] == "lost in collisions"
+    import matplotlib.pyplot as plt
+
+    plt.close(ax.figure)
+
+
+def test_without_collisions_the_trajectory_records_zeros():
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[0, 0, 0], [0.1, 0, 0]], velocity=[[1, 0, 0], [-1, 0, 0]], radius=0.1)
+    tr = w.run(0.1, fps=100)
+    assert w.collisions is None and w.collision_stats() is None
+    assert tr.contacts.dtype.kind == "i" and not tr.contacts.any()
+    assert tr.impulse_balance.shape == (11, 3) and not tr.impulse_balance.any() and not tr.collision_energy_lost.any()
+    np.testing.assert_allclose(tr.positions[-1, :, 0], [0.1, 0.0], atol=1e-12)  # they pass through each other
+
+
+def test_a_pair_takes_the_larger_restitution_and_a_collider_its_own():
+    # Box2D's rule: a pair bounces with e = max(e_i, e_j), whichever particle is which; a NaN
+    # entry takes the world's value. A collider's own e overrides the particle's: a dead
+    # floor (e = 0) stops a perfectly bouncy ball.
+    m1, m2, u1, u2 = 1.0, 2.0, 1.5, -0.5
+    for own in [(0.2, 0.9), (0.9, 0.2)]:
+        w = head_on(m1, m2, u1, u2, e_own=own, restitution=0.0)
+        np.testing.assert_allclose(w.velocities[:, 0], restitution_closed_form(m1, m2, u1, u2, 0.9), rtol=1e-12)
+    for own in [(0.2, None), (np.nan, 0.2)]:
+        w = head_on(m1, m2, u1, u2, e_own=own, restitution=0.5)
+        np.testing.assert_allclose(w.velocities[:, 0], restitution_closed_form(m1, m2, u1, u2, 0.5), rtol=1e-12)
+
+    w = kinema.World(dt=1e-3)
+    w.add_particles([0.0, 0.0, 0.5], velocity=[0.3, 0.0, -2.0], radius=0.1, restitution=1.0)
+    assert w.collisions is not None  # a particle's own restitution turns collisions on
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution=0.0))
+    w.step(1000)
+    np.testing.assert_allclose(w.velocities[0], [0.3, 0.0, 0.0], rtol=0, atol=1e-14)  # normal motion stopped, no friction
+    assert w.positions[0, 2] == pytest.approx(0.1, abs=1e-12)
+    bouncy = kinema.World(dt=1e-3)
+    bouncy.add_particles([0.0, 0.0, 0.5], velocity=[0.3, 0.0, -2.0], radius=0.1, restitution=1.0)
+    bouncy.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    bouncy.step(1000)
+    assert bouncy.velocities[0, 2] == pytest.approx(2.0, rel=1e-12)  # the same floor without its own e
+
+
+def test_a_periodic_box_conserves_momentum_and_energy():
+    # Elastic impulses between particles are equal and opposite and keep the kinetic energy;
+    # with every wall replaced by periodic boundaries nothing external acts, so the total
+    # momentum and kinetic energy are conserved to rounding, every frame's impulse balance is
+    # zero, and positions stay in the cell [lo, hi).
+    rng = np.random.default_rng(7)
+    sites = (np.stack(np.meshgrid(*[np.arange(6)] * 3, indexing="ij"), axis=-1).reshape(-1, 3) + 0.5) / 6
+    n = 200
+    w = kinema.World(dt=1e-3)
+    w.add_particles(sites[rng.permutation(len(sites))[:n]], velocity=rng.normal(size=(n, 3)), mass=rng.uniform(0.5, 2.0, n), radius=0.03)
+    w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+    w.periodic = (True, True, True)
+    assert w.periodic == (True, True, True)
+    scale = np.sum(w.masses * np.linalg.norm(w.velocities, axis=1))
+    p0 = w.momenta.sum(axis=0)
+    tr = w.run(2.0, fps=50)  # 100 frames of 20 steps
+    assert w._core.steps == 2000
+    ke0 = tr.kinetic[0]
+    np.testing.assert_allclose(tr.momentum, np.broadcast_to(p0, tr.momentum.shape), rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(tr.kinetic, ke0, rtol=1e-9)
+    assert tr.positions.min() >= 0.0 and tr.positions.max() < 1.0
+    assert np.abs(tr.impulse_balance).max() <= 1e-12 * scale
+    stats = w.collision_stats()["total"]
+    assert stats["impacts"] > 100 and stats["energy_lost"] == 0.0  # the check is not empty
+
+
+def test_a_periodic_axis_wraps_positions_into_the_live_view():
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[1.25, 0.5, 0.5]], velocity=[[1.0, 0, 0]], radius=0.05)
+    x = w.positions
+    w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+    w.periodic = (True, False, False)
+    assert x is w.positions and x[0, 0] == pytest.approx(0.25, abs=1e-15)
+    x[0, 0] = 0.99  # a write is handed to the world before it moves
+    w.step(20)  # 2 cm along x: across the periodic face, not bounced back
+    assert w.positions[0, 0] == pytest.approx(0.01, abs=1e-12) and w.velocities[0, 0] == 1.0
+    w.periodic = (False, False, False)
+    assert w.periodic == (False, False, False)
+
+
+def test_a_two_dimensional_box_can_be_periodic():
+    w = kinema.World(dim=2, dt=1e-3)
+    w.add_particles([[1.25, 0.5, 0.0]], radius=0.05)
+    w.add(kinema.Box([0, 0], [1, 1]))
+    w.periodic = (True, True)
+    assert w.periodic == (True, True, False) and w.positions[0, 0] == pytest.approx(0.25)
+
+
+def test_a_rectangle_reflects_specularly_in_two_dimensions():
+    # Elastic reflection off an axis-aligned wall flips one velocity component and keeps the
+    # other: |v_x| and |v_y| never change, and the particle stays inside [r, 1 − r], z = 0.
+    r = 0.05
+    w = kinema.World(dim=2, dt=1e-3)
+    w.add_particles([[0.5, 0.5, 0.0]], velocity=[[3.0, 2.0, 0.0]], radius=r)
+    w.add(kinema.Box([0, 0], [1, 1]))
+    tr = w.run(2.0, fps=100)
+    np.testing.assert_allclose(np.abs(tr.velocities[:, 0, :2]), np.broadcast_to([3.0, 2.0], (tr.t.size, 2)), rtol=1e-12)
+    assert np.all(tr.positions[:, 0, 2] == 0.0)
+    assert tr.positions[:, 0, :2].min() >= r - 1e-12 and tr.positions[:, 0, :2].max() <= 1 - r + 1e-12
+    assert w.collision_stats()["total"]["impacts"] >= 10  # 6 m along x, 4 m along y in a 0.9 m free cell
+
+
+@pytest.mark.parametrize("collider", [kinema.Plane([1.0, 0, 0], [-1.0, 0, 0]), kinema.SphereObstacle([1.5, 0, 0], 0.5)])
+def test_no_tunnelling_at_1000_m_per_s(collider):
+    # At 1000 m/s and dt = 1/60 s a particle moves 16.7 m per step, past a wall 1 m away.
+    # Continuous detection finds the impact at t* = (1 − r)/1000 inside the step and reflects
+    # the particle there: after the step x = (1 − r) − 1000 (dt − t*), v = −1000 m/s.
+    r, dt = 0.05, 1 / 60
+    w = kinema.World(dt=dt)
+    w.add_particles([0.0, 0.0, 0.0], velocity=[1000.0, 0, 0], radius=r)
+    w.add(collider)
+    w.step()
+    t_hit = (1 - r) / 1000.0
+    np.testing.assert_allclose(w.velocities[0], [-1000.0, 0, 0], rtol=1e-12)
+    assert w.positions[0, 0] == pytest.approx((1 - r) - 1000.0 * (dt - t_hit), rel=1e-12)
+    assert w.collision_stats()["last"]["impacts"] == 1
+
+
+def test_without_ccd_a_fast_particle_tunnels_through_an_obstacle():
+    # The contrast to the test above: seen only at the ends of the step, the particle was
+    # before the obstacle and is 16 m beyond it, never overlapping.
+    w = kinema.World(dt=1 / 60)
+    w.add_particles([0.0, 0.0, 0.0], velocity=[1000.0, 0, 0], radius=0.05)
+    w.add(kinema.SphereObstacle([1.5, 0, 0], 0.5))
+    w.set_collisions(ccd=False)
+    w.step()
+    assert w.velocities[0, 0] == 1000.0 and w.positions[0, 0] > 16.0
+
+
+def test_contacts_report_pairs_and_colliders():
+    # Two particles overlapping at rest by δ = 0.05 m: one contact, normal from j to i (−x for
+    # i = 0). The overlap is removed along the normal in proportion to the inverse masses
+    # (i moves 2δ/3, j δ/3 for m = 1, 2 kg), so the contact reports what is left, 0, and the
+    # centre of mass stays put.
+    w = kinema.World(dt=1e-3)
+    empty = w.contacts()
+    assert set(empty) == {"i", "j", "collider", "normal", "overlap", "u_n"}
+    assert empty["normal"].shape == (0, 3) and all(empty[k].shape == (0,) for k in ("i", "j", "collider", "overlap", "u_n"))
+    w.add_particles([[0, 0, 0], [0.15, 0, 0]], mass=[1.0, 2.0], radius=0.1)
+    w.set_collisions()
+    w.step()
+    c = w.contacts()
+    assert c["i"].tolist() == [0] and c["j"].tolist() == [1] and c["collider"].tolist() == [-1]
+    assert c["normal"].shape == (1, 3) and c["i"].dtype == np.int64
+    np.testing.assert_array_equal(c["normal"], [[-1.0, 0.0, 0.0]])
+    assert abs(c["overlap"][0]) < 1e-15 and c["u_n"][0] == 0.0
+    np.testing.assert_allclose(w.positions[:, 0], [-0.05 * 2 / 3, 0.15 + 0.05 / 3], atol=1e-15)
+    assert w.collision_stats()["last"]["contacts"] == 1
+
+    # Against a collider: j = −1 and the collider's index in world.colliders; the normal is
+    # the plane's, normalised. Without continuous detection the contact is found at the end
+    # of the step, still approaching (u_n = −1 m/s), and then gets its impulse (e = 1).
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[0, 0, 0.1]], velocity=[[0, 0, -1.0]], radius=0.1)
+    far, floor = kinema.SphereObstacle([10, 0, 0], 1.0), kinema.Plane([0, 0, 0], [0, 0, 2.0])
+    w.add(far)
+    w.add(floor)
+    w.set_collisions(ccd=False)
+    assert w.colliders == [far, floor]
+    w.step()
+    c = w.contacts()
+    assert c["i"].tolist() == [0] and c["j"].tolist() == [-1] and c["collider"].tolist() == [1]
+    np.testing.assert_array_equal(c["normal"], [[0.0, 0.0, 1.0]])
+    assert c["u_n"][0] == -1.0 and w.velocities[0, 2] == 1.0
+    assert w.positions[0, 2] == pytest.approx(0.1, abs=1e-15)  # the 1 mm overlap was removed
+
+
+def test_settings_read_back_and_round_trip():
+    w = kinema.World()
+    assert w.collisions is None and w.periodic == (False, False, False) and w.colliders == []
+    w.set_collisions(restitution=0.3, friction=0.2, ccd=False, restitution_threshold=0.01)
+    expected = {
+        "model": "impulse",
+        "restitution": 0.3,
+        "friction": 0.2,
+        "ccd": False,
+        "restitution_threshold": 0.01,
+        "stiffness": None,
+        "damping": None,
+    }
+    assert w.collisions == expected
+    w.set_collisions(**w.collisions)
+    assert w.collisions == expected
+    w.set_collisions(model="spring_dashpot", stiffness=1e5, damping=3.0)
+    assert w.collisions["model"] == "spring_dashpot" and w.collisions["stiffness"] == 1e5 and w.collisions["damping"] == 3.0
+    assert w.collisions["restitution"] == 1.0  # every setting is replaced
+
+
+def test_bad_collision_input_is_named():
+    w = kinema.World()
+    w.add_particles([[0, 0, 0]], radius=0.1)
+    with pytest.raises(ValueError, match=r"restitution = 1.5 is invalid: .*\[0, 1\]"):
+        w.set_collisions(restitution=1.5)
+    with pytest.raises(ValueError, match=r"restitution = 1.5 is invalid: .*\[0, 1\]"):
+        w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution=1.5))
+    with pytest.raises(ValueError, match=r"restitution\[1\] = 1.5 is invalid: .*\[0, 1\]"):
+        w.add_particles([[1, 0, 0], [2, 0, 0]], restitution=[0.5, 1.5])
+    with pytest.raises(ValueError, match=r"friction\[0\] = -1 is invalid"):
+        w.add_particles([[1, 0, 0]], friction=-1.0)
+    assert len(w) == 1  # nothing added
+    with pytest.raises(ValueError, match=r"normal = \[0.0, 0.0, 0.0\] is invalid: a plane's normal must be non-zero"):
+        w.add(kinema.Plane([0, 0, 0], [0, 0, 0]))
+    with pytest.raises(ValueError, match=r"hi\[1\] = 0 is invalid: the box needs hi > lo"):
+        w.add(kinema.Box([0, 0, 0], [1, 0, 1]))
+    with pytest.raises(ValueError, match=r"hi\[0\] = 1 is invalid"):
+        w.add(kinema.Box([2, 0, 0], [1, 1, 1]))
+    with pytest.raises(ValueError, match=r"radius = -1 is invalid"):
+        w.add(kinema.SphereObstacle([0, 0, 0], -1.0))
+    with pytest.raises(ValueError, match=r"lo = .* is invalid: a 3D world's box has 3 values"):
+        w.add(kinema.Box([0, 0], [1, 1]))
+    assert w.colliders == []
+    with pytest.raises(ValueError, match="periodic = .* is invalid: periodic axes need a box collider"):
+        w.periodic = (True, False, False)
+    with pytest.raises(ValueError, match="periodic = .* is invalid"):
+        w.periodic = (True, False)
+    with pytest.raises(ValueError, match=r"model = 'foo' is invalid: .*'impulse', 'spring_dashpot'"):
+        w.set_collisions(model="foo")
+    with pytest.raises(ValueError, match=r"stiffness = None is invalid: model='spring_dashpot' needs the contact stiffness"):
+        w.set_collisions(model="spring_dashpot")
+    with pytest.raises(ValueError, match=r"stiffness = -1 is invalid"):
+        w.set_collisions(model="spring_dashpot", stiffness=-1.0)
+    with pytest.raises(ValueError, match=r"damping = -2 is invalid"):
+        w.set_collisions(model="spring_dashpot", stiffness=1.0, damping=-2.0)
+    with pytest.raises(ValueError, match=r"stiffness = 1000 is invalid: only model='spring_dashpot' uses it"):
+        w.set_collisions(stiffness=1e3)
+    with pytest.raises(TypeError, match="is not a kinema force or collider"):
+        w.add(object())
+    assert w.collisions["restitution"] == 1.0  # the refused settings changed nothing
+
+    flat = kinema.World(dim=2)
+    with pytest.raises(ValueError, match=r"normal\[2\] = 1 is invalid: a 2D world keeps z = 0"):
+        flat.add(kinema.Plane([0, 0, 0], [0, 1, 1]))
+    with pytest.raises(ValueError, match=r"center\[2\] = 0.5 is invalid: a 2D world keeps z = 0"):
+        flat.add(kinema.SphereObstacle([0, 0, 0.5], 1.0))
+    with pytest.raises(ValueError, match=r"lo = .* is invalid: a 2D world's box has 2 values"):
+        flat.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+    with pytest.raises(ValueError, match="periodic = .* is invalid: a 2D world has no periodic z axis"):
+        flat.add(kinema.Box([0, 0], [1, 1]))
+        flat.periodic = (False, False, True)
+
+
+def test_spring_dashpot_contacts_bounce_with_the_requested_restitution():
+    # A linear spring–dashpot contact is a damped oscillator in the overlap: with γ_n chosen
+    # for e = 0.5 the balls separate at half their approach speed after half a damped period,
+    # π/(ω √(1 − ζ²)) with ω² = k/μ (μ = 0.5 kg: about 7 ms, 700 steps), overlapping by less
+    # than the undamped amplitude u/ω. The impulse model would give the same e with no overlap
+    # at all, hence the checks on the contact's duration and depth.
+    k, e, mu, u = 1e5, 0.5, 0.5, 2.0
+    w = kinema.World(dt=1e-5)
+    w.add_particles([[0, 0, 0], [0.21, 0, 0]], velocity=[[u / 2, 0, 0], [-u / 2, 0, 0]], radius=0.1)
+    w.set_collisions(model="spring_dashpot", stiffness=k, restitution=e)
+    tr = w.run(0.03, fps=1e5)  # every step
+    overlap = 0.2 - (tr.positions[:, 1, 0] - tr.positions[:, 0, 0])
+    u_after = w.velocities[1, 0] - w.velocities[0, 0]
+    assert u_after / u == pytest.approx(e, rel=0.02)
+    omega = np.sqrt(k / mu)
+    zeta = -np.log(e) / np.hypot(np.pi, np.log(e))
+    assert np.count_nonzero(overlap > 0) * w.dt == pytest.approx(np.pi / (omega * np.sqrt(1 - zeta**2)), rel=0.05)
+    assert 0 < overlap.max() < u / omega
+    # The contact is a force of stage 1: its elastic energy is a potential, and the impulse
+    # stages (contacts, statistics) have nothing to report.
+    assert "contact" in tr.potential and tr.potential["contact"].max() > 0 and tr.potential["contact"][-1] == 0.0
+    assert w.contacts()["i"].size == 0 and w.collision_stats()["total"]["impulses"] == 0
+
+
+def test_the_stability_warning_counts_contact_springs():
+    # A spring–dashpot contact between two 1 kg balls is a spring k_n on their relative
+    # motion: ω² = k_n (1/m + 1/m) = 2·10⁵ s⁻², so Verlet needs dt ≤ 2/ω = 4.47 ms even before
+    # they touch, and a world with no other force warns at dt = 10 ms.
+    w = kinema.World(dt=0.01)
+    w.add_particles([[0, 0, 0], [1, 0, 0]], radius=0.1)
+    w.set_collisions(model="spring_dashpot", stiffness=1e5)
+    assert w.stable_step("verlet") == pytest.approx(2 / np.sqrt(2e5), rel=1e-6)
+    with pytest.warns(kinema.StabilityWarning, match="limit 0.004472 s"):
+        w.step()
