@@ -221,9 +221,9 @@ def test_without_ccd_a_fast_particle_tunnels_through_an_obstacle():
 
 def test_contacts_report_pairs_and_colliders():
     # Two particles overlapping at rest by δ = 0.05 m: one contact, normal from j to i (−x for
-    # i = 0). The overlap is removed along the normal in proportion to the inverse masses
-    # (i moves 2δ/3, j δ/3 for m = 1, 2 kg), so the contact reports what is left, 0, and the
-    # centre of mass stays put.
+    # i = 0). The contact reports the overlap as detected, δ; then it is removed along the
+    # normal in proportion to the inverse masses (i moves 2δ/3, j δ/3 for m = 1, 2 kg), and
+    # the centre of mass stays put.
     w = kinema.World(dt=1e-3)
     empty = w.contacts()
     assert set(empty) == {"i", "j", "collider", "normal", "overlap", "u_n"}
@@ -235,7 +235,7 @@ def test_contacts_report_pairs_and_colliders():
     assert c["i"].tolist() == [0] and c["j"].tolist() == [1] and c["collider"].tolist() == [-1]
     assert c["normal"].shape == (1, 3) and c["i"].dtype == np.int64
     np.testing.assert_array_equal(c["normal"], [[-1.0, 0.0, 0.0]])
-    assert abs(c["overlap"][0]) < 1e-15 and c["u_n"][0] == 0.0
+    assert c["overlap"][0] == pytest.approx(0.05, abs=1e-15) and c["u_n"][0] == 0.0
     np.testing.assert_allclose(w.positions[:, 0], [-0.05 * 2 / 3, 0.15 + 0.05 / 3], atol=1e-15)
     assert w.collision_stats()["last"]["contacts"] == 1
 
@@ -254,6 +254,7 @@ def test_contacts_report_pairs_and_colliders():
     assert c["i"].tolist() == [0] and c["j"].tolist() == [-1] and c["collider"].tolist() == [1]
     np.testing.assert_array_equal(c["normal"], [[0.0, 0.0, 1.0]])
     assert c["u_n"][0] == -1.0 and w.velocities[0, 2] == 1.0
+    assert c["overlap"][0] == pytest.approx(1e-3, abs=1e-15)
     assert w.positions[0, 2] == pytest.approx(0.1, abs=1e-15)  # the 1 mm overlap was removed
 
 

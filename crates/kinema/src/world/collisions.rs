@@ -150,7 +150,9 @@ pub(crate) struct CollisionStage {
     pub domain: Domain,
     grid: Grid,
     pairs: Vec<Pair>,
-    pub contacts: Vec<Contact>,
+    contacts: Vec<Contact>,
+    /// The end-of-step contacts as detected (overlap and u_n before the response).
+    pub detected: Vec<Contact>,
     // Continuous detection: each particle moves on x(τ) = x_ref + v_ref (τ − t_ref) + ½ a (τ − t_ref)²
     accel: Vec<f64>,
     t_ref: Vec<f64>,
@@ -190,6 +192,7 @@ impl CollisionStage {
             grid: Grid::new(),
             pairs: Vec::new(),
             contacts: Vec::new(),
+            detected: Vec::new(),
             accel: Vec::new(),
             t_ref: Vec::new(),
             x_ref: Vec::new(),
@@ -330,6 +333,7 @@ impl CollisionStage {
             changed = true;
         }
         // Overlap left by discrete detection is removed by moving positions, not velocities.
+        self.detected.clone_from(&self.contacts);
         let s = separate(&mut self.contacts, x1, inv_mass, &SeparateParams::default())?;
         stats.max_overlap = s.max_overlap_after;
         if s.max_overlap_before > 0.0 {

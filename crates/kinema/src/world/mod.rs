@@ -636,10 +636,12 @@ impl World {
             .unwrap_or([false; 3])
     }
 
-    /// The contacts found at the end of the last step (after its impulses; their `u_n` is
-    /// the approach speed before them).
+    /// The contacts found at the end of the last step, as detected: `overlap` before it was
+    /// removed and `u_n` before the end-of-step impulses (impacts found inside the step by
+    /// continuous detection were already resolved). Empty with the spring–dashpot model,
+    /// whose contacts live inside the force evaluations.
     pub fn contacts(&self) -> &[Contact] {
-        self.collisions.as_ref().map_or(&[], |c| &c.contacts)
+        self.collisions.as_ref().map_or(&[], |c| &c.detected)
     }
 
     /// What the collision stages did in the last step, and summed over all steps; `None`
