@@ -5,6 +5,7 @@ import base64
 import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -168,8 +169,12 @@ def test_h5md_layout_follows_the_spec(tmp_path):
 
 
 def test_h5md_without_optional_fields_reads_back_what_is_there(tmp_path):
-    # today's kinema.Trajectory has no masses, radii, ids, dim or dt
-    tr = world_run()
+    # A trajectory-like object with only the frames (no masses, radii, ids, dim or dt):
+    # what is missing stays missing, ids default to 0..N-1 and steps to the frame index.
+    run = world_run()
+    tr = SimpleNamespace(
+        **{name: getattr(run, name) for name in ("t", "positions", "velocities", "kinetic", "potential", "total", "momentum", "angular_momentum")}
+    )
     save_h5md(tr, tmp_path / "run.h5")
     back = load_h5md(tmp_path / "run.h5")
     assert back.masses is None and back.radii is None and back.dt is None
@@ -430,3 +435,25 @@ def test_a_periodic_box_is_written_with_its_edges(tmp_path):
     with pytest.raises(ValueError, match="periodic boundaries need the box edges"):
         save_h5md(tr, tmp_path / "other.h5")
     assert not (tmp_path / "other.h5").exists()
+
+
+def test_a_world_run_saves_loads_and_exports_through_the_trajectory(tmp_path):
+    # Trajectory.save / kinema.load_trajectory round-trip a run bit for bit, including what
+    # the trajectory knows about the world (masses, radii, dt, method, the periodic cell).
+    w = kinema.World(dt=0.01, method="rk4")
+    w.add_particles([[0.2, 0.5, 0.5], [0.8, 0.5, 0.5]], velocity=[[1.0, 0, 0], [-1.0, 0, 0]], mass=[1.0, 2.0], radius=0.05)
+    w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+    w.periodic = (True, False, False)
+    traj = w.run(0.5, fps=20)
+    assert traj.dt == 0.01 and traj.method == "rk4" and traj.periodic == (True, False, False)
+    np.testing.assert_array_equal(traj.masses, [1.0, 2.0])
+    np.testing.assert_array_equal(traj.radii, [0.05, 0.05])
+    np.testing.assert_array_equal(traj.box_edges, [1.0, 0.0, 0.0])
+    path = traj.save(tmp_path / "run.h5")
+    back = kinema.load_trajectory(path)
+    for name in ("t", "positions", "velocities", "kinetic", "total", "momentum", "contacts", "impulse_balance", "collision_energy_lost", "masses", "radii"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(traj, name), err_msg=name)
+    assert back.dt == traj.dt and back.method == traj.method
+    files = traj.export(tmp_path / "run.csv")
+    rows = np.loadtxt(files[0], delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(rows[:, 3:6].reshape(-1, 2, 3), traj.positions)

@@ -11,11 +11,13 @@ The public API (everything else is private):
   ``World.add``); ``World.set_collisions``, ``World.collisions``, ``World.periodic``,
   ``World.contacts``, ``World.collision_stats``; per-particle ``restitution`` and ``friction``
   in ``World.add_particles``
+- Trajectory files: ``Trajectory.save`` (H5MD), ``load_trajectory``, ``Trajectory.export``
+  (VTK, PLY, extended XYZ, CSV); the module ``kinema.io``
 - Measured orders of accuracy: ``convergence``, ``ConvergenceResult``, the module
   ``kinema.problems`` (problems with exact solutions)
 """
 
-from . import problems, stability
+from . import io, problems, stability
 from ._core import __version__
 from .colliders import Box, Plane, SphereObstacle
 from .convergence import ConvergenceResult, convergence
@@ -34,6 +36,8 @@ from .ode import (
 from .trajectory import Trajectory
 from .world import SimulationDiverged, StabilityWarning, World
 
+load_trajectory = Trajectory.load
+
 __all__ = [
     "__version__",
     "Attractor",
@@ -47,6 +51,8 @@ __all__ = [
     "StabilityWarning",
     "Spring",
     "Trajectory",
+    "io",
+    "load_trajectory",
     "Wind",
     "World",
     "ButcherTableau",

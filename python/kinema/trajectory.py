@@ -18,7 +18,14 @@ class Trajectory:
     the frame; ``impulse_balance`` (F, 3), N·s, the sum of the impulses between movable
     particles since the previous frame (0 at frame 0), zero by action and reaction up to
     rounding; ``collision_energy_lost`` (F,), J, the kinetic energy the collisions removed
-    since they were turned on."""
+    since they were turned on.
+
+    About the world (``None`` when unknown): ``masses`` (N,) kg, ``radii`` (N,) m, ``ids``
+    (N,), ``dim`` (2 or 3), ``dt`` s, ``method``, ``periodic`` (3 bools) and ``box_edges``
+    (3,) m, the periodic cell.
+
+    ``save`` writes an H5MD file, ``Trajectory.load`` (or ``kinema.load_trajectory``) reads
+    one back, ``export`` writes VTK, PLY, extended XYZ or CSV (see ``kinema.io``)."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -30,6 +37,14 @@ class Trajectory:
     contacts: np.ndarray
     impulse_balance: np.ndarray
     collision_energy_lost: np.ndarray
+    masses: np.ndarray | None = None
+    radii: np.ndarray | None = None
+    ids: np.ndarray | None = None
+    dim: int = 3
+    dt: float | None = None
+    method: str | None = None
+    periodic: tuple[bool, bool, bool] | None = None
+    box_edges: np.ndarray | None = None
     total: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -38,6 +53,27 @@ class Trajectory:
     @staticmethod
     def _recorder() -> _Recorder:
         return _Recorder()
+
+    def save(self, path: Any, group: str = "all", **options: Any) -> Any:
+        """Write the frames to an H5MD file (``kinema.io.save_h5md``); returns its path."""
+        from .io import save_h5md
+
+        return save_h5md(self, path, group=group, **options)
+
+    @classmethod
+    def load(cls, path: Any, group: str | None = None) -> Trajectory:
+        """Read a trajectory from an H5MD file written by ``save`` (``kinema.io.load_h5md``)."""
+        from .io import load_h5md
+
+        return load_h5md(path, group=group).to_trajectory()
+
+    def export(self, path: Any, format: str | None = None) -> list[Any]:
+        """Write the frames for other tools: ``vtk`` (ParaView), ``ply`` (Blender, Houdini),
+        ``xyz`` (OVITO) or ``csv``, inferred from the suffix when ``format`` is None; returns
+        the files written (``kinema.io.export``)."""
+        from .io import export
+
+        return export(self, path, format)
 
     def plot_energy(self, ax: Any = None) -> Any:
         """Kinetic, each potential and the total energy against time, and the energy lost in
@@ -62,8 +98,11 @@ class Trajectory:
 class _Recorder:
     def __init__(self) -> None:
         self.frames: list[tuple] = []
+        self.about: dict[str, Any] = {}
 
     def add(self, world: Any) -> None:
+        if not self.about:
+            self.about = world._trajectory_info()
         d = world.diagnostics()
         stats = world.collision_stats()
         if stats is None:
@@ -90,4 +129,5 @@ class _Recorder:
             contacts=np.array(contacts, dtype=np.int64),
             impulse_balance=balance,
             collision_energy_lost=np.array(lost),
+            **self.about,
         )

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
-from .colliders import Collider
+from .colliders import Box, Collider
 from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
 
@@ -391,6 +391,26 @@ class World:
     @property
     def forces(self) -> list[Any]:
         return list(self._forces)
+
+    def _trajectory_info(self) -> dict[str, Any]:
+        """What a Trajectory records about the world besides its frames."""
+        periodic = self.periodic
+        edges = None
+        if any(periodic):
+            box = next(c for c in self.colliders if isinstance(c, Box))
+            lo, hi = np.zeros(3), np.zeros(3)
+            lo[: len(np.ravel(box.lo))], hi[: len(np.ravel(box.hi))] = np.ravel(box.lo), np.ravel(box.hi)
+            edges = np.where(periodic, hi - lo, 0.0)
+        return {
+            "masses": self._m.copy(),
+            "radii": np.array(self._core.radii),
+            "ids": np.arange(len(self)),
+            "dim": self.dim,
+            "dt": self.dt,
+            "method": self.method,
+            "periodic": periodic if any(periodic) else None,
+            "box_edges": edges,
+        }
 
     def __len__(self) -> int:
         return self._core.len

@@ -345,6 +345,10 @@ impl PyWorld {
         PyArray1::from_slice(py, &self.inner.particles().mass)
     }
     #[getter]
+    fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.inner.particles().radius)
+    }
+    #[getter]
     fn inverse_masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.inner.particles().inv_mass)
     }

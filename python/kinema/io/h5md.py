@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import getpass
 import os
-from dataclasses import dataclass, field, fields
+from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -105,6 +105,8 @@ class LoadedTrajectory:
             value = getattr(self, fl.name, None)
             if value is None:
                 value = zeros.get(fl.name)
+            if value is None and fl.default is not MISSING:
+                continue  # optional in Trajectory: its default
             if value is None:
                 raise ValueError(f"the file holds no {fl.name!r}, which kinema.Trajectory needs")
             args[fl.name] = value
