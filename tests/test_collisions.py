@@ -366,3 +366,17 @@ def test_the_stability_warning_counts_contact_springs():
     assert w.stable_step("verlet") == pytest.approx(2 / np.sqrt(2e5), rel=1e-6)
     with pytest.warns(kinema.StabilityWarning, match="limit 0.004472 s"):
         w.step()
+
+
+def test_the_spring_dashpot_model_keeps_positions_in_the_periodic_cell():
+    # A particle crossing a periodic face comes back on the other side under either model;
+    # the spring–dashpot model keeps no end-of-step contacts (its contacts live in the force).
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[0.95, 0.5, 0.5], [0.2, 0.5, 0.5]], velocity=[[1.0, 0, 0], [0, 0, 0]], radius=0.01)
+    w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+    w.set_collisions(model="spring_dashpot", stiffness=1e4, restitution=0.5)
+    w.periodic = (True, True, True)
+    w.step(100)  # 10 cm along x: across the face at x = 1
+    assert w.positions[0, 0] == pytest.approx(0.05, abs=1e-12)
+    assert np.all((w.positions >= 0) & (w.positions < 1))
+    assert w.contacts()["i"].size == 0 and w.collision_stats()["last"]["contacts"] == 0

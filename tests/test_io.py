@@ -453,7 +453,8 @@ def test_a_world_run_saves_loads_and_exports_through_the_trajectory(tmp_path):
     back = kinema.load_trajectory(path)
     for name in ("t", "positions", "velocities", "kinetic", "total", "momentum", "contacts", "impulse_balance", "collision_energy_lost", "masses", "radii"):
         np.testing.assert_array_equal(getattr(back, name), getattr(traj, name), err_msg=name)
-    assert back.dt == traj.dt and back.method == traj.method
+    assert back.dt == traj.dt and back.method == traj.method and back.periodic == (True, False, False)
+    np.testing.assert_array_equal(back.box_edges, traj.box_edges)
     files = traj.export(tmp_path / "run.csv")
     rows = np.loadtxt(files[0], delimiter=",", skiprows=1)
     np.testing.assert_array_equal(rows[:, 3:6].reshape(-1, 2, 3), traj.positions)

@@ -82,9 +82,11 @@ class World:
         limit = self._core.stable_step(self._method_arg)
         if self.dt > limit:
             self._warned = True
+            rates = self._core.rates()
+            omega = max(rates["omega"], rates["standby_omega"] or 0.0)  # contacts not yet touching count
             warnings.warn(
                 f"dt = {self.dt:.4g} s exceeds the stable-step advisor's limit {limit:.4g} s for method "
-                f"{self.method!r} on these forces (stiffest mode: omega = {self._core.rates()['omega']:.4g} rad/s); "
+                f"{self.method!r} on these forces (stiffest mode: omega = {omega:.4g} rad/s); "
                 "the simulation will likely blow up: reduce dt or use method='implicit_euler'",
                 StabilityWarning,
                 stacklevel=3,
@@ -226,14 +228,15 @@ class World:
             self._pull()
 
     def contacts(self) -> dict[str, np.ndarray]:
-        """The K contacts found at the end of the last step, after its impulses and after the
-        overlap was removed, as arrays: ``i`` (K,), the particle; ``j`` (K,), the other
-        particle or −1 for a collider; ``collider`` (K,), the collider's index in
-        :attr:`colliders` or −1 between particles; ``normal`` (K, 3), the unit normal from
-        the partner towards i; ``overlap`` (K,), m, what is left of the penetration (< 0: a
-        gap); ``u_n`` (K,), m/s, (v_i − v_j)·n when the contact was found, before its own
-        impulse (< 0: approaching). Impacts that continuous detection (``ccd``) found inside
-        the step were resolved before, so a particle that bounced there shows u_n > 0."""
+        """The K contacts found at the end of the last step, as detected, as arrays: ``i``
+        (K,), the particle; ``j`` (K,), the other particle or −1 for a collider; ``collider``
+        (K,), the collider's index in :attr:`colliders` or −1 between particles; ``normal``
+        (K, 3), the unit normal from the partner towards i; ``overlap`` (K,), m, the
+        penetration before it was removed; ``u_n`` (K,), m/s, (v_i − v_j)·n when the contact
+        was found, before its own impulse (< 0: approaching). Impacts that continuous
+        detection (``ccd``) found inside the step were resolved before, so a particle that
+        bounced there shows u_n > 0. Empty with the spring–dashpot model, whose contacts live
+        inside the force evaluations."""
         self._push()
         return self._core.contacts()
 
@@ -309,7 +312,9 @@ class World:
         """The advisor's estimate at the current state: ``omega`` (rad/s, the highest natural
         frequency), its damping ratio ``zeta``, the largest damping rate ``damping_rate``
         (1/s), closed-form upper bounds ``omega_bound`` and ``damping_rate_bound`` (None when a
-        force has none) and the power ``iterations`` used."""
+        force has none), the power ``iterations`` used, and ``standby_omega``/``standby_zeta``:
+        the stiffest mode a force can reach from another state — a spring–dashpot contact
+        not touching yet — or None."""
         self._push()
         return self._core.rates()
 

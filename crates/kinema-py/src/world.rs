@@ -21,8 +21,9 @@ pyo3::create_exception!(
     kinema,
     SimulationDiverged,
     pyo3::exceptions::PyRuntimeError,
-    "A world step produced a non-finite state or runaway energy; the world keeps the state from before it. \
-     Attributes: step, time, particle, dt, advised_dt, reason."
+    "A world step produced a non-finite state or runaway energy, or rk45 could not finish it; the world keeps \
+     the state from before it. Attributes: step, time, particle, dt, advised_dt, reason ('non-finite', \
+     'runaway energy' or 'step too small')."
 );
 
 /// Engine errors of a world: divergence gets its own exception, with its facts as attributes.
@@ -441,6 +442,8 @@ impl PyWorld {
         out.set_item("omega_bound", r.bound.map(|b| b.omega_squared.sqrt()))?;
         out.set_item("damping_rate_bound", r.bound.map(|b| b.damping_rate))?;
         out.set_item("iterations", r.iterations)?;
+        out.set_item("standby_omega", r.standby.map(|s| s.0))?;
+        out.set_item("standby_zeta", r.standby.map(|s| s.1))?;
         Ok(out)
     }
 

@@ -87,6 +87,8 @@ class LoadedTrajectory:
     dim: int = 3
     dt: float | None = None
     method: str | None = None
+    periodic: tuple[bool, bool, bool] | None = None
+    box_edges: np.ndarray | None = None
     group: str = "all"
     author: str | None = None
     creator: str | None = None
@@ -312,6 +314,15 @@ def _read(path: Path, f: Any, group: str | None) -> LoadedTrajectory:
         if name in p:
             a = p[name][()] if isinstance(p[name], h5py.Dataset) else _read_element(path, p, name)[2][0]
             setattr(out, attr, a)
+    box = p.get("box")
+    if isinstance(box, h5py.Group) and "boundary" in box.attrs:
+        boundary = [b.decode() if isinstance(b, bytes) else str(b) for b in np.asarray(box.attrs["boundary"]).reshape(-1)]
+        flags = [b == "periodic" for b in boundary]
+        if any(flags):
+            out.periodic = tuple((flags + [False] * 3)[:3])
+            if isinstance(box.get("edges"), h5py.Dataset):
+                edges = np.asarray(box["edges"][()], dtype=np.float64).reshape(-1)
+                out.box_edges = np.concatenate([edges, np.zeros(3 - edges.size)])[:3]
     obs = f.get("observables")
     if isinstance(obs, h5py.Group):
         for name, (attr, _) in _OBSERVABLES.items():

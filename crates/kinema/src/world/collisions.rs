@@ -213,6 +213,12 @@ impl CollisionStage {
         self.refresh_materials()
     }
 
+    /// Forgets the last step's contacts and figures (a step of the spring–dashpot model).
+    pub fn clear_step(&mut self) {
+        self.detected.clear();
+        self.last = CollisionStats::default();
+    }
+
     /// The global material and the per-particle ones (if any particle has its own).
     pub fn materials_parts(&self) -> (Material, Option<Vec<Material>>) {
         (self.material, self.particle_materials.clone())

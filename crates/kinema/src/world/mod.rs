@@ -438,8 +438,17 @@ impl World {
         let Some(stage) = self.collisions.as_mut() else {
             return Ok(());
         };
-        if n == 0 || stage.params.model != ContactModel::Impulse {
-            return Ok(()); // the spring–dashpot model acts in stage 1, as a force
+        if n == 0 {
+            return Ok(());
+        }
+        if stage.params.model != ContactModel::Impulse {
+            // The spring–dashpot model acted in stage 1, as a force; what is left here is
+            // keeping positions in the periodic cell.
+            stage.clear_step();
+            if let Some(p) = stage.domain.periodic_box() {
+                p.wrap_positions(&mut self.y_next[..n]);
+            }
+            return Ok(());
         }
         let p = &self.particles;
         let (x1, v1) = self.y_next.split_at_mut(n);
