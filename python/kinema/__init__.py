@@ -13,11 +13,14 @@ The public API (everything else is private):
   in ``World.add_particles``
 - Trajectory files: ``Trajectory.save`` (H5MD), ``load_trajectory``, ``Trajectory.export``
   (VTK, PLY, extended XYZ, CSV); the module ``kinema.io``
+- Pictures: ``render_frames`` (2D discs, 3D shaded spheres, coloured by speed, id or a field,
+  with a time stamp), ``write_video`` (H.264 MP4, GIF), ``Camera2D``, ``Camera3D``; the
+  module ``kinema.render``
 - Measured orders of accuracy: ``convergence``, ``ConvergenceResult``, the module
   ``kinema.problems`` (problems with exact solutions)
 """
 
-from . import io, problems, stability
+from . import io, problems, render, stability
 from ._core import __version__
 from .colliders import Box, Plane, SphereObstacle
 from .convergence import ConvergenceResult, convergence
@@ -33,6 +36,7 @@ from .ode import (
     solve,
     solve_second_order,
 )
+from .render import Camera2D, Camera3D, render_frames, write_video
 from .trajectory import Trajectory
 from .world import SimulationDiverged, StabilityWarning, World
 
@@ -42,6 +46,8 @@ __all__ = [
     "__version__",
     "Attractor",
     "Box",
+    "Camera2D",
+    "Camera3D",
     "Drag",
     "Gravity",
     "Plane",
@@ -53,6 +59,9 @@ __all__ = [
     "Trajectory",
     "io",
     "load_trajectory",
+    "render",
+    "render_frames",
+    "write_video",
     "Wind",
     "World",
     "ButcherTableau",

@@ -152,3 +152,35 @@ class World:
     def inverse_masses(self) -> npt.NDArray[np.float64]: ...
     @property
     def radii(self) -> npt.NDArray[np.float64]: ...
+
+# -- rendering (crates/kinema-py/src/render.rs) -------------------------------------------------
+COLORMAP_NAMES: list[str]
+
+def render_frame(
+    positions: npt.NDArray[np.float64],
+    radius: npt.NDArray[np.float64],
+    *,
+    colors: npt.NDArray[np.uint8] | None = None,
+    values: npt.NDArray[np.float64] | None = None,
+    colormap: str = "viridis",
+    vmin: float | None = None,
+    vmax: float | None = None,
+    width: int = 1280,
+    height: int = 720,
+    view: tuple[float, float, float, float] | None = None,
+    eye: Sequence[float] | None = None,
+    target: Sequence[float] | None = None,
+    up: Sequence[float] = ...,
+    fov_deg: float = 40.0,
+    background: tuple[int, int, int] = (255, 255, 255),
+    min_radius_px: float = 1.0,
+    label: str | None = None,
+    label_scale: int = 2,
+    label_color: tuple[int, int, int] = (0, 0, 0),
+) -> npt.NDArray[np.uint8]: ...
+def colormap(values: npt.NDArray[np.float64], colormap: str = "viridis", vmin: float | None = None, vmax: float | None = None) -> npt.NDArray[np.uint8]: ...
+def categorical_colors(ids: npt.NDArray[np.uint64]) -> npt.NDArray[np.uint8]: ...
+def frame_box(
+    lo: Sequence[float], hi: Sequence[float], from_: Sequence[float] = ..., fov_deg: float = 40.0, width: int = 1280, height: int = 720
+) -> tuple[list[float], list[float], list[float]]: ...
+def rgb_to_yuv420p(frame: npt.NDArray[np.uint8]) -> bytes: ...

@@ -7,6 +7,7 @@ mod callbacks;
 mod collisions;
 mod errors;
 mod ode;
+mod render;
 mod stability;
 mod world;
 
@@ -18,5 +19,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     ode::register(m)?;
     stability::register(m)?;
     world::register(m)?;
+    render::register(m)?;
     Ok(())
 }

@@ -11,6 +11,7 @@ pub mod error;
 pub mod forces;
 pub mod ode;
 pub mod particles;
+pub mod render;
 pub mod world;
 
 pub use error::{CallbackError, Divergence, Error};

@@ -1,0 +1,335 @@
+//! Camera: maps world positions (m) and radii (m) to pixel centres and pixel radii.
+//!
+//! Pixel convention: pixel (i, j) — column i, row j, row 0 at the top — covers the square
+//! [i, i+1) × [j, j+1) of the image plane; its centre is (i + 0.5, j + 0.5).
+
+use crate::Error;
+
+/// How world coordinates become pixel coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Camera {
+    /// 2D orthographic view of the xy-plane (z is ignored); x grows to the right, y upwards.
+    Orthographic {
+        /// World point (m) that lands at the image centre.
+        center: [f64; 2],
+        /// Scale, pixels per metre (the same along x and y, so discs stay round).
+        pixels_per_unit: f64,
+    },
+    /// 3D pinhole camera.
+    Perspective {
+        /// Eye position, m.
+        eye: [f64; 3],
+        /// Point looked at, m (lands at the image centre).
+        target: [f64; 3],
+        /// Up direction (need not be unit or orthogonal to the view; z-up scenes use (0, 0, 1)).
+        up: [f64; 3],
+        /// Vertical field of view, degrees, in (0, 180).
+        fov_y_deg: f64,
+        /// Near distance, m: particles whose centre is nearer than this along the view axis
+        /// (or behind the eye) are not drawn.
+        near: f64,
+    },
+}
+
+/// A particle as the camera sees it: centre and radius in pixels, depth for ordering.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Projected {
+    /// Centre, pixels from the left edge.
+    pub x: f64,
+    /// Centre, pixels from the top edge.
+    pub y: f64,
+    /// Radius, pixels (before the minimum radius is applied).
+    pub r: f64,
+    /// Distance along the view axis, m (0 for the orthographic camera).
+    pub depth: f64,
+}
+
+impl Camera {
+    /// Orthographic camera that fits the world rectangle `[lo, hi]` (m, xy) into a
+    /// `width × height` image, centred, keeping the aspect ratio (the looser axis gets margins).
+    pub fn fit_2d(lo: [f64; 2], hi: [f64; 2], width: usize, height: usize) -> Result<Self, Error> {
+        let span = [hi[0] - lo[0], hi[1] - lo[1]];
+        if !(span[0] > 0.0 && span[1] > 0.0 && span[0].is_finite() && span[1].is_finite()) {
+            return Err(invalid(
+                "view",
+                format!("{lo:?}..{hi:?}"),
+                "a finite rectangle with hi > lo on both axes",
+            ));
+        }
+        check_size(width, height)?;
+        // The rectangle fits when both of its sides do: the scale is the smaller of the two.
+        let pixels_per_unit = (width as f64 / span[0]).min(height as f64 / span[1]);
+        Ok(Camera::Orthographic {
+            center: [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])],
+            pixels_per_unit,
+        })
+    }
+
+    /// Perspective camera at `eye` looking at `target`, checked (see the variant's fields).
+    /// The near distance is 1e-6 of the eye–target distance.
+    pub fn perspective(eye: [f64; 3], target: [f64; 3], up: [f64; 3], fov_y_deg: f64) -> Result<Self, Error> {
+        let cam = Camera::Perspective {
+            eye,
+            target,
+            up,
+            fov_y_deg,
+            near: 1e-6 * norm(sub(target, eye)),
+        };
+        cam.basis()?;
+        Ok(cam)
+    }
+
+    /// Perspective camera that frames the box `[lo, hi]` (m): it looks at the box centre from
+    /// the direction `from` (a vector pointing from the centre towards the eye) and stands far
+    /// enough that the box's bounding sphere fits the narrower field of view of a
+    /// `width × height` image. Up is +z unless `from` is vertical (then +y).
+    pub fn frame_box(
+        lo: [f64; 3],
+        hi: [f64; 3],
+        from: [f64; 3],
+        fov_y_deg: f64,
+        width: usize,
+        height: usize,
+    ) -> Result<Self, Error> {
+        check_size(width, height)?;
+        check_fov(fov_y_deg)?;
+        if !(0..3).all(|k| hi[k] >= lo[k] && lo[k].is_finite() && hi[k].is_finite()) {
+            return Err(invalid("box", format!("{lo:?}..{hi:?}"), "finite corners with hi >= lo"));
+        }
+        let n = norm(from);
+        if !(n > 0.0 && n.is_finite()) {
+            return Err(invalid("from", format!("{from:?}"), "a finite non-zero direction"));
+        }
+        let dir = scale(from, 1.0 / n);
+        let center = scale(add(lo, hi), 0.5);
+        let radius = (0.5 * norm(sub(hi, lo))).max(1e-12);
+        // A sphere of radius ρ seen from distance D subtends the half angle asin(ρ/D); it fits
+        // the half field of view φ when D = ρ / sin φ. The horizontal half field of view is
+        // atan(aspect · tan φ_y), the narrower of the two is used.
+        let half_y = 0.5 * fov_y_deg.to_radians();
+        let half_x = (width as f64 / height as f64 * half_y.tan()).atan();
+        let distance = radius / half_y.min(half_x).sin();
+        let up = if dir[0].abs() < 1e-9 && dir[1].abs() < 1e-9 {
+            [0.0, 1.0, 0.0]
+        } else {
+            [0.0, 0.0, 1.0]
+        };
+        let eye = add(center, scale(dir, distance));
+        Ok(Camera::Perspective {
+            eye,
+            target: center,
+            up,
+            fov_y_deg,
+            near: 1e-3 * distance,
+        })
+    }
+
+    /// Checks the camera's parameters; an orthographic camera needs a finite positive scale,
+    /// a perspective one a non-degenerate view direction and up, and 0 < fov < 180.
+    pub fn validate(&self) -> Result<(), Error> {
+        match *self {
+            Camera::Orthographic { center, pixels_per_unit } => {
+                if !(pixels_per_unit > 0.0 && pixels_per_unit.is_finite()) {
+                    return Err(invalid("pixels_per_unit", pixels_per_unit, "a finite number > 0"));
+                }
+                if !(center[0].is_finite() && center[1].is_finite()) {
+                    return Err(invalid("center", format!("{center:?}"), "finite coordinates"));
+                }
+                Ok(())
+            }
+            Camera::Perspective { .. } => self.basis().map(|_| ()),
+        }
+    }
+
+    /// True for the 3D perspective camera (spheres are shaded), false for the 2D one (flat discs).
+    pub fn is_3d(&self) -> bool {
+        matches!(self, Camera::Perspective { .. })
+    }
+
+    /// A projector for a `width × height` image: precomputes the basis and focal length.
+    pub(crate) fn projector(&self, width: usize, height: usize) -> Result<Projector, Error> {
+        check_size(width, height)?;
+        self.validate()?;
+        let (w, h) = (width as f64, height as f64);
+        Ok(match *self {
+            Camera::Orthographic { center, pixels_per_unit } => Projector::Ortho {
+                cx: 0.5 * w - pixels_per_unit * center[0],
+                cy: 0.5 * h + pixels_per_unit * center[1],
+                s: pixels_per_unit,
+            },
+            Camera::Perspective {
+                eye, fov_y_deg, near, ..
+            } => {
+                let (right, up, forward) = self.basis()?;
+                // Pinhole: a point at camera coordinates (xc, yc, zc), zc along the view axis,
+                // lands at f·xc/zc, f·yc/zc from the image centre, where the focal length in
+                // pixels f = (H/2) / tan(fov_y/2) puts the top edge at the fov_y/2 angle.
+                let f = 0.5 * h / (0.5 * fov_y_deg.to_radians()).tan();
+                Projector::Persp {
+                    eye,
+                    right,
+                    up,
+                    forward,
+                    f,
+                    cx: 0.5 * w,
+                    cy: 0.5 * h,
+                    near: near.max(0.0),
+                }
+            }
+        })
+    }
+
+    /// Orthonormal camera basis (right, up, forward) of a perspective camera.
+    fn basis(&self) -> Result<Basis, Error> {
+        let Camera::Perspective {
+            eye,
+            target,
+            up,
+            fov_y_deg,
+            near,
+        } = *self
+        else {
+            unreachable!("basis of an orthographic camera")
+        };
+        check_fov(fov_y_deg)?;
+        if !(near >= 0.0 && near.is_finite()) {
+            return Err(invalid("near", near, "a finite distance >= 0"));
+        }
+        let d = sub(target, eye);
+        let nd = norm(d);
+        if !(nd > 0.0 && nd.is_finite()) {
+            return Err(invalid("target", format!("{target:?}"), "a finite point different from eye"));
+        }
+        let forward = scale(d, 1.0 / nd);
+        let r = cross(forward, up);
+        let nr = norm(r);
+        if !(nr > 1e-12 * norm(up) && nr.is_finite()) {
+            return Err(invalid(
+                "up",
+                format!("{up:?}"),
+                "a finite direction not parallel to target - eye",
+            ));
+        }
+        let right = scale(r, 1.0 / nr);
+        Ok((right, cross(right, forward), forward))
+    }
+}
+
+/// Unit vectors (right, up, forward) of a perspective camera, in world coordinates.
+type Basis = ([f64; 3], [f64; 3], [f64; 3]);
+
+/// The camera with its per-image constants, ready to project many particles.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Projector {
+    Ortho {
+        cx: f64,
+        cy: f64,
+        s: f64,
+    },
+    Persp {
+        eye: [f64; 3],
+        right: [f64; 3],
+        up: [f64; 3],
+        forward: [f64; 3],
+        f: f64,
+        cx: f64,
+        cy: f64,
+        near: f64,
+    },
+}
+
+impl Projector {
+    /// Projects a particle at `p` (m) of radius `radius` (m); `None` when it is behind the
+    /// camera (nearer than `near`).
+    #[inline]
+    pub(crate) fn project(&self, p: [f64; 3], radius: f64) -> Option<Projected> {
+        match *self {
+            Projector::Ortho { cx, cy, s } => Some(Projected {
+                x: cx + s * p[0],
+                y: cy - s * p[1],
+                r: s * radius,
+                depth: 0.0,
+            }),
+            Projector::Persp {
+                eye,
+                right,
+                up,
+                forward,
+                f,
+                cx,
+                cy,
+                near,
+            } => {
+                let d = sub(p, eye);
+                let zc = dot(d, forward);
+                // NaN depths (cannot happen for checked finite input) fall through to `None` too.
+                if zc.partial_cmp(&near) != Some(std::cmp::Ordering::Greater) {
+                    return None;
+                }
+                let k = f / zc;
+                // The exact outline of a sphere off the axis is an ellipse whose minor radius
+                // is f·R/sqrt(zc² − R²) (on the axis); R ≪ zc makes it the disc of radius
+                // f·R/zc drawn here, which is also what keeps "twice as far, half as big".
+                Some(Projected {
+                    x: cx + k * dot(d, right),
+                    y: cy - k * dot(d, up),
+                    r: k * radius,
+                    depth: zc,
+                })
+            }
+        }
+    }
+}
+
+pub(crate) fn invalid(parameter: &str, value: impl std::fmt::Display, allowed: &str) -> Error {
+    Error::InvalidParameter {
+        parameter: parameter.to_string(),
+        value: value.to_string(),
+        allowed: allowed.to_string(),
+    }
+}
+
+pub(crate) fn check_size(width: usize, height: usize) -> Result<(), Error> {
+    const MAX: usize = 1 << 15;
+    if width == 0 || width > MAX {
+        return Err(invalid("width", width, "1 ..= 32768 pixels"));
+    }
+    if height == 0 || height > MAX {
+        return Err(invalid("height", height, "1 ..= 32768 pixels"));
+    }
+    Ok(())
+}
+
+fn check_fov(fov_y_deg: f64) -> Result<(), Error> {
+    if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
+        return Err(invalid(
+            "fov_y_deg",
+            fov_y_deg,
+            "an angle in degrees strictly between 0 and 180",
+        ));
+    }
+    Ok(())
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}

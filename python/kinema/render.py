@@ -1,0 +1,304 @@
+"""Off-screen rendering of particle trajectories into frames, MP4 (H.264) and GIF.
+
+2D scenes are drawn as antialiased discs seen from +z, 3D scenes as shaded spheres in
+perspective, far to near. Particles are coloured by speed, by id, or by any per-particle field,
+and each frame carries a time stamp. Pixels are drawn by the engine (``kinema._core``, in
+parallel, with the GIL released); this module chooses cameras and colours and writes files.
+
+    frames = render_frames(traj_x, radius=0.01, t=traj_t, dim=3, color_by="speed")
+    write_video(frames, "out.mp4", fps=30)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import _core
+
+__all__ = ["Camera2D", "Camera3D", "COLORMAPS", "render_frames", "write_video", "VIDEO_EXTENSIONS"]
+
+#: Names accepted by ``colormap=``.
+COLORMAPS: tuple[str, ...] = tuple(_core.COLORMAP_NAMES)
+#: File extensions ``write_video`` knows.
+VIDEO_EXTENSIONS = (".mp4", ".gif")
+
+
+@dataclass(frozen=True)
+class Camera2D:
+    """Orthographic view of the xy-plane: the rectangle [xmin, xmax] × [ymin, ymax] (m) fits the
+    image, centred, aspect kept (x to the right, y up)."""
+
+    xmin: float
+    ymin: float
+    xmax: float
+    ymax: float
+
+    @classmethod
+    def framing(cls, lo, hi, margin: float = 0.0) -> Camera2D:
+        """The box [lo, hi] (xy, m) widened by ``margin`` (m) on every side."""
+        return cls(lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin)
+
+    def _kwargs(self) -> dict:
+        return {"view": (float(self.xmin), float(self.ymin), float(self.xmax), float(self.ymax))}
+
+
+@dataclass(frozen=True)
+class Camera3D:
+    """Pinhole camera at ``eye`` (m) looking at ``target`` (m), ``up`` the image's up direction
+    (z is up by default), ``fov_deg`` the vertical field of view in degrees."""
+
+    eye: tuple[float, float, float]
+    target: tuple[float, float, float]
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    fov_deg: float = 40.0
+
+    @classmethod
+    def framing(cls, lo, hi, direction=(1.0, -1.6, 0.9), fov_deg: float = 40.0, width: int = 1280, height: int = 720) -> Camera3D:
+        """A camera looking at the centre of the box [lo, hi] (m) from ``direction`` (centre →
+        eye), just far enough that the whole box is in view."""
+        eye, target, up = _core.frame_box(_vec3(lo), _vec3(hi), _vec3(direction), float(fov_deg), int(width), int(height))
+        return cls(tuple(eye), tuple(target), tuple(up), float(fov_deg))
+
+    def _kwargs(self) -> dict:
+        return {"eye": _vec3(self.eye), "target": _vec3(self.target), "up": _vec3(self.up), "fov_deg": float(self.fov_deg)}
+
+
+def _vec3(v) -> list[float]:
+    return [float(c) for c in v]
+
+
+def render_frames(
+    positions,
+    radius,
+    t,
+    *,
+    dim: int = 3,
+    color_by="speed",
+    velocities=None,
+    colormap: str = "viridis",
+    vmin: float | None = None,
+    vmax: float | None = None,
+    width: int = 1280,
+    height: int = 720,
+    camera: Camera2D | Camera3D | None = None,
+    background=(255, 255, 255),
+    time_format: str | None = "t = {:.3f} s",
+    label_scale: int = 2,
+    min_radius_px: float = 1.0,
+) -> Iterator[np.ndarray]:
+    """Yield one (height, width, 3) uint8 RGB frame per time.
+
+    positions: (F, N, 3) or, for ``dim=2``, (F, N, 2) positions in m (2D uses x and y).
+    radius: one radius for all particles or one per particle (N,), m.
+    t: (F,) times, s, stamped on each frame with ``time_format`` (None: no stamp; the stamp
+      may use only digits, '.', '-', '+', ':', '=', ' ', 't', 's', 'e').
+    color_by: "speed" (|v|, from ``velocities`` (F, N, dim) or else from finite differences of
+      the positions in t), "id" (categorical colours by particle index), a field of floats of
+      shape (N,) or (F, N) mapped through ``colormap`` between ``vmin`` and ``vmax`` (default:
+      the field's minimum and maximum over all frames, so colours mean the same in every
+      frame), or fixed uint8 colours of shape (N, 3) or (F, N, 3).
+    camera: a Camera2D / Camera3D; default frames the bounding box of all frames (plus the
+      largest radius), a 3D box seen from the front right and above.
+    background: RGB8 colour.
+    """
+    if dim not in (2, 3):
+        raise ValueError(f"dim = {dim!r} is invalid: use 2 (discs in the xy-plane) or 3 (spheres)")
+    x = np.asarray(positions, dtype=np.float64)
+    if x.ndim != 3 or x.shape[2] not in (dim, 3):
+        raise ValueError(f"positions has shape {x.shape}: expected (F, N, 3){' or (F, N, 2)' if dim == 2 else ''}")
+    n_frames, n = x.shape[:2]
+    times = np.asarray(t, dtype=np.float64).reshape(-1)
+    if times.shape != (n_frames,):
+        raise ValueError(f"t has {times.size} times: expected one per frame ({n_frames})")
+    if x.shape[2] == 2:
+        x = np.concatenate([x, np.zeros((n_frames, n, 1))], axis=2)
+    elif dim == 2:
+        x = x.copy()
+        x[:, :, 2] = 0.0
+    r = np.broadcast_to(np.asarray(radius, dtype=np.float64), (n,))
+    r = np.ascontiguousarray(r)
+    if not np.all(np.isfinite(r)) or np.any(r < 0):
+        raise ValueError("radius is invalid: radii must be finite and >= 0")
+
+    colors, values, vmin, vmax = _colouring(color_by, x, times, velocities, dim, vmin, vmax)
+    if camera is None:
+        camera = _auto_camera(x, r, dim, width, height)
+    elif dim == 2 and not isinstance(camera, Camera2D) or dim == 3 and not isinstance(camera, Camera3D):
+        raise ValueError(f"camera = {camera!r} is invalid: dim={dim} needs a Camera{dim}D")
+    bg = tuple(int(c) for c in background)
+    luminance = 0.299 * bg[0] + 0.587 * bg[1] + 0.114 * bg[2]
+    label_color = (0, 0, 0) if luminance > 128 else (255, 255, 255)
+    common = dict(
+        width=int(width),
+        height=int(height),
+        background=bg,
+        min_radius_px=float(min_radius_px),
+        label_scale=int(label_scale),
+        label_color=label_color,
+        **camera._kwargs(),
+    )
+    for k in range(n_frames):
+        label = time_format.format(times[k]) if time_format is not None else None
+        if colors is not None:
+            colour_kw = {"colors": colors[k] if colors.ndim == 3 else colors}
+        else:
+            colour_kw = {"values": values[k] if values.ndim == 2 else values, "colormap": colormap, "vmin": vmin, "vmax": vmax}
+        yield _core.render_frame(x[k], r, label=label, **colour_kw, **common)
+
+
+def _colouring(color_by, x, times, velocities, dim, vmin, vmax):
+    """(colors, values, vmin, vmax): fixed uint8 colours, or values for the colormap."""
+    n_frames, n = x.shape[:2]
+    if isinstance(color_by, str):
+        if color_by == "id":
+            return _core.categorical_colors(np.arange(n, dtype=np.uint64)), None, vmin, vmax
+        if color_by != "speed":
+            raise ValueError(f"color_by = {color_by!r} is invalid: use 'speed', 'id' or an array of values or colours")
+        if velocities is not None:
+            v = np.asarray(velocities, dtype=np.float64)
+            if v.shape[:2] != (n_frames, n) or v.ndim != 3:
+                raise ValueError(f"velocities has shape {v.shape}: expected ({n_frames}, {n}, {dim})")
+            speed = np.linalg.norm(v[:, :, :dim], axis=2)
+        elif n_frames >= 2:
+            speed = np.linalg.norm(np.gradient(x[:, :, :dim], times, axis=0), axis=2)
+        else:
+            speed = np.zeros((n_frames, n))
+        values = speed
+    else:
+        field = np.asarray(color_by)
+        if field.dtype == np.uint8 and field.shape[-1:] == (3,) and field.shape in ((n, 3), (n_frames, n, 3)):
+            return np.ascontiguousarray(field), None, vmin, vmax
+        values = np.asarray(field, dtype=np.float64)
+        if values.shape not in ((n,), (n_frames, n)):
+            raise ValueError(
+                f"color_by has shape {field.shape}: expected values (N,) or (F, N), or uint8 colours (N, 3) or (F, N, 3), with F={n_frames}, N={n}"
+            )
+    finite = values[np.isfinite(values)]
+    lo = float(finite.min()) if vmin is None and finite.size else (0.0 if vmin is None else float(vmin))
+    hi = float(finite.max()) if vmax is None and finite.size else (1.0 if vmax is None else float(vmax))
+    return None, np.ascontiguousarray(values), lo, hi
+
+
+def _auto_camera(x, r, dim, width, height):
+    finite = x[np.all(np.isfinite(x), axis=2)]
+    if finite.size == 0:
+        lo, hi = np.zeros(3), np.ones(3)
+    else:
+        lo, hi = finite.min(axis=0), finite.max(axis=0)
+    pad = float(r.max()) if r.size else 0.0
+    span = float(np.max(hi - lo)) if finite.size else 1.0
+    # A degenerate box (one particle, a line) still gets a view of finite size.
+    pad = max(pad, 0.05 * span, 1e-9)
+    lo, hi = lo - pad, hi + pad
+    if dim == 2:
+        return Camera2D(float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
+    return Camera3D.framing(lo, hi, width=width, height=height)
+
+
+def write_video(frames: Iterable[np.ndarray], path, fps: float = 30.0, *, preset: str = "ultrafast", crf: int = 20) -> Path:
+    """Write RGB uint8 frames of one size to ``path`` and return it as a Path.
+
+    ``.mp4``: H.264 (libx264, yuv420p, BT.601 limited range; odd sizes padded by one edge
+    row/column) by the ffmpeg that imageio-ffmpeg ships, with the x264
+    ``preset`` (ultrafast … veryslow; the default ultrafast keeps 10,000 particles at
+    1280×720 above 60 frames per second on two cores, ``benchmarks/render.py``; slower
+    presets give smaller files) and constant-quality ``crf`` (0 lossless … 51 worst).
+    ``.gif``: Pillow, looping, 1/fps seconds per frame (GIF counts in 1/100 s).
+    The file is written under a temporary name in the same directory and renamed when
+    complete: on any error nothing is left behind and an existing file is untouched.
+    """
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext not in VIDEO_EXTENSIONS:
+        raise ValueError(f"path = {str(path)!r} is invalid: the extension must be one of {', '.join(VIDEO_EXTENSIONS)}")
+    if not (isinstance(fps, int | float) and math.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps = {fps!r} is invalid: frames per second must be a finite number > 0")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise FileNotFoundError(f"path = {str(path)!r} is invalid: the directory {str(parent)!r} does not exist")
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".part{ext}", dir=parent)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        count = (_write_mp4 if ext == ".mp4" else _write_gif)(_checked(frames), tmp, fps, preset, crf)
+        if count == 0:
+            raise ValueError("frames is empty: a video needs at least one frame")
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _checked(frames: Iterable[np.ndarray]) -> Iterator[np.ndarray]:
+    """The frames as C-contiguous (H, W, 3) uint8, all of the first one's size."""
+    shape = None
+    for k, f in enumerate(frames):
+        f = np.asarray(f)
+        if f.dtype != np.uint8 or f.ndim != 3 or f.shape[2] != 3:
+            raise ValueError(f"frames[{k}] has dtype {f.dtype} and shape {f.shape}: expected uint8 (H, W, 3)")
+        if shape is None:
+            shape = f.shape
+        elif f.shape != shape:
+            raise ValueError(f"frames[{k}] has shape {f.shape}: all frames must have the first one's shape {shape}")
+        yield np.ascontiguousarray(f)
+
+
+def _write_mp4(frames: Iterator[np.ndarray], tmp: Path, fps: float, preset: str, crf: int) -> int:
+    import imageio_ffmpeg
+
+    writer = None
+    count = 0
+    try:
+        for f in frames:
+            h, w = f.shape[:2]
+            if h % 2 or w % 2:
+                # yuv420p stores colour at half resolution: both sides must be even.
+                f = np.pad(f, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
+            if writer is None:
+                writer = imageio_ffmpeg.write_frames(
+                    str(tmp),
+                    (f.shape[1], f.shape[0]),
+                    pix_fmt_in="yuv420p",
+                    fps=fps,
+                    codec="libx264",
+                    quality=None,
+                    macro_block_size=1,
+                    output_params=["-preset", str(preset), "-crf", str(int(crf))],
+                    ffmpeg_log_level="error",
+                )
+                writer.send(None)
+            # Converted by the engine in parallel: ffmpeg's own conversion is single-threaded
+            # and the pipe carries half the bytes.
+            writer.send(_core.rgb_to_yuv420p(f))
+            count += 1
+    finally:
+        if writer is not None:
+            writer.close()
+    return count
+
+
+def _write_gif(frames: Iterator[np.ndarray], tmp: Path, fps: float, preset: str, crf: int) -> int:
+    from PIL import Image
+
+    count = 0
+
+    def images():
+        nonlocal count
+        for f in frames:
+            count += 1
+            yield Image.fromarray(f)
+
+    it = images()
+    first = next(it, None)
+    if first is None:
+        return 0
+    first.save(tmp, format="GIF", save_all=True, append_images=it, duration=max(10, round(1000.0 / fps)), loop=0)
+    return count

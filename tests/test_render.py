@@ -1,0 +1,140 @@
+"""kinema.render: frames, colours, time stamps, MP4 and GIF files."""
+
+from __future__ import annotations
+
+import imageio_ffmpeg
+import numpy as np
+import pytest
+from PIL import Image
+
+from kinema import _core
+from kinema.render import Camera2D, Camera3D, render_frames, write_video
+
+
+def _scene(frames=3, n=5):
+    """n particles on the x axis; particle k moves along y at speed k (the last is fastest)."""
+    t = np.linspace(0.0, 1.0, frames)
+    x = np.zeros((frames, n, 3))
+    x[:, :, 0] = np.arange(n)
+    x[:, :, 1] = t[:, None] * np.arange(n)[None, :]
+    return x, t
+
+
+def test_frames_have_the_requested_shape_and_dtype():
+    x, t = _scene()
+    for dim in (2, 3):
+        frames = list(render_frames(x, 0.3, t, dim=dim, width=160, height=90))
+        assert len(frames) == 3
+        for f in frames:
+            assert f.shape == (90, 160, 3) and f.dtype == np.uint8
+            assert (f != 255).any()
+
+
+def test_colour_by_speed_puts_the_fastest_particle_at_the_top_colour():
+    x, t = _scene(frames=2, n=3)
+    v = np.zeros_like(x)
+    v[:, :, 1] = [0.0, 1.0, 5.0]
+    cam = Camera2D(-1.0, -2.0, 3.0, 2.0)  # 4 m × 4 m onto 100 × 100: 25 px per m
+    frame = next(render_frames(x[:, :, :2], 0.4, t, dim=2, velocities=v[:, :, :2], width=100, height=100, camera=cam, time_format=None))
+    top = _core.colormap(np.array([1.0]), "viridis", 0.0, 1.0)[0]
+    bottom = _core.colormap(np.array([0.0]), "viridis", 0.0, 1.0)[0]
+
+    def at(xw, yw):  # world → pixel: column 25·(x + 1), row 25·(2 − y)
+        return frame[int(25 * (2 - yw)), int(25 * (xw + 1))]
+
+    assert (at(2.0, 0.0) == top).all()  # particle 2, speed 5, the maximum
+    assert (at(0.0, 0.0) == bottom).all()  # particle 0 at rest, the minimum
+
+
+def test_colour_by_id_and_by_field_and_fixed_colours():
+    x, t = _scene(frames=1, n=4)
+    kw = dict(dim=2, width=80, height=40, time_format=None)
+    by_id = next(render_frames(x, 0.3, t, color_by="id", **kw))
+    by_field = next(render_frames(x, 0.3, t, color_by=np.array([0.0, 1.0, 2.0, 3.0]), **kw))
+    red = np.tile(np.array([255, 0, 0], np.uint8), (4, 1))
+    fixed = next(render_frames(x, 0.3, t, color_by=red, **kw))
+    assert not np.array_equal(by_id, by_field)
+    colours = {tuple(c) for c in fixed.reshape(-1, 3)}
+    assert (255, 0, 0) in colours and (0, 255, 0) not in colours
+
+
+def test_time_stamp_changes_pixels_between_frames():
+    x = np.zeros((2, 1, 3))
+    frames = list(render_frames(x, 0.1, [0.0, 1.5], dim=3, width=200, height=100, color_by="id"))
+    diff = np.any(frames[0] != frames[1], axis=2)
+    assert diff.any()
+    rows, cols = np.nonzero(diff)
+    assert rows.max() < 30 and cols.max() < 150, "only the stamp in the top-left corner differs"
+
+
+def test_3d_camera_framing_and_depth_order():
+    # Two spheres on the view axis: the nearer (green) hides the farther (red) at the centre.
+    x = np.array([[[0.0, 0.0, 0.0], [0.0, -3.0, 0.0]]])
+    cam = Camera3D(eye=(0.0, -10.0, 0.0), target=(0.0, 0.0, 0.0))
+    colours = np.array([[255, 0, 0], [0, 255, 0]], np.uint8)
+    f = next(render_frames(x, [1.0, 0.5], [0.0], camera=cam, color_by=colours, width=100, height=100, time_format=None))
+    c = f[50, 50].astype(int)
+    assert c[1] > c[0] + 100
+    framed = Camera3D.framing((0, 0, 0), (1, 1, 1))
+    assert np.linalg.norm(np.subtract(framed.eye, framed.target)) > 1.0
+
+
+def test_mp4_and_gif_are_written_and_read_back(tmp_path):
+    x, t = _scene(frames=6, n=20)
+    frames = list(render_frames(x, 0.2, t, dim=2, width=96, height=64))
+    mp4 = write_video(iter(frames), tmp_path / "a.mp4", fps=12)
+    reader = imageio_ffmpeg.read_frames(str(mp4))
+    meta = next(reader)
+    assert tuple(meta["size"]) == (96, 64)
+    assert sum(1 for _ in reader) == 6
+    gif = write_video(frames, tmp_path / "a.gif", fps=12)
+    with Image.open(gif) as im:
+        assert im.size == (96, 64) and im.n_frames == 6
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "a.mp4"]
+
+
+def test_odd_sizes_are_padded_for_h264(tmp_path):
+    frames = [np.full((33, 47, 3), k * 40, np.uint8) for k in range(3)]
+    reader = imageio_ffmpeg.read_frames(str(write_video(frames, tmp_path / "odd.mp4", fps=5)))
+    assert tuple(next(reader)["size"]) == (48, 34)
+
+
+def test_bad_path_is_a_clear_error_and_leaves_nothing_behind(tmp_path):
+    frames = [np.zeros((16, 16, 3), np.uint8)]
+    with pytest.raises(ValueError, match=r"path.*\.mp4, \.gif"):
+        write_video(frames, tmp_path / "a.avi")
+    with pytest.raises(FileNotFoundError, match="path"):
+        write_video(frames, tmp_path / "missing" / "a.mp4")
+
+    def failing():
+        yield np.zeros((16, 16, 3), np.uint8)
+        raise RuntimeError("simulation failed mid-way")
+
+    for ext in (".mp4", ".gif"):
+        with pytest.raises(RuntimeError, match="mid-way"):
+            write_video(failing(), tmp_path / f"b{ext}")
+    with pytest.raises(ValueError, match="frames"):
+        write_video([np.zeros((16, 16, 3), np.uint8), np.zeros((8, 8, 3), np.uint8)], tmp_path / "c.mp4")
+    with pytest.raises(ValueError, match="fps"):
+        write_video(frames, tmp_path / "d.gif", fps=0)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bad_render_input_names_the_parameter():
+    x, t = _scene()
+    with pytest.raises(ValueError, match="positions"):
+        next(render_frames(x[:, :, :1], 0.1, t))
+    with pytest.raises(ValueError, match="color_by"):
+        next(render_frames(x, 0.1, t, color_by="mass"))
+    with pytest.raises(ValueError, match="colormap"):
+        next(render_frames(x, 0.1, t, colormap="jet"))
+    with pytest.raises(ValueError, match="radius"):
+        next(render_frames(x, -1.0, t))
+    with pytest.raises(ValueError, match="fov_y_deg"):
+        next(render_frames(x, 0.1, t, camera=Camera3D((0, -5, 0), (0, 0, 0), fov_deg=190)))
+    with pytest.raises(ValueError, match="width"):
+        next(render_frames(x, 0.1, t, width=0))
+    with pytest.raises(ValueError, match="text"):
+        next(render_frames(x, 0.1, t, time_format="time {:.2f}"))
+    with pytest.raises(ValueError, match="positions\\[0\\]"):
+        _core.render_frame(np.full((1, 3), np.nan), np.ones(1), view=(0, 0, 1, 1))
