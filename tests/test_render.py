@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+import kinema
 from kinema import _core
 from kinema.render import Camera2D, Camera3D, render_frames, write_video
 
@@ -138,3 +139,19 @@ def test_bad_render_input_names_the_parameter():
         next(render_frames(x, 0.1, t, time_format="time {:.2f}"))
     with pytest.raises(ValueError, match="positions\\[0\\]"):
         _core.render_frame(np.full((1, 3), np.nan), np.ones(1), view=(0, 0, 1, 1))
+
+
+def test_a_trajectory_renders_itself(tmp_path):
+    # Trajectory.render: one video frame per recorded frame, at the recording's frame rate.
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[0, 0, 1.0], [0.5, 0, 1.0]], radius=0.1)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution=0.8))
+    traj = w.run(0.5, fps=20)
+    path = traj.render(tmp_path / "bounce.mp4", width=160, height=96)
+    reader = imageio_ffmpeg.read_frames(str(path))
+    meta = next(reader)
+    frames = list(reader)
+    assert len(frames) == traj.t.size and meta["size"] == (160, 96)
+    assert meta["fps"] == pytest.approx(20.0)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bounce.mp4"]

@@ -25,7 +25,8 @@ class Trajectory:
     (3,) m, the periodic cell.
 
     ``save`` writes an H5MD file, ``Trajectory.load`` (or ``kinema.load_trajectory``) reads
-    one back, ``export`` writes VTK, PLY, extended XYZ or CSV (see ``kinema.io``)."""
+    one back, ``export`` writes VTK, PLY, extended XYZ or CSV (see ``kinema.io``), ``render``
+    a video (see ``kinema.render``)."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -66,6 +67,25 @@ class Trajectory:
         from .io import load_h5md
 
         return load_h5md(path, group=group).to_trajectory()
+
+    def render(self, path: Any, fps: float | None = None, **options: Any) -> Any:
+        """Render the frames to a video, ``.mp4`` (H.264) or ``.gif``, and return its path.
+
+        ``fps`` defaults to the recording's frame rate (real time). ``options`` go to
+        ``kinema.render_frames`` (``color_by``, ``width``, ``height``, ``camera``, ...) and
+        ``preset``/``crf`` to ``kinema.write_video``. Particles without a radius are drawn at
+        1/200 of the scene's size."""
+        from .render import render_frames, write_video
+
+        video = {k: options.pop(k) for k in ("preset", "crf") if k in options}
+        if fps is None:
+            fps = 1.0 / float(np.median(np.diff(self.t))) if self.t.size > 1 else 30.0
+        radius = self.radii
+        if radius is None or not np.any(radius > 0):
+            extent = float(np.ptp(self.positions.reshape(-1, 3), axis=0).max()) or 1.0
+            radius = np.full(self.positions.shape[1], extent / 200.0)
+        frames = render_frames(self.positions, radius, self.t, dim=self.dim, velocities=self.velocities, **options)
+        return write_video(frames, path, fps=fps, **video)
 
     def export(self, path: Any, format: str | None = None) -> list[Any]:
         """Write the frames for other tools: ``vtk`` (ParaView), ``ply`` (Blender, Houdini),
