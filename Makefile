@@ -10,9 +10,10 @@ PY     := $(VENV)/bin/python
 PIP    := $(VENV)/bin/pip
 STAMP  := $(VENV)/.deps-installed
 BUILT  := $(VENV)/.kinema-built
+VIEWER_BUNDLE := python/kinema/viewer/static/viewer.js
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml pyproject.toml
 
-.PHONY: demo test test-rust test-python bench fmt setup build clean
+.PHONY: demo test test-rust test-python bench fmt setup build viewer clean
 
 setup: $(STAMP)
 
@@ -22,11 +23,17 @@ $(STAMP): requirements/dev.txt
 	touch $@
 
 # Release build of the extension, installed into the venv in editable mode (python/ is used in place).
-build: $(BUILT)
+build: $(BUILT) $(VIEWER_BUNDLE)
 
 $(BUILT): $(STAMP) $(RUST_SOURCES)
 	$(VENV)/bin/maturin develop --release -q
 	touch $@
+
+# The browser viewer's script: three.js and viewer/src bundled by esbuild (pinned in viewer/package-lock.json).
+viewer: $(VIEWER_BUNDLE)
+
+$(VIEWER_BUNDLE): viewer/package.json viewer/package-lock.json viewer/build.mjs $(wildcard viewer/src/*.js)
+	cd viewer && npm ci --no-audit --no-fund --loglevel=error && node build.mjs
 
 demo: build
 	$(VENV)/bin/kinema demo --out out
@@ -37,6 +44,7 @@ test-rust:
 	cargo test --workspace --exclude kinema-py --release
 
 test-python: build
+	command -v chromium >/dev/null || apt-get install -y -q chromium >/dev/null || (apt-get update -q >/dev/null && apt-get install -y -q chromium >/dev/null) || echo "chromium could not be installed: the browser tests will say so and skip"
 	$(PY) -m pytest -q
 
 bench: build

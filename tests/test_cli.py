@@ -56,3 +56,155 @@ def test_demo_writes_its_pictures(tmp_path):
 def test_python_dash_m_kinema_is_the_same_command():
     res = subprocess.run([sys.executable, "-m", "kinema", "--help"], capture_output=True, text=True, check=True)
     assert "stability" in res.stdout and "demo" in res.stdout
+
+
+# -- kinema run / render / export ------------------------------------------------------------
+
+SMALL = """
+[world]
+dim = 2
+dt = 0.01
+duration = 0.3
+fps = 20.0
+
+[[particles]]
+type = "list"
+positions = [[0, 1], [0.5, 1]]
+radius = 0.1
+
+[[forces]]
+type = "gravity"
+
+[[colliders]]
+type = "plane"
+point = [0, 0]
+normal = [0, 1]
+
+[render]
+width = 64
+height = 48
+"""
+
+
+def small_scene(tmp_path, text=SMALL, name="small.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def error_lines(res):
+    return [line for line in res.output.splitlines() if line.startswith("error:")]
+
+
+def test_run_writes_trajectory_video_and_plot(tmp_path):
+    import kinema
+
+    out = tmp_path / "out"
+    res = runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in out.iterdir()) == ["energy.png", "small.mp4", "trajectory.h5"]  # no temporaries
+    traj = kinema.load_trajectory(out / "trajectory.h5")
+    assert traj.positions.shape == (7, 2, 3) and traj.dim == 2
+    assert (out / "energy.png").read_bytes()[:4] == b"\x89PNG"
+    assert (out / "small.mp4").stat().st_size > 1000
+    for name in ("trajectory.h5", "small.mp4", "energy.png"):
+        assert str(out / name) in res.output.replace("\n", "")
+
+
+def test_run_duration_and_no_video(tmp_path):
+    import kinema
+
+    out = tmp_path / "o"
+    res = runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(out), "--duration", "0.1", "--no-video"])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in out.iterdir()) == ["energy.png", "trajectory.h5"]
+    assert kinema.load_trajectory(out / "trajectory.h5").t.size == 3
+
+
+def test_render_and_export_a_saved_trajectory(tmp_path):
+    out = tmp_path / "o"
+    assert runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(out), "--no-video"]).exit_code == 0
+    res = runner.invoke(app, ["render", str(out / "trajectory.h5"), "-o", str(tmp_path / "m.gif"), "--width", "64", "--height", "48"])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "m.gif").read_bytes()[:3] == b"GIF"
+    for fmt, main in (("csv", "t.csv"), ("xyz", "t.xyz"), ("vtk", "v.pvd"), ("ply", "p.ply")):
+        res = runner.invoke(app, ["export", str(out / "trajectory.h5"), "--format", fmt, "-o", str(tmp_path / main)])
+        assert res.exit_code == 0, res.output
+    assert (tmp_path / "t.csv").read_text().startswith("frame,time,id,x,y,z")
+    assert (tmp_path / "v").is_dir() and (tmp_path / "p").is_dir()  # the vtk and ply series folders
+
+
+def test_a_scene_with_typos_is_exit_2_one_line_per_problem(tmp_path):
+    path = small_scene(tmp_path, SMALL.replace("dt = 0.01", "dt = -1").replace("radius = 0.1", "radius = 0.1\nmas = 2"))
+    res = runner.invoke(app, ["run", str(path), "-o", str(tmp_path / "o")])
+    assert res.exit_code == 2
+    lines = error_lines(res)
+    assert len(lines) == 2, res.output
+    assert f"{path}: world.dt: -1 is invalid" in lines[0]
+    assert "particles[0].mas: unknown key; did you mean 'mass'?" in lines[1]
+    assert "Traceback" not in res.output and not (tmp_path / "o").exists()
+
+
+def test_bad_inputs_are_exit_2_with_one_line(tmp_path):
+    scene = small_scene(tmp_path)
+    foreign = tmp_path / "foreign.h5"
+    foreign.write_bytes(b"not an hdf5 file at all")
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    cases = [
+        (["run", str(tmp_path / "missing.toml")], "no such file"),
+        (["run", str(tmp_path)], "is a directory"),
+        (["run", str(scene), "-o", str(blocker)], "exists and is not a folder"),
+        (["run", str(scene), "-o", str(blocker / "sub")], "cannot create the folder"),
+        (["run", str(scene), "--duration", "-1"], "--duration"),
+        (["render", str(tmp_path / "missing.h5"), "-o", str(tmp_path / "m.mp4")], "no such file"),
+        (["render", str(foreign), "-o", str(tmp_path / "m.mp4")], "not an HDF5 file"),
+        (["render", str(foreign), "-o", str(tmp_path / "m.avi")], "unsupported video format"),
+        (["export", str(foreign), "--format", "csv"], "not an HDF5 file"),
+        (["export", str(foreign), "--format", "obj"], "--format 'obj'"),
+    ]
+    for args, needle in cases:
+        res = runner.invoke(app, args)
+        assert res.exit_code == 2, (args, res.output)
+        lines = error_lines(res)
+        assert len(lines) == 1 and needle in lines[0], (args, res.output)
+        assert "Traceback" not in res.output
+    assert not (tmp_path / "m.mp4").exists() and not (tmp_path / "m.avi").exists()
+
+
+def test_export_into_an_unwritable_place_is_exit_2(tmp_path):
+    out = tmp_path / "o"
+    assert runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(out), "--no-video"]).exit_code == 0
+    res = runner.invoke(app, ["export", str(out / "trajectory.h5"), "--format", "csv", "-o", str(tmp_path / "nowhere" / "t.csv")])
+    assert res.exit_code == 2 and "does not exist" in error_lines(res)[0]
+
+
+DIVERGING = """
+[world]
+dt = 0.05
+method = "euler"
+duration = 20.0
+fps = 20.0
+
+[[particles]]
+type = "list"
+positions = [[0, 0, 0], [1, 0, 0]]
+pinned = [true, false]
+
+[[forces]]
+type = "spring"
+i = [0]
+j = [1]
+k = 10000.0
+rest_length = 0.5
+"""
+
+
+def test_a_diverging_scene_is_exit_1_naming_the_advised_step(tmp_path):
+    out = tmp_path / "o"
+    res = runner.invoke(app, ["run", str(small_scene(tmp_path, DIVERGING)), "-o", str(out)])
+    assert res.exit_code == 1, res.output
+    lines = error_lines(res)
+    assert len(lines) == 1 and "diverged" in lines[0] and "step" in lines[0], res.output
+    assert "Traceback" not in res.output
+    assert list(out.iterdir()) == []  # nothing written

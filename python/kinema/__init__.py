@@ -16,11 +16,19 @@ The public API (everything else is private):
 - Pictures: ``render_frames`` (2D discs, 3D shaded spheres, coloured by speed, id or a field,
   with a time stamp), ``write_video`` (H.264 MP4, GIF), ``Camera2D``, ``Camera3D``; the
   module ``kinema.render``
+- Scene files (TOML): ``load_scene``, ``Scene``, ``SceneError``, ``World.to_scene``; the
+  module ``kinema.scene`` (docs/scenes.md)
 - Measured orders of accuracy: ``convergence``, ``ConvergenceResult``, the module
   ``kinema.problems`` (problems with exact solutions)
 """
 
-from . import io, problems, render, stability
+from . import (
+    io,
+    problems,
+    render,
+    scene,  # importing it attaches World.to_scene
+    stability,
+)
 from ._core import __version__
 from .colliders import Box, Plane, SphereObstacle
 from .convergence import ConvergenceResult, convergence
@@ -37,6 +45,7 @@ from .ode import (
     solve_second_order,
 )
 from .render import Camera2D, Camera3D, render_frames, write_video
+from .scene import Scene, SceneError, load_scene
 from .trajectory import Trajectory
 from .world import SimulationDiverged, StabilityWarning, World
 
@@ -51,6 +60,10 @@ __all__ = [
     "Drag",
     "Gravity",
     "Plane",
+    "Scene",
+    "SceneError",
+    "load_scene",
+    "scene",
     "PythonForce",
     "SimulationDiverged",
     "SphereObstacle",

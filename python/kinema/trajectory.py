@@ -87,6 +87,29 @@ class Trajectory:
         frames = render_frames(self.positions, radius, self.t, dim=self.dim, velocities=self.velocities, **options)
         return write_video(frames, path, fps=fps, **video)
 
+    def show(self, **options: Any) -> Any:
+        """Play the frames in the browser viewer (three.js, bundled): inline in Jupyter (an
+        HTML page in an iframe), else served on 127.0.0.1 and opened in the user's browser;
+        returns the page's URL, or the IPython display object in a notebook."""
+        from .viewer import serve
+        from .viewer.page import html_page
+
+        try:
+            from IPython import get_ipython  # type: ignore[import-not-found]
+
+            in_notebook = get_ipython() is not None and "IPKernelApp" in get_ipython().config
+        except ImportError:
+            in_notebook = False
+        if in_notebook:
+            import html as _html
+
+            from IPython.display import HTML  # type: ignore[import-not-found]
+
+            page = html_page(self, **options)
+            return HTML(f'<iframe srcdoc="{_html.escape(page)}" style="width:100%;height:480px;border:0"></iframe>')
+        url, _server = serve(self, **options)
+        return url
+
     def export(self, path: Any, format: str | None = None) -> list[Any]:
         """Write the frames for other tools: ``vtk`` (ParaView), ``ply`` (Blender, Houdini),
         ``xyz`` (OVITO) or ``csv``, inferred from the suffix when ``format`` is None; returns

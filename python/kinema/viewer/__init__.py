@@ -1,0 +1,17 @@
+"""A trajectory in the browser: three.js plays the frames with play/pause, scrubbing, speed,
+an orbit camera and colouring by speed or id.
+
+- ``write_html(traj, path)`` writes one self-contained HTML file (script and frames inlined)
+  that plays offline.
+- ``serve(traj)`` serves the page and its frames (``/data.bin``) on 127.0.0.1 at a free port
+  and opens it in the user's browser when there is one.
+
+The page's script is a bundle built from ``viewer/`` (three.js from the npm registry, bundled by
+esbuild) into ``kinema/viewer/static/viewer.js`` by ``make build``; nothing is fetched from
+the internet when a page is opened.
+"""
+
+from .page import BundleMissingError, ViewerWarning, write_html
+from .server import serve
+
+__all__ = ["BundleMissingError", "ViewerWarning", "serve", "write_html"]

@@ -1,0 +1,258 @@
+"""Scene files: every example loads and runs, a scene round-trips, and a bad scene gets one
+clear line per problem naming the file, the key path, the value and what is allowed."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import kinema
+from kinema.scene import Scene, SceneError
+
+SCENES = Path(__file__).resolve().parent.parent / "examples" / "scenes"
+EXAMPLES = sorted(p.name for p in SCENES.glob("*.toml"))
+
+
+def load(name):
+    return kinema.load_scene(SCENES / name)
+
+
+def test_every_example_is_listed():
+    for name in (
+        "bouncing_balls",
+        "newtons_cradle",
+        "billiards_2d",
+        "sand_box",
+        "cloth_on_sphere",
+        "maxwell_gas",
+        "kepler_euler",
+        "kepler_rk4",
+        "kepler_verlet",
+    ):
+        assert f"{name}.toml" in EXAMPLES
+
+
+@pytest.mark.filterwarnings("ignore::kinema.StabilityWarning")
+@pytest.mark.parametrize("name", EXAMPLES)
+def test_example_loads_and_runs_shortened(name):
+    w = load(name)
+    assert isinstance(w.scene, Scene) and len(w) > 0
+    traj = w.run(min(0.1, w.scene.world.duration), fps=w.scene.world.fps)
+    assert np.all(np.isfinite(traj.positions))
+
+
+@pytest.mark.filterwarnings("ignore::kinema.StabilityWarning")
+@pytest.mark.parametrize("name", EXAMPLES)
+def test_example_round_trips_to_an_identical_world(name, tmp_path):
+    w = load(name)
+    w.step(5)
+    path = w.to_scene().to_toml(tmp_path / "again.toml")
+    w2 = kinema.load_scene(path)
+    assert (w2.dim, w2.dt, w2.method) == (w.dim, w.dt, w.method)
+    for a in ("positions", "velocities", "masses"):
+        np.testing.assert_array_equal(getattr(w2, a), getattr(w, a))
+    np.testing.assert_array_equal(w2._core.radii, w._core.radii)
+    np.testing.assert_array_equal(w2._core.inverse_masses, w._core.inverse_masses)
+    assert w2.collisions == w.collisions and w2.periodic == w.periodic
+    assert [type(c) for c in w2.colliders] == [type(c) for c in w.colliders]
+    assert [type(f) for f in w2.forces] == [type(f) for f in w.forces]
+    assert w2.to_scene().to_dict() == w.to_scene().to_dict()
+    assert w2.scene.world == w.scene.world and w2.scene.render == w.scene.render and w2.scene.output == w.scene.output
+    # the same state, forces and settings step alike (not bit for bit: the scene does not hold
+    # the time or the method's caches, such as Verlet's stored acceleration)
+    w.step(5)
+    w2.step(5)
+    np.testing.assert_allclose(w2.positions, w.positions, rtol=1e-9, atol=1e-9)
+
+
+def test_maxwell_gas_conserves_momentum_and_energy():
+    w = load("maxwell_gas.toml")
+    assert all(w.periodic)
+    traj = w.run(0.3, fps=30)
+    assert np.abs(traj.momentum).max() < 1e-10  # zero_momentum = true, elastic impulses
+    assert abs(traj.total[-1] - traj.total[0]) < 1e-9 * traj.total[0]
+    assert traj.collision_energy_lost[-1] < 1e-9 * traj.total[0]
+
+
+def test_newtons_cradle_passes_the_velocity_along():
+    w = load("newtons_cradle.toml")
+    balls = slice(5, 10)
+    # the raised ball reaches the row after a quarter period (about 0.5 s)
+    w.run(0.75, fps=50)
+    speed = np.linalg.norm(w.velocities[balls], axis=1)
+    assert speed[4] > 5 * speed[0] and speed[4] > 1.0
+    assert np.all(speed[1:4] < 0.3 * speed[4])
+
+
+def test_bouncing_balls_rebound_with_their_own_restitution():
+    w = load("bouncing_balls.toml")
+    e = np.linspace(0.1, 0.9, 9)
+    w.run(0.5, fps=100)  # every ball has bounced once (falls 0.95 m in 0.44 s)
+    impact = np.sqrt(2 * 9.81 * 0.95)
+    vz = w.velocities[:, 2]
+    np.testing.assert_allclose(vz - vz[0], (e - e[0]) * impact, atol=0.05 * impact)
+
+
+@pytest.mark.filterwarnings("ignore::kinema.StabilityWarning")
+def test_kepler_scenes_differ_only_by_method():
+    radius = {}
+    for m in ("euler", "rk4", "verlet"):
+        w = load(f"kepler_{m}.toml")
+        assert w.method == m
+        w.run(2 * np.pi, fps=20)
+        radius[m] = np.linalg.norm(w.positions[0])
+    assert radius["euler"] > 1.5  # forward Euler spirals out
+    assert abs(radius["verlet"] - 1) < 0.02 and abs(radius["rk4"] - 1) < 0.02
+
+
+def test_cloth_rests_on_the_sphere_not_in_it():
+    w = load("cloth_on_sphere.toml")
+    assert len(w.forces[1].i) == 2 * 19 * 20 + 2 * 19 * 19  # stretch + shear springs of the grid rule
+    w.run(0.6, fps=30)
+    d = np.linalg.norm(w.positions - [0, 0, 0.5], axis=1)
+    assert d.min() > 0.3 - 1e-6
+    assert np.all(np.isfinite(w.positions))
+
+
+def test_random_block_keeps_min_distance_and_is_seeded():
+    w = load("sand_box.toml")
+    x = w.positions[:300]
+    d = np.linalg.norm(x[:, None] - x[None], axis=2) + np.eye(len(x))
+    assert d.min() >= 0.021
+    np.testing.assert_array_equal(load("sand_box.toml").positions, w.positions)
+    assert 0.0045 <= w.masses.min() and w.masses.max() <= 0.0055
+
+
+def test_billiard_balls_stay_on_the_table():
+    w = load("billiards_2d.toml")
+    w.run(1.0, fps=30)
+    x = w.positions
+    assert np.all(x[:, :2] >= 0.028575 - 1e-9) and np.all(x[:, 0] <= 2.54) and np.all(x[:, 2] == 0)
+
+
+def test_to_scene_of_a_world_made_in_code(tmp_path):
+    w = kinema.World(dt=0.01, method="rk4")
+    w.add_particles([[0, 0, 0], [0, 0, -1.0]], mass=[1.0, 0.5], pinned=[True, False], radius=0.1)
+    w.add(kinema.Gravity())
+    w.add(kinema.Spring(0, 1, k=100.0, rest_length=1.0, damping=0.5))
+    w.add(kinema.Plane([0, 0, -3], [0, 0, 1], restitution=0.5))
+    assert w.scene is None
+    w2 = kinema.load_scene(w.to_scene().to_toml(tmp_path / "s.toml"))
+    w.step(50)
+    w2.step(50)
+    np.testing.assert_allclose(w2.positions, w.positions, rtol=1e-12, atol=1e-12)
+
+
+def test_python_force_cannot_be_written():
+    w = kinema.World()
+    w.add_particles([0, 0, 0])
+    w.add(kinema.PythonForce(lambda t, x, v: -x))
+    with pytest.raises(ValueError, match="PythonForce cannot be written"):
+        w.to_scene()
+
+
+# -- errors -----------------------------------------------------------------------------------
+
+BAD = """
+[world]
+dt = 0.001
+method = "verlett"
+duraton = 2
+
+[[particles]]
+type = "lattice"
+counts = [3, 3]
+spacing = -0.1
+
+[[forces]]
+type = "gravity"
+
+[[forces]]
+type = "drag"
+
+[[forces]]
+type = "spring"
+i = [0]
+j = [1]
+k = -5
+
+[[forces]]
+type = "magnet"
+"""
+
+
+def errors_of(text, tmp_path, name="bad.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(SceneError) as info:
+        kinema.load_scene(path)
+    return str(info.value).splitlines(), str(path)
+
+
+def test_each_problem_is_one_line_naming_file_key_value_and_what_is_allowed(tmp_path):
+    lines, path = errors_of(BAD, tmp_path)
+    assert len(lines) == 5, lines
+    assert all(line.startswith(f"{path}: ") for line in lines)
+    assert f"{path}: world.method: 'verlett' is invalid: unknown method; valid methods are: euler" in lines[0]
+    assert "world.duraton: unknown key; did you mean 'duration'?" in lines[1]
+    assert "particles[0].spacing: -0.1 is invalid: input should be greater than 0" in lines[2]
+    assert lines[3] == f"{path}: forces[2].k: -5 is invalid: input should be greater than 0"
+    assert "forces[3]: {'type': 'magnet'} is invalid: type must be one of 'gravity', 'drag', 'spring'" in lines[4]
+
+
+def test_unknown_keys_are_errors_everywhere(tmp_path):
+    lines, _ = errors_of('[render]\ncolour_by = "id"\n[extra]\na = 1\n[[colliders]]\ntype = "plane"\npoint = [0,0,0]\nnormal = [0,0,1]\nbounce = 1\n', tmp_path)
+    assert any("render.colour_by: unknown key; did you mean 'color_by'?" in line for line in lines)
+    assert any("extra: unknown key" in line for line in lines)
+    assert any("colliders[0].bounce: unknown key" in line and "restitution" in line for line in lines)
+
+
+def test_missing_values_and_ranges(tmp_path):
+    lines, _ = errors_of('[[colliders]]\ntype = "sphere"\ncenter = [0,0,0]\nradius = -1\n[collisions]\nrestitution = 1.5\n', tmp_path)
+    assert any("colliders[0].radius: -1 is invalid: input should be greater than or equal to 0" in line for line in lines)
+    assert any("collisions.restitution: 1.5 is invalid: input should be less than or equal to 1" in line for line in lines)
+    lines, _ = errors_of('[[forces]]\ntype = "spring"\ni = [0]\nj = [1]\n', tmp_path)
+    assert lines == [f"{tmp_path / 'bad.toml'}: forces[0].k: missing: a value is required"]
+
+
+def test_toml_syntax_error_names_line_and_column(tmp_path):
+    lines, path = errors_of("[world]\ndt = 0.001\nmethod = verlet\n", tmp_path)
+    assert len(lines) == 1 and lines[0].startswith(f"{path}: TOML syntax error") and "line 3" in lines[0] and "column" in lines[0]
+
+
+def test_missing_file_and_directory_are_one_line(tmp_path):
+    with pytest.raises(SceneError, match=r"nope.toml: no such file$"):
+        kinema.load_scene(tmp_path / "nope.toml")
+    with pytest.raises(SceneError, match="is a directory"):
+        kinema.load_scene(tmp_path)
+
+
+def test_engine_refusals_name_the_entry(tmp_path):
+    lines, _ = errors_of('[world]\ndim = 2\n[[particles]]\ntype = "list"\npositions = [[0, 0, 1]]\n', tmp_path)
+    assert len(lines) == 1 and "particles[0]:" in lines[0] and "z" in lines[0]
+    lines, _ = errors_of('[[particles]]\ntype = "list"\npositions = [[0,0,0],[1,0,0]]\n[[forces]]\ntype = "spring"\ni = [0]\nj = [5]\nk = 1.0\n', tmp_path)
+    assert lines == [f"{tmp_path / 'bad.toml'}: forces[0]: spring 0 joins particles 0 and 5, but the scene has 2 particles (indices 0..1)"]
+    lines, _ = errors_of('[[particles]]\ntype = "list"\npositions = [[0,0,0],[1,0,0]]\nmass = [1.0, 2.0, 3.0]\n', tmp_path)
+    assert lines == [f"{tmp_path / 'bad.toml'}: particles[0]: mass has 3 values for 2 particles"]
+
+
+def test_spring_rules_are_checked(tmp_path):
+    lines, _ = errors_of(
+        '[[particles]]\ntype = "list"\npositions = [[0,0,0],[1,0,0]]\n[[forces]]\ntype = "spring"\nrule = "grid"\nblock = 0\nk = 1.0\n', tmp_path
+    )
+    assert "rule = 'grid' needs a lattice block" in lines[0]
+    lines, _ = errors_of('[[forces]]\ntype = "spring"\nrule = "chain"\nblock = 3\nk = 1.0\n', tmp_path)
+    assert "block = 3" in lines[0]
+
+
+def test_chain_rule_and_maxwell_velocities(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(
+        '[[particles]]\ntype = "lattice"\ncounts = [5, 1, 1]\nspacing = 0.5\nmass = 2.0\nvelocity = { kT = 8.0, seed = 3, zero_momentum = true }\n'
+        '[[forces]]\ntype = "spring"\nrule = "chain"\nblock = 0\nk = 10.0\n'
+    )
+    w = kinema.load_scene(path)
+    np.testing.assert_array_equal(w.forces[0].i, [0, 1, 2, 3])
+    np.testing.assert_allclose(w.forces[0].rest_length, 0.5)
+    np.testing.assert_allclose(w.momenta.sum(axis=0), 0, atol=1e-12)
+    np.testing.assert_array_equal(kinema.load_scene(path).velocities, w.velocities)  # seeded
