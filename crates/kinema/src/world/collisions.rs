@@ -463,6 +463,16 @@ impl CollisionStage {
             };
             self.events.swap_remove(k);
             processed += 1;
+            if self.events.len() > 64 * (n + self.pairs.len()) {
+                let version = &self.version;
+                self.events.retain(|e| {
+                    let vj = match e.partner {
+                        Partner::Particle(j) => version[j],
+                        Partner::Collider(_) => 0,
+                    };
+                    (version[e.i], vj) == e.versions
+                });
+            }
             let t = event.time;
             // Move the particles involved to the impact.
             let mut movers = vec![event.i];
@@ -608,6 +618,13 @@ impl CollisionStage {
             }
             tau
         };
+        if tau == 0.0 {
+            // Touching already (and approaching): a resting contact, or one that an impact of
+            // this step just pressed together. It is left to the end-of-step stage, whose
+            // sequential impulses settle whole stacks at once; as events at one instant they
+            // would cascade through a pile one impulse at a time.
+            return None;
+        }
         Some(Event {
             time: now + tau,
             i,
@@ -647,7 +664,8 @@ impl CollisionStage {
                 }
             }
         }
-        for (t, k, w) in found {
+        for (t, k, w) in found.into_iter().filter(|f| f.0 > 0.0) {
+            // (t = 0: touching already, left to the end-of-step stage as for pairs)
             self.events.push(Event {
                 time: now + t,
                 i,
