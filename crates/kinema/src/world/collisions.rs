@@ -153,6 +153,9 @@ pub(crate) struct CollisionStage {
     contacts: Vec<Contact>,
     /// The end-of-step contacts as detected (overlap and u_n before the response).
     pub detected: Vec<Contact>,
+    /// Scratch: collider contacts, and the velocities before the stage (for the impulse balance).
+    walls: Vec<Contact>,
+    v_before: Vec<f64>,
     // Continuous detection: each particle moves on x(τ) = x_ref + v_ref (τ − t_ref) + ½ a (τ − t_ref)²
     accel: Vec<f64>,
     t_ref: Vec<f64>,
@@ -165,6 +168,17 @@ pub(crate) struct CollisionStage {
     adjacency: Vec<usize>,
     pub total: CollisionStats,
     pub last: CollisionStats,
+}
+
+/// Whether contact `c` is with a wall of a box collider along a periodic axis of `domain`:
+/// such walls do not exist (a particle leaving one side comes back on the other). Box walls
+/// have axis-aligned normals.
+pub(crate) fn on_periodic_wall(c: &Contact, colliders: &[Collider], domain: &Domain) -> bool {
+    let in_box = matches!(c.other, Partner::Collider(k) if matches!(colliders[k], Collider::Box(_)));
+    in_box
+        && domain
+            .periodic_box()
+            .is_some_and(|p| (0..3).any(|k| p.axes()[k] && c.normal[k] != 0.0))
 }
 
 fn get(a: &[f64], i: usize) -> [f64; 3] {
@@ -193,6 +207,8 @@ impl CollisionStage {
             pairs: Vec::new(),
             contacts: Vec::new(),
             detected: Vec::new(),
+            walls: Vec::new(),
+            v_before: Vec::new(),
             accel: Vec::new(),
             t_ref: Vec::new(),
             x_ref: Vec::new(),
@@ -302,7 +318,8 @@ impl CollisionStage {
                 .fold(0.0, f64::max);
             2.0 * dv
         });
-        let v_before: Vec<f64> = v1.to_vec();
+        self.v_before.clear();
+        self.v_before.extend_from_slice(v1);
         let mut external = [0.0; 3];
         let mut changed = false;
 
@@ -314,13 +331,12 @@ impl CollisionStage {
         // the colliders.
         self.grid.find_pairs(x1, radius, &self.domain, 0.0, &mut self.pairs)?;
         sphere_contacts(x1, v1, radius, &self.pairs, &self.domain, 0.0, &mut self.contacts)?;
-        let mut wall_contacts = Vec::new();
-        collider_contacts(&self.colliders, x1, v1, radius, 0.0, &mut wall_contacts)?;
+        self.walls.clear();
+        collider_contacts(&self.colliders, x1, v1, radius, 0.0, &mut self.walls)?;
         // Box walls along periodic axes do not exist (their normals are along the axes).
-        let periodic_axes = self.domain.periodic_box().map(|p| p.axes());
-        wall_contacts
-            .retain(|c| !(self.is_box(c.other) && periodic_axes.is_some_and(|ax| (0..3).any(|k| ax[k] && c.normal[k] != 0.0))));
-        self.contacts.extend(wall_contacts);
+        let (colliders, domain) = (&self.colliders, &self.domain);
+        self.contacts
+            .extend(self.walls.iter().filter(|c| !on_periodic_wall(c, colliders, domain)));
         stats.contacts = self.contacts.len();
 
         // Stages 3–4: the impulse j = −(1 + e) u_n / (1/m_i + 1/m_j) of each approaching contact,
@@ -353,7 +369,7 @@ impl CollisionStage {
         for i in 0..n {
             if inv_mass[i] > 0.0 {
                 for k in 0..3 {
-                    stats.impulse_balance[k] += mass[i] * (v1[3 * i + k] - v_before[3 * i + k]);
+                    stats.impulse_balance[k] += mass[i] * (v1[3 * i + k] - self.v_before[3 * i + k]);
                 }
             }
         }
@@ -363,11 +379,6 @@ impl CollisionStage {
         self.last = stats;
         self.total.accumulate(&stats);
         Ok(changed)
-    }
-
-    /// Whether `partner` is a box collider.
-    fn is_box(&self, partner: Partner) -> bool {
-        matches!(partner, Partner::Collider(k) if matches!(self.colliders[k], Collider::Box(_)))
     }
 
     /// Continuous detection: finds the impacts inside the step in time order and resolves

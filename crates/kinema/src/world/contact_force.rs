@@ -3,8 +3,9 @@
 
 use std::cell::RefCell;
 
+use super::collisions::on_periodic_wall;
 use crate::collide::{
-    collider_contacts, damping_ratio, sphere_contacts, Collider, Contact, Domain, Grid, Material, MaterialTable, Pair, Partner,
+    collider_contacts, damping_ratio, sphere_contacts, Collider, Contact, Domain, Grid, Material, MaterialTable, Pair,
 };
 use crate::error::{CallbackError, Error};
 use crate::forces::{Force, SpringRates, State};
@@ -86,11 +87,7 @@ impl ContactForce {
         sphere_contacts(s.x, s.v, &self.radius, pairs, &self.domain, 0.0, contacts)?;
         walls.clear();
         collider_contacts(&self.colliders, s.x, s.v, &self.radius, 0.0, walls)?;
-        let periodic_axes = self.domain.periodic_box().map(|p| p.axes());
-        contacts.extend(walls.iter().filter(|c| {
-            let in_box = matches!(c.other, Partner::Collider(k) if matches!(self.colliders[k], Collider::Box(_)));
-            !(in_box && periodic_axes.is_some_and(|ax| (0..3).any(|k| ax[k] && c.normal[k] != 0.0)))
-        }));
+        contacts.extend(walls.iter().filter(|c| !on_periodic_wall(c, &self.colliders, &self.domain)));
         Ok(())
     }
 
