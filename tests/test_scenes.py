@@ -256,3 +256,22 @@ def test_chain_rule_and_maxwell_velocities(tmp_path):
     np.testing.assert_allclose(w.forces[0].rest_length, 0.5)
     np.testing.assert_allclose(w.momenta.sum(axis=0), 0, atol=1e-12)
     np.testing.assert_array_equal(kinema.load_scene(path).velocities, w.velocities)  # seeded
+
+
+def test_isotropic_velocities_have_one_speed_and_random_directions(tmp_path):
+    path = tmp_path / "s.toml"
+    block = '[[particles]]\ntype = "random"\nlo = [0, 0, 0]\nhi = [1, 1, 1]\ncount = 4000\nseed = 2\nvelocity = { speed = 3.0 }\n'
+    path.write_text(block)
+    v = kinema.load_scene(path).velocities
+    np.testing.assert_allclose(np.linalg.norm(v, axis=1), 3.0, rtol=1e-14)
+    # uniform on the sphere: each component of the direction is uniform on [-1, 1]
+    # (Archimedes' hat-box theorem), mean 0 and variance 1/3
+    u = v / 3.0
+    assert np.abs(u.mean(axis=0)).max() < 4 / np.sqrt(3 * 4000)
+    np.testing.assert_allclose((u**2).mean(axis=0), 1 / 3, atol=0.02)
+    np.testing.assert_array_equal(kinema.load_scene(path).velocities, v)  # seeded
+    path.write_text("[world]\ndim = 2\n" + block.replace("count = 4000", "count = 50").replace("hi = [1, 1, 1]", "hi = [1, 1, 0]"))
+    v2 = kinema.load_scene(path).velocities
+    assert np.all(v2[:, 2] == 0) and np.allclose(np.linalg.norm(v2, axis=1), 3.0)
+    lines, _ = errors_of(block.replace("speed = 3.0", "speed = -1.0"), tmp_path)
+    assert "velocity.speed" in lines[0] and "-1" in lines[0]

@@ -24,7 +24,7 @@ from .forces import Attractor, Drag, Gravity, Spring, Wind
 from .ode import method_names
 from .world import World
 
-__all__ = ["Maxwell", "Scene", "SceneError", "Uniform", "load_scene", "to_scene"]
+__all__ = ["Isotropic", "Maxwell", "Scene", "SceneError", "Uniform", "load_scene", "to_scene"]
 
 
 class SceneError(ValueError):
@@ -78,6 +78,15 @@ class Maxwell(_Model):
         return self
 
 
+class Isotropic(_Model):
+    """Every particle at the same ``speed`` (m/s) in a direction drawn uniformly on the sphere
+    (the circle in 2D): a gas far from equilibrium, which collisions take to Maxwell–Boltzmann."""
+
+    speed: NonNeg
+    seed: int | None = None
+    zero_momentum: bool = False
+
+
 def _kind(v: Any) -> str:
     if isinstance(v, dict):
         return "~dict"
@@ -100,11 +109,14 @@ PerParticle = _by_kind(float, list[float], Uniform)
 def _velocity_kind(v: Any) -> str:
     if isinstance(v, list) and v and isinstance(v[0], list):
         return "~vectors"
+    if isinstance(v, dict) and "speed" in v or isinstance(v, Isotropic):
+        return "~speed"
     return _kind(v)
 
 
 Velocity = Annotated[
-    Annotated[float, Tag("~scalar")] | Annotated[list[float], Tag("~list")] | Annotated[list[list[float]], Tag("~vectors")] | Annotated[Maxwell, Tag("~dict")],
+    Annotated[float, Tag("~scalar")] | Annotated[list[float], Tag("~list")] | Annotated[list[list[float]], Tag("~vectors")] | Annotated[Maxwell, Tag("~dict")]
+    | Annotated[Isotropic, Tag("~speed")],
     Discriminator(_velocity_kind),
 ]  # a scalar is refused below, with a message that says what to give
 Flags = _by_kind(bool, list[bool], bool)
@@ -168,7 +180,7 @@ class _Block(_Model):
     @classmethod
     def _not_scalar(cls, v: Any) -> Any:
         if isinstance(v, float):
-            raise ValueError("give a vector [vx, vy, vz], one vector per particle, or a table {sigma = ..., seed = ...}")
+            raise ValueError("give a vector [vx, vy, vz], one vector per particle, or a table {sigma = ...}, {kT = ...} or {speed = ...}")
         return v
 
 
@@ -604,6 +616,15 @@ def _particles(block: Any, dim: int) -> tuple:
         v = rng.standard_normal((n, 3)) * np.reshape(sigma, (-1, 1))
         if dim == 2:
             v[:, 2] = 0.0
+        if vel.zero_momentum and n > 1:
+            v -= (m[:, None] * v).sum(axis=0) / m.sum()
+    elif isinstance(vel, Isotropic):
+        # A normal vector divided by its length is uniform on the sphere (the circle with z = 0).
+        rng = _rng(block.seed if vel.seed is None else vel.seed, 3)
+        u = rng.standard_normal((n, 3))
+        if dim == 2:
+            u[:, 2] = 0.0
+        v = vel.speed * u / np.linalg.norm(u, axis=1, keepdims=True)
         if vel.zero_momentum and n > 1:
             v -= (m[:, None] * v).sum(axis=0) / m.sum()
     elif vel and isinstance(vel[0], list):
