@@ -48,7 +48,7 @@ def test_methods_lists_the_registry():
 def test_demo_writes_its_pictures(tmp_path):
     res = runner.invoke(app, ["demo", "--out", str(tmp_path)])
     assert res.exit_code == 0, res.output
-    for name in ("phase_portraits.png", "stability_regions.png", "convergence.png", "demo.mp4", "demo.html", "energy.png"):
+    for name in ("phase_portraits.png", "stability_regions.png", "convergence.png", "trajectory.h5", "demo.mp4", "demo.html", "energy.png"):
         assert (tmp_path / name).stat().st_size > 10_000
         assert str(tmp_path / name) in res.output.replace("\n", "")
 

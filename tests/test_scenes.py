@@ -28,6 +28,7 @@ def test_every_example_is_listed():
         "kepler_euler",
         "kepler_rk4",
         "kepler_verlet",
+        "demo",
     ):
         assert f"{name}.toml" in EXAMPLES
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -247,6 +247,14 @@ def run(
     no_video: Annotated[bool, typer.Option("--no-video", help="Skip the video.")] = False,
 ) -> None:
     """Simulate a scene; write the trajectory (H5MD), a video and an energy/momentum plot."""
+    simulate_scene(scene, out if out is not None else Path("out") / scene.stem, duration, no_video)
+
+
+def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_video: bool = False) -> tuple[Any, list[Path]]:
+    """`kinema run`'s work: load ``scene``, simulate ``duration`` s (default: the scene's) with
+    a progress bar, and write what its [output] table asks for into the folder ``outdir``
+    (created when the scene is valid): trajectory.h5, <scene name>.mp4|.gif, energy.png, all
+    or none. Returns the trajectory and the paths written."""
     import shutil
     import warnings
 
@@ -257,7 +265,7 @@ def run(
     seconds = sc.world.duration if duration is None else duration
     if not (np.isfinite(seconds) and seconds >= 0):
         raise ValueError(f"--duration {seconds}: give a finite number of seconds >= 0")
-    outdir = _outdir(out if out is not None else Path("out") / scene.stem)
+    outdir = _outdir(outdir)
     fps = sc.world.fps
     per_frame = max(1, round(1.0 / (fps * world.dt)))
     frames = int(np.floor(seconds / (per_frame * world.dt) + 1e-9))
@@ -271,6 +279,10 @@ def run(
         finally:  # a StabilityWarning explains a divergence: show it before the error
             for w in caught:
                 err_console.print(f"[yellow]warning:[/] {w.message}", highlight=False, soft_wrap=True)
+    stats = world.collision_stats()
+    if stats is not None:
+        total = stats["total"]
+        console.print(f"{total['impacts']} impacts inside steps, {total['energy_lost']:.4g} J of kinetic energy taken by the impulses", highlight=False)
     # Everything is written in a hidden folder inside OUTDIR and moved into place at the end,
     # so a failure leaves no file half-written and none of this run's files at all.
     stage = Path(tempfile.mkdtemp(prefix=".kinema-run.", dir=outdir))
@@ -299,6 +311,7 @@ def run(
         shutil.rmtree(stage, ignore_errors=True)
     for path in written:
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)
+    return traj, written
 
 
 def _camera(table):

@@ -5,10 +5,11 @@ every method of the registry at the same step, then three pictures: the phase po
 (forward Euler spirals out, backward Euler spirals in, the symplectic methods stay on the
 circle), the stability regions on p' = λp, and the measured convergence orders.
 
-Second half: 400 balls falling under gravity into a box, integrated by velocity Verlet and
-colliding by Newton's restitution law (e = 0.7): a video (demo.mp4), the browser viewer in
-one offline page (demo.html) and the energy plot (energy.png), where the energy the
-collisions take is booked.
+Second half: the scene kinema/scenes/demo.toml, 400 balls falling under gravity into a box,
+integrated by velocity Verlet and colliding by Newton's restitution law (e = 0.7): the
+trajectory (trajectory.h5), a video (demo.mp4), the browser viewer in one offline page
+(demo.html) and the energy and momentum plot (energy.png), where the energy the collisions
+take is booked.
 """
 
 from __future__ import annotations
@@ -89,44 +90,23 @@ def _convergence(out: Path, console: Console) -> Path:
     return path
 
 
+SCENE = Path(__file__).resolve().parent / "scenes" / "demo.toml"
+
+
 def _falling_balls(out: Path, console: Console) -> list[Path]:
-    """400 balls (r = 2.5–4 cm, 1 kg) on a jittered lattice fall into a 0.5 m box under gravity,
-    Verlet at dt = 1 ms, impulses with e = 0.7; 4 s recorded at 30 frames per second."""
-    import matplotlib.pyplot as plt
-
-    from .cli import save_figure_atomically
-    from .colliders import Box
-    from .forces import Gravity
-    from .render import Camera3D
+    """The scene ``kinema/scenes/demo.toml`` (examples/scenes/demo.toml): 400 balls falling
+    into a box, Verlet, e = 0.7, run as `kinema run` runs it (trajectory.h5, demo.mp4,
+    energy.png), plus the viewer in one offline page (demo.html)."""
+    from .cli import simulate_scene
     from .viewer import BundleMissingError, write_html
-    from .world import World
 
-    rng = np.random.default_rng(2026)
-    grid = np.stack(np.meshgrid(np.arange(5), np.arange(5), np.arange(16), indexing="ij"), axis=-1).reshape(-1, 3)
-    x = [0.07, 0.07, 0.5] + 0.09 * grid + rng.uniform(-0.005, 0.005, grid.shape)
-    w = World(dt=1e-3, method="verlet")
-    w.add_particles(x, velocity=rng.normal(0.0, 0.5, x.shape), radius=rng.uniform(0.025, 0.04, len(x)), mass=1.0)
-    w.add(Gravity())
-    w.add(Box([0, 0, 0], [0.5, 0.5, 3]))
-    w.set_collisions(restitution=0.7)
     start = time.perf_counter()
-    traj = w.run(4.0, fps=30)
-    lost = traj.collision_energy_lost[-1]
-    console.print(
-        f"{len(x)} balls, e = 0.7, verlet, dt = 1 ms: 4 s simulated in {time.perf_counter() - start:.1f} s; "
-        f"{w.collision_stats()['total']['impacts']} impacts inside steps, {lost:.1f} J of kinetic energy taken by the impulses"
-    )
-    camera = Camera3D.framing([0, 0, 0], [0.5, 0.5, 1.9], width=960, height=540)
-    paths = [traj.render(out / "demo.mp4", width=960, height=540, camera=camera)]
+    traj, paths = simulate_scene(SCENE, out)
+    console.print(f"{traj.positions.shape[1]} balls: {traj.t[-1]:g} s simulated and rendered in {time.perf_counter() - start:.1f} s")
     try:
         paths.append(write_html(traj, out / "demo.html", title="kinema demo: falling balls"))
     except BundleMissingError as e:
         console.print(f"[yellow]skipped demo.html:[/] {e}")
-    fig, ax = plt.subplots(figsize=(7, 4))
-    traj.plot_energy(ax=ax)
-    ax.set_title("400 balls, e = 0.7: kinetic, potential, total, and lost in collisions")
-    paths.append(save_figure_atomically(fig, out / "energy.png"))
-    plt.close(fig)
     return paths
 
 

@@ -115,7 +115,10 @@ def _velocity_kind(v: Any) -> str:
 
 
 Velocity = Annotated[
-    Annotated[float, Tag("~scalar")] | Annotated[list[float], Tag("~list")] | Annotated[list[list[float]], Tag("~vectors")] | Annotated[Maxwell, Tag("~dict")]
+    Annotated[float, Tag("~scalar")]
+    | Annotated[list[float], Tag("~list")]
+    | Annotated[list[list[float]], Tag("~vectors")]
+    | Annotated[Maxwell, Tag("~dict")]
     | Annotated[Isotropic, Tag("~speed")],
     Discriminator(_velocity_kind),
 ]  # a scalar is refused below, with a message that says what to give
