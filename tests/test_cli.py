@@ -5,6 +5,7 @@ import sys
 
 from typer.testing import CliRunner
 
+import kinema
 from kinema.cli import app
 
 runner = CliRunner()
@@ -130,6 +131,8 @@ def test_render_and_export_a_saved_trajectory(tmp_path):
     for fmt, main in (("csv", "t.csv"), ("xyz", "t.xyz"), ("vtk", "v.pvd"), ("ply", "p.ply")):
         res = runner.invoke(app, ["export", str(out / "trajectory.h5"), "--format", fmt, "-o", str(tmp_path / main)])
         assert res.exit_code == 0, res.output
+        frames = kinema.load_trajectory(out / "trajectory.h5").t.size
+        assert f"writing {fmt}" in res.stderr and f"{frames}/{frames} frames" in res.stderr  # the progress bar counted every frame
     assert (tmp_path / "t.csv").read_text().startswith("frame,time,id,x,y,z")
     assert (tmp_path / "v").is_dir() and (tmp_path / "p").is_dir()  # the vtk and ply series folders
 

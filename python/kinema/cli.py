@@ -364,13 +364,16 @@ def export(
 ) -> None:
     """Export a saved trajectory for other programs."""
     from .io import FORMATS
+    from .io import export as write_export
     from .trajectory import Trajectory
 
     if format not in FORMATS:
         raise ValueError(f"--format {format!r}: use one of {', '.join(FORMATS)}")
     suffix = {"vtk": ".pvd", "ply": ".ply", "xyz": ".xyz", "csv": ".csv"}[format]
     t = Trajectory.load(traj)
-    paths = t.export(out if out is not None else traj.with_suffix(suffix), format)
+    with _progress() as bar:
+        task = bar.add_task(f"writing {format}", total=len(t.t))
+        paths = write_export(t, out if out is not None else traj.with_suffix(suffix), format, on_frame=lambda _i: bar.advance(task))
     console.print(f"wrote {paths[0]}" + (f" and {len(paths) - 1} more files" if len(paths) > 1 else ""), highlight=False, soft_wrap=True)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import base64
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import quoteattr
@@ -18,7 +19,7 @@ _SUFFIXES = {".pvd": "vtk", ".vtp": "vtk", ".ply": "ply", ".xyz": "xyz", ".extxy
 _DIGITS = 5  # frame numbers in series file names: stem_00000.vtp
 
 
-def export(traj: Any, path: str | os.PathLike, format: str | None = None) -> list[Path]:
+def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_frame: Callable[[int], Any] | None = None) -> list[Path]:
     """Write ``traj`` (a ``kinema.Trajectory`` or any object with ``t``, ``positions``,
     ``velocities`` and optionally ``masses``, ``radii``, ``ids``) for another program; returns
     the paths written, the main file first.
@@ -43,8 +44,9 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None) -> lis
     radius are left out where the trajectory has none. Every file is written under a
     temporary name and renamed at the end; a series is built in a temporary folder that takes
     the place of ``<stem>/`` only when complete (an existing ``<stem>/`` is replaced only if
-    it holds nothing but an earlier series). Raises ``ValueError`` for an unknown ``format``
-    and ``TrajectoryFileError`` (a ``ValueError``) naming the path that cannot be written."""
+    it holds nothing but an earlier series). ``on_frame(i)`` is called after frame ``i`` is
+    written (a progress bar). Raises ``ValueError`` for an unknown ``format`` and
+    ``TrajectoryFileError`` (a ``ValueError``) naming the path that cannot be written."""
     path = Path(path)
     if format is None:
         format = _SUFFIXES.get(path.suffix.lower())
@@ -56,7 +58,7 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None) -> lis
         raise ValueError(f"format = {format!r} is invalid: the allowed values are {', '.join(map(repr, FORMATS))}")
     fr = frames_of(traj)
     writer = {"vtk": _write_vtk, "ply": _write_ply, "xyz": _write_xyz, "csv": _write_csv}[format]
-    return writer(traj, fr, path)
+    return writer(traj, fr, path, on_frame or (lambda i: None))
 
 
 def _series(path: Path, suffix: str) -> tuple[Path, str]:
@@ -106,7 +108,7 @@ def _vtp(fr: Frames, i: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _write_vtk(traj: Any, fr: Frames, path: Path) -> list[Path]:
+def _write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
     folder, pattern = _series(path, ".vtp")
     stem = folder.name
     pvd = folder.with_name(stem + ".pvd")
@@ -120,6 +122,7 @@ def _write_vtk(traj: Any, fr: Frames, path: Path) -> list[Path]:
         with atomic_folder(folder, pattern) as tmp:
             for i, name in enumerate(names):
                 (tmp / name).write_text(_vtp(fr, i), encoding="ascii")
+                on_frame(i)
         tmp_pvd.write_text(collection, encoding="utf-8")
     return [pvd, *(folder / name for name in names)]
 
@@ -155,12 +158,13 @@ def _ply(fr: Frames, i: int) -> bytes:
     return ("\n".join(header) + "\n").encode("ascii") + rows.tobytes()
 
 
-def _write_ply(traj: Any, fr: Frames, path: Path) -> list[Path]:
+def _write_ply(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
     folder, pattern = _series(path, ".ply")
     names = [f"{folder.name}_{i:0{_DIGITS}d}.ply" for i in range(fr.n_frames)]
     with atomic_folder(folder, pattern) as tmp:
         for i, name in enumerate(names):
             (tmp / name).write_bytes(_ply(fr, i))
+            on_frame(i)
     return [folder / name for name in names]
 
 
@@ -176,7 +180,7 @@ def _xyz(fr: Frames, i: int, header: str) -> str:
     return f"{fr.n_particles}\n{header} Time={float(fr.t[i])!r}\n{rows}"
 
 
-def _write_xyz(traj: Any, fr: Frames, path: Path) -> list[Path]:
+def _write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
     props = "species:S:1:pos:R:3:velo:R:3" + ":radius:R:1" * (fr.radii is not None) + ":mass:R:1" * (fr.masses is not None) + ":id:I:1"
     periodic = getattr(traj, "periodic", None)
     pbc = np.zeros(3, dtype=bool) if periodic is None else np.resize(np.asarray(periodic, dtype=bool).reshape(-1), 3)
@@ -189,6 +193,7 @@ def _write_xyz(traj: Any, fr: Frames, path: Path) -> list[Path]:
     with atomic_file(path) as tmp, open(tmp, "w", encoding="ascii") as f:
         for i in range(fr.n_frames):
             f.write(_xyz(fr, i, header))
+            on_frame(i)
     return [path]
 
 
@@ -199,9 +204,10 @@ def _csv(fr: Frames, i: int) -> str:
     return "".join(f"{i},{t},{int(k)}," + ",".join(map(repr, r)) + "\n" for r, k in zip(table, fr.ids, strict=True))
 
 
-def _write_csv(traj: Any, fr: Frames, path: Path) -> list[Path]:
+def _write_csv(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
     with atomic_file(path) as tmp, open(tmp, "w", encoding="ascii", newline="") as f:
         f.write("frame,time,id,x,y,z,vx,vy,vz\n")
         for i in range(fr.n_frames):
             f.write(_csv(fr, i))
+            on_frame(i)
     return [path]
