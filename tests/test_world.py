@@ -148,6 +148,22 @@ def test_the_stability_warning_comes_once():
         quiet.step(10)
 
 
+def test_forward_euler_on_an_undamped_spring_is_unstable_at_any_step():
+    # R(z) = 1 + z on z = ±iωh: |R|² = 1 + ω²h² > 1 for every h > 0, so the advisor's limit is
+    # 0 and the warning says no step is small enough, rather than "limit 0 s".
+    w = kinema.World(dt=1e-4, method="euler")
+    w.add_particles([[0, 0, 0], [1.2, 0, 0]], mass=0.5)  # stretched by 0.2 m: the spring stays linear
+    w.add(kinema.Spring(0, 1, k=50.0, rest_length=1.0))
+    assert w.stable_step("euler") == 0.0
+    with pytest.warns(kinema.StabilityWarning, match=r"'euler' is unstable at every step.*omega = 14.14 rad/s"):
+        w.step()
+    e0 = w.diagnostics()["kinetic"] + sum(w.diagnostics()["potential"].values())
+    w.step(20_000)
+    e1 = w.diagnostics()["kinetic"] + sum(w.diagnostics()["potential"].values())
+    # for x' = v, v' = −ω²x each Euler step multiplies the energy by exactly |R|² = 1 + (ωh)²
+    assert e1 / e0 == pytest.approx((1 + (14.142135623730951 * 1e-4) ** 2) ** 20_000, rel=1e-9)
+
+
 def test_state_arrays_are_live_views():
     w = kinema.World(dt=0.01, method="verlet")
     w.add_particles([[0, 0, 0], [1, 0, 0]], velocity=[[1, 0, 0], [0, 0, 0]], mass=[1.0, 2.0])

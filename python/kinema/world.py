@@ -84,13 +84,20 @@ class World:
             self._warned = True
             rates = self._core.rates()
             omega = max(rates["omega"], rates["standby_omega"] or 0.0)  # contacts not yet touching count
-            warnings.warn(
-                f"dt = {self.dt:.4g} s exceeds the stable-step advisor's limit {limit:.4g} s for method "
-                f"{self.method!r} on these forces (stiffest mode: omega = {omega:.4g} rad/s); "
-                "the simulation will likely blow up: reduce dt or use method='implicit_euler'",
-                StabilityWarning,
-                stacklevel=3,
-            )
+            if limit > 0:
+                text = (
+                    f"dt = {self.dt:.4g} s exceeds the stable-step advisor's limit {limit:.4g} s for method "
+                    f"{self.method!r} on these forces (stiffest mode: omega = {omega:.4g} rad/s); "
+                    "the simulation will likely blow up: reduce dt or use method='implicit_euler'"
+                )
+            else:  # |R(iωh)| > 1 for every h > 0: e.g. forward Euler on an undamped oscillation
+                text = (
+                    f"method {self.method!r} is unstable at every step on these forces: their stiffest mode "
+                    f"(omega = {omega:.4g} rad/s) is undamped and each step multiplies its amplitude by more than 1, "
+                    "so the energy grows; a smaller dt only slows the growth: use a symplectic method "
+                    "('verlet', 'symplectic_euler'), 'rk4' or 'implicit_euler'"
+                )
+            warnings.warn(text, StabilityWarning, stacklevel=3)
 
     # -- building ---------------------------------------------------------------------------
     def add_particles(
