@@ -2,6 +2,7 @@
 #   make demo   set up, build (release), run the demonstration; writes to out/
 #   make test   set up, build, then cargo test and pytest
 #   make bench  set up, build, run the benchmarks (kinema beside its peers, one table each)
+#   make pictures  the README's pictures of the example scenes (docs/img/scene_*.png)
 #   make fmt    format Rust and Python sources
 
 PYTHON ?= python3
@@ -13,7 +14,7 @@ BUILT  := $(VENV)/.kinema-built
 VIEWER_BUNDLE := python/kinema/viewer/static/viewer.js
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml pyproject.toml
 
-.PHONY: demo test test-rust test-python bench fmt setup build viewer clean
+.PHONY: demo test test-rust test-python bench pictures fmt setup build viewer clean
 
 setup: $(STAMP)
 
@@ -49,6 +50,12 @@ test-python: build
 
 bench: build
 	$(PY) benchmarks/ode_overhead.py
+	$(PY) benchmarks/render.py
+	command -v lmp >/dev/null || apt-get install -y -q lammps >/dev/null || echo "LAMMPS could not be installed: the collision benchmark will say so and skip"
+	$(PY) benchmarks/collisions_lammps.py
+
+pictures: build
+	$(PY) docs/pictures.py docs/img
 
 fmt: $(STAMP)
 	cargo fmt --all
