@@ -458,3 +458,67 @@ def test_a_world_run_saves_loads_and_exports_through_the_trajectory(tmp_path):
     files = traj.export(tmp_path / "run.csv")
     rows = np.loadtxt(files[0], delimiter=",", skiprows=1)
     np.testing.assert_array_equal(rows[:, 3:6].reshape(-1, 2, 3), traj.positions)
+
+
+def test_colliders_are_saved_and_loaded_back(tmp_path):
+    # A world's colliders ride along in the trajectory (Trajectory.colliders, plain
+    # descriptions) and in the file under /parameters/kinema/colliders/<k>, in order;
+    # an open box's +inf survives.
+    w = kinema.World(dt=0.01)
+    w.add_particles([[0.0, 0.0, 1.0]], radius=0.05)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution=0.5))
+    w.add(kinema.Box([-1, -1, 0], [1, 1, np.inf]))
+    w.add(kinema.SphereObstacle([0.5, 0, 0.3], 0.2, friction=0.1))
+    traj = w.run(0.1, fps=20)
+    expected = [
+        {"type": "plane", "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 1.0], "restitution": 0.5},
+        {"type": "box", "lo": [-1.0, -1.0, 0.0], "hi": [1.0, 1.0, np.inf]},
+        {"type": "sphere", "center": [0.5, 0.0, 0.3], "radius": 0.2, "friction": 0.1},
+    ]
+    assert traj.colliders == expected
+    path = traj.save(tmp_path / "run.h5")
+    assert kinema.load_trajectory(path).colliders == expected
+    assert load_h5md(path).colliders == expected
+    with h5py.File(path) as f:
+        group = f["parameters/kinema/colliders"]
+        assert list(group) == ["0", "1", "2"]
+        assert group["0"].attrs["type"] == "plane"
+        np.testing.assert_array_equal(group["1"].attrs["hi"], [1.0, 1.0, np.inf])
+        assert f["parameters/kinema"].attrs["dt"] == 0.01  # beside the other parameters
+        assert f["h5md"].attrs["version"].tolist() == [1, 1]
+    # A trajectory saved again from the loaded one keeps them.
+    again = kinema.load_trajectory(kinema.load_trajectory(path).save(tmp_path / "again.h5"))
+    assert again.colliders == expected
+
+
+def test_files_without_colliders_load_with_none(tmp_path):
+    # A world without colliders writes no colliders group; an older file (written before
+    # colliders were recorded, here: the group removed) loads with colliders == [].
+    tr = world_run()
+    assert tr.colliders == []
+    save_h5md(tr, tmp_path / "run.h5")
+    with h5py.File(tmp_path / "run.h5") as f:
+        assert "colliders" not in f["parameters/kinema"]
+    w = kinema.World(dt=0.01)
+    w.add_particles([[0.0, 0.0, 1.0]])
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    save_h5md(w.run(0.05, fps=20), tmp_path / "old.h5")
+    with h5py.File(tmp_path / "old.h5", "a") as f:
+        del f["parameters/kinema/colliders"]
+    assert kinema.load_trajectory(tmp_path / "old.h5").colliders == []
+    assert load_h5md(tmp_path / "run.h5").colliders == []
+    # An object without the attribute at all (Synthetic) writes none either.
+    save_h5md(synthetic(), tmp_path / "syn.h5")
+    assert load_h5md(tmp_path / "syn.h5").colliders == []
+
+
+def test_a_damaged_collider_is_a_clear_error(tmp_path):
+    w = kinema.World(dt=0.01)
+    w.add_particles([[0.0, 0.0, 1.0]])
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    save_h5md(w.run(0.05, fps=20), tmp_path / "run.h5")
+    with h5py.File(tmp_path / "run.h5", "a") as f:
+        f["parameters/kinema/colliders/0"].attrs["type"] = "cone"
+    with pytest.raises(TrajectoryFileError, match=r"run\.h5: /parameters/kinema/colliders/0 is not a kinema collider"):
+        load_h5md(tmp_path / "run.h5")

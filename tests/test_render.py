@@ -155,3 +155,108 @@ def test_a_trajectory_renders_itself(tmp_path):
     assert len(frames) == traj.t.size and meta["size"] == (160, 96)
     assert meta["fps"] == pytest.approx(20.0)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bounce.mp4"]
+
+
+# -- colliders --------------------------------------------------------------------------------
+
+
+def test_a_floor_changes_the_ground_and_not_the_sky():
+    # Two particles above the floor z = 0, seen from the side and above: with the Plane the
+    # lower part of the image becomes a neutral floor, the top rows (sky) stay background.
+    x = np.array([[[-0.5, 0.0, 0.5], [0.5, 0.0, 0.8]]])
+    cam = Camera3D(eye=(0.0, -4.0, 1.0), target=(0.0, 0.0, 0.5))
+    kw = dict(camera=cam, color_by="id", width=160, height=120, time_format=None)
+    bare = next(render_frames(x, 0.1, [0.0], **kw))
+    floor = next(render_frames(x, 0.1, [0.0], colliders=[kinema.Plane([0, 0, 0], [0, 0, 1])], **kw))
+    changed = np.any(bare != floor, axis=2)
+    assert changed[-20:].all(), "the bottom rows are floor"
+    assert not changed[:20].any(), "the sky is untouched"
+    ground = floor[-20:].astype(int)
+    assert (ground.max(axis=2) - ground.min(axis=2)).max() <= 8 and ground.max() < 250, "a light neutral grey"
+    # The particles are still drawn over it.
+    assert (floor[~changed] == bare[~changed]).all()
+
+
+def test_a_box_outline_lights_its_edges_in_2d_and_a_description_draws_the_same():
+    # [0, 4] × [0, 2] onto 200 × 100: 50 px per m. The box [1, 3] × [0.5, 1.5] has its left
+    # side on pixel column 50 and its top on row 25; its interior is empty.
+    x = np.array([[[0.2, 0.2]]])
+    cam = Camera2D(0.0, 0.0, 4.0, 2.0)
+    kw = dict(dim=2, camera=cam, width=200, height=100, time_format=None, color_by="id")
+    bare = next(render_frames(x, 0.05, [0.0], **kw))
+    boxed = next(render_frames(x, 0.05, [0.0], colliders=[kinema.Box([1, 0.5], [3, 1.5])], **kw))
+    changed = np.any(bare != boxed, axis=2)
+    assert changed[50, 49] and changed[50, 50] and changed[25, 100] and changed[75, 150]
+    assert not changed[35:65, 60:140].any(), "the interior is untouched"
+    assert not changed[:20].any() and not changed[:, :40].any(), "outside the box is untouched"
+    described = next(render_frames(x, 0.05, [0.0], colliders=[{"type": "box", "lo": [1, 0.5], "hi": [3, 1.5]}], **kw))
+    assert np.array_equal(boxed, described)
+
+
+def test_a_sphere_obstacle_hides_what_is_behind_it():
+    x = np.array([[[0.0, 2.0, 0.0], [1.5, 2.0, 0.0]]])  # behind the obstacle, and beside it
+    cam = Camera3D(eye=(0.0, -8.0, 0.0), target=(0.0, 0.0, 0.0))
+    red = np.array([[255, 0, 0], [255, 0, 0]], np.uint8)
+    kw = dict(camera=cam, color_by=red, width=120, height=120, time_format=None)
+    bare = next(render_frames(x, 0.3, [0.0], **kw))
+    hidden = next(render_frames(x, 0.3, [0.0], colliders=[kinema.SphereObstacle([0, 0, 0], 1.0)], **kw))
+    c = bare[60, 60].astype(int)
+    assert c[0] > c[1] + 50, "the particle alone is red at the centre"
+    c = hidden[60, 60].astype(int)
+    assert abs(c[0] - c[1]) < 15, f"the obstacle hides it: {c}"
+    assert (hidden[60, 90:110] == bare[60, 90:110]).all(), "the one beside it is not hidden"
+
+
+def test_the_default_camera_frames_the_colliders_and_open_boxes_work():
+    # A 2D box much larger than the particles: the default camera shows all four sides.
+    x = np.array([[[0.5, 0.5]]])
+    f = next(render_frames(x, 0.05, [0.0], dim=2, width=100, height=100, time_format=None, colliders=[kinema.Box([-2, -2], [3, 3])]))
+    lit = np.any(f != 255, axis=2)
+    assert lit[:, :10].any() and lit[:, -10:].any() and lit[:10].any() and lit[-10:].any()
+    # An open 3D box (no lid) and a floor: drawn, no error.
+    x3 = np.array([[[0.5, 0.5, 0.2]]])
+    cols = [kinema.Box([0, 0, 0], [1, 1, np.inf]), kinema.Plane([0, 0, 0], [0, 0, 1])]
+    f = next(render_frames(x3, 0.05, [0.0], width=100, height=80, time_format=None, colliders=cols))
+    assert (f != 255).any(axis=2).mean() > 0.3
+
+
+def test_bad_colliders_name_the_collider():
+    x, t = _scene(frames=1)
+    with pytest.raises(ValueError, match=r"colliders\[1\]\.radius = -1"):
+        next(render_frames(x, 0.1, t, colliders=[kinema.Plane([0, 0, 0], [0, 0, 1]), kinema.SphereObstacle([0, 0, 0], -1.0)]))
+    with pytest.raises(ValueError, match=r"colliders\[0\]\.normal.*non-zero"):
+        next(render_frames(x, 0.1, t, colliders=[kinema.Plane([0, 0, 0], [0, 0, 0])]))
+    with pytest.raises(ValueError, match=r"colliders\[0\] = .*Gravity.*Plane, Box or SphereObstacle"):
+        next(render_frames(x, 0.1, t, colliders=[kinema.Gravity()]))
+    with pytest.raises(ValueError, match=r"colliders\[0\].*needs center and radius"):
+        next(render_frames(x, 0.1, t, colliders=[{"type": "sphere", "center": [0, 0, 0]}]))
+
+
+def _bottom_brightness(path):
+    reader = imageio_ffmpeg.read_frames(str(path))
+    meta = next(reader)
+    w, h = meta["size"]
+    frames = [np.frombuffer(b, np.uint8).reshape(h, w, 3) for b in reader]
+    return len(frames), float(np.mean([f[-h // 5 :].mean() for f in frames]))
+
+
+def test_a_trajectory_renders_its_colliders_unless_told_not_to(tmp_path):
+    from kinema.cli import _render_video
+
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[0, 0, 1.0], [0.5, 0, 1.0]], radius=0.1)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution=0.8))
+    traj = w.run(0.3, fps=20)
+    assert traj.colliders == [{"type": "plane", "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 1.0], "restitution": 0.8}]
+    with_floor = traj.render(tmp_path / "floor.mp4", width=160, height=96)
+    without = traj.render(tmp_path / "bare.mp4", width=160, height=96, draw_colliders=False)
+    n, floor_light = _bottom_brightness(with_floor)
+    m, bare_light = _bottom_brightness(without)
+    assert n == m == traj.t.size
+    assert floor_light < bare_light - 10, "the floor darkens the bottom of every frame"
+    # kinema run / kinema render go through cli._render_video: the same default and switch.
+    cli_floor = _render_video(traj, tmp_path / "cli.mp4", {"width": 160, "height": 96}, None, "rendering")
+    cli_bare = _render_video(traj, tmp_path / "cli_bare.mp4", {"width": 160, "height": 96, "draw_colliders": False}, None, "rendering")
+    assert _bottom_brightness(cli_floor)[1] == pytest.approx(floor_light, abs=1.0)
+    assert _bottom_brightness(cli_bare)[1] == pytest.approx(bare_light, abs=1.0)

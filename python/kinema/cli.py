@@ -183,10 +183,15 @@ def _guarded(fn):
     return wrapper
 
 
-def _render_video(traj, path: Path, render_opts: dict, fps: float | None, description: str) -> Path:
-    """Render ``traj`` to ``path`` (.mp4 or .gif) with a progress bar over the frames."""
+def _render_video(traj, path: Path, render_opts: dict, fps: float | None, description: str, draw_colliders: bool = True) -> Path:
+    """Render ``traj`` to ``path`` (.mp4 or .gif) with a progress bar over the frames; the
+    trajectory's colliders are drawn unless ``draw_colliders`` (or the option of that name in
+    ``render_opts``) is False."""
     from .render import render_frames, write_video
 
+    render_opts = dict(render_opts)
+    draw_colliders = render_opts.pop("draw_colliders", draw_colliders)
+    render_opts.setdefault("colliders", getattr(traj, "colliders", None) if draw_colliders else None)
     if fps is None:
         fps = 1.0 / float(np.median(np.diff(traj.t))) if traj.t.size > 1 else 30.0
     radius = traj.radii

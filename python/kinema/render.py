@@ -2,10 +2,14 @@
 
 2D scenes are drawn as antialiased discs seen from +z, 3D scenes as shaded spheres in
 perspective, far to near. Particles are coloured by speed, by id, or by any per-particle field,
-and each frame carries a time stamp. Pixels are drawn by the engine (``kinema._core``, in
-parallel, with the GIL released); this module chooses cameras and colours and writes files.
+and each frame carries a time stamp. The world's colliders can be drawn with them
+(``colliders=``): in 3D a plane is a floor patch with a faint grid, a box its edges and a
+lightly filled floor, a sphere obstacle a grey shaded sphere; in 2D a plane is a thick line
+with its solid side shaded, a box a rectangle outline, a sphere obstacle a grey disc. Pixels
+are drawn by the engine (``kinema._core``, in parallel, with the GIL released); this module
+chooses cameras and colours and writes files.
 
-    frames = render_frames(traj_x, radius=0.01, t=traj_t, dim=3, color_by="speed")
+    frames = render_frames(traj_x, radius=0.01, t=traj_t, dim=3, color_by="speed", colliders=world.colliders)
     write_video(frames, "out.mp4", fps=30)
 """
 
@@ -92,6 +96,7 @@ def render_frames(
     time_format: str | None = "t = {:.3f} s",
     label_scale: int = 2,
     min_radius_px: float = 1.0,
+    colliders=None,
 ) -> Iterator[np.ndarray]:
     """Yield one (height, width, 3) uint8 RGB frame per time.
 
@@ -105,8 +110,13 @@ def render_frames(
       the field's minimum and maximum over all frames, so colours mean the same in every
       frame), or fixed uint8 colours of shape (N, 3) or (F, N, 3).
     camera: a Camera2D / Camera3D; default frames the bounding box of all frames (plus the
-      largest radius), a 3D box seen from the front right and above.
+      largest radius) and of the colliders' finite parts, a 3D box seen from the front right
+      and above.
     background: RGB8 colour.
+    colliders: colliders to draw, ``kinema.Plane`` / ``Box`` / ``SphereObstacle`` objects or
+      their descriptions (``Trajectory.colliders``: dicts {"type": "plane", "point",
+      "normal"}, {"type": "box", "lo", "hi"}, {"type": "sphere", "center", "radius"}); None
+      draws none. Infinite box bounds (an open top) are drawn up to the scene's extent.
     """
     if dim not in (2, 3):
         raise ValueError(f"dim = {dim!r} is invalid: use 2 (discs in the xy-plane) or 3 (spheres)")
@@ -128,8 +138,10 @@ def render_frames(
         raise ValueError("radius is invalid: radii must be finite and >= 0")
 
     colors, values, vmin, vmax = _colouring(color_by, x, times, velocities, dim, vmin, vmax)
+    scenery = _scenery(colliders)
+    lo, hi = _extent(x, r, scenery)
     if camera is None:
-        camera = _auto_camera(x, r, dim, width, height)
+        camera = _auto_camera(lo, hi, dim, width, height)
     elif dim == 2 and not isinstance(camera, Camera2D) or dim == 3 and not isinstance(camera, Camera3D):
         raise ValueError(f"camera = {camera!r} is invalid: dim={dim} needs a Camera{dim}D")
     bg = tuple(int(c) for c in background)
@@ -144,13 +156,20 @@ def render_frames(
         label_color=label_color,
         **camera._kwargs(),
     )
+    if scenery:
+        # One extent for every frame, so that floors and open walls stay put.
+        common.update(scenery=scenery, extent=(lo.tolist(), hi.tolist()))
     for k in range(n_frames):
         label = time_format.format(times[k]) if time_format is not None else None
         if colors is not None:
             colour_kw = {"colors": colors[k] if colors.ndim == 3 else colors}
         else:
             colour_kw = {"values": values[k] if values.ndim == 2 else values, "colormap": colormap, "vmin": vmin, "vmax": vmax}
-        yield _core.render_frame(x[k], r, label=label, **colour_kw, **common)
+        try:
+            frame = _core.render_frame(x[k], r, label=label, **colour_kw, **common)
+        except ValueError as e:  # the engine calls the list "scenery"; here it is "colliders"
+            raise ValueError(str(e).replace("scenery[", "colliders[", 1)) from None
+        yield frame
 
 
 def _colouring(color_by, x, times, velocities, dim, vmin, vmax):
@@ -186,17 +205,108 @@ def _colouring(color_by, x, times, velocities, dim, vmin, vmax):
     return None, np.ascontiguousarray(values), lo, hi
 
 
-def _auto_camera(x, r, dim, width, height):
+_KIND = {"plane": ("point", "normal"), "box": ("lo", "hi"), "sphere": ("center", "radius")}
+
+
+def _describe_colliders(colliders) -> list[dict]:
+    """Plain descriptions of colliders (``kinema.Plane``, ``Box``, ``SphereObstacle`` or such
+    descriptions already): {"type": "plane", "point": [3], "normal": [3]}, {"type": "box",
+    "lo": [2 or 3], "hi": [2 or 3]} (bounds may be ±inf), {"type": "sphere", "center": [3],
+    "radius": r}, with "restitution" and "friction" where the collider sets them."""
+    from .colliders import Box, Plane, SphereObstacle
+
+    def floats(name, value, sizes=(3,)):
+        a = np.asarray(value, dtype=np.float64).reshape(-1)
+        if a.size not in sizes:
+            raise ValueError(f"{name} = {value!r} is invalid: it must have {' or '.join(map(str, sizes))} values")
+        return a.tolist()
+
+    out = []
+    for k, c in enumerate(colliders):
+        if isinstance(c, Plane):
+            d = {"type": "plane", "point": c.point, "normal": c.normal}
+        elif isinstance(c, Box):
+            d = {"type": "box", "lo": c.lo, "hi": c.hi}
+        elif isinstance(c, SphereObstacle):
+            d = {"type": "sphere", "center": c.center, "radius": c.radius}
+        elif isinstance(c, dict) and c.get("type") in _KIND:
+            d = dict(c)
+        else:
+            raise ValueError(
+                f"colliders[{k}] = {c!r} is invalid: use kinema.Plane, Box or SphereObstacle, or a description "
+                "{'type': 'plane' | 'box' | 'sphere', ...} (Trajectory.colliders)"
+            )
+        try:
+            if d["type"] == "box":
+                d["lo"], d["hi"] = floats(f"colliders[{k}].lo", d["lo"], (2, 3)), floats(f"colliders[{k}].hi", d["hi"], (2, 3))
+            elif d["type"] == "sphere":
+                d["center"], d["radius"] = floats(f"colliders[{k}].center", d["center"]), float(d["radius"])
+            else:
+                d["point"], d["normal"] = floats(f"colliders[{k}].point", d["point"]), floats(f"colliders[{k}].normal", d["normal"])
+        except KeyError as e:
+            raise ValueError(f"colliders[{k}] = {c!r} is invalid: a {d['type']} needs {' and '.join(_KIND[d['type']])}, it has no {e}") from None
+        for name in ("restitution", "friction"):
+            value = getattr(c, name, None) if not isinstance(c, dict) else c.get(name)
+            if value is not None:
+                d[name] = float(value)
+            else:
+                d.pop(name, None)
+        out.append(d)
+    return out
+
+
+def _scenery(colliders) -> list[tuple[str, list[float]]]:
+    """The engine's (kind, numbers) pairs of the colliders; a 2-value box (2D) is open along z."""
+    if colliders is None:
+        return []
+    items = []
+    for d in _describe_colliders(colliders):
+        if d["type"] == "plane":
+            items.append(("plane", d["point"] + d["normal"]))
+        elif d["type"] == "box":
+            lo, hi = list(d["lo"]), list(d["hi"])
+            if len(lo) == 2:
+                lo.append(-math.inf)
+            if len(hi) == 2:
+                hi.append(math.inf)
+            items.append(("box", lo + hi))
+        else:
+            items.append(("sphere", d["center"] + [d["radius"]]))
+    return items
+
+
+def _extent(x, r, scenery):
+    """(lo, hi): the box of all frames' particles and of the scenery's finite parts, widened
+    by the largest radius (at least 5% of its size, so that one particle still has a view)."""
     finite = x[np.all(np.isfinite(x), axis=2)]
-    if finite.size == 0:
-        lo, hi = np.zeros(3), np.ones(3)
-    else:
-        lo, hi = finite.min(axis=0), finite.max(axis=0)
+    points = [finite.reshape(-1, 3)]
+    for kind, v in scenery:
+        if kind == "box":
+            # Each finite bound counts along its own axis (an open top adds nothing along z).
+            for corner in (v[:3], v[3:]):
+                c = np.array(corner, dtype=np.float64)
+                for k in range(3):
+                    if np.isfinite(c[k]):
+                        p = np.full((1, 3), np.nan)
+                        p[0, k] = c[k]
+                        points.append(p)
+        elif kind == "sphere":
+            c, radius = np.array(v[:3]), v[3]
+            points.append(np.array([c - radius, c + radius]))
+    pts = np.concatenate(points)
+    with np.errstate(invalid="ignore"):
+        lo = np.array([np.nanmin(pts[:, k]) if np.any(np.isfinite(pts[:, k])) else np.nan for k in range(3)])
+        hi = np.array([np.nanmax(pts[:, k]) if np.any(np.isfinite(pts[:, k])) else np.nan for k in range(3)])
+    known = np.isfinite(lo) & np.isfinite(hi)
+    lo, hi = np.where(known, lo, 0.0), np.where(known, hi, np.where(known.any(), 0.0, 1.0))
     pad = float(r.max()) if r.size else 0.0
-    span = float(np.max(hi - lo)) if finite.size else 1.0
+    span = float(np.max(hi - lo))
     # A degenerate box (one particle, a line) still gets a view of finite size.
     pad = max(pad, 0.05 * span, 1e-9)
-    lo, hi = lo - pad, hi + pad
+    return lo - pad, hi + pad
+
+
+def _auto_camera(lo, hi, dim, width, height):
     if dim == 2:
         return Camera2D(float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
     return Camera3D.framing(lo, hi, width=width, height=height)

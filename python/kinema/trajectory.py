@@ -22,7 +22,11 @@ class Trajectory:
 
     About the world (``None`` when unknown): ``masses`` (N,) kg, ``radii`` (N,) m, ``ids``
     (N,), ``dim`` (2 or 3), ``dt`` s, ``method``, ``periodic`` (3 bools) and ``box_edges``
-    (3,) m, the periodic cell.
+    (3,) m, the periodic cell. ``colliders``: the world's colliders as plain descriptions, in
+    the order added — {"type": "plane", "point": [3], "normal": [3]}, {"type": "box", "lo",
+    "hi"} (2 or 3 values each, ±inf for an open face), {"type": "sphere", "center": [3],
+    "radius"}, with "restitution" and "friction" where the collider sets them; m. Empty when
+    there are none or they are unknown (a file written before they were recorded).
 
     ``save`` writes an H5MD file, ``Trajectory.load`` (or ``kinema.load_trajectory``) reads
     one back, ``export`` writes VTK, PLY, extended XYZ or CSV (see ``kinema.io``), ``render``
@@ -46,6 +50,7 @@ class Trajectory:
     method: str | None = None
     periodic: tuple[bool, bool, bool] | None = None
     box_edges: np.ndarray | None = None
+    colliders: list[dict[str, Any]] = field(default_factory=list)
     total: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -68,16 +73,19 @@ class Trajectory:
 
         return load_h5md(path, group=group).to_trajectory()
 
-    def render(self, path: Any, fps: float | None = None, **options: Any) -> Any:
+    def render(self, path: Any, fps: float | None = None, draw_colliders: bool = True, **options: Any) -> Any:
         """Render the frames to a video, ``.mp4`` (H.264) or ``.gif``, and return its path.
 
-        ``fps`` defaults to the recording's frame rate (real time). ``options`` go to
-        ``kinema.render_frames`` (``color_by``, ``width``, ``height``, ``camera``, ...) and
-        ``preset``/``crf`` to ``kinema.write_video``. Particles without a radius are drawn at
-        1/200 of the scene's size."""
+        ``fps`` defaults to the recording's frame rate (real time). The trajectory's
+        ``colliders`` are drawn with the particles unless ``draw_colliders`` is False (or
+        ``colliders=`` gives others). ``options`` go to ``kinema.render_frames``
+        (``color_by``, ``width``, ``height``, ``camera``, ...) and ``preset``/``crf`` to
+        ``kinema.write_video``. Particles without a radius are drawn at 1/200 of the scene's
+        size."""
         from .render import render_frames, write_video
 
         video = {k: options.pop(k) for k in ("preset", "crf") if k in options}
+        options.setdefault("colliders", self.colliders if draw_colliders else None)
         if fps is None:
             fps = 1.0 / float(np.median(np.diff(self.t))) if self.t.size > 1 else 30.0
         radius = self.radii

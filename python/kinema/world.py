@@ -406,6 +406,8 @@ class World:
 
     def _trajectory_info(self) -> dict[str, Any]:
         """What a Trajectory records about the world besides its frames."""
+        from .render import _describe_colliders
+
         periodic = self.periodic
         edges = None
         if any(periodic):
@@ -422,6 +424,7 @@ class World:
             "method": self.method,
             "periodic": periodic if any(periodic) else None,
             "box_edges": edges,
+            "colliders": _describe_colliders(self.colliders),
         }
 
     def __len__(self) -> int:

@@ -2,7 +2,7 @@
 
 use std::borrow::Cow;
 
-use kinema::render::{categorical, render, text, yuv, Camera, Colormap, RenderParams};
+use kinema::render::{categorical, render_scene, text, yuv, Camera, Colormap, RenderParams, Scenery, SceneryItem};
 use numpy::ndarray::Dimension;
 use numpy::{
     Element, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
@@ -26,14 +26,67 @@ fn bad(parameter: &str, got: impl std::fmt::Display, expected: &str) -> PyErr {
     PyValueError::new_err(format!("{parameter} = {got} is invalid: {expected}"))
 }
 
+/// The scenery items from (kind, numbers) pairs: ("plane", [px, py, pz, nx, ny, nz]),
+/// ("box", [lo x, y, z, hi x, y, z]), ("sphere", [cx, cy, cz, radius]).
+fn scenery_items(items: Vec<(String, Vec<f64>)>) -> PyResult<Vec<SceneryItem>> {
+    items
+        .into_iter()
+        .enumerate()
+        .map(|(k, (kind, v))| {
+            let want = match kind.as_str() {
+                "plane" | "box" => 6,
+                "sphere" => 4,
+                _ => {
+                    return Err(bad(
+                        &format!("scenery[{k}]"),
+                        format!("a {kind:?}"),
+                        "the kinds are 'plane', 'box' and 'sphere'",
+                    ))
+                }
+            };
+            if v.len() != want {
+                return Err(bad(
+                    &format!("scenery[{k}]"),
+                    format!("a {kind} of {} numbers", v.len()),
+                    &format!(
+                        "a {kind} takes {want}: {}",
+                        match want {
+                            4 => "centre x, y, z and radius",
+                            _ if kind == "plane" => "point x, y, z and normal x, y, z",
+                            _ => "lo x, y, z and hi x, y, z",
+                        }
+                    ),
+                ));
+            }
+            let a = [v[0], v[1], v[2]];
+            Ok(match kind.as_str() {
+                "plane" => SceneryItem::Plane {
+                    point: a,
+                    normal: [v[3], v[4], v[5]],
+                },
+                "box" => SceneryItem::Box {
+                    lo: a,
+                    hi: [v[3], v[4], v[5]],
+                },
+                _ => SceneryItem::Sphere { center: a, radius: v[3] },
+            })
+        })
+        .collect()
+}
+
 /// Renders one frame; returns an (height, width, 3) uint8 array. The GIL is released while
 /// colours are mapped and pixels are drawn.
+///
+/// `scenery`: colliders drawn with the particles, a list of (kind, numbers) — ("plane",
+/// [point, normal]), ("box", [lo, hi]) (bounds may be infinite), ("sphere", [centre,
+/// radius]); `extent`: (lo, hi), m, the region of the whole scene, which sizes planes and
+/// clamps infinite box bounds (default: this frame's particles and the finite scenery).
 #[pyfunction]
 #[pyo3(signature = (
     positions, radius, *, colors=None, values=None, colormap="viridis", vmin=None, vmax=None,
     width=1280, height=720, view=None, eye=None, target=None, up=[0.0, 0.0, 1.0], fov_deg=40.0,
     background=(255, 255, 255), min_radius_px=1.0, label=None, label_scale=2,
-    label_color=(0, 0, 0)
+    label_color=(0, 0, 0), scenery=None, extent=None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn render_frame<'py>(
@@ -57,7 +110,13 @@ fn render_frame<'py>(
     label: Option<&str>,
     label_scale: usize,
     label_color: (u8, u8, u8),
+    scenery: Option<Vec<(String, Vec<f64>)>>,
+    extent: Option<([f64; 3], [f64; 3])>,
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    let scenery = Scenery {
+        items: scenery_items(scenery.unwrap_or_default())?,
+        extent,
+    };
     let n = positions.shape()[0];
     if positions.shape()[1] != 3 {
         return Err(bad(
@@ -120,7 +179,7 @@ fn render_frame<'py>(
     let rad = data(&radius);
     let mut image = vec![0u8; width.saturating_mul(height).saturating_mul(3).min(3 << 30)];
     py.detach(|| -> Result<(), kinema::Error> {
-        render(&camera, &pos, &rad, &colors, &params, &mut image)?;
+        render_scene(&camera, &pos, &rad, &colors, &scenery, &params, &mut image)?;
         if let Some(label) = label {
             let lc = [label_color.0, label_color.1, label_color.2];
             let margin = 4 * label_scale.max(1);

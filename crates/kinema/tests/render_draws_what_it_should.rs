@@ -1,10 +1,12 @@
 //! The renderer draws what it should: discs where they are with antialiased edges, nearer
 //! spheres over farther ones, perspective sizes, nothing behind the eye, and the same bytes
-//! for every thread count.
+//! for every thread count; with scenery, floors below the horizon, sphere obstacles in depth
+//! order with the particles, box outlines on their edges only, and named errors.
 
 // The tests sit in a module named `render` so that `cargo test render` selects them.
 mod render {
-    use kinema::render::{render, text, Camera, RenderParams, RenderStats};
+    use kinema::render::scenery::{BOX_FLOOR_COLOR, FLOOR_COLOR, LINE_COLOR, OBSTACLE_COLOR};
+    use kinema::render::{render, render_scene, text, Camera, RenderParams, RenderStats, Scenery, SceneryItem};
     use kinema::Error;
 
     const BG: [u8; 3] = [255, 255, 255];
@@ -133,20 +135,48 @@ mod render {
             Camera::frame_box([0.0; 3], [1.0; 3], [1.0, -1.5, 0.8], 40.0, w, h).unwrap(),
             Camera::fit_2d([0.0, 0.0], [1.0, 1.0], w, h).unwrap(),
         ];
+        // Without scenery, and with a floor, an open box (no lid), a slanted wall and an
+        // obstacle in the middle of the cloud.
+        let sceneries = [
+            Scenery::default(),
+            Scenery {
+                items: vec![
+                    SceneryItem::Plane {
+                        point: [0.0; 3],
+                        normal: [0.0, 0.0, 1.0],
+                    },
+                    SceneryItem::Plane {
+                        point: [0.0; 3],
+                        normal: [1.0, 0.3, 0.2],
+                    },
+                    SceneryItem::Box {
+                        lo: [0.0; 3],
+                        hi: [1.0, 1.0, f64::INFINITY],
+                    },
+                    SceneryItem::Sphere {
+                        center: [0.5; 3],
+                        radius: 0.2,
+                    },
+                ],
+                extent: None,
+            },
+        ];
         for cam in cams {
-            let images: Vec<Vec<u8>> = [1, 2, 3]
-                .iter()
-                .map(|&threads| {
-                    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-                    let mut image = vec![0u8; w * h * 3];
-                    pool.install(|| render(&cam, &positions, &radius, &colors, &params, &mut image))
-                        .unwrap();
-                    image
-                })
-                .collect();
-            assert!(images[0].iter().any(|&b| b != 255));
-            assert_eq!(images[0], images[1], "1 vs 2 threads, {cam:?}");
-            assert_eq!(images[0], images[2], "1 vs 3 threads, {cam:?}");
+            for scenery in &sceneries {
+                let images: Vec<Vec<u8>> = [1, 2, 3]
+                    .iter()
+                    .map(|&threads| {
+                        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                        let mut image = vec![0u8; w * h * 3];
+                        pool.install(|| render_scene(&cam, &positions, &radius, &colors, scenery, &params, &mut image))
+                            .unwrap();
+                        image
+                    })
+                    .collect();
+                assert!(images[0].iter().any(|&b| b != 255));
+                assert_eq!(images[0], images[1], "1 vs 2 threads, {cam:?}, {} items", scenery.items.len());
+                assert_eq!(images[0], images[2], "1 vs 3 threads, {cam:?}, {} items", scenery.items.len());
+            }
         }
     }
 
@@ -207,5 +237,316 @@ mod render {
         assert_eq!(drawn, 10 * 6 * 2);
         assert_ne!(a, b);
         assert!(a.contains(&0));
+    }
+
+    // -- scenery ------------------------------------------------------------------------------
+
+    fn scene_frame(
+        camera: &Camera,
+        pos: &[[f64; 3]],
+        radius: &[f64],
+        colors: &[[u8; 3]],
+        scenery: &Scenery,
+        w: usize,
+        h: usize,
+    ) -> Vec<u8> {
+        let mut image = vec![0u8; w * h * 3];
+        let positions: Vec<f64> = pos.iter().flatten().copied().collect();
+        let colors: Vec<u8> = colors.iter().flatten().copied().collect();
+        render_scene(
+            camera,
+            &positions,
+            radius,
+            &colors,
+            scenery,
+            &RenderParams::new(w, h),
+            &mut image,
+        )
+        .unwrap();
+        image
+    }
+
+    fn items(items: Vec<SceneryItem>) -> Scenery {
+        Scenery { items, extent: None }
+    }
+
+    /// A neutral grey: the three channels within `tol` of each other and darker than white.
+    fn is_grey(c: [u8; 3], tol: u8) -> bool {
+        let (lo, hi) = (c.iter().min().unwrap(), c.iter().max().unwrap());
+        hi - lo <= tol && *hi < 250
+    }
+
+    #[test]
+    fn a_floor_colours_the_ground_below_the_horizon_and_not_the_sky() {
+        // The eye 1 m above the floor z = 0, looking horizontally along +y: the horizon is
+        // the middle row; the floor patch (which reaches behind the camera and is cut at the
+        // near distance) fills the lower half, the sky stays the background.
+        let (w, h) = (160, 120);
+        let cam = Camera::perspective([0.0, 0.0, 1.0], [0.0, 10.0, 1.0], [0.0, 0.0, 1.0], 60.0).unwrap();
+        let floor = items(vec![SceneryItem::Plane {
+            point: [0.0; 3],
+            normal: [0.0, 0.0, 1.0],
+        }]);
+        let img = scene_frame(&cam, &[], &[], &[], &floor, w, h);
+        for j in 0..55 {
+            assert!((0..w).all(|i| pixel(&img, w, i, j) == BG), "sky row {j} is background");
+        }
+        for j in 65..h {
+            let floor_pixels = (0..w).filter(|&i| is_grey(pixel(&img, w, i, j), 6)).count();
+            assert_eq!(floor_pixels, w, "ground row {j} is floor everywhere");
+        }
+        // Most of the ground is the plain floor colour (the faint grid covers a few pixels).
+        let plain = (65..h)
+            .flat_map(|j| (0..w).map(move |i| (i, j)))
+            .filter(|&(i, j)| pixel(&img, w, i, j) == FLOOR_COLOR)
+            .count();
+        assert!(plain > (h - 65) * w / 2, "{plain} plain floor pixels");
+        // Seen from below, the same floor is overhead: the upper half.
+        let below = Camera::perspective([0.0, 0.0, -1.0], [0.0, 10.0, -1.0], [0.0, 0.0, 1.0], 60.0).unwrap();
+        let img = scene_frame(&below, &[], &[], &[], &floor, w, h);
+        assert!(is_grey(pixel(&img, w, 80, 5), 6) && pixel(&img, w, 80, 115) == BG);
+        // Looking up and away, the floor is entirely behind the view: nothing is drawn, and
+        // the parts behind the eye do not wrap around into the image.
+        let up = Camera::perspective([0.0, 0.0, 1.0], [0.0, 5.0, 4.0], [0.0, 0.0, 1.0], 40.0).unwrap();
+        let img = scene_frame(&up, &[], &[], &[], &floor, w, h);
+        assert!(img.iter().all(|&b| b == 255));
+    }
+
+    #[test]
+    fn a_floor_is_drawn_under_the_particles() {
+        let (w, h) = (160, 120);
+        let cam = Camera::perspective([0.0, -4.0, 2.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 40.0).unwrap();
+        let floor = items(vec![SceneryItem::Plane {
+            point: [0.0, 0.0, -0.3],
+            normal: [0.0, 0.0, 1.0],
+        }]);
+        // A red ball resting on the floor at the image centre: its pixels are red (shaded),
+        // the floor's grey around it.
+        let img = scene_frame(&cam, &[[0.0; 3]], &[0.3], &[[255, 0, 0]], &floor, w, h);
+        for (i, j) in [(80, 60), (80, 52), (74, 64)] {
+            let c = pixel(&img, w, i, j);
+            assert!(
+                c[0] > 60 && c[1] < c[0] / 3 && c[2] < c[0] / 3,
+                "ball pixel ({i}, {j}): {c:?}"
+            );
+        }
+        assert!(is_grey(pixel(&img, w, 80, 100), 6), "floor below the ball");
+    }
+
+    #[test]
+    fn a_sphere_obstacle_hides_a_particle_behind_it_and_not_one_in_front() {
+        let (w, h) = (200, 200);
+        let cam = Camera::perspective([0.0, -10.0, 0.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0).unwrap();
+        let ball = items(vec![SceneryItem::Sphere {
+            center: [0.0; 3],
+            radius: 1.0,
+        }]);
+        let red = [[255, 0, 0]];
+        let behind = scene_frame(&cam, &[[0.0, 3.0, 0.0]], &[0.2], &red, &ball, w, h);
+        let c = pixel(&behind, w, 100, 100);
+        assert!(is_grey(c, 12), "the obstacle covers the particle behind it: {c:?}");
+        let in_front = scene_frame(&cam, &[[0.0, -3.0, 0.0]], &[0.2], &red, &ball, w, h);
+        let c = pixel(&in_front, w, 100, 100);
+        assert!(c[0] > c[1] + 100, "the particle in front covers the obstacle: {c:?}");
+        // Beside the particle, still the obstacle; the same for the 2D disc, under particles.
+        assert!(is_grey(pixel(&in_front, w, 100 + 20, 100), 12));
+        let flat = Camera::fit_2d([-2.0, -2.0], [2.0, 2.0], w, h).unwrap();
+        let img = scene_frame(&flat, &[[0.0, 0.0, 0.0]], &[0.2], &red, &ball, w, h);
+        assert_eq!(pixel(&img, w, 100, 100), [255, 0, 0]);
+        assert_eq!(pixel(&img, w, 100 + 30, 100), OBSTACLE_COLOR);
+        assert_eq!(pixel(&img, w, 100 + 60, 100), BG);
+    }
+
+    #[test]
+    fn a_2d_box_outline_lights_its_edges_and_not_its_interior() {
+        // [0, 10]² onto 100 × 100: the box [2, 8]² has its sides on pixel lines 20 and 80.
+        let (w, h) = (100, 100);
+        let cam = Camera::fit_2d([0.0, 0.0], [10.0, 10.0], w, h).unwrap();
+        let b = items(vec![SceneryItem::Box {
+            lo: [2.0, 2.0, -1.0],
+            hi: [8.0, 8.0, 1.0],
+        }]);
+        let img = scene_frame(&cam, &[], &[], &[], &b, w, h);
+        // A 2 px line centred on x = 20: pixels 19 and 20 (centres 0.5 px away) are covered,
+        // clamp(w/2 + ½ − d, 0, 1) = clamp(1 + ½ − ½) = 1; pixels 18 and 21 (1.5 px) are not.
+        for j in [30, 50, 70] {
+            for i in [19, 20, 79, 80] {
+                assert_eq!(pixel(&img, w, i, j), LINE_COLOR, "side pixel ({i}, {j})");
+                assert_eq!(pixel(&img, w, j, i), LINE_COLOR, "top/bottom pixel ({j}, {i})");
+            }
+            for i in [17, 22, 50, 77, 82] {
+                assert_eq!(pixel(&img, w, i, j), BG, "off-edge pixel ({i}, {j})");
+            }
+        }
+        let lit = img.chunks(3).filter(|p| p != &BG).count();
+        assert!(
+            (4 * 2 * 60..=4 * 2 * 64).contains(&lit),
+            "{lit} pixels lit: the four sides only"
+        );
+        // An open top (hi y = +inf) has no lid; its sides rise to the extent's top (y = 9).
+        let open = Scenery {
+            items: vec![SceneryItem::Box {
+                lo: [2.0, 2.0, -1.0],
+                hi: [8.0, f64::INFINITY, 1.0],
+            }],
+            extent: Some(([0.0, 0.0, 0.0], [10.0, 9.0, 0.0])),
+        };
+        let img = scene_frame(&cam, &[], &[], &[], &open, w, h);
+        assert_eq!(pixel(&img, w, 50, 20), BG, "no lid at y = 8");
+        assert_eq!(pixel(&img, w, 50, 80), LINE_COLOR, "the floor at y = 2");
+        assert_eq!(pixel(&img, w, 20, 12), LINE_COLOR, "the left wall at y = 8.7");
+        assert_eq!(pixel(&img, w, 20, 5), BG, "above the extent");
+    }
+
+    #[test]
+    fn a_2d_plane_is_a_thick_line_with_its_solid_side_filled() {
+        // The wall x = 5 with the free side towards +x, on pixel line 50; 3 px wide.
+        let (w, h) = (100, 100);
+        let cam = Camera::fit_2d([0.0, 0.0], [10.0, 10.0], w, h).unwrap();
+        let wall = items(vec![SceneryItem::Plane {
+            point: [5.0, 0.0, 0.0],
+            normal: [2.0, 0.0, 0.0],
+        }]);
+        let img = scene_frame(&cam, &[], &[], &[], &wall, w, h);
+        for j in [0, 50, 99] {
+            assert_eq!(pixel(&img, w, 49, j), LINE_COLOR);
+            assert_eq!(pixel(&img, w, 50, j), LINE_COLOR);
+            // 1.5 px from the centre line: clamp(1.5 + ½ − 1.5, 0, 1) = ½ of the line colour.
+            let half = pixel(&img, w, 51, j);
+            assert!((170..=180).contains(&half[0]), "{half:?}");
+            assert_eq!(pixel(&img, w, 20, j), FLOOR_COLOR, "solid side");
+            assert_eq!(pixel(&img, w, 80, j), BG, "free side");
+        }
+        // A plane parallel to the view (normal along z) has no line in 2D: nothing is drawn.
+        let flat = items(vec![SceneryItem::Plane {
+            point: [0.0; 3],
+            normal: [0.0, 0.0, 1.0],
+        }]);
+        assert!(scene_frame(&cam, &[], &[], &[], &flat, w, h).iter().all(|&b| b == 255));
+    }
+
+    #[test]
+    fn a_3d_box_draws_its_edges_and_floor_and_an_open_one_has_no_lid() {
+        let (w, h) = (200, 150);
+        let cam = Camera::frame_box([-1.0, -1.0, 0.0], [1.0, 1.0, 2.0], [1.0, -1.6, 0.9], 40.0, w, h).unwrap();
+        let closed = items(vec![SceneryItem::Box {
+            lo: [-1.0, -1.0, 0.0],
+            hi: [1.0, 1.0, 2.0],
+        }]);
+        let open = items(vec![SceneryItem::Box {
+            lo: [-1.0, -1.0, 0.0],
+            hi: [1.0, 1.0, f64::INFINITY],
+        }]);
+        // A particle at the top keeps the open box's extent at the closed box's height.
+        let top = [[0.0, 0.0, 1.9]];
+        let a = scene_frame(&cam, &top, &[0.1], &[[0, 0, 255]], &closed, w, h);
+        let b = scene_frame(&cam, &top, &[0.1], &[[0, 0, 255]], &open, w, h);
+        let count = |img: &[u8], c: [u8; 3]| img.chunks(3).filter(|p| *p == c).count();
+        assert!(count(&a, LINE_COLOR) > 200, "edges drawn");
+        assert!(count(&a, BOX_FLOOR_COLOR) > 1000, "floor face filled");
+        assert_eq!(count(&a, BOX_FLOOR_COLOR), count(&b, BOX_FLOOR_COLOR), "the same floor");
+        // The lid's four edges are missing from the open box, the rest is the same.
+        assert!(count(&b, LINE_COLOR) < count(&a, LINE_COLOR) * 9 / 10);
+        let differ = a.chunks(3).zip(b.chunks(3)).filter(|(p, q)| p != q).count();
+        assert!(differ > 100);
+    }
+
+    #[test]
+    fn scenery_does_not_count_as_particles() {
+        let cam = Camera::perspective([0.0, -10.0, 0.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0).unwrap();
+        let scenery = items(vec![
+            SceneryItem::Sphere {
+                center: [0.0; 3],
+                radius: 1.0,
+            },
+            SceneryItem::Plane {
+                point: [0.0, 0.0, -1.0],
+                normal: [0.0, 0.0, 1.0],
+            },
+        ]);
+        let mut image = vec![0u8; 64 * 64 * 3];
+        let stats = render_scene(
+            &cam,
+            &[0.0, -3.0, 0.0],
+            &[0.1],
+            &[0; 3],
+            &scenery,
+            &RenderParams::new(64, 64),
+            &mut image,
+        )
+        .unwrap();
+        assert_eq!(stats, RenderStats { drawn: 1, culled: 0 });
+    }
+
+    #[test]
+    fn bad_scenery_names_the_item_and_the_parameter() {
+        let cam = Camera::fit_2d([0.0, 0.0], [1.0, 1.0], 10, 10).unwrap();
+        let mut image = vec![0u8; 300];
+        let p = RenderParams::new(10, 10);
+        let error = |item: SceneryItem, extent| {
+            let scenery = Scenery {
+                items: vec![
+                    SceneryItem::Sphere {
+                        center: [0.0; 3],
+                        radius: 1.0,
+                    },
+                    item,
+                ],
+                extent,
+            };
+            match render_scene(&cam, &[], &[], &[], &scenery, &p, &mut image.clone()).unwrap_err() {
+                Error::InvalidParameter {
+                    parameter,
+                    value,
+                    allowed,
+                } => format!("{parameter} = {value}: {allowed}"),
+                other => panic!("{other}"),
+            }
+        };
+        let plane = |point, normal| SceneryItem::Plane { point, normal };
+        let e = error(plane([0.0; 3], [0.0; 3]), None);
+        assert!(
+            e.starts_with("scenery[1].normal = [0.0, 0.0, 0.0]") && e.contains("non-zero"),
+            "{e}"
+        );
+        let e = error(plane([f64::INFINITY, 0.0, 0.0], [0.0, 0.0, 1.0]), None);
+        assert!(e.starts_with("scenery[1].point") && e.contains("finite"), "{e}");
+        let e = error(plane([0.0; 3], [f64::NAN, 0.0, 1.0]), None);
+        assert!(e.starts_with("scenery[1].normal"), "{e}");
+        let e = error(
+            SceneryItem::Sphere {
+                center: [0.0; 3],
+                radius: -0.5,
+            },
+            None,
+        );
+        assert!(e.starts_with("scenery[1].radius = -0.5") && e.contains(">= 0"), "{e}");
+        let e = error(
+            SceneryItem::Sphere {
+                center: [f64::NAN, 0.0, 0.0],
+                radius: 1.0,
+            },
+            None,
+        );
+        assert!(e.starts_with("scenery[1].center"), "{e}");
+        for (lo, hi) in [
+            ([0.0, 0.0, 1.0], [1.0, 1.0, 1.0]),                     // empty along z
+            ([f64::NAN, 0.0, 0.0], [1.0; 3]),                       // NaN
+            ([0.0, f64::INFINITY, 0.0], [1.0, f64::INFINITY, 1.0]), // lo = +inf
+        ] {
+            let e = error(SceneryItem::Box { lo, hi }, None);
+            assert!(e.starts_with("scenery[1].lo") && e.contains("lo < hi"), "{e}");
+        }
+        let fine = SceneryItem::Box {
+            lo: [f64::NEG_INFINITY, 0.0, 0.0],
+            hi: [1.0, 1.0, f64::INFINITY],
+        };
+        let e = error(fine, Some(([0.0; 3], [f64::INFINITY, 1.0, 1.0])));
+        assert!(e.starts_with("extent"), "{e}");
+        let ok = Scenery {
+            items: vec![fine],
+            extent: None,
+        };
+        render_scene(&cam, &[], &[], &[], &ok, &p, &mut image).unwrap();
     }
 }

@@ -19,6 +19,9 @@ through HDF5 hard links, as the specification allows)::
         momentum (F, 3) [kg m s-1], angular_momentum (F, 3) [kg m2 s-1]
         contacts (F,), impulse_balance (F, 3) [kg m s-1], collision_energy_lost (F,) [J]
     /parameters/kinema    +-- dt [s], method   (when known)
+        colliders/<k>     +-- type = "plane" | "box" | "sphere", its geometry [m]
+                              (point, normal | lo, hi | center, radius), restitution,
+                              friction when set; k = 0, 1, ... in the world's order
 
 Units follow the H5MD units module: a ``unit`` attribute on each ``value`` (and ``time``)
 dataset, in the "SI" system, written as space-separated factors with integer powers.
@@ -66,8 +69,9 @@ class LoadedTrajectory:
     (F, 3) kg m/s and ``angular_momentum`` (F, 3) kg m²/s; ``contacts`` (F,),
     ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J. Besides: ``step``
     (F,) the integration step of each frame, ``masses`` (N,) kg, ``radii`` (N,) m, ``ids``
-    (N,), ``dim``, ``dt`` s, ``method``, ``group`` and the file's ``author`` and ``creator``.
-    An element the file does not hold is ``None`` (``potential``: empty)."""
+    (N,), ``dim``, ``dt`` s, ``method``, ``colliders`` (descriptions, as
+    ``Trajectory.colliders``), ``group`` and the file's ``author`` and ``creator``. An
+    element the file does not hold is ``None`` (``potential``, ``colliders``: empty)."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -89,6 +93,7 @@ class LoadedTrajectory:
     method: str | None = None
     periodic: tuple[bool, bool, bool] | None = None
     box_edges: np.ndarray | None = None
+    colliders: list[dict[str, Any]] = field(default_factory=list)
     group: str = "all"
     author: str | None = None
     creator: str | None = None
@@ -107,7 +112,7 @@ class LoadedTrajectory:
             value = getattr(self, fl.name, None)
             if value is None:
                 value = zeros.get(fl.name)
-            if value is None and fl.default is not MISSING:
+            if value is None and (fl.default is not MISSING or fl.default_factory is not MISSING):
                 continue  # optional in Trajectory: its default
             if value is None:
                 raise ValueError(f"the file holds no {fl.name!r}, which kinema.Trajectory needs")
@@ -210,13 +215,57 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     if total is not None:
         _element(obs, "total_energy", np.asarray(total, dtype=np.float64), clock, compression, "J")
 
-    if fr.dt is not None or fr.method is not None:
+    colliders = _colliders_of(tr)
+    if fr.dt is not None or fr.method is not None or colliders:
         params = f.create_group("parameters").create_group("kinema")
         if fr.dt is not None:
             params.attrs["dt"] = fr.dt
             params.attrs["dt_unit"] = "s"
         if fr.method is not None:
             params.attrs["method"] = fr.method
+        if colliders:
+            # One group per collider, named by its index; the values are attributes (H5MD
+            # leaves /parameters to the program), lengths in m, ±inf for an open box face.
+            group_of = params.create_group("colliders", track_order=True)
+            for k, c in enumerate(colliders):
+                g = group_of.create_group(str(k), track_order=True)
+                g.attrs["type"] = c["type"]
+                for name, value in c.items():
+                    if name != "type":
+                        g.attrs.create(name, np.asarray(value, dtype=np.float64))
+
+
+def _colliders_of(tr: Any) -> list[dict[str, Any]]:
+    """The trajectory's collider descriptions (``Trajectory.colliders``), checked; [] when it
+    has none."""
+    colliders = getattr(tr, "colliders", None) or []
+    if not colliders:
+        return []
+    from ..render import _describe_colliders
+
+    return _describe_colliders(colliders)
+
+
+def _read_colliders(path: Path, params: Any) -> list[dict[str, Any]]:
+    """The descriptions under /parameters/kinema/colliders, in index order."""
+    h5py = _h5py()
+    group = params.get("colliders")
+    if not isinstance(group, h5py.Group):
+        return []
+    out = []
+    for name in sorted(group, key=lambda n: int(n) if n.isdigit() else -1):
+        g = group[name]
+        kind = g.attrs.get("type")
+        kind = kind.decode() if isinstance(kind, bytes) else kind
+        if not name.isdigit() or not isinstance(g, h5py.Group) or kind not in ("plane", "box", "sphere"):
+            raise _fail(path, f"{g.name} is not a kinema collider (a group named by its index with type plane, box or sphere)")
+        d: dict[str, Any] = {"type": str(kind)}
+        for key, value in g.attrs.items():
+            if key != "type":
+                a = np.asarray(value, dtype=np.float64)
+                d[key] = float(a) if a.ndim == 0 else a.tolist()
+        out.append(d)
+    return out
 
 
 def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: str | None = None, compression: str | None = "gzip") -> Path:
@@ -229,7 +278,8 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     when present, ``total`` (F,) J, ``contacts`` (F,), ``impulse_balance`` (F, 3) N s,
     ``collision_energy_lost`` (F,) J, ``masses`` (N,) kg, ``radii`` (N,) m, ``ids`` (N,),
     ``dim`` (2: positions are stored as (F, N, 2)), ``dt`` s, ``method``, ``periodic`` (D
-    bools) with ``box_edges`` (D,) m.
+    bools) with ``box_edges`` (D,) m, ``colliders`` (``Trajectory.colliders``' descriptions
+    or ``kinema`` collider objects).
 
     ``group`` names the particle group (/particles/<group>); ``author`` the /h5md/author name
     (default: the login name); ``compression`` "gzip", "lzf" or None for the chunked
@@ -343,6 +393,7 @@ def _read(path: Path, f: Any, group: str | None) -> LoadedTrajectory:
     if isinstance(params, h5py.Group):
         out.dt = float(params.attrs["dt"]) if "dt" in params.attrs else None
         out.method = str(params.attrs["method"]) if "method" in params.attrs else None
+        out.colliders = _read_colliders(path, params)
     author = f["h5md"].get("author")
     creator = f["h5md"].get("creator")
     out.author = None if author is None else str(author.attrs.get("name", ""))

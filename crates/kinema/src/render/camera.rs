@@ -281,6 +281,37 @@ impl Projector {
     }
 }
 
+impl Projector {
+    /// Camera coordinates (xc, yc, zc) of a world point: right, up and along the view axis,
+    /// m from the eye. Perspective only; the orthographic camera returns (x, y, 0).
+    #[inline]
+    pub(crate) fn camera_coords(&self, p: [f64; 3]) -> [f64; 3] {
+        match *self {
+            Projector::Ortho { .. } => [p[0], p[1], 0.0],
+            Projector::Persp {
+                eye, right, up, forward, ..
+            } => {
+                let d = sub(p, eye);
+                [dot(d, right), dot(d, up), dot(d, forward)]
+            }
+        }
+    }
+
+    /// Pixel position of a point given in camera coordinates with zc > 0 (the pinhole
+    /// projection of [`Projector::project`]); for the orthographic camera, of the world point
+    /// (x, y, ·).
+    #[inline]
+    pub(crate) fn camera_to_pixel(&self, c: [f64; 3]) -> [f64; 2] {
+        match *self {
+            Projector::Ortho { cx, cy, s } => [cx + s * c[0], cy - s * c[1]],
+            Projector::Persp { f, cx, cy, .. } => {
+                let k = f / c[2];
+                [cx + k * c[0], cy - k * c[1]]
+            }
+        }
+    }
+}
+
 pub(crate) fn invalid(parameter: &str, value: impl std::fmt::Display, allowed: &str) -> Error {
     Error::InvalidParameter {
         parameter: parameter.to_string(),
@@ -311,22 +342,22 @@ fn check_fov(fov_y_deg: f64) -> Result<(), Error> {
     Ok(())
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
-fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
-fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
+pub(crate) fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
     [a[0] * s, a[1] * s, a[2] * s]
 }
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-fn norm(a: [f64; 3]) -> f64 {
+pub(crate) fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],

@@ -1,16 +1,22 @@
-//! Off-screen rendering: particles → RGB8 frames (2D antialiased discs, 3D shaded spheres).
+//! Off-screen rendering: particles → RGB8 frames (2D antialiased discs, 3D shaded spheres),
+//! with optional scenery: the static colliders (planes, boxes, sphere obstacles; [`Scenery`]).
 //!
 //! The stages of a frame, in order:
 //!
 //! 1. project   positions (m) and radii (m) → pixel centres, pixel radii, depths ([`Camera`]);
-//!    particles behind the camera are dropped.
-//! 2. order     3D: far to near (painter's algorithm, ties broken by index); 2D: index order —
-//!    later particles are drawn over earlier ones.
-//! 3. bin       each particle is listed, in draw order, in every horizontal band of
-//!    [`BAND_ROWS`] rows it overlaps.
-//! 4. raster    the bands are filled in parallel (rayon); each band clears to the background
-//!    and draws its list in order. A band's pixels depend only on its list, never on which
-//!    thread ran it or when, so frames are byte-identical for every thread count.
+//!    particles behind the camera are dropped. The scenery is projected too ([`scenery`]):
+//!    planes, boxes and 2D obstacles become a short list of background primitives (convex
+//!    fills and antialiased lines in pixels, cut at the camera's near distance first), and
+//!    3D sphere obstacles become sprites like the particles, numbered after them.
+//! 2. order     3D: far to near (painter's algorithm, ties broken by index), sphere obstacles
+//!    included; 2D: index order — later particles are drawn over earlier ones.
+//! 3. bin       each sprite is listed, in draw order, in every horizontal band of
+//!    [`BAND_ROWS`] rows it overlaps. (The few background primitives are not binned: every
+//!    band walks all of them and draws the rows it owns.)
+//! 4. raster    the bands are filled in parallel (rayon); each band clears to the background,
+//!    draws the background primitives in order, then its list in order. A band's pixels
+//!    depend only on its lists, never on which thread ran it or when, so frames are
+//!    byte-identical for every thread count.
 //!
 //! Colours come per particle as RGB8 ([`colormap`] turns values or ids into them), and
 //! [`text::draw_text`] stamps a label (e.g. the time) onto a finished frame; [`yuv`] converts
@@ -19,9 +25,11 @@
 mod camera;
 pub mod colormap;
 mod raster;
+pub mod scenery;
 pub mod text;
 pub mod yuv;
 
 pub use camera::{Camera, Projected};
 pub use colormap::{categorical, Colormap, COLORMAP_NAMES};
-pub use raster::{render, RenderParams, RenderStats, Shading, BAND_ROWS};
+pub use raster::{render, render_scene, RenderParams, RenderStats, Shading, BAND_ROWS};
+pub use scenery::{Scenery, SceneryItem};

@@ -3,6 +3,7 @@
 use rayon::prelude::*;
 
 use super::camera::{invalid, Camera};
+use super::scenery::{self, Scenery};
 use crate::Error;
 
 /// Rows per band: the unit of parallel work (720 rows give 45 bands).
@@ -73,16 +74,45 @@ pub struct RenderStats {
     pub culled: usize,
 }
 
-/// A particle ready to rasterize, in pixels; f32 is ample for image coordinates.
+/// A particle (or a sphere obstacle) ready to rasterize, in pixels; f32 is ample for image
+/// coordinates.
 #[derive(Clone, Copy, Debug)]
-struct Sprite {
-    x: f32,
-    y: f32,
-    r: f32,
-    color: [f32; 3],
+pub(crate) struct Sprite {
+    pub(crate) x: f32,
+    pub(crate) y: f32,
+    pub(crate) r: f32,
+    pub(crate) color: [f32; 3],
     /// Rows [row0, row1) that the antialiased outline can touch.
-    row0: u32,
-    row1: u32,
+    pub(crate) row0: u32,
+    pub(crate) row1: u32,
+}
+
+impl Sprite {
+    /// The disc of centre (x, y) and radius r (pixels) in a `w × h` image; `None` when it
+    /// touches no pixel (or r is not finite).
+    #[inline]
+    pub(crate) fn new(x: f64, y: f64, r: f64, color: [u8; 3], w: usize, h: usize) -> Option<Sprite> {
+        // The antialiased outline reaches half a pixel beyond the radius (see `coverage`).
+        let reach = r + 0.5;
+        if x + reach < 0.0 || x - reach > w as f64 || y + reach < 0.0 || y - reach > h as f64 || !r.is_finite() {
+            return None;
+        }
+        // Pixel row j is drawn when its centre j + 0.5 is within the reach of the centre.
+        let row0 = (y - reach - 0.5).ceil().max(0.0) as u32;
+        let row1 = ((y + reach - 0.5).floor() + 1.0).clamp(0.0, h as f64) as u32;
+        if row0 >= row1 {
+            return None;
+        }
+        Some(Sprite {
+            x: x as f32,
+            y: y as f32,
+            // A sphere filling the screen a million times over draws like one filling it once.
+            r: r.min(1e6) as f32,
+            color: color.map(|c| c as f32),
+            row0,
+            row1,
+        })
+    }
 }
 
 /// Renders the particles into `image` (RGB8, `width × height × 3` bytes, rows top first).
@@ -96,6 +126,21 @@ pub fn render(
     positions: &[f64],
     radius: &[f64],
     colors: &[u8],
+    params: &RenderParams,
+    image: &mut [u8],
+) -> Result<RenderStats, Error> {
+    render_scene(camera, positions, radius, colors, &Scenery::default(), params, image)
+}
+
+/// [`render`] with scenery: the colliders of [`Scenery`] drawn with the particles (see
+/// [`super::scenery`] for how each looks). The stats count particles only. Errors also name
+/// a bad scenery item (`scenery[2].radius`) or extent.
+pub fn render_scene(
+    camera: &Camera,
+    positions: &[f64],
+    radius: &[f64],
+    colors: &[u8],
+    scenery: &Scenery,
     params: &RenderParams,
     image: &mut [u8],
 ) -> Result<RenderStats, Error> {
@@ -131,6 +176,7 @@ pub fn render(
         ));
     }
     let light = check_shading(&params.shading)?;
+    scenery.validate()?;
 
     // 1. project
     let mut culled = 0;
@@ -148,34 +194,39 @@ pub fn render(
             continue;
         };
         let r = q.r.max(params.min_radius_px);
-        // The antialiased outline reaches half a pixel beyond the radius (see `coverage`).
-        let reach = r + 0.5;
-        if q.x + reach < 0.0 || q.x - reach > w as f64 || q.y + reach < 0.0 || q.y - reach > h as f64 || !r.is_finite() {
+        let c = [colors[3 * i], colors[3 * i + 1], colors[3 * i + 2]];
+        let Some(sprite) = Sprite::new(q.x, q.y, r, c, w, h) else {
             culled += 1;
             continue;
-        }
-        // Pixel row j is drawn when its centre j + 0.5 is within the reach of the centre.
-        let row0 = (q.y - reach - 0.5).ceil().max(0.0) as u32;
-        let row1 = ((q.y + reach - 0.5).floor() + 1.0).clamp(0.0, h as f64) as u32;
-        if row0 >= row1 {
-            culled += 1;
-            continue;
-        }
-        let c = &colors[3 * i..3 * i + 3];
-        let sprite = Sprite {
-            x: q.x as f32,
-            y: q.y as f32,
-            // A sphere filling the screen a million times over draws like one filling it once.
-            r: r.min(1e6) as f32,
-            color: [c[0] as f32, c[1] as f32, c[2] as f32],
-            row0,
-            row1,
         };
         sprites.push((q.depth, i, sprite));
     }
+    let drawn = sprites.len();
+
+    // 1b. project the scenery: planes, boxes (and 2D obstacles) become background primitives,
+    //     3D sphere obstacles join the particles, numbered after them.
+    let spheres = camera.is_3d();
+    let built = if scenery.items.is_empty() {
+        scenery::Built::default()
+    } else {
+        let frame = scenery::Frame {
+            camera,
+            projector: &projector,
+            width: w,
+            height: h,
+            min_radius_px: params.min_radius_px,
+            particles: bounding_box(positions, radius),
+        };
+        scenery::build(scenery, &frame)
+    };
+    for (k, (depth, s)) in built.spheres.into_iter().enumerate() {
+        sprites.push((depth, n + k, s));
+    }
+    let background = built.background;
 
     // 2. order: far to near; the index breaks ties so the order is total and repeatable.
-    let spheres = camera.is_3d();
+    //    A sphere obstacle sorts by its centre's depth like a particle: cloth on its near
+    //    side is drawn over it, particles behind it under it.
     if spheres {
         sprites.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     }
@@ -205,11 +256,17 @@ pub fn render(
     let bg = params.background;
     let row_bytes = 3 * w;
     image.par_chunks_mut(BAND_ROWS * row_bytes).enumerate().for_each(|(b, band)| {
-        for px in band.chunks_exact_mut(3) {
-            px.copy_from_slice(&bg);
-        }
+        fill_rgb(band, bg);
         let band_row0 = (b * BAND_ROWS) as u32;
         let band_row1 = band_row0 + (band.len() / row_bytes) as u32;
+        // The background layer: every band walks the same short list in the same order.
+        for prim in &background {
+            let (r0, r1) = prim.rows();
+            for j in r0.max(band_row0)..r1.min(band_row1) {
+                let off = (j - band_row0) as usize * row_bytes;
+                prim.draw_row(&mut band[off..off + row_bytes], j);
+            }
+        }
         for &k in &binned[start[b]..start[b + 1]] {
             let s = &sprites[k as usize].2;
             let rows = s.row0.max(band_row0)..s.row1.min(band_row1);
@@ -225,10 +282,21 @@ pub fn render(
         }
     });
 
-    Ok(RenderStats {
-        drawn: sprites.len(),
-        culled,
-    })
+    Ok(RenderStats { drawn, culled })
+}
+
+/// The particles' bounding box, radii included (positions are checked finite); `None`
+/// without particles.
+fn bounding_box(positions: &[f64], radius: &[f64]) -> Option<([f64; 3], [f64; 3])> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for (p, &r) in positions.chunks_exact(3).zip(radius) {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k] - r);
+            hi[k] = hi[k].max(p[k] + r);
+        }
+    }
+    (!radius.is_empty()).then_some((lo, hi))
 }
 
 /// Lighting constants in f32, the light and half vectors normalised.
@@ -299,9 +367,25 @@ fn coverage(r: f32, d2: f32) -> f32 {
     (r + 0.5 - d2.sqrt()).clamp(0.0, 1.0)
 }
 
+/// Sets every pixel of `dst` (RGB8) to `c`: one pixel, then copies of what is done, doubling
+/// (a few memcpy calls instead of one small copy per pixel).
+#[inline]
+pub(crate) fn fill_rgb(dst: &mut [u8], c: [u8; 3]) {
+    if dst.len() < 3 {
+        return;
+    }
+    dst[..3].copy_from_slice(&c);
+    let mut done = 3;
+    while done < dst.len() {
+        let n = done.min(dst.len() - done);
+        dst.copy_within(0..n, done);
+        done += n;
+    }
+}
+
 /// `dst ← dst + a·(src − dst)`, rounded: the "over" operator with coverage as alpha.
 #[inline]
-fn blend(dst: &mut [u8], src: [f32; 3], a: f32) {
+pub(crate) fn blend(dst: &mut [u8], src: [f32; 3], a: f32) {
     for k in 0..3 {
         let d = dst[k] as f32;
         dst[k] = (d + a * (src[k] - d) + 0.5) as u8;
@@ -310,7 +394,7 @@ fn blend(dst: &mut [u8], src: [f32; 3], a: f32) {
 
 /// One row of a flat 2D disc.
 #[inline]
-fn disc_row(row: &mut [u8], s: &Sprite, j: u32) {
+pub(crate) fn disc_row(row: &mut [u8], s: &Sprite, j: u32) {
     let Some((i0, i1, dy)) = span(row.len(), s, j) else { return };
     // Pixels with d ≤ r − ½ are fully covered and need neither sqrt nor blending.
     let inner = (s.r - 0.5).max(0.0);
