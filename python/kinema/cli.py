@@ -390,12 +390,17 @@ def view(
     port: Annotated[int, typer.Option(help="Port on 127.0.0.1 (0: a free one).")] = 0,
     no_browser: Annotated[bool, typer.Option("--no-browser", help="Do not open a browser.")] = False,
 ) -> None:
-    """Play a trajectory in the browser (three.js): play/pause, scrub, speed, orbit camera, colouring."""
+    """Play a trajectory in the browser (three.js): play/pause, scrub, speed, orbit camera, colouring.
+
+    Serves the page on 127.0.0.1 (the URL is printed) until Ctrl-C, which stops the server and
+    exits 0; with --html, writes the page to a file instead."""
     import time
 
     from .trajectory import Trajectory
-    from .viewer import serve, write_html
+    from .viewer import BundleMissingError, serve, write_html
 
+    if not 0 <= port <= 65535:
+        raise ValueError(f"--port {port}: use 0 (a free port) or a port from 1 to 65535")
     if not source.exists():
         raise ValueError(f"{source}: no such file")
     if source.is_dir():
@@ -414,13 +419,21 @@ def view(
         path = write_html(traj, html)
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)
         return
-    url, server = serve(traj, open_browser=not no_browser, port=port)
-    console.print(f"serving {url} — Ctrl-C to stop", highlight=False, soft_wrap=True)
     try:
-        while True:
+        url, server = serve(traj, open_browser=not no_browser, port=port)
+    except BundleMissingError:
+        raise
+    except OSError as e:  # the port is taken or not ours to bind
+        raise ValueError(f"--port {port}: cannot listen on 127.0.0.1:{port} ({e.strerror or e})") from None
+    try:
+        console.print(f"serving {url} — Ctrl-C to stop", highlight=False, soft_wrap=True)
+        while server.thread.is_alive():
             time.sleep(0.5)
     except KeyboardInterrupt:
+        pass  # Ctrl-C is how the viewer is stopped: a clean exit, status 0
+    finally:
         server.shutdown()
+        server.server_close()
 
 
 def main() -> None:

@@ -95,26 +95,63 @@ class Trajectory:
         frames = render_frames(self.positions, radius, self.t, dim=self.dim, velocities=self.velocities, **options)
         return write_video(frames, path, fps=fps, **video)
 
-    def show(self, **options: Any) -> Any:
-        """Play the frames in the browser viewer (three.js, bundled): inline in Jupyter (an
-        HTML page in an iframe), else served on 127.0.0.1 and opened in the user's browser;
-        returns the page's URL, or the IPython display object in a notebook."""
-        from .viewer import serve
-        from .viewer.page import html_page
+    def show(self, mode: str = "viewer", **options: Any) -> Any:
+        """Play the frames, inline in Jupyter, else outside it.
 
+        ``mode="viewer"`` (the default): the browser viewer (three.js, bundled; play/pause,
+        scrub, speed, orbit camera, colouring). In a notebook, returns an IPython ``HTML``
+        object holding the self-contained page in an iframe (``options``: ``title``,
+        ``max_bytes``; ``open_browser`` and ``port`` are ignored there); elsewhere, serves it
+        on 127.0.0.1 (``kinema.viewer.serve``: ``open_browser``, ``port``, ``title``,
+        ``max_bytes``), opens the user's browser when there is one and returns the page's
+        URL. The server runs on a daemon thread until the process ends.
+
+        ``mode="video"``: an H.264 MP4 rendered by :meth:`render` (``options`` go to it:
+        ``fps``, ``color_by``, ``width``, ``height``, ``camera``, ...). In a notebook, returns
+        an IPython ``Video`` embedded in the notebook (an HTML5 ``<video>`` with the MP4 as a
+        base64 data URI; nothing is left on disk); elsewhere, writes the MP4 to a new
+        temporary file (``kinema-*.mp4`` in the system's temporary folder) and returns its
+        path."""
+        if mode not in ("viewer", "video"):
+            raise ValueError(f"mode = {mode!r} is invalid: use 'viewer' (the browser viewer) or 'video' (an MP4)")
         try:
             from IPython import get_ipython  # type: ignore[import-not-found]
 
-            in_notebook = get_ipython() is not None and "IPKernelApp" in get_ipython().config
+            shell = get_ipython()
+            # A Jupyter kernel's shell (ZMQInteractiveShell) has a kernel; a terminal IPython's has not.
+            in_notebook = shell is not None and (getattr(shell, "kernel", None) is not None or "IPKernelApp" in shell.config)
         except ImportError:
             in_notebook = False
+        if mode == "video":
+            import os
+            import tempfile
+            from pathlib import Path
+
+            if not in_notebook:
+                fd, name = tempfile.mkstemp(prefix="kinema-", suffix=".mp4")
+                os.close(fd)
+                try:
+                    return self.render(name, **options)
+                except BaseException:
+                    os.unlink(name)
+                    raise
+            from IPython.display import Video  # type: ignore[import-not-found]
+
+            with tempfile.TemporaryDirectory(prefix="kinema-") as folder:
+                data = Path(self.render(Path(folder) / "show.mp4", **options)).read_bytes()
+            return Video(data, embed=True, mimetype="video/mp4", html_attributes="controls loop")
         if in_notebook:
-            import html as _html
+            import html
 
             from IPython.display import HTML  # type: ignore[import-not-found]
 
+            from .viewer.page import html_page
+
+            options = {k: v for k, v in options.items() if k not in ("open_browser", "port")}
             page = html_page(self, **options)
-            return HTML(f'<iframe srcdoc="{_html.escape(page)}" style="width:100%;height:480px;border:0"></iframe>')
+            return HTML(f'<iframe srcdoc="{html.escape(page)}" style="width:100%;height:480px;border:0"></iframe>')
+        from .viewer import serve
+
         url, _server = serve(self, **options)
         return url
 

@@ -5,12 +5,20 @@
 // {min, max} (m), speedMax (m/s), note, and either base64 blobs (positions, speed, radii:
 // little-endian float32) or `source` naming a binary file served beside the page whose
 // layout is given by `layout` (byte offsets of positions, speed, radii).
-// A URL hash `#frame=K` opens paused at frame K (used by the tests); `#frame=K&play=1` plays.
+// A URL hash `#frame=K` opens paused at frame K (used by the tests); `#frame=K&play=1` plays;
+// `rotate=1` turns the orbit camera about its target (a turntable; the benchmark draws every
+// animation frame that way).
+//
+// `window.kinemaViewer` is the page's state for tests and benchmarks: `ready`, `error`,
+// `frame` (the trajectory frame shown), `playing`, `setFrame(k)`, and `stats`, the frame
+// statistics (see frameStats): `stats.snapshot()` gives animation frames run, frames drawn,
+// trajectory frames stepped and median frame times in ms over the last STATS_WINDOW frames.
 
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 
 const SPEEDS = [0.25, 0.5, 1, 2, 4];
+const STATS_WINDOW = 120; // animation frames the medians are taken over (2 s at 60 Hz)
 
 // Viridis by a degree-6 polynomial fit per channel (good to about 1/255 of the table).
 const VERTEX = /* glsl */ `
@@ -78,7 +86,45 @@ async function loadData() {
 function hashOptions() {
   const params = new URLSearchParams(location.hash.slice(1));
   const frame = params.has("frame") ? parseInt(params.get("frame"), 10) : null;
-  return { frame: Number.isFinite(frame) ? frame : null, play: params.get("play") === "1" };
+  return { frame: Number.isFinite(frame) ? frame : null, play: params.get("play") === "1", rotate: params.get("rotate") === "1" };
+}
+
+// Counters and the last STATS_WINDOW frame times in rings (no allocation per frame); the
+// medians are computed when read. Times in ms: `frameMs`, between consecutive animation
+// frames (1000 / frameMs is the frame rate the page reaches, at most the display's);
+// `drawMs`, the script's work in the frames that drew (setting the frame and rendering:
+// the GPU's work is not in it). A median is null before any frame was measured.
+function frameStats() {
+  const intervals = new Float64Array(STATS_WINDOW);
+  const work = new Float64Array(STATS_WINDOW);
+  const scratch = new Float64Array(STATS_WINDOW);
+  const median = (ring, count) => {
+    const m = Math.min(count, STATS_WINDOW);
+    if (m === 0) return null;
+    const sorted = scratch.subarray(0, m);
+    sorted.set(ring.subarray(0, m));
+    sorted.sort();
+    return m % 2 ? sorted[(m - 1) / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
+  };
+  const stats = {
+    ticks: 0, // animation frames run
+    draws: 0, // animation frames that drew the scene
+    steps: 0, // trajectory frames shown (each change of the shown frame)
+    tick(intervalMs) {
+      intervals[stats.ticks++ % STATS_WINDOW] = intervalMs;
+    },
+    drew(workMs) {
+      work[stats.draws++ % STATS_WINDOW] = workMs;
+    },
+    reset() {
+      stats.ticks = stats.draws = stats.steps = 0;
+    },
+    snapshot() {
+      const frameMs = median(intervals, stats.ticks);
+      return { ticks: stats.ticks, draws: stats.draws, steps: stats.steps, frameMs, fps: frameMs ? 1000 / frameMs : null, drawMs: median(work, stats.draws), window: STATS_WINDOW };
+    },
+  };
+  return stats;
 }
 
 function buildUi(root) {
@@ -101,7 +147,10 @@ function start({ meta, positions, speed, radii }) {
   const times = meta.t;
   const container = document.getElementById("kinema-view");
 
-  const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  // No MSAA: the discs are cut out by `discard`, which multisampling does not smooth, so it
+  // would only multiply the fill work; and no preserved drawing buffer, which costs a copy of
+  // the canvas every frame (the compositor still shows the last frame drawn).
+  const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: false });
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   renderer.setClearColor(0x101014, 1);
   container.appendChild(renderer.domElement);
@@ -122,9 +171,15 @@ function start({ meta, positions, speed, radii }) {
   controls.target.copy(center);
   controls.update();
 
+  // The attributes hold views into the frame data, not copies: showing frame k points
+  // `position` (and `aValue` when colouring by speed) at frame k's slice and marks it for
+  // upload, so a step costs the upload alone (no copy, no allocation but the view).
+  const frameSlice = (data, k, width) => data.subarray(k * n * width, (k + 1) * n * width);
+  const idValues = () => Float32Array.from({ length: n }, (_, i) => (n > 1 ? i / (n - 1) : 0.5));
+  let ids = speed ? null : idValues(); // the id ramp, made when first asked for
   const geometry = new THREE.BufferGeometry();
-  const position = new THREE.BufferAttribute(new Float32Array(n * 3), 3).setUsage(THREE.DynamicDrawUsage);
-  const value = new THREE.BufferAttribute(new Float32Array(n), 1).setUsage(THREE.DynamicDrawUsage);
+  const position = new THREE.BufferAttribute(frameSlice(positions, 0, 3), 3).setUsage(THREE.DynamicDrawUsage);
+  const value = new THREE.BufferAttribute(speed ? frameSlice(speed, 0, 1) : ids, 1).setUsage(THREE.DynamicDrawUsage);
   const radius = new THREE.BufferAttribute(radii ? radii : new Float32Array(n).fill(meta.defaultRadius), 1);
   geometry.setAttribute("position", position);
   geometry.setAttribute("aValue", value);
@@ -146,33 +201,47 @@ function start({ meta, positions, speed, radii }) {
 
   const state = window.kinemaViewer;
   let colouring = ui.colour.value;
+  let playbackSpeed = Number(ui.speed.value);
   let playbackTime = times[0];
+  // Playback loops from the first frame to one frame interval past the last, so that the last
+  // frame is shown as long as the others before the first comes round again.
+  const loopEnd = frames > 1 ? 2 * times[frames - 1] - times[frames - 2] : times[0];
   let dirty = true;
+  const infoPrefix = `${n.toLocaleString()} particles · t = `;
+  const infoSuffix = meta.note ? ` · ${meta.note}` : "";
 
+  // Point aValue at what the colouring needs at frame k and set the ramp; only colouring by
+  // speed changes from frame to frame, and "none" uploads nothing.
   function fillColour(k) {
     if (colouring === "speed" && speed) {
-      value.array.set(speed.subarray(k * n, (k + 1) * n));
+      value.array = frameSlice(speed, k, 1);
+      value.needsUpdate = true;
       material.uniforms.uScale.value = meta.speedMax > 0 ? 1 / meta.speedMax : 1;
       material.uniforms.uMode.value = 1;
     } else if (colouring === "id") {
-      for (let i = 0; i < n; i++) value.array[i] = n > 1 ? i / (n - 1) : 0.5;
+      if (value.array !== ids) {
+        value.array = ids ??= idValues();
+        value.needsUpdate = true;
+      }
       material.uniforms.uScale.value = 1;
       material.uniforms.uMode.value = 1;
     } else {
       material.uniforms.uMode.value = 0;
     }
-    value.needsUpdate = true;
   }
 
   function setFrame(k, keepTime = false) {
     k = Math.max(0, Math.min(frames - 1, Math.round(k)));
-    position.array.set(positions.subarray(k * n * 3, (k + 1) * n * 3));
-    position.needsUpdate = true;
-    if (colouring === "speed" || state.frame < 0) fillColour(k); // id and none fill once
+    if (k !== state.frame) {
+      position.array = frameSlice(positions, k, 3);
+      position.needsUpdate = true;
+      if (colouring === "speed") fillColour(k); // id and none do not change with the frame
+      state.stats.steps++;
+      ui.scrub.value = String(k);
+      ui.info.textContent = `${infoPrefix}${times[k].toFixed(3)} s · frame ${k + 1}/${frames}${infoSuffix}`;
+    }
     state.frame = k;
     if (!keepTime) playbackTime = times[k];
-    ui.scrub.value = String(k);
-    ui.info.textContent = `${n.toLocaleString()} particles · t = ${times[k].toFixed(3)} s · frame ${k + 1}/${frames}${meta.note ? " · " + meta.note : ""}`;
     dirty = true;
   }
 
@@ -200,6 +269,7 @@ function start({ meta, positions, speed, radii }) {
     setPlaying(false);
     setFrame(Number(ui.scrub.value));
   });
+  ui.speed.addEventListener("change", () => (playbackSpeed = Number(ui.speed.value)));
   ui.colour.addEventListener("change", () => {
     colouring = ui.colour.value;
     fillColour(state.frame);
@@ -216,12 +286,15 @@ function start({ meta, positions, speed, radii }) {
 
   let last = performance.now();
   function tick(now) {
+    const begun = performance.now();
+    state.stats.tick(now - last);
     const elapsed = Math.min((now - last) / 1000, 0.25); // a hidden tab does not jump far ahead
     last = now;
+    if (controls.autoRotate) controls.update(elapsed);
     if (state.playing) {
       // Real time times the chosen speed; the shown frame is the last one at or before it.
-      playbackTime += elapsed * Number(ui.speed.value);
-      if (playbackTime > times[frames - 1]) playbackTime = times[0] + (playbackTime - times[frames - 1]);
+      playbackTime += elapsed * playbackSpeed;
+      if (playbackTime >= loopEnd) playbackTime = times[0] + (playbackTime - loopEnd);
       let k = state.frame;
       if (times[k] > playbackTime) k = 0;
       while (k + 1 < frames && times[k + 1] <= playbackTime) k++;
@@ -230,6 +303,7 @@ function start({ meta, positions, speed, radii }) {
     if (dirty) {
       renderer.render(scene, camera);
       dirty = false;
+      state.stats.drew(performance.now() - begun);
     }
     requestAnimationFrame(tick);
   }
@@ -242,14 +316,18 @@ function start({ meta, positions, speed, radii }) {
     renderer.render(scene, camera);
   };
   resize();
+  fillColour(0);
   setFrame(opts.frame ?? 0);
   setPlaying(opts.frame === null || opts.play);
+  controls.autoRotate = opts.rotate;
   renderer.render(scene, camera);
+  state.stats.reset();
   state.ready = true;
+  last = performance.now();
   requestAnimationFrame(tick);
 }
 
-window.kinemaViewer = { frame: 0, setFrame: () => {}, playing: false, ready: false, error: null };
+window.kinemaViewer = { frame: 0, setFrame: () => {}, playing: false, ready: false, error: null, stats: frameStats() };
 loadData()
   .then(start)
   .catch((err) => {
