@@ -10,6 +10,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 PIP    := $(VENV)/bin/pip
 STAMP  := $(VENV)/.deps-installed
+TEST_STAMP := $(VENV)/.test-deps-installed
 BUILT  := $(VENV)/.kinema-built
 VIEWER_BUNDLE := python/kinema/viewer/static/viewer.js
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml pyproject.toml
@@ -21,6 +22,11 @@ setup: $(STAMP)
 $(STAMP): requirements/dev.txt
 	$(PYTHON) -m venv $(VENV)
 	$(PIP) install --disable-pip-version-check -q -r requirements/dev.txt
+	touch $@
+
+# The browser and Jupyter tests' extras (playwright drives the system's Chromium; nothing downloaded).
+$(TEST_STAMP): $(STAMP) requirements/viewer-test.txt
+	$(PIP) install --disable-pip-version-check -q -r requirements/viewer-test.txt
 	touch $@
 
 # Release build of the extension, installed into the venv in editable mode (python/ is used in place).
@@ -44,13 +50,14 @@ test: test-rust test-python
 test-rust:
 	cargo test --workspace --exclude kinema-py --release
 
-test-python: build
+test-python: build $(TEST_STAMP)
 	command -v chromium >/dev/null || apt-get install -y -q chromium >/dev/null || (apt-get update -q >/dev/null && apt-get install -y -q chromium >/dev/null) || echo "chromium could not be installed: the browser tests will say so and skip"
 	$(PY) -m pytest -q
 
-bench: build
+bench: build $(TEST_STAMP)
 	$(PY) benchmarks/ode_overhead.py
 	$(PY) benchmarks/render.py
+	$(PY) benchmarks/viewer.py
 	command -v lmp >/dev/null || apt-get install -y -q lammps >/dev/null || echo "LAMMPS could not be installed: the collision benchmark will say so and skip"
 	$(PY) benchmarks/collisions_lammps.py
 
