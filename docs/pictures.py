@@ -1,0 +1,637 @@
+"""Pictures of the example scenes for the README: docs/img/scene_<name>.png.
+
+Every scene of examples/scenes/*.toml is loaded with ``kinema.load_scene``, run for its own
+[world] duration at its own frame rate (none is shortened: the slowest, sand_box, takes about
+20 s on two cores), and drawn by kinema's own renderer (``kinema.render_frames``) with the
+scene's [render] colouring, colormap and background, and its camera where it has one (demo,
+billiards_2d); the others are framed on their particles and obstacles. A few frames are put
+side by side with Pillow under titles that carry the time, and one caption line with numbers
+measured in the run is printed per scene, for the README.
+
+The renderer draws particles only. So that the pictures read, this script adds:
+
+- colliders as thin grey lines drawn with Pillow through the same camera: the floor of
+  bouncing_balls (with dashes at the predicted rebound heights e²·h), the box walls of
+  sand_box, demo and maxwell_gas (lines of walls that face away from the camera are drawn only
+  where the background shows, so that they pass behind the particles), the cushions of
+  billiards_2d; and the strings and the ceiling of newtons_cradle (its pinned anchors, which
+  have no radius, are drawn as 12 mm pins);
+- in the last billiards frame, the paths of the balls since t = 0, in lighter colours;
+- the sphere under the cloth of cloth_on_sphere as one extra, large sphere particle of a fixed
+  neutral grey (the cloth nodes get the scene's speed colours, through matplotlib's colormap of
+  the same name, so that fixed colours can be given to all). The sphere is placed three times
+  as far from the eye with three times the radius (the same disc on the image: the renderer
+  draws a sphere at f·R/z) so that it is drawn before every cloth node, and the nodes it hides
+  (behind it along the line of sight) are left out. The cloth's stretch springs are drawn as
+  thin lines between visible neighbouring nodes;
+- colour bars for the scenes coloured by speed, from matplotlib's colormap of the same name.
+
+kepler_euler, kepler_rk4 and kepler_verlet make one matplotlib figure together,
+scene_kepler.png (the planet's x–y path over the run against the closed-form orbit in grey).
+maxwell_gas calls examples/maxwell_gas.py (``main``, which runs the scene and plots the speed
+histogram and the Kolmogorov–Smirnov distance) and puts one rendered frame of the gas, coloured
+by speed, to the left of that figure.
+
+    .venv/bin/python docs/pictures.py [OUTDIR]        # default docs/img
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import io
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from PIL import Image, ImageDraw, ImageFont
+
+import kinema
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = ROOT / "examples" / "scenes"
+FONT_FILE = Path(matplotlib.get_data_path()) / "fonts" / "ttf" / "DejaVuSans.ttf"
+MAX_BYTES = 150 * 1024  # larger pictures are saved with a 256-colour palette
+WHITE = (255, 255, 255)
+LINE = (150, 150, 150)  # colliders drawn as lines
+OBSTACLE = np.array([185, 185, 185], dtype=np.uint8)  # the cloth's sphere
+
+
+# -- running scenes ---------------------------------------------------------------------------
+
+
+def run_scene(name: str, duration: float | None = None, fps: float | None = None):
+    """Load examples/scenes/<name>.toml and run it (default: its own duration and fps).
+    Returns the world and the trajectory; warnings are printed, one line each."""
+    world = kinema.load_scene(SCENES / f"{name}.toml")
+    seconds = world.scene.world.duration if duration is None else duration
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        traj = world.run(seconds, fps=world.scene.world.fps if fps is None else fps)
+    for w in caught:
+        print(f"  warning ({name}): {w.message}")
+    return world, traj
+
+
+def frame_at(traj, t: float) -> int:
+    """Index of the recorded frame nearest to the time t (s)."""
+    return int(np.argmin(np.abs(traj.t - t)))
+
+
+def scene_camera(world):
+    """The scene's [render] camera as a kinema camera, or None."""
+    table = world.scene.render.camera
+    if table is None:
+        return None
+    if table.type == "2d":
+        return kinema.Camera2D(table.xmin, table.ymin, table.xmax, table.ymax)
+    return kinema.Camera3D(tuple(table.eye), tuple(table.target), tuple(table.up), table.fov_deg)
+
+
+def render(sc, traj, frames, *, width, height, camera, radius=None, positions=None, colors=None, vmax=None):
+    """The recorded frames (indices) of ``traj`` as images, coloured as the scene's [render]
+    table ``sc`` says (speed from 0 to ``vmax``); ``positions`` (F, N, 3), ``radius`` and
+    ``colors`` (uint8) replace the recorded particles and their colouring."""
+    color_by = sc.color_by if colors is None else colors
+    out = kinema.render_frames(
+        traj.positions[frames] if positions is None else positions,
+        traj.radii if radius is None else radius,
+        traj.t[frames],
+        dim=traj.dim,
+        velocities=traj.velocities[frames] if positions is None else None,
+        color_by=color_by,
+        colormap=sc.colormap,
+        vmin=0.0 if isinstance(color_by, str) and color_by == "speed" else None,
+        vmax=vmax,
+        width=width,
+        height=height,
+        camera=camera,
+        background=tuple(sc.background),
+        time_format=None,  # the time goes into the panel's title
+    )
+    return [np.array(f) for f in out]
+
+
+def speed_max(traj, frames=slice(None)) -> float:
+    return float(np.linalg.norm(traj.velocities[frames], axis=2).max())
+
+
+# -- cameras seen from Python: where a world point lands on the image --------------------------
+
+
+def _basis(camera):
+    eye = np.asarray(camera.eye, dtype=float)
+    forward = np.asarray(camera.target, dtype=float) - eye
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, camera.up)
+    right /= np.linalg.norm(right)
+    return eye, right, np.cross(right, forward), forward
+
+
+def projector(camera, width: int, height: int):
+    """A function (P, 3) points (m) -> ((P, 2) pixels, (P,) depths along the view, m): the
+    renderer's mapping (crates/kinema/src/render/camera.rs)."""
+    if isinstance(camera, kinema.Camera2D):
+        s = min(width / (camera.xmax - camera.xmin), height / (camera.ymax - camera.ymin))
+        cx, cy = 0.5 * (camera.xmin + camera.xmax), 0.5 * (camera.ymin + camera.ymax)
+
+        def ortho(p):
+            p = np.atleast_2d(np.asarray(p, dtype=float))
+            return np.stack([0.5 * width + s * (p[:, 0] - cx), 0.5 * height - s * (p[:, 1] - cy)], axis=1), np.ones(len(p))
+
+        return ortho
+    eye, right, up, forward = _basis(camera)
+    f = 0.5 * height / np.tan(0.5 * np.radians(camera.fov_deg))
+
+    def persp(p):
+        d = np.atleast_2d(np.asarray(p, dtype=float)) - eye
+        z = d @ forward
+        return np.stack([0.5 * width + f * (d @ right) / z, 0.5 * height - f * (d @ up) / z], axis=1), z
+
+    return persp
+
+
+def fit_camera(points, radius, direction, width: int, height: int, fov_deg: float = 30.0, fill: float = 0.94):
+    """A Camera3D looking from ``direction`` (target → eye) whose image the points (m), as
+    spheres of ``radius`` (m), fill to ``fill`` of the tighter side, centred: the camera of
+    ``Camera3D.framing`` moved across the view and along it until the projected extent fits."""
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    rad = np.broadcast_to(np.asarray(radius, dtype=float), (len(pts),))
+    cam = kinema.Camera3D.framing(pts.min(0), pts.max(0), direction=direction, fov_deg=fov_deg, width=width, height=height)
+    f = 0.5 * height / np.tan(0.5 * np.radians(fov_deg))
+    for _ in range(12):
+        px, z = projector(cam, width, height)(pts)
+        r_px = f * rad / z
+        (x0, y0), (x1, y1) = (px - r_px[:, None]).min(0), (px + r_px[:, None]).max(0)
+        eye, right, up, _ = _basis(cam)
+        target = np.asarray(cam.target, dtype=float)
+        dist = np.linalg.norm(target - eye)
+        shift = (right * (0.5 * (x0 + x1) - 0.5 * width) - up * (0.5 * (y0 + y1) - 0.5 * height)) * dist / f
+        scale = max((x1 - x0) / (fill * width), (y1 - y0) / (fill * height))
+        target = target + shift
+        eye = target + (eye + shift - target) * scale
+        cam = kinema.Camera3D(tuple(eye), tuple(target), tuple(cam.up), fov_deg)
+    return cam
+
+
+# -- drawing lines into frames --------------------------------------------------------------------
+
+
+def draw_segments(frame, segments, project, *, behind=False, color=LINE, width=2, dashed=False, background=WHITE):
+    """Draw the world segments [(a, b), ...] (m) into the frame, in place. ``behind``: only
+    where the ``background`` colour shows, so that the lines pass behind the particles (all
+    the scenes here have the default white background)."""
+    img = Image.fromarray(frame)
+    bg = tuple(int(c) for c in background)
+    layer = Image.new("RGB", img.size, bg) if behind else img
+    draw = ImageDraw.Draw(layer)
+    for a, b in segments:
+        (pa, pb), _ = project(np.array([a, b], dtype=float))
+        pa, pb = pa - 0.5, pb - 0.5  # Pillow puts pixel centres at whole numbers, the renderer at +0.5
+        if dashed:
+            n = max(1, int(np.hypot(*(pb - pa)) / 5))
+            for k in range(0, n, 2):
+                draw.line([tuple(pa + (pb - pa) * k / n), tuple(pa + (pb - pa) * (k + 1) / n)], fill=color, width=width)
+        else:
+            draw.line([tuple(pa), tuple(pb)], fill=color, width=width)
+    if behind:
+        is_bg = np.all(frame == np.asarray(bg, np.uint8), axis=2)
+        frame[is_bg] = np.asarray(layer)[is_bg]
+    else:
+        frame[:] = np.asarray(img)
+    return frame
+
+
+def box_corners(lo, hi) -> np.ndarray:
+    """The 8 corners of the box [lo, hi], (8, 3)."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    return np.array([[(lo, hi)[c[m]][m] for m in range(3)] for c in np.ndindex(2, 2, 2)])
+
+
+def draw_box(frame, camera, width, height, lo, hi, *, open_top=False):
+    """The edges of the box [lo, hi] (m): those of walls that face the camera over the
+    particles, the others behind them."""
+    project = projector(camera, width, height)
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    eye = np.asarray(camera.eye, float)
+    corner = {c: np.array([(lo, hi)[c[m]][m] for m in range(3)]) for c in np.ndindex(2, 2, 2)}
+    # A wall (axis, side) faces the camera when the eye is outside its plane.
+    facing = {(a, s): bool(eye[a] < lo[a] if s == 0 else eye[a] > hi[a]) for a in range(3) for s in (0, 1)}
+    if open_top:
+        del facing[(2, 1)]
+    front, back = [], []
+    for c0 in corner:
+        for axis in range(3):
+            if c0[axis] == 1:
+                continue
+            c1 = tuple(1 if m == axis else c0[m] for m in range(3))
+            walls = [(m, c0[m]) for m in range(3) if m != axis and (m, c0[m]) in facing]
+            if walls:
+                (front if any(facing[w] for w in walls) else back).append((corner[c0], corner[c1]))
+    draw_segments(frame, back, project, behind=True)
+    return draw_segments(frame, front, project)
+
+
+# -- composing ----------------------------------------------------------------------------------
+
+
+def font(size: int):
+    return ImageFont.truetype(str(FONT_FILE), size)
+
+
+def titled(frame, title: str, size: int = 15) -> np.ndarray:
+    """The frame under a strip with the title (in a smaller font where it would not fit)."""
+    h = size + 12
+    while size > 9 and font(size).getlength(title) > frame.shape[1] - 6:
+        size -= 1
+    img = Image.new("RGB", (frame.shape[1], frame.shape[0] + h), WHITE)
+    img.paste(Image.fromarray(frame), (0, h))
+    ImageDraw.Draw(img).text((frame.shape[1] // 2, h // 2 + 1), title, fill=(30, 30, 30), font=font(size), anchor="mm")
+    return np.asarray(img)
+
+
+def crop_columns(images, margin: int = 12, background=WHITE):
+    """The images cut to the columns where any of them differs from the background (plus a
+    margin): one camera's frames with much empty space at the sides."""
+    used = np.zeros(images[0].shape[1], bool)
+    for f in images:
+        used |= np.any(f != np.asarray(background, np.uint8), axis=(0, 2))
+    cols = np.nonzero(used)[0]
+    a, b = max(cols[0] - margin, 0), min(cols[-1] + margin + 1, images[0].shape[1])
+    return [np.ascontiguousarray(f[:, a:b]) for f in images]
+
+
+def colorbar(cmap: str, vmin: float, vmax: float, label: str, height: int, width: int = 62) -> np.ndarray:
+    """A vertical colour bar (matplotlib's colormap of the same name) as an image."""
+    top, bottom, x0, x1 = 44, height - 16, 8, 22
+    arr = np.full((height, width, 3), 255, np.uint8)
+    arr[top:bottom, x0:x1] = (plt.get_cmap(cmap)(np.linspace(1, 0, bottom - top))[:, :3] * 255).astype(np.uint8)[:, None, :]
+    img = Image.fromarray(arr)
+    draw = ImageDraw.Draw(img)
+    draw.rectangle([x0 - 1, top - 1, x1, bottom], outline=(120, 120, 120))
+    f = font(12)
+    draw.text((x1 + 4, top), f"{vmax:.2g}", fill=(30, 30, 30), font=f, anchor="lm")
+    draw.text((x1 + 4, bottom - 1), f"{vmin:.2g}", fill=(30, 30, 30), font=f, anchor="lm")
+    for k, line in enumerate(label.split("\n")):
+        draw.text((4, 6 + 15 * k), line, fill=(30, 30, 30), font=f)
+    return np.asarray(img)
+
+
+def hstack(panels, gap: int = 10) -> np.ndarray:
+    """Panels side by side, top-aligned, on white."""
+    h = max(p.shape[0] for p in panels)
+    row = []
+    for k, p in enumerate(panels):
+        row.append(np.concatenate([p, np.full((h - p.shape[0], p.shape[1], 3), 255, np.uint8)]))
+        if k < len(panels) - 1:
+            row.append(np.full((h, gap, 3), 255, np.uint8))
+    return np.concatenate(row, axis=1)
+
+
+def save(image: np.ndarray, path: Path) -> Path:
+    """A PNG; one over MAX_BYTES is saved again with a 256-colour palette."""
+    img = Image.fromarray(np.ascontiguousarray(image))
+    img.save(path, optimize=True)
+    if path.stat().st_size > MAX_BYTES:
+        print(f"  {path.name}: {path.stat().st_size // 1024} KiB as RGB, saved with a palette")
+        img.quantize(colors=256, method=Image.Quantize.MEDIANCUT).save(path, optimize=True)
+    return path
+
+
+def pixel_colors(frame, project, points) -> np.ndarray:
+    """The colours of the frame at the projected points (the centres of flat 2D discs)."""
+    px, _ = project(points)
+    i = np.clip(px.astype(int), 0, [frame.shape[1] - 1, frame.shape[0] - 1])
+    return frame[i[:, 1], i[:, 0]]
+
+
+# -- the scenes ---------------------------------------------------------------------------------
+
+
+def bouncing_balls(out: Path) -> str:
+    world, traj = run_scene("bouncing_balls")
+    e = np.linspace(0.1, 0.9, 9)  # the scene's restitution list, left to right
+    r = float(traj.radii[0])
+    x0 = traj.positions[0, :, 0]
+    h0 = float(traj.positions[0, 0, 2]) - r  # drop height of the balls' bottoms, m
+    # Rebound heights, measured on a run recorded at every step (9 particles: cheap): the
+    # first rebound starts where v_z first turns positive and ends where it next turns negative.
+    _, fine = run_scene("bouncing_balls", duration=1.6, fps=1.0 / world.dt)
+    z, vz = fine.positions[:, :, 2], fine.velocities[:, :, 2]
+    up = np.argmax(vz > 0, axis=0)
+    h1 = np.array([z[up[k] :, k][: np.argmax(vz[up[k] :, k] < 0) + 1].max() - r for k in range(9)])
+    ratio = h1 / h0
+
+    width, height = 440, 215
+    marks = [((x - 0.1, 0, r + ek**2 * h0), (x + 0.1, 0, r + ek**2 * h0)) for x, ek in zip(x0, e, strict=True)]
+    floor = [((x0[0] - 0.15, 0, 0), (x0[-1] + 0.15, 0, 0))]
+    extent = np.concatenate([traj.positions.reshape(-1, 3), np.array(floor).reshape(-1, 3)])
+    camera = fit_camera(extent, r, (0.0, -1.0, 0.12), width, height, fill=0.96)
+    project = projector(camera, width, height)
+    times = [0.0, 0.59, 0.79]
+    titles = ["dropped from 1 m", "rising after the first bounce", "e = 0.8 and 0.9 at the top"]
+    frames = [frame_at(traj, t) for t in times]
+    panels = []
+    for k, frame, title in zip(frames, render(world.scene.render, traj, frames, width=width, height=height, camera=camera), titles, strict=True):
+        draw_segments(frame, marks, project, behind=True, color=(110, 110, 110), width=2, dashed=True)
+        draw_segments(frame, floor, project, color=(80, 80, 80), width=2)
+        panels.append(titled(frame, f"t = {traj.t[k]:.2f} s: {title}"))
+    save(hstack(panels), out / "scene_bouncing_balls.png")
+    pairs = ", ".join(f"{q:.3f}" for q in ratio)
+    return (
+        f"Nine balls dropped from 1 m onto the floor with e = 0.1, 0.2 … 0.9 (left to right); the dashes mark the predicted rebound "
+        f"height e²·h. Measured first rebound / drop height: {pairs} (e² to within {np.abs(ratio - e**2).max():.0e})."
+    )
+
+
+def newtons_cradle(out: Path) -> str:
+    world, traj = run_scene("newtons_cradle")
+    anchors, balls = np.arange(5), np.arange(5, 10)
+    radius = traj.radii.copy()
+    radius[anchors] = 0.012  # the pinned anchors have no radius: drawn as pins
+    x = traj.positions
+    impact = int(np.argmax(np.linalg.norm(traj.velocities[:, 9], axis=1) > 0.05))  # the right ball starts
+    top = int(np.argmax(np.where(traj.t < 1.5, x[:, 9, 1], -np.inf)))  # and swings out to here
+    frames = [0, impact + 1, top]
+    width, height = 400, 290
+    camera = kinema.Camera2D.framing((x[:, :, 0].min(), x[:, :, 1].min()), (x[:, :, 0].max(), 1.03), margin=0.08)
+    project = projector(camera, width, height)
+    vmax = speed_max(traj)
+    images = render(world.scene.render, traj, frames, width=width, height=height, camera=camera, radius=radius, vmax=vmax)
+    titles = ["the left ball raised by 30°", "the impulse has passed through", "the right ball swings out"]
+    ceiling = [((x[0, 0, 0] - 0.1, 1.012, 0), (x[0, 4, 0] + 0.1, 1.012, 0))]
+    for k, frame in zip(frames, images, strict=True):
+        strings = []
+        for a, b in zip(anchors, balls, strict=True):
+            pa, pb = x[k, a, :2], x[k, b, :2]
+            strings.append(((*pa, 0), (*(pb - (pb - pa) / np.linalg.norm(pb - pa) * traj.radii[b]), 0)))
+        draw_segments(frame, strings, project, color=(110, 110, 110), width=1)
+        draw_segments(frame, ceiling, project, color=(80, 80, 80), width=3)
+    images = crop_columns(images, margin=16)
+    panels = [titled(f, f"t = {traj.t[k]:.2f} s: {title}") for k, f, title in zip(frames, images, titles, strict=True)]
+    bar = colorbar(world.scene.render.colormap, 0.0, vmax, "speed\n(m/s)", panels[0].shape[0])
+    save(hstack([*panels, bar]), out / "scene_newtons_cradle.png")
+    h_start = x[0, 5, 1] - x[0, 6, 1]
+    h_right = x[top, 9, 1] - x[0, 9, 1]
+    still = np.abs(x[:top, 6:9, :2] - x[0, 6:9, :2]).max()
+    return (
+        f"Newton's cradle: the left ball, raised by {h_start * 100:.1f} cm, hits the row at t = {traj.t[impact]:.2f} s and stops; the right ball "
+        f"swings out to {h_right * 100:.1f} cm ({h_right / h_start:.1%} of the height) at t = {traj.t[top]:.2f} s while the middle three move by at "
+        f"most {still * 1000:.1f} mm; the swing repeats, {world.collision_stats()['total']['impacts']} impacts in {traj.t[-1]:.0f} s."
+    )
+
+
+def billiards_2d(out: Path) -> str:
+    world, traj = run_scene("billiards_2d")
+    camera = scene_camera(world)
+    width, height = 430, 215
+    project = projector(camera, width, height)
+    frames = [0, frame_at(traj, 0.3), len(traj.t) - 1]
+    images = render(world.scene.render, traj, frames, width=width, height=height, camera=camera)
+    # The paths since t = 0 behind the balls of the last frame, in lighter colours.
+    colours = pixel_colors(images[-1], project, traj.positions[-1])
+    light = (255 - 0.45 * (255 - colours.astype(float))).astype(np.uint8)
+    for b in range(traj.positions.shape[1]):
+        path = traj.positions[:, b]
+        draw_segments(images[-1], list(zip(path[:-1], path[1:], strict=True)), project, behind=True, color=tuple(int(c) for c in light[b]), width=2)
+    titles = ["the rack and the cue ball at 6 m/s", "the break", "spread out, with the paths"]
+    lo, hi = world.colliders[0].lo, world.colliders[0].hi
+    table = [
+        ((lo[0], lo[1], 0), (hi[0], lo[1], 0)),
+        ((hi[0], lo[1], 0), (hi[0], hi[1], 0)),
+        ((hi[0], hi[1], 0), (lo[0], hi[1], 0)),
+        ((lo[0], hi[1], 0), (lo[0], lo[1], 0)),
+    ]
+    panels = [
+        titled(draw_segments(f, table, project, color=(60, 110, 60), width=3), f"t = {traj.t[k]:.2f} s: {title}")
+        for k, f, title in zip(frames, images, titles, strict=True)
+    ]
+    save(hstack(panels), out / "scene_billiards_2d.png")
+    ke = traj.kinetic
+    stats = world.collision_stats()["total"]
+    return (
+        f"The break: the cue ball at 6 m/s scatters the 15-ball rack over the 2.54 m × 1.27 m table (cushions drawn in green); "
+        f"{stats['impacts']} impacts in {traj.t[-1]:.0f} s, after which {ke[-1] / ke[0]:.1%} of the {ke[0]:.2f} J is left "
+        f"(the collisions took {stats['energy_lost']:.2f} J, the drag the rest)."
+    )
+
+
+def sand_box(out: Path) -> str:
+    world, traj = run_scene("sand_box")
+    box = world.colliders[0]
+    box_lo, box_hi = np.asarray(box.lo, float), np.array([box.hi[0], box.hi[1], 0.4])  # the box has no lid: walls drawn 0.4 m high
+    frames = [0, frame_at(traj, 0.4), len(traj.t) - 1]
+    vmax = speed_max(traj, frames)
+    r = traj.radii
+    corners = box_corners(box_lo, box_hi)
+    # One camera for the column and the fall, another closer one for the settled grains.
+    tall_w, tall_h, near_w = 230, 380, 440
+    tall = fit_camera(np.concatenate([traj.positions[0], corners]), r.max(), (1.0, -1.5, 0.45), tall_w, tall_h)
+    near = fit_camera(corners, 0.0, (1.0, -1.5, 1.0), near_w, tall_h, fill=0.9)
+    images = render(world.scene.render, traj, frames[:2], width=tall_w, height=tall_h, camera=tall, vmax=vmax)
+    images.append(render(world.scene.render, traj, frames[2:], width=near_w, height=tall_h, camera=near, vmax=vmax)[0])
+    titles = ["a column of 2,000 grains", "falling in", "settled (closer)"]
+    panels = []
+    for k, frame, cam, w, title in zip(frames, images, [tall, tall, near], [tall_w, tall_w, near_w], titles, strict=True):
+        draw_box(frame, cam, w, tall_h, box_lo, box_hi, open_top=True)
+        panels.append(titled(frame, f"t = {traj.t[k]:.2f} s: {title}"))
+    bar = colorbar(world.scene.render.colormap, 0.0, vmax, "speed\n(m/s)", panels[0].shape[0])
+    save(hstack([*panels, bar]), out / "scene_sand_box.png")
+    z = traj.positions[-1, :, 2]
+    xy = traj.positions[-1, :, :2] - 0.5 * (box_lo[:2] + box_hi[:2])
+    centre = np.linalg.norm(xy, axis=1) < 0.08
+    edge = np.abs(xy).max(axis=1) > 0.15
+    top_c, top_e = np.percentile(z[centre], 95), np.percentile(z[edge], 95)
+    stats = world.collision_stats()["total"]
+    return (
+        f"2,000 grains (r = 1 cm, e = 0.2, μ = 0.5) fall from a 0.2 m × 0.2 m column, 0.3–1.9 m high, into a 0.4 m box and spread over its floor "
+        f"as a low mound: at t = {traj.t[-1]:.1f} s the surface is about {top_c * 100:.0f} cm high in the middle and {top_e * 100:.0f} cm at the walls "
+        f"(95th percentile of the grain heights), mean speed {np.linalg.norm(traj.velocities[-1], axis=1).mean() * 100:.1f} cm/s; {stats['impacts']:,} impacts."
+    )
+
+
+def cloth_on_sphere(out: Path) -> str:
+    world, traj = run_scene("cloth_on_sphere")
+    obstacle = world.colliders[0]
+    centre, radius = np.asarray(obstacle.center, float), float(obstacle.radius)
+    n = int(round(np.sqrt(traj.positions.shape[1])))  # the n × n lattice, last axis fastest
+    grid = np.arange(n * n).reshape(n, n)
+    springs = np.concatenate([np.stack([grid[:, :-1].ravel(), grid[:, 1:].ravel()], 1), np.stack([grid[:-1].ravel(), grid[1:].ravel()], 1)])
+    width, height = 400, 300
+    frames = [0, frame_at(traj, 0.3), len(traj.t) - 1]
+    x = traj.positions
+    u = np.random.default_rng(0).normal(size=(400, 3))
+    surface = centre + radius * u / np.linalg.norm(u, axis=1)[:, None]
+    camera = fit_camera(np.concatenate([x[frames].reshape(-1, 3), surface]), traj.radii.max(), (1.0, -1.6, 0.55), width, height)
+    eye = np.asarray(camera.eye)
+    project = projector(camera, width, height)
+    speed = np.linalg.norm(traj.velocities[frames], axis=2)
+    vmax = float(speed.max())
+    cmap = plt.get_cmap(world.scene.render.colormap)
+    images = []
+    for k, s in zip(frames, speed, strict=True):
+        p = x[k]
+        # A node is hidden when the line of sight meets the sphere before it.
+        d = p - eye
+        dist = np.linalg.norm(d, axis=1)
+        b = (d / dist[:, None]) @ (eye - centre)
+        disc = b**2 - (np.sum((eye - centre) ** 2) - radius**2)
+        hidden = (disc > 0) & (-b - np.sqrt(np.maximum(disc, 0.0)) < dist - traj.radii)
+        keep = ~hidden
+        far = eye + 3.0 * (centre - eye)  # the same disc on the image, drawn before the cloth
+        pos = np.concatenate([p[keep], far[None]])[None]
+        rad = np.concatenate([traj.radii[keep], [3.0 * radius]])
+        rgb = (cmap(s / vmax)[:, :3] * 255).astype(np.uint8)
+        col = np.concatenate([rgb[keep], OBSTACLE[None]])[None]
+        frame = render(world.scene.render, traj, [k], width=width, height=height, camera=camera, radius=rad, positions=pos, colors=col)[0]
+        img = Image.fromarray(frame)
+        draw = ImageDraw.Draw(img)
+        px = project(p)[0] - 0.5  # Pillow's pixel centres
+        for i, j in springs:
+            if keep[i] and keep[j]:
+                draw.line([tuple(px[i]), tuple(px[j])], fill=tuple(int(c) for c in (0.8 * rgb[i])), width=1)
+        images.append(np.asarray(img))
+    titles = ["a 20 × 20 cloth above the sphere", "falling onto it", "draped"]
+    panels = [titled(f, f"t = {traj.t[k]:.2f} s: {t}") for k, f, t in zip(frames, images, titles, strict=True)]
+    bar = colorbar(world.scene.render.colormap, 0.0, vmax, "speed\n(m/s)", panels[0].shape[0])
+    save(hstack([*panels, bar]), out / "scene_cloth_on_sphere.png")
+    corner = x[-1, [0, n - 1, n * (n - 1), n * n - 1], 2]
+    return (
+        f"A 20 × 20 cloth on stretch and shear springs (implicit Euler, dt = {world.dt * 1000:.0f} ms) falls onto a sphere (drawn in grey) and drapes over "
+        f"it: at t = {traj.t[-1]:.1f} s the corners hang at z = {corner.mean():.2f} m, {centre[2] + radius - corner.mean():.2f} m below the top of the sphere, "
+        f"and the cloth still sways at up to {np.linalg.norm(traj.velocities[-1], axis=1).max():.2f} m/s."
+    )
+
+
+def kepler(out: Path) -> str:
+    fig, axes = plt.subplots(1, 3, figsize=(10.5, 3.9))
+    drift = {}
+    for ax, method in zip(axes, ["euler", "rk4", "verlet"], strict=True):
+        world, traj = run_scene(f"kepler_{method}")
+        mu = float(world.scene.forces[0].strength)
+        p, v = traj.positions[:, 0, :2], traj.velocities[:, 0, :2]
+        energy = 0.5 * np.sum(v**2, axis=1) - mu / np.linalg.norm(p, axis=1)
+        # The closed-form orbit of the initial state: r = (h²/μ) / (1 + e cos(θ − ω)).
+        h = p[0, 0] * v[0, 1] - p[0, 1] * v[0, 0]
+        ecc = np.array([v[0, 1] * h, -v[0, 0] * h]) / mu - p[0] / np.linalg.norm(p[0])
+        theta = np.linspace(0.0, 2.0 * np.pi, 400)
+        rr = h**2 / mu / (1.0 + np.linalg.norm(ecc) * np.cos(theta - np.arctan2(ecc[1], ecc[0])))
+        ax.plot(rr * np.cos(theta), rr * np.sin(theta), color="0.75", lw=4)
+        ax.plot(p[:, 0], p[:, 1], color="C3" if method == "euler" else "C0", lw=1.2)
+        ax.plot(*p[0], "ko", ms=4)
+        ax.plot(*p[-1], "o", color="C3" if method == "euler" else "C0", ms=5)
+        ax.plot(0, 0, marker="*", color="orange", ms=12)
+        rel = (energy - energy[0]) / abs(energy[0])
+        drift[method] = (rel[-1], np.abs(rel).max(), np.linalg.norm(p[-1]))
+        ax.set_title(f"{method}: ΔE/|E₀| = {rel[-1]:+.2g} at the end\n(largest |ΔE|/|E₀| {np.abs(rel).max():.2g})", fontsize=10)
+        lim = max(2.0, 1.08 * np.abs(p).max())
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(-lim, lim)
+        ax.set_aspect("equal")
+        ax.set_xlabel("x")
+        ax.grid(True, alpha=0.3)
+    axes[0].set_ylabel("y")
+    fig.suptitle(f"Kepler orbit, 3 periods at dt = {world.dt:g}: path (colour), exact orbit (grey), start (black dot), end (coloured dot)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out / "scene_kepler.png", dpi=90)
+    plt.close(fig)
+    e, r, v = drift["euler"], drift["rk4"], drift["verlet"]
+    return (
+        f"kepler_euler / kepler_rk4 / kepler_verlet: the circular orbit (μ = 1, r = 1, period 2π) for three periods at dt = 0.05. Euler spirals out "
+        f"(energy {e[0]:+.0%}, r = {e[2]:.2f} at the end), RK4 stays on the circle while its energy drifts ({r[0]:+.1e}), Verlet keeps the orbit "
+        f"(|ΔE|/|E₀| ≤ {v[1]:.1e} throughout, {v[0]:+.0e} at the end)."
+    )
+
+
+def maxwell_gas(out: Path) -> str:
+    spec = importlib.util.spec_from_file_location("maxwell_gas_example", ROOT / "examples" / "maxwell_gas.py")
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    with tempfile.TemporaryDirectory() as tmp, contextlib.redirect_stdout(io.StringIO()):
+        result = example.main(Path(tmp))
+        figure = np.asarray(Image.open(Path(tmp) / "maxwell_gas.png").convert("RGB"))
+    traj = result["trajectory"]
+    world = kinema.load_scene(SCENES / "maxwell_gas.toml")
+    box = world.colliders[0]
+    height = figure.shape[0] - 27
+    width = height
+    camera = fit_camera(box_corners(box.lo, box.hi), 0.0, (1.0, -1.7, 0.8), width, height, fill=0.92)
+    vmax = float(np.ceil(np.percentile(result["speed"], 99.5) * 10) / 10)
+    k = len(traj.t) - 1
+    frame = render(world.scene.render, traj, [k], width=width, height=height, camera=camera, vmax=vmax)[0]
+    draw_box(frame, camera, width, height, box.lo, box.hi)
+    panel = titled(frame, f"t = {traj.t[k]:.2f} s: the gas, coloured by speed")
+    bar = colorbar(world.scene.render.colormap, 0.0, vmax, "speed\n(m/s)", panel.shape[0])
+    save(hstack([panel, bar, figure], gap=4), out / "scene_maxwell_gas.png")
+    ks = result["ks"]
+    level = 1.63 / np.sqrt(traj.positions.shape[1])
+    above = np.nonzero(ks >= level)[0]
+    below = traj.t[above[-1] + 1] if above.size and above[-1] + 1 < len(ks) else float("nan")  # from here on below the level
+    return (
+        f"maxwell_gas: 1,000 hard spheres in a periodic box, all at 1 m/s at t = 0, relax to Maxwell–Boltzmann with a = √(kT/m) = {result['a']:.3f} m/s "
+        f"(the speed histogram and the Kolmogorov–Smirnov distance on the right are drawn by examples/maxwell_gas.py): D falls from {ks[0]:.2f} to "
+        f"{ks[-1]:.3f} at t = {traj.t[-1]:.0f} s and stays below the 1 % level of the test from t = {below:.2f} s."
+    )
+
+
+def demo(out: Path) -> str:
+    world, traj = run_scene("demo")
+    camera = scene_camera(world)
+    width, height = 600, 338  # the scene's 960 × 540, smaller; cut to the box below
+    frames = [0, frame_at(traj, 0.4), len(traj.t) - 1]
+    vmax = speed_max(traj, frames)
+    images = render(world.scene.render, traj, frames, width=width, height=height, camera=camera, vmax=vmax)
+    box = world.colliders[0]
+    images = crop_columns([draw_box(f, camera, width, height, box.lo, box.hi, open_top=True) for f in images], margin=60)
+    titles = ["400 balls on a jittered lattice", "falling into the box", "settled"]
+    panels = [titled(f, f"t = {traj.t[k]:.2f} s: {t}") for k, f, t in zip(frames, images, titles, strict=True)]
+    bar = colorbar(world.scene.render.colormap, 0.0, vmax, "speed\n(m/s)", panels[0].shape[0])
+    save(hstack([*panels, bar]), out / "scene_demo.png")
+    stats = world.collision_stats()["total"]
+    ke = traj.kinetic
+    return (
+        f"demo (`kinema demo`): 400 balls (e = 0.7) fall into a 0.5 m box and settle; in {traj.t[-1]:.0f} s {stats['impacts']:,} impacts take "
+        f"{stats['energy_lost']:.0f} J, the kinetic energy falls from {ke.max():.0f} J (at its peak) to {ke[-1]:.1f} J and the pile is {traj.positions[-1, :, 2].max() + traj.radii.max():.2f} m high."
+    )
+
+
+PICTURES = {
+    "bouncing_balls": bouncing_balls,
+    "newtons_cradle": newtons_cradle,
+    "billiards_2d": billiards_2d,
+    "sand_box": sand_box,
+    "cloth_on_sphere": cloth_on_sphere,
+    "kepler": kepler,
+    "maxwell_gas": maxwell_gas,
+    "demo": demo,
+}
+
+
+def main(out: Path) -> dict[str, str]:
+    out.mkdir(parents=True, exist_ok=True)
+    missing = {p.stem for p in SCENES.glob("*.toml")} - {f"kepler_{m}" for m in ("euler", "rk4", "verlet")} - set(PICTURES)
+    if missing:
+        print(f"scenes without a picture here: {', '.join(sorted(missing))}")
+    captions = {}
+    start = time.perf_counter()
+    for name, make in PICTURES.items():
+        t0 = time.perf_counter()
+        captions[name] = make(out)
+        path = out / f"scene_{name}.png"
+        w, h = Image.open(path).size
+        print(f"{name:16s} {time.perf_counter() - t0:6.1f} s  {path}  {w} × {h}, {path.stat().st_size / 1024:.0f} KiB", flush=True)
+    print(f"all in {time.perf_counter() - start:.1f} s\n")
+    for name, caption in captions.items():
+        print(f"scene_{name}.png: {caption}")
+    return captions
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else ROOT / "docs" / "img")
