@@ -1,14 +1,33 @@
 //! The spring–dashpot contact model as a force of stage 1: contacts found at every force
 //! evaluation push overlapping bodies apart with F_n = k_n δ − m_eff γ_n u_n.
+//!
+//! The contacts come from a Verlet neighbour list ([`NeighbourList`]): the grid's candidate
+//! pairs within r_i + r_j + skin (and the particles within the skin of a collider), kept until
+//! the particles have moved far enough that something left out could touch. Every evaluation
+//! tests what is listed exactly, so the contacts, and the forces, are those of a search at
+//! every evaluation, bit for bit. The potential energy summed during an evaluation is kept
+//! with its positions ([`EnergyMemo`]): the world's runaway-energy check, right after
+//! Verlet's evaluation at the step's end, reads it instead of finding the contacts again.
 
 use std::cell::RefCell;
 
 use super::collisions::on_periodic_wall;
-use crate::collide::{
-    collider_contacts, damping_ratio, sphere_contacts, Collider, Contact, Domain, Grid, Material, MaterialTable, Pair,
-};
+use crate::collide::{damping_ratio, pair_contact, Collider, Contact, Domain, Grid, Material, Pair, Partner};
 use crate::error::{CallbackError, Error};
 use crate::forces::{Force, SpringRates, State};
+
+/// The neighbour list's default skin, as a fraction of the particles' mean radius.
+///
+/// The skin trades the pairs tested at every evaluation against how often the list is
+/// rebuilt: a thicker shell lists more pairs that do not touch, a thinner one is outlived
+/// sooner (the list lasts while the two particles that moved most have together moved less
+/// than s). In the granular settle of benchmarks/collisions_lammps.py (r = 5 mm, dt = 50 µs,
+/// falling at up to 2 m/s, 8,000 spheres: 16,000 listed pairs at the end) a build costs about
+/// 4 steps without one, and 0.2 r (LAMMPS's skin there, 0.1 d) was rebuilt 55 times in 1,500
+/// steps; 0.1 r, 0.3 r and 0.5 r measured 5–20 % slower per step (medians of 3 on a noisy
+/// 2-core machine), so the optimum is flat. A fraction of the radius keeps the choice independent of the units and
+/// of the size of the particles.
+pub(crate) const SKIN_PER_RADIUS: f64 = 0.2;
 
 /// Penalty contacts between particles and with colliders (the DEM way).
 ///
@@ -31,19 +50,61 @@ pub(crate) struct ContactForce {
     damping: Option<f64>,
     global: Material,
     own: Option<Vec<Material>>,
+    /// ζ of the pair materials, worked out once.
+    ratios: DampingRatios,
     radius: Vec<f64>,
     inv_mass: Vec<f64>,
     colliders: Vec<Collider>,
     domain: Domain,
+    /// The neighbour list's skin, m.
+    skin: f64,
+    /// The largest |coordinate| of the colliders' points, centres and radii, m (for the
+    /// neighbour list's rounding margin).
+    collider_scale: f64,
     scratch: RefCell<Scratch>,
 }
 
 #[derive(Default)]
 struct Scratch {
     grid: Grid,
-    pairs: Vec<Pair>,
-    contacts: Vec<Contact>,
-    walls: Vec<Contact>,
+    list: NeighbourList,
+    /// The contact potential energy of the last force evaluation and its positions.
+    energy: EnergyMemo,
+}
+
+/// U = Σ ½ k_n δ² (J) at the positions `at` (empty: nothing remembered). It depends on the
+/// positions only, so the world's energy check right after Verlet's force evaluation, at the
+/// same positions, reads it here instead of finding the contacts again.
+#[derive(Default)]
+struct EnergyMemo {
+    at: Vec<f64>,
+    energy: f64,
+}
+
+impl EnergyMemo {
+    /// The energy remembered at positions `x`, if they are those, bit for bit.
+    fn at(&self, x: &[f64]) -> Option<f64> {
+        // The bits of each block of 8 are or-ed together (which vectorises) before a block
+        // is judged.
+        let same = !self.at.is_empty()
+            && self.at.len() == x.len()
+            && self
+                .at
+                .chunks(8)
+                .zip(x.chunks(8))
+                .all(|(a, b)| a.iter().zip(b).fold(0, |acc, (p, q)| acc | (p.to_bits() ^ q.to_bits())) == 0);
+        same.then_some(self.energy)
+    }
+
+    fn remember(&mut self, x: &[f64], energy: f64) {
+        self.at.clear();
+        self.at.extend_from_slice(x);
+        self.energy = energy;
+    }
+
+    fn forget(&mut self) {
+        self.at.clear();
+    }
 }
 
 impl ContactForce {
@@ -61,11 +122,19 @@ impl ContactForce {
         colliders: Vec<Collider>,
         domain: Domain,
     ) -> Self {
+        let mean_radius = if radius.is_empty() {
+            0.0
+        } else {
+            radius.iter().sum::<f64>() / radius.len() as f64
+        };
         ContactForce {
             stiffness,
             damping,
+            ratios: DampingRatios::new(global, own.as_deref(), &colliders),
             global,
             own,
+            skin: SKIN_PER_RADIUS * mean_radius,
+            collider_scale: colliders.iter().map(collider_scale).fold(0.0, f64::max),
             radius,
             inv_mass,
             colliders,
@@ -74,29 +143,111 @@ impl ContactForce {
         }
     }
 
-    /// The contacts at state `s` into the scratch (particle pairs, then colliders; box walls
-    /// along periodic axes left out).
-    fn detect(&self, s: &State, scratch: &mut Scratch) -> Result<(), Error> {
-        let Scratch {
+    /// The same force with a neighbour-list skin of `skin` m (≥ 0, finite; 0 searches the
+    /// grid at every evaluation).
+    #[cfg(test)]
+    fn with_skin(mut self, skin: f64) -> Self {
+        self.skin = skin;
+        self
+    }
+
+    /// How many times the neighbour list was built so far.
+    #[cfg(test)]
+    fn list_builds(&self) -> usize {
+        self.scratch.borrow().list.builds
+    }
+
+    /// Calls `each` with every contact at state `s`, in the order of a full search: particle
+    /// pairs by (i, j) (those of the neighbour list that touch, each tested exactly as
+    /// [`pair_contact`] tests it), then particle by particle, collider by collider, wall by
+    /// wall (box walls along periodic axes left out), as
+    /// [`collider_contacts`](crate::collide::collider_contacts) lists them.
+    fn for_each_contact(&self, s: &State, scratch: &mut Scratch, mut each: impl FnMut(&Contact)) -> Result<(), Error> {
+        let n = self.radius.len();
+        for (name, len) in [("x", s.x.len()), ("v", s.v.len())] {
+            if len != 3 * n {
+                return Err(Error::invalid(
+                    name,
+                    format!("{len} values"),
+                    format!("3 per particle ({} for the {n} radii)", 3 * n),
+                ));
+            }
+        }
+        let Scratch { grid, list, .. } = scratch;
+        list.update(
             grid,
-            pairs,
-            contacts,
-            walls,
-        } = scratch;
-        grid.find_pairs(s.x, &self.radius, &self.domain, 0.0, pairs)?;
-        sphere_contacts(s.x, s.v, &self.radius, pairs, &self.domain, 0.0, contacts)?;
-        walls.clear();
-        collider_contacts(&self.colliders, s.x, s.v, &self.radius, 0.0, walls)?;
-        contacts.extend(walls.iter().filter(|c| !on_periodic_wall(c, &self.colliders, &self.domain)));
+            s.x,
+            &self.radius,
+            &self.colliders,
+            &self.domain,
+            self.skin,
+            self.collider_scale,
+        )?;
+        let (x, v, radius) = (s.x, s.v, &self.radius[..]);
+        for &(i, j) in &list.pairs {
+            // `pair_contact`'s own test, |d|² < (r_i + r_j + 0)², the same floating-point
+            // operations: most listed pairs do not touch, and are dropped here without a call.
+            let d = self
+                .domain
+                .displacement([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [x[3 * j], x[3 * j + 1], x[3 * j + 2]]);
+            let reach = radius[i] + radius[j] + 0.0;
+            if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= reach * reach {
+                continue;
+            }
+            if let Some(c) = pair_contact(i, j, x, v, radius, &self.domain, 0.0) {
+                each(&c);
+            }
+        }
+        for &(i, k) in &list.walls {
+            let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
+            self.colliders[k].for_each_touch(p, radius[i], 0.0, |t| {
+                let c = Contact {
+                    i,
+                    other: Partner::Collider(k),
+                    normal: t.normal,
+                    overlap: t.overlap,
+                    u_n: vi[0] * t.normal[0] + vi[1] * t.normal[1] + vi[2] * t.normal[2],
+                };
+                if !on_periodic_wall(&c, &self.colliders, &self.domain) {
+                    each(&c);
+                }
+            });
+        }
         Ok(())
     }
 
-    fn materials(&self) -> MaterialTable<'_> {
-        let table = MaterialTable::uniform(self.global).with_colliders(&self.colliders);
-        match &self.own {
-            Some(m) => table.with_particles(m),
-            None => table,
+    /// The force of contact `c` along its normal, N (> 0 pushes apart), or `None` when it
+    /// exerts none (not overlapping, or both sides immovable).
+    #[inline]
+    fn normal_force(&self, c: &Contact) -> Option<f64> {
+        let w = self.inverse_mass_sum(c);
+        if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
+            return None;
         }
+        Some(self.stiffness * c.overlap - self.dashpot(c, w) * c.u_n)
+    }
+
+    /// ½ k_n δ² of contact `c` if it counts in the potential energy (overlapping, with a
+    /// movable particle), J.
+    #[inline]
+    fn spring_energy(&self, c: &Contact) -> Option<f64> {
+        (c.overlap > 0.0 && self.inverse_mass_sum(c) > 0.0).then_some(0.5 * self.stiffness * c.overlap * c.overlap)
+    }
+
+    /// U = Σ ½ k_n δ² at the positions of `s` (J): remembered from the last force evaluation
+    /// when that was at the same positions, bit for bit, else summed over the contacts now.
+    fn potential_at(&self, s: &State, scratch: &mut Scratch) -> Result<f64, Error> {
+        if let Some(u) = scratch.energy.at(s.x) {
+            return Ok(u);
+        }
+        // Summed in the contacts' order from −0.0, as `Iterator::sum` does.
+        let mut energy = -0.0;
+        self.for_each_contact(s, scratch, |c| {
+            if let Some(u) = self.spring_energy(c) {
+                energy += u;
+            }
+        })?;
+        Ok(energy)
     }
 
     /// w_i + w_j of a contact.
@@ -108,12 +259,176 @@ impl ContactForce {
     fn dashpot(&self, c: &Contact, w: f64) -> f64 {
         match self.damping {
             Some(gamma) => gamma / w,
-            None => {
-                let e = self.materials().pair(c).restitution();
-                let zeta = damping_ratio(e).unwrap_or(0.0);
-                2.0 * zeta * (self.stiffness / w).sqrt()
+            None => 2.0 * self.ratios.of(c) * (self.stiffness / w).sqrt(),
+        }
+    }
+}
+
+/// The damping ratio ζ = `damping_ratio`(e) of every contact's material, worked out once per
+/// particle and collider rather than per contact (a logarithm and a square root each).
+///
+/// A pair of particles has e = max(e_i, e_j) ([`Material::combine`]), so its ζ is the ζ of
+/// the particle with the larger e (either one when they are equal: the same e gives the same
+/// ζ), bit for bit what `damping_ratio(max(e_i, e_j))` gives. Against a collider, the
+/// collider's own e where it sets one, else the particle's.
+struct DampingRatios {
+    /// ζ of the global e.
+    global: f64,
+    /// (e, ζ) of each particle, when particles have their own materials.
+    particles: Option<Vec<(f64, f64)>>,
+    /// ζ of each collider's own e, where it sets one.
+    colliders: Vec<Option<f64>>,
+}
+
+impl DampingRatios {
+    fn new(global: Material, own: Option<&[Material]>, colliders: &[Collider]) -> Self {
+        let zeta = |e: f64| damping_ratio(e).unwrap_or(0.0);
+        DampingRatios {
+            global: zeta(global.restitution()),
+            particles: own.map(|m| m.iter().map(|m| (m.restitution(), zeta(m.restitution()))).collect()),
+            colliders: colliders.iter().map(|c| c.surface().restitution().map(zeta)).collect(),
+        }
+    }
+
+    /// Particle i's (e, ζ), or `None` when every particle has the global material.
+    fn particle(&self, i: usize) -> Option<(f64, f64)> {
+        self.particles.as_ref().map(|p| p[i])
+    }
+
+    /// ζ of contact `c`.
+    fn of(&self, c: &Contact) -> f64 {
+        match c.other {
+            Partner::Collider(k) => self.colliders[k].unwrap_or_else(|| self.particle(c.i).map_or(self.global, |p| p.1)),
+            Partner::Particle(j) => match (self.particle(c.i), self.particle(j)) {
+                (Some((e_i, z_i)), Some((e_j, z_j))) => {
+                    if e_j > e_i {
+                        z_j
+                    } else {
+                        z_i
+                    }
+                }
+                _ => self.global,
+            },
+        }
+    }
+}
+
+/// The largest |coordinate| of a collider's points (a plane's, each box wall's) or of an
+/// obstacle's centre plus its radius, m.
+fn collider_scale(c: &Collider) -> f64 {
+    let largest = |p: [f64; 3]| p.iter().fold(0.0, |m: f64, c| m.max(c.abs()));
+    match c {
+        Collider::Plane(p) => largest(p.point()),
+        Collider::Box(b) => b.walls().iter().map(|w| largest(w.point())).fold(0.0, f64::max),
+        Collider::Sphere(s) => largest(s.center()) + s.radius(),
+    }
+}
+
+/// A Verlet neighbour list: the particle pairs (i, j) with |x_i − x_j| < r_i + r_j + s at the
+/// build (the grid's [`Grid::find_pairs`] with margin s, the skin), and the particles within
+/// s of touching each collider, reused until the particles have moved far enough that
+/// something left out could touch.
+///
+/// Why that is exact. Let a_i be particle i's displacement since the build (its minimum image
+/// along periodic axes: positions matter only modulo the period there, so any image of the
+/// move will do, and a particle wrapped to the other side has not moved far). A pair left out
+/// had |d_b| ≥ r_i + r_j + s at the build for every image d_b of x_i − x_j. Each image of
+/// the pair's separation now is an image of d_b + a_i − a_j, so by the triangle inequality
+///
+/// ```text
+///   |d| ≥ |d_b| − |a_i| − |a_j| ≥ r_i + r_j + s − (|a_i| + |a_j|)
+/// ```
+///
+/// and while |a_i| + |a_j| < s for every pair, no pair left out can touch (|d| < r_i + r_j).
+/// That holds while the two largest displacements sum to less than s; the usual criterion,
+/// "rebuild once some particle has moved more than s/2", implies it (both are then < s/2)
+/// and rebuilds sooner. A collider is fixed, and the distance from a plane, or from an
+/// obstacle's centre, changes by at most |a_i| ≤ the largest displacement: a particle left out
+/// at r_i + s or more from it cannot touch it either. What is in the list is tested exactly
+/// at every evaluation, with the full search's floating-point tests, so the contacts are the
+/// same as a search at every evaluation, in the same order.
+///
+/// In floating point each of those inequalities holds to a few roundings of numbers no
+/// larger than `scale` = the largest |coordinate| of the particles and colliders + the
+/// periods + 2 r_max + s (the coordinate differences, minimum images, squares and square
+/// roots: ≲ 10 ε·scale ≈ 2·10⁻¹⁵ scale in all); the list is rebuilt once the two largest
+/// moves reach s − 10⁻¹² scale, which leaves a margin of hundreds of roundings. (When
+/// 10⁻¹² scale ≥ s, coordinates 10¹² times the skin, it is rebuilt at every evaluation,
+/// still exact.)
+#[derive(Default)]
+struct NeighbourList {
+    /// The candidate particle pairs, sorted by (i, j).
+    pairs: Vec<Pair>,
+    /// The candidate (particle, collider) pairs, sorted.
+    walls: Vec<(usize, usize)>,
+    /// Positions at the build, m (empty: no list).
+    built_at: Vec<f64>,
+    /// The list holds while the two largest displacements since the build sum to less, m.
+    allowance: f64,
+    /// Builds so far.
+    builds: usize,
+}
+
+impl NeighbourList {
+    /// Makes the list hold for positions `x` (rebuilt with `grid` and skin `skin` if needed);
+    /// `collider_scale` is the colliders' largest |coordinate|.
+    #[allow(clippy::too_many_arguments)]
+    fn update(
+        &mut self,
+        grid: &mut Grid,
+        x: &[f64],
+        radius: &[f64],
+        colliders: &[Collider],
+        domain: &Domain,
+        skin: f64,
+        collider_scale: f64,
+    ) -> Result<(), Error> {
+        if self.built_at.len() == x.len() && self.holds(x, domain) {
+            return Ok(());
+        }
+        self.built_at.clear(); // no list until the build succeeds (non-finite positions fail)
+        grid.find_pairs(x, radius, domain, skin, &mut self.pairs)?;
+        self.walls.clear();
+        for (i, &r) in radius.iter().enumerate() {
+            let p = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
+            for (k, c) in colliders.iter().enumerate() {
+                let mut near = false;
+                c.for_each_touch(p, r, skin, |_| near = true);
+                if near {
+                    self.walls.push((i, k));
+                }
             }
         }
+        self.built_at.extend_from_slice(x);
+        let largest = |a: &[f64]| a.iter().fold(0.0, |m: f64, c| m.max(c.abs()));
+        let periods = domain
+            .periodic_box()
+            .map_or(0.0, |p| (0..3).filter(|&k| p.axes()[k]).map(|k| p.period(k)).sum());
+        let scale = largest(x).max(collider_scale) + periods + 2.0 * largest(radius) + skin;
+        self.allowance = skin - 1e-12 * scale;
+        self.builds += 1;
+        Ok(())
+    }
+
+    /// Whether the two largest displacements since the build sum to less than the allowance
+    /// (false for non-finite positions, which then go to the grid and its error).
+    fn holds(&self, x: &[f64], domain: &Domain) -> bool {
+        let (mut first, mut second) = (0.0_f64, 0.0_f64); // squared, first ≥ second
+        for (p, q) in x.chunks_exact(3).zip(self.built_at.chunks_exact(3)) {
+            let a = domain.displacement([p[0], p[1], p[2]], [q[0], q[1], q[2]]);
+            let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+            if a2 > second {
+                if a2 > first {
+                    second = first;
+                    first = a2;
+                } else {
+                    second = a2;
+                }
+            } else if a2.is_nan() {
+                return false;
+            }
+        }
+        first.sqrt() + second.sqrt() < self.allowance
     }
 }
 
@@ -122,39 +437,37 @@ impl Force for ContactForce {
         "contact"
     }
 
+    /// The contact forces at `s`; their potential energy is summed on the way and remembered
+    /// with the positions (see [`EnergyMemo`]).
     fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
-        let mut scratch = self.scratch.borrow_mut();
-        self.detect(s, &mut scratch)?;
-        for c in &scratch.contacts {
-            let w = self.inverse_mass_sum(c);
-            if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
-                continue;
+        let scratch = &mut *self.scratch.borrow_mut();
+        scratch.energy.forget();
+        // Summed in the contacts' order from −0.0, as `Iterator::sum` and `potential_at` do.
+        let mut energy = -0.0;
+        self.for_each_contact(s, scratch, |c| {
+            if let Some(u) = self.spring_energy(c) {
+                energy += u;
             }
-            let force = self.stiffness * c.overlap - self.dashpot(c, w) * c.u_n;
+            let Some(force) = self.normal_force(c) else {
+                return;
+            };
             for k in 0..3 {
                 f[3 * c.i + k] += force * c.normal[k];
                 if let Some(j) = c.partner_particle() {
                     f[3 * j + k] -= force * c.normal[k];
                 }
             }
-        }
+        })?;
+        scratch.energy.remember(s.x, energy);
         Ok(())
     }
 
     // No `validate`: the world rebuilds this force whenever its particles change.
 
-    /// U = Σ ½ k_n δ² over the overlapping contacts, J.
+    /// U = Σ ½ k_n δ² over the overlapping contacts, J. At the positions of the last force
+    /// evaluation (Verlet's, then the world's energy check) it is the one summed there.
     fn potential_energy(&self, s: &State) -> Option<f64> {
-        let mut scratch = self.scratch.borrow_mut();
-        self.detect(s, &mut scratch).ok()?;
-        Some(
-            scratch
-                .contacts
-                .iter()
-                .filter(|c| c.overlap > 0.0 && self.inverse_mass_sum(c) > 0.0)
-                .map(|c| 0.5 * self.stiffness * c.overlap * c.overlap)
-                .sum(),
-        )
+        self.potential_at(s, &mut self.scratch.borrow_mut()).ok()
     }
 
     fn depends_on_velocity(&self) -> bool {
@@ -174,14 +487,12 @@ impl Force for ContactForce {
     /// with a particle partner (diagonal and off-diagonal), once against a collider; the
     /// dashpot likewise with c_n.
     fn rate_bound(&self, s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
-        let mut scratch = self.scratch.borrow_mut();
-        self.detect(s, &mut scratch).ok()?;
         let mut k_row = vec![0.0; inv_mass.len()];
         let mut c_row = vec![0.0; inv_mass.len()];
-        for c in scratch.contacts.iter().filter(|c| c.overlap > 0.0) {
+        self.for_each_contact(s, &mut self.scratch.borrow_mut(), |c| {
             let w = self.inverse_mass_sum(c);
-            if w == 0.0 {
-                continue;
+            if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
+                return;
             }
             let times = if c.partner_particle().is_some() { 2.0 } else { 1.0 };
             let dashpot = self.dashpot(c, w);
@@ -189,7 +500,8 @@ impl Force for ContactForce {
                 k_row[p] += times * self.stiffness;
                 c_row[p] += times * dashpot;
             }
-        }
+        })
+        .ok()?;
         let mut rates = SpringRates::default();
         for (p, w) in inv_mass.iter().enumerate() {
             rates.omega_squared = rates.omega_squared.max(w * k_row[p]);
@@ -229,5 +541,412 @@ impl Force for ContactForce {
             }
         };
         Some((omega_squared, zeta))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! The neighbour list against a search at every evaluation: the forces and energies of
+    //! [`ContactForce`] are compared bit for bit with a reference that finds the contacts with
+    //! the O(N²) [`all_pairs`] and the collide kernels at every call and applies the law as
+    //! written before the list (the material table and ζ per contact), while the particles
+    //! move: through the sides of a periodic cell, at speeds that force rebuilds.
+
+    use super::*;
+    use crate::collide::{
+        all_pairs, collider_contacts, sphere_contacts, BoxContainer, MaterialTable, Periodic, Plane, SphereObstacle, Surface,
+    };
+    use crate::forces::testing::Rng;
+
+    /// Forces (N) and U (J) from the contacts of an exhaustive search at `s`, by the law as
+    /// it was written before the neighbour list.
+    fn reference(force: &ContactForce, s: &State) -> (Vec<f64>, f64) {
+        let (mut pairs, mut contacts, mut walls) = (Vec::new(), Vec::new(), Vec::new());
+        all_pairs(s.x, &force.radius, &force.domain, 0.0, &mut pairs).unwrap();
+        sphere_contacts(s.x, s.v, &force.radius, &pairs, &force.domain, 0.0, &mut contacts).unwrap();
+        collider_contacts(&force.colliders, s.x, s.v, &force.radius, 0.0, &mut walls).unwrap();
+        contacts.extend(walls.iter().filter(|c| !on_periodic_wall(c, &force.colliders, &force.domain)));
+        let table = MaterialTable::uniform(force.global).with_colliders(&force.colliders);
+        let table = match &force.own {
+            Some(m) => table.with_particles(m),
+            None => table,
+        };
+        let mut f = vec![0.0; s.x.len()];
+        for c in &contacts {
+            let w = force.inverse_mass_sum(c);
+            if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
+                continue;
+            }
+            let dashpot = match force.damping {
+                Some(gamma) => gamma / w,
+                None => 2.0 * damping_ratio(table.pair(c).restitution()).unwrap_or(0.0) * (force.stiffness / w).sqrt(),
+            };
+            let fn_ = force.stiffness * c.overlap - dashpot * c.u_n;
+            for k in 0..3 {
+                f[3 * c.i + k] += fn_ * c.normal[k];
+                if let Some(j) = c.partner_particle() {
+                    f[3 * j + k] -= fn_ * c.normal[k];
+                }
+            }
+        }
+        let u = contacts
+            .iter()
+            .filter(|c| c.overlap > 0.0 && force.inverse_mass_sum(c) > 0.0)
+            .map(|c| 0.5 * force.stiffness * c.overlap * c.overlap)
+            .sum();
+        (f, u)
+    }
+
+    fn bits(a: &[f64]) -> Vec<u64> {
+        a.iter().map(|c| c.to_bits()).collect()
+    }
+
+    struct Scene {
+        force: ContactForce,
+        x: Vec<f64>,
+        v: Vec<f64>,
+        mass: Vec<f64>,
+        /// A constant acceleration on every particle, m/s².
+        g: [f64; 3],
+    }
+
+    /// Steps `scene` with symplectic Euler (kick with the contact forces and g, then drift,
+    /// then wrap into the periodic cell as the world does) for `steps` steps of `dt`; at every
+    /// step the force with the list, the same force rebuilding its list at every call (skin 0)
+    /// and the exhaustive reference must give the same forces and energies, bit for bit.
+    /// `kicks` gives particles new velocities before some steps (fast movers). Returns the
+    /// list's builds and how many times a particle was wrapped through a periodic side.
+    fn run(mut scene: Scene, steps: usize, dt: f64, kicks: &[(usize, usize, [f64; 3])]) -> (usize, usize) {
+        let n = scene.mass.len();
+        let mut every_call = ContactForce::new(
+            scene.force.stiffness,
+            scene.force.damping,
+            scene.force.global,
+            scene.force.own.clone(),
+            scene.force.radius.clone(),
+            scene.force.inv_mass.clone(),
+            scene.force.colliders.clone(),
+            scene.force.domain,
+        )
+        .with_skin(0.0);
+        let (mut touching, mut wrapped) = (0, 0);
+        for step in 0..steps {
+            for &(when, i, v) in kicks {
+                if when == step {
+                    scene.v[3 * i..3 * i + 3].copy_from_slice(&v);
+                }
+            }
+            let s = State {
+                t: 0.0,
+                x: &scene.x,
+                v: &scene.v,
+                mass: &scene.mass,
+            };
+            let (f_ref, u_ref) = reference(&scene.force, &s);
+            let mut f = vec![0.0; 3 * n];
+            scene.force.accumulate(&s, &mut f).unwrap();
+            let mut f0 = vec![0.0; 3 * n];
+            every_call.accumulate(&s, &mut f0).unwrap();
+            assert_eq!(bits(&f), bits(&f_ref), "step {step}: forces with the list");
+            assert_eq!(bits(&f0), bits(&f_ref), "step {step}: forces with a search at every call");
+            let u = scene.force.potential_energy(&s).unwrap();
+            assert_eq!(u.to_bits(), u_ref.to_bits(), "step {step}: remembered U {u} vs {u_ref}");
+            touching += usize::from(u_ref > 0.0);
+            for i in 0..n {
+                for k in 0..3 {
+                    let a = f[3 * i + k] * scene.force.inv_mass[i] + scene.g[k];
+                    scene.v[3 * i + k] += dt * a;
+                    scene.x[3 * i + k] += dt * scene.v[3 * i + k];
+                }
+            }
+            if let Some(p) = scene.force.domain.periodic_box() {
+                let before = scene.x.clone();
+                p.wrap_positions(&mut scene.x);
+                wrapped += before.iter().zip(&scene.x).filter(|(a, b)| a != b).count();
+            }
+        }
+        assert!(touching > steps / 2, "contacts in only {touching} of {steps} steps");
+        assert_eq!(every_call.list_builds(), steps, "skin 0 searches at every call");
+        (scene.force.list_builds(), wrapped)
+    }
+
+    /// Positions, velocities, radii, masses and inverse masses.
+    type Gas = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
+
+    /// `n` particles of radii in [r/2, r] at random in [lo, hi) (3D, or z = 0 in 2D), with
+    /// `apart`: not overlapping (drawn again where one would overlap an earlier one; the
+    /// minimum image in `domain`), with speeds up to `speed` (m/s) and masses in [0.5, 2] kg, the first one
+    /// pinned.
+    #[allow(clippy::too_many_arguments)]
+    fn gas(rng: &mut Rng, n: usize, r: f64, lo: [f64; 3], hi: [f64; 3], domain: &Domain, apart: bool, speed: f64) -> Gas {
+        let dim = domain.dim();
+        let radius = rng.vec(n, 0.5 * r, r);
+        let (mut x, mut v): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            let p = loop {
+                let p = [0, 1, 2].map(|k| if k < dim { rng.uniform(lo[k], hi[k]) } else { 0.0 });
+                let clear = !apart
+                    || (0..i).all(|j| {
+                        let d = domain.displacement(p, [x[3 * j], x[3 * j + 1], x[3 * j + 2]]);
+                        d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= (radius[i] + radius[j]).powi(2)
+                    });
+                if clear {
+                    break p;
+                }
+            };
+            x.extend(p);
+            v.extend([0, 1, 2].map(|k| if k < dim { rng.uniform(-speed, speed) } else { 0.0 }));
+        }
+        let mass = rng.vec(n, 0.5, 2.0);
+        let mut inv_mass: Vec<f64> = mass.iter().map(|m| 1.0 / m).collect();
+        inv_mass[0] = 0.0;
+        (x, v, radius, mass, inv_mass)
+    }
+
+    #[test]
+    fn a_periodic_gas_crossing_its_cell_gets_the_forces_of_a_search_at_every_call() {
+        // A gas in a periodic unit cube (all three axes), r ≤ 4 cm: at up to 1 m/s and
+        // dt = 0.25 ms a particle moves up to 0.25 mm a step against a skin of 0.2 mean radii
+        // (6 mm), so the list lasts several steps; particles leave through the sides and are
+        // wrapped back (their displacements taken as minimum images). Particles 1 and 2
+        // are shot across the cell at 40 and 60 m/s for 20 steps (1–1.5 cm a step: a
+        // rebuild at every one of those steps).
+        let mut rng = Rng::new(7);
+        let (lo, hi) = ([0.0; 3], [1.0; 3]);
+        let cell = Periodic::new(lo, hi, [true; 3]).unwrap();
+        let domain = Domain::periodic(3, cell).unwrap();
+        let (x, v, radius, mass, inv_mass) = gas(&mut rng, 400, 0.04, lo, hi, &domain, true, 1.0);
+        let walls = vec![Collider::Box(BoxContainer::new(lo, hi, Surface::default()).unwrap())];
+        let material = Material::new(0.5, 0.0).unwrap();
+        let force = ContactForce::new(1e4, None, material, None, radius, inv_mass, walls, domain);
+        let scene = Scene {
+            force,
+            x,
+            v,
+            mass,
+            g: [0.0; 3],
+        };
+        let kicks = [
+            (100, 1, [40.0, 10.0, -5.0]),
+            (100, 2, [-60.0, 0.0, 30.0]),
+            (120, 1, [0.0; 3]),
+            (120, 2, [0.0; 3]),
+        ];
+        let (builds, wrapped) = run(scene, 300, 2.5e-4, &kicks);
+        eprintln!("periodic gas: {builds} builds in 300 steps, {wrapped} crossings");
+        assert!(
+            builds >= 20,
+            "the fast particles force a rebuild at every step: {builds} builds"
+        );
+        assert!(builds < 120, "the list is reused: {builds} builds in 300 steps");
+        assert!(wrapped > 10, "{wrapped} crossings of the cell's sides");
+    }
+
+    #[test]
+    fn a_pile_on_colliders_with_own_materials_gets_the_forces_of_a_search_at_every_call() {
+        // Open space, a box open at the top, a tilted plane and a sphere obstacle, gravity:
+        // particles fall onto the floor and the obstacle and push each other apart. Particles have
+        // their own restitutions (0, 1 and equal values included), colliders their own or
+        // none, so ζ comes from every branch of the pair rule. One particle is dropped in at
+        // 30 m/s (a rebuild at each step until it stops).
+        let mut rng = Rng::new(11);
+        let (lo, hi) = ([0.0; 3], [0.6, 0.6, f64::INFINITY]);
+        let (x, v, radius, mass, inv_mass) = gas(
+            &mut rng,
+            300,
+            0.05,
+            [0.0; 3],
+            [0.6, 0.6, 0.8],
+            &Domain::open(3).unwrap(),
+            true,
+            0.3,
+        );
+        let own: Vec<Material> = (0..300)
+            .map(|i| {
+                let e = match i % 5 {
+                    0 => 0.0,
+                    1 => 1.0,
+                    2 => 0.5,
+                    _ => rng.uniform(0.0, 1.0),
+                };
+                Material::new(e, 0.0).unwrap()
+            })
+            .collect();
+        let colliders = vec![
+            Collider::Box(BoxContainer::new(lo, hi, Surface::new(None, None).unwrap()).unwrap()),
+            Collider::Plane(Plane::new([0.0, 0.0, 0.1], [1.0, 0.0, 3.0], Surface::new(Some(0.3), None).unwrap()).unwrap()),
+            Collider::Sphere(SphereObstacle::new([0.3, 0.3, 0.3], 0.1, Surface::new(Some(0.9), None).unwrap()).unwrap()),
+        ];
+        let material = Material::new(0.4, 0.0).unwrap();
+        let force = ContactForce::new(
+            5e3,
+            None,
+            material,
+            Some(own),
+            radius,
+            inv_mass,
+            colliders,
+            Domain::open(3).unwrap(),
+        );
+        let scene = Scene {
+            force,
+            x,
+            v,
+            mass,
+            g: [0.0, 0.0, -9.81],
+        };
+        let (builds, _) = run(scene, 600, 2e-4, &[(50, 5, [0.0, 0.0, -30.0])]);
+        eprintln!("pile: {builds} builds in 600 steps");
+        assert!(builds < 200, "the list is reused: {builds} builds in 600 steps");
+    }
+
+    #[test]
+    fn a_2d_strip_periodic_along_x_with_a_given_damping() {
+        // Circles in the xy-plane, periodic along x only, the rectangle's walls along y
+        // kept (those along x vanish), γ_n given instead of e. Particle 9 runs at 80 m/s
+        // (2 cm a step) for 140 steps, through the gas and the cell's sides.
+        let mut rng = Rng::new(3);
+        let (lo, hi) = ([-1.0, 0.0, 0.0], [1.0, 0.5, 0.0]);
+        let cell = Periodic::new(
+            [-1.0, 0.0, f64::NEG_INFINITY],
+            [1.0, 0.5, f64::INFINITY],
+            [true, false, false],
+        )
+        .unwrap();
+        let domain = Domain::periodic(2, cell).unwrap();
+        let (x, v, radius, mass, inv_mass) = gas(&mut rng, 200, 0.03, lo, hi, &domain, true, 0.5);
+        let rect = BoxContainer::rect([-1.0, 0.0], [1.0, 0.5], Surface::default()).unwrap();
+        let material = Material::new(0.7, 0.0).unwrap();
+        let force = ContactForce::new(
+            1e4,
+            Some(30.0),
+            material,
+            None,
+            radius,
+            inv_mass,
+            vec![Collider::Box(rect)],
+            domain,
+        );
+        let scene = Scene {
+            force,
+            x,
+            v,
+            mass,
+            g: [0.0, -2.0, 0.0],
+        };
+        let (builds, wrapped) = run(scene, 400, 2.5e-4, &[(10, 9, [80.0, 5.0, 0.0]), (150, 9, [1.0, 0.0, 0.0])]);
+        eprintln!("2D strip: {builds} builds in 400 steps, {wrapped} crossings");
+        assert!(wrapped > 3, "{wrapped} crossings of the cell's sides");
+        assert!((140..260).contains(&builds), "{builds} builds in 400 steps");
+    }
+
+    #[test]
+    fn a_head_on_pair_just_outside_the_list_is_caught_before_it_touches() {
+        // The worst case of the criterion: two particles (r = 0.1 m, skin s = 0.02 m) start
+        // s (1 + 10⁻³) beyond contact, so out of the list, and close head-on at 1 mm each a
+        // step. They touch at the 11th step; the two largest moves reach s at the 10th, when
+        // the list is rebuilt with them in it. A criterion 30 % looser would miss the touch.
+        let x = vec![0.0, 0.0, 0.0, 0.2 + 0.02 * 1.001, 0.0, 0.0, 5.0, 5.0, 5.0];
+        let v = vec![1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let force = ContactForce::new(
+            10.0,
+            None,
+            Material::new(0.5, 0.0).unwrap(),
+            None,
+            vec![0.1; 3],
+            vec![1.0; 3],
+            vec![],
+            Domain::open(3).unwrap(),
+        );
+        assert_eq!(force.skin, 0.2 * 0.1);
+        let scene = Scene {
+            force,
+            x,
+            v,
+            mass: vec![1.0; 3],
+            g: [0.0; 3],
+        };
+        let (builds, _) = run(scene, 40, 1e-3, &[]);
+        assert_eq!(builds, 4, "built at steps 0, 10, 20, 30");
+    }
+
+    #[test]
+    fn the_remembered_energy_is_that_of_the_same_positions_only() {
+        // U after a force evaluation at x is the one summed there; at other positions (one
+        // coordinate an ulp or a micrometre away) it is found again, and matches the
+        // exhaustive reference.
+        let mut rng = Rng::new(5);
+        let (x, v, radius, mass, inv_mass) = gas(&mut rng, 200, 0.06, [0.0; 3], [0.5; 3], &Domain::open(3).unwrap(), false, 1.0);
+        let mut force = ContactForce::new(
+            1e3,
+            None,
+            Material::new(0.5, 0.0).unwrap(),
+            None,
+            radius,
+            inv_mass,
+            vec![],
+            Domain::open(3).unwrap(),
+        );
+        let s = State {
+            t: 0.0,
+            x: &x,
+            v: &v,
+            mass: &mass,
+        };
+        let mut f = vec![0.0; x.len()];
+        force.accumulate(&s, &mut f).unwrap();
+        let u = force.potential_energy(&s).unwrap();
+        assert!(u > 0.0);
+        assert_eq!(u.to_bits(), reference(&force, &s).1.to_bits());
+        // one coordinate one ulp away: the memo does not answer
+        let mut x1 = x.clone();
+        x1[7] = f64::from_bits(x1[7].to_bits() + 1);
+        assert_eq!(force.scratch.borrow().energy.at(&x), Some(u));
+        assert_eq!(force.scratch.borrow().energy.at(&x1), None);
+        // a particle of an overlapping pair a micrometre away: found again
+        let mut pairs = Vec::new();
+        all_pairs(&x, &force.radius, &force.domain, 0.0, &mut pairs).unwrap();
+        let (i, _) = pairs[0];
+        let mut x2 = x.clone();
+        x2[3 * i] += 1e-6;
+        let s2 = State { x: &x2, ..s };
+        let u2 = force.potential_energy(&s2).unwrap();
+        assert_eq!(u2.to_bits(), reference(&force, &s2).1.to_bits());
+        assert_ne!(u2.to_bits(), u.to_bits(), "a moved overlap changes U");
+        // a failed evaluation forgets: NaN positions are an error, and so is U there
+        let mut bad = x.clone();
+        bad[4] = f64::NAN;
+        let s3 = State { x: &bad, ..s };
+        assert!(force.accumulate(&s3, &mut f).is_err());
+        assert_eq!(force.potential_energy(&s3), None);
+        // and the rates at s are those of its contacts
+        assert!(force.rate_bound(&s, &force.inv_mass.clone()).unwrap().omega_squared > 0.0);
+    }
+
+    #[test]
+    fn the_allowance_leaves_a_rounding_margin_below_the_skin() {
+        // Coordinates 10¹² times the skin leave no room: the list is rebuilt at every call.
+        let radius = vec![1e-3; 2];
+        let domain = Domain::open(3).unwrap();
+        let (mut list, mut grid) = (NeighbourList::default(), Grid::new());
+        let x = [0.0, 0.0, 0.0, 1.5e-3, 0.0, 0.0];
+        list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+        assert!(list.allowance < 2e-4 && list.allowance > 2e-4 * (1.0 - 1e-10));
+        assert_eq!(list.pairs, vec![(0, 1)]);
+        list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+        assert_eq!(list.builds, 1, "nothing moved");
+        let far = [1e9, 0.0, 0.0, 1e9 + 1.5e-3, 0.0, 0.0];
+        list.update(&mut grid, &far, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+        assert!(list.allowance < 0.0);
+        list.update(&mut grid, &far, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+        assert_eq!(list.builds, 3);
+        // two particles that together moved the allowance (exactly: half each, along
+        // coordinates that were 0): rebuilt; a hair less: kept
+        list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+        let half = 0.5 * list.allowance;
+        assert!(!list.holds(&[-half, 0.0, 0.0, 1.5e-3, half, 0.0], &domain));
+        let less = 0.99 * half;
+        assert!(list.holds(&[-less, 0.0, 0.0, 1.5e-3, half, 0.0], &domain));
+        assert!(!list.holds(&[f64::NAN, 0.0, 0.0, 1.5e-3, 0.0, 0.0], &domain));
     }
 }
