@@ -299,10 +299,7 @@ impl PyWorld {
 
     /// Advances n steps; stops at the first failing one (the state before it is kept).
     fn step(&mut self, n: u64) -> PyResult<()> {
-        for _ in 0..n {
-            self.inner.step().map_err(world_err)?;
-        }
-        Ok(())
+        self.inner.advance(n).map_err(world_err)
     }
 
     #[getter]

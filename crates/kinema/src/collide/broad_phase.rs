@@ -138,6 +138,58 @@ impl Grid {
         Ok(())
     }
 
+    /// Sorts the particles into cells at least 2 r_max + `margin` wide for [`Grid::partners`]
+    /// (same arguments, checks and cell layout as [`Grid::find_pairs`]). Returns false when
+    /// nothing can pair (fewer than two particles, or zero reach): every particle has no
+    /// partner then.
+    pub fn prepare(&mut self, x: &[f64], radius: &[f64], domain: &Domain, margin: f64) -> Result<bool, Error> {
+        check_inputs(x, radius, margin)?;
+        let reach = 2.0 * radius.iter().fold(0.0, |m: f64, r| m.max(*r)) + margin;
+        if radius.len() < 2 || reach == 0.0 {
+            self.dims = [1; 3];
+            self.width = [0.0; 3];
+            return Ok(false);
+        }
+        self.layout(x, domain, reach);
+        self.sort_into_cells(x, radius, domain);
+        Ok(true)
+    }
+
+    /// Particle i's partners in the grid of the last [`Grid::prepare`] (same positions `x`
+    /// and `radius`): every j ≠ i with |x_i − x_j| < r_i + r_j + `margin` (the pair test of
+    /// [`Grid::find_pairs`], with j's stored copy of its position), appended to `out` in
+    /// ascending order of j. Reads the grid only, so particles can be searched in parallel:
+    /// each pair is found twice, once from each side (a full neighbour list).
+    pub fn partners(&self, i: usize, xi: [f64; 3], ri: f64, domain: &Domain, margin: f64, out: &mut Vec<u32>) {
+        let first = out.len();
+        let [nx, ny, _] = self.dims;
+        let cell = self.cell_of[i];
+        let at = [cell % nx, (cell / nx) % ny, cell / (nx * ny)];
+        let (xs, xn) = self.neighbours(0, at[0]);
+        let (ys, yn) = self.neighbours(1, at[1]);
+        let (zs, zn) = self.neighbours(2, at[2]);
+        for &z in &zs[..zn] {
+            for &y in &ys[..yn] {
+                let row = nx * (y + ny * z);
+                let mut k = 0;
+                while k < xn {
+                    let run = xs[k];
+                    while k + 1 < xn && xs[k + 1] == xs[k] + 1 {
+                        k += 1;
+                    }
+                    for b in self.start[row + run]..self.start[row + xs[k] + 1] {
+                        let j = self.order[b];
+                        if j != i && touches(domain, xi, self.pos[b], ri, self.rad[b], margin) {
+                            out.push(j as u32);
+                        }
+                    }
+                    k += 1;
+                }
+            }
+        }
+        out[first..].sort_unstable();
+    }
+
     /// Appends to `found` each pair (i, j), j > i, of a particle i in cell `at` with a
     /// particle j in the same or a neighbouring cell that passes the pair test.
     fn pairs_from_cell(&self, at: [usize; 3], domain: &Domain, margin: f64, found: &mut Vec<Pair>) {

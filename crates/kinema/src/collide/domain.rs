@@ -6,6 +6,7 @@
 //! touch through two images at once (r_i + r_j + margin > L/2) only the nearest one counts.
 
 use super::vec3;
+use rayon::prelude::*;
 use crate::error::Error;
 
 /// A box [lo, hi) whose opposite faces are identified along the axes marked periodic.
@@ -113,11 +114,19 @@ impl Periodic {
     /// Wraps every position of the flat array `x` (m, 3 per particle) into the box along
     /// the periodic axes, in place.
     pub fn wrap_positions(&self, x: &mut [f64]) {
-        for p in x.chunks_exact_mut(3) {
-            for (k, c) in p.iter_mut().enumerate() {
-                *c = self.wrap_coordinate(k, *c);
+        // A coordinate already in [lo, hi) is its own wrap (floor gives 0 there): only the few
+        // that left the cell in a step pay for the division and the floor.
+        let (lo, hi) = (self.lo, self.hi);
+        let axes = self.axes;
+        x.par_chunks_mut(3 * 4096).for_each(|chunk| {
+            for p in chunk.chunks_exact_mut(3) {
+                for (k, c) in p.iter_mut().enumerate() {
+                    if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
+                        *c = self.wrap_coordinate(k, *c);
+                    }
+                }
             }
-        }
+        });
     }
 }
 

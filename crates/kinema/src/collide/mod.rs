@@ -45,7 +45,7 @@ pub use colliders::{collider_contacts, BoxContainer, Collider, Plane, SphereObst
 pub use contact::{Contact, Partner};
 pub use domain::{Domain, Periodic};
 pub use narrow_phase::{pair_contact, sphere_contacts};
-pub use penalty::{damping_ratio, restitution_of_damping, PenaltyLaw};
+pub use penalty::{damping_ratio, dashpot_coefficient, restitution_of_damping, spring_dashpot_force, PenaltyLaw};
 pub use response::{
     apply_impulse, resolve, separate, Impulse, Material, MaterialTable, ResolveParams, ResolveStats, SeparateParams,
     SeparateStats,

@@ -68,6 +68,23 @@ pub fn restitution_of_damping(zeta: f64) -> f64 {
     }
 }
 
+/// The spring–dashpot law itself, F_n = k_n δ − c_n u_n (N, > 0 pushes the pair apart):
+/// stiffness k_n (N/m), dashpot coefficient c_n (kg/s), overlap δ (m) and normal velocity u_n
+/// (m/s, < 0 approaching). Every spring–dashpot contact in kinema is this function: the
+/// world's contact force calls it for each contact, and [`PenaltyLaw`] (whose restitution
+/// the tests measure) through [`PenaltyLaw::normal_force`].
+#[inline]
+pub fn spring_dashpot_force(stiffness: f64, dashpot: f64, overlap: f64, u_n: f64) -> f64 {
+    stiffness * overlap - dashpot * u_n
+}
+
+/// c_n = m_eff γ_n = 2 ζ √(k_n m_eff) = 2 ζ √(k_n / w), kg/s: the dashpot that gives damping
+/// ratio ζ to a contact of stiffness k_n (N/m) and inverse-mass sum w = w_i + w_j (1/kg, > 0).
+#[inline]
+pub fn dashpot_coefficient(stiffness: f64, zeta: f64, inverse_mass_sum: f64) -> f64 {
+    2.0 * zeta * (stiffness / inverse_mass_sum).sqrt()
+}
+
 /// A linear spring–dashpot contact law with stiffness k_n and the damping that gives a
 /// restitution e for every pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -130,8 +147,10 @@ impl PenaltyLaw {
 
     /// F_n = k_n δ − m_eff γ_n u_n, N, pushing the pair apart when > 0; for overlap `overlap`
     /// (δ, m), normal velocity `u_n` (m/s, < 0 approaching) and reduced mass `m_eff` (kg).
+    /// The same arithmetic as the world's contact force: [`spring_dashpot_force`] with
+    /// c_n = [`dashpot_coefficient`]`(k_n, ζ, 1/m_eff)`.
     pub fn normal_force(&self, overlap: f64, u_n: f64, m_eff: f64) -> f64 {
-        self.stiffness * overlap - m_eff * self.damping_rate(m_eff) * u_n
+        spring_dashpot_force(self.stiffness, dashpot_coefficient(self.stiffness, self.zeta, 1.0 / m_eff), overlap, u_n)
     }
 
     /// ω₀² = k_n (w_i + w_j), 1/s², of contact `c`, with `inv_mass` the inverse masses (1/kg;

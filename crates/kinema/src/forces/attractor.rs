@@ -73,6 +73,11 @@ impl Attractor {
 }
 
 impl Force for Attractor {
+    /// Uniform over the particles: holds no particle indices.
+    fn can_renumber(&self) -> bool {
+        true
+    }
+
     fn name(&self) -> &str {
         "attractor"
     }

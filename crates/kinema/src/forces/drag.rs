@@ -50,6 +50,11 @@ impl Drag {
 }
 
 impl Force for Drag {
+    /// Uniform over the particles: holds no particle indices.
+    fn can_renumber(&self) -> bool {
+        true
+    }
+
     fn name(&self) -> &str {
         "drag"
     }

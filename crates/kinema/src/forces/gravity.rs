@@ -58,6 +58,11 @@ impl Default for Gravity {
 }
 
 impl Force for Gravity {
+    /// Uniform over the particles: holds no particle indices.
+    fn can_renumber(&self) -> bool {
+        true
+    }
+
     fn name(&self) -> &str {
         "gravity"
     }

@@ -127,6 +127,20 @@ pub trait Force {
     fn linearize(&self, _s: &State, _definite: bool) -> Option<Box<dyn Linearized>> {
         None
     }
+
+    /// Whether the world may renumber the particles under this force (see
+    /// [`Force::renumber`]). The world keeps its particles in an order that follows space (a
+    /// Morton curve), re-sorted when its neighbour list is rebuilt, so that neighbours sit
+    /// near each other in memory; the user never sees that order. Default false, for a force
+    /// that knows particles by index and cannot follow: the world then keeps the user's order.
+    fn can_renumber(&self) -> bool {
+        false
+    }
+
+    /// Follows a renumbering of the particles: particle i is now particle `new_of_old[i]`.
+    /// Called only when [`Force::can_renumber`] says yes; a force without per-particle data
+    /// has nothing to do (the default).
+    fn renumber(&mut self, _new_of_old: &[u32]) {}
 }
 
 /// A force's Jacobian prepared at one state (see [`Force::linearize`]).

@@ -331,6 +331,18 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 impl Force for Springs {
+    fn can_renumber(&self) -> bool {
+        true
+    }
+
+    /// Each spring's ends follow their particles; the springs keep their order.
+    fn renumber(&mut self, new_of_old: &[u32]) {
+        for end in self.i.iter_mut().chain(self.j.iter_mut()) {
+            *end = new_of_old[*end] as usize;
+        }
+        self.min_particles = self.i.iter().chain(&self.j).map(|p| p + 1).max().unwrap_or(0);
+    }
+
     fn name(&self) -> &str {
         "spring"
     }

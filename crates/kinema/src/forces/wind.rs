@@ -48,6 +48,11 @@ impl Wind {
 }
 
 impl Force for Wind {
+    /// Uniform over the particles: holds no particle indices.
+    fn can_renumber(&self) -> bool {
+        true
+    }
+
     fn name(&self) -> &str {
         "wind"
     }

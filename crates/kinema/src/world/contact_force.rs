@@ -5,14 +5,19 @@
 //! pairs within r_i + r_j + skin (and the particles within the skin of a collider), kept until
 //! the particles have moved far enough that something left out could touch. Every evaluation
 //! tests what is listed exactly, so the contacts, and the forces, are those of a search at
-//! every evaluation, bit for bit. The potential energy summed during an evaluation is kept
-//! with its positions ([`EnergyMemo`]): the world's runaway-energy check, right after
-//! Verlet's evaluation at the step's end, reads it instead of finding the contacts again.
+//! every evaluation, bit for bit.
+//!
+//! The list is a full one (each pair listed from both sides) kept in chunks of
+//! [`CHUNK`] particles, so that the build and the force pass run on all threads with rayon and
+//! each particle's force is summed by one thread alone, in a fixed order: the result does not
+//! depend on the number of threads.
 
-use std::cell::RefCell;
+use std::sync::{Mutex, MutexGuard};
+
+use rayon::prelude::*;
 
 use super::collisions::on_periodic_wall;
-use crate::collide::{damping_ratio, pair_contact, Collider, Contact, Domain, Grid, Material, Pair, Partner};
+use crate::collide::{damping_ratio, dashpot_coefficient, pair_contact, spring_dashpot_force, Collider, Contact, Domain, Grid, Material, Partner};
 use crate::error::{CallbackError, Error};
 use crate::forces::{Force, SpringRates, State};
 
@@ -21,13 +26,13 @@ use crate::forces::{Force, SpringRates, State};
 /// The skin trades the pairs tested at every evaluation against how often the list is
 /// rebuilt: a thicker shell lists more pairs that do not touch, a thinner one is outlived
 /// sooner (the list lasts while the two particles that moved most have together moved less
-/// than s). In the granular settle of benchmarks/collisions_lammps.py (r = 5 mm, dt = 50 µs,
-/// falling at up to 2 m/s, 8,000 spheres: 16,000 listed pairs at the end) a build costs about
-/// 4 steps without one, and 0.2 r (LAMMPS's skin there, 0.1 d) was rebuilt 55 times in 1,500
-/// steps; 0.1 r, 0.3 r and 0.5 r measured 5–20 % slower per step (medians of 3 on a noisy
-/// 2-core machine), so the optimum is flat. A fraction of the radius keeps the choice independent of the units and
-/// of the size of the particles.
-pub(crate) const SKIN_PER_RADIUS: f64 = 0.2;
+/// than s). Measured on the granular gas of benchmarks/granular_gas.py (N = 103,823, density
+/// 0.3, T = 1, 500 steps, particle-steps/s with 1 and 2 threads): 0.2 r: 8.6e6 and 1.5e7;
+/// 0.6 r: 1.0e7 and 1.8e7; 1.0 r: 7.0e6 and 1.3e7. 0.6 r is LAMMPS's skin for that gas
+/// (0.3 d). In the denser granular settle of benchmarks/collisions_lammps.py the optimum
+/// was flat between 0.1 r and 0.5 r. A fraction of the radius keeps the choice independent
+/// of the units and of the size of the particles.
+pub(crate) const SKIN_PER_RADIUS: f64 = 0.6;
 
 /// Penalty contacts between particles and with colliders (the DEM way).
 ///
@@ -61,50 +66,21 @@ pub(crate) struct ContactForce {
     /// The largest |coordinate| of the colliders' points, centres and radii, m (for the
     /// neighbour list's rounding margin).
     collider_scale: f64,
-    scratch: RefCell<Scratch>,
+    /// Buffers kept between evaluations (a mutex, not a `RefCell`: the passes share `&self`
+    /// across threads).
+    scratch: Mutex<Scratch>,
 }
+
+/// Particles per chunk of the neighbour list and of the parallel passes over it. Fixed (not
+/// derived from the number of threads), so that sums over chunks are always the same sums.
+pub(crate) const CHUNK: usize = 2048;
 
 #[derive(Default)]
 struct Scratch {
     grid: Grid,
     list: NeighbourList,
-    /// The contact potential energy of the last force evaluation and its positions.
-    energy: EnergyMemo,
-}
-
-/// U = Σ ½ k_n δ² (J) at the positions `at` (empty: nothing remembered). It depends on the
-/// positions only, so the world's energy check right after Verlet's force evaluation, at the
-/// same positions, reads it here instead of finding the contacts again.
-#[derive(Default)]
-struct EnergyMemo {
-    at: Vec<f64>,
-    energy: f64,
-}
-
-impl EnergyMemo {
-    /// The energy remembered at positions `x`, if they are those, bit for bit.
-    fn at(&self, x: &[f64]) -> Option<f64> {
-        // The bits of each block of 8 are or-ed together (which vectorises) before a block
-        // is judged.
-        let same = !self.at.is_empty()
-            && self.at.len() == x.len()
-            && self
-                .at
-                .chunks(8)
-                .zip(x.chunks(8))
-                .all(|(a, b)| a.iter().zip(b).fold(0, |acc, (p, q)| acc | (p.to_bits() ^ q.to_bits())) == 0);
-        same.then_some(self.energy)
-    }
-
-    fn remember(&mut self, x: &[f64], energy: f64) {
-        self.at.clear();
-        self.at.extend_from_slice(x);
-        self.energy = energy;
-    }
-
-    fn forget(&mut self) {
-        self.at.clear();
-    }
+    /// Each chunk's share of the contact energy, J (kept to allocate nothing per evaluation).
+    chunk_energy: Vec<f64>,
 }
 
 impl ContactForce {
@@ -139,7 +115,7 @@ impl ContactForce {
             inv_mass,
             colliders,
             domain,
-            scratch: RefCell::new(Scratch::default()),
+            scratch: Mutex::new(Scratch::default()),
         }
     }
 
@@ -151,10 +127,31 @@ impl ContactForce {
         self
     }
 
+    /// Whether the neighbour list must be rebuilt before an evaluation at positions `x` (m,
+    /// 3 per particle): there is none, or the particles have moved too far since its build.
+    pub fn list_expired(&self, x: &[f64]) -> bool {
+        !self.scratch().list.holds(x, &self.domain)
+    }
+
+    /// The width of the cells the neighbour list searches, 2 r_max + skin, m.
+    pub fn reach(&self) -> f64 {
+        2.0 * self.radius.iter().fold(0.0, |m: f64, r| m.max(*r)) + self.skin
+    }
+
+    /// The domain (2D/3D, periodic axes).
+    pub fn domain(&self) -> &Domain {
+        &self.domain
+    }
+
+    /// The buffers (a panic in another evaluation leaves them usable: each build starts over).
+    fn scratch(&self) -> MutexGuard<'_, Scratch> {
+        self.scratch.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
     /// How many times the neighbour list was built so far.
     #[cfg(test)]
     fn list_builds(&self) -> usize {
-        self.scratch.borrow().list.builds
+        self.scratch().list.builds
     }
 
     /// Calls `each` with every contact at state `s`, in the order of a full search: particle
@@ -163,6 +160,145 @@ impl ContactForce {
     /// wall (box walls along periodic axes left out), as
     /// [`collider_contacts`](crate::collide::collider_contacts) lists them.
     fn for_each_contact(&self, s: &State, scratch: &mut Scratch, mut each: impl FnMut(&Contact)) -> Result<(), Error> {
+        self.update_list(s, scratch)?;
+        let list = &scratch.list;
+        let (x, v) = (s.x, s.v);
+        for (c, rows) in list.rows.iter().enumerate() {
+            for (l, i) in (c * CHUNK..).take(rows.len()).enumerate() {
+                for &j in rows.of(l) {
+                    if j as usize > i {
+                        if let Some(contact) = self.pair(i, j as usize, x, v) {
+                            each(&contact);
+                        }
+                    }
+                }
+            }
+        }
+        self.for_each_wall_contact(s, list, each);
+        Ok(())
+    }
+
+    /// The contact of particles i < j at (x, v), if they overlap: `pair_contact`, after its own
+    /// test |d|² < (r_i + r_j + 0)² with the same floating-point operations, inline (most
+    /// listed pairs do not touch, and are dropped here without a call).
+    #[inline]
+    fn pair(&self, i: usize, j: usize, x: &[f64], v: &[f64]) -> Option<Contact> {
+        let d = self
+            .domain
+            .displacement([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [x[3 * j], x[3 * j + 1], x[3 * j + 2]]);
+        let reach = self.radius[i] + self.radius[j] + 0.0;
+        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= reach * reach {
+            return None;
+        }
+        pair_contact(i, j, x, v, &self.radius, &self.domain, 0.0)
+    }
+
+    /// Calls `each` with every contact of a particle with a collider at `s`, particle by
+    /// particle, collider by collider (the list must hold at `s`).
+    fn for_each_wall_contact(&self, s: &State, list: &NeighbourList, mut each: impl FnMut(&Contact)) {
+        let (x, v, radius) = (s.x, s.v, &self.radius[..]);
+        for &(i, k) in &list.walls {
+            let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
+            self.colliders[k].for_each_touch(p, radius[i], 0.0, |t| {
+                let c = Contact {
+                    i,
+                    other: Partner::Collider(k),
+                    normal: t.normal,
+                    overlap: t.overlap,
+                    u_n: vi[0] * t.normal[0] + vi[1] * t.normal[1] + vi[2] * t.normal[2],
+                };
+                if !on_periodic_wall(&c, &self.colliders, &self.domain) {
+                    each(&c);
+                }
+            });
+        }
+    }
+
+    /// The pair forces at `s` added to `f` (N, 3 per particle), and the pairs' energy
+    /// Σ ½ k_n δ² (J). Chunk by chunk in parallel: particle i sums the forces of its listed
+    /// partners in ascending order of j, each pair's contact computed with the lower index
+    /// first, so i and j get F_n n and −F_n n to the bit; a pair's energy is counted by its
+    /// lower index, and the chunks' sums are added in chunk order. Without `f`, the energy only.
+    fn pair_pass(&self, s: &State, scratch: &mut Scratch, f: Option<&mut [f64]>) -> f64 {
+        let Scratch { list, chunk_energy, .. } = scratch;
+        let (x, v) = (s.x, s.v);
+        let chunk = |c: usize, rows: &Rows, mut fc: Option<&mut [f64]>| {
+            let mut energy = -0.0;
+            for (l, i) in (c * CHUNK..).take(rows.len()).enumerate() {
+                for &j in rows.of(l) {
+                    let j = j as usize;
+                    let (lo, hi) = if i < j { (i, j) } else { (j, i) };
+                    let Some(contact) = self.pair(lo, hi, x, v) else {
+                        continue;
+                    };
+                    if i == lo {
+                        if let Some(u) = self.spring_energy(&contact) {
+                            energy += u;
+                        }
+                    }
+                    let (Some(fc), Some(force)) = (fc.as_deref_mut(), self.normal_force(&contact)) else {
+                        continue;
+                    };
+                    for k in 0..3 {
+                        if i == lo {
+                            fc[3 * l + k] += force * contact.normal[k];
+                        } else {
+                            fc[3 * l + k] -= force * contact.normal[k];
+                        }
+                    }
+                }
+            }
+            energy
+        };
+        match f {
+            Some(f) => f
+                .par_chunks_mut(3 * CHUNK)
+                .zip(list.rows.par_iter())
+                .enumerate()
+                .map(|(c, (fc, rows))| chunk(c, rows, Some(fc)))
+                .collect_into_vec(chunk_energy),
+            None => list
+                .rows
+                .par_iter()
+                .enumerate()
+                .map(|(c, rows)| chunk(c, rows, None))
+                .collect_into_vec(chunk_energy),
+        }
+        chunk_energy.iter().fold(-0.0, |sum, u| sum + u)
+    }
+
+    /// The force of contact `c` along its normal, N (> 0 pushes apart), or `None` when it
+    /// exerts none (not overlapping, or both sides immovable).
+    #[inline]
+    fn normal_force(&self, c: &Contact) -> Option<f64> {
+        let w = self.inverse_mass_sum(c);
+        if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
+            return None;
+        }
+        Some(spring_dashpot_force(self.stiffness, self.dashpot(c, w), c.overlap, c.u_n))
+    }
+
+    /// ½ k_n δ² of contact `c` if it counts in the potential energy (overlapping, with a
+    /// movable particle), J.
+    #[inline]
+    fn spring_energy(&self, c: &Contact) -> Option<f64> {
+        (c.overlap > 0.0 && self.inverse_mass_sum(c) > 0.0).then_some(0.5 * self.stiffness * c.overlap * c.overlap)
+    }
+
+    /// U = Σ ½ k_n δ² at the positions of `s` (J), summed as the force evaluation sums it.
+    fn potential_at(&self, s: &State, scratch: &mut Scratch) -> Result<f64, Error> {
+        self.update_list(s, scratch)?;
+        let mut energy = self.pair_pass(s, scratch, None);
+        self.for_each_wall_contact(s, &scratch.list, |c| {
+            if let Some(u) = self.spring_energy(c) {
+                energy += u;
+            }
+        });
+        Ok(energy)
+    }
+
+    /// Checks the state's lengths and makes the neighbour list hold at its positions.
+    fn update_list(&self, s: &State, scratch: &mut Scratch) -> Result<(), Error> {
         let n = self.radius.len();
         for (name, len) in [("x", s.x.len()), ("v", s.v.len())] {
             if len != 3 * n {
@@ -182,72 +318,7 @@ impl ContactForce {
             &self.domain,
             self.skin,
             self.collider_scale,
-        )?;
-        let (x, v, radius) = (s.x, s.v, &self.radius[..]);
-        for &(i, j) in &list.pairs {
-            // `pair_contact`'s own test, |d|² < (r_i + r_j + 0)², the same floating-point
-            // operations: most listed pairs do not touch, and are dropped here without a call.
-            let d = self
-                .domain
-                .displacement([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [x[3 * j], x[3 * j + 1], x[3 * j + 2]]);
-            let reach = radius[i] + radius[j] + 0.0;
-            if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= reach * reach {
-                continue;
-            }
-            if let Some(c) = pair_contact(i, j, x, v, radius, &self.domain, 0.0) {
-                each(&c);
-            }
-        }
-        for &(i, k) in &list.walls {
-            let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
-            self.colliders[k].for_each_touch(p, radius[i], 0.0, |t| {
-                let c = Contact {
-                    i,
-                    other: Partner::Collider(k),
-                    normal: t.normal,
-                    overlap: t.overlap,
-                    u_n: vi[0] * t.normal[0] + vi[1] * t.normal[1] + vi[2] * t.normal[2],
-                };
-                if !on_periodic_wall(&c, &self.colliders, &self.domain) {
-                    each(&c);
-                }
-            });
-        }
-        Ok(())
-    }
-
-    /// The force of contact `c` along its normal, N (> 0 pushes apart), or `None` when it
-    /// exerts none (not overlapping, or both sides immovable).
-    #[inline]
-    fn normal_force(&self, c: &Contact) -> Option<f64> {
-        let w = self.inverse_mass_sum(c);
-        if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
-            return None;
-        }
-        Some(self.stiffness * c.overlap - self.dashpot(c, w) * c.u_n)
-    }
-
-    /// ½ k_n δ² of contact `c` if it counts in the potential energy (overlapping, with a
-    /// movable particle), J.
-    #[inline]
-    fn spring_energy(&self, c: &Contact) -> Option<f64> {
-        (c.overlap > 0.0 && self.inverse_mass_sum(c) > 0.0).then_some(0.5 * self.stiffness * c.overlap * c.overlap)
-    }
-
-    /// U = Σ ½ k_n δ² at the positions of `s` (J): remembered from the last force evaluation
-    /// when that was at the same positions, bit for bit, else summed over the contacts now.
-    fn potential_at(&self, s: &State, scratch: &mut Scratch) -> Result<f64, Error> {
-        if let Some(u) = scratch.energy.at(s.x) {
-            return Ok(u);
-        }
-        // Summed in the contacts' order from −0.0, as `Iterator::sum` does.
-        let mut energy = -0.0;
-        self.for_each_contact(s, scratch, |c| {
-            if let Some(u) = self.spring_energy(c) {
-                energy += u;
-            }
-        })?;
-        Ok(energy)
+        )
     }
 
     /// w_i + w_j of a contact.
@@ -259,7 +330,7 @@ impl ContactForce {
     fn dashpot(&self, c: &Contact, w: f64) -> f64 {
         match self.damping {
             Some(gamma) => gamma / w,
-            None => 2.0 * self.ratios.of(c) * (self.stiffness / w).sqrt(),
+            None => dashpot_coefficient(self.stiffness, self.ratios.of(c), w),
         }
     }
 }
@@ -357,8 +428,9 @@ fn collider_scale(c: &Collider) -> f64 {
 /// still exact.)
 #[derive(Default)]
 struct NeighbourList {
-    /// The candidate particle pairs, sorted by (i, j).
-    pairs: Vec<Pair>,
+    /// Each chunk of [`CHUNK`] particles' partners, ascending (a full list: a pair is listed
+    /// from both sides).
+    rows: Vec<Rows>,
     /// The candidate (particle, collider) pairs, sorted.
     walls: Vec<(usize, usize)>,
     /// Positions at the build, m (empty: no list).
@@ -367,6 +439,27 @@ struct NeighbourList {
     allowance: f64,
     /// Builds so far.
     builds: usize,
+}
+
+/// The partners of one chunk's particles, compressed: particle l of the chunk has
+/// `partners[start[l]..start[l + 1]]`.
+#[derive(Default)]
+struct Rows {
+    start: Vec<u32>,
+    partners: Vec<u32>,
+}
+
+impl Rows {
+    /// Particles in the chunk.
+    fn len(&self) -> usize {
+        self.start.len().saturating_sub(1)
+    }
+
+    /// The partners of the chunk's particle `l`.
+    #[inline]
+    fn of(&self, l: usize) -> &[u32] {
+        &self.partners[self.start[l] as usize..self.start[l + 1] as usize]
+    }
 }
 
 impl NeighbourList {
@@ -383,24 +476,51 @@ impl NeighbourList {
         skin: f64,
         collider_scale: f64,
     ) -> Result<(), Error> {
-        if self.built_at.len() == x.len() && self.holds(x, domain) {
+        if self.holds(x, domain) {
             return Ok(());
         }
         self.built_at.clear(); // no list until the build succeeds (non-finite positions fail)
-        grid.find_pairs(x, radius, domain, skin, &mut self.pairs)?;
+        let n = radius.len();
+        if n > u32::MAX as usize {
+            return Err(Error::invalid(
+                "particles",
+                n,
+                format!("at most {} with spring-dashpot contacts", u32::MAX),
+            ));
+        }
+        let searched = grid.prepare(x, radius, domain, skin)?;
+        // The rows, chunk by chunk on all threads; each particle's row depends on the
+        // positions only, so the list is the same for any number of threads.
+        self.rows.resize_with(n.div_ceil(CHUNK), Rows::default);
+        let grid = &*grid;
+        self.rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
+            let (start, partners) = (&mut rows.start, &mut rows.partners);
+            start.clear();
+            partners.clear();
+            start.push(0);
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                if searched {
+                    let xi = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
+                    grid.partners(i, xi, radius[i], domain, skin, partners);
+                }
+                start.push(partners.len() as u32);
+            }
+        });
         self.walls.clear();
-        for (i, &r) in radius.iter().enumerate() {
-            let p = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
-            for (k, c) in colliders.iter().enumerate() {
-                let mut near = false;
-                c.for_each_touch(p, r, skin, |_| near = true);
-                if near {
-                    self.walls.push((i, k));
+        if !colliders.is_empty() {
+            for (i, &r) in radius.iter().enumerate() {
+                let p = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
+                for (k, c) in colliders.iter().enumerate() {
+                    let mut near = false;
+                    c.for_each_touch(p, r, skin, |_| near = true);
+                    if near {
+                        self.walls.push((i, k));
+                    }
                 }
             }
         }
         self.built_at.extend_from_slice(x);
-        let largest = |a: &[f64]| a.iter().fold(0.0, |m: f64, c| m.max(c.abs()));
+        let largest = |a: &[f64]| a.par_iter().map(|c| c.abs()).reduce(|| 0.0, f64::max);
         let periods = domain
             .periodic_box()
             .map_or(0.0, |p| (0..3).filter(|&k| p.axes()[k]).map(|k| p.period(k)).sum());
@@ -410,25 +530,74 @@ impl NeighbourList {
         Ok(())
     }
 
-    /// Whether the two largest displacements since the build sum to less than the allowance
-    /// (false for non-finite positions, which then go to the grid and its error).
+    /// Whether there is a list and the two largest displacements since its build sum to less
+    /// than the allowance (false for non-finite positions, which then go to the grid and its
+    /// error). Chunk by chunk in parallel; the two largest of all are the two largest of
+    /// the chunks' two largest, whatever the order they are combined in.
     fn holds(&self, x: &[f64], domain: &Domain) -> bool {
-        let (mut first, mut second) = (0.0_f64, 0.0_f64); // squared, first ≥ second
-        for (p, q) in x.chunks_exact(3).zip(self.built_at.chunks_exact(3)) {
-            let a = domain.displacement([p[0], p[1], p[2]], [q[0], q[1], q[2]]);
-            let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-            if a2 > second {
-                if a2 > first {
-                    second = first;
-                    first = a2;
-                } else {
-                    second = a2;
-                }
-            } else if a2.is_nan() {
-                return false;
-            }
+        if self.built_at.len() != x.len() || x.is_empty() {
+            return false;
         }
-        first.sqrt() + second.sqrt() < self.allowance
+        type Top = Option<(f64, f64)>; // squared, first ≥ second; None: a NaN was met
+        let add = |top: Top, a2: f64| -> Top {
+            let (first, second) = top?;
+            if a2.is_nan() {
+                None
+            } else if a2 > first {
+                Some((a2, first))
+            } else {
+                Some((first, second.max(a2)))
+            }
+        };
+        let top = x
+            .par_chunks(3 * CHUNK)
+            .zip(self.built_at.par_chunks(3 * CHUNK))
+            .map(|(xc, bc)| {
+                xc.chunks_exact(3).zip(bc.chunks_exact(3)).fold(Some((0.0, 0.0)), |top, (p, q)| {
+                    let a = domain.displacement([p[0], p[1], p[2]], [q[0], q[1], q[2]]);
+                    add(top, a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+                })
+            })
+            .reduce(|| Some((0.0, 0.0)), |a, b| b.and_then(|(f, s)| add(add(a, f), s)));
+        top.is_some_and(|(first, second)| first.sqrt() + second.sqrt() < self.allowance)
+    }
+
+    /// Follows a renumbering of the particles, `new_of_old[i]` the new index of particle i:
+    /// rows, partners, walls and the build's positions move with their particles (the list
+    /// stays the same list, in the new numbering).
+    fn renumber(&mut self, new_of_old: &[u32], old_of_new: &[u32]) {
+        if self.built_at.is_empty() {
+            return;
+        }
+        let n = new_of_old.len();
+        let old = std::mem::take(&mut self.rows);
+        let mut rows: Vec<Rows> = Vec::new();
+        rows.resize_with(n.div_ceil(CHUNK), Rows::default);
+        rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
+            rows.start.clear();
+            rows.partners.clear();
+            rows.start.push(0);
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                let o = old_of_new[i] as usize;
+                let first = rows.partners.len();
+                rows.partners.extend(old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]));
+                rows.partners[first..].sort_unstable();
+                rows.start.push(rows.partners.len() as u32);
+            }
+        });
+        self.rows = rows;
+        for w in &mut self.walls {
+            w.0 = new_of_old[w.0] as usize;
+        }
+        self.walls.sort_unstable();
+        let built: Vec<f64> = old_of_new
+            .iter()
+            .flat_map(|&o| {
+                let o = o as usize;
+                [self.built_at[3 * o], self.built_at[3 * o + 1], self.built_at[3 * o + 2]]
+            })
+            .collect();
+        self.built_at = built;
     }
 }
 
@@ -437,41 +606,57 @@ impl Force for ContactForce {
         "contact"
     }
 
-    /// The contact forces at `s`; their potential energy is summed on the way and remembered
-    /// with the positions (see [`EnergyMemo`]).
+    /// The contact forces at `s`: particle pairs on all threads, then colliders.
     fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
-        let scratch = &mut *self.scratch.borrow_mut();
-        scratch.energy.forget();
-        // Summed in the contacts' order from −0.0, as `Iterator::sum` and `potential_at` do.
-        let mut energy = -0.0;
-        self.for_each_contact(s, scratch, |c| {
-            if let Some(u) = self.spring_energy(c) {
-                energy += u;
-            }
-            let Some(force) = self.normal_force(c) else {
-                return;
-            };
-            for k in 0..3 {
-                f[3 * c.i + k] += force * c.normal[k];
-                if let Some(j) = c.partner_particle() {
-                    f[3 * j + k] -= force * c.normal[k];
+        let mut scratch = std::mem::take(&mut *self.scratch());
+        let result = self.update_list(s, &mut scratch);
+        if result.is_ok() {
+            self.pair_pass(s, &mut scratch, Some(f));
+            self.for_each_wall_contact(s, &scratch.list, |c| {
+                if let Some(force) = self.normal_force(c) {
+                    for k in 0..3 {
+                        f[3 * c.i + k] += force * c.normal[k];
+                    }
                 }
-            }
-        })?;
-        scratch.energy.remember(s.x, energy);
-        Ok(())
+            });
+        }
+        *self.scratch() = scratch;
+        Ok(result?)
     }
 
     // No `validate`: the world rebuilds this force whenever its particles change.
 
-    /// U = Σ ½ k_n δ² over the overlapping contacts, J. At the positions of the last force
-    /// evaluation (Verlet's, then the world's energy check) it is the one summed there.
+    /// U = Σ ½ k_n δ² over the overlapping contacts, J.
     fn potential_energy(&self, s: &State) -> Option<f64> {
-        self.potential_at(s, &mut self.scratch.borrow_mut()).ok()
+        self.potential_at(s, &mut self.scratch()).ok()
     }
 
     fn depends_on_velocity(&self) -> bool {
         true
+    }
+
+    fn can_renumber(&self) -> bool {
+        true
+    }
+
+    /// Radii, inverse masses, materials and the neighbour list follow their particles.
+    fn renumber(&mut self, new_of_old: &[u32]) {
+        let mut old_of_new = vec![0u32; new_of_old.len()];
+        for (old, &new) in new_of_old.iter().enumerate() {
+            old_of_new[new as usize] = old as u32;
+        }
+        fn gather<T: Copy>(a: &[T], old_of_new: &[u32]) -> Vec<T> {
+            old_of_new.iter().map(|&o| a[o as usize]).collect()
+        }
+        self.radius = gather(&self.radius, &old_of_new);
+        self.inv_mass = gather(&self.inv_mass, &old_of_new);
+        if let Some(own) = &self.own {
+            self.own = Some(gather(own, &old_of_new));
+        }
+        if let Some(p) = &self.ratios.particles {
+            self.ratios.particles = Some(gather(p, &old_of_new));
+        }
+        self.scratch().list.renumber(new_of_old, &old_of_new);
     }
 
     fn is_internal(&self) -> bool {
@@ -489,7 +674,7 @@ impl Force for ContactForce {
     fn rate_bound(&self, s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
         let mut k_row = vec![0.0; inv_mass.len()];
         let mut c_row = vec![0.0; inv_mass.len()];
-        self.for_each_contact(s, &mut self.scratch.borrow_mut(), |c| {
+        self.for_each_contact(s, &mut self.scratch(), |c| {
             let w = self.inverse_mass_sum(c);
             if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
                 return;
@@ -857,8 +1042,8 @@ mod tests {
             vec![1.0; 3],
             vec![],
             Domain::open(3).unwrap(),
-        );
-        assert_eq!(force.skin, 0.2 * 0.1);
+        )
+        .with_skin(0.02);
         let scene = Scene {
             force,
             x,
@@ -871,10 +1056,10 @@ mod tests {
     }
 
     #[test]
-    fn the_remembered_energy_is_that_of_the_same_positions_only() {
-        // U after a force evaluation at x is the one summed there; at other positions (one
-        // coordinate an ulp or a micrometre away) it is found again, and matches the
-        // exhaustive reference.
+    fn the_energy_is_that_of_the_positions_asked_about() {
+        // U at x after a force evaluation there is the reference's; at other positions (a
+        // particle of an overlapping pair a micrometre away) it is found again, not the last
+        // evaluation's.
         let mut rng = Rng::new(5);
         let (x, v, radius, mass, inv_mass) = gas(&mut rng, 200, 0.06, [0.0; 3], [0.5; 3], &Domain::open(3).unwrap(), false, 1.0);
         let mut force = ContactForce::new(
@@ -898,11 +1083,6 @@ mod tests {
         let u = force.potential_energy(&s).unwrap();
         assert!(u > 0.0);
         assert_eq!(u.to_bits(), reference(&force, &s).1.to_bits());
-        // one coordinate one ulp away: the memo does not answer
-        let mut x1 = x.clone();
-        x1[7] = f64::from_bits(x1[7].to_bits() + 1);
-        assert_eq!(force.scratch.borrow().energy.at(&x), Some(u));
-        assert_eq!(force.scratch.borrow().energy.at(&x1), None);
         // a particle of an overlapping pair a micrometre away: found again
         let mut pairs = Vec::new();
         all_pairs(&x, &force.radius, &force.domain, 0.0, &mut pairs).unwrap();
@@ -913,7 +1093,7 @@ mod tests {
         let u2 = force.potential_energy(&s2).unwrap();
         assert_eq!(u2.to_bits(), reference(&force, &s2).1.to_bits());
         assert_ne!(u2.to_bits(), u.to_bits(), "a moved overlap changes U");
-        // a failed evaluation forgets: NaN positions are an error, and so is U there
+        // NaN positions are an error, and so is U there
         let mut bad = x.clone();
         bad[4] = f64::NAN;
         let s3 = State { x: &bad, ..s };
@@ -932,7 +1112,7 @@ mod tests {
         let x = [0.0, 0.0, 0.0, 1.5e-3, 0.0, 0.0];
         list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
         assert!(list.allowance < 2e-4 && list.allowance > 2e-4 * (1.0 - 1e-10));
-        assert_eq!(list.pairs, vec![(0, 1)]);
+        assert_eq!((list.rows[0].of(0), list.rows[0].of(1)), (&[1][..], &[0][..]), "listed from both sides");
         list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
         assert_eq!(list.builds, 1, "nothing moved");
         let far = [1e9, 0.0, 0.0, 1e9 + 1.5e-3, 0.0, 0.0];

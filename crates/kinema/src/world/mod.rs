@@ -5,6 +5,7 @@ mod collisions;
 mod contact_force;
 mod dynamics;
 mod implicit;
+mod order;
 
 pub use advisor::Rates;
 pub use collisions::{CollisionParams, CollisionStats, ContactModel};
@@ -18,17 +19,25 @@ use crate::ode::explicit_rk::ExplicitRk;
 use crate::ode::stepper::{first_non_finite, Stats, StepFailure, Stepper, Termination};
 use crate::ode::symplectic_euler::SymplecticEuler;
 use crate::ode::system::{FirstOrderForm, OdeSystem, SecondOrderSystem};
-use crate::ode::verlet::Verlet;
 use crate::ode::{self, Integrator, Method, MethodKind, SolveOptions};
 use crate::particles::Particles;
 use collisions::CollisionStage;
-use contact_force::ContactForce;
+use contact_force::{ContactForce, CHUNK};
+use rayon::prelude::*;
+use std::cell::RefCell;
+use std::rc::Rc;
 use dynamics::Dynamics;
 use implicit::BaraffWitkin;
 
 /// The energy may grow by this many times its reference scale before a step counts as a
 /// runaway (see [`World::step`]).
 pub const RUNAWAY_FACTOR: f64 = 1e3;
+
+/// The runaway-energy check runs at every this many steps (steps 10, 20, ...), not at every
+/// step: the energy needs a pass over the particles and, with spring–dashpot contacts, over
+/// the contacts, which would cost as much as a force evaluation per step. A runaway grows
+/// over many steps, and a step that overflows is refused at once by the non-finite check.
+pub const RUNAWAY_CHECK_EVERY: u64 = 10;
 
 /// Parameters of a world. Units SI.
 #[derive(Debug, Clone, PartialEq)]
@@ -53,6 +62,8 @@ impl Default for WorldParams {
 
 /// The stepper a world keeps between steps (so that a method's cache survives).
 enum WorldStepper {
+    /// Velocity Verlet on the particles' own arrays (see [`VerletBuffers`]).
+    Verlet(Box<VerletBuffers>),
     SecondOrder(Box<dyn for<'a> Stepper<dyn SecondOrderSystem + 'a>>),
     FirstOrder(Box<dyn for<'a> Stepper<dyn OdeSystem + 'a>>),
     /// rk45 substeps adaptively inside each world step.
@@ -66,7 +77,7 @@ impl WorldStepper {
         match method {
             Integrator::Tableau(t) => WorldStepper::FirstOrder(Box::new(ExplicitRk::new(t.clone(), 2 * n))),
             Integrator::Named(m) => match m.kind() {
-                MethodKind::SecondOrder if *m == Method::Verlet => WorldStepper::SecondOrder(Box::new(Verlet::new(n))),
+                MethodKind::SecondOrder if *m == Method::Verlet => WorldStepper::Verlet(Box::default()),
                 MethodKind::SecondOrder => WorldStepper::SecondOrder(Box::new(SymplecticEuler::new(n))),
                 MethodKind::ExplicitRk => WorldStepper::FirstOrder(Box::new(ExplicitRk::new(
                     m.tableau().expect("explicit methods have tableaux"),
@@ -77,6 +88,26 @@ impl WorldStepper {
             },
         }
     }
+}
+
+/// Velocity Verlet's acceleration a_n at the current state, kept from the last step's end
+/// (first same as last), and the next one's buffer; the world's `x_next`, `v_next` hold the
+/// new state until the step is accepted. The scheme (and why the dashpot sees the Euler
+/// predictor v + h a) is that of `ode/verlet.rs`, bit for bit:
+///
+/// ```text
+///   x' = x + h v + h²/2 a,   v' = v + h a          (drift and predictor, one pass)
+///   a' = F(t + h, x', v') / m                       (the force evaluation)
+///   v' = v + h/2 (a + a')                           (the two half kicks, one pass)
+/// ```
+///
+/// Nothing is joined, split or copied: the accepted step swaps buffers.
+#[derive(Default)]
+struct VerletBuffers {
+    a: Vec<f64>,
+    a_next: Vec<f64>,
+    /// `a` holds the acceleration at the current state.
+    fresh: bool,
 }
 
 /// Particles, forces, an integrator, a time step and the time.
@@ -90,13 +121,21 @@ pub struct World {
     stepper: Option<WorldStepper>,
     y: Vec<f64>,
     y_next: Vec<f64>,
+    /// The state a step produces, m and m/s (3 per particle); swapped in when accepted.
+    x_next: Vec<f64>,
+    v_next: Vec<f64>,
     force: Vec<f64>,
     /// The energy reference of the runaway check; `None` until the next step sets it.
     watch: Option<EnergyWatch>,
     /// Stages 2–4, when collisions are on.
     collisions: Option<CollisionStage>,
-    /// Index in `forces` of the spring–dashpot contact force, with that model.
+    /// Index in `forces` of the spring–dashpot contact force, with that model, and the
+    /// force itself (shared: the world asks it when its list expires and sorts by it).
     contact_force: Option<usize>,
+    contact: Option<Rc<RefCell<ContactForce>>>,
+    /// The particles' order: `Some(user_of)` while they are sorted along space, with
+    /// `user_of[i]` the user's index of particle i (see `order.rs`); `None` in the user's order.
+    sorted: Option<Vec<u32>>,
     /// The contact force must be rebuilt before the next step (particles changed).
     contact_dirty: bool,
     /// Wall-clock time spent in each stage so far.
@@ -140,10 +179,14 @@ impl World {
             stepper: None,
             y: Vec::new(),
             y_next: Vec::new(),
+            x_next: Vec::new(),
+            v_next: Vec::new(),
             force: Vec::new(),
             watch: None,
             collisions: None,
             contact_force: None,
+            contact: None,
+            sorted: None,
             contact_dirty: false,
             times: StageTimes::default(),
         })
@@ -325,6 +368,29 @@ impl World {
     /// errors that are large only against a tiny S₀: forward Euler in free fall from rest adds
     /// ½ m g² h² per step, a fraction 1/(2n) of S after n steps.
     pub fn step(&mut self) -> Result<(), Error> {
+        self.advance(1)
+    }
+
+    /// Advances the world by `n` steps of [`World::step`]; stops at the first refused one,
+    /// keeping the state before it.
+    ///
+    /// Inside, with spring–dashpot contacts and velocity Verlet, the particles are kept in
+    /// an order that follows space (re-sorted whenever the neighbour list is rebuilt, see
+    /// `order.rs`); `advance` puts them back in the user's order before it returns, so every
+    /// method of the world, and every force, callback and file, sees the user's order.
+    pub fn advance(&mut self, n: u64) -> Result<(), Error> {
+        let mut result = Ok(());
+        for _ in 0..n {
+            result = self.step_once();
+            if result.is_err() {
+                break;
+            }
+        }
+        self.restore_user_order();
+        result
+    }
+
+    fn step_once(&mut self) -> Result<(), Error> {
         if self.contact_dirty {
             self.rebuild_contact_force()?;
         }
@@ -335,14 +401,16 @@ impl World {
             }
         }
         let start = std::time::Instant::now();
-        self.integrate()?; // 1: the integrated state, in y_next
+        self.integrate()?; // 1: the integrated state, in x_next, v_next
         let integrated = std::time::Instant::now();
-        self.collide()?; // 2–4: detect, respond, distribute, on y_next
+        self.collide()?; // 2–4: detect, respond, distribute, on x_next, v_next
         self.times.integrate += integrated - start;
         self.times.collide += integrated.elapsed();
-        let n = 3 * self.particles.len();
-        if n > 0 {
-            FirstOrderForm::split(&self.y_next, n, &mut self.particles.x, &mut self.particles.v);
+        // Accepted: the new state becomes the particles' own (a swap, not a copy).
+        std::mem::swap(&mut self.particles.x, &mut self.x_next);
+        std::mem::swap(&mut self.particles.v, &mut self.v_next);
+        if let Some(WorldStepper::Verlet(b)) = &mut self.stepper {
+            std::mem::swap(&mut b.a, &mut b.a_next);
         }
         self.time = self.params_time_after(self.steps + 1);
         self.steps += 1;
@@ -354,18 +422,127 @@ impl World {
         k as f64 * self.params.dt
     }
 
-    /// Stage 1: integrate positions and velocities over one step.
+    /// Stage 1: integrate positions and velocities over one step, into `x_next`, `v_next`.
     fn integrate(&mut self) -> Result<(), Error> {
         let n = 3 * self.particles.len();
+        self.x_next.resize(n, 0.0);
+        self.v_next.resize(n, 0.0);
         if n == 0 {
             return Ok(());
         }
+        let method = self.params.method.clone();
+        let stepper = self.stepper.get_or_insert_with(|| WorldStepper::new(&method, n));
+        if matches!(stepper, WorldStepper::Verlet(_)) {
+            self.verlet()?;
+        } else {
+            self.integrate_joined()?;
+        }
+        if self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0 {
+            self.check_runaway()?;
+        }
+        Ok(())
+    }
+
+    /// Velocity Verlet on the particles' arrays (see [`VerletBuffers`]): drift and predictor
+    /// in one parallel pass, the force evaluation (after sorting the particles along space
+    /// when the contact force's neighbour list must be rebuilt), the two half kicks in one
+    /// parallel pass that also finds a non-finite value.
+    fn verlet(&mut self) -> Result<(), Error> {
+        let n = 3 * self.particles.len();
+        let (t, h) = (self.time, self.params.dt);
+        let Some(WorldStepper::Verlet(mut b)) = self.stepper.take() else {
+            unreachable!("called for verlet only")
+        };
+        let result = (|| {
+            if !b.fresh || b.a.len() != n {
+                b.a.resize(n, 0.0);
+                let p = &self.particles;
+                let mut dynamics = Dynamics {
+                    forces: &mut self.forces,
+                    mass: &p.mass,
+                    inv_mass: &p.inv_mass,
+                    dim: self.params.dim,
+                    force: &mut self.force,
+                };
+                dynamics.accel(t, &p.x, &p.v, &mut b.a)?;
+                self.stats.nfev += 1;
+                b.fresh = true;
+            }
+            let p = &self.particles;
+            let a = &b.a;
+            self.x_next
+                .par_chunks_mut(3 * CHUNK)
+                .zip(self.v_next.par_chunks_mut(3 * CHUNK))
+                .enumerate()
+                .for_each(|(c, (xn, vn))| {
+                    let base = 3 * CHUNK * c;
+                    for k in 0..xn.len() {
+                        let (x, v, a) = (p.x[base + k], p.v[base + k], a[base + k]);
+                        xn[k] = x + (h * v + 0.5 * h * h * a);
+                        vn[k] = v + h * a;
+                    }
+                });
+            // With spring–dashpot contacts, wrapped into the periodic cell before the force
+            // evaluation, so that the kept acceleration is that of the state kept (collide's
+            // wrap then changes nothing). The impulse model's continuous detection needs the
+            // unwrapped drift, and wraps after its impacts.
+            if let Some(cell) = self.collisions.as_ref().and_then(|c| c.domain.periodic_box()) {
+                if self.contact.is_some() {
+                    cell.wrap_positions(&mut self.x_next);
+                }
+            }
+            if self.sortable() && self.contact.as_ref().is_some_and(|c| c.borrow().list_expired(&self.x_next)) {
+                self.sort_along_space(&mut b.a);
+            }
+            b.a_next.resize(n, 0.0);
+            let p = &self.particles;
+            let mut dynamics = Dynamics {
+                forces: &mut self.forces,
+                mass: &p.mass,
+                inv_mass: &p.inv_mass,
+                dim: self.params.dim,
+                force: &mut self.force,
+            };
+            dynamics.accel(t + h, &self.x_next, &self.v_next, &mut b.a_next)?;
+            self.stats.nfev += 1;
+            b.fresh = true; // a_next, the next step's a once accepted
+            let (a, a_next) = (&b.a, &b.a_next);
+            let bad = self
+                .v_next
+                .par_chunks_mut(3 * CHUNK)
+                .zip(self.x_next.par_chunks(3 * CHUNK))
+                .enumerate()
+                .map(|(c, (vn, xn))| {
+                    let base = 3 * CHUNK * c;
+                    let mut bad = None;
+                    for k in 0..vn.len() {
+                        vn[k] = p.v[base + k] + 0.5 * h * (a[base + k] + a_next[base + k]);
+                        if bad.is_none() && !(vn[k].is_finite() && xn[k].is_finite()) {
+                            bad = Some(base + k);
+                        }
+                    }
+                    bad
+                })
+                .min();
+            Ok::<_, Error>(bad.flatten())
+        })();
+        self.stepper = Some(WorldStepper::Verlet(b));
+        match result? {
+            Some(index) => Err(self.diverged(Divergence::NonFinite, Some(index / 3))),
+            None => Ok(()),
+        }
+    }
+
+    /// Stage 1 for the other methods, on the joined state [x, v] (their steppers work on one
+    /// vector): joined into `y`, stepped into `y_next`, split into `x_next`, `v_next`.
+    fn integrate_joined(&mut self) -> Result<(), Error> {
+        let n = 3 * self.particles.len();
         let (t, h) = (self.time, self.params.dt);
         let p = &mut self.particles;
         self.y.resize(2 * n, 0.0);
         self.y_next.resize(2 * n, 0.0);
         FirstOrderForm::join(&p.x, &p.v, n, &mut self.y);
-        let stepper = self.stepper.get_or_insert_with(|| WorldStepper::new(&self.params.method, n));
+        let stepper = self.stepper.as_mut().expect("made by integrate");
         let mut dynamics = Dynamics {
             forces: &mut self.forces,
             mass: &p.mass,
@@ -374,6 +551,7 @@ impl World {
             force: &mut self.force,
         };
         let outcome = match stepper {
+            WorldStepper::Verlet(_) => unreachable!("verlet steps the particles' arrays"),
             WorldStepper::SecondOrder(s) => s.step(&mut dynamics, t, &self.y, h, &mut self.y_next, &mut self.stats),
             WorldStepper::FirstOrder(s) => {
                 let mut first = FirstOrderForm::new(&mut dynamics);
@@ -414,25 +592,31 @@ impl World {
             let particle = (index % n) / 3; // y_next = [x, v]
             return Err(self.diverged(Divergence::NonFinite, Some(particle)));
         }
-        if let Some(watch) = self.watch {
-            let (x_next, v_next) = self.y_next.split_at(n);
-            let (energy, scale) = self.energy_and_scale(x_next, v_next);
-            if energy - watch.energy > RUNAWAY_FACTOR * watch.scale + 0.5 * scale {
-                let fastest = self.fastest(v_next);
-                let reason = Divergence::RunawayEnergy {
-                    energy,
-                    reference: watch.energy,
-                    scale: watch.scale,
-                };
-                return Err(self.diverged(reason, fastest));
-            }
+        FirstOrderForm::split(&self.y_next, n, &mut self.x_next, &mut self.v_next);
+        Ok(())
+    }
+
+    /// The runaway-energy check of [`World::step`] on the integrated state.
+    fn check_runaway(&mut self) -> Result<(), Error> {
+        let Some(watch) = self.watch else {
+            return Ok(());
+        };
+        let (energy, scale) = self.energy_and_scale(&self.x_next, &self.v_next);
+        if energy - watch.energy > RUNAWAY_FACTOR * watch.scale + 0.5 * scale {
+            let fastest = self.fastest(&self.v_next);
+            let reason = Divergence::RunawayEnergy {
+                energy,
+                reference: watch.energy,
+                scale: watch.scale,
+            };
+            return Err(self.diverged(reason, fastest));
         }
         Ok(())
     }
 
-    /// Stages 2–4 on the integrated state in `y_next` (a no-op without collisions): impacts
-    /// inside the step and contacts at its end get Newton's restitution impulses, equal and
-    /// opposite on the two particles (see [`CollisionParams`]).
+    /// Stages 2–4 on the integrated state in `x_next`, `v_next` (a no-op without collisions):
+    /// impacts inside the step and contacts at its end get Newton's restitution impulses,
+    /// equal and opposite on the two particles (see [`CollisionParams`]).
     fn collide(&mut self) -> Result<(), Error> {
         let n = 3 * self.particles.len();
         let Some(stage) = self.collisions.as_mut() else {
@@ -446,12 +630,12 @@ impl World {
             // keeping positions in the periodic cell.
             stage.clear_step();
             if let Some(p) = stage.domain.periodic_box() {
-                p.wrap_positions(&mut self.y_next[..n]);
+                p.wrap_positions(&mut self.x_next);
             }
             return Ok(());
         }
         let p = &self.particles;
-        let (x1, v1) = self.y_next.split_at_mut(n);
+        let (x1, v1) = (&mut self.x_next[..], &mut self.v_next[..]);
         let changed = stage.run(&p.x, &p.v, x1, v1, &p.radius, &p.inv_mass, &p.mass, self.params.dt)?;
         if changed {
             // A method's cache (Verlet's last acceleration) holds F at the integrated state;
@@ -467,7 +651,10 @@ impl World {
                     .is_some_and(|r| r.omega_squared == 0.0 && r.damping_rate == 0.0)
             });
             if !uniform {
-                self.stepper = None;
+                match &mut self.stepper {
+                    Some(WorldStepper::Verlet(b)) => b.fresh = false, // a_next is stale; keep the buffers
+                    _ => self.stepper = None,
+                }
             }
         }
         Ok(())
@@ -500,12 +687,13 @@ impl World {
             (None, Some(k)) => {
                 self.forces.remove(k);
                 self.contact_force = None;
+                self.contact = None;
             }
             (Some((stiffness, damping)), index) => {
                 let stage = self.collisions.as_ref().expect("collisions are on");
                 let (global, own) = stage.materials_parts();
                 let p = &self.particles;
-                let force = Box::new(ContactForce::new(
+                let contact = Rc::new(RefCell::new(ContactForce::new(
                     stiffness,
                     damping,
                     global,
@@ -514,7 +702,9 @@ impl World {
                     p.inv_mass.clone(),
                     stage.colliders.clone(),
                     stage.domain,
-                ));
+                )));
+                let force = Box::new(order::SharedContact(contact.clone()));
+                self.contact = Some(contact);
                 match index {
                     Some(k) => self.forces[k] = force,
                     None => {
@@ -699,6 +889,7 @@ impl World {
     /// The error of a refused step, with the advisor's step at the kept state.
     fn diverged(&mut self, reason: Divergence, particle: Option<usize>) -> Error {
         self.stepper = None;
+        let particle = particle.map(|i| self.sorted.as_ref().map_or(i, |user_of| user_of[i] as usize));
         let method = self.params.method.clone();
         let advised_dt = self.stable_step(&method).ok().filter(|h| h.is_finite());
         Error::Diverged {
