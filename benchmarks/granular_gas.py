@@ -237,7 +237,9 @@ def plot(rows: list[tuple], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for name, t in sorted({(r[0], r[1]) for r in rows}):
         pts = sorted((r[2], 1e9 / r[4]) for r in rows if r[0] == name and r[1] == t)
-        ax.plot(*zip(*pts), marker="o", ls="-" if name == "kinema" else "--", label=f"{name}, {t} {'thread' if name == 'kinema' else 'rank'}{'s' if t > 1 else ''}")
+        ax.plot(
+            *zip(*pts), marker="o", ls="-" if name == "kinema" else "--", label=f"{name}, {t} {'thread' if name == 'kinema' else 'rank'}{'s' if t > 1 else ''}"
+        )
     ax.set_xscale("log")
     ax.set_xlabel("particles N")
     ax.set_ylabel("wall time per particle-step (ns)")

@@ -306,6 +306,11 @@ impl PyWorld {
     fn time(&self) -> f64 {
         self.inner.time()
     }
+    /// How many times the engine sorted the particles along space (internal; for tests).
+    #[getter]
+    fn sorts(&self) -> u64 {
+        self.inner.sorts()
+    }
     #[getter]
     fn steps(&self) -> u64 {
         self.inner.steps()

@@ -6,8 +6,8 @@
 //! touch through two images at once (r_i + r_j + margin > L/2) only the nearest one counts.
 
 use super::vec3;
-use rayon::prelude::*;
 use crate::error::Error;
+use rayon::prelude::*;
 
 /// A box [lo, hi) whose opposite faces are identified along the axes marked periodic.
 ///

@@ -150,7 +150,12 @@ impl PenaltyLaw {
     /// The same arithmetic as the world's contact force: [`spring_dashpot_force`] with
     /// c_n = [`dashpot_coefficient`]`(k_n, ζ, 1/m_eff)`.
     pub fn normal_force(&self, overlap: f64, u_n: f64, m_eff: f64) -> f64 {
-        spring_dashpot_force(self.stiffness, dashpot_coefficient(self.stiffness, self.zeta, 1.0 / m_eff), overlap, u_n)
+        spring_dashpot_force(
+            self.stiffness,
+            dashpot_coefficient(self.stiffness, self.zeta, 1.0 / m_eff),
+            overlap,
+            u_n,
+        )
     }
 
     /// ω₀² = k_n (w_i + w_j), 1/s², of contact `c`, with `inv_mass` the inverse masses (1/kg;

@@ -17,7 +17,9 @@ use std::sync::{Mutex, MutexGuard};
 use rayon::prelude::*;
 
 use super::collisions::on_periodic_wall;
-use crate::collide::{damping_ratio, dashpot_coefficient, pair_contact, spring_dashpot_force, Collider, Contact, Domain, Grid, Material, Partner};
+use crate::collide::{
+    damping_ratio, dashpot_coefficient, pair_contact, spring_dashpot_force, Collider, Contact, Domain, Grid, Material, Partner,
+};
 use crate::error::{CallbackError, Error};
 use crate::forces::{Force, SpringRates, State};
 
@@ -196,22 +198,118 @@ impl ContactForce {
     /// Calls `each` with every contact of a particle with a collider at `s`, particle by
     /// particle, collider by collider (the list must hold at `s`).
     fn for_each_wall_contact(&self, s: &State, list: &NeighbourList, mut each: impl FnMut(&Contact)) {
-        let (x, v, radius) = (s.x, s.v, &self.radius[..]);
         for &(i, k) in &list.walls {
-            let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
-            self.colliders[k].for_each_touch(p, radius[i], 0.0, |t| {
-                let c = Contact {
-                    i,
-                    other: Partner::Collider(k),
-                    normal: t.normal,
-                    overlap: t.overlap,
-                    u_n: vi[0] * t.normal[0] + vi[1] * t.normal[1] + vi[2] * t.normal[2],
-                };
-                if !on_periodic_wall(&c, &self.colliders, &self.domain) {
-                    each(&c);
-                }
-            });
+            self.wall_contacts(i, k, s.x, s.v, &mut each);
         }
+    }
+
+    /// Calls `each` with the contacts of particle i with collider k at (x, v) (a box's walls
+    /// along periodic axes left out).
+    #[inline]
+    fn wall_contacts(&self, i: usize, k: usize, x: &[f64], v: &[f64], mut each: impl FnMut(&Contact)) {
+        let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
+        self.colliders[k].for_each_touch(p, self.radius[i], 0.0, |t| {
+            let c = Contact {
+                i,
+                other: Partner::Collider(k),
+                normal: t.normal,
+                overlap: t.overlap,
+                u_n: vi[0] * t.normal[0] + vi[1] * t.normal[1] + vi[2] * t.normal[2],
+            };
+            if !on_periodic_wall(&c, &self.colliders, &self.domain) {
+                each(&c);
+            }
+        });
+    }
+
+    /// Velocity Verlet's force evaluation and closing kick fused into one parallel pass over
+    /// the particles (see `VerletBuffers` in `world/mod.rs`): for each particle i,
+    ///
+    /// ```text
+    ///   F_i  = other_i + Σ_j contact forces (pairs, then colliders: as `accumulate` sums them)
+    ///   a'_i = F_i / m_i           (into `a`, which held a_i: only i reads its own a_i)
+    ///   v_i  ← v_i + h/2 (a_i + a'_i)   (into `v_out`)
+    /// ```
+    ///
+    /// at the drifted state `s` (x', and the predictor v' that the dashpot sees), with
+    /// `v` the velocities at the step's start, `other` the other forces' sum (N; `None`: none),
+    /// `inv_mass` (0 pinned) and `flat` (2D: a_z = 0). Saves the separate passes that clear the
+    /// force buffer, turn it into accelerations and kick. Returns the first non-finite
+    /// coordinate of x' or of the new velocities, if any.
+    #[allow(clippy::too_many_arguments)]
+    pub fn verlet_force_and_kick(
+        &self,
+        s: &State,
+        other: Option<&[f64]>,
+        inv_mass: &[f64],
+        flat: bool,
+        h: f64,
+        v: &[f64],
+        a: &mut [f64],
+        v_out: &mut [f64],
+    ) -> Result<Option<usize>, Error> {
+        let mut scratch = self.scratch();
+        self.update_list(s, &mut scratch)?;
+        let list = &scratch.list;
+        let (x, vp) = (s.x, s.v);
+        let bad = a
+            .par_chunks_mut(3 * CHUNK)
+            .zip(v_out.par_chunks_mut(3 * CHUNK))
+            .zip(list.rows.par_iter())
+            .enumerate()
+            .map(|(c, ((ac, vc), rows))| {
+                let first = c * CHUNK;
+                // this chunk's wall candidates (sorted by particle)
+                let w0 = list.walls.partition_point(|w| w.0 < first);
+                let w1 = list.walls.partition_point(|w| w.0 < first + rows.len());
+                let mut walls = list.walls[w0..w1].iter().peekable();
+                let mut bad = None;
+                for (l, i) in (first..).take(rows.len()).enumerate() {
+                    let mut f = match other {
+                        Some(o) => [o[3 * i], o[3 * i + 1], o[3 * i + 2]],
+                        None => [0.0; 3],
+                    };
+                    for &j in rows.of(l) {
+                        let j = j as usize;
+                        let (lo, hi) = if i < j { (i, j) } else { (j, i) };
+                        let Some(contact) = self.pair(lo, hi, x, vp) else {
+                            continue;
+                        };
+                        let Some(force) = self.normal_force(&contact) else {
+                            continue;
+                        };
+                        for k in 0..3 {
+                            if i == lo {
+                                f[k] += force * contact.normal[k];
+                            } else {
+                                f[k] -= force * contact.normal[k];
+                            }
+                        }
+                    }
+                    while let Some(&(_, k)) = walls.next_if(|w| w.0 == i) {
+                        self.wall_contacts(i, k, x, vp, |contact| {
+                            if let Some(force) = self.normal_force(contact) {
+                                for (fk, nk) in f.iter_mut().zip(contact.normal) {
+                                    *fk += force * nk;
+                                }
+                            }
+                        });
+                    }
+                    let w = inv_mass[i];
+                    for k in 0..3 {
+                        let a_new = if flat && k == 2 { 0.0 } else { f[k] * w };
+                        let q = 3 * l + k;
+                        vc[q] = v[3 * i + k] + 0.5 * h * (ac[q] + a_new);
+                        ac[q] = a_new;
+                        if bad.is_none() && !(vc[q].is_finite() && x[3 * i + k].is_finite()) {
+                            bad = Some(3 * i + k);
+                        }
+                    }
+                }
+                bad
+            })
+            .min();
+        Ok(bad.flatten())
     }
 
     /// The pair forces at `s` added to `f` (N, 3 per particle), and the pairs' energy
@@ -553,10 +651,12 @@ impl NeighbourList {
             .par_chunks(3 * CHUNK)
             .zip(self.built_at.par_chunks(3 * CHUNK))
             .map(|(xc, bc)| {
-                xc.chunks_exact(3).zip(bc.chunks_exact(3)).fold(Some((0.0, 0.0)), |top, (p, q)| {
-                    let a = domain.displacement([p[0], p[1], p[2]], [q[0], q[1], q[2]]);
-                    add(top, a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
-                })
+                xc.chunks_exact(3)
+                    .zip(bc.chunks_exact(3))
+                    .fold(Some((0.0, 0.0)), |top, (p, q)| {
+                        let a = domain.displacement([p[0], p[1], p[2]], [q[0], q[1], q[2]]);
+                        add(top, a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+                    })
             })
             .reduce(|| Some((0.0, 0.0)), |a, b| b.and_then(|(f, s)| add(add(a, f), s)));
         top.is_some_and(|(first, second)| first.sqrt() + second.sqrt() < self.allowance)
@@ -580,7 +680,8 @@ impl NeighbourList {
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 let o = old_of_new[i] as usize;
                 let first = rows.partners.len();
-                rows.partners.extend(old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]));
+                rows.partners
+                    .extend(old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]));
                 rows.partners[first..].sort_unstable();
                 rows.start.push(rows.partners.len() as u32);
             }
@@ -1112,7 +1213,11 @@ mod tests {
         let x = [0.0, 0.0, 0.0, 1.5e-3, 0.0, 0.0];
         list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
         assert!(list.allowance < 2e-4 && list.allowance > 2e-4 * (1.0 - 1e-10));
-        assert_eq!((list.rows[0].of(0), list.rows[0].of(1)), (&[1][..], &[0][..]), "listed from both sides");
+        assert_eq!(
+            (list.rows[0].of(0), list.rows[0].of(1)),
+            (&[1][..], &[0][..]),
+            "listed from both sides"
+        );
         list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
         assert_eq!(list.builds, 1, "nothing moved");
         let far = [1e9, 0.0, 0.0, 1e9 + 1.5e-3, 0.0, 0.0];

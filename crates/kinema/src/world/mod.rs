@@ -23,11 +23,11 @@ use crate::ode::{self, Integrator, Method, MethodKind, SolveOptions};
 use crate::particles::Particles;
 use collisions::CollisionStage;
 use contact_force::{ContactForce, CHUNK};
+use dynamics::Dynamics;
+use implicit::BaraffWitkin;
 use rayon::prelude::*;
 use std::cell::RefCell;
 use std::rc::Rc;
-use dynamics::Dynamics;
-use implicit::BaraffWitkin;
 
 /// The energy may grow by this many times its reference scale before a step counts as a
 /// runaway (see [`World::step`]).
@@ -136,6 +136,8 @@ pub struct World {
     /// The particles' order: `Some(user_of)` while they are sorted along space, with
     /// `user_of[i]` the user's index of particle i (see `order.rs`); `None` in the user's order.
     sorted: Option<Vec<u32>>,
+    /// Sorts along space so far.
+    sorts: u64,
     /// The contact force must be rebuilt before the next step (particles changed).
     contact_dirty: bool,
     /// Wall-clock time spent in each stage so far.
@@ -187,6 +189,7 @@ impl World {
             contact_force: None,
             contact: None,
             sorted: None,
+            sorts: 0,
             contact_dirty: false,
             times: StageTimes::default(),
         })
@@ -225,10 +228,19 @@ impl World {
         Ok(range)
     }
 
-    /// Adds a force, checked against the current particles.
+    /// Adds a force, checked against the current particles (before the spring–dashpot contact
+    /// force, which is always the last one).
     pub fn add_force(&mut self, force: Box<dyn Force>) -> Result<(), Error> {
         force.validate(self.particles.len())?;
-        self.forces.push(force);
+        // The spring–dashpot contact force stays last: Verlet's fused pass adds it after the
+        // sum of the others, the order in which the forces are summed everywhere else.
+        match self.contact_force {
+            Some(k) => {
+                self.forces.insert(k, force);
+                self.contact_force = Some(k + 1);
+            }
+            None => self.forces.push(force),
+        }
         self.reset_caches();
         Ok(())
     }
@@ -275,6 +287,12 @@ impl World {
     /// Work counters of all steps so far (force evaluations in `nfev`).
     pub fn stats(&self) -> Stats {
         self.stats
+    }
+
+    /// How many times the particles were sorted along space inside the engine (see
+    /// [`World::advance`]); 0 where the world keeps the user's order.
+    pub fn sorts(&self) -> u64 {
+        self.sorts
     }
 
     /// Wall-clock time spent in each stage of the steps so far.
@@ -496,6 +514,45 @@ impl World {
             }
             b.a_next.resize(n, 0.0);
             let p = &self.particles;
+            if let Some(contact) = &self.contact {
+                // The contact force and the closing kick in one pass, the other forces first.
+                let others = self.contact_force.map_or(self.forces.len(), |_| self.forces.len() - 1);
+                let s1 = State {
+                    t: t + h,
+                    x: &self.x_next,
+                    v: &self.v_next,
+                    mass: &p.mass,
+                };
+                let other = if others > 0 {
+                    self.force.clear();
+                    self.force.resize(n, 0.0);
+                    for (k, f) in self.forces.iter_mut().enumerate() {
+                        if Some(k) != self.contact_force {
+                            f.accumulate(&s1, &mut self.force)?;
+                        }
+                    }
+                    Some(&self.force[..])
+                } else {
+                    None
+                };
+                // a becomes a' and v_next... holds v'; the new velocities go to a_next's buffer,
+                // swapped into place below.
+                let bad = contact.borrow().verlet_force_and_kick(
+                    &s1,
+                    other,
+                    &p.inv_mass,
+                    self.params.dim == 2,
+                    h,
+                    &p.v,
+                    &mut b.a,
+                    &mut b.a_next,
+                )?;
+                std::mem::swap(&mut b.a, &mut b.a_next); // a_next = a'
+                std::mem::swap(&mut b.a, &mut self.v_next); // v_next = v(t + h); a = spare
+                self.stats.nfev += 1;
+                b.fresh = true;
+                return Ok::<_, Error>(bad);
+            }
             let mut dynamics = Dynamics {
                 forces: &mut self.forces,
                 mass: &p.mass,

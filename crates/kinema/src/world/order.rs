@@ -170,6 +170,7 @@ impl World {
         };
         self.permute(&old_of_new, a);
         self.sorted = Some(user_of);
+        self.sorts += 1;
     }
 
     /// Puts the particles back in the user's order, if they are sorted.
