@@ -185,7 +185,7 @@ def compare(args: argparse.Namespace, lmp: str | None) -> int:
         tk, tl = runs["kinema"][0]["temps"], runs["LAMMPS"][0]["temps"]
         print(f"\nsame work: the gas cools (T(t)/T(0), every {PRINT_EVERY} steps; tolerance {TOL_COOLING:g} relative, N >= 1e5)")
         print(f"{'step':>6} {'kinema':>9} {'LAMMPS':>9} {'rel. diff':>10}")
-        for k, (a, b) in enumerate(zip(tk, tl)):
+        for k, (a, b) in enumerate(zip(tk, tl, strict=True)):
             ra, rb = a / tk[0], b / tl[0]
             diff = abs(ra - rb) / rb
             print(f"{k * PRINT_EVERY:>6} {ra:>9.4f} {rb:>9.4f} {diff:>10.2e}")
@@ -238,7 +238,7 @@ def plot(rows: list[tuple], path: Path) -> None:
     for name, t in sorted({(r[0], r[1]) for r in rows}):
         pts = sorted((r[2], 1e9 / r[4]) for r in rows if r[0] == name and r[1] == t)
         ax.plot(
-            *zip(*pts), marker="o", ls="-" if name == "kinema" else "--", label=f"{name}, {t} {'thread' if name == 'kinema' else 'rank'}{'s' if t > 1 else ''}"
+            *zip(*pts, strict=True), marker="o", ls="-" if name == "kinema" else "--", label=f"{name}, {t} {'thread' if name == 'kinema' else 'rank'}{'s' if t > 1 else ''}"
         )
     ax.set_xscale("log")
     ax.set_xlabel("particles N")

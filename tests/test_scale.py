@@ -3,16 +3,12 @@ engine's space-filling-curve order of the particles invisible from outside."""
 
 from __future__ import annotations
 
-import hashlib
-import math
 import os
 import subprocess
 import sys
 import textwrap
 
 import numpy as np
-
-import kinema
 
 # The granular gas of benchmarks/granular_gas.py (LAMMPS's granular_gas.in), small: 17³ = 4,913
 # particles, more than the 4,096 from which the engine sorts them and more than two chunks
