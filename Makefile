@@ -60,6 +60,10 @@ bench: build $(TEST_STAMP)
 	$(PY) benchmarks/viewer.py
 	command -v lmp >/dev/null || apt-get install -y -q lammps >/dev/null || echo "LAMMPS could not be installed: the collision benchmark will say so and skip"
 	$(PY) benchmarks/collisions_lammps.py
+	$(PY) benchmarks/granular_gas.py --ncell 47 --steps 1000 --threads 2
+	$(PY) benchmarks/granular_gas.py --ncell 47 --steps 1000 --threads 2 --model impulse --repeat 1
+	$(PY) benchmarks/granular_gas.py --sizes --repeat 1
+	$(PY) benchmarks/springs.py
 
 pictures: build
 	$(PY) docs/pictures.py docs/img
