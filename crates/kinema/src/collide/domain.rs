@@ -79,7 +79,10 @@ impl Periodic {
     pub fn min_image(&self, d: [f64; 3]) -> [f64; 3] {
         let mut out = d;
         for k in 0..3 {
-            if self.axes[k] {
+            // Within half a period, d/L rounds to 0 (0.5 itself ties to even, 0) and d stays
+            // as it is: the formula's result, bit for bit, without its arithmetic. That is
+            // nearly every pair of a neighbour search.
+            if self.axes[k] && d[k].abs() > 0.5 * self.period(k) {
                 out[k] = d[k] - self.period(k) * nearest_integer(d[k] * self.inv_period[k]);
             }
         }

@@ -195,6 +195,17 @@ impl ContactForce {
         pair_contact(i, j, x, v, &self.radius, &self.domain, 0.0)
     }
 
+    /// Whether particles i and j overlap at `x`, tested from i's side with x_i already loaded:
+    /// the same operations as [`ContactForce::pair`]'s test of the pair (lower index first),
+    /// bit for bit, since x_i − x_j = −(x_j − x_i) exactly, the minimum image is odd and the
+    /// squares and r_i + r_j do not care about the order.
+    #[inline]
+    fn overlaps(&self, xi: [f64; 3], ri: f64, j: usize, x: &[f64]) -> bool {
+        let d = self.domain.displacement(xi, [x[3 * j], x[3 * j + 1], x[3 * j + 2]]);
+        let reach = ri + self.radius[j] + 0.0;
+        d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach
+    }
+
     /// Calls `each` with every contact of a particle with a collider at `s`, particle by
     /// particle, collider by collider (the list must hold at `s`).
     fn for_each_wall_contact(&self, s: &State, list: &NeighbourList, mut each: impl FnMut(&Contact)) {
@@ -269,10 +280,14 @@ impl ContactForce {
                         Some(o) => [o[3 * i], o[3 * i + 1], o[3 * i + 2]],
                         None => [0.0; 3],
                     };
+                    let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
                     for &j in rows.of(l) {
                         let j = j as usize;
+                        if !self.overlaps(xi, ri, j, x) {
+                            continue;
+                        }
                         let (lo, hi) = if i < j { (i, j) } else { (j, i) };
-                        let Some(contact) = self.pair(lo, hi, x, vp) else {
+                        let Some(contact) = pair_contact(lo, hi, x, vp, &self.radius, &self.domain, 0.0) else {
                             continue;
                         };
                         let Some(force) = self.normal_force(&contact) else {
@@ -323,10 +338,14 @@ impl ContactForce {
         let chunk = |c: usize, rows: &Rows, mut fc: Option<&mut [f64]>| {
             let mut energy = -0.0;
             for (l, i) in (c * CHUNK..).take(rows.len()).enumerate() {
+                let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
                 for &j in rows.of(l) {
                     let j = j as usize;
+                    if !self.overlaps(xi, ri, j, x) {
+                        continue;
+                    }
                     let (lo, hi) = if i < j { (i, j) } else { (j, i) };
-                    let Some(contact) = self.pair(lo, hi, x, v) else {
+                    let Some(contact) = pair_contact(lo, hi, x, v, &self.radius, &self.domain, 0.0) else {
                         continue;
                     };
                     if i == lo {
@@ -636,30 +655,31 @@ impl NeighbourList {
         if self.built_at.len() != x.len() || x.is_empty() {
             return false;
         }
-        type Top = Option<(f64, f64)>; // squared, first ≥ second; None: a NaN was met
-        let add = |top: Top, a2: f64| -> Top {
-            let (first, second) = top?;
-            if a2.is_nan() {
-                None
-            } else if a2 > first {
-                Some((a2, first))
-            } else {
-                Some((first, second.max(a2)))
-            }
+        // (first, second, nan): the two largest squared displacements, first ≥ second, and
+        // whether a NaN was met (which `max` would pass over).
+        let top = |a: (f64, f64, bool), b: (f64, f64, bool)| {
+            let first = a.0.max(b.0);
+            let second = a.0.min(b.0).max(a.1).max(b.1);
+            (first, second, a.2 || b.2)
         };
-        let top = x
+        let (first, second, nan) = x
             .par_chunks(3 * CHUNK)
             .zip(self.built_at.par_chunks(3 * CHUNK))
             .map(|(xc, bc)| {
-                xc.chunks_exact(3)
-                    .zip(bc.chunks_exact(3))
-                    .fold(Some((0.0, 0.0)), |top, (p, q)| {
-                        let a = domain.displacement([p[0], p[1], p[2]], [q[0], q[1], q[2]]);
-                        add(top, a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
-                    })
+                let (mut first, mut second, mut nan) = (0.0_f64, 0.0_f64, false);
+                for (p, q) in xc.chunks_exact(3).zip(bc.chunks_exact(3)) {
+                    let a = domain.displacement([p[0], p[1], p[2]], [q[0], q[1], q[2]]);
+                    let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+                    nan |= a2.is_nan();
+                    if a2 > second {
+                        second = a2.min(first);
+                        first = first.max(a2);
+                    }
+                }
+                (first, second, nan)
             })
-            .reduce(|| Some((0.0, 0.0)), |a, b| b.and_then(|(f, s)| add(add(a, f), s)));
-        top.is_some_and(|(first, second)| first.sqrt() + second.sqrt() < self.allowance)
+            .reduce(|| (0.0, 0.0, false), top);
+        !nan && first.sqrt() + second.sqrt() < self.allowance
     }
 
     /// Follows a renumbering of the particles, `new_of_old[i]` the new index of particle i:

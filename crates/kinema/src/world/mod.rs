@@ -486,6 +486,16 @@ impl World {
                 self.stats.nfev += 1;
                 b.fresh = true;
             }
+            // With spring–dashpot contacts in a periodic cell, x' is wrapped into the cell in
+            // the same pass, before the force evaluation, so that the kept acceleration is
+            // that of the state kept (collide's wrap then changes nothing). The impulse
+            // model's continuous detection needs the unwrapped drift, and wraps after its
+            // impacts.
+            let cell = self
+                .collisions
+                .as_ref()
+                .and_then(|c| c.domain.periodic_box())
+                .filter(|_| self.contact.is_some());
             let p = &self.particles;
             let a = &b.a;
             self.x_next
@@ -499,16 +509,17 @@ impl World {
                         xn[k] = x + (h * v + 0.5 * h * h * a);
                         vn[k] = v + h * a;
                     }
+                    if let Some(cell) = cell {
+                        let (lo, hi, axes) = (cell.lo(), cell.hi(), cell.axes());
+                        for q in xn.chunks_exact_mut(3) {
+                            for (k, c) in q.iter_mut().enumerate() {
+                                if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
+                                    *c = cell.wrap_coordinate(k, *c);
+                                }
+                            }
+                        }
+                    }
                 });
-            // With spring–dashpot contacts, wrapped into the periodic cell before the force
-            // evaluation, so that the kept acceleration is that of the state kept (collide's
-            // wrap then changes nothing). The impulse model's continuous detection needs the
-            // unwrapped drift, and wraps after its impacts.
-            if let Some(cell) = self.collisions.as_ref().and_then(|c| c.domain.periodic_box()) {
-                if self.contact.is_some() {
-                    cell.wrap_positions(&mut self.x_next);
-                }
-            }
             if self.sortable() && self.contact.as_ref().is_some_and(|c| c.borrow().list_expired(&self.x_next)) {
                 self.sort_along_space(&mut b.a);
             }
