@@ -503,11 +503,11 @@ impl World {
                 .zip(self.v_next.par_chunks_mut(3 * CHUNK))
                 .enumerate()
                 .for_each(|(c, (xn, vn))| {
-                    let base = 3 * CHUNK * c;
-                    for k in 0..xn.len() {
-                        let (x, v, a) = (p.x[base + k], p.v[base + k], a[base + k]);
-                        xn[k] = x + (h * v + 0.5 * h * h * a);
-                        vn[k] = v + h * a;
+                    let chunk = 3 * CHUNK * c..3 * CHUNK * c + xn.len();
+                    let (x, v, a) = (&p.x[chunk.clone()], &p.v[chunk.clone()], &a[chunk]);
+                    for ((((xn, vn), x), v), a) in xn.iter_mut().zip(vn.iter_mut()).zip(x).zip(v).zip(a) {
+                        *xn = x + (h * v + 0.5 * h * h * a);
+                        *vn = v + h * a;
                     }
                     if let Some(cell) = cell {
                         let (lo, hi, axes) = (cell.lo(), cell.hi(), cell.axes());
