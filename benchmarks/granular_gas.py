@@ -25,6 +25,7 @@ agree to the noise of N particles). The cooled fraction T(t)/T(0) of the two is 
 each print, to TOL_COOLING; exit status 1 when they disagree (never on timings).
 
 `--sizes` prints a scaling table instead: N = 10³, 10⁴, 10⁵, 10⁶ (and 10⁷ with `--large`),
+300 steps each,
 kinema with 1 and 2 threads (and LAMMPS with 1 and 2 ranks when present): particle-steps/s,
 ns per particle-step, and peak resident memory per particle (the whole process's peak RSS
 over N; at small N the interpreter's ~60 MB dominates), and writes a plot of the cost per
@@ -68,6 +69,7 @@ PRINT_EVERY = 100
 TOL_COOLING = 0.03  # |T_k/T_k(0) − T_l/T_l(0)| over T_l/T_l(0) at each print (N ≥ 10⁵)
 SIZES = [10, 22, 47, 100]  # ncell: N = 1,000, 10,648, 103,823, 1,000,000
 LARGE = 216  # N = 10,077,696
+SIZES_STEPS = 300  # steps per run of the scaling table: 100 of free flight, then contacts
 
 
 # -- kinema ------------------------------------------------------------------------------------
@@ -202,7 +204,9 @@ def sizes(args: argparse.Namespace, lmp: str | None) -> int:
     rows = []
     for ncell in ncells:
         n = ncell**3
-        steps = int(min(args.steps, max(50, 1e8 // n)))  # about 10⁸ particle-steps per run at most
+        # The same steps at every N (the lattice starts with no contact: the first ~100 steps
+        # are free flight, so fewer steps at large N would time a different mix of work).
+        steps = min(args.steps, SIZES_STEPS)
         reps = args.repeat if n < 10**7 else 1
         engines = [("kinema", t) for t in (1, 2)] + ([("LAMMPS", t) for t in (1, 2)] if lmp else [])
         got: dict[tuple[str, int], list[dict]] = {e: [] for e in engines}

@@ -195,6 +195,24 @@ impl ContactForce {
         pair_contact(i, j, x, v, &self.radius, &self.domain, 0.0)
     }
 
+    /// Calls `each(contact, first)` with the contact of particle i with each listed partner j
+    /// it overlaps at (x, v), in the row's order; the contact is computed with the lower index
+    /// first (`first`: i is that one), so both sides of a pair see the same numbers.
+    #[inline]
+    fn for_each_partner_contact(&self, i: usize, partners: &[u32], x: &[f64], v: &[f64], mut each: impl FnMut(&Contact, bool)) {
+        let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
+        for &j in partners {
+            let j = j as usize;
+            if !self.overlaps(xi, ri, j, x) {
+                continue;
+            }
+            let (lo, hi) = if i < j { (i, j) } else { (j, i) };
+            if let Some(contact) = pair_contact(lo, hi, x, v, &self.radius, &self.domain, 0.0) {
+                each(&contact, i == lo);
+            }
+        }
+    }
+
     /// Whether particles i and j overlap at `x`, tested from i's side with x_i already loaded:
     /// the same operations as [`ContactForce::pair`]'s test of the pair (lower index first),
     /// bit for bit, since x_i − x_j = −(x_j − x_i) exactly, the minimum image is odd and the
@@ -280,27 +298,17 @@ impl ContactForce {
                         Some(o) => [o[3 * i], o[3 * i + 1], o[3 * i + 2]],
                         None => [0.0; 3],
                     };
-                    let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
-                    for &j in rows.of(l) {
-                        let j = j as usize;
-                        if !self.overlaps(xi, ri, j, x) {
-                            continue;
-                        }
-                        let (lo, hi) = if i < j { (i, j) } else { (j, i) };
-                        let Some(contact) = pair_contact(lo, hi, x, vp, &self.radius, &self.domain, 0.0) else {
-                            continue;
-                        };
-                        let Some(force) = self.normal_force(&contact) else {
-                            continue;
-                        };
-                        for k in 0..3 {
-                            if i == lo {
-                                f[k] += force * contact.normal[k];
-                            } else {
-                                f[k] -= force * contact.normal[k];
+                    self.for_each_partner_contact(i, rows.of(l), x, vp, |contact, first| {
+                        if let Some(force) = self.normal_force(contact) {
+                            for k in 0..3 {
+                                if first {
+                                    f[k] += force * contact.normal[k];
+                                } else {
+                                    f[k] -= force * contact.normal[k];
+                                }
                             }
                         }
-                    }
+                    });
                     while let Some(&(_, k)) = walls.next_if(|w| w.0 == i) {
                         self.wall_contacts(i, k, x, vp, |contact| {
                             if let Some(force) = self.normal_force(contact) {
@@ -338,32 +346,23 @@ impl ContactForce {
         let chunk = |c: usize, rows: &Rows, mut fc: Option<&mut [f64]>| {
             let mut energy = -0.0;
             for (l, i) in (c * CHUNK..).take(rows.len()).enumerate() {
-                let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
-                for &j in rows.of(l) {
-                    let j = j as usize;
-                    if !self.overlaps(xi, ri, j, x) {
-                        continue;
-                    }
-                    let (lo, hi) = if i < j { (i, j) } else { (j, i) };
-                    let Some(contact) = pair_contact(lo, hi, x, v, &self.radius, &self.domain, 0.0) else {
-                        continue;
-                    };
-                    if i == lo {
-                        if let Some(u) = self.spring_energy(&contact) {
+                self.for_each_partner_contact(i, rows.of(l), x, v, |contact, first| {
+                    if first {
+                        if let Some(u) = self.spring_energy(contact) {
                             energy += u;
                         }
                     }
-                    let (Some(fc), Some(force)) = (fc.as_deref_mut(), self.normal_force(&contact)) else {
-                        continue;
+                    let (Some(fc), Some(force)) = (fc.as_deref_mut(), self.normal_force(contact)) else {
+                        return;
                     };
                     for k in 0..3 {
-                        if i == lo {
+                        if first {
                             fc[3 * l + k] += force * contact.normal[k];
                         } else {
                             fc[3 * l + k] -= force * contact.normal[k];
                         }
                     }
-                }
+                });
             }
             energy
         };

@@ -16,7 +16,24 @@ pub(crate) struct Dynamics<'a> {
     pub force: &'a mut Vec<f64>,
 }
 
-impl Dynamics<'_> {
+impl<'a> Dynamics<'a> {
+    /// The dynamics of `particles` under `forces` in `dim` dimensions, with `force` as the
+    /// buffer of the summed forces.
+    pub fn new(
+        forces: &'a mut [Box<dyn Force>],
+        particles: &'a crate::particles::Particles,
+        dim: usize,
+        force: &'a mut Vec<f64>,
+    ) -> Self {
+        Dynamics {
+            forces,
+            mass: &particles.mass,
+            inv_mass: &particles.inv_mass,
+            dim,
+            force,
+        }
+    }
+
     /// Sums every force at (t, x, v) into `self.force`, N.
     pub fn total_force(&mut self, t: f64, x: &[f64], v: &[f64]) -> Result<(), CallbackError> {
         self.force.clear();

@@ -317,13 +317,7 @@ impl World {
     /// The accelerations a = F/m now, m/s² (3 per particle).
     pub fn accelerations(&mut self) -> Result<Vec<f64>, Error> {
         let p = &self.particles;
-        let mut dynamics = Dynamics {
-            forces: &mut self.forces,
-            mass: &p.mass,
-            inv_mass: &p.inv_mass,
-            dim: self.params.dim,
-            force: &mut self.force,
-        };
+        let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
         let mut a = vec![0.0; p.x.len()];
         dynamics.accel(self.time, &p.x, &p.v, &mut a)?;
         Ok(a)
@@ -475,13 +469,7 @@ impl World {
             if !b.fresh || b.a.len() != n {
                 b.a.resize(n, 0.0);
                 let p = &self.particles;
-                let mut dynamics = Dynamics {
-                    forces: &mut self.forces,
-                    mass: &p.mass,
-                    inv_mass: &p.inv_mass,
-                    dim: self.params.dim,
-                    force: &mut self.force,
-                };
+                let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
                 dynamics.accel(t, &p.x, &p.v, &mut b.a)?;
                 self.stats.nfev += 1;
                 b.fresh = true;
@@ -564,13 +552,7 @@ impl World {
                 b.fresh = true;
                 return Ok::<_, Error>(bad);
             }
-            let mut dynamics = Dynamics {
-                forces: &mut self.forces,
-                mass: &p.mass,
-                inv_mass: &p.inv_mass,
-                dim: self.params.dim,
-                force: &mut self.force,
-            };
+            let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
             dynamics.accel(t + h, &self.x_next, &self.v_next, &mut b.a_next)?;
             self.stats.nfev += 1;
             b.fresh = true; // a_next, the next step's a once accepted
@@ -611,13 +593,7 @@ impl World {
         self.y_next.resize(2 * n, 0.0);
         FirstOrderForm::join(&p.x, &p.v, n, &mut self.y);
         let stepper = self.stepper.as_mut().expect("made by integrate");
-        let mut dynamics = Dynamics {
-            forces: &mut self.forces,
-            mass: &p.mass,
-            inv_mass: &p.inv_mass,
-            dim: self.params.dim,
-            force: &mut self.force,
-        };
+        let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
         let outcome = match stepper {
             WorldStepper::Verlet(_) => unreachable!("verlet steps the particles' arrays"),
             WorldStepper::SecondOrder(s) => s.step(&mut dynamics, t, &self.y, h, &mut self.y_next, &mut self.stats),
