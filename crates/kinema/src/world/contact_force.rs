@@ -131,8 +131,20 @@ impl ContactForce {
 
     /// Whether the neighbour list must be rebuilt before an evaluation at positions `x` (m,
     /// 3 per particle): there is none, or the particles have moved too far since its build.
+    ///
+    /// The world asks this right before the force evaluation at the same `x`; a yes is
+    /// remembered for that buffer, so the evaluation does not check a second time.
     pub fn list_expired(&self, x: &[f64]) -> bool {
-        !self.scratch().list.holds(x, &self.domain)
+        let list = &mut self.scratch().list;
+        let holds = list.holds(x, &self.domain);
+        list.verified = holds.then_some((x.as_ptr() as usize, x.len()));
+        !holds
+    }
+
+    /// Forgets what [`ContactForce::list_expired`] found (the world calls this at the end of
+    /// each step, so that a buffer reused later is checked again).
+    pub fn forget_verified(&self) {
+        self.scratch().list.verified = None;
     }
 
     /// The width of the cells the neighbour list searches, 2 r_max + skin, m.
@@ -555,6 +567,10 @@ struct NeighbourList {
     allowance: f64,
     /// Builds so far.
     builds: usize,
+    /// The buffer (address, length) at which [`ContactForce::list_expired`] just found that
+    /// the list holds: the next update at that buffer, the world's force evaluation of the
+    /// same step with nothing written in between, need not check again. Any update clears it.
+    verified: Option<(usize, usize)>,
 }
 
 /// The partners of one chunk's particles, compressed: particle l of the chunk has
@@ -592,7 +608,7 @@ impl NeighbourList {
         skin: f64,
         collider_scale: f64,
     ) -> Result<(), Error> {
-        if self.holds(x, domain) {
+        if self.verified.take() == Some((x.as_ptr() as usize, x.len())) || self.holds(x, domain) {
             return Ok(());
         }
         self.built_at.clear(); // no list until the build succeeds (non-finite positions fail)
@@ -685,6 +701,7 @@ impl NeighbourList {
     /// rows, partners, walls and the build's positions move with their particles (the list
     /// stays the same list, in the new numbering).
     fn renumber(&mut self, new_of_old: &[u32], old_of_new: &[u32]) {
+        self.verified = None;
         if self.built_at.is_empty() {
             return;
         }

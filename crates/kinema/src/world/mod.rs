@@ -577,6 +577,9 @@ impl World {
             Ok::<_, Error>(bad.flatten())
         })();
         self.stepper = Some(WorldStepper::Verlet(b));
+        if let Some(contact) = &self.contact {
+            contact.borrow().forget_verified();
+        }
         match result? {
             Some(index) => Err(self.diverged(Divergence::NonFinite, Some(index / 3))),
             None => Ok(()),
