@@ -442,9 +442,10 @@ impl World {
         if n == 0 {
             return Ok(());
         }
-        let method = self.params.method.clone();
-        let stepper = self.stepper.get_or_insert_with(|| WorldStepper::new(&method, n));
-        if matches!(stepper, WorldStepper::Verlet(_)) {
+        if self.stepper.is_none() {
+            self.stepper = Some(WorldStepper::new(&self.params.method, n));
+        }
+        if matches!(self.stepper, Some(WorldStepper::Verlet(_))) {
             self.verlet()?;
         } else {
             self.integrate_joined()?;
@@ -515,14 +516,13 @@ impl World {
             let p = &self.particles;
             if let Some(contact) = &self.contact {
                 // The contact force and the closing kick in one pass, the other forces first.
-                let others = self.contact_force.map_or(self.forces.len(), |_| self.forces.len() - 1);
                 let s1 = State {
                     t: t + h,
                     x: &self.x_next,
                     v: &self.v_next,
                     mass: &p.mass,
                 };
-                let other = if others > 0 {
+                let other = if self.forces.len() > 1 {
                     self.force.clear();
                     self.force.resize(n, 0.0);
                     for (k, f) in self.forces.iter_mut().enumerate() {
@@ -534,8 +534,9 @@ impl World {
                 } else {
                     None
                 };
-                // a becomes a' and v_next... holds v'; the new velocities go to a_next's buffer,
-                // swapped into place below.
+                // The pass writes a' over a and the new velocities into a_next; two swaps put
+                // a' in a_next (the next step's a once accepted) and the velocities in v_next
+                // (v' there, the predictor, becomes spare).
                 let bad = contact.borrow().verlet_force_and_kick(
                     &s1,
                     other,
