@@ -1,5 +1,6 @@
-//! The grid broad phase finds exactly the pairs the O(N²) search finds: random sets with radii
-//! spanning 10×, in 2D and 3D, open and periodic along random axes (boxes down to a single
+//! The grid broad phase finds exactly the pairs the O(N²) search finds, and each particle's
+//! partners (the full list) are exactly those pairs seen from both sides: random sets with
+//! radii spanning 10× (and 1000×: a few boulders among grains, several grid levels), in 2D and 3D, open and periodic along random axes (boxes down to a single
 //! cell, particles outside the box), margins 0 and > 0, coincident and lattice positions.
 //! And the O(N²) reference agrees with an independent test that enumerates periodic images.
 
@@ -29,7 +30,8 @@ struct Scene {
 /// Units drawn from [0, 1) map onto the scene: per particle (x, y, z, radius fraction).
 /// `layout`: 0 uniform, 1 snapped to a lattice of spacing r_min (coincident points and exact
 /// distances), 2 all radii zero, 3 clustered in a tenth of the box, 4 all radii equal to the
-/// largest (every pair then needs the full cell width).
+/// largest (every pair then needs the full cell width), 5 every 20th particle 10–1000× the
+/// smallest (levels of a hierarchical grid).
 fn scene() -> impl Strategy<Value = Scene> {
     (
         2usize..=3,
@@ -37,7 +39,7 @@ fn scene() -> impl Strategy<Value = Scene> {
         0.2f64..4.0,
         0.005f64..0.15,
         prop_oneof![Just(0.0), 0.0f64..0.3],
-        0u8..5,
+        0u8..6,
         prop::collection::vec(prop::array::uniform4(0.0f64..1.0), 0..160),
     )
         .prop_map(|(dim, axes, size, r_min, margin, layout, units)| {
@@ -61,6 +63,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 radius.push(match layout {
                     2 => 0.0,
                     4 => 10.0 * r_min,
+                    5 if radius.len() % 20 == 7 => r_min * 10f64.powf(1.0 + 2.0 * u[3]),
                     _ => r_min * (1.0 + 9.0 * u[3]),
                 });
             }
@@ -93,8 +96,10 @@ proptest! {
         prop_assert_eq!(&fast, &slow);
         prop_assert!(fast.windows(2).all(|w| w[0] < w[1]), "pairs not strictly sorted");
         prop_assert!(fast.iter().all(|&(i, j)| i < j));
-        let cells: usize = grid.cells().iter().product();
-        prop_assert!(cells <= 2 * s.radius.len() + 16, "{:?} cells for {} particles", grid.cells(), s.radius.len());
+        let cells = grid.cell_count();
+        let bound = 2 * s.radius.len() + 16 * grid.level_count();
+        prop_assert!(cells <= bound, "{} cells in {} levels for {} particles", cells, grid.level_count(), s.radius.len());
+        prop_assert_eq!(partner_pairs(&s), slow);
         if s.domain.dim() == 2 {
             prop_assert_eq!(grid.cells()[2], 1);
         }
@@ -106,6 +111,28 @@ proptest! {
         all_pairs(&s.x, &s.radius, &s.domain, s.margin, &mut slow).unwrap();
         prop_assert_eq!(slow, by_images(&s));
     }
+}
+
+/// The pairs of [`Grid::partners`]' full list, each pair found from both of its sides
+/// exactly once (a pair seen from one side only shows up as a pair (j, i) with j > i).
+fn partner_pairs(s: &Scene) -> Vec<Pair> {
+    let mut grid = Grid::new();
+    let mut found = Vec::new();
+    if grid.prepare(&s.x, &s.radius, &s.domain, s.margin).unwrap() {
+        for i in 0..s.radius.len() {
+            let xi = [s.x[3 * i], s.x[3 * i + 1], s.x[3 * i + 2]];
+            let mut out = Vec::new();
+            grid.partners(i, xi, s.radius[i], &s.domain, s.margin, &mut out);
+            assert!(out.windows(2).all(|w| w[0] < w[1]), "partners of {i} not strictly ascending");
+            found.extend(out.into_iter().map(|j| (i, j as usize)));
+        }
+    }
+    let mut lower: Vec<Pair> = found.iter().filter(|&&(i, j)| i < j).copied().collect();
+    let mut upper: Vec<Pair> = found.iter().filter(|&&(i, j)| i > j).map(|&(i, j)| (j, i)).collect();
+    lower.sort_unstable();
+    upper.sort_unstable();
+    assert_eq!(lower, upper, "a pair found from one side only");
+    lower
 }
 
 /// Pairs closer than r_i + r_j + margin, with the distance along each periodic axis the

@@ -102,8 +102,9 @@ pub(crate) fn morton_order(x: &[f64], origin: [f64; 3], width: f64) -> Vec<u32> 
         .par_chunks_exact(3)
         .enumerate()
         .map(|(i, p)| {
-            // `as u64` saturates: below the origin is cell 0, NaN is 0, beyond the top the top.
-            let cell = [0, 1, 2].map(|k| ((p[k] - origin[k]) / width).floor().min(top) as u64);
+            // `as u64` truncates (the floor for t ≥ 0, without `f64::floor`'s library call)
+            // and saturates: below the origin is cell 0, NaN is 0, beyond the top the top.
+            let cell = [0, 1, 2].map(|k| ((p[k] - origin[k]) / width).min(top) as u64);
             (morton(cell), i as u32)
         })
         .collect();
