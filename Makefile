@@ -64,6 +64,7 @@ bench: build $(TEST_STAMP)
 	$(PY) benchmarks/granular_gas.py --ncell 47 --steps 1000 --threads 2 --model impulse --repeat 1
 	$(PY) benchmarks/granular_gas.py --sizes --repeat 1
 	$(PY) benchmarks/springs.py
+	$(PY) benchmarks/mixed_radii.py
 
 pictures: build
 	$(PY) docs/pictures.py docs/img

@@ -242,7 +242,10 @@ def plot(rows: list[tuple], path: Path) -> None:
     for name, t in sorted({(r[0], r[1]) for r in rows}):
         pts = sorted((r[2], 1e9 / r[4]) for r in rows if r[0] == name and r[1] == t)
         ax.plot(
-            *zip(*pts, strict=True), marker="o", ls="-" if name == "kinema" else "--", label=f"{name}, {t} {'thread' if name == 'kinema' else 'rank'}{'s' if t > 1 else ''}"
+            *zip(*pts, strict=True),
+            marker="o",
+            ls="-" if name == "kinema" else "--",
+            label=f"{name}, {t} {'thread' if name == 'kinema' else 'rank'}{'s' if t > 1 else ''}",
         )
     ax.set_xscale("log")
     ax.set_xlabel("particles N")

@@ -100,10 +100,7 @@ def main() -> int:
             for b in cases:
                 times[b].append(run(b, model, args.steps, args.threads)["seconds_per_step"])
         alone = statistics.median(times[0.0])
-        print(
-            f"{model}: 40,000 grains of r = {GRAIN_RADIUS} m, {args.steps} steps, {args.threads} threads, "
-            f"median of {args.repeat}"
-        )
+        print(f"{model}: 40,000 grains of r = {GRAIN_RADIUS} m, {args.steps} steps, {args.threads} threads, median of {args.repeat}")
         print(f"  {'case':<22}{'s/step':>12}{'× grains alone':>18}")
         print(f"  {'grains alone':<22}{alone:>12.3e}{1.0:>18.2f}")
         for b in args.boulders:

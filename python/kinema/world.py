@@ -136,7 +136,7 @@ class World:
         except ValueError as e:
             raise ValueError(f"velocity, mass, radius, pinned, restitution and friction must broadcast to {n} particles: {e}") from None
         self._push()
-        start, end = self._core.add_particles(np.ascontiguousarray(x), np.ascontiguousarray(v), m.tolist(), r.tolist(), p.tolist(), e, mu)
+        start, end = self._core.add_particles(*(np.ascontiguousarray(a) for a in (x, v, m, r, p)), e, mu)
         self._new_views()
         self._advice_due = True
         return np.arange(start, end)

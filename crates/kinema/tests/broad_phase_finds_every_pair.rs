@@ -120,9 +120,8 @@ fn partner_pairs(s: &Scene) -> Vec<Pair> {
     let mut found = Vec::new();
     if grid.prepare(&s.x, &s.radius, &s.domain, s.margin).unwrap() {
         for i in 0..s.radius.len() {
-            let xi = [s.x[3 * i], s.x[3 * i + 1], s.x[3 * i + 2]];
             let mut out = Vec::new();
-            grid.partners(i, xi, s.radius[i], &s.domain, s.margin, &mut out);
+            grid.partners(i, &s.x, &s.radius, &s.domain, s.margin, &mut out);
             assert!(out.windows(2).all(|w| w[0] < w[1]), "partners of {i} not strictly ascending");
             found.extend(out.into_iter().map(|j| (i, j as usize)));
         }

@@ -111,7 +111,8 @@ struct Level {
     start: Vec<u32>,
     /// Particle indices sorted by cell.
     order: Vec<u32>,
-    /// Positions, m, and radii, m, in the order of `order`.
+    /// Positions, m, and radii, m, in the order of `order` (for [`Grid::find_pairs`] only;
+    /// empty after [`Grid::prepare`]).
     pos: Vec<[f64; 3]>,
     rad: Vec<f64>,
 }
@@ -166,7 +167,7 @@ impl Grid {
         pairs: &mut Vec<Pair>,
     ) -> Result<(), Error> {
         pairs.clear();
-        if !self.prepare(x, radius, domain, margin)? {
+        if !self.sort(x, radius, domain, margin, true)? {
             return Ok(());
         }
         // Level by level, cell by cell, so that neighbouring cells (and the copies of their
@@ -207,7 +208,16 @@ impl Grid {
     /// Sorts the particles into the levels' cells for [`Grid::partners`] (same arguments,
     /// checks and cell layout as [`Grid::find_pairs`]). Returns false when nothing can pair
     /// (fewer than two particles, or zero reach): every particle has no partner then.
+    ///
+    /// Unlike [`Grid::find_pairs`] it keeps no copies of the positions and radii in cell
+    /// order (32 B per particle): its callers sort their particles along space themselves.
     pub fn prepare(&mut self, x: &[f64], radius: &[f64], domain: &Domain, margin: f64) -> Result<bool, Error> {
+        self.sort(x, radius, domain, margin, false)
+    }
+
+    /// Sorts the particles into the levels' cells, with copies of their positions and radii
+    /// in cell order when `copies`. False when nothing can pair.
+    fn sort(&mut self, x: &[f64], radius: &[f64], domain: &Domain, margin: f64, copies: bool) -> Result<bool, Error> {
         check_inputs(x, radius, margin)?;
         let n = radius.len();
         let (r_min, r_max) = radius
@@ -240,7 +250,7 @@ impl Grid {
             }
             let l = &mut self.levels[0];
             l.r_max = r_max;
-            l.build(x, radius, None, domain, reach_max, &mut self.cell_of);
+            l.build(x, radius, None, domain, reach_max, &mut self.cell_of, copies);
             return Ok(true);
         }
         // Several levels: number the non-empty ones in order, finest first.
@@ -274,36 +284,32 @@ impl Grid {
         }
         for level in &mut self.levels[..used] {
             let members = std::mem::take(&mut level.members);
-            level.build(
-                x,
-                radius,
-                Some(&members),
-                domain,
-                2.0 * level.r_max + margin,
-                &mut self.cell_of,
-            );
+            // (at least `base` > 0: a level of points with no margin pairs with nothing of
+            // its own, but its cells need a width)
+            let reach = (2.0 * level.r_max + margin).max(base);
+            level.build(x, radius, Some(&members), domain, reach, &mut self.cell_of, copies);
             level.members = members;
         }
         Ok(true)
     }
 
-    /// Particle i's partners in the grid of the last [`Grid::prepare`] (same positions `x`
-    /// and `radius`): every j ≠ i with |x_i − x_j| < r_i + r_j + `margin` (the pair test of
-    /// [`Grid::find_pairs`], with j's stored copy of its position), appended to `out` in
-    /// ascending order of j. Reads the grid only, so particles can be searched in parallel:
+    /// Particle i's partners in the grid of the last [`Grid::prepare`] (same positions `x`,
+    /// m, and `radius`, m): every j ≠ i with |x_i − x_j| < r_i + r_j + `margin` (the pair
+    /// test of [`Grid::find_pairs`]), appended to `out` in ascending order of j. Reads the grid only, so particles can be searched in parallel:
     /// each pair is found twice, once from each side (a full neighbour list).
     ///
     /// In its own and the coarser levels i searches the 3 × 3 × 3 cells around it; in a
     /// finer level, whose cells may be much narrower than i, the cells within
     /// r_i + r_max + margin of it (r_max the finer level's largest radius).
-    pub fn partners(&self, i: usize, xi: [f64; 3], ri: f64, domain: &Domain, margin: f64, out: &mut Vec<u32>) {
+    pub fn partners(&self, i: usize, x: &[f64], radius: &[f64], domain: &Domain, margin: f64, out: &mut Vec<u32>) {
         let first = out.len();
+        let (xi, ri) = (vec3::get(x, i), radius[i]);
         let own = self.level_of.get(i).map_or(0, |&l| l as usize);
         let mut search = |level: &Level, at: [usize; 3], span: [usize; 3]| {
             level.visit(at, span, |b| {
-                let j = level.order[b];
-                if j as usize != i && touches(domain, xi, level.pos[b], ri, level.rad[b], margin) {
-                    out.push(j);
+                let j = level.order[b] as usize;
+                if j != i && touches(domain, xi, vec3::get(x, j), ri, radius[j], margin) {
+                    out.push(j as u32);
                 }
             });
         };
@@ -357,8 +363,19 @@ impl Grid {
 
 impl Level {
     /// Lays the level out for cells at least `reach` wide and sorts its particles (`members`,
-    /// or all when None) into them; writes each one's cell into `cell_of`.
-    fn build(&mut self, x: &[f64], radius: &[f64], members: Option<&[u32]>, domain: &Domain, reach: f64, cell_of: &mut [u32]) {
+    /// or all when None) into them; writes each one's cell into `cell_of`; copies their
+    /// positions and radii in cell order when `copies` (else frees the copies).
+    #[allow(clippy::too_many_arguments)]
+    fn build(
+        &mut self,
+        x: &[f64],
+        radius: &[f64],
+        members: Option<&[u32]>,
+        domain: &Domain,
+        reach: f64,
+        cell_of: &mut [u32],
+        copies: bool,
+    ) {
         let count = members.map_or(radius.len(), |m| m.len());
         let member = |k: usize| members.map_or(k, |m| m[k] as usize);
         self.layout(x, count, member, domain, reach);
@@ -393,6 +410,10 @@ impl Level {
             self.start[c] = self.start[c - 1];
         }
         self.start[0] = 0;
+        if !copies {
+            (self.pos, self.rad) = (Vec::new(), Vec::new());
+            return;
+        }
         self.pos.clear();
         self.pos.extend(self.order.iter().map(|&i| vec3::get(x, i as usize)));
         self.rad.clear();
@@ -689,7 +710,7 @@ mod tests {
         let mut both_sides = std::collections::BTreeMap::new();
         for i in 0..radius.len() {
             let mut out = Vec::new();
-            g.partners(i, vec3::get(x, i), radius[i], domain, margin, &mut out);
+            g.partners(i, x, radius, domain, margin, &mut out);
             assert!(out.windows(2).all(|w| w[0] < w[1]), "partners of {i} not ascending: {out:?}");
             for j in out {
                 *both_sides.entry(((j as usize).min(i), (j as usize).max(i))).or_insert(0) += 1;
@@ -752,6 +773,18 @@ mod tests {
         g.find_pairs(&x, &r, &Domain::open(3).unwrap(), 0.0, &mut pairs).unwrap();
         assert_eq!(pairs, vec![(1, 2)]);
         assert!(g.cells().iter().product::<usize>() <= 2 * 3 + 16, "{:?}", g.cells());
+    }
+
+    #[test]
+    fn points_beside_balls_make_a_level_of_their_own() {
+        // radius 0 with margin 0 (the level's reach is 0: its cells still need a width)
+        let x = [0.0, 1.0, 0.0, 0.5, 1.0, 0.0, 0.0, 0.0, 0.0, 0.3, 0.0, 0.0, 0.0, 0.96, 0.0];
+        let r = [0.0, 0.0, 0.05, 0.05, 0.05];
+        let d = Domain::open(2).unwrap();
+        let (fast, slow) = both(&x, &r, &d, 0.0);
+        assert_eq!(fast, vec![(0, 4)]);
+        assert_eq!(fast, slow);
+        assert_eq!(by_partners(&x, &r, &d, 0.0), slow);
     }
 
     #[test]

@@ -98,28 +98,32 @@ pub(crate) fn estimate(forces: &mut [Box<dyn Force>], s: &State, inv_mass: &[f64
         ..Rates::default()
     };
     let n = s.x.len();
-    let mut free = Vec::new();
-    free_components(inv_mass, dim, &mut free);
-    // Symmetric scaling M^(−½) on free components (0 on the filtered ones).
-    let scale: Vec<f64> = (0..n).map(|k| free[k] * inv_mass[k / 3].sqrt()).collect();
+    // Symmetric scaling M^(−½) on free components (0 on the filtered ones). The buffers are
+    // few (five of 3N values besides the Jacobian's): at 10⁶ particles each is 24 MB, and the
+    // advice runs before the first step, beside everything the step keeps.
+    let mut scale = Vec::new();
+    free_components(inv_mass, dim, &mut scale);
+    for (k, c) in scale.iter_mut().enumerate() {
+        *c *= inv_mass[k / 3].sqrt();
+    }
     let mut jac = ForceJacobian::default();
     jac.prepare(forces, s, false)?;
     let zero = vec![0.0; n];
     let mut dx = vec![0.0; n];
-    let mut out = vec![0.0; n];
 
-    // y = M^(−½)(−J_·)M^(−½) u for the stiffness (position) or the damping (velocity) part.
+    // y = M^(−½)(−J_·)M^(−½) u for the stiffness (position) or the damping (velocity) part
+    // (the product is written into y, then scaled where it stands).
     let mut apply = |forces: &mut [Box<dyn Force>], u: &[f64], velocity: bool, y: &mut [f64]| {
         for k in 0..n {
             dx[k] = scale[k] * u[k];
         }
         if velocity {
-            jac.apply(forces, s, &zero, &dx, &mut out)?;
+            jac.apply(forces, s, &zero, &dx, y)?;
         } else {
-            jac.apply(forces, s, &dx, &zero, &mut out)?;
+            jac.apply(forces, s, &dx, &zero, y)?;
         }
         for k in 0..n {
-            y[k] = -scale[k] * out[k];
+            y[k] *= -scale[k];
         }
         Ok::<(), CallbackError>(())
     };
@@ -140,7 +144,7 @@ pub(crate) fn estimate(forces: &mut [Box<dyn Force>], s: &State, inv_mass: &[f64
         }
         // Power iteration from a fixed pseudo-random start (reproducible advice): for a
         // symmetric operator ‖A u_k‖ rises monotonically to |λ|max.
-        let mut u: Vec<f64> = (0..n).map(|k| free[k] * start(k)).collect();
+        let mut u: Vec<f64> = (0..n).map(|k| if scale[k] != 0.0 { start(k) } else { 0.0 }).collect();
         let norm = dot(&u, &u).sqrt();
         if norm == 0.0 {
             break; // nothing is free to move

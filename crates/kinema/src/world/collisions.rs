@@ -141,7 +141,8 @@ struct Event {
 pub(crate) struct CollisionStage {
     pub params: CollisionParams,
     material: Material,
-    /// Per-particle restitution and friction where set (`None`: the global value).
+    /// Per-particle restitution and friction where set (`None`: the global value); empty
+    /// until some particle gets its own (32 B per particle otherwise spent on nothing).
     pub own: Vec<(Option<f64>, Option<f64>)>,
     /// The materials of all particles, built from `own` and the global value when some
     /// particle has its own.

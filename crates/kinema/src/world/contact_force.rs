@@ -632,8 +632,7 @@ impl NeighbourList {
             start.push(0);
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 if searched {
-                    let xi = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
-                    grid.partners(i, xi, radius[i], domain, skin, partners);
+                    grid.partners(i, x, radius, domain, skin, partners);
                 }
                 start.push(partners.len() as u32);
             }

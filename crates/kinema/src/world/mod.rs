@@ -221,7 +221,9 @@ impl World {
         }
         self.reset_caches(); // the state changed size
         if let Some(stage) = &mut self.collisions {
-            stage.own.resize(self.particles.len(), (None, None));
+            if !stage.own.is_empty() {
+                stage.own.resize(self.particles.len(), (None, None));
+            }
             stage.refresh_materials()?;
         }
         self.rebuild_contact_force()?;
@@ -532,6 +534,8 @@ impl World {
                     }
                     Some(&self.force[..])
                 } else {
+                    // nothing to sum: the buffer the first acceleration used is let go
+                    self.force = Vec::new();
                     None
                 };
                 // The pass writes a' over a and the new velocities into a_next; two swaps put
@@ -714,9 +718,7 @@ impl World {
         match &mut self.collisions {
             Some(stage) => stage.set_params(params)?,
             None => {
-                let mut stage = CollisionStage::new(params, self.params.dim)?;
-                stage.own.resize(self.particles.len(), (None, None));
-                self.collisions = Some(stage);
+                self.collisions = Some(CollisionStage::new(params, self.params.dim)?);
             }
         }
         self.rebuild_contact_force()
@@ -807,6 +809,7 @@ impl World {
             self.set_collisions(CollisionParams::default())?;
         }
         let stage = self.collisions.as_mut().expect("collisions are on");
+        stage.own.resize(self.particles.len(), (None, None));
         for (k, (e, m)) in restitution.iter().zip(friction).enumerate() {
             stage.own[start + k] = (*e, *m);
         }

@@ -96,20 +96,33 @@ pub(crate) fn morton(c: [u64; 3]) -> u64 {
 /// The order that sorts positions `x` (m, 3 per particle) by the Morton code of their cells
 /// of width `width` (m) from `origin`, ties in index order: `old_of_new[i]` is the index now
 /// of the particle that goes to place i.
+///
+/// Each key is one u64, the code above the index (8 B per particle while sorting, not 16):
+/// the index takes ⌈log₂ N⌉ bits and each cell coordinate B = ⌊(64 − those) / 3⌋ ≥ 10 of the
+/// rest; where the particles span more than 2^B cells the cells are widened to fit.
 pub(crate) fn morton_order(x: &[f64], origin: [f64; 3], width: f64) -> Vec<u32> {
-    let top = ((1u64 << MORTON_BITS) - 1) as f64;
-    let mut keys: Vec<(u64, u32)> = x
+    let n = x.len() / 3;
+    let index_bits = usize::BITS - n.saturating_sub(1).leading_zeros();
+    let bits = ((64 - index_bits) / 3).min(MORTON_BITS);
+    let top = ((1u64 << bits) - 1) as f64;
+    let span = x
+        .par_chunks_exact(3)
+        .map(|p| (0..3).map(|k| p[k] - origin[k]).fold(0.0, f64::max))
+        .reduce(|| 0.0, f64::max);
+    let width = width.max(span / top);
+    let mut keys: Vec<u64> = x
         .par_chunks_exact(3)
         .enumerate()
         .map(|(i, p)| {
             // `as u64` truncates (the floor for t ≥ 0, without `f64::floor`'s library call)
             // and saturates: below the origin is cell 0, NaN is 0, beyond the top the top.
             let cell = [0, 1, 2].map(|k| ((p[k] - origin[k]) / width).min(top) as u64);
-            (morton(cell), i as u32)
+            morton(cell) << index_bits | i as u64
         })
         .collect();
-    keys.par_sort_unstable(); // (code, index) pairs are distinct: one result for any thread count
-    keys.into_iter().map(|(_, i)| i).collect()
+    keys.par_sort_unstable(); // the keys are distinct: one result for any thread count
+    let mask = (1u64 << index_bits) - 1;
+    keys.into_iter().map(|k| (k & mask) as u32).collect()
 }
 
 /// `a` (3 values per particle) in the new order.
@@ -127,6 +140,9 @@ fn gather3(a: &mut Vec<f64>, old_of_new: &[u32]) {
 
 /// `a` (one value per particle) in the new order.
 fn gather<T: Copy + Send + Sync>(a: &mut Vec<T>, old_of_new: &[u32]) {
+    if a.len() != old_of_new.len() {
+        return; // not in use (an empty buffer)
+    }
     *a = old_of_new.par_iter().map(|&i| a[i as usize]).collect();
 }
 
