@@ -38,7 +38,8 @@ pub type Pair = (usize, usize);
 /// s / w + 2 ε T ≤ 1 / (1 + 10⁻⁶) + 2·2⁻⁵²·2³³ < 1 cell, so they are never two cells apart.
 const CELL_SLACK: f64 = 1e-6;
 
-/// Neighbouring levels' cell widths differ by at most this factor: a particle goes to level
+/// Neighbouring levels' cell widths differ by at most this factor (the level index below is
+/// a log₂, so this is 2 and nothing else): a particle goes to level
 /// ⌊log₂(s_i / s_min)⌋ of its own reach s_i = 2 r_i + margin, so within a level the reaches
 /// span less than 2×, and a particle's cells are never more than twice its reach, as in a
 /// grid of equal radii.
@@ -295,7 +296,8 @@ impl Grid {
 
     /// Particle i's partners in the grid of the last [`Grid::prepare`] (same positions `x`,
     /// m, and `radius`, m): every j ≠ i with |x_i − x_j| < r_i + r_j + `margin` (the pair
-    /// test of [`Grid::find_pairs`]), appended to `out` in ascending order of j. Reads the grid only, so particles can be searched in parallel:
+    /// test of [`Grid::find_pairs`]), appended to `out` in ascending order of j. Reads the
+    /// grid only, so particles can be searched in parallel:
     /// each pair is found twice, once from each side (a full neighbour list).
     ///
     /// In its own and the coarser levels i searches the 3 × 3 × 3 cells around it; in a
