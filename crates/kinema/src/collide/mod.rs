@@ -35,6 +35,7 @@ pub mod colliders;
 pub mod contact;
 pub mod domain;
 pub mod narrow_phase;
+pub(crate) mod neighbour_list;
 pub mod penalty;
 pub mod response;
 pub mod toi;

@@ -1,0 +1,240 @@
+//! A Verlet neighbour list with a skin: the candidate pairs of the contact searches, rebuilt
+//! only when the particles have moved far enough that something left out could touch. The
+//! spring–dashpot force tests its pairs at every evaluation; the impulse model's continuous
+//! detection sweeps each step's paths against them (the skin then also covers the step's
+//! sweep, see `collide::events`).
+
+use rayon::prelude::*;
+
+use super::{Collider, Domain, Grid};
+use crate::error::Error;
+
+/// Particles per chunk of the neighbour list and of the parallel passes over it. Fixed (not
+/// derived from the number of threads), so that sums over chunks are always the same sums.
+pub const CHUNK: usize = 2048;
+
+/// The largest |coordinate| of a collider's points (a plane's, each box wall's) or of an
+/// obstacle's centre plus its radius, m.
+pub(crate) fn collider_scale(c: &Collider) -> f64 {
+    let largest = |p: [f64; 3]| p.iter().fold(0.0, |m: f64, c| m.max(c.abs()));
+    match c {
+        Collider::Plane(p) => largest(p.point()),
+        Collider::Box(b) => b.walls().iter().map(|w| largest(w.point())).fold(0.0, f64::max),
+        Collider::Sphere(s) => largest(s.center()) + s.radius(),
+    }
+}
+
+/// A Verlet neighbour list: the particle pairs (i, j) with |x_i − x_j| < r_i + r_j + s at the
+/// build (the grid's [`Grid::find_pairs`] with margin s, the skin), and the particles within
+/// s of touching each collider, reused until the particles have moved far enough that
+/// something left out could touch.
+///
+/// Why that is exact. Let a_i be particle i's displacement since the build (its minimum image
+/// along periodic axes: positions matter only modulo the period there, so any image of the
+/// move will do, and a particle wrapped to the other side has not moved far). A pair left out
+/// had |d_b| ≥ r_i + r_j + s at the build for every image d_b of x_i − x_j. Each image of
+/// the pair's separation now is an image of d_b + a_i − a_j, so by the triangle inequality
+///
+/// ```text
+///   |d| ≥ |d_b| − |a_i| − |a_j| ≥ r_i + r_j + s − (|a_i| + |a_j|)
+/// ```
+///
+/// and while |a_i| + |a_j| < s for every pair, no pair left out can touch (|d| < r_i + r_j).
+/// That holds while the two largest displacements sum to less than s; the usual criterion,
+/// "rebuild once some particle has moved more than s/2", implies it (both are then < s/2)
+/// and rebuilds sooner. A collider is fixed, and the distance from a plane, or from an
+/// obstacle's centre, changes by at most |a_i| ≤ the largest displacement: a particle left out
+/// at r_i + s or more from it cannot touch it either. What is in the list is tested exactly
+/// at every evaluation, with the full search's floating-point tests, so the contacts are the
+/// same as a search at every evaluation, in the same order.
+///
+/// In floating point each of those inequalities holds to a few roundings of numbers no
+/// larger than `scale` = the largest |coordinate| of the particles and colliders + the
+/// periods + 2 r_max + s (the coordinate differences, minimum images, squares and square
+/// roots: ≲ 10 ε·scale ≈ 2·10⁻¹⁵ scale in all); the list is rebuilt once the two largest
+/// moves reach s − 10⁻¹² scale, which leaves a margin of hundreds of roundings. (When
+/// 10⁻¹² scale ≥ s, coordinates 10¹² times the skin, it is rebuilt at every evaluation,
+/// still exact.)
+#[derive(Default)]
+pub(crate) struct NeighbourList {
+    /// Each chunk of [`CHUNK`] particles' partners, ascending (a full list: a pair is listed
+    /// from both sides).
+    pub(crate) rows: Vec<Rows>,
+    /// The candidate (particle, collider) pairs, sorted.
+    pub(crate) walls: Vec<(usize, usize)>,
+    /// Positions at the build, m (empty: no list).
+    pub(crate) built_at: Vec<f64>,
+    /// The list holds while the two largest displacements since the build sum to less, m.
+    pub(crate) allowance: f64,
+    /// Builds so far.
+    pub(crate) builds: usize,
+    /// The buffer (address, length) at which [`ContactForce::list_expired`] just found that
+    /// the list holds: the next update at that buffer, the world's force evaluation of the
+    /// same step with nothing written in between, need not check again. Any update clears it.
+    pub(crate) verified: Option<(usize, usize)>,
+}
+
+/// The partners of one chunk's particles, compressed: particle l of the chunk has
+/// `partners[start[l]..start[l + 1]]`.
+#[derive(Default)]
+pub(crate) struct Rows {
+    pub(crate) start: Vec<u32>,
+    pub(crate) partners: Vec<u32>,
+}
+
+impl Rows {
+    /// Particles in the chunk.
+    pub(crate) fn len(&self) -> usize {
+        self.start.len().saturating_sub(1)
+    }
+
+    /// The partners of the chunk's particle `l`.
+    #[inline]
+    pub(crate) fn of(&self, l: usize) -> &[u32] {
+        &self.partners[self.start[l] as usize..self.start[l + 1] as usize]
+    }
+}
+
+impl NeighbourList {
+    /// Makes the list hold for positions `x` (rebuilt with `grid` and skin `skin` if needed);
+    /// `collider_scale` is the colliders' largest |coordinate|.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn update(
+        &mut self,
+        grid: &mut Grid,
+        x: &[f64],
+        radius: &[f64],
+        colliders: &[Collider],
+        domain: &Domain,
+        skin: f64,
+        collider_scale: f64,
+    ) -> Result<(), Error> {
+        if self.verified.take() == Some((x.as_ptr() as usize, x.len())) || self.holds(x, domain) {
+            return Ok(());
+        }
+        self.built_at.clear(); // no list until the build succeeds (non-finite positions fail)
+        let n = radius.len();
+        if n > u32::MAX as usize {
+            return Err(Error::invalid(
+                "particles",
+                n,
+                format!("at most {} with spring-dashpot contacts", u32::MAX),
+            ));
+        }
+        let searched = grid.prepare(x, radius, domain, skin)?;
+        // The rows, chunk by chunk on all threads; each particle's row depends on the
+        // positions only, so the list is the same for any number of threads.
+        self.rows.resize_with(n.div_ceil(CHUNK), Rows::default);
+        let grid = &*grid;
+        self.rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
+            let (start, partners) = (&mut rows.start, &mut rows.partners);
+            start.clear();
+            partners.clear();
+            start.push(0);
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                if searched {
+                    grid.partners(i, x, radius, domain, skin, partners);
+                }
+                start.push(partners.len() as u32);
+            }
+        });
+        self.walls.clear();
+        if !colliders.is_empty() {
+            for (i, &r) in radius.iter().enumerate() {
+                let p = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
+                for (k, c) in colliders.iter().enumerate() {
+                    let mut near = false;
+                    c.for_each_touch(p, r, skin, |_| near = true);
+                    if near {
+                        self.walls.push((i, k));
+                    }
+                }
+            }
+        }
+        self.built_at.extend_from_slice(x);
+        let largest = |a: &[f64]| a.par_iter().map(|c| c.abs()).reduce(|| 0.0, f64::max);
+        let periods = domain
+            .periodic_box()
+            .map_or(0.0, |p| (0..3).filter(|&k| p.axes()[k]).map(|k| p.period(k)).sum());
+        let scale = largest(x).max(collider_scale) + periods + 2.0 * largest(radius) + skin;
+        self.allowance = skin - 1e-12 * scale;
+        self.builds += 1;
+        Ok(())
+    }
+
+    /// Whether there is a list and the two largest displacements since its build sum to less
+    /// than the allowance (false for non-finite positions, which then go to the grid and its
+    /// error). Chunk by chunk in parallel; the two largest of all are the two largest of
+    /// the chunks' two largest, whatever the order they are combined in.
+    pub(crate) fn holds(&self, x: &[f64], domain: &Domain) -> bool {
+        if self.built_at.len() != x.len() || x.is_empty() {
+            return false;
+        }
+        // (first, second, nan): the two largest squared displacements, first ≥ second, and
+        // whether a NaN was met (which `max` would pass over).
+        let top = |a: (f64, f64, bool), b: (f64, f64, bool)| {
+            let first = a.0.max(b.0);
+            let second = a.0.min(b.0).max(a.1).max(b.1);
+            (first, second, a.2 || b.2)
+        };
+        let (first, second, nan) = x
+            .par_chunks(3 * CHUNK)
+            .zip(self.built_at.par_chunks(3 * CHUNK))
+            .map(|(xc, bc)| {
+                let (mut first, mut second, mut nan) = (0.0_f64, 0.0_f64, false);
+                for (p, q) in xc.chunks_exact(3).zip(bc.chunks_exact(3)) {
+                    let a = domain.displacement([p[0], p[1], p[2]], [q[0], q[1], q[2]]);
+                    let a2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+                    nan |= a2.is_nan();
+                    if a2 > second {
+                        second = a2.min(first);
+                        first = first.max(a2);
+                    }
+                }
+                (first, second, nan)
+            })
+            .reduce(|| (0.0, 0.0, false), top);
+        !nan && first.sqrt() + second.sqrt() < self.allowance
+    }
+
+    /// Follows a renumbering of the particles, `new_of_old[i]` the new index of particle i:
+    /// rows, partners, walls and the build's positions move with their particles (the list
+    /// stays the same list, in the new numbering).
+    pub(crate) fn renumber(&mut self, new_of_old: &[u32], old_of_new: &[u32]) {
+        self.verified = None;
+        if self.built_at.is_empty() {
+            return;
+        }
+        let n = new_of_old.len();
+        let old = std::mem::take(&mut self.rows);
+        let mut rows: Vec<Rows> = Vec::new();
+        rows.resize_with(n.div_ceil(CHUNK), Rows::default);
+        rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
+            rows.start.clear();
+            rows.partners.clear();
+            rows.start.push(0);
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                let o = old_of_new[i] as usize;
+                let first = rows.partners.len();
+                rows.partners
+                    .extend(old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]));
+                rows.partners[first..].sort_unstable();
+                rows.start.push(rows.partners.len() as u32);
+            }
+        });
+        self.rows = rows;
+        for w in &mut self.walls {
+            w.0 = new_of_old[w.0] as usize;
+        }
+        self.walls.sort_unstable();
+        let built: Vec<f64> = old_of_new
+            .iter()
+            .flat_map(|&o| {
+                let o = o as usize;
+                [self.built_at[3 * o], self.built_at[3 * o + 1], self.built_at[3 * o + 2]]
+            })
+            .collect();
+        self.built_at = built;
+    }
+}
+
