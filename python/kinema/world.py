@@ -252,11 +252,19 @@ class World:
         (``"total"``), each a dict: ``contacts`` (at the end of the step), ``impacts`` (found
         inside steps by continuous detection), ``impulses``, ``impulse_balance`` ((3,), N·s:
         the sum of the impulses between movable particles, 0 by action and reaction up to
-        rounding), ``energy_lost`` (J, kinetic energy removed) and ``max_overlap`` (m, left
-        after the step). ``total``'s ``contacts`` and ``max_overlap`` are the last step's.
-        ``None`` while collisions are off."""
+        rounding), ``energy_lost`` (J, the mechanical energy the collisions took),
+        ``max_overlap`` (m, left after the step), ``solver_sweeps`` (of the end-of-step
+        velocity solver) and ``unconverged`` (steps whose solver, or whose impacts, stopped
+        at their cap). ``total``'s ``contacts``, ``max_overlap`` and ``solver_sweeps`` are the
+        last step's. ``None`` while collisions are off."""
         self._push()
         return self._core.collision_stats()
+
+    def stage_times(self) -> dict[str, float]:
+        """Wall-clock seconds spent so far in each of the seed's four stages of a step:
+        ``integrate`` (forces included; with spring–dashpot contacts, those too),
+        ``detect``, ``respond`` and ``distribute`` (collisions of the impulse model)."""
+        return self._core.stage_times()
 
     # -- running ----------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:

@@ -311,6 +311,16 @@ impl PyWorld {
     fn time(&self) -> f64 {
         self.inner.time()
     }
+    /// Wall-clock seconds spent in each of the seed's four stages so far.
+    fn stage_times<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let t = self.inner.stage_times();
+        let out = PyDict::new(py);
+        out.set_item("integrate", t.integrate.as_secs_f64())?;
+        out.set_item("detect", t.detect.as_secs_f64())?;
+        out.set_item("respond", t.respond.as_secs_f64())?;
+        out.set_item("distribute", t.distribute.as_secs_f64())?;
+        Ok(out)
+    }
     /// How many times the engine sorted the particles along space (internal; for tests).
     #[getter]
     fn sorts(&self) -> u64 {

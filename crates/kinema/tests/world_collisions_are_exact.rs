@@ -341,10 +341,94 @@ fn a_settling_heap_costs_few_impacts() {
         w.step().unwrap();
     }
     let before = w.collision_stats().unwrap().1.impacts;
+    let mut most = 0;
     for _ in 0..100 {
         w.step().unwrap();
+        most = most.max(w.collision_stats().unwrap().0.impacts);
     }
     let impacts = w.collision_stats().unwrap().1.impacts - before;
-    eprintln!("impacts in 100 steps of a settled heap: {impacts}");
-    assert!(impacts < 10 * n, "{impacts} impacts in 100 steps");
+    eprintln!("impacts in 100 steps of a settled heap: {impacts}, at most {most} in one step");
+    // The frictionless heap still flows at ~0.2 m/s; grains meeting faster than the
+    // restitution threshold (2 g h) are impacts, a few dozen a step, some at a step's start
+    // (touching pairs that approach: impacts at t = 0). A cascade is thousands in one step.
+    assert!(most < n / 2, "{most} impacts in one step");
+    assert!(impacts < 20 * n, "{impacts} impacts in 100 steps");
+}
+
+#[test]
+fn a_touching_pair_that_approaches_is_an_impact_at_the_start_of_the_step() {
+    // A (r = 0.1 m) at x = 0 moving at 1 m/s, B touching it at x = 0.2 m at rest, e = 1, equal
+    // masses: the impact is at t = 0 of the step, A stops there and B leaves at 1 m/s. After
+    // one step of 1 ms: x = (0, 0.201) exactly (not pushed apart from an overlap at the end).
+    let mut w = world(1e-3, 3, 1.0);
+    w.add_particles(&[0.0, 0.0, 0.0, 0.2, 0.0, 0.0], &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0], &[1.0; 2], &[0.1; 2], &[false; 2])
+        .unwrap();
+    w.step().unwrap();
+    let x = &w.particles().x;
+    assert_eq!((x[0], x[3]), (0.0, 0.2 + 1e-3), "{x:?}");
+    assert_eq!((v(&w, 0)[0], v(&w, 1)[0]), (0.0, 1.0));
+    let (last, _) = w.collision_stats().unwrap();
+    assert_eq!((last.impacts, last.contacts), (1, 0), "{last:?}");
+}
+
+#[test]
+fn a_cradle_chain_at_the_start_of_a_step_is_four_impacts() {
+    // Five touching balls, the first moving at 1 m/s into the others (e = 1): at t = 0 the
+    // impacts pass the momentum along, ball by ball (index order); four impacts, and only the
+    // last ball moves, by exactly v dt.
+    let mut w = world(1e-3, 3, 1.0);
+    let r = 0.05;
+    let x: Vec<f64> = (0..5).flat_map(|k| [2.0 * r * k as f64, 0.0, 0.0]).collect();
+    let mut vel = vec![0.0; 15];
+    vel[0] = 1.0;
+    w.add_particles(&x, &vel, &[0.1; 5], &[r; 5], &[false; 5]).unwrap();
+    w.step().unwrap();
+    let (last, _) = w.collision_stats().unwrap();
+    assert_eq!(last.impacts, 4, "{last:?}");
+    for k in 0..4 {
+        assert_eq!(v(&w, k), [0.0; 3], "ball {k}");
+        // (the end-of-step correction may move a touching pair by a rounding of its distance)
+        assert!((w.particles().x[3 * k] - x[3 * k]).abs() < 1e-15, "ball {k} moved");
+    }
+    assert_eq!(v(&w, 4)[0], 1.0);
+    assert!((w.particles().x[12] - (0.4 + 1e-3)).abs() < 1e-15);
+}
+
+#[test]
+fn a_column_of_twenty_balls_comes_to_rest() {
+    // 20 balls (r = 5 cm, 100 g) stacked on a floor with small gaps, dropped under gravity
+    // with e = 0.5, dt = 1 ms. A resting column is what a converged contact solve gives: every
+    // ball at rest, each contact carrying the weight above it. After 5 s: speeds below
+    // 1e-6 m/s, overlaps below 0.1 % of the radius, and the energy never above its start
+    // (e ≤ 1 and a plastic resting contact can only take energy).
+    let (r, m, g) = (0.05, 0.1, 9.81);
+    let mut w = world(1e-3, 3, 0.5);
+    let n = 20;
+    let x: Vec<f64> = (0..n).flat_map(|k| [0.0, 0.0, r + 1e-3 + (2.0 * r + 1e-3) * k as f64]).collect();
+    w.add_particles(&x, &vec![0.0; 3 * n], &vec![m; n], &vec![r; n], &vec![false; n])
+        .unwrap();
+    w.add_force(Box::new(Gravity::new([0.0, 0.0, -g]).unwrap())).unwrap();
+    w.add_collider(Plane::new([0.0; 3], [0.0, 0.0, 1.0], Surface::default()).unwrap())
+        .unwrap();
+    let e0 = w.diagnostics().total_energy();
+    let mut worst_rise: f64 = f64::NEG_INFINITY;
+    for _ in 0..5000 {
+        w.step().unwrap();
+        worst_rise = worst_rise.max(w.diagnostics().total_energy() - e0);
+    }
+    let p = w.particles();
+    let fastest = (0..n).map(|k| v(&w, k)[2].abs().max(v(&w, k)[0].abs())).fold(0.0, f64::max);
+    let mut overlap: f64 = (r - p.x[2]).max(0.0);
+    for k in 1..n {
+        overlap = overlap.max(2.0 * r - (p.x[3 * k + 2] - p.x[3 * k - 1]));
+    }
+    let (last, total) = w.collision_stats().unwrap();
+    eprintln!("column: fastest {fastest:e} m/s, overlap {overlap:e} m, energy rise {worst_rise:e} J, last {last:?}");
+    assert!(fastest < 1e-6, "still moving at {fastest} m/s");
+    assert!(overlap < 1e-3 * r, "overlap {overlap} m");
+    assert!(worst_rise <= 1e-12 * e0.abs(), "energy rose by {worst_rise} J");
+    assert_eq!(last.unconverged, 0, "{last:?}");
+    // The books: what the collisions took is what the column lost.
+    let e1 = w.diagnostics().total_energy();
+    assert!((total.energy_lost - (e0 - e1)).abs() < 1e-9 * e0, "{} vs {}", total.energy_lost, e0 - e1);
 }

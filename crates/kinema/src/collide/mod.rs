@@ -34,12 +34,13 @@ pub mod broad_phase;
 pub mod colliders;
 pub mod contact;
 pub mod domain;
+pub(crate) mod events;
 pub mod narrow_phase;
 pub(crate) mod neighbour_list;
 pub mod penalty;
 pub mod response;
 pub mod toi;
-mod vec3;
+pub(crate) mod vec3;
 
 pub use broad_phase::{all_pairs, Grid, Pair};
 pub use colliders::{collider_contacts, BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};
@@ -48,7 +49,7 @@ pub use domain::{Domain, Periodic};
 pub use narrow_phase::{pair_contact, sphere_contacts};
 pub use penalty::{damping_ratio, dashpot_coefficient, restitution_of_damping, spring_dashpot_force, PenaltyLaw};
 pub use response::{
-    apply_impulse, resolve, separate, Impulse, Material, MaterialTable, ResolveParams, ResolveStats, SeparateParams,
+    apply_impulse, hold, resolve, restitution_impulse, separate, HoldParams, HoldStats, Impulse, Material, MaterialTable, ResolveParams, ResolveStats, SeparateParams,
     SeparateStats,
 };
 pub use toi::{toi_plane, toi_sphere_obstacle, toi_spheres};

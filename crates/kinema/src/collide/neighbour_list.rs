@@ -9,6 +9,19 @@ use rayon::prelude::*;
 use super::{Collider, Domain, Grid};
 use crate::error::Error;
 
+/// The neighbour list's default skin, as a fraction of the particles' mean radius.
+///
+/// The skin trades the pairs tested at every evaluation against how often the list is
+/// rebuilt: a thicker shell lists more pairs that do not touch, a thinner one is outlived
+/// sooner (the list lasts while the two particles that moved most have together moved less
+/// than s). Measured on the granular gas of benchmarks/granular_gas.py (N = 103,823, density
+/// 0.3, T = 1, 500 steps, particle-steps/s with 1 and 2 threads): 0.2 r: 8.6e6 and 1.5e7;
+/// 0.6 r: 1.0e7 and 1.8e7; 1.0 r: 7.0e6 and 1.3e7. 0.6 r is LAMMPS's skin for that gas
+/// (0.3 d). In the denser granular settle of benchmarks/collisions_lammps.py the optimum
+/// was flat between 0.1 r and 0.5 r. A fraction of the radius keeps the choice independent
+/// of the units and of the size of the particles.
+pub const SKIN_PER_RADIUS: f64 = 0.6;
+
 /// Particles per chunk of the neighbour list and of the parallel passes over it. Fixed (not
 /// derived from the number of threads), so that sums over chunks are always the same sums.
 pub const CHUNK: usize = 2048;

@@ -15,6 +15,11 @@ pub(crate) fn add_scaled(a: &mut [f64], i: usize, s: f64, d: [f64; 3]) {
 }
 
 #[inline]
+pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+#[inline]
 pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }

@@ -2,9 +2,16 @@
 //! the step, then as contacts at its end), respond by Newton's restitution law, distribute each
 //! impulse onto both particles.
 
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use crate::collide::vec3;
+use crate::collide::events::{swept_reach, Event, EventQueue, Paths, Scene};
+use crate::collide::neighbour_list::{collider_scale, NeighbourList, CHUNK, SKIN_PER_RADIUS};
 use crate::collide::{
-    apply_impulse, collider_contacts, resolve, separate, sphere_contacts, toi_plane, toi_sphere_obstacle, toi_spheres, Collider,
-    Contact, Domain, Grid, Material, MaterialTable, Pair, Partner, Periodic, Plane, ResolveParams, SeparateParams,
+    hold, pair_contact, restitution_impulse, separate, Collider, Contact, Domain, Grid, HoldParams, HoldStats, Material,
+    MaterialTable, Partner, Periodic, Plane, ResolveParams, SeparateParams,
 };
 use crate::error::Error;
 
@@ -108,6 +115,11 @@ pub struct CollisionStats {
     pub energy_lost: f64,
     /// The largest overlap left after the step, m.
     pub max_overlap: f64,
+    /// Sweeps of the end-of-step velocity solver (the latest step's).
+    pub solver_sweeps: usize,
+    /// Steps whose end-of-step solver stopped at its sweep cap before converging, or whose
+    /// impacts stopped at the cap of continuous detection (0 or 1 for one step; summed).
+    pub unconverged: usize,
 }
 
 impl CollisionStats {
@@ -121,23 +133,38 @@ impl CollisionStats {
         }
         self.energy_lost += step.energy_lost;
         self.max_overlap = step.max_overlap;
+        self.solver_sweeps = step.solver_sweeps;
+        self.unconverged += step.unconverged;
     }
 }
 
-/// A time of impact inside the step: particle `i` meets `partner` at time `time` (s from the
-/// start of the step); `wall` picks the wall of a box. `versions` are the two particles'
-/// path versions when it was computed: a later impact of either makes it stale.
-#[derive(Debug, Clone, Copy)]
-struct Event {
-    time: f64,
-    i: usize,
-    partner: Partner,
-    wall: usize,
-    versions: (u32, u32),
+/// Wall-clock time of the collision stages 2–4 of the impulse model, summed over steps.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CollisionTimes {
+    /// Stage 2: the candidate list, each particle's first impact, the events' validity and
+    /// rescheduling, the end-of-step contacts.
+    pub detect: std::time::Duration,
+    /// Stage 3: the impulses of Newton's law (impacts, and the end-of-step solver) and the
+    /// removal of overlap.
+    pub respond: std::time::Duration,
+    /// Stage 4: each impulse onto both particles, the impulse balance and the energy books.
+    pub distribute: std::time::Duration,
 }
 
+/// The velocity solver of the end-of-step contacts: most sweeps, and the tolerance below which
+/// a sweep counts as converged (m/s). Warm-started, a resting pile takes one or two sweeps a
+/// step; the cap only matters while a heap settles (see `docs/collisions.md`).
+const END_SWEEPS: usize = 200;
+
+/// Pairs closer than r_i + r_j by less than this fraction of r_i + r_j (and particles this
+/// fraction of their radius from a collider) are contacts at the end of a step: the position
+/// correction leaves resting pairs touching to rounding, on either side of exact contact.
+const CONTACT_GAP: f64 = 1e-9;
+
+/// Sweeps of the position correction at the end of a step (overlap removed along the normals).
+const SEPARATE_SWEEPS: usize = 20;
+
 /// The collision stages of a world, with their settings, colliders and buffers.
-#[derive(Debug, Clone)]
 pub(crate) struct CollisionStage {
     pub params: CollisionParams,
     material: Material,
@@ -150,25 +177,30 @@ pub(crate) struct CollisionStage {
     pub colliders: Vec<Collider>,
     pub domain: Domain,
     grid: Grid,
-    pairs: Vec<Pair>,
+    /// Candidate pairs of continuous detection and of the end-of-step contacts.
+    list: NeighbourList,
+    /// The particles' paths through the step and the queue of their next impacts.
+    paths: Paths,
+    queue: EventQueue,
+    /// Particles that touched something at the step's start or were hit in it: the only
+    /// ones that can be in contact at its end (continuous detection saw every other path).
+    touched: Vec<bool>,
+    /// The integrated state (x₁, v₁) of each touched particle, for the energy books.
+    books: Vec<(usize, [f64; 3], [f64; 3])>,
     contacts: Vec<Contact>,
     /// The end-of-step contacts as detected (overlap and u_n before the response).
     pub detected: Vec<Contact>,
-    /// Scratch: collider contacts, and the velocities before the stage (for the impulse balance).
-    walls: Vec<Contact>,
-    v_before: Vec<f64>,
-    // Continuous detection: each particle moves on x(τ) = x_ref + v_ref (τ − t_ref) + ½ a (τ − t_ref)²
-    accel: Vec<f64>,
-    t_ref: Vec<f64>,
-    x_ref: Vec<f64>,
-    v_ref: Vec<f64>,
-    version: Vec<u32>,
-    events: Vec<Event>,
-    /// Candidate pairs of each particle (indices into `pairs`), CSR.
-    adjacency_start: Vec<usize>,
-    adjacency: Vec<usize>,
+    /// The end-of-step solver's velocity targets, totals, working velocities, and the last
+    /// step's totals by contact (for warm starting).
+    targets: Vec<f64>,
+    totals: Vec<[f64; 3]>,
+    v_work: Vec<f64>,
+    warm: Vec<(usize, Partner, [f64; 3])>,
+    /// The contacts of `warm` and whether each carried load (see `Scene::resting`).
+    resting: Vec<(usize, Partner, bool)>,
     pub total: CollisionStats,
     pub last: CollisionStats,
+    pub times: CollisionTimes,
 }
 
 /// Whether contact `c` is with a wall of a box collider along a periodic axis of `domain`:
@@ -182,18 +214,6 @@ pub(crate) fn on_periodic_wall(c: &Contact, colliders: &[Collider], domain: &Dom
             .is_some_and(|p| (0..3).any(|k| p.axes()[k] && c.normal[k] != 0.0))
 }
 
-fn get(a: &[f64], i: usize) -> [f64; 3] {
-    [a[3 * i], a[3 * i + 1], a[3 * i + 2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-
 impl CollisionStage {
     pub fn new(params: CollisionParams, dim: usize) -> Result<Self, Error> {
         let material = params.check()?;
@@ -205,21 +225,21 @@ impl CollisionStage {
             colliders: Vec::new(),
             domain: Domain::open(dim)?,
             grid: Grid::new(),
-            pairs: Vec::new(),
+            list: NeighbourList::default(),
+            paths: Paths::default(),
+            queue: EventQueue::default(),
+            touched: Vec::new(),
+            books: Vec::new(),
             contacts: Vec::new(),
             detected: Vec::new(),
-            walls: Vec::new(),
-            v_before: Vec::new(),
-            accel: Vec::new(),
-            t_ref: Vec::new(),
-            x_ref: Vec::new(),
-            v_ref: Vec::new(),
-            version: Vec::new(),
-            events: Vec::new(),
-            adjacency_start: Vec::new(),
-            adjacency: Vec::new(),
+            targets: Vec::new(),
+            totals: Vec::new(),
+            v_work: Vec::new(),
+            warm: Vec::new(),
+            resting: Vec::new(),
             total: CollisionStats::default(),
             last: CollisionStats::default(),
+            times: CollisionTimes::default(),
         })
     }
 
@@ -288,10 +308,63 @@ impl CollisionStage {
         }
     }
 
-    /// Stages 2–4 on the step from (x0, v0) to the integrated (x1, v1), over `h` s: impacts
-    /// inside the step in time order (with `ccd`), then the contacts at the end: Newton's
-    /// restitution by sequential impulses and the removal of overlap. (x1, v1) are updated
-    /// in place; returns whether anything changed.
+    /// Forgets the candidate list and the warm start (particles, colliders or the domain
+    /// changed).
+    pub fn forget_list(&mut self) {
+        self.list.built_at.clear();
+        self.warm.clear();
+        self.resting.clear();
+    }
+
+    /// Leaves out of the list's collider candidates a box whose walls all lie along
+    /// periodic axes (a fully periodic cell has no walls to meet).
+    fn drop_inactive_walls(&mut self) {
+        let active = self.active_walls();
+        self.list.walls.retain(|&(_, k)| active[k].iter().any(|a| *a));
+    }
+
+    /// Which walls of each collider exist: a box's walls along periodic axes do not.
+    fn active_walls(&self) -> Vec<[bool; 6]> {
+        self.colliders
+            .iter()
+            .map(|c| {
+                let mut active = [false; 6];
+                match c {
+                    Collider::Box(b) => {
+                        for (w, wall) in b.walls().iter().enumerate() {
+                            active[w] = self.wall_active(wall);
+                        }
+                    }
+                    _ => active[0] = true,
+                }
+                active
+            })
+            .collect()
+    }
+
+    /// Stages 2–4 of the impulse model on the step from (x0, v0) to the integrated (x1, v1),
+    /// over `h` s; `accel` is the step's constant acceleration where the method knows it
+    /// (velocity Verlet's a(t)), else it is the one that takes x0, v0 to x1. (x1, v1) are
+    /// updated in place; returns whether anything changed.
+    ///
+    /// The order, and why (as Box2D's solver stages are listed):
+    ///
+    /// ```text
+    ///   detect      the list holds for the step's sweep (else rebuilt); each particle's first
+    ///               impact in [0, h] into the queue; who touches something at τ = 0
+    ///   ┌ detect    the earliest event; a stale one is recomputed and put back
+    ///   │ respond   its impulse by Newton's law at the impact time
+    ///   │ distribute +w_i J on i, −w_j J on j; their paths change from there
+    ///   └ detect    the two particles' next impacts           (until the queue is empty)
+    ///   detect      end-of-step contacts among the touched particles
+    ///   respond     the velocity solver's totals (restitution targets for impacts, holds for
+    ///               resting contacts, warm-started); overlap removed by moving positions
+    ///   distribute  the totals onto both particles; impulse balance; energy books
+    /// ```
+    ///
+    /// Continuous detection interleaves the stages in time: an impact's impulse changes the
+    /// two paths, and the next impacts of those two can only be found after it is applied.
+    /// The end-of-step solve comes after all impacts, on the state they leave.
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
@@ -302,416 +375,371 @@ impl CollisionStage {
         radius: &[f64],
         inv_mass: &[f64],
         mass: &[f64],
+        accel: Option<&[f64]>,
         h: f64,
     ) -> Result<bool, Error> {
         let n = radius.len();
         let mut stats = CollisionStats::default();
-        // Automatic threshold: twice the largest speed change the forces made in this step.
-        let threshold = self.params.restitution_threshold.unwrap_or_else(|| {
-            let dv = (0..n)
-                .map(|i| {
-                    norm([
-                        v1[3 * i] - v0[3 * i],
-                        v1[3 * i + 1] - v0[3 * i + 1],
-                        v1[3 * i + 2] - v0[3 * i + 2],
-                    ])
-                })
-                .fold(0.0, f64::max);
-            2.0 * dv
-        });
-        self.v_before.clear();
-        self.v_before.extend_from_slice(v1);
-        let mut external = [0.0; 3];
+        let clock = Instant::now();
+        // The step's paths: Verlet's own acceleration, or the parabola through x1.
+        match accel {
+            Some(a) => self.paths.begin(x0, v0, a.iter().copied()),
+            None => self
+                .paths
+                .begin(x0, v0, (0..3 * n).map(|c| 2.0 * (x1[c] - x0[c] - v0[c] * h) / (h * h))),
+        }
+        let (threshold, reach) = self.prepare(x0, v0, x1, v1, radius, h)?;
+        self.touched.clear();
+        self.touched.resize(n, !self.params.ccd);
+        self.books.clear();
         let mut changed = false;
+        let mut t_detect = clock.elapsed();
+        let (mut t_respond, mut t_distribute) = (Duration::ZERO, Duration::ZERO);
 
         if self.params.ccd {
-            changed |= self.sweep(x0, v0, x1, v1, radius, inv_mass, h, threshold, &mut stats, &mut external)?;
+            let (d, r, s, any) = self.impacts(radius, inv_mass, mass, h, threshold, reach, &mut stats)?;
+            t_detect += d;
+            t_respond += r;
+            t_distribute += s;
+            changed |= any;
         }
-
-        // Stage 2 at the end of the step: pairs (broad phase) → contacts (narrow phase), then
-        // the colliders.
-        self.grid.find_pairs(x1, radius, &self.domain, 0.0, &mut self.pairs)?;
-        sphere_contacts(x1, v1, radius, &self.pairs, &self.domain, 0.0, &mut self.contacts)?;
-        self.walls.clear();
-        collider_contacts(&self.colliders, x1, v1, radius, 0.0, &mut self.walls)?;
-        // Box walls along periodic axes do not exist (their normals are along the axes).
-        let (colliders, domain) = (&self.colliders, &self.domain);
-        self.contacts
-            .extend(self.walls.iter().filter(|c| !on_periodic_wall(c, colliders, domain)));
+        let clock = Instant::now();
+        if self.params.ccd {
+            self.paths.finish(v0, x1, v1, h);
+        }
+        // The state of the touched particles before the end-of-step solve, for its books.
+        for q in (0..n).filter(|&q| self.touched[q]) {
+            self.books.push((q, vec3::get(x1, q), vec3::get(v1, q)));
+        }
+        // Stage 2 at the end of the step: the contacts of the touched particles.
+        self.end_contacts(x1, v1, radius);
         stats.contacts = self.contacts.len();
-
-        // Stages 3–4: the impulse j = −(1 + e) u_n / (1/m_i + 1/m_j) of each approaching contact,
-        // +j n / m_i on i and −j n / m_j on j, by sequential impulses.
-        let resolve_params = ResolveParams {
-            restitution_threshold: threshold,
-            ..ResolveParams::default()
-        };
-        let r = resolve(&self.contacts, v1, inv_mass, &self.materials(), &resolve_params)?;
-        stats.impulses += r.impulses;
-        stats.energy_lost += r.kinetic_energy_lost;
-        for (k, e) in external.iter_mut().enumerate() {
-            *e += r.collider_impulse_sum[k] + r.pinned_impulse_sum[k];
-        }
-        if r.impulses > 0 {
-            changed = true;
-        }
-        // Overlap left by discrete detection is removed by moving positions, not velocities.
         self.detected.clone_from(&self.contacts);
-        let s = separate(&mut self.contacts, x1, inv_mass, &SeparateParams::default())?;
+        t_detect += clock.elapsed();
+
+        // Stage 3: the solver's totals, and the overlap removed.
+        let clock = Instant::now();
+        let solved = self.solve(v1, inv_mass, threshold)?;
+        stats.solver_sweeps = solved.iterations;
+        stats.unconverged = usize::from(!solved.converged);
+        let s = separate(
+            &mut self.contacts,
+            x1,
+            inv_mass,
+            &SeparateParams {
+                iterations: SEPARATE_SWEEPS,
+                ..SeparateParams::default()
+            },
+        )?;
         stats.max_overlap = s.max_overlap_after;
-        if s.max_overlap_before > 0.0 {
+        changed |= s.max_overlap_before > 0.0;
+        t_respond += clock.elapsed();
+
+        // Stage 4: the totals onto both particles; the books.
+        let clock = Instant::now();
+        for (c, p) in self.detected.iter().zip(&self.totals) {
+            if *p == [0.0; 3] {
+                continue;
+            }
             changed = true;
+            stats.impulses += 1;
+            distribute(c.i, c.partner_particle(), *p, v1, inv_mass, mass, &mut stats.impulse_balance);
         }
+        stats.energy_lost += self.energy_books(x1, v1, mass, inv_mass);
         if let Some(p) = self.domain.periodic_box() {
             p.wrap_positions(x1);
         }
+        t_distribute += clock.elapsed();
 
-        // The impulse balance: Σ m Δv minus what colliders and pinned particles gave.
-        for i in 0..n {
-            if inv_mass[i] > 0.0 {
-                for k in 0..3 {
-                    stats.impulse_balance[k] += mass[i] * (v1[3 * i + k] - self.v_before[3 * i + k]);
-                }
-            }
-        }
-        for (b, e) in stats.impulse_balance.iter_mut().zip(external) {
-            *b -= e;
-        }
+        self.times.detect += t_detect;
+        self.times.respond += t_respond;
+        self.times.distribute += t_distribute;
         self.last = stats;
         self.total.accumulate(&stats);
         Ok(changed)
     }
 
-    /// Continuous detection: finds the impacts inside the step in time order and resolves
-    /// each at its time. Returns whether any impulse was applied.
+    /// Makes the neighbour list hold for the whole step's sweep (rebuilt at x0 if not) and
+    /// returns the restitution threshold and the largest swept displacement of any particle
+    /// from the list's build positions, m.
     ///
-    /// Each particle moves on the parabola with the constant acceleration that takes it from
-    /// (x0, v0) to the integrated x1 in h: a = 2 (x1 − x0 − v0 h) / h², exact for uniform
-    /// fields such as gravity (and then the relative motion of two particles is a straight
-    /// line). At an impact at τ the two particles' velocities there, v(τ) = v_ref + a (τ −
-    /// t_ref), get the restitution impulse and each continues on a new parabola from τ. At
-    /// the end a particle that was hit is at its parabola's point at h, with velocity
-    /// v(h) + (v1 − (v0 + a h)) (the integrator's velocity beyond the parabola's is kept).
+    /// One pass over the particles: each one's swept displacement max(|x0 − b|, |x1 − b|) +
+    /// ⅛ |a| h² (b its build position) and the two largest of them; its velocity change
+    /// |v1 − v0| for the automatic threshold (twice the largest: a body resting under gravity
+    /// approaches at g h each step).
     #[allow(clippy::too_many_arguments)]
-    fn sweep(
+    fn prepare(&mut self, x0: &[f64], v0: &[f64], x1: &[f64], v1: &[f64], radius: &[f64], h: f64) -> Result<(f64, f64), Error> {
+        let domain = self.domain;
+        let automatic = self.params.restitution_threshold.is_none();
+        let sweep = |built: &[f64], accel: &[f64]| {
+            x0.par_chunks(3 * CHUNK)
+                .zip(x1.par_chunks(3 * CHUNK))
+                .zip(built.par_chunks(3 * CHUNK))
+                .enumerate()
+                .map(|(c, ((x0, x1), b))| {
+                    let mut top = (0.0_f64, 0.0_f64, 0.0_f64, false);
+                    for l in 0..x0.len() / 3 {
+                        let q = c * CHUNK + l;
+                        let bq = vec3::get(b, l);
+                        let d0 = domain.displacement(vec3::get(x0, l), bq);
+                        let d1 = domain.displacement(vec3::get(x1, l), bq);
+                        let a = vec3::get(accel, q);
+                        let bulge2 = vec3::dot(a, a);
+                        let mut d = vec3::dot(d0, d0).max(vec3::dot(d1, d1)).sqrt();
+                        if bulge2 > 0.0 {
+                            d += 0.125 * bulge2.sqrt() * h * h;
+                        }
+                        let dv = if automatic {
+                            let w = vec3::sub(vec3::get(v1, q), vec3::get(v0, q));
+                            vec3::dot(w, w)
+                        } else {
+                            0.0
+                        };
+                        top = top_two(top, (d, 0.0, dv, d.is_nan()));
+                    }
+                    top
+                })
+                .reduce(|| (0.0, 0.0, 0.0, false), top_two)
+        };
+        let fresh = self.list.built_at.len() == x0.len();
+        let mut top = if fresh {
+            sweep(&self.list.built_at, &self.paths.accel)
+        } else {
+            (f64::INFINITY, 0.0, 0.0, false)
+        };
+        let holds = top.0 + top.1 < self.list.allowance;
+        if top.3 || !holds {
+            // Rebuild at x0, with a skin of the base (0.6 mean radius) or four of this step's
+            // largest sweeps, whichever is more: the list then lasts at least two such steps.
+            let accel = &self.paths.accel;
+            let largest_move = (0..radius.len())
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .map(|q| {
+                    let a = vec3::norm(vec3::get(accel, q));
+                    vec3::norm(domain.displacement(vec3::get(x1, q), vec3::get(x0, q))) + 0.125 * a * h * h
+                })
+                .reduce(|| 0.0, f64::max);
+            let mean_radius = radius.iter().sum::<f64>() / radius.len().max(1) as f64;
+            let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest_move);
+            let scale = self.colliders.iter().map(collider_scale).fold(0.0, f64::max);
+            self.list.built_at.clear();
+            self.list
+                .update(&mut self.grid, x0, radius, &self.colliders, &self.domain, skin, scale)?;
+            self.list.verified = None;
+            self.drop_inactive_walls();
+            top = sweep(&self.list.built_at, &self.paths.accel);
+            if top.3 || !top.0.is_finite() {
+                // non-finite positions: the list's build named them already; a NaN velocity
+                // change is caught by the world
+                top.0 = f64::INFINITY;
+            }
+        }
+        let threshold = self.params.restitution_threshold.unwrap_or(2.0 * top.2.sqrt());
+        Ok((threshold, top.0))
+    }
+
+    /// Continuous detection and the impacts in time order (see [`CollisionStage::run`]):
+    /// returns the time spent detecting, responding and distributing, and whether any impulse
+    /// was applied. `reach`: the largest swept displacement from the list's build positions.
+    #[allow(clippy::too_many_arguments)]
+    fn impacts(
         &mut self,
-        x0: &[f64],
-        v0: &[f64],
-        x1: &mut [f64],
-        v1: &mut [f64],
         radius: &[f64],
         inv_mass: &[f64],
+        mass: &[f64],
         h: f64,
         threshold: f64,
+        mut reach: f64,
         stats: &mut CollisionStats,
-        external: &mut [f64; 3],
-    ) -> Result<bool, Error> {
+    ) -> Result<(Duration, Duration, Duration, bool), Error> {
         let n = radius.len();
-        self.accel.clear();
-        self.accel
-            .extend((0..3 * n).map(|c| 2.0 * (x1[c] - x0[c] - v0[c] * h) / (h * h)));
-        self.t_ref.clear();
-        self.t_ref.resize(n, 0.0);
-        self.x_ref.clear();
-        self.x_ref.extend_from_slice(x0);
-        self.v_ref.clear();
-        self.v_ref.extend_from_slice(v0);
-        self.version.clear();
-        self.version.resize(n, 0);
-
-        // Candidates: pairs that can close their gap within the step. Two parabolas come at
-        // most (|v_i| + |v_j|) h + ½ (|a_i| + |a_j|) h² closer.
-        let reach = (0..n)
-            .map(|i| norm(get(v0, i)) * h + 0.5 * norm(get(&self.accel, i)) * h * h)
-            .fold(0.0, f64::max);
-        self.grid.find_pairs(x0, radius, &self.domain, 2.0 * reach, &mut self.pairs)?;
-        self.adjacency_start.clear();
-        self.adjacency_start.resize(n + 1, 0);
-        for &(i, j) in &self.pairs {
-            self.adjacency_start[i + 1] += 1;
-            self.adjacency_start[j + 1] += 1;
-        }
-        for i in 0..n {
-            self.adjacency_start[i + 1] += self.adjacency_start[i];
-        }
-        self.adjacency.clear();
-        self.adjacency.resize(2 * self.pairs.len(), 0);
-        let mut fill = self.adjacency_start.clone();
-        for (p, &(i, j)) in self.pairs.iter().enumerate() {
-            for q in [i, j] {
-                self.adjacency[fill[q]] = p;
-                fill[q] += 1;
-            }
-        }
-
-        self.events.clear();
-        for p in 0..self.pairs.len() {
-            let (i, j) = self.pairs[p];
-            if let Some(e) = self.pair_event(i, j, radius, h, 0.0) {
-                self.events.push(e);
-            }
-        }
-        for i in 0..n {
-            self.collider_events(i, radius, h, 0.0);
-        }
-
-        // Impacts in time order. Each one changes two paths at most; the events of those
-        // particles are recomputed and older ones become stale. A cap keeps a pathological
-        // case (a particle wedged between two others) from looping: what is left is resolved
-        // at the end of the step.
-        let cap = 100 * (n + self.pairs.len()) + 1000;
+        let clock = Instant::now();
+        let active = self.active_walls();
+        self.schedule_all(radius, &active, 0.0, h, threshold);
+        let (mut t_detect, mut t_respond, mut t_distribute) = (clock.elapsed(), Duration::ZERO, Duration::ZERO);
+        // A cap keeps an inelastic collapse (a particle wedged between two others, hit back
+        // and forth ever faster) from looping: what is left goes to the end-of-step solver.
+        let cap = 1000 * n + 100_000;
         let mut processed = 0;
         let mut any = false;
-        while processed < cap {
-            let Some((k, event)) = self
-                .events
-                .iter()
-                .enumerate()
-                .filter(|(_, e)| self.is_current(e))
-                .min_by(|a, b| a.1.time.total_cmp(&b.1.time).then(a.1.i.cmp(&b.1.i)))
-                .map(|(k, e)| (k, *e))
-            else {
-                break;
-            };
-            self.events.swap_remove(k);
-            processed += 1;
-            if self.events.len() > 64 * (n + self.pairs.len()) {
-                let version = &self.version;
-                self.events.retain(|e| {
-                    let vj = match e.partner {
-                        Partner::Particle(j) => version[j],
-                        Partner::Collider(_) => 0,
-                    };
-                    (version[e.i], vj) == e.versions
-                });
-            }
+        loop {
+            let clock = Instant::now();
+            let Some(event) = self.queue.pop() else { break };
             let t = event.time;
-            // Move the particles involved to the impact.
-            let mut movers = vec![event.i];
-            if let Partner::Particle(j) = event.partner {
-                movers.push(j);
-            }
-            for &q in &movers {
-                self.advance(q, t);
-            }
-            let Some(contact) = self.contact_at(&event) else { continue };
-            // Touching pairs that approach slower than the resolve tolerance (rounding after an
-            // earlier impulse) are not impacts; the end-of-step stage sees them if they close.
-            let vi = get(&self.v_ref, event.i);
-            let vj = contact.partner_particle().map_or([0.0; 3], |j| get(&self.v_ref, j));
-            let u_n = dot([vi[0] - vj[0], vi[1] - vj[1], vi[2] - vj[2]], contact.normal);
-            if u_n >= -ResolveParams::default().tolerance {
+            let scene = Scene {
+                radius,
+                colliders: &self.colliders,
+                active: &active,
+                domain: &self.domain,
+                list: &self.list,
+                slow: ResolveParams::default().tolerance.max(threshold),
+                resting: &self.resting,
+            };
+            let partner = match event.partner {
+                Partner::Particle(j) => Some(j),
+                Partner::Collider(_) => None,
+            };
+            if partner.is_some_and(|j| self.paths.version[j] != event.partner_version) {
+                // the partner's path changed since: predicted on a path that no longer exists
+                let next = scene.earliest(&self.paths, event.i, t, h);
+                self.touched[event.i] |= next.touching;
+                self.queue.schedule(event.i, next.event);
+                t_detect += clock.elapsed();
                 continue;
             }
-            let material = self.materials().pair(&contact);
-            let Some(impulse) = apply_impulse(&contact, &mut self.v_ref, inv_mass, material, threshold) else {
-                continue;
-            };
-            any = true;
-            stats.impacts += 1;
-            stats.impulses += 1;
-            stats.energy_lost += impulse.energy_lost;
-            let external_partner = match event.partner {
-                Partner::Collider(_) => true,
-                Partner::Particle(j) => inv_mass[j] == 0.0,
-            };
-            // What the movable side got from a collider or a pinned particle is external.
-            let sign = match event.partner {
-                _ if external_partner && inv_mass[event.i] > 0.0 => 1.0,
-                Partner::Particle(j) if inv_mass[event.i] == 0.0 && inv_mass[j] > 0.0 => -1.0,
-                _ => 0.0,
-            };
-            for (e, j) in external.iter_mut().zip(impulse.vector) {
-                *e += sign * j;
+            processed += 1;
+            if processed > cap {
+                stats.unconverged += 1;
+                self.touched.iter_mut().for_each(|f| *f = true);
+                t_detect += clock.elapsed();
+                break;
             }
-            for &q in &movers {
-                self.version[q] += 1;
+            self.paths.advance(event.i, t);
+            if let Some(j) = partner {
+                self.paths.advance(j, t);
             }
-            for &q in &movers {
-                for a in self.adjacency_start[q]..self.adjacency_start[q + 1] {
-                    let (i, j) = self.pairs[self.adjacency[a]];
-                    if let Some(e) = self.pair_event(i, j, radius, h, t) {
-                        self.events.push(e);
-                    }
-                }
-                self.collider_events(q, radius, h, t);
-            }
-        }
+            let contact = self.contact_at(&event);
+            t_detect += clock.elapsed();
 
-        // The particles that were hit end on their last parabola.
-        for i in 0..n {
-            if self.version[i] == 0 {
-                continue;
-            }
-            let dt = h - self.t_ref[i];
-            for k in 0..3 {
-                let c = 3 * i + k;
-                let drift = v1[c] - (v0[c] + self.accel[c] * h);
-                x1[c] = self.x_ref[c] + self.v_ref[c] * dt + 0.5 * self.accel[c] * dt * dt;
-                v1[c] = self.v_ref[c] + self.accel[c] * dt + drift;
-            }
-        }
-        Ok(any)
-    }
-
-    fn is_current(&self, e: &Event) -> bool {
-        let vj = match e.partner {
-            Partner::Particle(j) => self.version[j],
-            Partner::Collider(_) => 0,
-        };
-        (self.version[e.i], vj) == e.versions
-    }
-
-    /// Moves particle q along its parabola to time t and makes that its reference.
-    fn advance(&mut self, q: usize, t: f64) {
-        let dt = t - self.t_ref[q];
-        for k in 0..3 {
-            let c = 3 * q + k;
-            self.x_ref[c] += self.v_ref[c] * dt + 0.5 * self.accel[c] * dt * dt;
-            self.v_ref[c] += self.accel[c] * dt;
-        }
-        self.t_ref[q] = t;
-    }
-
-    /// Position and velocity of particle q at time t on its current parabola.
-    fn state_at(&self, q: usize, t: f64) -> ([f64; 3], [f64; 3]) {
-        let dt = t - self.t_ref[q];
-        let mut x = [0.0; 3];
-        let mut v = [0.0; 3];
-        for k in 0..3 {
-            let c = 3 * q + k;
-            x[k] = self.x_ref[c] + self.v_ref[c] * dt + 0.5 * self.accel[c] * dt * dt;
-            v[k] = self.v_ref[c] + self.accel[c] * dt;
-        }
-        (x, v)
-    }
-
-    /// The first impact of particles i and j after time `now` within the step.
-    ///
-    /// Their separation d(τ) = d₀ + u τ + ½ Δa τ² is a straight line when Δa = 0 (uniform
-    /// fields), and [`toi_spheres`] solves |d| = r_i + r_j exactly. Otherwise the chord of
-    /// the remaining step (u + ½ Δa (h − now)) gives a first root, refined by Newton's method
-    /// on |d(τ)|² − R².
-    fn pair_event(&self, i: usize, j: usize, radius: &[f64], h: f64, now: f64) -> Option<Event> {
-        let (xi, vi) = self.state_at(i, now);
-        let (xj, vj) = self.state_at(j, now);
-        let d0 = self.domain.displacement(xi, xj);
-        let u = [vi[0] - vj[0], vi[1] - vj[1], vi[2] - vj[2]];
-        let da = [
-            self.accel[3 * i] - self.accel[3 * j],
-            self.accel[3 * i + 1] - self.accel[3 * j + 1],
-            self.accel[3 * i + 2] - self.accel[3 * j + 2],
-        ];
-        let big_r = radius[i] + radius[j];
-        let rest = h - now;
-        let tau = if da == [0.0; 3] {
-            toi_spheres(d0, u, big_r, rest)?
-        } else {
-            let chord = [
-                u[0] + 0.5 * da[0] * rest,
-                u[1] + 0.5 * da[1] * rest,
-                u[2] + 0.5 * da[2] * rest,
-            ];
-            let mut tau = toi_spheres(d0, chord, big_r, rest)?;
-            for _ in 0..8 {
-                let d = [0, 1, 2].map(|k| d0[k] + u[k] * tau + 0.5 * da[k] * tau * tau);
-                let dd = [0, 1, 2].map(|k| u[k] + da[k] * tau);
-                let g = dot(d, d) - big_r * big_r;
-                let dg = 2.0 * dot(d, dd);
-                if dg == 0.0 {
-                    break;
-                }
-                let next = (tau - g / dg).clamp(0.0, rest);
-                if (next - tau).abs() <= 1e-15 * rest {
-                    tau = next;
-                    break;
-                }
-                tau = next;
-            }
-            tau
-        };
-        if tau == 0.0 {
-            // Touching already (and approaching): a resting contact, or one that an impact of
-            // this step just pressed together. It is left to the end-of-step stage, whose
-            // sequential impulses settle whole stacks at once; as events at one instant they
-            // would cascade through a pile one impulse at a time.
-            return None;
-        }
-        Some(Event {
-            time: now + tau,
-            i,
-            partner: Partner::Particle(j),
-            wall: 0,
-            versions: (self.version[i], self.version[j]),
-        })
-    }
-
-    /// Pushes the first impact of particle i with each collider after `now`.
-    fn collider_events(&mut self, i: usize, radius: &[f64], h: f64, now: f64) {
-        let (x, v) = self.state_at(i, now);
-        let a = get(&self.accel, i);
-        let rest = h - now;
-        let mut found = Vec::new();
-        for (k, collider) in self.colliders.iter().enumerate() {
-            match collider {
-                Collider::Plane(p) => {
-                    if let Some(t) = toi_plane(x, v, a, radius[i], p, rest) {
-                        found.push((t, k, 0));
-                    }
-                }
-                Collider::Box(b) => {
-                    for (w, wall) in b.walls().iter().enumerate() {
-                        if self.wall_active(wall) {
-                            if let Some(t) = toi_plane(x, v, a, radius[i], wall, rest) {
-                                found.push((t, k, w));
-                            }
-                        }
-                    }
-                }
-                Collider::Sphere(s) => {
-                    let chord = [v[0] + 0.5 * a[0] * rest, v[1] + 0.5 * a[1] * rest, v[2] + 0.5 * a[2] * rest];
-                    if let Some(t) = toi_sphere_obstacle(x, chord, radius[i], s, rest) {
-                        found.push((t, k, 0));
-                    }
-                }
-            }
-        }
-        for (t, k, w) in found.into_iter().filter(|f| f.0 > 0.0) {
-            // (t = 0: touching already, left to the end-of-step stage as for pairs)
-            self.events.push(Event {
-                time: now + t,
-                i,
-                partner: Partner::Collider(k),
-                wall: w,
-                versions: (self.version[i], 0),
+            // Stage 3: the impulse of Newton's law at the impact.
+            let clock = Instant::now();
+            let impulse = contact.and_then(|c| {
+                let material = self.materials().pair(&c);
+                restitution_impulse(&c, &self.paths.v_ref, inv_mass, material, threshold)
             });
+            t_respond += clock.elapsed();
+
+            // Stage 4: onto both particles.
+            let clock = Instant::now();
+            if let Some(imp) = impulse {
+                if std::env::var("KDEBUG").is_ok() {
+                    eprintln!("IMPACT {} {:?} t={:.3e} jn={:.3e} e={}", event.i, event.partner, t, imp.normal, imp.restitution);
+                }
+                any = true;
+                stats.impacts += 1;
+                stats.impulses += 1;
+                stats.energy_lost += imp.energy_lost;
+                distribute(event.i, partner, imp.vector, &mut self.paths.v_ref, inv_mass, mass, &mut stats.impulse_balance);
+                for q in std::iter::once(event.i).chain(partner) {
+                    self.paths.version[q] += 1;
+                    self.touched[q] = true;
+                }
+            }
+            t_distribute += clock.elapsed();
+
+            // Stage 2 again: the two particles' next impacts, on the list if it still holds.
+            let clock = Instant::now();
+            let built = &self.list.built_at;
+            let farthest = std::iter::once(event.i)
+                .chain(partner)
+                .map(|q| swept_reach(&self.paths, q, t, h, vec3::get(built, q), &self.domain))
+                .fold(0.0, f64::max);
+            if farthest + reach >= self.list.allowance {
+                // a new path could reach beyond the list: rebuild it at t, predict everything again
+                reach = self.rebuild_at(t, radius, h)?;
+                self.schedule_all(radius, &active, t, h, threshold);
+            } else {
+                reach = reach.max(farthest);
+                let scene = Scene {
+                    radius,
+                    colliders: &self.colliders,
+                    active: &active,
+                    domain: &self.domain,
+                    list: &self.list,
+                    slow: ResolveParams::default().tolerance.max(threshold),
+                    resting: &self.resting,
+                };
+                for q in std::iter::once(event.i).chain(partner) {
+                    if impulse.is_some() || q == event.i {
+                        let next = scene.earliest(&self.paths, q, t, h);
+                        self.touched[q] |= next.touching;
+                        self.queue.schedule(q, next.event);
+                    }
+                }
+            }
+            t_detect += clock.elapsed();
         }
+        Ok((t_detect, t_respond, t_distribute, any))
+    }
+
+    /// Every particle's first impact after `now` into the queue (the queue emptied first),
+    /// on all threads; with `flag`, the particles touching something at `now` are marked.
+    fn schedule_all(&mut self, radius: &[f64], active: &[[bool; 6]], now: f64, h: f64, threshold: f64) {
+        let n = radius.len();
+        let scene = Scene {
+            radius,
+            colliders: &self.colliders,
+            active,
+            domain: &self.domain,
+            list: &self.list,
+            slow: ResolveParams::default().tolerance.max(threshold),
+            resting: &self.resting,
+        };
+        let (mut events, touching) = scene.all_impacts(&self.paths, now, h);
+        for q in touching {
+            self.touched[q] = true;
+        }
+        // Each particle's earliest: every pair's impact counts for both of its particles.
+        let mirrored: Vec<Event> = events
+            .iter()
+            .filter_map(|e| match e.partner {
+                Partner::Particle(j) => Some(Event {
+                    i: j,
+                    partner: Partner::Particle(e.i),
+                    partner_version: self.paths.version[e.i],
+                    ..*e
+                }),
+                Partner::Collider(_) => None,
+            })
+            .collect();
+        events.extend(mirrored);
+        events.sort_by(|a, b| a.i.cmp(&b.i).then(a.time.total_cmp(&b.time)).then(a.partner.cmp(&b.partner)));
+        self.queue.reset(n);
+        let mut last = usize::MAX;
+        for e in events {
+            if e.i != last {
+                self.queue.schedule(e.i, Some(e));
+                last = e.i;
+            }
+        }
+    }
+
+    /// Rebuilds the list at the particles' positions at time t (their references moved there)
+    /// for the rest of the step; returns the largest swept displacement from there, m.
+    fn rebuild_at(&mut self, t: f64, radius: &[f64], h: f64) -> Result<f64, Error> {
+        let n = radius.len();
+        let mut x = vec![0.0; 3 * n];
+        let mut largest: f64 = 0.0;
+        for q in 0..n {
+            self.paths.advance(q, t);
+            x[3 * q..3 * q + 3].copy_from_slice(&vec3::get(&self.paths.x_ref, q));
+            largest = largest.max(swept_reach(&self.paths, q, t, h, vec3::get(&x, q), &self.domain));
+        }
+        let mean_radius = radius.iter().sum::<f64>() / n.max(1) as f64;
+        let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest);
+        let scale = self.colliders.iter().map(collider_scale).fold(0.0, f64::max);
+        self.list.built_at.clear();
+        self.list
+            .update(&mut self.grid, &x, radius, &self.colliders, &self.domain, skin, scale)?;
+        self.list.verified = None;
+        self.drop_inactive_walls();
+        Ok(largest)
     }
 
     /// The contact of an event at its time (the particles already moved there).
     fn contact_at(&self, e: &Event) -> Option<Contact> {
-        let xi = get(&self.x_ref, e.i);
+        let xi = vec3::get(&self.paths.x_ref, e.i);
+        let unit = |d: [f64; 3]| {
+            let len = vec3::norm(d);
+            (len > 0.0).then(|| vec3::scale(1.0 / len, d))
+        };
         let normal = match e.partner {
-            Partner::Particle(j) => {
-                let d = self.domain.displacement(xi, get(&self.x_ref, j));
-                let len = norm(d);
-                if len == 0.0 {
-                    return None;
-                }
-                [d[0] / len, d[1] / len, d[2] / len]
-            }
+            Partner::Particle(j) => unit(self.domain.displacement(xi, vec3::get(&self.paths.x_ref, j)))?,
             Partner::Collider(k) => match &self.colliders[k] {
                 Collider::Plane(p) => p.normal(),
                 Collider::Box(b) => b.walls()[e.wall].normal(),
-                Collider::Sphere(s) => {
-                    let c = s.center();
-                    let d = [xi[0] - c[0], xi[1] - c[1], xi[2] - c[2]];
-                    let len = norm(d);
-                    if len == 0.0 {
-                        return None;
-                    }
-                    [d[0] / len, d[1] / len, d[2] / len]
-                }
+                Collider::Sphere(s) => unit(vec3::sub(xi, s.center()))?,
             },
         };
         Some(Contact {
@@ -722,4 +750,157 @@ impl CollisionStage {
             u_n: 0.0,
         })
     }
+
+    /// The contacts at the end of the step (pairs within [`CONTACT_GAP`] of touching, and
+    /// with colliders) of the touched particles, and of every particle they reach through
+    /// such contacts: a pile is one contact network, and the solver must see all of it (a
+    /// ball the solver stops changes the approach of the one resting on it). Breadth first
+    /// from the touched particles; a particle reached for the first time is touched, and its
+    /// integrated state goes to the energy books. Each pair once, lower index first; sorted
+    /// by (i, partner), then each touched particle's collider contacts.
+    fn end_contacts(&mut self, x1: &[f64], v1: &[f64], radius: &[f64]) {
+        self.contacts.clear();
+        let n = radius.len();
+        let mut work: Vec<usize> = (0..n).filter(|&i| self.touched[i]).collect();
+        let mut done = vec![false; n];
+        let mut next = 0;
+        while next < work.len() {
+            let i = work[next];
+            next += 1;
+            for &j in self.list.rows[i / CHUNK].of(i % CHUNK) {
+                let j = j as usize;
+                if done[j] {
+                    continue; // the pair was seen from j's side
+                }
+                let (lo, hi) = (i.min(j), i.max(j));
+                let gap = CONTACT_GAP * (radius[lo] + radius[hi]);
+                if let Some(c) = pair_contact(lo, hi, x1, v1, radius, &self.domain, gap) {
+                    self.contacts.push(c);
+                    if !self.touched[j] {
+                        self.touched[j] = true;
+                        self.books.push((j, vec3::get(x1, j), vec3::get(v1, j)));
+                        work.push(j);
+                    }
+                }
+            }
+            done[i] = true;
+        }
+        self.contacts.sort_by_key(|c| (c.i, c.other));
+        let list = &self.list;
+        for i in (0..n).filter(|&i| self.touched[i]) {
+            let (p, vi) = (vec3::get(x1, i), vec3::get(v1, i));
+            let first = list.walls.partition_point(|w| w.0 < i);
+            for &(_, k) in list.walls[first..].iter().take_while(|w| w.0 == i) {
+                self.colliders[k].for_each_touch(p, radius[i], CONTACT_GAP * radius[i], |t| {
+                    let c = Contact {
+                        i,
+                        other: Partner::Collider(k),
+                        normal: t.normal,
+                        overlap: t.overlap,
+                        u_n: vec3::dot(vi, t.normal),
+                    };
+                    if !on_periodic_wall(&c, &self.colliders, &self.domain) {
+                        self.contacts.push(c);
+                    }
+                });
+            }
+        }
+    }
+
+    /// The velocity solver of the end-of-step contacts, on a copy of the velocities: each
+    /// contact's total impulse into `totals` (applied by the caller). A contact approaching
+    /// faster than the threshold is an impact with target u_n⁺ = −e u_n⁻ (Newton's law);
+    /// slower, a resting contact with target 0. Warm-started from the last step's totals of
+    /// the same contacts.
+    fn solve(&mut self, v1: &[f64], inv_mass: &[f64], threshold: f64) -> Result<HoldStats, Error> {
+        let table = MaterialTable::uniform(self.material).with_colliders(&self.colliders);
+        let materials = match &self.particle_materials {
+            Some(m) => table.with_particles(m),
+            None => table,
+        };
+        self.targets.clear();
+        self.targets.extend(self.contacts.iter().map(|c| {
+            if -c.u_n >= threshold && c.u_n < 0.0 {
+                -materials.pair(c).restitution() * c.u_n
+            } else {
+                0.0
+            }
+        }));
+        let warm = &self.warm;
+        self.totals.clear();
+        self.totals.extend(self.contacts.iter().map(|c| {
+            warm.binary_search_by(|w| (w.0, w.1).cmp(&(c.i, c.other)))
+                .map_or([0.0; 3], |k| warm[k].2)
+        }));
+        if self.contacts.is_empty() {
+            self.warm.clear();
+            self.resting.clear();
+            return Ok(HoldStats {
+                converged: true,
+                ..HoldStats::default()
+            });
+        }
+        self.v_work.clear();
+        self.v_work.extend_from_slice(v1);
+        let params = HoldParams {
+            tolerance: ResolveParams::default().tolerance,
+            max_iterations: END_SWEEPS,
+        };
+        let stats = hold(&self.contacts, &self.targets, &mut self.v_work, inv_mass, &materials, &params, &mut self.totals)?;
+        self.warm.clear();
+        self.warm
+            .extend(self.contacts.iter().zip(&self.totals).map(|(c, p)| (c.i, c.other, *p)));
+        self.warm.sort_by_key(|w| (w.0, w.1));
+        self.resting.clear();
+        self.resting
+            .extend(self.warm.iter().map(|w| (w.0, w.1, w.2 != [0.0; 3])));
+        Ok(stats)
+    }
+
+    /// The mechanical energy the end-of-step solve and the position correction took, J: over
+    /// the particles in contact, the kinetic energy before them minus after, minus the work
+    /// the step's forces (the constant accelerations of the paths) do along the positions
+    /// the correction moved: Σ ½ m (|v_b|² − |v|²) + Σ m a·(x − x_b). For a resting contact
+    /// held by the solver, whose sinking the correction undoes, it is 0: what the impulse
+    /// took from the speed the force gave, the correction gave back as height. (An impact
+    /// inside the step books its own ½ (1 − e²) μ u_n², exactly 0 for e = 1.)
+    fn energy_books(&self, x1: &[f64], v1: &[f64], mass: &[f64], inv_mass: &[f64]) -> f64 {
+        let mut lost = 0.0;
+        for &(q, xb, vb) in &self.books {
+            if inv_mass[q] == 0.0 {
+                continue;
+            }
+            let (x, v, a) = (vec3::get(x1, q), vec3::get(v1, q), vec3::get(&self.paths.accel, q));
+            let dx = self.domain.displacement(x, xb);
+            lost += 0.5 * mass[q] * (vec3::dot(vb, vb) - vec3::dot(v, v)) + mass[q] * vec3::dot(a, dx);
+        }
+        lost
+    }
 }
+
+/// Stage 4 for one impulse: J on particle i (+w_i J to its velocity) and −J on its partner
+/// particle (−w_j J), in `v`; adds to `balance` what the two movable sides received, m Δv
+/// (Σ over both: zero by action and reaction, to rounding). An impulse from a collider or a
+/// pinned particle comes from outside the movable particles and is not part of the balance.
+fn distribute(i: usize, j: Option<usize>, impulse: [f64; 3], v: &mut [f64], inv_mass: &[f64], mass: &[f64], balance: &mut [f64; 3]) {
+    let (wi, wj) = (inv_mass[i], j.map_or(0.0, |j| inv_mass[j]));
+    for k in 0..3 {
+        v[3 * i + k] += wi * impulse[k];
+    }
+    if let Some(j) = j {
+        for k in 0..3 {
+            v[3 * j + k] -= wj * impulse[k];
+        }
+        if wi > 0.0 && wj > 0.0 {
+            for k in 0..3 {
+                balance[k] += mass[i] * (wi * impulse[k]) - mass[j] * (wj * impulse[k]);
+            }
+        }
+    }
+}
+
+/// Combines (largest, second largest, largest velocity change, NaN met) of two parts.
+fn top_two(a: (f64, f64, f64, bool), b: (f64, f64, f64, bool)) -> (f64, f64, f64, bool) {
+    (a.0.max(b.0), a.0.min(b.0).max(a.1).max(b.1), a.2.max(b.2), a.3 || b.3)
+}
+

@@ -20,23 +20,11 @@ use super::collisions::on_periodic_wall;
 use crate::collide::{
     damping_ratio, dashpot_coefficient, pair_contact, spring_dashpot_force, Collider, Contact, Domain, Grid, Material, Partner,
 };
-use crate::collide::neighbour_list::{collider_scale, NeighbourList, Rows};
+use crate::collide::neighbour_list::{collider_scale, NeighbourList, Rows, SKIN_PER_RADIUS};
 pub(crate) use crate::collide::neighbour_list::CHUNK;
 use crate::error::{CallbackError, Error};
 use crate::forces::{Force, SpringRates, State};
 
-/// The neighbour list's default skin, as a fraction of the particles' mean radius.
-///
-/// The skin trades the pairs tested at every evaluation against how often the list is
-/// rebuilt: a thicker shell lists more pairs that do not touch, a thinner one is outlived
-/// sooner (the list lasts while the two particles that moved most have together moved less
-/// than s). Measured on the granular gas of benchmarks/granular_gas.py (N = 103,823, density
-/// 0.3, T = 1, 500 steps, particle-steps/s with 1 and 2 threads): 0.2 r: 8.6e6 and 1.5e7;
-/// 0.6 r: 1.0e7 and 1.8e7; 1.0 r: 7.0e6 and 1.3e7. 0.6 r is LAMMPS's skin for that gas
-/// (0.3 d). In the denser granular settle of benchmarks/collisions_lammps.py the optimum
-/// was flat between 0.1 r and 0.5 r. A fraction of the radius keeps the choice independent
-/// of the units and of the size of the particles.
-pub(crate) const SKIN_PER_RADIUS: f64 = 0.6;
 
 /// Penalty contacts between particles and with colliders (the DEM way).
 ///

@@ -144,13 +144,18 @@ pub struct World {
     times: StageTimes,
 }
 
-/// Wall-clock time spent in the stages of [`World::step`], summed over all steps.
+/// Wall-clock time spent in the seed's four stages of [`World::step`], summed over all steps.
+/// With spring–dashpot contacts the contacts are a force: all of their time is integration.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTimes {
     /// Stage 1: integration (force evaluations included).
     pub integrate: std::time::Duration,
-    /// Stages 2–4: detection, response and distribution of collisions.
-    pub collide: std::time::Duration,
+    /// Stage 2: collision detection (candidates, times of impact, contacts).
+    pub detect: std::time::Duration,
+    /// Stage 3: the response by Newton's restitution law (impulses; overlap removed).
+    pub respond: std::time::Duration,
+    /// Stage 4: each impulse distributed onto both particles.
+    pub distribute: std::time::Duration,
 }
 
 /// The reference of the runaway-energy check (see [`World::step`]).
@@ -264,6 +269,9 @@ impl World {
     fn reset_caches(&mut self) {
         self.stepper = None;
         self.watch = None;
+        if let Some(stage) = &mut self.collisions {
+            stage.forget_list();
+        }
     }
 
     /// The forces, in the order they were added.
@@ -299,7 +307,13 @@ impl World {
 
     /// Wall-clock time spent in each stage of the steps so far.
     pub fn stage_times(&self) -> StageTimes {
-        self.times
+        let mut times = self.times;
+        if let Some(stage) = &self.collisions {
+            times.detect = stage.times.detect;
+            times.respond = stage.times.respond;
+            times.distribute = stage.times.distribute;
+        }
+        times
     }
 
     /// Energies and momenta now.
@@ -416,10 +430,8 @@ impl World {
         }
         let start = std::time::Instant::now();
         self.integrate()?; // 1: the integrated state, in x_next, v_next
-        let integrated = std::time::Instant::now();
-        self.collide()?; // 2–4: detect, respond, distribute, on x_next, v_next
-        self.times.integrate += integrated - start;
-        self.times.collide += integrated.elapsed();
+        self.times.integrate += start.elapsed();
+        self.collide()?; // 2–4: detect, respond, distribute, on x_next, v_next (timed inside)
         // Accepted: the new state becomes the particles' own (a swap, not a copy).
         std::mem::swap(&mut self.particles.x, &mut self.x_next);
         std::mem::swap(&mut self.particles.v, &mut self.v_next);
@@ -688,7 +700,11 @@ impl World {
         }
         let p = &self.particles;
         let (x1, v1) = (&mut self.x_next[..], &mut self.v_next[..]);
-        let changed = stage.run(&p.x, &p.v, x1, v1, &p.radius, &p.inv_mass, &p.mass, self.params.dt)?;
+        let accel = match &self.stepper {
+            Some(WorldStepper::Verlet(b)) if b.a.len() == n => Some(&b.a[..]),
+            _ => None,
+        };
+        let changed = stage.run(&p.x, &p.v, x1, v1, &p.radius, &p.inv_mass, &p.mass, accel, self.params.dt)?;
         if changed {
             // A method's cache (Verlet's last acceleration) holds F at the integrated state;
             // it stays right only if no force depends on positions or velocities.
@@ -728,6 +744,9 @@ impl World {
     /// particles (added to the forces, replaced, or removed).
     fn rebuild_contact_force(&mut self) -> Result<(), Error> {
         self.contact_dirty = false;
+        if let Some(stage) = &mut self.collisions {
+            stage.forget_list(); // the impulse model's list: colliders, domain or particles changed
+        }
         let wanted = match self.collisions.as_ref().map(|c| c.params.model) {
             Some(ContactModel::SpringDashpot { stiffness, damping }) => Some((stiffness, damping)),
             _ => None,
