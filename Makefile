@@ -65,6 +65,7 @@ bench: build $(TEST_STAMP)
 	$(PY) benchmarks/granular_gas.py --sizes --repeat 1
 	$(PY) benchmarks/springs.py
 	$(PY) benchmarks/mixed_radii.py
+	$(PY) benchmarks/impacts.py
 
 pictures: build
 	$(PY) docs/pictures.py docs/img
