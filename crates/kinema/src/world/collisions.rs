@@ -415,6 +415,13 @@ impl CollisionStage {
         self.end_contacts(x1, v1, radius);
         stats.contacts = self.contacts.len();
         self.detected.clone_from(&self.contacts);
+        // A pair that only touches (no overlap) and approaches faster than an impact's least
+        // speed meets exactly at the step's end: its impact belongs to the next step's t = 0,
+        // where the law resolves it pair by pair, like every other impact (with ccd).
+        if self.params.ccd {
+            let slow = ResolveParams::default().tolerance.max(threshold);
+            self.contacts.retain(|c| !(c.overlap <= 0.0 && c.u_n < -slow));
+        }
         t_detect += clock.elapsed();
 
         // Stage 3: the solver's totals, and the overlap removed.
@@ -437,7 +444,7 @@ impl CollisionStage {
 
         // Stage 4: the totals onto both particles; the books.
         let clock = Instant::now();
-        for (c, p) in self.detected.iter().zip(&self.totals) {
+        for (c, p) in self.contacts.iter().zip(&self.totals) {
             if *p == [0.0; 3] {
                 continue;
             }
