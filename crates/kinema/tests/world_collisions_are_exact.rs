@@ -432,3 +432,25 @@ fn a_column_of_twenty_balls_comes_to_rest() {
     let e1 = w.diagnostics().total_energy();
     assert!((total.energy_lost - (e0 - e1)).abs() < 1e-9 * e0, "{} vs {}", total.energy_lost, e0 - e1);
 }
+
+#[test]
+fn a_path_that_outruns_the_candidate_list_rebuilds_it_within_the_step() {
+    // A touching chain of masses 1, 10⁻², 10⁻⁴, 10⁻⁶ kg (r = 0.1 mm), the first at 1 m/s,
+    // e = 1: at t = 0 each impact about doubles the speed (a light ball hit by a heavy one
+    // leaves at twice its speed), so the last ball leaves at ~7.8 m/s where the list was built
+    // for moves of 1 mm (skin 4 mm). A target 6 mm ahead of it, beyond that skin, is reached
+    // within the step only if the list is rebuilt at the impacts: it must be hit.
+    let r = 1e-4;
+    let mut w = world(1e-3, 3, 1.0);
+    let mut x: Vec<f64> = (0..4).flat_map(|k| [2.0 * r * k as f64, 0.0, 0.0]).collect();
+    x.extend([6.0 * r + 2.0 * r + 6e-3, 0.0, 0.0]);
+    let mut vel = vec![0.0; 15];
+    vel[0] = 1.0;
+    let mass = [1.0, 1e-2, 1e-4, 1e-6, 1e-6];
+    w.add_particles(&x, &vel, &mass, &[r; 5], &[false; 5]).unwrap();
+    w.step().unwrap();
+    let (last, _) = w.collision_stats().unwrap();
+    assert!(v(&w, 4)[0] > 1.0, "the target was not hit: {:?} {last:?}", v(&w, 4));
+    let p: f64 = mass.iter().enumerate().map(|(k, m)| m * v(&w, k)[0]).sum();
+    assert!((p - 1.0).abs() < 1e-12, "momentum {p}");
+}
