@@ -287,7 +287,7 @@ def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_
     stats = world.collision_stats()
     if stats is not None:
         total = stats["total"]
-        console.print(f"{total['impacts']} impacts inside steps, {total['energy_lost']:.4g} J of kinetic energy taken by the impulses", highlight=False)
+        console.print(f"{total['impacts']} impacts inside steps, {total['energy_lost']:.4g} J taken by the collisions", highlight=False)
     # Everything is written in a hidden folder inside OUTDIR and moved into place at the end,
     # so a failure leaves no file half-written and none of this run's files at all.
     stage = Path(tempfile.mkdtemp(prefix=".kinema-run.", dir=outdir))

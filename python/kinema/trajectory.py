@@ -17,8 +17,8 @@ class Trajectory:
     Collisions (all zeros while they are off): ``contacts`` (F,), the number of contacts at
     the frame; ``impulse_balance`` (F, 3), N·s, the sum of the impulses between movable
     particles since the previous frame (0 at frame 0), zero by action and reaction up to
-    rounding; ``collision_energy_lost`` (F,), J, the kinetic energy the collisions removed
-    since they were turned on.
+    rounding; ``collision_energy_lost`` (F,), J, the mechanical energy the collisions took
+    since they were turned on (total energy + it is conserved).
 
     About the world (``None`` when unknown): ``masses`` (N,) kg, ``radii`` (N,) m, ``ids``
     (N,), ``dim`` (2 or 3), ``dt`` s, ``method``, ``periodic`` (3 bools) and ``box_edges``
