@@ -428,7 +428,7 @@ impl CollisionStage {
         let clock = Instant::now();
         let solved = self.solve(v1, inv_mass, threshold)?;
         stats.solver_sweeps = solved.iterations;
-        stats.unconverged = usize::from(!solved.converged);
+        stats.unconverged = stats.unconverged.max(usize::from(!solved.converged));
         let s = separate(
             &mut self.contacts,
             x1,
@@ -620,9 +620,6 @@ impl CollisionStage {
             // Stage 4: onto both particles.
             let clock = Instant::now();
             if let Some(imp) = impulse {
-                if std::env::var("KDEBUG").is_ok() {
-                    eprintln!("IMPACT {} {:?} t={:.3e} jn={:.3e} e={}", event.i, event.partner, t, imp.normal, imp.restitution);
-                }
                 any = true;
                 stats.impacts += 1;
                 stats.impulses += 1;
