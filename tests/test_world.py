@@ -107,6 +107,21 @@ def test_a_nan_force_is_named_as_a_non_finite_divergence():
     assert info.value.reason == "non-finite" and info.value.particle == 1 and info.value.step == 1
 
 
+@pytest.mark.parametrize("bad", [0, 4999])
+def test_verlet_finds_a_non_finite_state_in_any_chunk_of_many_particles(bad):
+    # Velocity Verlet checks the new state for NaN/inf chunk by chunk on all threads (2,048
+    # particles a chunk). Regression: the chunks' findings were combined with Option's own
+    # order, in which "nothing found" comes first, so with more than one chunk an infinite
+    # force went through unnoticed.
+    w = kinema.World(dt=1e-3, method="verlet")
+    n = 5000
+    w.add_particles(np.random.default_rng(0).uniform(0, 10, (n, 3)), radius=0.01)
+    w.add(kinema.PythonForce(lambda t, x, v: np.where(np.arange(len(x))[:, None] == bad, np.inf, 0.0) * np.ones_like(x)))
+    with pytest.warns(kinema.StabilityWarning), pytest.raises(kinema.SimulationDiverged, match="non-finite") as info:
+        w.step(2)
+    assert info.value.particle == bad and info.value.step == 1
+
+
 def test_stable_step_of_two_masses_on_a_spring_is_the_closed_form():
     # Two masses m on a spring k: the stretch oscillates at ω² = k (1/m + 1/m). Theory:
     # Verlet and symplectic Euler are stable for hω ≤ 2, RK4 for hω ≤ 2√2 (its imaginary

@@ -330,8 +330,9 @@ impl ContactForce {
                 }
                 bad
             })
+            .flatten() // (Option's own order puts None first: drop the clean chunks)
             .min();
-        Ok(bad.flatten())
+        Ok(bad)
     }
 
     /// The pair forces at `s` added to `f` (N, 3 per particle), and the pairs' energy
