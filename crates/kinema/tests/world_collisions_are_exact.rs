@@ -361,8 +361,14 @@ fn a_touching_pair_that_approaches_is_an_impact_at_the_start_of_the_step() {
     // masses: the impact is at t = 0 of the step, A stops there and B leaves at 1 m/s. After
     // one step of 1 ms: x = (0, 0.201) exactly (not pushed apart from an overlap at the end).
     let mut w = world(1e-3, 3, 1.0);
-    w.add_particles(&[0.0, 0.0, 0.0, 0.2, 0.0, 0.0], &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0], &[1.0; 2], &[0.1; 2], &[false; 2])
-        .unwrap();
+    w.add_particles(
+        &[0.0, 0.0, 0.0, 0.2, 0.0, 0.0],
+        &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        &[1.0; 2],
+        &[0.1; 2],
+        &[false; 2],
+    )
+    .unwrap();
     w.step().unwrap();
     let x = &w.particles().x;
     assert_eq!((x[0], x[3]), (0.0, 0.2 + 1e-3), "{x:?}");
@@ -404,7 +410,9 @@ fn a_column_of_twenty_balls_comes_to_rest() {
     let (r, m, g) = (0.05, 0.1, 9.81);
     let mut w = world(1e-3, 3, 0.5);
     let n = 20;
-    let x: Vec<f64> = (0..n).flat_map(|k| [0.0, 0.0, r + 1e-3 + (2.0 * r + 1e-3) * k as f64]).collect();
+    let x: Vec<f64> = (0..n)
+        .flat_map(|k| [0.0, 0.0, r + 1e-3 + (2.0 * r + 1e-3) * k as f64])
+        .collect();
     w.add_particles(&x, &vec![0.0; 3 * n], &vec![m; n], &vec![r; n], &vec![false; n])
         .unwrap();
     w.add_force(Box::new(Gravity::new([0.0, 0.0, -g]).unwrap())).unwrap();
@@ -430,7 +438,12 @@ fn a_column_of_twenty_balls_comes_to_rest() {
     assert_eq!(last.unconverged, 0, "{last:?}");
     // The books: what the collisions took is what the column lost.
     let e1 = w.diagnostics().total_energy();
-    assert!((total.energy_lost - (e0 - e1)).abs() < 1e-9 * e0, "{} vs {}", total.energy_lost, e0 - e1);
+    assert!(
+        (total.energy_lost - (e0 - e1)).abs() < 1e-9 * e0,
+        "{} vs {}",
+        total.energy_lost,
+        e0 - e1
+    );
 }
 
 #[test]

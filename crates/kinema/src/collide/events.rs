@@ -318,9 +318,7 @@ impl Scene<'_> {
             match pair_toi(d0, u, da, self.radius[i] + self.radius[j], rest, self.slow) {
                 Toi::Never => {}
                 Toi::Touching => each(Found::Touching(Some(j))),
-                Toi::At(tau) if tau == 0.0 && self.is_resting(i, Partner::Particle(j), now) => {
-                    each(Found::Touching(Some(j)))
-                }
+                Toi::At(tau) if tau == 0.0 && self.is_resting(i, Partner::Particle(j), now) => each(Found::Touching(Some(j))),
                 Toi::At(tau) => each(Found::Impact(Event {
                     time: now + tau,
                     i,
@@ -356,7 +354,11 @@ impl Scene<'_> {
     fn touches(&self, k: usize, x: [f64; 3], r: f64) -> bool {
         match &self.colliders[k] {
             Collider::Plane(p) => p.touch(x, r, 0.0).is_some(),
-            Collider::Box(b) => b.walls().iter().enumerate().any(|(w, wall)| self.active[k][w] && wall.touch(x, r, 0.0).is_some()),
+            Collider::Box(b) => b
+                .walls()
+                .iter()
+                .enumerate()
+                .any(|(w, wall)| self.active[k][w] && wall.touch(x, r, 0.0).is_some()),
             Collider::Sphere(s) => s.touch(x, r, 0.0).is_some(),
         }
     }
@@ -536,14 +538,32 @@ mod tests {
         };
         assert!((at - 0.05).abs() < 1e-16, "{at}");
         // passing 0.25 m to the side of R = 0.2: never, and receding: never
-        assert_eq!(pair_toi([-1.0, 0.25, 0.0], [2.0, 0.0, 0.0], [0.0; 3], 0.2, 1.0, 1e-9), Toi::Never);
-        assert_eq!(pair_toi([1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0; 3], 0.2, 1.0, 1e-9), Toi::Never);
+        assert_eq!(
+            pair_toi([-1.0, 0.25, 0.0], [2.0, 0.0, 0.0], [0.0; 3], 0.2, 1.0, 1e-9),
+            Toi::Never
+        );
+        assert_eq!(
+            pair_toi([1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0; 3], 0.2, 1.0, 1e-9),
+            Toi::Never
+        );
         // out of reach within the step
-        assert_eq!(pair_toi([-1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0; 3], 0.2, 0.3, 1e-9), Toi::Never);
+        assert_eq!(
+            pair_toi([-1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0; 3], 0.2, 0.3, 1e-9),
+            Toi::Never
+        );
         // touching: an impact now when approaching, else only touching
-        assert_eq!(pair_toi([-0.2, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0; 3], 0.2, 1.0, 1e-9), Toi::At(0.0));
-        assert_eq!(pair_toi([-0.2, 0.0, 0.0], [1e-12, 0.0, 0.0], [0.0; 3], 0.2, 1.0, 1e-9), Toi::Touching);
-        assert_eq!(pair_toi([-0.2, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0; 3], 0.2, 1.0, 1e-9), Toi::Touching);
+        assert_eq!(
+            pair_toi([-0.2, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0; 3], 0.2, 1.0, 1e-9),
+            Toi::At(0.0)
+        );
+        assert_eq!(
+            pair_toi([-0.2, 0.0, 0.0], [1e-12, 0.0, 0.0], [0.0; 3], 0.2, 1.0, 1e-9),
+            Toi::Touching
+        );
+        assert_eq!(
+            pair_toi([-0.2, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0; 3], 0.2, 1.0, 1e-9),
+            Toi::Touching
+        );
         // under a relative acceleration from rest: ½ Δa τ² = gap, τ = √(2·0.1/2) s
         let Toi::At(tau) = pair_toi([-0.3, 0.0, 0.0], [0.0; 3], [2.0, 0.0, 0.0], 0.2, 1.0, 1e-9) else {
             panic!("no impact")

@@ -49,7 +49,7 @@ pub use domain::{Domain, Periodic};
 pub use narrow_phase::{pair_contact, sphere_contacts};
 pub use penalty::{damping_ratio, dashpot_coefficient, restitution_of_damping, spring_dashpot_force, PenaltyLaw};
 pub use response::{
-    apply_impulse, hold, resolve, restitution_impulse, separate, HoldParams, HoldStats, Impulse, Material, MaterialTable, ResolveParams, ResolveStats, SeparateParams,
-    SeparateStats,
+    apply_impulse, hold, resolve, restitution_impulse, separate, HoldParams, HoldStats, Impulse, Material, MaterialTable,
+    ResolveParams, ResolveStats, SeparateParams, SeparateStats,
 };
 pub use toi::{toi_plane, toi_sphere_obstacle, toi_spheres};

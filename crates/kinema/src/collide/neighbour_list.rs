@@ -250,4 +250,3 @@ impl NeighbourList {
         self.built_at = built;
     }
 }
-

@@ -6,9 +6,9 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
-use crate::collide::vec3;
 use crate::collide::events::{swept_reach, Event, EventQueue, Paths, Scene};
 use crate::collide::neighbour_list::{collider_scale, NeighbourList, CHUNK, SKIN_PER_RADIUS};
+use crate::collide::vec3;
 use crate::collide::{
     hold, pair_contact, restitution_impulse, separate, Collider, Contact, Domain, Grid, HoldParams, HoldStats, Material,
     MaterialTable, Partner, Periodic, Plane, ResolveParams, SeparateParams,
@@ -163,6 +163,29 @@ const CONTACT_GAP: f64 = 1e-9;
 
 /// Sweeps of the position correction at the end of a step (overlap removed along the normals).
 const SEPARATE_SWEEPS: usize = 20;
+
+/// The least approach speed of an impact, m/s: slower meetings are contacts for the end of
+/// the step (the solver's tolerance, or the restitution threshold below which they would be
+/// plastic anyway).
+fn least_impact_speed(threshold: f64) -> f64 {
+    ResolveParams::default().tolerance.max(threshold)
+}
+
+/// What continuous detection sweeps against (`collide::events::Scene`), from the stage's own
+/// fields (a macro, not a method: the event loop holds it while it changes other fields).
+macro_rules! scene {
+    ($stage:ident, $radius:expr, $active:expr, $threshold:expr) => {
+        Scene {
+            radius: $radius,
+            colliders: &$stage.colliders,
+            active: $active,
+            domain: &$stage.domain,
+            list: &$stage.list,
+            slow: least_impact_speed($threshold),
+            resting: &$stage.resting,
+        }
+    };
+}
 
 /// The collision stages of a world, with their settings, colliders and buffers.
 pub(crate) struct CollisionStage {
@@ -419,7 +442,7 @@ impl CollisionStage {
         // speed meets exactly at the step's end: its impact belongs to the next step's t = 0,
         // where the law resolves it pair by pair, like every other impact (with ccd).
         if self.params.ccd {
-            let slow = ResolveParams::default().tolerance.max(threshold);
+            let slow = least_impact_speed(threshold);
             self.contacts.retain(|c| !(c.overlap <= 0.0 && c.u_n < -slow));
         }
         t_detect += clock.elapsed();
@@ -574,15 +597,7 @@ impl CollisionStage {
             let clock = Instant::now();
             let Some(event) = self.queue.pop() else { break };
             let t = event.time;
-            let scene = Scene {
-                radius,
-                colliders: &self.colliders,
-                active: &active,
-                domain: &self.domain,
-                list: &self.list,
-                slow: ResolveParams::default().tolerance.max(threshold),
-                resting: &self.resting,
-            };
+            let scene = scene!(self, radius, &active, threshold);
             let partner = match event.partner {
                 Partner::Particle(j) => Some(j),
                 Partner::Collider(_) => None,
@@ -624,7 +639,15 @@ impl CollisionStage {
                 stats.impacts += 1;
                 stats.impulses += 1;
                 stats.energy_lost += imp.energy_lost;
-                distribute(event.i, partner, imp.vector, &mut self.paths.v_ref, inv_mass, mass, &mut stats.impulse_balance);
+                distribute(
+                    event.i,
+                    partner,
+                    imp.vector,
+                    &mut self.paths.v_ref,
+                    inv_mass,
+                    mass,
+                    &mut stats.impulse_balance,
+                );
                 for q in std::iter::once(event.i).chain(partner) {
                     self.paths.version[q] += 1;
                     self.touched[q] = true;
@@ -645,15 +668,7 @@ impl CollisionStage {
                 self.schedule_all(radius, &active, t, h, threshold);
             } else {
                 reach = reach.max(farthest);
-                let scene = Scene {
-                    radius,
-                    colliders: &self.colliders,
-                    active: &active,
-                    domain: &self.domain,
-                    list: &self.list,
-                    slow: ResolveParams::default().tolerance.max(threshold),
-                    resting: &self.resting,
-                };
+                let scene = scene!(self, radius, &active, threshold);
                 for q in std::iter::once(event.i).chain(partner) {
                     if impulse.is_some() || q == event.i {
                         let next = scene.earliest(&self.paths, q, t, h);
@@ -671,15 +686,7 @@ impl CollisionStage {
     /// on all threads; with `flag`, the particles touching something at `now` are marked.
     fn schedule_all(&mut self, radius: &[f64], active: &[[bool; 6]], now: f64, h: f64, threshold: f64) {
         let n = radius.len();
-        let scene = Scene {
-            radius,
-            colliders: &self.colliders,
-            active,
-            domain: &self.domain,
-            list: &self.list,
-            slow: ResolveParams::default().tolerance.max(threshold),
-            resting: &self.resting,
-        };
+        let scene = scene!(self, radius, active, threshold);
         let (mut events, touching) = scene.all_impacts(&self.paths, now, h);
         for q in touching {
             self.touched[q] = true;
@@ -850,14 +857,21 @@ impl CollisionStage {
             tolerance: ResolveParams::default().tolerance,
             max_iterations: END_SWEEPS,
         };
-        let stats = hold(&self.contacts, &self.targets, &mut self.v_work, inv_mass, &materials, &params, &mut self.totals)?;
+        let stats = hold(
+            &self.contacts,
+            &self.targets,
+            &mut self.v_work,
+            inv_mass,
+            &materials,
+            &params,
+            &mut self.totals,
+        )?;
         self.warm.clear();
         self.warm
             .extend(self.contacts.iter().zip(&self.totals).map(|(c, p)| (c.i, c.other, *p)));
         self.warm.sort_by_key(|w| (w.0, w.1));
         self.resting.clear();
-        self.resting
-            .extend(self.warm.iter().map(|w| (w.0, w.1, w.2 != [0.0; 3])));
+        self.resting.extend(self.warm.iter().map(|w| (w.0, w.1, w.2 != [0.0; 3])));
         Ok(stats)
     }
 
@@ -886,7 +900,15 @@ impl CollisionStage {
 /// particle (−w_j J), in `v`; adds to `balance` what the two movable sides received, m Δv
 /// (Σ over both: zero by action and reaction, to rounding). An impulse from a collider or a
 /// pinned particle comes from outside the movable particles and is not part of the balance.
-fn distribute(i: usize, j: Option<usize>, impulse: [f64; 3], v: &mut [f64], inv_mass: &[f64], mass: &[f64], balance: &mut [f64; 3]) {
+fn distribute(
+    i: usize,
+    j: Option<usize>,
+    impulse: [f64; 3],
+    v: &mut [f64],
+    inv_mass: &[f64],
+    mass: &[f64],
+    balance: &mut [f64; 3],
+) {
     let (wi, wj) = (inv_mass[i], j.map_or(0.0, |j| inv_mass[j]));
     for k in 0..3 {
         v[3 * i + k] += wi * impulse[k];
@@ -907,4 +929,3 @@ fn distribute(i: usize, j: Option<usize>, impulse: [f64; 3], v: &mut [f64], inv_
 fn top_two(a: (f64, f64, f64, bool), b: (f64, f64, f64, bool)) -> (f64, f64, f64, bool) {
     (a.0.max(b.0), a.0.min(b.0).max(a.1).max(b.1), a.2.max(b.2), a.3 || b.3)
 }
-

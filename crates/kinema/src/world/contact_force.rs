@@ -17,14 +17,13 @@ use std::sync::{Mutex, MutexGuard};
 use rayon::prelude::*;
 
 use super::collisions::on_periodic_wall;
+pub(crate) use crate::collide::neighbour_list::CHUNK;
+use crate::collide::neighbour_list::{collider_scale, NeighbourList, Rows, SKIN_PER_RADIUS};
 use crate::collide::{
     damping_ratio, dashpot_coefficient, pair_contact, spring_dashpot_force, Collider, Contact, Domain, Grid, Material, Partner,
 };
-use crate::collide::neighbour_list::{collider_scale, NeighbourList, Rows, SKIN_PER_RADIUS};
-pub(crate) use crate::collide::neighbour_list::CHUNK;
 use crate::error::{CallbackError, Error};
 use crate::forces::{Force, SpringRates, State};
-
 
 /// Penalty contacts between particles and with colliders (the DEM way).
 ///
@@ -62,7 +61,6 @@ pub(crate) struct ContactForce {
     /// across threads).
     scratch: Mutex<Scratch>,
 }
-
 
 #[derive(Default)]
 struct Scratch {

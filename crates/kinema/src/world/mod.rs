@@ -431,7 +431,8 @@ impl World {
         let start = std::time::Instant::now();
         self.integrate()?; // 1: the integrated state, in x_next, v_next
         self.times.integrate += start.elapsed();
-        self.collide()?; // 2–4: detect, respond, distribute, on x_next, v_next (timed inside)
+        // 2–4: detect, respond, distribute, on x_next, v_next (timed inside)
+        self.collide()?;
         // Accepted: the new state becomes the particles' own (a swap, not a copy).
         std::mem::swap(&mut self.particles.x, &mut self.x_next);
         std::mem::swap(&mut self.particles.v, &mut self.v_next);
@@ -485,11 +486,14 @@ impl World {
                 // No force at all (a gas of the impulse model): a = a' = 0, so the drift is
                 // x + h v and both kicks add nothing. One pass instead of three, the same
                 // numbers (to the sign of a zero).
-                b.a.clear();
-                b.a.resize(n, 0.0);
-                b.a_next.clear();
-                b.a_next.resize(n, 0.0);
-                b.fresh = true;
+                if !b.fresh || b.a.len() != n || b.a_next.len() != n {
+                    // zeros once; no step writes them again
+                    b.a.clear();
+                    b.a.resize(n, 0.0);
+                    b.a_next.clear();
+                    b.a_next.resize(n, 0.0);
+                    b.fresh = true;
+                }
                 let p = &self.particles;
                 let bad = self
                     .x_next
