@@ -404,3 +404,47 @@ def test_the_demo_pile_books_only_what_the_collisions_take():
     assert lost[0] > 0.5 * e0  # the check is not empty: most of the fall's energy is gone
     # settled by 2 s (a frictionless heap still creeps): under 0.1 % more in the last 0.5 s
     assert lost[-1] - lost[-2] < 1e-3 * lost[-1], lost
+
+
+def _gas_in_a_slab(zero_force: bool):
+    # 1,728 spheres (two radii) at number density 0.3 with random velocities of a few m/s in
+    # a box periodic along x and y, with walls along z; e = 0.8.
+    rng = np.random.default_rng(7)
+    ncell, a = 12, (1 / 0.3) ** (1 / 3)
+    i, j, k = np.meshgrid(*[np.arange(ncell)] * 3, indexing="ij")
+    x = (np.stack([i, j, k], axis=-1).reshape(-1, 3) + 0.5) * a
+    v = rng.normal(0.0, 2.0, x.shape)
+    radius = 0.5 - 0.1 * (np.arange(len(x)) % 2)
+    w = kinema.World(dt=1e-3, method="verlet")
+    w.add_particles(x, velocity=v, mass=1.0, radius=radius)
+    w.add(kinema.Box([0, 0, 0], [ncell * a] * 3))
+    w.periodic = (True, True, False)
+    w.set_collisions(model="impulse", restitution=0.8)
+    if zero_force:
+        w.add(kinema.Gravity((0.0, 0.0, 0.0)))
+    return w, radius
+
+
+def test_the_wake_schedule_of_a_force_free_world_misses_no_impact():
+    # Without forces, a step searches impacts only from the particles whose wake time falls
+    # in it (collide/wake.rs). A zero force makes the world search from every particle, as
+    # with any force, on the same numbers (x + h v; a = 0). Had the wake times missed an
+    # impact, a pair would pass through each other: the two runs would part, and spheres
+    # would overlap.
+    runs = []
+    for zero_force in (False, True):
+        w, radius = _gas_in_a_slab(zero_force)
+        w.step(600)
+        runs.append((w.positions.copy(), w.velocities.copy(), w.collision_stats()["total"]))
+    (x_wake, v_wake, s_wake), (x_all, v_all, s_all) = runs
+    assert s_wake["impacts"] > 1500, s_wake["impacts"]
+    assert s_wake["impacts"] == s_all["impacts"]
+    assert np.allclose(x_wake, x_all, rtol=0, atol=1e-9)
+    assert np.allclose(v_wake, v_all, rtol=0, atol=1e-9)
+    # no two spheres overlap (minimum image along the periodic axes)
+    box = 12 * (1 / 0.3) ** (1 / 3)
+    d = x_wake[:, None, :] - x_wake[None, :, :]
+    d[..., :2] -= box * np.round(d[..., :2] / box)
+    gap = np.sqrt((d**2).sum(-1)) - (radius[:, None] + radius[None, :])
+    np.fill_diagonal(gap, np.inf)
+    assert gap.min() > -1e-9, gap.min()

@@ -115,21 +115,25 @@ impl Periodic {
     }
 
     /// Wraps every position of the flat array `x` (m, 3 per particle) into the box along
-    /// the periodic axes, in place.
+    /// the periodic axes, in place, on all threads.
     pub fn wrap_positions(&self, x: &mut [f64]) {
+        x.par_chunks_mut(3 * 4096).for_each(|chunk| self.wrap_positions_serial(chunk));
+    }
+
+    /// [`Periodic::wrap_positions`] on the calling thread (for a pass that has the positions
+    /// at hand already).
+    pub fn wrap_positions_serial(&self, x: &mut [f64]) {
         // A coordinate already in [lo, hi) is its own wrap (floor gives 0 there): only the few
         // that left the cell in a step pay for the division and the floor.
         let (lo, hi) = (self.lo, self.hi);
         let axes = self.axes;
-        x.par_chunks_mut(3 * 4096).for_each(|chunk| {
-            for p in chunk.chunks_exact_mut(3) {
-                for (k, c) in p.iter_mut().enumerate() {
-                    if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
-                        *c = self.wrap_coordinate(k, *c);
-                    }
+        for p in x.chunks_exact_mut(3) {
+            for (k, c) in p.iter_mut().enumerate() {
+                if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
+                    *c = self.wrap_coordinate(k, *c);
                 }
             }
-        });
+        }
     }
 }
 

@@ -7,7 +7,9 @@
 //! the impact time and its velocity there gets the impulse. `a` is the constant acceleration
 //! of the step (Verlet's a(t), or the one that takes a method's x₀, v₀ to its x₁), exact for
 //! uniform fields such as gravity, under which the relative motion of two particles is a
-//! straight line.
+//! straight line. The references are read in place from the world's state (x₀, v₀): a
+//! particle gets its own copy only when an impact opens its path ([`PathStore`]), so a step
+//! copies nothing for the particles nothing happens to.
 //!
 //! **Candidates.** A particle can only hit a partner of its Verlet neighbour list
 //! ([`NeighbourList`]): pairs within r_i + r_j + s at the list's build. The list holds for the
@@ -40,72 +42,151 @@ use super::neighbour_list::{NeighbourList, CHUNK};
 use super::toi::{toi_plane, toi_sphere_obstacle, toi_spheres};
 use super::vec3;
 
-/// The particles' paths through one step (see the module doc), 3 values per particle.
+/// Where the step's paths are kept, allocated once: the reference states of the particles
+/// whose path was opened in this step (an impact or a rebuild moved its reference), marked
+/// by the step's number. A particle whose path is not open is on its path from the step's
+/// start, read from the world's state where it lies: a step copies nothing for particles
+/// nothing happens to.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct Paths {
-    /// Constant acceleration of the step, m/s².
-    pub accel: Vec<f64>,
-    /// Time of each particle's reference state, s from the step's start.
-    pub t_ref: Vec<f64>,
-    /// Position (m) and velocity (m/s) at `t_ref`.
-    pub x_ref: Vec<f64>,
-    pub v_ref: Vec<f64>,
-    /// Impacts each particle has had in the step (its path's version).
-    pub version: Vec<u32>,
+pub(crate) struct PathStore {
+    /// Time of each open path's reference state, s from the step's start.
+    t_ref: Vec<f64>,
+    /// Position (m) and velocity (m/s) at `t_ref`, 3 values per particle.
+    x_ref: Vec<f64>,
+    v_ref: Vec<f64>,
+    /// Impacts each open path has had in the step (its version; 0 if not open).
+    version: Vec<u32>,
+    /// The step in which each particle's path was last opened.
+    opened: Vec<u32>,
+    step: u32,
+    /// The particles whose path is open, in the order they were opened.
+    open: Vec<usize>,
 }
 
-impl Paths {
+/// The particles' paths through one step (see the module doc): each starts at (x0, v0) at
+/// τ = 0 with constant acceleration `accel`, until an impact opens it (its reference moves
+/// to the impact, where its velocity gets the impulse).
+pub(crate) struct Paths<'a> {
+    /// The world's state at the step's start, m and m/s.
+    pub x0: &'a [f64],
+    pub v0: &'a [f64],
+    /// Constant acceleration of the step, m/s², 3 per particle.
+    pub accel: &'a [f64],
+    store: &'a mut PathStore,
+}
+
+impl<'a> Paths<'a> {
     /// Starts the step: every particle at (x0, v0) at τ = 0 with acceleration `accel`.
-    pub fn begin(&mut self, x0: &[f64], v0: &[f64], accel: impl Iterator<Item = f64>) {
+    pub fn begin(store: &'a mut PathStore, x0: &'a [f64], v0: &'a [f64], accel: &'a [f64]) -> Self {
         let n = x0.len() / 3;
-        self.accel.clear();
-        self.accel.extend(accel);
-        self.t_ref.clear();
-        self.t_ref.resize(n, 0.0);
-        self.x_ref.clear();
-        self.x_ref.extend_from_slice(x0);
-        self.v_ref.clear();
-        self.v_ref.extend_from_slice(v0);
-        self.version.clear();
-        self.version.resize(n, 0);
+        store.step = store.step.wrapping_add(1);
+        if store.step == 0 || store.opened.len() != n {
+            // a new size, or the step numbers wrapped: no path is open
+            store.opened.clear();
+            store.opened.resize(n, 0);
+            store.step = 1;
+            store.t_ref.resize(n, 0.0);
+            store.version.resize(n, 0);
+            store.x_ref.resize(3 * n, 0.0);
+            store.v_ref.resize(3 * n, 0.0);
+        }
+        store.open.clear();
+        Paths { x0, v0, accel, store }
+    }
+
+    fn is_open(&self, q: usize) -> bool {
+        self.store.opened[q] == self.store.step
+    }
+
+    /// Opens particle q's path (its reference: the step's start).
+    fn open(&mut self, q: usize) {
+        if self.is_open(q) {
+            return;
+        }
+        let s = &mut *self.store;
+        s.opened[q] = s.step;
+        s.open.push(q);
+        s.t_ref[q] = 0.0;
+        s.version[q] = 0;
+        s.x_ref[3 * q..3 * q + 3].copy_from_slice(&self.x0[3 * q..3 * q + 3]);
+        s.v_ref[3 * q..3 * q + 3].copy_from_slice(&self.v0[3 * q..3 * q + 3]);
     }
 
     /// Position and velocity of particle q at time t on its current path.
     #[inline]
     pub fn state_at(&self, q: usize, t: f64) -> ([f64; 3], [f64; 3]) {
-        let dt = t - self.t_ref[q];
+        let (x_ref, v_ref, dt) = if self.is_open(q) {
+            (&self.store.x_ref[..], &self.store.v_ref[..], t - self.store.t_ref[q])
+        } else {
+            (self.x0, self.v0, t)
+        };
         let mut x = [0.0; 3];
         let mut v = [0.0; 3];
         for k in 0..3 {
             let c = 3 * q + k;
-            x[k] = self.x_ref[c] + self.v_ref[c] * dt + 0.5 * self.accel[c] * dt * dt;
-            v[k] = self.v_ref[c] + self.accel[c] * dt;
+            x[k] = x_ref[c] + v_ref[c] * dt + 0.5 * self.accel[c] * dt * dt;
+            v[k] = v_ref[c] + self.accel[c] * dt;
         }
         (x, v)
     }
 
-    /// Moves particle q's reference along its path to time t.
+    /// Impacts particle q has had in the step (its path's version).
+    #[inline]
+    pub fn version(&self, q: usize) -> u32 {
+        if self.is_open(q) {
+            self.store.version[q]
+        } else {
+            0
+        }
+    }
+
+    /// Moves particle q's reference along its path to time t (opening it).
     pub fn advance(&mut self, q: usize, t: f64) {
-        if self.t_ref[q] == t {
+        self.open(q);
+        if self.store.t_ref[q] == t {
             return;
         }
         let (x, v) = self.state_at(q, t);
-        self.x_ref[3 * q..3 * q + 3].copy_from_slice(&x);
-        self.v_ref[3 * q..3 * q + 3].copy_from_slice(&v);
-        self.t_ref[q] = t;
+        let s = &mut *self.store;
+        s.x_ref[3 * q..3 * q + 3].copy_from_slice(&x);
+        s.v_ref[3 * q..3 * q + 3].copy_from_slice(&v);
+        s.t_ref[q] = t;
+    }
+
+    /// The reference position of an open path, m.
+    pub fn x_ref(&self, q: usize) -> [f64; 3] {
+        debug_assert!(self.is_open(q));
+        vec3::get(&self.store.x_ref, q)
+    }
+
+    /// The reference velocities, m/s (meaningful for open paths only: impulses go there
+    /// after [`Paths::advance`] moved both particles to the impact).
+    pub fn v_ref(&self) -> &[f64] {
+        &self.store.v_ref
+    }
+
+    /// An impulse changed open path q (its velocity in [`Paths::v_ref_mut`]): a new version.
+    pub fn changed(&mut self, q: usize) {
+        debug_assert!(self.is_open(q));
+        self.store.version[q] += 1;
+    }
+
+    /// See [`Paths::v_ref`].
+    pub fn v_ref_mut(&mut self) -> &mut [f64] {
+        &mut self.store.v_ref
     }
 
     /// Puts each particle that was hit at its last path's point at h, with velocity
     /// v(h) + (v1 − (v0 + a h)): what the integrator added beyond the parabola is kept.
-    pub fn finish(&self, v0: &[f64], x1: &mut [f64], v1: &mut [f64], h: f64) {
-        for q in 0..self.version.len() {
-            if self.version[q] == 0 {
+    pub fn finish(&self, x1: &mut [f64], v1: &mut [f64], h: f64) {
+        for &q in &self.store.open {
+            if self.store.version[q] == 0 {
                 continue;
             }
             let (x, v) = self.state_at(q, h);
             for k in 0..3 {
                 let c = 3 * q + k;
-                let beyond = v1[c] - (v0[c] + self.accel[c] * h);
+                let beyond = v1[c] - (self.v0[c] + self.accel[c] * h);
                 x1[c] = x[k];
                 v1[c] = v[k] + beyond;
             }
@@ -124,7 +205,7 @@ pub(crate) struct Event {
     pub partner_version: u32,
 }
 
-/// A heap entry: particle i's event at `time`, made by its schedule number `stamp`.
+/// A heap entry: particle i's time, set by its schedule number `stamp`.
 #[derive(Debug, Clone, Copy)]
 struct Entry {
     time: f64,
@@ -153,47 +234,95 @@ impl Ord for Entry {
     }
 }
 
-/// A binary heap of the particles' next events, at most one current event per particle:
-/// scheduling a particle again makes its older entry stale (its stamp no longer matches), and
-/// stale entries are dropped as they come to the top.
+/// A binary heap of at most one current time per particle: setting a particle's time again
+/// makes its older entry stale (its stamp no longer matches), and stale entries are dropped
+/// as they come to the top. O(log N) per set and per pop.
 #[derive(Debug, Default)]
-pub(crate) struct EventQueue {
+pub(crate) struct Timetable {
     heap: BinaryHeap<Reverse<Entry>>,
-    next: Vec<Option<Event>>,
     stamp: Vec<u32>,
 }
 
-impl EventQueue {
-    /// Empties the queue for `n` particles.
+impl Timetable {
+    /// Empties the table for `n` particles.
     pub fn reset(&mut self, n: usize) {
-        // Entries left from before are gone with the heap: `next` and `stamp` keep their
-        // values (a particle's `next` is read only through an entry with its current stamp).
+        // Entries left from before are gone with the heap; the stamps keep counting.
         self.heap.clear();
-        self.next.resize(n, None);
         self.stamp.resize(n, 0);
     }
 
-    /// Makes `event` particle i's only event (`None`: it has none).
-    pub fn schedule(&mut self, i: usize, event: Option<Event>) {
+    /// Makes `time` particle i's only time (`None`: it has none).
+    pub fn set(&mut self, i: usize, time: Option<f64>) {
         self.stamp[i] = self.stamp[i].wrapping_add(1);
-        self.next[i] = event;
-        if let Some(e) = event {
+        if let Some(time) = time {
             self.heap.push(Reverse(Entry {
-                time: e.time,
+                time,
                 i,
                 stamp: self.stamp[i],
             }));
         }
     }
 
-    /// Takes the earliest current event (stale entries are dropped on the way).
-    pub fn pop(&mut self) -> Option<Event> {
-        while let Some(Reverse(entry)) = self.heap.pop() {
-            if entry.stamp == self.stamp[entry.i] {
-                return self.next[entry.i].take();
+    /// Sets the times of many particles at once, `(i, time)` (each i at most once), in O(n):
+    /// the table is rebuilt from them (everything else is dropped).
+    pub fn fill(&mut self, n: usize, times: impl Iterator<Item = (usize, f64)>) {
+        self.reset(n);
+        let mut entries = std::mem::take(&mut self.heap).into_vec();
+        for (i, time) in times {
+            self.stamp[i] = self.stamp[i].wrapping_add(1);
+            entries.push(Reverse(Entry {
+                time,
+                i,
+                stamp: self.stamp[i],
+            }));
+        }
+        self.heap = BinaryHeap::from(entries);
+    }
+
+    /// Takes the particle with the earliest current time if that time is at most `until`.
+    pub fn pop_until(&mut self, until: f64) -> Option<(usize, f64)> {
+        while let Some(Reverse(top)) = self.heap.peek() {
+            if top.stamp != self.stamp[top.i] {
+                self.heap.pop(); // stale
+                continue;
             }
+            if top.time > until {
+                return None;
+            }
+            let (i, time) = (top.i, top.time);
+            self.heap.pop();
+            self.stamp[i] = self.stamp[i].wrapping_add(1); // taken: no longer current
+            return Some((i, time));
         }
         None
+    }
+}
+
+/// The particles' next events: a [`Timetable`] of their times and each one's event.
+#[derive(Debug, Default)]
+pub(crate) struct EventQueue {
+    times: Timetable,
+    next: Vec<Option<Event>>,
+}
+
+impl EventQueue {
+    /// Empties the queue for `n` particles.
+    pub fn reset(&mut self, n: usize) {
+        // A particle's `next` is read only through a current entry: old values may stay.
+        self.times.reset(n);
+        self.next.resize(n, None);
+    }
+
+    /// Makes `event` particle i's only event (`None`: it has none).
+    pub fn schedule(&mut self, i: usize, event: Option<Event>) {
+        self.next[i] = event;
+        self.times.set(i, event.map(|e| e.time));
+    }
+
+    /// Takes the earliest current event (stale entries are dropped on the way).
+    pub fn pop(&mut self) -> Option<Event> {
+        let (i, _) = self.times.pop_until(f64::INFINITY)?;
+        self.next[i].take()
     }
 }
 
@@ -252,7 +381,7 @@ impl Scene<'_> {
     /// Particle i's earliest impact after `now` within the step of length h, over its list
     /// partners, then its colliders (ties: the first found). A pair that touches at `now`
     /// and approaches faster than `slow` is an impact at `now`.
-    pub fn earliest(&self, paths: &Paths, i: usize, now: f64, h: f64) -> Earliest {
+    pub fn earliest(&self, paths: &Paths<'_>, i: usize, now: f64, h: f64) -> Earliest {
         let mut best: Option<Event> = None;
         let mut touching = false;
         let partners = self.list.rows[i / CHUNK].of(i % CHUNK);
@@ -271,7 +400,7 @@ impl Scene<'_> {
     /// threads), and each particle's with the colliders: the impacts found, and the particles
     /// touching something (each may be listed more than once). The caller keeps each
     /// particle's earliest.
-    pub fn all_impacts(&self, paths: &Paths, now: f64, h: f64) -> (Vec<Event>, Vec<usize>) {
+    pub fn all_impacts(&self, paths: &Paths<'_>, now: f64, h: f64) -> (Vec<Event>, Vec<usize>) {
         let parts: Vec<(Vec<Event>, Vec<usize>)> = self
             .list
             .rows
@@ -305,16 +434,16 @@ impl Scene<'_> {
 
     /// Calls `each` with what particle i meets after `now`: each of `partners` (an impact,
     /// or touching), then each of its colliders.
-    fn visit(&self, paths: &Paths, i: usize, partners: &[u32], now: f64, h: f64, mut each: impl FnMut(Found)) {
+    fn visit(&self, paths: &Paths<'_>, i: usize, partners: &[u32], now: f64, h: f64, mut each: impl FnMut(Found)) {
         let (xi, vi) = paths.state_at(i, now);
-        let ai = vec3::get(&paths.accel, i);
+        let ai = vec3::get(paths.accel, i);
         let rest = h - now;
         for &j in partners {
             let j = j as usize;
             let (xj, vj) = paths.state_at(j, now);
             let d0 = self.domain.displacement(xi, xj);
             let u = vec3::sub(vi, vj);
-            let da = vec3::sub(ai, vec3::get(&paths.accel, j));
+            let da = vec3::sub(ai, vec3::get(paths.accel, j));
             match pair_toi(d0, u, da, self.radius[i] + self.radius[j], rest, self.slow) {
                 Toi::Never => {}
                 Toi::Touching => each(Found::Touching(Some(j))),
@@ -324,7 +453,7 @@ impl Scene<'_> {
                     i,
                     partner: Partner::Particle(j),
                     wall: 0,
-                    partner_version: paths.version[j],
+                    partner_version: paths.version(j),
                 })),
             }
         }
@@ -348,6 +477,42 @@ impl Scene<'_> {
                 }));
             });
         }
+    }
+
+    /// The first time, s from now, at which particle i (state x, v, 3 values per particle,
+    /// with its list partners) can have anything for continuous detection: it touches a
+    /// partner or a collider now (0), or the straight paths of force-free motion meet within
+    /// `horizon` s; `None`: nothing within the horizon. A meeting at any speed counts (a slow
+    /// one is a contact, still detection's business).
+    pub fn first_meeting(&self, x: &[f64], v: &[f64], i: usize, horizon: f64) -> Option<f64> {
+        let (xi, vi) = (vec3::get(x, i), vec3::get(v, i));
+        let mut first: Option<f64> = None;
+        let mut meet = |tau: f64| {
+            if first.is_none_or(|f| tau < f) {
+                first = Some(tau);
+            }
+        };
+        for &j in self.list.rows[i / CHUNK].of(i % CHUNK) {
+            let j = j as usize;
+            let d0 = self.domain.displacement(xi, vec3::get(x, j));
+            let big_r = self.radius[i] + self.radius[j];
+            if vec3::dot(d0, d0) <= big_r * big_r {
+                return Some(0.0);
+            }
+            let u = vec3::sub(vi, vec3::get(v, j));
+            if let Some(tau) = toi_spheres(d0, u, big_r, horizon) {
+                meet(tau);
+            }
+        }
+        let walls = &self.list.walls;
+        let start = walls.partition_point(|w| w.0 < i);
+        for &(_, k) in walls[start..].iter().take_while(|w| w.0 == i) {
+            if self.touches(k, xi, self.radius[i]) {
+                return Some(0.0);
+            }
+            self.collider_events(i, k, xi, vi, [0.0; 3], horizon, |_, tau| meet(tau));
+        }
+        first
     }
 
     /// Whether a sphere at x of radius r touches an active wall of collider k.
@@ -495,10 +660,10 @@ pub(crate) fn pair_toi(d0: [f64; 3], u: [f64; 3], da: [f64; 3], big_r: f64, rest
 
 /// A bound on how far particle q can be from `from` (m) at any time in [t, h] on its current
 /// path: its distance at t (minimum image) plus |v(t)| (h − t) + ½ |a| (h − t)².
-pub(crate) fn swept_reach(paths: &Paths, q: usize, t: f64, h: f64, from: [f64; 3], domain: &Domain) -> f64 {
+pub(crate) fn swept_reach(paths: &Paths<'_>, q: usize, t: f64, h: f64, from: [f64; 3], domain: &Domain) -> f64 {
     let (x, v) = paths.state_at(q, t);
     let rest = h - t;
-    vec3::norm(domain.displacement(x, from)) + vec3::norm(v) * rest + 0.5 * vec3::norm(vec3::get(&paths.accel, q)) * rest * rest
+    vec3::norm(domain.displacement(x, from)) + vec3::norm(v) * rest + 0.5 * vec3::norm(vec3::get(paths.accel, q)) * rest * rest
 }
 
 #[cfg(test)]

@@ -41,6 +41,7 @@ pub mod penalty;
 pub mod response;
 pub mod toi;
 pub(crate) mod vec3;
+pub(crate) mod wake;
 
 pub use broad_phase::{all_pairs, Grid, Pair};
 pub use colliders::{collider_contacts, BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};

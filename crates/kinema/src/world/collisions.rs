@@ -6,9 +6,10 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
-use crate::collide::events::{swept_reach, Event, EventQueue, Paths, Scene};
+use crate::collide::events::{swept_reach, Event, EventQueue, PathStore, Paths, Scene};
 use crate::collide::neighbour_list::{collider_scale, NeighbourList, CHUNK, SKIN_PER_RADIUS};
 use crate::collide::vec3;
+use crate::collide::wake::Wake;
 use crate::collide::{
     hold, pair_contact, restitution_impulse, separate, Collider, Contact, Domain, Grid, HoldParams, HoldStats, Material,
     MaterialTable, Partner, Periodic, Plane, ResolveParams, SeparateParams,
@@ -187,6 +188,23 @@ macro_rules! scene {
     };
 }
 
+/// What the world tells the collision stages about the step they follow.
+pub(crate) struct StepFrame<'a> {
+    /// The world's clock at the step's start, s.
+    pub t0: f64,
+    /// The step, s.
+    pub h: f64,
+    /// The method's constant acceleration of the step (velocity Verlet's a(t)), m/s², 3 per
+    /// particle; `None`: the parabola through x₁ is taken.
+    pub accel: Option<&'a [f64]>,
+    /// No force acts: every path is a straight line from one step to the next, and the
+    /// impact search starts only from the particles whose wake time falls in the step
+    /// (`collide/wake.rs`).
+    pub steady: bool,
+    /// x₁ is already in the periodic cell (the stages wrap only what they move).
+    pub wrapped: bool,
+}
+
 /// The collision stages of a world, with their settings, colliders and buffers.
 pub(crate) struct CollisionStage {
     pub params: CollisionParams,
@@ -203,8 +221,18 @@ pub(crate) struct CollisionStage {
     /// Candidate pairs of continuous detection and of the end-of-step contacts.
     list: NeighbourList,
     /// The particles' paths through the step and the queue of their next impacts.
-    paths: Paths,
+    paths: PathStore,
+    /// The step's constant accelerations when the method gives none (the parabola
+    /// through x₁), m/s².
+    fitted: Vec<f64>,
     queue: EventQueue,
+    /// In a force-free world, each particle's wake time (see `collide/wake.rs`), the
+    /// particles woken in this step, whether this step rebuilt the list, and the fastest
+    /// speed an impact of this step left.
+    wake: Wake,
+    woken: Vec<usize>,
+    rebuilt: bool,
+    fastest_hit: f64,
     /// Particles that touched something at the step's start or were hit in it: the only
     /// ones that can be in contact at its end (continuous detection saw every other path).
     touched: Vec<bool>,
@@ -249,8 +277,13 @@ impl CollisionStage {
             domain: Domain::open(dim)?,
             grid: Grid::new(),
             list: NeighbourList::default(),
-            paths: Paths::default(),
+            paths: PathStore::default(),
+            fitted: Vec::new(),
             queue: EventQueue::default(),
+            wake: Wake::default(),
+            woken: Vec::new(),
+            rebuilt: false,
+            fastest_hit: 0.0,
             touched: Vec::new(),
             books: Vec::new(),
             contacts: Vec::new(),
@@ -335,6 +368,7 @@ impl CollisionStage {
     /// changed).
     pub fn forget_list(&mut self) {
         self.list.built_at.clear();
+        self.wake.valid = false;
         self.warm.clear();
         self.resting.clear();
     }
@@ -388,9 +422,11 @@ impl CollisionStage {
     /// Continuous detection interleaves the stages in time: an impact's impulse changes the
     /// two paths, and the next impacts of those two can only be found after it is applied.
     /// The end-of-step solve comes after all impacts, on the state they leave.
+    ///
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
+        frame: &StepFrame<'_>,
         x0: &[f64],
         v0: &[f64],
         x1: &mut [f64],
@@ -398,20 +434,63 @@ impl CollisionStage {
         radius: &[f64],
         inv_mass: &[f64],
         mass: &[f64],
-        accel: Option<&[f64]>,
-        h: f64,
     ) -> Result<bool, Error> {
+        let clock = Instant::now();
+        let h = frame.h;
+        // The step's paths: Verlet's own acceleration, or the parabola through x1.
+        let mut store = std::mem::take(&mut self.paths);
+        let mut fitted = std::mem::take(&mut self.fitted);
+        let accel = match frame.accel {
+            Some(a) => a,
+            None => {
+                fitted.clear();
+                fitted.extend((0..x0.len()).map(|c| 2.0 * (x1[c] - x0[c] - v0[c] * h) / (h * h)));
+                &fitted
+            }
+        };
+        let mut paths = Paths::begin(&mut store, x0, v0, accel);
+        let result = self.stages(&mut paths, clock, frame, x1, v1, radius, inv_mass, mass);
+        self.paths = store;
+        self.fitted = fitted;
+        result
+    }
+
+    /// The body of [`CollisionStage::run`] on the step's paths (`clock`: the detect stage's
+    /// start).
+    #[allow(clippy::too_many_arguments)]
+    fn stages(
+        &mut self,
+        paths: &mut Paths<'_>,
+        clock: Instant,
+        frame: &StepFrame<'_>,
+        x1: &mut [f64],
+        v1: &mut [f64],
+        radius: &[f64],
+        inv_mass: &[f64],
+        mass: &[f64],
+    ) -> Result<bool, Error> {
+        let (t0, h) = (frame.t0, frame.h);
         let n = radius.len();
         let mut stats = CollisionStats::default();
-        let clock = Instant::now();
-        // The step's paths: Verlet's own acceleration, or the parabola through x1.
-        match accel {
-            Some(a) => self.paths.begin(x0, v0, a.iter().copied()),
-            None => self
-                .paths
-                .begin(x0, v0, (0..3 * n).map(|c| 2.0 * (x1[c] - x0[c] - v0[c] * h) / (h * h))),
+        // The wake times hold only if this step ends well (an error leaves them invalid).
+        let steady = frame.steady && self.params.ccd;
+        let quiet = std::mem::replace(&mut self.wake.valid, false) && steady;
+        self.rebuilt = false;
+        self.fastest_hit = 0.0;
+        let (threshold, reach) = self.prepare(paths, x1, v1, radius, h, quiet)?;
+        let mut only_woken = quiet && !self.rebuilt;
+        if steady && !only_woken {
+            // New wake times for everyone, from the step's start (one pass over all pairs,
+            // instead of a search of this step's impacts from every particle).
+            self.wake_up(paths.x0, paths.v0, radius, t0, h, false);
+            only_woken = std::mem::replace(&mut self.wake.valid, false);
         }
-        let (threshold, reach) = self.prepare(x0, v0, x1, v1, radius, h)?;
+        // From here `rebuilt`: the list was rebuilt inside the step.
+        self.rebuilt = false;
+        self.woken.clear();
+        if only_woken {
+            self.woken = self.wake.due(t0 + h, h);
+        }
         self.touched.clear();
         self.touched.resize(n, !self.params.ccd);
         self.books.clear();
@@ -420,7 +499,7 @@ impl CollisionStage {
         let (mut t_respond, mut t_distribute) = (Duration::ZERO, Duration::ZERO);
 
         if self.params.ccd {
-            let (d, r, s, any) = self.impacts(radius, inv_mass, mass, h, threshold, reach, &mut stats)?;
+            let (d, r, s, any) = self.impacts(paths, radius, inv_mass, mass, h, threshold, reach, only_woken, &mut stats)?;
             t_detect += d;
             t_respond += r;
             t_distribute += s;
@@ -428,7 +507,7 @@ impl CollisionStage {
         }
         let clock = Instant::now();
         if self.params.ccd {
-            self.paths.finish(v0, x1, v1, h);
+            paths.finish(x1, v1, h);
         }
         // The state of the touched particles before the end-of-step solve, for its books.
         for q in (0..n).filter(|&q| self.touched[q]) {
@@ -475,11 +554,25 @@ impl CollisionStage {
             stats.impulses += 1;
             distribute(c.i, c.partner_particle(), *p, v1, inv_mass, mass, &mut stats.impulse_balance);
         }
-        stats.energy_lost += self.energy_books(x1, v1, mass, inv_mass);
+        stats.energy_lost += self.energy_books(paths.accel, x1, v1, mass, inv_mass);
         if let Some(p) = self.domain.periodic_box() {
-            p.wrap_positions(x1);
+            if frame.wrapped {
+                // only the touched particles moved since (the impacts, the correction)
+                for &(q, _, _) in &self.books {
+                    p.wrap_positions_serial(&mut x1[3 * q..3 * q + 3]);
+                }
+            } else {
+                p.wrap_positions(x1);
+            }
         }
         t_distribute += clock.elapsed();
+
+        // The next steps' wake times: of the particles this step looked at, or of all.
+        if steady {
+            let clock = Instant::now();
+            self.wake_up(x1, v1, radius, t0 + h, h, only_woken && !self.rebuilt);
+            t_detect += clock.elapsed();
+        }
 
         self.times.detect += t_detect;
         self.times.respond += t_respond;
@@ -497,8 +590,25 @@ impl CollisionStage {
     /// ⅛ |a| h² (b its build position) and the two largest of them; its velocity change
     /// |v1 − v0| for the automatic threshold (twice the largest: a body resting under gravity
     /// approaches at g h each step).
+    ///
+    /// With `quiet` (a force-free step with valid wake times) the list's hold comes from the
+    /// wake's speed bound instead, with no pass (`collide/wake.rs`), and the automatic
+    /// threshold is 0 (no force changes a velocity). Sets `rebuilt` when it rebuilds.
     #[allow(clippy::too_many_arguments)]
-    fn prepare(&mut self, x0: &[f64], v0: &[f64], x1: &[f64], v1: &[f64], radius: &[f64], h: f64) -> Result<(f64, f64), Error> {
+    fn prepare(
+        &mut self,
+        paths: &Paths<'_>,
+        x1: &[f64],
+        v1: &[f64],
+        radius: &[f64],
+        h: f64,
+        quiet: bool,
+    ) -> Result<(f64, f64), Error> {
+        let reach = self.wake.reach_after(h);
+        let (x0, v0) = (paths.x0, paths.v0);
+        if quiet && self.list.built_at.len() == x0.len() && 2.0 * reach < self.list.allowance {
+            return Ok((self.params.restitution_threshold.unwrap_or(0.0), reach));
+        }
         let domain = self.domain;
         let automatic = self.params.restitution_threshold.is_none();
         let sweep = |built: &[f64], accel: &[f64]| {
@@ -531,9 +641,11 @@ impl CollisionStage {
                 })
                 .reduce(|| (0.0, 0.0, 0.0, false), top_two)
         };
-        let fresh = self.list.built_at.len() == x0.len();
+        // (with `quiet` the bound said the list may not hold: rebuilt without the check, which
+        // the actual displacements would pass only for a few more steps)
+        let fresh = self.list.built_at.len() == x0.len() && !quiet;
         let mut top = if fresh {
-            sweep(&self.list.built_at, &self.paths.accel)
+            sweep(&self.list.built_at, paths.accel)
         } else {
             (f64::INFINITY, 0.0, 0.0, false)
         };
@@ -541,7 +653,7 @@ impl CollisionStage {
         if top.3 || !holds {
             // Rebuild at x0, with a skin of the base (0.6 mean radius) or four of this step's
             // largest sweeps, whichever is more: the list then lasts at least two such steps.
-            let accel = &self.paths.accel;
+            let accel = paths.accel;
             let largest_move = (0..radius.len())
                 .into_par_iter()
                 .with_min_len(CHUNK)
@@ -558,7 +670,8 @@ impl CollisionStage {
                 .update(&mut self.grid, x0, radius, &self.colliders, &self.domain, skin, scale)?;
             self.list.verified = None;
             self.drop_inactive_walls();
-            top = sweep(&self.list.built_at, &self.paths.accel);
+            self.rebuilt = true;
+            top = sweep(&self.list.built_at, paths.accel);
             if top.3 || !top.0.is_finite() {
                 // non-finite positions: the list's build named them already; a NaN velocity
                 // change is caught by the world
@@ -575,18 +688,24 @@ impl CollisionStage {
     #[allow(clippy::too_many_arguments)]
     fn impacts(
         &mut self,
+        paths: &mut Paths<'_>,
         radius: &[f64],
         inv_mass: &[f64],
         mass: &[f64],
         h: f64,
         threshold: f64,
         mut reach: f64,
+        only_woken: bool,
         stats: &mut CollisionStats,
     ) -> Result<(Duration, Duration, Duration, bool), Error> {
         let n = radius.len();
         let clock = Instant::now();
         let active = self.active_walls();
-        self.schedule_all(radius, &active, 0.0, h, threshold);
+        if only_woken {
+            self.schedule_woken(paths, radius, &active, h, threshold);
+        } else {
+            self.schedule_all(paths, radius, &active, 0.0, h, threshold);
+        }
         let (mut t_detect, mut t_respond, mut t_distribute) = (clock.elapsed(), Duration::ZERO, Duration::ZERO);
         // A cap keeps an inelastic collapse (a particle wedged between two others, hit back
         // and forth ever faster) from looping: what is left goes to the end-of-step solver.
@@ -602,9 +721,9 @@ impl CollisionStage {
                 Partner::Particle(j) => Some(j),
                 Partner::Collider(_) => None,
             };
-            if partner.is_some_and(|j| self.paths.version[j] != event.partner_version) {
+            if partner.is_some_and(|j| paths.version(j) != event.partner_version) {
                 // the partner's path changed since: predicted on a path that no longer exists
-                let next = scene.earliest(&self.paths, event.i, t, h);
+                let next = scene.earliest(paths, event.i, t, h);
                 self.touched[event.i] |= next.touching;
                 self.queue.schedule(event.i, next.event);
                 t_detect += clock.elapsed();
@@ -617,18 +736,18 @@ impl CollisionStage {
                 t_detect += clock.elapsed();
                 break;
             }
-            self.paths.advance(event.i, t);
+            paths.advance(event.i, t);
             if let Some(j) = partner {
-                self.paths.advance(j, t);
+                paths.advance(j, t);
             }
-            let contact = self.contact_at(&event);
+            let contact = self.contact_at(paths, &event);
             t_detect += clock.elapsed();
 
             // Stage 3: the impulse of Newton's law at the impact.
             let clock = Instant::now();
             let impulse = contact.and_then(|c| {
                 let material = self.materials().pair(&c);
-                restitution_impulse(&c, &self.paths.v_ref, inv_mass, material, threshold)
+                restitution_impulse(&c, paths.v_ref(), inv_mass, material, threshold)
             });
             t_respond += clock.elapsed();
 
@@ -643,14 +762,15 @@ impl CollisionStage {
                     event.i,
                     partner,
                     imp.vector,
-                    &mut self.paths.v_ref,
+                    paths.v_ref_mut(),
                     inv_mass,
                     mass,
                     &mut stats.impulse_balance,
                 );
                 for q in std::iter::once(event.i).chain(partner) {
-                    self.paths.version[q] += 1;
+                    paths.changed(q);
                     self.touched[q] = true;
+                    self.fastest_hit = self.fastest_hit.max(vec3::norm(vec3::get(paths.v_ref(), q)));
                 }
             }
             t_distribute += clock.elapsed();
@@ -660,18 +780,19 @@ impl CollisionStage {
             let built = &self.list.built_at;
             let farthest = std::iter::once(event.i)
                 .chain(partner)
-                .map(|q| swept_reach(&self.paths, q, t, h, vec3::get(built, q), &self.domain))
+                .map(|q| swept_reach(paths, q, t, h, vec3::get(built, q), &self.domain))
                 .fold(0.0, f64::max);
             if farthest + reach >= self.list.allowance {
                 // a new path could reach beyond the list: rebuild it at t, predict everything again
-                reach = self.rebuild_at(t, radius, h)?;
-                self.schedule_all(radius, &active, t, h, threshold);
+                reach = self.rebuild_at(paths, t, radius, h)?;
+                self.rebuilt = true;
+                self.schedule_all(paths, radius, &active, t, h, threshold);
             } else {
                 reach = reach.max(farthest);
                 let scene = scene!(self, radius, &active, threshold);
                 for q in std::iter::once(event.i).chain(partner) {
                     if impulse.is_some() || q == event.i {
-                        let next = scene.earliest(&self.paths, q, t, h);
+                        let next = scene.earliest(paths, q, t, h);
                         self.touched[q] |= next.touching;
                         self.queue.schedule(q, next.event);
                     }
@@ -684,10 +805,10 @@ impl CollisionStage {
 
     /// Every particle's first impact after `now` into the queue (the queue emptied first),
     /// on all threads; with `flag`, the particles touching something at `now` are marked.
-    fn schedule_all(&mut self, radius: &[f64], active: &[[bool; 6]], now: f64, h: f64, threshold: f64) {
+    fn schedule_all(&mut self, paths: &Paths<'_>, radius: &[f64], active: &[[bool; 6]], now: f64, h: f64, threshold: f64) {
         let n = radius.len();
         let scene = scene!(self, radius, active, threshold);
-        let (mut events, touching) = scene.all_impacts(&self.paths, now, h);
+        let (mut events, touching) = scene.all_impacts(paths, now, h);
         for q in touching {
             self.touched[q] = true;
         }
@@ -698,7 +819,7 @@ impl CollisionStage {
                 Partner::Particle(j) => Some(Event {
                     i: j,
                     partner: Partner::Particle(e.i),
-                    partner_version: self.paths.version[e.i],
+                    partner_version: paths.version(e.i),
                     ..*e
                 }),
                 Partner::Collider(_) => None,
@@ -716,16 +837,87 @@ impl CollisionStage {
         }
     }
 
+    /// The first impacts of the particles woken for this step only (the others are quiet:
+    /// their lines meet nothing in it, `collide/wake.rs`), into the emptied queue.
+    fn schedule_woken(&mut self, paths: &Paths<'_>, radius: &[f64], active: &[[bool; 6]], h: f64, threshold: f64) {
+        self.queue.reset(radius.len());
+        let scene = scene!(self, radius, active, threshold);
+        for &q in &self.woken {
+            let next = scene.earliest(paths, q, 0.0, h);
+            self.touched[q] |= next.touching;
+            self.queue.schedule(q, next.event);
+        }
+    }
+
+    /// The wake times at time `end` (world clock, s) of a force-free world in state x1, v1
+    /// (`collide/wake.rs`). `incremental` (at the end of a step that looked only at the woken
+    /// particles): the times of the rest still hold, and only the particles this step looked
+    /// at or changed get new ones (the bound grows by the step); otherwise all are computed
+    /// again, with the bound measured. Leaves `wake.valid` set if the list holds.
+    fn wake_up(&mut self, x1: &[f64], v1: &[f64], radius: &[f64], end: f64, h: f64, incremental: bool) {
+        let n = radius.len();
+        let domain = self.domain;
+        if incremental {
+            // The touched particles (all of them have books) moved at most at the fastest
+            // speed of the step, plus what the end-of-step solve moved them by.
+            let (mut moved, mut fastest_after) = (0.0_f64, 0.0_f64);
+            for &(q, x, _) in &self.books {
+                moved = moved.max(vec3::norm(domain.displacement(vec3::get(x1, q), x)));
+                fastest_after = fastest_after.max(vec3::norm(vec3::get(v1, q)));
+            }
+            let fastest = self.wake.vmax.max(self.fastest_hit);
+            self.wake.reach += h * fastest + moved;
+            self.wake.vmax = fastest.max(fastest_after);
+        } else {
+            let built = &self.list.built_at;
+            let (reach, vmax) = (0..n)
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .map(|q| {
+                    let d = domain.displacement(vec3::get(x1, q), vec3::get(built, q));
+                    (vec3::norm(d), vec3::norm(vec3::get(v1, q)))
+                })
+                .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)));
+            self.wake.reach = reach;
+            self.wake.vmax = vmax;
+        }
+        if !(2.0 * self.wake.reach < self.list.allowance) {
+            return; // the list expires now: the next step rebuilds it and looks at everyone
+        }
+        // Meetings up to the list's expiry, and a step beyond it.
+        let horizon = self.wake.horizon(self.list.allowance) + h;
+        let active = self.active_walls();
+        let scene = scene!(self, radius, &active, 0.0);
+        let at = |q: usize| scene.first_meeting(x1, v1, q, horizon).map(|tau| end + tau);
+        if incremental {
+            let mut involved: Vec<usize> = self.books.iter().map(|b| b.0).chain(self.woken.iter().copied()).collect();
+            involved.sort_unstable();
+            involved.dedup();
+            let times: Vec<(usize, Option<f64>)> = involved.into_iter().map(|q| (q, at(q))).collect();
+            for (q, time) in times {
+                self.wake.table.set(q, time);
+            }
+        } else {
+            let times: Vec<(usize, f64)> = (0..n)
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .filter_map(|q| at(q).map(|t| (q, t)))
+                .collect();
+            self.wake.table.fill(n, times.into_iter());
+        }
+        self.wake.valid = true;
+    }
+
     /// Rebuilds the list at the particles' positions at time t (their references moved there)
     /// for the rest of the step; returns the largest swept displacement from there, m.
-    fn rebuild_at(&mut self, t: f64, radius: &[f64], h: f64) -> Result<f64, Error> {
+    fn rebuild_at(&mut self, paths: &mut Paths<'_>, t: f64, radius: &[f64], h: f64) -> Result<f64, Error> {
         let n = radius.len();
         let mut x = vec![0.0; 3 * n];
         let mut largest: f64 = 0.0;
         for q in 0..n {
-            self.paths.advance(q, t);
-            x[3 * q..3 * q + 3].copy_from_slice(&vec3::get(&self.paths.x_ref, q));
-            largest = largest.max(swept_reach(&self.paths, q, t, h, vec3::get(&x, q), &self.domain));
+            paths.advance(q, t);
+            x[3 * q..3 * q + 3].copy_from_slice(&paths.x_ref(q));
+            largest = largest.max(swept_reach(paths, q, t, h, vec3::get(&x, q), &self.domain));
         }
         let mean_radius = radius.iter().sum::<f64>() / n.max(1) as f64;
         let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest);
@@ -739,14 +931,14 @@ impl CollisionStage {
     }
 
     /// The contact of an event at its time (the particles already moved there).
-    fn contact_at(&self, e: &Event) -> Option<Contact> {
-        let xi = vec3::get(&self.paths.x_ref, e.i);
+    fn contact_at(&self, paths: &Paths<'_>, e: &Event) -> Option<Contact> {
+        let xi = paths.x_ref(e.i);
         let unit = |d: [f64; 3]| {
             let len = vec3::norm(d);
             (len > 0.0).then(|| vec3::scale(1.0 / len, d))
         };
         let normal = match e.partner {
-            Partner::Particle(j) => unit(self.domain.displacement(xi, vec3::get(&self.paths.x_ref, j)))?,
+            Partner::Particle(j) => unit(self.domain.displacement(xi, paths.x_ref(j)))?,
             Partner::Collider(k) => match &self.colliders[k] {
                 Collider::Plane(p) => p.normal(),
                 Collider::Box(b) => b.walls()[e.wall].normal(),
@@ -882,13 +1074,13 @@ impl CollisionStage {
     /// held by the solver, whose sinking the correction undoes, it is 0: what the impulse
     /// took from the speed the force gave, the correction gave back as height. (An impact
     /// inside the step books its own ½ (1 − e²) μ u_n², exactly 0 for e = 1.)
-    fn energy_books(&self, x1: &[f64], v1: &[f64], mass: &[f64], inv_mass: &[f64]) -> f64 {
+    fn energy_books(&self, accel: &[f64], x1: &[f64], v1: &[f64], mass: &[f64], inv_mass: &[f64]) -> f64 {
         let mut lost = 0.0;
         for &(q, xb, vb) in &self.books {
             if inv_mass[q] == 0.0 {
                 continue;
             }
-            let (x, v, a) = (vec3::get(x1, q), vec3::get(v1, q), vec3::get(&self.paths.accel, q));
+            let (x, v, a) = (vec3::get(x1, q), vec3::get(v1, q), vec3::get(accel, q));
             let dx = self.domain.displacement(x, xb);
             lost += 0.5 * mass[q] * (vec3::dot(vb, vb) - vec3::dot(v, v)) + mass[q] * vec3::dot(a, dx);
         }

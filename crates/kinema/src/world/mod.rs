@@ -8,6 +8,7 @@ mod implicit;
 mod order;
 
 pub use advisor::Rates;
+use collisions::StepFrame;
 pub use collisions::{CollisionParams, CollisionStats, ContactModel};
 pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
 
@@ -494,6 +495,9 @@ impl World {
                     b.a_next.resize(n, 0.0);
                     b.fresh = true;
                 }
+                // In a periodic cell x' is wrapped into it in the same pass (the collision
+                // stage is told, and wraps only what it moves itself).
+                let cell = self.collisions.as_ref().and_then(|c| c.domain.periodic_box());
                 let p = &self.particles;
                 let bad = self
                     .x_next
@@ -510,6 +514,9 @@ impl World {
                             if bad.is_none() && !xn[k].is_finite() {
                                 bad = Some(base + k);
                             }
+                        }
+                        if let Some(cell) = cell {
+                            cell.wrap_positions_serial(xn);
                         }
                         bad
                     })
@@ -741,7 +748,18 @@ impl World {
             Some(WorldStepper::Verlet(b)) if b.a.len() == n => Some(&b.a[..]),
             _ => None,
         };
-        let changed = stage.run(&p.x, &p.v, x1, v1, &p.radius, &p.inv_mass, &p.mass, accel, self.params.dt)?;
+        // Without forces the paths are straight lines from step to step: the stage keeps
+        // each particle's wake time and looks only at those due (collide/wake.rs). Verlet's
+        // force-free pass wrapped x1 into the periodic cell already.
+        let steady = self.forces.is_empty();
+        let frame = StepFrame {
+            t0: self.time,
+            h: self.params.dt,
+            accel,
+            steady,
+            wrapped: steady && accel.is_some(),
+        };
+        let changed = stage.run(&frame, &p.x, &p.v, x1, v1, &p.radius, &p.inv_mass, &p.mass)?;
         if changed {
             // A method's cache (Verlet's last acceleration) holds F at the integrated state;
             // it stays right only if no force depends on positions or velocities.
