@@ -422,7 +422,6 @@ impl CollisionStage {
     /// Continuous detection interleaves the stages in time: an impact's impulse changes the
     /// two paths, and the next impacts of those two can only be found after it is applied.
     /// The end-of-step solve comes after all impacts, on the state they leave.
-    ///
     #[allow(clippy::too_many_arguments)]
     pub fn run(
         &mut self,
