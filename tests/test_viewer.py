@@ -311,7 +311,8 @@ class _Command:
         )
         self.lines: queue.Queue[str] = queue.Queue()
         self.stdout: list[str] = []
-        threading.Thread(target=self._read, daemon=True).start()
+        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.reader.start()
 
     def _read(self) -> None:
         for line in self.proc.stdout:
@@ -333,13 +334,15 @@ class _Command:
         pytest.fail(f"no line matching {pattern!r}; status {self.proc.poll()}; stdout {''.join(self.stdout)!r}; stderr {self.proc.stderr.read()[-2000:]!r}")
 
     def interrupt(self) -> tuple[int, str]:
-        """Ctrl-C, then the exit status and stderr."""
+        """Ctrl-C, then the exit status and stderr; ``stdout`` holds every line once this
+        returns (the reader is joined: it ends when the pipe closes at the command's exit)."""
         self.proc.send_signal(signal.SIGINT)
         try:
             status = self.proc.wait(timeout=60)
         except subprocess.TimeoutExpired:
             self.proc.kill()
             pytest.fail("the command did not stop on SIGINT")
+        self.reader.join(timeout=30)
         return status, self.proc.stderr.read()
 
 
@@ -382,7 +385,9 @@ def test_kinema_view_serves_until_ctrl_c(source, tmp_path):
         n, frames = 3, 3
     command = _Command([sys.executable, "-m", "kinema", "view", source, "--no-browser"], cwd=tmp_path)
     try:
-        url = command.wait_for(r"(http://127\.0\.0\.1:\d+/)").group(1)
+        # The CLI's own line, printed after the server's "kinema viewer: URL": a Ctrl-C sent
+        # between the two would stop the command before it says how to stop it.
+        url = command.wait_for(r"serving (http://127\.0\.0\.1:\d+/) — Ctrl-C to stop").group(1)
         page, body = _fetch(url)
     finally:
         status, stderr = command.interrupt()
@@ -394,7 +399,7 @@ def test_kinema_view_serves_until_ctrl_c(source, tmp_path):
     np.testing.assert_allclose(np.frombuffer(body, "<f4", count, start), 0.1, rtol=1e-6)
     assert status == 0, stderr
     assert "Traceback" not in stderr and "error" not in stderr.lower(), stderr
-    assert any("Ctrl-C to stop" in line for line in command.stdout)
+    assert any(line.startswith("kinema viewer: " + url) for line in command.stdout)
 
 
 def test_kinema_view_rejects_a_bad_port(tmp_path):
