@@ -188,6 +188,7 @@ pub fn stats_dict<'py>(py: Python<'py>, s: &CollisionStats) -> PyResult<Bound<'p
     out.set_item("energy_lost", s.energy_lost)?;
     out.set_item("max_overlap", s.max_overlap)?;
     out.set_item("solver_sweeps", s.solver_sweeps)?;
+    out.set_item("islands", s.islands)?;
     out.set_item("unconverged", s.unconverged)?;
     Ok(out)
 }

@@ -22,6 +22,7 @@
 
 use super::colliders::Collider;
 use super::contact::{Contact, Partner};
+use super::sweeps::{sweeps, Ends, SweepGroup};
 use super::vec3;
 use crate::error::Error;
 
@@ -485,6 +486,26 @@ pub fn hold(
     params: &HoldParams,
     impulses: &mut Vec<[f64; 3]>,
 ) -> Result<HoldStats, Error> {
+    let all = [SweepGroup::in_order(0..contacts.len())];
+    hold_grouped(contacts, targets, v, inv_mass, materials, params, impulses, &all)
+}
+
+/// [`hold`] with each sweep visiting the contacts group by group (`groups` cover the contacts
+/// in order): a group of contacts that share no movable particle (`together`) is visited
+/// all at once, on all threads, the others one contact after the other. The result does not
+/// depend on the thread count: the contacts of a `together` group read and write disjoint
+/// velocities, so visiting them at once is the same as visiting them in order.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn hold_grouped(
+    contacts: &[Contact],
+    targets: &[f64],
+    v: &mut [f64],
+    inv_mass: &[f64],
+    materials: &MaterialTable,
+    params: &HoldParams,
+    impulses: &mut Vec<[f64; 3]>,
+    groups: &[SweepGroup],
+) -> Result<HoldStats, Error> {
     check_contacts(contacts, inv_mass.len())?;
     check_len("v", v.len(), inv_mass.len())?;
     materials.check(inv_mass.len(), contacts)?;
@@ -512,54 +533,28 @@ pub fn hold(
         impulses.clear();
         impulses.resize(contacts.len(), [0.0; 3]);
     }
-    // Each contact's row: its particles (j = None for a collider), inverse masses, 1/(w_i + w_j),
-    // friction and target; a contact of two immovable bodies has none.
-    struct Row {
-        i: usize,
-        j: Option<usize>,
-        wi: f64,
-        wj: f64,
-        inv_w: f64,
-        mu: f64,
-        n: [f64; 3],
-        b: f64,
-    }
-    let rows: Vec<Option<Row>> = contacts
+    let ends: Vec<Option<Ends>> = contacts.iter().map(|c| Ends::of(c, inv_mass)).collect();
+    let rows: Vec<Row> = contacts
         .iter()
         .zip(targets)
         .map(|(c, &b)| {
-            let j = c.partner_particle();
-            let (wi, wj) = (inv_mass[c.i], j.map_or(0.0, |j| inv_mass[j]));
-            (wi + wj > 0.0).then(|| Row {
-                i: c.i,
-                j,
+            let (wi, wj) = (inv_mass[c.i], c.partner_particle().map_or(0.0, |j| inv_mass[j]));
+            Row {
                 wi,
                 wj,
                 inv_w: 1.0 / (wi + wj),
                 mu: materials.pair(c).friction,
                 n: c.normal,
                 b,
-            })
+            }
         })
         .collect();
-    let rel = |v: &[f64], r: &Row| {
-        let (a, b) = (3 * r.i, r.j.map(|j| 3 * j));
-        let vj = b.map_or([0.0; 3], |b| [v[b], v[b + 1], v[b + 2]]);
-        [v[a] - vj[0], v[a + 1] - vj[1], v[a + 2] - vj[2]]
-    };
-    let apply = |v: &mut [f64], r: &Row, p: [f64; 3]| {
-        vec3::add_scaled(v, r.i, r.wi, p);
-        if let Some(j) = r.j {
-            vec3::add_scaled(v, j, -r.wj, p);
-        }
-    };
-    // The totals: normal λ ≥ 0 along n and the tangential part t ⊥ n, |t| ≤ μ λ. Warm start:
-    // each starting total, projected onto them, is applied before the sweeps.
-    let mut normal = vec![0.0; contacts.len()];
-    let mut tangent = vec![[0.0; 3]; contacts.len()];
-    for (k, row) in rows.iter().enumerate() {
+    // The totals (λ, t): normal λ ≥ 0 along n and the tangential part t ⊥ n, |t| ≤ μ λ. Warm
+    // start: each starting total, projected onto them, is applied before the sweeps.
+    let mut totals = vec![(0.0, [0.0; 3]); contacts.len()];
+    for (k, (r, e)) in rows.iter().zip(&ends).enumerate() {
         let start = impulses[k];
-        let Some(r) = row else { continue };
+        let Some(e) = e else { continue };
         if start == [0.0; 3] || vec3::first_non_finite(&start).is_some() {
             continue;
         }
@@ -569,52 +564,22 @@ pub fn hold(
         if len > cap {
             t = vec3::scale(if len > 0.0 { cap / len } else { 0.0 }, t);
         }
-        normal[k] = lambda;
-        tangent[k] = t;
-        apply(v, r, vec3::add(vec3::scale(lambda, r.n), t));
+        totals[k] = (lambda, t);
+        let (mut vi, mut vj) = e.load(v);
+        r.apply(e.j.is_some(), &mut vi, &mut vj, vec3::add(vec3::scale(lambda, r.n), t));
+        e.store(v, vi, vj);
     }
     let mut stats = HoldStats::default();
-    for sweep in 1..=params.max_iterations {
-        stats.iterations = sweep;
-        let mut change: f64 = 0.0;
-        for (k, row) in rows.iter().enumerate() {
-            let Some(r) = row else { continue };
-            // Normal: the total that brings u_n to b, clamped at 0.
-            let u_n = vec3::dot(rel(v, r), r.n);
-            let total = (normal[k] - (u_n - r.b) * r.inv_w).max(0.0);
-            let dn = total - normal[k];
-            normal[k] = total;
-            if dn != 0.0 {
-                change = change.max(dn.abs() / r.inv_w);
-                apply(v, r, vec3::scale(dn, r.n));
-            }
-            // Friction: the total that stops the sliding, clamped to the cone μ λ.
-            if r.mu > 0.0 {
-                let u = rel(v, r);
-                let u_t = vec3::sub(u, vec3::scale(vec3::dot(u, r.n), r.n));
-                let old = tangent[k];
-                let mut t = vec3::sub(old, vec3::scale(r.inv_w, u_t));
-                let (len, cap) = (vec3::norm(t), r.mu * total);
-                if len > cap {
-                    t = vec3::scale(if len > 0.0 { cap / len } else { 0.0 }, t);
-                }
-                let dt = vec3::sub(t, old);
-                if dt != [0.0; 3] {
-                    change = change.max(vec3::norm(dt) / r.inv_w);
-                    tangent[k] = t;
-                    apply(v, r, dt);
-                }
-            }
-        }
-        stats.last_change = change;
-        if change <= params.tolerance {
-            stats.converged = true;
-            break;
-        }
-    }
-    for (k, row) in rows.iter().enumerate() {
-        impulses[k] = match row {
-            Some(r) => vec3::add(vec3::scale(normal[k], r.n), tangent[k]),
+    let visit = |k: usize, total: &mut (f64, [f64; 3]), vi: &mut [f64; 3], vj: &mut [f64; 3]| {
+        rows[k].visit(ends[k].is_some_and(|e| e.j.is_some()), vi, vj, total)
+    };
+    let done = sweeps(groups, &ends, v, &mut totals, params.max_iterations, params.tolerance, visit);
+    stats.iterations = done.sweeps;
+    stats.last_change = done.last_change;
+    stats.converged = done.converged;
+    for (k, (r, (lambda, t))) in rows.iter().zip(&totals).enumerate() {
+        impulses[k] = match ends[k] {
+            Some(_) => vec3::add(vec3::scale(*lambda, r.n), *t),
             None => [0.0; 3],
         };
     }
@@ -640,6 +605,64 @@ pub fn hold(
         }
     }
     Ok(stats)
+}
+
+/// A contact of [`hold`]: its inverse masses w (1/kg), 1/(w_i + w_j), friction μ, normal n
+/// and target b (m/s).
+struct Row {
+    wi: f64,
+    wj: f64,
+    inv_w: f64,
+    mu: f64,
+    n: [f64; 3],
+    b: f64,
+}
+
+impl Row {
+    /// The impulse p on i and −p on j: v_i += w_i p, v_j −= w_j p (`has_j`: j is a particle).
+    fn apply(&self, has_j: bool, vi: &mut [f64; 3], vj: &mut [f64; 3], p: [f64; 3]) {
+        for k in 0..3 {
+            vi[k] += self.wi * p[k];
+        }
+        if has_j {
+            for k in 0..3 {
+                vj[k] += -self.wj * p[k];
+            }
+        }
+    }
+
+    /// One visit with the totals (λ, t) on the velocities of i and j: returns the largest
+    /// change it made, as a velocity (impulse · (w_i + w_j), m/s).
+    fn visit(&self, has_j: bool, vi: &mut [f64; 3], vj: &mut [f64; 3], (normal, tangent): &mut (f64, [f64; 3])) -> f64 {
+        let mut change: f64 = 0.0;
+        // Normal: the total that brings u_n to b, clamped at 0.
+        let u_n = vec3::dot(vec3::sub(*vi, *vj), self.n);
+        let total = (*normal - (u_n - self.b) * self.inv_w).max(0.0);
+        let dn = total - *normal;
+        *normal = total;
+        if dn != 0.0 {
+            change = change.max(dn.abs() / self.inv_w);
+            self.apply(has_j, vi, vj, vec3::scale(dn, self.n));
+        }
+        // Friction: the total that stops the sliding, clamped to the cone μ λ.
+        if self.mu > 0.0 {
+            let u = vec3::sub(*vi, *vj);
+            let u_t = vec3::sub(u, vec3::scale(vec3::dot(u, self.n), self.n));
+            let old = *tangent;
+            let mut t = vec3::sub(old, vec3::scale(self.inv_w, u_t));
+            let (len, cap) = (vec3::norm(t), self.mu * total);
+            if len > cap {
+                t = vec3::scale(if len > 0.0 { cap / len } else { 0.0 }, t);
+            }
+            let dt = vec3::sub(t, old);
+            if dt != [0.0; 3] {
+                change = change.max(vec3::norm(dt) / self.inv_w);
+                *tangent = t;
+                self.apply(has_j, vi, vj, dt);
+            }
+        }
+        change
+    }
 }
 
 /// Settings of [`separate`].
@@ -692,6 +715,19 @@ pub fn separate(
     inv_mass: &[f64],
     params: &SeparateParams,
 ) -> Result<SeparateStats, Error> {
+    let all = [SweepGroup::in_order(0..contacts.len())];
+    separate_grouped(contacts, x, inv_mass, params, &all)
+}
+
+/// [`separate`] with each sweep visiting the contacts group by group, as
+/// [`hold_grouped`] does (the same result for any thread count).
+pub(crate) fn separate_grouped(
+    contacts: &mut [Contact],
+    x: &mut [f64],
+    inv_mass: &[f64],
+    params: &SeparateParams,
+    groups: &[SweepGroup],
+) -> Result<SeparateStats, Error> {
     check_contacts(contacts, inv_mass.len())?;
     check_len("x", x.len(), inv_mass.len())?;
     if !(params.fraction > 0.0 && params.fraction <= 1.0) {
@@ -724,20 +760,31 @@ pub fn separate(
         }
         c.overlap += along(x, c);
     }
-    for _ in 0..params.iterations {
-        for c in contacts.iter() {
-            let (wi, wj) = weights(c);
-            let w = wi + wj;
-            let depth = c.overlap - along(x, c);
-            if w == 0.0 || depth <= params.slop || depth.is_nan() {
-                continue;
-            }
-            let push = params.fraction * (depth - params.slop) / w;
-            vec3::add_scaled(x, c.i, push * wi, c.normal);
-            if let Some(j) = c.partner_particle() {
-                vec3::add_scaled(x, j, -push * wj, c.normal);
+    let ends: Vec<Option<Ends>> = contacts.iter().map(|c| Ends::of(c, inv_mass)).collect();
+    let mut none = vec![(); contacts.len()];
+    let fixed: &[Contact] = contacts;
+    // A push of Δ = fraction · (depth − slop) / (w_i + w_j): i by w_i Δ along n, j by −w_j Δ.
+    let push = |k: usize, _: &mut (), xi: &mut [f64; 3], xj: &mut [f64; 3]| {
+        let c = &fixed[k];
+        let (wi, wj) = weights(c);
+        let depth = c.overlap - vec3::dot(vec3::sub(*xi, *xj), c.normal);
+        if depth <= params.slop || depth.is_nan() {
+            return 0.0;
+        }
+        let push = params.fraction * (depth - params.slop) / (wi + wj);
+        for k in 0..3 {
+            xi[k] += push * wi * c.normal[k];
+        }
+        if c.partner_particle().is_some() {
+            for k in 0..3 {
+                xj[k] += -push * wj * c.normal[k];
             }
         }
+        push
+    };
+    if params.iterations > 0 {
+        // every sweep (no tolerance: a change is never below −1)
+        sweeps(groups, &ends, x, &mut none, params.iterations, -1.0, push);
     }
     for c in contacts.iter_mut() {
         c.overlap -= along(x, c);

@@ -7,12 +7,13 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use crate::collide::events::{swept_reach, Event, EventQueue, PathStore, Paths, Scene};
+use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::{collider_scale, NeighbourList, CHUNK, SKIN_PER_RADIUS};
 use crate::collide::vec3;
 use crate::collide::wake::Wake;
 use crate::collide::{
-    hold, pair_contact, restitution_impulse, separate, Collider, Contact, Domain, Grid, HoldParams, HoldStats, Material,
-    MaterialTable, Partner, Periodic, Plane, ResolveParams, SeparateParams,
+    pair_contact, restitution_impulse, Collider, Contact, Domain, Grid, HoldParams, Material, MaterialTable, Partner, Periodic,
+    Plane, ResolveParams, SeparateParams,
 };
 use crate::error::Error;
 
@@ -116,8 +117,11 @@ pub struct CollisionStats {
     pub energy_lost: f64,
     /// The largest overlap left after the step, m.
     pub max_overlap: f64,
-    /// Sweeps of the end-of-step velocity solver (the latest step's).
+    /// Sweeps of the end-of-step velocity solver (the latest step's; the most any island took).
     pub solver_sweeps: usize,
+    /// Independent groups of the end-of-step contacts, each solved on its own on one of the
+    /// threads (the latest step's; `collide/islands.rs`).
+    pub islands: usize,
     /// Steps whose end-of-step solver stopped at its sweep cap before converging, or whose
     /// impacts stopped at the cap of continuous detection (0 or 1 for one step; summed).
     pub unconverged: usize,
@@ -135,6 +139,7 @@ impl CollisionStats {
         self.energy_lost += step.energy_lost;
         self.max_overlap = step.max_overlap;
         self.solver_sweeps = step.solver_sweeps;
+        self.islands = step.islands;
         self.unconverged += step.unconverged;
     }
 }
@@ -241,11 +246,10 @@ pub(crate) struct CollisionStage {
     contacts: Vec<Contact>,
     /// The end-of-step contacts as detected (overlap and u_n before the response).
     pub detected: Vec<Contact>,
-    /// The end-of-step solver's velocity targets, totals, working velocities, and the last
-    /// step's totals by contact (for warm starting).
+    /// The end-of-step solver's velocity targets, totals, and the last step's totals by
+    /// contact (for warm starting).
     targets: Vec<f64>,
     totals: Vec<[f64; 3]>,
-    v_work: Vec<f64>,
     warm: Vec<(usize, Partner, [f64; 3])>,
     /// The contacts of `warm` and whether each carried load (see `Scene::resting`).
     resting: Vec<(usize, Partner, bool)>,
@@ -290,7 +294,6 @@ impl CollisionStage {
             detected: Vec::new(),
             targets: Vec::new(),
             totals: Vec::new(),
-            v_work: Vec::new(),
             warm: Vec::new(),
             resting: Vec::new(),
             total: CollisionStats::default(),
@@ -527,20 +530,12 @@ impl CollisionStage {
 
         // Stage 3: the solver's totals, and the overlap removed.
         let clock = Instant::now();
-        let solved = self.solve(v1, inv_mass, threshold)?;
-        stats.solver_sweeps = solved.iterations;
-        stats.unconverged = stats.unconverged.max(usize::from(!solved.converged));
-        let s = separate(
-            &mut self.contacts,
-            x1,
-            inv_mass,
-            &SeparateParams {
-                iterations: SEPARATE_SWEEPS,
-                ..SeparateParams::default()
-            },
-        )?;
-        stats.max_overlap = s.max_overlap_after;
-        changed |= s.max_overlap_before > 0.0;
+        let solved = self.solve(v1, x1, inv_mass, threshold)?;
+        stats.solver_sweeps = solved.hold.iterations;
+        stats.unconverged = stats.unconverged.max(usize::from(!solved.hold.converged));
+        stats.islands = solved.islands;
+        stats.max_overlap = solved.separate.max_overlap_after;
+        changed |= solved.separate.max_overlap_before > 0.0;
         t_respond += clock.elapsed();
 
         // Stage 4: the totals onto both particles; the books.
@@ -1009,12 +1004,13 @@ impl CollisionStage {
         }
     }
 
-    /// The velocity solver of the end-of-step contacts, on a copy of the velocities: each
-    /// contact's total impulse into `totals` (applied by the caller). A contact approaching
-    /// faster than the threshold is an impact with target u_n⁺ = −e u_n⁻ (Newton's law);
-    /// slower, a resting contact with target 0. Warm-started from the last step's totals of
-    /// the same contacts.
-    fn solve(&mut self, v1: &[f64], inv_mass: &[f64], threshold: f64) -> Result<HoldStats, Error> {
+    /// The end-of-step contacts' solve, island by island on all threads (`collide/islands.rs`):
+    /// the velocity solver's total impulse of each contact into `totals` (applied by the
+    /// caller; `v1` is not changed), then the overlap removed from the positions `x1`. A
+    /// contact approaching faster than the threshold is an impact with target u_n⁺ = −e u_n⁻
+    /// (Newton's law); slower, a resting contact with target 0. Warm-started from the last
+    /// step's totals of the same contacts.
+    fn solve(&mut self, v1: &[f64], x1: &mut [f64], inv_mass: &[f64], threshold: f64) -> Result<IslandStats, Error> {
         let table = MaterialTable::uniform(self.material).with_colliders(&self.colliders);
         let materials = match &self.particle_materials {
             Some(m) => table.with_particles(m),
@@ -1037,26 +1033,26 @@ impl CollisionStage {
         if self.contacts.is_empty() {
             self.warm.clear();
             self.resting.clear();
-            return Ok(HoldStats {
-                converged: true,
-                ..HoldStats::default()
-            });
+            let mut done = IslandStats::default();
+            done.hold.converged = true;
+            return Ok(done);
         }
-        self.v_work.clear();
-        self.v_work.extend_from_slice(v1);
-        let params = HoldParams {
-            tolerance: ResolveParams::default().tolerance,
-            max_iterations: END_SWEEPS,
-        };
-        let stats = hold(
-            &self.contacts,
-            &self.targets,
-            &mut self.v_work,
+        let problem = EndProblem {
+            contacts: &self.contacts,
+            targets: &self.targets,
             inv_mass,
-            &materials,
-            &params,
-            &mut self.totals,
-        )?;
+            materials,
+            hold: HoldParams {
+                tolerance: ResolveParams::default().tolerance,
+                max_iterations: END_SWEEPS,
+            },
+            separate: SeparateParams {
+                iterations: SEPARATE_SWEEPS,
+                ..SeparateParams::default()
+            },
+        };
+        let islands = Islands::find(&self.contacts, inv_mass);
+        let stats = islands::solve(&islands, &problem, &mut self.totals, v1, x1)?;
         self.warm.clear();
         self.warm
             .extend(self.contacts.iter().zip(&self.totals).map(|(c, p)| (c.i, c.other, *p)));

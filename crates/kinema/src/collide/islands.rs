@@ -1,0 +1,589 @@
+//! Independent groups of end-of-step contacts (islands), solved on all threads.
+//!
+//! Two contacts are in one island when they share a movable particle. A collider or a
+//! pinned particle joins nothing: its velocity and position never change, so what one
+//! contact does to it cannot reach another (Box2D's static bodies). The velocity solver
+//! ([`hold`](super::hold)) and the position correction ([`separate`](super::separate)) of
+//! one island never read what another writes, so each island is a problem of its own: its
+//! particles are gathered into small arrays, solved, and the results scattered back. The
+//! islands are solved on rayon's threads, a batch of them per task.
+//!
+//! One island of many contacts (a heap is one) is parallel inside by colouring, as Box2D v3's
+//! solver colours its constraint graph: in the island's contact order each contact takes the
+//! first colour that neither of its movable particles has yet (64 colours; a contact that
+//! finds none goes to a last group visited in order, Box2D's overflow). The contacts of one
+//! colour share no movable particle, so a sweep visits the colours in turn and all the
+//! contacts of one colour at once. Such an island is swept in colour order rather than in
+//! contact order: Gauss–Seidel all the same, converging alike.
+//!
+//! Determinism: the islands, their order (by first contact) and the colours are functions of
+//! the contact list alone, each island is solved the same way on any thread (a coloured sweep
+//! gives what the same sweep gives in order), and the islands' figures are combined in island
+//! order. The result is bit for bit the same for any thread count.
+
+use rayon::prelude::*;
+
+use super::contact::{Contact, Partner};
+use super::response::{
+    hold_grouped, separate_grouped, HoldParams, HoldStats, Material, MaterialTable, SeparateParams, SeparateStats,
+};
+use super::sweeps::SweepGroup;
+use super::vec3;
+use crate::error::Error;
+
+/// Islands of at least this many contacts are coloured (smaller ones are swept in contact
+/// order: a colour of theirs would be too small to share among threads).
+const COLOUR_FROM: usize = 512;
+
+/// Islands are handed to the threads in batches of at least this many contacts.
+const BATCH: usize = 256;
+
+/// The end-of-step contacts split into islands.
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct Islands {
+    /// The contacts' indices, island after island, each island's in list order.
+    members: Vec<usize>,
+    /// Island k is `members[starts[k]..starts[k + 1]]`.
+    starts: Vec<usize>,
+}
+
+impl Islands {
+    /// The islands of `contacts` in a world with these inverse masses (0: pinned), numbered
+    /// in the order of their first contact.
+    pub fn find(contacts: &[Contact], inv_mass: &[f64]) -> Islands {
+        // The movable particles of the contacts, numbered by rank; a union–find over them
+        // (the lower rank is the root: the same forest for the same list).
+        let movable = |q: usize| inv_mass[q] > 0.0;
+        let mut ranked: Vec<usize> = contacts
+            .iter()
+            .flat_map(|c| std::iter::once(c.i).chain(c.partner_particle()))
+            .filter(|&q| movable(q))
+            .collect();
+        ranked.sort_unstable();
+        ranked.dedup();
+        let rank = |q: usize| ranked.binary_search(&q).ok();
+        let mut parent: Vec<usize> = (0..ranked.len()).collect();
+        fn root(parent: &mut [usize], mut a: usize) -> usize {
+            while parent[a] != a {
+                parent[a] = parent[parent[a]]; // path halving
+                a = parent[a];
+            }
+            a
+        }
+        for c in contacts {
+            if let (Some(a), Some(b)) = (rank(c.i), c.partner_particle().and_then(rank)) {
+                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+        // Each contact's island: that of its movable side (a contact of two immovable bodies,
+        // which the solvers skip, is an island of its own).
+        let mut island_of_root = vec![usize::MAX; ranked.len()];
+        let mut count = 0;
+        let labels: Vec<usize> = contacts
+            .iter()
+            .map(|c| {
+                let side = rank(c.i).or_else(|| c.partner_particle().and_then(rank));
+                let slot = side.map(|a| root(&mut parent, a));
+                match slot {
+                    Some(r) if island_of_root[r] != usize::MAX => island_of_root[r],
+                    _ => {
+                        if let Some(r) = slot {
+                            island_of_root[r] = count;
+                        }
+                        count += 1;
+                        count - 1
+                    }
+                }
+            })
+            .collect();
+        // Counting sort by island, stable: each island's contacts stay in list order.
+        let mut starts = vec![0; count + 1];
+        for &l in &labels {
+            starts[l + 1] += 1;
+        }
+        for k in 0..count {
+            starts[k + 1] += starts[k];
+        }
+        let mut fill = starts.clone();
+        let mut members = vec![0; contacts.len()];
+        for (c, &l) in labels.iter().enumerate() {
+            members[fill[l]] = c;
+            fill[l] += 1;
+        }
+        Islands { members, starts }
+    }
+
+    /// The number of islands.
+    #[allow(clippy::len_without_is_empty)]
+    pub fn len(&self) -> usize {
+        self.starts.len().saturating_sub(1)
+    }
+
+    /// The contacts of island `k`, in list order.
+    pub fn island(&self, k: usize) -> &[usize] {
+        &self.members[self.starts[k]..self.starts[k + 1]]
+    }
+}
+
+/// The end-of-step problem the islands split: the contacts, each one's velocity target
+/// (m/s, see [`hold`](super::hold)), the particles' inverse masses (1/kg) and the materials.
+pub struct EndProblem<'a> {
+    pub contacts: &'a [Contact],
+    pub targets: &'a [f64],
+    pub inv_mass: &'a [f64],
+    pub materials: MaterialTable<'a>,
+    pub hold: HoldParams,
+    pub separate: SeparateParams,
+}
+
+/// What the islands' solves did, combined: the most sweeps, converged if all did, the largest
+/// last change; the overlaps before and after, largest.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct IslandStats {
+    pub hold: HoldStats,
+    pub separate: SeparateStats,
+    /// The islands, and the most contacts in one.
+    pub islands: usize,
+    pub largest: usize,
+}
+
+/// The islands' solves: the velocity solver (totals of impulse, N·s, on each contact's i) on
+/// the velocities `v`, then the position correction on the positions `x`, each island on
+/// its own copy of its particles. `totals` holds each contact's starting total (warm start)
+/// on entry and its total on return (the caller applies them to the velocities); `x` is
+/// corrected in place. `v` is not changed.
+pub fn solve(
+    islands: &Islands,
+    problem: &EndProblem<'_>,
+    totals: &mut [[f64; 3]],
+    v: &[f64],
+    x: &mut [f64],
+) -> Result<IslandStats, Error> {
+    // Batches of consecutive islands, each solved in turn by one task.
+    let mut batches = Vec::new();
+    let mut first = 0;
+    for k in 0..islands.len() {
+        if islands.starts[k + 1] - islands.starts[first] >= BATCH || k + 1 == islands.len() {
+            batches.push(first..k + 1);
+            first = k + 1;
+        }
+    }
+    let seen: &[f64] = x;
+    let warm: &[[f64; 3]] = totals;
+    let solved: Vec<Result<Vec<Solved>, Error>> = batches
+        .into_par_iter()
+        .map(|batch| {
+            let mut local = Local::default();
+            batch
+                .map(|k| local.solve(islands.island(k), problem, warm, v, seen))
+                .collect()
+        })
+        .collect();
+    // Scattered back, and the figures combined, in island order.
+    let mut stats = IslandStats {
+        islands: islands.len(),
+        hold: HoldStats {
+            converged: true,
+            ..HoldStats::default()
+        },
+        ..IslandStats::default()
+    };
+    for island in solved.into_iter().collect::<Result<Vec<_>, _>>()?.into_iter().flatten() {
+        for (&c, p) in island.order.iter().zip(&island.totals) {
+            totals[c] = *p;
+        }
+        for (&q, p) in island.moved.iter().zip(&island.positions) {
+            x[3 * q..3 * q + 3].copy_from_slice(p);
+        }
+        let (h, s) = (island.hold, island.separate);
+        stats.largest = stats.largest.max(island.order.len());
+        stats.hold.iterations = stats.hold.iterations.max(h.iterations);
+        stats.hold.converged &= h.converged;
+        stats.hold.last_change = stats.hold.last_change.max(h.last_change);
+        stats.hold.active += h.active;
+        for k in 0..3 {
+            stats.hold.collider_impulse_sum[k] += h.collider_impulse_sum[k];
+            stats.hold.pinned_impulse_sum[k] += h.pinned_impulse_sum[k];
+        }
+        stats.separate.max_overlap_before = stats.separate.max_overlap_before.max(s.max_overlap_before);
+        stats.separate.max_overlap_after = stats.separate.max_overlap_after.max(s.max_overlap_after);
+    }
+    Ok(stats)
+}
+
+/// One island's results: its contacts in the order solved and their totals; its movable
+/// particles and their corrected positions; the solvers' figures.
+struct Solved {
+    order: Vec<usize>,
+    totals: Vec<[f64; 3]>,
+    moved: Vec<usize>,
+    positions: Vec<[f64; 3]>,
+    hold: HoldStats,
+    separate: SeparateStats,
+}
+
+/// The gathered copy of one island (buffers reused from island to island of a batch).
+#[derive(Default)]
+struct Local {
+    particles: Vec<usize>,
+    contacts: Vec<Contact>,
+    targets: Vec<f64>,
+    v: Vec<f64>,
+    x: Vec<f64>,
+    inv_mass: Vec<f64>,
+    materials: Vec<Material>,
+    groups: Vec<SweepGroup>,
+}
+
+impl Local {
+    fn solve(
+        &mut self,
+        island: &[usize],
+        problem: &EndProblem<'_>,
+        warm: &[[f64; 3]],
+        v: &[f64],
+        x: &[f64],
+    ) -> Result<Solved, Error> {
+        let all = problem.contacts;
+        // The island's particles, numbered by rank, and their copies.
+        self.particles.clear();
+        self.particles.extend(
+            island
+                .iter()
+                .flat_map(|&c| std::iter::once(all[c].i).chain(all[c].partner_particle())),
+        );
+        self.particles.sort_unstable();
+        self.particles.dedup();
+        let parts = &self.particles;
+        let local = |q: usize| parts.binary_search(&q).expect("an island's contact names its particles");
+        let gather = |out: &mut Vec<f64>, from: &[f64]| {
+            out.clear();
+            out.extend(parts.iter().flat_map(|&q| vec3::get(from, q)));
+        };
+        gather(&mut self.v, v);
+        gather(&mut self.x, x);
+        self.inv_mass.clear();
+        self.inv_mass.extend(parts.iter().map(|&q| problem.inv_mass[q]));
+        let mut materials = problem.materials;
+        if let Some(m) = problem.materials.particles {
+            self.materials.clear();
+            self.materials.extend(parts.iter().map(|&q| m[q]));
+            materials = materials.with_particles(&self.materials);
+        }
+        // Its contacts in the order of their sweep (by colour when coloured), on the copies.
+        let order = colour(island, all, &self.inv_mass, local, &mut self.groups);
+        self.contacts.clear();
+        self.contacts.extend(order.iter().map(|&c| {
+            let c = all[c];
+            Contact {
+                i: local(c.i),
+                other: match c.other {
+                    Partner::Particle(j) => Partner::Particle(local(j)),
+                    other => other,
+                },
+                ..c
+            }
+        }));
+        self.targets.clear();
+        self.targets.extend(order.iter().map(|&c| problem.targets[c]));
+        let mut totals: Vec<[f64; 3]> = order.iter().map(|&c| warm[c]).collect();
+        let hold = hold_grouped(
+            &self.contacts,
+            &self.targets,
+            &mut self.v,
+            &self.inv_mass,
+            &materials,
+            &problem.hold,
+            &mut totals,
+            &self.groups,
+        )?;
+        let separate = separate_grouped(
+            &mut self.contacts,
+            &mut self.x,
+            &self.inv_mass,
+            &problem.separate,
+            &self.groups,
+        )?;
+        let moved: Vec<usize> = (0..parts.len()).filter(|&l| self.inv_mass[l] > 0.0).collect();
+        Ok(Solved {
+            order,
+            totals,
+            positions: moved.iter().map(|&l| vec3::get(&self.x, l)).collect(),
+            moved: moved.iter().map(|&l| parts[l]).collect(),
+            hold,
+            separate,
+        })
+    }
+}
+
+/// The island's contacts in the order of their sweep, with its sweep groups in `groups`: in
+/// list order as one group below [`COLOUR_FROM`] contacts; else colour after colour (greedy,
+/// in list order, over the movable particles: `inv_mass` of the island's particles, which
+/// `local` numbers), then the contacts that found no colour, in order.
+fn colour(
+    island: &[usize],
+    all: &[Contact],
+    inv_mass: &[f64],
+    local: impl Fn(usize) -> usize,
+    groups: &mut Vec<SweepGroup>,
+) -> Vec<usize> {
+    groups.clear();
+    if island.len() < COLOUR_FROM {
+        groups.push(SweepGroup::in_order(0..island.len()));
+        return island.to_vec();
+    }
+    const OVERFLOW: usize = 64;
+    // The colours each movable particle has taken, as a bit set.
+    let mut taken = vec![0u64; inv_mass.len()];
+    let colours: Vec<usize> = island
+        .iter()
+        .map(|&k| {
+            let c = &all[k];
+            let sides = [Some(local(c.i)), c.partner_particle().map(&local)];
+            let movable = sides.into_iter().flatten().filter(|&l| inv_mass[l] > 0.0);
+            let free = (!movable.clone().fold(0, |m, l| m | taken[l])).trailing_zeros() as usize;
+            if free < OVERFLOW {
+                movable.for_each(|l| taken[l] |= 1 << free);
+            }
+            free.min(OVERFLOW)
+        })
+        .collect();
+    // Counting sort by colour, stable.
+    let mut starts = [0usize; OVERFLOW + 2];
+    for &c in &colours {
+        starts[c + 1] += 1;
+    }
+    for c in 0..=OVERFLOW {
+        starts[c + 1] += starts[c];
+    }
+    let mut fill = starts;
+    let mut order = vec![0; island.len()];
+    for (&k, &c) in island.iter().zip(&colours) {
+        order[fill[c]] = k;
+        fill[c] += 1;
+    }
+    for c in (0..=OVERFLOW).filter(|&c| starts[c + 1] > starts[c]) {
+        groups.push(SweepGroup {
+            range: starts[c]..starts[c + 1],
+            together: c < OVERFLOW,
+        });
+    }
+    order
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::colliders::{Collider, Plane, Surface};
+    use super::super::response::{hold, separate};
+    use super::*;
+
+    fn floor() -> Vec<Collider> {
+        vec![Collider::Plane(
+            Plane::new([0.0, 0.0, -0.5], [0.0, 0.0, 1.0], Surface::default()).unwrap(),
+        )]
+    }
+
+    /// A cubic block of nx·ny·nz touching unit-mass balls (radius ½, spacing 1) on a floor at
+    /// z = −½, all falling at 1 m/s (overlapping the floor by `sink` m): its contacts (each
+    /// touching pair once, lower index first, then the floor) and its velocities.
+    fn block(nx: usize, ny: usize, nz: usize, sink: f64) -> (Vec<Contact>, Vec<f64>, Vec<f64>) {
+        let id = |x: usize, y: usize, z: usize| (z * ny + y) * nx + x;
+        let n = nx * ny * nz;
+        let mut contacts = Vec::new();
+        let pair = |i, j, normal| Contact {
+            i,
+            other: Partner::Particle(j),
+            normal,
+            overlap: 0.0,
+            u_n: 0.0,
+        };
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    let i = id(x, y, z);
+                    if x + 1 < nx {
+                        contacts.push(pair(i, id(x + 1, y, z), [-1.0, 0.0, 0.0]));
+                    }
+                    if y + 1 < ny {
+                        contacts.push(pair(i, id(x, y + 1, z), [0.0, -1.0, 0.0]));
+                    }
+                    if z + 1 < nz {
+                        contacts.push(pair(i, id(x, y, z + 1), [0.0, 0.0, -1.0]));
+                    }
+                }
+            }
+        }
+        for i in (0..nx * ny).map(|q| id(q % nx, q / nx, 0)) {
+            contacts.push(Contact {
+                i,
+                other: Partner::Collider(0),
+                normal: [0.0, 0.0, 1.0],
+                overlap: sink,
+                u_n: -1.0,
+            });
+        }
+        let v = (0..n).flat_map(|_| [0.0, 0.0, -1.0]).collect();
+        let x = (0..n)
+            .flat_map(|q| [(q % nx) as f64, (q / nx % ny) as f64, (q / (nx * ny)) as f64 - sink])
+            .collect();
+        (contacts, v, x)
+    }
+
+    fn problem<'a>(
+        contacts: &'a [Contact],
+        targets: &'a [f64],
+        inv_mass: &'a [f64],
+        floor: &'a [Collider],
+        sweeps: usize,
+    ) -> EndProblem<'a> {
+        EndProblem {
+            contacts,
+            targets,
+            inv_mass,
+            materials: MaterialTable::uniform(Material::new(0.0, 0.3).unwrap()).with_colliders(floor),
+            hold: HoldParams {
+                tolerance: 0.0,
+                max_iterations: sweeps,
+            },
+            separate: SeparateParams {
+                iterations: 5,
+                ..SeparateParams::default()
+            },
+        }
+    }
+
+    #[test]
+    fn contacts_join_through_movable_particles_only() {
+        // 0–1–2 a chain; 3 pinned, touched by 4 and 5: they stay apart; 6 on a wall; 7–8 a
+        // pair of two pinned particles. Islands by first contact.
+        let c = |i, other| Contact {
+            i,
+            other,
+            normal: [1.0, 0.0, 0.0],
+            overlap: 0.0,
+            u_n: 0.0,
+        };
+        let p = Partner::Particle;
+        let contacts = [
+            c(4, p(3)),
+            c(0, p(1)),
+            c(3, p(5)),
+            c(6, Partner::Collider(0)),
+            c(1, p(2)),
+            c(7, p(8)),
+            c(2, Partner::Collider(0)),
+        ];
+        let mut inv_mass = vec![1.0; 9];
+        for q in [3, 7, 8] {
+            inv_mass[q] = 0.0;
+        }
+        let islands = Islands::find(&contacts, &inv_mass);
+        let all: Vec<&[usize]> = (0..islands.len()).map(|k| islands.island(k)).collect();
+        assert_eq!(all, [&[0][..], &[1, 4, 6], &[2], &[3], &[5]]);
+    }
+
+    #[test]
+    fn islands_solve_what_one_solve_of_all_contacts_gives() {
+        // Three small blocks (below the colouring size): solved island by island, each in list
+        // order, they give the whole list's solve bit for bit (fixed sweeps: tolerance 0 on a
+        // problem that does not converge exactly).
+        let (mut contacts, mut v, mut x) = (Vec::new(), Vec::new(), Vec::new());
+        for b in 0..3 {
+            let (c, bv, bx) = block(3, 3, 2 + b, 1e-3);
+            let offset = v.len() / 3;
+            contacts.extend(c.into_iter().map(|c| Contact {
+                i: c.i + offset,
+                other: match c.other {
+                    Partner::Particle(j) => Partner::Particle(j + offset),
+                    other => other,
+                },
+                ..c
+            }));
+            v.extend(bv);
+            x.extend(bx);
+        }
+        // interleave the blocks' contacts in the list (sorted by particle, as the world's are)
+        contacts.sort_by_key(|c| (c.i, c.other));
+        let inv_mass = vec![1.0; v.len() / 3];
+        let targets = vec![0.0; contacts.len()];
+        let islands = Islands::find(&contacts, &inv_mass);
+        assert_eq!(islands.len(), 3);
+        let floor = floor();
+        let p = problem(&contacts, &targets, &inv_mass, &floor, 7);
+        let mut totals = vec![[0.0; 3]; contacts.len()];
+        let mut x_islands = x.clone();
+        let stats = solve(&islands, &p, &mut totals, &v, &mut x_islands).unwrap();
+        assert_eq!((stats.hold.iterations, stats.islands), (7, 3));
+
+        let mut all_totals = Vec::new();
+        let mut v_all = v.clone();
+        hold(
+            &contacts,
+            &targets,
+            &mut v_all,
+            &inv_mass,
+            &p.materials,
+            &p.hold,
+            &mut all_totals,
+        )
+        .unwrap();
+        let mut x_all = x.clone();
+        separate(&mut contacts.clone(), &mut x_all, &inv_mass, &p.separate).unwrap();
+        assert_eq!(totals, all_totals);
+        assert_eq!(x_islands, x_all);
+        assert!(totals.iter().any(|t| t[2] != 0.0)); // the floor holds the blocks up
+    }
+
+    #[test]
+    fn a_coloured_island_is_the_same_on_any_number_of_threads_and_holds_the_block_up() {
+        // A block of 12·12·6 balls: 2,448 contacts, one island, coloured, with colours large
+        // enough to be swept on threads. Its solve on 1, 2 and 3 threads, bit for bit; and the
+        // physics of a plastic block landing on a floor (e = 0): every ball stops, the floor
+        // takes the block's momentum, 864 kg · 1 m/s, to the solver's tolerance.
+        let (contacts, v, x) = block(12, 12, 6, 0.0);
+        let inv_mass = vec![1.0; v.len() / 3];
+        let targets = vec![0.0; contacts.len()];
+        let islands = Islands::find(&contacts, &inv_mass);
+        assert_eq!((islands.len(), islands.island(0).len()), (1, 2448));
+        let mut groups = Vec::new();
+        colour(islands.island(0), &contacts, &inv_mass, |q| q, &mut groups);
+        assert!(groups.iter().any(|g| g.together && g.range.len() >= 256), "{groups:?}");
+        let floor = floor();
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut p = problem(&contacts, &targets, &inv_mass, &floor, 2000);
+                p.hold.tolerance = 1e-12;
+                let mut totals = vec![[0.0; 3]; contacts.len()];
+                let mut x = x.clone();
+                let stats = solve(&islands, &p, &mut totals, &v, &mut x).unwrap();
+                (totals, x, stats)
+            })
+        };
+        let (one, two, three) = (run(1), run(2), run(3));
+        assert!(one == two, "1 and 2 threads differ");
+        assert!(one == three, "1 and 3 threads differ");
+        let (totals, _, stats) = one;
+        assert!(stats.hold.converged, "{stats:?}");
+        let floor: f64 = totals
+            .iter()
+            .zip(&contacts)
+            .filter(|(_, c)| c.partner_particle().is_none())
+            .map(|(t, _)| t[2])
+            .sum();
+        assert!((floor - 864.0).abs() < 1e-6, "{floor}");
+        let mut after = v.clone();
+        for (c, t) in contacts.iter().zip(&totals) {
+            vec3::add_scaled(&mut after, c.i, 1.0, *t);
+            if let Some(j) = c.partner_particle() {
+                vec3::add_scaled(&mut after, j, -1.0, *t);
+            }
+        }
+        assert!(
+            after.iter().all(|u| u.abs() < 1e-6),
+            "{:?}",
+            after.iter().fold(0.0_f64, |m, u| m.max(u.abs()))
+        );
+    }
+}

@@ -1,0 +1,269 @@
+//! The sweeps of the contact solvers ([`hold`](super::hold)'s velocities,
+//! [`separate`](super::separate)'s positions): over the contacts one after the other, or,
+//! where the contacts come in colours (`collide/islands.rs`), colour by colour on all threads.
+//!
+//! A sweep visits every contact once; a visit reads and writes the 3-vectors of its two
+//! particles (velocities or positions) and its own state (the totals of impulse). The
+//! contacts of one colour share no movable particle, so their visits commute: done at once,
+//! they give what they give in order, and the result cannot depend on the thread count.
+//!
+//! On threads the sweeps run as Box2D v3's solver stages do: each thread that joins takes
+//! the next block of the current colour from a counter, visits it, counts it done, and
+//! when the colour has no block left waits (spinning) until every block is done; then the
+//! next colour. The threads are started once for all the sweeps, not once a colour (a
+//! thread woken from sleep costs as much as a colour of a thousand visits). Nothing waits
+//! on a thread that has not joined: a block is counted only when a running thread takes it,
+//! so one thread alone does every block (a thread that joins late finds the colours done
+//! and only reads where the others stopped).
+
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+
+use super::contact::Contact;
+use super::vec3;
+
+/// Sweeps run on all threads when a colour has at least this many contacts (below, the
+/// waits cost more than the visits; the result is the same either way).
+const PARALLEL_COLOUR: usize = 256;
+
+/// The least block of contacts a thread takes at once.
+const BLOCK: usize = 32;
+
+/// Contacts that a sweep visits as one: the contacts `range` of the list, and whether they
+/// share no movable particle (`together`: a colour, visited at once on all threads) or are
+/// visited in order.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct SweepGroup {
+    pub range: std::ops::Range<usize>,
+    pub together: bool,
+}
+
+impl SweepGroup {
+    /// The contacts `range`, visited one after the other.
+    pub fn in_order(range: std::ops::Range<usize>) -> Self {
+        SweepGroup { range, together: false }
+    }
+}
+
+/// The two particles whose 3-vectors one visit of a contact reads (j: none for a collider),
+/// and which of them it may change (an immovable side never changes).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Ends {
+    pub i: usize,
+    pub j: Option<usize>,
+    write_i: bool,
+    write_j: bool,
+}
+
+impl Ends {
+    /// The contact's ends in a world with these inverse masses (1/kg); none if both are
+    /// immovable (such a contact is skipped).
+    pub fn of(c: &Contact, inv_mass: &[f64]) -> Option<Ends> {
+        let j = c.partner_particle();
+        let (wi, wj) = (inv_mass[c.i], j.map_or(0.0, |j| inv_mass[j]));
+        (wi + wj > 0.0).then_some(Ends {
+            i: c.i,
+            j,
+            write_i: wi > 0.0,
+            write_j: wj > 0.0,
+        })
+    }
+
+    /// The 3-vectors of i and j (0 for a collider) in the flat array `a`.
+    pub fn load(&self, a: &[f64]) -> ([f64; 3], [f64; 3]) {
+        (vec3::get(a, self.i), self.j.map_or([0.0; 3], |j| vec3::get(a, j)))
+    }
+
+    /// Writes back the 3-vectors of the movable sides.
+    pub fn store(&self, a: &mut [f64], ai: [f64; 3], aj: [f64; 3]) {
+        if self.write_i {
+            a[3 * self.i..3 * self.i + 3].copy_from_slice(&ai);
+        }
+        if let Some(j) = self.j.filter(|_| self.write_j) {
+            a[3 * j..3 * j + 3].copy_from_slice(&aj);
+        }
+    }
+
+    /// [`Ends::load`] through a pointer to the array.
+    ///
+    /// # Safety
+    /// `a` points to an array that holds both particles, which no thread writes meanwhile.
+    unsafe fn load_from(&self, a: *const f64) -> ([f64; 3], [f64; 3]) {
+        let get = |q: usize| [*a.add(3 * q), *a.add(3 * q + 1), *a.add(3 * q + 2)];
+        (get(self.i), self.j.map_or([0.0; 3], get))
+    }
+
+    /// [`Ends::store`] through a pointer to the array.
+    ///
+    /// # Safety
+    /// `a` points to an array that holds both particles, whose movable sides no other thread
+    /// reads or writes meanwhile.
+    unsafe fn store_to(&self, a: *mut f64, ai: [f64; 3], aj: [f64; 3]) {
+        let put = |q: usize, v: [f64; 3]| (0..3).for_each(|d| *a.add(3 * q + d) = v[d]);
+        if self.write_i {
+            put(self.i, ai);
+        }
+        if let Some(j) = self.j.filter(|_| self.write_j) {
+            put(j, aj);
+        }
+    }
+}
+
+/// What [`sweeps`] did: the sweeps made, the largest change of the last one, and whether
+/// it was at most the tolerance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Swept {
+    pub sweeps: usize,
+    pub last_change: f64,
+    pub converged: bool,
+}
+
+/// Sweeps over the contacts, group after group (`groups` cover them in order), until a sweep
+/// changes nothing by more than `tolerance` or `most` sweeps are made: each contact k with
+/// ends is visited by `visit(k, state[k], a_i, a_j)` on the 3-vectors of its ends in `a`,
+/// which returns the largest change it made (≥ 0).
+pub(crate) fn sweeps<T: Send>(
+    groups: &[SweepGroup],
+    ends: &[Option<Ends>],
+    a: &mut [f64],
+    state: &mut [T],
+    most: usize,
+    tolerance: f64,
+    visit: impl Fn(usize, &mut T, &mut [f64; 3], &mut [f64; 3]) -> f64 + Sync,
+) -> Swept {
+    let threads = rayon::current_num_threads();
+    if most > 0 && threads > 1 && groups.iter().any(|g| g.together && g.range.len() >= PARALLEL_COLOUR) {
+        return on_threads(groups, ends, a, state, most, tolerance, threads, visit);
+    }
+    let mut done = Swept {
+        sweeps: 0,
+        last_change: 0.0,
+        converged: false,
+    };
+    for sweep in 1..=most {
+        let mut change: f64 = 0.0;
+        for k in groups.iter().flat_map(|g| g.range.clone()) {
+            let Some(e) = ends[k] else { continue };
+            let (mut ai, mut aj) = e.load(a);
+            change = change.max(visit(k, &mut state[k], &mut ai, &mut aj));
+            e.store(a, ai, aj);
+        }
+        done = Swept {
+            sweeps: sweep,
+            last_change: change,
+            converged: change <= tolerance,
+        };
+        if done.converged {
+            break;
+        }
+    }
+    done
+}
+
+/// A pointer that threads share; each writes through it only what no other reads or writes
+/// in the same colour.
+struct Shared<T>(*mut T);
+impl<T> Clone for Shared<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T> Copy for Shared<T> {}
+unsafe impl<T: Send> Send for Shared<T> {}
+unsafe impl<T: Send> Sync for Shared<T> {}
+
+/// [`sweeps`] on all threads (see the module's doc).
+#[allow(clippy::too_many_arguments)]
+fn on_threads<T: Send>(
+    groups: &[SweepGroup],
+    ends: &[Option<Ends>],
+    a: &mut [f64],
+    state: &mut [T],
+    most: usize,
+    tolerance: f64,
+    threads: usize,
+    visit: impl Fn(usize, &mut T, &mut [f64; 3], &mut [f64; 3]) -> f64 + Sync,
+) -> Swept {
+    // Each group's blocks: a few per thread for a colour, the whole group for one in order.
+    let blocks: Vec<(usize, usize)> = groups
+        .iter()
+        .map(|g| {
+            let len = g.range.len();
+            let size = if g.together {
+                (len / (4 * threads)).max(BLOCK)
+            } else {
+                len.max(1)
+            };
+            (size, len.div_ceil(size))
+        })
+        .collect();
+    // Per phase (sweep s, group g at s·G + g): blocks taken and done; per sweep: the largest
+    // change, as the bits of a non-negative f64 (ordered as the numbers are).
+    let phases = most * groups.len();
+    let taken: Vec<AtomicUsize> = (0..phases).map(|_| AtomicUsize::new(0)).collect();
+    let finished: Vec<AtomicUsize> = (0..phases).map(|_| AtomicUsize::new(0)).collect();
+    let change: Vec<AtomicU64> = (0..most).map(|_| AtomicU64::new(0)).collect();
+    let (a_len, state_len) = (a.len(), state.len());
+    let (a_at, state_at) = (Shared(a.as_mut_ptr()), Shared(state.as_mut_ptr()));
+    let work = || {
+        let (a_at, state_at) = (a_at, state_at);
+        for s in 0..most {
+            for (g, group) in groups.iter().enumerate() {
+                let phase = s * groups.len() + g;
+                let (size, count) = blocks[g];
+                loop {
+                    let b = taken[phase].fetch_add(1, Ordering::Relaxed);
+                    if b >= count {
+                        break;
+                    }
+                    let first = group.range.start + b * size;
+                    let mut largest: f64 = 0.0;
+                    for k in first..(first + size).min(group.range.end) {
+                        let Some(e) = ends[k] else { continue };
+                        // SAFETY: the block's contacts are its own (a block is taken once), and
+                        // the movable particles of a colour's contacts are all distinct (a
+                        // group in order is one block): nothing this visit writes is read or
+                        // written by another thread in this phase; the phases are ordered by
+                        // the release of `finished` and the acquire of the wait below.
+                        debug_assert!(k < state_len && 3 * e.i.max(e.j.unwrap_or(0)) + 2 < a_len);
+                        unsafe {
+                            let (mut ai, mut aj) = e.load_from(a_at.0);
+                            largest = largest.max(visit(k, &mut *state_at.0.add(k), &mut ai, &mut aj));
+                            e.store_to(a_at.0, ai, aj);
+                        }
+                    }
+                    change[s].fetch_max(largest.to_bits(), Ordering::Relaxed);
+                    finished[phase].fetch_add(1, Ordering::Release);
+                }
+                let mut spins = 0u32;
+                while finished[phase].load(Ordering::Acquire) < count {
+                    spins += 1;
+                    if spins < 4096 {
+                        std::hint::spin_loop();
+                    } else {
+                        std::thread::yield_now();
+                    }
+                }
+            }
+            if f64::from_bits(change[s].load(Ordering::Relaxed)) <= tolerance {
+                return;
+            }
+        }
+    };
+    let work = &work;
+    rayon::scope(|scope| {
+        for _ in 1..threads {
+            scope.spawn(move |_| work());
+        }
+        work();
+    });
+    // Where every thread stopped: the first sweep within the tolerance, or the last.
+    let made = (0..most)
+        .find(|&s| f64::from_bits(change[s].load(Ordering::Relaxed)) <= tolerance)
+        .map_or(most, |s| s + 1);
+    let last_change = f64::from_bits(change[made - 1].load(Ordering::Relaxed));
+    Swept {
+        sweeps: made,
+        last_change,
+        converged: last_change <= tolerance,
+    }
+}
