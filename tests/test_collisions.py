@@ -448,3 +448,20 @@ def test_the_wake_schedule_of_a_force_free_world_misses_no_impact():
     gap = np.sqrt((d**2).sum(-1)) - (radius[:, None] + radius[None, :])
     np.fill_diagonal(gap, np.inf)
     assert gap.min() > -1e-9, gap.min()
+
+
+def test_contacts_that_share_no_movable_particle_are_separate_islands():
+    # Four balls resting on a floor: 0 and 1 touching each other, 2 alone, 3 touching a pinned
+    # ball 4 that also touches nothing else. Islands join contacts through movable particles
+    # only (the floor and the pinned ball join nothing): {0–1, 0–floor, 1–floor}, {2–floor},
+    # {3–floor, 3–4} = 3; the pinned ball on the floor, a contact of two immovable bodies,
+    # is in none.
+    w = kinema.World(dt=1e-3, method="verlet")
+    x = [[0, 0, 0.1], [0.2, 0, 0.1], [1, 0, 0.1], [2, 0, 0.1], [2.2, 0, 0.1]]
+    w.add_particles(x, radius=0.1, pinned=[False, False, False, False, True])
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w.set_collisions(restitution=0.5)
+    w.step(5)
+    last = w.collision_stats()["last"]
+    assert (last["contacts"], last["islands"]) == (7, 3), last

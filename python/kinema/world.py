@@ -254,9 +254,10 @@ class World:
         the sum of the impulses between movable particles, 0 by action and reaction up to
         rounding), ``energy_lost`` (J, the mechanical energy the collisions took),
         ``max_overlap`` (m, left after the step), ``solver_sweeps`` (of the end-of-step
-        velocity solver) and ``unconverged`` (steps whose solver, or whose impacts, stopped
-        at their cap). ``total``'s ``contacts``, ``max_overlap`` and ``solver_sweeps`` are the
-        last step's. ``None`` while collisions are off."""
+        velocity solver), ``islands`` (independent groups of the end-of-step contacts, each
+        solved on its own) and ``unconverged`` (steps whose solver, or whose impacts, stopped
+        at their cap). ``total``'s ``contacts``, ``max_overlap``, ``solver_sweeps`` and
+        ``islands`` are the last step's. ``None`` while collisions are off."""
         self._push()
         return self._core.collision_stats()
 

@@ -41,7 +41,8 @@ const BATCH: usize = 256;
 /// The end-of-step contacts split into islands.
 #[derive(Debug, Default, Clone, PartialEq)]
 pub struct Islands {
-    /// The contacts' indices, island after island, each island's in list order.
+    /// The contacts' indices, island after island, each island's in list order (a contact
+    /// of two immovable bodies is in none).
     members: Vec<usize>,
     /// Island k is `members[starts[k]..starts[k + 1]]`.
     starts: Vec<usize>,
@@ -49,7 +50,7 @@ pub struct Islands {
 
 impl Islands {
     /// The islands of `contacts` in a world with these inverse masses (0: pinned), numbered
-    /// in the order of their first contact.
+    /// in the order of their first contact; a contact of two immovable bodies is in none.
     pub fn find(contacts: &[Contact], inv_mass: &[f64]) -> Islands {
         // The movable particles of the contacts, numbered by rank; a union–find over them
         // (the lower rank is the root: the same forest for the same list).
@@ -77,39 +78,36 @@ impl Islands {
             }
         }
         // Each contact's island: that of its movable side (a contact of two immovable bodies,
-        // which the solvers skip, is an island of its own).
+        // which the solvers skip, is in none).
         let mut island_of_root = vec![usize::MAX; ranked.len()];
         let mut count = 0;
-        let labels: Vec<usize> = contacts
+        let labels: Vec<Option<usize>> = contacts
             .iter()
             .map(|c| {
-                let side = rank(c.i).or_else(|| c.partner_particle().and_then(rank));
-                let slot = side.map(|a| root(&mut parent, a));
-                match slot {
-                    Some(r) if island_of_root[r] != usize::MAX => island_of_root[r],
-                    _ => {
-                        if let Some(r) = slot {
-                            island_of_root[r] = count;
-                        }
-                        count += 1;
-                        count - 1
-                    }
+                let side = rank(c.i).or_else(|| c.partner_particle().and_then(rank))?;
+                let r = root(&mut parent, side);
+                if island_of_root[r] == usize::MAX {
+                    island_of_root[r] = count;
+                    count += 1;
                 }
+                Some(island_of_root[r])
             })
             .collect();
         // Counting sort by island, stable: each island's contacts stay in list order.
         let mut starts = vec![0; count + 1];
-        for &l in &labels {
+        for &l in labels.iter().flatten() {
             starts[l + 1] += 1;
         }
         for k in 0..count {
             starts[k + 1] += starts[k];
         }
         let mut fill = starts.clone();
-        let mut members = vec![0; contacts.len()];
-        for (c, &l) in labels.iter().enumerate() {
-            members[fill[l]] = c;
-            fill[l] += 1;
+        let mut members = vec![0; starts[count]];
+        for (c, l) in labels.iter().enumerate() {
+            if let Some(l) = *l {
+                members[fill[l]] = c;
+                fill[l] += 1;
+            }
         }
         Islands { members, starts }
     }
@@ -138,14 +136,14 @@ pub struct EndProblem<'a> {
 }
 
 /// What the islands' solves did, combined: the most sweeps, converged if all did, the largest
-/// last change; the overlaps before and after, largest.
+/// last change, the active contacts and the impulse sums added; the overlaps before and
+/// after, largest.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct IslandStats {
     pub hold: HoldStats,
     pub separate: SeparateStats,
-    /// The islands, and the most contacts in one.
+    /// The islands.
     pub islands: usize,
-    pub largest: usize,
 }
 
 /// The islands' solves: the velocity solver (totals of impulse, N·s, on each contact's i) on
@@ -180,7 +178,9 @@ pub fn solve(
                 .collect()
         })
         .collect();
-    // Scattered back, and the figures combined, in island order.
+    // Scattered back, and the figures combined, in island order (a contact in no island, of
+    // two immovable bodies, carries nothing).
+    totals.fill([0.0; 3]);
     let mut stats = IslandStats {
         islands: islands.len(),
         hold: HoldStats {
@@ -197,7 +197,6 @@ pub fn solve(
             x[3 * q..3 * q + 3].copy_from_slice(p);
         }
         let (h, s) = (island.hold, island.separate);
-        stats.largest = stats.largest.max(island.order.len());
         stats.hold.iterations = stats.hold.iterations.max(h.iterations);
         stats.hold.converged &= h.converged;
         stats.hold.last_change = stats.hold.last_change.max(h.last_change);
@@ -456,7 +455,7 @@ mod tests {
     #[test]
     fn contacts_join_through_movable_particles_only() {
         // 0–1–2 a chain; 3 pinned, touched by 4 and 5: they stay apart; 6 on a wall; 7–8 a
-        // pair of two pinned particles. Islands by first contact.
+        // pair of two pinned particles, in no island. Islands by first contact.
         let c = |i, other| Contact {
             i,
             other,
@@ -480,7 +479,7 @@ mod tests {
         }
         let islands = Islands::find(&contacts, &inv_mass);
         let all: Vec<&[usize]> = (0..islands.len()).map(|k| islands.island(k)).collect();
-        assert_eq!(all, [&[0][..], &[1, 4, 6], &[2], &[3], &[5]]);
+        assert_eq!(all, [&[0][..], &[1, 4, 6], &[2], &[3]]);
     }
 
     #[test]
