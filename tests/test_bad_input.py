@@ -1,6 +1,8 @@
 """Bad input gets a clear error naming the parameter, the value and what is allowed; no crash."""
 
 import math
+import re
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -182,3 +184,305 @@ def test_negative_declared_order():
 def test_amplification_of_something_that_is_not_a_number():
     with pytest.raises(ValueError, match="z = 'x' is invalid"):
         kinema.stability.amplification("rk4", "x")
+
+
+# -- the strict checks at the World / forces / colliders boundary (kinema._checks) ------------
+# A wrong type is a TypeError, a wrong value a ValueError; each message names the parameter,
+# shows the value compactly and says what is allowed. Nothing is silently coerced.
+
+
+def _raises(exc, text):
+    """pytest.raises whose message must contain ``text`` literally."""
+    return pytest.raises(exc, match=re.escape(text))
+
+
+@pytest.mark.parametrize("bad, shown", [("no", "'no'"), ("False", "'False'"), ("0", "'0'"), (0, "0"), (1, "1"), (1.0, "1.0")])
+def test_pinned_must_be_a_real_bool(bad, shown):
+    w = kinema.World()
+    with _raises(TypeError, f"pinned = {shown} is invalid: it must be True or False (a bool)"):
+        w.add_particles([[0, 0, 0]], pinned=bad)
+    assert len(w) == 0  # nothing added
+
+
+def test_pinned_ints_and_none_entries_are_refused():
+    w = kinema.World()
+    with _raises(TypeError, "pinned[1] = 1 is invalid: it must be True or False (a bool), not an int"):
+        w.add_particles([[0, 0, 0], [1, 0, 0]], pinned=[False, 1])
+    with _raises(TypeError, "pinned = array([0, 1]) is invalid"):
+        w.add_particles([[0, 0, 0], [1, 0, 0]], pinned=np.array([0, 1]))
+    with _raises(TypeError, "pinned[0] = None is invalid: it must be True or False (a bool), not None"):
+        w.add_particles([[0, 0, 0], [1, 0, 0]], pinned=[None, True])
+    assert len(w) == 0
+
+
+@pytest.mark.parametrize("bad, shown", [("no", "'no'"), ("False", "'False'"), ("0", "'0'"), (1, "1"), (0, "0"), (None, "None"), (1.0, "1.0")])
+def test_ccd_must_be_a_real_bool(bad, shown):
+    w = kinema.World()
+    w.set_collisions(ccd=False)
+    with _raises(TypeError, f"ccd = {shown} is invalid: it must be True or False (a bool)"):
+        w.set_collisions(ccd=bad)
+    assert w.collisions["ccd"] is False  # the refused call changed nothing
+
+
+def test_periodic_flags_must_be_bools():
+    w = kinema.World()
+    w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+    with _raises(TypeError, "periodic[0] = 1 is invalid: it must be True or False (a bool), not an int"):
+        w.periodic = [1, 0, 0]
+    with _raises(TypeError, "periodic = 'yes' is invalid"):
+        w.periodic = "yes"
+    assert w.periodic == (False, False, False)
+
+
+@pytest.mark.parametrize(
+    "i, shown, what",
+    [
+        (0.9, "i = 0.9", "not a float"),
+        (2.0, "i = 2.0", "not a float"),
+        (True, "i = True", "not a bool"),
+        ("0", "i = '0'", "not a string"),
+        (None, "i = None", "not None"),
+        ([0, 1.5], "i[1] = 1.5", "not a float"),
+        ([2, True], "i[1] = True", "not a bool"),
+        (np.array([0.0, 1.0]), "i = array([0., 1.])", "not floats"),
+        (np.array([True, False]), "i = array([ True, False])", "not bools"),
+        (np.timedelta64(0), "i = np.timedelta64(0)", "not a timedelta64"),  # NumPy counts it as an integer
+    ],
+)
+def test_spring_indices_must_be_integers(i, shown, what):
+    with pytest.raises(TypeError) as info:
+        kinema.Spring(i, np.ones(np.shape(i), dtype=int) * 3, k=1.0)
+    msg = str(info.value)
+    assert msg.startswith(f"{shown} is invalid: particle indices must be integers"), msg
+    assert what in msg
+
+
+@pytest.mark.parametrize(
+    "i, shown, what",
+    [
+        (-1, "i = -1", "particle indices must be >= 0"),
+        ([0, -2], "i[1] = -2", "particle indices must be >= 0"),
+        (2**70, "i = 1.18059e+21", "particle indices must be < 9.22337e+18"),
+        (np.array([2**64 - 1], dtype=np.uint64), "i[0] = 1.84467e+19", "particle indices must be < 9.22337e+18"),
+    ],
+)
+def test_spring_indices_negative_or_huge(i, shown, what):
+    with _raises(ValueError, f"{shown} is invalid: {what}"):
+        kinema.Spring(i, np.ones(np.shape(i), dtype=int), k=1.0)
+
+
+def test_spring_j_is_checked_too_and_the_world_is_unchanged():
+    w = kinema.World()
+    w.add_particles([[0, 0, 0], [1, 0, 0]])
+    with _raises(TypeError, "j = 0.5 is invalid: particle indices must be integers"):
+        w.add(kinema.Spring(0, 0.5, k=1.0))
+    assert w.forces == []
+
+
+@pytest.mark.parametrize(
+    "position, shown, what",
+    [
+        ([[1j, 0, 0]], "position[0][0] = 1j", "not a complex number"),
+        ([[0, 0, 2 + 0j]], "position[0][2] = (2+0j)", "not a complex number"),
+        (np.array([[1, 0, 0]], dtype=complex), "position = array([[1.+0.j, 0.+0.j, 0.+0.j]])", "not complex numbers (complex128)"),
+        (np.array([[1, 2, 3]], dtype="datetime64[s]"), "position = array([['1970-01-01T00:00:01'", "not dates (datetime64[s])"),
+        (np.array([[1, 2, 3]], dtype="timedelta64[s]"), "position = array([[1, 2, 3]], dtype='timedelta64[s]')", "not time spans (timedelta64[s])"),
+        (np.array([["1", "2", "3"]]), "position = array([['1', '2', '3']], dtype='<U1')", "not strings"),
+        (np.array([[0, "a", 0]], dtype=object), "position[0][1] = 'a'", "not a string"),
+        (np.array([[None, 0, 0]], dtype=object), "position[0][0] = None", "not None"),
+        ([["1", "2", "3"]], "position[0][0] = '1'", "not a string"),
+        (b"abc", "position = b'abc'", "not bytes"),
+        (np.ones((1, 3), dtype=bool), "position = array([[ True, True, True]])", "not bools"),
+        ([[0, True, 0]], "position[0][1] = True", "not a bool"),
+        (None, "position = None", "not None"),
+    ],
+)
+def test_positions_must_be_real_numbers(position, shown, what):
+    w = kinema.World()
+    with pytest.raises(TypeError) as info:
+        w.add_particles(position)
+    msg = str(info.value)
+    assert msg.startswith(shown), msg
+    assert "is invalid: it must" in msg and "real number" in msg and what in msg
+    assert len(w) == 0
+
+
+def _world2():
+    w = kinema.World()
+    w.add_particles([[0, 0, 0], [1, 0, 0]])
+    return w
+
+
+@pytest.mark.parametrize(
+    "call, shown",
+    [
+        (lambda w: w.add_particles([[0, 0, 0]], velocity=[1j, 0, 0]), "velocity[0] = 1j"),
+        (lambda w: w.add_particles([[0, 0, 0]], mass="1"), "mass = '1'"),
+        (lambda w: w.add_particles([[0, 0, 0]], mass=True), "mass = True"),
+        (lambda w: w.add_particles([[0, 0, 0], [1, 1, 1]], mass=[1.5, True]), "mass[1] = True"),
+        (lambda w: w.add_particles([[0, 0, 0]], radius=np.array([0.1 + 0j])), "radius = array([0.1+0.j])"),
+        (lambda w: w.add_particles([[0, 0, 0]], restitution=["a"]), "restitution[0] = 'a'"),
+        (lambda w: w.add_particles([[0, 0, 0]], friction=1j), "friction = 1j"),
+        (lambda w: w.set_collisions(restitution="0.5"), "restitution = '0.5'"),
+        (lambda w: w.set_collisions(friction=True), "friction = True"),
+        (lambda w: w.set_collisions(model="spring_dashpot", stiffness="1e3"), "stiffness = '1e3'"),
+        (lambda w: w.set_collisions(restitution_threshold=1j), "restitution_threshold = 1j"),
+        (lambda w: w.set_collisions(model=3), "model = 3"),
+        (lambda w: w.add(kinema.Gravity((0, 0, 1j))), "g[2] = 1j"),
+        (lambda w: w.add(kinema.Gravity(np.array(["0", "0", "-9.8"]))), "g = array(['0', '0', '-9.8'], dtype='<U4')"),
+        (lambda w: w.add(kinema.Drag("1")), "linear = '1'"),
+        (lambda w: w.add(kinema.Drag(0.1, quadratic=[1.0])), "quadratic = [1.0]"),
+        (lambda w: w.add(kinema.Attractor(strength=True)), "strength = True"),
+        (lambda w: w.add(kinema.Attractor(point=(0, 0, None))), "point[2] = None"),
+        (lambda w: w.add(kinema.Wind(coefficient=1j)), "coefficient = 1j"),
+        (lambda w: w.add(kinema.Spring(0, 1, k="1")), "k = '1'"),
+        (lambda w: w.add(kinema.Spring(0, 1, k=1.0, damping=[1j])), "damping[0] = 1j"),
+        (lambda w: w.add(kinema.Spring(0, 1, k=1.0, rest_length=np.datetime64("2020-01-01"))), "rest_length = np.datetime64('2020-01-01')"),
+        (lambda w: w.add(kinema.PythonForce(lambda t, x, v: 0 * x, name=3)), "name = 3"),
+        (lambda w: w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution="0.5")), "restitution = '0.5'"),
+        (lambda w: w.add(kinema.Plane([0, 0, 0], [0, 0, 1j])), "normal[2] = 1j"),
+        (lambda w: w.add(kinema.Box([0, 0, 1j], [1, 1, 1])), "lo[2] = 1j"),
+        (lambda w: w.add(kinema.Box([0, 0, 0], [1, 1, True])), "hi[2] = True"),
+        (lambda w: w.add(kinema.SphereObstacle([0, 0, 0], "1")), "radius = '1'"),
+        (lambda w: w.add(kinema.SphereObstacle([0, 0, 0], 1.0, friction=True)), "friction = True"),
+        (lambda w: kinema.World(dt="0.1"), "dt = '0.1'"),
+        (lambda w: kinema.World(dt=True), "dt = True"),
+        (lambda w: kinema.World(dt=np.timedelta64(1, "ms")), "dt = np.timedelta64(1,'ms')"),
+        (lambda w: w.add_particles([[np.timedelta64(1, "s"), 0, 0]]), "position[0][0] = np.timedelta64(1,'s')"),
+        (lambda w: w.run("1"), "duration = '1'"),
+        (lambda w: w.run(1.0, fps=1j), "fps = 1j"),
+        (lambda w: setattr(w, "masses", "1"), "masses = '1'"),
+        (lambda w: setattr(w, "positions", np.zeros((2, 3)) + 1j), "positions = array([[0.+1.j"),
+        (lambda w: setattr(w, "velocities", np.zeros((2, 3), dtype=bool)), "velocities = array([[False"),
+    ],
+)
+def test_numeric_parameters_refuse_what_is_not_a_real_number(call, shown):
+    w = _world2()
+    before = (w.positions.copy(), w.velocities.copy(), w.masses.copy(), w.collisions)
+    with pytest.raises(TypeError) as info:
+        call(w)
+    msg = str(info.value)
+    assert msg.startswith(f"{shown}"), msg
+    assert "is invalid: " in msg and ("real number" in msg or "string" in msg)
+    assert len(w) == 2 and w.forces == [] and w.colliders == []
+    np.testing.assert_array_equal(w.positions, before[0])
+    np.testing.assert_array_equal(w.velocities, before[1])
+    np.testing.assert_array_equal(w.masses, before[2])
+    assert w.collisions == before[3]
+
+
+@pytest.mark.parametrize("dim, shown", [(-1, "-1"), (0, "0"), (1, "1"), (5, "5"), (2**70, "1.18059e+21"), (np.int64(-3), "-3")])
+def test_world_dim_out_of_range(dim, shown):
+    with _raises(ValueError, f"dim = {shown} is invalid: a world is 2D (the xy-plane) or 3D: dim must be 2 or 3"):
+        kinema.World(dim=dim)
+
+
+@pytest.mark.parametrize(
+    "dim, shown, what", [(2.5, "2.5", "a float"), (3.0, "3.0", "a float"), (True, "True", "a bool"), ("3", "'3'", "a string"), (None, "None", "None")]
+)
+def test_world_dim_must_be_an_integer(dim, shown, what):
+    with _raises(TypeError, f"dim = {shown} is invalid: it must be an integer (int), not {what}"):
+        kinema.World(dim=dim)
+
+
+@pytest.mark.parametrize("n, shown, what", [(1.5, "1.5", "a float"), (2.0, "2.0", "a float"), (True, "True", "a bool"), ("2", "'2'", "a string")])
+def test_step_count_must_be_an_integer(n, shown, what):
+    w = _world2()
+    with _raises(TypeError, f"n = {shown} is invalid: it must be an integer (int), not {what}"):
+        w.step(n)
+    assert w.time == 0.0
+
+
+def test_step_count_out_of_range():
+    w = _world2()
+    with _raises(ValueError, "n = -1 is invalid: the number of steps must be >= 0"):
+        w.step(-1)
+    with _raises(ValueError, "n = 1.18059e+21 is invalid: the number of steps must be < 2**64"):
+        w.step(2**70)
+    assert w.time == 0.0
+
+
+def test_numbers_in_messages_are_compact():
+    with pytest.raises(ValueError) as info:
+        kinema.Drag(10**400)
+    assert str(info.value) == "linear = an integer of 401 digits is invalid: it is too large for a float (at most 1.79769e+308)"
+    with pytest.raises(ValueError) as info:
+        kinema.Spring(10**5000, 1, k=1.0)
+    assert str(info.value) == "i = an integer of 5001 digits is invalid: particle indices must be < 9.22337e+18"
+    with pytest.raises(ValueError) as info:
+        kinema.World().add_particles([[10**400, 0, 0]])
+    assert info.value.args[0].startswith("position = ") and len(str(info.value)) < 200
+    with pytest.raises(TypeError) as info:
+        kinema.World().add_particles(np.zeros((10_000, 3), dtype=complex))
+    assert len(str(info.value)) < 250 and "..." in str(info.value)
+
+
+def test_ragged_and_misshapen_inputs_name_the_parameter():
+    w = kinema.World()
+    with _raises(ValueError, "position = [[0, 0, 0], [1, 1]] is invalid: its rows have different lengths"):
+        w.add_particles([[0, 0, 0], [1, 1]])
+    with _raises(ValueError, "mass has shape (3,); it must be a scalar or one value per particle, (2,)"):
+        w.add_particles([[0, 0, 0], [1, 1, 1]], mass=[1, 2, 3])
+    with _raises(ValueError, "pinned has shape (3,); it must be a scalar or one value per particle, (2,)"):
+        w.add_particles([[0, 0, 0], [1, 1, 1]], pinned=[True, False, True])
+    with _raises(ValueError, "velocity has shape (1, 2); it must be a (3,) vector or one per particle, (2, 3)"):
+        w.add_particles([[0, 0, 0], [1, 1, 1]], velocity=[1, 2])
+    with _raises(ValueError, "k has shape (2,); it must be a scalar or one value per spring, (1,)"):
+        kinema.Spring(0, 1, k=[1.0, 2.0])
+    with _raises(ValueError, "i has shape (1, 1); it must be one index or a 1-D list of indices"):
+        kinema.Spring([[0]], [[1]], k=1.0)
+    assert len(w) == 0
+
+
+def test_callables_are_checked():
+    with _raises(TypeError, "fn = 3 is invalid: PythonForce.fn must be a callable"):
+        kinema.PythonForce(3)
+    with _raises(TypeError, "callback = 'print' is invalid: it must be a function callback(world) or None"):
+        _world2().run(0.01, callback="print")
+
+
+def test_valid_inputs_of_every_accepted_kind_still_work():
+    w = kinema.World(dim=np.int64(3), dt=np.float32(0.001))
+    assert w.dim == 3
+    # int positions, float32 velocities, numpy bool arrays for pinned, 0-d arrays for scalars
+    idx = w.add_particles(
+        [[0, 0, 0], [1, 0, 0], [2, 0, 0]], velocity=np.ones((3, 3), dtype=np.float32), mass=np.array(2.0), pinned=np.array([True, False, False])
+    )
+    np.testing.assert_array_equal(idx, [0, 1, 2])
+    np.testing.assert_array_equal(w.positions, [[0, 0, 0], [1, 0, 0], [2, 0, 0]])
+    np.testing.assert_array_equal(w.velocities, [[0, 0, 0], [1, 1, 1], [1, 1, 1]])  # the pinned one keeps 0
+    np.testing.assert_array_equal(w._core.inverse_masses, [0.0, 0.5, 0.5])
+    # float32 positions, a numpy bool scalar, a Python bool list, uint8 masses, Fractions, None entries
+    w.add_particles(np.array([[3, 0, 0]], dtype=np.float32), pinned=np.True_, radius=np.float32(0.1))
+    w.add_particles([[4, 0, 0], [5, 0, 0]], pinned=[False, True], mass=np.array([1, 2], dtype=np.uint8), restitution=[0.5, None])
+    w.add_particles(np.array([[Fraction(13, 2), 0, 0]], dtype=object), friction=np.array([None], dtype=object))
+    assert len(w) == 7 and w.positions[6, 0] == 6.5
+    np.testing.assert_array_equal(w._core.inverse_masses, [0.0, 0.5, 0.5, 0.0, 1.0, 0.0, 1.0])
+    # numpy integer indices of every width, Python int lists, an empty list
+    w.add(kinema.Spring(np.int64(1), np.int64(2), k=np.float32(10.0)))
+    w.add(kinema.Spring(np.array([1, 2], dtype=np.int32), np.array([4, 6], dtype=np.uint16), k=[1, 2], damping=np.array([0, 1])))
+    w.add(kinema.Spring([4, 0], [6, 1], k=1))
+    w.add(kinema.Spring([], [], k=1.0))
+    w.add(kinema.Gravity(np.array([0, 0, -10])))
+    w.add(kinema.Drag(np.float32(0.1), 0))
+    w.add(kinema.Wind(velocity=[1, 0, 0], coefficient=np.array(0.5)))
+    w.add(kinema.Attractor(point=np.zeros(3, dtype=np.float32), strength=1, softening=0.1))
+    w.set_collisions(ccd=np.False_, restitution=np.float64(0.5), friction=0, restitution_threshold=np.float32(0.01))
+    assert w.collisions["ccd"] is False and w.collisions["restitution"] == 0.5
+    w.set_collisions(**w.collisions)  # the documented round trip
+    w.add(kinema.Plane(np.array([0, 0, -1]), (0, 0, 1), restitution=np.float32(0.5), friction=0))
+    w.add(kinema.SphereObstacle([10, 10, 10], np.int64(1)))
+    w.add(kinema.Box(np.array([-20, -20, -20], dtype=np.int16), [20.0, 20.0, 20.0]))
+    w.periodic = np.array([True, False, False])
+    assert w.periodic == (True, False, False)
+    w.periodic = (False, np.False_, False)
+    w.step(np.int64(2))
+    w.step(np.array(1))
+    w.positions = w.positions.astype(np.float32)
+    w.masses = np.array([1, 2, 3, 4, 5, 6, 7])
+    traj = w.run(np.float32(0.01), fps=np.int64(100), callback=lambda world: None)
+    assert len(traj.t) >= 1 and w.time > 0
+    flat = kinema.World(dim=2)
+    flat.add(kinema.Box([0, 0], [1, 1]))
+    flat.periodic = [True, np.True_]
+    assert flat.periodic == (True, True, False)

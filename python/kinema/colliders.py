@@ -14,19 +14,26 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
+from . import _checks
 from .forces import _vec3
 
 
-def _surface(value: Any) -> float | None:
-    return None if value is None else float(value)
+def _surface(c: Any) -> tuple[float | None, float | None]:
+    return _checks.real("restitution", c.restitution, optional=True), _checks.real("friction", c.friction, optional=True)
 
 
 class Collider:
-    """Base of the colliders (a world tells them from forces by it)."""
+    """Base of the colliders (a world tells them from forces by it). A collider checks its
+    values' types when built (a bad one raises there, naming it); the engine checks their
+    ranges when it is added."""
 
     __slots__ = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_args", self._checked())
+
+    def _checked(self) -> tuple:  # pragma: no cover - every collider overrides it
+        raise NotImplementedError
 
     def _attach(self, core: Any) -> int:  # pragma: no cover - every collider overrides it
         raise NotImplementedError
@@ -43,8 +50,11 @@ class Plane(Collider):
     restitution: float | None = None
     friction: float | None = None
 
+    def _checked(self) -> tuple:
+        return _vec3("point", self.point), _vec3("normal", self.normal), *_surface(self)
+
     def _attach(self, core: Any) -> int:
-        return core.add_plane(_vec3("point", self.point), _vec3("normal", self.normal), _surface(self.restitution), _surface(self.friction))
+        return core.add_plane(*self._args)
 
 
 @dataclass(frozen=True)
@@ -60,10 +70,13 @@ class Box(Collider):
     restitution: float | None = None
     friction: float | None = None
 
+    def _checked(self) -> tuple:
+        lo = _checks.real_array("lo", self.lo).reshape(-1).tolist()
+        hi = _checks.real_array("hi", self.hi).reshape(-1).tolist()
+        return lo, hi, *_surface(self)
+
     def _attach(self, core: Any) -> int:
-        lo = np.asarray(self.lo, dtype=np.float64).reshape(-1).tolist()
-        hi = np.asarray(self.hi, dtype=np.float64).reshape(-1).tolist()
-        return core.add_box(lo, hi, _surface(self.restitution), _surface(self.friction))
+        return core.add_box(*self._args)
 
 
 @dataclass(frozen=True)
@@ -76,5 +89,8 @@ class SphereObstacle(Collider):
     restitution: float | None = None
     friction: float | None = None
 
+    def _checked(self) -> tuple:
+        return _vec3("center", self.center), _checks.real("radius", self.radius), *_surface(self)
+
     def _attach(self, core: Any) -> int:
-        return core.add_sphere_obstacle(_vec3("center", self.center), float(self.radius), _surface(self.restitution), _surface(self.friction))
+        return core.add_sphere_obstacle(*self._args)

@@ -12,42 +12,62 @@ from typing import Any
 
 import numpy as np
 
+from . import _checks
+
 
 def _vec3(name: str, value: Any) -> list[float]:
-    arr = np.asarray(value, dtype=np.float64).reshape(-1)
+    arr = _checks.real_array(name, value).reshape(-1)
     if arr.size != 3:
-        raise ValueError(f"{name} = {value!r} is invalid: it must be a 3-vector")
+        raise ValueError(f"{name} = {_checks.describe(value)} is invalid: it must be a 3-vector")
     return arr.tolist()
 
 
+class _Checked:
+    """Checks its values when built (a bad one raises there, naming it) and keeps them,
+    converted, for the world it is added to; the fields keep what was given."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_args", self._checked())
+
+    def _checked(self) -> tuple:  # pragma: no cover - every force overrides it
+        raise NotImplementedError
+
+
 @dataclass(frozen=True)
-class Gravity:
+class Gravity(_Checked):
     """Uniform gravity: F_i = m_i g (N); g in m/s², default (0, 0, −9.81) (z is up)."""
 
     g: Any = (0.0, 0.0, -9.81)
 
+    def _checked(self) -> tuple:
+        return (_vec3("g", self.g),)
+
     def _attach(self, core: Any) -> None:
-        core.add_gravity(_vec3("g", self.g))
+        core.add_gravity(*self._args)
 
 
 @dataclass(frozen=True)
-class Drag:
+class Drag(_Checked):
     """Drag: F_i = −b₁ v_i − b₂ |v_i| v_i (N); b₁ = ``linear`` in kg/s, b₂ = ``quadratic`` in kg/m."""
 
     linear: float = 0.0
     quadratic: float = 0.0
 
+    def _checked(self) -> tuple:
+        return _checks.real("linear", self.linear), _checks.real("quadratic", self.quadratic)
+
     def _attach(self, core: Any) -> None:
-        core.add_drag(float(self.linear), float(self.quadratic))
+        core.add_drag(*self._args)
 
 
 @dataclass(frozen=True)
-class Spring:
+class Spring(_Checked):
     """Springs between particles i[s] and j[s]: Hooke's law plus a dashpot along the spring,
     F_i = [k (L − L₀) + c (v_j − v_i)·n] n = −F_j, n the unit vector from i to j, L its length.
 
     ``k`` in N/m, ``rest_length`` L₀ in m (None: the current distance when added), ``damping``
     c in N·s/m. Scalars broadcast over the index arrays, so one object holds many springs.
+    Indices are integers (ints, NumPy integers or integer arrays; not floats, not bools) >= 0.
     """
 
     i: Any
@@ -56,25 +76,26 @@ class Spring:
     rest_length: Any = None
     damping: Any = 0.0
 
-    def _attach(self, core: Any) -> None:
-        i = np.atleast_1d(np.asarray(self.i)).astype(np.int64, copy=False)
-        j = np.atleast_1d(np.asarray(self.j)).astype(np.int64, copy=False)
-        if i.shape != j.shape or i.ndim != 1:
+    def _checked(self) -> tuple:
+        i = _checks.index_array("i", self.i)
+        j = _checks.index_array("j", self.j)
+        if i.shape != j.shape:
             raise ValueError(f"Spring: i has shape {i.shape} and j {j.shape}; they must be 1-D and equal")
-        if (i < 0).any() or (j < 0).any():
-            raise ValueError("Spring: particle indices must be >= 0")
         n = i.size
 
         def per_spring(name: str, value: Any) -> list[float]:
-            arr = np.broadcast_to(np.asarray(value, dtype=np.float64), (n,))
-            return arr.tolist()
+            arr = _checks.real_array(name, value)
+            return _checks.broadcast(name, arr, (n,), f"a scalar or one value per spring, ({n},)").tolist()
 
         rest = None if self.rest_length is None else per_spring("rest_length", self.rest_length)
-        core.add_springs(i.tolist(), j.tolist(), per_spring("k", self.k), rest, per_spring("damping", self.damping))
+        return i.tolist(), j.tolist(), per_spring("k", self.k), rest, per_spring("damping", self.damping)
+
+    def _attach(self, core: Any) -> None:
+        core.add_springs(*self._args)
 
 
 @dataclass(frozen=True)
-class Attractor:
+class Attractor(_Checked):
     """Inverse-square pull toward a fixed point: F_i = −μ m_i r / (|r|² + ε²)^{3/2}, r = x_i − point.
 
     ``strength`` μ = G·M in m³/s², ``softening`` ε in m.
@@ -84,31 +105,40 @@ class Attractor:
     strength: float = 1.0
     softening: float = 0.0
 
+    def _checked(self) -> tuple:
+        return _vec3("point", self.point), _checks.real("strength", self.strength), _checks.real("softening", self.softening)
+
     def _attach(self, core: Any) -> None:
-        core.add_attractor(_vec3("point", self.point), float(self.strength), float(self.softening))
+        core.add_attractor(*self._args)
 
 
 @dataclass(frozen=True)
-class Wind:
+class Wind(_Checked):
     """A uniform wind field: F_i = b (w − v_i), drag relative to air moving at ``velocity`` w
     (m/s), ``coefficient`` b in kg/s."""
 
     velocity: Any = (1.0, 0.0, 0.0)
     coefficient: float = 1.0
 
+    def _checked(self) -> tuple:
+        return _vec3("velocity", self.velocity), _checks.real("coefficient", self.coefficient)
+
     def _attach(self, core: Any) -> None:
-        core.add_wind(_vec3("velocity", self.velocity), float(self.coefficient))
+        core.add_wind(*self._args)
 
 
 @dataclass(frozen=True)
-class PythonForce:
+class PythonForce(_Checked):
     """Your own force: ``fn(t, x, v) -> F`` receives positions and velocities as (N, 3) arrays
     (m, m/s) and returns forces (N) of the same shape; called once per force evaluation."""
 
     fn: Callable[[float, np.ndarray, np.ndarray], Any]
     name: str = "python"
 
-    def _attach(self, core: Any) -> None:
+    def _checked(self) -> tuple:
         if not callable(self.fn):
-            raise TypeError(f"PythonForce.fn must be a callable, got {type(self.fn).__name__}")
-        core.add_python_force(self.fn, str(self.name))
+            raise TypeError(f"fn = {_checks.describe(self.fn)} is invalid: PythonForce.fn must be a callable fn(t, x, v) -> F, not {type(self.fn).__name__}")
+        return self.fn, _checks.text("name", self.name)
+
+    def _attach(self, core: Any) -> None:
+        core.add_python_force(*self._args)

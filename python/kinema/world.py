@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
+from . import _checks, _core
 from .colliders import Box, Collider
 from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
@@ -43,7 +43,8 @@ class World:
     """
 
     def __init__(self, dim: int = 3, dt: float = 1e-3, method: str | ButcherTableau = "verlet"):
-        self._core = _core.World(int(dim), float(dt), method)
+        dim = _checks.integer("dim", dim, 2, 3, what="a world is 2D (the xy-plane) or 3D: dim must be 2 or 3")
+        self._core = _core.World(dim, _checks.real("dt", dt), method)
         self._forces: list[Any] = []
         self._colliders: list[Collider] = []
         self._method_arg = method
@@ -121,20 +122,26 @@ class World:
         :meth:`set_collisions`). A pair combines its two by Box2D's rule, e = max(e_i, e_j) and
         μ = √(μ_i μ_j); a collider's own value overrides the particle's. Giving any turns
         collisions on.
+
+        Nothing is coerced: numbers are real numbers (ints or floats, NumPy scalars or arrays
+        of an int or float dtype), and a bool, a complex number, a string or a date among them
+        is a ``TypeError`` naming the parameter and the value; ``pinned`` takes only bools
+        (``True``/``False``, NumPy bools), not ``'no'`` or ``0``.
         """
-        x = np.atleast_2d(np.asarray(position, dtype=np.float64))
+        x = np.atleast_2d(_checks.real_array("position", position))
         if x.ndim != 2 or x.shape[1] != 3:
             raise ValueError(f"position has shape {np.shape(position)}; it must be (N, 3) or a single (3,) point")
         n = x.shape[0]
-        v = np.zeros_like(x) if velocity is None else np.atleast_2d(np.asarray(velocity, dtype=np.float64))
-        try:
-            v = np.broadcast_to(v, (n, 3))
-            m = np.broadcast_to(np.asarray(mass, dtype=np.float64), (n,))
-            r = np.broadcast_to(np.asarray(radius, dtype=np.float64), (n,))
-            p = np.broadcast_to(np.asarray(False if pinned is None else pinned, dtype=bool), (n,))
-            e, mu = (None if a is None else np.broadcast_to(np.asarray(a, dtype=np.float64), (n,)).tolist() for a in (restitution, friction))
-        except ValueError as e:
-            raise ValueError(f"velocity, mass, radius, pinned, restitution and friction must broadcast to {n} particles: {e}") from None
+        each = f"a scalar or one value per particle, ({n},)"
+        v = np.zeros_like(x) if velocity is None else np.atleast_2d(_checks.real_array("velocity", velocity))
+        v = _checks.broadcast("velocity", v, (n, 3), f"a (3,) vector or one per particle, ({n}, 3)")
+        m = _checks.broadcast("mass", _checks.real_array("mass", mass), (n,), each)
+        r = _checks.broadcast("radius", _checks.real_array("radius", radius), (n,), each)
+        p = _checks.broadcast("pinned", _checks.bool_array("pinned", False if pinned is None else pinned), (n,), each)
+        e, mu = (
+            None if a is None else _checks.broadcast(name, _checks.real_array(name, a, none_is_nan=True), (n,), each).tolist()
+            for name, a in (("restitution", restitution), ("friction", friction))
+        )
         self._push()
         start, end = self._core.add_particles(*(np.ascontiguousarray(a) for a in (x, v, m, r, p)), e, mu)
         self._new_views()
@@ -190,16 +197,17 @@ class World:
 
         ``w.set_collisions(**w.collisions)`` changes nothing.
         """
-        self._push()
-        self._core.set_collisions(
-            str(model),
-            float(restitution),
-            float(friction),
-            bool(ccd),
-            None if restitution_threshold is None else float(restitution_threshold),
-            None if stiffness is None else float(stiffness),
-            None if damping is None else float(damping),
+        args = (
+            _checks.text("model", model),
+            _checks.real("restitution", restitution),
+            _checks.real("friction", friction),
+            _checks.boolean("ccd", ccd),
+            _checks.real("restitution_threshold", restitution_threshold, optional=True),
+            _checks.real("stiffness", stiffness, optional=True),
+            _checks.real("damping", damping, optional=True),
         )
+        self._push()
+        self._core.set_collisions(*args)
         self._advice_due = True  # the spring-dashpot model's contacts are stiff springs
 
     @property
@@ -223,11 +231,11 @@ class World:
 
     @periodic.setter
     def periodic(self, axes: Any) -> None:
-        flags = np.asarray(axes).reshape(-1)
+        flags = _checks.bool_array("periodic", axes).reshape(-1)
         if self.dim == 2 and flags.size == 2:
             flags = np.append(flags, False)
-        if flags.size != 3 or flags.dtype != bool:
-            raise ValueError(f"periodic = {axes!r} is invalid: it must be 3 bools (x, y, z){' or 2 in a 2D world' if self.dim == 2 else ''}")
+        if flags.size != 3:
+            raise ValueError(f"periodic = {_checks.describe(axes)} is invalid: it must be 3 bools (x, y, z){' or 2 in a 2D world' if self.dim == 2 else ''}")
         self._push()
         try:
             self._core.set_periodic(flags.tolist())
@@ -272,12 +280,13 @@ class World:
         """Advance ``n`` steps of ``dt``. Raises ``kinema.SimulationDiverged`` at a step that
         would leave a non-finite state or make the energy run away (see docs/world.md); the
         world then keeps the state from before it."""
-        if int(n) < 0:
-            raise ValueError(f"n = {n} is invalid: the number of steps must be >= 0")
+        n = _checks.integer("n", n, 0, what="the number of steps must be >= 0")
+        if n > _checks.UINT64_MAX:
+            raise ValueError(f"n = {_checks.describe(n)} is invalid: the number of steps must be < 2**64")
         self._push()
         self._advise()
         try:
-            self._core.step(int(n))
+            self._core.step(n)
         finally:
             self._pull()
 
@@ -285,7 +294,9 @@ class World:
         """Simulate ``duration`` seconds from now, recording a frame every 1/fps s (rounded to
         a whole number of steps), the current state included; ``callback(world)`` runs after
         each recorded frame. Returns the ``Trajectory``."""
-        duration, fps = float(duration), float(fps)
+        duration, fps = _checks.real("duration", duration), _checks.real("fps", fps)
+        if callback is not None and not callable(callback):
+            raise TypeError(f"callback = {_checks.describe(callback)} is invalid: it must be a function callback(world) or None")
         if not (np.isfinite(duration) and duration >= 0):
             raise ValueError(f"duration = {duration} is invalid: it must be a finite number of seconds >= 0")
         if not (np.isfinite(fps) and fps > 0):
@@ -363,8 +374,9 @@ class World:
         self._assign(self._m, value, "masses", (len(self),))
 
     def _assign(self, view: np.ndarray, value: Any, name: str, shape: tuple[int, ...]) -> None:
+        new = _checks.real_array(name, value)
         try:
-            new = np.broadcast_to(np.asarray(value, dtype=np.float64), shape)
+            new = np.broadcast_to(new, shape)
         except ValueError:
             raise ValueError(f"{name} has shape {np.shape(value)}; it must be {shape}") from None
         old = view.copy()
