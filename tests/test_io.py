@@ -522,3 +522,268 @@ def test_a_damaged_collider_is_a_clear_error(tmp_path):
         f["parameters/kinema/colliders/0"].attrs["type"] = "cone"
     with pytest.raises(TrajectoryFileError, match=r"run\.h5: /parameters/kinema/colliders/0 is not a kinema collider"):
         load_h5md(tmp_path / "run.h5")
+
+
+# -- loading checks what it reads: the file, the dataset or attribute and the bad value -----------
+
+POS, VEL, MASS, RADIUS = "particles/all/position", "particles/all/velocity", "particles/all/mass", "particles/all/radius"
+
+
+def _replace(f, name, data=None, **kwargs):
+    """Replace the dataset ``name`` (only this link: hard links elsewhere keep the old one)."""
+    del f[name]
+    return f.create_dataset(name, data=data, **kwargs)
+
+
+def _set(name, index, value):
+    def change(f):
+        f[name][index] = value
+
+    return change
+
+
+def _nan_position(f):
+    f[f"{POS}/value"][3, 6, 1] = np.nan
+
+
+def _times(values):
+    def change(f):
+        _replace(f, f"{POS}/time", np.array(values, dtype=np.float64))
+
+    return change
+
+
+def _masses(values):
+    return lambda f: _replace(f, MASS, np.array(values))
+
+
+def _attr(group, name, value):
+    def change(f):
+        f[group].attrs[name] = value
+
+    return change
+
+
+# (change to a valid saved trajectory (F = 5 frames of N = 7 particles, t = 0, 0.02, ...), the message after "<path>: ")
+DAMAGES = {
+    "nan position": (_nan_position, "dataset 'positions' (/particles/all/position/value) has a non-finite value (nan) at frame 3, particle 6"),
+    "inf velocity": (
+        _set(f"{VEL}/value", (2, 0, 0), -np.inf),
+        "dataset 'velocities' (/particles/all/velocity/value) has a non-finite value (-inf) at frame 2, particle 0",
+    ),
+    "inf time": (_times([0, 0.02, 0.04, 0.06, np.inf]), "dataset 'times' (/particles/all/position/time) has a non-finite value (inf) at frame 4"),
+    "decreasing times": (_times([0, 0.02, 0.04, 0.3, 0.2]), "dataset 'times' (/particles/all/position/time) must increase: t[4] = 0.2 after t[3] = 0.3"),
+    "repeated time": (_times([0, 0.02, 0.02, 0.3, 0.4]), "dataset 'times' (/particles/all/position/time) must increase: t[2] = 0.02 after t[1] = 0.02"),
+    "negative mass": (
+        _masses([1.0, 1.0, -1.0, 1.0, 1.0, 1.0, 1.0]),
+        "dataset 'masses' (/particles/all/mass) has mass[2] = -1 (masses must be finite and > 0 kg)",
+    ),
+    "zero mass": (_masses([1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0]), "dataset 'masses' (/particles/all/mass) has mass[6] = 0 (masses must be finite and > 0 kg)"),
+    "nan mass": (_masses([1.0, np.nan, 1.0, 1.0, 1.0, 1.0, 1.0]), "dataset 'masses' (/particles/all/mass) has a non-finite value (nan) at particle 1"),
+    "nan radius": (_set(RADIUS, 4, np.nan), "dataset 'radii' (/particles/all/radius) has a non-finite value (nan) at particle 4"),
+    "negative radius": (_set(RADIUS, 1, -0.5), "dataset 'radii' (/particles/all/radius) has radius[1] = -0.5 (radii must be finite and >= 0 m)"),
+    "dt a word": (_attr("parameters/kinema", "dt", "fast"), "attribute 'dt' (/parameters/kinema) = 'fast' is not a positive number"),
+    "dt negative": (_attr("parameters/kinema", "dt", -0.01), "attribute 'dt' (/parameters/kinema) = -0.01 is not a positive number"),
+    "dt nan": (_attr("parameters/kinema", "dt", np.nan), "attribute 'dt' (/parameters/kinema) = nan is not a positive number"),
+    "method a number": (_attr("parameters/kinema", "method", 3), "attribute 'method' (/parameters/kinema) = 3 is not the name of an integration method"),
+    "string masses": (_masses([b"heavy"] * N), "dataset 'masses' (/particles/all/mass) holds strings; it must hold real numbers"),
+    "string times": (
+        lambda f: _replace(f, f"{POS}/time", ["0", "1", "2", "3", "4"], dtype=h5py.string_dtype()),
+        "dataset 'times' (/particles/all/position/time) holds strings",
+    ),
+    "complex positions": (
+        lambda f: _replace(f, f"{POS}/value", np.ones((F, N, 3), dtype=complex)),
+        "dataset 'positions' (/particles/all/position/value) holds complex numbers (complex128); it must hold real numbers",
+    ),
+    "float steps": (
+        lambda f: _replace(f, f"{POS}/step", np.arange(F, dtype=np.float64)),
+        "dataset 'steps' (/particles/all/position/step) holds floating-point numbers (float64); it must hold integers",
+    ),
+    "boolean ids": (
+        lambda f: _replace(f, "particles/all/id", np.ones(N, dtype=bool)),
+        "dataset 'ids' (/particles/all/id) holds booleans; it must hold integers",
+    ),
+    "one time too few": (
+        _times([0, 0.02, 0.04, 0.06]),
+        "dataset 'times' (/particles/all/position/time) has shape (4,) but dataset 'positions' (/particles/all/position/value) has 5 frames: one time per frame",
+    ),
+    "one mass too many": (_masses(np.ones(N + 1)), "dataset 'masses' (/particles/all/mass) has shape (8,) but there are 7 particles"),
+    "velocities of fewer particles": (
+        lambda f: _replace(f, f"{VEL}/value", np.zeros((F, N - 1, 3))),
+        "dataset 'velocities' (/particles/all/velocity/value) has shape (5, 6, 3) but dataset 'positions' (/particles/all/position/value) (5, 7, 3); they must match",
+    ),
+    "positions without frames": (
+        lambda f: _replace(f, f"{POS}/value", np.zeros((F, N))),
+        "dataset 'positions' (/particles/all/position/value) has shape (5, 7); it must be (frames, particles, 3) or (frames, particles, 2)",
+    ),
+    "0 frames": (
+        lambda f: _replace(f, f"{POS}/value", np.zeros((0, N, 3))),
+        "0 frames: dataset 'positions' (/particles/all/position/value) has shape (0, 7, 3)",
+    ),
+    "an energy per frame too few": (
+        lambda f: _replace(f, "observables/kinetic_energy/value", np.zeros(F - 1)),
+        "dataset 'kinetic_energy' (/observables/kinetic_energy/value) has shape (4,); it must be (5,), one value per frame",
+    ),
+    "a 2D box for 3D positions": (_attr("particles/all/box", "dimension", 2), "attribute 'dimension' (/particles/all/box) = 2 but dataset 'positions'"),
+    "no time": (lambda f: f.__delitem__(f"{POS}/time"), "/particles/all/position has no time dataset"),
+    "no positions": (lambda f: f.__delitem__(POS), "not a complete H5MD trajectory: /particles/all/position is missing"),
+}
+
+
+@pytest.mark.parametrize("damage", list(DAMAGES))
+def test_a_damaged_file_is_refused_naming_the_file_the_dataset_and_the_value(tmp_path, damage):
+    change, expected = DAMAGES[damage]
+    path = tmp_path / "run.h5"
+    save_h5md(synthetic(), path)
+    with h5py.File(path, "r+") as f:
+        change(f)
+    for load in (load_h5md, kinema.Trajectory.load, kinema.load_trajectory):
+        with pytest.raises(TrajectoryFileError) as e:
+            load(path)
+        message = str(e.value)
+        assert isinstance(e.value, ValueError) and "\n" not in message
+        assert message.startswith(f"{path}: ") and expected in message, message
+
+
+def test_a_file_without_particles_is_refused(tmp_path):
+    path = kinema.World(dt=0.01).run(0.05, fps=20).save(tmp_path / "run.h5")  # an empty world saves
+    with pytest.raises(TrajectoryFileError, match=r"run\.h5: 0 particles: dataset 'positions' \(/particles/all/position/value\) has shape \(2, 0, 3\)$"):
+        kinema.Trajectory.load(path)
+
+
+def test_a_missing_element_kinema_needs_is_named_with_the_file(tmp_path):
+    # load_h5md reads what is there (no velocities: None); a kinema.Trajectory needs them.
+    path = tmp_path / "run.h5"
+    save_h5md(synthetic(), path)
+    with h5py.File(path, "r+") as f:
+        del f[VEL]
+    assert load_h5md(path).velocities is None
+    with pytest.raises(TrajectoryFileError, match=r"run\.h5: not a complete kinema trajectory: /particles/all/velocity \(velocities\) is missing$"):
+        kinema.Trajectory.load(path)
+    with h5py.File(path, "r+") as f:
+        del f["observables/kinetic_energy"]
+    with pytest.raises(TrajectoryFileError, match=r"/particles/all/velocity \(velocities\) is missing$"):
+        kinema.load_trajectory(path)
+
+
+def test_a_file_that_is_not_hdf5_is_refused_by_trajectory_load(tmp_path):
+    path = tmp_path / "run.h5"
+    path.write_text("t,x,y,z\n0,1,2,3\n")
+    with pytest.raises(TrajectoryFileError, match=rf"^{path}: not an HDF5 file"):
+        kinema.Trajectory.load(path)
+
+
+def _periodic_file(tmp_path):
+    tr = synthetic()
+    tr.periodic, tr.box_edges = (True, False, False), np.array([2.0, 0.0, 0.0])
+    return save_h5md(tr, tmp_path / "run.h5")
+
+
+def test_periodic_box_edges_are_checked(tmp_path):
+    path = _periodic_file(tmp_path)
+    assert load_h5md(path).periodic == (True, False, False)
+    with h5py.File(path, "r+") as f:
+        f["particles/all/box/edges"][0] = np.nan
+    with pytest.raises(TrajectoryFileError, match=r"dataset 'box edges' \(/particles/all/box/edges\) has edge\[0\] = nan \(box edges must be finite, in m\)$"):
+        load_h5md(path)
+    with h5py.File(path, "r+") as f:
+        f["particles/all/box/edges"][0] = 0.0
+    with pytest.raises(TrajectoryFileError, match=r"has edge\[0\] = 0 \(a periodic axis needs an edge > 0 m\)$"):
+        load_h5md(path)
+    with h5py.File(path, "r+") as f:
+        del f["particles/all/box/edges"]
+    with pytest.raises(TrajectoryFileError, match=r"run\.h5: /particles/all/box has periodic boundaries \(periodic, none, none\) but no edges dataset$"):
+        load_h5md(path)
+
+
+def test_colliders_are_checked_as_the_world_checks_them(tmp_path):
+    w = kinema.World(dt=0.01)
+    w.add_particles([[0.0, 0.0, 1.0]])
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w.add(kinema.SphereObstacle([0.5, 0, 0.3], 0.2))
+    path = w.run(0.05, fps=20).save(tmp_path / "run.h5")
+    with h5py.File(path, "r+") as f:
+        f["parameters/kinema/colliders/0"].attrs["normal"] = np.zeros(3)
+    with pytest.raises(TrajectoryFileError, match=r"run\.h5: collider /parameters/kinema/colliders/0 \(a plane\): normal = \[0\.0, 0\.0, 0\.0\] is invalid"):
+        kinema.Trajectory.load(path)
+    with h5py.File(path, "r+") as f:
+        f["parameters/kinema/colliders/0"].attrs["normal"] = "up"
+    with pytest.raises(TrajectoryFileError, match=r"run\.h5: attribute 'normal' \(/parameters/kinema/colliders/0\) = 'up' is not a number$"):
+        kinema.Trajectory.load(path)
+    with h5py.File(path, "r+") as f:
+        f["parameters/kinema/colliders/0"].attrs["normal"] = [0.0, 0.0, 1.0]
+        del f["parameters/kinema/colliders/1"].attrs["radius"]
+    with pytest.raises(TrajectoryFileError, match=r"run\.h5: collider /parameters/kinema/colliders/1 \(a sphere\) has no attribute 'radius'$"):
+        kinema.Trajectory.load(path)
+
+
+def _huge_file(tmp_path, frames, particles):
+    """A valid trajectory whose positions and velocities are replaced by (frames, particles, 3)
+    float64 datasets that are declared but never written (HDF5 allocates nothing)."""
+    path = tmp_path / "huge.h5"
+    save_h5md(synthetic(), path)
+    with h5py.File(path, "r+") as f:
+        del f["observables"], f[MASS], f[RADIUS], f["particles/all/id"]
+        for element in (POS, VEL):
+            for name in ("value", "step", "time"):
+                del f[f"{element}/{name}"]
+        f.create_dataset(f"{POS}/value", shape=(frames, particles, 3), dtype="f8")
+        f.create_dataset(f"{POS}/step", shape=(frames,), dtype="i8")
+        f.create_dataset(f"{POS}/time", shape=(frames,), dtype="f8")
+        f[f"{VEL}/step"], f[f"{VEL}/time"] = f[f"{POS}/step"], f[f"{POS}/time"]
+        f.create_dataset(f"{VEL}/value", shape=(frames, particles, 3), dtype="f8")
+    return path
+
+
+def test_a_dataset_larger_than_memory_is_refused_before_it_is_read(tmp_path):
+    import time
+
+    path = _huge_file(tmp_path, 10**6, 10**6)  # 24e12 bytes (21.8 TiB) declared
+    assert path.stat().st_size < 1 << 20  # nothing allocated
+    with h5py.File(path) as f:
+        assert f[f"{POS}/value"].id.get_storage_size() == 0
+    start = time.perf_counter()
+    with pytest.raises(TrajectoryFileError) as e:
+        kinema.Trajectory.load(path)
+    assert time.perf_counter() - start < 10
+    message = str(e.value)
+    assert "\n" not in message and not isinstance(e.value, MemoryError)
+    assert message.startswith(
+        f"{path}: dataset 'positions' (/particles/all/position/value) of shape (1000000, 1000000, 3) (float64) needs 22,351.7 GiB of memory to load; "
+    ), message
+    assert message.endswith(" GiB is available")
+
+
+def test_memory_for_all_the_datasets_together_is_checked(tmp_path, monkeypatch):
+    import kinema.io.h5md as h5md
+
+    path = tmp_path / "run.h5"
+    save_h5md(synthetic(), path)
+    positions = F * N * 3 * 8
+    monkeypatch.setattr(h5md, "available_memory", lambda: positions // 2)
+    with pytest.raises(
+        TrajectoryFileError,
+        match=r"dataset 'positions' \(/particles/all/position/value\) of shape \(5, 7, 3\) \(float64\) needs 7.8e-07 GiB of memory to load; 3.9e-07 GiB is available$",
+    ):
+        load_h5md(path)
+    monkeypatch.setattr(h5md, "available_memory", lambda: positions + 1)  # each fits, not all together
+    with pytest.raises(TrajectoryFileError, match=r"run\.h5: loading it needs .* GiB of memory \(dataset 'positions' .*\); 7.8e-07 GiB is available$"):
+        load_h5md(path)
+    monkeypatch.setattr(h5md, "available_memory", lambda: None)  # unknown: no limit
+    assert load_h5md(path).positions.shape == (F, N, 3)
+
+
+def test_available_memory_is_known_here():
+    from kinema.io._checks import available_memory
+
+    memory = available_memory()
+    assert memory is None or memory > 0
+
+
+def test_a_valid_file_with_infinite_potential_energy_loads(tmp_path):
+    # Observables are read as they are: -inf is a potential energy a world can record.
+    path = tmp_path / "run.h5"
+    tr = synthetic()
+    tr.potential["spring"][2] = -np.inf
+    save_h5md(tr, path)
+    assert load_h5md(path).potential["spring"][2] == -np.inf

@@ -68,7 +68,13 @@ class Trajectory:
 
     @classmethod
     def load(cls, path: Any, group: str | None = None) -> Trajectory:
-        """Read a trajectory from an H5MD file written by ``save`` (``kinema.io.load_h5md``)."""
+        """Read a trajectory from an H5MD file written by ``save`` (``kinema.io.load_h5md``).
+
+        What the file holds is checked as it is read (shapes, types and the memory they need
+        before any data, then finite positions, velocities and times, times that increase,
+        masses > 0, radii >= 0, ``dt`` > 0, the colliders): a ``kinema.io.TrajectoryFileError``
+        (a ``ValueError``), one line, names the file, the dataset or attribute and the bad
+        value."""
         from .io import load_h5md
 
         return load_h5md(path, group=group).to_trajectory()

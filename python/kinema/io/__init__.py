@@ -1,7 +1,8 @@
 """Trajectory files: H5MD (HDF5) to save and load runs, and exports for other programs.
 
 - ``save_h5md(traj, path)`` / ``load_h5md(path)``: the H5MD 1.1 layout, read back exactly
-  (needs h5py).
+  (needs h5py). Loading checks what it reads (shapes, types and the memory needed before
+  any data is read, then the values) and names the file, the dataset and the bad value.
 - ``export(traj, path, format)``: VTK PolyData series with a .pvd collection (ParaView), PLY
   per frame (Blender, Houdini), extended XYZ (OVITO, ASE), CSV.
 - ``TrajectoryFileError``: a file that cannot be read or written (a ``ValueError`` whose

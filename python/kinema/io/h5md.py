@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from ._checks import available_memory, dtype_problem, first_non_finite, gib, number, shown
 from ._files import TrajectoryFileError, atomic_file, frames_of
 
 H5MD_VERSION = (1, 1)
@@ -70,8 +71,9 @@ class LoadedTrajectory:
     ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J. Besides: ``step``
     (F,) the integration step of each frame, ``masses`` (N,) kg, ``radii`` (N,) m, ``ids``
     (N,), ``dim``, ``dt`` s, ``method``, ``colliders`` (descriptions, as
-    ``Trajectory.colliders``), ``group`` and the file's ``author`` and ``creator``. An
-    element the file does not hold is ``None`` (``potential``, ``colliders``: empty)."""
+    ``Trajectory.colliders``), ``group``, the file's ``author`` and ``creator`` and its
+    ``path``. An element the file does not hold is ``None`` (``potential``, ``colliders``:
+    empty)."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -97,6 +99,7 @@ class LoadedTrajectory:
     group: str = "all"
     author: str | None = None
     creator: str | None = None
+    path: Path | None = None
 
     def to_trajectory(self) -> Any:
         """A ``kinema.Trajectory`` of these arrays: every field its constructor takes is
@@ -115,9 +118,24 @@ class LoadedTrajectory:
             if value is None and (fl.default is not MISSING or fl.default_factory is not MISSING):
                 continue  # optional in Trajectory: its default
             if value is None:
-                raise ValueError(f"the file holds no {fl.name!r}, which kinema.Trajectory needs")
+                if self.path is None:
+                    raise ValueError(f"the file holds no {fl.name!r}, which kinema.Trajectory needs")
+                where = _NEEDED.get(fl.name, "").format(group=self.group)
+                raise TrajectoryFileError(
+                    f"{self.path}: not a complete kinema trajectory: " + (f"{where} ({fl.name}) is missing" if where else f"it holds no {fl.name!r}")
+                )
             args[fl.name] = value
         return Trajectory(**args)
+
+
+# Where the arrays kinema.Trajectory needs are in a file (LoadedTrajectory.to_trajectory).
+_NEEDED = {
+    "positions": "/particles/{group}/position",
+    "velocities": "/particles/{group}/velocity",
+    "kinetic": "/observables/kinetic_energy",
+    "momentum": "/observables/momentum",
+    "angular_momentum": "/observables/angular_momentum",
+}
 
 
 def _chunks(shape: tuple[int, ...]) -> tuple[int, ...] | None:
@@ -246,13 +264,15 @@ def _colliders_of(tr: Any) -> list[dict[str, Any]]:
     return _describe_colliders(colliders)
 
 
-def _read_colliders(path: Path, params: Any) -> list[dict[str, Any]]:
-    """The descriptions under /parameters/kinema/colliders, in index order."""
+def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
+    """The descriptions under /parameters/kinema/colliders, in index order, each checked by
+    the engine as ``World.add`` checks a collider (in a world of ``dim`` dimensions)."""
     h5py = _h5py()
     group = params.get("colliders")
     if not isinstance(group, h5py.Group):
         return []
     out = []
+    names = []
     for name in sorted(group, key=lambda n: int(n) if n.isdigit() else -1):
         g = group[name]
         kind = g.attrs.get("type")
@@ -262,10 +282,38 @@ def _read_colliders(path: Path, params: Any) -> list[dict[str, Any]]:
         d: dict[str, Any] = {"type": str(kind)}
         for key, value in g.attrs.items():
             if key != "type":
-                a = np.asarray(value, dtype=np.float64)
+                a = np.asarray(value)
+                if a.size == 0 or dtype_problem(a.dtype) is not None:
+                    raise _fail(path, f"attribute {key!r} ({g.name}) = {shown(value)} is not a number")
+                a = a.astype(np.float64)
                 d[key] = float(a) if a.ndim == 0 else a.tolist()
         out.append(d)
+        names.append(g.name)
+    if out:
+        _check_colliders(path, names, out, dim)
     return out
+
+
+def _check_colliders(path: Path, names: list[str], colliders: list[dict[str, Any]], dim: int) -> None:
+    """Adds each collider to an empty world of ``dim`` dimensions: the engine's checks (finite
+    values, a non-zero normal, hi > lo, 2 or 3 values, restitution in [0, 1], ...)."""
+    from ..colliders import Box, Plane, SphereObstacle
+    from ..render import _KIND
+    from ..world import World
+
+    world = World(dim=dim)
+    make = {"plane": Plane, "box": Box, "sphere": SphereObstacle}
+    for name, d in zip(names, colliders, strict=True):
+        needed = _KIND[d["type"]]
+        missing = [k for k in needed if k not in d]
+        if missing:
+            raise _fail(path, f"collider {name} (a {d['type']}) has no attribute {missing[0]!r}")
+        args = {k: d[k] for k in (*needed, "restitution", "friction") if k in d}
+        try:
+            world.add(make[d["type"]](**args))
+        except (ValueError, TypeError) as e:
+            first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            raise _fail(path, f"collider {name} (a {d['type']}): {first}") from None
 
 
 def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: str | None = None, compression: str | None = "gzip") -> Path:
@@ -306,31 +354,101 @@ def _fail(path: Path, what: str) -> TrajectoryFileError:
     return TrajectoryFileError(f"{path}: {what}")
 
 
-def _read_element(path: Path, parent: Any, name: str, required: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """(step, time, value) of a time-dependent element, or ``None`` when it is absent."""
+def _where(word: str, ds: Any) -> str:
+    """A dataset as a message names it: its meaning and its path in the file."""
+    return f"dataset {word!r} ({ds.name})"
+
+
+class _Reader:
+    """The reads of one file. Every dataset's type and shape is checked, and the bytes it
+    needs added up (``plan``), before any data is read; ``check_memory`` then refuses a file
+    that does not fit in the memory there is; ``finite`` checks values once read."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.planned: list[tuple[str, Any, int]] = []
+
+    def fail(self, what: str) -> TrajectoryFileError:
+        return _fail(self.path, what)
+
+    def numbers(self, word: str, ds: Any, integer: bool = False) -> tuple[int, ...]:
+        """The shape of ``ds``, which must hold real numbers (integers when ``integer``)."""
+        must = "integers" if integer else "real numbers"
+        if ds.shape is None:
+            raise self.fail(f"{_where(word, ds)} holds no data (an empty dataspace); it must hold {must}")
+        problem = dtype_problem(ds.dtype, integer)
+        if problem is not None:
+            raise self.fail(f"{_where(word, ds)} holds {problem}; it must hold {must}")
+        return tuple(ds.shape)
+
+    def clock(self, word: str, ds: Any, value_word: str, value: Any, integer: bool = False) -> None:
+        """``ds`` (the step or time of an element) holds one number per frame of ``value``,
+        or one number (H5MD's fixed interval)."""
+        shape = self.numbers(word, ds, integer)
+        n = value.shape[0]
+        if shape not in ((), (n,)):
+            one = word[:-1] if word.endswith("s") else word
+            raise self.fail(f"{_where(word, ds)} has shape {shape} but {_where(value_word, value)} has {n} frames: one {one} per frame")
+
+    def plan(self, word: str, ds: Any, nbytes: int | None = None) -> None:
+        self.planned.append((word, ds, int(ds.size) * ds.dtype.itemsize if nbytes is None else nbytes))
+
+    def check_memory(self, limit: int | None) -> None:
+        if limit is None or not self.planned:
+            return
+        for word, ds, nbytes in self.planned:
+            if nbytes > limit:
+                raise self.fail(
+                    f"{_where(word, ds)} of shape {tuple(ds.shape)} ({ds.dtype}) needs {gib(nbytes)} GiB of memory to load; {gib(limit)} GiB is available"
+                )
+        total = sum(nbytes for _, _, nbytes in self.planned)
+        if total > limit:
+            word, ds, nbytes = max(self.planned, key=lambda p: p[2])
+            raise self.fail(
+                f"loading it needs {gib(total)} GiB of memory ({_where(word, ds)} of shape {tuple(ds.shape)} ({ds.dtype}): "
+                f"{gib(nbytes)} GiB); {gib(limit)} GiB is available"
+            )
+
+    def finite(self, word: str, ds: Any, a: np.ndarray, axes: tuple[str, ...]) -> None:
+        """Refuses a NaN or ±inf in ``a`` (read from ``ds``), naming its place: ``axes`` name
+        the leading indices (frame, particle)."""
+        at = first_non_finite(a)
+        if at is not None:
+            place = ", ".join(f"{name} {i}" for name, i in zip(axes, at, strict=False))
+            raise self.fail(f"{_where(word, ds)} has a non-finite value ({number(a[at])})" + (f" at {place}" if place else ""))
+
+
+def _element_datasets(path: Path, parent: Any, name: str, required: bool = False) -> tuple[Any, Any, Any] | None:
+    """The (value, step, time) datasets of a time-dependent element (time ``None`` when it
+    has none), or ``None`` when it is absent."""
     h5py = _h5py()
     if name not in parent:
         if required:
-            raise _fail(path, f"not a complete H5MD trajectory: {parent.name}/{name} is missing")
+            raise _fail(path, f"not a complete H5MD trajectory: {parent.name.rstrip('/')}/{name} is missing")
         return None
     g = parent[name]
-    if not isinstance(g, h5py.Group) or "value" not in g or "step" not in g:
-        raise _fail(path, f"{g.name} is not a time-dependent H5MD element (a group with step and value)")
-    value = g["value"][()]
-    step = g["step"][()]
-    time = g["time"][()] if "time" in g else None
-    n = value.shape[0] if value.ndim else 0
-    # H5MD 1.1 allows scalar step/time with an offset attribute: equal intervals.
-    if np.ndim(step) == 0:
-        step = g["step"].attrs.get("offset", 0) + step * np.arange(n)
-    if time is not None and np.ndim(time) == 0:
-        time = g["time"].attrs.get("offset", 0.0) + time * np.arange(n)
-    if np.shape(step) != (n,) or (time is not None and np.shape(time) != (n,)):
-        raise _fail(path, f"{g.name}: step and time must have one entry per frame of value ({n})")
-    return np.asarray(step), (None if time is None else np.asarray(time)), value
+    value, step, time = (g.get(k) for k in ("value", "step", "time")) if isinstance(g, h5py.Group) else (None, None, None)
+    if not (isinstance(value, h5py.Dataset) and isinstance(step, h5py.Dataset) and (time is None or isinstance(time, h5py.Dataset))):
+        raise _fail(path, f"{g.name} is not a time-dependent H5MD element (a group with step and value datasets)")
+    return value, step, time
 
 
-def _read(path: Path, f: Any, group: str | None) -> LoadedTrajectory:
+def _per_frame(ds: Any, a: np.ndarray, n: int, dtype: Any) -> np.ndarray:
+    """A step or time read from ``ds``: one per frame, or H5MD's fixed interval (a scalar
+    ``a`` and the ``offset`` attribute) made one per frame."""
+    if np.ndim(a) != 0:
+        return np.asarray(a)
+    offset = ds.attrs.get("offset", 0)
+    if np.asarray(offset).size != 1 or dtype_problem(np.asarray(offset).dtype) is not None:
+        raise TrajectoryFileError(f"attribute 'offset' ({ds.name}) = {shown(offset)} is not a number")
+    return (np.asarray(offset).reshape(()) + a * np.arange(n)).astype(dtype, copy=False)
+
+
+# /observables read back: (name, attribute of the trajectory, a vector per frame)
+_READ_OBSERVABLES = [(name, attr, attr in ("momentum", "angular_momentum", "impulse_balance")) for name, (attr, _) in _OBSERVABLES.items()]
+
+
+def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTrajectory:
     h5py = _h5py()
     missing = [name for name in ("h5md", "particles") if not isinstance(f.get(name), h5py.Group)]
     if missing:
@@ -346,54 +464,186 @@ def _read(path: Path, f: Any, group: str | None) -> LoadedTrajectory:
     if group not in groups:
         raise _fail(path, f"has no particle group {group!r}; available: {', '.join(groups) or '(none)'}")
     p = f["particles"][group]
-    step, t, x = _read_element(path, p, "position", required=True)
-    if x.ndim != 3 or x.shape[2] not in (2, 3):
-        raise _fail(path, f"{p.name}/position/value has shape {x.shape}; it must be (F, N, 2) or (F, N, 3)")
-    if t is None:
-        raise _fail(path, f"{p.name}/position has no time dataset; kinema needs the time of each frame")
-    d = x.shape[2]
+    r = _Reader(path)
 
-    def three(a: np.ndarray) -> np.ndarray:
-        return a if a.shape[-1] == 3 else np.concatenate([a, np.zeros(a.shape[:-1] + (3 - a.shape[-1],), dtype=a.dtype)], axis=-1)
-
-    vel = _read_element(path, p, "velocity")
-    if vel is not None and vel[2].shape != x.shape:
-        raise _fail(path, f"{p.name}/velocity/value has shape {vel[2].shape} but position/value {x.shape}")
-    out = LoadedTrajectory(t=t, positions=three(x), velocities=None if vel is None else three(vel[2]), step=step, dim=d, group=group)
-    for name, attr in (("mass", "masses"), ("radius", "radii"), ("id", "ids")):
-        if name in p:
-            a = p[name][()] if isinstance(p[name], h5py.Dataset) else _read_element(path, p, name)[2][0]
-            setattr(out, attr, a)
+    # -- What is there: types and shapes, before any data is read. ---------------------------
+    x_ds, step_ds, t_ds = _element_datasets(path, p, "position", required=True)
+    shape = r.numbers("positions", x_ds)
+    if len(shape) != 3 or shape[2] not in (2, 3):
+        raise r.fail(f"{_where('positions', x_ds)} has shape {shape}; it must be (frames, particles, 3) or (frames, particles, 2)")
+    frames, n, d = shape
+    if frames == 0:
+        raise r.fail(f"0 frames: {_where('positions', x_ds)} has shape {shape}")
+    if n == 0:
+        raise r.fail(f"0 particles: {_where('positions', x_ds)} has shape {shape}")
+    if t_ds is None:
+        raise r.fail(f"{p.name}/position has no time dataset; kinema needs the time of each frame")
+    r.clock("times", t_ds, "positions", x_ds)
+    r.clock("steps", step_ds, "positions", x_ds, integer=True)
     box = p.get("box")
+    if isinstance(box, h5py.Group) and "dimension" in box.attrs:
+        dimension = box.attrs["dimension"]
+        if np.asarray(dimension).size != 1 or dtype_problem(np.asarray(dimension).dtype, integer=True) or int(np.asarray(dimension).reshape(())) != d:
+            raise r.fail(f"attribute 'dimension' ({box.name}) = {shown(dimension)} but {_where('positions', x_ds)} has {d} coordinates per particle")
+    # 2D positions and velocities get z = 0: the padded copy is read besides.
+    per_frame_vectors = frames * n * (5 if d == 2 else 3)
+    r.plan("positions", x_ds, per_frame_vectors * x_ds.dtype.itemsize)
+    r.plan("times", t_ds)
+    r.plan("steps", step_ds)
+
+    vel = _element_datasets(path, p, "velocity")
+    if vel is not None:
+        v_ds = vel[0]
+        if r.numbers("velocities", v_ds) != shape:
+            raise r.fail(f"{_where('velocities', v_ds)} has shape {v_ds.shape} but {_where('positions', x_ds)} {shape}; they must match")
+        r.clock("steps", vel[1], "velocities", v_ds, integer=True)
+        if vel[2] is not None:
+            r.clock("times", vel[2], "velocities", v_ds)
+        r.plan("velocities", v_ds, per_frame_vectors * v_ds.dtype.itemsize)
+
+    per_particle = {}  # attribute: (dataset, word, whether it is a time-dependent element's value)
+    for name, attr, integer in (("mass", "masses", False), ("radius", "radii", False), ("id", "ids", True)):
+        if name not in p:
+            continue
+        obj = p[name]
+        if isinstance(obj, h5py.Dataset):
+            if r.numbers(attr, obj, integer) != (n,):
+                raise r.fail(
+                    f"{_where(attr, obj)} has shape {obj.shape} but there are {n} particles ({_where('positions', x_ds)} {shape}): one value per particle"
+                )
+            r.plan(attr, obj)
+            per_particle[attr] = (obj, False)
+        else:
+            value = _element_datasets(path, p, name)[0]
+            s = r.numbers(attr, value, integer)
+            if len(s) != 2 or s[0] == 0 or s[1] != n:
+                raise r.fail(f"{_where(attr, value)} has shape {s}; it must be (frames, {n}), one value per particle ({_where('positions', x_ds)} {shape})")
+            r.plan(attr, value, n * value.dtype.itemsize)
+            per_particle[attr] = (value, True)
+
+    periodic = None
+    edges_ds = None
     if isinstance(box, h5py.Group) and "boundary" in box.attrs:
         boundary = [b.decode() if isinstance(b, bytes) else str(b) for b in np.asarray(box.attrs["boundary"]).reshape(-1)]
         flags = [b == "periodic" for b in boundary]
         if any(flags):
-            out.periodic = tuple((flags + [False] * 3)[:3])
-            if isinstance(box.get("edges"), h5py.Dataset):
-                edges = np.asarray(box["edges"][()], dtype=np.float64).reshape(-1)
-                out.box_edges = np.concatenate([edges, np.zeros(3 - edges.size)])[:3]
+            periodic = tuple((flags + [False] * 3)[:3])
+            edges_ds = box.get("edges")
+            if not isinstance(edges_ds, h5py.Dataset):
+                raise r.fail(f"{box.name} has periodic boundaries ({', '.join(boundary)}) but no edges dataset")
+            s = r.numbers("box edges", edges_ds)
+            if s != (d,):
+                raise r.fail(f"{_where('box edges', edges_ds)} has shape {s}; it must be ({d},), one edge per axis")
+            r.plan("box edges", edges_ds)
+
+    observables: dict[str, Any] = {}  # attribute or ("potential", force name): value dataset
     obs = f.get("observables")
     if isinstance(obs, h5py.Group):
-        for name, (attr, _) in _OBSERVABLES.items():
-            e = _read_element(path, obs, name)
-            if e is not None:
-                setattr(out, attr, e[2])
-        e = _read_element(path, obs, "total_energy")
-        out.total = None if e is None else e[2]
+
+        def observable(parent: Any, name: str, vector: bool = False, required: bool = False) -> Any:
+            e = _element_datasets(path, parent, name, required)
+            if e is None:
+                return None
+            value, step, time = e
+            s = r.numbers(name, value)
+            good = len(s) == 2 and s[1] in (2, 3) if vector else len(s) == 1
+            if not good or s[0] != frames:
+                must = f"({frames}, 3)" if vector else f"({frames},)"
+                raise r.fail(f"{_where(name, value)} has shape {s}; it must be {must}, one value per frame of {_where('positions', x_ds)} {shape}")
+            r.clock("steps", step, name, value, integer=True)
+            if time is not None:
+                r.clock("times", time, name, value)
+            r.plan(name, value)
+            return value
+
+        for name, attr, vector in _READ_OBSERVABLES:
+            observables[attr] = observable(obs, name, vector)
+        observables["total"] = observable(obs, "total_energy")
         by_force = obs.get(_BY_FORCE)
         if isinstance(by_force, h5py.Group):
-            names = [str(n) for n in by_force.attrs.get("names", list(by_force))]
-            out.potential = {n: _read_element(path, by_force, n, required=True)[2] for n in names}
+            names = [n.decode() if isinstance(n, bytes) else str(n) for n in np.asarray(by_force.attrs.get("names", list(by_force))).reshape(-1)]
+            for name in names:
+                observables[("potential", name)] = observable(by_force, name, required=True)
         elif "potential_energy" in obs:
-            out.potential = {"potential": _read_element(path, obs, "potential_energy")[2]}
+            observables[("potential", "potential")] = observable(obs, "potential_energy")
+
+    params = f.get("parameters/kinema")
+    dt = method = None
+    colliders: list[dict[str, Any]] = []
+    if isinstance(params, h5py.Group):
+        if "dt" in params.attrs:
+            raw = params.attrs["dt"]
+            a = np.asarray(raw)
+            if a.size != 1 or dtype_problem(a.dtype) is not None or not (np.isfinite(a).all() and a.reshape(()) > 0):
+                raise r.fail(f"attribute 'dt' ({params.name}) = {shown(raw)} is not a positive number (the time step in s)")
+            dt = float(a.reshape(()))
+        if "method" in params.attrs:
+            raw = params.attrs["method"]
+            if isinstance(raw, bytes):
+                try:
+                    raw = raw.decode("utf-8")
+                except UnicodeDecodeError:
+                    pass
+            if not isinstance(raw, str):
+                raise r.fail(f"attribute 'method' ({params.name}) = {shown(raw)} is not the name of an integration method")
+            method = raw
+        colliders = _read_colliders(path, params, d)
+
+    r.check_memory(memory)
+
+    # -- The data, and its values. ------------------------------------------------------------
+    def three(a: np.ndarray) -> np.ndarray:
+        return a if a.shape[-1] == 3 else np.concatenate([a, np.zeros(a.shape[:-1] + (3 - a.shape[-1],), dtype=a.dtype)], axis=-1)
+
+    try:
+        t = _per_frame(t_ds, t_ds[()], frames, np.float64)
+        step = _per_frame(step_ds, step_ds[()], frames, np.int64)
+    except TrajectoryFileError as e:
+        raise r.fail(str(e)) from None
+    r.finite("times", t_ds, t, ("frame",))
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        k = int(back[0]) + 1
+        raise r.fail(f"{_where('times', t_ds)} must increase: t[{k}] = {number(t[k])} after t[{k - 1}] = {number(t[k - 1])}")
+    x = x_ds[()]
+    r.finite("positions", x_ds, x, ("frame", "particle"))
+    velocities = None
+    if vel is not None:
+        v = vel[0][()]
+        r.finite("velocities", vel[0], v, ("frame", "particle"))
+        velocities = three(v)
+    out = LoadedTrajectory(t=t, positions=three(x), velocities=velocities, step=step, dim=d, group=group, path=path)
+    for attr, (ds, element) in per_particle.items():
+        a = ds[0] if element else ds[()]
+        r.finite(attr, ds, a, ("particle",))
+        if attr == "masses" and np.any(a <= 0):
+            i = int(np.argmax(a <= 0))
+            raise r.fail(f"{_where(attr, ds)} has mass[{i}] = {number(a[i])} (masses must be finite and > 0 kg)")
+        if attr == "radii" and np.any(a < 0):
+            i = int(np.argmax(a < 0))
+            raise r.fail(f"{_where(attr, ds)} has radius[{i}] = {number(a[i])} (radii must be finite and >= 0 m)")
+        setattr(out, attr, a)
+    if periodic is not None:
+        edges = np.asarray(edges_ds[()], dtype=np.float64).reshape(-1)
+        for k, e in enumerate(edges):
+            if not np.isfinite(e):
+                raise r.fail(f"{_where('box edges', edges_ds)} has edge[{k}] = {number(e)} (box edges must be finite, in m)")
+            if periodic[k] and e <= 0:
+                raise r.fail(f"{_where('box edges', edges_ds)} has edge[{k}] = {number(e)} (a periodic axis needs an edge > 0 m)")
+        out.periodic = periodic
+        out.box_edges = np.concatenate([edges, np.zeros(3 - edges.size)])[:3]
+    # Observables are read as they are: a potential energy may be -inf (a particle exactly at
+    # an unsoftened attractor point).
+    for key, ds in observables.items():
+        if ds is None:
+            continue
+        if isinstance(key, tuple):
+            out.potential[key[1]] = ds[()]
+        else:
+            setattr(out, key, ds[()])
     if out.total is None and out.kinetic is not None:
         out.total = out.kinetic + sum(out.potential.values(), np.zeros_like(out.kinetic))
-    params = f.get("parameters/kinema")
-    if isinstance(params, h5py.Group):
-        out.dt = float(params.attrs["dt"]) if "dt" in params.attrs else None
-        out.method = str(params.attrs["method"]) if "method" in params.attrs else None
-        out.colliders = _read_colliders(path, params)
+    out.dt, out.method, out.colliders = dt, method, colliders
     author = f["h5md"].get("author")
     creator = f["h5md"].get("creator")
     out.author = None if author is None else str(author.attrs.get("name", ""))
@@ -408,9 +658,22 @@ def load_h5md(path: str | os.PathLike, group: str | None = None) -> LoadedTrajec
     makes a ``kinema.Trajectory``). Arrays come back exactly as written; 2D positions and
     velocities get z = 0.
 
+    What is read is checked first: the types and shapes of every dataset before any data
+    is read (positions (F, N, 3) or (F, N, 2) with F, N > 0; velocities as positions; one
+    time and one step per frame; masses, radii and ids (N,); observables one value or vector
+    per frame; real numbers, integers for steps and ids), then the memory it needs against
+    the memory available (``kinema.io._checks.available_memory``), then the values: finite
+    positions, velocities and times, times that increase, masses > 0, radii >= 0, periodic
+    box edges > 0, ``dt`` a positive number, ``method`` a name and each collider as
+    ``World.add`` checks it. Observables are not checked for finite values (a potential
+    energy may be -inf).
+
     Raises ``TrajectoryFileError`` (a ``ValueError``), one line naming the file, when it is
     missing, a directory, not HDF5 or corrupt, an HDF5 file without /h5md and /particles, of
-    another major H5MD version, or lacks ``group`` (the message lists the groups there)."""
+    another major H5MD version, lacks ``group`` (the message lists the groups there), or when
+    a check fails: the message names the dataset (its meaning and its path in the file) or
+    attribute and the bad value, e.g. ``run.h5: dataset 'positions'
+    (/particles/all/position/value) has a non-finite value (nan) at frame 3, particle 7``."""
     h5py = _h5py()
     path = Path(path)
     if not path.exists():
@@ -425,9 +688,11 @@ def load_h5md(path: str | os.PathLike, group: str | None = None) -> LoadedTrajec
         raise _fail(path, "not an HDF5 file (corrupt, or another format)")
     try:
         with h5py.File(path, "r") as f:
-            return _read(path, f, group)
+            return _read(path, f, group, available_memory())
     except TrajectoryFileError:
         raise
+    except MemoryError:
+        raise _fail(path, "not enough memory to load it") from None
     except (OSError, KeyError, RuntimeError) as e:
         # h5py reports a damaged file as OSError/KeyError/RuntimeError with a multi-line text.
         first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
