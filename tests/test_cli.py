@@ -1,7 +1,9 @@
 """The `kinema` command: exit codes, messages, files written."""
 
+import os
 import subprocess
 import sys
+import time
 
 from typer.testing import CliRunner
 
@@ -211,3 +213,159 @@ def test_a_diverging_scene_is_exit_1_naming_the_advised_step(tmp_path):
     assert len(lines) == 1 and "diverged" in lines[0] and "step" in lines[0], res.output
     assert "Traceback" not in res.output
     assert list(out.iterdir()) == []  # nothing written
+
+
+# -- user errors are exit 2 and one line; the work is estimated before it is done -------------
+
+
+def one_error_line(res):
+    """The single line on stderr of a refused command (and no traceback, no 'unexpected')."""
+    lines = res.stderr.strip().splitlines()
+    assert res.exit_code == 2, res.output
+    assert len(lines) == 1 and lines[0].startswith("error: "), res.stderr
+    assert "Traceback" not in res.output and "unexpected" not in res.output
+    return lines[0]
+
+
+def test_values_that_overflowed_or_recursed_are_exit_2_naming_file_key_value(tmp_path):
+    # each of these was an OverflowError or RecursionError (exit 1, "unexpected ...")
+    cases = [
+        (SMALL.replace("dt = 0.01", "dt = 1e-320"), "world.dt: 1e-320 is invalid: the time step must be a finite number of seconds >= 1e-300"),
+        (SMALL.replace("dt = 0.01", 'dt = "1e-3"'), "world.dt: '1e-3' is invalid: input should be a valid number"),
+        (
+            SMALL + '[[forces]]\ntype = "spring"\ni = [0]\nj = [1000000000000000000000000000000]\nk = 1.0\n',
+            "forces[1].j[0]: 1000000000000000000000000000000 is invalid",
+        ),
+        (SMALL.replace("positions = [[0, 1], [0.5, 1]]", "positions = " + "[" * 3000 + "]" * 3000), "particles[0].positions: [[[[[[[["),
+    ]
+    for k, (text, needle) in enumerate(cases):
+        path = small_scene(tmp_path, text, name=f"bad{k}.toml")
+        line = one_error_line(runner.invoke(app, ["run", str(path), "-o", str(tmp_path / "o")]))
+        assert line.startswith(f"error: {path}: ") and needle in line, line
+    assert not (tmp_path / "o").exists()
+
+
+HUGE = """
+[world]
+dt = 0.001
+duration = 1.0
+
+[[particles]]
+type = "random"
+lo = [0, 0, 0]
+hi = [1, 1, 1]
+count = 1000000000
+"""
+
+
+def test_a_run_over_the_limits_is_refused_before_any_work(tmp_path, monkeypatch):
+    from kinema.scene import Scene
+
+    def never(*args, **kwargs):
+        raise AssertionError("the scene was built: the estimate must refuse it first")
+
+    monkeypatch.setattr(Scene, "build", never)  # were the check gone, fail here rather than allocate 22 GiB
+    # a billion particles: refused at once
+    path = small_scene(tmp_path, HUGE, name="huge.toml")
+    line = one_error_line(runner.invoke(app, ["run", str(path), "-o", str(tmp_path / "o")]))
+    assert line.startswith(f"error: {path}: the run would take 9.9e+11 particle-steps (1,000,000,000 particles × 986 steps: ")
+    assert "world.duration = 1 s at world.dt = 0.001 s; particles[0].count = 1000000000" in line
+    assert "over the limits of 1e+11 particle-steps, 1e+11 pixels and 8.0 GiB of memory; give --force to run it anyway" in line
+    assert "TiB of memory" in line
+    # ten particles for a billion seconds
+    path = small_scene(tmp_path, HUGE.replace("count = 1000000000", "count = 10").replace("duration = 1.0", "duration = 1e9"), name="long.toml")
+    line = one_error_line(runner.invoke(app, ["run", str(path), "-o", str(tmp_path / "o"), "--no-video"]))
+    assert "1.0e+13 particle-steps (10 particles × 999,999,999,987 steps: world.duration = 1e+09 s at world.dt = 0.001 s" in line
+    # --duration names itself; more steps than can be counted are refused even with --force
+    line = one_error_line(runner.invoke(app, ["run", str(small_scene(tmp_path)), "--duration", "1e300", "--force", "-o", str(tmp_path / "o")]))
+    assert "the run would take 1.0e+302 steps (--duration = 1e+300 s at world.dt = 0.01 s), more than can be counted (1e+18), even with --force" in line
+    assert not (tmp_path / "o").exists()
+
+
+def test_force_runs_what_the_limits_refuse(tmp_path, monkeypatch):
+    import kinema.cli
+
+    monkeypatch.setattr(kinema.cli, "LIMIT_PARTICLE_STEPS", 10.0)
+    scene = small_scene(tmp_path)
+    line = one_error_line(runner.invoke(app, ["run", str(scene), "-o", str(tmp_path / "o"), "--no-video"]))
+    assert "6.0e+01 particle-steps (2 particles × 30 steps: world.duration = 0.3 s at world.dt = 0.01 s; 2 particles[0].positions)" in line
+    assert "over the limits of 1e+01 particle-steps" in line and not (tmp_path / "o").exists()
+    res = runner.invoke(app, ["run", str(scene), "-o", str(tmp_path / "o"), "--no-video", "--force"])
+    assert res.exit_code == 0, res.output
+    assert "work: 6.0e+01 particle-steps" in res.stdout  # the estimate is printed
+    assert (tmp_path / "o" / "trajectory.h5").exists()
+    # view simulates a scene too
+    res = runner.invoke(app, ["view", str(scene), "--html", str(tmp_path / "v.html")])
+    assert "give --force" in one_error_line(res) and not (tmp_path / "v.html").exists()
+
+
+def test_render_over_the_pixel_limit_is_refused_unless_forced(tmp_path, monkeypatch):
+    import kinema.cli
+
+    out = tmp_path / "o"
+    assert runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(out), "--no-video"]).exit_code == 0
+    monkeypatch.setattr(kinema.cli, "LIMIT_PIXELS", 1e4)
+    args = ["render", str(out / "trajectory.h5"), "-o", str(tmp_path / "m.gif"), "--width", "64", "--height", "48"]
+    line = one_error_line(runner.invoke(app, args))
+    assert line.startswith(f"error: {out / 'trajectory.h5'}: rendering would take 2.2e+04 pixels (7 frames × --width 64 × --height 48)"), line
+    assert "give --force" in line and not (tmp_path / "m.gif").exists()
+    res = runner.invoke(app, [*args, "--force"])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "m.gif").read_bytes()[:3] == b"GIF"
+
+
+def test_every_example_scene_is_within_the_limits():
+    from pathlib import Path
+
+    from kinema.cli import _scene_work
+    from kinema.scene import Scene
+
+    scenes = sorted((Path(__file__).resolve().parent.parent / "examples" / "scenes").glob("*.toml"))
+    assert len(scenes) >= 10
+    for path in scenes:
+        sc = Scene.from_toml(path)
+        assert "particle-steps" in _scene_work(sc, path, sc.world.duration, "world.duration", True, force=False)
+
+
+def test_stale_staging_folders_of_killed_runs_are_removed(tmp_path):
+    from kinema.cli import _host
+
+    out = tmp_path / "o"
+    out.mkdir()
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True, check=True)
+    dead = int(gone.stdout)  # a process that has exited
+    stale = out / f".kinema-run.{_host()}-{dead}.abc123"
+    (stale / "sub").mkdir(parents=True)
+    (stale / "trajectory.h5").write_bytes(b"half written")
+    alive = out / f".kinema-run.{_host()}-{os.getppid()}.def456"  # a run still going
+    elsewhere = out / f".kinema-run.otherhost-{dead}.ghi789"  # another machine's: cannot tell
+    old_style = out / ".kinema-run.jkl012"  # no pid: removed once a day old
+    recent_style = out / ".kinema-run.mno345"
+    for d in (alive, elsewhere, old_style, recent_style):
+        d.mkdir()
+    day_ago = time.time() - 2 * 86400
+    os.utime(old_style, (day_ago, day_ago))
+    (out / ".kinema-run.notes").write_text("a file, not a staging folder")
+    res = runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(out), "--no-video"])
+    assert res.exit_code == 0, res.output
+    left = sorted(p.name for p in out.iterdir())
+    assert left == sorted([alive.name, elsewhere.name, recent_style.name, ".kinema-run.notes", "energy.png", "trajectory.h5"]), left
+
+
+def test_a_run_stages_in_a_folder_named_by_its_process(tmp_path, monkeypatch):
+    import tempfile
+
+    import kinema.cli
+
+    made = []
+    real = tempfile.mkdtemp
+
+    def spy(*args, **kwargs):
+        made.append(real(*args, **kwargs))
+        return made[-1]
+
+    monkeypatch.setattr(kinema.cli.tempfile, "mkdtemp", spy)
+    res = runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(tmp_path / "o"), "--no-video"])
+    assert res.exit_code == 0, res.output
+    assert len(made) == 1 and os.path.basename(made[0]).startswith(f".kinema-run.{kinema.cli._host()}-{os.getpid()}.")
+    assert not os.path.exists(made[0])  # removed at the end

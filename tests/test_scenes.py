@@ -276,3 +276,105 @@ def test_isotropic_velocities_have_one_speed_and_random_directions(tmp_path):
     assert np.all(v2[:, 2] == 0) and np.allclose(np.linalg.norm(v2, axis=1), 3.0)
     lines, _ = errors_of(block.replace("speed = 3.0", "speed = -1.0"), tmp_path)
     assert "velocity.speed" in lines[0] and "-1" in lines[0]
+
+
+# -- strict values: no coercion, bounds that keep the engine's numbers finite -----------------
+
+ONE = '[[particles]]\ntype = "list"\npositions = [[0, 0, 0]]\n'
+
+
+def test_strings_and_booleans_are_not_numbers(tmp_path):
+    lines, path = errors_of('[world]\ndt = "1e-3"\n[[particles]]\ntype = "list"\npositions = [["0", true, "1e3"]]\nmass = "2"\n', tmp_path)
+    assert lines == [
+        f"{path}: world.dt: '1e-3' is invalid: input should be a valid number",
+        f"{path}: particles[0].mass: '2' is invalid: input should be a valid number",
+        f"{path}: particles[0].positions[0][0]: '0' is invalid: input should be a valid number",
+        f"{path}: particles[0].positions[0][1]: True is invalid: input should be a valid number",
+        f"{path}: particles[0].positions[0][2]: '1e3' is invalid: input should be a valid number",
+    ]
+
+
+def test_floats_are_not_integers_and_numbers_are_not_booleans(tmp_path):
+    text = '[world]\ndim = 2.0\n[[particles]]\ntype = "random"\nlo = [0, 0]\nhi = [1, 1]\ncount = 3.0\npinned = 1\n[output]\nvideo = 0\n'
+    lines, path = errors_of(text, tmp_path)
+    assert f"{path}: world.dim: 2.0 is invalid: input should be 2 or 3" in lines
+    assert f"{path}: particles[0].count: 3.0 is invalid: input should be a valid integer" in lines
+    assert f"{path}: particles[0].pinned: 1 is invalid: input should be a valid boolean" in lines
+    assert f"{path}: output.video: 0 is invalid: input should be 'mp4' or 'gif' or False" in lines
+    assert len(lines) == 4, lines
+
+
+def test_integers_are_taken_where_floats_are_wanted(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text('[world]\ndim = 2\ndt = 1\nduration = 2\nfps = 1\n[[particles]]\ntype = "list"\npositions = [[1, 2]]\nmass = 3\nradius = 0\n')
+    w = kinema.load_scene(path)
+    assert (w.dim, w.dt, w.scene.world.duration) == (2, 1.0, 2.0) and isinstance(w.scene.world.dt, float)
+    np.testing.assert_array_equal(w.positions, [[1, 2, 0]])
+    assert w.masses.tolist() == [3.0]
+
+
+@pytest.mark.parametrize(
+    ("line", "shown", "allowed"),
+    [
+        ("dt = 1e-320", "1e-320", "finite number of seconds >= 1e-300"),
+        ("dt = inf", "inf", "finite number of seconds >= 1e-300"),
+        ("dt = nan", "nan", "finite number of seconds >= 1e-300"),
+        ("duration = inf", "inf", "finite number of seconds >= 0"),
+        ("fps = 1e-9", "1e-09", "finite number >= 1e-06"),
+    ],
+)
+def test_world_numbers_must_be_finite_and_in_range(tmp_path, line, shown, allowed):
+    lines, path = errors_of(f"[world]\n{line}\n", tmp_path)
+    key = line.split(" = ")[0]
+    assert len(lines) == 1 and lines[0].startswith(f"{path}: world.{key}: {shown} is invalid: ") and allowed in lines[0], lines
+
+
+def test_indices_and_counts_must_fit(tmp_path):
+    spring = '[[forces]]\ntype = "spring"\ni = [0]\nj = [1000000000000000000000000000000]\nk = 1.0\n'
+    lines, path = errors_of(ONE + spring, tmp_path)
+    assert lines == [f"{path}: forces[0].j[0]: 1000000000000000000000000000000 is invalid: input should be less than 4294967295"]
+    lines, _ = errors_of(ONE + spring.replace("1000000000000000000000000000000", "1e30"), tmp_path)
+    assert lines == [f"{path}: forces[0].j[0]: 1e+30 is invalid: input should be a valid integer"]
+    lines, _ = errors_of('[[particles]]\ntype = "lattice"\ncounts = [100000, 100000, 100000]\n', tmp_path)
+    assert lines == [
+        f"{path}: particles[0].counts: [100000, 100000, 100000] is invalid: the lattice would have 1,000,000,000,000,000 particles, more than 4,294,967,295"
+    ]
+    lines, _ = errors_of(ONE.replace('"list"', '"random"').replace("positions = [[0, 0, 0]]", "lo = [0, 0]\nhi = [1, 1]\ncount = 10000000000"), tmp_path)
+    assert lines == [f"{path}: particles[0].count: 10000000000 is invalid: input should be less than or equal to 4294967295"]
+    lines, _ = errors_of(ONE + "seed = -1\n", tmp_path)
+    assert lines == [f"{path}: particles[0].seed: -1 is invalid: input should be greater than or equal to 0"]
+
+
+def test_video_fps_must_be_playable(tmp_path):
+    lines, path = errors_of("[render]\nfps = 1e-300\n", tmp_path)
+    assert lines == [f"{path}: render.fps: 1e-300 is invalid: input should be greater than or equal to 0.01"]
+
+
+def test_arrays_nested_too_deep_for_the_parser_are_one_line(tmp_path):
+    # 3,000 levels: the TOML parser itself runs out of stack (RecursionError)
+    text = '# a comment with [[[ brackets\n[world]\nmethod = "verlet" # "[["\n\n[[particles]]\ntype = "list"\npositions = ' + "[" * 3000 + "]" * 3000 + "\n"
+    lines, path = errors_of(text, tmp_path)
+    assert lines == [f"{path}: line 7: particles[0].positions: {'[' * 32}... is invalid: arrays and tables nested more than 32 levels deep are refused"]
+
+
+def test_values_nested_too_deep_are_one_line(tmp_path):
+    # parsed, but deeper than any scene needs: refused before validation (whose messages
+    # would print the whole value, and whose repr of it could itself recurse too deep)
+    lines, path = errors_of(ONE.replace("[[0, 0, 0]]", "[" * 100 + "]" * 100), tmp_path)
+    assert lines == [f"{path}: particles[0].positions[0][0][0]...: {'[' * 40}... is invalid: arrays and tables nested more than 32 levels deep are refused"]
+    lines, _ = errors_of("[render.camera." + ".".join(["a"] * 3000) + "]\n", tmp_path)
+    assert len(lines) == 1 and lines[0].startswith(f"{path}: render.camera.a.a.a.a...: {{'a': {{'a': ") and "nested more than 32 levels deep" in lines[0]
+
+
+def test_an_integer_too_long_to_read_is_one_line(tmp_path):
+    lines, path = errors_of("[world]\ndt = " + "1" * 5000 + "\n", tmp_path)
+    assert len(lines) == 1 and lines[0].startswith(f"{path}: cannot be read as TOML: ") and "4300 digits" in lines[0]
+
+
+def test_particle_count_is_known_without_building():
+    scenes = {p.name: Scene.from_toml(p) for p in SCENES.glob("*.toml")}
+    assert scenes["sand_box.toml"].particle_count() == 2000
+    assert scenes["newtons_cradle.toml"].particle_count() == 10
+    assert scenes["demo.toml"].particle_count() == 400
+    huge = Scene.from_string('[[particles]]\ntype = "random"\nlo = [0, 0, 0]\nhi = [1, 1, 1]\ncount = 1000000000\n')
+    assert huge.particle_count() == 10**9  # counted, not made

@@ -181,6 +181,29 @@ def test_serve_answers_on_loopback(traj):
         server.shutdown()
 
 
+def test_serve_refuses_a_foreign_host_header(traj):
+    # DNS rebinding: a page of evil.example, its name now resolving to 127.0.0.1, asks for the
+    # data with "Host: evil.example:PORT"; only 127.0.0.1:PORT and localhost:PORT are served.
+    url, server = viewer.serve(traj, open_browser=False)
+    port = server.server_address[1]
+    try:
+        for host in (f"evil.example:{port}", "evil.example", f"127.0.0.1.evil.example:{port}", f"localhost:{port + 1}", "127.0.0.1", ""):
+            for path in ("", "data.bin"):
+                request = urllib.request.Request(url + path, headers={"Host": host})
+                with pytest.raises(urllib.error.HTTPError) as refused:
+                    urllib.request.urlopen(request, timeout=10)
+                assert refused.value.code == 403, host
+                body = refused.value.read().decode()
+                assert body.startswith("forbidden: this viewer answers only to") and len(body) < 200, body
+        for host in (f"127.0.0.1:{port}", f"localhost:{port}", f"LOCALHOST:{port}"):
+            request = urllib.request.Request(url + "data.bin", headers={"Host": host})
+            with urllib.request.urlopen(request, timeout=10) as blob:
+                assert blob.status == 200 and len(blob.read()) > 0
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
 def test_large_trajectory_is_downsampled_with_a_warning(traj, tmp_path):
     with pytest.warns(viewer.ViewerWarning, match="showing"):
         path = viewer.write_html(traj, tmp_path / "small.html", max_bytes=40 * 16 * 4)

@@ -1,14 +1,20 @@
 """The ``kinema`` command (``python -m kinema`` is the same).
 
 Exit codes: 0 done, 2 bad input (the message says what and where: a scene or trajectory file,
-an option, an output path that cannot be written), 1 a simulation that diverged (the message
-names the step and the advisor's step). Errors are one line on stderr, never a traceback;
-``KINEMA_DEBUG=1`` re-raises unexpected errors.
+an option, an output path that cannot be written, work over the limits below without
+--force), 1 a simulation that diverged (the message names the step and the advisor's step).
+Errors are one line on stderr, never a traceback; ``KINEMA_DEBUG=1`` re-raises unexpected errors.
+
+Work limits: ``run``, ``view`` (of a scene) and ``render`` estimate their work before doing any
+(particles × steps, video frames × pixels, memory) and refuse, unless given ``--force``,
+more than ``LIMIT_PARTICLE_STEPS`` particle-steps, ``LIMIT_PIXELS`` pixels or
+``LIMIT_MEMORY`` bytes; more than ``MAX_STEPS`` steps are refused even with ``--force``.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import tempfile
 from pathlib import Path
 from typing import Annotated, Any
@@ -27,6 +33,80 @@ app = typer.Typer(
 )
 console = Console()
 err_console = Console(stderr=True)
+
+
+# -- work estimate ----------------------------------------------------------------------------
+# Every example scene and `kinema demo` is four orders of magnitude below these (the most:
+# sand_box, 4e6 particle-steps and 17 MiB; demo, 6e7 pixels of video); they stop runs that
+# would take most of a day or more, or more memory than a laptop has, such as count = 1e9 or
+# duration = 1e9 s at dt = 1e-3, before any of the work (or the allocation) is done.
+LIMIT_PARTICLE_STEPS = 1e11  # 5 hours at 6e6 particle-steps a second (maxwell_gas), days in a heap of contacts (demo: 2e5/s)
+LIMIT_PIXELS = 1e11  # frames × width × height: 16 minutes of 1080p at 30 fps; rendering runs at about 5e8 pixels a second, encoding slower
+LIMIT_MEMORY = 8 * 2**30  # bytes
+VIDEO_FPS = (0.01, 1000.0)  # playback frames per second a GIF (1/100 s to 655 s a frame) and an MP4 can hold
+MAX_STEPS = 10**18  # even with --force: the engine counts steps in 64 bits; 1e18 is 30 years at 1e9 steps a second
+ENGINE_BYTES = 1024  # per particle: state, the method's stages, collision grid and lists (measured 400-800)
+FRAME_BYTES = 96  # per particle and recorded frame: positions and velocities (48 B), held twice while the trajectory is assembled
+RENDER_BYTES = 32  # per particle and frame while rendering: the renderer's copy of the positions, the speeds
+
+
+def _size(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.0f} {unit}" if unit == "B" or n >= 10 else f"{n:.1f} {unit}"
+        n /= 1024
+    return ""  # unreachable
+
+
+def _frames_and_steps(seconds: float, dt: float, fps: float) -> tuple[float, float]:
+    """Recorded frames after the first, and steps, as ``World.run`` takes them (floats: they
+    may be far too many to count)."""
+    per_frame = max(1, round(1.0 / (fps * dt)))
+    frames = float(np.floor(seconds / (per_frame * dt) + 1e-9))
+    return frames, frames * per_frame
+
+
+def _over_limits(what: str, estimate: str, particle_steps: float, pixels: float, memory: float, force: bool) -> None:
+    """Refuse (``ValueError``, exit 2) work over a limit unless ``force``."""
+    if force or (particle_steps <= LIMIT_PARTICLE_STEPS and pixels <= LIMIT_PIXELS and memory <= LIMIT_MEMORY):
+        return
+    limits = f"{LIMIT_PARTICLE_STEPS:.0e} particle-steps, {LIMIT_PIXELS:.0e} pixels and {_size(LIMIT_MEMORY)} of memory"
+    raise ValueError(f"{what}: {estimate}, over the limits of {limits}; give --force to run it anyway")
+
+
+def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video: bool, force: bool) -> str:
+    """Estimate the work of simulating ``scene`` (read from ``path``) for ``seconds`` (and
+    rendering its video when ``video``), refuse it when over the limits unless ``force``, and
+    return the estimate in words. Nothing is built: the particles are counted from the blocks."""
+    from .scene import block_size
+
+    w = scene.world
+    frames, steps = _frames_and_steps(seconds, w.dt, w.fps)
+    why = f"{duration_key} = {seconds:g} s at world.dt = {w.dt:g} s"
+    if not steps <= MAX_STEPS:
+        raise ValueError(f"{path}: the run would take {steps:.1e} steps ({why}), more than can be counted ({MAX_STEPS:.0e}), even with --force")
+    n = scene.particle_count()
+    if scene.particles:  # name the largest block, where the particles come from
+        size, k = max((block_size(b), k) for k, b in enumerate(scene.particles))
+        block = scene.particles[k]
+        if block.type == "random":
+            why += f"; particles[{k}].count = {block.count}"
+        elif block.type == "lattice":
+            why += f"; particles[{k}].counts = {block.counts}"
+        else:
+            why += f"; {size:,} particles[{k}].positions"
+        if len(scene.particles) > 1:
+            why += f", the largest of {len(scene.particles)} blocks"
+    particle_steps = float(n) * steps
+    pixels = (frames + 1) * scene.render.width * scene.render.height if video and n else 0.0
+    memory = n * ENGINE_BYTES + (frames + 1) * n * (FRAME_BYTES + (RENDER_BYTES if pixels else 0))
+    video_words = f"{frames + 1:,.0f} frames × render.width {scene.render.width} × render.height {scene.render.height}"
+    estimate = f"the run would take {particle_steps:.1e} particle-steps ({n:,} particles × {steps:,.0f} steps: {why})"
+    if pixels:
+        estimate += f", {pixels:.1e} pixels of video ({video_words})"
+    estimate += f" and about {_size(memory)} of memory"
+    _over_limits(str(path), estimate, particle_steps, pixels, memory, force)
+    return f"{particle_steps:.1e} particle-steps" + (f", {pixels:.1e} pixels of video" if pixels else "") + f", about {_size(memory)} of memory"
 
 
 def _fail(message: str, code: int = 2) -> None:
@@ -175,6 +255,8 @@ def _guarded(fn):
             _fail(text)
         except KeyboardInterrupt:
             _fail("interrupted; nothing was written", code=130)
+        except MemoryError:
+            _fail("out of memory: the work is too large for this machine; nothing was written")
         except Exception as e:
             if os.environ.get("KINEMA_DEBUG"):
                 raise
@@ -192,8 +274,9 @@ def _render_video(traj, path: Path, render_opts: dict, fps: float | None, descri
     render_opts = dict(render_opts)
     draw_colliders = render_opts.pop("draw_colliders", draw_colliders)
     render_opts.setdefault("colliders", getattr(traj, "colliders", None) if draw_colliders else None)
-    if fps is None:
+    if fps is None:  # real time, within what the video formats can play
         fps = 1.0 / float(np.median(np.diff(traj.t))) if traj.t.size > 1 else 30.0
+        fps = min(max(fps, VIDEO_FPS[0]), VIDEO_FPS[1]) if np.isfinite(fps) else 30.0
     radius = traj.radii
     if radius is None or not np.any(radius > 0):
         extent = float(np.ptp(traj.positions.reshape(-1, 3), axis=0).max()) or 1.0
@@ -250,31 +333,43 @@ def run(
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Output folder (default: out/<scene name>).")] = None,
     duration: Annotated[float | None, typer.Option(help="Simulated time, s (default: the scene's [world].duration).")] = None,
     no_video: Annotated[bool, typer.Option("--no-video", help="Skip the video.")] = False,
+    force: Annotated[bool, typer.Option("--force", help="Run even when the work estimate is over the limits.")] = False,
 ) -> None:
-    """Simulate a scene; write the trajectory (H5MD), a video and an energy/momentum plot."""
-    simulate_scene(scene, out if out is not None else Path("out") / scene.stem, duration, no_video)
+    """Simulate a scene; write the trajectory (H5MD), a video and an energy/momentum plot.
+
+    The work is estimated first (particles × steps, video pixels, memory); a run over the
+    limits is refused unless --force is given."""
+    simulate_scene(scene, out if out is not None else Path("out") / scene.stem, duration, no_video, force=force)
 
 
-def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_video: bool = False) -> tuple[Any, list[Path]]:
+def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_video: bool = False, *, force: bool = False) -> tuple[Any, list[Path]]:
     """`kinema run`'s work: load ``scene``, simulate ``duration`` s (default: the scene's) with
     a progress bar, and write what its [output] table asks for into the folder ``outdir``
     (created when the scene is valid): trajectory.h5, <scene name>.mp4|.gif, energy.png, all
-    or none. Returns the trajectory and the paths written."""
+    or none. Work over the limits (module docstring) is refused before any is done unless
+    ``force``. Staging folders left in ``outdir`` by runs that were killed are removed.
+    Returns the trajectory and the paths written."""
     import shutil
     import warnings
 
-    from .scene import load_scene
+    from .scene import Scene
 
-    world = load_scene(scene)
-    sc = world.scene
+    sc = Scene.from_toml(scene)
     seconds = sc.world.duration if duration is None else duration
     if not (np.isfinite(seconds) and seconds >= 0):
         raise ValueError(f"--duration {seconds}: give a finite number of seconds >= 0")
+    video = sc.output.video if not no_video else False
+    estimate = _scene_work(sc, scene, seconds, "world.duration" if duration is None else "--duration", bool(video), force)
+    world = sc.build(source=str(scene))
     outdir = _outdir(outdir)
+    _remove_stale_stages(outdir)
     fps = sc.world.fps
-    per_frame = max(1, round(1.0 / (fps * world.dt)))
-    frames = int(np.floor(seconds / (per_frame * world.dt) + 1e-9))
-    console.print(f"{scene}: {len(world)} particles, dim {world.dim}, {world.method}, dt = {world.dt:g} s, {seconds:g} s, {frames + 1} frames")
+    frames = int(_frames_and_steps(seconds, world.dt, fps)[0])
+    console.print(
+        f"{scene}: {len(world)} particles, dim {world.dim}, {world.method}, dt = {world.dt:g} s, {seconds:g} s, {frames + 1} frames; work: {estimate}",
+        highlight=False,
+        soft_wrap=True,
+    )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -290,15 +385,14 @@ def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_
         console.print(f"{total['impacts']} impacts inside steps, {total['energy_lost']:.4g} J taken by the collisions", highlight=False)
     # Everything is written in a hidden folder inside OUTDIR and moved into place at the end,
     # so a failure leaves no file half-written and none of this run's files at all.
-    stage = Path(tempfile.mkdtemp(prefix=".kinema-run.", dir=outdir))
+    stage = Path(tempfile.mkdtemp(prefix=_stage_prefix(), dir=outdir))
     written: list[Path] = []
     try:
         names = []
         if sc.output.trajectory:
             traj.save(stage / "trajectory.h5")
             names.append("trajectory.h5")
-        video = sc.output.video
-        if video and not no_video:
+        if video:
             opts = sc.render.model_dump(exclude={"fps", "camera"})
             opts["camera"] = _camera(sc.render.camera)
             _render_video(traj, stage / f"{scene.stem}.{video}", opts, sc.render.fps, "rendering")
@@ -317,6 +411,64 @@ def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_
     for path in written:
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)
     return traj, written
+
+
+# A run writes into a hidden staging folder .kinema-run.<host>-<pid>.<random> in its output
+# folder; a run that is killed (kill -9, power off) leaves it behind, and the next run into the
+# folder removes it once the process that made it is gone.
+_STAGE = re.compile(r"\.kinema-run\.(?:(?P<host>[A-Za-z0-9-]*)-(?P<pid>[0-9]+)\.)?[A-Za-z0-9_]+")
+STALE_UNKNOWN_OWNER_S = 86400.0  # a staging folder without a pid in its name (older kinema) is stale after a day
+
+
+def _host() -> str:
+    import socket
+
+    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:64]
+
+
+def _stage_prefix() -> str:
+    return f".kinema-run.{_host()}-{os.getpid()}."
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    except (OverflowError, ValueError, OSError):
+        return False
+    return True
+
+
+def _remove_stale_stages(outdir: Path) -> list[Path]:
+    """Remove the staging folders in ``outdir`` whose run is over (its process is gone); keep
+    those of live runs and of other hosts. Returns the folders removed."""
+    import shutil
+    import time
+
+    removed = []
+    try:
+        entries = [e for e in os.scandir(outdir) if e.name.startswith(".kinema-run.")]
+    except OSError:
+        return removed
+    host = _host()
+    for entry in entries:
+        m = _STAGE.fullmatch(entry.name)
+        if m is None or not entry.is_dir(follow_symlinks=False):
+            continue
+        if m["pid"] is not None:
+            stale = m["host"] == host and int(m["pid"]) != os.getpid() and not _alive(int(m["pid"]))
+        else:
+            try:
+                stale = time.time() - entry.stat(follow_symlinks=False).st_mtime > STALE_UNKNOWN_OWNER_S
+            except OSError:
+                stale = False
+        if stale:
+            shutil.rmtree(entry.path, ignore_errors=True)
+            removed.append(Path(entry.path))
+    return removed
 
 
 def _camera(table):
@@ -338,8 +490,12 @@ def render(
     width: Annotated[int, typer.Option(help="Width, pixels.")] = 640,
     height: Annotated[int, typer.Option(help="Height, pixels.")] = 480,
     color_by: Annotated[str, typer.Option(help="speed or id.")] = "speed",
+    force: Annotated[bool, typer.Option("--force", help="Render even when the work estimate is over the limits.")] = False,
 ) -> None:
-    """Render a saved trajectory to a video."""
+    """Render a saved trajectory to a video.
+
+    The work is estimated first (frames × pixels, memory); a video over the limits is refused
+    unless --force is given."""
     from .render import VIDEO_EXTENSIONS
     from .trajectory import Trajectory
 
@@ -353,9 +509,17 @@ def render(
         raise ValueError(f"--color-by {color_by!r}: use speed or id")
     if not (16 <= width <= 8192 and 16 <= height <= 8192):
         raise ValueError(f"--width {width} --height {height}: each must be between 16 and 8192 pixels")
-    if fps is not None and not (np.isfinite(fps) and fps > 0):
-        raise ValueError(f"--fps {fps}: give a number of frames per second > 0")
+    if fps is not None and not (VIDEO_FPS[0] <= fps <= VIDEO_FPS[1]):
+        raise ValueError(f"--fps {fps}: give a number of frames per second from {VIDEO_FPS[0]:g} to {VIDEO_FPS[1]:g}")
     t = Trajectory.load(traj)
+    frames, n = t.positions.shape[:2]
+    pixels = float(frames) * width * height
+    memory = frames * n * (FRAME_BYTES + RENDER_BYTES)
+    estimate = f"rendering would take {pixels:.1e} pixels ({frames:,} frames × --width {width} × --height {height}) and about {_size(memory)} of memory"
+    _over_limits(str(traj), estimate, 0.0, pixels, memory, force)
+    console.print(
+        f"{traj}: {n} particles, {frames} frames, {width}×{height}; work: {pixels:.1e} pixels, about {_size(memory)} of memory", highlight=False, soft_wrap=True
+    )
     path = _render_video(t, out, {"width": width, "height": height, "color_by": color_by}, fps, "rendering")
     console.print(f"wrote {path}", highlight=False, soft_wrap=True)
 
@@ -389,6 +553,7 @@ def view(
     html: Annotated[Path | None, typer.Option("--html", help="Write one self-contained page that plays offline, and exit.")] = None,
     port: Annotated[int, typer.Option(help="Port on 127.0.0.1 (0: a free one).")] = 0,
     no_browser: Annotated[bool, typer.Option("--no-browser", help="Do not open a browser.")] = False,
+    force: Annotated[bool, typer.Option("--force", help="Simulate a scene even when the work estimate is over the limits.")] = False,
 ) -> None:
     """Play a trajectory in the browser (three.js): play/pause, scrub, speed, orbit camera, colouring.
 
@@ -406,10 +571,12 @@ def view(
     if source.is_dir():
         raise ValueError(f"{source}: is a directory; give a trajectory (.h5) or a scene (.toml)")
     if source.suffix.lower() == ".toml":
-        from .scene import load_scene
+        from .scene import Scene
 
-        world = load_scene(source)
-        settings = world.scene.world
+        sc = Scene.from_toml(source)
+        _scene_work(sc, source, sc.world.duration, "world.duration", False, force)
+        world = sc.build(source=str(source))
+        settings = sc.world
         with _progress() as bar:
             task = bar.add_task("simulating", total=max(1, round(settings.duration * settings.fps)))
             traj = world.run(settings.duration, fps=settings.fps, callback=lambda w: bar.advance(task))

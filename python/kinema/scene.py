@@ -1,8 +1,10 @@
 """Scene files: a whole simulation (particles, forces, colliders, settings, outputs) in TOML.
 
-``Scene.from_toml(path)`` reads and validates a file (pydantic models, unknown keys are
-errors); ``scene.build()`` makes the ``World``; ``load_scene(path)`` does both and keeps the
-scene on the world (``world.scene``) so that ``kinema run`` knows duration, fps and outputs.
+``Scene.from_toml(path)`` reads and validates a file (pydantic models in strict mode: unknown
+keys are errors, and no value is converted to another type but an integer to a float, so
+``dt = "1e-3"``, ``mass = true`` or ``count = 2.0`` are refused; values nested more than
+``MAX_NESTING`` deep are refused before validation); ``scene.build()`` makes the ``World``;
+``load_scene(path)`` does both and keeps the scene on the world (``world.scene``) so that ``kinema run`` knows duration, fps and outputs.
 ``world.to_scene()`` describes a world as it is now, as one explicit particle list, and
 ``scene.to_toml(path)`` writes it (tomli-w); reading that file back gives an identical world.
 
@@ -12,6 +14,8 @@ The format, key by key with units, is in docs/scenes.md.
 from __future__ import annotations
 
 import difflib
+import math
+import re
 import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -40,13 +44,39 @@ class SceneError(ValueError):
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    # strict: no str -> number, bool -> number or float -> int (TOML's 1 is an int, and
+    # pydantic's strict mode still takes an int where a float is wanted)
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, strict=True)
+
+
+# Bounds that keep the engine's arithmetic finite and its integers in range (the CLI's work
+# estimate, kinema.cli, refuses much smaller runs unless told --force).
+MIN_DT = 1e-300  # s; with MIN_FPS, 1/(fps dt) (the steps of one frame) stays finite
+MIN_FPS = 1e-6  # frames per second
+MAX_PARTICLES = 2**32 - 1  # particles in one block, and the largest particle index + 1
+MAX_SEED = 2**64 - 1
+MAX_NESTING = 32  # arrays and tables inside each other (a scene's deepest key path is 5 long)
 
 
 Vec = Annotated[list[float], Field(min_length=2, max_length=3)]
 NonNeg = Annotated[float, Field(ge=0)]
 Positive = Annotated[float, Field(gt=0)]
 Unit = Annotated[float, Field(ge=0, le=1)]
+Index = Annotated[int, Field(ge=0, lt=MAX_PARTICLES)]
+Count = Annotated[int, Field(ge=1, le=MAX_PARTICLES)]
+Seed = Annotated[int, Field(ge=0, le=MAX_SEED)]
+
+
+def _exact(*allowed: Any) -> Any:
+    """A before-validator for a Literal field: pydantic's strict mode still matches 2.0 to 2
+    and 0 to False; this takes only values of the listed ones' own types."""
+
+    def check(v: Any) -> Any:
+        if not any(type(v) is type(a) and v == a for a in allowed):
+            raise ValueError(f"input should be {' or '.join(repr(a) for a in allowed)}")
+        return v
+
+    return check
 
 
 class Uniform(_Model):
@@ -68,7 +98,7 @@ class Maxwell(_Model):
 
     sigma: NonNeg | None = None
     kT: NonNeg | None = None
-    seed: int | None = None
+    seed: Seed | None = None
     zero_momentum: bool = False
 
     @model_validator(mode="after")
@@ -83,7 +113,7 @@ class Isotropic(_Model):
     (the circle in 2D): a gas far from equilibrium, which collisions take to Maxwell–Boltzmann."""
 
     speed: NonNeg
-    seed: int | None = None
+    seed: Seed | None = None
     zero_momentum: bool = False
 
 
@@ -154,16 +184,39 @@ def _union(members: tuple) -> Any:
 
 class WorldTable(_Model):
     dim: Literal[2, 3] = 3
-    dt: Positive = 1e-3
+    dt: float = 1e-3
     method: str = "verlet"
-    duration: NonNeg = 1.0
-    fps: Positive = 60.0
+    duration: float = 1.0
+    fps: float = 60.0
+
+    _dim = field_validator("dim", mode="before")(_exact(2, 3))
 
     @field_validator("method")
     @classmethod
     def _known(cls, v: str) -> str:
         if v not in method_names():
             raise ValueError(f"unknown method; valid methods are: {', '.join(method_names())}")
+        return v
+
+    @field_validator("dt")
+    @classmethod
+    def _dt(cls, v: float) -> float:
+        if not (math.isfinite(v) and v >= MIN_DT):
+            raise ValueError(f"the time step must be a finite number of seconds >= {MIN_DT:g}")
+        return v
+
+    @field_validator("duration")
+    @classmethod
+    def _duration(cls, v: float) -> float:
+        if not (math.isfinite(v) and v >= 0):
+            raise ValueError("the duration must be a finite number of seconds >= 0")
+        return v
+
+    @field_validator("fps")
+    @classmethod
+    def _fps(cls, v: float) -> float:
+        if not (math.isfinite(v) and v >= MIN_FPS):
+            raise ValueError(f"frames per second must be a finite number >= {MIN_FPS:g}")
         return v
 
 
@@ -177,7 +230,7 @@ class _Block(_Model):
     pinned: Flags = False
     restitution: Material | None = None
     friction: Material | None = None
-    seed: int = 0
+    seed: Seed = 0
 
     @field_validator("velocity")
     @classmethod
@@ -195,16 +248,23 @@ class ListBlock(_Block):
 class LatticeBlock(_Block):
     type: Literal["lattice"] = "lattice"
     origin: Vec = [0.0, 0.0, 0.0]
-    counts: Annotated[list[Annotated[int, Field(ge=1)]], Field(min_length=2, max_length=3)]
+    counts: Annotated[list[Count], Field(min_length=2, max_length=3)]
     spacing: _by_kind(Positive, Annotated[list[Positive], Field(min_length=2, max_length=3)]) = 1.0
     jitter: NonNeg = 0.0
+
+    @field_validator("counts")
+    @classmethod
+    def _size(cls, v: list[int]) -> list[int]:
+        if math.prod(v) > MAX_PARTICLES:
+            raise ValueError(f"the lattice would have {math.prod(v):,} particles, more than {MAX_PARTICLES:,}")
+        return v
 
 
 class RandomBlock(_Block):
     type: Literal["random"] = "random"
     lo: Vec
     hi: Vec
-    count: Annotated[int, Field(ge=1)]
+    count: Count
     min_distance: NonNeg | None = None
 
     @model_validator(mode="after")
@@ -232,10 +292,10 @@ class DragForce(_Model):
 
 class SpringForce(_Model):
     type: Literal["spring"] = "spring"
-    i: list[Annotated[int, Field(ge=0)]] | None = None
-    j: list[Annotated[int, Field(ge=0)]] | None = None
+    i: list[Index] | None = None
+    j: list[Index] | None = None
     rule: Literal["chain", "grid"] | None = None
-    block: Annotated[int, Field(ge=0)] | None = None
+    block: Index | None = None
     diagonals: bool = False
     k: _by_kind(Positive, list[Positive])
     rest_length: _by_kind(NonNeg, list[NonNeg]) | None = None
@@ -338,7 +398,7 @@ class RenderTable(_Model):
     color_by: Literal["speed", "id"] = "speed"
     colormap: str = "viridis"
     background: Annotated[list[Annotated[int, Field(ge=0, le=255)]], Field(min_length=3, max_length=3)] = [255, 255, 255]
-    fps: Positive | None = None
+    fps: Annotated[float, Field(ge=0.01, le=1000)] | None = None  # playback; what GIF and MP4 can hold (kinema.cli.VIDEO_FPS)
     camera: _typed(Camera2DTable, Camera3DTable) | None = None
 
     @field_validator("colormap")
@@ -355,6 +415,8 @@ class OutputTable(_Model):
     trajectory: bool = True
     video: Literal["mp4", "gif", False] = "mp4"
     plot: bool = True
+
+    _video = field_validator("video", mode="before")(_exact("mp4", "gif", False))
 
 
 # -- the scene --------------------------------------------------------------------------------
@@ -400,14 +462,26 @@ class Scene(_Model):
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as e:
             raise SceneError(f"{source}: TOML syntax error: {e}") from None  # the message has "(at line L, column C)"
+        except ValueError as e:  # an integer of more than 4300 digits
+            raise SceneError(f"{source}: cannot be read as TOML: {e}") from None
+        except RecursionError:  # arrays or inline tables nested hundreds deep
+            raise SceneError(_too_deep_in_text(text, source)) from None
         return cls.from_dict(data, source)
 
     @classmethod
     def from_dict(cls, data: dict, source: str = "<scene>") -> Scene:
+        deep = _too_deep(data, source)
+        if deep is not None:
+            raise SceneError(deep)
         try:
             return cls.model_validate(data)
         except ValidationError as e:
             raise SceneError("\n".join(_describe(err, source) for err in e.errors())) from None
+
+    # size --------------------------------------------------------------------------------
+    def particle_count(self) -> int:
+        """How many particles ``build`` makes, counted without making them."""
+        return sum(block_size(b) for b in self.particles)
 
     # writing -----------------------------------------------------------------------------
     def to_dict(self) -> dict:
@@ -475,6 +549,15 @@ class Scene(_Model):
         return w
 
 
+def block_size(block: Any) -> int:
+    """The particles of one [[particles]] block, counted without making them."""
+    if isinstance(block, ListBlock):
+        return len(block.positions)
+    if isinstance(block, LatticeBlock):
+        return math.prod(block.counts)
+    return block.count
+
+
 def load_scene(path: str | Path) -> World:
     """Read, validate and build the scene file ``path``; the world keeps it as ``world.scene``."""
     return Scene.from_toml(path).build(source=str(path))
@@ -486,7 +569,7 @@ def load_scene(path: str | Path) -> World:
 def _describe(err: dict, source: str) -> str:
     """One line for one pydantic error: file, key path, value, what is allowed."""
     loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("~"))]
-    path = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in loc).lstrip(".") or "(top level)"
+    path = _path(loc)
     kind = err["type"]
     msg = err["msg"].removeprefix("Value error, ")
     if kind == "extra_forbidden":
@@ -502,6 +585,98 @@ def _describe(err: dict, source: str) -> str:
     shown = repr(value) if not isinstance(value, dict | list) or len(repr(value)) < 60 else repr(value)[:57] + "..."
     msg = msg[0].lower() + msg[1:] if msg[:1].isupper() and not msg[1:2].isupper() else msg
     return f"{source}: {path}: {shown} is invalid: {msg}"
+
+
+def _path(loc: list) -> str:
+    return "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in loc).lstrip(".") or "(top level)"
+
+
+def _preview(value: Any, width: int = 40) -> str:
+    """The start of a value's repr, made without recursing (repr itself fails on deep values)."""
+    out = ""
+    while len(out) < width:
+        if isinstance(value, list):
+            out += "["
+            if not value:
+                out += "]"
+                break
+            value = value[0]
+        elif isinstance(value, dict):
+            out += "{"
+            if not value:
+                out += "}"
+                break
+            key, value = next(iter(value.items()))
+            out += f"{key!r}: "
+        else:
+            out += repr(value)
+            break
+    return out[:width] + "..."
+
+
+def _too_deep(data: Any, source: str) -> str | None:
+    """A line naming the first value nested more than MAX_NESTING deep, or None."""
+    stack: list[tuple[Any, list]] = [(data, [])]
+    while stack:
+        value, loc = stack.pop()
+        if len(loc) > MAX_NESTING:
+            where = _path(loc[:6]) + "..."  # the key, and the start of the path inside it
+            return f"{source}: {where}: {_preview(value)} is invalid: arrays and tables nested more than {MAX_NESTING} levels deep are refused"
+        if isinstance(value, dict):
+            stack.extend((v, [*loc, k]) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, [*loc, k]) for k, v in enumerate(value) if isinstance(v, list | dict))
+    return None
+
+
+_TOKEN = re.compile(r'"""|\'\'\'|["\'#\n\[\]{}=]')
+_STRING_END = {  # from just after the opening quotes to just after the closing ones
+    '"': re.compile(r'(?:[^"\\\n]|\\.)*"?'),
+    "'": re.compile(r"[^'\n]*'?"),
+    '"""': re.compile(r'(?:[^"\\]|\\.|"(?!""))*(?:"""|$)', re.S),
+    "'''": re.compile(r"(?:[^']|'(?!''))*(?:'''|$)", re.S),
+}
+
+
+def _too_deep_in_text(text: str, source: str) -> str:
+    """The line for a TOML text too deep for the parser: the line and key where arrays or inline
+    tables first nest more than MAX_NESTING deep (strings and comments skipped)."""
+    depth, line, pos, key, start, table = 0, 1, 0, "", 0, ""
+    seen: dict[str, int] = {}  # [[name]] headers so far, for the index of the next one
+    while (m := _TOKEN.search(text, pos)) is not None:
+        t, pos = m.group(), m.end()
+        if t == "[" and depth == 0 and not text[start : m.start()].strip():  # a [table] or [[array]] header
+            header = re.match(r"(\[\[?)\s*([^\]\n]*?)\s*\]", text[m.start() :])
+            if header is not None:
+                table = header.group(2)
+                if header.group(1) == "[[":
+                    seen[table] = seen.get(table, -1) + 1
+                    table += f"[{seen[table]}]"
+                pos = m.start() + header.end()
+                continue
+        if t in _STRING_END:
+            stop = _STRING_END[t].match(text, pos).end()
+            line += text.count("\n", pos, stop)
+            pos = stop
+        elif t == "#":
+            end = text.find("\n", pos)
+            pos = len(text) if end < 0 else end
+        elif t == "\n":
+            line += 1
+            start = pos
+        elif t == "=" and depth == 0:
+            key = ".".join(filter(None, (table, text[start : m.start()].strip())))
+        elif t in "[{":
+            depth += 1
+            if depth > MAX_NESTING:
+                head = text[m.start() - MAX_NESTING + 1 : m.start() + 1].lstrip()
+                return (
+                    f"{source}: line {line}: {key or '(top level)'}: {head}... is invalid: arrays and tables nested more than {MAX_NESTING} levels deep"
+                    " are refused"
+                )
+        elif t in "]}":
+            depth = max(0, depth - 1)
+    return f"{source}: arrays or tables are nested too deep to read (more than {MAX_NESTING} levels deep are refused)"
 
 
 _TAGGED = {

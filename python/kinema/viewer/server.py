@@ -1,4 +1,6 @@
-"""The viewer on a local web server: the page at ``/`` and the frames at ``/data.bin``."""
+"""The viewer on a local web server: the page at ``/`` and the frames at ``/data.bin``, on
+127.0.0.1 only, to requests whose Host is 127.0.0.1:PORT or localhost:PORT (any other is
+refused with 403, so that a web page cannot reach the data by DNS rebinding)."""
 
 from __future__ import annotations
 
@@ -31,7 +33,22 @@ def _binary(packed: Any) -> tuple[bytes, dict[str, list[int] | None]]:
 
 def _handler(routes: dict[str, tuple[str, bytes]]) -> type[BaseHTTPRequestHandler]:
     class Handler(BaseHTTPRequestHandler):
+        def _host_is_ours(self) -> bool:
+            """DNS rebinding: a page of evil.example whose name is made to resolve to 127.0.0.1
+            reaches this server with ``Host: evil.example:PORT``; only our own names are served."""
+            port = self.server.server_address[1]
+            return (self.headers.get("Host") or "").strip().lower() in (f"127.0.0.1:{port}", f"localhost:{port}")
+
         def do_GET(self) -> None:  # noqa: N802 (http.server's name)
+            if not self._host_is_ours():
+                port = self.server.server_address[1]
+                body = f"forbidden: this viewer answers only to http://127.0.0.1:{port}/ and http://localhost:{port}/\n".encode()
+                self.send_response(403)
+                self.send_header("Content-Type", "text/plain; charset=utf-8")
+                self.send_header("Content-Length", str(len(body)))
+                self.end_headers()
+                self.wfile.write(body)
+                return
             route = routes.get(self.path.split("?", 1)[0].split("#", 1)[0])
             if route is None:
                 self.send_error(404)
