@@ -2,6 +2,11 @@
 
 import math
 import re
+import signal
+import subprocess
+import sys
+import textwrap
+import time
 from fractions import Fraction
 
 import numpy as np
@@ -486,3 +491,103 @@ def test_valid_inputs_of_every_accepted_kind_still_work():
     flat.add(kinema.Box([0, 0], [1, 1]))
     flat.periodic = [True, np.True_]
     assert flat.periodic == (True, True, False)
+
+
+def test_a_force_that_steps_or_changes_its_own_world_gets_a_clear_error():
+    # A PythonForce that calls w.step (or changes the world) while the world is stepping: a
+    # RuntimeError that says so, not pyo3's "Already borrowed"; the world keeps its state.
+    for act in ("step", "add"):
+        w = kinema.World()
+        w.add_particles([[0, 0, 0]])
+
+        def force(t, x, v, w=w, act=act):
+            if act == "step":
+                w.step()
+            else:
+                w.add_particles([[1, 0, 0]])
+            return np.zeros_like(x)
+
+        w.add(kinema.PythonForce(force))
+        with pytest.raises(RuntimeError, match="while it is stepping|while this world is stepping") as err:
+            w.step()
+        assert "borrowed" not in str(err.value)
+        assert len(w) == 1 and w.time == 0.0
+
+
+def test_implicit_euler_reports_a_non_finite_force_instead_of_taking_it_as_zero():
+    # A NaN force: SimulationDiverged, as the explicit methods raise; the state before kept.
+    w = kinema.World(method="implicit_euler")
+    w.add_particles([[0, 0, 0]])
+    w.add(kinema.PythonForce(lambda t, x, v: np.full_like(x, np.nan)))
+    with pytest.raises(kinema.SimulationDiverged, match="non-finite"):
+        w.step(3)
+    assert w.time == 0.0 and np.all(w.velocities == 0)
+    # A force so large that |F|² overflows: still the step's closed form, v = g t (it was 0).
+    w = kinema.World(method="implicit_euler")
+    w.add_particles([[0, 0, 0]])
+    w.add(kinema.Gravity((0, 0, -1e160)))
+    w.step(3)
+    assert w.velocities[0, 2] == pytest.approx(-1e160 * 3e-3, rel=1e-12)
+
+
+def test_ctrl_c_stops_a_long_step_call_at_a_whole_step():
+    # w.step(10**12) used to ignore SIGINT. Now the steps run in slices of a few ms with Ctrl-C
+    # checked between: KeyboardInterrupt, and the world at the end of its last whole step
+    # (v = g t exactly as the steps made it: t = steps · dt).
+    code = textwrap.dedent(
+        """
+        import kinema, sys
+        w = kinema.World()
+        w.add_particles([[0, 0, 0]])
+        w.add(kinema.Gravity())
+        print("stepping", flush=True)
+        try:
+            w.step(10**12)
+        except KeyboardInterrupt:
+            steps = w._core.steps
+            print("interrupted", steps, w.time == steps * 1e-3, w.velocities[0, 2] == -9.81 * w.time or abs(w.velocities[0, 2] / (-9.81 * w.time) - 1) < 1e-9, flush=True)
+        """
+    )
+    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "stepping"
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    try:
+        out, err = proc.communicate(timeout=20)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        pytest.fail("w.step(10**12) did not stop on SIGINT")
+    words = out.split()
+    assert proc.returncode == 0 and words[0] == "interrupted", (out, err)
+    assert int(words[1]) > 0 and words[2:] == ["True", "True"], out
+
+
+def test_solve_refuses_step_limits_that_cannot_end_and_stops_at_max_steps():
+    f = lambda t, y: -y  # noqa: E731
+    # an h_max with which rk45 could never reach the end: refused up front, naming it
+    with pytest.raises(ValueError, match=r"h_max = 1e-300 is invalid: .*1\.000e300 steps.*max_steps"):
+        kinema.solve(f, [1.0], (0, 1), method="rk45", h_max=1e-300)
+    with pytest.raises(ValueError, match=r"h = 1e-9 is invalid: .*1\.000e9 steps"):
+        kinema.solve(f, [1.0], (0, 1), method="rk4", h=1e-9)
+    # rk45 stops at max_steps with the solution so far and the reason
+    with pytest.warns(kinema.SolverWarning):
+        s = kinema.solve(f, [1.0], (0, 10), method="rk45", rtol=1e-12, atol=1e-14, max_steps=5)
+    assert not s.success and "max_steps = 5" in s.message and len(s.t) == 6
+    np.testing.assert_allclose(s.y[:, 0], np.exp(-s.t), rtol=1e-10)  # what it has is right
+    # h_min: a step below it stops the solve ("step too small")
+    with pytest.warns(kinema.SolverWarning):
+        s = kinema.solve(f, [1.0], (0, 1), method="rk45", rtol=1e-12, h_min=0.5)
+    assert not s.success and "step size" in s.message
+    for name, value, kind in (("max_steps", 0, ValueError), ("max_steps", 2.5, TypeError), ("h_min", -1.0, ValueError)):
+        with pytest.raises(kind, match=name):
+            kinema.solve(f, [1.0], (0, 1), method="rk45", **{name: value})
+
+
+def test_implicit_euler_refuses_a_dense_jacobian_larger_than_memory_with_advice():
+    # 10⁶ unknowns in one system: a 10¹² entry Jacobian (7,451 GiB) used to abort the
+    # interpreter on the failed allocation; now a ValueError that names y0 and what to do.
+    with pytest.raises(ValueError, match=r"y0 = 1000000 unknowns .*dense Jacobian.*7450\.6 GiB.*vectorized=True.*World"):
+        kinema.solve(lambda t, y: -y, np.ones(1_000_000), (0.0, 1.0), h=0.1, method="implicit_euler")
+    # as a batch of independent rows the same size is fine (one 1×1 block each)
+    s = kinema.solve(lambda t, y: -y, np.ones((100_000, 1)), (0.0, 0.1), h=0.1, method="implicit_euler", vectorized=True)
+    np.testing.assert_allclose(s.y[-1], 1 / 1.1, rtol=1e-6)

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
+from . import _checks, _core
 
 ButcherTableau = _core.ButcherTableau
 
@@ -152,6 +152,8 @@ def solve(
     t_eval: Any = None,
     vectorized: bool = False,
     dense_output: bool = False,
+    max_steps: int = 10_000_000,
+    h_min: float | None = None,
 ) -> Solution:
     """Solve the initial value problem y' = f(t, y), y(t0) = y0 over ``t_span = (t0, t_end)``.
 
@@ -184,6 +186,13 @@ def solve(
         the interval (rk45: Dormand-Prince's fourth-order extension; fixed-step methods: cubic
         Hermite, which costs one extra evaluation of f per step except for explicit
         Runge-Kutta methods).
+    max_steps : int
+        Most steps (default 10⁷): a fixed step ``h``, or an ``h_max``, that needs more over
+        ``t_span`` is refused up front (``ValueError``); ``rk45`` stops there otherwise, with
+        ``success=False`` and the reason.
+    h_min : float, optional
+        Smallest step ``rk45`` may take (default: what the time variable can resolve); below
+        it the solve stops ("step too small").
 
     Returns
     -------
@@ -207,8 +216,10 @@ def solve(
         float(rtol),
         float(atol),
         _t_eval(t_eval),
-        bool(vectorized),
-        bool(dense_output),
+        _checks.boolean("vectorized", vectorized),
+        _checks.boolean("dense_output", dense_output),
+        max_steps=_count("max_steps", max_steps),
+        h_min=_float_or_none("h_min", h_min),
     )
     return _finish(raw, y.shape, "solve")
 
@@ -227,6 +238,8 @@ def solve_second_order(
     t_eval: Any = None,
     vectorized: bool = False,
     dense_output: bool = False,
+    max_steps: int = 10_000_000,
+    h_min: float | None = None,
 ) -> Solution:
     """Solve x'' = a(t, x, v), x(t0) = x0, x'(t0) = v0 — Newton's law with a = F/m.
 
@@ -249,8 +262,10 @@ def solve_second_order(
         float(rtol),
         float(atol),
         _t_eval(t_eval),
-        bool(vectorized),
-        bool(dense_output),
+        _checks.boolean("vectorized", vectorized),
+        _checks.boolean("dense_output", dense_output),
+        max_steps=_count("max_steps", max_steps),
+        h_min=_float_or_none("h_min", h_min),
     )
     shape = (*x.shape[:-1], 2 * x.shape[-1])
     sol = _finish(raw, shape, "solve_second_order")
@@ -258,6 +273,10 @@ def solve_second_order(
     sol.x = sol.y[..., :n]
     sol.v = sol.y[..., n:]
     return sol
+
+
+def _count(name: str, value: Any) -> int:
+    return _checks.integer(name, value, 1, 2**63 - 1, what=f"{name} must be an integer >= 1")
 
 
 def _float_or_none(name: str, value: Any) -> float | None:

@@ -50,6 +50,7 @@ class World:
         self._method_arg = method
         self._warned = False
         self._advice_due = True
+        self._stepping = False  # inside _core.step: a force of its own must not step it again
         self._new_views()
 
     def _new_views(self) -> None:
@@ -62,6 +63,8 @@ class World:
     def _push(self) -> None:
         """Hands what the user wrote into the views to the world (a no-op when unchanged). A
         bad value is refused whole: the world keeps its state and the views show it again."""
+        if self._stepping:
+            raise RuntimeError("the world was changed while it is stepping (from one of its own forces): a force computes F(t, x, v) and must leave its world alone")
         try:
             self._core.sync(self._x, self._v, self._m)
         except ValueError:
@@ -283,11 +286,15 @@ class World:
         n = _checks.integer("n", n, 0, what="the number of steps must be >= 0")
         if n > _checks.UINT64_MAX:
             raise ValueError(f"n = {_checks.describe(n)} is invalid: the number of steps must be < 2**64")
+        if self._stepping:
+            raise RuntimeError("World.step was called while this world is stepping (from one of its own forces): a force computes F(t, x, v) and must not advance its world")
         self._push()
-        self._advise()
+        self._stepping = True  # (the advice evaluates the forces too)
         try:
+            self._advise()
             self._core.step(n)
         finally:
+            self._stepping = False
             self._pull()
 
     def run(self, duration: float, fps: float = 60.0, callback: Callable[[World], Any] | None = None) -> Trajectory:

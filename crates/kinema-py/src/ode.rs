@@ -145,6 +145,10 @@ fn methods<'py>(py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         .collect()
 }
 
+/// The step limits of a solve: most steps, smallest step.
+type Limits = (usize, Option<f64>);
+
+#[allow(clippy::too_many_arguments)]
 fn options(
     t_span: (f64, f64),
     h: Option<f64>,
@@ -153,6 +157,7 @@ fn options(
     atol: f64,
     t_eval: Option<Vec<f64>>,
     dense_output: bool,
+    (max_steps, h_min): Limits,
 ) -> SolveOptions {
     SolveOptions {
         t_span,
@@ -162,6 +167,8 @@ fn options(
         rtol,
         atol,
         t_eval,
+        max_steps,
+        h_min,
     }
 }
 
@@ -207,7 +214,7 @@ fn initial_state(name: &str, arr: &PyReadonlyArrayDyn<'_, f64>, vectorized: bool
 
 /// Solves y' = f(t, y); returns a dict (see kinema.ode.Solution).
 #[pyfunction]
-#[pyo3(signature = (f, y0, t_span, h, h_max, method, jac, rtol, atol, t_eval, vectorized, dense_output))]
+#[pyo3(signature = (f, y0, t_span, h, h_max, method, jac, rtol, atol, t_eval, vectorized, dense_output, max_steps=ode::MAX_STEPS, h_min=None))]
 #[allow(clippy::too_many_arguments)]
 fn solve<'py>(
     py: Python<'py>,
@@ -223,6 +230,8 @@ fn solve<'py>(
     t_eval: Option<Vec<f64>>,
     vectorized: bool,
     dense_output: bool,
+    max_steps: usize,
+    h_min: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let integrator = integrator_from(&method)?;
     let (y, shape) = initial_state("y0", &y0, vectorized)?;
@@ -231,7 +240,7 @@ fn solve<'py>(
         &mut sys,
         &y,
         &integrator,
-        &options(t_span, h, h_max, rtol, atol, t_eval, dense_output),
+        &options(t_span, h, h_max, rtol, atol, t_eval, dense_output, (max_steps, h_min)),
     )
     .map_err(to_py)?;
     solution_dict(py, sol)
@@ -239,7 +248,7 @@ fn solve<'py>(
 
 /// Solves x'' = a(t, x, v); the dict's y rows are [x, v] per block.
 #[pyfunction]
-#[pyo3(signature = (a, x0, v0, t_span, h, h_max, method, rtol, atol, t_eval, vectorized, dense_output))]
+#[pyo3(signature = (a, x0, v0, t_span, h, h_max, method, rtol, atol, t_eval, vectorized, dense_output, max_steps=ode::MAX_STEPS, h_min=None))]
 #[allow(clippy::too_many_arguments)]
 fn solve_second_order<'py>(
     py: Python<'py>,
@@ -255,6 +264,8 @@ fn solve_second_order<'py>(
     t_eval: Option<Vec<f64>>,
     vectorized: bool,
     dense_output: bool,
+    max_steps: usize,
+    h_min: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let integrator = integrator_from(&method)?;
     let (x, shape) = initial_state("x0", &x0, vectorized)?;
@@ -270,7 +281,7 @@ fn solve_second_order<'py>(
         &x,
         &v,
         &integrator,
-        &options(t_span, h, h_max, rtol, atol, t_eval, dense_output),
+        &options(t_span, h, h_max, rtol, atol, t_eval, dense_output, (max_steps, h_min)),
     )
     .map_err(to_py)?;
     solution_dict(py, sol)

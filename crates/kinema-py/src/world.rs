@@ -61,6 +61,50 @@ fn world_err(e: Error) -> PyErr {
     }
 }
 
+/// How long a slice of `World.step` runs before Ctrl-C is checked.
+const SLICE: std::time::Duration = std::time::Duration::from_millis(20);
+
+impl PyWorld {
+    /// The body of `step`: slices of steps in the engine's order, Ctrl-C checked between.
+    fn step_in_slices(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
+        let mut left = n;
+        let mut slice = 1u64;
+        while left > 0 {
+            let k = slice.min(left);
+            let world = OnThisThread(&mut self.inner);
+            let start = std::time::Instant::now();
+            py.detach(move || world.advance(k)).map_err(world_err)?;
+            left -= k;
+            py.check_signals()?;
+            // the next slice: as many steps as fit in SLICE at this pace
+            let took = start.elapsed().as_secs_f64();
+            slice = if took < SLICE.as_secs_f64() / 4.0 {
+                (2 * slice).min(1 << 24)
+            } else if took > SLICE.as_secs_f64() {
+                (slice / 2).max(1)
+            } else {
+                slice
+            };
+        }
+        Ok(())
+    }
+}
+
+/// The world, lent to the code that runs while the GIL is released. The world is
+/// `unsendable` (its Python forces are bound to this thread) and the closure runs on this
+/// same thread (`Python::detach` does not move it), so it never crosses threads.
+struct OnThisThread<'a>(&'a mut World);
+
+// SAFETY: see the type's doc: the value is used on the thread that made it, inside
+// `Python::detach`, whose `Send` bound is only there for closures that could move.
+unsafe impl Send for OnThisThread<'_> {}
+
+impl OnThisThread<'_> {
+    fn advance(self, n: u64) -> Result<(), Error> {
+        self.0.advance_in_engine_order(n)
+    }
+}
+
 /// A force computed by a Python callable `fn(t, x, v) -> F` on whole (N, 3) arrays.
 struct PythonForce {
     f: Py<PyAny>,
@@ -303,8 +347,15 @@ impl PyWorld {
     }
 
     /// Advances n steps; stops at the first failing one (the state before it is kept).
-    fn step(&mut self, n: u64) -> PyResult<()> {
-        self.inner.advance(n).map_err(world_err)
+    ///
+    /// The steps run in slices of a few milliseconds with the GIL released (other Python
+    /// threads run meanwhile; a Python force takes it back for its call), and Ctrl-C is
+    /// checked between slices: `KeyboardInterrupt` within [`SLICE`]'s order of time, the
+    /// world at the end of its last whole step.
+    fn step(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
+        let result = self.step_in_slices(py, n);
+        self.inner.restore_order();
+        result
     }
 
     #[getter]

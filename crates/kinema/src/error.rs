@@ -44,7 +44,9 @@ pub enum Error {
     /// the stability limit of the method for these forces, or a force returned NaN/inf). The
     /// world keeps the state from before the step.
     #[error(
-        "the simulation diverged at step {step} (t = {time} s, dt = {dt} s){}: {reason}; {}",
+        "the simulation diverged at step {step} (t = {} s, dt = {} s){}: {reason}; {}",
+        compact(time.to_string()),
+        compact(dt.to_string()),
         particle.map(|p| format!(", first at particle {p}")).unwrap_or_default(),
         advice(*dt, *advised_dt)
     )]
@@ -121,14 +123,48 @@ impl Error {
     pub fn invalid(parameter: impl Into<String>, value: impl fmt::Display, allowed: impl Into<String>) -> Self {
         Error::InvalidParameter {
             parameter: parameter.into(),
-            value: value.to_string(),
+            value: compact(value.to_string()),
             allowed: allowed.into(),
         }
+    }
+}
+
+/// A value for a message, short: a number that Rust prints with dozens of digits (1e112 as
+/// 1 and 112 zeros, 1e-300 as 300 zeros and a 1) in scientific notation instead; integers
+/// that fit 64 bits and everything that is not a number unchanged.
+fn compact(text: String) -> String {
+    let integer = !text.contains(['.', 'e', 'E']) && text.trim_start_matches('-').len() <= 20;
+    match text.parse::<f64>() {
+        Ok(v) if text.len() > 16 && !integer => format!("{v:e}"),
+        _ => text,
     }
 }
 
 impl From<CallbackError> for Error {
     fn from(e: CallbackError) -> Self {
         Error::Callback(e)
+    }
+}
+
+#[cfg(test)]
+mod compact_tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_messages_are_short() {
+        let text = |v: f64| Error::invalid("x", v, "finite").to_string();
+        assert_eq!(text(1e112), "x = 1e112 is invalid: finite");
+        assert_eq!(text(-1e-300), "x = -1e-300 is invalid: finite");
+        assert_eq!(text(f64::MAX), "x = 1.7976931348623157e308 is invalid: finite");
+        assert_eq!(text(0.25), "x = 0.25 is invalid: finite");
+        assert_eq!(text(f64::NAN), "x = NaN is invalid: finite");
+        assert_eq!(
+            Error::invalid("n", u64::MAX, "small").to_string(),
+            "n = 18446744073709551615 is invalid: small"
+        );
+        assert_eq!(
+            Error::invalid("name", "a long name that is not a number", "short").to_string(),
+            "name = a long name that is not a number is invalid: short"
+        );
     }
 }

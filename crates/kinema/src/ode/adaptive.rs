@@ -137,10 +137,14 @@ pub(crate) fn run(sys: &mut dyn OdeSystem, y0: &[f64], opts: &SolveOptions) -> R
     let mut non_finite_at: Option<usize> = None;
 
     while dir * (t_end - t) > 0.0 {
-        // Smallest step the time variable can resolve at t: ten units in the last place
-        // (at t = 0 the smallest subnormal, so a step that keeps failing ends after a few
-        // hundred rejections at worst).
-        let h_min = 10.0 * (t.abs().next_up() - t.abs());
+        // Smallest step: the user's h_min, and at least what the time variable can resolve at
+        // t, ten units in the last place (at t = 0 the smallest subnormal, so a step that
+        // keeps failing ends after a few hundred rejections at worst).
+        let h_min = opts.h_min.unwrap_or(0.0).max(10.0 * (t.abs().next_up() - t.abs()));
+        if stats.nsteps >= opts.max_steps {
+            termination = Some(Termination::MaxSteps { t, steps: stats.nsteps });
+            break;
+        }
         if h.is_nan() || h < h_min {
             termination = Some(match non_finite_at {
                 // The last attempts failed because f or the stages produced NaN/inf: say so.

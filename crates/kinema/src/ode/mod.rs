@@ -24,7 +24,7 @@ pub mod verlet;
 
 pub use dense::DenseOutput;
 pub use method::{Integrator, Method, MethodKind};
-pub use solve::{solve, solve_second_order, Solution, SolveOptions};
+pub use solve::{solve, solve_second_order, Solution, SolveOptions, MAX_DENSE_JACOBIAN, MAX_STEPS};
 pub use stability::{
     amplification, imag_interval, max_step, oscillator_amplification, oscillator_max_step, real_interval, StabilityFunction,
 };

@@ -39,7 +39,21 @@ pub struct SolveOptions {
     /// integration. `None`: every step. Points between steps are interpolated (Hermite cubic;
     /// rk45: its own fourth-order dense output).
     pub t_eval: Option<Vec<f64>>,
+    /// Most steps of a solve (default [`MAX_STEPS`]): a fixed step that needs more is refused
+    /// up front, as is an `h_max` with which rk45 would; rk45 stops there otherwise (the
+    /// solution so far, with its reason).
+    pub max_steps: usize,
+    /// Smallest step rk45 may take (`None`: ten units in the last place of t); below it the
+    /// solve stops ("step too small").
+    pub h_min: Option<f64>,
 }
+
+/// The default [`SolveOptions::max_steps`].
+pub const MAX_STEPS: usize = 10_000_000;
+
+/// The most values a dense Jacobian of implicit Euler may hold (n unknowns × the block
+/// length: 2²⁷, 1 GiB); larger systems are refused with advice.
+pub const MAX_DENSE_JACOBIAN: usize = 1 << 27;
 
 impl Default for SolveOptions {
     fn default() -> Self {
@@ -51,6 +65,8 @@ impl Default for SolveOptions {
             rtol: 1e-6,
             atol: 1e-9,
             t_eval: None,
+            max_steps: MAX_STEPS,
+            h_min: None,
         }
     }
 }
@@ -120,7 +136,21 @@ pub fn solve(sys: &mut dyn OdeSystem, y0: &[f64], integrator: &Integrator, opts:
             }
             MethodKind::Implicit => {
                 let h = fixed_step(integrator, opts)?;
-                let stepper = &mut ImplicitEuler::new(y0.len(), sys.block_len(), opts.rtol, opts.atol);
+                let (n, block) = (y0.len(), sys.block_len());
+                if n.saturating_mul(block) > MAX_DENSE_JACOBIAN {
+                    return Err(Error::invalid(
+                        "y0",
+                        format!("{n} unknowns in blocks of {block}"),
+                        format!(
+                            "implicit_euler's Newton solve keeps a dense Jacobian of n × block values, {:.3e} here ({:.1} GiB), \
+                             at most {MAX_DENSE_JACOBIAN} (1 GiB): solve independent systems as a batch (vectorized=True, \
+                             one row each), or use a World, whose implicit Euler is matrix-free",
+                            (n as f64) * (block as f64),
+                            (n as f64) * (block as f64) * 8.0 / (1u64 << 30) as f64
+                        ),
+                    ));
+                }
+                let stepper = &mut ImplicitEuler::new(n, block, opts.rtol, opts.atol);
                 run_fixed(stepper, sys, y0, h, opts, m.name())
             }
             MethodKind::Adaptive => adaptive::run(sys, y0, opts),
@@ -185,10 +215,6 @@ pub fn solve_second_order(
     }
 }
 
-/// Most steps a fixed-step solve may take (beyond this, h is almost surely a mistake: 10¹²
-/// steps take hours even with the cheapest right-hand side).
-pub const MAX_FIXED_STEPS: f64 = 1e12;
-
 fn fixed_step(integrator: &Integrator, opts: &SolveOptions) -> Result<f64, Error> {
     let h = opts.h.ok_or_else(|| {
         Error::invalid(
@@ -202,13 +228,14 @@ fn fixed_step(integrator: &Integrator, opts: &SolveOptions) -> Result<f64, Error
     })?;
     let (t0, t1) = opts.t_span;
     let steps = (t1 - t0).abs() / h;
-    if steps > MAX_FIXED_STEPS || t0 + h == t0 || t1 + h == t1 {
+    if steps > opts.max_steps as f64 || t0 + h == t0 || t1 + h == t1 {
         return Err(Error::invalid(
             "h",
             format!("{h:e}"),
             format!(
-                "over t_span ({t0}, {t1}) it would take {steps:.3e} steps (at most {MAX_FIXED_STEPS:e} are allowed) or be below the \
-                 resolution of t; choose a larger h"
+                "over t_span ({t0}, {t1}) it would take {steps:.3e} steps (max_steps = {}) or be below the resolution of \
+                 t; choose a larger h, or raise max_steps",
+                opts.max_steps
             ),
         ));
     }
@@ -255,6 +282,39 @@ fn validate(dim: usize, block: usize, y0: &[f64], opts: &SolveOptions) -> Result
                 "h_max",
                 h_max,
                 "the largest step must be a number > 0 (or None for no limit)",
+            ));
+        }
+    }
+    if opts.max_steps == 0 {
+        return Err(Error::invalid("max_steps", 0, "at least one step"));
+    }
+    if let Some(h_min) = opts.h_min {
+        if !(h_min.is_finite() && h_min > 0.0) {
+            return Err(Error::invalid(
+                "h_min",
+                h_min,
+                "the smallest step must be a finite number > 0 (or None)",
+            ));
+        }
+        if opts.h_max.is_some_and(|h_max| h_max < h_min) {
+            return Err(Error::invalid(
+                "h_min",
+                h_min,
+                format!("the smallest step must be at most h_max = {}", opts.h_max.unwrap_or(0.0)),
+            ));
+        }
+    }
+    if let Some(h_max) = opts.h_max {
+        let steps = (t1 - t0).abs() / h_max;
+        if steps > opts.max_steps as f64 {
+            return Err(Error::invalid(
+                "h_max",
+                format!("{h_max:e}"),
+                format!(
+                    "over t_span ({t0}, {t1}) rk45 would take at least {steps:.3e} steps of at most h_max (max_steps = {}); \
+                     choose a larger h_max, or raise max_steps",
+                    opts.max_steps
+                ),
             ));
         }
     }

@@ -43,6 +43,13 @@ pub enum Termination {
         /// The step size.
         h: f64,
     },
+    /// rk45 made `max_steps` steps before the end of its interval.
+    MaxSteps {
+        /// Time reached.
+        t: f64,
+        /// The steps made.
+        steps: usize,
+    },
     /// A step produced NaN or ±inf (the method is unstable at this step, or f returned them).
     NonFinite {
         /// Time at the start of the step.
@@ -79,6 +86,12 @@ impl fmt::Display for Termination {
                 "required step size {} at t = {} is below what the time variable can resolve; the problem may be stiff \
                  (try method='implicit_euler') or singular at this time",
                 num(h),
+                num(t)
+            ),
+            Termination::MaxSteps { t, steps } => write!(
+                f,
+                "rk45 stopped at t = {} after max_steps = {steps} steps; raise max_steps, or loosen rtol/atol (or raise \
+                 h_max) if the steps are smaller than the problem needs",
                 num(t)
             ),
             Termination::NonFinite { t, h, index } => write!(

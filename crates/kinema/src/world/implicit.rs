@@ -153,6 +153,16 @@ impl BaraffWitkin {
             self.dv.fill(0.0);
             self.converged = true;
         }
+        if !b_norm.is_finite() {
+            // F₀ (or h ∂F/∂x v₀) is NaN or ±inf, or so large that |b|² overflows: no solve can
+            // take it. Δv = b/m, the step without the Jacobian (exact for a constant force):
+            // non-finite where F₀ is, and the world stops the step as it does for the explicit
+            // methods (SimulationDiverged naming the particle) instead of taking Δv = 0.
+            for k in 0..n {
+                self.dv[k] = self.b[k] / self.mass[k];
+            }
+            self.converged = true;
+        }
         if !self.converged {
             for k in 0..n {
                 self.z[k] = self.r[k] / self.diag[k];
@@ -167,7 +177,13 @@ impl BaraffWitkin {
                 self.p = p;
                 result?;
                 let curvature = dot(&self.p, &self.q);
-                if curvature.is_nan() || curvature <= 0.0 {
+                if curvature.is_nan() {
+                    // a product overflowed or a force's derivative is NaN: not a solution to
+                    // keep (the world reports the non-finite velocity)
+                    self.dv.fill(f64::NAN);
+                    break;
+                }
+                if curvature <= 0.0 {
                     break; // not positive definite along p: keep the last iterate
                 }
                 let alpha = rz / curvature;

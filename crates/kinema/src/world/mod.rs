@@ -408,15 +408,25 @@ impl World {
     /// `order.rs`); `advance` puts them back in the user's order before it returns, so every
     /// method of the world, and every force, callback and file, sees the user's order.
     pub fn advance(&mut self, n: u64) -> Result<(), Error> {
-        let mut result = Ok(());
-        for _ in 0..n {
-            result = self.step_once();
-            if result.is_err() {
-                break;
-            }
-        }
+        let result = self.advance_in_engine_order(n);
         self.restore_user_order();
         result
+    }
+
+    /// [`World::advance`] for a caller that advances in slices: the particles stay in the
+    /// engine's order (sorted along space) after it, for the next slice, until
+    /// [`World::restore_order`] puts them back in the user's (every other method expects
+    /// that order: call it before anything else).
+    pub fn advance_in_engine_order(&mut self, n: u64) -> Result<(), Error> {
+        for _ in 0..n {
+            self.step_once()?;
+        }
+        Ok(())
+    }
+
+    /// Puts the particles back in the user's order after [`World::advance_in_engine_order`].
+    pub fn restore_order(&mut self) {
+        self.restore_user_order();
     }
 
     fn step_once(&mut self) -> Result<(), Error> {
@@ -759,7 +769,16 @@ impl World {
             steady,
             wrapped: steady && accel.is_some(),
         };
-        let changed = stage.run(&frame, &p.x, &p.v, x1, v1, &p.radius, &p.inv_mass, &p.mass)?;
+        let changed = match stage.run(&frame, &p.x, &p.v, x1, v1, &p.radius, &p.inv_mass, &p.mass) {
+            Ok(changed) => changed,
+            Err(Error::InvalidParameter { .. }) if Self::beyond_geometry(&self.x_next, &self.v_next) => {
+                // The collision stages' own quantities (a margin, a threshold) overflowed: the
+                // state is too large for their geometry, which squares distances and speeds.
+                let fastest = self.fastest(&self.v_next);
+                return Err(self.diverged(Divergence::NonFinite, fastest));
+            }
+            Err(e) => return Err(e),
+        };
         if changed {
             // A method's cache (Verlet's last acceleration) holds F at the integrated state;
             // it stays right only if no force depends on positions or velocities.
@@ -999,6 +1018,12 @@ impl World {
             }
         }
         (energy, scale)
+    }
+
+    /// Whether a position or velocity is so large (> 10¹⁵⁰, m or m/s) that its square, or a
+    /// sum of them, overflows: the collision geometry cannot be computed for such a state.
+    fn beyond_geometry(x: &[f64], v: &[f64]) -> bool {
+        x.iter().chain(v).any(|c| !(c.abs() <= 1e150))
     }
 
     /// The movable particle with the largest speed in `v`.
