@@ -591,3 +591,26 @@ def test_implicit_euler_refuses_a_dense_jacobian_larger_than_memory_with_advice(
     # as a batch of independent rows the same size is fine (one 1×1 block each)
     s = kinema.solve(lambda t, y: -y, np.ones((100_000, 1)), (0.0, 0.1), h=0.1, method="implicit_euler", vectorized=True)
     np.testing.assert_allclose(s.y[-1], 1 / 1.1, rtol=1e-6)
+
+
+def test_a_world_larger_than_memory_is_a_memory_error_not_an_abort():
+    # Under a 3 GiB address-space cap, 6·10⁶ particles (≈ 6 GiB of world) used to abort the
+    # interpreter on the failed allocation (exit 134). Now: MemoryError naming the request,
+    # the world unchanged, Python alive.
+    code = textwrap.dedent(
+        """
+        import resource, numpy as np, kinema
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+        w = kinema.World()
+        w.add_particles([[0, 0, 0]])
+        try:
+            w.add_particles(np.arange(18_000_000, dtype=float).reshape(-1, 3))
+        except MemoryError as e:
+            print("MemoryError", e)
+        w.step(2)
+        print("alive", len(w))
+        """
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "MemoryError adding 6000000 particles needs about" in res.stdout and "alive 1" in res.stdout, res.stdout

@@ -5,7 +5,7 @@
 //! the value and what is allowed.
 
 use kinema::Error;
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
 use pyo3::PyErr;
 
 /// Converts an engine error into the Python exception to raise.
@@ -15,6 +15,7 @@ pub fn to_py(e: Error) -> PyErr {
             Ok(py_err) => *py_err,
             Err(other) => PyRuntimeError::new_err(other.to_string()),
         },
+        e @ Error::OutOfMemory { .. } => PyMemoryError::new_err(e.to_string()),
         other => PyValueError::new_err(other.to_string()),
     }
 }

@@ -21,6 +21,15 @@ pub enum Error {
         /// What is allowed instead.
         allowed: String,
     },
+    /// Memory that cannot be allocated for what the user asked (the Python bindings raise
+    /// `MemoryError`).
+    #[error("{what} needs about {:.3} GiB of memory, which cannot be allocated", *bytes as f64 / (1u64 << 30) as f64)]
+    OutOfMemory {
+        /// What needed it, in the user's words.
+        what: String,
+        /// The bytes asked for.
+        bytes: usize,
+    },
     /// A method name that is not in the registry.
     #[error("unknown method '{name}'; valid methods are: {valid}")]
     UnknownMethod {
@@ -125,6 +134,16 @@ impl Error {
             parameter: parameter.into(),
             value: compact(value.to_string()),
             allowed: allowed.into(),
+        }
+    }
+}
+
+impl Error {
+    /// Memory for `what` (bytes) that cannot be allocated.
+    pub fn out_of_memory(what: impl Into<String>, bytes: usize) -> Self {
+        Error::OutOfMemory {
+            what: what.into(),
+            bytes,
         }
     }
 }

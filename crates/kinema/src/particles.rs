@@ -35,8 +35,14 @@ impl Particles {
         self.mass.is_empty()
     }
 
+    /// About how much memory a world needs per particle (its state, the integrator's
+    /// buffers, the neighbour lists), bytes: measured 400–800 with 10⁶ particles.
+    pub const BYTES_PER_PARTICLE: usize = 1024;
+
     /// Appends particles and returns their indices. `x`, `v` hold 3 values per particle;
-    /// `mass`, `radius`, `pinned` one each. Errors name the first bad value.
+    /// `mass`, `radius`, `pinned` one each. Errors name the first bad value; room the
+    /// machine cannot give ([`Particles::BYTES_PER_PARTICLE`] each) is
+    /// [`Error::OutOfMemory`].
     pub fn add(
         &mut self,
         x: &[f64],
@@ -84,6 +90,23 @@ impl Particles {
                 "radii must be finite and >= 0 m",
             ));
         }
+        // Room first, so that a size the machine cannot hold is an error, not an abort.
+        let room = |bytes: usize, ok: bool| -> Result<(), Error> {
+            ok.then_some(())
+                .ok_or_else(|| Error::out_of_memory(format!("adding {n} particles"), bytes))
+        };
+        let total = (self.len() + n).saturating_mul(Self::BYTES_PER_PARTICLE);
+        room(total, self.x.try_reserve(3 * n).is_ok() && self.v.try_reserve(3 * n).is_ok())?;
+        room(
+            total,
+            self.mass.try_reserve(n).is_ok()
+                && self.inv_mass.try_reserve(n).is_ok()
+                && self.radius.try_reserve(n).is_ok()
+                && self.id.try_reserve(n).is_ok(),
+        )?;
+        // and the world's working memory for them (integration, neighbour lists, collisions),
+        // tried once: the step would abort on it otherwise
+        room(total, Vec::<u8>::new().try_reserve_exact(total).is_ok())?;
         let start = self.len();
         let first_id = self.id.last().map_or(0, |l| l + 1);
         self.x.extend_from_slice(x);
