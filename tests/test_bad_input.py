@@ -609,8 +609,13 @@ def test_a_world_larger_than_memory_is_a_memory_error_not_an_abort():
             print("MemoryError", e)
         w.step(2)
         print("alive", len(w))
+        try:  # a solve whose states cannot be kept: 10⁷ steps of 10⁵ values (7,451 GiB)
+            kinema.solve(lambda t, y: -y, np.ones(100_000), (0, 1000), h=1e-4)
+        except MemoryError as e:
+            print("MemoryError", e)
         """
     )
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr[-2000:]
     assert "MemoryError adding 6000000 particles needs about" in res.stdout and "alive 1" in res.stdout, res.stdout
+    assert "MemoryError the solution's 10000001 states of 100000 values needs about 7450.656 GiB" in res.stdout, res.stdout

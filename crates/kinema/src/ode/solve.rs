@@ -382,6 +382,20 @@ impl<'a> Recorder<'a> {
         rec
     }
 
+    /// Room for `rows` states in all (a fixed step knows them up front): a size the machine
+    /// cannot hold is [`Error::OutOfMemory`] before the solve starts, not an abort in it.
+    pub(crate) fn reserve(&mut self, rows: usize) -> Result<(), Error> {
+        let more = rows.saturating_sub(self.t.len());
+        let values = more.saturating_mul(self.dim);
+        if self.t.try_reserve(more).is_err() || self.y.try_reserve(values).is_err() {
+            return Err(Error::out_of_memory(
+                format!("the solution's {rows} states of {} values", self.dim),
+                rows.saturating_mul(self.dim + 1).saturating_mul(8),
+            ));
+        }
+        Ok(())
+    }
+
     fn push(&mut self, t: f64, y: &[f64]) {
         self.t.push(t);
         self.y.extend_from_slice(y);
@@ -450,6 +464,7 @@ fn run_fixed<S: ?Sized>(
     };
     let n = y0.len();
     let mut rec = Recorder::new(opts, t0, y0);
+    rec.reserve(opts.t_eval.as_ref().map_or(nsteps + 1, |te| te.len()))?;
     let mut stats = Stats::default();
     let mut termination = None;
     let (mut y, mut y_next) = (y0.to_vec(), vec![0.0; n]);
@@ -458,6 +473,15 @@ fn run_fixed<S: ?Sized>(
     let mut f_a_known = false;
     // With dense_output: the grid (t, y, f) of every step boundary, for Hermite pieces.
     let mut grid: Option<(Vec<f64>, Vec<f64>, Vec<f64>)> = opts.dense_output.then(|| (Vec::new(), Vec::new(), Vec::new()));
+    if let Some((gt, gy, gf)) = &mut grid {
+        let values = (nsteps + 1).saturating_mul(n);
+        if gt.try_reserve(nsteps + 1).is_err() || gy.try_reserve(values).is_err() || gf.try_reserve(values).is_err() {
+            return Err(Error::out_of_memory(
+                format!("the dense output's {} steps of {n} values", nsteps + 1),
+                values.saturating_mul(16),
+            ));
+        }
+    }
     for k in 0..nsteps {
         let t_a = t0 + dir * k as f64 * h;
         let t_b = if k + 1 == nsteps {
