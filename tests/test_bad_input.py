@@ -8,6 +8,7 @@ import sys
 import textwrap
 import time
 from fractions import Fraction
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -619,3 +620,42 @@ def test_a_world_larger_than_memory_is_a_memory_error_not_an_abort():
     assert res.returncode == 0, res.stderr[-2000:]
     assert "MemoryError adding 6000000 particles needs about" in res.stdout and "alive 1" in res.stdout, res.stdout
     assert "MemoryError the solution's 10000001 states of 100000 values needs about 7450.656 GiB" in res.stdout, res.stdout
+
+
+def test_ctrl_c_stops_inside_one_long_step_and_leaves_the_step_before():
+    # One step of 400 discs at 10⁴ m/s (benchmarks/impacts.py's scene) makes ~56,000 impacts
+    # and takes a second or more: Ctrl-C is checked inside its impacts too. KeyboardInterrupt
+    # long before the step could end, and the world exactly as before it (time 0, the same
+    # positions and velocities).
+    code = textwrap.dedent(
+        """
+        import sys, time
+        import numpy as np
+        sys.path.insert(0, "benchmarks")
+        import impacts
+        w = impacts.build(1e4)
+        w.step(0)
+        x0, v0 = w.positions.copy(), w.velocities.copy()
+        print("stepping", flush=True)
+        start = time.perf_counter()
+        try:
+            w.step(50)
+            print("finished", flush=True)
+        except KeyboardInterrupt:
+            print("interrupted", round(time.perf_counter() - start, 3), w.time, w._core.steps,
+                  bool(np.array_equal(w.positions, x0) and np.array_equal(w.velocities, v0)), flush=True)
+        """
+    )
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.Popen([sys.executable, "-c", code], cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "stepping"
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGINT)
+    try:
+        out, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        pytest.fail("a long step did not stop on SIGINT")
+    words = out.split()
+    assert proc.returncode == 0 and words[0] == "interrupted", (out, err)
+    assert float(words[1]) < 5.0 and words[2:] == ["0.0", "0", "True"], out  # 50 steps take ~90 s

@@ -61,6 +61,13 @@ fn world_err(e: Error) -> PyErr {
     }
 }
 
+/// The world's interrupt check inside a step (`World::set_interrupt`): Python's pending
+/// signals, whose handler raises (Ctrl-C: `KeyboardInterrupt`); it runs them only on the main
+/// thread, and takes the GIL back for it (the steps run without it).
+fn ctrl_c() -> Result<(), CallbackError> {
+    Python::attach(|py| py.check_signals()).map_err(|e| Box::new(e) as CallbackError)
+}
+
 /// How long a slice of `World.step` runs before Ctrl-C is checked.
 const SLICE: std::time::Duration = std::time::Duration::from_millis(20);
 
@@ -165,9 +172,9 @@ impl PyWorld {
     #[new]
     fn new(dim: usize, dt: f64, method: Bound<'_, PyAny>) -> PyResult<Self> {
         let method = integrator_from(&method)?;
-        Ok(Self {
-            inner: World::new(WorldParams { dt, method, dim }).map_err(world_err)?,
-        })
+        let mut inner = World::new(WorldParams { dt, method, dim }).map_err(world_err)?;
+        inner.set_interrupt(Some(ctrl_c));
+        Ok(Self { inner })
     }
 
     /// Appends particles; returns (first, end) indices. `restitution` and `friction` (one per

@@ -16,4 +16,4 @@ pub mod world;
 
 pub use error::{CallbackError, Divergence, Error};
 pub use particles::Particles;
-pub use world::{World, WorldParams};
+pub use world::{Interrupt, World, WorldParams};

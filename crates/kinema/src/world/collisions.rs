@@ -256,6 +256,8 @@ pub(crate) struct CollisionStage {
     pub total: CollisionStats,
     pub last: CollisionStats,
     pub times: CollisionTimes,
+    /// The world's check that may stop a step, asked inside a long run of impacts.
+    pub interrupt: super::Interrupt,
 }
 
 /// Whether contact `c` is with a wall of a box collider along a periodic axis of `domain`:
@@ -299,6 +301,7 @@ impl CollisionStage {
             total: CollisionStats::default(),
             last: CollisionStats::default(),
             times: CollisionTimes::default(),
+            interrupt: super::Interrupt::none(),
         })
     }
 
@@ -724,6 +727,9 @@ impl CollisionStage {
                 continue;
             }
             processed += 1;
+            if processed % 256 == 0 {
+                self.interrupt.poll()?; // a stop leaves the wake times invalid (see `stages`)
+            }
             if processed > cap {
                 stats.unconverged += 1;
                 self.touched.iter_mut().for_each(|f| *f = true);

@@ -14,7 +14,7 @@ pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
 
 use crate::collide::{Collider, Contact, Periodic};
 use crate::diagnostics::Diagnostics;
-use crate::error::{Divergence, Error};
+use crate::error::{CallbackError, Divergence, Error};
 use crate::forces::{Force, State};
 use crate::ode::explicit_rk::ExplicitRk;
 use crate::ode::stepper::{first_non_finite, Stats, StepFailure, Stepper, Termination};
@@ -143,6 +143,38 @@ pub struct World {
     contact_dirty: bool,
     /// Wall-clock time spent in each stage so far.
     times: StageTimes,
+    /// Asked between the stages of a step and inside long ones whether to stop (Ctrl-C).
+    interrupt: Interrupt,
+}
+
+/// Whether to stop a step: the caller's check (the Python bindings: Ctrl-C), asked at most
+/// every [`Interrupt::EVERY`]; its error stops the step, which then leaves the world as it
+/// was before it.
+#[derive(Debug, Clone, Copy)]
+pub struct Interrupt {
+    check: Option<fn() -> Result<(), CallbackError>>,
+    last: Option<std::time::Instant>,
+}
+
+impl Interrupt {
+    /// How often the check runs at most.
+    pub const EVERY: std::time::Duration = std::time::Duration::from_millis(10);
+
+    /// No check.
+    pub fn none() -> Self {
+        Interrupt { check: None, last: None }
+    }
+
+    /// Runs the check if it has not run for [`Interrupt::EVERY`].
+    pub fn poll(&mut self) -> Result<(), Error> {
+        let Some(check) = self.check else { return Ok(()) };
+        let now = std::time::Instant::now();
+        if self.last.is_some_and(|t| now.duration_since(t) < Self::EVERY) {
+            return Ok(());
+        }
+        self.last = Some(now);
+        check().map_err(Error::Callback)
+    }
 }
 
 /// Wall-clock time spent in the seed's four stages of [`World::step`], summed over all steps.
@@ -198,6 +230,7 @@ impl World {
             sorts: 0,
             contact_dirty: false,
             times: StageTimes::default(),
+            interrupt: Interrupt::none(),
         })
     }
 
@@ -440,9 +473,11 @@ impl World {
             }
         }
         let start = std::time::Instant::now();
+        self.poll_interrupt()?;
         self.integrate()?; // 1: the integrated state, in x_next, v_next
         self.times.integrate += start.elapsed();
         // 2–4: detect, respond, distribute, on x_next, v_next (timed inside)
+        self.poll_interrupt()?;
         self.collide()?;
         // Accepted: the new state becomes the particles' own (a swap, not a copy).
         std::mem::swap(&mut self.particles.x, &mut self.x_next);
@@ -808,7 +843,9 @@ impl World {
         match &mut self.collisions {
             Some(stage) => stage.set_params(params)?,
             None => {
-                self.collisions = Some(CollisionStage::new(params, self.params.dim)?);
+                let mut stage = CollisionStage::new(params, self.params.dim)?;
+                stage.interrupt = self.interrupt;
+                self.collisions = Some(stage);
             }
         }
         self.rebuild_contact_force()
@@ -1024,6 +1061,26 @@ impl World {
     /// sum of them, overflows: the collision geometry cannot be computed for such a state.
     fn beyond_geometry(x: &[f64], v: &[f64]) -> bool {
         x.iter().chain(v).any(|c| !(c.abs() <= 1e150))
+    }
+
+    /// Sets the check that may stop a step (`None`: none): asked at most every
+    /// [`Interrupt::EVERY`] between the stages of a step and inside the impacts of a long
+    /// one; its error stops the step, and the world stays at the end of the step before.
+    pub fn set_interrupt(&mut self, check: Option<fn() -> Result<(), CallbackError>>) {
+        self.interrupt = Interrupt { check, last: None };
+        if let Some(stage) = &mut self.collisions {
+            stage.interrupt = self.interrupt;
+        }
+    }
+
+    /// The interrupt check between stages; a stop forgets the method's cache (the step's
+    /// half-made state is dropped).
+    fn poll_interrupt(&mut self) -> Result<(), Error> {
+        let result = self.interrupt.poll();
+        if result.is_err() {
+            self.stepper = None;
+        }
+        result
     }
 
     /// The movable particle with the largest speed in `v`.
