@@ -531,6 +531,25 @@ def test_implicit_euler_reports_a_non_finite_force_instead_of_taking_it_as_zero(
     assert w.velocities[0, 2] == pytest.approx(-1e160 * 3e-3, rel=1e-12)
 
 
+def _interrupted(code: str, after: float) -> list[str]:
+    """Runs ``code`` (from the repository's root) until it prints "stepping", sends it
+    SIGINT ``after`` s later, and returns the words of what it printed then, which must
+    start with "interrupted" (exit status 0: it caught the KeyboardInterrupt)."""
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.Popen([sys.executable, "-c", code], cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stdout.readline().strip() == "stepping"
+    time.sleep(after)
+    proc.send_signal(signal.SIGINT)
+    try:
+        out, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        pytest.fail("the step did not stop on SIGINT")
+    words = out.split()
+    assert proc.returncode == 0 and words[:1] == ["interrupted"], (out, err)
+    return words
+
+
 def test_ctrl_c_stops_a_long_step_call_at_a_whole_step():
     # w.step(10**12) used to ignore SIGINT. Now the steps run in slices of a few ms with Ctrl-C
     # checked between: KeyboardInterrupt, and the world at the end of its last whole step
@@ -549,18 +568,8 @@ def test_ctrl_c_stops_a_long_step_call_at_a_whole_step():
             print("interrupted", steps, w.time == steps * 1e-3, w.velocities[0, 2] == -9.81 * w.time or abs(w.velocities[0, 2] / (-9.81 * w.time) - 1) < 1e-9, flush=True)
         """
     )
-    proc = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert proc.stdout.readline().strip() == "stepping"
-    time.sleep(0.5)
-    proc.send_signal(signal.SIGINT)
-    try:
-        out, err = proc.communicate(timeout=20)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        pytest.fail("w.step(10**12) did not stop on SIGINT")
-    words = out.split()
-    assert proc.returncode == 0 and words[0] == "interrupted", (out, err)
-    assert int(words[1]) > 0 and words[2:] == ["True", "True"], out
+    words = _interrupted(code, after=0.5)
+    assert int(words[1]) > 0 and words[2:] == ["True", "True"], words
 
 
 def test_solve_refuses_step_limits_that_cannot_end_and_stops_at_max_steps():
@@ -646,16 +655,5 @@ def test_ctrl_c_stops_inside_one_long_step_and_leaves_the_step_before():
                   bool(np.array_equal(w.positions, x0) and np.array_equal(w.velocities, v0)), flush=True)
         """
     )
-    root = Path(__file__).resolve().parents[1]
-    proc = subprocess.Popen([sys.executable, "-c", code], cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert proc.stdout.readline().strip() == "stepping"
-    time.sleep(0.3)
-    proc.send_signal(signal.SIGINT)
-    try:
-        out, err = proc.communicate(timeout=60)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        pytest.fail("a long step did not stop on SIGINT")
-    words = out.split()
-    assert proc.returncode == 0 and words[0] == "interrupted", (out, err)
-    assert float(words[1]) < 5.0 and words[2:] == ["0.0", "0", "True"], out  # 50 steps take ~90 s
+    words = _interrupted(code, after=0.3)
+    assert float(words[1]) < 5.0 and words[2:] == ["0.0", "0", "True"], words  # 50 steps take ~90 s

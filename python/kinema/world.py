@@ -64,7 +64,9 @@ class World:
         """Hands what the user wrote into the views to the world (a no-op when unchanged). A
         bad value is refused whole: the world keeps its state and the views show it again."""
         if self._stepping:
-            raise RuntimeError("the world was changed while it is stepping (from one of its own forces): a force computes F(t, x, v) and must leave its world alone")
+            raise RuntimeError(
+                "the world was changed while it is stepping (from one of its own forces): a force computes F(t, x, v) and must leave its world alone"
+            )
         try:
             self._core.sync(self._x, self._v, self._m)
         except ValueError:
@@ -287,7 +289,9 @@ class World:
         if n > _checks.UINT64_MAX:
             raise ValueError(f"n = {_checks.describe(n)} is invalid: the number of steps must be < 2**64")
         if self._stepping:
-            raise RuntimeError("World.step was called while this world is stepping (from one of its own forces): a force computes F(t, x, v) and must not advance its world")
+            raise RuntimeError(
+                "World.step was called while this world is stepping (from one of its own forces): a force computes F(t, x, v) and must not advance its world"
+            )
         self._push()
         self._stepping = True  # (the advice evaluates the forces too)
         try:
