@@ -2,6 +2,7 @@
 #   make demo   set up, build (release), run the demonstration; writes to out/
 #   make test   set up, build, then cargo test and pytest
 #   make bench  set up, build, run the benchmarks (kinema beside its peers, one table each)
+#   make fuzz   set up, build, run the fuzz suite (tests/test_fuzz.py) with many more cases
 #   make pictures  the README's pictures of the example scenes (docs/img/scene_*.png)
 #   make fmt    format Rust and Python sources
 
@@ -15,7 +16,7 @@ BUILT  := $(VENV)/.kinema-built
 VIEWER_BUNDLE := python/kinema/viewer/static/viewer.js
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml pyproject.toml
 
-.PHONY: demo test test-rust test-python bench pictures fmt setup build viewer clean
+.PHONY: demo test test-rust test-python fuzz bench pictures fmt setup build viewer clean
 
 setup: $(STAMP)
 
@@ -53,6 +54,12 @@ test-rust:
 test-python: build $(TEST_STAMP)
 	command -v chromium >/dev/null || apt-get install -y -q chromium >/dev/null || (apt-get update -q >/dev/null && apt-get install -y -q chromium >/dev/null) || echo "chromium could not be installed: the browser tests will say so and skip"
 	$(PY) -m pytest -q
+
+# The fuzz suite alone, FUZZ_EXAMPLES cases per test (make test runs it with 40).
+FUZZ_EXAMPLES ?= 2000
+
+fuzz: build
+	KINEMA_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q tests/test_fuzz.py
 
 bench: build $(TEST_STAMP)
 	$(PY) benchmarks/ode_overhead.py

@@ -1,0 +1,719 @@
+"""The fuzz suite's cases and the worker process that runs them (used by tests/test_fuzz.py).
+
+A case is a JSON description of a few calls of kinema's public API ("ops"), for example::
+
+    {"ops": [{"op": "world", "kwargs": {"dim": 2}},
+             {"op": "add_particles", "kwargs": {"position": [{"$f": "nan"}, 0, 0]}},
+             {"op": "step", "args": [5]}]}
+
+Values that JSON cannot hold are tagged (``decode`` makes the values, ``py`` their source): ``{"$f": "nan"}`` (also
+``"inf"``, ``"-inf"``), ``{"$c": [re, im]}`` a complex number, ``{"$t": [...]}`` a tuple,
+``{"$d": {...}}`` a dict, ``{"$b": "text"}`` bytes, ``{"$s": value, "dtype": "float32"}`` a
+NumPy scalar, ``{"$a": [flat values], "shape": [2, 3], "dtype": "int64"}`` a NumPy array
+(``dtype`` "list": nested Python lists of that shape), ``{"$ref": "tableau"}`` the
+``ButcherTableau`` an earlier op built. Python ints of any size are JSON ints.
+
+``Worker`` (the test process's side) keeps one ``python tests/fuzz_cases.py --worker``
+process, which imports kinema once and runs cases read from its stdin, one JSON line each,
+answering one JSON line each: the outcome of every op (``"ok"`` or the exception's type,
+message and ``verdict``). A crash signal, a hang (no answer within the timeout) or a
+``PanicException`` is found by the test process; the worker is started again for the next
+case. ``to_python`` writes a case as a Python reproducer.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import selectors
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+HERE = Path(__file__).resolve()
+REPO = HERE.parent.parent
+
+# Documented RuntimeErrors of kinema.World (a force of a world must not change or step it
+# while it steps): refusals by design, not failures. Any other RuntimeError is.
+REENTRY_MESSAGES = ("the world was changed while it is stepping", "World.step was called while this world is stepping")
+
+
+# -- values ----------------------------------------------------------------------------------
+def decode(v: Any, ctx: Any = None) -> Any:
+    """The Python value an encoded value describes (run in the worker; imports NumPy)."""
+    import numpy as np
+
+    if isinstance(v, list):
+        return [decode(x, ctx) for x in v]
+    if not isinstance(v, dict):
+        return v
+    if "$f" in v:
+        return float(v["$f"])
+    if "$c" in v:
+        re_, im = (decode(x, ctx) for x in v["$c"])
+        return complex(re_, im)
+    if "$t" in v:
+        return tuple(decode(x, ctx) for x in v["$t"])
+    if "$d" in v:
+        return {k: decode(x, ctx) for k, x in v["$d"].items()}
+    if "$b" in v:
+        return v["$b"].encode()
+    if "$s" in v:
+        return np.array(decode(v["$s"], ctx), dtype=v["dtype"])[()]
+    if "$ref" in v:
+        return getattr(ctx, v["$ref"])
+    if "$a" in v:
+        flat = [decode(x, ctx) for x in v["$a"]]
+        shape = tuple(v["shape"])
+        if v["dtype"] == "list":
+            return _nest(flat, list(shape))
+        if v["dtype"] == "object":
+            arr = np.empty(len(flat), dtype=object)
+            for k, x in enumerate(flat):
+                arr[k] = x
+            return arr.reshape(shape)
+        return np.array(flat, dtype=v["dtype"]).reshape(shape)
+    raise ValueError(f"not an encoded value: {v!r}")
+
+
+def _nest(flat: list, shape: list[int]) -> Any:
+    if not shape:
+        return flat[0]
+    if len(shape) == 1:
+        return list(flat)
+    step = math.prod(shape[1:])
+    return [_nest(flat[k * step : (k + 1) * step], shape[1:]) for k in range(shape[0])]
+
+
+def py(v: Any) -> str:
+    """Python source for an encoded value (for reproducers)."""
+    if isinstance(v, list):
+        return "[" + ", ".join(py(x) for x in v) + "]"
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, int) and not isinstance(v, bool) and abs(v) >= 2**31:
+        return _int_source(v)
+    if not isinstance(v, dict):
+        return repr(v)
+    if "$f" in v:
+        return f"float({v['$f']!r})"
+    if "$c" in v:
+        return f"complex({py(v['$c'][0])}, {py(v['$c'][1])})"
+    if "$t" in v:
+        items = [py(x) for x in v["$t"]]
+        return "(" + ", ".join(items) + ("," if len(items) == 1 else "") + ")"
+    if "$d" in v:
+        return "{" + ", ".join(f"{k!r}: {py(x)}" for k, x in v["$d"].items()) + "}"
+    if "$b" in v:
+        return repr(v["$b"].encode())
+    if "$s" in v:
+        return f"np.array({py(v['$s'])}, dtype={v['dtype']!r})[()]"
+    if "$ref" in v:
+        return v["$ref"]
+    if "$a" in v:
+        shape = list(v["shape"])
+        if v["dtype"] == "list":
+            return py(_nest(v["$a"], shape))
+        if v["dtype"] == "object":
+            return f"_objects({py(v['$a'])}, {tuple(shape)!r})"
+        return f"np.array({py(v['$a'])}, dtype={v['dtype']!r}).reshape({tuple(shape)!r})"
+    return repr(v)
+
+
+def _int_source(v: int) -> str:
+    sign, a = ("-" if v < 0 else ""), abs(v)
+    for base in (2, 10):
+        k = round(math.log(a, base))
+        for off, text in ((0, ""), (1, " - 1"), (-1, " + 1")):
+            if base**k - off == a:
+                return f"{sign}({base}**{k}{text})" if text else f"{sign}{base}**{k}"
+    return repr(v)
+
+
+def _call(fn: str, op: dict) -> str:
+    parts = [py(a) for a in op.get("args", [])] + [f"{k}={py(x)}" for k, x in op.get("kwargs", {}).items()]
+    return f"{fn}({', '.join(parts)})"
+
+
+def _fn_source(spec: dict, args: str, state: str) -> str:
+    kind = spec["fn"]
+    if kind == "decay":
+        return f"lambda {args}: -{state}"
+    if kind == "scale":
+        return f"lambda {args}: {py(spec['k'])} * {state}"
+    if kind == "const":
+        return f"lambda {args}: {py(spec['value'])}"
+    if kind == "reenter":
+        return f"lambda {args}: reenter(w, {spec['action']!r}, x)"
+    return repr(spec)
+
+
+def to_python(case: dict) -> str:
+    """A case as Python source (a reproducer); ops that are not plain calls are shown as data."""
+    lines = ["import numpy as np", "import kinema", "w = kinema.World()"]
+    if any(op["op"] == "world" for op in case["ops"]):
+        lines.pop()
+    for op in case["ops"]:
+        kind = op["op"]
+        if kind == "world":
+            lines.append(f"w = {_call('kinema.World', op)}")
+        elif kind in ("add_particles", "set_collisions", "step", "run"):
+            lines.append(_call(f"w.{kind}", op))
+        elif kind == "add":
+            kwargs = dict(op.get("kwargs", {}))
+            if op["kind"] == "PythonForce":
+                kwargs = {"fn": None, **kwargs}
+                call = _call("kinema.PythonForce", {"kwargs": kwargs}).replace("fn=None", "fn=" + _fn_source(op["fn"], "t, x, v", "x"))
+            elif op["kind"] == "value":
+                call = py(op["value"])
+            else:
+                call = _call(f"kinema.{op['kind']}", {"kwargs": kwargs})
+            lines.append(f"w.add({call})")
+        elif kind in ("periodic", "positions", "velocities", "masses"):
+            lines.append(f"w.{kind} = {py(op['value'])}")
+        elif kind == "call":
+            lines.append(_call(f"w.{op['method']}", op) if op["method"] != "accelerations" else "w.accelerations")
+        elif kind == "inspect":
+            lines.append("w.diagnostics(); w.contacts(); w.collision_stats(); w.rates(); w.stable_step(); w.accelerations; w.to_scene()")
+        elif kind == "tableau":
+            lines.append(f"tableau = {_call('kinema.ButcherTableau', op)}")
+        elif kind in ("solve", "solve_second_order"):
+            rhs = _fn_source(op["fn"], "t, y" if kind == "solve" else "t, x, v", "y" if kind == "solve" else "x")
+            extra = {"kwargs": dict(op.get("kwargs", {}))}
+            if "jac" in op:
+                extra["kwargs"]["jac"] = "JAC"
+            text = _call(f"kinema.{kind}", {"args": op.get("args", []), **extra}).replace(f"kinema.{kind}(", f"kinema.{kind}({rhs}, ", 1)
+            if "jac" in op:
+                text = text.replace("jac='JAC'", "jac=" + _fn_source(op["jac"], "t, y", "np.eye(len(y))"))
+            lines.append(text)
+        elif kind == "stability":
+            lines.append(_call(f"kinema.stability.{op['fn']}", op))
+        else:
+            lines.append(f"# {json.dumps(op)}")
+    text = "\n".join(lines)
+    helpers = [source for name, source in _HELPERS.items() if f"{name}(" in text]
+    return text.replace("import kinema\n", "import kinema\n" + "".join(helpers), 1)
+
+
+_HELPERS = {
+    "_objects": """def _objects(items, shape):  # an object array of these items
+    a = np.empty(len(items), dtype=object)
+    for k, x in enumerate(items):
+        a[k] = x
+    return a.reshape(shape)
+""",
+    "reenter": """def reenter(w, action, x):  # a force that uses its own world (the fuzz worker's)
+    if action == "step": w.step(1)
+    elif action == "add_particles": w.add_particles([0.0, 0.0, 0.0])
+    elif action == "diagnostics": w.diagnostics()
+    elif action == "set_positions": w.positions = np.zeros((len(w), 3))
+    elif action == "read_core": w.time + w.dt + len(w)
+    elif action == "read_views": w.positions.sum() + w.velocities.sum() + w.masses.sum() + len(w.forces)
+    return np.zeros_like(x)
+""",
+}
+
+
+# -- the test process's side -----------------------------------------------------------------
+class Worker:
+    """One worker process, started on demand and again after it died or hung."""
+
+    def __init__(self, timeout: float = 20.0):
+        self.timeout = timeout
+        self.proc: subprocess.Popen | None = None
+        self.buffer = b""
+        self.stderr = None
+        self.cases = 0
+
+    def start(self) -> None:
+        self.stderr = tempfile.TemporaryFile()
+        env = {k: v for k, v in os.environ.items() if k != "KINEMA_DEBUG"}
+        env["PYTHONFAULTHANDLER"] = "1"  # a crash prints the Python stack to stderr
+        env["MPLBACKEND"] = "Agg"  # the CLI draws its energy plot
+        self.proc = subprocess.Popen(
+            [sys.executable, "-u", str(HERE), "--worker"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.stderr, cwd=REPO, env=env
+        )
+        self.buffer = b""
+        ready = self._answer(max(60.0, self.timeout))
+        if not (isinstance(ready, dict) and ready.get("ready")):
+            tail = self._stderr_tail()
+            self.stop()
+            raise RuntimeError(f"the fuzz worker did not start: {ready!r}\n{tail}")
+
+    def stop(self) -> None:
+        if self.proc is not None:
+            if self.proc.poll() is None:
+                self.proc.kill()
+            self.proc.wait()
+            for stream in (self.proc.stdin, self.proc.stdout):
+                try:
+                    stream.close()
+                except OSError:
+                    pass
+            self.proc = None
+        if self.stderr is not None:
+            self.stderr.close()
+            self.stderr = None
+
+    def _stderr_tail(self, since: int = 0, limit: int = 3000) -> str:
+        if self.stderr is None:
+            return ""
+        self.stderr.flush()
+        self.stderr.seek(since)
+        text = self.stderr.read().decode(errors="replace")
+        self.stderr.seek(0, os.SEEK_END)
+        return text[-limit:]
+
+    def _answer(self, timeout: float) -> Any:
+        """The next JSON line from the worker; "hang" after ``timeout`` s, "eof" when it closed."""
+        assert self.proc is not None and self.proc.stdout is not None
+        fd = self.proc.stdout.fileno()
+        end = time.monotonic() + timeout
+        with selectors.DefaultSelector() as sel:
+            sel.register(fd, selectors.EVENT_READ)
+            while b"\n" not in self.buffer:
+                left = end - time.monotonic()
+                if left <= 0:
+                    return "hang"
+                if not sel.select(left):
+                    continue
+                chunk = os.read(fd, 65536)
+                if not chunk:
+                    return "eof"
+                self.buffer += chunk
+        line, self.buffer = self.buffer.split(b"\n", 1)
+        return json.loads(line)
+
+    def run(self, case: dict, timeout: float | None = None) -> dict:
+        """Run one case; returns the worker's answer, or {"status": "crash"|"hang", ...}."""
+        if self.proc is None or self.proc.poll() is not None:
+            self.stop()
+            self.start()
+        assert self.proc is not None and self.proc.stdin is not None and self.stderr is not None
+        self.stderr.seek(0, os.SEEK_END)
+        before = self.stderr.tell()
+        self.cases += 1
+        try:
+            self.proc.stdin.write((json.dumps(case) + "\n").encode())
+            self.proc.stdin.flush()
+            answer = self._answer(self.timeout if timeout is None else timeout)
+        except BrokenPipeError:
+            answer = "eof"
+        if answer == "hang":
+            self.proc.kill()
+            self.proc.wait()
+            tail = self._stderr_tail(before)
+            self.stop()
+            return {"status": "hang", "timeout_s": self.timeout if timeout is None else timeout, "stderr": tail}
+        if answer == "eof":
+            try:
+                rc = self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                rc = self.proc.wait()
+            tail = self._stderr_tail(before)
+            self.stop()
+            sig = signal.Signals(-rc).name if rc < 0 and -rc in signal.Signals._value2member_map_ else None
+            return {"status": "crash", "returncode": rc, "signal": sig, "stderr": tail}
+        err = self._stderr_tail(before)
+        if "panicked at" in err:  # a Rust panic, even one caught and turned into another error
+            answer["panic_output"] = err
+        return answer
+
+
+def problems(answer: dict, allow_exit_1_divergence: bool = True) -> list[str]:
+    """What is wrong with a worker's answer (empty: nothing)."""
+    status = answer.get("status")
+    if status == "crash":
+        return [f"the worker process died (returncode {answer['returncode']}, signal {answer['signal']}); stderr:\n{answer['stderr']}"]
+    if status == "hang":
+        return [f"no answer within {answer['timeout_s']} s (a hang); stderr:\n{answer['stderr']}"]
+    out = []
+    if "panic_output" in answer:
+        out.append(f"a Rust panic was printed:\n{answer['panic_output']}")
+    for k, r in enumerate(answer.get("ops", [])):
+        if r.get("verdict") == "bad":
+            out.append(f"op {k} ({r.get('op')}) raised {r['type']} (not an allowed error): {r['message']}")
+        cli = r.get("cli")
+        if cli is not None and "skipped" not in cli:
+            code, err = cli["exit"], cli["stderr"]
+            if "Traceback" in err:
+                out.append(f"op {k}: the CLI printed a traceback (exit {code}):\n{err}")
+            if code == 1 and not (allow_exit_1_divergence and "diverged" in err and "unexpected" not in err):
+                out.append(f"op {k}: the CLI exited 1 (not a divergence):\n{err}")
+            elif code not in (0, 1, 2):
+                out.append(f"op {k}: the CLI exited {code}:\n{err}")
+    return out
+
+
+# -- the worker ------------------------------------------------------------------------------
+class _Ctx:
+    world: Any = None
+    tableau: Any = None
+
+
+def _classify(e: BaseException, op: dict) -> str:
+    """The verdict on an exception an op raised: "allowed" or "bad"."""
+    import kinema
+    from kinema.io import TrajectoryFileError
+    from kinema.scene import SceneError
+
+    names = [c.__name__ for c in type(e).__mro__]
+    if "PanicException" in names or not isinstance(e, Exception):
+        return "bad"
+    if isinstance(e, (ArithmeticError, LookupError, AttributeError, RecursionError, AssertionError, NameError, SystemError, UnicodeError)):
+        return "bad"
+    if isinstance(e, kinema.SimulationDiverged):
+        return "allowed"
+    if isinstance(e, RuntimeError):
+        return "allowed" if str(e).startswith(REENTRY_MESSAGES) else "bad"
+    if op["op"] == "scene" and isinstance(e, (ValueError, TypeError)) and not isinstance(e, SceneError):
+        return "bad"  # the scene loader reports every problem as a SceneError (the CLI's exit 2)
+    if op["op"] == "trajectory" and isinstance(e, (ValueError, TypeError)) and not isinstance(e, TrajectoryFileError):
+        return "bad"  # Trajectory.load reports every problem of a file as a TrajectoryFileError naming it
+    if isinstance(e, (ValueError, TypeError, MemoryError)):
+        return "allowed"
+    return "bad"
+
+
+def _make_fn(spec: dict, ctx: _Ctx, second: bool = False) -> Any:
+    import numpy as np
+
+    kind = spec["fn"]
+    if kind == "decay":
+        return (lambda t, x, v: -x) if second else (lambda t, y: -y)
+    if kind == "scale":
+        k = decode(spec["k"], ctx)
+        return (lambda t, x, v: k * x) if second else (lambda t, y: k * y)
+    if kind == "const":
+        value = decode(spec["value"], ctx)
+        return (lambda t, x, v: value) if second else (lambda t, y: value)
+    if kind == "reenter":
+        action = spec["action"]
+
+        def reenter(t: float, x: Any, v: Any) -> Any:
+            w = ctx.world
+            if action == "step":
+                w.step(1)
+            elif action == "add_particles":
+                w.add_particles([0.0, 0.0, 0.0])
+            elif action == "diagnostics":
+                w.diagnostics()
+            elif action == "set_positions":
+                w.positions = np.zeros((len(w), 3))
+            elif action == "read_views":
+                _ = w.positions.sum() + w.velocities.sum() + w.masses.sum() + len(w.forces)
+            elif action == "read_core":
+                _ = w.time + w.dt + len(w)
+            return np.zeros_like(x)
+
+        return reenter
+    raise ValueError(f"unknown fn spec {spec!r}")
+
+
+def _inspect(w: Any) -> None:
+    w.diagnostics()
+    w.contacts()
+    w.collision_stats()
+    w.stage_times()
+    w.rates()
+    w.stable_step()
+    w.accelerations  # noqa: B018 - a property that computes
+    w.momenta  # noqa: B018
+    repr(w)
+    try:
+        w.to_scene()
+    except ValueError as e:  # a PythonForce cannot be written to a scene: documented
+        if "cannot be written to a scene" not in str(e):
+            raise
+
+
+_BASE_H5: dict[str, Any] = {}
+
+
+def _base_trajectory() -> Path:
+    """A small valid trajectory file (made once per worker)."""
+    if "path" not in _BASE_H5:
+        import kinema
+
+        folder = Path(tempfile.mkdtemp(prefix="kinema-fuzz-"))
+        w = kinema.World(dt=0.01)
+        w.add_particles([[0.2, 0.5, 0.5], [0.5, 0.5, 0.5], [0.8, 0.5, 0.6]], velocity=[1.0, 0.5, 0.0], radius=0.05)
+        w.add(kinema.Gravity())
+        w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+        w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+        w.add(kinema.SphereObstacle([0.5, 0.5, 0.2], 0.1))
+        w.periodic = (True, False, False)
+        _BASE_H5["path"] = w.run(0.05, fps=50).save(folder / "base.h5")
+        _BASE_H5["folder"] = folder
+    return _BASE_H5["path"]
+
+
+def _h5_layout() -> dict:
+    import h5py
+
+    datasets, attrs = [], []
+    with h5py.File(_base_trajectory(), "r") as f:
+
+        def visit(name: str, obj: Any) -> None:
+            if isinstance(obj, h5py.Dataset):
+                datasets.append([name, list(obj.shape), str(obj.dtype)])
+            attrs.extend([name, a] for a in obj.attrs)
+
+        attrs.extend(["/", a] for a in f.attrs)
+        f.visititems(visit)
+    return {"datasets": datasets, "attrs": attrs, "size": _base_trajectory().stat().st_size}
+
+
+def _damage(path: Path, m: dict, ctx: _Ctx) -> None:
+    """Apply one damage to a copy of the base trajectory; a ValueError("invalid case") when
+    h5py cannot store it (the case is then not a test of kinema)."""
+    import h5py
+    import numpy as np
+
+    action = m["action"]
+    if action == "truncate":
+        with open(path, "r+b") as fh:
+            fh.truncate(m["size"])
+        return
+    if action == "flip":
+        with open(path, "r+b") as fh:
+            fh.seek(m["offset"])
+            fh.write(bytes([m["byte"]]))
+        return
+    with h5py.File(path, "r+") as f:
+        if action == "delete_dataset":
+            del f[m["name"]]
+        elif action == "replace_dataset":
+            del f[m["name"]]
+            f.create_dataset(m["name"], data=decode(m["value"], ctx))
+        elif action == "set_element":
+            data = f[m["name"]][()]
+            arr = np.array(data)
+            if arr.size == 0:
+                raise ValueError("invalid case: empty dataset")
+            arr.reshape(-1)[m["index"] % arr.size] = decode(m["value"], ctx)
+            del f[m["name"]]
+            f.create_dataset(m["name"], data=arr)
+        elif action == "delete_attr":
+            del f[m["group"]].attrs[m["name"]]
+        elif action == "set_attr":
+            f[m["group"]].attrs[m["name"]] = decode(m["value"], ctx)
+        else:
+            raise ValueError(f"invalid case: unknown damage {action!r}")
+
+
+# Known slow case (test_fuzz.py: test_known_bug_dense_overlaps_make_a_step_take_seconds): when
+# hundreds of particles overlap each other at once, one step takes seconds to minutes (the
+# impact search runs to its cap). A scene case with more overlapping pairs than this is built
+# but not stepped.
+MAX_OVERLAPPING_PAIRS = 1000
+
+
+def overlapping_pairs(world: Any) -> int:
+    """Pairs of particles closer than twice the largest radius (an upper bound of the overlaps)."""
+    import numpy as np
+    from scipy.spatial import cKDTree
+
+    n = len(world)
+    if n < 2:
+        return 0
+    x = np.asarray(world.positions)
+    reach = 2.0 * float(np.max(world._core.radii))
+    if not (np.all(np.isfinite(x)) and np.isfinite(reach)):
+        return n * (n - 1) // 2
+    try:
+        with np.errstate(all="ignore"):
+            tree = cKDTree(x)
+            return (int(tree.count_neighbors(tree, reach)) - n) // 2
+    except (ValueError, OverflowError):  # coordinates near 1e308: count them all unless few
+        return 0 if n <= 100 else n * (n - 1) // 2
+
+
+def _too_long(pre: dict) -> str | None:
+    """Why ``kinema run`` would accept the scene ``pre["scene"]`` but take too long for a fuzz
+    case, or None. Raises where the CLI refuses the scene (it is then quick)."""
+    from kinema import cli
+    from kinema.scene import Scene
+
+    sc = Scene.from_toml(pre["scene"])
+    seconds = sc.world.duration if pre.get("duration") is None else pre["duration"]
+    cli._scene_work(sc, Path(pre["scene"]), seconds, "world.duration", False, False)
+    n = sc.particle_count()
+    steps = cli._frames_and_steps(seconds, sc.world.dt, sc.world.fps)[1]
+    if n > pre["max_particles"] or n * steps > pre["max_particle_steps"] or steps > pre["max_steps"]:
+        return f"{n} particles x {steps:g} steps: more work than a fuzz case may take"
+    pairs = overlapping_pairs(sc.build(source=pre["scene"]))
+    if pairs > MAX_OVERLAPPING_PAIRS:
+        return f"{pairs} overlapping pairs (a known slow case)"
+    return None
+
+
+def _cli(op: dict) -> dict:
+    """``kinema <argv>`` in this process (as the console script runs it): exit code and stderr."""
+    import contextlib
+    import io
+
+    from kinema import cli
+
+    pre = op.get("precheck")
+    if pre is not None:  # skip runs the CLI would accept but that are too long for a fuzz case
+        try:
+            why = _too_long(pre)
+        except Exception:  # noqa: BLE001 - the CLI refuses it, or fails on it: run it and see
+            why = None
+        if why is not None:
+            return {"skipped": why}
+    out, err = io.StringIO(), io.StringIO()
+    code: Any = 0
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            cli.app(args=op["argv"], prog_name="kinema")
+        except SystemExit as e:
+            code = e.code if isinstance(e.code, int) else (0 if e.code is None else 1)
+        except BaseException as e:  # what escapes the CLI is a traceback and exit 1 in a real run
+            import traceback
+
+            code = 1
+            err.write("Traceback (most recent call last):\n" + "".join(traceback.format_exception(e)))
+    return {"exit": code, "stderr": err.getvalue()[-4000:], "stdout": out.getvalue()[-1000:]}
+
+
+def _op(ctx: _Ctx, op: dict) -> Any:
+    import kinema
+
+    kind = op["op"]
+    args = [decode(a, ctx) for a in op.get("args", [])]
+    kwargs = {k: decode(v, ctx) for k, v in op.get("kwargs", {}).items()}
+    if kind == "world":
+        ctx.world = kinema.World(*args, **kwargs)
+        return None
+    if kind == "tableau":
+        ctx.tableau = kinema.ButcherTableau(*args, **kwargs)
+        return None
+    if kind in ("solve", "solve_second_order"):
+        fn = _make_fn(op["fn"], ctx, second=kind == "solve_second_order")
+        if "jac" in op:
+            kwargs["jac"] = _make_fn(op["jac"], ctx)
+        getattr(kinema, kind)(fn, *args, **kwargs)
+        return None
+    if kind == "stability":
+        getattr(kinema.stability, op["fn"])(*args, **kwargs)
+        return None
+    if kind == "trajectory":
+        import shutil
+
+        base = _base_trajectory()
+        path = base.with_name(f"case-{os.getpid()}.h5")
+        shutil.copyfile(base, path)
+        try:
+            try:
+                _damage(path, op["damage"], ctx)
+            except Exception as e:  # h5py could not write this damage: not a case
+                return {"invalid": f"{type(e).__name__}: {e}"}
+            kinema.Trajectory.load(path)
+        finally:
+            path.unlink(missing_ok=True)
+        return None
+    if kind == "h5_layout":
+        return {"layout": _h5_layout()}
+    if kind == "scene":
+        from kinema.scene import Scene
+
+        sc = Scene.from_toml(op["path"])
+        if sc.particle_count() > op.get("max_particles", 5000):
+            return {"skipped": f"{sc.particle_count()} particles"}
+        w = sc.build(source=op["path"])
+        ctx.world = w
+        pairs = overlapping_pairs(w)
+        if pairs > MAX_OVERLAPPING_PAIRS:
+            return {"skipped": f"{pairs} overlapping pairs (a known slow case): built, not stepped"}
+        w.step(op.get("steps", 2))
+        _inspect(w)
+        return None
+    if kind == "cli":
+        return {"cli": _cli(op)}
+    if kind == "debug":  # the harness's own tests
+        if op["what"] == "abort":
+            os.abort()
+        if op["what"] == "sleep":
+            time.sleep(op["seconds"])
+        if op["what"] == "panic":
+            raise type("PanicException", (BaseException,), {})("a fake panic")
+        if op["what"] == "print":
+            print("noise on stdout")
+            os.write(1, b"noise on fd 1\n")
+        return None
+    if ctx.world is None:
+        ctx.world = kinema.World()
+    w = ctx.world
+    if kind in ("add_particles", "set_collisions", "step", "run"):
+        getattr(w, kind)(*args, **kwargs)
+    elif kind == "add":
+        if op["kind"] == "value":
+            w.add(decode(op["value"], ctx))
+        else:
+            cls = getattr(kinema, op["kind"])
+            if op["kind"] == "PythonForce":
+                kwargs["fn"] = _make_fn(op["fn"], ctx, second=True)
+            w.add(cls(*args, **kwargs))
+    elif kind in ("periodic", "positions", "velocities", "masses"):
+        setattr(w, kind, decode(op["value"], ctx))
+    elif kind == "call":  # any other method or property of the world
+        attr = getattr(w, op["method"])
+        if callable(attr):
+            attr(*args, **kwargs)
+    elif kind == "inspect":
+        _inspect(w)
+    else:
+        raise ValueError(f"unknown op {kind!r}")
+    return None
+
+
+def _run_case(case: dict) -> dict:
+    ctx = _Ctx()
+    results = []
+    for op in case["ops"]:
+        if op["op"] != "world" and ctx.world is None and results and results[0]["op"] == "world":
+            results.append({"op": op["op"], "result": "not run: no world"})
+            continue
+        try:
+            extra = _op(ctx, op)
+        except BaseException as e:  # noqa: BLE001 - every exception is judged
+            results.append({"op": op["op"], "type": type(e).__name__, "message": str(e)[:600], "verdict": _classify(e, op)})
+            if not isinstance(e, Exception):
+                break  # a panic (or an exit) leaves the process in an unknown state
+            continue
+        results.append({"op": op["op"], "result": "ok", **(extra or {})})
+    return {"status": "done", "ops": results}
+
+
+def worker_main() -> None:
+    proto = os.fdopen(os.dup(1), "w", buffering=1, encoding="utf-8")
+    os.dup2(2, 1)  # whatever else writes to stdout (Python or native code) goes to stderr
+    sys.stdout = sys.stderr
+    import warnings
+
+    warnings.simplefilter("ignore")
+    import numpy as np
+
+    np.seterr(all="ignore")
+    import kinema  # noqa: F401
+    import kinema.cli  # noqa: F401
+
+    proto.write(json.dumps({"ready": True, "pid": os.getpid()}) + "\n")
+    for line in sys.stdin:
+        if not line.strip():
+            continue
+        answer = _run_case(json.loads(line))
+        proto.write(json.dumps(answer, default=repr) + "\n")
+
+
+if __name__ == "__main__" and sys.argv[1:] == ["--worker"]:
+    sys.path.insert(0, str(HERE.parent))
+    worker_main()
