@@ -104,17 +104,14 @@ class Solution:
 
 def _t_span(t_span: Sequence[float]) -> tuple[float, float]:
     try:
-        t0, t1 = (float(v) for v in t_span)
+        t0, t1 = t_span
     except (TypeError, ValueError):
-        raise ValueError(f"t_span = {t_span!r} is invalid: it must be a pair (t0, t_end) of numbers") from None
-    return t0, t1
+        raise ValueError(f"t_span = {_checks.describe(t_span)} is invalid: it must be a pair (t0, t_end) of numbers") from None
+    return _checks.real("t_span[0]", t0), _checks.real("t_span[1]", t1)
 
 
 def _state(name: str, value: Any) -> np.ndarray:
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} = {value!r} is invalid: it must be an array of numbers") from None
+    arr = np.asarray(_checks.real_array(name, value), dtype=np.float64)
     if arr.ndim == 0:
         arr = arr.reshape(1)
     return np.ascontiguousarray(arr)
@@ -123,7 +120,7 @@ def _state(name: str, value: Any) -> np.ndarray:
 def _t_eval(t_eval: Any) -> list[float] | None:
     if t_eval is None:
         return None
-    arr = np.asarray(t_eval, dtype=np.float64)
+    arr = np.asarray(_checks.real_array("t_eval", t_eval), dtype=np.float64)
     if arr.ndim != 1:
         raise ValueError(f"t_eval has shape {arr.shape}; it must be a 1-D array of times")
     return arr.tolist()
@@ -213,8 +210,8 @@ def solve(
         _float_or_none("h_max", h_max),
         method,
         jac,
-        float(rtol),
-        float(atol),
+        _checks.real("rtol", rtol),
+        _checks.real("atol", atol),
         _t_eval(t_eval),
         _checks.boolean("vectorized", vectorized),
         _checks.boolean("dense_output", dense_output),
@@ -259,8 +256,8 @@ def solve_second_order(
         _float_or_none("h", h),
         _float_or_none("h_max", h_max),
         method,
-        float(rtol),
-        float(atol),
+        _checks.real("rtol", rtol),
+        _checks.real("atol", atol),
         _t_eval(t_eval),
         _checks.boolean("vectorized", vectorized),
         _checks.boolean("dense_output", dense_output),
@@ -280,12 +277,7 @@ def _count(name: str, value: Any) -> int:
 
 
 def _float_or_none(name: str, value: Any) -> float | None:
-    if value is None:
-        return None
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} = {value!r} is invalid: it must be a number") from None
+    return _checks.real(name, value, optional=True)
 
 
 def _callable(name: str, value: Any) -> None:

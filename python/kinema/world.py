@@ -312,7 +312,12 @@ class World:
             raise ValueError(f"duration = {duration} is invalid: it must be a finite number of seconds >= 0")
         if not (np.isfinite(fps) and fps > 0):
             raise ValueError(f"fps = {fps} is invalid: frames per second must be > 0")
-        per_frame = max(1, round(1.0 / (fps * self.dt)))
+        steps_per_frame = 1.0 / (fps * self.dt)
+        if not steps_per_frame < 2.0**63:
+            raise ValueError(
+                f"fps = {_checks.describe(fps)} is invalid: one frame would take {steps_per_frame:.3g} steps of dt = {self.dt:g} s (at most 2**63)"
+            )
+        per_frame = max(1, round(steps_per_frame))
         frames = int(np.floor(duration / (per_frame * self.dt) + 1e-9))
         self._push()
         self._advise()

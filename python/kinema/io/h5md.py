@@ -277,7 +277,7 @@ def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
         g = group[name]
         kind = g.attrs.get("type")
         kind = kind.decode() if isinstance(kind, bytes) else kind
-        if not name.isdigit() or not isinstance(g, h5py.Group) or kind not in ("plane", "box", "sphere"):
+        if not name.isdigit() or not isinstance(g, h5py.Group) or not isinstance(kind, str) or kind not in ("plane", "box", "sphere"):
             raise _fail(path, f"{g.name} is not a kinema collider (a group named by its index with type plane, box or sphere)")
         d: dict[str, Any] = {"type": str(kind)}
         for key, value in g.attrs.items():
