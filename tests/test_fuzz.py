@@ -462,8 +462,8 @@ def state_cases(draw):
         "spring": {"op": "add", "kind": "Spring", "kwargs": {"i": [0, 1], "j": [1, 2], "k": draw(st.sampled_from([1.0, 1e308])), "damping": 1.0}},
         "drag": {"op": "add", "kind": "Drag", "kwargs": {"linear": 0.1, "quadratic": draw(st.sampled_from([0.1, 1e308]))}},
         "attractor": {"op": "add", "kind": "Attractor", "kwargs": {"point": [0, 0, 0], "strength": 1.0}},
-        # (impulses only: known bugs test_known_bug_nan_state_with_spring_dashpot_contacts and
-        # test_known_bug_huge_radius_with_spring_dashpot_contacts, which extreme states meet)
+        # (impulses only: the known bug test_known_bug_huge_radius_with_spring_dashpot_contacts,
+        # which extreme states meet)
         "collisions": {"op": "set_collisions", "kwargs": {"model": "impulse", "restitution": draw(unit)}},
         "sphere": {"op": "add", "kind": "SphereObstacle", "kwargs": {"center": [0, 0, 0], "radius": 0.5}},
         "box": {"op": "add", "kind": "Box", "kwargs": {"lo": [-2, -2, -2], "hi": [2, 2, 2]}},
@@ -942,9 +942,10 @@ NAN_STATE_CASES = {
 }
 
 
-@known_bug("RuntimeError('x[0][0] = NaN is invalid: positions must be finite'), not SimulationDiverged: a non-finite state met by spring-dashpot contacts")
 @pytest.mark.parametrize("name", list(NAN_STATE_CASES))
-def test_known_bug_nan_state_with_spring_dashpot_contacts(name):
+def test_a_non_finite_state_met_by_spring_dashpot_contacts_is_simulation_diverged(name):
+    # found by the fuzzer: RuntimeError('x[0][0] = NaN is invalid: positions must be finite');
+    # now the contact force gives NaN there and the world raises SimulationDiverged
     check({"ops": NAN_STATE_CASES[name]})
 
 

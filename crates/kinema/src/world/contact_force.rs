@@ -518,7 +518,17 @@ impl Force for ContactForce {
             });
         }
         *self.scratch() = scratch;
-        Ok(result?)
+        match result {
+            Err(Error::InvalidParameter { .. }) if s.x.iter().chain(s.v).any(|c| !(c.abs() <= 1e150)) => {
+                // A state that is non-finite, or too large for the contacts' geometry (a
+                // stage of rk45, an overflowing step): no contact force exists there. NaN
+                // forces let the world stop the step as it stops any non-finite one
+                // (SimulationDiverged), instead of an error about the list's internals.
+                f.fill(f64::NAN);
+                Ok(())
+            }
+            other => Ok(other?),
+        }
     }
 
     // No `validate`: the world rebuilds this force whenever its particles change.
