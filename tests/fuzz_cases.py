@@ -38,9 +38,9 @@ from typing import Any
 HERE = Path(__file__).resolve()
 REPO = HERE.parent.parent
 
-# Documented RuntimeErrors of kinema.World (a force of a world must not change or step it
-# while it steps): refusals by design, not failures. Any other RuntimeError is.
-REENTRY_MESSAGES = ("the world was changed while it is stepping", "World.step was called while this world is stepping")
+# The documented RuntimeError of kinema.World (kinema.world.REENTRY: a force must not use its
+# world while the world runs it): a refusal by design, not a failure. Any other RuntimeError is.
+REENTRY_MESSAGES = ("the world was used while it is stepping",)
 
 
 # -- values ----------------------------------------------------------------------------------

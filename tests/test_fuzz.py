@@ -350,7 +350,7 @@ FORCES = {
     "PythonForce": ({}, {"name": st.sampled_from(["python", "mine", ""])}),
 }
 # PythonForce functions: a constant (of a bad type or shape too), k x, or one that uses its world
-REENTRANT = ("step", "add_particles", "diagnostics")  # actions that change or step the world
+REENTRANT = ("step", "add_particles", "diagnostics", "set_positions", "read_core")  # actions that use the world's engine
 force_fns = st.one_of(
     st.builds(lambda v: {"fn": "const", "value": v}, st.one_of(st.just([[0.0, 0.0, 1.0]] * 4), bad)),
     st.builds(lambda k: {"fn": "scale", "k": k}, st.one_of(finite, bad)),
@@ -377,11 +377,6 @@ def force_cases(draw):
     x = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]
     world = {"op": "world", "kwargs": {"dim": draw(st.sampled_from([2, 3])), "dt": 0.001, "method": draw(methods)}}
     ops = [world, {"op": "add_particles", "kwargs": {"position": x, "velocity": [0.1, 0.2, 0.0]}}, op, {"op": "step", "args": [draw(st.integers(1, 10))]}]
-    if op.get("fn", {}).get("action") in REENTRANT:
-        # Known bug (test_known_bug_force_changing_its_world_outside_step): such a force, run
-        # from run(), rates(), stable_step() or accelerations, gets RuntimeError('Already
-        # borrowed'); only step() guards against it. Left out here.
-        return {"ops": ops}
     return {"ops": [*ops, {"op": "run", "kwargs": draw(run_kwargs)}, {"op": "inspect"}]}
 
 
@@ -872,25 +867,28 @@ def known_bug(reason: str):
 TWO = {"op": "add_particles", "kwargs": {"position": [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]}}
 
 
-@known_bug("RuntimeError('Already borrowed'): only World.step guards against a force that changes or steps its own world")
 @pytest.mark.parametrize(
     "entry",
     [{"op": "run", "args": [0.01]}, {"op": "call", "method": "rates"}, {"op": "call", "method": "stable_step"}, {"op": "call", "method": "accelerations"}],
     ids=lambda e: e.get("method", e["op"]),
 )
-def test_known_bug_force_changing_its_world_outside_step(entry):
+def test_a_force_stepping_its_world_from_any_entry_point_is_refused_clearly(entry):
+    # found by the fuzzer: only World.step guarded; from run(), rates(), stable_step() or
+    # accelerations such a force got pyo3's RuntimeError('Already borrowed'). Now every entry
+    # lends the engine through World._engine and the force meets kinema.world.REENTRY.
     # w = kinema.World(); w.add_particles([[0, 0, 0], [1, 0, 0]])
     # w.add(kinema.PythonForce(lambda t, x, v: (w.step(1), np.zeros_like(x))[1]))
-    # w.rates()  # (or w.run(0.01), w.stable_step(), w.accelerations): RuntimeError: Already borrowed
+    # w.rates()
     check({"ops": [{"op": "world"}, TWO, {"op": "add", "kind": "PythonForce", "fn": {"fn": "reenter", "action": "step"}}, entry]})
 
 
-@known_bug("RuntimeError('Already mutably borrowed'): a force reading len(w), w.time, w.dt (or setting w.positions) while its world steps")
 @pytest.mark.parametrize("action", ["read_core", "set_positions"])
-def test_known_bug_force_using_its_world_during_step(action):
+def test_a_force_using_its_world_during_a_step_is_refused_clearly(action):
+    # found by the fuzzer: reading len(w), w.time, w.dt (or setting w.positions) from a force
+    # got RuntimeError('Already mutably borrowed'); now kinema.world.REENTRY
     # w = kinema.World(); w.add_particles([[0, 0, 0], [1, 0, 0]])
     # w.add(kinema.PythonForce(lambda t, x, v: (w.time, np.zeros_like(x))[1]))
-    # w.step(1)  # RuntimeError: Already mutably borrowed (also len(w), w.dt, repr(w), w.collisions, w.periodic)
+    # w.step(1)
     check({"ops": [{"op": "world"}, TWO, {"op": "add", "kind": "PythonForce", "fn": {"fn": "reenter", "action": action}}, {"op": "step", "args": [1]}]})
 
 

@@ -5,7 +5,8 @@ any integration method of the registry, colliding with each other and with stati
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -20,6 +21,22 @@ SimulationDiverged = _core.SimulationDiverged
 
 class StabilityWarning(UserWarning):
     """The time step exceeds the stable-step advisor's limit for the world's method."""
+
+
+REENTRY = (
+    "the world was used while it is stepping (from one of its own forces, or another thread): "
+    "a force computes F(t, x, v) from its arguments and must leave its world alone"
+)
+
+
+class _Busy:
+    """Stands in for the engine while it runs work that calls back into Python (a
+    ``PythonForce`` in a step, the advisor, ``accelerations``). The engine is borrowed for
+    that work, so any use of the world from there (reading ``time``, writing ``positions``,
+    stepping it again) would meet pyo3's bare "Already borrowed"; it meets this instead."""
+
+    def __getattr__(self, name: str) -> Any:
+        raise RuntimeError(REENTRY)
 
 
 class World:
@@ -50,8 +67,20 @@ class World:
         self._method_arg = method
         self._warned = False
         self._advice_due = True
-        self._stepping = False  # inside _core.step: a force of its own must not step it again
         self._new_views()
+
+    @contextmanager
+    def _engine(self) -> Iterator[Any]:
+        """The engine, lent for work that may call back into Python; meanwhile the world's own
+        methods see ``_Busy`` (the views stay readable)."""
+        core = self._core
+        if isinstance(core, _Busy):
+            raise RuntimeError(REENTRY)
+        self._core = _Busy()
+        try:
+            yield core
+        finally:
+            self._core = core
 
     def _new_views(self) -> None:
         n = self._core.len
@@ -63,10 +92,6 @@ class World:
     def _push(self) -> None:
         """Hands what the user wrote into the views to the world (a no-op when unchanged). A
         bad value is refused whole: the world keeps its state and the views show it again."""
-        if self._stepping:
-            raise RuntimeError(
-                "the world was changed while it is stepping (from one of its own forces): a force computes F(t, x, v) and must leave its world alone"
-            )
         try:
             self._core.sync(self._x, self._v, self._m)
         except ValueError:
@@ -77,28 +102,29 @@ class World:
     def _pull(self) -> None:
         self._core.read_state(self._x, self._v)
 
-    def _advise(self) -> None:
-        """Warns once if dt is beyond the advisor's limit for the world's method."""
+    def _advise(self, core: Any) -> None:
+        """Warns once if dt is beyond the advisor's limit for the world's method (``core``: the
+        engine, lent by :meth:`_engine`; the advisor evaluates the forces)."""
         if not self._advice_due:
             return
         self._advice_due = False
-        contact_springs = (self._core.collisions or {}).get("model") == "spring_dashpot"
-        if self._warned or len(self) == 0 or not (self._forces or contact_springs):
+        contact_springs = (core.collisions or {}).get("model") == "spring_dashpot"
+        if self._warned or core.len == 0 or not (self._forces or contact_springs):
             return
-        limit = self._core.stable_step(self._method_arg)
-        if self.dt > limit:
+        limit = core.stable_step(self._method_arg)
+        if core.dt > limit:
             self._warned = True
-            rates = self._core.rates()
+            rates = core.rates()
             omega = max(rates["omega"], rates["standby_omega"] or 0.0)  # contacts not yet touching count
             if limit > 0:
                 text = (
-                    f"dt = {self.dt:.4g} s exceeds the stable-step advisor's limit {limit:.4g} s for method "
-                    f"{self.method!r} on these forces (stiffest mode: omega = {omega:.4g} rad/s); "
+                    f"dt = {core.dt:.4g} s exceeds the stable-step advisor's limit {limit:.4g} s for method "
+                    f"{core.method!r} on these forces (stiffest mode: omega = {omega:.4g} rad/s); "
                     "the simulation will likely blow up: reduce dt or use method='implicit_euler'"
                 )
             else:  # |R(iωh)| > 1 for every h > 0: e.g. forward Euler on an undamped oscillation
                 text = (
-                    f"method {self.method!r} is unstable at every step on these forces: their stiffest mode "
+                    f"method {core.method!r} is unstable at every step on these forces: their stiffest mode "
                     f"(omega = {omega:.4g} rad/s) is undamped and each step multiplies its amplitude by more than 1, "
                     "so the energy grows; a smaller dt only slows the growth: use a symplectic method "
                     "('verlet', 'symplectic_euler'), 'rk4' or 'implicit_euler'"
@@ -288,17 +314,12 @@ class World:
         n = _checks.integer("n", n, 0, what="the number of steps must be >= 0")
         if n > _checks.UINT64_MAX:
             raise ValueError(f"n = {_checks.describe(n)} is invalid: the number of steps must be < 2**64")
-        if self._stepping:
-            raise RuntimeError(
-                "World.step was called while this world is stepping (from one of its own forces): a force computes F(t, x, v) and must not advance its world"
-            )
         self._push()
-        self._stepping = True  # (the advice evaluates the forces too)
         try:
-            self._advise()
-            self._core.step(n)
+            with self._engine() as core:
+                self._advise(core)
+                core.step(n)
         finally:
-            self._stepping = False
             self._pull()
 
     def run(self, duration: float, fps: float = 60.0, callback: Callable[[World], Any] | None = None) -> Trajectory:
@@ -320,12 +341,14 @@ class World:
         per_frame = max(1, round(steps_per_frame))
         frames = int(np.floor(duration / (per_frame * self.dt) + 1e-9))
         self._push()
-        self._advise()
+        with self._engine() as core:
+            self._advise(core)
         rec = Trajectory._recorder()
         rec.add(self)
         for _ in range(frames):
             try:
-                self._core.step(per_frame)
+                with self._engine() as core:
+                    core.step(per_frame)
             finally:
                 self._pull()
             rec.add(self)
@@ -347,9 +370,10 @@ class World:
         ω² ≤ max_p 2 Σ k/m_p) are reported by :meth:`rates`.
         """
         self._push()
-        if method is None:
-            return {name: self._core.stable_step(name) for name in method_names()}
-        return self._core.stable_step(method)
+        with self._engine() as core:
+            if method is None:
+                return {name: core.stable_step(name) for name in method_names()}
+            return core.stable_step(method)
 
     def rates(self) -> dict:
         """The advisor's estimate at the current state: ``omega`` (rad/s, the highest natural
@@ -359,7 +383,8 @@ class World:
         the stiffest mode a force can reach from another state — a spring–dashpot contact
         not touching yet — or None."""
         self._push()
-        return self._core.rates()
+        with self._engine() as core:
+            return core.rates()
 
     # -- state ------------------------------------------------------------------------------
     @property
@@ -417,7 +442,8 @@ class World:
         """Accelerations a = F/m (N, 3), m/s², under the forces now (0 for pinned particles); a
         new read-only array."""
         self._push()
-        out = self._core.accelerations()
+        with self._engine() as core:
+            out = core.accelerations()
         out.flags.writeable = False
         return out
 
@@ -470,7 +496,10 @@ class World:
     def diagnostics(self) -> dict:
         """Kinetic energy, potential energy per conservative force, linear and angular momentum now."""
         self._push()
-        return self._core.diagnostics()
+        with self._engine() as core:
+            return core.diagnostics()
 
     def __repr__(self) -> str:
+        if isinstance(self._core, _Busy):
+            return "World(stepping)"
         return f"World(dim={self.dim}, dt={self.dt}, method={self.method!r}, particles={len(self)}, t={self.time:g})"
