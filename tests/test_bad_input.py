@@ -313,6 +313,18 @@ def test_positions_must_be_real_numbers(position, shown, what):
     assert len(w) == 0
 
 
+@pytest.mark.parametrize("radius", [1e308, 1.0000001e150, float("inf"), -1.0])
+def test_a_radius_beyond_the_collision_geometry_is_refused_up_front(radius):
+    # The contacts square distances: (r_i + r_j + margin)^2 must not overflow, so radii stop at
+    # 1e150 m (a radius of 1e308 used to fail at the first step with a message about the
+    # neighbour list's 'margin', a name the user never gave).
+    w = kinema.World()
+    with pytest.raises(ValueError, match=r"^radius\[1\] = .* is invalid: radii must be finite, >= 0 m and <= 1e150 m"):
+        w.add_particles([[0, 0, 0], [0, 0, 0]], radius=[1.0, radius])
+    assert len(w) == 0
+    w.add_particles([[0, 0, 0], [0, 0, 0]], radius=1e150)  # the limit itself is allowed
+
+
 def _world2():
     w = kinema.World()
     w.add_particles([[0, 0, 0], [1, 0, 0]])

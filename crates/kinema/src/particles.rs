@@ -1,5 +1,6 @@
 //! Particles: struct of arrays — positions, velocities, masses, radii, ids.
 
+use crate::collide::GEOMETRY_LIMIT;
 use crate::error::Error;
 
 /// The particles of a world, one entry per particle in each array; vectors are stored
@@ -83,11 +84,11 @@ impl Particles {
                 "masses must be finite and > 0 kg (pin a particle to make it immovable)",
             ));
         }
-        if let Some(i) = radius.iter().position(|r| !(r.is_finite() && *r >= 0.0)) {
+        if let Some(i) = radius.iter().position(|r| !(*r >= 0.0 && *r <= GEOMETRY_LIMIT)) {
             return Err(Error::invalid(
                 format!("radius[{i}]"),
                 radius[i],
-                "radii must be finite and >= 0 m",
+                "radii must be finite, >= 0 m and <= 1e150 m (collisions square distances)",
             ));
         }
         // Room first, so that a size the machine cannot hold is an error, not an abort.

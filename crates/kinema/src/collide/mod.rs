@@ -30,6 +30,11 @@
 //! Space is described by a [`Domain`]: 2D (circles in the xy-plane) or 3D, open or
 //! periodic along any axis (the minimum image is used throughout).
 
+/// The largest length (m) or speed (m/s) the contacts' geometry accepts: it squares
+/// distances and speeds, and (r_i + r_j + margin)² must stay far from overflow (1e308).
+/// A particle's radius is refused above it; a state beyond it is a diverged step.
+pub const GEOMETRY_LIMIT: f64 = 1e150;
+
 pub mod broad_phase;
 pub mod colliders;
 pub mod contact;

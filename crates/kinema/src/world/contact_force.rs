@@ -21,6 +21,7 @@ pub(crate) use crate::collide::neighbour_list::CHUNK;
 use crate::collide::neighbour_list::{collider_scale, NeighbourList, Rows, SKIN_PER_RADIUS};
 use crate::collide::{
     damping_ratio, dashpot_coefficient, pair_contact, spring_dashpot_force, Collider, Contact, Domain, Grid, Material, Partner,
+    GEOMETRY_LIMIT,
 };
 use crate::error::{CallbackError, Error};
 use crate::forces::{Force, SpringRates, State};
@@ -519,7 +520,7 @@ impl Force for ContactForce {
         }
         *self.scratch() = scratch;
         match result {
-            Err(Error::InvalidParameter { .. }) if s.x.iter().chain(s.v).any(|c| !(c.abs() <= 1e150)) => {
+            Err(Error::InvalidParameter { .. }) if s.x.iter().chain(s.v).any(|c| !(c.abs() <= GEOMETRY_LIMIT)) => {
                 // A state that is non-finite, or too large for the contacts' geometry (a
                 // stage of rk45, an overflowing step): no contact force exists there. NaN
                 // forces let the world stop the step as it stops any non-finite one

@@ -12,7 +12,7 @@ use collisions::StepFrame;
 pub use collisions::{CollisionParams, CollisionStats, ContactModel};
 pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
 
-use crate::collide::{Collider, Contact, Periodic};
+use crate::collide::{Collider, Contact, Periodic, GEOMETRY_LIMIT};
 use crate::diagnostics::Diagnostics;
 use crate::error::{CallbackError, Divergence, Error};
 use crate::forces::{Force, State};
@@ -1060,7 +1060,7 @@ impl World {
     /// Whether a position or velocity is so large (> 10¹⁵⁰, m or m/s) that its square, or a
     /// sum of them, overflows: the collision geometry cannot be computed for such a state.
     fn beyond_geometry(x: &[f64], v: &[f64]) -> bool {
-        x.iter().chain(v).any(|c| !(c.abs() <= 1e150))
+        x.iter().chain(v).any(|c| !(c.abs() <= GEOMETRY_LIMIT))
     }
 
     /// Sets the check that may stop a step (`None`: none): asked at most every
