@@ -353,16 +353,20 @@ def problems(answer: dict, allow_exit_1_divergence: bool = True) -> list[str]:
 
 # -- the worker ------------------------------------------------------------------------------
 class _Ctx:
-    world: Any = None
-    tableau: Any = None
+    def __init__(self) -> None:
+        self.world: Any = None
+        self.tableau: Any = None
+        self.user_errors: list[BaseException] = []  # raised by a case's own function (its arithmetic)
 
 
-def _classify(e: BaseException, op: dict) -> str:
+def _classify(e: BaseException, op: dict, ctx: _Ctx) -> str:
     """The verdict on an exception an op raised: "allowed" or "bad"."""
     import kinema
     from kinema.io import TrajectoryFileError
     from kinema.scene import SceneError
 
+    if any(e is u for u in ctx.user_errors):
+        return "allowed"  # the case's own function raised it (10**400 * y): kinema passes it on unchanged
     names = [c.__name__ for c in type(e).__mro__]
     if "PanicException" in names or not isinstance(e, Exception):
         return "bad"
@@ -381,6 +385,19 @@ def _classify(e: BaseException, op: dict) -> str:
     return "bad"
 
 
+def _own(fn: Any, ctx: _Ctx) -> Any:
+    """``fn``, with what it raises remembered as the case's own error (not kinema's)."""
+
+    def call(*args: Any) -> Any:
+        try:
+            return fn(*args)
+        except Exception as e:
+            ctx.user_errors.append(e)
+            raise
+
+    return call
+
+
 def _make_fn(spec: dict, ctx: _Ctx, second: bool = False) -> Any:
     import numpy as np
 
@@ -389,7 +406,7 @@ def _make_fn(spec: dict, ctx: _Ctx, second: bool = False) -> Any:
         return (lambda t, x, v: -x) if second else (lambda t, y: -y)
     if kind == "scale":
         k = decode(spec["k"], ctx)
-        return (lambda t, x, v: k * x) if second else (lambda t, y: k * y)
+        return _own((lambda t, x, v: k * x) if second else (lambda t, y: k * y), ctx)
     if kind == "const":
         value = decode(spec["value"], ctx)
         return (lambda t, x, v: value) if second else (lambda t, y: value)
@@ -685,7 +702,7 @@ def _run_case(case: dict) -> dict:
         try:
             extra = _op(ctx, op)
         except BaseException as e:  # noqa: BLE001 - every exception is judged
-            results.append({"op": op["op"], "type": type(e).__name__, "message": str(e)[:600], "verdict": _classify(e, op)})
+            results.append({"op": op["op"], "type": type(e).__name__, "message": str(e)[:600], "verdict": _classify(e, op, ctx)})
             if not isinstance(e, Exception):
                 break  # a panic (or an exit) leaves the process in an unknown state
             continue

@@ -188,8 +188,30 @@ def test_negative_declared_order():
 
 
 def test_amplification_of_something_that_is_not_a_number():
-    with pytest.raises(ValueError, match="z = 'x' is invalid"):
+    # a wrong type is a TypeError, as at every other boundary of the API (kinema._checks)
+    with pytest.raises(TypeError, match=r"z = 'x' is invalid: it must be a number \(int, float or complex\), not a string"):
         kinema.stability.amplification("rk4", "x")
+    with pytest.raises(TypeError, match=r"z\[1\] = True is invalid: it must be a number"):
+        kinema.stability.amplification("rk4", [0.5, True])
+    with pytest.raises(ValueError, match="too large for a float"):
+        kinema.stability.max_step("rk4", [10**400])
+    # complex numbers are what z is made of: accepted, as Python's and NumPy's
+    assert kinema.stability.amplification("euler", [1j, np.complex64(-1)]).tolist() == [1 + 1j, 0j]
+
+
+@pytest.mark.parametrize(
+    "args, exc, text",
+    [
+        (([[0]], [1], [0], True), TypeError, "order = True is invalid: it must be an integer"),
+        (([[0]], [1], [0], 2**64), ValueError, "order = 1.84467e\\+19 is invalid: the declared order must be an integer from 1 to 2\\*\\*32 - 1"),
+        (([[0]], [10**400], [0], 1), ValueError, "b = .* too large for a float"),
+        (([[0]], ["1"], [0], 1), TypeError, r"b\[0\] = '1' is invalid"),
+        (([0], [1], [0], 1), ValueError, r"a has shape \(1,\); it must be \(N, N\)"),
+    ],
+)
+def test_butcher_tableau_arguments_are_checked_strictly(args, exc, text):
+    with pytest.raises(exc, match=text):
+        kinema.ButcherTableau(*args)
 
 
 # -- the strict checks at the World / forces / colliders boundary (kinema._checks) ------------

@@ -286,6 +286,27 @@ def real_array(name: str, value: Any, shape: tuple[int | None, ...] | None = Non
     return out
 
 
+def complex_array(name: str, value: Any) -> np.ndarray:
+    """``value`` as a complex128 array: as :func:`real_array`, with complex numbers (and a
+    complex dtype) accepted too. Bools, strings, ``None``, ``datetime64`` and other objects
+    are a ``TypeError`` naming the first bad element; a number beyond a float a ``ValueError``."""
+    arr = _as_array(name, value)
+    kind = arr.dtype.kind
+    given = isinstance(value, np.ndarray)
+    if given and kind not in "iufcO":
+        raise _fail(TypeError, name, value, f"it must hold numbers (int, float or complex), not {_dtype_words(arr.dtype)}")
+    if kind == "O" or (not given and (kind not in "iufc" or _has_zero_or_one(arr))):
+        bad = _first_bad(name, _objects(value), lambda x: isinstance(x, numbers.Complex) and not isinstance(x, _NOT_NUMBERS))
+        if bad is not None:
+            raise _fail(TypeError, bad[0], bad[1], f"it must be a number (int, float or complex), not {_type_words(bad[1])}")
+    try:
+        if arr.dtype.kind == "O":
+            return np.array([complex(x) for x in arr.ravel().tolist()], dtype=np.complex128).reshape(arr.shape)
+        return np.asarray(arr, dtype=np.complex128)
+    except OverflowError:
+        raise _fail(ValueError, name, value, "it holds a number too large for a float (at most 1.79769e+308)") from None
+
+
 def _has_zero_or_one(arr: np.ndarray) -> bool:
     """Whether a number array converted from a list holds a 0 or a 1 (where a bool may hide)."""
     return bool(arr.size) and bool(((arr == 0) | (arr == 1)).any())

@@ -17,7 +17,32 @@ import numpy as np
 
 from . import _checks, _core
 
-ButcherTableau = _core.ButcherTableau
+
+class ButcherTableau(_core.ButcherTableau):
+    """An explicit Runge-Kutta method given by its Butcher tableau: ``a`` (s x s, strictly
+    lower triangular), weights ``b`` and nodes ``c`` (length s) and its declared ``order``.
+
+    The arguments are checked as the API's numbers are (real numbers, not bools or strings; an
+    integer order); the engine then checks the tableau itself (square A, rows of A summing to
+    c, weights summing to 1). ``ButcherTableau.of("rk4")`` gives a registered method's.
+    """
+
+    __slots__ = ()
+
+    def __new__(cls, a: Any, b: Any, c: Any, order: int, name: str = "custom") -> ButcherTableau:
+        a = _checks.real_array("a", a, (None, None)).tolist()
+        b = _checks.real_array("b", b, (None,)).tolist()
+        c = _checks.real_array("c", c, (None,)).tolist()
+        order = _checks.integer("order", order, 1, 2**32 - 1, what="the declared order must be an integer from 1 to 2**32 - 1")
+        return super().__new__(cls, a, b, c, order, _checks.text("name", name))
+
+    @classmethod
+    def of(cls, method: str) -> ButcherTableau:
+        """The tableau of a registered explicit method (``euler``, ``midpoint``, ``heun``,
+        ``rk4``, ``rk45``)."""
+        t = _core.ButcherTableau.of(_checks.text("method", method))
+        return cls(t.A, t.b, t.c, t.order, t.name)
+
 
 Method = "str | ButcherTableau"
 

@@ -14,7 +14,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import _core
+from . import _checks, _core
 from .ode import ButcherTableau
 
 
@@ -30,13 +30,6 @@ class Interval(NamedTuple):
         return self.lo == 0.0 and self.hi == 0.0
 
 
-def _complex(name: str, value: Any) -> np.ndarray:
-    try:
-        return np.asarray(value, dtype=np.complex128)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} = {value!r} is invalid: it must be a number or an array of (complex) numbers") from None
-
-
 def amplification(method: str | ButcherTableau, z: Any) -> np.ndarray:
     """R(z) for every z of a (complex) array; same shape as ``z``.
 
@@ -45,7 +38,7 @@ def amplification(method: str | ButcherTableau, z: Any) -> np.ndarray:
     the eigenvalue of larger modulus of the one-step matrix (its modulus is the spectral
     radius), a function of w = z².
     """
-    arr = _complex("z", z)
+    arr = _checks.complex_array("z", z)
     out = _core.amplification(method, np.ascontiguousarray(arr.reshape(arr.shape or (1,))))
     return out.reshape(arr.shape) if arr.shape else out.reshape(())[()]
 
@@ -56,7 +49,7 @@ def max_step(method: str | ButcherTableau, lam: Any) -> Any:
     ``inf`` where no step is too large (e.g. implicit Euler for Re λ ≤ 0), ``0`` where no
     positive step is stable (e.g. forward Euler on the imaginary axis).
     """
-    arr = _complex("lam", lam)
+    arr = _checks.complex_array("lam", lam)
     out = _core.max_step(method, np.ascontiguousarray(arr.reshape(arr.shape or (1,))))
     return out.reshape(arr.shape) if arr.shape else float(out[0])
 
@@ -72,7 +65,7 @@ def imag_interval(method: str | ButcherTableau) -> Interval:
 
 
 def _oscillator_args(omega: float, zeta: float) -> tuple[float, float]:
-    omega, zeta = float(omega), float(zeta)
+    omega, zeta = _checks.real("omega", omega), _checks.real("zeta", zeta)
     if not (np.isfinite(omega) and omega > 0):
         raise ValueError(f"omega = {omega} is invalid: the angular frequency must be a finite number > 0 (rad per time unit)")
     if not (np.isfinite(zeta) and zeta >= 0):
@@ -97,7 +90,7 @@ def max_step_oscillator(method: str | ButcherTableau, omega: float, zeta: float 
 def oscillator_amplification(method: str | ButcherTableau, h: float, omega: float, zeta: float = 0.0) -> float:
     """Spectral radius of one step of size h on x'' = −ω²x − 2ζω v (≤ 1: stable)."""
     omega, zeta = _oscillator_args(omega, zeta)
-    return _core.oscillator_amplification(method, float(h), omega, zeta)
+    return _core.oscillator_amplification(method, _checks.real("h", h), omega, zeta)
 
 
 def _name(method: str | ButcherTableau) -> str:

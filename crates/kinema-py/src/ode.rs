@@ -10,7 +10,8 @@ use crate::callbacks::{shape_str, PyAccel, PyOde};
 use crate::errors::to_py;
 
 /// An explicit Runge–Kutta method given by its Butcher tableau (A, b, c), checked when built.
-#[pyclass(name = "ButcherTableau", module = "kinema._core", frozen)]
+/// Subclassed by `kinema.ButcherTableau`, which checks the arguments' types first.
+#[pyclass(name = "ButcherTableau", module = "kinema._core", frozen, subclass)]
 pub struct PyButcherTableau {
     pub inner: ButcherTableau,
 }
