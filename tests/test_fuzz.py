@@ -985,19 +985,38 @@ def _overlapping(n: int) -> list[list[float]]:
     return [[(k * 0.618034) % 1.0, (k * 0.754878) % 1.0, (k * 0.569840) % 1.0] for k in range(n)]
 
 
-@known_bug("a hang: one step of 300 particles that all overlap (radius 1 in a unit box) takes ~8 s; maxwell_gas.toml with radius = 1: 80 s")
-def test_known_bug_dense_overlaps_make_a_step_take_seconds():
-    # w = kinema.World(); w.add_particles(points_in_unit_cube(300), velocity=varied, radius=1.0)
-    # w.add(kinema.Box([0, 0, 0], [1, 1, 1])); w.periodic = (True, True, True)
-    # w.step(1)  # 8 s: the impact search runs to its cap (collision_stats: 400,000 impacts, 'unconverged': 1)
+def _dense(radius: float, periodic: bool) -> list[dict]:
     v = [[math.sin(k), math.cos(1.3 * k), math.sin(2.1 * k)] for k in range(300)]
-    ops = [{"op": "world"}, {"op": "add_particles", "kwargs": {"position": _overlapping(300), "velocity": v, "radius": 1.0}}]
-    ops += [
-        {"op": "add", "kind": "Box", "kwargs": {"lo": [0, 0, 0], "hi": [1, 1, 1]}},
-        {"op": "periodic", "value": [True, True, True]},
-        {"op": "step", "args": [1]},
-    ]
-    check({"ops": ops}, timeout=4)
+    ops = [{"op": "world"}, {"op": "add_particles", "kwargs": {"position": _overlapping(300), "velocity": v, "radius": radius}}]
+    ops.append({"op": "add", "kind": "Box", "kwargs": {"lo": [0, 0, 0], "hi": [1, 1, 1]}})
+    if periodic:
+        ops.append({"op": "periodic", "value": [True, True, True]})
+    return [*ops, {"op": "step", "args": [2]}, {"op": "inspect"}]
+
+
+@pytest.mark.parametrize(
+    "radius, periodic, refusal",
+    [
+        (1.0, False, "the radii are too large for the box"),
+        (0.2, False, "would fill 10.053 times its volume"),
+        (1.0, True, "a particle's diameter must be less than half the periodic cell's edge (1 m along x)"),
+        (0.092, False, None),  # allowed: fills 0.92 of the box, heavily overlapping
+    ],
+)
+def test_particles_too_large_for_their_box_are_refused_and_the_densest_allowed_steps_at_once(radius, periodic, refusal):
+    # found by the fuzzer: 300 particles of radius 1 in a unit box, each overlapping all the
+    # others, took ~8 s a step (the impacts ran to their cap of 400,000, each looking at 299
+    # partners again); maxwell_gas.toml with radius = 1 took 80 s. Spheres filling more than
+    # their box (or, periodic, wider than half the cell, where the minimum image is not the
+    # partner) are refused at the step; the densest fill allowed takes ~0.5 s, then ms.
+    # w = kinema.World(); w.add_particles(points_in_unit_cube(300), velocity=varied, radius=1.0)
+    # w.add(kinema.Box([0, 0, 0], [1, 1, 1])); w.step(2)
+    answer = check({"ops": _dense(radius, periodic)}, timeout=6)
+    step = answer["ops"][-2]
+    if refusal is None:
+        assert step["result"] == "ok", answer
+    else:
+        assert step.get("type") == "ValueError" and refusal in step["message"], answer
 
 
 def test_a_collider_type_attribute_that_is_an_array_is_a_trajectory_file_error():

@@ -187,6 +187,46 @@ impl BoxContainer {
         BoxContainer::new([lo[0], lo[1], f64::NEG_INFINITY], [hi[0], hi[1], f64::INFINITY], surface)
     }
 
+    /// Whether the particles whose centres lie inside the box fit in it: their spheres (discs
+    /// in 2D, `dim` = 2) must not fill more than its volume (area), or they overlap wherever
+    /// they are, and the impacts among hundreds of overlapping neighbours make a step last
+    /// seconds. A box open along an axis holds anything. Equal spheres fill at most 0.74 of
+    /// a box; more than 1 is refused, naming the largest radius.
+    pub fn check_fill(&self, dim: usize, x: &[f64], radius: &[f64]) -> Result<(), Error> {
+        let volume: f64 = (0..dim).map(|k| self.hi[k] - self.lo[k]).product();
+        if !volume.is_finite() {
+            return Ok(());
+        }
+        let (mut filled, mut count, mut largest) = (0.0, 0usize, 0.0_f64);
+        for (i, &r) in radius.iter().enumerate() {
+            if (0..dim).all(|k| x[3 * i + k] >= self.lo[k] && x[3 * i + k] <= self.hi[k]) {
+                filled += if dim == 3 {
+                    4.0 / 3.0 * std::f64::consts::PI * r * r * r
+                } else {
+                    std::f64::consts::PI * r * r
+                };
+                count += 1;
+                largest = largest.max(r);
+            }
+        }
+        let fraction = filled / volume;
+        if fraction > 1.0 {
+            let what = if dim == 3 { "spheres" } else { "discs" };
+            return Err(Error::invalid(
+                "radius",
+                largest,
+                format!(
+                    "the {count} particles inside the box from {:?} to {:?} m would fill {fraction:.3} times its {} \
+                     (the largest radius shown; {what} that fit fill at most 0.74 of it): the radii are too large for the box",
+                    &self.lo[..dim],
+                    &self.hi[..dim],
+                    if dim == 3 { "volume" } else { "area" }
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Lower corner, m.
     pub fn lo(&self) -> [f64; 3] {
         self.lo

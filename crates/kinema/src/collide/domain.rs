@@ -208,6 +208,32 @@ impl Domain {
         self.periodic.as_ref()
     }
 
+    /// Whether particles of these radii (m) can collide in this domain. Along a periodic axis
+    /// of edge L the minimum image is a touching pair's partner only while r_i + r_j < L/2,
+    /// so a diameter of L/2 or more is refused, naming the largest particle (HOOMD and
+    /// LAMMPS refuse a box this small for their cutoff too). The broad phase itself finds
+    /// the nearest images in any box; it is the contacts that need this.
+    pub fn check_radii(&self, radius: &[f64]) -> Result<(), Error> {
+        let Some(cell) = &self.periodic else { return Ok(()) };
+        let (i, r_max) = radius
+            .iter()
+            .enumerate()
+            .fold((0, 0.0_f64), |best, (i, &r)| if r > best.1 { (i, r) } else { best });
+        match (0..3).find(|&k| cell.axes[k] && 4.0 * r_max >= cell.period(k)) {
+            None => Ok(()),
+            Some(k) => Err(Error::invalid(
+                format!("radius[{i}]"),
+                r_max,
+                format!(
+                    "a particle's diameter must be less than half the periodic cell's edge ({} m along {}), \
+                     where the minimum image finds its partners",
+                    cell.period(k),
+                    ["x", "y", "z"][k]
+                ),
+            )),
+        }
+    }
+
     /// The displacement x_i − x_j (m), as its minimum image along periodic axes.
     #[inline]
     pub fn displacement(&self, xi: [f64; 3], xj: [f64; 3]) -> [f64; 3] {
@@ -222,6 +248,24 @@ impl Domain {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_diameter_of_half_the_periodic_cell_is_refused_naming_the_particle() {
+        // a cell 1 m along x: r = 0.25 makes r_i + r_j = L/2, where the minimum image of a
+        // touching pair is ambiguous; a radius just below passes, and so does any open axis
+        let cell = Periodic::new([0.0; 3], [1.0, 4.0, 4.0], [true, true, true]).unwrap();
+        let domain = Domain::periodic(3, cell).unwrap();
+        let err = domain.check_radii(&[0.1, 0.25, 0.2]).unwrap_err().to_string();
+        assert!(
+            err.starts_with("radius[1] = 0.25 is invalid: a particle's diameter must be less than half"),
+            "{err}"
+        );
+        assert!(err.contains("(1 m along x)"), "{err}");
+        assert!(domain.check_radii(&[0.1, 0.2499, 0.2]).is_ok());
+        let open_x = Periodic::new([0.0; 3], [1.0, 4.0, 4.0], [false, true, true]).unwrap();
+        assert!(Domain::periodic(3, open_x).unwrap().check_radii(&[0.9]).is_ok());
+        assert!(Domain::open(3).unwrap().check_radii(&[1e9]).is_ok());
+    }
 
     fn unit_box() -> Periodic {
         Periodic::new([0.0, -1.0, 5.0], [2.0, 1.0, 6.0], [true, true, false]).unwrap()

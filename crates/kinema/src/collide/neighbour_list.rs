@@ -5,6 +5,7 @@
 //! sweep, see `collide::events`).
 
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use super::{Collider, Domain, Grid};
 use crate::error::Error;
@@ -112,6 +113,11 @@ impl NeighbourList {
     /// Makes the list hold for positions `x` (rebuilt with `grid` and skin `skin` if needed);
     /// `collider_scale` is the colliders' largest |coordinate|.
     #[allow(clippy::too_many_arguments)]
+    /// The most entries (a particle's partner, 4 bytes) a list holds: 4 GiB, about 10,000
+    /// partners for each of 100,000 particles, where a packing of spheres gives each fewer
+    /// than 50 within the skin.
+    pub(crate) const MAX_ENTRIES: usize = 1 << 30;
+
     pub(crate) fn update(
         &mut self,
         grid: &mut Grid,
@@ -134,23 +140,43 @@ impl NeighbourList {
                 format!("at most {} with spring-dashpot contacts", u32::MAX),
             ));
         }
+        domain.check_radii(radius)?;
+        for c in colliders {
+            if let Collider::Box(b) = c {
+                b.check_fill(domain.dim(), x, radius)?;
+            }
+        }
         let searched = grid.prepare(x, radius, domain, skin)?;
         // The rows, chunk by chunk on all threads; each particle's row depends on the
-        // positions only, so the list is the same for any number of threads.
+        // positions only, so the list is the same for any number of threads. The entries are
+        // counted as they come, so that a list beyond MAX_ENTRIES stops before it exhausts
+        // the machine's memory (an abort Python could not catch).
         self.rows.resize_with(n.div_ceil(CHUNK), Rows::default);
         let grid = &*grid;
+        let entries = AtomicUsize::new(0);
         self.rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
             let (start, partners) = (&mut rows.start, &mut rows.partners);
             start.clear();
             partners.clear();
             start.push(0);
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                if searched {
+                if searched && entries.load(Ordering::Relaxed) <= Self::MAX_ENTRIES {
+                    let before = partners.len();
                     grid.partners(i, x, radius, domain, skin, partners);
+                    entries.fetch_add(partners.len() - before, Ordering::Relaxed);
                 }
                 start.push(partners.len() as u32);
             }
         });
+        if entries.into_inner() > Self::MAX_ENTRIES {
+            self.rows.clear();
+            let what = format!(
+                "the contact list of {n} particles (over {} neighbours per particle: \
+                 radii far too large for the space the particles fill)",
+                Self::MAX_ENTRIES / n.max(1)
+            );
+            return Err(Error::out_of_memory(what, Self::MAX_ENTRIES * std::mem::size_of::<u32>()));
+        }
         self.walls.clear();
         if !colliders.is_empty() {
             for (i, &r) in radius.iter().enumerate() {
