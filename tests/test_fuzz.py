@@ -838,12 +838,10 @@ def test_the_harness_reports_a_crash_a_hang_and_a_panic():
         w.stop()
 
 
-# -- known bugs ------------------------------------------------------------------------------
-# Found by this suite and not fixed yet. Each is left out of the strategies above (see the
-# comments there) and kept here as a strict xfail with its reproducer: when it is fixed, the
-# test passes, strict xfail reports it, and the marker and the exclusion can go.
-def known_bug(reason: str):
-    return pytest.mark.xfail(strict=True, reason=reason)
+# -- bugs this suite found ------------------------------------------------------------------
+# Each was a strict xfail with its reproducer, left out of the strategies above, until it was
+# fixed; now each is a test of the fix, and the strategies draw its values again. A new bug
+# goes here the same way: @pytest.mark.xfail(strict=True, reason=...) with the reproducer.
 
 
 TWO = {"op": "add_particles", "kwargs": {"position": [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]}}
