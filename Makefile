@@ -13,7 +13,6 @@ PIP    := $(VENV)/bin/pip
 STAMP  := $(VENV)/.deps-installed
 TEST_STAMP := $(VENV)/.test-deps-installed
 BUILT  := $(VENV)/.kinema-built
-VIEWER_BUNDLE := python/kinema/viewer/static/viewer.js
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml pyproject.toml
 
 .PHONY: demo test test-rust test-python fuzz bench pictures fmt setup build viewer clean
@@ -31,16 +30,17 @@ $(TEST_STAMP): $(STAMP) requirements/viewer-test.txt
 	touch $@
 
 # Release build of the extension, installed into the venv in editable mode (python/ is used in place).
-build: $(BUILT) $(VIEWER_BUNDLE)
+build: $(BUILT)
 
 $(BUILT): $(STAMP) $(RUST_SOURCES)
 	$(VENV)/bin/maturin develop --release -q
 	touch $@
 
-# The browser viewer's script: three.js and viewer/src bundled by esbuild (pinned in viewer/package-lock.json).
-viewer: $(VIEWER_BUNDLE)
-
-$(VIEWER_BUNDLE): viewer/package.json viewer/package-lock.json viewer/build.mjs $(wildcard viewer/src/*.js)
+# The browser viewer's script: three.js and viewer/src bundled by esbuild (pinned in
+# viewer/package-lock.json). The bundle is committed, so that building and installing kinema
+# needs no Node; after changing viewer/src run `make viewer` and commit the bundle
+# (tests/test_viewer_bundle.py checks that it is what viewer/src builds).
+viewer:
 	cd viewer && npm ci --no-audit --no-fund --loglevel=error && node build.mjs
 
 demo: build

@@ -214,7 +214,7 @@ def test_large_trajectory_is_downsampled_with_a_warning(traj, tmp_path):
 
 def test_missing_bundle_says_to_build(traj, tmp_path, monkeypatch):
     monkeypatch.setattr(viewer_page, "BUNDLE", tmp_path / "absent.js")
-    with pytest.raises(viewer.BundleMissingError, match="make build"):
+    with pytest.raises(viewer.BundleMissingError, match="make viewer"):
         viewer.write_html(traj, tmp_path / "run.html")
     assert not (tmp_path / "run.html").exists()
 

@@ -4,7 +4,9 @@ import { fileURLToPath } from "node:url";
 import path from "node:path";
 
 const here = path.dirname(fileURLToPath(import.meta.url));
-const outfile = path.join(here, "..", "python", "kinema", "viewer", "static", "viewer.js");
+// The bundle is committed (a package installs whole without Node); `node build.mjs OUT`
+// writes elsewhere, which tests/test_viewer_bundle.py uses to check the committed one.
+const outfile = process.argv[2] ?? path.join(here, "..", "python", "kinema", "viewer", "static", "viewer.js");
 
 await build({
   entryPoints: [path.join(here, "src", "viewer.js")],

@@ -7,7 +7,7 @@ an orbit camera and colouring by speed or id.
   and opens it in the user's browser when there is one.
 
 The page's script is a bundle built from ``viewer/`` (three.js from the npm registry, bundled by
-esbuild) into ``kinema/viewer/static/viewer.js`` by ``make build``; nothing is fetched from
+esbuild) into ``kinema/viewer/static/viewer.js`` by ``make viewer`` and committed; nothing is fetched from
 the internet when a page is opened.
 """
 

@@ -31,7 +31,9 @@ class BundleMissingError(FileNotFoundError):
     """The viewer's script bundle has not been built."""
 
     def __init__(self) -> None:
-        super().__init__(f"the viewer's script {BUNDLE} is missing: run `make build` (npm ci and esbuild in viewer/) first")
+        super().__init__(
+            f"the viewer's script {BUNDLE} is missing: this installation of kinema is incomplete; reinstall it (from a source checkout: `make viewer` rebuilds the script with Node)"
+        )
 
 
 class ViewerWarning(UserWarning):
@@ -105,7 +107,7 @@ def pack(traj: Any, max_bytes: int) -> Packed:
 
 
 def bundle() -> str:
-    """The built viewer script; ``BundleMissingError`` when ``make build`` has not made it."""
+    """The built viewer script (shipped in the package); ``BundleMissingError`` when it is missing."""
     if not BUNDLE.is_file():
         raise BundleMissingError()
     script = BUNDLE.read_text(encoding="utf-8")
