@@ -24,9 +24,10 @@ $(STAMP): requirements/dev.txt
 	$(PIP) install --disable-pip-version-check -q -r requirements/dev.txt
 	touch $@
 
-# The browser and Jupyter tests' extras (playwright drives the system's Chromium; nothing downloaded).
-$(TEST_STAMP): $(STAMP) requirements/viewer-test.txt
-	$(PIP) install --disable-pip-version-check -q -r requirements/viewer-test.txt
+# The browser and Jupyter tests' extras (playwright drives the system's Chromium; nothing
+# downloaded) and the outside readers of kinema's files (OVITO).
+$(TEST_STAMP): $(STAMP) requirements/viewer-test.txt requirements/formats-test.txt
+	$(PIP) install --disable-pip-version-check -q -r requirements/viewer-test.txt -r requirements/formats-test.txt
 	touch $@
 
 # Release build of the extension, installed into the venv in editable mode (python/ is used in place).

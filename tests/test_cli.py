@@ -136,7 +136,7 @@ def test_render_and_export_a_saved_trajectory(tmp_path):
         frames = kinema.load_trajectory(out / "trajectory.h5").t.size
         assert f"writing {fmt}" in res.stderr and f"{frames}/{frames} frames" in res.stderr  # the progress bar counted every frame
     assert (tmp_path / "t.csv").read_text().startswith("frame,time,id,x,y,z")
-    assert (tmp_path / "v").is_dir() and (tmp_path / "p").is_dir()  # the vtk and ply series folders
+    assert (tmp_path / "v_vtk").is_dir() and (tmp_path / "p_ply").is_dir()  # the vtk and ply series folders
 
 
 def test_a_scene_with_typos_is_exit_2_one_line_per_problem(tmp_path):
@@ -180,8 +180,10 @@ def test_bad_inputs_are_exit_2_with_one_line(tmp_path):
 def test_export_into_an_unwritable_place_is_exit_2(tmp_path):
     out = tmp_path / "o"
     assert runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(out), "--no-video"]).exit_code == 0
-    res = runner.invoke(app, ["export", str(out / "trajectory.h5"), "--format", "csv", "-o", str(tmp_path / "nowhere" / "t.csv")])
-    assert res.exit_code == 2 and "does not exist" in error_lines(res)[0]
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    res = runner.invoke(app, ["export", str(out / "trajectory.h5"), "--format", "csv", "-o", str(blocker / "nowhere" / "t.csv")])
+    assert res.exit_code == 2 and "cannot create the folder" in error_lines(res)[0]
 
 
 DIVERGING = """

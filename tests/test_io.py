@@ -3,6 +3,7 @@ reads and writes that say what is wrong and leave nothing half-written behind.""
 
 import base64
 import os
+import shlex
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from types import SimpleNamespace
@@ -285,11 +286,11 @@ def test_a_series_replaces_an_earlier_series_but_never_other_files(tmp_path):
     short = synthetic(seed=3)
     short.t, short.positions, short.velocities = short.t[:2], short.positions[:2], short.velocities[:2]
     export(short, tmp_path / "run.ply")
-    assert listing(tmp_path) == ["run", "run/run_00000.ply", "run/run_00001.ply"]
-    (tmp_path / "run" / "notes.txt").write_text("mine")
+    assert listing(tmp_path) == ["run_ply", "run_ply/run_00000.ply", "run_ply/run_00001.ply"]
+    (tmp_path / "run_ply" / "notes.txt").write_text("mine")
     with pytest.raises(TrajectoryFileError, match="holds other files"):
         export(synthetic(), tmp_path / "run.ply")
-    assert (tmp_path / "run" / "notes.txt").read_text() == "mine"
+    assert (tmp_path / "run_ply" / "notes.txt").read_text() == "mine"
 
 
 def test_a_bad_format_names_the_allowed_values(tmp_path):
@@ -361,7 +362,7 @@ def read_extxyz(path):
     frames, i = [], 0
     while i < len(lines):
         n = int(lines[i])
-        keys = dict(kv.split("=", 1) for kv in lines[i + 1].replace('"F F F"', "FFF").split())
+        keys = dict(kv.split("=", 1) for kv in shlex.split(lines[i + 1]))
         rows = np.array([line.split()[1:] for line in lines[i + 2 : i + 2 + n]], dtype=float)
         frames.append((keys, rows))
         i += 2 + n
@@ -374,13 +375,15 @@ def test_extended_xyz_reads_back(tmp_path):
     frames = read_extxyz(tmp_path / "run.xyz")
     assert len(frames) == F
     for i, (keys, rows) in enumerate(frames):
-        assert keys["Properties"] == "species:S:1:pos:R:3:velo:R:3:radius:R:1:mass:R:1:id:I:1"
-        assert float(keys["Time"]) == tr.t[i]
+        assert keys["Properties"] == "species:S:1:pos:R:3:velo:R:3:momenta:R:3:radius:R:1:mass:R:1:masses:R:1:id:I:1"
+        assert float(keys["Time"]) == tr.t[i] and keys["units"] == "SI"
         np.testing.assert_array_equal(rows[:, 0:3], tr.positions[i])
         np.testing.assert_array_equal(rows[:, 3:6], tr.velocities[i])
-        np.testing.assert_array_equal(rows[:, 6], tr.radii)
-        np.testing.assert_array_equal(rows[:, 7], tr.masses)
-        np.testing.assert_array_equal(rows[:, 8], tr.ids)
+        np.testing.assert_array_equal(rows[:, 6:9], tr.masses[:, None] * tr.velocities[i])
+        np.testing.assert_array_equal(rows[:, 9], tr.radii)
+        np.testing.assert_array_equal(rows[:, 10], tr.masses)
+        np.testing.assert_array_equal(rows[:, 11], tr.masses)
+        np.testing.assert_array_equal(rows[:, 12], tr.ids)
 
 
 def test_extended_xyz_reads_back_with_ase(tmp_path):
@@ -400,10 +403,10 @@ def test_csv_reads_back(tmp_path):
     tr = world_run()
     export(tr, tmp_path / "run.csv")
     with open(tmp_path / "run.csv") as f:
-        assert f.readline().strip() == "frame,time,id,x,y,z,vx,vy,vz"
+        assert f.readline().strip() == "frame,time,id,x,y,z,vx,vy,vz,mass,radius"
     table = np.loadtxt(tmp_path / "run.csv", delimiter=",", skiprows=1)
     f_, n = tr.positions.shape[:2]
-    assert table.shape == (f_ * n, 9)
+    assert table.shape == (f_ * n, 11)
     np.testing.assert_array_equal(table[:, 0], np.repeat(np.arange(f_), n))
     np.testing.assert_array_equal(table[:, 1], np.repeat(tr.t, n))
     np.testing.assert_array_equal(table[:, 2], np.tile(np.arange(n), f_))
@@ -416,7 +419,7 @@ def test_written_files_get_ordinary_permissions(tmp_path):
     export(synthetic(), tmp_path / "run.pvd")
     mask = os.umask(0)
     os.umask(mask)
-    for p in (tmp_path / "run.h5", tmp_path / "run.pvd", tmp_path / "run" / "run_00000.vtp"):
+    for p in (tmp_path / "run.h5", tmp_path / "run.pvd", tmp_path / "run_vtk" / "run_00000.vtp"):
         assert p.stat().st_mode & 0o777 == 0o666 & ~mask
 
 
@@ -430,7 +433,8 @@ def test_a_periodic_box_is_written_with_its_edges(tmp_path):
         np.testing.assert_array_equal(box["edges"], [2.0, 3.0, 4.0])
     export(tr, tmp_path / "run.xyz")
     first = (tmp_path / "run.xyz").read_text().splitlines()[1]
-    assert first.startswith('Lattice="2.0 0.0 0.0 0.0 3.0 0.0 0.0 0.0 4.0" ') and 'pbc="T T F"' in first
+    # x and y are the periodic cell; z is open: the particles' extent with a margin
+    assert first.startswith('Lattice="2.0 0.0 0.0 0.0 3.0 0.0 ') and 'pbc="T T F"' in first
     del tr.box_edges
     with pytest.raises(ValueError, match="periodic boundaries need the box edges"):
         save_h5md(tr, tmp_path / "other.h5")

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import errno
 import os
 import re
+import secrets
 import shutil
 import tempfile
 from collections.abc import Iterator
@@ -23,11 +25,52 @@ class TrajectoryFileError(ValueError):
 
 
 def _umask() -> int:
-    # Read-and-restore is the only way to learn the umask; files made by mkstemp are 0600 and
-    # get the mode an ordinary open() would have given them.
+    """The process's umask. Linux reports it in /proc/self/status; elsewhere it is read by
+    setting and restoring it, which briefly changes it for every thread of the process (the
+    writers below never need it: they create their files with the mode open() uses)."""
+    try:
+        with open("/proc/self/status", encoding="ascii", errors="replace") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+_NAME_TRIES = 100
+
+
+def _temporary_file(parent: Path, prefix: str, suffix: str) -> Path:
+    """A new empty file ``<prefix><random><suffix>`` in ``parent``, created exclusively with
+    mode 0666 as an ordinary ``open()`` creates files: the kernel applies the umask (and a
+    default ACL of the folder), so 0644 under umask 022. ``tempfile.mkstemp`` would make it
+    0600."""
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0)
+    for _ in range(_NAME_TRIES):
+        path = parent / f"{prefix}{secrets.token_hex(6)}{suffix}"
+        try:
+            fd = os.open(path, flags, 0o666)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        return path
+    raise FileExistsError(errno.EEXIST, "no unused temporary name", str(parent))
+
+
+def _temporary_folder(parent: Path, prefix: str, suffix: str) -> Path:
+    """A new empty folder in ``parent``, made with mode 0777 as ``os.mkdir`` makes folders
+    (0755 under umask 022; ``tempfile.mkdtemp`` would make it 0700)."""
+    for _ in range(_NAME_TRIES):
+        path = parent / f"{prefix}{secrets.token_hex(6)}{suffix}"
+        try:
+            os.mkdir(path, 0o777)
+        except FileExistsError:
+            continue
+        return path
+    raise FileExistsError(errno.EEXIST, "no unused temporary name", str(parent))
 
 
 def _writable_parent(path: Path) -> Path:
@@ -45,19 +88,17 @@ def _writable_parent(path: Path) -> Path:
 def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
     """Yields a temporary path in the folder of ``path``; when the block ends without an
     exception the temporary file is renamed to ``path`` (``os.replace``, atomic on one file
-    system), otherwise it is removed and ``path`` is left as it was. An ``OSError`` while
-    writing becomes a ``TrajectoryFileError`` naming ``path``."""
+    system), otherwise it is removed and ``path`` is left as it was. The file gets the mode
+    an ordinary ``open()`` would give it (0666 less the umask). An ``OSError`` while writing
+    becomes a ``TrajectoryFileError`` naming ``path``."""
     path = Path(path)
     parent = _writable_parent(path)
     try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=parent)
+        tmp = _temporary_file(parent, f".{path.name}.", ".part")
     except OSError as e:
         raise TrajectoryFileError(f"cannot write {path}: {e.strerror}") from None
-    os.close(fd)
-    tmp = Path(tmp_name)
     try:
         yield tmp
-        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
     except BaseException as e:
         tmp.unlink(missing_ok=True)
@@ -71,7 +112,9 @@ def atomic_folder(folder: str | os.PathLike, pattern: str) -> Iterator[Path]:
     """Yields a temporary folder beside ``folder``; when the block ends without an exception
     it takes the place of ``folder``, otherwise it is removed with all it holds. An existing
     ``folder`` is replaced only if every file in it matches the regular expression
-    ``pattern`` (a series written before), so no other file is ever deleted."""
+    ``pattern`` (a series written before), so no other file is ever deleted. The folder
+    gets the mode ``os.mkdir`` gives (0777 less the umask), the files in it the mode their
+    writer gave them."""
     folder = Path(folder)
     if folder.exists():
         if not folder.is_dir():
@@ -85,14 +128,11 @@ def atomic_folder(folder: str | os.PathLike, pattern: str) -> Iterator[Path]:
     if not parent.is_dir():
         raise TrajectoryFileError(f"cannot write {folder}: the folder {parent} does not exist")
     try:
-        tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".part", dir=parent))
+        tmp = _temporary_folder(parent, f".{folder.name}.", ".part")
     except OSError as e:
         raise TrajectoryFileError(f"cannot write {folder}: {e.strerror}") from None
     try:
         yield tmp
-        os.chmod(tmp, 0o777 & ~_umask())
-        for p in tmp.iterdir():
-            os.chmod(p, 0o666 & ~_umask())
         old = None
         if folder.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".old", dir=parent))

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import base64
 import os
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -12,41 +13,93 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from ._cell import particle_types, trajectory_cell
 from ._files import Frames, atomic_file, atomic_folder, frames_of
+from .gsd_writer import write_gsd
+from .lammps_dump import write_lammps
 
-FORMATS = ("vtk", "ply", "xyz", "csv")
-_SUFFIXES = {".pvd": "vtk", ".vtp": "vtk", ".ply": "ply", ".xyz": "xyz", ".extxyz": "xyz", ".csv": "csv"}
+FORMATS = ("vtk", "ply", "xyz", "csv", "gsd", "lammps")
+_SUFFIXES = {
+    ".pvd": "vtk",
+    ".vtp": "vtk",
+    ".ply": "ply",
+    ".xyz": "xyz",
+    ".extxyz": "xyz",
+    ".csv": "csv",
+    ".gsd": "gsd",
+    ".lammpstrj": "lammps",
+    ".dump": "lammps",
+}
+SUFFIX = {"vtk": ".pvd", "ply": ".ply", "xyz": ".xyz", "csv": ".csv", "gsd": ".gsd", "lammps": ".lammpstrj"}  # the main file's suffix of each format
+_TRAJECTORY_SUFFIXES = (".h5", ".hdf5", ".h5md")  # H5MD trajectories: never the name of an export
 _DIGITS = 5  # frame numbers in series file names: stem_00000.vtp
 
 
 def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_frame: Callable[[int], Any] | None = None) -> list[Path]:
     """Write ``traj`` (a ``kinema.Trajectory`` or any object with ``t``, ``positions``,
-    ``velocities`` and optionally ``masses``, ``radii``, ``ids``) for another program; returns
-    the paths written, the main file first.
+    ``velocities`` and optionally ``masses``, ``radii``, ``ids``, ``types``, ``periodic``,
+    ``box_edges``, ``colliders``) for another program; returns the paths written, the main
+    file first.
 
-    ``format`` (default: from the suffix of ``path``):
+    ``format`` (default: from the suffix of ``path``); each format has its own names, so one
+    trajectory exported as ``run.pvd``, ``run.ply``, ``run.xyz``, ``run.csv``, ``run.gsd`` and
+    ``run.lammpstrj`` gives files that never collide:
 
-    - ``"vtk"`` (.pvd, .vtp): for ParaView, ``<stem>.pvd``, a collection whose timesteps are
-      the frame times, and the folder ``<stem>/`` with one XML PolyData file per frame,
-      ``<stem>_00000.vtp``: points (m) as vertex cells, point data ``velocity`` (m/s),
-      ``speed`` (m/s), ``radius`` (m), ``mass`` (kg), ``id``; float64, base64.
-    - ``"ply"`` (.ply): for Blender and Houdini, the folder ``<stem>/`` with one binary
-      little-endian PLY per frame, ``<stem>_00000.ply``: vertex properties x y z vx vy vz
-      (float32; m, m/s), radius (float32, m) and id (int32).
+    - ``"vtk"`` (.pvd, .vtp): for ParaView, ``<stem>.pvd`` (open this one: a collection whose
+      timesteps are the frame times) and the folder ``<stem>_vtk/`` with one XML PolyData
+      file per frame, ``<stem>_00000.vtp``: points (m) as vertex cells, point data
+      ``velocity`` (m/s), ``speed`` (m/s), ``radius`` (m), ``mass`` (kg), ``id``; float64,
+      base64.
+    - ``"ply"`` (.ply): for Blender and Houdini, the folder ``<stem>_ply/`` with one binary
+      little-endian PLY per frame, ``<stem>_00000.ply``, ``<stem>_00001.ply``, ...: vertex
+      properties x y z vx vy vz (float32; m, m/s), radius (float32, m) and id (int32).
     - ``"xyz"`` (.xyz, .extxyz): for OVITO and ASE, one extended XYZ file, the frames one
-      after the other: N, a comment line ``Properties=species:S:1:pos:R:3:velo:R:3:radius:R:1:mass:R:1:id:I:1
-      Time=... pbc="F F F"`` (``Lattice`` when the trajectory has ``box_edges``), then one
-      row per particle (species ``X``, ASE's dummy element).
-    - ``"csv"`` (.csv): one file with the header ``frame,time,id,x,y,z,vx,vy,vz`` and a row
-      per particle and frame.
+      after the other: N, the comment line ``Lattice="ax 0 0 0 by 0 0 0 cz" Origin="ox oy oz"
+      pbc="T T F" units=SI Properties=species:S:1:pos:R:3:velo:R:3:momenta:R:3:radius:R:1:
+      mass:R:1:masses:R:1:id:I:1 Time=t``, then one row per particle.
+
+      Units are SI, as ``units=SI`` says: positions, ``Lattice`` and ``Origin`` in m,
+      ``velo`` in m/s, ``momenta`` (mass × velocity) in kg·m/s, ``mass`` and ``masses`` in
+      kg, ``radius`` in m, ``Time`` in s. OVITO maps ``velo`` to Velocity, ``mass`` to Mass,
+      ``radius`` to Radius, ``id`` to Particle Identifier and ``species`` to Particle Type,
+      and places the cell at ``Origin``. ASE reads ``masses`` as ``atoms.get_masses()`` and
+      ``momenta`` as ``atoms.get_momenta()``, so ``atoms.get_velocities()`` (momenta /
+      masses) gives the velocities in m/s; ASE's own units are Å, amu and Å per ASE time
+      unit, so these numbers are SI only, to be converted before ASE calculators see them.
+      ASE keeps ``Origin`` in ``atoms.info["Origin"]`` (its cell starts at 0). ``momenta``,
+      ``mass`` and ``masses`` are written only when the trajectory has masses, ``radius``
+      when it has radii.
+
+      The cell (``_cell.trajectory_cell``, shared with GSD and LAMMPS) is an orthogonal
+      box, the same in every frame, that holds every particle of every frame: along a
+      periodic axis the periodic cell (the world's ``Box``); along an axis where that box
+      has two walls and every particle stays between them, the walls; otherwise the
+      particles' extent over all frames widened on each side by the largest radius or 5 % of
+      the largest extent, whichever is more; a 2D trajectory's z spans that margin. No edge
+      is zero, so OVITO's cell analysis and ``atoms.get_volume()`` work. ``species``: the
+      trajectory's ``types`` names (one word each) when it has them, else ``X`` (ASE's dummy
+      element).
+    - ``"csv"`` (.csv): one file with the header ``frame,time,id,x,y,z,vx,vy,vz,mass,radius``
+      and a row per particle and frame.
+    - ``"gsd"`` (.gsd): HOOMD-blue's format (OVITO, HOOMD, freud, MDAnalysis), written with
+      the ``gsd`` package; float32 particle data, the box centred at 0 with its offset in
+      ``log/kinema/origin`` (see ``gsd_writer.write_gsd``).
+    - ``"lammps"`` (.lammpstrj, .dump): a LAMMPS ``dump custom`` text file (OVITO, ASE,
+      MDAnalysis, VMD): ``id type x y z vx vy vz radius mass`` with ids from 1, the box with
+      ``pp``/``ff`` flags, ``ITEM: TIME``; 17 significant digits (see
+      ``lammps_dump.write_lammps``).
 
     Text formats write every float with 17 significant digits (exact for float64); mass and
-    radius are left out where the trajectory has none. Every file is written under a
-    temporary name and renamed at the end; a series is built in a temporary folder that takes
-    the place of ``<stem>/`` only when complete (an existing ``<stem>/`` is replaced only if
-    it holds nothing but an earlier series). ``on_frame(i)`` is called after frame ``i`` is
-    written (a progress bar). Raises ``ValueError`` for an unknown ``format`` and
-    ``TrajectoryFileError`` (a ``ValueError``) naming the path that cannot be written."""
+    radius are left out where the trajectory has none. A suffix of ``path`` that names
+    another format (``format="vtk"`` with ``run.ply``) or an H5MD trajectory (.h5) is a
+    ``ValueError``; the folder of ``path`` must exist. Every file is written under a
+    temporary name and renamed at the end; a series is built in a temporary folder that
+    takes the place of ``<stem>_vtk/`` or ``<stem>_ply/`` only when complete (an existing
+    one is replaced only if it holds nothing but an earlier series). Files get the mode an
+    ordinary ``open()`` gives (0666 less the umask; folders 0777 less the umask).
+    ``on_frame(i)`` is called after frame ``i`` is written (a progress bar). Raises
+    ``ValueError`` for an unknown ``format`` and ``TrajectoryFileError`` (a ``ValueError``)
+    naming the path that cannot be written."""
     path = Path(path)
     if format is None:
         format = _SUFFIXES.get(path.suffix.lower())
@@ -56,15 +109,34 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
             )
     if format not in FORMATS:
         raise ValueError(f"format = {format!r} is invalid: the allowed values are {', '.join(map(repr, FORMATS))}")
+    other = suffix_format(path)
+    if other not in (None, format):
+        what = "an H5MD trajectory" if other == "h5md" else f"format {other!r}"
+        raise ValueError(f"path = {str(path)!r}: the suffix {path.suffix!r} is for {what}, not format = {format!r}; give a name ending in {SUFFIX[format]}")
     fr = frames_of(traj)
-    writer = {"vtk": _write_vtk, "ply": _write_ply, "xyz": _write_xyz, "csv": _write_csv}[format]
+    writer = {"vtk": _write_vtk, "ply": _write_ply, "xyz": _write_xyz, "csv": _write_csv, "gsd": write_gsd, "lammps": write_lammps}[format]
     return writer(traj, fr, path, on_frame or (lambda i: None))
 
 
-def _series(path: Path, suffix: str) -> tuple[Path, str]:
-    """The folder of a series and the regular expression of its file names."""
+def suffix_format(path: str | os.PathLike) -> str | None:
+    """The format the suffix of ``path`` names: one of ``FORMATS``, ``"h5md"`` for a
+    trajectory file (.h5, .hdf5, .h5md), ``None`` for another suffix or none. An export
+    whose ``format`` differs from a suffix's format is refused."""
+    suffix = Path(path).suffix.lower()
+    return "h5md" if suffix in _TRAJECTORY_SUFFIXES else _SUFFIXES.get(suffix)
+
+
+def default_path(source: str | os.PathLike, format: str) -> Path:
+    """The export of the trajectory file ``source`` beside it: ``run.h5`` gives ``run.pvd``
+    (and ``run_vtk/``), ``run.ply`` (the folder ``run_ply/``), ``run.xyz``, ``run.csv``."""
+    return Path(source).with_suffix(SUFFIX[format])
+
+
+def _series(path: Path, format: str, suffix: str) -> tuple[Path, str, str]:
+    """The folder of a series (``<stem>_<format>``), the stem of its file names and the
+    regular expression of those names."""
     stem = path.stem if path.suffix.lower() in _SUFFIXES else path.name
-    return path.with_name(stem), rf"{stem}_\d{{{_DIGITS},}}\{suffix}"
+    return path.with_name(f"{stem}_{format}"), stem, rf"{re.escape(stem)}_\d{{{_DIGITS},}}{re.escape(suffix)}"
 
 
 # -- VTK ----------------------------------------------------------------------------------------
@@ -109,11 +181,10 @@ def _vtp(fr: Frames, i: int) -> str:
 
 
 def _write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    folder, pattern = _series(path, ".vtp")
-    stem = folder.name
-    pvd = folder.with_name(stem + ".pvd")
+    folder, stem, pattern = _series(path, "vtk", ".vtp")
+    pvd = path.with_name(stem + ".pvd")
     names = [f"{stem}_{i:0{_DIGITS}d}.vtp" for i in range(fr.n_frames)]
-    datasets = "\n".join(f'<DataSet timestep="{float(fr.t[i])!r}" part="0" file={quoteattr(f"{stem}/{name}")}/>' for i, name in enumerate(names))
+    datasets = "\n".join(f'<DataSet timestep="{float(fr.t[i])!r}" part="0" file={quoteattr(f"{folder.name}/{name}")}/>' for i, name in enumerate(names))
     collection = (
         f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="1.0" byte_order="LittleEndian">\n<Collection>\n{datasets}\n</Collection>\n</VTKFile>\n'
     )
@@ -159,8 +230,8 @@ def _ply(fr: Frames, i: int) -> bytes:
 
 
 def _write_ply(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    folder, pattern = _series(path, ".ply")
-    names = [f"{folder.name}_{i:0{_DIGITS}d}.ply" for i in range(fr.n_frames)]
+    folder, stem, pattern = _series(path, "ply", ".ply")
+    names = [f"{stem}_{i:0{_DIGITS}d}.ply" for i in range(fr.n_frames)]
     with atomic_folder(folder, pattern) as tmp:
         for i, name in enumerate(names):
             (tmp / name).write_bytes(_ply(fr, i))
@@ -171,42 +242,63 @@ def _write_ply(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]
 # -- text ---------------------------------------------------------------------------------------
 
 
-def _xyz(fr: Frames, i: int, header: str) -> str:
-    """Frame ``i`` of an extended XYZ file: the count, the comment line, one row per particle
-    (species X, then the columns of ``Properties``; 17 significant digits, exact float64)."""
-    cols = [fr.positions[i], fr.velocities[i], *(a[:, None] for a in (fr.radii, fr.masses) if a is not None)]
+def _xyz(fr: Frames, i: int, header: str, species: list[str]) -> str:
+    """Frame ``i`` of an extended XYZ file: the count, the comment line (``header`` and the
+    frame's ``Time``), one row per particle: its species name, then the columns of
+    ``Properties``: pos, velo, momenta, radius, mass, masses, id (those the trajectory has;
+    17 significant digits, exact float64)."""
+    v = fr.velocities[i]
+    cols = [fr.positions[i], v]
+    if fr.masses is not None:
+        cols.append(fr.masses[:, None] * v)
+    if fr.radii is not None:
+        cols.append(fr.radii[:, None])
+    if fr.masses is not None:
+        cols += [fr.masses[:, None], fr.masses[:, None]]
     table = np.hstack(cols).tolist()
-    rows = "".join("X " + " ".join(map(repr, r)) + f" {int(k)}\n" for r, k in zip(table, fr.ids, strict=True))
+    rows = "".join(f"{s} " + " ".join(map(repr, r)) + f" {int(k)}\n" for s, r, k in zip(species, table, fr.ids, strict=True))
     return f"{fr.n_particles}\n{header} Time={float(fr.t[i])!r}\n{rows}"
 
 
 def _write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    props = "species:S:1:pos:R:3:velo:R:3" + ":radius:R:1" * (fr.radii is not None) + ":mass:R:1" * (fr.masses is not None) + ":id:I:1"
-    periodic = getattr(traj, "periodic", None)
-    pbc = np.zeros(3, dtype=bool) if periodic is None else np.resize(np.asarray(periodic, dtype=bool).reshape(-1), 3)
-    header = f'Properties={props} pbc="{" ".join("T" if p else "F" for p in pbc)}"'
-    edges = getattr(traj, "box_edges", None)
-    if edges is not None:
-        e = np.zeros(3)
-        e[: np.size(edges)] = np.asarray(edges, dtype=np.float64).reshape(-1)[:3]
-        header = 'Lattice="' + " ".join(repr(float(c)) for c in np.diag(e).reshape(-1)) + '" ' + header
+    names, typeid = particle_types(traj, fr.n_particles)
+    if getattr(traj, "types", None) is None:
+        names = ["X"]  # ASE's dummy element
+    for name in names:
+        if not re.fullmatch(r"[A-Za-z0-9_.+-]+", name):
+            raise ValueError(f"types: {name!r} is invalid: a species name is one word of letters, digits and _ . + -")
+    species = [names[k] for k in typeid]
+    has_m, has_r = fr.masses is not None, fr.radii is not None
+    props = "species:S:1:pos:R:3:velo:R:3" + ":momenta:R:3" * has_m + ":radius:R:1" * has_r + ":mass:R:1:masses:R:1" * has_m + ":id:I:1"
+    cell = trajectory_cell(traj, fr)
+    origin, edges, pbc = cell.lo, cell.hi - cell.lo, cell.periodic
+    lattice = " ".join(repr(float(c)) for c in np.diag(edges).reshape(-1))
+    header = (
+        f'Lattice="{lattice}" Origin="{" ".join(repr(float(c)) for c in origin)}" pbc="{" ".join("T" if p else "F" for p in pbc)}" units=SI Properties={props}'
+    )
     with atomic_file(path) as tmp, open(tmp, "w", encoding="ascii") as f:
         for i in range(fr.n_frames):
-            f.write(_xyz(fr, i, header))
+            f.write(_xyz(fr, i, header, species))
             on_frame(i)
     return [path]
 
 
+def _csv_header(fr: Frames) -> str:
+    return "frame,time,id,x,y,z,vx,vy,vz" + ",mass" * (fr.masses is not None) + ",radius" * (fr.radii is not None)
+
+
 def _csv(fr: Frames, i: int) -> str:
-    """The rows of frame ``i``: frame,time,id,x,y,z,vx,vy,vz (17 significant digits)."""
+    """The rows of frame ``i``: frame,time,id,x,y,z,vx,vy,vz, then mass and radius where the
+    trajectory has them (17 significant digits)."""
     t = repr(float(fr.t[i]))
-    table = np.hstack([fr.positions[i], fr.velocities[i]]).tolist()
+    cols = [fr.positions[i], fr.velocities[i], *(a[:, None] for a in (fr.masses, fr.radii) if a is not None)]
+    table = np.hstack(cols).tolist()
     return "".join(f"{i},{t},{int(k)}," + ",".join(map(repr, r)) + "\n" for r, k in zip(table, fr.ids, strict=True))
 
 
 def _write_csv(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
     with atomic_file(path) as tmp, open(tmp, "w", encoding="ascii", newline="") as f:
-        f.write("frame,time,id,x,y,z,vx,vy,vz\n")
+        f.write(_csv_header(fr) + "\n")
         for i in range(fr.n_frames):
             f.write(_csv(fr, i))
             on_frame(i)

@@ -1,0 +1,95 @@
+"""What the exports need to know about a trajectory beyond its frames, computed once for
+every format: the cell that holds it (OVITO, ASE, HOOMD and LAMMPS all want a box), the step
+number of each frame, and the particles' types."""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ._files import Frames
+
+_MARGIN = 0.05  # of the particles' largest extent, around them where no periodic cell is known
+
+
+def box_collider(traj: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """(lo, hi), (3,) each, of the trajectory's first box collider (the one a world's periodic
+    cell comes from), ±inf for open faces; ``None`` without one."""
+    for c in getattr(traj, "colliders", None) or []:
+        if isinstance(c, dict) and c.get("type") == "box":
+            lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
+            a, b = np.asarray(c["lo"], dtype=np.float64).reshape(-1)[:3], np.asarray(c["hi"], dtype=np.float64).reshape(-1)[:3]
+            lo[: a.size], hi[: b.size] = a, b
+            return lo, hi
+    return None
+
+
+class Cell(NamedTuple):
+    """An orthogonal box holding every particle of every frame."""
+
+    lo: np.ndarray  # (3,) m, the lower corner
+    hi: np.ndarray  # (3,) m, the upper corner: hi > lo on every axis
+    periodic: np.ndarray  # (3,) bools
+    margin: float  # m, the room left around the particles along an open axis
+
+
+def trajectory_cell(traj: Any, fr: Frames) -> Cell:
+    """The cell of the whole trajectory, the same for every frame.
+
+    A periodic axis takes the bounds of the trajectory's box collider (the world's periodic
+    cell), or, when it records none, its ``box_edges`` from the lowest coordinate on that
+    axis; so does an axis where the box has two walls and all frames' particles lie between
+    them. Any other axis takes the bounds of all frames' particles widened on each side by
+    ``margin``: the largest radius plus 5 % of their largest extent (of 1 m when all sit at
+    one point), so the spheres fit with room. In 2D, z is [-margin, margin] and not
+    periodic: no edge is ever zero (OVITO's cell analysis and ASE's ``get_volume`` need a 3D
+    box; HOOMD's Lz = 0 is the GSD writer's own). A periodic axis with no edge is a
+    ``ValueError``."""
+    periodic = getattr(traj, "periodic", None)
+    periodic = np.zeros(3, dtype=bool) if periodic is None else np.resize(np.asarray(periodic, dtype=bool).reshape(-1), 3)
+    edges = getattr(traj, "box_edges", None)
+    edges = np.zeros(3) if edges is None else np.resize(np.asarray(edges, dtype=np.float64).reshape(-1), 3)
+    box = box_collider(traj)
+    x = fr.positions.reshape(-1, 3)
+    x = x[np.all(np.isfinite(x), axis=1)]
+    lo, hi = (x.min(axis=0), x.max(axis=0)) if len(x) else (np.zeros(3), np.zeros(3))
+    axes = fr.dim
+    r_max = float(np.max(fr.radii)) if fr.radii is not None and fr.radii.size else 0.0
+    margin = r_max + _MARGIN * (float(np.max(hi[:axes] - lo[:axes])) or 1.0)
+    cell_lo, cell_hi, is_periodic = lo - margin, hi + margin, np.zeros(3, dtype=bool)
+    for k in range(axes):
+        walls = box is not None and np.isfinite(box[0][k]) and np.isfinite(box[1][k]) and box[1][k] > box[0][k]
+        if walls and (periodic[k] or (box[0][k] <= lo[k] and hi[k] <= box[1][k])):
+            cell_lo[k], cell_hi[k], is_periodic[k] = box[0][k], box[1][k], bool(periodic[k])
+        elif periodic[k]:
+            if not (np.isfinite(edges[k]) and edges[k] > 0):
+                flags = tuple(bool(p) for p in periodic)
+                raise ValueError(f"periodic = {flags} but box_edges[{k}] = {float(edges[k])!r}: a periodic axis needs its cell edge > 0 m")
+            cell_lo[k], cell_hi[k], is_periodic[k] = lo[k], lo[k] + edges[k], True
+    if axes == 2:
+        cell_lo[2], cell_hi[2] = -margin, margin
+    return Cell(cell_lo, cell_hi, is_periodic, margin)
+
+
+def frame_steps(fr: Frames) -> np.ndarray:
+    """The step number of each frame: round(t/dt) when ``dt`` is known and those numbers are
+    >= 0 and increase; otherwise the frame index."""
+    if fr.dt is not None and fr.dt > 0 and np.all(np.isfinite(fr.t)):
+        steps = np.rint(fr.t / fr.dt)
+        if fr.n_frames == 0 or (steps[0] >= 0 and np.all(np.diff(steps) > 0) and steps[-1] < 2**62):
+            return steps.astype(np.int64)
+    return np.arange(fr.n_frames, dtype=np.int64)
+
+
+def particle_types(traj: Any, n: int) -> tuple[list[str], np.ndarray]:
+    """(type names, type index of each particle (N,)): the sorted distinct names of the
+    trajectory's ``types`` (N,) when it has them, else the single type ``"A"``."""
+    names = getattr(traj, "types", None)
+    if names is None:
+        return ["A"], np.zeros(n, dtype=np.int64)
+    a = np.asarray(names).astype(str)
+    if a.shape != (n,):
+        raise ValueError(f"types has shape {a.shape}; it must be ({n},), one name per particle")
+    unique, index = np.unique(a, return_inverse=True)
+    return unique.tolist(), index.astype(np.int64)
