@@ -60,7 +60,7 @@ def _options(
 LIMIT_PARTICLE_STEPS = 1e11  # 5 hours at 6e6 particle-steps a second (maxwell_gas), days in a heap of contacts (demo: 2e5/s)
 LIMIT_PIXELS = 1e11  # frames × width × height: 16 minutes of 1080p at 30 fps; rendering runs at about 5e8 pixels a second, encoding slower
 LIMIT_MEMORY = 8 * 2**30  # bytes
-VIDEO_FPS = (0.01, 1000.0)  # playback frames per second a GIF (1/100 s to 655 s a frame) and an MP4 can hold
+VIDEO_FPS = (0.01, 1000.0)  # playback frames per second asked; a GIF writes the nearest of 100/d, d = 2 … 65535 (kinema.render.video_rate)
 MAX_STEPS = 10**18  # even with --force: the engine counts steps in 64 bits; 1e18 is 30 years at 1e9 steps a second
 ENGINE_BYTES = 1024  # per particle: state, the method's stages, collision grid and lists (measured 400-800)
 FRAME_BYTES = 96  # per particle and recorded frame: positions and velocities (48 B), held twice while the trajectory is assembled
@@ -288,18 +288,33 @@ def _guarded(fn):
     return wrapper
 
 
-def _render_video(traj, path: Path, render_opts: dict, fps: float | None, description: str, draw_colliders: bool = True) -> Path:
+def _render_video(
+    traj, path: Path, render_opts: dict, fps: float | None, description: str, draw_colliders: bool = True, scene_fps: float | None = None
+) -> Path:
     """Render ``traj`` to ``path`` (.mp4 or .gif) with a progress bar over the frames; the
     trajectory's colliders are drawn unless ``draw_colliders`` (or the option of that name in
-    ``render_opts``) is False."""
-    from .render import render_frames, write_video
+    ``render_opts``) is False.
+
+    ``fps``: one video frame per recorded frame at this rate. None: real time, the frames
+    placed by their times (``write_video(times=)``), at the ``scene_fps`` the scene asked for
+    (World.run records every round(1/(fps·dt)) steps, 33 ms for 30 fps and dt = 1 ms, so one
+    frame in about a hundred is dropped to play 30.30 recorded frames a second at exactly 30),
+    or, without it or when the recording interval is not that rate's rounding (clamped to one
+    step), at the recording's own rate (clamped to ``VIDEO_FPS``, and then not real time). The
+    rate written (``kinema.render.video_rate``: GIF counts in 1/100 s) is printed."""
+    from .render import render_frames, video_rate, write_video
 
     render_opts = dict(render_opts)
     draw_colliders = render_opts.pop("draw_colliders", draw_colliders)
     render_opts.setdefault("colliders", getattr(traj, "colliders", None) if draw_colliders else None)
-    if fps is None:  # real time, within what the video formats can play
-        fps = 1.0 / float(np.median(np.diff(traj.t))) if traj.t.size > 1 else 30.0
-        fps = min(max(fps, VIDEO_FPS[0]), VIDEO_FPS[1]) if np.isfinite(fps) else 30.0
+    times, timing = None, "one video frame per recorded frame"
+    recorded = 1.0 / float(np.median(np.diff(traj.t))) if traj.t.size > 1 else float("nan")
+    if fps is None and scene_fps is not None and VIDEO_FPS[0] <= scene_fps <= VIDEO_FPS[1] and 0.5 <= recorded / scene_fps <= 1.5:
+        fps, times, timing = scene_fps, traj.t, f"real time, {recorded:.4g} recorded frames a second placed by their times"
+    elif fps is None:  # real time, within what the video formats can play
+        fps = min(max(recorded, VIDEO_FPS[0]), VIDEO_FPS[1]) if np.isfinite(recorded) else 30.0
+        if fps == recorded:  # placed by their times: GIF delays round, the times need not be even
+            times, timing = traj.t, "real time at the recording's rate"
     radius = traj.radii
     if radius is None or not np.any(radius > 0):
         extent = float(np.ptp(traj.positions.reshape(-1, 3), axis=0).max()) or 1.0
@@ -313,7 +328,11 @@ def _render_video(traj, path: Path, render_opts: dict, fps: float | None, descri
                 yield f
                 bar.advance(task)
 
-        return write_video(counted(), path, fps=fps)
+        written = write_video(counted(), path, fps=fps, times=times)
+    rate = video_rate(fps, path)
+    exact = f"{rate} fps" if rate.denominator == 1 else f"{float(rate):.4g} fps ({rate})"
+    console.print(f"video: {exact}, {timing}", highlight=False, soft_wrap=True)
+    return written
 
 
 def _energy_plot(traj, out: Path) -> Path:
@@ -418,7 +437,7 @@ def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_
         if video:
             opts = sc.render.model_dump(exclude={"fps", "camera"})
             opts["camera"] = _camera(sc.render.camera)
-            _render_video(traj, stage / f"{scene.stem}.{video}", opts, sc.render.fps, "rendering")
+            _render_video(traj, stage / f"{scene.stem}.{video}", opts, sc.render.fps, "rendering", scene_fps=fps)
             names.append(f"{scene.stem}.{video}")
         if sc.output.plot:
             _energy_plot(traj, stage / "energy.png")
@@ -551,22 +570,54 @@ def render(
 @_guarded
 def export(
     traj: Annotated[Path, typer.Argument(help="Trajectory file (H5MD).")],
-    format: Annotated[str, typer.Option("--format", "-f", help="vtk (ParaView), ply (Blender), xyz (OVITO), csv.")],
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Main output file (default: beside TRAJ).")] = None,
+    format: Annotated[
+        str, typer.Option("--format", "-f", help="vtk (ParaView), ply (Blender), xyz (OVITO, ASE), csv, gsd (HOOMD, OVITO), lammps (a LAMMPS dump).")
+    ],
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", "-o", help="Main output file; missing folders are created (default: beside TRAJ, named as below)."),
+    ] = None,
 ) -> None:
-    """Export a saved trajectory for other programs."""
+    """Export a saved trajectory for other programs.
+
+    Beside TRAJ (run.h5) unless -o names another file: vtk writes run.pvd (open it in
+    ParaView) and its frames in the folder run_vtk/; ply one file a frame in the folder
+    run_ply/ (run_00000.ply, ...); xyz run.xyz (extended XYZ, SI units); csv run.csv; gsd
+    run.gsd; lammps run.lammpstrj (dump custom). So the formats never overwrite each other.
+    A suffix of -o that names another format (-f vtk -o x.ply) is refused."""
     from .io import FORMATS
     from .io import export as write_export
+    from .io.exports import SUFFIX, default_path, suffix_format
     from .trajectory import Trajectory
 
     if format not in FORMATS:
         raise ValueError(f"--format {format!r}: use one of {', '.join(FORMATS)}")
-    suffix = {"vtk": ".pvd", "ply": ".ply", "xyz": ".xyz", "csv": ".csv"}[format]
+    if out is not None:
+        other = suffix_format(out)
+        if other == "h5md":
+            raise ValueError(f"-o {out}: the suffix {out.suffix} is for H5MD trajectories, not exports; name the file {out.with_suffix(SUFFIX[format]).name}")
+        if other not in (None, format):
+            raise ValueError(
+                f"-o {out}: the suffix {out.suffix} is for --format {other}, not --format {format}; name the file {out.with_suffix(SUFFIX[format]).name}"
+            )
+    path = out if out is not None else default_path(traj, format)
     t = Trajectory.load(traj)
+    if path.exists() and os.path.samefile(path, traj):
+        raise ValueError(f"-o {path}: is the trajectory being exported; name another file")
+    if not path.parent.is_dir():  # as `kinema run -o` makes its folder
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise ValueError(f"-o {out}: cannot create the folder {path.parent} ({e.strerror or e})") from None
     with _progress() as bar:
         task = bar.add_task(f"writing {format}", total=len(t.t))
-        paths = write_export(t, out if out is not None else traj.with_suffix(suffix), format, on_frame=lambda _i: bar.advance(task))
-    console.print(f"wrote {paths[0]}" + (f" and {len(paths) - 1} more files" if len(paths) > 1 else ""), highlight=False, soft_wrap=True)
+        paths = write_export(t, path, format, on_frame=lambda _i: bar.advance(task))
+    # The main files beside PATH, then a series folder's frames as a count.
+    main = [str(p) for p in paths if p.parent == path.parent]
+    frames = [p for p in paths if p.parent != path.parent]
+    if frames:
+        main.append(f"{len(frames)} frames in {frames[0].parent}{os.sep}")
+    console.print("wrote " + " and ".join(main), highlight=False, soft_wrap=True)
 
 
 @app.command()

@@ -10,23 +10,28 @@ are drawn by the engine (``kinema._core``, in parallel, with the GIL released); 
 chooses cameras and colours and writes files.
 
     frames = render_frames(traj_x, radius=0.01, t=traj_t, dim=3, color_by="speed", colliders=world.colliders)
-    write_video(frames, "out.mp4", fps=30)
+    write_video(frames, "out.mp4", fps=30, times=traj_t)  # exactly 30 fps, in real time
+
+MP4s are BT.709, tagged so, with ``moov`` first; ``video_rate`` gives the exact frame rate a
+file is written at (GIF delays are whole 1/100 s).
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import tempfile
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
 
 from . import _core
 
-__all__ = ["Camera2D", "Camera3D", "COLORMAPS", "render_frames", "write_video", "VIDEO_EXTENSIONS"]
+__all__ = ["Camera2D", "Camera3D", "COLORMAPS", "render_frames", "write_video", "video_rate", "VIDEO_EXTENSIONS"]
 
 #: Names accepted by ``colormap=``.
 COLORMAPS: tuple[str, ...] = tuple(_core.COLORMAP_NAMES)
@@ -312,15 +317,46 @@ def _auto_camera(lo, hi, dim, width, height):
     return Camera3D.framing(lo, hi, width=width, height=height)
 
 
-def write_video(frames: Iterable[np.ndarray], path, fps: float = 30.0, *, preset: str = "ultrafast", crf: int = 20) -> Path:
+def write_video(
+    frames: Iterable[np.ndarray],
+    path,
+    fps: float = 30.0,
+    *,
+    times=None,
+    preset: str = "ultrafast",
+    crf: int = 20,
+) -> Path:
     """Write RGB uint8 frames of one size to ``path`` and return it as a Path.
 
-    ``.mp4``: H.264 (libx264, yuv420p, BT.601 limited range; odd sizes padded by one edge
-    row/column) by the ffmpeg that imageio-ffmpeg ships, with the x264
-    ``preset`` (ultrafast … veryslow; the default ultrafast keeps 10,000 particles at
-    1280×720 above 60 frames per second on two cores, ``benchmarks/render.py``; slower
-    presets give smaller files) and constant-quality ``crf`` (0 lossless … 51 worst).
-    ``.gif``: Pillow, looping, 1/fps seconds per frame (GIF counts in 1/100 s).
+    The frame rate written is ``video_rate(fps, path)``, exactly:
+
+    - ``.mp4``: ``fps`` as a fraction with a denominator of at most 1001 (30 → 30/1,
+      29.97 → 2997/100, 30000/1001 stays; ``fps`` may be a ``fractions.Fraction``), so a
+      30 fps video says 30 fps, not 30.00003.
+    - ``.gif``: a GIF counts each frame's delay in whole 1/100 s, and browsers play a delay of
+      0 or 1/100 s as 1/10 s: the delay is the whole number of 1/100 s from 2 to 65535 whose
+      rate is closest to ``fps`` (ratio nearest 1), so 60 fps is written at 50 (2/100 s),
+      30 fps at 33.3 (3/100 s), 25 at 25, 12 at 12.5 (8/100 s).
+
+    ``times`` (seconds, increasing, one per frame; optional): the frames were recorded at these
+    times and are to play in real time. The video is written at the rate above and each of its
+    frames shows the recorded frame nearest in time to it (from ``times[0]``, every 1/rate s up
+    to the last time): frames are repeated or dropped where the recording interval differs from
+    1/rate, and none are when it equals it (``World.run(fps=30)`` with dt = 1 ms records every
+    33 ms, 30.30 a second: at 30 fps one frame in about a hundred is dropped). Without
+    ``times``, each frame is one video frame at that rate (its playback speed is up to you).
+
+    ``.mp4``: H.264 (libx264, yuv420p, 4:2:0) by the ffmpeg that imageio-ffmpeg ships. The RGB
+    is converted with the BT.709 matrix into limited ("tv") range by ffmpeg's scaler and the
+    stream and the MP4 say so (``colr`` box and H.264 VUI: primaries, transfer and matrix
+    BT.709, limited range), so players convert it back with the same matrix; the ``moov`` box
+    comes before the media data (``-movflags +faststart``), so a browser plays the file while
+    it downloads. Odd sizes are padded by one edge row/column. x264 ``preset`` (ultrafast …
+    veryslow; the default ultrafast keeps 10,000 particles at 1280×720 above 60 frames per
+    second on two cores, ``benchmarks/render.py``; slower presets give smaller files) and
+    constant-quality ``crf`` (0 lossless … 51 worst).
+    ``.gif``: Pillow, looping, at most 256 colours a frame.
+
     The file is written under a temporary name in the same directory and renamed when
     complete: on any error nothing is left behind and an existing file is untouched.
     """
@@ -328,8 +364,8 @@ def write_video(frames: Iterable[np.ndarray], path, fps: float = 30.0, *, preset
     ext = path.suffix.lower()
     if ext not in VIDEO_EXTENSIONS:
         raise ValueError(f"path = {str(path)!r} is invalid: the extension must be one of {', '.join(VIDEO_EXTENSIONS)}")
-    if not (isinstance(fps, int | float) and math.isfinite(fps) and fps > 0):
-        raise ValueError(f"fps = {fps!r} is invalid: frames per second must be a finite number > 0")
+    rate = video_rate(fps, ext)
+    counts = None if times is None else _repeats(times, rate)
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise FileNotFoundError(f"path = {str(path)!r} is invalid: the directory {str(parent)!r} does not exist")
@@ -337,7 +373,10 @@ def write_video(frames: Iterable[np.ndarray], path, fps: float = 30.0, *, preset
     os.close(fd)
     tmp = Path(tmp_name)
     try:
-        count = (_write_mp4 if ext == ".mp4" else _write_gif)(_checked(frames), tmp, fps, preset, crf)
+        stream = _checked(frames)
+        if counts is not None:
+            stream = _resampled(stream, counts)
+        count = (_write_mp4 if ext == ".mp4" else _write_gif)(stream, tmp, rate, preset, crf)
         if count == 0:
             raise ValueError("frames is empty: a video needs at least one frame")
         os.replace(tmp, path)
@@ -345,6 +384,65 @@ def write_video(frames: Iterable[np.ndarray], path, fps: float = 30.0, *, preset
         tmp.unlink(missing_ok=True)
         raise
     return path
+
+
+#: GIF frame delays, in 1/100 s: browsers play 0 and 1 as 10, and the field has 16 bits.
+GIF_DELAYS_CS = (2, 65535)
+
+
+def video_rate(fps, path=".mp4") -> Fraction:
+    """The exact frame rate ``write_video`` writes for ``fps`` into ``path`` (a file name or
+    just its extension, ".mp4" or ".gif"), in frames per second: for MP4 ``fps`` as a fraction
+    with a denominator up to 1001 (``video_rate(30) == 30``; below 1/1001, 1/n for n whole
+    seconds a frame); for GIF 100/d, d the delay in 1/100 s from 2 to 65535 whose rate is
+    nearest ``fps`` (``video_rate(60, ".gif") == 50``)."""
+    if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not (math.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps = {fps!r} is invalid: frames per second must be a finite number > 0")
+    ext = str(path).lower()
+    ext = ext if ext in VIDEO_EXTENSIONS else Path(ext).suffix
+    if ext not in VIDEO_EXTENSIONS:
+        raise ValueError(f"path = {str(path)!r} is invalid: the extension must be one of {', '.join(VIDEO_EXTENSIONS)}")
+    exact = Fraction(fps) if isinstance(fps, numbers.Rational) else Fraction(float(fps))
+    if ext == ".gif":
+        lo, hi = GIF_DELAYS_CS
+        ideal = 100 / exact
+        candidates = {min(max(d, lo), hi) for d in (math.floor(ideal), math.ceil(ideal))}
+        delay = min(candidates, key=lambda d: (abs(math.log(d / ideal)), d))
+        return Fraction(100, delay)
+    if exact < Fraction(1, 1001):  # slower than a frame in 1001 s: a whole number of seconds a frame
+        return Fraction(1, round(1 / exact))
+    return exact.limit_denominator(1001)
+
+
+def _repeats(times, rate: Fraction) -> np.ndarray:
+    """How many video frames at ``rate`` each frame recorded at ``times`` fills, for playback
+    in real time: video frame k (at times[0] + k/rate, k = 0 … round(span·rate)) shows the
+    recorded frame nearest in time (the earlier one on a tie); 0 drops the frame."""
+    t = np.asarray(times, dtype=np.float64)
+    if t.ndim != 1 or t.size == 0 or not np.all(np.isfinite(t)):
+        raise ValueError(f"times has shape {t.shape}: expected one finite time (s) per frame")
+    if np.any(np.diff(t) <= 0):
+        k = int(np.argmax(np.diff(t) <= 0)) + 1
+        raise ValueError(f"times[{k}] = {t[k]!r} is invalid: times must increase (times[{k - 1}] = {t[k - 1]!r})")
+    r = float(rate)
+    n_out = int(round((t[-1] - t[0]) * r)) + 1
+    # Video frames up to the midpoint between recorded frames i and i + 1 show frame i or one
+    # before it; a relative 1e-9 settles ties that rounding would otherwise decide.
+    mid = 0.5 * (t[:-1] + t[1:]) - t[0]
+    upto = np.minimum(np.floor(mid * r * (1 + 1e-9)).astype(np.int64) + 1, n_out)
+    return np.diff(np.concatenate([[0], upto, [n_out]]))
+
+
+def _resampled(frames: Iterator[np.ndarray], counts: np.ndarray) -> Iterator[np.ndarray]:
+    """Each frame repeated counts[k] times (0: left out)."""
+    k = -1
+    for k, f in enumerate(frames):
+        if k >= counts.size:
+            raise ValueError(f"frames has more frames than times ({counts.size}): give one time per frame")
+        for _ in range(int(counts[k])):
+            yield f
+    if k + 1 != counts.size:
+        raise ValueError(f"frames has {k + 1} frames and times {counts.size}: give one time per frame")
 
 
 def _checked(frames: Iterable[np.ndarray]) -> Iterator[np.ndarray]:
@@ -361,7 +459,25 @@ def _checked(frames: Iterable[np.ndarray]) -> Iterator[np.ndarray]:
         yield np.ascontiguousarray(f)
 
 
-def _write_mp4(frames: Iterator[np.ndarray], tmp: Path, fps: float, preset: str, crf: int) -> int:
+#: What the MP4 says about its colours, and the conversion that makes it true: ffmpeg's
+#: scaler converts the RGB frames with the BT.709 matrix into limited range (the tags alone
+#: would not change the matrix), then x264 and the MP4 muxer record the same description.
+_MP4_COLOUR = [
+    "-vf",
+    "scale=out_color_matrix=bt709:out_range=tv:flags=bicubic+accurate_rnd,format=yuv420p,"
+    "setparams=colorspace=bt709:color_primaries=bt709:color_trc=bt709:range=tv",
+    "-colorspace",
+    "bt709",
+    "-color_primaries",
+    "bt709",
+    "-color_trc",
+    "bt709",
+    "-color_range",
+    "tv",
+]
+
+
+def _write_mp4(frames: Iterator[np.ndarray], tmp: Path, rate: Fraction, preset: str, crf: int) -> int:
     import imageio_ffmpeg
 
     writer = None
@@ -376,18 +492,16 @@ def _write_mp4(frames: Iterator[np.ndarray], tmp: Path, fps: float, preset: str,
                 writer = imageio_ffmpeg.write_frames(
                     str(tmp),
                     (f.shape[1], f.shape[0]),
-                    pix_fmt_in="yuv420p",
-                    fps=fps,
+                    pix_fmt_in="rgb24",
+                    fps=rate,
                     codec="libx264",
                     quality=None,
                     macro_block_size=1,
-                    output_params=["-preset", str(preset), "-crf", str(int(crf))],
+                    output_params=["-preset", str(preset), "-crf", str(int(crf)), *_MP4_COLOUR, "-movflags", "+faststart"],
                     ffmpeg_log_level="error",
                 )
                 writer.send(None)
-            # Converted by the engine in parallel: ffmpeg's own conversion is single-threaded
-            # and the pipe carries half the bytes.
-            writer.send(_core.rgb_to_yuv420p(f))
+            writer.send(f)
             count += 1
     finally:
         if writer is not None:
@@ -395,7 +509,7 @@ def _write_mp4(frames: Iterator[np.ndarray], tmp: Path, fps: float, preset: str,
     return count
 
 
-def _write_gif(frames: Iterator[np.ndarray], tmp: Path, fps: float, preset: str, crf: int) -> int:
+def _write_gif(frames: Iterator[np.ndarray], tmp: Path, rate: Fraction, preset: str, crf: int) -> int:
     from PIL import Image
 
     count = 0
@@ -410,5 +524,7 @@ def _write_gif(frames: Iterator[np.ndarray], tmp: Path, fps: float, preset: str,
     first = next(it, None)
     if first is None:
         return 0
-    first.save(tmp, format="GIF", save_all=True, append_images=it, duration=max(10, round(1000.0 / fps)), loop=0)
+    # rate is 100/d (video_rate): d/100 s a frame, given to Pillow in ms.
+    delay_ms = round(1000 / rate)
+    first.save(tmp, format="GIF", save_all=True, append_images=it, duration=delay_ms, loop=0)
     return count

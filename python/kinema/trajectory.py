@@ -82,7 +82,9 @@ class Trajectory:
     def render(self, path: Any, fps: float | None = None, draw_colliders: bool = True, **options: Any) -> Any:
         """Render the frames to a video, ``.mp4`` (H.264) or ``.gif``, and return its path.
 
-        ``fps`` defaults to the recording's frame rate (real time). The trajectory's
+        ``fps`` defaults to the recording's frame rate (real time: the frames are placed by
+        their times, ``write_video(times=)``, so a GIF, whose delays are whole 1/100 s, still
+        plays in real time; the rate written is ``kinema.render.video_rate``). The trajectory's
         ``colliders`` are drawn with the particles unless ``draw_colliders`` is False (or
         ``colliders=`` gives others). ``options`` go to ``kinema.render_frames``
         (``color_by``, ``width``, ``height``, ``camera``, ...) and ``preset``/``crf`` to
@@ -92,14 +94,16 @@ class Trajectory:
 
         video = {k: options.pop(k) for k in ("preset", "crf") if k in options}
         options.setdefault("colliders", self.colliders if draw_colliders else None)
+        times = None
         if fps is None:
             fps = 1.0 / float(np.median(np.diff(self.t))) if self.t.size > 1 else 30.0
+            times = self.t if self.t.size > 1 else None
         radius = self.radii
         if radius is None or not np.any(radius > 0):
             extent = float(np.ptp(self.positions.reshape(-1, 3), axis=0).max()) or 1.0
             radius = np.full(self.positions.shape[1], extent / 200.0)
         frames = render_frames(self.positions, radius, self.t, dim=self.dim, velocities=self.velocities, **options)
-        return write_video(frames, path, fps=fps, **video)
+        return write_video(frames, path, fps=fps, times=times, **video)
 
     def show(self, mode: str = "viewer", **options: Any) -> Any:
         """Play the frames, inline in Jupyter, else outside it.
