@@ -927,10 +927,13 @@ def test_a_non_finite_state_met_by_spring_dashpot_contacts_is_simulation_diverge
     check({"ops": NAN_STATE_CASES[name]})
 
 
-def test_run_with_a_subnormal_fps_is_a_value_error():
-    # found by the fuzzer: kinema.World().run(0.0, fps=1e-320) raised OverflowError; now a
-    # ValueError naming fps (one frame would take inf steps)
-    check({"ops": [{"op": "world"}, {"op": "run", "args": [0.0], "kwargs": {"fps": 1e-320}}]})
+@pytest.mark.parametrize("fps", [1e-320, 5e-324])
+def test_run_with_a_subnormal_fps_is_a_value_error(fps):
+    # found by the fuzzer: kinema.World().run(0.0, fps=1e-320) raised OverflowError, and
+    # fps=5e-324 ZeroDivisionError (fps * dt underflowed to 0); now a ValueError naming fps
+    # (one frame would take inf steps)
+    answer = check({"ops": [{"op": "world"}, {"op": "run", "args": [0.0], "kwargs": {"fps": fps}}]})
+    assert answer["ops"][-1]["type"] == "ValueError" and answer["ops"][-1]["message"].startswith("fps = "), answer
 
 
 def _solve(**kwargs):
@@ -1031,3 +1034,22 @@ def test_a_collider_type_attribute_that_is_an_array_is_a_trajectory_file_error()
             ]
         }
     )
+
+
+def test_rk45_with_a_huge_dt_stops_at_its_sub_step_cap_not_after_seconds():
+    # found by the fuzzer (make fuzz): rk45 at dt = 1e10 s with quadratic drag chattered about
+    # v = 0 through 10**7 adaptive sub-steps (24 s) before "step too small"; a world step now
+    # stops at 100,000 sub-steps (World::RK45_SUBSTEPS) with reason "too many sub-steps"
+    # w = kinema.World(dim=2, dt=1e10, method="rk45"); w.add_particles(...); w.add(kinema.Drag(0.1, 0.1)); w.step(17)
+    x = [[1.9, 0.0, 0.0], [223.26226341143524, 468.5836569421606, 0.0], [-279.7695945942936, 5.960464477539063e-08, 0.0]]
+    v = [[0.0, -161.5182536432493, 0.0], [36.75412129155052, 0.0, 0.0], [0.0, 0.0, 0.0]]
+    ops = [
+        {"op": "world", "kwargs": {"dim": 2, "dt": 1e10, "method": "rk45"}},
+        {"op": "add_particles", "kwargs": {"position": x, "velocity": v, "mass": [1.0, 1.0, 1.0], "radius": 0.0}},
+        {"op": "add", "kind": "Drag", "kwargs": {"linear": 0.1, "quadratic": 0.1}},
+        {"op": "masses", "value": [390.2028690246454, 2.00001, 845.3065238213276]},
+        {"op": "step", "args": [17]},
+    ]
+    answer = check({"ops": ops}, timeout=5)
+    step = answer["ops"][-1]
+    assert step["type"] == "SimulationDiverged" and "100000 adaptive sub-steps" in step["message"], answer

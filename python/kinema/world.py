@@ -333,7 +333,7 @@ class World:
             raise ValueError(f"duration = {duration} is invalid: it must be a finite number of seconds >= 0")
         if not (np.isfinite(fps) and fps > 0):
             raise ValueError(f"fps = {fps} is invalid: frames per second must be > 0")
-        steps_per_frame = 1.0 / (fps * self.dt)
+        steps_per_frame = 1.0 / fps / self.dt  # (fps * dt may underflow to 0: 5e-324 * 1e-3)
         if not steps_per_frame < 2.0**63:
             raise ValueError(
                 f"fps = {_checks.describe(fps)} is invalid: one frame would take {steps_per_frame:.3g} steps of dt = {self.dt:g} s (at most 2**63)"

@@ -43,6 +43,7 @@ fn world_err(e: Error) -> PyErr {
                 let reason = match reason {
                     Divergence::NonFinite => "non-finite",
                     Divergence::StepTooSmall => "step too small",
+                    Divergence::TooManySubsteps => "too many sub-steps",
                     Divergence::RunawayEnergy { .. } => "runaway energy",
                 };
                 let set = || -> PyResult<()> {

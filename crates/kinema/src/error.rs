@@ -87,6 +87,8 @@ pub enum Divergence {
     NonFinite,
     /// rk45 could not finish the step: its adaptive step fell below what the time resolves.
     StepTooSmall,
+    /// rk45 took its cap of sub-steps ([`crate::world::World::RK45_SUBSTEPS`]) inside one step.
+    TooManySubsteps,
     /// The mechanical energy grew far beyond anything the forces can supply.
     RunawayEnergy {
         /// Kinetic plus potential energy after the step, J.
@@ -104,6 +106,11 @@ impl fmt::Display for Divergence {
         match self {
             Divergence::NonFinite => write!(f, "the state became non-finite"),
             Divergence::StepTooSmall => write!(f, "rk45's adaptive step became too small to finish it"),
+            Divergence::TooManySubsteps => write!(
+                f,
+                "rk45 took {} adaptive sub-steps inside this one step and stopped",
+                crate::world::World::RK45_SUBSTEPS
+            ),
             Divergence::RunawayEnergy {
                 energy,
                 reference,

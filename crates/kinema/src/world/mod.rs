@@ -201,6 +201,12 @@ struct EnergyWatch {
 }
 
 impl World {
+    /// The most adaptive sub-steps rk45 takes inside one step of dt: a step that needs more
+    /// has a dt far beyond what its forces allow (or forces rk45 cannot follow, such as
+    /// quadratic drag chattering about v = 0 over a step of 1e10 s, which took 24 s before
+    /// stopping at the solver's 10⁷), and is refused as diverged in milliseconds instead.
+    pub const RK45_SUBSTEPS: usize = 100_000;
+
     /// An empty world; checks the parameters.
     pub fn new(params: WorldParams) -> Result<Self, Error> {
         if !(params.dt.is_finite() && params.dt > 0.0) {
@@ -719,6 +725,7 @@ impl World {
                 let opts = SolveOptions {
                     t_span: (t, t + h),
                     t_eval: Some(vec![t + h]),
+                    max_steps: Self::RK45_SUBSTEPS,
                     ..SolveOptions::default()
                 };
                 let mut first = FirstOrderForm::new(&mut dynamics);
@@ -739,6 +746,7 @@ impl World {
             Err(StepFailure::Stop(Termination::NonFinite { index, .. })) => {
                 return Err(self.diverged(Divergence::NonFinite, Some((index % n) / 3)))
             }
+            Err(StepFailure::Stop(Termination::MaxSteps { .. })) => return Err(self.diverged(Divergence::TooManySubsteps, None)),
             Err(StepFailure::Stop(_)) => return Err(self.diverged(Divergence::StepTooSmall, None)),
         }
         if let Some(index) = first_non_finite(&self.y_next) {
