@@ -67,6 +67,11 @@ FRAME_BYTES = 96  # per particle and recorded frame: positions and velocities (4
 RENDER_BYTES = 32  # per particle and frame while rendering: the renderer's copy of the positions, the speeds
 
 
+def _count(n: int, noun: str) -> str:
+    """``1 particle``, ``2 particles``, ``1,000 frames``."""
+    return f"{n:,} {noun}" + ("" if n == 1 else "s")
+
+
 def _size(n: float) -> str:
     for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
         if n < 1024 or unit == "PiB":
@@ -213,7 +218,7 @@ def stability(
     for n in names:
         r = kinema.stability.real_interval(n)
         i = kinema.stability.imag_interval(n)
-        table.add_row(n, f"[{r.lo:.4f}, {r.hi:.4f}]", "none" if i.empty else f"[{i.lo:.4f}, {i.hi:.4f}]")
+        table.add_row(n, *("none" if a.empty else f"[{a.lo + 0.0:.4f}, {a.hi + 0.0:.4f}]" for a in (r, i)))  # (+ 0.0: no "-0.0000")
     console.print(table)
     console.print(f"wrote {path}")
 
@@ -408,7 +413,8 @@ def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_
     fps = sc.world.fps
     frames = int(_frames_and_steps(seconds, world.dt, fps)[0])
     console.print(
-        f"{scene}: {len(world)} particles, dim {world.dim}, {world.method}, dt = {world.dt:g} s, {seconds:g} s, {frames + 1} frames; work: {estimate}",
+        f"{scene}: {_count(len(world), 'particle')}, dim {world.dim}, {world.method}, dt = {world.dt:g} s, {seconds:g} s, "
+        f"{_count(frames + 1, 'frame')}; work: {estimate}",
         highlight=False,
         soft_wrap=True,
     )
@@ -416,7 +422,7 @@ def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_
         warnings.simplefilter("always")
         try:
             with _progress() as bar:
-                task = bar.add_task("simulating", total=frames)
+                task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
                 traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task))
         finally:  # a StabilityWarning explains a divergence: show it before the error
             for w in caught:
@@ -560,7 +566,9 @@ def render(
     estimate = f"rendering would take {pixels:.1e} pixels ({frames:,} frames × --width {width} × --height {height}) and about {_size(memory)} of memory"
     _over_limits(str(traj), estimate, 0.0, pixels, memory, force)
     console.print(
-        f"{traj}: {n} particles, {frames} frames, {width}×{height}; work: {pixels:.1e} pixels, about {_size(memory)} of memory", highlight=False, soft_wrap=True
+        f"{traj}: {_count(n, 'particle')}, {_count(frames, 'frame')}, {width}×{height}; work: {pixels:.1e} pixels, about {_size(memory)} of memory",
+        highlight=False,
+        soft_wrap=True,
     )
     path = _render_video(t, out, {"width": width, "height": height, "color_by": color_by}, fps, "rendering")
     console.print(f"wrote {path}", highlight=False, soft_wrap=True)
@@ -652,7 +660,8 @@ def view(
         world = sc.build(source=str(source))
         settings = sc.world
         with _progress() as bar:
-            task = bar.add_task("simulating", total=max(1, round(settings.duration * settings.fps)))
+            frames = int(_frames_and_steps(settings.duration, world.dt, settings.fps)[0])
+            task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
             traj = world.run(settings.duration, fps=settings.fps, callback=lambda w: bar.advance(task))
     else:
         traj = Trajectory.load(source)
@@ -661,7 +670,7 @@ def view(
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)
         return
     try:
-        url, server = serve(traj, open_browser=not no_browser, port=port)
+        url, server = serve(traj, open_browser=not no_browser, port=port, announce=False)
     except BundleMissingError:
         raise
     except OSError as e:  # the port is taken or not ours to bind

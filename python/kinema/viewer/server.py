@@ -75,9 +75,11 @@ def _gui_available() -> bool:
     return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
-def serve(traj: Any, open_browser: bool = True, port: int = 0, *, title: str = "kinema", max_bytes: int = SERVE_MAX_BYTES) -> tuple[str, ThreadingHTTPServer]:
+def serve(
+    traj: Any, open_browser: bool = True, port: int = 0, *, title: str = "kinema", max_bytes: int = SERVE_MAX_BYTES, announce: bool = True
+) -> tuple[str, ThreadingHTTPServer]:
     """Serve the viewer for ``traj`` on 127.0.0.1 (``port`` 0: a free one) from a daemon
-    thread; print the URL and open it in the user's browser when ``open_browser`` and a
+    thread; print the URL (unless ``announce`` is False) and open it in the user's browser when ``open_browser`` and a
     graphical browser exists (no error when none does). Returns ``(url, server)``; stop with
     ``server.shutdown()``, or keep the process alive while the page is in use (the thread is
     ``server.thread``). Frames, then particles, are left out by strides when the frame data
@@ -93,7 +95,8 @@ def serve(traj: Any, open_browser: bool = True, port: int = 0, *, title: str = "
     thread.start()
     server.thread = thread  # type: ignore[attr-defined]
     url = f"http://127.0.0.1:{server.server_address[1]}/"
-    print(f"kinema viewer: {url}", flush=True)
+    if announce:  # (the `kinema view` command prints its own line with the URL)
+        print(f"kinema viewer: {url}", flush=True)
     if open_browser and _gui_available():
         try:
             webbrowser.open(url)
