@@ -22,6 +22,17 @@ def test_stability_writes_the_png_and_prints_the_intervals(tmp_path):
     assert [p.name for p in out.parent.iterdir()] == ["regions.png"]  # no temporary left behind
 
 
+def test_pictures_get_the_mode_an_ordinary_open_gives(tmp_path):
+    # (they were written 0600 through mkstemp; a file the user's tools share must follow the umask)
+    old = os.umask(0o022)
+    try:
+        res = runner.invoke(app, ["stability", "--methods", "euler", "--out", str(tmp_path / "r.png")])
+    finally:
+        os.umask(old)
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "r.png").stat().st_mode & 0o777 == 0o644
+
+
 def test_unknown_method_is_exit_2_with_the_valid_names(tmp_path):
     res = runner.invoke(app, ["stability", "--methods", "euler,rk5", "--out", str(tmp_path / "r.png")])
     assert res.exit_code == 2

@@ -158,19 +158,17 @@ def save_figure_atomically(fig, out: Path, dpi: int = 130) -> Path:
     suffix = out.suffix.lower().lstrip(".")
     if suffix not in {"png", "svg", "pdf", "jpg", "jpeg"}:
         _fail(f"--out {out}: unsupported image format '{out.suffix}'; use .png, .svg, .pdf or .jpg")
+    from .io._files import TrajectoryFileError, atomic_file
+
     parent = out.parent if str(out.parent) else Path(".")
     try:
         parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=out.suffix, dir=parent)
+        with atomic_file(out) as tmp:  # the mode an ordinary open() gives (mkstemp's was 0600)
+            fig.savefig(tmp, dpi=dpi, format=suffix, bbox_inches="tight")
+    except TrajectoryFileError as e:  # (an OSError of the write, naming the file)
+        _fail(f"--out {out}: {e}")
     except OSError as e:
-        _fail(f"--out {out}: cannot write there ({e.strerror})")
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=dpi, format=suffix, bbox_inches="tight")
-        os.replace(tmp, out)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        _fail(f"--out {out}: cannot write there ({e.strerror or e})")
     return out
 
 
