@@ -15,7 +15,7 @@ TEST_STAMP := $(VENV)/.test-deps-installed
 BUILT  := $(VENV)/.kinema-built
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml pyproject.toml
 
-.PHONY: demo test test-rust test-python fuzz bench pictures fmt setup build viewer clean
+.PHONY: demo test test-rust test-python fuzz bench pictures fmt setup build viewer wheel-check clean
 
 setup: $(STAMP)
 
@@ -43,6 +43,19 @@ $(BUILT): $(STAMP) $(RUST_SOURCES)
 # (tests/test_viewer_bundle.py checks that it is what viewer/src builds).
 viewer:
 	cd viewer && npm ci --no-audit --no-fund --loglevel=error && node build.mjs
+
+# The package as a user installs it: the release wheel into a fresh venv outside the checkout
+# (nothing of python/ on the path), then `kinema demo` and `kinema view --html` from it. CI
+# runs this after `make test`.
+WHEEL_DIR := target/wheel-check
+wheel-check: $(STAMP)
+	rm -rf $(WHEEL_DIR) && mkdir -p $(WHEEL_DIR)/run
+	$(VENV)/bin/maturin build --release -q -o $(WHEEL_DIR)
+	$(PYTHON) -m venv $(WHEEL_DIR)/venv
+	$(WHEEL_DIR)/venv/bin/pip install --disable-pip-version-check -q $(WHEEL_DIR)/kinema-*.whl
+	cd $(WHEEL_DIR)/run && ../venv/bin/kinema --version && ../venv/bin/kinema demo --out demo
+	cd $(WHEEL_DIR)/run && test -s demo/demo.html && test -s demo/demo.mp4 && ../venv/bin/kinema view demo/trajectory.h5 --html view.html && test -s view.html
+	@echo "wheel-check: the installed wheel ran kinema demo and kinema view --html"
 
 demo: build
 	$(VENV)/bin/kinema demo --out out
