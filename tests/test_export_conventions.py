@@ -290,12 +290,14 @@ def test_kinema_export_defaults_do_not_collide(saved):
         "trajectory.h5",
         "trajectory.pvd",
         "trajectory.xyz",
+        "trajectory_colliders.vtp",  # the run's box, beside the .pvd
         "trajectory_ply",
         "trajectory_vtk",
     ]
     assert len(list((folder / "trajectory_vtk").iterdir())) == len(list((folder / "trajectory_ply").iterdir())) == n
     res = runner.invoke(app, ["export", str(saved), "-f", "vtk"])  # again: it replaces its own series
-    assert f"wrote {folder / 'trajectory.pvd'} and {n} frames in {folder / 'trajectory_vtk'}{os.sep}" in res.output.replace("\n", "")
+    wrote = f"wrote {folder / 'trajectory.pvd'} and {folder / 'trajectory_colliders.vtp'} and {n} frames in {folder / 'trajectory_vtk'}{os.sep}"
+    assert wrote in res.output.replace("\n", "")
 
 
 def test_kinema_export_creates_missing_folders(saved, tmp_path):
@@ -376,4 +378,5 @@ def test_kinema_export_files_follow_the_umask(saved, tmp_path):
             preexec_fn=lambda: os.umask(0o027),
         )
     frames = {f"new/run_vtk/run_{i:05d}.vtp": 0o640 for i in range(kinema.load_trajectory(saved).t.size)}
-    assert modes(out) == {"new": 0o750, "new/run.pvd": 0o640, "new/run.csv": 0o640, "new/run_vtk": 0o750, **frames}
+    files = {"new/run.pvd": 0o640, "new/run_colliders.vtp": 0o640, "new/run.csv": 0o640}
+    assert modes(out) == {"new": 0o750, **files, "new/run_vtk": 0o750, **frames}

@@ -332,7 +332,7 @@ def test_vtk_series_reads_back(tmp_path, dim):
         arrays, n_points, n_verts = read_vtp(tmp_path / d.get("file"))
         assert n_points == n_verts == N
         np.testing.assert_array_equal(arrays["Points"], tr.positions[i])
-        np.testing.assert_array_equal(arrays["velocity"], tr.velocities[i])
+        np.testing.assert_array_equal(arrays["v"], tr.velocities[i])
         np.testing.assert_array_equal(arrays["speed"], np.linalg.norm(tr.velocities[i], axis=1))
         np.testing.assert_array_equal(arrays["radius"], tr.radii)
         np.testing.assert_array_equal(arrays["mass"], tr.masses)

@@ -6,7 +6,8 @@ from __future__ import annotations
 import base64
 import os
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import quoteattr
@@ -45,11 +46,16 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
     trajectory exported as ``run.pvd``, ``run.ply``, ``run.xyz``, ``run.csv``, ``run.gsd`` and
     ``run.lammpstrj`` gives files that never collide:
 
-    - ``"vtk"`` (.pvd, .vtp): for ParaView, ``<stem>.pvd`` (open this one: a collection whose
-      timesteps are the frame times) and the folder ``<stem>_vtk/`` with one XML PolyData
-      file per frame, ``<stem>_00000.vtp``: points (m) as vertex cells, point data
-      ``velocity`` (m/s), ``speed`` (m/s), ``radius`` (m), ``mass`` (kg), ``id``; float64,
-      base64.
+    - ``"vtk"`` (.pvd, .vtp): for ParaView and OVITO, ``<stem>.pvd`` (open this one: a
+      collection whose timesteps are the frame times) and the folder ``<stem>_vtk/`` with one
+      XML PolyData file per frame, ``<stem>_00000.vtp``: points (m) as vertex cells, point
+      data ``v`` (velocity, m/s), ``speed`` (m/s), ``radius`` (m), ``mass`` (kg), ``id``;
+      float64 and int64, base64. OVITO maps ``v``, ``radius``, ``mass`` and ``id`` to
+      Velocity, Radius, Mass and Particle Identifier. When the trajectory has ``colliders``,
+      ``<stem>_colliders.vtp`` beside the .pvd holds them: a box as its 12 edges (lines), a
+      plane as a square (a polygon) that covers the scene, a sphere obstacle as a sphere of
+      polygons (2D: a rectangle, a segment and a disk at z = 0), the cell data ``collider``
+      the index in ``colliders``. OVITO reads the polygons of that file, not the lines.
     - ``"ply"`` (.ply): for Blender and Houdini, the folder ``<stem>_ply/`` with one binary
       little-endian PLY per frame, ``<stem>_00000.ply``, ``<stem>_00001.ply``, ...: vertex
       properties x y z vx vy vz (float32; m, m/s), radius (float32, m) and id (int32).
@@ -151,51 +157,232 @@ def _vtk_array(name: str, a: np.ndarray, components: int = 1, count: str = "Numb
     return f'<DataArray type="{vtk_type}" Name={quoteattr(name)} {count}="{components}" format="binary">{payload}</DataArray>'
 
 
+def _cells(cells: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The connectivity and offsets arrays of a list of cells (each an array of point indices)."""
+    if not cells:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    return np.concatenate(cells).astype(np.int64), np.cumsum([len(c) for c in cells], dtype=np.int64)
+
+
+def _polydata(
+    points: np.ndarray,
+    point_data: Sequence[str] = (),
+    cell_data: Sequence[str] = (),
+    field_data: Sequence[str] = (),
+    attributes: str = "",
+    **cells: tuple[np.ndarray, np.ndarray],
+) -> str:
+    """An XML PolyData file (one Piece): ``points`` (n, 3) float64, the DataArrays of
+    ``point_data``, ``cell_data`` and ``field_data``, ``attributes`` of <PointData> (the
+    active ``Scalars`` and ``Vectors``), and the cells ``verts``, ``lines``, ``polys`` as
+    (connectivity, offsets) pairs.
+
+    The <FieldData> comes after the Piece: VTK reads it anywhere in <PolyData>, but OVITO's
+    format check walks from <VTKFile> to the first <Piece> and gives up at the end of a
+    DataArray before it, so a frame with its FieldData first is not recognised (and an OVITO
+    .pvd import silently loads no particles)."""
+    counts = {name: len(cells[name.lower()][1]) if name.lower() in cells else 0 for name in ("Verts", "Lines", "Strips", "Polys")}
+    lines = [
+        '<?xml version="1.0"?>',
+        '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
+        "<PolyData>",
+        f'<Piece NumberOfPoints="{len(points)}" ' + " ".join(f'NumberOf{k}="{v}"' for k, v in counts.items()) + ">",
+        f"<PointData{attributes}>",
+        *point_data,
+        "</PointData>",
+        *(["<CellData>", *cell_data, "</CellData>"] if cell_data else []),
+        f"<Points>{_vtk_array('Points', np.asarray(points, dtype=np.float64).reshape(-1, 3), 3)}</Points>",
+    ]
+    for name in ("Verts", "Lines", "Polys"):
+        if name.lower() in cells:
+            connectivity, offsets = cells[name.lower()]
+            lines.append(f"<{name}>{_vtk_array('connectivity', connectivity)}{_vtk_array('offsets', offsets)}</{name}>")
+    lines.append("</Piece>")
+    if field_data:
+        lines.append(f"<FieldData>{''.join(field_data)}</FieldData>")
+    lines += ["</PolyData>", "</VTKFile>"]
+    return "\n".join(lines) + "\n"
+
+
 def _vtp(fr: Frames, i: int) -> str:
+    """Frame ``i``: the particles as points and vertex cells, point data ``v`` (velocity),
+    ``speed``, ``radius``, ``mass``, ``id`` (the names OVITO maps to Velocity, Radius, Mass
+    and Particle Identifier; ParaView takes ``v`` as the active vectors), the field
+    ``TimeValue``."""
     n = fr.n_particles
     x, v = fr.positions[i], fr.velocities[i]
-    point_data = [_vtk_array("velocity", v, 3), _vtk_array("speed", np.linalg.norm(v, axis=1))]
+    point_data = [_vtk_array("v", v, 3), _vtk_array("speed", np.linalg.norm(v, axis=1))]
     if fr.radii is not None:
         point_data.append(_vtk_array("radius", fr.radii))
     if fr.masses is not None:
         point_data.append(_vtk_array("mass", fr.masses))
     point_data.append(_vtk_array("id", fr.ids))
-    # One vertex cell per particle, so that ParaView draws the points without a filter.
+    # One vertex cell per particle, so that ParaView draws the points without a filter (and
+    # OVITO reads the file as particles: as many vertices as points, no other cells).
     cells = np.arange(n, dtype=np.int64)
-    lines = [
-        '<?xml version="1.0"?>',
-        '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
-        "<PolyData>",
-        f"<FieldData>{_vtk_array('TimeValue', np.array([fr.t[i]]), 1, 'NumberOfTuples')}</FieldData>",
-        f'<Piece NumberOfPoints="{n}" NumberOfVerts="{n}" NumberOfLines="0" NumberOfStrips="0" NumberOfPolys="0">',
-        '<PointData Scalars="speed" Vectors="velocity">',
-        *point_data,
-        "</PointData>",
-        f"<Points>{_vtk_array('Points', x, 3)}</Points>",
-        f"<Verts>{_vtk_array('connectivity', cells)}{_vtk_array('offsets', cells + 1)}</Verts>",
-        "</Piece>",
-        "</PolyData>",
-        "</VTKFile>",
-    ]
-    return "\n".join(lines) + "\n"
+    return _polydata(
+        x,
+        point_data,
+        field_data=[_vtk_array("TimeValue", np.array([fr.t[i]]), 1, "NumberOfTuples")],
+        attributes=' Scalars="speed" Vectors="v"',
+        verts=(cells, cells + 1),
+    )
+
+
+_SPHERE_BANDS, _SPHERE_SEGMENTS = 16, 32  # a sphere obstacle's latitude bands and longitudes
+_DISK_SEGMENTS = 64  # the sides of a 2D sphere obstacle's disk
+
+
+def _unit(a: np.ndarray) -> np.ndarray:
+    return a / np.linalg.norm(a)
+
+
+def _scene_bounds(traj: Any, fr: Frames, colliders: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) of the trajectory's cell (``_cell.trajectory_cell``: all particles of all
+    frames, or the box's walls) and of the colliders' finite parts: the room open box faces
+    and planes are drawn in."""
+    cell = trajectory_cell(traj, fr)
+    lo, hi = cell.lo.astype(np.float64), cell.hi.astype(np.float64)
+    for d in colliders:
+        if d["type"] == "sphere":
+            c, r = np.asarray(d["center"], dtype=np.float64), float(d["radius"])
+            lo, hi = np.minimum(lo, c - r), np.maximum(hi, c + r)
+        elif d["type"] == "box":
+            for bound in (d["lo"], d["hi"]):
+                b = np.full(3, np.nan)
+                b[: len(bound)] = bound
+                finite = np.isfinite(b)
+                lo[finite], hi[finite] = np.minimum(lo[finite], b[finite]), np.maximum(hi[finite], b[finite])
+    return lo, hi
+
+
+def _uv_sphere() -> tuple[np.ndarray, list[np.ndarray]]:
+    """The unit sphere as ``_SPHERE_BANDS`` bands of ``_SPHERE_SEGMENTS`` faces: its points
+    (the poles first and last, the rings between) and its faces (triangles at the poles,
+    quads between), anticlockwise seen from outside."""
+    m, s = _SPHERE_BANDS, _SPHERE_SEGMENTS
+    theta, phi = np.pi * np.arange(1, m) / m, 2 * np.pi * np.arange(s) / s
+    ring = np.stack([np.sin(theta)[:, None] * np.cos(phi), np.sin(theta)[:, None] * np.sin(phi), np.cos(theta)[:, None] * np.ones(s)], axis=2)
+    points = np.concatenate([[[0.0, 0.0, 1.0]], ring.reshape(-1, 3), [[0.0, 0.0, -1.0]]])
+    north, south = 0, len(points) - 1
+
+    def at(band: int, j: int) -> int:
+        return 1 + band * s + j % s
+
+    faces = [np.array([north, at(0, j), at(0, j + 1)]) for j in range(s)]
+    faces += [np.array([at(b, j), at(b + 1, j), at(b + 1, j + 1), at(b, j + 1)]) for b in range(m - 2) for j in range(s)]
+    faces += [np.array([south, at(m - 2, j + 1), at(m - 2, j)]) for j in range(s)]
+    return points, faces
+
+
+def _collider_geometry(traj: Any, fr: Frames) -> tuple[np.ndarray, list[tuple[int, np.ndarray]], list[tuple[int, np.ndarray]]] | None:
+    """The trajectory's colliders as points (m) and line and polygon cells, each cell with
+    the index of its collider; ``None`` without colliders.
+
+    A box is its 12 edges (a 2D trajectory's box: the 4 edges of its rectangle at z = 0), an
+    open face at the bound of ``_scene_bounds``; a plane is a square centred on the point
+    of the plane nearest the middle of the scene, as wide as the scene's diagonal, so that it
+    covers the scene (2D: a line segment at z = 0); a sphere obstacle is a UV sphere of
+    ``_SPHERE_BANDS`` × ``_SPHERE_SEGMENTS`` faces, its points at exactly its radius (2D: a
+    disk of ``_DISK_SEGMENTS`` sides at z = 0)."""
+    if not getattr(traj, "colliders", None):
+        return None
+    from ..render import _describe_colliders
+
+    colliders = _describe_colliders(traj.colliders)
+    lo, hi = _scene_bounds(traj, fr, colliders)
+    middle, half = (lo + hi) / 2, float(np.linalg.norm(hi - lo)) / 2
+    points: list[np.ndarray] = []
+    lines: list[tuple[int, np.ndarray]] = []
+    polys: list[tuple[int, np.ndarray]] = []
+    base = 0
+
+    def add(p: np.ndarray) -> int:
+        nonlocal base
+        points.append(np.asarray(p, dtype=np.float64).reshape(-1, 3))
+        first, base = base, base + len(points[-1])
+        return first
+
+    for k, d in enumerate(colliders):
+        if d["type"] == "box":
+            b_lo, b_hi = np.full(3, -np.inf), np.full(3, np.inf)
+            b_lo[: len(d["lo"])], b_hi[: len(d["hi"])] = d["lo"], d["hi"]
+            b_lo, b_hi = np.where(np.isfinite(b_lo), b_lo, lo), np.where(np.isfinite(b_hi), b_hi, hi)
+            if fr.dim == 2:
+                first = add([[b_lo[0], b_lo[1], 0], [b_hi[0], b_lo[1], 0], [b_hi[0], b_hi[1], 0], [b_lo[0], b_hi[1], 0]])
+                lines += [(k, first + np.array([j, (j + 1) % 4])) for j in range(4)]
+            else:
+                # Corner j has the upper bound along the axes of its set bits (x: 1, y: 2, z: 4).
+                first = add([[(b_hi if j >> a & 1 else b_lo)[a] for a in range(3)] for j in range(8)])
+                lines += [(k, first + np.array([j, j | 1 << a])) for j in range(8) for a in range(3) if not j >> a & 1]
+        elif d["type"] == "plane":
+            n = np.asarray(d["normal"], dtype=np.float64)
+            if not np.linalg.norm(n) > 0:
+                raise ValueError(f"colliders[{k}]: the plane's normal = {d['normal']!r} is invalid: it must not be zero")
+            n = _unit(n)
+            centre = middle - np.dot(middle - np.asarray(d["point"], dtype=np.float64), n) * n
+            in_xy = np.cross(n, [0.0, 0.0, 1.0])
+            if fr.dim == 2 and np.linalg.norm(in_xy) > 1e-12:
+                u = _unit(in_xy)
+                along = np.array([0.0, 0.0, 1.0]) - n[2] * n  # in the plane, up
+                centre -= centre[2] / along[2] * along  # along the plane to z = 0
+                lines.append((k, add([centre - half * u, centre + half * u]) + np.arange(2)))
+            else:
+                u = _unit(np.cross(n, np.eye(3)[np.argmin(np.abs(n))]))
+                w = np.cross(n, u)  # u × w = n: the square's corners turn anticlockwise seen from the side n points to
+                corners = [centre + half * (su * u + sw * w) for su, sw in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+                polys.append((k, add(corners) + np.arange(4)))
+        else:
+            c, r = np.asarray(d["center"], dtype=np.float64), float(d["radius"])
+            if fr.dim == 2:
+                phi = 2 * np.pi * np.arange(_DISK_SEGMENTS) / _DISK_SEGMENTS
+                disk = np.stack([c[0] + r * np.cos(phi), c[1] + r * np.sin(phi), np.zeros_like(phi)], axis=1)
+                polys.append((k, add(disk) + np.arange(_DISK_SEGMENTS)))
+            else:
+                unit, faces = _uv_sphere()
+                first = add(c + r * unit)
+                polys += [(k, first + f) for f in faces]
+    return np.concatenate(points) if points else np.zeros((0, 3)), lines, polys
+
+
+def _colliders_vtp(traj: Any, fr: Frames) -> str | None:
+    """The colliders file: the geometry of ``_collider_geometry`` as line and polygon cells,
+    with the cell data ``collider`` (the index in ``traj.colliders``); ``None`` without
+    colliders."""
+    geometry = _collider_geometry(traj, fr)
+    if geometry is None:
+        return None
+    points, lines, polys = geometry
+    index = np.array([k for k, _ in lines] + [k for k, _ in polys], dtype=np.int64)  # VTK numbers lines before polygons
+    return _polydata(
+        points,
+        cell_data=[_vtk_array("collider", index)],
+        lines=_cells([c for _, c in lines]),
+        polys=_cells([c for _, c in polys]),
+    )
 
 
 def _write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
     folder, stem, pattern = _series(path, "vtk", ".vtp")
     pvd = path.with_name(stem + ".pvd")
+    colliders = path.with_name(stem + "_colliders.vtp")
+    scenery = _colliders_vtp(traj, fr)  # before anything is written: a bad collider is a ValueError
     names = [f"{stem}_{i:0{_DIGITS}d}.vtp" for i in range(fr.n_frames)]
     datasets = "\n".join(f'<DataSet timestep="{float(fr.t[i])!r}" part="0" file={quoteattr(f"{folder.name}/{name}")}/>' for i, name in enumerate(names))
     collection = (
         f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="1.0" byte_order="LittleEndian">\n<Collection>\n{datasets}\n</Collection>\n</VTKFile>\n'
     )
-    # The frames first, then the collection that points at them.
+    # The frames first, then the colliders, then the collection that points at the frames.
     with atomic_file(pvd) as tmp_pvd:
-        with atomic_folder(folder, pattern) as tmp:
-            for i, name in enumerate(names):
-                (tmp / name).write_text(_vtp(fr, i), encoding="ascii")
-                on_frame(i)
+        with atomic_file(colliders) if scenery is not None else nullcontext() as tmp_colliders:
+            with atomic_folder(folder, pattern) as tmp:
+                for i, name in enumerate(names):
+                    (tmp / name).write_text(_vtp(fr, i), encoding="ascii")
+                    on_frame(i)
+            if tmp_colliders is not None:
+                tmp_colliders.write_text(scenery, encoding="ascii")
         tmp_pvd.write_text(collection, encoding="utf-8")
-    return [pvd, *(folder / name for name in names)]
+    return [pvd, *([colliders] if scenery is not None else []), *(folder / name for name in names)]
 
 
 # -- PLY ----------------------------------------------------------------------------------------
