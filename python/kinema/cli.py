@@ -587,7 +587,8 @@ def export(
     """Export a saved trajectory for other programs.
 
     Beside TRAJ (run.h5) unless -o names another file: vtk writes run.pvd (open it in
-    ParaView) and its frames in the folder run_vtk/; ply one file a frame in the folder
+    ParaView or OVITO), its frames in the folder run_vtk/ and the colliders in
+    run_colliders.vtp; ply one file a frame in the folder
     run_ply/ (run_00000.ply, ...); xyz run.xyz (extended XYZ, SI units); csv run.csv; gsd
     run.gsd; lammps run.lammpstrj (dump custom). So the formats never overwrite each other.
     A suffix of -o that names another format (-f vtk -o x.ply) is refused."""

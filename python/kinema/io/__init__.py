@@ -3,8 +3,9 @@
 - ``save_h5md(traj, path)`` / ``load_h5md(path)``: the H5MD 1.1 layout, read back exactly
   (needs h5py). Loading checks what it reads (shapes, types and the memory needed before
   any data is read, then the values) and names the file, the dataset and the bad value.
-- ``export(traj, path, format)``: VTK PolyData series with a .pvd collection (ParaView), PLY
-  per frame (Blender, Houdini), extended XYZ (OVITO, ASE), CSV.
+- ``export(traj, path, format)``: VTK PolyData series with a .pvd collection and the
+  colliders (ParaView, OVITO), PLY per frame (Blender, Houdini), extended XYZ (OVITO, ASE),
+  CSV, GSD (HOOMD, OVITO), a LAMMPS dump (OVITO, ASE, VMD).
 - ``TrajectoryFileError``: a file that cannot be read or written (a ``ValueError`` whose
   message is one line naming the file).
 
