@@ -128,26 +128,49 @@ def test_h5md_layout_follows_the_spec(tmp_path):
     tr = synthetic()
     save_h5md(tr, tmp_path / "run.h5", group="balls", author="Ada")
     with h5py.File(tmp_path / "run.h5") as f:
+
+        def fixed_length(obj, name):  # H5MD: author, creator and boundary are fixed-length strings
+            info = h5py.check_string_dtype(obj.attrs.get_id(name).dtype)
+            assert info is not None and info.length is not None, (obj.name, name)
+            return np.char.decode(np.asarray(obj.attrs[name]), info.encoding).tolist()
+
+        def unit(ds):  # the units module: a variable-length ASCII string
+            if "unit" not in ds.attrs:
+                return None
+            info = h5py.check_string_dtype(ds.attrs.get_id("unit").dtype)
+            assert (info.encoding, info.length) == ("ascii", None), ds.name
+            return ds.attrs["unit"]
+
         h5md = f["h5md"]
         np.testing.assert_array_equal(h5md.attrs["version"], [1, 1])
-        assert h5md["author"].attrs["name"] == "Ada"
-        assert dict(h5md["creator"].attrs) == {"name": "kinema", "version": kinema.__version__}
+        assert fixed_length(h5md["author"], "name") == "Ada"
+        assert [fixed_length(h5md["creator"], k) for k in ("name", "version")] == ["kinema", kinema.__version__]
         assert h5md["modules/units"].attrs["system"] == "SI"
         p = f["particles/balls"]
         assert p["box"].attrs["dimension"] == 3
-        assert list(p["box"].attrs["boundary"]) == ["none"] * 3
-        for element, unit in (("position", "m"), ("velocity", "m s-1")):
+        assert fixed_length(p["box"], "boundary") == ["none"] * 3
+        for element, unit_of in (("position", "m"), ("velocity", "m s-1")):
             g = p[element]
             assert isinstance(g, h5py.Group) and set(g) == {"step", "time", "value"}
             assert g["step"].dtype.kind == "i" and g["step"].shape == (F,)
-            assert g["time"].dtype == np.float64 and g["time"].attrs["unit"] == "s"
-            assert g["value"].attrs["unit"] == unit and g["value"].chunks is not None
+            assert g["time"].dtype == np.float64 and unit(g["time"]) == "s"
+            assert unit(g["value"]) == unit_of and g["value"].chunks is not None
             assert g["value"].compression == "gzip" and g["value"].maxshape[0] is None
-        # step and time are one dataset, hard-linked into every element
+        # step and time are one dataset, hard-linked into every element, the box's included
         assert p["velocity/step"] == p["position/step"] and f["observables/momentum/time"] == p["position/time"]
-        for name, unit in (("mass", "kg"), ("radius", "m"), ("id", None)):
-            assert isinstance(p[name], h5py.Dataset) and p[name].shape == (N,)
-            assert p[name].attrs.get("unit") == unit
+        assert p["box/edges/step"] == p["position/step"] and p["box/edges/time"] == p["position/time"]
+        # per-particle elements are time-dependent (znh5md reads no other form), the same at every frame
+        expected = {"species": np.zeros(N), "mass": tr.masses, "radius": tr.radii, "id": tr.ids}
+        for name, unit_of in (("species", None), ("mass", "kg"), ("radius", "m"), ("id", None)):
+            g = p[name]
+            assert set(g) == {"step", "time", "value"} and g["step"] == p["position/step"], name
+            assert g["value"].shape == (F, N) and unit(g["value"]) == unit_of, name
+            np.testing.assert_array_equal(g["value"], np.broadcast_to(expected[name], (F, N)), err_msg=name)
+        assert p["species/value"].dtype.kind == p["id/value"].dtype.kind == "i"
+        # no periodic axis: the edges are placeholders (0) and pbc all False
+        np.testing.assert_array_equal(p["box/edges/value"], np.zeros((F, 3)))
+        assert unit(p["box/edges/value"]) == "m"
+        np.testing.assert_array_equal(p["box/pbc/value"], np.zeros((F, 3), dtype=bool))
         obs = f["observables"]
         units = {
             "kinetic_energy": "J",
@@ -161,9 +184,9 @@ def test_h5md_layout_follows_the_spec(tmp_path):
             "potential_energy_by_force/gravity": "J",
             "contacts": None,
         }
-        for name, unit in units.items():
+        for name, unit_of in units.items():
             assert set(obs[name]) == {"step", "time", "value"}, name
-            assert obs[name]["value"].attrs.get("unit") == unit, name
+            assert unit(obs[name]["value"]) == unit_of, name
         assert obs["momentum/value"].shape == (F, 3)
         np.testing.assert_array_equal(obs["potential_energy/value"], tr.potential["spring"] + tr.potential["gravity"])
         assert dict(f["parameters/kinema"].attrs) == {"dt": 0.01, "dt_unit": "s", "method": "verlet"}
@@ -429,8 +452,10 @@ def test_a_periodic_box_is_written_with_its_edges(tmp_path):
     save_h5md(tr, tmp_path / "run.h5")
     with h5py.File(tmp_path / "run.h5") as f:
         box = f["particles/all/box"]
-        assert list(box.attrs["boundary"]) == ["periodic", "periodic", "none"]
-        np.testing.assert_array_equal(box["edges"], [2.0, 3.0, 4.0])
+        assert np.char.decode(box.attrs["boundary"]).tolist() == ["periodic", "periodic", "none"]  # fixed-length strings
+        # time-dependent, the same edges at every frame, as znh5md and MDAnalysis read them
+        np.testing.assert_array_equal(box["edges/value"], [[2.0, 3.0, 4.0]] * F)
+        np.testing.assert_array_equal(box["pbc/value"], [[True, True, False]] * F)
     export(tr, tmp_path / "run.xyz")
     first = (tmp_path / "run.xyz").read_text().splitlines()[1]
     # x and y are the periodic cell; z is open: the particles' extent with a margin
@@ -584,8 +609,12 @@ DAMAGES = {
     ),
     "zero mass": (_masses([1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0]), "dataset 'masses' (/particles/all/mass) has mass[6] = 0 (masses must be finite and > 0 kg)"),
     "nan mass": (_masses([1.0, np.nan, 1.0, 1.0, 1.0, 1.0, 1.0]), "dataset 'masses' (/particles/all/mass) has a non-finite value (nan) at particle 1"),
-    "nan radius": (_set(RADIUS, 4, np.nan), "dataset 'radii' (/particles/all/radius) has a non-finite value (nan) at particle 4"),
-    "negative radius": (_set(RADIUS, 1, -0.5), "dataset 'radii' (/particles/all/radius) has radius[1] = -0.5 (radii must be finite and >= 0 m)"),
+    # per-particle elements are time-dependent, constant: the first frame is read
+    "nan radius": (_set(f"{RADIUS}/value", (0, 4), np.nan), "dataset 'radii' (/particles/all/radius/value) has a non-finite value (nan) at particle 4"),
+    "negative radius": (
+        _set(f"{RADIUS}/value", (0, 1), -0.5),
+        "dataset 'radii' (/particles/all/radius/value) has radius[1] = -0.5 (radii must be finite and >= 0 m)",
+    ),
     "dt a word": (_attr("parameters/kinema", "dt", "fast"), "attribute 'dt' (/parameters/kinema) = 'fast' is not a positive number"),
     "dt negative": (_attr("parameters/kinema", "dt", -0.01), "attribute 'dt' (/parameters/kinema) = -0.01 is not a positive number"),
     "dt nan": (_attr("parameters/kinema", "dt", np.nan), "attribute 'dt' (/parameters/kinema) = nan is not a positive number"),
@@ -655,19 +684,34 @@ def test_a_file_without_particles_is_refused(tmp_path):
         kinema.Trajectory.load(path)
 
 
-def test_a_missing_element_kinema_needs_is_named_with_the_file(tmp_path):
-    # load_h5md reads what is there (no velocities: None); a kinema.Trajectory needs them.
+def test_a_file_without_velocities_or_energies_loads_them_as_unknown(tmp_path):
+    # load_h5md reads what is there (no velocities: None); a kinema.Trajectory, which needs
+    # them, gets NaN (unknown) velocities, kinetic energy, momentum and angular momentum, as
+    # for a file of another program; saved again, the unknown values are not written.
     path = tmp_path / "run.h5"
-    save_h5md(synthetic(), path)
+    tr = synthetic()
+    save_h5md(tr, path)
     with h5py.File(path, "r+") as f:
         del f[VEL]
     assert load_h5md(path).velocities is None
-    with pytest.raises(TrajectoryFileError, match=r"run\.h5: not a complete kinema trajectory: /particles/all/velocity \(velocities\) is missing$"):
-        kinema.Trajectory.load(path)
+    back = kinema.Trajectory.load(path)
+    assert back.velocities.shape == (F, N, 3) and np.isnan(back.velocities).all()
+    np.testing.assert_array_equal(back.kinetic, tr.kinetic)
     with h5py.File(path, "r+") as f:
-        del f["observables/kinetic_energy"]
-    with pytest.raises(TrajectoryFileError, match=r"/particles/all/velocity \(velocities\) is missing$"):
-        kinema.load_trajectory(path)
+        for name in ("kinetic_energy", "momentum", "angular_momentum", "total_energy"):
+            del f[f"observables/{name}"]
+    back = kinema.load_trajectory(path)
+    for name, shape in (("velocities", (F, N, 3)), ("kinetic", (F,)), ("momentum", (F, 3)), ("angular_momentum", (F, 3)), ("total", (F,))):
+        a = getattr(back, name)
+        assert a.shape == shape and np.isnan(a).all(), name
+    np.testing.assert_array_equal(back.positions, tr.positions)
+    np.testing.assert_array_equal(back.potential["spring"], tr.potential["spring"])
+    again = back.save(tmp_path / "again.h5")
+    with h5py.File(again) as f:
+        assert "velocity" not in f["particles/all"] and "kinetic_energy" not in f["observables"] and "total_energy" not in f["observables"]
+    reloaded = kinema.load_trajectory(again)
+    np.testing.assert_array_equal(reloaded.positions, back.positions)
+    assert np.isnan(reloaded.velocities).all() and np.isnan(reloaded.kinetic).all()
 
 
 def test_a_file_that_is_not_hdf5_is_refused_by_trajectory_load(tmp_path):
@@ -686,8 +730,21 @@ def _periodic_file(tmp_path):
 def test_periodic_box_edges_are_checked(tmp_path):
     path = _periodic_file(tmp_path)
     assert load_h5md(path).periodic == (True, False, False)
+    # kinema writes the edges time-dependent: each frame's are checked
     with h5py.File(path, "r+") as f:
-        f["particles/all/box/edges"][0] = np.nan
+        f["particles/all/box/edges/value"][3, 0] = np.nan
+    with pytest.raises(
+        TrajectoryFileError, match=r"dataset 'box edges' \(/particles/all/box/edges/value\) has edge\[0\] = nan at frame 3 \(box edges must be finite, in m\)$"
+    ):
+        load_h5md(path)
+    with h5py.File(path, "r+") as f:
+        f["particles/all/box/edges/value"][3, 0] = 0.0
+    with pytest.raises(TrajectoryFileError, match=r"has edge\[0\] = 0 at frame 3 \(a periodic axis needs an edge > 0 m\)$"):
+        load_h5md(path)
+    # a fixed box (kinema's files before, other writers): one (D,) dataset
+    with h5py.File(path, "r+") as f:
+        del f["particles/all/box/edges"]
+        f["particles/all/box/edges"] = [np.nan, 0.0, 0.0]
     with pytest.raises(TrajectoryFileError, match=r"dataset 'box edges' \(/particles/all/box/edges\) has edge\[0\] = nan \(box edges must be finite, in m\)$"):
         load_h5md(path)
     with h5py.File(path, "r+") as f:

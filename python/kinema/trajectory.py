@@ -68,7 +68,8 @@ class Trajectory:
 
     @classmethod
     def load(cls, path: Any, group: str | None = None) -> Trajectory:
-        """Read a trajectory from an H5MD file written by ``save`` (``kinema.io.load_h5md``).
+        """Read a trajectory from an H5MD file, written by ``save`` or by another program (units
+        converted to SI, velocities and energies NaN where the file has none; ``kinema.io.load_h5md``).
 
         What the file holds is checked as it is read (shapes, types and the memory they need
         before any data, then finite positions, velocities and times, times that increase,

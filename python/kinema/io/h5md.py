@@ -1,18 +1,22 @@
-"""H5MD 1.1 trajectory files (HDF5 through h5py): writing a trajectory and reading it back.
+"""H5MD 1.1 trajectory files (HDF5 through h5py): writing a trajectory and reading it back,
+and reading the H5MD files of other programs.
 
 Layout written by :func:`save_h5md` (``(F)`` frames, ``N`` particles, ``D`` = 2 or 3, the
 world's dimension; every time-dependent element shares one ``step`` and one ``time`` dataset
-through HDF5 hard links, as the specification allows)::
+through HDF5 hard links, as the specification allows, and requires for the box)::
 
     /h5md                 +-- version = [1, 1]
-        author            +-- name
-        creator           +-- name = "kinema", version
+        author            +-- name                      (fixed-length string)
+        creator           +-- name = "kinema", version  (fixed-length strings)
         modules/units     +-- version = [1, 0], system = "SI"
     /particles/<group>
-        box               +-- dimension = D, boundary = ["none"] * D or "periodic" (+ edges)
+        box               +-- dimension = D, boundary = ["none" | "periodic"] * D (fixed-length)
+            edges         step, time, value (F, D) [m]: the periodic cell, 0 along open axes
+            pbc           step, time, value (F, D) bool: the boundary again, for znh5md
         position          step int64 (F,), time float64 (F,) [s], value (F, N, D) [m]
         velocity          step, time, value (F, N, D) [m s-1]
-        mass (N,) [kg], radius (N,) [m], id (N,)      time-independent, when known
+        species           step, time, value (F, N) int32: the type index of each particle
+        mass [kg], radius [m], id      step, time, value (F, N), when known (id: always)
     /observables
         kinetic_energy, potential_energy, total_energy    step, time, value (F,) [J]
         potential_energy_by_force/<force name>             step, time, value (F,) [J]
@@ -23,20 +27,30 @@ through HDF5 hard links, as the specification allows)::
                               (point, normal | lo, hi | center, radius), restitution,
                               friction when set; k = 0, 1, ... in the world's order
 
-Units follow the H5MD units module: a ``unit`` attribute on each ``value`` (and ``time``)
-dataset, in the "SI" system, written as space-separated factors with integer powers.
+Units follow the H5MD units module: a ``unit`` attribute (a variable-length ASCII string) on
+each ``value`` (and ``time``) dataset, in the "SI" system, written as space-separated factors
+with integer powers. The per-particle elements (species, mass, radius, id) and the box are
+time-dependent, constant over the frames, because znh5md (ASE's H5MD reader) reads only that
+form; MDAnalysis's reader and pyh5md read them too.
+
+:func:`load_h5md` converts the units of what it reads to SI (``parse_unit``: "nm", "Ang",
+"ps", "nm ps-1", "u", "kJ mol-1", ...), accepts files without velocities or observables and
+reads a box that changes from frame to frame.
 """
 
 from __future__ import annotations
 
 import getpass
 import os
+import re
 from dataclasses import MISSING, dataclass, field, fields
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ._cell import particle_types
 from ._checks import available_memory, dtype_problem, first_non_finite, gib, number, shown
 from ._files import TrajectoryFileError, atomic_file, frames_of
 
@@ -64,13 +78,15 @@ def _h5py() -> Any:
 
 @dataclass
 class LoadedTrajectory:
-    """A trajectory read from an H5MD file, with the attributes of ``kinema.Trajectory``:
-    ``t`` (F,) s; ``positions``, ``velocities`` (F, N, 3) m and m/s (z = 0 when ``dim`` is
-    2); ``kinetic``, ``total`` (F,) J and ``potential`` {force name: (F,)} J; ``momentum``
-    (F, 3) kg m/s and ``angular_momentum`` (F, 3) kg m²/s; ``contacts`` (F,),
-    ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J. Besides: ``step``
-    (F,) the integration step of each frame, ``masses`` (N,) kg, ``radii`` (N,) m, ``ids``
-    (N,), ``dim``, ``dt`` s, ``method``, ``colliders`` (descriptions, as
+    """A trajectory read from an H5MD file, with the attributes of ``kinema.Trajectory``, in SI
+    units whatever the file's units: ``t`` (F,) s; ``positions``, ``velocities`` (F, N, 3) m
+    and m/s (z = 0 when ``dim`` is 2); ``kinetic``, ``total`` (F,) J and ``potential``
+    {force name: (F,)} J; ``momentum`` (F, 3) kg m/s and ``angular_momentum`` (F, 3) kg m²/s;
+    ``contacts`` (F,), ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J.
+    Besides: ``step`` (F,) the integration step of each frame, ``masses`` (N,) kg, ``radii``
+    (N,) m, ``ids`` (N,), ``dim``, ``dt`` s, ``method``, ``periodic`` (3 bools) and
+    ``box_edges`` (3,) m, the periodic cell at the first frame, with ``box_edges_by_frame``
+    (F, 3) m, the cell at each frame (a box that changes), ``colliders`` (descriptions, as
     ``Trajectory.colliders``), ``group``, the file's ``author`` and ``creator`` and its
     ``path``. An element the file does not hold is ``None`` (``potential``, ``colliders``:
     empty)."""
@@ -95,6 +111,7 @@ class LoadedTrajectory:
     method: str | None = None
     periodic: tuple[bool, bool, bool] | None = None
     box_edges: np.ndarray | None = None
+    box_edges_by_frame: np.ndarray | None = None
     colliders: list[dict[str, Any]] = field(default_factory=list)
     group: str = "all"
     author: str | None = None
@@ -103,18 +120,31 @@ class LoadedTrajectory:
 
     def to_trajectory(self) -> Any:
         """A ``kinema.Trajectory`` of these arrays: every field its constructor takes is
-        passed (absent collision fields as zeros), so it follows the class as it grows."""
+        passed, so it follows the class as it grows. What the file does not hold is filled
+        in: velocities, kinetic energy, momentum and angular momentum that were not recorded
+        (a file of another program) are NaN, "unknown" (``total`` is then NaN too), and absent
+        collision observables zeros. The periodic cell is ``box_edges``, the first frame's:
+        a ``Trajectory`` has one cell, so a box that changes keeps its later frames only in
+        ``box_edges_by_frame``."""
         from ..trajectory import Trajectory
 
-        f = self.t.shape[0]
-        zeros = {"contacts": np.zeros(f, dtype=np.int64), "impulse_balance": np.zeros((f, 3)), "collision_energy_lost": np.zeros(f)}
+        f, n = self.positions.shape[:2]
+        fill = {
+            "velocities": lambda: np.full((f, n, 3), np.nan),
+            "kinetic": lambda: np.full(f, np.nan),
+            "momentum": lambda: np.full((f, 3), np.nan),
+            "angular_momentum": lambda: np.full((f, 3), np.nan),
+            "contacts": lambda: np.zeros(f, dtype=np.int64),
+            "impulse_balance": lambda: np.zeros((f, 3)),
+            "collision_energy_lost": lambda: np.zeros(f),
+        }
         args = {}
         for fl in fields(Trajectory):
             if not fl.init:
                 continue
             value = getattr(self, fl.name, None)
-            if value is None:
-                value = zeros.get(fl.name)
+            if value is None and fl.name in fill:
+                value = fill[fl.name]()
             if value is None and (fl.default is not MISSING or fl.default_factory is not MISSING):
                 continue  # optional in Trajectory: its default
             if value is None:
@@ -129,13 +159,98 @@ class LoadedTrajectory:
 
 
 # Where the arrays kinema.Trajectory needs are in a file (LoadedTrajectory.to_trajectory).
-_NEEDED = {
-    "positions": "/particles/{group}/position",
-    "velocities": "/particles/{group}/velocity",
-    "kinetic": "/observables/kinetic_energy",
-    "momentum": "/observables/momentum",
-    "angular_momentum": "/observables/angular_momentum",
+_NEEDED = {"positions": "/particles/{group}/position"}
+
+
+# -- Units ------------------------------------------------------------------------------------
+# A unit string of the H5MD units module is space-separated factors: at most one number first
+# ("60", "10+3" = 10^3) and unit symbols, each with an optional SI prefix and an integer power
+# ("nm", "ps-1", "m2"). A dimension is the powers of (length, time, mass). A mole is a number,
+# Avogadro's: "kJ mol-1" is an energy per particle and "g mol-1" a particle's mass (1 u), as
+# molecular-dynamics programs mean them. "A" is the ångström (as MDAnalysis reads it), not
+# the ampere, which no quantity kinema reads involves.
+_LENGTH, _TIME, _MASS = (1, 0, 0), (0, 1, 0), (0, 0, 1)
+_ANGSTROM = (Fraction(1, 10**10), _LENGTH)
+_DALTON = (Fraction("1.66053906660e-27"), _MASS)  # kg, CODATA 2018
+_ENERGY = (2, -2, 1)
+_SYMBOLS: dict[str, tuple[Fraction, tuple[int, int, int]]] = {
+    "m": (Fraction(1), _LENGTH),
+    "Ang": _ANGSTROM,
+    "\u00c5": _ANGSTROM,  # Å
+    "\u212b": _ANGSTROM,  # the ångström sign
+    "Angstrom": _ANGSTROM,
+    "angstrom": _ANGSTROM,
+    "A": _ANGSTROM,
+    "s": (Fraction(1), _TIME),
+    "g": (Fraction(1, 1000), _MASS),
+    "u": _DALTON,
+    "Da": _DALTON,
+    "amu": _DALTON,
+    "J": (Fraction(1), _ENERGY),
+    "eV": (Fraction("1.602176634e-19"), _ENERGY),
+    "cal": (Fraction("4.1868"), _ENERGY),
+    "erg": (Fraction(1, 10**7), _ENERGY),
+    "N": (Fraction(1), (1, -2, 1)),
+    "Hz": (Fraction(1), (0, -1, 0)),
+    "mol": (Fraction("6.02214076e23"), (0, 0, 0)),
 }
+_PREFIXES = {"E": 18, "P": 15, "T": 12, "G": 9, "M": 6, "k": 3, "h": 2, "da": 1, "d": -1, "c": -2, "m": -3, "u": -6, "\u00b5": -6, "\u03bc": -6}
+_PREFIXES.update({"n": -9, "p": -12, "f": -15, "a": -18})
+_QUANTITY = {
+    _LENGTH: "a length (m)",
+    _TIME: "a time (s)",
+    _MASS: "a mass (kg)",
+    (1, -1, 0): "a velocity (m s-1)",
+    _ENERGY: "an energy (J)",
+    (1, -1, 1): "a momentum (kg m s-1)",
+    (2, -1, 1): "an angular momentum (kg m2 s-1)",
+}
+
+
+def _symbol(token: str) -> tuple[Fraction, tuple[int, int, int]] | None:
+    if token in _SYMBOLS:
+        return _SYMBOLS[token]
+    for prefix in sorted(_PREFIXES, key=len, reverse=True):
+        if token.startswith(prefix) and token[len(prefix) :] in _SYMBOLS:
+            factor, dims = _SYMBOLS[token[len(prefix) :]]
+            return factor * Fraction(10) ** _PREFIXES[prefix], dims
+    return None
+
+
+def parse_unit(text: str) -> tuple[Fraction, tuple[int, int, int]]:
+    """The SI factor (exact) and the dimension (powers of length, time, mass) of an H5MD unit
+    string: ``parse_unit("nm ps-1") == (Fraction(1000), (1, -1, 0))``. Raises ``ValueError``
+    saying which factor it does not know."""
+    tokens = text.split()
+    if not tokens:
+        raise ValueError("it is empty")
+    if len(text) > 200:
+        raise ValueError("it is over 200 characters long")
+    factor, dims = Fraction(1), [0, 0, 0]
+    for k, token in enumerate(tokens):
+        number = re.fullmatch(r"([0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:([+-][0-9]{1,3})|[eE]([+-]?[0-9]{1,3}))?", token)
+        if number:
+            if k:
+                raise ValueError(f"the number {token!r} is not the first factor")
+            value = Fraction(number.group(1))
+            if value == 0:
+                raise ValueError("its number is 0")
+            if number.group(2):
+                value = value ** int(number.group(2))
+            elif number.group(3):
+                value = value * Fraction(10) ** int(number.group(3))
+            factor *= value
+            continue
+        match = re.fullmatch(r"([^\W\d_]+)([+-]?[0-9]{1,2})?", token)
+        known = _symbol(match.group(1)) if match else None
+        if known is None and "/" in token:
+            raise ValueError(f"{token!r}: H5MD writes a unit as space-separated factors with powers ('nm ps-1'), not with '/'")
+        if known is None:
+            raise ValueError(f"{token!r} is not a unit symbol kinema knows")
+        power = int(match.group(2)) if match.group(2) else 1
+        factor *= known[0] ** power
+        dims = [a + power * b for a, b in zip(dims, known[1], strict=True)]
+    return factor, (dims[0], dims[1], dims[2])
 
 
 def _chunks(shape: tuple[int, ...]) -> tuple[int, ...] | None:
@@ -147,18 +262,38 @@ def _chunks(shape: tuple[int, ...]) -> tuple[int, ...] | None:
     return (max(1, min(shape[0], (1 << 17) // max(1, per_frame))),) + tuple(shape[1:])
 
 
-def _dataset(group: Any, name: str, data: np.ndarray, compression: str | None, unit: str | None = None, time_series: bool = False) -> Any:
-    chunks = _chunks(data.shape)
+def _storage(shape: tuple[int, ...], compression: str | None, time_series: bool) -> dict[str, Any]:
+    chunks = _chunks(shape)
     kwargs: dict[str, Any] = {}
     if chunks is not None:
         kwargs["chunks"] = chunks
         if time_series:
-            kwargs["maxshape"] = (None,) + data.shape[1:]
+            kwargs["maxshape"] = (None,) + shape[1:]
         if compression is not None:
             kwargs.update(compression=compression, shuffle=True)
-    ds = group.create_dataset(name, data=data, **kwargs)
+    return kwargs
+
+
+def _set_unit(ds: Any, unit: str | None) -> None:
+    """The H5MD units module's ``unit`` attribute: a variable-length ASCII string."""
     if unit is not None:
-        ds.attrs["unit"] = unit
+        ds.attrs.create("unit", unit, dtype=_h5py().string_dtype("ascii"))
+
+
+def _fixed_string(obj: Any, name: str, value: str | list[str]) -> None:
+    """A string attribute of H5MD's fixed-length string type (``author``, ``creator``,
+    ``boundary``): ASCII when it is, else UTF-8, as long as its longest value (at least 1)."""
+    values = [value] if isinstance(value, str) else list(value)
+    encoded = [v.encode("utf-8") for v in values]
+    length = max([1, *(len(b) for b in encoded)])
+    dtype = _h5py().string_dtype("ascii" if all(b.isascii() for b in encoded) else "utf-8", length)
+    data = np.array(encoded, dtype=f"S{length}")
+    obj.attrs.create(name, data[0] if isinstance(value, str) else data, dtype=dtype)
+
+
+def _dataset(group: Any, name: str, data: np.ndarray, compression: str | None, unit: str | None = None, time_series: bool = False) -> Any:
+    ds = group.create_dataset(name, data=data, **_storage(data.shape, compression, time_series))
+    _set_unit(ds, unit)
     return ds
 
 
@@ -172,6 +307,30 @@ def _element(parent: Any, name: str, value: np.ndarray, clock: Any, compression:
     return g
 
 
+def _constant_element(parent: Any, name: str, row: np.ndarray, clock: Any, compression: str | None, unit: str | None) -> Any:
+    """A time-dependent H5MD element whose value is ``row`` at every frame, written chunk by
+    chunk (the (F, ...) array is never made whole)."""
+    g = parent.create_group(name)
+    g["step"] = clock["step"]
+    g["time"] = clock["time"]
+    frames = clock["step"].shape[0]
+    shape = (frames,) + row.shape
+    options = _storage(shape, compression, time_series=True)
+    ds = g.create_dataset("value", shape=shape, dtype=row.dtype, **options)
+    slab = options["chunks"][0] if "chunks" in options else max(1, frames)
+    for i in range(0, frames, slab):
+        ds[i : i + slab] = np.broadcast_to(row, (min(slab, frames - i),) + row.shape)
+    _set_unit(ds, unit)
+    return g
+
+
+def _unknown(a: Any) -> bool:
+    """All NaN (and not empty): values a loaded trajectory did not have (velocities or
+    energies of a file without them), which are not written."""
+    a = np.asarray(a)
+    return a.size > 0 and a.dtype.kind == "f" and bool(np.isnan(a).all())
+
+
 def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str | None) -> None:
     from .. import __version__
 
@@ -179,13 +338,13 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     string = h5py.string_dtype()
     h5md = f.create_group("h5md")
     h5md.attrs.create("version", np.array(H5MD_VERSION, dtype=np.int32))
-    h5md.create_group("author").attrs["name"] = author
+    _fixed_string(h5md.create_group("author"), "name", author)
     creator = h5md.create_group("creator")
-    creator.attrs["name"] = "kinema"
-    creator.attrs["version"] = str(__version__)
+    _fixed_string(creator, "name", "kinema")
+    _fixed_string(creator, "version", str(__version__))
     units = h5md.create_group("modules").create_group("units")
     units.attrs.create("version", np.array([1, 0], dtype=np.int32))
-    units.attrs["system"] = "SI"
+    units.attrs.create("system", "SI", dtype=h5py.string_dtype("ascii"))
 
     d = fr.dim
     particles = f.create_group("particles").create_group(group)
@@ -193,12 +352,13 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     box.attrs.create("dimension", np.int32(d))
     periodic = getattr(tr, "periodic", None)
     flags = [False] * d if periodic is None else [bool(p) for p in np.asarray(periodic).reshape(-1)[:d]]
-    box.attrs.create("boundary", ["periodic" if p else "none" for p in flags], dtype=string)
+    _fixed_string(box, "boundary", ["periodic" if p else "none" for p in flags])
     edges = getattr(tr, "box_edges", None)
     if any(flags) and edges is None:
         raise ValueError("periodic boundaries need the box edges: the trajectory has no box_edges")
-    if edges is not None:
-        _dataset(box, "edges", np.asarray(edges, dtype=np.float64).reshape(-1)[:d], None, "m")
+    edges = np.zeros(d) if edges is None else np.asarray(edges, dtype=np.float64).reshape(-1)[:d]
+    if edges.size != d:
+        raise ValueError(f"box_edges has {edges.size} values; it must have one per axis, {d}")
 
     # The clock shared by every time-dependent element: the integration step of each frame
     # (t / dt rounded, or the frame index when dt is unknown) and the time in s.
@@ -207,17 +367,24 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     _dataset(clock, "step", step, compression, time_series=True)
     _dataset(clock, "time", fr.t, compression, "s", time_series=True)
     _dataset(clock, "value", fr.positions[..., :d], compression, "m", time_series=True)
-    _element(particles, "velocity", fr.velocities[..., :d], clock, compression, "m s-1")
-    for name, a, unit in (("mass", fr.masses, "kg"), ("radius", fr.radii, "m"), ("id", fr.ids, None)):
+    # The box, time-dependent as the readers want it (znh5md and MDAnalysis read edges/value
+    # only), its step and time those of position as the specification requires. znh5md reads
+    # a fixed-length boundary as all periodic (it compares bytes with "none"): pbc tells it.
+    _constant_element(box, "edges", edges, clock, compression, "m")
+    _constant_element(box, "pbc", np.array(flags, dtype=bool), clock, compression, None)
+    if not _unknown(fr.velocities):
+        _element(particles, "velocity", fr.velocities[..., :d], clock, compression, "m s-1")
+    species = particle_types(tr, fr.n_particles)[1].astype(np.int32)
+    for name, a, unit in (("species", species, None), ("mass", fr.masses, "kg"), ("radius", fr.radii, "m"), ("id", fr.ids, None)):
         if a is not None:
-            _dataset(particles, name, a, compression, unit)
+            _constant_element(particles, name, np.asarray(a), clock, compression, unit)
 
     obs = f.create_group("observables")
     kinetic = getattr(tr, "kinetic", None)
     potential = dict(getattr(tr, "potential", None) or {})
     for name, (attr, unit) in _OBSERVABLES.items():
         a = getattr(tr, attr, None)
-        if a is not None:
+        if a is not None and not _unknown(a):
             _element(obs, name, np.asarray(a), clock, compression, unit)
     if potential:
         by_force = obs.create_group(_BY_FORCE, track_order=True)
@@ -230,7 +397,7 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     total = getattr(tr, "total", None)
     if total is None and kinetic is not None:
         total = np.asarray(kinetic) + sum((np.asarray(u) for u in potential.values()), np.zeros(fr.n_frames))
-    if total is not None:
+    if total is not None and not _unknown(total):
         _element(obs, "total_energy", np.asarray(total, dtype=np.float64), clock, compression, "J")
 
     colliders = _colliders_of(tr)
@@ -326,8 +493,11 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     when present, ``total`` (F,) J, ``contacts`` (F,), ``impulse_balance`` (F, 3) N s,
     ``collision_energy_lost`` (F,) J, ``masses`` (N,) kg, ``radii`` (N,) m, ``ids`` (N,),
     ``dim`` (2: positions are stored as (F, N, 2)), ``dt`` s, ``method``, ``periodic`` (D
-    bools) with ``box_edges`` (D,) m, ``colliders`` (``Trajectory.colliders``' descriptions
-    or ``kinema`` collider objects).
+    bools) with ``box_edges`` (D,) m, ``types`` (N,) names (the ``species`` written: the
+    index of each particle's name among the sorted names; 0 for all without ``types``),
+    ``colliders`` (``Trajectory.colliders``' descriptions or ``kinema`` collider objects).
+    Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
+    without them) are not written.
 
     ``group`` names the particle group (/particles/<group>); ``author`` the /h5md/author name
     (default: the login name); ``compression`` "gzip", "lzf" or None for the chunked
@@ -390,6 +560,32 @@ class _Reader:
             one = word[:-1] if word.endswith("s") else word
             raise self.fail(f"{_where(word, ds)} has shape {shape} but {_where(value_word, value)} has {n} frames: one {one} per frame")
 
+    def unit(self, word: str, ds: Any, dims: tuple[int, int, int]) -> float:
+        """The factor that converts the values of ``ds`` to SI, from its ``unit`` attribute,
+        which must be a unit of the dimension ``dims`` (``parse_unit``); 1 when it has none
+        (the values are taken as SI)."""
+        if "unit" not in ds.attrs:
+            return 1.0
+        raw = ds.attrs["unit"]
+        text = raw.reshape(-1)[0] if isinstance(raw, np.ndarray) and raw.size == 1 else raw
+        if isinstance(text, bytes):
+            try:
+                text = text.decode("utf-8")
+            except UnicodeDecodeError:
+                pass
+        if not isinstance(text, str):
+            raise self.fail(f"{_where(word, ds)} has a unit attribute that is not a string: {shown(raw)}")
+        try:
+            factor, dims_found = parse_unit(text)
+            value = float(factor)
+        except (ValueError, OverflowError) as e:
+            raise self.fail(f"{_where(word, ds)} has unit {text!r}, which kinema cannot read: {e}") from None
+        if dims_found != dims:
+            raise self.fail(f"{_where(word, ds)} has unit {text!r}, which is not {_QUANTITY[dims]}")
+        if not 0 < value < np.inf:
+            raise self.fail(f"{_where(word, ds)} has unit {text!r}, whose factor to SI is out of the range of float64")
+        return value
+
     def plan(self, word: str, ds: Any, nbytes: int | None = None) -> None:
         self.planned.append((word, ds, int(ds.size) * ds.dtype.itemsize if nbytes is None else nbytes))
 
@@ -444,6 +640,48 @@ def _per_frame(ds: Any, a: np.ndarray, n: int, dtype: Any) -> np.ndarray:
     return (np.asarray(offset).reshape(()) + a * np.arange(n)).astype(dtype, copy=False)
 
 
+def _to_si(a: Any, factor: float) -> Any:
+    """``a`` (just read from a file) in SI: times ``factor`` (in place when it is float64, else
+    as float64); ``a`` itself when the factor is 1."""
+    if factor == 1.0:
+        return a
+    if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.writeable:
+        a *= factor
+        return a
+    return np.asarray(a, dtype=np.float64) * factor
+
+
+def _text(value: Any) -> str:
+    """A string attribute as text: H5MD's fixed-length strings read back as bytes."""
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.reshape(-1)[0]
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
+
+
+def _box_edges(r: _Reader, ds: Any, e: np.ndarray, by_frame: bool, periodic: tuple[bool, ...]) -> np.ndarray:
+    """The edges of the box at each frame, (F, D) m, from the values ``e`` of ``ds`` in m:
+    (D,) or (F, D) edges, or (D, D) or (F, D, D) edge vectors, which must lie along the axes
+    (a cuboid: kinema has no triclinic cells). Each edge is finite, > 0 on a periodic axis."""
+    rows = e[None] if not by_frame else e
+    frame = (lambda i: f" at frame {i}") if by_frame else (lambda i: "")
+    if rows.ndim == 3:
+        r.finite("box edges", ds, rows, ("frame",) if by_frame else ())
+        d = rows.shape[1]
+        off = np.flatnonzero((rows * (1 - np.eye(d))).reshape(rows.shape[0], -1).any(axis=1))
+        if off.size:
+            raise r.fail(f"{_where('box edges', ds)} is a triclinic box{frame(int(off[0]))} (edge vectors not along the axes), which kinema does not support")
+        rows = np.diagonal(rows, axis1=1, axis2=2)
+    bad = ~np.isfinite(rows)
+    if bad.any():
+        i, k = np.unravel_index(int(np.argmax(bad)), rows.shape)
+        raise r.fail(f"{_where('box edges', ds)} has edge[{k}] = {number(rows[i, k])}{frame(i)} (box edges must be finite, in m)")
+    bad = (rows <= 0) & np.array(periodic[: rows.shape[1]])
+    if bad.any():
+        i, k = np.unravel_index(int(np.argmax(bad)), rows.shape)
+        raise r.fail(f"{_where('box edges', ds)} has edge[{k}] = {number(rows[i, k])}{frame(i)} (a periodic axis needs an edge > 0 m)")
+    return rows
+
+
 # /observables read back: (name, attribute of the trajectory, a vector per frame)
 _READ_OBSERVABLES = [(name, attr, attr in ("momentum", "angular_momentum", "impulse_balance")) for name, (attr, _) in _OBSERVABLES.items()]
 
@@ -485,9 +723,16 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
         dimension = box.attrs["dimension"]
         if np.asarray(dimension).size != 1 or dtype_problem(np.asarray(dimension).dtype, integer=True) or int(np.asarray(dimension).reshape(())) != d:
             raise r.fail(f"attribute 'dimension' ({box.name}) = {shown(dimension)} but {_where('positions', x_ds)} has {d} coordinates per particle")
-    # 2D positions and velocities get z = 0: the padded copy is read besides.
-    per_frame_vectors = frames * n * (5 if d == 2 else 3)
-    r.plan("positions", x_ds, per_frame_vectors * x_ds.dtype.itemsize)
+    units: dict[str, float] = {"positions": r.unit("positions", x_ds, _LENGTH), "times": r.unit("times", t_ds, _TIME)}
+
+    def vector_bytes(ds: Any, factor: float) -> int:
+        # Read, converted to float64 when the unit is not SI (in place when it is float64),
+        # and in 2D padded with z = 0 (a copy).
+        converted = factor != 1.0 and ds.dtype != np.float64
+        out = 8 if converted else ds.dtype.itemsize
+        return ds.size * ds.dtype.itemsize + (ds.size * 8 if converted else 0) + (frames * n * 3 * out if d == 2 else 0)
+
+    r.plan("positions", x_ds, vector_bytes(x_ds, units["positions"]))
     r.plan("times", t_ds)
     r.plan("steps", step_ds)
 
@@ -499,7 +744,8 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
         r.clock("steps", vel[1], "velocities", v_ds, integer=True)
         if vel[2] is not None:
             r.clock("times", vel[2], "velocities", v_ds)
-        r.plan("velocities", v_ds, per_frame_vectors * v_ds.dtype.itemsize)
+        units["velocities"] = r.unit("velocities", v_ds, (1, -1, 0))
+        r.plan("velocities", v_ds, vector_bytes(v_ds, units["velocities"]))
 
     per_particle = {}  # attribute: (dataset, word, whether it is a time-dependent element's value)
     for name, attr, integer in (("mass", "masses", False), ("radius", "radii", False), ("id", "ids", True)):
@@ -514,33 +760,53 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
             r.plan(attr, obj)
             per_particle[attr] = (obj, False)
         else:
-            value = _element_datasets(path, p, name)[0]
-            s = r.numbers(attr, value, integer)
+            obj = _element_datasets(path, p, name)[0]
+            s = r.numbers(attr, obj, integer)
             if len(s) != 2 or s[0] == 0 or s[1] != n:
-                raise r.fail(f"{_where(attr, value)} has shape {s}; it must be (frames, {n}), one value per particle ({_where('positions', x_ds)} {shape})")
-            r.plan(attr, value, n * value.dtype.itemsize)
-            per_particle[attr] = (value, True)
+                raise r.fail(f"{_where(attr, obj)} has shape {s}; it must be (frames, {n}), one value per particle ({_where('positions', x_ds)} {shape})")
+            r.plan(attr, obj, n * obj.dtype.itemsize)
+            per_particle[attr] = (obj, True)
+        if not integer:
+            units[attr] = r.unit(attr, obj, _MASS if attr == "masses" else _LENGTH)
 
+    # The box: edges (D,) or a (D, D) matrix of edge vectors, fixed, or time-dependent with
+    # one row per frame (a box that may change).
     periodic = None
     edges_ds = None
+    edges_by_frame = False
     if isinstance(box, h5py.Group) and "boundary" in box.attrs:
-        boundary = [b.decode() if isinstance(b, bytes) else str(b) for b in np.asarray(box.attrs["boundary"]).reshape(-1)]
+        boundary = [b.decode("utf-8", "replace") if isinstance(b, bytes) else str(b) for b in np.asarray(box.attrs["boundary"]).reshape(-1)]
         flags = [b == "periodic" for b in boundary]
         if any(flags):
             periodic = tuple((flags + [False] * 3)[:3])
-            edges_ds = box.get("edges")
-            if not isinstance(edges_ds, h5py.Dataset):
+            edges = box.get("edges")
+            if isinstance(edges, h5py.Group):
+                edges_ds, edges_step, edges_time = _element_datasets(path, box, "edges")
+                s = r.numbers("box edges", edges_ds)
+                if s not in ((frames, d), (frames, d, d)):
+                    raise r.fail(
+                        f"{_where('box edges', edges_ds)} has shape {s}; it must be ({frames}, {d}), one edge per axis at each frame of "
+                        f"{_where('positions', x_ds)} {shape} (or ({frames}, {d}, {d}), edge vectors)"
+                    )
+                r.clock("steps", edges_step, "box edges", edges_ds, integer=True)
+                if edges_time is not None:
+                    r.clock("times", edges_time, "box edges", edges_ds)
+                edges_by_frame = True
+            elif isinstance(edges, h5py.Dataset):
+                edges_ds = edges
+                s = r.numbers("box edges", edges_ds)
+                if s not in ((d,), (d, d)):
+                    raise r.fail(f"{_where('box edges', edges_ds)} has shape {s}; it must be ({d},), one edge per axis (or ({d}, {d}), edge vectors)")
+            else:
                 raise r.fail(f"{box.name} has periodic boundaries ({', '.join(boundary)}) but no edges dataset")
-            s = r.numbers("box edges", edges_ds)
-            if s != (d,):
-                raise r.fail(f"{_where('box edges', edges_ds)} has shape {s}; it must be ({d},), one edge per axis")
-            r.plan("box edges", edges_ds)
+            units["box edges"] = r.unit("box edges", edges_ds, _LENGTH)
+            r.plan("box edges", edges_ds, edges_ds.size * (edges_ds.dtype.itemsize + 8))
 
     observables: dict[str, Any] = {}  # attribute or ("potential", force name): value dataset
     obs = f.get("observables")
     if isinstance(obs, h5py.Group):
 
-        def observable(parent: Any, name: str, vector: bool = False, required: bool = False) -> Any:
+        def observable(parent: Any, name: str, vector: bool = False, required: bool = False, unit: str | None = "J") -> Any:
             e = _element_datasets(path, parent, name, required)
             if e is None:
                 return None
@@ -553,11 +819,13 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
             r.clock("steps", step, name, value, integer=True)
             if time is not None:
                 r.clock("times", time, name, value)
-            r.plan(name, value)
+            if unit is not None:  # the kinema unit of the observable: the dimension its unit must have
+                units[value.name] = r.unit(name, value, parse_unit(unit)[1])
+            r.plan(name, value, value.size * max(8, value.dtype.itemsize))
             return value
 
         for name, attr, vector in _READ_OBSERVABLES:
-            observables[attr] = observable(obs, name, vector)
+            observables[attr] = observable(obs, name, vector, unit=_OBSERVABLES[name][1])
         observables["total"] = observable(obs, "total_energy")
         by_force = obs.get(_BY_FORCE)
         if isinstance(by_force, h5py.Group):
@@ -596,7 +864,7 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
         return a if a.shape[-1] == 3 else np.concatenate([a, np.zeros(a.shape[:-1] + (3 - a.shape[-1],), dtype=a.dtype)], axis=-1)
 
     try:
-        t = _per_frame(t_ds, t_ds[()], frames, np.float64)
+        t = _to_si(_per_frame(t_ds, t_ds[()], frames, np.float64), units["times"])
         step = _per_frame(step_ds, step_ds[()], frames, np.int64)
     except TrajectoryFileError as e:
         raise r.fail(str(e)) from None
@@ -605,16 +873,16 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
     if back.size:
         k = int(back[0]) + 1
         raise r.fail(f"{_where('times', t_ds)} must increase: t[{k}] = {number(t[k])} after t[{k - 1}] = {number(t[k - 1])}")
-    x = x_ds[()]
+    x = _to_si(x_ds[()], units["positions"])
     r.finite("positions", x_ds, x, ("frame", "particle"))
     velocities = None
     if vel is not None:
-        v = vel[0][()]
+        v = _to_si(vel[0][()], units["velocities"])
         r.finite("velocities", vel[0], v, ("frame", "particle"))
         velocities = three(v)
     out = LoadedTrajectory(t=t, positions=three(x), velocities=velocities, step=step, dim=d, group=group, path=path)
     for attr, (ds, element) in per_particle.items():
-        a = ds[0] if element else ds[()]
+        a = _to_si(ds[0] if element else ds[()], units.get(attr, 1.0))
         r.finite(attr, ds, a, ("particle",))
         if attr == "masses" and np.any(a <= 0):
             i = int(np.argmax(a <= 0))
@@ -624,56 +892,65 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
             raise r.fail(f"{_where(attr, ds)} has radius[{i}] = {number(a[i])} (radii must be finite and >= 0 m)")
         setattr(out, attr, a)
     if periodic is not None:
-        edges = np.asarray(edges_ds[()], dtype=np.float64).reshape(-1)
-        for k, e in enumerate(edges):
-            if not np.isfinite(e):
-                raise r.fail(f"{_where('box edges', edges_ds)} has edge[{k}] = {number(e)} (box edges must be finite, in m)")
-            if periodic[k] and e <= 0:
-                raise r.fail(f"{_where('box edges', edges_ds)} has edge[{k}] = {number(e)} (a periodic axis needs an edge > 0 m)")
+        edges = _box_edges(r, edges_ds, _to_si(np.asarray(edges_ds[()], dtype=np.float64), units["box edges"]), edges_by_frame, periodic)
         out.periodic = periodic
-        out.box_edges = np.concatenate([edges, np.zeros(3 - edges.size)])[:3]
+        out.box_edges_by_frame = np.ascontiguousarray(np.broadcast_to(np.pad(edges, [(0, 0), (0, 3 - d)]), (frames, 3)))
+        out.box_edges = out.box_edges_by_frame[0].copy()
     # Observables are read as they are: a potential energy may be -inf (a particle exactly at
     # an unsoftened attractor point).
     for key, ds in observables.items():
         if ds is None:
             continue
+        a = _to_si(ds[()], units.get(ds.name, 1.0))
         if isinstance(key, tuple):
-            out.potential[key[1]] = ds[()]
+            out.potential[key[1]] = a
         else:
-            setattr(out, key, ds[()])
+            setattr(out, key, a)
     if out.total is None and out.kinetic is not None:
         out.total = out.kinetic + sum(out.potential.values(), np.zeros_like(out.kinetic))
     out.dt, out.method, out.colliders = dt, method, colliders
     author = f["h5md"].get("author")
     creator = f["h5md"].get("creator")
-    out.author = None if author is None else str(author.attrs.get("name", ""))
+    out.author = None if author is None else _text(author.attrs.get("name", ""))
     if creator is not None:
-        out.creator = f"{creator.attrs.get('name', '')} {creator.attrs.get('version', '')}".strip()
+        out.creator = f"{_text(creator.attrs.get('name', ''))} {_text(creator.attrs.get('version', ''))}".strip()
     return out
 
 
 def load_h5md(path: str | os.PathLike, group: str | None = None) -> LoadedTrajectory:
     """Read the particle group ``group`` of the H5MD file ``path`` (``None``: the file's only
     group) with its observables; returns a :class:`LoadedTrajectory` (``.to_trajectory()``
-    makes a ``kinema.Trajectory``). Arrays come back exactly as written; 2D positions and
-    velocities get z = 0.
+    makes a ``kinema.Trajectory``). Arrays of kinema's files come back exactly as written;
+    2D positions and velocities get z = 0.
+
+    Files of other programs are read too. Each dataset's ``unit`` attribute (H5MD's units
+    module) is converted to SI, the values multiplied by its exact factor (``parse_unit``:
+    "Ang", "nm", "ps", "nm ps-1", "u", "kJ mol-1", ...; a dataset without one is taken as
+    SI); a unit kinema does not know, or of the wrong kind, is an error. Velocities and
+    observables may be absent (``None``; ``to_trajectory`` makes them NaN, unknown). The box
+    may be fixed (edges (D,)) or time-dependent (one row per frame, a box that may change:
+    ``box_edges_by_frame``), edges or a (D, D) matrix of edge vectors along the axes. Step
+    and time may be H5MD's fixed interval (a scalar with an ``offset``).
 
     What is read is checked first: the types and shapes of every dataset before any data
     is read (positions (F, N, 3) or (F, N, 2) with F, N > 0; velocities as positions; one
-    time and one step per frame; masses, radii and ids (N,); observables one value or vector
-    per frame; real numbers, integers for steps and ids), then the memory it needs against
-    the memory available (``kinema.io._checks.available_memory``), then the values: finite
-    positions, velocities and times, times that increase, masses > 0, radii >= 0, periodic
-    box edges > 0, ``dt`` a positive number, ``method`` a name and each collider as
-    ``World.add`` checks it. Observables are not checked for finite values (a potential
-    energy may be -inf).
+    time and one step per frame; masses, radii and ids (N,), or (frames, N) of which the
+    first frame is read; observables and a time-dependent box one value or vector per frame;
+    real numbers, integers for steps and ids; units), then the memory it needs against the
+    memory available (``kinema.io._checks.available_memory``), then the values: finite
+    positions, velocities and times, times that increase, masses > 0, radii >= 0, finite box
+    edges, > 0 on periodic axes, at every frame, ``dt`` a positive number, ``method`` a name
+    and each collider as ``World.add`` checks it. Observables are not checked for finite
+    values (a potential energy may be -inf).
 
     Raises ``TrajectoryFileError`` (a ``ValueError``), one line naming the file, when it is
     missing, a directory, not HDF5 or corrupt, an HDF5 file without /h5md and /particles, of
     another major H5MD version, lacks ``group`` (the message lists the groups there), or when
     a check fails: the message names the dataset (its meaning and its path in the file) or
     attribute and the bad value, e.g. ``run.h5: dataset 'positions'
-    (/particles/all/position/value) has a non-finite value (nan) at frame 3, particle 7``."""
+    (/particles/all/position/value) has a non-finite value (nan) at frame 3, particle 7``
+    or ``md.h5: dataset 'velocities' (/particles/atoms/velocity/value) has unit 'furlong
+    fortnight-1', which kinema cannot read: 'furlong' is not a unit symbol kinema knows``."""
     h5py = _h5py()
     path = Path(path)
     if not path.exists():
