@@ -524,6 +524,17 @@ def _fail(path: Path, what: str) -> TrajectoryFileError:
     return TrajectoryFileError(f"{path}: {what}")
 
 
+def _utf8(raw: Any) -> Any:
+    """An attribute's bytes (a fixed-length HDF5 string) as text; anything else as it is,
+    for the caller to refuse by type."""
+    if isinstance(raw, bytes):
+        try:
+            return raw.decode("utf-8")
+        except UnicodeDecodeError:
+            pass
+    return raw
+
+
 def _where(word: str, ds: Any) -> str:
     """A dataset as a message names it: its meaning and its path in the file."""
     return f"dataset {word!r} ({ds.name})"
@@ -567,12 +578,7 @@ class _Reader:
         if "unit" not in ds.attrs:
             return 1.0
         raw = ds.attrs["unit"]
-        text = raw.reshape(-1)[0] if isinstance(raw, np.ndarray) and raw.size == 1 else raw
-        if isinstance(text, bytes):
-            try:
-                text = text.decode("utf-8")
-            except UnicodeDecodeError:
-                pass
+        text = _utf8(raw.reshape(-1)[0] if isinstance(raw, np.ndarray) and raw.size == 1 else raw)
         if not isinstance(text, str):
             raise self.fail(f"{_where(word, ds)} has a unit attribute that is not a string: {shown(raw)}")
         try:
@@ -846,12 +852,7 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
                 raise r.fail(f"attribute 'dt' ({params.name}) = {shown(raw)} is not a positive number (the time step in s)")
             dt = float(a.reshape(()))
         if "method" in params.attrs:
-            raw = params.attrs["method"]
-            if isinstance(raw, bytes):
-                try:
-                    raw = raw.decode("utf-8")
-                except UnicodeDecodeError:
-                    pass
+            raw = _utf8(params.attrs["method"])
             if not isinstance(raw, str):
                 raise r.fail(f"attribute 'method' ({params.name}) = {shown(raw)} is not the name of an integration method")
             method = raw
