@@ -187,11 +187,11 @@ def test_without_masses_there_are_no_momenta_or_masses_columns(tmp_path):
 
 def test_species_come_from_the_trajectorys_types(tmp_path):
     names = np.array(["Si", "O", "O", "Si", "H", "X"])
-    export(synthetic(types=names), tmp_path / "named.xyz")
+    export(synthetic(species=names), tmp_path / "named.xyz")
     atoms = ase.io.read(tmp_path / "named.xyz", index=0)
     assert atoms.get_chemical_symbols() == names.tolist()
-    with pytest.raises(ValueError, match=r"types: 'two words' is invalid"):
-        export(synthetic(types=["Si", "O", "two words", "Si", "H", "X"]), tmp_path / "bad.xyz")
+    with pytest.raises(ValueError, match=r"species: 'two words' is invalid"):
+        export(synthetic(species=["Si", "O", "two words", "Si", "H", "X"]), tmp_path / "bad.xyz")
     assert not (tmp_path / "bad.xyz").exists()
 
 

@@ -115,7 +115,7 @@ def test_gsd_types_ids_and_a_trajectory_without_masses(tmp_path):
         positions=rng.normal(size=(3, 4, 3)),
         velocities=rng.normal(size=(3, 4, 3)),
         ids=np.array([7, 3, 9, 1]),
-        types=["b", "a", "b", "c"],
+        species=["b", "a", "b", "c"],
     )
     path = tmp_path / "run.gsd"
     write(write_gsd, traj, path)
@@ -191,7 +191,7 @@ def test_lammps_dump_ids_and_types(tmp_path):
     rng = np.random.default_rng(6)
     ids = np.array([7, 3, 9, 1])
     traj = SimpleNamespace(
-        t=np.array([0.0, 0.25]), positions=rng.normal(size=(2, 4, 3)), velocities=rng.normal(size=(2, 4, 3)), ids=ids, types=["b", "a", "b", "c"]
+        t=np.array([0.0, 0.25]), positions=rng.normal(size=(2, 4, 3)), velocities=rng.normal(size=(2, 4, 3)), ids=ids, species=["b", "a", "b", "c"]
     )
     path = tmp_path / "run.dump"
     write(write_lammps, traj, path)

@@ -61,6 +61,7 @@ MAX_NESTING = 32  # arrays and tables inside each other (a scene's deepest key p
 Vec = Annotated[list[float], Field(min_length=2, max_length=3)]
 NonNeg = Annotated[float, Field(ge=0)]
 Positive = Annotated[float, Field(gt=0)]
+SpeciesName = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.+-]+$")]  # one word, as World.add_particles takes it
 Unit = Annotated[float, Field(ge=0, le=1)]
 Index = Annotated[int, Field(ge=0, lt=MAX_PARTICLES)]
 Count = Annotated[int, Field(ge=1, le=MAX_PARTICLES)]
@@ -230,6 +231,7 @@ class _Block(_Model):
     pinned: Flags = False
     restitution: Material | None = None
     friction: Material | None = None
+    species: SpeciesName | list[SpeciesName] | None = None
     seed: Seed = 0
 
     @field_validator("velocity")
@@ -517,7 +519,7 @@ class Scene(_Model):
             where = f"{source}: particles[{b}]"
             try:
                 x, v, m, r, p, e, mu = _particles(block, dim)
-                idx = w.add_particles(x, v, m, r, p, e, mu)
+                idx = w.add_particles(x, v, m, r, p, e, mu, species=block.species)
             except ValueError as err:
                 raise SceneError(f"{where}: {err}") from None
             starts.append((int(idx[0]), int(idx[-1]) + 1))
@@ -898,6 +900,8 @@ def to_scene(world: World) -> Scene:
             "radius": list(world._core.radii),
             "pinned": (inverse == 0).tolist(),
         }
+        if world.species is not None:
+            block["species"] = world.species.tolist()
         materials = getattr(world, "_scene_materials", None)
         if materials is not None and len(materials[0]) == n:
             for name, arr in zip(("restitution", "friction"), materials, strict=True):

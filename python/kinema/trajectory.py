@@ -21,7 +21,7 @@ class Trajectory:
     since they were turned on (total energy + it is conserved).
 
     About the world (``None`` when unknown): ``masses`` (N,) kg, ``radii`` (N,) m, ``ids``
-    (N,), ``dim`` (2 or 3), ``dt`` s, ``method``, ``periodic`` (3 bools) and ``box_edges``
+    (N,), ``species`` (N,) names (``World.add_particles(species=)``), ``dim`` (2 or 3), ``dt`` s, ``method``, ``periodic`` (3 bools) and ``box_edges``
     (3,) m, the periodic cell. ``colliders``: the world's colliders as plain descriptions, in
     the order added — {"type": "plane", "point": [3], "normal": [3]}, {"type": "box", "lo",
     "hi"} (2 or 3 values each, ±inf for an open face), {"type": "sphere", "center": [3],
@@ -45,6 +45,7 @@ class Trajectory:
     masses: np.ndarray | None = None
     radii: np.ndarray | None = None
     ids: np.ndarray | None = None
+    species: np.ndarray | None = None
     dim: int = 3
     dt: float | None = None
     method: str | None = None

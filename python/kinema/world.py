@@ -4,6 +4,7 @@ any integration method of the registry, colliding with each other and with stati
 
 from __future__ import annotations
 
+import re
 import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -67,6 +68,7 @@ class World:
         self._method_arg = method
         self._warned = False
         self._advice_due = True
+        self._species: list[str] = []  # per particle ("": none given)
         self._new_views()
 
     @contextmanager
@@ -141,6 +143,7 @@ class World:
         pinned: Any = None,
         restitution: Any = None,
         friction: Any = None,
+        species: Any = None,
     ) -> np.ndarray:
         """Add particles; returns their indices.
 
@@ -153,6 +156,11 @@ class World:
         :meth:`set_collisions`). A pair combines its two by Box2D's rule, e = max(e_i, e_j) and
         μ = √(μ_i μ_j); a collider's own value overrides the particle's. Giving any turns
         collisions on.
+
+        ``species``: a name for these particles, or one per particle (one word each: letters,
+        digits, ``_ . + -``), recorded in trajectories and written by the exports as the particle type (OVITO,
+        ASE's chemical symbol, HOOMD's types, H5MD's species); particles without one are
+        ``X`` once any particle has one.
 
         Nothing is coerced: numbers are real numbers (ints or floats, NumPy scalars or arrays
         of an int or float dtype), and a bool, a complex number, a string or a date among them
@@ -173,8 +181,10 @@ class World:
             None if a is None else _checks.broadcast(name, _checks.real_array(name, a, none_is_nan=True), (n,), each).tolist()
             for name, a in (("restitution", restitution), ("friction", friction))
         )
+        names = self._species_names(species, n)
         self._push()
         start, end = self._core.add_particles(*(np.ascontiguousarray(a) for a in (x, v, m, r, p)), e, mu)
+        self._species += names
         self._new_views()
         self._advice_due = True
         return np.arange(start, end)
@@ -463,6 +473,31 @@ class World:
     def dim(self) -> int:
         return self._core.dim
 
+    @staticmethod
+    def _species_names(species: Any, n: int) -> list[str]:
+        """``species`` (None, a name, or one name per particle) as n names ("" for none)."""
+        if species is None:
+            return [""] * n
+        if isinstance(species, str):
+            given = [("species", species)]
+        elif isinstance(species, (list, tuple, np.ndarray)) and len(species) == n:
+            given = [(f"species[{k}]", name) for k, name in enumerate(np.asarray(species, dtype=object).reshape(-1).tolist())]
+        else:
+            raise TypeError(f"species = {_checks.describe(species)} is invalid: give a name (a string) or one per particle, ({n},)")
+        for label, name in given:
+            _checks.text(label, name)
+            if not re.fullmatch(r"[A-Za-z0-9_.+-]+", name):
+                raise ValueError(f"{label} = {name!r} is invalid: a species name is one word of letters, digits and _ . + -")
+        return [species] * n if isinstance(species, str) else [name for _, name in given]
+
+    @property
+    def species(self) -> np.ndarray | None:
+        """Each particle's species name (N,), ``X`` where none was given; ``None`` when no
+        particle has one."""
+        if not any(self._species):
+            return None
+        return np.array([s or "X" for s in self._species])
+
     @property
     def forces(self) -> list[Any]:
         return list(self._forces)
@@ -482,6 +517,7 @@ class World:
             "masses": self._m.copy(),
             "radii": np.array(self._core.radii),
             "ids": np.arange(len(self)),
+            "species": self.species,
             "dim": self.dim,
             "dt": self.dt,
             "method": self.method,

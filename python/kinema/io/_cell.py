@@ -1,6 +1,6 @@
 """What the exports need to know about a trajectory beyond its frames, computed once for
 every format: the cell that holds it (OVITO, ASE, HOOMD and LAMMPS all want a box), the step
-number of each frame, and the particles' types."""
+number of each frame, and the particles' species."""
 
 from __future__ import annotations
 
@@ -84,12 +84,12 @@ def frame_steps(fr: Frames) -> np.ndarray:
 
 def particle_types(traj: Any, n: int) -> tuple[list[str], np.ndarray]:
     """(type names, type index of each particle (N,)): the sorted distinct names of the
-    trajectory's ``types`` (N,) when it has them, else the single type ``"A"``."""
-    names = getattr(traj, "types", None)
+    trajectory's ``species`` (N,) when it has them, else the single type ``"A"``."""
+    names = getattr(traj, "species", None)
     if names is None:
         return ["A"], np.zeros(n, dtype=np.int64)
     a = np.asarray(names).astype(str)
     if a.shape != (n,):
-        raise ValueError(f"types has shape {a.shape}; it must be ({n},), one name per particle")
+        raise ValueError(f"species has shape {a.shape}; it must be ({n},), one name per particle")
     unique, index = np.unique(a, return_inverse=True)
     return unique.tolist(), index.astype(np.int64)

@@ -33,12 +33,18 @@ _SUFFIXES = {
 }
 SUFFIX = {"vtk": ".pvd", "ply": ".ply", "xyz": ".xyz", "csv": ".csv", "gsd": ".gsd", "lammps": ".lammpstrj"}  # the main file's suffix of each format
 _TRAJECTORY_SUFFIXES = (".h5", ".hdf5", ".h5md")  # H5MD trajectories: never the name of an export
+_ELEMENTS = frozenset(
+    "H He Li Be B C N O F Ne Na Mg Al Si P S Cl Ar K Ca Sc Ti V Cr Mn Fe Co Ni Cu Zn Ga Ge As Se Br Kr Rb Sr Y Zr "
+    "Nb Mo Tc Ru Rh Pd Ag Cd In Sn Sb Te I Xe Cs Ba La Ce Pr Nd Pm Sm Eu Gd Tb Dy Ho Er Tm Yb Lu Hf Ta W Re Os Ir "
+    "Pt Au Hg Tl Pb Bi Po At Rn Fr Ra Ac Th Pa U Np Pu Am Cm Bk Cf Es Fm Md No Lr Rf Db Sg Bh Hs Mt Ds Rg Cn Nh Fl "
+    "Mc Lv Ts Og".split()
+)  # the chemical symbols ASE's extended XYZ reader accepts as species (and X)
 _DIGITS = 5  # frame numbers in series file names: stem_00000.vtp
 
 
 def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_frame: Callable[[int], Any] | None = None) -> list[Path]:
     """Write ``traj`` (a ``kinema.Trajectory`` or any object with ``t``, ``positions``,
-    ``velocities`` and optionally ``masses``, ``radii``, ``ids``, ``types``, ``periodic``,
+    ``velocities`` and optionally ``masses``, ``radii``, ``ids``, ``species``, ``periodic``,
     ``box_edges``, ``colliders``) for another program; returns the paths written, the main
     file first.
 
@@ -82,9 +88,12 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
       has two walls and every particle stays between them, the walls; otherwise the
       particles' extent over all frames widened on each side by the largest radius or 5 % of
       the largest extent, whichever is more; a 2D trajectory's z spans that margin. No edge
-      is zero, so OVITO's cell analysis and ``atoms.get_volume()`` work. ``species``: the
-      trajectory's ``types`` names (one word each) when it has them, else ``X`` (ASE's dummy
-      element).
+      is zero, so OVITO's cell analysis and ``atoms.get_volume()`` work. Particle types:
+      a trajectory with ``species`` names (``World.add_particles(species=)``, a scene's
+      ``species``) gets a first column ``type:S:1`` of the names, which OVITO takes as its
+      Particle Type, and a ``species`` column of the name where it is a chemical symbol and
+      ``X`` (ASE's dummy element) where not, as ASE refuses other words; ASE keeps the names
+      in ``atoms.arrays["type"]``. Without species names every species is ``X``.
     - ``"csv"`` (.csv): one file with the header ``frame,time,id,x,y,z,vx,vy,vz,mass,radius``
       and a row per particle and frame.
     - ``"gsd"`` (.gsd): HOOMD-blue's format (OVITO, HOOMD, freud, MDAnalysis), written with
@@ -430,6 +439,7 @@ def _write_ply(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]
 
 
 def _xyz(fr: Frames, i: int, header: str, species: list[str]) -> str:
+    # species: each particle's leading columns ("X"; or its type and its element symbol)
     """Frame ``i`` of an extended XYZ file: the count, the comment line (``header`` and the
     frame's ``Time``), one row per particle: its species name, then the columns of
     ``Properties``: pos, velo, momenta, radius, mass, masses, id (those the trajectory has;
@@ -448,15 +458,19 @@ def _xyz(fr: Frames, i: int, header: str, species: list[str]) -> str:
 
 
 def _write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
+    # A trajectory's species names go to a `type` column, first: OVITO takes the first of
+    # `type` and `species` as its Particle Type. ASE reads `species` as chemical symbols and
+    # refuses other words ("grain"), so that column holds the name where it is an element's
+    # symbol and X (ASE's dummy element) where not; ASE keeps `type` in atoms.arrays.
     names, typeid = particle_types(traj, fr.n_particles)
-    if getattr(traj, "types", None) is None:
-        names = ["X"]  # ASE's dummy element
-    for name in names:
+    typed = getattr(traj, "species", None) is not None
+    for name in names if typed else []:
         if not re.fullmatch(r"[A-Za-z0-9_.+-]+", name):
-            raise ValueError(f"types: {name!r} is invalid: a species name is one word of letters, digits and _ . + -")
-    species = [names[k] for k in typeid]
+            raise ValueError(f"species: {name!r} is invalid: a species name is one word of letters, digits and _ . + -")
+    lead = [f"{name} {name if name in _ELEMENTS else 'X'}" for name in names] if typed else ["X"]
+    species = [lead[k] for k in typeid] if typed else ["X"] * fr.n_particles
     has_m, has_r = fr.masses is not None, fr.radii is not None
-    props = "species:S:1:pos:R:3:velo:R:3" + ":momenta:R:3" * has_m + ":radius:R:1" * has_r + ":mass:R:1:masses:R:1" * has_m + ":id:I:1"
+    props = "type:S:1:" * typed + "species:S:1:pos:R:3:velo:R:3" + ":momenta:R:3" * has_m + ":radius:R:1" * has_r + ":mass:R:1:masses:R:1" * has_m + ":id:I:1"
     cell = trajectory_cell(traj, fr)
     origin, edges, pbc = cell.lo, cell.hi - cell.lo, cell.periodic
     lattice = " ".join(repr(float(c)) for c in np.diag(edges).reshape(-1))

@@ -19,7 +19,7 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     One GSD frame per trajectory frame: ``configuration/step`` (round(t/dt) when ``dt`` is
     known, else the frame index), ``configuration/dimensions`` (2 or 3) and
     ``configuration/box`` [Lx, Ly, Lz, 0, 0, 0] (Lz = 0 in 2D, as HOOMD does); ``particles/N``,
-    ``types`` (``["A"]``, or the trajectory's ``types``), ``typeid``, ``position`` (m),
+    ``types`` (``["A"]``, or the trajectory's ``species`` names), ``typeid``, ``position`` (m),
     ``velocity`` (m/s), ``mass`` (kg) and ``diameter`` (2 × radius, m) where the trajectory
     has masses and radii. The box: along a periodic axis the world's periodic cell, along
     another the walls of the world's ``Box`` where all particles stay between them, else the

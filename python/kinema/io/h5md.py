@@ -84,8 +84,9 @@ class LoadedTrajectory:
     {force name: (F,)} J; ``momentum`` (F, 3) kg m/s and ``angular_momentum`` (F, 3) kg m²/s;
     ``contacts`` (F,), ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J.
     Besides: ``step`` (F,) the integration step of each frame, ``masses`` (N,) kg, ``radii``
-    (N,) m, ``ids`` (N,), ``dim``, ``dt`` s, ``method``, ``periodic`` (3 bools) and
-    ``box_edges`` (3,) m, the periodic cell at the first frame, with ``box_edges_by_frame``
+    (N,) m, ``ids`` (N,), ``species`` (N,) names (kinema's files), ``dim``, ``dt`` s,
+    ``method``, ``periodic`` (3 bools) and ``box_edges`` (3,) m, the periodic cell at the
+    first frame, with ``box_edges_by_frame``
     (F, 3) m, the cell at each frame (a box that changes), ``colliders`` (descriptions, as
     ``Trajectory.colliders``), ``group``, the file's ``author`` and ``creator`` and its
     ``path``. An element the file does not hold is ``None`` (``potential``, ``colliders``:
@@ -106,6 +107,7 @@ class LoadedTrajectory:
     masses: np.ndarray | None = None
     radii: np.ndarray | None = None
     ids: np.ndarray | None = None
+    species: np.ndarray | None = None
     dim: int = 3
     dt: float | None = None
     method: str | None = None
@@ -374,10 +376,12 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     _constant_element(box, "pbc", np.array(flags, dtype=bool), clock, compression, None)
     if not _unknown(fr.velocities):
         _element(particles, "velocity", fr.velocities[..., :d], clock, compression, "m s-1")
-    species = particle_types(tr, fr.n_particles)[1].astype(np.int32)
-    for name, a, unit in (("species", species, None), ("mass", fr.masses, "kg"), ("radius", fr.radii, "m"), ("id", fr.ids, None)):
+    names, species = particle_types(tr, fr.n_particles)
+    for name, a, unit in (("species", species.astype(np.int32), None), ("mass", fr.masses, "kg"), ("radius", fr.radii, "m"), ("id", fr.ids, None)):
         if a is not None:
-            _constant_element(particles, name, np.asarray(a), clock, compression, unit)
+            element = _constant_element(particles, name, np.asarray(a), clock, compression, unit)
+            if name == "species" and getattr(tr, "species", None) is not None:
+                _fixed_string(element, "names", names)  # species k is names[k] (kinema's; H5MD's species are integers)
 
     obs = f.create_group("observables")
     kinetic = getattr(tr, "kinetic", None)
@@ -493,8 +497,9 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     when present, ``total`` (F,) J, ``contacts`` (F,), ``impulse_balance`` (F, 3) N s,
     ``collision_energy_lost`` (F,) J, ``masses`` (N,) kg, ``radii`` (N,) m, ``ids`` (N,),
     ``dim`` (2: positions are stored as (F, N, 2)), ``dt`` s, ``method``, ``periodic`` (D
-    bools) with ``box_edges`` (D,) m, ``types`` (N,) names (the ``species`` written: the
-    index of each particle's name among the sorted names; 0 for all without ``types``),
+    bools) with ``box_edges`` (D,) m, ``species`` (N,) names (the ``species`` element: the
+    index of each particle's name among the sorted names, which its ``names`` attribute
+    holds; 0 for all without ``species``),
     ``colliders`` (``Trajectory.colliders``' descriptions or ``kinema`` collider objects).
     Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
     without them) are not written.
@@ -522,6 +527,19 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
 
 def _fail(path: Path, what: str) -> TrajectoryFileError:
     return TrajectoryFileError(f"{path}: {what}")
+
+
+def _species_names(r: Any, obj: Any, index: np.ndarray) -> np.ndarray | None:
+    """The species names of the particles: ``names[index]`` when the species element (or
+    dataset) ``obj`` has a ``names`` attribute (kinema writes one), else ``None`` (H5MD's
+    species are integers, and a name cannot be made up for them)."""
+    if "names" not in obj.attrs:
+        return None
+    names = [_utf8(b) for b in np.asarray(obj.attrs["names"]).reshape(-1)]
+    bad = next((k for k in index.tolist() if not 0 <= k < len(names)), None)
+    if not all(isinstance(s, str) and s for s in names) or bad is not None:
+        raise r.fail(f"{_where('species', obj)} has species {bad} or names {names!r}: each particle's species must index its names")
+    return np.array(names)[index.astype(np.int64)]
 
 
 def _utf8(raw: Any) -> Any:
@@ -754,8 +772,11 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
         r.plan("velocities", v_ds, vector_bytes(v_ds, units["velocities"]))
 
     per_particle = {}  # attribute: (dataset, word, whether it is a time-dependent element's value)
-    for name, attr, integer in (("mass", "masses", False), ("radius", "radii", False), ("id", "ids", True)):
-        if name not in p:
+    # species: read where the file names them (kinema's `names`); H5MD's own species are
+    # integers with no names, which a trajectory has no use for (znh5md writes them as floats)
+    named = "species" in p and "names" in p["species"].attrs
+    for name, attr, integer in (("mass", "masses", False), ("radius", "radii", False), ("id", "ids", True), ("species", "species", True)):
+        if name not in p or (name == "species" and not named):
             continue
         obj = p[name]
         if isinstance(obj, h5py.Dataset):
@@ -891,6 +912,8 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
         if attr == "radii" and np.any(a < 0):
             i = int(np.argmax(a < 0))
             raise r.fail(f"{_where(attr, ds)} has radius[{i}] = {number(a[i])} (radii must be finite and >= 0 m)")
+        if attr == "species":  # names where the file gives them (kinema's ``names``), else none
+            a = _species_names(r, p["species"], np.asarray(a))
         setattr(out, attr, a)
     if periodic is not None:
         edges = _box_edges(r, edges_ds, _to_si(np.asarray(edges_ds[()], dtype=np.float64), units["box edges"]), edges_by_frame, periodic)

@@ -35,7 +35,7 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
     as LAMMPS's 2D boxes are periodic in z), then ``ITEM: ATOMS id type x y z vx vy
     vz radius mass`` and a row per particle: id + 1 (LAMMPS ids start at 1; 1..N in row order
     if the ids are not distinct and >= 0), type 1 (or 1 + the index of the particle's name in
-    the trajectory's sorted ``types``), radius and mass only where the trajectory has them.
+    the trajectory's sorted ``species``), radius and mass only where the trajectory has them.
     Floats are written with 17 significant digits: exact for float64 (ASE reads them back
     bit for bit; OVITO 3.17's parser can land 1 or 2 units in the last place off). OVITO
     reads ``TIME`` as the global attribute ``Time``; ASE skips it. ``on_frame(i)`` is called after frame
