@@ -22,6 +22,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 app = typer.Typer(
@@ -132,7 +133,8 @@ def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video
 
 
 def _fail(message: str, code: int = 2) -> None:
-    err_console.print(f"[bold red]error:[/] {message}", highlight=False, soft_wrap=True)
+    # (escaped: a message quotes paths and values, whose brackets are not rich markup)
+    err_console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
     raise typer.Exit(code)
 
 
@@ -272,8 +274,10 @@ def _guarded(fn):
             _fail(str(e) if "diverged" in str(e) else f"the simulation diverged: {e}", code=1)
         except SceneError as e:  # one line per problem
             for line in str(e).splitlines():
-                err_console.print(f"[bold red]error:[/] {line}", highlight=False, soft_wrap=True)
+                err_console.print(f"[bold red]error:[/] {escape(line)}", highlight=False, soft_wrap=True)
             raise typer.Exit(2) from None
+        except ImportError as e:  # an optional package a format needs (usd-core): how to get it
+            _fail(str(e).strip().splitlines()[0])
         except (ValueError, OSError) as e:  # TrajectoryFileError is a ValueError
             text = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
             if isinstance(e, OSError) and e.filename:
@@ -424,7 +428,7 @@ def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_
                 traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task))
         finally:  # a StabilityWarning explains a divergence: show it before the error
             for w in caught:
-                err_console.print(f"[yellow]warning:[/] {w.message}", highlight=False, soft_wrap=True)
+                err_console.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
     stats = world.collision_stats()
     if stats is not None:
         total = stats["total"]
@@ -577,7 +581,10 @@ def render(
 def export(
     traj: Annotated[Path, typer.Argument(help="Trajectory file (H5MD).")],
     format: Annotated[
-        str, typer.Option("--format", "-f", help="vtk (ParaView), ply (Blender), xyz (OVITO, ASE), csv, gsd (HOOMD, OVITO), lammps (a LAMMPS dump).")
+        str,
+        typer.Option(
+            "--format", "-f", help="vtk (ParaView), ply (Blender), xyz (OVITO, ASE), csv, gsd (HOOMD, OVITO), lammps (a LAMMPS dump), usd (Blender, Houdini)."
+        ),
     ],
     out: Annotated[
         Path | None,
@@ -590,7 +597,8 @@ def export(
     ParaView or OVITO), its frames in the folder run_vtk/ and the colliders in
     run_colliders.vtp; ply one file a frame in the folder
     run_ply/ (run_00000.ply, ...); xyz run.xyz (extended XYZ, SI units); csv run.csv; gsd
-    run.gsd; lammps run.lammpstrj (dump custom). So the formats never overwrite each other.
+    run.gsd; lammps run.lammpstrj (dump custom); usd run.usd (Blender, Houdini; needs
+    pip install kinema[usd]). So the formats never overwrite each other.
     A suffix of -o that names another format (-f vtk -o x.ply) is refused."""
     from .io import FORMATS
     from .io import export as write_export

@@ -18,8 +18,9 @@ from ._cell import particle_types, trajectory_cell
 from ._files import Frames, atomic_file, atomic_folder, frames_of
 from .gsd_writer import write_gsd
 from .lammps_dump import write_lammps
+from .usd_writer import write_usd
 
-FORMATS = ("vtk", "ply", "xyz", "csv", "gsd", "lammps")
+FORMATS = ("vtk", "ply", "xyz", "csv", "gsd", "lammps", "usd")
 _SUFFIXES = {
     ".pvd": "vtk",
     ".vtp": "vtk",
@@ -30,8 +31,19 @@ _SUFFIXES = {
     ".gsd": "gsd",
     ".lammpstrj": "lammps",
     ".dump": "lammps",
+    ".usd": "usd",
+    ".usda": "usd",
+    ".usdc": "usd",
 }
-SUFFIX = {"vtk": ".pvd", "ply": ".ply", "xyz": ".xyz", "csv": ".csv", "gsd": ".gsd", "lammps": ".lammpstrj"}  # the main file's suffix of each format
+SUFFIX = {
+    "vtk": ".pvd",
+    "ply": ".ply",
+    "xyz": ".xyz",
+    "csv": ".csv",
+    "gsd": ".gsd",
+    "lammps": ".lammpstrj",
+    "usd": ".usd",
+}  # the main file's suffix of each format
 _TRAJECTORY_SUFFIXES = (".h5", ".hdf5", ".h5md")  # H5MD trajectories: never the name of an export
 _ELEMENTS = frozenset(
     "H He Li Be B C N O F Ne Na Mg Al Si P S Cl Ar K Ca Sc Ti V Cr Mn Fe Co Ni Cu Zn Ga Ge As Se Br Kr Rb Sr Y Zr "
@@ -103,6 +115,10 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
       MDAnalysis, VMD): ``id type x y z vx vy vz radius mass`` with ids from 1, the box with
       ``pp``/``ff`` flags, ``ITEM: TIME``; 17 significant digits (see
       ``lammps_dump.write_lammps``).
+    - ``"usd"`` (.usd, .usda, .usdc): Pixar's USD for Blender and Houdini, written with the
+      ``usd-core`` package: a ``UsdGeom.Points`` prim with positions and velocities as time
+      samples at the recording's frame rate, widths 2r and ids, Z up, 1 m per unit, and the
+      colliders as guide prims (see ``usd_writer.write_usd``).
 
     Text formats write every float with 17 significant digits (exact for float64); mass and
     radius are left out where the trajectory has none. A suffix of ``path`` that names
@@ -129,7 +145,7 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
         what = "an H5MD trajectory" if other == "h5md" else f"format {other!r}"
         raise ValueError(f"path = {str(path)!r}: the suffix {path.suffix!r} is for {what}, not format = {format!r}; give a name ending in {SUFFIX[format]}")
     fr = frames_of(traj)
-    writer = {"vtk": _write_vtk, "ply": _write_ply, "xyz": _write_xyz, "csv": _write_csv, "gsd": write_gsd, "lammps": write_lammps}[format]
+    writer = {"vtk": _write_vtk, "ply": _write_ply, "xyz": _write_xyz, "csv": _write_csv, "gsd": write_gsd, "lammps": write_lammps, "usd": write_usd}[format]
     return writer(traj, fr, path, on_frame or (lambda i: None))
 
 

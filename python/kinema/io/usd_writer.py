@@ -1,0 +1,153 @@
+"""Pixar's USD (Blender, Houdini, Omniverse, usdview), written with the ``usd-core`` package:
+the particles as one ``UsdGeom.Points`` prim with time samples, the colliders as simple prims."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._cell import trajectory_cell
+from ._files import Frames, TrajectoryFileError
+
+SUFFIXES = (".usd", ".usda", ".usdc")  # binary crate (.usd, .usdc) or text (.usda)
+
+
+def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
+    """Write ``fr`` to one USD stage at ``path``; returns ``[path]``.
+
+    The stage: ``upAxis`` Z (kinema's gravity points along -z), ``metersPerUnit`` 1 (kinema
+    is SI), ``timeCodesPerSecond`` the recording's frame rate, time code t × that rate for a
+    frame at t s (the frame index when frames are evenly spaced), ``startTimeCode`` and
+    ``endTimeCode`` the first and last frames. ``/World`` (the default prim, an Xform) holds:
+
+    - ``/World/particles``, a ``UsdGeom.Points``: ``points`` (m) and ``velocities`` (m/s:
+      USD's velocities are in units per second, whatever the time codes) as a time sample per
+      frame, float32 as USD's point arrays are; ``widths`` 2r (m) and ``ids`` constant;
+      primvar ``mass`` (kg) where the trajectory has masses.
+    - ``/World/colliders``: a ``box_k`` (a ``UsdGeom.Cube`` scaled to the box, open faces
+      closed at the particles' extent), ``plane_k`` (a ``UsdGeom.Plane``, as wide as the
+      scene) and ``sphere_k`` (a ``UsdGeom.Sphere``) per collider, with the ``guide`` purpose
+      so that renders show the particles only, and ``kinema:collider`` naming the type.
+
+    In Blender: File → Import → Universal Scene Description, then play: the Points prim
+    becomes a point cloud whose positions follow the time samples. In Houdini: a LOP
+    network's Sublayer or a SOP ``usdimport``. ``on_frame(i)`` is called after frame ``i``."""
+    try:
+        from pxr import Gf, Sdf, Usd, UsdGeom, Vt
+    except ImportError:
+        raise ImportError("writing USD needs the usd-core package: pip install usd-core (or kinema[usd])") from None
+    rate = _frame_rate(fr.t)
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise TrajectoryFileError(f"cannot write {path}: the folder {parent} does not exist")
+    # USD picks the file format from the name's suffix, so the stage is written under its own
+    # name in a temporary folder beside the target, then renamed over it.
+    staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=parent))
+    try:
+        tmp = staging / path.name
+        stage = Usd.Stage.CreateNew(str(tmp))
+        UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+        UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+        stage.SetTimeCodesPerSecond(rate)
+        codes = fr.t * rate
+        stage.SetStartTimeCode(float(codes[0]) if fr.n_frames else 0.0)
+        stage.SetEndTimeCode(float(codes[-1]) if fr.n_frames else 0.0)
+        world = UsdGeom.Xform.Define(stage, "/World")
+        stage.SetDefaultPrim(world.GetPrim())
+
+        points = UsdGeom.Points.Define(stage, "/World/particles")
+        radii = fr.radii if fr.radii is not None else np.zeros(fr.n_particles)
+        points.CreateWidthsAttr(Vt.FloatArray.FromNumpy((2.0 * radii).astype(np.float32)))
+        points.CreateIdsAttr(Vt.Int64Array.FromNumpy(fr.ids.astype(np.int64)))
+        if fr.masses is not None:
+            mass = UsdGeom.PrimvarsAPI(points).CreatePrimvar("mass", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex)
+            mass.Set(Vt.FloatArray.FromNumpy(fr.masses.astype(np.float32)))
+        positions, velocities = points.CreatePointsAttr(), points.CreateVelocitiesAttr()
+        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        for i in range(fr.n_frames):
+            code = Usd.TimeCode(float(codes[i]))
+            x = fr.positions[i].astype(np.float32)
+            positions.Set(Vt.Vec3fArray.FromNumpy(x), code)
+            velocities.Set(Vt.Vec3fArray.FromNumpy(fr.velocities[i].astype(np.float32)), code)
+            if fr.n_particles:
+                reach = radii[:, None]
+                lo, hi = np.minimum(lo, (fr.positions[i] - reach).min(axis=0)), np.maximum(hi, (fr.positions[i] + reach).max(axis=0))
+            on_frame(i)
+        if fr.n_particles and fr.n_frames:
+            points.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
+        _colliders(stage, traj, fr, UsdGeom, Gf)
+        stage.GetRootLayer().Save()
+        os.replace(tmp, path)
+    except OSError as e:
+        raise TrajectoryFileError(f"cannot write {path}: {e.strerror or e}") from None
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return [path]
+
+
+def _frame_rate(t: np.ndarray) -> float:
+    """Frames per second of the recording (the stage's time codes per second): 1 / the median
+    interval, 24 (USD's default) for a single frame."""
+    if t.size < 2:
+        return 24.0
+    step = float(np.median(np.diff(t)))
+    if not (np.isfinite(step) and step > 0):
+        raise ValueError(f"t: the frames' times must increase to give USD a frame rate (median interval {step!r} s)")
+    return 1.0 / step
+
+
+def _colliders(stage: Any, traj: Any, fr: Frames, UsdGeom: Any, Gf: Any) -> None:
+    """The trajectory's colliders as simple prims under /World/colliders (see write_usd)."""
+    described = [c for c in getattr(traj, "colliders", None) or [] if isinstance(c, dict)]
+    if not described:
+        return
+    cell = trajectory_cell(traj, fr)
+    centre, size = 0.5 * (cell.lo + cell.hi), float(np.max(cell.hi - cell.lo))
+    UsdGeom.Scope.Define(stage, "/World/colliders")
+    for k, c in enumerate(described):
+        kind = c.get("type")
+        prim_path = f"/World/colliders/{kind}_{k}"
+        if kind == "box":
+            lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
+            a, b = np.asarray(c["lo"], float).reshape(-1)[:3], np.asarray(c["hi"], float).reshape(-1)[:3]
+            lo[: a.size], hi[: b.size] = a, b
+            lo, hi = np.where(np.isfinite(lo), lo, cell.lo), np.where(np.isfinite(hi), hi, cell.hi)  # open faces: the scene's extent
+            geom = UsdGeom.Cube.Define(stage, prim_path)
+            geom.CreateSizeAttr(1.0)
+            xf = UsdGeom.XformCommonAPI(geom)
+            xf.SetTranslate(Gf.Vec3d(*(0.5 * (lo + hi)).tolist()))
+            xf.SetScale(Gf.Vec3f(*np.maximum(hi - lo, 1e-9).tolist()))
+        elif kind == "plane":
+            normal = np.asarray(c["normal"], float).reshape(-1)
+            normal = normal / np.linalg.norm(normal)
+            point = np.asarray(c["point"], float).reshape(-1)
+            geom = UsdGeom.Plane.Define(stage, prim_path)
+            geom.CreateAxisAttr(UsdGeom.Tokens.z)
+            geom.CreateWidthAttr(2.0 * size)
+            geom.CreateLengthAttr(2.0 * size)
+            # the plane's point nearest the scene's centre, its z axis turned onto the normal
+            foot = centre - np.dot(centre - point, normal) * normal
+            rotation = Gf.Rotation(Gf.Vec3d(0.0, 0.0, 1.0), Gf.Vec3d(*normal.tolist()))
+            xf = UsdGeom.Xformable(geom)
+            xf.AddTranslateOp().Set(Gf.Vec3d(*foot.tolist()))
+            xf.AddOrientOp().Set(Gf.Quatf(rotation.GetQuat()))
+        elif kind == "sphere":
+            geom = UsdGeom.Sphere.Define(stage, prim_path)
+            geom.CreateRadiusAttr(float(c["radius"]))
+            UsdGeom.XformCommonAPI(geom).SetTranslate(Gf.Vec3d(*np.asarray(c["center"], float).reshape(-1)[:3].tolist()))
+        else:
+            continue
+        geom.CreatePurposeAttr(UsdGeom.Tokens.guide)
+        geom.GetPrim().CreateAttribute("kinema:collider", _token_type()).Set(kind)
+
+
+def _token_type() -> Any:
+    from pxr import Sdf
+
+    return Sdf.ValueTypeNames.Token
