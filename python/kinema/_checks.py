@@ -22,11 +22,13 @@ strings, bytes, ``None`` (where not documented) and anything else.
 from __future__ import annotations
 
 import numbers
+import re
 import reprlib
 from typing import Any
 
 import numpy as np
 
+SPECIES_PATTERN = r"[A-Za-z0-9_.+-]+"  # a species name: one word, as every export's reader takes it
 INT64_MAX = 2**63 - 1
 UINT64_MAX = 2**64 - 1
 
@@ -242,6 +244,15 @@ def index(name: str, value: Any, n: int | None = None) -> int:
     if v > INT64_MAX:
         raise _fail(ValueError, name, v, f"particle indices must be < {_int_text(INT64_MAX + 1)}")
     return v
+
+
+def species(name: str, value: Any) -> str:
+    """``value`` as a species name: a string (else ``TypeError``) of one word of letters,
+    digits and ``_ . + -`` (else ``ValueError``)."""
+    value = text(name, value)
+    if not re.fullmatch(SPECIES_PATTERN, value):
+        raise ValueError(f"{name} = {value!r} is invalid: a species name is one word of letters, digits and _ . + -")
+    return value
 
 
 def text(name: str, value: Any) -> str:

@@ -23,6 +23,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, ValidationError, field_validator, model_validator
 
+from . import _checks
 from .colliders import Box, Plane, SphereObstacle
 from .forces import Attractor, Drag, Gravity, Spring, Wind
 from .ode import method_names
@@ -61,7 +62,7 @@ MAX_NESTING = 32  # arrays and tables inside each other (a scene's deepest key p
 Vec = Annotated[list[float], Field(min_length=2, max_length=3)]
 NonNeg = Annotated[float, Field(ge=0)]
 Positive = Annotated[float, Field(gt=0)]
-SpeciesName = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.+-]+$")]  # one word, as World.add_particles takes it
+SpeciesName = Annotated[str, Field(pattern=f"^{_checks.SPECIES_PATTERN}$")]  # one word, as World.add_particles takes it
 Unit = Annotated[float, Field(ge=0, le=1)]
 Index = Annotated[int, Field(ge=0, lt=MAX_PARTICLES)]
 Count = Annotated[int, Field(ge=1, le=MAX_PARTICLES)]

@@ -4,7 +4,6 @@ any integration method of the registry, colliding with each other and with stati
 
 from __future__ import annotations
 
-import re
 import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -485,9 +484,7 @@ class World:
         else:
             raise TypeError(f"species = {_checks.describe(species)} is invalid: give a name (a string) or one per particle, ({n},)")
         for label, name in given:
-            _checks.text(label, name)
-            if not re.fullmatch(r"[A-Za-z0-9_.+-]+", name):
-                raise ValueError(f"{label} = {name!r} is invalid: a species name is one word of letters, digits and _ . + -")
+            _checks.species(label, name)
         return [species] * n if isinstance(species, str) else [name for _, name in given]
 
     @property

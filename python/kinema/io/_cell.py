@@ -13,15 +13,22 @@ from ._files import Frames
 _MARGIN = 0.05  # of the particles' largest extent, around them where no periodic cell is known
 
 
+def box_corners(description: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi), (3,) each, m, of a box collider's description (``Trajectory.colliders``):
+    ±inf for open faces and along z of a 2D box (2 values each)."""
+    lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
+    a = np.asarray(description["lo"], dtype=np.float64).reshape(-1)[:3]
+    b = np.asarray(description["hi"], dtype=np.float64).reshape(-1)[:3]
+    lo[: a.size], hi[: b.size] = a, b
+    return lo, hi
+
+
 def box_collider(traj: Any) -> tuple[np.ndarray, np.ndarray] | None:
-    """(lo, hi), (3,) each, of the trajectory's first box collider (the one a world's periodic
-    cell comes from), ±inf for open faces; ``None`` without one."""
+    """The corners (``box_corners``) of the trajectory's first box collider (the one a
+    world's periodic cell comes from); ``None`` without one."""
     for c in getattr(traj, "colliders", None) or []:
         if isinstance(c, dict) and c.get("type") == "box":
-            lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
-            a, b = np.asarray(c["lo"], dtype=np.float64).reshape(-1)[:3], np.asarray(c["hi"], dtype=np.float64).reshape(-1)[:3]
-            lo[: a.size], hi[: b.size] = a, b
-            return lo, hi
+            return box_corners(c)
     return None
 
 

@@ -14,7 +14,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from ._cell import particle_types, trajectory_cell
+from .. import _checks
+from ._cell import box_corners, particle_types, trajectory_cell
 from ._files import Frames, atomic_file, atomic_folder, frames_of
 from .gsd_writer import write_gsd
 from .lammps_dump import write_lammps
@@ -330,8 +331,7 @@ def _collider_geometry(traj: Any, fr: Frames) -> tuple[np.ndarray, list[tuple[in
 
     for k, d in enumerate(colliders):
         if d["type"] == "box":
-            b_lo, b_hi = np.full(3, -np.inf), np.full(3, np.inf)
-            b_lo[: len(d["lo"])], b_hi[: len(d["hi"])] = d["lo"], d["hi"]
+            b_lo, b_hi = box_corners(d)
             b_lo, b_hi = np.where(np.isfinite(b_lo), b_lo, lo), np.where(np.isfinite(b_hi), b_hi, hi)
             if fr.dim == 2:
                 first = add([[b_lo[0], b_lo[1], 0], [b_hi[0], b_lo[1], 0], [b_hi[0], b_hi[1], 0], [b_lo[0], b_hi[1], 0]])
@@ -481,7 +481,7 @@ def _write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]
     names, typeid = particle_types(traj, fr.n_particles)
     typed = getattr(traj, "species", None) is not None
     for name in names if typed else []:
-        if not re.fullmatch(r"[A-Za-z0-9_.+-]+", name):
+        if not re.fullmatch(_checks.SPECIES_PATTERN, name):
             raise ValueError(f"species: {name!r} is invalid: a species name is one word of letters, digits and _ . + -")
     lead = [f"{name} {name if name in _ELEMENTS else 'X'}" for name in names] if typed else ["X"]
     species = [lead[k] for k in typeid] if typed else ["X"] * fr.n_particles

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ._cell import trajectory_cell
+from ._cell import box_corners, trajectory_cell
 from ._files import Frames, TrajectoryFileError
 
 SUFFIXES = (".usd", ".usda", ".usdc")  # binary crate (.usd, .usdc) or text (.usda)
@@ -114,9 +114,7 @@ def _colliders(stage: Any, traj: Any, fr: Frames, UsdGeom: Any, Gf: Any) -> None
         kind = c.get("type")
         prim_path = f"/World/colliders/{kind}_{k}"
         if kind == "box":
-            lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
-            a, b = np.asarray(c["lo"], float).reshape(-1)[:3], np.asarray(c["hi"], float).reshape(-1)[:3]
-            lo[: a.size], hi[: b.size] = a, b
+            lo, hi = box_corners(c)
             lo, hi = np.where(np.isfinite(lo), lo, cell.lo), np.where(np.isfinite(hi), hi, cell.hi)  # open faces: the scene's extent
             geom = UsdGeom.Cube.Define(stage, prim_path)
             geom.CreateSizeAttr(1.0)

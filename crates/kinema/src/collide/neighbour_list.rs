@@ -86,6 +86,8 @@ pub(crate) struct NeighbourList {
     /// the list holds: the next update at that buffer, the world's force evaluation of the
     /// same step with nothing written in between, need not check again. Any update clears it.
     pub(crate) verified: Option<(usize, usize)>,
+    /// The most entries a build may hold (`None`: [`Self::MAX_ENTRIES`]; tests set less).
+    pub(crate) entry_limit: Option<usize>,
 }
 
 /// The partners of one chunk's particles, compressed: particle l of the chunk has
@@ -149,33 +151,41 @@ impl NeighbourList {
         let searched = grid.prepare(x, radius, domain, skin)?;
         // The rows, chunk by chunk on all threads; each particle's row depends on the
         // positions only, so the list is the same for any number of threads. The entries are
-        // counted as they come, so that a list beyond MAX_ENTRIES stops before it exhausts
-        // the machine's memory (an abort Python could not catch).
+        // counted as they come (into a shared count every 64 particles, so the threads rarely
+        // meet on it), so that a list beyond MAX_ENTRIES stops before it exhausts the
+        // machine's memory (an abort Python could not catch).
         self.rows.resize_with(n.div_ceil(CHUNK), Rows::default);
         let grid = &*grid;
         let entries = AtomicUsize::new(0);
+        let limit = self.entry_limit.unwrap_or(Self::MAX_ENTRIES);
         self.rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
             let (start, partners) = (&mut rows.start, &mut rows.partners);
             start.clear();
             partners.clear();
             start.push(0);
+            let mut counted = 0;
+            let mut over = false;
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                if searched && entries.load(Ordering::Relaxed) <= Self::MAX_ENTRIES {
-                    let before = partners.len();
+                if searched && !over {
                     grid.partners(i, x, radius, domain, skin, partners);
-                    entries.fetch_add(partners.len() - before, Ordering::Relaxed);
+                    if i % 64 == 63 {
+                        let added = partners.len() - counted;
+                        counted = partners.len();
+                        over = entries.fetch_add(added, Ordering::Relaxed) + added > limit;
+                    }
                 }
                 start.push(partners.len() as u32);
             }
+            entries.fetch_add(partners.len() - counted, Ordering::Relaxed);
         });
-        if entries.into_inner() > Self::MAX_ENTRIES {
+        if entries.into_inner() > limit {
             self.rows.clear();
             let what = format!(
                 "the contact list of {n} particles (over {} neighbours per particle: \
                  radii far too large for the space the particles fill)",
-                Self::MAX_ENTRIES / n.max(1)
+                limit / n.max(1)
             );
-            return Err(Error::out_of_memory(what, Self::MAX_ENTRIES * std::mem::size_of::<u32>()));
+            return Err(Error::out_of_memory(what, limit * std::mem::size_of::<u32>()));
         }
         self.walls.clear();
         if !colliders.is_empty() {
@@ -274,5 +284,40 @@ impl NeighbourList {
             })
             .collect();
         self.built_at = built;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_list_beyond_its_entry_limit_is_an_out_of_memory_error_and_no_list() {
+        // 300 particles of radius 1 within a unit cube: every one is every other's partner,
+        // 300 × 299 = 89,700 entries; a limit of 10,000 stops the build (counted every 64
+        // particles, so it stops early rather than filling all rows)
+        let n = 300;
+        let x: Vec<f64> = (0..n)
+            .flat_map(|k| [(k as f64 * 0.618) % 1.0, (k as f64 * 0.755) % 1.0, (k as f64 * 0.57) % 1.0])
+            .collect();
+        let radius = vec![1.0; n];
+        let domain = Domain::open(3).unwrap();
+        let mut grid = Grid::new();
+        let mut list = NeighbourList {
+            entry_limit: Some(10_000),
+            ..NeighbourList::default()
+        };
+        let err = list.update(&mut grid, &x, &radius, &[], &domain, 0.1, 0.0).unwrap_err();
+        assert!(matches!(err, Error::OutOfMemory { .. }), "{err}");
+        assert!(
+            err.to_string()
+                .starts_with("the contact list of 300 particles (over 33 neighbours per particle"),
+            "{err}"
+        );
+        assert!(list.rows.is_empty() && list.built_at.is_empty(), "no list is left behind");
+        list.entry_limit = None;
+        list.update(&mut grid, &x, &radius, &[], &domain, 0.1, 0.0).unwrap();
+        let entries: usize = list.rows.iter().map(|r| r.partners.len()).sum();
+        assert_eq!(entries, n * (n - 1));
     }
 }
