@@ -28,6 +28,12 @@ class Trajectory:
     "radius"}, with "restitution" and "friction" where the collider sets them; m. Empty when
     there are none or they are unknown (a file written before they were recorded).
 
+    Births and deaths (emitters, ``World.remove_particles``): N counts every particle alive
+    in some frame, one column per particle in the order of their ``ids`` (stable, never
+    reused); ``alive`` (F, N) bool says which exist at each frame, and their positions and
+    velocities are NaN where they do not. Without births or deaths ``alive`` is all True.
+    ``springs`` (S, 2): the ids at the ends of each spring, drawn while both are alive.
+
     ``save`` writes an H5MD file, ``Trajectory.load`` (or ``kinema.load_trajectory``) reads
     one back, ``export`` writes VTK, PLY, extended XYZ or CSV (see ``kinema.io``), ``render``
     a video (see ``kinema.render``)."""
@@ -52,10 +58,38 @@ class Trajectory:
     periodic: tuple[bool, bool, bool] | None = None
     box_edges: np.ndarray | None = None
     colliders: list[dict[str, Any]] = field(default_factory=list)
+    alive: np.ndarray | None = None
+    springs: np.ndarray | None = None
     total: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
         self.total = self.kinetic + sum(self.potential.values(), np.zeros_like(self.kinetic))
+        frames, n = self.positions.shape[:2]
+        if self.alive is None:
+            self.alive = np.ones((frames, n), dtype=bool)
+        else:
+            self.alive = np.asarray(self.alive, dtype=bool)
+            if self.alive.shape != (frames, n):
+                raise ValueError(f"alive has shape {self.alive.shape}; it must be (frames, particles) = {(frames, n)}")
+        if self.springs is not None:
+            self.springs = np.asarray(self.springs, dtype=np.int64).reshape(-1, 2)
+
+    @property
+    def changes_count(self) -> bool:
+        """Whether particles are born or die during the recording (some are not alive at some frame)."""
+        return not bool(self.alive.all())
+
+    def frame(self, k: int) -> dict[str, np.ndarray]:
+        """The particles alive at frame ``k``: ``ids``, ``positions``, ``velocities`` and, where
+        known, ``masses``, ``radii`` and ``species``, each with one row per live particle."""
+        live = self.alive[k]
+        out = {"ids": (self.ids if self.ids is not None else np.arange(live.size))[live]}
+        out["positions"], out["velocities"] = self.positions[k][live], self.velocities[k][live]
+        for name in ("masses", "radii", "species"):
+            value = getattr(self, name)
+            if value is not None:
+                out[name] = value[live]
+        return out
 
     @staticmethod
     def _recorder() -> _Recorder:
