@@ -202,6 +202,11 @@ impl PyWorld {
         Ok((r.start, r.end))
     }
 
+    /// Removes the particles at these indices (checked; repeats allowed).
+    fn remove_particles(&mut self, indices: Vec<usize>) -> PyResult<()> {
+        self.inner.remove_particles(&indices).map_err(to_py)
+    }
+
     fn add_gravity(&mut self, g: [f64; 3]) -> PyResult<()> {
         self.inner.add_force(Box::new(Gravity::new(g).map_err(to_py)?)).map_err(to_py)
     }
@@ -420,6 +425,10 @@ impl PyWorld {
     #[getter]
     fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.inner.particles().mass)
+    }
+    #[getter]
+    fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
+        PyArray1::from_slice(py, &self.inner.particles().id)
     }
     #[getter]
     fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {

@@ -21,9 +21,15 @@ pub struct Particles {
     pub inv_mass: Vec<f64>,
     /// Radii, m (≥ 0; 0 for point particles).
     pub radius: Vec<f64>,
-    /// Stable identifiers, in the order of creation.
+    /// Stable identifiers, in the order of creation; never reused, not even after the
+    /// particle with the highest one is removed.
     pub id: Vec<u64>,
+    /// The id the next particle added gets.
+    pub next_id: u64,
 }
+
+/// In a `new_of_old` map of [`Particles::retain`]: the particle was removed.
+pub const GONE: u32 = u32::MAX;
 
 impl Particles {
     /// Number of particles.
@@ -109,7 +115,8 @@ impl Particles {
         // tried once: the step would abort on it otherwise
         room(total, Vec::<u8>::new().try_reserve_exact(total).is_ok())?;
         let start = self.len();
-        let first_id = self.id.last().map_or(0, |l| l + 1);
+        let first_id = self.next_id;
+        self.next_id += n as u64;
         self.x.extend_from_slice(x);
         self.v.extend(
             v.iter()
@@ -124,10 +131,51 @@ impl Particles {
         Ok(start..start + n)
     }
 
+    /// Keeps the particles where `keep[i]` holds, in their order, and removes the others;
+    /// returns `new_of_old`: each particle's new index, or [`GONE`]. The ids stay with their
+    /// particles (and are never given again).
+    pub fn retain(&mut self, keep: &[bool]) -> Vec<u32> {
+        assert_eq!(keep.len(), self.len(), "one flag per particle");
+        let mut next = 0u32;
+        let new_of_old: Vec<u32> = keep
+            .iter()
+            .map(|&k| {
+                if k {
+                    next += 1;
+                    next - 1
+                } else {
+                    GONE
+                }
+            })
+            .collect();
+        for v in [&mut self.x, &mut self.v] {
+            retain_rows(v, 3, keep);
+        }
+        for v in [&mut self.mass, &mut self.inv_mass, &mut self.radius] {
+            retain_rows(v, 1, keep);
+        }
+        retain_rows(&mut self.id, 1, keep);
+        new_of_old
+    }
+
     /// Whether particle i is pinned.
     pub fn is_pinned(&self, i: usize) -> bool {
         self.inv_mass[i] == 0.0
     }
+}
+
+/// Keeps the rows (of `width` values each) of `a` where `keep` holds; a buffer not in use
+/// (of another length) is left alone.
+pub(crate) fn retain_rows<T: Copy>(a: &mut Vec<T>, width: usize, keep: &[bool]) {
+    if a.len() != width * keep.len() {
+        return;
+    }
+    let mut row = 0;
+    a.retain(|_| {
+        let k = keep[row / width];
+        row += 1;
+        k
+    });
 }
 
 #[cfg(test)]
@@ -146,6 +194,24 @@ mod tests {
         let r = p.add(&[0.0; 3], &[0.0; 3], &[1.0], &[0.0], &[false]).unwrap();
         assert_eq!(r, 2..3);
         assert_eq!(p.id, vec![0, 1, 2]);
+    }
+
+    #[test]
+    fn removed_particles_take_their_values_and_ids_with_them() {
+        let mut p = Particles::default();
+        let x: Vec<f64> = (0..9).map(f64::from).collect();
+        p.add(&x, &x, &[1.0, 2.0, 3.0], &[0.1, 0.2, 0.3], &[false; 3]).unwrap();
+        let new_of_old = p.retain(&[true, false, false]);
+        assert_eq!(new_of_old, vec![0, GONE, GONE]);
+        assert_eq!(
+            (p.x.as_slice(), p.mass.as_slice(), p.id.as_slice()),
+            (&x[..3], &[1.0][..], &[0][..])
+        );
+        // the highest id (2) is gone, and still never given again
+        p.add(&[0.0; 3], &[0.0; 3], &[4.0], &[0.4], &[false]).unwrap();
+        assert_eq!(p.id, vec![0, 3]);
+        assert_eq!(p.retain(&[false, true]), vec![GONE, 0]);
+        assert_eq!((p.radius.as_slice(), p.inv_mass.as_slice()), (&[0.4][..], &[0.25][..]));
     }
 
     #[test]

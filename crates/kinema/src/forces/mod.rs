@@ -141,6 +141,13 @@ pub trait Force {
     /// Called only when [`Force::can_renumber`] says yes; a force without per-particle data
     /// has nothing to do (the default).
     fn renumber(&mut self, _new_of_old: &[u32]) {}
+
+    /// Follows the removal of particles ([`crate::World::remove_particles`]): particle i is
+    /// now particle `new_of_old[i]`, or was removed where that is
+    /// [`crate::particles::GONE`]. What the force holds per particle goes with a removed
+    /// one (a spring with a removed end is removed). A force without per-particle data has
+    /// nothing to do (the default).
+    fn remove_particles(&mut self, _new_of_old: &[u32]) {}
 }
 
 /// A force's Jacobian prepared at one state (see [`Force::linearize`]).

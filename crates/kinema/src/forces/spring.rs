@@ -20,6 +20,7 @@ use rayon::prelude::*;
 
 use super::{check_buffers, Force, Linearized, State};
 use crate::error::{CallbackError, Error};
+use crate::particles::{retain_rows, GONE};
 
 /// A set of damped springs between pairs of particles.
 ///
@@ -390,6 +391,24 @@ impl Force for Springs {
             *end = new_of_old[*end] as usize;
         }
         self.min_particles = self.i.iter().chain(&self.j).map(|p| p + 1).max().unwrap_or(0);
+    }
+
+    /// A spring with a removed end dies with it; the others keep their order and follow
+    /// their particles.
+    fn remove_particles(&mut self, new_of_old: &[u32]) {
+        let keep: Vec<bool> = self
+            .i
+            .iter()
+            .zip(&self.j)
+            .map(|(&a, &b)| new_of_old[a] != GONE && new_of_old[b] != GONE)
+            .collect();
+        for v in [&mut self.i, &mut self.j] {
+            retain_rows(v, 1, &keep);
+        }
+        for v in [&mut self.k, &mut self.rest_length, &mut self.damping] {
+            retain_rows(v, 1, &keep);
+        }
+        self.renumber(new_of_old);
     }
 
     fn name(&self) -> &str {

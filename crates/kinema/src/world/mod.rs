@@ -275,6 +275,44 @@ impl World {
         Ok(range)
     }
 
+    /// Removes the particles at the given indices (the user's order; repeats allowed); the
+    /// others keep their order, their ids and their state. A removed particle takes with it
+    /// what the forces hold for it (springs ending on it, [`Force::remove_particles`]) and its
+    /// own collision materials; the integrator's and the collision stage's caches start
+    /// again, as after [`World::add_particles`]. Between steps only: the time, the step
+    /// count and the collision books go on.
+    pub fn remove_particles(&mut self, indices: &[usize]) -> Result<(), Error> {
+        let n = self.particles.len();
+        if let Some(k) = indices.iter().position(|&i| i >= n) {
+            return Err(Error::invalid(
+                format!("index[{k}]"),
+                indices[k],
+                format!("indices of particles must be < {n}, the number of particles"),
+            ));
+        }
+        if indices.is_empty() {
+            return Ok(());
+        }
+        self.restore_user_order();
+        let mut keep = vec![true; n];
+        for &i in indices {
+            keep[i] = false;
+        }
+        let new_of_old = self.particles.retain(&keep);
+        for v in [&mut self.x_next, &mut self.v_next] {
+            crate::particles::retain_rows(v, 3, &keep);
+        }
+        for f in &mut self.forces {
+            f.remove_particles(&new_of_old);
+        }
+        if let Some(stage) = &mut self.collisions {
+            crate::particles::retain_rows(&mut stage.own, 1, &keep);
+            stage.refresh_materials()?;
+        }
+        self.reset_caches();
+        self.rebuild_contact_force()
+    }
+
     /// Adds a force, checked against the current particles (before the spring–dashpot contact
     /// force, which is always the last one).
     pub fn add_force(&mut self, force: Box<dyn Force>) -> Result<(), Error> {

@@ -1,0 +1,152 @@
+//! Worlds whose particle count changes: removing particles between steps leaves exactly the
+//! world one would build from the survivors (same state, forces, springs among survivors,
+//! colliders), bit for bit over the steps that follow, for both contact models and the
+//! integrators; ids are never reused; springs die with an end.
+
+use kinema::collide::{BoxContainer, Surface};
+use kinema::forces::{Gravity, Springs};
+use kinema::ode::{Integrator, Method};
+use kinema::world::{CollisionParams, ContactModel};
+use kinema::{World, WorldParams};
+
+/// A small deterministic generator (no dependency), uniform in [lo, hi).
+struct Lcg(u64);
+impl Lcg {
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+struct Setup {
+    method: Method,
+    model: Option<ContactModel>,
+    springs: bool,
+}
+
+/// `n` particles on a jittered lattice in a 1 m box under gravity; with `springs`, a spring
+/// from each particle to the next one.
+fn build(s: &Setup, x: &[f64], v: &[f64], m: &[f64], r: &[f64], springs: &[(usize, usize)]) -> World {
+    let mut w = World::new(WorldParams {
+        dt: 2e-4,
+        method: Integrator::Named(s.method),
+        dim: 3,
+    })
+    .unwrap();
+    if let Some(model) = s.model {
+        w.set_collisions(CollisionParams {
+            model,
+            restitution: 0.7,
+            ..CollisionParams::default()
+        })
+        .unwrap();
+        w.add_collider(BoxContainer::new([0.0; 3], [1.0; 3], Surface::default()).unwrap())
+            .unwrap();
+    }
+    w.add_particles(x, v, m, r, &vec![false; m.len()]).unwrap();
+    w.add_force(Box::new(Gravity::new([0.0, 0.0, -9.81]).unwrap())).unwrap();
+    if s.springs && !springs.is_empty() {
+        let (i, j): (Vec<usize>, Vec<usize>) = springs.iter().copied().unzip();
+        w.add_force(Box::new(Springs::with_rest_from_positions(i, j, 50.0, 0.01, x).unwrap()))
+            .unwrap();
+    }
+    w
+}
+
+fn lattice(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+    let mut rng = Lcg(7);
+    let side = (n as f64).cbrt().ceil() as usize;
+    let (mut x, mut v, mut m, mut r) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for p in 0..n {
+        let (a, b, c) = (p % side, (p / side) % side, p / (side * side));
+        for (k, q) in [a, b, c].into_iter().enumerate() {
+            let _ = k;
+            x.push(0.1 + 0.8 * (q as f64 + 0.5) / side as f64 + rng.uniform(-0.005, 0.005));
+        }
+        for _ in 0..3 {
+            v.push(rng.uniform(-0.5, 0.5));
+        }
+        m.push(rng.uniform(0.5, 2.0) * 1e-3);
+        r.push(0.3 * 0.8 / side as f64);
+    }
+    (x, v, m, r)
+}
+
+#[test]
+fn a_world_after_removal_steps_as_the_world_built_from_its_survivors() {
+    let n = 600; // above the size from which spring–dashpot worlds sort along space
+    let setups = [
+        Setup {
+            method: Method::Verlet,
+            model: Some(ContactModel::SpringDashpot {
+                stiffness: 2e3,
+                damping: None,
+            }),
+            springs: false,
+        },
+        Setup {
+            method: Method::Verlet,
+            model: Some(ContactModel::Impulse),
+            springs: false,
+        },
+        Setup {
+            method: Method::Rk4,
+            model: None,
+            springs: true,
+        },
+        Setup {
+            method: Method::ImplicitEuler,
+            model: None,
+            springs: true,
+        },
+    ];
+    for s in &setups {
+        let (x, v, m, r) = lattice(n);
+        let chain: Vec<(usize, usize)> = (0..n - 1).map(|p| (p, p + 1)).collect();
+        let mut a = build(s, &x, &v, &m, &r, &chain);
+        a.advance(40).unwrap();
+        // Remove every third particle and a few more (repeats allowed).
+        let gone: Vec<usize> = (0..n).filter(|p| p % 3 == 0).chain([1, 1, n - 1]).collect();
+        a.remove_particles(&gone).unwrap();
+        let kept: Vec<usize> = (0..n).filter(|p| !gone.contains(p)).collect();
+        assert_eq!(a.particles().len(), kept.len());
+        let ids: Vec<u64> = kept.iter().map(|&p| p as u64).collect();
+        assert_eq!(a.particles().id, ids, "the survivors keep their ids, in order");
+
+        // The survivors' world: their state now, springs between two survivors renumbered.
+        let p = a.particles();
+        let new_of: std::collections::HashMap<usize, usize> = kept.iter().enumerate().map(|(new, &old)| (old, new)).collect();
+        let survivors: Vec<(usize, usize)> = chain
+            .iter()
+            .filter_map(|(i, j)| Some((*new_of.get(i)?, *new_of.get(j)?)))
+            .collect();
+        // rest lengths from the original positions, as the springs in `a` have them
+        let x0: Vec<f64> = kept.iter().flat_map(|&q| x[3 * q..3 * q + 3].to_vec()).collect();
+        let mut b = build(s, &x0, &p.v, &p.mass, &p.radius, &survivors);
+        b.particles_mut().x.copy_from_slice(&p.x);
+        b.particles_mut().v.copy_from_slice(&p.v);
+        a.advance(60).unwrap();
+        b.advance(60).unwrap();
+        assert_eq!(a.particles().x, b.particles().x, "{:?} / {:?}: positions", s.method, s.model);
+        assert_eq!(a.particles().v, b.particles().v, "{:?} / {:?}: velocities", s.method, s.model);
+        if s.springs {
+            assert!(survivors.len() < chain.len() / 3, "most springs lost an end");
+        }
+    }
+}
+
+#[test]
+fn ids_are_never_reused_and_bad_indices_are_named() {
+    let mut w = World::new(WorldParams::default()).unwrap();
+    w.add_particles(&[0.0; 9], &[0.0; 9], &[1.0; 3], &[0.0; 3], &[false; 3])
+        .unwrap();
+    w.remove_particles(&[2]).unwrap();
+    w.add_particles(&[0.0; 3], &[0.0; 3], &[1.0], &[0.0], &[false]).unwrap();
+    assert_eq!(w.particles().id, vec![0, 1, 3]);
+    let e = w.remove_particles(&[0, 3]).unwrap_err().to_string();
+    assert!(e.contains("index[1] = 3") && e.contains("< 3"), "{e}");
+    assert_eq!(w.particles().len(), 3, "a refused removal removes nothing");
+    w.remove_particles(&[0, 1, 2]).unwrap();
+    w.advance(3).unwrap(); // an empty world steps
+    assert_eq!(w.steps(), 3);
+}
