@@ -9,6 +9,10 @@
 - ``TrajectoryFileError``: a file that cannot be read or written (a ``ValueError`` whose
   message is one line naming the file).
 
+Births and deaths (``Trajectory.alive``) are written by every format: H5MD keeps one column
+per particle with its ``id`` element's fill value where it does not exist (and reads it back,
+with the springs), the exports write each frame's live particles with their ids.
+
 Every writer writes under a temporary name and renames at the end: a failed write leaves no
 partial file behind and the previous file as it was.
 """

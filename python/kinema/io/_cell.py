@@ -42,7 +42,8 @@ class Cell(NamedTuple):
 
 
 def trajectory_cell(traj: Any, fr: Frames) -> Cell:
-    """The cell of the whole trajectory, the same for every frame.
+    """The cell of the whole trajectory, the same for every frame (of the particles alive at
+    each frame: births and deaths leave no trace).
 
     A periodic axis takes the bounds of the trajectory's box collider (the world's periodic
     cell), or, when it records none, its ``box_edges`` from the lowest coordinate on that
@@ -58,7 +59,7 @@ def trajectory_cell(traj: Any, fr: Frames) -> Cell:
     edges = getattr(traj, "box_edges", None)
     edges = np.zeros(3) if edges is None else np.resize(np.asarray(edges, dtype=np.float64).reshape(-1), 3)
     box = box_collider(traj)
-    x = fr.positions.reshape(-1, 3)
+    x = fr.positions[fr.alive]  # the particles that exist, (K, 3)
     x = x[np.all(np.isfinite(x), axis=1)]
     lo, hi = (x.min(axis=0), x.max(axis=0)) if len(x) else (np.zeros(3), np.zeros(3))
     axes = fr.dim

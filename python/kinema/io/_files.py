@@ -152,7 +152,9 @@ class Frames:
     """The per-particle data of a trajectory-like object, checked and in SI units: ``t``
     (F,) s; ``positions`` (F, N, 3) m and ``velocities`` (F, N, 3) m/s (z = 0 in 2D worlds);
     ``masses`` (N,) kg and ``radii`` (N,) m, ``None`` when the object has none; ``ids`` (N,)
-    (0..N-1 by default); ``dim`` 2 or 3; ``dt`` s and ``method``, ``None`` when unknown."""
+    (0..N-1 by default); ``dim`` 2 or 3; ``dt`` s and ``method``, ``None`` when unknown;
+    ``alive`` (F, N) bool, which particles exist at each frame (all True without births and
+    deaths; positions and velocities are NaN where not)."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -163,6 +165,7 @@ class Frames:
     dim: int
     dt: float | None
     method: str | None
+    alive: np.ndarray
 
     @property
     def n_frames(self) -> int:
@@ -171,6 +174,15 @@ class Frames:
     @property
     def n_particles(self) -> int:
         return self.positions.shape[1]
+
+    @property
+    def changes_count(self) -> bool:
+        """Whether particles are born or die: some are not alive at some frame."""
+        return not bool(self.alive.all())
+
+    def live(self, i: int) -> np.ndarray:
+        """The columns (particles) alive at frame ``i``, in column order (that of ``ids``)."""
+        return np.flatnonzero(self.alive[i])
 
 
 def _per_frame_vectors(traj: Any, name: str, n_frames: int) -> np.ndarray:
@@ -195,8 +207,9 @@ def _per_particle(traj: Any, names: tuple[str, ...], n: int, dtype: Any) -> np.n
 
 def frames_of(traj: Any) -> Frames:
     """Reads ``t``, ``positions``, ``velocities`` and the optional ``masses`` (or ``mass``),
-    ``radii`` (or ``radius``), ``ids``, ``dim``, ``dt`` and ``method`` of a trajectory-like
-    object and checks their shapes; raises ``ValueError`` naming the attribute that is wrong."""
+    ``radii`` (or ``radius``), ``ids``, ``alive``, ``dim``, ``dt`` and ``method`` of a
+    trajectory-like object and checks their shapes; raises ``ValueError`` naming the
+    attribute that is wrong."""
     t = np.asarray(traj.t, dtype=np.float64)
     if t.ndim != 1:
         raise ValueError(f"t has shape {t.shape}; it must be (F,), one time per frame")
@@ -205,10 +218,15 @@ def frames_of(traj: Any) -> Frames:
     if v.shape != x.shape:
         raise ValueError(f"velocities have shape {v.shape} but positions {x.shape}; they must match")
     n = x.shape[1]
+    alive = getattr(traj, "alive", None)
+    alive = np.ones((t.shape[0], n), dtype=bool) if alive is None else np.asarray(alive, dtype=bool)
+    if alive.shape != (t.shape[0], n):
+        raise ValueError(f"alive has shape {alive.shape}; it must be (F, N) = {(t.shape[0], n)}, one flag per frame and particle")
     dim = int(getattr(traj, "dim", None) or 3)
     if dim not in (2, 3):
         raise ValueError(f"dim = {dim} is invalid: it must be 2 or 3")
-    if dim == 2 and (np.any(x[..., 2] != 0) or np.any(v[..., 2] != 0)):
+    # NaN (a particle not alive, or velocities unknown) is no z != 0
+    if dim == 2 and (np.any(np.abs(x[..., 2]) > 0) or np.any(np.abs(v[..., 2]) > 0)):
         raise ValueError("dim = 2 but some positions or velocities have z != 0; a 2D trajectory lies in the xy-plane")
     ids = _per_particle(traj, ("ids", "id"), n, np.int64)
     dt = getattr(traj, "dt", None)
@@ -223,4 +241,5 @@ def frames_of(traj: Any) -> Frames:
         dim=dim,
         dt=None if dt is None else float(dt),
         method=None if method is None else str(method),
+        alive=alive,
     )

@@ -121,6 +121,12 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
       samples at the recording's frame rate, widths 2r and ids, Z up, 1 m per unit, and the
       colliders as guide prims (see ``usd_writer.write_usd``).
 
+    Births and deaths (a trajectory whose ``alive`` is not all True): every format writes at
+    each frame the particles alive at it only, each with its id (VTK's ``id`` point data,
+    PLY's ``id``, XYZ's ``id`` column, CSV's ``id``, GSD's ``log/particles/kinema/id``, LAMMPS's
+    ``id`` column, USD's time-sampled ``ids``), so a frame may hold fewer particles than
+    another, or none.
+
     Text formats write every float with 17 significant digits (exact for float64); mass and
     radius are left out where the trajectory has none. A suffix of ``path`` that names
     another format (``format="vtk"`` with ``run.ply``) or an H5MD trajectory (.h5) is a
@@ -231,18 +237,19 @@ def _polydata(
 
 
 def _vtp(fr: Frames, i: int) -> str:
-    """Frame ``i``: the particles as points and vertex cells, point data ``v`` (velocity),
-    ``speed``, ``radius``, ``mass``, ``id`` (the names OVITO maps to Velocity, Radius, Mass
-    and Particle Identifier; ParaView takes ``v`` as the active vectors), the field
-    ``TimeValue``."""
-    n = fr.n_particles
-    x, v = fr.positions[i], fr.velocities[i]
+    """Frame ``i``: the particles alive at it as points and vertex cells, point data ``v``
+    (velocity), ``speed``, ``radius``, ``mass``, ``id`` (the names OVITO maps to Velocity,
+    Radius, Mass and Particle Identifier; ParaView takes ``v`` as the active vectors), the
+    field ``TimeValue``."""
+    live = fr.live(i)
+    n = live.size
+    x, v = fr.positions[i][live], fr.velocities[i][live]
     point_data = [_vtk_array("v", v, 3), _vtk_array("speed", np.linalg.norm(v, axis=1))]
     if fr.radii is not None:
-        point_data.append(_vtk_array("radius", fr.radii))
+        point_data.append(_vtk_array("radius", fr.radii[live]))
     if fr.masses is not None:
-        point_data.append(_vtk_array("mass", fr.masses))
-    point_data.append(_vtk_array("id", fr.ids))
+        point_data.append(_vtk_array("mass", fr.masses[live]))
+    point_data.append(_vtk_array("id", fr.ids[live]))
     # One vertex cell per particle, so that ParaView draws the points without a filter (and
     # OVITO reads the file as particles: as many vertices as points, no other cells).
     cells = np.arange(n, dtype=np.int64)
@@ -414,27 +421,28 @@ def _write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]
 
 
 def _ply(fr: Frames, i: int) -> bytes:
-    """Frame ``i`` as a binary little-endian PLY of vertices (float32 x y z vx vy vz radius,
-    int32 id): the types Blender's and Houdini's importers read; extra properties are kept as
-    point attributes."""
+    """Frame ``i`` as a binary little-endian PLY of vertices, one per particle alive at it
+    (float32 x y z vx vy vz radius, int32 id): the types Blender's and Houdini's importers
+    read; extra properties are kept as point attributes."""
     columns = [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("vx", "<f4"), ("vy", "<f4"), ("vz", "<f4")]
     if fr.radii is not None:
         columns.append(("radius", "<f4"))
     columns.append(("id", "<i4"))
-    rows = np.empty(fr.n_particles, dtype=columns)
+    live = fr.live(i)
+    rows = np.empty(live.size, dtype=columns)
     for k, axis in enumerate("xyz"):
-        rows[axis] = fr.positions[i, :, k]
-        rows["v" + axis] = fr.velocities[i, :, k]
+        rows[axis] = fr.positions[i, live, k]
+        rows["v" + axis] = fr.velocities[i, live, k]
     if fr.radii is not None:
-        rows["radius"] = fr.radii
-    rows["id"] = fr.ids
+        rows["radius"] = fr.radii[live]
+    rows["id"] = fr.ids[live]
     ply_type = {"<f4": "float", "<i4": "int"}
     header = [
         "ply",
         "format binary_little_endian 1.0",
         "comment kinema trajectory frame, SI units (m, m/s)",
         f"comment time {float(fr.t[i])!r}",
-        f"element vertex {fr.n_particles}",
+        f"element vertex {live.size}",
         *(f"property {ply_type[t]} {name}" for name, t in columns),
         "end_header",
     ]
@@ -457,20 +465,23 @@ def _write_ply(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]
 def _xyz(fr: Frames, i: int, header: str, species: list[str]) -> str:
     # species: each particle's leading columns ("X"; or its type and its element symbol)
     """Frame ``i`` of an extended XYZ file: the count, the comment line (``header`` and the
-    frame's ``Time``), one row per particle: its species name, then the columns of
-    ``Properties``: pos, velo, momenta, radius, mass, masses, id (those the trajectory has;
-    17 significant digits, exact float64)."""
-    v = fr.velocities[i]
-    cols = [fr.positions[i], v]
-    if fr.masses is not None:
-        cols.append(fr.masses[:, None] * v)
+    frame's ``Time``), one row per particle alive at it: its species name, then the columns
+    of ``Properties``: pos, velo, momenta, radius, mass, masses, id (those the trajectory
+    has; 17 significant digits, exact float64)."""
+    live = fr.live(i)
+    v = fr.velocities[i][live]
+    masses = None if fr.masses is None else fr.masses[live][:, None]
+    cols = [fr.positions[i][live], v]
+    if masses is not None:
+        cols.append(masses * v)
     if fr.radii is not None:
-        cols.append(fr.radii[:, None])
-    if fr.masses is not None:
-        cols += [fr.masses[:, None], fr.masses[:, None]]
+        cols.append(fr.radii[live][:, None])
+    if masses is not None:
+        cols += [masses, masses]
     table = np.hstack(cols).tolist()
-    rows = "".join(f"{s} " + " ".join(map(repr, r)) + f" {int(k)}\n" for s, r, k in zip(species, table, fr.ids, strict=True))
-    return f"{fr.n_particles}\n{header} Time={float(fr.t[i])!r}\n{rows}"
+    lead = [species[k] for k in live]
+    rows = "".join(f"{s} " + " ".join(map(repr, r)) + f" {int(k)}\n" for s, r, k in zip(lead, table, fr.ids[live], strict=True))
+    return f"{live.size}\n{header} Time={float(fr.t[i])!r}\n{rows}"
 
 
 def _write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
@@ -505,12 +516,13 @@ def _csv_header(fr: Frames) -> str:
 
 
 def _csv(fr: Frames, i: int) -> str:
-    """The rows of frame ``i``: frame,time,id,x,y,z,vx,vy,vz, then mass and radius where the
-    trajectory has them (17 significant digits)."""
+    """The rows of frame ``i``, one per particle alive at it: frame,time,id,x,y,z,vx,vy,vz,
+    then mass and radius where the trajectory has them (17 significant digits)."""
     t = repr(float(fr.t[i]))
-    cols = [fr.positions[i], fr.velocities[i], *(a[:, None] for a in (fr.masses, fr.radii) if a is not None)]
+    live = fr.live(i)
+    cols = [fr.positions[i][live], fr.velocities[i][live], *(a[live][:, None] for a in (fr.masses, fr.radii) if a is not None)]
     table = np.hstack(cols).tolist()
-    return "".join(f"{i},{t},{int(k)}," + ",".join(map(repr, r)) + "\n" for r, k in zip(table, fr.ids, strict=True))
+    return "".join(f"{i},{t},{int(k)}," + ",".join(map(repr, r)) + "\n" for r, k in zip(table, fr.ids[live], strict=True))
 
 
 def _write_csv(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:

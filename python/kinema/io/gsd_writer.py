@@ -35,6 +35,12 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     OVITO shows the log values as the global attributes ``kinema/origin`` and
     ``kinema/time`` and the ids as the particle property ``kinema_id``.
 
+    Births and deaths (``alive``): a frame holds the particles alive at it only, GSD's
+    ``particles/N`` varying from frame to frame as HOOMD's does; ``typeid``, ``mass``,
+    ``diameter`` and ``log/particles/kinema/id`` are those of the live particles, in the
+    order of their ids, so a particle is followed across frames by its id (a frame may hold
+    none).
+
     ``on_frame(i)`` is called after frame ``i`` is written. Needs the ``gsd`` package."""
     try:
         import gsd.hoomd
@@ -47,6 +53,10 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
         origin[2], lengths[2] = 0.0, 0.0
     box = [*(float(v) for v in lengths), 0.0, 0.0, 0.0]
     types, typeid = particle_types(traj, fr.n_particles)
+    typeid = typeid.astype(np.uint32)
+    masses = None if fr.masses is None else fr.masses.astype(np.float32)
+    diameters = None if fr.radii is None else (2.0 * fr.radii).astype(np.float32)
+    ids = fr.ids.astype(np.int64)
     steps = frame_steps(fr)
     with atomic_file(path) as tmp, gsd.hoomd.open(str(tmp), mode="w") as f:
         for i in range(fr.n_frames):
@@ -54,19 +64,20 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
             frame.configuration.step = int(steps[i])
             frame.configuration.dimensions = fr.dim
             frame.configuration.box = box
+            live = fr.live(i)
             p = frame.particles
-            p.N = fr.n_particles
+            p.N = live.size
             p.types = types
-            p.typeid = typeid.astype(np.uint32)
-            p.position = (fr.positions[i] - origin).astype(np.float32)
-            p.velocity = fr.velocities[i].astype(np.float32)
-            if fr.masses is not None:
-                p.mass = fr.masses.astype(np.float32)
-            if fr.radii is not None:
-                p.diameter = (2.0 * fr.radii).astype(np.float32)
+            p.typeid = typeid[live]
+            p.position = (fr.positions[i][live] - origin).astype(np.float32)
+            p.velocity = fr.velocities[i][live].astype(np.float32)
+            if masses is not None:
+                p.mass = masses[live]
+            if diameters is not None:
+                p.diameter = diameters[live]
             frame.log["kinema/origin"] = origin.copy()
             frame.log["kinema/time"] = np.array([fr.t[i]], dtype=np.float64)
-            frame.log["particles/kinema/id"] = fr.ids.astype(np.int64)
+            frame.log["particles/kinema/id"] = ids[live]
             f.append(frame)
             on_frame(i)
     return [path]

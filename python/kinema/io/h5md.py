@@ -17,6 +17,8 @@ through HDF5 hard links, as the specification allows, and requires for the box):
         velocity          step, time, value (F, N, D) [m s-1]
         species           step, time, value (F, N) int32: the type index of each particle
         mass [kg], radius [m], id      step, time, value (F, N), when known (id: always)
+    /connectivity/springs (S, 2) int64: the ids at the ends of each spring, when the trajectory
+                          has springs; attribute particles_group: a reference to the group
     /observables
         kinetic_energy, potential_energy, total_energy    step, time, value (F,) [J]
         potential_energy_by_force/<force name>             step, time, value (F,) [J]
@@ -32,6 +34,13 @@ each ``value`` (and ``time``) dataset, in the "SI" system, written as space-sepa
 with integer powers. The per-particle elements (species, mass, radius, id) and the box are
 time-dependent, constant over the frames, because znh5md (ASE's H5MD reader) reads only that
 form; MDAnalysis's reader and pyh5md read them too.
+
+Births and deaths (``Trajectory.alive`` not all True) are written as H5MD 1.1 provides for a
+number of particles that varies: the arrays keep N columns, one per particle that exists at
+some frame, and the ``id`` element's value dataset gets a fill value (-1, or one less than
+the least id), which it holds where that particle does not exist; there ``position``,
+``velocity``, ``mass`` and ``radius`` hold their datasets' fill value, NaN, and ``species``
+-1. Without births and deaths no fill value is set and the layout is as above.
 
 :func:`load_h5md` converts the units of what it reads to SI (``parse_unit``: "nm", "Ang",
 "ps", "nm ps-1", "u", "kJ mol-1", ...), accepts files without velocities or observables and
@@ -88,9 +97,12 @@ class LoadedTrajectory:
     ``method``, ``periodic`` (3 bools) and ``box_edges`` (3,) m, the periodic cell at the
     first frame, with ``box_edges_by_frame``
     (F, 3) m, the cell at each frame (a box that changes), ``colliders`` (descriptions, as
-    ``Trajectory.colliders``), ``group``, the file's ``author`` and ``creator`` and its
-    ``path``. An element the file does not hold is ``None`` (``potential``, ``colliders``:
-    empty)."""
+    ``Trajectory.colliders``), ``alive`` (F, N) bool, which particles exist at each frame
+    (``None`` when all do: a file whose number of particles does not vary), ``springs`` (S, 2)
+    the ids at the ends of each spring, ``group``, the file's ``author`` and ``creator`` and
+    its ``path``. An element the file does not hold is ``None`` (``potential``,
+    ``colliders``: empty). Where particles come and go, ``positions`` and ``velocities`` are
+    NaN where they do not exist, one column per id (ascending)."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -115,6 +127,8 @@ class LoadedTrajectory:
     box_edges: np.ndarray | None = None
     box_edges_by_frame: np.ndarray | None = None
     colliders: list[dict[str, Any]] = field(default_factory=list)
+    alive: np.ndarray | None = None
+    springs: np.ndarray | None = None
     group: str = "all"
     author: str | None = None
     creator: str | None = None
@@ -293,35 +307,46 @@ def _fixed_string(obj: Any, name: str, value: str | list[str]) -> None:
     obj.attrs.create(name, data[0] if isinstance(value, str) else data, dtype=dtype)
 
 
-def _dataset(group: Any, name: str, data: np.ndarray, compression: str | None, unit: str | None = None, time_series: bool = False) -> Any:
-    ds = group.create_dataset(name, data=data, **_storage(data.shape, compression, time_series))
+def _dataset(group: Any, name: str, data: np.ndarray, compression: str | None, unit: str | None = None, time_series: bool = False, fill: Any = None) -> Any:
+    """A dataset of ``data``; ``fill``, when given, is its HDF5 fill value (H5MD's mark of an
+    entry of a particle that does not exist)."""
+    options = _storage(data.shape, compression, time_series)
+    if fill is not None:
+        options["fillvalue"] = fill
+    ds = group.create_dataset(name, data=data, **options)
     _set_unit(ds, unit)
     return ds
 
 
-def _element(parent: Any, name: str, value: np.ndarray, clock: Any, compression: str | None, unit: str | None) -> Any:
+def _element(parent: Any, name: str, value: np.ndarray, clock: Any, compression: str | None, unit: str | None, fill: Any = None) -> Any:
     """A time-dependent H5MD element: a group with ``step`` and ``time`` (hard links to the
-    shared clock datasets) and ``value``."""
+    shared clock datasets) and ``value`` (of fill value ``fill`` when given)."""
     g = parent.create_group(name)
     g["step"] = clock["step"]
     g["time"] = clock["time"]
-    _dataset(g, "value", value, compression, unit, time_series=True)
+    _dataset(g, "value", value, compression, unit, time_series=True, fill=fill)
     return g
 
 
-def _constant_element(parent: Any, name: str, row: np.ndarray, clock: Any, compression: str | None, unit: str | None) -> Any:
+def _constant_element(
+    parent: Any, name: str, row: np.ndarray, clock: Any, compression: str | None, unit: str | None, alive: np.ndarray | None = None, fill: Any = None
+) -> Any:
     """A time-dependent H5MD element whose value is ``row`` at every frame, written chunk by
-    chunk (the (F, ...) array is never made whole)."""
+    chunk (the (F, ...) array is never made whole). With ``alive`` (F, N), the entries of the
+    particles not alive hold ``fill``, the dataset's fill value."""
     g = parent.create_group(name)
     g["step"] = clock["step"]
     g["time"] = clock["time"]
     frames = clock["step"].shape[0]
     shape = (frames,) + row.shape
     options = _storage(shape, compression, time_series=True)
+    if alive is not None:
+        options["fillvalue"] = fill
     ds = g.create_dataset("value", shape=shape, dtype=row.dtype, **options)
     slab = options["chunks"][0] if "chunks" in options else max(1, frames)
     for i in range(0, frames, slab):
-        ds[i : i + slab] = np.broadcast_to(row, (min(slab, frames - i),) + row.shape)
+        rows = np.broadcast_to(row, (min(slab, frames - i),) + row.shape)
+        ds[i : i + slab] = rows if alive is None else np.where(alive[i : i + slab], rows, np.asarray(fill, dtype=row.dtype))
     _set_unit(ds, unit)
     return g
 
@@ -368,18 +393,35 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     step = np.arange(fr.n_frames, dtype=np.int64) if not fr.dt else np.rint(fr.t / fr.dt).astype(np.int64)
     _dataset(clock, "step", step, compression, time_series=True)
     _dataset(clock, "time", fr.t, compression, "s", time_series=True)
-    _dataset(clock, "value", fr.positions[..., :d], compression, "m", time_series=True)
+    # Births and deaths (H5MD's varying number of particles): the arrays keep one column per
+    # particle; at a frame where it does not exist, its id is the id dataset's fill value and
+    # its other entries the fill values of theirs (NaN; species -1).
+    changes = fr.changes_count
+    alive = fr.alive if changes else None
+    nan = np.nan if changes else None
+
+    def placed(a: np.ndarray) -> np.ndarray:  # NaN where a particle does not exist
+        return a if not changes else np.where(fr.alive[..., None], a, np.nan)
+
+    _dataset(clock, "value", placed(fr.positions[..., :d]), compression, "m", time_series=True, fill=nan)
     # The box, time-dependent as the readers want it (znh5md and MDAnalysis read edges/value
     # only), its step and time those of position as the specification requires. znh5md reads
     # a fixed-length boundary as all periodic (it compares bytes with "none"): pbc tells it.
     _constant_element(box, "edges", edges, clock, compression, "m")
     _constant_element(box, "pbc", np.array(flags, dtype=bool), clock, compression, None)
-    if not _unknown(fr.velocities):
-        _element(particles, "velocity", fr.velocities[..., :d], clock, compression, "m s-1")
+    if not _unknown(fr.velocities[fr.alive]):
+        _element(particles, "velocity", placed(fr.velocities[..., :d]), clock, compression, "m s-1", fill=nan)
     names, species = particle_types(tr, fr.n_particles)
-    for name, a, unit in (("species", species.astype(np.int32), None), ("mass", fr.masses, "kg"), ("radius", fr.radii, "m"), ("id", fr.ids, None)):
+    no_id = min(-1, int(fr.ids.min()) - 1) if fr.ids.size else -1  # the id of no particle: -1 unless an id is negative
+    per_particle = (
+        ("species", species.astype(np.int32), None, -1),
+        ("mass", fr.masses, "kg", np.nan),
+        ("radius", fr.radii, "m", np.nan),
+        ("id", fr.ids, None, no_id),
+    )
+    for name, a, unit, fill in per_particle:
         if a is not None:
-            element = _constant_element(particles, name, np.asarray(a), clock, compression, unit)
+            element = _constant_element(particles, name, np.asarray(a), clock, compression, unit, alive, fill)
             if name == "species" and getattr(tr, "species", None) is not None:
                 _fixed_string(element, "names", names)  # species k is names[k] (kinema's; H5MD's species are integers)
 
@@ -403,6 +445,17 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
         total = np.asarray(kinetic) + sum((np.asarray(u) for u in potential.values()), np.zeros(fr.n_frames))
     if total is not None and not _unknown(total):
         _element(obs, "total_energy", np.asarray(total, dtype=np.float64), clock, compression, "J")
+
+    springs = getattr(tr, "springs", None)
+    if springs is not None:
+        # H5MD's connectivity group: a time-independent list of pairs whose values are the
+        # particles' ids (the particle group has an id element), particles_group naming it.
+        pairs = np.asarray(springs, dtype=np.int64).reshape(-1, 2)
+        unknown = np.setdiff1d(pairs, fr.ids)
+        if unknown.size:
+            raise ValueError(f"springs: id {int(unknown[0])} is not the id of a particle of the trajectory")
+        ds = f.require_group("connectivity").create_dataset("springs", data=pairs)
+        ds.attrs["particles_group"] = particles.ref
 
     colliders = _colliders_of(tr)
     if fr.dt is not None or fr.method is not None or colliders:
@@ -500,8 +553,10 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     bools) with ``box_edges`` (D,) m, ``species`` (N,) names (the ``species`` element: the
     index of each particle's name among the sorted names, which its ``names`` attribute
     holds; 0 for all without ``species``),
-    ``colliders`` (``Trajectory.colliders``' descriptions or ``kinema`` collider objects).
-    Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
+    ``colliders`` (``Trajectory.colliders``' descriptions or ``kinema`` collider objects),
+    ``alive`` (F, N) bool, which particles exist at each frame (births and deaths: written
+    with H5MD's fill values, see the module doc), ``springs`` (S, 2) the ids at the ends of
+    each spring (``/connectivity/springs``). Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
     without them) are not written.
 
     ``group`` names the particle group (/particles/<group>); ``author`` the /h5md/author name
@@ -706,6 +761,87 @@ def _box_edges(r: _Reader, ds: Any, e: np.ndarray, by_frame: bool, periodic: tup
     return rows
 
 
+def _varying_ids(path: Path, p: Any) -> Any:
+    """The ``value`` dataset of the particle group's time-dependent ``id`` element when it has
+    a fill value (set when it was created): the mark, in H5MD, of a number of particles that
+    varies (an entry equal to it is a particle that does not exist at that frame); else
+    ``None``."""
+    h5py = _h5py()
+    if not isinstance(p.get("id"), h5py.Group):
+        return None
+    ds = _element_datasets(path, p, "id")[0]
+    if ds.shape is None or ds.dtype.kind not in "iu":
+        return None  # the per-particle checks name it
+    return ds if ds.id.get_create_plist().fill_value_defined() == h5py.h5d.FILL_VALUE_USER_DEFINED else None
+
+
+class _Live:
+    """The particles of a file whose number varies: the id of each of its (F, N) entries or
+    the fill value (H5MD's "no particle here"). kinema's trajectories have one column per
+    particle, the ids ascending, so the entries are gathered by id: ``ids`` (U,) the ids
+    that exist at some frame, ``alive`` (F, U). A file whose particles keep their slot (as
+    kinema writes them, with ascending ids) reads back column for column."""
+
+    def __init__(self, r: _Reader, ds: Any, frames: int, n: int) -> None:
+        table = np.asarray(ds[()], dtype=np.int64)
+        fill = ds.fillvalue
+        self.present = table != fill
+        self.frame, self.slot = np.nonzero(self.present)  # frame by frame
+        self.ids, self.column = np.unique(table[self.present], return_inverse=True)
+        self.column = self.column.reshape(-1)
+        if self.ids.size == 0:
+            raise r.fail(f"0 particles: every entry of {_where('ids', ds)} is its fill value {number(fill)} (no particle exists at any frame)")
+        key = self.frame * self.ids.size + self.column
+        order = np.sort(key)
+        twice = np.flatnonzero(np.diff(order) == 0)
+        if twice.size:
+            k, c = divmod(int(order[twice[0]]), self.ids.size)
+            raise r.fail(f"{_where('ids', ds)} holds id {int(self.ids[c])} twice at frame {k} (an id names one particle)")
+        self.frames = frames
+        self.alive = np.zeros((frames, self.ids.size), dtype=bool)
+        self.alive[self.frame, self.column] = True
+        # the entry where each particle first exists
+        self.first_entry = np.unique(self.column, return_index=True)[1]
+
+    def masked(self, a: np.ndarray) -> np.ndarray:
+        """``a`` (F, N, ...) with 0 where no particle exists: what is checked for finite values."""
+        mask = self.present.reshape(self.present.shape + (1,) * (a.ndim - 2))
+        return np.where(mask, a, 0)
+
+    def columns(self, a: np.ndarray) -> np.ndarray:
+        """``a`` (F, N, D) by particle: (F, U, D), NaN where a particle does not exist."""
+        out = np.full((self.frames, self.ids.size) + a.shape[2:], np.nan)
+        out[self.frame, self.column] = a[self.frame, self.slot]
+        return out
+
+    def first(self, a: np.ndarray, element: bool) -> np.ndarray:
+        """A per-particle value (U,) from ``a``, (F, N) (a time-dependent element) or (N,):
+        its value at the first entry of each particle."""
+        e = self.first_entry
+        return a[self.frame[e], self.slot[e]] if element else a[self.slot[e]]
+
+
+def _read_springs(r: _Reader, f: Any, p: Any, ids: np.ndarray) -> np.ndarray | None:
+    """The springs (S, 2) ids of ``/connectivity/springs`` (kinema's: H5MD's time-independent
+    list of pairs, whose ``particles_group`` is the particle group read), ``None`` without
+    them."""
+    h5py = _h5py()
+    ds = f.get("connectivity/springs")
+    if not isinstance(ds, h5py.Dataset):
+        return None
+    ref = ds.attrs.get("particles_group")
+    if isinstance(ref, h5py.Reference) and ref and f[ref].name != p.name:
+        return None  # the springs of another particle group
+    s = r.numbers("springs", ds, integer=True)
+    if len(s) != 2 or s[1] != 2:
+        raise r.fail(f"{_where('springs', ds)} has shape {s}; it must be (springs, 2), the ids of the two ends of each spring")
+    pairs = np.asarray(ds[()], dtype=np.int64)
+    unknown = np.setdiff1d(pairs, ids)
+    if unknown.size:
+        raise r.fail(f"{_where('springs', ds)} names id {int(unknown[0])}, which is no particle's ({p.name}/id)")
+    return pairs
+
+
 # /observables read back: (name, attribute of the trajectory, a vector per frame)
 _READ_OBSERVABLES = [(name, attr, attr in ("momentum", "angular_momentum", "impulse_balance")) for name, (attr, _) in _OBSERVABLES.items()]
 
@@ -771,12 +907,23 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
         units["velocities"] = r.unit("velocities", v_ds, (1, -1, 0))
         r.plan("velocities", v_ds, vector_bytes(v_ds, units["velocities"]))
 
+    # A varying number of particles (births and deaths): H5MD marks the entries of a particle
+    # that does not exist at a frame by the fill value of the time-dependent id element.
+    id_table = _varying_ids(path, p)
+    if id_table is not None:
+        if r.numbers("ids", id_table, True) != (frames, n):
+            raise r.fail(
+                f"{_where('ids', id_table)} has shape {id_table.shape}; with a fill value (particles that come and go) it must be "
+                f"({frames}, {n}), one id per frame and particle ({_where('positions', x_ds)} {shape})"
+            )
+        r.plan("ids", id_table, id_table.size * 8 * 4)  # the table, the entries present and their frames and columns
+
     per_particle = {}  # attribute: (dataset, word, whether it is a time-dependent element's value)
     # species: read where the file names them (kinema's `names`); H5MD's own species are
     # integers with no names, which a trajectory has no use for (znh5md writes them as floats)
     named = "species" in p and "names" in p["species"].attrs
     for name, attr, integer in (("mass", "masses", False), ("radius", "radii", False), ("id", "ids", True), ("species", "species", True)):
-        if name not in p or (name == "species" and not named):
+        if name not in p or (name == "species" and not named) or (name == "id" and id_table is not None):
             continue
         obj = p[name]
         if isinstance(obj, h5py.Dataset):
@@ -789,9 +936,9 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
         else:
             obj = _element_datasets(path, p, name)[0]
             s = r.numbers(attr, obj, integer)
-            if len(s) != 2 or s[0] == 0 or s[1] != n:
+            if len(s) != 2 or s[0] == 0 or s[1] != n or (id_table is not None and s[0] != frames):
                 raise r.fail(f"{_where(attr, obj)} has shape {s}; it must be (frames, {n}), one value per particle ({_where('positions', x_ds)} {shape})")
-            r.plan(attr, obj, n * obj.dtype.itemsize)
+            r.plan(attr, obj, (frames if id_table is not None else 1) * n * obj.dtype.itemsize)
             per_particle[attr] = (obj, True)
         if not integer:
             units[attr] = r.unit(attr, obj, _MASS if attr == "masses" else _LENGTH)
@@ -895,16 +1042,24 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
     if back.size:
         k = int(back[0]) + 1
         raise r.fail(f"{_where('times', t_ds)} must increase: t[{k}] = {number(t[k])} after t[{k - 1}] = {number(t[k - 1])}")
+    live = None if id_table is None else _Live(r, id_table, frames, n)
     x = _to_si(x_ds[()], units["positions"])
-    r.finite("positions", x_ds, x, ("frame", "particle"))
+    r.finite("positions", x_ds, x if live is None else live.masked(x), ("frame", "particle"))
     velocities = None
     if vel is not None:
         v = _to_si(vel[0][()], units["velocities"])
-        r.finite("velocities", vel[0], v, ("frame", "particle"))
-        velocities = three(v)
-    out = LoadedTrajectory(t=t, positions=three(x), velocities=velocities, step=step, dim=d, group=group, path=path)
+        r.finite("velocities", vel[0], v if live is None else live.masked(v), ("frame", "particle"))
+        velocities = three(v) if live is None else live.columns(three(v))
+    positions = three(x) if live is None else live.columns(three(x))  # 2D: z = 0 where a particle exists
+    out = LoadedTrajectory(t=t, positions=positions, velocities=velocities, step=step, dim=d, group=group, path=path)
+    if live is not None:
+        out.ids, out.alive = live.ids, live.alive
     for attr, (ds, element) in per_particle.items():
-        a = _to_si(ds[0] if element else ds[()], units.get(attr, 1.0))
+        if live is None:
+            a = ds[0] if element else ds[()]
+        else:  # each particle's value where it first exists
+            a = live.first(ds[()], element)
+        a = _to_si(a, units.get(attr, 1.0))
         r.finite(attr, ds, a, ("particle",))
         if attr == "masses" and np.any(a <= 0):
             i = int(np.argmax(a <= 0))
@@ -933,6 +1088,7 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
     if out.total is None and out.kinetic is not None:
         out.total = out.kinetic + sum(out.potential.values(), np.zeros_like(out.kinetic))
     out.dt, out.method, out.colliders = dt, method, colliders
+    out.springs = _read_springs(r, f, p, out.ids if out.ids is not None else np.arange(out.positions.shape[1]))
     author = f["h5md"].get("author")
     creator = f["h5md"].get("creator")
     out.author = None if author is None else _text(author.attrs.get("name", ""))
@@ -955,6 +1111,13 @@ def load_h5md(path: str | os.PathLike, group: str | None = None) -> LoadedTrajec
     may be fixed (edges (D,)) or time-dependent (one row per frame, a box that may change:
     ``box_edges_by_frame``), edges or a (D, D) matrix of edge vectors along the axes. Step
     and time may be H5MD's fixed interval (a scalar with an ``offset``).
+
+    A number of particles that varies (H5MD's time-dependent ``id`` with a fill value, as
+    kinema writes births and deaths) is read by id, whatever slot a particle takes at each
+    frame: one column per id that exists at some frame, ascending, ``alive`` (F, N) where it
+    exists, NaN positions and velocities where not, and its mass, radius and species where
+    it first exists. Only the entries that exist are checked (finite, an id once per frame).
+    ``/connectivity/springs`` (ids, as kinema writes them) becomes ``springs``.
 
     What is read is checked first: the types and shapes of every dataset before any data
     is read (positions (F, N, 3) or (F, N, 2) with F, N > 0; velocities as positions; one

@@ -36,7 +36,9 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
     vz radius mass`` and a row per particle: id + 1 (LAMMPS ids start at 1; 1..N in row order
     if the ids are not distinct and >= 0), type 1 (or 1 + the index of the particle's name in
     the trajectory's sorted ``species``), radius and mass only where the trajectory has them.
-    Floats are written with 17 significant digits: exact for float64 (ASE reads them back
+    Births and deaths (``alive``): each timestep lists the atoms alive at it only (``NUMBER
+    OF ATOMS`` varies; 0 for a frame with none), each with its own id, so a particle keeps
+    its id from frame to frame. Floats are written with 17 significant digits: exact for float64 (ASE reads them back
     bit for bit; OVITO 3.17's parser can land 1 or 2 units in the last place off). OVITO
     reads ``TIME`` as the global attribute ``Time``; ASE skips it. ``on_frame(i)`` is called after frame
     ``i`` is written."""
@@ -47,17 +49,17 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
     bounds += "".join(f"{float(a)!r} {float(b)!r}\n" for a, b in zip(lo, hi, strict=True))
     columns = "id type x y z vx vy vz" + " radius" * (fr.radii is not None) + " mass" * (fr.masses is not None)
     _, typeid = particle_types(traj, fr.n_particles)
-    prefixes = [f"{int(k)} {int(t) + 1} " for k, t in zip(_lammps_ids(fr), typeid, strict=True)]
+    prefixes = np.array([f"{int(k)} {int(t) + 1} " for k, t in zip(_lammps_ids(fr), typeid, strict=True)], dtype=object)
     per_particle = [a[:, None] for a in (fr.radii, fr.masses) if a is not None]
     steps = frame_steps(fr)
     with atomic_file(path) as tmp, open(tmp, "w", encoding="ascii") as f:
         f.write("ITEM: UNITS\nsi\n")
         for i in range(fr.n_frames):
-            table = np.hstack([fr.positions[i], fr.velocities[i], *per_particle]).tolist()
-            rows = "".join(p + " ".join(map(repr, r)) + "\n" for p, r in zip(prefixes, table, strict=True))
+            live = fr.live(i)
+            table = np.hstack([fr.positions[i][live], fr.velocities[i][live], *(a[live] for a in per_particle)]).tolist()
+            rows = "".join(p + " ".join(map(repr, r)) + "\n" for p, r in zip(prefixes[live], table, strict=True))
             f.write(
-                f"ITEM: TIME\n{float(fr.t[i])!r}\nITEM: TIMESTEP\n{int(steps[i])}\nITEM: NUMBER OF ATOMS\n{fr.n_particles}\n"
-                f"{bounds}ITEM: ATOMS {columns}\n{rows}"
+                f"ITEM: TIME\n{float(fr.t[i])!r}\nITEM: TIMESTEP\n{int(steps[i])}\nITEM: NUMBER OF ATOMS\n{live.size}\n{bounds}ITEM: ATOMS {columns}\n{rows}"
             )
             on_frame(i)
     return [path]

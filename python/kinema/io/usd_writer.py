@@ -29,7 +29,11 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     - ``/World/particles``, a ``UsdGeom.Points``: ``points`` (m) and ``velocities`` (m/s:
       USD's velocities are in units per second, whatever the time codes) as a time sample per
       frame, float32 as USD's point arrays are; ``widths`` 2r (m) and ``ids`` constant;
-      primvar ``mass`` (kg) where the trajectory has masses.
+      primvar ``mass`` (kg) where the trajectory has masses. With births and deaths
+      (``alive``) each time sample holds the particles alive at that frame only: ``points``,
+      ``velocities``, ``widths``, ``ids`` and ``mass`` are then all time-sampled, their
+      length varying from frame to frame (0 for a frame with none), and ``ids`` tells which
+      particle each point is.
     - ``/World/colliders``: a ``box_k`` (a ``UsdGeom.Cube`` scaled to the box, open faces
       closed at the particles' extent), ``plane_k`` (a ``UsdGeom.Plane``, as wide as the
       scene) and ``sphere_k`` (a ``UsdGeom.Sphere``) per collider, with the ``guide`` purpose
@@ -63,23 +67,38 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
 
         points = UsdGeom.Points.Define(stage, "/World/particles")
         radii = fr.radii if fr.radii is not None else np.zeros(fr.n_particles)
-        points.CreateWidthsAttr(Vt.FloatArray.FromNumpy((2.0 * radii).astype(np.float32)))
-        points.CreateIdsAttr(Vt.Int64Array.FromNumpy(fr.ids.astype(np.int64)))
-        if fr.masses is not None:
+        widths, ids = (2.0 * radii).astype(np.float32), fr.ids.astype(np.int64)
+        masses = None if fr.masses is None else fr.masses.astype(np.float32)
+        widths_attr, ids_attr = points.CreateWidthsAttr(), points.CreateIdsAttr()
+        mass = None
+        if masses is not None:
             mass = UsdGeom.PrimvarsAPI(points).CreatePrimvar("mass", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex)
-            mass.Set(Vt.FloatArray.FromNumpy(fr.masses.astype(np.float32)))
+        # Without births and deaths the per-particle values are constant (one default value);
+        # with them, a time sample per frame of the live particles' values.
+        changes = fr.changes_count
+        if not changes:
+            widths_attr.Set(Vt.FloatArray.FromNumpy(widths))
+            ids_attr.Set(Vt.Int64Array.FromNumpy(ids))
+            if mass is not None:
+                mass.Set(Vt.FloatArray.FromNumpy(masses))
         positions, velocities = points.CreatePointsAttr(), points.CreateVelocitiesAttr()
         lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
         for i in range(fr.n_frames):
             code = Usd.TimeCode(float(codes[i]))
-            x = fr.positions[i].astype(np.float32)
-            positions.Set(Vt.Vec3fArray.FromNumpy(x), code)
-            velocities.Set(Vt.Vec3fArray.FromNumpy(fr.velocities[i].astype(np.float32)), code)
-            if fr.n_particles:
-                reach = radii[:, None]
-                lo, hi = np.minimum(lo, (fr.positions[i] - reach).min(axis=0)), np.maximum(hi, (fr.positions[i] + reach).max(axis=0))
+            live = fr.live(i)
+            x = fr.positions[i][live]
+            positions.Set(Vt.Vec3fArray.FromNumpy(x.astype(np.float32)), code)
+            velocities.Set(Vt.Vec3fArray.FromNumpy(fr.velocities[i][live].astype(np.float32)), code)
+            if changes:
+                widths_attr.Set(Vt.FloatArray.FromNumpy(widths[live]), code)
+                ids_attr.Set(Vt.Int64Array.FromNumpy(ids[live]), code)
+                if mass is not None:
+                    mass.Set(Vt.FloatArray.FromNumpy(masses[live]), code)
+            if live.size:
+                reach = radii[live][:, None]
+                lo, hi = np.minimum(lo, (x - reach).min(axis=0)), np.maximum(hi, (x + reach).max(axis=0))
             on_frame(i)
-        if fr.n_particles and fr.n_frames:
+        if np.all(lo <= hi):
             points.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
         _colliders(stage, traj, fr, UsdGeom, Gf)
         stage.GetRootLayer().Save()
