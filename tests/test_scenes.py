@@ -29,6 +29,8 @@ def test_every_example_is_listed():
         "kepler_rk4",
         "kepler_verlet",
         "demo",
+        "fountain",
+        "pour",
     ):
         assert f"{name}.toml" in EXAMPLES
 
@@ -37,9 +39,9 @@ def test_every_example_is_listed():
 @pytest.mark.parametrize("name", EXAMPLES)
 def test_example_loads_and_runs_shortened(name):
     w = load(name)
-    assert isinstance(w.scene, Scene) and len(w) > 0
+    assert isinstance(w.scene, Scene) and (len(w) > 0 or w.scene.emitters)
     traj = w.run(min(0.1, w.scene.world.duration), fps=w.scene.world.fps)
-    assert np.all(np.isfinite(traj.positions))
+    assert traj.alive[-1].any() and np.all(np.isfinite(traj.positions[traj.alive]))
 
 
 @pytest.mark.filterwarnings("ignore::kinema.StabilityWarning")
@@ -60,7 +62,10 @@ def test_example_round_trips_to_an_identical_world(name, tmp_path):
     assert w2.to_scene().to_dict() == w.to_scene().to_dict()
     assert w2.scene.world == w.scene.world and w2.scene.render == w.scene.render and w2.scene.output == w.scene.output
     # the same state, forces and settings step alike (not bit for bit: the scene does not hold
-    # the time or the method's caches, such as Verlet's stored acceleration)
+    # the time or the method's caches, such as Verlet's stored acceleration); an emitter starts
+    # again from its first particle in the loaded world (no time), so only emitter-free scenes
+    if w.scene.emitters:
+        return
     w.step(5)
     w2.step(5)
     np.testing.assert_allclose(w2.positions, w.positions, rtol=1e-9, atol=1e-9)

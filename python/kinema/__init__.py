@@ -7,6 +7,9 @@ The public API (everything else is private):
 - Stability on p' = λp: the module ``kinema.stability``
 - Particle worlds: ``World``, the forces ``Gravity``, ``Drag``, ``Spring``, ``Attractor``,
   ``Wind``, ``PythonForce``, the recorded ``Trajectory`` and ``SimulationDiverged``
+- Births and deaths: ``Emitter`` and the kill volumes ``KillBox``, ``KillSphere``,
+  ``KillPlane`` (added with ``World.add``), ``World.remove_particles``, ``World.ids``,
+  ``Trajectory.alive``; the module ``kinema.emitter``
 - Collisions: the colliders ``Plane``, ``Box``, ``SphereObstacle`` (added with
   ``World.add``); ``World.set_collisions``, ``World.collisions``, ``World.periodic``,
   ``World.contacts``, ``World.collision_stats``; per-particle ``restitution`` and ``friction``
@@ -32,6 +35,7 @@ from . import (
 from ._core import __version__
 from .colliders import Box, Plane, SphereObstacle
 from .convergence import ConvergenceResult, convergence
+from .emitter import Emitter, KillBox, KillPlane, KillSphere
 from .forces import Attractor, Drag, Gravity, PythonForce, Spring, Wind
 from .ode import (
     ButcherTableau,
@@ -58,6 +62,10 @@ __all__ = [
     "Camera2D",
     "Camera3D",
     "Drag",
+    "Emitter",
+    "KillBox",
+    "KillPlane",
+    "KillSphere",
     "Gravity",
     "Plane",
     "Scene",

@@ -120,6 +120,10 @@ def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video
             why += f"; {size:,} particles[{k}].positions"
         if len(scene.particles) > 1:
             why += f", the largest of {len(scene.particles)} blocks"
+    born = scene.emitted_count(seconds)
+    if born:
+        why += f"; up to {born:,} particles from {len(scene.emitters)} emitter{'s' if len(scene.emitters) > 1 else ''}"
+        n += born
     particle_steps = float(n) * steps
     pixels = (frames + 1) * scene.render.width * scene.render.height if video and n else 0.0
     memory = n * ENGINE_BYTES + (frames + 1) * n * (FRAME_BYTES + (RENDER_BYTES if pixels else 0))

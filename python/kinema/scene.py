@@ -25,6 +25,7 @@ from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, Validatio
 
 from . import _checks
 from .colliders import Box, Plane, SphereObstacle
+from .emitter import Emitter, KillBox, KillPlane, KillSphere
 from .forces import Attractor, Drag, Gravity, Spring, Wind
 from .ode import method_names
 from .world import World
@@ -359,6 +360,73 @@ class SphereCollider(_Surface):
 
 ColliderItem = _typed(PlaneCollider, BoxCollider, SphereCollider)
 
+# -- [[emitters]], [[kill_volumes]] ------------------------------------------------------------
+# The emitter checks its own values (kinema.Emitter); the tables check the types and names.
+
+
+class EmitterTable(_Model):
+    rate: Positive
+    shape: Literal["point", "box", "disc", "sphere"] = "point"
+    center: Vec = [0.0, 0.0, 0.0]
+    size: Vec = [0.0, 0.0, 0.0]
+    radius: NonNeg = 0.0
+    normal: Vec = [0.0, 0.0, 1.0]
+    start: float = 0.0
+    end: float = float("inf")
+    direction: Vec | None = None
+    speed: NonNeg = 0.0
+    speed_spread: NonNeg = 0.0
+    spread: Annotated[float, Field(ge=0, le=180)] = 0.0
+    particle_radius: NonNeg = 0.0
+    radius_spread: NonNeg = 0.0
+    mass: Positive | None = None
+    density: Positive = 1000.0
+    lifetime: Positive = float("inf")
+    lifetime_spread: NonNeg = 0.0
+    color: str | Annotated[list[Unit], Field(min_length=3, max_length=3)] | None = None
+    species: SpeciesName | None = None
+    restitution: Unit | None = None
+    friction: NonNeg | None = None
+    seed: Annotated[int, Field(ge=0, le=2**63 - 1)] = 0
+
+
+class KillBoxTable(_Model):
+    type: Literal["box"] = "box"
+    lo: Vec
+    hi: Vec
+
+
+class KillSphereTable(_Model):
+    type: Literal["sphere"] = "sphere"
+    center: Vec
+    radius: Positive
+
+
+class KillPlaneTable(_Model):
+    type: Literal["plane"] = "plane"
+    point: Vec
+    normal: Vec
+
+
+KillItem = _typed(KillBoxTable, KillSphereTable, KillPlaneTable)
+
+
+def _emitter(e: EmitterTable) -> Emitter:
+    values = e.model_dump()
+    for name in ("center", "size", "normal", "direction"):
+        if values[name] is not None:
+            values[name] = _v3(values[name])
+    return Emitter(**values)
+
+
+def _kill(k: Any) -> Any:
+    if isinstance(k, KillBoxTable):
+        return KillBox(_v3(k.lo), _v3(k.hi))
+    if isinstance(k, KillSphereTable):
+        return KillSphere(_v3(k.center), k.radius)
+    return KillPlane(_v3(k.point), _v3(k.normal))
+
+
 # -- [collisions], [render], [output] ---------------------------------------------------------
 
 
@@ -432,6 +500,8 @@ class Scene(_Model):
     particles: list[Block] = Field(default_factory=list)
     forces: list[ForceItem] = Field(default_factory=list)
     colliders: list[ColliderItem] = Field(default_factory=list)
+    emitters: list[EmitterTable] = Field(default_factory=list)
+    kill_volumes: list[KillItem] = Field(default_factory=list)
     collisions: CollisionsTable | None = None
     render: RenderTable = Field(default_factory=RenderTable)
     output: OutputTable = Field(default_factory=OutputTable)
@@ -485,6 +555,19 @@ class Scene(_Model):
     def particle_count(self) -> int:
         """How many particles ``build`` makes, counted without making them."""
         return sum(block_size(b) for b in self.particles)
+
+    def emitted_count(self, seconds: float) -> int:
+        """How many particles the emitters give in the first ``seconds`` of a run (births at
+        start + k / rate, k = 0, 1, ..., before ``end``), counted without making them."""
+        total = 0
+        for e in self.emitters:
+            until = min(e.end, seconds)
+            if until >= e.start:
+                count = math.floor((until - e.start) * e.rate) + 1
+                if math.isfinite(e.end):
+                    count = min(count, math.ceil((e.end - e.start) * e.rate))
+                total += count
+        return total
 
     # writing -----------------------------------------------------------------------------
     def to_dict(self) -> dict:
@@ -542,6 +625,12 @@ class Scene(_Model):
                 w.add(_force(f, dim, w, starts, self.particles))
             except ValueError as err:
                 raise SceneError(f"{source}: forces[{k}]: {err}") from None
+        for key, items, make in (("emitters", self.emitters, _emitter), ("kill_volumes", self.kill_volumes, _kill)):
+            for k, item in enumerate(items):
+                try:
+                    w.add(make(item))
+                except (ValueError, TypeError) as err:
+                    raise SceneError(f"{source}: {key}[{k}]: {err}") from None
         if self.collisions is not None and self.collisions.periodic is not None:
             try:
                 w.periodic = self.collisions.periodic
@@ -910,6 +999,7 @@ def to_scene(world: World) -> Scene:
                     block[name] = arr.tolist()
         blocks.append(block)
     forces = []
+    spring_offset = 0  # the springs' end ids, in the order the Spring forces were added
     for f in world.forces:
         if isinstance(f, Gravity):
             forces.append({"type": "gravity", "g": _v3(np.asarray(f.g, float).tolist())})
@@ -922,14 +1012,23 @@ def to_scene(world: World) -> Scene:
         elif isinstance(f, Wind):
             forces.append({"type": "wind", "velocity": _v3(np.asarray(f.velocity, float).tolist()), "coefficient": float(f.coefficient)})
         elif isinstance(f, Spring):
-            i = np.atleast_1d(np.asarray(f.i, dtype=np.int64))
-            j = np.atleast_1d(np.asarray(f.j, dtype=np.int64))
+            # The springs whose two ends live, at the ends' current indices (particles removed
+            # since shifted them; a spring with a dead end died with it).
+            count = len(f._args[0])
+            ends = world._spring_ids[spring_offset : spring_offset + count]
+            spring_offset += count
+            ids = world.ids
+            at = np.minimum(np.searchsorted(ids, ends), max(len(ids) - 1, 0))
+            live = np.all(ids[at] == ends, axis=1) if len(ids) else np.zeros(count, dtype=bool)
+            i, j = at[live, 0], at[live, 1]
             rest = f.rest_length
             if rest is None:  # unknown after the fact: the current lengths
                 rest = np.linalg.norm(world.positions[j] - world.positions[i], axis=1)
             spring = {"type": "spring", "i": i.tolist(), "j": j.tolist()}
             for name, value in (("k", f.k), ("rest_length", rest), ("damping", f.damping)):
                 arr = np.asarray(value, dtype=float)
+                if arr.ndim and arr.size == count:
+                    arr = arr[live]
                 spring[name] = float(arr) if arr.ndim == 0 else arr.tolist()
             forces.append(spring)
         else:
@@ -943,11 +1042,31 @@ def to_scene(world: World) -> Scene:
             colliders.append({"type": "box", "lo": np.ravel(c.lo).astype(float).tolist(), "hi": np.ravel(c.hi).astype(float).tolist(), **s})
         else:
             colliders.append({"type": "sphere", "center": _v3(list(np.ravel(c.center))), "radius": float(c.radius), **s})
+    emitters = []
+    for source in world._emitters:
+        table = EmitterTable.model_fields.keys()
+        e = source.emitter
+        emitters.append({name: getattr(e, name) for name in table if getattr(e, name) is not None})
+        for name in ("center", "size", "normal", "direction"):
+            if name in emitters[-1]:
+                emitters[-1][name] = np.asarray(emitters[-1][name], float).tolist()
+        if isinstance(e.color, (tuple, list, np.ndarray)):
+            emitters[-1]["color"] = np.asarray(e.color, float).tolist()
+    kills = []
+    for k in world._kills:
+        if isinstance(k, KillBox):
+            kills.append({"type": "box", "lo": _v3(list(np.ravel(k.lo))), "hi": _v3(list(np.ravel(k.hi)))})
+        elif isinstance(k, KillSphere):
+            kills.append({"type": "sphere", "center": _v3(list(np.ravel(k.center))), "radius": float(k.radius)})
+        else:
+            kills.append({"type": "plane", "point": _v3(list(np.ravel(k.point))), "normal": _v3(list(np.ravel(k.normal)))})
     data: dict[str, Any] = {
         "world": {"dim": world.dim, "dt": world.dt, "method": world.method},
         "particles": blocks,
         "forces": forces,
         "colliders": colliders,
+        "emitters": emitters,
+        "kill_volumes": kills,
     }
     if old is not None:
         data["world"].update(duration=old.world.duration, fps=old.world.fps)

@@ -33,6 +33,8 @@ class Trajectory:
     reused); ``alive`` (F, N) bool says which exist at each frame, and their positions and
     velocities are NaN where they do not. Without births or deaths ``alive`` is all True.
     ``springs`` (S, 2): the ids at the ends of each spring, drawn while both are alive.
+    ``colors`` (N, 3): each particle's own colour, r g b in [0, 1] (NaN: none; an
+    ``Emitter``'s ``color``), or None.
 
     ``save`` writes an H5MD file, ``Trajectory.load`` (or ``kinema.load_trajectory``) reads
     one back, ``export`` writes VTK, PLY, extended XYZ or CSV (see ``kinema.io``), ``render``
@@ -60,6 +62,7 @@ class Trajectory:
     colliders: list[dict[str, Any]] = field(default_factory=list)
     alive: np.ndarray | None = None
     springs: np.ndarray | None = None
+    colors: np.ndarray | None = None
     total: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -85,7 +88,7 @@ class Trajectory:
         live = self.alive[k]
         out = {"ids": (self.ids if self.ids is not None else np.arange(live.size))[live]}
         out["positions"], out["velocities"] = self.positions[k][live], self.velocities[k][live]
-        for name in ("masses", "radii", "species"):
+        for name in ("masses", "radii", "species", "colors"):
             value = getattr(self, name)
             if value is not None:
                 out[name] = value[live]
@@ -230,13 +233,23 @@ class Trajectory:
 
 
 class _Recorder:
+    """Collects frames while a world runs. Particles are columns by id: when the set of ids
+    changes (births, deaths), the columns are the union of all ids, NaN where not alive."""
+
     def __init__(self) -> None:
         self.frames: list[tuple] = []
         self.about: dict[str, Any] = {}
+        # (ids, masses, radii, species, colors) each time the set of particles changed
+        self.sets: list[tuple] = []
 
     def add(self, world: Any) -> None:
+        info = world._trajectory_info()
         if not self.about:
-            self.about = world._trajectory_info()
+            self.about = info
+        self.about["springs"] = info["springs"]  # springs added mid-run count
+        ids = info["ids"]
+        if not self.sets or not np.array_equal(ids, self.sets[-1][0]):
+            self.sets.append((ids, info["masses"], info["radii"], info["species"], info["colors"]))
         d = world.diagnostics()
         stats = world.collision_stats()
         if stats is None:
@@ -244,18 +257,23 @@ class _Recorder:
         else:
             contacts, balance, lost = stats["last"]["contacts"], stats["total"]["impulse_balance"], stats["total"]["energy_lost"]
         frame = (d["t"], world.positions.copy(), world.velocities.copy(), d["kinetic"], d["potential"], d["momentum"], d["angular_momentum"])
-        self.frames.append((*frame, contacts, balance, lost))
+        self.frames.append((*frame, contacts, balance, lost, ids))
 
     def finish(self) -> Trajectory:
-        t, x, v, ke, pot, p, ang, contacts, balance, lost = zip(*self.frames, strict=True)
+        t, x, v, ke, pot, p, ang, contacts, balance, lost, ids = zip(*self.frames, strict=True)
         names = list(dict.fromkeys(name for frame in pot for name in frame))  # a force added mid-run counts from then
         # The world sums the impulse balance over all its steps; a frame gets what its steps
         # added (the first frame none).
         balance = np.diff(np.array(balance), axis=0, prepend=np.array(balance)[:1])
+        about = dict(self.about)
+        if len(self.sets) == 1:
+            positions, velocities, alive = np.array(x), np.array(v), None
+        else:
+            positions, velocities, alive = self._by_id(x, v, ids, about)
         return Trajectory(
             t=np.array(t),
-            positions=np.array(x),
-            velocities=np.array(v),
+            positions=positions,
+            velocities=velocities,
             kinetic=np.array(ke),
             potential={name: np.array([f.get(name, 0.0) for f in pot]) for name in names},
             momentum=np.array(p),
@@ -263,5 +281,34 @@ class _Recorder:
             contacts=np.array(contacts, dtype=np.int64),
             impulse_balance=balance,
             collision_energy_lost=np.array(lost),
-            **self.about,
+            alive=alive,
+            **about,
         )
+
+    def _by_id(self, x, v, ids, about) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Frames of changing particle sets as columns by id (the union of all ids, sorted)."""
+        every = np.unique(np.concatenate([s[0] for s in self.sets]))
+        frames, n = len(x), every.size
+        positions, velocities = np.full((frames, n, 3), np.nan), np.full((frames, n, 3), np.nan)
+        alive = np.zeros((frames, n), dtype=bool)
+        for k, (xk, vk, ik) in enumerate(zip(x, v, ids, strict=True)):
+            col = np.searchsorted(every, ik)
+            positions[k, col], velocities[k, col], alive[k, col] = xk, vk, True
+        masses, radii = np.full(n, np.nan), np.full(n, np.nan)
+        species = np.full(n, "X", dtype=object) if any(s[3] is not None for s in self.sets) else None
+        colors = np.full((n, 3), np.nan) if any(s[4] is not None for s in self.sets) else None
+        for ik, m, r, sp, c in self.sets:
+            col = np.searchsorted(every, ik)
+            masses[col], radii[col] = m, r
+            if species is not None and sp is not None:
+                species[col] = sp
+            if colors is not None and c is not None:
+                colors[col] = c
+        about.update(
+            ids=every,
+            masses=masses,
+            radii=radii,
+            species=None if species is None else species.astype(str),
+            colors=colors,
+        )
+        return positions, velocities, alive

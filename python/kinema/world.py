@@ -13,6 +13,8 @@ import numpy as np
 
 from . import _checks, _core
 from .colliders import Box, Collider
+from .emitter import KILL_VOLUMES, Emitter
+from .forces import Spring
 from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
 
@@ -57,6 +59,12 @@ class World:
     Collisions are off until :meth:`set_collisions` is called, a collider (``kinema.Plane``,
     ``Box``, ``SphereObstacle``) is added, or particles get their own ``restitution`` or
     ``friction``; particles then collide as spheres of their ``radius``.
+
+    The particle count may change: :meth:`remove_particles`, and ``kinema.Emitter`` and kill
+    volumes (``KillBox``, ``KillSphere``, ``KillPlane``) added with :meth:`add`, which give
+    births and deaths between steps (``kinema.emitter``). Each particle has an id
+    (:attr:`ids`) that stays with it and is never given again; indices are positions in the
+    current arrays and shift when particles are removed.
     """
 
     def __init__(self, dim: int = 3, dt: float = 1e-3, method: str | ButcherTableau = "verlet"):
@@ -68,6 +76,14 @@ class World:
         self._warned = False
         self._advice_due = True
         self._species: list[str] = []  # per particle ("": none given)
+        # Births and deaths: the emitters at work, the kill volumes, and per particle its time
+        # of death (inf: none), its colour (NaN: none) and the id pairs of the springs.
+        self._emitters: list[Any] = []
+        self._kills: list[Any] = []
+        self._death = np.empty(0)
+        self._colors = np.empty((0, 3))
+        self._spring_ids = np.empty((0, 2), dtype=np.int64)
+        self._advised_at = 0  # particles when the advisor last looked
         self._new_views()
 
     @contextmanager
@@ -109,6 +125,7 @@ class World:
         if not self._advice_due:
             return
         self._advice_due = False
+        self._advised_at = core.len
         contact_springs = (core.collisions or {}).get("model") == "spring_dashpot"
         if self._warned or core.len == 0 or not (self._forces or contact_springs):
             return
@@ -181,12 +198,52 @@ class World:
             for name, a in (("restitution", restitution), ("friction", friction))
         )
         names = self._species_names(species, n)
+        return self._add(x, v, m, r, p, e, mu, names)
+
+    def _add(self, x, v, m, r, p, e, mu, names, death=None, color=None) -> np.ndarray:
+        """Adds checked particles with their species names, times of death and colours."""
+        n = len(m)
         self._push()
-        start, end = self._core.add_particles(*(np.ascontiguousarray(a) for a in (x, v, m, r, p)), e, mu)
+        start, end = self._core.add_particles(
+            *(np.ascontiguousarray(a, dtype=d) for a, d in ((x, float), (v, float), (m, float), (r, float), (p, bool))), e, mu
+        )
         self._species += names
+        self._death = np.concatenate([self._death, np.full(n, np.inf) if death is None else death])
+        self._colors = np.concatenate([self._colors, np.full((n, 3), np.nan) if color is None else np.broadcast_to(color, (n, 3))])
         self._new_views()
         self._advice_due = True
         return np.arange(start, end)
+
+    def remove_particles(self, indices: Any) -> None:
+        """Remove the particles at these indices (integers, or a bool mask of length N). The
+        others keep their order, ids and state, and their indices shift down; springs ending
+        on a removed particle go with it. Views taken before no longer follow the world."""
+        n = len(self)
+        if np.asarray(indices).dtype == bool:
+            mask = _checks.bool_array("indices", indices)
+            if mask.shape != (n,):
+                raise ValueError(f"indices is a bool mask of shape {mask.shape}; it must be ({n},), one flag per particle")
+            gone = np.flatnonzero(mask)
+        else:
+            gone = _checks.index_array("indices", indices, n)
+        if gone.size == 0:
+            return
+        self._push()
+        self._core.remove_particles(gone.tolist())
+        keep = np.ones(n, dtype=bool)
+        keep[gone] = False
+        self._species = [s for s, k in zip(self._species, keep, strict=True) if k]
+        self._death, self._colors = self._death[keep], self._colors[keep]
+        self._new_views()
+        self._advice_due = True
+
+    @property
+    def ids(self) -> np.ndarray:
+        """Each particle's id (N,): given in the order particles are added, kept for life,
+        never given again (a new read-only array)."""
+        out = np.asarray(self._core.ids, dtype=np.int64)
+        out.flags.writeable = False
+        return out
 
     def add(self, item: Any) -> Any:
         """Add a force (``kinema.Gravity``, ``Drag``, ``Spring``, ``Attractor``, ``Wind``,
@@ -195,9 +252,12 @@ class World:
         attach = getattr(item, "_attach", None)
         if attach is None:
             raise TypeError(
-                f"{type(item).__name__} is not a kinema force or collider; use kinema.Gravity, Drag, Spring, Attractor, "
-                "Wind, PythonForce, Plane, Box or SphereObstacle"
+                f"{type(item).__name__} is not a kinema force, collider or emitter; use kinema.Gravity, Drag, Spring, Attractor, "
+                "Wind, PythonForce, Plane, Box, SphereObstacle, Emitter, KillBox, KillSphere or KillPlane"
             )
+        if isinstance(item, (Emitter, *KILL_VOLUMES)):
+            attach(self)
+            return item
         self._push()
         attach(self._core)
         if isinstance(item, Collider):
@@ -205,6 +265,9 @@ class World:
         else:
             self._forces.append(item)
             self._advice_due = True
+            if isinstance(item, Spring):  # drawn between these ids while both live
+                i, j = item._args[:2]
+                self._spring_ids = np.concatenate([self._spring_ids, self.ids[np.stack([i, j], axis=1).reshape(-1, 2)]])
         return item
 
     # -- collisions -------------------------------------------------------------------------
@@ -327,9 +390,52 @@ class World:
         try:
             with self._engine() as core:
                 self._advise(core)
-                core.step(n)
+            self._advance(n)
         finally:
             self._pull()
+
+    def _changes_count(self) -> bool:
+        return bool(self._emitters or self._kills or np.isfinite(self._death).any())
+
+    def _advance(self, n: int) -> None:
+        """``n`` steps. With emitters, kill volumes or particles that die of age, one step at
+        a time: the births due by the step's start are added before it (``kinema.emitter``),
+        the dead removed after it. The stable-step advisor looks at the newborn at the next
+        call of :meth:`step` or the next frame of :meth:`run`."""
+        if not self._changes_count():
+            with self._engine() as core:
+                core.step(n)
+            return
+        for _ in range(n):
+            self._births()
+            if self._advice_due and len(self) >= 2 * self._advised_at:
+                # newborns may be stiffer than what was there (contacts of a first pair): the
+                # advisor looks again at the first births and whenever the count has doubled
+                with self._engine() as core:
+                    self._advise(core)
+            try:
+                with self._engine() as core:
+                    core.step(1)
+            finally:
+                self._pull()
+            self._deaths()
+
+    def _births(self) -> None:
+        t = self.time
+        for source in self._emitters:
+            b = source.births(t)
+            if b is None:
+                continue
+            c, k = source.c, len(b["m"])
+            e, mu = ([c[name]] * k if c[name] is not None else None for name in ("restitution", "friction"))
+            self._add(b["x"], b["v"], b["m"], b["r"], np.zeros(k, bool), e, mu, [c["species"] or ""] * k, b["death"], c["color"])
+
+    def _deaths(self) -> None:
+        dead = self._death <= self.time
+        for volume in self._kills:
+            dead |= volume.inside(self._x)
+        if dead.any():
+            self.remove_particles(dead)
 
     def run(self, duration: float, fps: float = 60.0, callback: Callable[[World], Any] | None = None) -> Trajectory:
         """Simulate ``duration`` seconds from now, recording a frame every 1/fps s (rounded to
@@ -356,8 +462,10 @@ class World:
         rec.add(self)
         for _ in range(frames):
             try:
-                with self._engine() as core:
-                    core.step(per_frame)
+                if self._advice_due and self._changes_count():
+                    with self._engine() as core:
+                        self._advise(core)
+                self._advance(per_frame)
             finally:
                 self._pull()
             rec.add(self)
@@ -513,8 +621,10 @@ class World:
         return {
             "masses": self._m.copy(),
             "radii": np.array(self._core.radii),
-            "ids": np.arange(len(self)),
+            "ids": self.ids.copy(),
             "species": self.species,
+            "colors": self._colors.copy() if np.isfinite(self._colors).any() else None,
+            "springs": self._spring_ids.copy() if self._spring_ids.size else None,
             "dim": self.dim,
             "dt": self.dt,
             "method": self.method,
