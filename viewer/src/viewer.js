@@ -1,52 +1,115 @@
-//! kinema trajectory viewer: frames as THREE.Points with a sprite shader, an orbit camera and a small UI.
+//! kinema trajectory viewer: frames as THREE.Points with a sprite shader, the colliders and
+//! springs, an orbit camera framing the scene, a colour legend and a small UI.
 //
 // The page carries `<script type="application/json" id="kinema-data">` with the metadata
 // written by python/kinema/viewer: n (particles), frames, dim, t (times, s), bounds
-// {min, max} (m), speedMax (m/s), note, and either base64 blobs (positions, speed, radii:
-// little-endian float32) or `source` naming a binary file served beside the page whose
-// layout is given by `layout` (byte offsets of positions, speed, radii).
+// {min, max} (m, the particles), extent {min, max} (m: the live particles with their radii
+// over every frame and the colliders' finite parts), colliders (plain descriptions, 3 values
+// per vector, ±inf bounds as null), speedMin/speedMax (m/s), idRange (the first and last
+// column's ids), springCount, aliveBytes, defaultRadius, note, and either base64 blobs
+// (positions, speed, radii: little-endian float32; springs: int32 column pairs; alive: per
+// frame aliveBytes bytes, bit i of byte j for particle 8 j + i, absent when every particle is
+// alive throughout; colors: RGBA bytes per particle, alpha 0 for none) or `source` naming a
+// binary file served beside the page whose layout is given by `layout` ([byte offset,
+// element count] of each, null for what is absent).
+//
+// Drawn: the particles alive at the frame (the others are moved out of the clip volume by
+// the vertex shader); springs as lines between live ends; planes as a floor patch (3D) or a
+// line with its solid side filled (2D); boxes as their edges less those of open faces, with
+// the walls of open faces reaching the extent, and a floor face; sphere obstacles as shaded
+// spheres (3D) or discs (2D). 3D: a perspective camera looking from VIEW_DIRECTION, z up,
+// placed so that the extent and the colliders' corners fill the view at the canvas's aspect
+// ratio; 2D: an orthographic camera on the xy-plane, fitted likewise. Refitted on resize
+// until the user moves the camera.
+//
 // A URL hash `#frame=K` opens paused at frame K (used by the tests); `#frame=K&play=1` plays;
 // `rotate=1` turns the orbit camera about its target (a turntable; the benchmark draws every
 // animation frame that way).
 //
 // `window.kinemaViewer` is the page's state for tests and benchmarks: `ready`, `error`,
-// `frame` (the trajectory frame shown), `playing`, `setFrame(k)`, and `stats`, the frame
+// `frame` (the trajectory frame shown), `playing`, `setFrame(k)`, `stats`, the frame
 // statistics (see frameStats): `stats.snapshot()` gives animation frames run, frames drawn,
-// trajectory frames stepped and median frame times in ms over the last STATS_WINDOW frames.
+// trajectory frames stepped and median frame times in ms over the last STATS_WINDOW frames;
+// and `info()`, a read-only description of what is drawn (see `describe` in start).
 
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
+import { LineSegments2 } from "three/examples/jsm/lines/LineSegments2.js";
+import { LineSegmentsGeometry } from "three/examples/jsm/lines/LineSegmentsGeometry.js";
+import { LineMaterial } from "three/examples/jsm/lines/LineMaterial.js";
 
 const SPEEDS = [0.25, 0.5, 1, 2, 4];
 const STATS_WINDOW = 120; // animation frames the medians are taken over (2 s at 60 Hz)
 
-// Viridis by a degree-6 polynomial fit per channel (good to about 1/255 of the table).
+// The scenery's neutral colours, those of kinema's own renderer (crates/kinema/src/render/
+// scenery.rs), so that the particles' colours keep their meaning.
+const FLOOR_COLOR = 0xe0e0dc; // (224, 224, 220): plane floor patches, the solid side of 2D planes
+const BOX_FLOOR_COLOR = 0xd4d4ce; // (212, 212, 206): a box's floor face
+const LINE_COLOR = 0x606064; // (96, 96, 100): outlines, grid lines (faint), box edges, 2D plane lines
+const OBSTACLE_RGB = [176 / 255, 178 / 255, 184 / 255]; // sphere obstacles, shaded like the particles
+const SPRING_COLOR = 0xa0a0a6; // springs: lighter than the outlines, to show on the dark background
+const BACKGROUND = 0x101014;
+// Line widths, CSS pixels (as the renderer's).
+const PATCH_OUTLINE_PX = 1.5;
+const BOX_EDGE_PX = 1.5;
+const PLANE_2D_PX = 3;
+const BOX_2D_PX = 2;
+const GRID_ALPHA = 0.25;
+const FIT_MARGIN = 0.94; // the scene fills this much of the view's half-width or half-height
+const VIEW_DIRECTION = [0.9, -1.1, 0.6]; // from the scene towards the 3D camera (z up)
+
+// Viridis by a degree-6 polynomial fit per channel (good to about 1/255 of the table); the
+// legend's gradient evaluates the same polynomial.
+const VIRIDIS = [
+  [0.2777273272234177, 0.005407344544966578, 0.3340998053353061],
+  [0.1050930431085774, 1.404613529898575, 1.384590162594685],
+  [-0.3308618287255563, 0.214847559468213, 0.09509516302823659],
+  [-4.634230498983486, -5.799100973351585, -19.33244095627987],
+  [6.228269936347081, 14.17993336680509, 56.69055260068105],
+  [4.776384997670288, -13.74514537774601, -65.35303263337234],
+  [-5.435455855934631, 4.645852612178535, 26.3124352495832],
+];
+const glslVec = (c) => `vec3(${c.join(", ")})`;
+
 const VERTEX = /* glsl */ `
-uniform float uPixelsPerUnit;  // viewport height / (2 tan(fov/2)): pixels per metre at 1 m depth
-uniform float uScale;          // 1 / the value that maps to the top of the ramp
-uniform int uMode;             // 0: one colour, 1: ramp over aValue
+uniform float uPixelsPerUnit;  // perspective: viewport height / (2 tan(fov/2)), pixels per metre at 1 m depth;
+                               // orthographic: pixels per metre
+uniform int uOrtho;            // 1: orthographic (the size does not depend on depth)
+uniform float uOffset;         // the value at the bottom of the ramp
+uniform float uScale;          // 1 / (the values' range)
+uniform int uMode;             // 0: one colour, 1: ramp over aValue, 2: the particle's own colour
 attribute float aRadius;
 attribute float aValue;
+attribute vec4 aColor;         // the particle's own colour (alpha 0: none)
+attribute float aAlive;        // 0: not alive at this frame, not drawn
 varying vec3 vColor;
 
 vec3 viridis(float t) {
-  const vec3 c0 = vec3(0.2777273272234177, 0.005407344544966578, 0.3340998053353061);
-  const vec3 c1 = vec3(0.1050930431085774, 1.404613529898575, 1.384590162594685);
-  const vec3 c2 = vec3(-0.3308618287255563, 0.214847559468213, 0.09509516302823659);
-  const vec3 c3 = vec3(-4.634230498983486, -5.799100973351585, -19.33244095627987);
-  const vec3 c4 = vec3(6.228269936347081, 14.17993336680509, 56.69055260068105);
-  const vec3 c5 = vec3(4.776384997670288, -13.74514537774601, -65.35303263337234);
-  const vec3 c6 = vec3(-5.435455855934631, 4.645852612178535, 26.3124352495832);
+  const vec3 c0 = ${glslVec(VIRIDIS[0])};
+  const vec3 c1 = ${glslVec(VIRIDIS[1])};
+  const vec3 c2 = ${glslVec(VIRIDIS[2])};
+  const vec3 c3 = ${glslVec(VIRIDIS[3])};
+  const vec3 c4 = ${glslVec(VIRIDIS[4])};
+  const vec3 c5 = ${glslVec(VIRIDIS[5])};
+  const vec3 c6 = ${glslVec(VIRIDIS[6])};
   t = clamp(t, 0.0, 1.0);
   return c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * (c5 + t * c6)))));
 }
 
 void main() {
+  if (aAlive < 0.5) {
+    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: nothing drawn
+    gl_PointSize = 0.0;
+    vColor = vec3(0.0);
+    return;
+  }
   vec4 mv = modelViewMatrix * vec4(position, 1.0);
   gl_Position = projectionMatrix * mv;
   // A sphere of radius r at depth d covers 2 r / d * pixelsPerUnit pixels; never under 2 px.
-  gl_PointSize = max(2.0, 2.0 * aRadius * uPixelsPerUnit / max(-mv.z, 1e-6));
-  vColor = uMode == 0 ? vec3(0.35, 0.65, 0.95) : viridis(aValue * uScale);
+  float perUnit = uOrtho == 1 ? uPixelsPerUnit : uPixelsPerUnit / max(-mv.z, 1e-6);
+  gl_PointSize = max(2.0, 2.0 * aRadius * perUnit);
+  const vec3 plain = vec3(0.35, 0.65, 0.95);
+  vColor = uMode == 0 ? plain : uMode == 2 ? (aColor.a > 0.5 ? aColor.rgb : plain) : viridis((aValue - uOffset) * uScale);
 }
 `;
 
@@ -63,24 +126,52 @@ void main() {
 }
 `;
 
+// Sphere obstacles, shaded as the particles are (the same light, in view space).
+const OBSTACLE_VERTEX = /* glsl */ `
+varying vec3 vNormal;
+void main() {
+  vNormal = normalize(normalMatrix * normal);
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+}
+`;
+const OBSTACLE_FRAGMENT = /* glsl */ `
+uniform vec3 uColor;
+varying vec3 vNormal;
+void main() {
+  float diffuse = max(dot(normalize(vNormal), normalize(vec3(-0.4, 0.5, 0.8))), 0.0);
+  gl_FragColor = vec4(uColor * (0.3 + 0.7 * diffuse), 1.0);
+}
+`;
+
+function viridisCss(t) {
+  const c = [0, 1, 2].map((ch) => VIRIDIS.reduceRight((acc, coeffs) => acc * t + coeffs[ch], 0));
+  return `rgb(${c.map((x) => Math.round(255 * Math.min(1, Math.max(0, x)))).join(",")})`;
+}
+
 function decodeBase64(text) {
   const bin = atob(text);
   const bytes = new Uint8Array(bin.length);
   for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
-  return new Float32Array(bytes.buffer);
+  return bytes.buffer;
 }
+
+const ARRAYS = { positions: Float32Array, speed: Float32Array, radii: Float32Array, springs: Int32Array, alive: Uint8Array, colors: Uint8Array };
 
 async function loadData() {
   const meta = JSON.parse(document.getElementById("kinema-data").textContent);
+  const data = { meta };
   if (meta.source) {
     const response = await fetch(meta.source);
     if (!response.ok) throw new Error(`${meta.source}: HTTP ${response.status}`);
     const buffer = await response.arrayBuffer();
-    const view = (entry) => (entry ? new Float32Array(buffer, entry[0], entry[1]) : null);
-    return { meta, positions: view(meta.layout.positions), speed: view(meta.layout.speed), radii: view(meta.layout.radii) };
+    for (const [name, Type] of Object.entries(ARRAYS)) {
+      const entry = meta.layout[name];
+      data[name] = entry ? new Type(buffer, entry[0], entry[1]) : null;
+    }
+    return data;
   }
-  const blob = (text) => (text ? decodeBase64(text) : null);
-  return { meta, positions: blob(meta.positions), speed: blob(meta.speed), radii: blob(meta.radii) };
+  for (const [name, Type] of Object.entries(ARRAYS)) data[name] = meta[name] ? new Type(decodeBase64(meta[name])) : null;
+  return data;
 }
 
 function hashOptions() {
@@ -127,7 +218,7 @@ function frameStats() {
   return stats;
 }
 
-function buildUi(root) {
+function buildUi(root, view) {
   const bar = document.createElement("div");
   bar.id = "kinema-ui";
   bar.innerHTML = `
@@ -137,14 +228,258 @@ function buildUi(root) {
     <label>colour <select id="kinema-colour"><option value="speed">speed</option><option value="id">id</option><option value="none">none</option></select></label>
     <span id="kinema-info"></span>`;
   root.appendChild(bar);
+  // The colour legend: what the colours mean, over the view's top right corner.
+  const legend = document.createElement("div");
+  legend.id = "kinema-legend";
+  const stops = Array.from({ length: 11 }, (_, i) => `${viridisCss(i / 10)} ${i * 10}%`).join(", ");
+  legend.innerHTML = `<div id="kinema-legend-label"></div><div id="kinema-legend-bar" style="background: linear-gradient(to right, ${stops})"></div>
+    <div id="kinema-legend-ticks"><span id="kinema-legend-min"></span><span id="kinema-legend-max"></span></div>`;
+  view.appendChild(legend);
   const get = (id) => document.getElementById(id);
-  return { play: get("kinema-play"), scrub: get("kinema-scrub"), speed: get("kinema-speed"), colour: get("kinema-colour"), info: get("kinema-info") };
+  return {
+    play: get("kinema-play"),
+    scrub: get("kinema-scrub"),
+    speed: get("kinema-speed"),
+    colour: get("kinema-colour"),
+    info: get("kinema-info"),
+    legend,
+    legendLabel: get("kinema-legend-label"),
+    legendMin: get("kinema-legend-min"),
+    legendMax: get("kinema-legend-max"),
+  };
 }
 
-function start({ meta, positions, speed, radii }) {
+// A value for the legend: three significant digits, no trailing zeros.
+const legendValue = (x) => String(Number(Number(x).toPrecision(3)));
+
+// The smallest of 1, 2, 5 × 10^k not below x (x > 0).
+function niceStep(x) {
+  const p = 10 ** Math.floor(Math.log10(x));
+  const m = x / p;
+  return p * (m <= 1 ? 1 : m <= 2 ? 2 : m <= 5 ? 5 : 10);
+}
+
+const vec = (a) => new THREE.Vector3(a[0], a[1], a[2]);
+
+// The 8 corners of the box [lo, hi].
+function boxCorners(lo, hi) {
+  const out = [];
+  for (let i = 0; i < 8; i++) out.push(new THREE.Vector3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z));
+  return out;
+}
+
+// The colliders as three.js objects in `group`. Returns what was drawn: `counts` (objects by
+// type: a plane's floor patch or 2D line, a box, a sphere), `boxEdges` (box edges in 3D, sides
+// in 2D), `corners` (the finite corners of what was drawn: floor patches, boxes with their
+// open bounds at the extent, spheres' bounding boxes; the camera frames them) and
+// `lineMaterials` (their resolution follows the canvas).
+function buildScenery(meta, group) {
+  const dim = meta.dim;
+  const elo = vec(meta.extent.min);
+  const ehi = vec(meta.extent.max);
+  const ecentre = elo.clone().add(ehi).multiplyScalar(0.5);
+  const esize = Math.max(ehi.clone().sub(elo).length(), 1e-9);
+  const counts = { plane: 0, box: 0, sphere: 0 };
+  const corners = [];
+  const lineMaterials = [];
+  let boxEdges = 0;
+  // 2D: the scenery lies under everything, drawn first without depth.
+  const flat = (material, order = -2) => {
+    if (dim === 2) {
+      material.depthTest = false;
+      material.depthWrite = false;
+    }
+    return [material, order];
+  };
+  const add = (object, [material, order]) => {
+    object.material = material;
+    if (dim === 2) object.renderOrder = order;
+    group.add(object);
+    return object;
+  };
+  const fatLines = (points, width) => {
+    // points: [a0, b0, a1, b1, ...] Vector3s; drawn `width` CSS pixels wide.
+    const geometry = new LineSegmentsGeometry().setPositions(points.flatMap((p) => [p.x, p.y, p.z]));
+    const material = new LineMaterial({ color: LINE_COLOR, linewidth: width });
+    lineMaterials.push(material);
+    const lines = new LineSegments2(geometry);
+    add(lines, flat(material, -1));
+    return lines;
+  };
+  const quad = (a, b, c, d, color, opacity = 1) => {
+    const geometry = new THREE.BufferGeometry().setFromPoints([a, b, c, a, c, d]);
+    const material = new THREE.MeshBasicMaterial({ color, side: THREE.DoubleSide, transparent: opacity < 1, opacity });
+    // Lines on the face (grid, outline, edges) win the depth test against it.
+    material.polygonOffset = true;
+    material.polygonOffsetFactor = 1;
+    material.polygonOffsetUnits = 1;
+    return add(new THREE.Mesh(geometry), flat(material, -3));
+  };
+
+  for (const c of meta.colliders || []) {
+    if (c.type === "plane") {
+      const n = vec(c.normal).normalize();
+      const p = vec(c.point);
+      if (dim === 2) {
+        // The line n·(q − p) = 0 of the normal's xy part, its solid side (against the normal)
+        // lightly filled, both reaching far past the scene.
+        const nxy = new THREE.Vector3(c.normal[0], c.normal[1], 0);
+        if (nxy.length() <= 1e-9 * vec(c.normal).length()) continue;
+        nxy.normalize();
+        const t = new THREE.Vector3(-nxy.y, nxy.x, 0);
+        const foot = new THREE.Vector3(p.x, p.y, 0).addScaledVector(t, t.dot(ecentre.clone().sub(p)));
+        const reach = 1000 * esize;
+        const a = foot.clone().addScaledVector(t, -reach);
+        const b = foot.clone().addScaledVector(t, reach);
+        quad(a, b, b.clone().addScaledVector(nxy, -reach), a.clone().addScaledVector(nxy, -reach), FLOOR_COLOR, 0.3);
+        fatLines([a, b], PLANE_2D_PX);
+        counts.plane++;
+        continue;
+      }
+      // A finite floor patch under the scene: the extent's box projected on the plane (along
+      // tangents t1, t2: for a horizontal floor, x and y), each side at least 0.6 of the
+      // longer one, widened by 0.15 of the longer one all round.
+      const k = [0, 1, 2].reduce((best, i) => (Math.abs(n.getComponent(i)) < Math.abs(n.getComponent(best)) ? i : best), 0);
+      const axis = new THREE.Vector3().setComponent(k, 1);
+      const t1 = new THREE.Vector3().crossVectors(n, axis).normalize();
+      const t2 = new THREE.Vector3().crossVectors(n, t1);
+      const range = [
+        [Infinity, -Infinity],
+        [Infinity, -Infinity],
+      ];
+      for (const q of boxCorners(elo, ehi)) {
+        const d = q.clone().sub(p);
+        [d.dot(t1), d.dot(t2)].forEach((x, i) => {
+          range[i][0] = Math.min(range[i][0], x);
+          range[i][1] = Math.max(range[i][1], x);
+        });
+      }
+      const longest = Math.max(range[0][1] - range[0][0], range[1][1] - range[1][0], 1e-9);
+      for (const r of range) {
+        const mid = 0.5 * (r[0] + r[1]);
+        const half = 0.5 * Math.max(r[1] - r[0], 0.6 * longest) + 0.15 * longest;
+        r[0] = mid - half;
+        r[1] = mid + half;
+      }
+      const at = (u, v) => p.clone().addScaledVector(t1, u).addScaledVector(t2, v);
+      const [[u0, u1], [v0, v1]] = range;
+      const patch = [at(u0, v0), at(u1, v0), at(u1, v1), at(u0, v1)];
+      quad(...patch, FLOOR_COLOR);
+      // The grid: lines on multiples of a 1-2-5 step (counted from the plane's point, so
+      // that they stay put), about 10 to 25 across the patch.
+      const step = niceStep(longest / 10);
+      const grid = [];
+      for (let u = Math.ceil(u0 / step) * step; u < u1 - 1e-9 * step; u += step) if (u > u0 + 1e-9 * step) grid.push(at(u, v0), at(u, v1));
+      for (let v = Math.ceil(v0 / step) * step; v < v1 - 1e-9 * step; v += step) if (v > v0 + 1e-9 * step) grid.push(at(u0, v), at(u1, v));
+      const gridMaterial = new THREE.LineBasicMaterial({ color: LINE_COLOR, transparent: true, opacity: GRID_ALPHA, depthWrite: false });
+      add(new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(grid)), [gridMaterial, -2]);
+      fatLines([0, 1, 1, 2, 2, 3, 3, 0].map((i) => patch[i]), PATCH_OUTLINE_PX);
+      corners.push(...patch);
+      counts.plane++;
+    } else if (c.type === "box") {
+      // Open bounds (null) reach the extent (never past the other bound).
+      const lo = [0, 1, 2].map((k) => c.lo[k] ?? (c.hi[k] !== null ? Math.min(elo.getComponent(k), c.hi[k]) : elo.getComponent(k)));
+      const hi = [0, 1, 2].map((k) => c.hi[k] ?? Math.max(ehi.getComponent(k), lo[k]));
+      const corner = (s) => new THREE.Vector3(...[0, 1, 2].map((k) => (s[k] ? hi[k] : lo[k])));
+      const finite = (k, high) => (high ? c.hi[k] : c.lo[k]) !== null;
+      const segments = [];
+      if (dim === 2) {
+        // Each side where its own bound is finite.
+        const z = 0;
+        const p = (x, y) => new THREE.Vector3(x, y, z);
+        if (finite(0, false)) segments.push(p(lo[0], lo[1]), p(lo[0], hi[1]));
+        if (finite(0, true)) segments.push(p(hi[0], lo[1]), p(hi[0], hi[1]));
+        if (finite(1, false)) segments.push(p(lo[0], lo[1]), p(hi[0], lo[1]));
+        if (finite(1, true)) segments.push(p(lo[0], hi[1]), p(hi[0], hi[1]));
+        corners.push(p(lo[0], lo[1]), p(hi[0], lo[1]), p(hi[0], hi[1]), p(lo[0], hi[1]));
+      } else {
+        // An edge along `axis` lies on two faces: it is drawn when both are closed (an open
+        // top has no rim; the walls rise to the extent).
+        for (let axis = 0; axis < 3; axis++) {
+          const b = (axis + 1) % 3;
+          const cc = (axis + 2) % 3;
+          for (const [sb, sc] of [
+            [false, false],
+            [true, false],
+            [false, true],
+            [true, true],
+          ]) {
+            if (!finite(b, sb) || !finite(cc, sc)) continue;
+            const s0 = [false, false, false];
+            s0[b] = sb;
+            s0[cc] = sc;
+            const s1 = s0.slice();
+            s1[axis] = true;
+            segments.push(corner(s0), corner(s1));
+          }
+        }
+        // The floor: the lower z face, lightly filled, when it is closed.
+        if (finite(2, false)) quad(corner([0, 0, 0]), corner([1, 0, 0]), corner([1, 1, 0]), corner([0, 1, 0]), BOX_FLOOR_COLOR);
+        corners.push(...boxCorners(corner([0, 0, 0]), corner([1, 1, 1])));
+      }
+      if (segments.length) fatLines(segments, dim === 2 ? BOX_2D_PX : BOX_EDGE_PX);
+      boxEdges += segments.length / 2;
+      counts.box++;
+    } else if (c.type === "sphere") {
+      const centre = vec(c.center);
+      const r = c.radius;
+      if (dim === 2) {
+        const disc = add(new THREE.Mesh(new THREE.CircleGeometry(r, 96)), flat(new THREE.MeshBasicMaterial({ color: new THREE.Color().setRGB(...OBSTACLE_RGB, THREE.SRGBColorSpace) })));
+        disc.position.set(centre.x, centre.y, 0);
+        corners.push(...boxCorners(new THREE.Vector3(centre.x - r, centre.y - r, 0), new THREE.Vector3(centre.x + r, centre.y + r, 0)));
+      } else {
+        const material = new THREE.ShaderMaterial({ uniforms: { uColor: { value: new THREE.Vector3(...OBSTACLE_RGB) } }, vertexShader: OBSTACLE_VERTEX, fragmentShader: OBSTACLE_FRAGMENT });
+        const ball = add(new THREE.Mesh(new THREE.SphereGeometry(r, 64, 32)), [material, 0]);
+        ball.position.copy(centre);
+        const d = new THREE.Vector3(r, r, r);
+        corners.push(...boxCorners(centre.clone().sub(d), centre.clone().add(d)));
+      }
+      counts.sphere++;
+    }
+  }
+  return { counts, boxEdges, corners, lineMaterials };
+}
+
+// The 3D camera's place: looking along -VIEW_DIRECTION with z up, as near as it can be with
+// every point inside the field of view (`margin` of it): for camera axes r (right), u (up),
+// f (forward), a point p is in view when |p·r − a| <= tH (p·f − c) and |p·u − b| <= tV (p·f − c),
+// the camera at a r + b u + c f. Each pair of bounds on c is largest (the camera nearest)
+// where the two meet: c = (A + B) / 2 at a = (B − A) tH / 2, A = min(p·f − p·r / tH),
+// B = min(p·f + p·r / tH), and likewise for b; the camera takes the smaller c (the other
+// direction is then centred with room to spare).
+function fitPerspective(points, fovDeg, aspect) {
+  const f = vec(VIEW_DIRECTION).normalize().negate();
+  const r = new THREE.Vector3().crossVectors(f, new THREE.Vector3(0, 0, 1)).normalize();
+  const u = new THREE.Vector3().crossVectors(r, f);
+  const tV = Math.tan(THREE.MathUtils.degToRad(fovDeg) / 2) * FIT_MARGIN;
+  const tH = tV * aspect;
+  let [ah, bh, av, bv] = [Infinity, Infinity, Infinity, Infinity];
+  let farthest = -Infinity;
+  const centre = new THREE.Vector3();
+  for (const p of points) {
+    const [pr, pu, pf] = [p.dot(r), p.dot(u), p.dot(f)];
+    ah = Math.min(ah, pf - pr / tH);
+    bh = Math.min(bh, pf + pr / tH);
+    av = Math.min(av, pf - pu / tV);
+    bv = Math.min(bv, pf + pu / tV);
+    farthest = Math.max(farthest, pf);
+    centre.add(p);
+  }
+  centre.multiplyScalar(1 / points.length);
+  const a = ((bh - ah) * tH) / 2;
+  const b = ((bv - av) * tV) / 2;
+  const c = Math.min((ah + bh) / 2, (av + bv) / 2);
+  const eye = r.clone().multiplyScalar(a).addScaledVector(u, b).addScaledVector(f, c);
+  // The orbit's target: on the axis of view, at the depth of the points' centre.
+  const depth = Math.max(centre.clone().sub(eye).dot(f), 1e-9);
+  return { eye, target: eye.clone().addScaledVector(f, depth), far: farthest - c };
+}
+
+function start({ meta, positions, speed, radii, springs, alive, colors }) {
   const n = meta.n;
   const frames = meta.frames;
   const times = meta.t;
+  const dim = meta.dim;
   const container = document.getElementById("kinema-view");
 
   // No MSAA: the discs are cut out by `discard`, which multisampling does not smooth, so it
@@ -152,24 +487,57 @@ function start({ meta, positions, speed, radii }) {
   // the canvas every frame (the compositor still shows the last frame drawn).
   const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: false });
   renderer.setPixelRatio(window.devicePixelRatio || 1);
-  renderer.setClearColor(0x101014, 1);
+  renderer.setClearColor(BACKGROUND, 1);
   container.appendChild(renderer.domElement);
 
   const scene = new THREE.Scene();
-  const lo = new THREE.Vector3(...meta.bounds.min);
-  const hi = new THREE.Vector3(...meta.bounds.max);
-  const center = lo.clone().add(hi).multiplyScalar(0.5);
-  const extent = Math.max(hi.clone().sub(lo).length(), 1e-9);
-  const camera = new THREE.PerspectiveCamera(45, 1, extent * 1e-3, extent * 100);
-  if (meta.dim === 2) {
-    camera.position.set(center.x, center.y, center.z + 1.3 * extent);
-  } else {
-    camera.up.set(0, 0, 1); // kinema's worlds have z up (gravity along -z)
-    camera.position.copy(center).add(new THREE.Vector3(0.9, -1.1, 0.6).multiplyScalar(extent * 0.9));
-  }
+  const scenery = new THREE.Group();
+  scene.add(scenery);
+  const drawn = buildScenery(meta, scenery);
+  const elo = vec(meta.extent.min);
+  const ehi = vec(meta.extent.max);
+  const centre = elo.clone().add(ehi).multiplyScalar(0.5);
+  const extent = Math.max(ehi.clone().sub(elo).length(), 1e-9);
+  // What the camera frames: the extent's corners (the particles over every frame and the
+  // colliders' finite parts) and the corners of what the colliders drew (floor patches).
+  const framed = boxCorners(elo, ehi).concat(drawn.corners);
+
+  const camera = dim === 2 ? new THREE.OrthographicCamera(-1, 1, 1, -1, extent * 1e-3, extent * 100) : new THREE.PerspectiveCamera(45, 1, extent * 1e-3, extent * 100);
+  if (dim !== 2) camera.up.set(0, 0, 1); // kinema's worlds have z up (gravity along -z)
   const controls = new OrbitControls(camera, renderer.domElement);
-  controls.target.copy(center);
-  controls.update();
+  if (dim === 2) {
+    controls.enableRotate = false; // a plane seen from above; pan and zoom
+    controls.screenSpacePanning = true;
+  }
+  let userMoved = false; // the camera is refitted on resize until the user moves it
+  controls.addEventListener("start", () => (userMoved = true));
+
+  // Place the camera so that everything framed is in view at the canvas's aspect ratio.
+  function fit(aspect) {
+    if (dim === 2) {
+      let [x0, x1, y0, y1] = [Infinity, -Infinity, Infinity, -Infinity];
+      for (const p of framed) {
+        [x0, x1, y0, y1] = [Math.min(x0, p.x), Math.max(x1, p.x), Math.min(y0, p.y), Math.max(y1, p.y)];
+      }
+      const half = Math.max((y1 - y0) / 2, (x1 - x0) / 2 / aspect, 1e-9) / FIT_MARGIN;
+      Object.assign(camera, { left: -half * aspect, right: half * aspect, top: half, bottom: -half, zoom: 1 });
+      const cx = (x0 + x1) / 2;
+      const cy = (y0 + y1) / 2;
+      camera.position.set(cx, cy, ehi.z + extent);
+      camera.near = extent * 1e-3;
+      camera.far = ehi.z - elo.z + 3 * extent;
+      controls.target.set(cx, cy, centre.z);
+    } else {
+      camera.aspect = aspect;
+      const { eye, target, far } = fitPerspective(framed, camera.fov, aspect);
+      camera.position.copy(eye);
+      camera.near = Math.max(eye.distanceTo(target), extent) * 1e-3;
+      camera.far = 10 * Math.max(far, extent);
+      controls.target.copy(target);
+    }
+    camera.updateProjectionMatrix();
+    controls.update();
+  }
 
   // The attributes hold views into the frame data, not copies: showing frame k points
   // `position` (and `aValue` when colouring by speed) at frame k's slice and marks it for
@@ -181,12 +549,18 @@ function start({ meta, positions, speed, radii }) {
   const position = new THREE.BufferAttribute(frameSlice(positions, 0, 3), 3).setUsage(THREE.DynamicDrawUsage);
   const value = new THREE.BufferAttribute(speed ? frameSlice(speed, 0, 1) : ids, 1).setUsage(THREE.DynamicDrawUsage);
   const radius = new THREE.BufferAttribute(radii ? radii : new Float32Array(n).fill(meta.defaultRadius), 1);
+  // Which particles are alive at the frame shown (all, without births and deaths).
+  const aliveNow = new Uint8Array(n).fill(1);
+  const aliveAttr = new THREE.BufferAttribute(aliveNow, 1).setUsage(alive ? THREE.DynamicDrawUsage : THREE.StaticDrawUsage);
+  let visible = n;
   geometry.setAttribute("position", position);
   geometry.setAttribute("aValue", value);
   geometry.setAttribute("aRadius", radius);
-  geometry.boundingSphere = new THREE.Sphere(center, extent * 10); // frames move: never cull
+  geometry.setAttribute("aAlive", aliveAttr);
+  if (colors) geometry.setAttribute("aColor", new THREE.BufferAttribute(colors, 4, true));
+  geometry.boundingSphere = new THREE.Sphere(centre, extent * 10); // frames move: never cull
   const material = new THREE.ShaderMaterial({
-    uniforms: { uPixelsPerUnit: { value: 1 }, uScale: { value: 1 }, uMode: { value: 1 } },
+    uniforms: { uPixelsPerUnit: { value: 1 }, uOrtho: { value: dim === 2 ? 1 : 0 }, uOffset: { value: 0 }, uScale: { value: 1 }, uMode: { value: 1 } },
     vertexShader: VERTEX,
     fragmentShader: FRAGMENT,
   });
@@ -194,9 +568,29 @@ function start({ meta, positions, speed, radii }) {
   points.frustumCulled = false;
   scene.add(points);
 
-  const ui = buildUi(document.body);
+  // Springs: a segment between the two ends' centres, while both are alive; the visible ones
+  // are packed at the front of the buffer and the draw range cut to them.
+  const springCount = springs ? springs.length / 2 : 0;
+  const springPositions = new Float32Array(Math.max(springCount, 1) * 6);
+  const springGeometry = new THREE.BufferGeometry();
+  const springAttr = new THREE.BufferAttribute(springPositions, 3).setUsage(THREE.DynamicDrawUsage);
+  springGeometry.setAttribute("position", springAttr);
+  springGeometry.setDrawRange(0, 0);
+  const springMaterial = new THREE.LineBasicMaterial({ color: SPRING_COLOR });
+  if (dim === 2) {
+    springMaterial.depthTest = false;
+    springMaterial.depthWrite = false;
+  }
+  const springLines = new THREE.LineSegments(springGeometry, springMaterial);
+  springLines.frustumCulled = false;
+  springLines.renderOrder = -1;
+  let springsVisible = 0;
+  if (springCount) scene.add(springLines);
+
+  const ui = buildUi(document.body, container);
   ui.scrub.max = String(frames - 1);
   if (!speed) ui.colour.querySelector('option[value="speed"]').disabled = true;
+  if (colors) ui.colour.querySelector('option[value="none"]').insertAdjacentHTML("beforebegin", '<option value="color">own colour</option>');
   ui.colour.value = speed ? "speed" : "id";
 
   const state = window.kinemaViewer;
@@ -207,8 +601,21 @@ function start({ meta, positions, speed, radii }) {
   // frame is shown as long as the others before the first comes round again.
   const loopEnd = frames > 1 ? 2 * times[frames - 1] - times[frames - 2] : times[0];
   let dirty = true;
-  const infoPrefix = `${n.toLocaleString()} particles · t = `;
   const infoSuffix = meta.note ? ` · ${meta.note}` : "";
+  let legendShown = null;
+
+  // The legend names what the colours show and the values at the ends of the ramp.
+  function setLegend() {
+    legendShown = null;
+    if (colouring === "speed" && speed) legendShown = { label: "speed (m/s)", min: meta.speedMin, max: meta.speedMax };
+    else if (colouring === "id") legendShown = { label: "particle id", min: meta.idRange[0], max: meta.idRange[1] };
+    ui.legend.style.display = legendShown ? "" : "none";
+    if (legendShown) {
+      ui.legendLabel.textContent = legendShown.label;
+      ui.legendMin.textContent = legendValue(legendShown.min);
+      ui.legendMax.textContent = legendValue(legendShown.max);
+    }
+  }
 
   // Point aValue at what the colouring needs at frame k and set the ramp; only colouring by
   // speed changes from frame to frame, and "none" uploads nothing.
@@ -216,17 +623,48 @@ function start({ meta, positions, speed, radii }) {
     if (colouring === "speed" && speed) {
       value.array = frameSlice(speed, k, 1);
       value.needsUpdate = true;
-      material.uniforms.uScale.value = meta.speedMax > 0 ? 1 / meta.speedMax : 1;
+      const range = meta.speedMax - meta.speedMin;
+      material.uniforms.uOffset.value = meta.speedMin;
+      material.uniforms.uScale.value = range > 0 ? 1 / range : 0;
       material.uniforms.uMode.value = 1;
     } else if (colouring === "id") {
       if (value.array !== ids) {
         value.array = ids ??= idValues();
         value.needsUpdate = true;
       }
+      material.uniforms.uOffset.value = 0;
       material.uniforms.uScale.value = 1;
       material.uniforms.uMode.value = 1;
     } else {
-      material.uniforms.uMode.value = 0;
+      material.uniforms.uMode.value = colouring === "color" && colors ? 2 : 0;
+    }
+  }
+
+  // Which particles are alive at frame k, and the springs between live ends.
+  function fillAliveAndSprings(k, frame) {
+    if (alive) {
+      const stride = meta.aliveBytes;
+      const row = alive.subarray(k * stride, (k + 1) * stride);
+      visible = 0;
+      for (let i = 0; i < n; i++) visible += aliveNow[i] = (row[i >> 3] >> (i & 7)) & 1;
+      aliveAttr.needsUpdate = true;
+    }
+    if (springCount) {
+      let m = 0;
+      for (let s = 0; s < springCount; s++) {
+        const a = springs[2 * s];
+        const b = springs[2 * s + 1];
+        if (!aliveNow[a] || !aliveNow[b]) continue;
+        springPositions.set(frame.subarray(3 * a, 3 * a + 3), 6 * m);
+        springPositions.set(frame.subarray(3 * b, 3 * b + 3), 6 * m + 3);
+        m++;
+      }
+      springsVisible = m;
+      springGeometry.setDrawRange(0, 2 * m);
+      if (m > 0) {
+        springAttr.addUpdateRange(0, 6 * m);
+        springAttr.needsUpdate = true;
+      }
     }
   }
 
@@ -235,10 +673,12 @@ function start({ meta, positions, speed, radii }) {
     if (k !== state.frame) {
       position.array = frameSlice(positions, k, 3);
       position.needsUpdate = true;
+      fillAliveAndSprings(k, position.array);
       if (colouring === "speed") fillColour(k); // id and none do not change with the frame
       state.stats.steps++;
       ui.scrub.value = String(k);
-      ui.info.textContent = `${infoPrefix}${times[k].toFixed(3)} s · frame ${k + 1}/${frames}${infoSuffix}`;
+      const count = alive ? `${visible.toLocaleString()} of ${n.toLocaleString()}` : n.toLocaleString();
+      ui.info.textContent = `${count} particles · t = ${times[k].toFixed(3)} s · frame ${k + 1}/${frames}${infoSuffix}`;
     }
     state.frame = k;
     if (!keepTime) playbackTime = times[k];
@@ -250,15 +690,83 @@ function start({ meta, positions, speed, radii }) {
     ui.play.textContent = state.playing ? "❚❚" : "▶";
   }
 
+  function canvasSize() {
+    return [container.clientWidth || window.innerWidth, container.clientHeight || window.innerHeight];
+  }
+
+  // Pixels per metre for the particles' sprites (at 1 m depth in perspective).
+  function pointScale() {
+    const pixels = canvasSize()[1] * renderer.getPixelRatio();
+    material.uniforms.uPixelsPerUnit.value =
+      dim === 2 ? (pixels * camera.zoom) / (camera.top - camera.bottom) : pixels / (2 * Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2));
+  }
+
   function resize() {
-    const w = container.clientWidth || window.innerWidth;
-    const h = container.clientHeight || window.innerHeight;
+    const [w, h] = canvasSize();
     renderer.setSize(w, h, false);
-    camera.aspect = w / h;
-    camera.updateProjectionMatrix();
-    const pixels = h * renderer.getPixelRatio();
-    material.uniforms.uPixelsPerUnit.value = pixels / (2 * Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2));
+    if (userMoved) {
+      if (dim === 2) {
+        // Keep the height in view and widen or narrow the width.
+        const half = (camera.top - camera.bottom) / 2;
+        Object.assign(camera, { left: (-half * w) / h, right: (half * w) / h });
+      } else camera.aspect = w / h;
+      camera.updateProjectionMatrix();
+    } else fit(w / h);
+    for (const m of drawn.lineMaterials) m.resolution.set(w, h);
+    pointScale();
     dirty = true;
+  }
+
+  // A read-only description of what is drawn at the frame shown (for tests): the colliders'
+  // objects by type, box edges, springs and particles visible, the legend, whether every
+  // visible particle (its disc) and every corner of the colliders' drawing project inside
+  // the canvas (`room`: the least distance in CSS pixels from one to the canvas's border,
+  // negative outside), and how much of the canvas the framed points span (`fill`, of its
+  // width and height).
+  function describe() {
+    camera.updateMatrixWorld();
+    const [w, h] = canvasSize();
+    const ndc = new THREE.Vector3();
+    const view = new THREE.Vector3();
+    const perPixel = dim === 2 ? (h * camera.zoom) / (camera.top - camera.bottom) : h / (2 * Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2));
+    const box = [Infinity, -Infinity, Infinity, -Infinity];
+    // The disc of radius r (m) about p on the canvas: its least distance to the border.
+    const room = (p, r, span = false) => {
+      view.copy(p).applyMatrix4(camera.matrixWorldInverse);
+      if (dim !== 2 && view.z >= 0) return -Infinity; // behind the camera
+      ndc.copy(p).project(camera);
+      const px = ((ndc.x + 1) / 2) * w;
+      const py = ((1 - ndc.y) / 2) * h;
+      if (span) [box[0], box[1], box[2], box[3]] = [Math.min(box[0], px), Math.max(box[1], px), Math.min(box[2], py), Math.max(box[3], py)];
+      const rp = dim === 2 ? r * perPixel : (r * perPixel) / -view.z;
+      return Math.min(px - rp, w - px - rp, py - rp, h - py - rp);
+    };
+    let particleRoom = Infinity;
+    const p = new THREE.Vector3();
+    const frame = position.array;
+    for (let i = 0; i < n; i++) {
+      if (!aliveNow[i]) continue;
+      p.fromArray(frame, 3 * i);
+      particleRoom = Math.min(particleRoom, room(p, radius.array[i]));
+    }
+    let colliderRoom = Infinity;
+    for (const c of drawn.corners) colliderRoom = Math.min(colliderRoom, room(c, 0));
+    let framedRoom = Infinity;
+    for (const c of framed) framedRoom = Math.min(framedRoom, room(c, 0, true));
+    return {
+      frame: state.frame,
+      dim,
+      canvas: { width: w, height: h },
+      colliders: { ...drawn.counts },
+      boxEdges: drawn.boxEdges,
+      colliderCorners: drawn.corners.length,
+      particles: { total: n, visible },
+      springs: { total: springCount, visible: springsVisible },
+      legend: legendShown ? { shown: true, label: legendShown.label, min: legendShown.min, max: legendShown.max, text: ui.legend.innerText } : { shown: false },
+      // Half a pixel of slack for rounding (Infinity: nothing to check).
+      inView: { particles: particleRoom >= -0.5, colliders: colliderRoom >= -0.5, particleRoom, colliderRoom, framedRoom },
+      fill: [(box[1] - box[0]) / w, (box[3] - box[2]) / h],
+    };
   }
 
   ui.play.addEventListener("click", () => {
@@ -273,6 +781,7 @@ function start({ meta, positions, speed, radii }) {
   ui.colour.addEventListener("change", () => {
     colouring = ui.colour.value;
     fillColour(state.frame);
+    setLegend();
     dirty = true;
   });
   window.addEventListener("keydown", (e) => {
@@ -281,7 +790,10 @@ function start({ meta, positions, speed, radii }) {
       ui.play.click();
     }
   });
-  controls.addEventListener("change", () => (dirty = true));
+  controls.addEventListener("change", () => {
+    if (dim === 2) pointScale(); // zooming an orthographic camera changes pixels per metre
+    dirty = true;
+  });
   window.addEventListener("resize", resize);
 
   let last = performance.now();
@@ -315,8 +827,10 @@ function start({ meta, positions, speed, radii }) {
     setFrame(k);
     renderer.render(scene, camera);
   };
+  state.info = describe;
   resize();
   fillColour(0);
+  setLegend();
   setFrame(opts.frame ?? 0);
   setPlaying(opts.frame === null || opts.play);
   controls.autoRotate = opts.rotate;
@@ -327,7 +841,7 @@ function start({ meta, positions, speed, radii }) {
   requestAnimationFrame(tick);
 }
 
-window.kinemaViewer = { frame: 0, setFrame: () => {}, playing: false, ready: false, error: null, stats: frameStats() };
+window.kinemaViewer = { frame: 0, setFrame: () => {}, info: () => null, playing: false, ready: false, error: null, stats: frameStats() };
 loadData()
   .then(start)
   .catch((err) => {

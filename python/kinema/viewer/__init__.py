@@ -1,5 +1,8 @@
 """A trajectory in the browser: three.js plays the frames with play/pause, scrubbing, speed,
-an orbit camera and colouring by speed or id.
+an orbit camera framing the whole scene, and colouring by speed, id or the particles' own
+colours with a legend. The trajectory's colliders are drawn (planes as floor patches, boxes
+as their edges less the open faces', sphere obstacles; in 2D lines, rectangles and discs),
+its springs as lines, and only the particles alive at each frame (births and deaths).
 
 - ``write_html(traj, path)`` writes one self-contained HTML file (script and frames inlined)
   that plays offline.

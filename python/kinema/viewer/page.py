@@ -42,13 +42,19 @@ class ViewerWarning(UserWarning):
 
 @dataclass
 class Packed:
-    """What a page shows: metadata (JSON-ready) and float32 arrays (positions (F, N, 3),
-    speed (F, N) or None, radii (N,))."""
+    """What a page shows: metadata (JSON-ready) and the arrays: positions (F, N, 3) float32
+    (0 where a particle is not alive), speed (F, N) float32 or None, radii (N,) float32,
+    springs (2 S,) int32 column pairs or None, alive (F, ceil(N / 8)) uint8, each frame's
+    bits little-endian (bit i of byte j: particle 8 j + i), or None when all are alive, and
+    colors (N, 4) uint8, each particle's own colour as RGBA (A 0: none), or None."""
 
     meta: dict[str, Any]
     positions: np.ndarray
     speed: np.ndarray | None
     radii: np.ndarray
+    springs: np.ndarray | None = None
+    alive: np.ndarray | None = None
+    colors: np.ndarray | None = None
 
 
 def _strides(frames: int, particles: int, per_particle: int, max_bytes: int) -> tuple[int, int]:
@@ -62,6 +68,116 @@ def _strides(frames: int, particles: int, per_particle: int, max_bytes: int) -> 
     kept = len(range(0, frames, frame_stride))
     particle_stride = max(1, math.ceil(kept * particles * per_particle / max_bytes))
     return frame_stride, particle_stride
+
+
+def _finite_or_none(values: Any, size: int = 3, pad: float | None = None) -> list[float | None] | None:
+    """Up to ``size`` numbers with ±inf as None (JSON has no infinity), padded with ``pad``;
+    None when there are too many values or one is NaN."""
+    try:
+        a = np.asarray(values, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        return None
+    if a.size == 0 or a.size > size or np.isnan(a).any():
+        return None
+    out: list[float | None] = [float(x) if math.isfinite(x) else None for x in a]
+    return out + [pad] * (size - a.size)
+
+
+def _colliders(colliders: Any) -> list[dict[str, Any]]:
+    """The trajectory's collider descriptions as the page draws them: 3 values per vector
+    (a 2-value box is open along z), ±inf bounds as None; what cannot be drawn (a malformed
+    description, a plane with no finite normal) is left out."""
+    out: list[dict[str, Any]] = []
+    for c in colliders or []:
+        if not isinstance(c, dict):
+            continue
+        kind = c.get("type")
+        if kind == "plane":
+            point, normal = _finite_or_none(c.get("point"), pad=0.0), _finite_or_none(c.get("normal"), pad=0.0)
+            if point and normal and None not in point and None not in normal and any(normal):
+                out.append({"type": "plane", "point": point, "normal": normal})
+        elif kind == "box":
+            lo, hi = _finite_or_none(c.get("lo")), _finite_or_none(c.get("hi"))
+            if lo and hi and all(a is None or b is None or a < b for a, b in zip(lo, hi, strict=True)):
+                out.append({"type": "box", "lo": lo, "hi": hi})
+        elif kind == "sphere":
+            center = _finite_or_none(c.get("center"), pad=0.0)
+            try:
+                radius = float(c.get("radius"))
+            except (TypeError, ValueError):
+                continue
+            if center and None not in center and math.isfinite(radius) and radius >= 0:
+                out.append({"type": "sphere", "center": center, "radius": radius})
+    return out
+
+
+def _extent(lo: np.ndarray, hi: np.ndarray, colliders: list[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
+    """The particles' box (lo, hi: NaN where none) joined with the colliders' finite parts: a
+    box's finite bounds, each along its own axis, and a sphere's box; a plane adds nothing.
+    An axis nothing reached gets [0, 1] (or the other axes' size around 0 when any has one)."""
+    lo, hi = lo.astype(np.float64).copy(), hi.astype(np.float64).copy()
+
+    def grow(k: int, v: float | None) -> None:
+        if v is not None and math.isfinite(v):
+            lo[k] = v if math.isnan(lo[k]) else min(lo[k], v)
+            hi[k] = v if math.isnan(hi[k]) else max(hi[k], v)
+
+    for c in colliders:
+        for k in range(3):
+            if c["type"] == "box":
+                grow(k, c["lo"][k])
+                grow(k, c["hi"][k])
+            elif c["type"] == "sphere":
+                grow(k, c["center"][k] - c["radius"])
+                grow(k, c["center"][k] + c["radius"])
+    known = ~np.isnan(lo)
+    span = float(np.max(hi[known] - lo[known])) if known.any() else 0.0
+    span = span or 1.0
+    return np.where(known, lo, -0.5 * span), np.where(known, hi, 0.5 * span)
+
+
+def _springs(traj: Any, particles: int, particle_stride: int) -> np.ndarray | None:
+    """The springs' ends as the columns of the page's particles (``ids`` mapped to columns,
+    then to the kept columns when particles are left out), flattened to int32; springs with
+    an end that is unknown or left out are dropped. None when the trajectory has none."""
+    springs = getattr(traj, "springs", None)
+    if springs is None:
+        return None
+    springs = np.asarray(springs, dtype=np.int64).reshape(-1, 2)
+    if springs.size == 0:
+        return None
+    ids = getattr(traj, "ids", None)
+    ids = np.arange(particles) if ids is None or np.size(ids) != particles else np.asarray(ids, dtype=np.int64).reshape(-1)
+    order = np.argsort(ids, kind="stable")
+    where = np.clip(np.searchsorted(ids, springs, sorter=order), 0, max(ids.size - 1, 0))
+    columns = order[where] if ids.size else np.zeros_like(springs)
+    known = (ids[columns] == springs).all(axis=1) if ids.size else np.zeros(len(springs), dtype=bool)
+    kept = known & (columns % particle_stride == 0).all(axis=1)
+    return np.ascontiguousarray((columns[kept] // particle_stride).reshape(-1), dtype="<i4")
+
+
+def _colors(traj: Any, particles: int, particle_stride: int) -> np.ndarray | None:
+    """The particles' own colours (``Trajectory.colors``, r g b in [0, 1], NaN: none) as RGBA
+    bytes, A 255 where a particle has one and 0 where not; None when none has one."""
+    colors = getattr(traj, "colors", None)
+    if colors is None or np.shape(colors) != (particles, 3):
+        return None
+    colors = np.asarray(colors, dtype=np.float64)[::particle_stride]
+    own = np.isfinite(colors).all(axis=1)
+    if not own.any():
+        return None
+    rgba = np.zeros((len(colors), 4), dtype=np.uint8)
+    rgba[own, :3] = np.round(np.clip(colors[own], 0.0, 1.0) * 255.0).astype(np.uint8)
+    rgba[own, 3] = 255
+    return rgba
+
+
+def _id_range(ids: np.ndarray) -> list[int]:
+    """The first and last column's ids (the lowest and highest: columns are in id order)."""
+    try:
+        return [int(ids[0]), int(ids[-1])] if ids.size else [0, 0]
+    except (TypeError, ValueError):
+        return [0, max(int(ids.size) - 1, 0)]
 
 
 def pack(traj: Any, max_bytes: int) -> Packed:
@@ -81,29 +197,77 @@ def pack(traj: Any, max_bytes: int) -> Packed:
         note = f"showing {kept_f} of {frames} frames and {kept_n} of {particles} particles"
         warnings.warn(f"the viewer is {note} (the frames are over {max_bytes / 1e6:.0f} MB)", ViewerWarning, stacklevel=3)
     positions = positions[::fs, ::ps]
+    # A particle is drawn where the trajectory says it is alive and its position is finite
+    # (NaN where it is not alive, and JSON and the page have no use for NaN: 0 with the mask).
+    alive = getattr(traj, "alive", None)
+    alive = np.ones((frames, particles), dtype=bool) if alive is None or np.shape(alive) != (frames, particles) else np.asarray(alive, dtype=bool)
+    alive = alive[::fs, ::ps] & np.isfinite(positions).all(axis=2)
     t = np.asarray(traj.t, dtype=np.float64)[::fs]
-    speed = np.linalg.norm(np.asarray(velocities)[::fs, ::ps], axis=2).astype("<f4") if has_speed else None
+    speed, speed_min, speed_max = None, 0.0, 0.0
+    if has_speed:
+        speed = np.linalg.norm(np.asarray(velocities, dtype=np.float64)[::fs, ::ps], axis=2).astype("<f4")
+        known = alive & np.isfinite(speed)
+        if known.any():
+            speed_min, speed_max = float(speed[known].min()), float(speed[known].max())
+            speed[~known] = 0.0
+        else:
+            speed = None  # velocities unknown (NaN): no colouring by speed
+    out_positions = np.ascontiguousarray(positions, dtype="<f4")
+    out_positions[~alive] = 0.0
 
-    finite = positions[np.isfinite(positions).all(axis=2)]
-    lo, hi = (finite.min(axis=0), finite.max(axis=0)) if finite.size else (np.zeros(3), np.ones(3))
+    radii = getattr(traj, "radii", None)
+    radii = None if radii is None or np.size(radii) != particles else np.asarray(radii, dtype=np.float64).reshape(-1)[::ps]
+    # The live particles' box over every frame, bare (lo, hi) and with each particle's own
+    # radius (plo, phi), a block of frames at a time (no copy of all the frames).
+    lo, hi, plo, phi = (np.full(3, v) for v in (np.inf, -np.inf, np.inf, -np.inf))
+    block = max(1, 2**20 // max(positions.shape[1], 1))
+    for k in range(0, positions.shape[0], block):
+        mask = alive[k : k + block]
+        if not mask.any():
+            continue
+        live = positions[k : k + block][mask]
+        lo, hi = np.minimum(lo, live.min(axis=0)), np.maximum(hi, live.max(axis=0))
+        if radii is not None:
+            r = np.broadcast_to(np.where(radii > 0, radii, 0.0), mask.shape)[mask][:, None]
+            plo, phi = np.minimum(plo, (live - r).min(axis=0)), np.maximum(phi, (live + r).max(axis=0))
+    if not np.isfinite(lo).all():
+        lo, hi = np.zeros(3), np.ones(3)  # nothing alive anywhere
     extent = float(np.max(hi - lo)) or 1.0
     default_radius = extent / 200.0  # as Trajectory.render draws particles without a radius
-    radii = getattr(traj, "radii", None)
-    radii = np.full(particles, default_radius) if radii is None else np.where(np.asarray(radii) > 0, radii, default_radius)
-    radii = radii[::ps]
+    if radii is None or not np.all(radii > 0):
+        # Particles without a radius (or with 0) are drawn at the default radius.
+        plo, phi = np.minimum(plo, lo - default_radius), np.maximum(phi, hi + default_radius)
+        radii = np.full(positions.shape[1], default_radius) if radii is None else np.where(radii > 0, radii, default_radius)
+    if not alive.any():
+        plo, phi = np.full(3, np.nan), np.full(3, np.nan)
+    colliders = _colliders(getattr(traj, "colliders", None))
+    elo, ehi = _extent(plo, phi, colliders)
+    ids = getattr(traj, "ids", None)
+    ids = np.arange(particles) if ids is None or np.size(ids) != particles else np.asarray(ids).reshape(-1)
+    ids = ids[::ps]
+    springs = _springs(traj, particles, ps)
+    bits = None if alive.all() else np.packbits(alive, axis=1, bitorder="little")
     pad = float(radii.max()) if radii.size else 0.0
-    speed_max = float(np.nanmax(speed)) if speed is not None and speed.size and np.isfinite(speed).any() else 0.0
     meta = {
         "n": int(positions.shape[1]),
         "frames": int(positions.shape[0]),
         "dim": int(getattr(traj, "dim", 3) or 3),
         "t": [float(x) for x in t],
         "bounds": {"min": [float(x) - pad for x in lo], "max": [float(x) + pad for x in hi]},
+        # What the camera frames and the colliders are drawn within (open boxes up to it,
+        # floor patches around it): the live particles with their radii, over every frame,
+        # and the colliders' finite parts.
+        "extent": {"min": [float(x) for x in elo], "max": [float(x) for x in ehi]},
+        "colliders": colliders,
+        "speedMin": speed_min,
         "speedMax": speed_max,
+        "idRange": _id_range(ids),
+        "springCount": 0 if springs is None else int(springs.size // 2),
+        "aliveBytes": 0 if bits is None else int(bits.shape[1]),
         "defaultRadius": default_radius,
         "note": note,
     }
-    return Packed(meta, np.ascontiguousarray(positions, dtype="<f4"), speed, np.ascontiguousarray(radii, dtype="<f4"))
+    return Packed(meta, out_positions, speed, np.ascontiguousarray(radii, dtype="<f4"), springs, bits, _colors(traj, particles, ps))
 
 
 def bundle() -> str:
@@ -132,7 +296,9 @@ def html_page(traj: Any, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYT
     bundle()  # fail before any work when the script is not built
     packed = pack(traj, max_bytes)
     meta = dict(packed.meta, positions=_b64(packed.positions), radii=_b64(packed.radii))
-    meta["speed"] = _b64(packed.speed) if packed.speed is not None else None
+    for name in ("speed", "springs", "alive", "colors"):
+        array = getattr(packed, name)
+        meta[name] = _b64(array) if array is not None else None
     return page(meta, title)
 
 

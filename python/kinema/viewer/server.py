@@ -17,17 +17,21 @@ from .page import SERVE_MAX_BYTES, bundle, pack, page
 
 
 def _binary(packed: Any) -> tuple[bytes, dict[str, list[int] | None]]:
-    """positions, speed, radii one after the other; the layout is [byte offset, float count]."""
+    """positions, speed, radii (float32), springs (int32), alive and colors (uint8) one after the other,
+    each starting at a multiple of 4 bytes; the layout is [byte offset, element count], None
+    for what the trajectory has not."""
     layout: dict[str, list[int] | None] = {}
     blobs, offset = [], 0
-    for name in ("positions", "speed", "radii"):
+    for name, dtype in (("positions", "<f4"), ("speed", "<f4"), ("radii", "<f4"), ("springs", "<i4"), ("alive", "u1"), ("colors", "u1")):
         array = getattr(packed, name)
         if array is None:
             layout[name] = None
             continue
         layout[name] = [offset, int(array.size)]
-        blobs.append(np.ascontiguousarray(array, dtype="<f4").tobytes())
-        offset += len(blobs[-1])
+        blob = np.ascontiguousarray(array, dtype=dtype).tobytes()
+        blob += bytes(-len(blob) % 4)
+        blobs.append(blob)
+        offset += len(blob)
     return b"".join(blobs), layout
 
 

@@ -1,0 +1,423 @@
+"""The browser viewer's scene: colliders, springs, births and deaths, the colour legend and the
+camera's framing, read through the page's `window.kinemaViewer.info()` in headless Chromium
+(and the data the page carries, without a browser)."""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+from test_viewer import WAIT_MS, browser, chromium  # noqa: F401 (the browser fixtures)
+
+import kinema
+from kinema import viewer
+from kinema.viewer import page as viewer_page
+from kinema.viewer import server as viewer_server
+
+FLOOR = np.array([224, 224, 220])  # the scenery's colours, as kinema's renderer draws them
+BOX_FLOOR = np.array([212, 212, 206])
+OBSTACLE = np.array([176, 178, 184])
+WIDE, TALL = (1200, 420), (420, 1000)
+
+
+def _traj(positions, velocities=None, **about) -> kinema.Trajectory:
+    """A trajectory by hand: positions (F, N, 3), frames 0.1 s apart."""
+    positions = np.asarray(positions, dtype=np.float64)
+    frames = positions.shape[0]
+    if velocities is None:
+        velocities = np.gradient(positions, 0.1, axis=0) if frames > 1 else np.zeros_like(positions)
+    zeros, three = np.zeros(frames), np.zeros((frames, 3))
+    about.setdefault("radii", np.full(positions.shape[1], 0.05))
+    return kinema.Trajectory(
+        t=np.arange(frames) * 0.1,
+        positions=positions,
+        velocities=velocities,
+        kinetic=zeros,
+        potential={},
+        momentum=three,
+        angular_momentum=three,
+        contacts=np.zeros(frames, dtype=int),
+        impulse_balance=three,
+        collision_energy_lost=zeros,
+        **about,
+    )
+
+
+def _falling(n=12, frames=8, seed=1, **about) -> kinema.Trajectory:
+    """``n`` balls in the unit square falling from z = 1 to z = 0.05 (3D)."""
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(0.1, 0.9, (n, 2))
+    z = np.linspace(1.0, 0.05, frames)[:, None].repeat(n, axis=1)
+    positions = np.concatenate([np.broadcast_to(xy, (frames, n, 2)), z[..., None]], axis=2)
+    return _traj(positions, **about)
+
+
+def _page_data(text: str) -> dict:
+    match = re.search(r'<script type="application/json" id="kinema-data">(.*?)</script>', text, re.S)
+    assert match, "the page has no kinema-data element"
+
+    def refuse(constant: str):
+        raise AssertionError(f"the page's JSON holds {constant}, which JSON.parse refuses")
+
+    return json.loads(match.group(1), parse_constant=refuse)
+
+
+class _Page:
+    """A viewer page open in headless Chromium at a viewport size; ``info()`` is the page's
+    ``window.kinemaViewer.info()``."""
+
+    def __init__(self, browser, url: str, size: tuple[int, int]) -> None:  # noqa: F811 (the fixture's name)
+        self.page = browser.new_page(viewport={"width": size[0], "height": size[1]})
+        self.page.goto(url)
+        self.page.wait_for_function("() => window.kinemaViewer.ready || window.kinemaViewer.error", timeout=WAIT_MS)
+        assert self.page.evaluate("() => window.kinemaViewer.error") is None
+
+    def info(self) -> dict:
+        return self.page.evaluate("() => window.kinemaViewer.info()")
+
+    def show(self, frame: int) -> dict:
+        self.page.evaluate(f"() => window.kinemaViewer.setFrame({frame})")
+        info = self.info()
+        assert info["frame"] == frame
+        return info
+
+    def resize(self, size: tuple[int, int]) -> dict:
+        self.page.set_viewport_size({"width": size[0], "height": size[1]})
+        self.page.wait_for_function(f"() => window.kinemaViewer.info().canvas.width === {size[0]}", timeout=WAIT_MS)
+        return self.info()
+
+    def pixels(self, path) -> np.ndarray:
+        """The view (the canvas, the UI bar left out) as RGB."""
+        box = self.page.locator("#kinema-view canvas").bounding_box()
+        self.page.screenshot(path=str(path), clip=box)
+        return np.asarray(Image.open(path).convert("RGB"), dtype=np.int16)
+
+    def close(self) -> None:
+        self.page.close()
+
+
+@pytest.fixture
+def open_page(browser, tmp_path):  # noqa: F811 (the fixture's name)
+    """Open ``traj``'s self-contained page (or, served, its page and data.bin) at a size."""
+    opened: list = []
+
+    def open_(traj, size=(800, 600), frame=0, served=False) -> _Page:
+        if served:
+            url, server = viewer.serve(traj, open_browser=False, announce=False)
+            opened.append(server)
+        else:
+            url = viewer.write_html(traj, tmp_path / f"page{len(opened)}.html").resolve().as_uri()
+        page = _Page(browser, f"{url}#frame={frame}", size)
+        opened.append(page)
+        return page
+
+    yield open_
+    for thing in opened:
+        if isinstance(thing, _Page):
+            thing.close()
+        else:
+            thing.shutdown()
+            thing.server_close()
+
+
+def _share(image: np.ndarray, color: np.ndarray, tol: int = 6) -> float:
+    """The share of the image's pixels within ``tol`` of ``color``."""
+    return float((np.abs(image - color).max(axis=2) <= tol).mean())
+
+
+def _assert_in_view(info: dict) -> None:
+    room = info["inView"]
+    assert room["particles"] and room["colliders"], f"something projects outside the {info['canvas']} canvas: {room}"
+    # The framing is tight: the framed points span nearly all of the width or of the height.
+    assert max(info["fill"]) > 0.85 and max(info["fill"]) <= 1.0, info["fill"]
+
+
+# --- Colliders --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("lo", "hi", "edges"),
+    [
+        ([0, 0, 0], [1, 1, 1.2], 12),  # closed: all 12
+        ([0, 0, 0], [1, 1, math.inf], 8),  # no lid: the 4 rim edges of the top go, the 4 walls' edges rise to the extent
+        ([0, 0, -math.inf], [1, 1, math.inf], 4),  # a chimney: the 4 vertical edges alone
+        ([-math.inf, 0, 0], [1, 1, 1.2], 8),  # open towards -x: the 4 edges of that face go
+    ],
+)
+def test_a_box_draws_its_edges_less_the_open_faces(open_page, tmp_path, lo, hi, edges):
+    traj = _falling(colliders=[{"type": "box", "lo": lo, "hi": hi}])
+    page = open_page(traj)
+    info = page.info()
+    assert info["colliders"] == {"plane": 0, "box": 1, "sphere": 0}
+    assert info["boxEdges"] == edges
+    _assert_in_view(info)
+    image = page.pixels(tmp_path / "box.png")
+    floor = _share(image, BOX_FLOOR)
+    # The floor face is drawn when the lower z face is closed (and then it shows).
+    assert (floor > 0.01) == math.isfinite(lo[2]), f"box floor colour on {floor:.3%} of the view"
+
+
+def test_a_plane_is_a_floor_patch_and_a_sphere_a_shaded_ball(open_page, tmp_path):
+    colliders = [{"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 1]}, {"type": "sphere", "center": [0.5, 0.5, 0.3], "radius": 0.25}]
+    page = open_page(_falling(colliders=colliders))
+    info = page.info()
+    assert info["colliders"] == {"plane": 1, "box": 0, "sphere": 1}
+    assert info["colliderCorners"] == 4 + 8  # the patch's corners, the sphere's bounding box
+    _assert_in_view(info)
+    image = page.pixels(tmp_path / "plane.png")
+    assert _share(image, FLOOR) > 0.05, "the floor patch does not show"
+    # The sphere is shaded: many pixels of its grey, a little darker or lighter.
+    grey = np.abs(image - image.mean(axis=2, keepdims=True)).max(axis=2) < 8
+    assert (grey & (image.mean(axis=2) > 40) & (image.mean(axis=2) < 200)).mean() > 0.01, "the sphere obstacle does not show"
+    # Without colliders, none of that.
+    bare = open_page(_falling())
+    assert bare.info()["colliders"] == {"plane": 0, "box": 0, "sphere": 0}
+    assert _share(bare.pixels(tmp_path / "bare.png"), FLOOR) < 1e-3
+
+
+def test_2d_colliders_a_line_a_rectangle_a_disc(open_page, tmp_path):
+    # A 2D world (xy, orthographic): the floor y = 0 with its solid side below, a box
+    # open at the top (3 sides), a disc.
+    n, frames = 8, 6
+    x = np.linspace(0.2, 1.8, n)
+    y = np.linspace(1.5, 0.1, frames)
+    positions = np.stack([np.broadcast_to(x, (frames, n)), np.broadcast_to(y[:, None], (frames, n)), np.zeros((frames, n))], axis=2)
+    colliders = [
+        {"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0]},
+        {"type": "box", "lo": [0, 0], "hi": [2, math.inf]},
+        {"type": "sphere", "center": [1.0, 0.8, 0], "radius": 0.2},
+    ]
+    page = open_page(_traj(positions, dim=2, colliders=colliders), size=WIDE)
+    info = page.info()
+    assert info["dim"] == 2 and info["colliders"] == {"plane": 1, "box": 1, "sphere": 1}
+    assert info["boxEdges"] == 3
+    _assert_in_view(info)
+    image = page.pixels(tmp_path / "flat.png")
+    assert _share(image, OBSTACLE, tol=3) > 0.005, "the disc does not show"
+    # The solid side (below the floor line, the bottom of the view) is lightly filled: the
+    # bottom rows are lighter than the background, the top rows are not.
+    assert image[-3:].mean() > image[:3].mean() + 10
+
+
+# --- Springs, births and deaths ----------------------------------------------------------------
+
+
+def _chain(frames=6, death=3) -> kinema.Trajectory:
+    """Four particles of ids 10..13 in a row joined by three springs; 13 dies at ``death``."""
+    n = 4
+    positions = np.zeros((frames, n, 3))
+    positions[:, :, 0] = np.arange(n) * 0.4
+    positions[:, :, 2] = np.linspace(1, 0.5, frames)[:, None]
+    alive = np.ones((frames, n), dtype=bool)
+    alive[death:, 3] = False
+    positions[~alive] = np.nan
+    return _traj(positions, ids=np.arange(10, 10 + n), alive=alive, springs=np.array([[10, 11], [11, 12], [12, 13]]))
+
+
+@pytest.mark.parametrize("served", [False, True])
+def test_springs_are_drawn_while_both_ends_live(open_page, tmp_path, served):
+    page = open_page(_chain(), served=served)
+    first = page.info()
+    assert first["springs"] == {"total": 3, "visible": 3} and first["particles"] == {"total": 4, "visible": 4}
+    later = page.show(4)
+    assert later["springs"] == {"total": 3, "visible": 2} and later["particles"]["visible"] == 3
+    assert page.show(2)["springs"]["visible"] == 3  # and back
+    _assert_in_view(later)
+
+
+def _births_and_deaths(n=30, frames=10) -> kinema.Trajectory:
+    """Particle i is born at frame i // 4 and dies at frame 4 + i // 3 (some never die)."""
+    rng = np.random.default_rng(5)
+    born = np.arange(n) // 4
+    dies = 4 + np.arange(n) // 3
+    k = np.arange(frames)[:, None]
+    alive = (k >= born) & (k < dies)
+    positions = rng.uniform(0, 1, (1, n, 3)) + 0.05 * k[..., None] * rng.normal(size=(1, n, 3))
+    velocities = np.broadcast_to(rng.normal(size=(1, n, 3)), (frames, n, 3)).copy()
+    positions[~alive] = np.nan
+    velocities[~alive] = np.nan
+    return _traj(positions, velocities, alive=alive)
+
+
+@pytest.mark.parametrize("served", [False, True])
+def test_only_the_live_particles_are_drawn(open_page, served):
+    traj = _births_and_deaths()
+    page = open_page(traj, served=served)
+    for k in (0, 3, 5, 9):
+        info = page.show(k)
+        assert info["particles"] == {"total": 30, "visible": int(traj.alive[k].sum())}, k
+        assert info["inView"]["particles"]
+    assert "of 30 particles" in page.page.inner_text("#kinema-info")
+
+
+def test_dead_particles_leave_no_pixels(open_page, tmp_path):
+    # A 2D grid of 24 discs, still and well apart; disc i lives from frame i // 6 to frame
+    # 2 + i // 4: the discs one sees on the canvas are the live ones.
+    ndimage = pytest.importorskip("scipy.ndimage")
+    n, frames = 24, 6
+    xy = np.stack(np.meshgrid(np.arange(6), np.arange(4)), axis=-1).reshape(n, 2).astype(float)
+    positions = np.broadcast_to(np.concatenate([xy, np.zeros((n, 1))], axis=1), (frames, n, 3)).copy()
+    k = np.arange(frames)[:, None]
+    alive = (k >= np.arange(n) // 6) & (k <= 2 + np.arange(n) // 4)
+    positions[~alive] = np.nan
+    traj = _traj(positions, np.zeros_like(positions), alive=alive, dim=2, radii=np.full(n, 0.2))
+    page = open_page(traj, size=(800, 600))
+    page.page.select_option("#kinema-colour", "none")  # no legend over the view
+    for frame in (0, 2, 5):
+        info = page.show(frame)
+        image = page.pixels(tmp_path / f"alive{frame}.png")
+        lit = np.abs(image - np.array([16, 16, 20])).max(axis=2) > 40
+        _, blobs = ndimage.label(lit)
+        assert blobs == info["particles"]["visible"] == alive[frame].sum(), (frame, blobs)
+
+
+def test_the_page_carries_alive_as_bits_and_no_nan(tmp_path):
+    traj = _births_and_deaths()
+    data = _page_data(viewer.write_html(traj, tmp_path / "run.html").read_text(encoding="utf-8"))
+    frames, n = traj.alive.shape
+    bits = np.frombuffer(base64.b64decode(data["alive"]), dtype=np.uint8).reshape(frames, -1)
+    assert data["aliveBytes"] == bits.shape[1] == math.ceil(n / 8)
+    np.testing.assert_array_equal(np.unpackbits(bits, axis=1, bitorder="little")[:, :n].astype(bool), traj.alive)
+    positions = np.frombuffer(base64.b64decode(data["positions"]), dtype="<f4").reshape(frames, n, 3)
+    assert np.isfinite(positions).all() and not positions[~traj.alive].any()
+    np.testing.assert_allclose(positions[traj.alive], traj.positions[traj.alive], rtol=1e-6, atol=1e-6)
+    # The extent is the live particles' with their radii.
+    live = traj.positions[traj.alive]
+    np.testing.assert_allclose(data["extent"]["min"], live.min(axis=0) - 0.05, rtol=1e-9)
+    np.testing.assert_allclose(data["extent"]["max"], live.max(axis=0) + 0.05, rtol=1e-9)
+    # All alive: no mask at all (and the served data is as long as before).
+    plain = _page_data(viewer.write_html(_falling(), tmp_path / "plain.html").read_text(encoding="utf-8"))
+    assert plain["alive"] is None and plain["aliveBytes"] == 0 and plain["springs"] is None
+
+
+def test_springs_map_ids_to_columns_and_survive_left_out_particles(tmp_path):
+    traj = _chain()
+    packed = viewer_page.pack(traj, viewer_page.HTML_MAX_BYTES)
+    np.testing.assert_array_equal(packed.springs, [0, 1, 1, 2, 2, 3])
+    # Springs to an id the trajectory has not are dropped; with every other particle left
+    # out, only springs between kept particles remain, renumbered.
+    traj.springs = np.array([[10, 12], [11, 12], [10, 99]])
+    with pytest.warns(viewer.ViewerWarning):
+        packed = viewer_page.pack(traj, max_bytes=6 * 2 * 16)  # 6 frames of 2 particles
+    assert packed.meta["n"] == 2 and packed.meta["springCount"] == 1
+    np.testing.assert_array_equal(packed.springs, [0, 1])
+    body, layout = viewer_server._binary(packed)
+    start, count = layout["springs"]
+    np.testing.assert_array_equal(np.frombuffer(body, "<i4", count, start), [0, 1])
+    assert layout["alive"] is None  # the one particle that dies (id 13) is left out
+    # Served, the alive bits follow the rest, one byte per frame here (4 particles).
+    packed = viewer_page.pack(_chain(), viewer_page.SERVE_MAX_BYTES)
+    body, layout = viewer_server._binary(packed)
+    start, count = layout["alive"]
+    assert count == 6 and len(body) == start + 8  # padded to a multiple of 4 bytes
+    np.testing.assert_array_equal(np.frombuffer(body, np.uint8, count, start), [15, 15, 15, 7, 7, 7])
+
+
+def test_colliders_reach_the_page_without_infinities(tmp_path):
+    colliders = [
+        {"type": "box", "lo": [0, 0], "hi": [2, math.inf], "restitution": 0.5},
+        {"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 2]},
+        {"type": "sphere", "center": [0, 0, 3], "radius": 0.5},
+    ]
+    data = _page_data(viewer.write_html(_falling(colliders=colliders), tmp_path / "c.html").read_text(encoding="utf-8"))
+    assert data["colliders"] == [
+        {"type": "box", "lo": [0, 0, None], "hi": [2, None, None]},
+        {"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 2]},
+        {"type": "sphere", "center": [0, 0, 3], "radius": 0.5},
+    ]
+    # The extent holds the box's finite bounds and the sphere (not the open ones).
+    assert data["extent"]["min"][:2] == [-0.5, -0.5] and data["extent"]["max"][0] == 2 and data["extent"]["max"][2] == 3.5
+
+
+def test_unknown_velocities_give_no_speed_colouring(tmp_path):
+    # A file without velocities loads with NaN velocities: the page colours by id, not by a
+    # speed of 0 everywhere.
+    traj = _falling()
+    traj.velocities = np.full_like(traj.positions, np.nan)
+    data = _page_data(viewer.write_html(traj, tmp_path / "v.html").read_text(encoding="utf-8"))
+    assert data["speed"] is None and data["speedMin"] == data["speedMax"] == 0
+
+
+# --- The legend ---------------------------------------------------------------------------------
+
+
+def test_the_legend_names_the_colouring_and_its_range(open_page):
+    traj = _births_and_deaths()
+    speed = np.linalg.norm(traj.velocities, axis=2)[traj.alive]
+    page = open_page(traj)
+
+    def legend() -> tuple[str, float, float]:
+        assert page.page.is_visible("#kinema-legend")
+        label = page.page.inner_text("#kinema-legend-label")
+        return label, float(page.page.inner_text("#kinema-legend-min")), float(page.page.inner_text("#kinema-legend-max"))
+
+    label, low, high = legend()
+    assert label == "speed (m/s)" and page.info()["legend"]["label"] == label
+    assert low == pytest.approx(speed.min(), rel=5e-3) and high == pytest.approx(speed.max(), rel=5e-3)
+    page.page.select_option("#kinema-colour", "id")
+    assert legend() == ("particle id", 0, 29)
+    page.page.select_option("#kinema-colour", "none")
+    assert not page.page.is_visible("#kinema-legend") and page.info()["legend"] == {"shown": False}
+    page.page.select_option("#kinema-colour", "speed")
+    assert legend()[0] == "speed (m/s)"
+
+
+def test_own_colours_are_a_colouring_without_legend(open_page, tmp_path):
+    # An emitter's particles have their own colour (Trajectory.colors; NaN: none, drawn in
+    # the plain colour); "own colour" shows them and no legend.
+    positions = np.zeros((2, 3, 3))
+    positions[:, :, 0] = [0, 1, 2]
+    colors = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [np.nan, np.nan, np.nan]])
+    traj = _traj(positions, dim=2, radii=np.full(3, 0.3), colors=colors)
+    data = _page_data(viewer.write_html(traj, tmp_path / "c.html").read_text(encoding="utf-8"))
+    rgba = np.frombuffer(base64.b64decode(data["colors"]), dtype=np.uint8).reshape(3, 4)
+    np.testing.assert_array_equal(rgba, [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 0, 0]])
+    page = open_page(traj)
+    page.page.select_option("#kinema-colour", "color")
+    assert page.info()["legend"] == {"shown": False}
+    image = page.pixels(tmp_path / "own.png")
+    r, g, b = image[..., 0], image[..., 1], image[..., 2]
+    assert ((r > 150) & (g < 30) & (b < 30)).sum() > 100, "no red disc"
+    assert ((g > 150) & (r < 30) & (b < 30)).sum() > 100, "no green disc"
+    assert ((b > 150) & (r < 120) & (g > 80)).sum() > 100, "no disc in the plain colour"
+    # Without own colours there is no such choice.
+    plain = open_page(_falling())
+    assert plain.page.locator('#kinema-colour option[value="color"]').count() == 0
+
+
+# --- Framing ------------------------------------------------------------------------------------
+
+
+def _cradle() -> kinema.Trajectory:
+    """examples/scenes/newtons_cradle.toml (2D), shortened, with its strings: springs from the
+    pinned anchors (ids 0–4, the bar) to the balls (5–9)."""
+    world = kinema.load_scene(Path(__file__).resolve().parent.parent / "examples" / "scenes" / "newtons_cradle.toml")
+    traj = world.run(0.3, fps=20)
+    if traj.springs is None:  # (worlds that do not record their springs yet)
+        traj.springs = np.array([[i, i + 5] for i in range(5)])
+    return traj
+
+
+@pytest.mark.parametrize("scene", ["box and plane", "cradle"])
+def test_everything_is_in_view_at_a_wide_and_a_tall_aspect(open_page, scene):
+    if scene == "cradle":
+        traj = _cradle()
+    else:
+        colliders = [{"type": "plane", "point": [0, 0, -0.5], "normal": [0, 0, 1]}, {"type": "box", "lo": [0, 0, 0], "hi": [1, 1, 1.5]}]
+        traj = _falling(colliders=colliders)
+    frames = traj.t.size
+    page = open_page(traj, size=WIDE, frame=frames - 1)
+    for size in (WIDE, TALL):
+        info = page.resize(size) if size != WIDE else page.info()
+        assert info["canvas"]["width"] == size[0]
+        _assert_in_view(info)
+        for k in (0, frames // 2):
+            _assert_in_view(page.show(k))
+    if scene == "cradle":
+        assert info["springs"] == {"total": 5, "visible": 5} and info["particles"]["visible"] == 10
