@@ -121,7 +121,7 @@ class Isotropic(_Model):
 
 
 def _kind(v: Any) -> str:
-    if isinstance(v, dict):
+    if isinstance(v, (dict, BaseModel)):  # a table as read, or as a model when written back
         return "~dict"
     if isinstance(v, list):
         return "~list"
