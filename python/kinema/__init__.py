@@ -21,6 +21,7 @@ The public API (everything else is private):
   module ``kinema.render``
 - Scene files (TOML): ``load_scene``, ``Scene``, ``SceneError``, ``World.to_scene``; the
   module ``kinema.scene`` (docs/scenes.md)
+- Sweeps and ensembles on Dask: ``sweep``, ``SweepResult``; the module ``kinema.sweeps``
 - Measured orders of accuracy: ``convergence``, ``ConvergenceResult``, the module
   ``kinema.problems`` (problems with exact solutions)
 """
@@ -50,6 +51,7 @@ from .ode import (
 )
 from .render import Camera2D, Camera3D, render_frames, write_video
 from .scene import Scene, SceneError, load_scene
+from .sweeps import SweepResult, sweep
 from .trajectory import Trajectory
 from .world import SimulationDiverged, StabilityWarning, World
 
@@ -77,6 +79,8 @@ __all__ = [
     "SphereObstacle",
     "StabilityWarning",
     "Spring",
+    "sweep",
+    "SweepResult",
     "Trajectory",
     "io",
     "load_trajectory",

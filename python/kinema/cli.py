@@ -641,6 +641,46 @@ def export(
 
 @app.command()
 @_guarded
+def sweep(
+    scene: Annotated[Path, typer.Argument(help="Scene file (.toml): the base of every member.")],
+    vary: Annotated[
+        list[str] | None,
+        typer.Option("--vary", help="KEY=V1,V2,... : a scene key path and its values (TOML values); repeat for a grid."),
+    ] = None,
+    seeds: Annotated[int | None, typer.Option("--seeds", help="Members per point of the grid, each with its own seed (0 … N−1).", min=1)] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Sweep folder (default: out/<scene name>_sweep); rerun into it to resume.")] = None,
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help="A Dask scheduler's address (tcp://host:8786); default: worker processes here.")] = None,
+    workers: Annotated[int | None, typer.Option("--workers", help="Local worker processes (default: the cores).", min=1)] = None,
+    duration: Annotated[float | None, typer.Option(help="Simulated time of each member, s (default: the scene's).")] = None,
+) -> None:
+    """Run a parameter sweep or ensemble on Dask: every combination of the --vary values ×
+    --seeds, each member a scene with those keys set (validated first), run, saved (H5MD)
+    and measured. Writes summary.csv (one row per member), timings.csv and summary.png into
+    the folder; members already finished there are skipped (resume). See docs/sweeps.md."""
+    from .sweeps import parse_values
+    from .sweeps import sweep as run_sweep
+
+    grid = {}
+    for item in vary or []:
+        key, eq, values = item.partition("=")
+        if not eq or not key.strip():
+            raise ValueError(f"--vary {item!r}: use KEY=V1,V2,... (e.g. collisions.restitution=0.5,0.7,0.9)")
+        try:
+            grid[key.strip()] = parse_values(values)
+        except ValueError as e:
+            raise ValueError(f"--vary {item!r}: {e}") from None
+    folder = out if out is not None else Path("out") / f"{scene.stem}_sweep"
+    result = run_sweep(scene, grid, seeds=seeds, client=scheduler, out=folder, duration=duration, workers=workers)
+    failed = result.failed
+    console.print(f"{len(result.rows)} members, {len(failed)} failed; wrote {folder / 'summary.csv'}", highlight=False, soft_wrap=True)
+    for row in failed:
+        err_console.print(f"[bold red]failed:[/] {escape(row['member'])}: {escape(row['error'])}", highlight=False, soft_wrap=True)
+    if failed:
+        raise typer.Exit(1)
+
+
+@app.command()
+@_guarded
 def view(
     source: Annotated[Path, typer.Argument(help="A trajectory file (H5MD) or a scene (.toml, run first).")],
     html: Annotated[Path | None, typer.Option("--html", help="Write one self-contained page that plays offline, and exit.")] = None,

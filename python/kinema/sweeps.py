@@ -1,0 +1,415 @@
+"""Parameter sweeps and ensembles on Dask: the grid of a scene's varied values × seeds, each
+member run and measured on a ``dask.distributed`` cluster (local worker processes, a
+scheduler started by hand, or Slurm/PBS through dask-jobqueue), results in plain files.
+
+A sweep's folder::
+
+    sweep.json               what was asked: the scene, the varied keys and values, the seeds
+    members/<name>/          one folder per member: scene.toml (the member's scene),
+                             trajectory.h5 (H5MD), result.json (its measurements, or its error)
+    summary.csv              one row per member, in member order: the varied values, the seed,
+                             the measurements (the same bits wherever the members ran)
+    timings.csv              one row per member: its wall time and the worker that ran it
+    summary.png              each measurement against each varied key, mean ± spread over seeds
+
+A member is finished when its ``result.json`` exists (written last, atomically): a sweep run
+again into the same folder skips finished members and runs the others. A member whose worker
+dies is run again elsewhere (Dask's retries); a member that raises is recorded with its error
+and the others go on.
+
+Seeds: member seed s (0 … seeds − 1) gives every ``seed`` of the scene (particle blocks,
+their velocity tables, emitters) the value ``SeedSequence([seed, s])`` draws, so members
+differ and each is reproducible from (scene, s) alone.
+"""
+
+from __future__ import annotations
+
+import copy
+import csv
+import itertools
+import json
+import math
+import os
+import socket
+import time
+import tomllib
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .scene import Scene, SceneError
+
+#: The measurements every member reports (besides what ``measure`` returns).
+MEASURED = ("final_kinetic", "final_total", "energy_lost", "impacts", "frames")
+
+
+@dataclass(frozen=True)
+class Member:
+    """One run of a sweep: its index, folder name, varied values (key path → value), seed
+    index, and the scene as plain data with those set."""
+
+    index: int
+    name: str
+    values: dict[str, Any]
+    seed: int | None
+    scene: dict[str, Any]
+
+
+@dataclass
+class SweepResult:
+    """What a sweep gave: its folder, the members, and one row per member (``rows``: the
+    varied values, ``seed``, the measurements, ``error`` where it failed)."""
+
+    folder: Path
+    members: list[Member]
+    rows: list[dict[str, Any]]
+
+    @property
+    def failed(self) -> list[dict[str, Any]]:
+        return [r for r in self.rows if r.get("error")]
+
+
+# -- the grid ---------------------------------------------------------------------------------
+
+
+def _set_key(data: dict, key: str, value: Any, source: str) -> None:
+    """Sets ``data[a][b]...`` for the key path ``a.b...`` (a list index is a number:
+    ``particles.0.radius``); a table the scene does not have yet is made (``collisions``)."""
+    parts = key.split(".")
+    if not key or any(p == "" for p in parts):
+        raise SceneError(f"{source}: vary key {key!r} is invalid: use a dotted key path such as collisions.restitution")
+    node: Any = data
+    for depth, part in enumerate(parts[:-1]):
+        where = ".".join(parts[: depth + 1])
+        if isinstance(node, list):
+            if not part.isdigit() or int(part) >= len(node):
+                raise SceneError(f"{source}: vary key {key!r}: {where} is not an entry (the scene has {len(node)})")
+            node = node[int(part)]
+        else:
+            node = node.setdefault(part, {})
+            if not isinstance(node, (dict, list)):
+                raise SceneError(f"{source}: vary key {key!r}: {where} is a value, not a table")
+    last = parts[-1]
+    if isinstance(node, list):
+        raise SceneError(f"{source}: vary key {key!r} names a list entry, not a key of a table")
+    node[last] = value
+
+
+def _derived(base: int, s: int) -> int:
+    """Member s's seed from a scene's seed: independent streams for every (base, s)."""
+    return int(np.random.SeedSequence([int(base), s]).generate_state(1, np.uint64)[0] >> 1)
+
+
+def _seeded(data: dict, s: int) -> dict:
+    """The scene with every seed (particle blocks and their velocity tables, emitters)
+    replaced by member s's."""
+    out = copy.deepcopy(data)
+    for table in (*out.get("particles", []), *out.get("emitters", [])):
+        table["seed"] = _derived(table.get("seed", 0), s)
+        velocity = table.get("velocity")
+        if isinstance(velocity, dict) and velocity.get("seed") is not None:
+            velocity["seed"] = _derived(velocity["seed"], s)
+    return out
+
+
+def _value_name(v: Any) -> str:
+    text = json.dumps(v) if not isinstance(v, str) else v
+    return "".join(c if c.isalnum() or c in ".-+" else "_" for c in text)[:40]
+
+
+def members(scene: Scene | str | Path | dict, vary: dict[str, Iterable[Any]] | None = None, seeds: int | None = None) -> list[Member]:
+    """The sweep's members, each scene validated (a bad key or value is a ``SceneError``
+    naming the member and the key) before anything runs."""
+    base, source = _scene_data(scene)
+    vary = {k: list(v) for k, v in (vary or {}).items()}
+    for key, values in vary.items():
+        if not values:
+            raise SceneError(f"{source}: vary key {key!r} has no values")
+    seed_list: list[int | None] = [None] if not seeds else list(range(int(seeds)))
+    out = []
+    for index, (combo, s) in enumerate(itertools.product(itertools.product(*vary.values()), seed_list)):
+        values = dict(zip(vary.keys(), combo, strict=True))
+        data = copy.deepcopy(base) if s is None else _seeded(base, s)
+        for key, value in values.items():
+            _set_key(data, key, value, source)
+        name = "_".join(f"{k.split('.')[-1]}={_value_name(v)}" for k, v in values.items()) or "member"
+        name = f"{index:04d}_{name}" + ("" if s is None else f"_seed={s}")
+        try:
+            Scene.from_dict(data, f"{source} [member {name}]")
+        except SceneError as err:
+            raise SceneError(str(err)) from None
+        out.append(Member(index, name, values, s, data))
+    return out
+
+
+def _scene_data(scene: Scene | str | Path | dict) -> tuple[dict, str]:
+    if isinstance(scene, Scene):
+        return scene.model_dump(mode="python", exclude_none=True), "<scene>"
+    if isinstance(scene, dict):
+        return Scene.from_dict(scene).model_dump(mode="python", exclude_none=True), "<scene>"
+    path = Path(scene)
+    return Scene.from_toml(path).model_dump(mode="python", exclude_none=True), str(path)
+
+
+# -- one member -------------------------------------------------------------------------------
+
+
+def run_member(member: Member, folder: str, duration: float | None, measure: Callable | bytes | None) -> dict[str, Any]:
+    """Runs one member in this process and writes its folder; returns its row. Never raises
+    for the member's own failure (the row has ``error``): only a dying worker is retried."""
+    import traceback
+
+    from .io._files import atomic_file
+
+    if isinstance(measure, bytes):  # sent by cloudpickle (see _run_all)
+        import cloudpickle
+
+        measure = cloudpickle.loads(measure)
+    where = Path(folder) / "members" / member.name
+    where.mkdir(parents=True, exist_ok=True)
+    row: dict[str, Any] = {"member": member.name, **member.values, "seed": member.seed}
+    start = time.perf_counter()
+    try:
+        scene = Scene.from_dict(member.scene, member.name)
+        scene.to_toml(where / "scene.toml")
+        world = scene.build(member.name)
+        seconds = scene.world.duration if duration is None else duration
+        traj = world.run(seconds, fps=scene.world.fps)
+        traj.save(where / "trajectory.h5")
+        stats = world.collision_stats()
+        row.update(
+            final_kinetic=float(traj.kinetic[-1]),
+            final_total=float(traj.total[-1]),
+            energy_lost=float(traj.collision_energy_lost[-1]),
+            impacts=int(stats["total"]["impacts"]) if stats else 0,
+            frames=len(traj.t),
+        )
+        if measure is not None:
+            extra = measure(traj, world)
+            if not isinstance(extra, dict):
+                raise TypeError(f"measure returned {type(extra).__name__}; it must return a dict of name → number")
+            row.update({str(k): _plain(v) for k, v in extra.items()})
+        row["error"] = ""
+    except Exception as err:  # the member's failure is its result
+        row["error"] = f"{type(err).__name__}: {err}".replace("\n", " ")
+        (where / "error.txt").write_text(traceback.format_exc())
+    timing = {"wall_s": time.perf_counter() - start, "host": socket.gethostname(), "pid": os.getpid()}
+    with atomic_file(where / "result.json") as tmp:
+        tmp.write_text(json.dumps({"row": row, "timing": timing}, indent=1))
+    return {"row": row, "timing": timing}
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, (np.floating, np.integer, np.bool_)):
+        return v.item()
+    return v
+
+
+# -- the sweep --------------------------------------------------------------------------------
+
+
+def sweep(
+    scene: Scene | str | Path | dict,
+    vary: dict[str, Iterable[Any]] | None = None,
+    seeds: int | None = None,
+    measure: Callable[[Any, Any], dict] | None = None,
+    client: Any = None,
+    out: str | Path = "sweep",
+    duration: float | None = None,
+    workers: int | None = None,
+    progress: bool = True,
+    plot: bool = True,
+) -> SweepResult:
+    """Run the grid of ``vary`` (key path → values) × ``seeds`` on Dask; see the module doc.
+
+    ``client``: a ``distributed.Client`` or a scheduler address (``"tcp://host:8786"``);
+    None starts a ``LocalCluster`` of ``workers`` processes (default: the cores, at most
+    the members) with one thread each, or runs a single member in this process.
+    ``measure(trajectory, world) -> dict`` adds measurements (it must be importable by the
+    workers: a module-level function). ``duration`` overrides the scene's."""
+    folder = Path(out)
+    grid = members(scene, vary, seeds)
+    folder.mkdir(parents=True, exist_ok=True)
+    asked = {"scene": _scene_data(scene)[0], "vary": {k: list(v) for k, v in (vary or {}).items()}, "seeds": seeds, "duration": duration}
+    (folder / "sweep.json").write_text(json.dumps(asked, indent=1, default=str))
+    results: dict[int, dict] = {}
+    todo = []
+    for m in grid:
+        done = folder / "members" / m.name / "result.json"
+        if done.exists():
+            results[m.index] = json.loads(done.read_text())
+        else:
+            todo.append(m)
+    if todo:
+        results.update(_run_all(todo, folder, duration, measure, client, workers, progress))
+    rows = [results[m.index]["row"] for m in grid]
+    _write_csv(folder / "summary.csv", rows)
+    _write_csv(folder / "timings.csv", [{"member": m.name, **results[m.index]["timing"]} for m in grid])
+    if plot and vary:
+        _plot(folder / "summary.png", rows, list(vary))
+    return SweepResult(folder, grid, rows)
+
+
+def _run_all(todo: list[Member], folder: Path, duration, measure, client, workers, progress) -> dict[int, dict]:
+    if client is None and len(todo) == 1:
+        return {todo[0].index: run_member(todo[0], str(folder), duration, measure)}
+    from distributed import Client, LocalCluster, as_completed
+
+    own = None
+    if client is None:
+        n = max(1, min(workers or os.cpu_count() or 1, len(todo)))
+        threads = max(1, (os.cpu_count() or 1) // n)
+        # one thread per worker for Dask, the engine's own threads split among them
+        own = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", env={"RAYON_NUM_THREADS": str(threads)})
+        client = Client(own)
+    elif isinstance(client, str):
+        client = own = Client(client)
+    # Dask pickles a task with the standard pickle first, which sends a function by its
+    # module's name; cloudpickle honours cloudpickle.register_pickle_by_value (and sends a
+    # function of __main__ by value), so a measure from a script reaches the workers.
+    if measure is not None:
+        import cloudpickle
+
+        measure = cloudpickle.dumps(measure)
+    try:
+        futures = {
+            client.submit(run_member, m, str(folder.resolve()), duration, measure, key=f"kinema-member-{m.name}-{os.getpid()}", retries=2, pure=False): m
+            for m in todo
+        }
+        out: dict[int, dict] = {}
+        bar = _bar(progress, len(futures))
+        for future in as_completed(futures):
+            m = futures[future]
+            try:
+                out[m.index] = future.result()
+            except Exception as err:  # the worker died more often than the retries
+                row = {"member": m.name, **m.values, "seed": m.seed, "error": f"{type(err).__name__}: {err}"}
+                out[m.index] = {"row": row, "timing": {"wall_s": math.nan, "host": "", "pid": 0}}
+            bar.advance(m.name)
+        bar.close()
+        return out
+    finally:
+        if own is not None:
+            client.close()
+            if hasattr(own, "close"):
+                own.close()
+
+
+class _bar:
+    """A rich progress bar over the members (or nothing)."""
+
+    def __init__(self, show: bool, total: int) -> None:
+        self.progress = None
+        if show:
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+            self.progress = Progress(TextColumn("sweep"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TextColumn("{task.description}"))
+            self.progress.start()
+            self.task = self.progress.add_task("", total=total)
+
+    def advance(self, name: str) -> None:
+        if self.progress is not None:
+            self.progress.update(self.task, advance=1, description=name)
+
+    def close(self) -> None:
+        if self.progress is not None:
+            self.progress.stop()
+
+
+# -- results ----------------------------------------------------------------------------------
+
+
+def _write_csv(path: Path, rows: list[dict[str, Any]]) -> None:
+    from .io._files import atomic_file
+
+    columns = list(dict.fromkeys(k for r in rows for k in r))
+    if "error" in columns:  # last, where it reads best
+        columns.remove("error")
+        columns.append("error")
+    with atomic_file(path) as tmp, open(tmp, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: _cell(r.get(k, "")) for k in columns})
+
+
+def _cell(v: Any) -> Any:
+    if isinstance(v, float):
+        return repr(v)  # every bit: the shortest text that reads back as the same float
+    if isinstance(v, (list, dict)):
+        return json.dumps(v)
+    return "" if v is None else v
+
+
+def _plot(path: Path, rows: list[dict[str, Any]], keys: list[str]) -> None:
+    """Each numeric measurement against each varied key: the mean over the other values and
+    seeds with its standard deviation as error bars, and the members as dots."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .cli import save_figure_atomically
+
+    ok = [r for r in rows if not r.get("error")]
+    skip = {"member", "seed", "error", *keys}
+    names = [k for k in dict.fromkeys(k for r in ok for k in r) if k not in skip and all(_number(r.get(k)) for r in ok)]
+    if not ok or not names:
+        return
+    numeric_keys = [k for k in keys if all(_number(r[k]) for r in ok)]
+    if not numeric_keys:
+        return
+    fig, axes = plt.subplots(len(names), len(numeric_keys), figsize=(4.2 * len(numeric_keys), 2.6 * len(names)), squeeze=False)
+    for i, name in enumerate(names):
+        for j, key in enumerate(numeric_keys):
+            ax = axes[i][j]
+            xs = np.array([float(r[key]) for r in ok])
+            ys = np.array([float(r[name]) for r in ok])
+            ax.plot(xs, ys, ".", color="0.6", ms=4)
+            ux = np.unique(xs)
+            mean = np.array([ys[xs == u].mean() for u in ux])
+            spread = np.array([ys[xs == u].std() for u in ux])
+            ax.errorbar(ux, mean, yerr=spread, fmt="o-", color="C0", capsize=3)
+            ax.set_xlabel(key)
+            ax.set_ylabel(name)
+            ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    save_figure_atomically(fig, path)
+    plt.close(fig)
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(float(v))
+
+
+def parse_values(text: str) -> list[Any]:
+    """``V1,V2,...`` of the command line: each a TOML value (0.5, 3, true, "verlet", [0, 0, 1]);
+    commas inside brackets or quotes do not split; a bare word is a string."""
+    items, depth, quote, cur = [], 0, None, ""
+    for c in text:
+        if quote:
+            quote = None if c == quote else quote
+        elif c in "\"'":
+            quote = c
+        elif c in "[{":
+            depth += 1
+        elif c in "]}":
+            depth -= 1
+        elif c == "," and depth == 0:
+            items.append(cur)
+            cur = ""
+            continue
+        cur += c
+    items.append(cur)
+    out = []
+    for item in (i.strip() for i in items):
+        if not item:
+            raise ValueError(f"{text!r} has an empty value: use V1,V2,... (TOML values)")
+        try:
+            out.append(tomllib.loads(f"v = {item}")["v"])
+        except tomllib.TOMLDecodeError:
+            out.append(item)  # a bare word: a string (method names)
+    return out
