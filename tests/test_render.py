@@ -341,14 +341,15 @@ def test_a_trajectory_maps_its_spring_ids_to_columns_and_renders_its_births(tmp_
 
 
 def test_the_legend_is_a_colour_bar_in_the_top_right_corner():
-    # Particles in the lower left quarter; the legend's corner is the top right quarter.
+    # Particles in the lower left; the legend goes into the top right corner, on the row of the
+    # time stamp (none here).
     x = np.zeros((2, 3, 3))
     x[:, :, 0] = [0.0, 0.5, 1.0]
     x[1, :, 1] = [0.0, 1.0, 2.0]  # moving: speeds 0, 1, 2
     cam = Camera2D(0.0, 0.0, 4.0, 3.0)
     kw = dict(dim=2, camera=cam, width=320, height=240, time_format=None)
     top, bottom = (tuple(c) for c in _core.colormap(np.array([1.0, 0.0]), "magma", 0.0, 1.0))
-    corner = (slice(0, 160), slice(160, 320))
+    corner = (slice(0, 60), slice(100, 320))
 
     def colours(frame):
         return {tuple(c) for c in frame[corner].reshape(-1, 3)}
@@ -357,11 +358,13 @@ def test_the_legend_is_a_colour_bar_in_the_top_right_corner():
     with_legend = next(render_frames(x, 0.1, [0.0, 1.0], colormap="magma", **kw))
     assert {top, bottom} <= colours(with_legend), "the bar's ends are the colormap's ends"
     bar = np.nonzero((with_legend == top).all(axis=2))
-    assert bar[0].size and bar[0].max() < 160 and bar[1].min() >= 160, "in the top right corner"
+    assert bar[0].size and bar[0].max() < 60 and bar[1].min() >= 100, "in the top right corner"
+    low = np.nonzero((with_legend == bottom).all(axis=2))
+    assert low[1].max() < bar[1].min(), "the bottom colour on the left, the top colour on the right"
     assert np.any(with_legend[corner] < 100), "with dark text"
     without = next(render_frames(x, 0.1, [0.0, 1.0], colormap="magma", legend=False, **kw))
     assert colours(without) == {(255, 255, 255)}
-    assert (with_legend[:, :160] == without[:, :160]).all(), "the legend changes only its corner"
+    assert (with_legend[:, :100] == without[:, :100]).all() and (with_legend[60:] == without[60:]).all(), "only its corner"
     # Fixed colours and ids have no legend; a label names the quantity.
     by_id = next(render_frames(x, 0.1, [0.0, 1.0], color_by="id", **kw))
     assert colours(by_id) == {(255, 255, 255)}

@@ -155,8 +155,9 @@ def render_frames(
     legend: when the particles are coloured by a quantity (speed or a field of values; not
       ids or fixed colours), a colour bar from ``vmin`` to ``vmax`` with the quantity's name
       and units ("speed (m/s)"; a string gives them, e.g. "temperature (K)"; a field is
-      "value" otherwise) in the top right corner, its text sized by ``label_scale``. False:
-      none. It is left out of frames under 160 × 120 pixels, which have no room for it.
+      "value" otherwise) in the top right corner, beside the time stamp, its text as tall
+      (``label_scale``). False: none. It is left out of frames under 160 × 120 pixels or too
+      narrow for it, which have no room for it.
     """
     if dim not in (2, 3):
         raise ValueError(f"dim = {dim!r} is invalid: use 2 (discs in the xy-plane) or 3 (spheres)")
@@ -192,9 +193,13 @@ def render_frames(
     key = None
     if legend is not False and legend is not None and colors is None and width >= 160 and height >= 120:
         name = legend if isinstance(legend, str) else ("speed (m/s)" if isinstance(color_by, str) else "value")
-        key = _Legend(name, colormap, vmin, vmax, int(width), int(height), int(label_scale), label_color, bg)
+        stamp = max((len(time_format.format(v)) for v in times), default=0) if time_format is not None else 0
+        key = _Legend(name, colormap, vmin, vmax, int(width), int(height), int(label_scale), label_color, bg, stamp)
+        if not key.fits:  # a frame too narrow for the name, the values and a bar
+            key = None
     if camera is None:
-        camera = _auto_camera(lo, hi, dim, width, height, avoid=key.box if key is not None else None)
+        points = _frame_corners(x, r, scenery, lo, hi) if dim == 3 else None
+        camera = _auto_camera(lo, hi, dim, width, height, avoid=key.box if key is not None else None, points=points)
     elif dim == 2 and not isinstance(camera, Camera2D) or dim == 3 and not isinstance(camera, Camera3D):
         raise ValueError(f"camera = {camera!r} is invalid: dim={dim} needs a Camera{dim}D")
     common = dict(
@@ -287,59 +292,60 @@ def _springs(springs, n: int) -> np.ndarray:
 
 
 class _Legend:
-    """A colour bar, drawn into frames: the quantity's name over a vertical bar of the
-    colormap (``vmax`` at the top, ``vmin`` at the bottom, each end labelled), on a panel of
-    the background colour (3/4 opaque) in the top right corner. Pillow draws it once, text in
-    DejaVu Sans (matplotlib's); each frame gets it by blending, ``box`` (x0, y0, x1, y1) pixels
-    being where it goes."""
+    """A colour bar, drawn into frames: in the top right corner, on the time stamp's row (or
+    under it where the row is too short for both), the quantity's name, ``vmin``, a horizontal
+    bar of the colormap (its bottom colour on the left, its top colour on the right) and
+    ``vmax``, on a panel of the background colour (3/4 opaque). Pillow draws it once, its text
+    in DejaVu Sans (matplotlib's) as tall as the time stamp; each frame gets it by blending,
+    ``box`` (x0, y0, x1, y1) pixels being where it goes."""
 
-    def __init__(self, name, colormap, vmin, vmax, width, height, scale, ink, background):
+    def __init__(self, name, colormap, vmin, vmax, width, height, scale, ink, background, stamp_chars=0):
         from PIL import Image, ImageDraw
 
-        size = max(9, round(7.5 * max(scale, 1)))  # the time stamp's height at this scale
+        scale = max(scale, 1)
+        size = max(9, 7 * scale)  # the time stamp's glyphs are 7 font pixels of `scale` tall
         font = _legend_font(size)
-        margin, pad, gap = 4 * max(scale, 1), max(3, size // 4), max(3, size // 3)
-        top_text, bottom_text = f"{vmax:.3g}", f"{vmin:.3g}"
+        margin, pad, gap = 4 * scale, max(2, size // 5), max(3, size // 3)
+        low, high = f"{vmin:.3g}", f"{vmax:.3g}"
         probe = ImageDraw.Draw(Image.new("L", (1, 1)))
-
-        def extent(text):
-            x0, y0, x1, y1 = probe.textbbox((0, 0), text, font=font)
-            return x1 - x0, y1 - y0
-
-        (name_w, _), num_w = extent(name), max(extent(top_text)[0], extent(bottom_text)[0])
-        bar_w = max(6, round(0.8 * size))
-        bar_h = int(min(max(0.36 * height, 3 * size), 400, height - 2 * margin - 4 * size))
-        pw = max(name_w, bar_w + gap + num_w) + 2 * pad
-        # The end values are centred on the bar's ends: half a line above and below it.
-        ph = pad + size + gap + size // 2 + bar_h + size // 2 + pad
-        self.box = (width - margin - pw, margin, width - margin, margin + ph)
+        name_w, low_w, high_w = (round(probe.textlength(text, font=font)) for text in (name, low, high))
+        bar_w, bar_h = int(min(max(0.2 * width, 40), 240)), max(6, round(0.75 * size))
+        pw = pad + name_w + 2 * gap + low_w + gap + bar_w + gap + high_w + pad
+        ph = size + size // 3 + 2 * pad
+        x0 = width - margin - pw
+        # On the stamp's row, centred on it, unless the two would meet; then under it.
+        y0 = max(0, round(margin + 3.5 * scale - 0.5 * ph))
+        if stamp_chars and x0 < margin + 6 * scale * stamp_chars + 2 * margin:
+            y0 = margin + 7 * scale + margin
+        self.box = (x0, y0, x0 + pw, y0 + ph)
         # out = frame·(1 − A) + C over the panel: A the opacity, C the colour times it.
         opacity = np.full((ph, pw, 1), 0.75, np.float32)
         colour = opacity * np.asarray(background, np.float32)
         mask = Image.new("L", (pw, ph), 0)
         draw = ImageDraw.Draw(mask)
-        draw.text((pw - pad, pad), name, fill=255, font=font, anchor="ra")
-        bx1 = pw - pad - num_w - gap
-        bx0, by0 = bx1 - bar_w, pad + size + gap + size // 2
-        draw.text((bx1 + gap, by0), top_text, fill=255, font=font, anchor="lm")
-        draw.text((bx1 + gap, by0 + bar_h - 1), bottom_text, fill=255, font=font, anchor="lm")
+        cy = ph // 2
+        draw.text((pad, cy), name, fill=255, font=font, anchor="lm")
+        bx0 = pad + name_w + 2 * gap + low_w + gap
+        draw.text((bx0 - gap, cy), low, fill=255, font=font, anchor="rm")
+        draw.text((bx0 + bar_w + gap, cy), high, fill=255, font=font, anchor="lm")
         m = np.asarray(mask, np.float32)[:, :, None] / 255.0
         colour = colour * (1.0 - m) + m * np.asarray(ink, np.float32)
         opacity = opacity * (1.0 - m) + m
-        # The bar, opaque: top row the colormap's top colour, bottom row its bottom colour.
-        ramp = _core.colormap(np.linspace(1.0, 0.0, bar_h), colormap, 0.0, 1.0).astype(np.float32)
-        colour[by0 : by0 + bar_h, bx0:bx1] = ramp[:, None, :]
-        opacity[by0 : by0 + bar_h, bx0:bx1] = 1.0
+        # The bar, opaque: left column the colormap's bottom colour, right column its top colour.
+        by0 = cy - bar_h // 2
+        ramp = _core.colormap(np.linspace(0.0, 1.0, bar_w), colormap, 0.0, 1.0).astype(np.float32)
+        colour[by0 : by0 + bar_h, bx0 : bx0 + bar_w] = ramp[None, :, :]
+        opacity[by0 : by0 + bar_h, bx0 : bx0 + bar_w] = 1.0
         edge = np.asarray([128, 128, 128], np.float32)
         for rows, cols in (
-            (slice(by0 - 1, by0), slice(bx0 - 1, bx1 + 1)),
-            (slice(by0 + bar_h, by0 + bar_h + 1), slice(bx0 - 1, bx1 + 1)),
+            (slice(by0 - 1, by0), slice(bx0 - 1, bx0 + bar_w + 1)),
+            (slice(by0 + bar_h, by0 + bar_h + 1), slice(bx0 - 1, bx0 + bar_w + 1)),
             (slice(by0, by0 + bar_h), slice(bx0 - 1, bx0)),
-            (slice(by0, by0 + bar_h), slice(bx1, bx1 + 1)),
+            (slice(by0, by0 + bar_h), slice(bx0 + bar_w, bx0 + bar_w + 1)),
         ):
             colour[rows, cols], opacity[rows, cols] = edge, 1.0
         self._opacity, self._colour = opacity, colour
-        self.bar = (bx0 + self.box[0], by0 + self.box[1], bx1 + self.box[0], by0 + bar_h + self.box[1])
+        self.fits = x0 >= 0 and y0 + ph <= height
 
     def draw(self, frame: np.ndarray) -> None:
         x0, y0, x1, y1 = self.box
@@ -500,18 +506,46 @@ def _extent(x, r, scenery):
 _VIEW_FROM = (1.0, -1.6, 0.9)
 
 
-def _auto_camera(lo, hi, dim, width, height, avoid=None, fov_deg: float = 40.0):
-    """The camera that fits the box [lo, hi] into the frame to ``FRAME_MARGIN`` of its sides
-    (2D: the xy rectangle, orthographic; 3D: the 8 corners, seen from ``_VIEW_FROM``). When
-    the scene would overlap ``avoid`` (x0, y0, x1, y1 pixels: the legend), it is fitted
-    either left of it or below it, whichever leaves it larger."""
+def _frame_corners(x, r, scenery, lo, hi) -> np.ndarray:
+    """(P, 3): the corners of each frame's box of its live particles (radii included) and of
+    each collider's finite box (a box's infinite bounds at the extent [lo, hi], a sphere's
+    cube). Each frame's box, not one over all frames, so that a scene whose parts sit apart
+    in space and time (a cloth above a sphere, then draped on it) is framed by what it shows:
+    the box around all of it has empty corners that would take room in the frame."""
+    live = np.all(np.isfinite(x), axis=2)
+    rows = live.any(axis=1)
+    boxes = []
+    if rows.any():
+        xr = x[rows]
+        low = np.where(live[rows][:, :, None], xr - r[None, :, None], np.inf).min(axis=1)
+        high = np.where(live[rows][:, :, None], xr + r[None, :, None], -np.inf).max(axis=1)
+        boxes += list(zip(low, high, strict=True))
+    for kind, v in scenery:
+        if kind == "box":
+            a, b = np.array(v[:3], float), np.array(v[3:], float)
+            boxes.append((np.where(np.isfinite(a), a, lo), np.where(np.isfinite(b), b, hi)))
+        elif kind == "sphere":
+            c, radius = np.array(v[:3], float), float(v[3])
+            boxes.append((c - radius, c + radius))
+    if not boxes:
+        return _corners(lo, hi)
+    return np.concatenate([_corners(a, b) for a, b in boxes])
+
+
+def _auto_camera(lo, hi, dim, width, height, avoid=None, fov_deg: float = 40.0, points=None):
+    """The camera that fits the scene into the frame to ``FRAME_MARGIN`` of its sides (2D: the
+    xy rectangle of the box [lo, hi], orthographic; 3D: ``points``, by default the 8 corners
+    of [lo, hi], seen from ``_VIEW_FROM``, both fields of view fitted). When the scene would
+    overlap ``avoid`` (x0, y0, x1, y1 pixels: the legend), it is fitted either between it and
+    its mirror image on the left or below it, whichever leaves it larger."""
     m = _core.FRAME_MARGIN
     w, h = float(width), float(height)
 
     def fit(window):
         if dim == 2:
             return _fit_2d(lo, hi, w, h, window)
-        eye, target, up, box = _core.frame_points(_corners(lo, hi), _VIEW_FROM, fov_deg, int(width), int(height), window)
+        pts = _corners(lo, hi) if points is None else points
+        eye, target, up, box = _core.frame_points(pts, _VIEW_FROM, fov_deg, int(width), int(height), window)
         return Camera3D(tuple(eye), tuple(target), tuple(up), fov_deg), box
 
     full = (m * w, m * h, (1.0 - m) * w, (1.0 - m) * h)
@@ -519,7 +553,10 @@ def _auto_camera(lo, hi, dim, width, height, avoid=None, fov_deg: float = 40.0):
     if avoid is None or not (box[0] < avoid[2] and avoid[0] < box[2] and box[1] < avoid[3] and avoid[1] < box[3]):
         return camera
     best, area = camera, 0.0
-    for window in ((full[0], full[1], avoid[0] - m * w, full[3]), (full[0], avoid[3] + m * h, full[2], full[3])):
+    # Beside it: a window narrowed on both sides, so that the view stays centred (a scene off
+    # the axis of a perspective camera leans); under it: the rows below the legend.
+    side = w - avoid[0] + m * w
+    for window in ((side, full[1], w - side, full[3]), (full[0], avoid[3] + m * h, full[2], full[3])):
         if window[2] - window[0] < 0.3 * w or window[3] - window[1] < 0.3 * h:
             continue
         c, b = fit(window)
