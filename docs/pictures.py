@@ -2,22 +2,21 @@
 
 Every scene of examples/scenes/*.toml is loaded with ``kinema.load_scene``, run for its own
 [world] duration at its own frame rate (none is shortened; the slowest is sand_box), and drawn
-by kinema's own renderer (``kinema.render_frames``) with the scene's [render] colouring,
-colormap and background, its camera where it has one (demo; billiards_2d's, 1 cm wider so that
-the cushions show whole; the others are framed on their particles and obstacles) and its
-colliders (``colliders=traj.colliders``): the floor of bouncing_balls (seen level with it, as a
-line), the boxes of demo and maxwell_gas, the cushions of billiards_2d, the sphere under the
-cloth of cloth_on_sphere, and the box of sand_box, which has no lid, drawn 0.4 m high. A few
-frames are put side by side with Pillow under titles that carry the time, and one caption line
-with numbers measured in the run is printed per scene, for the README.
-
-Drawn over the rendered frames with Pillow, through a copy of the renderer's projection
-(``View``), is what the renderer has no notion of: the strings and the ceiling of
-newtons_cradle (its pinned anchors, which have no radius, are drawn as 12 mm pins), the
-predicted rebound heights e²·h of bouncing_balls, the paths of the balls since t = 0 in the
-last billiards frame (in lighter colours), and the stretch springs of the cloth (between nodes
-that the sphere does not hide). Colour bars for the scenes coloured by speed come from
-matplotlib's colormap of the same name.
+by kinema's own renderer alone (``kinema.render_frames``) with the scene's [render] colouring,
+colormap and background, and with what the renderer draws besides the particles: the
+colliders (``colliders=traj.colliders``: the floor of bouncing_balls, seen level with it, as a
+line; the boxes of demo and maxwell_gas; the cushions of billiards_2d; the sphere under the
+cloth; the box of sand_box, which has no lid, drawn 0.4 m high), the springs (``springs=``:
+the strings of newtons_cradle, whose pinned anchors have no radius and are drawn as 12 mm pins,
+and the cloth's springs) and the colour bar of the scenes coloured by speed (``legend=``, in
+every panel, as in a video). Cameras are the renderer's default (one ``render_frames`` call per
+camera, so the panels it draws share it: the particles of those frames and the colliders fill
+the frame, clear of the colour bar), except for bouncing_balls (``kinema.Camera3D.framing`` of
+the balls and their mirror images under the floor, which puts the eye level with the floor)
+and billiards_2d (the scene's own camera, 1 cm wider so that the cushions show whole). Nothing
+is drawn over the rendered frames: they are cut to the rows or columns they use, put side by
+side with Pillow under titles that carry the time, and one caption line with numbers measured
+in the run is printed per scene, for the README.
 
 kepler_euler, kepler_rk4 and kepler_verlet make one matplotlib figure together,
 scene_kepler.png (the planet's x–y path over the run against the closed-form orbit in grey).
@@ -86,10 +85,11 @@ def scene_camera(world):
     return kinema.Camera3D(tuple(table.eye), tuple(table.target), tuple(table.up), table.fov_deg)
 
 
-def render(sc, traj, frames, *, width, height, camera, colliders=None, radius=None, vmax=None):
+def render(sc, traj, frames, *, width, height, camera, colliders=None, radius=None, vmax=None, springs=None, legend=False):
     """The recorded frames (indices) of ``traj`` as images, coloured as the scene's [render]
     table ``sc`` says (speed from 0 to ``vmax``), with the trajectory's colliders (or
-    ``colliders``) drawn by the renderer; ``radius`` replaces the recorded radii."""
+    ``colliders``) and ``springs`` drawn by the renderer, and its colour bar when ``legend``;
+    ``radius`` replaces the recorded radii."""
     out = kinema.render_frames(
         traj.positions[frames],
         traj.radii if radius is None else radius,
@@ -106,6 +106,8 @@ def render(sc, traj, frames, *, width, height, camera, colliders=None, radius=No
         background=tuple(sc.background),
         time_format=None,  # the time goes into the panel's title
         colliders=traj.colliders if colliders is None else colliders,
+        springs=springs,
+        legend=legend,
     )
     return [np.array(f) for f in out]
 
@@ -114,89 +116,19 @@ def speed_max(traj, frames=slice(None)) -> float:
     return float(np.linalg.norm(traj.velocities[frames], axis=2).max())
 
 
-# -- where a world point lands on the image -----------------------------------------------------
+def springs_of(world, traj) -> np.ndarray | None:
+    """The springs as pairs of particle indices: the trajectory's (ids, which are the indices
+    of a world without births) or else the world's Spring forces."""
+    if traj.springs is not None and len(traj.springs):
+        return traj.springs
+    pairs = [np.stack([np.ravel(f.i), np.ravel(f.j)], axis=1) for f in world.forces if isinstance(f, kinema.Spring)]
+    return np.concatenate(pairs).astype(np.int64) if pairs else None
 
 
-class View:
-    """Where world points (m) land on a rendered image: a copy of the renderer's mapping,
-    ``Camera::fit_2d``, ``Camera::projector`` and ``Projector::project`` in
-    crates/kinema/src/render/camera.rs, which Python cannot call. It is needed for what is
-    drawn over the rendered frames (strings, springs, rebound marks, paths) and to frame a
-    camera tightly on points (``fit_camera``). ``view(points)`` gives the (P, 2) pixels (x
-    right, y down; pixel centres at +0.5) and the (P,) depths along the view axis (m; 1 for a
-    2D camera)."""
-
-    def __init__(self, camera, width: int, height: int):
-        self.width, self.height = width, height
-        if isinstance(camera, kinema.Camera2D):
-            self.s = min(width / (camera.xmax - camera.xmin), height / (camera.ymax - camera.ymin))
-            self.centre = np.array([0.5 * (camera.xmin + camera.xmax), 0.5 * (camera.ymin + camera.ymax), 0.0])
-            self.right, self.up = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
-            self.forward = None
-            return
-        self.eye = np.asarray(camera.eye, dtype=float)
-        self.forward = np.asarray(camera.target, dtype=float) - self.eye
-        self.forward /= np.linalg.norm(self.forward)
-        self.right = np.cross(self.forward, camera.up)
-        self.right /= np.linalg.norm(self.right)
-        self.up = np.cross(self.right, self.forward)
-        self.f = 0.5 * height / np.tan(0.5 * np.radians(camera.fov_deg))
-
-    def __call__(self, points):
-        p = np.atleast_2d(np.asarray(points, dtype=float))
-        if self.forward is None:
-            d, z = p - self.centre, np.ones(len(p))
-            k = self.s
-        else:
-            d = p - self.eye
-            z = d @ self.forward
-            k = (self.f / z)[:, None]
-        return np.stack([d @ self.right, -(d @ self.up)], axis=1) * k + [0.5 * self.width, 0.5 * self.height], z
-
-
-def fit_camera(points, radius, direction, width: int, height: int, fov_deg: float = 30.0, fill: float = 0.94):
-    """A Camera3D looking from ``direction`` (target → eye) whose image the points (m), as
-    spheres of ``radius`` (m), fill to ``fill`` of the tighter side, centred: the camera of
-    ``Camera3D.framing`` moved across the view and along it until the projected extent fits."""
+def framing(points, radius, direction, width: int, height: int, margin: float = 0.03):
+    """``kinema.Camera3D.framing`` of the box around the points (m) as spheres of ``radius``."""
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
-    rad = np.broadcast_to(np.asarray(radius, dtype=float), (len(pts),))
-    cam = kinema.Camera3D.framing(pts.min(0), pts.max(0), direction=direction, fov_deg=fov_deg, width=width, height=height)
-    for _ in range(12):
-        view = View(cam, width, height)
-        px, z = view(pts)
-        r_px = view.f * rad / z
-        (x0, y0), (x1, y1) = (px - r_px[:, None]).min(0), (px + r_px[:, None]).max(0)
-        target = np.asarray(cam.target, dtype=float)
-        dist = np.linalg.norm(target - view.eye)
-        shift = (view.right * (0.5 * (x0 + x1) - 0.5 * width) - view.up * (0.5 * (y0 + y1) - 0.5 * height)) * dist / view.f
-        scale = max((x1 - x0) / (fill * width), (y1 - y0) / (fill * height))
-        target = target + shift
-        eye = target + (view.eye + shift - target) * scale
-        cam = kinema.Camera3D(tuple(eye), tuple(target), tuple(cam.up), fov_deg)
-    return cam
-
-
-def draw_segments(frame, segments, view, *, behind=False, color=(110, 110, 110), width=2, background=WHITE):
-    """Draw the world segments [(a, b), ...] (m) into the frame, in place. ``behind``: only
-    where the ``background`` colour shows, so that the lines pass behind the particles."""
-    img = Image.fromarray(frame)
-    bg = tuple(int(c) for c in background)
-    layer = Image.new("RGB", img.size, bg) if behind else img
-    draw = ImageDraw.Draw(layer)
-    for a, b in segments:
-        pa, pb = view(np.array([a, b], dtype=float))[0] - 0.5  # Pillow puts pixel centres at whole numbers
-        draw.line([tuple(pa), tuple(pb)], fill=color, width=width)
-    if behind:
-        is_bg = np.all(frame == np.asarray(bg, np.uint8), axis=2)
-        frame[is_bg] = np.asarray(layer)[is_bg]
-    else:
-        frame[:] = np.asarray(img)
-    return frame
-
-
-def box_corners(lo, hi) -> np.ndarray:
-    """The 8 corners of the box [lo, hi], (8, 3)."""
-    return np.array([[(lo, hi)[c[m]][m] for m in range(3)] for c in np.ndindex(2, 2, 2)], dtype=float)
+    return kinema.Camera3D.framing(pts.min(0) - radius, pts.max(0) + radius, direction=direction, width=width, height=height, margin=margin)
 
 
 # -- composing ----------------------------------------------------------------------------------
@@ -228,22 +160,6 @@ def crop_columns(images, margin: int = 12, background=WHITE):
     return [np.ascontiguousarray(f[:, a:b]) for f in images]
 
 
-def colorbar(cmap: str, vmin: float, vmax: float, label: str, height: int, width: int = 62) -> np.ndarray:
-    """A vertical colour bar (matplotlib's colormap of the same name) as an image."""
-    top, bottom, x0, x1 = 44, height - 16, 8, 22
-    arr = np.full((height, width, 3), 255, np.uint8)
-    arr[top:bottom, x0:x1] = (plt.get_cmap(cmap)(np.linspace(1, 0, bottom - top))[:, :3] * 255).astype(np.uint8)[:, None, :]
-    img = Image.fromarray(arr)
-    draw = ImageDraw.Draw(img)
-    draw.rectangle([x0 - 1, top - 1, x1, bottom], outline=(120, 120, 120))
-    f = font(12)
-    draw.text((x1 + 4, top), f"{vmax:.2g}", fill=(30, 30, 30), font=f, anchor="lm")
-    draw.text((x1 + 4, bottom - 1), f"{vmin:.2g}", fill=(30, 30, 30), font=f, anchor="lm")
-    for k, line in enumerate(label.split("\n")):
-        draw.text((4, 6 + 15 * k), line, fill=(30, 30, 30), font=f)
-    return np.asarray(img)
-
-
 def hstack(panels, gap: int = 10) -> np.ndarray:
     """Panels side by side, top-aligned, on white."""
     h = max(p.shape[0] for p in panels)
@@ -265,13 +181,6 @@ def save(image: np.ndarray, path: Path) -> Path:
     return path
 
 
-def pixel_colors(frame, view, points) -> np.ndarray:
-    """The colours of the frame at the projected points (the centres of flat 2D discs)."""
-    px, _ = view(points)
-    i = np.clip(px.astype(int), 0, [frame.shape[1] - 1, frame.shape[0] - 1])
-    return frame[i[:, 1], i[:, 0]]
-
-
 # -- the scenes ---------------------------------------------------------------------------------
 
 
@@ -289,36 +198,28 @@ def bouncing_balls(out: Path) -> str:
     h1 = np.array([z[up[k] :, k][: np.argmax(vz[up[k] :, k] < 0) + 1].max() - r for k in range(9)])
     ratio = h1 / h0
 
-    # The predicted height of each ball's centre at the top of its first rebound, as a dash on
-    # either side of its column (so that the ball, when it gets there, is not crossed).
-    marks = [((x + s * (r + 0.015), 0, r + ek**2 * h0), (x + s * 0.1, 0, r + ek**2 * h0)) for x, ek in zip(x0, e, strict=True) for s in (-1, 1)]
     # The eye just above the floor, level with it, so that the floor is seen edge-on as a line:
-    # the camera is fitted to the balls and their mirror images under the floor, and the
-    # image is cut to the balls and a little of the floor.
+    # the camera frames the balls and their mirror images under the floor, which puts the
+    # floor on the image's middle row, and the image is cut to its upper half and a little floor.
     width, height = 440, 430
     pts = np.concatenate([traj.positions.reshape(-1, 3), [(x0[0] - 0.15, 0, 0), (x0[-1] + 0.15, 0, 0)]])
-    camera = fit_camera(np.concatenate([pts, pts * [1, 1, -1]]), r, (0.0, -1.0, 0.005), width, height, fill=0.96)
-    view = View(camera, width, height)
-    px, depth = view(pts)
-    top, bottom = int((px[:, 1] - view.f * r / depth).min()) - 14, int(px[-2:, 1].max()) + 12
+    camera = framing(np.concatenate([pts, pts * [1, 1, -1]]), r, (0.0, -1.0, 0.005), width, height, margin=0.02)
     times = [0.0, 0.59, 0.79]
     titles = ["dropped from 1 m", "rising after the first bounce", "e = 0.8 and 0.9 at the top"]
     frames = [frame_at(traj, t) for t in times]
-    panels = []
-    for k, frame, title in zip(frames, render(world.scene.render, traj, frames, width=width, height=height, camera=camera), titles, strict=True):
-        draw_segments(frame, marks, view, color=(90, 90, 90), width=2)
-        panels.append(titled(frame[top:bottom], f"t = {traj.t[k]:.2f} s: {title}"))
+    images = render(world.scene.render, traj, frames, width=width, height=height, camera=camera)
+    panels = [titled(f[: height // 2 + 12], f"t = {traj.t[k]:.2f} s: {title}") for k, f, title in zip(frames, images, titles, strict=True)]
     save(hstack(panels), out / "scene_bouncing_balls.png")
     pairs = ", ".join(f"{q:.3f}" for q in ratio)
     return (
-        f"Nine balls dropped from 1 m onto the floor with e = 0.1, 0.2 … 0.9 (left to right); the dashes either side of each ball's column "
-        f"mark the predicted rebound height e²·h. Measured first rebound / drop height: {pairs} (e² to within {np.abs(ratio - e**2).max():.0e})."
+        f"Nine balls dropped from 1 m onto the floor with e = 0.1, 0.2 … 0.9 (left to right), whose first rebounds reach e²·h as Newton's law "
+        f"says. Measured first rebound / drop height: {pairs} (e² to within {np.abs(ratio - e**2).max():.0e})."
     )
 
 
 def newtons_cradle(out: Path) -> str:
     world, traj = run_scene("newtons_cradle")
-    anchors, balls = np.arange(5), np.arange(5, 10)
+    anchors = np.arange(5)
     radius = traj.radii.copy()
     radius[anchors] = 0.012  # the pinned anchors have no radius: drawn as pins
     x = traj.positions
@@ -326,23 +227,12 @@ def newtons_cradle(out: Path) -> str:
     top = int(np.argmax(np.where(traj.t < 1.5, x[:, 9, 1], -np.inf)))  # and swings out to here
     frames = [0, impact + 1, top]
     width, height = 400, 290
-    camera = kinema.Camera2D.framing((x[:, :, 0].min(), x[:, :, 1].min()), (x[:, :, 0].max(), 1.03), margin=0.08)
-    view = View(camera, width, height)
-    vmax = speed_max(traj)
-    images = render(world.scene.render, traj, frames, width=width, height=height, camera=camera, radius=radius, vmax=vmax)
+    kw = dict(width=width, height=height, camera=None, radius=radius, vmax=speed_max(traj), springs=springs_of(world, traj), legend=True)
+    images = render(world.scene.render, traj, frames, **kw)
     titles = ["the left ball raised by 30°", "the impulse has passed through", "the right ball swings out"]
-    ceiling = [((x[0, 0, 0] - 0.1, 1.012, 0), (x[0, 4, 0] + 0.1, 1.012, 0))]
-    for k, frame in zip(frames, images, strict=True):
-        strings = []
-        for a, b in zip(anchors, balls, strict=True):
-            pa, pb = x[k, a, :2], x[k, b, :2]
-            strings.append(((*pa, 0), (*(pb - (pb - pa) / np.linalg.norm(pb - pa) * traj.radii[b]), 0)))
-        draw_segments(frame, strings, view, color=(110, 110, 110), width=1)
-        draw_segments(frame, ceiling, view, color=(80, 80, 80), width=3)
     images = crop_columns(images, margin=16)
     panels = [titled(f, f"t = {traj.t[k]:.2f} s: {title}") for k, f, title in zip(frames, images, titles, strict=True)]
-    bar = colorbar(world.scene.render.colormap, 0.0, vmax, "speed\n(m/s)", panels[0].shape[0])
-    save(hstack([*panels, bar]), out / "scene_newtons_cradle.png")
+    save(hstack(panels), out / "scene_newtons_cradle.png")
     h_start = x[0, 5, 1] - x[0, 6, 1]
     h_right = x[top, 9, 1] - x[0, 9, 1]
     still = np.abs(x[:top, 6:9, :2] - x[0, 6:9, :2]).max()
@@ -358,16 +248,9 @@ def billiards_2d(out: Path) -> str:
     table = scene_camera(world)  # the table itself: widened a little so that its outline shows whole
     camera = kinema.Camera2D.framing((table.xmin, table.ymin), (table.xmax, table.ymax), margin=0.01)
     width, height = 430, 215
-    view = View(camera, width, height)
     frames = [0, frame_at(traj, 0.3), len(traj.t) - 1]
     images = render(world.scene.render, traj, frames, width=width, height=height, camera=camera)
-    # The paths since t = 0 behind the balls of the last frame, in lighter colours.
-    colours = pixel_colors(images[-1], view, traj.positions[-1])
-    light = (255 - 0.45 * (255 - colours.astype(float))).astype(np.uint8)
-    for b in range(traj.positions.shape[1]):
-        path = traj.positions[:, b]
-        draw_segments(images[-1], list(zip(path[:-1], path[1:], strict=True)), view, behind=True, color=tuple(int(c) for c in light[b]), width=2)
-    titles = ["the rack and the cue ball at 6 m/s", "the break", "spread out, with the paths"]
+    titles = ["the rack and the cue ball at 6 m/s", "the break", "spread out"]
     panels = [titled(f, f"t = {traj.t[k]:.2f} s: {title}") for k, f, title in zip(frames, images, titles, strict=True)]
     save(hstack(panels), out / "scene_billiards_2d.png")
     ke = traj.kinetic
@@ -388,18 +271,13 @@ def sand_box(out: Path) -> str:
     drawn = [{"type": "box", "lo": box_lo, "hi": box_hi}]
     frames = [0, frame_at(traj, 0.4), len(traj.t) - 1]
     vmax = speed_max(traj, frames)
-    r = traj.radii
-    corners = box_corners(box_lo, box_hi)
     # One camera for the column and the fall, another closer one for the settled grains.
-    tall_w, tall_h, near_w = 230, 380, 440
-    tall = fit_camera(np.concatenate([traj.positions[0], corners]), r.max(), (1.0, -1.5, 0.45), tall_w, tall_h)
-    near = fit_camera(corners, 0.0, (1.0, -1.5, 1.0), near_w, tall_h, fill=0.82)
-    images = render(world.scene.render, traj, frames[:2], width=tall_w, height=tall_h, camera=tall, colliders=drawn, vmax=vmax)
-    images += render(world.scene.render, traj, frames[2:], width=near_w, height=tall_h, camera=near, colliders=drawn, vmax=vmax)
+    tall_w, tall_h, near_w = 300, 380, 460
+    kw = dict(height=tall_h, camera=None, colliders=drawn, vmax=vmax, legend=True)
+    images = render(world.scene.render, traj, frames[:2], width=tall_w, **kw) + render(world.scene.render, traj, frames[2:], width=near_w, **kw)
     titles = ["a column of 2,000 grains", "falling in", "settled (closer)"]
     panels = [titled(f, f"t = {traj.t[k]:.2f} s: {title}") for k, f, title in zip(frames, images, titles, strict=True)]
-    bar = colorbar(world.scene.render.colormap, 0.0, vmax, "speed\n(m/s)", panels[0].shape[0])
-    save(hstack([*panels, bar]), out / "scene_sand_box.png")
+    save(hstack(panels), out / "scene_sand_box.png")
     z = traj.positions[-1, :, 2]
     xy = traj.positions[-1, :, :2] - 0.5 * (box_lo[:2] + box_hi[:2])
     centre = np.linalg.norm(xy, axis=1) < 0.08
@@ -418,40 +296,14 @@ def cloth_on_sphere(out: Path) -> str:
     obstacle = traj.colliders[0]
     centre, radius = np.asarray(obstacle["center"], float), float(obstacle["radius"])
     n = int(round(np.sqrt(traj.positions.shape[1])))  # the n × n lattice, last axis fastest
-    grid = np.arange(n * n).reshape(n, n)
-    springs = np.concatenate([np.stack([grid[:, :-1].ravel(), grid[:, 1:].ravel()], 1), np.stack([grid[:-1].ravel(), grid[1:].ravel()], 1)])
     width, height = 400, 300
     frames = [0, frame_at(traj, 0.3), len(traj.t) - 1]
     x = traj.positions
-    u = np.random.default_rng(0).normal(size=(400, 3))
-    surface = centre + radius * u / np.linalg.norm(u, axis=1)[:, None]
-    camera = fit_camera(np.concatenate([x[frames].reshape(-1, 3), surface]), traj.radii.max(), (1.0, -1.6, 0.55), width, height)
-    eye = np.asarray(camera.eye)
-    view = View(camera, width, height)
-    speed = np.linalg.norm(traj.velocities[frames], axis=2)
-    vmax = float(speed.max())
-    images = render(world.scene.render, traj, frames, width=width, height=height, camera=camera, vmax=vmax)
-    cmap = plt.get_cmap(world.scene.render.colormap)
-    for k, s, frame in zip(frames, speed, images, strict=True):
-        # The springs between nodes that the sphere does not hide (the line of sight to the
-        # node meets the sphere before it), in a darker shade of the node's colour.
-        d = x[k] - eye
-        dist = np.linalg.norm(d, axis=1)
-        b = (d / dist[:, None]) @ (eye - centre)
-        disc = b**2 - (np.sum((eye - centre) ** 2) - radius**2)
-        shown = ~((disc > 0) & (-b - np.sqrt(np.maximum(disc, 0.0)) < dist - traj.radii))
-        rgb = (cmap(s / vmax)[:, :3] * 255 * 0.8).astype(np.uint8)
-        img = Image.fromarray(frame)
-        draw = ImageDraw.Draw(img)
-        px = view(x[k])[0] - 0.5  # Pillow's pixel centres
-        for i, j in springs:
-            if shown[i] and shown[j]:
-                draw.line([tuple(px[i]), tuple(px[j])], fill=tuple(int(c) for c in rgb[i]), width=1)
-        frame[:] = np.asarray(img)
+    kw = dict(width=width, height=height, camera=None, vmax=speed_max(traj, frames), springs=springs_of(world, traj), legend=True)
+    images = render(world.scene.render, traj, frames, **kw)
     titles = ["a 20 × 20 cloth above the sphere", "falling onto it", "draped"]
     panels = [titled(f, f"t = {traj.t[k]:.2f} s: {t}") for k, f, t in zip(frames, images, titles, strict=True)]
-    bar = colorbar(world.scene.render.colormap, 0.0, vmax, "speed\n(m/s)", panels[0].shape[0])
-    save(hstack([*panels, bar]), out / "scene_cloth_on_sphere.png")
+    save(hstack(panels), out / "scene_cloth_on_sphere.png")
     corner = x[-1, [0, n - 1, n * (n - 1), n * n - 1], 2]
     return (
         f"A 20 × 20 cloth on stretch and shear springs (implicit Euler, dt = {world.dt * 1000:.0f} ms) falls onto a sphere and drapes over "
@@ -509,16 +361,14 @@ def maxwell_gas(out: Path) -> str:
         figure = np.asarray(Image.open(Path(tmp) / "maxwell_gas.png").convert("RGB"))
     traj = result["trajectory"]
     world = kinema.load_scene(SCENES / "maxwell_gas.toml")  # its [render] table
-    box = traj.colliders[0]
     height = figure.shape[0] - 27
-    width = height
-    camera = fit_camera(box_corners(box["lo"], box["hi"]), 0.0, (1.0, -1.7, 0.8), width, height, fill=0.92)
+    width = round(1.25 * height)  # room for the colour bar beside the box
     vmax = float(np.ceil(np.percentile(result["speed"], 99.5) * 10) / 10)
     k = len(traj.t) - 1
-    frame = render(world.scene.render, traj, [k], width=width, height=height, camera=camera, vmax=vmax)[0]
+    # The renderer's own camera: the box and the gas as large as the frame allows, clear of the bar.
+    frame = render(world.scene.render, traj, [k], width=width, height=height, camera=None, vmax=vmax, legend=True)[0]
     panel = titled(frame, f"t = {traj.t[k]:.2f} s: the gas, coloured by speed")
-    bar = colorbar(world.scene.render.colormap, 0.0, vmax, "speed\n(m/s)", panel.shape[0])
-    save(hstack([panel, bar, figure], gap=4), out / "scene_maxwell_gas.png")
+    save(hstack([panel, figure], gap=4), out / "scene_maxwell_gas.png")
     ks = result["ks"]
     level = 1.63 / np.sqrt(traj.positions.shape[1])
     above = np.nonzero(ks >= level)[0]
@@ -532,16 +382,13 @@ def maxwell_gas(out: Path) -> str:
 
 def demo(out: Path) -> str:
     world, traj = run_scene("demo")
-    camera = scene_camera(world)
-    width, height = 600, 338  # the scene's 960 × 540, smaller; cut to the box below
+    width, height = 360, 338  # the scene's height, 960 × 540, smaller; the box is tall and narrow
     frames = [0, frame_at(traj, 0.4), len(traj.t) - 1]
-    vmax = speed_max(traj, frames)
-    images = render(world.scene.render, traj, frames, width=width, height=height, camera=camera, vmax=vmax)
-    images = crop_columns(images, margin=60)
+    kw = dict(width=width, height=height, camera=scene_camera(world), vmax=speed_max(traj, frames), legend=True)
+    images = render(world.scene.render, traj, frames, **kw)
     titles = ["400 balls on a jittered lattice", "falling into the box", "settled"]
     panels = [titled(f, f"t = {traj.t[k]:.2f} s: {t}") for k, f, t in zip(frames, images, titles, strict=True)]
-    bar = colorbar(world.scene.render.colormap, 0.0, vmax, "speed\n(m/s)", panels[0].shape[0])
-    save(hstack([*panels, bar]), out / "scene_demo.png")
+    save(hstack(panels), out / "scene_demo.png")
     stats = world.collision_stats()["total"]
     ke = traj.kinetic
     return (

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import imageio_ffmpeg
 import numpy as np
 import pytest
@@ -260,3 +262,191 @@ def test_a_trajectory_renders_its_colliders_unless_told_not_to(tmp_path):
     cli_bare = _render_video(traj, tmp_path / "cli_bare.mp4", {"width": 160, "height": 96, "draw_colliders": False}, None, "rendering")
     assert _bottom_brightness(cli_floor)[1] == pytest.approx(floor_light, abs=1.0)
     assert _bottom_brightness(cli_bare)[1] == pytest.approx(bare_light, abs=1.0)
+
+
+# -- springs, births and deaths ---------------------------------------------------------------
+
+LINE = tuple(_core.LINE_COLOR)
+
+
+def _pair_scene():
+    # [0, 10] × [0, 5] onto 200 × 100: 20 px per m. Discs of 10 px at x = 2 m and 8 m on the
+    # row of pixel centres y = 49.5 (world y = 2.525); a third one at the top right.
+    x = np.array([[[2.0, 2.525], [8.0, 2.525], [9.0, 4.5]]] * 3)
+    colours = np.array([[255, 0, 0], [0, 200, 0], [0, 0, 255]], np.uint8)
+    kw = dict(dim=2, camera=Camera2D(0.0, 0.0, 10.0, 5.0), width=200, height=100, color_by=colours, time_format=None)
+    return x, kw
+
+
+def test_a_spring_is_a_line_between_its_particles_and_none_when_an_end_is_dead():
+    x, kw = _pair_scene()
+    alive = np.array([[True, True, True], [True, False, True], [False, False, False]])
+    frames = list(render_frames(x, 0.5, [0.0, 1.0, 2.0], springs=[[0, 1]], alive=alive, **kw))
+    on_line = frames[0][49, 55:145]
+    assert (on_line == LINE).all(), "the segment between the rims is the line colour"
+    assert (frames[0][49, 45] == (255, 0, 0)).all() and (frames[0][49, 155] == (0, 200, 0)).all(), "the discs stay whole"
+    for f in frames[1:]:
+        assert not (f == LINE).all(axis=2).any(), "no line with a dead end"
+    # Without springs there is no line either; a NaN position is a dead particle too.
+    bare = next(render_frames(x, 0.5, [0.0, 1.0, 2.0], **kw))
+    assert not (bare == LINE).all(axis=2).any()
+    nan = x.copy()
+    nan[0, 0] = np.nan
+    f = next(render_frames(nan, 0.5, [0.0, 1.0, 2.0], springs=[[0, 1]], **kw))
+    assert not (f == LINE).all(axis=2).any() and not (f == (255, 0, 0)).all(axis=2).any()
+    with pytest.raises(ValueError, match=r"springs\[1\] = \[1, 3\]"):
+        next(render_frames(x, 0.5, [0.0, 1.0, 2.0], springs=[[0, 1], [1, 3]], **kw))
+
+
+def test_particles_not_alive_leave_no_pixels_and_an_all_dead_frame_is_background():
+    x, kw = _pair_scene()
+    alive = np.array([[True, True, True], [True, False, True], [False, False, False]])
+    frames = list(render_frames(x, 0.5, [0.0, 1.0, 2.0], alive=alive, **kw))
+    has = [{c: bool((f == c).all(axis=2).any()) for c in [(255, 0, 0), (0, 200, 0), (0, 0, 255)]} for f in frames]
+    assert has[0] == {(255, 0, 0): True, (0, 200, 0): True, (0, 0, 255): True}
+    assert has[1] == {(255, 0, 0): True, (0, 200, 0): False, (0, 0, 255): True}
+    assert (frames[2] == 255).all(), "nothing alive: the background alone"
+    # Coloured by speed with the default camera and a legend: the dead do not crash the
+    # colour range or the camera, in 2D and 3D.
+    x3 = np.concatenate([x, np.zeros((3, 3, 1))], axis=2)
+    for dim in (2, 3):
+        out = list(render_frames(x3, 0.5, [0.0, 1.0, 2.0], dim=dim, alive=alive, width=320, height=240))
+        assert len(out) == 3 and all(f.shape == (240, 320, 3) for f in out)
+    nothing = list(render_frames(np.full((2, 3, 3), np.nan), 0.5, [0.0, 1.0], width=320, height=240))
+    assert len(nothing) == 2
+
+
+def test_a_trajectory_maps_its_spring_ids_to_columns_and_renders_its_births(tmp_path):
+    import dataclasses
+
+    from kinema.render import _trajectory_options
+
+    w = kinema.World(dt=1e-3, dim=2)
+    w.add_particles([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]], radius=0.1)
+    traj = w.run(0.05, fps=100)
+    alive = np.ones(traj.alive.shape, bool)
+    alive[:2, 2] = False  # the third is born at frame 2
+    pos = traj.positions.copy()
+    pos[~alive] = np.nan
+    traj = dataclasses.replace(traj, positions=pos, ids=np.array([10, 11, 12]), alive=alive, springs=np.array([[12, 10], [11, 99]]))
+    options = _trajectory_options(traj)
+    assert options["springs"].tolist() == [[2, 0]], "id 99 is not in the trajectory: left out"
+    assert options["alive"] is traj.alive
+    path = traj.render(tmp_path / "born.gif", width=160, height=120, color_by="id")
+    with Image.open(path) as im:
+        assert im.n_frames >= 3
+
+
+# -- the legend -------------------------------------------------------------------------------
+
+
+def test_the_legend_is_a_colour_bar_in_the_top_right_corner():
+    # Particles in the lower left; the legend goes into the top right corner, on the row of the
+    # time stamp (none here).
+    x = np.zeros((2, 3, 3))
+    x[:, :, 0] = [0.0, 0.5, 1.0]
+    x[1, :, 1] = [0.0, 1.0, 2.0]  # moving: speeds 0, 1, 2
+    cam = Camera2D(0.0, 0.0, 4.0, 3.0)
+    kw = dict(dim=2, camera=cam, width=320, height=240, time_format=None)
+    top, bottom = (tuple(c) for c in _core.colormap(np.array([1.0, 0.0]), "magma", 0.0, 1.0))
+    corner = (slice(0, 60), slice(100, 320))
+
+    def colours(frame):
+        return {tuple(c) for c in frame[corner].reshape(-1, 3)}
+
+    kw.update(vmin=-1.0, vmax=3.0)  # no particle takes an end colour of the colormap
+    with_legend = next(render_frames(x, 0.1, [0.0, 1.0], colormap="magma", **kw))
+    assert {top, bottom} <= colours(with_legend), "the bar's ends are the colormap's ends"
+    bar = np.nonzero((with_legend == top).all(axis=2))
+    assert bar[0].size and bar[0].max() < 60 and bar[1].min() >= 100, "in the top right corner"
+    low = np.nonzero((with_legend == bottom).all(axis=2))
+    assert low[1].max() < bar[1].min(), "the bottom colour on the left, the top colour on the right"
+    assert np.any(with_legend[corner] < 100), "with dark text"
+    without = next(render_frames(x, 0.1, [0.0, 1.0], colormap="magma", legend=False, **kw))
+    assert colours(without) == {(255, 255, 255)}
+    assert (with_legend[:, :100] == without[:, :100]).all() and (with_legend[60:] == without[60:]).all(), "only its corner"
+    # Fixed colours and ids have no legend; a label names the quantity.
+    by_id = next(render_frames(x, 0.1, [0.0, 1.0], color_by="id", **kw))
+    assert colours(by_id) == {(255, 255, 255)}
+    labelled = next(render_frames(x, 0.1, [0.0, 1.0], colormap="magma", color_by=np.arange(3.0), legend="temperature (K)", **kw))
+    assert {top, bottom} <= colours(labelled) and not np.array_equal(labelled[corner], with_legend[corner])
+
+
+# -- the default camera -----------------------------------------------------------------------
+
+
+def _recorded_cameras(monkeypatch):
+    """The camera keywords of every frame render_frames draws."""
+    calls = []
+    real = _core.render_frame
+
+    def spy(*args, **kwargs):
+        calls.append({k: kwargs[k] for k in ("eye", "target", "up", "fov_deg", "view") if k in kwargs})
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(_core, "render_frame", spy)
+    return calls
+
+
+def _pixels(cam, points, w, h):
+    """Pinhole projection (camera.rs) of (P, 3) points: (P, 2) pixels."""
+    eye, target, up = (np.asarray(cam[k], float) for k in ("eye", "target", "up"))
+    fwd = (target - eye) / np.linalg.norm(target - eye)
+    right = np.cross(fwd, up)
+    right /= np.linalg.norm(right)
+    upv = np.cross(right, fwd)
+    f = 0.5 * h / np.tan(np.radians(cam["fov_deg"]) / 2)
+    d = np.asarray(points, float) - eye
+    z = d @ fwd
+    return np.stack([0.5 * w + f * (d @ right) / z, 0.5 * h - f * (d @ upv) / z], axis=1)
+
+
+def _box_corners(lo, hi):
+    return np.array([[(hi if c >> k & 1 else lo)[k] for k in range(3)] for c in range(8)], float)
+
+
+@pytest.mark.parametrize("legend", [True, False])
+def test_the_default_camera_shows_the_whole_demo_box_large(monkeypatch, legend):
+    # `kinema demo`'s scene with its own [render] camera (none: the default), at 16:9.
+    from kinema.cli import _camera
+
+    world = kinema.load_scene(Path(kinema.__file__).parent / "scenes" / "demo.toml")
+    traj = world.run(0.1, fps=30)
+    box = traj.colliders[0]
+    w, h = 480, 270
+    calls = _recorded_cameras(monkeypatch)
+    camera = _camera(world.scene.render.camera)
+    kw = dict(colliders=traj.colliders, width=w, height=h, time_format=None, legend=legend, camera=camera)
+    frame = next(render_frames(traj.positions, traj.radii, traj.t, **kw))
+    px = _pixels(calls[0], np.concatenate([_box_corners(box["lo"], box["hi"]), traj.positions.reshape(-1, 3)]), w, h)
+    r = traj.radii.max()
+    assert (px >= 0).all() and (px[:, 0] <= w).all() and (px[:, 1] <= h).all(), "every box corner and particle in the frame"
+    span = px.max(axis=0) - px.min(axis=0)
+    assert span[0] >= 0.6 * w or span[1] >= 0.6 * h, f"the scene fills the frame: {span} of {w} × {h}"
+    assert r > 0
+    # Nothing touches the frame's edges: nothing is cropped.
+    edges = np.concatenate([frame[0], frame[-1], frame[:, 0], frame[:, -1]])
+    assert (edges == 255).all()
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_the_default_camera_fits_a_tall_scene_into_a_wide_frame(monkeypatch, dim):
+    # A column of particles 2 m tall in a 0.2 m box (its top open: drawn up to the particles).
+    z = np.linspace(0.1, 2.0, 20)
+    x = np.zeros((1, 20, 3))
+    x[0, :, 0], x[0, :, 1 if dim == 2 else 2] = 0.1, z
+    hi = [0.2, np.inf] if dim == 2 else [0.2, 0.2, np.inf]
+    lo = [0.0, 0.0] if dim == 2 else [0.0, 0.0, 0.0]
+    w, h = 400, 225
+    calls = _recorded_cameras(monkeypatch)
+    frame = next(render_frames(x, 0.05, [0.0], dim=dim, colliders=[kinema.Box(lo, hi)], width=w, height=h, time_format=None))
+    lit = np.nonzero(np.any(frame != 255, axis=2))
+    assert (lit[0].min() > 0 and lit[0].max() < h - 1) and (lit[1].min() > 0 and lit[1].max() < w - 1), "nothing cropped"
+    assert lit[0].max() - lit[0].min() >= 0.6 * h, "the column spans most of the height"
+    if dim == 3:
+        px = _pixels(calls[0], np.concatenate([_box_corners([0, 0, 0], [0.2, 0.2, 2.05]), x[0]]), w, h)
+        assert (px >= 0).all() and (px[:, 0] <= w).all() and (px[:, 1] <= h).all()
+        assert px[:, 1].max() - px[:, 1].min() >= 0.6 * h
+    else:
+        xmin, ymin, xmax, ymax = calls[0]["view"]
+        assert (ymax - ymin) <= (2.05 + 0.05) / 0.6, "the 2D view is not much taller than the column"

@@ -161,6 +161,8 @@ class World:
 
 # -- rendering (crates/kinema-py/src/render.rs) -------------------------------------------------
 COLORMAP_NAMES: list[str]
+LINE_COLOR: list[int]
+FRAME_MARGIN: float
 
 def render_frame(
     positions: npt.NDArray[np.float64],
@@ -183,10 +185,17 @@ def render_frame(
     label: str | None = None,
     label_scale: int = 2,
     label_color: tuple[int, int, int] = (0, 0, 0),
+    scenery: list[tuple[str, list[float]]] | None = None,
+    extent: tuple[Sequence[float], Sequence[float]] | None = None,
+    springs: npt.NDArray[np.int64] | None = None,
+    spring_width: float = 1.5,
 ) -> npt.NDArray[np.uint8]: ...
 def colormap(values: npt.NDArray[np.float64], colormap: str = "viridis", vmin: float | None = None, vmax: float | None = None) -> npt.NDArray[np.uint8]: ...
 def categorical_colors(ids: npt.NDArray[np.uint64]) -> npt.NDArray[np.uint8]: ...
 def frame_box(
     lo: Sequence[float], hi: Sequence[float], from_: Sequence[float] = ..., fov_deg: float = 40.0, width: int = 1280, height: int = 720
 ) -> tuple[list[float], list[float], list[float]]: ...
+def frame_points(
+    points: npt.NDArray[np.float64], from_: Sequence[float], fov_deg: float, width: int, height: int, window: Sequence[float]
+) -> tuple[list[float], list[float], list[float], list[float]]: ...
 def rgb_to_yuv420p(frame: npt.NDArray[np.uint8]) -> bytes: ...

@@ -313,7 +313,7 @@ def _render_video(
     or, without it or when the recording interval is not that rate's rounding (clamped to one
     step), at the recording's own rate (clamped to ``VIDEO_FPS``, and then not real time). The
     rate written (``kinema.render.video_rate``: GIF counts in 1/100 s) is printed."""
-    from .render import render_frames, video_rate, write_video
+    from .render import _trajectory_options, render_frames, video_rate, write_video
 
     render_opts = dict(render_opts)
     draw_colliders = render_opts.pop("draw_colliders", draw_colliders)
@@ -326,11 +326,10 @@ def _render_video(
         fps = min(max(recorded, VIDEO_FPS[0]), VIDEO_FPS[1]) if np.isfinite(recorded) else 30.0
         if fps == recorded:  # placed by their times: GIF delays round, the times need not be even
             times, timing = traj.t, "real time at the recording's rate"
-    radius = traj.radii
-    if radius is None or not np.any(radius > 0):
-        extent = float(np.ptp(traj.positions.reshape(-1, 3), axis=0).max()) or 1.0
-        radius = np.full(traj.positions.shape[1], extent / 200.0)
-    frames = render_frames(traj.positions, radius, traj.t, dim=traj.dim, velocities=traj.velocities, **render_opts)
+    # The radii (or a stand-in), the alive mask and the springs (ids → columns).
+    for name, value in _trajectory_options(traj).items():
+        render_opts.setdefault(name, value)
+    frames = render_frames(traj.positions, t=traj.t, dim=traj.dim, velocities=traj.velocities, **render_opts)
     with _progress() as bar:
         task = bar.add_task(description, total=len(traj.t))
 

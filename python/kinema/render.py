@@ -7,7 +7,12 @@ and each frame carries a time stamp. The world's colliders can be drawn with the
 lightly filled floor, a sphere obstacle a grey shaded sphere; in 2D a plane is a thick line
 with its solid side shaded, a box a rectangle outline, a sphere obstacle a grey disc. Pixels
 are drawn by the engine (``kinema._core``, in parallel, with the GIL released); this module
-chooses cameras and colours and writes files.
+chooses cameras and colours and writes files. Springs (``springs=``, pairs of particles) are
+lines between the particles, and particles not alive in a frame (``alive=``, or NaN
+positions: births and deaths) are left out, with their springs. Particles coloured by a
+quantity get a colour bar with its name, units and range in the top right corner
+(``legend=``). The default camera fits the whole scene, particles of every frame and the
+colliders' finite parts, into the frame's width and height, clear of the legend.
 
     frames = render_frames(traj_x, radius=0.01, t=traj_t, dim=3, color_by="speed", colliders=world.colliders)
     write_video(frames, "out.mp4", fps=30, times=traj_t)  # exactly 30 fps, in real time
@@ -69,10 +74,16 @@ class Camera3D:
     fov_deg: float = 40.0
 
     @classmethod
-    def framing(cls, lo, hi, direction=(1.0, -1.6, 0.9), fov_deg: float = 40.0, width: int = 1280, height: int = 720) -> Camera3D:
-        """A camera looking at the centre of the box [lo, hi] (m) from ``direction`` (centre →
-        eye), just far enough that the whole box is in view."""
-        eye, target, up = _core.frame_box(_vec3(lo), _vec3(hi), _vec3(direction), float(fov_deg), int(width), int(height))
+    def framing(cls, lo, hi, direction=(1.0, -1.6, 0.9), fov_deg: float = 40.0, width: int = 1280, height: int = 720, margin: float | None = None) -> Camera3D:
+        """A camera looking at the box [lo, hi] (m) from ``direction`` (box → eye), as near
+        as it can be with all 8 corners in view: they fill the image's width or height (both
+        fields of view are fitted) up to ``margin`` (a fraction of each side; default
+        ``FRAME_MARGIN``, 3 %), centred."""
+        m = _core.FRAME_MARGIN if margin is None else float(margin)
+        if not 0.0 <= m < 0.5:
+            raise ValueError(f"margin = {margin!r} is invalid: a fraction of the image in [0, 0.5)")
+        window = (m * width, m * height, (1.0 - m) * width, (1.0 - m) * height)
+        eye, target, up, _ = _core.frame_points(_corners(lo, hi), _vec3(direction), float(fov_deg), int(width), int(height), window)
         return cls(tuple(eye), tuple(target), tuple(up), float(fov_deg))
 
     def _kwargs(self) -> dict:
@@ -81,6 +92,12 @@ class Camera3D:
 
 def _vec3(v) -> list[float]:
     return [float(c) for c in v]
+
+
+def _corners(lo, hi) -> np.ndarray:
+    """The 8 corners of the box [lo, hi], (8, 3)."""
+    lo, hi = np.asarray(_vec3(lo)), np.asarray(_vec3(hi))
+    return np.array([[(hi if c >> k & 1 else lo)[k] for k in range(3)] for c in range(8)])
 
 
 def render_frames(
@@ -102,6 +119,10 @@ def render_frames(
     label_scale: int = 2,
     min_radius_px: float = 1.0,
     colliders=None,
+    alive=None,
+    springs=None,
+    spring_width: float | None = None,
+    legend: bool | str = True,
 ) -> Iterator[np.ndarray]:
     """Yield one (height, width, 3) uint8 RGB frame per time.
 
@@ -114,14 +135,29 @@ def render_frames(
       shape (N,) or (F, N) mapped through ``colormap`` between ``vmin`` and ``vmax`` (default:
       the field's minimum and maximum over all frames, so colours mean the same in every
       frame), or fixed uint8 colours of shape (N, 3) or (F, N, 3).
-    camera: a Camera2D / Camera3D; default frames the bounding box of all frames (plus the
-      largest radius) and of the colliders' finite parts, a 3D box seen from the front right
-      and above.
+    camera: a Camera2D / Camera3D; default: the bounding box of the live particles of all
+      frames (with the largest radius) and of the colliders' finite parts fills the frame's
+      width or height, whichever binds, to 3 % of its sides, centred (a 3D box seen from the
+      front right and above; both fields of view are fitted), and kept clear of the legend.
     background: RGB8 colour.
     colliders: colliders to draw, ``kinema.Plane`` / ``Box`` / ``SphereObstacle`` objects or
       their descriptions (``Trajectory.colliders``: dicts {"type": "plane", "point",
       "normal"}, {"type": "box", "lo", "hi"}, {"type": "sphere", "center", "radius"}); None
       draws none. Infinite box bounds (an open top) are drawn up to the scene's extent.
+    alive: (F, N) bools (or (N,), the same in every frame): the particles that exist in each
+      frame (``Trajectory.alive``: births and deaths). Those that do not, and any with a
+      non-finite position, are not drawn, count for neither the camera nor the colour range,
+      and their springs are not drawn. A frame with none alive shows the scenery alone.
+    springs: (S, 2) particle indices (columns of ``positions``) joined by springs, strings or
+      bonds, each drawn as a grey line (``_core.LINE_COLOR``) ``spring_width`` pixels wide
+      (default: 1 per 480 rows, at least 1) from one particle's rim to the other's, in frames
+      where both are alive.
+    legend: when the particles are coloured by a quantity (speed or a field of values; not
+      ids or fixed colours), a colour bar from ``vmin`` to ``vmax`` with the quantity's name
+      and units ("speed (m/s)"; a string gives them, e.g. "temperature (K)"; a field is
+      "value" otherwise) in the top right corner, beside the time stamp, its text as tall
+      (``label_scale``). False: none. It is left out of frames under 160 × 120 pixels or too
+      narrow for it, which have no room for it.
     """
     if dim not in (2, 3):
         raise ValueError(f"dim = {dim!r} is invalid: use 2 (discs in the xy-plane) or 3 (spheres)")
@@ -141,17 +177,31 @@ def render_frames(
     r = np.ascontiguousarray(r)
     if not np.all(np.isfinite(r)) or np.any(r < 0):
         raise ValueError("radius is invalid: radii must be finite and >= 0")
+    live = _live(alive, x)
+    if not live.all():
+        x = np.where(live[:, :, None], x, np.nan)  # the dead are nowhere: no camera, no colour range
+    pairs = _springs(springs, n)
+    if spring_width is None:
+        spring_width = max(1.0, height / 480.0)
 
     colors, values, vmin, vmax = _colouring(color_by, x, times, velocities, dim, vmin, vmax)
     scenery = _scenery(colliders)
     lo, hi = _extent(x, r, scenery)
-    if camera is None:
-        camera = _auto_camera(lo, hi, dim, width, height)
-    elif dim == 2 and not isinstance(camera, Camera2D) or dim == 3 and not isinstance(camera, Camera3D):
-        raise ValueError(f"camera = {camera!r} is invalid: dim={dim} needs a Camera{dim}D")
     bg = tuple(int(c) for c in background)
     luminance = 0.299 * bg[0] + 0.587 * bg[1] + 0.114 * bg[2]
     label_color = (0, 0, 0) if luminance > 128 else (255, 255, 255)
+    key = None
+    if legend is not False and legend is not None and colors is None and width >= 160 and height >= 120:
+        name = legend if isinstance(legend, str) else ("speed (m/s)" if isinstance(color_by, str) else "value")
+        stamp = max((len(time_format.format(v)) for v in times), default=0) if time_format is not None else 0
+        key = _Legend(name, colormap, vmin, vmax, int(width), int(height), int(label_scale), label_color, bg, stamp)
+        if not key.fits:  # a frame too narrow for the name, the values and a bar
+            key = None
+    if camera is None:
+        points = _frame_corners(x, r, scenery, lo, hi) if dim == 3 else None
+        camera = _auto_camera(lo, hi, dim, width, height, avoid=key.box if key is not None else None, points=points)
+    elif dim == 2 and not isinstance(camera, Camera2D) or dim == 3 and not isinstance(camera, Camera3D):
+        raise ValueError(f"camera = {camera!r} is invalid: dim={dim} needs a Camera{dim}D")
     common = dict(
         width=int(width),
         height=int(height),
@@ -159,6 +209,7 @@ def render_frames(
         min_radius_px=float(min_radius_px),
         label_scale=int(label_scale),
         label_color=label_color,
+        spring_width=float(spring_width),
         **camera._kwargs(),
     )
     if scenery:
@@ -166,15 +217,154 @@ def render_frames(
         common.update(scenery=scenery, extent=(lo.tolist(), hi.tolist()))
     for k in range(n_frames):
         label = time_format.format(times[k]) if time_format is not None else None
+        here = live[k]
+        every = bool(here.all())
+
+        def pick(a, here=here, every=every):  # the live particles' rows
+            return a if every else np.ascontiguousarray(a[here])
+
         if colors is not None:
-            colour_kw = {"colors": colors[k] if colors.ndim == 3 else colors}
+            colour_kw = {"colors": pick(colors[k] if colors.ndim == 3 else colors)}
         else:
-            colour_kw = {"values": values[k] if values.ndim == 2 else values, "colormap": colormap, "vmin": vmin, "vmax": vmax}
+            colour_kw = {"values": pick(values[k] if values.ndim == 2 else values), "colormap": colormap, "vmin": vmin, "vmax": vmax}
+        if pairs.size and not every:
+            both = here[pairs[:, 0]] & here[pairs[:, 1]]
+            column = np.cumsum(here) - 1  # a live particle's index among the live ones
+            frame_pairs = np.ascontiguousarray(column[pairs[both]])
+        else:
+            frame_pairs = pairs
         try:
-            frame = _core.render_frame(x[k], r, label=label, **colour_kw, **common)
+            frame = _core.render_frame(pick(x[k]), pick(r), label=label, springs=frame_pairs, **colour_kw, **common)
         except ValueError as e:  # the engine calls the list "scenery"; here it is "colliders"
             raise ValueError(str(e).replace("scenery[", "colliders[", 1)) from None
+        if key is not None:
+            key.draw(frame)
         yield frame
+
+
+def _trajectory_options(traj) -> dict:
+    """``render_frames``' radius, alive and springs for a ``Trajectory``: its radii (or, where
+    it has none, 1/200 of the size of what its live particles span), its alive mask, and its
+    springs (particle ids) as pairs of columns, those whose ids it does not hold left out."""
+    x = np.asarray(traj.positions, dtype=np.float64)
+    radius = traj.radii
+    if radius is None or not np.any(np.asarray(radius) > 0):
+        finite = x[np.all(np.isfinite(x), axis=2)]
+        extent = float(np.ptp(finite, axis=0).max()) if finite.size else 0.0
+        radius = np.full(x.shape[1], (extent or 1.0) / 200.0)
+    options = {"radius": radius, "alive": getattr(traj, "alive", None)}
+    springs = getattr(traj, "springs", None)
+    if springs is not None and np.size(springs):
+        ids = np.arange(x.shape[1]) if traj.ids is None else np.asarray(traj.ids).reshape(-1)
+        order = np.argsort(ids, kind="stable")
+        pairs = np.asarray(springs, dtype=np.int64).reshape(-1, 2)
+        at = np.clip(np.searchsorted(ids[order], pairs), 0, ids.size - 1) if ids.size else np.zeros_like(pairs)
+        known = (ids[order][at] == pairs).all(axis=1) if ids.size else np.zeros(len(pairs), bool)
+        options["springs"] = order[at[known]]
+    return options
+
+
+def _live(alive, x) -> np.ndarray:
+    """(F, N) bools: alive (all when None) and with a finite position."""
+    n_frames, n = x.shape[:2]
+    finite = np.all(np.isfinite(x), axis=2)
+    if alive is None:
+        return finite
+    a = np.asarray(alive)
+    if a.dtype != np.bool_ or a.shape not in ((n,), (n_frames, n)):
+        raise ValueError(f"alive has shape {a.shape} and type {a.dtype}: expected bools of shape ({n_frames}, {n}) or ({n},)")
+    return np.broadcast_to(a, (n_frames, n)) & finite
+
+
+def _springs(springs, n: int) -> np.ndarray:
+    """(S, 2) int64 particle indices, checked."""
+    if springs is None:
+        return np.zeros((0, 2), np.int64)
+    s = np.asarray(springs)
+    if s.size == 0:
+        return np.zeros((0, 2), np.int64)
+    if s.ndim != 2 or s.shape[1] != 2 or not np.issubdtype(s.dtype, np.integer):
+        raise ValueError(f"springs has shape {s.shape} and type {s.dtype}: expected integer particle indices of shape (S, 2)")
+    bad = np.nonzero((s < 0).any(axis=1) | (s >= n).any(axis=1))[0]
+    if bad.size:
+        raise ValueError(f"springs[{bad[0]}] = {s[bad[0]].tolist()} is invalid: particle indices in [0, {n})")
+    return np.ascontiguousarray(s, dtype=np.int64)
+
+
+class _Legend:
+    """A colour bar, drawn into frames: in the top right corner, on the time stamp's row (or
+    under it where the row is too short for both), the quantity's name, ``vmin``, a horizontal
+    bar of the colormap (its bottom colour on the left, its top colour on the right) and
+    ``vmax``, on a panel of the background colour (3/4 opaque). Pillow draws it once, its text
+    in DejaVu Sans (matplotlib's) as tall as the time stamp; each frame gets it by blending,
+    ``box`` (x0, y0, x1, y1) pixels being where it goes."""
+
+    def __init__(self, name, colormap, vmin, vmax, width, height, scale, ink, background, stamp_chars=0):
+        from PIL import Image, ImageDraw
+
+        scale = max(scale, 1)
+        size = max(9, 7 * scale)  # the time stamp's glyphs are 7 font pixels of `scale` tall
+        font = _legend_font(size)
+        margin, pad, gap = 4 * scale, max(2, size // 5), max(3, size // 3)
+        low, high = f"{vmin:.3g}", f"{vmax:.3g}"
+        probe = ImageDraw.Draw(Image.new("L", (1, 1)))
+        name_w, low_w, high_w = (round(probe.textlength(text, font=font)) for text in (name, low, high))
+        bar_w, bar_h = int(min(max(0.2 * width, 40), 240)), max(6, round(0.75 * size))
+        pw = pad + name_w + 2 * gap + low_w + gap + bar_w + gap + high_w + pad
+        ph = size + size // 3 + 2 * pad
+        x0 = width - margin - pw
+        # On the stamp's row, centred on it, unless the two would meet; then under it.
+        y0 = max(0, round(margin + 3.5 * scale - 0.5 * ph))
+        if stamp_chars and x0 < margin + 6 * scale * stamp_chars + 2 * margin:
+            y0 = margin + 7 * scale + margin
+        self.box = (x0, y0, x0 + pw, y0 + ph)
+        # out = frame·(1 − A) + C over the panel: A the opacity, C the colour times it.
+        opacity = np.full((ph, pw, 1), 0.75, np.float32)
+        colour = opacity * np.asarray(background, np.float32)
+        mask = Image.new("L", (pw, ph), 0)
+        draw = ImageDraw.Draw(mask)
+        cy = ph // 2
+        draw.text((pad, cy), name, fill=255, font=font, anchor="lm")
+        bx0 = pad + name_w + 2 * gap + low_w + gap
+        draw.text((bx0 - gap, cy), low, fill=255, font=font, anchor="rm")
+        draw.text((bx0 + bar_w + gap, cy), high, fill=255, font=font, anchor="lm")
+        m = np.asarray(mask, np.float32)[:, :, None] / 255.0
+        colour = colour * (1.0 - m) + m * np.asarray(ink, np.float32)
+        opacity = opacity * (1.0 - m) + m
+        # The bar, opaque: left column the colormap's bottom colour, right column its top colour.
+        by0 = cy - bar_h // 2
+        ramp = _core.colormap(np.linspace(0.0, 1.0, bar_w), colormap, 0.0, 1.0).astype(np.float32)
+        colour[by0 : by0 + bar_h, bx0 : bx0 + bar_w] = ramp[None, :, :]
+        opacity[by0 : by0 + bar_h, bx0 : bx0 + bar_w] = 1.0
+        edge = np.asarray([128, 128, 128], np.float32)
+        for rows, cols in (
+            (slice(by0 - 1, by0), slice(bx0 - 1, bx0 + bar_w + 1)),
+            (slice(by0 + bar_h, by0 + bar_h + 1), slice(bx0 - 1, bx0 + bar_w + 1)),
+            (slice(by0, by0 + bar_h), slice(bx0 - 1, bx0)),
+            (slice(by0, by0 + bar_h), slice(bx0 + bar_w, bx0 + bar_w + 1)),
+        ):
+            colour[rows, cols], opacity[rows, cols] = edge, 1.0
+        self._opacity, self._colour = opacity, colour
+        self.fits = x0 >= 0 and y0 + ph <= height
+
+    def draw(self, frame: np.ndarray) -> None:
+        x0, y0, x1, y1 = self.box
+        region = frame[y0:y1, x0:x1]
+        region[:] = np.clip(region * (1.0 - self._opacity) + self._colour + 0.5, 0, 255).astype(np.uint8)
+
+
+def _legend_font(size: int):
+    from PIL import ImageFont
+
+    try:
+        import matplotlib
+
+        return ImageFont.truetype(str(Path(matplotlib.get_data_path()) / "fonts" / "ttf" / "DejaVuSans.ttf"), size)
+    except (ImportError, OSError):
+        try:
+            return ImageFont.load_default(size=size)
+        except TypeError:  # Pillow < 10.1: the fixed bitmap font
+            return ImageFont.load_default()
 
 
 def _colouring(color_by, x, times, velocities, dim, vmin, vmax):
@@ -281,8 +471,9 @@ def _scenery(colliders) -> list[tuple[str, list[float]]]:
 
 
 def _extent(x, r, scenery):
-    """(lo, hi): the box of all frames' particles and of the scenery's finite parts, widened
-    by the largest radius (at least 5% of its size, so that one particle still has a view)."""
+    """(lo, hi): the box of all frames' particles (finite positions: the live ones) and of the
+    scenery's finite parts, widened by the largest radius (a point without radius by 0.5 m,
+    so that it still has a view)."""
     finite = x[np.all(np.isfinite(x), axis=2)]
     points = [finite.reshape(-1, 3)]
     for kind, v in scenery:
@@ -304,17 +495,86 @@ def _extent(x, r, scenery):
         hi = np.array([np.nanmax(pts[:, k]) if np.any(np.isfinite(pts[:, k])) else np.nan for k in range(3)])
     known = np.isfinite(lo) & np.isfinite(hi)
     lo, hi = np.where(known, lo, 0.0), np.where(known, hi, np.where(known.any(), 0.0, 1.0))
-    pad = float(r.max()) if r.size else 0.0
     span = float(np.max(hi - lo))
-    # A degenerate box (one particle, a line) still gets a view of finite size.
-    pad = max(pad, 0.05 * span, 1e-9)
+    pad = float(r.max()) if r.size else 0.0
+    # A degenerate box (one point, no radius) still gets a view of finite size.
+    pad = max(pad, 1e-3 * span) if span + pad > 0 else 0.5
     return lo - pad, hi + pad
 
 
-def _auto_camera(lo, hi, dim, width, height):
-    if dim == 2:
-        return Camera2D(float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))
-    return Camera3D.framing(lo, hi, width=width, height=height)
+#: The camera direction of the default 3D view (box → eye): front right, above.
+_VIEW_FROM = (1.0, -1.6, 0.9)
+
+
+def _frame_corners(x, r, scenery, lo, hi) -> np.ndarray:
+    """(P, 3): the corners of each frame's box of its live particles (radii included) and of
+    each collider's finite box (a box's infinite bounds at the extent [lo, hi], a sphere's
+    cube). Each frame's box, not one over all frames, so that a scene whose parts sit apart
+    in space and time (a cloth above a sphere, then draped on it) is framed by what it shows:
+    the box around all of it has empty corners that would take room in the frame."""
+    live = np.all(np.isfinite(x), axis=2)
+    rows = live.any(axis=1)
+    boxes = []
+    if rows.any():
+        xr = x[rows]
+        low = np.where(live[rows][:, :, None], xr - r[None, :, None], np.inf).min(axis=1)
+        high = np.where(live[rows][:, :, None], xr + r[None, :, None], -np.inf).max(axis=1)
+        boxes += list(zip(low, high, strict=True))
+    for kind, v in scenery:
+        if kind == "box":
+            a, b = np.array(v[:3], float), np.array(v[3:], float)
+            boxes.append((np.where(np.isfinite(a), a, lo), np.where(np.isfinite(b), b, hi)))
+        elif kind == "sphere":
+            c, radius = np.array(v[:3], float), float(v[3])
+            boxes.append((c - radius, c + radius))
+    if not boxes:
+        return _corners(lo, hi)
+    return np.concatenate([_corners(a, b) for a, b in boxes])
+
+
+def _auto_camera(lo, hi, dim, width, height, avoid=None, fov_deg: float = 40.0, points=None):
+    """The camera that fits the scene into the frame to ``FRAME_MARGIN`` of its sides (2D: the
+    xy rectangle of the box [lo, hi], orthographic; 3D: ``points``, by default the 8 corners
+    of [lo, hi], seen from ``_VIEW_FROM``, both fields of view fitted). When the scene would
+    overlap ``avoid`` (x0, y0, x1, y1 pixels: the legend), it is fitted either between it and
+    its mirror image on the left or below it, whichever leaves it larger."""
+    m = _core.FRAME_MARGIN
+    w, h = float(width), float(height)
+
+    def fit(window):
+        if dim == 2:
+            return _fit_2d(lo, hi, w, h, window)
+        pts = _corners(lo, hi) if points is None else points
+        eye, target, up, box = _core.frame_points(pts, _VIEW_FROM, fov_deg, int(width), int(height), window)
+        return Camera3D(tuple(eye), tuple(target), tuple(up), fov_deg), box
+
+    full = (m * w, m * h, (1.0 - m) * w, (1.0 - m) * h)
+    camera, box = fit(full)
+    if avoid is None or not (box[0] < avoid[2] and avoid[0] < box[2] and box[1] < avoid[3] and avoid[1] < box[3]):
+        return camera
+    best, area = camera, 0.0
+    # Beside it: a window narrowed on both sides, so that the view stays centred (a scene off
+    # the axis of a perspective camera leans); under it: the rows below the legend.
+    side = w - avoid[0] + m * w
+    for window in ((side, full[1], w - side, full[3]), (full[0], avoid[3] + m * h, full[2], full[3])):
+        if window[2] - window[0] < 0.3 * w or window[3] - window[1] < 0.3 * h:
+            continue
+        c, b = fit(window)
+        if (b[2] - b[0]) * (b[3] - b[1]) > area:
+            best, area = c, (b[2] - b[0]) * (b[3] - b[1])
+    return best
+
+
+def _fit_2d(lo, hi, w, h, window):
+    """The Camera2D showing the rectangle [lo, hi] (xy) as large as fits the pixel window,
+    centred in it, and the rectangle's pixel box."""
+    x0, y0, x1, y1 = window
+    span = np.asarray(hi[:2], float) - np.asarray(lo[:2], float)
+    s = min((x1 - x0) / span[0], (y1 - y0) / span[1])  # pixels per metre
+    left, top = x0 + 0.5 * ((x1 - x0) - s * span[0]), y0 + 0.5 * ((y1 - y0) - s * span[1])
+    xmin, ymax = float(lo[0]) - left / s, float(hi[1]) + top / s
+    camera = Camera2D(xmin, ymax - h / s, xmin + w / s, ymax)
+    return camera, (left, top, left + s * span[0], top + s * span[1])
 
 
 def write_video(

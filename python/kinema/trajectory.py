@@ -128,8 +128,9 @@ class Trajectory:
         ``colliders=`` gives others). ``options`` go to ``kinema.render_frames``
         (``color_by``, ``width``, ``height``, ``camera``, ...) and ``preset``/``crf`` to
         ``kinema.write_video``. Particles without a radius are drawn at 1/200 of the scene's
-        size."""
-        from .render import render_frames, write_video
+        size. Each frame shows the particles ``alive`` then, and the ``springs`` whose ends
+        both are, as lines."""
+        from .render import _trajectory_options, render_frames, write_video
 
         video = {k: options.pop(k) for k in ("preset", "crf") if k in options}
         options.setdefault("colliders", self.colliders if draw_colliders else None)
@@ -137,11 +138,10 @@ class Trajectory:
         if fps is None:
             fps = 1.0 / float(np.median(np.diff(self.t))) if self.t.size > 1 else 30.0
             times = self.t if self.t.size > 1 else None
-        radius = self.radii
-        if radius is None or not np.any(radius > 0):
-            extent = float(np.ptp(self.positions.reshape(-1, 3), axis=0).max()) or 1.0
-            radius = np.full(self.positions.shape[1], extent / 200.0)
-        frames = render_frames(self.positions, radius, self.t, dim=self.dim, velocities=self.velocities, **options)
+        # The radii (or a stand-in), the alive mask and the springs (ids → columns); options win.
+        for name, value in _trajectory_options(self).items():
+            options.setdefault(name, value)
+        frames = render_frames(self.positions, t=self.t, dim=self.dim, velocities=self.velocities, **options)
         return write_video(frames, path, fps=fps, times=times, **video)
 
     def show(self, mode: str = "viewer", **options: Any) -> Any:

@@ -2,7 +2,7 @@
 
 use std::borrow::Cow;
 
-use kinema::render::{categorical, render_scene, text, yuv, Camera, Colormap, RenderParams, Scenery, SceneryItem};
+use kinema::render::{categorical, render_frame as render_core, text, yuv, Camera, Colormap, RenderParams, Scenery, SceneryItem};
 use numpy::ndarray::Dimension;
 use numpy::{
     Element, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
@@ -81,12 +81,13 @@ fn scenery_items(items: Vec<(String, Vec<f64>)>) -> PyResult<Vec<SceneryItem>> {
 /// [point, normal]), ("box", [lo, hi]) (bounds may be infinite), ("sphere", [centre,
 /// radius]); `extent`: (lo, hi), m, the region of the whole scene, which sizes planes and
 /// clamps infinite box bounds (default: this frame's particles and the finite scenery).
+/// `springs`: (S, 2) integer indices of particles joined by a line `spring_width` pixels wide.
 #[pyfunction]
 #[pyo3(signature = (
     positions, radius, *, colors=None, values=None, colormap="viridis", vmin=None, vmax=None,
     width=1280, height=720, view=None, eye=None, target=None, up=[0.0, 0.0, 1.0], fov_deg=40.0,
     background=(255, 255, 255), min_radius_px=1.0, label=None, label_scale=2,
-    label_color=(0, 0, 0), scenery=None, extent=None
+    label_color=(0, 0, 0), scenery=None, extent=None, springs=None, spring_width=1.5
 ))]
 #[allow(clippy::too_many_arguments)]
 fn render_frame<'py>(
@@ -112,7 +113,28 @@ fn render_frame<'py>(
     label_color: (u8, u8, u8),
     scenery: Option<Vec<(String, Vec<f64>)>>,
     extent: Option<([f64; 3], [f64; 3])>,
+    springs: Option<PyReadonlyArray2<'py, i64>>,
+    spring_width: f64,
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    let springs: Vec<[usize; 2]> = match springs {
+        None => Vec::new(),
+        Some(a) => {
+            if a.shape()[1] != 2 {
+                return Err(bad("springs", format!("an array of shape {:?}", a.shape()), "shape (S, 2)"));
+            }
+            let v = data(&a);
+            v.chunks_exact(2)
+                .enumerate()
+                .map(|(k, p)| {
+                    if p[0] < 0 || p[1] < 0 {
+                        Err(bad(&format!("springs[{k}]"), format!("{p:?}"), "particle indices >= 0"))
+                    } else {
+                        Ok([p[0] as usize, p[1] as usize])
+                    }
+                })
+                .collect::<PyResult<_>>()?
+        }
+    };
     let scenery = Scenery {
         items: scenery_items(scenery.unwrap_or_default())?,
         extent,
@@ -173,13 +195,14 @@ fn render_frame<'py>(
     let params = RenderParams {
         background: [background.0, background.1, background.2],
         min_radius_px,
+        spring_width_px: spring_width,
         ..RenderParams::new(width, height)
     };
     let pos = data(&positions);
     let rad = data(&radius);
     let mut image = vec![0u8; width.saturating_mul(height).saturating_mul(3).min(3 << 30)];
     py.detach(|| -> Result<(), kinema::Error> {
-        render_scene(&camera, &pos, &rad, &colors, &scenery, &params, &mut image)?;
+        render_core(&camera, &pos, &rad, &colors, &springs, &scenery, &params, &mut image)?;
         if let Some(label) = label {
             let lc = [label_color.0, label_color.1, label_color.2];
             let margin = 4 * label_scale.max(1);
@@ -248,6 +271,34 @@ fn frame_box(
     }
 }
 
+/// (eye, target, up, bbox) of a perspective camera looking from direction `from_` whose
+/// width × height image shows the (P, 3) points inside `window` = (x0, y0, x1, y1) pixels, as
+/// large as that allows; bbox (x0, y0, x1, y1) is where the points land, pixels.
+#[pyfunction]
+#[pyo3(signature = (points, from_, fov_deg, width, height, window))]
+#[allow(clippy::type_complexity)]
+fn frame_points(
+    points: PyReadonlyArray2<'_, f64>,
+    from_: [f64; 3],
+    fov_deg: f64,
+    width: usize,
+    height: usize,
+    window: [f64; 4],
+) -> PyResult<([f64; 3], [f64; 3], [f64; 3], [f64; 4])> {
+    if points.shape()[1] != 3 {
+        return Err(bad(
+            "points",
+            format!("an array of shape {:?}", points.shape()),
+            "shape (P, 3)",
+        ));
+    }
+    let pts: Vec<[f64; 3]> = data(&points).chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    match Camera::frame_points(&pts, from_, fov_deg, width, height, window).map_err(to_py)? {
+        (Camera::Perspective { eye, target, up, .. }, bbox) => Ok((eye, target, up, bbox)),
+        (Camera::Orthographic { .. }, _) => unreachable!("frame_points makes a perspective camera"),
+    }
+}
+
 /// An (H, W, 3) uint8 RGB frame (H and W even) as YUV 4:2:0 bytes (planes Y, U, V; BT.601
 /// limited range) for the H.264 encoder. The GIL is released while converting.
 #[pyfunction]
@@ -264,13 +315,17 @@ fn rgb_to_yuv420p<'py>(py: Python<'py>, frame: PyReadonlyArray3<'py, u8>) -> PyR
 }
 
 /// Registers the render functions (`render_frame`, `colormap`, `categorical_colors`,
-/// `frame_box`, `rgb_to_yuv420p`) and the constant `COLORMAP_NAMES`.
+/// `frame_box`, `frame_points`, `rgb_to_yuv420p`) and the constants `COLORMAP_NAMES`,
+/// `LINE_COLOR` (springs, box edges) and `FRAME_MARGIN`.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render_frame, m)?)?;
     m.add_function(wrap_pyfunction!(colormap, m)?)?;
     m.add_function(wrap_pyfunction!(categorical_colors, m)?)?;
     m.add_function(wrap_pyfunction!(frame_box, m)?)?;
+    m.add_function(wrap_pyfunction!(frame_points, m)?)?;
     m.add_function(wrap_pyfunction!(rgb_to_yuv420p, m)?)?;
     m.add("COLORMAP_NAMES", kinema::render::COLORMAP_NAMES.to_vec())?;
+    m.add("LINE_COLOR", kinema::render::scenery::LINE_COLOR.to_vec())?;
+    m.add("FRAME_MARGIN", kinema::render::FRAME_MARGIN)?;
     Ok(())
 }

@@ -1,12 +1,15 @@
 //! The renderer draws what it should: discs where they are with antialiased edges, nearer
 //! spheres over farther ones, perspective sizes, nothing behind the eye, and the same bytes
 //! for every thread count; with scenery, floors below the horizon, sphere obstacles in depth
-//! order with the particles, box outlines on their edges only, and named errors.
+//! order with the particles, box outlines on their edges only, and named errors; springs as
+//! lines from rim to rim, in depth order in 3D; cameras that fit a box into both fields of view.
 
 // The tests sit in a module named `render` so that `cargo test render` selects them.
 mod render {
     use kinema::render::scenery::{BOX_FLOOR_COLOR, FLOOR_COLOR, LINE_COLOR, OBSTACLE_COLOR};
-    use kinema::render::{render, render_scene, text, Camera, RenderParams, RenderStats, Scenery, SceneryItem};
+    use kinema::render::{
+        render, render_frame, render_scene, text, Camera, RenderParams, RenderStats, Scenery, SceneryItem, FRAME_MARGIN,
+    };
     use kinema::Error;
 
     const BG: [u8; 3] = [255, 255, 255];
@@ -129,6 +132,8 @@ mod render {
     #[test]
     fn frames_are_identical_for_one_and_two_threads() {
         let (positions, radius, colors) = cloud(3000);
+        // Springs between particles far apart and near: lines across many bands, and short ones.
+        let springs: Vec<[usize; 2]> = (0..600).map(|k| [k, (k * 7 + 1) % 3000]).collect();
         let (w, h) = (320, 200);
         let params = RenderParams::new(w, h);
         let cams = [
@@ -168,7 +173,7 @@ mod render {
                     .map(|&threads| {
                         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                         let mut image = vec![0u8; w * h * 3];
-                        pool.install(|| render_scene(&cam, &positions, &radius, &colors, scenery, &params, &mut image))
+                        pool.install(|| render_frame(&cam, &positions, &radius, &colors, &springs, scenery, &params, &mut image))
                             .unwrap();
                         image
                     })
@@ -548,5 +553,187 @@ mod render {
             extent: None,
         };
         render_scene(&cam, &[], &[], &[], &ok, &p, &mut image).unwrap();
+    }
+
+    // -- springs ------------------------------------------------------------------------------
+
+    fn spring_frame(
+        camera: &Camera,
+        pos: &[[f64; 3]],
+        radius: &[f64],
+        springs: &[[usize; 2]],
+        scenery: &Scenery,
+        w: usize,
+        h: usize,
+    ) -> Vec<u8> {
+        let mut image = vec![0u8; w * h * 3];
+        let positions: Vec<f64> = pos.iter().flatten().copied().collect();
+        let colors: Vec<u8> = pos.iter().flat_map(|_| [200, 0, 0]).collect();
+        render_frame(
+            camera,
+            &positions,
+            radius,
+            &colors,
+            springs,
+            scenery,
+            &RenderParams::new(w, h),
+            &mut image,
+        )
+        .unwrap();
+        image
+    }
+
+    #[test]
+    fn a_spring_is_a_line_from_rim_to_rim() {
+        // [0, 10] × [0, 5] onto 200 × 100: 20 px per m. Two discs of radius 10 px on the row
+        // whose pixel centres are at y = 49.5, x = 2 m and 8 m (pixel columns 40 and 160).
+        let (w, h) = (200, 100);
+        let cam = Camera::fit_2d([0.0, 0.0], [10.0, 5.0], w, h).unwrap();
+        let pos = [[2.0, 2.525, 0.0], [8.0, 2.525, 0.0]];
+        let img = spring_frame(&cam, &pos, &[0.5, 0.5], &[[0, 1]], &Scenery::default(), w, h);
+        for i in 55..145 {
+            assert_eq!(pixel(&img, w, i, 49), LINE_COLOR, "column {i} on the line");
+        }
+        // 1.5 px wide: the rows beside it are touched at most partly, the ones beyond not at all.
+        assert_ne!(pixel(&img, w, 100, 48), LINE_COLOR);
+        assert_eq!(pixel(&img, w, 100, 46), BG);
+        assert_eq!(pixel(&img, w, 100, 52), BG);
+        // The discs are whole: the line stops at their rims.
+        assert_eq!(pixel(&img, w, 45, 49), [200, 0, 0]);
+        assert_eq!(pixel(&img, w, 155, 49), [200, 0, 0]);
+        // No spring, no line; a spring of one particle with itself draws nothing.
+        let bare = spring_frame(&cam, &pos, &[0.5, 0.5], &[], &Scenery::default(), w, h);
+        assert_eq!(pixel(&bare, w, 100, 49), BG);
+        assert_eq!(
+            spring_frame(&cam, &pos, &[0.5, 0.5], &[[1, 1]], &Scenery::default(), w, h),
+            bare
+        );
+        // An index past the particles is an error that names the spring.
+        let mut image = vec![0u8; w * h * 3];
+        let e = render_frame(
+            &cam,
+            &[0.0; 6],
+            &[0.1; 2],
+            &[0; 6],
+            &[[0, 1], [1, 2]],
+            &Scenery::default(),
+            &RenderParams::new(w, h),
+            &mut image,
+        );
+        match e.unwrap_err() {
+            Error::InvalidParameter { parameter, .. } => assert_eq!(parameter, "springs[1]"),
+            other => panic!("{other}"),
+        }
+    }
+
+    #[test]
+    fn a_3d_spring_in_front_of_an_obstacle_shows_and_one_behind_it_does_not() {
+        // Looking along +y at a sphere obstacle of radius 1 at the origin; a horizontal spring
+        // through x = 0 at y = −2 (in front, 8 m from the eye) or y = +2 (behind, 12 m), half a
+        // pixel below the centre so that it runs along the centres of pixel row 100.
+        let (w, h) = (200, 200);
+        let cam = Camera::perspective([0.0, -10.0, 0.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0).unwrap();
+        let f = 100.0 / 20f64.to_radians().tan();
+        let ball = items(vec![SceneryItem::Sphere {
+            center: [0.0; 3],
+            radius: 1.0,
+        }]);
+        let spring_at = |y: f64| {
+            let z = -0.5 * (y + 10.0) / f;
+            spring_frame(&cam, &[[-2.0, y, z], [2.0, y, z]], &[0.05; 2], &[[0, 1]], &ball, w, h)
+        };
+        let (front, behind) = (spring_at(-2.0), spring_at(2.0));
+        let count = |img: &[u8]| (0..w).filter(|&i| pixel(img, w, i, 100) == LINE_COLOR).count();
+        assert_eq!(pixel(&front, w, 100, 100), LINE_COLOR, "drawn over the obstacle");
+        assert!(
+            is_grey(pixel(&behind, w, 100, 100), 12) && pixel(&behind, w, 100, 100) != LINE_COLOR,
+            "hidden by it"
+        );
+        assert!(count(&front) > count(&behind) + 40, "{} vs {}", count(&front), count(&behind));
+        assert!(count(&behind) > 10, "beside the obstacle the far spring shows");
+    }
+
+    // -- framing ------------------------------------------------------------------------------
+
+    /// Pixel position of a world point under a perspective camera (the pinhole of camera.rs).
+    fn project(cam: &Camera, p: [f64; 3], w: usize, h: usize) -> [f64; 2] {
+        let Camera::Perspective {
+            eye,
+            target,
+            up,
+            fov_y_deg,
+            ..
+        } = *cam
+        else {
+            panic!()
+        };
+        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let unit = |a: [f64; 3]| {
+            let n = dot(a, a).sqrt();
+            [a[0] / n, a[1] / n, a[2] / n]
+        };
+        let f_ = unit(sub(target, eye));
+        let r = unit(cross(f_, up));
+        let u = cross(r, f_);
+        let d = sub(p, eye);
+        let f = 0.5 * h as f64 / (0.5 * fov_y_deg.to_radians()).tan();
+        let z = dot(d, f_);
+        [0.5 * w as f64 + f * dot(d, r) / z, 0.5 * h as f64 - f * dot(d, u) / z]
+    }
+
+    #[test]
+    fn frame_box_fits_a_tall_box_and_a_wide_one_into_both_fields_of_view() {
+        let (w, h) = (320, 180);
+        for (hi, tall) in [([0.5, 0.5, 3.0], true), ([4.0, 4.0, 0.2], false)] {
+            let lo = [0.0; 3];
+            let cam = Camera::frame_box(lo, hi, [1.0, -1.6, 0.9], 40.0, w, h).unwrap();
+            let corners: Vec<[f64; 2]> = (0..8)
+                .map(|c| {
+                    project(
+                        &cam,
+                        std::array::from_fn(|k| if c >> k & 1 == 1 { hi[k] } else { lo[k] }),
+                        w,
+                        h,
+                    )
+                })
+                .collect();
+            let (x0, x1) = corners
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[0]), b.max(p[0])));
+            let (y0, y1) = corners
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[1]), b.max(p[1])));
+            let (mw, mh) = (FRAME_MARGIN * w as f64, FRAME_MARGIN * h as f64);
+            let tol = 1e-6;
+            assert!(
+                x0 >= mw - tol && x1 <= w as f64 - mw + tol && y0 >= mh - tol && y1 <= h as f64 - mh + tol,
+                "{x0} {x1} {y0} {y1}"
+            );
+            // The binding side is filled to its margins, the other centred.
+            let (fill_x, fill_y) = ((x1 - x0) / (w as f64 - 2.0 * mw), (y1 - y0) / (h as f64 - 2.0 * mh));
+            assert!((fill_x.max(fill_y) - 1.0).abs() < 1e-6, "{fill_x} {fill_y}");
+            assert!(if tall { fill_y > fill_x } else { fill_x > fill_y });
+            assert!((0.5 * (x0 + x1) - 0.5 * w as f64).abs() < 1e-6 && (0.5 * (y0 + y1) - 0.5 * h as f64).abs() < 1e-6);
+        }
+        // A window off-centre: the points go into it.
+        let pts = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]];
+        let (cam, bbox) = Camera::frame_points(&pts, [1.0, -1.0, 1.0], 40.0, w, h, [10.0, 20.0, 200.0, 170.0]).unwrap();
+        for p in pts {
+            let q = project(&cam, p, w, h);
+            assert!(q[0] >= bbox[0] - 1e-6 && q[0] <= bbox[2] + 1e-6 && q[1] >= bbox[1] - 1e-6 && q[1] <= bbox[3] + 1e-6);
+        }
+        assert!(
+            bbox[0] >= 10.0 - 1e-6 && bbox[2] <= 200.0 + 1e-6 && bbox[1] >= 20.0 - 1e-6 && bbox[3] <= 170.0 + 1e-6,
+            "{bbox:?}"
+        );
+        assert!(Camera::frame_points(&pts, [1.0, 0.0, 0.0], 40.0, w, h, [10.0, 20.0, 5.0, 170.0]).is_err());
     }
 }

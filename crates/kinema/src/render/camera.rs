@@ -5,6 +5,10 @@
 
 use crate::Error;
 
+/// The margin [`Camera::frame_box`] leaves on each side of the image, a fraction of its width
+/// (left and right) and height (top and bottom).
+pub const FRAME_MARGIN: f64 = 0.03;
+
 /// How world coordinates become pixel coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Camera {
@@ -79,10 +83,10 @@ impl Camera {
         Ok(cam)
     }
 
-    /// Perspective camera that frames the box `[lo, hi]` (m): it looks at the box centre from
-    /// the direction `from` (a vector pointing from the centre towards the eye) and stands far
-    /// enough that the box's bounding sphere fits the narrower field of view of a
-    /// `width × height` image. Up is +z unless `from` is vertical (then +y).
+    /// Perspective camera that frames the box `[lo, hi]` (m): it looks from the direction
+    /// `from` (a vector pointing from the box towards the eye) and its 8 corners fill a
+    /// `width × height` image up to a margin of [`FRAME_MARGIN`] of each side, centred
+    /// ([`Camera::frame_points`] of the corners). Up is +z unless `from` is vertical (then +y).
     pub fn frame_box(
         lo: [f64; 3],
         hi: [f64; 3],
@@ -91,37 +95,159 @@ impl Camera {
         width: usize,
         height: usize,
     ) -> Result<Self, Error> {
-        check_size(width, height)?;
-        check_fov(fov_y_deg)?;
         if !(0..3).all(|k| hi[k] >= lo[k] && lo[k].is_finite() && hi[k].is_finite()) {
             return Err(invalid("box", format!("{lo:?}..{hi:?}"), "finite corners with hi >= lo"));
+        }
+        let corners: Vec<[f64; 3]> = (0..8)
+            .map(|c| std::array::from_fn(|k| if c >> k & 1 == 1 { hi[k] } else { lo[k] }))
+            .collect();
+        let (w, h) = (width as f64, height as f64);
+        let window = [
+            FRAME_MARGIN * w,
+            FRAME_MARGIN * h,
+            (1.0 - FRAME_MARGIN) * w,
+            (1.0 - FRAME_MARGIN) * h,
+        ];
+        Ok(Camera::frame_points(&corners, from, fov_y_deg, width, height, window)?.0)
+    }
+
+    /// Perspective camera looking from the direction `from` (from the points towards the eye)
+    /// whose `width × height` image shows every point inside `window` = [x0, y0, x1, y1]
+    /// (pixels, x to the right, y down), as large as that allows: the points touch the
+    /// window's sides along one image axis (or both) and are centred in it along the other.
+    /// Returns the camera and the points' pixel bounding box [x0, y0, x1, y1].
+    ///
+    /// Both fields of view are fitted, not a bounding sphere to the narrower one, so a tall
+    /// scene in a wide image fills its height. With the camera basis (right, up, forward) of
+    /// `from`, a point at (x, y, z) from the points' centre c, and the eye at
+    /// c + sx·right + sy·up − D·forward, the point lands at the tangent u = (x − sx)/(z + D)
+    /// right of the view axis (v = (y − sy)/(z + D) up). It is inside the window when
+    /// a₀ ≤ u ≤ a₁, a the window's sides as tangents (pixels from the image centre over the
+    /// focal length f), i.e. x − a₁z − a₁D ≤ sx ≤ x − a₀z − a₀D. Some sx suits every point
+    /// when D (a₁ − a₀) ≥ maxᵢ(xᵢ − a₁zᵢ) − minᵢ(xᵢ − a₀zᵢ): the least D is exact, per axis,
+    /// and the larger of the two axes' is taken. Along the axis with room to spare, sx is
+    /// chosen (by bisection: the projected extent's midpoint falls as sx grows) to centre the
+    /// points' projected extent in the window.
+    pub fn frame_points(
+        points: &[[f64; 3]],
+        from: [f64; 3],
+        fov_y_deg: f64,
+        width: usize,
+        height: usize,
+        window: [f64; 4],
+    ) -> Result<(Self, [f64; 4]), Error> {
+        check_size(width, height)?;
+        check_fov(fov_y_deg)?;
+        if points.is_empty() || !points.iter().flatten().all(|c| c.is_finite()) {
+            return Err(invalid(
+                "points",
+                format!("{} points", points.len()),
+                "at least one point, finite",
+            ));
+        }
+        let (w, h) = (width as f64, height as f64);
+        let [x0, y0, x1, y1] = window;
+        if !(0.0 <= x0 && x0 < x1 && x1 <= w && 0.0 <= y0 && y0 < y1 && y1 <= h) {
+            return Err(invalid(
+                "window",
+                format!("{window:?}"),
+                &format!("x0 < x1 within [0, {width}] and y0 < y1 within [0, {height}] pixels"),
+            ));
         }
         let n = norm(from);
         if !(n > 0.0 && n.is_finite()) {
             return Err(invalid("from", format!("{from:?}"), "a finite non-zero direction"));
         }
         let dir = scale(from, 1.0 / n);
-        let center = scale(add(lo, hi), 0.5);
-        let radius = (0.5 * norm(sub(hi, lo))).max(1e-12);
-        // A sphere of radius ρ seen from distance D subtends the half angle asin(ρ/D); it fits
-        // the half field of view φ when D = ρ / sin φ. The horizontal half field of view is
-        // atan(aspect · tan φ_y), the narrower of the two is used.
-        let half_y = 0.5 * fov_y_deg.to_radians();
-        let half_x = (width as f64 / height as f64 * half_y.tan()).atan();
-        let distance = radius / half_y.min(half_x).sin();
-        let up = if dir[0].abs() < 1e-9 && dir[1].abs() < 1e-9 {
+        let world_up = if dir[0].abs() < 1e-9 && dir[1].abs() < 1e-9 {
             [0.0, 1.0, 0.0]
         } else {
             [0.0, 0.0, 1.0]
         };
-        let eye = add(center, scale(dir, distance));
-        Ok(Camera::Perspective {
+        let forward = scale(dir, -1.0);
+        let right = {
+            let r = cross(forward, world_up);
+            scale(r, 1.0 / norm(r))
+        };
+        let up = cross(right, forward);
+        let f = 0.5 * h / (0.5 * fov_y_deg.to_radians()).tan();
+        // The window's sides as tangents from the view axis: a along right, b along up.
+        let (a0, a1) = ((x0 - 0.5 * w) / f, (x1 - 0.5 * w) / f);
+        let (b0, b1) = ((0.5 * h - y1) / f, (0.5 * h - y0) / f);
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in points {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        let centre = scale(add(lo, hi), 0.5);
+        let size = norm(sub(hi, lo));
+        let local: Vec<[f64; 3]> = points
+            .iter()
+            .map(|&p| {
+                let d = sub(p, centre);
+                [dot(d, right), dot(d, up), dot(d, forward)]
+            })
+            .collect();
+        // The least distance along each axis (axis 0: x with a, axis 1: y with b).
+        let least = |k: usize, t0: f64, t1: f64| {
+            let top = local.iter().map(|q| q[k] - t1 * q[2]).fold(f64::NEG_INFINITY, f64::max);
+            let bottom = local.iter().map(|q| q[k] - t0 * q[2]).fold(f64::INFINITY, f64::min);
+            (top - bottom) / (t1 - t0)
+        };
+        let zmin = local.iter().map(|q| q[2]).fold(f64::INFINITY, f64::min);
+        // Never inside the points: the eye stays in front of the nearest by a little.
+        let floor = -zmin + 1e-3 * size.max(1e-9);
+        let distance = least(0, a0, a1).max(least(1, b0, b1)).max(floor).max(1e-9);
+        // The shift along one axis: the feasible range, then bisection to centre the extent.
+        let shift = |k: usize, t0: f64, t1: f64| {
+            let lo_s = local
+                .iter()
+                .map(|q| q[k] - t1 * (q[2] + distance))
+                .fold(f64::NEG_INFINITY, f64::max);
+            let hi_s = local
+                .iter()
+                .map(|q| q[k] - t0 * (q[2] + distance))
+                .fold(f64::INFINITY, f64::min);
+            let (mut a, mut b) = (lo_s.min(hi_s), lo_s.max(hi_s));
+            let target = t0 + t1;
+            let mid = |s: f64| {
+                let (mut u0, mut u1) = (f64::INFINITY, f64::NEG_INFINITY);
+                for q in &local {
+                    let u = (q[k] - s) / (q[2] + distance);
+                    u0 = u0.min(u);
+                    u1 = u1.max(u);
+                }
+                u0 + u1
+            };
+            for _ in 0..60 {
+                let m = 0.5 * (a + b);
+                if mid(m) > target {
+                    a = m;
+                } else {
+                    b = m;
+                }
+            }
+            0.5 * (a + b)
+        };
+        let (sx, sy) = (shift(0, a0, a1), shift(1, b0, b1));
+        let target = add(centre, add(scale(right, sx), scale(up, sy)));
+        let eye = sub(target, scale(forward, distance));
+        let camera = Camera::Perspective {
             eye,
-            target: center,
-            up,
+            target,
+            up: world_up,
             fov_y_deg,
             near: 1e-3 * distance,
-        })
+        };
+        let mut bbox = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+        for q in &local {
+            let z = q[2] + distance;
+            let (px, py) = (0.5 * w + f * (q[0] - sx) / z, 0.5 * h - f * (q[1] - sy) / z);
+            bbox = [bbox[0].min(px), bbox[1].min(py), bbox[2].max(px), bbox[3].max(py)];
+        }
+        Ok((camera, bbox))
     }
 
     /// Checks the camera's parameters; an orthographic camera needs a finite positive scale,

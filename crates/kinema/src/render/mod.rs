@@ -7,10 +7,13 @@
 //!    particles behind the camera are dropped. The scenery is projected too ([`scenery`]):
 //!    planes, boxes and 2D obstacles become a short list of background primitives (convex
 //!    fills and antialiased lines in pixels, cut at the camera's near distance first), and
-//!    3D sphere obstacles become sprites like the particles, numbered after them.
+//!    3D sphere obstacles become sprites like the particles, numbered after them. Springs
+//!    (pairs of particles, [`render_frame`]) become antialiased lines from rim to rim, cut at
+//!    the near distance, numbered after the obstacles.
 //! 2. order     3D: far to near (painter's algorithm, ties broken by index), sphere obstacles
-//!    included; 2D: index order — later particles are drawn over earlier ones.
-//! 3. bin       each sprite is listed, in draw order, in every horizontal band of
+//!    and springs (at their midpoints' depth) included; 2D: springs first, then the particles
+//!    in index order — later particles are drawn over earlier ones.
+//! 3. bin       each sprite or line is listed, in draw order, in every horizontal band of
 //!    [`BAND_ROWS`] rows it overlaps. (The few background primitives are not binned: every
 //!    band walks all of them and draws the rows it owns.)
 //! 4. raster    the bands are filled in parallel (rayon); each band clears to the background,
@@ -29,7 +32,7 @@ pub mod scenery;
 pub mod text;
 pub mod yuv;
 
-pub use camera::{Camera, Projected};
+pub use camera::{Camera, Projected, FRAME_MARGIN};
 pub use colormap::{categorical, Colormap, COLORMAP_NAMES};
-pub use raster::{render, render_scene, RenderParams, RenderStats, Shading, BAND_ROWS};
+pub use raster::{render, render_frame, render_scene, RenderParams, RenderStats, Shading, BAND_ROWS};
 pub use scenery::{Scenery, SceneryItem};

@@ -2,8 +2,8 @@
 
 use rayon::prelude::*;
 
-use super::camera::{invalid, Camera};
-use super::scenery::{self, Scenery};
+use super::camera::{invalid, norm, sub, Camera, Projector};
+use super::scenery::{self, Prim, Scenery, LINE_COLOR};
 use crate::Error;
 
 /// Rows per band: the unit of parallel work (720 rows give 45 bands).
@@ -50,6 +50,9 @@ pub struct RenderParams {
     pub min_radius_px: f64,
     /// Lighting of 3D spheres (the 2D camera draws flat discs and ignores it).
     pub shading: Shading,
+    /// Width of the lines drawn for springs ([`render_frame`]), pixels, in [1, 1000].
+    /// Default 1.5.
+    pub spring_width_px: f64,
 }
 
 impl RenderParams {
@@ -61,6 +64,7 @@ impl RenderParams {
             background: [255, 255, 255],
             min_radius_px: 1.0,
             shading: Shading::default(),
+            spring_width_px: 1.5,
         }
     }
 }
@@ -144,6 +148,32 @@ pub fn render_scene(
     params: &RenderParams,
     image: &mut [u8],
 ) -> Result<RenderStats, Error> {
+    render_frame(camera, positions, radius, colors, &[], scenery, params, image)
+}
+
+/// [`render_scene`] with springs: `springs` holds pairs of particle indices (into
+/// `positions`), each drawn as an antialiased line of [`LINE_COLOR`],
+/// [`RenderParams::spring_width_px`] wide, from the rim of one particle's disc to the rim of
+/// the other's (nothing when the two discs touch on screen). A pair of one particle twice
+/// draws nothing; an index ≥ N is an error (`springs[k]`).
+///
+/// Where the lines go in the drawing order: in 2D, after the background and before every
+/// particle, so that a particle always covers the strings under it. In 3D they are ordered
+/// with the particles and sphere obstacles, far to near, at the depth of their midpoint: a
+/// cloth's springs in front of a sphere obstacle are drawn over it and those behind it are
+/// hidden, which lines drawn under everything (like box edges) would get wrong. Since a line
+/// stops at its particles' rims, it never paints over its own ends, whichever comes first.
+#[allow(clippy::too_many_arguments)]
+pub fn render_frame(
+    camera: &Camera,
+    positions: &[f64],
+    radius: &[f64],
+    colors: &[u8],
+    springs: &[[usize; 2]],
+    scenery: &Scenery,
+    params: &RenderParams,
+    image: &mut [u8],
+) -> Result<RenderStats, Error> {
     let (w, h) = (params.width, params.height);
     let projector = camera.projector(w, h)?;
     let n = radius.len();
@@ -175,12 +205,26 @@ pub fn render_scene(
             "a number of pixels in [0, 1e6)",
         ));
     }
+    if !(params.spring_width_px >= 1.0 && params.spring_width_px <= 1000.0) {
+        return Err(invalid(
+            "spring_width_px",
+            params.spring_width_px,
+            "a width in pixels in [1, 1000]",
+        ));
+    }
+    if let Some((k, pair)) = springs.iter().enumerate().find(|(_, p)| p[0] >= n || p[1] >= n) {
+        return Err(invalid(
+            &format!("springs[{k}]"),
+            format!("{pair:?}"),
+            &format!("two particle indices < N = {n}"),
+        ));
+    }
     let light = check_shading(&params.shading)?;
     scenery.validate()?;
 
     // 1. project
     let mut culled = 0;
-    let mut sprites: Vec<(f64, usize, Sprite)> = Vec::with_capacity(n);
+    let mut items: Vec<(f64, usize, Item)> = Vec::with_capacity(n + springs.len());
     for i in 0..n {
         let p = [positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]];
         if !p.iter().all(|c| c.is_finite()) {
@@ -199,9 +243,9 @@ pub fn render_scene(
             culled += 1;
             continue;
         };
-        sprites.push((q.depth, i, sprite));
+        items.push((q.depth, i, Item::Sprite(sprite)));
     }
-    let drawn = sprites.len();
+    let drawn = items.len();
 
     // 1b. project the scenery: planes, boxes (and 2D obstacles) become background primitives,
     //     3D sphere obstacles join the particles, numbered after them.
@@ -219,24 +263,43 @@ pub fn render_scene(
         };
         scenery::build(scenery, &frame)
     };
+    let obstacles = built.spheres.len();
     for (k, (depth, s)) in built.spheres.into_iter().enumerate() {
-        sprites.push((depth, n + k, s));
+        items.push((depth, n + k, Item::Sprite(s)));
     }
     let background = built.background;
+
+    // 1c. springs: lines numbered after the obstacles (see `render_frame` for their place).
+    let lines = spring_lines(camera, &projector, positions, radius, springs, params);
+    if spheres {
+        for (k, (depth, line)) in lines.into_iter().enumerate() {
+            items.push((depth, n + obstacles + k, Item::Line(line)));
+        }
+    } else {
+        // 2D: before every particle, in their own order.
+        let particles = std::mem::take(&mut items);
+        items = lines
+            .into_iter()
+            .enumerate()
+            .map(|(k, (d, l))| (d, k, Item::Line(l)))
+            .collect();
+        items.extend(particles);
+    }
 
     // 2. order: far to near; the index breaks ties so the order is total and repeatable.
     //    A sphere obstacle sorts by its centre's depth like a particle: cloth on its near
     //    side is drawn over it, particles behind it under it.
     if spheres {
-        sprites.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        items.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     }
 
     // 3. bin: counting sort of (band, draw position) keeps the draw order inside each band.
     let bands = h.div_ceil(BAND_ROWS);
     let band_of = |row: u32| row as usize / BAND_ROWS;
     let mut start = vec![0usize; bands + 1];
-    for (_, _, s) in &sprites {
-        for b in band_of(s.row0)..=band_of(s.row1 - 1) {
+    for (_, _, it) in &items {
+        let (r0, r1) = it.rows();
+        for b in band_of(r0)..=band_of(r1 - 1) {
             start[b + 1] += 1;
         }
     }
@@ -245,8 +308,9 @@ pub fn render_scene(
     }
     let mut fill = start.clone();
     let mut binned = vec![0u32; start[bands]];
-    for (k, (_, _, s)) in sprites.iter().enumerate() {
-        for b in band_of(s.row0)..=band_of(s.row1 - 1) {
+    for (k, (_, _, it)) in items.iter().enumerate() {
+        let (r0, r1) = it.rows();
+        for b in band_of(r0)..=band_of(r1 - 1) {
             binned[fill[b]] = k as u32;
             fill[b] += 1;
         }
@@ -268,15 +332,15 @@ pub fn render_scene(
             }
         }
         for &k in &binned[start[b]..start[b + 1]] {
-            let s = &sprites[k as usize].2;
-            let rows = s.row0.max(band_row0)..s.row1.min(band_row1);
-            for j in rows {
+            let it = &items[k as usize].2;
+            let (r0, r1) = it.rows();
+            for j in r0.max(band_row0)..r1.min(band_row1) {
                 let off = (j - band_row0) as usize * row_bytes;
                 let row = &mut band[off..off + row_bytes];
-                if spheres {
-                    sphere_row(row, s, j, &light);
-                } else {
-                    disc_row(row, s, j);
+                match it {
+                    Item::Sprite(s) if spheres => sphere_row(row, s, j, &light),
+                    Item::Sprite(s) => disc_row(row, s, j),
+                    Item::Line(line) => line.draw_row(row, j),
                 }
             }
         }
@@ -297,6 +361,78 @@ fn bounding_box(positions: &[f64], radius: &[f64]) -> Option<([f64; 3], [f64; 3]
         }
     }
     (!radius.is_empty()).then_some((lo, hi))
+}
+
+/// What a band draws after its background: a particle or obstacle, or a spring's line.
+enum Item {
+    Sprite(Sprite),
+    Line(Prim),
+}
+
+impl Item {
+    fn rows(&self) -> (u32, u32) {
+        match self {
+            Item::Sprite(s) => (s.row0, s.row1),
+            Item::Line(p) => p.rows(),
+        }
+    }
+}
+
+/// The springs as pixel-space lines with the depth of their midpoints (0 in 2D): each cut at
+/// the near distance (3D), then shortened at an end by the drawn radius of the particle
+/// there (an end cut off by the near distance has no particle in view), so that it runs
+/// from rim to rim; none where the rims meet.
+fn spring_lines(
+    camera: &Camera,
+    projector: &Projector,
+    positions: &[f64],
+    radius: &[f64],
+    springs: &[[usize; 2]],
+    params: &RenderParams,
+) -> Vec<(f64, Prim)> {
+    let (w, h) = (params.width as f64, params.height as f64);
+    // The same cut as the scenery's (`scenery::build`): pixel coordinates stay bounded.
+    let zn = match (camera, projector) {
+        (Camera::Perspective { eye, target, .. }, Projector::Persp { near, .. }) => near.max(1e-4 * norm(sub(*target, *eye))),
+        _ => f64::NEG_INFINITY,
+    };
+    let at = |i: usize| [positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]];
+    let drawn_radius = |i: usize| {
+        projector
+            .project(at(i), radius[i])
+            .map_or(0.0, |q| q.r.max(params.min_radius_px))
+    };
+    let mut out = Vec::new();
+    for &[i, j] in springs {
+        if i == j {
+            continue;
+        }
+        let (ci, cj) = (projector.camera_coords(at(i)), projector.camera_coords(at(j)));
+        let (qi, qj) = if camera.is_3d() {
+            match scenery::clip_segment_near(ci, cj, zn) {
+                Some(pair) => pair,
+                None => continue,
+            }
+        } else {
+            (ci, cj)
+        };
+        let ri = if qi == ci { drawn_radius(i) } else { 0.0 };
+        let rj = if qj == cj { drawn_radius(j) } else { 0.0 };
+        let (a, b) = (projector.camera_to_pixel(qi), projector.camera_to_pixel(qj));
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let len = (d[0] * d[0] + d[1] * d[1]).sqrt();
+        if len.partial_cmp(&(ri + rj)) != Some(std::cmp::Ordering::Greater) {
+            continue;
+        }
+        let u = [d[0] / len, d[1] / len];
+        let a = [a[0] + ri * u[0], a[1] + ri * u[1]];
+        let b = [b[0] - rj * u[0], b[1] - rj * u[1]];
+        let depth = if camera.is_3d() { 0.5 * (qi[2] + qj[2]) } else { 0.0 };
+        if let Some(line) = scenery::line(a, b, params.spring_width_px, LINE_COLOR, 1.0, w, h) {
+            out.push((depth, line));
+        }
+    }
+    out
 }
 
 /// Lighting constants in f32, the light and half vectors normalised.

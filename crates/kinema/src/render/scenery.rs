@@ -603,7 +603,7 @@ fn clip_polygon_near(poly: &[[f64; 3]], zn: f64) -> Vec<[f64; 3]> {
 }
 
 /// The part of the segment AB (camera coordinates) with zc ≥ zn (see `clip_polygon_near`).
-fn clip_segment_near(a: [f64; 3], b: [f64; 3], zn: f64) -> Option<([f64; 3], [f64; 3])> {
+pub(crate) fn clip_segment_near(a: [f64; 3], b: [f64; 3], zn: f64) -> Option<([f64; 3], [f64; 3])> {
     match (a[2] >= zn, b[2] >= zn) {
         (true, true) => Some((a, b)),
         (false, false) => None,
@@ -719,7 +719,7 @@ fn fill(poly: Vec<[f64; 2]>, color: [u8; 3], alpha: f32, w: f64, h: f64) -> Opti
 const MAX_EDGES: usize = 16;
 
 /// A segment (pixels) `width` pixels wide, clipped to the guard rectangle (Liang–Barsky).
-fn line(a: [f64; 2], b: [f64; 2], width: f64, color: [u8; 3], alpha: f32, w: f64, h: f64) -> Option<Prim> {
+pub(crate) fn line(a: [f64; 2], b: [f64; 2], width: f64, color: [u8; 3], alpha: f32, w: f64, h: f64) -> Option<Prim> {
     let d = [b[0] - a[0], b[1] - a[1]];
     // a + s·d for s in [s0, s1], kept inside each of the four sides.
     let (mut s0, mut s1) = (0.0f64, 1.0f64);
