@@ -349,3 +349,19 @@ def test_a_python_force_sees_the_particles_alive_now():
     assert max(seen) in (10, 11) and min(seen) >= 1
     x = traj.positions[traj.alive]
     assert np.linalg.norm(x, axis=1).max() <= 0.5 + 1e-9  # |x| <= the amplitude 0.5 m (at rest at birth)
+
+
+def test_each_particle_is_drawn_in_its_own_colour():
+    # color_by="color": an emitter's colour is the particle's; one without a colour keeps the
+    # renderer's NO_OWN_COLOR. 2D discs are flat: their pixels are exactly the colour.
+    from kinema.render import NO_OWN_COLOR, own_colours
+
+    w = kinema.World(dim=2, dt=1e-3)
+    w.add(Emitter(rate=20.0, shape="sphere", radius=0.5, mass=1.0, particle_radius=0.05, color="#ff2000", end=0.2))
+    w.add_particles([0.0, 0.0, 0.0], radius=0.05)
+    traj = w.run(0.3, fps=10)
+    rgb = own_colours(traj)
+    assert {tuple(c) for c in rgb} == {(255, 32, 0), NO_OWN_COLOR}
+    (frame,) = kinema.render_frames(traj.positions[-1:], traj.radii, traj.t[-1:], dim=2, color_by=rgb, width=200, height=200, legend=False)
+    pixels = {tuple(p) for p in np.asarray(frame).reshape(-1, 3)}
+    assert (255, 32, 0) in pixels and NO_OWN_COLOR in pixels

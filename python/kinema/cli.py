@@ -313,7 +313,7 @@ def _render_video(
     or, without it or when the recording interval is not that rate's rounding (clamped to one
     step), at the recording's own rate (clamped to ``VIDEO_FPS``, and then not real time). The
     rate written (``kinema.render.video_rate``: GIF counts in 1/100 s) is printed."""
-    from .render import _trajectory_options, render_frames, video_rate, write_video
+    from .render import _trajectory_options, own_colours, render_frames, video_rate, write_video
 
     render_opts = dict(render_opts)
     draw_colliders = render_opts.pop("draw_colliders", draw_colliders)
@@ -329,6 +329,8 @@ def _render_video(
     # The radii (or a stand-in), the alive mask and the springs (ids → columns).
     for name, value in _trajectory_options(traj).items():
         render_opts.setdefault(name, value)
+    if isinstance(render_opts.get("color_by"), str) and render_opts["color_by"] == "color":  # each particle's own
+        render_opts["color_by"] = own_colours(traj)
     frames = render_frames(traj.positions, t=traj.t, dim=traj.dim, velocities=traj.velocities, **render_opts)
     with _progress() as bar:
         task = bar.add_task(description, total=len(traj.t))
@@ -542,7 +544,7 @@ def render(
     fps: Annotated[float | None, typer.Option(help="Frames per second (default: real time).")] = None,
     width: Annotated[int, typer.Option(help="Width, pixels.")] = 640,
     height: Annotated[int, typer.Option(help="Height, pixels.")] = 480,
-    color_by: Annotated[str, typer.Option(help="speed or id.")] = "speed",
+    color_by: Annotated[str, typer.Option(help="speed, id or color (each particle's own: an emitter's color).")] = "speed",
     force: Annotated[bool, typer.Option("--force", help="Render even when the work estimate is over the limits.")] = False,
 ) -> None:
     """Render a saved trajectory to a video.
@@ -558,8 +560,8 @@ def render(
         raise ValueError(f"-o {out}: is a directory; give a file name such as {out / 'movie.mp4'}")
     if not out.parent.is_dir() if str(out.parent) else False:
         raise ValueError(f"-o {out}: the folder {out.parent} does not exist")
-    if color_by not in ("speed", "id"):
-        raise ValueError(f"--color-by {color_by!r}: use speed or id")
+    if color_by not in ("speed", "id", "color"):
+        raise ValueError(f"--color-by {color_by!r}: use speed, id or color")
     if not (16 <= width <= 8192 and 16 <= height <= 8192):
         raise ValueError(f"--width {width} --height {height}: each must be between 16 and 8192 pixels")
     if fps is not None and not (VIDEO_FPS[0] <= fps <= VIDEO_FPS[1]):

@@ -264,6 +264,23 @@ def _trajectory_options(traj) -> dict:
     return options
 
 
+#: The colour of a particle without its own (``color_by="color"``), RGB8.
+NO_OWN_COLOR = (70, 130, 200)
+
+
+def own_colours(traj) -> np.ndarray:
+    """Each particle's own colour (``Trajectory.colors``: an ``Emitter``'s ``color``) as uint8
+    RGB (N, 3) for ``render_frames(color_by=...)``; ``NO_OWN_COLOR`` where it has none."""
+    n = np.shape(traj.positions)[1]
+    colors = getattr(traj, "colors", None)
+    out = np.tile(np.array(NO_OWN_COLOR, dtype=np.uint8), (n, 1))
+    if colors is not None:
+        c = np.asarray(colors, dtype=np.float64)
+        given = np.all(np.isfinite(c), axis=1)
+        out[given] = np.round(np.clip(c[given], 0, 1) * 255).astype(np.uint8)
+    return out
+
+
 def _live(alive, x) -> np.ndarray:
     """(F, N) bools: alive (all when None) and with a finite position."""
     n_frames, n = x.shape[:2]

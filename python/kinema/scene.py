@@ -466,7 +466,7 @@ class Camera3DTable(_Model):
 class RenderTable(_Model):
     width: Annotated[int, Field(ge=16, le=8192)] = 640
     height: Annotated[int, Field(ge=16, le=8192)] = 480
-    color_by: Literal["speed", "id"] = "speed"
+    color_by: Literal["speed", "id", "color"] = "speed"
     colormap: str = "viridis"
     background: Annotated[list[Annotated[int, Field(ge=0, le=255)]], Field(min_length=3, max_length=3)] = [255, 255, 255]
     fps: Annotated[float, Field(ge=0.01, le=1000)] | None = None  # playback; what GIF and MP4 can hold (kinema.cli.VIDEO_FPS)

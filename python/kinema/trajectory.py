@@ -130,7 +130,7 @@ class Trajectory:
         ``kinema.write_video``. Particles without a radius are drawn at 1/200 of the scene's
         size. Each frame shows the particles ``alive`` then, and the ``springs`` whose ends
         both are, as lines."""
-        from .render import _trajectory_options, render_frames, write_video
+        from .render import _trajectory_options, own_colours, render_frames, write_video
 
         video = {k: options.pop(k) for k in ("preset", "crf") if k in options}
         options.setdefault("colliders", self.colliders if draw_colliders else None)
@@ -141,6 +141,8 @@ class Trajectory:
         # The radii (or a stand-in), the alive mask and the springs (ids → columns); options win.
         for name, value in _trajectory_options(self).items():
             options.setdefault(name, value)
+        if isinstance(options.get("color_by"), str) and options["color_by"] == "color":  # each particle's own
+            options["color_by"] = own_colours(self)
         frames = render_frames(self.positions, t=self.t, dim=self.dim, velocities=self.velocities, **options)
         return write_video(frames, path, fps=fps, times=times, **video)
 
