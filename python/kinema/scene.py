@@ -24,6 +24,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, ValidationError, field_validator, model_validator
 
 from . import _checks
+from .checkpoint import load_checkpoint, save_checkpoint
 from .colliders import Box, Plane, SphereObstacle
 from .emitter import Emitter, KillBox, KillPlane, KillSphere
 from .forces import Attractor, Drag, Gravity, Spring, Wind
@@ -597,8 +598,6 @@ class Scene(_Model):
         dim = self.world.dim
         w = World(dim=dim, dt=self.world.dt, method=self.world.method)
         starts: list[tuple[int, int]] = []
-        e_all: list[np.ndarray] = []
-        mu_all: list[np.ndarray] = []
         for b, block in enumerate(self.particles):
             where = f"{source}: particles[{b}]"
             try:
@@ -607,8 +606,6 @@ class Scene(_Model):
             except ValueError as err:
                 raise SceneError(f"{where}: {err}") from None
             starts.append((int(idx[0]), int(idx[-1]) + 1))
-            e_all.append(np.full(len(idx), np.nan) if e is None else np.broadcast_to(e, len(idx)).astype(float))
-            mu_all.append(np.full(len(idx), np.nan) if mu is None else np.broadcast_to(mu, len(idx)).astype(float))
         if self.collisions is not None:
             c = self.collisions.model_dump(exclude={"periodic"})
             try:
@@ -637,7 +634,6 @@ class Scene(_Model):
             except (ValueError, StopIteration) as err:
                 raise SceneError(f"{source}: collisions.periodic: {err or 'periodic axes need a box collider'}") from None
         w.scene = self
-        w._scene_materials = (np.concatenate(e_all) if e_all else np.zeros(0), np.concatenate(mu_all) if mu_all else np.zeros(0))
         return w
 
 
@@ -975,8 +971,8 @@ def _spring_rule(f: SpringForce, starts: list[tuple[int, int]], blocks: list) ->
 def to_scene(world: World) -> Scene:
     """The scene of ``world`` as it is now: one explicit particle list, its forces, colliders
     and settings; duration, fps, render and output options come from ``world.scene`` when
-    the world was loaded from one. Per-particle restitution and friction are known only for
-    worlds built from a scene; a ``PythonForce`` cannot be written and raises ``ValueError``."""
+    the world was loaded from one. Each particle's own restitution and friction come from the
+    engine; a ``PythonForce`` cannot be written and raises ``ValueError``."""
     old: Scene | None = getattr(world, "scene", None)
     n = len(world)
     inverse = np.asarray(world._core.inverse_masses)
@@ -992,9 +988,10 @@ def to_scene(world: World) -> Scene:
         }
         if world.species is not None:
             block["species"] = world.species.tolist()
-        materials = getattr(world, "_scene_materials", None)
-        if materials is not None and len(materials[0]) == n:
-            for name, arr in zip(("restitution", "friction"), materials, strict=True):
+        own = world._core.particle_materials()  # each particle's own values, as the engine holds them
+        if len(own) == n:
+            for k, name in enumerate(("restitution", "friction")):
+                arr = np.array([np.nan if m[k] is None else m[k] for m in own])
                 if not np.all(np.isnan(arr)):
                     block[name] = arr.tolist()
         blocks.append(block)
@@ -1081,4 +1078,6 @@ def to_scene(world: World) -> Scene:
 
 
 World.to_scene = to_scene  # ``world.to_scene()``; the world module stays free of the scene format
+World.save_checkpoint = save_checkpoint  # ``world.save_checkpoint(path)`` (kinema.checkpoint)
+World.load_checkpoint = staticmethod(load_checkpoint)  # ``kinema.World.load_checkpoint(path)``
 World.scene = None  # a world made in code has no scene; ``load_scene`` sets it on the instance

@@ -267,7 +267,8 @@ class World:
             self._advice_due = True
             if isinstance(item, Spring):  # drawn between these ids while both live
                 i, j = item._args[:2]
-                self._spring_ids = np.concatenate([self._spring_ids, self.ids[np.stack([i, j], axis=1).reshape(-1, 2)]])
+                ends = np.array([i, j], dtype=np.int64).T.reshape(-1, 2)
+                self._spring_ids = np.concatenate([self._spring_ids, self.ids[ends]])
         return item
 
     # -- collisions -------------------------------------------------------------------------

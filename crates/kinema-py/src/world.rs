@@ -202,6 +202,26 @@ impl PyWorld {
         Ok((r.start, r.end))
     }
 
+    /// A checkpoint's time, steps and ids (see `World::restore_clock_and_ids`).
+    fn restore_clock_and_ids(&mut self, time: f64, steps: u64, ids: Vec<u64>, next_id: u64) -> PyResult<()> {
+        self.inner.restore_clock_and_ids(time, steps, &ids, next_id).map_err(to_py)
+    }
+
+    /// Starts the caches again (a checkpoint's restart point).
+    fn restart_caches(&mut self) {
+        self.inner.restart_caches();
+    }
+
+    /// Each particle's own (restitution, friction), None where not set; empty if none has.
+    fn particle_materials(&self) -> Vec<(Option<f64>, Option<f64>)> {
+        self.inner.particle_materials()
+    }
+
+    #[getter]
+    fn next_id(&self) -> u64 {
+        self.inner.particles().next_id
+    }
+
     /// Removes the particles at these indices (checked; repeats allowed).
     fn remove_particles(&mut self, indices: Vec<usize>) -> PyResult<()> {
         self.inner.remove_particles(&indices).map_err(to_py)

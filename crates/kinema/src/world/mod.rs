@@ -275,6 +275,50 @@ impl World {
         Ok(range)
     }
 
+    /// Restores what a checkpoint holds besides the particles' state: the time (s), the
+    /// steps taken, and each particle's id with the id the next one gets (ids strictly
+    /// increasing, as adding and removing leave them, all below `next_id`).
+    pub fn restore_clock_and_ids(&mut self, time: f64, steps: u64, ids: &[u64], next_id: u64) -> Result<(), Error> {
+        if !time.is_finite() {
+            return Err(Error::invalid("time", time, "the time must be finite"));
+        }
+        if ids.len() != self.particles.len() {
+            return Err(Error::invalid(
+                "ids",
+                format!("{} ids", ids.len()),
+                format!("one per particle ({})", self.particles.len()),
+            ));
+        }
+        if let Some(k) = (1..ids.len()).find(|&k| ids[k] <= ids[k - 1]) {
+            return Err(Error::invalid(format!("ids[{k}]"), ids[k], "ids must increase strictly"));
+        }
+        if ids.last().is_some_and(|&l| l >= next_id) {
+            return Err(Error::invalid("next_id", next_id, "it must be above every id"));
+        }
+        self.restore_user_order();
+        self.time = time;
+        self.steps = steps;
+        self.particles.id.copy_from_slice(ids);
+        self.particles.next_id = next_id;
+        Ok(())
+    }
+
+    /// Starts the method's and the collision stage's caches again, as after changing the
+    /// particles: Verlet's stored acceleration, implicit Euler's warm start, the contact
+    /// lists and their order along space, the impulse solver's warm start. A checkpoint is
+    /// taken at such a point, so that a run resumed from it and the run that wrote it go on
+    /// from the same engine state, bit for bit.
+    pub fn restart_caches(&mut self) {
+        self.restore_user_order();
+        self.particles_mut();
+    }
+
+    /// Each particle's own restitution and friction (`None`: the world's value); empty when
+    /// no particle has its own.
+    pub fn particle_materials(&self) -> Vec<(Option<f64>, Option<f64>)> {
+        self.collisions.as_ref().map(|c| c.own.clone()).unwrap_or_default()
+    }
+
     /// Removes the particles at the given indices (the user's order; repeats allowed); the
     /// others keep their order, their ids and their state. A removed particle takes with it
     /// what the forces hold for it (springs ending on it, [`Force::remove_particles`]) and its

@@ -1,0 +1,153 @@
+"""Checkpoints: a world written between steps and read back goes on bit for bit as the world
+that wrote it, for every integrator and both contact models, with springs, emitters,
+lifetimes, own materials and particles sorted along space."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import kinema
+from kinema.scene import Scene
+
+
+def scene(method, model, count=60, emitter=False):
+    """A small gas under gravity in a box, springs between neighbours in a chain, own
+    materials for half the particles, and with ``emitter`` an emitter with lifetimes (its
+    births restart the caches, so the matrix below runs without: there the caches count)."""
+    collisions = {"model": model, "restitution": 0.7, "friction": 0.2}
+    if model == "spring_dashpot":
+        collisions.update(stiffness=2e3, friction=0.0)
+    return {
+        "world": {"dim": 3, "dt": 5e-4, "method": method, "duration": 1.0, "fps": 50.0},
+        "particles": [
+            {
+                "type": "random",
+                "lo": [0.05, 0.05, 0.05],
+                "hi": [0.95, 0.95, 0.6],
+                "count": count,
+                "seed": 2,
+                "min_distance": 0.05,
+                "radius": 0.02,
+                "mass": {"min": 0.01, "max": 0.02},
+                "velocity": {"sigma": 0.3, "seed": 4},
+                "restitution": [0.5, float("nan")] * (count // 2),
+            }
+        ],
+        "forces": [{"type": "gravity"}, {"type": "spring", "i": list(range(0, 10)), "j": list(range(1, 11)), "k": 5.0, "damping": 0.01}],
+        "colliders": [{"type": "box", "lo": [0, 0, 0], "hi": [1, 1, 1]}],
+        "collisions": collisions,
+        "emitters": []
+        if not emitter
+        else [
+            {
+                "rate": 200.0,
+                "center": [0.5, 0.5, 0.8],
+                "shape": "disc",
+                "radius": 0.1,
+                "speed": 0.5,
+                "spread": 30,
+                "particle_radius": 0.015,
+                "lifetime": 0.05,
+                "lifetime_spread": 0.02,
+                "color": "#40a0ff",
+                "seed": 9,
+            }
+        ],
+    }
+
+
+def run_alongside(world, tmp_path, before=60, after=80):
+    """Steps, writes a checkpoint, reads it back; both step on. Returns the two worlds."""
+    world.step(before)
+    world.save_checkpoint(tmp_path / "w.ckpt")
+    again = kinema.World.load_checkpoint(tmp_path / "w.ckpt")
+    world.step(after)
+    again.step(after)
+    return world, again
+
+
+def assert_same(a, b):
+    np.testing.assert_array_equal(a.positions, b.positions)
+    np.testing.assert_array_equal(a.velocities, b.velocities)
+    np.testing.assert_array_equal(a.masses, b.masses)
+    np.testing.assert_array_equal(a.ids, b.ids)
+    assert a.time == b.time and a._core.steps == b._core.steps
+
+
+@pytest.mark.filterwarnings("ignore::kinema.StabilityWarning")
+@pytest.mark.parametrize("model", ["impulse", "spring_dashpot"])
+@pytest.mark.parametrize("method", kinema.method_names())
+def test_a_resumed_world_goes_on_bit_for_bit(method, model, tmp_path):
+    w = Scene.from_dict(scene(method, model)).build()
+    a, b = run_alongside(w, tmp_path)
+    assert_same(a, b)
+
+
+@pytest.mark.filterwarnings("ignore::kinema.StabilityWarning")
+@pytest.mark.parametrize("model", ["impulse", "spring_dashpot"])
+def test_births_and_deaths_resume_bit_for_bit(model, tmp_path):
+    w = Scene.from_dict(scene("verlet", model, emitter=True)).build()
+    a, b = run_alongside(w, tmp_path)
+    assert_same(a, b)
+    # births and deaths happened on both sides of the checkpoint, alike
+    assert a.ids.max() > 60 and not np.isin(np.arange(60, a.ids.max()), a.ids).all()
+
+
+@pytest.mark.filterwarnings("ignore::kinema.StabilityWarning")
+def test_a_world_sorted_along_space_resumes_bit_for_bit(tmp_path):
+    # Spring–dashpot contacts with Verlet from 4,096 particles: the engine sorts them along a
+    # Morton curve whenever its list is rebuilt (without own materials); the checkpoint's
+    # restart puts both worlds on the same list and order.
+    d = scene("verlet", "spring_dashpot", count=4200)
+    d["particles"][0].update(lo=[0.0, 0.0, 0.0], hi=[4.0, 4.0, 1.0], min_distance=0.045)
+    del d["particles"][0]["restitution"]  # own materials keep the user's order (no sorting)
+    d["colliders"][0]["hi"] = [4.0, 4.0, 2.0]
+    w = Scene.from_dict(d).build()
+    a, b = run_alongside(w, tmp_path, before=30, after=30)
+    assert a._core.sorts > 0
+    assert_same(a, b)
+
+
+def test_the_checkpoint_keeps_what_the_world_knows(tmp_path):
+    w = kinema.World(dt=1e-3, method="rk4")
+    w.add_particles([[0, 0, 0], [0, 0, -1], [0, 0, -2]], pinned=[True, False, False], species=["anchor", "bob", "bob"], friction=[np.nan, 0.3, 0.4])
+    w.add(kinema.Gravity())
+    w.add(kinema.Spring([0, 1], [1, 2], k=50.0))
+    w.add(kinema.Emitter(rate=10.0, mass=1.0, lifetime=0.5, color="#ff0000", seed=1))
+    w.add(kinema.KillPlane([0, 0, -5], [0, 0, 1]))
+    w.step(250)
+    w.remove_particles([1])
+    w.save_checkpoint(tmp_path / "w.ckpt")
+    r = kinema.World.load_checkpoint(tmp_path / "w.ckpt")
+    assert r.ids.tolist() == w.ids.tolist() and r._core.next_id == w._core.next_id
+    assert r.species.tolist() == w.species.tolist()
+    assert r._core.particle_materials() == w._core.particle_materials()
+    np.testing.assert_array_equal(r._death, w._death)
+    np.testing.assert_array_equal(r._colors, w._colors)
+    np.testing.assert_array_equal(r._spring_ids, w._spring_ids)
+    assert r._emitters[0].emitted == w._emitters[0].emitted and len(r._kills) == 1
+    # the spring that survived (none: both ended on particle 1) and the emitter's stream go on alike
+    w.step(300)
+    r.step(300)
+    assert_same(w, r)
+
+
+def test_bad_checkpoints_are_refused_by_name(tmp_path):
+    with pytest.raises(ValueError, match="no such checkpoint file"):
+        kinema.World.load_checkpoint(tmp_path / "missing.ckpt")
+    (tmp_path / "junk.ckpt").write_bytes(b"not hdf5")
+    with pytest.raises(ValueError, match="cannot be read as HDF5"):
+        kinema.World.load_checkpoint(tmp_path / "junk.ckpt")
+    traj = kinema.World().run(0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        traj.save(tmp_path / "t.h5")
+    with pytest.raises(ValueError, match="not a kinema checkpoint"):
+        kinema.World.load_checkpoint(tmp_path / "t.h5")
+    w = kinema.World()
+    w.add_particles([0, 0, 0])
+    w.add(kinema.PythonForce(lambda t, x, v: -x))
+    with pytest.raises(ValueError, match="PythonForce cannot be written"):
+        w.save_checkpoint(tmp_path / "p.ckpt")
+    assert not (tmp_path / "p.ckpt").exists()
