@@ -151,3 +151,98 @@ def test_bad_checkpoints_are_refused_by_name(tmp_path):
     with pytest.raises(ValueError, match="PythonForce cannot be written"):
         w.save_checkpoint(tmp_path / "p.ckpt")
     assert not (tmp_path / "p.ckpt").exists()
+
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parent.parent
+FIELDS = ("t", "positions", "velocities", "alive", "ids", "masses", "kinetic", "momentum", "contacts", "impulse_balance", "collision_energy_lost")
+
+
+def assert_same_trajectory(a, b):
+    for name in FIELDS:
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert a.potential.keys() == b.potential.keys()
+    for k in a.potential:
+        np.testing.assert_array_equal(a.potential[k], b.potential[k])
+
+
+class Stop(Exception):
+    pass
+
+
+@pytest.mark.parametrize("model", ["impulse", "spring_dashpot"])
+def test_a_run_stopped_after_a_checkpoint_resumes_to_the_same_trajectory(model, tmp_path):
+    # The run writes a checkpoint every 0.1 s; one copy runs through, another is stopped at
+    # 0.25 s (after the checkpoint at 0.2 s) and resumed: the whole trajectories are the same
+    # bits, the frames before the stop included, births, deaths and collision books too.
+    def build():
+        return Scene.from_dict(scene("verlet", model, emitter=True)).build()
+
+    whole = build().run(0.5, fps=50, checkpoint=tmp_path / "a.ckpt", checkpoint_every=0.1)
+
+    def stop(world):
+        if world.time > 0.25:
+            raise Stop
+
+    with pytest.raises(Stop):
+        build().run(0.5, fps=50, checkpoint=tmp_path / "b.ckpt", checkpoint_every=0.1, callback=stop)
+    world, resumed = kinema.resume_run(tmp_path / "b.ckpt")
+    assert_same_trajectory(whole, resumed)
+    assert resumed.changes_count and world.time == pytest.approx(0.5)
+
+
+def test_kinema_run_resumes_from_its_checkpoint(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    kinema_bin = Path(sys.executable).parent / "kinema"
+    scene_file = ROOT / "examples" / "scenes" / "fountain.toml"
+    args = [str(kinema_bin), "run", str(scene_file), "--no-video", "--duration", "2.0", "--checkpoint-every", "0.5"]
+    done = subprocess.run([*args, "-o", str(tmp_path / "a")], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert not (tmp_path / "a" / "checkpoint.ckpt").exists()  # removed once the run is whole
+    # the same run, stopped by Ctrl-C once its first checkpoint is there, then resumed
+    proc = subprocess.Popen([*args, "-o", str(tmp_path / "b")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    ckpt = tmp_path / "b" / "checkpoint.ckpt"
+    deadline = time.monotonic() + 120
+    while not ckpt.exists() and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    if proc.returncode == 0:
+        pytest.skip("the run finished before it could be stopped")  # a machine far faster than this test expects
+    assert proc.returncode == 130 and "interrupted" in err and ckpt.exists()
+    assert not (tmp_path / "b" / "trajectory.h5").exists()
+    again = subprocess.run(
+        [str(kinema_bin), "run", str(scene_file), "--no-video", "--resume", "-o", str(tmp_path / "b")], capture_output=True, text=True, timeout=300
+    )
+    assert again.returncode == 0, again.stderr
+    assert_same_trajectory(kinema.load_trajectory(tmp_path / "a" / "trajectory.h5"), kinema.load_trajectory(tmp_path / "b" / "trajectory.h5"))
+    nothing = subprocess.run([str(kinema_bin), "run", str(scene_file), "--resume", "-o", str(tmp_path / "c")], capture_output=True, text=True, timeout=60)
+    assert nothing.returncode == 2 and "no checkpoint to resume" in nothing.stderr
+
+
+def test_a_sweep_member_interrupted_mid_run_resumes_from_its_checkpoint(tmp_path):
+    from kinema.sweeps import members, run_member
+
+    d = scene("verlet", "impulse", emitter=True)
+    d["world"]["duration"] = 0.4
+    (member,) = members(d)
+    whole = run_member(member, str(tmp_path / "a"), None, None, checkpoint_every=0.1)
+    # as if its worker had died after the checkpoint at 0.2 s: the checkpoint is left
+    w = Scene.from_dict(d).build()
+    where = tmp_path / "b" / "members" / member.name
+    where.mkdir(parents=True)
+
+    def stop(world):
+        if world.time > 0.25:
+            raise Stop
+
+    with pytest.raises(Stop):
+        w.run(0.4, fps=50, checkpoint=where / "checkpoint.ckpt", checkpoint_every=0.1, callback=stop)
+    again = run_member(member, str(tmp_path / "b"), None, None, checkpoint_every=0.1)
+    assert again["row"] == whole["row"] and not again["row"]["error"]
+    assert not (where / "checkpoint.ckpt").exists()
+    assert_same_trajectory(kinema.load_trajectory(tmp_path / "a" / "members" / member.name / "trajectory.h5"), kinema.load_trajectory(where / "trajectory.h5"))

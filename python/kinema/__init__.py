@@ -21,6 +21,8 @@ The public API (everything else is private):
   module ``kinema.render``
 - Scene files (TOML): ``load_scene``, ``Scene``, ``SceneError``, ``World.to_scene``; the
   module ``kinema.scene`` (docs/scenes.md)
+- Checkpoints: ``World.save_checkpoint``, ``World.load_checkpoint``, ``World.run(checkpoint=,
+  checkpoint_every=)`` and ``resume_run``; the module ``kinema.checkpoint``
 - Sweeps and ensembles on Dask: ``sweep``, ``SweepResult``; the module ``kinema.sweeps``
 - Measured orders of accuracy: ``convergence``, ``ConvergenceResult``, the module
   ``kinema.problems`` (problems with exact solutions)
@@ -34,6 +36,7 @@ from . import (
     stability,
 )
 from ._core import __version__
+from .checkpoint import resume_run
 from .colliders import Box, Plane, SphereObstacle
 from .convergence import ConvergenceResult, convergence
 from .emitter import Emitter, KillBox, KillPlane, KillSphere
@@ -86,6 +89,7 @@ __all__ = [
     "load_trajectory",
     "render",
     "render_frames",
+    "resume_run",
     "write_video",
     "Wind",
     "World",

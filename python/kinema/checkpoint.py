@@ -8,7 +8,8 @@ What a checkpoint holds (an HDF5 file, written under a temporary name and rename
   periodicity, emitters and kill volumes), in the attribute ``scene`` (TOML);
 - the time, the step count, each particle's id and the next id;
 - what the Python world keeps per particle: time of death, own colour; the springs' end ids;
-- each emitter's progress (particles emitted) and the state of its four random streams.
+- each emitter's progress (particles emitted) and the state of its four random streams;
+- the collision books (totals since collisions were turned on: impacts, energy lost, ...).
 
 The method's and the collision stage's caches (Verlet's stored acceleration, implicit Euler's
 warm start, the contact lists and the particles' order along space, the impulse solver's warm
@@ -34,8 +35,9 @@ FORMAT = "kinema-checkpoint"
 VERSION = 1
 
 
-def save_checkpoint(world: Any, path: str | Path) -> Path:
-    """Write ``world`` to ``path`` (see the module doc) and restart its caches; returns the path."""
+def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> Path:
+    """Write ``world`` to ``path`` (see the module doc) and restart its caches; returns the path.
+    (``_run``: the progress of ``World.run``, written by it; see ``resume_run``.)"""
     import h5py
 
     from . import __version__
@@ -62,6 +64,11 @@ def save_checkpoint(world: Any, path: str | Path) -> Path:
         f.attrs["emitters"] = json.dumps(
             [{"emitted": s.emitted, "streams": {name: g.bit_generator.state for name, g in s.rng.items()}} for s in world._emitters]
         )
+        stats = core.collision_stats()
+        if stats is not None:  # the collision books go on where they were
+            f.attrs["collision_stats"] = json.dumps(_plain(stats))
+        if _run is not None:
+            _write_run(f.create_group("run"), _run)
     core.restart_caches()
     return path
 
@@ -90,6 +97,9 @@ def load_checkpoint(path: str | Path) -> Any:
         world._death = np.asarray(f["death"][()], dtype=float)
         world._colors = np.asarray(f["colors"][()], dtype=float).reshape(-1, 3)
         world._spring_ids = np.asarray(f["spring_ids"][()], dtype=np.int64).reshape(-1, 2)
+        if "collision_stats" in f.attrs:
+            books = _unplain(json.loads(str(f.attrs["collision_stats"])))
+            world._core.restore_collision_stats(books["total"], books["last"])
         world._warned = bool(f.attrs["warned"])
         world._advised_at = int(f.attrs["advised_at"])
         for source, saved in zip(world._emitters, json.loads(str(f.attrs["emitters"])), strict=True):
@@ -99,3 +109,114 @@ def load_checkpoint(path: str | Path) -> Any:
     world._advice_due = False  # the advisor had looked at this state already (its warning is in `warned`)
     world._new_views()
     return world
+
+
+# -- a run in progress ------------------------------------------------------------------------
+# World.run(checkpoint=..., checkpoint_every=...) writes, with the world, how far the run has
+# come (frames recorded and to go, steps per frame, how often to write) and the frames it has
+# recorded, as plain arrays (no pickle: a checkpoint is data).
+
+
+def _write_run(g: Any, run: dict) -> None:
+    rec = run["recorder"]
+    for key in ("frames_done", "frames_total", "per_frame", "every"):
+        g.attrs[key] = int(run[key])
+    g.attrs["fps"] = float(run["fps"])
+    t, x, v, ke, pot, p, ang, contacts, balance, lost, ids = (list(c) for c in zip(*rec.frames, strict=True))
+    counts = np.array([len(i) for i in ids], dtype=np.int64)
+    for name, data in (
+        ("t", np.array(t)),
+        ("kinetic", np.array(ke)),
+        ("momentum", np.array(p).reshape(-1, 3)),
+        ("angular_momentum", np.array(ang).reshape(-1, 3)),
+        ("contacts", np.array(contacts, dtype=np.int64)),
+        ("impulse_total", np.array(balance).reshape(-1, 3)),
+        ("energy_lost", np.array(lost)),
+        ("counts", counts),
+        ("x", np.concatenate(x).reshape(-1, 3)),
+        ("v", np.concatenate(v).reshape(-1, 3)),
+        ("ids", np.concatenate(ids).astype(np.int64)),
+    ):
+        g.create_dataset(name, data=data)
+    g.attrs["potential"] = json.dumps(pot)
+    g.attrs["about"] = json.dumps({k: _plain(v) for k, v in rec.about.items()})
+    g.attrs["sets"] = json.dumps([[_plain(a) for a in entry] for entry in rec.sets])
+
+
+def _plain(value: Any) -> Any:
+    """JSON-able: arrays as nested lists (floats by repr: every bit), tuples as lists."""
+    if isinstance(value, np.ndarray):
+        return {"__array__": value.tolist(), "dtype": str(value.dtype)}
+    if isinstance(value, (np.floating, np.integer, np.bool_)):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
+def _unplain(value: Any) -> Any:
+    if isinstance(value, dict) and "__array__" in value:
+        return np.array(value["__array__"], dtype=value["dtype"])
+    if isinstance(value, dict):
+        return {k: _unplain(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_unplain(v) for v in value]
+    return value
+
+
+def _read_run(g: Any) -> dict:
+    from .trajectory import Trajectory
+
+    rec = Trajectory._recorder()
+    counts = g["counts"][()]
+    cut = np.cumsum(counts)[:-1]
+    x, v, ids = (np.split(g[name][()], cut) for name in ("x", "v", "ids"))
+    pot = json.loads(str(g.attrs["potential"]))
+    rows = zip(
+        g["t"][()].tolist(),
+        x,
+        v,
+        g["kinetic"][()].tolist(),
+        pot,
+        list(g["momentum"][()]),
+        list(g["angular_momentum"][()]),
+        g["contacts"][()].tolist(),
+        list(g["impulse_total"][()]),
+        g["energy_lost"][()].tolist(),
+        ids,
+        strict=True,
+    )
+    rec.frames = [tuple(r) for r in rows]
+    rec.about = _unplain(json.loads(str(g.attrs["about"])))
+    if isinstance(rec.about.get("periodic"), list):
+        rec.about["periodic"] = tuple(rec.about["periodic"])
+    rec.sets = [tuple(_unplain(a) for a in entry) for entry in json.loads(str(g.attrs["sets"]))]
+    run = {key: int(g.attrs[key]) for key in ("frames_done", "frames_total", "per_frame", "every")}
+    run.update(fps=float(g.attrs["fps"]), recorder=rec)
+    return run
+
+
+def resume_run(path: str | Path, callback: Any = None) -> tuple[Any, Any]:
+    """Goes on with the ``World.run`` that wrote the checkpoint ``path`` (``checkpoint=``),
+    writing checkpoints to the same file as it did, to its end; returns ``(world,
+    trajectory)``: the trajectory of the whole run, the frames before the checkpoint
+    included, the same bits as the run never stopped."""
+    import h5py
+
+    world = load_checkpoint(path)
+    with h5py.File(path, "r") as f:
+        if "run" not in f:
+            raise ValueError(f"{path}: a checkpoint of a world, not of a run in progress (World.run(checkpoint=...) writes those)")
+        run = _read_run(f["run"])
+    return world, world._record(run, callback, Path(path))
+
+
+def run_progress(path: str | Path) -> tuple[int, int]:
+    """(frames recorded, frames in all) of the run in progress that wrote ``path``."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        g = f["run"]
+        return int(g.attrs["frames_done"]), int(g.attrs["frames_total"])

@@ -388,15 +388,32 @@ def run(
     duration: Annotated[float | None, typer.Option(help="Simulated time, s (default: the scene's [world].duration).")] = None,
     no_video: Annotated[bool, typer.Option("--no-video", help="Skip the video.")] = False,
     force: Annotated[bool, typer.Option("--force", help="Run even when the work estimate is over the limits.")] = False,
+    checkpoint_every: Annotated[
+        float | None, typer.Option("--checkpoint-every", help="Write OUT/checkpoint.ckpt every this many simulated seconds (whole frames).")
+    ] = None,
+    resume: Annotated[bool, typer.Option("--resume", help="Go on from OUT/checkpoint.ckpt, left by a run with --checkpoint-every that stopped.")] = False,
 ) -> None:
     """Simulate a scene; write the trajectory (H5MD), a video and an energy/momentum plot.
 
     The work is estimated first (particles × steps, video pixels, memory); a run over the
-    limits is refused unless --force is given."""
-    simulate_scene(scene, out if out is not None else Path("out") / scene.stem, duration, no_video, force=force)
+    limits is refused unless --force is given. With --checkpoint-every T the world and the
+    frames so far are written to OUT/checkpoint.ckpt every T s of simulated time (removed when
+    the run ends well); --resume goes on from it, to the same files, bit for bit."""
+    simulate_scene(
+        scene, out if out is not None else Path("out") / scene.stem, duration, no_video, force=force, checkpoint_every=checkpoint_every, resume=resume
+    )
 
 
-def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_video: bool = False, *, force: bool = False) -> tuple[Any, list[Path]]:
+def simulate_scene(
+    scene: Path,
+    outdir: Path,
+    duration: float | None = None,
+    no_video: bool = False,
+    *,
+    force: bool = False,
+    checkpoint_every: float | None = None,
+    resume: bool = False,
+) -> tuple[Any, list[Path]]:
     """`kinema run`'s work: load ``scene``, simulate ``duration`` s (default: the scene's) with
     a progress bar, and write what its [output] table asks for into the folder ``outdir``
     (created when the scene is valid): trajectory.h5, <scene name>.mp4|.gif, energy.png, all
@@ -425,12 +442,25 @@ def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_
         highlight=False,
         soft_wrap=True,
     )
+    ckpt = outdir / "checkpoint.ckpt"
+    if checkpoint_every is not None and not (np.isfinite(checkpoint_every) and checkpoint_every > 0):
+        raise ValueError(f"--checkpoint-every {checkpoint_every}: give a finite number of simulated seconds > 0")
+    if resume and not ckpt.is_file():
+        raise ValueError(f"--resume: there is no checkpoint to resume in {outdir} ({ckpt.name}; a run with --checkpoint-every writes it)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             with _progress() as bar:
-                task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
-                traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task))
+                if resume:
+                    from .checkpoint import resume_run, run_progress
+
+                    done, total = run_progress(ckpt)
+                    task = bar.add_task("simulating (resumed)", total=total + 1, completed=done + 1)
+                    world, traj = resume_run(ckpt, callback=lambda _w: bar.advance(task))
+                else:
+                    task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
+                    saving = {"checkpoint": ckpt, "checkpoint_every": checkpoint_every} if checkpoint_every is not None else {}
+                    traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task), **saving)
         finally:  # a StabilityWarning explains a divergence: show it before the error
             for w in caught:
                 err_console.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
@@ -463,6 +493,8 @@ def simulate_scene(scene: Path, outdir: Path, duration: float | None = None, no_
             written.append(outdir / name)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+    if checkpoint_every is not None or resume:
+        ckpt.unlink(missing_ok=True)  # the run is whole: its files are written
     for path in written:
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)
     return traj, written
@@ -653,6 +685,9 @@ def sweep(
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="A Dask scheduler's address (tcp://host:8786); default: worker processes here.")] = None,
     workers: Annotated[int | None, typer.Option("--workers", help="Local worker processes (default: the cores).", min=1)] = None,
     duration: Annotated[float | None, typer.Option(help="Simulated time of each member, s (default: the scene's).")] = None,
+    checkpoint_every: Annotated[
+        float | None, typer.Option("--checkpoint-every", help="Each member writes a checkpoint this often (simulated s); a rerun resumes from it.")
+    ] = None,
 ) -> None:
     """Run a parameter sweep or ensemble on Dask: every combination of the --vary values ×
     --seeds, each member a scene with those keys set (validated first), run, saved (H5MD)
@@ -671,7 +706,7 @@ def sweep(
         except ValueError as e:
             raise ValueError(f"--vary {item!r}: {e}") from None
     folder = out if out is not None else Path("out") / f"{scene.stem}_sweep"
-    result = run_sweep(scene, grid, seeds=seeds, client=scheduler, out=folder, duration=duration, workers=workers)
+    result = run_sweep(scene, grid, seeds=seeds, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every)
     failed = result.failed
     console.print(f"{len(result.rows)} members, {len(failed)} failed; wrote {folder / 'summary.csv'}", highlight=False, soft_wrap=True)
     for row in failed:

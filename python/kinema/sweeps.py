@@ -6,7 +6,8 @@ A sweep's folder::
 
     sweep.json               what was asked: the scene, the varied keys and values, the seeds
     members/<name>/          one folder per member: scene.toml (the member's scene),
-                             trajectory.h5 (H5MD), result.json (its measurements, or its error)
+                             trajectory.h5 (H5MD), result.json (its measurements, or its error),
+                             checkpoint.ckpt while it runs with checkpoint_every
     summary.csv              one row per member, in member order: the varied values, the seed,
                              the measurements (the same bits wherever the members ran)
     timings.csv              one row per member: its wall time and the worker that ran it
@@ -157,7 +158,7 @@ def _scene_data(scene: Scene | str | Path | dict) -> tuple[dict, str]:
 # -- one member -------------------------------------------------------------------------------
 
 
-def run_member(member: Member, folder: str, duration: float | None, measure: Callable | bytes | None) -> dict[str, Any]:
+def run_member(member: Member, folder: str, duration: float | None, measure: Callable | bytes | None, checkpoint_every: float | None = None) -> dict[str, Any]:
     """Runs one member in this process and writes its folder; returns its row. Never raises
     for the member's own failure (the row has ``error``): only a dying worker is retried."""
     import traceback
@@ -175,9 +176,16 @@ def run_member(member: Member, folder: str, duration: float | None, measure: Cal
     try:
         scene = Scene.from_dict(member.scene, member.name)
         scene.to_toml(where / "scene.toml")
-        world = scene.build(member.name)
-        seconds = scene.world.duration if duration is None else duration
-        traj = world.run(seconds, fps=scene.world.fps)
+        ckpt = where / "checkpoint.ckpt"
+        if ckpt.is_file():  # a member interrupted mid-run goes on from its last checkpoint
+            from .checkpoint import resume_run
+
+            world, traj = resume_run(ckpt)
+        else:
+            world = scene.build(member.name)
+            seconds = scene.world.duration if duration is None else duration
+            saving = {"checkpoint": ckpt, "checkpoint_every": checkpoint_every} if checkpoint_every else {}
+            traj = world.run(seconds, fps=scene.world.fps, **saving)
         traj.save(where / "trajectory.h5")
         stats = world.collision_stats()
         row.update(
@@ -193,6 +201,7 @@ def run_member(member: Member, folder: str, duration: float | None, measure: Cal
                 raise TypeError(f"measure returned {type(extra).__name__}; it must return a dict of name → number")
             row.update({str(k): _plain(v) for k, v in extra.items()})
         row["error"] = ""
+        ckpt.unlink(missing_ok=True)
     except Exception as err:  # the member's failure is its result
         row["error"] = f"{type(err).__name__}: {err}".replace("\n", " ")
         (where / "error.txt").write_text(traceback.format_exc())
@@ -222,6 +231,7 @@ def sweep(
     workers: int | None = None,
     progress: bool = True,
     plot: bool = True,
+    checkpoint_every: float | None = None,
 ) -> SweepResult:
     """Run the grid of ``vary`` (key path → values) × ``seeds`` on Dask; see the module doc.
 
@@ -229,7 +239,10 @@ def sweep(
     None starts a ``LocalCluster`` of ``workers`` processes (default: the cores, at most
     the members) with one thread each, or runs a single member in this process.
     ``measure(trajectory, world) -> dict`` adds measurements (it must be importable by the
-    workers: a module-level function). ``duration`` overrides the scene's."""
+    workers: a module-level function). ``duration`` overrides the scene's.
+    ``checkpoint_every`` (simulated s): each member writes ``checkpoint.ckpt`` in its folder
+    that often, and a member interrupted mid-run (its worker killed, the sweep stopped) goes on
+    from it when run again, bit for bit."""
     folder = Path(out)
     grid = members(scene, vary, seeds)
     folder.mkdir(parents=True, exist_ok=True)
@@ -244,7 +257,7 @@ def sweep(
         else:
             todo.append(m)
     if todo:
-        results.update(_run_all(todo, folder, duration, measure, client, workers, progress))
+        results.update(_run_all(todo, folder, duration, measure, client, workers, progress, checkpoint_every))
     rows = [results[m.index]["row"] for m in grid]
     _write_csv(folder / "summary.csv", rows)
     _write_csv(folder / "timings.csv", [{"member": m.name, **results[m.index]["timing"]} for m in grid])
@@ -253,9 +266,9 @@ def sweep(
     return SweepResult(folder, grid, rows)
 
 
-def _run_all(todo: list[Member], folder: Path, duration, measure, client, workers, progress) -> dict[int, dict]:
+def _run_all(todo: list[Member], folder: Path, duration, measure, client, workers, progress, checkpoint_every=None) -> dict[int, dict]:
     if client is None and len(todo) == 1:
-        return {todo[0].index: run_member(todo[0], str(folder), duration, measure)}
+        return {todo[0].index: run_member(todo[0], str(folder), duration, measure, checkpoint_every)}
     from distributed import Client, LocalCluster, as_completed
 
     own = None
@@ -276,7 +289,9 @@ def _run_all(todo: list[Member], folder: Path, duration, measure, client, worker
         measure = cloudpickle.dumps(measure)
     try:
         futures = {
-            client.submit(run_member, m, str(folder.resolve()), duration, measure, key=f"kinema-member-{m.name}-{os.getpid()}", retries=2, pure=False): m
+            client.submit(
+                run_member, m, str(folder.resolve()), duration, measure, checkpoint_every, key=f"kinema-member-{m.name}-{os.getpid()}", retries=2, pure=False
+            ): m
             for m in todo
         }
         out: dict[int, dict] = {}

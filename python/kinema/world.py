@@ -7,6 +7,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -438,10 +439,22 @@ class World:
         if dead.any():
             self.remove_particles(dead)
 
-    def run(self, duration: float, fps: float = 60.0, callback: Callable[[World], Any] | None = None) -> Trajectory:
+    def run(
+        self,
+        duration: float,
+        fps: float = 60.0,
+        callback: Callable[[World], Any] | None = None,
+        checkpoint: Any = None,
+        checkpoint_every: float | None = None,
+    ) -> Trajectory:
         """Simulate ``duration`` seconds from now, recording a frame every 1/fps s (rounded to
         a whole number of steps), the current state included; ``callback(world)`` runs after
-        each recorded frame. Returns the ``Trajectory``."""
+        each recorded frame. Returns the ``Trajectory``.
+
+        ``checkpoint`` (a path) with ``checkpoint_every`` (simulated seconds, rounded to whole
+        frames): at those frames the world and the frames recorded so far are written there
+        (``kinema.checkpoint``), replacing the last; ``kinema.resume_run(path)`` goes on from
+        it to the same end, bit for bit as this run."""
         duration, fps = _checks.real("duration", duration), _checks.real("fps", fps)
         if callback is not None and not callable(callback):
             raise TypeError(f"callback = {_checks.describe(callback)} is invalid: it must be a function callback(world) or None")
@@ -449,6 +462,11 @@ class World:
             raise ValueError(f"duration = {duration} is invalid: it must be a finite number of seconds >= 0")
         if not (np.isfinite(fps) and fps > 0):
             raise ValueError(f"fps = {fps} is invalid: frames per second must be > 0")
+        every_s = _checks.real("checkpoint_every", checkpoint_every, optional=True)
+        if (checkpoint is None) != (every_s is None):
+            raise ValueError("checkpoint and checkpoint_every go together: a path and how often to write it (s)")
+        if every_s is not None and not (np.isfinite(every_s) and every_s > 0):
+            raise ValueError(f"checkpoint_every = {every_s} is invalid: it must be a finite number of seconds > 0")
         steps_per_frame = 1.0 / fps / self.dt  # (fps * dt may underflow to 0: 5e-324 * 1e-3)
         if not steps_per_frame < 2.0**63:
             raise ValueError(
@@ -456,23 +474,36 @@ class World:
             )
         per_frame = max(1, round(steps_per_frame))
         frames = int(np.floor(duration / (per_frame * self.dt) + 1e-9))
+        every = 0 if every_s is None else max(1, round(every_s / (per_frame * self.dt)))
         self._push()
         with self._engine() as core:
             self._advise(core)
         rec = Trajectory._recorder()
         rec.add(self)
-        for _ in range(frames):
+        run = {"frames_done": 0, "frames_total": frames, "per_frame": per_frame, "every": every, "fps": fps, "recorder": rec}
+        return self._record(run, callback, None if checkpoint is None else Path(checkpoint))
+
+    def _record(self, run: dict, callback: Any, checkpoint: Path | None) -> Trajectory:
+        """The frames of ``run`` from ``frames_done`` on, writing ``checkpoint`` every
+        ``every`` frames (the loop of ``run``, and of a run resumed from a checkpoint)."""
+        from .checkpoint import save_checkpoint
+
+        rec = run["recorder"]
+        while run["frames_done"] < run["frames_total"]:
             try:
                 if self._advice_due and self._changes_count():
                     with self._engine() as core:
                         self._advise(core)
-                self._advance(per_frame)
+                self._advance(run["per_frame"])
             finally:
                 self._pull()
             rec.add(self)
+            run["frames_done"] += 1
             if callback is not None:
                 callback(self)
                 self._push()
+            if checkpoint is not None and run["frames_done"] % run["every"] == 0 and run["frames_done"] < run["frames_total"]:
+                save_checkpoint(self, checkpoint, _run=run)
         return rec.finish()
 
     # -- stability --------------------------------------------------------------------------

@@ -192,3 +192,22 @@ pub fn stats_dict<'py>(py: Python<'py>, s: &CollisionStats) -> PyResult<Bound<'p
     out.set_item("unconverged", s.unconverged)?;
     Ok(out)
 }
+
+/// The reverse of [`stats_dict`], for a checkpoint's collision books.
+pub fn stats_from(d: &Bound<'_, PyDict>) -> PyResult<CollisionStats> {
+    let get = |key: &str| -> PyResult<Bound<'_, PyAny>> {
+        d.get_item(key)?
+            .ok_or_else(|| pyo3::exceptions::PyValueError::new_err(format!("collision stats: {key} is missing")))
+    };
+    Ok(CollisionStats {
+        contacts: get("contacts")?.extract()?,
+        impacts: get("impacts")?.extract()?,
+        impulses: get("impulses")?.extract()?,
+        impulse_balance: get("impulse_balance")?.extract()?,
+        energy_lost: get("energy_lost")?.extract()?,
+        max_overlap: get("max_overlap")?.extract()?,
+        solver_sweeps: get("solver_sweeps")?.extract()?,
+        islands: get("islands")?.extract()?,
+        unconverged: get("unconverged")?.extract()?,
+    })
+}

@@ -207,6 +207,13 @@ impl PyWorld {
         self.inner.restore_clock_and_ids(time, steps, &ids, next_id).map_err(to_py)
     }
 
+    /// A checkpoint's collision books (dicts as `collision_stats` gives them).
+    fn restore_collision_stats(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
+        let (total, last) = (collisions::stats_from(&total)?, collisions::stats_from(&last)?);
+        self.inner.restore_collision_stats(total, last);
+        Ok(())
+    }
+
     /// Starts the caches again (a checkpoint's restart point).
     fn restart_caches(&mut self) {
         self.inner.restart_caches();

@@ -303,6 +303,15 @@ impl World {
         Ok(())
     }
 
+    /// Restores the collision books of a checkpoint: the totals since collisions were turned
+    /// on and the last step's (see [`World::collision_stats`]). Nothing when they are off.
+    pub fn restore_collision_stats(&mut self, total: CollisionStats, last: CollisionStats) {
+        if let Some(stage) = &mut self.collisions {
+            stage.total = total;
+            stage.last = last;
+        }
+    }
+
     /// Starts the method's and the collision stage's caches again, as after changing the
     /// particles: Verlet's stored acceleration, implicit Euler's warm start, the contact
     /// lists and their order along space, the impulse solver's warm start. A checkpoint is
