@@ -318,7 +318,7 @@ def test_bad_collision_input_is_named():
         w.set_collisions(model="spring_dashpot", stiffness=1.0, damping=-2.0)
     with pytest.raises(ValueError, match=r"stiffness = 1000 is invalid: only model='spring_dashpot' uses it"):
         w.set_collisions(stiffness=1e3)
-    with pytest.raises(TypeError, match="is not a kinema force or collider"):
+    with pytest.raises(TypeError, match="is not a kinema force, collider or emitter"):
         w.add(object())
     assert w.collisions["restitution"] == 1.0  # the refused settings changed nothing
 
