@@ -207,3 +207,19 @@ def test_haff_time_matches_enskog_in_a_dilute_gas(tmp_path):
         assert abs(err) < 0.04, (e, err)
     assert (tmp_path / "haff_tau.png").stat().st_size > 10_000
     shutil.rmtree(tmp_path / "members")
+
+
+def test_a_member_whose_worker_dies_is_run_again(tmp_path):
+    # The first attempt kills its own worker process (as an out-of-memory kill or a lost node
+    # would); Dask runs the member again on a worker, and the sweep ends with every row.
+    marker = tmp_path / "died-once"
+
+    def die_once(traj, world):
+        if not marker.exists():
+            marker.write_text("the first attempt's worker died here")
+            os._exit(1)
+        return {"top": float(np.nanmax(traj.positions[..., 2]))}
+
+    result = kinema.sweep(gas(), {"collisions.restitution": [0.5, 0.9]}, measure=die_once, out=tmp_path / "s", workers=2, progress=False, plot=False)
+    assert marker.exists() and not result.failed
+    assert all(r["top"] > 0 for r in result.rows)
