@@ -1,7 +1,7 @@
 //! Bindings of the particle world: World, the force catalogue, Python forces, diagnostics,
 //! collisions (conversions in `collisions.rs`).
 
-use kinema::collide::Surface;
+use kinema::collide::{Partner, Surface};
 use kinema::error::CallbackError;
 use kinema::forces::{Attractor, Drag, Force, Gravity, Springs, State, Wind};
 use kinema::world::CollisionParams;
@@ -215,8 +215,47 @@ impl PyWorld {
     }
 
     /// Starts the caches again (a checkpoint's restart point).
-    fn restart_caches(&mut self) {
-        self.inner.restart_caches();
+    fn restart_caches(&mut self) -> PyResult<()> {
+        self.inner.restart_caches().map_err(to_py)
+    }
+
+    /// What the method carries from step to step (Verlet's a, implicit Euler's Δv), or None.
+    fn integrator_carry<'py>(&mut self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner.integrator_carry().map(|c| PyArray1::from_vec(py, c))
+    }
+
+    fn restore_integrator_carry(&mut self, carry: Vec<f64>) -> PyResult<()> {
+        self.inner.restore_integrator_carry(carry).map_err(to_py)
+    }
+
+    /// The impulse model's warm start: (particle, partner is a collider, partner index, totals).
+    fn collision_carry(&mut self) -> Vec<(usize, bool, usize, [f64; 3])> {
+        self.inner
+            .collision_carry()
+            .into_iter()
+            .map(|(i, other, t)| match other {
+                Partner::Particle(j) => (i, false, j, t),
+                Partner::Collider(c) => (i, true, c, t),
+            })
+            .collect()
+    }
+
+    fn restore_collision_carry(&mut self, carry: Vec<(usize, bool, usize, [f64; 3])>) -> PyResult<()> {
+        let carry = carry
+            .into_iter()
+            .map(|(i, collider, j, t)| {
+                (
+                    i,
+                    if collider {
+                        Partner::Collider(j)
+                    } else {
+                        Partner::Particle(j)
+                    },
+                    t,
+                )
+            })
+            .collect();
+        self.inner.restore_collision_carry(carry).map_err(to_py)
     }
 
     /// Each particle's own (restitution, friction), None where not set; empty if none has.

@@ -323,6 +323,19 @@ impl CollisionStage {
         (self.material, self.particle_materials.clone())
     }
 
+    /// The end-of-step solver's warm start: each contact of the last step (particle, partner)
+    /// with the impulse totals it carried, N·s, sorted by (particle, partner).
+    pub fn warm_start(&self) -> &[(usize, Partner, [f64; 3])] {
+        &self.warm
+    }
+
+    /// Sets the warm start (a checkpoint's), and with it which contacts rested.
+    pub fn set_warm_start(&mut self, mut warm: Vec<(usize, Partner, [f64; 3])>) {
+        warm.sort_by_key(|w| (w.0, w.1));
+        self.resting = warm.iter().map(|w| (w.0, w.1, w.2 != [0.0; 3])).collect();
+        self.warm = warm;
+    }
+
     /// Rebuilds the per-particle materials from `own` and the global value.
     pub fn refresh_materials(&mut self) -> Result<(), Error> {
         if self.own.iter().all(|(e, m)| e.is_none() && m.is_none()) {

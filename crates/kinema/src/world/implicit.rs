@@ -70,6 +70,16 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 impl BaraffWitkin {
+    /// The last step's Δv (m/s, 3 per particle): the next solve's first guess.
+    pub(crate) fn warm_start(&self) -> &[f64] {
+        &self.dv
+    }
+
+    /// Sets the next solve's first guess (a checkpoint's).
+    pub(crate) fn set_warm_start(&mut self, dv: Vec<f64>) {
+        self.dv = dv;
+    }
+
     /// Advances (x, v) at time t by h into (x_out, v_out).
     #[allow(clippy::too_many_arguments)]
     pub fn step(
