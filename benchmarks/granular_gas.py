@@ -1,6 +1,6 @@
 """Particle-steps per second of the granular gas: kinema beside LAMMPS, same scene, same cores.
 
-The scene is `shared/peers/lammps/granular_gas.in` (LAMMPS units lj): N = ncell³ spheres of
+The scene is `benchmarks/peers/granular_gas.in` (a copy of the project's LAMMPS peer scene; units lj): N = ncell³ spheres of
 diameter 1 and mass 1 on a simple cubic lattice of spacing (1/0.3)^(1/3) = 1.4938 (number
 density 0.3) in a cubic periodic box of side ncell·a; random velocities (uniform components,
 zero total momentum) scaled to temperature 1 (T = 2 KE / (3N − 3)); normal spring–dashpot
@@ -54,7 +54,7 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-LAMMPS_SCENE = HERE.parent.parent / "shared" / "peers" / "lammps" / "granular_gas.in"
+LAMMPS_SCENE = HERE / "peers" / "granular_gas.in"
 
 DENSITY = 0.3  # spheres per unit volume
 SPACING = (1.0 / DENSITY) ** (1.0 / 3.0)
