@@ -1,0 +1,250 @@
+"""Scene -> engine objects: the World a ``Scene`` describes (``Scene.build`` calls ``build``
+here), ``load_scene``. This module imports ``schema`` and ``tables``; ``schema`` imports it
+only inside ``Scene.build``, at call time."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..colliders import Box, Plane, SphereObstacle
+from ..emitter import Emitter, KillBox, KillPlane, KillSphere
+from ..forces import Attractor, Drag, Gravity, Spring, Wind
+from ..world import World
+from .schema import Scene, SceneError
+from .tables import (
+    AttractorForce,
+    BoxCollider,
+    DragForce,
+    EmitterTable,
+    GravityForce,
+    Isotropic,
+    KillBoxTable,
+    KillSphereTable,
+    LatticeBlock,
+    ListBlock,
+    Maxwell,
+    PlaneCollider,
+    SpringForce,
+    Uniform,
+    WindForce,
+)
+
+
+def build(scene: Scene, source: str = "<scene>") -> World:
+    """The body of ``Scene.build`` (see its docstring): the World ``scene`` describes."""
+    dim = scene.world.dim
+    w = World(dim=dim, dt=scene.world.dt, method=scene.world.method)
+    starts: list[tuple[int, int]] = []
+    for b, block in enumerate(scene.particles):
+        where = f"{source}: particles[{b}]"
+        try:
+            x, v, m, r, p, e, mu = _particles(block, dim)
+            idx = w.add_particles(x, v, m, r, p, e, mu, species=block.species)
+        except ValueError as err:
+            raise SceneError(f"{where}: {err}") from None
+        starts.append((int(idx[0]), int(idx[-1]) + 1))
+    if scene.collisions is not None:
+        c = scene.collisions.model_dump(exclude={"periodic"})
+        try:
+            w.set_collisions(**c)
+        except ValueError as err:
+            raise SceneError(f"{source}: collisions: {err}") from None
+    for k, col in enumerate(scene.colliders):
+        try:
+            w.add(_collider(col, dim))
+        except ValueError as err:
+            raise SceneError(f"{source}: colliders[{k}]: {err}") from None
+    for k, f in enumerate(scene.forces):
+        try:
+            w.add(_force(f, dim, w, starts, scene.particles))
+        except ValueError as err:
+            raise SceneError(f"{source}: forces[{k}]: {err}") from None
+    for key, items, make in (("emitters", scene.emitters, _emitter), ("kill_volumes", scene.kill_volumes, _kill)):
+        for k, item in enumerate(items):
+            try:
+                w.add(make(item))
+            except (ValueError, TypeError) as err:
+                raise SceneError(f"{source}: {key}[{k}]: {err}") from None
+    if scene.collisions is not None and scene.collisions.periodic is not None:
+        try:
+            w.periodic = scene.collisions.periodic
+        except (ValueError, StopIteration) as err:
+            raise SceneError(f"{source}: collisions.periodic: {err or 'periodic axes need a box collider'}") from None
+    w.scene = scene
+    return w
+
+
+def load_scene(path: str | Path) -> World:
+    """Read, validate and build the scene file ``path``; the world keeps it as ``world.scene``."""
+    return Scene.from_toml(path).build(source=str(path))
+
+
+def _emitter(e: EmitterTable) -> Emitter:
+    values = e.model_dump()
+    for name in ("center", "size", "normal", "direction"):
+        if values[name] is not None:
+            values[name] = _v3(values[name])
+    return Emitter(**values)
+
+
+def _kill(k: Any) -> Any:
+    if isinstance(k, KillBoxTable):
+        return KillBox(_v3(k.lo), _v3(k.hi))
+    if isinstance(k, KillSphereTable):
+        return KillSphere(_v3(k.center), k.radius)
+    return KillPlane(_v3(k.point), _v3(k.normal))
+
+
+# -- scene -> engine objects ------------------------------------------------------------------
+
+
+def _v3(v: list[float]) -> list[float]:
+    return [*map(float, v), 0.0][:3] if len(v) == 2 else [float(c) for c in v]
+
+
+def _rng(seed: int, stream: int) -> np.random.Generator:
+    # one stream per purpose, so changing one rule does not change the others' draws
+    return np.random.default_rng([int(seed), stream])
+
+
+def _positions(block: Any, dim: int) -> np.ndarray:
+    if isinstance(block, ListBlock):
+        return np.array([_v3(p) for p in block.positions])
+    if isinstance(block, LatticeBlock):
+        counts = [*block.counts, 1][:3]
+        spacing = np.broadcast_to(np.asarray(_v3(block.spacing) if isinstance(block.spacing, list) else block.spacing, dtype=float), (3,))
+        grid = np.stack(np.meshgrid(*[np.arange(c) for c in counts], indexing="ij"), axis=-1).reshape(-1, 3)
+        x = np.asarray(_v3(block.origin)) + grid * spacing
+        if block.jitter > 0:
+            x = x + _rng(block.seed, 0).uniform(-block.jitter, block.jitter, x.shape)
+        if dim == 2:
+            x[:, 2] = 0.0
+        return x
+    lo, hi = np.asarray(_v3(block.lo)), np.asarray(_v3(block.hi))
+    rng = _rng(block.seed, 0)
+    if not block.min_distance:
+        return rng.uniform(lo, hi, (block.count, 3))
+    return _spaced(rng, lo, hi, block.count, block.min_distance)
+
+
+def _spaced(rng: np.random.Generator, lo: np.ndarray, hi: np.ndarray, count: int, d: float) -> np.ndarray:
+    """Random sequential addition: uniform points, each kept only if no kept point lies within d."""
+    kept = np.empty((count, 3))
+    n = 0
+    for _ in range(200):
+        for c in rng.uniform(lo, hi, (max(count, 256), 3)):
+            if n == 0 or np.min(np.sum((kept[:n] - c) ** 2, axis=1)) >= d * d:
+                kept[n] = c
+                n += 1
+                if n == count:
+                    return kept
+    raise ValueError(f"min_distance = {d}: could place only {n} of {count} particles in the box; enlarge the box or lower count or min_distance")
+
+
+def _per_particle(name: str, value: Any, n: int, rng: np.random.Generator) -> np.ndarray:
+    if isinstance(value, Uniform):
+        return rng.uniform(value.min, value.max, n)
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == 1 and arr.size != n:
+        raise ValueError(f"{name} has {arr.size} values for {n} particles")
+    return np.broadcast_to(arr, (n,)).copy()
+
+
+def _particles(block: Any, dim: int) -> tuple:
+    x = _positions(block, dim)
+    n = len(x)
+    m = _per_particle("mass", block.mass, n, _rng(block.seed, 1))
+    r = _per_particle("radius", block.radius, n, _rng(block.seed, 2))
+    vel = block.velocity
+    if vel is None:
+        v = np.zeros((n, 3))
+    elif isinstance(vel, Maxwell):
+        rng = _rng(block.seed if vel.seed is None else vel.seed, 3)
+        sigma = vel.sigma if vel.sigma is not None else np.sqrt(vel.kT / m)
+        v = rng.standard_normal((n, 3)) * np.reshape(sigma, (-1, 1))
+        if dim == 2:
+            v[:, 2] = 0.0
+        if vel.zero_momentum and n > 1:
+            v -= (m[:, None] * v).sum(axis=0) / m.sum()
+    elif isinstance(vel, Isotropic):
+        # A normal vector divided by its length is uniform on the sphere (the circle with z = 0).
+        rng = _rng(block.seed if vel.seed is None else vel.seed, 3)
+        u = rng.standard_normal((n, 3))
+        if dim == 2:
+            u[:, 2] = 0.0
+        v = vel.speed * u / np.linalg.norm(u, axis=1, keepdims=True)
+        if vel.zero_momentum and n > 1:
+            v -= (m[:, None] * v).sum(axis=0) / m.sum()
+    elif vel and isinstance(vel[0], list):
+        if len(vel) != n:
+            raise ValueError(f"velocity has {len(vel)} vectors for {n} particles")
+        v = np.array([_v3(u) for u in vel])
+    else:
+        if len(vel) not in (2, 3):
+            raise ValueError(f"velocity = {vel} is invalid: it must be a vector of 2 or 3 values")
+        v = np.broadcast_to(_v3(vel), (n, 3)).copy()
+    pinned = np.asarray(block.pinned, dtype=bool)
+    if pinned.ndim == 1 and pinned.size != n:
+        raise ValueError(f"pinned has {pinned.size} values for {n} particles")
+    e = None if block.restitution is None else _per_particle("restitution", block.restitution, n, _rng(block.seed, 4))
+    mu = None if block.friction is None else _per_particle("friction", block.friction, n, _rng(block.seed, 5))
+    return x, v, m, r, np.broadcast_to(pinned, (n,)), e, mu
+
+
+def _collider(c: Any, dim: int) -> Any:
+    s = {"restitution": c.restitution, "friction": c.friction}
+    if isinstance(c, PlaneCollider):
+        return Plane(_v3(c.point), _v3(c.normal), **s)
+    if isinstance(c, BoxCollider):
+        return Box(list(c.lo), list(c.hi), **s)
+    return SphereObstacle(_v3(c.center), c.radius, **s)
+
+
+def _force(f: Any, dim: int, w: World, starts: list[tuple[int, int]], blocks: list) -> Any:
+    if isinstance(f, GravityForce):
+        return Gravity(_v3(f.g) if f.g is not None else ([0.0, -9.81, 0.0] if dim == 2 else [0.0, 0.0, -9.81]))
+    if isinstance(f, DragForce):
+        return Drag(f.linear, f.quadratic)
+    if isinstance(f, AttractorForce):
+        return Attractor(_v3(f.point), f.strength, f.softening)
+    if isinstance(f, WindForce):
+        return Wind(_v3(f.velocity), f.coefficient)
+    if f.rule is None:
+        i, j = np.asarray(f.i, dtype=np.int64), np.asarray(f.j, dtype=np.int64)
+    else:
+        i, j = _spring_rule(f, starts, blocks)
+    n = len(w)
+    bad = np.flatnonzero((i >= n) | (j >= n))
+    if bad.size:
+        s = int(bad[0])
+        raise ValueError(f"spring {s} joins particles {int(i[s])} and {int(j[s])}, but the scene has {n} particles (indices 0..{n - 1})")
+    for name, value in (("k", f.k), ("rest_length", f.rest_length), ("damping", f.damping)):
+        if isinstance(value, list) and len(value) != i.size:
+            raise ValueError(f"{name} has {len(value)} values for {i.size} springs")
+    rest = f.rest_length
+    if rest is None:  # the distance at load time, written out so that the scene round-trips
+        rest = np.linalg.norm(w.positions[j] - w.positions[i], axis=1)
+    return Spring(i, j, f.k, rest, f.damping)
+
+
+def _spring_rule(f: SpringForce, starts: list[tuple[int, int]], blocks: list) -> tuple[np.ndarray, np.ndarray]:
+    start, end = starts[f.block]
+    if f.rule == "chain":
+        idx = np.arange(start, end)
+        return idx[:-1], idx[1:]
+    block = blocks[f.block]
+    if not isinstance(block, LatticeBlock):
+        raise ValueError(f"rule = 'grid' needs a lattice block, but particles[{f.block}] is of type {block.type!r}")
+    counts = [*block.counts, 1][:3]
+    ids = np.arange(start, end).reshape(counts)
+    pairs = []
+    for axis in range(3):
+        a = np.moveaxis(ids, axis, 0)
+        pairs.append((a[:-1].ravel(), a[1:].ravel()))
+    if f.diagonals:  # shear springs across each cell of the first two lattice axes
+        pairs.append((ids[:-1, :-1].ravel(), ids[1:, 1:].ravel()))
+        pairs.append((ids[1:, :-1].ravel(), ids[:-1, 1:].ravel()))
+    return np.concatenate([p[0] for p in pairs]), np.concatenate([p[1] for p in pairs])

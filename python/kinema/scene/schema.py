@@ -1,0 +1,334 @@
+"""The whole scene file, ``Scene`` (read from TOML, text or a dict, validated, written back),
+``SceneError`` and the one-line-per-problem messages made of pydantic's errors. The tables
+the scene holds are in ``kinema.scene.tables``; turning a scene into a World is
+``kinema.scene.build`` (``Scene.build`` calls it)."""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+import tomllib
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from pydantic import BaseModel, Field, ValidationError, model_validator
+
+from .tables import (
+    MAX_NESTING,
+    AttractorForce,
+    Block,
+    BoxCollider,
+    Camera2DTable,
+    Camera3DTable,
+    ColliderItem,
+    CollisionsTable,
+    DragForce,
+    EmitterTable,
+    ForceItem,
+    GravityForce,
+    KillItem,
+    LatticeBlock,
+    ListBlock,
+    OutputTable,
+    PlaneCollider,
+    RandomBlock,
+    RenderTable,
+    SphereCollider,
+    SpringForce,
+    WindForce,
+    WorldTable,
+    _Model,
+)
+
+if TYPE_CHECKING:
+    from ..world import World
+
+
+class SceneError(ValueError):
+    """A scene that cannot be read or built. The message has one line per problem:
+    ``<file>: <key path>: <value> is invalid: <what is allowed>``."""
+
+    __module__ = "kinema"
+
+
+# -- the scene --------------------------------------------------------------------------------
+
+
+class Scene(_Model):
+    """A whole simulation; see docs/scenes.md for every key."""
+
+    world: WorldTable = Field(default_factory=WorldTable)
+    particles: list[Block] = Field(default_factory=list)
+    forces: list[ForceItem] = Field(default_factory=list)
+    colliders: list[ColliderItem] = Field(default_factory=list)
+    emitters: list[EmitterTable] = Field(default_factory=list)
+    kill_volumes: list[KillItem] = Field(default_factory=list)
+    collisions: CollisionsTable | None = None
+    render: RenderTable = Field(default_factory=RenderTable)
+    output: OutputTable = Field(default_factory=OutputTable)
+
+    @model_validator(mode="after")
+    def _references(self) -> Scene:
+        for f in self.forces:
+            if isinstance(f, SpringForce) and f.block is not None and f.block >= len(self.particles):
+                raise ValueError(f"a spring names block = {f.block}, but the scene has {len(self.particles)} [[particles]] blocks")
+        return self
+
+    # reading -----------------------------------------------------------------------------
+    @classmethod
+    def from_toml(cls, path: str | Path) -> Scene:
+        """Read and validate a scene file; raises ``SceneError`` (one line per problem)."""
+        path = Path(path)
+        if not path.exists():
+            raise SceneError(f"{path}: no such file")
+        if path.is_dir():
+            raise SceneError(f"{path}: is a directory, not a scene file (.toml)")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as e:
+            raise SceneError(f"{path}: cannot be read ({getattr(e, 'strerror', None) or e})") from None
+        return cls.from_string(text, source=str(path))
+
+    @classmethod
+    def from_string(cls, text: str, source: str = "<scene>") -> Scene:
+        """Validate a scene given as TOML text; ``source`` names it in messages."""
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise SceneError(f"{source}: TOML syntax error: {e}") from None  # the message has "(at line L, column C)"
+        except ValueError as e:  # an integer of more than 4300 digits
+            raise SceneError(f"{source}: cannot be read as TOML: {e}") from None
+        except RecursionError:  # arrays or inline tables nested hundreds deep
+            raise SceneError(_too_deep_in_text(text, source)) from None
+        return cls.from_dict(data, source)
+
+    @classmethod
+    def from_dict(cls, data: dict, source: str = "<scene>") -> Scene:
+        deep = _too_deep(data, source)
+        if deep is not None:
+            raise SceneError(deep)
+        try:
+            return cls.model_validate(data)
+        except ValidationError as e:
+            raise SceneError("\n".join(_describe(err, source) for err in e.errors())) from None
+
+    # size --------------------------------------------------------------------------------
+    def particle_count(self) -> int:
+        """How many particles ``build`` makes, counted without making them."""
+        return sum(block_size(b) for b in self.particles)
+
+    def emitted_count(self, seconds: float) -> int:
+        """How many particles the emitters give in the first ``seconds`` of a run (births at
+        start + k / rate, k = 0, 1, ..., before ``end``), counted without making them."""
+        total = 0
+        for e in self.emitters:
+            until = min(e.end, seconds)
+            if until >= e.start:
+                count = math.floor((until - e.start) * e.rate) + 1
+                if math.isfinite(e.end):
+                    count = min(count, math.ceil((e.end - e.start) * e.rate))
+                total += count
+        return total
+
+    # writing -----------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """Plain data, ``None`` values left out (TOML has no null)."""
+        return self.model_dump(mode="python", exclude_none=True)
+
+    def to_toml_string(self) -> str:
+        import tomli_w
+
+        return tomli_w.dumps(self.to_dict())
+
+    def to_toml(self, path: str | Path) -> Path:
+        """Write the scene as TOML under a temporary name, then rename; returns the path."""
+        from ..io._files import atomic_file
+
+        path = Path(path)
+        text = self.to_toml_string()
+        with atomic_file(path) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+        return path
+
+    # building ----------------------------------------------------------------------------
+    def build(self, source: str = "<scene>") -> World:
+        """The World this scene describes (``world.scene`` is this scene). An engine refusal
+        (a 2D scene with z ≠ 0, a spring index out of range, ...) is a ``SceneError`` naming
+        the entry."""
+        # The dependency goes build -> schema: build.py imports this module at its top, and this
+        # module reaches build.py only here, when a scene is built (no import circle).
+        from .build import build
+
+        return build(self, source)
+
+
+def block_size(block: Any) -> int:
+    """The particles of one [[particles]] block, counted without making them."""
+    if isinstance(block, ListBlock):
+        return len(block.positions)
+    if isinstance(block, LatticeBlock):
+        return math.prod(block.counts)
+    return block.count
+
+
+# -- errors -----------------------------------------------------------------------------------
+
+
+def _describe(err: dict, source: str) -> str:
+    """One line for one pydantic error: file, key path, value, what is allowed."""
+    loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("~"))]
+    path = _path(loc)
+    kind = err["type"]
+    msg = err["msg"].removeprefix("Value error, ")
+    if kind == "extra_forbidden":
+        allowed = _allowed_keys(err["loc"])
+        hint = ""
+        if allowed:
+            close = difflib.get_close_matches(str(loc[-1]), allowed, n=1)
+            hint = (f"; did you mean {close[0]!r}?" if close else "") + f" allowed keys here: {', '.join(allowed)}"
+        return f"{source}: {path}: unknown key{hint}"
+    if kind == "missing":
+        return f"{source}: {path}: missing: a value is required"
+    value = err.get("input")
+    shown = repr(value) if not isinstance(value, dict | list) or len(repr(value)) < 60 else repr(value)[:57] + "..."
+    msg = msg[0].lower() + msg[1:] if msg[:1].isupper() and not msg[1:2].isupper() else msg
+    return f"{source}: {path}: {shown} is invalid: {msg}"
+
+
+def _path(loc: list) -> str:
+    return "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in loc).lstrip(".") or "(top level)"
+
+
+def _preview(value: Any, width: int = 40) -> str:
+    """The start of a value's repr, made without recursing (repr itself fails on deep values)."""
+    out = ""
+    while len(out) < width:
+        if isinstance(value, list):
+            out += "["
+            if not value:
+                out += "]"
+                break
+            value = value[0]
+        elif isinstance(value, dict):
+            out += "{"
+            if not value:
+                out += "}"
+                break
+            key, value = next(iter(value.items()))
+            out += f"{key!r}: "
+        else:
+            out += repr(value)
+            break
+    return out[:width] + "..."
+
+
+def _too_deep(data: Any, source: str) -> str | None:
+    """A line naming the first value nested more than MAX_NESTING deep, or None."""
+    stack: list[tuple[Any, list]] = [(data, [])]
+    while stack:
+        value, loc = stack.pop()
+        if len(loc) > MAX_NESTING:
+            where = _path(loc[:6]) + "..."  # the key, and the start of the path inside it
+            return f"{source}: {where}: {_preview(value)} is invalid: arrays and tables nested more than {MAX_NESTING} levels deep are refused"
+        if isinstance(value, dict):
+            stack.extend((v, [*loc, k]) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, [*loc, k]) for k, v in enumerate(value) if isinstance(v, list | dict))
+    return None
+
+
+_TOKEN = re.compile(r'"""|\'\'\'|["\'#\n\[\]{}=]')
+_STRING_END = {  # from just after the opening quotes to just after the closing ones
+    '"': re.compile(r'(?:[^"\\\n]|\\.)*"?'),
+    "'": re.compile(r"[^'\n]*'?"),
+    '"""': re.compile(r'(?:[^"\\]|\\.|"(?!""))*(?:"""|$)', re.S),
+    "'''": re.compile(r"(?:[^']|'(?!''))*(?:'''|$)", re.S),
+}
+
+
+def _too_deep_in_text(text: str, source: str) -> str:
+    """The line for a TOML text too deep for the parser: the line and key where arrays or inline
+    tables first nest more than MAX_NESTING deep (strings and comments skipped)."""
+    depth, line, pos, key, start, table = 0, 1, 0, "", 0, ""
+    seen: dict[str, int] = {}  # [[name]] headers so far, for the index of the next one
+    while (m := _TOKEN.search(text, pos)) is not None:
+        t, pos = m.group(), m.end()
+        if t == "[" and depth == 0 and not text[start : m.start()].strip():  # a [table] or [[array]] header
+            header = re.match(r"(\[\[?)\s*([^\]\n]*?)\s*\]", text[m.start() :])
+            if header is not None:
+                table = header.group(2)
+                if header.group(1) == "[[":
+                    seen[table] = seen.get(table, -1) + 1
+                    table += f"[{seen[table]}]"
+                pos = m.start() + header.end()
+                continue
+        if t in _STRING_END:
+            stop = _STRING_END[t].match(text, pos).end()
+            line += text.count("\n", pos, stop)
+            pos = stop
+        elif t == "#":
+            end = text.find("\n", pos)
+            pos = len(text) if end < 0 else end
+        elif t == "\n":
+            line += 1
+            start = pos
+        elif t == "=" and depth == 0:
+            key = ".".join(filter(None, (table, text[start : m.start()].strip())))
+        elif t in "[{":
+            depth += 1
+            if depth > MAX_NESTING:
+                head = text[m.start() - MAX_NESTING + 1 : m.start() + 1].lstrip()
+                return (
+                    f"{source}: line {line}: {key or '(top level)'}: {head}... is invalid: arrays and tables nested more than {MAX_NESTING} levels deep"
+                    " are refused"
+                )
+        elif t in "]}":
+            depth = max(0, depth - 1)
+    return f"{source}: arrays or tables are nested too deep to read (more than {MAX_NESTING} levels deep are refused)"
+
+
+_TAGGED = {
+    f"~{m.model_fields['type'].default}": m
+    for m in (
+        ListBlock,
+        LatticeBlock,
+        RandomBlock,
+        GravityForce,
+        DragForce,
+        SpringForce,
+        AttractorForce,
+        WindForce,
+        PlaneCollider,
+        BoxCollider,
+        SphereCollider,
+        Camera2DTable,
+        Camera3DTable,
+    )
+}
+
+
+def _allowed_keys(loc: tuple) -> list[str]:
+    """The keys of the table that holds the unknown key at ``loc``."""
+    cls: Any = Scene
+    for part in loc[:-1]:
+        if isinstance(part, int) or part in ("~dict", "~list", "~scalar", "~vectors"):
+            continue
+        if part in _TAGGED:
+            cls = _TAGGED[part]
+            continue
+        field = cls.model_fields.get(part) if isinstance(cls, type) and issubclass(cls, BaseModel) else None
+        if field is None:
+            return []
+        cls = _model_in(field.annotation)
+    return sorted(cls.model_fields) if isinstance(cls, type) and issubclass(cls, BaseModel) else []
+
+
+def _model_in(annotation: Any) -> Any:
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in getattr(annotation, "__args__", ()) or ():
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None

@@ -1,0 +1,447 @@
+"""A scene file's value types and the pydantic models of its tables: [world], [[particles]],
+[[forces]], [[colliders]], [[emitters]], [[kill_volumes]], [collisions], [render], [output].
+The whole file, ``Scene``, is in ``kinema.scene.schema``, which imports this module (never the
+other way round)."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
+
+from .. import _checks
+from ..ode import method_names
+
+# -- value types ------------------------------------------------------------------------------
+# A callable discriminator picks one member of a union, so a wrong value gets one error (that
+# member's) rather than one per member. Tags start with "~" so they can be cut out of key paths.
+
+
+class _Model(BaseModel):
+    # strict: no str -> number, bool -> number or float -> int (TOML's 1 is an int, and
+    # pydantic's strict mode still takes an int where a float is wanted)
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, strict=True)
+
+
+# Bounds that keep the engine's arithmetic finite and its integers in range (the CLI's work
+# estimate, kinema.cli, refuses much smaller runs unless told --force).
+MIN_DT = 1e-300  # s; with MIN_FPS, 1/(fps dt) (the steps of one frame) stays finite
+MIN_FPS = 1e-6  # frames per second
+MAX_PARTICLES = 2**32 - 1  # particles in one block, and the largest particle index + 1
+MAX_SEED = 2**64 - 1
+MAX_NESTING = 32  # arrays and tables inside each other (a scene's deepest key path is 5 long)
+
+
+Vec = Annotated[list[float], Field(min_length=2, max_length=3)]
+NonNeg = Annotated[float, Field(ge=0)]
+Positive = Annotated[float, Field(gt=0)]
+SpeciesName = Annotated[str, Field(pattern=f"^{_checks.SPECIES_PATTERN}$")]  # one word, as World.add_particles takes it
+Unit = Annotated[float, Field(ge=0, le=1)]
+Index = Annotated[int, Field(ge=0, lt=MAX_PARTICLES)]
+Count = Annotated[int, Field(ge=1, le=MAX_PARTICLES)]
+Seed = Annotated[int, Field(ge=0, le=MAX_SEED)]
+
+
+def _exact(*allowed: Any) -> Any:
+    """A before-validator for a Literal field: pydantic's strict mode still matches 2.0 to 2
+    and 0 to False; this takes only values of the listed ones' own types."""
+
+    def check(v: Any) -> Any:
+        if not any(type(v) is type(a) and v == a for a in allowed):
+            raise ValueError(f"input should be {' or '.join(repr(a) for a in allowed)}")
+        return v
+
+    return check
+
+
+class Uniform(_Model):
+    """A value drawn per particle, uniformly in [min, max], with the block's seed."""
+
+    min: float
+    max: float
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Uniform:
+        if not self.min <= self.max:
+            raise ValueError(f"min = {self.min} > max = {self.max}; min must be <= max")
+        return self
+
+
+class Maxwell(_Model):
+    """Velocities from the Maxwell–Boltzmann distribution: each component normal with standard
+    deviation ``sigma`` (m/s), or sqrt(kT/m) for a thermal energy ``kT`` (J)."""
+
+    sigma: NonNeg | None = None
+    kT: NonNeg | None = None
+    seed: Seed | None = None
+    zero_momentum: bool = False
+
+    @model_validator(mode="after")
+    def _one(self) -> Maxwell:
+        if (self.sigma is None) == (self.kT is None):
+            raise ValueError("give exactly one of sigma (m/s) or kT (J)")
+        return self
+
+
+class Isotropic(_Model):
+    """Every particle at the same ``speed`` (m/s) in a direction drawn uniformly on the sphere
+    (the circle in 2D): a gas far from equilibrium, which collisions take to Maxwell–Boltzmann."""
+
+    speed: NonNeg
+    seed: Seed | None = None
+    zero_momentum: bool = False
+
+
+def _kind(v: Any) -> str:
+    if isinstance(v, (dict, BaseModel)):  # a table as read, or as a model when written back
+        return "~dict"
+    if isinstance(v, list):
+        return "~list"
+    return "~scalar"
+
+
+def _by_kind(scalar: Any, listed: Any, table: Any = None) -> Any:
+    """scalar | list | table, chosen by the value's kind (a table may be left out)."""
+    members = Annotated[scalar, Tag("~scalar")] | Annotated[listed, Tag("~list")]
+    if table is not None:
+        members = members | Annotated[table, Tag("~dict")]
+    return Annotated[members, Discriminator(_kind, custom_error_type="kind", custom_error_message="give a number or a list of numbers")]
+
+
+PerParticle = _by_kind(float, list[float], Uniform)
+
+
+def _velocity_kind(v: Any) -> str:
+    if isinstance(v, list) and v and isinstance(v[0], list):
+        return "~vectors"
+    if isinstance(v, dict) and "speed" in v or isinstance(v, Isotropic):
+        return "~speed"
+    return _kind(v)
+
+
+Velocity = Annotated[
+    Annotated[float, Tag("~scalar")]
+    | Annotated[list[float], Tag("~list")]
+    | Annotated[list[list[float]], Tag("~vectors")]
+    | Annotated[Maxwell, Tag("~dict")]
+    | Annotated[Isotropic, Tag("~speed")],
+    Discriminator(_velocity_kind),
+]  # a scalar is refused below, with a message that says what to give
+Flags = _by_kind(bool, list[bool], bool)
+Material = _by_kind(float, list[float], float)
+
+
+def _typed(*models: type[_Model]) -> Any:
+    """A union of models told apart by their ``type`` key."""
+    names = [m.model_fields["type"].default for m in models]
+
+    def tag(v: Any) -> str | None:
+        t = v.get("type") if isinstance(v, dict) else getattr(v, "type", None)
+        return f"~{t}" if t in names else None
+
+    allowed = ", ".join(repr(n) for n in names)
+    members = tuple(Annotated[m, Tag(f"~{n}")] for m, n in zip(models, names, strict=True))
+    return Annotated[
+        members[0] if len(members) == 1 else _union(members),
+        Discriminator(tag, custom_error_type="type", custom_error_message=f"type must be one of {allowed}"),
+    ]
+
+
+def _union(members: tuple) -> Any:
+    u = members[0]
+    for m in members[1:]:
+        u = u | m
+    return u
+
+
+# -- [world] ----------------------------------------------------------------------------------
+
+
+class WorldTable(_Model):
+    dim: Literal[2, 3] = 3
+    dt: float = 1e-3
+    method: str = "verlet"
+    duration: float = 1.0
+    fps: float = 60.0
+
+    _dim = field_validator("dim", mode="before")(_exact(2, 3))
+
+    @field_validator("method")
+    @classmethod
+    def _known(cls, v: str) -> str:
+        if v not in method_names():
+            raise ValueError(f"unknown method; valid methods are: {', '.join(method_names())}")
+        return v
+
+    @field_validator("dt")
+    @classmethod
+    def _dt(cls, v: float) -> float:
+        if not (math.isfinite(v) and v >= MIN_DT):
+            raise ValueError(f"the time step must be a finite number of seconds >= {MIN_DT:g}")
+        return v
+
+    @field_validator("duration")
+    @classmethod
+    def _duration(cls, v: float) -> float:
+        if not (math.isfinite(v) and v >= 0):
+            raise ValueError("the duration must be a finite number of seconds >= 0")
+        return v
+
+    @field_validator("fps")
+    @classmethod
+    def _fps(cls, v: float) -> float:
+        if not (math.isfinite(v) and v >= MIN_FPS):
+            raise ValueError(f"frames per second must be a finite number >= {MIN_FPS:g}")
+        return v
+
+
+# -- [[particles]] ----------------------------------------------------------------------------
+
+
+class _Block(_Model):
+    mass: PerParticle = 1.0
+    radius: PerParticle = 0.0
+    velocity: Velocity | None = None
+    pinned: Flags = False
+    restitution: Material | None = None
+    friction: Material | None = None
+    species: SpeciesName | list[SpeciesName] | None = None
+    seed: Seed = 0
+
+    @field_validator("velocity")
+    @classmethod
+    def _not_scalar(cls, v: Any) -> Any:
+        if isinstance(v, float):
+            raise ValueError("give a vector [vx, vy, vz], one vector per particle, or a table {sigma = ...}, {kT = ...} or {speed = ...}")
+        return v
+
+
+class ListBlock(_Block):
+    type: Literal["list"] = "list"
+    positions: Annotated[list[Vec], Field(min_length=1)]
+
+
+class LatticeBlock(_Block):
+    type: Literal["lattice"] = "lattice"
+    origin: Vec = [0.0, 0.0, 0.0]
+    counts: Annotated[list[Count], Field(min_length=2, max_length=3)]
+    spacing: _by_kind(Positive, Annotated[list[Positive], Field(min_length=2, max_length=3)]) = 1.0
+    jitter: NonNeg = 0.0
+
+    @field_validator("counts")
+    @classmethod
+    def _size(cls, v: list[int]) -> list[int]:
+        if math.prod(v) > MAX_PARTICLES:
+            raise ValueError(f"the lattice would have {math.prod(v):,} particles, more than {MAX_PARTICLES:,}")
+        return v
+
+
+class RandomBlock(_Block):
+    type: Literal["random"] = "random"
+    lo: Vec
+    hi: Vec
+    count: Count
+    min_distance: NonNeg | None = None
+
+    @model_validator(mode="after")
+    def _box(self) -> RandomBlock:
+        if len(self.lo) != len(self.hi) or any(a > b for a, b in zip(self.lo, self.hi, strict=False)):
+            raise ValueError(f"lo = {self.lo} and hi = {self.hi}: give corners of the same length with lo <= hi")
+        return self
+
+
+Block = _typed(ListBlock, LatticeBlock, RandomBlock)
+
+# -- [[forces]] -------------------------------------------------------------------------------
+
+
+class GravityForce(_Model):
+    type: Literal["gravity"] = "gravity"
+    g: Vec | None = None  # default (0, 0, -9.81) in 3D, (0, -9.81) in 2D
+
+
+class DragForce(_Model):
+    type: Literal["drag"] = "drag"
+    linear: NonNeg = 0.0
+    quadratic: NonNeg = 0.0
+
+
+class SpringForce(_Model):
+    type: Literal["spring"] = "spring"
+    i: list[Index] | None = None
+    j: list[Index] | None = None
+    rule: Literal["chain", "grid"] | None = None
+    block: Index | None = None
+    diagonals: bool = False
+    k: _by_kind(Positive, list[Positive])
+    rest_length: _by_kind(NonNeg, list[NonNeg]) | None = None
+    damping: _by_kind(NonNeg, list[NonNeg]) = 0.0
+
+    @model_validator(mode="after")
+    def _which(self) -> SpringForce:
+        explicit = self.i is not None or self.j is not None
+        if explicit == (self.rule is not None):
+            raise ValueError("give either i and j (particle indices) or rule = 'chain' | 'grid' with block")
+        if explicit and (self.i is None or self.j is None or len(self.i) != len(self.j)):
+            raise ValueError("i and j must both be given, with the same length")
+        if self.rule is not None and self.block is None:
+            raise ValueError(f"rule = {self.rule!r} needs block, the index of the [[particles]] block it joins")
+        return self
+
+
+class AttractorForce(_Model):
+    type: Literal["attractor"] = "attractor"
+    point: Vec = [0.0, 0.0, 0.0]
+    strength: NonNeg = 1.0
+    softening: NonNeg = 0.0
+
+
+class WindForce(_Model):
+    type: Literal["wind"] = "wind"
+    velocity: Vec = [1.0, 0.0, 0.0]
+    coefficient: NonNeg = 1.0
+
+
+ForceItem = _typed(GravityForce, DragForce, SpringForce, AttractorForce, WindForce)
+
+# -- [[colliders]] ----------------------------------------------------------------------------
+
+
+class _Surface(_Model):
+    restitution: Unit | None = None
+    friction: NonNeg | None = None
+
+
+class PlaneCollider(_Surface):
+    type: Literal["plane"] = "plane"
+    point: Vec
+    normal: Vec
+
+
+class BoxCollider(_Surface):
+    type: Literal["box"] = "box"
+    lo: Vec
+    hi: Vec
+
+
+class SphereCollider(_Surface):
+    type: Literal["sphere"] = "sphere"
+    center: Vec
+    radius: NonNeg
+
+
+ColliderItem = _typed(PlaneCollider, BoxCollider, SphereCollider)
+
+# -- [[emitters]], [[kill_volumes]] ------------------------------------------------------------
+# The emitter checks its own values (kinema.Emitter); the tables check the types and names.
+
+
+class EmitterTable(_Model):
+    rate: Positive
+    shape: Literal["point", "box", "disc", "sphere"] = "point"
+    center: Vec = [0.0, 0.0, 0.0]
+    size: Vec = [0.0, 0.0, 0.0]
+    radius: NonNeg = 0.0
+    normal: Vec = [0.0, 0.0, 1.0]
+    start: float = 0.0
+    end: float = float("inf")
+    direction: Vec | None = None
+    speed: NonNeg = 0.0
+    speed_spread: NonNeg = 0.0
+    spread: Annotated[float, Field(ge=0, le=180)] = 0.0
+    particle_radius: NonNeg = 0.0
+    radius_spread: NonNeg = 0.0
+    mass: Positive | None = None
+    density: Positive = 1000.0
+    lifetime: Positive = float("inf")
+    lifetime_spread: NonNeg = 0.0
+    color: str | Annotated[list[Unit], Field(min_length=3, max_length=3)] | None = None
+    species: SpeciesName | None = None
+    restitution: Unit | None = None
+    friction: NonNeg | None = None
+    seed: Annotated[int, Field(ge=0, le=2**63 - 1)] = 0
+
+
+class KillBoxTable(_Model):
+    type: Literal["box"] = "box"
+    lo: Vec
+    hi: Vec
+
+
+class KillSphereTable(_Model):
+    type: Literal["sphere"] = "sphere"
+    center: Vec
+    radius: Positive
+
+
+class KillPlaneTable(_Model):
+    type: Literal["plane"] = "plane"
+    point: Vec
+    normal: Vec
+
+
+KillItem = _typed(KillBoxTable, KillSphereTable, KillPlaneTable)
+
+
+# -- [collisions], [render], [output] ---------------------------------------------------------
+
+
+class CollisionsTable(_Model):
+    model: Literal["impulse", "spring_dashpot"] = "impulse"
+    restitution: Unit = 1.0
+    friction: NonNeg = 0.0
+    ccd: bool = True
+    restitution_threshold: NonNeg | None = None
+    stiffness: Positive | None = None
+    damping: NonNeg | None = None
+    periodic: Annotated[list[bool], Field(min_length=2, max_length=3)] | None = None
+
+    @model_validator(mode="after")
+    def _stiff(self) -> CollisionsTable:
+        if self.model == "spring_dashpot" and self.stiffness is None:
+            raise ValueError("model = 'spring_dashpot' needs stiffness (N/m)")
+        return self
+
+
+class Camera2DTable(_Model):
+    type: Literal["2d"] = "2d"
+    xmin: float
+    ymin: float
+    xmax: float
+    ymax: float
+
+
+class Camera3DTable(_Model):
+    type: Literal["3d"] = "3d"
+    eye: Vec
+    target: Vec
+    up: Vec = [0.0, 0.0, 1.0]
+    fov_deg: Annotated[float, Field(gt=0, lt=180)] = 40.0
+
+
+class RenderTable(_Model):
+    width: Annotated[int, Field(ge=16, le=8192)] = 640
+    height: Annotated[int, Field(ge=16, le=8192)] = 480
+    color_by: Literal["speed", "id", "color"] = "speed"
+    colormap: str = "viridis"
+    background: Annotated[list[Annotated[int, Field(ge=0, le=255)]], Field(min_length=3, max_length=3)] = [255, 255, 255]
+    fps: Annotated[float, Field(ge=0.01, le=1000)] | None = None  # playback; what GIF and MP4 can hold (kinema.cli.VIDEO_FPS)
+    camera: _typed(Camera2DTable, Camera3DTable) | None = None
+
+    @field_validator("colormap")
+    @classmethod
+    def _known(cls, v: str) -> str:
+        from ..render import COLORMAPS
+
+        if v not in COLORMAPS:
+            raise ValueError(f"unknown colormap; valid colormaps are: {', '.join(COLORMAPS)}")
+        return v
+
+
+class OutputTable(_Model):
+    trajectory: bool = True
+    video: Literal["mp4", "gif", False] = "mp4"
+    plot: bool = True
+
+    _video = field_validator("video", mode="before")(_exact("mp4", "gif", False))
