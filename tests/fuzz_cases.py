@@ -555,14 +555,14 @@ def overlapping_pairs(world: Any) -> int:
 def _too_long(pre: dict) -> str | None:
     """Why ``kinema run`` would accept the scene ``pre["scene"]`` but take too long for a fuzz
     case, or None. Raises where the CLI refuses the scene (it is then quick)."""
-    from kinema import cli
+    from kinema import runner
     from kinema.scene import Scene
 
     sc = Scene.from_toml(pre["scene"])
     seconds = sc.world.duration if pre.get("duration") is None else pre["duration"]
-    cli._scene_work(sc, Path(pre["scene"]), seconds, "world.duration", False, False)
+    runner._scene_work(sc, Path(pre["scene"]), seconds, "world.duration", False, False)
     n = sc.particle_count()
-    steps = cli._frames_and_steps(seconds, sc.world.dt, sc.world.fps)[1]
+    steps = runner._frames_and_steps(seconds, sc.world.dt, sc.world.fps)[1]
     if n > pre["max_particles"] or n * steps > pre["max_particle_steps"] or steps > pre["max_steps"]:
         return f"{n} particles x {steps:g} steps: more work than a fuzz case may take"
     pairs = overlapping_pairs(sc.build(source=pre["scene"]))

@@ -296,9 +296,9 @@ def test_a_run_over_the_limits_is_refused_before_any_work(tmp_path, monkeypatch)
 
 
 def test_force_runs_what_the_limits_refuse(tmp_path, monkeypatch):
-    import kinema.cli
+    import kinema.runner
 
-    monkeypatch.setattr(kinema.cli, "LIMIT_PARTICLE_STEPS", 10.0)
+    monkeypatch.setattr(kinema.runner, "LIMIT_PARTICLE_STEPS", 10.0)
     scene = small_scene(tmp_path)
     line = one_error_line(runner.invoke(app, ["run", str(scene), "-o", str(tmp_path / "o"), "--no-video"]))
     assert "6.0e+01 particle-steps (2 particles × 30 steps: world.duration = 0.3 s at world.dt = 0.01 s; 2 particles[0].positions)" in line
@@ -313,11 +313,11 @@ def test_force_runs_what_the_limits_refuse(tmp_path, monkeypatch):
 
 
 def test_render_over_the_pixel_limit_is_refused_unless_forced(tmp_path, monkeypatch):
-    import kinema.cli
+    import kinema.runner
 
     out = tmp_path / "o"
     assert runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(out), "--no-video"]).exit_code == 0
-    monkeypatch.setattr(kinema.cli, "LIMIT_PIXELS", 1e4)
+    monkeypatch.setattr(kinema.runner, "LIMIT_PIXELS", 1e4)
     args = ["render", str(out / "trajectory.h5"), "-o", str(tmp_path / "m.gif"), "--width", "64", "--height", "48"]
     line = one_error_line(runner.invoke(app, args))
     assert line.startswith(f"error: {out / 'trajectory.h5'}: rendering would take 2.2e+04 pixels (7 frames × --width 64 × --height 48)"), line
@@ -330,7 +330,7 @@ def test_render_over_the_pixel_limit_is_refused_unless_forced(tmp_path, monkeypa
 def test_every_example_scene_is_within_the_limits():
     from pathlib import Path
 
-    from kinema.cli import _scene_work
+    from kinema.runner import _scene_work
     from kinema.scene import Scene
 
     scenes = sorted((Path(__file__).resolve().parent.parent / "examples" / "scenes").glob("*.toml"))
@@ -341,7 +341,7 @@ def test_every_example_scene_is_within_the_limits():
 
 
 def test_stale_staging_folders_of_killed_runs_are_removed(tmp_path):
-    from kinema.cli import _host
+    from kinema.runner import _host
 
     out = tmp_path / "o"
     out.mkdir()
@@ -368,7 +368,7 @@ def test_stale_staging_folders_of_killed_runs_are_removed(tmp_path):
 def test_a_run_stages_in_a_folder_named_by_its_process(tmp_path, monkeypatch):
     import tempfile
 
-    import kinema.cli
+    import kinema.runner
 
     made = []
     real = tempfile.mkdtemp
@@ -377,8 +377,8 @@ def test_a_run_stages_in_a_folder_named_by_its_process(tmp_path, monkeypatch):
         made.append(real(*args, **kwargs))
         return made[-1]
 
-    monkeypatch.setattr(kinema.cli.tempfile, "mkdtemp", spy)
+    monkeypatch.setattr(kinema.runner.tempfile, "mkdtemp", spy)
     res = runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(tmp_path / "o"), "--no-video"])
     assert res.exit_code == 0, res.output
-    assert len(made) == 1 and os.path.basename(made[0]).startswith(f".kinema-run.{kinema.cli._host()}-{os.getpid()}.")
+    assert len(made) == 1 and os.path.basename(made[0]).startswith(f".kinema-run.{kinema.runner._host()}-{os.getpid()}.")
     assert not os.path.exists(made[0])  # removed at the end

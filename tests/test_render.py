@@ -243,7 +243,7 @@ def _bottom_brightness(path):
 
 
 def test_a_trajectory_renders_its_colliders_unless_told_not_to(tmp_path):
-    from kinema.cli import _render_video
+    from kinema.runner import _render_video
 
     w = kinema.World(dt=1e-3)
     w.add_particles([[0, 0, 1.0], [0.5, 0, 1.0]], radius=0.1)
@@ -257,7 +257,7 @@ def test_a_trajectory_renders_its_colliders_unless_told_not_to(tmp_path):
     m, bare_light = _bottom_brightness(without)
     assert n == m == traj.t.size
     assert floor_light < bare_light - 10, "the floor darkens the bottom of every frame"
-    # kinema run / kinema render go through cli._render_video: the same default and switch.
+    # kinema run / kinema render go through runner._render_video: the same default and switch.
     cli_floor = _render_video(traj, tmp_path / "cli.mp4", {"width": 160, "height": 96}, None, "rendering")
     cli_bare = _render_video(traj, tmp_path / "cli_bare.mp4", {"width": 160, "height": 96, "draw_colliders": False}, None, "rendering")
     assert _bottom_brightness(cli_floor)[1] == pytest.approx(floor_light, abs=1.0)
@@ -408,7 +408,7 @@ def _box_corners(lo, hi):
 @pytest.mark.parametrize("legend", [True, False])
 def test_the_default_camera_shows_the_whole_demo_box_large(monkeypatch, legend):
     # `kinema demo`'s scene with its own [render] camera (none: the default), at 16:9.
-    from kinema.cli import _camera
+    from kinema.runner import _camera
 
     world = kinema.load_scene(Path(kinema.__file__).parent / "scenes" / "demo.toml")
     traj = world.run(0.1, fps=30)

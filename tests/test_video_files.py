@@ -18,8 +18,9 @@ import pytest
 from PIL import Image
 
 import kinema
-from kinema.cli import _render_video, app
+from kinema.cli import app
 from kinema.render import Camera2D, render_frames, video_rate, write_video
+from kinema.runner import _render_video
 
 FFMPEG = imageio_ffmpeg.get_ffmpeg_exe()
 W, H = 64, 48

@@ -8,22 +8,37 @@ Errors are one line on stderr, never a traceback; ``KINEMA_DEBUG=1`` re-raises u
 Work limits: ``run``, ``view`` (of a scene) and ``render`` estimate their work before doing any
 (particles × steps, video frames × pixels, memory) and refuse, unless given ``--force``,
 more than ``LIMIT_PARTICLE_STEPS`` particle-steps, ``LIMIT_PIXELS`` pixels or
-``LIMIT_MEMORY`` bytes; more than ``MAX_STEPS`` steps are refused even with ``--force``.
+``LIMIT_MEMORY`` bytes; more than ``MAX_STEPS`` steps are refused even with ``--force``
+(the limits and the work of running a scene are in kinema.runner).
 """
 
 from __future__ import annotations
 
 import os
-import re
-import tempfile
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
-import numpy as np
 import typer
-from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
+
+from .runner import (
+    FRAME_BYTES,
+    RENDER_BYTES,
+    VIDEO_FPS,
+    OutputError,
+    _count,
+    _frames_and_steps,
+    _over_limits,
+    _progress,
+    _render_video,
+    _scene_work,
+    _size,
+    console,
+    err_console,
+    save_figure_atomically,
+    simulate_scene,
+)
 
 app = typer.Typer(
     name="kinema",
@@ -34,8 +49,6 @@ app = typer.Typer(
     context_settings={"help_option_names": ["-h", "--help"]},
     rich_markup_mode=None,  # click's plain help: typer 0.29's rich help prints <bool> beside every flag
 )
-console = Console()
-err_console = Console(stderr=True)
 
 
 def _print_version(value: bool) -> None:
@@ -51,89 +64,6 @@ def _options(
     version: Annotated[bool | None, typer.Option("--version", "-V", callback=_print_version, is_eager=True, help="Print the version and exit.")] = None,
 ) -> None:
     """kinema: particle systems that move by honest numerical methods."""
-
-
-# -- work estimate ----------------------------------------------------------------------------
-# Every example scene and `kinema demo` is four orders of magnitude below these (the most:
-# sand_box, 4e6 particle-steps and 17 MiB; demo, 6e7 pixels of video); they stop runs that
-# would take most of a day or more, or more memory than a laptop has, such as count = 1e9 or
-# duration = 1e9 s at dt = 1e-3, before any of the work (or the allocation) is done.
-LIMIT_PARTICLE_STEPS = 1e11  # 5 hours at 6e6 particle-steps a second (maxwell_gas), days in a heap of contacts (demo: 2e5/s)
-LIMIT_PIXELS = 1e11  # frames × width × height: 16 minutes of 1080p at 30 fps; rendering runs at about 5e8 pixels a second, encoding slower
-LIMIT_MEMORY = 8 * 2**30  # bytes
-VIDEO_FPS = (0.01, 1000.0)  # playback frames per second asked; a GIF writes the nearest of 100/d, d = 2 … 65535 (kinema.render.video_rate)
-MAX_STEPS = 10**18  # even with --force: the engine counts steps in 64 bits; 1e18 is 30 years at 1e9 steps a second
-ENGINE_BYTES = 1024  # per particle: state, the method's stages, collision grid and lists (measured 400-800)
-FRAME_BYTES = 96  # per particle and recorded frame: positions and velocities (48 B), held twice while the trajectory is assembled
-RENDER_BYTES = 32  # per particle and frame while rendering: the renderer's copy of the positions, the speeds
-
-
-def _count(n: int, noun: str) -> str:
-    """``1 particle``, ``2 particles``, ``1,000 frames``."""
-    return f"{n:,} {noun}" + ("" if n == 1 else "s")
-
-
-def _size(n: float) -> str:
-    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
-        if n < 1024 or unit == "PiB":
-            return f"{n:.0f} {unit}" if unit == "B" or n >= 10 else f"{n:.1f} {unit}"
-        n /= 1024
-    return ""  # unreachable
-
-
-def _frames_and_steps(seconds: float, dt: float, fps: float) -> tuple[float, float]:
-    """Recorded frames after the first, and steps, as ``World.run`` takes them (floats: they
-    may be far too many to count)."""
-    per_frame = max(1, round(1.0 / (fps * dt)))
-    frames = float(np.floor(seconds / (per_frame * dt) + 1e-9))
-    return frames, frames * per_frame
-
-
-def _over_limits(what: str, estimate: str, particle_steps: float, pixels: float, memory: float, force: bool) -> None:
-    """Refuse (``ValueError``, exit 2) work over a limit unless ``force``."""
-    if force or (particle_steps <= LIMIT_PARTICLE_STEPS and pixels <= LIMIT_PIXELS and memory <= LIMIT_MEMORY):
-        return
-    limits = f"{LIMIT_PARTICLE_STEPS:.0e} particle-steps, {LIMIT_PIXELS:.0e} pixels and {_size(LIMIT_MEMORY)} of memory"
-    raise ValueError(f"{what}: {estimate}, over the limits of {limits}; give --force to run it anyway")
-
-
-def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video: bool, force: bool) -> str:
-    """Estimate the work of simulating ``scene`` (read from ``path``) for ``seconds`` (and
-    rendering its video when ``video``), refuse it when over the limits unless ``force``, and
-    return the estimate in words. Nothing is built: the particles are counted from the blocks."""
-    from .scene import block_size
-
-    w = scene.world
-    frames, steps = _frames_and_steps(seconds, w.dt, w.fps)
-    why = f"{duration_key} = {seconds:g} s at world.dt = {w.dt:g} s"
-    if not steps <= MAX_STEPS:
-        raise ValueError(f"{path}: the run would take {steps:.1e} steps ({why}), more than can be counted ({MAX_STEPS:.0e}), even with --force")
-    n = scene.particle_count()
-    if scene.particles:  # name the largest block, where the particles come from
-        size, k = max((block_size(b), k) for k, b in enumerate(scene.particles))
-        block = scene.particles[k]
-        if block.type == "random":
-            why += f"; particles[{k}].count = {block.count}"
-        elif block.type == "lattice":
-            why += f"; particles[{k}].counts = {block.counts}"
-        else:
-            why += f"; {size:,} particles[{k}].positions"
-        if len(scene.particles) > 1:
-            why += f", the largest of {len(scene.particles)} blocks"
-    born = scene.emitted_count(seconds)
-    if born:
-        why += f"; up to {born:,} particles from {len(scene.emitters)} emitter{'s' if len(scene.emitters) > 1 else ''}"
-        n += born
-    particle_steps = float(n) * steps
-    pixels = (frames + 1) * scene.render.width * scene.render.height if video and n else 0.0
-    memory = n * ENGINE_BYTES + (frames + 1) * n * (FRAME_BYTES + (RENDER_BYTES if pixels else 0))
-    video_words = f"{frames + 1:,.0f} frames × render.width {scene.render.width} × render.height {scene.render.height}"
-    estimate = f"the run would take {particle_steps:.1e} particle-steps ({n:,} particles × {steps:,.0f} steps: {why})"
-    if pixels:
-        estimate += f", {pixels:.1e} pixels of video ({video_words})"
-    estimate += f" and about {_size(memory)} of memory"
-    _over_limits(str(path), estimate, particle_steps, pixels, memory, force)
-    return f"{particle_steps:.1e} particle-steps" + (f", {pixels:.1e} pixels of video" if pixels else "") + f", about {_size(memory)} of memory"
 
 
 def _fail(message: str, code: int = 2) -> None:
@@ -153,29 +83,6 @@ def _split_methods(methods: str) -> list[str]:
         if n not in valid:
             _fail(f"--methods: unknown method '{n}'; valid methods are: {', '.join(valid)}")
     return names
-
-
-def save_figure_atomically(fig, out: Path, dpi: int = 130) -> Path:
-    """Write a matplotlib figure to ``out`` via a temporary file in the same folder, so an
-    interrupted or failed write never leaves a half-written file under the final name."""
-    out = Path(out)
-    if out.is_dir():
-        _fail(f"--out {out}: is a directory; give a file name such as {out / 'regions.png'}")
-    suffix = out.suffix.lower().lstrip(".")
-    if suffix not in {"png", "svg", "pdf", "jpg", "jpeg"}:
-        _fail(f"--out {out}: unsupported image format '{out.suffix}'; use .png, .svg, .pdf or .jpg")
-    from .io._files import TrajectoryFileError, atomic_file
-
-    parent = out.parent if str(out.parent) else Path(".")
-    try:
-        parent.mkdir(parents=True, exist_ok=True)
-        with atomic_file(out) as tmp:  # the mode an ordinary open() gives (mkstemp's was 0600)
-            fig.savefig(tmp, dpi=dpi, format=suffix, bbox_inches="tight")
-    except TrajectoryFileError as e:  # (an OSError of the write, naming the file)
-        _fail(f"--out {out}: {e}")
-    except OSError as e:
-        _fail(f"--out {out}: cannot write there ({e.strerror or e})")
-    return out
 
 
 @app.command()
@@ -214,7 +121,10 @@ def stability(
         _fail(f"--extent {extent!r}: give four numbers re_min,re_max,im_min,im_max with min < max")
     fig, ax = plt.subplots(figsize=(7, 6))
     kinema.stability.plot_regions(names, ax=ax, extent=box)
-    path = save_figure_atomically(fig, out)
+    try:
+        path = save_figure_atomically(fig, out)
+    except OutputError as e:
+        _fail(str(e))
     plt.close(fig)
     table = Table(title="stable intervals of z = hλ")
     for col in ("method", "real axis", "imaginary axis"):
@@ -242,23 +152,10 @@ def demo(
 
     if out.exists() and not out.is_dir():
         _fail(f"--out {out}: exists and is not a folder")
-    run_demo(out, console)
-
-
-def _progress():
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-
-    return Progress(
-        TextColumn("[bold]{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TextColumn("frames"),
-        TimeElapsedColumn(),
-        TextColumn("ETA"),
-        TimeRemainingColumn(),
-        console=err_console,
-        transient=False,
-    )
+    try:
+        run_demo(out, console)
+    except OutputError as e:  # a picture that cannot be written
+        _fail(str(e))
 
 
 def _guarded(fn):
@@ -299,87 +196,6 @@ def _guarded(fn):
     return wrapper
 
 
-def _render_video(
-    traj, path: Path, render_opts: dict, fps: float | None, description: str, draw_colliders: bool = True, scene_fps: float | None = None
-) -> Path:
-    """Render ``traj`` to ``path`` (.mp4 or .gif) with a progress bar over the frames; the
-    trajectory's colliders are drawn unless ``draw_colliders`` (or the option of that name in
-    ``render_opts``) is False.
-
-    ``fps``: one video frame per recorded frame at this rate. None: real time, the frames
-    placed by their times (``write_video(times=)``), at the ``scene_fps`` the scene asked for
-    (World.run records every round(1/(fps·dt)) steps, 33 ms for 30 fps and dt = 1 ms, so one
-    frame in about a hundred is dropped to play 30.30 recorded frames a second at exactly 30),
-    or, without it or when the recording interval is not that rate's rounding (clamped to one
-    step), at the recording's own rate (clamped to ``VIDEO_FPS``, and then not real time). The
-    rate written (``kinema.render.video_rate``: GIF counts in 1/100 s) is printed."""
-    from .render import _trajectory_options, own_colours, render_frames, video_rate, write_video
-
-    render_opts = dict(render_opts)
-    draw_colliders = render_opts.pop("draw_colliders", draw_colliders)
-    render_opts.setdefault("colliders", getattr(traj, "colliders", None) if draw_colliders else None)
-    times, timing = None, "one video frame per recorded frame"
-    recorded = 1.0 / float(np.median(np.diff(traj.t))) if traj.t.size > 1 else float("nan")
-    if fps is None and scene_fps is not None and VIDEO_FPS[0] <= scene_fps <= VIDEO_FPS[1] and 0.5 <= recorded / scene_fps <= 1.5:
-        fps, times, timing = scene_fps, traj.t, f"real time, {recorded:.4g} recorded frames a second placed by their times"
-    elif fps is None:  # real time, within what the video formats can play
-        fps = min(max(recorded, VIDEO_FPS[0]), VIDEO_FPS[1]) if np.isfinite(recorded) else 30.0
-        if fps == recorded:  # placed by their times: GIF delays round, the times need not be even
-            times, timing = traj.t, "real time at the recording's rate"
-    # The radii (or a stand-in), the alive mask and the springs (ids → columns).
-    for name, value in _trajectory_options(traj).items():
-        render_opts.setdefault(name, value)
-    if isinstance(render_opts.get("color_by"), str) and render_opts["color_by"] == "color":  # each particle's own
-        render_opts["color_by"] = own_colours(traj)
-    frames = render_frames(traj.positions, t=traj.t, dim=traj.dim, velocities=traj.velocities, **render_opts)
-    with _progress() as bar:
-        task = bar.add_task(description, total=len(traj.t))
-
-        def counted():
-            for f in frames:
-                yield f
-                bar.advance(task)
-
-        written = write_video(counted(), path, fps=fps, times=times)
-    rate = video_rate(fps, path)
-    exact = f"{rate} fps" if rate.denominator == 1 else f"{float(rate):.4g} fps ({rate})"
-    console.print(f"video: {exact}, {timing}", highlight=False, soft_wrap=True)
-    return written
-
-
-def _energy_plot(traj, out: Path) -> Path:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (ax_e, ax_p) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
-    traj.plot_energy(ax=ax_e)
-    ax_e.set_xlabel("")
-    for k, axis in enumerate("xyz"[: traj.dim]):
-        ax_p.plot(traj.t, traj.momentum[:, k], label=f"p_{axis}")
-    ax_p.set_xlabel("t (s)")
-    ax_p.set_ylabel("momentum (kg·m/s)")
-    ax_p.legend(fontsize="small")
-    ax_p.grid(True, alpha=0.3)
-    try:
-        return save_figure_atomically(fig, out)
-    finally:
-        plt.close(fig)
-
-
-def _outdir(out: Path) -> Path:
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"-o {out}: exists and is not a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise ValueError(f"-o {out}: cannot create the folder ({e.strerror})") from None
-    if not os.access(out, os.W_OK | os.X_OK):
-        raise ValueError(f"-o {out}: the folder is not writable")
-    return out
-
-
 @app.command()
 @_guarded
 def run(
@@ -402,170 +218,6 @@ def run(
     simulate_scene(
         scene, out if out is not None else Path("out") / scene.stem, duration, no_video, force=force, checkpoint_every=checkpoint_every, resume=resume
     )
-
-
-def simulate_scene(
-    scene: Path,
-    outdir: Path,
-    duration: float | None = None,
-    no_video: bool = False,
-    *,
-    force: bool = False,
-    checkpoint_every: float | None = None,
-    resume: bool = False,
-) -> tuple[Any, list[Path]]:
-    """`kinema run`'s work: load ``scene``, simulate ``duration`` s (default: the scene's) with
-    a progress bar, and write what its [output] table asks for into the folder ``outdir``
-    (created when the scene is valid): trajectory.h5, <scene name>.mp4|.gif, energy.png, all
-    or none. Work over the limits (module docstring) is refused before any is done unless
-    ``force``. Staging folders left in ``outdir`` by runs that were killed are removed.
-    Returns the trajectory and the paths written."""
-    import shutil
-    import warnings
-
-    from .scene import Scene
-
-    sc = Scene.from_toml(scene)
-    seconds = sc.world.duration if duration is None else duration
-    if not (np.isfinite(seconds) and seconds >= 0):
-        raise ValueError(f"--duration {seconds}: give a finite number of seconds >= 0")
-    video = sc.output.video if not no_video else False
-    estimate = _scene_work(sc, scene, seconds, "world.duration" if duration is None else "--duration", bool(video), force)
-    world = sc.build(source=str(scene))
-    outdir = _outdir(outdir)
-    _remove_stale_stages(outdir)
-    fps = sc.world.fps
-    frames = int(_frames_and_steps(seconds, world.dt, fps)[0])
-    console.print(
-        f"{scene}: {_count(len(world), 'particle')}, dim {world.dim}, {world.method}, dt = {world.dt:g} s, {seconds:g} s, "
-        f"{_count(frames + 1, 'frame')}; work: {estimate}",
-        highlight=False,
-        soft_wrap=True,
-    )
-    ckpt = outdir / "checkpoint.ckpt"
-    if checkpoint_every is not None and not (np.isfinite(checkpoint_every) and checkpoint_every > 0):
-        raise ValueError(f"--checkpoint-every {checkpoint_every}: give a finite number of simulated seconds > 0")
-    if resume and not ckpt.is_file():
-        raise ValueError(f"--resume: there is no checkpoint to resume in {outdir} ({ckpt.name}; a run with --checkpoint-every writes it)")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            with _progress() as bar:
-                if resume:
-                    from .checkpoint import resume_run, run_progress
-
-                    done, total = run_progress(ckpt)
-                    task = bar.add_task("simulating (resumed)", total=total + 1, completed=done + 1)
-                    world, traj = resume_run(ckpt, callback=lambda _w: bar.advance(task))
-                else:
-                    task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
-                    saving = {"checkpoint": ckpt, "checkpoint_every": checkpoint_every} if checkpoint_every is not None else {}
-                    traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task), **saving)
-        finally:  # a StabilityWarning explains a divergence: show it before the error
-            for w in caught:
-                err_console.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
-    stats = world.collision_stats()
-    if stats is not None:
-        total = stats["total"]
-        console.print(f"{total['impacts']} impacts inside steps, {total['energy_lost']:.4g} J taken by the collisions", highlight=False)
-    # Everything is written in a hidden folder inside OUTDIR and moved into place at the end,
-    # so a failure leaves no file half-written and none of this run's files at all.
-    stage = Path(tempfile.mkdtemp(prefix=_stage_prefix(), dir=outdir))
-    written: list[Path] = []
-    try:
-        names = []
-        if sc.output.trajectory:
-            traj.save(stage / "trajectory.h5")
-            names.append("trajectory.h5")
-        if video:
-            opts = sc.render.model_dump(exclude={"fps", "camera"})
-            opts["camera"] = _camera(sc.render.camera)
-            _render_video(traj, stage / f"{scene.stem}.{video}", opts, sc.render.fps, "rendering", scene_fps=fps)
-            names.append(f"{scene.stem}.{video}")
-        if sc.output.plot:
-            _energy_plot(traj, stage / "energy.png")
-            names.append("energy.png")
-        from .io._files import _umask
-
-        for name in names:
-            os.chmod(stage / name, 0o666 & ~_umask())
-            os.replace(stage / name, outdir / name)
-            written.append(outdir / name)
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
-    if checkpoint_every is not None or resume:
-        ckpt.unlink(missing_ok=True)  # the run is whole: its files are written
-    for path in written:
-        console.print(f"wrote {path}", highlight=False, soft_wrap=True)
-    return traj, written
-
-
-# A run writes into a hidden staging folder .kinema-run.<host>-<pid>.<random> in its output
-# folder; a run that is killed (kill -9, power off) leaves it behind, and the next run into the
-# folder removes it once the process that made it is gone.
-_STAGE = re.compile(r"\.kinema-run\.(?:(?P<host>[A-Za-z0-9-]*)-(?P<pid>[0-9]+)\.)?[A-Za-z0-9_]+")
-STALE_UNKNOWN_OWNER_S = 86400.0  # a staging folder without a pid in its name (older kinema) is stale after a day
-
-
-def _host() -> str:
-    import socket
-
-    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:64]
-
-
-def _stage_prefix() -> str:
-    return f".kinema-run.{_host()}-{os.getpid()}."
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's process
-        return True
-    except (OverflowError, ValueError, OSError):
-        return False
-    return True
-
-
-def _remove_stale_stages(outdir: Path) -> list[Path]:
-    """Remove the staging folders in ``outdir`` whose run is over (its process is gone); keep
-    those of live runs and of other hosts. Returns the folders removed."""
-    import shutil
-    import time
-
-    removed = []
-    try:
-        entries = [e for e in os.scandir(outdir) if e.name.startswith(".kinema-run.")]
-    except OSError:
-        return removed
-    host = _host()
-    for entry in entries:
-        m = _STAGE.fullmatch(entry.name)
-        if m is None or not entry.is_dir(follow_symlinks=False):
-            continue
-        if m["pid"] is not None:
-            stale = m["host"] == host and int(m["pid"]) != os.getpid() and not _alive(int(m["pid"]))
-        else:
-            try:
-                stale = time.time() - entry.stat(follow_symlinks=False).st_mtime > STALE_UNKNOWN_OWNER_S
-            except OSError:
-                stale = False
-        if stale:
-            shutil.rmtree(entry.path, ignore_errors=True)
-            removed.append(Path(entry.path))
-    return removed
-
-
-def _camera(table):
-    from .render import Camera2D, Camera3D
-
-    if table is None:
-        return None
-    if table.type == "2d":
-        return Camera2D(table.xmin, table.ymin, table.xmax, table.ymax)
-    return Camera3D(tuple(table.eye), tuple(table.target), tuple(table.up), table.fov_deg)
 
 
 @app.command()

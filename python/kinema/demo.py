@@ -22,6 +22,7 @@ from rich.console import Console
 from rich.table import Table
 
 from . import convergence, methods, problems, solve_second_order, stability
+from .runner import save_figure_atomically, simulate_scene
 
 OMEGA = 1.0
 PERIODS = 10
@@ -30,8 +31,6 @@ H = 0.1
 
 def _phase_portraits(results: dict, out: Path) -> Path:
     import matplotlib.pyplot as plt
-
-    from .cli import save_figure_atomically
 
     names = list(results)
     cols = 4
@@ -57,8 +56,6 @@ def _phase_portraits(results: dict, out: Path) -> Path:
 def _regions(out: Path) -> Path:
     import matplotlib.pyplot as plt
 
-    from .cli import save_figure_atomically
-
     fig, ax = plt.subplots(figsize=(7.5, 6.5))
     stability.plot_regions(["euler", "midpoint", "rk4", "rk45", "implicit_euler"], ax=ax, extent=(-5.0, 3.0, -4.0, 4.0))
     path = save_figure_atomically(fig, out / "stability_regions.png")
@@ -68,8 +65,6 @@ def _regions(out: Path) -> Path:
 
 def _convergence(out: Path, console: Console) -> Path:
     import matplotlib.pyplot as plt
-
-    from .cli import save_figure_atomically
 
     fig, ax = plt.subplots(figsize=(7.5, 6))
     table = Table(title="measured orders on x'' = -x (least-squares slopes of log error vs log h)")
@@ -97,7 +92,6 @@ def _falling_balls(out: Path, console: Console) -> list[Path]:
     """The scene ``kinema/scenes/demo.toml`` (examples/scenes/demo.toml): 400 balls falling
     into a box, Verlet, e = 0.7, run as `kinema run` runs it (trajectory.h5, demo.mp4,
     energy.png), plus the viewer in one offline page (demo.html)."""
-    from .cli import simulate_scene
     from .viewer import BundleMissingError, write_html
 
     start = time.perf_counter()

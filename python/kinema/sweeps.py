@@ -367,7 +367,7 @@ def _plot(path: Path, rows: list[dict[str, Any]], keys: list[str]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .cli import save_figure_atomically
+    from .runner import save_figure_atomically
 
     ok = [r for r in rows if not r.get("error")]
     skip = {"member", "seed", "error", *keys}

@@ -21,7 +21,7 @@ from __future__ import annotations
 from .build import load_scene
 from .export import to_scene  # importing it attaches World.to_scene, World.scene, World.save/load_checkpoint
 from .schema import Scene, SceneError
-from .schema import block_size as block_size  # kinema.cli's work estimate
+from .schema import block_size as block_size  # kinema.runner's work estimate
 from .tables import Isotropic, Maxwell, Uniform
 
 __all__ = ["Isotropic", "Maxwell", "Scene", "SceneError", "Uniform", "load_scene", "to_scene"]

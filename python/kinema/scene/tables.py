@@ -25,7 +25,7 @@ class _Model(BaseModel):
 
 
 # Bounds that keep the engine's arithmetic finite and its integers in range (the CLI's work
-# estimate, kinema.cli, refuses much smaller runs unless told --force).
+# estimate, kinema.runner, refuses much smaller runs unless told --force).
 MIN_DT = 1e-300  # s; with MIN_FPS, 1/(fps dt) (the steps of one frame) stays finite
 MIN_FPS = 1e-6  # frames per second
 MAX_PARTICLES = 2**32 - 1  # particles in one block, and the largest particle index + 1
@@ -426,7 +426,7 @@ class RenderTable(_Model):
     color_by: Literal["speed", "id", "color"] = "speed"
     colormap: str = "viridis"
     background: Annotated[list[Annotated[int, Field(ge=0, le=255)]], Field(min_length=3, max_length=3)] = [255, 255, 255]
-    fps: Annotated[float, Field(ge=0.01, le=1000)] | None = None  # playback; what GIF and MP4 can hold (kinema.cli.VIDEO_FPS)
+    fps: Annotated[float, Field(ge=0.01, le=1000)] | None = None  # playback; what GIF and MP4 can hold (kinema.runner.VIDEO_FPS)
     camera: _typed(Camera2DTable, Camera3DTable) | None = None
 
     @field_validator("colormap")
