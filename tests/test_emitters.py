@@ -177,7 +177,6 @@ def test_springs_die_with_an_end():
     w.add_particles([[0, 0, 0], [0, 0, -1], [0, 0, -2]], pinned=[True, False, False])
     w.add(kinema.Gravity())
     w.add(kinema.Spring([0, 1], [1, 2], k=100.0))
-    assert not np.allclose(w.accelerations[2], [0, 0, -9.81]) or True
     w.step(10)
     w.remove_particles([1])
     assert w.ids.tolist() == [0, 2]

@@ -245,13 +245,16 @@ class _Recorder:
         self.sets: list[tuple] = []
 
     def add(self, world: Any) -> None:
-        info = world._trajectory_info()
-        if not self.about:
-            self.about = info
-        self.about["springs"] = info["springs"]  # springs added mid-run count
-        ids = info["ids"]
+        # What the world is (masses, radii, species, colliders, ...) is read only when its set of
+        # particles changed, not at every frame; the ids are compared each frame.
+        ids = np.asarray(world._core.ids, dtype=np.int64)
         if not self.sets or not np.array_equal(ids, self.sets[-1][0]):
+            info = world._trajectory_info()
+            if not self.about:
+                self.about = info
             self.sets.append((ids, info["masses"], info["radii"], info["species"], info["colors"]))
+        springs = world._spring_ids  # springs added mid-run count
+        self.about["springs"] = springs.copy() if springs.size else None
         d = world.diagnostics()
         stats = world.collision_stats()
         if stats is None:
