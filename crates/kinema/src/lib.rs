@@ -12,6 +12,7 @@ pub mod forces;
 pub mod ode;
 pub mod particles;
 pub mod render;
+pub(crate) mod vec3;
 pub mod world;
 
 pub use error::{CallbackError, Divergence, Error};

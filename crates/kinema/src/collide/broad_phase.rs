@@ -24,8 +24,8 @@
 //! in (i, j) order by a second counting sort, by i.
 
 use super::domain::Domain;
-use super::vec3;
 use crate::error::Error;
+use crate::vec3;
 
 /// A candidate pair (i, j) of particle indices, i < j.
 pub type Pair = (usize, usize);

@@ -8,8 +8,8 @@
 //! then circles), and boxes no walls along z ([`BoxContainer::rect`]).
 
 use super::contact::{Contact, Partner};
-use super::vec3;
 use crate::error::Error;
+use crate::vec3;
 
 /// A collider's own restitution and friction; `None` uses the particle's value (the world's
 /// global value where particles have none). See [`crate::collide::response::MaterialTable`].

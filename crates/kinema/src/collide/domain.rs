@@ -5,8 +5,8 @@
 //! displacement d − L·round(d / L), which lies in [−L/2, L/2]. When two particles could
 //! touch through two images at once (r_i + r_j + margin > L/2) only the nearest one counts.
 
-use super::vec3;
 use crate::error::Error;
+use crate::vec3;
 use rayon::prelude::*;
 
 /// A box [lo, hi) whose opposite faces are identified along the axes marked periodic.

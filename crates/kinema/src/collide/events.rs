@@ -40,7 +40,7 @@ use super::contact::Partner;
 use super::domain::Domain;
 use super::neighbour_list::{NeighbourList, CHUNK};
 use super::toi::{toi_plane, toi_sphere_obstacle, toi_spheres};
-use super::vec3;
+use crate::vec3;
 
 /// Where the step's paths are kept, allocated once: the reference states of the particles
 /// whose path was opened in this step (an impact or a rebuild moved its reference), marked

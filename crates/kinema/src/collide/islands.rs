@@ -28,8 +28,8 @@ use super::response::{
     hold_grouped, separate_grouped, HoldParams, HoldStats, Material, MaterialTable, SeparateParams, SeparateStats,
 };
 use super::sweeps::SweepGroup;
-use super::vec3;
 use crate::error::Error;
+use crate::vec3;
 
 /// Islands of at least this many contacts are coloured (smaller ones are swept in contact
 /// order: a colour of theirs would be too small to share among threads).

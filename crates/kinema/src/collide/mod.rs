@@ -47,7 +47,6 @@ pub mod penalty;
 pub mod response;
 pub(crate) mod sweeps;
 pub mod toi;
-pub(crate) mod vec3;
 pub(crate) mod wake;
 
 pub use broad_phase::{all_pairs, Grid, Pair};

@@ -15,8 +15,8 @@
 use super::broad_phase::Pair;
 use super::contact::{Contact, Partner};
 use super::domain::Domain;
-use super::vec3;
 use crate::error::Error;
+use crate::vec3;
 
 /// The contact of particles i and j if their distance is below r_i + r_j + `tolerance`
 /// (m, ≥ 0; > 0 also reports near misses, with overlap −gap < 0), else `None`.

@@ -36,8 +36,8 @@
 //! longer give.
 
 use super::contact::Contact;
-use super::vec3;
 use crate::error::Error;
+use crate::vec3;
 
 /// The damping ratio ζ of the contact oscillator that bounces back with restitution `e`
 /// (in [0, 1]): ζ = −ln e / √(π² + ln² e); 0 for e = 1, 1 (critical) for e = 0.

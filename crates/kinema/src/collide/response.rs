@@ -23,8 +23,8 @@
 use super::colliders::Collider;
 use super::contact::{Contact, Partner};
 use super::sweeps::{sweeps, Ends, SweepGroup};
-use super::vec3;
 use crate::error::Error;
+use crate::vec3;
 
 /// The restitution and friction of a contact, or of one body before combining.
 #[derive(Debug, Clone, Copy, PartialEq)]

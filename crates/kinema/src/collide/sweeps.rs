@@ -19,7 +19,7 @@
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use super::contact::Contact;
-use super::vec3;
+use crate::vec3;
 
 /// Sweeps run on all threads when a colour has at least this many contacts (below, the
 /// waits cost more than the visits; the result is the same either way).

@@ -14,7 +14,7 @@
 //! A step length h that is negative or NaN finds nothing.
 
 use super::colliders::{Plane, SphereObstacle};
-use super::vec3;
+use crate::vec3;
 
 /// The two real roots of A τ² + B τ + C = 0, smaller first, for A ≠ 0 and a positive
 /// discriminant; `None` otherwise (no roots, or a double root: a tangency).

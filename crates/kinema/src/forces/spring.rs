@@ -21,6 +21,7 @@ use rayon::prelude::*;
 use super::{check_buffers, Force, Linearized, State};
 use crate::error::{CallbackError, Error};
 use crate::particles::{retain_rows, GONE};
+use crate::vec3::dot;
 
 /// A set of damped springs between pairs of particles.
 ///
@@ -373,10 +374,6 @@ impl Linearized for LinearizedSprings {
 fn distance(x: &[f64], i: usize, j: usize) -> f64 {
     let (a, b) = (3 * i, 3 * j);
     ((x[b] - x[a]).powi(2) + (x[b + 1] - x[a + 1]).powi(2) + (x[b + 2] - x[a + 2]).powi(2)).sqrt()
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 impl Force for Springs {

@@ -3,6 +3,7 @@
 //! Pixel convention: pixel (i, j) — column i, row j, row 0 at the top — covers the square
 //! [i, i+1) × [j, j+1) of the image plane; its centre is (i + 0.5, j + 0.5).
 
+use crate::vec3::{add, cross, dot, norm, scale, sub};
 use crate::Error;
 
 /// The margin [`Camera::frame_box`] leaves on each side of the image, a fraction of its width
@@ -158,16 +159,16 @@ impl Camera {
         if !(n > 0.0 && n.is_finite()) {
             return Err(invalid("from", format!("{from:?}"), "a finite non-zero direction"));
         }
-        let dir = scale(from, 1.0 / n);
+        let dir = scale(1.0 / n, from);
         let world_up = if dir[0].abs() < 1e-9 && dir[1].abs() < 1e-9 {
             [0.0, 1.0, 0.0]
         } else {
             [0.0, 0.0, 1.0]
         };
-        let forward = scale(dir, -1.0);
+        let forward = scale(-1.0, dir);
         let right = {
             let r = cross(forward, world_up);
-            scale(r, 1.0 / norm(r))
+            scale(1.0 / norm(r), r)
         };
         let up = cross(right, forward);
         let f = 0.5 * h / (0.5 * fov_y_deg.to_radians()).tan();
@@ -181,7 +182,7 @@ impl Camera {
                 hi[k] = hi[k].max(p[k]);
             }
         }
-        let centre = scale(add(lo, hi), 0.5);
+        let centre = scale(0.5, add(lo, hi));
         let size = norm(sub(hi, lo));
         let local: Vec<[f64; 3]> = points
             .iter()
@@ -232,8 +233,8 @@ impl Camera {
             0.5 * (a + b)
         };
         let (sx, sy) = (shift(0, a0, a1), shift(1, b0, b1));
-        let target = add(centre, add(scale(right, sx), scale(up, sy)));
-        let eye = sub(target, scale(forward, distance));
+        let target = add(centre, add(scale(sx, right), scale(sy, up)));
+        let eye = sub(target, scale(distance, forward));
         let camera = Camera::Perspective {
             eye,
             target,
@@ -326,7 +327,7 @@ impl Camera {
         if !(nd > 0.0 && nd.is_finite()) {
             return Err(invalid("target", format!("{target:?}"), "a finite point different from eye"));
         }
-        let forward = scale(d, 1.0 / nd);
+        let forward = scale(1.0 / nd, d);
         let r = cross(forward, up);
         let nr = norm(r);
         if !(nr > 1e-12 * norm(up) && nr.is_finite()) {
@@ -336,7 +337,7 @@ impl Camera {
                 "a finite direction not parallel to target - eye",
             ));
         }
-        let right = scale(r, 1.0 / nr);
+        let right = scale(1.0 / nr, r);
         Ok((right, cross(right, forward), forward))
     }
 }
@@ -466,27 +467,4 @@ fn check_fov(fov_y_deg: f64) -> Result<(), Error> {
         ));
     }
     Ok(())
-}
-
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-pub(crate) fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-pub(crate) fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }

@@ -2,8 +2,9 @@
 
 use rayon::prelude::*;
 
-use super::camera::{invalid, norm, sub, Camera, Projector};
+use super::camera::{invalid, Camera, Projector};
 use super::scenery::{self, Prim, Scenery, LINE_COLOR};
+use crate::vec3::{norm, sub};
 use crate::Error;
 
 /// Rows per band: the unit of parallel work (720 rows give 45 bands).

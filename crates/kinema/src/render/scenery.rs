@@ -17,8 +17,9 @@
 //! primitive's rows that fall inside it, in list order, before its particles. A band's pixels
 //! still depend only on its own rows, so frames stay byte-identical for any thread count.
 
-use super::camera::{add, cross, dot, invalid, norm, scale, sub, Camera, Projector};
+use super::camera::{invalid, Camera, Projector};
 use super::raster::{blend, disc_row, fill_rgb, Sprite};
+use crate::vec3::{add, cross, dot, norm, scale, sub};
 use crate::Error;
 
 /// A static collider to draw. Lengths in m.
@@ -409,10 +410,10 @@ impl Persp3<'_> {
     /// framing the scene sees the floor run under and well beyond it, into the distance,
     /// with its far border in view as a horizon.
     fn plane(&self, out: &mut Vec<Prim>, point: [f64; 3], normal: [f64; 3], eye: [f64; 3], elo: [f64; 3], ehi: [f64; 3]) {
-        let n = scale(normal, 1.0 / norm(normal));
-        let centre = scale(add(elo, ehi), 0.5);
+        let n = scale(1.0 / norm(normal), normal);
+        let centre = scale(0.5, add(elo, ehi));
         let r_scene = 0.5 * norm(sub(ehi, elo));
-        let c = sub(centre, scale(n, dot(sub(centre, point), n)));
+        let c = sub(centre, scale(dot(sub(centre, point), n), n));
         let half = (2.5 * norm(sub(eye, c))).max(2.0 * r_scene).max(1e-9);
         // Tangents: the world axis least aligned with n, made orthogonal to it, and n × that;
         // a horizontal floor gets a grid along the world's x and y.
@@ -421,10 +422,10 @@ impl Persp3<'_> {
         axis[k] = 1.0;
         let t1 = {
             let v = cross(n, axis);
-            scale(v, 1.0 / norm(v))
+            scale(1.0 / norm(v), v)
         };
         let t2 = cross(n, t1);
-        let at = |u: f64, v: f64| add(add(point, scale(t1, u)), scale(t2, v));
+        let at = |u: f64, v: f64| add(add(point, scale(u, t1)), scale(v, t2));
         let (uc, vc) = (dot(sub(c, point), t1), dot(sub(c, point), t2));
         let corners = [
             at(uc - half, vc - half),

@@ -9,13 +9,13 @@ use rayon::prelude::*;
 use crate::collide::events::{swept_reach, Event, EventQueue, PathStore, Paths, Scene};
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::{collider_scale, NeighbourList, CHUNK, SKIN_PER_RADIUS};
-use crate::collide::vec3;
 use crate::collide::wake::Wake;
 use crate::collide::{
     pair_contact, restitution_impulse, Collider, Contact, Domain, Grid, HoldParams, Material, MaterialTable, Partner, Periodic,
     Plane, ResolveParams, SeparateParams,
 };
 use crate::error::Error;
+use crate::vec3;
 
 /// The contact model: how a collision changes the motion.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,4 +1,4 @@
-//! Small 3-vector helpers shared by the collision stages (flat arrays, 3 values per particle).
+//! Small 3-vector helpers, the one set the crate uses (flat arrays hold 3 values per particle).
 
 /// The 3 coordinates of particle `i` in a flat array (`a[3i..3i+3]`).
 #[inline]
