@@ -3,6 +3,7 @@
 //! The `World` methods that use them are thin wrappers in `world.rs` (one `#[pymethods]` block
 //! per class); every rule is the engine's, and its errors name the parameter.
 
+use kinema::collide::colliders::{check_planar, PLANE_IN_2D, SPHERE_IN_2D};
 use kinema::collide::{BoxContainer, Contact, Material, Partner, Plane, SphereObstacle, Surface};
 use kinema::world::{CollisionParams, CollisionStats, ContactModel};
 use kinema::Error;
@@ -62,26 +63,15 @@ pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<
     Ok(out)
 }
 
-/// In a 2D world the component `name[2]` must be 0 (normals in the xy-plane, centres on it):
-/// the engine's colliders are 3D and would push particles out of the plane.
-fn planar(dim: usize, name: &str, v: [f64; 3], what: &str) -> Result<(), Error> {
-    if dim == 2 && v[2] != 0.0 {
-        return Err(Error::invalid(
-            format!("{name}[2]"),
-            v[2],
-            format!("a 2D world keeps z = 0: {what}"),
-        ));
-    }
-    Ok(())
-}
-
+/// A plane, the engine's 2D rule checked on the normal as given (before it is normalised, so
+/// that the error names the user's number; `World::add_collider` checks it again).
 pub fn plane(dim: usize, point: [f64; 3], normal: [f64; 3], surface: Surface) -> Result<Plane, Error> {
-    planar(dim, "normal", normal, "a plane's normal must lie in the xy-plane")?;
+    check_planar(dim, "normal", normal, PLANE_IN_2D)?;
     Plane::new(point, normal, surface)
 }
 
 pub fn sphere_obstacle(dim: usize, center: [f64; 3], radius: f64, surface: Surface) -> Result<SphereObstacle, Error> {
-    planar(dim, "center", center, "an obstacle's centre must lie in the xy-plane")?;
+    check_planar(dim, "center", center, SPHERE_IN_2D)?;
     SphereObstacle::new(center, radius, surface)
 }
 

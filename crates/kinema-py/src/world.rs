@@ -138,9 +138,8 @@ impl Force for PythonForce {
         })
         .map_err(|e| Box::new(e) as CallbackError)
     }
-    fn depends_on_velocity(&self) -> bool {
-        true // unknown: assume it may
-    }
+    // No `properties`: the default, a force the world knows nothing about, is what a
+    // Python callable is (it may add energy and depend on anything).
 }
 
 /// The particle world (see kinema.World).

@@ -3,8 +3,9 @@
 //! on an oscillator, momentum conservation under internal forces, and divergence reported
 //! without losing the state.
 
+use kinema::collide::{BoxContainer, Plane, SphereObstacle, Surface};
 use kinema::error::CallbackError;
-use kinema::forces::{Force, State};
+use kinema::forces::{Force, Properties, State};
 use kinema::ode::{ButcherTableau, Integrator, Method};
 use kinema::{Error, World, WorldParams};
 
@@ -68,8 +69,11 @@ impl Force for Chain {
         }
         Ok(())
     }
-    fn is_internal(&self) -> bool {
-        true
+    fn properties(&self) -> Properties {
+        Properties {
+            internal: true,
+            ..Properties::UNKNOWN
+        }
     }
 }
 
@@ -165,6 +169,38 @@ fn pinned_particles_stay_put_and_2d_worlds_stay_in_the_plane() {
         .unwrap_err()
         .to_string()
         .contains("position[0][2] = 1 is invalid: a 2D world keeps z = 0"));
+}
+
+/// A 2D world's colliders stay in the plane: the engine refuses a plane whose normal leaves
+/// the xy-plane, an obstacle off it and a box closed along z, whoever adds them (the Python
+/// binding checks the same rule, from the same engine function, on the values as given).
+#[test]
+fn a_2d_world_refuses_colliders_out_of_its_plane() {
+    let flat = || {
+        World::new(WorldParams {
+            dim: 2,
+            ..WorldParams::default()
+        })
+        .unwrap()
+    };
+    let s = Surface::default();
+    let plane = Plane::new([0.0; 3], [0.0, 0.0, 1.0], s).unwrap();
+    let e = flat().add_collider(plane).unwrap_err().to_string();
+    assert!(e.contains("normal[2] = 1 is invalid: a 2D world keeps z = 0"), "{e}");
+    let ball = SphereObstacle::new([0.0, 0.0, 0.5], 1.0, s).unwrap();
+    let e = flat().add_collider(ball).unwrap_err().to_string();
+    assert!(e.contains("center[2] = 0.5 is invalid: a 2D world keeps z = 0"), "{e}");
+    let cube = BoxContainer::new([0.0; 3], [1.0; 3], s).unwrap();
+    let e = flat().add_collider(cube.clone()).unwrap_err().to_string();
+    assert!(e.contains("lo[2] = 0 is invalid: a 2D world keeps z = 0"), "{e}");
+    // What does fit: an in-plane normal, a centre on z = 0, a rectangle; and any of them in 3D.
+    let mut w = flat();
+    w.add_collider(Plane::new([0.0; 3], [0.0, 1.0, 0.0], s).unwrap()).unwrap();
+    w.add_collider(SphereObstacle::new([0.0, 2.0, 0.0], 1.0, s).unwrap()).unwrap();
+    w.add_collider(BoxContainer::rect([-5.0, -5.0], [5.0, 5.0], s).unwrap())
+        .unwrap();
+    assert_eq!(w.colliders().len(), 3);
+    world(Method::Verlet, 0.01).add_collider(cube).unwrap();
 }
 
 /// Relative energy error (E − E₀)/E₀ of a unit oscillator (k = m = 1, period 2π, 100 steps

@@ -314,6 +314,26 @@ impl SphereObstacle {
     }
 }
 
+/// What a plane of a 2D world must satisfy ([`Collider::check_dim`]).
+pub const PLANE_IN_2D: &str = "a plane's normal must lie in the xy-plane";
+/// What a sphere obstacle of a 2D world must satisfy ([`Collider::check_dim`]).
+pub const SPHERE_IN_2D: &str = "an obstacle's centre must lie in the xy-plane";
+
+/// The 2D rule for one vector: in a world of `dim` = 2 the component `name[2]` must be 0
+/// (`what` says why). The binding calls it on the values as given, before a plane's normal
+/// is normalised, so that the error names the user's number; [`Collider::check_dim`] calls
+/// it on the collider.
+pub fn check_planar(dim: usize, name: &str, v: [f64; 3], what: &str) -> Result<(), Error> {
+    if dim == 2 && v[2] != 0.0 {
+        return Err(Error::invalid(
+            format!("{name}[2]"),
+            v[2],
+            format!("a 2D world keeps z = 0: {what}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Any static collider.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Collider {
@@ -332,6 +352,30 @@ impl Collider {
             Collider::Plane(p) => p.surface(),
             Collider::Box(b) => b.surface(),
             Collider::Sphere(s) => s.surface(),
+        }
+    }
+
+    /// Checks that the collider fits a world of `dim` dimensions. A 2D world keeps every
+    /// particle on z = 0, and the colliders are 3D: a plane's normal must lie in the
+    /// xy-plane, an obstacle's centre on it, and a box must be open along z (a rectangle,
+    /// [`BoxContainer::rect`]), or they would push particles out of the plane.
+    pub fn check_dim(&self, dim: usize) -> Result<(), Error> {
+        match self {
+            Collider::Plane(p) => check_planar(dim, "normal", p.normal(), PLANE_IN_2D),
+            Collider::Sphere(s) => check_planar(dim, "center", s.center(), SPHERE_IN_2D),
+            Collider::Box(b) if dim == 2 => {
+                for (name, z, open) in [("lo", b.lo()[2], f64::NEG_INFINITY), ("hi", b.hi()[2], f64::INFINITY)] {
+                    if z != open {
+                        return Err(Error::invalid(
+                            format!("{name}[2]"),
+                            z,
+                            "a 2D world keeps z = 0: its box is a rectangle, open along z (lo[2] = -inf, hi[2] = inf)",
+                        ));
+                    }
+                }
+                Ok(())
+            }
+            Collider::Box(_) => Ok(()),
         }
     }
 

@@ -6,7 +6,7 @@
 //! ε > 0 (Plummer's) caps the force near the point: |F| peaks at 2μm/(3√3 ε²), for |r| = ε/√2,
 //! and falls to zero at the point, so close passes need no tiny steps.
 
-use super::{check_buffers, Force, SpringRates, State};
+use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State};
 use crate::error::{CallbackError, Error};
 
 /// Softened inverse-square attraction toward a fixed point: F_i = −μ m_i r / (|r|² + ε²)^{3/2},
@@ -73,11 +73,6 @@ impl Attractor {
 }
 
 impl Force for Attractor {
-    /// Uniform over the particles: holds no particle indices.
-    fn can_renumber(&self) -> bool {
-        true
-    }
-
     fn name(&self) -> &str {
         "attractor"
     }
@@ -112,15 +107,28 @@ impl Force for Attractor {
         Some(u.sum())
     }
 
-    /// Conservative: its work is −ΔU.
-    fn can_add_energy(&self) -> bool {
-        false
+    /// Conservative (its work is −ΔU), a function of the positions; it holds no particle
+    /// indices.
+    fn properties(&self) -> Properties {
+        Properties {
+            energy: EnergyClass::Conservative,
+            depends_on_position: true,
+            depends_on_velocity: false,
+            internal: false,
+            renumbers: true,
+        }
+    }
+
+    /// Nothing to prepare: the products read the positions of `s` (see
+    /// [`AttractorJacobian`]).
+    fn linearize(&self, _s: &State, _definite: bool) -> Option<Box<dyn Linearized>> {
+        Some(Box::new(AttractorJacobian(*self)))
     }
 
     /// ω² ≤ max over movable particles of 2μ / s³: the eigenvalues of M⁻¹∂F/∂x (see
-    /// [`Force::jacobian_product`] below) are μ (3|r|²/s² − 1)/s³ ≤ 2μ/s³ along r and −μ/s³
+    /// [`Linearized::apply`] below) are μ (3|r|²/s² − 1)/s³ ≤ 2μ/s³ along r and −μ/s³
     /// across it. No velocity dependence.
-    fn rate_bound(&self, s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
+    fn rates(&self, s: &State, inv_mass: &[f64]) -> Option<Rates> {
         let mut omega_squared: f64 = 0.0;
         for (xi, w) in s.x.chunks_exact(3).zip(inv_mass) {
             if *w > 0.0 {
@@ -128,12 +136,18 @@ impl Force for Attractor {
                 omega_squared = omega_squared.max(2.0 * self.strength / (s2 * s2.sqrt()));
             }
         }
-        Some(SpringRates {
+        Some(Rates {
             omega_squared,
-            damping_rate: 0.0,
+            ..Rates::default()
         })
     }
+}
 
+/// The attractor's Jacobian: ∂F/∂x per particle (below), read from the positions; ∂F/∂v = 0.
+/// It gives no diagonal (the default): the implicit solve's preconditioner leaves it out.
+struct AttractorJacobian(Attractor);
+
+impl Linearized for AttractorJacobian {
     /// Adds (∂F/∂x)·dx; ∂F/∂v = 0.
     ///
     /// Differentiating F = −μ m r s⁻³ with ∂r/∂x = I and ∂s⁻³/∂x = −3 s⁻⁵ r:
@@ -144,33 +158,30 @@ impl Force for Attractor {
     /// ```
     ///
     /// Radially (dx ∥ r, ε = 0) this is +2μm/|r|³: the tidal stretching; across, −μm/|r|³.
-    fn jacobian_product(&self, s: &State, dx: &[f64], _dv: &[f64], out: &mut [f64]) -> bool {
-        if check_buffers(self.name(), s, &[("dx", dx.len()), ("out", out.len())]).is_err() {
-            return false;
-        }
+    fn apply(&self, s: &State, dx: &[f64], _dv: &[f64], out: &mut [f64]) {
+        let a = &self.0;
         for (((oi, xi), di), m) in out
             .chunks_exact_mut(3)
             .zip(s.x.chunks_exact(3))
             .zip(dx.chunks_exact(3))
             .zip(s.mass)
         {
-            let (r, s2) = self.offset(xi);
+            let (r, s2) = a.offset(xi);
             if s2 == 0.0 {
                 continue;
             }
-            let c = self.strength * m / (s2 * s2.sqrt());
+            let c = a.strength * m / (s2 * s2.sqrt());
             let along = 3.0 * (r[0] * di[0] + r[1] * di[1] + r[2] * di[2]) / s2;
             for k in 0..3 {
                 oi[k] -= c * (di[k] - along * r[k]);
             }
         }
-        true
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::testing::{assert_force_is_minus_gradient, assert_jacobian_matches_differences, forces, Rng};
+    use super::super::testing::{assert_force_is_minus_gradient, assert_jacobian_matches_differences, forces, product, Rng};
     use super::*;
 
     /// Theory: Newton's law. A 2 kg particle 3 m above an unsoftened attractor of μ = 18 m³/s²
@@ -234,7 +245,7 @@ mod tests {
             assert_eq!(forces(&mut a, &s), vec![0.0; 3]);
             assert_eq!(a.potential_energy(&s).unwrap(), u);
             let mut out = [0.0; 3];
-            assert!(a.jacobian_product(&s, &[1.0, 2.0, 3.0], &[0.0; 3], &mut out));
+            assert!(product(&a, &s, &[1.0, 2.0, 3.0], &[0.0; 3], &mut out, false));
             assert!(out.iter().all(|o| o.is_finite()), "{out:?}");
         }
     }

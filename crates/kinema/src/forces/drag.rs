@@ -6,7 +6,7 @@
 //! density ρ. Both oppose the velocity, so the force only removes energy: its power is
 //! F·v = −b₁ |v|² − b₂ |v|³ ≤ 0. The coefficients are the same for every particle.
 
-use super::{check_buffers, Force, SpringRates, State};
+use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State};
 use crate::error::{CallbackError, Error};
 
 /// Linear plus quadratic drag: F_i = −b₁ v_i − b₂ |v_i| v_i, N.
@@ -50,11 +50,6 @@ impl Drag {
 }
 
 impl Force for Drag {
-    /// Uniform over the particles: holds no particle indices.
-    fn can_renumber(&self) -> bool {
-        true
-    }
-
     fn name(&self) -> &str {
         "drag"
     }
@@ -77,35 +72,51 @@ impl Force for Drag {
         self.check()
     }
 
-    fn depends_on_velocity(&self) -> bool {
-        true
+    /// Dissipative (its power −b₁|v|² − b₂|v|³ is never positive), a function of the
+    /// velocities only; it holds no particle indices.
+    fn properties(&self) -> Properties {
+        Properties {
+            energy: EnergyClass::Dissipative,
+            depends_on_position: false,
+            depends_on_velocity: true,
+            internal: false,
+            renumbers: true,
+        }
     }
 
-    /// Dissipative: its power −b₁|v|² − b₂|v|³ is never positive.
-    fn can_add_energy(&self) -> bool {
-        false
+    /// Nothing to prepare: the products read the velocities of `s` (see [`DragJacobian`]).
+    fn linearize(&self, _s: &State, _definite: bool) -> Option<Box<dyn Linearized>> {
+        Some(Box::new(DragJacobian {
+            linear: self.linear,
+            quadratic: self.quadratic,
+        }))
     }
 
     /// γ ≤ max_p w_p (b₁ + 2 b₂ |v_p|): the eigenvalues of ∂F/∂v are −(b₁ + b₂ s) across v
     /// and −(b₁ + 2 b₂ s) along it. No position dependence.
-    fn rate_bound(&self, s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
+    fn rates(&self, s: &State, inv_mass: &[f64]) -> Option<Rates> {
         let mut damping_rate: f64 = 0.0;
         for (vi, w) in s.v.chunks_exact(3).zip(inv_mass) {
             let speed = (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]).sqrt();
             damping_rate = damping_rate.max(w * (self.linear + 2.0 * self.quadratic * speed));
         }
-        Some(SpringRates {
-            omega_squared: 0.0,
+        Some(Rates {
             damping_rate,
+            ..Rates::default()
         })
     }
+}
 
+/// Drag's Jacobian: ∂F/∂x = 0 and ∂F/∂v per particle (below), read from the velocities.
+struct DragJacobian {
+    linear: f64,
+    quadratic: f64,
+}
+
+impl Linearized for DragJacobian {
     /// Adds c_v·diag(∂F/∂v) = −c_v (b₁ + b₂ (s + v_k²/s)) per component (see
-    /// [`Force::jacobian_product`] below for ∂F/∂v).
-    fn jacobian_diagonal(&self, s: &State, _cx: f64, cv: f64, out: &mut [f64]) -> bool {
-        if check_buffers(self.name(), s, &[("out", out.len())]).is_err() {
-            return false;
-        }
+    /// [`Linearized::apply`] below for ∂F/∂v).
+    fn add_diagonal(&self, s: &State, _cx: f64, cv: f64, out: &mut [f64]) {
         for (oi, vi) in out.chunks_exact_mut(3).zip(s.v.chunks_exact(3)) {
             let speed = (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]).sqrt();
             for k in 0..3 {
@@ -113,7 +124,6 @@ impl Force for Drag {
                 oi[k] -= cv * (self.linear + self.quadratic * (speed + along));
             }
         }
-        true
     }
 
     /// Adds (∂F/∂v)·dv; ∂F/∂x = 0.
@@ -127,10 +137,7 @@ impl Force for Drag {
     ///
     /// At v = 0 the quadratic term is O(|v|²) and its derivative is 0: the product is −b₁ dv
     /// (the v vᵀ/s term is bounded by s and is dropped, not divided by zero).
-    fn jacobian_product(&self, s: &State, _dx: &[f64], dv: &[f64], out: &mut [f64]) -> bool {
-        if check_buffers(self.name(), s, &[("dv", dv.len()), ("out", out.len())]).is_err() {
-            return false;
-        }
+    fn apply(&self, s: &State, _dx: &[f64], dv: &[f64], out: &mut [f64]) {
         for ((oi, vi), di) in out.chunks_exact_mut(3).zip(s.v.chunks_exact(3)).zip(dv.chunks_exact(3)) {
             let speed = (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]).sqrt();
             let along = if speed > 0.0 {
@@ -143,13 +150,12 @@ impl Force for Drag {
                 oi[k] -= b * di[k] + self.quadratic * along * vi[k];
             }
         }
-        true
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::testing::{assert_jacobian_matches_differences, forces, Rng};
+    use super::super::testing::{assert_jacobian_matches_differences, forces, product, Rng};
     use super::*;
 
     /// Theory: for v = (3, 4, 0) m/s, |v| = 5, F = −(b₁ + 5 b₂) v; with b₁ = 0.5, b₂ = 0.1:
@@ -208,7 +214,7 @@ mod tests {
         };
         let dv = [1.0, -2.0, 0.5];
         let mut out = [0.0; 3];
-        assert!(Drag::new(0.25, 3.0).unwrap().jacobian_product(&s, &[0.0; 3], &dv, &mut out));
+        assert!(product(&Drag::new(0.25, 3.0).unwrap(), &s, &[0.0; 3], &dv, &mut out, false));
         assert_eq!(out, [-0.25, 0.5, -0.125]);
     }
 
@@ -226,7 +232,7 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.starts_with("linear = inf is invalid"), "{e}");
-        assert!(Drag::new(0.0, 0.0).unwrap().depends_on_velocity());
+        assert!(Drag::new(0.0, 0.0).unwrap().properties().depends_on_velocity);
         assert!(Drag::default()
             .potential_energy(&State {
                 t: 0.0,

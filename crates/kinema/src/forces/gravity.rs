@@ -5,7 +5,7 @@
 //! mass, and the world keeps them still through their inverse mass 0, not by skipping them
 //! here (so that the reaction a support must provide can be read off the force array).
 
-use super::{check_buffers, Force, SpringRates, State};
+use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State, ZeroJacobian};
 use crate::error::{CallbackError, Error};
 
 /// Standard gravity near the Earth's surface, m/s² (the rounded value 9.81 used throughout
@@ -58,11 +58,6 @@ impl Default for Gravity {
 }
 
 impl Force for Gravity {
-    /// Uniform over the particles: holds no particle indices.
-    fn can_renumber(&self) -> bool {
-        true
-    }
-
     fn name(&self) -> &str {
         "gravity"
     }
@@ -92,24 +87,25 @@ impl Force for Gravity {
         Some(u.sum())
     }
 
+    /// Conservative (its work is −ΔU), uniform and constant; it holds no particle indices.
+    fn properties(&self) -> Properties {
+        Properties {
+            energy: EnergyClass::Conservative,
+            depends_on_position: false,
+            depends_on_velocity: false,
+            internal: false,
+            renumbers: true,
+        }
+    }
+
     /// The field is uniform and constant: ∂F/∂x = ∂F/∂v = 0, nothing to add.
-    fn jacobian_product(&self, _s: &State, _dx: &[f64], _dv: &[f64], _out: &mut [f64]) -> bool {
-        true
-    }
-
-    /// Zero diagonal: nothing to add.
-    fn jacobian_diagonal(&self, _s: &State, _cx: f64, _cv: f64, _out: &mut [f64]) -> bool {
-        true
-    }
-
-    /// Conservative: its work is −ΔU.
-    fn can_add_energy(&self) -> bool {
-        false
+    fn linearize(&self, _s: &State, _definite: bool) -> Option<Box<dyn Linearized>> {
+        Some(Box::new(ZeroJacobian))
     }
 
     /// A uniform constant field adds no rates.
-    fn rate_bound(&self, _s: &State, _inv_mass: &[f64]) -> Option<SpringRates> {
-        Some(SpringRates::default())
+    fn rates(&self, _s: &State, _inv_mass: &[f64]) -> Option<Rates> {
+        Some(Rates::default())
     }
 }
 
@@ -170,7 +166,8 @@ mod tests {
             mass: &m,
         };
         assert_jacobian_matches_differences(&mut Gravity::earth(), &s, &mut Rng::new(1), 1e-6, 1e-6);
-        assert!(!Gravity::earth().depends_on_velocity() && !Gravity::earth().is_internal());
+        let props = Gravity::earth().properties();
+        assert!(!props.depends_on_velocity && !props.internal);
     }
 
     #[test]

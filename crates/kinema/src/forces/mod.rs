@@ -2,8 +2,8 @@
 //!
 //! A force adds its contribution F (N) to a flat force array, x y z per particle. Forces that
 //! are conservative report their potential energy (J); forces that can, give their Jacobian
-//! as products (∂F/∂x)·dx + (∂F/∂v)·dv for implicit integration; the others are
-//! differentiated numerically where that is needed.
+//! prepared at a state ([`Linearized`]: products (∂F/∂x)·dx + (∂F/∂v)·dv and the diagonal)
+//! for implicit integration; the others are differentiated numerically where that is needed.
 
 use crate::error::{CallbackError, Error};
 
@@ -19,7 +19,7 @@ pub(crate) mod testing;
 pub use attractor::Attractor;
 pub use drag::Drag;
 pub use gravity::Gravity;
-pub use spring::{SpringRates, Springs};
+pub use spring::Springs;
 pub use wind::Wind;
 
 /// What a force sees of the particles at one instant.
@@ -46,7 +46,107 @@ impl State<'_> {
     }
 }
 
+/// How a force exchanges mechanical energy with the particles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EnergyClass {
+    /// F = −∇U: its work is −ΔU, counted by its potential energy (gravity, an attractor,
+    /// springs without dashpots).
+    Conservative,
+    /// A conservative part, if any, and a part whose power is never positive (drag,
+    /// dashpots, contacts): it cannot add energy.
+    Dissipative,
+    /// It may add mechanical energy (wind, a user's force).
+    Source,
+}
+
+/// What a force is, for the world's bookkeeping (see [`Force::properties`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Properties {
+    /// How it exchanges energy. The world watches for runaway energy only when no force is
+    /// a [`EnergyClass::Source`].
+    pub energy: EnergyClass,
+    /// Whether F depends on the positions.
+    pub depends_on_position: bool,
+    /// Whether F depends on the velocities.
+    pub depends_on_velocity: bool,
+    /// Whether the force is internal: a sum of pairs acting equally and oppositely, so that
+    /// it changes no total momentum.
+    pub internal: bool,
+    /// Whether the world may renumber the particles under this force (see
+    /// [`Force::reindex`]). The world keeps its particles in an order that follows space (a
+    /// Morton curve), re-sorted when its neighbour list is rebuilt, so that neighbours sit
+    /// near each other in memory; the user never sees that order. False for a force that
+    /// knows particles by index and cannot follow: the world then keeps the user's order.
+    pub renumbers: bool,
+}
+
+impl Properties {
+    /// A force the world knows nothing about (a user's): it may add energy, depends on the
+    /// whole state, is not internal and cannot follow a renumbering.
+    pub const UNKNOWN: Properties = Properties {
+        energy: EnergyClass::Source,
+        depends_on_position: true,
+        depends_on_velocity: true,
+        internal: false,
+        renumbers: false,
+    };
+
+    /// Whether F is the same for every position and velocity (a uniform field): then a
+    /// method's cached force stays right when a collision moves the particles.
+    pub fn is_uniform(&self) -> bool {
+        !self.depends_on_position && !self.depends_on_velocity
+    }
+}
+
+/// Closed-form upper bounds on the rates a force gives the particles (see [`Force::rates`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Rates {
+    /// ω², 1/s²: bounds every |eigenvalue| of M⁻¹ ∂F/∂x (for a spring, the squared angular
+    /// frequency of its oscillation).
+    pub omega_squared: f64,
+    /// γ, 1/s: bounds every |eigenvalue| of M⁻¹ ∂F/∂v (for a dashpot, the decay rate of the
+    /// relative velocity along it).
+    pub damping_rate: f64,
+    /// The stiffest oscillation the force can have in states other than the current one — a
+    /// contact that is not touching yet — for the stable-step advisor; `None` when the
+    /// current state tells all (every force of the catalogue but the contact force).
+    pub standby: Option<Standby>,
+}
+
+impl Rates {
+    /// The bounds of two forces together: each is an ∞-norm (Gershgorin) bound, so they
+    /// add; the stiffer standby oscillation stands for both.
+    pub fn add(self, other: Rates) -> Rates {
+        let standby = match (self.standby, other.standby) {
+            (Some(a), Some(b)) => Some(if b.omega_squared > a.omega_squared { b } else { a }),
+            (a, b) => a.or(b),
+        };
+        Rates {
+            omega_squared: self.omega_squared + other.omega_squared,
+            damping_rate: self.damping_rate + other.damping_rate,
+            standby,
+        }
+    }
+}
+
+/// An oscillation a force can have in other states than the current one (see
+/// [`Rates::standby`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Standby {
+    /// ω², 1/s².
+    pub omega_squared: f64,
+    /// ζ, the damping ratio (1 = critical).
+    pub zeta: f64,
+}
+
 /// A force acting on the particles of a world.
+///
+/// What every force gives: its name, its contribution ([`Force::accumulate`]), a check
+/// against the particles ([`Force::validate`]), its potential energy, what kind of force it
+/// is ([`Force::properties`]), its Jacobian prepared at a state ([`Force::linearize`]), bounds
+/// on the rates it gives ([`Force::rates`]), and how it follows the particles when the
+/// world renumbers or removes some ([`Force::reindex`]). Only `name` and `accumulate` are
+/// required; the defaults describe a force the world knows nothing about.
 pub trait Force {
     /// Short name for diagnostics and messages (`"gravity"`, `"spring"`).
     fn name(&self) -> &str;
@@ -64,96 +164,56 @@ pub trait Force {
         None
     }
 
-    /// Whether F depends on the velocities.
-    fn depends_on_velocity(&self) -> bool {
-        false
-    }
-
-    /// Whether this force is internal: a sum of pairs acting equally and oppositely, so that
-    /// it changes no total momentum.
-    fn is_internal(&self) -> bool {
-        false
-    }
-
-    /// Adds (∂F/∂x)·dx + (∂F/∂v)·dv to `out` when the force knows its Jacobian; returns
-    /// `false` (and adds nothing) when it does not.
-    fn jacobian_product(&self, _s: &State, _dx: &[f64], _dv: &[f64], _out: &mut [f64]) -> bool {
-        false
-    }
-
-    /// Like [`Force::jacobian_product`], but with the parts that can make the implicit
-    /// system indefinite dropped, so that conjugate gradients can solve it (Choi & Ko 2002:
-    /// a spring in compression loses its transverse stiffness). Defaults to the exact product.
-    fn definite_jacobian_product(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64]) -> bool {
-        self.jacobian_product(s, dx, dv, out)
-    }
-
-    /// Adds c_x·diag(∂F/∂x) + c_v·diag(∂F/∂v) of the definite Jacobian (see
-    /// [`Force::definite_jacobian_product`]) to `out`, for the Jacobi preconditioner of the
-    /// implicit solve; returns `false` (adding nothing) when the force does not provide it.
-    fn jacobian_diagonal(&self, _s: &State, _cx: f64, _cv: f64, _out: &mut [f64]) -> bool {
-        false
-    }
-
-    /// Whether the force can add mechanical energy to the particles (wind, a user's force).
-    /// Conservative forces (their work is counted in their potential energy) and dissipative
-    /// ones (drag, dashpots) cannot; the world watches for runaway energy only when no force
-    /// can add it.
-    fn can_add_energy(&self) -> bool {
-        true
-    }
-
-    /// Closed-form upper bounds, at state `s`, on the rates this force gives the particles
-    /// (inverse masses `inv_mass`, 0 for pinned ones): ω² ≥ every |eigenvalue| of M⁻¹ ∂F/∂x
-    /// and γ ≥ every |eigenvalue| of M⁻¹ ∂F/∂v, each an ∞-norm (Gershgorin) bound so that the
-    /// bounds of several forces add. `None` when the force has none (a user's force). A bound
-    /// holds where its force documents it (springs: while longer than half their rest
-    /// length, dashpot position terms aside).
-    fn rate_bound(&self, _s: &State, _inv_mass: &[f64]) -> Option<SpringRates> {
-        None
-    }
-
-    /// The stiffest oscillation this force can have in states other than the current one —
-    /// a contact that is not touching yet — as (ω², 1/s²; ζ), for the stable-step advisor;
-    /// `None` when the current state tells all (every force of the catalogue).
-    fn standby_rates(&self, _inv_mass: &[f64]) -> Option<(f64, f64)> {
-        None
+    /// What kind of force this is: its energy class, what it depends on, whether it is
+    /// internal and whether it follows a renumbering. Default [`Properties::UNKNOWN`].
+    fn properties(&self) -> Properties {
+        Properties::UNKNOWN
     }
 
     /// The Jacobian at state `s` prepared for many products (the implicit solve and the
     /// advisor take hundreds at one state): what depends only on `s` — a spring's axis and
-    /// length — is computed once. Its products equal [`Force::jacobian_product`] (or the
-    /// definite variant with `definite`). `None` when the force has nothing to prepare.
+    /// length — is computed once. With `definite`, the parts that can make the implicit
+    /// system indefinite are dropped, so that conjugate gradients can solve it (Choi & Ko
+    /// 2002: a spring in compression loses its transverse stiffness). `None` when the force
+    /// does not know its Jacobian: the world then differentiates it numerically.
     fn linearize(&self, _s: &State, _definite: bool) -> Option<Box<dyn Linearized>> {
         None
     }
 
-    /// Whether the world may renumber the particles under this force (see
-    /// [`Force::renumber`]). The world keeps its particles in an order that follows space (a
-    /// Morton curve), re-sorted when its neighbour list is rebuilt, so that neighbours sit
-    /// near each other in memory; the user never sees that order. Default false, for a force
-    /// that knows particles by index and cannot follow: the world then keeps the user's order.
-    fn can_renumber(&self) -> bool {
-        false
+    /// Closed-form upper bounds, at state `s`, on the rates this force gives the particles
+    /// (inverse masses `inv_mass`, 0 for pinned ones), each an ∞-norm (Gershgorin) bound so
+    /// that the bounds of several forces add ([`Rates::add`]). `None` when the force has
+    /// none (a user's force). A bound holds where its force documents it (springs: while
+    /// longer than half their rest length, dashpot position terms aside).
+    fn rates(&self, _s: &State, _inv_mass: &[f64]) -> Option<Rates> {
+        None
     }
 
-    /// Follows a renumbering of the particles: particle i is now particle `new_of_old[i]`.
-    /// Called only when [`Force::can_renumber`] says yes; a force without per-particle data
-    /// has nothing to do (the default).
-    fn renumber(&mut self, _new_of_old: &[u32]) {}
-
-    /// Follows the removal of particles ([`crate::World::remove_particles`]): particle i is
-    /// now particle `new_of_old[i]`, or was removed where that is
-    /// [`crate::particles::GONE`]. What the force holds per particle goes with a removed
-    /// one (a spring with a removed end is removed). A force without per-particle data has
-    /// nothing to do (the default).
-    fn remove_particles(&mut self, _new_of_old: &[u32]) {}
+    /// Follows a renumbering or a removal of the particles: particle i is now particle
+    /// `new_of_old[i]`, or was removed where that is [`crate::particles::GONE`]
+    /// ([`crate::World::remove_particles`]). What the force holds per particle follows (a
+    /// spring with a removed end is removed). A renumbering (no `GONE`) comes only when
+    /// [`Properties::renumbers`] says yes. A force without per-particle data has nothing to
+    /// do (the default).
+    fn reindex(&mut self, _new_of_old: &[u32]) {}
 }
 
-/// A force's Jacobian prepared at one state (see [`Force::linearize`]).
+/// A force's Jacobian prepared at one state `s` (see [`Force::linearize`]); its methods are
+/// given the same `s` again, so that a preparation need not copy what it can read there.
 pub trait Linearized {
     /// Adds (∂F/∂x)·dx + (∂F/∂v)·dv to `out` (3 values per particle each).
-    fn apply(&self, dx: &[f64], dv: &[f64], out: &mut [f64]);
+    fn apply(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64]);
+
+    /// Adds c_x·diag(∂F/∂x) + c_v·diag(∂F/∂v) to `out`, for the Jacobi preconditioner of the
+    /// implicit solve. The default adds nothing: the diagonal only preconditions.
+    fn add_diagonal(&self, _s: &State, _cx: f64, _cv: f64, _out: &mut [f64]) {}
+}
+
+/// The Jacobian of a force that has none: a uniform constant field.
+pub(crate) struct ZeroJacobian;
+
+impl Linearized for ZeroJacobian {
+    fn apply(&self, _s: &State, _dx: &[f64], _dv: &[f64], _out: &mut [f64]) {}
 }
 
 /// Checks that the positions and velocities of `s` and every named buffer hold 3 values per

@@ -18,7 +18,7 @@
 
 use rayon::prelude::*;
 
-use super::{check_buffers, Force, Linearized, State};
+use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State};
 use crate::error::{CallbackError, Error};
 use crate::particles::{retain_rows, GONE};
 use crate::vec3::dot;
@@ -62,21 +62,6 @@ impl PartialEq for Scratch {
     fn eq(&self, _: &Self) -> bool {
         true // buffers, not data
     }
-}
-
-/// Rates of the motion of particles joined by springs, for choosing a stable time step.
-///
-/// For one spring with inverse masses w_i, w_j at its ends, the stretch r = L − L₀ obeys
-/// r'' = −ω² r − γ r' along the spring, with ω² = k (w_i + w_j) and γ = c (w_i + w_j) (the
-/// relative acceleration is w_j F_j − w_i F_i = −(w_i + w_j) F_i). A pinned end has w = 0,
-/// infinite mass. Explicit methods need h ω below their stability limit (2 for symplectic Euler
-/// and Verlet) and h γ below theirs for the damping (2 for forward Euler on r' = −γ r).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct SpringRates {
-    /// ω², 1/s²: the squared angular frequency of the spring's oscillation.
-    pub omega_squared: f64,
-    /// γ, 1/s: the decay rate of the relative velocity along the spring due to the dashpot.
-    pub damping_rate: f64,
 }
 
 impl Springs {
@@ -217,21 +202,22 @@ impl Springs {
 
     /// Per spring, ω² = k (w_i + w_j) (1/s²) and γ = c (w_i + w_j) (1/s), with `inv_mass` the
     /// particles' inverse masses w (1/kg; 0 for a pinned particle, which counts as infinitely
-    /// heavy). See [`SpringRates`].
+    /// heavy). See [`Springs::max_rates`] for the motion they describe.
     ///
     /// These are exact for an isolated spring's motion along its axis (and bound the motion
     /// across it while the spring is longer than half its rest length: the transverse
     /// stiffness is k (1 − L₀/L), below k in magnitude there). In a network a particle shared
     /// by several springs moves faster than any one spring says (a uniform chain reaches
     /// ω² → 4k/m, twice the 2k/m of each spring): use [`Springs::max_rates`] for a step bound.
-    pub fn stiffness_bounds(&self, inv_mass: &[f64]) -> Result<Vec<SpringRates>, Error> {
+    pub fn stiffness_bounds(&self, inv_mass: &[f64]) -> Result<Vec<Rates>, Error> {
         self.validate(inv_mass.len())?;
         Ok((0..self.len())
             .map(|s| {
                 let w = inv_mass[self.i[s]] + inv_mass[self.j[s]];
-                SpringRates {
+                Rates {
                     omega_squared: self.k[s] * w,
                     damping_rate: self.damping[s] * w,
+                    standby: None,
                 }
             })
             .collect())
@@ -250,7 +236,13 @@ impl Springs {
     /// ```
     ///
     /// The bound is reached by the highest mode of a long uniform chain (4k/m).
-    pub fn max_rates(&self, inv_mass: &[f64]) -> Result<SpringRates, Error> {
+    ///
+    /// For one spring with inverse masses w_i, w_j at its ends, the stretch r = L − L₀ obeys
+    /// r'' = −ω² r − γ r' along the spring, with ω² = k (w_i + w_j) and γ = c (w_i + w_j) (the
+    /// relative acceleration is w_j F_j − w_i F_i = −(w_i + w_j) F_i). A pinned end has w = 0,
+    /// infinite mass. Explicit methods need h ω below their stability limit (2 for symplectic
+    /// Euler and Verlet) and h γ below theirs for the damping (2 for forward Euler on r' = −γ r).
+    pub fn max_rates(&self, inv_mass: &[f64]) -> Result<Rates, Error> {
         self.validate(inv_mass.len())?;
         let mut k_sum = vec![0.0; inv_mass.len()];
         let mut c_sum = vec![0.0; inv_mass.len()];
@@ -260,7 +252,7 @@ impl Springs {
                 c_sum[p] += self.damping[s];
             }
         }
-        let mut rates = SpringRates::default();
+        let mut rates = Rates::default();
         for (p, w) in inv_mass.iter().enumerate() {
             rates.omega_squared = rates.omega_squared.max(2.0 * w * k_sum[p]);
             rates.damping_rate = rates.damping_rate.max(2.0 * w * c_sum[p]);
@@ -280,15 +272,6 @@ impl Springs {
     fn relative(&self, v: &[f64], s: usize) -> [f64; 3] {
         let (a, b) = (3 * self.i[s], 3 * self.j[s]);
         [v[b] - v[a], v[b + 1] - v[a + 1], v[b + 2] - v[a + 2]]
-    }
-
-    /// Adds `g` to particle i's entries of `out` and subtracts it from j's (action = −reaction).
-    fn apply_pair(&self, out: &mut [f64], s: usize, g: [f64; 3]) {
-        let (a, b) = (3 * self.i[s], 3 * self.j[s]);
-        for k in 0..3 {
-            out[a + k] += g[k];
-            out[b + k] -= g[k];
-        }
     }
 
     /// For each of `n` particles, the springs it ends, in spring order (a counting sort by
@@ -354,7 +337,8 @@ struct LinearizedSprings {
 }
 
 impl Linearized for LinearizedSprings {
-    fn apply(&self, dx: &[f64], dv: &[f64], out: &mut [f64]) {
+    /// Adds each spring's blocks (see [`Springs::linearize`]) times (dx, dv).
+    fn apply(&self, _s: &State, dx: &[f64], dv: &[f64], out: &mut [f64]) {
         for b in &self.blocks {
             let (a, c) = (3 * b.i, 3 * b.j);
             let e = [dx[c] - dx[a], dx[c + 1] - dx[a + 1], dx[c + 2] - dx[a + 2]];
@@ -369,6 +353,30 @@ impl Linearized for LinearizedSprings {
             }
         }
     }
+
+    /// Adds c_x·diag(∂F/∂x) + c_v·diag(∂F/∂v): each end of a spring has the diagonal blocks
+    /// −(k n nᵀ + k_t P + n (P t)ᵀ) and −c n nᵀ (k_t the transverse coefficient, t the
+    /// turning-axis term), whose q-th diagonal entries are
+    /// −(k n_q² + k_t (1 − n_q²) + n_q (t_q − n_q t·n)) and −c n_q². For coincident ends
+    /// (n = 0) that is −c_x k_t, with k_t = k for rest length 0 and 0 otherwise. The
+    /// implicit solve asks for it from the definite linearisation, where t = 0 and
+    /// k_t = k max(0, 1 − L₀/L).
+    fn add_diagonal(&self, _s: &State, cx: f64, cv: f64, out: &mut [f64]) {
+        for b in &self.blocks {
+            let tn = dot(b.turn, b.n);
+            let mut diag = [0.0; 3];
+            for q in 0..3 {
+                let nn = b.n[q] * b.n[q];
+                let turning = b.n[q] * (b.turn[q] - b.n[q] * tn);
+                diag[q] = -cx * (b.k * nn + b.transverse * (1.0 - nn) + turning) - cv * b.c * nn;
+            }
+            for p in [b.i, b.j] {
+                for q in 0..3 {
+                    out[3 * p + q] += diag[q];
+                }
+            }
+        }
+    }
 }
 
 fn distance(x: &[f64], i: usize, j: usize) -> f64 {
@@ -377,37 +385,6 @@ fn distance(x: &[f64], i: usize, j: usize) -> f64 {
 }
 
 impl Force for Springs {
-    fn can_renumber(&self) -> bool {
-        true
-    }
-
-    /// Each spring's ends follow their particles; the springs keep their order.
-    fn renumber(&mut self, new_of_old: &[u32]) {
-        self.scratch = Scratch::default();
-        for end in self.i.iter_mut().chain(self.j.iter_mut()) {
-            *end = new_of_old[*end] as usize;
-        }
-        self.min_particles = self.i.iter().chain(&self.j).map(|p| p + 1).max().unwrap_or(0);
-    }
-
-    /// A spring with a removed end dies with it; the others keep their order and follow
-    /// their particles.
-    fn remove_particles(&mut self, new_of_old: &[u32]) {
-        let keep: Vec<bool> = self
-            .i
-            .iter()
-            .zip(&self.j)
-            .map(|(&a, &b)| new_of_old[a] != GONE && new_of_old[b] != GONE)
-            .collect();
-        for v in [&mut self.i, &mut self.j] {
-            retain_rows(v, 1, &keep);
-        }
-        for v in [&mut self.k, &mut self.rest_length, &mut self.damping] {
-            retain_rows(v, 1, &keep);
-        }
-        self.renumber(new_of_old);
-    }
-
     fn name(&self) -> &str {
         "spring"
     }
@@ -474,16 +451,51 @@ impl Force for Springs {
         Some(u.sum())
     }
 
-    /// True when some spring has a dashpot (c > 0).
-    fn depends_on_velocity(&self) -> bool {
-        self.damping.iter().any(|c| *c != 0.0)
+    /// Internal (each spring pulls its ends equally and oppositely); conservative without
+    /// dashpots, dissipative with some (the dashpot's power −c (u·n)² ≤ 0, the elastic work
+    /// is −ΔU); a function of the velocities when some spring has a dashpot (c > 0). Each
+    /// spring's ends follow their particles ([`Force::reindex`]).
+    fn properties(&self) -> Properties {
+        let damped = self.damping.iter().any(|c| *c != 0.0);
+        Properties {
+            energy: if damped {
+                EnergyClass::Dissipative
+            } else {
+                EnergyClass::Conservative
+            },
+            depends_on_position: true,
+            depends_on_velocity: damped,
+            internal: true,
+            renumbers: true,
+        }
     }
 
-    fn is_internal(&self) -> bool {
-        true
+    /// A spring with a removed end dies with it; the others keep their order and their ends
+    /// follow their particles.
+    fn reindex(&mut self, new_of_old: &[u32]) {
+        self.scratch = Scratch::default();
+        if new_of_old.contains(&GONE) {
+            let keep: Vec<bool> = self
+                .i
+                .iter()
+                .zip(&self.j)
+                .map(|(&a, &b)| new_of_old[a] != GONE && new_of_old[b] != GONE)
+                .collect();
+            for v in [&mut self.i, &mut self.j] {
+                retain_rows(v, 1, &keep);
+            }
+            for v in [&mut self.k, &mut self.rest_length, &mut self.damping] {
+                retain_rows(v, 1, &keep);
+            }
+        }
+        for end in self.i.iter_mut().chain(self.j.iter_mut()) {
+            *end = new_of_old[*end] as usize;
+        }
+        self.min_particles = self.i.iter().chain(&self.j).map(|p| p + 1).max().unwrap_or(0);
     }
 
-    /// Adds (∂F/∂x)·dx + (∂F/∂v)·dv, from each spring's blocks (P = I − n nᵀ, the projector
+    /// The Jacobian as each spring's blocks, with the axis n, the transverse coefficient and
+    /// the dashpot's turning-axis term computed once (P = I − n nᵀ, the projector
     /// across the spring; ∂n/∂d = P / L; ∂L/∂d = nᵀ):
     ///
     /// ```text
@@ -498,52 +510,13 @@ impl Force for Springs {
     ///
     /// At L = 0 (coincident ends, no force, see the module doc) a spring of rest length 0
     /// adds k (dx_j − dx_i), the exact derivative of its force k d; any other adds nothing.
-    /// Returns false, adding nothing, if a buffer's length or an index does not fit `s`.
-    fn jacobian_product(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64]) -> bool {
-        self.product(s, dx, dv, out, false)
-    }
-
-    /// The product with the definite part of the Jacobian: each spring's transverse
+    /// `None` if a buffer's length or an index does not fit `s`.
+    ///
+    /// With `definite`, the definite part of the Jacobian: each spring's transverse
     /// stiffness k (1 − L₀/L) is clamped at 0 (a compressed spring would otherwise make
     /// M − h²∂F/∂x indefinite for large h; Choi & Ko 2002), and the dashpot keeps only its
     /// symmetric c n nᵀ (the terms from the turning axis are dropped). What is left is
     /// −(k n nᵀ + k max(0, 1 − L₀/L) P) and −c n nᵀ per spring: negative semi-definite.
-    fn definite_jacobian_product(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64]) -> bool {
-        self.product(s, dx, dv, out, true)
-    }
-
-    /// Adds c_x·diag(∂F/∂x) + c_v·diag(∂F/∂v) of the definite Jacobian: each end of a spring
-    /// has the diagonal blocks −(k n nᵀ + k_t P) and −c n nᵀ, k_t = k max(0, 1 − L₀/L), whose
-    /// k-th diagonal entries are −(k n_k² + k_t (1 − n_k²)) and −c n_k².
-    fn jacobian_diagonal(&self, s: &State, cx: f64, cv: f64, out: &mut [f64]) -> bool {
-        if check_buffers(self.name(), s, &[("out", out.len())]).is_err() || self.check_indices(s.len()).is_err() {
-            return false;
-        }
-        for sp in 0..self.len() {
-            let (k, rest, c) = (self.k[sp], self.rest_length[sp], self.damping[sp]);
-            let mut diag = [0.0; 3];
-            match self.axis(s.x, sp) {
-                Some((n, len)) => {
-                    let kt = k * (1.0 - rest / len).max(0.0);
-                    for q in 0..3 {
-                        let nn = n[q] * n[q];
-                        diag[q] = -cx * (k * nn + kt * (1.0 - nn)) - cv * c * nn;
-                    }
-                }
-                None if rest == 0.0 => diag = [-cx * k; 3],
-                None => {}
-            }
-            for p in [self.i[sp], self.j[sp]] {
-                for q in 0..3 {
-                    out[3 * p + q] += diag[q];
-                }
-            }
-        }
-        true
-    }
-
-    /// Each spring's axis n, its transverse coefficient and the dashpot's turning-axis term,
-    /// computed once (see [`Force::jacobian_product`] for the blocks).
     fn linearize(&self, s: &State, definite: bool) -> Option<Box<dyn Linearized>> {
         if check_buffers(self.name(), s, &[]).is_err() || self.check_indices(s.len()).is_err() {
             return None;
@@ -590,63 +563,15 @@ impl Force for Springs {
     }
 
     /// The network's Gershgorin bounds, [`Springs::max_rates`].
-    fn rate_bound(&self, _s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
+    fn rates(&self, _s: &State, inv_mass: &[f64]) -> Option<Rates> {
         self.max_rates(inv_mass).ok()
-    }
-
-    /// Dissipative and conservative parts only: the dashpot's power −c (u·n)² ≤ 0 and the
-    /// elastic work is −ΔU.
-    fn can_add_energy(&self) -> bool {
-        false
-    }
-}
-
-impl Springs {
-    /// The Jacobian product of [`Force::jacobian_product`] (`definite = false`) or of
-    /// [`Force::definite_jacobian_product`] (`definite = true`).
-    fn product(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64], definite: bool) -> bool {
-        if check_buffers(self.name(), s, &[("dx", dx.len()), ("dv", dv.len()), ("out", out.len())]).is_err()
-            || self.check_indices(s.len()).is_err()
-        {
-            return false;
-        }
-        for sp in 0..self.len() {
-            let (k, rest, c) = (self.k[sp], self.rest_length[sp], self.damping[sp]);
-            let e = self.relative(dx, sp); // dx_j − dx_i
-            let Some((n, len)) = self.axis(s.x, sp) else {
-                if rest == 0.0 {
-                    self.apply_pair(out, sp, [k * e[0], k * e[1], k * e[2]]);
-                }
-                continue;
-            };
-            let u = self.relative(s.v, sp);
-            let w = self.relative(dv, sp); // dv_j − dv_i
-            let (ne, un, nw) = (dot(n, e), dot(u, n), dot(n, w));
-            let pe = [e[0] - ne * n[0], e[1] - ne * n[1], e[2] - ne * n[2]]; // P e
-            let (transverse, axial) = if definite {
-                (k * (1.0 - rest / len).max(0.0), k * ne + c * nw)
-            } else {
-                // coefficient of P e; coefficient of n, with (P u)·e = u·(P e)
-                (k * (1.0 - rest / len) + c * un / len, k * ne + c * dot(u, pe) / len + c * nw)
-            };
-            self.apply_pair(
-                out,
-                sp,
-                [
-                    axial * n[0] + transverse * pe[0],
-                    axial * n[1] + transverse * pe[1],
-                    axial * n[2] + transverse * pe[2],
-                ],
-            );
-        }
-        true
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::super::testing::{
-        assert_close, assert_force_is_minus_gradient, assert_jacobian_matches_differences, forces, max_abs, Rng,
+        assert_close, assert_force_is_minus_gradient, assert_jacobian_matches_differences, forces, max_abs, product, Rng,
     };
     use super::*;
 
@@ -724,7 +649,7 @@ mod tests {
                 "component {c}: Σ F = {total:e}, Σ |F| = {scale:e}"
             );
         }
-        assert!(sp.is_internal() && sp.depends_on_velocity());
+        assert!(sp.properties().internal && sp.properties().depends_on_velocity);
     }
 
     /// Theory: F = −∇U with U = Σ ½ k (L − L₀)², by central differences; for undamped springs
@@ -733,7 +658,7 @@ mod tests {
     fn force_is_minus_gradient_of_elastic_energy() {
         let mut rng = Rng::new(5);
         let (mut sp, x, v, m) = network(&mut rng, 8, 20, false);
-        assert!(!sp.depends_on_velocity());
+        assert!(!sp.properties().depends_on_velocity);
         assert_force_is_minus_gradient(&mut sp, &state(&x, &v, &m), 1e-6, 1e-6);
         let (mut sp, x, _, m) = network(&mut rng, 8, 20, true);
         assert_force_is_minus_gradient(&mut sp, &state(&x, &[0.0; 24], &m), 1e-6, 1e-6);
@@ -743,9 +668,45 @@ mod tests {
     /// c n nᵀ are the derivatives of the force: central differences of F along random dx, dv,
     /// on a damped network in motion with stretched, compressed and zero-rest-length springs.
     ///
-    /// The prepared Jacobian is the same linear map as the products it replaces: exact and
-    /// definite, for a damped network in motion with compressed and stretched springs, and
-    /// with coincident ends of rest length 0.
+    /// The products of the derivation above written out spring by spring, without the
+    /// prepared blocks: the reference the linearisation is checked against.
+    fn reference_product(sp: &Springs, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64], definite: bool) {
+        for i in 0..sp.len() {
+            let (k, rest, c) = (sp.k[i], sp.rest_length[i], sp.damping[i]);
+            let e = sp.relative(dx, i); // dx_j − dx_i
+            let g = match sp.axis(s.x, i) {
+                None if rest == 0.0 => [k * e[0], k * e[1], k * e[2]],
+                None => continue,
+                Some((n, len)) => {
+                    let u = sp.relative(s.v, i);
+                    let w = sp.relative(dv, i); // dv_j − dv_i
+                    let (ne, un, nw) = (dot(n, e), dot(u, n), dot(n, w));
+                    let pe = [e[0] - ne * n[0], e[1] - ne * n[1], e[2] - ne * n[2]]; // P e
+                    let (transverse, axial) = if definite {
+                        (k * (1.0 - rest / len).max(0.0), k * ne + c * nw)
+                    } else {
+                        // coefficient of P e; coefficient of n, with (P u)·e = u·(P e)
+                        (k * (1.0 - rest / len) + c * un / len, k * ne + c * dot(u, pe) / len + c * nw)
+                    };
+                    [
+                        axial * n[0] + transverse * pe[0],
+                        axial * n[1] + transverse * pe[1],
+                        axial * n[2] + transverse * pe[2],
+                    ]
+                }
+            };
+            let (a, b) = (3 * sp.i[i], 3 * sp.j[i]);
+            for q in 0..3 {
+                out[a + q] += g[q];
+                out[b + q] -= g[q];
+            }
+        }
+    }
+
+    /// The prepared Jacobian is the linear map of the derivation, products written out
+    /// spring by spring: exact and definite, for a damped network in motion with compressed
+    /// and stretched springs, and with coincident ends of rest length 0. Its diagonal is the
+    /// diagonal of those products (unit directions e_k: (J e_k)_k).
     #[test]
     fn linearized_products_equal_the_direct_ones() {
         let mut rng = Rng::new(21);
@@ -759,15 +720,27 @@ mod tests {
             for _ in 0..5 {
                 let (dx, dv) = (rng.vec(36, -1.0, 1.0), rng.vec(36, -1.0, 1.0));
                 let (mut direct, mut prepared) = (vec![0.0; 36], vec![0.0; 36]);
-                if definite {
-                    assert!(sp.definite_jacobian_product(&s, &dx, &dv, &mut direct));
-                } else {
-                    assert!(sp.jacobian_product(&s, &dx, &dv, &mut direct));
-                }
-                op.apply(&dx, &dv, &mut prepared);
+                reference_product(&sp, &s, &dx, &dv, &mut direct, definite);
+                op.apply(&s, &dx, &dv, &mut prepared);
                 for (p, d) in prepared.iter().zip(&direct) {
                     assert!((p - d).abs() <= 1e-12 * (1.0 + d.abs()), "definite {definite}: {p} vs {d}");
                 }
+            }
+            let (cx, cv) = (-0.3, -0.7);
+            let mut diagonal = vec![0.0; 36];
+            op.add_diagonal(&s, cx, cv, &mut diagonal);
+            for k in 0..36 {
+                let mut unit = vec![0.0; 36];
+                unit[k] = 1.0;
+                let (mut jx, mut jv) = (vec![0.0; 36], vec![0.0; 36]);
+                reference_product(&sp, &s, &unit, &[0.0; 36], &mut jx, definite);
+                reference_product(&sp, &s, &[0.0; 36], &unit, &mut jv, definite);
+                let expected = cx * jx[k] + cv * jv[k];
+                assert!(
+                    (diagonal[k] - expected).abs() <= 1e-12 * (1.0 + expected.abs()),
+                    "definite {definite}: diagonal[{k}] = {} vs {expected}",
+                    diagonal[k]
+                );
             }
         }
     }
@@ -792,8 +765,8 @@ mod tests {
         .unwrap();
         let dx = rng.vec(30, -1.0, 1.0);
         let (mut jd, mut ju) = (vec![0.0; 30], vec![0.0; 30]);
-        assert!(sp.jacobian_product(&s, &dx, &[0.0; 30], &mut jd));
-        assert!(undamped.jacobian_product(&s, &dx, &[0.0; 30], &mut ju));
+        assert!(product(&sp, &s, &dx, &[0.0; 30], &mut jd, false));
+        assert!(product(&undamped, &s, &dx, &[0.0; 30], &mut ju, false));
         let term: Vec<f64> = jd.iter().zip(&ju).map(|(a, b)| a - b).collect();
         assert!(
             max_abs(&term) > 1e-2 * max_abs(&jd),
@@ -816,7 +789,14 @@ mod tests {
             assert_eq!(forces(&mut sp, &s), vec![0.0; 6]);
             assert_eq!(sp.potential_energy(&s).unwrap(), 0.5 * 2.0 * rest * rest);
             let mut out = [0.0; 6];
-            assert!(sp.jacobian_product(&s, &[1.0, -1.0, 0.0, -1.0, 1.0, 1.0], &[1.0; 6], &mut out));
+            assert!(product(
+                &sp,
+                &s,
+                &[1.0, -1.0, 0.0, -1.0, 1.0, 1.0],
+                &[1.0; 6],
+                &mut out,
+                false
+            ));
             assert_eq!(out, expect);
         }
     }
@@ -850,7 +830,7 @@ mod tests {
     }
 
     /// Theory: the largest eigenvalue of M⁻¹K of a chain at rest (found by power iteration on
-    /// the symmetric M^{-1/2} K M^{-1/2}, K = −∂F/∂x from `jacobian_product`) lies below the
+    /// the symmetric M^{-1/2} K M^{-1/2}, K = −∂F/∂x from the linearisation) lies below the
     /// Gershgorin bound of `max_rates`, and above every per-spring ω², which is why the
     /// network bound exists.
     #[test]
@@ -870,7 +850,7 @@ mod tests {
         for _ in 0..2000 {
             let z: Vec<f64> = y.iter().zip(&root_w).map(|(y, r)| y * r).collect();
             let mut jz = vec![0.0; 3 * n];
-            assert!(sp.jacobian_product(&s, &z, &vec![0.0; 3 * n], &mut jz));
+            assert!(product(&sp, &s, &z, &vec![0.0; 3 * n], &mut jz, false));
             let ay: Vec<f64> = jz.iter().zip(&root_w).map(|(j, r)| -j * r).collect();
             let norm = ay.iter().map(|a| a * a).sum::<f64>().sqrt();
             lambda = ay.iter().zip(&y).map(|(a, y)| a * y).sum::<f64>() / y.iter().map(|y| y * y).sum::<f64>();

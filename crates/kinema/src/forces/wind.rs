@@ -5,7 +5,7 @@
 //! v_i = w (plus whatever the other forces add: under gravity, v → w + m g / b). With w = 0 it
 //! is the linear part of [`Drag`](super::Drag).
 
-use super::{check_buffers, Force, SpringRates, State};
+use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State};
 use crate::error::{CallbackError, Error};
 
 /// Uniform wind field: F_i = b (w − v_i), N.
@@ -48,11 +48,6 @@ impl Wind {
 }
 
 impl Force for Wind {
-    /// Uniform over the particles: holds no particle indices.
-    fn can_renumber(&self) -> bool {
-        true
-    }
-
     fn name(&self) -> &str {
         "wind"
     }
@@ -73,36 +68,46 @@ impl Force for Wind {
         self.check()
     }
 
-    fn depends_on_velocity(&self) -> bool {
-        true
+    /// A source of energy (moving air pushes particles along), a function of the velocities;
+    /// it holds no particle indices.
+    fn properties(&self) -> Properties {
+        Properties {
+            energy: EnergyClass::Source,
+            depends_on_position: false,
+            depends_on_velocity: true,
+            internal: false,
+            renumbers: true,
+        }
+    }
+
+    /// ∂F/∂v = −b I, ∂F/∂x = 0: see [`WindJacobian`].
+    fn linearize(&self, _s: &State, _definite: bool) -> Option<Box<dyn Linearized>> {
+        Some(Box::new(WindJacobian(self.coefficient)))
     }
 
     /// γ ≤ b · max_p w_p (∂F/∂v = −b I). No position dependence.
-    fn rate_bound(&self, _s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
-        Some(SpringRates {
-            omega_squared: 0.0,
+    fn rates(&self, _s: &State, inv_mass: &[f64]) -> Option<Rates> {
+        Some(Rates {
             damping_rate: self.coefficient * inv_mass.iter().fold(0.0_f64, |a, w| a.max(*w)),
+            ..Rates::default()
         })
+    }
+}
+
+/// The wind's Jacobian ∂F/∂v = −b I (b, kg/s), ∂F/∂x = 0.
+struct WindJacobian(f64);
+
+impl Linearized for WindJacobian {
+    /// Adds (∂F/∂v)·dv = −b dv.
+    fn apply(&self, _s: &State, _dx: &[f64], dv: &[f64], out: &mut [f64]) {
+        for (o, d) in out.iter_mut().zip(dv) {
+            *o -= self.0 * d;
+        }
     }
 
     /// Adds c_v·diag(∂F/∂v) = −c_v b per component.
-    fn jacobian_diagonal(&self, s: &State, _cx: f64, cv: f64, out: &mut [f64]) -> bool {
-        if check_buffers(self.name(), s, &[("out", out.len())]).is_err() {
-            return false;
-        }
-        out.iter_mut().for_each(|o| *o -= cv * self.coefficient);
-        true
-    }
-
-    /// Adds (∂F/∂v)·dv = −b dv; ∂F/∂x = 0.
-    fn jacobian_product(&self, s: &State, _dx: &[f64], dv: &[f64], out: &mut [f64]) -> bool {
-        if check_buffers(self.name(), s, &[("dv", dv.len()), ("out", out.len())]).is_err() {
-            return false;
-        }
-        for (o, d) in out.iter_mut().zip(dv) {
-            *o -= self.coefficient * d;
-        }
-        true
+    fn add_diagonal(&self, _s: &State, _cx: f64, cv: f64, out: &mut [f64]) {
+        out.iter_mut().for_each(|o| *o -= cv * self.0);
     }
 }
 
@@ -143,7 +148,7 @@ mod tests {
         };
         let mut wind = Wind::new([1.0, -0.5, 0.2], 0.8).unwrap();
         assert_jacobian_matches_differences(&mut wind, &s, &mut rng, 1e-6, 1e-6);
-        assert!(wind.depends_on_velocity() && wind.potential_energy(&s).is_none());
+        assert!(wind.properties().depends_on_velocity && wind.potential_energy(&s).is_none());
     }
 
     #[test]

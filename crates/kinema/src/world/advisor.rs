@@ -3,7 +3,7 @@
 
 use super::dynamics::{free_components, ForceJacobian};
 use crate::error::CallbackError;
-use crate::forces::{Force, SpringRates, State};
+use crate::forces::{Force, Rates as ForceRates, State};
 use crate::ode::stability::{oscillator_max_step, StabilityFunction};
 use crate::ode::{Integrator, Method, MethodKind};
 use num_complex::Complex64;
@@ -32,12 +32,12 @@ pub struct Rates {
     /// γ, 1/s: the largest damping rate, the top eigenvalue of M^(−½)(−C)M^(−½).
     pub damping_rate: f64,
     /// Closed-form upper bounds on ω² (1/s²) and γ (1/s), the sum of every force's
-    /// [`Force::rate_bound`]; `None` when some force has none.
-    pub bound: Option<SpringRates>,
+    /// [`Force::rates`]; `None` when some force has none.
+    pub bound: Option<ForceRates>,
     /// Power iterations used (both estimates together).
     pub iterations: usize,
     /// The stiffest mode a force can reach from other states (a contact not touching yet),
-    /// as (ω, rad/s; ζ): [`Force::standby_rates`]. It limits the step like the others.
+    /// as (ω, rad/s; ζ): [`crate::forces::Rates::standby`]. It limits the step like the others.
     pub standby: Option<(f64, f64)>,
 }
 
@@ -77,21 +77,18 @@ impl Rates {
 /// Estimates the [`Rates`] of the forces at state `s` for particles of inverse masses
 /// `inv_mass` (0 = pinned), in `dim` dimensions.
 pub(crate) fn estimate(forces: &mut [Box<dyn Force>], s: &State, inv_mass: &[f64], dim: usize) -> Result<Rates, CallbackError> {
-    let mut bound = Some(SpringRates::default());
+    // The bounds add, and hold when every force has one; the stiffest standby oscillation
+    // counts whatever the others say.
+    let mut all = ForceRates::default();
+    let mut every = true;
     for f in forces.iter() {
-        bound = match (bound, f.rate_bound(s, inv_mass)) {
-            (Some(a), Some(b)) => Some(SpringRates {
-                omega_squared: a.omega_squared + b.omega_squared,
-                damping_rate: a.damping_rate + b.damping_rate,
-            }),
-            _ => None,
-        };
+        match f.rates(s, inv_mass) {
+            Some(r) => all = all.add(r),
+            None => every = false,
+        }
     }
-    let standby = forces
-        .iter()
-        .filter_map(|f| f.standby_rates(inv_mass))
-        .max_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(omega_squared, zeta)| (omega_squared.sqrt(), zeta));
+    let bound = every.then_some(all);
+    let standby = all.standby.map(|s| (s.omega_squared.sqrt(), s.zeta));
     let mut rates = Rates {
         bound,
         standby,
@@ -128,7 +125,7 @@ pub(crate) fn estimate(forces: &mut [Box<dyn Force>], s: &State, inv_mass: &[f64
         Ok::<(), CallbackError>(())
     };
 
-    let skip = |b: Option<SpringRates>, damping: bool| {
+    let skip = |b: Option<ForceRates>, damping: bool| {
         b.is_some_and(|b| {
             if damping {
                 b.damping_rate == 0.0

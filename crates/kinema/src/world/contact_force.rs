@@ -24,7 +24,8 @@ use crate::collide::{
     GEOMETRY_LIMIT,
 };
 use crate::error::{CallbackError, Error};
-use crate::forces::{Force, SpringRates, State};
+use crate::forces::{EnergyClass, Force, Properties, Rates, Standby, State};
+use crate::particles::GONE;
 
 /// Penalty contacts between particles and with colliders (the DEM way).
 ///
@@ -539,16 +540,25 @@ impl Force for ContactForce {
         self.potential_at(s, &mut self.scratch()).ok()
     }
 
-    fn depends_on_velocity(&self) -> bool {
-        true
+    /// Dissipative (the spring is conservative and the dashpot dissipative), a function of
+    /// positions and velocities, internal when no collider pushes; it follows a renumbering.
+    fn properties(&self) -> Properties {
+        Properties {
+            energy: EnergyClass::Dissipative,
+            depends_on_position: true,
+            depends_on_velocity: true,
+            internal: self.colliders.is_empty(),
+            renumbers: true,
+        }
     }
 
-    fn can_renumber(&self) -> bool {
-        true
-    }
-
-    /// Radii, inverse masses, materials and the neighbour list follow their particles.
-    fn renumber(&mut self, new_of_old: &[u32]) {
+    /// Radii, inverse masses, materials and the neighbour list follow their particles. A
+    /// removal (some [`GONE`]) is left to the world, which rebuilds this force from the
+    /// survivors ([`crate::World::remove_particles`]).
+    fn reindex(&mut self, new_of_old: &[u32]) {
+        if new_of_old.contains(&GONE) {
+            return;
+        }
         let mut old_of_new = vec![0u32; new_of_old.len()];
         for (old, &new) in new_of_old.iter().enumerate() {
             old_of_new[new as usize] = old as u32;
@@ -567,19 +577,10 @@ impl Force for ContactForce {
         self.scratch().list.renumber(new_of_old, &old_of_new);
     }
 
-    fn is_internal(&self) -> bool {
-        self.colliders.is_empty()
-    }
-
-    /// The spring is conservative and the dashpot dissipative.
-    fn can_add_energy(&self) -> bool {
-        false
-    }
-
     /// Gershgorin over the contacts at `s`: a contact adds k_n w_p to particle p's row twice
     /// with a particle partner (diagonal and off-diagonal), once against a collider; the
-    /// dashpot likewise with c_n.
-    fn rate_bound(&self, s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
+    /// dashpot likewise with c_n. The standby oscillation is [`ContactForce::standby`].
+    fn rates(&self, s: &State, inv_mass: &[f64]) -> Option<Rates> {
         let mut k_row = vec![0.0; inv_mass.len()];
         let mut c_row = vec![0.0; inv_mass.len()];
         self.for_each_contact(s, &mut self.scratch(), |c| {
@@ -595,18 +596,23 @@ impl Force for ContactForce {
             }
         })
         .ok()?;
-        let mut rates = SpringRates::default();
+        let mut rates = Rates {
+            standby: self.standby(inv_mass),
+            ..Rates::default()
+        };
         for (p, w) in inv_mass.iter().enumerate() {
             rates.omega_squared = rates.omega_squared.max(w * k_row[p]);
             rates.damping_rate = rates.damping_rate.max(w * c_row[p]);
         }
         Some(rates)
     }
+}
 
+impl ContactForce {
     /// A contact that is not touching yet counts as a spring: ω² = k_n (w_i + w_j) for the
     /// two lightest movable particles (or k_n w against a collider), with the ζ of the
     /// largest restitution's opposite, the least damped contact.
-    fn standby_rates(&self, inv_mass: &[f64]) -> Option<(f64, f64)> {
+    fn standby(&self, inv_mass: &[f64]) -> Option<Standby> {
         let mut lightest = [0.0_f64; 2];
         for w in inv_mass {
             if *w > lightest[0] {
@@ -633,7 +639,7 @@ impl Force for ContactForce {
                 damping_ratio(e_max).unwrap_or(0.0)
             }
         };
-        Some((omega_squared, zeta))
+        Some(Standby { omega_squared, zeta })
     }
 }
 
@@ -1010,7 +1016,7 @@ mod tests {
         assert!(f.iter().all(|c| c.is_nan()));
         assert_eq!(force.potential_energy(&s3), None);
         // and the rates at s are those of its contacts
-        assert!(force.rate_bound(&s, &force.inv_mass.clone()).unwrap().omega_squared > 0.0);
+        assert!(force.rates(&s, &force.inv_mass.clone()).unwrap().omega_squared > 0.0);
     }
 
     #[test]

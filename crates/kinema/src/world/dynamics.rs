@@ -85,8 +85,8 @@ pub(crate) fn free_components(inv_mass: &[f64], dim: usize, out: &mut Vec<f64>) 
 /// Jacobian–vector products of the total force at one state (t, x, v):
 /// J·(dx, dv) = (∂F/∂x) dx + (∂F/∂v) dv.
 ///
-/// Forces that know their Jacobian add it exactly ([`Force::jacobian_product`], or the
-/// definite variant for the implicit solve); the others are differentiated by a forward
+/// Forces that know their Jacobian add it exactly ([`Force::linearize`], the definite
+/// variant for the implicit solve); the others are differentiated by a forward
 /// difference, (F(x + ε dx, v + ε dv) − F(x, v)) / ε, with ε = √ε_mach (1 + ‖(x, v)‖∞) /
 /// ‖(dx, dv)‖∞ — the step that balances truncation O(ε) against rounding O(ε_mach / ε).
 #[derive(Default)]
@@ -99,8 +99,6 @@ pub(crate) struct ForceJacobian {
     base: Vec<f64>,
     /// Whether some force is differentiated numerically.
     numeric: bool,
-    /// Use the definite products (for conjugate gradients).
-    definite: bool,
     /// ‖(x, v)‖∞ at the state.
     scale: f64,
     xp: Vec<f64>,
@@ -115,7 +113,6 @@ impl ForceJacobian {
     /// others once at `s` (the base of the differences).
     pub fn prepare(&mut self, forces: &mut [Box<dyn Force>], s: &State, definite: bool) -> Result<(), CallbackError> {
         let n = s.x.len();
-        self.definite = definite;
         self.analytic.clear();
         self.fp.clear();
         self.fp.resize(n, 0.0);
@@ -124,13 +121,7 @@ impl ForceJacobian {
         self.prepared.clear();
         for f in forces.iter() {
             let op = f.linearize(s, definite);
-            let has = op.is_some()
-                || if definite {
-                    f.definite_jacobian_product(s, &self.xp, &self.xp, &mut self.fp)
-                } else {
-                    f.jacobian_product(s, &self.xp, &self.xp, &mut self.fp)
-                };
-            self.analytic.push(has);
+            self.analytic.push(op.is_some());
             self.prepared.push(op);
         }
         self.numeric = self.analytic.iter().any(|a| !a);
@@ -165,16 +156,8 @@ impl ForceJacobian {
         out: &mut [f64],
     ) -> Result<(), CallbackError> {
         out.fill(0.0);
-        for ((f, has), op) in forces.iter().zip(&self.analytic).zip(&self.prepared) {
-            if let Some(op) = op {
-                op.apply(dx, dv, out);
-            } else if *has {
-                if self.definite {
-                    f.definite_jacobian_product(s, dx, dv, out);
-                } else {
-                    f.jacobian_product(s, dx, dv, out);
-                }
-            }
+        for op in self.prepared.iter().flatten() {
+            op.apply(s, dx, dv, out);
         }
         if !self.numeric {
             return Ok(());
@@ -207,11 +190,11 @@ impl ForceJacobian {
         Ok(())
     }
 
-    /// Adds c_x·diag(∂F/∂x) + c_v·diag(∂F/∂v) of the forces that provide it (the others are
-    /// left out: the diagonal only preconditions).
-    pub fn add_diagonal(&self, forces: &[Box<dyn Force>], s: &State, cx: f64, cv: f64, out: &mut [f64]) {
-        for f in forces {
-            f.jacobian_diagonal(s, cx, cv, out);
+    /// Adds c_x·diag(∂F/∂x) + c_v·diag(∂F/∂v) of the prepared forces that provide it (the
+    /// others are left out: the diagonal only preconditions).
+    pub fn add_diagonal(&self, s: &State, cx: f64, cv: f64, out: &mut [f64]) {
+        for op in self.prepared.iter().flatten() {
+            op.add_diagonal(s, cx, cv, out);
         }
     }
 }
@@ -261,7 +244,7 @@ mod tests {
         let mut out = [0.0; 6];
         jac.apply(&mut forces, &s, &dx, &dv, &mut out).unwrap();
         let mut expected = [0.0; 6];
-        springs.jacobian_product(&s, &dx, &dv, &mut expected);
+        springs.linearize(&s, false).unwrap().apply(&s, &dx, &dv, &mut expected);
         for k in 0..6 {
             expected[k] += -3.0 * 4.0 * x[k] * x[k] * dx[k] - 0.3 * dv[k];
         }

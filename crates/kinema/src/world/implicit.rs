@@ -138,7 +138,7 @@ impl BaraffWitkin {
 
         // Jacobi preconditioner: diag(A) = m − h² diag(∂F/∂x) − h diag(∂F/∂v), where known.
         self.diag.copy_from_slice(&self.mass);
-        self.jac.add_diagonal(dynamics.forces, &s, -h * h, -h, &mut self.diag);
+        self.jac.add_diagonal(&s, -h * h, -h, &mut self.diag);
         for (d, m) in self.diag.iter_mut().zip(&self.mass) {
             if !(d.is_finite() && *d > 0.0) {
                 *d = *m;

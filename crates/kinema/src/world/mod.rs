@@ -15,7 +15,7 @@ pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
 use crate::collide::{Collider, Contact, Partner, Periodic, GEOMETRY_LIMIT};
 use crate::diagnostics::Diagnostics;
 use crate::error::{CallbackError, Divergence, Error};
-use crate::forces::{Force, State};
+use crate::forces::{EnergyClass, Force, State};
 use crate::ode::explicit_rk::ExplicitRk;
 use crate::ode::stepper::{first_non_finite, Stats, StepFailure, Stepper, Termination};
 use crate::ode::symplectic_euler::SymplecticEuler;
@@ -441,7 +441,7 @@ impl World {
             crate::particles::retain_rows(v, 3, &keep);
         }
         for f in &mut self.forces {
-            f.remove_particles(&new_of_old);
+            f.reindex(&new_of_old);
         }
         if let Some(stage) = &mut self.collisions {
             crate::particles::retain_rows(&mut stage.own, 1, &keep);
@@ -648,7 +648,10 @@ impl World {
         if self.contact_dirty {
             self.rebuild_contact_force()?;
         }
-        if self.watch.is_none() && !self.particles.is_empty() && self.forces.iter().all(|f| !f.can_add_energy()) {
+        if self.watch.is_none()
+            && !self.particles.is_empty()
+            && self.forces.iter().all(|f| f.properties().energy != EnergyClass::Source)
+        {
             let (energy, scale) = self.energy_and_scale(&self.particles.x, &self.particles.v);
             if scale > 0.0 {
                 self.watch = Some(EnergyWatch { energy, scale });
@@ -1001,16 +1004,7 @@ impl World {
         if changed {
             // A method's cache (Verlet's last acceleration) holds F at the integrated state;
             // it stays right only if no force depends on positions or velocities.
-            let s = State {
-                t: self.time,
-                x: x1,
-                v: v1,
-                mass: &p.mass,
-            };
-            let uniform = self.forces.iter().all(|f| {
-                f.rate_bound(&s, &p.inv_mass)
-                    .is_some_and(|r| r.omega_squared == 0.0 && r.damping_rate == 0.0)
-            });
+            let uniform = self.forces.iter().all(|f| f.properties().is_uniform());
             if !uniform {
                 match &mut self.stepper {
                     Some(WorldStepper::Verlet(b)) => b.fresh = false, // a_next is stale; keep the buffers
@@ -1139,11 +1133,13 @@ impl World {
     /// Adds a static collider and returns its index; turns collisions on with the default
     /// settings if they are off.
     pub fn add_collider(&mut self, collider: impl Into<Collider>) -> Result<usize, Error> {
+        let collider = collider.into();
+        collider.check_dim(self.params.dim)?;
         if self.collisions.is_none() {
             self.set_collisions(CollisionParams::default())?;
         }
         let stage = self.collisions.as_mut().expect("collisions are on");
-        stage.colliders.push(collider.into());
+        stage.colliders.push(collider);
         let index = stage.colliders.len() - 1;
         self.rebuild_contact_force()?;
         Ok(index)

@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use super::contact_force::ContactForce;
 use super::{World, WorldStepper};
 use crate::error::{CallbackError, Error};
-use crate::forces::{Force, SpringRates, State};
+use crate::forces::{Force, Properties, Rates, State};
 
 /// The fewest particles the world sorts along space.
 pub(crate) const SORT_MIN_PARTICLES: usize = 2 * super::CHUNK;
@@ -54,26 +54,14 @@ impl Force for SharedContact {
     fn potential_energy(&self, s: &State) -> Option<f64> {
         self.0.borrow().potential_energy(s)
     }
-    fn depends_on_velocity(&self) -> bool {
-        self.0.borrow().depends_on_velocity()
+    fn properties(&self) -> Properties {
+        self.0.borrow().properties()
     }
-    fn is_internal(&self) -> bool {
-        self.0.borrow().is_internal()
+    fn rates(&self, s: &State, inv_mass: &[f64]) -> Option<Rates> {
+        self.0.borrow().rates(s, inv_mass)
     }
-    fn can_add_energy(&self) -> bool {
-        self.0.borrow().can_add_energy()
-    }
-    fn rate_bound(&self, s: &State, inv_mass: &[f64]) -> Option<SpringRates> {
-        self.0.borrow().rate_bound(s, inv_mass)
-    }
-    fn standby_rates(&self, inv_mass: &[f64]) -> Option<(f64, f64)> {
-        self.0.borrow().standby_rates(inv_mass)
-    }
-    fn can_renumber(&self) -> bool {
-        self.0.borrow().can_renumber()
-    }
-    fn renumber(&mut self, new_of_old: &[u32]) {
-        self.0.borrow_mut().renumber(new_of_old)
+    fn reindex(&mut self, new_of_old: &[u32]) {
+        self.0.borrow_mut().reindex(new_of_old)
     }
 }
 
@@ -153,7 +141,7 @@ impl World {
         self.contact.is_some()
             && self.particles.len() >= SORT_MIN_PARTICLES
             && self.collisions.as_ref().is_some_and(|c| c.materials_parts().1.is_none())
-            && self.forces.iter().all(|f| f.can_renumber())
+            && self.forces.iter().all(|f| f.properties().renumbers)
     }
 
     /// Sorts the particles along the Morton curve of the positions in `x_next` (the step's
@@ -229,7 +217,7 @@ impl World {
             new_of_old[old as usize] = new as u32;
         }
         for f in &mut self.forces {
-            f.renumber(&new_of_old);
+            f.reindex(&new_of_old);
         }
     }
 }
