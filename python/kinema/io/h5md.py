@@ -52,7 +52,7 @@ from __future__ import annotations
 import getpass
 import os
 import re
-from dataclasses import MISSING, dataclass, field, fields
+from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -87,22 +87,29 @@ def _h5py() -> Any:
 
 @dataclass
 class LoadedTrajectory:
-    """A trajectory read from an H5MD file, with the attributes of ``kinema.Trajectory``, in SI
-    units whatever the file's units: ``t`` (F,) s; ``positions``, ``velocities`` (F, N, 3) m
-    and m/s (z = 0 when ``dim`` is 2); ``kinetic``, ``total`` (F,) J and ``potential``
-    {force name: (F,)} J; ``momentum`` (F, 3) kg m/s and ``angular_momentum`` (F, 3) kg m²/s;
-    ``contacts`` (F,), ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J.
-    Besides: ``step`` (F,) the integration step of each frame, ``masses`` (N,) kg, ``radii``
-    (N,) m, ``ids`` (N,), ``species`` (N,) names (kinema's files), ``dim``, ``dt`` s,
-    ``method``, ``periodic`` (3 bools) and ``box_edges`` (3,) m, the periodic cell at the
-    first frame, with ``box_edges_by_frame``
-    (F, 3) m, the cell at each frame (a box that changes), ``colliders`` (descriptions, as
-    ``Trajectory.colliders``), ``alive`` (F, N) bool, which particles exist at each frame
-    (``None`` when all do: a file whose number of particles does not vary), ``springs`` (S, 2)
-    the ids at the ends of each spring, ``group``, the file's ``author`` and ``creator`` and
-    its ``path``. An element the file does not hold is ``None`` (``potential``,
-    ``colliders``: empty). Where particles come and go, ``positions`` and ``velocities`` are
-    NaN where they do not exist, one column per id (ascending)."""
+    """What an H5MD file holds, as :func:`load_h5md` reads it: the arrays of a
+    ``kinema.Trajectory`` under its attribute names, in SI units whatever the file's units,
+    each ``None`` where the file does not hold it (``potential``, ``colliders``: empty).
+    ``kinema.Trajectory.load`` makes a ``Trajectory`` of it, which fills what is missing
+    (NaN velocities and energies, "unknown") and keeps the file's own facts as
+    ``Trajectory.source``; this record keeps the difference between "not in the file" and a
+    value, which a ``Trajectory`` cannot.
+
+    ``t`` (F,) s; ``positions``, ``velocities`` (F, N, 3) m and m/s (z = 0 when ``dim`` is
+    2); ``kinetic``, ``total`` (F,) J and ``potential`` {force name: (F,)} J; ``momentum``
+    (F, 3) kg m/s and ``angular_momentum`` (F, 3) kg m²/s; ``contacts`` (F,),
+    ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J; ``masses`` (N,) kg,
+    ``radii`` (N,) m, ``ids`` (N,), ``species`` (N,) names (kinema's files), ``dim``, ``dt``
+    s, ``method``, ``periodic`` (3 bools) and ``box_edges`` (3,) m, the periodic cell at the
+    first frame; ``colliders`` (descriptions, as ``Trajectory.colliders``), ``alive`` (F, N)
+    bool, which particles exist at each frame (``None`` when all do: a file whose number of
+    particles does not vary), ``springs`` (S, 2) the ids at the ends of each spring. Where
+    particles come and go, ``positions`` and ``velocities`` are NaN where they do not exist,
+    one column per id (ascending).
+
+    What only a file has (``Trajectory.source`` after ``Trajectory.load``): ``step`` (F,) the
+    integration step of each frame, ``box_edges_by_frame`` (F, 3) m, the cell at each frame
+    (a box that changes), ``group``, the file's ``author`` and ``creator`` and its ``path``."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -133,49 +140,6 @@ class LoadedTrajectory:
     author: str | None = None
     creator: str | None = None
     path: Path | None = None
-
-    def to_trajectory(self) -> Any:
-        """A ``kinema.Trajectory`` of these arrays: every field its constructor takes is
-        passed, so it follows the class as it grows. What the file does not hold is filled
-        in: velocities, kinetic energy, momentum and angular momentum that were not recorded
-        (a file of another program) are NaN, "unknown" (``total`` is then NaN too), and absent
-        collision observables zeros. The periodic cell is ``box_edges``, the first frame's:
-        a ``Trajectory`` has one cell, so a box that changes keeps its later frames only in
-        ``box_edges_by_frame``."""
-        from ..trajectory import Trajectory
-
-        f, n = self.positions.shape[:2]
-        fill = {
-            "velocities": lambda: np.full((f, n, 3), np.nan),
-            "kinetic": lambda: np.full(f, np.nan),
-            "momentum": lambda: np.full((f, 3), np.nan),
-            "angular_momentum": lambda: np.full((f, 3), np.nan),
-            "contacts": lambda: np.zeros(f, dtype=np.int64),
-            "impulse_balance": lambda: np.zeros((f, 3)),
-            "collision_energy_lost": lambda: np.zeros(f),
-        }
-        args = {}
-        for fl in fields(Trajectory):
-            if not fl.init:
-                continue
-            value = getattr(self, fl.name, None)
-            if value is None and fl.name in fill:
-                value = fill[fl.name]()
-            if value is None and (fl.default is not MISSING or fl.default_factory is not MISSING):
-                continue  # optional in Trajectory: its default
-            if value is None:
-                if self.path is None:
-                    raise ValueError(f"the file holds no {fl.name!r}, which kinema.Trajectory needs")
-                where = _NEEDED.get(fl.name, "").format(group=self.group)
-                raise TrajectoryFileError(
-                    f"{self.path}: not a complete kinema trajectory: " + (f"{where} ({fl.name}) is missing" if where else f"it holds no {fl.name!r}")
-                )
-            args[fl.name] = value
-        return Trajectory(**args)
-
-
-# Where the arrays kinema.Trajectory needs are in a file (LoadedTrajectory.to_trajectory).
-_NEEDED = {"positions": "/particles/{group}/position"}
 
 
 # -- Units ------------------------------------------------------------------------------------
@@ -519,13 +483,15 @@ def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
 
 
 def _check_colliders(path: Path, names: list[str], colliders: list[dict[str, Any]], dim: int) -> None:
-    """Adds each collider to an empty world of ``dim`` dimensions: the engine's checks (finite
-    values, a non-zero normal, hi > lo, 2 or 3 values, restitution in [0, 1], ...)."""
+    """Adds each collider to an empty engine world of ``dim`` dimensions, as ``World.add``
+    does: the engine's checks (finite values, a non-zero normal, hi > lo, 2 or 3 values,
+    restitution in [0, 1], ...). The engine's own ``World``, not ``kinema.World``: reading a
+    file needs no world module (which imports ``kinema.trajectory``, which imports this)."""
+    from .. import _core
     from ..colliders import Box, Plane, SphereObstacle
     from ..render import _KIND
-    from ..world import World
 
-    world = World(dim=dim)
+    core = _core.World(dim, 1e-3, "verlet")
     make = {"plane": Plane, "box": Box, "sphere": SphereObstacle}
     for name, d in zip(names, colliders, strict=True):
         needed = _KIND[d["type"]]
@@ -534,7 +500,7 @@ def _check_colliders(path: Path, names: list[str], colliders: list[dict[str, Any
             raise _fail(path, f"collider {name} (a {d['type']}) has no attribute {missing[0]!r}")
         args = {k: d[k] for k in (*needed, "restitution", "friction") if k in d}
         try:
-            world.add(make[d["type"]](**args))
+            make[d["type"]](**args)._attach(core)
         except (ValueError, TypeError) as e:
             first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
             raise _fail(path, f"collider {name} (a {d['type']}): {first}") from None
@@ -1099,15 +1065,15 @@ def _read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTr
 
 def load_h5md(path: str | os.PathLike, group: str | None = None) -> LoadedTrajectory:
     """Read the particle group ``group`` of the H5MD file ``path`` (``None``: the file's only
-    group) with its observables; returns a :class:`LoadedTrajectory` (``.to_trajectory()``
-    makes a ``kinema.Trajectory``). Arrays of kinema's files come back exactly as written;
-    2D positions and velocities get z = 0.
+    group) with its observables; returns a :class:`LoadedTrajectory`, what the file holds
+    (``kinema.Trajectory.load`` makes a ``kinema.Trajectory`` of it). Arrays of kinema's
+    files come back exactly as written; 2D positions and velocities get z = 0.
 
     Files of other programs are read too. Each dataset's ``unit`` attribute (H5MD's units
     module) is converted to SI, the values multiplied by its exact factor (``parse_unit``:
     "Ang", "nm", "ps", "nm ps-1", "u", "kJ mol-1", ...; a dataset without one is taken as
     SI); a unit kinema does not know, or of the wrong kind, is an error. Velocities and
-    observables may be absent (``None``; ``to_trajectory`` makes them NaN, unknown). The box
+    observables may be absent (``None``; ``Trajectory.load`` makes them NaN, unknown). The box
     may be fixed (edges (D,)) or time-dependent (one row per frame, a box that may change:
     ``box_edges_by_frame``), edges or a (D, D) matrix of edge vectors along the axes. Step
     and time may be H5MD's fixed interval (a scalar with an ``offset``).
