@@ -119,9 +119,33 @@ def test_h5md_round_trip_of_a_world_run(tmp_path, dim):
     save_h5md(tr, tmp_path / "run.h5", compression=None)
     back = load_h5md(tmp_path / "run.h5", group="all")
     assert_same_trajectory(tr, back)
-    again = back.to_trajectory()
+    again = kinema.Trajectory.load(tmp_path / "run.h5", group="all")
     assert isinstance(again, kinema.Trajectory)
     assert_same_trajectory(tr, again)
+
+
+def test_a_loaded_trajectory_keeps_what_only_its_file_knows(tmp_path):
+    # Trajectory.load gives a Trajectory whose source is the file's own facts; a run has none.
+    tr = world_run()
+    assert tr.source is None
+    path = save_h5md(tr, tmp_path / "run.h5", group="balls", author="Ada")
+    back = kinema.Trajectory.load(path)
+    assert isinstance(back.source, kinema.trajectory.FileInfo)
+    assert (back.source.path, back.source.group, back.source.author) == (path, "balls", "Ada")
+    assert back.source.creator == f"kinema {kinema.__version__}" and back.source.box_edges_by_frame is None
+    np.testing.assert_array_equal(back.source.step, load_h5md(path).step)
+
+
+def test_the_file_modules_do_not_import_the_trajectory():
+    # kinema.io takes any object with a Trajectory's attributes; Trajectory imports kinema.io
+    # (inside its methods), never the other way round, not even through kinema.world.
+    import ast
+    from pathlib import Path
+
+    for module in sorted((Path(kinema.__file__).parent / "io").glob("*.py")):
+        for node in ast.walk(ast.parse(module.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and node.level == 2:
+                assert node.module not in ("trajectory", "world"), f"{module.name} imports kinema.{node.module}"
 
 
 def test_h5md_layout_follows_the_spec(tmp_path):

@@ -1,11 +1,34 @@
-"""Recorded frames of a world run: times, positions, velocities and diagnostics as arrays."""
+"""Recorded frames of a world run: times, positions, velocities and diagnostics as arrays,
+and what a trajectory read from a file knows of that file (``FileInfo``).
+
+This module imports ``kinema.io`` only inside the methods that write or read files; the
+readers and writers of ``kinema.io`` take any object with a ``Trajectory``'s attributes and
+never import this module."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+
+@dataclass
+class FileInfo:
+    """What only the file a trajectory was read from knows (``Trajectory.source``): its
+    ``path``, the particle ``group`` read (/particles/<group>), ``step`` (F,) the integration
+    step of each frame as the file numbers them, the file's ``author`` and ``creator``
+    (program and version; ``None`` where it names none) and ``box_edges_by_frame`` (F, 3) m,
+    the periodic cell at each frame (a box that may change; ``Trajectory.box_edges`` is the
+    first frame's), ``None`` with open boundaries."""
+
+    path: Path
+    group: str
+    step: np.ndarray
+    author: str | None = None
+    creator: str | None = None
+    box_edges_by_frame: np.ndarray | None = None
 
 
 @dataclass
@@ -36,6 +59,10 @@ class Trajectory:
     ``colors`` (N, 3): each particle's own colour, r g b in [0, 1] (NaN: none; an
     ``Emitter``'s ``color``), or None.
 
+    ``source``: a trajectory read from a file (``Trajectory.load``) keeps what only the file
+    knows, a :class:`FileInfo` (path, group, step of each frame, author, creator, the cell
+    at each frame); ``None`` for one recorded by ``World.run``.
+
     ``save`` writes an H5MD file, ``Trajectory.load`` (or ``kinema.load_trajectory``) reads
     one back, ``export`` writes VTK, PLY, extended XYZ or CSV (see ``kinema.io``), ``render``
     a video (see ``kinema.render``)."""
@@ -63,6 +90,7 @@ class Trajectory:
     alive: np.ndarray | None = None
     springs: np.ndarray | None = None
     colors: np.ndarray | None = None
+    source: FileInfo | None = None
     total: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -107,7 +135,9 @@ class Trajectory:
     @classmethod
     def load(cls, path: Any, group: str | None = None) -> Trajectory:
         """Read a trajectory from an H5MD file, written by ``save`` or by another program (units
-        converted to SI, velocities and energies NaN where the file has none; ``kinema.io.load_h5md``).
+        converted to SI, velocities and energies NaN where the file has none; ``kinema.io.load_h5md``);
+        what only the file knows (its path, group, step of each frame, author, creator, the
+        cell at each frame) is ``source``, a :class:`FileInfo`.
 
         What the file holds is checked as it is read (shapes, types and the memory they need
         before any data, then finite positions, velocities and times, times that increase,
@@ -116,7 +146,46 @@ class Trajectory:
         value."""
         from .io import load_h5md
 
-        return load_h5md(path, group=group).to_trajectory()
+        return cls._from_file(load_h5md(path, group=group))
+
+    @classmethod
+    def _from_file(cls, read: Any) -> Trajectory:
+        """The ``Trajectory`` of what ``kinema.io.load_h5md`` read (a ``LoadedTrajectory``):
+        every field the constructor takes, from the attribute of the same name, so it follows
+        the class as it grows. What the file does not hold is filled in: velocities, kinetic
+        energy, momentum and angular momentum that were not recorded (a file of another
+        program) are NaN, "unknown" (``total`` is then NaN too), absent collision observables
+        zeros, other absent attributes their defaults. The file's own facts become
+        ``source``; the periodic cell is the first frame's (``box_edges``), a box that
+        changes keeps every frame's in ``source.box_edges_by_frame``."""
+        f, n = read.positions.shape[:2]
+        unknown = {
+            "velocities": lambda: np.full((f, n, 3), np.nan),
+            "kinetic": lambda: np.full(f, np.nan),
+            "momentum": lambda: np.full((f, 3), np.nan),
+            "angular_momentum": lambda: np.full((f, 3), np.nan),
+            "contacts": lambda: np.zeros(f, dtype=np.int64),
+            "impulse_balance": lambda: np.zeros((f, 3)),
+            "collision_energy_lost": lambda: np.zeros(f),
+        }
+        args = {}
+        for fl in fields(cls):
+            if not fl.init or fl.name == "source":
+                continue
+            value = getattr(read, fl.name, None)
+            if value is None and fl.name in unknown:
+                value = unknown[fl.name]()
+            if value is not None:  # else: optional, its default
+                args[fl.name] = value
+        source = FileInfo(
+            path=read.path,
+            group=read.group,
+            step=read.step,
+            author=read.author,
+            creator=read.creator,
+            box_edges_by_frame=read.box_edges_by_frame,
+        )
+        return cls(**args, source=source)
 
     def render(self, path: Any, fps: float | None = None, draw_colliders: bool = True, **options: Any) -> Any:
         """Render the frames to a video, ``.mp4`` (H.264) or ``.gif``, and return its path.

@@ -1,0 +1,443 @@
+"""Reading H5MD files (``kinema.io.load_h5md``): ``read`` turns an open file into a
+``LoadedTrajectory``, what the file holds in SI units, checking what it reads (through
+``kinema.io._h5md_checks``): shapes, types and the memory needed before any data, then the
+values. Besides the frames: the box (fixed or changing), per-particle masses, radii, ids and
+species, the observables, kinema's parameters and colliders, and the springs."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._checks import dtype_problem, number, shown
+from ._files import TrajectoryFileError
+from ._h5md_checks import Live, Reader, as_text, element_datasets, fail, per_frame, utf8, varying_ids, where
+from ._h5md_layout import BY_FORCE, OBSERVABLES, import_h5py
+from .h5md_units import LENGTH, MASS, TIME, parse_unit, to_si
+
+
+@dataclass
+class LoadedTrajectory:
+    """What an H5MD file holds, as :func:`load_h5md` reads it: the arrays of a
+    ``kinema.Trajectory`` under its attribute names, in SI units whatever the file's units,
+    each ``None`` where the file does not hold it (``potential``, ``colliders``: empty).
+    ``kinema.Trajectory.load`` makes a ``Trajectory`` of it, which fills what is missing
+    (NaN velocities and energies, "unknown") and keeps the file's own facts as
+    ``Trajectory.source``; this record keeps the difference between "not in the file" and a
+    value, which a ``Trajectory`` cannot.
+
+    ``t`` (F,) s; ``positions``, ``velocities`` (F, N, 3) m and m/s (z = 0 when ``dim`` is
+    2); ``kinetic``, ``total`` (F,) J and ``potential`` {force name: (F,)} J; ``momentum``
+    (F, 3) kg m/s and ``angular_momentum`` (F, 3) kg m²/s; ``contacts`` (F,),
+    ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J; ``masses`` (N,) kg,
+    ``radii`` (N,) m, ``ids`` (N,), ``species`` (N,) names (kinema's files), ``dim``, ``dt``
+    s, ``method``, ``periodic`` (3 bools) and ``box_edges`` (3,) m, the periodic cell at the
+    first frame; ``colliders`` (descriptions, as ``Trajectory.colliders``), ``alive`` (F, N)
+    bool, which particles exist at each frame (``None`` when all do: a file whose number of
+    particles does not vary), ``springs`` (S, 2) the ids at the ends of each spring. Where
+    particles come and go, ``positions`` and ``velocities`` are NaN where they do not exist,
+    one column per id (ascending).
+
+    What only a file has (``Trajectory.source`` after ``Trajectory.load``): ``step`` (F,) the
+    integration step of each frame, ``box_edges_by_frame`` (F, 3) m, the cell at each frame
+    (a box that changes), ``group``, the file's ``author`` and ``creator`` and its ``path``."""
+
+    t: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray | None
+    step: np.ndarray
+    kinetic: np.ndarray | None = None
+    potential: dict[str, np.ndarray] = field(default_factory=dict)
+    total: np.ndarray | None = None
+    momentum: np.ndarray | None = None
+    angular_momentum: np.ndarray | None = None
+    contacts: np.ndarray | None = None
+    impulse_balance: np.ndarray | None = None
+    collision_energy_lost: np.ndarray | None = None
+    masses: np.ndarray | None = None
+    radii: np.ndarray | None = None
+    ids: np.ndarray | None = None
+    species: np.ndarray | None = None
+    dim: int = 3
+    dt: float | None = None
+    method: str | None = None
+    periodic: tuple[bool, bool, bool] | None = None
+    box_edges: np.ndarray | None = None
+    box_edges_by_frame: np.ndarray | None = None
+    colliders: list[dict[str, Any]] = field(default_factory=list)
+    alive: np.ndarray | None = None
+    springs: np.ndarray | None = None
+    group: str = "all"
+    author: str | None = None
+    creator: str | None = None
+    path: Path | None = None
+
+
+def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
+    """The descriptions under /parameters/kinema/colliders, in index order, each checked by
+    the engine as ``World.add`` checks a collider (in a world of ``dim`` dimensions)."""
+    h5py = import_h5py()
+    group = params.get("colliders")
+    if not isinstance(group, h5py.Group):
+        return []
+    out = []
+    names = []
+    for name in sorted(group, key=lambda n: int(n) if n.isdigit() else -1):
+        g = group[name]
+        kind = g.attrs.get("type")
+        kind = kind.decode() if isinstance(kind, bytes) else kind
+        if not name.isdigit() or not isinstance(g, h5py.Group) or not isinstance(kind, str) or kind not in ("plane", "box", "sphere"):
+            raise fail(path, f"{g.name} is not a kinema collider (a group named by its index with type plane, box or sphere)")
+        d: dict[str, Any] = {"type": str(kind)}
+        for key, value in g.attrs.items():
+            if key != "type":
+                a = np.asarray(value)
+                if a.size == 0 or dtype_problem(a.dtype) is not None:
+                    raise fail(path, f"attribute {key!r} ({g.name}) = {shown(value)} is not a number")
+                a = a.astype(np.float64)
+                d[key] = float(a) if a.ndim == 0 else a.tolist()
+        out.append(d)
+        names.append(g.name)
+    if out:
+        _check_colliders(path, names, out, dim)
+    return out
+
+
+def _check_colliders(path: Path, names: list[str], colliders: list[dict[str, Any]], dim: int) -> None:
+    """Adds each collider to an empty engine world of ``dim`` dimensions, as ``World.add``
+    does: the engine's checks (finite values, a non-zero normal, hi > lo, 2 or 3 values,
+    restitution in [0, 1], ...). The engine's own ``World``, not ``kinema.World``: reading a
+    file needs no world module (which imports ``kinema.trajectory``, which imports this)."""
+    from .. import _core
+    from ..colliders import Box, Plane, SphereObstacle
+    from ..render import _KIND
+
+    core = _core.World(dim, 1e-3, "verlet")
+    make = {"plane": Plane, "box": Box, "sphere": SphereObstacle}
+    for name, d in zip(names, colliders, strict=True):
+        needed = _KIND[d["type"]]
+        missing = [k for k in needed if k not in d]
+        if missing:
+            raise fail(path, f"collider {name} (a {d['type']}) has no attribute {missing[0]!r}")
+        args = {k: d[k] for k in (*needed, "restitution", "friction") if k in d}
+        try:
+            make[d["type"]](**args)._attach(core)
+        except (ValueError, TypeError) as e:
+            first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            raise fail(path, f"collider {name} (a {d['type']}): {first}") from None
+
+
+def _species_names(r: Any, obj: Any, index: np.ndarray) -> np.ndarray | None:
+    """The species names of the particles: ``names[index]`` when the species element (or
+    dataset) ``obj`` has a ``names`` attribute (kinema writes one), else ``None`` (H5MD's
+    species are integers, and a name cannot be made up for them)."""
+    if "names" not in obj.attrs:
+        return None
+    names = [utf8(b) for b in np.asarray(obj.attrs["names"]).reshape(-1)]
+    bad = next((k for k in index.tolist() if not 0 <= k < len(names)), None)
+    if not all(isinstance(s, str) and s for s in names) or bad is not None:
+        raise r.fail(f"{where('species', obj)} has species {bad} or names {names!r}: each particle's species must index its names")
+    return np.array(names)[index.astype(np.int64)]
+
+
+def _box_edges(r: Reader, ds: Any, e: np.ndarray, by_frame: bool, periodic: tuple[bool, ...]) -> np.ndarray:
+    """The edges of the box at each frame, (F, D) m, from the values ``e`` of ``ds`` in m:
+    (D,) or (F, D) edges, or (D, D) or (F, D, D) edge vectors, which must lie along the axes
+    (a cuboid: kinema has no triclinic cells). Each edge is finite, > 0 on a periodic axis."""
+    rows = e[None] if not by_frame else e
+    frame = (lambda i: f" at frame {i}") if by_frame else (lambda i: "")
+    if rows.ndim == 3:
+        r.finite("box edges", ds, rows, ("frame",) if by_frame else ())
+        d = rows.shape[1]
+        off = np.flatnonzero((rows * (1 - np.eye(d))).reshape(rows.shape[0], -1).any(axis=1))
+        if off.size:
+            raise r.fail(f"{where('box edges', ds)} is a triclinic box{frame(int(off[0]))} (edge vectors not along the axes), which kinema does not support")
+        rows = np.diagonal(rows, axis1=1, axis2=2)
+    bad = ~np.isfinite(rows)
+    if bad.any():
+        i, k = np.unravel_index(int(np.argmax(bad)), rows.shape)
+        raise r.fail(f"{where('box edges', ds)} has edge[{k}] = {number(rows[i, k])}{frame(i)} (box edges must be finite, in m)")
+    bad = (rows <= 0) & np.array(periodic[: rows.shape[1]])
+    if bad.any():
+        i, k = np.unravel_index(int(np.argmax(bad)), rows.shape)
+        raise r.fail(f"{where('box edges', ds)} has edge[{k}] = {number(rows[i, k])}{frame(i)} (a periodic axis needs an edge > 0 m)")
+    return rows
+
+
+def _read_springs(r: Reader, f: Any, p: Any, ids: np.ndarray) -> np.ndarray | None:
+    """The springs (S, 2) ids of ``/connectivity/springs`` (kinema's: H5MD's time-independent
+    list of pairs, whose ``particles_group`` is the particle group read), ``None`` without
+    them."""
+    h5py = import_h5py()
+    ds = f.get("connectivity/springs")
+    if not isinstance(ds, h5py.Dataset):
+        return None
+    ref = ds.attrs.get("particles_group")
+    if isinstance(ref, h5py.Reference) and ref and f[ref].name != p.name:
+        return None  # the springs of another particle group
+    s = r.numbers("springs", ds, integer=True)
+    if len(s) != 2 or s[1] != 2:
+        raise r.fail(f"{where('springs', ds)} has shape {s}; it must be (springs, 2), the ids of the two ends of each spring")
+    pairs = np.asarray(ds[()], dtype=np.int64)
+    unknown = np.setdiff1d(pairs, ids)
+    if unknown.size:
+        raise r.fail(f"{where('springs', ds)} names id {int(unknown[0])}, which is no particle's ({p.name}/id)")
+    return pairs
+
+
+# /observables read back: (name, attribute of the trajectory, a vector per frame)
+_READ_OBSERVABLES = [(name, attr, attr in ("momentum", "angular_momentum", "impulse_balance")) for name, (attr, _) in OBSERVABLES.items()]
+
+
+def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTrajectory:
+    h5py = import_h5py()
+    missing = [name for name in ("h5md", "particles") if not isinstance(f.get(name), h5py.Group)]
+    if missing:
+        raise fail(path, f"a foreign HDF5 file, not H5MD: it has no /{' or /'.join(missing)} group")
+    version = np.asarray(f["h5md"].attrs.get("version", [])).reshape(-1)
+    if version.size != 2 or version[0] != 1:
+        raise fail(path, f"unsupported H5MD version {version.tolist()}; kinema reads version 1.x")
+    groups = [k for k, g in f["particles"].items() if isinstance(g, h5py.Group)]
+    if group is None:
+        if len(groups) != 1:
+            raise fail(path, f"holds {len(groups)} particle groups; choose one with group=: {', '.join(groups) or '(none)'}")
+        group = groups[0]
+    if group not in groups:
+        raise fail(path, f"has no particle group {group!r}; available: {', '.join(groups) or '(none)'}")
+    p = f["particles"][group]
+    r = Reader(path)
+
+    # -- What is there: types and shapes, before any data is read. ---------------------------
+    x_ds, step_ds, t_ds = element_datasets(path, p, "position", required=True)
+    shape = r.numbers("positions", x_ds)
+    if len(shape) != 3 or shape[2] not in (2, 3):
+        raise r.fail(f"{where('positions', x_ds)} has shape {shape}; it must be (frames, particles, 3) or (frames, particles, 2)")
+    frames, n, d = shape
+    if frames == 0:
+        raise r.fail(f"0 frames: {where('positions', x_ds)} has shape {shape}")
+    if n == 0:
+        raise r.fail(f"0 particles: {where('positions', x_ds)} has shape {shape}")
+    if t_ds is None:
+        raise r.fail(f"{p.name}/position has no time dataset; kinema needs the time of each frame")
+    r.clock("times", t_ds, "positions", x_ds)
+    r.clock("steps", step_ds, "positions", x_ds, integer=True)
+    box = p.get("box")
+    if isinstance(box, h5py.Group) and "dimension" in box.attrs:
+        dimension = box.attrs["dimension"]
+        if np.asarray(dimension).size != 1 or dtype_problem(np.asarray(dimension).dtype, integer=True) or int(np.asarray(dimension).reshape(())) != d:
+            raise r.fail(f"attribute 'dimension' ({box.name}) = {shown(dimension)} but {where('positions', x_ds)} has {d} coordinates per particle")
+    units: dict[str, float] = {"positions": r.unit("positions", x_ds, LENGTH), "times": r.unit("times", t_ds, TIME)}
+
+    def vector_bytes(ds: Any, factor: float) -> int:
+        # Read, converted to float64 when the unit is not SI (in place when it is float64),
+        # and in 2D padded with z = 0 (a copy).
+        converted = factor != 1.0 and ds.dtype != np.float64
+        out = 8 if converted else ds.dtype.itemsize
+        return ds.size * ds.dtype.itemsize + (ds.size * 8 if converted else 0) + (frames * n * 3 * out if d == 2 else 0)
+
+    r.plan("positions", x_ds, vector_bytes(x_ds, units["positions"]))
+    r.plan("times", t_ds)
+    r.plan("steps", step_ds)
+
+    vel = element_datasets(path, p, "velocity")
+    if vel is not None:
+        v_ds = vel[0]
+        if r.numbers("velocities", v_ds) != shape:
+            raise r.fail(f"{where('velocities', v_ds)} has shape {v_ds.shape} but {where('positions', x_ds)} {shape}; they must match")
+        r.clock("steps", vel[1], "velocities", v_ds, integer=True)
+        if vel[2] is not None:
+            r.clock("times", vel[2], "velocities", v_ds)
+        units["velocities"] = r.unit("velocities", v_ds, (1, -1, 0))
+        r.plan("velocities", v_ds, vector_bytes(v_ds, units["velocities"]))
+
+    # A varying number of particles (births and deaths): H5MD marks the entries of a particle
+    # that does not exist at a frame by the fill value of the time-dependent id element.
+    id_table = varying_ids(path, p)
+    if id_table is not None:
+        if r.numbers("ids", id_table, True) != (frames, n):
+            raise r.fail(
+                f"{where('ids', id_table)} has shape {id_table.shape}; with a fill value (particles that come and go) it must be "
+                f"({frames}, {n}), one id per frame and particle ({where('positions', x_ds)} {shape})"
+            )
+        r.plan("ids", id_table, id_table.size * 8 * 4)  # the table, the entries present and their frames and columns
+
+    per_particle = {}  # attribute: (dataset, word, whether it is a time-dependent element's value)
+    # species: read where the file names them (kinema's `names`); H5MD's own species are
+    # integers with no names, which a trajectory has no use for (znh5md writes them as floats)
+    named = "species" in p and "names" in p["species"].attrs
+    for name, attr, integer in (("mass", "masses", False), ("radius", "radii", False), ("id", "ids", True), ("species", "species", True)):
+        if name not in p or (name == "species" and not named) or (name == "id" and id_table is not None):
+            continue
+        obj = p[name]
+        if isinstance(obj, h5py.Dataset):
+            if r.numbers(attr, obj, integer) != (n,):
+                raise r.fail(
+                    f"{where(attr, obj)} has shape {obj.shape} but there are {n} particles ({where('positions', x_ds)} {shape}): one value per particle"
+                )
+            r.plan(attr, obj)
+            per_particle[attr] = (obj, False)
+        else:
+            obj = element_datasets(path, p, name)[0]
+            s = r.numbers(attr, obj, integer)
+            if len(s) != 2 or s[0] == 0 or s[1] != n or (id_table is not None and s[0] != frames):
+                raise r.fail(f"{where(attr, obj)} has shape {s}; it must be (frames, {n}), one value per particle ({where('positions', x_ds)} {shape})")
+            r.plan(attr, obj, (frames if id_table is not None else 1) * n * obj.dtype.itemsize)
+            per_particle[attr] = (obj, True)
+        if not integer:
+            units[attr] = r.unit(attr, obj, MASS if attr == "masses" else LENGTH)
+
+    # The box: edges (D,) or a (D, D) matrix of edge vectors, fixed, or time-dependent with
+    # one row per frame (a box that may change).
+    periodic = None
+    edges_ds = None
+    edges_by_frame = False
+    if isinstance(box, h5py.Group) and "boundary" in box.attrs:
+        boundary = [b.decode("utf-8", "replace") if isinstance(b, bytes) else str(b) for b in np.asarray(box.attrs["boundary"]).reshape(-1)]
+        flags = [b == "periodic" for b in boundary]
+        if any(flags):
+            periodic = tuple((flags + [False] * 3)[:3])
+            edges = box.get("edges")
+            if isinstance(edges, h5py.Group):
+                edges_ds, edges_step, edges_time = element_datasets(path, box, "edges")
+                s = r.numbers("box edges", edges_ds)
+                if s not in ((frames, d), (frames, d, d)):
+                    raise r.fail(
+                        f"{where('box edges', edges_ds)} has shape {s}; it must be ({frames}, {d}), one edge per axis at each frame of "
+                        f"{where('positions', x_ds)} {shape} (or ({frames}, {d}, {d}), edge vectors)"
+                    )
+                r.clock("steps", edges_step, "box edges", edges_ds, integer=True)
+                if edges_time is not None:
+                    r.clock("times", edges_time, "box edges", edges_ds)
+                edges_by_frame = True
+            elif isinstance(edges, h5py.Dataset):
+                edges_ds = edges
+                s = r.numbers("box edges", edges_ds)
+                if s not in ((d,), (d, d)):
+                    raise r.fail(f"{where('box edges', edges_ds)} has shape {s}; it must be ({d},), one edge per axis (or ({d}, {d}), edge vectors)")
+            else:
+                raise r.fail(f"{box.name} has periodic boundaries ({', '.join(boundary)}) but no edges dataset")
+            units["box edges"] = r.unit("box edges", edges_ds, LENGTH)
+            r.plan("box edges", edges_ds, edges_ds.size * (edges_ds.dtype.itemsize + 8))
+
+    observables: dict[str, Any] = {}  # attribute or ("potential", force name): value dataset
+    obs = f.get("observables")
+    if isinstance(obs, h5py.Group):
+
+        def observable(parent: Any, name: str, vector: bool = False, required: bool = False, unit: str | None = "J") -> Any:
+            e = element_datasets(path, parent, name, required)
+            if e is None:
+                return None
+            value, step, time = e
+            s = r.numbers(name, value)
+            good = len(s) == 2 and s[1] in (2, 3) if vector else len(s) == 1
+            if not good or s[0] != frames:
+                must = f"({frames}, 3)" if vector else f"({frames},)"
+                raise r.fail(f"{where(name, value)} has shape {s}; it must be {must}, one value per frame of {where('positions', x_ds)} {shape}")
+            r.clock("steps", step, name, value, integer=True)
+            if time is not None:
+                r.clock("times", time, name, value)
+            if unit is not None:  # the kinema unit of the observable: the dimension its unit must have
+                units[value.name] = r.unit(name, value, parse_unit(unit)[1])
+            r.plan(name, value, value.size * max(8, value.dtype.itemsize))
+            return value
+
+        for name, attr, vector in _READ_OBSERVABLES:
+            observables[attr] = observable(obs, name, vector, unit=OBSERVABLES[name][1])
+        observables["total"] = observable(obs, "total_energy")
+        by_force = obs.get(BY_FORCE)
+        if isinstance(by_force, h5py.Group):
+            names = [n.decode() if isinstance(n, bytes) else str(n) for n in np.asarray(by_force.attrs.get("names", list(by_force))).reshape(-1)]
+            for name in names:
+                observables[("potential", name)] = observable(by_force, name, required=True)
+        elif "potential_energy" in obs:
+            observables[("potential", "potential")] = observable(obs, "potential_energy")
+
+    params = f.get("parameters/kinema")
+    dt = method = None
+    colliders: list[dict[str, Any]] = []
+    if isinstance(params, h5py.Group):
+        if "dt" in params.attrs:
+            raw = params.attrs["dt"]
+            a = np.asarray(raw)
+            if a.size != 1 or dtype_problem(a.dtype) is not None or not (np.isfinite(a).all() and a.reshape(()) > 0):
+                raise r.fail(f"attribute 'dt' ({params.name}) = {shown(raw)} is not a positive number (the time step in s)")
+            dt = float(a.reshape(()))
+        if "method" in params.attrs:
+            raw = utf8(params.attrs["method"])
+            if not isinstance(raw, str):
+                raise r.fail(f"attribute 'method' ({params.name}) = {shown(raw)} is not the name of an integration method")
+            method = raw
+        colliders = _read_colliders(path, params, d)
+
+    r.check_memory(memory)
+
+    # -- The data, and its values. ------------------------------------------------------------
+    def three(a: np.ndarray) -> np.ndarray:
+        return a if a.shape[-1] == 3 else np.concatenate([a, np.zeros(a.shape[:-1] + (3 - a.shape[-1],), dtype=a.dtype)], axis=-1)
+
+    try:
+        t = to_si(per_frame(t_ds, t_ds[()], frames, np.float64), units["times"])
+        step = per_frame(step_ds, step_ds[()], frames, np.int64)
+    except TrajectoryFileError as e:
+        raise r.fail(str(e)) from None
+    r.finite("times", t_ds, t, ("frame",))
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if back.size:
+        k = int(back[0]) + 1
+        raise r.fail(f"{where('times', t_ds)} must increase: t[{k}] = {number(t[k])} after t[{k - 1}] = {number(t[k - 1])}")
+    live = None if id_table is None else Live(r, id_table, frames, n)
+    x = to_si(x_ds[()], units["positions"])
+    r.finite("positions", x_ds, x if live is None else live.masked(x), ("frame", "particle"))
+    velocities = None
+    if vel is not None:
+        v = to_si(vel[0][()], units["velocities"])
+        r.finite("velocities", vel[0], v if live is None else live.masked(v), ("frame", "particle"))
+        velocities = three(v) if live is None else live.columns(three(v))
+    positions = three(x) if live is None else live.columns(three(x))  # 2D: z = 0 where a particle exists
+    out = LoadedTrajectory(t=t, positions=positions, velocities=velocities, step=step, dim=d, group=group, path=path)
+    if live is not None:
+        out.ids, out.alive = live.ids, live.alive
+    for attr, (ds, element) in per_particle.items():
+        if live is None:
+            a = ds[0] if element else ds[()]
+        else:  # each particle's value where it first exists
+            a = live.first(ds[()], element)
+        a = to_si(a, units.get(attr, 1.0))
+        r.finite(attr, ds, a, ("particle",))
+        if attr == "masses" and np.any(a <= 0):
+            i = int(np.argmax(a <= 0))
+            raise r.fail(f"{where(attr, ds)} has mass[{i}] = {number(a[i])} (masses must be finite and > 0 kg)")
+        if attr == "radii" and np.any(a < 0):
+            i = int(np.argmax(a < 0))
+            raise r.fail(f"{where(attr, ds)} has radius[{i}] = {number(a[i])} (radii must be finite and >= 0 m)")
+        if attr == "species":  # names where the file gives them (kinema's ``names``), else none
+            a = _species_names(r, p["species"], np.asarray(a))
+        setattr(out, attr, a)
+    if periodic is not None:
+        edges = _box_edges(r, edges_ds, to_si(np.asarray(edges_ds[()], dtype=np.float64), units["box edges"]), edges_by_frame, periodic)
+        out.periodic = periodic
+        out.box_edges_by_frame = np.ascontiguousarray(np.broadcast_to(np.pad(edges, [(0, 0), (0, 3 - d)]), (frames, 3)))
+        out.box_edges = out.box_edges_by_frame[0].copy()
+    # Observables are read as they are: a potential energy may be -inf (a particle exactly at
+    # an unsoftened attractor point).
+    for key, ds in observables.items():
+        if ds is None:
+            continue
+        a = to_si(ds[()], units.get(ds.name, 1.0))
+        if isinstance(key, tuple):
+            out.potential[key[1]] = a
+        else:
+            setattr(out, key, a)
+    if out.total is None and out.kinetic is not None:
+        out.total = out.kinetic + sum(out.potential.values(), np.zeros_like(out.kinetic))
+    out.dt, out.method, out.colliders = dt, method, colliders
+    out.springs = _read_springs(r, f, p, out.ids if out.ids is not None else np.arange(out.positions.shape[1]))
+    author = f["h5md"].get("author")
+    creator = f["h5md"].get("creator")
+    out.author = None if author is None else as_text(author.attrs.get("name", ""))
+    if creator is not None:
+        out.creator = f"{as_text(creator.attrs.get('name', ''))} {as_text(creator.attrs.get('version', ''))}".strip()
+    return out

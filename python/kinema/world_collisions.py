@@ -1,0 +1,127 @@
+"""The collision part of ``kinema.World``'s API: the settings (``set_collisions``,
+``collisions``), the colliders added, the periodic axes, what the collision stages report
+(``contacts``, ``collision_stats``) and the time each stage of a step took
+(``stage_times``). ``WorldCollisions`` is a base class of ``World``, not used alone: its
+methods use the world's engine (``_core``), its views (``_push``, ``_pull``), its colliders
+(``_colliders``, which ``World.add`` fills), its ``dim`` and the advisor's flag
+(``_advice_due``). Units: m, s, kg; impulses N·s, energies J."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from . import _checks
+from .colliders import Collider
+
+
+class WorldCollisions:
+    """Collisions of a ``kinema.World``: see ``World`` and docs/collisions.md."""
+
+    def set_collisions(
+        self,
+        model: str = "impulse",
+        restitution: float = 1.0,
+        friction: float = 0.0,
+        ccd: bool = True,
+        restitution_threshold: float | None = None,
+        stiffness: float | None = None,
+        damping: float | None = None,
+    ) -> None:
+        """Turn collisions on, or replace every one of their settings.
+
+        ``model``: ``"impulse"`` (Newton's restitution law u_n⁺ = −e u_n⁻ by impulses after
+        each integration step) or ``"spring_dashpot"`` (a force k_n δ − m_eff γ_n u_n while
+        two bodies overlap by δ, integrated with the other forces; it needs ``stiffness`` k_n
+        in N/m, and ``damping`` γ_n in 1/s defaults to the value that gives ``restitution``).
+        ``restitution`` e ∈ [0, 1] and ``friction`` (Coulomb μ ≥ 0) are the values of every
+        particle without its own. ``ccd``: find impacts at their time inside the step, so
+        nothing passes through a particle or a wall however fast. ``restitution_threshold``
+        (m/s): approach speeds below it bounce with e = 0, so resting contacts stay at rest;
+        ``None`` takes twice the largest speed change the forces gave a particle in the step.
+
+        With ``"spring_dashpot"`` the contacts are a force (its elastic energy is the potential
+        ``"contact"`` of :meth:`diagnostics` and of the ``Trajectory``), which the stable-step
+        advisor and the ``StabilityWarning`` count; :meth:`contacts` and
+        :meth:`collision_stats` report the impulse model only.
+
+        ``w.set_collisions(**w.collisions)`` changes nothing.
+        """
+        args = (
+            _checks.text("model", model),
+            _checks.real("restitution", restitution),
+            _checks.real("friction", friction),
+            _checks.boolean("ccd", ccd),
+            _checks.real("restitution_threshold", restitution_threshold, optional=True),
+            _checks.real("stiffness", stiffness, optional=True),
+            _checks.real("damping", damping, optional=True),
+        )
+        self._push()
+        self._core.set_collisions(*args)
+        self._advice_due = True  # the spring-dashpot model's contacts are stiff springs
+
+    @property
+    def collisions(self) -> dict | None:
+        """The collision settings, a dict of :meth:`set_collisions`' keyword arguments, or
+        ``None`` while collisions are off."""
+        return self._core.collisions
+
+    @property
+    def colliders(self) -> list[Collider]:
+        """The colliders, in the order added (a collider's index in :meth:`contacts`)."""
+        return list(self._colliders)
+
+    @property
+    def periodic(self) -> tuple[bool, bool, bool]:
+        """The periodic axes (x, y, z). Set ``w.periodic = (True, True, False)`` to make axes
+        periodic with the cell of the world's ``Box`` (added first): its walls along those
+        axes vanish and a particle leaving one side comes back on the other; positions are
+        wrapped into [lo, hi) at once. All false makes space open again."""
+        return self._core.periodic
+
+    @periodic.setter
+    def periodic(self, axes: Any) -> None:
+        flags = _checks.bool_array("periodic", axes).reshape(-1)
+        if self.dim == 2 and flags.size == 2:
+            flags = np.append(flags, False)
+        if flags.size != 3:
+            raise ValueError(f"periodic = {_checks.describe(axes)} is invalid: it must be 3 bools (x, y, z){' or 2 in a 2D world' if self.dim == 2 else ''}")
+        self._push()
+        try:
+            self._core.set_periodic(flags.tolist())
+        finally:
+            self._pull()
+
+    def contacts(self) -> dict[str, np.ndarray]:
+        """The K contacts found at the end of the last step, as detected, as arrays: ``i``
+        (K,), the particle; ``j`` (K,), the other particle or −1 for a collider; ``collider``
+        (K,), the collider's index in :attr:`colliders` or −1 between particles; ``normal``
+        (K, 3), the unit normal from the partner towards i; ``overlap`` (K,), m, the
+        penetration before it was removed; ``u_n`` (K,), m/s, (v_i − v_j)·n when the contact
+        was found, before its own impulse (< 0: approaching). Impacts that continuous
+        detection (``ccd``) found inside the step were resolved before, so a particle that
+        bounced there shows u_n > 0. Empty with the spring–dashpot model, whose contacts live
+        inside the force evaluations."""
+        self._push()
+        return self._core.contacts()
+
+    def collision_stats(self) -> dict | None:
+        """What the collision stages did in the last step (``"last"``) and over all steps
+        (``"total"``), each a dict: ``contacts`` (at the end of the step), ``impacts`` (found
+        inside steps by continuous detection), ``impulses``, ``impulse_balance`` ((3,), N·s:
+        the sum of the impulses between movable particles, 0 by action and reaction up to
+        rounding), ``energy_lost`` (J, the mechanical energy the collisions took),
+        ``max_overlap`` (m, left after the step), ``solver_sweeps`` (of the end-of-step
+        velocity solver), ``islands`` (independent groups of the end-of-step contacts, each
+        solved on its own) and ``unconverged`` (steps whose solver, or whose impacts, stopped
+        at their cap). ``total``'s ``contacts``, ``max_overlap``, ``solver_sweeps`` and
+        ``islands`` are the last step's. ``None`` while collisions are off."""
+        self._push()
+        return self._core.collision_stats()
+
+    def stage_times(self) -> dict[str, float]:
+        """Wall-clock seconds spent so far in each of the seed's four stages of a step:
+        ``integrate`` (forces included; with spring–dashpot contacts, those too),
+        ``detect``, ``respond`` and ``distribute`` (collisions of the impulse model)."""
+        return self._core.stage_times()
