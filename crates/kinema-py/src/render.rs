@@ -2,7 +2,8 @@
 
 use std::borrow::Cow;
 
-use kinema::render::{categorical, render_frame as render_core, text, yuv, Camera, Colormap, RenderParams, Scenery, SceneryItem};
+use kinema::collide::{BoxContainer, Collider, Plane, SphereObstacle, Surface};
+use kinema::render::{categorical, render_frame as render_core, text, yuv, Camera, Colormap, Frame, RenderParams, Scenery};
 use numpy::ndarray::Dimension;
 use numpy::{
     Element, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
@@ -26,9 +27,10 @@ fn bad(parameter: &str, got: impl std::fmt::Display, expected: &str) -> PyErr {
     PyValueError::new_err(format!("{parameter} = {got} is invalid: {expected}"))
 }
 
-/// The scenery items from (kind, numbers) pairs: ("plane", [px, py, pz, nx, ny, nz]),
-/// ("box", [lo x, y, z, hi x, y, z]), ("sphere", [cx, cy, cz, radius]).
-fn scenery_items(items: Vec<(String, Vec<f64>)>) -> PyResult<Vec<SceneryItem>> {
+/// The colliders from (kind, numbers) pairs: ("plane", [px, py, pz, nx, ny, nz]),
+/// ("box", [lo x, y, z, hi x, y, z]), ("sphere", [cx, cy, cz, radius]); an error names the
+/// item (`scenery[2].radius`).
+fn scenery_items(items: Vec<(String, Vec<f64>)>) -> PyResult<Vec<Collider>> {
     items
         .into_iter()
         .enumerate()
@@ -58,17 +60,19 @@ fn scenery_items(items: Vec<(String, Vec<f64>)>) -> PyResult<Vec<SceneryItem>> {
                     ),
                 ));
             }
-            let a = [v[0], v[1], v[2]];
-            Ok(match kind.as_str() {
-                "plane" => SceneryItem::Plane {
-                    point: a,
-                    normal: [v[3], v[4], v[5]],
-                },
-                "box" => SceneryItem::Box {
-                    lo: a,
-                    hi: [v[3], v[4], v[5]],
-                },
-                _ => SceneryItem::Sphere { center: a, radius: v[3] },
+            let (a, s) = ([v[0], v[1], v[2]], Surface::default());
+            let collider: Result<Collider, kinema::Error> = match kind.as_str() {
+                "plane" => Plane::new(a, [v[3], v[4], v[5]], s).map(Into::into),
+                "box" => BoxContainer::new(a, [v[3], v[4], v[5]], s).map(Into::into),
+                _ => SphereObstacle::new(a, v[3], s).map(Into::into),
+            };
+            collider.map_err(|e| match e {
+                kinema::Error::InvalidParameter {
+                    parameter,
+                    value,
+                    allowed,
+                } => bad(&format!("scenery[{k}].{parameter}"), value, &allowed),
+                other => to_py(other),
             })
         })
         .collect()
@@ -136,7 +140,7 @@ fn render_frame<'py>(
         }
     };
     let scenery = Scenery {
-        items: scenery_items(scenery.unwrap_or_default())?,
+        colliders: scenery_items(scenery.unwrap_or_default())?,
         extent,
     };
     let n = positions.shape()[0];
@@ -202,7 +206,14 @@ fn render_frame<'py>(
     let rad = data(&radius);
     let mut image = vec![0u8; width.saturating_mul(height).saturating_mul(3).min(3 << 30)];
     py.detach(|| -> Result<(), kinema::Error> {
-        render_core(&camera, &pos, &rad, &colors, &springs, &scenery, &params, &mut image)?;
+        let frame = Frame {
+            positions: &pos,
+            radius: &rad,
+            colors: &colors,
+            springs: &springs,
+            scenery: &scenery,
+        };
+        render_core(&camera, &frame, &params, &mut image)?;
         if let Some(label) = label {
             let lc = [label_color.0, label_color.1, label_color.2];
             let margin = 4 * label_scale.max(1);
@@ -325,7 +336,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frame_points, m)?)?;
     m.add_function(wrap_pyfunction!(rgb_to_yuv420p, m)?)?;
     m.add("COLORMAP_NAMES", kinema::render::COLORMAP_NAMES.to_vec())?;
-    m.add("LINE_COLOR", kinema::render::scenery::LINE_COLOR.to_vec())?;
+    m.add("LINE_COLOR", kinema::render::paint::LINE_COLOR.to_vec())?;
     m.add("FRAME_MARGIN", kinema::render::FRAME_MARGIN)?;
     Ok(())
 }
