@@ -185,8 +185,11 @@ def render_frames(
         spring_width = max(1.0, height / 480.0)
 
     colors, values, vmin, vmax = _colouring(color_by, x, times, velocities, dim, vmin, vmax)
-    scenery = _scenery(colliders)
-    lo, hi = _extent(x, r, scenery)
+    # The colliders become the engine's once; the engine lays the scene out (its extent:
+    # all frames' live particles and the colliders' finite parts, widened by the largest
+    # radius), one extent for every frame, so that floors and open walls stay put.
+    scenery = _core.Scenery(_describe_colliders(colliders) if colliders is not None else [], x.reshape(-1, 3), r)
+    lo, hi = (np.array(corner) for corner in scenery.extent)
     bg = tuple(int(c) for c in background)
     luminance = 0.299 * bg[0] + 0.587 * bg[1] + 0.114 * bg[2]
     label_color = (0, 0, 0) if luminance > 128 else (255, 255, 255)
@@ -198,7 +201,7 @@ def render_frames(
         if not key.fits:  # a frame too narrow for the name, the values and a bar
             key = None
     if camera is None:
-        points = _frame_corners(x, r, scenery, lo, hi) if dim == 3 else None
+        points = _frame_corners(x, r, scenery.boxes, lo, hi) if dim == 3 else None
         camera = _auto_camera(lo, hi, dim, width, height, avoid=key.box if key is not None else None, points=points)
     elif dim == 2 and not isinstance(camera, Camera2D) or dim == 3 and not isinstance(camera, Camera3D):
         raise ValueError(f"camera = {camera!r} is invalid: dim={dim} needs a Camera{dim}D")
@@ -212,9 +215,8 @@ def render_frames(
         spring_width=float(spring_width),
         **camera._kwargs(),
     )
-    if scenery:
-        # One extent for every frame, so that floors and open walls stay put.
-        common.update(scenery=scenery, extent=(lo.tolist(), hi.tolist()))
+    if len(scenery):
+        common["scenery"] = scenery
     for k in range(n_frames):
         label = time_format.format(times[k]) if time_format is not None else None
         here = live[k]
@@ -233,10 +235,7 @@ def render_frames(
             frame_pairs = np.ascontiguousarray(column[pairs[both]])
         else:
             frame_pairs = pairs
-        try:
-            frame = _core.render_frame(pick(x[k]), pick(r), label=label, springs=frame_pairs, **colour_kw, **common)
-        except ValueError as e:  # the engine calls the list "scenery"; here it is "colliders"
-            raise ValueError(str(e).replace("scenery[", "colliders[", 1)) from None
+        frame = _core.render_frame(pick(x[k]), pick(r), label=label, springs=frame_pairs, **colour_kw, **common)
         if key is not None:
             key.draw(frame)
         yield frame
@@ -467,68 +466,17 @@ def _describe_colliders(colliders) -> list[dict]:
     return out
 
 
-def _scenery(colliders) -> list[tuple[str, list[float]]]:
-    """The engine's (kind, numbers) pairs of the colliders; a 2-value box (2D) is open along z."""
-    if colliders is None:
-        return []
-    items = []
-    for d in _describe_colliders(colliders):
-        if d["type"] == "plane":
-            items.append(("plane", d["point"] + d["normal"]))
-        elif d["type"] == "box":
-            lo, hi = list(d["lo"]), list(d["hi"])
-            if len(lo) == 2:
-                lo.append(-math.inf)
-            if len(hi) == 2:
-                hi.append(math.inf)
-            items.append(("box", lo + hi))
-        else:
-            items.append(("sphere", d["center"] + [d["radius"]]))
-    return items
-
-
-def _extent(x, r, scenery):
-    """(lo, hi): the box of all frames' particles (finite positions: the live ones) and of the
-    scenery's finite parts, widened by the largest radius (a point without radius by 0.5 m,
-    so that it still has a view)."""
-    finite = x[np.all(np.isfinite(x), axis=2)]
-    points = [finite.reshape(-1, 3)]
-    for kind, v in scenery:
-        if kind == "box":
-            # Each finite bound counts along its own axis (an open top adds nothing along z).
-            for corner in (v[:3], v[3:]):
-                c = np.array(corner, dtype=np.float64)
-                for k in range(3):
-                    if np.isfinite(c[k]):
-                        p = np.full((1, 3), np.nan)
-                        p[0, k] = c[k]
-                        points.append(p)
-        elif kind == "sphere":
-            c, radius = np.array(v[:3]), v[3]
-            points.append(np.array([c - radius, c + radius]))
-    pts = np.concatenate(points)
-    with np.errstate(invalid="ignore"):
-        lo = np.array([np.nanmin(pts[:, k]) if np.any(np.isfinite(pts[:, k])) else np.nan for k in range(3)])
-        hi = np.array([np.nanmax(pts[:, k]) if np.any(np.isfinite(pts[:, k])) else np.nan for k in range(3)])
-    known = np.isfinite(lo) & np.isfinite(hi)
-    lo, hi = np.where(known, lo, 0.0), np.where(known, hi, np.where(known.any(), 0.0, 1.0))
-    span = float(np.max(hi - lo))
-    pad = float(r.max()) if r.size else 0.0
-    # A degenerate box (one point, no radius) still gets a view of finite size.
-    pad = max(pad, 1e-3 * span) if span + pad > 0 else 0.5
-    return lo - pad, hi + pad
-
-
 #: The camera direction of the default 3D view (box → eye): front right, above.
 _VIEW_FROM = (1.0, -1.6, 0.9)
 
 
-def _frame_corners(x, r, scenery, lo, hi) -> np.ndarray:
+def _frame_corners(x, r, collider_boxes, lo, hi) -> np.ndarray:
     """(P, 3): the corners of each frame's box of its live particles (radii included) and of
-    each collider's finite box (a box's infinite bounds at the extent [lo, hi], a sphere's
-    cube). Each frame's box, not one over all frames, so that a scene whose parts sit apart
-    in space and time (a cloth above a sphere, then draped on it) is framed by what it shows:
-    the box around all of it has empty corners that would take room in the frame."""
+    each collider's box (``_core.Scenery.boxes``: a box's infinite bounds at the extent [lo,
+    hi], a sphere's cube). Each frame's box, not one over all frames, so that a scene whose
+    parts sit apart in space and time (a cloth above a sphere, then draped on it) is framed
+    by what it shows: the box around all of it has empty corners that would take room in
+    the frame."""
     live = np.all(np.isfinite(x), axis=2)
     rows = live.any(axis=1)
     boxes = []
@@ -537,13 +485,7 @@ def _frame_corners(x, r, scenery, lo, hi) -> np.ndarray:
         low = np.where(live[rows][:, :, None], xr - r[None, :, None], np.inf).min(axis=1)
         high = np.where(live[rows][:, :, None], xr + r[None, :, None], -np.inf).max(axis=1)
         boxes += list(zip(low, high, strict=True))
-    for kind, v in scenery:
-        if kind == "box":
-            a, b = np.array(v[:3], float), np.array(v[3:], float)
-            boxes.append((np.where(np.isfinite(a), a, lo), np.where(np.isfinite(b), b, hi)))
-        elif kind == "sphere":
-            c, radius = np.array(v[:3], float), float(v[3])
-            boxes.append((c - radius, c + radius))
+    boxes += collider_boxes
     if not boxes:
         return _corners(lo, hi)
     return np.concatenate([_corners(a, b) for a, b in boxes])

@@ -2,8 +2,10 @@
 
 use std::borrow::Cow;
 
-use kinema::collide::{BoxContainer, Collider, Plane, SphereObstacle, Surface};
-use kinema::render::{categorical, render_frame as render_core, text, yuv, Camera, Colormap, Frame, RenderParams, Scenery};
+use kinema::render::{
+    categorical, collider_boxes, render_frame as render_core, scene_extent, text, yuv, Camera, Colormap, Frame, Region,
+    RenderParams, Scenery,
+};
 use numpy::ndarray::Dimension;
 use numpy::{
     Element, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
@@ -13,6 +15,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
+use crate::collisions::{self, Description};
 use crate::errors::to_py;
 
 /// The array's data in C order, borrowed when it already is contiguous.
@@ -27,71 +30,74 @@ fn bad(parameter: &str, got: impl std::fmt::Display, expected: &str) -> PyErr {
     PyValueError::new_err(format!("{parameter} = {got} is invalid: {expected}"))
 }
 
-/// The colliders from (kind, numbers) pairs: ("plane", [px, py, pz, nx, ny, nz]),
-/// ("box", [lo x, y, z, hi x, y, z]), ("sphere", [cx, cy, cz, radius]); an error names the
-/// item (`scenery[2].radius`).
-fn scenery_items(items: Vec<(String, Vec<f64>)>) -> PyResult<Vec<Collider>> {
-    items
-        .into_iter()
-        .enumerate()
-        .map(|(k, (kind, v))| {
-            let want = match kind.as_str() {
-                "plane" | "box" => 6,
-                "sphere" => 4,
-                _ => {
-                    return Err(bad(
-                        &format!("scenery[{k}]"),
-                        format!("a {kind:?}"),
-                        "the kinds are 'plane', 'box' and 'sphere'",
-                    ))
-                }
-            };
-            if v.len() != want {
-                return Err(bad(
-                    &format!("scenery[{k}]"),
-                    format!("a {kind} of {} numbers", v.len()),
-                    &format!(
-                        "a {kind} takes {want}: {}",
-                        match want {
-                            4 => "centre x, y, z and radius",
-                            _ if kind == "plane" => "point x, y, z and normal x, y, z",
-                            _ => "lo x, y, z and hi x, y, z",
-                        }
-                    ),
-                ));
-            }
-            let (a, s) = ([v[0], v[1], v[2]], Surface::default());
-            let collider: Result<Collider, kinema::Error> = match kind.as_str() {
-                "plane" => Plane::new(a, [v[3], v[4], v[5]], s).map(Into::into),
-                "box" => BoxContainer::new(a, [v[3], v[4], v[5]], s).map(Into::into),
-                _ => SphereObstacle::new(a, v[3], s).map(Into::into),
-            };
-            collider.map_err(|e| match e {
-                kinema::Error::InvalidParameter {
-                    parameter,
-                    value,
-                    allowed,
-                } => bad(&format!("scenery[{k}].{parameter}"), value, &allowed),
-                other => to_py(other),
-            })
+/// The colliders a video draws, made into the engine's once (the conversions `World.add`
+/// uses), with the video's extent: the region every frame's scenery is laid out in, so that
+/// it stays put while the particles move (`kinema::render::scene_extent`).
+#[pyclass(frozen, name = "Scenery", module = "kinema._core")]
+pub struct PyScenery {
+    inner: Scenery,
+}
+
+#[pymethods]
+impl PyScenery {
+    /// `colliders`: descriptions as `Trajectory.colliders` holds them; `positions`: (P, 3),
+    /// m, the particles of every frame (NaN where one is not alive); `radius`: (N,), m. An
+    /// error names the collider (`colliders[2].radius`).
+    #[new]
+    fn new(
+        py: Python<'_>,
+        colliders: Vec<Description>,
+        positions: PyReadonlyArray2<'_, f64>,
+        radius: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Self> {
+        if positions.shape()[1] != 3 {
+            return Err(bad(
+                "positions",
+                format!("an array of shape {:?}", positions.shape()),
+                "shape (P, 3)",
+            ));
+        }
+        let colliders = collisions::colliders(&colliders).map_err(to_py)?;
+        let (pos, rad) = (data(&positions), data(&radius));
+        let extent = py.detach(|| scene_extent(&pos, &rad, &colliders)).map_err(to_py)?;
+        Ok(PyScenery {
+            inner: Scenery {
+                colliders,
+                extent: Some(extent),
+            },
         })
-        .collect()
+    }
+
+    /// (lo, hi), m: the region the scenery is laid out in.
+    #[getter]
+    fn extent(&self) -> Region {
+        self.inner.extent.expect("made with its extent")
+    }
+
+    /// (lo, hi) of each box and sphere obstacle, in order, a box's infinite bounds at the
+    /// extent's: what the default 3D camera frames besides the particles.
+    #[getter]
+    fn boxes(&self) -> Vec<Region> {
+        collider_boxes(&self.inner.colliders, self.extent())
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.colliders.len()
+    }
 }
 
 /// Renders one frame; returns an (height, width, 3) uint8 array. The GIL is released while
 /// colours are mapped and pixels are drawn.
 ///
-/// `scenery`: colliders drawn with the particles, a list of (kind, numbers) — ("plane",
-/// [point, normal]), ("box", [lo, hi]) (bounds may be infinite), ("sphere", [centre,
-/// radius]); `extent`: (lo, hi), m, the region of the whole scene, which sizes planes and
-/// clamps infinite box bounds (default: this frame's particles and the finite scenery).
+/// `scenery`: a `Scenery`, the colliders drawn with the particles and the extent that
+/// sizes planes and clamps infinite box bounds.
 /// `springs`: (S, 2) integer indices of particles joined by a line `spring_width` pixels wide.
 #[pyfunction]
 #[pyo3(signature = (
     positions, radius, *, colors=None, values=None, colormap="viridis", vmin=None, vmax=None,
     width=1280, height=720, view=None, eye=None, target=None, up=[0.0, 0.0, 1.0], fov_deg=40.0,
     background=(255, 255, 255), min_radius_px=1.0, label=None, label_scale=2,
-    label_color=(0, 0, 0), scenery=None, extent=None, springs=None, spring_width=1.5
+    label_color=(0, 0, 0), scenery=None, springs=None, spring_width=1.5
 ))]
 #[allow(clippy::too_many_arguments)]
 fn render_frame<'py>(
@@ -115,8 +121,7 @@ fn render_frame<'py>(
     label: Option<&str>,
     label_scale: usize,
     label_color: (u8, u8, u8),
-    scenery: Option<Vec<(String, Vec<f64>)>>,
-    extent: Option<([f64; 3], [f64; 3])>,
+    scenery: Option<Bound<'py, PyScenery>>,
     springs: Option<PyReadonlyArray2<'py, i64>>,
     spring_width: f64,
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
@@ -138,10 +143,6 @@ fn render_frame<'py>(
                 })
                 .collect::<PyResult<_>>()?
         }
-    };
-    let scenery = Scenery {
-        colliders: scenery_items(scenery.unwrap_or_default())?,
-        extent,
     };
     let n = positions.shape()[0];
     if positions.shape()[1] != 3 {
@@ -205,13 +206,14 @@ fn render_frame<'py>(
     let pos = data(&positions);
     let rad = data(&radius);
     let mut image = vec![0u8; width.saturating_mul(height).saturating_mul(3).min(3 << 30)];
+    let drawn: &Scenery = scenery.as_ref().map_or(&NO_SCENERY, |s| &s.get().inner);
     py.detach(|| -> Result<(), kinema::Error> {
         let frame = Frame {
             positions: &pos,
             radius: &rad,
             colors: &colors,
             springs: &springs,
-            scenery: &scenery,
+            scenery: drawn,
         };
         render_core(&camera, &frame, &params, &mut image)?;
         if let Some(label) = label {
@@ -325,10 +327,17 @@ fn rgb_to_yuv420p<'py>(py: Python<'py>, frame: PyReadonlyArray3<'py, u8>) -> PyR
     Ok(PyBytes::new(py, &out))
 }
 
-/// Registers the render functions (`render_frame`, `colormap`, `categorical_colors`,
+/// No colliders: what a frame without `scenery` draws besides the particles.
+static NO_SCENERY: Scenery = Scenery {
+    colliders: Vec::new(),
+    extent: None,
+};
+
+/// Registers the class `Scenery`, the render functions (`render_frame`, `colormap`, `categorical_colors`,
 /// `frame_box`, `frame_points`, `rgb_to_yuv420p`) and the constants `COLORMAP_NAMES`,
 /// `LINE_COLOR` (springs, box edges) and `FRAME_MARGIN`.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyScenery>()?;
     m.add_function(wrap_pyfunction!(render_frame, m)?)?;
     m.add_function(wrap_pyfunction!(colormap, m)?)?;
     m.add_function(wrap_pyfunction!(categorical_colors, m)?)?;
