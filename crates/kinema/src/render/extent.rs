@@ -2,13 +2,13 @@
 //!
 //! A plane is infinite and an open box face has no wall, so drawing them needs a size: a
 //! plane's floor patch is centred under the extent's centre and sized from it, and a box's
-//! infinite bounds are drawn up to it ([`clamp_box`]). Two extents, one rule for the
+//! infinite bounds are drawn up to it (`clamp_box`). Two extents, one rule for the
 //! colliders (a box's finite bounds, each along its own axis; a sphere's box; a plane adds
 //! nothing):
 //!
 //! - [`scene_extent`]: a whole video's, from the positions of all its frames, so that the
 //!   scenery stays put while the particles move; the default cameras frame it too;
-//! - [`frame_extent`]: one frame's, when it is given none ([`super::Scenery::extent`]).
+//! - `frame_extent`: one frame's, when it is given none ([`super::Scenery::extent`]).
 
 use super::camera::{invalid, Camera};
 use crate::collide::Collider;

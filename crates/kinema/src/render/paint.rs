@@ -13,8 +13,8 @@
 //! Everything is in fixed neutral colours ([`FLOOR_COLOR`], [`BOX_FLOOR_COLOR`],
 //! [`LINE_COLOR`], [`OBSTACLE_COLOR`]) so that the particles' colours keep their meaning.
 //!
-//! Geometry is turned into a few pixel-space primitives ([`Prim`]: a convex polygon, a line
-//! segment, a disc) once per frame, in f64, cut at the near depth first ([`super::clip`]);
+//! Geometry is turned into a few pixel-space primitives (`Prim`: a convex polygon, a line
+//! segment, a disc) once per frame, in f64, cut at the near depth first (`clip.rs`);
 //! each band of the raster stage draws every primitive's rows that fall inside it, in list
 //! order, before its particles. A band's pixels still depend only on its own rows, so frames
 //! stay byte-identical for any thread count. What is infinite (a plane, an open box face) is
