@@ -174,6 +174,16 @@ COLORMAP_NAMES: list[str]
 LINE_COLOR: list[int]
 FRAME_MARGIN: float
 
+class Scenery:
+    """The colliders a video draws, made into the engine's once, with the video's extent."""
+
+    def __init__(self, colliders: Sequence[dict[str, Any]], positions: npt.NDArray[np.float64], radius: npt.NDArray[np.float64]) -> None: ...
+    @property
+    def extent(self) -> tuple[list[float], list[float]]: ...
+    @property
+    def boxes(self) -> list[tuple[list[float], list[float]]]: ...
+    def __len__(self) -> int: ...
+
 def render_frame(
     positions: npt.NDArray[np.float64],
     radius: npt.NDArray[np.float64],
@@ -195,8 +205,7 @@ def render_frame(
     label: str | None = None,
     label_scale: int = 2,
     label_color: tuple[int, int, int] = (0, 0, 0),
-    scenery: list[tuple[str, list[float]]] | None = None,
-    extent: tuple[Sequence[float], Sequence[float]] | None = None,
+    scenery: Scenery | None = None,
     springs: npt.NDArray[np.int64] | None = None,
     spring_width: float = 1.5,
 ) -> npt.NDArray[np.uint8]: ...

@@ -4,7 +4,7 @@
 //! per class); every rule is the engine's, and its errors name the parameter.
 
 use kinema::collide::colliders::{check_planar, PLANE_IN_2D, SPHERE_IN_2D};
-use kinema::collide::{BoxContainer, Contact, Material, Partner, Plane, SphereObstacle, Surface};
+use kinema::collide::{BoxContainer, Collider, Contact, Material, Partner, Plane, SphereObstacle, Surface};
 use kinema::world::{CollisionParams, CollisionStats, ContactModel};
 use kinema::Error;
 use numpy::{PyArray1, PyArrayMethods};
@@ -99,6 +99,87 @@ pub fn box_container(dim: usize, lo: &[f64], hi: &[f64], surface: Surface) -> Re
     } else {
         BoxContainer::new([lo[0], lo[1], lo[2]], [hi[0], hi[1], hi[2]], surface)
     }
+}
+
+/// A collider as a plain description, the dicts `Trajectory.colliders` holds (written by
+/// `kinema.render._describe_colliders`): {"type": "plane", "point", "normal"}, {"type":
+/// "box", "lo", "hi"} (2 or 3 values per corner, ±inf for an open face), {"type": "sphere",
+/// "center", "radius"}, with "restitution" and "friction" where the collider sets them; m.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct Description {
+    #[pyo3(item("type"))]
+    kind: String,
+    #[pyo3(default)]
+    point: Option<[f64; 3]>,
+    #[pyo3(default)]
+    normal: Option<[f64; 3]>,
+    #[pyo3(default)]
+    lo: Option<Vec<f64>>,
+    #[pyo3(default)]
+    hi: Option<Vec<f64>>,
+    #[pyo3(default)]
+    center: Option<[f64; 3]>,
+    #[pyo3(default)]
+    radius: Option<f64>,
+    #[pyo3(default)]
+    restitution: Option<f64>,
+    #[pyo3(default)]
+    friction: Option<f64>,
+}
+
+/// The engine's collider of a description, made by the conversions `World.add` uses, with
+/// their checks: a box with 2 values per corner is a 2D world's rectangle (open along z),
+/// with 3 a 3D world's box; a plane or a sphere is taken as it is (a picture has no 2D rule:
+/// the 2D view draws the xy part). Errors name the field (`radius`, `normal[2]`, `hi[1]`).
+pub fn collider(d: &Description) -> Result<Collider, Error> {
+    let surface = Surface::new(d.restitution, d.friction)?;
+    let missing = |needs: &str| {
+        Error::invalid(
+            "type",
+            format!("'{}'", d.kind),
+            format!("a {} needs {needs}, and this description lacks one of them", d.kind),
+        )
+    };
+    match (d.kind.as_str(), d.point, d.normal, &d.lo, &d.hi, d.center, d.radius) {
+        ("plane", Some(point), Some(normal), ..) => Ok(plane(3, point, normal, surface)?.into()),
+        ("plane", ..) => Err(missing("point and normal")),
+        ("box", _, _, Some(lo), Some(hi), ..) => {
+            let dim = if lo.len() == 2 { 2 } else { 3 };
+            Ok(box_container(dim, lo, hi, surface)?.into())
+        }
+        ("box", ..) => Err(missing("lo and hi")),
+        ("sphere", .., Some(center), Some(radius)) => Ok(sphere_obstacle(3, center, radius, surface)?.into()),
+        ("sphere", ..) => Err(missing("center and radius")),
+        (other, ..) => Err(Error::invalid(
+            "type",
+            format!("'{other}'"),
+            "a collider is a 'plane', a 'box' or a 'sphere'",
+        )),
+    }
+}
+
+/// [`collider`] of each description, in order; an error names the collider by its index
+/// (`colliders[2].radius`).
+pub fn colliders(descriptions: &[Description]) -> Result<Vec<Collider>, Error> {
+    descriptions
+        .iter()
+        .enumerate()
+        .map(|(k, d)| {
+            collider(d).map_err(|err| match err {
+                Error::InvalidParameter {
+                    parameter,
+                    value,
+                    allowed,
+                } => Error::InvalidParameter {
+                    parameter: format!("colliders[{k}].{parameter}"),
+                    value,
+                    allowed,
+                },
+                other => other,
+            })
+        })
+        .collect()
 }
 
 /// Per-particle restitution and friction of `n` new particles (NaN: the world's global value),

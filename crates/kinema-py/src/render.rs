@@ -2,16 +2,21 @@
 
 use std::borrow::Cow;
 
-use kinema::render::{categorical, render_frame as render_core, text, yuv, Camera, Colormap, RenderParams, Scenery, SceneryItem};
+use kinema::render::{
+    categorical, collider_boxes, render_frame as render_core, scene_extent, text, yuv, Camera, Colormap, Frame, Region,
+    RenderParams, Scenery,
+};
 use numpy::ndarray::Dimension;
 use numpy::{
     Element, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
     PyUntypedArrayMethods,
 };
-use pyo3::exceptions::PyValueError;
+use pyo3::conversion::FromPyObjectOwned;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyBytes;
+use pyo3::types::{PyBytes, PyDict};
 
+use crate::collisions::{self, Description};
 use crate::errors::to_py;
 
 /// The array's data in C order, borrowed when it already is contiguous.
@@ -26,50 +31,291 @@ fn bad(parameter: &str, got: impl std::fmt::Display, expected: &str) -> PyErr {
     PyValueError::new_err(format!("{parameter} = {got} is invalid: {expected}"))
 }
 
-/// The scenery items from (kind, numbers) pairs: ("plane", [px, py, pz, nx, ny, nz]),
-/// ("box", [lo x, y, z, hi x, y, z]), ("sphere", [cx, cy, cz, radius]).
-fn scenery_items(items: Vec<(String, Vec<f64>)>) -> PyResult<Vec<SceneryItem>> {
-    items
-        .into_iter()
-        .enumerate()
-        .map(|(k, (kind, v))| {
-            let want = match kind.as_str() {
-                "plane" | "box" => 6,
-                "sphere" => 4,
-                _ => {
-                    return Err(bad(
-                        &format!("scenery[{k}]"),
-                        format!("a {kind:?}"),
-                        "the kinds are 'plane', 'box' and 'sphere'",
-                    ))
-                }
-            };
-            if v.len() != want {
-                return Err(bad(
-                    &format!("scenery[{k}]"),
-                    format!("a {kind} of {} numbers", v.len()),
-                    &format!(
-                        "a {kind} takes {want}: {}",
-                        match want {
-                            4 => "centre x, y, z and radius",
-                            _ if kind == "plane" => "point x, y, z and normal x, y, z",
-                            _ => "lo x, y, z and hi x, y, z",
-                        }
-                    ),
-                ));
+/// The colliders a video draws, made into the engine's once (the conversions `World.add`
+/// uses), with the video's extent: the region every frame's scenery is laid out in, so that
+/// it stays put while the particles move (`kinema::render::scene_extent`).
+#[pyclass(frozen, name = "Scenery", module = "kinema._core")]
+pub struct PyScenery {
+    inner: Scenery,
+}
+
+#[pymethods]
+impl PyScenery {
+    /// `colliders`: descriptions as `Trajectory.colliders` holds them; `positions`: (P, 3),
+    /// m, the particles of every frame (NaN where one is not alive); `radius`: (N,), m. An
+    /// error names the collider (`colliders[2].radius`).
+    #[new]
+    fn new(
+        py: Python<'_>,
+        colliders: Vec<Description>,
+        positions: PyReadonlyArray2<'_, f64>,
+        radius: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Self> {
+        if positions.shape()[1] != 3 {
+            return Err(bad(
+                "positions",
+                format!("an array of shape {:?}", positions.shape()),
+                "shape (P, 3)",
+            ));
+        }
+        let colliders = collisions::colliders(&colliders).map_err(to_py)?;
+        let (pos, rad) = (data(&positions), data(&radius));
+        let extent = py.detach(|| scene_extent(&pos, &rad, &colliders)).map_err(to_py)?;
+        Ok(PyScenery {
+            inner: Scenery {
+                colliders,
+                extent: Some(extent),
+            },
+        })
+    }
+
+    /// (lo, hi), m: the region the scenery is laid out in.
+    #[getter]
+    fn extent(&self) -> Region {
+        self.inner.extent.expect("made with its extent")
+    }
+
+    /// (lo, hi) of each box and sphere obstacle, in order, a box's infinite bounds at the
+    /// extent's: what the default 3D camera frames besides the particles.
+    #[getter]
+    fn boxes(&self) -> Vec<Region> {
+        collider_boxes(&self.inner.colliders, self.extent())
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.colliders.len()
+    }
+}
+
+/// The keyword arguments of `render_frame`, which each group below reads by name (`get`),
+/// with its default where one is not given.
+struct Keywords<'a, 'py> {
+    py: Python<'py>,
+    given: Option<&'a Bound<'py, PyDict>>,
+}
+
+/// The names `render_frame` takes after `positions` and `radius`, in the order of its
+/// signature.
+const KEYWORDS: [&str; 20] = [
+    "colors",
+    "values",
+    "colormap",
+    "vmin",
+    "vmax",
+    "width",
+    "height",
+    "view",
+    "eye",
+    "target",
+    "up",
+    "fov_deg",
+    "background",
+    "min_radius_px",
+    "label",
+    "label_scale",
+    "label_color",
+    "scenery",
+    "springs",
+    "spring_width",
+];
+
+impl<'a, 'py> Keywords<'a, 'py> {
+    /// The keywords given; a name `render_frame` does not take is a TypeError, as Python's
+    /// own functions raise it.
+    fn new(py: Python<'py>, given: Option<&'a Bound<'py, PyDict>>) -> PyResult<Self> {
+        for name in given.into_iter().flat_map(|d| d.keys()) {
+            let name: String = name.extract()?;
+            if !KEYWORDS.contains(&name.as_str()) {
+                return Err(PyTypeError::new_err(format!(
+                    "render_frame() got an unexpected keyword argument '{name}'"
+                )));
             }
-            let a = [v[0], v[1], v[2]];
-            Ok(match kind.as_str() {
-                "plane" => SceneryItem::Plane {
-                    point: a,
-                    normal: [v[3], v[4], v[5]],
-                },
-                "box" => SceneryItem::Box {
-                    lo: a,
-                    hi: [v[3], v[4], v[5]],
-                },
-                _ => SceneryItem::Sphere { center: a, radius: v[3] },
-            })
+        }
+        Ok(Keywords { py, given })
+    }
+
+    /// The value of keyword `name`, or `default` when it is not given; a value of the wrong
+    /// type is a TypeError that names the argument.
+    fn get<T: FromPyObjectOwned<'py>>(&self, name: &str, default: T) -> PyResult<T> {
+        let Some(value) = self.given.map(|d| d.get_item(name)).transpose()?.flatten() else {
+            return Ok(default);
+        };
+        value.extract::<T>().map_err(|e| {
+            let e: PyErr = e.into();
+            if e.is_instance_of::<PyTypeError>(self.py) {
+                PyTypeError::new_err(format!("argument '{name}': {}", e.value(self.py)))
+            } else {
+                e
+            }
+        })
+    }
+}
+
+/// The camera: `view` = (xmin, ymin, xmax, ymax), m, for a 2D frame, or `eye` and `target`
+/// (m) with `up` and the vertical field of view `fov_deg` (degrees) for a 3D one.
+struct CameraArgs {
+    view: Option<(f64, f64, f64, f64)>,
+    eye: Option<[f64; 3]>,
+    target: Option<[f64; 3]>,
+    up: [f64; 3],
+    fov_deg: f64,
+}
+
+impl CameraArgs {
+    fn read(kw: &Keywords) -> PyResult<Self> {
+        Ok(CameraArgs {
+            view: kw.get("view", None)?,
+            eye: kw.get("eye", None)?,
+            target: kw.get("target", None)?,
+            up: kw.get("up", [0.0, 0.0, 1.0])?,
+            fov_deg: kw.get("fov_deg", 40.0)?,
+        })
+    }
+
+    /// The camera of a `width × height` frame.
+    fn camera(&self, width: usize, height: usize) -> PyResult<Camera> {
+        match (self.view, self.eye, self.target) {
+            (Some((x0, y0, x1, y1)), None, None) => Camera::fit_2d([x0, y0], [x1, y1], width, height).map_err(to_py),
+            (None, Some(eye), Some(target)) => Camera::perspective(eye, target, self.up, self.fov_deg).map_err(to_py),
+            _ => Err(PyValueError::new_err(
+                "camera is invalid: give either view=(xmin, ymin, xmax, ymax) for 2D or eye and target for 3D",
+            )),
+        }
+    }
+}
+
+/// The particles' colours: fixed `colors` ((N, 3) uint8), or `values` ((N,)) through the
+/// colormap `colormap` from `vmin` to `vmax` (default: the values' finite range); black
+/// without either.
+struct ColourArgs<'py> {
+    colors: Option<PyReadonlyArray2<'py, u8>>,
+    values: Option<PyReadonlyArray1<'py, f64>>,
+    colormap: String,
+    vmin: Option<f64>,
+    vmax: Option<f64>,
+}
+
+impl<'py> ColourArgs<'py> {
+    fn read(kw: &Keywords<'_, 'py>) -> PyResult<Self> {
+        Ok(ColourArgs {
+            colors: kw.get("colors", None)?,
+            values: kw.get("values", None)?,
+            colormap: kw.get("colormap", "viridis".to_string())?,
+            vmin: kw.get("vmin", None)?,
+            vmax: kw.get("vmax", None)?,
+        })
+    }
+
+    /// RGB8 of each of the `n` particles; the GIL is released while values are mapped.
+    fn colours(&self, py: Python<'_>, n: usize) -> PyResult<Vec<u8>> {
+        match (&self.colors, &self.values) {
+            (Some(c), None) => {
+                if c.shape() != [n, 3] {
+                    return Err(bad(
+                        "colors",
+                        format!("an array of shape {:?}", c.shape()),
+                        &format!("shape ({n}, 3) uint8"),
+                    ));
+                }
+                Ok(data(c).into_owned())
+            }
+            (None, Some(v)) => {
+                if v.len() != n {
+                    return Err(bad(
+                        "values",
+                        format!("an array of length {}", v.len()),
+                        &format!("one value per particle ({n})"),
+                    ));
+                }
+                let cmap = Colormap::from_name(&self.colormap).map_err(to_py)?;
+                let v = data(v);
+                let (lo, hi) = value_range(&v, self.vmin, self.vmax);
+                let mut out = vec![0u8; 3 * n];
+                py.detach(|| cmap.map(&v, lo, hi, &mut out)).map_err(to_py)?;
+                Ok(out)
+            }
+            (Some(_), Some(_)) => Err(PyValueError::new_err("colors and values are both given: give one of them")),
+            (None, None) => Ok(vec![0u8; 3 * n]),
+        }
+    }
+}
+
+/// The image: `width × height` pixels, `background` RGB8, the smallest drawn radius
+/// `min_radius_px` (pixels) and the springs' width `spring_width` (pixels).
+struct ImageArgs {
+    width: usize,
+    height: usize,
+    background: (u8, u8, u8),
+    min_radius_px: f64,
+    spring_width: f64,
+}
+
+impl ImageArgs {
+    fn read(kw: &Keywords) -> PyResult<Self> {
+        Ok(ImageArgs {
+            width: kw.get("width", 1280)?,
+            height: kw.get("height", 720)?,
+            background: kw.get("background", (255, 255, 255))?,
+            min_radius_px: kw.get("min_radius_px", 1.0)?,
+            spring_width: kw.get("spring_width", 1.5)?,
+        })
+    }
+
+    fn params(&self) -> RenderParams {
+        RenderParams {
+            background: [self.background.0, self.background.1, self.background.2],
+            min_radius_px: self.min_radius_px,
+            spring_width_px: self.spring_width,
+            ..RenderParams::new(self.width, self.height)
+        }
+    }
+}
+
+/// The time stamp: `label` (none by default), its glyphs `label_scale` times the font's
+/// pixels, in `label_color` (RGB8), 4 glyph pixels from the top left corner.
+struct LabelArgs {
+    label: Option<String>,
+    label_scale: usize,
+    label_color: (u8, u8, u8),
+}
+
+impl LabelArgs {
+    fn read(kw: &Keywords) -> PyResult<Self> {
+        Ok(LabelArgs {
+            label: kw.get("label", None)?,
+            label_scale: kw.get("label_scale", 2)?,
+            label_color: kw.get("label_color", (0, 0, 0))?,
+        })
+    }
+
+    /// Stamps the label onto a finished `width × height` frame.
+    fn draw(&self, image: &mut [u8], width: usize, height: usize) -> Result<(), kinema::Error> {
+        if let Some(label) = &self.label {
+            let (c, scale) = (self.label_color, self.label_scale);
+            let margin = 4 * scale.max(1);
+            text::draw_text(image, width, height, [margin, margin], scale, [c.0, c.1, c.2], label)?;
+        }
+        Ok(())
+    }
+}
+
+/// (S, 2) particle indices as pairs, checked >= 0 (the engine checks < N).
+fn spring_pairs(springs: Option<PyReadonlyArray2<'_, i64>>) -> PyResult<Vec<[usize; 2]>> {
+    let Some(a) = springs else {
+        return Ok(Vec::new());
+    };
+    if a.shape()[1] != 2 {
+        return Err(bad("springs", format!("an array of shape {:?}", a.shape()), "shape (S, 2)"));
+    }
+    let v = data(&a);
+    v.chunks_exact(2)
+        .enumerate()
+        .map(|(k, p)| {
+            if p[0] < 0 || p[1] < 0 {
+                Err(bad(&format!("springs[{k}]"), format!("{p:?}"), "particle indices >= 0"))
+            } else {
+                Ok([p[0] as usize, p[1] as usize])
+            }
         })
         .collect()
 }
@@ -77,68 +323,31 @@ fn scenery_items(items: Vec<(String, Vec<f64>)>) -> PyResult<Vec<SceneryItem>> {
 /// Renders one frame; returns an (height, width, 3) uint8 array. The GIL is released while
 /// colours are mapped and pixels are drawn.
 ///
-/// `scenery`: colliders drawn with the particles, a list of (kind, numbers) — ("plane",
-/// [point, normal]), ("box", [lo, hi]) (bounds may be infinite), ("sphere", [centre,
-/// radius]); `extent`: (lo, hi), m, the region of the whole scene, which sizes planes and
-/// clamps infinite box bounds (default: this frame's particles and the finite scenery).
+/// The keywords, by group: the camera (`CameraArgs`), the colours (`ColourArgs`), the image
+/// (`ImageArgs`), the time stamp (`LabelArgs`); `scenery`: a `Scenery`, the colliders drawn
+/// with the particles and the extent that sizes planes and clamps infinite box bounds;
 /// `springs`: (S, 2) integer indices of particles joined by a line `spring_width` pixels wide.
 #[pyfunction]
-#[pyo3(signature = (
-    positions, radius, *, colors=None, values=None, colormap="viridis", vmin=None, vmax=None,
-    width=1280, height=720, view=None, eye=None, target=None, up=[0.0, 0.0, 1.0], fov_deg=40.0,
-    background=(255, 255, 255), min_radius_px=1.0, label=None, label_scale=2,
-    label_color=(0, 0, 0), scenery=None, extent=None, springs=None, spring_width=1.5
-))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (positions, radius, **keywords))]
+#[pyo3(
+    text_signature = "(positions, radius, *, colors=None, values=None, colormap='viridis', vmin=None, vmax=None, \
+    width=1280, height=720, view=None, eye=None, target=None, up=[0.0, 0.0, 1.0], fov_deg=40.0, \
+    background=(255, 255, 255), min_radius_px=1.0, label=None, label_scale=2, label_color=(0, 0, 0), \
+    scenery=None, springs=None, spring_width=1.5)"
+)]
 fn render_frame<'py>(
     py: Python<'py>,
     positions: PyReadonlyArray2<'py, f64>,
     radius: PyReadonlyArray1<'py, f64>,
-    colors: Option<PyReadonlyArray2<'py, u8>>,
-    values: Option<PyReadonlyArray1<'py, f64>>,
-    colormap: &str,
-    vmin: Option<f64>,
-    vmax: Option<f64>,
-    width: usize,
-    height: usize,
-    view: Option<(f64, f64, f64, f64)>,
-    eye: Option<[f64; 3]>,
-    target: Option<[f64; 3]>,
-    up: [f64; 3],
-    fov_deg: f64,
-    background: (u8, u8, u8),
-    min_radius_px: f64,
-    label: Option<&str>,
-    label_scale: usize,
-    label_color: (u8, u8, u8),
-    scenery: Option<Vec<(String, Vec<f64>)>>,
-    extent: Option<([f64; 3], [f64; 3])>,
-    springs: Option<PyReadonlyArray2<'py, i64>>,
-    spring_width: f64,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
-    let springs: Vec<[usize; 2]> = match springs {
-        None => Vec::new(),
-        Some(a) => {
-            if a.shape()[1] != 2 {
-                return Err(bad("springs", format!("an array of shape {:?}", a.shape()), "shape (S, 2)"));
-            }
-            let v = data(&a);
-            v.chunks_exact(2)
-                .enumerate()
-                .map(|(k, p)| {
-                    if p[0] < 0 || p[1] < 0 {
-                        Err(bad(&format!("springs[{k}]"), format!("{p:?}"), "particle indices >= 0"))
-                    } else {
-                        Ok([p[0] as usize, p[1] as usize])
-                    }
-                })
-                .collect::<PyResult<_>>()?
-        }
-    };
-    let scenery = Scenery {
-        items: scenery_items(scenery.unwrap_or_default())?,
-        extent,
-    };
+    let kw = Keywords::new(py, keywords)?;
+    let colouring = ColourArgs::read(&kw)?;
+    let look = ImageArgs::read(&kw)?;
+    let view = CameraArgs::read(&kw)?;
+    let stamp = LabelArgs::read(&kw)?;
+    let scenery: Option<Bound<'py, PyScenery>> = kw.get("scenery", None)?;
+    let springs = spring_pairs(kw.get("springs", None)?)?;
     let n = positions.shape()[0];
     if positions.shape()[1] != 3 {
         return Err(bad(
@@ -154,61 +363,24 @@ fn render_frame<'py>(
             &format!("one radius per particle ({n})"),
         ));
     }
-    let camera = match (view, eye, target) {
-        (Some((x0, y0, x1, y1)), None, None) => Camera::fit_2d([x0, y0], [x1, y1], width, height).map_err(to_py)?,
-        (None, Some(eye), Some(target)) => Camera::perspective(eye, target, up, fov_deg).map_err(to_py)?,
-        _ => {
-            return Err(PyValueError::new_err(
-                "camera is invalid: give either view=(xmin, ymin, xmax, ymax) for 2D or eye and target for 3D",
-            ))
-        }
-    };
-    let colors: Cow<[u8]> = match (colors, values) {
-        (Some(c), None) => {
-            if c.shape() != [n, 3] {
-                return Err(bad(
-                    "colors",
-                    format!("an array of shape {:?}", c.shape()),
-                    &format!("shape ({n}, 3) uint8"),
-                ));
-            }
-            Cow::Owned(data(&c).into_owned())
-        }
-        (None, Some(v)) => {
-            if v.len() != n {
-                return Err(bad(
-                    "values",
-                    format!("an array of length {}", v.len()),
-                    &format!("one value per particle ({n})"),
-                ));
-            }
-            let cmap = Colormap::from_name(colormap).map_err(to_py)?;
-            let v = data(&v);
-            let (lo, hi) = value_range(&v, vmin, vmax);
-            let mut out = vec![0u8; 3 * n];
-            py.detach(|| cmap.map(&v, lo, hi, &mut out)).map_err(to_py)?;
-            Cow::Owned(out)
-        }
-        (Some(_), Some(_)) => return Err(PyValueError::new_err("colors and values are both given: give one of them")),
-        (None, None) => Cow::Owned(vec![0u8; 3 * n]),
-    };
-    let params = RenderParams {
-        background: [background.0, background.1, background.2],
-        min_radius_px,
-        spring_width_px: spring_width,
-        ..RenderParams::new(width, height)
-    };
+    let (width, height) = (look.width, look.height);
+    let camera = view.camera(width, height)?;
+    let colors = colouring.colours(py, n)?;
+    let params = look.params();
     let pos = data(&positions);
     let rad = data(&radius);
     let mut image = vec![0u8; width.saturating_mul(height).saturating_mul(3).min(3 << 30)];
+    let drawn: &Scenery = scenery.as_ref().map_or(&NO_SCENERY, |s| &s.get().inner);
     py.detach(|| -> Result<(), kinema::Error> {
-        render_core(&camera, &pos, &rad, &colors, &springs, &scenery, &params, &mut image)?;
-        if let Some(label) = label {
-            let lc = [label_color.0, label_color.1, label_color.2];
-            let margin = 4 * label_scale.max(1);
-            text::draw_text(&mut image, width, height, [margin, margin], label_scale, lc, label)?;
-        }
-        Ok(())
+        let frame = Frame {
+            positions: &pos,
+            radius: &rad,
+            colors: &colors,
+            springs: &springs,
+            scenery: drawn,
+        };
+        render_core(&camera, &frame, &params, &mut image)?;
+        stamp.draw(&mut image, width, height)
     })
     .map_err(to_py)?;
     PyArray1::from_vec(py, image).reshape([height, width, 3])
@@ -314,10 +486,17 @@ fn rgb_to_yuv420p<'py>(py: Python<'py>, frame: PyReadonlyArray3<'py, u8>) -> PyR
     Ok(PyBytes::new(py, &out))
 }
 
-/// Registers the render functions (`render_frame`, `colormap`, `categorical_colors`,
+/// No colliders: what a frame without `scenery` draws besides the particles.
+static NO_SCENERY: Scenery = Scenery {
+    colliders: Vec::new(),
+    extent: None,
+};
+
+/// Registers the class `Scenery`, the render functions (`render_frame`, `colormap`, `categorical_colors`,
 /// `frame_box`, `frame_points`, `rgb_to_yuv420p`) and the constants `COLORMAP_NAMES`,
 /// `LINE_COLOR` (springs, box edges) and `FRAME_MARGIN`.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyScenery>()?;
     m.add_function(wrap_pyfunction!(render_frame, m)?)?;
     m.add_function(wrap_pyfunction!(colormap, m)?)?;
     m.add_function(wrap_pyfunction!(categorical_colors, m)?)?;
@@ -325,7 +504,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(frame_points, m)?)?;
     m.add_function(wrap_pyfunction!(rgb_to_yuv420p, m)?)?;
     m.add("COLORMAP_NAMES", kinema::render::COLORMAP_NAMES.to_vec())?;
-    m.add("LINE_COLOR", kinema::render::scenery::LINE_COLOR.to_vec())?;
+    m.add("LINE_COLOR", kinema::render::paint::LINE_COLOR.to_vec())?;
     m.add("FRAME_MARGIN", kinema::render::FRAME_MARGIN)?;
     Ok(())
 }

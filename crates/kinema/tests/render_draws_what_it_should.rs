@@ -6,9 +6,11 @@
 
 // The tests sit in a module named `render` so that `cargo test render` selects them.
 mod render {
-    use kinema::render::scenery::{BOX_FLOOR_COLOR, FLOOR_COLOR, LINE_COLOR, OBSTACLE_COLOR};
+    use kinema::collide::{BoxContainer, Collider, Plane, SphereObstacle, Surface};
+    use kinema::render::paint::{BOX_FLOOR_COLOR, FLOOR_COLOR, LINE_COLOR, OBSTACLE_COLOR};
     use kinema::render::{
-        render, render_frame, render_scene, text, Camera, RenderParams, RenderStats, Scenery, SceneryItem, FRAME_MARGIN,
+        collider_boxes, render, render_frame, render_scene, scene_extent, text, Camera, Frame, RenderParams, RenderStats,
+        Scenery, FRAME_MARGIN,
     };
     use kinema::Error;
 
@@ -145,23 +147,11 @@ mod render {
         let sceneries = [
             Scenery::default(),
             Scenery {
-                items: vec![
-                    SceneryItem::Plane {
-                        point: [0.0; 3],
-                        normal: [0.0, 0.0, 1.0],
-                    },
-                    SceneryItem::Plane {
-                        point: [0.0; 3],
-                        normal: [1.0, 0.3, 0.2],
-                    },
-                    SceneryItem::Box {
-                        lo: [0.0; 3],
-                        hi: [1.0, 1.0, f64::INFINITY],
-                    },
-                    SceneryItem::Sphere {
-                        center: [0.5; 3],
-                        radius: 0.2,
-                    },
+                colliders: vec![
+                    plane([0.0; 3], [0.0, 0.0, 1.0]),
+                    plane([0.0; 3], [1.0, 0.3, 0.2]),
+                    cuboid([0.0; 3], [1.0, 1.0, f64::INFINITY]),
+                    obstacle([0.5; 3], 0.2),
                 ],
                 extent: None,
             },
@@ -173,14 +163,30 @@ mod render {
                     .map(|&threads| {
                         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                         let mut image = vec![0u8; w * h * 3];
-                        pool.install(|| render_frame(&cam, &positions, &radius, &colors, &springs, scenery, &params, &mut image))
-                            .unwrap();
+                        let frame = Frame {
+                            positions: &positions,
+                            radius: &radius,
+                            colors: &colors,
+                            springs: &springs,
+                            scenery,
+                        };
+                        pool.install(|| render_frame(&cam, &frame, &params, &mut image)).unwrap();
                         image
                     })
                     .collect();
                 assert!(images[0].iter().any(|&b| b != 255));
-                assert_eq!(images[0], images[1], "1 vs 2 threads, {cam:?}, {} items", scenery.items.len());
-                assert_eq!(images[0], images[2], "1 vs 3 threads, {cam:?}, {} items", scenery.items.len());
+                assert_eq!(
+                    images[0],
+                    images[1],
+                    "1 vs 2 threads, {cam:?}, {} items",
+                    scenery.colliders.len()
+                );
+                assert_eq!(
+                    images[0],
+                    images[2],
+                    "1 vs 3 threads, {cam:?}, {} items",
+                    scenery.colliders.len()
+                );
             }
         }
     }
@@ -271,8 +277,20 @@ mod render {
         image
     }
 
-    fn items(items: Vec<SceneryItem>) -> Scenery {
-        Scenery { items, extent: None }
+    fn items(colliders: Vec<Collider>) -> Scenery {
+        Scenery { colliders, extent: None }
+    }
+
+    fn plane(point: [f64; 3], normal: [f64; 3]) -> Collider {
+        Plane::new(point, normal, Surface::default()).unwrap().into()
+    }
+
+    fn cuboid(lo: [f64; 3], hi: [f64; 3]) -> Collider {
+        BoxContainer::new(lo, hi, Surface::default()).unwrap().into()
+    }
+
+    fn obstacle(center: [f64; 3], radius: f64) -> Collider {
+        SphereObstacle::new(center, radius, Surface::default()).unwrap().into()
     }
 
     /// A neutral grey: the three channels within `tol` of each other and darker than white.
@@ -288,10 +306,7 @@ mod render {
         // near distance) fills the lower half, the sky stays the background.
         let (w, h) = (160, 120);
         let cam = Camera::perspective([0.0, 0.0, 1.0], [0.0, 10.0, 1.0], [0.0, 0.0, 1.0], 60.0).unwrap();
-        let floor = items(vec![SceneryItem::Plane {
-            point: [0.0; 3],
-            normal: [0.0, 0.0, 1.0],
-        }]);
+        let floor = items(vec![plane([0.0; 3], [0.0, 0.0, 1.0])]);
         let img = scene_frame(&cam, &[], &[], &[], &floor, w, h);
         for j in 0..55 {
             assert!((0..w).all(|i| pixel(&img, w, i, j) == BG), "sky row {j} is background");
@@ -321,10 +336,7 @@ mod render {
     fn a_floor_is_drawn_under_the_particles() {
         let (w, h) = (160, 120);
         let cam = Camera::perspective([0.0, -4.0, 2.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 40.0).unwrap();
-        let floor = items(vec![SceneryItem::Plane {
-            point: [0.0, 0.0, -0.3],
-            normal: [0.0, 0.0, 1.0],
-        }]);
+        let floor = items(vec![plane([0.0, 0.0, -0.3], [0.0, 0.0, 1.0])]);
         // A red ball resting on the floor at the image centre: its pixels are red (shaded),
         // the floor's grey around it.
         let img = scene_frame(&cam, &[[0.0; 3]], &[0.3], &[[255, 0, 0]], &floor, w, h);
@@ -342,10 +354,7 @@ mod render {
     fn a_sphere_obstacle_hides_a_particle_behind_it_and_not_one_in_front() {
         let (w, h) = (200, 200);
         let cam = Camera::perspective([0.0, -10.0, 0.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0).unwrap();
-        let ball = items(vec![SceneryItem::Sphere {
-            center: [0.0; 3],
-            radius: 1.0,
-        }]);
+        let ball = items(vec![obstacle([0.0; 3], 1.0)]);
         let red = [[255, 0, 0]];
         let behind = scene_frame(&cam, &[[0.0, 3.0, 0.0]], &[0.2], &red, &ball, w, h);
         let c = pixel(&behind, w, 100, 100);
@@ -367,10 +376,7 @@ mod render {
         // [0, 10]² onto 100 × 100: the box [2, 8]² has its sides on pixel lines 20 and 80.
         let (w, h) = (100, 100);
         let cam = Camera::fit_2d([0.0, 0.0], [10.0, 10.0], w, h).unwrap();
-        let b = items(vec![SceneryItem::Box {
-            lo: [2.0, 2.0, -1.0],
-            hi: [8.0, 8.0, 1.0],
-        }]);
+        let b = items(vec![cuboid([2.0, 2.0, -1.0], [8.0, 8.0, 1.0])]);
         let img = scene_frame(&cam, &[], &[], &[], &b, w, h);
         // A 2 px line centred on x = 20: pixels 19 and 20 (centres 0.5 px away) are covered,
         // clamp(w/2 + ½ − d, 0, 1) = clamp(1 + ½ − ½) = 1; pixels 18 and 21 (1.5 px) are not.
@@ -390,10 +396,7 @@ mod render {
         );
         // An open top (hi y = +inf) has no lid; its sides rise to the extent's top (y = 9).
         let open = Scenery {
-            items: vec![SceneryItem::Box {
-                lo: [2.0, 2.0, -1.0],
-                hi: [8.0, f64::INFINITY, 1.0],
-            }],
+            colliders: vec![cuboid([2.0, 2.0, -1.0], [8.0, f64::INFINITY, 1.0])],
             extent: Some(([0.0, 0.0, 0.0], [10.0, 9.0, 0.0])),
         };
         let img = scene_frame(&cam, &[], &[], &[], &open, w, h);
@@ -408,10 +411,7 @@ mod render {
         // The wall x = 5 with the free side towards +x, on pixel line 50; 3 px wide.
         let (w, h) = (100, 100);
         let cam = Camera::fit_2d([0.0, 0.0], [10.0, 10.0], w, h).unwrap();
-        let wall = items(vec![SceneryItem::Plane {
-            point: [5.0, 0.0, 0.0],
-            normal: [2.0, 0.0, 0.0],
-        }]);
+        let wall = items(vec![plane([5.0, 0.0, 0.0], [2.0, 0.0, 0.0])]);
         let img = scene_frame(&cam, &[], &[], &[], &wall, w, h);
         for j in [0, 50, 99] {
             assert_eq!(pixel(&img, w, 49, j), LINE_COLOR);
@@ -423,10 +423,7 @@ mod render {
             assert_eq!(pixel(&img, w, 80, j), BG, "free side");
         }
         // A plane parallel to the view (normal along z) has no line in 2D: nothing is drawn.
-        let flat = items(vec![SceneryItem::Plane {
-            point: [0.0; 3],
-            normal: [0.0, 0.0, 1.0],
-        }]);
+        let flat = items(vec![plane([0.0; 3], [0.0, 0.0, 1.0])]);
         assert!(scene_frame(&cam, &[], &[], &[], &flat, w, h).iter().all(|&b| b == 255));
     }
 
@@ -434,14 +431,8 @@ mod render {
     fn a_3d_box_draws_its_edges_and_floor_and_an_open_one_has_no_lid() {
         let (w, h) = (200, 150);
         let cam = Camera::frame_box([-1.0, -1.0, 0.0], [1.0, 1.0, 2.0], [1.0, -1.6, 0.9], 40.0, w, h).unwrap();
-        let closed = items(vec![SceneryItem::Box {
-            lo: [-1.0, -1.0, 0.0],
-            hi: [1.0, 1.0, 2.0],
-        }]);
-        let open = items(vec![SceneryItem::Box {
-            lo: [-1.0, -1.0, 0.0],
-            hi: [1.0, 1.0, f64::INFINITY],
-        }]);
+        let closed = items(vec![cuboid([-1.0, -1.0, 0.0], [1.0, 1.0, 2.0])]);
+        let open = items(vec![cuboid([-1.0, -1.0, 0.0], [1.0, 1.0, f64::INFINITY])]);
         // A particle at the top keeps the open box's extent at the closed box's height.
         let top = [[0.0, 0.0, 1.9]];
         let a = scene_frame(&cam, &top, &[0.1], &[[0, 0, 255]], &closed, w, h);
@@ -459,16 +450,7 @@ mod render {
     #[test]
     fn scenery_does_not_count_as_particles() {
         let cam = Camera::perspective([0.0, -10.0, 0.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0).unwrap();
-        let scenery = items(vec![
-            SceneryItem::Sphere {
-                center: [0.0; 3],
-                radius: 1.0,
-            },
-            SceneryItem::Plane {
-                point: [0.0, 0.0, -1.0],
-                normal: [0.0, 0.0, 1.0],
-            },
-        ]);
+        let scenery = items(vec![obstacle([0.0; 3], 1.0), plane([0.0, 0.0, -1.0], [0.0, 0.0, 1.0])]);
         let mut image = vec![0u8; 64 * 64 * 3];
         let stats = render_scene(
             &cam,
@@ -484,75 +466,95 @@ mod render {
     }
 
     #[test]
-    fn bad_scenery_names_the_item_and_the_parameter() {
+    fn bad_scenery_names_the_collider_field_and_the_extent() {
+        // A collider is checked when it is made (the world's rules, collide/colliders.rs): a
+        // bad one never reaches the renderer, and the error names the field and its value.
+        let named = |e: Error| match e {
+            Error::InvalidParameter {
+                parameter,
+                value,
+                allowed,
+            } => format!("{parameter} = {value}: {allowed}"),
+            other => panic!("{other}"),
+        };
+        let s = Surface::default();
+        let e = named(Plane::new([0.0; 3], [0.0; 3], s).unwrap_err());
+        assert!(e.starts_with("normal = [0.0, 0.0, 0.0]") && e.contains("non-zero"), "{e}");
+        let e = named(Plane::new([f64::INFINITY, 0.0, 0.0], [0.0, 0.0, 1.0], s).unwrap_err());
+        assert!(e.starts_with("point[0]") && e.contains("finite"), "{e}");
+        let e = named(Plane::new([0.0; 3], [f64::NAN, 0.0, 1.0], s).unwrap_err());
+        assert!(e.starts_with("normal[0]"), "{e}");
+        let e = named(SphereObstacle::new([0.0; 3], -0.5, s).unwrap_err());
+        assert!(e.starts_with("radius = -0.5") && e.contains(">= 0"), "{e}");
+        let e = named(SphereObstacle::new([f64::NAN, 0.0, 0.0], 1.0, s).unwrap_err());
+        assert!(e.starts_with("center[0]"), "{e}");
+        for (lo, hi, name) in [
+            ([0.0, 0.0, 1.0], [1.0, 1.0, 1.0], "hi[2]"),                     // empty along z
+            ([f64::NAN, 0.0, 0.0], [1.0; 3], "lo[0]"),                       // NaN
+            ([0.0, f64::INFINITY, 0.0], [1.0, f64::INFINITY, 1.0], "lo[1]"), // lo = +inf
+        ] {
+            let e = named(BoxContainer::new(lo, hi, s).unwrap_err());
+            assert!(e.starts_with(name), "{e}");
+        }
+        // The extent is the renderer's to check.
         let cam = Camera::fit_2d([0.0, 0.0], [1.0, 1.0], 10, 10).unwrap();
         let mut image = vec![0u8; 300];
         let p = RenderParams::new(10, 10);
-        let error = |item: SceneryItem, extent| {
-            let scenery = Scenery {
-                items: vec![
-                    SceneryItem::Sphere {
-                        center: [0.0; 3],
-                        radius: 1.0,
-                    },
-                    item,
-                ],
-                extent,
-            };
-            match render_scene(&cam, &[], &[], &[], &scenery, &p, &mut image.clone()).unwrap_err() {
-                Error::InvalidParameter {
-                    parameter,
-                    value,
-                    allowed,
-                } => format!("{parameter} = {value}: {allowed}"),
-                other => panic!("{other}"),
-            }
+        let fine = cuboid([f64::NEG_INFINITY, 0.0, 0.0], [1.0, 1.0, f64::INFINITY]);
+        let bad = Scenery {
+            colliders: vec![obstacle([0.0; 3], 1.0), fine.clone()],
+            extent: Some(([0.0; 3], [f64::INFINITY, 1.0, 1.0])),
         };
-        let plane = |point, normal| SceneryItem::Plane { point, normal };
-        let e = error(plane([0.0; 3], [0.0; 3]), None);
-        assert!(
-            e.starts_with("scenery[1].normal = [0.0, 0.0, 0.0]") && e.contains("non-zero"),
-            "{e}"
-        );
-        let e = error(plane([f64::INFINITY, 0.0, 0.0], [0.0, 0.0, 1.0]), None);
-        assert!(e.starts_with("scenery[1].point") && e.contains("finite"), "{e}");
-        let e = error(plane([0.0; 3], [f64::NAN, 0.0, 1.0]), None);
-        assert!(e.starts_with("scenery[1].normal"), "{e}");
-        let e = error(
-            SceneryItem::Sphere {
-                center: [0.0; 3],
-                radius: -0.5,
-            },
-            None,
-        );
-        assert!(e.starts_with("scenery[1].radius = -0.5") && e.contains(">= 0"), "{e}");
-        let e = error(
-            SceneryItem::Sphere {
-                center: [f64::NAN, 0.0, 0.0],
-                radius: 1.0,
-            },
-            None,
-        );
-        assert!(e.starts_with("scenery[1].center"), "{e}");
-        for (lo, hi) in [
-            ([0.0, 0.0, 1.0], [1.0, 1.0, 1.0]),                     // empty along z
-            ([f64::NAN, 0.0, 0.0], [1.0; 3]),                       // NaN
-            ([0.0, f64::INFINITY, 0.0], [1.0, f64::INFINITY, 1.0]), // lo = +inf
-        ] {
-            let e = error(SceneryItem::Box { lo, hi }, None);
-            assert!(e.starts_with("scenery[1].lo") && e.contains("lo < hi"), "{e}");
-        }
-        let fine = SceneryItem::Box {
-            lo: [f64::NEG_INFINITY, 0.0, 0.0],
-            hi: [1.0, 1.0, f64::INFINITY],
-        };
-        let e = error(fine, Some(([0.0; 3], [f64::INFINITY, 1.0, 1.0])));
+        let e = named(render_scene(&cam, &[], &[], &[], &bad, &p, &mut image).unwrap_err());
         assert!(e.starts_with("extent"), "{e}");
         let ok = Scenery {
-            items: vec![fine],
+            colliders: vec![fine],
             extent: None,
         };
         render_scene(&cam, &[], &[], &[], &ok, &p, &mut image).unwrap();
+    }
+
+    #[test]
+    fn a_video_extent_holds_every_frame_and_the_finite_scenery() {
+        // Two frames of two particles (one not alive in the second: NaN), radii 0.1 and 0.25;
+        // a box open at the top and a sphere obstacle of radius 1 at (5, 0, 0).
+        let positions = [
+            0.0,
+            0.0,
+            0.5,
+            1.0,
+            2.0,
+            0.5, //
+            0.5,
+            -1.0,
+            3.0,
+            f64::NAN,
+            f64::NAN,
+            f64::NAN,
+        ];
+        let colliders = [
+            cuboid([-1.0, -1.0, 0.0], [1.0, 1.0, f64::INFINITY]),
+            obstacle([5.0, 0.0, 0.0], 1.0),
+            plane([0.0; 3], [0.0, 0.0, 1.0]),
+        ];
+        let (lo, hi) = scene_extent(&positions, &[0.1, 0.25], &colliders).unwrap();
+        // x: box −1, sphere 4 … 6; y: box ±1, particle 2; z: box floor 0, particle 3, sphere
+        // ±1; every side widened by the largest radius, 0.25.
+        assert_eq!(lo, [-1.25, -1.25, -1.25]);
+        assert_eq!(hi, [6.25, 2.25, 3.25]);
+        // The open top rises to the extent; the plane occupies no box.
+        assert_eq!(
+            collider_boxes(&colliders, (lo, hi)),
+            vec![([-1.0, -1.0, 0.0], [1.0, 1.0, 3.25]), ([4.0, -1.0, -1.0], [6.0, 1.0, 1.0])]
+        );
+        // Nothing finite at all: the unit cube, widened by 1e-3 of its side; a single point
+        // without radius: 0.5 m around it.
+        let (lo, hi) = scene_extent(&[f64::NAN; 3], &[0.0], &[]).unwrap();
+        assert_eq!((lo, hi), ([-0.001; 3], [1.001; 3]));
+        let (lo, hi) = scene_extent(&[2.0, 0.0, 0.0], &[0.0], &[]).unwrap();
+        assert_eq!((lo, hi), ([1.5, -0.5, -0.5], [2.5, 0.5, 0.5]));
+        let e = scene_extent(&[0.0; 3], &[-1.0], &[]).unwrap_err();
+        assert!(e.to_string().starts_with("radius[0] = -1 is invalid"), "{e}");
     }
 
     // -- springs ------------------------------------------------------------------------------
@@ -569,17 +571,14 @@ mod render {
         let mut image = vec![0u8; w * h * 3];
         let positions: Vec<f64> = pos.iter().flatten().copied().collect();
         let colors: Vec<u8> = pos.iter().flat_map(|_| [200, 0, 0]).collect();
-        render_frame(
-            camera,
-            &positions,
+        let frame = Frame {
+            positions: &positions,
             radius,
-            &colors,
+            colors: &colors,
             springs,
             scenery,
-            &RenderParams::new(w, h),
-            &mut image,
-        )
-        .unwrap();
+        };
+        render_frame(camera, &frame, &RenderParams::new(w, h), &mut image).unwrap();
         image
     }
 
@@ -610,16 +609,11 @@ mod render {
         );
         // An index past the particles is an error that names the spring.
         let mut image = vec![0u8; w * h * 3];
-        let e = render_frame(
-            &cam,
-            &[0.0; 6],
-            &[0.1; 2],
-            &[0; 6],
-            &[[0, 1], [1, 2]],
-            &Scenery::default(),
-            &RenderParams::new(w, h),
-            &mut image,
-        );
+        let frame = Frame {
+            springs: &[[0, 1], [1, 2]],
+            ..Frame::particles(&[0.0; 6], &[0.1; 2], &[0; 6])
+        };
+        let e = render_frame(&cam, &frame, &RenderParams::new(w, h), &mut image);
         match e.unwrap_err() {
             Error::InvalidParameter { parameter, .. } => assert_eq!(parameter, "springs[1]"),
             other => panic!("{other}"),
@@ -634,10 +628,7 @@ mod render {
         let (w, h) = (200, 200);
         let cam = Camera::perspective([0.0, -10.0, 0.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0).unwrap();
         let f = 100.0 / 20f64.to_radians().tan();
-        let ball = items(vec![SceneryItem::Sphere {
-            center: [0.0; 3],
-            radius: 1.0,
-        }]);
+        let ball = items(vec![obstacle([0.0; 3], 1.0)]);
         let spring_at = |y: f64| {
             let z = -0.5 * (y + 10.0) / f;
             spring_frame(&cam, &[[-2.0, y, z], [2.0, y, z]], &[0.05; 2], &[[0, 1]], &ball, w, h)

@@ -4,7 +4,7 @@
 //! The stages of a frame, in order:
 //!
 //! 1. project   positions (m) and radii (m) → pixel centres, pixel radii, depths ([`Camera`]);
-//!    particles behind the camera are dropped. The scenery is projected too ([`scenery`]):
+//!    particles behind the camera are dropped. The scenery is projected too ([`paint`]):
 //!    planes, boxes and 2D obstacles become a short list of background primitives (convex
 //!    fills and antialiased lines in pixels, cut at the camera's near distance first), and
 //!    3D sphere obstacles become sprites like the particles, numbered after them. Springs
@@ -24,15 +24,25 @@
 //! Colours come per particle as RGB8 ([`colormap`] turns values or ids into them), and
 //! [`text::draw_text`] stamps a label (e.g. the time) onto a finished frame; [`yuv`] converts
 //! frames for the H.264 encoder.
+//!
+//! The modules, each using only those listed before it (besides the camera): `camera`;
+//! `pixels` (sprites and the row painters); `clip` (the near cut and the guard rectangle);
+//! `prim` (pixel-space fills and lines); [`extent`] (the region infinite scenery is drawn
+//! in); [`paint`] (colliders → primitives and sprites); `raster` (the four stages).
 
 mod camera;
+mod clip;
 pub mod colormap;
+pub mod extent;
+pub mod paint;
+mod pixels;
+mod prim;
 mod raster;
-pub mod scenery;
 pub mod text;
 pub mod yuv;
 
 pub use camera::{Camera, Projected, FRAME_MARGIN};
 pub use colormap::{categorical, Colormap, COLORMAP_NAMES};
-pub use raster::{render, render_frame, render_scene, RenderParams, RenderStats, Shading, BAND_ROWS};
-pub use scenery::{Scenery, SceneryItem};
+pub use extent::{collider_boxes, scene_extent, Region};
+pub use paint::Scenery;
+pub use raster::{render, render_frame, render_scene, Frame, RenderParams, RenderStats, Shading, BAND_ROWS};

@@ -3,8 +3,11 @@
 use rayon::prelude::*;
 
 use super::camera::{invalid, Camera, Projector};
-use super::scenery::{self, Prim, Scenery, LINE_COLOR};
-use crate::vec3::{norm, sub};
+use super::clip::{clip_segment_near, near_depth};
+use super::extent::{frame_extent, Region};
+use super::paint::{paint, Painted, Scenery, View, LINE_COLOR};
+use super::pixels::{disc_row, fill_rgb, sphere_row, Light, Sprite};
+use super::prim::{line, Prim};
 use crate::Error;
 
 /// Rows per band: the unit of parallel work (720 rows give 45 bands).
@@ -79,44 +82,37 @@ pub struct RenderStats {
     pub culled: usize,
 }
 
-/// A particle (or a sphere obstacle) ready to rasterize, in pixels; f32 is ample for image
-/// coordinates.
+/// What one frame shows: the particles, the springs between them and the scenery.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Sprite {
-    pub(crate) x: f32,
-    pub(crate) y: f32,
-    pub(crate) r: f32,
-    pub(crate) color: [f32; 3],
-    /// Rows [row0, row1) that the antialiased outline can touch.
-    pub(crate) row0: u32,
-    pub(crate) row1: u32,
+pub struct Frame<'a> {
+    /// x, y, z (m) per particle: 3N numbers.
+    pub positions: &'a [f64],
+    /// Radius (m) per particle: N numbers.
+    pub radius: &'a [f64],
+    /// Colour (RGB8) per particle: 3N bytes.
+    pub colors: &'a [u8],
+    /// Pairs of particle indices, each drawn as a line ([`render_frame`]).
+    pub springs: &'a [[usize; 2]],
+    /// The colliders drawn with the particles.
+    pub scenery: &'a Scenery,
 }
 
-impl Sprite {
-    /// The disc of centre (x, y) and radius r (pixels) in a `w × h` image; `None` when it
-    /// touches no pixel (or r is not finite).
-    #[inline]
-    pub(crate) fn new(x: f64, y: f64, r: f64, color: [u8; 3], w: usize, h: usize) -> Option<Sprite> {
-        // The antialiased outline reaches half a pixel beyond the radius (see `coverage`).
-        let reach = r + 0.5;
-        if x + reach < 0.0 || x - reach > w as f64 || y + reach < 0.0 || y - reach > h as f64 || !r.is_finite() {
-            return None;
+/// No colliders: what [`Frame::particles`] draws besides the particles.
+static NO_SCENERY: Scenery = Scenery {
+    colliders: Vec::new(),
+    extent: None,
+};
+
+impl<'a> Frame<'a> {
+    /// The particles alone: no springs, no scenery.
+    pub fn particles(positions: &'a [f64], radius: &'a [f64], colors: &'a [u8]) -> Self {
+        Frame {
+            positions,
+            radius,
+            colors,
+            springs: &[],
+            scenery: &NO_SCENERY,
         }
-        // Pixel row j is drawn when its centre j + 0.5 is within the reach of the centre.
-        let row0 = (y - reach - 0.5).ceil().max(0.0) as u32;
-        let row1 = ((y + reach - 0.5).floor() + 1.0).clamp(0.0, h as f64) as u32;
-        if row0 >= row1 {
-            return None;
-        }
-        Some(Sprite {
-            x: x as f32,
-            y: y as f32,
-            // A sphere filling the screen a million times over draws like one filling it once.
-            r: r.min(1e6) as f32,
-            color: color.map(|c| c as f32),
-            row0,
-            row1,
-        })
     }
 }
 
@@ -134,12 +130,12 @@ pub fn render(
     params: &RenderParams,
     image: &mut [u8],
 ) -> Result<RenderStats, Error> {
-    render_scene(camera, positions, radius, colors, &Scenery::default(), params, image)
+    render_frame(camera, &Frame::particles(positions, radius, colors), params, image)
 }
 
 /// [`render`] with scenery: the colliders of [`Scenery`] drawn with the particles (see
-/// [`super::scenery`] for how each looks). The stats count particles only. Errors also name
-/// a bad scenery item (`scenery[2].radius`) or extent.
+/// [`super::paint`] for how each looks). The stats count particles only. Errors also name a
+/// bad extent.
 pub fn render_scene(
     camera: &Camera,
     positions: &[f64],
@@ -149,11 +145,16 @@ pub fn render_scene(
     params: &RenderParams,
     image: &mut [u8],
 ) -> Result<RenderStats, Error> {
-    render_frame(camera, positions, radius, colors, &[], scenery, params, image)
+    let frame = Frame {
+        scenery,
+        ..Frame::particles(positions, radius, colors)
+    };
+    render_frame(camera, &frame, params, image)
 }
 
-/// [`render_scene`] with springs: `springs` holds pairs of particle indices (into
-/// `positions`), each drawn as an antialiased line of [`LINE_COLOR`],
+/// Renders a [`Frame`]: its particles (as [`render`] does), its scenery (as [`render_scene`]
+/// does) and its springs. `springs` holds pairs of particle indices (into `positions`), each
+/// drawn as an antialiased line of [`LINE_COLOR`],
 /// [`RenderParams::spring_width_px`] wide, from the rim of one particle's disc to the rim of
 /// the other's (nothing when the two discs touch on screen). A pair of one particle twice
 /// draws nothing; an index ≥ N is an error (`springs[k]`).
@@ -164,17 +165,14 @@ pub fn render_scene(
 /// cloth's springs in front of a sphere obstacle are drawn over it and those behind it are
 /// hidden, which lines drawn under everything (like box edges) would get wrong. Since a line
 /// stops at its particles' rims, it never paints over its own ends, whichever comes first.
-#[allow(clippy::too_many_arguments)]
-pub fn render_frame(
-    camera: &Camera,
-    positions: &[f64],
-    radius: &[f64],
-    colors: &[u8],
-    springs: &[[usize; 2]],
-    scenery: &Scenery,
-    params: &RenderParams,
-    image: &mut [u8],
-) -> Result<RenderStats, Error> {
+pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image: &mut [u8]) -> Result<RenderStats, Error> {
+    let Frame {
+        positions,
+        radius,
+        colors,
+        springs,
+        scenery,
+    } = *frame;
     let (w, h) = (params.width, params.height);
     let projector = camera.projector(w, h)?;
     let n = radius.len();
@@ -251,27 +249,29 @@ pub fn render_frame(
     // 1b. project the scenery: planes, boxes (and 2D obstacles) become background primitives,
     //     3D sphere obstacles join the particles, numbered after them.
     let spheres = camera.is_3d();
-    let built = if scenery.items.is_empty() {
-        scenery::Built::default()
+    let painted = if scenery.colliders.is_empty() {
+        Painted::default()
     } else {
-        let frame = scenery::Frame {
+        let extent = scenery
+            .extent
+            .unwrap_or_else(|| frame_extent(&scenery.colliders, bounding_box(positions, radius), camera, w, h));
+        let view = View {
             camera,
             projector: &projector,
             width: w,
             height: h,
             min_radius_px: params.min_radius_px,
-            particles: bounding_box(positions, radius),
         };
-        scenery::build(scenery, &frame)
+        paint(&scenery.colliders, extent, &view)
     };
-    let obstacles = built.spheres.len();
-    for (k, (depth, s)) in built.spheres.into_iter().enumerate() {
+    let obstacles = painted.spheres.len();
+    for (k, (depth, s)) in painted.spheres.into_iter().enumerate() {
         items.push((depth, n + k, Item::Sprite(s)));
     }
-    let background = built.background;
+    let background = painted.background;
 
     // 1c. springs: lines numbered after the obstacles (see `render_frame` for their place).
-    let lines = spring_lines(camera, &projector, positions, radius, springs, params);
+    let lines = spring_lines(camera, &projector, frame, params);
     if spheres {
         for (k, (depth, line)) in lines.into_iter().enumerate() {
             items.push((depth, n + obstacles + k, Item::Line(line)));
@@ -352,7 +352,7 @@ pub fn render_frame(
 
 /// The particles' bounding box, radii included (positions are checked finite); `None`
 /// without particles.
-fn bounding_box(positions: &[f64], radius: &[f64]) -> Option<([f64; 3], [f64; 3])> {
+fn bounding_box(positions: &[f64], radius: &[f64]) -> Option<Region> {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for (p, &r) in positions.chunks_exact(3).zip(radius) {
@@ -383,20 +383,16 @@ impl Item {
 /// the near distance (3D), then shortened at an end by the drawn radius of the particle
 /// there (an end cut off by the near distance has no particle in view), so that it runs
 /// from rim to rim; none where the rims meet.
-fn spring_lines(
-    camera: &Camera,
-    projector: &Projector,
-    positions: &[f64],
-    radius: &[f64],
-    springs: &[[usize; 2]],
-    params: &RenderParams,
-) -> Vec<(f64, Prim)> {
+fn spring_lines(camera: &Camera, projector: &Projector, frame: &Frame, params: &RenderParams) -> Vec<(f64, Prim)> {
+    let Frame {
+        positions,
+        radius,
+        springs,
+        ..
+    } = *frame;
     let (w, h) = (params.width as f64, params.height as f64);
-    // The same cut as the scenery's (`scenery::build`): pixel coordinates stay bounded.
-    let zn = match (camera, projector) {
-        (Camera::Perspective { eye, target, .. }, Projector::Persp { near, .. }) => near.max(1e-4 * norm(sub(*target, *eye))),
-        _ => f64::NEG_INFINITY,
-    };
+    // The same cut as the scenery's: pixel coordinates stay bounded.
+    let zn = near_depth(camera, projector);
     let at = |i: usize| [positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]];
     let drawn_radius = |i: usize| {
         projector
@@ -410,7 +406,7 @@ fn spring_lines(
         }
         let (ci, cj) = (projector.camera_coords(at(i)), projector.camera_coords(at(j)));
         let (qi, qj) = if camera.is_3d() {
-            match scenery::clip_segment_near(ci, cj, zn) {
+            match clip_segment_near(ci, cj, zn) {
                 Some(pair) => pair,
                 None => continue,
             }
@@ -429,20 +425,11 @@ fn spring_lines(
         let a = [a[0] + ri * u[0], a[1] + ri * u[1]];
         let b = [b[0] - rj * u[0], b[1] - rj * u[1]];
         let depth = if camera.is_3d() { 0.5 * (qi[2] + qj[2]) } else { 0.0 };
-        if let Some(line) = scenery::line(a, b, params.spring_width_px, LINE_COLOR, 1.0, w, h) {
+        if let Some(line) = line(a, b, params.spring_width_px, LINE_COLOR, 1.0, w, h) {
             out.push((depth, line));
         }
     }
     out
-}
-
-/// Lighting constants in f32, the light and half vectors normalised.
-struct Light {
-    l: [f32; 3],
-    h: [f32; 3],
-    ambient: f32,
-    specular: f32,
-    shininess: i32,
 }
 
 fn check_shading(s: &Shading) -> Result<Light, Error> {
@@ -475,138 +462,4 @@ fn check_shading(s: &Shading) -> Result<Light, Error> {
         specular: s.specular as f32,
         shininess: s.shininess,
     })
-}
-
-/// Pixel columns [i0, i1) of row `j` whose centres are within the antialiased reach of `s`,
-/// with dy, the centre's vertical offset.
-#[inline]
-fn span(row_len: usize, s: &Sprite, j: u32) -> Option<(usize, usize, f32)> {
-    let dy = j as f32 + 0.5 - s.y;
-    let reach = s.r + 0.5;
-    let q = reach * reach - dy * dy;
-    if q <= 0.0 {
-        return None;
-    }
-    let half = q.sqrt();
-    let width = (row_len / 3) as f32;
-    let i0 = (s.x - half - 0.5).ceil().clamp(0.0, width) as usize;
-    let i1 = ((s.x + half - 0.5).floor() + 1.0).clamp(0.0, width) as usize;
-    (i0 < i1).then_some((i0, i1, dy))
-}
-
-/// Coverage of a pixel by a disc of radius r whose centre is at distance d from the pixel
-/// centre. The signed distance from the pixel centre to the edge is r − d (positive inside);
-/// a pixel is a unit square, so as the edge sweeps across it the covered fraction goes from
-/// 0 to 1 over a one-pixel-wide band of that distance: coverage ≈ clamp(r − d + ½, 0, 1)
-/// (exact for a straight edge parallel to a pixel side; the edge's curvature, 1/r, is small).
-#[inline]
-fn coverage(r: f32, d2: f32) -> f32 {
-    (r + 0.5 - d2.sqrt()).clamp(0.0, 1.0)
-}
-
-/// Sets every pixel of `dst` (RGB8) to `c`: one pixel, then copies of what is done, doubling
-/// (a few memcpy calls instead of one small copy per pixel).
-#[inline]
-pub(crate) fn fill_rgb(dst: &mut [u8], c: [u8; 3]) {
-    if dst.len() < 3 {
-        return;
-    }
-    dst[..3].copy_from_slice(&c);
-    let mut done = 3;
-    while done < dst.len() {
-        let n = done.min(dst.len() - done);
-        dst.copy_within(0..n, done);
-        done += n;
-    }
-}
-
-/// `dst ← dst + a·(src − dst)`, rounded: the "over" operator with coverage as alpha.
-#[inline]
-pub(crate) fn blend(dst: &mut [u8], src: [f32; 3], a: f32) {
-    for k in 0..3 {
-        let d = dst[k] as f32;
-        dst[k] = (d + a * (src[k] - d) + 0.5) as u8;
-    }
-}
-
-/// One row of a flat 2D disc.
-#[inline]
-pub(crate) fn disc_row(row: &mut [u8], s: &Sprite, j: u32) {
-    let Some((i0, i1, dy)) = span(row.len(), s, j) else { return };
-    // Pixels with d ≤ r − ½ are fully covered and need neither sqrt nor blending.
-    let inner = (s.r - 0.5).max(0.0);
-    let inner2 = inner * inner;
-    let full = s.color.map(|c| c as u8);
-    for i in i0..i1 {
-        let dx = i as f32 + 0.5 - s.x;
-        let d2 = dx * dx + dy * dy;
-        let px = &mut row[3 * i..3 * i + 3];
-        if d2 <= inner2 {
-            px.copy_from_slice(&full);
-        } else {
-            let a = coverage(s.r, d2);
-            if a > 0.0 {
-                blend(px, s.color, a);
-            }
-        }
-    }
-}
-
-/// One row of a shaded sphere.
-///
-/// The sphere seen from far away projects to a disc; at the pixel offset (dx, dy) from the
-/// centre, in units of the radius u = dx/r, v = −dy/r (y up), the visible surface point has
-/// the unit normal n = (u, v, √(1 − u² − v²)) in camera coordinates. Its colour is
-/// base · (ambient + (1 − ambient)·max(n·l, 0)) + 255 · specular · max(n·h, 0)^shininess
-/// (Lambert diffuse plus a Blinn–Phong highlight), clamped to 255.
-#[inline]
-fn sphere_row(row: &mut [u8], s: &Sprite, j: u32, light: &Light) {
-    let Some((i0, i1, dy)) = span(row.len(), s, j) else { return };
-    let inner = (s.r - 0.5).max(0.0);
-    let inner2 = inner * inner;
-    let inv_r = 1.0 / s.r;
-    let v = -dy * inv_r;
-    let kd = 1.0 - light.ambient;
-    for i in i0..i1 {
-        let dx = i as f32 + 0.5 - s.x;
-        let d2 = dx * dx + dy * dy;
-        let a = if d2 <= inner2 { 1.0 } else { coverage(s.r, d2) };
-        if a <= 0.0 {
-            continue;
-        }
-        let u = dx * inv_r;
-        // On the antialiased rim u² + v² slightly exceeds 1: the normal lies in the image plane.
-        let w = (1.0 - u * u - v * v).max(0.0).sqrt();
-        let ndl = (u * light.l[0] + v * light.l[1] + w * light.l[2]).max(0.0);
-        let ndh = (u * light.h[0] + v * light.h[1] + w * light.h[2]).max(0.0);
-        let shade = light.ambient + kd * ndl;
-        let spec = 255.0 * light.specular * powi(ndh, light.shininess);
-        let c = [
-            (s.color[0] * shade + spec).min(255.0),
-            (s.color[1] * shade + spec).min(255.0),
-            (s.color[2] * shade + spec).min(255.0),
-        ];
-        let px = &mut row[3 * i..3 * i + 3];
-        if a >= 1.0 {
-            for k in 0..3 {
-                px[k] = (c[k] + 0.5) as u8;
-            }
-        } else {
-            blend(px, c, a);
-        }
-    }
-}
-
-/// x^n by squaring (n ≥ 1), the same on every platform unlike a libm `powf`.
-#[inline]
-fn powi(mut x: f32, mut n: i32) -> f32 {
-    let mut acc = 1.0;
-    while n > 0 {
-        if n & 1 == 1 {
-            acc *= x;
-        }
-        x *= x;
-        n >>= 1;
-    }
-    acc
 }

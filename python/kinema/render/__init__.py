@@ -1,0 +1,42 @@
+"""Off-screen rendering of particle trajectories into frames, MP4 (H.264) and GIF.
+
+2D scenes are drawn as antialiased discs seen from +z, 3D scenes as shaded spheres in
+perspective, far to near. Particles are coloured by speed, by id, or by any per-particle field,
+and each frame carries a time stamp. The world's colliders can be drawn with them
+(``colliders=``): in 3D a plane is a floor patch with a faint grid, a box its edges and a
+lightly filled floor, a sphere obstacle a grey shaded sphere; in 2D a plane is a thick line
+with its solid side shaded, a box a rectangle outline, a sphere obstacle a grey disc. Pixels
+are drawn by the engine (``kinema._core``, in parallel, with the GIL released); this module
+chooses cameras and colours and writes files. Springs (``springs=``, pairs of particles) are
+lines between the particles, and particles not alive in a frame (``alive=``, or NaN
+positions: births and deaths) are left out, with their springs. Particles coloured by a
+quantity get a colour bar with its name, units and range in the top right corner
+(``legend=``). The default camera fits the whole scene, particles of every frame and the
+colliders' finite parts, into the frame's width and height, clear of the legend.
+
+    frames = render_frames(traj_x, radius=0.01, t=traj_t, dim=3, color_by="speed", colliders=world.colliders)
+    write_video(frames, "out.mp4", fps=30, times=traj_t)  # exactly 30 fps, in real time
+
+MP4s are BT.709, tagged so, with ``moov`` first; ``video_rate`` gives the exact frame rate a
+file is written at (GIF delays are whole 1/100 s).
+
+The package: ``frames`` (``render_frames``: colours, the live particles, springs, one call to
+the engine per frame), ``cameras`` (``Camera2D``, ``Camera3D`` and the default camera that
+fits the scene), ``legend`` (the colour bar), ``descriptions`` (colliders as the plain
+descriptions ``Trajectory.colliders`` holds, which the engine takes) and ``video``
+(``write_video``, ``video_rate``: MP4 and GIF files).
+"""
+
+from __future__ import annotations
+
+from .cameras import Camera2D, Camera3D
+from .descriptions import _KIND as _KIND  # kinema.io.h5md
+from .descriptions import _describe_colliders as _describe_colliders  # World, the trajectory files
+from .frames import COLORMAPS, render_frames
+from .frames import NO_OWN_COLOR as NO_OWN_COLOR
+from .frames import _trajectory_options as _trajectory_options  # Trajectory.render, kinema.runner
+from .frames import own_colours as own_colours
+from .video import GIF_DELAYS_CS as GIF_DELAYS_CS
+from .video import VIDEO_EXTENSIONS, video_rate, write_video
+
+__all__ = ["Camera2D", "Camera3D", "COLORMAPS", "render_frames", "write_video", "video_rate", "VIDEO_EXTENSIONS"]

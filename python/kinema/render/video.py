@@ -1,0 +1,231 @@
+"""Video files: ``write_video`` (MP4 through imageio-ffmpeg's ffmpeg: H.264, BT.709, tagged,
+``moov`` first; GIF through Pillow) and ``video_rate``, the exact frame rate a file is
+written at."""
+
+from __future__ import annotations
+
+import math
+import numbers
+import os
+import tempfile
+from collections.abc import Iterable, Iterator
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+
+#: File extensions ``write_video`` knows.
+VIDEO_EXTENSIONS = (".mp4", ".gif")
+
+
+def write_video(
+    frames: Iterable[np.ndarray],
+    path,
+    fps: float = 30.0,
+    *,
+    times=None,
+    preset: str = "ultrafast",
+    crf: int = 20,
+) -> Path:
+    """Write RGB uint8 frames of one size to ``path`` and return it as a Path.
+
+    The frame rate written is ``video_rate(fps, path)``, exactly:
+
+    - ``.mp4``: ``fps`` as a fraction with a denominator of at most 1001 (30 → 30/1,
+      29.97 → 2997/100, 30000/1001 stays; ``fps`` may be a ``fractions.Fraction``), so a
+      30 fps video says 30 fps, not 30.00003.
+    - ``.gif``: a GIF counts each frame's delay in whole 1/100 s, and browsers play a delay of
+      0 or 1/100 s as 1/10 s: the delay is the whole number of 1/100 s from 2 to 65535 whose
+      rate is closest to ``fps`` (ratio nearest 1), so 60 fps is written at 50 (2/100 s),
+      30 fps at 33.3 (3/100 s), 25 at 25, 12 at 12.5 (8/100 s).
+
+    ``times`` (seconds, increasing, one per frame; optional): the frames were recorded at these
+    times and are to play in real time. The video is written at the rate above and each of its
+    frames shows the recorded frame nearest in time to it (from ``times[0]``, every 1/rate s up
+    to the last time): frames are repeated or dropped where the recording interval differs from
+    1/rate, and none are when it equals it (``World.run(fps=30)`` with dt = 1 ms records every
+    33 ms, 30.30 a second: at 30 fps one frame in about a hundred is dropped). Without
+    ``times``, each frame is one video frame at that rate (its playback speed is up to you).
+
+    ``.mp4``: H.264 (libx264, yuv420p, 4:2:0) by the ffmpeg that imageio-ffmpeg ships. The RGB
+    is converted with the BT.709 matrix into limited ("tv") range by ffmpeg's scaler and the
+    stream and the MP4 say so (``colr`` box and H.264 VUI: primaries, transfer and matrix
+    BT.709, limited range), so players convert it back with the same matrix; the ``moov`` box
+    comes before the media data (``-movflags +faststart``), so a browser plays the file while
+    it downloads. Odd sizes are padded by one edge row/column. x264 ``preset`` (ultrafast …
+    veryslow; the default ultrafast keeps 10,000 particles at 1280×720 above 60 frames per
+    second on two cores, ``benchmarks/render.py``; slower presets give smaller files) and
+    constant-quality ``crf`` (0 lossless … 51 worst).
+    ``.gif``: Pillow, looping, at most 256 colours a frame.
+
+    The file is written under a temporary name in the same directory and renamed when
+    complete: on any error nothing is left behind and an existing file is untouched.
+    """
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext not in VIDEO_EXTENSIONS:
+        raise ValueError(f"path = {str(path)!r} is invalid: the extension must be one of {', '.join(VIDEO_EXTENSIONS)}")
+    rate = video_rate(fps, ext)
+    counts = None if times is None else _repeats(times, rate)
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise FileNotFoundError(f"path = {str(path)!r} is invalid: the directory {str(parent)!r} does not exist")
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".part{ext}", dir=parent)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        stream = _checked(frames)
+        if counts is not None:
+            stream = _resampled(stream, counts)
+        count = (_write_mp4 if ext == ".mp4" else _write_gif)(stream, tmp, rate, preset, crf)
+        if count == 0:
+            raise ValueError("frames is empty: a video needs at least one frame")
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+#: GIF frame delays, in 1/100 s: browsers play 0 and 1 as 10, and the field has 16 bits.
+GIF_DELAYS_CS = (2, 65535)
+
+
+def video_rate(fps, path=".mp4") -> Fraction:
+    """The exact frame rate ``write_video`` writes for ``fps`` into ``path`` (a file name or
+    just its extension, ".mp4" or ".gif"), in frames per second: for MP4 ``fps`` as a fraction
+    with a denominator up to 1001 (``video_rate(30) == 30``; below 1/1001, 1/n for n whole
+    seconds a frame); for GIF 100/d, d the delay in 1/100 s from 2 to 65535 whose rate is
+    nearest ``fps`` (``video_rate(60, ".gif") == 50``)."""
+    if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not (math.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps = {fps!r} is invalid: frames per second must be a finite number > 0")
+    ext = str(path).lower()
+    ext = ext if ext in VIDEO_EXTENSIONS else Path(ext).suffix
+    if ext not in VIDEO_EXTENSIONS:
+        raise ValueError(f"path = {str(path)!r} is invalid: the extension must be one of {', '.join(VIDEO_EXTENSIONS)}")
+    exact = Fraction(fps) if isinstance(fps, numbers.Rational) else Fraction(float(fps))
+    if ext == ".gif":
+        lo, hi = GIF_DELAYS_CS
+        ideal = 100 / exact
+        candidates = {min(max(d, lo), hi) for d in (math.floor(ideal), math.ceil(ideal))}
+        delay = min(candidates, key=lambda d: (abs(math.log(d / ideal)), d))
+        return Fraction(100, delay)
+    if exact < Fraction(1, 1001):  # slower than a frame in 1001 s: a whole number of seconds a frame
+        return Fraction(1, round(1 / exact))
+    return exact.limit_denominator(1001)
+
+
+def _repeats(times, rate: Fraction) -> np.ndarray:
+    """How many video frames at ``rate`` each frame recorded at ``times`` fills, for playback
+    in real time: video frame k (at times[0] + k/rate, k = 0 … round(span·rate)) shows the
+    recorded frame nearest in time (the earlier one on a tie); 0 drops the frame."""
+    t = np.asarray(times, dtype=np.float64)
+    if t.ndim != 1 or t.size == 0 or not np.all(np.isfinite(t)):
+        raise ValueError(f"times has shape {t.shape}: expected one finite time (s) per frame")
+    if np.any(np.diff(t) <= 0):
+        k = int(np.argmax(np.diff(t) <= 0)) + 1
+        raise ValueError(f"times[{k}] = {t[k]!r} is invalid: times must increase (times[{k - 1}] = {t[k - 1]!r})")
+    r = float(rate)
+    n_out = int(round((t[-1] - t[0]) * r)) + 1
+    # Video frames up to the midpoint between recorded frames i and i + 1 show frame i or one
+    # before it; a relative 1e-9 settles ties that rounding would otherwise decide.
+    mid = 0.5 * (t[:-1] + t[1:]) - t[0]
+    upto = np.minimum(np.floor(mid * r * (1 + 1e-9)).astype(np.int64) + 1, n_out)
+    return np.diff(np.concatenate([[0], upto, [n_out]]))
+
+
+def _resampled(frames: Iterator[np.ndarray], counts: np.ndarray) -> Iterator[np.ndarray]:
+    """Each frame repeated counts[k] times (0: left out)."""
+    k = -1
+    for k, f in enumerate(frames):
+        if k >= counts.size:
+            raise ValueError(f"frames has more frames than times ({counts.size}): give one time per frame")
+        for _ in range(int(counts[k])):
+            yield f
+    if k + 1 != counts.size:
+        raise ValueError(f"frames has {k + 1} frames and times {counts.size}: give one time per frame")
+
+
+def _checked(frames: Iterable[np.ndarray]) -> Iterator[np.ndarray]:
+    """The frames as C-contiguous (H, W, 3) uint8, all of the first one's size."""
+    shape = None
+    for k, f in enumerate(frames):
+        f = np.asarray(f)
+        if f.dtype != np.uint8 or f.ndim != 3 or f.shape[2] != 3:
+            raise ValueError(f"frames[{k}] has dtype {f.dtype} and shape {f.shape}: expected uint8 (H, W, 3)")
+        if shape is None:
+            shape = f.shape
+        elif f.shape != shape:
+            raise ValueError(f"frames[{k}] has shape {f.shape}: all frames must have the first one's shape {shape}")
+        yield np.ascontiguousarray(f)
+
+
+#: What the MP4 says about its colours, and the conversion that makes it true: ffmpeg's
+#: scaler converts the RGB frames with the BT.709 matrix into limited range (the tags alone
+#: would not change the matrix), then x264 and the MP4 muxer record the same description.
+_MP4_COLOUR = [
+    "-vf",
+    "scale=out_color_matrix=bt709:out_range=tv:flags=bicubic+accurate_rnd,format=yuv420p,"
+    "setparams=colorspace=bt709:color_primaries=bt709:color_trc=bt709:range=tv",
+    "-colorspace",
+    "bt709",
+    "-color_primaries",
+    "bt709",
+    "-color_trc",
+    "bt709",
+    "-color_range",
+    "tv",
+]
+
+
+def _write_mp4(frames: Iterator[np.ndarray], tmp: Path, rate: Fraction, preset: str, crf: int) -> int:
+    import imageio_ffmpeg
+
+    writer = None
+    count = 0
+    try:
+        for f in frames:
+            h, w = f.shape[:2]
+            if h % 2 or w % 2:
+                # yuv420p stores colour at half resolution: both sides must be even.
+                f = np.pad(f, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
+            if writer is None:
+                writer = imageio_ffmpeg.write_frames(
+                    str(tmp),
+                    (f.shape[1], f.shape[0]),
+                    pix_fmt_in="rgb24",
+                    fps=rate,
+                    codec="libx264",
+                    quality=None,
+                    macro_block_size=1,
+                    output_params=["-preset", str(preset), "-crf", str(int(crf)), *_MP4_COLOUR, "-movflags", "+faststart"],
+                    ffmpeg_log_level="error",
+                )
+                writer.send(None)
+            writer.send(f)
+            count += 1
+    finally:
+        if writer is not None:
+            writer.close()
+    return count
+
+
+def _write_gif(frames: Iterator[np.ndarray], tmp: Path, rate: Fraction, preset: str, crf: int) -> int:
+    from PIL import Image
+
+    count = 0
+
+    def images():
+        nonlocal count
+        for f in frames:
+            count += 1
+            yield Image.fromarray(f)
+
+    it = images()
+    first = next(it, None)
+    if first is None:
+        return 0
+    # rate is 100/d (video_rate): d/100 s a frame, given to Pillow in ms.
+    delay_ms = round(1000 / rate)
+    first.save(tmp, format="GIF", save_all=True, append_images=it, duration=delay_ms, loop=0)
+    return count
