@@ -465,3 +465,38 @@ def test_contacts_that_share_no_movable_particle_are_separate_islands():
     w.step(5)
     last = w.collision_stats()["last"]
     assert (last["contacts"], last["islands"]) == (7, 3), last
+
+
+def test_collision_defaults_and_contact_models_are_the_engines():
+    """One home for each fact (issue 16): World.set_collisions' defaults, the scene table's
+    defaults and its model names are the engine's CollisionParams::default and
+    ContactModel::NAMES, and a scene file breaks the contact-model rule with the engine's
+    message."""
+    import inspect
+    import typing
+
+    from kinema import _core
+    from kinema.scene.tables import CollisionsTable
+
+    engine = _core.collision_defaults()
+    assert engine == {
+        "model": "impulse",
+        "restitution": 1.0,
+        "friction": 0.0,
+        "ccd": True,
+        "restitution_threshold": None,
+        "stiffness": None,
+        "damping": None,
+    }
+    signature = inspect.signature(kinema.World.set_collisions)
+    assert {k: p.default for k, p in signature.parameters.items() if k != "self"} == engine
+    table = CollisionsTable()
+    assert {k: getattr(table, k) for k in engine} == engine
+    assert typing.get_args(CollisionsTable.model_fields["model"].annotation) == tuple(_core.CONTACT_MODELS)
+    w = kinema.World()
+    w.set_collisions()
+    assert w.collisions == engine
+    with pytest.raises(ValueError, match=r"stiffness = None is invalid: model='spring_dashpot' needs the contact stiffness"):
+        CollisionsTable(model="spring_dashpot")
+    with pytest.raises(ValueError, match=r"damping = 2 is invalid: only model='spring_dashpot' uses it"):
+        CollisionsTable(model="impulse", damping=2.0)

@@ -12,8 +12,12 @@ from typing import Any
 
 import numpy as np
 
-from . import _checks
+from . import _checks, _core
 from .colliders import Collider
+
+# The engine's defaults (kinema::world::CollisionParams::default), read once: the one place
+# they are kept.
+_DEFAULTS = _core.collision_defaults()
 
 
 class WorldCollisions:
@@ -21,13 +25,13 @@ class WorldCollisions:
 
     def set_collisions(
         self,
-        model: str = "impulse",
-        restitution: float = 1.0,
-        friction: float = 0.0,
-        ccd: bool = True,
-        restitution_threshold: float | None = None,
-        stiffness: float | None = None,
-        damping: float | None = None,
+        model: str = _DEFAULTS["model"],
+        restitution: float = _DEFAULTS["restitution"],
+        friction: float = _DEFAULTS["friction"],
+        ccd: bool = _DEFAULTS["ccd"],
+        restitution_threshold: float | None = _DEFAULTS["restitution_threshold"],
+        stiffness: float | None = _DEFAULTS["stiffness"],
+        damping: float | None = _DEFAULTS["damping"],
     ) -> None:
         """Turn collisions on, or replace every one of their settings.
 
@@ -46,19 +50,21 @@ class WorldCollisions:
         advisor and the ``StabilityWarning`` count; :meth:`contacts` and
         :meth:`collision_stats` report the impulse model only.
 
-        ``w.set_collisions(**w.collisions)`` changes nothing.
+        ``w.set_collisions(**w.collisions)`` changes nothing. The defaults are the engine's
+        (``model="impulse"``, ``restitution=1.0``, ``friction=0.0``, ``ccd=True``, the rest
+        ``None``), read from it.
         """
-        args = (
-            _checks.text("model", model),
-            _checks.real("restitution", restitution),
-            _checks.real("friction", friction),
-            _checks.boolean("ccd", ccd),
-            _checks.real("restitution_threshold", restitution_threshold, optional=True),
-            _checks.real("stiffness", stiffness, optional=True),
-            _checks.real("damping", damping, optional=True),
-        )
+        settings = {
+            "model": _checks.text("model", model),
+            "restitution": _checks.real("restitution", restitution),
+            "friction": _checks.real("friction", friction),
+            "ccd": _checks.boolean("ccd", ccd),
+            "restitution_threshold": _checks.real("restitution_threshold", restitution_threshold, optional=True),
+            "stiffness": _checks.real("stiffness", stiffness, optional=True),
+            "damping": _checks.real("damping", damping, optional=True),
+        }
         self._push()
-        self._core.set_collisions(*args)
+        self._core.set_collisions(settings)
         self._advice_due = True  # the spring-dashpot model's contacts are stiff springs
 
     @property

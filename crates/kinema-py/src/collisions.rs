@@ -11,48 +11,68 @@ use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-/// The names `model` accepts, in the order the error lists them.
-const MODELS: &str = "'impulse', 'spring_dashpot'";
+/// `World.set_collisions`' keyword arguments, read by name from the dict Python passes (the
+/// values already checked for their types by Python).
+#[derive(FromPyObject)]
+pub struct CollisionArgs {
+    #[pyo3(item)]
+    model: String,
+    #[pyo3(item)]
+    restitution: f64,
+    #[pyo3(item)]
+    friction: f64,
+    #[pyo3(item)]
+    ccd: bool,
+    #[pyo3(item)]
+    restitution_threshold: Option<f64>,
+    #[pyo3(item)]
+    stiffness: Option<f64>,
+    #[pyo3(item)]
+    damping: Option<f64>,
+}
 
-/// The contact model of `model`, with the spring–dashpot's stiffness (N/m) and damping rate
-/// (1/s). Each parameter belongs to one model: giving it to the other is an error too.
-pub fn contact_model(model: &str, stiffness: Option<f64>, damping: Option<f64>) -> Result<ContactModel, Error> {
-    match model {
-        "impulse" => {
-            for (name, value) in [("stiffness", stiffness), ("damping", damping)] {
-                if let Some(v) = value {
-                    return Err(Error::invalid(
-                        name,
-                        v,
-                        "only model='spring_dashpot' uses it; the impulse model has no contact spring",
-                    ));
-                }
-            }
-            Ok(ContactModel::Impulse)
-        }
-        "spring_dashpot" => match stiffness {
-            Some(stiffness) => Ok(ContactModel::SpringDashpot { stiffness, damping }),
-            None => Err(Error::invalid(
-                "stiffness",
-                "None",
-                "model='spring_dashpot' needs the contact stiffness k_n, finite and > 0 N/m",
-            )),
-        },
-        other => Err(Error::invalid(
-            "model",
-            format!("'{other}'"),
-            format!("the contact model must be one of {MODELS}"),
-        )),
+impl CollisionArgs {
+    /// The engine's settings: the model by its name (the engine's rule), the rest as given.
+    pub fn params(&self) -> Result<CollisionParams, Error> {
+        Ok(CollisionParams {
+            model: ContactModel::from_name(&self.model, self.stiffness, self.damping)?,
+            restitution: self.restitution,
+            friction: self.friction,
+            ccd: self.ccd,
+            restitution_threshold: self.restitution_threshold,
+        })
     }
+}
+
+/// The engine's default collision settings, as `World.set_collisions`' keyword arguments:
+/// the one place Python reads them from (its signature, the scene files' defaults).
+#[pyfunction]
+fn collision_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    params_dict(py, &CollisionParams::default())
+}
+
+/// Checks a contact model's name and which of stiffness and damping it takes, by the
+/// engine's rule (for the scene files, before any world is built); ValueError otherwise.
+#[pyfunction]
+#[pyo3(signature = (model, stiffness, damping))]
+fn check_contact_model(model: &str, stiffness: Option<f64>, damping: Option<f64>) -> PyResult<()> {
+    ContactModel::from_name(model, stiffness, damping)
+        .map(|_| ())
+        .map_err(crate::errors::to_py)
+}
+
+/// Registers the module-level functions of the collision settings.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(collision_defaults, m)?)?;
+    m.add_function(wrap_pyfunction!(check_contact_model, m)?)?;
+    m.add("CONTACT_MODELS", ContactModel::NAMES.to_vec())?;
+    Ok(())
 }
 
 /// The settings as the keyword arguments of `World.set_collisions` (so that they round-trip).
 pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<'py, PyDict>> {
     let out = PyDict::new(py);
-    let (model, stiffness, damping) = match p.model {
-        ContactModel::Impulse => ("impulse", None, None),
-        ContactModel::SpringDashpot { stiffness, damping } => ("spring_dashpot", Some(stiffness), damping),
-    };
+    let (model, stiffness, damping) = p.model.named();
     out.set_item("model", model)?;
     out.set_item("restitution", p.restitution)?;
     out.set_item("friction", p.friction)?;

@@ -4,7 +4,6 @@
 use kinema::collide::{Partner, Surface};
 use kinema::error::CallbackError;
 use kinema::forces::{Attractor, Drag, Force, Gravity, Springs, State, Wind};
-use kinema::world::CollisionParams;
 use kinema::Divergence;
 use kinema::{Error, World, WorldParams};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods};
@@ -331,27 +330,10 @@ impl PyWorld {
         self.inner.add_force(Box::new(PythonForce { f, name })).map_err(to_py)
     }
 
-    /// Turns collisions on, or changes their settings (every one of them).
-    #[pyo3(signature = (model, restitution, friction, ccd, restitution_threshold, stiffness, damping))]
-    #[allow(clippy::too_many_arguments)]
-    fn set_collisions(
-        &mut self,
-        model: &str,
-        restitution: f64,
-        friction: f64,
-        ccd: bool,
-        restitution_threshold: Option<f64>,
-        stiffness: Option<f64>,
-        damping: Option<f64>,
-    ) -> PyResult<()> {
-        let model = collisions::contact_model(model, stiffness, damping).map_err(to_py)?;
-        let params = CollisionParams {
-            model,
-            restitution,
-            friction,
-            ccd,
-            restitution_threshold,
-        };
+    /// Turns collisions on, or changes their settings (every one of them), from the dict of
+    /// `World.set_collisions`' keyword arguments.
+    fn set_collisions(&mut self, settings: collisions::CollisionArgs) -> PyResult<()> {
+        let params = settings.params().map_err(to_py)?;
         self.inner.set_collisions(params).map_err(to_py)
     }
 
@@ -647,6 +629,7 @@ impl PyWorld {
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyWorld>()?;
+    collisions::register(m)?;
     m.add("SimulationDiverged", m.py().get_type::<SimulationDiverged>())?;
     Ok(())
 }

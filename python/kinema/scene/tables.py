@@ -10,7 +10,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
 
-from .. import _checks
+from .. import _checks, _core
 from ..ode import method_names
 
 # -- value types ------------------------------------------------------------------------------
@@ -387,20 +387,25 @@ KillItem = _typed(KillBoxTable, KillSphereTable, KillPlaneTable)
 # -- [collisions], [render], [output] ---------------------------------------------------------
 
 
+# The engine's defaults and contact-model rule (kinema::world::CollisionParams, ContactModel):
+# the table states the types and ranges a TOML file may hold, the engine the rest.
+_COLLISION_DEFAULTS = _core.collision_defaults()
+
+
 class CollisionsTable(_Model):
-    model: Literal["impulse", "spring_dashpot"] = "impulse"
-    restitution: Unit = 1.0
-    friction: NonNeg = 0.0
-    ccd: bool = True
-    restitution_threshold: NonNeg | None = None
-    stiffness: Positive | None = None
-    damping: NonNeg | None = None
+    model: Literal["impulse", "spring_dashpot"] = _COLLISION_DEFAULTS["model"]
+    restitution: Unit = _COLLISION_DEFAULTS["restitution"]
+    friction: NonNeg = _COLLISION_DEFAULTS["friction"]
+    ccd: bool = _COLLISION_DEFAULTS["ccd"]
+    restitution_threshold: NonNeg | None = _COLLISION_DEFAULTS["restitution_threshold"]
+    stiffness: Positive | None = _COLLISION_DEFAULTS["stiffness"]
+    damping: NonNeg | None = _COLLISION_DEFAULTS["damping"]
     periodic: Annotated[list[bool], Field(min_length=2, max_length=3)] | None = None
 
     @model_validator(mode="after")
-    def _stiff(self) -> CollisionsTable:
-        if self.model == "spring_dashpot" and self.stiffness is None:
-            raise ValueError("model = 'spring_dashpot' needs stiffness (N/m)")
+    def _model_takes_its_parameters(self) -> CollisionsTable:
+        # "spring_dashpot needs stiffness", "only spring_dashpot takes damping": the engine's rule.
+        _core.check_contact_model(self.model, self.stiffness, self.damping)
         return self
 
 

@@ -33,6 +33,58 @@ pub enum ContactModel {
     },
 }
 
+impl ContactModel {
+    /// The models' names, as the binding and the scene files spell them, in the order an
+    /// error lists them.
+    pub const NAMES: [&'static str; 2] = ["impulse", "spring_dashpot"];
+
+    /// The model named `name`, with the spring–dashpot's stiffness k_n (N/m) and damping
+    /// rate γ_n (1/s). Each parameter belongs to one model: giving it to the other is an
+    /// error, and `"spring_dashpot"` needs its stiffness. (The values themselves are checked
+    /// by [`CollisionParams::check`].)
+    pub fn from_name(name: &str, stiffness: Option<f64>, damping: Option<f64>) -> Result<ContactModel, Error> {
+        match name {
+            "impulse" => {
+                for (param, value) in [("stiffness", stiffness), ("damping", damping)] {
+                    if let Some(v) = value {
+                        return Err(Error::invalid(
+                            param,
+                            v,
+                            "only model='spring_dashpot' uses it; the impulse model has no contact spring",
+                        ));
+                    }
+                }
+                Ok(ContactModel::Impulse)
+            }
+            "spring_dashpot" => match stiffness {
+                Some(stiffness) => Ok(ContactModel::SpringDashpot { stiffness, damping }),
+                None => Err(Error::invalid(
+                    "stiffness",
+                    "None",
+                    "model='spring_dashpot' needs the contact stiffness k_n, finite and > 0 N/m",
+                )),
+            },
+            other => Err(Error::invalid(
+                "model",
+                format!("'{other}'"),
+                format!(
+                    "the contact model must be one of {}",
+                    Self::NAMES.map(|n| format!("'{n}'")).join(", ")
+                ),
+            )),
+        }
+    }
+
+    /// The model's name ([`ContactModel::NAMES`]), with its stiffness and damping (`None`
+    /// for the impulse model): what [`ContactModel::from_name`] takes back.
+    pub fn named(&self) -> (&'static str, Option<f64>, Option<f64>) {
+        match *self {
+            ContactModel::Impulse => (Self::NAMES[0], None, None),
+            ContactModel::SpringDashpot { stiffness, damping } => (Self::NAMES[1], Some(stiffness), damping),
+        }
+    }
+}
+
 /// How collisions between particles, and with colliders, are handled. Units SI.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CollisionParams {
