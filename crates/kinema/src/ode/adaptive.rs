@@ -22,7 +22,7 @@
 
 use super::dense::{self, DenseOutput};
 use super::explicit_rk::ExplicitRk;
-use super::solve::{Recorder, Solution, SolveOptions};
+use super::solution::{Recorder, Solution, SolveOptions};
 use super::stepper::{first_non_finite, Stats, Termination};
 use super::system::OdeSystem;
 use super::tableau::catalogue;
