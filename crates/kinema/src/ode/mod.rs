@@ -5,12 +5,14 @@
 //! - [`method`]: the registry of method names ([`Method`]) shared by every front end.
 //! - [`tableau`]: explicit Runge–Kutta methods as checked Butcher tableaux; [`explicit_rk`]
 //!   runs any of them. [`implicit_euler`], [`symplectic_euler`], [`verlet`]: the others.
-//! - [`solve`](mod@solve): the fixed-step driver and the entry points; `adaptive`: rk45's
-//!   step-size control; [`solution`]: the options and the result both drivers share, and
-//!   the output recorder; [`dense`]: output between steps.
+//! - [`solve`](mod@solve): the fixed-step driver and the entry points; `adaptive`: the
+//!   loop of rk45 (any embedded pair) with error control, `controller`: its step-size rule;
+//!   [`solution`]: the options and the result both drivers share, and the output recorder;
+//!   [`dense`]: output between steps.
 //! - [`stability`]: R(z) on the test equation p' = λp, stable steps and intervals.
 
 mod adaptive;
+mod controller;
 pub mod dense;
 pub mod explicit_rk;
 pub mod implicit_euler;

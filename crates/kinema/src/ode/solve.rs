@@ -5,7 +5,8 @@
 //! adaptive loop in `adaptive` decides the steps, and a `Recorder` ([`solution`](super::solution))
 //! stores the output.
 
-use super::adaptive;
+use super::adaptive::Adaptive;
+use super::controller::StepSizeController;
 use super::dense::{self, DenseOutput};
 use super::explicit_rk::ExplicitRk;
 use super::implicit_euler::ImplicitEuler;
@@ -66,7 +67,10 @@ pub fn solve(sys: &mut dyn OdeSystem, y0: &[f64], integrator: &Integrator, opts:
                 let stepper = &mut ImplicitEuler::new(n, block, opts.rtol, opts.atol);
                 run_fixed(stepper, sys, y0, h, opts, m.name())
             }
-            MethodKind::Adaptive => adaptive::run(sys, y0, opts),
+            MethodKind::Adaptive => {
+                let tab = m.tableau().expect("adaptive methods have tableaux");
+                Adaptive::new(tab, StepSizeController::default())?.run(sys, y0, opts, m.name())
+            }
             MethodKind::SecondOrder => Err(Error::MethodNotApplicable {
                 method: m.name().into(),
                 reason: "it integrates second-order systems x'' = a(t, x, v) only; use solve_second_order, \
