@@ -1,7 +1,7 @@
 """Type stubs of the compiled module kinema._core (private: use the documented kinema API)."""
 
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -36,33 +36,35 @@ class DenseOutput:
     def span(self) -> tuple[float, float]: ...
 
 def methods() -> list[dict[str, Any]]: ...
+
+class _SolveOptions(TypedDict):
+    """The options of a solve (the engine's SolveOptions), checked by kinema.ode."""
+
+    t_span: tuple[float, float]
+    h: float | None
+    h_max: float | None
+    rtol: float
+    atol: float
+    t_eval: list[float] | None
+    dense_output: bool
+    max_steps: int
+    h_min: float | None
+
 def solve(
     f: Callable[..., Any],
     y0: npt.NDArray[np.float64],
-    t_span: tuple[float, float],
-    h: float | None,
-    h_max: float | None,
     method: str | ButcherTableau,
     jac: Callable[..., Any] | None,
-    rtol: float,
-    atol: float,
-    t_eval: list[float] | None,
     vectorized: bool,
-    dense_output: bool,
+    options: _SolveOptions,
 ) -> dict[str, Any]: ...
 def solve_second_order(
     a: Callable[..., Any],
     x0: npt.NDArray[np.float64],
     v0: npt.NDArray[np.float64],
-    t_span: tuple[float, float],
-    h: float | None,
-    h_max: float | None,
     method: str | ButcherTableau,
-    rtol: float,
-    atol: float,
-    t_eval: list[float] | None,
     vectorized: bool,
-    dense_output: bool,
+    options: _SolveOptions,
 ) -> dict[str, Any]: ...
 def amplification(method: str | ButcherTableau, z: npt.NDArray[np.complex128]) -> npt.NDArray[np.complex128]: ...
 def max_step(method: str | ButcherTableau, lam: npt.NDArray[np.complex128]) -> npt.NDArray[np.float64]: ...

@@ -11,11 +11,14 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import _checks, _core
+
+if TYPE_CHECKING:
+    from ._core import _SolveOptions
 
 
 class ButcherTableau(_core.ButcherTableau):
@@ -227,22 +230,19 @@ def solve(
     if jac is not None:
         _callable("jac", jac)
     y = _state("y0", y0)
-    raw = _core.solve(
-        f,
-        y,
-        _t_span(t_span),
-        _float_or_none("h", h),
-        _float_or_none("h_max", h_max),
-        method,
-        jac,
-        _checks.real("rtol", rtol),
-        _checks.real("atol", atol),
-        _t_eval(t_eval),
-        _checks.boolean("vectorized", vectorized),
-        _checks.boolean("dense_output", dense_output),
-        max_steps=_count("max_steps", max_steps),
-        h_min=_float_or_none("h_min", h_min),
+    vectorized, options = _options(
+        t_span=t_span,
+        h=h,
+        h_max=h_max,
+        rtol=rtol,
+        atol=atol,
+        t_eval=t_eval,
+        vectorized=vectorized,
+        dense_output=dense_output,
+        max_steps=max_steps,
+        h_min=h_min,
     )
+    raw = _core.solve(f, y, method, jac, vectorized, options)
     return _finish(raw, y.shape, "solve")
 
 
@@ -273,28 +273,62 @@ def solve_second_order(
     _callable("a", a)
     x = _state("x0", x0)
     v = _state("v0", v0)
-    raw = _core.solve_second_order(
-        a,
-        x,
-        v,
-        _t_span(t_span),
-        _float_or_none("h", h),
-        _float_or_none("h_max", h_max),
-        method,
-        _checks.real("rtol", rtol),
-        _checks.real("atol", atol),
-        _t_eval(t_eval),
-        _checks.boolean("vectorized", vectorized),
-        _checks.boolean("dense_output", dense_output),
-        max_steps=_count("max_steps", max_steps),
-        h_min=_float_or_none("h_min", h_min),
+    vectorized, options = _options(
+        t_span=t_span,
+        h=h,
+        h_max=h_max,
+        rtol=rtol,
+        atol=atol,
+        t_eval=t_eval,
+        vectorized=vectorized,
+        dense_output=dense_output,
+        max_steps=max_steps,
+        h_min=h_min,
     )
+    raw = _core.solve_second_order(a, x, v, method, vectorized, options)
     shape = (*x.shape[:-1], 2 * x.shape[-1])
     sol = _finish(raw, shape, "solve_second_order")
     n = x.shape[-1]
     sol.x = sol.y[..., :n]
     sol.v = sol.y[..., n:]
     return sol
+
+
+def _options(
+    *,
+    t_span: Sequence[float],
+    h: Any,
+    h_max: Any,
+    rtol: Any,
+    atol: Any,
+    t_eval: Any,
+    vectorized: Any,
+    dense_output: Any,
+    max_steps: Any,
+    h_min: Any,
+) -> tuple[bool, _SolveOptions]:
+    """The checked arguments of a solve: ``vectorized``, and the options the engine reads as
+    its ``SolveOptions`` (a dict keyed by the fields' names). Checked in the order of the
+    public signature (method and jac aside), so that the first bad argument is the one
+    reported."""
+    span = _t_span(t_span)
+    step, step_max = _float_or_none("h", h), _float_or_none("h_max", h_max)
+    tolerances = _checks.real("rtol", rtol), _checks.real("atol", atol)
+    times = _t_eval(t_eval)
+    batch = _checks.boolean("vectorized", vectorized)
+    dense = _checks.boolean("dense_output", dense_output)
+    options: _SolveOptions = {
+        "t_span": span,
+        "h": step,
+        "h_max": step_max,
+        "rtol": tolerances[0],
+        "atol": tolerances[1],
+        "t_eval": times,
+        "dense_output": dense,
+        "max_steps": _count("max_steps", max_steps),
+        "h_min": _float_or_none("h_min", h_min),
+    }
+    return batch, options
 
 
 def _count(name: str, value: Any) -> int:

@@ -146,11 +146,12 @@ fn methods<'py>(py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         .collect()
 }
 
-/// The step limits of a solve: most steps, smallest step.
-type Limits = (usize, Option<f64>);
-
-#[allow(clippy::too_many_arguments)]
-fn options(
+/// The options of a solve as `kinema.ode` passes them: a dict with one key per field of
+/// [`SolveOptions`] (every key present; the values already checked there, so that a bad one
+/// is reported with the API's message before it gets here).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct Options {
     t_span: (f64, f64),
     h: Option<f64>,
     h_max: Option<f64>,
@@ -158,18 +159,23 @@ fn options(
     atol: f64,
     t_eval: Option<Vec<f64>>,
     dense_output: bool,
-    (max_steps, h_min): Limits,
-) -> SolveOptions {
-    SolveOptions {
-        t_span,
-        h,
-        h_max,
-        dense_output,
-        rtol,
-        atol,
-        t_eval,
-        max_steps,
-        h_min,
+    max_steps: usize,
+    h_min: Option<f64>,
+}
+
+impl From<Options> for SolveOptions {
+    fn from(o: Options) -> Self {
+        SolveOptions {
+            t_span: o.t_span,
+            h: o.h,
+            h_max: o.h_max,
+            dense_output: o.dense_output,
+            rtol: o.rtol,
+            atol: o.atol,
+            t_eval: o.t_eval,
+            max_steps: o.max_steps,
+            h_min: o.h_min,
+        }
     }
 }
 
@@ -213,60 +219,34 @@ fn initial_state(name: &str, arr: &PyReadonlyArrayDyn<'_, f64>, vectorized: bool
     Ok((arr.as_array().iter().copied().collect(), shape))
 }
 
-/// Solves y' = f(t, y); returns a dict (see kinema.ode.Solution).
+/// Solves y' = f(t, y); returns a dict (see kinema.ode.Solution). `options`: see [`Options`].
 #[pyfunction]
-#[pyo3(signature = (f, y0, t_span, h, h_max, method, jac, rtol, atol, t_eval, vectorized, dense_output, max_steps=ode::MAX_STEPS, h_min=None))]
-#[allow(clippy::too_many_arguments)]
 fn solve<'py>(
     py: Python<'py>,
     f: Bound<'py, PyAny>,
     y0: PyReadonlyArrayDyn<'py, f64>,
-    t_span: (f64, f64),
-    h: Option<f64>,
-    h_max: Option<f64>,
     method: Bound<'py, PyAny>,
     jac: Option<Bound<'py, PyAny>>,
-    rtol: f64,
-    atol: f64,
-    t_eval: Option<Vec<f64>>,
     vectorized: bool,
-    dense_output: bool,
-    max_steps: usize,
-    h_min: Option<f64>,
+    options: Options,
 ) -> PyResult<Bound<'py, PyDict>> {
     let integrator = integrator_from(&method)?;
     let (y, shape) = initial_state("y0", &y0, vectorized)?;
     let mut sys = PyOde { py, f, jac, shape };
-    let sol = ode::solve(
-        &mut sys,
-        &y,
-        &integrator,
-        &options(t_span, h, h_max, rtol, atol, t_eval, dense_output, (max_steps, h_min)),
-    )
-    .map_err(to_py)?;
+    let sol = ode::solve(&mut sys, &y, &integrator, &options.into()).map_err(to_py)?;
     solution_dict(py, sol)
 }
 
-/// Solves x'' = a(t, x, v); the dict's y rows are [x, v] per block.
+/// Solves x'' = a(t, x, v); the dict's y rows are [x, v] per block. `options`: see [`Options`].
 #[pyfunction]
-#[pyo3(signature = (a, x0, v0, t_span, h, h_max, method, rtol, atol, t_eval, vectorized, dense_output, max_steps=ode::MAX_STEPS, h_min=None))]
-#[allow(clippy::too_many_arguments)]
 fn solve_second_order<'py>(
     py: Python<'py>,
     a: Bound<'py, PyAny>,
     x0: PyReadonlyArrayDyn<'py, f64>,
     v0: PyReadonlyArrayDyn<'py, f64>,
-    t_span: (f64, f64),
-    h: Option<f64>,
-    h_max: Option<f64>,
     method: Bound<'py, PyAny>,
-    rtol: f64,
-    atol: f64,
-    t_eval: Option<Vec<f64>>,
     vectorized: bool,
-    dense_output: bool,
-    max_steps: usize,
-    h_min: Option<f64>,
+    options: Options,
 ) -> PyResult<Bound<'py, PyDict>> {
     let integrator = integrator_from(&method)?;
     let (x, shape) = initial_state("x0", &x0, vectorized)?;
@@ -277,14 +257,7 @@ fn solve_second_order<'py>(
         )));
     }
     let mut sys = PyAccel { py, a, shape };
-    let sol = ode::solve_second_order(
-        &mut sys,
-        &x,
-        &v,
-        &integrator,
-        &options(t_span, h, h_max, rtol, atol, t_eval, dense_output, (max_steps, h_min)),
-    )
-    .map_err(to_py)?;
+    let sol = ode::solve_second_order(&mut sys, &x, &v, &integrator, &options.into()).map_err(to_py)?;
     solution_dict(py, sol)
 }
 

@@ -125,6 +125,16 @@ impl DenseOutput {
         }
     }
 
+    /// Appends the end (t, y, f = dy/dt) of one more step to Hermite pieces (the adaptive
+    /// driver with a pair that has no continuous extension of its own).
+    pub(crate) fn push_hermite(&mut self, t_end: f64, y_end: &[f64], f_end: &[f64]) {
+        if let Pieces::Hermite { y, f } = &mut self.pieces {
+            y.extend_from_slice(y_end);
+            f.extend_from_slice(f_end);
+            self.t.push(t_end);
+        }
+    }
+
     /// Number of values per state.
     pub fn dim(&self) -> usize {
         self.dim

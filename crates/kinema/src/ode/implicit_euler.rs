@@ -47,6 +47,16 @@ pub struct ImplicitEuler {
     delta: Mat<f64>,
 }
 
+/// One attempted step: from (t, y) by h, for the blocks marked in `active` (the others ride
+/// along: f is evaluated for the whole state at once, and their values are discarded).
+#[derive(Debug, Clone, Copy)]
+struct Attempt<'a> {
+    t: f64,
+    y: &'a [f64],
+    h: f64,
+    active: &'a [bool],
+}
+
 /// Where a block's Newton iteration stands.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Block {
@@ -126,17 +136,14 @@ impl ImplicitEuler {
     /// Blocks are independent systems (a batch), so each converges or fails on its own;
     /// only the blocks marked in `active` are judged (the others ride along, since f is
     /// evaluated for the whole state at once, and their values are discarded by the caller).
-    #[allow(clippy::too_many_arguments)]
     fn newton(
         &mut self,
         sys: &mut dyn OdeSystem,
-        t: f64,
-        y: &[f64],
-        h: f64,
+        attempt: Attempt<'_>,
         y_out: &mut [f64],
-        active: &[bool],
         stats: &mut Stats,
     ) -> Result<Vec<Block>, Error> {
+        let Attempt { t, y, h, active } = attempt;
         let b = self.block;
         let t1 = t + h;
         y_out.copy_from_slice(y);
@@ -225,23 +232,20 @@ impl ImplicitEuler {
         Ok(status)
     }
 
-    /// A step of the blocks in `active`; a block whose Newton iteration fails is redone as two
-    /// half steps (the others keep their full-step result, so a batch member's answer does
-    /// not depend on the other members).
-    #[allow(clippy::too_many_arguments)]
+    /// A step of the blocks in `attempt.active`; a block whose Newton iteration fails is
+    /// redone as two half steps (the others keep their full-step result, so a batch member's
+    /// answer does not depend on the other members). `depth`: halvings so far.
     fn step_with_halving(
         &mut self,
         sys: &mut dyn OdeSystem,
-        t: f64,
-        y: &[f64],
-        h: f64,
+        attempt: Attempt<'_>,
         y_out: &mut [f64],
-        active: &[bool],
         stats: &mut Stats,
         depth: u32,
     ) -> Result<(), StepFailure> {
+        let Attempt { t, y, h, .. } = attempt;
         let b = self.block;
-        let status = self.newton(sys, t, y, h, y_out, active, stats)?;
+        let status = self.newton(sys, attempt, y_out, stats)?;
         let failing: Vec<bool> = status.iter().map(|s| *s != Block::Converged).collect();
         let Some(first) = failing.iter().position(|&f| f) else {
             return Ok(());
@@ -260,9 +264,21 @@ impl ImplicitEuler {
         }
         stats.nrejected += 1;
         let mut mid = y.to_vec();
-        self.step_with_halving(sys, t, y, 0.5 * h, &mut mid, &failing, stats, depth + 1)?;
+        let first_half = Attempt {
+            t,
+            y,
+            h: 0.5 * h,
+            active: &failing,
+        };
+        self.step_with_halving(sys, first_half, &mut mid, stats, depth + 1)?;
         let mut end = mid.clone();
-        self.step_with_halving(sys, t + 0.5 * h, &mid, 0.5 * h, &mut end, &failing, stats, depth + 1)?;
+        let second_half = Attempt {
+            t: t + 0.5 * h,
+            y: &mid,
+            h: 0.5 * h,
+            active: &failing,
+        };
+        self.step_with_halving(sys, second_half, &mut end, stats, depth + 1)?;
         for (m, &f) in failing.iter().enumerate() {
             if f {
                 y_out[m * b..(m + 1) * b].copy_from_slice(&end[m * b..(m + 1) * b]);
@@ -283,7 +299,18 @@ impl<'a> Stepper<dyn OdeSystem + 'a> for ImplicitEuler {
         stats: &mut Stats,
     ) -> Result<(), StepFailure> {
         let active = vec![true; y.len() / self.block];
-        match self.step_with_halving(sys, t, y, h, y_out, &active, stats, 0) {
+        match self.step_with_halving(
+            sys,
+            Attempt {
+                t,
+                y,
+                h,
+                active: &active,
+            },
+            y_out,
+            stats,
+            0,
+        ) {
             // Report the step the driver asked for; the sub-step that failed is in t_fail/h_min.
             Err(StepFailure::Stop(Termination::NewtonFailed {
                 h_min, t_fail, halvings, ..

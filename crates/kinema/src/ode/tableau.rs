@@ -17,7 +17,7 @@ use crate::error::Error;
 pub const TABLEAU_TOL: f64 = 1e-12;
 
 /// An explicit Runge–Kutta method: strictly lower-triangular A, weights b, nodes c, its
-/// declared order, and optionally embedded weights for an error estimate.
+/// declared order, and optionally embedded weights (with their order) for an error estimate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ButcherTableau {
     name: String,
@@ -25,8 +25,9 @@ pub struct ButcherTableau {
     a: Vec<f64>,
     b: Vec<f64>,
     c: Vec<f64>,
-    /// Embedded lower-order weights b̂ (error estimate y − ŷ = h Σ (b_i − b̂_i) k_i).
-    b_hat: Option<Vec<f64>>,
+    /// Embedded lower-order weights b̂ (error estimate y − ŷ = h Σ (b_i − b̂_i) k_i) and their
+    /// declared order p̂.
+    embedded: Option<(Vec<f64>, u32)>,
     order: u32,
 }
 
@@ -102,13 +103,15 @@ impl ButcherTableau {
             a: flat,
             b,
             c,
-            b_hat: None,
+            embedded: None,
             order,
         })
     }
 
-    /// Adds embedded weights b̂ (same number of stages, summing to 1) for error estimation.
-    pub fn with_embedded(mut self, b_hat: Vec<f64>) -> Result<Self, Error> {
+    /// Adds embedded weights b̂ (same number of stages, summing to 1) of declared order
+    /// `order` (≥ 1; p̂ = p − 1 for the usual pairs: Dormand–Prince 5(4) has p̂ = 4) for error
+    /// estimation. The adaptive driver takes the exponent of its step-size update from it.
+    pub fn with_embedded(mut self, b_hat: Vec<f64>, order: u32) -> Result<Self, Error> {
         if b_hat.len() != self.stages() {
             return Err(Error::InvalidTableau(format!(
                 "embedded weights have {} entries, expected {}",
@@ -122,7 +125,12 @@ impl ButcherTableau {
                 "the embedded weights sum to {sum}, they must sum to 1"
             )));
         }
-        self.b_hat = Some(b_hat);
+        if order == 0 {
+            return Err(Error::InvalidTableau(
+                "embedded order = 0; a consistent method has order ≥ 1".into(),
+            ));
+        }
+        self.embedded = Some((b_hat, order));
         Ok(self)
     }
 
@@ -155,7 +163,18 @@ impl ButcherTableau {
     }
     /// Embedded weights b̂, if any.
     pub fn b_hat(&self) -> Option<&[f64]> {
-        self.b_hat.as_deref()
+        self.embedded.as_ref().map(|(b_hat, _)| b_hat.as_slice())
+    }
+    /// Declared order p̂ of the embedded weights, if any.
+    pub fn embedded_order(&self) -> Option<u32> {
+        self.embedded.as_ref().map(|&(_, order)| order)
+    }
+    /// Order q of the error estimate e = y − ŷ, if the tableau is embedded: q = min(p, p̂).
+    ///
+    /// y has local error O(hᵖ⁺¹) and ŷ O(hᵖ̂⁺¹), so their difference is O(h^(q+1)), dominated
+    /// by the less accurate of the two (for Dormand–Prince, q = p̂ = 4).
+    pub fn error_order(&self) -> Option<u32> {
+        self.embedded_order().map(|p_hat| p_hat.min(self.order))
     }
     /// Declared order p: the global error is O(hᵖ), the local (one-step) error O(hᵖ⁺¹).
     pub fn order(&self) -> u32 {
@@ -295,8 +314,26 @@ pub mod catalogue {
             1.0 / 40.0,
         ];
         build("dopri5", a, b, c, 5)
-            .with_embedded(b_hat)
+            .with_embedded(b_hat, 4)
             .expect("Dormand–Prince embedded weights are consistent")
+    }
+
+    /// Bogacki–Shampine 3(2) (Bogacki & Shampine 1989; SciPy's `RK23`): 4 stages, FSAL,
+    /// third-order solution with an embedded second-order estimate. Not in the method
+    /// registry: the adaptive driver's tests run it.
+    pub fn bs3() -> ButcherTableau {
+        let a = vec![
+            vec![0.0; 4],
+            vec![1.0 / 2.0, 0.0, 0.0, 0.0],
+            vec![0.0, 3.0 / 4.0, 0.0, 0.0],
+            vec![2.0 / 9.0, 1.0 / 3.0, 4.0 / 9.0, 0.0],
+        ];
+        let b = vec![2.0 / 9.0, 1.0 / 3.0, 4.0 / 9.0, 0.0];
+        let c = vec![0.0, 1.0 / 2.0, 3.0 / 4.0, 1.0];
+        let b_hat = vec![7.0 / 24.0, 1.0 / 4.0, 1.0 / 3.0, 1.0 / 8.0];
+        build("bs3", a, b, c, 3)
+            .with_embedded(b_hat, 2)
+            .expect("Bogacki–Shampine embedded weights are consistent")
     }
 }
 
@@ -318,6 +355,16 @@ mod tests {
     fn dopri5_is_fsal_and_rk4_is_not() {
         assert!(dopri5().is_fsal());
         assert!(!rk4().is_fsal());
+    }
+
+    #[test]
+    fn embedded_pairs_know_the_order_of_their_error_estimate() {
+        assert_eq!((dopri5().embedded_order(), dopri5().error_order()), (Some(4), Some(4)));
+        assert_eq!((bs3().embedded_order(), bs3().error_order()), (Some(2), Some(2)));
+        assert!(bs3().is_fsal());
+        assert_eq!(rk4().error_order(), None);
+        let e = heun().with_embedded(vec![1.0, 0.0], 0).unwrap_err();
+        assert!(e.to_string().contains("embedded order = 0"), "{e}");
     }
 
     #[test]
