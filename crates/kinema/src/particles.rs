@@ -166,6 +166,21 @@ impl Particles {
 
 /// Keeps the rows (of `width` values each) of `a` where `keep` holds; a buffer not in use
 /// (of another length) is left alone.
+/// Checks that the flat array `name` (length `len`) holds `per` values for each of `n`
+/// particles, `counted` saying what gave n ("radii", "particles", "inverse masses"), so that
+/// a kernel can index it without panicking. The error names the array, its length and the
+/// length it must have. The one check behind every kernel's per-particle buffers.
+pub(crate) fn check_per_particle(name: &str, len: usize, per: usize, n: usize, counted: &str) -> Result<(), Error> {
+    if len != per * n {
+        return Err(Error::invalid(
+            name,
+            format!("{len} values"),
+            format!("{per} per particle ({} for the {n} {counted})", per * n),
+        ));
+    }
+    Ok(())
+}
+
 pub(crate) fn retain_rows<T: Copy>(a: &mut Vec<T>, width: usize, keep: &[bool]) {
     if a.len() != width * keep.len() {
         return;

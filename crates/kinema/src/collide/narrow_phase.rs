@@ -16,6 +16,7 @@ use super::broad_phase::Pair;
 use super::contact::{Contact, Partner};
 use super::domain::Domain;
 use crate::error::Error;
+use crate::particles::check_per_particle;
 use crate::vec3;
 
 /// The contact of particles i and j if their distance is below r_i + r_j + `tolerance`
@@ -73,13 +74,7 @@ pub fn sphere_contacts(
 ) -> Result<(), Error> {
     let n = radius.len();
     for (name, len) in [("x", x.len()), ("v", v.len())] {
-        if len != 3 * n {
-            return Err(Error::invalid(
-                name,
-                format!("{len} values"),
-                format!("3 per particle ({} for the {n} radii)", 3 * n),
-            ));
-        }
+        check_per_particle(name, len, 3, n, "radii")?;
     }
     if !(tolerance.is_finite() && tolerance >= 0.0) {
         return Err(Error::invalid(

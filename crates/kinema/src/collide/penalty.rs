@@ -37,6 +37,7 @@
 
 use super::contact::Contact;
 use crate::error::Error;
+use crate::particles::check_per_particle;
 use crate::vec3;
 
 /// The damping ratio ζ of the contact oscillator that bounces back with restitution `e`
@@ -183,13 +184,7 @@ impl PenaltyLaw {
     /// m_eff γ_n = 2 ζ √(k_n m_eff) = 2 ζ √(k_n / (w_i + w_j)).
     pub fn accumulate(&self, contacts: &[Contact], inv_mass: &[f64], f: &mut [f64]) -> Result<(), Error> {
         let n = inv_mass.len();
-        if f.len() != 3 * n {
-            return Err(Error::invalid(
-                "f",
-                format!("{} values", f.len()),
-                format!("3 per particle ({} for the {n} inverse masses)", 3 * n),
-            ));
-        }
+        check_per_particle("f", f.len(), 3, n, "inverse masses")?;
         if let Some(p) = contacts
             .iter()
             .position(|c| c.i >= n || c.partner_particle().is_some_and(|j| j >= n || j == c.i))

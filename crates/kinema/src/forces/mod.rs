@@ -6,6 +6,7 @@
 //! for implicit integration; the others are differentiated numerically where that is needed.
 
 use crate::error::{CallbackError, Error};
+use crate::particles::check_per_particle;
 
 pub mod attractor;
 pub mod drag;
@@ -220,15 +221,8 @@ impl Linearized for ZeroJacobian {
 /// particle, so that a force can index them without panicking. The error names the force, the
 /// buffer and its length.
 pub(crate) fn check_buffers(force: &str, s: &State, buffers: &[(&str, usize)]) -> Result<(), Error> {
-    let n = s.len();
     for &(name, len) in [("x", s.x.len()), ("v", s.v.len())].iter().chain(buffers) {
-        if len != 3 * n {
-            return Err(Error::invalid(
-                format!("{force}: {name}"),
-                format!("{len} values"),
-                format!("3 per particle for {n} particles ({} values)", 3 * n),
-            ));
-        }
+        check_per_particle(&format!("{force}: {name}"), len, 3, s.len(), "particles")?;
     }
     Ok(())
 }

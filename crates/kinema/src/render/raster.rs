@@ -8,6 +8,7 @@ use super::extent::{frame_extent, Region};
 use super::paint::{paint, Painted, Scenery, View, LINE_COLOR};
 use super::pixels::{disc_row, fill_rgb, sphere_row, Light, Sprite};
 use super::prim::{line, Prim};
+use crate::particles::check_per_particle;
 use crate::Error;
 
 /// Rows per band: the unit of parallel work (720 rows give 45 bands).
@@ -176,20 +177,8 @@ pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image
     let (w, h) = (params.width, params.height);
     let projector = camera.projector(w, h)?;
     let n = radius.len();
-    if positions.len() != 3 * n {
-        return Err(invalid(
-            "positions",
-            format!("{} numbers", positions.len()),
-            &format!("3 per particle (N = {n} from radius)"),
-        ));
-    }
-    if colors.len() != 3 * n {
-        return Err(invalid(
-            "colors",
-            format!("{} bytes", colors.len()),
-            &format!("3 per particle (N = {n} from radius)"),
-        ));
-    }
+    check_per_particle("positions", positions.len(), 3, n, "radii")?;
+    check_per_particle("colors", colors.len(), 3, n, "radii")?;
     if image.len() != w * h * 3 {
         return Err(invalid(
             "image",
