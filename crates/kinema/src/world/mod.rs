@@ -991,7 +991,7 @@ impl World {
             steady,
             wrapped: steady && accel.is_some(),
         };
-        let changed = match stage.run(&frame, &p.x, &p.v, x1, v1, &p.radius, &p.inv_mass, &p.mass) {
+        let changed = match stage.run(&frame, p, x1, v1) {
             Ok(changed) => changed,
             Err(Error::InvalidParameter { .. }) if Self::beyond_geometry(&self.x_next, &self.v_next) => {
                 // The collision stages' own quantities (a margin, a threshold) overflowed: the
@@ -1022,7 +1022,7 @@ impl World {
             Some(stage) => stage.set_params(params)?,
             None => {
                 let mut stage = CollisionStage::new(params, self.params.dim)?;
-                stage.interrupt = self.interrupt;
+                stage.impulse.interrupt = self.interrupt;
                 self.collisions = Some(stage);
             }
         }
@@ -1201,7 +1201,7 @@ impl World {
     /// continuous detection were already resolved). Empty with the spring–dashpot model,
     /// whose contacts live inside the force evaluations.
     pub fn contacts(&self) -> &[Contact] {
-        self.collisions.as_ref().map_or(&[], |c| &c.detected)
+        self.collisions.as_ref().map_or(&[], |c| &c.impulse.detected)
     }
 
     /// What the collision stages did in the last step, and summed over all steps; `None`
@@ -1249,7 +1249,7 @@ impl World {
     pub fn set_interrupt(&mut self, check: Option<fn() -> Result<(), CallbackError>>) {
         self.interrupt = Interrupt { check, last: None };
         if let Some(stage) = &mut self.collisions {
-            stage.interrupt = self.interrupt;
+            stage.impulse.interrupt = self.interrupt;
         }
     }
 
