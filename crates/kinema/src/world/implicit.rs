@@ -69,6 +69,17 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
+/// One step of [`BaraffWitkin::step`]: from the state (x, v) (m, m/s, 3 per particle) at
+/// time t (s) over h (s), into (x_out, v_out).
+pub struct StepSpan<'a> {
+    pub t: f64,
+    pub h: f64,
+    pub x: &'a [f64],
+    pub v: &'a [f64],
+    pub x_out: &'a mut [f64],
+    pub v_out: &'a mut [f64],
+}
+
 impl BaraffWitkin {
     /// The last step's Δv (m/s, 3 per particle): the next solve's first guess.
     pub(crate) fn warm_start(&self) -> &[f64] {
@@ -80,19 +91,16 @@ impl BaraffWitkin {
         self.dv = dv;
     }
 
-    /// Advances (x, v) at time t by h into (x_out, v_out).
-    #[allow(clippy::too_many_arguments)]
-    pub fn step(
-        &mut self,
-        dynamics: &mut Dynamics,
-        t: f64,
-        x: &[f64],
-        v: &[f64],
-        h: f64,
-        x_out: &mut [f64],
-        v_out: &mut [f64],
-        stats: &mut Stats,
-    ) -> Result<(), CallbackError> {
+    /// Advances (x, v) at time t by h into (x_out, v_out) (see [`StepSpan`]).
+    pub fn step(&mut self, dynamics: &mut Dynamics, span: StepSpan<'_>, stats: &mut Stats) -> Result<(), CallbackError> {
+        let StepSpan {
+            t,
+            h,
+            x,
+            v,
+            x_out,
+            v_out,
+        } = span;
         let n = x.len();
         free_components(dynamics.inv_mass, dynamics.dim, &mut self.free);
         self.mass.clear();

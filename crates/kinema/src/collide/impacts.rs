@@ -1,0 +1,470 @@
+//! Continuous detection of the impulse model and its impacts in time order (stages 2–4 inside
+//! the step, [`ImpulseStage::run`]): the neighbour list made to hold for the step's sweep,
+//! each particle's first impact into the queue, the impacts popped in time order, each
+//! resolved by Newton's law and distributed at its time, and the force-free world's wake
+//! times (`wake.rs`) for the next steps.
+
+use std::time::{Duration, Instant};
+
+use rayon::prelude::*;
+
+use super::end_of_step::distribute;
+use super::events::{swept_reach, Event, Paths, Scene};
+use super::impulse_stage::{CollisionStats, ImpulseStage, StageSetting};
+use super::neighbour_list::{collider_scale, CHUNK, SKIN_PER_RADIUS};
+use super::{restitution_impulse, Collider, Contact, Domain, Partner, Plane, ResolveParams};
+use crate::error::Error;
+use crate::vec3;
+
+/// The least approach speed of an impact, m/s: slower meetings are contacts for the end of
+/// the step (the solver's tolerance, or the restitution threshold below which they would be
+/// plastic anyway).
+pub(super) fn least_impact_speed(threshold: f64) -> f64 {
+    ResolveParams::default().tolerance.max(threshold)
+}
+
+/// What an impact search sweeps against: the stage's setting, which walls of each collider
+/// exist ([`active_walls`]), the step h (s) and the restitution threshold (m/s).
+pub(super) struct Search<'s, 'a> {
+    pub set: &'s StageSetting<'a>,
+    pub active: &'s [[bool; 6]],
+    pub h: f64,
+    pub threshold: f64,
+}
+
+/// What continuous detection sweeps against (`collide::events::Scene`), from a [`Search`]
+/// and the stage's own fields (a macro, not a method: the event loop holds it while it
+/// changes other fields).
+macro_rules! scene {
+    ($stage:ident, $search:expr) => {
+        Scene {
+            radius: $search.set.radius,
+            colliders: $search.set.colliders,
+            active: $search.active,
+            domain: $search.set.domain,
+            list: &$stage.list,
+            slow: least_impact_speed($search.threshold),
+            resting: &$stage.resting,
+        }
+    };
+}
+
+impl ImpulseStage {
+    /// Makes the neighbour list hold for the whole step's sweep (rebuilt at x0 if not) and
+    /// returns the restitution threshold and the largest swept displacement of any particle
+    /// from the list's build positions, m.
+    ///
+    /// One pass over the particles: each one's swept displacement max(|x0 − b|, |x1 − b|) +
+    /// ⅛ |a| h² (b its build position) and the two largest of them; its velocity change
+    /// |v1 − v0| for the automatic threshold (twice the largest: a body resting under gravity
+    /// approaches at g h each step).
+    ///
+    /// With `quiet` (a force-free step with valid wake times) the list's hold comes from the
+    /// wake's speed bound instead, with no pass (`collide/wake.rs`), and the automatic
+    /// threshold is 0 (no force changes a velocity). Sets `rebuilt` when it rebuilds.
+    pub(super) fn prepare(
+        &mut self,
+        set: &StageSetting<'_>,
+        paths: &Paths<'_>,
+        x1: &[f64],
+        v1: &[f64],
+        h: f64,
+        quiet: bool,
+    ) -> Result<(f64, f64), Error> {
+        let reach = self.wake.reach_after(h);
+        let (x0, v0) = (paths.x0, paths.v0);
+        if quiet && self.list.built_at.len() == x0.len() && 2.0 * reach < self.list.allowance {
+            return Ok((set.restitution_threshold.unwrap_or(0.0), reach));
+        }
+        let domain = *set.domain;
+        let automatic = set.restitution_threshold.is_none();
+        let sweep = |built: &[f64], accel: &[f64]| {
+            x0.par_chunks(3 * CHUNK)
+                .zip(x1.par_chunks(3 * CHUNK))
+                .zip(built.par_chunks(3 * CHUNK))
+                .enumerate()
+                .map(|(c, ((x0, x1), b))| {
+                    let mut top = (0.0_f64, 0.0_f64, 0.0_f64, false);
+                    for l in 0..x0.len() / 3 {
+                        let q = c * CHUNK + l;
+                        let bq = vec3::get(b, l);
+                        let d0 = domain.displacement(vec3::get(x0, l), bq);
+                        let d1 = domain.displacement(vec3::get(x1, l), bq);
+                        let a = vec3::get(accel, q);
+                        let bulge2 = vec3::dot(a, a);
+                        let mut d = vec3::dot(d0, d0).max(vec3::dot(d1, d1)).sqrt();
+                        if bulge2 > 0.0 {
+                            d += 0.125 * bulge2.sqrt() * h * h;
+                        }
+                        let dv = if automatic {
+                            let w = vec3::sub(vec3::get(v1, q), vec3::get(v0, q));
+                            vec3::dot(w, w)
+                        } else {
+                            0.0
+                        };
+                        top = top_two(top, (d, 0.0, dv, d.is_nan()));
+                    }
+                    top
+                })
+                .reduce(|| (0.0, 0.0, 0.0, false), top_two)
+        };
+        // (with `quiet` the bound said the list may not hold: rebuilt without the check, which
+        // the actual displacements would pass only for a few more steps)
+        let fresh = self.list.built_at.len() == x0.len() && !quiet;
+        let mut top = if fresh {
+            sweep(&self.list.built_at, paths.accel)
+        } else {
+            (f64::INFINITY, 0.0, 0.0, false)
+        };
+        let holds = top.0 + top.1 < self.list.allowance;
+        if top.3 || !holds {
+            // Rebuild at x0, with a skin of the base (0.6 mean radius) or four of this step's
+            // largest sweeps, whichever is more: the list then lasts at least two such steps.
+            let accel = paths.accel;
+            let largest_move = (0..set.radius.len())
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .map(|q| {
+                    let a = vec3::norm(vec3::get(accel, q));
+                    vec3::norm(domain.displacement(vec3::get(x1, q), vec3::get(x0, q))) + 0.125 * a * h * h
+                })
+                .reduce(|| 0.0, f64::max);
+            let mean_radius = set.radius.iter().sum::<f64>() / set.radius.len().max(1) as f64;
+            let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest_move);
+            let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
+            self.list.built_at.clear();
+            self.list
+                .update(&mut self.grid, x0, set.radius, set.colliders, set.domain, skin, scale)?;
+            self.list.verified = None;
+            self.drop_inactive_walls(set);
+            self.rebuilt = true;
+            top = sweep(&self.list.built_at, paths.accel);
+            if top.3 || !top.0.is_finite() {
+                // non-finite positions: the list's build named them already; a NaN velocity
+                // change is caught by the world
+                top.0 = f64::INFINITY;
+            }
+        }
+        let threshold = set.restitution_threshold.unwrap_or(2.0 * top.2.sqrt());
+        Ok((threshold, top.0))
+    }
+
+    /// Continuous detection and the impacts in time order (see [`ImpulseStage::run`]):
+    /// returns the time spent detecting, responding and distributing, and whether any impulse
+    /// was applied. `reach`: the largest swept displacement from the list's build positions.
+    pub(super) fn impacts(
+        &mut self,
+        s: &Search<'_, '_>,
+        paths: &mut Paths<'_>,
+        mut reach: f64,
+        only_woken: bool,
+        stats: &mut CollisionStats,
+    ) -> Result<(Duration, Duration, Duration, bool), Error> {
+        let (h, threshold) = (s.h, s.threshold);
+        let (inv_mass, mass) = (s.set.inv_mass, s.set.mass);
+        let n = s.set.radius.len();
+        let clock = Instant::now();
+        if only_woken {
+            self.schedule_woken(s, paths);
+        } else {
+            self.schedule_all(s, paths, 0.0);
+        }
+        let (mut t_detect, mut t_respond, mut t_distribute) = (clock.elapsed(), Duration::ZERO, Duration::ZERO);
+        // A cap keeps an inelastic collapse (a particle wedged between two others, hit back
+        // and forth ever faster) from looping: what is left goes to the end-of-step solver.
+        let cap = 1000 * n + 100_000;
+        let mut processed = 0;
+        let mut any = false;
+        loop {
+            let clock = Instant::now();
+            let Some(event) = self.queue.pop() else { break };
+            let t = event.time;
+            let scene = scene!(self, s);
+            let partner = match event.partner {
+                Partner::Particle(j) => Some(j),
+                Partner::Collider(_) => None,
+            };
+            if partner.is_some_and(|j| paths.version(j) != event.partner_version) {
+                // the partner's path changed since: predicted on a path that no longer exists
+                let next = scene.earliest(paths, event.i, t, h);
+                self.touched[event.i] |= next.touching;
+                self.queue.schedule(event.i, next.event);
+                t_detect += clock.elapsed();
+                continue;
+            }
+            processed += 1;
+            if processed % 256 == 0 {
+                self.interrupt.poll()?; // a stop leaves the wake times invalid (see `stages`)
+            }
+            if processed > cap {
+                stats.unconverged += 1;
+                self.touched.iter_mut().for_each(|f| *f = true);
+                t_detect += clock.elapsed();
+                break;
+            }
+            paths.advance(event.i, t);
+            if let Some(j) = partner {
+                paths.advance(j, t);
+            }
+            let contact = contact_at(s.set, paths, &event);
+            t_detect += clock.elapsed();
+
+            // Stage 3: the impulse of Newton's law at the impact.
+            let clock = Instant::now();
+            let impulse = contact.and_then(|c| {
+                let material = s.set.materials.pair(&c);
+                restitution_impulse(&c, paths.v_ref(), inv_mass, material, threshold)
+            });
+            t_respond += clock.elapsed();
+
+            // Stage 4: onto both particles.
+            let clock = Instant::now();
+            if let Some(imp) = impulse {
+                any = true;
+                stats.impacts += 1;
+                stats.impulses += 1;
+                stats.energy_lost += imp.energy_lost;
+                distribute(
+                    event.i,
+                    partner,
+                    imp.vector,
+                    paths.v_ref_mut(),
+                    inv_mass,
+                    mass,
+                    &mut stats.impulse_balance,
+                );
+                for q in std::iter::once(event.i).chain(partner) {
+                    paths.changed(q);
+                    self.touched[q] = true;
+                    self.fastest_hit = self.fastest_hit.max(vec3::norm(vec3::get(paths.v_ref(), q)));
+                }
+            }
+            t_distribute += clock.elapsed();
+
+            // Stage 2 again: the two particles' next impacts, on the list if it still holds.
+            let clock = Instant::now();
+            let built = &self.list.built_at;
+            let farthest = std::iter::once(event.i)
+                .chain(partner)
+                .map(|q| swept_reach(paths, q, t, h, vec3::get(built, q), s.set.domain))
+                .fold(0.0, f64::max);
+            if farthest + reach >= self.list.allowance {
+                // a new path could reach beyond the list: rebuild it at t, predict everything again
+                reach = self.rebuild_at(s.set, paths, t, h)?;
+                self.rebuilt = true;
+                self.schedule_all(s, paths, t);
+            } else {
+                reach = reach.max(farthest);
+                let scene = scene!(self, s);
+                for q in std::iter::once(event.i).chain(partner) {
+                    if impulse.is_some() || q == event.i {
+                        let next = scene.earliest(paths, q, t, h);
+                        self.touched[q] |= next.touching;
+                        self.queue.schedule(q, next.event);
+                    }
+                }
+            }
+            t_detect += clock.elapsed();
+        }
+        Ok((t_detect, t_respond, t_distribute, any))
+    }
+
+    /// Every particle's first impact after `now` into the queue (the queue emptied first),
+    /// on all threads; with `flag`, the particles touching something at `now` are marked.
+    fn schedule_all(&mut self, s: &Search<'_, '_>, paths: &Paths<'_>, now: f64) {
+        let n = s.set.radius.len();
+        let scene = scene!(self, s);
+        let (mut events, touching) = scene.all_impacts(paths, now, s.h);
+        for q in touching {
+            self.touched[q] = true;
+        }
+        // Each particle's earliest: every pair's impact counts for both of its particles.
+        let mirrored: Vec<Event> = events
+            .iter()
+            .filter_map(|e| match e.partner {
+                Partner::Particle(j) => Some(Event {
+                    i: j,
+                    partner: Partner::Particle(e.i),
+                    partner_version: paths.version(e.i),
+                    ..*e
+                }),
+                Partner::Collider(_) => None,
+            })
+            .collect();
+        events.extend(mirrored);
+        events.sort_by(|a, b| a.i.cmp(&b.i).then(a.time.total_cmp(&b.time)).then(a.partner.cmp(&b.partner)));
+        self.queue.reset(n);
+        let mut last = usize::MAX;
+        for e in events {
+            if e.i != last {
+                self.queue.schedule(e.i, Some(e));
+                last = e.i;
+            }
+        }
+    }
+
+    /// The first impacts of the particles woken for this step only (the others are quiet:
+    /// their lines meet nothing in it, `collide/wake.rs`), into the emptied queue.
+    fn schedule_woken(&mut self, s: &Search<'_, '_>, paths: &Paths<'_>) {
+        self.queue.reset(s.set.radius.len());
+        let scene = scene!(self, s);
+        for &q in &self.woken {
+            let next = scene.earliest(paths, q, 0.0, s.h);
+            self.touched[q] |= next.touching;
+            self.queue.schedule(q, next.event);
+        }
+    }
+
+    /// The wake times at time `end` (world clock, s) of a force-free world in state x1, v1
+    /// (`collide/wake.rs`). `incremental` (at the end of a step that looked only at the woken
+    /// particles): the times of the rest still hold, and only the particles this step looked
+    /// at or changed get new ones (the bound grows by the step); otherwise all are computed
+    /// again, with the bound measured. Leaves `wake.valid` set if the list holds.
+    pub(super) fn wake_up(&mut self, set: &StageSetting<'_>, x1: &[f64], v1: &[f64], end: f64, h: f64, incremental: bool) {
+        let n = set.radius.len();
+        let domain = *set.domain;
+        if incremental {
+            // The touched particles (all of them have books) moved at most at the fastest
+            // speed of the step, plus what the end-of-step solve moved them by.
+            let (mut moved, mut fastest_after) = (0.0_f64, 0.0_f64);
+            for &(q, x, _) in &self.books {
+                moved = moved.max(vec3::norm(domain.displacement(vec3::get(x1, q), x)));
+                fastest_after = fastest_after.max(vec3::norm(vec3::get(v1, q)));
+            }
+            let fastest = self.wake.vmax.max(self.fastest_hit);
+            self.wake.reach += h * fastest + moved;
+            self.wake.vmax = fastest.max(fastest_after);
+        } else {
+            let built = &self.list.built_at;
+            let (reach, vmax) = (0..n)
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .map(|q| {
+                    let d = domain.displacement(vec3::get(x1, q), vec3::get(built, q));
+                    (vec3::norm(d), vec3::norm(vec3::get(v1, q)))
+                })
+                .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)));
+            self.wake.reach = reach;
+            self.wake.vmax = vmax;
+        }
+        if !(2.0 * self.wake.reach < self.list.allowance) {
+            return; // the list expires now: the next step rebuilds it and looks at everyone
+        }
+        // Meetings up to the list's expiry, and a step beyond it.
+        let horizon = self.wake.horizon(self.list.allowance) + h;
+        let active = active_walls(set.colliders, set.domain);
+        let search = Search {
+            set,
+            active: &active,
+            h,
+            threshold: 0.0,
+        };
+        let scene = scene!(self, search);
+        let at = |q: usize| scene.first_meeting(x1, v1, q, horizon).map(|tau| end + tau);
+        if incremental {
+            let mut involved: Vec<usize> = self.books.iter().map(|b| b.0).chain(self.woken.iter().copied()).collect();
+            involved.sort_unstable();
+            involved.dedup();
+            let times: Vec<(usize, Option<f64>)> = involved.into_iter().map(|q| (q, at(q))).collect();
+            for (q, time) in times {
+                self.wake.table.set(q, time);
+            }
+        } else {
+            let times: Vec<(usize, f64)> = (0..n)
+                .into_par_iter()
+                .with_min_len(CHUNK)
+                .filter_map(|q| at(q).map(|t| (q, t)))
+                .collect();
+            self.wake.table.fill(n, times.into_iter());
+        }
+        self.wake.valid = true;
+    }
+
+    /// Rebuilds the list at the particles' positions at time t (their references moved there)
+    /// for the rest of the step; returns the largest swept displacement from there, m.
+    fn rebuild_at(&mut self, set: &StageSetting<'_>, paths: &mut Paths<'_>, t: f64, h: f64) -> Result<f64, Error> {
+        let (n, radius) = (set.radius.len(), set.radius);
+        let mut x = vec![0.0; 3 * n];
+        let mut largest: f64 = 0.0;
+        for q in 0..n {
+            paths.advance(q, t);
+            x[3 * q..3 * q + 3].copy_from_slice(&paths.x_ref(q));
+            largest = largest.max(swept_reach(paths, q, t, h, vec3::get(&x, q), set.domain));
+        }
+        let mean_radius = radius.iter().sum::<f64>() / n.max(1) as f64;
+        let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest);
+        let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
+        self.list.built_at.clear();
+        self.list
+            .update(&mut self.grid, &x, radius, set.colliders, set.domain, skin, scale)?;
+        self.list.verified = None;
+        self.drop_inactive_walls(set);
+        Ok(largest)
+    }
+
+    /// Leaves out of the list's collider candidates a box whose walls all lie along
+    /// periodic axes (a fully periodic cell has no walls to meet).
+    fn drop_inactive_walls(&mut self, set: &StageSetting<'_>) {
+        let active = active_walls(set.colliders, set.domain);
+        self.list.walls.retain(|&(_, k)| active[k].iter().any(|a| *a));
+    }
+}
+
+/// The contact of an event at its time (the particles already moved there).
+fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event) -> Option<Contact> {
+    let xi = paths.x_ref(e.i);
+    let unit = |d: [f64; 3]| {
+        let len = vec3::norm(d);
+        (len > 0.0).then(|| vec3::scale(1.0 / len, d))
+    };
+    let normal = match e.partner {
+        Partner::Particle(j) => unit(set.domain.displacement(xi, paths.x_ref(j)))?,
+        Partner::Collider(k) => match &set.colliders[k] {
+            Collider::Plane(p) => p.normal(),
+            Collider::Box(b) => b.walls()[e.wall].normal(),
+            Collider::Sphere(s) => unit(vec3::sub(xi, s.center()))?,
+        },
+    };
+    Some(Contact {
+        i: e.i,
+        other: e.partner,
+        normal,
+        overlap: 0.0,
+        u_n: 0.0,
+    })
+}
+
+/// Which walls of each collider exist: a box's walls along periodic axes do not.
+pub(super) fn active_walls(colliders: &[Collider], domain: &Domain) -> Vec<[bool; 6]> {
+    colliders
+        .iter()
+        .map(|c| {
+            let mut active = [false; 6];
+            match c {
+                Collider::Box(b) => {
+                    for (w, wall) in b.walls().iter().enumerate() {
+                        active[w] = wall_active(domain, wall);
+                    }
+                }
+                _ => active[0] = true,
+            }
+            active
+        })
+        .collect()
+}
+
+/// Whether a wall is active: a box's walls along periodic axes are not.
+fn wall_active(domain: &Domain, plane: &Plane) -> bool {
+    match domain.periodic_box() {
+        Some(p) => {
+            let n = plane.normal();
+            !(0..3).any(|k| p.axes()[k] && n[k] != 0.0)
+        }
+        None => true,
+    }
+}
+
+/// Combines (largest, second largest, largest velocity change, NaN met) of two parts.
+fn top_two(a: (f64, f64, f64, bool), b: (f64, f64, f64, bool)) -> (f64, f64, f64, bool) {
+    (a.0.max(b.0), a.0.min(b.0).max(a.1).max(b.1), a.2.max(b.2), a.3 || b.3)
+}

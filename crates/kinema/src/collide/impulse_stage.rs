@@ -1,0 +1,373 @@
+//! The impulse model's collision stages 2–4 over one step ([`ImpulseStage::run`]): what they
+//! keep from step to step (the candidate list, the paths and the queue of impacts, the wake
+//! times, the end-of-step contacts and their warm start), what the world tells them
+//! ([`StageSetting`], [`StepFrame`]) and what they report ([`CollisionStats`],
+//! [`CollisionTimes`]). Continuous detection and the impacts are in `impacts.rs`, the
+//! end-of-step contacts, their solve and the books in `end_of_step.rs`; the world keeps the
+//! settings, colliders, domain and the books summed over steps (`world/collisions.rs`).
+
+use std::time::{Duration, Instant};
+
+use super::end_of_step::distribute;
+use super::events::{EventQueue, PathStore, Paths};
+use super::impacts::{active_walls, least_impact_speed, Search};
+use super::neighbour_list::NeighbourList;
+use super::wake::Wake;
+use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
+use crate::error::Error;
+use crate::vec3;
+use crate::world::Interrupt;
+
+/// What the collision stages did, over one step or summed over many.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CollisionStats {
+    /// Contacts at the end of the step (touching or overlapping pairs and particle–collider
+    /// contacts).
+    pub contacts: usize,
+    /// Impacts found by continuous detection inside the step, each resolved at its time.
+    pub impacts: usize,
+    /// Impulses applied (impacts and end-of-step contacts).
+    pub impulses: usize,
+    /// Σ m Δv of all particles over the collision stages minus the impulses that colliders
+    /// and pinned particles gave them, N·s: the sum of all impulses between movable
+    /// particles, zero by action and reaction up to rounding.
+    pub impulse_balance: [f64; 3],
+    /// Kinetic energy removed by the collisions, J (≥ 0; 0 for e = 1 without friction).
+    pub energy_lost: f64,
+    /// The largest overlap left after the step, m.
+    pub max_overlap: f64,
+    /// Sweeps of the end-of-step velocity solver (the latest step's; the most any island took).
+    pub solver_sweeps: usize,
+    /// Independent groups of the end-of-step contacts, each solved on its own on one of the
+    /// threads (the latest step's; `collide/islands.rs`).
+    pub islands: usize,
+    /// Steps whose end-of-step solver stopped at its sweep cap before converging, or whose
+    /// impacts stopped at the cap of continuous detection (0 or 1 for one step; summed).
+    pub unconverged: usize,
+}
+
+impl CollisionStats {
+    /// Adds another step's figures (contacts: the latest).
+    pub fn accumulate(&mut self, step: &CollisionStats) {
+        self.contacts = step.contacts;
+        self.impacts += step.impacts;
+        self.impulses += step.impulses;
+        for k in 0..3 {
+            self.impulse_balance[k] += step.impulse_balance[k];
+        }
+        self.energy_lost += step.energy_lost;
+        self.max_overlap = step.max_overlap;
+        self.solver_sweeps = step.solver_sweeps;
+        self.islands = step.islands;
+        self.unconverged += step.unconverged;
+    }
+}
+
+/// Wall-clock time of the collision stages 2–4 of the impulse model, summed over steps.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CollisionTimes {
+    /// Stage 2: the candidate list, each particle's first impact, the events' validity and
+    /// rescheduling, the end-of-step contacts.
+    pub detect: std::time::Duration,
+    /// Stage 3: the impulses of Newton's law (impacts, and the end-of-step solver) and the
+    /// removal of overlap.
+    pub respond: std::time::Duration,
+    /// Stage 4: each impulse onto both particles, the impulse balance and the energy books.
+    pub distribute: std::time::Duration,
+}
+
+/// What the world tells the collision stages about the step they follow.
+pub(crate) struct StepFrame<'a> {
+    /// The world's clock at the step's start, s.
+    pub t0: f64,
+    /// The step, s.
+    pub h: f64,
+    /// The method's constant acceleration of the step (velocity Verlet's a(t)), m/s², 3 per
+    /// particle; `None`: the parabola through x₁ is taken.
+    pub accel: Option<&'a [f64]>,
+    /// No force acts: every path is a straight line from one step to the next, and the
+    /// impact search starts only from the particles whose wake time falls in the step
+    /// (`collide/wake.rs`).
+    pub steady: bool,
+    /// x₁ is already in the periodic cell (the stages wrap only what they move).
+    pub wrapped: bool,
+}
+
+/// What the stages see of the world in a step, besides its state: the colliders, the domain,
+/// the materials (global, per particle, per collider), the settings they follow, and the
+/// particles' radii (m), inverse masses (1/kg) and masses (kg).
+pub(crate) struct StageSetting<'a> {
+    pub colliders: &'a [Collider],
+    pub domain: &'a Domain,
+    pub materials: MaterialTable<'a>,
+    /// Continuous detection ([`crate::world::CollisionParams::ccd`]).
+    pub ccd: bool,
+    /// The restitution threshold, m/s, or `None` for the automatic one
+    /// ([`crate::world::CollisionParams::restitution_threshold`]).
+    pub restitution_threshold: Option<f64>,
+    pub radius: &'a [f64],
+    pub inv_mass: &'a [f64],
+    pub mass: &'a [f64],
+}
+
+/// The impulse model's stages and their buffers.
+pub(crate) struct ImpulseStage {
+    pub(super) grid: Grid,
+    /// Candidate pairs of continuous detection and of the end-of-step contacts.
+    pub(super) list: NeighbourList,
+    /// The particles' paths through the step and the queue of their next impacts.
+    pub(super) paths: PathStore,
+    /// The step's constant accelerations when the method gives none (the parabola
+    /// through x₁), m/s².
+    pub(super) fitted: Vec<f64>,
+    pub(super) queue: EventQueue,
+    /// In a force-free world, each particle's wake time (see `collide/wake.rs`), the
+    /// particles woken in this step, whether this step rebuilt the list, and the fastest
+    /// speed an impact of this step left.
+    pub(super) wake: Wake,
+    pub(super) woken: Vec<usize>,
+    pub(super) rebuilt: bool,
+    pub(super) fastest_hit: f64,
+    /// Particles that touched something at the step's start or were hit in it: the only
+    /// ones that can be in contact at its end (continuous detection saw every other path).
+    pub(super) touched: Vec<bool>,
+    /// The integrated state (x₁, v₁) of each touched particle, for the energy books.
+    pub(super) books: Vec<(usize, [f64; 3], [f64; 3])>,
+    pub(super) contacts: Vec<Contact>,
+    /// The end-of-step contacts as detected (overlap and u_n before the response).
+    pub detected: Vec<Contact>,
+    /// The end-of-step solver's velocity targets, totals, and the last step's totals by
+    /// contact (for warm starting).
+    pub(super) targets: Vec<f64>,
+    pub(super) totals: Vec<[f64; 3]>,
+    pub(super) warm: Vec<(usize, Partner, [f64; 3])>,
+    /// The contacts of `warm` and whether each carried load (see `Scene::resting`).
+    pub(super) resting: Vec<(usize, Partner, bool)>,
+    /// The world's check that may stop a step, asked inside a long run of impacts.
+    pub interrupt: Interrupt,
+}
+
+impl ImpulseStage {
+    /// Empty buffers; no check may stop a step.
+    pub fn new() -> Self {
+        ImpulseStage {
+            grid: Grid::new(),
+            list: NeighbourList::default(),
+            paths: PathStore::default(),
+            fitted: Vec::new(),
+            queue: EventQueue::default(),
+            wake: Wake::default(),
+            woken: Vec::new(),
+            rebuilt: false,
+            fastest_hit: 0.0,
+            touched: Vec::new(),
+            books: Vec::new(),
+            contacts: Vec::new(),
+            detected: Vec::new(),
+            targets: Vec::new(),
+            totals: Vec::new(),
+            warm: Vec::new(),
+            resting: Vec::new(),
+            interrupt: Interrupt::none(),
+        }
+    }
+
+    /// The end-of-step solver's warm start: each contact of the last step (particle, partner)
+    /// with the impulse totals it carried, N·s, sorted by (particle, partner).
+    pub fn warm_start(&self) -> &[(usize, Partner, [f64; 3])] {
+        &self.warm
+    }
+
+    /// Sets the warm start (a checkpoint's), and with it which contacts rested.
+    pub fn set_warm_start(&mut self, mut warm: Vec<(usize, Partner, [f64; 3])>) {
+        warm.sort_by_key(|w| (w.0, w.1));
+        self.resting = warm.iter().map(|w| (w.0, w.1, w.2 != [0.0; 3])).collect();
+        self.warm = warm;
+    }
+
+    /// Forgets the candidate list and the warm start (particles, colliders or the domain
+    /// changed).
+    pub fn forget_list(&mut self) {
+        self.list.built_at.clear();
+        self.wake.valid = false;
+        self.warm.clear();
+        self.resting.clear();
+    }
+
+    /// Stages 2–4 of the impulse model on the step from (x0, v0) to the integrated (x1, v1),
+    /// over `h` s, among the colliders, materials and particles of `set`; `accel` is the
+    /// step's constant acceleration where the method knows it (velocity Verlet's a(t)), else
+    /// it is the one that takes x0, v0 to x1. (x1, v1) are updated in place; returns whether anything changed, what the stages did and their
+    /// time (for the world's books: an error books nothing).
+    ///
+    /// The order, and why (as Box2D's solver stages are listed):
+    ///
+    /// ```text
+    ///   detect      the list holds for the step's sweep (else rebuilt); each particle's first
+    ///               impact in [0, h] into the queue; who touches something at τ = 0
+    ///   ┌ detect    the earliest event; a stale one is recomputed and put back
+    ///   │ respond   its impulse by Newton's law at the impact time
+    ///   │ distribute +w_i J on i, −w_j J on j; their paths change from there
+    ///   └ detect    the two particles' next impacts           (until the queue is empty)
+    ///   detect      end-of-step contacts among the touched particles
+    ///   respond     the velocity solver's totals (restitution targets for impacts, holds for
+    ///               resting contacts, warm-started); overlap removed by moving positions
+    ///   distribute  the totals onto both particles; impulse balance; energy books
+    /// ```
+    ///
+    /// Continuous detection interleaves the stages in time: an impact's impulse changes the
+    /// two paths, and the next impacts of those two can only be found after it is applied.
+    /// The end-of-step solve comes after all impacts, on the state they leave.
+    pub fn run(
+        &mut self,
+        set: &StageSetting<'_>,
+        frame: &StepFrame<'_>,
+        x0: &[f64],
+        v0: &[f64],
+        x1: &mut [f64],
+        v1: &mut [f64],
+    ) -> Result<(bool, CollisionStats, CollisionTimes), Error> {
+        let clock = Instant::now();
+        let h = frame.h;
+        // The step's paths: Verlet's own acceleration, or the parabola through x1.
+        let mut store = std::mem::take(&mut self.paths);
+        let mut fitted = std::mem::take(&mut self.fitted);
+        let accel = match frame.accel {
+            Some(a) => a,
+            None => {
+                fitted.clear();
+                fitted.extend((0..x0.len()).map(|c| 2.0 * (x1[c] - x0[c] - v0[c] * h) / (h * h)));
+                &fitted
+            }
+        };
+        let mut paths = Paths::begin(&mut store, x0, v0, accel);
+        let result = self.stages(set, &mut paths, clock, frame, x1, v1);
+        self.paths = store;
+        self.fitted = fitted;
+        result
+    }
+
+    /// The body of [`ImpulseStage::run`] on the step's paths (`clock`: the detect stage's
+    /// start).
+    fn stages(
+        &mut self,
+        set: &StageSetting<'_>,
+        paths: &mut Paths<'_>,
+        clock: Instant,
+        frame: &StepFrame<'_>,
+        x1: &mut [f64],
+        v1: &mut [f64],
+    ) -> Result<(bool, CollisionStats, CollisionTimes), Error> {
+        let (t0, h) = (frame.t0, frame.h);
+        let (inv_mass, mass) = (set.inv_mass, set.mass);
+        let n = set.radius.len();
+        let mut stats = CollisionStats::default();
+        // The wake times hold only if this step ends well (an error leaves them invalid).
+        let steady = frame.steady && set.ccd;
+        let quiet = std::mem::replace(&mut self.wake.valid, false) && steady;
+        self.rebuilt = false;
+        self.fastest_hit = 0.0;
+        let (threshold, reach) = self.prepare(set, paths, x1, v1, h, quiet)?;
+        let mut only_woken = quiet && !self.rebuilt;
+        if steady && !only_woken {
+            // New wake times for everyone, from the step's start (one pass over all pairs,
+            // instead of a search of this step's impacts from every particle).
+            self.wake_up(set, paths.x0, paths.v0, t0, h, false);
+            only_woken = std::mem::replace(&mut self.wake.valid, false);
+        }
+        // From here `rebuilt`: the list was rebuilt inside the step.
+        self.rebuilt = false;
+        self.woken.clear();
+        if only_woken {
+            self.woken = self.wake.due(t0 + h, h);
+        }
+        self.touched.clear();
+        self.touched.resize(n, !set.ccd);
+        self.books.clear();
+        let mut changed = false;
+        let mut t_detect = clock.elapsed();
+        let (mut t_respond, mut t_distribute) = (Duration::ZERO, Duration::ZERO);
+
+        if set.ccd {
+            let active = active_walls(set.colliders, set.domain);
+            let search = Search {
+                set,
+                active: &active,
+                h,
+                threshold,
+            };
+            let (d, r, s, any) = self.impacts(&search, paths, reach, only_woken, &mut stats)?;
+            t_detect += d;
+            t_respond += r;
+            t_distribute += s;
+            changed |= any;
+        }
+        let clock = Instant::now();
+        if set.ccd {
+            paths.finish(x1, v1, h);
+        }
+        // The state of the touched particles before the end-of-step solve, for its books.
+        for q in (0..n).filter(|&q| self.touched[q]) {
+            self.books.push((q, vec3::get(x1, q), vec3::get(v1, q)));
+        }
+        // Stage 2 at the end of the step: the contacts of the touched particles.
+        self.end_contacts(set, x1, v1);
+        stats.contacts = self.contacts.len();
+        self.detected.clone_from(&self.contacts);
+        // A pair that only touches (no overlap) and approaches faster than an impact's least
+        // speed meets exactly at the step's end: its impact belongs to the next step's t = 0,
+        // where the law resolves it pair by pair, like every other impact (with ccd).
+        if set.ccd {
+            let slow = least_impact_speed(threshold);
+            self.contacts.retain(|c| !(c.overlap <= 0.0 && c.u_n < -slow));
+        }
+        t_detect += clock.elapsed();
+
+        // Stage 3: the solver's totals, and the overlap removed.
+        let clock = Instant::now();
+        let solved = self.solve(set, v1, x1, threshold)?;
+        stats.solver_sweeps = solved.hold.iterations;
+        stats.unconverged = stats.unconverged.max(usize::from(!solved.hold.converged));
+        stats.islands = solved.islands;
+        stats.max_overlap = solved.separate.max_overlap_after;
+        changed |= solved.separate.max_overlap_before > 0.0;
+        t_respond += clock.elapsed();
+
+        // Stage 4: the totals onto both particles; the books.
+        let clock = Instant::now();
+        for (c, p) in self.contacts.iter().zip(&self.totals) {
+            if *p == [0.0; 3] {
+                continue;
+            }
+            changed = true;
+            stats.impulses += 1;
+            distribute(c.i, c.partner_particle(), *p, v1, inv_mass, mass, &mut stats.impulse_balance);
+        }
+        stats.energy_lost += self.energy_books(set, paths.accel, x1, v1);
+        if let Some(p) = set.domain.periodic_box() {
+            if frame.wrapped {
+                // only the touched particles moved since (the impacts, the correction)
+                for &(q, _, _) in &self.books {
+                    p.wrap_positions_serial(&mut x1[3 * q..3 * q + 3]);
+                }
+            } else {
+                p.wrap_positions(x1);
+            }
+        }
+        t_distribute += clock.elapsed();
+
+        // The next steps' wake times: of the particles this step looked at, or of all.
+        if steady {
+            let clock = Instant::now();
+            self.wake_up(set, x1, v1, t0 + h, h, only_woken && !self.rebuilt);
+            t_detect += clock.elapsed();
+        }
+
+        let times = CollisionTimes {
+            detect: t_detect,
+            respond: t_respond,
+            distribute: t_distribute,
+        };
+        Ok((changed, stats, times))
+    }
+}

@@ -1,0 +1,141 @@
+//! What a checkpoint takes from a world and gives back to it besides the particles' state:
+//! the clock and ids, the collision books, and what the method and the impulse model carry
+//! from one step to the next.
+
+use super::{CollisionStats, World, WorldStepper};
+use crate::collide::Partner;
+use crate::error::Error;
+
+impl World {
+    /// Restores what a checkpoint holds besides the particles' state: the time (s), the
+    /// steps taken, and each particle's id with the id the next one gets (ids strictly
+    /// increasing, as adding and removing leave them, all below `next_id`).
+    pub fn restore_clock_and_ids(&mut self, time: f64, steps: u64, ids: &[u64], next_id: u64) -> Result<(), Error> {
+        if !time.is_finite() {
+            return Err(Error::invalid("time", time, "the time must be finite"));
+        }
+        if ids.len() != self.particles.len() {
+            return Err(Error::invalid(
+                "ids",
+                format!("{} ids", ids.len()),
+                format!("one per particle ({})", self.particles.len()),
+            ));
+        }
+        if let Some(k) = (1..ids.len()).find(|&k| ids[k] <= ids[k - 1]) {
+            return Err(Error::invalid(format!("ids[{k}]"), ids[k], "ids must increase strictly"));
+        }
+        if ids.last().is_some_and(|&l| l >= next_id) {
+            return Err(Error::invalid("next_id", next_id, "it must be above every id"));
+        }
+        self.restore_user_order();
+        self.time = time;
+        self.steps = steps;
+        self.particles.id.copy_from_slice(ids);
+        self.particles.next_id = next_id;
+        Ok(())
+    }
+
+    /// Restores the collision books of a checkpoint: the totals since collisions were turned
+    /// on and the last step's (see [`World::collision_stats`]). Nothing when they are off.
+    pub fn restore_collision_stats(&mut self, total: CollisionStats, last: CollisionStats) {
+        if let Some(stage) = &mut self.collisions {
+            stage.total = total;
+            stage.last = last;
+        }
+    }
+
+    /// Starts the collision stage's and the contact force's caches again, as after changing
+    /// the particles (the contact lists and the particles' order along space, the impulse
+    /// solver's warm start), and the method's: a checkpoint is taken at such a point, so that
+    /// a world read from it, built afresh, and the world that wrote it go on from the same
+    /// engine state. What the method carries from step to step is kept apart
+    /// ([`World::integrator_carry`]) and given back to both.
+    pub fn restart_caches(&mut self) -> Result<(), Error> {
+        self.restore_user_order();
+        self.reset_caches();
+        self.rebuild_contact_force()
+    }
+
+    /// What the method carries from one step to the next, in the user's order: Verlet's
+    /// acceleration at the current state (m/s², 3 per particle; only while it is up to date)
+    /// or implicit Euler's last Δv (m/s, its first guess for the next solve). `None` for the
+    /// other methods, which carry nothing, and before the first step.
+    pub fn integrator_carry(&mut self) -> Option<Vec<f64>> {
+        self.restore_user_order();
+        let n = 3 * self.particles.len();
+        match &self.stepper {
+            Some(WorldStepper::Verlet(b)) if b.fresh && b.a.len() == n => Some(b.a.clone()),
+            Some(WorldStepper::Implicit(bw)) if bw.warm_start().len() == n => Some(bw.warm_start().to_vec()),
+            _ => None,
+        }
+    }
+
+    /// The impulse model's warm start carried to the next step: each contact of the last
+    /// step, (particle, partner, impulse totals in N·s), sorted; empty without collisions.
+    pub fn collision_carry(&mut self) -> Vec<(usize, Partner, [f64; 3])> {
+        self.restore_user_order();
+        self.collisions.as_ref().map(|c| c.warm_start().to_vec()).unwrap_or_default()
+    }
+
+    /// Gives the impulse model back what [`World::collision_carry`] took (a checkpoint's);
+    /// checks the particles and colliders it names.
+    pub fn restore_collision_carry(&mut self, carry: Vec<(usize, Partner, [f64; 3])>) -> Result<(), Error> {
+        let (n, colliders) = (self.particles.len(), self.colliders().len());
+        if let Some(k) = carry.iter().position(|(i, other, t)| {
+            *i >= n
+                || !t.iter().all(|c| c.is_finite())
+                || match other {
+                    Partner::Particle(j) => *j >= n,
+                    Partner::Collider(c) => *c >= colliders,
+                }
+        }) {
+            return Err(Error::invalid(
+                format!("collision_carry[{k}]"),
+                format!("{:?}", carry[k]),
+                format!("contacts between the {n} particles and {colliders} colliders, with finite impulses"),
+            ));
+        }
+        match &mut self.collisions {
+            Some(stage) => stage.set_warm_start(carry),
+            None if carry.is_empty() => {}
+            None => {
+                return Err(Error::invalid(
+                    "collision_carry",
+                    carry.len(),
+                    "no contacts: collisions are off",
+                ))
+            }
+        }
+        Ok(())
+    }
+
+    /// Gives the method back what [`World::integrator_carry`] took (a checkpoint's).
+    pub fn restore_integrator_carry(&mut self, carry: Vec<f64>) -> Result<(), Error> {
+        let n = 3 * self.particles.len();
+        if carry.len() != n {
+            return Err(Error::invalid(
+                "integrator_carry",
+                format!("{} values", carry.len()),
+                format!("3 per particle ({n})"),
+            ));
+        }
+        self.restore_user_order();
+        let mut stepper = WorldStepper::new(&self.params.method, n);
+        match &mut stepper {
+            WorldStepper::Verlet(b) => {
+                b.a = carry;
+                b.fresh = true;
+            }
+            WorldStepper::Implicit(bw) => bw.set_warm_start(carry),
+            _ => {
+                return Err(Error::invalid(
+                    "integrator_carry",
+                    self.params.method.name(),
+                    "only verlet and implicit_euler carry anything",
+                ))
+            }
+        }
+        self.stepper = Some(stepper);
+        Ok(())
+    }
+}

@@ -1,0 +1,121 @@
+//! What a world holds between steps: adding and removing particles and forces, and the caches
+//! that changing them drops.
+
+use super::World;
+use crate::error::Error;
+use crate::forces::Force;
+use crate::particles::Particles;
+
+impl World {
+    /// Adds particles (see [`Particles::add`]); in 2D every z and z velocity must be 0.
+    pub fn add_particles(
+        &mut self,
+        x: &[f64],
+        v: &[f64],
+        mass: &[f64],
+        radius: &[f64],
+        pinned: &[bool],
+    ) -> Result<std::ops::Range<usize>, Error> {
+        if self.params.dim == 2 {
+            for (name, values) in [("position", x), ("velocity", v)] {
+                if let Some(i) = values.chunks(3).position(|c| c.len() == 3 && c[2] != 0.0) {
+                    return Err(Error::invalid(
+                        format!("{name}[{i}][2]"),
+                        values[3 * i + 2],
+                        "a 2D world keeps z = 0",
+                    ));
+                }
+            }
+        }
+        let range = self.particles.add(x, v, mass, radius, pinned)?;
+        for f in &self.forces {
+            f.validate(self.particles.len())?;
+        }
+        self.reset_caches(); // the state changed size
+        if let Some(stage) = &mut self.collisions {
+            if !stage.own.is_empty() {
+                stage.own.resize(self.particles.len(), (None, None));
+            }
+            stage.refresh_materials()?;
+        }
+        self.rebuild_contact_force()?;
+        Ok(range)
+    }
+
+    /// Removes the particles at the given indices (the user's order; repeats allowed); the
+    /// others keep their order, their ids and their state. A removed particle takes with it
+    /// what the forces hold for it (springs ending on it, [`Force::remove_particles`]) and its
+    /// own collision materials; the integrator's and the collision stage's caches start
+    /// again, as after [`World::add_particles`]. Between steps only: the time, the step
+    /// count and the collision books go on.
+    pub fn remove_particles(&mut self, indices: &[usize]) -> Result<(), Error> {
+        let n = self.particles.len();
+        if let Some(k) = indices.iter().position(|&i| i >= n) {
+            return Err(Error::invalid(
+                format!("index[{k}]"),
+                indices[k],
+                format!("indices of particles must be < {n}, the number of particles"),
+            ));
+        }
+        if indices.is_empty() {
+            return Ok(());
+        }
+        self.restore_user_order();
+        let mut keep = vec![true; n];
+        for &i in indices {
+            keep[i] = false;
+        }
+        let new_of_old = self.particles.retain(&keep);
+        for v in [&mut self.x_next, &mut self.v_next] {
+            crate::particles::retain_rows(v, 3, &keep);
+        }
+        for f in &mut self.forces {
+            f.reindex(&new_of_old);
+        }
+        if let Some(stage) = &mut self.collisions {
+            crate::particles::retain_rows(&mut stage.own, 1, &keep);
+            stage.refresh_materials()?;
+        }
+        self.reset_caches();
+        self.rebuild_contact_force()
+    }
+
+    /// Adds a force, checked against the current particles (before the spring–dashpot contact
+    /// force, which is always the last one).
+    pub fn add_force(&mut self, force: Box<dyn Force>) -> Result<(), Error> {
+        force.validate(self.particles.len())?;
+        // The spring–dashpot contact force stays last: Verlet's fused pass adds it after the
+        // sum of the others, the order in which the forces are summed everywhere else.
+        match self.contact_force {
+            Some(k) => {
+                self.forces.insert(k, force);
+                self.contact_force = Some(k + 1);
+            }
+            None => self.forces.push(force),
+        }
+        self.reset_caches();
+        Ok(())
+    }
+
+    /// The particles (read only; change them through the world's methods).
+    pub fn particles(&self) -> &Particles {
+        &self.particles
+    }
+
+    /// Mutable particles: after changing positions or velocities the method caches are
+    /// dropped, so the next step starts afresh.
+    pub fn particles_mut(&mut self) -> &mut Particles {
+        self.reset_caches();
+        self.contact_dirty = self.contact_force.is_some();
+        &mut self.particles
+    }
+
+    /// Drops what depends on the state: the method's caches and the energy reference.
+    pub(super) fn reset_caches(&mut self) {
+        self.stepper = None;
+        self.watch = None;
+        if let Some(stage) = &mut self.collisions {
+            stage.forget_list();
+        }
+    }
+}

@@ -1,0 +1,338 @@
+//! Stage 1 of a world step: the stepper the world keeps between steps, and the integration of
+//! positions and velocities over one step (velocity Verlet on the particles' own arrays, the
+//! other methods on the joined state [x, v]).
+
+use super::contact_force::CHUNK;
+use super::dynamics::Dynamics;
+use super::implicit::{BaraffWitkin, StepSpan};
+use super::{World, RUNAWAY_CHECK_EVERY};
+use crate::error::{Divergence, Error};
+use crate::forces::State;
+use crate::ode::explicit_rk::ExplicitRk;
+use crate::ode::stepper::{first_non_finite, StepFailure, Stepper, Termination};
+use crate::ode::symplectic_euler::SymplecticEuler;
+use crate::ode::system::{FirstOrderForm, OdeSystem, SecondOrderSystem};
+use crate::ode::{self, Integrator, Method, MethodKind, SolveOptions};
+use rayon::prelude::*;
+
+/// The stepper a world keeps between steps (so that a method's cache survives).
+pub(super) enum WorldStepper {
+    /// Velocity Verlet on the particles' own arrays (see [`VerletBuffers`]).
+    Verlet(Box<VerletBuffers>),
+    SecondOrder(Box<dyn for<'a> Stepper<dyn SecondOrderSystem + 'a>>),
+    FirstOrder(Box<dyn for<'a> Stepper<dyn OdeSystem + 'a>>),
+    /// rk45 substeps adaptively inside each world step.
+    Adaptive,
+    /// implicit_euler: Baraff & Witkin's linearised step with conjugate gradients.
+    Implicit(Box<BaraffWitkin>),
+}
+
+impl WorldStepper {
+    pub(super) fn new(method: &Integrator, n: usize) -> Self {
+        match method {
+            Integrator::Tableau(t) => WorldStepper::FirstOrder(Box::new(ExplicitRk::new(t.clone(), 2 * n))),
+            Integrator::Named(m) => match m.kind() {
+                MethodKind::SecondOrder if *m == Method::Verlet => WorldStepper::Verlet(Box::default()),
+                MethodKind::SecondOrder => WorldStepper::SecondOrder(Box::new(SymplecticEuler::new(n))),
+                MethodKind::ExplicitRk => WorldStepper::FirstOrder(Box::new(ExplicitRk::new(
+                    m.tableau().expect("explicit methods have tableaux"),
+                    2 * n,
+                ))),
+                MethodKind::Implicit => WorldStepper::Implicit(Box::default()),
+                MethodKind::Adaptive => WorldStepper::Adaptive,
+            },
+        }
+    }
+}
+
+/// Velocity Verlet's acceleration a_n at the current state, kept from the last step's end
+/// (first same as last), and the next one's buffer; the world's `x_next`, `v_next` hold the
+/// new state until the step is accepted. The scheme (and why the dashpot sees the Euler
+/// predictor v + h a) is that of `ode/verlet.rs`, bit for bit:
+///
+/// ```text
+///   x' = x + h v + h²/2 a,   v' = v + h a          (drift and predictor, one pass)
+///   a' = F(t + h, x', v') / m                       (the force evaluation)
+///   v' = v + h/2 (a + a')                           (the two half kicks, one pass)
+/// ```
+///
+/// Nothing is joined, split or copied: the accepted step swaps buffers.
+#[derive(Default)]
+pub(super) struct VerletBuffers {
+    pub(super) a: Vec<f64>,
+    pub(super) a_next: Vec<f64>,
+    /// `a` holds the acceleration at the current state.
+    pub(super) fresh: bool,
+}
+
+impl World {
+    /// The most adaptive sub-steps rk45 takes inside one step of dt: a step that needs more
+    /// has a dt far beyond what its forces allow (or forces rk45 cannot follow, such as
+    /// quadratic drag chattering about v = 0 over a step of 1e10 s, which took 24 s before
+    /// stopping at the solver's 10⁷), and is refused as diverged in milliseconds instead.
+    pub const RK45_SUBSTEPS: usize = 100_000;
+
+    /// Stage 1: integrate positions and velocities over one step, into `x_next`, `v_next`.
+    pub(super) fn integrate(&mut self) -> Result<(), Error> {
+        let n = 3 * self.particles.len();
+        self.x_next.resize(n, 0.0);
+        self.v_next.resize(n, 0.0);
+        if n == 0 {
+            return Ok(());
+        }
+        if self.stepper.is_none() {
+            self.stepper = Some(WorldStepper::new(&self.params.method, n));
+        }
+        if matches!(self.stepper, Some(WorldStepper::Verlet(_))) {
+            self.verlet()?;
+        } else {
+            self.integrate_joined()?;
+        }
+        if self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0 {
+            self.check_runaway()?;
+        }
+        Ok(())
+    }
+
+    /// Velocity Verlet on the particles' arrays (see [`VerletBuffers`]): drift and predictor
+    /// in one parallel pass, the force evaluation (after sorting the particles along space
+    /// when the contact force's neighbour list must be rebuilt), the two half kicks in one
+    /// parallel pass that also finds a non-finite value.
+    fn verlet(&mut self) -> Result<(), Error> {
+        let n = 3 * self.particles.len();
+        let (t, h) = (self.time, self.params.dt);
+        let Some(WorldStepper::Verlet(mut b)) = self.stepper.take() else {
+            unreachable!("called for verlet only")
+        };
+        let result = (|| {
+            if self.forces.is_empty() {
+                // No force at all (a gas of the impulse model): a = a' = 0, so the drift is
+                // x + h v and both kicks add nothing. One pass instead of three, the same
+                // numbers (to the sign of a zero).
+                if !b.fresh || b.a.len() != n || b.a_next.len() != n {
+                    // zeros once; no step writes them again
+                    b.a.clear();
+                    b.a.resize(n, 0.0);
+                    b.a_next.clear();
+                    b.a_next.resize(n, 0.0);
+                    b.fresh = true;
+                }
+                // In a periodic cell x' is wrapped into it in the same pass (the collision
+                // stage is told, and wraps only what it moves itself).
+                let cell = self.collisions.as_ref().and_then(|c| c.domain.periodic_box());
+                let p = &self.particles;
+                let bad = self
+                    .x_next
+                    .par_chunks_mut(3 * CHUNK)
+                    .zip(self.v_next.par_chunks_mut(3 * CHUNK))
+                    .enumerate()
+                    .map(|(c, (xn, vn))| {
+                        let base = 3 * CHUNK * c;
+                        let mut bad = None;
+                        for k in 0..xn.len() {
+                            let (x, v) = (p.x[base + k], p.v[base + k]);
+                            xn[k] = x + h * v;
+                            vn[k] = v;
+                            if bad.is_none() && !xn[k].is_finite() {
+                                bad = Some(base + k);
+                            }
+                        }
+                        if let Some(cell) = cell {
+                            cell.wrap_positions_serial(xn);
+                        }
+                        bad
+                    })
+                    .flatten()
+                    .min();
+                return Ok::<_, Error>(bad);
+            }
+            if !b.fresh || b.a.len() != n {
+                b.a.resize(n, 0.0);
+                let p = &self.particles;
+                let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
+                dynamics.accel(t, &p.x, &p.v, &mut b.a)?;
+                self.stats.nfev += 1;
+                b.fresh = true;
+            }
+            // With spring–dashpot contacts in a periodic cell, x' is wrapped into the cell in
+            // the same pass, before the force evaluation, so that the kept acceleration is
+            // that of the state kept (collide's wrap then changes nothing). The impulse
+            // model's continuous detection needs the unwrapped drift, and wraps after its
+            // impacts.
+            let cell = self
+                .collisions
+                .as_ref()
+                .and_then(|c| c.domain.periodic_box())
+                .filter(|_| self.contact.is_some());
+            let p = &self.particles;
+            let a = &b.a;
+            self.x_next
+                .par_chunks_mut(3 * CHUNK)
+                .zip(self.v_next.par_chunks_mut(3 * CHUNK))
+                .enumerate()
+                .for_each(|(c, (xn, vn))| {
+                    let chunk = 3 * CHUNK * c..3 * CHUNK * c + xn.len();
+                    let (x, v, a) = (&p.x[chunk.clone()], &p.v[chunk.clone()], &a[chunk]);
+                    for ((((xn, vn), x), v), a) in xn.iter_mut().zip(vn.iter_mut()).zip(x).zip(v).zip(a) {
+                        *xn = x + (h * v + 0.5 * h * h * a);
+                        *vn = v + h * a;
+                    }
+                    if let Some(cell) = cell {
+                        let (lo, hi, axes) = (cell.lo(), cell.hi(), cell.axes());
+                        for q in xn.chunks_exact_mut(3) {
+                            for (k, c) in q.iter_mut().enumerate() {
+                                if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
+                                    *c = cell.wrap_coordinate(k, *c);
+                                }
+                            }
+                        }
+                    }
+                });
+            if self.sortable() && self.contact.as_ref().is_some_and(|c| c.borrow().list_expired(&self.x_next)) {
+                self.sort_along_space(&mut b.a);
+            }
+            b.a_next.resize(n, 0.0);
+            let p = &self.particles;
+            if let Some(contact) = &self.contact {
+                // The contact force and the closing kick in one pass, the other forces first.
+                let s1 = State {
+                    t: t + h,
+                    x: &self.x_next,
+                    v: &self.v_next,
+                    mass: &p.mass,
+                };
+                let other = if self.forces.len() > 1 {
+                    self.force.clear();
+                    self.force.resize(n, 0.0);
+                    for (k, f) in self.forces.iter_mut().enumerate() {
+                        if Some(k) != self.contact_force {
+                            f.accumulate(&s1, &mut self.force)?;
+                        }
+                    }
+                    Some(&self.force[..])
+                } else {
+                    // nothing to sum: the buffer the first acceleration used is let go
+                    self.force = Vec::new();
+                    None
+                };
+                // The pass writes a' over a and the new velocities into a_next; two swaps put
+                // a' in a_next (the next step's a once accepted) and the velocities in v_next
+                // (v' there, the predictor, becomes spare).
+                let bad = contact.borrow().verlet_force_and_kick(
+                    &s1,
+                    other,
+                    &p.inv_mass,
+                    self.params.dim == 2,
+                    h,
+                    &p.v,
+                    &mut b.a,
+                    &mut b.a_next,
+                )?;
+                std::mem::swap(&mut b.a, &mut b.a_next); // a_next = a'
+                std::mem::swap(&mut b.a, &mut self.v_next); // v_next = v(t + h); a = spare
+                self.stats.nfev += 1;
+                b.fresh = true;
+                return Ok::<_, Error>(bad);
+            }
+            let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
+            dynamics.accel(t + h, &self.x_next, &self.v_next, &mut b.a_next)?;
+            self.stats.nfev += 1;
+            b.fresh = true; // a_next, the next step's a once accepted
+            let (a, a_next) = (&b.a, &b.a_next);
+            let bad = self
+                .v_next
+                .par_chunks_mut(3 * CHUNK)
+                .zip(self.x_next.par_chunks(3 * CHUNK))
+                .enumerate()
+                .map(|(c, (vn, xn))| {
+                    let base = 3 * CHUNK * c;
+                    let mut bad = None;
+                    for k in 0..vn.len() {
+                        vn[k] = p.v[base + k] + 0.5 * h * (a[base + k] + a_next[base + k]);
+                        if bad.is_none() && !(vn[k].is_finite() && xn[k].is_finite()) {
+                            bad = Some(base + k);
+                        }
+                    }
+                    bad
+                })
+                .flatten() // (Option's own order puts None first: drop the clean chunks)
+                .min();
+            Ok::<_, Error>(bad)
+        })();
+        self.stepper = Some(WorldStepper::Verlet(b));
+        if let Some(contact) = &self.contact {
+            contact.borrow().forget_verified();
+        }
+        match result? {
+            Some(index) => Err(self.diverged(Divergence::NonFinite, Some(index / 3))),
+            None => Ok(()),
+        }
+    }
+
+    /// Stage 1 for the other methods, on the joined state [x, v] (their steppers work on one
+    /// vector): joined into `y`, stepped into `y_next`, split into `x_next`, `v_next`.
+    fn integrate_joined(&mut self) -> Result<(), Error> {
+        let n = 3 * self.particles.len();
+        let (t, h) = (self.time, self.params.dt);
+        let p = &mut self.particles;
+        self.y.resize(2 * n, 0.0);
+        self.y_next.resize(2 * n, 0.0);
+        FirstOrderForm::join(&p.x, &p.v, n, &mut self.y);
+        let stepper = self.stepper.as_mut().expect("made by integrate");
+        let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
+        let outcome = match stepper {
+            WorldStepper::Verlet(_) => unreachable!("verlet steps the particles' arrays"),
+            WorldStepper::SecondOrder(s) => s.step(&mut dynamics, t, &self.y, h, &mut self.y_next, &mut self.stats),
+            WorldStepper::FirstOrder(s) => {
+                let mut first = FirstOrderForm::new(&mut dynamics);
+                s.step(&mut first, t, &self.y, h, &mut self.y_next, &mut self.stats)
+            }
+            WorldStepper::Implicit(bw) => {
+                let (x_next, v_next) = self.y_next.split_at_mut(n);
+                let span = StepSpan {
+                    t,
+                    h,
+                    x: &p.x,
+                    v: &p.v,
+                    x_out: x_next,
+                    v_out: v_next,
+                };
+                bw.step(&mut dynamics, span, &mut self.stats)
+                    .map_err(|e| StepFailure::Error(e.into()))
+            }
+            WorldStepper::Adaptive => {
+                let opts = SolveOptions {
+                    t_span: (t, t + h),
+                    t_eval: Some(vec![t + h]),
+                    max_steps: Self::RK45_SUBSTEPS,
+                    ..SolveOptions::default()
+                };
+                let mut first = FirstOrderForm::new(&mut dynamics);
+                let sol = ode::solve(&mut first, &self.y, &Integrator::Named(Method::Rk45), &opts)?;
+                self.stats.nfev += sol.stats.nfev;
+                match sol.termination {
+                    None => {
+                        self.y_next.copy_from_slice(sol.last());
+                        Ok(())
+                    }
+                    Some(term) => Err(StepFailure::Stop(term)),
+                }
+            }
+        };
+        match outcome {
+            Ok(()) => {}
+            Err(StepFailure::Error(e)) => return Err(e),
+            Err(StepFailure::Stop(Termination::NonFinite { index, .. })) => {
+                return Err(self.diverged(Divergence::NonFinite, Some((index % n) / 3)))
+            }
+            Err(StepFailure::Stop(Termination::MaxSteps { .. })) => return Err(self.diverged(Divergence::TooManySubsteps, None)),
+            Err(StepFailure::Stop(_)) => return Err(self.diverged(Divergence::StepTooSmall, None)),
+        }
+        if let Some(index) = first_non_finite(&self.y_next) {
+            let particle = (index % n) / 3; // y_next = [x, v]
+            return Err(self.diverged(Divergence::NonFinite, Some(particle)));
+        }
+        FirstOrderForm::split(&self.y_next, n, &mut self.x_next, &mut self.v_next);
+        Ok(())
+    }
+}

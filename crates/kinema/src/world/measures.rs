@@ -1,0 +1,86 @@
+//! What a world measures of itself without stepping: energies and momenta, accelerations,
+//! the stable-step advisor's rates, work counters and the time spent in each stage.
+
+use super::dynamics::Dynamics;
+use super::{advisor, Rates, StageTimes, World, WorldStepper};
+use crate::diagnostics::Diagnostics;
+use crate::error::Error;
+use crate::forces::State;
+use crate::ode::stepper::Stats;
+use crate::ode::system::SecondOrderSystem;
+use crate::ode::Integrator;
+
+impl World {
+    /// Work counters of all steps so far (force evaluations in `nfev`).
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// How many times the particles were sorted along space inside the engine (see
+    /// [`World::advance`]); 0 where the world keeps the user's order.
+    pub fn sorts(&self) -> u64 {
+        self.sorts
+    }
+
+    /// Wall-clock time spent in each stage of the steps so far.
+    pub fn stage_times(&self) -> StageTimes {
+        let mut times = self.times;
+        if let Some(stage) = &self.collisions {
+            times.detect = stage.times.detect;
+            times.respond = stage.times.respond;
+            times.distribute = stage.times.distribute;
+        }
+        times
+    }
+
+    /// Energies and momenta now.
+    pub fn diagnostics(&self) -> Diagnostics {
+        let p = &self.particles;
+        Diagnostics::measure(
+            &State {
+                t: self.time,
+                x: &p.x,
+                v: &p.v,
+                mass: &p.mass,
+            },
+            &self.forces,
+        )
+    }
+
+    /// The accelerations a = F/m now, m/s² (3 per particle).
+    pub fn accelerations(&mut self) -> Result<Vec<f64>, Error> {
+        let p = &self.particles;
+        let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
+        let mut a = vec![0.0; p.x.len()];
+        dynamics.accel(self.time, &p.x, &p.v, &mut a)?;
+        Ok(a)
+    }
+
+    /// The stable-step advisor's rates at the current state: the highest natural frequency of
+    /// the linearised forces, its damping ratio and the largest damping rate (see [`Rates`]).
+    pub fn rates(&mut self) -> Result<Rates, Error> {
+        let p = &self.particles;
+        let s = State {
+            t: self.time,
+            x: &p.x,
+            v: &p.v,
+            mass: &p.mass,
+        };
+        Ok(advisor::estimate(&mut self.forces, &s, &p.inv_mass, self.params.dim)?)
+    }
+
+    /// The largest stable time step (s) of `method` at the current state, by the advisor
+    /// ([`Rates::max_step`]); infinite when no step is too large.
+    pub fn stable_step(&mut self, method: &Integrator) -> Result<f64, Error> {
+        Ok(self.rates()?.max_step(method))
+    }
+
+    /// Conjugate-gradient iterations of the last implicit_euler step, and whether they met
+    /// [`CG_TOLERANCE`]; `None` for the other methods.
+    pub fn linear_solve(&self) -> Option<(usize, bool)> {
+        match &self.stepper {
+            Some(WorldStepper::Implicit(bw)) => Some((bw.iterations, bw.converged)),
+            _ => None,
+        }
+    }
+}
