@@ -9,6 +9,7 @@ pub mod collide;
 pub mod diagnostics;
 pub mod error;
 pub mod forces;
+pub mod interrupt;
 pub mod ode;
 pub mod particles;
 pub mod render;

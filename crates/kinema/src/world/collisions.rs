@@ -1,7 +1,7 @@
 //! Stages 2–4 of a world step as a stage of the world: the collision settings
 //! ([`ContactModel`], [`CollisionParams`]) and [`CollisionStage`], which holds them with the
 //! colliders, the domain, the materials and the books summed over steps, and runs the impulse
-//! model's detection and response of `collide/` (`collide/impulse_stage.rs`) on each step:
+//! model's detection and response of `collide/` (`collide/impulse_stage/`) on each step:
 //! detect collisions (continuously inside the step, then as contacts at its end), respond by
 //! Newton's restitution law, distribute each impulse onto both particles.
 
@@ -10,7 +10,7 @@ use crate::collide::{Collider, Domain, Material, MaterialTable, Partner, Periodi
 use crate::error::Error;
 use crate::particles::Particles;
 
-pub(crate) use crate::collide::end_of_step::on_periodic_wall;
+pub(crate) use crate::collide::impulse_stage::end_of_step::on_periodic_wall;
 pub use crate::collide::impulse_stage::CollisionStats;
 pub(crate) use crate::collide::impulse_stage::{CollisionTimes, StepFrame};
 

@@ -25,6 +25,7 @@ mod integrate;
 mod measures;
 mod order;
 
+pub use crate::interrupt::Interrupt;
 pub use advisor::Rates;
 pub use collisions::{CollisionParams, CollisionStats, ContactModel};
 pub use divergence::{RUNAWAY_CHECK_EVERY, RUNAWAY_FACTOR};
@@ -97,36 +98,6 @@ pub struct World {
     times: StageTimes,
     /// Asked between the stages of a step and inside long ones whether to stop (Ctrl-C).
     interrupt: Interrupt,
-}
-
-/// Whether to stop a step: the caller's check (the Python bindings: Ctrl-C), asked at most
-/// every [`Interrupt::EVERY`]; its error stops the step, which then leaves the world as it
-/// was before it.
-#[derive(Debug, Clone, Copy)]
-pub struct Interrupt {
-    check: Option<fn() -> Result<(), CallbackError>>,
-    last: Option<std::time::Instant>,
-}
-
-impl Interrupt {
-    /// How often the check runs at most.
-    pub const EVERY: std::time::Duration = std::time::Duration::from_millis(10);
-
-    /// No check.
-    pub fn none() -> Self {
-        Interrupt { check: None, last: None }
-    }
-
-    /// Runs the check if it has not run for [`Interrupt::EVERY`].
-    pub fn poll(&mut self) -> Result<(), Error> {
-        let Some(check) = self.check else { return Ok(()) };
-        let now = std::time::Instant::now();
-        if self.last.is_some_and(|t| now.duration_since(t) < Self::EVERY) {
-            return Ok(());
-        }
-        self.last = Some(now);
-        check().map_err(Error::Callback)
-    }
 }
 
 /// Wall-clock time spent in the seed's four stages of [`World::step`], summed over all steps.
@@ -359,7 +330,7 @@ impl World {
     /// [`Interrupt::EVERY`] between the stages of a step and inside the impacts of a long
     /// one; its error stops the step, and the world stays at the end of the step before.
     pub fn set_interrupt(&mut self, check: Option<fn() -> Result<(), CallbackError>>) {
-        self.interrupt = Interrupt { check, last: None };
+        self.interrupt = Interrupt::new(check);
         if let Some(stage) = &mut self.collisions {
             stage.impulse.interrupt = self.interrupt;
         }

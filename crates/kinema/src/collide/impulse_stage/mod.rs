@@ -6,17 +6,20 @@
 //! end-of-step contacts, their solve and the books in `end_of_step.rs`; the world keeps the
 //! settings, colliders, domain and the books summed over steps (`world/collisions.rs`).
 
+pub(crate) mod end_of_step;
+pub(crate) mod impacts;
+
 use std::time::{Duration, Instant};
 
-use super::end_of_step::distribute;
 use super::events::{EventQueue, PathStore, Paths};
-use super::impacts::{active_walls, least_impact_speed, Search};
 use super::neighbour_list::NeighbourList;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
 use crate::error::Error;
+use crate::interrupt::Interrupt;
 use crate::vec3;
-use crate::world::Interrupt;
+use end_of_step::distribute;
+use impacts::{active_walls, least_impact_speed, Search};
 
 /// What the collision stages did, over one step or summed over many.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

@@ -9,10 +9,10 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use super::end_of_step::distribute;
-use super::events::{swept_reach, Event, Paths, Scene};
-use super::impulse_stage::{CollisionStats, ImpulseStage, StageSetting};
-use super::neighbour_list::{collider_scale, CHUNK, SKIN_PER_RADIUS};
-use super::{restitution_impulse, Collider, Contact, Domain, Partner, Plane, ResolveParams};
+use super::{CollisionStats, ImpulseStage, StageSetting};
+use crate::collide::events::{swept_reach, Event, Paths, Scene};
+use crate::collide::neighbour_list::{collider_scale, CHUNK, SKIN_PER_RADIUS};
+use crate::collide::{restitution_impulse, Collider, Contact, Domain, Partner, Plane, ResolveParams};
 use crate::error::Error;
 use crate::vec3;
 

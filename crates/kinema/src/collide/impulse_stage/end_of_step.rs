@@ -3,10 +3,10 @@
 //! velocity solve of Newton's law with its warm start and the overlap removed (response),
 //! each impulse onto both particles and the energy books (distribution).
 
-use super::impulse_stage::{ImpulseStage, StageSetting};
-use super::islands::{self, EndProblem, IslandStats, Islands};
-use super::neighbour_list::CHUNK;
-use super::{pair_contact, Collider, Contact, Domain, HoldParams, Partner, ResolveParams, SeparateParams};
+use super::{ImpulseStage, StageSetting};
+use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
+use crate::collide::neighbour_list::CHUNK;
+use crate::collide::{pair_contact, Collider, Contact, Domain, HoldParams, Partner, ResolveParams, SeparateParams};
 use crate::error::Error;
 use crate::vec3;
 
