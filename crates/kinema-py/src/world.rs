@@ -581,7 +581,7 @@ impl PyWorld {
 
     /// CG iterations of the last implicit_euler step and whether they converged, or None.
     fn linear_solve(&self) -> Option<(usize, bool)> {
-        self.inner.linear_solve()
+        self.inner.linear_solve().map(|s| (s.iterations, s.converged))
     }
 
     /// Sets positions and velocities (both (N, 3)); method caches restart.

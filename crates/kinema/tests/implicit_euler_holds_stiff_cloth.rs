@@ -3,6 +3,7 @@
 
 use kinema::forces::{Gravity, Springs};
 use kinema::ode::{Integrator, Method};
+use kinema::world::LinearSolve;
 use kinema::{Error, World, WorldParams};
 
 const SIDE: usize = 30;
@@ -78,7 +79,10 @@ fn implicit_euler_keeps_the_cloth_bounded_and_it_settles() {
     let mut iterations = 0;
     for step in 1..=1200 {
         w.step().unwrap();
-        let (its, converged) = w.linear_solve().unwrap();
+        let LinearSolve {
+            iterations: its,
+            converged,
+        } = w.linear_solve().unwrap();
         iterations += its;
         assert!(converged, "step {step}: CG did not converge in {its} iterations");
         peak = peak.max(kinetic(&w));

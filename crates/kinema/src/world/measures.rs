@@ -75,12 +75,25 @@ impl World {
         Ok(self.rates()?.max_step(method))
     }
 
-    /// Conjugate-gradient iterations of the last implicit_euler step, and whether they met
-    /// [`CG_TOLERANCE`]; `None` for the other methods.
-    pub fn linear_solve(&self) -> Option<(usize, bool)> {
+    /// The conjugate-gradient solve of the last implicit_euler step; `None` for the other
+    /// methods.
+    pub fn linear_solve(&self) -> Option<LinearSolve> {
         match &self.stepper {
-            Some(WorldStepper::Implicit(bw)) => Some((bw.iterations, bw.converged)),
+            Some(WorldStepper::Implicit(bw)) => Some(LinearSolve {
+                iterations: bw.iterations,
+                converged: bw.converged,
+            }),
             _ => None,
         }
     }
+}
+
+/// How the last implicit step's linear system was solved (see [`World::linear_solve`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LinearSolve {
+    /// Conjugate-gradient iterations.
+    pub iterations: usize,
+    /// Whether they met [`CG_TOLERANCE`](super::CG_TOLERANCE) within
+    /// [`CG_MAX_ITERATIONS`](super::CG_MAX_ITERATIONS).
+    pub converged: bool,
 }

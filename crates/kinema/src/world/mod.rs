@@ -30,6 +30,7 @@ pub use advisor::Rates;
 pub use collisions::{CollisionParams, CollisionStats, ContactModel};
 pub use divergence::{RUNAWAY_CHECK_EVERY, RUNAWAY_FACTOR};
 pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
+pub use measures::LinearSolve;
 
 use crate::error::{CallbackError, Divergence, Error};
 use crate::forces::{EnergyClass, Force};
