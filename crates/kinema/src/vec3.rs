@@ -1,4 +1,4 @@
-//! Small 3-vector helpers, the one set the crate uses (flat arrays hold 3 values per particle).
+//! Small vector helpers, the one set the crate uses: 3-vectors, and flat arrays (3 values per particle).
 
 /// The 3 coordinates of particle `i` in a flat array (`a[3i..3i+3]`).
 #[inline]
@@ -46,6 +46,12 @@ pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 #[inline]
 pub(crate) fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
+}
+
+/// a·b of two flat arrays of the same length (the unscaled sum, in index order).
+#[inline]
+pub(crate) fn dot_slices(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// Index and value of the first non-finite entry of `a`, for error messages.

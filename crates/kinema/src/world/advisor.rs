@@ -6,6 +6,7 @@ use crate::error::CallbackError;
 use crate::forces::{Force, Rates as ForceRates, State};
 use crate::ode::stability::{oscillator_max_step, StabilityFunction};
 use crate::ode::{Integrator, Method, MethodKind};
+use crate::vec3::dot_slices as dot;
 use num_complex::Complex64;
 
 /// Power iterations at most, per estimate.
@@ -187,8 +188,4 @@ fn start(k: usize) -> f64 {
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^= z >> 31;
     (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }

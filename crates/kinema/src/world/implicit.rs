@@ -5,6 +5,7 @@ use super::dynamics::{free_components, Dynamics, ForceJacobian};
 use crate::error::CallbackError;
 use crate::forces::State;
 use crate::ode::stepper::Stats;
+use crate::vec3::dot_slices as dot;
 
 /// Relative residual ‖b − A Δv‖ ≤ tol ‖b‖ at which conjugate gradients stop.
 pub const CG_TOLERANCE: f64 = 1e-6;
@@ -63,10 +64,6 @@ pub(crate) struct BaraffWitkin {
     pub iterations: usize,
     /// Whether the last step's CG met its tolerance.
     pub converged: bool,
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// One step of [`BaraffWitkin::step`]: from the state (x, v) (m, m/s, 3 per particle) at
