@@ -85,16 +85,9 @@ class World:
     """The engine's particle world (private; use kinema.World)."""
 
     def __init__(self, dim: int, dt: float, method: str | ButcherTableau) -> None: ...
-    def add_particles(
-        self,
-        x: npt.NDArray[np.float64],
-        v: npt.NDArray[np.float64],
-        mass: list[float],
-        radius: list[float],
-        pinned: list[bool],
-        restitution: list[float] | None = None,
-        friction: list[float] | None = None,
-    ) -> tuple[int, int]: ...
+    # particles: x, v (N, 3) float64, mass, radius (N,) float64, pinned (N,) bool; restitution,
+    # friction: lists of N floats (NaN: the global value) or None
+    def add_particles(self, particles: dict[str, Any]) -> tuple[int, int]: ...
     def remove_particles(self, indices: list[int]) -> None: ...
     def restore_clock_and_ids(self, time: float, steps: int, ids: list[int], next_id: int) -> None: ...
     def restart_caches(self) -> None: ...

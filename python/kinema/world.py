@@ -208,9 +208,10 @@ class World(WorldCollisions):
         """Adds checked particles with their species names, times of death and colours."""
         n = len(m)
         self._push()
-        start, end = self._core.add_particles(
-            *(np.ascontiguousarray(a, dtype=d) for a, d in ((x, float), (v, float), (m, float), (r, float), (p, bool))), e, mu
-        )
+        arrays = {
+            k: np.ascontiguousarray(a, dtype=d) for k, a, d in (("x", x, float), ("v", v, float), ("mass", m, float), ("radius", r, float), ("pinned", p, bool))
+        }
+        start, end = self._core.add_particles({**arrays, "restitution": e, "friction": mu})
         self._species += names
         self._death = np.concatenate([self._death, np.full(n, np.inf) if death is None else death])
         self._colors = np.concatenate([self._colors, np.full((n, 3), np.nan) if color is None else np.broadcast_to(color, (n, 3))])

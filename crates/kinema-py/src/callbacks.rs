@@ -1,4 +1,5 @@
-//! Python callables as engine systems: f(t, y) and a(t, x, v) with NumPy arrays in and out.
+//! Python callables as engine systems: f(t, y) and a(t, x, v) with NumPy arrays in and out,
+//! and a world's force F(t, x, v) (`PythonForce`).
 //!
 //! This is the hot path of a solve with a Python right-hand side, so each call does only what
 //! it must: one array for each argument (a fresh one, so the callable may keep it), the call,
@@ -6,6 +7,7 @@
 //! read directly; anything else goes through `numpy.asarray` once.
 
 use kinema::error::CallbackError;
+use kinema::forces::{Force, State};
 use kinema::ode::{OdeSystem, SecondOrderSystem};
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -154,4 +156,33 @@ impl SecondOrderSystem for PyAccel<'_> {
         let out = self.a.call1((t, xa, va)).map_err(boxed)?;
         copy_result(self.py, "a(t, x, v)", &out, &self.shape, acc).map_err(boxed)
     }
+}
+
+/// A force computed by a Python callable `fn(t, x, v) -> F` on whole (N, 3) arrays.
+pub struct PythonForce {
+    pub f: Py<PyAny>,
+    pub name: String,
+}
+
+impl Force for PythonForce {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
+        let n = s.len();
+        Python::attach(|py| -> PyResult<()> {
+            let x = PyArray1::from_slice(py, s.x).reshape([n, 3])?;
+            let v = PyArray1::from_slice(py, s.v).reshape([n, 3])?;
+            let out = self.f.bind(py).call1((s.t, x, v))?;
+            let mut buf = vec![0.0; 3 * n];
+            copy_result(py, &format!("force '{}' fn(t, x, v)", self.name), &out, &[n, 3], &mut buf)?;
+            for (fi, bi) in f.iter_mut().zip(&buf) {
+                *fi += bi;
+            }
+            Ok(())
+        })
+        .map_err(|e| Box::new(e) as CallbackError)
+    }
+    // No `properties`: the default, a force the world knows nothing about, is what a
+    // Python callable is (it may add energy and depend on anything).
 }

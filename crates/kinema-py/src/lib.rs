@@ -9,6 +9,7 @@ mod errors;
 mod ode;
 mod render;
 mod stability;
+mod stepping;
 mod world;
 
 use pyo3::prelude::*;

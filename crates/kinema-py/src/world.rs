@@ -1,144 +1,46 @@
 //! Bindings of the particle world: World, the force catalogue, Python forces, diagnostics,
-//! collisions (conversions in `collisions.rs`).
+//! collisions (conversions in `collisions.rs`; stepping and SimulationDiverged in
+//! `stepping.rs`; the Python force in `callbacks.rs`).
 
 use kinema::collide::{Partner, Surface};
-use kinema::error::CallbackError;
-use kinema::forces::{Attractor, Drag, Force, Gravity, Springs, State, Wind};
-use kinema::Divergence;
-use kinema::{Error, World, WorldParams};
+use kinema::forces::{Attractor, Drag, Gravity, Springs, Wind};
+use kinema::{World, WorldParams};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::callbacks::copy_result;
+use crate::callbacks::PythonForce;
 use crate::collisions;
 use crate::errors::to_py;
 use crate::ode::integrator_from;
+use crate::stepping::{ctrl_c, step_in_slices, world_err, SimulationDiverged};
 
-pyo3::create_exception!(
-    kinema,
-    SimulationDiverged,
-    pyo3::exceptions::PyRuntimeError,
-    "A world step produced a non-finite state or runaway energy, or rk45 could not finish it; the world keeps \
-     the state from before it. Attributes: step, time, particle, dt, advised_dt, reason ('non-finite', \
-     'runaway energy' or 'step too small')."
-);
-
-/// Engine errors of a world: divergence gets its own exception, with its facts as attributes.
-fn world_err(e: Error) -> PyErr {
-    match e {
-        Error::Diverged {
-            step,
-            time,
-            particle,
-            dt,
-            reason,
-            advised_dt,
-        } => {
-            let err = SimulationDiverged::new_err(e.to_string());
-            Python::attach(|py| {
-                let value = err.value(py);
-                let reason = match reason {
-                    Divergence::NonFinite => "non-finite",
-                    Divergence::StepTooSmall => "step too small",
-                    Divergence::TooManySubsteps => "too many sub-steps",
-                    Divergence::RunawayEnergy { .. } => "runaway energy",
-                };
-                let set = || -> PyResult<()> {
-                    value.setattr("step", step)?;
-                    value.setattr("time", time)?;
-                    value.setattr("particle", particle)?;
-                    value.setattr("dt", dt)?;
-                    value.setattr("advised_dt", advised_dt)?;
-                    value.setattr("reason", reason)?;
-                    Ok(())
-                };
-                set().err().unwrap_or(err.clone_ref(py))
-            })
-        }
-        other => to_py(other),
-    }
-}
-
-/// The world's interrupt check inside a step (`World::set_interrupt`): Python's pending
-/// signals, whose handler raises (Ctrl-C: `KeyboardInterrupt`); it runs them only on the main
-/// thread, and takes the GIL back for it (the steps run without it).
-fn ctrl_c() -> Result<(), CallbackError> {
-    Python::attach(|py| py.check_signals()).map_err(|e| Box::new(e) as CallbackError)
-}
-
-/// How long a slice of `World.step` runs before Ctrl-C is checked.
-const SLICE: std::time::Duration = std::time::Duration::from_millis(20);
-
-impl PyWorld {
-    /// The body of `step`: slices of steps in the engine's order, Ctrl-C checked between.
-    fn step_in_slices(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
-        let mut left = n;
-        let mut slice = 1u64;
-        while left > 0 {
-            let k = slice.min(left);
-            let world = OnThisThread(&mut self.inner);
-            let start = std::time::Instant::now();
-            py.detach(move || world.advance(k)).map_err(world_err)?;
-            left -= k;
-            py.check_signals()?;
-            // the next slice: as many steps as fit in SLICE at this pace
-            let took = start.elapsed().as_secs_f64();
-            slice = if took < SLICE.as_secs_f64() / 4.0 {
-                (2 * slice).min(1 << 24)
-            } else if took > SLICE.as_secs_f64() {
-                (slice / 2).max(1)
-            } else {
-                slice
-            };
-        }
-        Ok(())
-    }
-}
-
-/// The world, lent to the code that runs while the GIL is released. The world is
-/// `unsendable` (its Python forces are bound to this thread) and the closure runs on this
-/// same thread (`Python::detach` does not move it), so it never crosses threads.
-struct OnThisThread<'a>(&'a mut World);
-
-// SAFETY: see the type's doc: the value is used on the thread that made it, inside
-// `Python::detach`, whose `Send` bound is only there for closures that could move.
-unsafe impl Send for OnThisThread<'_> {}
-
-impl OnThisThread<'_> {
-    fn advance(self, n: u64) -> Result<(), Error> {
-        self.0.advance_in_engine_order(n)
-    }
-}
-
-/// A force computed by a Python callable `fn(t, x, v) -> F` on whole (N, 3) arrays.
-struct PythonForce {
-    f: Py<PyAny>,
-    name: String,
-}
-
-impl Force for PythonForce {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
-        let n = s.len();
-        Python::attach(|py| -> PyResult<()> {
-            let x = PyArray1::from_slice(py, s.x).reshape([n, 3])?;
-            let v = PyArray1::from_slice(py, s.v).reshape([n, 3])?;
-            let out = self.f.bind(py).call1((s.t, x, v))?;
-            let mut buf = vec![0.0; 3 * n];
-            copy_result(py, &format!("force '{}' fn(t, x, v)", self.name), &out, &[n, 3], &mut buf)?;
-            for (fi, bi) in f.iter_mut().zip(&buf) {
-                *fi += bi;
-            }
-            Ok(())
-        })
-        .map_err(|e| Box::new(e) as CallbackError)
-    }
-    // No `properties`: the default, a force the world knows nothing about, is what a
-    // Python callable is (it may add energy and depend on anything).
+/// `add_particles`' arguments, read by name from the dict Python passes (`World._add`: the
+/// values already checked and converted there, contiguous float64 and bool arrays).
+#[derive(FromPyObject)]
+struct NewParticles<'py> {
+    /// Positions, m, (N, 3).
+    #[pyo3(item)]
+    x: PyReadonlyArray2<'py, f64>,
+    /// Velocities, m/s, (N, 3).
+    #[pyo3(item)]
+    v: PyReadonlyArray2<'py, f64>,
+    /// Masses, kg, (N,).
+    #[pyo3(item)]
+    mass: PyReadonlyArray1<'py, f64>,
+    /// Radii, m, (N,).
+    #[pyo3(item)]
+    radius: PyReadonlyArray1<'py, f64>,
+    /// Pinned or not, (N,).
+    #[pyo3(item)]
+    pinned: PyReadonlyArray1<'py, bool>,
+    /// Each particle's own e (NaN: the global one), or None.
+    #[pyo3(item)]
+    restitution: Option<Vec<f64>>,
+    /// Each particle's own μ (NaN: the global one), or None.
+    #[pyo3(item)]
+    friction: Option<Vec<f64>>,
 }
 
 /// The particle world (see kinema.World).
@@ -178,18 +80,16 @@ impl PyWorld {
 
     /// Appends particles; returns (first, end) indices. `restitution` and `friction` (one per
     /// particle, NaN: the world's global value) are checked before anything is added.
-    #[pyo3(signature = (x, v, mass, radius, pinned, restitution=None, friction=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn add_particles(
-        &mut self,
-        x: PyReadonlyArray2<'_, f64>,
-        v: PyReadonlyArray2<'_, f64>,
-        mass: PyReadonlyArray1<'_, f64>,
-        radius: PyReadonlyArray1<'_, f64>,
-        pinned: PyReadonlyArray1<'_, bool>,
-        restitution: Option<Vec<f64>>,
-        friction: Option<Vec<f64>>,
-    ) -> PyResult<(usize, usize)> {
+    fn add_particles(&mut self, particles: NewParticles<'_>) -> PyResult<(usize, usize)> {
+        let NewParticles {
+            x,
+            v,
+            mass,
+            radius,
+            pinned,
+            restitution,
+            friction,
+        } = particles;
         let (x, v) = (flat3("position", &x)?, flat3("velocity", &v)?);
         let (mass, radius, pinned) = (mass.as_slice()?, radius.as_slice()?, pinned.as_slice()?);
         let own = collisions::materials(mass.len(), restitution, friction).map_err(to_py)?;
@@ -413,7 +313,7 @@ impl PyWorld {
     /// checked between slices: `KeyboardInterrupt` within [`SLICE`]'s order of time, the
     /// world at the end of its last whole step.
     fn step(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
-        let result = self.step_in_slices(py, n);
+        let result = step_in_slices(py, &mut self.inner, n);
         self.inner.restore_order();
         result
     }

@@ -3,7 +3,7 @@
 //! colliders, periodic axes, and what the collision stages found (contacts, their books).
 
 use super::collisions::CollisionStage;
-use super::contact_force::ContactForce;
+use super::contact_force::{ContactForce, ContactForceParams};
 use super::{order, CollisionParams, CollisionStats, ContactModel, World};
 use crate::collide::{Collider, Contact, Periodic};
 use crate::error::Error;
@@ -47,16 +47,16 @@ impl World {
                 let stage = self.collisions.as_ref().expect("collisions are on");
                 let (global, own) = stage.materials_parts();
                 let p = &self.particles;
-                let contact = Rc::new(RefCell::new(ContactForce::new(
+                let contact = Rc::new(RefCell::new(ContactForce::from_params(ContactForceParams {
                     stiffness,
                     damping,
                     global,
                     own,
-                    p.radius.clone(),
-                    p.inv_mass.clone(),
-                    stage.colliders.clone(),
-                    stage.domain,
-                )));
+                    radius: p.radius.clone(),
+                    inv_mass: p.inv_mass.clone(),
+                    colliders: stage.colliders.clone(),
+                    domain: stage.domain,
+                })));
                 let force = Box::new(order::SharedContact(contact.clone()));
                 self.contact = Some(contact);
                 match index {

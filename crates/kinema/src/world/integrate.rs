@@ -2,7 +2,7 @@
 //! positions and velocities over one step (velocity Verlet on the particles' own arrays, the
 //! other methods on the joined state [x, v]).
 
-use super::contact_force::CHUNK;
+use super::contact_force::{VerletKick, CHUNK};
 use super::dynamics::Dynamics;
 use super::implicit::{BaraffWitkin, StepSpan};
 use super::{World, RUNAWAY_CHECK_EVERY};
@@ -218,15 +218,17 @@ impl World {
                 // The pass writes a' over a and the new velocities into a_next; two swaps put
                 // a' in a_next (the next step's a once accepted) and the velocities in v_next
                 // (v' there, the predictor, becomes spare).
-                let bad = contact.borrow().verlet_force_and_kick(
+                let bad = contact.borrow().force_and_kick(
                     &s1,
-                    other,
-                    &p.inv_mass,
-                    self.params.dim == 2,
-                    h,
-                    &p.v,
-                    &mut b.a,
-                    &mut b.a_next,
+                    VerletKick {
+                        other,
+                        inv_mass: &p.inv_mass,
+                        flat: self.params.dim == 2,
+                        h,
+                        v: &p.v,
+                        a: &mut b.a,
+                        v_out: &mut b.a_next,
+                    },
                 )?;
                 std::mem::swap(&mut b.a, &mut b.a_next); // a_next = a'
                 std::mem::swap(&mut b.a, &mut self.v_next); // v_next = v(t + h); a = spare

@@ -1,0 +1,103 @@
+//! Running a world's steps from Python: the steps with the GIL released, in slices with
+//! Ctrl-C checked between, and the engine's divergence as `kinema.SimulationDiverged`.
+
+use kinema::error::CallbackError;
+use kinema::Divergence;
+use kinema::{Error, World};
+use pyo3::prelude::*;
+
+use crate::errors::to_py;
+
+pyo3::create_exception!(
+    kinema,
+    SimulationDiverged,
+    pyo3::exceptions::PyRuntimeError,
+    "A world step produced a non-finite state or runaway energy, or rk45 could not finish it; the world keeps \
+     the state from before it. Attributes: step, time, particle, dt, advised_dt, reason ('non-finite', \
+     'runaway energy' or 'step too small')."
+);
+
+/// Engine errors of a world: divergence gets its own exception, with its facts as attributes.
+pub fn world_err(e: Error) -> PyErr {
+    match e {
+        Error::Diverged {
+            step,
+            time,
+            particle,
+            dt,
+            reason,
+            advised_dt,
+        } => {
+            let err = SimulationDiverged::new_err(e.to_string());
+            Python::attach(|py| {
+                let value = err.value(py);
+                let reason = match reason {
+                    Divergence::NonFinite => "non-finite",
+                    Divergence::StepTooSmall => "step too small",
+                    Divergence::TooManySubsteps => "too many sub-steps",
+                    Divergence::RunawayEnergy { .. } => "runaway energy",
+                };
+                let set = || -> PyResult<()> {
+                    value.setattr("step", step)?;
+                    value.setattr("time", time)?;
+                    value.setattr("particle", particle)?;
+                    value.setattr("dt", dt)?;
+                    value.setattr("advised_dt", advised_dt)?;
+                    value.setattr("reason", reason)?;
+                    Ok(())
+                };
+                set().err().unwrap_or(err.clone_ref(py))
+            })
+        }
+        other => to_py(other),
+    }
+}
+
+/// The world's interrupt check inside a step (`World::set_interrupt`): Python's pending
+/// signals, whose handler raises (Ctrl-C: `KeyboardInterrupt`); it runs them only on the main
+/// thread, and takes the GIL back for it (the steps run without it).
+pub fn ctrl_c() -> Result<(), CallbackError> {
+    Python::attach(|py| py.check_signals()).map_err(|e| Box::new(e) as CallbackError)
+}
+
+/// How long a slice of `World.step` runs before Ctrl-C is checked.
+const SLICE: std::time::Duration = std::time::Duration::from_millis(20);
+
+/// The body of `World.step`: slices of steps in the engine's order, Ctrl-C checked between.
+pub fn step_in_slices(py: Python<'_>, inner: &mut World, n: u64) -> PyResult<()> {
+    let mut left = n;
+    let mut slice = 1u64;
+    while left > 0 {
+        let k = slice.min(left);
+        let world = OnThisThread(&mut *inner);
+        let start = std::time::Instant::now();
+        py.detach(move || world.advance(k)).map_err(world_err)?;
+        left -= k;
+        py.check_signals()?;
+        // the next slice: as many steps as fit in SLICE at this pace
+        let took = start.elapsed().as_secs_f64();
+        slice = if took < SLICE.as_secs_f64() / 4.0 {
+            (2 * slice).min(1 << 24)
+        } else if took > SLICE.as_secs_f64() {
+            (slice / 2).max(1)
+        } else {
+            slice
+        };
+    }
+    Ok(())
+}
+
+/// The world, lent to the code that runs while the GIL is released. The world is
+/// `unsendable` (its Python forces are bound to this thread) and the closure runs on this
+/// same thread (`Python::detach` does not move it), so it never crosses threads.
+struct OnThisThread<'a>(&'a mut World);
+
+// SAFETY: see the type's doc: the value is used on the thread that made it, inside
+// `Python::detach`, whose `Send` bound is only there for closures that could move.
+unsafe impl Send for OnThisThread<'_> {}
+
+impl OnThisThread<'_> {
+    fn advance(self, n: u64) -> Result<(), Error> {
+        self.0.advance_in_engine_order(n)
+    }
+}

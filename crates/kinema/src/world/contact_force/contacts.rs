@@ -1,0 +1,114 @@
+//! Finding the contacts of [`ContactForce`]: the listed particle pairs that overlap, each
+//! tested exactly as [`pair_contact`] tests it, and the particles' contacts with the colliders
+//! (box walls along periodic axes left out).
+
+use super::{ContactForce, Scratch, CHUNK};
+use crate::collide::neighbour_list::NeighbourList;
+use crate::collide::{pair_contact, Contact, Partner};
+use crate::error::Error;
+use crate::forces::State;
+use crate::world::collisions::on_periodic_wall;
+
+impl ContactForce {
+    /// Calls `each` with every contact at state `s`, in the order of a full search: particle
+    /// pairs by (i, j) (those of the neighbour list that touch, each tested exactly as
+    /// [`pair_contact`] tests it), then particle by particle, collider by collider, wall by
+    /// wall (box walls along periodic axes left out), as
+    /// [`collider_contacts`](crate::collide::collider_contacts) lists them.
+    pub(super) fn for_each_contact(&self, s: &State, scratch: &mut Scratch, mut each: impl FnMut(&Contact)) -> Result<(), Error> {
+        self.update_list(s, scratch)?;
+        let list = &scratch.list;
+        let (x, v) = (s.x, s.v);
+        for (c, rows) in list.rows.iter().enumerate() {
+            for (l, i) in (c * CHUNK..).take(rows.len()).enumerate() {
+                for &j in rows.of(l) {
+                    if j as usize > i {
+                        if let Some(contact) = self.pair(i, j as usize, x, v) {
+                            each(&contact);
+                        }
+                    }
+                }
+            }
+        }
+        self.for_each_wall_contact(s, list, each);
+        Ok(())
+    }
+
+    /// The contact of particles i < j at (x, v), if they overlap: `pair_contact`, after its own
+    /// test |d|² < (r_i + r_j + 0)² with the same floating-point operations, inline (most
+    /// listed pairs do not touch, and are dropped here without a call).
+    #[inline]
+    fn pair(&self, i: usize, j: usize, x: &[f64], v: &[f64]) -> Option<Contact> {
+        let d = self
+            .domain
+            .displacement([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [x[3 * j], x[3 * j + 1], x[3 * j + 2]]);
+        let reach = self.radius[i] + self.radius[j] + 0.0;
+        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= reach * reach {
+            return None;
+        }
+        pair_contact(i, j, x, v, &self.radius, &self.domain, 0.0)
+    }
+
+    /// Calls `each(contact, first)` with the contact of particle i with each listed partner j
+    /// it overlaps at (x, v), in the row's order; the contact is computed with the lower index
+    /// first (`first`: i is that one), so both sides of a pair see the same numbers.
+    #[inline]
+    pub(super) fn for_each_partner_contact(
+        &self,
+        i: usize,
+        partners: &[u32],
+        x: &[f64],
+        v: &[f64],
+        mut each: impl FnMut(&Contact, bool),
+    ) {
+        let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
+        for &j in partners {
+            let j = j as usize;
+            if !self.overlaps(xi, ri, j, x) {
+                continue;
+            }
+            let (lo, hi) = if i < j { (i, j) } else { (j, i) };
+            if let Some(contact) = pair_contact(lo, hi, x, v, &self.radius, &self.domain, 0.0) {
+                each(&contact, i == lo);
+            }
+        }
+    }
+
+    /// Whether particles i and j overlap at `x`, tested from i's side with x_i already loaded:
+    /// the same operations as [`ContactForce::pair`]'s test of the pair (lower index first),
+    /// bit for bit, since x_i − x_j = −(x_j − x_i) exactly, the minimum image is odd and the
+    /// squares and r_i + r_j do not care about the order.
+    #[inline]
+    fn overlaps(&self, xi: [f64; 3], ri: f64, j: usize, x: &[f64]) -> bool {
+        let d = self.domain.displacement(xi, [x[3 * j], x[3 * j + 1], x[3 * j + 2]]);
+        let reach = ri + self.radius[j] + 0.0;
+        d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach
+    }
+
+    /// Calls `each` with every contact of a particle with a collider at `s`, particle by
+    /// particle, collider by collider (the list must hold at `s`).
+    pub(super) fn for_each_wall_contact(&self, s: &State, list: &NeighbourList, mut each: impl FnMut(&Contact)) {
+        for &(i, k) in &list.walls {
+            self.wall_contacts(i, k, s.x, s.v, &mut each);
+        }
+    }
+
+    /// Calls `each` with the contacts of particle i with collider k at (x, v) (a box's walls
+    /// along periodic axes left out).
+    #[inline]
+    pub(super) fn wall_contacts(&self, i: usize, k: usize, x: &[f64], v: &[f64], mut each: impl FnMut(&Contact)) {
+        let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
+        self.colliders[k].for_each_touch(p, self.radius[i], 0.0, |t| {
+            let c = Contact {
+                i,
+                other: Partner::Collider(k),
+                normal: t.normal,
+                overlap: t.overlap,
+                u_n: vi[0] * t.normal[0] + vi[1] * t.normal[1] + vi[2] * t.normal[2],
+            };
+            if !on_periodic_wall(&c, &self.colliders, &self.domain) {
+                each(&c);
+            }
+        });
+    }
+}

@@ -1,0 +1,152 @@
+//! [`ContactForce`] as a [`Force`]: the forces and energy at a state, its properties, the
+//! renumbering of its particles, and the rates the step advisor reads (with the standby
+//! oscillation of contacts not touching yet).
+
+use super::ContactForce;
+use crate::collide::{damping_ratio, GEOMETRY_LIMIT};
+use crate::error::{CallbackError, Error};
+use crate::forces::{EnergyClass, Force, Properties, Rates, Standby, State};
+use crate::particles::GONE;
+
+impl Force for ContactForce {
+    fn name(&self) -> &str {
+        "contact"
+    }
+
+    /// The contact forces at `s`: particle pairs on all threads, then colliders.
+    fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
+        let mut scratch = std::mem::take(&mut *self.scratch());
+        let result = self.update_list(s, &mut scratch);
+        if result.is_ok() {
+            self.pair_pass(s, &mut scratch, Some(f));
+            self.for_each_wall_contact(s, &scratch.list, |c| {
+                if let Some(force) = self.normal_force(c) {
+                    for k in 0..3 {
+                        f[3 * c.i + k] += force * c.normal[k];
+                    }
+                }
+            });
+        }
+        *self.scratch() = scratch;
+        match result {
+            Err(Error::InvalidParameter { .. }) if s.x.iter().chain(s.v).any(|c| !(c.abs() <= GEOMETRY_LIMIT)) => {
+                // A state that is non-finite, or too large for the contacts' geometry (a
+                // stage of rk45, an overflowing step): no contact force exists there. NaN
+                // forces let the world stop the step as it stops any non-finite one
+                // (SimulationDiverged), instead of an error about the list's internals.
+                f.fill(f64::NAN);
+                Ok(())
+            }
+            other => Ok(other?),
+        }
+    }
+
+    // No `validate`: the world rebuilds this force whenever its particles change.
+
+    /// U = Σ ½ k_n δ² over the overlapping contacts, J.
+    fn potential_energy(&self, s: &State) -> Option<f64> {
+        self.potential_at(s, &mut self.scratch()).ok()
+    }
+
+    /// Dissipative (the spring is conservative and the dashpot dissipative), a function of
+    /// positions and velocities, internal when no collider pushes; it follows a renumbering.
+    fn properties(&self) -> Properties {
+        Properties {
+            energy: EnergyClass::Dissipative,
+            depends_on_position: true,
+            depends_on_velocity: true,
+            internal: self.colliders.is_empty(),
+            renumbers: true,
+        }
+    }
+
+    /// Radii, inverse masses, materials and the neighbour list follow their particles. A
+    /// removal (some [`GONE`]) is left to the world, which rebuilds this force from the
+    /// survivors ([`crate::World::remove_particles`]).
+    fn reindex(&mut self, new_of_old: &[u32]) {
+        if new_of_old.contains(&GONE) {
+            return;
+        }
+        let mut old_of_new = vec![0u32; new_of_old.len()];
+        for (old, &new) in new_of_old.iter().enumerate() {
+            old_of_new[new as usize] = old as u32;
+        }
+        fn gather<T: Copy>(a: &[T], old_of_new: &[u32]) -> Vec<T> {
+            old_of_new.iter().map(|&o| a[o as usize]).collect()
+        }
+        self.radius = gather(&self.radius, &old_of_new);
+        self.inv_mass = gather(&self.inv_mass, &old_of_new);
+        if let Some(own) = &self.own {
+            self.own = Some(gather(own, &old_of_new));
+        }
+        if let Some(p) = &self.ratios.particles {
+            self.ratios.particles = Some(gather(p, &old_of_new));
+        }
+        self.scratch().list.renumber(new_of_old, &old_of_new);
+    }
+
+    /// Gershgorin over the contacts at `s`: a contact adds k_n w_p to particle p's row twice
+    /// with a particle partner (diagonal and off-diagonal), once against a collider; the
+    /// dashpot likewise with c_n. The standby oscillation is [`ContactForce::standby`].
+    fn rates(&self, s: &State, inv_mass: &[f64]) -> Option<Rates> {
+        let mut k_row = vec![0.0; inv_mass.len()];
+        let mut c_row = vec![0.0; inv_mass.len()];
+        self.for_each_contact(s, &mut self.scratch(), |c| {
+            let w = self.inverse_mass_sum(c);
+            if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
+                return;
+            }
+            let times = if c.partner_particle().is_some() { 2.0 } else { 1.0 };
+            let dashpot = self.dashpot(c, w);
+            for p in std::iter::once(c.i).chain(c.partner_particle()) {
+                k_row[p] += times * self.stiffness;
+                c_row[p] += times * dashpot;
+            }
+        })
+        .ok()?;
+        let mut rates = Rates {
+            standby: self.standby(inv_mass),
+            ..Rates::default()
+        };
+        for (p, w) in inv_mass.iter().enumerate() {
+            rates.omega_squared = rates.omega_squared.max(w * k_row[p]);
+            rates.damping_rate = rates.damping_rate.max(w * c_row[p]);
+        }
+        Some(rates)
+    }
+}
+
+impl ContactForce {
+    /// A contact that is not touching yet counts as a spring: ω² = k_n (w_i + w_j) for the
+    /// two lightest movable particles (or k_n w against a collider), with the ζ of the
+    /// largest restitution's opposite, the least damped contact.
+    fn standby(&self, inv_mass: &[f64]) -> Option<Standby> {
+        let mut lightest = [0.0_f64; 2];
+        for w in inv_mass {
+            if *w > lightest[0] {
+                lightest = [*w, lightest[0]];
+            } else if *w > lightest[1] {
+                lightest[1] = *w;
+            }
+        }
+        let w = (lightest[0] + lightest[1]).max(if self.colliders.is_empty() { 0.0 } else { lightest[0] });
+        if w == 0.0 || (inv_mass.len() < 2 && self.colliders.is_empty()) {
+            return None;
+        }
+        let omega_squared = self.stiffness * w;
+        let zeta = match self.damping {
+            Some(gamma) => gamma / (2.0 * omega_squared.sqrt()),
+            None => {
+                let e_max = self
+                    .own
+                    .iter()
+                    .flatten()
+                    .map(|m| m.restitution())
+                    .chain(self.colliders.iter().filter_map(|c| c.surface().restitution()))
+                    .fold(self.global.restitution(), f64::max);
+                damping_ratio(e_max).unwrap_or(0.0)
+            }
+        };
+        Some(Standby { omega_squared, zeta })
+    }
+}

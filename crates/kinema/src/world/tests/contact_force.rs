@@ -1,0 +1,469 @@
+//! The neighbour list against a search at every evaluation: the forces and energies of
+//! [`ContactForce`] are compared bit for bit with a reference that finds the contacts with
+//! the O(N²) [`all_pairs`] and the collide kernels at every call and applies the law as
+//! written before the list (the material table and ζ per contact), while the particles
+//! move: through the sides of a periodic cell, at speeds that force rebuilds.
+
+use super::*;
+use crate::collide::{
+    all_pairs, collider_contacts, damping_ratio, sphere_contacts, BoxContainer, MaterialTable, Periodic, Plane, SphereObstacle,
+    Surface,
+};
+use crate::forces::testing::Rng;
+use crate::forces::Force;
+use crate::world::collisions::on_periodic_wall;
+
+/// Forces (N) and U (J) from the contacts of an exhaustive search at `s`, by the law as
+/// it was written before the neighbour list.
+fn reference(force: &ContactForce, s: &State) -> (Vec<f64>, f64) {
+    let (mut pairs, mut contacts, mut walls) = (Vec::new(), Vec::new(), Vec::new());
+    all_pairs(s.x, &force.radius, &force.domain, 0.0, &mut pairs).unwrap();
+    sphere_contacts(s.x, s.v, &force.radius, &pairs, &force.domain, 0.0, &mut contacts).unwrap();
+    collider_contacts(&force.colliders, s.x, s.v, &force.radius, 0.0, &mut walls).unwrap();
+    contacts.extend(walls.iter().filter(|c| !on_periodic_wall(c, &force.colliders, &force.domain)));
+    let table = MaterialTable::uniform(force.global).with_colliders(&force.colliders);
+    let table = match &force.own {
+        Some(m) => table.with_particles(m),
+        None => table,
+    };
+    let mut f = vec![0.0; s.x.len()];
+    for c in &contacts {
+        let w = force.inverse_mass_sum(c);
+        if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
+            continue;
+        }
+        let dashpot = match force.damping {
+            Some(gamma) => gamma / w,
+            None => 2.0 * damping_ratio(table.pair(c).restitution()).unwrap_or(0.0) * (force.stiffness / w).sqrt(),
+        };
+        let fn_ = force.stiffness * c.overlap - dashpot * c.u_n;
+        for k in 0..3 {
+            f[3 * c.i + k] += fn_ * c.normal[k];
+            if let Some(j) = c.partner_particle() {
+                f[3 * j + k] -= fn_ * c.normal[k];
+            }
+        }
+    }
+    let u = contacts
+        .iter()
+        .filter(|c| c.overlap > 0.0 && force.inverse_mass_sum(c) > 0.0)
+        .map(|c| 0.5 * force.stiffness * c.overlap * c.overlap)
+        .sum();
+    (f, u)
+}
+
+fn bits(a: &[f64]) -> Vec<u64> {
+    a.iter().map(|c| c.to_bits()).collect()
+}
+
+struct Scene {
+    force: ContactForce,
+    x: Vec<f64>,
+    v: Vec<f64>,
+    mass: Vec<f64>,
+    /// A constant acceleration on every particle, m/s².
+    g: [f64; 3],
+}
+
+/// Steps `scene` with symplectic Euler (kick with the contact forces and g, then drift,
+/// then wrap into the periodic cell as the world does) for `steps` steps of `dt`; at every
+/// step the force with the list, the same force rebuilding its list at every call (skin 0)
+/// and the exhaustive reference must give the same forces and energies, bit for bit.
+/// `kicks` gives particles new velocities before some steps (fast movers). Returns the
+/// list's builds and how many times a particle was wrapped through a periodic side.
+fn run(mut scene: Scene, steps: usize, dt: f64, kicks: &[(usize, usize, [f64; 3])]) -> (usize, usize) {
+    let n = scene.mass.len();
+    let mut every_call = ContactForce::from_params(ContactForceParams {
+        stiffness: scene.force.stiffness,
+        damping: scene.force.damping,
+        global: scene.force.global,
+        own: scene.force.own.clone(),
+        radius: scene.force.radius.clone(),
+        inv_mass: scene.force.inv_mass.clone(),
+        colliders: scene.force.colliders.clone(),
+        domain: scene.force.domain,
+    })
+    .with_skin(0.0);
+    let (mut touching, mut wrapped) = (0, 0);
+    for step in 0..steps {
+        for &(when, i, v) in kicks {
+            if when == step {
+                scene.v[3 * i..3 * i + 3].copy_from_slice(&v);
+            }
+        }
+        let s = State {
+            t: 0.0,
+            x: &scene.x,
+            v: &scene.v,
+            mass: &scene.mass,
+        };
+        let (f_ref, u_ref) = reference(&scene.force, &s);
+        let mut f = vec![0.0; 3 * n];
+        scene.force.accumulate(&s, &mut f).unwrap();
+        let mut f0 = vec![0.0; 3 * n];
+        every_call.accumulate(&s, &mut f0).unwrap();
+        assert_eq!(bits(&f), bits(&f_ref), "step {step}: forces with the list");
+        assert_eq!(bits(&f0), bits(&f_ref), "step {step}: forces with a search at every call");
+        let u = scene.force.potential_energy(&s).unwrap();
+        assert_eq!(u.to_bits(), u_ref.to_bits(), "step {step}: remembered U {u} vs {u_ref}");
+        touching += usize::from(u_ref > 0.0);
+        for i in 0..n {
+            for k in 0..3 {
+                let a = f[3 * i + k] * scene.force.inv_mass[i] + scene.g[k];
+                scene.v[3 * i + k] += dt * a;
+                scene.x[3 * i + k] += dt * scene.v[3 * i + k];
+            }
+        }
+        if let Some(p) = scene.force.domain.periodic_box() {
+            let before = scene.x.clone();
+            p.wrap_positions(&mut scene.x);
+            wrapped += before.iter().zip(&scene.x).filter(|(a, b)| a != b).count();
+        }
+    }
+    assert!(touching > steps / 2, "contacts in only {touching} of {steps} steps");
+    assert_eq!(every_call.list_builds(), steps, "skin 0 searches at every call");
+    (scene.force.list_builds(), wrapped)
+}
+
+/// Positions, velocities, radii, masses and inverse masses.
+type Gas = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// What [`gas`] draws: `n` particles of radii in [r/2, r] at random in [lo, hi) (3D, or z = 0
+/// in 2D), with `apart`: not overlapping (drawn again where one would overlap an earlier one;
+/// the minimum image in `domain`), with speeds up to `speed` (m/s).
+struct GasSpec<'a> {
+    n: usize,
+    r: f64,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    domain: &'a Domain,
+    apart: bool,
+    speed: f64,
+}
+
+/// The particles of `spec` ([`GasSpec`]), with masses in [0.5, 2] kg, the first one pinned.
+fn gas(rng: &mut Rng, spec: GasSpec<'_>) -> Gas {
+    let GasSpec {
+        n,
+        r,
+        lo,
+        hi,
+        domain,
+        apart,
+        speed,
+    } = spec;
+    let dim = domain.dim();
+    let radius = rng.vec(n, 0.5 * r, r);
+    let (mut x, mut v): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
+    for i in 0..n {
+        let p = loop {
+            let p = [0, 1, 2].map(|k| if k < dim { rng.uniform(lo[k], hi[k]) } else { 0.0 });
+            let clear = !apart
+                || (0..i).all(|j| {
+                    let d = domain.displacement(p, [x[3 * j], x[3 * j + 1], x[3 * j + 2]]);
+                    d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= (radius[i] + radius[j]).powi(2)
+                });
+            if clear {
+                break p;
+            }
+        };
+        x.extend(p);
+        v.extend([0, 1, 2].map(|k| if k < dim { rng.uniform(-speed, speed) } else { 0.0 }));
+    }
+    let mass = rng.vec(n, 0.5, 2.0);
+    let mut inv_mass: Vec<f64> = mass.iter().map(|m| 1.0 / m).collect();
+    inv_mass[0] = 0.0;
+    (x, v, radius, mass, inv_mass)
+}
+
+#[test]
+fn a_periodic_gas_crossing_its_cell_gets_the_forces_of_a_search_at_every_call() {
+    // A gas in a periodic unit cube (all three axes), r ≤ 4 cm: at up to 1 m/s and
+    // dt = 0.25 ms a particle moves up to 0.25 mm a step against a skin of 0.2 mean radii
+    // (6 mm), so the list lasts several steps; particles leave through the sides and are
+    // wrapped back (their displacements taken as minimum images). Particles 1 and 2
+    // are shot across the cell at 40 and 60 m/s for 20 steps (1–1.5 cm a step: a
+    // rebuild at every one of those steps).
+    let mut rng = Rng::new(7);
+    let (lo, hi) = ([0.0; 3], [1.0; 3]);
+    let cell = Periodic::new(lo, hi, [true; 3]).unwrap();
+    let domain = Domain::periodic(3, cell).unwrap();
+    let (x, v, radius, mass, inv_mass) = gas(
+        &mut rng,
+        GasSpec {
+            n: 400,
+            r: 0.04,
+            lo,
+            hi,
+            domain: &domain,
+            apart: true,
+            speed: 1.0,
+        },
+    );
+    let walls = vec![Collider::Box(BoxContainer::new(lo, hi, Surface::default()).unwrap())];
+    let material = Material::new(0.5, 0.0).unwrap();
+    let force = ContactForce::from_params(ContactForceParams {
+        stiffness: 1e4,
+        damping: None,
+        global: material,
+        own: None,
+        radius,
+        inv_mass,
+        colliders: walls,
+        domain,
+    });
+    let scene = Scene {
+        force,
+        x,
+        v,
+        mass,
+        g: [0.0; 3],
+    };
+    let kicks = [
+        (100, 1, [40.0, 10.0, -5.0]),
+        (100, 2, [-60.0, 0.0, 30.0]),
+        (120, 1, [0.0; 3]),
+        (120, 2, [0.0; 3]),
+    ];
+    let (builds, wrapped) = run(scene, 300, 2.5e-4, &kicks);
+    eprintln!("periodic gas: {builds} builds in 300 steps, {wrapped} crossings");
+    assert!(
+        builds >= 20,
+        "the fast particles force a rebuild at every step: {builds} builds"
+    );
+    assert!(builds < 120, "the list is reused: {builds} builds in 300 steps");
+    assert!(wrapped > 10, "{wrapped} crossings of the cell's sides");
+}
+
+#[test]
+fn a_pile_on_colliders_with_own_materials_gets_the_forces_of_a_search_at_every_call() {
+    // Open space, a box open at the top, a tilted plane and a sphere obstacle, gravity:
+    // particles fall onto the floor and the obstacle and push each other apart. Particles have
+    // their own restitutions (0, 1 and equal values included), colliders their own or
+    // none, so ζ comes from every branch of the pair rule. One particle is dropped in at
+    // 30 m/s (a rebuild at each step until it stops).
+    let mut rng = Rng::new(11);
+    let (lo, hi) = ([0.0; 3], [0.6, 0.6, f64::INFINITY]);
+    let (x, v, radius, mass, inv_mass) = gas(
+        &mut rng,
+        GasSpec {
+            n: 300,
+            r: 0.05,
+            lo: [0.0; 3],
+            hi: [0.6, 0.6, 0.8],
+            domain: &Domain::open(3).unwrap(),
+            apart: true,
+            speed: 0.3,
+        },
+    );
+    let own: Vec<Material> = (0..300)
+        .map(|i| {
+            let e = match i % 5 {
+                0 => 0.0,
+                1 => 1.0,
+                2 => 0.5,
+                _ => rng.uniform(0.0, 1.0),
+            };
+            Material::new(e, 0.0).unwrap()
+        })
+        .collect();
+    let colliders = vec![
+        Collider::Box(BoxContainer::new(lo, hi, Surface::new(None, None).unwrap()).unwrap()),
+        Collider::Plane(Plane::new([0.0, 0.0, 0.1], [1.0, 0.0, 3.0], Surface::new(Some(0.3), None).unwrap()).unwrap()),
+        Collider::Sphere(SphereObstacle::new([0.3, 0.3, 0.3], 0.1, Surface::new(Some(0.9), None).unwrap()).unwrap()),
+    ];
+    let material = Material::new(0.4, 0.0).unwrap();
+    let force = ContactForce::from_params(ContactForceParams {
+        stiffness: 5e3,
+        damping: None,
+        global: material,
+        own: Some(own),
+        radius,
+        inv_mass,
+        colliders,
+        domain: Domain::open(3).unwrap(),
+    });
+    let scene = Scene {
+        force,
+        x,
+        v,
+        mass,
+        g: [0.0, 0.0, -9.81],
+    };
+    let (builds, _) = run(scene, 600, 2e-4, &[(50, 5, [0.0, 0.0, -30.0])]);
+    eprintln!("pile: {builds} builds in 600 steps");
+    assert!(builds < 200, "the list is reused: {builds} builds in 600 steps");
+}
+
+#[test]
+fn a_2d_strip_periodic_along_x_with_a_given_damping() {
+    // Circles in the xy-plane, periodic along x only, the rectangle's walls along y
+    // kept (those along x vanish), γ_n given instead of e. Particle 9 runs at 80 m/s
+    // (2 cm a step) for 140 steps, through the gas and the cell's sides.
+    let mut rng = Rng::new(3);
+    let (lo, hi) = ([-1.0, 0.0, 0.0], [1.0, 0.5, 0.0]);
+    let cell = Periodic::new(
+        [-1.0, 0.0, f64::NEG_INFINITY],
+        [1.0, 0.5, f64::INFINITY],
+        [true, false, false],
+    )
+    .unwrap();
+    let domain = Domain::periodic(2, cell).unwrap();
+    let (x, v, radius, mass, inv_mass) = gas(
+        &mut rng,
+        GasSpec {
+            n: 200,
+            r: 0.03,
+            lo,
+            hi,
+            domain: &domain,
+            apart: true,
+            speed: 0.5,
+        },
+    );
+    let rect = BoxContainer::rect([-1.0, 0.0], [1.0, 0.5], Surface::default()).unwrap();
+    let material = Material::new(0.7, 0.0).unwrap();
+    let force = ContactForce::from_params(ContactForceParams {
+        stiffness: 1e4,
+        damping: Some(30.0),
+        global: material,
+        own: None,
+        radius,
+        inv_mass,
+        colliders: vec![Collider::Box(rect)],
+        domain,
+    });
+    let scene = Scene {
+        force,
+        x,
+        v,
+        mass,
+        g: [0.0, -2.0, 0.0],
+    };
+    let (builds, wrapped) = run(scene, 400, 2.5e-4, &[(10, 9, [80.0, 5.0, 0.0]), (150, 9, [1.0, 0.0, 0.0])]);
+    eprintln!("2D strip: {builds} builds in 400 steps, {wrapped} crossings");
+    assert!(wrapped > 3, "{wrapped} crossings of the cell's sides");
+    assert!((140..260).contains(&builds), "{builds} builds in 400 steps");
+}
+
+#[test]
+fn a_head_on_pair_just_outside_the_list_is_caught_before_it_touches() {
+    // The worst case of the criterion: two particles (r = 0.1 m, skin s = 0.02 m) start
+    // s (1 + 10⁻³) beyond contact, so out of the list, and close head-on at 1 mm each a
+    // step. They touch at the 11th step; the two largest moves reach s at the 10th, when
+    // the list is rebuilt with them in it. A criterion 30 % looser would miss the touch.
+    let x = vec![0.0, 0.0, 0.0, 0.2 + 0.02 * 1.001, 0.0, 0.0, 5.0, 5.0, 5.0];
+    let v = vec![1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let force = ContactForce::from_params(ContactForceParams {
+        stiffness: 10.0,
+        damping: None,
+        global: Material::new(0.5, 0.0).unwrap(),
+        own: None,
+        radius: vec![0.1; 3],
+        inv_mass: vec![1.0; 3],
+        colliders: vec![],
+        domain: Domain::open(3).unwrap(),
+    })
+    .with_skin(0.02);
+    let scene = Scene {
+        force,
+        x,
+        v,
+        mass: vec![1.0; 3],
+        g: [0.0; 3],
+    };
+    let (builds, _) = run(scene, 40, 1e-3, &[]);
+    assert_eq!(builds, 4, "built at steps 0, 10, 20, 30");
+}
+
+#[test]
+fn the_energy_is_that_of_the_positions_asked_about() {
+    // U at x after a force evaluation there is the reference's; at other positions (a
+    // particle of an overlapping pair a micrometre away) it is found again, not the last
+    // evaluation's.
+    let mut rng = Rng::new(5);
+    let (x, v, radius, mass, inv_mass) = gas(
+        &mut rng,
+        GasSpec {
+            n: 200,
+            r: 0.06,
+            lo: [0.0; 3],
+            hi: [0.5; 3],
+            domain: &Domain::open(3).unwrap(),
+            apart: false,
+            speed: 1.0,
+        },
+    );
+    let mut force = ContactForce::from_params(ContactForceParams {
+        stiffness: 1e3,
+        damping: None,
+        global: Material::new(0.5, 0.0).unwrap(),
+        own: None,
+        radius,
+        inv_mass,
+        colliders: vec![],
+        domain: Domain::open(3).unwrap(),
+    });
+    let s = State {
+        t: 0.0,
+        x: &x,
+        v: &v,
+        mass: &mass,
+    };
+    let mut f = vec![0.0; x.len()];
+    force.accumulate(&s, &mut f).unwrap();
+    let u = force.potential_energy(&s).unwrap();
+    assert!(u > 0.0);
+    assert_eq!(u.to_bits(), reference(&force, &s).1.to_bits());
+    // a particle of an overlapping pair a micrometre away: found again
+    let mut pairs = Vec::new();
+    all_pairs(&x, &force.radius, &force.domain, 0.0, &mut pairs).unwrap();
+    let (i, _) = pairs[0];
+    let mut x2 = x.clone();
+    x2[3 * i] += 1e-6;
+    let s2 = State { x: &x2, ..s };
+    let u2 = force.potential_energy(&s2).unwrap();
+    assert_eq!(u2.to_bits(), reference(&force, &s2).1.to_bits());
+    assert_ne!(u2.to_bits(), u.to_bits(), "a moved overlap changes U");
+    // At NaN positions no force exists: NaN forces (the world then stops the step with
+    // SimulationDiverged), and no U
+    let mut bad = x.clone();
+    bad[4] = f64::NAN;
+    let s3 = State { x: &bad, ..s };
+    assert!(force.accumulate(&s3, &mut f).is_ok());
+    assert!(f.iter().all(|c| c.is_nan()));
+    assert_eq!(force.potential_energy(&s3), None);
+    // and the rates at s are those of its contacts
+    assert!(force.rates(&s, &force.inv_mass.clone()).unwrap().omega_squared > 0.0);
+}
+
+#[test]
+fn the_allowance_leaves_a_rounding_margin_below_the_skin() {
+    // Coordinates 10¹² times the skin leave no room: the list is rebuilt at every call.
+    let radius = vec![1e-3; 2];
+    let domain = Domain::open(3).unwrap();
+    let (mut list, mut grid) = (NeighbourList::default(), Grid::new());
+    let x = [0.0, 0.0, 0.0, 1.5e-3, 0.0, 0.0];
+    list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+    assert!(list.allowance < 2e-4 && list.allowance > 2e-4 * (1.0 - 1e-10));
+    assert_eq!(
+        (list.rows[0].of(0), list.rows[0].of(1)),
+        (&[1][..], &[0][..]),
+        "listed from both sides"
+    );
+    list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+    assert_eq!(list.builds, 1, "nothing moved");
+    let far = [1e9, 0.0, 0.0, 1e9 + 1.5e-3, 0.0, 0.0];
+    list.update(&mut grid, &far, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+    assert!(list.allowance < 0.0);
+    list.update(&mut grid, &far, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+    assert_eq!(list.builds, 3);
+    // two particles that together moved the allowance (exactly: half each, along
+    // coordinates that were 0): rebuilt; a hair less: kept
+    list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+    let half = 0.5 * list.allowance;
+    assert!(!list.holds(&[-half, 0.0, 0.0, 1.5e-3, half, 0.0], &domain));
+    let less = 0.99 * half;
+    assert!(list.holds(&[-less, 0.0, 0.0, 1.5e-3, half, 0.0], &domain));
+    assert!(!list.holds(&[f64::NAN, 0.0, 0.0, 1.5e-3, 0.0, 0.0], &domain));
+}
