@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use super::contact::{Contact, Partner};
 use super::response::{
-    hold_grouped, separate_grouped, HoldParams, HoldStats, Material, MaterialTable, SeparateParams, SeparateStats,
+    hold_grouped, separate_grouped, HoldContacts, HoldParams, HoldStats, Material, MaterialTable, SeparateParams, SeparateStats,
 };
 use super::sweeps::SweepGroup;
 use crate::error::Error;
@@ -287,16 +287,13 @@ impl Local {
         self.targets.clear();
         self.targets.extend(order.iter().map(|&c| problem.targets[c]));
         let mut totals: Vec<[f64; 3]> = order.iter().map(|&c| warm[c]).collect();
-        let hold = hold_grouped(
-            &self.contacts,
-            &self.targets,
-            &mut self.v,
-            &self.inv_mass,
-            &materials,
-            &problem.hold,
-            &mut totals,
-            &self.groups,
-        )?;
+        let held = HoldContacts {
+            contacts: &self.contacts,
+            targets: &self.targets,
+            inv_mass: &self.inv_mass,
+            materials: &materials,
+        };
+        let hold = hold_grouped(held, &mut self.v, &problem.hold, &mut totals, &self.groups)?;
         let separate = separate_grouped(
             &mut self.contacts,
             &mut self.x,

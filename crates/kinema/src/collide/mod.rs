@@ -38,6 +38,7 @@ pub const GEOMETRY_LIMIT: f64 = 1e150;
 pub mod broad_phase;
 pub mod colliders;
 pub mod contact;
+mod contact_solver;
 pub mod domain;
 pub(crate) mod events;
 pub(crate) mod impulse_stage;
