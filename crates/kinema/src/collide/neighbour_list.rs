@@ -38,6 +38,14 @@ pub(crate) fn collider_scale(c: &Collider) -> f64 {
     }
 }
 
+/// The settings of a [`NeighbourList`] build: the skin s, m, and the colliders' largest
+/// |coordinate| (m, [`collider_scale`] of each), which enters the rounding allowance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ListBuild {
+    pub skin: f64,
+    pub collider_scale: f64,
+}
+
 /// A Verlet neighbour list: the particle pairs (i, j) with |x_i − x_j| < r_i + r_j + s at the
 /// build (the grid's [`Grid::find_pairs`] with margin s, the skin), and the particles within
 /// s of touching each collider, reused until the particles have moved far enough that
@@ -112,14 +120,13 @@ impl Rows {
 }
 
 impl NeighbourList {
-    /// Makes the list hold for positions `x` (rebuilt with `grid` and skin `skin` if needed);
-    /// `collider_scale` is the colliders' largest |coordinate|.
-    #[allow(clippy::too_many_arguments)]
     /// The most entries (a particle's partner, 4 bytes) a list holds: 4 GiB, about 10,000
     /// partners for each of 100,000 particles, where a packing of spheres gives each fewer
     /// than 50 within the skin.
     pub(crate) const MAX_ENTRIES: usize = 1 << 30;
 
+    /// Makes the list hold for positions `x` (rebuilt with `grid` and skin `build.skin` if
+    /// needed); `build.collider_scale` is the colliders' largest |coordinate|.
     pub(crate) fn update(
         &mut self,
         grid: &mut Grid,
@@ -127,9 +134,9 @@ impl NeighbourList {
         radius: &[f64],
         colliders: &[Collider],
         domain: &Domain,
-        skin: f64,
-        collider_scale: f64,
+        build: ListBuild,
     ) -> Result<(), Error> {
+        let ListBuild { skin, collider_scale } = build;
         if self.verified.take() == Some((x.as_ptr() as usize, x.len())) || self.holds(x, domain) {
             return Ok(());
         }
@@ -307,7 +314,19 @@ mod tests {
             entry_limit: Some(10_000),
             ..NeighbourList::default()
         };
-        let err = list.update(&mut grid, &x, &radius, &[], &domain, 0.1, 0.0).unwrap_err();
+        let err = list
+            .update(
+                &mut grid,
+                &x,
+                &radius,
+                &[],
+                &domain,
+                ListBuild {
+                    skin: 0.1,
+                    collider_scale: 0.0,
+                },
+            )
+            .unwrap_err();
         assert!(matches!(err, Error::OutOfMemory { .. }), "{err}");
         assert!(
             err.to_string()
@@ -316,7 +335,18 @@ mod tests {
         );
         assert!(list.rows.is_empty() && list.built_at.is_empty(), "no list is left behind");
         list.entry_limit = None;
-        list.update(&mut grid, &x, &radius, &[], &domain, 0.1, 0.0).unwrap();
+        list.update(
+            &mut grid,
+            &x,
+            &radius,
+            &[],
+            &domain,
+            ListBuild {
+                skin: 0.1,
+                collider_scale: 0.0,
+            },
+        )
+        .unwrap();
         let entries: usize = list.rows.iter().map(|r| r.partners.len()).sum();
         assert_eq!(entries, n * (n - 1));
     }

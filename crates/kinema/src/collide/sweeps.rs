@@ -132,7 +132,12 @@ pub(crate) fn sweeps<T: Send>(
 ) -> Swept {
     let threads = rayon::current_num_threads();
     if most > 0 && threads > 1 && groups.iter().any(|g| g.together && g.range.len() >= PARALLEL_COLOUR) {
-        return on_threads(groups, ends, a, state, most, tolerance, threads, visit);
+        let run = Run {
+            most,
+            tolerance,
+            threads,
+        };
+        return on_threads(groups, ends, a, state, run, visit);
     }
     let mut done = Swept {
         sweeps: 0,
@@ -171,18 +176,29 @@ impl<T> Copy for Shared<T> {}
 unsafe impl<T: Send> Send for Shared<T> {}
 unsafe impl<T: Send> Sync for Shared<T> {}
 
+/// How [`on_threads`] runs: at most `most` sweeps, until one changes nothing by more than
+/// `tolerance`, on `threads` threads.
+#[derive(Debug, Clone, Copy)]
+struct Run {
+    most: usize,
+    tolerance: f64,
+    threads: usize,
+}
+
 /// [`sweeps`] on all threads (see the module's doc).
-#[allow(clippy::too_many_arguments)]
 fn on_threads<T: Send>(
     groups: &[SweepGroup],
     ends: &[Option<Ends>],
     a: &mut [f64],
     state: &mut [T],
-    most: usize,
-    tolerance: f64,
-    threads: usize,
+    run: Run,
     visit: impl Fn(usize, &mut T, &mut [f64; 3], &mut [f64; 3]) -> f64 + Sync,
 ) -> Swept {
+    let Run {
+        most,
+        tolerance,
+        threads,
+    } = run;
     // Each group's blocks: a few per thread for a colour, the whole group for one in order.
     let blocks: Vec<(usize, usize)> = groups
         .iter()

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use super::end_of_step::distribute;
 use super::{CollisionStats, ImpulseStage, StageSetting};
 use crate::collide::events::{swept_reach, Event, Paths, Scene};
-use crate::collide::neighbour_list::{collider_scale, CHUNK, SKIN_PER_RADIUS};
+use crate::collide::neighbour_list::{collider_scale, ListBuild, CHUNK, SKIN_PER_RADIUS};
 use crate::collide::{restitution_impulse, Collider, Contact, Domain, Partner, Plane, ResolveParams};
 use crate::error::Error;
 use crate::vec3;
@@ -133,8 +133,12 @@ impl ImpulseStage {
             let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest_move);
             let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
             self.list.built_at.clear();
+            let build = ListBuild {
+                skin,
+                collider_scale: scale,
+            };
             self.list
-                .update(&mut self.grid, x0, set.radius, set.colliders, set.domain, skin, scale)?;
+                .update(&mut self.grid, x0, set.radius, set.colliders, set.domain, build)?;
             self.list.verified = None;
             self.drop_inactive_walls(set);
             self.rebuilt = true;
@@ -395,8 +399,12 @@ impl ImpulseStage {
         let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest);
         let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
         self.list.built_at.clear();
+        let build = ListBuild {
+            skin,
+            collider_scale: scale,
+        };
         self.list
-            .update(&mut self.grid, &x, radius, set.colliders, set.domain, skin, scale)?;
+            .update(&mut self.grid, &x, radius, set.colliders, set.domain, build)?;
         self.list.verified = None;
         self.drop_inactive_walls(set);
         Ok(largest)

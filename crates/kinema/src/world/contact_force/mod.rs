@@ -21,7 +21,7 @@
 use std::sync::{Mutex, MutexGuard};
 
 pub(crate) use crate::collide::neighbour_list::CHUNK;
-use crate::collide::neighbour_list::{collider_scale, NeighbourList, SKIN_PER_RADIUS};
+use crate::collide::neighbour_list::{collider_scale, ListBuild, NeighbourList, SKIN_PER_RADIUS};
 use crate::collide::{Collider, Domain, Grid, Material};
 use crate::error::Error;
 use crate::forces::State;
@@ -194,15 +194,11 @@ impl ContactForce {
             }
         }
         let Scratch { grid, list, .. } = scratch;
-        list.update(
-            grid,
-            s.x,
-            &self.radius,
-            &self.colliders,
-            &self.domain,
-            self.skin,
-            self.collider_scale,
-        )
+        let build = ListBuild {
+            skin: self.skin,
+            collider_scale: self.collider_scale,
+        };
+        list.update(grid, s.x, &self.radius, &self.colliders, &self.domain, build)
     }
 }
 

@@ -444,23 +444,27 @@ fn the_allowance_leaves_a_rounding_margin_below_the_skin() {
     let domain = Domain::open(3).unwrap();
     let (mut list, mut grid) = (NeighbourList::default(), Grid::new());
     let x = [0.0, 0.0, 0.0, 1.5e-3, 0.0, 0.0];
-    list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+    let build = ListBuild {
+        skin: 2e-4,
+        collider_scale: 0.0,
+    };
+    list.update(&mut grid, &x, &radius, &[], &domain, build).unwrap();
     assert!(list.allowance < 2e-4 && list.allowance > 2e-4 * (1.0 - 1e-10));
     assert_eq!(
         (list.rows[0].of(0), list.rows[0].of(1)),
         (&[1][..], &[0][..]),
         "listed from both sides"
     );
-    list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+    list.update(&mut grid, &x, &radius, &[], &domain, build).unwrap();
     assert_eq!(list.builds, 1, "nothing moved");
     let far = [1e9, 0.0, 0.0, 1e9 + 1.5e-3, 0.0, 0.0];
-    list.update(&mut grid, &far, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+    list.update(&mut grid, &far, &radius, &[], &domain, build).unwrap();
     assert!(list.allowance < 0.0);
-    list.update(&mut grid, &far, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+    list.update(&mut grid, &far, &radius, &[], &domain, build).unwrap();
     assert_eq!(list.builds, 3);
     // two particles that together moved the allowance (exactly: half each, along
     // coordinates that were 0): rebuilt; a hair less: kept
-    list.update(&mut grid, &x, &radius, &[], &domain, 2e-4, 0.0).unwrap();
+    list.update(&mut grid, &x, &radius, &[], &domain, build).unwrap();
     let half = 0.5 * list.allowance;
     assert!(!list.holds(&[-half, 0.0, 0.0, 1.5e-3, half, 0.0], &domain));
     let less = 0.99 * half;
