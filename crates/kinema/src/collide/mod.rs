@@ -38,7 +38,6 @@ pub const GEOMETRY_LIMIT: f64 = 1e150;
 pub mod broad_phase;
 pub mod colliders;
 pub mod contact;
-mod contact_solver;
 pub mod domain;
 pub(crate) mod events;
 pub(crate) mod impulse_stage;
@@ -50,6 +49,9 @@ pub mod response;
 pub(crate) mod sweeps;
 pub mod toi;
 pub(crate) mod wake;
+
+mod contact_solver;
+mod paths;
 
 pub use broad_phase::{all_pairs, Grid, Pair};
 pub use colliders::{collider_contacts, BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};
