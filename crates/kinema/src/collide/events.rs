@@ -209,6 +209,14 @@ impl Scene<'_> {
     }
 }
 
+/// A sphere's motion from now, τ s on: x + v τ + ½ a τ² (m, m/s, m/s²).
+#[derive(Debug, Clone, Copy)]
+struct Parabola {
+    x: [f64; 3],
+    v: [f64; 3],
+    a: [f64; 3],
+}
+
 /// What a particle meets: an impact, or something it touches (a partner particle, if any).
 enum Found {
     Impact(Event),
@@ -308,7 +316,8 @@ impl Scene<'_> {
             if now == 0.0 && self.touches(k, xi, self.radius[i]) {
                 each(Found::Touching(None)); // touching a collider at the start, approaching or not
             }
-            self.collider_events(i, k, xi, vi, ai, rest, |wall, tau| {
+            let path = Parabola { x: xi, v: vi, a: ai };
+            self.collider_events(i, k, path, rest, |wall, tau| {
                 if wall.1 > -self.slow || (tau == 0.0 && self.is_resting(i, Partner::Collider(k), now)) {
                     each(Found::Touching(None)); // meets it too slowly, or rests on it: a contact
                     return;
@@ -355,7 +364,12 @@ impl Scene<'_> {
             if self.touches(k, xi, self.radius[i]) {
                 return Some(0.0);
             }
-            self.collider_events(i, k, xi, vi, [0.0; 3], horizon, |_, tau| meet(tau));
+            let line = Parabola {
+                x: xi,
+                v: vi,
+                a: [0.0; 3],
+            };
+            self.collider_events(i, k, line, horizon, |_, tau| meet(tau));
         }
         first
     }
@@ -375,17 +389,8 @@ impl Scene<'_> {
 
     /// Calls `each((wall, u_n), τ)` with the first impact of a sphere at (x, v, a) with each
     /// active wall of collider k within `rest`, u_n its normal velocity then (< 0).
-    #[allow(clippy::too_many_arguments)]
-    fn collider_events(
-        &self,
-        i: usize,
-        k: usize,
-        x: [f64; 3],
-        v: [f64; 3],
-        a: [f64; 3],
-        rest: f64,
-        mut each: impl FnMut((usize, f64), f64),
-    ) {
+    fn collider_events(&self, i: usize, k: usize, path: Parabola, rest: f64, mut each: impl FnMut((usize, f64), f64)) {
+        let Parabola { x, v, a } = path;
         let r = self.radius[i];
         match &self.colliders[k] {
             Collider::Plane(p) => {
