@@ -51,6 +51,7 @@ pub mod toi;
 pub(crate) mod wake;
 
 mod contact_solver;
+mod grid_level;
 mod paths;
 
 pub use broad_phase::{all_pairs, Grid, Pair};
