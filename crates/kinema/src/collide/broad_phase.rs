@@ -24,7 +24,7 @@
 //! in (i, j) order by a second counting sort, by i.
 
 use super::domain::Domain;
-use super::grid_level::Level;
+use super::grid_level::{Level, LevelSort};
 use crate::error::Error;
 use crate::vec3;
 
@@ -208,7 +208,12 @@ impl Grid {
             }
             let l = &mut self.levels[0];
             l.r_max = r_max;
-            l.build(x, radius, None, domain, reach_max, &mut self.cell_of, copies);
+            let sort = LevelSort {
+                members: None,
+                reach: reach_max,
+                copies,
+            };
+            l.build(x, radius, domain, sort, &mut self.cell_of);
             return Ok(true);
         }
         // Several levels: number the non-empty ones in order, finest first.
@@ -245,7 +250,12 @@ impl Grid {
             // (at least `base` > 0: a level of points with no margin pairs with nothing of
             // its own, but its cells need a width)
             let reach = (2.0 * level.r_max + margin).max(base);
-            level.build(x, radius, Some(&members), domain, reach, &mut self.cell_of, copies);
+            let sort = LevelSort {
+                members: Some(&members),
+                reach,
+                copies,
+            };
+            level.build(x, radius, domain, sort, &mut self.cell_of);
             level.members = members;
         }
         Ok(true)

@@ -51,21 +51,22 @@ pub(super) struct Level {
     pub(super) rad: Vec<f64>,
 }
 
+/// What [`Level::build`] sorts and how: the level's particles (`members`, or all when None),
+/// the least cell width `reach`, m, and whether to keep copies of their positions and radii
+/// in cell order (`copies`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct LevelSort<'a> {
+    pub members: Option<&'a [u32]>,
+    pub reach: f64,
+    pub copies: bool,
+}
+
 impl Level {
     /// Lays the level out for cells at least `reach` wide and sorts its particles (`members`,
     /// or all when None) into them; writes each one's cell into `cell_of`; copies their
     /// positions and radii in cell order when `copies` (else frees the copies).
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn build(
-        &mut self,
-        x: &[f64],
-        radius: &[f64],
-        members: Option<&[u32]>,
-        domain: &Domain,
-        reach: f64,
-        cell_of: &mut [u32],
-        copies: bool,
-    ) {
+    pub(super) fn build(&mut self, x: &[f64], radius: &[f64], domain: &Domain, sort: LevelSort<'_>, cell_of: &mut [u32]) {
+        let LevelSort { members, reach, copies } = sort;
         let count = members.map_or(radius.len(), |m| m.len());
         let member = |k: usize| members.map_or(k, |m| m[k] as usize);
         self.layout(x, count, member, domain, reach);
