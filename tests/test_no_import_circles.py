@@ -87,7 +87,7 @@ def rust_graph(src: Path) -> dict[str, set[str]]:
     graph: dict[str, set[str]] = {"::".join(m): set() for m in files}
     for m, p in files.items():
         text = p.read_text().split("#[cfg(test)]")[0]
-        for use in re.findall(r"^use\s+([^;]+);", text, re.M):
+        for use in re.findall(r"^(?:pub(?:\([\w:]+\))? )?use\s+([^;]+);", text, re.M):
             use = " ".join(use.split())
             grouped = re.match(r"([\w:]+)::\{(.*)\}$", use)
             items = re.split(r",(?![^{]*\})", grouped.group(2)) if grouped else [use]

@@ -24,9 +24,8 @@
 use rayon::prelude::*;
 
 use super::contact::{Contact, Partner};
-use super::response::{
-    hold_grouped, separate_grouped, HoldContacts, HoldParams, HoldStats, Material, MaterialTable, SeparateParams, SeparateStats,
-};
+use super::contact_solver::{hold_grouped, separate_grouped, HoldContacts, HoldParams, HoldStats, SeparateParams, SeparateStats};
+use super::response::{Material, MaterialTable};
 use super::sweeps::SweepGroup;
 use crate::error::Error;
 use crate::vec3;
@@ -371,7 +370,7 @@ fn colour(
 #[cfg(test)]
 mod tests {
     use super::super::colliders::{Collider, Plane, Surface};
-    use super::super::response::{hold, separate};
+    use super::super::contact_solver::{hold, separate};
     use super::*;
 
     fn floor() -> Vec<Collider> {

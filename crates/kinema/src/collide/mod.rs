@@ -57,11 +57,9 @@ mod paths;
 pub use broad_phase::{all_pairs, Grid, Pair};
 pub use colliders::{collider_contacts, BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};
 pub use contact::{Contact, Partner};
+pub use contact_solver::{hold, separate, HoldParams, HoldStats, SeparateParams, SeparateStats};
 pub use domain::{Domain, Periodic};
 pub use narrow_phase::{pair_contact, sphere_contacts};
 pub use penalty::{damping_ratio, dashpot_coefficient, restitution_of_damping, spring_dashpot_force, PenaltyLaw};
-pub use response::{
-    apply_impulse, hold, resolve, restitution_impulse, separate, HoldParams, HoldStats, Impulse, Material, MaterialTable,
-    ResolveParams, ResolveStats, SeparateParams, SeparateStats,
-};
+pub use response::{apply_impulse, resolve, restitution_impulse, Impulse, Material, MaterialTable, ResolveParams, ResolveStats};
 pub use toi::{toi_plane, toi_sphere_obstacle, toi_spheres};

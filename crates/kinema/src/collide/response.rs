@@ -27,9 +27,6 @@ use super::contact::{Contact, Partner};
 use crate::error::Error;
 use crate::vec3;
 
-pub use super::contact_solver::{hold, separate, HoldParams, HoldStats, SeparateParams, SeparateStats};
-pub(crate) use super::contact_solver::{hold_grouped, separate_grouped, HoldContacts};
-
 /// The restitution and friction of a contact, or of one body before combining.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Material {

@@ -1,5 +1,6 @@
 use super::super::colliders::{Plane, Surface};
 use super::*;
+use crate::collide::contact_solver::{hold, separate, HoldParams, SeparateParams};
 
 fn m(e: f64, mu: f64) -> Material {
     Material::new(e, mu).unwrap()
