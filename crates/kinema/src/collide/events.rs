@@ -35,6 +35,7 @@ use super::domain::Domain;
 use super::neighbour_list::{NeighbourList, CHUNK};
 use super::paths::{pair_toi, Toi};
 use super::toi::{toi_plane, toi_sphere_obstacle, toi_spheres};
+use super::impulse_stage::SPECULATIVE;
 use crate::vec3;
 
 pub(crate) use super::paths::{swept_reach, PathStore, Paths};
@@ -313,8 +314,10 @@ impl Scene<'_> {
         let walls = &self.list.walls;
         let first = walls.partition_point(|w| w.0 < i);
         for &(_, k) in walls[first..].iter().take_while(|w| w.0 == i) {
-            if now == 0.0 && self.touches(k, xi, self.radius[i]) {
-                each(Found::Touching(None)); // touching a collider at the start, approaching or not
+            if now == 0.0 && self.touches(k, xi, self.radius[i], 2.0 * SPECULATIVE * self.radius[i]) {
+                // touching a collider at the start, or within the speculative margin of it,
+                // approaching or not: a contact of the step's end
+                each(Found::Touching(None));
             }
             let path = Parabola { x: xi, v: vi, a: ai };
             self.collider_events(i, k, path, rest, |wall, tau| {
@@ -361,7 +364,7 @@ impl Scene<'_> {
         let walls = &self.list.walls;
         let start = walls.partition_point(|w| w.0 < i);
         for &(_, k) in walls[start..].iter().take_while(|w| w.0 == i) {
-            if self.touches(k, xi, self.radius[i]) {
+            if self.touches(k, xi, self.radius[i], 0.0) {
                 return Some(0.0);
             }
             let line = Parabola {
@@ -374,16 +377,17 @@ impl Scene<'_> {
         first
     }
 
-    /// Whether a sphere at x of radius r touches an active wall of collider k.
-    fn touches(&self, k: usize, x: [f64; 3], r: f64) -> bool {
+    /// Whether a sphere at x of radius r comes within `tolerance` (m) of an active wall of
+    /// collider k.
+    fn touches(&self, k: usize, x: [f64; 3], r: f64, tolerance: f64) -> bool {
         match &self.colliders[k] {
-            Collider::Plane(p) => p.touch(x, r, 0.0).is_some(),
+            Collider::Plane(p) => p.touch(x, r, tolerance).is_some(),
             Collider::Box(b) => b
                 .walls()
                 .iter()
                 .enumerate()
-                .any(|(w, wall)| self.active[k][w] && wall.touch(x, r, 0.0).is_some()),
-            Collider::Sphere(s) => s.touch(x, r, 0.0).is_some(),
+                .any(|(w, wall)| self.active[k][w] && wall.touch(x, r, tolerance).is_some()),
+            Collider::Sphere(s) => s.touch(x, r, tolerance).is_some(),
         }
     }
 

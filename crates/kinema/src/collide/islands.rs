@@ -24,8 +24,8 @@
 use rayon::prelude::*;
 
 use super::contact::{Contact, Partner};
-use super::contact_solver::{hold_grouped, separate_grouped, HoldContacts, HoldParams, HoldStats, SeparateParams, SeparateStats};
 use super::response::{Material, MaterialTable};
+use super::soft_step::{soft_step, SoftContacts, SoftParams, SoftStats, Target};
 use super::sweeps::SweepGroup;
 use crate::error::Error;
 use crate::vec3;
@@ -123,36 +123,34 @@ impl Islands {
     }
 }
 
-/// The end-of-step problem the islands split: the contacts, each one's velocity target
-/// (m/s, see [`hold`](super::hold)), the particles' inverse masses (1/kg) and the materials.
-pub struct EndProblem<'a> {
+/// The end-of-step problem the islands split: the contacts, each one's targets
+/// (`collide/soft_step.rs`), the particles' inverse masses (1/kg) and the materials.
+pub(crate) struct EndProblem<'a> {
     pub contacts: &'a [Contact],
-    pub targets: &'a [f64],
+    pub targets: &'a [Target],
     pub inv_mass: &'a [f64],
     pub materials: MaterialTable<'a>,
-    pub hold: HoldParams,
-    pub separate: SeparateParams,
+    pub params: SoftParams,
 }
 
-/// What the islands' solves did, combined: the most sweeps, converged if all did, the largest
-/// last change, the active contacts and the impulse sums added; the overlaps before and
-/// after, largest.
+/// What the islands' solves did, combined: the most sweeps of each stage, converged if all
+/// did, the active and bounced contacts added.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct IslandStats {
-    pub hold: HoldStats,
-    pub separate: SeparateStats,
+pub(crate) struct IslandStats {
+    pub soft: SoftStats,
     /// The islands.
     pub islands: usize,
 }
 
-/// The islands' solves: the velocity solver (totals of impulse, N·s, on each contact's i) on
-/// the velocities `v`, then the position correction on the positions `x`, each island on
-/// its own copy of its particles. `totals` holds each contact's starting total (warm start)
-/// on entry and its total on return (the caller applies them to the velocities); `x` is
-/// corrected in place. `v` is not changed.
-pub fn solve(
+/// The islands' soft steps (`collide/soft_step.rs`), each island on its own copy of its
+/// particles. `solved` holds each contact's starting total (the warm start) on entry and its
+/// solve stage's total on return; `totals` receives each contact's final total impulse on i
+/// (N·s; the caller applies them to the velocities, `v` is not changed); the positions `x`
+/// are moved in place by what the solve stage did.
+pub(crate) fn solve(
     islands: &Islands,
     problem: &EndProblem<'_>,
+    solved: &mut [[f64; 3]],
     totals: &mut [[f64; 3]],
     v: &[f64],
     x: &mut [f64],
@@ -167,8 +165,8 @@ pub fn solve(
         }
     }
     let seen: &[f64] = x;
-    let warm: &[[f64; 3]] = totals;
-    let solved: Vec<Result<Vec<Solved>, Error>> = batches
+    let warm: &[[f64; 3]] = solved;
+    let results: Vec<Result<Vec<Solved>, Error>> = batches
         .into_par_iter()
         .map(|batch| {
             let mut local = Local::default();
@@ -179,46 +177,43 @@ pub fn solve(
         .collect();
     // Scattered back, and the figures combined, in island order (a contact in no island, of
     // two immovable bodies, carries nothing).
+    solved.fill([0.0; 3]);
     totals.fill([0.0; 3]);
     let mut stats = IslandStats {
         islands: islands.len(),
-        hold: HoldStats {
+        soft: SoftStats {
             converged: true,
-            ..HoldStats::default()
+            ..SoftStats::default()
         },
-        ..IslandStats::default()
     };
-    for island in solved.into_iter().collect::<Result<Vec<_>, _>>()?.into_iter().flatten() {
-        for (&c, p) in island.order.iter().zip(&island.totals) {
+    for island in results.into_iter().collect::<Result<Vec<_>, _>>()?.into_iter().flatten() {
+        for ((&c, p), s) in island.order.iter().zip(&island.totals).zip(&island.solved) {
             totals[c] = *p;
+            solved[c] = *s;
         }
         for (&q, p) in island.moved.iter().zip(&island.positions) {
             x[3 * q..3 * q + 3].copy_from_slice(p);
         }
-        let (h, s) = (island.hold, island.separate);
-        stats.hold.iterations = stats.hold.iterations.max(h.iterations);
-        stats.hold.converged &= h.converged;
-        stats.hold.last_change = stats.hold.last_change.max(h.last_change);
-        stats.hold.active += h.active;
-        for k in 0..3 {
-            stats.hold.collider_impulse_sum[k] += h.collider_impulse_sum[k];
-            stats.hold.pinned_impulse_sum[k] += h.pinned_impulse_sum[k];
-        }
-        stats.separate.max_overlap_before = stats.separate.max_overlap_before.max(s.max_overlap_before);
-        stats.separate.max_overlap_after = stats.separate.max_overlap_after.max(s.max_overlap_after);
+        let (s, all) = (island.soft, &mut stats.soft);
+        all.sweeps = all.sweeps.max(s.sweeps);
+        all.converged &= s.converged;
+        all.relax_sweeps = all.relax_sweeps.max(s.relax_sweeps);
+        all.restitution_sweeps = all.restitution_sweeps.max(s.restitution_sweeps);
+        all.active += s.active;
+        all.bounced += s.bounced;
     }
     Ok(stats)
 }
 
-/// One island's results: its contacts in the order solved and their totals; its movable
-/// particles and their corrected positions; the solvers' figures.
+/// One island's results: its contacts in the order solved, their final and solve-stage
+/// totals; its movable particles and their new positions; the solver's figures.
 struct Solved {
     order: Vec<usize>,
     totals: Vec<[f64; 3]>,
+    solved: Vec<[f64; 3]>,
     moved: Vec<usize>,
     positions: Vec<[f64; 3]>,
-    hold: HoldStats,
-    separate: SeparateStats,
+    soft: SoftStats,
 }
 
 /// The gathered copy of one island (buffers reused from island to island of a batch).
@@ -226,7 +221,7 @@ struct Solved {
 struct Local {
     particles: Vec<usize>,
     contacts: Vec<Contact>,
-    targets: Vec<f64>,
+    targets: Vec<Target>,
     v: Vec<f64>,
     x: Vec<f64>,
     inv_mass: Vec<f64>,
@@ -285,29 +280,23 @@ impl Local {
         }));
         self.targets.clear();
         self.targets.extend(order.iter().map(|&c| problem.targets[c]));
-        let mut totals: Vec<[f64; 3]> = order.iter().map(|&c| warm[c]).collect();
-        let held = HoldContacts {
+        let mut solved: Vec<[f64; 3]> = order.iter().map(|&c| warm[c]).collect();
+        let mut totals = Vec::new();
+        let held = SoftContacts {
             contacts: &self.contacts,
             targets: &self.targets,
             inv_mass: &self.inv_mass,
             materials: &materials,
         };
-        let hold = hold_grouped(held, &mut self.v, &problem.hold, &mut totals, &self.groups)?;
-        let separate = separate_grouped(
-            &mut self.contacts,
-            &mut self.x,
-            &self.inv_mass,
-            &problem.separate,
-            &self.groups,
-        )?;
+        let soft = soft_step(held, &problem.params, &mut self.v, &mut self.x, &mut solved, &mut totals, &self.groups)?;
         let moved: Vec<usize> = (0..parts.len()).filter(|&l| self.inv_mass[l] > 0.0).collect();
         Ok(Solved {
             order,
             totals,
+            solved,
             positions: moved.iter().map(|&l| vec3::get(&self.x, l)).collect(),
             moved: moved.iter().map(|&l| parts[l]).collect(),
-            hold,
-            separate,
+            soft,
         })
     }
 }
@@ -370,7 +359,6 @@ fn colour(
 #[cfg(test)]
 mod tests {
     use super::super::colliders::{Collider, Plane, Surface};
-    use super::super::contact_solver::{hold, separate};
     use super::*;
 
     fn floor() -> Vec<Collider> {
@@ -425,9 +413,28 @@ mod tests {
         (contacts, v, x)
     }
 
+    const H: f64 = 1e-3;
+
+    /// The soft-step targets of `block`'s contacts: a step of h in which every ball fell
+    /// 1 m/s · h, ending `sink` into the floor (they started touching it).
+    fn targets(contacts: &[Contact]) -> Vec<Target> {
+        contacts
+            .iter()
+            .map(|c| {
+                // relative to the floor each ball fell H in the step at 1 m/s, from touching it;
+                // the pairs moved together
+                let (fell, u1) = match c.partner_particle() {
+                    None => ([0.0, 0.0, -H], [0.0, 0.0, -1.0]),
+                    Some(_) => ([0.0; 3], [0.0; 3]),
+                };
+                Target::new(0.0, 0.0, fell, u1, c.normal, H, None)
+            })
+            .collect()
+    }
+
     fn problem<'a>(
         contacts: &'a [Contact],
-        targets: &'a [f64],
+        targets: &'a [Target],
         inv_mass: &'a [f64],
         floor: &'a [Collider],
         sweeps: usize,
@@ -437,13 +444,11 @@ mod tests {
             targets,
             inv_mass,
             materials: MaterialTable::uniform(Material::new(0.0, 0.3).unwrap()).with_colliders(floor),
-            hold: HoldParams {
+            params: SoftParams {
+                h: H,
                 tolerance: 0.0,
-                max_iterations: sweeps,
-            },
-            separate: SeparateParams {
-                iterations: 5,
-                ..SeparateParams::default()
+                solve_sweeps: sweeps,
+                relax_sweeps: sweeps,
             },
         }
     }
@@ -481,8 +486,8 @@ mod tests {
     #[test]
     fn islands_solve_what_one_solve_of_all_contacts_gives() {
         // Three small blocks (below the colouring size): solved island by island, each in list
-        // order, they give the whole list's solve bit for bit (fixed sweeps: tolerance 0 on a
-        // problem that does not converge exactly).
+        // order, they give the whole list's soft step bit for bit (fixed sweeps: tolerance 0 on
+        // a problem that does not converge exactly).
         let (mut contacts, mut v, mut x) = (Vec::new(), Vec::new(), Vec::new());
         for b in 0..3 {
             let (c, bv, bx) = block(3, 3, 2 + b, 1e-3);
@@ -501,31 +506,30 @@ mod tests {
         // interleave the blocks' contacts in the list (sorted by particle, as the world's are)
         contacts.sort_by_key(|c| (c.i, c.other));
         let inv_mass = vec![1.0; v.len() / 3];
-        let targets = vec![0.0; contacts.len()];
+        let targets = targets(&contacts);
         let islands = Islands::find(&contacts, &inv_mass);
         assert_eq!(islands.len(), 3);
         let floor = floor();
         let p = problem(&contacts, &targets, &inv_mass, &floor, 7);
+        let mut solved = vec![[0.0; 3]; contacts.len()];
         let mut totals = vec![[0.0; 3]; contacts.len()];
         let mut x_islands = x.clone();
-        let stats = solve(&islands, &p, &mut totals, &v, &mut x_islands).unwrap();
-        assert_eq!((stats.hold.iterations, stats.islands), (7, 3));
+        let stats = solve(&islands, &p, &mut solved, &mut totals, &v, &mut x_islands).unwrap();
+        assert_eq!((stats.soft.sweeps, stats.islands), (7, 3));
 
+        let mut all_solved = vec![[0.0; 3]; contacts.len()];
         let mut all_totals = Vec::new();
-        let mut v_all = v.clone();
-        hold(
-            &contacts,
-            &targets,
-            &mut v_all,
-            &inv_mass,
-            &p.materials,
-            &p.hold,
-            &mut all_totals,
-        )
-        .unwrap();
-        let mut x_all = x.clone();
-        separate(&mut contacts.clone(), &mut x_all, &inv_mass, &p.separate).unwrap();
+        let (mut v_all, mut x_all) = (v.clone(), x.clone());
+        let held = SoftContacts {
+            contacts: &contacts,
+            targets: &targets,
+            inv_mass: &inv_mass,
+            materials: &p.materials,
+        };
+        let in_order = [SweepGroup::in_order(0..contacts.len())];
+        soft_step(held, &p.params, &mut v_all, &mut x_all, &mut all_solved, &mut all_totals, &in_order).unwrap();
         assert_eq!(totals, all_totals);
+        assert_eq!(solved, all_solved);
         assert_eq!(x_islands, x_all);
         assert!(totals.iter().any(|t| t[2] != 0.0)); // the floor holds the blocks up
     }
@@ -533,12 +537,13 @@ mod tests {
     #[test]
     fn a_coloured_island_is_the_same_on_any_number_of_threads_and_holds_the_block_up() {
         // A block of 12·12·6 balls: 2,448 contacts, one island, coloured, with colours large
-        // enough to be swept on threads. Its solve on 1, 2 and 3 threads, bit for bit; and the
-        // physics of a plastic block landing on a floor (e = 0): every ball stops, the floor
-        // takes the block's momentum, 864 kg · 1 m/s, to the solver's tolerance.
-        let (contacts, v, x) = block(12, 12, 6, 0.0);
+        // enough to be swept on threads. Its soft step on 1, 2 and 3 threads, bit for bit; and
+        // the physics of a plastic block landing on a floor (e = 0): every ball stops, the
+        // floor takes the block's momentum, 864 kg · 1 m/s, to the solver's tolerance, and the
+        // solve lifts the block out of the floor by the step's fall (it ends touching).
+        let (contacts, v, x) = block(12, 12, 6, H);
         let inv_mass = vec![1.0; v.len() / 3];
-        let targets = vec![0.0; contacts.len()];
+        let targets = targets(&contacts);
         let islands = Islands::find(&contacts, &inv_mass);
         assert_eq!((islands.len(), islands.island(0).len()), (1, 2448));
         let mut groups = Vec::new();
@@ -549,18 +554,19 @@ mod tests {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
                 let mut p = problem(&contacts, &targets, &inv_mass, &floor, 2000);
-                p.hold.tolerance = 1e-12;
+                p.params.tolerance = 1e-12;
+                let mut solved = vec![[0.0; 3]; contacts.len()];
                 let mut totals = vec![[0.0; 3]; contacts.len()];
                 let mut x = x.clone();
-                let stats = solve(&islands, &p, &mut totals, &v, &mut x).unwrap();
+                let stats = solve(&islands, &p, &mut solved, &mut totals, &v, &mut x).unwrap();
                 (totals, x, stats)
             })
         };
         let (one, two, three) = (run(1), run(2), run(3));
         assert!(one == two, "1 and 2 threads differ");
         assert!(one == three, "1 and 3 threads differ");
-        let (totals, _, stats) = one;
-        assert!(stats.hold.converged, "{stats:?}");
+        let (totals, x_after, stats) = one;
+        assert!(stats.soft.converged, "{stats:?}");
         let floor: f64 = totals
             .iter()
             .zip(&contacts)
@@ -575,10 +581,12 @@ mod tests {
                 vec3::add_scaled(&mut after, j, -1.0, *t);
             }
         }
-        assert!(
-            after.iter().all(|u| u.abs() < 1e-6),
-            "{:?}",
-            after.iter().fold(0.0_f64, |m, u| m.max(u.abs()))
-        );
+        let fastest = after.iter().fold(0.0_f64, |m, u| m.max(u.abs()));
+        assert!(fastest < 1e-6, "{fastest}");
+        // every ball back at its lattice height (the bottom layer touching the floor at −½)
+        for (q, z) in x_after.iter().skip(2).step_by(3).enumerate() {
+            let layer = (q / 144) as f64;
+            assert!((z - layer).abs() < 1e-9, "ball {q} at z = {z}");
+        }
     }
 }

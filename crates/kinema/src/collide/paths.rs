@@ -142,6 +142,16 @@ impl<'a> Paths<'a> {
         &self.store.v_ref
     }
 
+    /// Particle q's velocity at its path's reference: after its last impact if it had one,
+    /// else at the step's start (m/s).
+    pub fn reference_velocity(&self, q: usize) -> [f64; 3] {
+        if self.is_open(q) {
+            vec3::get(&self.store.v_ref, q)
+        } else {
+            vec3::get(self.v0, q)
+        }
+    }
+
     /// An impulse changed open path q (its velocity in [`Paths::v_ref_mut`]): a new version.
     pub fn changed(&mut self, q: usize) {
         debug_assert!(self.is_open(q));

@@ -4,24 +4,30 @@
 //! each impulse onto both particles and the energy books (distribution).
 
 use super::{ImpulseStage, StageSetting};
+use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::CHUNK;
-use crate::collide::{pair_contact, Collider, Contact, Domain, HoldParams, Partner, ResolveParams, SeparateParams};
+use crate::collide::soft_step::{SoftParams, Target};
+use crate::collide::{pair_contact, Collider, Contact, Domain, Partner, ResolveParams};
 use crate::error::Error;
 use crate::vec3;
 
-/// The velocity solver of the end-of-step contacts: most sweeps, and the tolerance below which
-/// a sweep counts as converged (m/s). Warm-started, a resting pile takes one or two sweeps a
-/// step; the cap only matters while a heap settles (see `docs/collisions.md`).
-const END_SWEEPS: usize = 200;
+/// Most sweeps of the soft step's solve stage, and of its relax and restitution stages.
+/// Warm-started, a resting pile takes a few sweeps a step; the caps only matter while a heap
+/// settles (see `docs/collisions.md`).
+const SOLVE_SWEEPS: usize = 100;
+const RELAX_SWEEPS: usize = 30;
 
-/// Pairs closer than r_i + r_j by less than this fraction of r_i + r_j (and particles this
-/// fraction of their radius from a collider) are contacts at the end of a step: the position
-/// correction leaves resting pairs touching to rounding, on either side of exact contact.
-const CONTACT_GAP: f64 = 1e-9;
+/// The speculative margin: pairs closer than r_i + r_j by less than this fraction of
+/// r_i + r_j (and particles this fraction of their diameter from a collider) are contacts at
+/// the end of a step, touching or not (Box2D's speculative distance). A resting contact then
+/// stays a contact from step to step, whatever rounding leaves of its gap, and the solve
+/// lets such a pair close its gap but not pass it.
+pub(crate) const SPECULATIVE: f64 = 0.05;
 
-/// Sweeps of the position correction at the end of a step (overlap removed along the normals).
-const SEPARATE_SWEEPS: usize = 20;
+/// The overlap a contact may keep, as a fraction of r_i + r_j (of the diameter against a
+/// collider): 0.2 % of r for equal spheres. Box2D's linear slop, relative to the size.
+pub(crate) const SLOP: f64 = 1e-3;
 
 /// Whether contact `c` is with a wall of a box collider along a periodic axis of `domain`:
 /// such walls do not exist (a particle leaving one side comes back on the other). Box walls
@@ -35,13 +41,13 @@ pub(crate) fn on_periodic_wall(c: &Contact, colliders: &[Collider], domain: &Dom
 }
 
 impl ImpulseStage {
-    /// The contacts at the end of the step (pairs within [`CONTACT_GAP`] of touching, and
-    /// with colliders) of the touched particles, and of every particle they reach through
-    /// such contacts: a pile is one contact network, and the solver must see all of it (a
-    /// ball the solver stops changes the approach of the one resting on it). Breadth first
-    /// from the touched particles; a particle reached for the first time is touched, and its
-    /// integrated state goes to the energy books. Each pair once, lower index first; sorted
-    /// by (i, partner), then each touched particle's collider contacts.
+    /// The contacts at the end of the step (pairs within the [`SPECULATIVE`] margin of
+    /// touching, and with colliders) of the touched particles, and of every particle they
+    /// reach through such contacts: a pile is one contact network, and the solver must see all
+    /// of it (a ball the solver stops changes the approach of the one resting on it). Breadth
+    /// first from the touched particles; a particle reached for the first time is touched.
+    /// Each pair once, lower index first; sorted by (i, partner), then each touched particle's
+    /// collider contacts.
     pub(super) fn end_contacts(&mut self, set: &StageSetting<'_>, x1: &[f64], v1: &[f64]) {
         self.contacts.clear();
         let (n, radius) = (set.radius.len(), set.radius);
@@ -57,12 +63,11 @@ impl ImpulseStage {
                     continue; // the pair was seen from j's side
                 }
                 let (lo, hi) = (i.min(j), i.max(j));
-                let gap = CONTACT_GAP * (radius[lo] + radius[hi]);
+                let gap = SPECULATIVE * (radius[lo] + radius[hi]);
                 if let Some(c) = pair_contact(lo, hi, x1, v1, radius, set.domain, gap) {
                     self.contacts.push(c);
                     if !self.touched[j] {
                         self.touched[j] = true;
-                        self.books.push((j, vec3::get(x1, j), vec3::get(v1, j)));
                         work.push(j);
                     }
                 }
@@ -75,7 +80,7 @@ impl ImpulseStage {
             let (p, vi) = (vec3::get(x1, i), vec3::get(v1, i));
             let first = list.walls.partition_point(|w| w.0 < i);
             for &(_, k) in list.walls[first..].iter().take_while(|w| w.0 == i) {
-                set.colliders[k].for_each_touch(p, radius[i], CONTACT_GAP * radius[i], |t| {
+                set.colliders[k].for_each_touch(p, radius[i], 2.0 * SPECULATIVE * radius[i], |t| {
                     let c = Contact {
                         i,
                         other: Partner::Collider(k),
@@ -91,78 +96,162 @@ impl ImpulseStage {
         }
     }
 
-    /// The end-of-step contacts' solve, island by island on all threads (`collide/islands.rs`):
-    /// the velocity solver's total impulse of each contact into `totals` (applied by the
-    /// caller; `v1` is not changed), then the overlap removed from the positions `x1`. A
-    /// contact approaching faster than the threshold is an impact with target u_n⁺ = −e u_n⁻
-    /// (Newton's law); slower, a resting contact with target 0. Warm-started from the last
-    /// step's totals of the same contacts.
+    /// The end-of-step contacts' soft step, island by island on all threads
+    /// (`collide/soft_step.rs`, `collide/islands.rs`): each contact's targets from the step
+    /// (its gap and velocities at x₁, v₁, its tangential displacement since the step's start
+    /// x₀, and its approach at the start, `paths`' reference velocities), the final total
+    /// impulse of each contact into `totals` (applied by the caller; `v1` is not changed), the
+    /// solve stage's into `solved` (the next warm start), and the positions `x1` moved by the
+    /// solve stage. A contact that approached faster than the threshold at the step's start
+    /// bounces by Newton's law, u_n⁺ = −e u_n⁻; slower, it comes to rest.
     pub(super) fn solve(
         &mut self,
         set: &StageSetting<'_>,
+        paths: &Paths<'_>,
+        h: f64,
         v1: &[f64],
         x1: &mut [f64],
         threshold: f64,
     ) -> Result<IslandStats, Error> {
-        let (materials, inv_mass) = (set.materials, set.inv_mass);
-        self.targets.clear();
-        self.targets.extend(self.contacts.iter().map(|c| {
-            if -c.u_n >= threshold && c.u_n < 0.0 {
-                -materials.pair(c).restitution() * c.u_n
-            } else {
-                0.0
-            }
-        }));
+        let (materials, inv_mass, domain) = (set.materials, set.inv_mass, set.domain);
+        let x0 = paths.x0;
+        let moved = |q: usize| domain.displacement(vec3::get(x1, q), vec3::get(x0, q));
+        let rel = |c: &Contact, f: &dyn Fn(usize) -> [f64; 3]| match c.partner_particle() {
+            Some(j) => vec3::sub(f(c.i), f(j)),
+            None => f(c.i),
+        };
         let warm = &self.warm;
-        self.totals.clear();
-        self.totals.extend(self.contacts.iter().map(|c| {
+        self.solved.clear();
+        self.solved.extend(self.contacts.iter().map(|c| {
             warm.binary_search_by(|w| (w.0, w.1).cmp(&(c.i, c.other)))
                 .map_or([0.0; 3], |k| warm[k].2)
         }));
+        // The particles in resting contact: named by a contact that carried load in the last
+        // step, or that the step would close beyond what its target allows (moving by
+        // symplectic Euler, below). No impact hit them in this step.
+        let euler_step = |q: usize| vec3::scale(h, vec3::get(v1, q));
+        let mut resting = vec![false; inv_mass.len()];
+        for (c, warm) in self.contacts.iter().zip(&self.solved) {
+            let start = -c.overlap - vec3::dot(rel(c, &moved), c.normal);
+            let least = start.min(0.0);
+            let closes = start + vec3::dot(rel(c, &euler_step), c.normal) < least;
+            if *warm != [0.0; 3] || closes {
+                for q in std::iter::once(c.i).chain(c.partner_particle()) {
+                    resting[q] = paths.version(q) == 0;
+                }
+            }
+        }
+        // Each particle's displacement over the step as the solve sees it: a particle in
+        // resting contact moves by symplectic Euler, as in Box2D (x = x₀ + h v: held at v = 0
+        // it stays where it was, whatever the method); any other as it was integrated (the
+        // method's own accuracy, an impact's exact path).
+        let base = |q: usize| if resting[q] { euler_step(q) } else { moved(q) };
+        self.prepared.clear();
+        self.prepared.extend(self.contacts.iter().map(|c| {
+            let n = c.normal;
+            let start = -c.overlap - vec3::dot(rel(c, &moved), n);
+            let u1 = rel(c, &|q| vec3::get(v1, q));
+            let u_pre = vec3::dot(rel(c, &|q| paths.reference_velocity(q)), n);
+            let bounce = (u_pre < 0.0 && -u_pre >= threshold).then(|| -materials.pair(c).restitution() * u_pre);
+            let slop = SLOP * (set.radius[c.i] + c.partner_particle().map_or(set.radius[c.i], |j| set.radius[j]));
+            Target::new(start, slop, rel(c, &base), u1, n, h, bounce)
+        }));
+        // What moving by symplectic Euler adds to the integrated position of each particle in
+        // resting contact.
+        let euler: Vec<(usize, [f64; 3])> = (0..inv_mass.len())
+            .filter(|&q| resting[q] && inv_mass[q] > 0.0)
+            .map(|q| (q, vec3::sub(euler_step(q), moved(q))))
+            .collect();
+        self.totals.clear();
+        self.totals.resize(self.contacts.len(), [0.0; 3]);
         if self.contacts.is_empty() {
+            self.acted.clear();
             self.warm.clear();
             self.resting.clear();
             let mut done = IslandStats::default();
-            done.hold.converged = true;
+            done.soft.converged = true;
             return Ok(done);
         }
         let problem = EndProblem {
             contacts: &self.contacts,
-            targets: &self.targets,
+            targets: &self.prepared,
             inv_mass,
             materials,
-            hold: HoldParams {
+            params: SoftParams {
+                h,
                 tolerance: ResolveParams::default().tolerance,
-                max_iterations: END_SWEEPS,
-            },
-            separate: SeparateParams {
-                iterations: SEPARATE_SWEEPS,
-                ..SeparateParams::default()
+                solve_sweeps: SOLVE_SWEEPS,
+                relax_sweeps: RELAX_SWEEPS,
             },
         };
         let islands = Islands::find(&self.contacts, inv_mass);
-        let stats = islands::solve(&islands, &problem, &mut self.totals, v1, x1)?;
+        let stats = islands::solve(&islands, &problem, &mut self.solved, &mut self.totals, v1, x1)?;
+        for &(q, c) in &euler {
+            vec3::add_scaled(x1, q, 1.0, c);
+        }
+        // What the stage acted on, for the books: moved by symplectic Euler, or pushed.
+        self.acted.clear();
+        self.acted.extend(resting.iter().map(|&r| r));
+        for (c, (p, s)) in self.contacts.iter().zip(self.totals.iter().zip(&self.solved)) {
+            if *p != [0.0; 3] || *s != [0.0; 3] {
+                self.acted[c.i] = true;
+                if let Some(j) = c.partner_particle() {
+                    self.acted[j] = true;
+                }
+            }
+        }
         self.warm.clear();
         self.warm
-            .extend(self.contacts.iter().zip(&self.totals).map(|(c, p)| (c.i, c.other, *p)));
+            .extend(self.contacts.iter().zip(&self.solved).map(|(c, p)| (c.i, c.other, *p)));
         self.warm.sort_by_key(|w| (w.0, w.1));
         self.resting.clear();
-        self.resting.extend(self.warm.iter().map(|w| (w.0, w.1, w.2 != [0.0; 3])));
+        let loaded: Vec<(usize, Partner, bool)> = self
+            .contacts
+            .iter()
+            .zip(&self.totals)
+            .map(|(c, p)| (c.i, c.other, *p != [0.0; 3]))
+            .collect();
+        self.resting.extend(loaded);
+        self.resting.sort_by_key(|w| (w.0, w.1));
         Ok(stats)
     }
 
-    /// The mechanical energy the end-of-step solve and the position correction took, J: over
-    /// the particles in contact, the kinetic energy before them minus after, minus the work
-    /// the step's forces (the constant accelerations of the paths) do along the positions
-    /// the correction moved: Σ ½ m (|v_b|² − |v|²) + Σ m a·(x − x_b). For a resting contact
-    /// held by the solver, whose sinking the correction undoes, it is 0: what the impulse
-    /// took from the speed the force gave, the correction gave back as height. (An impact
-    /// inside the step books its own ½ (1 − e²) μ u_n², exactly 0 for e = 1.)
+    /// The largest overlap of the end-of-step contacts at the positions `x1` the step leaves
+    /// (m, 0 if none): each pair's r_i + r_j − |x_i − x_j| and each collider contact's depth,
+    /// measured again (the particles no contact names had no meeting in the step).
+    pub(super) fn max_overlap(&self, set: &StageSetting<'_>, x1: &[f64]) -> f64 {
+        let mut deepest: f64 = 0.0;
+        for c in &self.contacts {
+            match c.other {
+                Partner::Particle(j) => {
+                    let d = set.domain.displacement(vec3::get(x1, c.i), vec3::get(x1, j));
+                    deepest = deepest.max(set.radius[c.i] + set.radius[j] - vec3::norm(d));
+                }
+                Partner::Collider(k) => {
+                    let r = set.radius[c.i];
+                    set.colliders[k].for_each_touch(vec3::get(x1, c.i), r, 0.0, |t| {
+                        if !on_periodic_wall(c, set.colliders, set.domain) {
+                            deepest = deepest.max(t.overlap);
+                        }
+                    });
+                }
+            }
+        }
+        deepest
+    }
+
+    /// The mechanical energy the end-of-step stage took, J, over the particles it acted on
+    /// (moved by symplectic Euler in resting contact, or pushed by a nonzero total): each one's kinetic energy at its books' reference state minus
+    /// now, minus the work the step's forces (the constant accelerations of the paths) did
+    /// since: Σ ½ m (|v_b|² − |v|²) + Σ m a·(x − x_b). The reference is the step's start for a
+    /// particle no impact hit, so a body held at rest books exactly 0 with every method (it
+    /// ends the step where and as it began); an impact inside the step books its own
+    /// ½ (1 − e²) μ u_n², exactly 0 for e = 1.
     pub(super) fn energy_books(&self, set: &StageSetting<'_>, accel: &[f64], x1: &[f64], v1: &[f64]) -> f64 {
         let (mass, inv_mass) = (set.mass, set.inv_mass);
         let mut lost = 0.0;
         for &(q, xb, vb) in &self.books {
-            if inv_mass[q] == 0.0 {
+            if inv_mass[q] == 0.0 || !self.acted.get(q).copied().unwrap_or(false) {
                 continue;
             }
             let (x, v, a) = (vec3::get(x1, q), vec3::get(v1, q), vec3::get(accel, q));

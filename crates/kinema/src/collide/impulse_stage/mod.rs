@@ -13,11 +13,13 @@ use std::time::{Duration, Instant};
 
 use super::events::{EventQueue, PathStore, Paths};
 use super::neighbour_list::NeighbourList;
+use super::soft_step::Target;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
 use crate::error::Error;
 use crate::interrupt::Interrupt;
 use crate::vec3;
+pub(crate) use end_of_step::SPECULATIVE;
 use end_of_step::distribute;
 use impacts::{active_walls, least_impact_speed, Search};
 
@@ -134,15 +136,20 @@ pub(crate) struct ImpulseStage {
     /// Particles that touched something at the step's start or were hit in it: the only
     /// ones that can be in contact at its end (continuous detection saw every other path).
     pub(super) touched: Vec<bool>,
-    /// The integrated state (x₁, v₁) of each touched particle, for the energy books.
+    /// Each touched particle's reference state for the energy books: at the step's start, or
+    /// after its impacts (x, v).
     pub(super) books: Vec<(usize, [f64; 3], [f64; 3])>,
     pub(super) contacts: Vec<Contact>,
     /// The end-of-step contacts as detected (overlap and u_n before the response).
     pub detected: Vec<Contact>,
-    /// The end-of-step solver's velocity targets, totals, and the last step's totals by
-    /// contact (for warm starting).
-    pub(super) targets: Vec<f64>,
+    /// The soft step's final totals of the end-of-step contacts, N·s.
     pub(super) totals: Vec<[f64; 3]>,
+    /// The solve stage's totals (the next step's warm start), N·s.
+    pub(super) solved: Vec<[f64; 3]>,
+    /// The particles the end-of-step stage acted on in this step (for the books).
+    pub(super) acted: Vec<bool>,
+    /// Each end-of-step contact's targets (`collide/soft_step.rs`).
+    pub(super) prepared: Vec<Target>,
     pub(super) warm: Vec<(usize, Partner, [f64; 3])>,
     /// The contacts of `warm` and whether each carried load (see `Scene::resting`).
     pub(super) resting: Vec<(usize, Partner, bool)>,
@@ -167,8 +174,10 @@ impl ImpulseStage {
             books: Vec::new(),
             contacts: Vec::new(),
             detected: Vec::new(),
-            targets: Vec::new(),
             totals: Vec::new(),
+            solved: Vec::new(),
+            acted: Vec::new(),
+            prepared: Vec::new(),
             warm: Vec::new(),
             resting: Vec::new(),
             interrupt: Interrupt::none(),
@@ -286,6 +295,18 @@ impl ImpulseStage {
         }
         self.touched.clear();
         self.touched.resize(n, !set.ccd);
+        // The last step's contacts stay contacts (a resting pile is solved at every step's end,
+        // whether or not its pairs touch to the last bit).
+        for &(i, other, _) in &self.warm {
+            for q in std::iter::once(i).chain(match other {
+                Partner::Particle(j) => Some(j),
+                Partner::Collider(_) => None,
+            }) {
+                if q < n {
+                    self.touched[q] = true;
+                }
+            }
+        }
         self.books.clear();
         let mut changed = false;
         let mut t_detect = clock.elapsed();
@@ -309,14 +330,21 @@ impl ImpulseStage {
         if set.ccd {
             paths.finish(x1, v1, h);
         }
-        // The state of the touched particles before the end-of-step solve, for its books.
-        for q in (0..n).filter(|&q| self.touched[q]) {
-            self.books.push((q, vec3::get(x1, q), vec3::get(v1, q)));
-        }
-        // Stage 2 at the end of the step: the contacts of the touched particles.
+        // Stage 2 at the end of the step: the contacts of the touched particles and of the
+        // piles they reach.
         self.end_contacts(set, x1, v1);
         stats.contacts = self.contacts.len();
         self.detected.clone_from(&self.contacts);
+        // The books' reference state of each touched particle: its state at the step's start
+        // if no impact changed its path (a body at rest then books 0 whatever the method), else
+        // the integrated state after its impacts (which booked their own loss).
+        for q in (0..n).filter(|&q| self.touched[q]) {
+            self.books.push(if paths.version(q) == 0 {
+                (q, vec3::get(paths.x0, q), vec3::get(paths.v0, q))
+            } else {
+                (q, vec3::get(x1, q), vec3::get(v1, q))
+            });
+        }
         // A pair that only touches (no overlap) and approaches faster than an impact's least
         // speed meets exactly at the step's end: its impact belongs to the next step's t = 0,
         // where the law resolves it pair by pair, like every other impact (with ccd).
@@ -326,14 +354,13 @@ impl ImpulseStage {
         }
         t_detect += clock.elapsed();
 
-        // Stage 3: the solver's totals, and the overlap removed.
+        // Stage 3: the soft step's totals; the positions follow its solve stage.
         let clock = Instant::now();
-        let solved = self.solve(set, v1, x1, threshold)?;
-        stats.solver_sweeps = solved.hold.iterations;
-        stats.unconverged = stats.unconverged.max(usize::from(!solved.hold.converged));
+        let solved = self.solve(set, paths, h, v1, x1, threshold)?;
+        stats.solver_sweeps = solved.soft.sweeps;
+        stats.unconverged = stats.unconverged.max(usize::from(!solved.soft.converged));
         stats.islands = solved.islands;
-        stats.max_overlap = solved.separate.max_overlap_after;
-        changed |= solved.separate.max_overlap_before > 0.0;
+        changed |= self.solved.iter().any(|p| *p != [0.0; 3]);
         t_respond += clock.elapsed();
 
         // Stage 4: the totals onto both particles; the books.
@@ -347,6 +374,7 @@ impl ImpulseStage {
             distribute(c.i, c.partner_particle(), *p, v1, inv_mass, mass, &mut stats.impulse_balance);
         }
         stats.energy_lost += self.energy_books(set, paths.accel, x1, v1);
+        stats.max_overlap = self.max_overlap(set, x1);
         if let Some(p) = set.domain.periodic_box() {
             if frame.wrapped {
                 // only the touched particles moved since (the impacts, the correction)

@@ -1,0 +1,326 @@
+//! The end-of-step contact solve of the impulse model: Box2D v3's soft step (`solver.c`,
+//! `contact_solver.c`), written for a step whose forces were already integrated.
+//!
+//! Stage 1 has moved every particle from (x₀, v₀) to (x₁, v₁) by the world's method. A
+//! contact's impulse P, taken as acting at the step's start, changes the end velocity by
+//! Δv = w P and the end position by h Δv (the velocity it leaves is carried over the whole
+//! step). Written for one contact, with g₁ its gap at x₁ (< 0: overlap), u₁ its normal
+//! velocity at v₁ and u its normal velocity after the solve,
+//!
+//! ```text
+//!   g = g₁ + h (u − u₁)                                (the gap the solve leaves)
+//! ```
+//!
+//! so every position condition is a velocity target, and one projected Gauss–Seidel over
+//! velocities keeps positions too. The stages, in order (Box2D's `b2SolverStage`):
+//!
+//! ```text
+//!   warm start   last step's totals of the same contacts, applied
+//!   solve        g ≥ 0 for a pair apart at the step's start (speculative: they may close
+//!                the gap, not pass it); g ≥ g₀ for one that overlapped by −g₀ within the
+//!                slop, and a part β of the excess removed per step beyond it;
+//!                tangential velocity u_t → u₁t − d_t/h (no sliding over the step: d_t is
+//!                the tangential displacement the step made), |t| ≤ μ λ (Coulomb)
+//!   integrate    x += h Δv of the solve (positions follow the solve, not the later stages)
+//!   relax        u ≥ 0 where the solve left them touching, u ≥ −g/h across a gap g; u_t → 0:
+//!                the velocity the solve needed to move positions is not kept (Box2D's relax)
+//!   restitution  u⁺ = −e u⁻ for each contact that carries load and approached faster than
+//!                the threshold at the step's start (Newton's law, Box2D's restitution stage)
+//! ```
+//!
+//! All stages work on the same accumulated totals (λ ≥ 0 along n, |t| ≤ μ λ), so an impulse
+//! that the relax finds too large shrinks again. A body resting under any method ends each
+//! step where it started, at rest: its gap is closed exactly and its velocity relaxed to 0.
+
+use super::contact::Contact;
+use super::response::MaterialTable;
+use super::sweeps::{sweeps, Ends, SweepGroup};
+use crate::error::Error;
+use crate::vec3;
+
+/// What the stage prepared for one contact (m, m/s, 3-vectors ⊥ n).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Target {
+    /// The gap g₁ at the integrated positions x₁, m (< 0: overlap).
+    pub gap: f64,
+    /// The normal velocity u₁ at v₁, m/s.
+    pub u_n: f64,
+    /// The least normal velocity of the solve stage, m/s.
+    pub solve_n: f64,
+    /// The tangential velocity of sticking over the step, m/s.
+    pub stick_t: [f64; 3],
+    /// Newton's target −e u⁻ > 0 when the contact approached faster than the threshold at
+    /// the step's start (`None`: no bounce).
+    pub bounce: Option<f64>,
+}
+
+/// Overlap removed per step by the solve stage (Baumgarte's β: 0.2, as Box2D v2 and Chipmunk
+/// use; an overlap only remains where a solve stopped short, and this takes it out gently).
+pub(crate) const OVERLAP_RECOVERY: f64 = 0.2;
+
+impl Target {
+    /// The targets of a contact whose gap was g₀ at the step's start (m), whose relative
+    /// displacement over the step is d without the solve (m), and whose relative velocity at
+    /// the step's end is u₁ (m/s), along `normal`, at step h (s); `bounce`: Newton's target if
+    /// any.
+    ///
+    /// Without the solve the step ends at the gap g₁ = g₀ + d·n. The solve lets it end at a gap
+    /// of at least 0 if they were apart at the start; at g₀ if they overlapped by at most the
+    /// `slop` (m: Box2D's linear slop, an overlap left in place so that a rounding of the
+    /// solve does not push a pile apart and back every step); and at g₀ + β (−slop − g₀)
+    /// if deeper (β = [`OVERLAP_RECOVERY`] of the excess removed per step). What the step
+    /// itself would close is never allowed, so a body resting under a force ends every step
+    /// where it began. With g = g₁ + h (u − u₁·n), the target is
+    /// u ≥ u₁·n + (g_target − g₁)/h. Sticking (no sliding over the step) is a tangential
+    /// velocity of u₁t − d_t/h.
+    pub fn new(start: f64, slop: f64, d: [f64; 3], u1: [f64; 3], normal: [f64; 3], h: f64, bounce: Option<f64>) -> Target {
+        let (d_n, u_n) = (vec3::dot(d, normal), vec3::dot(u1, normal));
+        let gap = start + d_n;
+        let least = if start >= 0.0 {
+            0.0
+        } else if start >= -slop {
+            start
+        } else {
+            start + OVERLAP_RECOVERY * (-slop - start)
+        };
+        let tangential = |a: [f64; 3], a_n: f64| vec3::sub(a, vec3::scale(a_n, normal));
+        Target {
+            gap,
+            u_n,
+            solve_n: u_n + (least - gap) / h,
+            stick_t: vec3::sub(tangential(u1, u_n), vec3::scale(1.0 / h, tangential(d, d_n))),
+            bounce,
+        }
+    }
+}
+
+/// Settings of [`soft_step`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SoftParams {
+    /// The step, s.
+    pub h: f64,
+    /// A sweep whose largest velocity change is at most this has converged, m/s.
+    pub tolerance: f64,
+    /// Most sweeps of the solve stage.
+    pub solve_sweeps: usize,
+    /// Most sweeps of the relax and of the restitution stages.
+    pub relax_sweeps: usize,
+}
+
+/// What [`soft_step`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct SoftStats {
+    /// Sweeps of the solve stage, and whether its last changed nothing beyond the tolerance.
+    pub sweeps: usize,
+    pub converged: bool,
+    /// Sweeps of the relax stage, and of the restitution stage.
+    pub relax_sweeps: usize,
+    pub restitution_sweeps: usize,
+    /// Contacts that carry a nonzero impulse at the end.
+    pub active: usize,
+    /// Contacts that bounced by Newton's law.
+    pub bounced: usize,
+}
+
+/// What [`soft_step`] holds: the contacts (indices into the arrays it is given), their
+/// targets, the particles' inverse masses (1/kg, 0 for pinned) and the materials.
+#[derive(Clone, Copy)]
+pub(crate) struct SoftContacts<'a> {
+    pub contacts: &'a [Contact],
+    pub targets: &'a [Target],
+    pub inv_mass: &'a [f64],
+    pub materials: &'a MaterialTable<'a>,
+}
+
+/// The soft step's stages (see the module's doc) on velocities `v` and positions `x` (3 per
+/// particle, updated in place), with each sweep visiting the contacts group by group (as
+/// `hold_grouped` does: the same result on any number of threads).
+///
+/// `solved`: each contact's starting total on entry (the last step's solve, for the warm
+/// start; zeros if none), its solve stage's total on return (the next step's warm start).
+/// `totals`: each contact's final total impulse on i, N·s (−total on a partner particle).
+pub(crate) fn soft_step(
+    held: SoftContacts<'_>,
+    params: &SoftParams,
+    v: &mut [f64],
+    x: &mut [f64],
+    solved: &mut [[f64; 3]],
+    totals: &mut Vec<[f64; 3]>,
+    groups: &[SweepGroup],
+) -> Result<SoftStats, Error> {
+    let SoftContacts {
+        contacts,
+        targets,
+        inv_mass,
+        materials,
+    } = held;
+    let h = params.h;
+    let ends: Vec<Option<Ends>> = contacts.iter().map(|c| Ends::of(c, inv_mass)).collect();
+    let rows: Vec<Row> = contacts
+        .iter()
+        .map(|c| {
+            let (wi, wj) = (inv_mass[c.i], c.partner_particle().map_or(0.0, |j| inv_mass[j]));
+            let w = wi + wj;
+            Row {
+                wi,
+                wj,
+                mass: if w > 0.0 { 1.0 / w } else { 0.0 },
+                mu: materials.pair(c).friction(),
+                n: c.normal,
+                has_j: c.partner_particle().is_some(),
+            }
+        })
+        .collect();
+    let before = v.to_vec();
+
+    // Warm start: each starting total projected onto λ ≥ 0 and the cone, then applied.
+    let mut acc: Vec<(f64, [f64; 3])> = vec![(0.0, [0.0; 3]); contacts.len()];
+    for (k, (r, e)) in rows.iter().zip(&ends).enumerate() {
+        let start = solved[k];
+        let Some(e) = e else { continue };
+        if start == [0.0; 3] || vec3::first_non_finite(&start).is_some() {
+            continue;
+        }
+        let lambda = vec3::dot(start, r.n).max(0.0);
+        let t = r.clamp(vec3::sub(start, vec3::scale(vec3::dot(start, r.n), r.n)), lambda);
+        acc[k] = (lambda, t);
+        let (mut vi, mut vj) = e.load(v);
+        r.apply(&mut vi, &mut vj, vec3::add(vec3::scale(lambda, r.n), t));
+        e.store(v, vi, vj);
+    }
+    let mut stats = SoftStats::default();
+
+    // Solve: the position targets, as velocities.
+    let done = sweeps(groups, &ends, v, &mut acc, params.solve_sweeps, params.tolerance, |k, a, vi, vj| {
+        rows[k].visit(vi, vj, a, targets[k].solve_n, Some(targets[k].stick_t))
+    });
+    stats.sweeps = done.sweeps;
+    stats.converged = done.converged;
+    for (k, r) in rows.iter().enumerate() {
+        solved[k] = vec3::add(vec3::scale(acc[k].0, r.n), acc[k].1);
+    }
+
+    // Integrate: the positions follow the solve's velocity change over the whole step.
+    for (q, (xq, (vq, bq))) in x.iter_mut().zip(v.iter().zip(&before)).enumerate() {
+        if inv_mass[q / 3] > 0.0 {
+            *xq += h * (vq - bq);
+        }
+    }
+
+    // Relax: velocity targets on the gaps the solve left.
+    let relax_n: Vec<f64> = rows
+        .iter()
+        .zip(&ends)
+        .zip(targets)
+        .map(|((r, e), t)| {
+            let Some(e) = e else { return 0.0 };
+            let (vi, vj) = e.load(v);
+            let gap = t.gap + h * (vec3::dot(vec3::sub(vi, vj), r.n) - t.u_n);
+            if gap > 0.0 {
+                -gap / h
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let relaxed = sweeps(groups, &ends, v, &mut acc, params.relax_sweeps, params.tolerance, |k, a, vi, vj| {
+        rows[k].visit(vi, vj, a, relax_n[k], Some([0.0; 3]))
+    });
+    stats.relax_sweeps = relaxed.sweeps;
+
+    // Restitution: Newton's law on the contacts that carry load and came in fast.
+    let bouncing: Vec<Option<f64>> = targets
+        .iter()
+        .zip(&acc)
+        .map(|(t, a)| t.bounce.filter(|_| a.0 > 0.0))
+        .collect();
+    stats.bounced = bouncing.iter().flatten().count();
+    if stats.bounced > 0 {
+        let bounced = sweeps(groups, &ends, v, &mut acc, params.relax_sweeps, params.tolerance, |k, a, vi, vj| match bouncing[k] {
+            Some(b) => rows[k].visit(vi, vj, a, b, None),
+            None => 0.0,
+        });
+        stats.restitution_sweeps = bounced.sweeps;
+    }
+
+    totals.clear();
+    totals.extend(rows.iter().zip(&acc).zip(&ends).map(|((r, (lambda, t)), e)| match e {
+        Some(_) => vec3::add(vec3::scale(*lambda, r.n), *t),
+        None => [0.0; 3],
+    }));
+    stats.active = totals.iter().filter(|p| **p != [0.0; 3]).count();
+    Ok(stats)
+}
+
+/// A contact of [`soft_step`]: its inverse masses w (1/kg), effective mass 1/(w_i + w_j)
+/// (kg), friction μ, normal n, and whether its partner is a particle.
+struct Row {
+    wi: f64,
+    wj: f64,
+    mass: f64,
+    mu: f64,
+    n: [f64; 3],
+    has_j: bool,
+}
+
+impl Row {
+    /// The impulse p on i and −p on j: v_i += w_i p, v_j −= w_j p.
+    fn apply(&self, vi: &mut [f64; 3], vj: &mut [f64; 3], p: [f64; 3]) {
+        for k in 0..3 {
+            vi[k] += self.wi * p[k];
+        }
+        if self.has_j {
+            for k in 0..3 {
+                vj[k] -= self.wj * p[k];
+            }
+        }
+    }
+
+    /// A tangential total clamped to the cone |t| ≤ μ λ.
+    fn clamp(&self, t: [f64; 3], lambda: f64) -> [f64; 3] {
+        let (len, cap) = (vec3::norm(t), self.mu * lambda);
+        if len > cap {
+            vec3::scale(if len > 0.0 { cap / len } else { 0.0 }, t)
+        } else {
+            t
+        }
+    }
+
+    /// One visit with the totals (λ, t): the normal total that brings u_n to at least `b_n`
+    /// (clamped at 0), then, with `b_t`, the tangential total that brings the tangential
+    /// velocity to `b_t` within the cone. Returns the largest change, as a velocity (m/s).
+    fn visit(&self, vi: &mut [f64; 3], vj: &mut [f64; 3], (normal, tangent): &mut (f64, [f64; 3]), b_n: f64, b_t: Option<[f64; 3]>) -> f64 {
+        let mut change: f64 = 0.0;
+        let u_n = vec3::dot(vec3::sub(*vi, *vj), self.n);
+        let total = (*normal - (u_n - b_n) * self.mass).max(0.0);
+        let dn = total - *normal;
+        *normal = total;
+        if dn != 0.0 {
+            change = change.max(dn.abs() / self.mass);
+            self.apply(vi, vj, vec3::scale(dn, self.n));
+        }
+        if let Some(b_t) = b_t {
+            if self.mu > 0.0 {
+                let u = vec3::sub(*vi, *vj);
+                let u_t = vec3::sub(u, vec3::scale(vec3::dot(u, self.n), self.n));
+                let old = *tangent;
+                let t = self.clamp(vec3::sub(old, vec3::scale(self.mass, vec3::sub(u_t, b_t))), total);
+                let dt = vec3::sub(t, old);
+                if dt != [0.0; 3] {
+                    change = change.max(vec3::norm(dt) / self.mass);
+                    *tangent = t;
+                    self.apply(vi, vj, dt);
+                }
+            }
+        } else if *tangent != [0.0; 3] {
+            // the restitution stage keeps the friction within the cone of a shrinking λ
+            let t = self.clamp(*tangent, total);
+            let dt = vec3::sub(t, *tangent);
+            if dt != [0.0; 3] {
+                *tangent = t;
+                self.apply(vi, vj, dt);
+            }
+        }
+        change
+    }
+}
