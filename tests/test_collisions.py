@@ -223,9 +223,10 @@ def test_without_ccd_a_fast_particle_tunnels_through_an_obstacle():
 
 def test_contacts_report_pairs_and_colliders():
     # Two particles overlapping at rest by δ = 0.05 m: one contact, normal from j to i (−x for
-    # i = 0). The contact reports the overlap as detected, δ; then it is removed along the
-    # normal in proportion to the inverse masses (i moves 2δ/3, j δ/3 for m = 1, 2 kg), and
-    # the centre of mass stays put.
+    # i = 0). The contact reports the overlap as detected, δ. The soft step removes β = 0.2 of
+    # its excess over the slop s = 0.001 (r_i + r_j) in a step, along the normal in proportion
+    # to the inverse masses (i moves 2/3 of it, j 1/3 for m = 1, 2 kg): the centre of mass
+    # stays put, and the relax stage leaves both at rest (docs/collisions.md).
     w = kinema.World(dt=1e-3)
     empty = w.contacts()
     assert set(empty) == {"i", "j", "collider", "normal", "overlap", "u_n"}
@@ -238,8 +239,15 @@ def test_contacts_report_pairs_and_colliders():
     assert c["normal"].shape == (1, 3) and c["i"].dtype == np.int64
     np.testing.assert_array_equal(c["normal"], [[-1.0, 0.0, 0.0]])
     assert c["overlap"][0] == pytest.approx(0.05, abs=1e-15) and c["u_n"][0] == 0.0
-    np.testing.assert_allclose(w.positions[:, 0], [-0.05 * 2 / 3, 0.15 + 0.05 / 3], atol=1e-15)
+    push = 0.2 * (0.05 - 0.001 * 0.2)
+    np.testing.assert_allclose(w.positions[:, 0], [-push * 2 / 3, 0.15 + push / 3], atol=1e-15)
+    np.testing.assert_allclose(w.velocities, 0.0, atol=1e-12)
     assert w.collision_stats()["last"]["contacts"] == 1
+    # The excess shrinks by 1 − β a step: after 60 steps 0.8⁶⁰ of it is left, within 1e-6 m.
+    w.step(59)
+    gap = w.positions[1, 0] - w.positions[0, 0] - 0.2
+    assert -0.001 * 0.2 - 1e-6 < gap <= 0.0
+    assert w.positions[0, 0] * 1.0 + w.positions[1, 0] * 2.0 == pytest.approx(0.3, abs=1e-14)
 
     # Against a collider: j = −1 and the collider's index in world.colliders; the normal is
     # the plane's, normalised. Without continuous detection the contact is found at the end

@@ -35,7 +35,7 @@ use super::domain::Domain;
 use super::neighbour_list::{NeighbourList, CHUNK};
 use super::paths::{pair_toi, Toi};
 use super::toi::{toi_plane, toi_sphere_obstacle, toi_spheres};
-use super::impulse_stage::SPECULATIVE;
+use super::soft_step::SPECULATIVE;
 use crate::vec3;
 
 pub(crate) use super::paths::{swept_reach, PathStore, Paths};

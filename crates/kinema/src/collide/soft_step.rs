@@ -94,6 +94,17 @@ impl Target {
     }
 }
 
+/// The speculative margin: pairs closer than r_i + r_j by less than this fraction of
+/// r_i + r_j (and particles this fraction of their diameter from a collider) are contacts at
+/// the end of a step, touching or not (Box2D's speculative distance). A resting contact then
+/// stays a contact from step to step, whatever rounding leaves of its gap, and the solve
+/// lets such a pair close its gap but not pass it.
+pub(crate) const SPECULATIVE: f64 = 0.05;
+
+/// The overlap a contact may keep, as a fraction of r_i + r_j (of the diameter against a
+/// collider): 0.2 % of r for equal spheres. Box2D's linear slop, relative to the size.
+pub(crate) const SLOP: f64 = 1e-3;
+
 /// Settings of [`soft_step`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct SoftParams {

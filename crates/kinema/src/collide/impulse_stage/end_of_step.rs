@@ -7,7 +7,7 @@ use super::{ImpulseStage, StageSetting};
 use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::CHUNK;
-use crate::collide::soft_step::{SoftParams, Target};
+use crate::collide::soft_step::{SoftParams, Target, SLOP, SPECULATIVE};
 use crate::collide::{pair_contact, Collider, Contact, Domain, Partner, ResolveParams};
 use crate::error::Error;
 use crate::vec3;
@@ -18,16 +18,6 @@ use crate::vec3;
 const SOLVE_SWEEPS: usize = 100;
 const RELAX_SWEEPS: usize = 30;
 
-/// The speculative margin: pairs closer than r_i + r_j by less than this fraction of
-/// r_i + r_j (and particles this fraction of their diameter from a collider) are contacts at
-/// the end of a step, touching or not (Box2D's speculative distance). A resting contact then
-/// stays a contact from step to step, whatever rounding leaves of its gap, and the solve
-/// lets such a pair close its gap but not pass it.
-pub(crate) const SPECULATIVE: f64 = 0.05;
-
-/// The overlap a contact may keep, as a fraction of r_i + r_j (of the diameter against a
-/// collider): 0.2 % of r for equal spheres. Box2D's linear slop, relative to the size.
-pub(crate) const SLOP: f64 = 1e-3;
 
 /// Whether contact `c` is with a wall of a box collider along a periodic axis of `domain`:
 /// such walls do not exist (a particle leaving one side comes back on the other). Box walls

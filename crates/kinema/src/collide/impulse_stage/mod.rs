@@ -19,7 +19,6 @@ use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
 use crate::error::Error;
 use crate::interrupt::Interrupt;
 use crate::vec3;
-pub(crate) use end_of_step::SPECULATIVE;
 use end_of_step::distribute;
 use impacts::{active_walls, least_impact_speed, Search};
 
