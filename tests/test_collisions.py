@@ -508,3 +508,16 @@ def test_collision_defaults_and_contact_models_are_the_engines():
         CollisionsTable(model="spring_dashpot")
     with pytest.raises(ValueError, match=r"damping = 2 is invalid: only model='spring_dashpot' uses it"):
         CollisionsTable(model="impulse", damping=2.0)
+
+
+def test_gravity_pulls_down_in_either_dimension():
+    # kinema.Gravity() with no g is 9.81 m/s² down: −z in 3D, −y in a 2D world (whose z is
+    # zeroed). One verlet step from rest under a constant force is exact: v = g h.
+    for dim, down in ((3, 2), (2, 1)):
+        w = kinema.World(dim=dim, dt=1e-3)
+        w.add_particles([0.0, 0.0, 0.0])
+        w.add(kinema.Gravity())
+        w.step()
+        expected = np.zeros(3)
+        expected[down] = -9.81e-3
+        np.testing.assert_allclose(w.velocities[0], expected, rtol=1e-15, atol=0)

@@ -15,6 +15,10 @@ import numpy as np
 from . import _checks
 
 
+STANDARD_GRAVITY = 9.81
+"""The default gravity's magnitude, m/s² (one home: ``Gravity`` and the scenes use it)."""
+
+
 def _vec3(name: str, value: Any) -> list[float]:
     arr = _checks.real_array(name, value).reshape(-1)
     if arr.size != 3:
@@ -35,15 +39,20 @@ class _Checked:
 
 @dataclass(frozen=True)
 class Gravity(_Checked):
-    """Uniform gravity: F_i = m_i g (N); g in m/s², default (0, 0, −9.81) (z is up)."""
+    """Uniform gravity: F_i = m_i g (N); g in m/s². The default is down at 9.81 m/s²: along −z
+    in a 3D world (z is up), along −y in a 2D world (the xy-plane, y up), as a scene's
+    ``[[forces]] type = "gravity"`` without ``g``."""
 
-    g: Any = (0.0, 0.0, -9.81)
+    g: Any = None
 
     def _checked(self) -> tuple:
-        return (_vec3("g", self.g),)
+        return (None if self.g is None else _vec3("g", self.g),)
 
     def _attach(self, core: Any) -> None:
-        core.add_gravity(*self._args)
+        (g,) = self._args
+        if g is None:
+            g = [0.0, -STANDARD_GRAVITY, 0.0] if core.dim == 2 else [0.0, 0.0, -STANDARD_GRAVITY]
+        core.add_gravity(g)
 
 
 @dataclass(frozen=True)

@@ -205,7 +205,7 @@ def _collider(c: Any, dim: int) -> Any:
 
 def _force(f: Any, dim: int, w: World, starts: list[tuple[int, int]], blocks: list) -> Any:
     if isinstance(f, GravityForce):
-        return Gravity(_v3(f.g) if f.g is not None else ([0.0, -9.81, 0.0] if dim == 2 else [0.0, 0.0, -9.81]))
+        return Gravity(_v3(f.g) if f.g is not None else None)
     if isinstance(f, DragForce):
         return Drag(f.linear, f.quadratic)
     if isinstance(f, AttractorForce):

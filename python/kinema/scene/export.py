@@ -51,7 +51,7 @@ def to_scene(world: World) -> Scene:
     spring_offset = 0  # the springs' end ids, in the order the Spring forces were added
     for f in world.forces:
         if isinstance(f, Gravity):
-            forces.append({"type": "gravity", "g": _v3(np.asarray(f.g, float).tolist())})
+            forces.append({"type": "gravity"} if f.g is None else {"type": "gravity", "g": _v3(np.asarray(f.g, float).tolist())})
         elif isinstance(f, Drag):
             forces.append({"type": "drag", "linear": float(f.linear), "quadratic": float(f.quadratic)})
         elif isinstance(f, Attractor):
