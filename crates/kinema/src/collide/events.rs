@@ -34,8 +34,8 @@ use super::contact::Partner;
 use super::domain::Domain;
 use super::neighbour_list::{NeighbourList, CHUNK};
 use super::paths::{pair_toi, Toi};
-use super::toi::{toi_plane, toi_sphere_obstacle, toi_spheres};
 use super::soft_step::SPECULATIVE;
+use super::toi::{toi_plane, toi_sphere_obstacle, toi_spheres};
 use crate::vec3;
 
 pub(crate) use super::paths::{swept_reach, PathStore, Paths};

@@ -288,7 +288,15 @@ impl Local {
             inv_mass: &self.inv_mass,
             materials: &materials,
         };
-        let soft = soft_step(held, &problem.params, &mut self.v, &mut self.x, &mut solved, &mut totals, &self.groups)?;
+        let soft = soft_step(
+            held,
+            &problem.params,
+            &mut self.v,
+            &mut self.x,
+            &mut solved,
+            &mut totals,
+            &self.groups,
+        )?;
         let moved: Vec<usize> = (0..parts.len()).filter(|&l| self.inv_mass[l] > 0.0).collect();
         Ok(Solved {
             order,
@@ -527,7 +535,16 @@ mod tests {
             materials: &p.materials,
         };
         let in_order = [SweepGroup::in_order(0..contacts.len())];
-        soft_step(held, &p.params, &mut v_all, &mut x_all, &mut all_solved, &mut all_totals, &in_order).unwrap();
+        soft_step(
+            held,
+            &p.params,
+            &mut v_all,
+            &mut x_all,
+            &mut all_solved,
+            &mut all_totals,
+            &in_order,
+        )
+        .unwrap();
         assert_eq!(totals, all_totals);
         assert_eq!(solved, all_solved);
         assert_eq!(x_islands, x_all);

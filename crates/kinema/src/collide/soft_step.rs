@@ -202,9 +202,15 @@ pub(crate) fn soft_step(
     let mut stats = SoftStats::default();
 
     // Solve: the position targets, as velocities.
-    let done = sweeps(groups, &ends, v, &mut acc, params.solve_sweeps, params.tolerance, |k, a, vi, vj| {
-        rows[k].visit(vi, vj, a, targets[k].solve_n, Some(targets[k].stick_t))
-    });
+    let done = sweeps(
+        groups,
+        &ends,
+        v,
+        &mut acc,
+        params.solve_sweeps,
+        params.tolerance,
+        |k, a, vi, vj| rows[k].visit(vi, vj, a, targets[k].solve_n, Some(targets[k].stick_t)),
+    );
     stats.sweeps = done.sweeps;
     stats.converged = done.converged;
     for (k, r) in rows.iter().enumerate() {
@@ -234,9 +240,15 @@ pub(crate) fn soft_step(
             }
         })
         .collect();
-    let relaxed = sweeps(groups, &ends, v, &mut acc, params.relax_sweeps, params.tolerance, |k, a, vi, vj| {
-        rows[k].visit(vi, vj, a, relax_n[k], Some([0.0; 3]))
-    });
+    let relaxed = sweeps(
+        groups,
+        &ends,
+        v,
+        &mut acc,
+        params.relax_sweeps,
+        params.tolerance,
+        |k, a, vi, vj| rows[k].visit(vi, vj, a, relax_n[k], Some([0.0; 3])),
+    );
     stats.relax_sweeps = relaxed.sweeps;
 
     // Restitution: Newton's law on the contacts that carry load and came in fast.
@@ -247,10 +259,18 @@ pub(crate) fn soft_step(
         .collect();
     stats.bounced = bouncing.iter().flatten().count();
     if stats.bounced > 0 {
-        let bounced = sweeps(groups, &ends, v, &mut acc, params.relax_sweeps, params.tolerance, |k, a, vi, vj| match bouncing[k] {
-            Some(b) => rows[k].visit(vi, vj, a, b, None),
-            None => 0.0,
-        });
+        let bounced = sweeps(
+            groups,
+            &ends,
+            v,
+            &mut acc,
+            params.relax_sweeps,
+            params.tolerance,
+            |k, a, vi, vj| match bouncing[k] {
+                Some(b) => rows[k].visit(vi, vj, a, b, None),
+                None => 0.0,
+            },
+        );
         stats.restitution_sweeps = bounced.sweeps;
     }
 
@@ -300,7 +320,14 @@ impl Row {
     /// One visit with the totals (λ, t): the normal total that brings u_n to at least `b_n`
     /// (clamped at 0), then, with `b_t`, the tangential total that brings the tangential
     /// velocity to `b_t` within the cone. Returns the largest change, as a velocity (m/s).
-    fn visit(&self, vi: &mut [f64; 3], vj: &mut [f64; 3], (normal, tangent): &mut (f64, [f64; 3]), b_n: f64, b_t: Option<[f64; 3]>) -> f64 {
+    fn visit(
+        &self,
+        vi: &mut [f64; 3],
+        vj: &mut [f64; 3],
+        (normal, tangent): &mut (f64, [f64; 3]),
+        b_n: f64,
+        b_t: Option<[f64; 3]>,
+    ) -> f64 {
         let mut change: f64 = 0.0;
         let u_n = vec3::dot(vec3::sub(*vi, *vj), self.n);
         let total = (*normal - (u_n - b_n) * self.mass).max(0.0);

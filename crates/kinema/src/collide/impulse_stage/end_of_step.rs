@@ -18,7 +18,6 @@ use crate::vec3;
 const SOLVE_SWEEPS: usize = 100;
 const RELAX_SWEEPS: usize = 30;
 
-
 /// Whether contact `c` is with a wall of a box collider along a periodic axis of `domain`:
 /// such walls do not exist (a particle leaving one side comes back on the other). Box walls
 /// have axis-aligned normals.
@@ -36,8 +35,8 @@ impl ImpulseStage {
     /// reach through such contacts: a pile is one contact network, and the solver must see all
     /// of it (a ball the solver stops changes the approach of the one resting on it). Breadth
     /// first from the touched particles; a particle reached for the first time is touched.
-    /// Each pair once, lower index first; sorted by (i, partner), then each touched particle's
-    /// collider contacts.
+    /// Each touched particle's collider contacts, then each pair once, lower index first,
+    /// sorted by (i, partner).
     pub(super) fn end_contacts(&mut self, set: &StageSetting<'_>, x1: &[f64], v1: &[f64]) {
         self.contacts.clear();
         let (n, radius) = (set.radius.len(), set.radius);
@@ -65,6 +64,7 @@ impl ImpulseStage {
             done[i] = true;
         }
         self.contacts.sort_by_key(|c| (c.i, c.other));
+        let pairs = self.contacts.len();
         let list = &self.list;
         for i in (0..n).filter(|&i| self.touched[i]) {
             let (p, vi) = (vec3::get(x1, i), vec3::get(v1, i));
@@ -84,6 +84,10 @@ impl ImpulseStage {
                 });
             }
         }
+        // The colliders' contacts first: a sweep then carries what a wall holds up through
+        // the pile above it in one pass where it can (a column resting on a floor converges
+        // in a few sweeps from zero, not hundreds).
+        self.contacts.rotate_left(pairs);
     }
 
     /// The end-of-step contacts' soft step, island by island on all threads
