@@ -521,3 +521,21 @@ def test_gravity_pulls_down_in_either_dimension():
         expected = np.zeros(3)
         expected[down] = -9.81e-3
         np.testing.assert_allclose(w.velocities[0], expected, rtol=1e-15, atol=0)
+
+
+def test_collision_stats_count_resting_and_speculative_contacts_and_the_overlap_is_real():
+    # A ball resting on a floor with a second one 1 mm above it (within the speculative margin,
+    # 5 % of r_i + r_j = 1 cm) and falling slower than anything that would close the gap in a
+    # step: two contacts, the floor's resting (it carries the weight), the pair's speculative
+    # (apart, carrying nothing); the solver converged. max_overlap is measured by brute force.
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[0, 0, 0.1], [0, 0, 0.301]], radius=0.1)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w.set_collisions(restitution=0.5)
+    w.step()
+    last = w.collision_stats()["last"]
+    assert (last["contacts"], last["resting"], last["speculative"], last["unconverged"]) == (2, 1, 1, 0), last
+    x = w.positions
+    real = max(0.1 - x[0, 2], 0.2 - np.linalg.norm(x[1] - x[0]), 0.0)
+    assert last["max_overlap"] == pytest.approx(real, abs=1e-15)

@@ -114,15 +114,19 @@ class WorldCollisions:
 
     def collision_stats(self) -> dict | None:
         """What the collision stages did in the last step (``"last"``) and over all steps
-        (``"total"``), each a dict: ``contacts`` (at the end of the step), ``impacts`` (found
-        inside steps by continuous detection), ``impulses``, ``impulse_balance`` ((3,), N·s:
+        (``"total"``), each a dict: ``contacts`` (at the end of the step: pairs and
+        particle–collider pairs within the speculative margin, 5 % of r_i + r_j), of them
+        ``resting`` (carrying an impulse at the step's end) and ``speculative`` (apart, carrying
+        nothing), ``bounced`` (end-of-step contacts that bounced by Newton's law),
+        ``impacts`` (found inside steps by continuous detection), ``impulses``, ``impulse_balance`` ((3,), N·s:
         the sum of the impulses between movable particles, 0 by action and reaction up to
         rounding), ``energy_lost`` (J, the mechanical energy the collisions took),
-        ``max_overlap`` (m, left after the step), ``solver_sweeps`` (of the end-of-step
-        velocity solver), ``islands`` (independent groups of the end-of-step contacts, each
+        ``max_overlap`` (m: the deepest overlap in the state the step leaves), ``solver_sweeps``
+        (of the end-of-step soft step's solve stage), ``islands`` (independent groups of the end-of-step contacts, each
         solved on its own) and ``unconverged`` (steps whose solver, or whose impacts, stopped
-        at their cap). ``total``'s ``contacts``, ``max_overlap``, ``solver_sweeps`` and
-        ``islands`` are the last step's. ``None`` while collisions are off."""
+        at their cap: 0 in ``last`` means the solver converged). ``total``'s ``contacts``,
+        ``resting``, ``speculative``, ``max_overlap``, ``solver_sweeps`` and ``islands`` are
+        the last step's. ``None`` while collisions are off."""
         self._push()
         return self._core.collision_stats()
 

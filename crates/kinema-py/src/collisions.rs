@@ -273,6 +273,9 @@ pub fn contacts_dict<'py>(py: Python<'py>, contacts: &[Contact]) -> PyResult<Bou
 pub fn stats_dict<'py>(py: Python<'py>, s: &CollisionStats) -> PyResult<Bound<'py, PyDict>> {
     let out = PyDict::new(py);
     out.set_item("contacts", s.contacts)?;
+    out.set_item("resting", s.resting)?;
+    out.set_item("speculative", s.speculative)?;
+    out.set_item("bounced", s.bounced)?;
     out.set_item("impacts", s.impacts)?;
     out.set_item("impulses", s.impulses)?;
     out.set_item("impulse_balance", PyArray1::from_slice(py, &s.impulse_balance))?;
@@ -290,8 +293,13 @@ pub fn stats_from(d: &Bound<'_, PyDict>) -> PyResult<CollisionStats> {
         d.get_item(key)?
             .ok_or_else(|| pyo3::exceptions::PyValueError::new_err(format!("collision stats: {key} is missing")))
     };
+    // (checkpoints written before these figures existed lack them: 0)
+    let count = |key: &str| -> PyResult<usize> { d.get_item(key)?.map_or(Ok(0), |v| v.extract()) };
     Ok(CollisionStats {
         contacts: get("contacts")?.extract()?,
+        resting: count("resting")?,
+        speculative: count("speculative")?,
+        bounced: count("bounced")?,
         impacts: get("impacts")?.extract()?,
         impulses: get("impulses")?.extract()?,
         impulse_balance: get("impulse_balance")?.extract()?,

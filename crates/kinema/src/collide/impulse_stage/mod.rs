@@ -28,6 +28,14 @@ pub struct CollisionStats {
     /// Contacts at the end of the step (touching or overlapping pairs and particle–collider
     /// contacts).
     pub contacts: usize,
+    /// Of the contacts: those that carry an impulse at the step's end (held, pushed or
+    /// bounced by the end-of-step soft step), ...
+    pub resting: usize,
+    /// ... and those apart at the step's end that carried nothing (speculative: within the
+    /// margin, `collide/soft_step.rs`, SPECULATIVE).
+    pub speculative: usize,
+    /// End-of-step contacts that bounced by Newton's law in the soft step's restitution stage.
+    pub bounced: usize,
     /// Impacts found by continuous detection inside the step, each resolved at its time.
     pub impacts: usize,
     /// Impulses applied (impacts and end-of-step contacts).
@@ -54,6 +62,9 @@ impl CollisionStats {
     /// Adds another step's figures (contacts: the latest).
     pub fn accumulate(&mut self, step: &CollisionStats) {
         self.contacts = step.contacts;
+        self.resting = step.resting;
+        self.speculative = step.speculative;
+        self.bounced += step.bounced;
         self.impacts += step.impacts;
         self.impulses += step.impulses;
         for k in 0..3 {
@@ -359,6 +370,14 @@ impl ImpulseStage {
         stats.solver_sweeps = solved.soft.sweeps;
         stats.unconverged = stats.unconverged.max(usize::from(!solved.soft.converged));
         stats.islands = solved.islands;
+        stats.bounced = solved.soft.bounced;
+        stats.resting = self.totals.iter().filter(|p| **p != [0.0; 3]).count();
+        stats.speculative = self
+            .contacts
+            .iter()
+            .zip(&self.totals)
+            .filter(|(c, p)| **p == [0.0; 3] && c.overlap < 0.0)
+            .count();
         changed |= self.solved.iter().any(|p| *p != [0.0; 3]);
         t_respond += clock.elapsed();
 
