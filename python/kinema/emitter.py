@@ -192,6 +192,9 @@ class _Source:
         streams = np.random.SeedSequence(self.c["seed"]).spawn(4)
         self.rng = {name: np.random.Generator(np.random.PCG64(s)) for name, s in zip(("position", "velocity", "size", "life"), streams, strict=True)}
         self.emitted = 0
+        # Particles drawn but held back because their place was taken (``hold_back``): each
+        # keeps what it was drawn with and is born where it was to be born once that is free.
+        self.waiting: dict[str, np.ndarray] | None = None
 
     def due(self, t: float) -> int:
         """How many particles have birth times <= t (and < end): k with start + k/rate <= t."""
@@ -204,7 +207,24 @@ class _Source:
         return count
 
     def births(self, t: float) -> dict[str, Any] | None:
-        """The particles born up to time t not yet emitted, carried to t; None if none."""
+        """The particles born up to time t not yet emitted, carried to t, after those held back
+        (born now at their spawn points); None if none."""
+        waiting, self.waiting = self.waiting, None
+        new = self._drawn(t)
+        if waiting is not None:
+            waiting = {**waiting, "x": waiting["spawn"].copy(), "born": np.full(len(waiting["m"]), t)}
+            waiting["death"] = waiting["born"] + waiting["life"]
+            new = waiting if new is None else {key: np.concatenate([waiting[key], new[key]]) for key in new}
+        return new
+
+    def hold_back(self, births: dict[str, Any], held: np.ndarray) -> None:
+        """Keeps the particles ``held`` (a mask over ``births``) for the next step: their place
+        is taken (an emitter never creates a particle inside another)."""
+        if held.any():
+            self.waiting = {key: value[held] for key, value in births.items()}
+
+    def _drawn(self, t: float) -> dict[str, Any] | None:
+        """The particles due by t not drawn yet, carried to t; None if none."""
         k = np.arange(self.emitted, self.due(t))
         if k.size == 0:
             return None
@@ -217,10 +237,11 @@ class _Source:
         r = c["particle_radius"] + c["radius_spread"] * size
         m = np.full(n, c["mass"]) if c["mass"] is not None else c["density"] * 4.0 / 3.0 * np.pi * r**3
         life = c["lifetime"] + c["lifetime_spread"] * self.rng["life"].uniform(-1.0, 1.0, n)
+        spawn = x.copy()
         x = x + v * (t - born)[:, None]
         if self.dim == 2:
-            x[:, 2] = v[:, 2] = 0.0
-        return {"x": x, "v": v, "m": m, "r": r, "death": born + life, "born": born}
+            x[:, 2] = v[:, 2] = spawn[:, 2] = 0.0
+        return {"x": x, "v": v, "m": m, "r": r, "death": born + life, "born": born, "life": life, "spawn": spawn}
 
     def _positions(self, n: int) -> tuple[np.ndarray, np.ndarray | None]:
         """Points of birth (n, 3) and, for a sphere, the outward normals there."""

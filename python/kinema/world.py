@@ -324,9 +324,29 @@ class World(WorldCollisions):
             b = source.births(t)
             if b is None:
                 continue
+            free = self._free_places(b["x"], b["r"])
+            source.hold_back(b, ~free)
+            if not free.any():
+                continue
+            b = {key: value[free] for key, value in b.items()}
             c, k = source.c, len(b["m"])
             e, mu = ([c[name]] * k if c[name] is not None else None for name in ("restitution", "friction"))
             self._add(b["x"], b["v"], b["m"], b["r"], np.zeros(k, bool), e, mu, [c["species"] or ""] * k, b["death"], c["color"])
+
+    def _free_places(self, x: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Which of the particles to be born at ``x`` (m) with radii ``r`` (m) overlap neither a
+        particle of the world nor one of them before it (in order); the others wait (with
+        collisions off, every place is free)."""
+        free = np.ones(len(r), bool)
+        if self.collisions is None:
+            return free
+        here, radius = self._x, np.asarray(self._core.radii)
+        for k in range(len(r)):
+            taken = np.concatenate([here, x[:k][free[:k]]])
+            reach = np.concatenate([radius, r[:k][free[:k]]]) + r[k]
+            if taken.size and (np.einsum("ij,ij->i", taken - x[k], taken - x[k]) < reach * reach).any():
+                free[k] = False
+        return free
 
     def _deaths(self) -> None:
         dead = self._death <= self.time
