@@ -14,7 +14,6 @@ import numpy as np
 
 from . import _checks
 
-
 STANDARD_GRAVITY = 9.81
 """The default gravity's magnitude, m/s² (one home: ``Gravity`` and the scenes use it)."""
 
