@@ -1,110 +1,139 @@
-//! Coulomb friction in the impulse response: a sliding contact's tangential impulse is μ j
-//! (the cone's edge), a sticking one stops the tangential relative motion exactly, and either
-//! conserves the pair's momentum and removes kinetic energy.
+//! Coulomb friction at impacts in a World (impulse model, continuous detection): a sliding
+//! contact's tangential impulse is μ j (the cone's edge), a sticking one stops the tangential
+//! relative motion exactly, and either conserves the pair's momentum and removes kinetic
+//! energy.
 //!
 //! Closed forms: normal impulse j = −(1 + e) u_n / (w₁ + w₂); the impulse that stops the
 //! sliding is |u_t| / (w₁ + w₂) (no rotation: the effective mass is the same across the
-//! normal as along it); the applied one is the smaller of that and μ j.
+//! normal as along it); the applied one is j_t = min(|u_t| / (w₁ + w₂), μ j), against u_t.
+//! The kinetic energy lost is ½ (1 − e²) u_n² / (w₁ + w₂) + j_t (|u_t| − ½ (w₁ + w₂) j_t).
+//! Each body starts a small gap from its partner and meets it inside a step.
 
-use kinema::collide::{
-    apply_impulse, collider_contacts, resolve, Collider, Contact, Material, MaterialTable, Partner, Plane, ResolveParams, Surface,
-};
+use kinema::collide::{Plane, Surface};
+use kinema::ode::{Integrator, Method};
+use kinema::world::CollisionParams;
+use kinema::{World, WorldParams};
+
+const DT: f64 = 1e-2;
+/// The impact's time inside the first step.
+const T_HIT: f64 = 0.37 * DT;
 
 fn close(a: f64, b: f64, scale: f64) -> bool {
     (a - b).abs() <= 1e-14 * scale
 }
 
-fn on_floor(u_n: f64) -> Contact {
-    Contact {
-        i: 0,
-        other: Partner::Collider(0),
-        normal: [0.0, 0.0, 1.0],
-        overlap: 0.0,
-        u_n,
-    }
+fn world(e: f64, mu: f64) -> World {
+    let mut w = World::new(WorldParams {
+        dt: DT,
+        method: Integrator::Named(Method::Verlet),
+        dim: 3,
+    })
+    .unwrap();
+    w.set_collisions(CollisionParams {
+        restitution: e,
+        friction: mu,
+        ..CollisionParams::default()
+    })
+    .unwrap();
+    w
+}
+
+/// A ball of mass `m` and radius 0.1 m with velocity `v` (v_z < 0) that meets the floor z = 0
+/// (with `surface`) at T_HIT, after one step.
+fn ball_on_floor(e: f64, mu: f64, surface: Surface, m: f64, v: [f64; 3]) -> World {
+    let mut w = world(e, mu);
+    w.add_collider(Plane::new([0.0; 3], [0.0, 0.0, 1.0], surface).unwrap())
+        .unwrap();
+    w.add_particles(&[0.0, 0.0, 0.1 - v[2] * T_HIT], &v, &[m], &[0.1], &[false])
+        .unwrap();
+    w.step().unwrap();
+    let (_, total) = w.collision_stats().unwrap();
+    assert_eq!(total.impacts, 1, "{total:?}");
+    w
 }
 
 #[test]
 fn sliding_on_a_floor_is_clamped_at_mu_j() {
     // m = 2 kg, v = (3, 0, −1), e = 0.5: j = 1.5 · 1 · 2 = 3 N·s. Stopping the 3 m/s slide
-    // needs 6 N·s; μ = 0.2 allows 0.6 N·s, so it slides on at 3 − 0.6/2 = 2.7 m/s.
-    let mut v = [3.0, 0.0, -1.0];
-    let imp = apply_impulse(&on_floor(-1.0), &mut v, &[0.5], Material::new(0.5, 0.2).unwrap(), 0.0).unwrap();
-    assert!(close(imp.normal, 3.0, 3.0));
-    assert!(
-        close(imp.tangent, 0.2 * imp.normal, 1.0),
-        "j_t = {} vs μ j = {}",
-        imp.tangent,
-        0.2 * imp.normal
-    );
+    // needs 6 N·s; μ = 0.2 allows μ j = 0.6 N·s, so it slides on at 3 − 0.6/2 = 2.7 m/s and
+    // leaves at e · 1 = 0.5 m/s.
+    let w = ball_on_floor(0.5, 0.2, Surface::default(), 2.0, [3.0, 0.0, -1.0]);
+    let v = &w.particles().v;
     assert!(close(v[0], 2.7, 3.0) && v[1] == 0.0 && close(v[2], 0.5, 1.0), "{v:?}");
     // KE lost: normal ½ (1 − e²) m u_n² = 0.75 J, tangential j_t (|u_t| − ½ w j_t) = 1.71 J
-    assert!(
-        close(imp.energy_lost, 0.75 + 0.6 * (3.0 - 0.5 * 0.5 * 0.6), 1.0),
-        "{}",
-        imp.energy_lost
-    );
-    let measured = 0.5 * 2.0 * (10.0 - (2.7 * 2.7 + 0.25));
-    assert!(close(imp.energy_lost, measured, 10.0));
+    let closed = 0.75 + 0.6 * (3.0 - 0.5 * 0.5 * 0.6);
+    let (_, total) = w.collision_stats().unwrap();
+    assert!(close(total.energy_lost, closed, 10.0), "{} vs {closed}", total.energy_lost);
+    let measured = 0.5 * 2.0 * (10.0 - (v[0] * v[0] + v[2] * v[2]));
+    assert!(close(measured, closed, 10.0), "measured {measured} vs {closed}");
 }
 
 #[test]
 fn sticking_stops_the_tangential_motion() {
-    // μ = 10: the cone allows 30 N·s, the 6 N·s that stop the slide are applied.
-    let mut v = [3.0, -4.0, -1.0];
-    let imp = apply_impulse(&on_floor(-1.0), &mut v, &[0.5], Material::new(0.5, 10.0).unwrap(), 0.0).unwrap();
-    assert!(
-        close(imp.tangent, 10.0, 10.0),
-        "stopping |u_t| = 5 m/s of 2 kg: {}",
-        imp.tangent
-    );
-    assert!(imp.tangent < 10.0 * imp.normal);
+    // μ = 10: the cone allows 30 N·s, the 10 N·s that stop |u_t| = 5 m/s of 2 kg are applied:
+    // the ball leaves straight up at e · 1 = 0.5 m/s. KE lost: 0.75 J + ½ m |u_t|² = 25 J.
+    let w = ball_on_floor(0.5, 10.0, Surface::default(), 2.0, [3.0, -4.0, -1.0]);
+    let v = &w.particles().v;
     assert!(v[0].abs() < 1e-15 && v[1].abs() < 1e-15 && close(v[2], 0.5, 1.0), "{v:?}");
+    let (_, total) = w.collision_stats().unwrap();
+    assert!(close(total.energy_lost, 25.75, 30.0), "{}", total.energy_lost);
 }
 
 #[test]
 fn particle_pairs_slide_and_stick_with_the_reduced_mass() {
-    // m₁ = 1, m₂ = 4 kg (w = 1.25 /kg), normal x, u_n = −2, u_t = (0, 3, 0), e = 0:
-    // j = 2 / 1.25 = 1.6 N·s, stopping needs 3 / 1.25 = 2.4 N·s.
-    let c = Contact {
-        i: 0,
-        other: Partner::Particle(1),
-        normal: [1.0, 0.0, 0.0],
-        overlap: 0.01,
-        u_n: -2.0,
-    };
+    // m₁ = 1, m₂ = 4 kg (w = 1.25 /kg), normal x at the impact, u_n = −2, u_t = (0, 3, 0),
+    // e = 0.5: j = 1.5 · 2 / 1.25 = 2.4 N·s, and stopping the slide needs 3 / 1.25 = 2.4 N·s.
+    // μ = 0.5 slides (j_t = μ j = 1.2), μ = 1.5 sticks (2.4), μ = 1 is the edge (2.4).
     let v0 = [-1.0, 2.0, 0.5, 1.0, -1.0, 0.5];
-    let inv_mass = [1.0, 0.25];
-    for (mu, j_t) in [(0.5, 0.8), (1.5, 2.4), (2.4 / 1.6, 2.4)] {
-        let mut v = v0;
-        let imp = apply_impulse(&c, &mut v, &inv_mass, Material::new(0.0, mu).unwrap(), 0.0).unwrap();
-        assert!(
-            close(imp.normal, 1.6, 2.0) && close(imp.tangent, j_t, 3.0),
-            "μ = {mu}: {imp:?}"
-        );
-        // relative tangential velocity falls by w j_t, from 3
+    let m = [1.0, 4.0];
+    let u = [v0[0] - v0[3], v0[1] - v0[4], v0[2] - v0[5]];
+    let r = [0.3, 0.2];
+    // at T_HIT the centres are r₁ + r₂ apart along x: the contact normal is x
+    let x1 = [0.1, -0.3, 0.2];
+    let x2 = [
+        x1[0] - (r[0] + r[1]) + u[0] * T_HIT,
+        x1[1] + u[1] * T_HIT,
+        x1[2] + u[2] * T_HIT,
+    ];
+    for (mu, j_t) in [(0.5, 1.2), (1.5, 2.4), (1.0, 2.4)] {
+        let mut w = world(0.5, mu);
+        w.add_particles(&[x1, x2].concat(), &v0, &m, &r, &[false; 2]).unwrap();
+        w.step().unwrap();
+        let v = &w.particles().v;
+        let (_, total) = w.collision_stats().unwrap();
+        assert_eq!(total.impacts, 1, "μ = {mu}: {total:?}");
+        // relative normal velocity −e u_n = 1; relative tangential velocity falls by w j_t
+        assert!(close(v[0] - v[3], 1.0, 3.0), "μ = {mu}: {v:?}");
         let u_t = v[1] - v[4];
         assert!(close(u_t, 3.0 - 1.25 * j_t, 3.0), "μ = {mu}: u_t = {u_t}");
-        // momentum unchanged; relative normal velocity 0 (e = 0); z untouched
+        // each body's change is its share, ±J/m: the normal impulse 2.4 N·s along x, j_t
+        // against the slide along y; z untouched
+        let jv = [2.4, -j_t, 0.0];
         for k in 0..3 {
-            assert!(close(v[k] + 4.0 * v[3 + k], v0[k] + 4.0 * v0[3 + k], 5.0), "momentum {k}");
+            assert!(close(v[k], v0[k] + jv[k] / m[0], 5.0), "μ = {mu}: {v:?}");
+            assert!(close(v[3 + k], v0[3 + k] - jv[k] / m[1], 5.0), "μ = {mu}: {v:?}");
+            assert!(total.impulse_balance[k].abs() <= 1e-14 * 10.0, "{total:?}");
         }
-        assert!(close(v[0], v[3], 2.0) && v[2] == 0.5 && v[5] == 0.5, "{v:?}");
+        let closed = 0.5 * 0.75 * 4.0 / 1.25 + j_t * (3.0 - 0.5 * 1.25 * j_t);
+        assert!(
+            close(total.energy_lost, closed, 10.0),
+            "μ = {mu}: {} vs {closed}",
+            total.energy_lost
+        );
     }
 }
 
 #[test]
 fn a_collider_surface_overrides_the_particles_friction() {
-    // global μ = 1 would stop the slide; the floor's own μ = 0 lets it slide freely, and
-    // its e = 1 bounces it fully.
-    let floor = [Collider::Plane(
-        Plane::new([0.0; 3], [0.0, 0.0, 1.0], Surface::new(Some(1.0), Some(0.0)).unwrap()).unwrap(),
-    )];
-    let mut v = vec![3.0, 0.0, -1.0];
-    let mut contacts = Vec::new();
-    collider_contacts(&floor, &[0.0, 0.0, 0.09], &v, &[0.1], 0.0, &mut contacts).unwrap();
-    let table = MaterialTable::uniform(Material::new(0.0, 1.0).unwrap()).with_colliders(&floor);
-    let stats = resolve(&contacts, &mut v, &[1.0], &table, &ResolveParams::default()).unwrap();
-    assert_eq!(v, vec![3.0, 0.0, 1.0]);
-    assert!(stats.kinetic_energy_lost.abs() < 1e-15);
+    // global e = 0, μ = 1 would take the bounce and 1 m/s of the 3 m/s slide (μ j = 1 N·s
+    // for 1 kg); the floor's own μ = 0 lets it slide freely, and its e = 1 bounces it fully:
+    // v = (3, 0, −1) → (3, 0, 1), nothing lost.
+    let w = ball_on_floor(0.0, 1.0, Surface::new(Some(1.0), Some(0.0)).unwrap(), 1.0, [3.0, 0.0, -1.0]);
+    assert_eq!(w.particles().v, vec![3.0, 0.0, 1.0]);
+    let (_, total) = w.collision_stats().unwrap();
+    assert!(total.energy_lost.abs() < 1e-15, "{total:?}");
+    // the floor's μ = 0.1 instead: j = 1 N·s (e = 0 from the particles), j_t = μ j = 0.1 N·s
+    let w = ball_on_floor(0.0, 1.0, Surface::new(None, Some(0.1)).unwrap(), 1.0, [3.0, 0.0, -1.0]);
+    let v = &w.particles().v;
+    assert!(close(v[0], 2.9, 3.0) && v[1] == 0.0 && v[2].abs() < 1e-15, "{v:?}");
 }

@@ -1,93 +1,109 @@
-//! Newton's cradle: five equal balls in a row, touching, e = 1. Sequential impulses with the
-//! current relative velocity pass the whole velocity along the row, as the real cradle does:
-//! one ball in, one ball out; two in, two out. (Momentum and energy conservation alone allow
-//! other outcomes; a simultaneous solve spreads the velocity over the row instead.)
+//! Newton's cradle in a World: five equal balls in a row, touching, e = 1, no gravity. The
+//! impacts of continuous detection, resolved one after the other at their common instant with
+//! the current relative velocity, pass the whole velocity along the row, as the real cradle
+//! does: one ball in, one ball out; two in, two out. (Momentum and energy conservation alone
+//! allow other outcomes; a simultaneous solve spreads the velocity over the row instead.)
+//!
+//! Closed form: the arriving ball(s) meet the row at t* = gap / v and stop there; as many
+//! balls leave the far end at v, so at time T the balls that left are at x + v (T − t*) and
+//! the others rest where they were at t*; nothing is lost.
 
-use kinema::collide::{resolve, sphere_contacts, Contact, Domain, Grid, Material, MaterialTable, ResolveParams, ResolveStats};
+use kinema::ode::{Integrator, Method};
+use kinema::world::CollisionParams;
+use kinema::{World, WorldParams};
 
 const N: usize = 5;
+const DT: f64 = 1e-3;
+const STEPS: usize = 100;
+/// The arriving balls' gap to the row, m: met at t* = 23.4375 steps at 1 m/s (exact in binary).
+const GAP: f64 = 0.0234375;
 
-/// Contacts of the row of touching balls (radius 0.5, centres 1 apart along x): exactly
-/// touching pairs need a contact tolerance, and the broad phase the same margin.
-fn row_contacts() -> (Vec<f64>, Vec<Contact>) {
-    let x: Vec<f64> = (0..N).flat_map(|i| [i as f64, 0.0, 0.0]).collect();
-    let radius = [0.5; N];
-    let domain = Domain::open(3).unwrap();
-    let mut pairs = Vec::new();
-    Grid::new().find_pairs(&x, &radius, &domain, 1e-9, &mut pairs).unwrap();
-    assert_eq!(pairs, vec![(0, 1), (1, 2), (2, 3), (3, 4)]);
-    let mut contacts = Vec::new();
-    sphere_contacts(&x, &[0.0; 3 * N], &radius, &pairs, &domain, 1e-9, &mut contacts).unwrap();
-    (x, contacts)
+/// Runs the row: radius 0.5 m, 1 kg, balls `k` at x = `x[k]` (touching neighbours 1 m apart)
+/// with velocities `vx`, listed in the order `order` (World index p holds ball order[p]);
+/// returns each ball's x and v_x after STEPS steps, and the collision books.
+fn swing(x: [f64; N], vx: [f64; N], order: [usize; N]) -> ([f64; N], [f64; N], kinema::world::CollisionStats) {
+    let mut w = World::new(WorldParams {
+        dt: DT,
+        method: Integrator::Named(Method::Verlet),
+        dim: 3,
+    })
+    .unwrap();
+    w.set_collisions(CollisionParams {
+        restitution: 1.0,
+        ..CollisionParams::default()
+    })
+    .unwrap();
+    let xs: Vec<f64> = order.iter().flat_map(|&k| [x[k], 0.0, 0.0]).collect();
+    let vs: Vec<f64> = order.iter().flat_map(|&k| [vx[k], 0.0, 0.0]).collect();
+    w.add_particles(&xs, &vs, &[1.0; N], &[0.5; N], &[false; N]).unwrap();
+    for _ in 0..STEPS {
+        w.step().unwrap();
+    }
+    let p = w.particles();
+    let (mut x_out, mut v_out) = ([0.0; N], [0.0; N]);
+    for (i, &k) in order.iter().enumerate() {
+        x_out[k] = p.x[3 * i];
+        v_out[k] = p.v[3 * i];
+        assert_eq!((p.v[3 * i + 1], p.v[3 * i + 2]), (0.0, 0.0), "ball {k} left the line");
+        assert_eq!((p.x[3 * i + 1], p.x[3 * i + 2]), (0.0, 0.0), "ball {k} left the line");
+    }
+    (x_out, v_out, w.collision_stats().unwrap().1)
 }
 
-fn swing(vx: [f64; N], contacts: &[Contact]) -> ([f64; N], ResolveStats) {
-    let mut v: Vec<f64> = vx.iter().flat_map(|u| [*u, 0.0, 0.0]).collect();
-    let table = MaterialTable::uniform(Material::new(1.0, 0.0).unwrap());
-    let stats = resolve(contacts, &mut v, &[1.0; N], &table, &ResolveParams::default()).unwrap();
-    let mut out = [0.0; N];
+fn assert_row(what: &str, got: [f64; N], want: [f64; N]) {
     for i in 0..N {
-        out[i] = v[3 * i];
-        assert_eq!((v[3 * i + 1], v[3 * i + 2]), (0.0, 0.0));
+        assert!((got[i] - want[i]).abs() < 1e-12, "{what} of ball {i}: {got:?} vs {want:?}");
     }
-    (out, stats)
 }
 
-fn assert_row(got: [f64; N], want: [f64; N]) {
-    for i in 0..N {
-        assert!((got[i] - want[i]).abs() < 1e-15, "ball {i}: {got:?} vs {want:?}");
-    }
+/// The time left after the impact at t*.
+fn after_impact() -> f64 {
+    STEPS as f64 * DT - GAP
 }
 
 #[test]
 fn one_ball_in_one_ball_out() {
-    let (_, contacts) = row_contacts();
-    let (v, stats) = swing([1.0, 0.0, 0.0, 0.0, 0.0], &contacts);
-    assert_row(v, [0.0, 0.0, 0.0, 0.0, 1.0]);
-    // one sweep hands it along the row (4 impulses), the second finds nothing to do
-    assert_eq!((stats.iterations, stats.impulses, stats.converged), (2, 4, true));
-    // Σ of the impulses on particles: zero by action = reaction (scale: m v = 1 N·s)
-    assert!(stats.particle_impulse_sum.iter().all(|s| s.abs() < 1e-12), "{stats:?}");
-    assert!(stats.kinetic_energy_lost.abs() < 1e-15, "e = 1 loses nothing: {stats:?}");
+    // Ball 0 at −1 − gap arrives at 1 m/s; the row rests at 0, 1, 2, 3. At t* ball 0 stops
+    // at −1 and ball 4 leaves from 3 at 1 m/s: four impacts, each handing the velocity on.
+    let (x, v, total) = swing([-1.0 - GAP, 0.0, 1.0, 2.0, 3.0], [1.0, 0.0, 0.0, 0.0, 0.0], [0, 1, 2, 3, 4]);
+    assert_row("v", v, [0.0, 0.0, 0.0, 0.0, 1.0]);
+    assert_row("x", x, [-1.0, 0.0, 1.0, 2.0, 3.0 + after_impact()]);
+    assert_eq!(total.impacts, 4, "{total:?}");
+    // Σ of the impulses between the balls: zero by action = reaction (scale: m v = 1 N·s)
+    assert!(total.impulse_balance.iter().all(|s| s.abs() < 1e-12), "{total:?}");
+    assert!(total.energy_lost.abs() < 1e-15, "e = 1 loses nothing: {total:?}");
 }
 
 #[test]
 fn two_balls_in_two_balls_out() {
-    let (_, contacts) = row_contacts();
-    let (v, stats) = swing([1.0, 1.0, 0.0, 0.0, 0.0], &contacts);
-    assert_row(v, [0.0, 0.0, 0.0, 1.0, 1.0]);
-    assert!(stats.converged);
-    assert!(stats.particle_impulse_sum.iter().all(|s| s.abs() < 1e-12), "{stats:?}");
+    // Balls 0 and 1, touching, arrive together at 1 m/s; at t* they stop at −2 and −1 and
+    // balls 3 and 4 leave from 1 and 2 at 1 m/s.
+    let (x, v, total) = swing(
+        [-2.0 - GAP, -1.0 - GAP, 0.0, 1.0, 2.0],
+        [1.0, 1.0, 0.0, 0.0, 0.0],
+        [0, 1, 2, 3, 4],
+    );
+    assert_row("v", v, [0.0, 0.0, 0.0, 1.0, 1.0]);
+    assert_row("x", x, [-2.0, -1.0, 0.0, 1.0 + after_impact(), 2.0 + after_impact()]);
+    assert!(total.impulse_balance.iter().all(|s| s.abs() < 1e-12), "{total:?}");
+    assert!(total.energy_lost.abs() < 1e-15, "e = 1 loses nothing: {total:?}");
 }
 
 #[test]
-fn the_contact_order_changes_the_sweeps_not_the_outcome() {
-    // Listed from the far end, each sweep passes the velocity one ball further.
-    let (_, mut contacts) = row_contacts();
-    contacts.reverse();
-    let (v, stats) = swing([1.0, 0.0, 0.0, 0.0, 0.0], &contacts);
-    assert_row(v, [0.0, 0.0, 0.0, 0.0, 1.0]);
-    assert_eq!((stats.iterations, stats.impulses, stats.converged), (5, 4, true));
-    // and from the other side: the last ball swings in
-    let (_, contacts) = row_contacts();
-    let (v, _) = swing([0.0, 0.0, 0.0, 0.0, -1.0], &contacts);
-    assert_row(v, [-1.0, 0.0, 0.0, 0.0, 0.0]);
-}
-
-#[test]
-fn an_iteration_cap_reports_what_is_left() {
-    // One sweep over the reversed list moves the velocity one ball on; the cap stops there
-    // and reports the still-approaching pair.
-    let (_, mut contacts) = row_contacts();
-    contacts.reverse();
-    let mut v: Vec<f64> = [1.0, 0.0, 0.0, 0.0, 0.0].iter().flat_map(|u| [*u, 0.0, 0.0]).collect();
-    let table = MaterialTable::uniform(Material::new(1.0, 0.0).unwrap());
-    let params = ResolveParams {
-        max_iterations: 1,
-        ..ResolveParams::default()
-    };
-    let stats = resolve(&contacts, &mut v, &[1.0; N], &table, &params).unwrap();
-    assert_eq!((stats.iterations, stats.impulses, stats.converged), (1, 1, false));
-    assert_eq!(stats.max_approach_speed, 1.0);
-    assert_eq!((v[0], v[3]), (0.0, 1.0));
+fn the_order_of_the_particles_does_not_change_the_outcome() {
+    // The row listed from the far end (the arriving ball last): the same outcome.
+    let (x, v, _) = swing([-1.0 - GAP, 0.0, 1.0, 2.0, 3.0], [1.0, 0.0, 0.0, 0.0, 0.0], [4, 3, 2, 1, 0]);
+    assert_row("v", v, [0.0, 0.0, 0.0, 0.0, 1.0]);
+    assert_row("x", x, [-1.0, 0.0, 1.0, 2.0, 3.0 + after_impact()]);
+    let (x, v, _) = swing(
+        [-2.0 - GAP, -1.0 - GAP, 0.0, 1.0, 2.0],
+        [1.0, 1.0, 0.0, 0.0, 0.0],
+        [3, 1, 4, 0, 2],
+    );
+    assert_row("v", v, [0.0, 0.0, 0.0, 1.0, 1.0]);
+    assert_row("x", x, [-2.0, -1.0, 0.0, 1.0 + after_impact(), 2.0 + after_impact()]);
+    // and from the other side: the last ball swings in, the first leaves
+    let (x, v, _) = swing([0.0, 1.0, 2.0, 3.0, 4.0 + GAP], [0.0, 0.0, 0.0, 0.0, -1.0], [0, 1, 2, 3, 4]);
+    assert_row("v", v, [-1.0, 0.0, 0.0, 0.0, 0.0]);
+    assert_row("x", x, [-after_impact(), 1.0, 2.0, 3.0, 4.0]);
 }

@@ -1,4 +1,5 @@
-//! Impulse response against the closed form of a collision along the contact normal.
+//! Newton's restitution law in a World (impulse model, continuous detection) against the
+//! closed form of a collision along the contact normal.
 //!
 //! Two bodies of masses m₁, m₂ with normal velocities u₁, u₂ (n from body 2 towards body 1)
 //! leave with Newton's restitution law and momentum conservation,
@@ -9,14 +10,34 @@
 //!
 //! their tangential velocities untouched without friction, and a kinetic energy loss of
 //! ½ (1 − e²) μ (u₁ − u₂)², μ = m₁m₂/(m₁ + m₂). Against an immovable body (pinned particle,
-//! collider) the limit m₂ → ∞ gives u₁' = −e u₁.
+//! collider) the limit m₂ → ∞ gives u₁' = −e u₁. The bodies start a small gap apart, so that
+//! the impact falls inside a step and is found there by continuous detection.
 
-use kinema::collide::{
-    apply_impulse, collider_contacts, resolve, sphere_contacts, Collider, Contact, Domain, Material, MaterialTable, Partner,
-    Plane, ResolveParams, Surface,
-};
+use kinema::collide::{Plane, Surface};
+use kinema::ode::{Integrator, Method};
+use kinema::world::CollisionParams;
+use kinema::{World, WorldParams};
 
 const RTOL: f64 = 1e-12;
+const DT: f64 = 1e-2;
+
+fn world(e: f64, restitution_threshold: Option<f64>) -> World {
+    let mut w = World::new(WorldParams {
+        dt: DT,
+        method: Integrator::Named(Method::Verlet),
+        dim: 3,
+    })
+    .unwrap();
+    w.set_collisions(CollisionParams {
+        restitution: e,
+        friction: 0.0,
+        ccd: true,
+        restitution_threshold,
+        ..CollisionParams::default()
+    })
+    .unwrap();
+    w
+}
 
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -24,6 +45,10 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 fn axpy(a: f64, x: [f64; 3], y: [f64; 3]) -> [f64; 3] {
     [a * x[0] + y[0], a * x[1] + y[1], a * x[2] + y[2]]
+}
+
+fn get(v: &[f64], i: usize) -> [f64; 3] {
+    [v[3 * i], v[3 * i + 1], v[3 * i + 2]]
 }
 
 fn assert_vec_close(got: &[f64], want: &[f64], scale: f64, what: &str) {
@@ -39,30 +64,11 @@ fn kinetic(v: &[f64], mass: &[f64]) -> f64 {
         .sum()
 }
 
-fn get(v: &[f64], i: usize) -> [f64; 3] {
-    [v[3 * i], v[3 * i + 1], v[3 * i + 2]]
-}
-
-/// Two overlapping spheres along `n` (body 2 on the −n side of body 1), resolved once; returns
-/// the contact, the velocities after and the stats.
-fn collide_pair(mass: [f64; 2], v: [[f64; 3]; 2], n: [f64; 3], e: f64) -> (Contact, Vec<f64>, kinema::collide::ResolveStats) {
-    let radius = [0.4, 0.25];
-    let x1 = [0.3, -0.2, 0.5];
-    let x2 = axpy(-(radius[0] + radius[1] - 0.01), n, x1);
-    let x = [x1, x2].concat();
-    let mut vel = [v[0], v[1]].concat();
-    let mut contacts = Vec::new();
-    let domain = Domain::open(3).unwrap();
-    sphere_contacts(&x, &vel, &radius, &[(0, 1)], &domain, 0.0, &mut contacts).unwrap();
-    assert_eq!(contacts.len(), 1);
-    let inv_mass = [1.0 / mass[0], 1.0 / mass[1]];
-    let table = MaterialTable::uniform(Material::new(e, 0.0).unwrap());
-    let stats = resolve(&contacts, &mut vel, &inv_mass, &table, &ResolveParams::default()).unwrap();
-    (contacts[0], vel, stats)
-}
-
 #[test]
 fn head_on_and_oblique_collisions_of_unequal_masses_match_the_closed_form() {
+    // Closed form: u₁', u₂' of the module doc (Newton's law + momentum), tangential parts
+    // unchanged, loss ½ (1 − e²) μ (u₁ − u₂)²; positions: free flight to the impact time t*,
+    // then free flight with the velocities after.
     let oblique = [1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0];
     let cases = [
         // head-on along x
@@ -73,19 +79,34 @@ fn head_on_and_oblique_collisions_of_unequal_masses_match_the_closed_form() {
             [axpy(-3.0, oblique, [0.7, -0.2, -0.3]), axpy(1.5, oblique, [0.0, 1.0, -1.0])],
         ),
     ];
+    let (m1, m2) = (2.0, 5.0);
+    let radius = [0.4, 0.25];
+    let reach = radius[0] + radius[1];
+    let steps = 10;
     for (n, v) in cases {
         for e in [0.0, 0.3, 0.7, 1.0] {
-            let (m1, m2) = (2.0, 5.0);
-            let (c, after, stats) = collide_pair([m1, m2], v, n, e);
-            let n = c.normal;
+            // Placed so that the centres are r₁ + r₂ apart along n at t* = 0.37 h: at the
+            // impact the line of centres, the contact normal, is n.
+            let u = [v[0][0] - v[1][0], v[0][1] - v[1][1], v[0][2] - v[1][2]];
+            let t_hit = 0.37 * DT;
+            let x1 = [0.3, -0.2, 0.5];
+            let x2 = axpy(-1.0, axpy(-t_hit, u, [reach * n[0], reach * n[1], reach * n[2]]), x1);
+            let mut w = world(e, None);
+            w.add_particles(&[x1, x2].concat(), &v.concat(), &[m1, m2], &radius, &[false; 2])
+                .unwrap();
+            for _ in 0..steps {
+                w.step().unwrap();
+            }
+
             let (u1, u2) = (dot(v[0], n), dot(v[1], n));
             assert!(u1 - u2 < 0.0, "the test pair must approach");
             let p = m1 * u1 + m2 * u2;
             let u1_after = (p + m2 * e * (u2 - u1)) / (m1 + m2);
             let u2_after = (p + m1 * e * (u1 - u2)) / (m1 + m2);
-            let want = [axpy(u1_after - u1, n, v[0]), axpy(u2_after - u2, n, v[1])].concat();
+            let want_v = [axpy(u1_after - u1, n, v[0]), axpy(u2_after - u2, n, v[1])];
             let scale = v.iter().flatten().fold(0.0, |m: f64, c| m.max(c.abs()));
-            assert_vec_close(&after, &want, scale, &format!("v after, e = {e}, n = {n:?}"));
+            let after = w.particles().v.clone();
+            assert_vec_close(&after, &want_v.concat(), scale, &format!("v after, e = {e}, n = {n:?}"));
 
             // tangential velocities untouched (no friction)
             for (b, &vb) in v.iter().enumerate() {
@@ -93,107 +114,128 @@ fn head_on_and_oblique_collisions_of_unequal_masses_match_the_closed_form() {
                 let t_after = axpy(-dot(get(&after, b), n), n, get(&after, b));
                 assert_vec_close(&t_after, &t_before, scale, "tangential velocity");
             }
-            // momentum, from the velocities
+            // positions: x(T) = x₀ + v t* + v' (T − t*)
+            let t_end = steps as f64 * DT;
+            let want_x: Vec<f64> = [(x1, v[0], want_v[0]), (x2, v[1], want_v[1])]
+                .iter()
+                .flat_map(|(x, v0, v1)| axpy(t_end - t_hit, *v1, axpy(t_hit, *v0, *x)))
+                .collect();
+            assert_vec_close(&w.particles().x, &want_x, 1.0, &format!("x after, e = {e}, n = {n:?}"));
+
+            // momentum, from the velocities; the books' impulse balance
             let before = [0, 1, 2].map(|k| m1 * v[0][k] + m2 * v[1][k]);
             let now = [0, 1, 2].map(|k| m1 * after[k] + m2 * after[3 + k]);
             assert_vec_close(&now, &before, (m1 + m2) * scale, "momentum");
-            assert_vec_close(&stats.particle_impulse_sum, &[0.0; 3], (m1 + m2) * scale, "impulse sum");
+            let (_, total) = w.collision_stats().unwrap();
+            assert_vec_close(&total.impulse_balance, &[0.0; 3], (m1 + m2) * scale, "impulse balance");
 
             // energy: the stat and the measured loss both equal ½ (1 − e²) μ (u₁ − u₂)²
             let mu = m1 * m2 / (m1 + m2);
             let closed = 0.5 * (1.0 - e * e) * mu * (u1 - u2) * (u1 - u2);
-            let ke = kinetic(&[v[0], v[1]].concat(), &[m1, m2]);
+            let ke = kinetic(&v.concat(), &[m1, m2]);
             let measured = ke - kinetic(&after, &[m1, m2]);
             assert!(
-                (stats.kinetic_energy_lost - closed).abs() <= RTOL * ke,
+                (total.energy_lost - closed).abs() <= RTOL * ke,
                 "{} vs {closed}",
-                stats.kinetic_energy_lost
+                total.energy_lost
             );
             assert!((measured - closed).abs() <= RTOL * ke, "measured {measured} vs {closed}");
-            assert_eq!((stats.impulses, stats.iterations, stats.converged), (1, 2, true));
+            assert_eq!(total.impacts, 1, "one impact, found inside its step");
         }
     }
 }
 
 #[test]
 fn an_immovable_partner_reflects_the_normal_velocity_times_e() {
-    let floor = [Collider::Plane(
-        Plane::new([0.0; 3], [0.0, 0.0, 1.0], Surface::default()).unwrap(),
-    )];
+    // Closed form (m₂ → ∞): u_n' = −e u_n, the tangential (2, 1) unchanged, loss
+    // ½ (1 − e²) m u_n²; the immovable side does not move.
+    let mass = 3.0;
+    let v0 = [2.0, 1.0, -4.0];
+    let t_hit = 0.37 * DT;
     for e in [0.0, 0.3, 0.7, 1.0] {
-        // a collider: u_n' = −e u_n, tangential (2, 1) unchanged; the collider's impulse is m Δv
-        let mass = 3.0;
-        let mut v = vec![2.0, 1.0, -4.0];
-        let mut contacts = Vec::new();
-        collider_contacts(&floor, &[0.0, 0.0, 0.45], &v, &[0.5], 0.0, &mut contacts).unwrap();
-        let table = MaterialTable::uniform(Material::new(e, 0.0).unwrap()).with_colliders(&floor);
-        let stats = resolve(&contacts, &mut v, &[1.0 / mass], &table, &ResolveParams::default()).unwrap();
-        assert_vec_close(&v, &[2.0, 1.0, 4.0 * e], 4.0, "after the floor");
-        assert_vec_close(
-            &stats.collider_impulse_sum,
-            &[0.0, 0.0, mass * 4.0 * (1.0 + e)],
-            4.0 * mass,
-            "floor impulse",
-        );
+        let want_v = [2.0, 1.0, 4.0 * e];
         let closed = 0.5 * (1.0 - e * e) * mass * 16.0;
-        assert!((stats.kinetic_energy_lost - closed).abs() <= RTOL * closed.max(1.0));
 
-        // a pinned particle acts the same; it keeps its (zero) velocity
-        let x = [0.0, 0.0, 0.45, 0.0, 0.0, -0.5];
-        let mut v = vec![2.0, 1.0, -4.0, 0.0, 0.0, 0.0];
-        let mut contacts = Vec::new();
-        sphere_contacts(&x, &v, &[0.5, 0.5], &[(0, 1)], &Domain::open(3).unwrap(), 0.0, &mut contacts).unwrap();
-        let table = MaterialTable::uniform(Material::new(e, 0.0).unwrap());
-        let stats = resolve(&contacts, &mut v, &[1.0 / mass, 0.0], &table, &ResolveParams::default()).unwrap();
-        assert_vec_close(&v, &[2.0, 1.0, 4.0 * e, 0.0, 0.0, 0.0], 4.0, "after the pinned ball");
-        let from_pinned = [0.0, 0.0, mass * 4.0 * (1.0 + e)];
-        assert_vec_close(&stats.pinned_impulse_sum, &from_pinned, 4.0 * mass, "pinned impulse");
-        assert_eq!(stats.collider_impulse_sum, [0.0; 3]);
+        // a plane collider, the floor z = 0: the ball of radius 0.5 touches it at t*
+        let mut w = world(e, None);
+        w.add_collider(Plane::new([0.0; 3], [0.0, 0.0, 1.0], Surface::default()).unwrap())
+            .unwrap();
+        w.add_particles(&[0.0, 0.0, 0.5 + 4.0 * t_hit], &v0, &[mass], &[0.5], &[false])
+            .unwrap();
+        w.step().unwrap();
+        assert_vec_close(&w.particles().v, &want_v, 4.0, &format!("after the floor, e = {e}"));
+        let z = 0.5 + want_v[2] * (DT - t_hit);
+        assert!(
+            (w.particles().x[2] - z).abs() <= RTOL,
+            "e = {e}: z = {} vs {z}",
+            w.particles().x[2]
+        );
+        let (_, total) = w.collision_stats().unwrap();
+        assert_eq!(total.impacts, 1);
+        assert!((total.energy_lost - closed).abs() <= RTOL * closed.max(1.0), "{total:?}");
+        // the floor's impulse is outside the particles: the balance of the rest is zero
+        assert_vec_close(&total.impulse_balance, &[0.0; 3], 4.0 * mass, "impulse balance");
+
+        // a pinned particle below, touched at t* along z (the ball at the origin then): the
+        // same, and it stays where it is
+        let mut w = world(e, None);
+        let x = [-2.0 * t_hit, -t_hit, 4.0 * t_hit, 0.0, 0.0, -1.0];
+        w.add_particles(&x, &[v0, [0.0; 3]].concat(), &[mass, 1.0], &[0.5, 0.5], &[false, true])
+            .unwrap();
+        w.step().unwrap();
+        let p = w.particles();
+        assert_vec_close(
+            &p.v,
+            &[want_v, [0.0; 3]].concat(),
+            4.0,
+            &format!("after the pinned ball, e = {e}"),
+        );
+        assert_eq!(&p.x[3..], &[0.0, 0.0, -1.0], "the pinned ball moved");
+        let (_, total) = w.collision_stats().unwrap();
+        assert_eq!(total.impacts, 1);
+        assert!((total.energy_lost - closed).abs() <= RTOL * closed.max(1.0), "{total:?}");
+        assert_vec_close(&total.impulse_balance, &[0.0; 3], 4.0 * mass, "impulse balance");
     }
 }
 
 #[test]
 fn slow_approaches_below_the_threshold_do_not_bounce() {
-    // e = 0.8 with a threshold of 0.5 m/s: approaching at 0.3 m/s stops (e = 0), at 0.7 m/s
-    // rebounds at 0.56 m/s.
-    let floor = Collider::Plane(Plane::new([0.0; 3], [0.0, 1.0, 0.0], Surface::default()).unwrap());
-    let material = Material::new(0.8, 0.0).unwrap();
-    for (speed, rebound, e_used) in [(0.3, 0.0, 0.0), (0.7, 0.56, 0.8)] {
-        let c = Contact {
-            i: 0,
-            other: Partner::Collider(0),
-            normal: [0.0, 1.0, 0.0],
-            overlap: 0.0,
-            u_n: -speed,
-        };
-        let mut v = [0.0, -speed, 0.0];
-        let imp = apply_impulse(&c, &mut v, &[1.0], material, 0.5).unwrap();
-        assert_eq!(imp.restitution, e_used);
-        assert!((v[1] - rebound).abs() < 1e-15, "{speed}: {v:?}");
-        // the same through the resolver
-        let mut v = [0.0, -speed, 0.0];
-        let params = ResolveParams {
-            restitution_threshold: 0.5,
-            ..ResolveParams::default()
-        };
-        let floors = [floor.clone()];
-        resolve(
-            &[c],
-            &mut v,
+    // e = 0.8 with a threshold of 0.5 m/s: a ball approaching the wall y = 0 at 0.3 m/s
+    // comes to rest on it (e = 0: u_n' = 0, at the wall), at 0.7 m/s it rebounds at
+    // e · 0.7 = 0.56 m/s; the x velocity 0.2 m/s is untouched either way (no friction).
+    for (speed, rebound, impacts) in [(0.3, 0.0, 0), (0.7, 0.56, 1)] {
+        let mut w = world(0.8, Some(0.5));
+        w.add_collider(Plane::new([0.0; 3], [0.0, 1.0, 0.0], Surface::default()).unwrap())
+            .unwrap();
+        let r = 0.1;
+        // reaches the wall after 3.37 steps
+        w.add_particles(
+            &[0.0, r + 3.37 * speed * DT, 0.0],
+            &[0.2, -speed, 0.0],
             &[1.0],
-            &MaterialTable::uniform(material).with_colliders(&floors),
-            &params,
+            &[r],
+            &[false],
         )
         .unwrap();
-        assert!((v[1] - rebound).abs() < 1e-15, "{speed}: {v:?}");
+        for _ in 0..10 {
+            w.step().unwrap();
+        }
+        let p = w.particles();
+        assert!((p.v[1] - rebound).abs() < 1e-12, "{speed} m/s: v = {:?}", p.v);
+        assert!((p.v[0] - 0.2).abs() < 1e-15 && p.v[2] == 0.0, "{speed} m/s: v = {:?}", p.v);
+        if rebound == 0.0 {
+            assert!((p.x[1] - r).abs() < 1e-12, "{speed} m/s: not resting on the wall: {:?}", p.x);
+        } else {
+            let y = r + rebound * (10.0 - 3.37) * DT;
+            assert!((p.x[1] - y).abs() < 1e-12, "{speed} m/s: y = {} vs {y}", p.x[1]);
+        }
+        let (_, total) = w.collision_stats().unwrap();
+        assert_eq!(total.impacts, impacts, "{speed} m/s: {total:?}");
+        // loss: ½ m (u² − u'²) either way
+        let closed = 0.5 * (speed * speed - rebound * rebound);
+        assert!(
+            (total.energy_lost - closed).abs() < 1e-12,
+            "{speed} m/s: {total:?} vs {closed}"
+        );
     }
-    // separating contacts get nothing
-    let c = Contact {
-        i: 0,
-        other: Partner::Collider(0),
-        normal: [0.0, 1.0, 0.0],
-        overlap: 0.1,
-        u_n: 1.0,
-    };
-    assert!(apply_impulse(&c, &mut [0.0, 1.0, 0.0], &[1.0], material, 0.0).is_none());
 }

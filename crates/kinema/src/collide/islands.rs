@@ -2,9 +2,9 @@
 //!
 //! Two contacts are in one island when they share a movable particle. A collider or a
 //! pinned particle joins nothing: its velocity and position never change, so what one
-//! contact does to it cannot reach another (Box2D's static bodies). The velocity solver
-//! ([`hold`](super::hold)) and the position correction ([`separate`](super::separate)) of
-//! one island never read what another writes, so each island is a problem of its own: its
+//! contact does to it cannot reach another (Box2D's static bodies). The soft step
+//! ([`soft_step`](super::soft_step)) of one island never reads what another writes, so each
+//! island is a problem of its own: its
 //! particles are gathered into small arrays, solved, and the results scattered back. The
 //! islands are solved on rayon's threads, a batch of them per task.
 //!

@@ -1,31 +1,32 @@
 //! Collisions: detection (broad phase → narrow phase, colliders) and response (impulses,
 //! position correction, or penalty forces), as kernels on flat particle arrays.
 //!
-//! A step with impulse response runs these stages in order, each writing a buffer that the
-//! next one reads:
+//! A step with impulse response (a World's, `impulse_stage/`) runs these stages in order,
+//! each writing a buffer that the next one reads:
 //!
 //! ```text
 //!   positions ──broad_phase::Grid::find_pairs──▶ pairs (i < j), sorted
 //!   pairs ──narrow_phase::sphere_contacts──▶ contacts (normal, overlap, u_n)
 //!     + colliders::collider_contacts (planes, boxes, sphere obstacles) appended
-//!   contacts ──response::resolve──▶ velocities: Newton's restitution u_n⁺ = −e u_n⁻ and
-//!                                   Coulomb friction, by sequential impulses
-//!   contacts ──response::separate──▶ positions: overlap removed along the normals
+//!   impacts inside the step ──response::restitution_impulse──▶ velocities: Newton's
+//!                                   restitution u_n⁺ = −e u_n⁻ and Coulomb friction
+//!   contacts at the step's end ──soft_step (by islands)──▶ velocities and positions:
+//!                                   resting contacts held, overlap removed
 //! ```
 //!
-//! The order matters: both the response and the separation need contacts that describe the
-//! current positions, and separation comes last because it moves positions (velocities are
-//! left alone) and rewrites each contact's overlap to what is left of it.
+//! The order matters: the end-of-step solve needs contacts that describe the current
+//! positions.
 //!
-//! The penalty model replaces the last two stages: [`penalty::PenaltyLaw::accumulate`] turns
+//! The penalty model replaces the response stages: [`penalty::PenaltyLaw::accumulate`] turns
 //! the contacts into spring–dashpot forces that the integrator applies within the step.
 //!
-//! Detection above is discrete: it sees overlaps at the end of a step, and a particle fast
-//! enough to cross another (or a wall) within one step is missed. The continuous part is
-//! [`toi`]: the time of impact inside the step, for sphere pairs and sphere obstacles in
-//! linear motion and for spheres against planes under constant acceleration. The broad
-//! phase finds the candidates for it when given a `margin` of the distance two particles can
-//! close within the step (h times the largest relative speed, 2 h |v|_max).
+//! The broad and narrow phases are discrete: they see overlaps at the end of a step, and a
+//! particle fast enough to cross another (or a wall) within one step is missed by them. The
+//! continuous part is [`toi`]: the time of impact inside the step, for sphere pairs and
+//! sphere obstacles in linear motion and for spheres against planes under constant
+//! acceleration. The broad phase finds the candidates for it when given a `margin` of the
+//! distance two particles can close within the step (h times the largest relative speed,
+//! 2 h |v|_max).
 //!
 //! Space is described by a [`Domain`]: 2D (circles in the xy-plane) or 3D, open or
 //! periodic along any axis (the minimum image is used throughout).
@@ -51,16 +52,14 @@ pub(crate) mod sweeps;
 pub mod toi;
 pub(crate) mod wake;
 
-mod contact_solver;
 mod grid_level;
 mod paths;
 
 pub use broad_phase::{all_pairs, Grid, Pair};
 pub use colliders::{collider_contacts, BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};
 pub use contact::{Contact, Partner};
-pub use contact_solver::{hold, separate, HoldParams, HoldStats, SeparateParams, SeparateStats};
 pub use domain::{Domain, Periodic};
 pub use narrow_phase::{pair_contact, sphere_contacts};
 pub use penalty::{damping_ratio, dashpot_coefficient, restitution_of_damping, spring_dashpot_force, PenaltyLaw};
-pub use response::{apply_impulse, resolve, restitution_impulse, Impulse, Material, MaterialTable, ResolveParams, ResolveStats};
+pub use response::{restitution_impulse, Impulse, Material, MaterialTable};
 pub use toi::{toi_plane, toi_sphere_obstacle, toi_spheres};

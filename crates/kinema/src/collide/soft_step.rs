@@ -145,7 +145,7 @@ pub(crate) struct SoftContacts<'a> {
 
 /// The soft step's stages (see the module's doc) on velocities `v` and positions `x` (3 per
 /// particle, updated in place), with each sweep visiting the contacts group by group (as
-/// `hold_grouped` does: the same result on any number of threads).
+/// `collide/sweeps.rs` describes: the same result on any number of threads).
 ///
 /// `solved`: each contact's starting total on entry (the last step's solve, for the warm
 /// start; zeros if none), its solve stage's total on return (the next step's warm start).

@@ -1,6 +1,6 @@
-//! The sweeps of the contact solvers ([`hold`](super::hold)'s velocities,
-//! [`separate`](super::separate)'s positions): over the contacts one after the other, or,
-//! where the contacts come in colours (`collide/islands.rs`), colour by colour on all threads.
+//! The sweeps of the end-of-step contact solve (`soft_step`'s velocities and positions):
+//! over the contacts one after the other, or, where the contacts come in colours
+//! (`collide/islands.rs`), colour by colour on all threads.
 //!
 //! A sweep visits every contact once; a visit reads and writes the 3-vectors of its two
 //! particles (velocities or positions) and its own state (the totals of impulse). The

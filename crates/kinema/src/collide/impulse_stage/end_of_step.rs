@@ -7,8 +7,9 @@ use super::{ImpulseStage, StageSetting};
 use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::CHUNK;
+use crate::collide::response::VELOCITY_TOLERANCE;
 use crate::collide::soft_step::{SoftParams, Target, SLOP, SPECULATIVE};
-use crate::collide::{pair_contact, Collider, Contact, Domain, Partner, ResolveParams};
+use crate::collide::{pair_contact, Collider, Contact, Domain, Partner};
 use crate::error::Error;
 use crate::vec3;
 
@@ -176,7 +177,7 @@ impl ImpulseStage {
             materials,
             params: SoftParams {
                 h,
-                tolerance: ResolveParams::default().tolerance,
+                tolerance: VELOCITY_TOLERANCE,
                 solve_sweeps: SOLVE_SWEEPS,
                 relax_sweeps: RELAX_SWEEPS,
             },

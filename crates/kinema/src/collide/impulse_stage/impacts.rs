@@ -12,7 +12,8 @@ use super::end_of_step::distribute;
 use super::{CollisionStats, ImpulseStage, StageSetting};
 use crate::collide::events::{swept_reach, Event, Paths, Scene};
 use crate::collide::neighbour_list::{collider_scale, ListBuild, CHUNK, SKIN_PER_RADIUS};
-use crate::collide::{restitution_impulse, Collider, Contact, Domain, Partner, Plane, ResolveParams};
+use crate::collide::response::VELOCITY_TOLERANCE;
+use crate::collide::{restitution_impulse, Collider, Contact, Domain, Partner, Plane};
 use crate::error::Error;
 use crate::vec3;
 
@@ -20,7 +21,7 @@ use crate::vec3;
 /// the step (the solver's tolerance, or the restitution threshold below which they would be
 /// plastic anyway).
 pub(super) fn least_impact_speed(threshold: f64) -> f64 {
-    ResolveParams::default().tolerance.max(threshold)
+    VELOCITY_TOLERANCE.max(threshold)
 }
 
 /// What an impact search sweeps against: the stage's setting, which walls of each collider
