@@ -8,7 +8,7 @@ What a checkpoint holds (an HDF5 file, written under a temporary name and rename
   periodicity, emitters and kill volumes), in the attribute ``scene`` (TOML);
 - the time, the step count, each particle's id and the next id;
 - what the Python world keeps per particle: time of death, own colour; the springs' end ids;
-- each emitter's progress (particles emitted) and the state of its four random streams;
+- each emitter's progress (particles emitted, births held back) and the state of its four random streams;
 - the collision books (totals since collisions were turned on: impacts, energy lost, ...).
 
 What is carried from step to step is written too, to every bit: Verlet's acceleration at the
@@ -68,7 +68,16 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
         f.create_dataset("colors", data=world._colors)
         f.create_dataset("spring_ids", data=world._spring_ids)
         f.attrs["emitters"] = json.dumps(
-            [{"emitted": s.emitted, "streams": {name: g.bit_generator.state for name, g in s.rng.items()}} for s in world._emitters]
+            [
+                {
+                    "emitted": s.emitted,
+                    "streams": {name: g.bit_generator.state for name, g in s.rng.items()},
+                    # the births held back because their place was taken (floats round-trip
+                    # exactly through JSON's shortest repr)
+                    "waiting": None if s.waiting is None else {k: v.tolist() for k, v in s.waiting.items()},
+                }
+                for s in world._emitters
+            ]
         )
         if carry is not None:  # Verlet's a or implicit Euler's last Δv, to every bit
             f.create_dataset("integrator_carry", data=carry)
@@ -123,6 +132,8 @@ def load_checkpoint(path: str | Path) -> Any:
         world._advised_at = int(f.attrs["advised_at"])
         for source, saved in zip(world._emitters, json.loads(str(f.attrs["emitters"])), strict=True):
             source.emitted = int(saved["emitted"])
+            waiting = saved.get("waiting")
+            source.waiting = None if waiting is None else {k: np.asarray(v, dtype=float) for k, v in waiting.items()}
             for name, state in saved["streams"].items():
                 source.rng[name].bit_generator.state = state
     world._advice_due = False  # the advisor had looked at this state already (its warning is in `warned`)
