@@ -87,6 +87,8 @@ bench: build $(TEST_STAMP)
 	$(PY) benchmarks/springs.py
 	$(PY) benchmarks/mixed_radii.py
 	$(PY) benchmarks/impacts.py
+	$(PIP) install --disable-pip-version-check -q -r requirements/bench.txt
+	$(PY) benchmarks/piles.py
 
 pictures: build
 	$(PY) docs/pictures.py docs/img

@@ -1,0 +1,569 @@
+"""Piles at rest: kinema beside pymunk (2D, Chipmunk) and pybullet (3D, Bullet), same piles.
+
+Every scene starts from the same state in each engine (built from a seeded RNG in the worker),
+falls under gravity, dt = 1 ms, and should end as a pile at rest. Masses 1 kg. The scenes:
+
+  pour2d     2,000 discs, radii uniform in [0.025, 0.04] m, e = 0.7, mu = 0, on a jittered grid
+             above the floor (spacing >= 2 r_max + 5 mm, no overlaps) in a box 1 m wide
+             (walls x = 0 and x = 1, floor y = 0, a lid far above: nothing reaches it), 5 s;
+             g = (0, -9.81).
+  pyramid2d  a 20-row pyramid of equal discs (r = 0.05 m, e = 0, mu = 0.5) standing on the
+             floor of a box 4 m wide, rows touching (row k has 20 - k discs), 10 s; its own
+             figure: the largest displacement of any disc from its start ("drift").
+  pour3d     10,000 balls, radii uniform in [0.025, 0.04] m, e = 0.7, mu = 0, on a jittered
+             lattice above the floor of a 1 m x 1 m box (floor z = 0), 5 s; g = (0, 0, -9.81).
+  pour3d_mu  the same with mu = 0.5.
+  deep3d     5 x 5 x 60 balls on a jittered lattice (same radii, e = 0.7, mu = 0.5) in a
+             0.5 m x 0.5 m box, 5 s: a tall narrow column.
+
+The engines:
+
+  kinema   World(dim, dt=1e-3, method="verlet"), Gravity, Box (the lid 1 m above the
+           highest particle), set_collisions(restitution=e, friction=mu): the impulse model,
+           ccd on. `--threads` rayon threads (RAYON_NUM_THREADS, default 2).
+  pymunk   (2D) Space(), iterations = 10, gravity (0, -9.81), step(1e-3); each disc a dynamic
+           Body of moment inf (no rotation: kinema's particles are points with a radius, so
+           no engine here rolls), walls static Segments of radius 0 (no lid: nothing rises
+           above its start with e < 1). collision_slop = 1e-4 m (Chipmunk's default 0.1 is
+           in its pixel-sized units and would let discs overlap by 3 radii). Broadphase:
+           use_spatial_hash(2 r_mean, 10 N), Chipmunk's advice for many shapes of one size
+           (2.5x faster on pour2d than its default bounding-box tree). One thread (its
+           threaded space with 2 threads was no faster here).
+  pybullet (3D) DIRECT, setTimeStep(1e-3), numSolverIterations = 10, gravity (0, 0, -9.81);
+           one sphere collision shape per ball (the radii are continuous: no binning, the
+           exact radii of the other engines; building is not timed), each ball a maximal-
+           coordinates body (btRigidBody, useMaximalCoordinates=True) changed to mass 1,
+           localInertiaDiagonal (0, 0, 0) (Bullet reads a zero inertia as infinite: no
+           rotation, as in the other engines), rollingFriction = spinningFriction = 0 and
+           linearDamping = angularDamping = 0 (pybullet's default 0.04 is a drag none of the
+           others has). The box: one static multibody of 5 box shapes 0.5 m thick (floor and
+           4 walls, no lid). Bullet's restitutionVelocityThreshold (0.2 m/s: slower impacts
+           do not bounce) and its sleeping are left at pybullet's defaults.
+
+Bullet and Chipmunk combine restitution by the product rule: give each body √e. So are
+friction coefficients combined: every ball, disc and wall of the peers gets √e and √mu
+(kinema takes the pair's values as given: e = max(e_i, e_j), mu = √(mu_i mu_j)).
+
+Each engine runs in a fresh process, `--repeat` times, interleaved (kinema, peer, kinema,
+peer, ...); an engine's runs of a scene stop early once they took `--budget` seconds (default
+600: a run of pour3d took 20-30 min in each engine on a 2-core machine, so it ran once, and a
+full default run took hours there, most of it pour3d and pour3d_mu); the table's "runs"
+column says how many there were. Timed: the simulation steps alone (kinema's `World.step`
+after a first `step(0)`, the peers' step loops), not the building. With `--threads-scaling`
+(on by default; pour3d only) kinema also runs pour3d with 1 and with 2 threads, interleaved
+with the others, and the speed-up of 2 threads over 1 is printed.
+
+The figures, measured on the final state (the median over the runs of each):
+  disp med / max  median and largest displacement over the last 0.1 s (positions at
+                  t_end - 0.1 s against t_end), m
+  drift           pyramid2d: the largest displacement from the start, m
+  overlap/r       the largest overlap r_i + r_j - |x_i - x_j| of any pair (found by brute force
+                  with scipy's cKDTree, pairs within 2 r_max), over the mean radius
+  wall pen/r      how far any particle's surface is beyond any wall of the box, over mean r
+  max |v|         m/s;  KE  ½ Σ m v², J
+  speed-up        on kinema's row: the peer's time over kinema's (> 1: kinema is faster)
+The targets are printed beside them, and PASS/FAIL per target for kinema. Exit status 1 when
+kinema misses a target (--quick's 1 s runs are judged by the full scenes' targets too).
+
+`--quick` shrinks every scene to about 1/10 of its particles and 1 s (and `--repeat` to 1
+unless given): a check in under a minute.
+
+    python benchmarks/piles.py [--scenes pour2d pyramid2d pour3d pour3d_mu deep3d]
+                               [--repeat 3] [--threads 2] [--quick] [--no-threads-scaling]
+                               [--budget 600] [--no-peers]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+DT = 1e-3
+G = 9.81
+MASS = 1.0
+GAP = 0.005  # m, the lattice's spacing beyond 2 r_max
+LAST = 0.1  # s: the displacement window at the end
+ITERATIONS = 10  # the peers' solver iterations
+PYMUNK_SLOP = 1e-4  # m
+WALL = 0.5  # m, pybullet's wall thickness
+# kinema's targets (the peers are measured against the same figures)
+TARGET_OVERLAP = 0.01  # of mean r
+TARGET_PEN = 0.01  # of mean r
+TARGET_DISP = 1e-5  # m per LAST
+TARGET_VMAX = 1e-3  # m/s
+TARGET_DRIFT = 1e-3  # m (pyramid2d)
+TARGET_THREADS = 1.6  # pour3d: 1-thread time over 2-thread time
+
+
+@dataclass(frozen=True)
+class Scene:
+    name: str
+    dim: int
+    kind: str  # "lattice" or "pyramid"
+    n: int  # particles (lattice) or rows (pyramid)
+    width: float  # m, the box's side(s) across gravity
+    e: float
+    mu: float
+    seconds: float
+    speed_target: float | None  # kinema's speed-up over the peer
+    per_row: int | None = None  # lattice sites per horizontal axis (None: as many as fit)
+    r_range: tuple[float, float] = (0.025, 0.04)
+    seed: int = 1
+
+    @property
+    def peer(self) -> str:
+        return "pymunk" if self.dim == 2 else "pybullet"
+
+
+SCENES = {
+    s.name: s
+    for s in (
+        Scene("pour2d", 2, "lattice", 2000, 1.0, 0.7, 0.0, 5.0, 1.0, seed=11),
+        Scene("pyramid2d", 2, "pyramid", 20, 4.0, 0.0, 0.5, 10.0, None, r_range=(0.05, 0.05)),
+        Scene("pour3d", 3, "lattice", 10_000, 1.0, 0.7, 0.0, 5.0, 5.0, seed=13),
+        Scene("pour3d_mu", 3, "lattice", 10_000, 1.0, 0.7, 0.5, 5.0, 5.0, seed=13),
+        Scene("deep3d", 3, "lattice", 1500, 0.5, 0.7, 0.5, 5.0, None, per_row=5, seed=17),
+    )
+}
+
+
+def shrink(s: Scene) -> Scene:
+    """--quick: about 1/10 of the particles, 1 s."""
+    if s.kind == "pyramid":
+        rows = max(2, round((-1 + math.sqrt(1 + 8 * s.n * (s.n + 1) / 2 / 10)) / 2))  # rows(rows+1)/2 ≈ N/10
+        return Scene(**{**s.__dict__, "n": rows, "seconds": 1.0})
+    return Scene(**{**s.__dict__, "n": max(1, s.n // 10), "seconds": 1.0})
+
+
+# -- the initial state --------------------------------------------------------------------------
+def initial_state(s: Scene) -> dict:
+    """Positions (N, 3) (z = 0 in 2D), radii (N,), the box's lo and hi (dim values each)."""
+    rng = np.random.default_rng(s.seed)
+    if s.kind == "pyramid":
+        r = s.r_range[0]
+        x0 = s.width / 2 - s.n * r  # the bottom row is centred
+        pts = [(x0 + r * (2 * i + k + 1), r + k * math.sqrt(3) * r, 0.0) for k in range(s.n) for i in range(s.n - k)]
+        x = np.array(pts)
+        radii = np.full(len(x), r)
+    else:
+        r_max = s.r_range[1]
+        across = s.dim - 1  # horizontal axes
+        per_row = s.per_row or int(s.width // (2 * r_max + GAP))
+        a = s.width / per_row  # horizontal spacing >= 2 r_max + GAP
+        layers = -(-s.n // per_row**across)
+        up = 2 * r_max + GAP  # vertical spacing
+        grids = np.meshgrid(*[np.arange(per_row)] * across, np.arange(layers), indexing="ij")
+        idx = np.stack([g.ravel() for g in grids], axis=-1)
+        idx = idx[np.argsort(idx[:, -1], kind="stable")][: s.n]  # bottom layers first
+        x = np.zeros((s.n, 3))
+        x[:, :across] = (idx[:, :across] + 0.5) * a
+        x[:, across] = r_max + GAP + idx[:, -1] * up
+        # jitter: each coordinate moves by at most 0.4 of the free space between neighbours,
+        # so neighbours stay > 2 r_max apart and clear of the walls
+        x[:, :across] += rng.uniform(-1, 1, (s.n, across)) * 0.4 * (a - 2 * r_max)
+        x[:, across] += rng.uniform(-1, 1, s.n) * 0.4 * GAP
+        radii = rng.uniform(*s.r_range, s.n)
+    up_axis = s.dim - 1
+    height = math.ceil(float(x[:, up_axis].max()) + 1.0)
+    lo = [0.0] * s.dim
+    hi = [s.width] * (s.dim - 1) + [float(height)]
+    return {"x": x, "r": radii, "lo": lo, "hi": hi}
+
+
+# -- the engines (in the worker) -----------------------------------------------------------------
+def run_kinema(s: Scene, st: dict, steps: int, last: int) -> dict:
+    import kinema
+
+    t0 = time.perf_counter()
+    w = kinema.World(dim=s.dim, dt=DT, method="verlet")
+    w.add_particles(st["x"], mass=MASS, radius=st["r"])
+    w.add(kinema.Gravity(g=(0.0, -G, 0.0) if s.dim == 2 else (0.0, 0.0, -G)))
+    w.add(kinema.Box(st["lo"], st["hi"]))
+    w.set_collisions(restitution=s.e, friction=s.mu)
+    w.step(0)
+    build = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    w.step(steps - last)
+    sim = time.perf_counter() - t0
+    before = w.positions.copy()
+    t0 = time.perf_counter()
+    w.step(last)
+    sim += time.perf_counter() - t0
+    stats = w.collision_stats() or {}
+    total, final = stats.get("total", {}), stats.get("last", {})
+    extra = {f"unconverged steps (of {steps})": total.get("unconverged")}
+    extra.update({f"last step's {key}": final.get(key) for key in ("contacts", "max_overlap", "solver_sweeps", "islands")})
+    extra = {k: float(v) for k, v in extra.items() if v is not None}
+    return {"build": build, "sim": sim, "before": before, "x": w.positions.copy(), "v": w.velocities.copy(), "extra": extra}
+
+
+def run_pymunk(s: Scene, st: dict, steps: int, last: int) -> dict:
+    import pymunk
+
+    t0 = time.perf_counter()
+    space = pymunk.Space()
+    space.iterations = ITERATIONS
+    space.gravity = (0.0, -G)
+    space.collision_slop = PYMUNK_SLOP
+    # Chipmunk's advice for many shapes of one size: a spatial hash of cells the size of a
+    # shape and ~10 cells per shape (2.5x faster than its default bounding-box tree on pour2d)
+    space.use_spatial_hash(2 * float(st["r"].mean()), 10 * len(st["r"]))
+    e, mu = math.sqrt(s.e), math.sqrt(s.mu)
+    (x0, y0), (x1, y1) = st["lo"], st["hi"]
+    for a, b in (((x0, y0), (x1, y0)), ((x0, y0), (x0, y1)), ((x1, y0), (x1, y1))):
+        seg = pymunk.Segment(space.static_body, a, b, 0.0)
+        seg.elasticity, seg.friction = e, mu
+        space.add(seg)
+    bodies = []
+    for p, r in zip(st["x"], st["r"], strict=True):
+        body = pymunk.Body(MASS, float("inf"))
+        body.position = (float(p[0]), float(p[1]))
+        disc = pymunk.Circle(body, float(r))
+        disc.elasticity, disc.friction = e, mu
+        space.add(body, disc)
+        bodies.append(body)
+    build = time.perf_counter() - t0
+
+    def state() -> tuple[np.ndarray, np.ndarray]:
+        x = np.zeros((len(bodies), 3))
+        v = np.zeros((len(bodies), 3))
+        x[:, :2] = [tuple(b.position) for b in bodies]
+        v[:, :2] = [tuple(b.velocity) for b in bodies]
+        return x, v
+
+    t0 = time.perf_counter()
+    for _ in range(steps - last):
+        space.step(DT)
+    sim = time.perf_counter() - t0
+    before = state()[0]
+    t0 = time.perf_counter()
+    for _ in range(last):
+        space.step(DT)
+    sim += time.perf_counter() - t0
+    x, v = state()
+    spin = max((abs(b.angular_velocity) for b in bodies), default=0.0)
+    return {
+        "build": build,
+        "sim": sim,
+        "before": before,
+        "x": x,
+        "v": v,
+        "extra": {"max |omega|": spin, "at |v| = 0 exactly": int(np.sum(~v.any(axis=1)))},
+    }
+
+
+def run_pybullet(s: Scene, st: dict, steps: int, last: int) -> dict:
+    import pybullet as pb
+
+    t0 = time.perf_counter()
+    pb.connect(pb.DIRECT)
+    pb.setGravity(0.0, 0.0, -G)
+    pb.setTimeStep(DT)
+    pb.setPhysicsEngineParameter(numSolverIterations=ITERATIONS)
+    e, mu = math.sqrt(s.e), math.sqrt(s.mu)
+    (lx, ly, lz), (hx, hy, hz) = st["lo"], st["hi"]
+    cx, cy, h, t = (lx + hx) / 2, (ly + hy) / 2, hz - lz, WALL
+    half = [[(hx - lx) / 2 + t, (hy - ly) / 2 + t, t]] + [[t, (hy - ly) / 2 + t, h / 2]] * 2 + [[(hx - lx) / 2 + t, t, h / 2]] * 2
+    at = [[cx, cy, lz - t], [lx - t, cy, lz + h / 2], [hx + t, cy, lz + h / 2], [cx, ly - t, lz + h / 2], [cx, hy + t, lz + h / 2]]
+    box = pb.createMultiBody(0.0, pb.createCollisionShapeArray([pb.GEOM_BOX] * 5, halfExtents=half, collisionFramePositions=at))
+    pb.changeDynamics(box, -1, restitution=e, lateralFriction=mu, rollingFriction=0.0, spinningFriction=0.0)
+    balls = []
+    for p, r in zip(st["x"], st["r"], strict=True):
+        shape = pb.createCollisionShape(pb.GEOM_SPHERE, radius=float(r))
+        ball = pb.createMultiBody(MASS, shape, -1, [float(c) for c in p], useMaximalCoordinates=True)
+        # mass= again: changeDynamics(localInertiaDiagonal=...) alone sets a maximal-coordinates
+        # body's mass to 0 (pybullet 3.2.7)
+        pb.changeDynamics(
+            ball,
+            -1,
+            mass=MASS,
+            localInertiaDiagonal=[0.0, 0.0, 0.0],
+            restitution=e,
+            lateralFriction=mu,
+            rollingFriction=0.0,
+            spinningFriction=0.0,
+            linearDamping=0.0,
+            angularDamping=0.0,
+        )
+        balls.append(ball)
+    build = time.perf_counter() - t0
+
+    def state() -> tuple[np.ndarray, np.ndarray, float]:
+        x = np.array([pb.getBasePositionAndOrientation(b)[0] for b in balls])
+        vel = [pb.getBaseVelocity(b) for b in balls]
+        v = np.array([lin for lin, _ in vel])
+        spin = max((float(np.linalg.norm(ang)) for _, ang in vel), default=0.0)
+        return x, v, spin
+
+    t0 = time.perf_counter()
+    for _ in range(steps - last):
+        pb.stepSimulation()
+    sim = time.perf_counter() - t0
+    before = state()[0]
+    t0 = time.perf_counter()
+    for _ in range(last):
+        pb.stepSimulation()
+    sim += time.perf_counter() - t0
+    x, v, spin = state()
+    return {
+        "build": build,
+        "sim": sim,
+        "before": before,
+        "x": x,
+        "v": v,
+        "extra": {"max |omega|": spin, "at |v| = 0 exactly": int(np.sum(~v.any(axis=1)))},
+    }
+
+
+def figures(s: Scene, st: dict, out: dict) -> dict:
+    """The rest figures of the final state."""
+    from scipy.spatial import cKDTree
+
+    x, v, r = out["x"], out["v"], st["r"]
+    d = s.dim
+    r_mean = float(r.mean())
+    if not (np.isfinite(x).all() and np.isfinite(v).all()):
+        nan = float("nan")
+        return dict.fromkeys(("disp_med", "disp_max", "drift", "overlap", "pen", "vmax", "ke"), nan)
+    disp = np.linalg.norm(x - out["before"], axis=1)
+    pairs = cKDTree(x[:, :d]).query_pairs(2 * float(r.max()), output_type="ndarray")
+    if len(pairs):
+        gap = np.linalg.norm(x[pairs[:, 0], :d] - x[pairs[:, 1], :d], axis=1)
+        overlap = max(0.0, float(np.max(r[pairs[:, 0]] + r[pairs[:, 1]] - gap)))
+    else:
+        overlap = 0.0
+    lo, hi = np.array(st["lo"]), np.array(st["hi"])
+    beyond = np.maximum(lo - (x[:, :d] - r[:, None]), (x[:, :d] + r[:, None]) - hi)
+    speed = np.linalg.norm(v, axis=1)
+    return {
+        "disp_med": float(np.median(disp)),
+        "disp_max": float(disp.max()),
+        "drift": float(np.linalg.norm(x - st["x"], axis=1).max()),
+        "overlap": overlap / r_mean,
+        "pen": max(0.0, float(beyond.max())) / r_mean,
+        "vmax": float(speed.max()),
+        "ke": float(0.5 * np.sum(MASS * speed**2)),
+    }
+
+
+def worker(engine: str, scene: str, quick: bool) -> dict:
+    s = shrink(SCENES[scene]) if quick else SCENES[scene]
+    st = initial_state(s)
+    steps = round(s.seconds / DT)
+    last = round(LAST / DT)
+    run = {"kinema": run_kinema, "pymunk": run_pymunk, "pybullet": run_pybullet}[engine]
+    try:
+        out = run(s, st, steps, last)
+    except Exception as exc:  # a diverged or failed run is reported, not hidden
+        return {"n": len(st["r"]), "error": f"{type(exc).__name__}: {exc}"}
+    return {"n": len(st["r"]), "build": out["build"], "sim": out["sim"], "figures": figures(s, st, out), "extra": out["extra"]}
+
+
+# -- the runs (in the parent) --------------------------------------------------------------------
+def spawn(engine: str, scene: str, quick: bool, threads: int) -> dict:
+    env = {**os.environ, "RAYON_NUM_THREADS": str(threads), "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+    cmd = [sys.executable, __file__, "--worker", engine, scene] + (["--quick"] if quick else [])
+    res = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    if res.returncode != 0:
+        return {"error": f"worker exited {res.returncode}: {res.stderr.strip()[-2000:]}"}
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def version(module: str) -> str | None:
+    """The peer's version, or None when it is not installed."""
+    if importlib.util.find_spec(module) is None:
+        return None
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as dist_version
+
+    try:
+        return dist_version(module)
+    except PackageNotFoundError:
+        return "?"
+
+
+COLUMNS = [  # key, title, width, format of a number
+    ("n", "N", 7, ","),
+    ("runs", "runs", 4, "d"),
+    ("sim", "sim s", 9, ".2f"),
+    ("speedup", "speed-up", 9, ""),
+    ("disp_med", "disp med m", 11, ".2e"),
+    ("disp_max", "disp max m", 11, ".2e"),
+    ("drift", "drift m", 10, ".2e"),
+    ("overlap", "overlap/r", 10, ".2e"),
+    ("pen", "wall pen/r", 11, ".2e"),
+    ("vmax", "max|v| m/s", 11, ".2e"),
+    ("ke", "KE J", 10, ".2e"),
+]
+
+
+def table_row(first: str, second: str, values: dict) -> str:
+    """A row of the table: a value per column key (missing or None: '-')."""
+    out = f"{first:<10} {second:<9}"
+    for key, _, width, spec in COLUMNS:
+        v = values.get(key)
+        text = "-" if v is None else v if isinstance(v, str) else format(v, spec)
+        out += f" {text:>{width}}"
+    return out
+
+
+def targets(s: Scene) -> dict[str, tuple[str, float]]:
+    """kinema's targets of a scene: key -> (the words, the bound); speed-up is a lower bound."""
+    t = {
+        "disp_med": ("<=", TARGET_DISP),
+        "overlap": ("<=", TARGET_OVERLAP),
+        "pen": ("<=", TARGET_PEN),
+        "vmax": ("<=", TARGET_VMAX),
+    }
+    if s.kind == "pyramid":
+        t["drift"] = ("<=", TARGET_DRIFT)
+    if s.speed_target is not None:
+        t["speedup"] = (">=", s.speed_target)
+    return t
+
+
+def median_row(runs: list[dict]) -> dict | None:
+    ok = [r for r in runs if "error" not in r]
+    if not ok:
+        return None
+    row = {"n": ok[0]["n"], "runs": len(ok), "sim": statistics.median(r["sim"] for r in ok), "build": statistics.median(r["build"] for r in ok)}
+    for key in ok[0]["figures"]:
+        row[key] = statistics.median(r["figures"][key] for r in ok)
+    return row
+
+
+def main() -> int:
+    if len(sys.argv) > 1 and sys.argv[1] == "--worker":
+        print(json.dumps(worker(sys.argv[2], sys.argv[3], "--quick" in sys.argv[4:])))
+        return 0
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scenes", nargs="+", choices=list(SCENES), default=list(SCENES))
+    ap.add_argument("--repeat", type=int, default=None, help="runs per engine and scene (default 3; 1 with --quick)")
+    ap.add_argument("--threads", type=int, default=2, help="kinema's threads (RAYON_NUM_THREADS)")
+    ap.add_argument("--quick", action="store_true", help="every scene at ~1/10 of its particles, 1 s")
+    ap.add_argument(
+        "--budget",
+        type=float,
+        default=600.0,
+        help="s: no further runs of an engine in a scene once its runs there took this long (a pour3d run takes ~20-30 min)",
+    )
+    ap.add_argument("--threads-scaling", action=argparse.BooleanOptionalAction, default=True, help="pour3d: kinema with 1 and 2 threads")
+    ap.add_argument(
+        "--peers",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="run the peers (--no-peers: kinema alone, e.g. for pour3d, whose pybullet run takes ~30 min)",
+    )
+    args = ap.parse_args()
+    repeat = args.repeat if args.repeat is not None else (1 if args.quick else 3)
+    if repeat < 1 or args.threads < 1:
+        raise SystemExit("--repeat >= 1 and --threads >= 1")
+
+    peers = {"pymunk": version("pymunk"), "pybullet": version("pybullet")}
+    for name, v in peers.items():
+        if v is None and any(SCENES[s].peer == name for s in args.scenes):
+            print(f"piles: {name} is missing (pip install -r requirements/bench.txt): kinema alone in its scenes", file=sys.stderr)
+
+    results: dict[str, dict[str, list[dict]]] = {}
+    scaling: dict[int, list[dict]] = {1: [], 2: []}
+    for name in args.scenes:
+        s = SCENES[name]
+        peer = s.peer if peers[s.peer] and args.peers else None
+        runs: dict[str, list[dict]] = {"kinema": [], **({peer: []} if peer else {})}
+        scale = args.threads_scaling and name == "pour3d"
+        # the runs of each engine: kinema at --threads, the peer, and for the scaling kinema at
+        # 1 and 2 threads (the first list again where --threads is 1 or 2)
+        lists: dict[tuple[str, int], list[dict]] = {("kinema", args.threads): runs["kinema"]}
+        if peer:
+            lists[(peer, args.threads)] = runs[peer]
+        if scale:
+            for t in (1, 2):
+                scaling[t] = lists.setdefault(("kinema", t), scaling[t])
+        for k in range(repeat):  # interleaved
+            started = time.perf_counter()
+            for (engine, t), got in lists.items():
+                if sum(r["wall"] for r in got) < args.budget:  # the first run always
+                    t0 = time.perf_counter()
+                    got.append(spawn(engine, name, args.quick, t))
+                    got[-1]["wall"] = time.perf_counter() - t0
+            print(f"  {name}: round {k + 1} of {repeat} done in {time.perf_counter() - started:.0f} s", file=sys.stderr, flush=True)
+        results[name] = runs
+
+    # -- the table
+    mode = "--quick: ~1/10 of the particles, 1 s; " if args.quick else ""
+    peer_words = ", ".join(f"{p} {v}" if v else f"{p} missing" for p, v in peers.items())
+    print(
+        f"piles at rest: kinema ({args.threads} threads) beside {peer_words}; dt = {DT * 1e3:g} ms, {ITERATIONS} solver iterations for the peers; "
+        f"{mode}median of {repeat} interleaved runs (fewer, see runs, where an engine's runs of a scene passed --budget {args.budget:g} s); "
+        f"{os.cpu_count()} CPUs"
+    )
+    print("sim s: the steps alone; speed-up: peer time / kinema time; disp: over the last 0.1 s; overlap, wall pen: over the mean radius")
+    head = table_row("scene", "engine", {k: title for k, title, _, _ in COLUMNS})
+    print(head)
+    print("-" * len(head))
+    missed = False
+    notes: list[str] = []
+    for name, runs in results.items():
+        s = SCENES[name]
+        rows = {engine: median_row(rs) for engine, rs in runs.items()}
+        kin = rows["kinema"]
+        peer = next((e for e in runs if e != "kinema"), None)
+        if kin and peer and rows[peer]:
+            kin["speedup"] = f"{rows[peer]['sim'] / kin['sim']:.2f}x"
+        for engine, row in rows.items():
+            if row is None:
+                print(f"{name:<10} {engine:<9} failed: {next(r['error'] for r in runs[engine] if 'error' in r)[:300]}")
+                continue
+            print(table_row(name, engine, {k: v for k, v in row.items() if k != "drift" or s.kind == "pyramid"}))
+            bad = [r["error"] for r in runs[engine] if "error" in r]
+            if bad:
+                notes.append(f"{name} {engine}: {len(bad)} of {len(runs[engine])} runs failed: {bad[0][:300]}")
+        goal = targets(s)
+        print(table_row("", "target", {k: f"{op} {bound:g}{'x' if k == 'speedup' else ''}" for k, (op, bound) in goal.items()}))
+        verdict = {}
+        for k, (_, bound) in goal.items():
+            if kin is None:
+                verdict[k] = "FAIL"
+            elif k == "speedup":
+                if peer is None or rows[peer] is None:
+                    continue
+                verdict[k] = "PASS" if rows[peer]["sim"] / kin["sim"] >= bound else "FAIL"
+            else:
+                verdict[k] = "PASS" if kin[k] <= bound else "FAIL"  # NaN fails
+        missed |= "FAIL" in verdict.values()
+        print(table_row("", "kinema", verdict))
+        for engine, rs in runs.items():
+            ok = [r for r in rs if "error" not in r]
+            if ok:
+                extra = ", ".join(f"{k} {v:g}" for k, v in ok[0]["extra"].items())
+                build = statistics.median(r["build"] for r in ok)
+                notes.append(f"{name} {engine}: build {build:.2f} s; {extra}")
+
+    if scaling[1] and scaling[2]:
+        t1, t2 = (median_row(scaling[t]) for t in (1, 2))
+        if t1 and t2:
+            ratio = t1["sim"] / t2["sim"]
+            word = "PASS" if ratio >= TARGET_THREADS else "FAIL"
+            missed |= word == "FAIL"
+            print(f"\npour3d, kinema threads: 1 thread {t1['sim']:.2f} s, 2 threads {t2['sim']:.2f} s: {ratio:.2f}x (target >= {TARGET_THREADS:g}x) {word}")
+        else:
+            print("\npour3d, kinema threads: a run failed, no ratio")
+    print("\nper engine (first run): build time (not timed), and what the engine reports (kinema: collision_stats)")
+    for line in notes:
+        print(f"  {line}")
+    print(f"kinema's targets: {'all met' if not missed else 'missed (FAIL above)'}")
+    return 1 if missed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
