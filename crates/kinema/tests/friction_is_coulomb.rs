@@ -9,10 +9,12 @@
 //! The kinetic energy lost is ½ (1 − e²) u_n² / (w₁ + w₂) + j_t (|u_t| − ½ (w₁ + w₂) j_t).
 //! Each body starts a small gap from its partner and meets it inside a step.
 
+mod common;
+
 use kinema::collide::{Plane, Surface};
-use kinema::ode::{Integrator, Method};
+use kinema::ode::Method;
 use kinema::world::CollisionParams;
-use kinema::{World, WorldParams};
+use kinema::World;
 
 const DT: f64 = 1e-2;
 /// The impact's time inside the first step.
@@ -23,19 +25,12 @@ fn close(a: f64, b: f64, scale: f64) -> bool {
 }
 
 fn world(e: f64, mu: f64) -> World {
-    let mut w = World::new(WorldParams {
-        dt: DT,
-        method: Integrator::Named(Method::Verlet),
-        dim: 3,
-    })
-    .unwrap();
-    w.set_collisions(CollisionParams {
+    let collisions = CollisionParams {
         restitution: e,
         friction: mu,
         ..CollisionParams::default()
-    })
-    .unwrap();
-    w
+    };
+    common::impulse_world(3, Method::Verlet, DT, collisions)
 }
 
 /// A ball of mass `m` and radius 0.1 m with velocity `v` (v_z < 0) that meets the floor z = 0

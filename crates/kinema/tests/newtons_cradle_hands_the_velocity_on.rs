@@ -8,9 +8,10 @@
 //! balls leave the far end at v, so at time T the balls that left are at x + v (T − t*) and
 //! the others rest where they were at t*; nothing is lost.
 
-use kinema::ode::{Integrator, Method};
+mod common;
+
+use kinema::ode::Method;
 use kinema::world::CollisionParams;
-use kinema::{World, WorldParams};
 
 const N: usize = 5;
 const DT: f64 = 1e-3;
@@ -22,17 +23,11 @@ const GAP: f64 = 0.0234375;
 /// with velocities `vx`, listed in the order `order` (World index p holds ball order[p]);
 /// returns each ball's x and v_x after STEPS steps, and the collision books.
 fn swing(x: [f64; N], vx: [f64; N], order: [usize; N]) -> ([f64; N], [f64; N], kinema::world::CollisionStats) {
-    let mut w = World::new(WorldParams {
-        dt: DT,
-        method: Integrator::Named(Method::Verlet),
-        dim: 3,
-    })
-    .unwrap();
-    w.set_collisions(CollisionParams {
+    let collisions = CollisionParams {
         restitution: 1.0,
         ..CollisionParams::default()
-    })
-    .unwrap();
+    };
+    let mut w = common::impulse_world(3, Method::Verlet, DT, collisions);
     let xs: Vec<f64> = order.iter().flat_map(|&k| [x[k], 0.0, 0.0]).collect();
     let vs: Vec<f64> = order.iter().flat_map(|&k| [vx[k], 0.0, 0.0]).collect();
     w.add_particles(&xs, &vs, &[1.0; N], &[0.5; N], &[false; N]).unwrap();

@@ -7,28 +7,23 @@
 //! holds a block on a slope of angle θ when μ > tan θ, and on a floor pulled sideways by a
 //! force below μ m g.
 
+mod common;
+
 use kinema::collide::{BoxContainer, Plane, Surface};
 use kinema::forces::Gravity;
-use kinema::ode::{Integrator, Method};
+use kinema::ode::Method;
 use kinema::world::CollisionParams;
-use kinema::{World, WorldParams};
+use kinema::World;
 
 const G: f64 = 9.81;
 
 fn world(dim: usize, method: Method, e: f64, mu: f64) -> World {
-    let mut w = World::new(WorldParams {
-        dt: 1e-3,
-        method: Integrator::Named(method),
-        dim,
-    })
-    .unwrap();
-    w.set_collisions(CollisionParams {
+    let collisions = CollisionParams {
         restitution: e,
         friction: mu,
         ..CollisionParams::default()
-    })
-    .unwrap();
-    w
+    };
+    common::impulse_world(dim, method, 1e-3, collisions)
 }
 
 fn ball_on_floor(method: Method, e: f64, height: f64, g: [f64; 3], mu: f64) -> World {

@@ -13,30 +13,25 @@
 //! collider) the limit m₂ → ∞ gives u₁' = −e u₁. The bodies start a small gap apart, so that
 //! the impact falls inside a step and is found there by continuous detection.
 
+mod common;
+
 use kinema::collide::{Plane, Surface};
-use kinema::ode::{Integrator, Method};
+use kinema::ode::Method;
 use kinema::world::CollisionParams;
-use kinema::{World, WorldParams};
+use kinema::World;
 
 const RTOL: f64 = 1e-12;
 const DT: f64 = 1e-2;
 
 fn world(e: f64, restitution_threshold: Option<f64>) -> World {
-    let mut w = World::new(WorldParams {
-        dt: DT,
-        method: Integrator::Named(Method::Verlet),
-        dim: 3,
-    })
-    .unwrap();
-    w.set_collisions(CollisionParams {
+    let collisions = CollisionParams {
         restitution: e,
         friction: 0.0,
         ccd: true,
         restitution_threshold,
         ..CollisionParams::default()
-    })
-    .unwrap();
-    w
+    };
+    common::impulse_world(3, Method::Verlet, DT, collisions)
 }
 
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
