@@ -367,6 +367,8 @@ def _world2():
         (lambda w: w.set_collisions(friction=True), "friction = True"),
         (lambda w: w.set_collisions(model="spring_dashpot", stiffness="1e3"), "stiffness = '1e3'"),
         (lambda w: w.set_collisions(restitution_threshold=1j), "restitution_threshold = 1j"),
+        (lambda w: w.set_collisions(sleep_time="0.5"), "sleep_time = '0.5'"),
+        (lambda w: w.set_collisions(sleep_speed=[0.1]), "sleep_speed = [0.1]"),
         (lambda w: w.set_collisions(model=3), "model = 3"),
         (lambda w: w.add(kinema.Gravity((0, 0, 1j))), "g[2] = 1j"),
         (lambda w: w.add(kinema.Gravity(np.array(["0", "0", "-9.8"]))), "g = array(['0', '0', '-9.8'], dtype='<U4')"),

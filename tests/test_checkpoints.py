@@ -259,3 +259,42 @@ def test_a_sweep_member_interrupted_mid_run_resumes_from_its_checkpoint(tmp_path
     assert again["row"] == whole["row"] and not again["row"]["error"]
     assert not (where / "checkpoint.ckpt").exists()
     assert_same_trajectory(kinema.load_trajectory(tmp_path / "a" / "members" / member.name / "trajectory.h5"), kinema.load_trajectory(where / "trajectory.h5"))
+
+
+def test_a_sleeping_pile_resumes_and_wakes_bit_for_bit(tmp_path):
+    """Sleeping's state (each particle's calm time, the islands asleep with their contacts'
+    warm start) is in the checkpoint: a pile written while asleep goes on bit for bit, a ball
+    dropped on it wakes it alike in both, and writing the checkpoint changed nothing."""
+    rng = np.random.default_rng(5)
+
+    def pile():
+        w = kinema.World(dt=1e-3)
+        grid = np.stack(np.meshgrid(range(4), range(4), range(3), indexing="ij"), -1).reshape(-1, 3)
+        w.add_particles(0.045 + 0.09 * grid, velocity=rng.uniform(-0.3, 0.3, (48, 3)), radius=0.035)
+        w.add(kinema.Gravity())
+        w.add(kinema.Box([0, 0, 0], [0.36, 0.36, 2.0]))
+        w.set_collisions(restitution=0.3, friction=0.5)
+        return w
+
+    w = pile()
+    rng = np.random.default_rng(5)
+    untouched = pile()
+    for _ in range(40):
+        w.step(100)
+        untouched.step(100)
+        if w.collision_stats()["last"]["asleep"] == len(w):
+            break
+    assert w.collision_stats()["last"]["asleep"] == len(w)
+    w.save_checkpoint(tmp_path / "w.ckpt")
+    again = kinema.World.load_checkpoint(tmp_path / "w.ckpt")
+    for world in (w, again, untouched):
+        world.add_particles([0.18, 0.18, 0.6], radius=0.03)
+        world.step(700)
+    assert w.collision_stats()["total"]["woke"] >= 1
+    for world in (again, untouched):
+        assert_same(w, world)
+        for part in ("last", "total"):
+            mine, theirs = w.collision_stats()[part], world.collision_stats()[part]
+            assert mine.keys() == theirs.keys()
+            for key in mine:
+                np.testing.assert_array_equal(mine[key], theirs[key], err_msg=f"{part} {key}")

@@ -278,6 +278,8 @@ def test_settings_read_back_and_round_trip():
         "friction": 0.2,
         "ccd": False,
         "restitution_threshold": 0.01,
+        "sleep_time": 0.5,
+        "sleep_speed": None,
         "stiffness": None,
         "damping": None,
     }
@@ -294,6 +296,10 @@ def test_bad_collision_input_is_named():
     w.add_particles([[0, 0, 0]], radius=0.1)
     with pytest.raises(ValueError, match=r"restitution = 1.5 is invalid: .*\[0, 1\]"):
         w.set_collisions(restitution=1.5)
+    with pytest.raises(ValueError, match=r"sleep_time = 0 is invalid: .*> 0 s \(or None: nothing sleeps\)"):
+        w.set_collisions(sleep_time=0.0)
+    with pytest.raises(ValueError, match=r"sleep_speed = -1 is invalid: .*> 0 m/s"):
+        w.set_collisions(sleep_speed=-1.0)
     with pytest.raises(ValueError, match=r"restitution = 1.5 is invalid: .*\[0, 1\]"):
         w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution=1.5))
     with pytest.raises(ValueError, match=r"restitution\[1\] = 1.5 is invalid: .*\[0, 1\]"):
@@ -493,6 +499,8 @@ def test_collision_defaults_and_contact_models_are_the_engines():
         "friction": 0.0,
         "ccd": True,
         "restitution_threshold": None,
+        "sleep_time": 0.5,
+        "sleep_speed": None,
         "stiffness": None,
         "damping": None,
     }

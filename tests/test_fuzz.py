@@ -317,6 +317,8 @@ def collision_cases(draw):
                 "friction": nonneg,
                 "ccd": st.booleans(),
                 "restitution_threshold": st.one_of(st.none(), nonneg),
+                "sleep_time": st.one_of(st.none(), positive),
+                "sleep_speed": st.one_of(st.none(), positive),
                 "stiffness": st.one_of(st.none(), st.floats(1.0, 1e6)),
                 "damping": st.one_of(st.none(), nonneg),
             },

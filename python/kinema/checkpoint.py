@@ -53,6 +53,7 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
     core = world._core
     carry = core.integrator_carry()
     warm = core.collision_carry()
+    calm, island = core.sleep_carry()
     with atomic_file(path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs["format"] = FORMAT
         f.attrs["version"] = VERSION
@@ -86,6 +87,10 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
         g.create_dataset("collider", data=np.array([w[1] for w in warm], dtype=bool))
         g.create_dataset("partner", data=np.array([w[2] for w in warm], dtype=np.int64))
         g.create_dataset("impulse", data=np.array([w[3] for w in warm], dtype=float).reshape(-1, 3))
+        # sleeping: each particle's calm time (s) and island (-1: awake); the islands'
+        # contacts are in the warm start above
+        g.create_dataset("sleep_calm", data=calm)
+        g.create_dataset("sleep_island", data=island)
         stats = core.collision_stats()
         if stats is not None:  # the collision books go on where they were
             f.attrs["collision_stats"] = json.dumps(_plain(stats))
@@ -93,6 +98,7 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
             _write_run(f.create_group("run"), _run)
     core.restart_caches()
     core.restore_collision_carry(warm)
+    core.restore_sleep_carry(calm.tolist(), island.tolist())
     if carry is not None:
         core.restore_integrator_carry(carry.tolist())
     return path
@@ -128,6 +134,8 @@ def load_checkpoint(path: str | Path) -> Any:
         carry = f["integrator_carry"][()].tolist() if "integrator_carry" in f else None
         g = f["collision_carry"]
         warm = list(zip(*(g[k][()].tolist() for k in ("particle", "collider", "partner", "impulse")), strict=True))
+        # (a checkpoint from before sleeping has none: everything awake)
+        sleep = [g[k][()].tolist() if k in g else [] for k in ("sleep_calm", "sleep_island")]
         world._warned = bool(f.attrs["warned"])
         world._advised_at = int(f.attrs["advised_at"])
         for source, saved in zip(world._emitters, json.loads(str(f.attrs["emitters"])), strict=True):
@@ -140,6 +148,7 @@ def load_checkpoint(path: str | Path) -> Any:
     world._new_views()
     # last: nothing after these may start the caches again
     world._core.restore_collision_carry(warm)
+    world._core.restore_sleep_carry(*sleep)
     if carry is not None:
         world._core.restore_integrator_carry(carry)
     return world

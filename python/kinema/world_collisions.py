@@ -30,6 +30,8 @@ class WorldCollisions:
         friction: float = _DEFAULTS["friction"],
         ccd: bool = _DEFAULTS["ccd"],
         restitution_threshold: float | None = _DEFAULTS["restitution_threshold"],
+        sleep_time: float | None = _DEFAULTS["sleep_time"],
+        sleep_speed: float | None = _DEFAULTS["sleep_speed"],
         stiffness: float | None = _DEFAULTS["stiffness"],
         damping: float | None = _DEFAULTS["damping"],
     ) -> None:
@@ -44,6 +46,12 @@ class WorldCollisions:
         nothing passes through a particle or a wall however fast. ``restitution_threshold``
         (m/s): approach speeds below it bounce with e = 0, so resting contacts stay at rest;
         ``None`` takes twice the largest speed change the forces gave a particle in the step.
+        ``sleep_time`` (s, default 0.5; ``None``: nothing sleeps): an island of touching
+        particles that rests on a collider, and whose particles have all been slower than
+        ``sleep_speed`` (m/s; ``None``: the largest speed change the forces gave a particle in
+        the step, g·dt under gravity) for that long, sleeps: velocities exactly 0, no work
+        until an impact, a touch, a write or a change of forces or colliders wakes it
+        (Box2D's, Bullet's and Chipmunk's sleeping; docs/collisions.md).
 
         With ``"spring_dashpot"`` the contacts are a force (its elastic energy is the potential
         ``"contact"`` of :meth:`diagnostics` and of the ``Trajectory``), which the stable-step
@@ -51,8 +59,8 @@ class WorldCollisions:
         :meth:`collision_stats` report the impulse model only.
 
         ``w.set_collisions(**w.collisions)`` changes nothing. The defaults are the engine's
-        (``model="impulse"``, ``restitution=1.0``, ``friction=0.0``, ``ccd=True``, the rest
-        ``None``), read from it.
+        (``model="impulse"``, ``restitution=1.0``, ``friction=0.0``, ``ccd=True``,
+        ``sleep_time=0.5``, the rest ``None``), read from it.
         """
         settings = {
             "model": _checks.text("model", model),
@@ -60,6 +68,8 @@ class WorldCollisions:
             "friction": _checks.real("friction", friction),
             "ccd": _checks.boolean("ccd", ccd),
             "restitution_threshold": _checks.real("restitution_threshold", restitution_threshold, optional=True),
+            "sleep_time": _checks.real("sleep_time", sleep_time, optional=True),
+            "sleep_speed": _checks.real("sleep_speed", sleep_speed, optional=True),
             "stiffness": _checks.real("stiffness", stiffness, optional=True),
             "damping": _checks.real("damping", damping, optional=True),
         }

@@ -26,6 +26,10 @@ pub struct CollisionArgs {
     #[pyo3(item)]
     restitution_threshold: Option<f64>,
     #[pyo3(item)]
+    sleep_time: Option<f64>,
+    #[pyo3(item)]
+    sleep_speed: Option<f64>,
+    #[pyo3(item)]
     stiffness: Option<f64>,
     #[pyo3(item)]
     damping: Option<f64>,
@@ -40,6 +44,8 @@ impl CollisionArgs {
             friction: self.friction,
             ccd: self.ccd,
             restitution_threshold: self.restitution_threshold,
+            sleep_time: self.sleep_time,
+            sleep_speed: self.sleep_speed,
         })
     }
 }
@@ -78,6 +84,8 @@ pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<
     out.set_item("friction", p.friction)?;
     out.set_item("ccd", p.ccd)?;
     out.set_item("restitution_threshold", p.restitution_threshold)?;
+    out.set_item("sleep_time", p.sleep_time)?;
+    out.set_item("sleep_speed", p.sleep_speed)?;
     out.set_item("stiffness", stiffness)?;
     out.set_item("damping", damping)?;
     Ok(out)
@@ -283,7 +291,13 @@ pub fn stats_dict<'py>(py: Python<'py>, s: &CollisionStats) -> PyResult<Bound<'p
     out.set_item("max_overlap", s.max_overlap)?;
     out.set_item("solver_sweeps", s.solver_sweeps)?;
     out.set_item("islands", s.islands)?;
+    out.set_item("asleep", s.asleep)?;
+    out.set_item("asleep_contacts", s.asleep_contacts)?;
+    out.set_item("slept", s.slept)?;
+    out.set_item("woke", s.woke)?;
     out.set_item("unconverged", s.unconverged)?;
+    // (over one step: whether its solver converged; over many: whether every step's did)
+    out.set_item("converged", s.unconverged == 0)?;
     Ok(out)
 }
 
@@ -307,6 +321,10 @@ pub fn stats_from(d: &Bound<'_, PyDict>) -> PyResult<CollisionStats> {
         max_overlap: get("max_overlap")?.extract()?,
         solver_sweeps: get("solver_sweeps")?.extract()?,
         islands: get("islands")?.extract()?,
+        asleep: count("asleep")?,
+        asleep_contacts: count("asleep_contacts")?,
+        slept: count("slept")?,
+        woke: count("woke")?,
         unconverged: get("unconverged")?.extract()?,
     })
 }

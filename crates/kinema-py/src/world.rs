@@ -156,6 +156,16 @@ impl PyWorld {
         self.inner.restore_collision_carry(carry).map_err(to_py)
     }
 
+    /// Sleeping's carry: each particle's calm time (s) and sleeping island (-1: awake).
+    fn sleep_carry<'py>(&mut self, py: Python<'py>) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>) {
+        let (calm, island) = self.inner.sleep_carry();
+        (PyArray1::from_vec(py, calm), PyArray1::from_vec(py, island))
+    }
+
+    fn restore_sleep_carry(&mut self, calm: Vec<f64>, island: Vec<i64>) -> PyResult<()> {
+        self.inner.restore_sleep_carry(calm, island).map_err(to_py)
+    }
+
     /// Each particle's own (restitution, friction), None where not set; empty if none has.
     fn particle_materials(&self) -> Vec<(Option<f64>, Option<f64>)> {
         self.inner.particle_materials()

@@ -17,10 +17,17 @@ use kinema::World;
 
 const G: f64 = 9.81;
 
+/// A world whose islands never sleep: what holds them at rest here is the soft step alone
+/// (sleeping would stop a resting body after 0.5 s and hide it; `sleeping_islands.rs`).
 fn world(dim: usize, method: Method, e: f64, mu: f64) -> World {
+    world_sleeping(dim, method, e, mu, None)
+}
+
+fn world_sleeping(dim: usize, method: Method, e: f64, mu: f64, sleep_time: Option<f64>) -> World {
     let collisions = CollisionParams {
         restitution: e,
         friction: mu,
+        sleep_time,
         ..CollisionParams::default()
     };
     common::impulse_world(dim, method, 1e-3, collisions)
@@ -147,7 +154,14 @@ fn a_frictional_pile_of_discs_comes_to_rest() {
     // 300 discs (radii 2.5–4 cm, e = 0.7, μ = 0.5) on a staggered lattice, dropped into a 1 m
     // box in 2D: after 3 s every disc is at rest (|v| < 1e-6 m/s), the overlaps stay below 1 %
     // of the mean radius (measured by brute force), and the solver converged in the last step.
-    let mut w = world(2, Method::Verlet, 0.7, 0.5);
+    // Held by the soft step alone, and asleep (then the overlap reported is the islands').
+    for sleep_time in [None, Some(0.5)] {
+        frictional_pile(sleep_time);
+    }
+}
+
+fn frictional_pile(sleep_time: Option<f64>) {
+    let mut w = world_sleeping(2, Method::Verlet, 0.7, 0.5, sleep_time);
     let n = 300;
     let (mut x, mut radius) = (Vec::new(), Vec::new());
     for k in 0..n {
@@ -177,6 +191,7 @@ fn a_frictional_pile_of_discs_comes_to_rest() {
     }
     let (last, _) = w.collision_stats().unwrap();
     assert!(fastest < 1e-6, "still moving at {fastest} m/s ({last:?})");
+    assert_eq!(last.asleep, if sleep_time.is_some() { n } else { 0 }, "{last:?}");
     assert!(overlap < 0.01 * mean_r, "overlap {overlap} m");
     assert_eq!(last.unconverged, 0, "{last:?}");
     // the reported overlap is the real one (within 1 %)

@@ -398,6 +398,8 @@ class CollisionsTable(_Model):
     friction: NonNeg = _COLLISION_DEFAULTS["friction"]
     ccd: bool = _COLLISION_DEFAULTS["ccd"]
     restitution_threshold: NonNeg | None = _COLLISION_DEFAULTS["restitution_threshold"]
+    sleep_time: Positive | None = _COLLISION_DEFAULTS["sleep_time"]
+    sleep_speed: Positive | None = _COLLISION_DEFAULTS["sleep_speed"]
     stiffness: Positive | None = _COLLISION_DEFAULTS["stiffness"]
     damping: NonNeg | None = _COLLISION_DEFAULTS["damping"]
     periodic: Annotated[list[bool], Field(min_length=2, max_length=3)] | None = None

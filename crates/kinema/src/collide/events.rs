@@ -34,6 +34,7 @@ use super::contact::Partner;
 use super::domain::Domain;
 use super::neighbour_list::{NeighbourList, CHUNK};
 use super::paths::{pair_toi, Toi};
+use super::sleep::AWAKE;
 use super::soft_step::SPECULATIVE;
 use super::toi::{toi_plane, toi_sphere_obstacle, toi_spheres};
 use crate::vec3;
@@ -196,9 +197,19 @@ pub(crate) struct Scene<'a> {
     /// step, the loaded ones (a body landing on a pile: its load is carried down at once,
     /// as shock propagation does, rather than by impacts cascading pair by pair).
     pub resting: &'a [(usize, Partner, bool)],
+    /// Each particle's sleeping island or `sleep::AWAKE` (empty while none sleeps,
+    /// `collide/sleep.rs`): a sleeper whose path no impact changed yet is a body at rest, and
+    /// two of them meet nothing.
+    pub asleep: &'a [u32],
 }
 
 impl Scene<'_> {
+    /// Whether particle q sleeps and no impact of this step has moved it.
+    #[inline]
+    fn still(&self, paths: &Paths<'_>, q: usize) -> bool {
+        self.asleep.get(q).is_some_and(|&k| k != AWAKE) && paths.version(q) == 0
+    }
+
     fn is_resting(&self, i: usize, partner: Partner, now: f64) -> bool {
         let key = match partner {
             Partner::Particle(j) if j < i => (j, Partner::Particle(i)),
@@ -292,8 +303,12 @@ impl Scene<'_> {
         let (xi, vi) = paths.state_at(i, now);
         let ai = vec3::get(paths.accel, i);
         let rest = h - now;
+        let still = self.still(paths, i);
         for &j in partners {
             let j = j as usize;
+            if still && self.still(paths, j) {
+                continue; // two bodies at rest
+            }
             let (xj, vj) = paths.state_at(j, now);
             let d0 = self.domain.displacement(xi, xj);
             let u = vec3::sub(vi, vj);
@@ -310,6 +325,9 @@ impl Scene<'_> {
                     partner_version: paths.version(j),
                 })),
             }
+        }
+        if still {
+            return; // a body at rest on its colliders
         }
         let walls = &self.list.walls;
         let first = walls.partition_point(|w| w.0 < i);

@@ -47,6 +47,7 @@ pub mod narrow_phase;
 pub(crate) mod neighbour_list;
 pub mod penalty;
 pub mod response;
+pub(crate) mod sleep;
 pub(crate) mod soft_step;
 pub(crate) mod sweeps;
 pub mod toi;

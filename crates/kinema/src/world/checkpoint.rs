@@ -3,6 +3,7 @@
 //! from one step to the next.
 
 use super::{CollisionStats, World, WorldStepper};
+use crate::collide::impulse_stage::end_of_step::overlap_at;
 use crate::collide::Partner;
 use crate::error::Error;
 
@@ -74,7 +75,67 @@ impl World {
     /// step, (particle, partner, impulse totals in N·s), sorted; empty without collisions.
     pub fn collision_carry(&mut self) -> Vec<(usize, Partner, [f64; 3])> {
         self.restore_user_order();
-        self.collisions.as_ref().map(|c| c.warm_start().to_vec()).unwrap_or_default()
+        self.collisions.as_ref().map(|c| c.all_warm()).unwrap_or_default()
+    }
+
+    /// What sleeping carries to the next step (`collide/sleep.rs`): each particle's calm time
+    /// (s) and the island it sleeps in (−1: awake); empty without collisions.
+    pub fn sleep_carry(&mut self) -> (Vec<f64>, Vec<i64>) {
+        self.restore_user_order();
+        let n = self.particles.len();
+        self.collisions.as_ref().map(|c| c.impulse.sleep_carry(n)).unwrap_or_default()
+    }
+
+    /// Gives sleeping back what [`World::sleep_carry`] took (a checkpoint's), after
+    /// [`World::restore_collision_carry`]: the islands asleep again with their contacts'
+    /// warm start. Checks the lengths, the times and that an island's contacts stay in it.
+    pub fn restore_sleep_carry(&mut self, calm: Vec<f64>, island: Vec<i64>) -> Result<(), Error> {
+        let n = self.particles.len();
+        if calm.is_empty() && island.is_empty() {
+            return Ok(()); // a checkpoint from before sleeping, or without collisions
+        }
+        for (name, len) in [("sleep_calm", calm.len()), ("sleep_island", island.len())] {
+            if len != n {
+                return Err(Error::invalid(
+                    name,
+                    format!("{len} values"),
+                    format!("one per particle ({n})"),
+                ));
+            }
+        }
+        if let Some(k) = calm.iter().position(|c| !(c.is_finite() && *c >= 0.0)) {
+            return Err(Error::invalid(
+                format!("sleep_calm[{k}]"),
+                calm[k],
+                "calm times are finite and >= 0 s",
+            ));
+        }
+        if let Some(k) = island.iter().position(|&k| k < -1) {
+            return Err(Error::invalid(
+                format!("sleep_island[{k}]"),
+                island[k],
+                "an island number >= 0, or -1: awake",
+            ));
+        }
+        let Some(stage) = &mut self.collisions else {
+            return Err(Error::invalid("sleep_island", n, "nothing sleeps: collisions are off"));
+        };
+        let of = |q: usize| island[q];
+        if let Some(w) = stage.impulse.warm_start().iter().find(|w| match w.1 {
+            Partner::Particle(j) => of(w.0) != of(j),
+            Partner::Collider(_) => false,
+        }) {
+            return Err(Error::invalid(
+                "sleep_island",
+                format!("{:?}", w),
+                "a contact's two particles sleep in one island, or are both awake",
+            ));
+        }
+        let (radius, x) = (&self.particles.radius, &self.particles.x);
+        let (colliders, domain) = (&stage.colliders, stage.domain);
+        let deepest = |i: usize, other: Partner| overlap_at(radius, colliders, &domain, x, i, other);
+        stage.impulse.restore_sleep(calm, &island, deepest);
+        Ok(())
     }
 
     /// Gives the impulse model back what [`World::collision_carry`] took (a checkpoint's);

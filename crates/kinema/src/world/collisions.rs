@@ -82,6 +82,10 @@ impl ContactModel {
     }
 }
 
+/// The default time to sleep, s: how long an island's particles must all be calm before it
+/// sleeps (Box2D's `b2_timeToSleep`).
+pub const SLEEP_TIME: f64 = 0.5;
+
 /// How collisions between particles, and with colliders, are handled. Units SI.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CollisionParams {
@@ -100,6 +104,13 @@ pub struct CollisionParams {
     /// place. `None` (default): twice the largest speed change the forces gave a particle in
     /// the step (a body resting under gravity approaches at g·dt each step).
     pub restitution_threshold: Option<f64>,
+    /// Sleeping (`collide/sleep.rs`): an island of resting contacts on a collider whose
+    /// particles have all been calm this long, s, sleeps until something reaches it. `None`:
+    /// nothing sleeps. Default 0.5 s (Box2D's time to sleep).
+    pub sleep_time: Option<f64>,
+    /// The speed below which a particle is calm, m/s. `None` (default): the largest speed
+    /// change the forces gave a particle in the step (g·dt under gravity; Chipmunk's rule).
+    pub sleep_speed: Option<f64>,
 }
 
 impl Default for CollisionParams {
@@ -110,6 +121,8 @@ impl Default for CollisionParams {
             friction: 0.0,
             ccd: true,
             restitution_threshold: None,
+            sleep_time: Some(SLEEP_TIME),
+            sleep_speed: None,
         }
     }
 }
@@ -142,6 +155,24 @@ impl CollisionParams {
                     t,
                     "the restitution threshold must be finite and >= 0 m/s (or None for automatic)",
                 ));
+            }
+        }
+        for (name, value, what) in [
+            (
+                "sleep_time",
+                self.sleep_time,
+                "the time to sleep must be finite and > 0 s (or None: nothing sleeps)",
+            ),
+            (
+                "sleep_speed",
+                self.sleep_speed,
+                "the sleep speed must be finite and > 0 m/s (or None for automatic)",
+            ),
+        ] {
+            if let Some(t) = value {
+                if !(t.is_finite() && t > 0.0) {
+                    return Err(Error::invalid(name, t, what));
+                }
             }
         }
         Material::new(self.restitution, self.friction)
@@ -203,10 +234,9 @@ impl CollisionStage {
         (self.material, self.particle_materials.clone())
     }
 
-    /// The end-of-step solver's warm start: each contact of the last step (particle, partner)
-    /// with the impulse totals it carried, N·s, sorted by (particle, partner).
-    pub fn warm_start(&self) -> &[(usize, Partner, [f64; 3])] {
-        self.impulse.warm_start()
+    /// Every contact's warm start, the sleeping islands' too (for a checkpoint).
+    pub fn all_warm(&self) -> Vec<(usize, Partner, [f64; 3])> {
+        self.impulse.all_warm()
     }
 
     /// Sets the warm start (a checkpoint's), and with it which contacts rested.
@@ -262,6 +292,8 @@ impl CollisionStage {
             },
             ccd: self.params.ccd,
             restitution_threshold: self.params.restitution_threshold,
+            sleep_time: self.params.sleep_time,
+            sleep_speed: self.params.sleep_speed,
             radius: &p.radius,
             inv_mass: &p.inv_mass,
             mass: &p.mass,

@@ -1,7 +1,7 @@
 //! What a world holds between steps: adding and removing particles and forces, and the caches
 //! that changing them drops.
 
-use super::World;
+use super::{ContactModel, World};
 use crate::error::Error;
 use crate::forces::Force;
 use crate::particles::Particles;
@@ -31,7 +31,10 @@ impl World {
         for f in &self.forces {
             f.validate(self.particles.len())?;
         }
-        self.reset_caches(); // the state changed size
+        // The state changed size; the others' contacts (their warm start, the islands asleep)
+        // stay: their numbers did not change, and a newborn wakes what it touches.
+        let kept = self.collisions.as_mut().map(|stage| stage.impulse.take_contacts());
+        self.reset_caches();
         if let Some(stage) = &mut self.collisions {
             if !stage.own.is_empty() {
                 stage.own.resize(self.particles.len(), (None, None));
@@ -39,6 +42,11 @@ impl World {
             stage.refresh_materials()?;
         }
         self.rebuild_contact_force()?;
+        if let (Some(stage), Some(kept)) = (&mut self.collisions, kept) {
+            if stage.params.model == ContactModel::Impulse {
+                stage.impulse.keep_contacts(kept, self.particles.len());
+            }
+        }
         Ok(range)
     }
 

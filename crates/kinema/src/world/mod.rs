@@ -296,12 +296,20 @@ impl World {
         // each particle's wake time and looks only at those due (collide/wake.rs). Verlet's
         // force-free pass wrapped x1 into the periodic cell already.
         let steady = self.forces.is_empty();
+        // Islands may sleep under forces that cannot pull a sleeper nobody looks at: none
+        // depends on the positions or adds energy (gravity, drag; `collide/sleep.rs`).
+        let may_sleep = !steady
+            && self.forces.iter().all(|f| {
+                let p = f.properties();
+                !p.depends_on_position && p.energy != EnergyClass::Source
+            });
         let frame = StepFrame {
             t0: self.time,
             h: self.params.dt,
             accel,
             steady,
             wrapped: steady && accel.is_some(),
+            may_sleep,
         };
         let changed = match stage.run(&frame, p, x1, v1) {
             Ok(changed) => changed,

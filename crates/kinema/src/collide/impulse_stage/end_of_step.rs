@@ -43,17 +43,21 @@ impl ImpulseStage {
     /// first from the touched particles; a particle reached for the first time is touched.
     /// Each touched particle's collider contacts, then each pair once, lower index first,
     /// sorted by (i, partner).
-    pub(super) fn end_contacts(&mut self, set: &StageSetting<'_>, x1: &[f64], v1: &[f64]) {
+    ///
+    /// A contact that reaches a particle asleep wakes its island, which joins the search and
+    /// this step's solve (`collide/sleep.rs`); returns the islands woken.
+    pub(super) fn end_contacts(&mut self, set: &StageSetting<'_>, x1: &[f64], v1: &[f64]) -> usize {
         self.contacts.clear();
         let (n, radius) = (set.radius.len(), set.radius);
         let mut work: Vec<usize> = (0..n).filter(|&i| self.touched[i]).collect();
         let mut done = vec![false; n];
         let mut next = 0;
+        let mut woke = 0;
         while next < work.len() {
             let i = work[next];
             next += 1;
-            for &j in self.list.rows[i / CHUNK].of(i % CHUNK) {
-                let j = j as usize;
+            for k in 0..self.list.rows[i / CHUNK].of(i % CHUNK).len() {
+                let j = self.list.rows[i / CHUNK].of(i % CHUNK)[k] as usize;
                 if done[j] {
                     continue; // the pair was seen from j's side
                 }
@@ -61,13 +65,19 @@ impl ImpulseStage {
                 let gap = SPECULATIVE * (radius[lo] + radius[hi]);
                 if let Some(c) = pair_contact(lo, hi, x1, v1, radius, set.domain, gap) {
                     self.contacts.push(c);
-                    if !self.touched[j] {
+                    if self.sleep.is_asleep(j) {
+                        woke += self.wake_island(j, &mut work);
+                    } else if !self.touched[j] {
                         self.touched[j] = true;
                         work.push(j);
                     }
                 }
             }
             done[i] = true;
+        }
+        if woke > 0 {
+            self.warm.sort_by_key(|w| (w.0, w.1));
+            self.resting.sort_by_key(|w| (w.0, w.1));
         }
         self.contacts.sort_by_key(|c| (c.i, c.other));
         let pairs = self.contacts.len();
@@ -94,6 +104,96 @@ impl ImpulseStage {
         // the pile above it in one pass where it can (a column resting on a floor converges
         // in a few sweeps from zero, not hundreds).
         self.contacts.rotate_left(pairs);
+        woke
+    }
+
+    /// Wakes the island particle q sleeps in (1 if it slept, else 0): its particles touched
+    /// and added to `work`, its contacts' warm start back among the awake ones (`warm` and
+    /// `resting` are left unsorted: the caller sorts them).
+    pub(super) fn wake_island(&mut self, q: usize, work: &mut Vec<usize>) -> usize {
+        let Some(island) = self.sleep.wake(q) else { return 0 };
+        for &m in &island.members {
+            self.touched[m] = true;
+            work.push(m);
+        }
+        self.resting.extend(island.warm.iter().map(|w| (w.0, w.1, w.2 != [0.0; 3])));
+        self.warm.extend(island.warm);
+        1
+    }
+
+    /// Sleeping's books at the step's end (`collide/sleep.rs`): each awake particle's calm
+    /// time grows by h if its speed and its displacement over the step divided by h are at
+    /// most `speed` (m/s), else starts again; each island of this step's solve that rests on a
+    /// collider or a pinned particle, and whose particles have all been calm for `time` s,
+    /// falls asleep with its contacts' warm start, its velocities set to 0. Returns the
+    /// islands put to sleep and the kinetic energy their velocities had, J.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn settle(
+        &mut self,
+        set: &StageSetting<'_>,
+        x0: &[f64],
+        x1: &[f64],
+        v1: &mut [f64],
+        h: f64,
+        speed: f64,
+        time: f64,
+    ) -> (usize, f64) {
+        let (n, inv_mass, domain) = (set.radius.len(), set.inv_mass, set.domain);
+        let reach = speed * h;
+        for q in 0..n {
+            if self.sleep.is_asleep(q) {
+                continue;
+            }
+            let v = vec3::get(v1, q);
+            let d = domain.displacement(vec3::get(x1, q), vec3::get(x0, q));
+            let calm = vec3::dot(v, v) <= speed * speed && vec3::dot(d, d) <= reach * reach;
+            // (a little under `time` counts: h added k times need not reach k h exactly)
+            self.sleep.calm[q] = if calm { self.sleep.calm[q] + h } else { 0.0 };
+        }
+        let ready = time - 1e-9 * h;
+        let mut slept = 0;
+        let mut lost = 0.0;
+        let mut island_of: Vec<usize> = Vec::new();
+        for k in 0..self.islands.len() {
+            let contacts = self.islands.island(k);
+            let fixed = |q: usize| inv_mass[q] == 0.0;
+            let supported = contacts.iter().any(|&c| match self.contacts[c].other {
+                Partner::Collider(_) => true,
+                Partner::Particle(j) => fixed(j) || fixed(self.contacts[c].i),
+            });
+            if !supported {
+                continue;
+            }
+            let mut members: Vec<usize> = contacts
+                .iter()
+                .flat_map(|&c| std::iter::once(self.contacts[c].i).chain(self.contacts[c].partner_particle()))
+                .filter(|&q| !fixed(q))
+                .collect();
+            if members.iter().any(|&q| self.sleep.calm[q] < ready) {
+                continue;
+            }
+            members.sort_unstable();
+            members.dedup();
+            if island_of.is_empty() {
+                island_of.resize(n, usize::MAX);
+            }
+            for &q in &members {
+                island_of[q] = k;
+                lost += 0.5 * set.mass[q] * vec3::dot(vec3::get(v1, q), vec3::get(v1, q));
+                v1[3 * q..3 * q + 3].fill(0.0);
+            }
+            let overlap = contacts
+                .iter()
+                .map(|&c| deepest(set, x1, self.contacts[c].i, self.contacts[c].other))
+                .fold(0.0, f64::max);
+            // its contacts' warm start goes with it (a pair's two particles are in one island)
+            let (mine, rest): (Vec<_>, Vec<_>) = self.warm.iter().partition(|w| island_of[w.0] == k);
+            self.warm = rest;
+            self.resting.retain(|r| island_of[r.0] != k);
+            self.sleep.put_to_sleep(members, mine, overlap);
+            slept += 1;
+        }
+        (slept, lost)
     }
 
     /// The end-of-step contacts' soft step, island by island on all threads
@@ -165,6 +265,7 @@ impl ImpulseStage {
         self.totals.clear();
         self.totals.resize(self.contacts.len(), [0.0; 3]);
         if self.contacts.is_empty() {
+            self.islands = Islands::default();
             self.acted.clear();
             self.warm.clear();
             self.resting.clear();
@@ -184,8 +285,8 @@ impl ImpulseStage {
                 relax_sweeps: RELAX_SWEEPS,
             },
         };
-        let islands = Islands::find(&self.contacts, inv_mass);
-        let stats = islands::solve(&islands, &problem, &mut self.solved, &mut self.totals, v1, x1)?;
+        self.islands = Islands::find(&self.contacts, inv_mass);
+        let stats = islands::solve(&self.islands, &problem, &mut self.solved, &mut self.totals, v1, x1)?;
         for &(q, c) in &euler {
             vec3::add_scaled(x1, q, 1.0, c);
         }
@@ -220,24 +321,10 @@ impl ImpulseStage {
     /// (m, 0 if none): each pair's r_i + r_j − |x_i − x_j| and each collider contact's depth,
     /// measured again (the particles no contact names had no meeting in the step).
     pub(super) fn max_overlap(&self, set: &StageSetting<'_>, x1: &[f64]) -> f64 {
-        let mut deepest: f64 = 0.0;
-        for c in &self.contacts {
-            match c.other {
-                Partner::Particle(j) => {
-                    let d = set.domain.displacement(vec3::get(x1, c.i), vec3::get(x1, j));
-                    deepest = deepest.max(set.radius[c.i] + set.radius[j] - vec3::norm(d));
-                }
-                Partner::Collider(k) => {
-                    let r = set.radius[c.i];
-                    set.colliders[k].for_each_touch(vec3::get(x1, c.i), r, 0.0, |t| {
-                        if !on_periodic_wall(c, set.colliders, set.domain) {
-                            deepest = deepest.max(t.overlap);
-                        }
-                    });
-                }
-            }
-        }
-        deepest
+        self.contacts
+            .iter()
+            .map(|c| deepest(set, x1, c.i, c.other))
+            .fold(0.0, f64::max)
     }
 
     /// The mechanical energy the end-of-step stage took, J, over the particles it acted on
@@ -259,6 +346,39 @@ impl ImpulseStage {
             lost += 0.5 * mass[q] * (vec3::dot(vb, vb) - vec3::dot(v, v)) + mass[q] * vec3::dot(a, dx);
         }
         lost
+    }
+}
+
+/// The overlap of particle i with `other` at positions `x` (m; ≤ 0 apart): r_i + r_j −
+/// |x_i − x_j| for a pair, the deepest touch of a collider (walls along periodic axes left
+/// out), 0 if none.
+pub(crate) fn deepest(set: &StageSetting<'_>, x: &[f64], i: usize, other: Partner) -> f64 {
+    overlap_at(set.radius, set.colliders, set.domain, x, i, other)
+}
+
+/// [`deepest`] from the parts a world has between steps (a checkpoint's islands asleep).
+pub(crate) fn overlap_at(radius: &[f64], colliders: &[Collider], domain: &Domain, x: &[f64], i: usize, other: Partner) -> f64 {
+    match other {
+        Partner::Particle(j) => {
+            let d = domain.displacement(vec3::get(x, i), vec3::get(x, j));
+            radius[i] + radius[j] - vec3::norm(d)
+        }
+        Partner::Collider(k) => {
+            let mut deepest: f64 = 0.0;
+            colliders[k].for_each_touch(vec3::get(x, i), radius[i], 0.0, |t| {
+                let c = Contact {
+                    i,
+                    other,
+                    normal: t.normal,
+                    overlap: t.overlap,
+                    u_n: 0.0,
+                };
+                if !on_periodic_wall(&c, colliders, domain) {
+                    deepest = deepest.max(t.overlap);
+                }
+            });
+            deepest
+        }
     }
 }
 

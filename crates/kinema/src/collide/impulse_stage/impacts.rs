@@ -46,14 +46,16 @@ macro_rules! scene {
             list: &$stage.list,
             slow: least_impact_speed($search.threshold),
             resting: &$stage.resting,
+            asleep: $stage.sleep.marks(),
         }
     };
 }
 
 impl ImpulseStage {
     /// Makes the neighbour list hold for the whole step's sweep (rebuilt at x0 if not) and
-    /// returns the restitution threshold and the largest swept displacement of any particle
-    /// from the list's build positions, m.
+    /// returns the restitution threshold (m/s), the largest swept displacement of any particle
+    /// from the list's build positions (m) and the largest speed change the forces gave a
+    /// particle in the step (m/s).
     ///
     /// One pass over the particles: each one's swept displacement max(|x0 − b|, |x1 − b|) +
     /// ⅛ |a| h² (b its build position) and the two largest of them; its velocity change
@@ -62,7 +64,8 @@ impl ImpulseStage {
     ///
     /// With `quiet` (a force-free step with valid wake times) the list's hold comes from the
     /// wake's speed bound instead, with no pass (`collide/wake.rs`), and the automatic
-    /// threshold is 0 (no force changes a velocity). Sets `rebuilt` when it rebuilds.
+    /// threshold and speed change are 0 (no force changes a velocity). Sets `rebuilt` when it
+    /// rebuilds.
     pub(super) fn prepare(
         &mut self,
         set: &StageSetting<'_>,
@@ -71,14 +74,13 @@ impl ImpulseStage {
         v1: &[f64],
         h: f64,
         quiet: bool,
-    ) -> Result<(f64, f64), Error> {
+    ) -> Result<(f64, f64, f64), Error> {
         let reach = self.wake.reach_after(h);
         let (x0, v0) = (paths.x0, paths.v0);
         if quiet && self.list.built_at.len() == x0.len() && 2.0 * reach < self.list.allowance {
-            return Ok((set.restitution_threshold.unwrap_or(0.0), reach));
+            return Ok((set.restitution_threshold.unwrap_or(0.0), reach, 0.0));
         }
         let domain = *set.domain;
-        let automatic = set.restitution_threshold.is_none();
         let sweep = |built: &[f64], accel: &[f64]| {
             x0.par_chunks(3 * CHUNK)
                 .zip(x1.par_chunks(3 * CHUNK))
@@ -97,12 +99,8 @@ impl ImpulseStage {
                         if bulge2 > 0.0 {
                             d += 0.125 * bulge2.sqrt() * h * h;
                         }
-                        let dv = if automatic {
-                            let w = vec3::sub(vec3::get(v1, q), vec3::get(v0, q));
-                            vec3::dot(w, w)
-                        } else {
-                            0.0
-                        };
+                        let w = vec3::sub(vec3::get(v1, q), vec3::get(v0, q));
+                        let dv = vec3::dot(w, w);
                         top = top_two(top, (d, 0.0, dv, d.is_nan()));
                     }
                     top
@@ -150,8 +148,9 @@ impl ImpulseStage {
                 top.0 = f64::INFINITY;
             }
         }
-        let threshold = set.restitution_threshold.unwrap_or(2.0 * top.2.sqrt());
-        Ok((threshold, top.0))
+        let kick = top.2.sqrt();
+        let threshold = set.restitution_threshold.unwrap_or(2.0 * kick);
+        Ok((threshold, top.0, kick))
     }
 
     /// Continuous detection and the impacts in time order (see [`ImpulseStage::run`]):

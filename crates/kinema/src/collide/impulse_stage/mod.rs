@@ -12,7 +12,9 @@ pub(crate) mod impacts;
 use std::time::{Duration, Instant};
 
 use super::events::{EventQueue, PathStore, Paths};
+use super::islands::Islands;
 use super::neighbour_list::NeighbourList;
+use super::sleep::Sleep;
 use super::soft_step::Target;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
@@ -53,6 +55,14 @@ pub struct CollisionStats {
     /// Independent groups of the end-of-step contacts, each solved on its own on one of the
     /// threads (the latest step's; `collide/islands.rs`).
     pub islands: usize,
+    /// Particles asleep at the step's end (`collide/sleep.rs`; the latest step's).
+    pub asleep: usize,
+    /// The contacts of the islands asleep (not among `contacts`: nothing solves them).
+    pub asleep_contacts: usize,
+    /// Islands that fell asleep (summed over steps).
+    pub slept: usize,
+    /// Islands woken, by a touch or an impact (summed over steps).
+    pub woke: usize,
     /// Steps whose end-of-step solver stopped at its sweep cap before converging, or whose
     /// impacts stopped at the cap of continuous detection (0 or 1 for one step; summed).
     pub unconverged: usize,
@@ -74,6 +84,10 @@ impl CollisionStats {
         self.max_overlap = step.max_overlap;
         self.solver_sweeps = step.solver_sweeps;
         self.islands = step.islands;
+        self.asleep = step.asleep;
+        self.asleep_contacts = step.asleep_contacts;
+        self.slept += step.slept;
+        self.woke += step.woke;
         self.unconverged += step.unconverged;
     }
 }
@@ -106,6 +120,9 @@ pub(crate) struct StepFrame<'a> {
     pub steady: bool,
     /// x₁ is already in the periodic cell (the stages wrap only what they move).
     pub wrapped: bool,
+    /// Whether islands may sleep in this step: no force depends on the positions or adds
+    /// energy (`collide/sleep.rs`).
+    pub may_sleep: bool,
 }
 
 /// What the stages see of the world in a step, besides its state: the colliders, the domain,
@@ -120,9 +137,20 @@ pub(crate) struct StageSetting<'a> {
     /// The restitution threshold, m/s, or `None` for the automatic one
     /// ([`crate::world::CollisionParams::restitution_threshold`]).
     pub restitution_threshold: Option<f64>,
+    /// The time to sleep, s (`None`: nothing sleeps), and the sleep speed, m/s (`None`:
+    /// automatic) ([`crate::world::CollisionParams::sleep_time`]).
+    pub sleep_time: Option<f64>,
+    pub sleep_speed: Option<f64>,
     pub radius: &'a [f64],
     pub inv_mass: &'a [f64],
     pub mass: &'a [f64],
+}
+
+/// What the stages keep of their contacts while particles are added
+/// ([`ImpulseStage::take_contacts`]).
+pub(crate) struct KeptContacts {
+    warm: Vec<(usize, Partner, [f64; 3])>,
+    sleep: Sleep,
 }
 
 /// The impulse model's stages and their buffers.
@@ -163,6 +191,10 @@ pub(crate) struct ImpulseStage {
     pub(super) warm: Vec<(usize, Partner, [f64; 3])>,
     /// The contacts of `warm` and whether each carried load (see `Scene::resting`).
     pub(super) resting: Vec<(usize, Partner, bool)>,
+    /// The islands of the last end-of-step solve (`collide/islands.rs`).
+    pub(super) islands: Islands,
+    /// Each particle's calm time and the islands asleep (`collide/sleep.rs`).
+    pub(super) sleep: Sleep,
     /// The world's check that may stop a step, asked inside a long run of impacts.
     pub interrupt: Interrupt,
 }
@@ -190,6 +222,8 @@ impl ImpulseStage {
             prepared: Vec::new(),
             warm: Vec::new(),
             resting: Vec::new(),
+            islands: Islands::default(),
+            sleep: Sleep::default(),
             interrupt: Interrupt::none(),
         }
     }
@@ -207,13 +241,66 @@ impl ImpulseStage {
         self.warm = warm;
     }
 
-    /// Forgets the candidate list and the warm start (particles, colliders or the domain
-    /// changed).
+    /// Forgets the candidate list and the warm start, and wakes every island (particles,
+    /// colliders or the domain changed).
     pub fn forget_list(&mut self) {
         self.list.built_at.clear();
         self.wake.valid = false;
         self.warm.clear();
         self.resting.clear();
+        self.sleep.wake_all();
+    }
+
+    /// The contacts' warm start and the islands asleep, taken out (particles are being added:
+    /// [`ImpulseStage::keep_contacts`] gives them back).
+    pub fn take_contacts(&mut self) -> KeptContacts {
+        KeptContacts {
+            warm: std::mem::take(&mut self.warm),
+            sleep: std::mem::take(&mut self.sleep),
+        }
+    }
+
+    /// Particles were added (now `n`): the list is rebuilt, and the contacts of the others
+    /// and their islands asleep, taken before, stay (their numbers did not change).
+    pub fn keep_contacts(&mut self, kept: KeptContacts, n: usize) {
+        self.list.built_at.clear();
+        self.wake.valid = false;
+        self.set_warm_start(kept.warm);
+        self.sleep = kept.sleep;
+        self.sleep.resize(n);
+    }
+
+    /// Every contact's warm start: the awake ones' and the sleeping islands', sorted.
+    pub fn all_warm(&self) -> Vec<(usize, Partner, [f64; 3])> {
+        let mut all = self.warm.clone();
+        all.extend(self.sleep.warm().copied());
+        all.sort_by_key(|w| (w.0, w.1));
+        all
+    }
+
+    /// What a checkpoint keeps of sleeping: each particle's calm time (s) and island (−1:
+    /// awake).
+    pub fn sleep_carry(&self, n: usize) -> (Vec<f64>, Vec<i64>) {
+        self.sleep.carry(n)
+    }
+
+    /// Gives back what [`ImpulseStage::sleep_carry`] took, after the warm start (which holds
+    /// the sleeping islands' contacts, taken out of it here): the islands asleep again, each
+    /// with its largest overlap measured at `x`.
+    pub fn restore_sleep(&mut self, calm: Vec<f64>, island: &[i64], deepest: impl Fn(usize, Partner) -> f64) {
+        self.sleep.wake_all();
+        self.sleep.calm = calm;
+        let mut numbers: Vec<i64> = island.iter().copied().filter(|&k| k >= 0).collect();
+        numbers.sort_unstable();
+        numbers.dedup();
+        for k in numbers {
+            let members: Vec<usize> = (0..island.len()).filter(|&q| island[q] == k).collect();
+            let (mine, rest): (Vec<_>, Vec<_>) = self.warm.iter().partition(|w| island[w.0] == k);
+            self.warm = rest;
+            self.resting.retain(|r| island[r.0] != k);
+            let overlap = mine.iter().map(|w| deepest(w.0, w.1)).fold(0.0, f64::max);
+            self.sleep.put_to_sleep(members, mine, overlap);
+        }
     }
 
     /// Stages 2–4 of the impulse model on the step from (x0, v0) to the integrated (x1, v1),
@@ -251,10 +338,31 @@ impl ImpulseStage {
     ) -> Result<(bool, CollisionStats, CollisionTimes), Error> {
         let clock = Instant::now();
         let h = frame.h;
+        if !frame.may_sleep || set.sleep_time.is_none() {
+            self.sleep.wake_all();
+        }
+        self.sleep.resize(x0.len() / 3);
+        // A particle asleep stays where it is, at rest: what the integrator made of it is
+        // dropped (x₀ = x₁, v₀ = v₁ = 0, and its path has no acceleration).
+        let sleeping = self.sleep.any();
+        if sleeping {
+            for q in (0..x0.len() / 3).filter(|&q| self.sleep.is_asleep(q)) {
+                x1[3 * q..3 * q + 3].copy_from_slice(&x0[3 * q..3 * q + 3]);
+                v1[3 * q..3 * q + 3].fill(0.0);
+            }
+        }
         // The step's paths: Verlet's own acceleration, or the parabola through x1.
         let mut store = std::mem::take(&mut self.paths);
         let mut fitted = std::mem::take(&mut self.fitted);
         let accel = match frame.accel {
+            Some(a) if sleeping => {
+                fitted.clear();
+                fitted.extend_from_slice(a);
+                for q in (0..x0.len() / 3).filter(|&q| self.sleep.is_asleep(q)) {
+                    fitted[3 * q..3 * q + 3].fill(0.0);
+                }
+                &fitted
+            }
             Some(a) => a,
             None => {
                 fitted.clear();
@@ -289,7 +397,7 @@ impl ImpulseStage {
         let quiet = std::mem::replace(&mut self.wake.valid, false) && steady;
         self.rebuilt = false;
         self.fastest_hit = 0.0;
-        let (threshold, reach) = self.prepare(set, paths, x1, v1, h, quiet)?;
+        let (threshold, reach, kick) = self.prepare(set, paths, x1, v1, h, quiet)?;
         let mut only_woken = quiet && !self.rebuilt;
         if steady && !only_woken {
             // New wake times for everyone, from the step's start (one pass over all pairs,
@@ -305,6 +413,11 @@ impl ImpulseStage {
         }
         self.touched.clear();
         self.touched.resize(n, !set.ccd);
+        if !set.ccd && self.sleep.any() {
+            for q in 0..n {
+                self.touched[q] = !self.sleep.is_asleep(q);
+            }
+        }
         // The last step's contacts stay contacts (a resting pile is solved at every step's end,
         // whether or not its pairs touch to the last bit).
         for &(i, other, _) in &self.warm {
@@ -340,9 +453,23 @@ impl ImpulseStage {
         if set.ccd {
             paths.finish(x1, v1, h);
         }
+        // A sleeper hit inside the step, or touched by an awake particle at its start, wakes
+        // with its island (`collide/sleep.rs`).
+        if self.sleep.any() {
+            let mut work = Vec::new();
+            for q in 0..n {
+                if self.touched[q] && self.sleep.is_asleep(q) {
+                    stats.woke += self.wake_island(q, &mut work);
+                }
+            }
+            if !work.is_empty() {
+                self.warm.sort_by_key(|w| (w.0, w.1));
+                self.resting.sort_by_key(|w| (w.0, w.1));
+            }
+        }
         // Stage 2 at the end of the step: the contacts of the touched particles and of the
-        // piles they reach.
-        self.end_contacts(set, x1, v1);
+        // piles they reach (waking the islands asleep they touch).
+        stats.woke += self.end_contacts(set, x1, v1);
         stats.contacts = self.contacts.len();
         self.detected.clone_from(&self.contacts);
         // The books' reference state of each touched particle: its state at the step's start
@@ -392,7 +519,16 @@ impl ImpulseStage {
             distribute(c.i, c.partner_particle(), *p, v1, inv_mass, mass, &mut stats.impulse_balance);
         }
         stats.energy_lost += self.energy_books(set, paths.accel, x1, v1);
-        stats.max_overlap = self.max_overlap(set, x1);
+        // Islands calm long enough fall asleep (their velocities to 0, that energy booked).
+        if let (Some(time), true) = (set.sleep_time, frame.may_sleep) {
+            let speed = set.sleep_speed.unwrap_or(kick);
+            let (slept, lost) = self.settle(set, paths.x0, x1, v1, h, speed, time);
+            stats.slept += slept;
+            stats.energy_lost += lost;
+        }
+        stats.asleep = self.sleep.asleep();
+        stats.asleep_contacts = self.sleep.contacts();
+        stats.max_overlap = self.max_overlap(set, x1).max(self.sleep.max_overlap());
         if let Some(p) = set.domain.periodic_box() {
             if frame.wrapped {
                 // only the touched particles moved since (the impacts, the correction)
