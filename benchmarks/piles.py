@@ -62,6 +62,10 @@ The figures, measured on the final state (the median over the runs of each):
   wall pen/r      how far any particle's surface is beyond any wall of the box, over mean r
   max |v|         m/s;  KE  ½ Σ m v², J
   speed-up        on kinema's row: the peer's time over kinema's (> 1: kinema is faster)
+  sleeping        (the 3D pours of 10,000) the particles asleep at the end, and the time of a
+                  step of the settled pile as it is (asleep) against the same pile kept awake
+                  (set_collisions(sleep_time=None), 300 steps to rebuild its warm start), each
+                  over 200 steps after the run: target <= 5 %
 The targets are printed beside them, and PASS/FAIL per target for kinema. Exit status 1 when
 kinema misses a target (--quick's 1 s runs are judged by the full scenes' targets too).
 
@@ -103,6 +107,9 @@ TARGET_DISP = 1e-5  # m per LAST
 TARGET_VMAX = 1e-3  # m/s
 TARGET_DRIFT = 1e-3  # m (pyramid2d)
 TARGET_THREADS = 1.6  # pour3d: 1-thread time over 2-thread time
+TARGET_SLEEP = 0.05  # the settled 3D pours: a step asleep over a step of the same pile awake
+SLEEP_STEPS = 200  # steps timed asleep, and awake
+WARM_STEPS = 300  # steps before the awake ones are timed (the warm start rebuilt)
 
 
 @dataclass(frozen=True)
@@ -202,9 +209,22 @@ def run_kinema(s: Scene, st: dict, steps: int, last: int) -> dict:
     stats = w.collision_stats() or {}
     total, final = stats.get("total", {}), stats.get("last", {})
     extra = {f"unconverged steps (of {steps})": total.get("unconverged")}
-    extra.update({f"last step's {key}": final.get(key) for key in ("contacts", "max_overlap", "solver_sweeps", "islands")})
+    extra.update({f"last step's {key}": final.get(key) for key in ("contacts", "max_overlap", "solver_sweeps", "islands", "asleep")})
     extra = {k: float(v) for k, v in extra.items() if v is not None}
-    return {"build": build, "sim": sim, "before": before, "x": w.positions.copy(), "v": w.velocities.copy(), "extra": extra}
+    out = {"build": build, "sim": sim, "before": before, "x": w.positions.copy(), "v": w.velocities.copy(), "extra": extra}
+    if s.dim == 3 and s.n >= 10_000:
+        # The settled pile of 10,000 balls: a step of it as it is (asleep, where it fell asleep)
+        # against a step of the same pile kept awake (sleeping off, its warm start rebuilt).
+        t0 = time.perf_counter()
+        w.step(SLEEP_STEPS)
+        asleep_time = time.perf_counter() - t0
+        w.set_collisions(restitution=s.e, friction=s.mu, sleep_time=None)
+        w.step(WARM_STEPS)
+        t0 = time.perf_counter()
+        w.step(SLEEP_STEPS)
+        awake_time = time.perf_counter() - t0
+        out["sleep"] = {"asleep": int(final.get("asleep", 0)), "asleep_ms": 1e3 * asleep_time / SLEEP_STEPS, "awake_ms": 1e3 * awake_time / SLEEP_STEPS}
+    return out
 
 
 def run_pymunk(s: Scene, st: dict, steps: int, last: int) -> dict:
@@ -366,7 +386,7 @@ def worker(engine: str, scene: str, quick: bool) -> dict:
         out = run(s, st, steps, last)
     except Exception as exc:  # a diverged or failed run is reported, not hidden
         return {"n": len(st["r"]), "error": f"{type(exc).__name__}: {exc}"}
-    return {"n": len(st["r"]), "build": out["build"], "sim": out["sim"], "figures": figures(s, st, out), "extra": out["extra"]}
+    return {"n": len(st["r"]), "build": out["build"], "sim": out["sim"], "figures": figures(s, st, out), "extra": out["extra"], "sleep": out.get("sleep")}
 
 
 # -- the runs (in the parent) --------------------------------------------------------------------
@@ -548,6 +568,18 @@ def main() -> int:
                 extra = ", ".join(f"{k} {v:g}" for k, v in ok[0]["extra"].items())
                 build = statistics.median(r["build"] for r in ok)
                 notes.append(f"{name} {engine}: build {build:.2f} s; {extra}")
+
+    for name, runs in results.items():
+        slept = [r["sleep"] for r in runs["kinema"] if r.get("sleep")]
+        if slept:
+            asleep = statistics.median(x["asleep_ms"] for x in slept)
+            awake = statistics.median(x["awake_ms"] for x in slept)
+            word = "PASS" if asleep <= TARGET_SLEEP * awake else "FAIL"
+            missed |= word == "FAIL"
+            print(
+                f"\n{name}, sleeping: {slept[0]['asleep']:,} of {runs['kinema'][0]['n']:,} particles asleep at the end; a step "
+                f"{asleep:.2f} ms asleep, {awake:.2f} ms awake (sleep_time=None): {asleep / awake:.1%} (target <= {TARGET_SLEEP:.0%}) {word}"
+            )
 
     if scaling[1] and scaling[2]:
         t1, t2 = (median_row(scaling[t]) for t in (1, 2))
