@@ -296,7 +296,7 @@ def test_bad_collision_input_is_named():
     w.add_particles([[0, 0, 0]], radius=0.1)
     with pytest.raises(ValueError, match=r"restitution = 1.5 is invalid: .*\[0, 1\]"):
         w.set_collisions(restitution=1.5)
-    with pytest.raises(ValueError, match=r"sleep_time = 0 is invalid: .*> 0 s \(or None: nothing sleeps\)"):
+    with pytest.raises(ValueError, match=r"sleep_time = 0 is invalid: .*> 0 s \(inf or None: nothing sleeps\)"):
         w.set_collisions(sleep_time=0.0)
     with pytest.raises(ValueError, match=r"sleep_speed = -1 is invalid: .*> 0 m/s"):
         w.set_collisions(sleep_speed=-1.0)

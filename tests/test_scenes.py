@@ -383,3 +383,19 @@ def test_particle_count_is_known_without_building():
     assert scenes["demo.toml"].particle_count() == 400
     huge = Scene.from_string('[[particles]]\ntype = "random"\nlo = [0, 0, 0]\nhi = [1, 1, 1]\ncount = 1000000000\n')
     assert huge.particle_count() == 10**9  # counted, not made
+
+
+def test_sleeping_settings_go_through_scene_files(tmp_path):
+    """[collisions] sleep_time and sleep_speed reach the world; a world in which nothing sleeps
+    (sleep_time=None) is written as sleep_time = inf (TOML has no None) and read back as None."""
+    path = tmp_path / "s.toml"
+    path.write_text('[[forces]]\ntype = "gravity"\n[collisions]\nsleep_time = 0.25\nsleep_speed = 0.002\n')
+    w = kinema.load_scene(path)
+    assert (w.collisions["sleep_time"], w.collisions["sleep_speed"]) == (0.25, 0.002)
+    w = kinema.World()
+    w.set_collisions(sleep_time=None)
+    again = kinema.load_scene(w.to_scene().to_toml(tmp_path / "off.toml"))
+    assert "sleep_time = inf" in (tmp_path / "off.toml").read_text()
+    assert again.collisions["sleep_time"] is None and w.collisions["sleep_time"] is None
+    w.set_collisions(sleep_time=float("inf"))
+    assert w.collisions["sleep_time"] is None

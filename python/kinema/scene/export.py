@@ -123,6 +123,8 @@ def to_scene(world: World) -> Scene:
         data["output"] = old.output.model_dump()
     if world.collisions is not None:
         c = {k: v for k, v in world.collisions.items() if v is not None}
+        if world.collisions.get("sleep_time", 0.5) is None:
+            c["sleep_time"] = float("inf")  # nothing sleeps (TOML has no None)
         if any(world.periodic):
             c["periodic"] = list(world.periodic)
         data["collisions"] = c

@@ -105,8 +105,9 @@ pub struct CollisionParams {
     /// the step (a body resting under gravity approaches at g·dt each step).
     pub restitution_threshold: Option<f64>,
     /// Sleeping (`collide/sleep.rs`): an island of resting contacts on a collider whose
-    /// particles have all been calm this long, s, sleeps until something reaches it. `None`:
-    /// nothing sleeps. Default 0.5 s (Box2D's time to sleep).
+    /// particles have all been calm this long, s, sleeps until something reaches it. `None`
+    /// (or +∞, which the settings read back as `None`): nothing sleeps. Default 0.5 s
+    /// (Box2D's time to sleep).
     pub sleep_time: Option<f64>,
     /// The speed below which a particle is calm, m/s. `None` (default): the largest speed
     /// change the forces gave a particle in the step (g·dt under gravity; Chipmunk's rule).
@@ -128,6 +129,14 @@ impl Default for CollisionParams {
 }
 
 impl CollisionParams {
+    /// The same settings with an infinite time to sleep written as `None` (nothing sleeps).
+    fn normalised(self) -> Self {
+        CollisionParams {
+            sleep_time: self.sleep_time.filter(|t| t.is_finite()),
+            ..self
+        }
+    }
+
     /// Checks the values; the error names the parameter.
     pub fn check(&self) -> Result<Material, Error> {
         if let ContactModel::SpringDashpot { stiffness, damping } = self.model {
@@ -161,7 +170,7 @@ impl CollisionParams {
             (
                 "sleep_time",
                 self.sleep_time,
-                "the time to sleep must be finite and > 0 s (or None: nothing sleeps)",
+                "the time to sleep must be > 0 s (inf or None: nothing sleeps)",
             ),
             (
                 "sleep_speed",
@@ -170,7 +179,8 @@ impl CollisionParams {
             ),
         ] {
             if let Some(t) = value {
-                if !(t.is_finite() && t > 0.0) {
+                let infinite_time = name == "sleep_time" && t == f64::INFINITY;
+                if !((t.is_finite() || infinite_time) && t > 0.0) {
                     return Err(Error::invalid(name, t, what));
                 }
             }
@@ -202,6 +212,7 @@ pub(crate) struct CollisionStage {
 impl CollisionStage {
     pub fn new(params: CollisionParams, dim: usize) -> Result<Self, Error> {
         let material = params.check()?;
+        let params = params.normalised();
         Ok(CollisionStage {
             params,
             material,
@@ -219,7 +230,7 @@ impl CollisionStage {
     /// Changes the settings, keeping colliders and buffers.
     pub fn set_params(&mut self, params: CollisionParams) -> Result<(), Error> {
         self.material = params.check()?;
-        self.params = params;
+        self.params = params.normalised();
         self.refresh_materials()
     }
 
