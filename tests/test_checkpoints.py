@@ -298,3 +298,27 @@ def test_a_sleeping_pile_resumes_and_wakes_bit_for_bit(tmp_path):
             assert mine.keys() == theirs.keys()
             for key in mine:
                 np.testing.assert_array_equal(mine[key], theirs[key], err_msg=f"{part} {key}")
+
+
+def test_a_heap_asleep_on_pinned_particles_resumes_bit_for_bit(tmp_path):
+    """A heap resting on pinned particles (no collider) sleeps; its contacts with the pinned
+    particles, which sleep in no island, go with it into the checkpoint and back."""
+    w = kinema.World(dt=1e-3)
+    floor = [[0.1 * (k % 6), 0.1 * (k // 6), 0.0] for k in range(36)]
+    balls = [[0.07 + 0.11 * (k % 4), 0.07 + 0.11 * (k // 4), 0.3] for k in range(16)]
+    w.add_particles(floor + balls, radius=0.05, pinned=[True] * 36 + [False] * 16)
+    w.add(kinema.Gravity())
+    w.set_collisions(restitution=0.3, friction=0.5)
+    for _ in range(50):
+        w.step(100)
+        if w.collision_stats()["last"]["asleep"] == 16:
+            break
+    assert w.collision_stats()["last"]["asleep"] == 16
+    w.save_checkpoint(tmp_path / "w.ckpt")
+    again = kinema.World.load_checkpoint(tmp_path / "w.ckpt")
+    assert again.collision_stats()["last"]["asleep"] == 16
+    for world in (w, again):
+        world.add_particles([0.2, 0.2, 0.6], radius=0.04)
+        world.step(600)
+    assert w.collision_stats()["total"]["woke"] >= 1
+    assert_same(w, again)

@@ -243,3 +243,42 @@ fn with_sleep_time_none_nothing_sleeps() {
     }
     assert_eq!(total(&w).slept, 0);
 }
+
+#[test]
+fn a_heap_on_pinned_particles_sleeps_and_stays_asleep() {
+    // A floor of 6 × 6 pinned balls and no collider: 16 balls settle on it and sleep, and the
+    // pinned floor (which touches them, but never moves) wakes nothing: no island is woken in
+    // the next 2 s, and none falls asleep again.
+    let mut w = world(0.3, 0.5);
+    let (mut x, mut pinned) = (Vec::new(), Vec::new());
+    for k in 0..36 {
+        x.extend([0.1 * (k % 6) as f64, 0.1 * (k / 6) as f64, 0.0]);
+        pinned.push(true);
+    }
+    for k in 0..16 {
+        x.extend([0.07 + 0.11 * (k % 4) as f64, 0.07 + 0.11 * (k / 4) as f64, 0.3]);
+        pinned.push(false);
+    }
+    let n = pinned.len();
+    w.add_particles(&x, &vec![0.0; 3 * n], &vec![1.0; n], &vec![0.05; n], &pinned)
+        .unwrap();
+    w.add_force(Box::new(Gravity::new([0.0, 0.0, -G]).unwrap())).unwrap();
+    let mut steps = 0;
+    while last_or_default(&w).asleep < 16 {
+        w.step().unwrap();
+        steps += 1;
+        assert!(steps < 5000, "not asleep: {:?}", last(&w));
+    }
+    let slept = total(&w).slept;
+    let x_asleep = w.particles().x.clone();
+    for _ in 0..2000 {
+        w.step().unwrap();
+        assert_eq!(last(&w).asleep, 16);
+    }
+    assert_eq!((total(&w).slept, total(&w).woke), (slept, 0));
+    assert_eq!(w.particles().x, x_asleep);
+}
+
+fn last_or_default(w: &World) -> CollisionStats {
+    w.collision_stats().map(|s| s.0).unwrap_or_default()
+}

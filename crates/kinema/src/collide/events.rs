@@ -201,13 +201,20 @@ pub(crate) struct Scene<'a> {
     /// `collide/sleep.rs`): a sleeper whose path no impact changed yet is a body at rest, and
     /// two of them meet nothing.
     pub asleep: &'a [u32],
+    /// The particles' inverse masses, 1/kg (0: pinned): while some sleep, a pinned particle
+    /// is a body at rest too, and meets no sleeper.
+    pub inv_mass: &'a [f64],
 }
 
 impl Scene<'_> {
-    /// Whether particle q sleeps and no impact of this step has moved it.
+    /// Whether particle q sleeps and no impact of this step has moved it, or (while some
+    /// sleep) is pinned.
     #[inline]
     fn still(&self, paths: &Paths<'_>, q: usize) -> bool {
-        self.asleep.get(q).is_some_and(|&k| k != AWAKE) && paths.version(q) == 0
+        match self.asleep.get(q) {
+            Some(&k) => (k != AWAKE && paths.version(q) == 0) || self.inv_mass[q] == 0.0,
+            None => false,
+        }
     }
 
     fn is_resting(&self, i: usize, partner: Partner, now: f64) -> bool {
@@ -304,6 +311,7 @@ impl Scene<'_> {
         let ai = vec3::get(paths.accel, i);
         let rest = h - now;
         let still = self.still(paths, i);
+        let asleep = still && self.inv_mass[i] > 0.0;
         for &j in partners {
             let j = j as usize;
             if still && self.still(paths, j) {
@@ -326,8 +334,8 @@ impl Scene<'_> {
                 })),
             }
         }
-        if still {
-            return; // a body at rest on its colliders
+        if asleep {
+            return; // a sleeper at rest on its colliders
         }
         let walls = &self.list.walls;
         let first = walls.partition_point(|w| w.0 < i);

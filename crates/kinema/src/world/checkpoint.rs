@@ -120,15 +120,15 @@ impl World {
         let Some(stage) = &mut self.collisions else {
             return Err(Error::invalid("sleep_island", n, "nothing sleeps: collisions are off"));
         };
-        let of = |q: usize| island[q];
+        let pinned = |q: usize| self.particles.inv_mass[q] == 0.0;
         if let Some(w) = stage.impulse.warm_start().iter().find(|w| match w.1 {
-            Partner::Particle(j) => of(w.0) != of(j),
+            Partner::Particle(j) => island[w.0] != island[j] && !pinned(w.0) && !pinned(j),
             Partner::Collider(_) => false,
         }) {
             return Err(Error::invalid(
                 "sleep_island",
                 format!("{:?}", w),
-                "a contact's two particles sleep in one island, or are both awake",
+                "a contact's two movable particles sleep in one island, or are both awake",
             ));
         }
         let (radius, x) = (&self.particles.radius, &self.particles.x);

@@ -63,6 +63,9 @@ impl ImpulseStage {
                 }
                 let (lo, hi) = (i.min(j), i.max(j));
                 let gap = SPECULATIVE * (radius[lo] + radius[hi]);
+                if self.sleep.is_asleep(j) && set.inv_mass[i] == 0.0 {
+                    continue; // a pinned particle wakes nothing: the contact is the sleeper's
+                }
                 if let Some(c) = pair_contact(lo, hi, x1, v1, radius, set.domain, gap) {
                     self.contacts.push(c);
                     if self.sleep.is_asleep(j) {
@@ -186,10 +189,15 @@ impl ImpulseStage {
                 .iter()
                 .map(|&c| deepest(set, x1, self.contacts[c].i, self.contacts[c].other))
                 .fold(0.0, f64::max);
-            // its contacts' warm start goes with it (a pair's two particles are in one island)
-            let (mine, rest): (Vec<_>, Vec<_>) = self.warm.iter().partition(|w| island_of[w.0] == k);
+            // its contacts' warm start goes with it (a pair's movable particles are in one
+            // island; a pinned one is in none)
+            let of = |i: usize, other: Partner| match (island_of[i], other) {
+                (usize::MAX, Partner::Particle(j)) => island_of[j],
+                (k, _) => k,
+            };
+            let (mine, rest): (Vec<_>, Vec<_>) = self.warm.iter().partition(|w| of(w.0, w.1) == k);
             self.warm = rest;
-            self.resting.retain(|r| island_of[r.0] != k);
+            self.resting.retain(|r| of(r.0, r.1) != k);
             self.sleep.put_to_sleep(members, mine, overlap);
             slept += 1;
         }

@@ -47,6 +47,7 @@ macro_rules! scene {
             slow: least_impact_speed($search.threshold),
             resting: &$stage.resting,
             asleep: $stage.sleep.marks(),
+            inv_mass: $search.set.inv_mass,
         }
     };
 }

@@ -295,9 +295,14 @@ impl ImpulseStage {
         numbers.dedup();
         for k in numbers {
             let members: Vec<usize> = (0..island.len()).filter(|&q| island[q] == k).collect();
-            let (mine, rest): (Vec<_>, Vec<_>) = self.warm.iter().partition(|w| island[w.0] == k);
+            // (a contact with a pinned particle, which sleeps in no island, is its partner's)
+            let of = |i: usize, other: Partner| match (island[i], other) {
+                (-1, Partner::Particle(j)) => island[j],
+                (k, _) => k,
+            };
+            let (mine, rest): (Vec<_>, Vec<_>) = self.warm.iter().partition(|w| of(w.0, w.1) == k);
             self.warm = rest;
-            self.resting.retain(|r| island[r.0] != k);
+            self.resting.retain(|r| of(r.0, r.1) != k);
             let overlap = mine.iter().map(|w| deepest(w.0, w.1)).fold(0.0, f64::max);
             self.sleep.put_to_sleep(members, mine, overlap);
         }
