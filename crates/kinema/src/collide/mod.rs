@@ -12,6 +12,8 @@
 //!                                   restitution u_n⁺ = −e u_n⁻ and Coulomb friction
 //!   contacts at the step's end ──soft_step (by islands)──▶ velocities and positions:
 //!                                   resting contacts held, overlap removed
+//!   islands at rest ──sleep──▶ asleep: frozen, skipped by the impact search and the solve,
+//!                                   until an impact or an awake particle's contact wakes them
 //! ```
 //!
 //! The order matters: the end-of-step solve needs contacts that describe the current
