@@ -227,6 +227,19 @@ def run_kinema(s: Scene, st: dict, steps: int, last: int) -> dict:
     return out
 
 
+def peer_result(build: float, sim: float, before: np.ndarray, x: np.ndarray, v: np.ndarray, spin: float) -> dict:
+    """A peer's run as the worker reports it, with what the peer itself tells: its largest
+    angular speed (0: nothing rolled) and how many bodies are at rest to the last bit."""
+    return {
+        "build": build,
+        "sim": sim,
+        "before": before,
+        "x": x,
+        "v": v,
+        "extra": {"max |omega|": spin, "at |v| = 0 exactly": int(np.sum(~v.any(axis=1)))},
+    }
+
+
 def run_pymunk(s: Scene, st: dict, steps: int, last: int) -> dict:
     import pymunk
 
@@ -272,14 +285,7 @@ def run_pymunk(s: Scene, st: dict, steps: int, last: int) -> dict:
     sim += time.perf_counter() - t0
     x, v = state()
     spin = max((abs(b.angular_velocity) for b in bodies), default=0.0)
-    return {
-        "build": build,
-        "sim": sim,
-        "before": before,
-        "x": x,
-        "v": v,
-        "extra": {"max |omega|": spin, "at |v| = 0 exactly": int(np.sum(~v.any(axis=1)))},
-    }
+    return peer_result(build, sim, before, x, v, spin)
 
 
 def run_pybullet(s: Scene, st: dict, steps: int, last: int) -> dict:
@@ -335,14 +341,7 @@ def run_pybullet(s: Scene, st: dict, steps: int, last: int) -> dict:
         pb.stepSimulation()
     sim += time.perf_counter() - t0
     x, v, spin = state()
-    return {
-        "build": build,
-        "sim": sim,
-        "before": before,
-        "x": x,
-        "v": v,
-        "extra": {"max |omega|": spin, "at |v| = 0 exactly": int(np.sum(~v.any(axis=1)))},
-    }
+    return peer_result(build, sim, before, x, v, spin)
 
 
 def figures(s: Scene, st: dict, out: dict) -> dict:

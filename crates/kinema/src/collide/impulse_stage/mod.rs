@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use super::events::{EventQueue, PathStore, Paths};
 use super::islands::Islands;
 use super::neighbour_list::NeighbourList;
-use super::sleep::Sleep;
+use super::sleep::{Sleep, WarmEntry};
 use super::soft_step::Target;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
@@ -290,19 +290,26 @@ impl ImpulseStage {
     pub fn restore_sleep(&mut self, calm: Vec<f64>, island: &[i64], deepest: impl Fn(usize, Partner) -> f64) {
         self.sleep.wake_all();
         self.sleep.calm = calm;
-        let mut numbers: Vec<i64> = island.iter().copied().filter(|&k| k >= 0).collect();
-        numbers.sort_unstable();
-        numbers.dedup();
-        for k in numbers {
-            let members: Vec<usize> = (0..island.len()).filter(|&q| island[q] == k).collect();
-            // (a contact with a pinned particle, which sleeps in no island, is its partner's)
-            let of = |i: usize, other: Partner| match (island[i], other) {
-                (-1, Partner::Particle(j)) => island[j],
-                (k, _) => k,
-            };
-            let (mine, rest): (Vec<_>, Vec<_>) = self.warm.iter().partition(|w| of(w.0, w.1) == k);
-            self.warm = rest;
-            self.resting.retain(|r| of(r.0, r.1) != k);
+        // Each island's members and contacts, gathered in one pass each (a contact with a
+        // pinned particle, which sleeps in no island, is its partner's).
+        let mut islands: std::collections::BTreeMap<i64, (Vec<usize>, Vec<WarmEntry>)> = Default::default();
+        for (q, &k) in island.iter().enumerate().filter(|(_, &k)| k >= 0) {
+            islands.entry(k).or_default().0.push(q);
+        }
+        let of = |i: usize, other: Partner| match (island[i], other) {
+            (-1, Partner::Particle(j)) => island[j],
+            (k, _) => k,
+        };
+        let mut awake = Vec::with_capacity(self.warm.len());
+        for w in self.warm.drain(..) {
+            match islands.get_mut(&of(w.0, w.1)) {
+                Some(entry) => entry.1.push(w),
+                None => awake.push(w),
+            }
+        }
+        self.warm = awake;
+        self.resting.retain(|r| of(r.0, r.1) < 0);
+        for (members, mine) in islands.into_values() {
             let overlap = mine.iter().map(|w| deepest(w.0, w.1)).fold(0.0, f64::max);
             self.sleep.put_to_sleep(members, mine, overlap);
         }
@@ -343,10 +350,13 @@ impl ImpulseStage {
     ) -> Result<(bool, CollisionStats, CollisionTimes), Error> {
         let clock = Instant::now();
         let h = frame.h;
-        if !frame.may_sleep || set.sleep_time.is_none() {
+        // (no pass over the particles where nothing can sleep: a force-free world's step looks
+        // only at the particles due, `collide/wake.rs`)
+        if frame.may_sleep && set.sleep_time.is_some() {
+            self.sleep.resize(x0.len() / 3);
+        } else if !self.sleep.calm.is_empty() {
             self.sleep.wake_all();
         }
-        self.sleep.resize(x0.len() / 3);
         // A particle asleep stays where it is, at rest: what the integrator made of it is
         // dropped (x₀ = x₁, v₀ = v₁ = 0, and its path has no acceleration).
         let sleeping = self.sleep.any();
