@@ -4,7 +4,7 @@
 //! Python package `kinema`. The module function only registers one area after another.
 
 mod callbacks;
-mod collisions;
+mod collide;
 mod errors;
 mod ode;
 mod render;

@@ -16,7 +16,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
-use crate::collisions::{self, Description};
+use crate::collide::{self, Description};
 use crate::errors::to_py;
 
 /// The array's data in C order, borrowed when it already is contiguous.
@@ -58,7 +58,7 @@ impl PyScenery {
                 "shape (P, 3)",
             ));
         }
-        let colliders = collisions::colliders(&colliders).map_err(to_py)?;
+        let colliders = collide::colliders(&colliders).map_err(to_py)?;
         let (pos, rad) = (data(&positions), data(&radius));
         let extent = py.detach(|| scene_extent(&pos, &rad, &colliders)).map_err(to_py)?;
         Ok(PyScenery {

@@ -1,5 +1,5 @@
 //! Bindings of the particle world: World, the force catalogue, Python forces, diagnostics,
-//! collisions (conversions in `collisions.rs`; stepping and SimulationDiverged in
+//! collisions (conversions in `collide.rs`; stepping and SimulationDiverged in
 //! `stepping.rs`; the Python force in `callbacks.rs`).
 
 use kinema::collide::{Partner, Surface};
@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::callbacks::PythonForce;
-use crate::collisions;
+use crate::collide;
 use crate::errors::to_py;
 use crate::ode::integrator_from;
 use crate::stepping::{ctrl_c, step_in_slices, world_err, SimulationDiverged};
@@ -92,7 +92,7 @@ impl PyWorld {
         } = particles;
         let (x, v) = (flat3("position", &x)?, flat3("velocity", &v)?);
         let (mass, radius, pinned) = (mass.as_slice()?, radius.as_slice()?, pinned.as_slice()?);
-        let own = collisions::materials(mass.len(), restitution, friction).map_err(to_py)?;
+        let own = collide::materials(mass.len(), restitution, friction).map_err(to_py)?;
         let r = self.inner.add_particles(&x, &v, mass, radius, pinned).map_err(world_err)?;
         if let Some((e, mu)) = own {
             self.inner.set_particle_materials(r.start, &e, &mu).map_err(to_py)?;
@@ -107,7 +107,7 @@ impl PyWorld {
 
     /// A checkpoint's collision books (dicts as `collision_stats` gives them).
     fn restore_collision_stats(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
-        let (total, last) = (collisions::stats_from(&total)?, collisions::stats_from(&last)?);
+        let (total, last) = (collide::stats_from(&total)?, collide::stats_from(&last)?);
         self.inner.restore_collision_stats(total, last);
         Ok(())
     }
@@ -242,7 +242,7 @@ impl PyWorld {
 
     /// Turns collisions on, or changes their settings (every one of them), from the dict of
     /// `World.set_collisions`' keyword arguments.
-    fn set_collisions(&mut self, settings: collisions::CollisionArgs) -> PyResult<()> {
+    fn set_collisions(&mut self, settings: collide::CollisionArgs) -> PyResult<()> {
         let params = settings.params().map_err(to_py)?;
         self.inner.set_collisions(params).map_err(to_py)
     }
@@ -252,7 +252,7 @@ impl PyWorld {
     fn collisions<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         self.inner
             .collision_params()
-            .map(|p| collisions::params_dict(py, &p))
+            .map(|p| collide::params_dict(py, &p))
             .transpose()
     }
 
@@ -265,14 +265,14 @@ impl PyWorld {
         friction: Option<f64>,
     ) -> PyResult<usize> {
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
-        let plane = collisions::plane(self.inner.params().dim, point, normal, surface).map_err(to_py)?;
+        let plane = collide::plane(self.inner.params().dim, point, normal, surface).map_err(to_py)?;
         self.inner.add_collider(plane).map_err(to_py)
     }
 
     /// Adds a box container (2 values per corner in 2D, 3 in 3D); returns its index.
     fn add_box(&mut self, lo: Vec<f64>, hi: Vec<f64>, restitution: Option<f64>, friction: Option<f64>) -> PyResult<usize> {
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
-        let b = collisions::box_container(self.inner.params().dim, &lo, &hi, surface).map_err(to_py)?;
+        let b = collide::box_container(self.inner.params().dim, &lo, &hi, surface).map_err(to_py)?;
         self.inner.add_collider(b).map_err(to_py)
     }
 
@@ -285,7 +285,7 @@ impl PyWorld {
         friction: Option<f64>,
     ) -> PyResult<usize> {
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
-        let s = collisions::sphere_obstacle(self.inner.params().dim, center, radius, surface).map_err(to_py)?;
+        let s = collide::sphere_obstacle(self.inner.params().dim, center, radius, surface).map_err(to_py)?;
         self.inner.add_collider(s).map_err(to_py)
     }
 
@@ -302,7 +302,7 @@ impl PyWorld {
 
     /// The contacts at the end of the last step, as arrays.
     fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        collisions::contacts_dict(py, self.inner.contacts())
+        collide::contacts_dict(py, self.inner.contacts())
     }
 
     /// {"last": ..., "total": ...} of the collision stages, or None without collisions.
@@ -311,8 +311,8 @@ impl PyWorld {
             return Ok(None);
         };
         let out = PyDict::new(py);
-        out.set_item("last", collisions::stats_dict(py, &last)?)?;
-        out.set_item("total", collisions::stats_dict(py, &total)?)?;
+        out.set_item("last", collide::stats_dict(py, &last)?)?;
+        out.set_item("total", collide::stats_dict(py, &total)?)?;
         Ok(Some(out))
     }
 
@@ -539,7 +539,7 @@ impl PyWorld {
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyWorld>()?;
-    collisions::register(m)?;
+    collide::register(m)?;
     m.add("SimulationDiverged", m.py().get_type::<SimulationDiverged>())?;
     Ok(())
 }

@@ -1,8 +1,11 @@
-//! Collisions: detection (broad phase → narrow phase, colliders) and response (impulses,
-//! position correction, or penalty forces), as kernels on flat particle arrays.
+//! The collide stage, stages 2–4 of a world step, and its kernels: detection (broad phase →
+//! narrow phase, colliders) and response (impulses, the end-of-step contact solve, or
+//! penalty forces), on flat particle arrays.
 //!
-//! A step with impulse response (a World's, `impulse_stage/`) runs these stages in order,
-//! each writing a buffer that the next one reads:
+//! `World::collide` (`world/collide.rs`) calls `stage::CollideStage::run` (`stage.rs`: the
+//! settings, colliders, domain, materials and books), which runs the impulse model over the
+//! step (`impulse/`: `impulse::ImpulseModel` and its buffers). Its stages, in order, each
+//! writing a buffer that the next one reads:
 //!
 //! ```text
 //!   positions ──broad_phase::Grid::find_pairs──▶ pairs (i < j), sorted
@@ -43,7 +46,7 @@ pub mod colliders;
 pub mod contact;
 pub mod domain;
 pub(crate) mod events;
-pub(crate) mod impulse_stage;
+pub(crate) mod impulse;
 pub(crate) mod islands;
 pub mod narrow_phase;
 pub(crate) mod neighbour_list;
@@ -51,6 +54,7 @@ pub mod penalty;
 pub mod response;
 pub(crate) mod sleep;
 pub(crate) mod soft_step;
+pub(crate) mod stage;
 pub(crate) mod sweeps;
 pub mod toi;
 pub(crate) mod wake;

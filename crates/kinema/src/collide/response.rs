@@ -1,7 +1,7 @@
 //! Response: Newton's restitution by impulses, Coulomb friction, and the materials that set
 //! them (the pair rule, [`MaterialTable`]). The impulse of one contact is
 //! [`restitution_impulse`]; the world applies it at each impact inside a step
-//! (`impulse_stage/impacts.rs`), and the end-of-step contacts are solved by `soft_step`.
+//! (`impulse/impacts.rs`), and the end-of-step contacts are solved by `soft_step`.
 //!
 //! For a contact with normal n (from the partner towards i), inverse masses w_i, w_j (0 for a
 //! pinned particle and for a collider) and relative normal velocity u_n = (v_i − v_j)·n < 0,
@@ -218,8 +218,8 @@ pub fn restitution_impulse(
 }
 
 /// The speed below which a pair counts as not approaching, m/s: slower approaches are left
-/// to the end-of-step contact solve (`impulse_stage/impacts.rs`, `least_impact_speed`), and
-/// that solve's convergence tolerance (`impulse_stage/end_of_step.rs`, `soft_step`).
+/// to the end-of-step contact solve (`impulse/impacts.rs`, `least_impact_speed`), and
+/// that solve's convergence tolerance (`impulse/end_of_step.rs`, `soft_step`).
 pub(crate) const VELOCITY_TOLERANCE: f64 = 1e-9;
 
 #[cfg(test)]

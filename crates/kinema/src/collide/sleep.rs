@@ -42,7 +42,7 @@ use super::contact::Partner;
 pub(crate) const AWAKE: u32 = u32::MAX;
 
 /// A warm-start entry: (particle, partner, the solve stage's totals N·s), as
-/// `ImpulseStage::warm` keeps them.
+/// `ImpulseModel::warm` keeps them.
 pub(crate) type WarmEntry = (usize, Partner, [f64; 3]);
 
 /// An island asleep.

@@ -3,7 +3,7 @@
 //! from one step to the next.
 
 use super::{CollisionStats, World, WorldStepper};
-use crate::collide::impulse_stage::end_of_step::overlap_at;
+use crate::collide::impulse::end_of_step::overlap_at;
 use crate::collide::Partner;
 use crate::error::Error;
 
@@ -39,7 +39,7 @@ impl World {
     /// Restores the collision books of a checkpoint: the totals since collisions were turned
     /// on and the last step's (see [`World::collision_stats`]). Nothing when they are off.
     pub fn restore_collision_stats(&mut self, total: CollisionStats, last: CollisionStats) {
-        if let Some(stage) = &mut self.collisions {
+        if let Some(stage) = &mut self.collide_stage {
             stage.total = total;
             stage.last = last;
         }
@@ -75,7 +75,7 @@ impl World {
     /// step, (particle, partner, impulse totals in N·s), sorted; empty without collisions.
     pub fn collision_carry(&mut self) -> Vec<(usize, Partner, [f64; 3])> {
         self.restore_user_order();
-        self.collisions.as_ref().map(|c| c.all_warm()).unwrap_or_default()
+        self.collide_stage.as_ref().map(|c| c.all_warm()).unwrap_or_default()
     }
 
     /// What sleeping carries to the next step (`collide/sleep.rs`): each particle's calm time
@@ -83,7 +83,10 @@ impl World {
     pub fn sleep_carry(&mut self) -> (Vec<f64>, Vec<i64>) {
         self.restore_user_order();
         let n = self.particles.len();
-        self.collisions.as_ref().map(|c| c.impulse.sleep_carry(n)).unwrap_or_default()
+        self.collide_stage
+            .as_ref()
+            .map(|c| c.impulse.sleep_carry(n))
+            .unwrap_or_default()
     }
 
     /// Gives sleeping back what [`World::sleep_carry`] took (a checkpoint's), after
@@ -117,7 +120,7 @@ impl World {
                 "an island number >= 0, or -1: awake",
             ));
         }
-        let Some(stage) = &mut self.collisions else {
+        let Some(stage) = &mut self.collide_stage else {
             return Err(Error::invalid("sleep_island", n, "nothing sleeps: collisions are off"));
         };
         let pinned = |q: usize| self.particles.inv_mass[q] == 0.0;
@@ -156,7 +159,7 @@ impl World {
                 format!("contacts between the {n} particles and {colliders} colliders, with finite impulses"),
             ));
         }
-        match &mut self.collisions {
+        match &mut self.collide_stage {
             Some(stage) => stage.set_warm_start(carry),
             None if carry.is_empty() => {}
             None => {

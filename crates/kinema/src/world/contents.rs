@@ -33,16 +33,16 @@ impl World {
         }
         // The state changed size; the others' contacts (their warm start, the islands asleep)
         // stay: their numbers did not change, and a newborn wakes what it touches.
-        let kept = self.collisions.as_mut().map(|stage| stage.impulse.take_contacts());
+        let kept = self.collide_stage.as_mut().map(|stage| stage.impulse.take_contacts());
         self.reset_caches();
-        if let Some(stage) = &mut self.collisions {
+        if let Some(stage) = &mut self.collide_stage {
             if !stage.own.is_empty() {
                 stage.own.resize(self.particles.len(), (None, None));
             }
             stage.refresh_materials()?;
         }
         self.rebuild_contact_force()?;
-        if let (Some(stage), Some(kept)) = (&mut self.collisions, kept) {
+        if let (Some(stage), Some(kept)) = (&mut self.collide_stage, kept) {
             if stage.params.model == ContactModel::Impulse {
                 stage.impulse.keep_contacts(kept, self.particles.len());
             }
@@ -80,7 +80,7 @@ impl World {
         for f in &mut self.forces {
             f.reindex(&new_of_old);
         }
-        if let Some(stage) = &mut self.collisions {
+        if let Some(stage) = &mut self.collide_stage {
             crate::particles::retain_rows(&mut stage.own, 1, &keep);
             stage.refresh_materials()?;
         }
@@ -122,7 +122,7 @@ impl World {
     pub(super) fn reset_caches(&mut self) {
         self.stepper = None;
         self.watch = None;
-        if let Some(stage) = &mut self.collisions {
+        if let Some(stage) = &mut self.collide_stage {
             stage.forget_list();
         }
     }

@@ -119,7 +119,7 @@ impl World {
                 }
                 // In a periodic cell x' is wrapped into it in the same pass (the collision
                 // stage is told, and wraps only what it moves itself).
-                let cell = self.collisions.as_ref().and_then(|c| c.domain.periodic_box());
+                let cell = self.collide_stage.as_ref().and_then(|c| c.domain.periodic_box());
                 let p = &self.particles;
                 let bad = self
                     .x_next
@@ -160,7 +160,7 @@ impl World {
             // model's continuous detection needs the unwrapped drift, and wraps after its
             // impacts.
             let cell = self
-                .collisions
+                .collide_stage
                 .as_ref()
                 .and_then(|c| c.domain.periodic_box())
                 .filter(|_| self.contact.is_some());

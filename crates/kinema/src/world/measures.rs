@@ -25,7 +25,7 @@ impl World {
     /// Wall-clock time spent in each stage of the steps so far.
     pub fn stage_times(&self) -> StageTimes {
         let mut times = self.times;
-        if let Some(stage) = &self.collisions {
+        if let Some(stage) = &self.collide_stage {
             times.detect = stage.times.detect;
             times.respond = stage.times.respond;
             times.distribute = stage.times.distribute;

@@ -4,18 +4,17 @@
 //! each in its own `impl World` block:
 //!
 //! - `integrate.rs`: stage 1, the kept stepper and the integration of one step;
-//! - `collisions.rs`: the collision settings, and stages 2–4 as a stage of the world
-//!   (`CollisionStage`), whose detection and response are in `collide/`;
+//! - `collide.rs`: stages 2–4, `World::collide`, which runs the collide stage
+//!   (`collide::stage::CollideStage`, detection and response in `collide/`), and the
+//!   collision settings, colliders, materials and periodic axes;
 //! - `divergence.rs`: the non-finite and runaway-energy checks that refuse a step;
 //! - `contents.rs`: adding and removing particles and forces;
-//! - `collision_api.rs`: collisions, colliders, materials and periodic axes;
 //! - `checkpoint.rs`: what a checkpoint takes and gives back besides the particles' state;
 //! - `measures.rs`: diagnostics, accelerations, the advisor's rates, counters and timings.
 
 mod advisor;
 mod checkpoint;
-mod collision_api;
-mod collisions;
+mod collide;
 mod contact_force;
 mod contents;
 mod divergence;
@@ -25,19 +24,19 @@ mod integrate;
 mod measures;
 mod order;
 
+pub use crate::collide::stage::{CollisionParams, CollisionStats, ContactModel};
 pub use crate::interrupt::Interrupt;
 pub use advisor::Rates;
-pub use collisions::{CollisionParams, CollisionStats, ContactModel};
 pub use divergence::{RUNAWAY_CHECK_EVERY, RUNAWAY_FACTOR};
 pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
 pub use measures::LinearSolve;
 
-use crate::error::{CallbackError, Divergence, Error};
+use crate::collide::stage::CollideStage;
+use crate::error::{CallbackError, Error};
 use crate::forces::{EnergyClass, Force};
 use crate::ode::stepper::Stats;
 use crate::ode::{Integrator, Method};
 use crate::particles::Particles;
-use collisions::{CollisionStage, StepFrame};
 use contact_force::{ContactForce, CHUNK};
 use divergence::EnergyWatch;
 use integrate::WorldStepper;
@@ -83,7 +82,7 @@ pub struct World {
     /// The energy reference of the runaway check; `None` until the next step sets it.
     watch: Option<EnergyWatch>,
     /// Stages 2–4, when collisions are on.
-    collisions: Option<CollisionStage>,
+    collide_stage: Option<CollideStage>,
     /// Index in `forces` of the spring–dashpot contact force, with that model, and the
     /// force itself (shared: the world asks it when its list expires and sorts by it).
     contact_force: Option<usize>,
@@ -138,7 +137,7 @@ impl World {
             v_next: Vec::new(),
             force: Vec::new(),
             watch: None,
-            collisions: None,
+            collide_stage: None,
             contact_force: None,
             contact: None,
             sorted: None,
@@ -177,7 +176,7 @@ impl World {
     /// 4. distribute — each impulse acts on both particles, equal and opposite.
     ///
     /// Stages 2–4 run when collisions are on ([`World::set_collisions`], or a collider was
-    /// added) with the impulse model; see `collisions.rs` for how impacts inside the step are
+    /// added) with the impulse model; see `collide.rs` for how impacts inside the step are
     /// found (continuous detection) and resolved in time order.
     ///
     /// A step that would produce a non-finite state, or runaway energy, fails with
@@ -266,81 +265,12 @@ impl World {
         k as f64 * self.params.dt
     }
 
-    /// Stages 2–4 on the integrated state in `x_next`, `v_next` (a no-op without collisions):
-    /// impacts inside the step and contacts at its end get Newton's restitution impulses,
-    /// equal and opposite on the two particles (see [`CollisionParams`]).
-    fn collide(&mut self) -> Result<(), Error> {
-        let n = 3 * self.particles.len();
-        let Some(stage) = self.collisions.as_mut() else {
-            return Ok(());
-        };
-        if n == 0 {
-            return Ok(());
-        }
-        if stage.params.model != ContactModel::Impulse {
-            // The spring–dashpot model acted in stage 1, as a force; what is left here is
-            // keeping positions in the periodic cell.
-            stage.clear_step();
-            if let Some(p) = stage.domain.periodic_box() {
-                p.wrap_positions(&mut self.x_next);
-            }
-            return Ok(());
-        }
-        let p = &self.particles;
-        let (x1, v1) = (&mut self.x_next[..], &mut self.v_next[..]);
-        let accel = match &self.stepper {
-            Some(WorldStepper::Verlet(b)) if b.a.len() == n => Some(&b.a[..]),
-            _ => None,
-        };
-        // Without forces the paths are straight lines from step to step: the stage keeps
-        // each particle's wake time and looks only at those due (collide/wake.rs). Verlet's
-        // force-free pass wrapped x1 into the periodic cell already.
-        let steady = self.forces.is_empty();
-        // Islands may sleep under forces that cannot pull a sleeper nobody looks at: none
-        // depends on the positions or adds energy (gravity, drag; `collide/sleep.rs`).
-        let may_sleep = !steady
-            && self.forces.iter().all(|f| {
-                let p = f.properties();
-                !p.depends_on_position && p.energy != EnergyClass::Source
-            });
-        let frame = StepFrame {
-            t0: self.time,
-            h: self.params.dt,
-            accel,
-            steady,
-            wrapped: steady && accel.is_some(),
-            may_sleep,
-        };
-        let changed = match stage.run(&frame, p, x1, v1) {
-            Ok(changed) => changed,
-            Err(Error::InvalidParameter { .. }) if Self::beyond_geometry(&self.x_next, &self.v_next) => {
-                // The collision stages' own quantities (a margin, a threshold) overflowed: the
-                // state is too large for their geometry, which squares distances and speeds.
-                let fastest = self.fastest(&self.v_next);
-                return Err(self.diverged(Divergence::NonFinite, fastest));
-            }
-            Err(e) => return Err(e),
-        };
-        if changed {
-            // A method's cache (Verlet's last acceleration) holds F at the integrated state;
-            // it stays right only if no force depends on positions or velocities.
-            let uniform = self.forces.iter().all(|f| f.properties().is_uniform());
-            if !uniform {
-                match &mut self.stepper {
-                    Some(WorldStepper::Verlet(b)) => b.fresh = false, // a_next is stale; keep the buffers
-                    _ => self.stepper = None,
-                }
-            }
-        }
-        Ok(())
-    }
-
     /// Sets the check that may stop a step (`None`: none): asked at most every
     /// [`Interrupt::EVERY`] between the stages of a step and inside the impacts of a long
     /// one; its error stops the step, and the world stays at the end of the step before.
     pub fn set_interrupt(&mut self, check: Option<fn() -> Result<(), CallbackError>>) {
         self.interrupt = Interrupt::new(check);
-        if let Some(stage) = &mut self.collisions {
+        if let Some(stage) = &mut self.collide_stage {
             stage.impulse.interrupt = self.interrupt;
         }
     }

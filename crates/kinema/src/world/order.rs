@@ -140,7 +140,7 @@ impl World {
     pub(super) fn sortable(&self) -> bool {
         self.contact.is_some()
             && self.particles.len() >= SORT_MIN_PARTICLES
-            && self.collisions.as_ref().is_some_and(|c| c.materials_parts().1.is_none())
+            && self.collide_stage.as_ref().is_some_and(|c| c.materials_parts().1.is_none())
             && self.forces.iter().all(|f| f.properties().renumbers)
     }
 
@@ -209,7 +209,7 @@ impl World {
         gather(&mut p.inv_mass, old_of_new);
         gather(&mut p.radius, old_of_new);
         gather(&mut p.id, old_of_new);
-        if let Some(stage) = &mut self.collisions {
+        if let Some(stage) = &mut self.collide_stage {
             gather(&mut stage.own, old_of_new);
         }
         let mut new_of_old = vec![0u32; old_of_new.len()];

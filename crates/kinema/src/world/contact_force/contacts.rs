@@ -4,10 +4,10 @@
 
 use super::{ContactForce, Scratch, CHUNK};
 use crate::collide::neighbour_list::NeighbourList;
+use crate::collide::stage::on_periodic_wall;
 use crate::collide::{pair_contact, Contact, Partner};
 use crate::error::Error;
 use crate::forces::State;
-use crate::world::collisions::on_periodic_wall;
 
 impl ContactForce {
     /// Calls `each` with every contact at state `s`, in the order of a full search: particle

@@ -5,13 +5,13 @@
 //! move: through the sides of a periodic cell, at speeds that force rebuilds.
 
 use super::*;
+use crate::collide::stage::on_periodic_wall;
 use crate::collide::{
     all_pairs, collider_contacts, damping_ratio, sphere_contacts, BoxContainer, MaterialTable, Periodic, Plane, SphereObstacle,
     Surface,
 };
 use crate::forces::testing::Rng;
 use crate::forces::Force;
-use crate::world::collisions::on_periodic_wall;
 
 /// Forces (N) and U (J) from the contacts of an exhaustive search at `s`, by the law as
 /// it was written before the neighbour list.

@@ -1,25 +1,98 @@
-//! The world's collision settings: turning collisions on, the contact model (and the
-//! spring–dashpot contact force it puts among the forces), the particles' own materials,
-//! colliders, periodic axes, and what the collision stages found (contacts, their books).
+//! Stages 2–4 of the world's step, the collide stage, as the world holds it: the step's call
+//! ([`World::collide`], which runs `collide::stage::CollideStage`) and the user's side of it:
+//! turning collisions on, the contact model (and the spring–dashpot contact force it puts
+//! among the forces), the particles' own materials, colliders, periodic axes, and what the
+//! stage found (contacts, their books).
 
-use super::collisions::CollisionStage;
 use super::contact_force::{ContactForce, ContactForceParams};
+use super::integrate::WorldStepper;
 use super::{order, CollisionParams, CollisionStats, ContactModel, World};
+use crate::collide::stage::{CollideStage, StepFrame};
 use crate::collide::{Collider, Contact, Periodic};
-use crate::error::Error;
+use crate::error::{Divergence, Error};
+use crate::forces::EnergyClass;
 use std::cell::RefCell;
 use std::rc::Rc;
 
 impl World {
+    /// Stages 2–4 on the integrated state in `x_next`, `v_next` (a no-op without collisions):
+    /// impacts inside the step and contacts at its end get Newton's restitution impulses,
+    /// equal and opposite on the two particles (see [`CollisionParams`]).
+    pub(super) fn collide(&mut self) -> Result<(), Error> {
+        let n = 3 * self.particles.len();
+        let Some(stage) = self.collide_stage.as_mut() else {
+            return Ok(());
+        };
+        if n == 0 {
+            return Ok(());
+        }
+        if stage.params.model != ContactModel::Impulse {
+            // The spring–dashpot model acted in stage 1, as a force; what is left here is
+            // keeping positions in the periodic cell.
+            stage.clear_step();
+            if let Some(p) = stage.domain.periodic_box() {
+                p.wrap_positions(&mut self.x_next);
+            }
+            return Ok(());
+        }
+        let p = &self.particles;
+        let (x1, v1) = (&mut self.x_next[..], &mut self.v_next[..]);
+        let accel = match &self.stepper {
+            Some(WorldStepper::Verlet(b)) if b.a.len() == n => Some(&b.a[..]),
+            _ => None,
+        };
+        // Without forces the paths are straight lines from step to step: the stage keeps
+        // each particle's wake time and looks only at those due (collide/wake.rs). Verlet's
+        // force-free pass wrapped x1 into the periodic cell already.
+        let steady = self.forces.is_empty();
+        // Islands may sleep under forces that cannot pull a sleeper nobody looks at: none
+        // depends on the positions or adds energy (gravity, drag; `collide/sleep.rs`).
+        let may_sleep = !steady
+            && self.forces.iter().all(|f| {
+                let p = f.properties();
+                !p.depends_on_position && p.energy != EnergyClass::Source
+            });
+        let frame = StepFrame {
+            t0: self.time,
+            h: self.params.dt,
+            accel,
+            steady,
+            wrapped: steady && accel.is_some(),
+            may_sleep,
+        };
+        let changed = match stage.run(&frame, p, x1, v1) {
+            Ok(changed) => changed,
+            Err(Error::InvalidParameter { .. }) if Self::beyond_geometry(&self.x_next, &self.v_next) => {
+                // The collision stages' own quantities (a margin, a threshold) overflowed: the
+                // state is too large for their geometry, which squares distances and speeds.
+                let fastest = self.fastest(&self.v_next);
+                return Err(self.diverged(Divergence::NonFinite, fastest));
+            }
+            Err(e) => return Err(e),
+        };
+        if changed {
+            // A method's cache (Verlet's last acceleration) holds F at the integrated state;
+            // it stays right only if no force depends on positions or velocities.
+            let uniform = self.forces.iter().all(|f| f.properties().is_uniform());
+            if !uniform {
+                match &mut self.stepper {
+                    Some(WorldStepper::Verlet(b)) => b.fresh = false, // a_next is stale; keep the buffers
+                    _ => self.stepper = None,
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Turns collisions on (or changes their settings): stages 2–4 of every step with the
     /// impulse model, a contact force in stage 1 with the spring–dashpot model.
     pub fn set_collisions(&mut self, params: CollisionParams) -> Result<(), Error> {
-        match &mut self.collisions {
+        match &mut self.collide_stage {
             Some(stage) => stage.set_params(params)?,
             None => {
-                let mut stage = CollisionStage::new(params, self.params.dim)?;
+                let mut stage = CollideStage::new(params, self.params.dim)?;
                 stage.impulse.interrupt = self.interrupt;
-                self.collisions = Some(stage);
+                self.collide_stage = Some(stage);
             }
         }
         self.rebuild_contact_force()
@@ -29,10 +102,10 @@ impl World {
     /// particles (added to the forces, replaced, or removed).
     pub(super) fn rebuild_contact_force(&mut self) -> Result<(), Error> {
         self.contact_dirty = false;
-        if let Some(stage) = &mut self.collisions {
+        if let Some(stage) = &mut self.collide_stage {
             stage.forget_list(); // the impulse model's list: colliders, domain or particles changed
         }
-        let wanted = match self.collisions.as_ref().map(|c| c.params.model) {
+        let wanted = match self.collide_stage.as_ref().map(|c| c.params.model) {
             Some(ContactModel::SpringDashpot { stiffness, damping }) => Some((stiffness, damping)),
             _ => None,
         };
@@ -44,7 +117,7 @@ impl World {
                 self.contact = None;
             }
             (Some((stiffness, damping)), index) => {
-                let stage = self.collisions.as_ref().expect("collisions are on");
+                let stage = self.collide_stage.as_ref().expect("collisions are on");
                 let (global, own) = stage.materials_parts();
                 let p = &self.particles;
                 let contact = Rc::new(RefCell::new(ContactForce::from_params(ContactForceParams {
@@ -109,10 +182,10 @@ impl World {
                 other => other,
             })?;
         }
-        if self.collisions.is_none() {
+        if self.collide_stage.is_none() {
             self.set_collisions(CollisionParams::default())?;
         }
-        let stage = self.collisions.as_mut().expect("collisions are on");
+        let stage = self.collide_stage.as_mut().expect("collisions are on");
         stage.own.resize(self.particles.len(), (None, None));
         for (k, (e, m)) in restitution.iter().zip(friction).enumerate() {
             stage.own[start + k] = (*e, *m);
@@ -124,12 +197,12 @@ impl World {
     /// Each particle's own restitution and friction (`None`: the world's value); empty when
     /// no particle has its own.
     pub fn particle_materials(&self) -> Vec<(Option<f64>, Option<f64>)> {
-        self.collisions.as_ref().map(|c| c.own.clone()).unwrap_or_default()
+        self.collide_stage.as_ref().map(|c| c.own.clone()).unwrap_or_default()
     }
 
     /// The collision settings, when collisions are on.
     pub fn collision_params(&self) -> Option<CollisionParams> {
-        self.collisions.as_ref().map(|c| c.params)
+        self.collide_stage.as_ref().map(|c| c.params)
     }
 
     /// Adds a static collider and returns its index; turns collisions on with the default
@@ -137,10 +210,10 @@ impl World {
     pub fn add_collider(&mut self, collider: impl Into<Collider>) -> Result<usize, Error> {
         let collider = collider.into();
         collider.check_dim(self.params.dim)?;
-        if self.collisions.is_none() {
+        if self.collide_stage.is_none() {
             self.set_collisions(CollisionParams::default())?;
         }
-        let stage = self.collisions.as_mut().expect("collisions are on");
+        let stage = self.collide_stage.as_mut().expect("collisions are on");
         stage.colliders.push(collider);
         let index = stage.colliders.len() - 1;
         self.rebuild_contact_force()?;
@@ -149,17 +222,17 @@ impl World {
 
     /// The colliders, in the order they were added.
     pub fn colliders(&self) -> &[Collider] {
-        self.collisions.as_ref().map_or(&[], |c| &c.colliders)
+        self.collide_stage.as_ref().map_or(&[], |c| &c.colliders)
     }
 
     /// Makes the axes with `axes[k]` true periodic, with the cell of the world's box collider
     /// (its walls along those axes then vanish: a particle leaving one side comes back on the
     /// other). All false makes space open again.
     pub fn set_periodic(&mut self, axes: [bool; 3]) -> Result<(), Error> {
-        if self.collisions.is_none() {
+        if self.collide_stage.is_none() {
             self.set_collisions(CollisionParams::default())?;
         }
-        let stage = self.collisions.as_mut().expect("collisions are on");
+        let stage = self.collide_stage.as_mut().expect("collisions are on");
         if !axes.iter().any(|a| *a) {
             stage.set_periodic(None)?;
             return self.rebuild_contact_force();
@@ -192,7 +265,7 @@ impl World {
 
     /// The periodic axes (all false for open space).
     pub fn periodic(&self) -> [bool; 3] {
-        self.collisions
+        self.collide_stage
             .as_ref()
             .and_then(|c| c.domain.periodic_box().map(|p| p.axes()))
             .unwrap_or([false; 3])
@@ -203,12 +276,12 @@ impl World {
     /// continuous detection were already resolved). Empty with the spring–dashpot model,
     /// whose contacts live inside the force evaluations.
     pub fn contacts(&self) -> &[Contact] {
-        self.collisions.as_ref().map_or(&[], |c| &c.impulse.detected)
+        self.collide_stage.as_ref().map_or(&[], |c| &c.impulse.detected)
     }
 
     /// What the collision stages did in the last step, and summed over all steps; `None`
     /// without collisions.
     pub fn collision_stats(&self) -> Option<(CollisionStats, CollisionStats)> {
-        self.collisions.as_ref().map(|c| (c.last, c.total))
+        self.collide_stage.as_ref().map(|c| (c.last, c.total))
     }
 }

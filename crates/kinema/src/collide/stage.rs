@@ -1,18 +1,19 @@
-//! Stages 2–4 of a world step as a stage of the world: the collision settings
-//! ([`ContactModel`], [`CollisionParams`]) and [`CollisionStage`], which holds them with the
+//! The collide stage, stages 2–4 of a world step (`World::collide`, `world/collide.rs`, calls
+//! it): the collision settings
+//! ([`ContactModel`], [`CollisionParams`]) and [`CollideStage`], which holds them with the
 //! colliders, the domain, the materials and the books summed over steps, and runs the impulse
-//! model's detection and response of `collide/` (`collide/impulse_stage/`) on each step:
+//! model's detection and response of `collide/` (`collide/impulse/`) on each step:
 //! detect collisions (continuously inside the step, then as contacts at its end), respond by
 //! Newton's restitution law, distribute each impulse onto both particles.
 
-use crate::collide::impulse_stage::{ImpulseStage, StageSetting};
+use crate::collide::impulse::{ImpulseModel, StageSetting};
 use crate::collide::{Collider, Domain, Material, MaterialTable, Partner, Periodic};
 use crate::error::Error;
 use crate::particles::Particles;
 
-pub(crate) use crate::collide::impulse_stage::end_of_step::on_periodic_wall;
-pub use crate::collide::impulse_stage::CollisionStats;
-pub(crate) use crate::collide::impulse_stage::{CollisionTimes, StepFrame};
+pub(crate) use crate::collide::impulse::end_of_step::on_periodic_wall;
+pub use crate::collide::impulse::CollisionStats;
+pub(crate) use crate::collide::impulse::{CollisionTimes, StepFrame};
 
 /// The contact model: how a collision changes the motion.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -190,8 +191,8 @@ impl CollisionParams {
 }
 
 /// The collision stages of a world, with their settings, colliders and books; the impulse
-/// model's buffers are its [`ImpulseStage`].
-pub(crate) struct CollisionStage {
+/// model's buffers are its [`ImpulseModel`].
+pub(crate) struct CollideStage {
     pub params: CollisionParams,
     material: Material,
     /// Per-particle restitution and friction where set (`None`: the global value); empty
@@ -203,24 +204,24 @@ pub(crate) struct CollisionStage {
     pub colliders: Vec<Collider>,
     pub domain: Domain,
     /// Detection and response of the impulse model, and their buffers.
-    pub impulse: ImpulseStage,
+    pub impulse: ImpulseModel,
     pub total: CollisionStats,
     pub last: CollisionStats,
     pub times: CollisionTimes,
 }
 
-impl CollisionStage {
+impl CollideStage {
     pub fn new(params: CollisionParams, dim: usize) -> Result<Self, Error> {
         let material = params.check()?;
         let params = params.normalised();
-        Ok(CollisionStage {
+        Ok(CollideStage {
             params,
             material,
             own: Vec::new(),
             particle_materials: None,
             colliders: Vec::new(),
             domain: Domain::open(dim)?,
-            impulse: ImpulseStage::new(),
+            impulse: ImpulseModel::new(),
             total: CollisionStats::default(),
             last: CollisionStats::default(),
             times: CollisionTimes::default(),
@@ -290,7 +291,7 @@ impl CollisionStage {
     }
 
     /// Stages 2–4 of the impulse model on the step from the particles' state (x0, v0) to the
-    /// integrated (x1, v1), updated in place ([`ImpulseStage::run`]); books what they did and
+    /// integrated (x1, v1), updated in place ([`ImpulseModel::run`]); books what they did and
     /// their time, and returns whether anything changed.
     pub fn run(&mut self, frame: &StepFrame<'_>, p: &Particles, x1: &mut [f64], v1: &mut [f64]) -> Result<bool, Error> {
         let table = MaterialTable::uniform(self.material).with_colliders(&self.colliders);

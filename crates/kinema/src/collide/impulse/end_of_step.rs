@@ -1,9 +1,9 @@
-//! The end of an impulse-model step (stages 2–4 after the impacts, [`ImpulseStage::run`]):
+//! The end of an impulse-model step (stages 2–4 after the impacts, [`ImpulseModel::run`]):
 //! the contacts of the touched particles and of the piles they reach (detection), the
 //! velocity solve of Newton's law with its warm start and the overlap removed (response),
 //! each impulse onto both particles and the energy books (distribution).
 
-use super::{ImpulseStage, StageSetting};
+use super::{ImpulseModel, StageSetting};
 use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::CHUNK;
@@ -35,7 +35,7 @@ pub(crate) fn on_periodic_wall(c: &Contact, colliders: &[Collider], domain: &Dom
             .is_some_and(|p| (0..3).any(|k| p.axes()[k] && c.normal[k] != 0.0))
 }
 
-impl ImpulseStage {
+impl ImpulseModel {
     /// The contacts at the end of the step (pairs within the [`SPECULATIVE`] margin of
     /// touching, and with colliders) of the touched particles, and of every particle they
     /// reach through such contacts: a pile is one contact network, and the solver must see all

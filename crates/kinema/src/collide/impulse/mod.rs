@@ -1,10 +1,10 @@
-//! The impulse model's collision stages 2–4 over one step ([`ImpulseStage::run`]): what they
+//! The impulse model's collision stages 2–4 over one step ([`ImpulseModel::run`]): what they
 //! keep from step to step (the candidate list, the paths and the queue of impacts, the wake
 //! times, the end-of-step contacts and their warm start), what the world tells them
 //! ([`StageSetting`], [`StepFrame`]) and what they report ([`CollisionStats`],
 //! [`CollisionTimes`]). Continuous detection and the impacts are in `impacts.rs`, the
 //! end-of-step contacts, their solve and the books in `end_of_step.rs`; the world keeps the
-//! settings, colliders, domain and the books summed over steps (`world/collisions.rs`).
+//! settings, colliders, domain and the books summed over steps (`collide/stage.rs`).
 
 pub(crate) mod end_of_step;
 pub(crate) mod impacts;
@@ -147,14 +147,14 @@ pub(crate) struct StageSetting<'a> {
 }
 
 /// What the stages keep of their contacts while particles are added
-/// ([`ImpulseStage::take_contacts`]).
+/// ([`ImpulseModel::take_contacts`]).
 pub(crate) struct KeptContacts {
     warm: Vec<(usize, Partner, [f64; 3])>,
     sleep: Sleep,
 }
 
 /// The impulse model's stages and their buffers.
-pub(crate) struct ImpulseStage {
+pub(crate) struct ImpulseModel {
     pub(super) grid: Grid,
     /// Candidate pairs of continuous detection and of the end-of-step contacts.
     pub(super) list: NeighbourList,
@@ -199,10 +199,10 @@ pub(crate) struct ImpulseStage {
     pub interrupt: Interrupt,
 }
 
-impl ImpulseStage {
+impl ImpulseModel {
     /// Empty buffers; no check may stop a step.
     pub fn new() -> Self {
-        ImpulseStage {
+        ImpulseModel {
             grid: Grid::new(),
             list: NeighbourList::default(),
             paths: PathStore::default(),
@@ -252,7 +252,7 @@ impl ImpulseStage {
     }
 
     /// The contacts' warm start and the islands asleep, taken out (particles are being added:
-    /// [`ImpulseStage::keep_contacts`] gives them back).
+    /// [`ImpulseModel::keep_contacts`] gives them back).
     pub fn take_contacts(&mut self) -> KeptContacts {
         KeptContacts {
             warm: std::mem::take(&mut self.warm),
@@ -284,7 +284,7 @@ impl ImpulseStage {
         self.sleep.carry(n)
     }
 
-    /// Gives back what [`ImpulseStage::sleep_carry`] took, after the warm start (which holds
+    /// Gives back what [`ImpulseModel::sleep_carry`] took, after the warm start (which holds
     /// the sleeping islands' contacts, taken out of it here): the islands asleep again, each
     /// with its largest overlap measured at `x`.
     pub fn restore_sleep(&mut self, calm: Vec<f64>, island: &[i64], deepest: impl Fn(usize, Partner) -> f64) {
@@ -386,15 +386,15 @@ impl ImpulseStage {
             }
         };
         let mut paths = Paths::begin(&mut store, x0, v0, accel);
-        let result = self.stages(set, &mut paths, clock, frame, x1, v1);
+        let result = self.run_on_paths(set, &mut paths, clock, frame, x1, v1);
         self.paths = store;
         self.fitted = fitted;
         result
     }
 
-    /// The body of [`ImpulseStage::run`] on the step's paths (`clock`: the detect stage's
+    /// The body of [`ImpulseModel::run`] on the step's paths (`clock`: the detect stage's
     /// start).
-    fn stages(
+    fn run_on_paths(
         &mut self,
         set: &StageSetting<'_>,
         paths: &mut Paths<'_>,

@@ -1,5 +1,5 @@
 //! Continuous detection of the impulse model and its impacts in time order (stages 2–4 inside
-//! the step, [`ImpulseStage::run`]): the neighbour list made to hold for the step's sweep,
+//! the step, [`ImpulseModel::run`]): the neighbour list made to hold for the step's sweep,
 //! each particle's first impact into the queue, the impacts popped in time order, each
 //! resolved by Newton's law and distributed at its time, and the force-free world's wake
 //! times (`wake.rs`) for the next steps.
@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use super::end_of_step::distribute;
-use super::{CollisionStats, ImpulseStage, StageSetting};
+use super::{CollisionStats, ImpulseModel, StageSetting};
 use crate::collide::events::{swept_reach, Event, Paths, Scene};
 use crate::collide::neighbour_list::{collider_scale, ListBuild, CHUNK, SKIN_PER_RADIUS};
 use crate::collide::response::VELOCITY_TOLERANCE;
@@ -52,7 +52,7 @@ macro_rules! scene {
     };
 }
 
-impl ImpulseStage {
+impl ImpulseModel {
     /// Makes the neighbour list hold for the whole step's sweep (rebuilt at x0 if not) and
     /// returns the restitution threshold (m/s), the largest swept displacement of any particle
     /// from the list's build positions (m) and the largest speed change the forces gave a
@@ -154,7 +154,7 @@ impl ImpulseStage {
         Ok((threshold, top.0, kick))
     }
 
-    /// Continuous detection and the impacts in time order (see [`ImpulseStage::run`]):
+    /// Continuous detection and the impacts in time order (see [`ImpulseModel::run`]):
     /// returns the time spent detecting, responding and distributing, and whether any impulse
     /// was applied. `reach`: the largest swept displacement from the list's build positions.
     pub(super) fn impacts(
