@@ -223,6 +223,17 @@ def _energy_plot(traj, out: Path) -> Path:
         plt.close(fig)
 
 
+def _refuse_special_outputs(outdir: Path, names: list[str]) -> None:
+    """Before any work: each output the run will move into ``outdir`` may replace only a
+    regular file (a folder, a device, a FIFO or a socket of that name is refused, untouched)."""
+    from .io._files import refuse_special_target
+
+    for name in names:
+        if (outdir / name).is_dir():
+            raise ValueError(f"-o {outdir}: {name} there is a folder; the run writes a file of that name")
+        refuse_special_target(outdir / name)
+
+
 def _outdir(out: Path) -> Path:
     if out.exists() and not out.is_dir():
         raise ValueError(f"-o {out}: exists and is not a folder")
@@ -264,6 +275,7 @@ def simulate_scene(
     estimate = _scene_work(sc, scene, seconds, "world.duration" if duration is None else "--duration", bool(video), force)
     world = sc.build(source=str(scene))
     outdir = _outdir(outdir)
+    _refuse_special_outputs(outdir, [n for n, on in (("trajectory.h5", sc.output.trajectory), (f"{scene.stem}.{video}", video), ("energy.png", sc.output.plot)) if on])
     _remove_stale_stages(outdir)
     fps = sc.world.fps
     frames = int(_frames_and_steps(seconds, world.dt, fps)[0])

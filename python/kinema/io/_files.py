@@ -7,6 +7,7 @@ import os
 import re
 import secrets
 import shutil
+import stat
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -73,9 +74,37 @@ def _temporary_folder(parent: Path, prefix: str, suffix: str) -> Path:
     raise FileExistsError(errno.EEXIST, "no unused temporary name", str(parent))
 
 
+_KINDS = (
+    (stat.S_ISCHR, "character device"),
+    (stat.S_ISBLK, "block device"),
+    (stat.S_ISFIFO, "FIFO (named pipe)"),
+    (stat.S_ISSOCK, "socket"),
+)
+
+
+def refuse_special_target(path: str | os.PathLike) -> None:
+    """Refuses a target that exists and is not a regular file (followed through symbolic
+    links): a device, a FIFO, a socket. Every writer puts a temporary file in place of its
+    target by a rename, which would replace such a node (a save to /dev/null as root made
+    the machine's /dev/null an 80 kB file), so kinema writes only where nothing stands or a
+    regular file does, and leaves anything else untouched. Nothing is opened: a FIFO is not
+    blocked on. A directory is refused by the callers, with their own advice."""
+    path = Path(path)
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return
+    except OSError as e:  # a name too long, a loop of links, a folder not searchable
+        raise TrajectoryFileError(f"cannot write {path}: {e.strerror or e}") from None
+    for test, kind in _KINDS:
+        if test(mode):
+            raise TrajectoryFileError(f"cannot write {path}: it is a {kind}, not a regular file; kinema replaces only regular files, so give another name")
+
+
 def _writable_parent(path: Path) -> Path:
     if path.is_dir():
         raise TrajectoryFileError(f"cannot write {path}: it is a directory; give a file name such as {path / 'run.h5'}")
+    refuse_special_target(path)
     parent = path.parent
     if not parent.is_dir():
         raise TrajectoryFileError(f"cannot write {path}: the folder {parent} does not exist")

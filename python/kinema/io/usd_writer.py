@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ._cell import box_corners, trajectory_cell
-from ._files import Frames, TrajectoryFileError
+from ._files import Frames, TrajectoryFileError, refuse_special_target
 
 SUFFIXES = (".usd", ".usda", ".usdc")  # binary crate (.usd, .usdc) or text (.usda)
 
@@ -50,6 +50,9 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise TrajectoryFileError(f"cannot write {path}: the folder {parent} does not exist")
+    if path.is_dir():
+        raise TrajectoryFileError(f"cannot write {path}: it is a directory; give a file name such as {path / 'run.usdc'}")
+    refuse_special_target(path)
     # USD picks the file format from the name's suffix, so the stage is written under its own
     # name in a temporary folder beside the target, then renamed over it.
     staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=parent))

@@ -70,6 +70,11 @@ def write_video(
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise FileNotFoundError(f"path = {str(path)!r} is invalid: the directory {str(parent)!r} does not exist")
+    if path.is_dir():
+        raise IsADirectoryError(f"path = {str(path)!r} is invalid: it is a directory; give a file name such as {str(path / ('video' + ext))!r}")
+    from ..io._files import refuse_special_target
+
+    refuse_special_target(path)
     fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".part{ext}", dir=parent)
     os.close(fd)
     tmp = Path(tmp_name)
