@@ -167,8 +167,7 @@ def test_a_regular_file_is_still_replaced(tmp_path, traj):
 def test_kinema_run_refuses_a_fifo_among_its_outputs_before_any_work(tmp_path):
     scene = tmp_path / "drop.toml"
     scene.write_text(
-        '[world]\ndim = 3\ndt = 0.01\nduration = 0.05\nfps = 20\n[[particles]]\ntype = "list"\npositions = [[0, 0, 1]]\n'
-        '[output]\nvideo = false\nplot = false\n'
+        '[world]\ndim = 3\ndt = 0.01\nduration = 0.05\nfps = 20\n[[particles]]\ntype = "list"\npositions = [[0, 0, 1]]\n[output]\nvideo = false\nplot = false\n'
     )
     out = tmp_path / "out"
     out.mkdir()

@@ -42,10 +42,8 @@ VERSION = 1
 def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> Path:
     """Write ``world`` to ``path`` (see the module doc) and restart its caches; returns the path.
     (``_run``: the progress of ``World.run``, written by it; see ``resume_run``.)"""
-    import h5py
-
     from . import __version__
-    from .io._files import atomic_file
+    from .io._files import hdf5_file
 
     path = Path(path)
     world._push()
@@ -54,7 +52,7 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
     carry = core.integrator_carry()
     warm = core.collision_carry()
     calm, island = core.sleep_carry()
-    with atomic_file(path) as tmp, h5py.File(tmp, "w") as f:
+    with hdf5_file(path) as f:
         f.attrs["format"] = FORMAT
         f.attrs["version"] = VERSION
         f.attrs["kinema"] = __version__

@@ -124,14 +124,14 @@ def save_figure_atomically(fig, out: Path, dpi: int = 130) -> Path:
     suffix = out.suffix.lower().lstrip(".")
     if suffix not in {"png", "svg", "pdf", "jpg", "jpeg"}:
         raise OutputError(f"--out {out}: unsupported image format '{out.suffix}'; use .png, .svg, .pdf or .jpg")
-    from .io._files import TrajectoryFileError, atomic_file
+    from .io._files import FileWriteError, TrajectoryFileError, atomic_file
 
     parent = out.parent if str(out.parent) else Path(".")
     try:
         parent.mkdir(parents=True, exist_ok=True)
         with atomic_file(out) as tmp:  # the mode an ordinary open() gives (mkstemp's was 0600)
             fig.savefig(tmp, dpi=dpi, format=suffix, bbox_inches="tight")
-    except TrajectoryFileError as e:  # (an OSError of the write, naming the file)
+    except (TrajectoryFileError, FileWriteError) as e:  # (one line naming the file)
         raise OutputError(f"--out {out}: {e}") from None
     except OSError as e:
         raise OutputError(f"--out {out}: cannot write there ({e.strerror or e})") from None
@@ -275,7 +275,9 @@ def simulate_scene(
     estimate = _scene_work(sc, scene, seconds, "world.duration" if duration is None else "--duration", bool(video), force)
     world = sc.build(source=str(scene))
     outdir = _outdir(outdir)
-    _refuse_special_outputs(outdir, [n for n, on in (("trajectory.h5", sc.output.trajectory), (f"{scene.stem}.{video}", video), ("energy.png", sc.output.plot)) if on])
+    _refuse_special_outputs(
+        outdir, [n for n, on in (("trajectory.h5", sc.output.trajectory), (f"{scene.stem}.{video}", video), ("energy.png", sc.output.plot)) if on]
+    )
     _remove_stale_stages(outdir)
     fps = sc.world.fps
     frames = int(_frames_and_steps(seconds, world.dt, fps)[0])

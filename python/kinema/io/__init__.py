@@ -6,8 +6,10 @@
 - ``export(traj, path, format)``: VTK PolyData series with a .pvd collection and the
   colliders (ParaView, OVITO), PLY per frame (Blender, Houdini), extended XYZ (OVITO, ASE),
   CSV, GSD (HOOMD, OVITO), a LAMMPS dump (OVITO, ASE, VMD).
-- ``TrajectoryFileError``: a file that cannot be read or written (a ``ValueError`` whose
-  message is one line naming the file).
+- ``TrajectoryFileError``: a file that cannot be read, or a target refused before writing (a
+  ``ValueError`` whose message is one line naming the file).
+- ``FileWriteError``: a write the system failed (a full disk, a file-size limit, an I/O
+  error; an ``OSError`` with the system's ``errno``, one line naming the file).
 
 Births and deaths (``Trajectory.alive``) are written by every format: H5MD keeps one column
 per particle with its ``id`` element's fill value where it does not exist (and reads it back,
@@ -17,8 +19,8 @@ Every writer writes under a temporary name and renames at the end: a failed writ
 partial file behind and the previous file as it was.
 """
 
-from ._files import TrajectoryFileError
+from ._files import FileWriteError, TrajectoryFileError
 from .exports import FORMATS, export
 from .h5md import LoadedTrajectory, load_h5md, save_h5md
 
-__all__ = ["FORMATS", "LoadedTrajectory", "TrajectoryFileError", "export", "load_h5md", "save_h5md"]
+__all__ = ["FORMATS", "FileWriteError", "LoadedTrajectory", "TrajectoryFileError", "export", "load_h5md", "save_h5md"]

@@ -25,6 +25,26 @@ class TrajectoryFileError(ValueError):
     __module__ = "kinema.io"
 
 
+class FileWriteError(OSError):
+    """A write the system failed: a full disk (ENOSPC), a file-size limit (EFBIG), an I/O
+    error (EIO), a permission refused while writing. The message is one line naming the file
+    and the system's reason; ``errno`` is the system's. The target is left as it was and no
+    temporary file remains. (A target refused before writing, such as a folder or a device,
+    is a ``TrajectoryFileError``.)"""
+
+    __module__ = "kinema.io"
+
+    @classmethod
+    def of(cls, path: str | os.PathLike, e: OSError) -> FileWriteError:
+        """The error for ``path`` from the system's ``e`` (``errno``, ``strerror`` and
+        ``filename`` set as an ``OSError``'s)."""
+        reason = e.strerror or str(e)
+        return cls(e.errno, reason, os.fspath(path))
+
+    def __str__(self) -> str:
+        return f"cannot write {self.filename}: {self.strerror}"
+
+
 def _umask() -> int:
     """The process's umask. Linux reports it in /proc/self/status; elsewhere it is read by
     setting and restoring it, which briefly changes it for every thread of the process (the
@@ -119,21 +139,48 @@ def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
     exception the temporary file is renamed to ``path`` (``os.replace``, atomic on one file
     system), otherwise it is removed and ``path`` is left as it was. The file gets the mode
     an ordinary ``open()`` would give it (0666 less the umask). An ``OSError`` while writing
-    becomes a ``TrajectoryFileError`` naming ``path``."""
+    becomes a ``FileWriteError`` naming ``path``."""
     path = Path(path)
     parent = _writable_parent(path)
     try:
         tmp = _temporary_file(parent, f".{path.name}.", ".part")
     except OSError as e:
-        raise TrajectoryFileError(f"cannot write {path}: {e.strerror}") from None
+        raise FileWriteError.of(path, e) from None
     try:
         yield tmp
         os.replace(tmp, path)
     except BaseException as e:
         tmp.unlink(missing_ok=True)
-        if isinstance(e, OSError) and not isinstance(e, TrajectoryFileError):
-            raise TrajectoryFileError(f"cannot write {path}: {e.strerror or e}") from e
+        if isinstance(e, OSError) and not isinstance(e, FileWriteError):
+            raise FileWriteError.of(path, e) from None
         raise
+
+
+@contextmanager
+def hdf5_file(path: str | os.PathLike, **options: Any) -> Iterator[Any]:
+    """Yields an ``h5py.File`` open for writing whose contents become ``path`` when the block
+    ends without an exception (written as ``atomic_file`` writes; ``options`` go to
+    ``h5py.File``).
+
+    HDF5 never writes to the disk here: it builds the file in memory (h5py's file-object
+    driver on a ``BytesIO``), and Python writes the finished bytes. A write that fails (a full
+    disk, a file-size limit, an I/O error) then fails in Python, as one ``FileWriteError``
+    naming ``path``, with the temporary file removed. Given to HDF5 itself, the failure leaves
+    objects that cannot be closed, since closing writes: their deallocation prints dozens of
+    tracebacks and the interpreter crashes at exit (h5py issues 914, 1775, 2160). The cost is
+    the file's size in memory while it is built, about what the trajectory already holds."""
+    import io
+
+    from ._h5md_layout import import_h5py
+
+    h5py = import_h5py()
+    path = Path(path)
+    _writable_parent(path)  # refused before the work of building it
+    image = io.BytesIO()
+    with h5py.File(image, "w", **options) as f:
+        yield f
+    with atomic_file(path) as tmp, open(tmp, "wb") as out:
+        out.write(image.getbuffer())
 
 
 @contextmanager
@@ -159,7 +206,7 @@ def atomic_folder(folder: str | os.PathLike, pattern: str) -> Iterator[Path]:
     try:
         tmp = _temporary_folder(parent, f".{folder.name}.", ".part")
     except OSError as e:
-        raise TrajectoryFileError(f"cannot write {folder}: {e.strerror}") from None
+        raise FileWriteError.of(folder, e) from None
     try:
         yield tmp
         old = None
@@ -171,8 +218,8 @@ def atomic_folder(folder: str | os.PathLike, pattern: str) -> Iterator[Path]:
             shutil.rmtree(old, ignore_errors=True)
     except BaseException as e:
         shutil.rmtree(tmp, ignore_errors=True)
-        if isinstance(e, OSError) and not isinstance(e, TrajectoryFileError):
-            raise TrajectoryFileError(f"cannot write {folder}: {e.strerror or e}") from e
+        if isinstance(e, OSError) and not isinstance(e, FileWriteError):
+            raise FileWriteError.of(folder, e) from None
         raise
 
 

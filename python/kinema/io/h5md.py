@@ -62,7 +62,7 @@ import numpy as np
 
 from ._cell import particle_types
 from ._checks import available_memory
-from ._files import TrajectoryFileError, atomic_file, frames_of
+from ._files import TrajectoryFileError, frames_of, hdf5_file
 from ._h5md_checks import fail
 from ._h5md_layout import BY_FORCE, H5MD_VERSION, OBSERVABLES, import_h5py
 from .h5md_reader import LoadedTrajectory, read
@@ -314,7 +314,7 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     datasets. The file is written under a temporary name in the same folder and renamed at
     the end, so a failed write leaves ``path`` as it was. Raises ``TrajectoryFileError`` when
     ``path`` cannot be written and ``ValueError`` for a malformed trajectory."""
-    h5py = import_h5py()
+    import_h5py()  # the ImportError that says how to get it, before any work
     if not group or "/" in group or group in (".", ".."):
         raise ValueError(f"group = {group!r} is invalid: it must be a non-empty name without '/'")
     fr = frames_of(traj)
@@ -324,9 +324,8 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
         except Exception:
             author = "unknown"
     path = Path(path)
-    with atomic_file(path) as tmp:
-        with h5py.File(tmp, "w", libver=("earliest", "latest"), track_order=True) as f:
-            _write(f, traj, fr, group, author, compression)
+    with hdf5_file(path, libver=("earliest", "latest"), track_order=True) as f:
+        _write(f, traj, fr, group, author, compression)
     return path
 
 

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ._cell import box_corners, trajectory_cell
-from ._files import Frames, TrajectoryFileError, refuse_special_target
+from ._files import FileWriteError, Frames, TrajectoryFileError, refuse_special_target
 
 SUFFIXES = (".usd", ".usda", ".usdc")  # binary crate (.usd, .usdc) or text (.usda)
 
@@ -107,7 +107,7 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
         stage.GetRootLayer().Save()
         os.replace(tmp, path)
     except OSError as e:
-        raise TrajectoryFileError(f"cannot write {path}: {e.strerror or e}") from None
+        raise FileWriteError.of(path, e) from None
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return [path]

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io._files import FileWriteError
+
 #: File extensions ``write_video`` knows.
 VIDEO_EXTENSIONS = (".mp4", ".gif")
 
@@ -85,9 +87,13 @@ def write_video(
         count = (_write_mp4 if ext == ".mp4" else _write_gif)(stream, tmp, rate, preset, crf)
         if count == 0:
             raise ValueError("frames is empty: a video needs at least one frame")
+        if ext == ".mp4":
+            _check_mp4(tmp, path, count)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as e:
         tmp.unlink(missing_ok=True)
+        if isinstance(e, OSError) and not isinstance(e, FileWriteError):
+            raise _encoder_failure(path, e) from None
         raise
     return path
 
@@ -181,6 +187,35 @@ _MP4_COLOUR = [
     "-color_range",
     "tv",
 ]
+
+
+def _encoder_failure(path: Path, e: OSError | None) -> FileWriteError:
+    """The error of a video the encoder could not finish: the system's reason where the
+    encoder's pipe or file told it, else ENOSPC when the folder is full, else EIO."""
+    import errno
+    import shutil
+
+    if e is not None and e.errno is not None and e.errno != errno.EPIPE:
+        return FileWriteError.of(path, e)
+    parent = path.parent if str(path.parent) else Path(".")
+    full = shutil.disk_usage(parent).free < 1 << 20
+    code = errno.ENOSPC if full else errno.EIO
+    reason = os.strerror(code) if full else "the video encoder (ffmpeg) did not finish the file"
+    return FileWriteError(code, reason, os.fspath(path))
+
+
+def _check_mp4(tmp: Path, path: Path, count: int) -> None:
+    """The MP4 at ``tmp`` holds all ``count`` frames, or raises ``FileWriteError``: ffmpeg's
+    exit status is not reported through imageio-ffmpeg's writer, and a disk that fills while
+    it writes the last packets or the index (moov) leaves a file no player opens."""
+    import imageio_ffmpeg
+
+    try:
+        frames, _ = imageio_ffmpeg.count_frames_and_secs(str(tmp))
+    except (RuntimeError, OSError):
+        frames = -1
+    if frames != count:
+        raise _encoder_failure(path, None)
 
 
 def _write_mp4(frames: Iterator[np.ndarray], tmp: Path, rate: Fraction, preset: str, crf: int) -> int:
