@@ -4,6 +4,7 @@ any integration method of the registry, colliding with each other and with stati
 
 from __future__ import annotations
 
+import threading
 import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -31,6 +32,13 @@ REENTRY = (
     "the world was used while it is stepping (from one of its own forces, or another thread): "
     "a force computes F(t, x, v) from its arguments and must leave its world alone"
 )
+
+
+def _other_thread(owner: int) -> RuntimeError:
+    return RuntimeError(
+        f"this World was made on thread {owner} and is used on thread {threading.get_ident()}: a World (its engine and its "
+        "Python forces) belongs to the thread that made it; make one per thread (or per process: kinema.sweep runs members so)"
+    )
 
 
 class _Busy:
@@ -73,6 +81,7 @@ class World(WorldCollisions):
 
     def __init__(self, dim: int = 3, dt: float = 1e-3, method: str | ButcherTableau = "verlet"):
         dim = _checks.integer("dim", dim, 2, 3, what="a world is 2D (the xy-plane) or 3D: dim must be 2 or 3")
+        self._owner = threading.get_ident()
         self._core = _core.World(dim, _checks.real("dt", dt), method)
         self._forces: list[Any] = []
         self._colliders: list[Collider] = []
@@ -89,6 +98,20 @@ class World(WorldCollisions):
         self._spring_ids = np.empty((0, 2), dtype=np.int64)
         self._advised_at = 0  # particles when the advisor last looked
         self._new_views()
+
+    # The engine is the thread's that made the world (pyo3's `unsendable`: its Python forces
+    # and shared buffers are not thread-safe). Every use of it goes through `_core`, which
+    # checks the thread first: from another thread, a RuntimeError that says so, where pyo3
+    # would raise its PanicException (a BaseException, with a Rust backtrace).
+    @property
+    def _core(self) -> Any:
+        if threading.get_ident() != self._owner:
+            raise _other_thread(self._owner)
+        return self._engine_core
+
+    @_core.setter
+    def _core(self, core: Any) -> None:
+        self._engine_core = core
 
     @contextmanager
     def _engine(self) -> Iterator[Any]:
