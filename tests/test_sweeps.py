@@ -160,6 +160,65 @@ def test_a_sweep_run_again_skips_finished_members(tmp_path):
     assert again.rows == first.rows
 
 
+def test_a_sweep_run_again_with_other_settings_runs_its_members_again(tmp_path):
+    # Before, a rerun into the same folder reused every member that had a result.json: with
+    # another duration, summary.csv kept the old run's frames (issue 26). A member is reused
+    # only when its key (scene and seed, duration, measure, kinema version) is the same.
+    vary = {"collisions.restitution": [0.5, 0.9]}
+    out = tmp_path / "s"
+    kinema.sweep(gas(duration=0.3), vary, out=out, progress=False, plot=False, workers=1)
+    assert [r["frames"] for r in rows(out)] == ["7", "7"]  # 0.3 s at 20 fps, both ends
+    kinema.sweep(gas(duration=0.3), vary, out=out, duration=0.1, progress=False, plot=False, workers=1)
+    assert [r["frames"] for r in rows(out)] == ["3", "3"]
+    # a changed scene (another count of particles) runs again too; the same one is reused
+    changed = kinema.sweep(gas(count=30, duration=0.3), vary, out=out, duration=0.1, progress=False, plot=False, workers=1)
+    stamps = [(out / "members" / m.name / "result.json").stat().st_mtime_ns for m in changed.members]
+    again = kinema.sweep(gas(count=30, duration=0.3), vary, out=out, duration=0.1, progress=False, plot=False, workers=1)
+    assert [(out / "members" / m.name / "result.json").stat().st_mtime_ns for m in again.members] == stamps
+    assert again.rows == changed.rows
+    # a measure is part of the key: adding one runs the members again, with its column
+    measured = kinema.sweep(gas(count=30, duration=0.3), vary, out=out, duration=0.1, measure=picky_top, progress=False, plot=False, workers=1)
+    assert all("top" in r for r in measured.rows)
+
+
+def picky_top(traj, world):
+    return {"top": float(traj.positions[-1][:, 2].max())}
+
+
+def test_a_key_varied_twice_is_an_error(tmp_path):
+    scene = tmp_path / "gas.toml"
+    kinema.scene.Scene.from_dict(gas()).to_toml(scene)
+    res = subprocess.run(
+        [str(BIN / "kinema"), "sweep", str(scene), "--vary", "collisions.restitution=0.5", "--vary", "collisions.restitution=0.9", "-o", str(tmp_path / "s")],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert res.returncode == 2 and "collisions.restitution is varied twice" in res.stderr, res.stderr
+    assert not (tmp_path / "s").exists()
+
+
+def test_the_local_cluster_listens_on_loopback_only(tmp_path, monkeypatch):
+    # Before, the dashboard (workers, logs, call stacks) listened on 0.0.0.0 (issue 26): every
+    # socket the scheduler and its workers listen on is on 127.0.0.1.
+    import distributed
+    import psutil
+
+    listening = []
+    real = distributed.LocalCluster
+
+    def spy(*args, **kwargs):
+        cluster = real(*args, **kwargs)
+        me = psutil.Process()
+        for proc in [me, *me.children(recursive=True)]:
+            listening.extend(c.laddr.ip for c in proc.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN)
+        return cluster
+
+    monkeypatch.setattr(distributed, "LocalCluster", spy)
+    kinema.sweep(gas(), {"collisions.restitution": [0.5, 0.9]}, out=tmp_path / "s", workers=2, progress=False, plot=False)
+    assert len(listening) >= 3 and set(listening) == {"127.0.0.1"}, listening
+
+
 def test_the_command_runs_a_sweep(tmp_path):
     scene = tmp_path / "gas.toml"
     kinema.scene.Scene.from_dict(gas()).to_toml(scene)

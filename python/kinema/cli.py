@@ -353,6 +353,8 @@ def sweep(
         key, eq, values = item.partition("=")
         if not eq or not key.strip():
             raise ValueError(f"--vary {item!r}: use KEY=V1,V2,... (e.g. collisions.restitution=0.5,0.7,0.9)")
+        if key.strip() in grid:
+            raise ValueError(f"--vary {item!r}: the key {key.strip()} is varied twice; give all its values in one --vary")
         try:
             grid[key.strip()] = parse_values(values)
         except ValueError as e:

@@ -13,8 +13,12 @@ A sweep's folder::
     timings.csv              one row per member: its wall time and the worker that ran it
     summary.png              each measurement against each varied key, mean ± spread over seeds
 
-A member is finished when its ``result.json`` exists (written last, atomically): a sweep run
-again into the same folder skips finished members and runs the others. A member whose worker
+A member is finished when its ``result.json`` exists (written last, atomically) and holds the
+member's key: a sweep run again into the same folder skips the finished members whose key is
+the same and runs the others. The key (``member_key``) is a hash of what the member's row
+depends on: its scene with its seed, the duration, the measure (its name and code) and the
+kinema version. A member whose scene, duration, measure or kinema changed is run again, its
+old trajectory, result and checkpoint replaced. A member whose worker
 dies is run again elsewhere (Dask's retries); a member that raises is recorded with its error
 and the others go on.
 
@@ -27,6 +31,7 @@ from __future__ import annotations
 
 import copy
 import csv
+import hashlib
 import itertools
 import json
 import math
@@ -158,9 +163,45 @@ def _scene_data(scene: Scene | str | Path | dict) -> tuple[dict, str]:
 # -- one member -------------------------------------------------------------------------------
 
 
-def run_member(member: Member, folder: str, duration: float | None, measure: Callable | bytes | None, checkpoint_every: float | None = None) -> dict[str, Any]:
+def _measure_id(measure: Callable | None) -> str:
+    """What identifies a measure for a member's key: its module and name, and the hash of its
+    code where it has one (a changed body under the same name is another measure)."""
+    if measure is None:
+        return ""
+    name = f"{getattr(measure, '__module__', '')}.{getattr(measure, '__qualname__', type(measure).__name__)}"
+    code = getattr(measure, "__code__", None)
+    if code is not None:
+        body = code.co_code + repr(code.co_consts).encode() + repr(code.co_names).encode()
+        name += ":" + hashlib.sha256(body).hexdigest()[:16]
+    return name
+
+
+def member_key(member: Member, duration: float | None, measure: Callable | None) -> str:
+    """The hash of what a member's row depends on: its scene (seed included), the duration,
+    the measure and the kinema version (hex, 32 digits)."""
+    from . import __version__
+
+    what = {"scene": member.scene, "duration": duration, "measure": _measure_id(measure), "kinema": __version__}
+    return hashlib.sha256(json.dumps(what, sort_keys=True, default=repr).encode()).hexdigest()[:32]
+
+
+def _finished(where: Path, key: str) -> dict | None:
+    """The member's result.json if it holds ``key`` (else None: not run, or run for another key)."""
+    try:
+        result = json.loads((where / "result.json").read_text())
+    except (OSError, ValueError):
+        return None
+    return result if isinstance(result, dict) and result.get("key") == key else None
+
+
+def run_member(
+    member: Member, folder: str, duration: float | None, measure: Callable | bytes | None, checkpoint_every: float | None = None, key: str = ""
+) -> dict[str, Any]:
     """Runs one member in this process and writes its folder; returns its row. Never raises
-    for the member's own failure (the row has ``error``): only a dying worker is retried."""
+    for the member's own failure (the row has ``error``): only a dying worker is retried.
+    ``key``: the member's key (``member_key``), written into its result.json and beside its
+    checkpoint; a checkpoint written for another key is not resumed."""
+    import gc
     import traceback
 
     from .io._files import atomic_file
@@ -171,6 +212,12 @@ def run_member(member: Member, folder: str, duration: float | None, measure: Cal
         measure = cloudpickle.loads(measure)
     where = Path(folder) / "members" / member.name
     where.mkdir(parents=True, exist_ok=True)
+    stamp = where / "key"
+    if (where / "checkpoint.ckpt").is_file() and (not stamp.is_file() or stamp.read_text().strip() != key):
+        (where / "checkpoint.ckpt").unlink()  # another member's run: not resumed
+    (where / "result.json").unlink(missing_ok=True)
+    with atomic_file(stamp) as tmp:
+        tmp.write_text(key)
     row: dict[str, Any] = {"member": member.name, **member.values, "seed": member.seed}
     start = time.perf_counter()
     try:
@@ -207,7 +254,11 @@ def run_member(member: Member, folder: str, duration: float | None, measure: Cal
         (where / "error.txt").write_text(traceback.format_exc())
     timing = {"wall_s": time.perf_counter() - start, "host": socket.gethostname(), "pid": os.getpid()}
     with atomic_file(where / "result.json") as tmp:
-        tmp.write_text(json.dumps({"row": row, "timing": timing}, indent=1))
+        tmp.write_text(json.dumps({"row": row, "timing": timing, "key": key}, indent=1))
+    # The member's World belongs to this thread: freed here (with any cycle it is in), not
+    # later by a collection on another thread of the worker, where pyo3 would refuse to drop it.
+    world = traj = None
+    gc.collect()
     return {"row": row, "timing": timing}
 
 
@@ -250,14 +301,15 @@ def sweep(
     (folder / "sweep.json").write_text(json.dumps(asked, indent=1, default=str))
     results: dict[int, dict] = {}
     todo = []
+    keys = {m.index: member_key(m, duration, measure) for m in grid}
     for m in grid:
-        done = folder / "members" / m.name / "result.json"
-        if done.exists():
-            results[m.index] = json.loads(done.read_text())
+        done = _finished(folder / "members" / m.name, keys[m.index])
+        if done is not None:
+            results[m.index] = done
         else:
             todo.append(m)
     if todo:
-        results.update(_run_all(todo, folder, duration, measure, client, workers, progress, checkpoint_every))
+        results.update(_run_all(todo, folder, duration, measure, client, workers, progress, checkpoint_every, keys))
     rows = [results[m.index]["row"] for m in grid]
     _write_csv(folder / "summary.csv", rows)
     _write_csv(folder / "timings.csv", [{"member": m.name, **results[m.index]["timing"]} for m in grid])
@@ -266,9 +318,9 @@ def sweep(
     return SweepResult(folder, grid, rows)
 
 
-def _run_all(todo: list[Member], folder: Path, duration, measure, client, workers, progress, checkpoint_every=None) -> dict[int, dict]:
+def _run_all(todo: list[Member], folder: Path, duration, measure, client, workers, progress, checkpoint_every, keys: dict[int, str]) -> dict[int, dict]:
     if client is None and len(todo) == 1:
-        return {todo[0].index: run_member(todo[0], str(folder), duration, measure, checkpoint_every)}
+        return {todo[0].index: run_member(todo[0], str(folder), duration, measure, checkpoint_every, keys[todo[0].index])}
     from distributed import Client, LocalCluster, as_completed
 
     own = None
@@ -276,7 +328,17 @@ def _run_all(todo: list[Member], folder: Path, duration, measure, client, worker
         n = max(1, min(workers or os.cpu_count() or 1, len(todo)))
         threads = max(1, (os.cpu_count() or 1) // n)
         # one thread per worker for Dask, the engine's own threads split among them
-        own = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", env={"RAYON_NUM_THREADS": str(threads)})
+        # Everything on the loopback interface: Dask's dashboard serves the workers' logs and
+        # call stacks to whoever reaches its port (":0" listened on every interface; None
+        # still starts its HTTP server on every interface at 8787).
+        own = LocalCluster(
+            n_workers=n,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address="127.0.0.1:0",
+            env={"RAYON_NUM_THREADS": str(threads)},
+        )
         client = Client(own)
     elif isinstance(client, str):
         client = own = Client(client)
@@ -290,7 +352,16 @@ def _run_all(todo: list[Member], folder: Path, duration, measure, client, worker
     try:
         futures = {
             client.submit(
-                run_member, m, str(folder.resolve()), duration, measure, checkpoint_every, key=f"kinema-member-{m.name}-{os.getpid()}", retries=2, pure=False
+                run_member,
+                m,
+                str(folder.resolve()),
+                duration,
+                measure,
+                checkpoint_every,
+                keys[m.index],
+                key=f"kinema-member-{m.name}-{os.getpid()}",
+                retries=2,
+                pure=False,
             ): m
             for m in todo
         }
