@@ -341,7 +341,7 @@ def test_every_example_scene_is_within_the_limits():
 
 
 def test_stale_staging_folders_of_killed_runs_are_removed(tmp_path):
-    from kinema.runner import _host
+    from kinema.io._files import host_name as _host
 
     out = tmp_path / "o"
     out.mkdir()
@@ -380,5 +380,5 @@ def test_a_run_stages_in_a_folder_named_by_its_process(tmp_path, monkeypatch):
     monkeypatch.setattr(kinema.runner.tempfile, "mkdtemp", spy)
     res = runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(tmp_path / "o"), "--no-video"])
     assert res.exit_code == 0, res.output
-    assert len(made) == 1 and os.path.basename(made[0]).startswith(f".kinema-run.{kinema.runner._host()}-{os.getpid()}.")
+    assert len(made) == 1 and os.path.basename(made[0]).startswith(f".kinema-run.{kinema.io._files.host_name()}-{os.getpid()}.")
     assert not os.path.exists(made[0])  # removed at the end

@@ -177,3 +177,37 @@ def test_kinema_run_refuses_a_fifo_among_its_outputs_before_any_work(tmp_path):
     assert run.returncode == 2, run.stdout + run.stderr
     assert "FIFO" in run.stderr and "trajectory.h5" in run.stderr, run.stderr
     assert _identity(fifo) == before
+
+
+# -- reading: a scene path must be a regular file ------------------------------------------
+
+
+@pytest.mark.parametrize("kind", list(NODES))
+def test_a_scene_that_is_not_a_regular_file_is_refused_without_blocking(tmp_path, kind):
+    # Before, a FIFO blocked the reader forever and /dev/zero was read to 3.8 GB.
+    from kinema.scene import Scene, SceneError
+
+    node = NODES[kind](tmp_path / "scene.toml")
+    if kind == "socket":  # a socket cannot be opened as a file at all
+        with _limit(), pytest.raises(SceneError, match="cannot be read"):
+            Scene.from_toml(node)
+        return
+    with _limit(), pytest.raises(SceneError, match=f"is not a regular file \\(a {kind}"):
+        Scene.from_toml(node)
+
+
+def test_a_scene_file_beyond_the_size_limit_is_refused(tmp_path):
+    from kinema.scene import Scene, SceneError
+    from kinema.scene.schema import SCENE_MAX_BYTES
+
+    big = tmp_path / "big.toml"
+    with open(big, "wb") as f:  # sparse: no disk used
+        f.truncate(SCENE_MAX_BYTES + 1)
+    with pytest.raises(SceneError, match="is larger than 256 MiB"):
+        Scene.from_toml(big)
+
+
+def test_kinema_run_of_a_fifo_exits_2_at_once(tmp_path):
+    fifo = _fifo(tmp_path / "scene.toml")
+    run = subprocess.run([sys.executable, "-m", "kinema", "run", str(fifo), "-o", str(tmp_path / "o")], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2 and "is not a regular file (a FIFO)" in run.stderr, run.stderr

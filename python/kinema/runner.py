@@ -13,7 +13,6 @@ more than ``LIMIT_PARTICLE_STEPS`` particle-steps, ``LIMIT_PIXELS`` pixels or
 from __future__ import annotations
 
 import os
-import re
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -348,59 +347,18 @@ def simulate_scene(
 # A run writes into a hidden staging folder .kinema-run.<host>-<pid>.<random> in its output
 # folder; a run that is killed (kill -9, power off) leaves it behind, and the next run into the
 # folder removes it once the process that made it is gone.
-_STAGE = re.compile(r"\.kinema-run\.(?:(?P<host>[A-Za-z0-9-]*)-(?P<pid>[0-9]+)\.)?[A-Za-z0-9_]+")
-STALE_UNKNOWN_OWNER_S = 86400.0  # a staging folder without a pid in its name (older kinema) is stale after a day
-
-
-def _host() -> str:
-    import socket
-
-    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:64]
-
-
 def _stage_prefix() -> str:
-    return f".kinema-run.{_host()}-{os.getpid()}."
+    from .io._files import owner_tag
 
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's process
-        return True
-    except (OverflowError, ValueError, OSError):
-        return False
-    return True
+    return f".kinema-run.{owner_tag()}."
 
 
 def _remove_stale_stages(outdir: Path) -> list[Path]:
     """Remove the staging folders in ``outdir`` whose run is over (its process is gone); keep
     those of live runs and of other hosts. Returns the folders removed."""
-    import shutil
-    import time
+    from .io._files import remove_stale
 
-    removed = []
-    try:
-        entries = [e for e in os.scandir(outdir) if e.name.startswith(".kinema-run.")]
-    except OSError:
-        return removed
-    host = _host()
-    for entry in entries:
-        m = _STAGE.fullmatch(entry.name)
-        if m is None or not entry.is_dir(follow_symlinks=False):
-            continue
-        if m["pid"] is not None:
-            stale = m["host"] == host and int(m["pid"]) != os.getpid() and not _alive(int(m["pid"]))
-        else:
-            try:
-                stale = time.time() - entry.stat(follow_symlinks=False).st_mtime > STALE_UNKNOWN_OWNER_S
-            except OSError:
-                stale = False
-        if stale:
-            shutil.rmtree(entry.path, ignore_errors=True)
-            removed.append(Path(entry.path))
-    return removed
+    return remove_stale(outdir, ".kinema-run.")
 
 
 def _camera(table):

@@ -63,6 +63,72 @@ def _umask() -> int:
 
 _NAME_TRIES = 100
 
+# A temporary name carries its writer: <prefix><host>-<pid>.<random><suffix>. A writer killed
+# (kill -9, power off) leaves it behind; the next writer of the same target removes it once
+# that process is gone (same host), or after a day where the name has no owner (an older
+# kinema's).
+_OWNED = re.compile(r"(?:(?P<host>[A-Za-z0-9-]*)-(?P<pid>[0-9]+)\.)?[A-Za-z0-9_]+")
+STALE_UNKNOWN_OWNER_S = 86400.0
+
+
+def host_name() -> str:
+    """This machine's name as temporary names carry it (letters, digits and '-')."""
+    import socket
+
+    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:64]
+
+
+def owner_tag() -> str:
+    """``<host>-<pid>``: what a temporary name says of the process that made it."""
+    return f"{host_name()}-{os.getpid()}"
+
+
+def alive(pid: int) -> bool:
+    """Whether process ``pid`` runs on this machine (another user's counts as running)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    except (OverflowError, ValueError, OSError):
+        return False
+    return True
+
+
+def remove_stale(folder: Path, prefix: str, suffix: str = "") -> list[Path]:
+    """Removes the temporary files and folders ``<prefix><owner>.<random><suffix>`` in
+    ``folder`` whose writer is gone: its process no longer runs on this host, or, with no
+    owner in the name, it is more than a day old. Those of live writers and of other hosts
+    are kept. Returns what was removed."""
+    import time
+
+    removed: list[Path] = []
+    try:
+        entries = [e for e in os.scandir(folder) if e.name.startswith(prefix) and e.name.endswith(suffix)]
+    except OSError:
+        return removed
+    host = host_name()
+    for entry in entries:
+        middle = entry.name[len(prefix) : len(entry.name) - len(suffix)]
+        m = _OWNED.fullmatch(middle)
+        if m is None:
+            continue
+        if m["pid"] is not None:
+            stale = m["host"] == host and int(m["pid"]) != os.getpid() and not alive(int(m["pid"]))
+        else:
+            try:
+                stale = time.time() - entry.stat(follow_symlinks=False).st_mtime > STALE_UNKNOWN_OWNER_S
+            except OSError:
+                stale = False
+        if stale:
+            if entry.is_dir(follow_symlinks=False):
+                shutil.rmtree(entry.path, ignore_errors=True)
+            else:
+                Path(entry.path).unlink(missing_ok=True)
+            removed.append(Path(entry.path))
+    return removed
+
 
 def _temporary_file(parent: Path, prefix: str, suffix: str) -> Path:
     """A new empty file ``<prefix><random><suffix>`` in ``parent``, created exclusively with
@@ -71,7 +137,7 @@ def _temporary_file(parent: Path, prefix: str, suffix: str) -> Path:
     0600."""
     flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0)
     for _ in range(_NAME_TRIES):
-        path = parent / f"{prefix}{secrets.token_hex(6)}{suffix}"
+        path = parent / f"{prefix}{owner_tag()}.{secrets.token_hex(6)}{suffix}"
         try:
             fd = os.open(path, flags, 0o666)
         except FileExistsError:
@@ -85,7 +151,7 @@ def _temporary_folder(parent: Path, prefix: str, suffix: str) -> Path:
     """A new empty folder in ``parent``, made with mode 0777 as ``os.mkdir`` makes folders
     (0755 under umask 022; ``tempfile.mkdtemp`` would make it 0700)."""
     for _ in range(_NAME_TRIES):
-        path = parent / f"{prefix}{secrets.token_hex(6)}{suffix}"
+        path = parent / f"{prefix}{owner_tag()}.{secrets.token_hex(6)}{suffix}"
         try:
             os.mkdir(path, 0o777)
         except FileExistsError:
@@ -97,9 +163,14 @@ def _temporary_folder(parent: Path, prefix: str, suffix: str) -> Path:
 _KINDS = (
     (stat.S_ISCHR, "character device"),
     (stat.S_ISBLK, "block device"),
-    (stat.S_ISFIFO, "FIFO (named pipe)"),
+    (stat.S_ISFIFO, "FIFO"),
     (stat.S_ISSOCK, "socket"),
 )
+
+
+def special_kind(mode: int) -> str | None:
+    """What a file of ``st_mode`` is if it is a device, a FIFO or a socket (else None)."""
+    return next((kind for test, kind in _KINDS if test(mode)), None)
 
 
 def refuse_special_target(path: str | os.PathLike) -> None:
@@ -116,9 +187,9 @@ def refuse_special_target(path: str | os.PathLike) -> None:
         return
     except OSError as e:  # a name too long, a loop of links, a folder not searchable
         raise TrajectoryFileError(f"cannot write {path}: {e.strerror or e}") from None
-    for test, kind in _KINDS:
-        if test(mode):
-            raise TrajectoryFileError(f"cannot write {path}: it is a {kind}, not a regular file; kinema replaces only regular files, so give another name")
+    kind = special_kind(mode)
+    if kind is not None:
+        raise TrajectoryFileError(f"cannot write {path}: it is a {kind}, not a regular file; kinema replaces only regular files, so give another name")
 
 
 def _writable_parent(path: Path) -> Path:
@@ -142,6 +213,7 @@ def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
     becomes a ``FileWriteError`` naming ``path``."""
     path = Path(path)
     parent = _writable_parent(path)
+    remove_stale(parent, f".{path.name}.", ".part")  # left by a writer of it that was killed
     try:
         tmp = _temporary_file(parent, f".{path.name}.", ".part")
     except OSError as e:
@@ -203,6 +275,7 @@ def atomic_folder(folder: str | os.PathLike, pattern: str) -> Iterator[Path]:
     parent = folder.parent
     if not parent.is_dir():
         raise TrajectoryFileError(f"cannot write {folder}: the folder {parent} does not exist")
+    remove_stale(parent, f".{folder.name}.", ".part")
     try:
         tmp = _temporary_folder(parent, f".{folder.name}.", ".part")
     except OSError as e:

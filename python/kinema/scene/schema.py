@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import difflib
 import math
+import os
 import re
+import stat
 import tomllib
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -43,6 +45,11 @@ from .tables import (
 
 if TYPE_CHECKING:
     from ..world import World
+
+
+#: The largest scene file read, in bytes: a scene describes particles by blocks; even a list
+#: of a million positions is ~60 MB of TOML.
+SCENE_MAX_BYTES = 256 * 2**20
 
 
 class SceneError(ValueError):
@@ -84,10 +91,31 @@ class Scene(_Model):
             raise SceneError(f"{path}: no such file")
         if path.is_dir():
             raise SceneError(f"{path}: is a directory, not a scene file (.toml)")
+        # Only a regular file, and one of a sane size: a FIFO blocked the reader forever and
+        # /dev/zero was read to 3.8 GB (issue 26). Opened without blocking, checked on the
+        # open descriptor (what is read is what was checked), read at most one byte past the
+        # limit.
         try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as e:
-            raise SceneError(f"{path}: cannot be read ({getattr(e, 'strerror', None) or e})") from None
+            fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+        except OSError as e:
+            raise SceneError(f"{path}: cannot be read ({e.strerror or e})") from None
+        from ..io._files import special_kind
+
+        with os.fdopen(fd, "rb") as f:
+            mode = os.fstat(fd).st_mode
+            if not stat.S_ISREG(mode):
+                kind = special_kind(mode) or "special file"
+                raise SceneError(f"{path}: is not a regular file (a {kind}); a scene is a .toml file")
+            try:
+                data = f.read(SCENE_MAX_BYTES + 1)
+            except OSError as e:
+                raise SceneError(f"{path}: cannot be read ({e.strerror or e})") from None
+        if len(data) > SCENE_MAX_BYTES:
+            raise SceneError(f"{path}: is larger than {SCENE_MAX_BYTES // 2**20} MiB; a scene file describes particles by blocks, it does not list millions")
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError as e:
+            raise SceneError(f"{path}: cannot be read ({e})") from None
         return cls.from_string(text, source=str(path))
 
     @classmethod
