@@ -239,6 +239,15 @@ impl ImpulseModel {
         // symplectic Euler, below). No impact hit them in this step.
         let euler_step = |q: usize| vec3::scale(h, vec3::get(v1, q));
         let mut resting = vec![false; inv_mass.len()];
+        // A particle touching a resting one (within the slop, by a contact that carried no load
+        // in the last step) rests too: a column placed at rest on a floor then moves as one by
+        // symplectic Euler from its first step, as it will in every step after, so that the
+        // first step's totals are the next step's warm start (each ball moved by the method
+        // in the first step and by Euler in the second asked the solve of the second for
+        // another load, which it took up over several steps, booking up to 1e-6 of the
+        // column's energy as lost). Such contacts are gathered here, then spread over in
+        // passes until nothing changes: as many as the chain of them is long.
+        let mut touching: Vec<(usize, usize)> = Vec::new();
         for (c, warm) in self.contacts.iter().zip(&self.solved) {
             let start = -c.overlap - vec3::dot(rel(c, &moved), c.normal);
             let least = start.min(0.0);
@@ -247,28 +256,13 @@ impl ImpulseModel {
                 for q in std::iter::once(c.i).chain(c.partner_particle()) {
                     resting[q] = paths.version(q) == 0;
                 }
+            } else if let Some(j) = c.partner_particle() {
+                let slop = SLOP * (set.radius[c.i] + set.radius[j]);
+                if start <= slop && paths.version(c.i) == 0 && paths.version(j) == 0 {
+                    touching.push((c.i, j));
+                }
             }
         }
-        // A particle touching a resting one (within the slop, by a contact that carried no load
-        // in the last step) rests too: a column placed at rest on a floor then moves as one by
-        // symplectic Euler from its first step, as it will in every step after, so that the
-        // first step's totals are the next step's warm start (each ball moved by the method
-        // in the first step and by Euler in the second asked the solve of the second for
-        // another load, which it took up over several steps, booking up to 1e-6 of the
-        // column's energy as lost). Passes until nothing changes: as many as the chain of such
-        // contacts is long.
-        let touching: Vec<(usize, usize)> = self
-            .contacts
-            .iter()
-            .zip(&self.solved)
-            .filter(|(_, warm)| **warm == [0.0; 3])
-            .filter_map(|(c, _)| {
-                let j = c.partner_particle()?;
-                let start = -c.overlap - vec3::dot(rel(c, &moved), c.normal);
-                let slop = SLOP * (set.radius[c.i] + set.radius[j]);
-                (start <= slop && paths.version(c.i) == 0 && paths.version(j) == 0).then_some((c.i, j))
-            })
-            .collect();
         let mut spread = true;
         while spread {
             spread = false;
