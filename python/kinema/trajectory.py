@@ -127,13 +127,20 @@ class Trajectory:
         return _Recorder()
 
     def save(self, path: Any, group: str = "all", **options: Any) -> Any:
-        """Write the frames to an H5MD file (``kinema.io.save_h5md``); returns its path."""
+        """Write the frames to an H5MD file (``kinema.io.save_h5md``); returns its path.
+
+        What is written is first checked by the rules :meth:`load` reads it with (finite
+        times that increase, finite positions and velocities, masses > 0, radii >= 0, ...):
+        a trajectory that would not load back is refused before anything is written, with a
+        one-line ``kinema.io.TrajectoryFileError`` naming the file, the attribute and the
+        value. A failure of the system (a name too long, a full disk) is a
+        ``kinema.io.FileWriteError`` naming the file."""
         from .io import save_h5md
 
         return save_h5md(self, path, group=group, **options)
 
     @classmethod
-    def load(cls, path: Any, group: str | None = None) -> Trajectory:
+    def load(cls, path: Any, group: str | None = None, follow_links: bool = False) -> Trajectory:
         """Read a trajectory from an H5MD file, written by ``save`` or by another program (units
         converted to SI, velocities and energies NaN where the file has none; ``kinema.io.load_h5md``);
         what only the file knows (its path, group, step of each frame, author, creator, the
@@ -141,12 +148,17 @@ class Trajectory:
 
         What the file holds is checked as it is read (shapes, types and the memory they need
         before any data, then finite positions, velocities and times, times that increase,
-        masses > 0, radii >= 0, ``dt`` > 0, the colliders): a ``kinema.io.TrajectoryFileError``
-        (a ``ValueError``), one line, names the file, the dataset or attribute and the bad
-        value."""
+        masses > 0, radii >= 0 and at most 1e150 m, printable species names, a box that is
+        periodic or open along the axes, ``dt`` > 0, the colliders): a
+        ``kinema.io.TrajectoryFileError`` (a ``ValueError``), one line, names the file, the
+        dataset or attribute and the bad value.
+
+        The file is read alone: one with an external link, a virtual dataset of another file
+        or data stored in external files is refused, unless ``follow_links=True`` (then those
+        other files are read too)."""
         from .io import load_h5md
 
-        return cls._from_file(load_h5md(path, group=group))
+        return cls._from_file(load_h5md(path, group=group, follow_links=follow_links))
 
     @classmethod
     def _from_file(cls, read: Any) -> Trajectory:
@@ -277,8 +289,9 @@ class Trajectory:
 
     def export(self, path: Any, format: str | None = None) -> list[Any]:
         """Write the frames for other tools: ``vtk`` (ParaView), ``ply`` (Blender, Houdini),
-        ``xyz`` (OVITO) or ``csv``, inferred from the suffix when ``format`` is None; returns
-        the files written (``kinema.io.export``)."""
+        ``xyz`` (OVITO), ``csv``, ``gsd``, ``lammps`` or ``usd``, inferred from the suffix when
+        ``format`` is None; returns the files written (``kinema.io.export``). Values the
+        format's readers or kinema's would refuse are refused before anything is written."""
         from .io import export
 
         return export(self, path, format)

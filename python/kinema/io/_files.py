@@ -45,6 +45,40 @@ class FileWriteError(OSError):
         return f"cannot write {self.filename}: {self.strerror}"
 
 
+_BOTH: dict[type, type] = {}
+
+
+def write_error(path: str | os.PathLike, code: int, reason: str) -> FileWriteError:
+    """A ``FileWriteError`` for ``path`` of errno ``code`` that is also the built-in ``OSError``
+    subclass of that errno (``FileNotFoundError`` for ENOENT, ``IsADirectoryError`` for
+    EISDIR, ...), as ``OSError(code, ...)`` would be: code that caught the built-in error
+    before it became a ``FileWriteError`` still catches it."""
+    builtin = type(OSError(code, reason))
+    if builtin is OSError:
+        return FileWriteError(code, reason, os.fspath(path))
+    if builtin not in _BOTH:
+        # named FileWriteError too: a traceback shows kinema.io.FileWriteError
+        _BOTH[builtin] = type("FileWriteError", (FileWriteError, builtin), {"__module__": "kinema.io", "__doc__": FileWriteError.__doc__})
+    return _BOTH[builtin](code, reason, os.fspath(path))
+
+
+@contextmanager
+def os_errors_as_write_errors(path: str | os.PathLike) -> Iterator[None]:
+    """Turns an ``OSError`` raised in the block that is not a ``FileWriteError`` yet (a name
+    too long for the file system, a folder that is not searchable, a temporary file that
+    cannot be made) into a ``FileWriteError`` naming ``path``, of the same errno (and the
+    same built-in subclass, ``write_error``): every failure of a writer's system calls is one
+    line naming the file it was asked to write."""
+    try:
+        yield
+    except FileWriteError:
+        raise
+    except OSError as e:
+        if e.errno is None:
+            raise
+        raise write_error(path, e.errno, e.strerror or str(e)) from None
+
+
 def _umask() -> int:
     """The process's umask. Linux reports it in /proc/self/status; elsewhere it is read by
     setting and restoring it, which briefly changes it for every thread of the process (the
@@ -193,11 +227,16 @@ def refuse_special_target(path: str | os.PathLike) -> None:
 
 
 def _writable_parent(path: Path) -> Path:
-    if path.is_dir():
+    try:  # (is_dir raises for a name too long, ENAMETOOLONG)
+        is_dir = path.is_dir()
+        parent_is_dir = path.parent.is_dir()
+    except OSError as e:
+        raise FileWriteError.of(path, e) from None
+    if is_dir:
         raise TrajectoryFileError(f"cannot write {path}: it is a directory; give a file name such as {path / 'run.h5'}")
     refuse_special_target(path)
     parent = path.parent
-    if not parent.is_dir():
+    if not parent_is_dir:
         raise TrajectoryFileError(f"cannot write {path}: the folder {parent} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise TrajectoryFileError(f"cannot write {path}: the folder {parent} is not writable")

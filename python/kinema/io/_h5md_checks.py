@@ -4,7 +4,13 @@ any data is read, then that the values read are finite; the datasets of a time-d
 element, its step and time made one per frame; and ``Live``, the particles of a file whose
 number varies (H5MD's time-dependent ``id`` with a fill value). Errors are
 ``TrajectoryFileError``, one line naming the file, the dataset (by meaning and by path) and the
-value."""
+value.
+
+The rules on values (``mass_problem``, ``radius_problem``, ``species_problem``,
+``boundary_problem``, ``non_finite``, ``increase_problem``) are shared with the writers:
+``check_frames`` refuses, before anything is written, a trajectory that these rules would
+refuse when it is read back (``save_h5md``, ``export``); ``links_out`` finds what in a file
+points out of it (external links, virtual datasets of other files, external storage)."""
 
 from __future__ import annotations
 
@@ -14,9 +20,188 @@ from typing import Any
 import numpy as np
 
 from ._checks import dtype_problem, first_non_finite, gib, number, shown
-from ._files import TrajectoryFileError
+from ._files import Frames, TrajectoryFileError
 from ._h5md_layout import import_h5py
 from .h5md_units import QUANTITY, parse_unit
+
+#: The largest radius read or written, m: the engine's own limit (``GEOMETRY_LIMIT``:
+#: collisions square distances), which the particles of a scene meet when it is built.
+MAX_RADIUS = 1e150
+#: The values of an H5MD box's ``boundary`` attribute kinema reads (its box is axis-aligned,
+#: periodic or open along each axis).
+BOUNDARIES = ("periodic", "none")
+#: The largest magnitude a float32 holds (PLY, GSD and USD store particle data as float32).
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+
+def non_finite(a: np.ndarray, axes: tuple[str, ...]) -> str | None:
+    """``"has a non-finite value (nan) at frame 3, particle 7"`` for the first NaN or ±inf in
+    ``a`` (``axes`` name its leading indices), ``None`` when all are finite."""
+    at = first_non_finite(a)
+    if at is None:
+        return None
+    place = ", ".join(f"{name} {i}" for name, i in zip(axes, at, strict=False))
+    return f"has a non-finite value ({number(a[at])})" + (f" at {place}" if place else "")
+
+
+def increase_problem(t: np.ndarray) -> str | None:
+    """``"must increase: t[4] = 0.2 after t[3] = 0.3"`` where the times ``t`` do not increase
+    strictly, else ``None``."""
+    back = np.flatnonzero(np.diff(t) <= 0)
+    if not back.size:
+        return None
+    k = int(back[0]) + 1
+    return f"must increase: t[{k}] = {number(t[k])} after t[{k - 1}] = {number(t[k - 1])}"
+
+
+def mass_problem(a: np.ndarray) -> str | None:
+    """``"has mass[2] = -1 (masses must be finite and > 0 kg)"`` for the first mass that is not
+    finite and > 0, else ``None``."""
+    bad = ~(np.isfinite(a) & (a > 0))
+    if not bad.any():
+        return None
+    i = int(np.argmax(bad))
+    return f"has mass[{i}] = {number(a[i])} (masses must be finite and > 0 kg)"
+
+
+def radius_problem(a: np.ndarray) -> str | None:
+    """``"has radius[1] = -0.5 (radii must be finite and >= 0 m)"`` for the first radius that
+    is not finite, >= 0 m and at most ``MAX_RADIUS``, else ``None``."""
+    bad = ~(np.isfinite(a) & (a >= 0))
+    if bad.any():
+        i = int(np.argmax(bad))
+        return f"has radius[{i}] = {number(a[i])} (radii must be finite and >= 0 m)"
+    big = a > MAX_RADIUS
+    if big.any():
+        i = int(np.argmax(big))
+        return f"has radius[{i}] = {number(a[i])} (radii must be at most {MAX_RADIUS:g} m, kinema's limit: collisions square distances)"
+    return None
+
+
+def species_problem(names: Any, label: str = "species") -> str | None:
+    """``"has species[3] = 'a\\x00b' (species names must be non-empty printable text: ...)"``
+    for the first of ``names`` that is not a non-empty printable string (no NUL, no control
+    characters), else ``None``; ``label`` names the list in the message."""
+    for k, name in enumerate(names):
+        if not isinstance(name, str) or not name or not name.isprintable():
+            return f"has {label}[{k}] = {shown(name)} (species names must be non-empty printable text: no NUL or control characters)"
+    return None
+
+
+def boundary_problem(values: list[str]) -> str | None:
+    """``"has boundary 'spherical' ..."`` for the first value of an H5MD box's ``boundary``
+    that is not one of ``BOUNDARIES``, else ``None``."""
+    for k, b in enumerate(values):
+        if b not in BOUNDARIES:
+            return f"has boundary[{k}] = {b!r}; allowed: {' or '.join(map(repr, BOUNDARIES))} (kinema's box is axis-aligned, periodic or open on each axis)"
+    return None
+
+
+def triclinic_at(rows: np.ndarray) -> int | None:
+    """The first row of ``rows`` (F, D, D), edge vectors, with an entry off the diagonal that is
+    not 0 (NaN counts: it is not 0), else ``None``."""
+    d = rows.shape[1]
+    off = np.flatnonzero(((rows != 0) & ~np.eye(d, dtype=bool)).reshape(rows.shape[0], -1).any(axis=1))
+    return int(off[0]) if off.size else None
+
+
+def edges_problem(rows: np.ndarray, periodic: Any, by_frame: bool) -> str | None:
+    """What is wrong with the box edges ``rows`` (F, D) m: ``"has edge[0] = nan at frame 3 (box
+    edges must be finite, in m)"``, or an edge <= 0 on a periodic axis; ``None`` when they are
+    right. ``by_frame``: name the frame (a box that changes)."""
+    frame = (lambda i: f" at frame {i}") if by_frame else (lambda i: "")
+    bad = ~np.isfinite(rows)
+    if bad.any():
+        i, k = np.unravel_index(int(np.argmax(bad)), rows.shape)
+        return f"has edge[{k}] = {number(rows[i, k])}{frame(i)} (box edges must be finite, in m)"
+    bad = (rows <= 0) & np.array([bool(p) for p in periodic][: rows.shape[1]])
+    if bad.any():
+        i, k = np.unravel_index(int(np.argmax(bad)), rows.shape)
+        return f"has edge[{k}] = {number(rows[i, k])}{frame(i)} (a periodic axis needs an edge > 0 m)"
+    return None
+
+
+def _per_frame_problem(a: np.ndarray, alive: np.ndarray, find: Any) -> tuple[int, ...] | None:
+    """The index (frame, particle, ...) in ``a`` (F, N, ...) of the first entry ``find`` finds
+    among the particles that exist (``alive`` (F, N)), or ``None``; ``find(rows)`` gives the
+    index of a hit in ``rows`` or ``None``. With particles that come and go it is applied
+    frame by frame, so ``a`` is never copied whole."""
+    if alive.all():
+        return find(a)
+    for i in range(a.shape[0]):
+        live = np.flatnonzero(alive[i])
+        hit = find(a[i, live])
+        if hit is not None:
+            return (i, int(live[hit[0]]), *hit[1:])
+    return None
+
+
+def _first_beyond_float32_at(a: np.ndarray) -> tuple[int, ...] | None:
+    if a.size == 0 or not (np.nanmax(a, initial=-np.inf) > FLOAT32_MAX or np.nanmin(a, initial=np.inf) < -FLOAT32_MAX):
+        return None  # reductions only: no copy of a
+    big = np.abs(np.nan_to_num(a, nan=0.0)) > FLOAT32_MAX
+    return tuple(int(i) for i in np.unravel_index(int(np.argmax(big)), a.shape))
+
+
+def _place(a: np.ndarray, at: tuple[int, ...], axes: tuple[str, ...]) -> str:
+    place = ", ".join(f"{name} {i}" for name, i in zip(axes, at, strict=False))
+    return f"({number(a[at])})" + (f" at {place}" if place else "")
+
+
+def check_frames(path: Any, traj: Any, fr: Frames, float32: str | None = None, int32_ids: str | None = None) -> None:
+    """Refuses, before anything is written to ``path``, a trajectory whose values kinema's
+    reader would refuse, by the reader's rules: finite times that increase; finite positions
+    and velocities where a particle exists (velocities may be all NaN: unknown, not written
+    to H5MD); masses finite and > 0 kg, radii finite, >= 0 m and at most ``MAX_RADIUS`` (of
+    the particles that exist at some frame); species names of printable text; ids once per
+    frame. ``float32`` (a format's name) also refuses values beyond float32, which that
+    format stores (they would be inf); ``int32_ids`` ids beyond int32. Raises
+    ``TrajectoryFileError`` (a ``ValueError``), one line: ``cannot write run.h5: trajectory
+    'masses' has mass[2] = -1 (masses must be finite and > 0 kg)``. The (F, N, 3) arrays are
+    checked frame by frame where particles come and go, never copied whole."""
+
+    def refuse(word: str, problem: str | None) -> None:
+        if problem is not None:
+            raise TrajectoryFileError(f"cannot write {path}: trajectory {word!r} {problem}")
+
+    refuse("t", non_finite(fr.t, ("frame",)))
+    refuse("t", increase_problem(fr.t))
+    axes = ("frame", "particle")
+    at = _per_frame_problem(fr.positions, fr.alive, first_non_finite)
+    refuse("positions", None if at is None else f"has a non-finite value {_place(fr.positions, at, axes)}")
+    # velocities all NaN where the particles exist: unknown (a file without them), not an error
+    known = _per_frame_problem(fr.velocities, fr.alive, lambda rows: None if np.isnan(rows).all() else (0,)) is not None
+    if known:
+        at = _per_frame_problem(fr.velocities, fr.alive, first_non_finite)
+        refuse("velocities", None if at is None else f"has a non-finite value {_place(fr.velocities, at, axes)}")
+    exists = fr.alive.any(axis=0)
+    if fr.masses is not None:
+        refuse("masses", mass_problem(np.where(exists, fr.masses, 1.0)))
+    if fr.radii is not None:
+        refuse("radii", radius_problem(np.where(exists, fr.radii, 0.0)))
+    species = getattr(traj, "species", None)
+    if species is not None:
+        refuse("species", species_problem(np.asarray(species, dtype=object).reshape(-1).tolist()))
+    if fr.changes_count and np.unique(fr.ids).size != fr.ids.size:
+        for i in range(fr.n_frames):
+            uniq, counts = np.unique(fr.ids[fr.alive[i]], return_counts=True)
+            if (counts > 1).any():
+                refuse("ids", f"has id {int(uniq[np.argmax(counts > 1)])} twice at frame {i} (an id names one particle)")
+    if float32 is not None:
+        beyond = f"beyond float32 (at most {FLOAT32_MAX:.8g} in magnitude), which format {float32!r} stores"
+        for word, a in (("positions", fr.positions), ("velocities", fr.velocities)):
+            at = _per_frame_problem(a, fr.alive, _first_beyond_float32_at)
+            refuse(word, None if at is None else f"has a value {_place(a, at, axes)} {beyond}")
+        for word, a in (("masses", fr.masses), ("radii", None if fr.radii is None else 2 * fr.radii)):
+            a = None if a is None else np.where(exists, a, 0.0)
+            at = None if a is None else _first_beyond_float32_at(a)
+            refuse(word, None if at is None else f"has a value {_place(a, at, ('particle',))}{' as a diameter' * (word == 'radii')} {beyond}")
+    if int32_ids is not None:
+        info = np.iinfo(np.int32)
+        bad = (fr.ids < info.min) | (fr.ids > info.max)
+        if bad.any():
+            k = int(np.argmax(bad))
+            refuse("ids", f"has id[{k}] = {int(fr.ids[k])} beyond int32 (from {info.min} to {info.max}), which format {int32_ids!r} stores")
 
 
 def fail(path: Path, what: str) -> TrajectoryFileError:
@@ -121,10 +306,46 @@ class Reader:
     def finite(self, word: str, ds: Any, a: np.ndarray, axes: tuple[str, ...]) -> None:
         """Refuses a NaN or ±inf in ``a`` (read from ``ds``), naming its place: ``axes`` name
         the leading indices (frame, particle)."""
-        at = first_non_finite(a)
-        if at is not None:
-            place = ", ".join(f"{name} {i}" for name, i in zip(axes, at, strict=False))
-            raise self.fail(f"{where(word, ds)} has a non-finite value ({number(a[at])})" + (f" at {place}" if place else ""))
+        problem = non_finite(a, axes)
+        if problem is not None:
+            raise self.fail(f"{where(word, ds)} {problem}")
+
+
+def links_out(f: Any) -> str | None:
+    """What in the open HDF5 file ``f`` reads data from another file, as a message names it:
+    an external link (``h5py.ExternalLink``), a virtual dataset with a source in another file
+    (``h5py.VirtualLayout``), a dataset whose raw data is stored in external files; ``None``
+    when nothing does. Links are inspected without being followed (soft links stay inside
+    the file and are skipped: their targets are reached by their own paths), so the other
+    file is never opened."""
+    h5py = import_h5py()
+    seen: set[Any] = set()
+    stack = [f["/"]]
+    while stack:
+        group = stack.pop()
+        key = h5py.h5o.get_info(group.id).addr  # the group's place in the file
+        if key in seen:
+            continue  # a group reached again through another hard link
+        seen.add(key)
+        base = group.name.rstrip("/")
+        for name in group:
+            link = group.get(name, getlink=True)
+            path = f"{base}/{name}"
+            if isinstance(link, h5py.ExternalLink):
+                return f"{path} is an external link to {link.path!r} in the file {link.filename!r}"
+            if not isinstance(link, h5py.HardLink):
+                continue  # a soft link: a path inside this file
+            obj = group.get(name)
+            if isinstance(obj, h5py.Group):
+                stack.append(obj)
+            elif isinstance(obj, h5py.Dataset):
+                if obj.is_virtual:
+                    other = next((m.file_name for m in obj.virtual_sources() if m.file_name != "."), None)
+                    if other is not None:
+                        return f"{path} is a virtual dataset that reads the file {other!r}"
+                if obj.external:
+                    return f"{path} is stored in the external file {obj.external[0][0]!r}"
+    return None
 
 
 def element_datasets(path: Path, parent: Any, name: str, required: bool = False) -> tuple[Any, Any, Any] | None:

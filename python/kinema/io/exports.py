@@ -16,9 +16,11 @@ import numpy as np
 
 from .. import _checks
 from ._cell import box_corners, particle_types, trajectory_cell
-from ._files import Frames, atomic_file, atomic_folder, frames_of
+from ._files import Frames, atomic_file, atomic_folder, frames_of, os_errors_as_write_errors
+from ._h5md_checks import check_frames
 from .gsd_writer import write_gsd
 from .lammps_dump import write_lammps
+from .usd_writer import SUFFIXES as USD_SUFFIXES
 from .usd_writer import write_usd
 
 FORMATS = ("vtk", "ply", "xyz", "csv", "gsd", "lammps", "usd")
@@ -35,6 +37,7 @@ _SUFFIXES = {
     ".usd": "usd",
     ".usda": "usd",
     ".usdc": "usd",
+    ".usdz": "usd",
 }
 SUFFIX = {
     "vtk": ".pvd",
@@ -53,6 +56,7 @@ _ELEMENTS = frozenset(
     "Mc Lv Ts Og".split()
 )  # the chemical symbols ASE's extended XYZ reader accepts as species (and X)
 _DIGITS = 5  # frame numbers in series file names: stem_00000.vtp
+_FLOAT32 = ("ply", "gsd", "usd")  # the formats that store particle data as float32
 
 
 def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_frame: Callable[[int], Any] | None = None) -> list[Path]:
@@ -116,10 +120,11 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
       MDAnalysis, VMD): ``id type x y z vx vy vz radius mass`` with ids from 1, the box with
       ``pp``/``ff`` flags, ``ITEM: TIME``; 17 significant digits (see
       ``lammps_dump.write_lammps``).
-    - ``"usd"`` (.usd, .usda, .usdc): Pixar's USD for Blender and Houdini, written with the
-      ``usd-core`` package: a ``UsdGeom.Points`` prim with positions and velocities as time
-      samples at the recording's frame rate, widths 2r and ids, Z up, 1 m per unit, and the
-      colliders as guide prims (see ``usd_writer.write_usd``).
+    - ``"usd"`` (.usd, .usda, .usdc, .usdz): Pixar's USD for Blender and Houdini, written
+      with the ``usd-core`` package: a ``UsdGeom.Points`` prim with positions and velocities
+      as time samples at the recording's frame rate, widths 2r and ids, Z up, 1 m per unit,
+      and the colliders as guide prims (see ``usd_writer.write_usd``); another suffix is a
+      ``ValueError`` (USD picks its file format from the suffix).
 
     Births and deaths (a trajectory whose ``alive`` is not all True): every format writes at
     each frame the particles alive at it only, each with its id (VTK's ``id`` point data,
@@ -135,9 +140,21 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
     takes the place of ``<stem>_vtk/`` or ``<stem>_ply/`` only when complete (an existing
     one is replaced only if it holds nothing but an earlier series). Files get the mode an
     ordinary ``open()`` gives (0666 less the umask; folders 0777 less the umask).
-    ``on_frame(i)`` is called after frame ``i`` is written (a progress bar). Raises
-    ``ValueError`` for an unknown ``format`` and ``TrajectoryFileError`` (a ``ValueError``)
-    naming the path that cannot be written."""
+    ``on_frame(i)`` is called after frame ``i`` is written (a progress bar).
+
+    What is written is checked first, by the rules kinema reads its own files with
+    (``_h5md_checks.check_frames``): finite times that increase, finite positions and
+    velocities of the particles that exist (velocities may be all NaN: unknown, written as
+    NaN), masses finite and > 0 kg, radii finite, >= 0 m and at most 1e150 m, printable
+    species names, periodic box edges finite and > 0 m, ids once per frame; for the float32
+    formats (PLY, GSD, USD) no value beyond float32 (it would be written as inf), for PLY
+    ids within int32. A value that breaks them is refused before anything is written.
+
+    Raises ``ValueError`` for an unknown ``format``, ``TrajectoryFileError`` (a
+    ``ValueError``) naming the path that cannot be written or the value that would not read
+    back (``cannot write run.xyz: trajectory 'masses' has mass[2] = -1 (masses must be
+    finite and > 0 kg)``), and ``FileWriteError`` (an ``OSError``) naming it when the system
+    fails the write or refuses the name (a name too long)."""
     path = Path(path)
     if format is None:
         format = _SUFFIXES.get(path.suffix.lower())
@@ -151,9 +168,13 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
     if other not in (None, format):
         what = "an H5MD trajectory" if other == "h5md" else f"format {other!r}"
         raise ValueError(f"path = {str(path)!r}: the suffix {path.suffix!r} is for {what}, not format = {format!r}; give a name ending in {SUFFIX[format]}")
+    if format == "usd" and path.suffix.lower() not in USD_SUFFIXES:
+        raise ValueError(f"path = {str(path)!r}: the suffix {path.suffix or '(none)'!r} is not a USD file's; allowed: {', '.join(USD_SUFFIXES)}")
     fr = frames_of(traj)
+    check_frames(path, traj, fr, float32=format if format in _FLOAT32 else None, int32_ids="ply" if format == "ply" else None)
     writer = {"vtk": _write_vtk, "ply": _write_ply, "xyz": _write_xyz, "csv": _write_csv, "gsd": write_gsd, "lammps": write_lammps, "usd": write_usd}[format]
-    return writer(traj, fr, path, on_frame or (lambda i: None))
+    with os_errors_as_write_errors(path):
+        return writer(traj, fr, path, on_frame or (lambda i: None))
 
 
 def suffix_format(path: str | os.PathLike) -> str | None:

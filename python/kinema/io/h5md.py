@@ -62,8 +62,8 @@ import numpy as np
 
 from ._cell import particle_types
 from ._checks import available_memory
-from ._files import TrajectoryFileError, frames_of, hdf5_file
-from ._h5md_checks import fail
+from ._files import TrajectoryFileError, frames_of, hdf5_file, os_errors_as_write_errors
+from ._h5md_checks import check_frames, edges_problem, fail, links_out
 from ._h5md_layout import BY_FORCE, H5MD_VERSION, OBSERVABLES, import_h5py
 from .h5md_reader import LoadedTrajectory, read
 from .h5md_units import parse_unit
@@ -279,6 +279,44 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
                         g.attrs.create(name, np.asarray(value, dtype=np.float64))
 
 
+def _check_writable(path: Path, tr: Any, fr: Any) -> None:
+    """Refuses, before anything is written, a trajectory that ``load_h5md`` would refuse to read
+    back: the values ``check_frames`` checks, and the box edges (finite, > 0 m on periodic
+    axes), the time step, the observables' shapes and the colliders (as the reader checks them: the engine's rules). One line naming the file,
+    the attribute and the value (a ``TrajectoryFileError``)."""
+    check_frames(path, tr, fr)
+    periodic, edges = getattr(tr, "periodic", None), getattr(tr, "box_edges", None)
+    flags = [] if periodic is None else [bool(p) for p in np.asarray(periodic).reshape(-1)[: fr.dim]]
+    rows = None if edges is None else np.asarray(edges, dtype=np.float64).reshape(1, -1)[:, : len(flags)]
+    if any(flags) and rows is not None and rows.shape[1] == len(flags):  # (else a ValueError of _write)
+        problem = edges_problem(np.where(flags, rows, 0.0), flags, False)
+        if problem is not None:
+            raise TrajectoryFileError(f"cannot write {path}: trajectory 'box_edges' {problem}")
+    if fr.dt is not None and not (np.isfinite(fr.dt) and fr.dt > 0):
+        raise TrajectoryFileError(f"cannot write {path}: trajectory 'dt' = {fr.dt!r} is not a positive number (the time step in s)")
+    for attr in [a for a, _ in OBSERVABLES.values()] + ["total"]:
+        a = getattr(tr, attr, None)
+        if a is None:
+            continue
+        s = np.shape(a)
+        vector = attr in ("momentum", "angular_momentum", "impulse_balance")
+        want = (fr.n_frames, 3) if vector else (fr.n_frames,)
+        if s != want and not (vector and s == (fr.n_frames, 2)):
+            raise TrajectoryFileError(f"cannot write {path}: trajectory {attr!r} has shape {s}; it must be {want}, one value per frame")
+    for name, u in (dict(getattr(tr, "potential", None) or {})).items():
+        if np.shape(u) != (fr.n_frames,):
+            raise TrajectoryFileError(
+                f"cannot write {path}: trajectory 'potential' {name!r} has shape {np.shape(u)}; it must be ({fr.n_frames},), one value per frame"
+            )
+    colliders = _colliders_of(tr)
+    if colliders:
+        from .h5md_reader import collider_problem
+
+        problem = collider_problem([f"colliders[{k}]" for k in range(len(colliders))], colliders, fr.dim)
+        if problem is not None:
+            raise TrajectoryFileError(f"cannot write {path}: trajectory {problem}")
+
+
 def _colliders_of(tr: Any) -> list[dict[str, Any]]:
     """The trajectory's collider descriptions (``Trajectory.colliders``), checked; [] when it
     has none."""
@@ -312,8 +350,20 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     ``group`` names the particle group (/particles/<group>); ``author`` the /h5md/author name
     (default: the login name); ``compression`` "gzip", "lzf" or None for the chunked
     datasets. The file is written under a temporary name in the same folder and renamed at
-    the end, so a failed write leaves ``path`` as it was. Raises ``TrajectoryFileError`` when
-    ``path`` cannot be written and ``ValueError`` for a malformed trajectory."""
+    the end, so a failed write leaves ``path`` as it was.
+
+    What is written is checked first, by the rules ``load_h5md`` reads it with, so that every
+    file kinema writes reads back: finite times that increase, finite positions and
+    velocities (velocities all NaN, unknown, are left out), masses finite and > 0 kg, radii
+    finite, >= 0 m and at most 1e150 m, printable species names, box edges finite and > 0 m
+    on periodic axes, ids once per frame, ``dt`` > 0, observables one value per frame, the
+    colliders as the engine checks them. A value that breaks them is refused before
+    anything is written (a ``TrajectoryFileError``, one line: ``cannot write run.h5:
+    trajectory 'masses' has mass[2] = -1 (masses must be finite and > 0 kg)``).
+
+    Raises ``TrajectoryFileError`` when ``path`` cannot be written or the values would not
+    read back, ``FileWriteError`` (an ``OSError``) when the system fails the write or refuses
+    the name (a name too long), and ``ValueError`` for a malformed trajectory."""
     import_h5py()  # the ImportError that says how to get it, before any work
     if not group or "/" in group or group in (".", ".."):
         raise ValueError(f"group = {group!r} is invalid: it must be a non-empty name without '/'")
@@ -324,12 +374,13 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
         except Exception:
             author = "unknown"
     path = Path(path)
-    with hdf5_file(path, libver=("earliest", "latest"), track_order=True) as f:
+    _check_writable(path, traj, fr)
+    with os_errors_as_write_errors(path), hdf5_file(path, libver=("earliest", "latest"), track_order=True) as f:
         _write(f, traj, fr, group, author, compression)
     return path
 
 
-def load_h5md(path: str | os.PathLike, group: str | None = None) -> LoadedTrajectory:
+def load_h5md(path: str | os.PathLike, group: str | None = None, follow_links: bool = False) -> LoadedTrajectory:
     """Read the particle group ``group`` of the H5MD file ``path`` (``None``: the file's only
     group) with its observables; returns a :class:`LoadedTrajectory`, what the file holds
     (``kinema.Trajectory.load`` makes a ``kinema.Trajectory`` of it). Arrays of kinema's
@@ -357,13 +408,25 @@ def load_h5md(path: str | os.PathLike, group: str | None = None) -> LoadedTrajec
     first frame is read; observables and a time-dependent box one value or vector per frame;
     real numbers, integers for steps and ids; units), then the memory it needs against the
     memory available (``kinema.io._checks.available_memory``), then the values: finite
-    positions, velocities and times, times that increase, masses > 0, radii >= 0, finite box
+    positions, velocities and times, times that increase, masses > 0, radii >= 0 and at most
+    1e150 m (the engine's limit), species names of printable text (no NUL or control
+    characters), a box ``boundary`` of "periodic" or "none" on each axis and edges along the
+    axes (a matrix of edge vectors must be diagonal, with open boundaries too), finite box
     edges, > 0 on periodic axes, at every frame, ``dt`` a positive number, ``method`` a name
     and each collider as ``World.add`` checks it. Observables are not checked for finite
     values (a potential energy may be -inf).
 
+    The file is read alone: a file with an external link (``h5py.ExternalLink``), a virtual
+    dataset with a source in another file (``h5py.VirtualLayout``) or a dataset stored in
+    external files is refused before anything is read, since reading it would read other
+    files, perhaps outside its folder (soft links stay inside the file and are followed).
+    ``follow_links=True`` reads such a file, following its links (HDF5 looks for a relative
+    name from the folder of the file, then from the working directory). The ``path`` itself
+    may be a symbolic link: the caller named it.
+
     Raises ``TrajectoryFileError`` (a ``ValueError``), one line naming the file, when it is
-    missing, a directory, not HDF5 or corrupt, an HDF5 file without /h5md and /particles, of
+    missing, a directory, not HDF5 or corrupt, its name cannot be used (too long), it has
+    links to other files (without ``follow_links``), an HDF5 file without /h5md and /particles, of
     another major H5MD version, lacks ``group`` (the message lists the groups there), or when
     a check fails: the message names the dataset (its meaning and its path in the file) or
     attribute and the bad value, e.g. ``run.h5: dataset 'positions'
@@ -372,18 +435,22 @@ def load_h5md(path: str | os.PathLike, group: str | None = None) -> LoadedTrajec
     fortnight-1', which kinema cannot read: 'furlong' is not a unit symbol kinema knows``."""
     h5py = import_h5py()
     path = Path(path)
-    if not path.exists():
-        raise fail(path, "no such file")
-    if path.is_dir():
-        raise fail(path, "is a directory, not an H5MD file")
     try:
+        if not path.exists():
+            raise fail(path, "no such file")
+        if path.is_dir():
+            raise fail(path, "is a directory, not an H5MD file")
         is_hdf5 = h5py.is_hdf5(path)
-    except OSError as e:
+    except OSError as e:  # a name too long, a loop of links, a folder not searchable
         raise fail(path, f"cannot be read ({e.strerror or e})") from None
     if not is_hdf5:
         raise fail(path, "not an HDF5 file (corrupt, or another format)")
     try:
         with h5py.File(path, "r") as f:
+            if not follow_links:
+                out = links_out(f)
+                if out is not None:
+                    raise fail(path, f"{out}; kinema reads a file alone (load it with follow_links=True to read the other file)")
             return read(path, f, group, available_memory())
     except TrajectoryFileError:
         raise

@@ -12,9 +12,26 @@ from typing import Any
 
 import numpy as np
 
-from ._checks import dtype_problem, number, shown
+from ._checks import dtype_problem, shown
 from ._files import TrajectoryFileError
-from ._h5md_checks import Live, Reader, as_text, element_datasets, fail, per_frame, utf8, varying_ids, where
+from ._h5md_checks import (
+    Live,
+    Reader,
+    as_text,
+    boundary_problem,
+    edges_problem,
+    element_datasets,
+    fail,
+    increase_problem,
+    mass_problem,
+    per_frame,
+    radius_problem,
+    species_problem,
+    triclinic_at,
+    utf8,
+    varying_ids,
+    where,
+)
 from ._h5md_layout import BY_FORCE, OBSERVABLES, import_h5py
 from .h5md_units import LENGTH, MASS, TIME, parse_unit, to_si
 
@@ -107,10 +124,19 @@ def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
 
 
 def _check_colliders(path: Path, names: list[str], colliders: list[dict[str, Any]], dim: int) -> None:
+    """Refuses the first collider ``collider_problem`` finds wrong, named by its group."""
+    problem = collider_problem(names, colliders, dim)
+    if problem is not None:
+        raise fail(path, f"collider {problem}")
+
+
+def collider_problem(names: list[str], colliders: list[dict[str, Any]], dim: int) -> str | None:
     """Adds each collider to an empty engine world of ``dim`` dimensions, as ``World.add``
     does: the engine's checks (finite values, a non-zero normal, hi > lo, 2 or 3 values,
-    restitution in [0, 1], ...). The engine's own ``World``, not ``kinema.World``: reading a
-    file needs no world module (which imports ``kinema.trajectory``, which imports this)."""
+    restitution in [0, 1], ...); returns ``"<name> (a plane): <the engine's message>"`` for
+    the first it refuses, else ``None``. The engine's own ``World``, not ``kinema.World``:
+    reading a file needs no world module (which imports ``kinema.trajectory``, which imports
+    this). ``save_h5md`` checks what it writes with it."""
     from .. import _core
     from ..colliders import Box, Plane, SphereObstacle
     from ..render import _KIND
@@ -121,13 +147,14 @@ def _check_colliders(path: Path, names: list[str], colliders: list[dict[str, Any
         needed = _KIND[d["type"]]
         missing = [k for k in needed if k not in d]
         if missing:
-            raise fail(path, f"collider {name} (a {d['type']}) has no attribute {missing[0]!r}")
+            return f"{name} (a {d['type']}) has no attribute {missing[0]!r}"
         args = {k: d[k] for k in (*needed, "restitution", "friction") if k in d}
         try:
             make[d["type"]](**args)._attach(core)
         except (ValueError, TypeError) as e:
             first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-            raise fail(path, f"collider {name} (a {d['type']}): {first}") from None
+            return f"{name} (a {d['type']}): {first}"
+    return None
 
 
 def _species_names(r: Any, obj: Any, index: np.ndarray) -> np.ndarray | None:
@@ -137,6 +164,9 @@ def _species_names(r: Any, obj: Any, index: np.ndarray) -> np.ndarray | None:
     if "names" not in obj.attrs:
         return None
     names = [utf8(b) for b in np.asarray(obj.attrs["names"]).reshape(-1)]
+    problem = species_problem(names, "names")
+    if problem is not None:
+        raise r.fail(f"{where('species', obj)} {problem}")
     bad = next((k for k in index.tolist() if not 0 <= k < len(names)), None)
     if not all(isinstance(s, str) and s for s in names) or bad is not None:
         raise r.fail(f"{where('species', obj)} has species {bad} or names {names!r}: each particle's species must index its names")
@@ -148,23 +178,22 @@ def _box_edges(r: Reader, ds: Any, e: np.ndarray, by_frame: bool, periodic: tupl
     (D,) or (F, D) edges, or (D, D) or (F, D, D) edge vectors, which must lie along the axes
     (a cuboid: kinema has no triclinic cells). Each edge is finite, > 0 on a periodic axis."""
     rows = e[None] if not by_frame else e
-    frame = (lambda i: f" at frame {i}") if by_frame else (lambda i: "")
     if rows.ndim == 3:
         r.finite("box edges", ds, rows, ("frame",) if by_frame else ())
-        d = rows.shape[1]
-        off = np.flatnonzero((rows * (1 - np.eye(d))).reshape(rows.shape[0], -1).any(axis=1))
-        if off.size:
-            raise r.fail(f"{where('box edges', ds)} is a triclinic box{frame(int(off[0]))} (edge vectors not along the axes), which kinema does not support")
+        _refuse_triclinic(r, ds, rows, by_frame)
         rows = np.diagonal(rows, axis1=1, axis2=2)
-    bad = ~np.isfinite(rows)
-    if bad.any():
-        i, k = np.unravel_index(int(np.argmax(bad)), rows.shape)
-        raise r.fail(f"{where('box edges', ds)} has edge[{k}] = {number(rows[i, k])}{frame(i)} (box edges must be finite, in m)")
-    bad = (rows <= 0) & np.array(periodic[: rows.shape[1]])
-    if bad.any():
-        i, k = np.unravel_index(int(np.argmax(bad)), rows.shape)
-        raise r.fail(f"{where('box edges', ds)} has edge[{k}] = {number(rows[i, k])}{frame(i)} (a periodic axis needs an edge > 0 m)")
+    problem = edges_problem(rows, periodic, by_frame)
+    if problem is not None:
+        raise r.fail(f"{where('box edges', ds)} {problem}")
     return rows
+
+
+def _refuse_triclinic(r: Reader, ds: Any, rows: np.ndarray, by_frame: bool) -> None:
+    """Refuses edge vectors ``rows`` (F, D, D) with an entry off the diagonal that is not 0."""
+    i = triclinic_at(rows)
+    if i is not None:
+        at = f" at frame {i}" if by_frame else ""
+        raise r.fail(f"{where('box edges', ds)} is a triclinic box{at} (edge vectors not along the axes), which kinema does not support")
 
 
 def _read_springs(r: Reader, f: Any, p: Any, ids: np.ndarray) -> np.ndarray | None:
@@ -290,37 +319,51 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
             units[attr] = r.unit(attr, obj, MASS if attr == "masses" else LENGTH)
 
     # The box: edges (D,) or a (D, D) matrix of edge vectors, fixed, or time-dependent with
-    # one row per frame (a box that may change).
+    # one row per frame (a box that may change). Its boundary is "periodic" or "none" on each
+    # axis, and its edges, periodic or not, lie along the axes (kinema's box is axis-aligned).
     periodic = None
     edges_ds = None
     edges_by_frame = False
+    flags: list[bool] = []
     if isinstance(box, h5py.Group) and "boundary" in box.attrs:
         boundary = [b.decode("utf-8", "replace") if isinstance(b, bytes) else str(b) for b in np.asarray(box.attrs["boundary"]).reshape(-1)]
+        problem = boundary_problem(boundary)
+        if problem is not None:
+            raise r.fail(f"attribute 'boundary' ({box.name}) {problem}")
         flags = [b == "periodic" for b in boundary]
-        if any(flags):
-            periodic = tuple((flags + [False] * 3)[:3])
-            edges = box.get("edges")
-            if isinstance(edges, h5py.Group):
-                edges_ds, edges_step, edges_time = element_datasets(path, box, "edges")
-                s = r.numbers("box edges", edges_ds)
-                if s not in ((frames, d), (frames, d, d)):
-                    raise r.fail(
-                        f"{where('box edges', edges_ds)} has shape {s}; it must be ({frames}, {d}), one edge per axis at each frame of "
-                        f"{where('positions', x_ds)} {shape} (or ({frames}, {d}, {d}), edge vectors)"
-                    )
-                r.clock("steps", edges_step, "box edges", edges_ds, integer=True)
-                if edges_time is not None:
-                    r.clock("times", edges_time, "box edges", edges_ds)
-                edges_by_frame = True
-            elif isinstance(edges, h5py.Dataset):
-                edges_ds = edges
-                s = r.numbers("box edges", edges_ds)
-                if s not in ((d,), (d, d)):
-                    raise r.fail(f"{where('box edges', edges_ds)} has shape {s}; it must be ({d},), one edge per axis (or ({d}, {d}), edge vectors)")
-            else:
-                raise r.fail(f"{box.name} has periodic boundaries ({', '.join(boundary)}) but no edges dataset")
-            units["box edges"] = r.unit("box edges", edges_ds, LENGTH)
-            r.plan("box edges", edges_ds, edges_ds.size * (edges_ds.dtype.itemsize + 8))
+    edges = box.get("edges") if isinstance(box, h5py.Group) else None
+    if any(flags):
+        periodic = tuple((flags + [False] * 3)[:3])
+        if isinstance(edges, h5py.Group):
+            edges_ds, edges_step, edges_time = element_datasets(path, box, "edges")
+            s = r.numbers("box edges", edges_ds)
+            if s not in ((frames, d), (frames, d, d)):
+                raise r.fail(
+                    f"{where('box edges', edges_ds)} has shape {s}; it must be ({frames}, {d}), one edge per axis at each frame of "
+                    f"{where('positions', x_ds)} {shape} (or ({frames}, {d}, {d}), edge vectors)"
+                )
+            r.clock("steps", edges_step, "box edges", edges_ds, integer=True)
+            if edges_time is not None:
+                r.clock("times", edges_time, "box edges", edges_ds)
+            edges_by_frame = True
+        elif isinstance(edges, h5py.Dataset):
+            edges_ds = edges
+            s = r.numbers("box edges", edges_ds)
+            if s not in ((d,), (d, d)):
+                raise r.fail(f"{where('box edges', edges_ds)} has shape {s}; it must be ({d},), one edge per axis (or ({d}, {d}), edge vectors)")
+        else:
+            raise r.fail(f"{box.name} has periodic boundaries ({', '.join(boundary)}) but no edges dataset")
+        units["box edges"] = r.unit("box edges", edges_ds, LENGTH)
+        r.plan("box edges", edges_ds, edges_ds.size * (edges_ds.dtype.itemsize + 8))
+    else:
+        # Open boundaries: the edges are not used, but edge vectors (a matrix per frame, or
+        # one) must still lie along the axes: kinema would drop a tilt it cannot hold.
+        by_frame = isinstance(edges, h5py.Group)  # time-dependent: (F, D, D) edge vectors; fixed: (D, D)
+        value = edges.get("value") if by_frame else edges
+        if isinstance(value, h5py.Dataset) and value.shape is not None and dtype_problem(value.dtype) is None:
+            if len(value.shape) == 2 + by_frame and value.shape[-2:] == (d, d):
+                edges_ds, edges_by_frame = value, by_frame
+                r.plan("box edges", edges_ds)
 
     observables: dict[str, Any] = {}  # attribute or ("potential", force name): value dataset
     obs = f.get("observables")
@@ -384,10 +427,9 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
     except TrajectoryFileError as e:
         raise r.fail(str(e)) from None
     r.finite("times", t_ds, t, ("frame",))
-    back = np.flatnonzero(np.diff(t) <= 0)
-    if back.size:
-        k = int(back[0]) + 1
-        raise r.fail(f"{where('times', t_ds)} must increase: t[{k}] = {number(t[k])} after t[{k - 1}] = {number(t[k - 1])}")
+    problem = increase_problem(t)
+    if problem is not None:
+        raise r.fail(f"{where('times', t_ds)} {problem}")
     live = None if id_table is None else Live(r, id_table, frames, n)
     x = to_si(x_ds[()], units["positions"])
     r.finite("positions", x_ds, x if live is None else live.masked(x), ("frame", "particle"))
@@ -407,15 +449,15 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
             a = live.first(ds[()], element)
         a = to_si(a, units.get(attr, 1.0))
         r.finite(attr, ds, a, ("particle",))
-        if attr == "masses" and np.any(a <= 0):
-            i = int(np.argmax(a <= 0))
-            raise r.fail(f"{where(attr, ds)} has mass[{i}] = {number(a[i])} (masses must be finite and > 0 kg)")
-        if attr == "radii" and np.any(a < 0):
-            i = int(np.argmax(a < 0))
-            raise r.fail(f"{where(attr, ds)} has radius[{i}] = {number(a[i])} (radii must be finite and >= 0 m)")
+        problem = mass_problem(a) if attr == "masses" else radius_problem(a) if attr == "radii" else None
+        if problem is not None:
+            raise r.fail(f"{where(attr, ds)} {problem}")
         if attr == "species":  # names where the file gives them (kinema's ``names``), else none
             a = _species_names(r, p["species"], np.asarray(a))
         setattr(out, attr, a)
+    if periodic is None and edges_ds is not None:  # open boundaries with edge vectors
+        rows = np.asarray(edges_ds[()])
+        _refuse_triclinic(r, edges_ds, rows if edges_by_frame else rows[None], edges_by_frame)
     if periodic is not None:
         edges = _box_edges(r, edges_ds, to_si(np.asarray(edges_ds[()], dtype=np.float64), units["box edges"]), edges_by_frame, periodic)
         out.periodic = periodic

@@ -3,6 +3,7 @@ the particles as one ``UsdGeom.Points`` prim with time samples, the colliders as
 
 from __future__ import annotations
 
+import errno
 import os
 import shutil
 import tempfile
@@ -13,9 +14,11 @@ from typing import Any
 import numpy as np
 
 from ._cell import box_corners, trajectory_cell
-from ._files import FileWriteError, Frames, TrajectoryFileError, refuse_special_target
+from ._files import FileWriteError, Frames, TrajectoryFileError, os_errors_as_write_errors, refuse_special_target
 
-SUFFIXES = (".usd", ".usda", ".usdc")  # binary crate (.usd, .usdc) or text (.usda)
+#: The suffixes USD writes: binary crate (.usd, .usdc), text (.usda), a zip package (.usdz).
+#: USD picks a layer's format from its suffix, and refuses another.
+SUFFIXES = (".usd", ".usda", ".usdc", ".usdz")
 
 
 def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
@@ -41,11 +44,24 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
 
     In Blender: File → Import → Universal Scene Description, then play: the Points prim
     becomes a point cloud whose positions follow the time samples. In Houdini: a LOP
-    network's Sublayer or a SOP ``usdimport``. ``on_frame(i)`` is called after frame ``i``."""
+    network's Sublayer or a SOP ``usdimport``. ``on_frame(i)`` is called after frame ``i``.
+
+    The suffix of ``path`` chooses the file: ``.usd`` or ``.usdc`` (binary), ``.usda``
+    (text), ``.usdz`` (the binary stage in a zip package, ``UsdUtils.CreateNewUsdzPackage``);
+    another is a ``ValueError`` listing them, before anything is written. A failure of the
+    system (a name too long, a full disk) is a ``FileWriteError`` naming ``path``."""
+    if path.suffix.lower() not in SUFFIXES:
+        raise ValueError(f"path = {str(path)!r}: the suffix {path.suffix or '(none)'!r} is not a USD file's; allowed: {', '.join(SUFFIXES)}")
     try:
         from pxr import Gf, Sdf, Usd, UsdGeom, Vt
     except ImportError:
         raise ImportError("writing USD needs the usd-core package: pip install usd-core (or kinema[usd])") from None
+    with os_errors_as_write_errors(path):
+        return _write_stage(traj, fr, path, on_frame, (Gf, Sdf, Usd, UsdGeom, Vt))
+
+
+def _write_stage(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any], pxr: tuple) -> list[Path]:
+    Gf, Sdf, Usd, UsdGeom, Vt = pxr
     rate = _frame_rate(fr.t)
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
@@ -57,7 +73,8 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     # name in a temporary folder beside the target, then renamed over it.
     staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=parent))
     try:
-        tmp = staging / path.name
+        package = path.suffix.lower() == ".usdz"  # a zip of a binary stage: written as .usdc, then packed
+        tmp = staging / (path.stem + ".usdc" if package else path.name)
         stage = Usd.Stage.CreateNew(str(tmp))
         UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
         UsdGeom.SetStageMetersPerUnit(stage, 1.0)
@@ -104,10 +121,27 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
         if np.all(lo <= hi):
             points.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
         _colliders(stage, traj, fr, UsdGeom, Gf)
-        stage.GetRootLayer().Save()
+        if not stage.GetRootLayer().Save():
+            raise FileWriteError(errno.EIO, "usd-core could not save the stage", str(path))
+        if package:
+            from pxr import UsdUtils
+
+            packed = staging / path.name
+            if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(tmp)), str(packed)):
+                raise FileWriteError(errno.EIO, "usd-core could not make the .usdz package", str(path))
+            tmp = packed
         os.replace(tmp, path)
     except OSError as e:
         raise FileWriteError.of(path, e) from None
+    except Exception as e:
+        from pxr import Tf
+
+        if not isinstance(e, Tf.ErrorException):
+            raise
+        # USD's errors are several lines ("Error in '...' at line ... : 'what'"): the last part
+        lines = [line.strip() for line in str(e).splitlines() if line.strip()]
+        reason = lines[0].rsplit(" : ", 1)[-1].strip("'") if lines else "usd-core failed"
+        raise FileWriteError(errno.EIO, f"usd-core failed: {reason}", str(path)) from None
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return [path]

@@ -4,6 +4,7 @@ written at."""
 
 from __future__ import annotations
 
+import errno
 import math
 import numbers
 import os
@@ -14,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io._files import FileWriteError
+from ..io._files import FileWriteError, os_errors_as_write_errors, write_error
 
 #: File extensions ``write_video`` knows.
 VIDEO_EXTENSIONS = (".mp4", ".gif")
@@ -62,6 +63,10 @@ def write_video(
 
     The file is written under a temporary name in the same directory and renamed when
     complete: on any error nothing is left behind and an existing file is untouched.
+
+    A name the system cannot write is a ``kinema.io.FileWriteError`` (an ``OSError``), one
+    line naming ``path``: a folder that does not exist (also a ``FileNotFoundError``), a
+    directory (also an ``IsADirectoryError``), a name too long, a full disk.
     """
     path = Path(path)
     ext = path.suffix.lower()
@@ -70,15 +75,16 @@ def write_video(
     rate = video_rate(fps, ext)
     counts = None if times is None else _repeats(times, rate)
     parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise FileNotFoundError(f"path = {str(path)!r} is invalid: the directory {str(parent)!r} does not exist")
-    if path.is_dir():
-        raise IsADirectoryError(f"path = {str(path)!r} is invalid: it is a directory; give a file name such as {str(path / ('video' + ext))!r}")
     from ..io._files import refuse_special_target
 
-    refuse_special_target(path)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".part{ext}", dir=parent)
-    os.close(fd)
+    with os_errors_as_write_errors(path):  # a name too long, a folder not searchable: one line naming path
+        if not parent.is_dir():
+            raise write_error(path, errno.ENOENT, f"the folder {parent} does not exist")
+        if path.is_dir():
+            raise write_error(path, errno.EISDIR, f"it is a directory; give a file name such as {path / ('video' + ext)}")
+        refuse_special_target(path)
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".part{ext}", dir=parent)
+        os.close(fd)
     tmp = Path(tmp_name)
     try:
         stream = _checked(frames)

@@ -4,27 +4,91 @@ package gives on import (``World.to_scene``, ``World.scene``, ``World.save_check
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
 
+from .. import _checks
 from ..checkpoint import load_checkpoint, save_checkpoint
 from ..colliders import Box, Plane
 from ..emitter import KillBox, KillSphere
 from ..forces import Attractor, Drag, Gravity, Spring, Wind
 from ..world import World
 from .build import _v3
-from .schema import Scene
+from .schema import Scene, SceneError
 from .tables import EmitterTable
 
 # -- world -> scene ---------------------------------------------------------------------------
+
+_SOURCE = "<world>"  # what the messages of to_scene name
+
+
+def _radius_limit() -> float:
+    from ..io._h5md_checks import MAX_RADIUS  # the engine's limit on radii, as the readers apply it
+
+    return MAX_RADIUS
+
+
+def _check_particles(block: dict[str, Any], dim: int) -> None:
+    """Refuses a particle value ``Scene.build`` would refuse when the scene is read back (the
+    engine's rules of ``World.add_particles``): finite positions and velocities (z = 0 in 2D),
+    masses finite and > 0 kg, radii finite, >= 0 m and at most 1e150 m, species names of one
+    word, restitution in [0, 1] and friction finite and >= 0 where set (NaN: the world's).
+    Values written into the world's arrays (``world.masses[3] = -1``) reach the engine only
+    at its next step; here they are caught before a scene holds them. One line, a
+    ``SceneError``: ``<world>: particles[0].mass[3]: -1.0 is invalid: masses must be finite
+    and > 0 kg (particle 3)``."""
+
+    def refuse(key: str, i: int, value: Any, rule: str, k: int | None = None) -> None:
+        at = f"particles[0].{key}[{i}]" + ("" if k is None else f"[{k}]")
+        raise SceneError(f"{_SOURCE}: {at}: {_checks.describe(value)} is invalid: {rule} (particle {i})")
+
+    for key in ("positions", "velocity"):
+        a = np.asarray(block[key], dtype=np.float64).reshape(-1, 3)
+        bad = ~np.isfinite(a)
+        if bad.any():
+            i, k = (int(j) for j in np.unravel_index(int(np.argmax(bad)), a.shape))
+            refuse(key, i, float(a[i, k]), "coordinates must be finite", k)
+        if dim == 2 and (a[:, 2] != 0).any():
+            i = int(np.argmax(a[:, 2] != 0))
+            refuse(key, i, float(a[i, 2]), "a 2D world keeps z = 0", 2)
+    m = np.asarray(block["mass"], dtype=np.float64)
+    bad = ~(np.isfinite(m) & (m > 0))
+    if bad.any():
+        i = int(np.argmax(bad))
+        refuse("mass", i, float(m[i]), "masses must be finite and > 0 kg (pin a particle to make it immovable)")
+    r = np.asarray(block["radius"], dtype=np.float64)
+    bad = ~(np.isfinite(r) & (r >= 0) & (r <= _radius_limit()))
+    if bad.any():
+        i = int(np.argmax(bad))
+        refuse("radius", i, float(r[i]), f"radii must be finite, >= 0 m and <= {_radius_limit():g} m")
+    for i, name in enumerate(block.get("species") or []):
+        if not isinstance(name, str) or not re.fullmatch(_checks.SPECIES_PATTERN, name):
+            refuse("species", i, name, "a species name is one word of letters, digits and _ . + -")
+    for key, ok, rule in (
+        ("restitution", lambda a: (a >= 0) & (a <= 1), "the coefficient of restitution must be in [0, 1] (NaN: the world's)"),
+        ("friction", lambda a: np.isfinite(a) & (a >= 0), "the friction coefficient must be finite and >= 0 (NaN: the world's)"),
+    ):
+        if key in block:
+            a = np.asarray(block[key], dtype=np.float64)
+            bad = ~(np.isnan(a) | ok(a))
+            if bad.any():
+                i = int(np.argmax(bad))
+                refuse(key, i, float(a[i]), rule)
 
 
 def to_scene(world: World) -> Scene:
     """The scene of ``world`` as it is now: one explicit particle list, its forces, colliders
     and settings; duration, fps, render and output options come from ``world.scene`` when
     the world was loaded from one. Each particle's own restitution and friction come from the
-    engine; a ``PythonForce`` cannot be written and raises ``ValueError``."""
+    engine; a ``PythonForce`` cannot be written and raises ``ValueError``.
+
+    What it makes is checked to be a scene kinema reads back and builds: the particles' values
+    by the engine's rules (``_check_particles``: a mass written into ``world.masses`` as -1 is
+    refused), then the whole scene by its schema. A value that fails is a ``SceneError`` (a
+    ``ValueError``) of one line naming the key, the particle index and the value:
+    ``<world>: particles[0].mass[3]: -1.0 is invalid: masses must be finite and > 0 kg ...``."""
     old: Scene | None = getattr(world, "scene", None)
     n = len(world)
     inverse = np.asarray(world._core.inverse_masses)
@@ -46,6 +110,7 @@ def to_scene(world: World) -> Scene:
                 arr = np.array([np.nan if m[k] is None else m[k] for m in own])
                 if not np.all(np.isnan(arr)):
                     block[name] = arr.tolist()
+        _check_particles(block, world.dim)
         blocks.append(block)
     forces = []
     spring_offset = 0  # the springs' end ids, in the order the Spring forces were added
@@ -128,7 +193,12 @@ def to_scene(world: World) -> Scene:
         if any(world.periodic):
             c["periodic"] = list(world.periodic)
         data["collisions"] = c
-    return Scene.from_dict(data, "<world>")
+    try:
+        return Scene.from_dict(data, _SOURCE)
+    except SceneError as e:  # one line per problem: the first, and how many more
+        lines = str(e).splitlines() or [f"{_SOURCE}: not a valid scene"]
+        more = f" (and {len(lines) - 1} more problems)" if len(lines) > 1 else ""
+        raise SceneError(lines[0] + more) from None
 
 
 World.to_scene = to_scene  # ``world.to_scene()``; the world module stays free of the scene format
