@@ -30,6 +30,20 @@ pub enum Error {
         /// The bytes asked for.
         bytes: usize,
     },
+    /// Particles placed where contacts cannot resolve them: a centre inside another particle
+    /// (coincident ones among them) or inside a collider (`collide/placement.rs`).
+    #[error(
+        "positions: {deepest}, {count} where contacts cannot push the bodies apart (coincident centres give \
+         no direction; a centre inside the other particle, with impulses, or inside a collider is pushed across \
+         the body): place the particles further apart, each centre on the free side of every collider"
+    )]
+    Placement {
+        /// The deepest one, in words (the particles, their distance and radii, or the collider).
+        deepest: String,
+        /// How many there are, in words: "the one placement", "the deepest of 12 placements"
+        /// ("at least N" where the count stopped).
+        count: String,
+    },
     /// A method name that is not in the registry.
     #[error("unknown method '{name}'; valid methods are: {valid}")]
     UnknownMethod {
@@ -166,9 +180,15 @@ fn compact(text: String) -> String {
     }
 }
 
+/// A callback's error; an engine error that passed through a callback's signature (the
+/// spring–dashpot contact force is a `Force`, whose errors are `CallbackError`s) comes back as
+/// itself, so that the same bad input is the same error under either contact model.
 impl From<CallbackError> for Error {
     fn from(e: CallbackError) -> Self {
-        Error::Callback(e)
+        match e.downcast::<Error>() {
+            Ok(engine) => *engine,
+            Err(e) => Error::Callback(e),
+        }
     }
 }
 

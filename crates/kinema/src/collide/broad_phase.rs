@@ -44,6 +44,17 @@ const MAX_LEVELS: usize = 16;
 /// The most particles the grid indexes (its slots and cells are u32; 2N + 16 cells must fit).
 pub const MAX_PARTICLES: usize = (u32::MAX as usize - 16) / 2;
 
+/// Candidate pairs a search may find per particle before it stops ([`Grid::find_pairs`]), with
+/// at least [`MIN_PAIR_LIMIT`] in all. Spheres that do not overlap touch at most 12 equal
+/// neighbours (6 in 2D), so a pile averages 6 pairs a particle and a gas with the widest
+/// margin of continuous detection a few dozen; 64 (1 KiB of pairs a particle, the memory the
+/// command line's estimate counts) is reached only by particles piled inside each other,
+/// whose N²/2 pairs would otherwise take all memory (30,000 at one point: 2.7 GB, then an abort).
+pub const PAIRS_PER_PARTICLE: usize = 64;
+
+/// The fewest candidate pairs a search may find before it stops (64 MiB of pairs).
+pub const MIN_PAIR_LIMIT: usize = 1 << 22;
+
 /// The broad phase's grid: one uniform grid per size class of particles (a hierarchical grid,
 /// as MercuryDPM's HGrid). It keeps its buffers between calls: once warm, a call allocates
 /// nothing unless the number of particles, of levels or of found pairs grows.
@@ -73,6 +84,9 @@ pub struct Grid {
     /// Pairs in the order found, and per-particle counts for sorting them.
     scratch: Vec<Pair>,
     count: Vec<usize>,
+    /// The most pairs a search may find (`None`: [`PAIRS_PER_PARTICLE`] a particle, at least
+    /// [`MIN_PAIR_LIMIT`]; tests set less).
+    pub(crate) pair_limit: Option<usize>,
 }
 
 impl Grid {
@@ -132,6 +146,7 @@ impl Grid {
         // particles' positions, stored in cell order) are read from memory close together.
         let mut found = std::mem::take(&mut self.scratch);
         found.clear();
+        let limit = self.pair_limit.unwrap_or((PAIRS_PER_PARTICLE * radius.len()).max(MIN_PAIR_LIMIT));
         let levels = &self.levels[..self.used];
         for (l, level) in levels.iter().enumerate() {
             let cells = level.dims.iter().product::<usize>();
@@ -154,6 +169,18 @@ impl Grid {
                                 found.push((i.min(j), i.max(j)));
                             }
                         });
+                    }
+                    // (checked per particle: one adds at most N pairs beyond the limit)
+                    if found.len() > limit {
+                        self.scratch = found;
+                        return Err(Error::out_of_memory(
+                            format!(
+                                "the candidate pairs of {} particles (more than {limit}, {PAIRS_PER_PARTICLE} a particle: \
+                                 particles inside each other, or a margin of {margin} m wide against their radii)",
+                                radius.len()
+                            ),
+                            radius.len() * (radius.len() - 1) / 2 * std::mem::size_of::<Pair>(),
+                        ));
                     }
                 }
             }

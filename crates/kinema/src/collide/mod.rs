@@ -51,6 +51,7 @@ pub(crate) mod islands;
 pub mod narrow_phase;
 pub(crate) mod neighbour_list;
 pub mod penalty;
+pub(crate) mod placement;
 pub mod response;
 pub(crate) mod sleep;
 pub(crate) mod soft_step;

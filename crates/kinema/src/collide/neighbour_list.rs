@@ -94,7 +94,8 @@ pub(crate) struct NeighbourList {
     /// the list holds: the next update at that buffer, the world's force evaluation of the
     /// same step with nothing written in between, need not check again. Any update clears it.
     pub(crate) verified: Option<(usize, usize)>,
-    /// The most entries a build may hold (`None`: [`Self::MAX_ENTRIES`]; tests set less).
+    /// The most entries a build may hold (`None`: [`Self::ENTRIES_PER_PARTICLE`] a particle,
+    /// at least [`Self::MIN_ENTRIES`]; tests set less).
     pub(crate) entry_limit: Option<usize>,
 }
 
@@ -120,10 +121,14 @@ impl Rows {
 }
 
 impl NeighbourList {
-    /// The most entries (a particle's partner, 4 bytes) a list holds: 4 GiB, about 10,000
-    /// partners for each of 100,000 particles, where a packing of spheres gives each fewer
-    /// than 50 within the skin.
-    pub(crate) const MAX_ENTRIES: usize = 1 << 30;
+    /// The most entries (a particle's partner, 4 bytes) a list holds per particle: 512 B,
+    /// where a packing of spheres gives each fewer than 50 within the skin; with at least
+    /// [`Self::MIN_ENTRIES`] in all. The memory is so bounded by the particle count, as the
+    /// command line's work estimate counts it.
+    pub(crate) const ENTRIES_PER_PARTICLE: usize = 128;
+
+    /// The fewest entries a list may hold before it stops (16 MiB).
+    pub(crate) const MIN_ENTRIES: usize = 1 << 22;
 
     /// Makes the list hold for positions `x` (rebuilt with `grid` and skin `build.skin` if
     /// needed); `build.collider_scale` is the colliders' largest |coordinate|.
@@ -159,12 +164,14 @@ impl NeighbourList {
         // The rows, chunk by chunk on all threads; each particle's row depends on the
         // positions only, so the list is the same for any number of threads. The entries are
         // counted as they come (into a shared count every 64 particles, so the threads rarely
-        // meet on it), so that a list beyond MAX_ENTRIES stops before it exhausts the
+        // meet on it), so that a list beyond its limit stops before it exhausts the
         // machine's memory (an abort Python could not catch).
         self.rows.resize_with(n.div_ceil(CHUNK), Rows::default);
         let grid = &*grid;
         let entries = AtomicUsize::new(0);
-        let limit = self.entry_limit.unwrap_or(Self::MAX_ENTRIES);
+        let limit = self
+            .entry_limit
+            .unwrap_or((Self::ENTRIES_PER_PARTICLE * n).max(Self::MIN_ENTRIES));
         self.rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
             let (start, partners) = (&mut rows.start, &mut rows.partners);
             start.clear();

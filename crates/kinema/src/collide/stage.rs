@@ -7,7 +7,7 @@
 //! Newton's restitution law, distribute each impulse onto both particles.
 
 use crate::collide::impulse::{ImpulseModel, StageSetting};
-use crate::collide::{Collider, Domain, Material, MaterialTable, Partner, Periodic};
+use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Partner, Periodic};
 use crate::error::Error;
 use crate::particles::Particles;
 
@@ -288,6 +288,22 @@ impl CollideStage {
     /// changed).
     pub fn forget_list(&mut self) {
         self.impulse.forget_list();
+    }
+
+    /// Refuses particles `from` on placed where this contact model cannot resolve them
+    /// ([`placement::check`], with the impulse model's grid).
+    pub fn check_placement(&mut self, p: &Particles, from: usize, user_of: Option<&[u32]>) -> Result<(), Error> {
+        let rule = match self.params.model {
+            ContactModel::Impulse => placement::Rule::CentreInside,
+            ContactModel::SpringDashpot { .. } => placement::Rule::Coincident,
+        };
+        let place = placement::Placed {
+            x: &p.x,
+            radius: &p.radius,
+            from,
+            user_of,
+        };
+        placement::check(&mut self.impulse.grid, &place, &self.domain, &self.colliders, rule)
     }
 
     /// Stages 2–4 of the impulse model on the step from the particles' state (x0, v0) to the

@@ -131,7 +131,7 @@ impl From<Error> for StepFailure {
 
 impl From<crate::error::CallbackError> for StepFailure {
     fn from(e: crate::error::CallbackError) -> Self {
-        StepFailure::Error(Error::Callback(e))
+        StepFailure::Error(Error::from(e)) // (an engine error inside comes back as itself)
     }
 }
 

@@ -50,10 +50,13 @@ impl World {
     /// solver's warm start), and the method's: a checkpoint is taken at such a point, so that
     /// a world read from it, built afresh, and the world that wrote it go on from the same
     /// engine state. What the method carries from step to step is kept apart
-    /// ([`World::integrator_carry`]) and given back to both.
+    /// ([`World::integrator_carry`]) and given back to both. The placement is not checked
+    /// again (`collide/placement.rs`): it was when the run started, and the resumed run must
+    /// go on as the one that wrote it.
     pub fn restart_caches(&mut self) -> Result<(), Error> {
         self.restore_user_order();
         self.reset_caches();
+        self.placement_from = None;
         self.rebuild_contact_force()
     }
 

@@ -84,6 +84,26 @@ impl World {
         Ok(())
     }
 
+    /// The placement check that is due (`collide/placement.rs`), if any: before the next step,
+    /// and before anything that evaluates the forces (the advisor, the accelerations), whose
+    /// spring–dashpot contact list would hold the N²/2 pairs of coincident particles.
+    pub fn check_pending_placement(&mut self) -> Result<(), Error> {
+        match self.placement_from {
+            Some(from) => self.check_placement(from),
+            None => Ok(()),
+        }
+    }
+
+    /// Refuses particles `from` on placed inside another particle or a collider when
+    /// collisions are on, before the first step after they were placed (`collide/placement.rs`).
+    pub(super) fn check_placement(&mut self, from: usize) -> Result<(), Error> {
+        if let Some(stage) = &mut self.collide_stage {
+            stage.check_placement(&self.particles, from, self.sorted.as_deref())?;
+        }
+        self.placement_from = None;
+        Ok(())
+    }
+
     /// Turns collisions on (or changes their settings): stages 2–4 of every step with the
     /// impulse model, a contact force in stage 1 with the spring–dashpot model.
     pub fn set_collisions(&mut self, params: CollisionParams) -> Result<(), Error> {
@@ -93,6 +113,7 @@ impl World {
                 let mut stage = CollideStage::new(params, self.params.dim)?;
                 stage.impulse.interrupt = self.interrupt;
                 self.collide_stage = Some(stage);
+                self.check_placement_from(0);
             }
         }
         self.rebuild_contact_force()
@@ -216,6 +237,7 @@ impl World {
         let stage = self.collide_stage.as_mut().expect("collisions are on");
         stage.colliders.push(collider);
         let index = stage.colliders.len() - 1;
+        self.check_placement_from(0);
         self.rebuild_contact_force()?;
         Ok(index)
     }
@@ -260,6 +282,7 @@ impl World {
         }
         self.rebuild_contact_force()?;
         self.reset_caches();
+        self.check_placement_from(0);
         Ok(())
     }
 

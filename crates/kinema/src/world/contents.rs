@@ -35,6 +35,7 @@ impl World {
         // stay: their numbers did not change, and a newborn wakes what it touches.
         let kept = self.collide_stage.as_mut().map(|stage| stage.impulse.take_contacts());
         self.reset_caches();
+        self.check_placement_from(range.start);
         if let Some(stage) = &mut self.collide_stage {
             if !stage.own.is_empty() {
                 stage.own.resize(self.particles.len(), (None, None));
@@ -85,6 +86,9 @@ impl World {
             stage.refresh_materials()?;
         }
         self.reset_caches();
+        if self.placement_from.is_some() {
+            self.placement_from = Some(0); // (the pending newcomers were renumbered)
+        }
         self.rebuild_contact_force()
     }
 
@@ -114,8 +118,17 @@ impl World {
     /// dropped, so the next step starts afresh.
     pub fn particles_mut(&mut self) -> &mut Particles {
         self.reset_caches();
+        if self.steps == 0 {
+            // (placed by hand before the first step; later writes are the user's dynamics)
+            self.check_placement_from(0);
+        }
         self.contact_dirty = self.contact_force.is_some();
         &mut self.particles
+    }
+
+    /// Asks for the placement check of particles `from` on before the next step.
+    pub(super) fn check_placement_from(&mut self, from: usize) {
+        self.placement_from = Some(self.placement_from.map_or(from, |f| f.min(from)));
     }
 
     /// Drops what depends on the state: the method's caches and the energy reference.

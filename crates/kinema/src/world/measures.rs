@@ -49,6 +49,7 @@ impl World {
 
     /// The accelerations a = F/m now, m/s² (3 per particle).
     pub fn accelerations(&mut self) -> Result<Vec<f64>, Error> {
+        self.check_pending_placement()?;
         let p = &self.particles;
         let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
         let mut a = vec![0.0; p.x.len()];
@@ -59,6 +60,7 @@ impl World {
     /// The stable-step advisor's rates at the current state: the highest natural frequency of
     /// the linearised forces, its damping ratio and the largest damping rate (see [`Rates`]).
     pub fn rates(&mut self) -> Result<Rates, Error> {
+        self.check_pending_placement()?;
         let p = &self.particles;
         let s = State {
             t: self.time,

@@ -94,6 +94,11 @@ pub struct World {
     sorts: u64,
     /// The contact force must be rebuilt before the next step (particles changed).
     contact_dirty: bool,
+    /// The particles' placement is checked before the next step from this index on
+    /// (`collide/placement.rs`): 0 after anything that places them all (collisions turned
+    /// on, a collider, periodic axes, positions written before the first step), the first
+    /// newcomer's index after particles are added; `None`: nothing to check.
+    placement_from: Option<usize>,
     /// Wall-clock time spent in each stage so far.
     times: StageTimes,
     /// Asked between the stages of a step and inside long ones whether to stop (Ctrl-C).
@@ -143,6 +148,7 @@ impl World {
             sorted: None,
             sorts: 0,
             contact_dirty: false,
+            placement_from: None,
             times: StageTimes::default(),
             interrupt: Interrupt::none(),
         })
@@ -230,6 +236,7 @@ impl World {
     }
 
     fn step_once(&mut self) -> Result<(), Error> {
+        self.check_pending_placement()?;
         if self.contact_dirty {
             self.rebuild_contact_force()?;
         }

@@ -121,14 +121,16 @@ impl ImpulseModel {
             // Rebuild at x0, with a skin of the base (0.6 mean radius) or four of this step's
             // largest sweeps, whichever is more: the list then lasts at least two such steps.
             let accel = paths.accel;
-            let largest_move = (0..set.radius.len())
+            let (largest_move, fastest) = (0..set.radius.len())
                 .into_par_iter()
                 .with_min_len(CHUNK)
                 .map(|q| {
                     let a = vec3::norm(vec3::get(accel, q));
-                    vec3::norm(domain.displacement(vec3::get(x1, q), vec3::get(x0, q))) + 0.125 * a * h * h
+                    let d = vec3::norm(domain.displacement(vec3::get(x1, q), vec3::get(x0, q))) + 0.125 * a * h * h;
+                    (d, q)
                 })
-                .reduce(|| 0.0, f64::max);
+                .reduce(|| (0.0, 0), |a, b| if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) { b } else { a });
+            check_travel(set, x0, largest_move, fastest, h)?;
             let mean_radius = set.radius.iter().sum::<f64>() / set.radius.len().max(1) as f64;
             let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest_move);
             let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
@@ -390,12 +392,16 @@ impl ImpulseModel {
     fn rebuild_at(&mut self, set: &StageSetting<'_>, paths: &mut Paths<'_>, t: f64, h: f64) -> Result<f64, Error> {
         let (n, radius) = (set.radius.len(), set.radius);
         let mut x = vec![0.0; 3 * n];
-        let mut largest: f64 = 0.0;
+        let (mut largest, mut fastest) = (0.0_f64, 0);
         for q in 0..n {
             paths.advance(q, t);
             x[3 * q..3 * q + 3].copy_from_slice(&paths.x_ref(q));
-            largest = largest.max(swept_reach(paths, q, t, h, vec3::get(&x, q), set.domain));
+            let reach = swept_reach(paths, q, t, h, vec3::get(&x, q), set.domain);
+            if reach > largest {
+                (largest, fastest) = (reach, q);
+            }
         }
+        check_travel(set, &x, largest, fastest, h - t)?;
         let mean_radius = radius.iter().sum::<f64>() / n.max(1) as f64;
         let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest);
         let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
@@ -417,6 +423,53 @@ impl ImpulseModel {
         let active = active_walls(set.colliders, set.domain);
         self.list.walls.retain(|&(_, k)| active[k].iter().any(|a| *a));
     }
+}
+
+/// How many times the scene's extent a particle may travel in the rest of a step: more would
+/// take more impacts than the step's cap (1000 a particle) to follow, each predicted against a
+/// candidate list that holds every particle the sweep reaches.
+pub(crate) const TRAVEL_LIMIT: f64 = 1000.0;
+
+/// Refuses a step in which particle `fastest` travels `largest` (m) in the `rest` of the step
+/// (s), more than [`TRAVEL_LIMIT`] times the extent of the scene: the box around the
+/// particles at `x` (m) and the box colliders (their finite sides). Such speeds (2.3e16 m/s in
+/// a 10 m box: 5 s a step for 1,000 particles) bounce to the cap of continuous detection in
+/// every step while resolving nothing. An extent of 0 (one particle, no box) has nothing to
+/// bounce between.
+fn check_travel(set: &StageSetting<'_>, x: &[f64], largest: f64, fastest: usize, rest: f64) -> Result<(), Error> {
+    if !(largest > 0.0) {
+        return Ok(());
+    }
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    let mut grow = |p: [f64; 3]| {
+        for k in 0..3 {
+            if p[k].is_finite() {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+    };
+    x.chunks_exact(3).for_each(|p| grow([p[0], p[1], p[2]]));
+    for c in set.colliders {
+        if let Collider::Box(b) = c {
+            grow(b.lo());
+            grow(b.hi());
+        }
+    }
+    let extent = (0..3).map(|k| if hi[k] >= lo[k] { hi[k] - lo[k] } else { 0.0 }).fold(0.0, f64::max);
+    let r_max = set.radius.iter().copied().fold(0.0, f64::max);
+    let scale = extent + 2.0 * r_max;
+    if scale > 0.0 && largest > TRAVEL_LIMIT * scale {
+        return Err(Error::invalid(
+            format!("velocities[{fastest}]"),
+            format!("{} m/s", largest / rest.max(f64::MIN_POSITIVE)),
+            format!(
+                "particle {fastest} would travel {largest:.3e} m in the {rest:.3e} s left of a step, over {TRAVEL_LIMIT} times \
+                 the scene's extent ({scale:.3e} m): more impacts a step than continuous detection follows; reduce the speed or dt"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The contact of an event at its time (the particles already moved there).

@@ -155,7 +155,7 @@ pub(crate) struct KeptContacts {
 
 /// The impulse model's stages and their buffers.
 pub(crate) struct ImpulseModel {
-    pub(super) grid: Grid,
+    pub(crate) grid: Grid,
     /// Candidate pairs of continuous detection and of the end-of-step contacts.
     pub(super) list: NeighbourList,
     /// The particles' paths through the step and the queue of their next impacts.

@@ -207,3 +207,24 @@ fn bad_input_is_named() {
         .to_string();
     assert!(e.starts_with("margin = NaN is invalid"), "{e}");
 }
+
+#[test]
+fn a_search_beyond_its_pair_limit_is_an_out_of_memory_error_not_an_allocation() {
+    // 300 particles at one point: 44,850 pairs. With a limit of 1,000 the search stops after
+    // the particle that crossed it (at most 1,000 + 299 pairs held), with Error::OutOfMemory;
+    // without the limit (the default, 4 Mi pairs) it finds all 44,850, as all_pairs does.
+    let n = 300;
+    let (x, r) = (vec![0.0; 3 * n], vec![0.1; n]);
+    let d = Domain::open(3).unwrap();
+    let mut g = Grid::new();
+    g.pair_limit = Some(1_000);
+    let mut pairs = Vec::new();
+    let e = g.find_pairs(&x, &r, &d, 0.0, &mut pairs).unwrap_err();
+    assert!(matches!(e, Error::OutOfMemory { .. }), "{e}");
+    assert!(e.to_string().contains("the candidate pairs of 300 particles (more than 1000"), "{e}");
+    assert!(g.scratch.len() <= 1_000 + n, "{}", g.scratch.len());
+    assert!(pairs.is_empty());
+    g.pair_limit = None;
+    g.find_pairs(&x, &r, &d, 0.0, &mut pairs).unwrap();
+    assert_eq!(pairs.len(), n * (n - 1) / 2);
+}

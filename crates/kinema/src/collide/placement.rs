@@ -1,0 +1,191 @@
+//! Placements the collide stage cannot resolve, refused before the first step that meets them.
+//!
+//! Both contact models push overlapping particles apart along the line of centres: the
+//! impulse model projects the overlap away at the end of the step, the spring–dashpot model
+//! pushes with k_n·δ. That is sound while the overlap δ = r_i + r_j − d is a fraction of the
+//! radii. It is not when the centre of one particle lies inside the other (d < max(r_i, r_j)):
+//! the normal (x_i − x_j)/d is then the accident of where the centres fell (undefined for
+//! coincident particles, d = 0), the push-out of a pile of them chains into a displacement of
+//! metres in one step, and every particle of a cluster of N coincident ones touches every
+//! other: N²/2 contacts (30,000 at one point asked for 2.7 GB before the allocation failed).
+//! The same holds for a particle whose centre lies inside a sphere obstacle, behind a plane or
+//! outside a box: the push-out to the nearest surface is a jump across the obstacle (a
+//! particle 1 m from the centre of a 100 m sphere went to z = 20.8 m in one step).
+//!
+//! So the world checks its particles' placement before the first step after anything that
+//! places them: collisions turned on, a collider or periodic axes added, positions written
+//! before the first step (all particles), particles added (the newcomers, against all). Later
+//! writes are the user's own dynamics, and a checkpoint restores a run that was checked when
+//! it started, so neither is checked. Such placements are refused with one error naming how
+//! many there are and the deepest one. The check is bounded: it stops counting at
+//! [`COUNT_LIMIT`], and reads each particle's neighbours once (the broad phase's grid).
+//!
+//! The rule depends on the contact model ([`Rule`]). Spring–dashpot contacts are soft: bodies
+//! overlap deeply in a crowded box by design, and the spring pushes along the line of centres
+//! whatever the depth, so only coincident particles (no line) are refused among particles.
+//! Colliders are rigid for both models: a centre inside one is refused for both.
+//!
+//! A tolerance of [`TOLERANCE`] of the lengths involved keeps a centre placed exactly on a
+//! wall (0.1 + 0.2 + 0.3 = 0.6000000000000001 against a wall at 0.6) or exactly at the
+//! distance max(r_i, r_j) on the allowed side.
+
+use crate::collide::broad_phase::Grid;
+use crate::collide::{Collider, Domain};
+use crate::error::Error;
+use crate::vec3;
+
+/// Placements counted at most: beyond, the error says "at least" this many.
+pub const COUNT_LIMIT: usize = 100_000;
+
+/// Relative tolerance of the tests (of the distances and coordinates compared).
+pub const TOLERANCE: f64 = 1e-9;
+
+/// Which particle pairs a contact model cannot resolve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rule {
+    /// The impulse model: a centre inside the other particle, d < max(r_i, r_j).
+    CentreInside,
+    /// The spring–dashpot model: coincident centres, d ≤ TOLERANCE · (r_i + r_j).
+    Coincident,
+}
+
+/// The particles to check: positions `x` (m, 3 per particle), radii `radius` (m); those from
+/// index `from` on are checked against all; `user_of`: the user's index of each particle
+/// when the world holds them in another order.
+pub struct Placed<'a> {
+    pub x: &'a [f64],
+    pub radius: &'a [f64],
+    pub from: usize,
+    pub user_of: Option<&'a [u32]>,
+}
+
+/// The deepest placement found, in words, and how deep (0 at the limit of what is allowed,
+/// 1 when centres coincide or a centre is a body's depth inside).
+struct Deepest {
+    what: String,
+    depth: f64,
+}
+
+/// Checks the particles of `place` against each other (in `domain`, periodic images
+/// included) by `rule` and against `colliders` (a centre inside a sphere obstacle, behind a
+/// plane or outside a box).
+/// Errors: [`Error::Placement`] naming the deepest and how many; what the broad phase's grid
+/// refuses (non-finite values).
+pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[Collider], rule: Rule) -> Result<(), Error> {
+    let Placed { x, radius, from, user_of } = *place;
+    let n = radius.len();
+    // First what the neighbour list refuses at its build, whose words say more about such a
+    // crowd than its deepest pair: radii too large for the periodic cell or the box.
+    domain.check_radii(radius)?;
+    for c in colliders {
+        if let Collider::Box(b) = c {
+            b.check_fill(domain.dim(), x, radius)?;
+        }
+    }
+    let user = |i: usize| user_of.map_or(i, |u| u[i] as usize);
+    let mut count = 0usize;
+    let mut deepest: Option<Deepest> = None;
+    let mut note = |depth: f64, what: &dyn Fn() -> String| {
+        count += 1;
+        if deepest.as_ref().is_none_or(|d| depth > d.depth) {
+            deepest = Some(Deepest { what: what(), depth });
+        }
+        count >= COUNT_LIMIT
+    };
+    let mut full = false;
+    // Particles against particles: a refused pair is also a touching one (d < r_i + r_j),
+    // so the grid's partners are the candidates; a pair is looked at from its later index
+    // among those checked (i ≥ from, and j < from or j < i).
+    if from < n && grid.prepare(x, radius, domain, 0.0)? {
+        let mut out = Vec::new();
+        'particles: for i in from..n {
+            out.clear();
+            grid.partners(i, x, radius, domain, 0.0, &mut out);
+            for &j in &out {
+                let j = j as usize;
+                if j >= from && j > i {
+                    continue;
+                }
+                let d = vec3::norm(domain.displacement(vec3::get(x, i), vec3::get(x, j)));
+                let bound = match rule {
+                    Rule::CentreInside => radius[i].max(radius[j]) * (1.0 - TOLERANCE),
+                    Rule::Coincident => TOLERANCE * (radius[i] + radius[j]),
+                };
+                let refused = match rule {
+                    Rule::CentreInside => d < bound,
+                    Rule::Coincident => d <= bound,
+                };
+                if refused {
+                    let (a, b) = if user(i) < user(j) { (i, j) } else { (j, i) };
+                    let words = || {
+                        format!(
+                            "particles {} and {} are {} m apart (radii {} and {} m)",
+                            user(a),
+                            user(b),
+                            short(d),
+                            radius[a],
+                            radius[b]
+                        )
+                    };
+                    full = note(1.0 - d / bound.max(f64::MIN_POSITIVE), &words);
+                    if full {
+                        break 'particles;
+                    }
+                }
+            }
+        }
+    }
+    // Particles against colliders: the centre on the wrong side of a surface.
+    'colliders: for i in from..n {
+        if full {
+            break;
+        }
+        let p = vec3::get(x, i);
+        let slack = TOLERANCE * (radius[i] + vec3::norm(p));
+        for (k, c) in colliders.iter().enumerate() {
+            let inside = match c {
+                Collider::Sphere(s) => {
+                    let d = vec3::norm(vec3::sub(p, s.center()));
+                    (d < s.radius() - slack).then(|| (1.0 - d / s.radius(), format!("{} m from its centre, radius {} m", short(d), s.radius())))
+                }
+                Collider::Plane(w) => {
+                    let s = w.signed_distance(p);
+                    (s < -slack).then(|| (1.0, format!("{} m behind it", short(-s))))
+                }
+                Collider::Box(b) => b
+                    .walls()
+                    .iter()
+                    .map(|w| w.signed_distance(p))
+                    .fold(None, |worst: Option<f64>, s| if s < -slack && worst.is_none_or(|v| s < v) { Some(s) } else { worst })
+                    .map(|s| (1.0, format!("{} m outside it", short(-s)))),
+            };
+            if let Some((depth, words)) = inside {
+                let u = user(i);
+                if note(depth, &|| format!("particle {u}'s centre lies inside colliders[{k}] ({words})")) {
+                    break 'colliders;
+                }
+            }
+        }
+    }
+    match deepest {
+        None => Ok(()),
+        Some(d) => Err(Error::Placement {
+            deepest: d.what,
+            count: match count {
+                1 => "the one placement".to_string(),
+                c if c >= COUNT_LIMIT => format!("the deepest of at least {COUNT_LIMIT} placements"),
+                c => format!("the deepest of {c} placements"),
+            },
+        }),
+    }
+}
+
+/// A distance for a message: 6 decimals.
+fn short(d: f64) -> String {
+    let rounded = (d * 1e6).round() / 1e6;
+    if rounded == 0.0 {
+        "0".to_string()
+    } else {
+        format!("{rounded}")
+    }
+}
