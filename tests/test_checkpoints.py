@@ -322,3 +322,527 @@ def test_a_heap_asleep_on_pinned_particles_resumes_bit_for_bit(tmp_path):
         world.step(600)
     assert w.collision_stats()["total"]["woke"] >= 1
     assert_same(w, again)
+
+
+# -- damaged checkpoints ------------------------------------------------------------------------
+# Every field load_checkpoint and resume_run read is checked (presence, type, shape, finite,
+# range, consistency with the others); a damaged checkpoint is one CheckpointError, one line
+# naming the file and the field, never a KeyError, OverflowError, ZeroDivisionError, ...
+# (an outside fuzz run found those), and never a run that writes a trajectory kinema's own
+# reader refuses (per_frame = 0).
+
+import json  # noqa: E402
+import shutil  # noqa: E402
+import time  # noqa: E402
+
+import h5py  # noqa: E402
+
+from kinema.checkpoint import CheckpointError  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def pristine(tmp_path_factory):
+    """A checkpoint of a run in progress holding every field: births held back by an
+    emitter, contacts with particles and with colliders (the warm start), Verlet's carry,
+    sleeping's carry, the collision books, 11 frames recorded with births among them."""
+    path = tmp_path_factory.mktemp("pristine") / "checkpoint.ckpt"
+    w = Scene.from_dict(scene("verlet", "impulse", emitter=True)).build()
+
+    def stop(world):
+        if world.time > 0.2:
+            raise Stop
+
+    with pytest.raises(Stop):
+        w.run(0.3, fps=50, checkpoint=path, checkpoint_every=0.2, callback=stop)
+    with h5py.File(path) as f:
+        collider = f["collision_carry/collider"][()]
+        assert collider.any() and not collider.all()
+        assert json.loads(f.attrs["emitters"])[0]["waiting"] is not None
+        assert "integrator_carry" in f and "collision_stats" in f.attrs and len(json.loads(f["run"].attrs["sets"])) > 1
+    return path
+
+
+def _holder(f, name):
+    group, _, key = name.rpartition("/")
+    return (f[group] if group else f), key
+
+
+def set_attr(name, value):
+    def damage(f):
+        holder, key = _holder(f, name)
+        holder.attrs[key] = value
+
+    return damage
+
+
+def del_attr(name):
+    def damage(f):
+        holder, key = _holder(f, name)
+        del holder.attrs[key]
+
+    return damage
+
+
+def del_node(name):
+    def damage(f):
+        del f[name]
+
+    return damage
+
+
+def edit_ds(name, change):
+    """Replace the dataset ``name`` by ``change(its data)``."""
+
+    def damage(f):
+        data = f[name][()]
+        del f[name]
+        f.create_dataset(name, data=change(data))
+
+    return damage
+
+
+def at(index, value):
+    """``data`` with ``data[index] = value`` (a float copy when the value is NaN or inf)."""
+
+    def change(data):
+        data = data.astype(float) if isinstance(value, float) and data.dtype.kind != "f" else data.copy()
+        data[index] = value
+        return data
+
+    return change
+
+
+def edit_json(name, change):
+    """Change the JSON attribute ``name`` in place: ``change(its value)``."""
+
+    def damage(f):
+        holder, key = _holder(f, name)
+        value = json.loads(holder.attrs[key])
+        change(value)
+        holder.attrs[key] = json.dumps(value)
+
+    return damage
+
+
+def edit_scene(old, new):
+    def damage(f):
+        text = f.attrs["scene"]
+        assert old in text
+        f.attrs["scene"] = text.replace(old, new, 1)
+
+    return damage
+
+
+ROOT_ATTRS = ("format", "version", "scene", "time", "steps", "next_id", "warned", "advised_at", "emitters", "collision_stats")
+RUN_ATTRS = ("frames_done", "frames_total", "per_frame", "every", "fps", "potential", "about", "sets")
+DATASETS = (
+    "ids",
+    "death",
+    "colors",
+    "spring_ids",
+    "collision_carry/particle",
+    "collision_carry/collider",
+    "collision_carry/partner",
+    "collision_carry/impulse",
+    "collision_carry/sleep_calm",
+    "collision_carry/sleep_island",
+    "run/t",
+    "run/kinetic",
+    "run/momentum",
+    "run/angular_momentum",
+    "run/contacts",
+    "run/impulse_total",
+    "run/energy_lost",
+    "run/counts",
+    "run/x",
+    "run/v",
+    "run/ids",
+)
+OPTIONAL = ("kinema", "integrator_carry")  # not read / absent before a first step (verlet) and for methods that carry nothing
+NUMERIC_ATTRS = ("version", "time", "steps", "next_id", "advised_at", *(f"run/{a}" for a in RUN_ATTRS[:5]))
+JSON_ATTRS = ("emitters", "collision_stats", "run/potential", "run/about", "run/sets")
+NUMERIC_DATASETS = tuple(d for d in (*DATASETS, "integrator_carry") if d != "collision_carry/collider")
+
+
+def test_the_damage_cases_cover_every_field_of_a_checkpoint(pristine):
+    found = set()
+    with h5py.File(pristine) as f:
+        found |= set(f.attrs) | {f"run/{a}" for a in f["run"].attrs}
+        f.visititems(lambda name, obj: found.add(name) if isinstance(obj, h5py.Dataset) else None)
+    covered = {*ROOT_ATTRS, *(f"run/{a}" for a in RUN_ATTRS), *DATASETS, *OPTIONAL}
+    assert found == covered
+
+
+CASES = [
+    # every field deleted
+    *((f"delete {a}", del_attr(a), "format" if a == "format" else f"'{a}'") for a in ROOT_ATTRS),
+    *((f"delete run/{a}", del_attr(f"run/{a}"), f"'run/{a}'") for a in RUN_ATTRS),
+    *((f"delete {d}", del_node(d), f"'{d}'") for d in DATASETS),
+    ("delete run", del_node("run"), "'run'"),
+    ("delete collision_carry", del_node("collision_carry"), "'collision_carry'"),
+    # the wrong type: text for numbers, numbers for text, bools for numbers and numbers for bools
+    *((f"{a} text", set_attr(a, "x"), f"'{a}'") for a in NUMERIC_ATTRS),
+    *((f"{a} bool", set_attr(a, True), f"'{a}'") for a in NUMERIC_ATTRS),
+    *((f"{a} float", set_attr(a, 2.5), f"'{a}'") for a in NUMERIC_ATTRS if a not in ("time", "run/fps")),
+    *((f"{a} a number", set_attr(a, 1.5), f"'{a}'") for a in ("scene", *JSON_ATTRS)),
+    *((f"{a} array", set_attr(a, np.array([1, 2])), f"'{a}'") for a in ("steps", "time", "run/per_frame")),
+    ("warned a number", set_attr("warned", 1), "'warned'"),
+    ("format other", set_attr("format", "kinema-trajectory"), "format"),
+    *((f"{d} text", edit_ds(d, lambda a: np.full(a.shape, b"x")), f"'{d}'") for d in NUMERIC_DATASETS),
+    *((f"{d} bool", edit_ds(d, lambda a: np.ones(a.shape, bool)), f"'{d}'") for d in NUMERIC_DATASETS),
+    ("collider integers", edit_ds("collision_carry/collider", lambda a: a.astype(np.int64)), "'collision_carry/collider'"),
+    *((f"{d} float", edit_ds(d, lambda a: a + 0.5), f"'{d}'") for d in ("ids", "spring_ids", "run/counts", "run/ids", "collision_carry/partner")),
+    ("ids a group", lambda f: (f.__delitem__("ids"), f.create_group("ids")), "'ids'"),
+    ("collision_carry a dataset", lambda f: (f.__delitem__("collision_carry"), f.create_dataset("collision_carry", data=[1])), "'collision_carry'"),
+    ("run a dataset", lambda f: (f.__delitem__("run"), f.create_dataset("run", data=[1])), "'run'"),
+    ("ids empty dataspace", lambda f: (f.__delitem__("ids"), f.create_dataset("ids", dtype="u8")), "'ids'"),
+    # NaN and inf where a number must be finite (or not NaN)
+    *((f"{a} nan", set_attr(a, float("nan")), f"'{a}'") for a in ("time", "run/fps")),
+    *((f"{a} inf", set_attr(a, float("inf")), f"'{a}'") for a in ("time", "run/fps")),
+    *(
+        (f"{d} nan", edit_ds(d, at(-1, float("nan"))), f"'{d}'")
+        for d in (
+            "death",
+            "integrator_carry",
+            "collision_carry/impulse",
+            "collision_carry/sleep_calm",
+            "run/t",
+            "run/kinetic",
+            "run/momentum",
+            "run/angular_momentum",
+            "run/impulse_total",
+            "run/energy_lost",
+            "run/x",
+            "run/v",
+        )
+    ),
+    *(
+        (f"{d} inf", edit_ds(d, at(-1, float("inf"))), f"'{d}'")
+        for d in ("integrator_carry", "collision_carry/impulse", "collision_carry/sleep_calm", "run/t", "run/kinetic", "run/x", "run/v")
+    ),
+    ("colors 2", edit_ds("colors", at((0, 1), 2.0)), "'colors'"),
+    ("colors inf", edit_ds("colors", at((0, 1), float("inf"))), "'colors'"),
+    # negative, and huge (2**64 - 1 as uint64, 1e300)
+    *((f"{a} negative", set_attr(a, -1), f"'{a}'") for a in ("version", "steps", "next_id", "advised_at", *(f"run/{a}" for a in RUN_ATTRS[:4]))),
+    *((f"{a} negative", set_attr(a, -1.0), f"'{a}'") for a in ("time", "run/fps")),
+    *((f"{a} huge", set_attr(a, np.uint64(2**64 - 1)), f"'{a}'") for a in ("version", "steps", "next_id", "advised_at", *(f"run/{a}" for a in RUN_ATTRS[:4]))),
+    ("time huge", set_attr("time", 1e300), "'time'"),
+    *(
+        (f"{d} negative", edit_ds(d, at(0, -1)), f"'{d}'")
+        for d in ("spring_ids", "collision_carry/particle", "collision_carry/partner", "run/counts", "run/contacts", "run/ids")
+    ),
+    ("ids negative", edit_ds("ids", lambda a: np.concatenate([[-1], a[1:].astype(np.int64)])), "'ids'"),
+    ("sleep_island -2", edit_ds("collision_carry/sleep_island", at(0, -2)), "'collision_carry/sleep_island'"),
+    ("sleep_calm negative", edit_ds("collision_carry/sleep_calm", at(0, -1.0)), "'collision_carry/sleep_calm'"),
+    ("kinetic negative", edit_ds("run/kinetic", at(0, -1.0)), "'run/kinetic'"),
+    ("colors negative", edit_ds("colors", at((0, 0), -0.5)), "'colors'"),
+    ("ids huge", edit_ds("ids", at(-1, np.uint64(2**64 - 1))), "'ids'"),
+    ("particle huge", edit_ds("collision_carry/particle", at(0, 2**62)), "'collision_carry/particle'"),
+    ("partner huge", edit_ds("collision_carry/partner", at(0, 2**62)), "'collision_carry/partner'"),
+    ("partner collider out of range", edit_ds("collision_carry/partner", lambda a: a + 1000), "'collision_carry/partner'"),
+    ("spring end above next_id", edit_ds("spring_ids", at(0, 10**6)), "'spring_ids'"),
+    # the wrong shape
+    ("ids one more", edit_ds("ids", lambda a: np.append(a, a[-1] + 1)), "'ids'"),
+    ("death one more", edit_ds("death", lambda a: np.append(a, np.inf)), "'death'"),
+    ("colors 2 columns", edit_ds("colors", lambda a: a[:, :2]), "'colors'"),
+    ("colors flat", edit_ds("colors", lambda a: a.reshape(-1)), "'colors'"),
+    ("spring_ids 3 columns", edit_ds("spring_ids", lambda a: np.tile(a, (1, 2))[:, :3]), "'spring_ids'"),
+    ("integrator_carry short", edit_ds("integrator_carry", lambda a: a[:-3]), "'integrator_carry'"),
+    ("particle one more", edit_ds("collision_carry/particle", lambda a: np.append(a, 0)), "'collision_carry/collider'"),
+    ("impulse 2 columns", edit_ds("collision_carry/impulse", lambda a: a[:, :2]), "'collision_carry/impulse'"),
+    ("sleep_calm one more", edit_ds("collision_carry/sleep_calm", lambda a: np.append(a, 0.0)), "'collision_carry/sleep_calm'"),
+    ("sleep_island one less", edit_ds("collision_carry/sleep_island", lambda a: a[:-1]), "'collision_carry/sleep_island'"),
+    ("run/t one more", edit_ds("run/t", lambda a: np.append(a, a[-1] + 1)), "'run/t'"),
+    ("run/kinetic one less", edit_ds("run/kinetic", lambda a: a[:-1]), "'run/kinetic'"),
+    ("run/momentum 2 columns", edit_ds("run/momentum", lambda a: a[:, :2]), "'run/momentum'"),
+    ("run/contacts 2-D", edit_ds("run/contacts", lambda a: a[:, None]), "'run/contacts'"),
+    ("run/counts one more", edit_ds("run/counts", lambda a: np.append(a, 0)), "'run/counts'"),
+    ("run/x one more", edit_ds("run/x", lambda a: np.vstack([a, a[:1]])), "'run/x'"),
+    ("run/v one less", edit_ds("run/v", lambda a: a[:-1]), "'run/v'"),
+    ("run/ids one more", edit_ds("run/ids", lambda a: np.append(a, 10**6)), "'run/ids'"),
+    # values that do not fit the others
+    ("per_frame 0", set_attr("run/per_frame", 0), "'run/per_frame'"),
+    ("per_frame another", set_attr("run/per_frame", 41), "'run/per_frame'"),
+    ("every 0", set_attr("run/every", 0), "'run/every'"),
+    ("fps tiny", set_attr("run/fps", 5e-324), "'run/fps'"),
+    ("frames_done above frames_total", lambda f: f["run"].attrs.__setitem__("frames_done", f["run"].attrs["frames_total"] + 1), "'run/frames_done'"),
+    ("frames_done one less", lambda f: f["run"].attrs.__setitem__("frames_done", f["run"].attrs["frames_done"] - 1), "'run/t'"),
+    ("frames_total past 2**53 steps", set_attr("run/frames_total", 2**60), "'run/frames_total'"),
+    ("steps one more", lambda f: f.attrs.__setitem__("steps", f.attrs["steps"] + 1), "'steps'"),
+    ("time a bit later", lambda f: f.attrs.__setitem__("time", f.attrs["time"] + 1e-9), "'time'"),
+    ("next_id at the last id", lambda f: f.attrs.__setitem__("next_id", f["ids"][-1]), "'next_id'"),
+    ("ids out of order", edit_ds("ids", lambda a: a[[1, 0, *range(2, len(a))]]), "'ids'"),
+    ("run/t not increasing", edit_ds("run/t", lambda a: np.concatenate([a[:1], a[:1], a[2:]])), "'run/t'"),
+    ("run/t after the time", edit_ds("run/t", lambda a: a + 1.0), "'run/t'"),
+    ("run/ids out of order", edit_ds("run/ids", lambda a: a[[1, 0, *range(2, len(a))]]), "'run/ids'"),
+    ("run/counts moved", edit_ds("run/counts", lambda a: np.concatenate([[a[0] - 1, a[1] + 1], a[2:]])), "'run/ids'"),
+    # the scene, through the scene's validation
+    ("scene not TOML", set_attr("scene", "[[[ nonsense"), "'scene'"),
+    ("scene dt negative", edit_scene("dt = 0.0005", "dt = -1.0"), "'scene'"),
+    ("scene unknown key", edit_scene("[world]", "[world]\nwarp = 9"), "'scene'"),
+    ("scene another dt", edit_scene("dt = 0.0005", "dt = 0.001"), "'time'"),
+    (
+        "scene a billion particles",
+        set_attr("scene", Scene.from_dict({"particles": [{"type": "random", "count": 10**9, "lo": [0, 0, 0], "hi": [1, 1, 1]}]}).to_toml_string()),
+        "'scene'",
+    ),
+    ("scene not UTF-8", set_attr("scene", np.bytes_(b"\xff\xfe")), "'scene'"),
+    # the emitters' states
+    ("emitters not JSON", set_attr("emitters", "[{"), "'emitters'"),
+    ("emitters a dict", set_attr("emitters", "{}"), "'emitters'"),
+    ("emitters none", set_attr("emitters", "[]"), "'emitters'"),
+    ("emitted missing", edit_json("emitters", lambda e: e[0].pop("emitted")), "'emitters'"),
+    ("emitted bool", edit_json("emitters", lambda e: e[0].update(emitted=True)), "emitted"),
+    ("emitted negative", edit_json("emitters", lambda e: e[0].update(emitted=-1)), "emitted"),
+    ("emitted 2**70", edit_json("emitters", lambda e: e[0].update(emitted=2**70)), "emitted"),
+    ("emitted float", edit_json("emitters", lambda e: e[0].update(emitted=1.5)), "emitted"),
+    ("emitted more than due", edit_json("emitters", lambda e: e[0].update(emitted=e[0]["emitted"] + 1000)), "emitted"),
+    ("stream missing", edit_json("emitters", lambda e: e[0]["streams"].pop("life")), "streams"),
+    ("stream other generator", edit_json("emitters", lambda e: e[0]["streams"]["size"].update(bit_generator="MT19937")), "streams.size.bit_generator"),
+    ("stream state 2**200", edit_json("emitters", lambda e: e[0]["streams"]["position"]["state"].update(state=2**200)), "streams.position.state.state"),
+    ("stream inc even", edit_json("emitters", lambda e: e[0]["streams"]["velocity"]["state"].update(inc=2)), "streams.velocity.state.inc"),
+    ("stream inc text", edit_json("emitters", lambda e: e[0]["streams"]["velocity"]["state"].update(inc="1")), "streams.velocity.state.inc"),
+    ("stream has_uint32 2", edit_json("emitters", lambda e: e[0]["streams"]["life"].update(has_uint32=2)), "streams.life.has_uint32"),
+    ("stream uinteger negative", edit_json("emitters", lambda e: e[0]["streams"]["life"].update(uinteger=-1)), "streams.life.uinteger"),
+    ("waiting key missing", edit_json("emitters", lambda e: e[0]["waiting"].pop("spawn")), "waiting"),
+    ("waiting x nan", edit_json("emitters", lambda e: e[0]["waiting"]["x"][0].__setitem__(0, float("nan"))), "waiting.x"),
+    ("waiting m negative", edit_json("emitters", lambda e: e[0]["waiting"]["m"].__setitem__(0, -1.0)), "waiting.m"),
+    ("waiting m one more", edit_json("emitters", lambda e: e[0]["waiting"]["m"].append(0.01)), "waiting.x"),
+    ("waiting v flat", edit_json("emitters", lambda e: e[0]["waiting"].update(v=[0.0] * len(e[0]["waiting"]["v"]))), "waiting.v"),
+    ("waiting life bool", edit_json("emitters", lambda e: e[0]["waiting"]["life"].__setitem__(0, True)), "waiting.life"),
+    ("waiting a list", edit_json("emitters", lambda e: e[0].update(waiting=[])), "waiting"),
+    # the collision books
+    ("collision_stats not JSON", set_attr("collision_stats", "{"), "'collision_stats'"),
+    ("collision_stats no total", edit_json("collision_stats", lambda s: s.pop("total")), "'collision_stats'"),
+    ("collision_stats contacts missing", edit_json("collision_stats", lambda s: s["total"].pop("contacts")), "total.contacts"),
+    ("collision_stats contacts negative", edit_json("collision_stats", lambda s: s["total"].update(contacts=-1)), "total.contacts"),
+    ("collision_stats impacts bool", edit_json("collision_stats", lambda s: s["last"].update(impacts=True)), "last.impacts"),
+    ("collision_stats impacts 2**70", edit_json("collision_stats", lambda s: s["last"].update(impacts=2**70)), "last.impacts"),
+    ("collision_stats energy nan", edit_json("collision_stats", lambda s: s["total"].update(energy_lost=float("nan"))), "total.energy_lost"),
+    ("collision_stats balance dtype", edit_json("collision_stats", lambda s: s["total"]["impulse_balance"].update(dtype="object")), "total.impulse_balance"),
+    (
+        "collision_stats balance dtype nonsense",
+        edit_json("collision_stats", lambda s: s["total"]["impulse_balance"].update(dtype="foo")),
+        "total.impulse_balance",
+    ),
+    ("collision_stats balance 2", edit_json("collision_stats", lambda s: s["total"]["impulse_balance"]["__array__"].pop()), "total.impulse_balance"),
+    ("collision_stats unknown", edit_json("collision_stats", lambda s: s["last"].update(warp=1)), "last.warp"),
+    ("collision_stats without collisions", edit_scene("[collisions]", "[unused]"), "'scene'"),
+    # the frames' potential energies, what the recording knows of the world, the sets of particles
+    ("potential one less", edit_json("run/potential", lambda p: p.pop()), "'run/potential'"),
+    ("potential not a dict", edit_json("run/potential", lambda p: p.__setitem__(0, 1.0)), "'run/potential'"),
+    ("potential text", edit_json("run/potential", lambda p: p[0].update(gravity="x")), "'run/potential'"),
+    ("potential nan", edit_json("run/potential", lambda p: p[0].update(gravity=float("nan"))), "'run/potential'"),
+    ("about not a dict", set_attr("run/about", "[]"), "'run/about'"),
+    ("about dim", edit_json("run/about", lambda a: a.update(dim=2)), "about'.dim"),
+    ("about dim bool", edit_json("run/about", lambda a: a.update(dim=True)), "about'.dim"),
+    ("about dt", edit_json("run/about", lambda a: a.update(dt=1.0)), "about'.dt"),
+    ("about method", edit_json("run/about", lambda a: a.update(method="rk4")), "about'.method"),
+    ("about masses", edit_json("run/about", lambda a: a["masses"]["__array__"].__setitem__(0, 1.0)), "about'.masses"),
+    ("about ids dtype", edit_json("run/about", lambda a: a["ids"].update(dtype="float64")), "about'.ids"),
+    ("about unknown", edit_json("run/about", lambda a: a.update(warp=1)), "about'.warp"),
+    ("about colliders missing", edit_json("run/about", lambda a: a.pop("colliders")), "about'.colliders"),
+    ("about colliders torus", edit_json("run/about", lambda a: a.update(colliders=[{"type": "torus"}])), "about'.colliders"),
+    ("about colliders nan", edit_json("run/about", lambda a: a["colliders"][0].update(lo=[float("nan")] * 3)), "about'.colliders"),
+    ("about periodic", edit_json("run/about", lambda a: a.update(periodic=[1, 2, 3])), "about'.periodic"),
+    ("about box_edges", edit_json("run/about", lambda a: a.update(box_edges={"__array__": [-1.0, 0.0, 0.0], "dtype": "float64"})), "about'.box_edges"),
+    ("about springs", edit_json("run/about", lambda a: a.update(springs={"__array__": [[0, -1]], "dtype": "int64"})), "about'.springs"),
+    ("sets empty", set_attr("run/sets", "[]"), "'run/sets'"),
+    ("sets entry short", edit_json("run/sets", lambda s: s[0].pop()), "'run/sets'"),
+    ("sets ids dtype", edit_json("run/sets", lambda s: s[0][0].update(dtype="foo")), "'run/sets'"),
+    ("sets ids bools", edit_json("run/sets", lambda s: s[0][0]["__array__"].__setitem__(0, True)), "'run/sets'"),
+    ("sets masses negative", edit_json("run/sets", lambda s: s[1][1]["__array__"].__setitem__(0, -1.0)), "'run/sets'"),
+    ("sets radii nan", edit_json("run/sets", lambda s: s[1][2]["__array__"].__setitem__(0, float("nan"))), "'run/sets'"),
+    ("sets radii short", edit_json("run/sets", lambda s: s[1][2]["__array__"].pop()), "'run/sets'"),
+    ("sets colors 2", edit_json("run/sets", lambda s: s[-1][4]["__array__"][-1].__setitem__(0, 2.0)), "'run/sets'"),
+    (
+        "sets species numbers",
+        edit_json("run/sets", lambda s: s[0].__setitem__(3, {"__array__": [1] * len(s[0][0]["__array__"]), "dtype": "<U1"})),
+        "'run/sets'",
+    ),
+    ("sets one dropped", edit_json("run/sets", lambda s: s.pop(1)), "'run/ids'"),
+    ("sets one more", edit_json("run/sets", lambda s: s.append(s[-1])), "'run/sets'"),
+]
+
+
+@pytest.mark.parametrize("damage, field", [pytest.param(d, field, id=name) for name, d, field in CASES])
+def test_a_damaged_checkpoint_is_one_clean_error_naming_the_field(pristine, tmp_path, damage, field):
+    path = tmp_path / "checkpoint.ckpt"
+    shutil.copy(pristine, path)
+    with h5py.File(path, "r+") as f:
+        damage(f)
+    calls = [kinema.resume_run] if field.startswith(("'run", "about", "'run/")) else [kinema.resume_run, kinema.World.load_checkpoint]
+    for call in calls:
+        with pytest.raises(CheckpointError) as caught:  # and nothing else (KeyError, OverflowError, ...)
+            call(path)
+        message = str(caught.value)
+        assert "\n" not in message and message.startswith(f"{path}: ") and field in message, message
+    assert issubclass(CheckpointError, kinema.io.TrajectoryFileError) and issubclass(CheckpointError, ValueError)
+
+
+def test_the_undamaged_checkpoint_resumes(pristine, tmp_path):
+    # (the control of the cases above: the same copy, undamaged, goes on to the run's end)
+    path = tmp_path / "checkpoint.ckpt"
+    shutil.copy(pristine, path)
+    with h5py.File(path, "r+") as f:  # opened for writing and closed, as the cases are
+        f.attrs["kinema"] = f.attrs["kinema"]
+    world, traj = kinema.resume_run(path)
+    assert len(traj.t) == 16 and world.time == pytest.approx(0.3)
+    traj.save(tmp_path / "t.h5")
+    assert len(kinema.load_trajectory(tmp_path / "t.h5").t) == 16
+
+
+@pytest.mark.parametrize(
+    "content",
+    [
+        pytest.param(lambda data: data[: len(data) // 2], id="truncated"),
+        pytest.param(lambda data: data[:2048], id="truncated-to-2k"),
+        pytest.param(lambda data: np.random.default_rng(1).bytes(len(data)), id="random-bytes"),
+        pytest.param(lambda data: data[:8] + np.random.default_rng(2).bytes(len(data) - 8), id="hdf5-signature-then-random"),
+        pytest.param(lambda data: b"", id="empty"),
+    ],
+)
+def test_a_truncated_or_random_file_is_one_clean_error(pristine, tmp_path, content):
+    path = tmp_path / "checkpoint.ckpt"
+    path.write_bytes(content(pristine.read_bytes()))
+    for call in (kinema.resume_run, kinema.World.load_checkpoint):
+        with pytest.raises(CheckpointError) as caught:
+            call(path)
+        assert "\n" not in str(caught.value) and str(caught.value).startswith(f"{path}: ")
+
+
+def test_a_damaged_waiting_birth_is_caught_where_it_is(pristine, tmp_path):
+    # in a 2D world a birth held back must lie in the plane; here the world is 3D, so z is free,
+    # but a held-back birth with an infinite velocity is refused by name
+    path = tmp_path / "checkpoint.ckpt"
+    shutil.copy(pristine, path)
+    with h5py.File(path, "r+") as f:
+        edit_json("emitters", lambda e: e[0]["waiting"]["v"][0].__setitem__(2, float("inf")))(f)
+    with pytest.raises(CheckpointError, match=r"\[0\]\.waiting\.v\[0, 2\] = inf is invalid"):
+        kinema.World.load_checkpoint(path)
+
+
+def test_a_checkpoint_write_removes_what_a_killed_writer_of_it_left(tmp_path):
+    # A writer killed mid-write (kill -9) leaves .checkpoint.ckpt.<host>-<pid>.<hex>.part;
+    # the next write of the checkpoint removes it once that process is gone.
+    import subprocess
+    import sys
+
+    from kinema.io._files import host_name
+
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    left = tmp_path / f".checkpoint.ckpt.{host_name()}-{dead.pid}.8d906b868137.part"
+    left.write_bytes(b"half a checkpoint")
+    w = Scene.from_dict(scene("verlet", "impulse", count=20)).build()
+    w.run(0.06, fps=50, checkpoint=tmp_path / "checkpoint.ckpt", checkpoint_every=0.02)
+    assert not left.exists()
+    assert not list(tmp_path.glob(".checkpoint.ckpt.*"))
+
+
+# -- kinema run --resume of a damaged checkpoint, or of one whose remaining work is absurd ----
+
+
+def _resumable(pristine, tmp_path):
+    """A scene file and an output folder holding the checkpoint of a run of it."""
+    scene_file = tmp_path / "gas.toml"
+    Scene.from_dict(scene("verlet", "impulse", emitter=True)).to_toml(scene_file)
+    out = tmp_path / "out"
+    out.mkdir()
+    shutil.copy(pristine, out / "checkpoint.ckpt")
+    return scene_file, out
+
+
+@pytest.mark.parametrize(
+    "damage, field",
+    [
+        pytest.param(set_attr("run/per_frame", 0), "'run/per_frame'", id="per_frame-0"),
+        pytest.param(set_attr("run/every", 0), "'run/every'", id="every-0"),
+        pytest.param(edit_ds("run/x", at((3, 1), float("nan"))), "'run/x'", id="x-nan"),
+        pytest.param(edit_json("emitters", lambda e: e[0].update(emitted=2**70)), "emitted", id="emitted-2**70"),
+        pytest.param(del_attr("run/about"), "'run/about'", id="about-missing"),
+        pytest.param(set_attr("steps", np.uint64(2**64 - 1)), "'steps'", id="steps-huge"),
+    ],
+)
+def test_kinema_run_resume_of_a_damaged_checkpoint_is_exit_2_with_one_line(pristine, tmp_path, damage, field):
+    from typer.testing import CliRunner
+
+    from kinema.cli import app
+
+    scene_file, out = _resumable(pristine, tmp_path)
+    with h5py.File(out / "checkpoint.ckpt", "r+") as f:
+        damage(f)
+    res = CliRunner().invoke(app, ["run", str(scene_file), "--no-video", "--resume", "-o", str(out)])
+    lines = res.output.strip().splitlines()
+    assert res.exit_code == 2, res.output
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "checkpoint.ckpt" in lines[0] and field in lines[0], res.output
+    assert not (out / "trajectory.h5").exists() and (out / "checkpoint.ckpt").exists()
+
+
+def test_kinema_run_resume_refuses_absurd_remaining_work_before_running(pristine, tmp_path):
+    # A checkpoint edited to a run of 1e10 more frames (4e11 steps, within a clock's 2**53) is
+    # refused as a fresh run over the limits is, before any step; it ran for ages before.
+    from typer.testing import CliRunner
+
+    from kinema.cli import app
+
+    scene_file, out = _resumable(pristine, tmp_path)
+    with h5py.File(out / "checkpoint.ckpt", "r+") as f:
+        f["run"].attrs["frames_total"] = 10**10
+    start = time.monotonic()
+    res = CliRunner().invoke(app, ["run", str(scene_file), "--no-video", "--resume", "-o", str(out)])
+    assert res.exit_code == 2, res.output
+    assert time.monotonic() - start < 20
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and "checkpoint.ckpt: the resumed run would take" in lines[0] and "over the limits of" in lines[0] and "--force" in lines[0], (
+        res.output
+    )
+    assert "frames to go" in lines[0] and "run/per_frame" in lines[0]
+    assert not (out / "trajectory.h5").exists() and (out / "checkpoint.ckpt").exists()
+    # as a fresh run of the scene over the limits is
+    fresh = CliRunner().invoke(app, ["run", str(scene_file), "--no-video", "--duration", "1e9", "-o", str(tmp_path / "fresh")])
+    assert fresh.exit_code == 2 and "over the limits of" in fresh.output and "--force" in fresh.output
+
+
+def test_kinema_run_resume_of_a_sound_checkpoint_goes_on(pristine, tmp_path):
+    from typer.testing import CliRunner
+
+    from kinema.cli import app
+
+    scene_file, out = _resumable(pristine, tmp_path)
+    res = CliRunner().invoke(app, ["run", str(scene_file), "--no-video", "--resume", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "resuming" in res.output and "frame 11 of 16" in res.output
+    assert len(kinema.load_trajectory(out / "trajectory.h5").t) == 16 and not (out / "checkpoint.ckpt").exists()
+
+
+def test_resume_run_refuses_absurd_remaining_work_as_world_run_does(pristine, tmp_path):
+    path = tmp_path / "checkpoint.ckpt"
+    shutil.copy(pristine, path)
+    with h5py.File(path, "r+") as f:
+        f["run"].attrs["frames_total"] = 10**10  # 4e11 steps more: valid, but years of work
+    start = time.monotonic()
+    with pytest.raises(ValueError, match=r"the rest of the run would take .* over max_work = 1\.0e\+11; give max_work=None"):
+        kinema.resume_run(path)
+    with pytest.raises(ValueError, match="over max_work = 1.0e.03"):
+        kinema.resume_run(pristine, max_work=1e3)  # (the pristine one: 68 particles × 200 steps left)
+    assert time.monotonic() - start < 20
+    with pytest.raises(ValueError, match="max_work = -1 is invalid"):
+        kinema.resume_run(pristine, max_work=-1)
+
+
+def test_a_spring_made_without_a_rest_length_keeps_the_one_it_was_made_with(tmp_path):
+    # Found by the fuzz suite: to_scene wrote the spring's length of the day as its rest
+    # length, so a resumed run ended 2e-7 m from the run that wrote the checkpoint.
+    w = kinema.World(dt=0.005)
+    w.add_particles([[0.1, 0.2, 0.3], [0.45, 0.21, 0.33]], velocity=[[0.1, 0, 0], [0, 0.2, 0]])
+    w.add(kinema.Spring(0, 1, 5.0))
+    made = float(np.linalg.norm(w.positions[1] - w.positions[0]))
+    w.step(4)
+    w.save_checkpoint(tmp_path / "c.ckpt")
+    back = kinema.World.load_checkpoint(tmp_path / "c.ckpt")
+    assert float(np.ravel(back.forces[0].rest_length)[0]) == made
+    assert float(np.ravel(w.to_scene().forces[0].rest_length)[0]) == made
+    w.step(50)
+    back.step(50)
+    assert np.array_equal(w.positions, back.positions)

@@ -403,7 +403,7 @@ def view(
         with _progress() as bar:
             frames = int(_frames_and_steps(settings.duration, world.dt, settings.fps)[0])
             task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
-            traj = world.run(settings.duration, fps=settings.fps, callback=lambda w: bar.advance(task))
+            traj = world.run(settings.duration, fps=settings.fps, callback=lambda w: bar.advance(task), max_work=None)
     else:
         traj = Trajectory.load(source)
     if html is not None:

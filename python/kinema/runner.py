@@ -21,6 +21,8 @@ import numpy as np
 from rich.console import Console
 from rich.markup import escape
 
+from .world import MAX_WORK
+
 console = Console()
 err_console = Console(stderr=True)
 
@@ -35,12 +37,12 @@ class OutputError(ValueError):
 # sand_box, 4e6 particle-steps and 17 MiB; demo, 6e7 pixels of video); they stop runs that
 # would take most of a day or more, or more memory than a laptop has, such as count = 1e9 or
 # duration = 1e9 s at dt = 1e-3, before any of the work (or the allocation) is done.
-LIMIT_PARTICLE_STEPS = 1e11  # 5 hours at 6e6 particle-steps a second (maxwell_gas), days in a heap of contacts (demo: 2e5/s)
+LIMIT_PARTICLE_STEPS = MAX_WORK  # (kinema.world.MAX_WORK, World.run's own default) 5 hours at 6e6 particle-steps a second (maxwell_gas), days in a heap of contacts (demo: 2e5/s)
 LIMIT_PIXELS = 1e11  # frames × width × height: 16 minutes of 1080p at 30 fps; rendering runs at about 5e8 pixels a second, encoding slower
 LIMIT_MEMORY = 8 * 2**30  # bytes
 VIDEO_FPS = (0.01, 1000.0)  # playback frames per second asked; a GIF writes the nearest of 100/d, d = 2 … 65535 (kinema.render.video_rate)
 MAX_STEPS = 10**18  # even with --force: the engine counts steps in 64 bits; 1e18 is 30 years at 1e9 steps a second
-ENGINE_BYTES = 1024  # per particle: state, the method's stages, collision grid and lists (measured 400-800)
+ENGINE_BYTES = 2048  # per particle: state, the method's stages, collision grid (measured 400-800) and the contacts, bounded by design: 64 candidate pairs (1 KiB) a particle at most (docs/collisions.md)
 FRAME_BYTES = 96  # per particle and recorded frame: positions and velocities (48 B), held twice while the trajectory is assembled
 RENDER_BYTES = 32  # per particle and frame while rendering: the renderer's copy of the positions, the speeds
 
@@ -111,6 +113,35 @@ def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video
     estimate += f" and about {_size(memory)} of memory"
     _over_limits(str(path), estimate, particle_steps, pixels, memory, force)
     return f"{particle_steps:.1e} particle-steps" + (f", {pixels:.1e} pixels of video" if pixels else "") + f", about {_size(memory)} of memory"
+
+
+def _resume_work(ckpt: Path, scene: Any, video: bool, force: bool) -> tuple[str, dict]:
+    """Estimate the work left to the run in progress that wrote the checkpoint ``ckpt``
+    (read and checked, nothing built: ``kinema.checkpoint.run_plan``) and the video of
+    ``scene`` (the scene given to ``kinema run``) at its end, refuse it when over the limits
+    unless ``force``, as ``_scene_work`` refuses a fresh run's; return the estimate in words
+    and the checkpoint's plan."""
+    from .checkpoint import run_plan
+
+    plan = run_plan(ckpt)
+    left = plan["frames_total"] - plan["frames_done"]
+    steps = left * plan["per_frame"]
+    dt = plan["scene"].world.dt
+    why = f"{left:,} frames to go (run/frames_total {plan['frames_total']:,} - run/frames_done {plan['frames_done']:,}) × run/per_frame {plan['per_frame']:,} steps of dt = {dt:g} s"
+    n = plan["particles"] + plan["born"]
+    if plan["born"]:
+        why += f"; up to {plan['born']:,} particles from the emitters"
+    frames = plan["frames_total"] + 1.0  # all held until the trajectory is written
+    particle_steps = float(n) * steps
+    pixels = frames * scene.render.width * scene.render.height if video and n else 0.0
+    memory = n * ENGINE_BYTES + frames * n * (FRAME_BYTES + (RENDER_BYTES if pixels else 0))
+    estimate = f"the resumed run would take {particle_steps:.1e} particle-steps ({n:,} particles × {steps:,} steps: {why})"
+    if pixels:
+        estimate += f", {pixels:.1e} pixels of video ({frames:,.0f} frames × render.width {scene.render.width} × render.height {scene.render.height})"
+    estimate += f" and about {_size(memory)} of memory"
+    _over_limits(str(ckpt), estimate, particle_steps, pixels, memory, force)
+    words = f"{particle_steps:.1e} particle-steps" + (f", {pixels:.1e} pixels of video" if pixels else "") + f", about {_size(memory)} of memory"
+    return words, plan
 
 
 def save_figure_atomically(fig, out: Path, dpi: int = 130) -> Path:
@@ -260,6 +291,8 @@ def simulate_scene(
     (created when the scene is valid): trajectory.h5, <scene name>.mp4|.gif, energy.png, all
     or none. Work over the limits (module docstring) is refused before any is done unless
     ``force``. Staging folders left in ``outdir`` by runs that were killed are removed.
+    With ``resume`` the run goes on from ``outdir``/checkpoint.ckpt instead, read and checked
+    first, the work it has left estimated and refused as a fresh run's (``_resume_work``).
     Returns the trajectory and the paths written."""
     import shutil
     import warnings
@@ -271,40 +304,52 @@ def simulate_scene(
     if not (np.isfinite(seconds) and seconds >= 0):
         raise ValueError(f"--duration {seconds}: give a finite number of seconds >= 0")
     video = sc.output.video if not no_video else False
-    estimate = _scene_work(sc, scene, seconds, "world.duration" if duration is None else "--duration", bool(video), force)
-    world = sc.build(source=str(scene))
+    ckpt = outdir / "checkpoint.ckpt"
+    if resume:  # the checkpoint's remaining work, estimated and refused as a fresh run's, then all of it checked
+        if not ckpt.is_file():
+            raise ValueError(f"--resume: there is no checkpoint to resume in {outdir} ({ckpt.name}; a run with --checkpoint-every writes it)")
+        from .checkpoint import load_run
+
+        estimate, plan = _resume_work(ckpt, sc, bool(video), force)
+        world, progress = load_run(ckpt)
+    else:
+        estimate = _scene_work(sc, scene, seconds, "world.duration" if duration is None else "--duration", bool(video), force)
+        world = sc.build(source=str(scene))
     outdir = _outdir(outdir)
     _refuse_special_outputs(
         outdir, [n for n, on in (("trajectory.h5", sc.output.trajectory), (f"{scene.stem}.{video}", video), ("energy.png", sc.output.plot)) if on]
     )
     _remove_stale_stages(outdir)
     fps = sc.world.fps
-    frames = int(_frames_and_steps(seconds, world.dt, fps)[0])
-    console.print(
-        f"{scene}: {_count(len(world), 'particle')}, dim {world.dim}, {world.method}, dt = {world.dt:g} s, {seconds:g} s, "
-        f"{_count(frames + 1, 'frame')}; work: {estimate}",
-        highlight=False,
-        soft_wrap=True,
-    )
-    ckpt = outdir / "checkpoint.ckpt"
+    if resume:
+        console.print(
+            f"{ckpt}: resuming {scene} at t = {plan['time']:g} s, frame {plan['frames_done'] + 1:,} of {plan['frames_total'] + 1:,}: "
+            f"{_count(len(world), 'particle')}, dim {world.dim}, {world.method}, dt = {world.dt:g} s; work: {estimate}",
+            highlight=False,
+            soft_wrap=True,
+        )
+    else:
+        frames = int(_frames_and_steps(seconds, world.dt, fps)[0])
+        console.print(
+            f"{scene}: {_count(len(world), 'particle')}, dim {world.dim}, {world.method}, dt = {world.dt:g} s, {seconds:g} s, "
+            f"{_count(frames + 1, 'frame')}; work: {estimate}",
+            highlight=False,
+            soft_wrap=True,
+        )
     if checkpoint_every is not None and not (np.isfinite(checkpoint_every) and checkpoint_every > 0):
         raise ValueError(f"--checkpoint-every {checkpoint_every}: give a finite number of simulated seconds > 0")
-    if resume and not ckpt.is_file():
-        raise ValueError(f"--resume: there is no checkpoint to resume in {outdir} ({ckpt.name}; a run with --checkpoint-every writes it)")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             with _progress() as bar:
                 if resume:
-                    from .checkpoint import resume_run, run_progress
-
-                    done, total = run_progress(ckpt)
+                    done, total = progress["frames_done"], progress["frames_total"]
                     task = bar.add_task("simulating (resumed)", total=total + 1, completed=done + 1)
-                    world, traj = resume_run(ckpt, callback=lambda _w: bar.advance(task))
+                    traj = world._record(progress, lambda _w: bar.advance(task), ckpt)  # (kinema.checkpoint.resume_run's loop)
                 else:
                     task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
                     saving = {"checkpoint": ckpt, "checkpoint_every": checkpoint_every} if checkpoint_every is not None else {}
-                    traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task), **saving)
+                    traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task), max_work=None, **saving)
         finally:  # a StabilityWarning explains a divergence: show it before the error
             for w in caught:
                 err_console.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)

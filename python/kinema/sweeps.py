@@ -224,15 +224,21 @@ def run_member(
         scene = Scene.from_dict(member.scene, member.name)
         scene.to_toml(where / "scene.toml")
         ckpt = where / "checkpoint.ckpt"
+        resumed = None
         if ckpt.is_file():  # a member interrupted mid-run goes on from its last checkpoint
-            from .checkpoint import resume_run
+            from .checkpoint import CheckpointError, resume_run
 
-            world, traj = resume_run(ckpt)
+            try:
+                resumed = resume_run(ckpt, max_work=None)
+            except CheckpointError:
+                ckpt.unlink()  # damaged (a disk that filled, a kill): the member runs afresh
+        if resumed is not None:
+            world, traj = resumed
         else:
             world = scene.build(member.name)
             seconds = scene.world.duration if duration is None else duration
             saving = {"checkpoint": ckpt, "checkpoint_every": checkpoint_every} if checkpoint_every else {}
-            traj = world.run(seconds, fps=scene.world.fps, **saving)
+            traj = world.run(seconds, fps=scene.world.fps, max_work=None, **saving)
         traj.save(where / "trajectory.h5")
         stats = world.collision_stats()
         row.update(

@@ -28,6 +28,10 @@ class StabilityWarning(UserWarning):
     """The time step exceeds the stable-step advisor's limit for the world's method."""
 
 
+# The most particle-steps World.run takes unless told otherwise: hours of work (5 hours at 6e6
+# particle-steps a second in a gas, days in a pile of contacts); the command line's limit too.
+MAX_WORK = 1e11
+
 REENTRY = (
     "the world was used while it is stepping (from one of its own forces, or another thread): "
     "a force computes F(t, x, v) from its arguments and must leave its world alone"
@@ -96,6 +100,7 @@ class World(WorldCollisions):
         self._death = np.empty(0)
         self._colors = np.empty((0, 3))
         self._spring_ids = np.empty((0, 2), dtype=np.int64)
+        self._spring_rest: dict[int, np.ndarray] = {}  # index in the forces -> each spring's rest length, m
         self._advised_at = 0  # particles when the advisor last looked
         self._new_views()
 
@@ -121,9 +126,16 @@ class World(WorldCollisions):
         if isinstance(core, _Busy):
             raise RuntimeError(REENTRY)
         self._core = _Busy()
+        # The views are read-only meanwhile: a write into one from a force would be lost or
+        # kept depending on what called it (a step reads the state back after, `rates` not).
+        views = [a for a in (self._x, self._v, self._m) if a.flags.writeable]
+        for a in views:
+            a.flags.writeable = False
         try:
             yield core
         finally:
+            for a in views:
+                a.flags.writeable = True
             self._core = core
 
     def _new_views(self) -> None:
@@ -287,13 +299,16 @@ class World(WorldCollisions):
             attach(self)
             return item
         self._push()
-        attach(self._core)
+        attached = attach(self._core)
         if isinstance(item, Collider):
             self._colliders.append(item)
         else:
             self._forces.append(item)
             self._advice_due = True
             if isinstance(item, Spring):  # drawn between these ids while both live
+                # the rest lengths the engine took (from the positions when not given): a
+                # scene or checkpoint of this world keeps them, not the distances of its day
+                self._spring_rest[len(self._forces) - 1] = np.asarray(attached, dtype=float)
                 i, j = item._args[:2]
                 ends = np.array([i, j], dtype=np.int64).T.reshape(-1, 2)
                 self._spring_ids = np.concatenate([self._spring_ids, self.ids[ends]])
@@ -385,6 +400,8 @@ class World(WorldCollisions):
         callback: Callable[[World], Any] | None = None,
         checkpoint: Any = None,
         checkpoint_every: float | None = None,
+        *,
+        max_work: float | None = MAX_WORK,
     ) -> Trajectory:
         """Simulate ``duration`` seconds from now, recording a frame every 1/fps s (rounded to
         a whole number of steps), the current state included; ``callback(world)`` runs after
@@ -393,7 +410,12 @@ class World(WorldCollisions):
         ``checkpoint`` (a path) with ``checkpoint_every`` (simulated seconds, rounded to whole
         frames): at those frames the world and the frames recorded so far are written there
         (``kinema.checkpoint``), replacing the last; ``kinema.resume_run(path)`` goes on from
-        it to the same end, bit for bit as this run."""
+        it to the same end, bit for bit as this run.
+
+        ``max_work``: the most particle-steps (particles now × steps) the run may take; a run
+        over it is refused before any step with a ``ValueError`` that gives the estimate
+        (default ``MAX_WORK`` = 1e11, the command line's limit: hours of work; ``None``: no
+        limit)."""
         duration, fps = _checks.real("duration", duration), _checks.real("fps", fps)
         if callback is not None and not callable(callback):
             raise TypeError(f"callback = {_checks.describe(callback)} is invalid: it must be a function callback(world) or None")
@@ -414,6 +436,15 @@ class World(WorldCollisions):
         per_frame = max(1, round(steps_per_frame))
         frames = int(np.floor(duration / (per_frame * self.dt) + 1e-9))
         every = 0 if every_s is None else max(1, round(every_s / (per_frame * self.dt)))
+        limit = _checks.real("max_work", max_work, optional=True)
+        if limit is not None and not limit > 0:
+            raise ValueError(f"max_work = {_checks.describe(max_work)} is invalid: it must be a number of particle-steps > 0, or None for no limit")
+        work = float(len(self)) * frames * per_frame
+        if limit is not None and work > limit:
+            raise ValueError(
+                f"the run would take {work:.1e} particle-steps ({len(self):,} particles × {frames * per_frame:,} steps of dt = {self.dt:g} s "
+                f"for duration = {duration:g} s), over max_work = {limit:.1e}; give max_work=None (or a larger number) to run it anyway"
+            )
         self._push()
         with self._engine() as core:
             self._advise(core)
@@ -503,6 +534,8 @@ class World(WorldCollisions):
         self._assign(self._m, value, "masses", (len(self),))
 
     def _assign(self, view: np.ndarray, value: Any, name: str, shape: tuple[int, ...]) -> None:
+        if isinstance(self._core, _Busy):  # (from a force while the world steps)
+            raise RuntimeError(REENTRY)
         new = _checks.real_array(name, value)
         try:
             new = np.broadcast_to(new, shape)

@@ -60,7 +60,8 @@ pub fn copy_result(py: Python<'_>, what: &str, value: &Bound<'_, PyAny>, shape: 
 }
 
 /// Anything but a float64 array: lists, tuples, integer arrays — once through numpy.asarray.
-/// None and complex values are refused rather than silently turned into NaN or their real part.
+/// None, booleans and complex values are refused rather than silently turned into NaN, 0/1 or
+/// their real part.
 fn slow_convert<'py>(
     py: Python<'py>,
     what: &str,
@@ -81,7 +82,13 @@ fn slow_convert<'py>(
         .map_err(|_| PyTypeError::new_err(format!("{}; it returned {}", expected(), type_name())))?;
     let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
     match kind.as_str() {
-        "f" | "i" | "u" | "b" => {}
+        "f" | "i" | "u" => {}
+        "b" => {
+            return Err(PyTypeError::new_err(format!(
+                "{}; it returned booleans (True/False are not numbers here: return floats, e.g. 1.0 * mask)",
+                expected()
+            )))
+        }
         "c" => {
             return Err(PyTypeError::new_err(format!(
                 "{}; it returned complex values (write a complex system as its real and imaginary parts)",

@@ -139,7 +139,7 @@ class Scene(_Model):
         try:
             return cls.model_validate(data)
         except ValidationError as e:
-            raise SceneError("\n".join(_describe(err, source) for err in e.errors())) from None
+            raise SceneError("\n".join(_describe_all(e.errors(), source))) from None
 
     # size --------------------------------------------------------------------------------
     def particle_count(self) -> int:
@@ -201,6 +201,36 @@ def block_size(block: Any) -> int:
 
 
 # -- errors -----------------------------------------------------------------------------------
+
+
+def _describe_all(errors: list[dict], source: str) -> list[str]:
+    """One line per mistake: the keys missing from one table and the unknown keys in it are
+    one mistake (``radius = {a = 1}`` gave three lines: min missing, max missing, a unknown),
+    said on one line for the table; every other error is its own line."""
+    tables: dict[tuple, list[dict]] = {}
+    for err in errors:
+        if err["type"] in ("missing", "extra_forbidden") and len(err["loc"]) > 1:
+            tables.setdefault(tuple(err["loc"][:-1]), []).append(err)
+    lines, said = [], set()
+    for err in errors:
+        key = tuple(err["loc"][:-1])
+        group = tables.get(key, [])
+        if len(group) < 2 or not any(e["type"] == "extra_forbidden" for e in group):
+            lines.append(_describe(err, source))
+            continue
+        if key in said:
+            continue
+        said.add(key)
+        missing = [str(e["loc"][-1]) for e in group if e["type"] == "missing"]
+        unknown = [str(e["loc"][-1]) for e in group if e["type"] == "extra_forbidden"]
+        allowed = _allowed_keys(group[[e["type"] for e in group].index("extra_forbidden")]["loc"])
+        loc = [p for p in key if not (isinstance(p, str) and p.startswith("~"))]
+        words = [f"unknown key{'s' if len(unknown) > 1 else ''} {', '.join(unknown)}"]
+        if missing:
+            words.append(f"missing {', '.join(missing)}")
+        hint = f" (allowed keys here: {', '.join(allowed)})" if allowed else ""
+        lines.append(f"{source}: {_path(loc)}: {'; '.join(words)}{hint}")
+    return lines
 
 
 def _describe(err: dict, source: str) -> str:
