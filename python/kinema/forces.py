@@ -98,8 +98,8 @@ class Spring(_Checked):
         rest = None if self.rest_length is None else per_spring("rest_length", self.rest_length)
         return i.tolist(), j.tolist(), per_spring("k", self.k), rest, per_spring("damping", self.damping)
 
-    def _attach(self, core: Any) -> None:
-        core.add_springs(*self._args)
+    def _attach(self, core: Any) -> list[float]:
+        return core.add_springs(*self._args)  # the rest lengths, taken from the positions when not given
 
 
 @dataclass(frozen=True)

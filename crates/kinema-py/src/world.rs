@@ -191,6 +191,7 @@ impl PyWorld {
             .map_err(to_py)
     }
 
+    /// Adds springs; returns their rest lengths, m (those given, or the current distances).
     #[pyo3(signature = (i, j, k, rest_length, damping))]
     fn add_springs(
         &mut self,
@@ -199,7 +200,7 @@ impl PyWorld {
         k: Vec<f64>,
         rest_length: Option<Vec<f64>>,
         damping: Vec<f64>,
-    ) -> PyResult<()> {
+    ) -> PyResult<Vec<f64>> {
         let rest = match rest_length {
             Some(r) => r,
             None => {
@@ -220,8 +221,9 @@ impl PyWorld {
                     .collect::<PyResult<Vec<f64>>>()?
             }
         };
-        let springs = Springs::new(i, j, k, rest, damping).map_err(to_py)?;
-        self.inner.add_force(Box::new(springs)).map_err(to_py)
+        let springs = Springs::new(i, j, k, rest.clone(), damping).map_err(to_py)?;
+        self.inner.add_force(Box::new(springs)).map_err(to_py)?;
+        Ok(rest) // (the lengths taken from the positions, which a scene or checkpoint must keep)
     }
 
     fn add_attractor(&mut self, point: [f64; 3], strength: f64, softening: f64) -> PyResult<()> {

@@ -114,7 +114,7 @@ def to_scene(world: World) -> Scene:
         blocks.append(block)
     forces = []
     spring_offset = 0  # the springs' end ids, in the order the Spring forces were added
-    for f in world.forces:
+    for index, f in enumerate(world.forces):
         if isinstance(f, Gravity):
             forces.append({"type": "gravity"} if f.g is None else {"type": "gravity", "g": _v3(np.asarray(f.g, float).tolist())})
         elif isinstance(f, Drag):
@@ -136,8 +136,8 @@ def to_scene(world: World) -> Scene:
             live = np.all(ids[at] == ends, axis=1) if len(ids) else np.zeros(count, dtype=bool)
             i, j = at[live, 0], at[live, 1]
             rest = f.rest_length
-            if rest is None:  # unknown after the fact: the current lengths
-                rest = np.linalg.norm(world.positions[j] - world.positions[i], axis=1)
+            if rest is None:  # the lengths the engine took when the spring was added
+                rest = world._spring_rest[index]
             spring = {"type": "spring", "i": i.tolist(), "j": j.tolist()}
             for name, value in (("k", f.k), ("rest_length", rest), ("damping", f.damping)):
                 arr = np.asarray(value, dtype=float)
