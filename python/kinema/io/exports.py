@@ -7,7 +7,6 @@ import base64
 import os
 import re
 from collections.abc import Callable, Sequence
-from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import quoteattr
@@ -16,7 +15,7 @@ import numpy as np
 
 from .. import _checks
 from ._cell import box_corners, particle_types, trajectory_cell
-from ._files import Frames, atomic_file, atomic_folder, frames_of, os_errors_as_write_errors
+from ._files import Frames, atomic_file, atomic_folder, atomic_outputs, frames_of, os_errors_as_write_errors
 from ._h5md_checks import check_frames
 from .gsd_writer import write_gsd
 from .lammps_dump import write_lammps
@@ -138,7 +137,11 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
     ``ValueError``; the folder of ``path`` must exist. Every file is written under a
     temporary name and renamed at the end; a series is built in a temporary folder that
     takes the place of ``<stem>_vtk/`` or ``<stem>_ply/`` only when complete (an existing
-    one is replaced only if it holds nothing but an earlier series). Files get the mode an
+    one is replaced only if it holds nothing but an earlier series); a VTK export's folder,
+    colliders file and .pvd are all written before any is put in place, the .pvd last, so a
+    failed export leaves nothing new and an earlier export as it was. GSD and USD files are
+    built by their libraries in the system's temporary folder (``tempfile.gettempdir()``)
+    and copied by Python, whose failed write is a clean error. Files get the mode an
     ordinary ``open()`` gives (0666 less the umask; folders 0777 less the umask).
     ``on_frame(i)`` is called after frame ``i`` is written (a progress bar).
 
@@ -425,16 +428,23 @@ def _write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]
     collection = (
         f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="1.0" byte_order="LittleEndian">\n<Collection>\n{datasets}\n</Collection>\n</VTKFile>\n'
     )
-    # The frames first, then the colliders, then the collection that points at the frames.
-    with atomic_file(pvd) as tmp_pvd:
-        with atomic_file(colliders) if scenery is not None else nullcontext() as tmp_colliders:
-            with atomic_folder(folder, pattern) as tmp:
-                for i, name in enumerate(names):
-                    (tmp / name).write_text(_vtp(fr, i), encoding="ascii")
-                    on_frame(i)
-            if tmp_colliders is not None:
+    # Everything is written under temporary names first: the frames, the colliders, the
+    # collection that points at the frames; only then are they put in place, the .pvd last.
+    # A write that fails leaves nothing new, and an earlier export (its .pvd, its series and
+    # its colliders) as it was.
+    with atomic_outputs(pvd) as out:
+        tmp_pvd = out.file(pvd)
+        tmp_colliders = out.file(colliders) if scenery is not None else None
+        tmp = out.folder(folder, pattern)
+        with out.naming(folder):
+            for i, name in enumerate(names):
+                (tmp / name).write_text(_vtp(fr, i), encoding="ascii")
+                on_frame(i)
+        if tmp_colliders is not None:
+            with out.naming(colliders):
                 tmp_colliders.write_text(scenery, encoding="ascii")
-        tmp_pvd.write_text(collection, encoding="utf-8")
+        with out.naming(pvd):
+            tmp_pvd.write_text(collection, encoding="utf-8")
     return [pvd, *([colliders] if scenery is not None else []), *(folder / name for name in names)]
 
 

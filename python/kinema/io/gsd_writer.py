@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import errno
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -10,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ._cell import frame_steps, particle_types, trajectory_cell
-from ._files import Frames, atomic_file
+from ._files import FileWriteError, Frames, close_descriptors_on, copy_into, private_folder, write_error
 
 
 def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
@@ -41,7 +43,13 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     order of their ids, so a particle is followed across frames by its id (a frame may hold
     none).
 
-    ``on_frame(i)`` is called after frame ``i`` is written. Needs the ``gsd`` package."""
+    ``on_frame(i)`` is called after frame ``i`` is written. Needs the ``gsd`` package.
+
+    gsd builds the file in a private folder of the system's temporary folder
+    (``tempfile.gettempdir()``), and Python copies it to a temporary name beside ``path``,
+    renamed over ``path`` when complete: a failure of the system (a full disk, a file-size
+    limit, there or at ``path``) is one ``FileWriteError`` naming ``path``, with ``path`` left
+    as it was and no file or descriptor left behind."""
     try:
         import gsd.hoomd
     except ImportError:
@@ -58,26 +66,62 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     diameters = None if fr.radii is None else (2.0 * fr.radii).astype(np.float32)
     ids = fr.ids.astype(np.int64)
     steps = frame_steps(fr)
-    with atomic_file(path) as tmp, gsd.hoomd.open(str(tmp), mode="w") as f:
-        for i in range(fr.n_frames):
-            frame = gsd.hoomd.Frame()
-            frame.configuration.step = int(steps[i])
-            frame.configuration.dimensions = fr.dim
-            frame.configuration.box = box
-            live = fr.live(i)
-            p = frame.particles
-            p.N = live.size
-            p.types = types
-            p.typeid = typeid[live]
-            p.position = (fr.positions[i][live] - origin).astype(np.float32)
-            p.velocity = fr.velocities[i][live].astype(np.float32)
-            if masses is not None:
-                p.mass = masses[live]
-            if diameters is not None:
-                p.diameter = diameters[live]
-            frame.log["kinema/origin"] = origin.copy()
-            frame.log["kinema/time"] = np.array([fr.t[i]], dtype=np.float64)
-            frame.log["particles/kinema/id"] = ids[live]
-            f.append(frame)
-            on_frame(i)
+    # gsd writes its file in a private folder of the system's temporary folder, never on the
+    # target's file system, and the finished bytes are copied to the target by Python: gsd
+    # 5.0.1 cannot be trusted with a failed write (its gsd_close returns before close(fd) when
+    # its last flush fails, leaving the file open, and a failure part way can surface as
+    # RuntimeError("Invalid gsd argument: ...")). A full disk or a file-size limit at the
+    # target is then one FileWriteError from Python's own write; one met by gsd in the
+    # temporary folder is a FileWriteError naming the target too, its descriptor closed.
+    with private_folder(path) as scratch:
+        built = scratch / "frames.gsd"
+        try:
+            f = _gsd_call(path, scratch, gsd.hoomd.open, str(built), mode="w")
+            try:
+                for i in range(fr.n_frames):
+                    frame = gsd.hoomd.Frame()
+                    frame.configuration.step = int(steps[i])
+                    frame.configuration.dimensions = fr.dim
+                    frame.configuration.box = box
+                    live = fr.live(i)
+                    p = frame.particles
+                    p.N = live.size
+                    p.types = types
+                    p.typeid = typeid[live]
+                    p.position = (fr.positions[i][live] - origin).astype(np.float32)
+                    p.velocity = fr.velocities[i][live].astype(np.float32)
+                    if masses is not None:
+                        p.mass = masses[live]
+                    if diameters is not None:
+                        p.diameter = diameters[live]
+                    frame.log["kinema/origin"] = origin.copy()
+                    frame.log["kinema/time"] = np.array([fr.t[i]], dtype=np.float64)
+                    frame.log["particles/kinema/id"] = ids[live]
+                    _gsd_call(path, scratch, f.append, frame)
+                    on_frame(i)
+            except BaseException:
+                with contextlib.suppress(Exception):
+                    f.close()
+                raise
+            _gsd_call(path, scratch, f.close)
+        finally:
+            close_descriptors_on(built)  # what gsd left open when its close failed
+        copy_into(built, path)
     return [path]
+
+
+def _gsd_call(path: Path, scratch: Path, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+    """``fn(*args, **kwargs)``, a gsd call on the file it builds for ``path`` in the folder
+    ``scratch``: its failure (gsd's OSError of the system's errno, or its RuntimeError of a
+    state its own failure left) is a ``FileWriteError`` naming ``path``, its reason saying
+    where it happened (the system's temporary folder, which may be the full one)."""
+    where = f"in the temporary folder {scratch.parent}, where gsd builds the file"
+    try:
+        return fn(*args, **kwargs)
+    except FileWriteError:
+        raise
+    except OSError as e:
+        raise write_error(path, e.errno or errno.EIO, f"{e.strerror or type(e).__name__} ({where})") from None
+    except RuntimeError as e:
+        what = str(e).split(":", 1)[0].strip() or type(e).__name__  # (the rest names gsd's temporary file)
+        raise FileWriteError(errno.EIO, f"gsd failed: {what} ({where})", str(path)) from None

@@ -4,9 +4,6 @@ the particles as one ``UsdGeom.Points`` prim with time samples, the colliders as
 from __future__ import annotations
 
 import errno
-import os
-import shutil
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -14,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ._cell import box_corners, trajectory_cell
-from ._files import FileWriteError, Frames, TrajectoryFileError, os_errors_as_write_errors, refuse_special_target
+from ._files import FileWriteError, Frames, TrajectoryFileError, copy_into, os_errors_as_write_errors, private_folder, refuse_special_target
 
 #: The suffixes USD writes: binary crate (.usd, .usdc), text (.usda), a zip package (.usdz).
 #: USD picks a layer's format from its suffix, and refuses another.
@@ -49,7 +46,10 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     The suffix of ``path`` chooses the file: ``.usd`` or ``.usdc`` (binary), ``.usda``
     (text), ``.usdz`` (the binary stage in a zip package, ``UsdUtils.CreateNewUsdzPackage``);
     another is a ``ValueError`` listing them, before anything is written. A failure of the
-    system (a name too long, a full disk) is a ``FileWriteError`` naming ``path``."""
+    system (a name too long, a full disk) is a ``FileWriteError`` naming ``path``, with
+    ``path`` left as it was: the stage (and its package, checked whole) is built in a private
+    folder of the system's temporary folder (``tempfile.gettempdir()``, ``$TMPDIR``) and
+    copied to a temporary name beside ``path``, renamed over it when complete."""
     if path.suffix.lower() not in SUFFIXES:
         raise ValueError(f"path = {str(path)!r}: the suffix {path.suffix or '(none)'!r} is not a USD file's; allowed: {', '.join(SUFFIXES)}")
     try:
@@ -61,8 +61,7 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
 
 
 def _write_stage(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any], pxr: tuple) -> list[Path]:
-    Gf, Sdf, Usd, UsdGeom, Vt = pxr
-    rate = _frame_rate(fr.t)
+    rate = _frame_rate(fr.t)  # (a ValueError before anything is written)
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise TrajectoryFileError(f"cannot write {path}: the folder {parent} does not exist")
@@ -70,8 +69,22 @@ def _write_stage(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
         raise TrajectoryFileError(f"cannot write {path}: it is a directory; give a file name such as {path / 'run.usdc'}")
     refuse_special_target(path)
     # USD picks the file format from the name's suffix, so the stage is written under its own
-    # name in a temporary folder beside the target, then renamed over it.
-    staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=parent))
+    # name in a private folder of the system's temporary folder, then copied to the target by
+    # Python (atomic_file: a temporary name beside it, renamed over it). usd-core cannot be
+    # trusted with a failed write: UsdUtils.CreateNewUsdzPackage returns True though its
+    # write failed (a full disk), leaving a truncated package; so nothing of usd-core's is
+    # written on the target's file system, the package is checked before it is copied, and a
+    # full disk at the target is Python's own FileWriteError, with what was there kept.
+    with private_folder(path) as staging:
+        _build_stage(traj, fr, path, staging, rate, on_frame, pxr)
+    return [path]
+
+
+def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, on_frame: Callable[[int], Any], pxr: tuple) -> None:
+    """Writes the stage of ``fr`` in the folder ``staging`` and copies it (or its .usdz
+    package) to ``path``."""
+    Gf, Sdf, Usd, UsdGeom, Vt = pxr
+    where = f"in the temporary folder {staging.parent}, where the stage is built"  # (usd-core's failures are there)
     try:
         package = path.suffix.lower() == ".usdz"  # a zip of a binary stage: written as .usdc, then packed
         tmp = staging / (path.stem + ".usdc" if package else path.name)
@@ -122,17 +135,20 @@ def _write_stage(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
             points.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
         _colliders(stage, traj, fr, UsdGeom, Gf)
         if not stage.GetRootLayer().Save():
-            raise FileWriteError(errno.EIO, "usd-core could not save the stage", str(path))
+            raise FileWriteError(errno.EIO, f"usd-core could not save the stage ({where})", str(path))
         if package:
             from pxr import UsdUtils
 
             packed = staging / path.name
-            if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(tmp)), str(packed)):
-                raise FileWriteError(errno.EIO, "usd-core could not make the .usdz package", str(path))
+            if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(tmp)), str(packed)) or not _whole_package(packed, tmp):
+                raise FileWriteError(errno.EIO, f"usd-core could not make the .usdz package ({where})", str(path))
             tmp = packed
-        os.replace(tmp, path)
+        del stage  # (its layer lets go of the file)
+        copy_into(tmp, path)
     except OSError as e:
-        raise FileWriteError.of(path, e) from None
+        if isinstance(e, FileWriteError):
+            raise
+        raise FileWriteError(e.errno, f"{e.strerror or e} ({where})", str(path)) from None
     except Exception as e:
         from pxr import Tf
 
@@ -141,10 +157,21 @@ def _write_stage(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
         # USD's errors are several lines ("Error in '...' at line ... : 'what'"): the last part
         lines = [line.strip() for line in str(e).splitlines() if line.strip()]
         reason = lines[0].rsplit(" : ", 1)[-1].strip("'") if lines else "usd-core failed"
-        raise FileWriteError(errno.EIO, f"usd-core failed: {reason}", str(path)) from None
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-    return [path]
+        raise FileWriteError(errno.EIO, f"usd-core failed: {reason} ({where})", str(path)) from None
+
+
+def _whole_package(packed: Path, layer: Path) -> bool:
+    """Whether the .usdz ``packed`` is a whole zip archive holding the stage ``layer`` as it
+    was saved (its size, every member's CRC): usd-core reports a package as made though a
+    write of it failed."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(packed) as z:
+            sizes = {info.filename: info.file_size for info in z.infolist()}
+            return sizes.get(layer.name) == layer.stat().st_size and z.testzip() is None
+    except (OSError, EOFError, zipfile.BadZipFile, ValueError):
+        return False
 
 
 def _frame_rate(t: np.ndarray) -> float:
