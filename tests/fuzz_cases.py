@@ -326,29 +326,122 @@ class Worker:
         return answer
 
 
-def problems(answer: dict, allow_exit_1_divergence: bool = True) -> list[str]:
-    """What is wrong with a worker's answer (empty: nothing)."""
+def findings(answer: dict, allow_exit_1_divergence: bool = True) -> list[tuple[str, str]]:
+    """What is wrong with a worker's answer, as (kind, text) pairs (empty: nothing). The kinds
+    (the columns of the session's report): crash, hang, panic, unexpected exception, CLI
+    traceback, CLI exit, and the faults of tests/fuzz_faults.py (destructive write, leftover
+    temp file, partial output, bad read-back, node changed, not refused, leaked fd, broken
+    world, stale result)."""
     status = answer.get("status")
     if status == "crash":
-        return [f"the worker process died (returncode {answer['returncode']}, signal {answer['signal']}); stderr:\n{answer['stderr']}"]
+        return [("crash", f"the worker process died (returncode {answer['returncode']}, signal {answer['signal']}); stderr:\n{answer['stderr']}")]
     if status == "hang":
-        return [f"no answer within {answer['timeout_s']} s (a hang); stderr:\n{answer['stderr']}"]
+        return [("hang", f"no answer within {answer['timeout_s']} s (a hang); stderr:\n{answer['stderr']}")]
     out = []
     if "panic_output" in answer:
-        out.append(f"a Rust panic was printed:\n{answer['panic_output']}")
-    for k, r in enumerate(answer.get("ops", [])):
+        out.append(("panic", f"a Rust panic was printed:\n{answer['panic_output']}"))
+
+    def judged(k: int, r: dict, where: str) -> None:
         if r.get("verdict") == "bad":
-            out.append(f"op {k} ({r.get('op')}) raised {r['type']} (not an allowed error): {r['message']}")
+            kind = "panic" if r.get("type") == "PanicException" else "unexpected exception"
+            why = f" ({r['why']})" if r.get("why") else ""
+            out.append((kind, f"op {k} ({where}) raised {r['type']} (not an allowed error){why}: {r['message']}"))
+
+    for k, r in enumerate(answer.get("ops", [])):
+        judged(k, r, r.get("op", "?"))
+        for c in r.get("calls", []):
+            judged(k, c, f"{r.get('op')}: {c.get('call')}")
+        for f in r.get("faults", []):
+            out.append((f["kind"], f"op {k} ({r.get('op')}): {f['kind']}: {f['detail']}"))
         cli = r.get("cli")
         if cli is not None and "skipped" not in cli:
             code, err = cli["exit"], cli["stderr"]
             if "Traceback" in err:
-                out.append(f"op {k}: the CLI printed a traceback (exit {code}):\n{err}")
+                out.append(("CLI traceback", f"op {k}: the CLI printed a traceback (exit {code}):\n{err}"))
             if code == 1 and not (allow_exit_1_divergence and "diverged" in err and "unexpected" not in err):
-                out.append(f"op {k}: the CLI exited 1 (not a divergence):\n{err}")
+                out.append(("CLI exit", f"op {k}: the CLI exited 1 (not a divergence):\n{err}"))
             elif code not in (0, 1, 2):
-                out.append(f"op {k}: the CLI exited {code}:\n{err}")
+                out.append(("CLI exit", f"op {k}: the CLI exited {code}:\n{err}"))
     return out
+
+
+def problems(answer: dict, allow_exit_1_divergence: bool = True) -> list[str]:
+    """What is wrong with a worker's answer (empty: nothing)."""
+    return [text for _, text in findings(answer, allow_exit_1_divergence)]
+
+
+def invalid(answer: dict) -> bool:
+    """Whether the case could not be set up (h5py could not write a damage, a mount failed):
+    not a test of kinema."""
+    return any(isinstance(r, dict) and r.get("invalid") for r in answer.get("ops", []))
+
+
+# -- the session's report ------------------------------------------------------------------
+# Every case the fuzz tests ran (tests/test_fuzz.py records each with its category); the
+# terminal summary (tests/conftest.py) prints the table and writes it as JSON to
+# $KINEMA_FUZZ_REPORT when set.
+REPORT: list[dict] = []
+
+
+def record(category: str, test: str, kinds: list[str], known: list[str] = ()) -> None:
+    """One case of ``test``: its failure kinds (none: clean) and the known bugs it met
+    (tests/fuzz_faults.KNOWN_BUGS: answered apart, not failures)."""
+    REPORT.append({"category": category, "test": test, "kinds": sorted(set(kinds)), "known": sorted(set(known))})
+
+
+def mark_failed_tests(failed: list[str], category_of: dict[str, str]) -> None:
+    """Tests that failed on their own assertions (after answers the worker judged clean): for
+    each failed test (one name per failed report, a parametrized test's several times) that
+    its failing cases do not account for, its last clean case becomes a failure of kind "test
+    assertion" (a new one where none is left), so that the report counts every failed test."""
+    from collections import Counter
+
+    for name, n in Counter(failed).items():
+        mine = [r for r in REPORT if r["test"] == name]
+        clean = [r for r in mine if not r["kinds"]]
+        for k in range(max(0, n - (len(mine) - len(clean)))):
+            if k < len(clean):
+                clean[-1 - k]["kinds"] = ["test assertion"]
+            else:
+                record(category_of.get(name, "uncategorized"), name, ["test assertion"])
+
+
+def known_bugs(answer: dict) -> list[str]:
+    """The known bugs (tests/fuzz_faults.KNOWN_BUGS) the answer's ops met."""
+    return [f["known"] for r in answer.get("ops", []) if isinstance(r, dict) for f in r.get("known", [])]
+
+
+def report_table(records: list[dict] | None = None) -> dict:
+    """Per category: tries, clean cases, the failing cases by kind (a case that failed in two
+    ways counts under both kinds, once in ``failed``) and the cases that met a known bug (clean
+    otherwise: counted in ``clean`` too)."""
+    out: dict[str, dict] = {}
+    for r in REPORT if records is None else records:
+        row = out.setdefault(r["category"], {"tries": 0, "clean": 0, "failed": 0, "failures": {}, "known_bugs": {}})
+        row["tries"] += 1
+        if not r["kinds"]:
+            row["clean"] += 1
+        else:
+            row["failed"] += 1
+            for kind in r["kinds"]:
+                row["failures"][kind] = row["failures"].get(kind, 0) + 1
+        for bug in r.get("known", []):
+            row["known_bugs"][bug] = row["known_bugs"].get(bug, 0) + 1
+    return dict(sorted(out.items()))
+
+
+def format_report(table: dict) -> str:
+    lines = [f"{'category':<16} {'tries':>7} {'clean':>7} {'failed':>7}  failures by kind [known bugs met]"]
+    total = {"tries": 0, "clean": 0, "failed": 0}
+    for cat, row in table.items():
+        kinds = ", ".join(f"{k}: {n}" for k, n in sorted(row["failures"].items())) or "-"
+        if row.get("known_bugs"):
+            kinds += "  [" + ", ".join(f"{k}: {n}" for k, n in sorted(row["known_bugs"].items())) + "]"
+        lines.append(f"{cat:<16} {row['tries']:>7} {row['clean']:>7} {row['failed']:>7}  {kinds}")
+        for k in total:
+            total[k] += row[k]
+    lines.append(f"{'total':<16} {total['tries']:>7} {total['clean']:>7} {total['failed']:>7}")
+    return "\n".join(lines)
 
 
 # -- the worker ------------------------------------------------------------------------------
@@ -605,6 +698,8 @@ def _op(ctx: _Ctx, op: dict) -> Any:
     import kinema
 
     kind = op["op"]
+    if kind in _fault_ops():
+        return _fault_ops()[kind](ctx, op)
     args = [decode(a, ctx) for a in op.get("args", [])]
     kwargs = {k: decode(v, ctx) for k, v in op.get("kwargs", {}).items()}
     if kind == "world":
@@ -692,6 +787,14 @@ def _op(ctx: _Ctx, op: dict) -> Any:
     return None
 
 
+def _fault_ops() -> dict:
+    """The ops of tests/fuzz_faults.py (file-system faults, special files, threads, sweeps,
+    checkpoints)."""
+    import fuzz_faults
+
+    return fuzz_faults.OPS
+
+
 def _run_case(case: dict) -> dict:
     ctx = _Ctx()
     results = []
@@ -733,4 +836,5 @@ def worker_main() -> None:
 
 if __name__ == "__main__" and sys.argv[1:] == ["--worker"]:
     sys.path.insert(0, str(HERE.parent))
+    sys.modules.setdefault("fuzz_cases", sys.modules["__main__"])  # one copy for tests/fuzz_faults.py too
     worker_main()
