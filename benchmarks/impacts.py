@@ -90,8 +90,9 @@ def main() -> int:
                 raise SystemExit(f"worker failed at {v} m/s:\n{res.stderr[-3000:]}")
             runs[v].append(json.loads(res.stdout.strip().splitlines()[-1]))
 
-    print(f"impulse model, {N} discs of r = {RADIUS} m in a {SIDE} m box, e = 1, dt = {DT} s, "
-          f"{args.steps} steps, {args.threads} threads, median of {args.repeat}")
+    print(
+        f"impulse model, {N} discs of r = {RADIUS} m in a {SIDE} m box, e = 1, dt = {DT} s, {args.steps} steps, {args.threads} threads, median of {args.repeat}"
+    )
     print(f"{'speed (m/s)':>12} {'s/step':>12} {'impacts/step':>14} {'µs/impact':>11}   stages (s: detect, respond, distribute)")
     cost = {}
     for v in SPEEDS:
@@ -99,8 +100,7 @@ def main() -> int:
         impacts = statistics.median(r["impacts"] for r in runs[v]) / args.steps
         cost[v] = per_step / max(impacts, 1e-300) * 1e6
         t = runs[v][0]["times"]
-        print(f"{v:>12.0e} {per_step:>12.3e} {impacts:>14.1f} {cost[v]:>11.2f}   "
-              f"{t['detect']:.3f}, {t['respond']:.3f}, {t['distribute']:.3f}")
+        print(f"{v:>12.0e} {per_step:>12.3e} {impacts:>14.1f} {cost[v]:>11.2f}   {t['detect']:.3f}, {t['respond']:.3f}, {t['distribute']:.3f}")
     ratio = max(cost.values()) / min(cost.values())
     print(f"cost per impact, most / least over the speeds: {ratio:.2f}x (target < {TARGET}x)")
     return 0 if ratio < TARGET else 1

@@ -59,7 +59,7 @@ def test_overlaps_short_of_a_centre_inside_step_and_the_cli_refuses_a_deep_one(t
 
     scene = tmp_path / "pile.toml"
     scene.write_text(
-        '[world]\ndim = 3\ndt = 0.001\nduration = 0.1\n[collisions]\nrestitution = 0.5\n'
+        "[world]\ndim = 3\ndt = 0.001\nduration = 0.1\n[collisions]\nrestitution = 0.5\n"
         '[[particles]]\ntype = "list"\npositions = [[0, 0, 0], [0, 0, 0], [0, 0, 0]]\nradius = 0.1\n'
     )
     result = CliRunner().invoke(app, ["run", str(scene), "--out", str(tmp_path / "out"), "--no-video"])
@@ -89,7 +89,10 @@ def test_a_speed_that_crosses_the_box_thousands_of_times_a_step_is_refused_at_on
 def test_run_over_its_work_limit_is_refused_before_any_step_and_max_work_lifts_it():
     w = kinema.World(dim=3, dt=1e-3)
     w.add_particles(position=np.arange(30.0).reshape(10, 3))
-    with pytest.raises(ValueError, match=r"1\.0e\+13 particle-steps \(10 particles × 999,999,999,987 steps of dt = 0\.001 s for duration = 1e\+09 s\), over max_work = 1\.0e\+11"):
+    with pytest.raises(
+        ValueError,
+        match=r"1\.0e\+13 particle-steps \(10 particles × 999,999,999,987 steps of dt = 0\.001 s for duration = 1e\+09 s\), over max_work = 1\.0e\+11",
+    ):
         w.run(1e9)
     assert w.time == 0.0
     with pytest.raises(ValueError, match="over max_work = 5.0e"):

@@ -37,7 +37,9 @@ class OutputError(ValueError):
 # sand_box, 4e6 particle-steps and 17 MiB; demo, 6e7 pixels of video); they stop runs that
 # would take most of a day or more, or more memory than a laptop has, such as count = 1e9 or
 # duration = 1e9 s at dt = 1e-3, before any of the work (or the allocation) is done.
-LIMIT_PARTICLE_STEPS = MAX_WORK  # (kinema.world.MAX_WORK, World.run's own default) 5 hours at 6e6 particle-steps a second (maxwell_gas), days in a heap of contacts (demo: 2e5/s)
+LIMIT_PARTICLE_STEPS = (
+    MAX_WORK  # (kinema.world.MAX_WORK, World.run's own default) 5 hours at 6e6 particle-steps a second (maxwell_gas), days in a heap of contacts (demo: 2e5/s)
+)
 LIMIT_PIXELS = 1e11  # frames × width × height: 16 minutes of 1080p at 30 fps; rendering runs at about 5e8 pixels a second, encoding slower
 LIMIT_MEMORY = 8 * 2**30  # bytes
 VIDEO_FPS = (0.01, 1000.0)  # playback frames per second asked; a GIF writes the nearest of 100/d, d = 2 … 65535 (kinema.render.video_rate)

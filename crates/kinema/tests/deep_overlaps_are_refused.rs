@@ -37,7 +37,8 @@ const MODELS: [ContactModel; 2] = [
 
 fn add(w: &mut World, x: &[f64], r: f64) {
     let n = x.len() / 3;
-    w.add_particles(x, &vec![0.0; 3 * n], &vec![1.0; n], &vec![r; n], &vec![false; n]).unwrap();
+    w.add_particles(x, &vec![0.0; 3 * n], &vec![1.0; n], &vec![r; n], &vec![false; n])
+        .unwrap();
 }
 
 fn placement(e: Error) -> String {
@@ -95,19 +96,28 @@ fn a_centre_inside_a_collider_is_refused_and_one_outside_steps() {
     let surface = Surface::new(None, None).unwrap();
     for model in MODELS {
         let mut w = world(model);
-        w.add_collider(SphereObstacle::new([0.0; 3], 100.0, surface).unwrap()).unwrap();
+        w.add_collider(SphereObstacle::new([0.0; 3], 100.0, surface).unwrap())
+            .unwrap();
         add(&mut w, &[0.0, 0.0, 1.0], 0.1);
         let e = placement(w.step().unwrap_err());
-        assert!(e.contains("particle 0's centre lies inside colliders[0] (1 m from its centre, radius 100 m)"), "{e}");
+        assert!(
+            e.contains("particle 0's centre lies inside colliders[0] (1 m from its centre, radius 100 m)"),
+            "{e}"
+        );
 
         let mut w = world(model);
-        w.add_collider(Plane::new([0.0; 3], [0.0, 0.0, 1.0], surface).unwrap()).unwrap();
+        w.add_collider(Plane::new([0.0; 3], [0.0, 0.0, 1.0], surface).unwrap())
+            .unwrap();
         add(&mut w, &[0.0, 0.0, 0.05, 1.0, 0.0, -0.25], 0.1); // the first overlaps the floor by half
         let e = placement(w.step().unwrap_err());
-        assert!(e.contains("particle 1's centre lies inside colliders[0] (0.25 m behind it)"), "{e}");
+        assert!(
+            e.contains("particle 1's centre lies inside colliders[0] (0.25 m behind it)"),
+            "{e}"
+        );
 
         let mut w = world(model);
-        w.add_collider(Plane::new([0.0; 3], [0.0, 0.0, 1.0], surface).unwrap()).unwrap();
+        w.add_collider(Plane::new([0.0; 3], [0.0, 0.0, 1.0], surface).unwrap())
+            .unwrap();
         add(&mut w, &[0.0, 0.0, 0.05], 0.1);
         w.step().unwrap();
     }
@@ -137,7 +147,8 @@ fn a_centre_exactly_on_a_wall_is_allowed_despite_rounding() {
     // 0.1 + 0.2 + 0.3 = 0.6000000000000001 against a box wall at 0.6.
     let surface = Surface::new(None, None).unwrap();
     let mut w = world(ContactModel::Impulse);
-    w.add_collider(kinema::collide::BoxContainer::new([0.0; 3], [1.0, 0.6, 1.0], surface).unwrap()).unwrap();
+    w.add_collider(kinema::collide::BoxContainer::new([0.0; 3], [1.0, 0.6, 1.0], surface).unwrap())
+        .unwrap();
     add(&mut w, &[0.5, 0.1 + 0.2 + 0.3, 0.5], 0.05);
     w.step().unwrap();
 }

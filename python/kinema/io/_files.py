@@ -304,17 +304,8 @@ def atomic_folder(folder: str | os.PathLike, pattern: str) -> Iterator[Path]:
     gets the mode ``os.mkdir`` gives (0777 less the umask), the files in it the mode their
     writer gave them."""
     folder = Path(folder)
-    if folder.exists():
-        if not folder.is_dir():
-            raise TrajectoryFileError(f"cannot write the series folder {folder}: a file of that name exists")
-        others = [p.name for p in folder.iterdir() if not re.fullmatch(pattern, p.name)]
-        if others:
-            raise TrajectoryFileError(
-                f"cannot write the series folder {folder}: it exists and holds other files ({', '.join(sorted(others)[:3])}); remove them or choose another name"
-            )
+    _check_series_folder(folder, pattern)
     parent = folder.parent
-    if not parent.is_dir():
-        raise TrajectoryFileError(f"cannot write {folder}: the folder {parent} does not exist")
     remove_stale(parent, f".{folder.name}.", ".part")
     try:
         tmp = _temporary_folder(parent, f".{folder.name}.", ".part")

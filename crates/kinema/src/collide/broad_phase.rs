@@ -146,7 +146,9 @@ impl Grid {
         // particles' positions, stored in cell order) are read from memory close together.
         let mut found = std::mem::take(&mut self.scratch);
         found.clear();
-        let limit = self.pair_limit.unwrap_or((PAIRS_PER_PARTICLE * radius.len()).max(MIN_PAIR_LIMIT));
+        let limit = self
+            .pair_limit
+            .unwrap_or((PAIRS_PER_PARTICLE * radius.len()).max(MIN_PAIR_LIMIT));
         let levels = &self.levels[..self.used];
         for (l, level) in levels.iter().enumerate() {
             let cells = level.dims.iter().product::<usize>();

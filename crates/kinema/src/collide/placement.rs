@@ -72,7 +72,12 @@ struct Deepest {
 /// Errors: [`Error::Placement`] naming the deepest and how many; what the broad phase's grid
 /// refuses (non-finite values).
 pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[Collider], rule: Rule) -> Result<(), Error> {
-    let Placed { x, radius, from, user_of } = *place;
+    let Placed {
+        x,
+        radius,
+        from,
+        user_of,
+    } = *place;
     let n = radius.len();
     // First what the neighbour list refuses at its build, whose words say more about such a
     // crowd than its deepest pair: radii too large for the periodic cell or the box.
@@ -146,7 +151,12 @@ pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[
             let inside = match c {
                 Collider::Sphere(s) => {
                     let d = vec3::norm(vec3::sub(p, s.center()));
-                    (d < s.radius() - slack).then(|| (1.0 - d / s.radius(), format!("{} m from its centre, radius {} m", short(d), s.radius())))
+                    (d < s.radius() - slack).then(|| {
+                        (
+                            1.0 - d / s.radius(),
+                            format!("{} m from its centre, radius {} m", short(d), s.radius()),
+                        )
+                    })
                 }
                 Collider::Plane(w) => {
                     let s = w.signed_distance(p);
@@ -156,12 +166,20 @@ pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[
                     .walls()
                     .iter()
                     .map(|w| w.signed_distance(p))
-                    .fold(None, |worst: Option<f64>, s| if s < -slack && worst.is_none_or(|v| s < v) { Some(s) } else { worst })
+                    .fold(None, |worst: Option<f64>, s| {
+                        if s < -slack && worst.is_none_or(|v| s < v) {
+                            Some(s)
+                        } else {
+                            worst
+                        }
+                    })
                     .map(|s| (1.0, format!("{} m outside it", short(-s)))),
             };
             if let Some((depth, words)) = inside {
                 let u = user(i);
-                if note(depth, &|| format!("particle {u}'s centre lies inside colliders[{k}] ({words})")) {
+                if note(depth, &|| {
+                    format!("particle {u}'s centre lies inside colliders[{k}] ({words})")
+                }) {
                     break 'colliders;
                 }
             }

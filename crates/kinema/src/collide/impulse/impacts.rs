@@ -456,7 +456,9 @@ fn check_travel(set: &StageSetting<'_>, x: &[f64], largest: f64, fastest: usize,
             grow(b.hi());
         }
     }
-    let extent = (0..3).map(|k| if hi[k] >= lo[k] { hi[k] - lo[k] } else { 0.0 }).fold(0.0, f64::max);
+    let extent = (0..3)
+        .map(|k| if hi[k] >= lo[k] { hi[k] - lo[k] } else { 0.0 })
+        .fold(0.0, f64::max);
     let r_max = set.radius.iter().copied().fold(0.0, f64::max);
     let scale = extent + 2.0 * r_max;
     if scale > 0.0 && largest > TRAVEL_LIMIT * scale {

@@ -221,7 +221,10 @@ fn a_search_beyond_its_pair_limit_is_an_out_of_memory_error_not_an_allocation() 
     let mut pairs = Vec::new();
     let e = g.find_pairs(&x, &r, &d, 0.0, &mut pairs).unwrap_err();
     assert!(matches!(e, Error::OutOfMemory { .. }), "{e}");
-    assert!(e.to_string().contains("the candidate pairs of 300 particles (more than 1000"), "{e}");
+    assert!(
+        e.to_string().contains("the candidate pairs of 300 particles (more than 1000"),
+        "{e}"
+    );
     assert!(g.scratch.len() <= 1_000 + n, "{}", g.scratch.len());
     assert!(pairs.is_empty());
     g.pair_limit = None;
