@@ -30,10 +30,19 @@ import numpy as np
 from . import _checks
 
 SHAPES = ("point", "box", "disc", "sphere")
+BIRTHS_AT_ONCE = 10**8  # particles one emitter may add in one step (about 100 GB of world)
+REACH_LIMIT = 1e150  # m and m/s: an emitter's extent from the origin and its fastest speed (the contacts' GEOMETRY_LIMIT)
 
 
 def _vec3(name: str, value: Any) -> np.ndarray:
     return _checks.real_array(name, value, (3,)).astype(float)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    """``v`` (non-zero, finite) divided by its length, scaled first by its largest component so
+    that the length cannot overflow ([1e300, 0, -1] has |v|² = inf)."""
+    v = v / np.abs(v).max()
+    return v / np.linalg.norm(v)
 
 
 def _colour(value: Any) -> np.ndarray | None:
@@ -134,9 +143,9 @@ class Emitter:
             raise ValueError(f"size = {c['size'].tolist()} is invalid: a box's edge lengths must be >= 0 m")
         c["radius"] = _positive("radius", self.radius, "the shape's radius must be a finite number >= 0 m", zero=True)
         normal = _vec3("normal", self.normal)
-        if not np.linalg.norm(normal) > 0:
-            raise ValueError(f"normal = {normal.tolist()} is invalid: it must be a non-zero vector")
-        c["normal"] = normal / np.linalg.norm(normal)
+        if not (np.all(np.isfinite(normal)) and np.abs(normal).max() > 0):
+            raise ValueError(f"normal = {normal.tolist()} is invalid: it must be a finite, non-zero vector")
+        c["normal"] = _unit(normal)
         start = _checks.real("start", self.start)
         end = _checks.real("end", self.end)
         if not np.isfinite(start) or not end > start:
@@ -146,15 +155,26 @@ class Emitter:
             c["direction"] = None
         else:
             d = _vec3("direction", self.direction)
-            if not np.linalg.norm(d) > 0:
-                raise ValueError(f"direction = {d.tolist()} is invalid: it must be a non-zero vector (or None)")
-            c["direction"] = d / np.linalg.norm(d)
+            if not (np.all(np.isfinite(d)) and np.abs(d).max() > 0):
+                raise ValueError(f"direction = {d.tolist()} is invalid: it must be a finite, non-zero vector (or None)")
+            c["direction"] = _unit(d)
         c["speed"] = _positive("speed", self.speed, "it must be a finite number >= 0 m/s", zero=True)
         c["speed_spread"] = _positive("speed_spread", self.speed_spread, "it must be a finite number >= 0 m/s", zero=True)
         spread = _checks.real("spread", self.spread)
         if not 0 <= spread <= 180:
             raise ValueError(f"spread = {spread} is invalid: the cone's half-angle must be from 0 to 180 degrees")
         c["spread"] = np.radians(spread)
+        # Births at x_born + v0 (t - t_k) must be finite: the shape and the speeds within the
+        # contacts' geometry limit (kinema.collide's GEOMETRY_LIMIT, 1e150 m and m/s).
+        with np.errstate(over="ignore", invalid="ignore"):
+            reach = float(np.abs(c["center"]).max() + np.abs(c["size"]).max() + c["radius"])
+        if not reach <= REACH_LIMIT:
+            raise ValueError(
+                f"center = {c['center'].tolist()}, size = {c['size'].tolist()}, radius = {c['radius']:g} are invalid: the emitter "
+                f"reaches {reach:g} m from the origin; at most {REACH_LIMIT:g} m"
+            )
+        if not c["speed"] + c["speed_spread"] <= REACH_LIMIT:
+            raise ValueError(f"speed = {c['speed']:g}, speed_spread = {c['speed_spread']:g} are invalid: their sum must be at most {REACH_LIMIT:g} m/s")
         c["particle_radius"] = _positive("particle_radius", self.particle_radius, "it must be a finite number >= 0 m", zero=True)
         c["radius_spread"] = _positive("radius_spread", self.radius_spread, "it must be a finite number >= 0 m", zero=True)
         if c["radius_spread"] > c["particle_radius"]:
@@ -166,6 +186,15 @@ class Emitter:
                 "mass = None is invalid for particles of radius 0: give the mass (kg), or a particle_radius above radius_spread "
                 "so that the mass comes from the density"
             )
+        if c["mass"] is None:  # the masses density · 4/3 π r³ must be finite and > 0 for every r drawn
+            r_lo, r_hi = c["particle_radius"] - c["radius_spread"], c["particle_radius"] + c["radius_spread"]
+            with np.errstate(over="ignore", under="ignore"):
+                m_lo, m_hi = (np.float64(c["density"]) * 4.0 / 3.0 * np.pi * np.float64(r) ** 3 for r in (r_lo, r_hi))
+            if not (np.isfinite(m_hi) and m_lo > 0):
+                raise ValueError(
+                    f"density = {c['density']:g} is invalid: with radii from {r_lo:g} to {r_hi:g} m it gives masses from {m_lo:g} to {m_hi:g} kg; "
+                    "masses must be finite and > 0 kg (give mass, or a density and radii whose product is)"
+                )
         lifetime = _checks.real("lifetime", self.lifetime)
         if not lifetime > 0:
             raise ValueError(f"lifetime = {lifetime} is invalid: it must be > 0 s (inf: until killed)")
@@ -201,10 +230,11 @@ class _Source:
         c = self.c
         if t < c["start"]:
             return 0
-        count = int(np.floor((t - c["start"]) * c["rate"])) + 1
-        if np.isfinite(c["end"]):
-            count = min(count, int(np.ceil((c["end"] - c["start"]) * c["rate"])))
-        return count
+        with np.errstate(over="ignore"):
+            count = np.floor((t - c["start"]) * c["rate"]) + 1.0
+            if np.isfinite(c["end"]):
+                count = min(count, np.ceil((c["end"] - c["start"]) * c["rate"]))
+        return int(min(count, 2.0**62))  # (an overflow to inf: more than can be born, see _drawn)
 
     def births(self, t: float) -> dict[str, Any] | None:
         """The particles born up to time t not yet emitted, carried to t, after those held back
@@ -224,8 +254,15 @@ class _Source:
             self.waiting = {key: value[held] for key, value in births.items()}
 
     def _drawn(self, t: float) -> dict[str, Any] | None:
-        """The particles due by t not drawn yet, carried to t; None if none."""
-        k = np.arange(self.emitted, self.due(t))
+        """The particles due by t not drawn yet, carried to t; None if none. More than
+        ``BIRTHS_AT_ONCE`` at once is a ``MemoryError`` (rate = 1e300 asked numpy for 1e297)."""
+        due = self.due(t)
+        if due - self.emitted > BIRTHS_AT_ONCE:
+            raise MemoryError(
+                f"the emitter (rate = {self.c['rate']:g} per second) has {due - self.emitted:.3g} particles due by t = {t:g} s, "
+                f"more than {BIRTHS_AT_ONCE:.0e} at once: lower the rate or the time step"
+            )
+        k = np.arange(self.emitted, due)
         if k.size == 0:
             return None
         self.emitted += k.size

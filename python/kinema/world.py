@@ -45,6 +45,21 @@ def _other_thread(owner: int) -> RuntimeError:
     )
 
 
+def _inside(c: Collider, p: np.ndarray) -> bool:
+    """Whether the point ``p`` (m) lies inside the collider ``c``: behind a plane, outside a
+    box, inside a sphere obstacle (the rule of collide/placement.rs, without its tolerance)."""
+    from .colliders import Plane, SphereObstacle
+
+    if isinstance(c, Plane):
+        n = np.ravel(np.asarray(c.normal, float))
+        return float(np.dot(p[: n.size] - np.ravel(np.asarray(c.point, float))[: n.size], n)) < 0.0
+    if isinstance(c, SphereObstacle):
+        centre = np.ravel(np.asarray(c.center, float))
+        return float(np.linalg.norm(p[: centre.size] - centre)) < float(c.radius)
+    lo, hi = np.ravel(np.asarray(c.lo, float)), np.ravel(np.asarray(c.hi, float))
+    return bool(np.any(p[: lo.size] < lo) or np.any(p[: hi.size] > hi))
+
+
 class _Busy:
     """Stands in for the engine while it runs work that calls back into Python (a
     ``PythonForce`` in a step, the advisor, ``accelerations``). The engine is borrowed for
@@ -373,11 +388,13 @@ class World(WorldCollisions):
 
     def _free_places(self, x: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Which of the particles to be born at ``x`` (m) with radii ``r`` (m) overlap neither a
-        particle of the world nor one of them before it (in order); the others wait (with
-        collisions off, every place is free)."""
+        particle of the world nor one of them before it (in order), and have their centre
+        outside every collider; the others wait (with collisions off, every place is free)."""
         free = np.ones(len(r), bool)
         if self.collisions is None:
             return free
+        # a centre inside a collider is no place either (the contacts cannot push it out: collide/placement.rs)
+        free &= ~np.array([any(_inside(c, p) for c in self._colliders) for p in x], dtype=bool)
         here, radius = self._x, np.asarray(self._core.radii)
         for k in range(len(r)):
             taken = np.concatenate([here, x[:k][free[:k]]])

@@ -36,6 +36,7 @@ pub fn world_err(e: Error) -> PyErr {
                     Divergence::StepTooSmall => "step too small",
                     Divergence::TooManySubsteps => "too many sub-steps",
                     Divergence::RunawayEnergy { .. } => "runaway energy",
+                    Divergence::TooFast { .. } => "too fast",
                 };
                 let set = || -> PyResult<()> {
                     value.setattr("step", step)?;

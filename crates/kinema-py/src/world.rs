@@ -100,6 +100,12 @@ impl PyWorld {
         Ok((r.start, r.end))
     }
 
+    /// Refuses now what the first step would: particles placed where contacts cannot resolve
+    /// them (`World::check_pending_placement`).
+    fn check_placement(&mut self) -> PyResult<()> {
+        self.inner.check_pending_placement().map_err(to_py)
+    }
+
     /// A checkpoint's time, steps and ids (see `World::restore_clock_and_ids`).
     fn restore_clock_and_ids(&mut self, time: f64, steps: u64, ids: Vec<u64>, next_id: u64) -> PyResult<()> {
         self.inner.restore_clock_and_ids(time, steps, &ids, next_id).map_err(to_py)

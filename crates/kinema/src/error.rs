@@ -103,6 +103,16 @@ pub enum Divergence {
     StepTooSmall,
     /// rk45 took its cap of sub-steps ([`crate::world::World::RK45_SUBSTEPS`]) inside one step.
     TooManySubsteps,
+    /// A particle would travel more than `limit` times the scene's extent within the step:
+    /// more impacts than continuous detection follows (`collide/impulse/impacts.rs`).
+    TooFast {
+        /// The distance it would travel in the rest of the step, m.
+        travel: f64,
+        /// The scene's extent (the particles' and the boxes' span, plus 2 r_max), m.
+        extent: f64,
+        /// The most extents a step may cross.
+        limit: f64,
+    },
     /// The mechanical energy grew far beyond anything the forces can supply.
     RunawayEnergy {
         /// Kinetic plus potential energy after the step, J.
@@ -124,6 +134,11 @@ impl fmt::Display for Divergence {
                 f,
                 "rk45 took {} adaptive sub-steps inside this one step and stopped",
                 crate::world::World::RK45_SUBSTEPS
+            ),
+            Divergence::TooFast { travel, extent, limit } => write!(
+                f,
+                "a particle would travel {travel:.3e} m within the step, over {limit} times the scene's extent \
+                 ({extent:.3e} m): more impacts than continuous detection follows"
             ),
             Divergence::RunawayEnergy {
                 energy,

@@ -73,6 +73,12 @@ def build(scene: Scene, source: str = "<scene>") -> World:
             w.periodic = scene.collisions.periodic
         except (ValueError, StopIteration) as err:
             raise SceneError(f"{source}: collisions.periodic: {err or 'periodic axes need a box collider'}") from None
+    # Particles placed where the contacts cannot resolve them (collide/placement.rs) are the
+    # scene's error, said when it is built, as every other of its values is: not at the first step.
+    try:
+        w._core.check_placement()
+    except ValueError as err:
+        raise SceneError(f"{source}: particles: {err}") from None
     w.scene = scene
     return w
 

@@ -62,6 +62,7 @@ impl World {
         };
         let changed = match stage.run(&frame, p, x1, v1) {
             Ok(changed) => changed,
+            Err(Error::Diverged { reason, particle, .. }) => return Err(self.diverged(reason, particle)),
             Err(Error::InvalidParameter { .. }) if Self::beyond_geometry(&self.x_next, &self.v_next) => {
                 // The collision stages' own quantities (a margin, a threshold) overflowed: the
                 // state is too large for their geometry, which squares distances and speeds.

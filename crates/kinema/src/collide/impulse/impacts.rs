@@ -14,7 +14,7 @@ use crate::collide::events::{swept_reach, Event, Paths, Scene};
 use crate::collide::neighbour_list::{collider_scale, ListBuild, CHUNK, SKIN_PER_RADIUS};
 use crate::collide::response::VELOCITY_TOLERANCE;
 use crate::collide::{restitution_impulse, Collider, Contact, Domain, Partner, Plane};
-use crate::error::Error;
+use crate::error::{Divergence, Error};
 use crate::vec3;
 
 /// The least approach speed of an impact, m/s: slower meetings are contacts for the end of
@@ -430,8 +430,8 @@ impl ImpulseModel {
 /// candidate list that holds every particle the sweep reaches.
 pub(crate) const TRAVEL_LIMIT: f64 = 1000.0;
 
-/// Refuses a step in which particle `fastest` travels `largest` (m) in the `rest` of the step
-/// (s), more than [`TRAVEL_LIMIT`] times the extent of the scene: the box around the
+/// Stops a step (a divergence, [`Divergence::TooFast`]) in which particle `fastest` travels
+/// `largest` (m) in the `rest` of the step (s), more than [`TRAVEL_LIMIT`] times the extent of the scene: the box around the
 /// particles at `x` (m) and the box colliders (their finite sides). Such speeds (2.3e16 m/s in
 /// a 10 m box: 5 s a step for 1,000 particles) bounce to the cap of continuous detection in
 /// every step while resolving nothing. An extent of 0 (one particle, no box) has nothing to
@@ -462,14 +462,19 @@ fn check_travel(set: &StageSetting<'_>, x: &[f64], largest: f64, fastest: usize,
     let r_max = set.radius.iter().copied().fold(0.0, f64::max);
     let scale = extent + 2.0 * r_max;
     if scale > 0.0 && largest > TRAVEL_LIMIT * scale {
-        return Err(Error::invalid(
-            format!("velocities[{fastest}]"),
-            format!("{} m/s", largest / rest.max(f64::MIN_POSITIVE)),
-            format!(
-                "particle {fastest} would travel {largest:.3e} m in the {rest:.3e} s left of a step, over {TRAVEL_LIMIT} times \
-                 the scene's extent ({scale:.3e} m): more impacts a step than continuous detection follows; reduce the speed or dt"
-            ),
-        ));
+        // (the world fills in the step, the time and the advice: World::collide)
+        return Err(Error::Diverged {
+            step: 0,
+            time: 0.0,
+            particle: Some(fastest),
+            dt: rest,
+            reason: Divergence::TooFast {
+                travel: largest,
+                extent: scale,
+                limit: TRAVEL_LIMIT,
+            },
+            advised_dt: None,
+        });
     }
     Ok(())
 }
