@@ -29,21 +29,47 @@ def test_usd_reads_the_time_samples_back(tmp_path, name):
     assert traj.export(tmp_path / name) == [tmp_path / name]
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]  # no staging folder left
     stage = Usd.Stage.Open(str(tmp_path / name))
-    assert stage.GetTimeCodesPerSecond() == pytest.approx(50.0, rel=1e-12)
-    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (0.0, pytest.approx(10.0, rel=1e-12))
+    assert stage.GetTimeCodesPerSecond() == stage.GetFramesPerSecond() == pytest.approx(50.0, rel=1e-12)
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (0.0, 10.0)  # frame k at time code k
     assert UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.z and UsdGeom.GetStageMetersPerUnit(stage) == 1.0
     assert stage.GetDefaultPrim().GetPath() == "/World"
     points = UsdGeom.Points(stage.GetPrimAtPath("/World/particles"))
     assert points.GetPointsAttr().GetNumTimeSamples() == len(traj.t) == 11
     assert points.GetVelocitiesAttr().GetNumTimeSamples() == len(traj.t)
-    for i, t in enumerate(traj.t):
-        code = Usd.TimeCode(t * 50.0)
-        np.testing.assert_array_equal(np.array(points.GetPointsAttr().Get(code)), traj.positions[i].astype(np.float32))
-        np.testing.assert_array_equal(np.array(points.GetVelocitiesAttr().Get(code)), traj.velocities[i].astype(np.float32))  # m/s: units per second
+    time = stage.GetDefaultPrim().GetAttribute("kinema:time")
+    for k, t in enumerate(traj.t):
+        code = Usd.TimeCode(float(k))  # asked at whole frames, as Blender and Houdini ask
+        assert time.Get(code) == t
+        np.testing.assert_array_equal(np.array(points.GetPointsAttr().Get(code)), traj.positions[k].astype(np.float32))
+        np.testing.assert_array_equal(np.array(points.GetVelocitiesAttr().Get(code)), traj.velocities[k].astype(np.float32))  # m/s: units per second
     np.testing.assert_array_equal(np.array(points.GetWidthsAttr().Get()), np.float32([0.1, 0.1, 0.2]))
     np.testing.assert_array_equal(np.array(points.GetIdsAttr().Get()), [0, 1, 2])
     mass = UsdGeom.PrimvarsAPI(points).GetPrimvar("mass")
     np.testing.assert_array_equal(np.array(mass.Get()), np.float32([1, 2, 3]))
+
+
+def test_a_fountain_at_60_fps_gives_every_frame_at_its_whole_time_code(tmp_path):
+    # The case: dt = 1 ms at fps = 60 records every 17 steps (58.8 frames a second);
+    # time codes t × rate landed a hair past each whole frame, so an application asking at
+    # whole frames got the previous frame in 172 of 182 (births and deaths change the points).
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Gravity())
+    w.add(kinema.Emitter(rate=200, speed=2.0, direction=[0, 0, 1], spread=0.3, lifetime=0.5, particle_radius=0.01, seed=3))
+    traj = w.run(1.0, fps=60)
+    traj.export(tmp_path / "fountain.usdc")
+    stage = Usd.Stage.Open(str(tmp_path / "fountain.usdc"))
+    frames = len(traj.t)
+    assert stage.GetEndTimeCode() == frames - 1
+    assert stage.GetFramesPerSecond() == pytest.approx(1 / 0.017, rel=1e-12)
+    points = UsdGeom.Points(stage.GetPrimAtPath("/World/particles"))
+    wrong = 0
+    for k in range(frames):
+        live = traj.alive[k] if traj.alive is not None else slice(None)
+        got = np.array(points.GetPointsAttr().Get(Usd.TimeCode(float(k))))
+        ids = np.array(points.GetIdsAttr().Get(Usd.TimeCode(float(k))))
+        expected = traj.positions[k][live].astype(np.float32)
+        wrong += not (got.shape == expected.shape and np.array_equal(got, expected) and np.array_equal(ids, traj.ids[live]))
+    assert wrong == 0, f"{wrong} of {frames} frames wrong at whole time codes"
 
 
 def test_the_colliders_are_guide_prims_where_the_world_has_them(tmp_path):

@@ -22,9 +22,13 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     """Write ``fr`` to one USD stage at ``path``; returns ``[path]``.
 
     The stage: ``upAxis`` Z (kinema's gravity points along -z), ``metersPerUnit`` 1 (kinema
-    is SI), ``timeCodesPerSecond`` the recording's frame rate, time code t × that rate for a
-    frame at t s (the frame index when frames are evenly spaced), ``startTimeCode`` and
-    ``endTimeCode`` the first and last frames. ``/World`` (the default prim, an Xform) holds:
+    is SI); frame k at time code k (k = 0 … F − 1: ``startTimeCode`` 0, ``endTimeCode``
+    F − 1), ``timeCodesPerSecond`` = ``framesPerSecond`` = the recording's frame rate (1 / the
+    median interval), so that a 3D application asking at whole frames, as Blender and Houdini
+    do, gets each frame exactly (time codes t × rate, 1.0000000000000027, 2.0000000000000053,
+    …, gave the previous frame in 172 of the fountain's 182 frames). The frames' own times (s,
+    float64) are the time samples of ``/World``'s ``kinema:time``. ``/World`` (the default
+    prim, an Xform) holds:
 
     - ``/World/particles``, a ``UsdGeom.Points``: ``points`` (m) and ``velocities`` (m/s:
       USD's velocities are in units per second, whatever the time codes) as a time sample per
@@ -92,11 +96,15 @@ def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, 
         UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
         UsdGeom.SetStageMetersPerUnit(stage, 1.0)
         stage.SetTimeCodesPerSecond(rate)
-        codes = fr.t * rate
-        stage.SetStartTimeCode(float(codes[0]) if fr.n_frames else 0.0)
-        stage.SetEndTimeCode(float(codes[-1]) if fr.n_frames else 0.0)
+        stage.SetFramesPerSecond(rate)
+        codes = np.arange(fr.n_frames, dtype=float)  # frame k at time code k
+        stage.SetStartTimeCode(0.0)
+        stage.SetEndTimeCode(float(max(fr.n_frames - 1, 0)))
         world = UsdGeom.Xform.Define(stage, "/World")
         stage.SetDefaultPrim(world.GetPrim())
+        time = world.GetPrim().CreateAttribute("kinema:time", Sdf.ValueTypeNames.Double)
+        for k in range(fr.n_frames):
+            time.Set(float(fr.t[k]), Usd.TimeCode(float(k)))
 
         points = UsdGeom.Points.Define(stage, "/World/particles")
         radii = fr.radii if fr.radii is not None else np.zeros(fr.n_particles)
