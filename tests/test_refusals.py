@@ -169,3 +169,38 @@ def test_particles_too_large_for_their_box_are_a_value_error_under_both_models(c
     with pytest.raises(ValueError) as e:
         w.step(2)
     assert not isinstance(e.value, RuntimeError), repr(e.value)
+
+
+# -- emitters (found by make fuzz at 2,000 cases a test) ----------------------------------------
+def test_an_emitters_extreme_values_are_refused_or_bounded():
+    # a normal of [1e300, 0, -1]: |n|² overflowed and the births were NaN
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Emitter(shape="disc", radius=0.1, normal=[1e300, 0, -1], rate=1000, particle_radius=0.01))
+    w.step(5)
+    assert len(w) == 5 and np.all(np.isfinite(w.positions))
+    # masses from the density must be finite and > 0
+    with pytest.raises(ValueError, match=r"density = 1e\+300 is invalid: .* masses must be finite and > 0 kg"):
+        kinema.Emitter(rate=10, particle_radius=1e3, density=1e300)
+    with pytest.raises(ValueError, match="the emitter reaches .* at most 1e\\+150 m"):
+        kinema.Emitter(rate=10, center=[1e300, 0, 0], particle_radius=0.01)
+    # rate = 1e300: numpy was asked for 1e297 births (a ValueError, then an OverflowError)
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Emitter(rate=1e300, start=-1e10, particle_radius=0.01))
+    with pytest.raises(MemoryError, match="particles due by t = 0 s, more than 1e\\+08 at once"):
+        w.step()
+
+
+def test_a_birth_inside_a_collider_waits_as_one_whose_place_is_taken():
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Plane(point=[0, 0, 0], normal=[0, 0, 1]))
+    w.add(kinema.Emitter(center=[0, 0, -1], rate=1000, particle_radius=0.01))  # below the floor
+    w.step(10)
+    assert len(w) == 0
+
+
+def test_a_scene_of_coincident_particles_is_a_scene_error_when_built():
+    from kinema.scene import Scene, SceneError
+
+    text = '[world]\ndim = 3\ndt = 0.001\n[collisions]\n[[particles]]\ntype = "list"\npositions = [[0, 0, 0], [0, 0, 0]]\nradius = 0.1\n'
+    with pytest.raises(SceneError, match=r"^s\.toml: particles: positions: particles 0 and 1 are 0 m apart"):
+        Scene.from_string(text, "s.toml").build("s.toml")
