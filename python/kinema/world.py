@@ -140,13 +140,15 @@ class World(WorldCollisions):
         core = self._core
         if isinstance(core, _Busy):
             raise RuntimeError(REENTRY)
-        self._core = _Busy()
-        # The views are read-only meanwhile: a write into one from a force would be lost or
-        # kept depending on what called it (a step reads the state back after, `rates` not).
-        views = [a for a in (self._x, self._v, self._m) if a.flags.writeable]
-        for a in views:
-            a.flags.writeable = False
-        try:
+        views: list[np.ndarray] = []
+        try:  # (all inside: a Ctrl-C anywhere here still gives the engine back)
+            self._core = _Busy()
+            # The views are read-only meanwhile: a write into one from a force would be lost or
+            # kept depending on what called it (a step reads the state back after, `rates` not).
+            for a in (self._x, self._v, self._m):
+                if a.flags.writeable:
+                    a.flags.writeable = False
+                    views.append(a)
             yield core
         finally:
             for a in views:
@@ -171,6 +173,9 @@ class World(WorldCollisions):
             raise
 
     def _pull(self) -> None:
+        if self._x.shape[0] != self._core.len:  # (a Ctrl-C between a birth and its new views)
+            self._new_views()
+            return
         self._core.read_state(self._x, self._v)
 
     def _advise(self, core: Any) -> None:
