@@ -25,9 +25,10 @@ $(STAMP): requirements/dev.txt
 	touch $@
 
 # The browser and Jupyter tests' extras (playwright drives the system's Chromium; nothing
-# downloaded) and the outside readers of kinema's files (OVITO).
-$(TEST_STAMP): $(STAMP) requirements/viewer-test.txt requirements/formats-test.txt
+# downloaded) and the outside readers of kinema's files (OVITO, VTK, MDAnalysis, freud, Blender, ...).
+$(TEST_STAMP): $(STAMP) requirements/viewer-test.txt requirements/formats-test.txt requirements/blender-test.txt
 	$(PIP) install --disable-pip-version-check -q -r requirements/viewer-test.txt -r requirements/formats-test.txt
+	$(PIP) install --disable-pip-version-check -q -r requirements/blender-test.txt || echo "bpy (Blender) could not be installed: the Blender tests will say so and skip"
 	touch $@
 
 # Release build of the extension, installed into the venv in editable mode (python/ is used in place).
