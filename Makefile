@@ -28,7 +28,7 @@ $(STAMP): requirements/dev.txt
 # downloaded) and the outside readers of kinema's files (OVITO, VTK, MDAnalysis, freud, Blender, ...).
 $(TEST_STAMP): $(STAMP) requirements/viewer-test.txt requirements/formats-test.txt requirements/blender-test.txt
 	$(PIP) install --disable-pip-version-check -q -r requirements/viewer-test.txt -r requirements/formats-test.txt
-	$(PIP) install --disable-pip-version-check -q -r requirements/blender-test.txt || echo "bpy (Blender) could not be installed: the Blender tests will say so and skip"
+	($(PYTHON) -m venv .venv-blender && .venv-blender/bin/pip install --disable-pip-version-check -q -r requirements/blender-test.txt) || echo "bpy (Blender) could not be installed: the Blender tests will say so and skip"
 	touch $@
 
 # Release build of the extension, installed into the venv in editable mode (python/ is used in place).
@@ -100,4 +100,4 @@ fmt: $(STAMP)
 	$(VENV)/bin/ruff check --fix python tests benchmarks examples
 
 clean:
-	rm -rf target $(VENV) out
+	rm -rf target $(VENV) .venv-blender out
