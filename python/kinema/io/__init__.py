@@ -22,5 +22,6 @@ partial file behind and the previous file as it was.
 from ._files import FileWriteError, TrajectoryFileError
 from .exports import FORMATS, export
 from .h5md import LoadedTrajectory, load_h5md, save_h5md
+from .units import UnitWarning
 
-__all__ = ["FORMATS", "FileWriteError", "LoadedTrajectory", "TrajectoryFileError", "export", "load_h5md", "save_h5md"]
+__all__ = ["FORMATS", "FileWriteError", "LoadedTrajectory", "TrajectoryFileError", "UnitWarning", "export", "load_h5md", "save_h5md"]
