@@ -1,6 +1,8 @@
-"""USD export read back by Pixar's own library (usd-core): the Points prim's time samples, the
-stage's time and units, the colliders as prims."""
+"""USD export read back by Pixar's own library (usd-core): the Points prim's time samples and
+primvars (ids, colours, species), the stage's time and units, the springs as curves, the
+colliders as meshes. tests/test_usd_blender.py imports the same stages into Blender."""
 
+import dataclasses
 import subprocess
 import sys
 
@@ -10,7 +12,89 @@ import pytest
 import kinema
 
 pxr = pytest.importorskip("pxr")
-from pxr import Gf, Usd, UsdGeom  # noqa: E402
+from pxr import Usd, UsdGeom  # noqa: E402
+
+
+def srgb_to_linear(c):
+    """sRGB-encoded values in [0, 1] to linear ones, as USD's colours are (IEC 61966-2-1)."""
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def speed_colours(traj, frame, columns, by_speed):
+    """The linear colours of kinema's videos for ``columns`` at ``frame``: viridis of |v| from
+    the lowest to the highest speed, over the run, of the live particles ``by_speed`` (N,)."""
+    speed = np.linalg.norm(traj.velocities, axis=2)
+    counted = speed[traj.alive & by_speed[None, :]]
+    rgb8 = kinema.render.frames._core.colormap(speed[frame, columns], "viridis", float(counted.min()), float(counted.max()))
+    return srgb_to_linear(rgb8 / 255.0)
+
+
+def expected_colours(traj, frame):
+    """The live particles' displayColor at ``frame``: their own colour where they have one,
+    else by speed."""
+    live = np.flatnonzero(traj.alive[frame])
+    own = traj.colors if traj.colors is not None else np.full((traj.positions.shape[1], 3), np.nan)
+    has_own = np.all(np.isfinite(own), axis=1)
+    out = srgb_to_linear(np.where(has_own[:, None], own, 0.0))[live]
+    if not has_own.all():
+        by_speed = ~has_own[live]
+        out[by_speed] = speed_colours(traj, frame, live[by_speed], ~has_own)
+    return out
+
+
+def fountain():
+    """Births and deaths: two emitters, one with its colour and species "water", the other
+    with species "oil" and no colour (by speed), a floor and an open-topped box."""
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w.add(kinema.Box([-0.5, -0.5, -1], [0.5, 0.5, np.inf]))
+    w.add(
+        kinema.Emitter(
+            rate=400,
+            shape="disc",
+            center=[0, 0, 0.05],
+            radius=0.05,
+            speed=2.0,
+            spread=10,
+            lifetime=0.25,
+            particle_radius=0.01,
+            color="#2f7fd8",
+            species="water",
+            seed=3,
+        )
+    )
+    w.add(
+        kinema.Emitter(
+            rate=200, shape="disc", center=[0.2, 0, 0.05], radius=0.05, speed=1.5, spread=10, lifetime=0.3, particle_radius=0.008, species="oil", seed=4
+        )
+    )
+    traj = w.run(0.5, fps=30)
+    assert traj.changes_count and traj.alive[0].sum() == 0 and traj.alive[-1].sum() < traj.alive.any(axis=0).sum()  # born and dead
+    return traj
+
+
+def cloth(deaths=False):
+    """The example cloth on a sphere (springs, no colours: by speed); with ``deaths``, its
+    first row of 20 particles is born at frame 2 and its last row dies at frame 5, so that
+    the springs to them come and go."""
+    traj = kinema.Scene.from_toml("examples/scenes/cloth_on_sphere.toml").build().run(0.3, fps=30)
+    if not deaths:
+        return traj
+    alive = np.ones(traj.alive.shape, dtype=bool)
+    alive[:2, :20] = False
+    alive[5:, -20:] = False
+    x, v = traj.positions.copy(), traj.velocities.copy()
+    x[~alive] = v[~alive] = np.nan
+    return dataclasses.replace(traj, positions=x, velocities=v, alive=alive)
+
+
+def spring_ends(traj, frame):
+    """(2 S', 3) the positions of the two ends of each spring whose ends are alive at ``frame``."""
+    column = {int(i): k for k, i in enumerate(traj.ids)}
+    pairs = np.array([[column[a], column[b]] for a, b in traj.springs if traj.alive[frame, column[a]] and traj.alive[frame, column[b]]]).reshape(-1, 2)
+    return traj.positions[frame][pairs.reshape(-1)]
 
 
 def _run():
@@ -44,8 +128,19 @@ def test_usd_reads_the_time_samples_back(tmp_path, name):
         np.testing.assert_array_equal(np.array(points.GetVelocitiesAttr().Get(code)), traj.velocities[k].astype(np.float32))  # m/s: units per second
     np.testing.assert_array_equal(np.array(points.GetWidthsAttr().Get()), np.float32([0.1, 0.1, 0.2]))
     np.testing.assert_array_equal(np.array(points.GetIdsAttr().Get()), [0, 1, 2])
-    mass = UsdGeom.PrimvarsAPI(points).GetPrimvar("mass")
+    primvars = UsdGeom.PrimvarsAPI(points)
+    mass = primvars.GetPrimvar("mass")
     np.testing.assert_array_equal(np.array(mass.Get()), np.float32([1, 2, 3]))
+    # the ids again as an int primvar `id`, which Blender's importer takes (it drops `ids`)
+    ids = primvars.GetPrimvar("id")
+    assert ids.GetTypeName() == "int[]" and ids.GetInterpolation() == UsdGeom.Tokens.vertex
+    np.testing.assert_array_equal(np.array(ids.Get()), [0, 1, 2])
+    # no colours of their own: by speed, a time sample per frame, kinema's videos' viridis
+    color = points.GetDisplayColorPrimvar()
+    assert color.GetInterpolation() == UsdGeom.Tokens.vertex and color.GetAttr().GetNumTimeSamples() == len(traj.t)
+    for k in range(len(traj.t)):
+        np.testing.assert_allclose(np.array(color.Get(Usd.TimeCode(float(k)))), expected_colours(traj, k), rtol=0, atol=1e-7)
+    assert not primvars.HasPrimvar("species") and not stage.GetPrimAtPath("/World/springs")  # it has neither
 
 
 def test_a_fountain_at_60_fps_gives_every_frame_at_its_whole_time_code(tmp_path):
@@ -72,23 +167,113 @@ def test_a_fountain_at_60_fps_gives_every_frame_at_its_whole_time_code(tmp_path)
     assert wrong == 0, f"{wrong} of {frames} frames wrong at whole time codes"
 
 
-def test_the_colliders_are_guide_prims_where_the_world_has_them(tmp_path):
+def test_the_primvars_follow_the_live_particles(tmp_path):
+    traj = fountain()
+    traj.export(tmp_path / "fountain.usdc")
+    stage = Usd.Stage.Open(str(tmp_path / "fountain.usdc"))
+    points = UsdGeom.Points(stage.GetPrimAtPath("/World/particles"))
+    primvars = UsdGeom.PrimvarsAPI(points)
+    ids, species, color = primvars.GetPrimvar("id"), primvars.GetPrimvar("species"), points.GetDisplayColorPrimvar()
+    assert species.GetTypeName() == "string[]" and species.GetInterpolation() == UsdGeom.Tokens.vertex
+    for primvar in (ids, species, color):
+        assert primvar.GetAttr().GetNumTimeSamples() == len(traj.t)
+    water = traj.species == "water"
+    assert np.all(np.isfinite(traj.colors[water])) and np.all(np.isnan(traj.colors[~water]))  # own colours and none
+    for k in range(len(traj.t)):
+        code, want = Usd.TimeCode(float(k)), traj.frame(k)
+        assert len(np.array(points.GetPointsAttr().Get(code))) == len(want["ids"])
+        np.testing.assert_array_equal(np.array(ids.Get(code)), want["ids"])
+        assert list(species.Get(code)) == want["species"].tolist()
+        got = np.array(color.Get(code)).reshape(-1, 3)
+        np.testing.assert_allclose(got, expected_colours(traj, k), rtol=0, atol=1e-7)
+        np.testing.assert_allclose(
+            got[want["species"] == "water"], np.tile(srgb_to_linear(np.array([0x2F, 0x7F, 0xD8]) / 255), (np.sum(want["species"] == "water"), 1)), atol=1e-7
+        )
+
+
+def test_a_trajectory_with_its_own_colours_has_constant_ones(tmp_path):
+    traj = _run()
+    traj = dataclasses.replace(traj, colors=np.array([[1.0, 0.0, 0.0], [0.0, 0.5, 0.0], [0.2, 0.2, 1.0]]), species=np.array(["a", "b", "a"]))
+    traj.export(tmp_path / "run.usda")
+    stage = Usd.Stage.Open(str(tmp_path / "run.usda"))
+    points = UsdGeom.Points(stage.GetPrimAtPath("/World/particles"))
+    color = points.GetDisplayColorPrimvar()
+    assert color.GetAttr().GetNumTimeSamples() == 0  # one value: the particles' colours never change
+    np.testing.assert_allclose(np.array(color.Get()), [[1, 0, 0], [0, 0.21404114, 0], [0.03310477, 0.03310477, 1]], atol=1e-7)
+    species = UsdGeom.PrimvarsAPI(points).GetPrimvar("species")
+    assert species.GetAttr().GetNumTimeSamples() == 0 and list(species.Get()) == ["a", "b", "a"]
+
+
+@pytest.mark.parametrize("deaths", [False, True], ids=["cloth", "cloth with births and deaths"])
+def test_the_springs_are_linear_curves_between_their_ends(tmp_path, deaths):
+    traj = cloth(deaths)
+    assert len(traj.springs) == 1482
+    traj.export(tmp_path / "cloth.usdc")
+    stage = Usd.Stage.Open(str(tmp_path / "cloth.usdc"))
+    curves = UsdGeom.BasisCurves(stage.GetPrimAtPath("/World/springs"))
+    assert curves.GetTypeAttr().Get() == UsdGeom.Tokens.linear and curves.GetWrapAttr().Get() == UsdGeom.Tokens.nonperiodic
+    assert UsdGeom.Imageable(curves).ComputePurpose() == UsdGeom.Tokens.default_  # rendered, with the particles
+    assert curves.GetPointsAttr().GetNumTimeSamples() == len(traj.t)
+    counts = []
+    for k in range(len(traj.t)):
+        code = Usd.TimeCode(float(k))
+        want = spring_ends(traj, k)
+        np.testing.assert_array_equal(np.array(curves.GetPointsAttr().Get(code)).reshape(-1, 3), want.astype(np.float32))
+        vertex_counts = np.array(curves.GetCurveVertexCountsAttr().Get(code))
+        assert np.all(vertex_counts == 2) and len(vertex_counts) == len(want) // 2
+        counts.append(len(vertex_counts))
+    # an edge row of the 20 × 20 lattice has 77 springs: 19 along it, 20 to the next row and
+    # 2 × 19 diagonals; they are gone where the row is not (born at frame 2, dead from 5)
+    assert counts == ([1482] * len(traj.t) if not deaths else [1482 - 77] * 2 + [1482] * 3 + [1482 - 77] * (len(traj.t) - 5))
+    assert np.array(curves.GetWidthsAttr().Get()).tolist() == [pytest.approx(0.012 / 2)]  # half the smallest radius, m
+
+
+def mesh_of(prim):
+    """(points (P, 3), faces as lists of point indices) of a UsdGeom.Mesh."""
+    mesh = UsdGeom.Mesh(prim)
+    points = np.array(mesh.GetPointsAttr().Get(), dtype=np.float64)
+    counts, indices = np.array(mesh.GetFaceVertexCountsAttr().Get()), np.array(mesh.GetFaceVertexIndicesAttr().Get())
+    return points, [f.tolist() for f in np.split(indices, np.cumsum(counts)[:-1])]
+
+
+def face_normal(points, face):
+    """The face's normal by USD's right-handed orientation (counter-clockwise seen from it)."""
+    p = points[face]
+    n = sum(np.cross(p[i] - p[0], p[i + 1] - p[0]) for i in range(1, len(p) - 1))
+    return n / np.linalg.norm(n)
+
+
+def test_the_colliders_are_guide_meshes_where_the_world_has_them(tmp_path):
     _run().export(tmp_path / "run.usda")
     stage = Usd.Stage.Open(str(tmp_path / "run.usda"))
     box, plane, sphere = (stage.GetPrimAtPath(f"/World/colliders/{n}") for n in ("box_0", "plane_1", "sphere_2"))
+    assert [p.GetTypeName() for p in (box, plane, sphere)] == ["Mesh"] * 3
     assert [p.GetAttribute("kinema:collider").Get() for p in (box, plane, sphere)] == ["box", "plane", "sphere"]
     assert all(UsdGeom.Imageable(p).GetPurposeAttr().Get() == UsdGeom.Tokens.guide for p in (box, plane, sphere))
-    cache = UsdGeom.XformCache()
-    bound = UsdGeom.Cube(box).ComputeWorldBound(Usd.TimeCode.Default(), UsdGeom.Tokens.default_, UsdGeom.Tokens.guide).ComputeAlignedRange()
-    np.testing.assert_allclose(np.array([bound.GetMin(), bound.GetMax()]), [[0, 0, 0], [1, 1, 2]], atol=1e-12)  # the box's corners
-    # the plane's z axis is the normal (0, 1, 1)/√2 and it passes through (0, 0, 0.1)
-    m = cache.GetLocalToWorldTransform(plane)
-    normal = np.array(m.TransformDir(Gf.Vec3d(0, 0, 1)))
-    np.testing.assert_allclose(normal / np.linalg.norm(normal), np.array([0, 1, 1]) / np.sqrt(2), atol=1e-6)
-    origin = np.array(m.Transform(Gf.Vec3d(0, 0, 0)))
-    assert np.dot(origin - [0, 0, 0.1], np.array([0, 1, 1]) / np.sqrt(2)) == pytest.approx(0.0, abs=1e-9)
-    assert UsdGeom.Sphere(sphere).GetRadiusAttr().Get() == 0.1
-    np.testing.assert_allclose(np.array(cache.GetLocalToWorldTransform(sphere).ExtractTranslation()), [0.5, 0.5, 0.2])
+    assert all(UsdGeom.Mesh(p).GetSubdivisionSchemeAttr().Get() == UsdGeom.Tokens.none for p in (box, plane, sphere))
+    # the box: its 8 corners, 6 quads whose normals point out of it
+    points, faces = mesh_of(box)
+    np.testing.assert_array_equal(points, [[x, y, z] for z in (0, 2) for y in (0, 1) for x in (0, 1)])
+    assert len(faces) == 6 and all(len(f) == 4 for f in faces)
+    normals = np.array([face_normal(points, f) for f in faces])
+    centres = np.array([points[f].mean(axis=0) for f in faces])
+    assert np.all(np.einsum("ij,ij->i", normals, centres - [0.5, 0.5, 1.0]) > 0)
+    np.testing.assert_array_equal(np.abs(normals).sum(axis=0), [2, 2, 2])  # along the axes, each axis twice
+    np.testing.assert_allclose(np.array(UsdGeom.Mesh(box).GetExtentAttr().Get()), [[0, 0, 0], [1, 1, 2]])
+    # the plane: one quad in the plane through (0, 0, 0.1) with normal (0, 1, 1)/√2, as wide as the scene
+    points, faces = mesh_of(plane)
+    normal = np.array([0, 1, 1]) / np.sqrt(2)
+    assert faces == [[0, 1, 2, 3]]
+    np.testing.assert_allclose((points - [0, 0, 0.1]) @ normal, 0, atol=1e-6)
+    np.testing.assert_allclose(face_normal(points, faces[0]), normal, atol=1e-6)
+    sides = np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)
+    np.testing.assert_allclose(sides, sides[0], rtol=1e-6)
+    assert sides[0] >= 2 * 1.0  # at least twice the scene's size (the box is 2 m tall)
+    # the sphere: a UV sphere of 448 quads and 64 triangles on the sphere, facing out
+    points, faces = mesh_of(sphere)
+    np.testing.assert_allclose(np.linalg.norm(points - [0.5, 0.5, 0.2], axis=1), 0.1, rtol=1e-6)
+    assert sorted(len(f) for f in faces) == [3] * 64 + [4] * 448 and len(points) == 482
+    assert all(np.dot(face_normal(points, f), points[f].mean(axis=0) - [0.5, 0.5, 0.2]) > 0 for f in faces)
 
 
 def test_kinema_export_writes_usd_beside_the_trajectory(tmp_path):

@@ -1,5 +1,6 @@
 """Pixar's USD (Blender, Houdini, Omniverse, usdview), written with the ``usd-core`` package:
-the particles as one ``UsdGeom.Points`` prim with time samples, the colliders as simple prims."""
+the particles as one ``UsdGeom.Points`` prim with time samples (and the primvars Blender and
+Houdini read), the springs as ``UsdGeom.BasisCurves``, the colliders as guide meshes."""
 
 from __future__ import annotations
 
@@ -32,20 +33,38 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
 
     - ``/World/particles``, a ``UsdGeom.Points``: ``points`` (m) and ``velocities`` (m/s:
       USD's velocities are in units per second, whatever the time codes) as a time sample per
-      frame, float32 as USD's point arrays are; ``widths`` 2r (m) and ``ids`` constant;
-      primvar ``mass`` (kg) where the trajectory has masses. With births and deaths
-      (``alive``) each time sample holds the particles alive at that frame only: ``points``,
-      ``velocities``, ``widths``, ``ids`` and ``mass`` are then all time-sampled, their
-      length varying from frame to frame (0 for a frame with none), and ``ids`` tells which
-      particle each point is.
-    - ``/World/colliders``: a ``box_k`` (a ``UsdGeom.Cube`` scaled to the box, open faces
-      closed at the particles' extent), ``plane_k`` (a ``UsdGeom.Plane``, as wide as the
-      scene) and ``sphere_k`` (a ``UsdGeom.Sphere``) per collider, with the ``guide`` purpose
-      so that renders show the particles only, and ``kinema:collider`` naming the type.
+      frame, float32 as USD's point arrays are; ``widths`` 2r (m), ``ids`` (int64, Houdini's
+      ``id``), the primvar ``id`` (int32: the ids again, as Blender's importer takes them; it
+      drops ``ids``; left out if an id is beyond int32), the primvar ``mass`` (kg) where the
+      trajectory has masses and ``species`` (strings) where it has species names, constant.
+      ``displayColor`` (vertex): each particle's own colour (``traj.colors``) where it has
+      one, the others by speed as kinema's videos colour them (see ``_Colours``), a time
+      sample per frame unless all have their own. With births and deaths (``alive``) each
+      time sample holds the particles alive at that frame only: ``points``, ``velocities``,
+      ``widths``, ``ids`` and every primvar are then all time-sampled, their length varying
+      from frame to frame (0 for a frame with none), and ``ids`` tells which particle each
+      point is.
+    - ``/World/springs`` where the trajectory has springs: a ``UsdGeom.BasisCurves`` of
+      ``linear`` curves of 2 vertices (``curveVertexCounts`` all 2), one per spring whose two
+      ends are alive at the frame, its ``points`` the two particles' positions as a time
+      sample per frame; ``widths`` half the smallest radius of their ends (m), grey as in
+      kinema's videos, with the default purpose: a cloth's springs render. A spring whose
+      ends are ids the trajectory does not hold is left out.
+    - ``/World/colliders``: a ``UsdGeom.Mesh`` per collider, ``box_k`` (its 8 corners and 6
+      quads; open faces closed at the scene's extent), ``plane_k`` (one square quad in the
+      plane, twice the scene's size wide, centred on the plane's point nearest the scene's
+      centre) and ``sphere_k`` (a UV sphere of 448 quads and 64 triangles, with its normals),
+      in world coordinates (m), facing out, with the ``guide`` purpose so that renders show
+      the particles only, and ``kinema:collider`` naming the type.
 
-    In Blender: File → Import → Universal Scene Description, then play: the Points prim
-    becomes a point cloud whose positions follow the time samples. In Houdini: a LOP
-    network's Sublayer or a SOP ``usdimport``. ``on_frame(i)`` is called after frame ``i``.
+    In Blender (5.0): File → Import → Universal Scene Description, then play: the Points
+    prim becomes a point cloud whose positions follow the time samples, with the attributes
+    ``radius``, ``velocity``, ``id``, ``mass`` and ``displayColor`` (not ``species``: it
+    takes no strings); the springs a Curves object; the colliders come only with the
+    import's Guide option. Blender asks at time code = frame, and takes the frame range but
+    not the rate: set Output → Frame Rate to the stage's ``framesPerSecond`` for real time.
+    In Houdini: a LOP network's Sublayer or a SOP ``usdimport``. ``on_frame(i)`` is called
+    after frame ``i``.
 
     The suffix of ``path`` chooses the file: ``.usd`` or ``.usdc`` (binary), ``.usda``
     (text), ``.usdz`` (the binary stage in a zip package, ``UsdUtils.CreateNewUsdzPackage``);
@@ -65,7 +84,9 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
 
 
 def _write_stage(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any], pxr: tuple) -> list[Path]:
-    rate = _frame_rate(fr.t)  # (a ValueError before anything is written)
+    # (ValueErrors before anything is written)
+    rate = _frame_rate(fr.t)
+    parts = (_Colours(traj, fr), _species(traj, fr), _spring_columns(traj, fr))
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise TrajectoryFileError(f"cannot write {path}: the folder {parent} does not exist")
@@ -80,15 +101,17 @@ def _write_stage(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
     # written on the target's file system, the package is checked before it is copied, and a
     # full disk at the target is Python's own FileWriteError, with what was there kept.
     with private_folder(path) as staging:
-        _build_stage(traj, fr, path, staging, rate, on_frame, pxr)
+        _build_stage(traj, fr, path, staging, rate, parts, on_frame, pxr)
     return [path]
 
 
-def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, on_frame: Callable[[int], Any], pxr: tuple) -> None:
+def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, parts: tuple, on_frame: Callable[[int], Any], pxr: tuple) -> None:
     """Writes the stage of ``fr`` in the folder ``staging`` and copies it (or its .usdz
-    package) to ``path``."""
+    package) to ``path``; ``parts``: the particles' colours, species and the springs'
+    columns."""
     Gf, Sdf, Usd, UsdGeom, Vt = pxr
     where = f"in the temporary folder {staging.parent}, where the stage is built"  # (usd-core's failures are there)
+    colours, species, pairs = parts
     try:
         package = path.suffix.lower() == ".usdz"  # a zip of a binary stage: written as .usdc, then packed
         tmp = staging / (path.stem + ".usdc" if package else path.name)
@@ -97,51 +120,24 @@ def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, 
         UsdGeom.SetStageMetersPerUnit(stage, 1.0)
         stage.SetTimeCodesPerSecond(rate)
         stage.SetFramesPerSecond(rate)
-        codes = np.arange(fr.n_frames, dtype=float)  # frame k at time code k
-        stage.SetStartTimeCode(0.0)
+        stage.SetStartTimeCode(0.0)  # frame k at time code k
         stage.SetEndTimeCode(float(max(fr.n_frames - 1, 0)))
         world = UsdGeom.Xform.Define(stage, "/World")
         stage.SetDefaultPrim(world.GetPrim())
         time = world.GetPrim().CreateAttribute("kinema:time", Sdf.ValueTypeNames.Double)
         for k in range(fr.n_frames):
             time.Set(float(fr.t[k]), Usd.TimeCode(float(k)))
-
-        points = UsdGeom.Points.Define(stage, "/World/particles")
-        radii = fr.radii if fr.radii is not None else np.zeros(fr.n_particles)
-        widths, ids = (2.0 * radii).astype(np.float32), fr.ids.astype(np.int64)
-        masses = None if fr.masses is None else fr.masses.astype(np.float32)
-        widths_attr, ids_attr = points.CreateWidthsAttr(), points.CreateIdsAttr()
-        mass = None
-        if masses is not None:
-            mass = UsdGeom.PrimvarsAPI(points).CreatePrimvar("mass", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex)
-        # Without births and deaths the per-particle values are constant (one default value);
-        # with them, a time sample per frame of the live particles' values.
-        changes = fr.changes_count
-        if not changes:
-            widths_attr.Set(Vt.FloatArray.FromNumpy(widths))
-            ids_attr.Set(Vt.Int64Array.FromNumpy(ids))
-            if mass is not None:
-                mass.Set(Vt.FloatArray.FromNumpy(masses))
-        positions, velocities = points.CreatePointsAttr(), points.CreateVelocitiesAttr()
-        lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+        particles = _Particles(stage, fr, colours, species, pxr)
+        springs = _Springs(stage, fr, pairs, pxr) if len(pairs) else None
         for i in range(fr.n_frames):
-            code = Usd.TimeCode(float(codes[i]))
-            live = fr.live(i)
-            x = fr.positions[i][live]
-            positions.Set(Vt.Vec3fArray.FromNumpy(x.astype(np.float32)), code)
-            velocities.Set(Vt.Vec3fArray.FromNumpy(fr.velocities[i][live].astype(np.float32)), code)
-            if changes:
-                widths_attr.Set(Vt.FloatArray.FromNumpy(widths[live]), code)
-                ids_attr.Set(Vt.Int64Array.FromNumpy(ids[live]), code)
-                if mass is not None:
-                    mass.Set(Vt.FloatArray.FromNumpy(masses[live]), code)
-            if live.size:
-                reach = radii[live][:, None]
-                lo, hi = np.minimum(lo, (x - reach).min(axis=0)), np.maximum(hi, (x + reach).max(axis=0))
+            particles.write(i)
+            if springs is not None:
+                springs.write(i)
             on_frame(i)
-        if np.all(lo <= hi):
-            points.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
-        _colliders(stage, traj, fr, UsdGeom, Gf)
+        particles.finish()
+        if springs is not None:
+            springs.finish()
+        _colliders(stage, traj, fr, pxr)
         if not stage.GetRootLayer().Save():
             raise FileWriteError(errno.EIO, f"usd-core could not save the stage ({where})", str(path))
         if package:
@@ -151,7 +147,7 @@ def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, 
             if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(tmp)), str(packed)) or not _whole_package(packed, tmp):
                 raise FileWriteError(errno.EIO, f"usd-core could not make the .usdz package ({where})", str(path))
             tmp = packed
-        del stage  # (its layer lets go of the file)
+        del stage, particles, springs  # (its layer lets go of the file)
         copy_into(tmp, path)
     except OSError as e:
         if isinstance(e, FileWriteError):
@@ -166,6 +162,204 @@ def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, 
         lines = [line.strip() for line in str(e).splitlines() if line.strip()]
         reason = lines[0].rsplit(" : ", 1)[-1].strip("'") if lines else "usd-core failed"
         raise FileWriteError(errno.EIO, f"usd-core failed: {reason} ({where})", str(path)) from None
+
+
+class _Particles:
+    """``/World/particles``, a ``UsdGeom.Points``, written one frame at a time (see write_usd).
+    Without births and deaths the per-particle values are constant (one default value); with
+    them, a time sample per frame of the live particles' values."""
+
+    def __init__(self, stage: Any, fr: Frames, colours: _Colours, species: np.ndarray | None, pxr: tuple) -> None:
+        Gf, Sdf, Usd, UsdGeom, Vt = pxr
+        self.fr, self.colours, self.pxr = fr, colours, pxr
+        self.prim = points = UsdGeom.Points.Define(stage, "/World/particles")
+        primvars = UsdGeom.PrimvarsAPI(points)
+        self.radii = fr.radii if fr.radii is not None else np.zeros(fr.n_particles)
+        self.changes = fr.changes_count
+        # name: (attribute, per-particle values (N, ...), Vt array type); the per-frame ones
+        # (positions, velocities, colours) are written by write()
+        self.values: dict[str, tuple[Any, np.ndarray, Any]] = {
+            "widths": (points.CreateWidthsAttr(), (2.0 * self.radii).astype(np.float32), Vt.FloatArray),
+            "ids": (points.CreateIdsAttr(), fr.ids.astype(np.int64), Vt.Int64Array),
+        }
+        if _fits_int32(fr.ids):  # Blender's importer takes int32 primvars, not the int64 ids
+            attr = primvars.CreatePrimvar("id", Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.vertex)
+            self.values["id"] = (attr, fr.ids.astype(np.int32), Vt.IntArray)
+        if fr.masses is not None:
+            attr = primvars.CreatePrimvar("mass", Sdf.ValueTypeNames.FloatArray, UsdGeom.Tokens.vertex)
+            self.values["mass"] = (attr, fr.masses.astype(np.float32), Vt.FloatArray)
+        if species is not None:
+            attr = primvars.CreatePrimvar("species", Sdf.ValueTypeNames.StringArray, UsdGeom.Tokens.vertex)
+            self.values["species"] = (attr, species, lambda a: Vt.StringArray(a.tolist()))
+        if not self.changes:
+            for attr, values, array in self.values.values():
+                attr.Set(_vt(array, values, Vt))
+        self.color = points.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex)
+        if not colours.per_frame and not self.changes:
+            self.color.Set(Vt.Vec3fArray.FromNumpy(colours.at(0, np.arange(fr.n_particles))))
+        self.positions, self.velocities = points.CreatePointsAttr(), points.CreateVelocitiesAttr()
+        self.lo, self.hi = np.full(3, np.inf), np.full(3, -np.inf)
+
+    def write(self, i: int) -> None:
+        """The time samples of frame ``i`` (time code ``i``)."""
+        Gf, Sdf, Usd, UsdGeom, Vt = self.pxr
+        code, live = Usd.TimeCode(float(i)), self.fr.live(i)
+        x = self.fr.positions[i][live]
+        self.positions.Set(Vt.Vec3fArray.FromNumpy(x.astype(np.float32)), code)
+        self.velocities.Set(Vt.Vec3fArray.FromNumpy(self.fr.velocities[i][live].astype(np.float32)), code)
+        if self.changes:
+            for attr, values, array in self.values.values():
+                attr.Set(_vt(array, values[live], Vt), code)
+        if self.colours.per_frame or self.changes:
+            self.color.Set(Vt.Vec3fArray.FromNumpy(self.colours.at(i, live)), code)
+        if live.size:
+            reach = self.radii[live][:, None]
+            self.lo, self.hi = np.minimum(self.lo, (x - reach).min(axis=0)), np.maximum(self.hi, (x + reach).max(axis=0))
+
+    def finish(self) -> None:
+        Gf, Sdf, Usd, UsdGeom, Vt = self.pxr
+        if np.all(self.lo <= self.hi):
+            self.prim.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, self.lo)), Gf.Vec3f(*map(float, self.hi))]))
+
+
+def _vt(array: Any, values: np.ndarray, Vt: Any) -> Any:
+    """``values`` as the Vt array type ``array`` (numeric ones straight from numpy)."""
+    return array.FromNumpy(np.ascontiguousarray(values)) if array in (Vt.FloatArray, Vt.IntArray, Vt.Int64Array) else array(values)
+
+
+def _fits_int32(ids: np.ndarray) -> bool:
+    return bool(ids.size == 0 or (ids.min() >= np.iinfo(np.int32).min and ids.max() <= np.iinfo(np.int32).max))
+
+
+#: The colour map of the particles without their own colour: kinema's videos' default.
+SPEED_COLORMAP = "viridis"
+
+
+class _Colours:
+    """The particles' ``displayColor``, linear RGB as USD's colours are (sRGB decoded: a
+    colour looks in a 3D application as it does in kinema's videos): a particle's own colour
+    (``traj.colors``, sRGB in [0, 1], NaN: none) where it has one; the others by speed, |v|
+    through ``SPEED_COLORMAP`` (as ``kinema.render_frames``' default ``color_by="speed"``)
+    from the lowest to the highest speed of those particles over the run (m/s). A particle
+    whose speed is unknown (NaN velocities) gets the low end's colour."""
+
+    def __init__(self, traj: Any, fr: Frames) -> None:
+        n = fr.n_particles
+        own = getattr(traj, "colors", None)
+        self.own = np.full((n, 3), np.nan)
+        if own is not None:
+            own = np.asarray(own, dtype=np.float64)
+            if own.shape != (n, 3):
+                raise ValueError(f"colors has shape {own.shape}; it must be ({n}, 3), one r g b per particle (NaN: none)")
+            self.own = own
+        self.has_own = np.all(np.isfinite(self.own), axis=1)
+        self.own_linear = _srgb_to_linear(np.clip(np.where(self.has_own[:, None], self.own, 0.0), 0.0, 1.0))
+        # with every particle's own colour, the colours do not change from frame to frame
+        self.per_frame = not bool(self.has_own.all())
+        self.speed = np.linalg.norm(fr.velocities, axis=2) if self.per_frame else None
+        self.vmin = self.vmax = 0.0
+        if self.speed is not None:
+            counted = self.speed[fr.alive & ~self.has_own[None, :]]
+            counted = counted[np.isfinite(counted)]
+            if counted.size:
+                self.vmin, self.vmax = float(counted.min()), float(counted.max())
+
+    def at(self, i: int, columns: np.ndarray) -> np.ndarray:
+        """(len(columns), 3) float32 linear RGB of those particles at frame ``i``."""
+        out = self.own_linear[columns]
+        if self.speed is not None:
+            by_speed = ~self.has_own[columns]
+            if by_speed.any():
+                v = self.speed[i, columns[by_speed]]
+                v = np.where(np.isfinite(v), v, self.vmin)
+                from .._core import colormap
+
+                out[by_speed] = _srgb_to_linear(colormap(np.ascontiguousarray(v, dtype=np.float64), SPEED_COLORMAP, self.vmin, self.vmax) / 255.0)
+        return out.astype(np.float32)
+
+
+def _srgb_to_linear(c: np.ndarray) -> np.ndarray:
+    """sRGB-encoded values in [0, 1] to linear ones (IEC 61966-2-1)."""
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def _species(traj: Any, fr: Frames) -> np.ndarray | None:
+    """The trajectory's species names (N,) as str, or None where it has none."""
+    names = getattr(traj, "species", None)
+    if names is None:
+        return None
+    a = np.asarray(names).astype(str)
+    if a.shape != (fr.n_particles,):
+        raise ValueError(f"species has shape {a.shape}; it must be ({fr.n_particles},), one name per particle")
+    return a
+
+
+def _spring_columns(traj: Any, fr: Frames) -> np.ndarray:
+    """The trajectory's springs (S, 2 particle ids) as (S', 2) columns of ``fr``; a spring
+    with an end whose id the trajectory does not hold is left out (as kinema's videos do)."""
+    springs = getattr(traj, "springs", None)
+    if springs is None or np.size(springs) == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    s = np.asarray(springs)
+    if s.ndim != 2 or s.shape[1] != 2 or not np.issubdtype(s.dtype, np.integer):
+        raise ValueError(f"springs has shape {s.shape} and type {s.dtype}; it must be (S, 2) integer particle ids")
+    order = np.argsort(fr.ids, kind="stable")
+    if not fr.ids.size:
+        return np.zeros((0, 2), dtype=np.int64)
+    at = np.clip(np.searchsorted(fr.ids[order], s), 0, fr.ids.size - 1)
+    known = (fr.ids[order][at] == s).all(axis=1)
+    return order[at[known]].astype(np.int64)
+
+
+#: The springs' colour, kinema's videos' (``_core.LINE_COLOR``), sRGB 8-bit.
+SPRING_COLOR = (96, 96, 100)
+
+
+class _Springs:
+    """``/World/springs``, a ``UsdGeom.BasisCurves`` of linear curves, one of 2 vertices per
+    spring whose two ends are alive at the frame, from one particle's centre to the other's
+    (see write_usd)."""
+
+    def __init__(self, stage: Any, fr: Frames, pairs: np.ndarray, pxr: tuple) -> None:
+        Gf, Sdf, Usd, UsdGeom, Vt = pxr
+        self.fr, self.pairs, self.pxr = fr, pairs, pxr
+        self.prim = curves = UsdGeom.BasisCurves.Define(stage, "/World/springs")
+        curves.CreateTypeAttr(UsdGeom.Tokens.linear)
+        curves.CreateWrapAttr(UsdGeom.Tokens.nonperiodic)
+        self.counts, self.points = curves.CreateCurveVertexCountsAttr(), curves.CreatePointsAttr()
+        self.changes = fr.changes_count
+        if not self.changes:
+            self.counts.Set(Vt.IntArray.FromNumpy(np.full(len(pairs), 2, dtype=np.int32)))
+        # a quarter of the smallest particle diameter (the lines kinema's videos draw are thin)
+        radii = fr.radii[pairs.reshape(-1)] if fr.radii is not None else np.zeros(0)
+        radii = radii[radii > 0]
+        self.width = 0.5 * float(radii.min()) if radii.size else None
+        if self.width is not None:
+            curves.CreateWidthsAttr(Vt.FloatArray([self.width]))
+            curves.SetWidthsInterpolation(UsdGeom.Tokens.constant)
+        grey = _srgb_to_linear(np.array(SPRING_COLOR) / 255.0)
+        curves.CreateDisplayColorPrimvar(UsdGeom.Tokens.constant).Set(Vt.Vec3fArray([Gf.Vec3f(*map(float, grey))]))
+        self.lo, self.hi = np.full(3, np.inf), np.full(3, -np.inf)
+
+    def write(self, i: int) -> None:
+        """The time samples of frame ``i`` (time code ``i``)."""
+        Gf, Sdf, Usd, UsdGeom, Vt = self.pxr
+        code, alive = Usd.TimeCode(float(i)), self.fr.alive[i]
+        pairs = self.pairs[alive[self.pairs[:, 0]] & alive[self.pairs[:, 1]]] if self.changes else self.pairs
+        x = self.fr.positions[i][pairs.reshape(-1)]
+        self.points.Set(Vt.Vec3fArray.FromNumpy(x.astype(np.float32)), code)
+        if self.changes:
+            self.counts.Set(Vt.IntArray.FromNumpy(np.full(len(pairs), 2, dtype=np.int32)), code)
+        if len(x):
+            self.lo, self.hi = np.minimum(self.lo, x.min(axis=0)), np.maximum(self.hi, x.max(axis=0))
+
+    def finish(self) -> None:
+        Gf, Sdf, Usd, UsdGeom, Vt = self.pxr
+        if np.all(self.lo <= self.hi):
+            reach = 0.5 * (self.width or 0.0)
+            lo, hi = self.lo - reach, self.hi + reach
+            self.prim.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
 
 
 def _whole_package(packed: Path, layer: Path) -> bool:
@@ -193,8 +387,9 @@ def _frame_rate(t: np.ndarray) -> float:
     return 1.0 / step
 
 
-def _colliders(stage: Any, traj: Any, fr: Frames, UsdGeom: Any, Gf: Any) -> None:
-    """The trajectory's colliders as simple prims under /World/colliders (see write_usd)."""
+def _colliders(stage: Any, traj: Any, fr: Frames, pxr: tuple) -> None:
+    """The trajectory's colliders as meshes under /World/colliders (see write_usd)."""
+    Gf, Sdf, Usd, UsdGeom, Vt = pxr
     described = [c for c in getattr(traj, "colliders", None) or [] if isinstance(c, dict)]
     if not described:
         return
@@ -203,40 +398,76 @@ def _colliders(stage: Any, traj: Any, fr: Frames, UsdGeom: Any, Gf: Any) -> None
     UsdGeom.Scope.Define(stage, "/World/colliders")
     for k, c in enumerate(described):
         kind = c.get("type")
-        prim_path = f"/World/colliders/{kind}_{k}"
+        normals = None
         if kind == "box":
             lo, hi = box_corners(c)
             lo, hi = np.where(np.isfinite(lo), lo, cell.lo), np.where(np.isfinite(hi), hi, cell.hi)  # open faces: the scene's extent
-            geom = UsdGeom.Cube.Define(stage, prim_path)
-            geom.CreateSizeAttr(1.0)
-            xf = UsdGeom.XformCommonAPI(geom)
-            xf.SetTranslate(Gf.Vec3d(*(0.5 * (lo + hi)).tolist()))
-            xf.SetScale(Gf.Vec3f(*np.maximum(hi - lo, 1e-9).tolist()))
+            points, faces = box_mesh(lo, hi)
         elif kind == "plane":
             normal = np.asarray(c["normal"], float).reshape(-1)
-            normal = normal / np.linalg.norm(normal)
             point = np.asarray(c["point"], float).reshape(-1)
-            geom = UsdGeom.Plane.Define(stage, prim_path)
-            geom.CreateAxisAttr(UsdGeom.Tokens.z)
-            geom.CreateWidthAttr(2.0 * size)
-            geom.CreateLengthAttr(2.0 * size)
-            # the plane's point nearest the scene's centre, its z axis turned onto the normal
-            foot = centre - np.dot(centre - point, normal) * normal
-            rotation = Gf.Rotation(Gf.Vec3d(0.0, 0.0, 1.0), Gf.Vec3d(*normal.tolist()))
-            xf = UsdGeom.Xformable(geom)
-            xf.AddTranslateOp().Set(Gf.Vec3d(*foot.tolist()))
-            xf.AddOrientOp().Set(Gf.Quatf(rotation.GetQuat()))
+            points, faces = plane_mesh(point, normal, centre, size)
         elif kind == "sphere":
-            geom = UsdGeom.Sphere.Define(stage, prim_path)
-            geom.CreateRadiusAttr(float(c["radius"]))
-            UsdGeom.XformCommonAPI(geom).SetTranslate(Gf.Vec3d(*np.asarray(c["center"], float).reshape(-1)[:3].tolist()))
+            centre_k, radius = np.asarray(c["center"], float).reshape(-1)[:3], float(c["radius"])
+            points, faces = sphere_mesh(centre_k, radius)
+            normals = (points - centre_k) / radius if radius > 0 else None  # smooth shading
         else:
             continue
-        geom.CreatePurposeAttr(UsdGeom.Tokens.guide)
-        geom.GetPrim().CreateAttribute("kinema:collider", _token_type()).Set(kind)
+        mesh = UsdGeom.Mesh.Define(stage, f"/World/colliders/{kind}_{k}")
+        mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points.astype(np.float32)))
+        mesh.CreateFaceVertexCountsAttr(Vt.IntArray([len(f) for f in faces]))
+        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray([int(i) for f in faces for i in f]))
+        mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)  # (a mesh is Catmull-Clark unless told)
+        mesh.CreateDoubleSidedAttr(True)  # the particles are seen inside a box and from both sides of a plane
+        mesh.CreateExtentAttr(UsdGeom.Mesh.ComputeExtent(mesh.GetPointsAttr().Get()))
+        if normals is not None:
+            mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(normals.astype(np.float32)))
+            mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+        mesh.CreatePurposeAttr(UsdGeom.Tokens.guide)
+        mesh.GetPrim().CreateAttribute("kinema:collider", Sdf.ValueTypeNames.Token).Set(kind)
 
 
-def _token_type() -> Any:
-    from pxr import Sdf
+def box_mesh(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, list[list[int]]]:
+    """The box [lo, hi] (m) as 8 points (corner j at x = hi if j & 1, y = hi if j & 2, z = hi
+    if j & 4, else lo) and 6 quads, counter-clockwise seen from outside (USD's right-handed
+    orientation: their normals point out)."""
+    points = np.array([[hi[0] if j & 1 else lo[0], hi[1] if j & 2 else lo[1], hi[2] if j & 4 else lo[2]] for j in range(8)], dtype=np.float64)
+    return points, [[0, 4, 6, 2], [1, 3, 7, 5], [0, 1, 5, 4], [2, 6, 7, 3], [0, 2, 3, 1], [4, 5, 7, 6]]
 
-    return Sdf.ValueTypeNames.Token
+
+def plane_mesh(point: np.ndarray, normal: np.ndarray, centre: np.ndarray, size: float) -> tuple[np.ndarray, list[list[int]]]:
+    """The plane through ``point`` with ``normal`` as one square quad 2 ``size`` wide (m),
+    centred on the plane's point nearest ``centre``, counter-clockwise seen from the side the
+    normal points to; its sides along the axes where the normal is one."""
+    n = normal / np.linalg.norm(normal)
+    foot = centre - np.dot(centre - point, n) * n
+    axis = np.eye(3)[int(np.argmin(np.abs(n)))]  # the axis farthest from the normal
+    u = axis - np.dot(axis, n) * n
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    corners = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
+    return np.array([foot + size * (a * u + b * v) for a, b in corners]), [[0, 1, 2, 3]]
+
+
+#: The sphere meshes' divisions: around (longitude) and from pole to pole (latitude).
+SPHERE_SEGMENTS, SPHERE_RINGS = 32, 16
+
+
+def sphere_mesh(centre: np.ndarray, radius: float) -> tuple[np.ndarray, list[list[int]]]:
+    """The sphere as a UV sphere (m): its points on the sphere, a pole at each end of z and
+    ``SPHERE_RINGS`` − 1 rings of ``SPHERE_SEGMENTS`` between; quads between the rings and
+    triangles at the poles (448 quads and 64 triangles), counter-clockwise seen from outside."""
+    m, rings = SPHERE_SEGMENTS, SPHERE_RINGS
+    theta = np.pi * np.arange(1, rings) / rings  # from +z
+    phi = 2.0 * np.pi * np.arange(m) / m
+    ring = np.stack([np.outer(np.sin(theta), np.cos(phi)), np.outer(np.sin(theta), np.sin(phi)), np.repeat(np.cos(theta)[:, None], m, axis=1)], axis=2)
+    unit = np.concatenate([[[0.0, 0.0, 1.0]], ring.reshape(-1, 3), [[0.0, 0.0, -1.0]]])
+    south = len(unit) - 1
+
+    def at(j: int, k: int) -> int:  # ring j (0 … rings − 2), segment k
+        return 1 + j * m + k % m
+
+    faces = [[0, at(0, k), at(0, k + 1)] for k in range(m)]
+    faces += [[at(j, k), at(j + 1, k), at(j + 1, k + 1), at(j, k + 1)] for j in range(rings - 2) for k in range(m)]
+    faces += [[south, at(rings - 2, k + 1), at(rings - 2, k)] for k in range(m)]
+    return centre + radius * unit, faces
