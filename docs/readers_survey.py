@@ -24,7 +24,6 @@ import argparse
 import contextlib
 import io
 import json
-import os
 import sys
 import tempfile
 import warnings
@@ -456,7 +455,7 @@ def read_blender(path, traj):
     out = Path(path).with_suffix(".blender.npz")
     done = subprocess.run([str(BLENDER), "-c", BLENDER_SCRIPT, str(path), str(out), str(len(traj.t))], capture_output=True, text=True, timeout=600)
     if done.returncode:
-        raise RuntimeError("Blender: " + (done.stderr.strip().splitlines() or ["exit status %d" % done.returncode])[-1])
+        raise RuntimeError("Blender: " + (done.stderr.strip().splitlines() or [f"exit status {done.returncode}"])[-1])
     got = np.load(out)
     r = Read()
     for k in range(len(traj.t)):
@@ -478,7 +477,7 @@ def read_csv(path, traj):
         frames.setdefault(int(row["frame"]), []).append(row)
     for k in range(len(traj.t)):
         rs = frames.get(k, [])
-        col = lambda *names: np.array([[float(x[n]) for n in names] for x in rs]).reshape(-1, len(names))  # noqa: E731
+        col = lambda *names, rs=rs: np.array([[float(x[n]) for n in names] for x in rs]).reshape(-1, len(names))  # noqa: E731
         if not rs:
             r.frames.append(
                 {"ids": np.zeros(0, int), "pos": np.zeros((0, 3)), "vel": np.zeros((0, 3)), "mass": np.zeros(0), "species": [], "color": np.zeros((0, 3))}
