@@ -140,25 +140,49 @@ class Trajectory:
         return save_h5md(self, path, group=group, **options)
 
     @classmethod
-    def load(cls, path: Any, group: str | None = None, follow_links: bool = False) -> Trajectory:
-        """Read a trajectory from an H5MD file, written by ``save`` or by another program (units
-        converted to SI, velocities and energies NaN where the file has none; ``kinema.io.load_h5md``);
-        what only the file knows (its path, group, step of each frame, author, creator, the
-        cell at each frame) is ``source``, a :class:`FileInfo`.
+    def load(
+        cls,
+        path: Any,
+        group: str | None = None,
+        follow_links: bool = False,
+        *,
+        format: str | None = None,
+        units: Any = None,
+        atom_style: str | None = None,
+    ) -> Trajectory:
+        """Read a trajectory file, kinema's or another program's, in SI units; what only the file
+        knows (its path, group, step of each frame, author, creator, the cell at each frame) is
+        ``source``, a :class:`FileInfo`. Quantities the file does not hold are filled in as
+        ``_from_file`` says (velocities and energies NaN, "unknown").
 
-        What the file holds is checked as it is read (shapes, types and the memory they need
-        before any data, then finite positions, velocities and times, times that increase,
-        masses > 0, radii >= 0 and at most 1e150 m, printable species names, a box that is
-        periodic or open along the axes, ``dt`` > 0, the colliders): a
-        ``kinema.io.TrajectoryFileError`` (a ``ValueError``), one line, names the file, the
-        dataset or attribute and the bad value.
+        Formats (``format``, default: told by the file's first bytes, its suffix, its first
+        lines; ``kinema.io.readers``): ``"h5md"`` (``save``'s and other programs' H5MD;
+        ``kinema.io.load_h5md``), ``"xyz"`` (extended XYZ: ASE's, OVITO's, kinema's ``.xyz``),
+        ``"gsd"`` (HOOMD-blue's, kinema's ``.gsd``), ``"lammps"`` (a LAMMPS text dump),
+        ``"lammps-data"`` (a LAMMPS data file), and kinema's own exports ``"csv"``, ``"vtk"``
+        (the ``.pvd`` series) and ``"ply"`` (the ``<stem>_ply/`` series). docs/files.md says
+        what each gives (ids, births and deaths, units).
 
-        The file is read alone: one with an external link, a virtual dataset of another file
+        ``units``: for a file that does not say its units, what they are: a LAMMPS unit style
+        (``"real"``, ``"metal"``, ``"si"``, ``"cgs"``, ``"electron"``, ``"micro"``,
+        ``"nano"``), ``"ase"``, or {"length": m, "time": s, "mass": kg}; a LAMMPS file that
+        says neither is refused, a HOOMD GSD file without them is read as SI with a
+        ``kinema.io.UnitWarning``. ``atom_style``: a LAMMPS data file's atom style, where its
+        Atoms section does not name it.
+
+        What the file holds is checked as it is read (H5MD: shapes, types and the memory they
+        need before any data; every format: finite positions, velocities and times, times that
+        increase, masses > 0, radii >= 0 and at most 1e150 m, printable species names, a box
+        along the axes, an id once per frame): a ``kinema.io.TrajectoryFileError`` (a
+        ``ValueError``), one line, names the file, where in it and the bad value. A file of
+        no format kinema reads is refused with the list of those it reads.
+
+        An H5MD file is read alone: one with an external link, a virtual dataset of another file
         or data stored in external files is refused, unless ``follow_links=True`` (then those
-        other files are read too)."""
-        from .io import load_h5md
+        other files are read too); ``group`` picks its particle group."""
+        from .io.readers import read_trajectory
 
-        return cls._from_file(load_h5md(path, group=group, follow_links=follow_links))
+        return cls._from_file(read_trajectory(path, format=format, units=units, group=group, follow_links=follow_links, atom_style=atom_style))
 
     @classmethod
     def _from_file(cls, read: Any) -> Trajectory:

@@ -1,0 +1,126 @@
+"""Reading GSD files (HOOMD-blue's schema, and kinema's own ``.gsd``) with the ``gsd`` package:
+``read_gsd`` gives a ``LoadedTrajectory`` in SI units."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._assemble import Box, RawFrame, assemble
+from ._h5md_checks import fail
+from .h5md_reader import LoadedTrajectory
+from .units import SI, UnitWarning, scales
+
+MAGIC = bytes.fromhex("df65df65df65df65")  # the first 8 bytes of every GSD file (0x65DF65DF65DF65DF, little-endian)
+
+
+def _log(f: Any, k: int, name: str) -> np.ndarray | None:
+    """The chunk ``log/<name>`` of frame ``k`` (or of frame 0, where GSD keeps a value that does
+    not change), ``None`` where there is none."""
+    for frame in (k, 0):
+        if f.file.chunk_exists(frame=frame, name=f"log/{name}"):
+            return f.file.read_chunk(frame=frame, name=f"log/{name}")
+    return None
+
+
+def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
+    """Read the GSD file ``path`` (schema "hoomd") with ``gsd.hoomd``.
+
+    Each frame: ``particles/position`` (+ ``log/kinema/origin`` in kinema's files, whose GSD box
+    is centred at 0), ``velocity``, ``mass`` and ``diameter`` (radius = diameter / 2) as HOOMD
+    reads them, its defaults where a file has none (mass 1, diameter 1, velocity 0, as the
+    schema says: gsd leaves out a value equal to its default), the type names
+    (``particles/types`` by ``typeid``) as species, ``configuration/step``,
+    ``configuration/dimensions`` and the box [Lx, Ly, Lz] centred at the origin (periodic on
+    every axis, as HOOMD's box is; a tilted box is refused). A number of particles that varies
+    is read by kinema's ids (``log/particles/kinema/id``); without them it is refused.
+    kinema's files also give the periodic axes (``log/kinema/periodic``: along another axis
+    the cell is the box halved), the springs (bonds of type "spring", as ids) and the
+    colours (``log/particles/Color``).
+
+    Units: HOOMD is unitless. A file kinema wrote (``log/kinema/time``) is SI and its times are
+    ``log/kinema/time``; another file's numbers are in the units ``units`` gives (see
+    ``kinema.io.units.scales``), or, without them, taken as SI with a ``UnitWarning`` naming the
+    file (its masses as kg). Its frames' times are their index (0, 1, 2, ... s; the steps are
+    ``source.step``)."""
+    try:
+        import gsd.hoomd
+    except ImportError:
+        raise ImportError("reading GSD needs the gsd package: pip install gsd") from None
+    try:
+        f = gsd.hoomd.open(str(path), mode="r")
+    except (RuntimeError, OSError, ValueError) as e:
+        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        raise fail(path, f"not a GSD file that can be read ({first})") from None
+    with f:
+        if f.file.schema != "hoomd":
+            raise fail(path, f"a GSD file of schema {f.file.schema!r}; kinema reads HOOMD's schema ('hoomd')")
+        count = len(f)
+        if count == 0:
+            raise fail(path, "holds no frame")
+        own = f.file.chunk_exists(frame=0, name="log/kinema/time")
+        if own:
+            if units is not None and scales(units, "units") != SI:
+                raise fail(path, f"kinema wrote this file in SI units (log/kinema/time), which units = {units!r} contradicts")
+            unit_scales = SI
+        elif units is not None:
+            unit_scales = scales(units, "units")
+        else:
+            warnings.warn(
+                f"{path}: a HOOMD GSD file has no units; its numbers are taken as SI (positions in m, velocities in m/s, masses in kg, diameters in m); "
+                "give units= to say what they are",
+                UnitWarning,
+                stacklevel=3,
+            )
+            unit_scales = SI
+        frames = []
+        springs: list[tuple[int, int]] = []  # the ids at the ends of kinema's springs (its bonds of type "spring")
+        dim = None
+        for k in range(count):
+            try:
+                frame = f[k]
+            except (RuntimeError, OSError, ValueError) as e:
+                raise fail(path, f"frame {k} cannot be read ({str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__})") from None
+            where = f"frame {k}"
+            c, p = frame.configuration, frame.particles
+            box = np.asarray(c.box, dtype=np.float64)
+            if np.any(box[3:] != 0):
+                raise fail(path, f"{where}: the box has tilt factors {box[3:].tolist()}; kinema reads boxes along the axes only")
+            dim = int(c.dimensions) if dim is None else dim
+            origin = _log(f, k, "kinema/origin") if own else None
+            origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64).reshape(3)
+            # kinema's files say which axes are periodic; along another its box is the cell
+            # doubled about its centre (room beyond the walls, gsd_writer.write_gsd)
+            flags = _log(f, k, "kinema/periodic") if own else None
+            periodic = np.array([True, True, dim == 3]) if flags is None else np.asarray(flags).reshape(3).astype(bool) & np.array([True, True, dim == 3])
+            lengths = np.where(periodic | (flags is None), 1.0, 0.5) * box[:3]
+            ids = _log(f, k, "particles/kinema/id") if own else None
+            time = _log(f, k, "kinema/time") if own else None
+            types = [str(t) for t in p.types]
+            typeid = np.asarray(p.typeid, dtype=np.int64)
+            if typeid.size and (typeid.min() < 0 or typeid.max() >= len(types)):
+                raise fail(path, f"{where}: particles/typeid holds {int(typeid.max())}, but particles/types names {len(types)} types")
+            color = _log(f, k, "particles/Color") if own else None
+            if ids is not None and frame.bonds.N and list(frame.bonds.types) == ["spring"]:
+                ends = np.asarray(ids, dtype=np.int64).reshape(-1)[np.asarray(frame.bonds.group, dtype=np.int64).reshape(-1, 2)]
+                springs.extend(map(tuple, ends.tolist()))
+            frames.append(
+                RawFrame(
+                    positions=np.asarray(p.position, dtype=np.float64).reshape(-1, 3) + origin,
+                    where=where,
+                    ids=None if ids is None else np.asarray(ids, dtype=np.int64).reshape(-1),
+                    velocities=np.asarray(p.velocity, dtype=np.float64).reshape(-1, 3),
+                    masses=np.asarray(p.mass, dtype=np.float64).reshape(-1),
+                    radii=np.asarray(p.diameter, dtype=np.float64).reshape(-1) / 2,
+                    species=np.array(types, dtype=object)[typeid] if types else None,
+                    colors=None if color is None else np.asarray(color, dtype=np.float64).reshape(-1, 3),
+                    time=None if time is None else float(np.asarray(time).reshape(-1)[0]),
+                    step=int(c.step),
+                    box=Box(origin - lengths / 2, origin + lengths / 2, periodic),
+                )
+            )
+        creator = "kinema" if own else (f.file.application or None)
+    return assemble(path, frames, unit_scales, dim=dim or 3, creator=creator, springs=list(dict.fromkeys(springs)))
