@@ -4,6 +4,7 @@ outside readers: the gsd package, ASE and, where installed, OVITO (requirements/
 import re
 from types import SimpleNamespace
 
+import ase.units
 import numpy as np
 import pytest
 
@@ -65,8 +66,10 @@ def test_gsd_periodic_box_and_float32_values(tmp_path):
         for i, frame in enumerate(f):
             assert frame.configuration.step == i  # round(t/dt), one frame per step
             assert frame.configuration.dimensions == 3
-            # x and y: the periodic cell; z: the Box's walls, which hold every particle.
-            np.testing.assert_array_equal(frame.configuration.box, [1, 1, 1, 0, 0, 0])
+            # x and y: the periodic cell; z: the Box's walls, which hold every particle, doubled
+            # about their centre (GSD's box is periodic on every axis: room beyond the walls).
+            np.testing.assert_array_equal(frame.configuration.box, [1, 1, 2, 0, 0, 0])
+            assert frame.log["kinema/periodic"].tolist() == [1, 1, 0]
             origin = frame.log["kinema/origin"]
             np.testing.assert_array_equal(origin, [0.5, 0.5, 0.5])
             assert frame.log["kinema/time"].tolist() == [traj.t[i]]
@@ -102,8 +105,11 @@ def test_gsd_open_space_box_encloses_the_particles(tmp_path, dim):
             if dim == 2:
                 assert box[2] == 0 and origin[2] == 0  # HOOMD's 2D box: Lz = 0
                 assert np.all(frame.particles.position[:, 2] == 0)
-            margin = box[:dim] / 2 - (hi - lo)[:dim] / 2
-            assert np.all(margin > 0.05 - 1e-6)  # at least the largest radius
+            # No axis is periodic: each is the particles' extent with a margin (at least the
+            # largest radius), doubled about its centre.
+            assert frame.log["kinema/periodic"].tolist() == [0, 0, 0]
+            margin = box[:dim] / 4 - (hi - lo)[:dim] / 2
+            assert np.all(margin > 0.05 - 1e-6)
             assert np.all(np.abs(frame.particles.position[:, :dim]) < box[:dim] / 2)
             np.testing.assert_allclose(frame.particles.position.astype(np.float64) + origin, x[i], rtol=6e-8)
 
@@ -132,17 +138,27 @@ def test_gsd_types_ids_and_a_trajectory_without_masses(tmp_path):
 
 
 def ase_frames(path):
+    """The dump read as docs/files.md says: ASE's LAMMPS reader told the units are SI (it
+    assumes LAMMPS's metal units otherwise), so it converts m and m/s to its own Å and
+    Å/(Å·sqrt(amu/eV))."""
     ase_io = pytest.importorskip("ase.io")
-    return ase_io.read(path, index=":", format="lammps-dump-text")
+    return ase_io.read(path, index=":", format="lammps-dump-text", units="si")
+
+
+def ase_positions(x):
+    """``x`` (m) as ASE's reader returns it, by the same operation: LAMMPS's si units to ASE's."""
+    from ase.calculators.lammps import convert
+
+    return convert(x, "distance", "si", "ASE")
 
 
 def ase_velocities(atoms, v):
-    """``v`` as ASE's reader returns it, by the same operations: LAMMPS metal units (Å/ps) to
+    """``v`` (m/s) as ASE's reader returns it, by the same operations: LAMMPS's si units to
     ASE's, then through the momenta (m v / m)."""
     from ase.calculators.lammps import convert
 
     m = atoms.get_masses()[:, np.newaxis]
-    return m * convert(v, "velocity", "metal", "ASE") / m
+    return m * convert(v, "velocity", "si", "ASE") / m
 
 
 def test_lammps_dump_read_by_ase(tmp_path):
@@ -155,15 +171,18 @@ def test_lammps_dump_read_by_ase(tmp_path):
     for i, atoms in enumerate(frames):
         assert atoms.info["timestep"] == i
         assert len(atoms) == 5
-        np.testing.assert_array_equal(atoms.positions, traj.positions[i])  # 17 digits: exact
+        np.testing.assert_array_equal(atoms.positions, ase_positions(traj.positions[i]))  # 17 digits: exact
+        np.testing.assert_allclose(atoms.positions / ase.units.m, traj.positions[i], rtol=2e-16, atol=0)  # Å back to m
         np.testing.assert_array_equal(atoms.get_velocities(), ase_velocities(atoms, traj.velocities[i]))
-        np.testing.assert_array_equal(atoms.cell[:], np.eye(3))
+        np.testing.assert_allclose(atoms.get_velocities() / (ase.units.m / ase.units.s), traj.velocities[i], rtol=1e-15, atol=0)
+        np.testing.assert_array_equal(atoms.cell[:], np.eye(3) * 1e10)
         np.testing.assert_array_equal(atoms.get_celldisp().ravel(), [0, 0, 0])
         assert atoms.pbc.tolist() == [True, True, False]
         assert atoms.arrays["type"].tolist() == [1] * 5
     text = path.read_text()
-    assert text.startswith("ITEM: UNITS\nsi\nITEM: TIME\n0.0\nITEM: TIMESTEP\n0\n")
-    assert [float(t) for t in re.findall(r"ITEM: TIME\n(\S+)\n", text)] == traj.t.tolist()
+    # No ITEM: UNITS or ITEM: TIME, which MDAnalysis cannot read: the times are TIMESTEP x dt.
+    assert text.startswith("ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n5\n") and "ITEM: TIME\n" not in text and "UNITS" not in text
+    assert [int(s) * 0.01 for s in re.findall(r"ITEM: TIMESTEP\n(\S+)\n", text)] == pytest.approx(traj.t.tolist(), rel=1e-15)
     assert text.count("ITEM: BOX BOUNDS pp pp ff\n0.0 1.0\n0.0 1.0\n0.0 1.0\n") == 6
     rows = [line.split() for line in text.splitlines() if re.fullmatch(r"\d+ 1 .*", line)]
     assert len(rows) == 30 and [r[0] for r in rows[:5]] == ["1", "2", "3", "4", "5"]  # ids 1-based
@@ -179,10 +198,10 @@ def test_lammps_dump_2d_open_space(tmp_path):
     x = traj.positions
     lo, hi = x.min(axis=(0, 1)), x.max(axis=(0, 1))
     for i, atoms in enumerate(frames):
-        np.testing.assert_array_equal(atoms.positions, x[i])
+        np.testing.assert_array_equal(atoms.positions, ase_positions(x[i]))
         np.testing.assert_array_equal(atoms.get_velocities(), ase_velocities(atoms, traj.velocities[i]))
         assert atoms.pbc.tolist() == [False, False, True]  # LAMMPS's 2D boxes are periodic in z
-        disp, lengths = atoms.get_celldisp().ravel(), atoms.cell.lengths()
+        disp, lengths = atoms.get_celldisp().ravel() / ase.units.m, atoms.cell.lengths() / ase.units.m
         assert np.all(disp[:2] < lo[:2] - 0.05 + 1e-12) and np.all(disp[:2] + lengths[:2] > hi[:2] + 0.05 - 1e-12)
         assert disp[2] < 0 < disp[2] + lengths[2]
 
@@ -198,7 +217,7 @@ def test_lammps_dump_ids_and_types(tmp_path):
     assert "ITEM: ATOMS id type x y z vx vy vz\n8 2 " in path.read_text()  # no radius or mass columns
     order = np.argsort(ids)  # ASE sorts the rows by id
     for i, atoms in enumerate(ase_frames(path)):
-        np.testing.assert_array_equal(atoms.positions, traj.positions[i][order])
+        np.testing.assert_array_equal(atoms.positions, ase_positions(traj.positions[i][order]))
         assert atoms.arrays["type"].tolist() == [3, 1, 2, 2]  # a=1, b=2, c=3 for ids 1, 3, 7, 9
 
 
@@ -247,7 +266,8 @@ def test_ovito_reads_the_gsd_file(tmp_path):
         np.testing.assert_array_equal(data.particles["Mass"][...], np.float32([1, 2, 3, 4, 5]))
         np.testing.assert_allclose(data.particles["Radius"][...], [0.01, 0.02, 0.03, 0.04, 0.05], rtol=1e-7)
         assert data.particles["kinema_id"][...].tolist() == [0, 1, 2, 3, 4]
-        np.testing.assert_array_equal(data.cell[...], [[1, 0, 0, -0.5], [0, 1, 0, -0.5], [0, 0, 1, -0.5]])
+        np.testing.assert_array_equal(data.cell[...], [[1, 0, 0, -0.5], [0, 1, 0, -0.5], [0, 0, 2, -1]])  # z: the walls, doubled
+        assert data.attributes["kinema/periodic"] == (1, 1, 0)
 
 
 def test_ovito_reads_the_gsd_file_2d(tmp_path):
@@ -270,7 +290,7 @@ def test_ovito_reads_the_lammps_dump(tmp_path):
     for i in range(6):
         data = pipeline.compute(i)
         assert data.particles.count == 5
-        assert data.attributes["Timestep"] == i and data.attributes["Time"] == traj.t[i]
+        assert data.attributes["Timestep"] == i and "Time" not in data.attributes  # no ITEM: TIME (MDAnalysis cannot read it)
         # The file is exact (ASE reads it back bit for bit); OVITO 3.17's number parser is not
         # correctly rounded and lands up to 2 units in the last place off (15% of values).
         np.testing.assert_array_max_ulp(data.particles.positions[...], traj.positions[i], maxulp=2)

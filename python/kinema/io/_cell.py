@@ -1,6 +1,6 @@
 """What the exports need to know about a trajectory beyond its frames, computed once for
 every format: the cell that holds it (OVITO, ASE, HOOMD and LAMMPS all want a box), the step
-number of each frame, and the particles' species."""
+number of each frame, the particles' species, their colours and the springs between them."""
 
 from __future__ import annotations
 
@@ -11,6 +11,12 @@ import numpy as np
 from ._files import Frames
 
 _MARGIN = 0.05  # of the particles' largest extent, around them where no periodic cell is known
+ELEMENTS = frozenset(
+    "H He Li Be B C N O F Ne Na Mg Al Si P S Cl Ar K Ca Sc Ti V Cr Mn Fe Co Ni Cu Zn Ga Ge As Se Br Kr Rb Sr Y Zr "
+    "Nb Mo Tc Ru Rh Pd Ag Cd In Sn Sb Te I Xe Cs Ba La Ce Pr Nd Pm Sm Eu Gd Tb Dy Ho Er Tm Yb Lu Hf Ta W Re Os Ir "
+    "Pt Au Hg Tl Pb Bi Po At Rn Fr Ra Ac Th Pa U Np Pu Am Cm Bk Cf Es Fm Md No Lr Rf Db Sg Bh Hs Mt Ds Rg Cn Nh Fl "
+    "Mc Lv Ts Og".split()
+)  # the chemical symbols ASE accepts as an atom's symbol, besides X (its dummy element)
 
 
 def box_corners(description: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
@@ -101,3 +107,69 @@ def particle_types(traj: Any, n: int) -> tuple[list[str], np.ndarray]:
         raise ValueError(f"species has shape {a.shape}; it must be ({n},), one name per particle")
     unique, index = np.unique(a, return_inverse=True)
     return unique.tolist(), index.astype(np.int64)
+
+
+def spring_columns(traj: Any, fr: Frames) -> np.ndarray:
+    """(S, 2) int64: the columns (the particles, in the order of ``fr.ids``) at the two ends
+    of each of the trajectory's ``springs`` (pairs of ids), in the order of ``springs``; a
+    spring with an end whose id the trajectory does not hold is left out, as the renderer
+    leaves it out. (0, 2) without springs."""
+    springs = getattr(traj, "springs", None)
+    if springs is None or np.size(springs) == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    pairs = np.asarray(springs)
+    if pairs.ndim != 2 or pairs.shape[1] != 2 or not np.issubdtype(pairs.dtype, np.integer):
+        raise ValueError(f"springs has shape {pairs.shape} and type {pairs.dtype}; it must be (S, 2) integers, the ids at the ends of each spring")
+    order = np.argsort(fr.ids, kind="stable")
+    sorted_ids = fr.ids[order]
+    at = np.clip(np.searchsorted(sorted_ids, pairs), 0, max(sorted_ids.size - 1, 0))
+    known = (sorted_ids[at] == pairs).all(axis=1) if sorted_ids.size else np.zeros(len(pairs), dtype=bool)
+    return order[at[known]].astype(np.int64).reshape(-1, 2)
+
+
+def live_springs(columns: np.ndarray, fr: Frames, i: int) -> np.ndarray:
+    """(K, 2) int64: the springs of ``columns`` (``spring_columns``) whose two ends are alive
+    at frame ``i``, as rows of that frame (indices into ``fr.live(i)``: the order every
+    format writes the frame's particles in), in the order of ``columns``."""
+    row = np.full(fr.n_particles, -1, dtype=np.int64)
+    live = fr.live(i)
+    row[live] = np.arange(live.size)
+    ends = row[columns]
+    return ends[(ends >= 0).all(axis=1)]
+
+
+def particle_colors(traj: Any, n: int) -> np.ndarray | None:
+    """(N, 3) float64: each particle's own colour (``Trajectory.colors``, r g b in [0, 1]),
+    the renderer's ``NO_OWN_COLOR`` (RGB 70 130 200, the colour a video draws such a particle
+    with) where it has none (a row with NaN); ``None`` when the trajectory has no colours.
+    A colour outside [0, 1] or infinite is a ``ValueError``."""
+    colors = getattr(traj, "colors", None)
+    if colors is None:
+        return None
+    c = np.array(colors, dtype=np.float64)
+    if c.shape != (n, 3):
+        raise ValueError(f"colors has shape {c.shape}; it must be ({n}, 3), r g b per particle")
+    none = np.isnan(c).any(axis=1)
+    bad = ~none & ~((c >= 0) & (c <= 1)).all(axis=1)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"colors[{k}] = {c[k].tolist()} is invalid: r g b must be in [0, 1] (NaN: the particle has no colour of its own)")
+    from ..render import NO_OWN_COLOR
+
+    c[none] = np.asarray(NO_OWN_COLOR, dtype=np.float64) / 255.0
+    return c
+
+
+def colors_uint8(colors: np.ndarray) -> np.ndarray:
+    """(N, 3) uint8 of ``particle_colors``: round(255 c), as the renderer's own colours."""
+    return np.round(colors * 255.0).astype(np.uint8)
+
+
+def element_names(traj: Any, n: int) -> list[str] | None:
+    """The species names of the particles' types (``particle_types``) when every one is a
+    chemical symbol or ``X`` (ASE's dummy element), as a LAMMPS ``element`` column needs them
+    (ASE refuses other words there); ``None`` without species or when one is another word."""
+    if getattr(traj, "species", None) is None:
+        return None
+    names, _ = particle_types(traj, n)
+    return names if all(name in ELEMENTS or name == "X" for name in names) else None

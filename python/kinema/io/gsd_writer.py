@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ._cell import frame_steps, particle_types, trajectory_cell
+from ._cell import frame_steps, live_springs, particle_colors, particle_types, spring_columns, trajectory_cell
 from ._files import FileWriteError, Frames, close_descriptors_on, copy_into, private_folder, write_error
 
 
@@ -23,10 +23,18 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     ``configuration/box`` [Lx, Ly, Lz, 0, 0, 0] (Lz = 0 in 2D, as HOOMD does); ``particles/N``,
     ``types`` (``["A"]``, or the trajectory's ``species`` names), ``typeid``, ``position`` (m),
     ``velocity`` (m/s), ``mass`` (kg) and ``diameter`` (2 × radius, m) where the trajectory
-    has masses and radii. The box: along a periodic axis the world's periodic cell, along
-    another the walls of the world's ``Box`` where all particles stay between them, else the
-    extent of all frames' particles with a margin (GSD's box itself is periodic on every
-    axis).
+    has masses and radii.
+
+    The box: GSD's box is periodic on every axis, as HOOMD's always is. Along a periodic axis
+    it is the world's periodic cell. Along another axis the cell (``_cell.trajectory_cell``:
+    the walls of the world's ``Box`` where all particles stay between them, else the extent
+    of all frames' particles with a margin) is doubled in length about its centre, as HOOMD
+    users leave room beyond walls: two particles in the cell are at most its length L apart
+    along that axis, so their image across the padded box is at least L away, and no
+    neighbour search whose cut-off is below half the box's length (the largest freud and
+    HOOMD allow) finds a pair across a wall. ``log/kinema/periodic`` (3,) uint8 says which
+    axes are periodic (1) and which are padded (0): the cell is the box with a padded axis
+    halved.
 
     Precision: GSD's HOOMD schema stores particle data as float32, so positions (relative to
     the box centre), velocities, masses and diameters keep about 7 significant digits (a
@@ -34,14 +42,21 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     box centre, and stores it in float64 as ``log/kinema/origin`` (3,), m; a position in
     kinema's coordinates is ``position + origin``. ``log/kinema/time`` (1,) is the frame
     time t in s (float64, exact) and ``log/particles/kinema/id`` (N,) the particle ids.
-    OVITO shows the log values as the global attributes ``kinema/origin`` and
-    ``kinema/time`` and the ids as the particle property ``kinema_id``.
+    OVITO shows the log values as the global attributes ``kinema/origin``, ``kinema/time``
+    and ``kinema/periodic`` and the ids as the particle property ``kinema_id``.
+
+    Springs (``traj.springs``): each frame's ``bonds/N``, ``bonds/types`` (``["spring"]``),
+    ``bonds/typeid`` (0) and ``bonds/group`` (the two ends as indices into the frame's
+    particles) hold the springs whose two ends are alive then; OVITO reads them as its Bonds.
+    Colours (``traj.colors``): ``log/particles/Color`` (N, 3) float32, r g b in [0, 1] (the
+    renderer's ``NO_OWN_COLOR`` for a particle without its own), which HOOMD's schema has no
+    place for and OVITO reads as its Color property.
 
     Births and deaths (``alive``): a frame holds the particles alive at it only, GSD's
     ``particles/N`` varying from frame to frame as HOOMD's does; ``typeid``, ``mass``,
-    ``diameter`` and ``log/particles/kinema/id`` are those of the live particles, in the
-    order of their ids, so a particle is followed across frames by its id (a frame may hold
-    none).
+    ``diameter``, the colours and ``log/particles/kinema/id`` are those of the live
+    particles, in the order of their ids, so a particle is followed across frames by its id
+    (a frame may hold none).
 
     ``on_frame(i)`` is called after frame ``i`` is written. Needs the ``gsd`` package.
 
@@ -54,9 +69,9 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
         import gsd.hoomd
     except ImportError:
         raise ImportError("writing GSD needs the gsd package: pip install gsd") from None
-    lo, hi, _, _ = trajectory_cell(traj, fr)
+    lo, hi, periodic, _ = trajectory_cell(traj, fr)
     origin = 0.5 * (lo + hi)
-    lengths = hi - lo
+    lengths = np.where(periodic, 1.0, 2.0) * (hi - lo)  # room beyond the walls: see above
     if fr.dim == 2:  # HOOMD's 2D box: Lz = 0, the particles at z = 0
         origin[2], lengths[2] = 0.0, 0.0
     box = [*(float(v) for v in lengths), 0.0, 0.0, 0.0]
@@ -64,6 +79,9 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     typeid = typeid.astype(np.uint32)
     masses = None if fr.masses is None else fr.masses.astype(np.float32)
     diameters = None if fr.radii is None else (2.0 * fr.radii).astype(np.float32)
+    colors = particle_colors(traj, fr.n_particles)
+    colors = None if colors is None else colors.astype(np.float32)
+    springs = spring_columns(traj, fr)
     ids = fr.ids.astype(np.int64)
     steps = frame_steps(fr)
     # gsd writes its file in a private folder of the system's temporary folder, never on the
@@ -94,9 +112,21 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
                         p.mass = masses[live]
                     if diameters is not None:
                         p.diameter = diameters[live]
+                    if springs.size:
+                        # A frame whose springs are all gone still writes bonds/N = 0: gsd
+                        # gives a frame without the chunk the value of frame 0.
+                        group = live_springs(springs, fr, i)
+                        b = frame.bonds
+                        b.N = len(group)
+                        b.types = ["spring"]
+                        b.typeid = np.zeros(len(group), dtype=np.uint32)
+                        b.group = group.astype(np.uint32).reshape(-1, 2)
                     frame.log["kinema/origin"] = origin.copy()
                     frame.log["kinema/time"] = np.array([fr.t[i]], dtype=np.float64)
+                    frame.log["kinema/periodic"] = periodic.astype(np.uint8)
                     frame.log["particles/kinema/id"] = ids[live]
+                    if colors is not None:
+                        frame.log["particles/Color"] = colors[live]
                     _gsd_call(path, scratch, f.append, frame)
                     on_frame(i)
             except BaseException:
