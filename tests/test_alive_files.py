@@ -4,6 +4,7 @@ it (h5py, pyh5md, gsd, ASE, OVITO, VTK, plyfile, pxr), each frame holding exactl
 particles alive at it, with their ids; and H5MD read back by kinema itself."""
 
 import csv
+import re
 
 import numpy as np
 import pytest
@@ -74,6 +75,13 @@ def traj():
 def expected(traj, k):
     """The live particles of frame ``k``, by the trajectory itself."""
     return traj.frame(k)
+
+
+def live_springs(traj, k):
+    """The springs (pairs of ids, in the order of ``traj.springs``) whose two ends are alive at
+    frame ``k``: [3, 5] at frames 0 and 1, both at frame 2, none after."""
+    alive = set(traj.ids[traj.alive[k]].tolist())
+    return [p for p in traj.springs.tolist() if p[0] in alive and p[1] in alive]
 
 
 # -- H5MD ----------------------------------------------------------------------------------------
@@ -206,6 +214,10 @@ def test_gsd_frames_hold_the_live_particles(tmp_path, traj):
             np.testing.assert_array_equal(p.mass, want["masses"].astype(np.float32))
             np.testing.assert_array_equal(p.diameter, (2 * want["radii"]).astype(np.float32))
             assert [p.types[i] for i in p.typeid] == want["species"].tolist()
+            # the springs whose ends are alive, as bonds between the frame's particles
+            ids = frame.log["particles/kinema/id"]
+            assert frame.bonds.N == len(live_springs(traj, k)) and list(frame.bonds.types) == ["spring"]
+            assert ids[frame.bonds.group].tolist() == live_springs(traj, k)
 
 
 def test_ovito_reads_the_gsd_file(tmp_path, traj):
@@ -220,6 +232,10 @@ def test_ovito_reads_the_gsd_file(tmp_path, traj):
             assert data.particles["kinema_id"][...].tolist() == want["ids"].tolist()
             origin = np.array(data.attributes["kinema/origin"])
             np.testing.assert_array_equal(data.particles.positions[...], (want["positions"] - origin).astype(np.float32))
+        # OVITO's Bonds: the live springs (none at all in the frames without one)
+        bonds = data.particles.bonds
+        ids = data.particles["kinema_id"][...] if data.particles.count else np.zeros(0, dtype=np.int64)
+        assert (ids[bonds.topology[...]].tolist() if bonds is not None and bonds.count else []) == live_springs(traj, k)
 
 
 # -- LAMMPS dump ---------------------------------------------------------------------------------
@@ -232,12 +248,14 @@ def test_lammps_dump_read_by_ase_and_ovito(tmp_path, traj):
     counts = [int(line) for line in text.split("ITEM: NUMBER OF ATOMS\n")[1:] for line in line.splitlines()[:1]]
     assert counts == ALIVE.sum(axis=1).tolist()
     ase_io = pytest.importorskip("ase.io")
-    frames = ase_io.read(tmp_path / "run.lammpstrj", index=":", format="lammps-dump-text")
+    from ase.calculators.lammps import convert
+
+    frames = ase_io.read(tmp_path / "run.lammpstrj", index=":", format="lammps-dump-text", units="si")
     assert len(frames) == F
     for k, atoms in enumerate(frames):
         want = expected(traj, k)  # ASE sorts the atoms by id; the ids are ascending already
         assert len(atoms) == ALIVE[k].sum()
-        np.testing.assert_array_equal(atoms.positions, want["positions"].reshape(-1, 3))
+        np.testing.assert_array_equal(atoms.positions, convert(want["positions"].reshape(-1, 3), "distance", "si", "ASE"))
     ovito_io = pytest.importorskip("ovito.io")
     pipeline = ovito_io.import_file(str(tmp_path / "run.lammpstrj"))
     assert pipeline.source.num_frames == F
@@ -296,9 +314,23 @@ def test_vtk_frames_read_by_vtk(tmp_path, traj):
     from vtkmodules.util.numpy_support import vtk_to_numpy
 
     paths = export(traj, tmp_path / "run.pvd")
-    frames = [p for p in paths if p.parent.name == "run_vtk"]
+    frames = [p for p in paths if re.fullmatch(r"run_\d{5}\.vtp", p.name)]
     assert len(frames) == F
     for k, path in enumerate(frames):
+        # the frame's multi-block file: its particles and the springs whose ends are alive
+        blocks = vtk_xml.vtkXMLMultiBlockDataReader()
+        blocks.SetFileName(str(tmp_path / "run_vtk" / f"run_{k:05d}.vtm"))
+        blocks.Update()
+        springs = blocks.GetOutput().GetBlock(1)
+        ends = np.column_stack([vtk_to_numpy(springs.GetCellData().GetArray(a)) for a in ("id1", "id2")])
+        points = vtk_to_numpy(springs.GetPoints().GetData())
+        assert springs.GetNumberOfLines() == len(ends) and springs.GetNumberOfPoints() == 2 * len(ends)
+        if live_springs(traj, k):
+            assert ends.tolist() == live_springs(traj, k)
+            by_id = dict(zip(traj.ids.tolist(), traj.positions[k].tolist(), strict=True))
+            np.testing.assert_array_equal(points, [by_id[i] for i in ends.reshape(-1).tolist()])
+        else:  # none alive: one line of zero length between no particles (OVITO needs a line)
+            assert ends.tolist() == [[-1, -1]] and np.array_equal(points[0], points[1])
         reader = vtk_xml.vtkXMLPolyDataReader()
         reader.SetFileName(str(path))
         reader.Update()
@@ -322,6 +354,11 @@ def test_ovito_reads_the_pvd(tmp_path, traj):
         if data.particles.count:
             assert data.particles["Particle Identifier"][...].tolist() == want["ids"].tolist()
             np.testing.assert_array_equal(data.particles.positions[...], want["positions"])
+        # the springs file beside each frame's particles: OVITO's Lines between particle ids
+        lines = [o for o in data.objects if type(o).__name__ == "Lines"]
+        assert len(lines) == 1 and lines[0].identifier == "particle-particle-contacts"
+        ends = np.column_stack([lines[0][f"Particle Identifier {j}"][...] for j in (1, 2)])[::2].tolist()
+        assert ends == (live_springs(traj, k) or [[-1, -1]])  # none: one line of zero length, not the last frame's
 
 
 def test_ply_frames_read_by_plyfile(tmp_path, traj):
@@ -335,6 +372,8 @@ def test_ply_frames_read_by_plyfile(tmp_path, traj):
         x = np.column_stack([vertex["x"], vertex["y"], vertex["z"]]) if vertex.count else np.zeros((0, 3), np.float32)
         np.testing.assert_array_equal(x, want["positions"].astype(np.float32))
         np.testing.assert_array_equal(vertex["radius"], want["radii"].astype(np.float32))
+        edge = plyfile.PlyData.read(str(path))["edge"]  # the live springs, between the frame's vertices
+        assert vertex["id"][np.column_stack([edge["vertex1"], edge["vertex2"]]).reshape(-1, 2)].tolist() == live_springs(traj, k)
 
 
 # -- USD -----------------------------------------------------------------------------------------

@@ -201,10 +201,10 @@ def test_a_bad_collider_or_an_error_mid_export_leaves_nothing_behind(tmp_path, m
 
     real = exports_module._vtp
 
-    def fail_at_frame_3(fr, i):
+    def fail_at_frame_3(fr, i, extras):
         if i == 3:
             raise RuntimeError("interrupted")
-        return real(fr, i)
+        return real(fr, i, extras)
 
     monkeypatch.setattr(exports_module, "_vtp", fail_at_frame_3)
     with pytest.raises(RuntimeError, match="interrupted"):

@@ -14,7 +14,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from .. import _checks
-from ._cell import box_corners, particle_types, trajectory_cell
+from ._cell import ELEMENTS, box_corners, colors_uint8, live_springs, particle_colors, particle_types, spring_columns, trajectory_cell
 from ._files import Frames, atomic_file, atomic_folder, atomic_outputs, frames_of, os_errors_as_write_errors
 from ._h5md_checks import check_frames
 from .gsd_writer import write_gsd
@@ -48,12 +48,6 @@ SUFFIX = {
     "usd": ".usd",
 }  # the main file's suffix of each format
 _TRAJECTORY_SUFFIXES = (".h5", ".hdf5", ".h5md")  # H5MD trajectories: never the name of an export
-_ELEMENTS = frozenset(
-    "H He Li Be B C N O F Ne Na Mg Al Si P S Cl Ar K Ca Sc Ti V Cr Mn Fe Co Ni Cu Zn Ga Ge As Se Br Kr Rb Sr Y Zr "
-    "Nb Mo Tc Ru Rh Pd Ag Cd In Sn Sb Te I Xe Cs Ba La Ce Pr Nd Pm Sm Eu Gd Tb Dy Ho Er Tm Yb Lu Hf Ta W Re Os Ir "
-    "Pt Au Hg Tl Pb Bi Po At Rn Fr Ra Ac Th Pa U Np Pu Am Cm Bk Cf Es Fm Md No Lr Rf Db Sg Bh Hs Mt Ds Rg Cn Nh Fl "
-    "Mc Lv Ts Og".split()
-)  # the chemical symbols ASE's extended XYZ reader accepts as species (and X)
 _DIGITS = 5  # frame numbers in series file names: stem_00000.vtp
 _FLOAT32 = ("ply", "gsd", "usd")  # the formats that store particle data as float32
 
@@ -213,6 +207,13 @@ def _vtk_array(name: str, a: np.ndarray, components: int = 1, count: str = "Numb
     return f'<DataArray type="{vtk_type}" Name={quoteattr(name)} {count}="{components}" format="binary">{payload}</DataArray>'
 
 
+def _vtk_strings(name: str, values: Sequence[str]) -> str:
+    """A field data array of strings, as VTK's XML writer writes one in ASCII: each string's
+    UTF-8 bytes as numbers, each string ended by a 0."""
+    codes = " ".join(" ".join(str(b) for b in v.encode("utf-8")) + " 0" for v in values)
+    return f'<Array type="String" Name={quoteattr(name)} NumberOfTuples="{len(values)}" format="ascii">{codes}</Array>'
+
+
 def _cells(cells: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """The connectivity and offsets arrays of a list of cells (each an array of point indices)."""
     if not cells:
@@ -226,18 +227,20 @@ def _polydata(
     cell_data: Sequence[str] = (),
     field_data: Sequence[str] = (),
     attributes: str = "",
+    declared: Sequence[str] = ("Verts", "Lines", "Strips", "Polys"),
     **cells: tuple[np.ndarray, np.ndarray],
 ) -> str:
     """An XML PolyData file (one Piece): ``points`` (n, 3) float64, the DataArrays of
     ``point_data``, ``cell_data`` and ``field_data``, ``attributes`` of <PointData> (the
     active ``Scalars`` and ``Vectors``), and the cells ``verts``, ``lines``, ``polys`` as
-    (connectivity, offsets) pairs.
+    (connectivity, offsets) pairs; the <Piece> states the counts of the kinds ``declared``
+    (VTK takes a count left out as 0).
 
     The <FieldData> comes after the Piece: VTK reads it anywhere in <PolyData>, but OVITO's
     format check walks from <VTKFile> to the first <Piece> and gives up at the end of a
     DataArray before it, so a frame with its FieldData first is not recognised (and an OVITO
     .pvd import silently loads no particles)."""
-    counts = {name: len(cells[name.lower()][1]) if name.lower() in cells else 0 for name in ("Verts", "Lines", "Strips", "Polys")}
+    counts = {name: len(cells[name.lower()][1]) if name.lower() in cells else 0 for name in declared}
     lines = [
         '<?xml version="1.0"?>',
         '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
@@ -260,10 +263,29 @@ def _polydata(
     return "\n".join(lines) + "\n"
 
 
-def _vtp(fr: Frames, i: int) -> str:
+class _Extras:
+    """What a trajectory adds to its particles beyond ``Frames``, computed once before the
+    files: the type names and each particle's type (``None`` without species), the colours
+    (``particle_colors``; ``None`` without) and the springs as pairs of columns
+    (``spring_columns``; ``None`` without)."""
+
+    def __init__(self, traj: Any, fr: Frames) -> None:
+        self.names, self.typeid = particle_types(traj, fr.n_particles) if getattr(traj, "species", None) is not None else (None, None)
+        # every reader takes a name as one word (XYZ's columns, a PLY comment, a CSV field)
+        for name in self.names or []:
+            if not re.fullmatch(_checks.SPECIES_PATTERN, name):
+                raise ValueError(f"species: {name!r} is invalid: a species name is one word of letters, digits and _ . + -")
+        self.colors = particle_colors(traj, fr.n_particles)
+        springs = spring_columns(traj, fr)
+        self.springs = springs if springs.size else None
+
+
+def _vtp(fr: Frames, i: int, extras: _Extras) -> str:
     """Frame ``i``: the particles alive at it as points and vertex cells, point data ``v``
     (velocity), ``speed``, ``radius``, ``mass``, ``id`` (the names OVITO maps to Velocity,
-    Radius, Mass and Particle Identifier; ParaView takes ``v`` as the active vectors), the
+    Radius, Mass and Particle Identifier; ParaView takes ``v`` as the active vectors),
+    ``type`` (the index of the particle's species in the field ``type_names``) and ``Color``
+    (r g b in [0, 1], the name OVITO maps to its Color) where the trajectory has them, the
     field ``TimeValue``."""
     live = fr.live(i)
     n = live.size
@@ -274,15 +296,48 @@ def _vtp(fr: Frames, i: int) -> str:
     if fr.masses is not None:
         point_data.append(_vtk_array("mass", fr.masses[live]))
     point_data.append(_vtk_array("id", fr.ids[live]))
+    field_data = [_vtk_array("TimeValue", np.array([fr.t[i]]), 1, "NumberOfTuples")]
+    if extras.names is not None:
+        point_data.append(_vtk_array("type", extras.typeid[live]))
+        field_data.append(_vtk_strings("type_names", extras.names))
+    if extras.colors is not None:
+        point_data.append(_vtk_array("Color", extras.colors[live], 3))
     # One vertex cell per particle, so that ParaView draws the points without a filter (and
     # OVITO reads the file as particles: as many vertices as points, no other cells).
     cells = np.arange(n, dtype=np.int64)
-    return _polydata(
-        x,
-        point_data,
-        field_data=[_vtk_array("TimeValue", np.array([fr.t[i]]), 1, "NumberOfTuples")],
-        attributes=' Scalars="speed" Vectors="v"',
-        verts=(cells, cells + 1),
+    return _polydata(x, point_data, field_data=field_data, attributes=' Scalars="speed" Vectors="v"', verts=(cells, cells + 1))
+
+
+def _springs_vtp(fr: Frames, i: int, springs: np.ndarray, rest: np.ndarray) -> str:
+    """The springs of frame ``i`` whose two ends are alive: one line cell per spring between
+    its own two points (the ends' positions, m), the cell data ``id1`` and ``id2`` the ends'
+    ids. This is the layout of a contact network beside a particles file (Aspherix's), which
+    OVITO reads as lines between particle ids; a particle file with line cells it does not
+    open at all. The <Piece> states the numbers of points and lines only: OVITO takes a file
+    that states as many vertices as points for particles.
+
+    A frame in which no spring has both ends alive holds one line of zero length at ``rest``
+    (the middle of the scene) with ``id1`` = ``id2`` = -1: OVITO 3.17 dies of a floating
+    point exception on a file of no lines, and keeps the previous frame's lines where the
+    frame has no springs file."""
+    rows = live_springs(springs, fr, i)
+    if not len(rows):
+        none = np.array([-1], dtype=np.int64)
+        points, id1, id2 = np.stack([rest, rest]), none, none
+    else:
+        ends = fr.live(i)[rows]  # (K, 2) columns
+        points, id1, id2 = fr.positions[i][ends.reshape(-1)], fr.ids[ends[:, 0]], fr.ids[ends[:, 1]]
+    k = np.arange(len(points), dtype=np.int64)
+    return _polydata(points, cell_data=[_vtk_array("id1", id1), _vtk_array("id2", id2)], declared=("Lines",), lines=(k, k[1::2] + 1))
+
+
+def _vtm(particles: str, springs: str) -> str:
+    """A multi-block file of one frame: block 0 ``particles`` (the frame's .vtp), block 1
+    ``springs`` (its springs' .vtp)."""
+    return (
+        '<?xml version="1.0"?>\n<VTKFile type="vtkMultiBlockDataSet" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n'
+        f'<vtkMultiBlockDataSet>\n<DataSet index="0" name="particles" file={quoteattr(particles)}/>\n'
+        f'<DataSet index="1" name="springs" file={quoteattr(springs)}/>\n</vtkMultiBlockDataSet>\n</VTKFile>\n'
     )
 
 
@@ -419,15 +474,25 @@ def _colliders_vtp(traj: Any, fr: Frames) -> str | None:
 
 
 def _write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    folder, stem, pattern = _series(path, "vtk", ".vtp")
+    folder, stem, _ = _series(path, "vtk", ".vtp")
+    # the frames, and with springs their springs files and the multi-block files of both
+    pattern = rf"{re.escape(stem)}(_springs)?_\d{{{_DIGITS},}}\.(vtp|vtm)"
     pvd = path.with_name(stem + ".pvd")
     colliders = path.with_name(stem + "_colliders.vtp")
     scenery = _colliders_vtp(traj, fr)  # before anything is written: a bad collider is a ValueError
+    extras = _Extras(traj, fr)
+    middle = np.zeros(3)  # where a frame without springs puts its line of zero length
+    if extras.springs is not None:
+        cell = trajectory_cell(traj, fr)
+        middle = 0.5 * (cell.lo + cell.hi)
     names = [f"{stem}_{i:0{_DIGITS}d}.vtp" for i in range(fr.n_frames)]
-    datasets = "\n".join(f'<DataSet timestep="{float(fr.t[i])!r}" part="0" file={quoteattr(f"{folder.name}/{name}")}/>' for i, name in enumerate(names))
+    # With springs each frame is a multi-block file (.vtm) of its particles and its springs.
+    entries = names if extras.springs is None else [f"{stem}_{i:0{_DIGITS}d}.vtm" for i in range(fr.n_frames)]
+    datasets = "\n".join(f'<DataSet timestep="{float(fr.t[i])!r}" part="0" file={quoteattr(f"{folder.name}/{name}")}/>' for i, name in enumerate(entries))
     collection = (
         f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="1.0" byte_order="LittleEndian">\n<Collection>\n{datasets}\n</Collection>\n</VTKFile>\n'
     )
+    written: list[Path] = []
     # Everything is written under temporary names first: the frames, the colliders, the
     # collection that points at the frames; only then are they put in place, the .pvd last.
     # A write that fails leaves nothing new, and an earlier export (its .pvd, its series and
@@ -438,26 +503,42 @@ def _write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]
         tmp = out.folder(folder, pattern)
         with out.naming(folder):
             for i, name in enumerate(names):
-                (tmp / name).write_text(_vtp(fr, i), encoding="ascii")
+                (tmp / name).write_text(_vtp(fr, i, extras), encoding="ascii")
+                if extras.springs is not None:
+                    spring_name = f"{stem}_springs_{i:0{_DIGITS}d}.vtp"
+                    (tmp / spring_name).write_text(_springs_vtp(fr, i, extras.springs, middle), encoding="ascii")
+                    (tmp / entries[i]).write_text(_vtm(name, spring_name), encoding="utf-8")
+                    written += [folder / entries[i], folder / name, folder / spring_name]
+                else:
+                    written.append(folder / name)
                 on_frame(i)
         if tmp_colliders is not None:
             with out.naming(colliders):
                 tmp_colliders.write_text(scenery, encoding="ascii")
         with out.naming(pvd):
             tmp_pvd.write_text(collection, encoding="utf-8")
-    return [pvd, *([colliders] if scenery is not None else []), *(folder / name for name in names)]
+    return [pvd, *([colliders] if scenery is not None else []), *written]
 
 
 # -- PLY ----------------------------------------------------------------------------------------
 
 
-def _ply(fr: Frames, i: int) -> bytes:
-    """Frame ``i`` as a binary little-endian PLY of vertices, one per particle alive at it
-    (float32 x y z vx vy vz radius, int32 id): the types Blender's and Houdini's importers
-    read; extra properties are kept as point attributes."""
+def _ply(fr: Frames, i: int, extras: _Extras) -> bytes:
+    """Frame ``i`` as a binary little-endian PLY: one vertex per particle alive at it, float32
+    x y z vx vy vz radius, uchar red green blue (the colour, where the trajectory has
+    colours), int32 type (the index of its species in the ``comment type <index> <name>``
+    lines, where it has species) and int32 id, the types Blender's and Houdini's importers
+    read (Blender keeps the other properties as point attributes and red green blue as the
+    colour attribute ``Col``); then, where the trajectory has springs, one edge per spring
+    whose two ends are alive, int32 vertex1 vertex2 (its ends' vertex indices), which
+    Blender imports as the mesh's edges."""
     columns = [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("vx", "<f4"), ("vy", "<f4"), ("vz", "<f4")]
     if fr.radii is not None:
         columns.append(("radius", "<f4"))
+    if extras.colors is not None:
+        columns += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
+    if extras.names is not None:
+        columns.append(("type", "<i4"))
     columns.append(("id", "<i4"))
     live = fr.live(i)
     rows = np.empty(live.size, dtype=columns)
@@ -466,26 +547,36 @@ def _ply(fr: Frames, i: int) -> bytes:
         rows["v" + axis] = fr.velocities[i, live, k]
     if fr.radii is not None:
         rows["radius"] = fr.radii[live]
+    if extras.colors is not None:
+        rgb = colors_uint8(extras.colors[live])
+        for k, name in enumerate(("red", "green", "blue")):
+            rows[name] = rgb[:, k]
+    if extras.names is not None:
+        rows["type"] = extras.typeid[live]
     rows["id"] = fr.ids[live]
-    ply_type = {"<f4": "float", "<i4": "int"}
+    edges = None if extras.springs is None else live_springs(extras.springs, fr, i).astype("<i4")
+    ply_type = {"<f4": "float", "<i4": "int", "u1": "uchar"}
     header = [
         "ply",
         "format binary_little_endian 1.0",
         "comment kinema trajectory frame, SI units (m, m/s)",
         f"comment time {float(fr.t[i])!r}",
+        *(f"comment type {k} {name}" for k, name in enumerate(extras.names or [])),
         f"element vertex {live.size}",
         *(f"property {ply_type[t]} {name}" for name, t in columns),
+        *([f"element edge {len(edges)}", "property int vertex1", "property int vertex2"] if edges is not None else []),
         "end_header",
     ]
-    return ("\n".join(header) + "\n").encode("ascii") + rows.tobytes()
+    return ("\n".join(header) + "\n").encode("ascii") + rows.tobytes() + (edges.tobytes() if edges is not None else b"")
 
 
 def _write_ply(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
     folder, stem, pattern = _series(path, "ply", ".ply")
+    extras = _Extras(traj, fr)
     names = [f"{stem}_{i:0{_DIGITS}d}.ply" for i in range(fr.n_frames)]
     with atomic_folder(folder, pattern) as tmp:
         for i, name in enumerate(names):
-            (tmp / name).write_bytes(_ply(fr, i))
+            (tmp / name).write_bytes(_ply(fr, i, extras))
             on_frame(i)
     return [folder / name for name in names]
 
@@ -493,42 +584,56 @@ def _write_ply(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]
 # -- text ---------------------------------------------------------------------------------------
 
 
-def _xyz(fr: Frames, i: int, header: str, species: list[str]) -> str:
-    # species: each particle's leading columns ("X"; or its type and its element symbol)
+def _xyz(fr: Frames, i: int, header: str, first: list[str], after_pos: list[str], colors: np.ndarray | None) -> str:
     """Frame ``i`` of an extended XYZ file: the count, the comment line (``header`` and the
-    frame's ``Time``), one row per particle alive at it: its species name, then the columns
-    of ``Properties``: pos, velo, momenta, radius, mass, masses, id (those the trajectory
-    has; 17 significant digits, exact float64)."""
+    frame's ``Time``), one row per particle alive at it: the columns of ``Properties``, its
+    ``first`` word (its type or species name), pos, its ``after_pos`` word (its ``species``
+    symbol; empty without), velo, momenta, radius, mass, masses, color, id (those the
+    trajectory has; 17 significant digits, exact float64)."""
     live = fr.live(i)
     v = fr.velocities[i][live]
     masses = None if fr.masses is None else fr.masses[live][:, None]
-    cols = [fr.positions[i][live], v]
+    cols = [v]
     if masses is not None:
         cols.append(masses * v)
     if fr.radii is not None:
         cols.append(fr.radii[live][:, None])
     if masses is not None:
         cols += [masses, masses]
-    table = np.hstack(cols).tolist()
-    lead = [species[k] for k in live]
-    rows = "".join(f"{s} " + " ".join(map(repr, r)) + f" {int(k)}\n" for s, r, k in zip(lead, table, fr.ids[live], strict=True))
+    if colors is not None:
+        cols.append(colors[live])
+    pos, rest = fr.positions[i][live].tolist(), np.hstack(cols).tolist()
+    rows = "".join(
+        f"{first[c]} " + " ".join(map(repr, x)) + after_pos[c] + " " + " ".join(map(repr, r)) + f" {int(k)}\n"
+        for c, x, r, k in zip(live, pos, rest, fr.ids[live], strict=True)
+    )
     return f"{live.size}\n{header} Time={float(fr.t[i])!r}\n{rows}"
 
 
 def _write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
     # A trajectory's species names go to a `type` column, first: OVITO takes the first of
-    # `type` and `species` as its Particle Type. ASE reads `species` as chemical symbols and
-    # refuses other words ("grain"), so that column holds the name where it is an element's
-    # symbol and X (ASE's dummy element) where not; ASE keeps `type` in atoms.arrays.
-    names, typeid = particle_types(traj, fr.n_particles)
-    typed = getattr(traj, "species", None) is not None
-    for name in names if typed else []:
-        if not re.fullmatch(_checks.SPECIES_PATTERN, name):
-            raise ValueError(f"species: {name!r} is invalid: a species name is one word of letters, digits and _ . + -")
-    lead = [f"{name} {name if name in _ELEMENTS else 'X'}" for name in names] if typed else ["X"]
-    species = [lead[k] for k in typeid] if typed else ["X"] * fr.n_particles
-    has_m, has_r = fr.masses is not None, fr.radii is not None
-    props = "type:S:1:" * typed + "species:S:1:pos:R:3:velo:R:3" + ":momenta:R:3" * has_m + ":radius:R:1" * has_r + ":mass:R:1:masses:R:1" * has_m + ":id:I:1"
+    # `type` and `species` as its Particle Type, and MDAnalysis's XYZ reader takes a row as a
+    # name and x y z, so the positions come second. ASE reads `species` as chemical symbols
+    # and refuses other words ("grain"), so that column, after the positions, holds the name
+    # where it is an element's symbol and X (ASE's dummy element) where not; ASE keeps `type`
+    # in atoms.arrays.
+    extras = _Extras(traj, fr)
+    typed = extras.names is not None
+    if typed:
+        first = [extras.names[t] for t in extras.typeid]
+        after_pos = [f" {name if name in ELEMENTS else 'X'}" for name in first]
+    else:
+        first, after_pos = ["X"] * fr.n_particles, [""] * fr.n_particles
+    has_m, has_r, has_c = fr.masses is not None, fr.radii is not None, extras.colors is not None
+    props = (
+        ("type:S:1:pos:R:3:species:S:1" if typed else "species:S:1:pos:R:3")
+        + ":velo:R:3"
+        + ":momenta:R:3" * has_m
+        + ":radius:R:1" * has_r
+        + ":mass:R:1:masses:R:1" * has_m
+        + ":color:R:3" * has_c
+        + ":id:I:1"
+    )
     cell = trajectory_cell(traj, fr)
     origin, edges, pbc = cell.lo, cell.hi - cell.lo, cell.periodic
     lattice = " ".join(repr(float(c)) for c in np.diag(edges).reshape(-1))
@@ -537,29 +642,41 @@ def _write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]
     )
     with atomic_file(path) as tmp, open(tmp, "w", encoding="ascii") as f:
         for i in range(fr.n_frames):
-            f.write(_xyz(fr, i, header, species))
+            f.write(_xyz(fr, i, header, first, after_pos, extras.colors))
             on_frame(i)
     return [path]
 
 
-def _csv_header(fr: Frames) -> str:
-    return "frame,time,id,x,y,z,vx,vy,vz" + ",mass" * (fr.masses is not None) + ",radius" * (fr.radii is not None)
+def _csv_header(fr: Frames, extras: _Extras) -> str:
+    return (
+        "frame,time,id,x,y,z,vx,vy,vz"
+        + ",mass" * (fr.masses is not None)
+        + ",radius" * (fr.radii is not None)
+        + ",species" * (extras.names is not None)
+        + ",r,g,b" * (extras.colors is not None)
+    )
 
 
-def _csv(fr: Frames, i: int) -> str:
+def _csv(fr: Frames, i: int, extras: _Extras) -> str:
     """The rows of frame ``i``, one per particle alive at it: frame,time,id,x,y,z,vx,vy,vz,
-    then mass and radius where the trajectory has them (17 significant digits)."""
+    then mass, radius, species (its name) and r,g,b (its colour in [0, 1]) where the
+    trajectory has them (17 significant digits)."""
     t = repr(float(fr.t[i]))
     live = fr.live(i)
     cols = [fr.positions[i][live], fr.velocities[i][live], *(a[live][:, None] for a in (fr.masses, fr.radii) if a is not None)]
     table = np.hstack(cols).tolist()
-    return "".join(f"{i},{t},{int(k)}," + ",".join(map(repr, r)) + "\n" for r, k in zip(table, fr.ids[live], strict=True))
+    names = [f",{extras.names[k]}" for k in extras.typeid[live]] if extras.names is not None else [""] * live.size
+    colors = [",".join(["", *map(repr, c)]) for c in extras.colors[live].tolist()] if extras.colors is not None else [""] * live.size
+    return "".join(
+        f"{i},{t},{int(k)}," + ",".join(map(repr, r)) + name + rgb + "\n" for r, k, name, rgb in zip(table, fr.ids[live], names, colors, strict=True)
+    )
 
 
 def _write_csv(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
+    extras = _Extras(traj, fr)
     with atomic_file(path) as tmp, open(tmp, "w", encoding="ascii", newline="") as f:
-        f.write(_csv_header(fr) + "\n")
+        f.write(_csv_header(fr, extras) + "\n")
         for i in range(fr.n_frames):
-            f.write(_csv(fr, i))
+            f.write(_csv(fr, i, extras))
             on_frame(i)
     return [path]
