@@ -196,6 +196,39 @@ def _guarded(fn):
     return wrapper
 
 
+_UNITS_HELP = (
+    "Units of a file that does not say them (a LAMMPS dump or data file without its units, a HOOMD GSD file, an XYZ file not in ASE's units): "
+    "real, metal, si, cgs, electron, micro, nano (LAMMPS's styles), ase, or length=M,time=S,mass=KG (the file's units in SI)."
+)
+_TRAJ_HELP = (
+    "A trajectory file: H5MD (.h5), extended XYZ (.xyz), GSD (.gsd), a LAMMPS dump (.lammpstrj) or data file (.data), "
+    "or kinema's CSV, VTK (.pvd) or PLY series export."
+)
+
+
+def _load(path: Path, units: str | None):
+    """The trajectory in ``path``, any format kinema reads (``Trajectory.load``), with the
+    ``--units`` given: a name, or length=M,time=S,mass=KG."""
+    from .trajectory import Trajectory
+
+    given: str | dict[str, float] | None = units
+    if units is not None and "=" in units:
+        given = {}
+        for item in units.split(","):
+            key, _, value = item.partition("=")
+            try:
+                given[key.strip()] = float(value)
+            except ValueError:
+                raise ValueError(f"--units {units!r}: {item!r} is invalid: give a name or length=M,time=S,mass=KG with numbers") from None
+    try:
+        return Trajectory.load(path, units=given)
+    except ValueError as e:
+        text = str(e)
+        if text.startswith("units"):  # the units refused: said of the option
+            raise ValueError(f"--units {units!r}: {text.split(' is invalid: ', 1)[1] if ' is invalid: ' in text else text.split(': ', 1)[-1]}") from None
+        raise
+
+
 @app.command()
 @_guarded
 def run(
@@ -223,20 +256,21 @@ def run(
 @app.command()
 @_guarded
 def render(
-    traj: Annotated[Path, typer.Argument(help="Trajectory file (H5MD, from kinema run or Trajectory.save).")],
+    traj: Annotated[Path, typer.Argument(help=_TRAJ_HELP)],
     out: Annotated[Path, typer.Option("--out", "-o", help="Video to write: .mp4 (H.264) or .gif.")],
     fps: Annotated[float | None, typer.Option(help="Frames per second (default: real time).")] = None,
     width: Annotated[int, typer.Option(help="Width, pixels.")] = 640,
     height: Annotated[int, typer.Option(help="Height, pixels.")] = 480,
     color_by: Annotated[str, typer.Option(help="speed, id or color (each particle's own: an emitter's color).")] = "speed",
     force: Annotated[bool, typer.Option("--force", help="Render even when the work estimate is over the limits.")] = False,
+    units: Annotated[str | None, typer.Option("--units", help=_UNITS_HELP)] = None,
 ) -> None:
-    """Render a saved trajectory to a video.
+    """Render a saved trajectory to a video: kinema's H5MD or another program's file (XYZ, GSD,
+    LAMMPS dump or data; docs/files.md).
 
     The work is estimated first (frames × pixels, memory); a video over the limits is refused
     unless --force is given."""
     from .render import VIDEO_EXTENSIONS
-    from .trajectory import Trajectory
 
     if out.suffix.lower() not in VIDEO_EXTENSIONS:
         raise ValueError(f"-o {out}: unsupported video format {out.suffix or '(none)'!r}; use .mp4 or .gif")
@@ -250,7 +284,7 @@ def render(
         raise ValueError(f"--width {width} --height {height}: each must be between 16 and 8192 pixels")
     if fps is not None and not (VIDEO_FPS[0] <= fps <= VIDEO_FPS[1]):
         raise ValueError(f"--fps {fps}: give a number of frames per second from {VIDEO_FPS[0]:g} to {VIDEO_FPS[1]:g}")
-    t = Trajectory.load(traj)
+    t = _load(traj, units)
     frames, n = t.positions.shape[:2]
     pixels = float(frames) * width * height
     memory = frames * n * (FRAME_BYTES + RENDER_BYTES)
@@ -268,7 +302,7 @@ def render(
 @app.command()
 @_guarded
 def export(
-    traj: Annotated[Path, typer.Argument(help="Trajectory file (H5MD).")],
+    traj: Annotated[Path, typer.Argument(help=_TRAJ_HELP)],
     format: Annotated[
         str,
         typer.Option(
@@ -279,8 +313,10 @@ def export(
         Path | None,
         typer.Option("--out", "-o", help="Main output file; missing folders are created (default: beside TRAJ, named as below)."),
     ] = None,
+    units: Annotated[str | None, typer.Option("--units", help=_UNITS_HELP)] = None,
 ) -> None:
-    """Export a saved trajectory for other programs.
+    """Export a saved trajectory for other programs (TRAJ: kinema's H5MD or any file kinema
+    reads, docs/files.md; the exports are in SI units).
 
     Beside TRAJ (run.h5) unless -o names another file: vtk writes run.pvd (open it in
     ParaView or OVITO), its frames in the folder run_vtk/ and the colliders in
@@ -292,7 +328,6 @@ def export(
     from .io import FORMATS
     from .io import export as write_export
     from .io.exports import SUFFIX, default_path, suffix_format
-    from .trajectory import Trajectory
 
     if format not in FORMATS:
         raise ValueError(f"--format {format!r}: use one of {', '.join(FORMATS)}")
@@ -305,7 +340,7 @@ def export(
                 f"-o {out}: the suffix {out.suffix} is for --format {other}, not --format {format}; name the file {out.with_suffix(SUFFIX[format]).name}"
             )
     path = out if out is not None else default_path(traj, format)
-    t = Trajectory.load(traj)
+    t = _load(traj, units)
     if path.exists() and os.path.samefile(path, traj):
         raise ValueError(f"-o {path}: is the trajectory being exported; name another file")
     if not path.parent.is_dir():  # as `kinema run -o` makes its folder
@@ -372,11 +407,12 @@ def sweep(
 @app.command()
 @_guarded
 def view(
-    source: Annotated[Path, typer.Argument(help="A trajectory file (H5MD) or a scene (.toml, run first).")],
+    source: Annotated[Path, typer.Argument(help="A scene (.toml, run first) or a trajectory file: " + _TRAJ_HELP[2:])],
     html: Annotated[Path | None, typer.Option("--html", help="Write one self-contained page that plays offline, and exit.")] = None,
     port: Annotated[int, typer.Option(help="Port on 127.0.0.1 (0: a free one).")] = 0,
     no_browser: Annotated[bool, typer.Option("--no-browser", help="Do not open a browser.")] = False,
     force: Annotated[bool, typer.Option("--force", help="Simulate a scene even when the work estimate is over the limits.")] = False,
+    units: Annotated[str | None, typer.Option("--units", help=_UNITS_HELP)] = None,
 ) -> None:
     """Play a trajectory in the browser (three.js): play/pause, scrub, speed, orbit camera, colouring.
 
@@ -384,16 +420,15 @@ def view(
     exits 0; with --html, writes the page to a file instead."""
     import time
 
-    from .trajectory import Trajectory
     from .viewer import BundleMissingError, serve, write_html
 
     if not 0 <= port <= 65535:
         raise ValueError(f"--port {port}: use 0 (a free port) or a port from 1 to 65535")
-    if not source.exists():
-        raise ValueError(f"{source}: no such file")
-    if source.is_dir():
-        raise ValueError(f"{source}: is a directory; give a trajectory (.h5) or a scene (.toml)")
     if source.suffix.lower() == ".toml":
+        if not source.exists():
+            raise ValueError(f"{source}: no such file")
+        if source.is_dir():
+            raise ValueError(f"{source}: is a directory; give a scene (.toml) or a trajectory file")
         from .scene import Scene
 
         sc = Scene.from_toml(source)
@@ -405,7 +440,7 @@ def view(
             task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
             traj = world.run(settings.duration, fps=settings.fps, callback=lambda w: bar.advance(task), max_work=None)
     else:
-        traj = Trajectory.load(source)
+        traj = _load(source, units)  # (a missing file or a folder: its one-line refusal)
     if html is not None:
         path = write_html(traj, html)
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)

@@ -259,6 +259,52 @@ class World(WorldCollisions):
         names = self._species_names(species, n)
         return self._add(x, v, m, r, p, e, mu, names)
 
+    def add_particles_from(
+        self,
+        path: Any,
+        frame: int = -1,
+        units: Any = None,
+        *,
+        format: str | None = None,
+        atom_style: str | None = None,
+        translate: Any = None,
+        velocity: Any = None,
+        mass: Any = 1.0,
+        radius: Any = 0.0,
+        species: Any = None,
+        pinned: Any = None,
+        restitution: Any = None,
+        friction: Any = None,
+    ) -> np.ndarray:
+        """Add the particles of frame ``frame`` (-1: the last) of a trajectory file; returns
+        their indices, as :meth:`add_particles` does.
+
+        ``path``: any file ``Trajectory.load`` reads (kinema's H5MD and exports, extended XYZ,
+        GSD, a LAMMPS dump or data file; docs/files.md), read in SI units: ``units`` for a file
+        that does not say its own (a LAMMPS style such as ``"real"``, ``"ase"``, or
+        {"length": m, "time": s, "mass": kg}), ``format`` and ``atom_style`` as
+        ``Trajectory.load`` takes them. The particles alive at that frame are added in the order
+        of their ids, at their positions plus ``translate`` (a (3,) vector, m), each with the
+        file's velocity, mass, radius and species where the file has them; where it has none,
+        ``velocity`` (default 0), ``mass`` (default 1 kg), ``radius`` (default 0) and
+        ``species`` are used, checked as :meth:`add_particles` checks them, as are
+        ``pinned``, ``restitution`` and ``friction``. A 2D world takes a file whose z are 0.
+        The file's box, colliders and springs are not added: they are the world's own."""
+        from .io.readers import particles_from
+
+        got = particles_from(path, frame, units, format=format, atom_style=atom_style)
+        x = got["positions"]
+        if translate is not None:
+            shift = _checks.real_array("translate", translate)
+            if shift.shape != (3,):
+                raise ValueError(f"translate has shape {shift.shape}; it must be a (3,) vector, m")
+            x = x + shift
+        v = got["velocities"] if got["velocities"] is not None else velocity
+        m = got["masses"] if got["masses"] is not None else mass
+        r = got["radii"] if got["radii"] is not None else radius
+        names = got["species"] if got["species"] is not None else species
+        return self.add_particles(x, v, m, r, pinned=pinned, restitution=restitution, friction=friction, species=names)
+
     def _add(self, x, v, m, r, p, e, mu, names, death=None, color=None) -> np.ndarray:
         """Adds checked particles with their species names, times of death and colours."""
         n = len(m)

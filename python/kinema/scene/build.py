@@ -19,6 +19,7 @@ from .tables import (
     BoxCollider,
     DragForce,
     EmitterTable,
+    FileBlock,
     GravityForce,
     Isotropic,
     KillBoxTable,
@@ -42,7 +43,7 @@ def build(scene: Scene, source: str = "<scene>") -> World:
         where = f"{source}: particles[{b}]"
         try:
             x, v, m, r, p, e, mu = _particles(block, dim)
-            idx = w.add_particles(x, v, m, r, p, e, mu, species=block.species)
+            idx = w.add_particles(x, v, m, r, p, e, mu, species=_species(block))
         except ValueError as err:
             raise SceneError(f"{where}: {err}") from None
         starts.append((int(idx[0]), int(idx[-1]) + 1))
@@ -117,6 +118,9 @@ def _rng(seed: int, stream: int) -> np.random.Generator:
 
 
 def _positions(block: Any, dim: int) -> np.ndarray:
+    if isinstance(block, FileBlock):
+        x = block.particles()["positions"]
+        return x + np.asarray(_v3(block.translate)) if block.translate is not None else x.copy()
     if isinstance(block, ListBlock):
         return np.array([_v3(p) for p in block.positions])
     if isinstance(block, LatticeBlock):
@@ -165,13 +169,27 @@ def _per_particle(name: str, value: Any, n: int, rng: np.random.Generator) -> np
     return np.broadcast_to(arr, (n,)).copy()
 
 
+def _species(block: Any) -> Any:
+    """The block's species: a file block's from its file where it has them."""
+    if isinstance(block, FileBlock) and block.particles()["species"] is not None:
+        return block.particles()["species"]
+    return block.species
+
+
 def _particles(block: Any, dim: int) -> tuple:
     x = _positions(block, dim)
     n = len(x)
     m = _per_particle("mass", block.mass, n, _rng(block.seed, 1))
     r = _per_particle("radius", block.radius, n, _rng(block.seed, 2))
+    # A file block: the file's masses, radii and velocities where it has them, the block's keys
+    # where it has none.
+    read = block.particles() if isinstance(block, FileBlock) else {}
+    m = read["masses"] if read.get("masses") is not None else m
+    r = read["radii"] if read.get("radii") is not None else r
     vel = block.velocity
-    if vel is None:
+    if read.get("velocities") is not None:
+        v = read["velocities"]
+    elif vel is None:
         v = np.zeros((n, 3))
     elif isinstance(vel, Maxwell):
         rng = _rng(block.seed if vel.seed is None else vel.seed, 3)

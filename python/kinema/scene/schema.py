@@ -27,6 +27,7 @@ from .tables import (
     CollisionsTable,
     DragForce,
     EmitterTable,
+    FileBlock,
     ForceItem,
     GravityForce,
     KillItem,
@@ -116,7 +117,14 @@ class Scene(_Model):
             text = data.decode("utf-8")
         except UnicodeDecodeError as e:
             raise SceneError(f"{path}: cannot be read ({e})") from None
-        return cls.from_string(text, source=str(path))
+        scene = cls.from_string(text, source=str(path))
+        # A file block's relative path names a file beside the scene file: made absolute here,
+        # so that the scene builds from any working folder and writes back (to_toml) as one
+        # that does.
+        for block in scene.particles:
+            if isinstance(block, FileBlock) and not os.path.isabs(block.path):
+                block.path = os.path.abspath(os.path.join(path.parent, block.path))
+        return scene
 
     @classmethod
     def from_string(cls, text: str, source: str = "<scene>") -> Scene:
@@ -143,8 +151,16 @@ class Scene(_Model):
 
     # size --------------------------------------------------------------------------------
     def particle_count(self) -> int:
-        """How many particles ``build`` makes, counted without making them."""
-        return sum(block_size(b) for b in self.particles)
+        """How many particles ``build`` makes, counted without making them (a file block's file
+        is read, once: its frame's particles are counted). A file that cannot be read is a
+        ``SceneError`` naming the block."""
+        total = 0
+        for k, b in enumerate(self.particles):
+            try:
+                total += block_size(b)
+            except ValueError as e:
+                raise SceneError(f"particles[{k}]: {e}") from None
+        return total
 
     def emitted_count(self, seconds: float) -> int:
         """How many particles the emitters give in the first ``seconds`` of a run (births at
@@ -192,11 +208,14 @@ class Scene(_Model):
 
 
 def block_size(block: Any) -> int:
-    """The particles of one [[particles]] block, counted without making them."""
+    """The particles of one [[particles]] block, counted without making them (a file block reads
+    its file; a ``ValueError`` when it cannot)."""
     if isinstance(block, ListBlock):
         return len(block.positions)
     if isinstance(block, LatticeBlock):
         return math.prod(block.counts)
+    if isinstance(block, FileBlock):
+        return len(block.particles()["positions"])
     return block.count
 
 
@@ -352,6 +371,7 @@ _TAGGED = {
         ListBlock,
         LatticeBlock,
         RandomBlock,
+        FileBlock,
         GravityForce,
         DragForce,
         SpringForce,

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, field_validator, model_validator
 
 from .. import _checks, _core
 from ..ode import method_names
@@ -251,7 +251,68 @@ class RandomBlock(_Block):
         return self
 
 
-Block = _typed(ListBlock, LatticeBlock, RandomBlock)
+class ScalesTable(_Model):
+    """A file's units given as their SI values: one unit of length in m, of time in s, of mass in kg."""
+
+    length: Positive
+    time: Positive
+    mass: Positive
+
+
+# the formats a file block reads (kinema.io.readers.READ_FORMATS) and a LAMMPS data file's atom styles (read_lammps.ATOM_STYLES)
+FileFormat = Literal["h5md", "xyz", "gsd", "lammps", "lammps-data", "csv", "vtk", "ply"]
+AtomStyle = Literal["atomic", "charge", "bond", "angle", "molecular", "full", "sphere"]
+
+
+FileUnits = Annotated[
+    Annotated[str, Tag("~scalar")] | Annotated[ScalesTable, Tag("~dict")],
+    Discriminator(_kind, custom_error_type="kind", custom_error_message="give a unit style's name or a table {length = m, time = s, mass = kg}"),
+]
+
+
+class FileBlock(_Block):
+    """The particles of one frame of a trajectory file (``World.add_particles_from``): their
+    positions (+ ``translate``), and their velocities, masses, radii and species where the file
+    has them (else the block's own keys)."""
+
+    type: Literal["file"] = "file"
+    path: Annotated[str, Field(min_length=1)]
+    frame: int = -1
+    units: FileUnits | None = None
+    format: FileFormat | None = None
+    atom_style: AtomStyle | None = None
+    translate: Vec | None = None
+    _read: dict[str, Any] | None = PrivateAttr(default=None)  # the particles read, for counting and building
+
+    @field_validator("units")
+    @classmethod
+    def _known_units(cls, v: Any) -> Any:
+        from ..io.units import scales
+
+        if isinstance(v, str):
+            try:
+                scales(v, "units")
+            except ValueError as e:
+                raise ValueError(str(e).split(" is invalid: ", 1)[-1]) from None
+        return v
+
+    def particles(self) -> dict[str, Any]:
+        """The particles the block takes from its file (``kinema.io.readers.particles_from``),
+        read once (a relative ``path``: from the working folder; ``Scene.from_toml`` makes it
+        relative to the scene file's folder). Raises ``ValueError``, one line naming ``path``
+        and why the file cannot be read."""
+        if self._read is None:
+            from ..io.readers import particles_from
+
+            units = self.units.model_dump() if isinstance(self.units, ScalesTable) else self.units
+            try:
+                self._read = particles_from(self.path, self.frame, units, format=self.format, atom_style=self.atom_style)
+            except (ValueError, TypeError) as e:
+                raise ValueError(f"path = {self.path!r}: {str(e).strip().splitlines()[0]}") from None
+        return self._read
+
+
+Block = _typed(ListBlock, LatticeBlock, RandomBlock, FileBlock)
 
 # -- [[forces]] -------------------------------------------------------------------------------
 
