@@ -110,8 +110,8 @@ def test_h5md_2d_round_trip(tmp_path):
     back = load_h5md(save_h5md(traj, tmp_path / "run.h5"))
     np.testing.assert_array_equal(back.alive, traj.alive)
     np.testing.assert_array_equal(back.positions, traj.positions)
-    with h5py.File(tmp_path / "run.h5") as f:
-        assert f["particles/all/position/value"].shape == (F, N, 2)
+    with h5py.File(tmp_path / "run.h5") as f:  # 3D, z = 0 (3D readers read it), dim = 2 a parameter
+        assert f["particles/all/position/value"].shape == (F, N, 3) and f["parameters/kinema"].attrs["dim"] == 2
 
 
 def test_h5md_layout_read_by_h5py(tmp_path, traj):

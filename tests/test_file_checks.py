@@ -29,7 +29,7 @@ from kinema.io import FileWriteError, TrajectoryFileError, export, load_h5md, sa
 h5py = pytest.importorskip("h5py")
 
 F, N = 5, 7
-POS, MASS, RADIUS, SPECIES, BOX = "particles/all/position", "particles/all/mass", "particles/all/radius", "particles/all/species", "particles/all/box"
+POS, MASS, RADIUS, SPECIES, BOX = "particles/all/position", "particles/all/mass", "particles/all/radius", "particles/all/species_index", "particles/all/box"
 
 
 @dataclass
@@ -317,7 +317,7 @@ READ_DAMAGES = {
     "huge radius": (_radius, "dataset 'radii' (/particles/all/radius/value) has radius[3] = 1e+300 (radii must be at most 1e+150 m"),
     "NUL in a species name": (
         _nul_name,
-        "dataset 'species' (/particles/all/species) has names[1] = 'N\\x00e' (species names must be non-empty printable text: no NUL or control characters)",
+        "dataset 'species' (/particles/all/species_index) has names[1] = 'N\\x00e' (species names must be non-empty printable text: no NUL or control characters)",
     ),
     "a control character in a species name": (_control_name, "has names[2] = 'gr\\x07in'"),
     "a tilted open box": (

@@ -13,6 +13,7 @@ import pytest
 import kinema
 from kinema.io import TrajectoryFileError, load_h5md, save_h5md
 from kinema.io.h5md import parse_unit
+from kinema.io.h5md_units import from_si
 
 h5py = pytest.importorskip("h5py")
 
@@ -111,48 +112,46 @@ def _mdanalysis_reader():
     return mda, H5MDReader
 
 
-def _compare_mdanalysis(reader, traj, length, speed, time):
-    """The frames of an H5MDReader against the trajectory, the reader's values being the SI
-    ones times ``length``, ``speed`` and ``time`` (its units); MDAnalysis keeps float32."""
+# MDAnalysis reads float32: the file's value rounded to float32, then its conversion to Å (×10
+# in float32) rounded again, each within half a float32 ulp (2**-24 relative)
+F32 = 2 * 2.0**-24 + 1e-15
+
+
+def _compare_mdanalysis(reader, traj):
+    """The frames of an H5MDReader of ``traj`` saved with units="MD" (nm, ps, nm ps-1), in
+    MDAnalysis's units (Å, ps, Å/ps), float32."""
+    assert reader.units == {"time": "ps", "length": "nm", "velocity": "nm/ps", "force": None}
     assert reader.n_frames == len(traj.t)
     for i, ts in enumerate(reader):
-        np.testing.assert_allclose(ts.positions, traj.positions[i] * length, rtol=1e-6)
-        np.testing.assert_allclose(ts.velocities, traj.velocities[i] * speed, rtol=1e-6)
-        np.testing.assert_allclose(ts.dimensions, [1.0 * length, 2.0 * length, 0.0, 90, 90, 90], rtol=1e-6)
-        assert ts.time == pytest.approx(traj.t[i] * time, rel=1e-12)
-        assert ts.data["step"] == 2 * i and ts.data["kinetic_energy"] == traj.kinetic[i]
+        assert ts.positions.dtype == ts.velocities.dtype == np.float32
+        np.testing.assert_allclose(ts.positions, traj.positions[i] * 1e10, rtol=F32, atol=0)
+        np.testing.assert_allclose(ts.velocities, traj.velocities[i] / 100, rtol=F32, atol=0)  # m/s = 1e10 Å / 1e12 ps
+        np.testing.assert_allclose(ts.dimensions, [1e10, 2e10, 0.0, 90, 90, 90], rtol=F32, atol=0)
+        assert ts.time == traj.t[i] * 1e12  # float64, as written
+        assert ts.data["step"] == 2 * i and ts.data["kinetic_energy"] == from_si(traj.kinetic, "kJ mol-1")[i]
 
 
-def test_mdanalysis_reads_kinema_files(saved):
-    # MDAnalysis converts to Å and ps; its H5MD reader knows no length unit "m" (2.11: its
-    # table has Angstrom, A, nm, pm and fm), so it refuses SI files: skipped, saying so, while
-    # that holds. Should it learn "m", the frames are compared in its units.
+@pytest.mark.filterwarnings("ignore:there is no reference attributes")  # MDAnalysis guessing types for atoms it has none of
+def test_mdanalysis_refuses_si_files_and_reads_md_units(tmp_path):
+    # MDAnalysis's H5MD reader knows no length unit "m" (2.11: its table has Angstrom, A, nm,
+    # pm and fm), with convert_units=False too; save(units="MD") writes nm, ps and nm ps-1,
+    # which it reads and converts to Å and ps.
     mda, H5MDReader = _mdanalysis_reader()
-    traj, path = saved
-    try:
-        reader = H5MDReader(str(path))
-    except RuntimeError as e:
-        if "length unit 'm' is not recognized by H5MDReader" not in str(e):
-            raise
-        pytest.skip(f"MDAnalysis {mda.__version__}'s H5MDReader refuses the SI length unit 'm' (RuntimeError: {e}); kinema writes SI")
-    with reader:
-        _compare_mdanalysis(reader, traj, length=1e10, speed=1e-2, time=1e12)
-
-
-def test_mdanalysis_reads_kinema_layout_given_the_unit_m(saved, monkeypatch):
-    # The rest of MDAnalysis's reading, with "m" added to its table and no conversion (values
-    # in SI): the layout (time-dependent box edges, position, velocity, observables) is read.
-    mda, H5MDReader = _mdanalysis_reader()
-    traj, path = saved
-    monkeypatch.setitem(H5MDReader._unit_translation["length"], "m", "m")
-    with H5MDReader(str(path), convert_units=False) as reader:
-        assert reader.units == {"time": "s", "length": "m", "velocity": "m/s", "force": None}
-        _compare_mdanalysis(reader, traj, length=1.0, speed=1.0, time=1.0)
-    # and through a Universe (an H5MD file has no topology: the atoms come from elsewhere)
-    u = mda.Universe.empty(4, trajectory=False)
-    u.load_new(str(path), format="H5MD", convert_units=False)
-    assert len(u.trajectory) == 6
-    np.testing.assert_allclose(u.trajectory[5].positions, traj.positions[5], rtol=1e-6)
+    traj = box_run()
+    si = save_h5md(traj, tmp_path / "si.h5")
+    for convert in (True, False):
+        with pytest.raises(RuntimeError, match=r"^length unit 'm' is not recognized by H5MDReader"):
+            H5MDReader(str(si), convert_units=convert)
+    path = traj.save(tmp_path / "md.h5", units="MD")
+    with H5MDReader(str(path)) as reader:
+        _compare_mdanalysis(reader, traj)
+    # through a Universe: an H5MD file has no topology, so the atoms come from elsewhere
+    empty = mda.Universe.empty(4, trajectory=False)
+    empty.load_new(str(path), format="H5MD")
+    minimal = mda.Universe(str(path), format="H5MD", topology_format="MINIMAL", n_atoms=4)
+    for u in (empty, minimal):
+        assert len(u.trajectory) == 6 and u.atoms.n_atoms == 4
+        np.testing.assert_allclose(u.trajectory[5].positions, traj.positions[5] * 1e10, rtol=F32, atol=0)
 
 
 # -- files of other programs read by kinema -------------------------------------------------------
@@ -180,18 +179,18 @@ def test_kinema_reads_znh5md_files_in_angstrom(tmp_path):
         assert "velocity" not in f["particles/atoms"] and "observables" not in f
     back = load_h5md(path)
     x = np.array([a.positions for a in frames])
-    np.testing.assert_array_equal(back.positions, x * 1e-10)  # Å to m: exactly ×1e-10
+    np.testing.assert_array_equal(back.positions, x / 1e10)  # Å to m: / 1e10, the float64 nearest the exact value
     assert back.velocities is None and back.kinetic is None and back.potential == {}
     # znh5md stores time as H5MD's fixed interval: 1 fs a frame (its default) from 0
-    np.testing.assert_array_equal(back.t, np.arange(3) * 1.0 * 1e-15)
+    np.testing.assert_array_equal(back.t, np.arange(3) * 1.0 / 1e15)
     np.testing.assert_array_equal(back.step, [0, 1, 2])
     # the box, a (3, 3) matrix a frame, changes: kept per frame, the first frame's in box_edges
     assert back.periodic == (True, True, True)
-    np.testing.assert_array_equal(back.box_edges_by_frame, np.array([[10.0, 11.0, 12.0 + k] for k in range(3)]) * 1e-10)
-    np.testing.assert_array_equal(back.box_edges, np.array([10.0, 11.0, 12.0]) * 1e-10)
+    np.testing.assert_array_equal(back.box_edges_by_frame, np.array([[10.0, 11.0, 12.0 + k] for k in range(3)]) / 1e10)
+    np.testing.assert_array_equal(back.box_edges, np.array([10.0, 11.0, 12.0]) / 1e10)
     assert back.creator.startswith("znh5md ")
     traj = kinema.Trajectory.load(path)
-    np.testing.assert_array_equal(traj.positions, x * 1e-10)
+    np.testing.assert_array_equal(traj.positions, x / 1e10)
     assert np.isnan(traj.velocities).all() and traj.velocities.shape == (3, 3, 3)
     assert np.isnan(traj.kinetic).all() and np.isnan(traj.momentum).all() and traj.potential == {}
     np.testing.assert_array_equal(traj.box_edges, back.box_edges)
@@ -239,10 +238,10 @@ def test_kinema_reads_mdanalysis_files(tmp_path):
         assert f["particles/trajectory/velocity/value"].attrs["unit"] == "Angstrom ps-1"
         assert f["particles/trajectory/box/edges/value"].shape == (3, 3, 3)
     back = load_h5md(path)
-    np.testing.assert_array_equal(back.positions, x.astype(np.float64) * 1e-10)
+    np.testing.assert_array_equal(back.positions, x.astype(np.float64) / 1e10)
     np.testing.assert_array_equal(back.velocities, v.astype(np.float64) * 100.0)  # Å/ps = 100 m/s exactly
-    np.testing.assert_array_equal(back.t, np.float32([0.0, 0.5, 1.0]).astype(np.float64) * 1e-12)
-    np.testing.assert_array_equal(back.box_edges_by_frame, np.array([[20.0, 21.0, 22.0 + k] for k in range(3)]) * 1e-10)
+    np.testing.assert_array_equal(back.t, np.float32([0.0, 0.5, 1.0]).astype(np.float64) / 1e12)
+    np.testing.assert_array_equal(back.box_edges_by_frame, np.array([[20.0, 21.0, 22.0 + k] for k in range(3)]) / 1e10)
     assert back.periodic == (True, True, True) and back.kinetic is None
     assert kinema.Trajectory.load(path).velocities.dtype == np.float64
 
@@ -276,18 +275,18 @@ def test_kinema_reads_pyh5md_files(tmp_path):
         g["mass"].attrs["unit"] = "u"
         pe.value.attrs["unit"] = "kJ mol-1"
     back = load_h5md(path)
-    np.testing.assert_array_equal(back.positions, x * 1e-9)
+    np.testing.assert_array_equal(back.positions, x / 1e9)
     np.testing.assert_array_equal(back.velocities, v * 1000.0)  # nm/ps = 1000 m/s exactly
-    np.testing.assert_array_equal(back.t, (1.0 + 0.02 * np.arange(4)) * 1e-12)
+    np.testing.assert_array_equal(back.t, (1.0 + 0.02 * np.arange(4)) / 1e12)
     np.testing.assert_array_equal(back.step, 100 + 10 * np.arange(4))
     np.testing.assert_array_equal(back.masses, np.array([18.0, 18.0, 40.0, 40.0, 40.0]) * 1.66053906660e-27)  # u
     np.testing.assert_allclose(back.potential["potential"], energy * 1e3 / 6.02214076e23, rtol=1e-15)  # per particle
-    np.testing.assert_array_equal(back.box_edges_by_frame, np.array([[3.0, 3.0 + 0.1 * k, 0.0] for k in range(4)]) * 1e-9)
+    np.testing.assert_array_equal(back.box_edges_by_frame, np.array([[3.0, 3.0 + 0.1 * k, 0.0] for k in range(4)]) / 1e9)
     assert back.periodic == (True, True, False) and back.group == "fluid"
     assert (back.author, back.creator) == ("Someone", "a program 1.0")
     traj = kinema.Trajectory.load(path)
     assert np.isnan(traj.kinetic).all() and np.isnan(traj.total).all()
-    np.testing.assert_array_equal(traj.box_edges, np.array([3.0, 3.0, 0.0]) * 1e-9)
+    np.testing.assert_array_equal(traj.box_edges, np.array([3.0, 3.0, 0.0]) / 1e9)
 
 
 def h5md_file(path, unit="Ang", boundary=("none", "none", "none"), edges=None, time_unit="ps"):
@@ -318,10 +317,10 @@ def h5md_file(path, unit="Ang", boundary=("none", "none", "none"), edges=None, t
 def test_a_minimal_file_of_another_program_loads(tmp_path):
     path = h5md_file(tmp_path / "min.h5", boundary=("periodic", "periodic", "periodic"), edges=np.diag([5.0, 6.0, 7.0]))
     back = load_h5md(path)
-    np.testing.assert_array_equal(back.positions, np.arange(1.0, 13.0).reshape(2, 2, 3) * 1e-10)
-    np.testing.assert_array_equal(back.t, np.array([0.0, 1.0]) * 1e-12)
-    np.testing.assert_array_equal(back.box_edges, np.array([5.0, 6.0, 7.0]) * 1e-10)  # a fixed (3, 3) box
-    np.testing.assert_array_equal(back.box_edges_by_frame, np.array([[5.0, 6.0, 7.0]] * 2) * 1e-10)
+    np.testing.assert_array_equal(back.positions, np.arange(1.0, 13.0).reshape(2, 2, 3) / 1e10)
+    np.testing.assert_array_equal(back.t, np.array([0.0, 1.0]) / 1e12)
+    np.testing.assert_array_equal(back.box_edges, np.array([5.0, 6.0, 7.0]) / 1e10)  # a fixed (3, 3) box
+    np.testing.assert_array_equal(back.box_edges_by_frame, np.array([[5.0, 6.0, 7.0]] * 2) / 1e10)
     assert back.velocities is None and back.masses is None and (back.author, back.creator) == ("me", "prog 0")
     assert np.isnan(kinema.load_trajectory(path).velocities).all()
 
@@ -389,7 +388,7 @@ def test_a_time_dependent_box_is_checked_at_each_frame(tmp_path):
         load_h5md(path)
     with h5py.File(path, "r+") as f:
         f["particles/all/box/edges/value"][1, 0] = 4.5
-    np.testing.assert_array_equal(load_h5md(path).box_edges_by_frame, np.array([[4.0, 0.0, 0.0], [4.5, 0.0, 0.0]]) * 1e-9)
+    np.testing.assert_array_equal(load_h5md(path).box_edges_by_frame, np.array([[4.0, 0.0, 0.0], [4.5, 0.0, 0.0]]) / 1e9)
     with h5py.File(path, "r+") as f:
         del f["particles/all/box/edges/value"]
         f["particles/all/box/edges/value"] = [[4.0, 0.0, 0.0]] * 3

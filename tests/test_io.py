@@ -109,8 +109,11 @@ def test_h5md_round_trip_is_exact(tmp_path, dim):
     assert (back.dim, back.dt, back.method, back.author, back.group) == (dim, 0.01, "verlet", "Ada", "all")
     assert back.creator == f"kinema {kinema.__version__}"
     with h5py.File(tmp_path / "run.h5") as f:
-        assert f["particles/all/position/value"].shape == (F, N, dim)
-        assert f["particles/all/velocity/value"].shape == (F, N, dim)
+        # every file is 3D (2D: z = 0, an open z axis), the world's dimension a parameter
+        assert f["particles/all/position/value"].shape == (F, N, 3)
+        assert f["particles/all/velocity/value"].shape == (F, N, 3)
+        assert f["particles/all/box"].attrs["dimension"] == 3 and f["parameters/kinema"].attrs["dim"] == dim
+        np.testing.assert_array_equal(f["particles/all/position/value"][..., 2] == 0, dim == 2)
 
 
 @pytest.mark.parametrize("dim", [3, 2])
@@ -213,7 +216,7 @@ def test_h5md_layout_follows_the_spec(tmp_path):
             assert unit(obs[name]["value"]) == unit_of, name
         assert obs["momentum/value"].shape == (F, 3)
         np.testing.assert_array_equal(obs["potential_energy/value"], tr.potential["spring"] + tr.potential["gravity"])
-        assert dict(f["parameters/kinema"].attrs) == {"dt": 0.01, "dt_unit": "s", "method": "verlet"}
+        assert dict(f["parameters/kinema"].attrs) == {"dim": 3, "dt": 0.01, "dt_unit": "s", "method": "verlet"}
 
 
 def test_h5md_without_optional_fields_reads_back_what_is_there(tmp_path):

@@ -7,13 +7,16 @@ number varies (H5MD's time-dependent ``id`` with a fill value). Errors are
 value.
 
 The rules on values (``mass_problem``, ``radius_problem``, ``species_problem``,
-``boundary_problem``, ``non_finite``, ``increase_problem``) are shared with the writers:
+``color_problem``, ``boundary_problem``, ``non_finite``, ``increase_problem``) are shared
+with the writers:
 ``check_frames`` refuses, before anything is written, a trajectory that these rules would
 refuse when it is read back (``save_h5md``, ``export``); ``links_out`` finds what in a file
 points out of it (external links, virtual datasets of other files, external storage)."""
 
 from __future__ import annotations
 
+import warnings
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +25,8 @@ import numpy as np
 from ._checks import dtype_problem, first_non_finite, gib, number, shown
 from ._files import Frames, TrajectoryFileError
 from ._h5md_layout import import_h5py
-from .h5md_units import QUANTITY, parse_unit
+from .h5md_units import QUANTITY, assumed_unit, parse_unit
+from .units import UnitWarning
 
 #: The largest radius read or written, m: the engine's own limit (``GEOMETRY_LIMIT``:
 #: collisions square distances), which the particles of a scene meet when it is built.
@@ -86,6 +90,16 @@ def species_problem(names: Any, label: str = "species") -> str | None:
         if not isinstance(name, str) or not name or not name.isprintable():
             return f"has {label}[{k}] = {shown(name)} (species names must be non-empty printable text: no NUL or control characters)"
     return None
+
+
+def color_problem(a: np.ndarray) -> str | None:
+    """``"has color[2] = [0.5, 1.5, 0] (colours are r, g, b in [0, 1], or NaN: none)"`` for the
+    first colour (a row of ``a`` (N, 3)) with a value neither NaN nor in [0, 1], else ``None``."""
+    bad = ~(np.isnan(a) | ((a >= 0) & (a <= 1)))
+    if not bad.any():
+        return None
+    i = int(np.argmax(bad.any(axis=1)))
+    return f"has color[{i}] = [{', '.join(number(v) for v in a[i])}] (colours are r, g, b in [0, 1], or NaN: none)"
 
 
 def boundary_problem(values: list[str]) -> str | None:
@@ -182,6 +196,12 @@ def check_frames(path: Any, traj: Any, fr: Frames, float32: str | None = None, i
     species = getattr(traj, "species", None)
     if species is not None:
         refuse("species", species_problem(np.asarray(species, dtype=object).reshape(-1).tolist()))
+    colors = getattr(traj, "colors", None)
+    if colors is not None:
+        c = np.asarray(colors, dtype=np.float64)
+        if c.shape != (fr.n_particles, 3):
+            refuse("colors", f"has shape {c.shape}; it must be ({fr.n_particles}, 3), r, g, b per particle")
+        refuse("colors", color_problem(np.where(exists[:, None], c, np.nan)))
     if fr.changes_count and np.unique(fr.ids).size != fr.ids.size:
         for i in range(fr.n_frames):
             uniq, counts = np.unique(fr.ids[fr.alive[i]], return_counts=True)
@@ -237,8 +257,9 @@ class Reader:
     needs added up (``plan``), before any data is read; ``check_memory`` then refuses a file
     that does not fit in the memory there is; ``finite`` checks values once read."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, creator: str | None = None) -> None:
         self.path = path
+        self.creator = creator  # the file's /h5md/creator name: what a dataset without a unit is in
         self.planned: list[tuple[str, Any, int]] = []
 
     def fail(self, what: str) -> TrajectoryFileError:
@@ -263,12 +284,19 @@ class Reader:
             one = word[:-1] if word.endswith("s") else word
             raise self.fail(f"{where(word, ds)} has shape {shape} but {where(value_word, value)} has {n} frames: one {one} per frame")
 
-    def unit(self, word: str, ds: Any, dims: tuple[int, int, int]) -> float:
-        """The factor that converts the values of ``ds`` to SI, from its ``unit`` attribute,
-        which must be a unit of the dimension ``dims`` (``parse_unit``); 1 when it has none
-        (the values are taken as SI)."""
+    def unit(self, word: str, ds: Any, dims: tuple[int, int, int]) -> Fraction:
+        """The exact factor that converts the values of ``ds`` to SI, from its ``unit``
+        attribute, which must be a unit of the dimension ``dims`` (``parse_unit``). Without one:
+        1 in kinema's files (SI, which they write a unit for anyway), else what
+        ``assumed_unit`` takes for the file's creator (ASE's units for znh5md, SI for the
+        others), said by a ``UnitWarning``, one line naming the file, the dataset and the unit
+        taken."""
         if "unit" not in ds.attrs:
-            return 1.0
+            if self.creator == "kinema":
+                return Fraction(1)
+            factor, words = assumed_unit(self.creator, dims)
+            warnings.warn(f"{self.path}: {where(word, ds)} has no unit; taken as {words}", UnitWarning, stacklevel=2)
+            return factor
         raw = ds.attrs["unit"]
         text = utf8(raw.reshape(-1)[0] if isinstance(raw, np.ndarray) and raw.size == 1 else raw)
         if not isinstance(text, str):
@@ -282,7 +310,7 @@ class Reader:
             raise self.fail(f"{where(word, ds)} has unit {text!r}, which is not {QUANTITY[dims]}")
         if not 0 < value < np.inf:
             raise self.fail(f"{where(word, ds)} has unit {text!r}, whose factor to SI is out of the range of float64")
-        return value
+        return factor
 
     def plan(self, word: str, ds: Any, nbytes: int | None = None) -> None:
         self.planned.append((word, ds, int(ds.size) * ds.dtype.itemsize if nbytes is None else nbytes))

@@ -1,6 +1,7 @@
 """What the writer and the reader of kinema's H5MD files share (``kinema.io.h5md``): the
-version written, the names and units of the observables, and h5py, imported when a file is
-written or read (an optional dependency)."""
+version written, the names and units of the observables, the chemical symbols (species
+written as atomic numbers), and h5py, imported when a file is written or read (an optional
+dependency)."""
 
 from __future__ import annotations
 
@@ -19,6 +20,15 @@ OBSERVABLES = {
 }
 # the group of /observables with one potential energy per force, J
 BY_FORCE = "potential_energy_by_force"
+
+# The chemical symbols by atomic number (IUPAC, 1 to 118); 0 is "X", no element (as ASE has it).
+# A species named by one is written as its atomic number, which ASE (znh5md) reads as that element.
+ELEMENTS = tuple(
+    """X H He Li Be B C N O F Ne Na Mg Al Si P S Cl Ar K Ca Sc Ti V Cr Mn Fe Co Ni Cu Zn Ga Ge As Se
+    Br Kr Rb Sr Y Zr Nb Mo Tc Ru Rh Pd Ag Cd In Sn Sb Te I Xe Cs Ba La Ce Pr Nd Pm Sm Eu Gd Tb Dy Ho
+    Er Tm Yb Lu Hf Ta W Re Os Ir Pt Au Hg Tl Pb Bi Po At Rn Fr Ra Ac Th Pa U Np Pu Am Cm Bk Cf Es Fm
+    Md No Lr Rf Db Sg Bh Hs Mt Ds Rg Cn Nh Fl Mc Lv Ts Og""".split()
+)
 
 
 def import_h5py() -> Any:

@@ -1,22 +1,27 @@
 """H5MD 1.1 trajectory files (HDF5 through h5py): writing a trajectory and reading it back,
 and reading the H5MD files of other programs.
 
-Layout written by :func:`save_h5md` (``(F)`` frames, ``N`` particles, ``D`` = 2 or 3, the
-world's dimension; every time-dependent element shares one ``step`` and one ``time`` dataset
-through HDF5 hard links, as the specification allows, and requires for the box)::
+Layout written by :func:`save_h5md` (``(F)`` frames, ``N`` particles; every time-dependent
+element shares one ``step`` and one ``time`` dataset through HDF5 hard links, as the
+specification allows, and requires for the box; units shown for ``units="SI"``, the default)::
 
     /h5md                 +-- version = [1, 1]
         author            +-- name                      (fixed-length string)
         creator           +-- name = "kinema", version  (fixed-length strings)
         modules/units     +-- version = [1, 0], system = "SI"
     /particles/<group>
-        box               +-- dimension = D, boundary = ["none" | "periodic"] * D (fixed-length)
-            edges         step, time, value (F, D) [m]: the periodic cell, 0 along open axes
-            pbc           step, time, value (F, D) bool: the boundary again, for znh5md
-        position          step int64 (F,), time float64 (F,) [s], value (F, N, D) [m]
-        velocity          step, time, value (F, N, D) [m s-1]
-        species           step, time, value (F, N) int32: the type index of each particle
+        box               +-- dimension = 3, boundary = ["none" | "periodic"] * 3 (fixed-length)
+            edges         step, time, value (F, 3) [m]: the periodic cell, 0 along open axes
+            pbc           step, time, value (F, 3) bool: the boundary again, for znh5md
+        position          step int64 (F,), time float64 (F,) [s], value (F, N, 3) [m]
+        velocity          step, time, value (F, N, 3) [m s-1]
+        species           step, time, value (F, N) int32: the atomic number of each particle's
+                          species name where it is a chemical symbol ("He": 2), else 0
+        species_index     step, time, value (F, N) int32: each particle's index among the
+                          sorted species names, attribute names (when the trajectory has species)
         mass [kg], radius [m], id      step, time, value (F, N), when known (id: always)
+        color             step, time, value (F, N, 3) float64: r, g, b in [0, 1], NaN: none
+                          (when the trajectory has colours)
     /connectivity/springs (S, 2) int64: the ids at the ends of each spring, when the trajectory
                           has springs; attribute particles_group: a reference to the group
     /observables
@@ -24,23 +29,30 @@ through HDF5 hard links, as the specification allows, and requires for the box):
         potential_energy_by_force/<force name>             step, time, value (F,) [J]
         momentum (F, 3) [kg m s-1], angular_momentum (F, 3) [kg m2 s-1]
         contacts (F,), impulse_balance (F, 3) [kg m s-1], collision_energy_lost (F,) [J]
-    /parameters/kinema    +-- dt [s], method   (when known)
+    /parameters/kinema    +-- dim = 2 | 3, dt [s], method   (dt, method when known)
         colliders/<k>     +-- type = "plane" | "box" | "sphere", its geometry [m]
                               (point, normal | lo, hi | center, radius), restitution,
                               friction when set; k = 0, 1, ... in the world's order
 
-Units follow the H5MD units module: a ``unit`` attribute (a variable-length ASCII string) on
-each ``value`` (and ``time``) dataset, in the "SI" system, written as space-separated factors
-with integer powers. The per-particle elements (species, mass, radius, id) and the box are
-time-dependent, constant over the frames, because znh5md (ASE's H5MD reader) reads only that
-form; MDAnalysis's reader and pyh5md read them too.
+A 2D world is written 3D, z = 0 and its box open along z, so that 3D readers (MDAnalysis,
+znh5md) read it; ``/parameters/kinema`` ``dim = 2`` makes it 2D again for kinema, which
+also reads the (F, N, 2) files of 2D worlds it wrote before.
+
+Units follow the H5MD units module: a ``unit`` attribute (a variable-length ASCII string:
+MDAnalysis reads no other) on each ``value`` (and ``time``) dataset, written as
+space-separated factors with integer powers; ``units="MD"`` writes nm, ps, nm ps-1, u and
+kJ mol-1 instead of m, s, m s-1, kg and J (``/parameters/kinema`` stays SI). The per-particle
+elements (species, mass, radius, id, color) and the box are time-dependent, constant over the
+frames, because znh5md (ASE's H5MD reader) reads only that form; MDAnalysis's reader and
+pyh5md read them too.
 
 Births and deaths (``Trajectory.alive`` not all True) are written as H5MD 1.1 provides for a
 number of particles that varies: the arrays keep N columns, one per particle that exists at
 some frame, and the ``id`` element's value dataset gets a fill value (-1, or one less than
 the least id), which it holds where that particle does not exist; there ``position``,
-``velocity``, ``mass`` and ``radius`` hold their datasets' fill value, NaN, and ``species``
--1. Without births and deaths no fill value is set and the layout is as above.
+``velocity``, ``mass``, ``radius`` and ``color`` hold their datasets' fill value, NaN, and
+``species`` and ``species_index`` -1. Without births and deaths no fill value is set and the
+layout is as above.
 
 :func:`load_h5md` converts the units of what it reads to SI (``parse_unit``: "nm", "Ang",
 "ps", "nm ps-1", "u", "kJ mol-1", ...), accepts files without velocities or observables and
@@ -61,12 +73,12 @@ from typing import Any
 import numpy as np
 
 from ._cell import particle_types
-from ._checks import available_memory
+from ._checks import available_memory, number
 from ._files import TrajectoryFileError, frames_of, hdf5_file, os_errors_as_write_errors
-from ._h5md_checks import check_frames, edges_problem, fail, links_out
-from ._h5md_layout import BY_FORCE, H5MD_VERSION, OBSERVABLES, import_h5py
+from ._h5md_checks import check_frames, edges_problem, fail, increase_problem, links_out
+from ._h5md_layout import BY_FORCE, ELEMENTS, H5MD_VERSION, OBSERVABLES, import_h5py
 from .h5md_reader import LoadedTrajectory, read
-from .h5md_units import parse_unit
+from .h5md_units import from_si, parse_unit, system_of
 
 __all__ = ["H5MD_VERSION", "LoadedTrajectory", "load_h5md", "parse_unit", "save_h5md"]
 
@@ -109,7 +121,7 @@ def _fixed_string(obj: Any, name: str, value: str | list[str]) -> None:
     obj.attrs.create(name, data[0] if isinstance(value, str) else data, dtype=dtype)
 
 
-def _dataset(group: Any, name: str, data: np.ndarray, compression: str | None, unit: str | None = None, time_series: bool = False, fill: Any = None) -> Any:
+def _dataset(group: Any, name: str, data: np.ndarray, unit: str | None, compression: str | None, time_series: bool = False, fill: Any = None) -> Any:
     """A dataset of ``data``; ``fill``, when given, is its HDF5 fill value (H5MD's mark of an
     entry of a particle that does not exist)."""
     options = _storage(data.shape, compression, time_series)
@@ -120,22 +132,23 @@ def _dataset(group: Any, name: str, data: np.ndarray, compression: str | None, u
     return ds
 
 
-def _element(parent: Any, name: str, value: np.ndarray, clock: Any, compression: str | None, unit: str | None, fill: Any = None) -> Any:
+def _element(parent: Any, name: str, value: np.ndarray, unit: str | None, clock: Any, compression: str | None, fill: Any = None) -> Any:
     """A time-dependent H5MD element: a group with ``step`` and ``time`` (hard links to the
     shared clock datasets) and ``value`` (of fill value ``fill`` when given)."""
     g = parent.create_group(name)
     g["step"] = clock["step"]
     g["time"] = clock["time"]
-    _dataset(g, "value", value, compression, unit, time_series=True, fill=fill)
+    _dataset(g, "value", value, unit, compression, time_series=True, fill=fill)
     return g
 
 
 def _constant_element(
-    parent: Any, name: str, row: np.ndarray, clock: Any, compression: str | None, unit: str | None, alive: np.ndarray | None = None, fill: Any = None
+    parent: Any, name: str, row: np.ndarray, unit: str | None, clock: Any, compression: str | None, alive: np.ndarray | None = None, fill: Any = None
 ) -> Any:
     """A time-dependent H5MD element whose value is ``row`` at every frame, written chunk by
     chunk (the (F, ...) array is never made whole). With ``alive`` (F, N), the entries of the
-    particles not alive hold ``fill``, the dataset's fill value."""
+    particles not alive hold ``fill``, the dataset's fill value (all of a particle's row (N,
+    3) of colours)."""
     g = parent.create_group(name)
     g["step"] = clock["step"]
     g["time"] = clock["time"]
@@ -148,7 +161,8 @@ def _constant_element(
     slab = options["chunks"][0] if "chunks" in options else max(1, frames)
     for i in range(0, frames, slab):
         rows = np.broadcast_to(row, (min(slab, frames - i),) + row.shape)
-        ds[i : i + slab] = rows if alive is None else np.where(alive[i : i + slab], rows, np.asarray(fill, dtype=row.dtype))
+        here = None if alive is None else alive[i : i + slab].reshape(alive[i : i + slab].shape + (1,) * (row.ndim - 1))
+        ds[i : i + slab] = rows if here is None else np.where(here, rows, np.asarray(fill, dtype=row.dtype))
     _set_unit(ds, unit)
     return g
 
@@ -160,7 +174,7 @@ def _unknown(a: Any) -> bool:
     return a.size > 0 and a.dtype.kind == "f" and bool(np.isnan(a).all())
 
 
-def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str | None) -> None:
+def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str | None, system: dict[str, str]) -> None:
     from .. import __version__
 
     h5py = import_h5py()
@@ -175,12 +189,22 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     units.attrs.create("version", np.array([1, 0], dtype=np.int32))
     units.attrs.create("system", "SI", dtype=h5py.string_dtype("ascii"))
 
+    def unit(a: Any, si: str | None) -> tuple[np.ndarray, str | None]:
+        """``a`` (in the SI unit ``si``, or a plain number when ``None``) as written: in the
+        file's unit system, with that system's unit."""
+        if si is None:
+            return np.asarray(a), None
+        return from_si(a, system[si]), system[si]
+
+    # Every file is 3D: a 2D world's positions and velocities get z = 0 and its box an open z
+    # axis, so that 3D readers (MDAnalysis, znh5md) read it; /parameters/kinema says dim = 2.
     d = fr.dim
     particles = f.create_group("particles").create_group(group)
     box = particles.create_group("box")
-    box.attrs.create("dimension", np.int32(d))
+    box.attrs.create("dimension", np.int32(3))
     periodic = getattr(tr, "periodic", None)
     flags = [False] * d if periodic is None else [bool(p) for p in np.asarray(periodic).reshape(-1)[:d]]
+    flags += [False] * (3 - d)
     _fixed_string(box, "boundary", ["periodic" if p else "none" for p in flags])
     edges = getattr(tr, "box_edges", None)
     if any(flags) and edges is None:
@@ -188,13 +212,14 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     edges = np.zeros(d) if edges is None else np.asarray(edges, dtype=np.float64).reshape(-1)[:d]
     if edges.size != d:
         raise ValueError(f"box_edges has {edges.size} values; it must have one per axis, {d}")
+    edges = np.pad(edges, (0, 3 - d))
 
     # The clock shared by every time-dependent element: the integration step of each frame
-    # (t / dt rounded, or the frame index when dt is unknown) and the time in s.
+    # (t / dt rounded, or the frame index when dt is unknown) and the time.
     clock = particles.create_group("position")
     step = np.arange(fr.n_frames, dtype=np.int64) if not fr.dt else np.rint(fr.t / fr.dt).astype(np.int64)
-    _dataset(clock, "step", step, compression, time_series=True)
-    _dataset(clock, "time", fr.t, compression, "s", time_series=True)
+    _dataset(clock, "step", step, None, compression, time_series=True)
+    _dataset(clock, "time", *unit(fr.t, "s"), compression, time_series=True)
     # Births and deaths (H5MD's varying number of particles): the arrays keep one column per
     # particle; at a frame where it does not exist, its id is the id dataset's fill value and
     # its other entries the fill values of theirs (NaN; species -1).
@@ -202,51 +227,61 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     alive = fr.alive if changes else None
     nan = np.nan if changes else None
 
-    def placed(a: np.ndarray) -> np.ndarray:  # NaN where a particle does not exist
+    def placed(a: np.ndarray) -> np.ndarray:  # z = 0 in 2D; NaN where a particle does not exist
+        if d == 2:
+            a = np.concatenate([a[..., :2], np.zeros(a.shape[:-1] + (1,))], axis=-1)
         return a if not changes else np.where(fr.alive[..., None], a, np.nan)
 
-    _dataset(clock, "value", placed(fr.positions[..., :d]), compression, "m", time_series=True, fill=nan)
+    _dataset(clock, "value", *unit(placed(fr.positions), "m"), compression, time_series=True, fill=nan)
     # The box, time-dependent as the readers want it (znh5md and MDAnalysis read edges/value
     # only), its step and time those of position as the specification requires. znh5md reads
     # a fixed-length boundary as all periodic (it compares bytes with "none"): pbc tells it.
-    _constant_element(box, "edges", edges, clock, compression, "m")
-    _constant_element(box, "pbc", np.array(flags, dtype=bool), clock, compression, None)
+    _constant_element(box, "edges", *unit(edges, "m"), clock, compression)
+    _constant_element(box, "pbc", np.array(flags, dtype=bool), None, clock, compression)
     if not _unknown(fr.velocities[fr.alive]):
-        _element(particles, "velocity", placed(fr.velocities[..., :d]), clock, compression, "m s-1", fill=nan)
-    names, species = particle_types(tr, fr.n_particles)
+        _element(particles, "velocity", *unit(placed(fr.velocities), "m s-1"), clock, compression, fill=nan)
+    # Species: H5MD's integers, for ASE (znh5md) the atomic number of a name that is a chemical
+    # symbol, else 0 (ASE's "X"); kinema's names in species_index, each particle's index among
+    # the sorted names (two names that are no element would share 0).
+    names, index = particle_types(tr, fr.n_particles)
+    named = getattr(tr, "species", None) is not None
+    numbers = np.array([ELEMENTS.index(n) if named and n in ELEMENTS else 0 for n in names], dtype=np.int32)
     no_id = min(-1, int(fr.ids.min()) - 1) if fr.ids.size else -1  # the id of no particle: -1 unless an id is negative
+    colors = getattr(tr, "colors", None)
     per_particle = (
-        ("species", species.astype(np.int32), None, -1),
+        ("species", numbers[index], None, -1),
+        ("species_index", index.astype(np.int32) if named else None, None, -1),
         ("mass", fr.masses, "kg", np.nan),
         ("radius", fr.radii, "m", np.nan),
         ("id", fr.ids, None, no_id),
+        ("color", None if colors is None else np.asarray(colors, dtype=np.float64), None, np.nan),
     )
-    for name, a, unit, fill in per_particle:
+    for name, a, si, fill in per_particle:
         if a is not None:
-            element = _constant_element(particles, name, np.asarray(a), clock, compression, unit, alive, fill)
-            if name == "species" and getattr(tr, "species", None) is not None:
-                _fixed_string(element, "names", names)  # species k is names[k] (kinema's; H5MD's species are integers)
+            element = _constant_element(particles, name, *unit(a, si), clock, compression, alive, fill)
+            if name == "species_index":
+                _fixed_string(element, "names", names)  # species_index k is names[k]
 
     obs = f.create_group("observables")
     kinetic = getattr(tr, "kinetic", None)
     potential = dict(getattr(tr, "potential", None) or {})
-    for name, (attr, unit) in OBSERVABLES.items():
+    for name, (attr, si) in OBSERVABLES.items():
         a = getattr(tr, attr, None)
         if a is not None and not _unknown(a):
-            _element(obs, name, np.asarray(a), clock, compression, unit)
+            _element(obs, name, *unit(a, si), clock, compression)
     if potential:
         by_force = obs.create_group(BY_FORCE, track_order=True)
         by_force.attrs.create("names", list(potential), dtype=string)
         for name, u in potential.items():
             if "/" in name or name in ("", ".", ".."):
                 raise ValueError(f"force name {name!r} cannot name an HDF5 group")
-            _element(by_force, name, np.asarray(u, dtype=np.float64), clock, compression, "J")
-        _element(obs, "potential_energy", sum(np.asarray(u, dtype=np.float64) for u in potential.values()), clock, compression, "J")
+            _element(by_force, name, *unit(np.asarray(u, dtype=np.float64), "J"), clock, compression)
+        _element(obs, "potential_energy", *unit(sum(np.asarray(u, dtype=np.float64) for u in potential.values()), "J"), clock, compression)
     total = getattr(tr, "total", None)
     if total is None and kinetic is not None:
         total = np.asarray(kinetic) + sum((np.asarray(u) for u in potential.values()), np.zeros(fr.n_frames))
     if total is not None and not _unknown(total):
-        _element(obs, "total_energy", np.asarray(total, dtype=np.float64), clock, compression, "J")
+        _element(obs, "total_energy", *unit(np.asarray(total, dtype=np.float64), "J"), clock, compression)
 
     springs = getattr(tr, "springs", None)
     if springs is not None:
@@ -259,32 +294,36 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
         ds = f.require_group("connectivity").create_dataset("springs", data=pairs)
         ds.attrs["particles_group"] = particles.ref
 
+    # kinema's own parameters, in SI whatever the units of the rest: the world's dimension (a 2D
+    # world's file is 3D with z = 0), dt, the method and the colliders.
     colliders = _colliders_of(tr)
-    if fr.dt is not None or fr.method is not None or colliders:
-        params = f.create_group("parameters").create_group("kinema")
-        if fr.dt is not None:
-            params.attrs["dt"] = fr.dt
-            params.attrs["dt_unit"] = "s"
-        if fr.method is not None:
-            params.attrs["method"] = fr.method
-        if colliders:
-            # One group per collider, named by its index; the values are attributes (H5MD
-            # leaves /parameters to the program), lengths in m, ±inf for an open box face.
-            group_of = params.create_group("colliders", track_order=True)
-            for k, c in enumerate(colliders):
-                g = group_of.create_group(str(k), track_order=True)
-                g.attrs["type"] = c["type"]
-                for name, value in c.items():
-                    if name != "type":
-                        g.attrs.create(name, np.asarray(value, dtype=np.float64))
+    params = f.create_group("parameters").create_group("kinema")
+    params.attrs["dim"] = np.int32(d)
+    if fr.dt is not None:
+        params.attrs["dt"] = fr.dt
+        params.attrs["dt_unit"] = "s"
+    if fr.method is not None:
+        params.attrs["method"] = fr.method
+    if colliders:
+        # One group per collider, named by its index; the values are attributes (H5MD
+        # leaves /parameters to the program), lengths in m, ±inf for an open box face.
+        group_of = params.create_group("colliders", track_order=True)
+        for k, c in enumerate(colliders):
+            g = group_of.create_group(str(k), track_order=True)
+            g.attrs["type"] = c["type"]
+            for name, value in c.items():
+                if name != "type":
+                    g.attrs.create(name, np.asarray(value, dtype=np.float64))
 
 
-def _check_writable(path: Path, tr: Any, fr: Any) -> None:
+def _check_writable(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
     """Refuses, before anything is written, a trajectory that ``load_h5md`` would refuse to read
     back: the values ``check_frames`` checks, and the box edges (finite, > 0 m on periodic
-    axes), the time step, the observables' shapes and the colliders (as the reader checks them: the engine's rules). One line naming the file,
+    axes), the time step, the observables' shapes and the colliders (as the reader checks them: the engine's rules), and values
+    that the unit ``system`` would make infinite or times it would make equal. One line naming the file,
     the attribute and the value (a ``TrajectoryFileError``)."""
     check_frames(path, tr, fr)
+    _check_units(path, tr, fr, system)
     periodic, edges = getattr(tr, "periodic", None), getattr(tr, "box_edges", None)
     flags = [] if periodic is None else [bool(p) for p in np.asarray(periodic).reshape(-1)[: fr.dim]]
     rows = None if edges is None else np.asarray(edges, dtype=np.float64).reshape(1, -1)[:, : len(flags)]
@@ -317,6 +356,31 @@ def _check_writable(path: Path, tr: Any, fr: Any) -> None:
             raise TrajectoryFileError(f"cannot write {path}: trajectory {problem}")
 
 
+def _check_units(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
+    """Refuses values that the unit ``system`` makes infinite (1e300 m is 1e309 nm, beyond
+    float64) or times it makes equal (two times a float64 apart may round to one in ps)."""
+    if system["m"] == "m":
+        return
+    t = from_si(fr.t, system["s"])
+    problem = increase_problem(t)
+    if problem is not None:
+        raise TrajectoryFileError(f"cannot write {path}: trajectory 't' in {system['s']} (units 'MD') {problem}")
+    arrays = [("t", fr.t, "s"), ("positions", fr.positions, "m"), ("velocities", fr.velocities, "m s-1"), ("masses", fr.masses, "kg"), ("radii", fr.radii, "m")]
+    arrays += [("box_edges", getattr(tr, "box_edges", None), "m"), ("total", getattr(tr, "total", None), "J")]
+    arrays += [(attr, getattr(tr, attr, None), si) for attr, si in OBSERVABLES.values() if si is not None]
+    arrays += [(f"potential {name!r}", u, "J") for name, u in (getattr(tr, "potential", None) or {}).items()]
+    for word, a, si in arrays:
+        if a is None or np.size(a) == 0:
+            continue
+        big = np.nanmax(np.abs(np.asarray(a, dtype=np.float64)), initial=0.0)
+        with np.errstate(over="ignore"):
+            beyond = np.isfinite(big) and not np.isfinite(from_si(big, system[si]))
+        if beyond:
+            raise TrajectoryFileError(
+                f"cannot write {path}: trajectory {word!r} has a value ({number(big)} {si} in magnitude) beyond float64 in {system[si]} (units 'MD'); write it in SI"
+            )
+
+
 def _colliders_of(tr: Any) -> list[dict[str, Any]]:
     """The trajectory's collider descriptions (``Trajectory.colliders``), checked; [] when it
     has none."""
@@ -328,7 +392,7 @@ def _colliders_of(tr: Any) -> list[dict[str, Any]]:
     return _describe_colliders(colliders)
 
 
-def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: str | None = None, compression: str | None = "gzip") -> Path:
+def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: str | None = None, compression: str | None = "gzip", units: str = "SI") -> Path:
     """Write ``traj`` to the H5MD 1.1 file ``path`` (see the module doc for the layout) and
     return the path.
 
@@ -337,10 +401,12 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     {name: (F,)} J, ``momentum`` (F, 3) kg m/s, ``angular_momentum`` (F, 3) kg m²/s and,
     when present, ``total`` (F,) J, ``contacts`` (F,), ``impulse_balance`` (F, 3) N s,
     ``collision_energy_lost`` (F,) J, ``masses`` (N,) kg, ``radii`` (N,) m, ``ids`` (N,),
-    ``dim`` (2: positions are stored as (F, N, 2)), ``dt`` s, ``method``, ``periodic`` (D
-    bools) with ``box_edges`` (D,) m, ``species`` (N,) names (the ``species`` element: the
-    index of each particle's name among the sorted names, which its ``names`` attribute
-    holds; 0 for all without ``species``),
+    ``dim`` (2: stored 3D with z = 0, ``dim`` in /parameters/kinema), ``dt`` s, ``method``,
+    ``periodic`` (D bools) with ``box_edges`` (D,) m, ``species`` (N,) names (the
+    ``species`` element: the atomic number of a name that is a chemical symbol, else 0, and
+    ``species_index``: the index of each particle's name among the sorted names, which its
+    ``names`` attribute holds; all 0 and no ``species_index`` without ``species``),
+    ``colors`` (N, 3) r, g, b in [0, 1], NaN: none (the ``color`` element),
     ``colliders`` (``Trajectory.colliders``' descriptions or ``kinema`` collider objects),
     ``alive`` (F, N) bool, which particles exist at each frame (births and deaths: written
     with H5MD's fill values, see the module doc), ``springs`` (S, 2) the ids at the ends of
@@ -349,15 +415,21 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
 
     ``group`` names the particle group (/particles/<group>); ``author`` the /h5md/author name
     (default: the login name); ``compression`` "gzip", "lzf" or None for the chunked
-    datasets. The file is written under a temporary name in the same folder and renamed at
-    the end, so a failed write leaves ``path`` as it was.
+    datasets; ``units`` the unit system of the values: "SI" (m, s, kg, J), read back
+    exactly, or "MD" (nm, ps, u, kJ mol-1: GROMACS's, which MDAnalysis reads), each value the
+    float64 nearest its exact conversion where the factor or its inverse is a float64 (nm,
+    ps, nm ps-1), else within one rounding more (u, kJ mol-1), read back within one ulp.
+    ``/parameters/kinema`` (dt, the colliders) stays in SI. The file is written under a
+    temporary name in the same folder and renamed at the end, so a failed write leaves
+    ``path`` as it was.
 
     What is written is checked first, by the rules ``load_h5md`` reads it with, so that every
     file kinema writes reads back: finite times that increase, finite positions and
     velocities (velocities all NaN, unknown, are left out), masses finite and > 0 kg, radii
-    finite, >= 0 m and at most 1e150 m, printable species names, box edges finite and > 0 m
-    on periodic axes, ids once per frame, ``dt`` > 0, observables one value per frame, the
-    colliders as the engine checks them. A value that breaks them is refused before
+    finite, >= 0 m and at most 1e150 m, printable species names, colours in [0, 1] or NaN,
+    box edges finite and > 0 m on periodic axes, ids once per frame, ``dt`` > 0, observables
+    one value per frame, the colliders as the engine checks them; with ``units="MD"`` values
+    that float64 holds in those units (1e300 m is 1e309 nm) and times that stay apart. A value that breaks them is refused before
     anything is written (a ``TrajectoryFileError``, one line: ``cannot write run.h5:
     trajectory 'masses' has mass[2] = -1 (masses must be finite and > 0 kg)``).
 
@@ -367,6 +439,7 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     import_h5py()  # the ImportError that says how to get it, before any work
     if not group or "/" in group or group in (".", ".."):
         raise ValueError(f"group = {group!r} is invalid: it must be a non-empty name without '/'")
+    system = system_of(units)
     fr = frames_of(traj)
     if author is None:
         try:
@@ -374,9 +447,9 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
         except Exception:
             author = "unknown"
     path = Path(path)
-    _check_writable(path, traj, fr)
+    _check_writable(path, traj, fr, system)
     with os_errors_as_write_errors(path), hdf5_file(path, libver=("earliest", "latest"), track_order=True) as f:
-        _write(f, traj, fr, group, author, compression)
+        _write(f, traj, fr, group, author, compression, system)
     return path
 
 
@@ -384,12 +457,16 @@ def load_h5md(path: str | os.PathLike, group: str | None = None, follow_links: b
     """Read the particle group ``group`` of the H5MD file ``path`` (``None``: the file's only
     group) with its observables; returns a :class:`LoadedTrajectory`, what the file holds
     (``kinema.Trajectory.load`` makes a ``kinema.Trajectory`` of it). Arrays of kinema's
-    files come back exactly as written; 2D positions and velocities get z = 0.
+    files come back exactly as written (within one ulp from ``units="MD"``); a 2D world's
+    file (``dim = 2`` in /parameters/kinema, or (F, N, 2) positions) gives ``dim`` 2, z = 0.
 
     Files of other programs are read too. Each dataset's ``unit`` attribute (H5MD's units
-    module) is converted to SI, the values multiplied by its exact factor (``parse_unit``:
-    "Ang", "nm", "ps", "nm ps-1", "u", "kJ mol-1", ...; a dataset without one is taken as
-    SI); a unit kinema does not know, or of the wrong kind, is an error. Velocities and
+    module) is converted to SI by its exact factor (``parse_unit``: "Ang", "nm", "ps",
+    "nm ps-1", "u", "kJ mol-1", ...; ``h5md_units.to_si``); a unit kinema does not know, or of
+    the wrong kind, is an error. A dataset without one is SI in kinema's files; in others it
+    is taken as ``h5md_units.assumed_unit`` says (ASE's units in znh5md's files: its masses in
+    u, else SI), with a ``kinema.io.UnitWarning`` naming the file, the dataset and the unit
+    taken. Velocities and
     observables may be absent (``None``; ``Trajectory.load`` makes them NaN, unknown). The box
     may be fixed (edges (D,)) or time-dependent (one row per frame, a box that may change:
     ``box_edges_by_frame``), edges or a (D, D) matrix of edge vectors along the axes. Step
@@ -410,7 +487,7 @@ def load_h5md(path: str | os.PathLike, group: str | None = None, follow_links: b
     memory available (``kinema.io._checks.available_memory``), then the values: finite
     positions, velocities and times, times that increase, masses > 0, radii >= 0 and at most
     1e150 m (the engine's limit), species names of printable text (no NUL or control
-    characters), a box ``boundary`` of "periodic" or "none" on each axis and edges along the
+    characters), colours in [0, 1] or NaN, z = 0 in a file of a 2D world, a box ``boundary`` of "periodic" or "none" on each axis and edges along the
     axes (a matrix of edge vectors must be diagonal, with open boundaries too), finite box
     edges, > 0 on periodic axes, at every frame, ``dt`` a positive number, ``method`` a name
     and each collider as ``World.add`` checks it. Observables are not checked for finite

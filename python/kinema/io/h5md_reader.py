@@ -1,24 +1,26 @@
 """Reading H5MD files (``kinema.io.load_h5md``): ``read`` turns an open file into a
 ``LoadedTrajectory``, what the file holds in SI units, checking what it reads (through
 ``kinema.io._h5md_checks``): shapes, types and the memory needed before any data, then the
-values. Besides the frames: the box (fixed or changing), per-particle masses, radii, ids and
-species, the observables, kinema's parameters and colliders, and the springs."""
+values. Besides the frames: the box (fixed or changing), per-particle masses, radii, ids,
+species and colours, the observables, kinema's parameters and colliders, and the springs."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ._checks import dtype_problem, shown
+from ._checks import dtype_problem, number, shown
 from ._files import TrajectoryFileError
 from ._h5md_checks import (
     Live,
     Reader,
     as_text,
     boundary_problem,
+    color_problem,
     edges_problem,
     element_datasets,
     fail,
@@ -50,8 +52,8 @@ class LoadedTrajectory:
     2); ``kinetic``, ``total`` (F,) J and ``potential`` {force name: (F,)} J; ``momentum``
     (F, 3) kg m/s and ``angular_momentum`` (F, 3) kg m²/s; ``contacts`` (F,),
     ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J; ``masses`` (N,) kg,
-    ``radii`` (N,) m, ``ids`` (N,), ``species`` (N,) names (kinema's files), ``dim``, ``dt``
-    s, ``method``, ``periodic`` (3 bools) and ``box_edges`` (3,) m, the periodic cell at the
+    ``radii`` (N,) m, ``ids`` (N,), ``species`` (N,) names (kinema's files), ``colors`` (N, 3)
+    r, g, b in [0, 1], NaN: none (kinema's files), ``dim``, ``dt`` s, ``method``, ``periodic`` (3 bools) and ``box_edges`` (3,) m, the periodic cell at the
     first frame; ``colliders`` (descriptions, as ``Trajectory.colliders``), ``alive`` (F, N)
     bool, which particles exist at each frame (``None`` when all do: a file whose number of
     particles does not vary), ``springs`` (S, 2) the ids at the ends of each spring. Where
@@ -78,6 +80,7 @@ class LoadedTrajectory:
     radii: np.ndarray | None = None
     ids: np.ndarray | None = None
     species: np.ndarray | None = None
+    colors: np.ndarray | None = None
     dim: int = 3
     dt: float | None = None
     method: str | None = None
@@ -237,7 +240,8 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
     if group not in groups:
         raise fail(path, f"has no particle group {group!r}; available: {', '.join(groups) or '(none)'}")
     p = f["particles"][group]
-    r = Reader(path)
+    creator = f["h5md"].get("creator")
+    r = Reader(path, None if creator is None else as_text(creator.attrs.get("name", "")))
 
     # -- What is there: types and shapes, before any data is read. ---------------------------
     x_ds, step_ds, t_ds = element_datasets(path, p, "position", required=True)
@@ -294,28 +298,34 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
         r.plan("ids", id_table, id_table.size * 8 * 4)  # the table, the entries present and their frames and columns
 
     per_particle = {}  # attribute: (dataset, word, whether it is a time-dependent element's value)
-    # species: read where the file names them (kinema's `names`); H5MD's own species are
-    # integers with no names, which a trajectory has no use for (znh5md writes them as floats)
-    named = "species" in p and "names" in p["species"].attrs
-    for name, attr, integer in (("mass", "masses", False), ("radius", "radii", False), ("id", "ids", True), ("species", "species", True)):
-        if name not in p or (name == "species" and not named) or (name == "id" and id_table is not None):
+    # species: read where the file names them: kinema's species_index, each particle's index
+    # among its `names` (its species element holds atomic numbers, for ASE), or, in kinema's
+    # files before it, the species element with `names`; H5MD's own species are integers with
+    # no names, which a trajectory has no use for (znh5md writes them as floats)
+    named = next((k for k in ("species_index", "species") if k in p and "names" in p[k].attrs), None)
+    each = (("mass", "masses", False), ("radius", "radii", False), ("id", "ids", True), (named, "species", True), ("color", "colors", False))
+    for name, attr, integer in each:
+        if name is None or name not in p or (name == "id" and id_table is not None):
             continue
+        tail = (3,) if attr == "colors" else ()  # r, g, b per particle
         obj = p[name]
         if isinstance(obj, h5py.Dataset):
-            if r.numbers(attr, obj, integer) != (n,):
+            if r.numbers(attr, obj, integer) != (n, *tail):
                 raise r.fail(
-                    f"{where(attr, obj)} has shape {obj.shape} but there are {n} particles ({where('positions', x_ds)} {shape}): one value per particle"
+                    f"{where(attr, obj)} has shape {obj.shape} but there are {n} particles ({where('positions', x_ds)} {shape}): "
+                    f"it must be {(n, *tail)}, one value per particle"
                 )
             r.plan(attr, obj)
             per_particle[attr] = (obj, False)
         else:
             obj = element_datasets(path, p, name)[0]
             s = r.numbers(attr, obj, integer)
-            if len(s) != 2 or s[0] == 0 or s[1] != n or (id_table is not None and s[0] != frames):
-                raise r.fail(f"{where(attr, obj)} has shape {s}; it must be (frames, {n}), one value per particle ({where('positions', x_ds)} {shape})")
-            r.plan(attr, obj, (frames if id_table is not None else 1) * n * obj.dtype.itemsize)
+            if len(s) != 2 + len(tail) or s[0] == 0 or s[1] != n or s[2:] != tail or (id_table is not None and s[0] != frames):
+                must = ", ".join(["frames", str(n), *map(str, tail)])
+                raise r.fail(f"{where(attr, obj)} has shape {s}; it must be ({must}), one value per particle ({where('positions', x_ds)} {shape})")
+            r.plan(attr, obj, (frames if id_table is not None else 1) * n * (3 if tail else 1) * obj.dtype.itemsize)
             per_particle[attr] = (obj, True)
-        if not integer:
+        if attr in ("masses", "radii"):
             units[attr] = r.unit(attr, obj, MASS if attr == "masses" else LENGTH)
 
     # The box: edges (D,) or a (D, D) matrix of edge vectors, fixed, or time-dependent with
@@ -400,8 +410,17 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
 
     params = f.get("parameters/kinema")
     dt = method = None
+    dim = d  # kinema's dimension: a 2D world's file holds z = 0 and says dim = 2 (below)
     colliders: list[dict[str, Any]] = []
     if isinstance(params, h5py.Group):
+        if "dim" in params.attrs:
+            raw = params.attrs["dim"]
+            a = np.asarray(raw)
+            if a.size != 1 or dtype_problem(a.dtype, integer=True) is not None or int(a.reshape(())) not in (2, d):
+                raise r.fail(
+                    f"attribute 'dim' ({params.name}) = {shown(raw)} is not the dimension of the world (2, or {d}: {where('positions', x_ds)} has {d} coordinates)"
+                )
+            dim = int(a.reshape(()))
         if "dt" in params.attrs:
             raw = params.attrs["dt"]
             a = np.asarray(raw)
@@ -413,7 +432,7 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
             if not isinstance(raw, str):
                 raise r.fail(f"attribute 'method' ({params.name}) = {shown(raw)} is not the name of an integration method")
             method = raw
-        colliders = _read_colliders(path, params, d)
+        colliders = _read_colliders(path, params, dim)
 
     r.check_memory(memory)
 
@@ -431,15 +450,25 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
     if problem is not None:
         raise r.fail(f"{where('times', t_ds)} {problem}")
     live = None if id_table is None else Live(r, id_table, frames, n)
+
+    def plane(word: str, ds: Any, a: np.ndarray) -> None:  # a 2D world's file: z = 0 where a particle exists
+        if dim == 2 and d == 3:
+            z = a[..., 2] if live is None else live.masked(a)[..., 2]
+            if z.any():
+                i, k = np.unravel_index(int(np.argmax(z != 0)), z.shape)
+                raise r.fail(f"{where(word, ds)} has z = {number(z[i, k])} at frame {i}, particle {k}, but {params.name} says dim = 2 (z = 0)")
+
     x = to_si(x_ds[()], units["positions"])
     r.finite("positions", x_ds, x if live is None else live.masked(x), ("frame", "particle"))
+    plane("positions", x_ds, x)
     velocities = None
     if vel is not None:
         v = to_si(vel[0][()], units["velocities"])
         r.finite("velocities", vel[0], v if live is None else live.masked(v), ("frame", "particle"))
+        plane("velocities", vel[0], v)
         velocities = three(v) if live is None else live.columns(three(v))
     positions = three(x) if live is None else live.columns(three(x))  # 2D: z = 0 where a particle exists
-    out = LoadedTrajectory(t=t, positions=positions, velocities=velocities, step=step, dim=d, group=group, path=path)
+    out = LoadedTrajectory(t=t, positions=positions, velocities=velocities, step=step, dim=dim, group=group, path=path)
     if live is not None:
         out.ids, out.alive = live.ids, live.alive
     for attr, (ds, element) in per_particle.items():
@@ -447,13 +476,14 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
             a = ds[0] if element else ds[()]
         else:  # each particle's value where it first exists
             a = live.first(ds[()], element)
-        a = to_si(a, units.get(attr, 1.0))
-        r.finite(attr, ds, a, ("particle",))
-        problem = mass_problem(a) if attr == "masses" else radius_problem(a) if attr == "radii" else None
+        a = to_si(a, units.get(attr, Fraction(1)))
+        if attr != "colors":  # a colour may be NaN: none
+            r.finite(attr, ds, a, ("particle",))
+        problem = mass_problem(a) if attr == "masses" else radius_problem(a) if attr == "radii" else color_problem(a) if attr == "colors" else None
         if problem is not None:
             raise r.fail(f"{where(attr, ds)} {problem}")
         if attr == "species":  # names where the file gives them (kinema's ``names``), else none
-            a = _species_names(r, p["species"], np.asarray(a))
+            a = _species_names(r, p[named], np.asarray(a))
         setattr(out, attr, a)
     if periodic is None and edges_ds is not None:  # open boundaries with edge vectors
         rows = np.asarray(edges_ds[()])

@@ -1,6 +1,8 @@
 """The units of H5MD files (the H5MD units module): ``parse_unit`` reads a unit string into
 its exact SI factor and its dimension, ``to_si`` converts values read from a file to SI
-(m, s, kg, J, m/s, kg m/s)."""
+(m, s, kg, J, m/s, kg m/s) and ``from_si`` values to write to a file's units; ``SYSTEMS``,
+the unit systems ``save_h5md`` writes; ``assumed_unit``, what a dataset without a unit is
+taken in."""
 
 from __future__ import annotations
 
@@ -9,6 +11,8 @@ from fractions import Fraction
 from typing import Any
 
 import numpy as np
+
+from .units import ASE
 
 # A unit string of the H5MD units module is space-separated factors: at most one number first
 # ("60", "10+3" = 10^3) and unit symbols, each with an optional SI prefix and an integer power
@@ -101,12 +105,83 @@ def parse_unit(text: str) -> tuple[Fraction, tuple[int, int, int]]:
     return factor, (dims[0], dims[1], dims[2])
 
 
-def to_si(a: Any, factor: float) -> Any:
+def _exact_inverse(factor: Fraction) -> float | None:
+    """The integer 1 / ``factor`` as a float when it is one and float64 holds it exactly (1e9
+    for "nm", 1e10 for "Ang"), else ``None``."""
+    inverse = 1 / factor
+    if inverse.denominator != 1 or Fraction(float(inverse)) != inverse:
+        return None
+    return float(inverse)
+
+
+def to_si(a: Any, factor: Fraction | float) -> Any:
     """``a`` (just read from a file) in SI: times ``factor`` (in place when it is float64, else
-    as float64); ``a`` itself when the factor is 1."""
-    if factor == 1.0:
+    as float64); ``a`` itself when the factor is 1. A factor whose inverse float64 holds
+    exactly (1e-9 for "nm": 1e9) divides by that inverse instead, so that each value is the
+    float64 nearest the exact product (1e-9 itself is not a float64)."""
+    if factor == 1:
         return a
-    if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.writeable:
-        a *= factor
-        return a
-    return np.asarray(a, dtype=np.float64) * factor
+    inverse = _exact_inverse(Fraction(factor))
+    out = a if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.writeable else np.array(a, dtype=np.float64)
+    if inverse is not None:
+        out /= inverse
+    else:
+        out *= float(factor)
+    return out
+
+
+def from_si(a: Any, unit: str) -> np.ndarray:
+    """``a`` in SI as float64 values in ``unit`` (``"nm"``: times 1e9), each the float64
+    nearest the exact quotient where the factor or its inverse is a float64 (powers of ten up
+    to 1e22, 1000 for "nm ps-1"), else within one rounding more; ``a`` itself (as an array)
+    when the factor is 1. NaN stays NaN."""
+    factor = parse_unit(unit)[0]
+    if factor == 1:
+        return np.asarray(a)
+    a = np.asarray(a, dtype=np.float64)
+    inverse = _exact_inverse(factor)
+    if inverse is not None:
+        return a * inverse
+    return a / float(factor)
+
+
+# The unit systems save_h5md writes, as the unit of each SI unit kinema's values are in.
+# "MD": GROMACS's units (nm, ps, u, kJ mol-1), which MDAnalysis reads (its H5MD reader knows
+# the lengths Å, nm, pm, fm and not m), as do VMD and the H5MD readers of the MD codes.
+SI_UNITS = ("m", "s", "m s-1", "kg", "J", "kg m s-1", "kg m2 s-1")
+SYSTEMS: dict[str, dict[str, str]] = {
+    "SI": {u: u for u in SI_UNITS},
+    "MD": {"m": "nm", "s": "ps", "m s-1": "nm ps-1", "kg": "u", "J": "kJ mol-1", "kg m s-1": "u nm ps-1", "kg m2 s-1": "u nm2 ps-1"},
+}
+
+
+def system_of(units: Any) -> dict[str, str]:
+    """The units of the unit system named ``units`` ("SI" or "MD", any case); a ``ValueError``
+    naming the value and the names allowed."""
+    if isinstance(units, str) and units.upper() in SYSTEMS:
+        return SYSTEMS[units.upper()]
+    raise ValueError(f"units = {units!r} is invalid: use 'SI' (m, s, kg, J) or 'MD' (nm, ps, u, kJ mol-1)")
+
+
+# The SI unit of each dimension kinema reads, as messages name it.
+_SI_OF = {parse_unit(u)[1]: u for u in SI_UNITS}
+#: the creator (/h5md/creator name) whose datasets without a unit are in ASE's units: znh5md
+#: writes ASE's numbers, and no unit on masses ("Angstrom" on positions and box, "fs" on
+#: time where it writes units at all)
+ZNH5MD = "znh5md"
+
+
+def assumed_unit(creator: str | None, dims: tuple[int, int, int]) -> tuple[Fraction, str]:
+    """What a dataset of dimension ``dims`` without a ``unit`` attribute is taken in, in a file
+    ``creator`` (its /h5md/creator name) wrote, as (the SI factor, the words a warning says):
+    ASE's units in znh5md's files (Å, u, fs for time, Å per ASE's time unit Å √(u/eV) for
+    velocities), else SI. kinema's own files write a unit on every dataset that has one."""
+    si = _SI_OF.get(dims, "SI")
+    if creator != ZNH5MD:
+        return Fraction(1), f"{si} (SI), which its creator {creator!r} may not mean"
+    if dims == TIME:
+        return Fraction(1, 10**15), "fs, znh5md's time unit"
+    length, time, mass = dims
+    factor = Fraction(ASE.length) ** length * Fraction(ASE.time) ** time * Fraction(ASE.mass) ** mass
+    words = {LENGTH: "Å", MASS: f"u (ASE's, {ASE.mass} kg)", (1, -1, 0): f"Å per ASE's time unit ({ASE.velocity:.8g} m s-1)"}
+    return factor, f"{words.get(dims, 'ASE units')}, as znh5md writes ASE's numbers"
