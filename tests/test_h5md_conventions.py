@@ -140,6 +140,26 @@ def test_kinema_render_of_a_saved_fountain_draws_its_colours(tmp_path, fountain)
     assert red == 0 and blue > 100, counts
 
 
+def test_znh5md_does_not_read_births_and_deaths(tmp_path, fountain):
+    # znh5md takes each frame's particles to be packed first with the fill values after;
+    # kinema keeps one column per particle, NaN before a particle is born
+    znh5md = pytest.importorskip("znh5md")
+    with pytest.raises(ValueError, match=r'Array "positions" has wrong shape'):
+        znh5md.IO(str(fountain.save(tmp_path / "run.h5")))[:]
+
+
+@pytest.mark.filterwarnings("ignore:there is no reference attributes")  # MDAnalysis guessing types for atoms it has none of
+def test_mdanalysis_reads_births_and_deaths_as_nan(tmp_path, fountain):
+    mda = pytest.importorskip("MDAnalysis")
+    path = fountain.save(tmp_path / "run.h5", units="MD")
+    u = mda.Universe(str(path), format="H5MD", topology_format="MINIMAL", n_atoms=fountain.positions.shape[1])
+    assert len(u.trajectory) == len(fountain.t)
+    for i, ts in enumerate(u.trajectory):
+        alive = fountain.alive[i]
+        assert np.isnan(ts.positions[~alive]).all() and ts.dimensions is None  # an open box
+        np.testing.assert_allclose(ts.positions[alive], fountain.positions[i][alive] * 1e10, rtol=F32, atol=0)
+
+
 def test_pyh5md_reads_the_colour_and_species_index_elements(tmp_path, fountain):
     pyh5md = pytest.importorskip("pyh5md")
     path = fountain.save(tmp_path / "run.h5")
@@ -159,6 +179,7 @@ def test_species_reach_ase_as_elements_and_kinema_as_names(tmp_path):
     import ase.io
 
     traj = gas()
+    traj.colors = np.linspace(0, 1, 24).reshape(8, 3)
     path = traj.save(tmp_path / "gas.h5")
     symbols = ["He", "He", "Ar", "Ar", "X", "X", "X", "X"]  # names that are no element: ASE's X
     for frames in (znh5md.IO(str(path))[:], ase.io.read(path, index=":", format="znh5md")):
@@ -166,6 +187,12 @@ def test_species_reach_ase_as_elements_and_kinema_as_names(tmp_path):
         for atoms in frames:
             assert atoms.get_chemical_symbols() == symbols
             np.testing.assert_array_equal(atoms.get_masses(), traj.masses)
+            np.testing.assert_array_equal(atoms.arrays["color"], traj.colors)
+            np.testing.assert_array_equal(atoms.arrays["species_index"], [1, 1, 0, 0, 3, 3, 2, 2])
+    # units="MD": masses in u, which are ASE's (znh5md reads no unit)
+    md = znh5md.IO(str(traj.save(tmp_path / "md.h5", units="MD")))[:]
+    np.testing.assert_array_equal(md[0].get_masses(), traj.masses / 1.66053906660e-27)
+    assert md[0].get_chemical_symbols() == symbols
     assert kinema.Trajectory.load(path).species.tolist() == traj.species.tolist() == ["He", "He", "Ar", "Ar", "grain", "grain", "dust", "dust"]
     with h5py.File(path) as f:
         p = f["particles/all"]
@@ -223,6 +250,18 @@ def test_2d_files_are_3d_with_z_0_and_read_back_as_2d(tmp_path, billiards):
     before = kinema.Trajectory.load(path)
     assert before.dim == 2 and before.colliders == billiards.colliders
     np.testing.assert_array_equal(before.positions, billiards.positions)
+
+
+@pytest.mark.filterwarnings("ignore:there is no reference attributes")  # MDAnalysis guessing types for atoms it has none of
+def test_3d_readers_refused_the_2d_files_before(tmp_path, billiards):
+    znh5md = pytest.importorskip("znh5md")
+    mda = pytest.importorskip("MDAnalysis")
+    path = billiards.save(tmp_path / "b.h5", units="MD")
+    as_2d_file_before(path)
+    with pytest.raises(ValueError, match=r'Array "positions" has wrong shape \(16, 2\) != \(16, 3\)'):
+        znh5md.IO(str(path))[:]
+    with pytest.raises(ValueError, match="MDAnalysis only supports 3-dimensional simulation boxes"):
+        mda.Universe(str(path), format="H5MD", topology_format="MINIMAL", n_atoms=16)
 
 
 def test_a_2d_file_with_z_is_refused(tmp_path, billiards):
@@ -351,6 +390,31 @@ def test_znh5md_masses_are_taken_in_ase_units_and_said(tmp_path):
     ]
     np.testing.assert_array_equal(back.masses, np.array([4.0026, 39.948]) * ase.units._amu)  # not 4 kg
     assert back.species is None  # H5MD's integers, unnamed
+
+
+def test_znh5md_files_without_units_are_taken_in_ase_units(tmp_path):
+    znh5md = pytest.importorskip("znh5md")
+    import ase
+    import ase.units
+
+    frames = []
+    for k in range(2):
+        atoms = ase.Atoms("HeAr", positions=[[0.0, 0.0, 0.0], [1.0, 1.0, 1.0 + k]], cell=[5.0, 5.0, 5.0], pbc=True)
+        atoms.set_velocities([[1.0, 0.0, 0.0], [0.0, 2.0, 0.0]])  # Å per ASE's time unit
+        frames.append(atoms)
+    path = tmp_path / "ase.h5"
+    znh5md.IO(str(path), save_units=False).extend(frames)
+    with pytest.warns(UnitWarning) as record:
+        back = load_h5md(path)
+    assert [str(w.message) for w in record] == [
+        f"{path}: dataset 'positions' (/particles/atoms/position/value) has no unit; taken as Å, as znh5md writes ASE's numbers",
+        f"{path}: dataset 'velocities' (/particles/atoms/velocity/value) has no unit; taken as Å per ASE's time unit (9822.6948 m s-1), as znh5md writes ASE's numbers",
+        f"{path}: dataset 'box edges' (/particles/atoms/box/edges/value) has no unit; taken as Å, as znh5md writes ASE's numbers",
+    ]
+    np.testing.assert_array_equal(back.positions[1], [[0.0, 0.0, 0.0], [1e-10, 1e-10, 2e-10]])
+    v = 1e-10 * ase.units.s  # m/s: 1 Å per ASE time unit, by ASE (the same constants, other roundings)
+    np.testing.assert_allclose(back.velocities[0], [[v, 0, 0], [0, 2 * v, 0]], rtol=1e-15, atol=0)
+    np.testing.assert_array_equal(back.box_edges, [5e-10] * 3)
 
 
 def foreign_file(path, creator="prog"):
