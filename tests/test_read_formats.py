@@ -558,6 +558,20 @@ def test_a_lammps_data_file_as_write_data_writes_it(tmp_path):
     np.testing.assert_array_equal(back.box_edges, np.array([20.0, 20.0, 5.0]) * s.length)
 
 
+def test_the_format_is_told_by_content_where_the_suffix_does_not_tell_it(tmp_path, comings_and_goings):
+    dump = tmp_path / "md.lmp"  # .lmp names data files too: the dump's ITEM: lines decide
+    dump.write_text(DUMP)
+    assert load(dump).source.creator == "LAMMPS dump"
+    export(comings_and_goings, tmp_path / "run.xyz")
+    (tmp_path / "run.xyz").rename(tmp_path / "frames")  # no suffix: a count alone on the first line
+    np.testing.assert_array_equal(load(tmp_path / "frames").positions, comings_and_goings.positions)
+    comings_and_goings.save(tmp_path / "run.h5")
+    (tmp_path / "run.h5").rename(tmp_path / "run.xyz")  # HDF5's first bytes win over the suffix
+    np.testing.assert_array_equal(load(tmp_path / "run.xyz").positions, comings_and_goings.positions)
+    (tmp_path / "copper").write_text(DATA)
+    assert load(tmp_path / "copper").source.creator == "LAMMPS"  # "3 atoms" in the header
+
+
 # -- what is refused -------------------------------------------------------------------------------
 
 

@@ -407,7 +407,7 @@ def sweep(
 @app.command()
 @_guarded
 def view(
-    source: Annotated[Path, typer.Argument(help="A scene (.toml, run first) or a trajectory file: " + _TRAJ_HELP[2:])],
+    source: Annotated[Path, typer.Argument(help="A scene (.toml, run first) or a" + _TRAJ_HELP[1:])],
     html: Annotated[Path | None, typer.Option("--html", help="Write one self-contained page that plays offline, and exit.")] = None,
     port: Annotated[int, typer.Option(help="Port on 127.0.0.1 (0: a free one).")] = 0,
     no_browser: Annotated[bool, typer.Option("--no-browser", help="Do not open a browser.")] = False,

@@ -56,31 +56,31 @@ def _ply_series(path: Path) -> Path | None:
     return None
 
 
-def _sniff_text(head: bytes) -> str | None:
-    """The text format the first bytes of a file look like, or ``None``."""
-    try:
-        text = head.decode("utf-8", errors="strict")
-    except UnicodeDecodeError:
-        text = head[: len(head) - 4].decode("utf-8", errors="replace") if len(head) > 4 else ""
+def _sniff_text(head: bytes) -> tuple[str | None, bool]:
+    """The text format the first bytes of a file look like (or ``None``), and whether the sign
+    is sure (a LAMMPS dump's ``ITEM:``, kinema's CSV header, a VTK collection) rather than a
+    guess (a count alone on the first line: XYZ; ``N atoms`` in a header: a LAMMPS data file)."""
+    text = head.decode("utf-8", errors="replace")
     lines = [line.strip() for line in text.splitlines()]
     first = next((line for line in lines if line), "")
     if first.startswith("ITEM:"):
-        return "lammps"
+        return "lammps", True
     if first.startswith("frame,time,id,"):
-        return "csv"
-    if first.startswith("<?xml") or first.startswith("<VTKFile"):
-        return "vtk" if 'type="Collection"' in text else None
+        return "csv", True
+    if (first.startswith("<?xml") or first.startswith("<VTKFile")) and 'type="Collection"' in text:
+        return "vtk", True
     if re.fullmatch(r"[0-9]+", lines[0] if lines else ""):
-        return "xyz"
+        return "xyz", False
     if any(re.fullmatch(r"[0-9]+\s+atoms", line.split("#")[0].strip()) for line in lines[1:40]):
-        return "lammps-data"
-    return None
+        return "lammps-data", False
+    return None, False
 
 
 def detect_format(path: Path) -> str:
-    """The format of the file ``path``: HDF5's or GSD's magic bytes first, then the suffix
-    (``READ_FORMATS``), then the first lines (``ITEM:`` a LAMMPS dump, a count alone an XYZ
-    file, ``N atoms`` in the header a LAMMPS data file, kinema's CSV header, a VTK collection).
+    """The format of the file ``path``: HDF5's or GSD's magic bytes first, then a sure sign in
+    the first lines (``ITEM:`` a LAMMPS dump, kinema's CSV header, a VTK collection), then the
+    suffix (``READ_FORMATS``), then a guess from the first lines (a count alone an XYZ file,
+    ``N atoms`` in the header a LAMMPS data file).
     Raises ``TrajectoryFileError`` naming the formats kinema reads when none fits."""
     if _ply_series(path) is not None:
         return "ply"
@@ -90,12 +90,14 @@ def detect_format(path: Path) -> str:
         return "h5md"
     if head.startswith(_GSD):
         return "gsd"
+    sniffed, sure = _sniff_text(head)
+    if sure:  # (a dump named .lmp, say)
+        return sniffed
     suffix = path.suffix.lower()
     by_suffix = next((name for name, suffixes in READ_FORMATS.items() if suffix in suffixes), None)
     if by_suffix not in (None, "h5md", "gsd"):  # (a binary format's suffix without its magic: the content decides)
         return by_suffix
-    sniffed = _sniff_text(head)
-    if sniffed is not None:
+    if sniffed is not None and by_suffix is None:  # (a guess does not overrule an .h5 or .gsd name)
         return sniffed
     if by_suffix == "h5md":
         raise fail(path, f"not an HDF5 file (corrupt, or another format); kinema reads {formats_read()}")
