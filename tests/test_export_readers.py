@@ -9,7 +9,9 @@ colours), a periodic 3D gas of He and Ar with two masses, and a walled 2D box of
 
 import csv
 import json
+import signal
 import subprocess
+import sys
 import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -177,6 +179,31 @@ def test_ovito_reads_the_vtk_springs_as_lines(tmp_path, cloth):
         np.testing.assert_array_equal(lines["Position"][...], ends_by_id(cloth, k, cloth.springs))
 
 
+def test_why_the_springs_have_a_file_of_their_own(tmp_path, cloth):
+    # A frame's particles file with the springs as line cells: OVITO does not open it.
+    from kinema.io import exports
+
+    pytest.importorskip("ovito.io")
+    k = np.arange(2 * 3, dtype=np.int64)
+    x = cloth.positions[0][:6]
+    verts = np.arange(6, dtype=np.int64)
+    (tmp_path / "both.vtp").write_text(exports._polydata(x, verts=(verts, verts + 1), lines=(k, k[1::2] + 1)))
+    with pytest.raises(RuntimeError, match="Could not detect the file format"):
+        ovito_import(tmp_path / "both.vtp")
+    # A springs file of no lines: OVITO 3.17 dies of a floating point exception (SIGFPE).
+    none = np.zeros(0, dtype=np.int64)
+    empty = exports._polydata(
+        np.zeros((0, 3)), cell_data=[exports._vtk_array("id1", none), exports._vtk_array("id2", none)], declared=("Lines",), lines=(none, none)
+    )
+    (tmp_path / "empty.vtp").write_text(empty)
+    run = subprocess.run(
+        [sys.executable, "-c", "import sys; from ovito.io import import_file; import_file(sys.argv[1]).compute()", str(tmp_path / "empty.vtp")],
+        capture_output=True,
+        timeout=120,
+    )
+    assert run.returncode == -signal.SIGFPE
+
+
 # -- springs: PLY, GSD ---------------------------------------------------------------------------
 
 
@@ -217,6 +244,9 @@ def test_blender_imports_the_ply_edges_colours_and_types(tmp_path, cloth, founta
         want, mesh = traj.frame(len(traj.t) - 1), got[name]
         np.testing.assert_array_equal(mesh["positions"], want["positions"].astype(np.float32))
         np.testing.assert_array_equal(mesh["attributes"]["id"], want["ids"])  # a float attribute: exact below 2^24
+        for j, name in enumerate(("vx", "vy", "vz")):
+            np.testing.assert_array_equal(mesh["attributes"][name], want["velocities"][:, j].astype(np.float32))
+        np.testing.assert_array_equal(mesh["attributes"]["radius"], want["radii"].astype(np.float32))
     edges = np.array(got["cloth"]["edges"])
     assert len(edges) == 1482 and {tuple(sorted(e)) for e in cloth.ids[edges].tolist()} == {tuple(sorted(s)) for s in cloth.springs.tolist()}
     # red green blue as the colour attribute Col: the bytes as sRGB, kept linear in float32
@@ -374,8 +404,10 @@ def test_ase_reads_the_dump_in_si_units(tmp_path, gas, flat):
         # masses are ASE's own, by element (it reads no mass column), not kinema's 0.5 and 2 kg
         np.testing.assert_array_equal(atoms.get_masses(), [atomic_masses[atomic_numbers[x]] for x in gas.species])
     # ASE's default units are LAMMPS's metal: the velocities come out 100/0.98 times too small
+    # and the positions keep the numbers in m
     metal = ase_io.read(tmp_path / "gas.lammpstrj", index=0, format="lammps-dump-text")
     np.testing.assert_allclose(metal.get_velocities() / gas.velocities[0], 0.01018, rtol=1e-3)
+    np.testing.assert_array_equal(metal.positions, gas.positions[0])
     # without an element column ASE names each atom by the element whose mass (amu) is nearest
     # the mass column's number (kg): 1 kg gives H
     export(flat, tmp_path / "flat.lammpstrj")
@@ -395,6 +427,25 @@ def test_ovito_reads_the_dump(tmp_path, gas):
         np.testing.assert_array_max_ulp(p.positions[...], gas.positions[k], maxulp=2)  # OVITO 3.17's parser, not the file
         np.testing.assert_array_max_ulp(p["Velocity"][...], gas.velocities[k], maxulp=2)
         np.testing.assert_array_equal(p["Mass"][...], gas.masses)
+
+
+def test_ovito_numbers_the_types_of_a_dump_without_element(tmp_path, flat):
+    export(flat, tmp_path / "run.lammpstrj")
+    p = ovito_import(tmp_path / "run.lammpstrj").compute(0).particles
+    assert [(t.id, t.name) for t in p.particle_types.types] == [(1, ""), (2, "")]
+    assert p.particle_types[...].tolist() == [["dust", "grain"].index(s) + 1 for s in flat.species.tolist()]
+
+
+def test_mdanalysis_fails_on_a_dump_with_units_and_time(tmp_path, gas):
+    # why the dump has no ITEM: UNITS or ITEM: TIME (LAMMPS's dump_modify units yes time yes)
+    mda = pytest.importorskip("MDAnalysis")
+    export(gas, tmp_path / "run.lammpstrj")
+    frames = (tmp_path / "run.lammpstrj").read_text().split("ITEM: TIMESTEP\n")[1:]
+    with_time = "ITEM: UNITS\nsi\n" + "".join(f"ITEM: TIME\n{t!r}\nITEM: TIMESTEP\n{f}" for t, f in zip(gas.t.tolist(), frames, strict=True))
+    (tmp_path / "timed.lammpstrj").write_text(with_time)
+    with pytest.raises(ValueError), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        mda.Universe(str(tmp_path / "timed.lammpstrj"), format="LAMMPSDUMP")
 
 
 def test_mdanalysis_reads_no_dump_or_xyz_whose_particles_come_and_go(tmp_path, fountain):
@@ -428,7 +479,12 @@ def test_xyz_with_species_read_by_mdanalysis_ase_and_ovito(tmp_path, run, reques
     assert u.atoms.names.tolist() == names and len(u.trajectory) == len(traj.t)
     for k, ts in enumerate(u.trajectory):
         np.testing.assert_array_equal(ts.positions, traj.positions[k].astype(np.float32))
-        assert ts.time == pytest.approx(k * interval, rel=1e-15, abs=1e-300)
+        assert ts.time == pytest.approx(k * interval, rel=1e-15, abs=1e-300) and not ts.has_velocities
+    if run == "flat":
+        assert u.atoms.masses.tolist() == [0.0] * len(names)  # no mass it can guess for 'grain'
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert [ts.time for ts in mda.Universe(str(path), format="XYZ").trajectory] == [float(k) for k in range(len(traj.t))]  # ps
     ase_io = pytest.importorskip("ase.io")
     atoms = ase_io.read(path, index=2)
     assert atoms.arrays["type"].tolist() == names

@@ -55,8 +55,8 @@ _FLOAT32 = ("ply", "gsd", "usd")  # the formats that store particle data as floa
 def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_frame: Callable[[int], Any] | None = None) -> list[Path]:
     """Write ``traj`` (a ``kinema.Trajectory`` or any object with ``t``, ``positions``,
     ``velocities`` and optionally ``masses``, ``radii``, ``ids``, ``species``, ``periodic``,
-    ``box_edges``, ``colliders``) for another program; returns the paths written, the main
-    file first.
+    ``box_edges``, ``colliders``, ``springs``, ``colors``) for another program; returns the
+    paths written, the main file first.
 
     ``format`` (default: from the suffix of ``path``); each format has its own names, so one
     trajectory exported as ``run.pvd``, ``run.ply``, ``run.xyz``, ``run.csv``, ``run.gsd`` and
@@ -66,19 +66,28 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
       collection whose timesteps are the frame times) and the folder ``<stem>_vtk/`` with one
       XML PolyData file per frame, ``<stem>_00000.vtp``: points (m) as vertex cells, point
       data ``v`` (velocity, m/s), ``speed`` (m/s), ``radius`` (m), ``mass`` (kg), ``id``;
-      float64 and int64, base64. OVITO maps ``v``, ``radius``, ``mass`` and ``id`` to
-      Velocity, Radius, Mass and Particle Identifier. When the trajectory has ``colliders``,
+      float64 and int64, base64; ``type`` (the index of the species in the field
+      ``type_names``) and ``Color`` (r g b in [0, 1]) where the trajectory has species and
+      colours. OVITO maps ``v``, ``radius``, ``mass``, ``id`` and ``Color`` to Velocity,
+      Radius, Mass, Particle Identifier and Color, ``type`` to Material Type. With
+      ``springs``, each frame is a multi-block ``<stem>_00000.vtm`` (the one the .pvd names)
+      of the particles .vtp and ``<stem>_springs_00000.vtp``, a line per spring whose ends
+      are alive (``_springs_vtp``), which OVITO reads as Lines. When the trajectory has ``colliders``,
       ``<stem>_colliders.vtp`` beside the .pvd holds them: a box as its 12 edges (lines), a
       plane as a square (a polygon) that covers the scene, a sphere obstacle as a sphere of
       polygons (2D: a rectangle, a segment and a disk at z = 0), the cell data ``collider``
       the index in ``colliders``. OVITO reads the polygons of that file, not the lines.
     - ``"ply"`` (.ply): for Blender and Houdini, the folder ``<stem>_ply/`` with one binary
       little-endian PLY per frame, ``<stem>_00000.ply``, ``<stem>_00001.ply``, ...: vertex
-      properties x y z vx vy vz (float32; m, m/s), radius (float32, m) and id (int32).
-    - ``"xyz"`` (.xyz, .extxyz): for OVITO and ASE, one extended XYZ file, the frames one
-      after the other: N, the comment line ``Lattice="ax 0 0 0 by 0 0 0 cz" Origin="ox oy oz"
-      pbc="T T F" units=SI Properties=species:S:1:pos:R:3:velo:R:3:momenta:R:3:radius:R:1:
-      mass:R:1:masses:R:1:id:I:1 Time=t``, then one row per particle.
+      properties x y z vx vy vz (float32; m, m/s), radius (float32, m), red green blue
+      (uchar, the colour), type (int32, the species, named in ``comment type k name``
+      lines) and id (int32); with springs, ``element edge`` (vertex1 vertex2), one edge per
+      spring whose ends are alive.
+    - ``"xyz"`` (.xyz, .extxyz): for OVITO, ASE and MDAnalysis, one extended XYZ file, the
+      frames one after the other: N, the comment line ``Lattice="ax 0 0 0 by 0 0 0 cz"
+      Origin="ox oy oz" pbc="T T F" units=SI Properties=species:S:1:pos:R:3:velo:R:3:
+      momenta:R:3:radius:R:1:mass:R:1:masses:R:1:color:R:3:id:I:1 Time=t``, then one row per
+      particle; ``color`` (r g b in [0, 1], OVITO's Color) where the trajectory has colours.
 
       Units are SI, as ``units=SI`` says: positions, ``Lattice`` and ``Origin`` in m,
       ``velo`` in m/s, ``momenta`` (mass × velocity) in kg·m/s, ``mass`` and ``masses`` in
@@ -101,23 +110,32 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
       is zero, so OVITO's cell analysis and ``atoms.get_volume()`` work. Particle types:
       a trajectory with ``species`` names (``World.add_particles(species=)``, a scene's
       ``species``) gets a first column ``type:S:1`` of the names, which OVITO takes as its
-      Particle Type, and a ``species`` column of the name where it is a chemical symbol and
-      ``X`` (ASE's dummy element) where not, as ASE refuses other words; ASE keeps the names
-      in ``atoms.arrays["type"]``. Without species names every species is ``X``.
-    - ``"csv"`` (.csv): one file with the header ``frame,time,id,x,y,z,vx,vy,vz,mass,radius``
-      and a row per particle and frame.
+      Particle Type and MDAnalysis as the atom names (it reads a row as a name and x y z),
+      then the positions, then a ``species`` column of the name where it is a chemical
+      symbol and ``X`` (ASE's dummy element) where not, as ASE refuses other words; ASE
+      keeps the names in ``atoms.arrays["type"]``. Without species names the first column
+      is ``species``, every one ``X``.
+    - ``"csv"`` (.csv): one file with the header
+      ``frame,time,id,x,y,z,vx,vy,vz,mass,radius,species,r,g,b`` (species and r,g,b where the
+      trajectory has species and colours) and a row per particle and frame.
     - ``"gsd"`` (.gsd): HOOMD-blue's format (OVITO, HOOMD, freud, MDAnalysis), written with
       the ``gsd`` package; float32 particle data, the box centred at 0 with its offset in
-      ``log/kinema/origin`` (see ``gsd_writer.write_gsd``).
+      ``log/kinema/origin`` and doubled along the axes that are not periodic, the springs as
+      bonds, the colours as ``log/particles/Color`` (see ``gsd_writer.write_gsd``).
     - ``"lammps"`` (.lammpstrj, .dump): a LAMMPS ``dump custom`` text file (OVITO, ASE,
-      MDAnalysis, VMD): ``id type x y z vx vy vz radius mass`` with ids from 1, the box with
-      ``pp``/``ff`` flags, ``ITEM: TIME``; 17 significant digits (see
-      ``lammps_dump.write_lammps``).
+      MDAnalysis, VMD): ``id type element x y z vx vy vz radius mass`` with ids from 1,
+      ``element`` where every species is a chemical symbol, the box with ``pp``/``ff``
+      flags, no ``ITEM: UNITS`` or ``ITEM: TIME`` (MDAnalysis cannot read them), SI units;
+      17 significant digits (see ``lammps_dump.write_lammps``).
     - ``"usd"`` (.usd, .usda, .usdc, .usdz): Pixar's USD for Blender and Houdini, written
       with the ``usd-core`` package: a ``UsdGeom.Points`` prim with positions and velocities
       as time samples at the recording's frame rate, widths 2r and ids, Z up, 1 m per unit,
       and the colliders as guide prims (see ``usd_writer.write_usd``); another suffix is a
       ``ValueError`` (USD picks its file format from the suffix).
+
+    A particle without its own colour (a NaN row of ``colors``) is written in the renderer's
+    ``NO_OWN_COLOR`` (RGB 70 130 200); a spring is written at a frame when both its ends are
+    alive then.
 
     Births and deaths (a trajectory whose ``alive`` is not all True): every format writes at
     each frame the particles alive at it only, each with its id (VTK's ``id`` point data,

@@ -28,13 +28,12 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     The box: GSD's box is periodic on every axis, as HOOMD's always is. Along a periodic axis
     it is the world's periodic cell. Along another axis the cell (``_cell.trajectory_cell``:
     the walls of the world's ``Box`` where all particles stay between them, else the extent
-    of all frames' particles with a margin) is doubled in length about its centre, as HOOMD
-    users leave room beyond walls: two particles in the cell are at most its length L apart
-    along that axis, so their image across the padded box is at least L away, and no
-    neighbour search whose cut-off is below half the box's length (the largest freud and
-    HOOMD allow) finds a pair across a wall. ``log/kinema/periodic`` (3,) uint8 says which
-    axes are periodic (1) and which are padded (0): the cell is the box with a padded axis
-    halved.
+    of all frames' particles with a margin) is doubled in length about its centre, room
+    beyond the walls: two particles in the cell are at most its length L apart along that
+    axis, so their image across the padded box is at least L away, and no neighbour search
+    whose cut-off is below half the box's length (the largest freud accepts) finds a pair
+    across a wall. ``log/kinema/periodic`` (3,) uint8 says which axes are periodic (1) and
+    which are padded (0): the cell is the box with a padded axis halved.
 
     Precision: GSD's HOOMD schema stores particle data as float32, so positions (relative to
     the box centre), velocities, masses and diameters keep about 7 significant digits (a
