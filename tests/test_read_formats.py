@@ -631,3 +631,7 @@ def test_kinema_export_and_view_read_other_formats(tmp_path):
     assert (tmp_path / "page.html").stat().st_size > 1000
     res = runner.invoke(app, ["view", str(tmp_path / "nothing.xyz"), "--html", str(tmp_path / "p.html")])
     assert res.exit_code == 2 and "nothing.xyz: no such file" in res.output
+    hoomd = hoomd_file(tmp_path / "hoomd.gsd")
+    res = runner.invoke(app, ["export", str(hoomd), "-f", "csv"])
+    assert res.exit_code == 0, res.output
+    assert "warning: " + str(hoomd) + ": a HOOMD GSD file has no units; its numbers are taken as SI" in res.output

@@ -209,6 +209,7 @@ _TRAJ_HELP = (
 def _load(path: Path, units: str | None):
     """The trajectory in ``path``, any format kinema reads (``Trajectory.load``), with the
     ``--units`` given: a name, or length=M,time=S,mass=KG."""
+    from .io import UnitWarning
     from .trajectory import Trajectory
 
     given: str | dict[str, float] | None = units
@@ -220,8 +221,18 @@ def _load(path: Path, units: str | None):
                 given[key.strip()] = float(value)
             except ValueError:
                 raise ValueError(f"--units {units!r}: {item!r} is invalid: give a name or length=M,time=S,mass=KG with numbers") from None
+    import warnings
+
     try:
-        return Trajectory.load(path, units=given)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", UnitWarning)
+            traj = Trajectory.load(path, units=given)
+        for w in caught:  # a UnitWarning (numbers taken in units the file does not state): one line, as runner.py says its warnings
+            if issubclass(w.category, UnitWarning):
+                err_console.print(f"[yellow]warning:[/] {escape(str(w.message))} (--units)", highlight=False, soft_wrap=True)
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        return traj
     except ValueError as e:
         text = str(e)
         if text.startswith("units"):  # the units refused: said of the option
