@@ -136,6 +136,18 @@ def test_own_ply_series_reads_back_as_plyfile_reads_it(tmp_path, comings_and_goi
     assert back.masses is None  # PLY holds no masses
 
 
+def test_own_springs_and_colours_come_back(tmp_path):
+    traj = births_and_deaths()
+    traj.colors = np.array([[1.0, 0.0, 0.0], [0.25, 0.5, 0.75], [0.0, 0.0, 1.0], [0.125, 1.0, 0.0]])
+    export(traj, tmp_path / "run.gsd")
+    back = load(tmp_path / "run.gsd")
+    assert sorted(map(tuple, back.springs.tolist())) == [(3, 5), (8, 11)]  # GSD's bonds of type "spring", as ids
+    np.testing.assert_array_equal(back.colors, traj.colors.astype(np.float32))
+    for fmt, suffix in (("xyz", ".xyz"), ("csv", ".csv"), ("vtk", ".pvd")):
+        export(traj, tmp_path / f"run{suffix}", fmt)
+        np.testing.assert_array_equal(load(tmp_path / f"run{suffix}").colors, traj.colors)
+
+
 def test_a_periodic_box_comes_back_with_its_corner(tmp_path):
     traj = periodic_run()
     export(traj, tmp_path / "run.xyz")

@@ -172,9 +172,8 @@ def assemble(
         creator=creator,
         path=path,
         springs=None if springs is None or not len(springs) else np.asarray(springs, dtype=np.int64).reshape(-1, 2),
+        colors=colors,
     )
-    if colors is not None:  # (Trajectory.colors, which _from_file takes from the attribute of that name)
-        out.colors = colors
     # a particle that has no value of its own where it first appears (another frame's column
     # had one): unknown values are refused, as a file of another program would be
     for word, a in (("masses", out.masses), ("radii", out.radii)):
