@@ -164,7 +164,11 @@ def export(traj, path, **options):
 
 
 def read_kinema(path, traj):
-    back = kinema.load_trajectory(path)
+    options = {"units": "si"} if str(path).endswith(".lammpstrj") else {}  # (a dump that says no units: kinema's are SI)
+    try:
+        back = kinema.load_trajectory(path, **options)
+    except TypeError:
+        back = kinema.load_trajectory(path)
     r = Read()
     for k in range(len(back.t)):
         f = live_frame(back, k)
@@ -174,7 +178,9 @@ def read_kinema(path, traj):
     return r
 
 
-def read_mdanalysis(path, fmt):
+def read_mdanalysis(path, fmt, traj):
+    """MDAnalysis: an H5MD file in its units (converted to Å and ps, so back to SI here); a dump
+    as the numbers in the file (its reader converts nothing: kinema's are SI)."""
     import MDAnalysis as mda
 
     with warnings.catch_warnings():
@@ -186,25 +192,30 @@ def read_mdanalysis(path, fmt):
                 n = next(iter(f["particles"].values()))["position/value"].shape[1]
             u = mda.Universe.empty(n, trajectory=True)
             u.load_new(str(path), format="H5MD")
+            x_unit, v_unit, m_unit = ANGSTROM, ANGSTROM / 1e-12, AMU
         else:
             u = mda.Universe(str(path), format=fmt, topology_format=fmt)
+            x_unit, v_unit, m_unit = 1.0, 1.0, 1.0
+            with open(path) as f:  # MDAnalysis moves the box to the origin: its lower corner back
+                lines = f.read(4096).splitlines()
+            at = next(i for i, line in enumerate(lines) if line.startswith("ITEM: BOX BOUNDS"))
+            corner = np.array([float(lines[at + 1 + a].split()[0]) for a in range(3)])
         r = Read()
-        names = getattr(u.atoms, "elements", None) if hasattr(u.atoms, "elements") else None
-        if names is None and hasattr(u.atoms, "types"):
-            names = u.atoms.types
+        names = None
+        for attr in ("elements", "types"):
+            if names is None and hasattr(u.atoms, attr):
+                names = getattr(u.atoms, attr)
         for ts in u.trajectory:
-            ids = u.atoms.ids if hasattr(u.atoms, "ids") else None
-            vel = ts.velocities * (ANGSTROM / 1e-12) if ts.has_velocities else None
-            mass = u.atoms.masses * AMU if hasattr(u.atoms, "masses") else None
-            r.frames.append(
-                {
-                    "ids": None if ids is None else ids - (1 if fmt == "LAMMPSDUMP" else 0),
-                    "pos": ts.positions * ANGSTROM,
-                    "vel": vel,
-                    "mass": mass,
-                    "species": names,
-                }
-            )
+            ids = u.atoms.ids - 1 if hasattr(u.atoms, "ids") and fmt == "LAMMPSDUMP" else None
+            pos = ts.positions.astype(float) * x_unit + (corner if fmt == "LAMMPSDUMP" else 0.0)
+            vel = ts.velocities.astype(float) * v_unit if ts.has_velocities else None
+            mass = u.atoms.masses * m_unit if hasattr(u.atoms, "masses") else None
+            if fmt == "H5MD":  # one column per particle, NaN where it does not exist (H5MD's fill)
+                live = np.isfinite(pos).all(axis=1)
+                ids = (traj.ids if traj.ids is not None else np.arange(len(pos)))[live]
+                pos, vel = pos[live], None if vel is None else vel[live]
+                mass = None if mass is None else mass[live]
+            r.frames.append({"ids": ids, "pos": pos, "vel": vel, "mass": mass, "species": names})
     return r
 
 
@@ -284,7 +295,7 @@ def read_gsd(path):
             ids = fr.log.get("particles/kinema/id")
             p = fr.particles
             species = [p.types[t] for t in p.typeid]
-            color = fr.log.get("particles/kinema/color")
+            color = fr.log.get("particles/Color", fr.log.get("particles/kinema/color"))
             r.frames.append(
                 {
                     "ids": ids,
@@ -333,7 +344,8 @@ def read_vtk(path):
 
     r = Read()
     folder = Path(path).with_name(Path(path).stem + "_vtk")
-    for f in sorted(folder.glob("*.vtp")):
+    stem = Path(path).stem
+    for f in sorted(p for p in folder.glob("*.vtp") if p.name[len(stem) + 1 : -4].isdigit()):  # (not the springs' files)
         rd = vtk.vtkXMLPolyDataReader()
         rd.SetFileName(str(f))
         rd.Update()
@@ -349,7 +361,14 @@ def read_vtk(path):
             t = arr.get("type", arr.get("species"))
             if names is not None and t is not None:
                 species = [names.GetValue(int(i)) for i in t]
-        r.frames.append({"ids": ids, "pos": pts, "vel": arr.get("v"), "mass": arr.get("mass"), "species": species, "color": arr.get("color")})
+        r.frames.append({"ids": ids, "pos": pts, "vel": arr.get("v"), "mass": arr.get("mass"), "species": species, "color": arr.get("Color", arr.get("color"))})
+        springs = f.with_name(f"{stem}_springs_{f.name[len(stem) + 1 :]}")
+        if r.springs is None and springs.exists():  # (a frame's springs are a file of their own)
+            sd = vtk.vtkXMLPolyDataReader()
+            sd.SetFileName(str(springs))
+            sd.Update()
+            cd = sd.GetOutput().GetCellData()
+            r.springs = [(int(a), int(b)) for a, b in zip(vtk_to_numpy(cd.GetArray("id1")), vtk_to_numpy(cd.GetArray("id2")), strict=True) if a >= 0]
         if r.springs is None and pd.GetNumberOfLines():
             lines = vtk_to_numpy(pd.GetLines().GetConnectivityArray())
             idk = ids if ids is not None else np.arange(len(pts))
@@ -378,6 +397,12 @@ def read_ply(path):
     return r
 
 
+def to_srgb(linear):
+    """USD's and Blender's colours are linear: back to the sRGB values kinema's colours are."""
+    c = np.clip(linear, 0.0, 1.0)
+    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055)
+
+
 def read_pxr(path, traj):
     """Asked at whole frames k, as 3D applications ask."""
     from pxr import Usd, UsdGeom
@@ -403,7 +428,7 @@ def read_pxr(path, traj):
                 "vel": v.reshape(-1, 3),
                 "mass": None if mass is None else np.asarray(mass, float),
                 "species": None if species is None else list(species),
-                "color": None if color is None or len(color) != len(x) else np.asarray(color, float),
+                "color": None if color is None or len(color) != len(x) else to_srgb(np.asarray(color, float)),
             }
         )
     curves = [p for p in stage.Traverse() if p.IsA(UsdGeom.BasisCurves)]
@@ -462,7 +487,7 @@ def read_blender(path, traj):
         color = got.get(f"color{k}")
         if color is not None and traj.colors is None:
             color = None
-        r.frames.append({"ids": got.get(f"ids{k}"), "pos": got[f"pos{k}"].astype(float), "vel": None, "color": color})
+        r.frames.append({"ids": got.get(f"ids{k}"), "pos": got[f"pos{k}"].astype(float), "vel": None, "color": None if color is None else to_srgb(color)})
     return r
 
 
@@ -499,7 +524,7 @@ def read_csv(path, traj):
 # (format, reader) -> (file name, export options, read function(path, traj))
 CASES = {
     ("H5MD", "kinema"): ("run.h5", {}, lambda p, t: read_kinema(p, t)),
-    ("H5MD", "MDAnalysis"): ("md.h5", {"units": "MD"}, lambda p, t: read_mdanalysis(p, "H5MD")),
+    ("H5MD", "MDAnalysis"): ("md.h5", {"units": "MD"}, lambda p, t: read_mdanalysis(p, "H5MD", t)),
     ("H5MD", "znh5md"): ("run.h5", {}, lambda p, t: read_znh5md(p)),
     ("XYZ", "ASE"): ("run.xyz", {}, lambda p, t: read_ase(p)),
     ("XYZ", "OVITO"): ("run.xyz", {}, lambda p, t: read_ovito(p)),
@@ -507,7 +532,7 @@ CASES = {
     ("XYZ", "kinema"): ("run.xyz", {}, lambda p, t: read_kinema(p, t)),
     ("dump", "ASE si"): ("run.lammpstrj", {}, lambda p, t: read_ase(p, format="lammps-dump-text", units="si")),
     ("dump", "OVITO"): ("run.lammpstrj", {}, lambda p, t: read_ovito(p)),
-    ("dump", "MDAnalysis"): ("run.lammpstrj", {}, lambda p, t: read_mdanalysis(p, "LAMMPSDUMP")),
+    ("dump", "MDAnalysis"): ("run.lammpstrj", {}, lambda p, t: read_mdanalysis(p, "LAMMPSDUMP", t)),
     ("dump", "kinema"): ("run.lammpstrj", {}, lambda p, t: read_kinema(p, t)),
     ("GSD", "gsd"): ("run.gsd", {}, lambda p, t: read_gsd(p)),
     ("GSD", "OVITO"): ("run.gsd", {}, lambda p, t: read_ovito(p)),

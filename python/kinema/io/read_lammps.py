@@ -62,7 +62,7 @@ def _unit_scales(path: Path, stated: str | None, units: Any, how: str) -> Scales
         raise fail(
             path,
             f"a LAMMPS file that does not say its units ({how} is missing); give units= (--units) one of {', '.join(repr(n) for n in NAMES if n != 'ase')}, "
-            "or {length = m, time = s, mass = kg} for lj",
+            "or {length = m, time = s, mass = kg} for lj (kinema's own dumps are 'si')",
         )
     return scales(units, "units")
 
