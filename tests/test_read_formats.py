@@ -178,14 +178,29 @@ def test_ase_extxyz_is_read_in_ases_units(tmp_path):
     np.testing.assert_array_equal(back.box_edges, np.array([10.0, 11.0, 12.0]) * 1e-10)
 
 
-def test_ase_xyz_without_masses_has_no_velocities_from_momenta(tmp_path):
+def test_ase_xyz_without_masses_takes_ases_element_masses_as_ase_does(tmp_path):
+    # ASE writes momenta of its own element masses and no masses column: Atoms.get_masses()
+    # gives its table's masses, and kinema the same, saying so once
     a = ase_atoms()
-    del a.arrays["masses"]  # ASE then writes momenta of its own element masses, which the file does not hold
+    del a.arrays["masses"]
     path = tmp_path / "plain.xyz"
-    ase.io.write(path, a, format="extxyz")
+    later = a.copy()
+    later.info["time"] = 1.0
+    ase.io.write(path, [a, later], format="extxyz")
+    with pytest.warns(UnitWarning, match=r"plain\.xyz: no masses in the file; ASE's standard atomic masses") as said:
+        back = kinema.Trajectory.load(path)
+    assert len([w for w in said if issubclass(w.category, UnitWarning)]) == 1
+    read = ase.io.read(path)
+    np.testing.assert_array_equal(back.masses, read.get_masses() * ASE.mass)
+    np.testing.assert_array_equal(back.velocities[0], read.get_velocities() * ASE.velocity)
+    np.testing.assert_array_equal(back.positions[0], read.positions * 1e-10)
+
+
+def test_an_xyz_without_masses_whose_names_are_not_elements_has_none(tmp_path):
+    path = tmp_path / "grains.xyz"
+    path.write_text("2\nProperties=species:S:1:pos:R:3:momenta:R:3\ngrain 0 0 0 1 0 0\nX 1 0 0 0 1 0\n")
     back = load(path)
     assert back.masses is None and np.isnan(back.velocities).all()
-    np.testing.assert_array_equal(back.positions[0], ase.io.read(path).positions * 1e-10)
 
 
 LAMMPS_UNITS = ["real", "metal", "si", "cgs", "electron", "micro", "nano"]
@@ -441,9 +456,11 @@ def test_mdanalysis_lammps_data_and_xyz(tmp_path):
     np.testing.assert_allclose(back.velocities[0] / s.velocity, per_fs, rtol=1e-15, atol=5e-11)
     np.testing.assert_array_equal(back.masses, np.array([1.5, 2.5, 1.5]) * s.mass)
     assert back.source.creator == "MDAnalysis"
-    xyz = load(tmp_path / "mda.xyz")  # plain XYZ: names and positions (Å, 5 decimals)
+    with pytest.warns(UnitWarning, match="ASE's standard atomic masses"):
+        xyz = kinema.Trajectory.load(tmp_path / "mda.xyz")  # plain XYZ: names and positions (Å, 5 decimals)
     np.testing.assert_allclose(xyz.positions[0], u.atoms.positions.astype(np.float64) * 1e-10, rtol=0, atol=5e-6 * 1e-10)
-    assert xyz.species.tolist() == ["Fe", "He", "Fe"] and xyz.masses is None
+    assert xyz.species.tolist() == ["Fe", "He", "Fe"]
+    np.testing.assert_array_equal(xyz.masses, ase.io.read(tmp_path / "mda.xyz").get_masses() * ASE.mass)  # ASE's, as ASE reads it
 
 
 # -- LAMMPS text files as LAMMPS writes them ---------------------------------------------------------

@@ -6,6 +6,7 @@ bit for bit."""
 from __future__ import annotations
 
 import re
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +15,7 @@ import numpy as np
 from ._assemble import Box, RawFrame, assemble
 from ._h5md_checks import fail
 from .h5md_reader import LoadedTrajectory
-from .units import ASE, Scales, scales
+from .units import ASE, Scales, UnitWarning, scales
 
 # key=value pairs of the comment line (the extxyz convention of libAtoms and ASE): a value is
 # "quoted" (with \" and \\ escapes), {braced} or a bare word; a key alone is a flag.
@@ -120,13 +121,34 @@ def _first(columns: dict[str, np.ndarray], names: tuple[str, ...]) -> np.ndarray
     return next((columns[n] for n in names if n in columns), None)
 
 
+def _ase_masses(path: Path, names: np.ndarray, warned: list[bool]) -> np.ndarray | None:
+    """The masses (amu) ASE gives particles of these chemical symbols without a masses column
+    (``Atoms.get_masses()``: its table of standard atomic weights), so that an ASE file's
+    ``momenta`` give velocities as in ASE; said once with a ``UnitWarning``. ``None`` where a
+    name is not a chemical symbol, or ASE (the table's keeper) is not installed."""
+    try:
+        from ase.data import atomic_masses, atomic_numbers
+    except ImportError:
+        return None
+    if not all(n in atomic_numbers and n != "X" for n in names):
+        return None
+    if not warned:
+        warned.append(True)
+        warnings.warn(
+            f"{path}: no masses in the file; ASE's standard atomic masses of its chemical symbols (amu), as ASE's get_masses() gives", UnitWarning, stacklevel=4
+        )
+    return np.array([atomic_masses[atomic_numbers[n]] for n in names], dtype=np.float64)
+
+
 def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
     """Read the extended XYZ (or plain XYZ) file ``path``.
 
     Each frame: the number of particles, the comment line of key=value pairs, one row per
     particle with the columns ``Properties`` names (``species:S:1:pos:R:3`` when it names
     none). Read: ``pos`` (positions), ``velo`` (velocities; else ``momenta`` / masses), ``mass``
-    or ``masses``, ``radius``, ``id`` (particles followed by id: a number of rows that varies
+    or ``masses`` (else, in a file of ASE's units whose names are all chemical symbols, ASE's
+    standard atomic masses, as ``Atoms.get_masses()`` gives, with a ``UnitWarning``), ``radius``,
+    ``id`` (particles followed by id: a number of rows that varies
     is read as births and deaths), the names of ``type`` (OVITO's and kinema's particle type),
     else ``species``, ``color`` (r g b in [0, 1], kinema's); the cell of ``Lattice`` (along the axes only) at ``Origin`` with ``pbc``;
     ``Time`` (or ``time``). Other columns and keys are skipped.
@@ -143,6 +165,7 @@ def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
     lines = text.splitlines()
     frames: list[RawFrame] = []
     file_units: str | None = None
+    warned: list[bool] = []  # (ASE's masses said once a file)
     i = 0
     while i < len(lines):
         head = lines[i].strip()
@@ -178,11 +201,14 @@ def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
         pos = _first(columns, _POSITIONS)
         if pos is None or pos.ndim != 2 or pos.shape[1] != 3 or pos.dtype != np.float64:
             raise fail(path, f"{where}: Properties has no pos:R:3 column (the positions)")
+        box = _box(path, keys, where)  # (refused before anything is said about masses)
         masses = _first(columns, _MASSES)
+        names = _first(columns, _NAMES)
+        if masses is None and "units" not in keys and units is None and names is not None:
+            masses = _ase_masses(path, names.astype(str), warned)
         velocities = _first(columns, _VELOCITIES)
         if velocities is None and "momenta" in columns and masses is not None:
             velocities = columns["momenta"] / masses[:, None]
-        names = _first(columns, _NAMES)
         time = next((keys[k] for k in ("Time", "time") if k in keys), None)
         if time is not None:
             time = float(_numbers(path, time, 1, "Time", where)[0])
@@ -197,7 +223,7 @@ def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
                 species=None if names is None else names.astype(str),
                 colors=columns["color"] if "color" in columns and columns["color"].ndim == 2 and columns["color"].shape[1] == 3 else None,
                 time=time,
-                box=_box(path, keys, where),
+                box=box,
             )
         )
         i += 2 + n
