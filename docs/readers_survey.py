@@ -235,7 +235,7 @@ def read_ase(path, **kw):
             ids = None if ids is None else ids - 1
         else:  # the numbers in the file (kinema's SI)
             pos, vel, mass = atoms.positions, atoms.get_velocities(), atoms.get_masses()
-        r.frames.append({"ids": ids, "pos": pos, "vel": vel, "mass": mass, "species": species})
+        r.frames.append({"ids": ids, "pos": pos, "vel": vel, "mass": mass, "species": species, "color": atoms.arrays.get("color")})
     return r
 
 
