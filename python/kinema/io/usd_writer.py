@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ._cell import box_corners, trajectory_cell
+from ._cell import box_corners, spring_columns, trajectory_cell
 from ._files import FileWriteError, Frames, TrajectoryFileError, copy_into, os_errors_as_write_errors, private_folder, refuse_special_target
 
 #: The suffixes USD writes: binary crate (.usd, .usdc), text (.usda), a zip package (.usdz).
@@ -86,7 +86,7 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
 def _write_stage(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any], pxr: tuple) -> list[Path]:
     # (ValueErrors before anything is written)
     rate = _frame_rate(fr.t)
-    parts = (_Colours(traj, fr), _species(traj, fr), _spring_columns(traj, fr))
+    parts = (_Colours(traj, fr), _species(traj, fr), spring_columns(traj, fr))
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise TrajectoryFileError(f"cannot write {path}: the folder {parent} does not exist")
@@ -293,23 +293,6 @@ def _species(traj: Any, fr: Frames) -> np.ndarray | None:
     if a.shape != (fr.n_particles,):
         raise ValueError(f"species has shape {a.shape}; it must be ({fr.n_particles},), one name per particle")
     return a
-
-
-def _spring_columns(traj: Any, fr: Frames) -> np.ndarray:
-    """The trajectory's springs (S, 2 particle ids) as (S', 2) columns of ``fr``; a spring
-    with an end whose id the trajectory does not hold is left out (as kinema's videos do)."""
-    springs = getattr(traj, "springs", None)
-    if springs is None or np.size(springs) == 0:
-        return np.zeros((0, 2), dtype=np.int64)
-    s = np.asarray(springs)
-    if s.ndim != 2 or s.shape[1] != 2 or not np.issubdtype(s.dtype, np.integer):
-        raise ValueError(f"springs has shape {s.shape} and type {s.dtype}; it must be (S, 2) integer particle ids")
-    order = np.argsort(fr.ids, kind="stable")
-    if not fr.ids.size:
-        return np.zeros((0, 2), dtype=np.int64)
-    at = np.clip(np.searchsorted(fr.ids[order], s), 0, fr.ids.size - 1)
-    known = (fr.ids[order][at] == s).all(axis=1)
-    return order[at[known]].astype(np.int64)
 
 
 #: The springs' colour, kinema's videos' (``_core.LINE_COLOR``), sRGB 8-bit.
