@@ -179,6 +179,7 @@ def test_the_primvars_follow_the_live_particles(tmp_path):
         assert primvar.GetAttr().GetNumTimeSamples() == len(traj.t)
     water = traj.species == "water"
     assert np.all(np.isfinite(traj.colors[water])) and np.all(np.isnan(traj.colors[~water]))  # own colours and none
+    assert list(points.GetPrim().GetAttribute("kinema:colorIds").Get()) == traj.ids[water].tolist()  # which colours are the particles' own
     for k in range(len(traj.t)):
         code, want = Usd.TimeCode(float(k)), traj.frame(k)
         assert len(np.array(points.GetPointsAttr().Get(code))) == len(want["ids"])
@@ -202,6 +203,7 @@ def test_a_trajectory_with_its_own_colours_has_constant_ones(tmp_path):
     np.testing.assert_allclose(np.array(color.Get()), [[1, 0, 0], [0, 0.21404114, 0], [0.03310477, 0.03310477, 1]], atol=1e-7)
     species = UsdGeom.PrimvarsAPI(points).GetPrimvar("species")
     assert species.GetAttr().GetNumTimeSamples() == 0 and list(species.Get()) == ["a", "b", "a"]
+    assert list(points.GetPrim().GetAttribute("kinema:colorIds").Get()) == traj.ids.tolist()  # every colour the particle's own
 
 
 @pytest.mark.parametrize("deaths", [False, True], ids=["cloth", "cloth with births and deaths"])
@@ -226,6 +228,8 @@ def test_the_springs_are_linear_curves_between_their_ends(tmp_path, deaths):
     # 2 × 19 diagonals; they are gone where the row is not (born at frame 2, dead from 5)
     assert counts == ([1482] * len(traj.t) if not deaths else [1482 - 77] * 2 + [1482] * 3 + [1482 - 77] * (len(traj.t) - 5))
     assert np.array(curves.GetWidthsAttr().Get()).tolist() == [pytest.approx(0.012 / 2)]  # half the smallest radius, m
+    # the ids at each spring's ends, for a reader: the curves' points alone do not tell them
+    np.testing.assert_array_equal(np.array(curves.GetPrim().GetAttribute("kinema:springs").Get()).reshape(-1, 2), traj.springs)
 
 
 def mesh_of(prim):

@@ -202,7 +202,7 @@ _UNITS_HELP = (
 )
 _TRAJ_HELP = (
     "A trajectory file: H5MD (.h5), extended XYZ (.xyz), GSD (.gsd), a LAMMPS dump (.lammpstrj) or data file (.data), "
-    "or kinema's CSV, VTK (.pvd) or PLY series export."
+    "a USD stage's points (.usd, .usdc, .usda, .usdz), or kinema's CSV, VTK (.pvd) or PLY series export."
 )
 
 

@@ -29,9 +29,13 @@ READ_FORMATS = {
     "csv": (".csv",),
     "vtk": (".pvd",),
     "ply": (".ply",),
+    "usd": (".usd", ".usda", ".usdc", ".usdz"),
 }
 _HDF5 = b"\x89HDF\r\n\x1a\n"
 _GSD = bytes.fromhex("df65df65df65df65")
+# USD's binary (crate) and text layers (read_usd.MAGIC_CRATE, MAGIC_TEXT); a .usdz, a zip
+# ("PK"), is known by its suffix only: a zip is many things
+_USD = (b"PXR-USDC", b"#usda")
 # A text file's memory once read, per byte of file: its lines and the words of its rows as
 # NumPy strings (4 bytes a character, padded to the longest word).
 _TEXT_FACTOR = 8
@@ -41,7 +45,7 @@ def formats_read() -> str:
     """The formats kinema reads, in words, as a refusal names them."""
     return (
         "H5MD (.h5, .hdf5, .h5md), extended XYZ (.xyz, .extxyz), GSD (.gsd), LAMMPS dumps (.lammpstrj, .dump) and data files (.data, .lmp), "
-        "and kinema's own CSV (.csv), VTK series (.pvd) and PLY series (<stem>_ply/)"
+        "kinema's own CSV (.csv), VTK series (.pvd) and PLY series (<stem>_ply/), and USD (.usd, .usda, .usdc, .usdz)"
     )
 
 
@@ -77,7 +81,7 @@ def _sniff_text(head: bytes) -> tuple[str | None, bool]:
 
 
 def detect_format(path: Path) -> str:
-    """The format of the file ``path``: HDF5's or GSD's magic bytes first, then a sure sign in
+    """The format of the file ``path``: HDF5's, GSD's or USD's magic bytes first, then a sure sign in
     the first lines (``ITEM:`` a LAMMPS dump, kinema's CSV header, a VTK collection), then the
     suffix (``READ_FORMATS``), then a guess from the first lines (a count alone an XYZ file,
     ``N atoms`` in the header a LAMMPS data file).
@@ -90,6 +94,8 @@ def detect_format(path: Path) -> str:
         return "h5md"
     if head.startswith(_GSD):
         return "gsd"
+    if head.startswith(_USD):
+        return "usd"
     sniffed, sure = _sniff_text(head)
     if sure:  # (a dump named .lmp, say)
         return sniffed
@@ -122,8 +128,9 @@ def read_trajectory(
     UNITS``, a HOOMD GSD file, an XYZ file not in ASE's units): a name (``"real"``,
     ``"metal"``, ``"si"``, ``"cgs"``, ``"electron"``, ``"micro"``, ``"nano"``, ``"ase"``) or
     {"length": m, "time": s, "mass": kg}; refused for H5MD and kinema's own CSV, VTK and PLY,
-    which are in known units. ``group`` and ``follow_links`` are H5MD's (``load_h5md``),
-    ``atom_style`` a LAMMPS data file's (``read_lammps.read_data``).
+    which are in known units, and USD, whose stage says them. ``group`` and ``follow_links``
+    are H5MD's (``load_h5md``), ``atom_style`` a LAMMPS data file's
+    (``read_lammps.read_data``).
 
     Raises ``TrajectoryFileError`` (a ``ValueError``), one line naming the file: missing, a
     directory or a device, of no format kinema reads (the message names those it reads), or
@@ -150,7 +157,7 @@ def read_trajectory(
         raise ValueError(f"group and follow_links are H5MD's options; {path} is read as {fmt}")
     if fmt != "lammps-data" and atom_style is not None:
         raise ValueError(f"atom_style is a LAMMPS data file's option; {path} is read as {fmt}")
-    if fmt in ("h5md", "csv", "vtk", "ply") and units is not None:
+    if fmt in ("h5md", "csv", "vtk", "ply", "usd") and units is not None:
         raise ValueError(
             f"units = {units!r}: {path} is read as {fmt}, whose units are known (SI, or the file's own); give units only for XYZ, GSD and LAMMPS files"
         )
@@ -181,6 +188,10 @@ def read_trajectory(
             from .read_lammps import read_data
 
             return read_data(path, units, atom_style)
+        if fmt == "usd":
+            from .read_usd import read_usd
+
+            return read_usd(path)
         from .read_exports import read_csv, read_ply, read_vtk
 
         return {"csv": read_csv, "vtk": read_vtk, "ply": read_ply}[fmt](series if fmt == "ply" else path)

@@ -43,13 +43,17 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
       time sample holds the particles alive at that frame only: ``points``, ``velocities``,
       ``widths``, ``ids`` and every primvar are then all time-sampled, their length varying
       from frame to frame (0 for a frame with none), and ``ids`` tells which particle each
-      point is.
+      point is. ``kinema:colorIds`` (int64, constant; where some particle has its own
+      colour): the ids of the particles whose ``displayColor`` is their own colour, which
+      kinema's reader gives back (the others' is the speed colour map's).
     - ``/World/springs`` where the trajectory has springs: a ``UsdGeom.BasisCurves`` of
       ``linear`` curves of 2 vertices (``curveVertexCounts`` all 2), one per spring whose two
       ends are alive at the frame, its ``points`` the two particles' positions as a time
       sample per frame; ``widths`` half the smallest radius of their ends (m), grey as in
       kinema's videos, with the default purpose: a cloth's springs render. A spring whose
-      ends are ids the trajectory does not hold is left out.
+      ends are ids the trajectory does not hold is left out. ``kinema:springs`` (int64,
+      constant): the ids at the two ends of each spring, a pair after pair (2 S values); a
+      frame's curves are the springs among them whose two ends are alive, in that order.
     - ``/World/colliders``: a ``UsdGeom.Mesh`` per collider, ``box_k`` (its 8 corners and 6
       quads; open faces closed at the scene's extent), ``plane_k`` (one square quad in the
       plane, twice the scene's size wide, centred on the plane's point nearest the scene's
@@ -195,6 +199,9 @@ class _Particles:
             for attr, values, array in self.values.values():
                 attr.Set(_vt(array, values, Vt))
         self.color = points.CreateDisplayColorPrimvar(UsdGeom.Tokens.vertex)
+        if colours.has_own.any():  # which colours a reader gives back as the particles' own (the others are the speed map's)
+            own_ids = fr.ids[colours.has_own].astype(np.int64)
+            points.GetPrim().CreateAttribute("kinema:colorIds", Sdf.ValueTypeNames.Int64Array).Set(Vt.Int64Array.FromNumpy(own_ids))
         if not colours.per_frame and not self.changes:
             self.color.Set(Vt.Vec3fArray.FromNumpy(colours.at(0, np.arange(fr.n_particles))))
         self.positions, self.velocities = points.CreatePointsAttr(), points.CreateVelocitiesAttr()
@@ -311,6 +318,9 @@ class _Springs:
         curves.CreateTypeAttr(UsdGeom.Tokens.linear)
         curves.CreateWrapAttr(UsdGeom.Tokens.nonperiodic)
         self.counts, self.points = curves.CreateCurveVertexCountsAttr(), curves.CreatePointsAttr()
+        # the curves' ends as ids, which their points alone do not tell (two particles may meet)
+        ends = Vt.Int64Array.FromNumpy(fr.ids[pairs].reshape(-1).astype(np.int64))
+        curves.GetPrim().CreateAttribute("kinema:springs", Sdf.ValueTypeNames.Int64Array).Set(ends)
         self.changes = fr.changes_count
         if not self.changes:
             self.counts.Set(Vt.IntArray.FromNumpy(np.full(len(pairs), 2, dtype=np.int32)))

@@ -260,7 +260,7 @@ class ScalesTable(_Model):
 
 
 # the formats a file block reads (kinema.io.readers.READ_FORMATS) and a LAMMPS data file's atom styles (read_lammps.ATOM_STYLES)
-FileFormat = Literal["h5md", "xyz", "gsd", "lammps", "lammps-data", "csv", "vtk", "ply"]
+FileFormat = Literal["h5md", "xyz", "gsd", "lammps", "lammps-data", "csv", "vtk", "ply", "usd"]
 AtomStyle = Literal["atomic", "charge", "bond", "angle", "molecular", "full", "sphere"]
 
 
