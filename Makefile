@@ -68,6 +68,7 @@ test-rust:
 
 test-python: build $(TEST_STAMP)
 	command -v chromium >/dev/null || apt-get install -y -q chromium >/dev/null || (apt-get update -q >/dev/null && apt-get install -y -q chromium >/dev/null) || echo "chromium could not be installed: the browser tests will say so and skip"
+	command -v lmp >/dev/null || apt-get install -y -q lammps >/dev/null || (apt-get update -q >/dev/null && apt-get install -y -q lammps >/dev/null) || echo "LAMMPS could not be installed: the tests of files LAMMPS writes will say so and skip"
 	$(PY) -m pytest -q
 
 # The fuzz suite alone, FUZZ_EXAMPLES cases per test (make test runs it with 40).
