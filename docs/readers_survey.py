@@ -542,6 +542,7 @@ CASES = {
     ("PLY", "plyfile"): ("run.ply", {}, lambda p, t: read_ply(p)),
     ("USD", "usd-core"): ("run.usd", {}, lambda p, t: read_pxr(p, t)),
     ("USD", "Blender"): ("run.usdc", {}, lambda p, t: read_blender(p, t)),
+    ("USD", "kinema"): ("run.usd", {}, lambda p, t: read_kinema(p, t)),
     ("CSV", "numpy"): ("run.csv", {}, lambda p, t: read_csv(p, t)),
 }
 
