@@ -117,8 +117,9 @@ def load(path, **options):
 
 
 def columns(back, ids):
-    """The columns of ``back`` of the particles ``ids``, in that order."""
-    return np.searchsorted(back.ids, ids.astype(np.int64))
+    """The columns of ``back`` of the particles of LAMMPS ids ``ids``, in that order (kinema's
+    ids are LAMMPS's − 1: from 0)."""
+    return np.searchsorted(back.ids, ids.astype(np.int64) - 1)
 
 
 def test_a_dump_custom_lammps_wrote_reads_as_lammps_wrote_it(run):
@@ -133,7 +134,7 @@ def test_a_dump_custom_lammps_wrote_reads_as_lammps_wrote_it(run):
     np.testing.assert_allclose(back.box_edges, [RUNS[units]["box"] * length] * 3, rtol=1e-15)
     for k, (_, c) in enumerate(written):
         col = columns(back, c["id"])
-        np.testing.assert_array_equal(back.ids[col], c["id"].astype(np.int64))
+        np.testing.assert_array_equal(back.ids[col], c["id"].astype(np.int64) - 1)
         assert back.species[col].tolist() == [str(int(t)) for t in c["type"]]
         x = np.stack([c["x"], c["y"], c["z"]], axis=1)
         v = np.stack([c["vx"], c["vy"], c["vz"]], axis=1)
@@ -179,7 +180,7 @@ def test_write_data_reads_as_lammps_wrote_it(run):
     x = np.stack([last["x"], last["y"], last["z"]], axis=1)[order] * length
     v = np.stack([last["vx"], last["vy"], last["vz"]], axis=1)[order] * length / time
     back = load(folder / "out.data", units=units)  # LAMMPS 2021's write_data names no units
-    np.testing.assert_array_equal(back.ids, np.sort(last["id"]).astype(np.int64))
+    np.testing.assert_array_equal(back.ids, np.sort(last["id"]).astype(np.int64) - 1)
     assert back.source.step.tolist() == [STEPS]  # the title's timestep = 10
     # write_data's 17 digits against the dump's 15
     np.testing.assert_allclose(back.positions[0], x, rtol=1e-14, atol=0)

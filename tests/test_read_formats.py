@@ -88,7 +88,7 @@ def test_own_lammps_dump_reads_back_bit_for_bit_in_si(tmp_path, comings_and_goin
     path = tmp_path / "run.lammpstrj"
     export(traj, path)
     back = load(path, units="si")
-    np.testing.assert_array_equal(back.ids, traj.ids + 1)  # LAMMPS ids start at 1: kinema writes id + 1
+    np.testing.assert_array_equal(back.ids, traj.ids)  # LAMMPS ids start at 1: kinema writes id + 1 and reads id − 1
     np.testing.assert_array_equal(back.alive, traj.alive)
     np.testing.assert_array_equal(back.positions, traj.positions)
     np.testing.assert_array_equal(back.velocities, traj.velocities)
@@ -222,7 +222,7 @@ def test_ase_lammps_data_is_read_in_its_units_style(tmp_path, style, units):
     masses = np.array([float(line.split()[1]) for line in path.read_text().split("Masses")[1].strip().splitlines()[:3]])
     np.testing.assert_array_equal(back.masses, masses[[1, 2, 0, 1]] * s.mass)  # types: Ar 1, Fe 2, He 3 (ASE sorts them)
     assert back.species.tolist() == ["Fe", "He", "Ar", "Fe"]  # ASE's "# Fe" comments on the Masses
-    np.testing.assert_array_equal(back.ids, [1, 2, 3, 4])
+    np.testing.assert_array_equal(back.ids, [0, 1, 2, 3])  # LAMMPS's 1 … 4
     assert back.source.creator == "ASE" and back.periodic == (True, True, True)
 
 
@@ -375,7 +375,7 @@ def test_ovito_lammps_dump(ovito_files):
     back = load(files["dump"], units="metal")
     s = LAMMPS_STYLES["metal"]
     ovito = import_file(str(files["dump"])).compute().particles
-    np.testing.assert_array_equal(back.ids, values["ids"])
+    np.testing.assert_array_equal(back.ids, values["ids"] - 1)  # LAMMPS's ids from 1
     # OVITO's own reading of its file, and the values it held to its 10 digits
     np.testing.assert_allclose(back.positions[0], ovito.positions[...] * s.length, rtol=1e-15, atol=0)
     np.testing.assert_allclose(back.positions[0], values["positions"] * s.length, rtol=0, atol=OVITO_DECIMALS * s.length)
@@ -502,7 +502,7 @@ def test_a_lammps_dump_with_units_scaled_positions_and_changing_atoms(tmp_path):
     path.write_text(DUMP)
     back = load(path)  # ITEM: UNITS real
     s = LAMMPS_STYLES["real"]
-    np.testing.assert_array_equal(back.ids, [1, 3, 7, 9])
+    np.testing.assert_array_equal(back.ids, [0, 2, 6, 8])  # LAMMPS's 1, 3, 7, 9
     np.testing.assert_array_equal(back.alive, [[True, True, True, False], [True, False, False, True]])
     np.testing.assert_array_equal(back.t, np.array([2.5, 5.0]) * s.time)
     np.testing.assert_array_equal(back.source.step, [10, 20])
@@ -574,7 +574,7 @@ def test_a_lammps_data_file_as_write_data_writes_it(tmp_path):
     path.write_text(DATA)
     back = load(path)
     s = LAMMPS_STYLES["metal"]
-    np.testing.assert_array_equal(back.ids, [1, 2, 3])
+    np.testing.assert_array_equal(back.ids, [0, 1, 2])  # LAMMPS's 1 … 3
     np.testing.assert_array_equal(back.positions[0], np.array([[4.0, 5.0, 1.0], [1.0, 2.0, 3.0], [10.0, 0.0, 2.5]]) * s.length)
     np.testing.assert_array_equal(back.velocities[0], np.array([[0.5, 0.25, 0.125], [1.0, 2.0, 3.0], [0.0, 0.0, -1.0]]) * s.velocity)
     # sphere: the radius is half the diameter, the mass the density times 4π/3 r³, or the density where the diameter is 0

@@ -228,7 +228,7 @@ def _dump_frame(path: Path, columns: list[str], rows: list[str], first: int, whe
     return RawFrame(
         positions=x,
         where=where,
-        ids=col("id", np.int64) if "id" in at else None,
+        ids=col("id", np.int64) - 1 if "id" in at else None,  # LAMMPS's ids from 1, kinema's from 0
         velocities=v,
         masses=col("mass") if "mass" in at else None,
         radii=radii,
@@ -416,7 +416,7 @@ def read_data(path: Path, units: Any = None, atom_style: str | None = None) -> L
     frame = RawFrame(
         positions=x,
         where="Atoms section",
-        ids=ids,
+        ids=ids - 1,  # LAMMPS's ids from 1, kinema's from 0 (the dump export writes id + 1)
         velocities=v,
         masses=masses,
         radii=radii,
