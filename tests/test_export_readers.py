@@ -181,19 +181,19 @@ def test_ovito_reads_the_vtk_springs_as_lines(tmp_path, cloth):
 
 def test_why_the_springs_have_a_file_of_their_own(tmp_path, cloth):
     # A frame's particles file with the springs as line cells: OVITO does not open it.
-    from kinema.io import exports
+    from kinema.io import vtk_writer
 
     pytest.importorskip("ovito.io")
     k = np.arange(2 * 3, dtype=np.int64)
     x = cloth.positions[0][:6]
     verts = np.arange(6, dtype=np.int64)
-    (tmp_path / "both.vtp").write_text(exports._polydata(x, verts=(verts, verts + 1), lines=(k, k[1::2] + 1)))
+    (tmp_path / "both.vtp").write_text(vtk_writer._polydata(x, verts=(verts, verts + 1), lines=(k, k[1::2] + 1)))
     with pytest.raises(RuntimeError, match="Could not detect the file format"):
         ovito_import(tmp_path / "both.vtp")
     # A springs file of no lines: OVITO 3.17 dies of a floating point exception (SIGFPE).
     none = np.zeros(0, dtype=np.int64)
-    empty = exports._polydata(
-        np.zeros((0, 3)), cell_data=[exports._vtk_array("id1", none), exports._vtk_array("id2", none)], declared=("Lines",), lines=(none, none)
+    empty = vtk_writer._polydata(
+        np.zeros((0, 3)), cell_data=[vtk_writer._vtk_array("id1", none), vtk_writer._vtk_array("id2", none)], declared=("Lines",), lines=(none, none)
     )
     (tmp_path / "empty.vtp").write_text(empty)
     run = subprocess.run(

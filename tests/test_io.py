@@ -316,16 +316,17 @@ def test_an_error_mid_write_keeps_the_previous_file_and_leaves_no_temporary(tmp_
 
 @pytest.mark.parametrize("fmt, frame_writer", [("pvd", "_vtp"), ("ply", "_ply"), ("xyz", "_xyz"), ("csv", "_csv")])
 def test_an_error_mid_export_leaves_nothing_behind(tmp_path, monkeypatch, fmt, frame_writer):
-    import kinema.io.exports as exports_module
+    from kinema.io import csv_writer, ply_writer, vtk_writer, xyz_writer
 
-    real = getattr(exports_module, frame_writer)
+    writer_module = {"pvd": vtk_writer, "ply": ply_writer, "xyz": xyz_writer, "csv": csv_writer}[fmt]
+    real = getattr(writer_module, frame_writer)
 
     def fail_at_frame_3(fr, i, *args):
         if i == 3:
             raise RuntimeError("interrupted")
         return real(fr, i, *args)
 
-    monkeypatch.setattr(exports_module, frame_writer, fail_at_frame_3)
+    monkeypatch.setattr(writer_module, frame_writer, fail_at_frame_3)
     with pytest.raises(RuntimeError, match="interrupted"):
         export(synthetic(), tmp_path / f"run.{fmt}")
     assert listing(tmp_path) == []

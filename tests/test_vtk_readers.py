@@ -193,20 +193,20 @@ def test_open_box_faces_and_2d_colliders(tmp_path):
 
 
 def test_a_bad_collider_or_an_error_mid_export_leaves_nothing_behind(tmp_path, monkeypatch):
-    import kinema.io.exports as exports_module
+    import kinema.io.vtk_writer as vtk_writer
 
     with pytest.raises(ValueError, match=r"colliders\[1\]: the plane's normal = \[0.0, 0.0, 0.0\] is invalid"):
         export(synthetic(colliders=[BOX, {"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 0]}]), tmp_path / "run.pvd")
     assert list(tmp_path.iterdir()) == []
 
-    real = exports_module._vtp
+    real = vtk_writer._vtp
 
     def fail_at_frame_3(fr, i, extras):
         if i == 3:
             raise RuntimeError("interrupted")
         return real(fr, i, extras)
 
-    monkeypatch.setattr(exports_module, "_vtp", fail_at_frame_3)
+    monkeypatch.setattr(vtk_writer, "_vtp", fail_at_frame_3)
     with pytest.raises(RuntimeError, match="interrupted"):
         export(synthetic(colliders=[BOX]), tmp_path / "run.pvd")
     assert list(tmp_path.iterdir()) == []

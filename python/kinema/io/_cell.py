@@ -4,10 +4,12 @@ number of each frame, the particles' species, their colours and the springs betw
 
 from __future__ import annotations
 
+import re
 from typing import Any, NamedTuple
 
 import numpy as np
 
+from .. import _checks
 from ._files import Frames
 
 _MARGIN = 0.05  # of the particles' largest extent, around them where no periodic cell is known
@@ -173,3 +175,20 @@ def element_names(traj: Any, n: int) -> list[str] | None:
         return None
     names, _ = particle_types(traj, n)
     return names if all(name in ELEMENTS or name == "X" for name in names) else None
+
+
+class Extras:
+    """What a trajectory adds to its particles beyond ``Frames``, computed once before the
+    files: the type names and each particle's type (``None`` without species), the colours
+    (``particle_colors``; ``None`` without) and the springs as pairs of columns
+    (``spring_columns``; ``None`` without)."""
+
+    def __init__(self, traj: Any, fr: Frames) -> None:
+        self.names, self.typeid = particle_types(traj, fr.n_particles) if getattr(traj, "species", None) is not None else (None, None)
+        # every reader takes a name as one word (XYZ's columns, a PLY comment, a CSV field)
+        for name in self.names or []:
+            if not re.fullmatch(_checks.SPECIES_PATTERN, name):
+                raise ValueError(f"species: {name!r} is invalid: a species name is one word of letters, digits and _ . + -")
+        self.colors = particle_colors(traj, fr.n_particles)
+        springs = spring_columns(traj, fr)
+        self.springs = springs if springs.size else None

@@ -295,6 +295,19 @@ def hdf5_file(path: str | os.PathLike, **options: Any) -> Iterator[Any]:
         out.write(image.getbuffer())
 
 
+SERIES_DIGITS = 5  # frame numbers in series file names: stem_00000.vtp
+
+
+def series_names(path: Path, format: str, suffix: str, own_suffixes: tuple[str, ...]) -> tuple[Path, str, str]:
+    """The folder of a series (``<stem>_<format>``), the stem of its file names and the
+    regular expression of those names (``<stem>_00000<suffix>``, ``SERIES_DIGITS`` digits
+    or more). The stem is the name of ``path`` less its suffix where that is one of the
+    format's ``own_suffixes`` (``export`` refuses another format's), the whole name
+    otherwise."""
+    stem = path.stem if path.suffix.lower() in own_suffixes else path.name
+    return path.with_name(f"{stem}_{format}"), stem, rf"{re.escape(stem)}_\d{{{SERIES_DIGITS},}}{re.escape(suffix)}"
+
+
 @contextmanager
 def atomic_folder(folder: str | os.PathLike, pattern: str) -> Iterator[Path]:
     """Yields a temporary folder beside ``folder``; when the block ends without an exception

@@ -1,0 +1,55 @@
+"""CSV, one text file of all frames: a row per particle and frame."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._cell import Extras
+from ._files import Frames, atomic_file
+
+
+def _csv_header(fr: Frames, extras: Extras) -> str:
+    return (
+        "frame,time,id,x,y,z,vx,vy,vz"
+        + ",mass" * (fr.masses is not None)
+        + ",radius" * (fr.radii is not None)
+        + ",species" * (extras.names is not None)
+        + ",r,g,b" * (extras.colors is not None)
+    )
+
+
+def _csv(fr: Frames, i: int, extras: Extras) -> str:
+    """The rows of frame ``i``, one per particle alive at it: frame,time,id,x,y,z,vx,vy,vz,
+    then mass, radius, species (its name) and r,g,b (its colour in [0, 1]) where the
+    trajectory has them (17 significant digits)."""
+    t = repr(float(fr.t[i]))
+    live = fr.live(i)
+    cols = [fr.positions[i][live], fr.velocities[i][live], *(a[live][:, None] for a in (fr.masses, fr.radii) if a is not None)]
+    table = np.hstack(cols).tolist()
+    names = [f",{extras.names[k]}" for k in extras.typeid[live]] if extras.names is not None else [""] * live.size
+    colors = [",".join(["", *map(repr, c)]) for c in extras.colors[live].tolist()] if extras.colors is not None else [""] * live.size
+    return "".join(
+        f"{i},{t},{int(k)}," + ",".join(map(repr, r)) + name + rgb + "\n" for r, k, name, rgb in zip(table, fr.ids[live], names, colors, strict=True)
+    )
+
+
+def write_csv(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
+    """Write ``fr`` to one CSV file at ``path``; returns ``[path]``.
+
+    The header ``frame,time,id,x,y,z,vx,vy,vz,mass,radius,species,r,g,b`` (``_csv_header``:
+    mass and radius where the trajectory has them, species and r,g,b where it has species
+    and colours), then a row per particle and frame (``_csv``), every float with 17
+    significant digits (exact for float64), in SI units. The file is written under a
+    temporary name and renamed at the end. ``on_frame(i)`` is called after frame ``i`` is
+    written."""
+    extras = Extras(traj, fr)
+    with atomic_file(path) as tmp, open(tmp, "w", encoding="ascii", newline="") as f:
+        f.write(_csv_header(fr, extras) + "\n")
+        for i in range(fr.n_frames):
+            f.write(_csv(fr, i, extras))
+            on_frame(i)
+    return [path]
