@@ -139,6 +139,30 @@ def test_a_loaded_trajectory_keeps_what_only_its_file_knows(tmp_path):
     np.testing.assert_array_equal(back.source.step, load_h5md(path).step)
 
 
+def test_the_fps_a_world_ran_at_is_saved_and_loaded_back(tmp_path):
+    # World.run(fps=30) with dt = 1 ms records every 33 steps (30.30 frames a second): the 30
+    # asked is kept, in /parameters/kinema, as the default rate of a video of the file.
+    w = kinema.World(dt=1e-3, dim=2)
+    w.add_particles([[0.0, 0.0, 0.0]], radius=0.1)
+    tr = w.run(0.2, fps=30)
+    assert tr.fps == 30.0 and 1 / np.median(np.diff(tr.t)) == pytest.approx(1000 / 33)
+    path = tr.save(tmp_path / "run.h5")
+    with h5py.File(path) as f:
+        attrs = dict(f["parameters/kinema"].attrs)
+        assert (attrs["fps"], attrs["fps_unit"]) == (30.0, "s-1")
+    assert load_h5md(path).fps == 30.0 and kinema.Trajectory.load(path).fps == 30.0
+    # A file without it (another program's, an older kinema's) loads with fps None.
+    with h5py.File(path, "r+") as f:
+        del f["parameters/kinema"].attrs["fps"]
+    assert kinema.Trajectory.load(path).fps is None
+    # What would not load back is not written.
+    for bad in (-30.0, float("nan"), True, "30"):
+        tr.fps = bad
+        with pytest.raises(TrajectoryFileError, match=r"trajectory 'fps' = .* is not a positive number"):
+            tr.save(tmp_path / "bad.h5")
+    assert not (tmp_path / "bad.h5").exists()
+
+
 def test_the_file_modules_do_not_import_the_trajectory():
     # kinema.io takes any object with a Trajectory's attributes; Trajectory imports kinema.io
     # (inside its methods), never the other way round, not even through kinema.world.
@@ -646,6 +670,9 @@ DAMAGES = {
     "dt a word": (_attr("parameters/kinema", "dt", "fast"), "attribute 'dt' (/parameters/kinema) = 'fast' is not a positive number"),
     "dt negative": (_attr("parameters/kinema", "dt", -0.01), "attribute 'dt' (/parameters/kinema) = -0.01 is not a positive number"),
     "dt nan": (_attr("parameters/kinema", "dt", np.nan), "attribute 'dt' (/parameters/kinema) = nan is not a positive number"),
+    "fps a word": (_attr("parameters/kinema", "fps", "fast"), "attribute 'fps' (/parameters/kinema) = 'fast' is not a positive number"),
+    "fps zero": (_attr("parameters/kinema", "fps", 0.0), "attribute 'fps' (/parameters/kinema) = 0 is not a positive number"),
+    "fps inf": (_attr("parameters/kinema", "fps", np.inf), "attribute 'fps' (/parameters/kinema) = inf is not a positive number"),
     "method a number": (_attr("parameters/kinema", "method", 3), "attribute 'method' (/parameters/kinema) = 3 is not the name of an integration method"),
     "string masses": (_masses([b"heavy"] * N), "dataset 'masses' (/particles/all/mass) holds strings; it must hold real numbers"),
     "string times": (

@@ -7,10 +7,14 @@ the MP4 boxes are read here; GIF delays with Pillow. Videos are small (64×48) a
 
 from __future__ import annotations
 
+import os
 import re
+import shutil
+import stat
 import struct
 import subprocess
 from fractions import Fraction
+from pathlib import Path
 
 import imageio_ffmpeg
 import numpy as np
@@ -224,12 +228,96 @@ def test_kinema_run_writes_the_scene_fps_and_says_so(tmp_path):
     assert mp4_timing(tmp_path / "slow" / "s.mp4") == (10, 101)
 
 
-def test_a_saved_trajectory_without_fps_is_written_at_its_own_rate_exactly(tmp_path):
+def _scene(tmp_path, fps=30.0, dt=1e-3, duration=1.0) -> Path:
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        f'[world]\ndim = 2\ndt = {dt!r}\nduration = {duration!r}\nfps = {fps!r}\n\n[[particles]]\ntype = "list"\npositions = [[0, 1]]\n'
+        "velocity = [1.0, 0.0]\nradius = 0.1\n\n[render]\nwidth = 64\nheight = 48\n\n[output]\nvideo = false\nplot = false\n"
+    )
+    return scene
+
+
+def _run_and_save(tmp_path, **scene) -> Path:
+    from typer.testing import CliRunner
+
+    res = CliRunner().invoke(app, ["run", str(_scene(tmp_path, **scene)), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    return tmp_path / "out" / "trajectory.h5"
+
+
+def test_kinema_render_of_a_saved_run_plays_at_the_scene_fps(tmp_path):
+    # fps = 30 and dt = 1 ms record every 33 steps, 30.30 frames a second; the file says the
+    # scene's 30 (/parameters/kinema fps), and the video is 30 fps in real time (it was
+    # 1000/33 = 30.30 fps, one video frame per recorded frame).
+    from typer.testing import CliRunner
+
+    saved = _run_and_save(tmp_path)
+    traj = kinema.Trajectory.load(saved)
+    assert traj.fps == 30.0 and traj.t.size == 31 and traj.t[1] == pytest.approx(0.033)
+    res = CliRunner().invoke(app, ["render", str(saved), "-o", str(tmp_path / "v.mp4"), "--width", "64", "--height", "48"])
+    assert res.exit_code == 0, res.output
+    assert "video: 30 fps, real time, 30.3 recorded frames a second placed by their times" in res.output
+    path = tmp_path / "v.mp4"
+    assert mp4_timing(path) == (30, round(traj.t[-1] * 30) + 1)  # 0.99 s at 30 fps, both ends
+    assert imageio_ffmpeg.read_frames(str(path)).__next__()["fps"] == 30.0
+    assert ", 30 fps," in ffmpeg_info(path)
+    ffprobe = shutil.which("ffprobe")
+    if ffprobe is not None:
+        out = subprocess.run([ffprobe, "-v", "error", "-select_streams", "v:0", "-show_entries", "stream=r_frame_rate,avg_frame_rate", "-of", "csv=p=0", str(path)],
+                             capture_output=True, text=True, check=True).stdout  # fmt: skip
+        assert out.split() == ["30/1,30/1"], out
+    # --fps is still a playback rate: every recorded frame at exactly that rate.
+    res = CliRunner().invoke(app, ["render", str(saved), "-o", str(tmp_path / "f.mp4"), "--width", "64", "--height", "48", "--fps", "10"])
+    assert res.exit_code == 0, res.output
+    assert mp4_timing(tmp_path / "f.mp4") == (10, traj.t.size)
+
+
+def test_a_trajectory_without_fps_plays_at_the_common_rate_within_2_percent(tmp_path):
+    # Another program's file (or an older kinema's) does not say its fps: 30.30 recorded frames
+    # a second are within 2 % of 30, so the video is 30 fps in real time (it was 1000/33).
     w = kinema.World(dt=1e-3, dim=2)
     w.add_particles([[0.0, 0.0, 0.0]], radius=0.1)
     traj = w.run(0.5, fps=30)  # every 33 ms
+    traj.fps = None
+    path = _render_video(traj, tmp_path / "common.mp4", {"width": W, "height": H}, None, "rendering")
+    assert mp4_timing(path) == (30, round(traj.t[-1] * 30) + 1)
+    path = traj.render(tmp_path / "common2.mp4", width=W, height=H)  # the same default
+    assert mp4_timing(path) == (30, round(traj.t[-1] * 30) + 1)
+    # 60 asked at dt = 1 ms records every 17 steps, 58.82 a second: within 2 % of 60.
+    assert kinema.render.playback_rate(np.arange(10) * 0.017)[:2] == (60.0, True)
+
+
+def test_a_trajectory_far_from_the_common_rates_is_written_at_its_own_rate_exactly(tmp_path):
+    # Every 45 ms, 22.2 frames a second: 7.4 % from 24, so the recording's own rate, 200/9.
+    w = kinema.World(dt=1e-3, dim=2)
+    w.add_particles([[0.0, 0.0, 0.0]], radius=0.1)
+    traj = w.run(0.5, fps=22.2)
+    assert traj.t[1] == pytest.approx(0.045)
+    traj.fps = None
     path = _render_video(traj, tmp_path / "own.mp4", {"width": W, "height": H}, None, "rendering")
-    assert mp4_timing(path) == (Fraction(1000, 33), traj.t.size)
+    assert mp4_timing(path) == (Fraction(200, 9), traj.t.size)
+
+
+@pytest.mark.parametrize(("mask", "mode"), [(0o022, 0o644), (0o027, 0o640)], ids=["umask022", "umask027"])
+def test_kinema_render_files_follow_the_umask(tmp_path, mask, mode):
+    # They were 0600 (tempfile.mkstemp's mode, kept by ffmpeg and Pillow writing into it); every
+    # other kinema writer gives 0666 less the umask.
+    from typer.testing import CliRunner
+
+    saved = _run_and_save(tmp_path)
+    old = os.umask(mask)
+    try:
+        for name in ("v.mp4", "v.gif"):
+            res = CliRunner().invoke(app, ["render", str(saved), "-o", str(tmp_path / name), "--width", "64", "--height", "48"])
+            assert res.exit_code == 0, res.output
+        write_video([solid((0, 0, 0))] * 2, tmp_path / "w.mp4")
+        write_video([solid((0, 0, 0))] * 2, tmp_path / "old.gif")
+        write_video([solid((9, 9, 9))] * 2, tmp_path / "old.gif")  # over an existing file
+    finally:
+        os.umask(old)
+    for name in ("v.mp4", "v.gif", "w.mp4", "old.gif"):
+        assert stat.S_IMODE((tmp_path / name).stat().st_mode) == mode, name
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []  # no temporary left
 
 
 def test_bad_times_are_refused_and_leave_nothing(tmp_path):

@@ -269,7 +269,14 @@ def run(
 def render(
     traj: Annotated[Path, typer.Argument(help=_TRAJ_HELP)],
     out: Annotated[Path, typer.Option("--out", "-o", help="Video to write: .mp4 (H.264) or .gif.")],
-    fps: Annotated[float | None, typer.Option(help="Frames per second (default: real time).")] = None,
+    fps: Annotated[
+        float | None,
+        typer.Option(
+            help="Frames per second: one video frame per recorded frame at this rate. Default: real time, at the fps the trajectory "
+            "was recorded at (kinema run's files say it), else the nearest of 24, 25, 30, 50, 60 within 2 % of the recording's rate, "
+            "else that rate."
+        ),
+    ] = None,
     width: Annotated[int, typer.Option(help="Width, pixels.")] = 640,
     height: Annotated[int, typer.Option(help="Height, pixels.")] = 480,
     color_by: Annotated[str, typer.Option(help="speed, id or color (each particle's own: an emitter's color).")] = "speed",
@@ -278,6 +285,12 @@ def render(
 ) -> None:
     """Render a saved trajectory to a video: kinema's H5MD or another program's file (XYZ, GSD,
     LAMMPS dump or data; docs/files.md).
+
+    Without --fps the video plays in real time: at the fps the scene asked for when the file
+    says it (an H5MD file of kinema run: 30, not the 30.30 frames a second that dt = 1 ms
+    records), else at the nearest of 24, 25, 30, 50 and 60 fps within 2 % of the recording's
+    rate, else at that rate; frames are dropped or repeated to keep time. --fps F writes every
+    recorded frame at exactly F (slow or fast motion).
 
     The work is estimated first (frames × pixels, memory); a video over the limits is refused
     unless --force is given."""

@@ -193,26 +193,26 @@ def _render_video(
     trajectory's colliders are drawn unless ``draw_colliders`` (or the option of that name in
     ``render_opts``) is False.
 
-    ``fps``: one video frame per recorded frame at this rate. None: real time, the frames
-    placed by their times (``write_video(times=)``), at the ``scene_fps`` the scene asked for
-    (World.run records every round(1/(fps·dt)) steps, 33 ms for 30 fps and dt = 1 ms, so one
-    frame in about a hundred is dropped to play 30.30 recorded frames a second at exactly 30),
-    or, without it or when the recording interval is not that rate's rounding (clamped to one
-    step), at the recording's own rate (clamped to ``VIDEO_FPS``, and then not real time). The
-    rate written (``kinema.render.video_rate``: GIF counts in 1/100 s) is printed."""
-    from .render import _trajectory_options, own_colours, render_frames, video_rate, write_video
+    ``fps``: one video frame per recorded frame at this rate. None: real time
+    (``kinema.render.playback_rate``), the frames placed by their times
+    (``write_video(times=)``), at the ``scene_fps`` the scene asked for or else the
+    trajectory's own ``fps`` (a file saved by ``kinema run`` says it): World.run records every
+    round(1/(fps·dt)) steps, 33 ms for 30 fps and dt = 1 ms, so one frame in about a hundred
+    is dropped to play 30.30 recorded frames a second at exactly 30. Without either, or when
+    the recording interval is not that rate's rounding (clamped to one step), at the common
+    rate (24, 25, 30, 50, 60) within 2 % of the recording's, else at the recording's own rate
+    (clamped to ``VIDEO_FPS``, and then not real time). The rate written
+    (``kinema.render.video_rate``: GIF counts in 1/100 s) is printed."""
+    from .render import _trajectory_options, own_colours, playback_rate, render_frames, video_rate, write_video
 
     render_opts = dict(render_opts)
     draw_colliders = render_opts.pop("draw_colliders", draw_colliders)
     render_opts.setdefault("colliders", getattr(traj, "colliders", None) if draw_colliders else None)
     times, timing = None, "one video frame per recorded frame"
-    recorded = 1.0 / float(np.median(np.diff(traj.t))) if traj.t.size > 1 else float("nan")
-    if fps is None and scene_fps is not None and VIDEO_FPS[0] <= scene_fps <= VIDEO_FPS[1] and 0.5 <= recorded / scene_fps <= 1.5:
-        fps, times, timing = scene_fps, traj.t, f"real time, {recorded:.4g} recorded frames a second placed by their times"
-    elif fps is None:  # real time, within what the video formats can play
-        fps = min(max(recorded, VIDEO_FPS[0]), VIDEO_FPS[1]) if np.isfinite(recorded) else 30.0
-        if fps == recorded:  # placed by their times: GIF delays round, the times need not be even
-            times, timing = traj.t, "real time at the recording's rate"
+    if fps is None:
+        known = scene_fps if scene_fps is not None else getattr(traj, "fps", None)
+        fps, real_time, timing = playback_rate(traj.t, known, VIDEO_FPS)
+        times = traj.t if real_time else None
     # The radii (or a stand-in), the alive mask and the springs (ids → columns).
     for name, value in _trajectory_options(traj).items():
         render_opts.setdefault(name, value)

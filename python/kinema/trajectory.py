@@ -45,7 +45,9 @@ class Trajectory:
 
     About the world (``None`` when unknown): ``masses`` (N,) kg, ``radii`` (N,) m, ``ids``
     (N,), ``species`` (N,) names (``World.add_particles(species=)``), ``dim`` (2 or 3), ``dt`` s, ``method``, ``periodic`` (3 bools) and ``box_edges``
-    (3,) m, the periodic cell. ``colliders``: the world's colliders as plain descriptions, in
+    (3,) m, the periodic cell. ``fps``: the frames per second asked of ``World.run`` (a frame
+    is recorded every round(1/(fps·dt)) steps, so the frames may be a little more or less
+    than 1/fps s apart); saved in H5MD files, it is the default rate of a video of them. ``colliders``: the world's colliders as plain descriptions, in
     the order added — {"type": "plane", "point": [3], "normal": [3]}, {"type": "box", "lo",
     "hi"} (2 or 3 values each, ±inf for an open face), {"type": "sphere", "center": [3],
     "radius"}, with "restitution" and "friction" where the collider sets them; m. Empty when
@@ -84,6 +86,7 @@ class Trajectory:
     dim: int = 3
     dt: float | None = None
     method: str | None = None
+    fps: float | None = None
     periodic: tuple[bool, bool, bool] | None = None
     box_edges: np.ndarray | None = None
     colliders: list[dict[str, Any]] = field(default_factory=list)
@@ -226,23 +229,28 @@ class Trajectory:
     def render(self, path: Any, fps: float | None = None, draw_colliders: bool = True, **options: Any) -> Any:
         """Render the frames to a video, ``.mp4`` (H.264) or ``.gif``, and return its path.
 
-        ``fps`` defaults to the recording's frame rate (real time: the frames are placed by
-        their times, ``write_video(times=)``, so a GIF, whose delays are whole 1/100 s, still
-        plays in real time; the rate written is ``kinema.render.video_rate``). The trajectory's
+        ``fps`` defaults to real time (``kinema.render.playback_rate``): the trajectory's own
+        ``fps`` (the rate asked of ``World.run``, also read from an H5MD file kinema wrote),
+        else the nearest of the common rates 24, 25, 30, 50 and 60 within 2 % of the
+        recording's rate, else the recording's rate; the frames are placed by their times
+        (``write_video(times=)``: a recording every 33 ms, 30.30 a second, makes a 30 fps
+        video with one frame in about a hundred dropped, and a GIF, whose delays are whole
+        1/100 s, still plays in real time; the rate written is ``kinema.render.video_rate``).
+        A number gives one video frame per recorded frame at that rate. The trajectory's
         ``colliders`` are drawn with the particles unless ``draw_colliders`` is False (or
         ``colliders=`` gives others). ``options`` go to ``kinema.render_frames``
         (``color_by``, ``width``, ``height``, ``camera``, ...) and ``preset``/``crf`` to
         ``kinema.write_video``. Particles without a radius are drawn at 1/200 of the scene's
         size. Each frame shows the particles ``alive`` then, and the ``springs`` whose ends
         both are, as lines."""
-        from .render import _trajectory_options, own_colours, render_frames, write_video
+        from .render import _trajectory_options, own_colours, playback_rate, render_frames, write_video
 
         video = {k: options.pop(k) for k in ("preset", "crf") if k in options}
         options.setdefault("colliders", self.colliders if draw_colliders else None)
         times = None
         if fps is None:
-            fps = 1.0 / float(np.median(np.diff(self.t))) if self.t.size > 1 else 30.0
-            times = self.t if self.t.size > 1 else None
+            fps, real_time, _ = playback_rate(self.t, self.fps)
+            times = self.t if real_time else None
         # The radii (or a stand-in), the alive mask and the springs (ids → columns); options win.
         for name, value in _trajectory_options(self).items():
             options.setdefault(name, value)

@@ -542,7 +542,9 @@ class World(WorldCollisions):
                 self._push()
             if checkpoint is not None and run["frames_done"] % run["every"] == 0 and run["frames_done"] < run["frames_total"]:
                 save_checkpoint(self, checkpoint, _run=run)
-        return rec.finish()
+        traj = rec.finish()
+        traj.fps = float(run["fps"])  # (saved with it: a video's default rate)
+        return traj
 
     # -- stability --------------------------------------------------------------------------
     def stable_step(self, method: str | ButcherTableau | None = None) -> float | dict[str, float]:

@@ -29,7 +29,8 @@ specification allows, and requires for the box; units shown for ``units="SI"``, 
         potential_energy_by_force/<force name>             step, time, value (F,) [J]
         momentum (F, 3) [kg m s-1], angular_momentum (F, 3) [kg m2 s-1]
         contacts (F,), impulse_balance (F, 3) [kg m s-1], collision_energy_lost (F,) [J]
-    /parameters/kinema    +-- dim = 2 | 3, dt [s], method   (dt, method when known)
+    /parameters/kinema    +-- dim = 2 | 3, dt [s], method, fps [s-1]   (each but dim when known;
+                              fps: the frames per second asked of World.run, a video's rate)
         colliders/<k>     +-- type = "plane" | "box" | "sphere", its geometry [m]
                               (point, normal | lo, hi | center, radius), restitution,
                               friction when set; k = 0, 1, ... in the world's order
@@ -66,6 +67,8 @@ units ``kinema.io.h5md_units``, what both sides share ``kinema.io._h5md_layout``
 from __future__ import annotations
 
 import getpass
+import math
+import numbers
 import os
 from pathlib import Path
 from typing import Any
@@ -304,6 +307,10 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
         params.attrs["dt_unit"] = "s"
     if fr.method is not None:
         params.attrs["method"] = fr.method
+    fps = getattr(tr, "fps", None)
+    if fps is not None:  # the frames per second asked of World.run: a video's default rate
+        params.attrs["fps"] = float(fps)
+        params.attrs["fps_unit"] = "s-1"
     if colliders:
         # One group per collider, named by its index; the values are attributes (H5MD
         # leaves /parameters to the program), lengths in m, ±inf for an open box face.
@@ -333,6 +340,9 @@ def _check_writable(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> Non
             raise TrajectoryFileError(f"cannot write {path}: trajectory 'box_edges' {problem}")
     if fr.dt is not None and not (np.isfinite(fr.dt) and fr.dt > 0):
         raise TrajectoryFileError(f"cannot write {path}: trajectory 'dt' = {fr.dt!r} is not a positive number (the time step in s)")
+    fps = getattr(tr, "fps", None)
+    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not (math.isfinite(fps) and fps > 0)):
+        raise TrajectoryFileError(f"cannot write {path}: trajectory 'fps' = {fps!r} is not a positive number (the frames per second recorded)")
     for attr in [a for a, _ in OBSERVABLES.values()] + ["total"]:
         a = getattr(tr, attr, None)
         if a is None:

@@ -53,7 +53,8 @@ class LoadedTrajectory:
     (F, 3) kg m/s and ``angular_momentum`` (F, 3) kg m²/s; ``contacts`` (F,),
     ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J; ``masses`` (N,) kg,
     ``radii`` (N,) m, ``ids`` (N,), ``species`` (N,) names (kinema's files), ``colors`` (N, 3)
-    r, g, b in [0, 1], NaN: none (kinema's files), ``dim``, ``dt`` s, ``method``, ``periodic`` (3 bools) and ``box_edges`` (3,) m, the periodic cell at the
+    r, g, b in [0, 1], NaN: none (kinema's files), ``dim``, ``dt`` s, ``method``, ``fps`` (the
+    frames per second asked of ``World.run``; kinema's files), ``periodic`` (3 bools) and ``box_edges`` (3,) m, the periodic cell at the
     first frame; ``colliders`` (descriptions, as ``Trajectory.colliders``), ``alive`` (F, N)
     bool, which particles exist at each frame (``None`` when all do: a file whose number of
     particles does not vary), ``springs`` (S, 2) the ids at the ends of each spring. Where
@@ -84,6 +85,7 @@ class LoadedTrajectory:
     dim: int = 3
     dt: float | None = None
     method: str | None = None
+    fps: float | None = None
     periodic: tuple[bool, bool, bool] | None = None
     box_edges: np.ndarray | None = None
     box_edges_by_frame: np.ndarray | None = None
@@ -409,7 +411,7 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
             observables[("potential", "potential")] = observable(obs, "potential_energy")
 
     params = f.get("parameters/kinema")
-    dt = method = None
+    dt = method = fps = None
     dim = d  # kinema's dimension: a 2D world's file holds z = 0 and says dim = 2 (below)
     colliders: list[dict[str, Any]] = []
     if isinstance(params, h5py.Group):
@@ -432,6 +434,12 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
             if not isinstance(raw, str):
                 raise r.fail(f"attribute 'method' ({params.name}) = {shown(raw)} is not the name of an integration method")
             method = raw
+        if "fps" in params.attrs:
+            raw = params.attrs["fps"]
+            a = np.asarray(raw)
+            if a.size != 1 or dtype_problem(a.dtype) is not None or not (np.isfinite(a).all() and a.reshape(()) > 0):
+                raise r.fail(f"attribute 'fps' ({params.name}) = {shown(raw)} is not a positive number (the frames per second recorded)")
+            fps = float(a.reshape(()))
         colliders = _read_colliders(path, params, dim)
 
     r.check_memory(memory)
@@ -505,7 +513,7 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
             setattr(out, key, a)
     if out.total is None and out.kinetic is not None:
         out.total = out.kinetic + sum(out.potential.values(), np.zeros_like(out.kinetic))
-    out.dt, out.method, out.colliders = dt, method, colliders
+    out.dt, out.method, out.fps, out.colliders = dt, method, fps, colliders
     out.springs = _read_springs(r, f, p, out.ids if out.ids is not None else np.arange(out.positions.shape[1]))
     author = f["h5md"].get("author")
     creator = f["h5md"].get("creator")

@@ -18,13 +18,14 @@ colliders' finite parts, into the frame's width and height, clear of the legend.
     write_video(frames, "out.mp4", fps=30, times=traj_t)  # exactly 30 fps, in real time
 
 MP4s are BT.709, tagged so, with ``moov`` first; ``video_rate`` gives the exact frame rate a
-file is written at (GIF delays are whole 1/100 s).
+file is written at (GIF delays are whole 1/100 s), ``playback_rate`` the default rate of a
+recording (the fps it was recorded at, else the common rate within 2 %, else its own).
 
 The package: ``frames`` (``render_frames``: colours, the live particles, springs, one call to
 the engine per frame), ``cameras`` (``Camera2D``, ``Camera3D`` and the default camera that
 fits the scene), ``legend`` (the colour bar), ``descriptions`` (colliders as the plain
 descriptions ``Trajectory.colliders`` holds, which the engine takes) and ``video``
-(``write_video``, ``video_rate``: MP4 and GIF files).
+(``write_video``, ``video_rate``, ``playback_rate``: MP4 and GIF files).
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from .frames import COLORMAPS, render_frames
 from .frames import NO_OWN_COLOR as NO_OWN_COLOR
 from .frames import _trajectory_options as _trajectory_options  # Trajectory.render, kinema.runner
 from .frames import own_colours as own_colours
+from .video import COMMON_RATES, VIDEO_EXTENSIONS, playback_rate, video_rate, write_video
 from .video import GIF_DELAYS_CS as GIF_DELAYS_CS
-from .video import VIDEO_EXTENSIONS, video_rate, write_video
 
-__all__ = ["Camera2D", "Camera3D", "COLORMAPS", "render_frames", "write_video", "video_rate", "VIDEO_EXTENSIONS"]
+__all__ = ["Camera2D", "Camera3D", "COLORMAPS", "render_frames", "write_video", "video_rate", "playback_rate", "COMMON_RATES", "VIDEO_EXTENSIONS"]

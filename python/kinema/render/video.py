@@ -8,7 +8,6 @@ import errno
 import math
 import numbers
 import os
-import tempfile
 from collections.abc import Iterable, Iterator
 from fractions import Fraction
 from pathlib import Path
@@ -62,7 +61,9 @@ def write_video(
     ``.gif``: Pillow, looping, at most 256 colours a frame.
 
     The file is written under a temporary name in the same directory and renamed when
-    complete: on any error nothing is left behind and an existing file is untouched.
+    complete: on any error nothing is left behind and an existing file is untouched. It gets
+    the mode an ordinary ``open()`` gives a new file, 0666 less the umask (0644 under umask
+    022), as every kinema writer's files do.
 
     A name the system cannot write is a ``kinema.io.FileWriteError`` (an ``OSError``), one
     line naming ``path``: a folder that does not exist (also a ``FileNotFoundError``), a
@@ -75,7 +76,7 @@ def write_video(
     rate = video_rate(fps, ext)
     counts = None if times is None else _repeats(times, rate)
     parent = path.parent if str(path.parent) else Path(".")
-    from ..io._files import refuse_special_target
+    from ..io._files import _temporary_file, refuse_special_target, remove_stale
 
     with os_errors_as_write_errors(path):  # a name too long, a folder not searchable: one line naming path
         if not parent.is_dir():
@@ -83,9 +84,11 @@ def write_video(
         if path.is_dir():
             raise write_error(path, errno.EISDIR, f"it is a directory; give a file name such as {path / ('video' + ext)}")
         refuse_special_target(path)
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".part{ext}", dir=parent)
-        os.close(fd)
-    tmp = Path(tmp_name)
+        # The temporary file ends in the extension (ffmpeg picks its container by it) and is
+        # created with mode 0666 less the umask, as open() creates files (tempfile.mkstemp's
+        # 0600 stayed on the video: ffmpeg and Pillow write into the file that is there).
+        remove_stale(parent, f".{path.name}.", f".part{ext}")  # left by a writer of it that was killed
+        tmp = _temporary_file(parent, f".{path.name}.", f".part{ext}")
     try:
         stream = _checked(frames)
         if counts is not None:
@@ -102,6 +105,47 @@ def write_video(
             raise _encoder_failure(path, e) from None
         raise
     return path
+
+
+#: The frame rates a video of frames recorded within ``COMMON_RATE_TOLERANCE`` of one of them
+#: defaults to (``playback_rate``).
+COMMON_RATES = (24, 25, 30, 50, 60)
+COMMON_RATE_TOLERANCE = 0.02
+
+
+def playback_rate(times, fps=None, limits=None) -> tuple[float, bool, str]:
+    """The default frame rate of a video of frames recorded at ``times`` (s), to play them in
+    real time: ``(rate, real_time, how)``, where ``real_time`` says whether the frames are
+    to be placed by their times (``write_video(times=)``) and ``how`` says why, in words.
+
+    - ``fps``, the frames per second the recording was asked for (``Trajectory.fps``, from
+      ``World.run(fps=)`` or an H5MD file kinema wrote), when the recording interval is
+      its rounding to whole steps (from 1/1.5 to 1/0.5 of it): ``World.run(fps=30)`` with
+      dt = 1 ms records every 33 steps, 30.30 frames a second, and the video is 30 fps with
+      one frame in about a hundred dropped.
+    - Else the common rate (``COMMON_RATES``: 24, 25, 30, 50, 60) nearest the recording's
+      rate, 1 / the median interval, when within 2 % of it (a file of another program,
+      or of a kinema older than ``fps`` in its files).
+    - Else the recording's rate; ``limits`` (lo, hi) clamp it, and a clamped rate is not
+      real time (one video frame per recorded frame). A single frame: 30 fps (``fps`` if
+      given), not real time."""
+    t = np.asarray(times, dtype=np.float64).reshape(-1)
+    recorded = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else float("nan")
+    lo, hi = limits if limits is not None else (0.0, math.inf)
+    known = isinstance(fps, numbers.Real) and not isinstance(fps, bool) and math.isfinite(fps) and lo <= fps <= hi and fps > 0
+    if known and not math.isfinite(recorded):
+        return float(fps), False, "a single frame"
+    if known and 0.5 <= recorded / fps <= 1.5:
+        return float(fps), True, f"real time, {recorded:.4g} recorded frames a second placed by their times"
+    if not (math.isfinite(recorded) and recorded > 0):
+        return 30.0, False, "one video frame per recorded frame"
+    common = min(COMMON_RATES, key=lambda r: abs(recorded / r - 1.0))
+    if abs(recorded / common - 1.0) <= COMMON_RATE_TOLERANCE:
+        return float(common), True, f"real time at the common rate nearest the recording's {recorded:.4g} frames a second, placed by their times"
+    rate = float(min(max(recorded, lo), hi))
+    if rate == recorded:  # placed by their times: GIF delays round, the times need not be even
+        return rate, True, "real time at the recording's rate"
+    return rate, False, "one video frame per recorded frame"
 
 
 #: GIF frame delays, in 1/100 s: browsers play 0 and 1 as 10, and the field has 16 bits.
