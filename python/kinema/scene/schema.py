@@ -81,6 +81,9 @@ class Scene(_Model):
         for f in self.forces:
             if isinstance(f, SpringForce) and f.block is not None and f.block >= len(self.particles):
                 raise ValueError(f"a spring names block = {f.block}, but the scene has {len(self.particles)} [[particles]] blocks")
+        camera, dim = self.render.camera, self.world.dim
+        if camera is not None and camera.type != f"{dim}d":
+            raise ValueError(f"render.camera.type: '{camera.type}' is invalid: a {dim}D world (world.dim = {dim}) needs a '{dim}d' camera")
         return self
 
     # reading -----------------------------------------------------------------------------
@@ -267,6 +270,8 @@ def _describe(err: dict, source: str) -> str:
         return f"{source}: {path}: unknown key{hint}"
     if kind == "missing":
         return f"{source}: {path}: missing: a value is required"
+    if not loc and kind == "value_error":  # Scene's own checks across tables: the message names the keys
+        return f"{source}: {msg}"
     value = err.get("input")
     shown = repr(value) if not isinstance(value, dict | list) or len(repr(value)) < 60 else repr(value)[:57] + "..."
     msg = msg[0].lower() + msg[1:] if msg[:1].isupper() and not msg[1:2].isupper() else msg

@@ -472,20 +472,56 @@ class CollisionsTable(_Model):
         return self
 
 
+def _engine_takes_camera(**camera: Any) -> None:
+    """Raises the engine's ``ValueError`` for a camera it cannot draw with (it draws a 16×16
+    frame of no particles with it): a camera is checked when the scene is read, not after the
+    run whose video it was to film."""
+    import numpy as np
+
+    _core.render_frame(np.zeros((0, 3)), np.zeros(0), width=16, height=16, **camera)
+
+
 class Camera2DTable(_Model):
+    """An orthographic view of the xy-plane: the rectangle [xmin, xmax] × [ymin, ymax] (m)
+    fits the image, centred, aspect kept (render.cameras.Camera2D)."""
+
     type: Literal["2d"] = "2d"
     xmin: float
     ymin: float
     xmax: float
     ymax: float
 
+    @model_validator(mode="after")
+    def _rectangle(self) -> Camera2DTable:
+        corners = (self.xmin, self.ymin, self.xmax, self.ymax)
+        if not (all(math.isfinite(v) for v in corners) and self.xmin < self.xmax and self.ymin < self.ymax):
+            raise ValueError(
+                f"xmin = {self.xmin:g}, xmax = {self.xmax:g}, ymin = {self.ymin:g}, ymax = {self.ymax:g}: the view must be a finite rectangle with xmin < xmax and ymin < ymax (m)"
+            )
+        _engine_takes_camera(view=corners)  # (a width beyond float64, -1e308 to 1e308)
+        return self
+
+
+Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+
 
 class Camera3DTable(_Model):
+    """A pinhole camera at ``eye`` looking at ``target`` (m), ``up`` the image's up direction,
+    ``fov_deg`` the vertical field of view (render.cameras.Camera3D)."""
+
     type: Literal["3d"] = "3d"
-    eye: Vec
-    target: Vec
-    up: Vec = [0.0, 0.0, 1.0]
+    eye: Vec3
+    target: Vec3
+    up: Vec3 = [0.0, 0.0, 1.0]
     fov_deg: Annotated[float, Field(gt=0, lt=180)] = 40.0
+
+    @model_validator(mode="after")
+    def _pose(self) -> Camera3DTable:
+        for name in ("eye", "target", "up"):
+            if not all(math.isfinite(v) for v in getattr(self, name)):
+                raise ValueError(f"{name} = {getattr(self, name)}: the camera's {name} must be finite")
+        _engine_takes_camera(eye=self.eye, target=self.target, up=self.up, fov_deg=self.fov_deg)  # eye != target, up not along the view
+        return self
 
 
 class RenderTable(_Model):
