@@ -17,9 +17,12 @@ from test_viewer import WAIT_MS, browser, chromium  # noqa: F401 (the browser fi
 
 import kinema
 from kinema import viewer
+from kinema.render import NO_OWN_COLOR
+from kinema.scene import Scene
 from kinema.viewer import page as viewer_page
 from kinema.viewer import server as viewer_server
 
+SCENES = Path(__file__).resolve().parent.parent / "examples" / "scenes"
 FLOOR = np.array([224, 224, 220])  # the scenery's colours, as kinema's renderer draws them
 BOX_FLOOR = np.array([212, 212, 206])
 OBSTACLE = np.array([176, 178, 184])
@@ -107,12 +110,12 @@ def open_page(browser, tmp_path):  # noqa: F811 (the fixture's name)
     """Open ``traj``'s self-contained page (or, served, its page and data.bin) at a size."""
     opened: list = []
 
-    def open_(traj, size=(800, 600), frame=0, served=False) -> _Page:
+    def open_(traj, size=(800, 600), frame=0, served=False, **options) -> _Page:
         if served:
-            url, server = viewer.serve(traj, open_browser=False, announce=False)
+            url, server = viewer.serve(traj, open_browser=False, announce=False, **options)
             opened.append(server)
         else:
-            url = viewer.write_html(traj, tmp_path / f"page{len(opened)}.html").resolve().as_uri()
+            url = viewer.write_html(traj, tmp_path / f"page{len(opened)}.html", **options).resolve().as_uri()
         page = _Page(browser, f"{url}#frame={frame}", size)
         opened.append(page)
         return page
@@ -368,9 +371,51 @@ def test_the_legend_names_the_colouring_and_its_range(open_page):
     assert legend()[0] == "speed (m/s)"
 
 
-def test_own_colours_are_a_colouring_without_legend(open_page, tmp_path):
+def _legend_text(page) -> tuple[str, str]:
+    return page.page.inner_text("#kinema-legend-min"), page.page.inner_text("#kinema-legend-max")
+
+
+@pytest.mark.parametrize("served", [False, True])
+def test_the_id_legend_is_the_least_and_greatest_id_shown(open_page, served):
+    # 1,250 particles, ids 0 … 1249 (the fountain's): the legend read 0 … 1250 (1249 to three
+    # significant digits); ids are shown exactly, whatever their number of digits.
+    traj = _falling(n=1250, frames=3)
+    page = open_page(traj, served=served, color_by="id")
+    assert page.info()["legend"]["label"] == "particle id"
+    assert _legend_text(page) == ("0", "1249")
+    traj.ids = np.arange(1250) + 98_765_000  # a later stretch of ids
+    page = open_page(traj, served=served, color_by="id")
+    assert _legend_text(page) == ("98765000", "98766249")
+    # Every other particle left out: the legend is what is shown (the kept columns' ids).
+    with pytest.warns(viewer.ViewerWarning):
+        page = open_page(traj, served=served, color_by="id", max_bytes=3 * 625 * 16)
+    assert page.info()["particles"]["total"] == 625
+    assert _legend_text(page) == ("98765000", "98766248")
+
+
+def test_the_speed_legend_is_the_least_and_greatest_live_speed(open_page):
+    # Speeds from 0.0123456 to 1249.7 m/s among the live particles, 5000 m/s on a dead one's
+    # column (NaN in the trajectory, never shown): the legend is 0.0123 … 1250, three
+    # significant digits as the renderer's legend but never fewer than the integer digits.
+    traj = _births_and_deaths()
+    speeds = np.linspace(0.0123456, 1249.7, 30)
+    velocities = np.zeros_like(traj.velocities)
+    velocities[..., 0] = speeds
+    velocities[~traj.alive] = np.nan
+    traj.velocities = velocities
+    page = open_page(traj)
+    legend = page.info()["legend"]
+    assert legend["label"] == "speed (m/s)"
+    live = np.linalg.norm(velocities, axis=2)[traj.alive].astype(np.float32)
+    assert legend["min"] == pytest.approx(live.min(), rel=1e-7) and legend["max"] == pytest.approx(live.max(), rel=1e-7)
+    assert _legend_text(page) == ("0.0123", "1250")
+    velocities[..., 0] *= 0.01  # 0.000123456 … 12.497 m/s
+    assert _legend_text(open_page(traj)) == ("0.000123", "12.5")
+
+
+def test_color_draws_each_particles_own_colour_without_legend(open_page, tmp_path):
     # An emitter's particles have their own colour (Trajectory.colors; NaN: none, drawn in
-    # the plain colour); "own colour" shows them and no legend.
+    # the renderer's NO_OWN_COLOR); "color" shows them and no legend.
     positions = np.zeros((2, 3, 3))
     positions[:, :, 0] = [0, 1, 2]
     colors = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [np.nan, np.nan, np.nan]])
@@ -378,17 +423,153 @@ def test_own_colours_are_a_colouring_without_legend(open_page, tmp_path):
     data = _page_data(viewer.write_html(traj, tmp_path / "c.html").read_text(encoding="utf-8"))
     rgba = np.frombuffer(base64.b64decode(data["colors"]), dtype=np.uint8).reshape(3, 4)
     np.testing.assert_array_equal(rgba, [[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 0, 0]])
+    assert data["noOwnColor"] == list(NO_OWN_COLOR) and data["colorBy"] is None
     page = open_page(traj)
+    option = page.page.locator('#kinema-colour option[value="color"]')
+    assert option.inner_text() == "color"
+    assert page.info()["colouring"]["choice"] == "speed"  # the default: speed
     page.page.select_option("#kinema-colour", "color")
-    assert page.info()["legend"] == {"shown": False}
+    info = page.info()
+    assert info["legend"] == {"shown": False} and info["colouring"]["mode"] == 2
+    # The colour buffer the GPU draws from: each particle's own, NO_OWN_COLOR for none.
+    assert page.page.evaluate("() => window.kinemaViewer.ownColours()") == [[255, 0, 0], [0, 255, 0], list(NO_OWN_COLOR)]
     image = page.pixels(tmp_path / "own.png")
     r, g, b = image[..., 0], image[..., 1], image[..., 2]
     assert ((r > 150) & (g < 30) & (b < 30)).sum() > 100, "no red disc"
     assert ((g > 150) & (r < 30) & (b < 30)).sum() > 100, "no green disc"
-    assert ((b > 150) & (r < 120) & (g > 80)).sum() > 100, "no disc in the plain colour"
-    # Without own colours there is no such choice.
+    # The third disc is NO_OWN_COLOR shaded (r : g : b as 70 : 130 : 200), not the plain colour.
+    own = (b > 100) & (b > r + 40)
+    assert own.sum() > 100, "no disc in NO_OWN_COLOR"
+    np.testing.assert_allclose([np.median(r[own] / b[own]), np.median(g[own] / b[own])], [70 / 200, 130 / 200], atol=0.02)
+    # Without own colours there is no such choice, unless the trajectory asks for it.
     plain = open_page(_falling())
     assert plain.page.locator('#kinema-colour option[value="color"]').count() == 0
+    asked = open_page(_falling(n=3), color_by="color")
+    assert asked.info()["colouring"]["choice"] == "color"
+    assert asked.page.evaluate("() => window.kinemaViewer.ownColours()") == [list(NO_OWN_COLOR)] * 3
+    with pytest.raises(ValueError, match="color_by"):
+        viewer.write_html(traj, tmp_path / "bad.html", color_by="colour")
+
+
+@pytest.fixture(scope="module")
+def fountain() -> kinema.Trajectory:
+    """examples/scenes/fountain.toml over 2.5 s at 10 frames a second (droplets born and
+    dying, an emitter colour, a floor plane)."""
+    return Scene.from_toml(SCENES / "fountain.toml").build(source="fountain").run(2.5, fps=10)
+
+
+@pytest.mark.parametrize("served", [False, True])
+def test_the_fountain_in_its_own_colour(open_page, fountain, tmp_path, served):
+    # The emitter's droplets (#2f7fd8) are born and die: in "color" the live ones are drawn in
+    # that colour, shaded (r : g : b as 47 : 127 : 216), the dead ones not at all.
+    traj = fountain
+    assert traj.colors is not None and np.isfinite(traj.colors).all()
+    page = open_page(traj, served=served, frame=20, color_by="color")
+    assert page.page.eval_on_selector("#kinema-colour", "e => e.value") == "color"
+    info = page.info()
+    assert info["colouring"]["mode"] == 2 and info["legend"] == {"shown": False}
+    assert info["particles"] == {"total": traj.alive.shape[1], "visible": int(traj.alive[20].sum())}
+    assert 0 < info["particles"]["visible"] < info["particles"]["total"]
+    colours = np.array(page.page.evaluate("() => window.kinemaViewer.ownColours()"))
+    np.testing.assert_array_equal(colours, np.broadcast_to([0x2F, 0x7F, 0xD8], colours.shape))
+    image = page.pixels(tmp_path / "fountain_color.png")
+    r, g, b = image[..., 0], image[..., 1], image[..., 2]
+    drop = (b > 60) & (b > r + 30)  # the droplets: blue on the grey floor and the dark background
+    assert drop.sum() > 2000, drop.sum()
+    np.testing.assert_allclose([np.median(r[drop] / b[drop]), np.median(g[drop] / b[drop])], [47 / 216, 127 / 216], atol=0.03)
+    assert ((g > b) & (g > r + 30)).sum() == 0  # nothing green: no speed colours
+    # Frame 0 holds the first droplets alone; by speed the droplets are viridis's greens.
+    assert page.show(0)["particles"]["visible"] == int(traj.alive[0].sum())
+    page.page.select_option("#kinema-colour", "speed")
+    page.show(20)
+    image = page.pixels(tmp_path / "fountain_speed.png")
+    r, g, b = image[..., 0], image[..., 1], image[..., 2]
+    assert ((g > b) & (g > r + 30)).sum() > 500
+
+
+def test_a_scene_that_asks_for_own_colours_opens_in_them(open_page):
+    # examples/scenes/pour.toml: [render] color_by = "color", the grains #c8a165, in a box
+    # whose bottom is the floor.
+    scene = Scene.from_toml(SCENES / "pour.toml")
+    assert scene.render.color_by == "color"
+    traj = scene.build(source="pour").run(0.6, fps=10)
+    page = open_page(traj, frame=5, color_by=scene.render.color_by)
+    info = page.info()
+    assert page.page.eval_on_selector("#kinema-colour", "e => e.value") == "color"
+    assert info["colouring"]["choice"] == "color" and info["colouring"]["mode"] == 2 and info["legend"] == {"shown": False}
+    assert 0 < info["particles"]["visible"] < info["particles"]["total"]
+    assert page.page.evaluate("() => window.kinemaViewer.ownColours()") == [[0xC8, 0xA1, 0x65]] * info["particles"]["total"]
+    assert info["camera"]["floor"] == 0
+    _assert_above(_drag(page, (400, 500), (400, 20), times=3))
+    # Asked for "speed" (or nothing), the page opens by speed.
+    assert open_page(traj, color_by="speed").info()["colouring"]["choice"] == "speed"
+
+
+# --- The orbit ----------------------------------------------------------------------------------
+
+
+def _drag(page, start, end, button="left", times=1) -> dict:
+    for _ in range(times):
+        page.page.mouse.move(*start)
+        page.page.mouse.down(button=button)
+        page.page.mouse.move(*end, steps=20)
+        page.page.mouse.up(button=button)
+    return page.info()["camera"]
+
+
+def _assert_above(camera: dict) -> None:
+    floor, clearance = camera["floor"], camera["clearance"]
+    assert camera["position"][2] >= floor + clearance * (1 - 1e-6), camera
+    assert camera["target"][2] >= floor - 1e-9 * clearance, camera
+    assert camera["polar"] <= camera["maxPolar"] + 1e-9, camera
+
+
+@pytest.mark.parametrize(
+    ("floor", "colliders"),
+    [
+        (0.0, [{"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 1]}]),
+        (-0.2, [{"type": "box", "lo": [0, 0, -0.2], "hi": [1, 1, math.inf]}]),
+        # The lowest floor: a box's bottom over a plane.
+        (-0.5, [{"type": "plane", "point": [0, 0, -0.5], "normal": [0, 0, 3]}, {"type": "box", "lo": [0, 0, 0], "hi": [1, 1, 1.5]}]),
+    ],
+)
+def test_the_orbit_stays_above_the_floor(open_page, floor, colliders):
+    # Dragging up turns the camera down under the target; it stops just above the floor
+    # (its clearance, 0.2 % of the scene's size), by orbiting, zooming out and panning down.
+    page = open_page(_falling(colliders=colliders))
+    camera = page.info()["camera"]
+    assert camera["floor"] == pytest.approx(floor, abs=1e-12)
+    start = camera["polar"]
+    assert start < math.pi / 2 and camera["maxPolar"] > math.pi / 2  # may look up from below the target, above the floor
+    camera = _drag(page, (400, 500), (400, 20), times=3)
+    _assert_above(camera)
+    assert camera["polar"] > start + 0.2 and camera["polar"] == pytest.approx(camera["maxPolar"], abs=1e-9)
+    assert camera["position"][2] == pytest.approx(floor + camera["clearance"], rel=1e-6, abs=1e-9)
+    page.page.mouse.move(400, 300)
+    for _ in range(8):
+        page.page.mouse.wheel(0, 400)  # zoom out: further away at the same height
+    page.page.wait_for_function("(z) => window.kinemaViewer.info().camera.position[2] >= z", arg=floor, timeout=WAIT_MS)
+    _assert_above(page.info()["camera"])
+    camera = _drag(page, (400, 540), (400, 20), button="right", times=3)  # pan: the scene up, the target down
+    _assert_above(camera)
+    assert camera["target"][2] == pytest.approx(floor, abs=1e-9)  # stopped at the floor
+    # A page that is not touched keeps its framing.
+    _assert_in_view(open_page(_falling(colliders=colliders)).info())
+
+
+def test_without_a_floor_the_orbit_is_free_and_2d_has_none(open_page, tmp_path):
+    page = open_page(_falling())
+    camera = page.info()["camera"]
+    assert camera["floor"] is None and camera["maxPolar"] == pytest.approx(math.pi)
+    camera = _drag(page, (400, 500), (400, 20), times=3)
+    assert camera["polar"] > math.pi / 2 + 0.3  # under where a floor would be
+    # A wall (a plane facing sideways) and a ceiling are no floor.
+    walls = [{"type": "plane", "point": [0, 0, 0], "normal": [1, 0, 0]}, {"type": "plane", "point": [0, 0, 2], "normal": [0, 0, -1]}]
+    assert open_page(_falling(colliders=walls)).info()["camera"]["floor"] is None
+    positions = np.zeros((2, 3, 3))
+    positions[:, :, 0] = [0, 1, 2]
+    flat = _traj(positions, dim=2, colliders=[{"type": "plane", "point": [0, 0, 0], "normal": [0, 1, 0]}])
+    assert open_page(flat).info()["camera"]["floor"] is None
 
 
 # --- Framing ------------------------------------------------------------------------------------

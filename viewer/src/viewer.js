@@ -5,8 +5,11 @@
 // written by python/kinema/viewer: n (particles), frames, dim, t (times, s), bounds
 // {min, max} (m, the particles), extent {min, max} (m: the live particles with their radii
 // over every frame and the colliders' finite parts), colliders (plain descriptions, 3 values
-// per vector, ±inf bounds as null), speedMin/speedMax (m/s), idRange (the first and last
-// column's ids), springCount, aliveBytes, defaultRadius, note, and either base64 blobs
+// per vector, ±inf bounds as null), speedMin/speedMax (m/s, over the live particles of the
+// frames shown), idRange (the lowest and highest id shown), springCount, aliveBytes,
+// defaultRadius, note, colorBy (the colouring to open with: "speed", "id", "color", "none" or
+// null), noOwnColor (RGB bytes: what "color" draws a particle without its own colour in, the
+// renderer's NO_OWN_COLOR), and either base64 blobs
 // (positions, speed, radii: little-endian float32; springs: int32 column pairs; alive: per
 // frame aliveBytes bytes, bit i of byte j for particle 8 j + i, absent when every particle is
 // alive throughout; colors: RGBA bytes per particle, alpha 0 for none) or `source` naming a
@@ -19,8 +22,12 @@
 // the walls of open faces reaching the extent, and a floor face; sphere obstacles as shaded
 // spheres (3D) or discs (2D). 3D: a perspective camera looking from VIEW_DIRECTION, z up,
 // placed so that the extent and the colliders' corners fill the view at the canvas's aspect
-// ratio; 2D: an orthographic camera on the xy-plane, fitted likewise. Refitted on resize
-// until the user moves the camera.
+// ratio, its orbit kept above the floor (see keepAboveFloor); 2D: an orthographic camera on
+// the xy-plane, fitted likewise. Refitted on resize until the user moves the camera.
+//
+// Colourings (the menu): "speed" and "id" through viridis with a legend of the real least and
+// greatest values shown, "color" each particle's own colour (noOwnColor where it has none;
+// offered when some particle has one or colorBy asks for it), "none" one plain colour.
 //
 // A URL hash `#frame=K` opens paused at frame K (used by the tests); `#frame=K&play=1` plays;
 // `rotate=1` turns the orbit camera about its target (a turntable; the benchmark draws every
@@ -30,7 +37,9 @@
 // `frame` (the trajectory frame shown), `playing`, `setFrame(k)`, `stats`, the frame
 // statistics (see frameStats): `stats.snapshot()` gives animation frames run, frames drawn,
 // trajectory frames stepped and median frame times in ms over the last STATS_WINDOW frames;
-// and `info()`, a read-only description of what is drawn (see `describe` in start).
+// `info()`, a read-only description of what is drawn (see `describe` in start: the colouring,
+// the legend, the orbit camera and its floor, ...); and `ownColours()`, the RGB bytes "color"
+// gives each particle, read from the colour buffer drawn (see `ownColourBytes`).
 
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
@@ -57,6 +66,8 @@ const BOX_2D_PX = 2;
 const GRID_ALPHA = 0.25;
 const FIT_MARGIN = 0.94; // the scene fills this much of the view's half-width or half-height
 const VIEW_DIRECTION = [0.9, -1.1, 0.6]; // from the scene towards the 3D camera (z up)
+const FLOOR_TILT = Math.PI / 3; // a plane facing up within this of level is a floor the 3D orbit stays above
+const FLOOR_CLEARANCE = 0.002; // of the extent's diagonal: how far above the floor the 3D camera stays
 
 // Viridis by a degree-6 polynomial fit per channel (good to about 1/255 of the table); the
 // legend's gradient evaluates the same polynomial.
@@ -78,6 +89,7 @@ uniform int uOrtho;            // 1: orthographic (the size does not depend on d
 uniform float uOffset;         // the value at the bottom of the ramp
 uniform float uScale;          // 1 / (the values' range)
 uniform int uMode;             // 0: one colour, 1: ramp over aValue, 2: the particle's own colour
+uniform vec3 uNoOwn;           // mode 2: the colour of a particle without its own
 attribute float aRadius;
 attribute float aValue;
 attribute vec4 aColor;         // the particle's own colour (alpha 0: none)
@@ -109,7 +121,7 @@ void main() {
   float perUnit = uOrtho == 1 ? uPixelsPerUnit : uPixelsPerUnit / max(-mv.z, 1e-6);
   gl_PointSize = max(2.0, 2.0 * aRadius * perUnit);
   const vec3 plain = vec3(0.35, 0.65, 0.95);
-  vColor = uMode == 0 ? plain : uMode == 2 ? (aColor.a > 0.5 ? aColor.rgb : plain) : viridis((aValue - uOffset) * uScale);
+  vColor = uMode == 0 ? plain : uMode == 2 ? (aColor.a > 0.5 ? aColor.rgb : uNoOwn) : viridis((aValue - uOffset) * uScale);
 }
 `;
 
@@ -225,7 +237,7 @@ function buildUi(root, view) {
     <button id="kinema-play" title="play / pause (space)">▶</button>
     <input id="kinema-scrub" type="range" min="0" max="0" value="0" step="1">
     <label>speed <select id="kinema-speed">${SPEEDS.map((s) => `<option value="${s}"${s === 1 ? " selected" : ""}>${s}×</option>`).join("")}</select></label>
-    <label>colour <select id="kinema-colour"><option value="speed">speed</option><option value="id">id</option><option value="none">none</option></select></label>
+    <label>colour <select id="kinema-colour"><option value="speed">speed</option><option value="id">id</option><option value="color">color</option><option value="none">none</option></select></label>
     <span id="kinema-info"></span>`;
   root.appendChild(bar);
   // The colour legend: what the colours mean, over the view's top right corner.
@@ -249,8 +261,14 @@ function buildUi(root, view) {
   };
 }
 
-// A value for the legend: three significant digits, no trailing zeros.
-const legendValue = (x) => String(Number(Number(x).toPrecision(3)));
+// A value for the legend: an integer (ids) exactly; otherwise three significant digits (as
+// the renderer's legend) but never fewer than the integer digits (1249.7 is 1250, not 1.25e3),
+// no trailing zeros.
+function legendValue(x, integer = false) {
+  x = Number(x);
+  if (integer || Math.abs(x) >= 100) return String(Math.round(x));
+  return String(Number(x.toPrecision(3)));
+}
 
 // The smallest of 1, 2, 5 × 10^k not below x (x > 0).
 function niceStep(x) {
@@ -271,8 +289,10 @@ function boxCorners(lo, hi) {
 // The colliders as three.js objects in `group`. Returns what was drawn: `counts` (objects by
 // type: a plane's floor patch or 2D line, a box, a sphere), `boxEdges` (box edges in 3D, sides
 // in 2D), `corners` (the finite corners of what was drawn: floor patches, boxes with their
-// open bounds at the extent, spheres' bounding boxes; the camera frames them) and
-// `lineMaterials` (their resolution follows the canvas).
+// open bounds at the extent, spheres' bounding boxes; the camera frames them),
+// `lineMaterials` (their resolution follows the canvas) and `floor` (3D: the height of the
+// lowest floor, null without one: a plane facing up, less than FLOOR_TILT from level, at its
+// patch's lowest corner, or a box's closed bottom).
 function buildScenery(meta, group) {
   const dim = meta.dim;
   const elo = vec(meta.extent.min);
@@ -281,6 +301,8 @@ function buildScenery(meta, group) {
   const esize = Math.max(ehi.clone().sub(elo).length(), 1e-9);
   const counts = { plane: 0, box: 0, sphere: 0 };
   const corners = [];
+  let floor = null;
+  const floorAt = (z) => (floor = floor === null ? z : Math.min(floor, z));
   const lineMaterials = [];
   let boxEdges = 0;
   // 2D: the scenery lies under everything, drawn first without depth.
@@ -375,6 +397,7 @@ function buildScenery(meta, group) {
       add(new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(grid)), [gridMaterial, -2]);
       fatLines([0, 1, 1, 2, 2, 3, 3, 0].map((i) => patch[i]), PATCH_OUTLINE_PX);
       corners.push(...patch);
+      if (n.z > Math.cos(FLOOR_TILT)) floorAt(Math.min(...patch.map((q) => q.z)));
       counts.plane++;
     } else if (c.type === "box") {
       // Open bounds (null) reach the extent (never past the other bound).
@@ -414,7 +437,10 @@ function buildScenery(meta, group) {
           }
         }
         // The floor: the lower z face, lightly filled, when it is closed.
-        if (finite(2, false)) quad(corner([0, 0, 0]), corner([1, 0, 0]), corner([1, 1, 0]), corner([0, 1, 0]), BOX_FLOOR_COLOR);
+        if (finite(2, false)) {
+          quad(corner([0, 0, 0]), corner([1, 0, 0]), corner([1, 1, 0]), corner([0, 1, 0]), BOX_FLOOR_COLOR);
+          floorAt(lo[2]);
+        }
         corners.push(...boxCorners(corner([0, 0, 0]), corner([1, 1, 1])));
       }
       if (segments.length) fatLines(segments, dim === 2 ? BOX_2D_PX : BOX_EDGE_PX);
@@ -437,7 +463,37 @@ function buildScenery(meta, group) {
       counts.sphere++;
     }
   }
-  return { counts, boxEdges, corners, lineMaterials };
+  return { counts, boxEdges, corners, lineMaterials, floor };
+}
+
+// Keeps the 3D orbit above the floor (height `floor`): the camera at least `clearance` over
+// it and the orbit's target not under it. OrbitControls clamps the polar angle (from +z, the
+// camera's up) to maxPolarAngle before it pans and zooms, so the limit is set from the target
+// and distance before each update, and an update whose pan or zoom still took the camera
+// below is followed by one more (no frame is drawn in between): a pan stops at the floor
+// (target and camera lifted together), an orbit or a zoom at the clearance.
+function keepAboveFloor(controls, camera, floor, clearance) {
+  const orbit = controls.update.bind(controls);
+  const limit = () => {
+    const d = Math.max(camera.position.distanceTo(controls.target), 1e-300);
+    controls.maxPolarAngle = Math.acos(Math.min(1, Math.max(-1, (floor + clearance - controls.target.z) / d)));
+  };
+  controls.minDistance = 2 * clearance; // the camera can be over the floor above a target on it
+  // OrbitControls' own handlers call this.update(), which is this from now on.
+  controls.update = (deltaTime = null) => {
+    limit();
+    let changed = orbit(deltaTime);
+    const lift = floor - controls.target.z;
+    if (lift > 0) {
+      controls.target.z += lift;
+      camera.position.z += lift;
+    }
+    if (lift > 0 || camera.position.z < floor + clearance * (1 - 1e-6)) {
+      limit();
+      changed = orbit() || changed;
+    }
+    return changed;
+  };
 }
 
 // The 3D camera's place: looking along -VIEW_DIRECTION with z up, as near as it can be with
@@ -511,6 +567,9 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   }
   let userMoved = false; // the camera is refitted on resize until the user moves it
   controls.addEventListener("start", () => (userMoved = true));
+  const floor = dim === 2 ? null : drawn.floor;
+  const clearance = FLOOR_CLEARANCE * extent;
+  if (floor !== null) keepAboveFloor(controls, camera, floor, clearance);
 
   // Place the camera so that everything framed is in view at the canvas's aspect ratio.
   function fit(aspect) {
@@ -534,6 +593,10 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
       camera.near = Math.max(eye.distanceTo(target), extent) * 1e-3;
       camera.far = 10 * Math.max(far, extent);
       controls.target.copy(target);
+      // An orbit target under the floor slides along the line of sight up to it (the view is
+      // the same; the floor keeps targets out from under it).
+      const ahead = target.clone().sub(eye);
+      if (floor !== null && target.z < floor && ahead.z < 0) controls.target.copy(eye).addScaledVector(ahead, (eye.z - floor) / -ahead.z);
     }
     camera.updateProjectionMatrix();
     controls.update();
@@ -557,10 +620,15 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   geometry.setAttribute("aValue", value);
   geometry.setAttribute("aRadius", radius);
   geometry.setAttribute("aAlive", aliveAttr);
-  if (colors) geometry.setAttribute("aColor", new THREE.BufferAttribute(colors, 4, true));
+  // Each particle's own colour, RGBA bytes (A 0: none), for "color": offered when some
+  // particle has one, or when the trajectory asks for it (then all may have none).
+  const offerOwn = colors !== null || meta.colorBy === "color";
+  const ownColours = colors ?? (offerOwn ? new Uint8Array(4 * n) : null);
+  if (ownColours) geometry.setAttribute("aColor", new THREE.BufferAttribute(ownColours, 4, true));
+  const noOwn = (meta.noOwnColor ?? [70, 130, 200]).map((c) => c / 255);
   geometry.boundingSphere = new THREE.Sphere(centre, extent * 10); // frames move: never cull
   const material = new THREE.ShaderMaterial({
-    uniforms: { uPixelsPerUnit: { value: 1 }, uOrtho: { value: dim === 2 ? 1 : 0 }, uOffset: { value: 0 }, uScale: { value: 1 }, uMode: { value: 1 } },
+    uniforms: { uPixelsPerUnit: { value: 1 }, uOrtho: { value: dim === 2 ? 1 : 0 }, uOffset: { value: 0 }, uScale: { value: 1 }, uMode: { value: 1 }, uNoOwn: { value: new THREE.Vector3(...noOwn) } },
     vertexShader: VERTEX,
     fragmentShader: FRAGMENT,
   });
@@ -590,8 +658,11 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   const ui = buildUi(document.body, container);
   ui.scrub.max = String(frames - 1);
   if (!speed) ui.colour.querySelector('option[value="speed"]').disabled = true;
-  if (colors) ui.colour.querySelector('option[value="none"]').insertAdjacentHTML("beforebegin", '<option value="color">own colour</option>');
-  ui.colour.value = speed ? "speed" : "id";
+  if (!offerOwn) ui.colour.querySelector('option[value="color"]').remove();
+  // The colouring the trajectory asks for (a scene's [render] color_by) where the page has it,
+  // else speed (id when the speeds are unknown).
+  const offered = (v) => Array.from(ui.colour.options).some((o) => o.value === v && !o.disabled);
+  ui.colour.value = offered(meta.colorBy) ? meta.colorBy : speed ? "speed" : "id";
 
   const state = window.kinemaViewer;
   let colouring = ui.colour.value;
@@ -608,12 +679,12 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   function setLegend() {
     legendShown = null;
     if (colouring === "speed" && speed) legendShown = { label: "speed (m/s)", min: meta.speedMin, max: meta.speedMax };
-    else if (colouring === "id") legendShown = { label: "particle id", min: meta.idRange[0], max: meta.idRange[1] };
+    else if (colouring === "id") legendShown = { label: "particle id", min: meta.idRange[0], max: meta.idRange[1], integer: true };
     ui.legend.style.display = legendShown ? "" : "none";
     if (legendShown) {
       ui.legendLabel.textContent = legendShown.label;
-      ui.legendMin.textContent = legendValue(legendShown.min);
-      ui.legendMax.textContent = legendValue(legendShown.max);
+      ui.legendMin.textContent = legendValue(legendShown.min, legendShown.integer);
+      ui.legendMax.textContent = legendValue(legendShown.max, legendShown.integer);
     }
   }
 
@@ -636,7 +707,7 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
       material.uniforms.uScale.value = 1;
       material.uniforms.uMode.value = 1;
     } else {
-      material.uniforms.uMode.value = colouring === "color" && colors ? 2 : 0;
+      material.uniforms.uMode.value = colouring === "color" && ownColours ? 2 : 0;
     }
   }
 
@@ -717,6 +788,15 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
     dirty = true;
   }
 
+  // For tests: the colour (RGB bytes) each particle's sprite is given before shading in the
+  // "color" colouring, read from the aColor buffer the GPU draws (null when not offered).
+  function ownColourBytes() {
+    const attr = geometry.getAttribute("aColor");
+    if (!attr) return null;
+    const base = noOwn.map((c) => Math.round(255 * c));
+    return Array.from({ length: n }, (_, i) => (attr.array[4 * i + 3] > 127 ? Array.from(attr.array.subarray(4 * i, 4 * i + 3)) : base));
+  }
+
   // A read-only description of what is drawn at the frame shown (for tests): the colliders'
   // objects by type, box edges, springs and particles visible, the legend, whether every
   // visible particle (its disc) and every corner of the colliders' drawing project inside
@@ -763,6 +843,16 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
       particles: { total: n, visible },
       springs: { total: springCount, visible: springsVisible },
       legend: legendShown ? { shown: true, label: legendShown.label, min: legendShown.min, max: legendShown.max, text: ui.legend.innerText } : { shown: false },
+      colouring: { choice: colouring, mode: material.uniforms.uMode.value, options: Array.from(ui.colour.options, (o) => o.value), noOwnColor: noOwn.map((c) => Math.round(255 * c)) },
+      // The orbit: polar angle from +z (rad) and its limit, the floor's height (null: none).
+      camera: {
+        position: camera.position.toArray(),
+        target: controls.target.toArray(),
+        polar: controls.getPolarAngle(),
+        maxPolar: controls.maxPolarAngle,
+        floor,
+        clearance: floor === null ? null : clearance,
+      },
       // Half a pixel of slack for rounding (Infinity: nothing to check).
       inView: { particles: particleRoom >= -0.5, colliders: colliderRoom >= -0.5, particleRoom, colliderRoom, framedRoom },
       fill: [(box[1] - box[0]) / w, (box[3] - box[2]) / h],
@@ -828,6 +918,7 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
     renderer.render(scene, camera);
   };
   state.info = describe;
+  state.ownColours = ownColourBytes;
   resize();
   fillColour(0);
   setLegend();

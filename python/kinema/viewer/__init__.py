@@ -1,8 +1,13 @@
 """A trajectory in the browser: three.js plays the frames with play/pause, scrubbing, speed,
-an orbit camera framing the whole scene, and colouring by speed, id or the particles' own
-colours with a legend. The trajectory's colliders are drawn (planes as floor patches, boxes
-as their edges less the open faces', sphere obstacles; in 2D lines, rectangles and discs),
-its springs as lines, and only the particles alive at each frame (births and deaths).
+an orbit camera framing the whole scene (in 3D kept above the floor: the lowest plane facing
+up or closed box bottom), and the colour menu: ``speed`` and ``id`` (viridis, with a legend of
+the least and greatest value shown), ``color`` (each particle's own, ``Trajectory.colors``:
+an emitter's ``color``; the renderer's ``NO_OWN_COLOR`` for a particle without one; offered
+when some particle has one) and ``none``. ``color_by=`` picks the colouring the page opens
+with (a scene's ``[render] color_by``); by default speed. The trajectory's colliders are
+drawn (planes as floor patches, boxes as their edges less the open faces', sphere obstacles;
+in 2D lines, rectangles and discs), its springs as lines, and only the particles alive at
+each frame (births and deaths).
 
 - ``write_html(traj, path)`` writes one self-contained HTML file (script and frames inlined)
   that plays offline.

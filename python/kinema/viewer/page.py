@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..io._files import atomic_file
+from ..render import NO_OWN_COLOR
 
 _HERE = Path(__file__).parent
 BUNDLE = _HERE / "static" / "viewer.js"
@@ -173,16 +174,25 @@ def _colors(traj: Any, particles: int, particle_stride: int) -> np.ndarray | Non
 
 
 def _id_range(ids: np.ndarray) -> list[int]:
-    """The first and last column's ids (the lowest and highest: columns are in id order)."""
+    """The lowest and highest id of the particles shown (the legend's ends, shown exactly);
+    their columns' numbers when the ids are not numbers."""
     try:
-        return [int(ids[0]), int(ids[-1])] if ids.size else [0, 0]
+        return [int(ids.min()), int(ids.max())] if ids.size else [0, 0]
     except (TypeError, ValueError):
         return [0, max(int(ids.size) - 1, 0)]
 
 
-def pack(traj: Any, max_bytes: int) -> Packed:
+#: The page's colourings (its menu): ``color`` is each particle's own colour.
+COLOR_BY = ("speed", "id", "color", "none")
+
+
+def pack(traj: Any, max_bytes: int, color_by: str | None = None) -> Packed:
     """The frames of ``traj`` as a page shows them, left out by strides if they are over
-    ``max_bytes`` (a ``ViewerWarning`` says so, and the page shows a note)."""
+    ``max_bytes`` (a ``ViewerWarning`` says so, and the page shows a note). ``color_by`` (one
+    of ``COLOR_BY``, as a scene's ``[render] color_by``) is the colouring the page opens
+    with; None: speed (id when the speeds are unknown)."""
+    if color_by is not None and color_by not in COLOR_BY:
+        raise ValueError(f"color_by = {color_by!r} is invalid: use one of {', '.join(COLOR_BY)}")
     positions = np.asarray(traj.positions, dtype=np.float64)
     if positions.ndim != 3 or positions.shape[2] != 3 or positions.shape[0] == 0:
         raise ValueError(f"positions must be (frames, particles, 3) with at least one frame, got {positions.shape}")
@@ -266,6 +276,9 @@ def pack(traj: Any, max_bytes: int) -> Packed:
         "aliveBytes": 0 if bits is None else int(bits.shape[1]),
         "defaultRadius": default_radius,
         "note": note,
+        "colorBy": color_by,
+        # What "color" draws a particle without its own colour in (the renderer's colour).
+        "noOwnColor": list(NO_OWN_COLOR),
     }
     return Packed(meta, out_positions, speed, np.ascontiguousarray(radii, dtype="<f4"), springs, bits, _colors(traj, particles, ps))
 
@@ -291,10 +304,10 @@ def _b64(array: np.ndarray) -> str:
     return base64.b64encode(array.tobytes()).decode("ascii")
 
 
-def html_page(traj: Any, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYTES) -> str:
+def html_page(traj: Any, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYTES, color_by: str | None = None) -> str:
     """The self-contained page of ``traj`` as text (see :func:`write_html`)."""
     bundle()  # fail before any work when the script is not built
-    packed = pack(traj, max_bytes)
+    packed = pack(traj, max_bytes, color_by)
     meta = dict(packed.meta, positions=_b64(packed.positions), radii=_b64(packed.radii))
     for name in ("speed", "springs", "alive", "colors"):
         array = getattr(packed, name)
@@ -302,12 +315,14 @@ def html_page(traj: Any, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYT
     return page(meta, title)
 
 
-def write_html(traj: Any, path: str | os.PathLike, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYTES) -> Path:
+def write_html(traj: Any, path: str | os.PathLike, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYTES, color_by: str | None = None) -> Path:
     """Write one self-contained HTML file that plays ``traj`` offline (the script and the
     frames inlined, the frames as base64 float32) and return its path. The file is written
     under a temporary name and renamed. Frames, then particles, are left out by strides when
-    the frame data is over ``max_bytes`` (a ``ViewerWarning`` says so)."""
-    text = html_page(traj, title=title, max_bytes=max_bytes)
+    the frame data is over ``max_bytes`` (a ``ViewerWarning`` says so). ``color_by``: the
+    colouring the page opens with, ``speed``, ``id``, ``color`` (each particle's own, as
+    ``[render] color_by = "color"``) or ``none``; None: speed."""
+    text = html_page(traj, title=title, max_bytes=max_bytes, color_by=color_by)
     path = Path(path)
     with atomic_file(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
