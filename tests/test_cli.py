@@ -382,3 +382,16 @@ def test_a_run_stages_in_a_folder_named_by_its_process(tmp_path, monkeypatch):
     assert res.exit_code == 0, res.output
     assert len(made) == 1 and os.path.basename(made[0]).startswith(f".kinema-run.{kinema.io._files.host_name()}-{os.getpid()}.")
     assert not os.path.exists(made[0])  # removed at the end
+
+
+def test_view_opens_a_scene_in_its_own_colouring(tmp_path):
+    # [render] color_by of the scene is the page's first colouring; a trajectory file opens by
+    # speed, the viewer's default
+    scene = small_scene(tmp_path, SMALL.replace("[render]", '[render]\ncolor_by = "id"'))
+    res = runner.invoke(app, ["view", str(scene), "--html", str(tmp_path / "v.html")])
+    assert res.exit_code == 0, res.output
+    assert '"colorBy":"id"' in (tmp_path / "v.html").read_text()
+    assert runner.invoke(app, ["run", str(small_scene(tmp_path)), "-o", str(tmp_path / "o"), "--no-video"]).exit_code == 0
+    res = runner.invoke(app, ["view", str(tmp_path / "o" / "trajectory.h5"), "--html", str(tmp_path / "t.html")])
+    assert res.exit_code == 0, res.output
+    assert '"colorBy":"id"' not in (tmp_path / "t.html").read_text()

@@ -465,12 +465,13 @@ def view(
             traj = world.run(settings.duration, fps=settings.fps, callback=lambda w: bar.advance(task), max_work=None)
     else:
         traj = _load(source, units)  # (a missing file or a folder: its one-line refusal)
+    color_by = sc.render.color_by if source.suffix.lower() == ".toml" else None  # (a scene opens in its own colouring)
     if html is not None:
-        path = write_html(traj, html)
+        path = write_html(traj, html, color_by=color_by)
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)
         return
     try:
-        url, server = serve(traj, open_browser=not no_browser, port=port, announce=False)
+        url, server = serve(traj, open_browser=not no_browser, port=port, announce=False, color_by=color_by)
     except BundleMissingError:
         raise
     except OSError as e:  # the port is taken or not ours to bind
