@@ -109,6 +109,7 @@ def render(sc, traj, frames, *, width, height, camera, colliders=None, radius=No
         colliders=traj.colliders if colliders is None else colliders,
         springs=springs,
         legend=legend,
+        trail=0,  # the panels are a few frames far apart: a line between them is no path
     )
     return [np.array(f) for f in out]
 

@@ -11,7 +11,7 @@ from PIL import Image
 
 import kinema
 from kinema import _core
-from kinema.render import Camera2D, Camera3D, render_frames, write_video
+from kinema.render import Camera2D, Camera3D, low_end, render_frames, write_video
 
 
 def _scene(frames=3, n=5):
@@ -40,7 +40,7 @@ def test_colour_by_speed_puts_the_fastest_particle_at_the_top_colour():
     cam = Camera2D(-1.0, -2.0, 3.0, 2.0)  # 4 m × 4 m onto 100 × 100: 25 px per m
     frame = next(render_frames(x[:, :, :2], 0.4, t, dim=2, velocities=v[:, :, :2], width=100, height=100, camera=cam, time_format=None))
     top = _core.colormap(np.array([1.0]), "viridis", 0.0, 1.0)[0]
-    bottom = _core.colormap(np.array([0.0]), "viridis", 0.0, 1.0)[0]
+    bottom = _core.colormap(np.array([low_end("viridis")]), "viridis", 0.0, 1.0)[0]  # the lifted low end
 
     def at(xw, yw):  # world → pixel: column 25·(x + 1), row 25·(2 − y)
         return frame[int(25 * (2 - yw)), int(25 * (xw + 1))]
@@ -67,7 +67,9 @@ def test_time_stamp_changes_pixels_between_frames():
     diff = np.any(frames[0] != frames[1], axis=2)
     assert diff.any()
     rows, cols = np.nonzero(diff)
-    assert rows.max() < 30 and cols.max() < 150, "only the stamp in the top-left corner differs"
+    # Only the stamp differs, in a corner on the left (the one with fewer of the sphere's pixels
+    # under it: test_the_time_stamp_goes_to_a_corner_free_of_particles).
+    assert rows.max() - rows.min() < 16 and (rows.max() < 30 or rows.min() > 70) and cols.max() < 150
 
 
 def test_3d_camera_framing_and_depth_order():
@@ -348,7 +350,7 @@ def test_the_legend_is_a_colour_bar_in_the_top_right_corner():
     x[1, :, 1] = [0.0, 1.0, 2.0]  # moving: speeds 0, 1, 2
     cam = Camera2D(0.0, 0.0, 4.0, 3.0)
     kw = dict(dim=2, camera=cam, width=320, height=240, time_format=None)
-    top, bottom = (tuple(c) for c in _core.colormap(np.array([1.0, 0.0]), "magma", 0.0, 1.0))
+    top, bottom = (tuple(c) for c in _core.colormap(np.array([1.0, low_end("magma")]), "magma", 0.0, 1.0))
     corner = (slice(0, 60), slice(100, 320))
 
     def colours(frame):
@@ -356,7 +358,7 @@ def test_the_legend_is_a_colour_bar_in_the_top_right_corner():
 
     kw.update(vmin=-1.0, vmax=3.0)  # no particle takes an end colour of the colormap
     with_legend = next(render_frames(x, 0.1, [0.0, 1.0], colormap="magma", **kw))
-    assert {top, bottom} <= colours(with_legend), "the bar's ends are the colormap's ends"
+    assert {top, bottom} <= colours(with_legend), "the bar's ends are the particles' end colours"
     bar = np.nonzero((with_legend == top).all(axis=2))
     assert bar[0].size and bar[0].max() < 60 and bar[1].min() >= 100, "in the top right corner"
     low = np.nonzero((with_legend == bottom).all(axis=2))
@@ -450,3 +452,80 @@ def test_the_default_camera_fits_a_tall_scene_into_a_wide_frame(monkeypatch, dim
     else:
         xmin, ymin, xmax, ymax = calls[0]["view"]
         assert (ymax - ymin) <= (2.05 + 0.05) / 0.6, "the 2D view is not much taller than the column"
+
+
+# -- the pictures: slow particles visible, the stamp clear of them, trails and attractors ------
+
+
+def _luma(c):
+    return 0.299 * c[0] + 0.587 * c[1] + 0.114 * c[2]
+
+
+def test_slow_particles_are_not_near_black_and_the_legend_agrees():
+    # Speeds 0 and 2: the one at rest gets the colormap at low_end, not its near-black bottom,
+    # and the colour bar's left end is that colour too.
+    x = np.zeros((2, 2, 3))
+    x[:, 1, 0] = 2.0
+    x[1, 1, 1] = 2.0
+    cam = Camera2D(-1.0, -1.0, 3.0, 3.0)
+    frame = list(render_frames(x[:, :, :2], 0.3, [0.0, 1.0], dim=2, camera=cam, width=240, height=240, time_format=None, trail=0))[0]
+    rest = frame[int(240 * (3.0 - 0.0) / 4.0), int(240 * (0.0 + 1.0) / 4.0)]
+    assert _luma(rest) >= 80 > _luma(_core.colormap(np.array([0.0]), "viridis", 0.0, 1.0)[0])
+    assert (rest == _core.colormap(np.array([0.25]), "viridis", 0.0, 1.0)[0]).all() and low_end("viridis") == 0.25
+    bar = np.nonzero((frame[:60] == rest).all(axis=2))
+    assert bar[0].size, "the colour bar starts at the colour of the slowest particle"
+    assert _luma(_core.colormap(np.array([low_end("magma")]), "magma", 0.0, 1.0)[0]) >= 80
+
+
+def _stamp_pixels(frames):
+    """Where two frames that differ only in their time stamp differ."""
+    return np.nonzero(np.any(frames[0] != frames[1], axis=2))
+
+
+def test_the_time_stamp_goes_to_a_corner_free_of_particles():
+    # A still crowd of particles fills the top left corner: the stamp goes to the bottom left.
+    g = np.stack(np.meshgrid(np.linspace(0.0, 1.0, 6), np.linspace(2.0, 3.0, 6)), axis=-1).reshape(-1, 2)
+    x = np.repeat(g[None], 2, axis=0)
+    cam = Camera2D(0.0, 0.0, 4.0, 3.0)
+    kw = dict(dim=2, camera=cam, width=320, height=240, color_by="id", trail=0)
+    rows, cols = _stamp_pixels(list(render_frames(x, 0.1, [0.0, 1.5], **kw)))
+    assert rows.size and rows.min() > 180 and cols.max() < 120, "bottom left"
+    # The crowd in the bottom left too: the top right (no colour bar with ids).
+    y = np.concatenate([x, x - [0.0, 2.0]], axis=1)
+    rows, cols = _stamp_pixels(list(render_frames(y, 0.1, [0.0, 1.5], **kw)))
+    assert rows.size and rows.max() < 40 and cols.min() > 200, "top right"
+    # Nothing in the top left: it stays there, as always.
+    rows, cols = _stamp_pixels(list(render_frames(x + [2.5, -2.0], 0.1, [0.0, 1.5], **kw)))
+    assert rows.max() < 30 and cols.max() < 150
+
+
+def test_a_kepler_orbit_draws_its_trail_on_the_circle_and_its_attractor():
+    # kepler_rk4: r = 1, v = 1 about an attractor at the origin (mu = 1): x(t) = (cos t, sin t).
+    from kinema.runner import _attractors
+
+    world = kinema.load_scene(Path(__file__).resolve().parent.parent / "examples" / "scenes" / "kepler_rk4.toml")
+    traj = world.run(3.0, fps=20.0)
+    assert _attractors(world) == [[0.0, 0.0, 0.0]]
+    cam = Camera2D(-2.0, -2.0, 2.0, 2.0)  # 360 × 360: 90 px per m, the origin at (180, 180)
+    frames = list(
+        render_frames(
+            traj.positions, traj.radii, traj.t, dim=2, camera=cam, width=360, height=360, attractors=_attractors(world), time_format=None, legend=False
+        )
+    )
+    last = frames[-1]
+
+    def px(p):
+        return last[int(180 - 90 * p[1]), int(180 + 90 * p[0])]
+
+    assert (px((0.0, 0.0)) == list(_core.MARKER_COLOR)).all(), "the attractor at the origin"
+    t_end = traj.t[-1]
+    # The default trail is a third of the run (1 s): the circle is drawn from t_end − 0.9 s on,
+    # and not where the planet was 2 s before the end.
+    for t in np.linspace(t_end - 0.9, t_end - 0.1, 9):
+        assert (px((np.cos(t), np.sin(t))) != 255).any(), f"the trail at t = {t:.2f} s"
+    assert (px((np.cos(t_end - 2.0), np.sin(t_end - 2.0))) == 255).all()
+    assert (px((0.0, -1.0)) == 255).all() and (px((0.5, 0.5)) == 255).all(), "nothing off the path"
+    # No trail without one, and many particles have none by default.
+    bare = list(render_frames(traj.positions, traj.radii, traj.t, dim=2, camera=cam, width=360, height=360, time_format=None, legend=False, trail=0))[-1]
+    t = t_end - 0.5
+    assert (bare[int(180 - 90 * np.sin(t)), int(180 + 90 * np.cos(t))] == 255).all()

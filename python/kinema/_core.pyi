@@ -161,6 +161,7 @@ class World:
 # -- rendering (crates/kinema-py/src/render.rs) -------------------------------------------------
 COLORMAP_NAMES: list[str]
 LINE_COLOR: list[int]
+MARKER_COLOR: list[int]
 FRAME_MARGIN: float
 
 class Scenery:
@@ -197,6 +198,11 @@ def render_frame(
     scenery: Scenery | None = None,
     springs: npt.NDArray[np.int64] | None = None,
     spring_width: float = 1.5,
+    trails: npt.NDArray[np.float64] | None = None,
+    trail_width: float = 1.5,
+    markers: npt.NDArray[np.float64] | None = None,
+    marker_radius: float = 5.0,
+    label_at: tuple[int, int] | None = None,
 ) -> npt.NDArray[np.uint8]: ...
 def colormap(values: npt.NDArray[np.float64], colormap: str = "viridis", vmin: float | None = None, vmax: float | None = None) -> npt.NDArray[np.uint8]: ...
 def categorical_colors(ids: npt.NDArray[np.uint64]) -> npt.NDArray[np.uint8]: ...

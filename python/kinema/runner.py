@@ -371,6 +371,7 @@ def simulate_scene(
         if video:
             opts = sc.render.model_dump(exclude={"fps", "camera"})
             opts["camera"] = _camera(sc.render.camera)
+            opts["attractors"] = _attractors(world)
             _render_video(traj, stage / f"{scene.stem}.{video}", opts, sc.render.fps, "rendering", scene_fps=fps)
             names.append(f"{scene.stem}.{video}")
         if sc.output.plot:
@@ -406,6 +407,14 @@ def _remove_stale_stages(outdir: Path) -> list[Path]:
     from .io._files import remove_stale
 
     return remove_stale(outdir, ".kinema-run.")
+
+
+def _attractors(world) -> list:
+    """The points (m) of the world's attractors, drawn as markers in its video."""
+    from .forces import Attractor
+
+    points = [[float(c) for c in np.ravel(f.point)] for f in world.forces if isinstance(f, Attractor)]
+    return [p + [0.0] * (3 - len(p)) for p in points]
 
 
 def _camera(table):

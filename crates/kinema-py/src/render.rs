@@ -96,7 +96,7 @@ struct Keywords<'a, 'py> {
 
 /// The names `render_frame` takes after `positions` and `radius`, in the order of its
 /// signature.
-const KEYWORDS: [&str; 20] = [
+const KEYWORDS: [&str; 25] = [
     "colors",
     "values",
     "colormap",
@@ -117,6 +117,11 @@ const KEYWORDS: [&str; 20] = [
     "scenery",
     "springs",
     "spring_width",
+    "trails",
+    "trail_width",
+    "markers",
+    "marker_radius",
+    "label_at",
 ];
 
 impl<'a, 'py> Keywords<'a, 'py> {
@@ -248,6 +253,8 @@ struct ImageArgs {
     background: (u8, u8, u8),
     min_radius_px: f64,
     spring_width: f64,
+    trail_width: f64,
+    marker_radius: f64,
 }
 
 impl ImageArgs {
@@ -258,6 +265,8 @@ impl ImageArgs {
             background: kw.get("background", (255, 255, 255))?,
             min_radius_px: kw.get("min_radius_px", 1.0)?,
             spring_width: kw.get("spring_width", 1.5)?,
+            trail_width: kw.get("trail_width", 1.5)?,
+            marker_radius: kw.get("marker_radius", 5.0)?,
         })
     }
 
@@ -266,17 +275,21 @@ impl ImageArgs {
             background: [self.background.0, self.background.1, self.background.2],
             min_radius_px: self.min_radius_px,
             spring_width_px: self.spring_width,
+            trail_width_px: self.trail_width,
+            marker_radius_px: self.marker_radius,
             ..RenderParams::new(self.width, self.height)
         }
     }
 }
 
 /// The time stamp: `label` (none by default), its glyphs `label_scale` times the font's
-/// pixels, in `label_color` (RGB8), 4 glyph pixels from the top left corner.
+/// pixels, in `label_color` (RGB8), its top left corner at `label_at` (column, row) pixels,
+/// by default 4 glyph pixels from the top left corner of the frame.
 struct LabelArgs {
     label: Option<String>,
     label_scale: usize,
     label_color: (u8, u8, u8),
+    label_at: Option<(usize, usize)>,
 }
 
 impl LabelArgs {
@@ -285,6 +298,7 @@ impl LabelArgs {
             label: kw.get("label", None)?,
             label_scale: kw.get("label_scale", 2)?,
             label_color: kw.get("label_color", (0, 0, 0))?,
+            label_at: kw.get("label_at", None)?,
         })
     }
 
@@ -293,7 +307,8 @@ impl LabelArgs {
         if let Some(label) = &self.label {
             let (c, scale) = (self.label_color, self.label_scale);
             let margin = 4 * scale.max(1);
-            text::draw_text(image, width, height, [margin, margin], scale, [c.0, c.1, c.2], label)?;
+            let (x, y) = self.label_at.unwrap_or((margin, margin));
+            text::draw_text(image, width, height, [x, y], scale, [c.0, c.1, c.2], label)?;
         }
         Ok(())
     }
@@ -326,14 +341,18 @@ fn spring_pairs(springs: Option<PyReadonlyArray2<'_, i64>>) -> PyResult<Vec<[usi
 /// The keywords, by group: the camera (`CameraArgs`), the colours (`ColourArgs`), the image
 /// (`ImageArgs`), the time stamp (`LabelArgs`); `scenery`: a `Scenery`, the colliders drawn
 /// with the particles and the extent that sizes planes and clamps infinite box bounds;
-/// `springs`: (S, 2) integer indices of particles joined by a line `spring_width` pixels wide.
+/// `springs`: (S, 2) integer indices of particles joined by a line `spring_width` pixels wide;
+/// `trails`: (N, L, 3) float, m, each particle's recent path (oldest first, NaN breaks it),
+/// drawn `trail_width` pixels wide in its colour, fading with age; `markers`: (M, 3), m,
+/// points drawn as amber discs of radius `marker_radius` pixels (attractors).
 #[pyfunction]
 #[pyo3(signature = (positions, radius, **keywords))]
 #[pyo3(
     text_signature = "(positions, radius, *, colors=None, values=None, colormap='viridis', vmin=None, vmax=None, \
     width=1280, height=720, view=None, eye=None, target=None, up=[0.0, 0.0, 1.0], fov_deg=40.0, \
     background=(255, 255, 255), min_radius_px=1.0, label=None, label_scale=2, label_color=(0, 0, 0), \
-    scenery=None, springs=None, spring_width=1.5)"
+    scenery=None, springs=None, spring_width=1.5, trails=None, trail_width=1.5, markers=None, \
+    marker_radius=5.0, label_at=None)"
 )]
 fn render_frame<'py>(
     py: Python<'py>,
@@ -348,6 +367,8 @@ fn render_frame<'py>(
     let stamp = LabelArgs::read(&kw)?;
     let scenery: Option<Bound<'py, PyScenery>> = kw.get("scenery", None)?;
     let springs = spring_pairs(kw.get("springs", None)?)?;
+    let trails: Option<PyReadonlyArray3<'py, f64>> = kw.get("trails", None)?;
+    let markers: Option<PyReadonlyArray2<'py, f64>> = kw.get("markers", None)?;
     let n = positions.shape()[0];
     if positions.shape()[1] != 3 {
         return Err(bad(
@@ -363,6 +384,24 @@ fn render_frame<'py>(
             &format!("one radius per particle ({n})"),
         ));
     }
+    let trail_len = match &trails {
+        Some(a) if a.shape()[0] != n || a.shape()[2] != 3 || a.shape()[1] < 2 => {
+            return Err(bad(
+                "trails",
+                format!("an array of shape {:?}", a.shape()),
+                &format!("shape ({n}, L, 3), L >= 2"),
+            ))
+        }
+        Some(a) => a.shape()[1],
+        None => 0,
+    };
+    if let Some(m) = &markers {
+        if m.shape()[1] != 3 {
+            return Err(bad("markers", format!("an array of shape {:?}", m.shape()), "shape (M, 3)"));
+        }
+    }
+    let trail_points = trails.as_ref().map(data).unwrap_or_default();
+    let marker_points = markers.as_ref().map(data).unwrap_or_default();
     let (width, height) = (look.width, look.height);
     let camera = view.camera(width, height)?;
     let colors = colouring.colours(py, n)?;
@@ -378,6 +417,9 @@ fn render_frame<'py>(
             colors: &colors,
             springs: &springs,
             scenery: drawn,
+            trails: &trail_points,
+            trail_len,
+            markers: &marker_points,
         };
         render_core(&camera, &frame, &params, &mut image)?;
         stamp.draw(&mut image, width, height)
@@ -494,7 +536,7 @@ static NO_SCENERY: Scenery = Scenery {
 
 /// Registers the class `Scenery`, the render functions (`render_frame`, `colormap`, `categorical_colors`,
 /// `frame_box`, `frame_points`, `rgb_to_yuv420p`) and the constants `COLORMAP_NAMES`,
-/// `LINE_COLOR` (springs, box edges) and `FRAME_MARGIN`.
+/// `LINE_COLOR` (springs, box edges), `MARKER_COLOR` (attractors) and `FRAME_MARGIN`.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScenery>()?;
     m.add_function(wrap_pyfunction!(render_frame, m)?)?;
@@ -505,6 +547,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rgb_to_yuv420p, m)?)?;
     m.add("COLORMAP_NAMES", kinema::render::COLORMAP_NAMES.to_vec())?;
     m.add("LINE_COLOR", kinema::render::paint::LINE_COLOR.to_vec())?;
+    m.add("MARKER_COLOR", kinema::render::MARKER_COLOR.to_vec())?;
     m.add("FRAME_MARGIN", kinema::render::FRAME_MARGIN)?;
     Ok(())
 }

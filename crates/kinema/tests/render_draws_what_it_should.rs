@@ -164,11 +164,9 @@ mod render {
                         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                         let mut image = vec![0u8; w * h * 3];
                         let frame = Frame {
-                            positions: &positions,
-                            radius: &radius,
-                            colors: &colors,
                             springs: &springs,
                             scenery,
+                            ..Frame::particles(&positions, &radius, &colors)
                         };
                         pool.install(|| render_frame(&cam, &frame, &params, &mut image)).unwrap();
                         image
@@ -572,11 +570,9 @@ mod render {
         let positions: Vec<f64> = pos.iter().flatten().copied().collect();
         let colors: Vec<u8> = pos.iter().flat_map(|_| [200, 0, 0]).collect();
         let frame = Frame {
-            positions: &positions,
-            radius,
-            colors: &colors,
             springs,
             scenery,
+            ..Frame::particles(&positions, radius, &colors)
         };
         render_frame(camera, &frame, &RenderParams::new(w, h), &mut image).unwrap();
         image
@@ -726,5 +722,38 @@ mod render {
             "{bbox:?}"
         );
         assert!(Camera::frame_points(&pts, [1.0, 0.0, 0.0], 40.0, w, h, [10.0, 20.0, 5.0, 170.0]).is_err());
+    }
+
+    #[test]
+    fn a_trail_follows_the_path_and_fades_and_a_marker_is_an_amber_disc() {
+        // [0, 10] × [0, 5] onto 200 × 100: 20 px per m. One particle at (8, 2.5) that came
+        // along the row y = 2.5 from x = 2: its trail runs left of it, oldest (faintest) first.
+        let (w, h) = (200, 100);
+        let cam = Camera::fit_2d([0.0, 0.0], [10.0, 5.0], w, h).unwrap();
+        let trail: Vec<f64> = (0..7).flat_map(|k| [2.0 + k as f64, 2.525, 0.0]).collect();
+        let marker = [5.0, 4.0, 0.0];
+        let frame = Frame {
+            trails: &trail,
+            trail_len: 7,
+            markers: &marker,
+            ..Frame::particles(&[8.0, 2.525, 0.0], &[0.25], &[200, 0, 0])
+        };
+        let mut img = vec![0u8; w * h * 3];
+        render_frame(&cam, &frame, &RenderParams::new(w, h), &mut img).unwrap();
+        // Newest segment (x 7 → 8 m): the particle's colour; oldest (2 → 3 m): faint.
+        let (new, old) = (pixel(&img, w, 150, 49), pixel(&img, w, 50, 49));
+        assert_eq!(new, [200, 0, 0], "the newest segment has the particle's colour");
+        assert!(old[0] > 240 && old[1] > 200, "{old:?}");
+        assert_eq!(pixel(&img, w, 100, 40), BG, "nothing off the path");
+        // The marker: amber at (5, 4) m → pixel (100, 20), a dark rim 6 px out.
+        assert_eq!(pixel(&img, w, 100, 20), kinema::render::MARKER_COLOR);
+        let rim = pixel(&img, w, 105, 20);
+        assert!(rim.iter().all(|&c| c < 120), "{rim:?}");
+        // A trail of the wrong length is an error that names it.
+        let bad = Frame { trail_len: 6, ..frame };
+        match render_frame(&cam, &bad, &RenderParams::new(w, h), &mut img).unwrap_err() {
+            Error::InvalidParameter { parameter, .. } => assert_eq!(parameter, "trails"),
+            other => panic!("{other}"),
+        }
     }
 }

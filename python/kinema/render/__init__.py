@@ -33,11 +33,11 @@ from __future__ import annotations
 from .cameras import Camera2D, Camera3D
 from .descriptions import _KIND as _KIND  # kinema.io.h5md
 from .descriptions import _describe_colliders as _describe_colliders  # World, the trajectory files
-from .frames import COLORMAPS, render_frames
+from .frames import COLORMAPS, low_end, render_frames
 from .frames import NO_OWN_COLOR as NO_OWN_COLOR
 from .frames import _trajectory_options as _trajectory_options  # Trajectory.render, kinema.runner
 from .frames import own_colours as own_colours
 from .video import COMMON_RATES, VIDEO_EXTENSIONS, playback_rate, video_rate, write_video
 from .video import GIF_DELAYS_CS as GIF_DELAYS_CS
 
-__all__ = ["Camera2D", "Camera3D", "COLORMAPS", "render_frames", "write_video", "video_rate", "playback_rate", "COMMON_RATES", "VIDEO_EXTENSIONS"]
+__all__ = ["Camera2D", "Camera3D", "COLORMAPS", "low_end", "render_frames", "write_video", "video_rate", "playback_rate", "COMMON_RATES", "VIDEO_EXTENSIONS"]

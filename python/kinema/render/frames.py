@@ -16,6 +16,26 @@ from .legend import _Legend
 #: Names accepted by ``colormap=``.
 COLORMAPS: tuple[str, ...] = tuple(_core.COLORMAP_NAMES)
 
+#: The least luma (Rec. 601, 0–255) of the colour a colormap gives the lowest value
+#: (``low_end``): viridis's and magma's bottom colours (luma 30 and 1) are near black, and a
+#: resting pile, shaded, reads as a black block; from here up, a slow sphere's lit and shaded
+#: sides differ enough to show its shape.
+LOW_END_LUMA = 80.0
+
+#: Scenes of at most this many particles get trails by default (``render_frames(trail=)``).
+TRAIL_PARTICLES = 10
+
+
+def low_end(colormap: str) -> float:
+    """Where on ``colormap`` (0 … 1) ``render_frames`` puts the lowest value: the first of
+    t = k/64 whose colour has a luma of at least ``LOW_END_LUMA`` (viridis 0.25, magma
+    0.41, gray 0.31). The values from ``vmin`` to ``vmax`` use the map from there to 1, and
+    the colour bar shows that part."""
+    t = np.arange(65) / 64.0
+    rgb = _core.colormap(t, colormap, 0.0, 1.0).astype(np.float64)
+    luma = rgb @ np.array([0.299, 0.587, 0.114])
+    return float(t[np.argmax(luma >= LOW_END_LUMA)]) if np.any(luma >= LOW_END_LUMA) else 0.0
+
 
 def render_frames(
     positions,
@@ -40,18 +60,27 @@ def render_frames(
     springs=None,
     spring_width: float | None = None,
     legend: bool | str = True,
+    trail: float | None = None,
+    trail_width: float | None = None,
+    attractors=None,
 ) -> Iterator[np.ndarray]:
     """Yield one (height, width, 3) uint8 RGB frame per time.
 
     positions: (F, N, 3) or, for ``dim=2``, (F, N, 2) positions in m (2D uses x and y).
     radius: one radius for all particles or one per particle (N,), m.
     t: (F,) times, s, stamped on each frame with ``time_format`` (None: no stamp; the stamp
-      may use only digits, '.', '-', '+', ':', '=', ' ', 't', 's', 'e').
+      may use only digits, '.', '-', '+', ':', '=', ' ', 't', 's', 'e'). The stamp goes into
+      the corner (top left, bottom left, top right, bottom right, the first of the fewest)
+      where the fewest particle pixels lie under it over the video (up to 24 frames evenly
+      spaced, drawn without scenery to count them), clear of the colour bar; one corner for
+      the whole video.
     color_by: "speed" (|v|, from ``velocities`` (F, N, dim) or else from finite differences of
       the positions in t), "id" (categorical colours by particle index), a field of floats of
       shape (N,) or (F, N) mapped through ``colormap`` between ``vmin`` and ``vmax`` (default:
       the field's minimum and maximum over all frames, so colours mean the same in every
-      frame), or fixed uint8 colours of shape (N, 3) or (F, N, 3).
+      frame), or fixed uint8 colours of shape (N, 3) or (F, N, 3). Values use the colormap
+      from ``low_end(colormap)`` up (viridis from 0.25: ``vmin`` is steel blue, not near
+      black), so the slowest particles stay visible and their shading shows.
     camera: a Camera2D / Camera3D; default: the bounding box of the live particles of all
       frames (with the largest radius) and of the colliders' finite parts fills the frame's
       width or height, whichever binds, to 3 % of its sides, centred (a 3D box seen from the
@@ -75,6 +104,14 @@ def render_frames(
       "value" otherwise) in the top right corner, beside the time stamp, its text as tall
       (``label_scale``). False: none. It is left out of frames under 160 × 120 pixels or too
       narrow for it, which have no room for it.
+    trail: seconds of each particle's recent path drawn behind it (its positions in the
+      frames of the last ``trail`` seconds, as a line in its colour fading with age,
+      ``trail_width`` pixels wide, default 1 per 300 rows, at least 1.5). Default: a third of
+      the recording's span for at most ``TRAIL_PARTICLES`` (10) particles (a Kepler orbit of
+      three periods shows one), none for more; 0: none.
+    attractors: (A, 3) or (A, 2) points, m (the ``point`` of ``kinema.Attractor`` forces),
+      each drawn as an amber disc with a dark rim (radius 1 per 80 rows, at least 4 pixels);
+      the default camera frames them with the particles.
     """
     if dim not in (2, 3):
         raise ValueError(f"dim = {dim!r} is invalid: use 2 (discs in the xy-plane) or 3 (spheres)")
@@ -102,10 +139,13 @@ def render_frames(
         spring_width = max(1.0, height / 480.0)
 
     colors, values, vmin, vmax = _colouring(color_by, x, times, velocities, dim, vmin, vmax)
+    marks = _attractor_points(attractors, dim)
+    trail = _trail_seconds(trail, n, times)
     # The colliders become the engine's once; the engine lays the scene out (its extent:
-    # all frames' live particles and the colliders' finite parts, widened by the largest
-    # radius), one extent for every frame, so that floors and open walls stay put.
-    scenery = _core.Scenery(_describe_colliders(colliders) if colliders is not None else [], x.reshape(-1, 3), r)
+    # all frames' live particles, the attractors and the colliders' finite parts, widened by
+    # the largest radius), one extent for every frame, so that floors and open walls stay put.
+    everything = np.concatenate([x.reshape(-1, 3), marks]) if len(marks) else x.reshape(-1, 3)
+    scenery = _core.Scenery(_describe_colliders(colliders) if colliders is not None else [], everything, r)
     lo, hi = (np.array(corner) for corner in scenery.extent)
     bg = tuple(int(c) for c in background)
     luminance = 0.299 * bg[0] + 0.587 * bg[1] + 0.114 * bg[2]
@@ -114,11 +154,13 @@ def render_frames(
     if legend is not False and legend is not None and colors is None and width >= 160 and height >= 120:
         name = legend if isinstance(legend, str) else ("speed (m/s)" if isinstance(color_by, str) else "value")
         stamp = max((len(time_format.format(v)) for v in times), default=0) if time_format is not None else 0
-        key = _Legend(name, colormap, vmin, vmax, int(width), int(height), int(label_scale), label_color, bg, stamp)
+        key = _Legend(name, colormap, vmin, vmax, int(width), int(height), int(label_scale), label_color, bg, stamp, low_end(colormap))
         if not key.fits:  # a frame too narrow for the name, the values and a bar
             key = None
     if camera is None:
         points = _frame_corners(x, r, scenery.boxes, lo, hi) if dim == 3 else None
+        if points is not None and len(marks):
+            points = np.concatenate([points, marks])
         camera = _auto_camera(lo, hi, dim, width, height, avoid=key.box if key is not None else None, points=points)
     elif dim == 2 and not isinstance(camera, Camera2D) or dim == 3 and not isinstance(camera, Camera3D):
         raise ValueError(f"camera = {camera!r} is invalid: dim={dim} needs a Camera{dim}D")
@@ -130,8 +172,21 @@ def render_frames(
         label_scale=int(label_scale),
         label_color=label_color,
         spring_width=float(spring_width),
+        trail_width=float(max(1.5, height / 300.0) if trail_width is None else trail_width),
+        marker_radius=float(max(4.0, height / 80.0)),
         **camera._kwargs(),
     )
+    if len(marks):
+        common["markers"] = marks
+    if values is not None and vmax > vmin:  # vmin at low_end(colormap) of the map, vmax at its top
+        low = low_end(colormap)
+        map_min = vmin - low / (1.0 - low) * (vmax - vmin)
+    else:
+        map_min = vmin
+    windows = _trail_windows(times, trail)
+    if time_format is not None:
+        stamps = [time_format.format(v) for v in times]
+        common["label_at"] = _label_corner(x, r, live, windows, stamps, int(label_scale), key.box if key is not None else None, common)
     if len(scenery):
         common["scenery"] = scenery
     for k in range(n_frames):
@@ -145,17 +200,100 @@ def render_frames(
         if colors is not None:
             colour_kw = {"colors": pick(colors[k] if colors.ndim == 3 else colors)}
         else:
-            colour_kw = {"values": pick(values[k] if values.ndim == 2 else values), "colormap": colormap, "vmin": vmin, "vmax": vmax}
+            colour_kw = {"values": pick(values[k] if values.ndim == 2 else values), "colormap": colormap, "vmin": map_min, "vmax": vmax}
         if pairs.size and not every:
             both = here[pairs[:, 0]] & here[pairs[:, 1]]
             column = np.cumsum(here) - 1  # a live particle's index among the live ones
             frame_pairs = np.ascontiguousarray(column[pairs[both]])
         else:
             frame_pairs = pairs
+        if windows[k] < k:  # (N, L, 3): the trail's points, oldest first, NaN where not alive
+            colour_kw["trails"] = pick(np.ascontiguousarray(x[windows[k] : k + 1].transpose(1, 0, 2)))
         frame = _core.render_frame(pick(x[k]), pick(r), label=label, springs=frame_pairs, **colour_kw, **common)
         if key is not None:
             key.draw(frame)
         yield frame
+
+
+def _attractor_points(attractors, dim: int) -> np.ndarray:
+    """(A, 3) finite points, m (z = 0 in 2D)."""
+    if attractors is None:
+        return np.zeros((0, 3))
+    a = np.asarray(attractors, dtype=np.float64)
+    if a.size == 0:
+        return np.zeros((0, 3))
+    a = a.reshape(1, -1) if a.ndim == 1 else a
+    if a.ndim != 2 or a.shape[1] not in (2, 3) or not np.all(np.isfinite(a)):
+        raise ValueError(f"attractors has shape {a.shape}: expected finite points (A, 3) or (A, 2), m")
+    if a.shape[1] == 2:
+        a = np.concatenate([a, np.zeros((len(a), 1))], axis=1)
+    elif dim == 2:
+        a = a.copy()
+        a[:, 2] = 0.0
+    return np.ascontiguousarray(a)
+
+
+def _trail_seconds(trail, n: int, times: np.ndarray) -> float:
+    """The trail's length, s: ``trail``, or by default a third of the span for few particles."""
+    if trail is None:
+        span = float(times[-1] - times[0]) if times.size > 1 else 0.0
+        return span / 3.0 if 0 < n <= TRAIL_PARTICLES and np.isfinite(span) else 0.0
+    if isinstance(trail, bool) or not (np.isfinite(float(trail)) and float(trail) >= 0):
+        raise ValueError(f"trail = {trail!r} is invalid: a number of seconds >= 0 (0: no trails)")
+    return float(trail)
+
+
+def _trail_windows(times: np.ndarray, trail: float) -> np.ndarray:
+    """For each frame k, the first frame of its trail (k: none): the earliest j with
+    times[j] >= times[k] − trail."""
+    if trail <= 0:
+        return np.arange(times.size)
+    return np.minimum(np.searchsorted(times, times - trail * (1 + 1e-12), side="left"), np.arange(times.size))
+
+
+#: The stamp's corners in the order of preference: top left, bottom left, top right, bottom right.
+_CORNERS = ((0, 0), (0, 1), (1, 0), (1, 1))
+
+
+def _label_corner(x, r, live, windows, stamps, scale: int, avoid, common: dict) -> tuple[int, int]:
+    """(column, row) of the stamp's top left corner: the corner of the frame (``_CORNERS``,
+    4 font pixels in) whose box holds the fewest particle, trail and marker pixels over up to
+    24 frames evenly spaced, drawn without scenery (black on white); corners that meet the
+    colour bar ``avoid`` (x0, y0, x1, y1) are not taken, unless all do."""
+    width, height = common["width"], common["height"]
+    margin = 4 * max(scale, 1)
+    lw = max((len(s) for s in stamps), default=0) * 6 * scale
+    lh = 7 * scale
+    boxes = []
+    for cx, cy in _CORNERS:
+        x0 = margin if cx == 0 else max(0, width - margin - lw)
+        y0 = margin if cy == 0 else max(0, height - margin - lh)
+        boxes.append((x0, y0))
+    n_frames = x.shape[0]
+    sample = np.unique(np.linspace(0, n_frames - 1, min(n_frames, 24)).round().astype(int))
+    kw = {k: v for k, v in common.items() if k not in ("scenery", "label_at", "background", "label_color")}
+    counts = np.zeros(len(boxes))
+    for k in sample:
+        here = live[k]
+        if not here.any():
+            continue
+        extra = {}
+        if windows[k] < k:
+            extra["trails"] = np.ascontiguousarray(x[windows[k] : k + 1].transpose(1, 0, 2)[here])
+        n = int(here.sum())
+        img = _core.render_frame(
+            np.ascontiguousarray(x[k][here]), np.ascontiguousarray(r[here]), colors=np.zeros((n, 3), np.uint8), background=(255, 255, 255), **extra, **kw
+        )
+        used = np.any(img != 255, axis=2)
+        for b, (x0, y0) in enumerate(boxes):
+            counts[b] += used[max(0, y0 - margin // 2) : y0 + lh + margin // 2, max(0, x0 - margin // 2) : x0 + lw + margin // 2].sum()
+    if avoid is not None:
+        ax0, ay0, ax1, ay1 = avoid
+        for b, (x0, y0) in enumerate(boxes):
+            if x0 < ax1 and ax0 < x0 + lw and y0 < ay1 and ay0 < y0 + lh:
+                counts[b] = np.inf
+    best = int(np.argmin(counts)) if np.isfinite(counts).any() else 0
+    return boxes[best]
 
 
 def _trajectory_options(traj) -> dict:

@@ -13,12 +13,13 @@ from .. import _core
 class _Legend:
     """A colour bar, drawn into frames: in the top right corner, on the time stamp's row (or
     under it where the row is too short for both), the quantity's name, ``vmin``, a horizontal
-    bar of the colormap (its bottom colour on the left, its top colour on the right) and
-    ``vmax``, on a panel of the background colour (3/4 opaque). Pillow draws it once, its text
+    bar of the colormap (the colour of ``vmin`` on the left, its top colour on the right) and
+    ``vmax`` (the map from ``start`` to 1, as the particles are coloured), on a panel of the
+    background colour (3/4 opaque). Pillow draws it once, its text
     in DejaVu Sans (matplotlib's) as tall as the time stamp; each frame gets it by blending,
     ``box`` (x0, y0, x1, y1) pixels being where it goes."""
 
-    def __init__(self, name, colormap, vmin, vmax, width, height, scale, ink, background, stamp_chars=0):
+    def __init__(self, name, colormap, vmin, vmax, width, height, scale, ink, background, stamp_chars=0, start=0.0):
         from PIL import Image, ImageDraw
 
         scale = max(scale, 1)
@@ -50,9 +51,10 @@ class _Legend:
         m = np.asarray(mask, np.float32)[:, :, None] / 255.0
         colour = colour * (1.0 - m) + m * np.asarray(ink, np.float32)
         opacity = opacity * (1.0 - m) + m
-        # The bar, opaque: left column the colormap's bottom colour, right column its top colour.
+        # The bar, opaque: left column the colour of vmin (the colormap at ``start``, where
+        # render_frames puts the lowest value), right column its top colour.
         by0 = cy - bar_h // 2
-        ramp = _core.colormap(np.linspace(0.0, 1.0, bar_w), colormap, 0.0, 1.0).astype(np.float32)
+        ramp = _core.colormap(np.linspace(float(start), 1.0, bar_w), colormap, 0.0, 1.0).astype(np.float32)
         colour[by0 : by0 + bar_h, bx0 : bx0 + bar_w] = ramp[None, :, :]
         opacity[by0 : by0 + bar_h, bx0 : bx0 + bar_w] = 1.0
         edge = np.asarray([128, 128, 128], np.float32)

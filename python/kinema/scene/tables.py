@@ -532,6 +532,7 @@ class RenderTable(_Model):
     background: Annotated[list[Annotated[int, Field(ge=0, le=255)]], Field(min_length=3, max_length=3)] = [255, 255, 255]
     fps: Annotated[float, Field(ge=0.01, le=1000)] | None = None  # playback; what GIF and MP4 can hold (kinema.runner.VIDEO_FPS)
     camera: _typed(Camera2DTable, Camera3DTable) | None = None
+    trail: Annotated[float, Field(ge=0, allow_inf_nan=False)] | None = None  # s of each particle's path drawn; None: render_frames' default
 
     @field_validator("colormap")
     @classmethod

@@ -9,7 +9,8 @@
 //!    fills and antialiased lines in pixels, cut at the camera's near distance first), and
 //!    3D sphere obstacles become sprites like the particles, numbered after them. Springs
 //!    (pairs of particles, [`render_frame`]) become antialiased lines from rim to rim, cut at
-//!    the near distance, numbered after the obstacles.
+//!    the near distance, numbered after the obstacles; trails (each particle's recent path)
+//!    become antialiased segments faded by age, and markers (attractors) discs.
 //! 2. order     3D: far to near (painter's algorithm, ties broken by index), sphere obstacles
 //!    and springs (at their midpoints' depth) included; 2D: springs first, then the particles
 //!    in index order — later particles are drawn over earlier ones.
@@ -45,4 +46,7 @@ pub use camera::{Camera, Projected, FRAME_MARGIN};
 pub use colormap::{categorical, Colormap, COLORMAP_NAMES};
 pub use extent::{collider_boxes, scene_extent, Region};
 pub use paint::Scenery;
-pub use raster::{render, render_frame, render_scene, Frame, RenderParams, RenderStats, Shading, BAND_ROWS};
+pub use raster::{
+    render, render_frame, render_scene, Frame, RenderParams, RenderStats, Shading, BAND_ROWS, MARKER_COLOR, MARKER_RIM_COLOR,
+    MARKER_RIM_PX,
+};

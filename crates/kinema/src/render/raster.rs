@@ -58,7 +58,19 @@ pub struct RenderParams {
     /// Width of the lines drawn for springs ([`render_frame`]), pixels, in [1, 1000].
     /// Default 1.5.
     pub spring_width_px: f64,
+    /// Width of the particles' trails ([`Frame::trails`]), pixels, in [1, 1000]. Default 1.5.
+    pub trail_width_px: f64,
+    /// Radius of a marker ([`Frame::markers`]), pixels, in [1, 1000]; its dark rim adds
+    /// [`MARKER_RIM_PX`]. Default 5.
+    pub marker_radius_px: f64,
 }
+
+/// The fill of a marker ([`Frame::markers`]: an attractor): amber, a sun.
+pub const MARKER_COLOR: [u8; 3] = [245, 170, 40];
+/// The rim of a marker, dark grey.
+pub const MARKER_RIM_COLOR: [u8; 3] = [50, 50, 54];
+/// The width of a marker's rim, pixels.
+pub const MARKER_RIM_PX: f64 = 1.5;
 
 impl RenderParams {
     /// A `width × height` frame with the defaults of the other fields.
@@ -70,6 +82,8 @@ impl RenderParams {
             min_radius_px: 1.0,
             shading: Shading::default(),
             spring_width_px: 1.5,
+            trail_width_px: 1.5,
+            marker_radius_px: 5.0,
         }
     }
 }
@@ -96,6 +110,14 @@ pub struct Frame<'a> {
     pub springs: &'a [[usize; 2]],
     /// The colliders drawn with the particles.
     pub scenery: &'a Scenery,
+    /// Each particle's recent path (its trail), oldest point first: `trail_len` points x, y,
+    /// z (m) per particle, N × `trail_len` × 3 numbers, or none (empty). A non-finite point
+    /// breaks the path there (the particle was not alive).
+    pub trails: &'a [f64],
+    /// Points per trail (≥ 2 when there are trails).
+    pub trail_len: usize,
+    /// Points x, y, z (m) marked with a disc (an attractor's centre): 3M numbers.
+    pub markers: &'a [f64],
 }
 
 /// No colliders: what [`Frame::particles`] draws besides the particles.
@@ -113,6 +135,9 @@ impl<'a> Frame<'a> {
             colors,
             springs: &[],
             scenery: &NO_SCENERY,
+            trails: &[],
+            trail_len: 0,
+            markers: &[],
         }
     }
 }
@@ -166,6 +191,15 @@ pub fn render_scene(
 /// cloth's springs in front of a sphere obstacle are drawn over it and those behind it are
 /// hidden, which lines drawn under everything (like box edges) would get wrong. Since a line
 /// stops at its particles' rims, it never paints over its own ends, whichever comes first.
+///
+/// Trails ([`Frame::trails`]) are polylines [`RenderParams::trail_width_px`] wide in their
+/// particle's colour, faded towards the background with age: segment k of S (0 the oldest)
+/// mixes (k + 1)/S of the colour into the background, so the newest segment has the
+/// particle's colour and the path fades out behind it (opaque, so no joint is drawn twice
+/// over); like a spring, a trail stops at the rim of its particle's disc. Markers ([`Frame::markers`]) are discs of [`MARKER_COLOR`] with a dark rim,
+/// [`RenderParams::marker_radius_px`] whatever their distance. In 2D the order is trails,
+/// markers, springs, particles; in 3D trail segments (at their midpoints' depth) and markers
+/// are ordered far to near with the rest.
 pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image: &mut [u8]) -> Result<RenderStats, Error> {
     let Frame {
         positions,
@@ -173,6 +207,9 @@ pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image
         colors,
         springs,
         scenery,
+        trails,
+        trail_len,
+        markers,
     } = *frame;
     let (w, h) = (params.width, params.height);
     let projector = camera.projector(w, h)?;
@@ -198,6 +235,28 @@ pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image
             "spring_width_px",
             params.spring_width_px,
             "a width in pixels in [1, 1000]",
+        ));
+    }
+    for (name, v) in [
+        ("trail_width_px", params.trail_width_px),
+        ("marker_radius_px", params.marker_radius_px),
+    ] {
+        if !(v >= 1.0 && v <= 1000.0) {
+            return Err(invalid(name, v, "a size in pixels in [1, 1000]"));
+        }
+    }
+    if !trails.is_empty() && (trail_len < 2 || trails.len() != n * trail_len * 3) {
+        return Err(invalid(
+            "trails",
+            format!("{} numbers of {trail_len} points per trail", trails.len()),
+            &format!("N × trail_len × 3 = {n} × trail_len × 3 numbers, trail_len >= 2"),
+        ));
+    }
+    if markers.len() % 3 != 0 || !markers.iter().all(|c| c.is_finite()) {
+        return Err(invalid(
+            "markers",
+            format!("{} numbers", markers.len()),
+            "finite x, y, z per marker",
         ));
     }
     if let Some((k, pair)) = springs.iter().enumerate().find(|(_, p)| p[0] >= n || p[1] >= n) {
@@ -259,20 +318,39 @@ pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image
     }
     let background = painted.background;
 
-    // 1c. springs: lines numbered after the obstacles (see `render_frame` for their place).
+    // 1c. springs: lines numbered after the obstacles (see `render_frame` for their place),
+    //     then the markers and the trails' segments.
+    let mut under: Vec<Item> = Vec::new();
+    let mut more: Vec<(f64, Item)> = Vec::new();
+    for (depth, line) in trail_lines(camera, &projector, frame, params) {
+        more.push((depth, Item::Line(line)));
+    }
+    for p in markers.chunks_exact(3) {
+        let Some(q) = projector.project([p[0], p[1], p[2]], 0.0) else {
+            continue;
+        };
+        let r = params.marker_radius_px;
+        for (rr, c) in [(r + MARKER_RIM_PX, MARKER_RIM_COLOR), (r, MARKER_COLOR)] {
+            if let Some(s) = Sprite::new(q.x, q.y, rr, c, w, h) {
+                more.push((q.depth, Item::Sprite(s)));
+            }
+        }
+    }
     let lines = spring_lines(camera, &projector, frame, params);
     if spheres {
+        let first = n + obstacles + lines.len();
         for (k, (depth, line)) in lines.into_iter().enumerate() {
             items.push((depth, n + obstacles + k, Item::Line(line)));
         }
+        for (k, (depth, it)) in more.into_iter().enumerate() {
+            items.push((depth, first + k, it));
+        }
     } else {
-        // 2D: before every particle, in their own order.
+        // 2D: trails and markers, then the springs, before every particle, in their order.
+        under.extend(more.into_iter().map(|(_, it)| it));
+        under.extend(lines.into_iter().map(|(_, l)| Item::Line(l)));
         let particles = std::mem::take(&mut items);
-        items = lines
-            .into_iter()
-            .enumerate()
-            .map(|(k, (d, l))| (d, k, Item::Line(l)))
-            .collect();
+        items = under.into_iter().enumerate().map(|(k, it)| (0.0, k, it)).collect();
         items.extend(particles);
     }
 
@@ -419,6 +497,84 @@ fn spring_lines(camera: &Camera, projector: &Projector, frame: &Frame, params: &
         }
     }
     out
+}
+
+/// The trails as pixel-space segments with the depth of their midpoints (0 in 2D), each cut
+/// at the near distance (3D), coloured by age (see [`render_frame`]).
+fn trail_lines(camera: &Camera, projector: &Projector, frame: &Frame, params: &RenderParams) -> Vec<(f64, Prim)> {
+    let (trails, len, colors) = (frame.trails, frame.trail_len, frame.colors);
+    let mut out = Vec::new();
+    if trails.is_empty() {
+        return out;
+    }
+    let (w, h) = (params.width as f64, params.height as f64);
+    let zn = near_depth(camera, projector);
+    let bg = params.background.map(|c| c as f64);
+    let segments = (len - 1) as f64;
+    for (i, path) in trails.chunks_exact(3 * len).enumerate() {
+        let c = [colors[3 * i], colors[3 * i + 1], colors[3 * i + 2]].map(|c| c as f64);
+        // The particle's disc on screen: the trail stops at its rim, as a spring does.
+        let p = &frame.positions[3 * i..3 * i + 3];
+        let disc = projector
+            .project([p[0], p[1], p[2]], frame.radius[i])
+            .map(|q| ([q.x, q.y], q.r.max(params.min_radius_px)));
+        for k in 0..len - 1 {
+            let (a, b) = (&path[3 * k..3 * k + 3], &path[3 * k + 3..3 * k + 6]);
+            if !a.iter().chain(b).all(|v| v.is_finite()) || a == b {
+                continue;
+            }
+            let (ca, cb) = (
+                projector.camera_coords([a[0], a[1], a[2]]),
+                projector.camera_coords([b[0], b[1], b[2]]),
+            );
+            let (qa, qb) = if camera.is_3d() {
+                match clip_segment_near(ca, cb, zn) {
+                    Some(pair) => pair,
+                    None => continue,
+                }
+            } else {
+                (ca, cb)
+            };
+            let f = (k + 1) as f64 / segments;
+            let colour: [u8; 3] = std::array::from_fn(|j| (bg[j] + f * (c[j] - bg[j])).round() as u8);
+            let (pa, pb) = (projector.camera_to_pixel(qa), projector.camera_to_pixel(qb));
+            let depth = if camera.is_3d() { 0.5 * (qa[2] + qb[2]) } else { 0.0 };
+            for (sa, sb) in outside_disc(pa, pb, disc) {
+                let at = |s: f64| [pa[0] + s * (pb[0] - pa[0]), pa[1] + s * (pb[1] - pa[1])];
+                if let Some(line) = line(at(sa), at(sb), params.trail_width_px, colour, 1.0, w, h) {
+                    out.push((depth, line));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The parts [s0, s1] ⊂ [0, 1] of the pixel segment a + s·(b − a) outside the disc (centre,
+/// radius) (all of it without a disc): none, one or two.
+fn outside_disc(a: [f64; 2], b: [f64; 2], disc: Option<([f64; 2], f64)>) -> Vec<(f64, f64)> {
+    let Some((c, r)) = disc else {
+        return vec![(0.0, 1.0)];
+    };
+    // |a − c + s·d|² = r²: s² |d|² + 2 s (a − c)·d + |a − c|² − r² = 0.
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let e = [a[0] - c[0], a[1] - c[1]];
+    let (qa, qb, qc) = (
+        d[0] * d[0] + d[1] * d[1],
+        e[0] * d[0] + e[1] * d[1],
+        e[0] * e[0] + e[1] * e[1] - r * r,
+    );
+    let disc2 = qb * qb - qa * qc;
+    if !(qa > 0.0 && disc2 > 0.0) {
+        // A point, or a line that misses the circle: all outside or all inside, as a is.
+        return if qc > 0.0 { vec![(0.0, 1.0)] } else { vec![] };
+    }
+    let root = disc2.sqrt();
+    let (s0, s1) = ((-qb - root) / qa, (-qb + root) / qa);
+    [(0.0, s0.min(1.0)), (s1.max(0.0), 1.0)]
+        .into_iter()
+        .filter(|(x, y)| y > x)
+        .collect()
 }
 
 fn check_shading(s: &Shading) -> Result<Light, Error> {
