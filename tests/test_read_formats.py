@@ -96,6 +96,23 @@ def test_own_lammps_dump_reads_back_bit_for_bit_in_si(tmp_path, comings_and_goin
     np.testing.assert_array_equal(back.radii, traj.radii)
 
 
+def test_a_2d_dump_reads_back_2d_periodic_in_x_and_y_only(tmp_path):
+    # LAMMPS's 2D boxes are periodic in z (kinema's dump writes pp there, as LAMMPS does); the
+    # z of a 2D world is no axis of it, so it comes back open
+    w = kinema.World(dt=1e-3, dim=2)
+    w.add(kinema.Box([0, 0], [1, 1]))
+    w.add_particles([[0.2, 0.3, 0.0], [0.7, 0.6, 0.0]], velocity=[[3.0, 1.0, 0.0], [-2.0, 0.5, 0.0]], mass=1.0, radius=0.05)
+    w.periodic = (True, True, False)
+    traj = w.run(0.3, fps=30)
+    path = tmp_path / "flat.lammpstrj"
+    export(traj, path)
+    assert "ITEM: BOX BOUNDS pp pp pp" in path.read_text()
+    back = load(path, units="si")
+    assert back.dim == 2 and back.periodic == (True, True, False)
+    np.testing.assert_array_equal(back.box_edges[:2], traj.box_edges[:2])
+    np.testing.assert_array_equal(back.positions, traj.positions)
+
+
 def test_own_gsd_reads_back_as_gsd_reads_it(tmp_path, comings_and_goings):
     gsd_hoomd = pytest.importorskip("gsd.hoomd")
     traj = comings_and_goings

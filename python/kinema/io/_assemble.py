@@ -186,6 +186,8 @@ def assemble(
         lo = np.array([b.lo for b in boxes], dtype=np.float64) * scales.length
         hi = np.array([b.hi for b in boxes], dtype=np.float64) * scales.length
         periodic = np.asarray(boxes[0].periodic, dtype=bool)
+        if dim == 2:  # (a 2D run's z is no axis of its world: LAMMPS's 2D boxes are periodic in z)
+            periodic = periodic & np.array([True, True, False])
         edges = hi - lo
         problem = edges_problem(edges, periodic, by_frame=True)
         if problem is not None:
