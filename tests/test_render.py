@@ -408,8 +408,10 @@ def _box_corners(lo, hi):
 
 
 @pytest.mark.parametrize("legend", [True, False])
-def test_the_default_camera_shows_the_whole_demo_box_large(monkeypatch, legend):
-    # `kinema demo`'s scene with its own [render] camera (none: the default), at 16:9.
+def test_the_default_camera_shows_the_demo_balls_and_floor_large(monkeypatch, legend):
+    # `kinema demo`'s scene with its own [render] camera (none: the default), at 16:9: its
+    # first 0.1 s, the balls still in their column, framed with the box's floor (its walls
+    # bound them), not the box's empty top at 3 m (issue 28: a narrow column in wide bands).
     from kinema.runner import _camera
 
     world = kinema.load_scene(Path(kinema.__file__).parent / "scenes" / "demo.toml")
@@ -420,14 +422,15 @@ def test_the_default_camera_shows_the_whole_demo_box_large(monkeypatch, legend):
     camera = _camera(world.scene.render.camera)
     kw = dict(colliders=traj.colliders, width=w, height=h, time_format=None, legend=legend, camera=camera)
     frame = next(render_frames(traj.positions, traj.radii, traj.t, **kw))
-    px = _pixels(calls[0], np.concatenate([_box_corners(box["lo"], box["hi"]), traj.positions.reshape(-1, 3)]), w, h)
     r = traj.radii.max()
-    assert (px >= 0).all() and (px[:, 0] <= w).all() and (px[:, 1] <= h).all(), "every box corner and particle in the frame"
+    top = traj.positions[..., 2].max() + r
+    assert top < box["hi"][2]
+    px = _pixels(calls[0], np.concatenate([_box_corners(box["lo"], [*box["hi"][:2], top]), traj.positions.reshape(-1, 3)]), w, h)
+    assert (px >= 0).all() and (px[:, 0] <= w).all() and (px[:, 1] <= h).all(), "the floor and every particle in the frame"
     span = px.max(axis=0) - px.min(axis=0)
     assert span[0] >= 0.6 * w or span[1] >= 0.6 * h, f"the scene fills the frame: {span} of {w} × {h}"
-    assert r > 0
-    # Nothing touches the frame's edges: nothing is cropped.
-    edges = np.concatenate([frame[0], frame[-1], frame[:, 0], frame[:, -1]])
+    # Nothing but the walls above the balls touches the frame's edges: no ball is cropped.
+    edges = np.concatenate([frame[-1], frame[:, 0], frame[:, -1]])
     assert (edges == 255).all()
 
 

@@ -81,10 +81,13 @@ def render_frames(
       frame), or fixed uint8 colours of shape (N, 3) or (F, N, 3). Values use the colormap
       from ``low_end(colormap)`` up (viridis from 0.25: ``vmin`` is steel blue, not near
       black), so the slowest particles stay visible and their shading shows.
-    camera: a Camera2D / Camera3D; default: the bounding box of the live particles of all
-      frames (with the largest radius) and of the colliders' finite parts fills the frame's
-      width or height, whichever binds, to 3 % of its sides, centred (a 3D box seen from the
-      front right and above; both fields of view are fitted), and kept clear of the legend.
+    camera: a Camera2D / Camera3D; default: one for the whole video, framing where the
+      live particles (with their radii) spend the run and where they end (``cameras.
+      _particle_region``: outliers and sparse transient tails such as the column a pile
+      fell from left out), widened to the walls of a box that bounds them (2D: a box with
+      finite walls whole) and the attractors; it fills the frame's width or height,
+      whichever binds, to 3 % of its sides, centred (a 3D box seen from the front right and
+      above; both fields of view are fitted), and kept clear of the legend.
     background: RGB8 colour.
     colliders: colliders to draw, ``kinema.Plane`` / ``Box`` / ``SphereObstacle`` objects or
       their descriptions (``Trajectory.colliders``: dicts {"type": "plane", "point",
@@ -145,7 +148,8 @@ def render_frames(
     # all frames' live particles, the attractors and the colliders' finite parts, widened by
     # the largest radius), one extent for every frame, so that floors and open walls stay put.
     everything = np.concatenate([x.reshape(-1, 3), marks]) if len(marks) else x.reshape(-1, 3)
-    scenery = _core.Scenery(_describe_colliders(colliders) if colliders is not None else [], everything, r)
+    described = _describe_colliders(colliders) if colliders is not None else []
+    scenery = _core.Scenery(described, everything, r)
     lo, hi = (np.array(corner) for corner in scenery.extent)
     bg = tuple(int(c) for c in background)
     luminance = 0.299 * bg[0] + 0.587 * bg[1] + 0.114 * bg[2]
@@ -158,9 +162,7 @@ def render_frames(
         if not key.fits:  # a frame too narrow for the name, the values and a bar
             key = None
     if camera is None:
-        points = _frame_corners(x, r, scenery.boxes, lo, hi) if dim == 3 else None
-        if points is not None and len(marks):
-            points = np.concatenate([points, marks])
+        points = _frame_corners(x, r, described, lo, hi, marks, dim)
         camera = _auto_camera(lo, hi, dim, width, height, avoid=key.box if key is not None else None, points=points)
     elif dim == 2 and not isinstance(camera, Camera2D) or dim == 3 and not isinstance(camera, Camera3D):
         raise ValueError(f"camera = {camera!r} is invalid: dim={dim} needs a Camera{dim}D")
