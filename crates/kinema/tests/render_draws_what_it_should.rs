@@ -316,7 +316,10 @@ mod render {
         // Most of the ground is the plain floor colour (the faint grid covers a few pixels).
         let plain = (65..h)
             .flat_map(|j| (0..w).map(move |i| (i, j)))
-            .filter(|&(i, j)| pixel(&img, w, i, j) == FLOOR_COLOR)
+            .filter(|&(i, j)| {
+                let c = pixel(&img, w, i, j);
+                (0..3).all(|k| c[k].abs_diff(FLOOR_COLOR[k]) <= 3)
+            })
             .count();
         assert!(plain > (h - 65) * w / 2, "{plain} plain floor pixels");
         // Seen from below, the same floor is overhead: the upper half.
@@ -346,6 +349,132 @@ mod render {
             );
         }
         assert!(is_grey(pixel(&img, w, 80, 100), 6), "floor below the ball");
+    }
+
+    fn luma(c: [u8; 3]) -> f64 {
+        0.299 * c[0] as f64 + 0.587 * c[1] as f64 + 0.114 * c[2] as f64
+    }
+
+    /// The darkest luma and the count of pixels darker than the bare floor by more than 4,
+    /// outside the ball's own pixels (those the ball covers with no scenery, grown by 2 px).
+    fn shadow_of(cam: &Camera, centre: [f64; 3], r: f64, scenery: &Scenery, w: usize, h: usize) -> (f64, usize) {
+        let red = [[200, 30, 30]];
+        let ball = scene_frame(cam, &[centre], &[r], &red, &items(vec![]), w, h);
+        let bare = scene_frame(cam, &[], &[], &[], scenery, w, h);
+        let img = scene_frame(cam, &[centre], &[r], &red, scenery, w, h);
+        let near_ball = |i: usize, j: usize| {
+            (i.saturating_sub(2)..(i + 3).min(w))
+                .any(|x| (j.saturating_sub(2)..(j + 3).min(h)).any(|y| pixel(&ball, w, x, y) != BG))
+        };
+        let (mut darkest, mut count) = (255.0f64, 0);
+        for j in 0..h {
+            for i in 0..w {
+                if near_ball(i, j) {
+                    continue;
+                }
+                let (l, l0) = (luma(pixel(&img, w, i, j)), luma(pixel(&bare, w, i, j)));
+                darkest = darkest.min(l);
+                if l < l0 - 4.0 {
+                    count += 1;
+                }
+            }
+        }
+        (darkest, count)
+    }
+
+    #[test]
+    fn a_ball_casts_a_contact_shadow_that_fades_with_its_height() {
+        let (w, h) = (200, 150);
+        let cam = Camera::perspective([0.0, -4.0, 4.0], [0.0, 0.0, 0.3], [0.0, 0.0, 1.0], 40.0).unwrap();
+        let floor = items(vec![plane([0.0; 3], [0.0, 0.0, 1.0])]);
+        let r = 0.3;
+        // Resting on the floor: a dark patch around where it touches.
+        let (rest_dark, rest_n) = shadow_of(&cam, [0.0, 0.0, r], r, &floor, w, h);
+        // 1 m up: the patch straight below is much fainter and wider.
+        let (up_dark, up_n) = shadow_of(&cam, [0.0, 0.0, r + 1.0], r, &floor, w, h);
+        let floor_luma = luma(pixel(&scene_frame(&cam, &[], &[], &[], &floor, w, h), w, 100, 75));
+        eprintln!("floor {floor_luma:.1}; resting: darkest {rest_dark:.1}, {rest_n} px; 1 m up: darkest {up_dark:.1}, {up_n} px");
+        assert!(
+            rest_dark < floor_luma - 40.0,
+            "resting shadow {rest_dark} on floor {floor_luma}"
+        );
+        assert!(up_dark > rest_dark + 20.0 && up_dark < floor_luma - 5.0, "1 m up: {up_dark}");
+        assert!(up_n > rest_n, "the high ball's shadow is wider: {up_n} vs {rest_n} px");
+        // A box's floor takes shadows too; with no floor there is none.
+        let boxed = items(vec![cuboid([-2.0, -2.0, 0.0], [2.0, 2.0, 3.0])]);
+        let (box_dark, _) = shadow_of(&cam, [0.0, 0.0, r], r, &boxed, w, h);
+        assert!(box_dark < luma(BOX_FLOOR_COLOR) - 40.0, "box floor shadow {box_dark}");
+        let (none_dark, none_n) = shadow_of(&cam, [0.0, 0.0, r], r, &items(vec![]), w, h);
+        assert_eq!((none_dark, none_n), (255.0, 0), "no floor, no shadow");
+    }
+
+    #[test]
+    fn planes_are_translucent_and_cut_where_they_meet() {
+        let (w, h) = (200, 150);
+        let cam = Camera::perspective([0.0, -10.0, 0.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0).unwrap();
+        // A plane tilted towards the camera, and a red ball behind it (seen through it).
+        let tilted = items(vec![plane([0.0, 0.0, 0.0], [0.0, -1.0, 1.0])]);
+        let red = [[220, 20, 20]];
+        let plane_only = pixel(&scene_frame(&cam, &[], &[], &[], &tilted, w, h), w, 100, 75);
+        let with_ball = pixel(
+            &scene_frame(&cam, &[[0.0, 2.0, 0.0]], &[0.4], &red, &tilted, w, h),
+            w,
+            100,
+            75,
+        );
+        eprintln!("plane alone {plane_only:?}, ball behind it {with_ball:?}");
+        assert!(is_grey(plane_only, 10), "the plane: {plane_only:?}");
+        assert!(
+            with_ball[0] > with_ball[1] + 60,
+            "the ball shows through the plane: {with_ball:?}"
+        );
+        // Translucent: over a blue background the plane's pixels stay bluish.
+        let mut params = RenderParams::new(w, h);
+        params.background = [40, 60, 220];
+        let mut img = vec![0u8; w * h * 3];
+        render_scene(&cam, &[], &[], &[], &tilted, &params, &mut img).unwrap();
+        let over_blue = pixel(&img, w, 60, 120);
+        eprintln!("the plane over a blue background {over_blue:?}");
+        assert!(
+            over_blue[2] > over_blue[0] + 80,
+            "the background shows through: {over_blue:?}"
+        );
+        // Two crossing planes (a V trough along the view, crease x = 0, z = −1): each drawn
+        // only on the free side of the other, so every pixel below the horizon shows one
+        // facet, not the two planes' whole squares over each other.
+        let v = items(vec![
+            plane([0.0, 0.0, -1.0], [-1.0, 0.0, 1.0]),
+            plane([0.0, 0.0, -1.0], [1.0, 0.0, 1.0]),
+        ]);
+        let img = scene_frame(&cam, &[], &[], &[], &v, w, h);
+        // Uncut, the two squares would overlap below the horizon: two layers of plane.
+        let two = pixel(
+            &scene_frame(
+                &cam,
+                &[],
+                &[],
+                &[],
+                &items(vec![plane([0.0, 0.0, -1.0], [0.0, 0.0, 1.0]); 2]),
+                w,
+                h,
+            ),
+            w,
+            60,
+            140,
+        );
+        let mut one_layer = 0;
+        for j in 80..h {
+            for i in 0..w {
+                let c = pixel(&img, w, i, j);
+                one_layer += usize::from((0..3).all(|k| c[k].abs_diff(FLOOR_COLOR[k]) <= 3));
+            }
+        }
+        let below = pixel(&img, w, 94, 145);
+        eprintln!(
+            "V: {one_layer} of {} px below row 80 one plane thick {below:?}; two layers {two:?}",
+            (h - 80) * w
+        );
+        assert!(one_layer > (h - 80) * w * 8 / 10 && luma(two) < luma(FLOOR_COLOR) - 15.0);
     }
 
     #[test]

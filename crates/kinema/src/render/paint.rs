@@ -64,6 +64,16 @@ pub const LINE_COLOR: [u8; 3] = [96, 96, 100];
 /// Sphere obstacles, RGB8 (shaded in 3D like the particles).
 pub const OBSTACLE_COLOR: [u8; 3] = [176, 178, 184];
 
+/// 3D plane patches: a grey drawn at [`PLANE_ALPHA`], so that what lies behind a plane shows
+/// through it; over white one plane reads about as [`FLOOR_COLOR`], two crossing ones darker.
+pub const PLANE_COLOR: [u8; 3] = [150, 150, 142];
+/// Opacity of a 3D plane patch.
+pub const PLANE_ALPHA: f32 = 0.3;
+/// Contact shadows on 3D floors ([`shadows`]): this colour at up to [`SHADOW_ALPHA`].
+pub const SHADOW_COLOR: [u8; 3] = [30, 30, 38];
+/// Opacity of the core of the shadow of a particle resting on a floor.
+pub const SHADOW_ALPHA: f32 = 0.55;
+
 /// Line widths, pixels.
 const PATCH_OUTLINE_PX: f64 = 1.5;
 const GRID_PX: f64 = 1.0;
@@ -94,7 +104,8 @@ pub(crate) struct View<'a> {
 }
 
 /// Turns the colliders into primitives; `extent` sizes what is infinite (see [`Scenery`]).
-pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View) -> Painted {
+/// `particles` (positions and radii) cast contact shadows on the 3D floors ([`shadows`]).
+pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View, particles: (&[f64], &[f64])) -> Painted {
     let mut out = Painted::default();
     if colliders.is_empty() {
         return out;
@@ -109,13 +120,30 @@ pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View) -> Pain
                 w,
                 h,
             };
+            // Each plane is drawn where it bounds the free space: the part of it on the free
+            // side of every other plane (a bowl of tilted planes shows its facets, not eight
+            // squares running through each other).
+            let planes: Vec<([f64; 3], [f64; 3])> = colliders
+                .iter()
+                .filter_map(|c| match c {
+                    Collider::Plane(p) => Some((p.point(), p.normal())),
+                    _ => None,
+                })
+                .collect();
+            let mut k = 0;
             for collider in colliders {
                 match collider {
-                    Collider::Plane(p) => p3.plane(&mut out.background, p.point(), p.normal(), eye, extent),
+                    Collider::Plane(p) => {
+                        let others: Vec<([f64; 3], [f64; 3])> =
+                            planes.iter().enumerate().filter(|&(j, _)| j != k).map(|(_, &q)| q).collect();
+                        k += 1;
+                        p3.plane(&mut out.background, p.point(), p.normal(), eye, extent, &others)
+                    }
                     Collider::Box(b) => p3.container(&mut out.background, b.lo(), b.hi(), extent, world_up),
                     Collider::Sphere(_) => {}
                 }
             }
+            shadows(&p3, colliders, eye, particles, &mut out.background);
             for collider in colliders {
                 if let Collider::Sphere(sphere) = collider {
                     let (center, radius) = (sphere.center(), sphere.radius());
@@ -231,7 +259,19 @@ impl Persp3<'_> {
     /// side is 2.5 times the eye's distance from c (at least the scene's diameter): a camera
     /// framing the scene sees the floor run under and well beyond it, into the distance,
     /// with its far border in view as a horizon.
-    fn plane(&self, out: &mut Vec<Prim>, point: [f64; 3], normal: [f64; 3], eye: [f64; 3], extent: Region) {
+    ///
+    /// The patch is translucent ([`PLANE_COLOR`] at [`PLANE_ALPHA`]) with a darker outline,
+    /// and cut to the free side of the `others` (point, normal): what lies behind a tilted
+    /// plane shows through it, and where planes cross the overlap reads darker.
+    fn plane(
+        &self,
+        out: &mut Vec<Prim>,
+        point: [f64; 3],
+        normal: [f64; 3],
+        eye: [f64; 3],
+        extent: Region,
+        others: &[([f64; 3], [f64; 3])],
+    ) {
         let (elo, ehi) = extent;
         let n = scale(1.0 / norm(normal), normal);
         let centre = scale(0.5, add(elo, ehi));
@@ -256,7 +296,14 @@ impl Persp3<'_> {
             at(uc + half, vc + half),
             at(uc - half, vc + half),
         ];
-        self.polygon(out, &corners, FLOOR_COLOR, 1.0);
+        let mut patch = corners.to_vec();
+        for &(q, m) in others {
+            patch = clip_polygon_halfspace(&patch, q, m);
+        }
+        if patch.len() < 3 {
+            return; // on the solid side of another plane: no free space touches it
+        }
+        self.polygon(out, &patch, PLANE_COLOR, PLANE_ALPHA);
         // Grid: a mat of radius R = 3× the scene's radius around c (within the patch), its
         // lines on multiples of a 1-2-5 step of at least R/12 counted from `point`, so that
         // they stay put from frame to frame (at most ~24 lines each way: the lines' pixels
@@ -286,15 +333,17 @@ impl Persp3<'_> {
                         let (p, q) = (point_at(x, y), point_at(x, y1));
                         let alpha = GRID_ALPHA * rim * self.grid_fade(p, q, point_at(x, ym), point_at(x + step, ym));
                         if alpha > 0.0 {
-                            self.segment(out, p, q, GRID_PX, alpha);
+                            if let Some((p, q)) = clip_segment_halfspaces(p, q, others) {
+                                self.segment(out, p, q, GRID_PX, alpha);
+                            }
                         }
                     }
                     y = y1;
                 }
             }
         }
-        for i in 0..4 {
-            self.segment(out, corners[i], corners[(i + 1) % 4], PATCH_OUTLINE_PX, 1.0);
+        for i in 0..patch.len() {
+            self.segment(out, patch[i], patch[(i + 1) % patch.len()], PATCH_OUTLINE_PX, 1.0);
         }
     }
 
@@ -398,5 +447,181 @@ fn nice_step(x: f64) -> f64 {
         5.0
     } else {
         10.0
+    }
+}
+
+/// The part of the convex polygon `poly` (world) on the free side n·(x − q) ≥ 0 of a plane.
+fn clip_polygon_halfspace(poly: &[[f64; 3]], q: [f64; 3], n: [f64; 3]) -> Vec<[f64; 3]> {
+    let side = |x: [f64; 3]| dot(sub(x, q), n);
+    let mut out = Vec::with_capacity(poly.len() + 1);
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let (da, db) = (side(a), side(b));
+        if da >= 0.0 {
+            out.push(a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            out.push(add(a, scale(da / (da - db), sub(b, a))));
+        }
+    }
+    out
+}
+
+/// The part of the segment ab (world) on the free side of every plane (point, normal).
+fn clip_segment_halfspaces(a: [f64; 3], b: [f64; 3], planes: &[([f64; 3], [f64; 3])]) -> Option<([f64; 3], [f64; 3])> {
+    let (mut s0, mut s1) = (0.0f64, 1.0f64);
+    for &(q, n) in planes {
+        let (da, db) = (dot(sub(a, q), n), dot(sub(b, q), n));
+        if da < 0.0 && db < 0.0 {
+            return None;
+        }
+        if (da < 0.0) != (db < 0.0) {
+            let s = da / (da - db);
+            if da < 0.0 {
+                s0 = s0.max(s);
+            } else {
+                s1 = s1.min(s);
+            }
+        }
+    }
+    (s1 > s0).then(|| (add(a, scale(s0, sub(b, a))), add(a, scale(s1, sub(b, a)))))
+}
+
+/// A floor a particle can stand over: a plane whose normal points up (n_z ≥ 0.3 of its
+/// length), or a box's closed bottom face (only over the box's xy extent).
+struct Floor {
+    point: [f64; 3],
+    /// Unit normal, pointing into the free side.
+    n: [f64; 3],
+    /// The xy rectangle it covers (a box's bottom), else unbounded.
+    xy: Option<([f64; 2], [f64; 2])>,
+}
+
+/// Contact shadows: each particle above a floor darkens a soft disc of that floor straight
+/// below it (along −z, kinema's gravity), on the first floor the vertical through its centre
+/// meets. With h the gap between the particle (radius r) and the floor, the disc's radius is
+/// r + h/2 and the opacity of its core [`SHADOW_ALPHA`]·exp(−h / 2r): a ball resting on the
+/// floor sits on a dark patch, one a few radii up casts a wide faint one, and one higher
+/// than about 7 radii none. The soft edge is six concentric discs (24-gons in the floor
+/// plane) of equal opacity, spread more widely the higher the particle, each cut to its
+/// floor (a box's bottom face; a plane's part on the free side of the other planes). Drawn after the
+/// scenery and before every particle (particles stand above their floors, so nothing a
+/// shadow could cover is in front of it); floors seen from below (the eye on their solid
+/// side) get none.
+fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64], &[f64]), out: &mut Vec<Prim>) {
+    let (positions, radius) = particles;
+    let mut floors = Vec::new();
+    for c in colliders {
+        match c {
+            Collider::Plane(p) => {
+                let n = scale(1.0 / norm(p.normal()), p.normal());
+                if n[2] >= 0.3 {
+                    floors.push(Floor {
+                        point: p.point(),
+                        n,
+                        xy: None,
+                    });
+                }
+            }
+            Collider::Box(b) => {
+                let (lo, hi) = (b.lo(), b.hi());
+                if lo[2].is_finite() {
+                    floors.push(Floor {
+                        point: [0.0, 0.0, lo[2]],
+                        n: [0.0, 0.0, 1.0],
+                        xy: Some(([lo[0], lo[1]], [hi[0], hi[1]])),
+                    });
+                }
+            }
+            Collider::Sphere(_) => {}
+        }
+    }
+    if floors.is_empty() {
+        return;
+    }
+    // Each shadow is cut to its floor: a box's bottom face, or the part of a plane on the
+    // free side of the other planes (a facet of a bowl), as the floor is drawn.
+    let planes: Vec<([f64; 3], [f64; 3])> = floors.iter().filter(|f| f.xy.is_none()).map(|f| (f.point, f.n)).collect();
+    const SIDES: usize = 24;
+    const RINGS: usize = 6;
+    for (c, &r) in positions.chunks_exact(3).zip(radius) {
+        let c = [c[0], c[1], c[2]];
+        if !(r > 0.0) {
+            continue;
+        }
+        // The first floor below the centre along −z: the least drop t = d / n_z, d ≥ 0.
+        let mut best: Option<(f64, f64, &Floor)> = None;
+        for f in &floors {
+            if let Some((lo, hi)) = f.xy {
+                if c[0] < lo[0] || c[0] > hi[0] || c[1] < lo[1] || c[1] > hi[1] {
+                    continue;
+                }
+            }
+            let d = dot(sub(c, f.point), f.n);
+            if d < 0.0 {
+                continue;
+            }
+            let t = d / f.n[2];
+            if best.is_none_or(|(bt, _, _)| t < bt) {
+                best = Some((t, d, f));
+            }
+        }
+        let Some((t, d, f)) = best else {
+            continue;
+        };
+        if dot(sub(eye, f.point), f.n) <= 0.0 {
+            continue; // the floor is seen from below
+        }
+        let h = (d - r).max(0.0);
+        let alpha = SHADOW_ALPHA * (-h / (2.0 * r)).exp() as f32;
+        if alpha < 0.01 {
+            continue;
+        }
+        let foot = [c[0], c[1], c[2] - t];
+        let rs = r + 0.5 * h;
+        // The soft edge: rings from (1 − b) to (1 + b) of rs, b from 0.3 (resting) to 0.7.
+        let b = 0.3 + 0.4 * h / (h + r);
+        let ring_alpha = 1.0 - (1.0 - alpha).powf(1.0 / RINGS as f32);
+        let k = (0..3).min_by(|&i, &j| f.n[i].abs().total_cmp(&f.n[j].abs())).unwrap_or(0);
+        let mut axis = [0.0; 3];
+        axis[k] = 1.0;
+        let t1 = {
+            let v = cross(f.n, axis);
+            scale(1.0 / norm(v), v)
+        };
+        let t2 = cross(f.n, t1);
+        for ring in 0..RINGS {
+            let rr = rs * (1.0 - b + 2.0 * b * ring as f64 / (RINGS - 1) as f64);
+            let mut poly: Vec<[f64; 3]> = (0..SIDES)
+                .map(|i| {
+                    let a = std::f64::consts::TAU * i as f64 / SIDES as f64;
+                    add(foot, add(scale(rr * a.cos(), t1), scale(rr * a.sin(), t2)))
+                })
+                .collect();
+            match f.xy {
+                Some((lo, hi)) => {
+                    for (q, m) in [
+                        ([lo[0], 0.0, 0.0], [1.0, 0.0, 0.0]),
+                        ([hi[0], 0.0, 0.0], [-1.0, 0.0, 0.0]),
+                        ([0.0, lo[1], 0.0], [0.0, 1.0, 0.0]),
+                        ([0.0, hi[1], 0.0], [0.0, -1.0, 0.0]),
+                    ] {
+                        if q.iter().all(|v| v.is_finite()) {
+                            poly = clip_polygon_halfspace(&poly, q, m);
+                        }
+                    }
+                }
+                None => {
+                    for &(q, m) in &planes {
+                        if (q, m) != (f.point, f.n) {
+                            poly = clip_polygon_halfspace(&poly, q, m);
+                        }
+                    }
+                }
+            }
+            if poly.len() >= 3 {
+                p3.polygon(out, &poly, SHADOW_COLOR, ring_alpha);
+            }
+        }
     }
 }

@@ -104,8 +104,9 @@ pub(crate) fn fill(poly: Vec<[f64; 2]>, color: [u8; 3], alpha: f32, w: f64, h: f
     })
 }
 
-/// A quad cut by the near plane and four guard sides has at most 9 edges.
-const MAX_EDGES: usize = 16;
+/// A quad cut by the near plane, four guard sides and up to a dozen other planes (a faceted
+/// bowl), or a shadow's 16-gon cut by the near plane and the guard sides, fits.
+const MAX_EDGES: usize = 32;
 
 /// A segment (pixels) `width` pixels wide, clipped to the guard rectangle (Liang–Barsky).
 pub(crate) fn line(a: [f64; 2], b: [f64; 2], width: f64, color: [u8; 3], alpha: f32, w: f64, h: f64) -> Option<Prim> {

@@ -310,7 +310,7 @@ pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image
             height: h,
             min_radius_px: params.min_radius_px,
         };
-        paint(&scenery.colliders, extent, &view)
+        paint(&scenery.colliders, extent, &view, (positions, radius))
     };
     let obstacles = painted.spheres.len();
     for (k, (depth, s)) in painted.spheres.into_iter().enumerate() {
