@@ -84,7 +84,14 @@ pub(crate) fn guard_rect(w: f64, h: f64) -> Vec<[f64; 2]> {
 
 /// The part of a polygon where e[0]·x + e[1]·y + e[2] ≥ 0 (Sutherland–Hodgman, as above).
 pub(crate) fn clip_halfplane(poly: &[[f64; 2]], e: [f64; 3]) -> Vec<[f64; 2]> {
-    let side = |p: [f64; 2]| e[0] * p[0] + e[1] * p[1] + e[2];
+    clip_where(poly, |p| e[0] * p[0] + e[1] * p[1] + e[2])
+}
+
+/// The part of the convex polygon `poly` (points of N coordinates) where the affine function
+/// `side` is ≥ 0 (Sutherland–Hodgman): the vertices inside are kept, and each edge ab that
+/// crosses gets the point a + s (b − a), s = side(a) / (side(a) − side(b)), where `side`,
+/// linear along the edge, is 0.
+pub(crate) fn clip_where<const N: usize>(poly: &[[f64; N]], side: impl Fn([f64; N]) -> f64) -> Vec<[f64; N]> {
     let mut out = Vec::with_capacity(poly.len() + 1);
     for i in 0..poly.len() {
         let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
@@ -94,7 +101,7 @@ pub(crate) fn clip_halfplane(poly: &[[f64; 2]], e: [f64; 3]) -> Vec<[f64; 2]> {
         }
         if (da >= 0.0) != (db >= 0.0) {
             let s = da / (da - db);
-            out.push([a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])]);
+            out.push(std::array::from_fn(|k| a[k] + s * (b[k] - a[k])));
         }
     }
     out

@@ -21,7 +21,7 @@
 //! sized by the scene's extent ([`super::extent`]).
 
 use super::camera::{invalid, Camera, Projector};
-use super::clip::{clip_halfplane, clip_polygon_near, clip_segment_near, dot2, guard_rect, near_depth, GUARD};
+use super::clip::{clip_halfplane, clip_polygon_near, clip_segment_near, clip_where, dot2, guard_rect, near_depth, GUARD};
 use super::extent::{clamp_box, Region};
 use super::pixels::Sprite;
 use super::prim::{fill, line, push, Prim};
@@ -452,19 +452,7 @@ fn nice_step(x: f64) -> f64 {
 
 /// The part of the convex polygon `poly` (world) on the free side n·(x − q) ≥ 0 of a plane.
 fn clip_polygon_halfspace(poly: &[[f64; 3]], q: [f64; 3], n: [f64; 3]) -> Vec<[f64; 3]> {
-    let side = |x: [f64; 3]| dot(sub(x, q), n);
-    let mut out = Vec::with_capacity(poly.len() + 1);
-    for i in 0..poly.len() {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        let (da, db) = (side(a), side(b));
-        if da >= 0.0 {
-            out.push(a);
-        }
-        if (da >= 0.0) != (db >= 0.0) {
-            out.push(add(a, scale(da / (da - db), sub(b, a))));
-        }
-    }
-    out
+    clip_where(poly, |x| dot(sub(x, q), n))
 }
 
 /// The part of the segment ab (world) on the free side of every plane (point, normal).
