@@ -162,8 +162,9 @@ class Trajectory:
         lines; ``kinema.io.readers``): ``"h5md"`` (``save``'s and other programs' H5MD;
         ``kinema.io.load_h5md``), ``"xyz"`` (extended XYZ: ASE's, OVITO's, kinema's ``.xyz``),
         ``"gsd"`` (HOOMD-blue's, kinema's ``.gsd``), ``"lammps"`` (a LAMMPS text dump),
-        ``"lammps-data"`` (a LAMMPS data file), and kinema's own exports ``"csv"``, ``"vtk"``
-        (the ``.pvd`` series) and ``"ply"`` (the ``<stem>_ply/`` series). docs/files.md says
+        ``"lammps-data"`` (a LAMMPS data file), ``"usd"`` (kinema's USD exports and another
+        program's first ``UsdGeom.Points``, through usd-core), and kinema's own exports ``"csv"``,
+        ``"vtk"`` (the ``.pvd`` series) and ``"ply"`` (the ``<stem>_ply/`` series). docs/files.md says
         what each gives (ids, births and deaths, units).
 
         ``units``: for a file that does not say its units, what they are: a LAMMPS unit style
