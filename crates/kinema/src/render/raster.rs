@@ -472,13 +472,8 @@ fn spring_lines(camera: &Camera, projector: &Projector, frame: &Frame, params: &
             continue;
         }
         let (ci, cj) = (projector.camera_coords(at(i)), projector.camera_coords(at(j)));
-        let (qi, qj) = if camera.is_3d() {
-            match clip_segment_near(ci, cj, zn) {
-                Some(pair) => pair,
-                None => continue,
-            }
-        } else {
-            (ci, cj)
+        let Some((qi, qj)) = segment_in_front(camera, ci, cj, zn) else {
+            continue;
         };
         let ri = if qi == ci { drawn_radius(i) } else { 0.0 };
         let rj = if qj == cj { drawn_radius(j) } else { 0.0 };
@@ -497,6 +492,16 @@ fn spring_lines(camera: &Camera, projector: &Projector, frame: &Frame, params: &
         }
     }
     out
+}
+
+/// The part of the segment ab (camera coordinates) that can be projected: in 3D cut at the
+/// near distance `zn` (none when wholly behind it), in 2D all of it.
+fn segment_in_front(camera: &Camera, a: [f64; 3], b: [f64; 3], zn: f64) -> Option<([f64; 3], [f64; 3])> {
+    if camera.is_3d() {
+        clip_segment_near(a, b, zn)
+    } else {
+        Some((a, b))
+    }
 }
 
 /// The trails as pixel-space segments with the depth of their midpoints (0 in 2D), each cut
@@ -527,13 +532,8 @@ fn trail_lines(camera: &Camera, projector: &Projector, frame: &Frame, params: &R
                 projector.camera_coords([a[0], a[1], a[2]]),
                 projector.camera_coords([b[0], b[1], b[2]]),
             );
-            let (qa, qb) = if camera.is_3d() {
-                match clip_segment_near(ca, cb, zn) {
-                    Some(pair) => pair,
-                    None => continue,
-                }
-            } else {
-                (ca, cb)
+            let Some((qa, qb)) = segment_in_front(camera, ca, cb, zn) else {
+                continue;
             };
             let f = (k + 1) as f64 / segments;
             let colour: [u8; 3] = std::array::from_fn(|j| (bg[j] + f * (c[j] - bg[j])).round() as u8);
