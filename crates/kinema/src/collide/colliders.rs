@@ -1,4 +1,5 @@
-//! Static colliders: planes, box containers and sphere obstacles, and their contacts.
+//! Static colliders: planes, box containers, sphere obstacles and triangle meshes
+//! ([`super::mesh`]), and their contacts.
 //!
 //! A collider never moves and has infinite mass, so a particle's relative velocity against
 //! it is its own: u_n = v_i·n. Each contact's normal points into the free side (the side the
@@ -8,6 +9,7 @@
 //! then circles), and boxes no walls along z ([`BoxContainer::rect`]).
 
 use super::contact::{Contact, Partner};
+pub use super::mesh::{Side, TriangleMesh};
 use crate::error::Error;
 use crate::vec3;
 
@@ -343,6 +345,8 @@ pub enum Collider {
     Box(BoxContainer),
     /// An obstacle.
     Sphere(SphereObstacle),
+    /// A triangle mesh: two-sided if open, an obstacle or a container if closed.
+    Mesh(TriangleMesh),
 }
 
 impl Collider {
@@ -352,6 +356,7 @@ impl Collider {
             Collider::Plane(p) => p.surface(),
             Collider::Box(b) => b.surface(),
             Collider::Sphere(s) => s.surface(),
+            Collider::Mesh(m) => m.surface(),
         }
     }
 
@@ -376,17 +381,25 @@ impl Collider {
                 Ok(())
             }
             Collider::Box(_) => Ok(()),
+            Collider::Mesh(_) if dim == 2 => Err(Error::invalid(
+                "type",
+                "'mesh'",
+                "a triangle mesh is a 3D collider; a 2D world's colliders are planes, rectangles and circles",
+            )),
+            Collider::Mesh(_) => Ok(()),
         }
     }
 
     /// Calls `each` with every touch of a sphere at `p` (m) of radius `r` (m) within
     /// `tolerance` (m): at most one for a plane or an obstacle, up to three for a box (a
-    /// particle in a corner touches three walls).
+    /// particle in a corner touches three walls), one per face, convex edge or vertex
+    /// touched for a mesh.
     pub fn for_each_touch(&self, p: [f64; 3], r: f64, tolerance: f64, each: impl FnMut(Touch)) {
         match self {
             Collider::Plane(plane) => plane.touch(p, r, tolerance).into_iter().for_each(each),
             Collider::Box(b) => b.walls().iter().filter_map(|w| w.touch(p, r, tolerance)).for_each(each),
             Collider::Sphere(s) => s.touch(p, r, tolerance).into_iter().for_each(each),
+            Collider::Mesh(m) => m.for_each_touch(p, r, tolerance, each),
         }
     }
 }
@@ -400,6 +413,12 @@ impl From<Plane> for Collider {
 impl From<BoxContainer> for Collider {
     fn from(b: BoxContainer) -> Self {
         Collider::Box(b)
+    }
+}
+
+impl From<TriangleMesh> for Collider {
+    fn from(m: TriangleMesh) -> Self {
+        Collider::Mesh(m)
     }
 }
 

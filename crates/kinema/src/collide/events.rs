@@ -414,6 +414,11 @@ impl Scene<'_> {
                 .enumerate()
                 .any(|(w, wall)| self.active[k][w] && wall.touch(x, r, tolerance).is_some()),
             Collider::Sphere(s) => s.touch(x, r, tolerance).is_some(),
+            Collider::Mesh(m) => {
+                let mut any = false;
+                m.for_each_touch(x, r, tolerance, |_| any = true);
+                any
+            }
         }
     }
 
@@ -445,6 +450,15 @@ impl Scene<'_> {
                     let len = vec3::norm(d);
                     let u_n = if len > 0.0 { vec3::dot(chord, d) / len } else { 0.0 };
                     each((0, u_n), t);
+                }
+            }
+            Collider::Mesh(m) => {
+                // faces on the parabola, edges and vertices on its chord; the wall is the
+                // triangle met
+                if let Some((t, tri)) = m.toi(x, v, a, r, rest) {
+                    let at = [0, 1, 2].map(|c| x[c] + v[c] * t + 0.5 * a[c] * t * t);
+                    let n = m.touch_of_triangle(tri, at, r).normal;
+                    each((tri, vec3::dot([0, 1, 2].map(|c| v[c] + a[c] * t), n)), t);
                 }
             }
         }

@@ -45,6 +45,7 @@ pub mod broad_phase;
 pub mod colliders;
 pub mod contact;
 pub mod domain;
+pub mod mesh;
 pub(crate) mod events;
 pub(crate) mod impulse;
 pub(crate) mod islands;
@@ -65,6 +66,7 @@ mod paths;
 
 pub use broad_phase::{all_pairs, Grid, Pair};
 pub use colliders::{collider_contacts, BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};
+pub use mesh::{Side, TriangleMesh};
 pub use contact::{Contact, Partner};
 pub use domain::{Domain, Periodic};
 pub use narrow_phase::{pair_contact, sphere_contacts};

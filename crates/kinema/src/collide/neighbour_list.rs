@@ -28,13 +28,14 @@ pub const SKIN_PER_RADIUS: f64 = 0.6;
 pub const CHUNK: usize = 2048;
 
 /// The largest |coordinate| of a collider's points (a plane's, each box wall's) or of an
-/// obstacle's centre plus its radius, m.
+/// obstacle's centre plus its radius, or of a mesh's vertices, m.
 pub(crate) fn collider_scale(c: &Collider) -> f64 {
     let largest = |p: [f64; 3]| p.iter().fold(0.0, |m: f64, c| m.max(c.abs()));
     match c {
         Collider::Plane(p) => largest(p.point()),
         Collider::Box(b) => b.walls().iter().map(|w| largest(w.point())).fold(0.0, f64::max),
         Collider::Sphere(s) => largest(s.center()) + s.radius(),
+        Collider::Mesh(m) => m.scale(),
     }
 }
 

@@ -9,7 +9,7 @@
 //! metres in one step, and every particle of a cluster of N coincident ones touches every
 //! other: N²/2 contacts (30,000 at one point asked for 2.7 GB before the allocation failed).
 //! The same holds for a particle whose centre lies inside a sphere obstacle, behind a plane or
-//! outside a box: the push-out to the nearest surface is a jump across the obstacle (a
+//! outside a box (or on the wrong side of a closed mesh): the push-out to the nearest surface is a jump across the obstacle (a
 //! particle 1 m from the centre of a 100 m sphere went to z = 20.8 m in one step).
 //!
 //! So the world checks its particles' placement before the first step after anything that
@@ -30,7 +30,7 @@
 //! distance max(r_i, r_j) on the allowed side.
 
 use crate::collide::broad_phase::Grid;
-use crate::collide::{Collider, Domain};
+use crate::collide::{Collider, Domain, Side};
 use crate::error::Error;
 use crate::vec3;
 
@@ -174,6 +174,11 @@ pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[
                         }
                     })
                     .map(|s| (1.0, format!("{} m outside it", short(-s)))),
+                Collider::Mesh(m) => match m.side() {
+                    Side::Both => None,
+                    Side::Outside => m.contains(p).then(|| (1.0, "inside the closed mesh".to_string())),
+                    Side::Inside => (!m.contains(p)).then(|| (1.0, "outside the closed mesh that contains the particles".to_string())),
+                },
             };
             if let Some((depth, words)) = inside {
                 let u = user(i);

@@ -93,13 +93,17 @@ pub fn toi_spheres(dx: [f64; 3], dv: [f64; 3], radius_sum: f64, h: f64) -> Optio
 /// the larger one, for A = 0 the single root −C/B when B < 0. A particle overlapping at the
 /// start and moving away has no impact unless it leaves the contact and comes back within h.
 pub fn toi_plane(x0: [f64; 3], v0: [f64; 3], a: [f64; 3], radius: f64, plane: &Plane, h: f64) -> Option<f64> {
+    toi_half_space(x0, v0, a, radius, plane.point(), plane.normal(), h)
+}
+
+/// [`toi_plane`] for the plane through `point` with unit normal `n` (a mesh's face).
+pub(crate) fn toi_half_space(x0: [f64; 3], v0: [f64; 3], a: [f64; 3], radius: f64, point: [f64; 3], n: [f64; 3], h: f64) -> Option<f64> {
     if h < 0.0 || h.is_nan() {
         return None;
     }
-    let n = plane.normal();
     let qa = 0.5 * vec3::dot(a, n);
     let qb = vec3::dot(v0, n);
-    let qc = plane.signed_distance(x0) - radius;
+    let qc = vec3::dot(vec3::sub(x0, point), n) - radius;
     if qc <= 0.0 && (qb < 0.0 || (qb == 0.0 && qa < 0.0)) {
         return Some(0.0);
     }

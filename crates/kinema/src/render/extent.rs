@@ -20,7 +20,7 @@ pub type Region = ([f64; 3], [f64; 3]);
 
 /// Calls `grow(axis, value)` with the finite parts of the colliders: a box's finite bounds,
 /// each along its own axis (an open top adds nothing along z), and the faces of a sphere's
-/// bounding box, c ± R; a plane has none.
+/// or a mesh's bounding box (c ± R for a sphere); a plane has none.
 fn finite_parts(colliders: &[Collider], mut grow: impl FnMut(usize, f64)) {
     for collider in colliders {
         match collider {
@@ -38,6 +38,13 @@ fn finite_parts(colliders: &[Collider], mut grow: impl FnMut(usize, f64)) {
                 for (k, c) in s.center().into_iter().enumerate() {
                     grow(k, c - s.radius());
                     grow(k, c + s.radius());
+                }
+            }
+            Collider::Mesh(m) => {
+                let (lo, hi) = m.bounds();
+                for k in 0..3 {
+                    grow(k, lo[k]);
+                    grow(k, hi[k]);
                 }
             }
         }
@@ -112,6 +119,7 @@ pub fn collider_boxes(colliders: &[Collider], extent: Region) -> Vec<Region> {
                 let (c, r) = (s.center(), s.radius());
                 Some((c.map(|v| v - r), c.map(|v| v + r)))
             }
+            Collider::Mesh(m) => Some(m.bounds()),
         })
         .collect()
 }

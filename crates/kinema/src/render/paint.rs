@@ -140,7 +140,7 @@ pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View, particl
                         p3.plane(&mut out.background, p.point(), p.normal(), eye, extent, &others)
                     }
                     Collider::Box(b) => p3.container(&mut out.background, b.lo(), b.hi(), extent, world_up),
-                    Collider::Sphere(_) => {}
+                    Collider::Sphere(_) | Collider::Mesh(_) => {}
                 }
             }
             shadows(&p3, colliders, eye, particles, &mut out.background);
@@ -211,6 +211,7 @@ pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View, particl
                             }
                         }
                     }
+                    Collider::Mesh(_) => {} // a 2D world has no meshes
                     Collider::Sphere(sphere) => {
                         let center = sphere.center();
                         let p = to_px(center[0], center[1]);
@@ -521,7 +522,7 @@ fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64
                     });
                 }
             }
-            Collider::Sphere(_) => {}
+            Collider::Sphere(_) | Collider::Mesh(_) => {}
         }
     }
     if floors.is_empty() {

@@ -492,6 +492,7 @@ fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event) -> Option<Co
             Collider::Plane(p) => p.normal(),
             Collider::Box(b) => b.walls()[e.wall].normal(),
             Collider::Sphere(s) => unit(vec3::sub(xi, s.center()))?,
+            Collider::Mesh(m) => m.touch_of_triangle(e.wall, xi, set.radius[e.i]).normal,
         },
     };
     Some(Contact {

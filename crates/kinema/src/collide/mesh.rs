@@ -1,0 +1,725 @@
+//! Triangle-mesh colliders: a static surface of triangles that particles bounce off, with a
+//! bounding-volume hierarchy so that a query costs O(log T) for T triangles.
+//!
+//! **Sides.** An *open* mesh (some edge has one face, or two faces that disagree on its
+//! direction) is two-sided: a particle belongs to the side its centre is on, and the normal
+//! of a face contact is ±n_face towards it. A *closed* mesh (every edge shared by exactly two
+//! faces that run along it in opposite directions) bounds a solid: it knows inside from
+//! outside. Its faces are oriented outwards on construction (flipped if its signed volume
+//! Σ a·(b × c)/6 is negative), and particles live outside it ([`Side::Outside`], an obstacle)
+//! or inside it ([`Side::Inside`], a container such as a drum). A face contact's normal is
+//! then the face's normal towards the free side whatever side the centre is on, so that a
+//! centre pushed past a face is pushed back out, not through.
+//!
+//! **Contacts.** A sphere of radius r at p touches every triangle whose closest point q is
+//! nearer than r (+ the tolerance). The closest point lies in the face's interior, on an
+//! edge or at a vertex (Ericson, *Real-Time Collision Detection* §5.1.5). Neighbouring
+//! triangles report the same edge or vertex as their closest point, and a ball resting on a
+//! flat patch of two coplanar triangles sees the face of one and the shared edge of the
+//! other, tilted: a "ghost" contact that would kick it sideways at every seam. Two rules keep
+//! exactly the contacts of the surface's true features:
+//!
+//! 1. contacts at the same point (the same edge or vertex seen from several triangles) are one;
+//! 2. an edge or vertex contact whose point lies in the plane of a face contact's triangle is
+//!    that face's own boundary (a coplanar seam, or the rim of the face it rests on) and is
+//!    dropped.
+//!
+//! In a concave crease (the bottom of a faceted bowl) the ball touches two faces: two face
+//! contacts, both kept. On a convex edge it touches the edge: one contact, normal from the
+//! edge to the centre.
+//!
+//! **Continuous detection.** [`TriangleMesh::toi`] sweeps the sphere along a straight path
+//! against each triangle the hierarchy finds near it: the first time its centre comes within r
+//! of the face's plane inside the triangle, of an edge's line within the edge, or of a vertex
+//! (each the first root of a quadratic, as in `toi.rs`).
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use super::colliders::{Surface, Touch};
+use super::toi::toi_half_space;
+use crate::error::Error;
+use crate::vec3;
+
+/// Which side of a mesh particles belong to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    /// Either side (an open mesh): the side the particle's centre is on.
+    Both,
+    /// Outside a closed mesh: it is a solid obstacle.
+    Outside,
+    /// Inside a closed mesh: it is a container.
+    Inside,
+}
+
+/// Where on a triangle its closest point to a query point lies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Feature {
+    Face,
+    Edge,
+    Vertex,
+}
+
+/// A node of the hierarchy: a box and either two children (the left one follows the node,
+/// the right one at `right`) or `count` triangles of `order` from `start`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Node {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    right: u32,
+    start: u32,
+    count: u32,
+}
+
+/// A triangle `t` near a point p: its nearest point q, the feature q lies on, d = p − q and |d|.
+#[derive(Debug, Clone, Copy)]
+struct Near {
+    t: usize,
+    q: [f64; 3],
+    feature: Feature,
+    d: [f64; 3],
+    len: f64,
+}
+
+/// The most triangles a leaf of the hierarchy holds.
+const LEAF: usize = 4;
+
+/// The geometry of a mesh, shared by its copies (the stage, the contact force and a picture
+/// hold the same one).
+#[derive(Debug, PartialEq)]
+struct Geometry {
+    vertices: Vec<[f64; 3]>,
+    faces: Vec<[u32; 3]>,
+    /// Unit normal of each face, (b − a) × (c − a) normalised.
+    normals: Vec<[f64; 3]>,
+    /// The triangles in the order the hierarchy's leaves hold them.
+    order: Vec<u32>,
+    nodes: Vec<Node>,
+    closed: bool,
+    /// Largest |coordinate| of a vertex, m.
+    scale: f64,
+}
+
+/// A static triangle mesh that particles collide with. Cloning is cheap: copies share the
+/// geometry.
+#[derive(Debug, Clone)]
+pub struct TriangleMesh {
+    geometry: Arc<Geometry>,
+    side: Side,
+    surface: Surface,
+}
+
+impl PartialEq for TriangleMesh {
+    fn eq(&self, other: &Self) -> bool {
+        (Arc::ptr_eq(&self.geometry, &other.geometry) || self.geometry == other.geometry)
+            && self.side == other.side
+            && self.surface == other.surface
+    }
+}
+
+impl TriangleMesh {
+    /// The mesh of `vertices` (m, finite) and triangles `faces` (three vertex indices each,
+    /// counter-clockwise seen from the outside for a closed mesh; any order for an open one).
+    /// Triangles of zero area are left out (they have no normal and touch nothing their
+    /// neighbours do not). `inside`: for a closed mesh, whether particles live inside it (a
+    /// container) rather than outside (an obstacle); an open mesh is two-sided and refuses
+    /// `inside = true`.
+    ///
+    /// Errors name the first bad value: a non-finite vertex, an index out of range, a face
+    /// with a repeated vertex, no triangle of non-zero area.
+    pub fn new(vertices: Vec<[f64; 3]>, faces: Vec<[u32; 3]>, inside: bool, surface: Surface) -> Result<Self, Error> {
+        for (v, p) in vertices.iter().enumerate() {
+            if let Some((k, value)) = vec3::first_non_finite(p) {
+                return Err(Error::invalid(format!("vertices[{v}][{k}]"), value, "a mesh's vertices must be finite"));
+            }
+        }
+        let n = vertices.len();
+        for (f, face) in faces.iter().enumerate() {
+            for (k, &index) in face.iter().enumerate() {
+                if index as usize >= n {
+                    return Err(Error::invalid(
+                        format!("faces[{f}][{k}]"),
+                        index,
+                        format!("a face's vertex index must be below the number of vertices ({n})"),
+                    ));
+                }
+            }
+            if face[0] == face[1] || face[1] == face[2] || face[0] == face[2] {
+                return Err(Error::invalid(
+                    format!("faces[{f}]"),
+                    format!("{face:?}"),
+                    "a face needs three different vertices",
+                ));
+            }
+        }
+        let area = |f: &[u32; 3]| {
+            let [a, b, c] = f.map(|k| vertices[k as usize]);
+            vec3::cross(vec3::sub(b, a), vec3::sub(c, a))
+        };
+        let mut faces: Vec<[u32; 3]> = faces.into_iter().filter(|f| vec3::norm(area(f)) > 0.0).collect();
+        if faces.is_empty() {
+            return Err(Error::invalid(
+                "faces",
+                "no triangle of non-zero area",
+                "a mesh needs at least one triangle with three distinct, non-collinear vertices",
+            ));
+        }
+        let closed = is_closed(&faces);
+        if closed {
+            let volume: f64 = faces
+                .iter()
+                .map(|f| {
+                    let [a, b, c] = f.map(|k| vertices[k as usize]);
+                    vec3::dot(a, vec3::cross(b, c))
+                })
+                .sum();
+            if volume < 0.0 {
+                for f in &mut faces {
+                    f.swap(1, 2);
+                }
+            }
+        } else if inside {
+            return Err(Error::invalid(
+                "inside",
+                "true",
+                "only a closed mesh has an inside (every edge shared by exactly two faces); this mesh is open, \
+                 so it is two-sided: particles stay on the side they start on",
+            ));
+        }
+        let normals = faces
+            .iter()
+            .map(|f| {
+                let c = area(f);
+                vec3::scale(1.0 / vec3::norm(c), c)
+            })
+            .collect();
+        let scale = vertices.iter().flatten().fold(0.0_f64, |m, c| m.max(c.abs()));
+        let mut geometry = Geometry {
+            vertices,
+            faces,
+            normals,
+            order: Vec::new(),
+            nodes: Vec::new(),
+            closed,
+            scale,
+        };
+        geometry.build();
+        let side = match (closed, inside) {
+            (false, _) => Side::Both,
+            (true, false) => Side::Outside,
+            (true, true) => Side::Inside,
+        };
+        Ok(TriangleMesh {
+            geometry: Arc::new(geometry),
+            side,
+            surface,
+        })
+    }
+
+    /// The vertices, m.
+    pub fn vertices(&self) -> &[[f64; 3]] {
+        &self.geometry.vertices
+    }
+
+    /// The triangles (zero-area ones left out; a closed mesh's oriented outwards).
+    pub fn faces(&self) -> &[[u32; 3]] {
+        &self.geometry.faces
+    }
+
+    /// The unit normal of triangle `t` ((b − a) × (c − a) normalised; outwards on a closed mesh).
+    pub fn face_normal(&self, t: usize) -> [f64; 3] {
+        self.geometry.normals[t]
+    }
+
+    /// Whether every edge is shared by exactly two faces running along it in opposite directions.
+    pub fn is_closed(&self) -> bool {
+        self.geometry.closed
+    }
+
+    /// Which side particles belong to.
+    pub fn side(&self) -> Side {
+        self.side
+    }
+
+    /// Its restitution and friction.
+    pub fn surface(&self) -> Surface {
+        self.surface
+    }
+
+    /// The box around all vertices, (lo, hi), m.
+    pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        let root = self.geometry.nodes[0];
+        (root.lo, root.hi)
+    }
+
+    /// Largest |coordinate| of a vertex, m.
+    pub fn scale(&self) -> f64 {
+        self.geometry.scale
+    }
+
+    /// Triangle t's point nearest to `p` if it lies within `reach` (m) of p.
+    fn near(&self, t: usize, p: [f64; 3], reach: f64) -> Option<Near> {
+        let g = &*self.geometry;
+        let [a, b, c] = g.faces[t].map(|k| g.vertices[k as usize]);
+        let (q, feature) = closest_on_triangle(p, a, b, c);
+        let d = vec3::sub(p, q);
+        let len = vec3::norm(d);
+        (len < reach).then_some(Near { t, q, feature, d, len })
+    }
+
+    /// The touches of a sphere of radius `r` (m) with the triangles `near` it (all within
+    /// its reach), in their order.
+    ///
+    /// On the particles' side of the surface (always, for an open mesh) each normal points
+    /// from the triangle's nearest point to the centre (±n_face for a face): overlap r − |d|.
+    /// A centre on the wrong side of a closed mesh (pushed through it) is pushed back: each
+    /// normal points to the free side (n_face outwards for an obstacle, inwards for a
+    /// container; from the centre to an edge or vertex), overlap r + |d|. Which side the
+    /// centre is on is the nearest triangles' verdict: the sign of Σ d·n_face over those at
+    /// the least distance (on a convex edge seen from outside both say outside). A far face
+    /// of a solid thinner than the ball, behind the centre, is then no push through the solid.
+    fn touches_of(&self, near: &[Near], r: f64) -> Vec<(Touch, [f64; 3], Feature)> {
+        let g = &*self.geometry;
+        let wrong_side = match self.side {
+            Side::Both => false,
+            side => {
+                let least = near.iter().fold(f64::INFINITY, |m, c| m.min(c.len));
+                let eps = 1e-10 * (g.scale + r + least);
+                let verdict: f64 = near
+                    .iter()
+                    .filter(|c| c.len <= least + eps)
+                    .map(|c| vec3::dot(c.d, g.normals[c.t]))
+                    .sum();
+                if side == Side::Outside {
+                    verdict < 0.0
+                } else {
+                    verdict > 0.0
+                }
+            }
+        };
+        near.iter()
+            .map(|c| {
+                let n = g.normals[c.t];
+                let normal = if wrong_side {
+                    match (c.feature, self.side) {
+                        (Feature::Face, Side::Inside) => vec3::scale(-1.0, n),
+                        (Feature::Face, _) => n,
+                        _ if c.len > 0.0 => vec3::scale(-1.0 / c.len, c.d),
+                        (_, Side::Inside) => vec3::scale(-1.0, n),
+                        _ => n,
+                    }
+                } else if c.feature == Feature::Face && c.len > 0.0 {
+                    // exactly ±n: d/|d| would carry the rounding of the foot q
+                    if vec3::dot(c.d, n) >= 0.0 { n } else { vec3::scale(-1.0, n) }
+                } else if c.len > 0.0 {
+                    vec3::scale(1.0 / c.len, c.d)
+                } else {
+                    // the centre on the surface itself: the face's normal towards the free side
+                    if self.side == Side::Inside { vec3::scale(-1.0, n) } else { n }
+                };
+                let overlap = if wrong_side { r + c.len } else { r - c.len };
+                (Touch { normal, overlap }, c.q, c.feature)
+            })
+            .collect()
+    }
+
+    /// The touch of a sphere at `p` of radius `r` (m) with triangle `t`, however far (the
+    /// normal and overlap of an impact the continuous detection found on that triangle).
+    pub fn touch_of_triangle(&self, t: usize, p: [f64; 3], r: f64) -> Touch {
+        let near = self.near(t, p, f64::INFINITY).expect("every triangle is within an infinite reach");
+        self.touches_of(&[near], r)[0].0
+    }
+
+    /// Calls `each` with every touch of a sphere at `p` (m) of radius `r` (m) within
+    /// `tolerance` (m), its true features only (the module's doc: one per face touched, one
+    /// per convex edge or vertex), in the order of the triangles' indices.
+    pub fn for_each_touch(&self, p: [f64; 3], r: f64, tolerance: f64, mut each: impl FnMut(Touch)) {
+        for (_, touch, _, _) in self.touches(p, r, tolerance) {
+            each(touch);
+        }
+    }
+
+    /// The touches of [`TriangleMesh::for_each_touch`] with each one's triangle and closest
+    /// point (m) and feature.
+    fn touches(&self, p: [f64; 3], r: f64, tolerance: f64) -> Vec<(usize, Touch, [f64; 3], Feature)> {
+        let reach = r + tolerance.max(0.0);
+        let (lo, hi) = ([0, 1, 2].map(|k| p[k] - reach), [0, 1, 2].map(|k| p[k] + reach));
+        let mut near: Vec<Near> = Vec::new();
+        self.geometry.visit(lo, hi, |t| near.extend(self.near(t, p, reach)));
+        if near.is_empty() {
+            return Vec::new();
+        }
+        near.sort_unstable_by_key(|c| c.t);
+        let found = self.touches_of(&near, r);
+        let eps = self.eps(p, r);
+        let faces: Vec<(usize, [f64; 3])> = near
+            .iter()
+            .filter(|c| c.feature == Feature::Face)
+            .map(|c| (c.t, c.q))
+            .collect();
+        let mut kept: Vec<(usize, Touch, [f64; 3], Feature)> = Vec::with_capacity(found.len());
+        for (c, (touch, q, feature)) in near.iter().zip(found) {
+            if feature != Feature::Face {
+                // rule 2: the boundary of a face touched; rule 1: seen from another triangle
+                let seen = kept.iter().any(|k| vec3::norm(vec3::sub(k.2, q)) <= eps);
+                if seen || self.in_face_plane(&faces, q, eps) {
+                    continue;
+                }
+            }
+            kept.push((c.t, touch, q, feature));
+        }
+        kept
+    }
+
+    /// The length below which a point counts as in a face's plane, or two points as one, m:
+    /// the relative precision of the coordinates near `p`.
+    fn eps(&self, p: [f64; 3], r: f64) -> f64 {
+        1e-10 * (self.geometry.scale + vec3::norm(p) + r)
+    }
+
+    /// Whether point q lies within `eps` of the plane of one of `faces` (triangle, a point of it).
+    fn in_face_plane(&self, faces: &[(usize, [f64; 3])], q: [f64; 3], eps: f64) -> bool {
+        faces
+            .iter()
+            .any(|&(t, qf)| vec3::dot(vec3::sub(q, qf), self.geometry.normals[t]).abs() <= eps)
+    }
+
+    /// First time τ ∈ [0, `horizon`] (s) at which a sphere of radius `r` (m) starting at `x`
+    /// (m) with velocity `v` (m/s) and constant acceleration `a` (m/s²) meets a triangle while
+    /// approaching it, with that triangle's index; `None` if it does not. Faces are met on
+    /// the exact parabola (as [`super::toi::toi_plane`]), edges and vertices on its chord
+    /// x + (v + ½ a T) τ over the horizon T (the same end point; the parabola bulges at
+    /// most ⅛ |a| T² from it, which the end-of-step contacts take up). A sphere that touches a true feature now (the
+    /// touches of [`TriangleMesh::for_each_touch`]) and approaches it meets it at 0; one
+    /// that slides along a face it touches meets no edge or vertex in that face's plane (the
+    /// seams of a flat patch, as rule 2 of the module's doc).
+    pub fn toi(&self, x: [f64; 3], v: [f64; 3], a: [f64; 3], r: f64, horizon: f64) -> Option<(f64, usize)> {
+        if !(horizon >= 0.0) {
+            return None;
+        }
+        let now = self.touches(x, r, 0.0);
+        if let Some(&(t, ..)) = now.iter().find(|f| vec3::dot(v, f.1.normal) < 0.0) {
+            return Some((0.0, t));
+        }
+        let (g, accel) = (&*self.geometry, a);
+        let eps = self.eps(x, r);
+        let faces: Vec<(usize, [f64; 3])> = now.iter().filter(|f| f.3 == Feature::Face).map(|f| (f.0, f.2)).collect();
+        let chord = [0, 1, 2].map(|k| v[k] + 0.5 * a[k] * horizon);
+        let end = [0, 1, 2].map(|k| x[k] + chord[k] * horizon);
+        let bulge = 0.125 * vec3::norm(a) * horizon * horizon;
+        let lo = [0, 1, 2].map(|k| x[k].min(end[k]) - r - bulge);
+        let hi = [0, 1, 2].map(|k| x[k].max(end[k]) + r + bulge);
+        let mut first: Option<(f64, usize)> = None;
+        g.visit(lo, hi, |t| {
+            let limit = first.map_or(horizon, |f| f.0);
+            let [a, b, c] = g.faces[t].map(|k| g.vertices[k as usize]);
+            if vec3::norm(vec3::sub(x, closest_on_triangle(x, a, b, c).0)) <= r {
+                return; // touching now: a true feature was handled above, a ghost is none
+            }
+            if let Some((tau, q, feature)) = toi_triangle(Path { x, v, a: accel, chord }, r, [a, b, c], g.normals[t], limit) {
+                if feature != Feature::Face && self.in_face_plane(&faces, q, eps) {
+                    return;
+                }
+                if first.is_none_or(|f| tau < f.0 || (tau == f.0 && t < f.1)) {
+                    first = Some((tau, t));
+                }
+            }
+        });
+        first
+    }
+
+    /// Whether point `p` (m) lies inside the closed mesh (false for an open one): the parity
+    /// of the crossings of a ray from p with the triangles (a ray in a direction no mesh
+    /// built of axis-aligned or simple angles lines up with).
+    pub fn contains(&self, p: [f64; 3]) -> bool {
+        if !self.geometry.closed {
+            return false;
+        }
+        let dir = {
+            let d = [0.123_456_7, 0.067_891_2, 1.0];
+            vec3::scale(1.0 / vec3::norm(d), d)
+        };
+        let g = &*self.geometry;
+        let mut crossings = 0usize;
+        g.visit_ray(p, dir, |t| {
+            let [a, b, c] = g.faces[t].map(|k| g.vertices[k as usize]);
+            if ray_hits_triangle(p, dir, a, b, c) {
+                crossings += 1;
+            }
+        });
+        crossings % 2 == 1
+    }
+}
+
+impl Geometry {
+    /// Builds the hierarchy: a median split of the triangles' centroids along the longest
+    /// axis of their box, down to leaves of at most [`LEAF`] triangles.
+    fn build(&mut self) {
+        let centroid = |t: u32| {
+            let [a, b, c] = self.faces[t as usize].map(|k| self.vertices[k as usize]);
+            [0, 1, 2].map(|k| (a[k] + b[k] + c[k]) / 3.0)
+        };
+        let centroids: Vec<[f64; 3]> = (0..self.faces.len() as u32).map(centroid).collect();
+        let mut order: Vec<u32> = (0..self.faces.len() as u32).collect();
+        let mut nodes = Vec::with_capacity(2 * order.len() / LEAF + 1);
+        self.split(&mut order, 0, &centroids, &mut nodes);
+        self.order = order;
+        self.nodes = nodes;
+    }
+
+    fn split(&self, order: &mut [u32], start: usize, centroids: &[[f64; 3]], nodes: &mut Vec<Node>) {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for &t in order.iter() {
+            for &v in &self.faces[t as usize] {
+                let p = self.vertices[v as usize];
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+        }
+        let me = nodes.len();
+        nodes.push(Node {
+            lo,
+            hi,
+            right: 0,
+            start: start as u32,
+            count: order.len() as u32,
+        });
+        if order.len() <= LEAF {
+            return;
+        }
+        let (mut clo, mut chi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for &t in order.iter() {
+            for k in 0..3 {
+                clo[k] = clo[k].min(centroids[t as usize][k]);
+                chi[k] = chi[k].max(centroids[t as usize][k]);
+            }
+        }
+        let axis = (0..3).max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b]))).unwrap_or(0);
+        let mid = order.len() / 2;
+        order.select_nth_unstable_by(mid, |&a, &b| {
+            centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]).then(a.cmp(&b))
+        });
+        let (left, right) = order.split_at_mut(mid);
+        self.split(left, start, centroids, nodes);
+        let r = nodes.len();
+        self.split(right, start + mid, centroids, nodes);
+        nodes[me].right = r as u32;
+        nodes[me].count = 0;
+    }
+
+    /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi].
+    fn visit(&self, lo: [f64; 3], hi: [f64; 3], mut each: impl FnMut(usize)) {
+        let mut stack = vec![0u32];
+        while let Some(k) = stack.pop() {
+            let node = self.nodes[k as usize];
+            if (0..3).any(|a| node.hi[a] < lo[a] || node.lo[a] > hi[a]) {
+                continue;
+            }
+            if node.count > 0 {
+                for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
+                    each(t as usize);
+                }
+            } else {
+                stack.push(node.right);
+                stack.push(k + 1);
+            }
+        }
+    }
+
+    /// Calls `each(t)` with every triangle whose leaf's box the ray p + s d (s ≥ 0) meets.
+    fn visit_ray(&self, p: [f64; 3], d: [f64; 3], mut each: impl FnMut(usize)) {
+        let mut stack = vec![0u32];
+        while let Some(k) = stack.pop() {
+            let node = self.nodes[k as usize];
+            // the slab test: the ray's parameter interval inside each axis's slab
+            let (mut enter, mut leave) = (0.0_f64, f64::INFINITY);
+            for a in 0..3 {
+                if d[a] == 0.0 {
+                    if p[a] < node.lo[a] || p[a] > node.hi[a] {
+                        leave = -1.0;
+                    }
+                } else {
+                    let (s1, s2) = ((node.lo[a] - p[a]) / d[a], (node.hi[a] - p[a]) / d[a]);
+                    enter = enter.max(s1.min(s2));
+                    leave = leave.min(s1.max(s2));
+                }
+            }
+            if enter > leave {
+                continue;
+            }
+            if node.count > 0 {
+                for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
+                    each(t as usize);
+                }
+            } else {
+                stack.push(node.right);
+                stack.push(k + 1);
+            }
+        }
+    }
+}
+
+/// Whether every edge is shared by exactly two faces that run along it in opposite directions.
+fn is_closed(faces: &[[u32; 3]]) -> bool {
+    // per undirected edge: (uses a→b with a < b, uses b→a)
+    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(3 * faces.len() / 2);
+    for f in faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            let e = edges.entry((a.min(b), a.max(b))).or_default();
+            if a < b {
+                e.0 += 1;
+            } else {
+                e.1 += 1;
+            }
+        }
+    }
+    edges.values().all(|&(up, down)| up == 1 && down == 1)
+}
+
+/// The point of triangle abc closest to p, and the feature it lies on (Ericson, *Real-Time
+/// Collision Detection*, §5.1.5: p's Voronoi region among the vertices, edges and face, from
+/// the barycentric coordinates of its projection).
+fn closest_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> ([f64; 3], Feature) {
+    let ab = vec3::sub(b, a);
+    let ac = vec3::sub(c, a);
+    let ap = vec3::sub(p, a);
+    let d1 = vec3::dot(ab, ap);
+    let d2 = vec3::dot(ac, ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, Feature::Vertex);
+    }
+    let bp = vec3::sub(p, b);
+    let d3 = vec3::dot(ab, bp);
+    let d4 = vec3::dot(ac, bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, Feature::Vertex);
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let s = d1 / (d1 - d3);
+        return (vec3::add(a, vec3::scale(s, ab)), Feature::Edge);
+    }
+    let cp = vec3::sub(p, c);
+    let d5 = vec3::dot(ab, cp);
+    let d6 = vec3::dot(ac, cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, Feature::Vertex);
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let s = d2 / (d2 - d6);
+        return (vec3::add(a, vec3::scale(s, ac)), Feature::Edge);
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let s = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (vec3::add(b, vec3::scale(s, vec3::sub(c, b))), Feature::Edge);
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    (vec3::add(a, vec3::add(vec3::scale(v, ab), vec3::scale(w, ac))), Feature::Face)
+}
+
+/// First root τ ∈ [0, h] of |d + u τ|² = R² while the distance falls, for |d| > R: the
+/// smaller root of a τ² + 2 b τ + c (a = u·u, b = d·u, c = |d|² − R²), in the
+/// cancellation-free form c / (−b + √(b² − a c)) of `toi.rs`.
+fn first_approach(d: [f64; 3], u: [f64; 3], radius: f64, h: f64) -> Option<f64> {
+    let a = vec3::dot(u, u);
+    let b = vec3::dot(d, u);
+    let len = vec3::norm(d);
+    let c = (len - radius) * (len + radius);
+    if c <= 0.0 || b >= 0.0 || a == 0.0 {
+        return None;
+    }
+    let disc = b * b - a * c;
+    if disc <= 0.0 {
+        return None;
+    }
+    let tau = c / (-b + disc.sqrt());
+    (tau <= h).then_some(tau)
+}
+
+/// A sphere's motion over the horizon: x + v τ + ½ a τ², and the chord's velocity.
+#[derive(Debug, Clone, Copy)]
+struct Path {
+    x: [f64; 3],
+    v: [f64; 3],
+    a: [f64; 3],
+    chord: [f64; 3],
+}
+
+/// First time τ ∈ [0, h] at which a sphere of radius r on `path` comes within r of
+/// triangle `tri` (unit normal `n`) while approaching it: the earliest of its face (the
+/// plane at distance r on the parabola, the foot of the centre inside the triangle), on the
+/// chord x + chord τ its edges (the
+/// cylinder of radius r about each edge's line, the foot within the edge) and its vertices
+/// (the sphere of radius r about each), with the point met and its feature; `None` if it
+/// misses (the caller handles a sphere that touches it now).
+fn toi_triangle(path: Path, r: f64, tri: [[f64; 3]; 3], n: [f64; 3], h: f64) -> Option<(f64, [f64; 3], Feature)> {
+    let [a, b, c] = tri;
+    let Path { x, v: v0, a: accel, chord: v } = path;
+    let mut first: Option<(f64, [f64; 3], Feature)> = None;
+    let mut take = |tau: f64, q: [f64; 3], feature: Feature| {
+        if (0.0..=h).contains(&tau) && first.is_none_or(|f| tau < f.0) {
+            first = Some((tau, q, feature));
+        }
+    };
+    // the face: the parabola's distance from its plane reaches r on the side it starts on
+    let side = if vec3::dot(vec3::sub(x, a), n) >= 0.0 { n } else { vec3::scale(-1.0, n) };
+    if let Some(tau) = toi_half_space(x, v0, accel, r, a, side, h) {
+        let p = [0, 1, 2].map(|k| x[k] + v0[k] * tau + 0.5 * accel[k] * tau * tau);
+        let (q, feature) = closest_on_triangle(p, a, b, c);
+        if feature == Feature::Face {
+            take(tau, q, feature);
+        }
+    }
+    // the edges: the centre's distance from the edge's line, the parts across the edge
+    for (p0, p1) in [(a, b), (b, c), (c, a)] {
+        let e = vec3::sub(p1, p0);
+        let ee = vec3::dot(e, e);
+        let d = vec3::sub(x, p0);
+        let across = |w: [f64; 3]| vec3::sub(w, vec3::scale(vec3::dot(w, e) / ee, e));
+        if let Some(tau) = first_approach(across(d), across(v), r, h) {
+            let along = vec3::dot(vec3::add(d, vec3::scale(tau, v)), e) / ee;
+            if (0.0..=1.0).contains(&along) {
+                take(tau, vec3::add(p0, vec3::scale(along, e)), Feature::Edge);
+            }
+        }
+    }
+    for p0 in [a, b, c] {
+        if let Some(tau) = first_approach(vec3::sub(x, p0), v, r, h) {
+            take(tau, p0, Feature::Vertex);
+        }
+    }
+    first
+}
+
+/// Whether the ray p + s d (s > 0) crosses triangle abc (Möller–Trumbore).
+fn ray_hits_triangle(p: [f64; 3], d: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> bool {
+    let e1 = vec3::sub(b, a);
+    let e2 = vec3::sub(c, a);
+    let h = vec3::cross(d, e2);
+    let det = vec3::dot(e1, h);
+    if det == 0.0 {
+        return false;
+    }
+    let inv = 1.0 / det;
+    let s = vec3::sub(p, a);
+    let u = inv * vec3::dot(s, h);
+    if !(0.0..=1.0).contains(&u) {
+        return false;
+    }
+    let q = vec3::cross(s, e1);
+    let w = inv * vec3::dot(d, q);
+    if w < 0.0 || u + w > 1.0 {
+        return false;
+    }
+    inv * vec3::dot(e2, q) > 0.0
+}
+
+#[cfg(test)]
+#[path = "tests/mesh.rs"]
+mod tests;

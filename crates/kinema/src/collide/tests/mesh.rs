@@ -1,0 +1,234 @@
+//! The mesh collider's geometry against hand-computed cases and brute force.
+
+use super::*;
+
+/// The unit cube [0, 1]³ as 12 triangles, wound `outwards` (counter-clockwise seen from
+/// outside) or inwards.
+pub(crate) fn cube(outwards: bool) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let v: Vec<[f64; 3]> = (0..8)
+        .map(|k| [(k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64])
+        .collect();
+    // each face as a quad (a, b, c, d) counter-clockwise from outside
+    let quads = [
+        [0, 2, 3, 1], // z = 0, normal −z
+        [4, 5, 7, 6], // z = 1
+        [0, 1, 5, 4], // y = 0
+        [2, 6, 7, 3], // y = 1
+        [0, 4, 6, 2], // x = 0
+        [1, 3, 7, 5], // x = 1
+    ];
+    let mut f = Vec::new();
+    for [a, b, c, d] in quads {
+        for tri in [[a, b, c], [a, c, d]] {
+            f.push(if outwards { tri } else { [tri[0], tri[2], tri[1]] });
+        }
+    }
+    (v, f)
+}
+
+fn touches(m: &TriangleMesh, p: [f64; 3], r: f64) -> Vec<Touch> {
+    let mut out = Vec::new();
+    m.for_each_touch(p, r, 0.0, |t| out.push(t));
+    out
+}
+
+fn close(a: [f64; 3], b: [f64; 3]) -> bool {
+    (0..3).all(|k| (a[k] - b[k]).abs() < 1e-14)
+}
+
+#[test]
+fn closest_point_regions_by_hand() {
+    let (a, b, c) = ([0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]);
+    assert_eq!(closest_on_triangle([0.5, 0.5, 3.0], a, b, c), ([0.5, 0.5, 0.0], Feature::Face));
+    assert_eq!(closest_on_triangle([-1.0, -1.0, 1.0], a, b, c), (a, Feature::Vertex));
+    assert_eq!(closest_on_triangle([3.0, -0.5, 0.0], a, b, c), (b, Feature::Vertex));
+    assert_eq!(closest_on_triangle([1.0, -1.0, 0.5], a, b, c), ([1.0, 0.0, 0.0], Feature::Edge));
+    // beyond the hypotenuse x + y = 2: the foot on it
+    assert_eq!(closest_on_triangle([2.0, 2.0, 0.0], a, b, c), ([1.0, 1.0, 0.0], Feature::Edge));
+}
+
+#[test]
+fn a_closed_mesh_is_oriented_outwards_and_knows_inside() {
+    for outwards in [true, false] {
+        let (v, f) = cube(outwards);
+        let m = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
+        assert!(m.is_closed());
+        assert_eq!(m.side(), Side::Outside);
+        // face 0 lies on z = 0: its outward normal is −z whatever the winding given
+        assert_eq!(m.face_normal(0), [0.0, 0.0, -1.0]);
+        assert!(m.contains([0.5, 0.5, 0.5]));
+        assert!(m.contains([0.01, 0.99, 0.5]));
+        assert!(!m.contains([1.5, 0.5, 0.5]));
+        assert!(!m.contains([0.5, 0.5, -0.01]));
+    }
+    // one face removed: open, two-sided, and no inside to ask for
+    let (v, mut f) = cube(true);
+    f.pop();
+    let open = TriangleMesh::new(v.clone(), f.clone(), false, Surface::default()).unwrap();
+    assert_eq!((open.is_closed(), open.side()), (false, Side::Both));
+    let e = TriangleMesh::new(v, f, true, Surface::default()).unwrap_err().to_string();
+    assert!(e.starts_with("inside = true is invalid: only a closed mesh has an inside"), "{e}");
+}
+
+#[test]
+fn a_flat_patch_of_triangles_gives_one_contact_at_its_seams() {
+    // The top of the cube (z = 1) is two triangles with the seam along its diagonal, and four
+    // convex edges. A ball resting on it (overlap 0.01) anywhere on the face, at the seam
+    // and at the middle of the square, touches the face only: one contact, normal +z.
+    let (v, f) = cube(true);
+    let m = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
+    for p in [[0.5, 0.5, 1.09], [0.3, 0.3, 1.09], [0.2, 0.7, 1.09], [0.95, 0.5, 1.09]] {
+        let t = touches(&m, p, 0.1);
+        assert_eq!(t.len(), 1, "{p:?}: {t:?}");
+        assert!(close(t[0].normal, [0.0, 0.0, 1.0]), "{p:?}: {t:?}");
+        assert!((t[0].overlap - 0.01).abs() < 1e-14, "{p:?}: {t:?}");
+    }
+}
+
+#[test]
+fn convex_edges_and_corners_give_their_own_normal() {
+    // Outside the cube beyond the edge x = 1, z = 1 along (1, 0, 1)/√2, and beyond the corner
+    // (1, 1, 1) along (1, 1, 1)/√3: one contact each, from the feature to the centre.
+    let (v, f) = cube(true);
+    let m = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
+    let (r, d) = (0.1, 0.09);
+    let s2 = std::f64::consts::FRAC_1_SQRT_2;
+    let edge = touches(&m, [1.0 + d * s2, 0.5, 1.0 + d * s2], r);
+    assert_eq!(edge.len(), 1, "{edge:?}");
+    assert!(close(edge[0].normal, [s2, 0.0, s2]), "{edge:?}");
+    assert!((edge[0].overlap - (r - d)).abs() < 1e-14);
+    let s3 = 1.0 / 3f64.sqrt();
+    let corner = touches(&m, [1.0 + d * s3, 1.0 + d * s3, 1.0 + d * s3], r);
+    assert_eq!(corner.len(), 1, "{corner:?}");
+    assert!(close(corner[0].normal, [s3, s3, s3]), "{corner:?}");
+    // inside the cube as a container, in its corner: three faces, the inward normals
+    let (v, f) = cube(true);
+    let inside = TriangleMesh::new(v, f, true, Surface::default()).unwrap();
+    let mut got: Vec<[f64; 3]> = touches(&inside, [0.95, 0.95, 0.95], r).iter().map(|t| t.normal).collect();
+    got.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    assert_eq!(got, vec![[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]);
+}
+
+#[test]
+fn a_centre_pushed_past_a_closed_mesh_face_is_pushed_back_out() {
+    // A centre 0.05 inside the cube below its top face: the obstacle's normal is still +z,
+    // the overlap r + 0.05; two-sided (the open cube), the centre's own side, −z.
+    let (v, f) = cube(true);
+    let m = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
+    let t = touches(&m, [0.5, 0.4, 0.95], 0.1);
+    assert_eq!(t.len(), 1, "{t:?}");
+    assert!(close(t[0].normal, [0.0, 0.0, 1.0]));
+    assert!((t[0].overlap - 0.15).abs() < 1e-14);
+    let top = TriangleMesh::new(
+        vec![[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0]],
+        vec![[0, 1, 2], [0, 2, 3]],
+        false,
+        Surface::default(),
+    )
+    .unwrap();
+    let t = touches(&top, [0.5, 0.4, 0.95], 0.1);
+    assert_eq!(t.len(), 1, "{t:?}");
+    assert!(close(t[0].normal, [0.0, 0.0, -1.0]));
+    assert!((t[0].overlap - 0.05).abs() < 1e-14);
+}
+
+#[test]
+fn a_concave_crease_gives_both_faces() {
+    // A V of two half-planes z = |x| tan 30° (as triangles far larger than the ball): a ball
+    // in the crease touches both faces, each with its own normal.
+    let t30 = (30f64).to_radians().tan();
+    let v = vec![
+        [-10.0, -10.0, 10.0 * t30],
+        [-10.0, 10.0, 10.0 * t30],
+        [0.0, -10.0, 0.0],
+        [0.0, 10.0, 0.0],
+        [10.0, -10.0, 10.0 * t30],
+        [10.0, 10.0, 10.0 * t30],
+    ];
+    let f = vec![[0, 2, 3], [0, 3, 1], [2, 4, 5], [2, 5, 3]];
+    let m = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
+    let r = 0.1;
+    // the ball centred on the axis at the height where it overlaps each face by 0.01
+    let z = (r - 0.01) / (30f64).to_radians().cos();
+    let t = touches(&m, [0.0, 0.5, z], r);
+    assert_eq!(t.len(), 2, "{t:?}");
+    let (s, c) = ((30f64).to_radians().sin(), (30f64).to_radians().cos());
+    let mut normals: Vec<[f64; 3]> = t.iter().map(|t| t.normal).collect();
+    normals.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    assert!(close(normals[0], [-s, 0.0, c]) && close(normals[1], [s, 0.0, c]), "{normals:?}");
+    for t in &t {
+        assert!((t.overlap - 0.01).abs() < 1e-14, "{t:?}");
+    }
+}
+
+#[test]
+fn continuous_detection_stops_a_fast_ball_at_a_thin_shell() {
+    // A zero-thickness square at z = 0 (a shell thinner than any 1 mm one); a ball r = 0.01 at z = 0.5 falling at
+    // 100 m/s crosses it within a 10 ms step. It meets the face at τ = (0.5 − 0.01)/100, and
+    // from below symmetrically (two-sided); sideways, a ball passing the square's edge
+    // meets the edge's cylinder when its centre is r from the edge.
+    let sq = TriangleMesh::new(
+        vec![[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]],
+        vec![[0, 1, 2], [0, 2, 3]],
+        false,
+        Surface::default(),
+    )
+    .unwrap();
+    let (t, _) = sq.toi([0.2, 0.1, 0.5], [0.0, 0.0, -100.0], [0.0; 3], 0.01, 0.01).unwrap();
+    assert!((t - 0.49 / 100.0).abs() < 1e-16, "{t}");
+    let (t, _) = sq.toi([0.2, 0.1, -0.5], [0.0, 0.0, 100.0], [0.0; 3], 0.01, 0.01).unwrap();
+    assert!((t - 0.49 / 100.0).abs() < 1e-16, "{t}");
+    assert!(sq.toi([0.2, 0.1, 0.5], [0.0, 0.0, -100.0], [0.0; 3], 0.01, 0.004).is_none());
+    // grazing past the edge x = 1 at height 0.005: contact when the centre is 0.01 from the
+    // edge's line, x = 1 + √(0.01² − 0.005²)
+    let (t, _) = sq.toi([2.0, 0.0, 0.005], [-100.0, 0.0, 0.0], [0.0; 3], 0.01, 0.1).unwrap();
+    let want = (1.0 - (0.01f64.powi(2) - 0.005f64.powi(2)).sqrt()) / 100.0;
+    assert!((t - want).abs() < 1e-15, "{t} vs {want}");
+    // a ball sliding on the square across its diagonal seam meets nothing
+    assert!(sq.toi([-0.5, -0.6, 0.0099], [10.0, 10.0, 0.0], [0.0; 3], 0.01, 0.1).is_none());
+}
+
+#[test]
+fn the_hierarchy_finds_what_brute_force_finds() {
+    // A wavy sheet of 2 × 40 × 40 triangles: for 300 random spheres the touches through
+    // the hierarchy equal those of every triangle tested (before the ghost rules).
+    let k = 40;
+    let mut v = Vec::new();
+    for j in 0..=k {
+        for i in 0..=k {
+            let (x, y) = (i as f64 / k as f64, j as f64 / k as f64);
+            v.push([x, y, 0.1 * (7.0 * x).sin() * (5.0 * y).cos()]);
+        }
+    }
+    let mut f = Vec::new();
+    for j in 0..k as u32 {
+        for i in 0..k as u32 {
+            let a = j * (k as u32 + 1) + i;
+            f.push([a, a + 1, a + k as u32 + 2]);
+            f.push([a, a + k as u32 + 2, a + k as u32 + 1]);
+        }
+    }
+    let m = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
+    let mut seed = 7u64;
+    let mut rnd = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut hits = 0;
+    for _ in 0..300 {
+        let p = [rnd(), rnd(), 0.3 * rnd() - 0.15];
+        let r = 0.05 * rnd();
+        let mut fast = Vec::new();
+        m.geometry.visit([p[0] - r, p[1] - r, p[2] - r], [p[0] + r, p[1] + r, p[2] + r], |t| {
+            if m.near(t, p, r).is_some() {
+                fast.push(t);
+            }
+        });
+        fast.sort_unstable();
+        let slow: Vec<usize> = (0..m.faces().len()).filter(|&t| m.near(t, p, r).is_some()).collect();
+        assert_eq!(fast, slow, "{p:?} r {r}");
+        hits += slow.len();
+    }
+    assert!(hits > 100, "the spheres touch the sheet: {hits}");
+}
+
