@@ -4,7 +4,7 @@
 //! per class); every rule is the engine's, and its errors name the parameter.
 
 use kinema::collide::colliders::{check_planar, PLANE_IN_2D, SPHERE_IN_2D};
-use kinema::collide::{BoxContainer, Collider, Contact, Material, Partner, Plane, SphereObstacle, Surface};
+use kinema::collide::{BoxContainer, Collider, Contact, Material, Partner, Plane, SphereObstacle, Surface, TriangleMesh};
 use kinema::world::{CollisionParams, CollisionStats, ContactModel};
 use kinema::Error;
 use numpy::{PyArray1, PyArrayMethods};
@@ -129,10 +129,32 @@ pub fn box_container(dim: usize, lo: &[f64], hi: &[f64], surface: Surface) -> Re
     }
 }
 
+/// A triangle mesh of `vertices` (m) and `faces` (vertex indices, 3 per face): the indices
+/// are checked here (a negative one, or one beyond u32, names its place), the rest by
+/// [`TriangleMesh::new`]. `inside`: particles inside a closed mesh.
+pub fn mesh(vertices: Vec<[f64; 3]>, faces: &[[i64; 3]], inside: bool, surface: Surface) -> Result<TriangleMesh, Error> {
+    let mut tris = Vec::with_capacity(faces.len());
+    for (f, face) in faces.iter().enumerate() {
+        let mut t = [0u32; 3];
+        for k in 0..3 {
+            t[k] = u32::try_from(face[k]).map_err(|_| {
+                Error::invalid(
+                    format!("faces[{f}][{k}]"),
+                    face[k],
+                    format!("a face's vertex index must be in [0, {})", vertices.len()),
+                )
+            })?;
+        }
+        tris.push(t);
+    }
+    TriangleMesh::new(vertices, tris, inside, surface)
+}
+
 /// A collider as a plain description, the dicts `Trajectory.colliders` holds (written by
 /// `kinema.render._describe_colliders`): {"type": "plane", "point", "normal"}, {"type":
 /// "box", "lo", "hi"} (2 or 3 values per corner, ±inf for an open face), {"type": "sphere",
-/// "center", "radius"}, with "restitution" and "friction" where the collider sets them; m.
+/// "center", "radius"}, {"type": "mesh", "vertices" (V × 3), "faces" (F × 3), "inside"}, with
+/// "restitution" and "friction" where the collider sets them; m.
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
 pub struct Description {
@@ -150,6 +172,12 @@ pub struct Description {
     center: Option<[f64; 3]>,
     #[pyo3(default)]
     radius: Option<f64>,
+    #[pyo3(default)]
+    vertices: Option<Vec<[f64; 3]>>,
+    #[pyo3(default)]
+    faces: Option<Vec<[i64; 3]>>,
+    #[pyo3(default)]
+    inside: Option<bool>,
     #[pyo3(default)]
     restitution: Option<f64>,
     #[pyo3(default)]
@@ -179,10 +207,14 @@ pub fn collider(d: &Description) -> Result<Collider, Error> {
         ("box", ..) => Err(missing("lo and hi")),
         ("sphere", .., Some(center), Some(radius)) => Ok(sphere_obstacle(3, center, radius, surface)?.into()),
         ("sphere", ..) => Err(missing("center and radius")),
+        ("mesh", ..) => match (&d.vertices, &d.faces) {
+            (Some(v), Some(f)) => Ok(mesh(v.clone(), f, d.inside.unwrap_or(false), surface)?.into()),
+            _ => Err(missing("vertices and faces")),
+        },
         (other, ..) => Err(Error::invalid(
             "type",
             format!("'{other}'"),
-            "a collider is a 'plane', a 'box' or a 'sphere'",
+            "a collider is a 'plane', a 'box', a 'sphere' or a 'mesh'",
         )),
     }
 }

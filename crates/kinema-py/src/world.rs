@@ -297,6 +297,31 @@ impl PyWorld {
         self.inner.add_collider(s).map_err(to_py)
     }
 
+    /// Adds a triangle mesh (vertices V × 3, m; faces F × 3 vertex indices); returns its index.
+    #[pyo3(signature = (vertices, faces, inside, restitution, friction))]
+    fn add_mesh(
+        &mut self,
+        vertices: PyReadonlyArray2<'_, f64>,
+        faces: PyReadonlyArray2<'_, i64>,
+        inside: bool,
+        restitution: Option<f64>,
+        friction: Option<f64>,
+    ) -> PyResult<usize> {
+        let surface = Surface::new(restitution, friction).map_err(to_py)?;
+        let (v, f) = (vertices.as_array(), faces.as_array());
+        if v.ncols() != 3 || f.ncols() != 3 {
+            return Err(PyValueError::new_err(format!(
+                "vertices and faces must have 3 columns (x, y, z; three vertex indices), not {} and {}",
+                v.ncols(),
+                f.ncols()
+            )));
+        }
+        let verts: Vec<[f64; 3]> = v.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+        let tris: Vec<[i64; 3]> = f.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+        let mesh = collide::mesh(verts, &tris, inside, surface).map_err(to_py)?;
+        self.inner.add_collider(mesh).map_err(to_py)
+    }
+
     /// Makes the axes periodic with the cell of the box collider (wraps the positions).
     fn set_periodic(&mut self, axes: [bool; 3]) -> PyResult<()> {
         self.inner.set_periodic(axes).map_err(to_py)

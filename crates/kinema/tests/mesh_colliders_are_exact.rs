@@ -88,7 +88,11 @@ fn a_ball_on_a_tilted_triangle_bounces_as_on_its_plane_with_e_squared_apexes() {
     let n = [0.0, -s, c];
     let (g, e, r) = (9.81, 0.8, 0.1);
     let tri = TriangleMesh::new(
-        vec![[-50.0, -50.0 * c, -50.0 * s], [50.0, -50.0 * c, -50.0 * s], [0.0, 50.0 * c, 50.0 * s]],
+        vec![
+            [-50.0, -50.0 * c, -50.0 * s],
+            [50.0, -50.0 * c, -50.0 * s],
+            [0.0, 50.0 * c, 50.0 * s],
+        ],
         vec![[0, 1, 2]],
         false,
         Surface::default(),
@@ -110,7 +114,6 @@ fn a_ball_on_a_tilted_triangle_bounces_as_on_its_plane_with_e_squared_apexes() {
             w.step().unwrap();
             let p = w.particles();
             path.push(([p.x[0], p.x[1], p.x[2]], [p.v[0], p.v[1], p.v[2]]));
-
         }
         path
     };
@@ -183,13 +186,16 @@ fn a_mesh_box_holds_a_ball_as_the_box_does() {
             ..CollisionParams::default()
         };
         let mut w = common::impulse_world(3, Method::Verlet, 1e-3, collisions);
-        w.add_particles(&[0.5, 0.4, 0.6], &[2.1, 1.7, 1.3], &[1.0], &[0.05], &[false]).unwrap();
+        w.add_particles(&[0.5, 0.4, 0.6], &[2.1, 1.7, 1.3], &[1.0], &[0.05], &[false])
+            .unwrap();
         w.add_force(Box::new(Gravity::new([0.0, 0.0, -9.81]).unwrap())).unwrap();
         if mesh {
             let (v, f) = cube(1.0, 4);
-            w.add_collider(TriangleMesh::new(v, f, true, Surface::default()).unwrap()).unwrap();
+            w.add_collider(TriangleMesh::new(v, f, true, Surface::default()).unwrap())
+                .unwrap();
         } else {
-            w.add_collider(BoxContainer::new([0.0; 3], [1.0; 3], Surface::default()).unwrap()).unwrap();
+            w.add_collider(BoxContainer::new([0.0; 3], [1.0; 3], Surface::default()).unwrap())
+                .unwrap();
         }
         (0..3000)
             .map(|_| {
@@ -215,7 +221,8 @@ fn an_elastic_gas_in_a_closed_mesh_box_keeps_its_energy() {
     let (side, cells, n) = (1.0, 7, 343);
     let (v, f) = cube(side, 5);
     let mut w = world(1.0, 1e-3);
-    w.add_collider(TriangleMesh::new(v, f, true, Surface::default()).unwrap()).unwrap();
+    w.add_collider(TriangleMesh::new(v, f, true, Surface::default()).unwrap())
+        .unwrap();
     let spacing = side / cells as f64;
     let mut seed = 2024u64;
     let mut rnd = || {

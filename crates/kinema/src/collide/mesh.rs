@@ -130,7 +130,11 @@ impl TriangleMesh {
     pub fn new(vertices: Vec<[f64; 3]>, faces: Vec<[u32; 3]>, inside: bool, surface: Surface) -> Result<Self, Error> {
         for (v, p) in vertices.iter().enumerate() {
             if let Some((k, value)) = vec3::first_non_finite(p) {
-                return Err(Error::invalid(format!("vertices[{v}][{k}]"), value, "a mesh's vertices must be finite"));
+                return Err(Error::invalid(
+                    format!("vertices[{v}][{k}]"),
+                    value,
+                    "a mesh's vertices must be finite",
+                ));
             }
         }
         let n = vertices.len();
@@ -310,12 +314,20 @@ impl TriangleMesh {
                     }
                 } else if c.feature == Feature::Face && c.len > 0.0 {
                     // exactly ±n: d/|d| would carry the rounding of the foot q
-                    if vec3::dot(c.d, n) >= 0.0 { n } else { vec3::scale(-1.0, n) }
+                    if vec3::dot(c.d, n) >= 0.0 {
+                        n
+                    } else {
+                        vec3::scale(-1.0, n)
+                    }
                 } else if c.len > 0.0 {
                     vec3::scale(1.0 / c.len, c.d)
                 } else {
                     // the centre on the surface itself: the face's normal towards the free side
-                    if self.side == Side::Inside { vec3::scale(-1.0, n) } else { n }
+                    if self.side == Side::Inside {
+                        vec3::scale(-1.0, n)
+                    } else {
+                        n
+                    }
                 };
                 let overlap = if wrong_side { r + c.len } else { r - c.len };
                 (Touch { normal, overlap }, c.q, c.feature)
@@ -326,7 +338,9 @@ impl TriangleMesh {
     /// The touch of a sphere at `p` of radius `r` (m) with triangle `t`, however far (the
     /// normal and overlap of an impact the continuous detection found on that triangle).
     pub fn touch_of_triangle(&self, t: usize, p: [f64; 3], r: f64) -> Touch {
-        let near = self.near(t, p, f64::INFINITY).expect("every triangle is within an infinite reach");
+        let near = self
+            .near(t, p, f64::INFINITY)
+            .expect("every triangle is within an infinite reach");
         self.touches_of(&[near], r)[0].0
     }
 
@@ -394,7 +408,7 @@ impl TriangleMesh {
     /// that slides along a face it touches meets no edge or vertex in that face's plane (the
     /// seams of a flat patch, as rule 2 of the module's doc).
     pub fn toi(&self, x: [f64; 3], v: [f64; 3], a: [f64; 3], r: f64, horizon: f64) -> Option<(f64, usize)> {
-        if !(horizon >= 0.0) {
+        if horizon.is_nan() || horizon < 0.0 {
             return None;
         }
         let now = self.touches(x, r, 0.0);
@@ -496,10 +510,14 @@ impl Geometry {
                 chi[k] = chi[k].max(centroids[t as usize][k]);
             }
         }
-        let axis = (0..3).max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b]))).unwrap_or(0);
+        let axis = (0..3)
+            .max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b])))
+            .unwrap_or(0);
         let mid = order.len() / 2;
         order.select_nth_unstable_by(mid, |&a, &b| {
-            centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]).then(a.cmp(&b))
+            centroids[a as usize][axis]
+                .total_cmp(&centroids[b as usize][axis])
+                .then(a.cmp(&b))
         });
         let (left, right) = order.split_at_mut(mid);
         self.split(left, start, centroids, nodes);
@@ -660,7 +678,12 @@ struct Path {
 /// misses (the caller handles a sphere that touches it now).
 fn toi_triangle(path: Path, r: f64, tri: [[f64; 3]; 3], n: [f64; 3], h: f64) -> Option<(f64, [f64; 3], Feature)> {
     let [a, b, c] = tri;
-    let Path { x, v: v0, a: accel, chord: v } = path;
+    let Path {
+        x,
+        v: v0,
+        a: accel,
+        chord: v,
+    } = path;
     let mut first: Option<(f64, [f64; 3], Feature)> = None;
     let mut take = |tau: f64, q: [f64; 3], feature: Feature| {
         if (0.0..=h).contains(&tau) && first.is_none_or(|f| tau < f.0) {
@@ -668,7 +691,11 @@ fn toi_triangle(path: Path, r: f64, tri: [[f64; 3]; 3], n: [f64; 3], h: f64) -> 
         }
     };
     // the face: the parabola's distance from its plane reaches r on the side it starts on
-    let side = if vec3::dot(vec3::sub(x, a), n) >= 0.0 { n } else { vec3::scale(-1.0, n) };
+    let side = if vec3::dot(vec3::sub(x, a), n) >= 0.0 {
+        n
+    } else {
+        vec3::scale(-1.0, n)
+    };
     if let Some(tau) = toi_half_space(x, v0, accel, r, a, side, h) {
         let p = [0, 1, 2].map(|k| x[k] + v0[k] * tau + 0.5 * accel[k] * tau * tau);
         let (q, feature) = closest_on_triangle(p, a, b, c);

@@ -177,7 +177,9 @@ pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[
                 Collider::Mesh(m) => match m.side() {
                     Side::Both => None,
                     Side::Outside => m.contains(p).then(|| (1.0, "inside the closed mesh".to_string())),
-                    Side::Inside => (!m.contains(p)).then(|| (1.0, "outside the closed mesh that contains the particles".to_string())),
+                    Side::Inside => {
+                        (!m.contains(p)).then(|| (1.0, "outside the closed mesh that contains the particles".to_string()))
+                    }
                 },
             };
             if let Some((depth, words)) = inside {

@@ -97,7 +97,15 @@ pub fn toi_plane(x0: [f64; 3], v0: [f64; 3], a: [f64; 3], radius: f64, plane: &P
 }
 
 /// [`toi_plane`] for the plane through `point` with unit normal `n` (a mesh's face).
-pub(crate) fn toi_half_space(x0: [f64; 3], v0: [f64; 3], a: [f64; 3], radius: f64, point: [f64; 3], n: [f64; 3], h: f64) -> Option<f64> {
+pub(crate) fn toi_half_space(
+    x0: [f64; 3],
+    v0: [f64; 3],
+    a: [f64; 3],
+    radius: f64,
+    point: [f64; 3],
+    n: [f64; 3],
+    h: f64,
+) -> Option<f64> {
     if h < 0.0 || h.is_nan() {
         return None;
     }

@@ -39,12 +39,21 @@ fn close(a: [f64; 3], b: [f64; 3]) -> bool {
 #[test]
 fn closest_point_regions_by_hand() {
     let (a, b, c) = ([0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]);
-    assert_eq!(closest_on_triangle([0.5, 0.5, 3.0], a, b, c), ([0.5, 0.5, 0.0], Feature::Face));
+    assert_eq!(
+        closest_on_triangle([0.5, 0.5, 3.0], a, b, c),
+        ([0.5, 0.5, 0.0], Feature::Face)
+    );
     assert_eq!(closest_on_triangle([-1.0, -1.0, 1.0], a, b, c), (a, Feature::Vertex));
     assert_eq!(closest_on_triangle([3.0, -0.5, 0.0], a, b, c), (b, Feature::Vertex));
-    assert_eq!(closest_on_triangle([1.0, -1.0, 0.5], a, b, c), ([1.0, 0.0, 0.0], Feature::Edge));
+    assert_eq!(
+        closest_on_triangle([1.0, -1.0, 0.5], a, b, c),
+        ([1.0, 0.0, 0.0], Feature::Edge)
+    );
     // beyond the hypotenuse x + y = 2: the foot on it
-    assert_eq!(closest_on_triangle([2.0, 2.0, 0.0], a, b, c), ([1.0, 1.0, 0.0], Feature::Edge));
+    assert_eq!(
+        closest_on_triangle([2.0, 2.0, 0.0], a, b, c),
+        ([1.0, 1.0, 0.0], Feature::Edge)
+    );
 }
 
 #[test]
@@ -67,7 +76,10 @@ fn a_closed_mesh_is_oriented_outwards_and_knows_inside() {
     let open = TriangleMesh::new(v.clone(), f.clone(), false, Surface::default()).unwrap();
     assert_eq!((open.is_closed(), open.side()), (false, Side::Both));
     let e = TriangleMesh::new(v, f, true, Surface::default()).unwrap_err().to_string();
-    assert!(e.starts_with("inside = true is invalid: only a closed mesh has an inside"), "{e}");
+    assert!(
+        e.starts_with("inside = true is invalid: only a closed mesh has an inside"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -155,7 +167,10 @@ fn a_concave_crease_gives_both_faces() {
     let (s, c) = ((30f64).to_radians().sin(), (30f64).to_radians().cos());
     let mut normals: Vec<[f64; 3]> = t.iter().map(|t| t.normal).collect();
     normals.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    assert!(close(normals[0], [-s, 0.0, c]) && close(normals[1], [s, 0.0, c]), "{normals:?}");
+    assert!(
+        close(normals[0], [-s, 0.0, c]) && close(normals[1], [s, 0.0, c]),
+        "{normals:?}"
+    );
     for t in &t {
         assert!((t.overlap - 0.01).abs() < 1e-14, "{t:?}");
     }
@@ -219,11 +234,12 @@ fn the_hierarchy_finds_what_brute_force_finds() {
         let p = [rnd(), rnd(), 0.3 * rnd() - 0.15];
         let r = 0.05 * rnd();
         let mut fast = Vec::new();
-        m.geometry.visit([p[0] - r, p[1] - r, p[2] - r], [p[0] + r, p[1] + r, p[2] + r], |t| {
-            if m.near(t, p, r).is_some() {
-                fast.push(t);
-            }
-        });
+        m.geometry
+            .visit([p[0] - r, p[1] - r, p[2] - r], [p[0] + r, p[1] + r, p[2] + r], |t| {
+                if m.near(t, p, r).is_some() {
+                    fast.push(t);
+                }
+            });
         fast.sort_unstable();
         let slow: Vec<usize> = (0..m.faces().len()).filter(|&t| m.near(t, p, r).is_some()).collect();
         assert_eq!(fast, slow, "{p:?} r {r}");
@@ -231,4 +247,3 @@ fn the_hierarchy_finds_what_brute_force_finds() {
     }
     assert!(hits > 100, "the spheres touch the sheet: {hits}");
 }
-
