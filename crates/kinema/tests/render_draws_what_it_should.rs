@@ -2,11 +2,13 @@
 //! spheres over farther ones, perspective sizes, nothing behind the eye, and the same bytes
 //! for every thread count; with scenery, floors below the horizon, sphere obstacles in depth
 //! order with the particles, box outlines on their edges only, and named errors; springs as
-//! lines from rim to rim, in depth order in 3D; cameras that fit a box into both fields of view.
+//! lines from rim to rim, in depth order in 3D; cameras that fit a box into both fields of view;
+//! mesh colliders translucent, outlined on their creases, and ordered by depth.
 
 // The tests sit in a module named `render` so that `cargo test render` selects them.
 mod render {
-    use kinema::collide::{BoxContainer, Collider, Plane, SphereObstacle, Surface};
+    use kinema::collide::{BoxContainer, Collider, Plane, SphereObstacle, Surface, TriangleMesh};
+    use kinema::render::mesh_paint::MESH_ALPHA;
     use kinema::render::paint::{BOX_FLOOR_COLOR, FLOOR_COLOR, LINE_COLOR, OBSTACLE_COLOR};
     use kinema::render::{
         collider_boxes, render, render_frame, render_scene, scene_extent, text, Camera, Frame, RenderParams, RenderStats,
@@ -572,6 +574,227 @@ mod render {
         assert!(count(&b, LINE_COLOR) < count(&a, LINE_COLOR) * 9 / 10);
         let differ = a.chunks(3).zip(b.chunks(3)).filter(|(p, q)| p != q).count();
         assert!(differ > 100);
+    }
+
+    // -- meshes -------------------------------------------------------------------------------
+
+    fn mesh(vertices: Vec<[f64; 3]>, faces: Vec<[u32; 3]>) -> Collider {
+        TriangleMesh::new(vertices, faces, false, Surface::default()).unwrap().into()
+    }
+
+    /// An equilateral triangle of circumradius `size` around `centre`, in the plane of normal `n`.
+    fn triangle(centre: [f64; 3], n: [f64; 3], size: f64) -> Vec<[f64; 3]> {
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let n = n.map(|c| c / len);
+        // t1 = n × z (or n × x when n is along z), t2 = n × t1.
+        let a = if n[2].abs() < 0.9 { [0.0, 0.0, 1.0] } else { [1.0, 0.0, 0.0] };
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let t1 = cross(n, a);
+        let l1 = (t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]).sqrt();
+        let t1 = t1.map(|c| c / l1);
+        let t2 = cross(n, t1);
+        [90.0f64, 210.0, 330.0]
+            .map(|deg| {
+                let (s, c) = deg.to_radians().sin_cos();
+                std::array::from_fn(|k| centre[k] + size * (c * t1[k] + s * t2[k]))
+            })
+            .to_vec()
+    }
+
+    #[test]
+    fn a_mesh_is_translucent_and_what_is_behind_it_shows() {
+        let (w, h) = (200, 150);
+        let cam = Camera::perspective([0.0, -10.0, 0.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0).unwrap();
+        // A square of two triangles facing the camera, 4 m wide, filling the middle.
+        let square = items(vec![mesh(
+            vec![[-2.0, 0.0, -1.5], [2.0, 0.0, -1.5], [2.0, 0.0, 1.5], [-2.0, 0.0, 1.5]],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )]);
+        let mut params = RenderParams::new(w, h);
+        params.background = [40, 60, 220];
+        let mut img = vec![0u8; w * h * 3];
+        render_scene(&cam, &[], &[], &[], &square, &params, &mut img).unwrap();
+        let over_blue = pixel(&img, w, 100, 75);
+        // Over white the square is a light grey, one layer thick: the same across its
+        // diagonal (no seam where the triangles meet).
+        let white = scene_frame(&cam, &[], &[], &[], &square, w, h);
+        let (mid, seam) = (pixel(&white, w, 60, 100), pixel(&white, w, 100, 75));
+        eprintln!("the mesh over blue {over_blue:?}, over white {mid:?}, on its diagonal {seam:?}");
+        assert!(
+            over_blue[2] > over_blue[0] + 80,
+            "the background shows through: {over_blue:?}"
+        );
+        assert!(over_blue != params.background, "and is tinted");
+        // Opacity: over white 255 (1 − α) + α c, over blue 220 (1 − α) + α c in the blue.
+        let alpha = 1.0 - (mid[2] as f64 - over_blue[2] as f64) / (255.0 - 220.0);
+        assert!((alpha - MESH_ALPHA as f64).abs() < 0.06, "opacity {alpha}");
+        assert!(is_grey(mid, 10) && mid == seam, "one layer: {mid:?} {seam:?}");
+        // A red ball behind it shows through, tinted; one in front is drawn over it, untinted.
+        let red = [[220, 20, 20]];
+        let alone = pixel(
+            &scene_frame(&cam, &[[0.0, 2.0, 0.0]], &[0.4], &red, &items(vec![]), w, h),
+            w,
+            100,
+            75,
+        );
+        let behind = pixel(
+            &scene_frame(&cam, &[[0.0, 2.0, 0.0]], &[0.4], &red, &square, w, h),
+            w,
+            100,
+            75,
+        );
+        let in_front = pixel(
+            &scene_frame(&cam, &[[0.0, -2.0, 0.0]], &[0.3], &red, &square, w, h),
+            w,
+            100,
+            75,
+        );
+        let in_front_alone = pixel(
+            &scene_frame(&cam, &[[0.0, -2.0, 0.0]], &[0.3], &red, &items(vec![]), w, h),
+            w,
+            100,
+            75,
+        );
+        eprintln!("ball alone {alone:?}, behind the mesh {behind:?}; in front {in_front:?} (alone {in_front_alone:?})");
+        assert!(behind[0] > behind[1] + 60 && behind != alone, "tinted, still red: {behind:?}");
+        assert_eq!(in_front, in_front_alone);
+    }
+
+    #[test]
+    fn nearer_mesh_triangles_are_drawn_over_farther_ones_whatever_the_face_order() {
+        let (w, h) = (200, 150);
+        let cam = Camera::perspective([0.0, -10.0, 0.0], [0.0; 3], [0.0, 0.0, 1.0], 40.0).unwrap();
+        // Two overlapping triangles, one facing the camera (lit: the light is in front, upper
+        // left), one turned away from the light (the ambient shade, darker); each in turn the
+        // nearer. Over white a single layer of colour c reads p = 255 (1 − α) + α c; the
+        // nearer one over the farther one reads α c_near + (1 − α) p_far.
+        let lit = |y: f64| triangle([0.0, y, 0.0], [0.0, -1.0, 0.0], 1.5);
+        let dark = |y: f64| triangle([0.0, y, 0.0], [0.6, -0.5, -0.6], 1.5);
+        let (p_lit, p_dark) = (
+            pixel(
+                &scene_frame(&cam, &[], &[], &[], &items(vec![mesh(lit(0.0), vec![[0, 1, 2]])]), w, h),
+                w,
+                100,
+                75,
+            ),
+            pixel(
+                &scene_frame(&cam, &[], &[], &[], &items(vec![mesh(dark(0.0), vec![[0, 1, 2]])]), w, h),
+                w,
+                100,
+                75,
+            ),
+        );
+        let a = MESH_ALPHA as f64;
+        let tint = |p: [u8; 3]| p.map(|v| v as f64 - 255.0 * (1.0 - a)); // α c
+        let over =
+            |near: [u8; 3], far: [u8; 3]| -> [f64; 3] { std::array::from_fn(|k| tint(near)[k] + (1.0 - a) * far[k] as f64) };
+        eprintln!("alone: lit {p_lit:?}, dark {p_dark:?}");
+        assert!(luma(p_lit) > luma(p_dark) + 8.0, "Lambert: the lit face is lighter");
+        for (lit_near, expected, wrong) in [
+            (true, over(p_lit, p_dark), over(p_dark, p_lit)),
+            (false, over(p_dark, p_lit), over(p_lit, p_dark)),
+        ] {
+            let (yl, yd) = if lit_near { (-2.0, 2.0) } else { (2.0, -2.0) };
+            let mut vertices = lit(yl);
+            vertices.extend(dark(yd));
+            for faces in [vec![[0, 1, 2], [3, 4, 5]], vec![[3, 4, 5], [0, 1, 2]]] {
+                let both = items(vec![mesh(vertices.clone(), faces)]);
+                let c = pixel(&scene_frame(&cam, &[], &[], &[], &both, w, h), w, 100, 75);
+                let off = |e: [f64; 3]| (0..3).map(|k| (c[k] as f64 - e[k]).abs()).fold(0.0, f64::max);
+                eprintln!("lit nearer: {lit_near}: {c:?}, expected {expected:?}, the other order {wrong:?}");
+                assert!(off(expected) <= 2.5 && off(wrong) >= 4.0, "{c:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_closed_cube_mesh_draws_its_edges_and_not_its_faces_diagonals() {
+        let (w, h) = (240, 180);
+        let cam = Camera::frame_box([-1.0; 3], [1.0; 3], [1.2, -1.6, 0.9], 40.0, w, h).unwrap();
+        let corners: Vec<[f64; 3]> = (0..8)
+            .map(|c| std::array::from_fn(|k| if c >> k & 1 == 1 { 1.0 } else { -1.0 }))
+            .collect();
+        // Two triangles per face (outward normals; the mesh orients a closed one anyway).
+        let faces = vec![
+            [0, 2, 3],
+            [0, 3, 1],
+            [4, 5, 7],
+            [4, 7, 6], // z = −1, z = +1
+            [0, 1, 5],
+            [0, 5, 4],
+            [2, 6, 7],
+            [2, 7, 3], // y = −1, y = +1
+            [0, 4, 6],
+            [0, 6, 2],
+            [1, 3, 7],
+            [1, 7, 5], // x = −1, x = +1
+        ];
+        let cube = items(vec![mesh(corners, faces)]);
+        let img = scene_frame(&cam, &[], &[], &[], &cube, w, h);
+        let at = |p: [f64; 3]| {
+            let q = project(&cam, p, w, h);
+            pixel(&img, w, q[0] as usize, q[1] as usize)
+        };
+        // Seen from (+x, −y, +z): the faces x = 1, y = −1, z = 1 in front of the three others.
+        // Each face is two triangles: the middle of its diagonal reads as the face does 4 px
+        // to either side of it (two flat translucent layers, no line, no seam); its edges are
+        // lines, darker.
+        for (p, q) in [
+            ([1.0, -1.0, -1.0], [1.0, 1.0, 1.0]),
+            ([-1.0, -1.0, -1.0], [1.0, -1.0, 1.0]),
+            ([-1.0, -1.0, 1.0], [1.0, 1.0, 1.0]),
+        ] {
+            let (a, b) = (project(&cam, p, w, h), project(&cam, q, w, h));
+            let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+            let n = [(a[1] - b[1]) / len, (b[0] - a[0]) / len];
+            let m = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+            let px = |s: f64| pixel(&img, w, (m[0] + s * n[0]) as usize, (m[1] + s * n[1]) as usize);
+            let (d, sides) = (px(0.0), [px(-4.0), px(4.0)]);
+            eprintln!("diagonal {p:?}-{q:?}: {d:?}, beside it {sides:?}");
+            for f in sides {
+                assert!(
+                    is_grey(f, 12) && (luma(d) - luma(f)).abs() <= 3.0,
+                    "no line on the diagonal: {d:?} vs {f:?}"
+                );
+            }
+        }
+        let face = luma(at([1.0, 0.45, -0.45]));
+        for e in [
+            [1.0, -1.0, 0.0],
+            [1.0, 0.0, 1.0],
+            [0.0, -1.0, 1.0],
+            [1.0, 0.0, -1.0],
+            [-1.0, -1.0, 0.0],
+        ] {
+            let c = at(e);
+            eprintln!("edge {e:?}: {c:?}");
+            assert!(is_grey(c, 12) && luma(c) < face - 15.0, "a line on the edge at {e:?}: {c:?}");
+        }
+    }
+
+    #[test]
+    fn a_mesh_passing_behind_the_eye_is_cut_at_the_near_distance() {
+        // A large floor of two triangles 1 m below the eye, reaching far behind it: it fills
+        // the lower half (cut, not wrapped around into the sky), as a plane would.
+        let (w, h) = (160, 120);
+        let cam = Camera::perspective([0.0, 0.0, 1.0], [0.0, 10.0, 1.0], [0.0, 0.0, 1.0], 60.0).unwrap();
+        let floor = items(vec![mesh(
+            vec![[-50.0, -50.0, 0.0], [50.0, -50.0, 0.0], [50.0, 50.0, 0.0], [-50.0, 50.0, 0.0]],
+            vec![[0, 1, 2], [0, 2, 3]],
+        )]);
+        let img = scene_frame(&cam, &[], &[], &[], &floor, w, h);
+        for j in 0..55 {
+            assert!((0..w).all(|i| pixel(&img, w, i, j) == BG), "sky row {j} is background");
+        }
+        for j in 70..h {
+            assert!((0..w).all(|i| is_grey(pixel(&img, w, i, j), 10)), "ground row {j} is mesh");
+        }
     }
 
     #[test]

@@ -1,18 +1,20 @@
 //! Off-screen rendering: particles → RGB8 frames (2D antialiased discs, 3D shaded spheres),
-//! with optional scenery: the static colliders (planes, boxes, sphere obstacles; [`Scenery`]).
+//! with optional scenery: the static colliders (planes, boxes, sphere obstacles, triangle
+//! meshes; [`Scenery`]).
 //!
 //! The stages of a frame, in order:
 //!
 //! 1. project   positions (m) and radii (m) → pixel centres, pixel radii, depths ([`Camera`]);
 //!    particles behind the camera are dropped. The scenery is projected too ([`paint`]):
 //!    planes, boxes and 2D obstacles become a short list of background primitives (convex
-//!    fills and antialiased lines in pixels, cut at the camera's near distance first), and
-//!    3D sphere obstacles become sprites like the particles, numbered after them. Springs
+//!    fills and antialiased lines in pixels, cut at the camera's near distance first),
+//!    3D sphere obstacles become sprites like the particles, numbered after them, and mesh
+//!    colliders translucent facets and edge lines, each with its depth. Springs
 //!    (pairs of particles, [`render_frame`]) become antialiased lines from rim to rim, cut at
 //!    the near distance, numbered after the obstacles; trails (each particle's recent path)
 //!    become antialiased segments faded by age, and markers (attractors) discs.
-//! 2. order     3D: far to near (painter's algorithm, ties broken by index), sphere obstacles
-//!    and springs (at their midpoints' depth) included; 2D: springs first, then the particles
+//! 2. order     3D: far to near (painter's algorithm, ties broken by index), sphere obstacles,
+//!    springs (at their midpoints' depth) and mesh facets (at their centroids') included; 2D: springs first, then the particles
 //!    in index order — later particles are drawn over earlier ones.
 //! 3. bin       each sprite or line is listed, in draw order, in every horizontal band of
 //!    [`BAND_ROWS`] rows it overlaps. (The few background primitives are not binned: every
@@ -28,13 +30,15 @@
 //!
 //! The modules, each using only those listed before it (besides the camera): `camera`;
 //! `pixels` (sprites and the row painters); `clip` (the near cut and the guard rectangle);
-//! `prim` (pixel-space fills and lines); [`extent`] (the region infinite scenery is drawn
-//! in); [`paint`] (colliders → primitives and sprites); `raster` (the four stages).
+//! `prim` (pixel-space fills, lines and mesh facets); [`extent`] (the region infinite
+//! scenery is drawn in); [`paint`] (colliders → primitives and sprites), with
+//! [`mesh_paint`] for mesh colliders; `raster` (the four stages).
 
 mod camera;
 mod clip;
 pub mod colormap;
 pub mod extent;
+pub mod mesh_paint;
 pub mod paint;
 mod pixels;
 mod prim;

@@ -9,9 +9,13 @@
 //! | box      | its floor face lightly filled and its 12 edges as lines, | its rectangle outline (background)    |
 //! |          | under everything (background layer)                      |                                       |
 //! | sphere   | a shaded sphere in the particles' far-to-near order      | a filled disc under the particles     |
+//! | mesh     | translucent lit triangles and faint rim, crease and      | (2D worlds have no meshes)            |
+//! |          | outline edges, in the particles' far-to-near order       |                                       |
+//! |          | ([`super::mesh_paint`])                                  |                                       |
 //!
 //! Everything is in fixed neutral colours ([`FLOOR_COLOR`], [`BOX_FLOOR_COLOR`],
-//! [`LINE_COLOR`], [`OBSTACLE_COLOR`]) so that the particles' colours keep their meaning.
+//! [`LINE_COLOR`], [`OBSTACLE_COLOR`], [`MESH_COLOR`]) so that the particles' colours keep
+//! their meaning.
 //!
 //! Geometry is turned into a few pixel-space primitives (`Prim`: a convex polygon, a line
 //! segment, a disc) once per frame, in f64, cut at the near depth first (`clip.rs`);
@@ -23,6 +27,7 @@
 use super::camera::{invalid, Camera, Projector};
 use super::clip::{clip_halfplane, clip_polygon_near, clip_segment_near, clip_where, dot2, guard_rect, near_depth, GUARD};
 use super::extent::{clamp_box, Region};
+use super::mesh_paint::paint_mesh;
 use super::pixels::Sprite;
 use super::prim::{fill, line, push, Prim};
 use crate::collide::Collider;
@@ -69,6 +74,12 @@ pub const OBSTACLE_COLOR: [u8; 3] = [176, 178, 184];
 pub const PLANE_COLOR: [u8; 3] = [150, 150, 142];
 /// Opacity of a 3D plane patch.
 pub const PLANE_ALPHA: f32 = 0.3;
+/// Mesh colliders' triangles, RGB8, lit ([`super::mesh_paint`]) and drawn at
+/// [`super::mesh_paint::MESH_ALPHA`] like the planes.
+pub const MESH_COLOR: [u8; 3] = [150, 150, 142];
+/// Mesh colliders' rims, creases and outlines, RGB8: [`LINE_COLOR`] at about half strength
+/// over white, drawn opaque.
+pub const MESH_EDGE_COLOR: [u8; 3] = [140, 140, 146];
 /// Contact shadows on 3D floors ([`shadows`]): this colour at up to [`SHADOW_ALPHA`].
 pub const SHADOW_COLOR: [u8; 3] = [30, 30, 38];
 /// Opacity of the core of the shadow of a particle resting on a floor.
@@ -90,6 +101,8 @@ pub(crate) struct Painted {
     pub background: Vec<Prim>,
     /// 3D sphere obstacles with their depths, to be ordered with the particles.
     pub spheres: Vec<(f64, Sprite)>,
+    /// 3D meshes' facets and edge lines with their depths, to be ordered with the particles.
+    pub ordered: Vec<(f64, Prim)>,
 }
 
 /// What [`paint`] needs to know about the frame.
@@ -101,6 +114,9 @@ pub(crate) struct View<'a> {
     pub height: usize,
     /// Smallest drawn radius, pixels (2D sphere obstacles and far 3D ones).
     pub min_radius_px: f64,
+    /// Unit direction towards the light in camera coordinates (x right, y up, z towards
+    /// the viewer), as the spheres are lit: it shades the meshes' facets.
+    pub light: [f64; 3],
 }
 
 /// Turns the colliders into primitives; `extent` sizes what is infinite (see [`Scenery`]).
@@ -140,7 +156,8 @@ pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View, particl
                         p3.plane(&mut out.background, p.point(), p.normal(), eye, extent, &others)
                     }
                     Collider::Box(b) => p3.container(&mut out.background, b.lo(), b.hi(), extent, world_up),
-                    Collider::Sphere(_) | Collider::Mesh(_) => {}
+                    Collider::Mesh(m) => paint_mesh(&p3, m, eye, view.light, &mut out.ordered),
+                    Collider::Sphere(_) => {}
                 }
             }
             shadows(&p3, colliders, eye, particles, &mut out.background);
@@ -229,11 +246,11 @@ pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View, particl
 }
 
 /// A 3D frame's constants: the projector, the clipping depth and the image size.
-struct Persp3<'a> {
-    proj: &'a Projector,
-    zn: f64,
-    w: f64,
-    h: f64,
+pub(super) struct Persp3<'a> {
+    pub(super) proj: &'a Projector,
+    pub(super) zn: f64,
+    pub(super) w: f64,
+    pub(super) h: f64,
 }
 
 impl Persp3<'_> {

@@ -1,5 +1,6 @@
 //! Pixel-space primitives: convex fills and antialiased lines (and flat discs), each turned
-//! into signed-distance equations once per frame and drawn row by row.
+//! into signed-distance equations once per frame and drawn row by row; and facets, the
+//! triangles of a mesh, filled where they cover pixel centres so that neighbours tile.
 //!
 //! The painters of the scenery ([`super::paint`]) and of springs (the raster stage) build
 //! them in f64 from points already projected (and cut at the near depth, [`super::clip`]);
@@ -33,6 +34,97 @@ pub(crate) enum Prim {
     },
     /// A flat disc (2D sphere obstacles).
     Disc(Sprite),
+    /// A mesh's triangle (or the quad left of it by the near cut), not antialiased.
+    Facet(Facet),
+}
+
+/// A convex polygon of three or four vertices (pixels) that paints exactly the pixels whose
+/// centres it covers, with no antialiased rim: the triangles of a mesh, drawn translucent.
+///
+/// Antialiased fills ([`Prim::Fill`]) would blend twice along every edge two triangles share
+/// (and under-cover their corners), a lattice of seams over a fine mesh; sampled at pixel
+/// centres, triangles that share an edge share its pixels out exactly: a translucent surface
+/// reads as one layer. Exactness takes two things. Both triangles hold the shared vertices'
+/// pixel coordinates bit for bit (the painter projects each vertex once), and each computes
+/// the edge's crossing of a row from its endpoints in one canonical order (the lower
+/// (y, x) first), so both get the same x_e; the triangle on its left takes the centres
+/// x < x_e and the one on its right x ≥ x_e. A row y crosses the edges with y0 ≤ y < y1 (half
+/// open, so a row through a shared vertex or along a horizontal edge belongs to one side).
+/// The outline of the surface is jagged; the mesh's painter draws its rim and silhouette as
+/// antialiased lines over it.
+#[derive(Clone, Debug)]
+pub(crate) struct Facet {
+    pts: [[f64; 2]; 4],
+    n: usize,
+    color: [f32; 3],
+    alpha: f32,
+    rows: (u32, u32),
+}
+
+impl Facet {
+    /// The facet of the convex polygon `poly` (3 or 4 vertices, pixels) in a `w × h` image;
+    /// `None` when it covers no pixel centre of the image's rows and columns (outside the
+    /// view, or a sliver between two rows or two columns of centres).
+    pub(crate) fn new(poly: &[[f64; 2]], color: [u8; 3], alpha: f32, w: f64, h: f64) -> Option<Facet> {
+        if !(3..=4).contains(&poly.len()) {
+            return None;
+        }
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in poly {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        // Centres c = i + ½ with lo ≤ c < hi: i in [⌈lo − ½⌉, ⌈hi − ½⌉).
+        let centres = |lo: f64, hi: f64, n: f64| ((lo - 0.5).ceil().clamp(0.0, n), (hi - 0.5).ceil().clamp(0.0, n));
+        let (c0, c1) = centres(lo[0], hi[0], w);
+        let (r0, r1) = centres(lo[1], hi[1], h);
+        if !(c0 < c1 && r0 < r1) {
+            return None;
+        }
+        let mut pts = [[0.0; 2]; 4];
+        pts[..poly.len()].copy_from_slice(poly);
+        Some(Facet {
+            pts,
+            n: poly.len(),
+            color: color_f32(color),
+            alpha,
+            rows: (r0 as u32, r1 as u32),
+        })
+    }
+
+    /// Row `j`: the centres between the two edges crossing it (see [`Facet`]).
+    fn draw_row(&self, row: &mut [u8], j: u32) {
+        let y = j as f64 + 0.5;
+        let (mut xl, mut xr, mut crossings) = (f64::INFINITY, f64::NEG_INFINITY, 0);
+        for k in 0..self.n {
+            let (a, b) = (self.pts[k], self.pts[(k + 1) % self.n]);
+            let (p, q) = if (a[1], a[0]) <= (b[1], b[0]) { (a, b) } else { (b, a) };
+            if p[1] <= y && y < q[1] {
+                let x = p[0] + (y - p[1]) * (q[0] - p[0]) / (q[1] - p[1]);
+                xl = xl.min(x);
+                xr = xr.max(x);
+                crossings += 1;
+            }
+        }
+        if crossings < 2 {
+            return;
+        }
+        let width = (row.len() / 3) as f64;
+        let i0 = (xl - 0.5).ceil().clamp(0.0, width) as usize;
+        let i1 = (xr - 0.5).ceil().clamp(0.0, width) as usize;
+        if i0 >= i1 {
+            return;
+        }
+        if self.alpha >= 1.0 {
+            fill_rgb(&mut row[3 * i0..3 * i1], self.color.map(|c| c as u8));
+        } else {
+            for px in row[3 * i0..3 * i1].chunks_exact_mut(3) {
+                blend(px, self.color, self.alpha);
+            }
+        }
+    }
 }
 
 /// Appends `p` when there is one (a primitive that is entirely out of view is `None`).
@@ -184,6 +276,7 @@ impl Prim {
         match self {
             Prim::Fill { rows, .. } | Prim::Line { rows, .. } => *rows,
             Prim::Disc(s) => (s.row0, s.row1),
+            Prim::Facet(f) => f.rows,
         }
     }
 
@@ -282,6 +375,7 @@ impl Prim {
                 }
             }
             Prim::Disc(s) => disc_row(row, s, j),
+            Prim::Facet(f) => f.draw_row(row, j),
         }
     }
 }

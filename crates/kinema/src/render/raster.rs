@@ -309,6 +309,7 @@ pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image
             width: w,
             height: h,
             min_radius_px: params.min_radius_px,
+            light: light.l.map(f64::from),
         };
         paint(&scenery.colliders, extent, &view, (positions, radius))
     };
@@ -317,13 +318,14 @@ pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image
         items.push((depth, n + k, Item::Sprite(s)));
     }
     let background = painted.background;
+    let mesh_prims = painted.ordered;
 
     // 1c. springs: lines numbered after the obstacles (see `render_frame` for their place),
     //     then the markers and the trails' segments.
     let mut under: Vec<Item> = Vec::new();
     let mut more: Vec<(f64, Item)> = Vec::new();
     for (depth, line) in trail_lines(camera, &projector, frame, params) {
-        more.push((depth, Item::Line(line)));
+        more.push((depth, Item::Prim(line)));
     }
     for p in markers.chunks_exact(3) {
         let Some(q) = projector.project([p[0], p[1], p[2]], 0.0) else {
@@ -340,15 +342,19 @@ pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image
     if spheres {
         let first = n + obstacles + lines.len();
         for (k, (depth, line)) in lines.into_iter().enumerate() {
-            items.push((depth, n + obstacles + k, Item::Line(line)));
+            items.push((depth, n + obstacles + k, Item::Prim(line)));
         }
+        let first_mesh = first + more.len();
         for (k, (depth, it)) in more.into_iter().enumerate() {
             items.push((depth, first + k, it));
+        }
+        for (k, (depth, p)) in mesh_prims.into_iter().enumerate() {
+            items.push((depth, first_mesh + k, Item::Prim(p)));
         }
     } else {
         // 2D: trails and markers, then the springs, before every particle, in their order.
         under.extend(more.into_iter().map(|(_, it)| it));
-        under.extend(lines.into_iter().map(|(_, l)| Item::Line(l)));
+        under.extend(lines.into_iter().map(|(_, l)| Item::Prim(l)));
         let particles = std::mem::take(&mut items);
         items = under.into_iter().enumerate().map(|(k, it)| (0.0, k, it)).collect();
         items.extend(particles);
@@ -408,7 +414,7 @@ pub fn render_frame(camera: &Camera, frame: &Frame, params: &RenderParams, image
                 match it {
                     Item::Sprite(s) if spheres => sphere_row(row, s, j, &light),
                     Item::Sprite(s) => disc_row(row, s, j),
-                    Item::Line(line) => line.draw_row(row, j),
+                    Item::Prim(line) => line.draw_row(row, j),
                 }
             }
         }
@@ -431,17 +437,18 @@ fn bounding_box(positions: &[f64], radius: &[f64]) -> Option<Region> {
     (!radius.is_empty()).then_some((lo, hi))
 }
 
-/// What a band draws after its background: a particle or obstacle, or a spring's line.
+/// What a band draws after its background: a particle or obstacle, or a primitive (a
+/// spring's or trail's line, a mesh's facet or edge).
 enum Item {
     Sprite(Sprite),
-    Line(Prim),
+    Prim(Prim),
 }
 
 impl Item {
     fn rows(&self) -> (u32, u32) {
         match self {
             Item::Sprite(s) => (s.row0, s.row1),
-            Item::Line(p) => p.rows(),
+            Item::Prim(p) => p.rows(),
         }
     }
 }
