@@ -280,6 +280,59 @@ def test_the_colliders_are_guide_meshes_where_the_world_has_them(tmp_path):
     assert all(np.dot(face_normal(points, f), points[f].mean(axis=0) - [0.5, 0.5, 0.2]) > 0 for f in faces)
 
 
+def _bowl_and_cube():
+    """An open hemispherical bowl of 20 rings of 48 segments (1 + 20 * 48 points, 48 + 19 * 96
+    triangles) about (0.5, 0.5, 1) and a closed cube of 12 triangles described inwards (its
+    faces clockwise seen from outside): two {"type": "mesh"} descriptions."""
+    rings, segments = 20, 48
+    theta = np.linspace(0, np.pi / 2, rings + 1)[1:]
+    phi = np.linspace(0, 2 * np.pi, segments, endpoint=False)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    ring = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), -np.cos(t)], axis=-1).reshape(-1, 3)
+    vertices = np.array([0.5, 0.5, 1.0]) + 0.5 * np.vstack([[0.0, 0.0, -1.0], ring])
+    at = lambda i, j: 1 + i * segments + j % segments  # noqa: E731
+    faces = [[0, at(0, j), at(0, j + 1)] for j in range(segments)]
+    for i in range(rings - 1):
+        for j in range(segments):
+            faces += [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]]
+    bowl = {"type": "mesh", "vertices": vertices.tolist(), "faces": faces, "inside": False}
+    corners = [[x, y, z] for z in (0.0, 0.2) for y in (0.0, 0.2) for x in (0.0, 0.2)]
+    outward = [[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6], [0, 1, 5], [0, 5, 4], [2, 6, 7], [2, 7, 3], [0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5]]
+    cube = {"type": "mesh", "vertices": corners, "faces": [[a, c, b] for a, b, c in outward], "inside": False}
+    return bowl, cube
+
+
+def test_a_mesh_collider_is_a_translucent_guide_mesh_of_its_triangles(tmp_path):
+    traj = _run()
+    bowl, cube = _bowl_and_cube()
+    traj.colliders = list(traj.colliders) + [bowl, cube, {"type": "mesh", "vertices": [[0, 0, 0]], "faces": [[0, 1, 2]]}]
+    traj.export(tmp_path / "run.usda")
+    stage = Usd.Stage.Open(str(tmp_path / "run.usda"))
+    meshes = [stage.GetPrimAtPath(f"/World/colliders/mesh_{k}") for k in (3, 4)]
+    assert all(p.IsValid() and p.GetTypeName() == "Mesh" for p in meshes)
+    assert not stage.GetPrimAtPath("/World/colliders/mesh_5").IsValid()  # a face past its vertices: left out
+    for prim, described in zip(meshes, (bowl, cube), strict=True):
+        mesh = UsdGeom.Mesh(prim)
+        assert prim.GetAttribute("kinema:collider").Get() == "mesh"
+        assert mesh.GetPurposeAttr().Get() == UsdGeom.Tokens.guide
+        assert mesh.GetSubdivisionSchemeAttr().Get() == UsdGeom.Tokens.none and mesh.GetDoubleSidedAttr().Get()
+        opacity = mesh.GetDisplayOpacityPrimvar()
+        assert opacity.GetInterpolation() == UsdGeom.Tokens.constant and list(opacity.Get()) == pytest.approx([0.3])
+        points, faces = mesh_of(prim)
+        assert len(points) == len(described["vertices"]) and len(faces) == len(described["faces"])
+        assert all(len(f) == 3 for f in faces)
+        np.testing.assert_array_equal(points, np.float32(described["vertices"]))
+        np.testing.assert_allclose(np.array(mesh.GetExtentAttr().Get()), [points.min(axis=0), points.max(axis=0)])
+    assert (len(mesh_of(meshes[0])[0]), len(mesh_of(meshes[0])[1])) == (1 + 20 * 48, 48 + 19 * 96)
+    # The open bowl keeps its triangles as described; the closed cube is turned to face out.
+    assert mesh_of(meshes[0])[1] == bowl["faces"]
+    points, faces = mesh_of(meshes[1])
+    assert all(np.dot(face_normal(points, f), points[f].mean(axis=0) - 0.1) > 0 for f in faces)
+    # Every collider is translucent where guides are shown.
+    for name in ("box_0", "plane_1", "sphere_2"):
+        assert list(UsdGeom.Mesh(stage.GetPrimAtPath(f"/World/colliders/{name}")).GetDisplayOpacityPrimvar().Get()) == pytest.approx([0.3])
+
+
 def test_kinema_export_writes_usd_beside_the_trajectory(tmp_path):
     _run().save(tmp_path / "run.h5")
     out = subprocess.run([sys.executable, "-m", "kinema", "export", str(tmp_path / "run.h5"), "-f", "usd"], capture_output=True, text=True)

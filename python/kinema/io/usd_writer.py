@@ -57,9 +57,13 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     - ``/World/colliders``: a ``UsdGeom.Mesh`` per collider, ``box_k`` (its 8 corners and 6
       quads; open faces closed at the scene's extent), ``plane_k`` (one square quad in the
       plane, twice the scene's size wide, centred on the plane's point nearest the scene's
-      centre) and ``sphere_k`` (a UV sphere of 448 quads and 64 triangles, with its normals),
-      in world coordinates (m), facing out, with the ``guide`` purpose so that renders show
-      the particles only, and ``kinema:collider`` naming the type.
+      centre), ``sphere_k`` (a UV sphere of 448 quads and 64 triangles, with its normals)
+      and ``mesh_k`` (a triangle mesh's vertices and triangles as they are described, a
+      closed one turned to face out), in world coordinates (m), facing out, with the
+      ``guide`` purpose so that renders show the particles only, ``displayOpacity``
+      ``COLLIDER_OPACITY`` (translucent where a viewer shows guides, as kinema's videos draw
+      planes and meshes, so that what is inside shows) and ``kinema:collider`` naming the
+      type.
 
     In Blender (5.0): File → Import → Universal Scene Description, then play: the Points
     prim becomes a point cloud whose positions follow the time samples, with the attributes
@@ -404,6 +408,11 @@ def _colliders(stage: Any, traj: Any, fr: Frames, pxr: tuple) -> None:
             centre_k, radius = np.asarray(c["center"], float).reshape(-1)[:3], float(c["radius"])
             points, faces = sphere_mesh(centre_k, radius)
             normals = (points - centre_k) / radius if radius > 0 else None  # smooth shading
+        elif kind == "mesh":
+            triangles = triangle_mesh(c)
+            if triangles is None:
+                continue
+            points, faces = triangles
         else:
             continue
         mesh = UsdGeom.Mesh.Define(stage, f"/World/colliders/{kind}_{k}")
@@ -417,7 +426,33 @@ def _colliders(stage: Any, traj: Any, fr: Frames, pxr: tuple) -> None:
             mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(normals.astype(np.float32)))
             mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
         mesh.CreatePurposeAttr(UsdGeom.Tokens.guide)
+        mesh.CreateDisplayOpacityPrimvar(UsdGeom.Tokens.constant).Set(Vt.FloatArray([COLLIDER_OPACITY]))
         mesh.GetPrim().CreateAttribute("kinema:collider", Sdf.ValueTypeNames.Token).Set(kind)
+
+
+#: The colliders' ``displayOpacity``: kinema's renderer draws planes and meshes at 0.3.
+COLLIDER_OPACITY = 0.3
+
+
+def triangle_mesh(c: dict) -> tuple[np.ndarray, np.ndarray] | None:
+    """A ``{"type": "mesh"}`` description's vertices (V, 3) (m) and triangles (F, 3), a closed
+    mesh's (every edge run once each way by two triangles) turned to face out (as the engine
+    turns it: when its signed volume, the sum of a · (b × c) / 6, is negative); None when it
+    is malformed (vertices not V × 3 finite numbers, faces not F × 3 indices below V)."""
+    try:
+        points = np.asarray(c.get("vertices"), dtype=np.float64).reshape(-1, 3)
+        faces = np.asarray(c.get("faces"), dtype=np.int64).reshape(-1, 3)
+    except (TypeError, ValueError):
+        return None
+    if not (len(points) and len(faces) and np.isfinite(points).all() and faces.min() >= 0 and faces.max() < len(points)):
+        return None
+    ends = np.stack([faces, np.roll(faces, -1, axis=1)], axis=2).reshape(-1, 2)  # each triangle's edges a → b
+    forward, backward = ends[:, 0] * len(points) + ends[:, 1], ends[:, 1] * len(points) + ends[:, 0]
+    closed = np.unique(forward).size == forward.size and np.array_equal(np.sort(forward), np.sort(backward))
+    a, b, cc = (points[faces[:, k]] for k in range(3))
+    if closed and np.einsum("ij,ij->", a, np.cross(b, cc)) < 0:
+        faces = faces[:, [0, 2, 1]]
+    return points, faces
 
 
 def box_mesh(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, list[list[int]]]:
