@@ -157,7 +157,7 @@ def test_a_box_draws_its_edges_less_the_open_faces(open_page, tmp_path, lo, hi, 
     traj = _falling(colliders=[{"type": "box", "lo": lo, "hi": hi}])
     page = open_page(traj)
     info = page.info()
-    assert info["colliders"] == {"plane": 0, "box": 1, "sphere": 0}
+    assert info["colliders"] == {"plane": 0, "box": 1, "sphere": 0, "mesh": 0}
     assert info["boxEdges"] == edges
     _assert_in_view(info)
     image = page.pixels(tmp_path / "box.png")
@@ -170,7 +170,7 @@ def test_a_plane_is_a_floor_patch_and_a_sphere_a_shaded_ball(open_page, tmp_path
     colliders = [{"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 1]}, {"type": "sphere", "center": [0.5, 0.5, 0.3], "radius": 0.25}]
     page = open_page(_falling(colliders=colliders))
     info = page.info()
-    assert info["colliders"] == {"plane": 1, "box": 0, "sphere": 1}
+    assert info["colliders"] == {"plane": 1, "box": 0, "sphere": 1, "mesh": 0}
     assert info["colliderCorners"] == 4 + 8  # the patch's corners, the sphere's bounding box
     _assert_in_view(info)
     image = page.pixels(tmp_path / "plane.png")
@@ -180,7 +180,7 @@ def test_a_plane_is_a_floor_patch_and_a_sphere_a_shaded_ball(open_page, tmp_path
     assert (grey & (image.mean(axis=2) > 40) & (image.mean(axis=2) < 200)).mean() > 0.01, "the sphere obstacle does not show"
     # Without colliders, none of that.
     bare = open_page(_falling())
-    assert bare.info()["colliders"] == {"plane": 0, "box": 0, "sphere": 0}
+    assert bare.info()["colliders"] == {"plane": 0, "box": 0, "sphere": 0, "mesh": 0}
     assert _share(bare.pixels(tmp_path / "bare.png"), FLOOR) < 1e-3
 
 
@@ -198,7 +198,7 @@ def test_2d_colliders_a_line_a_rectangle_a_disc(open_page, tmp_path):
     ]
     page = open_page(_traj(positions, dim=2, colliders=colliders), size=WIDE)
     info = page.info()
-    assert info["dim"] == 2 and info["colliders"] == {"plane": 1, "box": 1, "sphere": 1}
+    assert info["dim"] == 2 and info["colliders"] == {"plane": 1, "box": 1, "sphere": 1, "mesh": 0}
     assert info["boxEdges"] == 3
     _assert_in_view(info)
     image = page.pixels(tmp_path / "flat.png")
@@ -206,6 +206,86 @@ def test_2d_colliders_a_line_a_rectangle_a_disc(open_page, tmp_path):
     # The solid side (below the floor line, the bottom of the view) is lightly filled: the
     # bottom rows are lighter than the background, the top rows are not.
     assert image[-3:].mean() > image[:3].mean() + 10
+
+
+def _bowl(centre=(0.5, 0.5, 0.7), radius=0.7, rings=12, segments=32) -> tuple[np.ndarray, np.ndarray]:
+    """An open hemispherical bowl (the lower half of a sphere) as vertices (V, 3) and
+    triangles (F, 3): a fan about the bottom, then ``rings - 1`` bands of quads up to the rim."""
+    theta = np.linspace(0, np.pi / 2, rings + 1)[1:]
+    phi = np.linspace(0, 2 * np.pi, segments, endpoint=False)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    ring = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), -np.cos(t)], axis=-1).reshape(-1, 3)
+    vertices = np.asarray(centre) + radius * np.vstack([[0.0, 0.0, -1.0], ring])
+    at = lambda i, j: 1 + i * segments + j % segments  # noqa: E731 (ring i, vertex j)
+    faces = [[0, at(0, j), at(0, j + 1)] for j in range(segments)]
+    for i in range(rings - 1):
+        for j in range(segments):
+            faces += [[at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)]]
+    return vertices, np.asarray(faces)
+
+
+@pytest.mark.parametrize("served", [False, True])
+def test_a_mesh_is_a_translucent_surface_with_its_rim_and_what_is_inside_shows(browser, tmp_path, served):  # noqa: F811 (the fixture's name)
+    vertices, faces = _bowl()
+    mesh = {"type": "mesh", "vertices": vertices.tolist(), "faces": faces.tolist(), "inside": False}
+    if served:
+        url, server = viewer.serve(_falling(colliders=[mesh]), open_browser=False, announce=False)
+    else:
+        url = viewer.write_html(_falling(colliders=[mesh]), tmp_path / "bowl.html").resolve().as_uri()
+    page = browser.new_page(viewport={"width": 800, "height": 600})
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    # three.js reports a shader that fails to compile on the console (the served page's
+    # missing favicon is no error of the page's).
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" and not m.location.get("url", "").endswith("favicon.ico") else None)
+    try:
+        page.goto(f"{url}#frame=7")
+        page.wait_for_function("() => window.kinemaViewer.ready || window.kinemaViewer.error", timeout=WAIT_MS)
+        assert page.evaluate("() => window.kinemaViewer.error") is None
+        info = page.evaluate("() => window.kinemaViewer.info()")
+        assert errors == [], errors  # the shader compiled, nothing threw
+        assert info["colliders"] == {"plane": 0, "box": 0, "sphere": 0, "mesh": 1}
+        # Every triangle; the rim's 32 edges are the only ones drawn (no crease reaches 30°).
+        assert info["meshes"] == [{"triangles": len(faces), "edges": 32, "opacity": 0.3, "transparent": True, "depthWrite": False, "doubleSided": True}]
+        assert info["colliderCorners"] == 8  # the bowl's box, framed
+        _assert_in_view(info)
+        # The surface shows (lighter than the background) and the balls resting in it show
+        # through it: all 12 drawn, and the view's particle colours are there.
+        box = page.locator("#kinema-view canvas").bounding_box()
+        page.screenshot(path=str(tmp_path / "bowl.png"), clip=box)
+        image = np.asarray(Image.open(tmp_path / "bowl.png").convert("RGB"), dtype=np.int16)
+        grey = (np.abs(image - image.mean(axis=2, keepdims=True)).max(axis=2) < 10) & (image.mean(axis=2) > 35)
+        assert grey.mean() > 0.05, f"the bowl covers {grey.mean():.1%} of the view"
+        assert info["particles"] == {"total": 12, "visible": 12}
+        coloured = np.ptp(image, axis=2) > 40
+        assert coloured.mean() > 0.002, "the balls do not show through the bowl"
+    finally:
+        page.close()
+        if served:
+            server.shutdown()
+            server.server_close()
+
+
+def test_a_mesh_reaches_the_page_as_float32_and_uint32_and_is_framed(tmp_path):
+    vertices, faces = _bowl(centre=(0.5, 0.5, 2.0), radius=1.5)
+    colliders = [{"type": "mesh", "vertices": vertices.tolist(), "faces": faces.tolist(), "inside": False}]
+    data = _page_data(viewer.write_html(_falling(colliders=colliders), tmp_path / "m.html").read_text(encoding="utf-8"))
+    [mesh] = data["colliders"]
+    assert mesh["type"] == "mesh" and mesh["inside"] is False
+    assert (mesh["vertexCount"], mesh["faceCount"]) == (len(vertices), len(faces))
+    np.testing.assert_array_equal(np.frombuffer(base64.b64decode(mesh["vertices"]), "<f4").reshape(-1, 3), vertices.astype(np.float32))
+    np.testing.assert_array_equal(np.frombuffer(base64.b64decode(mesh["faces"]), "<u4").reshape(-1, 3), faces)
+    np.testing.assert_allclose(mesh["lo"], vertices.min(axis=0))
+    np.testing.assert_allclose(mesh["hi"], vertices.max(axis=0))
+    # The extent holds the bowl (wider than the falling balls: x from -1 to 2, z up to 2).
+    assert data["extent"]["min"][0] <= -1.0 + 1e-9 and data["extent"]["max"][2] >= 2.0 - 1e-9
+    # What cannot be drawn is left out: an index past the vertices, non-finite vertices.
+    bad = [
+        {"type": "mesh", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "faces": [[0, 1, 3]]},
+        {"type": "mesh", "vertices": [[0, 0, math.nan], [1, 0, 0], [0, 1, 0]], "faces": [[0, 1, 2]]},
+        {"type": "mesh", "vertices": "nonsense", "faces": [[0, 1, 2]]},
+    ]
+    assert _page_data(viewer.write_html(_falling(colliders=bad), tmp_path / "b.html").read_text(encoding="utf-8"))["colliders"] == []
 
 
 # --- Springs, births and deaths ----------------------------------------------------------------

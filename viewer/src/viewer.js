@@ -20,7 +20,8 @@
 // the vertex shader); springs as lines between live ends; planes as a floor patch (3D) or a
 // line with its solid side filled (2D); boxes as their edges less those of open faces, with
 // the walls of open faces reaching the extent, and a floor face; sphere obstacles as shaded
-// spheres (3D) or discs (2D). 3D: a perspective camera looking from VIEW_DIRECTION, z up,
+// spheres (3D) or discs (2D); triangle meshes (3D) as a translucent lit surface seen from
+// both sides, with its rim and creases as lines, so that what is inside shows. 3D: a perspective camera looking from VIEW_DIRECTION, z up,
 // placed so that the extent and the colliders' corners fill the view at the canvas's aspect
 // ratio, its orbit kept above the floor (see keepAboveFloor); 2D: an orthographic camera on
 // the xy-plane, fitted likewise. Refitted on resize until the user moves the camera.
@@ -57,6 +58,16 @@ const BOX_FLOOR_COLOR = 0xd4d4ce; // (212, 212, 206): a box's floor face
 const LINE_COLOR = 0x606064; // (96, 96, 100): outlines, grid lines (faint), box edges, 2D plane lines
 const OBSTACLE_RGB = [176 / 255, 178 / 255, 184 / 255]; // sphere obstacles, shaded like the particles
 const SPRING_COLOR = 0xa0a0a6; // springs: lighter than the outlines, to show on the dark background
+// Triangle meshes: a light grey at MESH_OPACITY (the renderer's PLANE_ALPHA), lit as the
+// renderer's facets (MESH_AMBIENT of the colour where the light does not reach), without
+// writing depth (what is inside or behind shows through); its rim and the edges where its
+// faces meet at more than MESH_CREASE_DEG as lines.
+const MESH_RGB = [200 / 255, 200 / 255, 196 / 255];
+const MESH_OPACITY = 0.3;
+const MESH_AMBIENT = 0.45;
+const MESH_EDGE_COLOR = 0xa0a0a6;
+const MESH_EDGE_OPACITY = 0.6;
+const MESH_CREASE_DEG = 30;
 const BACKGROUND = 0x101014;
 // Line widths, CSS pixels (as the renderer's).
 const PATCH_OUTLINE_PX = 1.5;
@@ -152,6 +163,29 @@ varying vec3 vNormal;
 void main() {
   float diffuse = max(dot(normalize(vNormal), normalize(vec3(-0.4, 0.5, 0.8))), 0.0);
   gl_FragColor = vec4(uColor * (0.3 + 0.7 * diffuse), 1.0);
+}
+`;
+
+// Triangle meshes: each triangle flat (its normal from the derivatives of the view-space
+// position across it) and turned towards the eye, so both sides are lit; translucent.
+const MESH_VERTEX = /* glsl */ `
+varying vec3 vView;
+void main() {
+  vec4 mv = modelViewMatrix * vec4(position, 1.0);
+  vView = mv.xyz;
+  gl_Position = projectionMatrix * mv;
+}
+`;
+const MESH_FRAGMENT = /* glsl */ `
+uniform vec3 uColor;
+uniform float uOpacity;
+uniform float uAmbient;
+varying vec3 vView;
+void main() {
+  vec3 n = normalize(cross(dFdx(vView), dFdy(vView)));
+  if (dot(n, vView) > 0.0) n = -n;
+  float diffuse = max(dot(n, normalize(vec3(-0.4, 0.5, 0.8))), 0.0);
+  gl_FragColor = vec4(uColor * (uAmbient + (1.0 - uAmbient) * diffuse), uOpacity);
 }
 `;
 
@@ -287,9 +321,11 @@ function boxCorners(lo, hi) {
 }
 
 // The colliders as three.js objects in `group`. Returns what was drawn: `counts` (objects by
-// type: a plane's floor patch or 2D line, a box, a sphere), `boxEdges` (box edges in 3D, sides
-// in 2D), `corners` (the finite corners of what was drawn: floor patches, boxes with their
-// open bounds at the extent, spheres' bounding boxes; the camera frames them),
+// type: a plane's floor patch or 2D line, a box, a sphere, a mesh), `boxEdges` (box edges in
+// 3D, sides in 2D), `meshes` (per mesh: its triangles and edge lines drawn and its surface's
+// material: opacity, depthWrite, double-sided), `corners` (the finite corners of what was
+// drawn: floor patches, boxes with their open bounds at the extent, spheres' and meshes'
+// bounding boxes; the camera frames them),
 // `lineMaterials` (their resolution follows the canvas) and `floor` (3D: the height of the
 // lowest floor, null without one: a plane facing up, less than FLOOR_TILT from level, at its
 // patch's lowest corner, or a box's closed bottom).
@@ -299,7 +335,8 @@ function buildScenery(meta, group) {
   const ehi = vec(meta.extent.max);
   const ecentre = elo.clone().add(ehi).multiplyScalar(0.5);
   const esize = Math.max(ehi.clone().sub(elo).length(), 1e-9);
-  const counts = { plane: 0, box: 0, sphere: 0 };
+  const counts = { plane: 0, box: 0, sphere: 0, mesh: 0 };
+  const meshes = [];
   const corners = [];
   let floor = null;
   const floorAt = (z) => (floor = floor === null ? z : Math.min(floor, z));
@@ -461,9 +498,37 @@ function buildScenery(meta, group) {
         corners.push(...boxCorners(centre.clone().sub(d), centre.clone().add(d)));
       }
       counts.sphere++;
+    } else if (c.type === "mesh" && dim !== 2) {
+      const geometry = new THREE.BufferGeometry();
+      geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(decodeBase64(c.vertices)), 3));
+      geometry.setIndex(new THREE.BufferAttribute(new Uint32Array(decodeBase64(c.faces)), 1));
+      const material = new THREE.ShaderMaterial({
+        uniforms: { uColor: { value: new THREE.Vector3(...MESH_RGB) }, uOpacity: { value: MESH_OPACITY }, uAmbient: { value: MESH_AMBIENT } },
+        vertexShader: MESH_VERTEX,
+        fragmentShader: MESH_FRAGMENT,
+        transparent: true,
+        depthWrite: false,
+        side: THREE.DoubleSide,
+      });
+      const surface = add(new THREE.Mesh(geometry), [material, 0]);
+      surface.name = "kinema-mesh";
+      // The rim (edges of one triangle) and the creases, drawn over the surface.
+      const edges = new THREE.EdgesGeometry(geometry, MESH_CREASE_DEG);
+      const edgeMaterial = new THREE.LineBasicMaterial({ color: MESH_EDGE_COLOR, transparent: true, opacity: MESH_EDGE_OPACITY, depthWrite: false });
+      add(new THREE.LineSegments(edges), [edgeMaterial, 0]);
+      meshes.push({
+        triangles: geometry.index.count / 3,
+        edges: edges.attributes.position.count / 2,
+        opacity: material.uniforms.uOpacity.value,
+        transparent: material.transparent,
+        depthWrite: material.depthWrite,
+        doubleSided: material.side === THREE.DoubleSide,
+      });
+      corners.push(...boxCorners(vec(c.lo), vec(c.hi)));
+      counts.mesh++;
     }
   }
-  return { counts, boxEdges, corners, lineMaterials, floor };
+  return { counts, boxEdges, meshes, corners, lineMaterials, floor };
 }
 
 // Keeps the 3D orbit above the floor (height `floor`): the camera at least `clearance` over
@@ -839,6 +904,7 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
       canvas: { width: w, height: h },
       colliders: { ...drawn.counts },
       boxEdges: drawn.boxEdges,
+      meshes: drawn.meshes,
       colliderCorners: drawn.corners.length,
       particles: { total: n, visible },
       springs: { total: springCount, visible: springsVisible },

@@ -84,10 +84,36 @@ def _finite_or_none(values: Any, size: int = 3, pad: float | None = None) -> lis
     return out + [pad] * (size - a.size)
 
 
+def _mesh(c: dict[str, Any]) -> dict[str, Any] | None:
+    """A mesh description as the page draws it: its vertices as base64 little-endian float32
+    (x, y, z each), its triangles as base64 little-endian uint32 (three vertex indices
+    each), their counts, its bounding box (lo, hi: what the camera frames) and ``inside``;
+    None when it cannot be drawn (vertices not V x 3 finite numbers, faces not F x 3
+    indices below V, or none)."""
+    try:
+        vertices = np.asarray(c.get("vertices"), dtype=np.float64).reshape(-1, 3)
+        faces = np.asarray(c.get("faces"), dtype=np.int64).reshape(-1, 3)
+    except (TypeError, ValueError):
+        return None
+    if not (len(vertices) and len(faces) and np.isfinite(vertices).all() and faces.min() >= 0 and faces.max() < len(vertices)):
+        return None
+    return {
+        "type": "mesh",
+        "vertices": _b64(np.ascontiguousarray(vertices, dtype="<f4")),
+        "faces": _b64(np.ascontiguousarray(faces, dtype="<u4")),
+        "vertexCount": len(vertices),
+        "faceCount": len(faces),
+        "lo": [float(x) for x in vertices.min(axis=0)],
+        "hi": [float(x) for x in vertices.max(axis=0)],
+        "inside": bool(c.get("inside", False)),
+    }
+
+
 def _colliders(colliders: Any) -> list[dict[str, Any]]:
     """The trajectory's collider descriptions as the page draws them: 3 values per vector
-    (a 2-value box is open along z), ±inf bounds as None; what cannot be drawn (a malformed
-    description, a plane with no finite normal) is left out."""
+    (a 2-value box is open along z), ±inf bounds as None, a mesh's arrays in base64
+    (``_mesh``); what cannot be drawn (a malformed description, a plane with no finite
+    normal) is left out."""
     out: list[dict[str, Any]] = []
     for c in colliders or []:
         if not isinstance(c, dict):
@@ -109,12 +135,17 @@ def _colliders(colliders: Any) -> list[dict[str, Any]]:
                 continue
             if center and None not in center and math.isfinite(radius) and radius >= 0:
                 out.append({"type": "sphere", "center": center, "radius": radius})
+        elif kind == "mesh":
+            mesh = _mesh(c)
+            if mesh is not None:
+                out.append(mesh)
     return out
 
 
 def _extent(lo: np.ndarray, hi: np.ndarray, colliders: list[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
     """The particles' box (lo, hi: NaN where none) joined with the colliders' finite parts: a
-    box's finite bounds, each along its own axis, and a sphere's box; a plane adds nothing.
+    box's finite bounds, each along its own axis, a sphere's and a mesh's box; a plane adds
+    nothing.
     An axis nothing reached gets [0, 1] (or the other axes' size around 0 when any has one)."""
     lo, hi = lo.astype(np.float64).copy(), hi.astype(np.float64).copy()
 
@@ -125,7 +156,7 @@ def _extent(lo: np.ndarray, hi: np.ndarray, colliders: list[dict[str, Any]]) -> 
 
     for c in colliders:
         for k in range(3):
-            if c["type"] == "box":
+            if c["type"] in ("box", "mesh"):
                 grow(k, c["lo"][k])
                 grow(k, c["hi"][k])
             elif c["type"] == "sphere":
