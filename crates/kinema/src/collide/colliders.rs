@@ -1,24 +1,32 @@
 //! Static colliders: planes, box containers, sphere obstacles and triangle meshes
 //! ([`super::mesh`]), and their contacts.
 //!
-//! A collider never moves and has infinite mass, so a particle's relative velocity against
-//! it is its own: u_n = v_i·n. Each contact's normal points into the free side (the side the
-//! particles belong to), so that an impulse +j n with j > 0 pushes the particle back there.
+//! A collider has infinite mass. It stays where it was added unless it is given a prescribed
+//! motion ([`super::motion`]): then the collide stage places it at each step
+//! ([`Collider::posed`]) and its [`Surface`] carries the velocity field of its surface, so
+//! that a particle's relative velocity against it is u_n = (v_i − u(x))·n, u(x) the
+//! surface's velocity at the contact point (0 for a still collider). Each contact's normal
+//! points into the free side (the side the particles belong to), so that an impulse +j n
+//! with j > 0 pushes the particle back there.
 //!
 //! In 2D give planes normals in the xy-plane, sphere obstacles centres with z = 0 (they are
 //! then circles), and boxes no walls along z ([`BoxContainer::rect`]).
 
 use super::contact::{Contact, Partner};
 pub use super::mesh::{Side, TriangleMesh};
+use super::motion::{Pose, SurfaceVelocity};
 use crate::error::Error;
 use crate::vec3;
 
 /// A collider's own restitution and friction; `None` uses the particle's value (the world's
 /// global value where particles have none). See [`crate::collide::response::MaterialTable`].
+/// And the velocity of its surface: zero for a still collider, the rigid field of its motion
+/// for a moving one.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Surface {
     restitution: Option<f64>,
     friction: Option<f64>,
+    velocity: SurfaceVelocity,
 }
 
 impl Surface {
@@ -43,7 +51,21 @@ impl Surface {
                 ));
             }
         }
-        Ok(Surface { restitution, friction })
+        Ok(Surface {
+            restitution,
+            friction,
+            velocity: SurfaceVelocity::default(),
+        })
+    }
+
+    /// The same surface moving with `velocity`.
+    pub fn with_velocity(self, velocity: SurfaceVelocity) -> Surface {
+        Surface { velocity, ..self }
+    }
+
+    /// The velocity field of the surface (zero for a still collider).
+    pub fn velocity(&self) -> SurfaceVelocity {
+        self.velocity
     }
 
     /// Restitution e, if the surface sets its own.
@@ -64,6 +86,23 @@ pub struct Touch {
     pub normal: [f64; 3],
     /// Penetration depth, m (> 0 when overlapping; < 0 for a gap within the tolerance).
     pub overlap: f64,
+}
+
+impl Touch {
+    /// The contact of particle `i` (centre `p`, m; velocity `v`, m/s; radius `r`, m) with
+    /// collider `k` that made this touch: u_n = (v − u)·n with u the collider surface's
+    /// velocity at the contact point p − (r − overlap) n (exactly v·n for a still collider).
+    pub fn contact(self, i: usize, k: usize, collider: &Collider, p: [f64; 3], v: [f64; 3], r: f64) -> Contact {
+        let w = collider.velocity_at(vec3::sub(p, vec3::scale(r - self.overlap, self.normal)));
+        Contact {
+            i,
+            other: Partner::Collider(k),
+            normal: self.normal,
+            overlap: self.overlap,
+            u_n: vec3::dot(vec3::sub(v, w), self.normal),
+            wall_velocity: w,
+        }
+    }
 }
 
 /// A plane through `point` with unit normal n: particles belong to the side n points to.
@@ -404,6 +443,51 @@ impl Collider {
     }
 }
 
+impl Collider {
+    /// The collider as added, displaced by `pose` and with its surface moving at `velocity`
+    /// (the collide stage's placement of a moving collider at a time). A box stays
+    /// axis-aligned: it can only be translated (a turning container is a closed mesh).
+    pub fn posed(&self, pose: &Pose, velocity: SurfaceVelocity) -> Result<Collider, Error> {
+        let surface = self.surface().with_velocity(velocity);
+        Ok(match self {
+            Collider::Plane(p) => Plane::new(pose.point(p.point()), pose.vector(p.normal()), surface)?.into(),
+            Collider::Sphere(s) => SphereObstacle::new(pose.point(s.center()), s.radius(), surface)?.into(),
+            Collider::Box(b) => {
+                if pose.rotates() {
+                    return Err(Error::invalid(
+                        "rotation",
+                        "a turn",
+                        "a box collider stays axis-aligned and can only be translated; a turning container is a closed mesh (inside = true)",
+                    ));
+                }
+                let t = pose.translation;
+                BoxContainer::new(
+                    [0, 1, 2].map(|k| b.lo()[k] + t[k]),
+                    [0, 1, 2].map(|k| b.hi()[k] + t[k]),
+                    surface,
+                )?
+                .into()
+            }
+            Collider::Mesh(m) => m.with_surface(surface).posed(*pose).into(),
+        })
+    }
+
+    /// The velocity of its surface at point `x` (m), m/s (0 for a still collider).
+    pub fn velocity_at(&self, x: [f64; 3]) -> [f64; 3] {
+        let v = self.surface().velocity();
+        if v.is_still() {
+            [0.0; 3]
+        } else {
+            v.at(x)
+        }
+    }
+
+    /// Whether its surface moves now.
+    pub fn is_moving(&self) -> bool {
+        !self.surface().velocity().is_still()
+    }
+}
+
 impl From<Plane> for Collider {
     fn from(p: Plane) -> Self {
         Collider::Plane(p)
@@ -431,7 +515,7 @@ impl From<SphereObstacle> for Collider {
 /// Appends to `contacts` (not cleared, so that it can follow the particle pairs' contacts)
 /// every particle–collider contact within `tolerance`, particle by particle, then collider
 /// by collider, then wall by wall: `Partner::Collider(k)` is the index in `colliders`, and
-/// u_n = v_i·n.
+/// u_n = (v_i − u)·n, u the collider surface's velocity there ([`Touch::contact`]).
 ///
 /// `x`, `v`: positions (m) and velocities (m/s), 3 per particle; `radius`: m, one per
 /// particle; `tolerance`: m (finite, ≥ 0).
@@ -463,15 +547,7 @@ pub fn collider_contacts(
     for (i, &r) in radius.iter().enumerate() {
         let (p, vi) = (vec3::get(x, i), vec3::get(v, i));
         for (k, collider) in colliders.iter().enumerate() {
-            collider.for_each_touch(p, r, tolerance, |t| {
-                contacts.push(Contact {
-                    i,
-                    other: Partner::Collider(k),
-                    normal: t.normal,
-                    overlap: t.overlap,
-                    u_n: vec3::dot(vi, t.normal),
-                })
-            });
+            collider.for_each_touch(p, r, tolerance, |t| contacts.push(t.contact(i, k, collider, p, vi, r)));
         }
     }
     Ok(())

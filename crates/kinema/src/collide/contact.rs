@@ -25,9 +25,13 @@ pub struct Contact {
     /// Penetration depth δ, m: > 0 when the two overlap (for two spheres δ = r_i + r_j − |x_i − x_j|),
     /// < 0 for a gap that is still within the contact tolerance that found it.
     pub overlap: f64,
-    /// Relative normal velocity u_n = (v_i − v_j)·n, m/s (v_j = 0 for a static collider):
-    /// < 0 while they approach, > 0 while they separate.
+    /// Relative normal velocity u_n = (v_i − v_j)·n, m/s (v_j the partner particle's
+    /// velocity, or a collider's surface velocity at the contact): < 0 while they approach,
+    /// > 0 while they separate.
     pub u_n: f64,
+    /// A collider partner's surface velocity at the contact point, m/s (0 for a still
+    /// collider and for a particle partner).
+    pub wall_velocity: [f64; 3],
 }
 
 impl Contact {
@@ -57,6 +61,7 @@ mod tests {
             normal: [1.0, 0.0, 0.0],
             overlap: 0.1,
             u_n: -2.0,
+            wall_velocity: [0.0; 3],
         };
         assert_eq!(c.partner_particle(), Some(3));
         assert!(c.is_approaching());

@@ -340,6 +340,17 @@ impl Scene<'_> {
         let walls = &self.list.walls;
         let first = walls.partition_point(|w| w.0 < i);
         for &(_, k) in walls[first..].iter().take_while(|w| w.0 == i) {
+            // A moving collider stands where it will be at the step's end; the particle's
+            // path is seen from it, displaced by the surface's motion over the rest of the
+            // step: x + u (h − now), v − u, with u the surface's velocity at x (exact for a
+            // translation; for a turn, the motion of the surface point nearest the particle,
+            // the end-of-step contacts taking up the second-order rest).
+            let (xi, vi) = if self.colliders[k].is_moving() {
+                let u = self.colliders[k].velocity_at(xi);
+                (vec3::add(xi, vec3::scale(rest, u)), vec3::sub(vi, u))
+            } else {
+                (xi, vi)
+            };
             if now == 0.0 && self.touches(k, xi, self.radius[i], 2.0 * SPECULATIVE * self.radius[i]) {
                 // touching a collider at the start, or within the speculative margin of it,
                 // approaching or not: a contact of the step's end

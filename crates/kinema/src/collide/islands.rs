@@ -402,6 +402,7 @@ mod tests {
             normal,
             overlap: 0.0,
             u_n: 0.0,
+            wall_velocity: [0.0; 3],
         };
         for z in 0..nz {
             for y in 0..ny {
@@ -426,6 +427,7 @@ mod tests {
                 normal: [0.0, 0.0, 1.0],
                 overlap: sink,
                 u_n: -1.0,
+                wall_velocity: [0.0; 3],
             });
         }
         let v = (0..n).flat_map(|_| [0.0, 0.0, -1.0]).collect();
@@ -485,6 +487,7 @@ mod tests {
             normal: [1.0, 0.0, 0.0],
             overlap: 0.0,
             u_n: 0.0,
+            wall_velocity: [0.0; 3],
         };
         let p = Partner::Particle;
         let contacts = [

@@ -37,6 +37,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use super::colliders::{Surface, Touch};
+use super::motion::Pose;
 use super::toi::toi_half_space;
 use crate::error::Error;
 use crate::vec3;
@@ -107,6 +108,9 @@ pub struct TriangleMesh {
     geometry: Arc<Geometry>,
     side: Side,
     surface: Surface,
+    /// Where a moving mesh is: its geometry is kept as added, and each query is turned into
+    /// that frame (a mesh of 10⁶ triangles moves at the cost of one transform per query).
+    pose: Option<Pose>,
 }
 
 impl PartialEq for TriangleMesh {
@@ -114,6 +118,7 @@ impl PartialEq for TriangleMesh {
         (Arc::ptr_eq(&self.geometry, &other.geometry) || self.geometry == other.geometry)
             && self.side == other.side
             && self.surface == other.surface
+            && self.pose == other.pose
     }
 }
 
@@ -217,6 +222,7 @@ impl TriangleMesh {
             geometry: Arc::new(geometry),
             side,
             surface,
+            pose: None,
         })
     }
 
@@ -250,15 +256,71 @@ impl TriangleMesh {
         self.surface
     }
 
-    /// The box around all vertices, (lo, hi), m.
-    pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        let root = self.geometry.nodes[0];
-        (root.lo, root.hi)
+    /// The same mesh with surface `surface` (the geometry shared).
+    pub fn with_surface(&self, surface: Surface) -> TriangleMesh {
+        TriangleMesh { surface, ..self.clone() }
     }
 
-    /// Largest |coordinate| of a vertex, m.
+    /// The same mesh displaced by `pose` from where it was added (the geometry shared).
+    pub fn posed(&self, pose: Pose) -> TriangleMesh {
+        TriangleMesh {
+            pose: Some(pose),
+            ..self.clone()
+        }
+    }
+
+    /// Its displacement from where it was added, if it moved.
+    pub fn pose(&self) -> Option<Pose> {
+        self.pose
+    }
+
+    /// The box around all vertices where the mesh is now, (lo, hi), m (around the turned
+    /// box of its vertices as added, for a turned mesh).
+    pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        let root = self.geometry.nodes[0];
+        let Some(pose) = self.pose else {
+            return (root.lo, root.hi);
+        };
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for corner in 0..8 {
+            let c = [0, 1, 2].map(|k| if corner >> k & 1 == 0 { root.lo[k] } else { root.hi[k] });
+            let p = pose.point(c);
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Largest |coordinate| of a vertex where the mesh is now, m (a bound for a moved mesh).
     pub fn scale(&self) -> f64 {
-        self.geometry.scale
+        if self.pose.is_none() {
+            return self.geometry.scale;
+        }
+        let (lo, hi) = self.bounds();
+        lo.iter().chain(&hi).fold(0.0, |m: f64, c| m.max(c.abs()))
+    }
+
+    /// A point (m) turned into the frame the geometry was added in.
+    fn local(&self, p: [f64; 3]) -> [f64; 3] {
+        self.pose.map_or(p, |pose| pose.point_back(p))
+    }
+
+    /// A direction turned into the frame the geometry was added in.
+    fn local_vector(&self, d: [f64; 3]) -> [f64; 3] {
+        self.pose.map_or(d, |pose| pose.vector_back(d))
+    }
+
+    /// A touch of the geometry's frame turned to where the mesh is.
+    fn placed(&self, t: Touch) -> Touch {
+        match self.pose {
+            None => t,
+            Some(pose) => Touch {
+                normal: pose.vector(t.normal),
+                ..t
+            },
+        }
     }
 
     /// Triangle t's point nearest to `p` if it lies within `reach` (m) of p.
@@ -348,13 +410,13 @@ impl TriangleMesh {
     /// `tolerance` (m), its true features only (the module's doc: one per face touched, one
     /// per convex edge or vertex), in the order of the triangles' indices.
     pub fn for_each_touch(&self, p: [f64; 3], r: f64, tolerance: f64, mut each: impl FnMut(Touch)) {
-        for (_, touch, _, _) in self.touches(p, r, tolerance) {
-            each(touch);
+        for (_, touch, _, _) in self.touches(self.local(p), r, tolerance) {
+            each(self.placed(touch));
         }
     }
 
     /// The touches of [`TriangleMesh::for_each_touch`] with each one's triangle and closest
-    /// point (m) and feature.
+    /// point (m) and feature, all in the frame the geometry was added in (`p` too).
     fn touches(&self, p: [f64; 3], r: f64, tolerance: f64) -> Vec<(usize, Touch, [f64; 3], Feature)> {
         let reach = r + tolerance.max(0.0);
         let (lo, hi) = ([0, 1, 2].map(|k| p[k] - reach), [0, 1, 2].map(|k| p[k] + reach));
@@ -411,6 +473,7 @@ impl TriangleMesh {
         if horizon.is_nan() || horizon < 0.0 {
             return None;
         }
+        let (x, v, a) = (self.local(x), self.local_vector(v), self.local_vector(a));
         let now = self.touches(x, r, 0.0);
         if let Some(&(t, ..)) = now.iter().find(|f| vec3::dot(v, f.1.normal) < 0.0) {
             return Some((0.0, t));
@@ -449,6 +512,7 @@ impl TriangleMesh {
         if !self.geometry.closed {
             return false;
         }
+        let p = self.local(p);
         let dir = {
             let d = [0.123_456_7, 0.067_891_2, 1.0];
             vec3::scale(1.0 / vec3::norm(d), d)

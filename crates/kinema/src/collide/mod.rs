@@ -49,6 +49,7 @@ pub(crate) mod events;
 pub(crate) mod impulse;
 pub(crate) mod islands;
 pub mod mesh;
+pub mod motion;
 pub mod narrow_phase;
 pub(crate) mod neighbour_list;
 pub mod penalty;
@@ -69,6 +70,7 @@ pub use colliders::{collider_contacts, BoxContainer, Collider, Plane, SphereObst
 pub use contact::{Contact, Partner};
 pub use domain::{Domain, Periodic};
 pub use mesh::{Side, TriangleMesh};
+pub use motion::{Motion, Pose, SurfaceVelocity};
 pub use narrow_phase::{pair_contact, sphere_contacts};
 pub use penalty::{damping_ratio, dashpot_coefficient, restitution_of_damping, spring_dashpot_force, PenaltyLaw};
 pub use response::{restitution_impulse, Impulse, Material, MaterialTable};

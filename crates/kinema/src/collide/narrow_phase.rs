@@ -53,6 +53,7 @@ pub fn pair_contact(
         normal,
         overlap: sum - dist,
         u_n: vec3::dot(u, normal),
+        wall_velocity: [0.0; 3],
     })
 }
 

@@ -98,6 +98,9 @@ pub(crate) struct NeighbourList {
     /// The most entries a build may hold (`None`: [`Self::ENTRIES_PER_PARTICLE`] a particle,
     /// at least [`Self::MIN_ENTRIES`]; tests set less).
     pub(crate) entry_limit: Option<usize>,
+    /// Which colliders moved at the build (every particle is a moving one's candidate): a
+    /// collider that starts moving needs a new list even if no particle moved.
+    pub(crate) moving: Vec<bool>,
 }
 
 /// The partners of one chunk's particles, compressed: particle l of the chunk has
@@ -143,9 +146,15 @@ impl NeighbourList {
         build: ListBuild,
     ) -> Result<(), Error> {
         let ListBuild { skin, collider_scale } = build;
-        if self.verified.take() == Some((x.as_ptr() as usize, x.len())) || self.holds(x, domain) {
+        let moving_now = colliders
+            .iter()
+            .enumerate()
+            .any(|(k, c)| c.is_moving() && !self.moving.get(k).copied().unwrap_or(false));
+        if !moving_now && (self.verified.take() == Some((x.as_ptr() as usize, x.len())) || self.holds(x, domain)) {
             return Ok(());
         }
+        self.verified = None;
+        self.moving = colliders.iter().map(Collider::is_moving).collect();
         self.built_at.clear(); // no list until the build succeeds (non-finite positions fail)
         let n = radius.len();
         if n > u32::MAX as usize {
@@ -207,8 +216,12 @@ impl NeighbourList {
             for (i, &r) in radius.iter().enumerate() {
                 let p = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
                 for (k, c) in colliders.iter().enumerate() {
-                    let mut near = false;
-                    c.for_each_touch(p, r, skin, |_| near = true);
+                    // a moving collider can reach a particle that stays put: every particle
+                    // is its candidate
+                    let mut near = c.is_moving();
+                    if !near {
+                        c.for_each_touch(p, r, skin, |_| near = true);
+                    }
                     if near {
                         self.walls.push((i, k));
                     }

@@ -246,6 +246,7 @@ mod tests {
                 normal: [0.6, 0.0, 0.8],
                 overlap: 1e-3,
                 u_n: -0.7,
+                wall_velocity: [0.0; 3],
             },
             Contact {
                 i: 1,
@@ -253,6 +254,7 @@ mod tests {
                 normal: [0.0, 0.0, 1.0],
                 overlap: 2e-3,
                 u_n: 0.1,
+                wall_velocity: [0.0; 3],
             },
             // a gap within the tolerance: no force
             Contact {
@@ -261,6 +263,7 @@ mod tests {
                 normal: [1.0, 0.0, 0.0],
                 overlap: -1e-3,
                 u_n: -5.0,
+                wall_velocity: [0.0; 3],
             },
         ];
         let mut f = [0.0; 9];

@@ -16,6 +16,10 @@
 //! μ = 1 / (w_i + w_j) the reduced mass: nothing is lost for e = 1, all the normal motion of
 //! the pair's centre-of-mass frame for e = 0.
 //!
+//! Against a moving collider, v_j is its surface's velocity at the contact
+//! (`Contact::wall_velocity`): the law acts on the relative velocity, and the surface does
+//! work on the particle, which the energy books (the particles' kinetic energy lost) count.
+//!
 //! Particles have no rotational inertia, so a tangential impulse j_t changes the tangential
 //! relative velocity u_t by (w_i + w_j) j_t, the same effective mass as along the normal.
 //! Coulomb friction gives the impulse that stops the sliding, |u_t| / (w_i + w_j), unless it
@@ -175,7 +179,7 @@ pub fn restitution_impulse(
     }
     let n = c.normal;
     let vi = vec3::get(v, c.i);
-    let vj = partner.map_or([0.0; 3], |j| vec3::get(v, j));
+    let vj = partner.map_or(c.wall_velocity, |j| vec3::get(v, j));
     let u = vec3::sub(vi, vj);
     let u_n = vec3::dot(u, n);
     if u_n >= 0.0 || u_n.is_nan() {
@@ -205,7 +209,8 @@ pub fn restitution_impulse(
     if wi == 0.0 {
         lost += vec3::dot(vi, impulse);
     }
-    if partner.is_some() && wj == 0.0 {
+    if wj == 0.0 && vj != [0.0; 3] {
+        // a pinned particle or a collider moving: the particles' own loss
         lost -= vec3::dot(vj, impulse);
     }
     Some(Impulse {

@@ -7,7 +7,7 @@
 //! Newton's restitution law, distribute each impulse onto both particles.
 
 use crate::collide::impulse::{ImpulseModel, StageSetting};
-use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Partner, Periodic};
+use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Motion, Partner, Periodic};
 use crate::error::Error;
 use crate::particles::Particles;
 
@@ -208,6 +208,41 @@ pub(crate) struct CollideStage {
     pub total: CollisionStats,
     pub last: CollisionStats,
     pub times: CollisionTimes,
+    /// Each collider's prescribed motion with the placement it was added in (`None`: it
+    /// stays where it was added).
+    pub motions: Vec<Option<(Motion, Collider)>>,
+    /// What the particles gave each collider over all steps.
+    pub collider_books: Vec<ColliderBooks>,
+}
+
+/// What the particles gave one collider (the impulse model's impacts and end-of-step
+/// contacts): momentum, and the work the collider did on them.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ColliderBooks {
+    /// Momentum the collider received, −Σ J over the impulses J it gave particles, N·s (a
+    /// collider has infinite mass: this is what it would have taken up, the force it felt
+    /// integrated over time).
+    pub momentum: [f64; 3],
+    /// Angular momentum the collider received about the world's origin, −Σ x_c × J, N·m·s
+    /// (x_c the contact point on its surface).
+    pub angular_momentum: [f64; 3],
+    /// Work the collider's surface did on the particles, Σ J·u(x_c), J (0 for a still one:
+    /// a moving wall's energy input, which the collisions' `energy_lost` books as negative
+    /// loss).
+    pub work: f64,
+}
+
+impl ColliderBooks {
+    /// Books the impulse `j` (N·s) the collider gave a particle at the point `at` (m) of its
+    /// surface moving at `u` (m/s).
+    pub(crate) fn book(&mut self, at: [f64; 3], u: [f64; 3], j: [f64; 3]) {
+        let torque = crate::vec3::cross(at, j);
+        for k in 0..3 {
+            self.momentum[k] -= j[k];
+            self.angular_momentum[k] -= torque[k];
+        }
+        self.work += crate::vec3::dot(j, u);
+    }
 }
 
 impl CollideStage {
@@ -225,7 +260,74 @@ impl CollideStage {
             total: CollisionStats::default(),
             last: CollisionStats::default(),
             times: CollisionTimes::default(),
+            motions: Vec::new(),
+            collider_books: Vec::new(),
         })
+    }
+
+    /// Gives collider k a prescribed motion from the placement it was added in (`None`:
+    /// back there, still), and places it at time `t` (s).
+    pub fn set_motion(&mut self, k: usize, motion: Option<Motion>, t: f64) -> Result<(), Error> {
+        let n = self.colliders.len();
+        if k >= n {
+            return Err(Error::invalid(
+                "collider",
+                k,
+                format!("an index below the number of colliders ({n})"),
+            ));
+        }
+        if let (Some(m), Collider::Box(_)) = (&motion, &self.colliders[k]) {
+            if m.rotates() {
+                return Err(Error::invalid(
+                    "angular_velocity",
+                    "a turn",
+                    "a box collider stays axis-aligned and can only be translated; a turning container is a closed mesh (inside = true)",
+                ));
+            }
+        }
+        self.motions.resize(n, None);
+        let rest = match self.motions[k].take() {
+            Some((_, rest)) => rest,
+            None => self.colliders[k].clone(),
+        };
+        match motion {
+            None => self.colliders[k] = rest,
+            Some(m) => {
+                let (pose, velocity) = m.at(t);
+                let placed = rest.posed(&pose, velocity);
+                match placed {
+                    Ok(c) => {
+                        self.colliders[k] = c;
+                        self.motions[k] = Some((m, rest));
+                    }
+                    Err(e) => {
+                        self.motions[k] = None;
+                        self.colliders[k] = rest;
+                        return Err(e);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Places every moving collider where its motion has it at time `t` (s); returns whether
+    /// any collider has a motion.
+    pub fn place_colliders(&mut self, t: f64) -> Result<bool, Error> {
+        let mut any = false;
+        for (k, m) in self.motions.iter().enumerate() {
+            if let Some((motion, rest)) = m {
+                let (pose, velocity) = motion.at(t);
+                self.colliders[k] = rest.posed(&pose, velocity)?;
+                any = true;
+            }
+        }
+        Ok(any)
+    }
+
+    /// Whether some collider has a prescribed motion.
+    pub fn has_motion(&self) -> bool {
+        self.motions.iter().any(Option::is_some)
     }
 
     /// Changes the settings, keeping colliders and buffers.
@@ -327,6 +429,14 @@ impl CollideStage {
             mass: &p.mass,
         };
         let (changed, stats, times) = self.impulse.run(&set, frame, &p.x, &p.v, x1, v1)?;
+        self.collider_books.resize(self.colliders.len(), ColliderBooks::default());
+        for (books, given) in self.collider_books.iter_mut().zip(&self.impulse.collider_books) {
+            for k in 0..3 {
+                books.momentum[k] += given.momentum[k];
+                books.angular_momentum[k] += given.angular_momentum[k];
+            }
+            books.work += given.work;
+        }
         self.times.detect += times.detect;
         self.times.respond += times.respond;
         self.times.distribute += times.distribute;

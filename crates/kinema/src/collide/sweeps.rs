@@ -44,12 +44,14 @@ impl SweepGroup {
     }
 }
 
-/// The two particles whose 3-vectors one visit of a contact reads (j: none for a collider),
-/// and which of them it may change (an immovable side never changes).
+/// The two particles whose velocities one visit of a contact reads (j: none for a
+/// collider, whose side is its surface's velocity `wall`), and which of them it may change
+/// (an immovable side never changes).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Ends {
     pub i: usize,
     pub j: Option<usize>,
+    wall: [f64; 3],
     write_i: bool,
     write_j: bool,
 }
@@ -63,14 +65,16 @@ impl Ends {
         (wi + wj > 0.0).then_some(Ends {
             i: c.i,
             j,
+            wall: c.wall_velocity,
             write_i: wi > 0.0,
             write_j: wj > 0.0,
         })
     }
 
-    /// The 3-vectors of i and j (0 for a collider) in the flat array `a`.
+    /// The velocities of i and j (a collider's surface velocity) in the flat array `a` of
+    /// velocities.
     pub fn load(&self, a: &[f64]) -> ([f64; 3], [f64; 3]) {
-        (vec3::get(a, self.i), self.j.map_or([0.0; 3], |j| vec3::get(a, j)))
+        (vec3::get(a, self.i), self.j.map_or(self.wall, |j| vec3::get(a, j)))
     }
 
     /// Writes back the 3-vectors of the movable sides.
@@ -89,7 +93,7 @@ impl Ends {
     /// `a` points to an array that holds both particles, which no thread writes meanwhile.
     unsafe fn load_from(&self, a: *const f64) -> ([f64; 3], [f64; 3]) {
         let get = |q: usize| [*a.add(3 * q), *a.add(3 * q + 1), *a.add(3 * q + 2)];
-        (get(self.i), self.j.map_or([0.0; 3], get))
+        (get(self.i), self.j.map_or(self.wall, get))
     }
 
     /// [`Ends::store`] through a pointer to the array.

@@ -7,8 +7,8 @@
 use super::contact_force::{ContactForce, ContactForceParams};
 use super::integrate::WorldStepper;
 use super::{order, CollisionParams, CollisionStats, ContactModel, World};
-use crate::collide::stage::{CollideStage, StepFrame};
-use crate::collide::{Collider, Contact, Periodic};
+use crate::collide::stage::{CollideStage, ColliderBooks, StepFrame};
+use crate::collide::{Collider, Contact, Motion, Periodic};
 use crate::error::{Divergence, Error};
 use crate::forces::EnergyClass;
 use std::cell::RefCell;
@@ -44,10 +44,13 @@ impl World {
         // Without forces the paths are straight lines from step to step: the stage keeps
         // each particle's wake time and looks only at those due (collide/wake.rs). Verlet's
         // force-free pass wrapped x1 into the periodic cell already.
-        let steady = self.forces.is_empty();
+        // (a moving collider meets particles that stay put: no wake times, no sleep)
+        let moving = stage.has_motion();
+        let steady = self.forces.is_empty() && !moving;
         // Islands may sleep under forces that cannot pull a sleeper nobody looks at: none
         // depends on the positions or adds energy (gravity, drag; `collide/sleep.rs`).
         let may_sleep = !steady
+            && !moving
             && self.forces.iter().all(|f| {
                 let p = f.properties();
                 !p.depends_on_position && p.energy != EnergyClass::Source
@@ -243,7 +246,61 @@ impl World {
         Ok(index)
     }
 
-    /// The colliders, in the order they were added.
+    /// Gives collider `k` a prescribed motion ([`Motion`]: steady velocity and angular
+    /// velocity, or keyframes) from the placement it was added in, on the world's clock
+    /// (the motion's t = 0 is the world's time 0); `None` puts it back there, still. It is
+    /// placed at the current time at once and at the end of every step after; its surface's
+    /// velocity enters every contact with it. A box can only be translated. In a 2D world
+    /// the motion must keep the plane: velocities and translations in xy, turns about z.
+    pub fn set_collider_motion(&mut self, k: usize, motion: Option<Motion>) -> Result<(), Error> {
+        if self.params.dim == 2 {
+            if let Some(m) = &motion {
+                check_planar_motion(m)?;
+            }
+        }
+        let t = self.time;
+        let Some(stage) = self.collide_stage.as_mut() else {
+            return Err(Error::invalid("collider", k, "the world has no colliders"));
+        };
+        stage.set_motion(k, motion, t)?;
+        self.watch = None;
+        self.check_placement_from(0);
+        self.rebuild_contact_force()
+    }
+
+    /// Whether some collider has a prescribed motion.
+    pub fn has_moving_colliders(&self) -> bool {
+        self.collide_stage.as_ref().is_some_and(|s| s.has_motion())
+    }
+
+    /// What the particles gave each collider over all steps (momentum, angular momentum
+    /// about the origin, the work the collider did on them), in the colliders' order; the
+    /// impulse model's books (the spring–dashpot model books nothing here).
+    pub fn collider_books(&self) -> Vec<ColliderBooks> {
+        let Some(stage) = self.collide_stage.as_ref() else {
+            return Vec::new();
+        };
+        let mut books = stage.collider_books.clone();
+        books.resize(stage.colliders.len(), ColliderBooks::default());
+        books
+    }
+
+    /// Places the moving colliders where their motions have them at time `t` (s), in the
+    /// collide stage and the contact force; returns whether any collider moves.
+    pub(super) fn place_moving_colliders(&mut self, t: f64) -> Result<bool, Error> {
+        let Some(stage) = self.collide_stage.as_mut() else {
+            return Ok(false);
+        };
+        if !stage.place_colliders(t)? {
+            return Ok(false);
+        }
+        if let Some(contact) = &self.contact {
+            contact.borrow_mut().place_colliders(&stage.colliders);
+        }
+        Ok(true)
+    }
+
+    /// The colliders, in the order they were added (a moving one where it is now).
     pub fn colliders(&self) -> &[Collider] {
         self.collide_stage.as_ref().map_or(&[], |c| &c.colliders)
     }
@@ -308,4 +365,49 @@ impl World {
     pub fn collision_stats(&self) -> Option<(CollisionStats, CollisionStats)> {
         self.collide_stage.as_ref().map(|c| (c.last, c.total))
     }
+}
+
+/// A 2D world's collider motion keeps the xy-plane: no velocity or translation along z, no
+/// turn but about z.
+fn check_planar_motion(m: &Motion) -> Result<(), Error> {
+    let what = "a 2D world keeps z = 0: a collider moves in the xy-plane and turns about z";
+    match m {
+        Motion::Steady {
+            velocity,
+            angular_velocity,
+            pivot,
+        } => {
+            for (name, v) in [
+                ("velocity[2]", velocity[2]),
+                ("angular_velocity[0]", angular_velocity[0]),
+                ("angular_velocity[1]", angular_velocity[1]),
+                ("pivot[2]", pivot[2]),
+            ] {
+                if v != 0.0 {
+                    return Err(Error::invalid(name, v, what));
+                }
+            }
+        }
+        Motion::Keyframes {
+            translations,
+            rotations,
+            pivot,
+            ..
+        } => {
+            for (k, t) in translations.iter().enumerate() {
+                if t[2] != 0.0 {
+                    return Err(Error::invalid(format!("translations[{k}][2]"), t[2], what));
+                }
+            }
+            for (k, q) in rotations.iter().enumerate() {
+                if q[1] != 0.0 || q[2] != 0.0 {
+                    return Err(Error::invalid(format!("rotations[{k}]"), format!("{q:?}"), what));
+                }
+            }
+            if pivot[2] != 0.0 {
+                return Err(Error::invalid("pivot[2]", pivot[2], what));
+            }
+        }
+    }
+    Ok(())
 }

@@ -24,7 +24,7 @@ mod integrate;
 mod measures;
 mod order;
 
-pub use crate::collide::stage::{CollisionParams, CollisionStats, ContactModel};
+pub use crate::collide::stage::{ColliderBooks, CollisionParams, CollisionStats, ContactModel};
 pub use crate::interrupt::Interrupt;
 pub use advisor::Rates;
 pub use divergence::{RUNAWAY_CHECK_EVERY, RUNAWAY_FACTOR};
@@ -240,7 +240,11 @@ impl World {
         if self.contact_dirty {
             self.rebuild_contact_force()?;
         }
+        // A moving collider stands where it will be at the step's end (`collide/events.rs`);
+        // it can add energy, so the runaway watch is off while one moves.
+        let moving = self.place_moving_colliders(self.params_time_after(self.steps + 1))?;
         if self.watch.is_none()
+            && !moving
             && !self.particles.is_empty()
             && self.forces.iter().all(|f| f.properties().energy != EnergyClass::Source)
         {

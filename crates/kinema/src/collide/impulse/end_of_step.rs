@@ -89,14 +89,9 @@ impl ImpulseModel {
             let (p, vi) = (vec3::get(x1, i), vec3::get(v1, i));
             let first = list.walls.partition_point(|w| w.0 < i);
             for &(_, k) in list.walls[first..].iter().take_while(|w| w.0 == i) {
-                set.colliders[k].for_each_touch(p, radius[i], 2.0 * SPECULATIVE * radius[i], |t| {
-                    let c = Contact {
-                        i,
-                        other: Partner::Collider(k),
-                        normal: t.normal,
-                        overlap: t.overlap,
-                        u_n: vec3::dot(vi, t.normal),
-                    };
+                let collider = &set.colliders[k];
+                collider.for_each_touch(p, radius[i], 2.0 * SPECULATIVE * radius[i], |t| {
+                    let c = t.contact(i, k, collider, p, vi, radius[i]);
                     if !on_periodic_wall(&c, set.colliders, set.domain) {
                         self.contacts.push(c);
                     }
@@ -224,9 +219,13 @@ impl ImpulseModel {
         let (materials, inv_mass, domain) = (set.materials, set.inv_mass, set.domain);
         let x0 = paths.x0;
         let moved = |q: usize| domain.displacement(vec3::get(x1, q), vec3::get(x0, q));
-        let rel = |c: &Contact, f: &dyn Fn(usize) -> [f64; 3]| match c.partner_particle() {
+        // i's relative velocity (`per` = 1 s: f gives velocities) or displacement over the
+        // step (`per` = h: f gives displacements) against its partner: a particle's, or a
+        // collider surface's (its velocity at the contact, over the step h times it)
+        let rel = |c: &Contact, f: &dyn Fn(usize) -> [f64; 3], per: f64| match c.partner_particle() {
             Some(j) => vec3::sub(f(c.i), f(j)),
-            None => f(c.i),
+            None if c.wall_velocity == [0.0; 3] => f(c.i),
+            None => vec3::sub(f(c.i), vec3::scale(per, c.wall_velocity)),
         };
         let warm = &self.warm;
         self.solved.clear();
@@ -249,9 +248,9 @@ impl ImpulseModel {
         // passes until nothing changes: as many as the chain of them is long.
         let mut touching: Vec<(usize, usize)> = Vec::new();
         for (c, warm) in self.contacts.iter().zip(&self.solved) {
-            let start = -c.overlap - vec3::dot(rel(c, &moved), c.normal);
+            let start = -c.overlap - vec3::dot(rel(c, &moved, h), c.normal);
             let least = start.min(0.0);
-            let closes = start + vec3::dot(rel(c, &euler_step), c.normal) < least;
+            let closes = start + vec3::dot(rel(c, &euler_step, h), c.normal) < least;
             if *warm != [0.0; 3] || closes {
                 for q in std::iter::once(c.i).chain(c.partner_particle()) {
                     resting[q] = paths.version(q) == 0;
@@ -281,12 +280,12 @@ impl ImpulseModel {
         self.prepared.clear();
         self.prepared.extend(self.contacts.iter().map(|c| {
             let n = c.normal;
-            let start = -c.overlap - vec3::dot(rel(c, &moved), n);
-            let u1 = rel(c, &|q| vec3::get(v1, q));
-            let u_pre = vec3::dot(rel(c, &|q| paths.reference_velocity(q)), n);
+            let start = -c.overlap - vec3::dot(rel(c, &moved, h), n);
+            let u1 = rel(c, &|q| vec3::get(v1, q), 1.0);
+            let u_pre = vec3::dot(rel(c, &|q| paths.reference_velocity(q), 1.0), n);
             let bounce = (u_pre < 0.0 && -u_pre >= threshold).then(|| -materials.pair(c).restitution() * u_pre);
             let slop = SLOP * (set.radius[c.i] + c.partner_particle().map_or(set.radius[c.i], |j| set.radius[j]));
-            Target::new(start, slop, rel(c, &base), u1, n, h, bounce)
+            Target::new(start, slop, rel(c, &base, h), u1, n, h, bounce)
         }));
         // What moving by symplectic Euler adds to the integrated position of each particle in
         // resting contact.
@@ -404,6 +403,7 @@ pub(crate) fn overlap_at(radius: &[f64], colliders: &[Collider], domain: &Domain
                     normal: t.normal,
                     overlap: t.overlap,
                     u_n: 0.0,
+                    wall_velocity: [0.0; 3],
                 };
                 if !on_periodic_wall(&c, colliders, domain) {
                     deepest = deepest.max(t.overlap);

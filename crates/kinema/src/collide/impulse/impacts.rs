@@ -213,7 +213,7 @@ impl ImpulseModel {
             if let Some(j) = partner {
                 paths.advance(j, t);
             }
-            let contact = contact_at(s.set, paths, &event);
+            let contact = contact_at(s.set, paths, &event, h);
             t_detect += clock.elapsed();
 
             // Stage 3: the impulse of Newton's law at the impact.
@@ -240,6 +240,10 @@ impl ImpulseModel {
                     mass,
                     &mut stats.impulse_balance,
                 );
+                if let (Partner::Collider(k), Some(c)) = (event.partner, contact) {
+                    let at = vec3::sub(paths.x_ref(event.i), vec3::scale(s.set.radius[event.i], c.normal));
+                    self.collider_books[k].book(at, c.wall_velocity, imp.vector);
+                }
                 for q in std::iter::once(event.i).chain(partner) {
                     paths.changed(q);
                     self.touched[q] = true;
@@ -480,8 +484,17 @@ fn check_travel(set: &StageSetting<'_>, x: &[f64], largest: f64, fastest: usize,
 }
 
 /// The contact of an event at its time (the particles already moved there).
-fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event) -> Option<Contact> {
+fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event, h: f64) -> Option<Contact> {
     let xi = paths.x_ref(e.i);
+    // A moving collider stands where it will be at the step's end: the particle is seen
+    // displaced by the surface's motion over the rest of the step (`events.rs`).
+    let (xi, wall) = match e.partner {
+        Partner::Collider(k) if set.colliders[k].is_moving() => {
+            let u = set.colliders[k].velocity_at(xi);
+            (vec3::add(xi, vec3::scale(h - e.time, u)), true)
+        }
+        _ => (xi, false),
+    };
     let unit = |d: [f64; 3]| {
         let len = vec3::norm(d);
         (len > 0.0).then(|| vec3::scale(1.0 / len, d))
@@ -495,12 +508,17 @@ fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event) -> Option<Co
             Collider::Mesh(m) => m.touch_of_triangle(e.wall, xi, set.radius[e.i]).normal,
         },
     };
+    let wall_velocity = match e.partner {
+        Partner::Collider(k) if wall => set.colliders[k].velocity_at(vec3::sub(xi, vec3::scale(set.radius[e.i], normal))),
+        _ => [0.0; 3],
+    };
     Some(Contact {
         i: e.i,
         other: e.partner,
         normal,
         overlap: 0.0,
         u_n: 0.0,
+        wall_velocity,
     })
 }
 

@@ -16,6 +16,7 @@ use super::islands::Islands;
 use super::neighbour_list::NeighbourList;
 use super::sleep::{Sleep, WarmEntry};
 use super::soft_step::Target;
+use super::stage::ColliderBooks;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
 use crate::error::Error;
@@ -193,6 +194,8 @@ pub(crate) struct ImpulseModel {
     pub(super) resting: Vec<(usize, Partner, bool)>,
     /// The islands of the last end-of-step solve (`collide/islands.rs`).
     pub(super) islands: Islands,
+    /// What the particles gave each collider in the last step.
+    pub(crate) collider_books: Vec<ColliderBooks>,
     /// Each particle's calm time and the islands asleep (`collide/sleep.rs`).
     pub(super) sleep: Sleep,
     /// The world's check that may stop a step, asked inside a long run of impacts.
@@ -223,6 +226,7 @@ impl ImpulseModel {
             warm: Vec::new(),
             resting: Vec::new(),
             islands: Islands::default(),
+            collider_books: Vec::new(),
             sleep: Sleep::default(),
             interrupt: Interrupt::none(),
         }
@@ -350,6 +354,8 @@ impl ImpulseModel {
     ) -> Result<(bool, CollisionStats, CollisionTimes), Error> {
         let clock = Instant::now();
         let h = frame.h;
+        self.collider_books.clear();
+        self.collider_books.resize(set.colliders.len(), ColliderBooks::default());
         // (no pass over the particles where nothing can sleep: a force-free world's step looks
         // only at the particles due, `collide/wake.rs`)
         if frame.may_sleep && set.sleep_time.is_some() {
@@ -532,6 +538,10 @@ impl ImpulseModel {
             changed = true;
             stats.impulses += 1;
             distribute(c.i, c.partner_particle(), *p, v1, inv_mass, mass, &mut stats.impulse_balance);
+            if let Partner::Collider(k) = c.other {
+                let at = vec3::sub(vec3::get(x1, c.i), vec3::scale(set.radius[c.i] - c.overlap, c.normal));
+                self.collider_books[k].book(at, c.wall_velocity, *p);
+            }
         }
         stats.energy_lost += self.energy_books(set, paths.accel, x1, v1);
         // Islands calm long enough fall asleep (their velocities to 0, that energy booked).

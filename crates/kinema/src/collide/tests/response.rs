@@ -12,6 +12,7 @@ fn pair(i: usize, j: usize, normal: [f64; 3], overlap: f64) -> Contact {
         normal,
         overlap,
         u_n: 0.0,
+        wall_velocity: [0.0; 3],
     }
 }
 

@@ -5,7 +5,7 @@
 use super::{ContactForce, Scratch, CHUNK};
 use crate::collide::neighbour_list::NeighbourList;
 use crate::collide::stage::on_periodic_wall;
-use crate::collide::{pair_contact, Contact, Partner};
+use crate::collide::{pair_contact, Contact};
 use crate::error::Error;
 use crate::forces::State;
 
@@ -98,14 +98,9 @@ impl ContactForce {
     #[inline]
     pub(super) fn wall_contacts(&self, i: usize, k: usize, x: &[f64], v: &[f64], mut each: impl FnMut(&Contact)) {
         let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
-        self.colliders[k].for_each_touch(p, self.radius[i], 0.0, |t| {
-            let c = Contact {
-                i,
-                other: Partner::Collider(k),
-                normal: t.normal,
-                overlap: t.overlap,
-                u_n: vi[0] * t.normal[0] + vi[1] * t.normal[1] + vi[2] * t.normal[2],
-            };
+        let collider = &self.colliders[k];
+        collider.for_each_touch(p, self.radius[i], 0.0, |t| {
+            let c = t.contact(i, k, collider, p, vi, self.radius[i]);
             if !on_periodic_wall(&c, &self.colliders, &self.domain) {
                 each(&c);
             }

@@ -99,6 +99,15 @@ pub(crate) struct ContactForceParams {
 }
 
 impl ContactForce {
+    /// The colliders where they are now (a moving collider's placement at a step), the same
+    /// colliders as built.
+    pub(crate) fn place_colliders(&mut self, colliders: &[Collider]) {
+        self.colliders.clone_from_slice(colliders);
+        self.collider_scale = self
+            .collider_scale
+            .max(colliders.iter().map(collider_scale).fold(0.0, f64::max));
+    }
+
     /// The force for particles of radii `radius` (m) and inverse masses `inv_mass` (1/kg),
     /// with stiffness k_n (N/m) and optional damping rate γ_n (1/s), the pair materials from
     /// `global` and `own`, the colliders and the domain (2D/3D, periodic axes).
