@@ -1,4 +1,4 @@
-"""Static colliders for ``kinema.World``: planes, boxes and sphere obstacles.
+"""Static colliders for ``kinema.World``: planes, boxes, sphere obstacles and triangle meshes.
 
 A collider never moves and has infinite mass. Add one with ``world.add(...)``, which turns
 collisions on (with ``World.set_collisions``' defaults if they were off). Its values are
@@ -11,8 +11,13 @@ ball); ``None`` uses the particle's value (its own, else the world's).
 
 from __future__ import annotations
 
+import math
+import os
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from . import _checks
 from .forces import _vec3
@@ -94,3 +99,255 @@ class SphereObstacle(Collider):
 
     def _attach(self, core: Any) -> int:
         return core.add_sphere_obstacle(*self._args)
+
+
+class Mesh(Collider):
+    """A static triangle mesh (3D worlds only), from a file or from arrays::
+
+        kinema.Mesh("bowl.obj", scale=1.0, rotation=(0, 0, 0), translation=(0, 0, 0), inside=False)
+        kinema.Mesh(vertices=V, faces=F)
+
+    ``file``: a mesh file, OBJ (.obj), STL (.stl), PLY (.ply), glTF (.gltf, .glb) or USD
+    (.usd, .usda, .usdc, .usdz; needs ``pip install usd-core``), read by
+    ``kinema.io.mesh_files.read_mesh``: polygons cut into triangles, a file of several meshes
+    taken whole, vertices of equal coordinates made one. Its coordinates are metres (glTF's
+    +y is up by its specification, kinema's +z: ``rotation=(90, 0, 0)`` turns one into the
+    other). Or ``vertices`` (V, 3), m, and ``faces`` (F, 3), the indices of each triangle's
+    three vertices (integers, from 0).
+
+    The vertices are then scaled, rotated and translated, in that order, about the origin of
+    the file's (the arrays') coordinates: x' = R (s ⊙ x) + t, with
+
+    - ``scale`` s: one factor or three (x, y, z), each finite and non-zero (a negative one
+      mirrors);
+    - ``rotation`` (α, β, γ): Euler angles in degrees about the fixed x, then y, then z axis
+      (extrinsic XYZ, Blender's default 'XYZ' rotation mode): R = R_z(γ) R_y(β) R_x(α);
+    - ``translation`` t (m).
+
+    ``vertices`` (V, 3) float64 (after the transform) and ``faces`` (F, 3) int64 are
+    read-only arrays; ``file`` is the ``Path`` given (None for arrays).
+
+    A *closed* mesh (every edge shared by exactly two faces running along it in opposite
+    directions) bounds a solid: particles stay outside it (an obstacle), or inside it with
+    ``inside=True`` (a container). An *open* mesh is two-sided: a particle stays on the side
+    it is on, and ``inside=True`` is refused. The engine drops faces of zero area and turns a
+    closed mesh's faces outwards (docs/collisions.md, "Triangle meshes").
+
+    Refused when built, a ``ValueError`` naming the parameter: a file and arrays both given,
+    or neither; a missing file, an unknown suffix (the formats read are listed), a file that
+    cannot be read; arrays of the wrong shape; a zero or non-finite scale, rotation or
+    translation (a wrong type is a ``TypeError``). The engine checks the rest when the mesh
+    is added (an index out of range, a face with a repeated vertex, no face of non-zero
+    area, a 2D world).
+    """
+
+    __slots__ = ("_file", "_vertices", "_faces", "_scale", "_rotation", "_translation", "_inside", "_restitution", "_friction", "_args", "_closed")
+
+    def __init__(
+        self,
+        file: str | os.PathLike | None = None,
+        *,
+        vertices: Any = None,
+        faces: Any = None,
+        scale: Any = 1.0,
+        rotation: Any = (0.0, 0.0, 0.0),
+        translation: Any = (0.0, 0.0, 0.0),
+        inside: bool = False,
+        restitution: float | None = None,
+        friction: float | None = None,
+    ) -> None:
+        arrays = vertices is not None or faces is not None
+        if file is not None and arrays:
+            given = " and ".join(n for n, v in (("vertices", vertices), ("faces", faces)) if v is not None)
+            raise ValueError(f"file = {_checks.describe(_text(file))} and {given} are given: give either a file or vertices and faces, not both")
+        if file is None and not arrays:
+            raise ValueError("Mesh needs a file (Mesh('bowl.obj')) or vertices and faces (Mesh(vertices=V, faces=F)); neither is given")
+        s = _factors(scale)
+        rot = _vec3("rotation", rotation)
+        t = _vec3("translation", translation)
+        for name, value in (("rotation", rot), ("translation", t)):
+            if not all(math.isfinite(c) for c in value):
+                raise ValueError(f"{name} = {_checks.describe(value)} is invalid: it must be 3 finite numbers ({'degrees' if name == 'rotation' else 'm'})")
+        if file is not None:
+            from .io.mesh_files import read_mesh
+
+            if not isinstance(file, (str, os.PathLike)):
+                raise TypeError(f"file = {_checks.describe(file)} is invalid: it must be a path (a str or a pathlib.Path), not {_checks._type_words(file)}")
+            path = Path(file)
+            v, f = read_mesh(path, "file")
+        else:
+            path = None
+            if vertices is None or faces is None:
+                missing = "faces" if faces is None else "vertices"
+                raise ValueError(f"{missing} is missing: a mesh from arrays needs both vertices (V, 3), m, and faces (F, 3), vertex indices")
+            v = _checks.real_array("vertices", vertices)
+            if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] == 0:
+                raise ValueError(f"vertices has shape {v.shape}; it must be (V, 3): x, y, z (m) of each vertex")
+            f = _indices(faces)
+        v = transformed(v, s, rot, t)
+        v.flags.writeable = False
+        f = np.ascontiguousarray(f, dtype=np.int64)
+        f.flags.writeable = False
+        inside = _checks.boolean("inside", inside)
+        surface = _surface_values(restitution, friction)
+        for name, value in (
+            ("_file", path),
+            ("_vertices", v),
+            ("_faces", f),
+            ("_scale", tuple(s)),
+            ("_rotation", tuple(rot)),
+            ("_translation", tuple(t)),
+            ("_inside", inside),
+            ("_restitution", restitution),
+            ("_friction", friction),
+            ("_args", (v, f, inside, *surface)),
+            ("_closed", None),
+        ):
+            object.__setattr__(self, name, value)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"a Mesh cannot be changed (its {name!r} is read-only); make a new one")
+
+    @property
+    def file(self) -> Path | None:
+        """The mesh file given, or None for a mesh of arrays."""
+        return self._file
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(V, 3) float64, m: the vertices after scale, rotation and translation (read-only)."""
+        return self._vertices
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(F, 3) int64: each triangle's three vertex indices (read-only)."""
+        return self._faces
+
+    @property
+    def scale(self) -> tuple[float, float, float]:
+        """The scale factors along x, y, z applied to the file's (the arrays') vertices."""
+        return self._scale
+
+    @property
+    def rotation(self) -> tuple[float, float, float]:
+        """Euler angles in degrees about the fixed x, y, z axes, in that order."""
+        return self._rotation
+
+    @property
+    def translation(self) -> tuple[float, float, float]:
+        """The translation (m), applied last."""
+        return self._translation
+
+    @property
+    def inside(self) -> bool:
+        """Whether particles live inside this (closed) mesh: a container."""
+        return self._inside
+
+    @property
+    def restitution(self) -> float | None:
+        return self._restitution
+
+    @property
+    def friction(self) -> float | None:
+        return self._friction
+
+    def __repr__(self) -> str:
+        source = repr(str(self._file)) if self._file is not None else "vertices=..., faces=..."
+        return f"Mesh({source}, {len(self._vertices)} vertices, {len(self._faces)} triangles, inside={self._inside})"
+
+    def _attach(self, core: Any) -> int:
+        return core.add_mesh(*self._args)
+
+    def _contains(self, p: Any) -> bool:
+        """Whether the point ``p`` (m) lies where no particle may be: inside a closed obstacle,
+        outside a closed container; never for an open mesh (two-sided). By the winding number
+        of the surface about p (the sum of the solid angles of its triangles over 4π, Van
+        Oosterom and Strackee's formula): 1 inside, 0 outside."""
+        if self._closed is None:
+            object.__setattr__(self, "_closed", _is_closed(self._vertices, self._faces))
+        if not self._closed:
+            return False
+        a, b, c = (self._vertices[self._faces[:, k]] - np.asarray(p, float)[:3] for k in range(3))
+        la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+        # tan(Ω/2) = a·(b × c) / (|a||b||c| + (a·b)|c| + (a·c)|b| + (b·c)|a|)
+        num = np.einsum("ij,ij->i", a, np.cross(b, c))
+        den = la * lb * lc + np.einsum("ij,ij->i", a, b) * lc + np.einsum("ij,ij->i", a, c) * lb + np.einsum("ij,ij->i", b, c) * la
+        winding = abs(float(np.sum(2.0 * np.arctan2(num, den))) / (4.0 * math.pi))
+        return winding < 0.5 if self._inside else winding > 0.5
+
+
+def transformed(vertices: np.ndarray, scale: Any, rotation: Any, translation: Any) -> np.ndarray:
+    """x' = R (s ⊙ x) + t for each row x of ``vertices`` (V, 3), m: ``scale`` s (3,), then
+    ``rotation`` (α, β, γ) in degrees about the fixed x, y and z axes in that order, R = R_z(γ)
+    R_y(β) R_x(α) (extrinsic XYZ, Blender's 'XYZ' mode), then ``translation`` t (3,), m."""
+    scaled = np.asarray(vertices, dtype=np.float64) * np.asarray(scale, dtype=np.float64)
+    return scaled @ rotation_matrix(rotation).T + np.asarray(translation, dtype=np.float64)
+
+
+def rotation_matrix(rotation: Any) -> np.ndarray:
+    """R = R_z(γ) R_y(β) R_x(α) (3, 3) of Euler angles (α, β, γ) in degrees: a rotation about
+    the fixed x axis, then y, then z (extrinsic XYZ)."""
+    ax, ay, az = np.radians(np.asarray(rotation, dtype=np.float64))
+    cx, sx, cy, sy, cz, sz = np.cos(ax), np.sin(ax), np.cos(ay), np.sin(ay), np.cos(az), np.sin(az)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def _text(file: Any) -> Any:
+    return os.fspath(file) if isinstance(file, os.PathLike) else file
+
+
+def _surface_values(restitution: Any, friction: Any) -> tuple[float | None, float | None]:
+    return _checks.real("restitution", restitution, optional=True), _checks.real("friction", friction, optional=True)
+
+
+def _factors(scale: Any) -> list[float]:
+    """``scale`` as 3 factors (one number: the same along each axis), each finite and non-zero."""
+    s = _checks.real_array("scale", scale).reshape(-1)
+    if s.size == 1:
+        s = np.repeat(s, 3)
+    if s.size != 3:
+        raise ValueError(f"scale = {_checks.describe(scale)} is invalid: it must be one number or 3 (x, y, z)")
+    if not (np.all(np.isfinite(s)) and np.all(s != 0)):
+        raise ValueError(f"scale = {_checks.describe(scale)} is invalid: each factor must be finite and non-zero (a negative one mirrors)")
+    return s.tolist()
+
+
+def _indices(faces: Any) -> np.ndarray:
+    """``faces`` as an (F, 3) int64 array: integers only (a float, even 2.0, or a bool is a
+    ``TypeError`` naming it); ranges are the engine's to check."""
+    arr = _checks._as_array("faces", faces)
+    if isinstance(faces, np.ndarray) and arr.dtype.kind in "iu":
+        if arr.dtype.kind == "u" and arr.size and int(arr.max()) > _checks.INT64_MAX:
+            raise ValueError(f"faces holds {int(arr.max())}; vertex indices must be below 2**63")
+        out = arr.astype(np.int64)
+    elif isinstance(faces, np.ndarray) and arr.dtype.kind != "O":
+        raise TypeError(f"faces = {_checks.describe(faces)} is invalid: vertex indices must be integers, not {_checks._dtype_words(arr.dtype)}")
+    else:
+        obj = _checks._objects(faces)
+        bad = _checks._first_bad("faces", obj, _checks._is_integer)
+        if bad is not None:
+            raise TypeError(f"{bad[0]} = {_checks.describe(bad[1])} is invalid: vertex indices must be integers (int), not {_checks._type_words(bad[1])}")
+        values = [int(x) for x in obj.reshape(-1).tolist()]
+        if values and (max(values) > _checks.INT64_MAX or min(values) < -_checks.INT64_MAX):
+            raise ValueError(f"faces holds {max(values, key=abs)}; vertex indices must fit in 64 bits")
+        out = np.array(values, dtype=np.int64).reshape(obj.shape)
+    if out.ndim != 2 or out.shape[1] != 3 or out.shape[0] == 0:
+        raise ValueError(
+            f"faces has shape {out.shape}; it must be (F, 3): three vertex indices per triangle, F >= 1 (cut polygons into triangles, or load a file, which does)"
+        )
+    return out
+
+
+def _is_closed(vertices: np.ndarray, faces: np.ndarray) -> bool:
+    """The engine's rule (collide/mesh.rs): over the faces of non-zero area, every edge is
+    shared by exactly two faces that run along it in opposite directions."""
+    a, b, c = (vertices[faces[:, k]] for k in range(3))
+    f = faces[np.linalg.norm(np.cross(b - a, c - a), axis=1) > 0.0]
+    directed = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    if len(np.unique(directed, axis=0)) != len(directed):
+        return False  # an edge run twice the same way
+    undirected, counts = np.unique(np.sort(directed, axis=1), axis=0, return_counts=True)
+    return bool(len(undirected) and np.all(counts == 2))

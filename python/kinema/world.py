@@ -47,9 +47,12 @@ def _other_thread(owner: int) -> RuntimeError:
 
 def _inside(c: Collider, p: np.ndarray) -> bool:
     """Whether the point ``p`` (m) lies inside the collider ``c``: behind a plane, outside a
-    box, inside a sphere obstacle (the rule of collide/placement.rs, without its tolerance)."""
-    from .colliders import Plane, SphereObstacle
+    box, inside a sphere obstacle, on the wrong side of a closed mesh (the rule of
+    collide/placement.rs, without its tolerance)."""
+    from .colliders import Mesh, Plane, SphereObstacle
 
+    if isinstance(c, Mesh):
+        return c._contains(p)
     if isinstance(c, Plane):
         n = np.ravel(np.asarray(c.normal, float))
         return float(np.dot(p[: n.size] - np.ravel(np.asarray(c.point, float))[: n.size], n)) < 0.0
@@ -353,13 +356,13 @@ class World(WorldCollisions):
 
     def add(self, item: Any) -> Any:
         """Add a force (``kinema.Gravity``, ``Drag``, ``Spring``, ``Attractor``, ``Wind``,
-        ``PythonForce``) or a collider (``kinema.Plane``, ``Box``, ``SphereObstacle``; this
-        turns collisions on); returns it."""
+        ``PythonForce``) or a collider (``kinema.Plane``, ``Box``, ``SphereObstacle``,
+        ``Mesh``; this turns collisions on); returns it."""
         attach = getattr(item, "_attach", None)
         if attach is None:
             raise TypeError(
                 f"{type(item).__name__} is not a kinema force, collider or emitter; use kinema.Gravity, Drag, Spring, Attractor, "
-                "Wind, PythonForce, Plane, Box, SphereObstacle, Emitter, KillBox, KillSphere or KillPlane"
+                "Wind, PythonForce, Plane, Box, SphereObstacle, Mesh, Emitter, KillBox, KillSphere or KillPlane"
             )
         if isinstance(item, (Emitter, *KILL_VOLUMES)):
             attach(self)

@@ -5,15 +5,19 @@ from __future__ import annotations
 
 import numpy as np
 
-_KIND = {"plane": ("point", "normal"), "box": ("lo", "hi"), "sphere": ("center", "radius")}
+from .._checks import describe
+
+_KIND = {"plane": ("point", "normal"), "box": ("lo", "hi"), "sphere": ("center", "radius"), "mesh": ("vertices", "faces")}
 
 
 def _describe_colliders(colliders) -> list[dict]:
-    """Plain descriptions of colliders (``kinema.Plane``, ``Box``, ``SphereObstacle`` or such
-    descriptions already): {"type": "plane", "point": [3], "normal": [3]}, {"type": "box",
-    "lo": [2 or 3], "hi": [2 or 3]} (bounds may be ±inf), {"type": "sphere", "center": [3],
-    "radius": r}, with "restitution" and "friction" where the collider sets them."""
-    from ..colliders import Box, Plane, SphereObstacle
+    """Plain descriptions of colliders (``kinema.Plane``, ``Box``, ``SphereObstacle``,
+    ``Mesh`` or such descriptions already): {"type": "plane", "point": [3], "normal": [3]},
+    {"type": "box", "lo": [2 or 3], "hi": [2 or 3]} (bounds may be ±inf), {"type": "sphere",
+    "center": [3], "radius": r}, {"type": "mesh", "vertices": [[x, y, z], ...] (m, after the
+    mesh's transform), "faces": [[i, j, k], ...] (ints), "inside": bool}, with "restitution"
+    and "friction" where the collider sets them."""
+    from ..colliders import Box, Mesh, Plane, SphereObstacle
 
     def floats(name, value, sizes=(3,)):
         a = np.asarray(value, dtype=np.float64).reshape(-1)
@@ -29,22 +33,27 @@ def _describe_colliders(colliders) -> list[dict]:
             d = {"type": "box", "lo": c.lo, "hi": c.hi}
         elif isinstance(c, SphereObstacle):
             d = {"type": "sphere", "center": c.center, "radius": c.radius}
+        elif isinstance(c, Mesh):
+            d = {"type": "mesh", "vertices": c.vertices, "faces": c.faces, "inside": c.inside}
         elif isinstance(c, dict) and c.get("type") in _KIND:
             d = dict(c)
         else:
             raise ValueError(
-                f"colliders[{k}] = {c!r} is invalid: use kinema.Plane, Box or SphereObstacle, or a description "
-                "{'type': 'plane' | 'box' | 'sphere', ...} (Trajectory.colliders)"
+                f"colliders[{k}] = {describe(c)} is invalid: use kinema.Plane, Box or SphereObstacle (or kinema.Mesh), or a description "
+                "{'type': 'plane' | 'box' | 'sphere' | 'mesh', ...} (Trajectory.colliders)"
             )
         try:
             if d["type"] == "box":
                 d["lo"], d["hi"] = floats(f"colliders[{k}].lo", d["lo"], (2, 3)), floats(f"colliders[{k}].hi", d["hi"], (2, 3))
             elif d["type"] == "sphere":
                 d["center"], d["radius"] = floats(f"colliders[{k}].center", d["center"]), float(d["radius"])
+            elif d["type"] == "mesh":
+                d["vertices"], d["faces"] = _mesh_arrays(f"colliders[{k}]", d["vertices"], d["faces"])
+                d["inside"] = _flag(f"colliders[{k}].inside", d.get("inside", False))
             else:
                 d["point"], d["normal"] = floats(f"colliders[{k}].point", d["point"]), floats(f"colliders[{k}].normal", d["normal"])
         except KeyError as e:
-            raise ValueError(f"colliders[{k}] = {c!r} is invalid: a {d['type']} needs {' and '.join(_KIND[d['type']])}, it has no {e}") from None
+            raise ValueError(f"colliders[{k}] = {describe(c)} is invalid: a {d['type']} needs {' and '.join(_KIND[d['type']])}, it has no {e}") from None
         for name in ("restitution", "friction"):
             value = getattr(c, name, None) if not isinstance(c, dict) else c.get(name)
             if value is not None:
@@ -53,3 +62,24 @@ def _describe_colliders(colliders) -> list[dict]:
                 d.pop(name, None)
         out.append(d)
     return out
+
+
+def _mesh_arrays(name: str, vertices, faces) -> tuple[list, list]:
+    """A mesh description's vertices as (V, 3) nested lists of floats (m) and faces as (F, 3)
+    nested lists of ints; a ``ValueError`` naming ``name`` for another shape or for faces that
+    are not integers."""
+    v = np.asarray(vertices, dtype=np.float64)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise ValueError(f"{name}.vertices has shape {v.shape}; it must be (V, 3): x, y, z (m) of each vertex")
+    f = np.asarray(faces)
+    if f.size and f.dtype.kind not in "iu":
+        raise ValueError(f"{name}.faces holds {f.dtype} values; they must be vertex indices (integers)")
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise ValueError(f"{name}.faces has shape {f.shape}; it must be (F, 3): three vertex indices per triangle")
+    return v.tolist(), f.astype(np.int64).tolist()
+
+
+def _flag(name: str, value) -> bool:
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise ValueError(f"{name} = {value!r} is invalid: it must be true or false")
