@@ -31,9 +31,11 @@ specification allows, and requires for the box; units shown for ``units="SI"``, 
         contacts (F,), impulse_balance (F, 3) [kg m s-1], collision_energy_lost (F,) [J]
     /parameters/kinema    +-- dim = 2 | 3, dt [s], method, fps [s-1]   (each but dim when known;
                               fps: the frames per second asked of World.run, a video's rate)
-        colliders/<k>     +-- type = "plane" | "box" | "sphere", its geometry [m]
-                              (point, normal | lo, hi | center, radius), restitution,
+        colliders/<k>     +-- type = "plane" | "box" | "sphere" | "mesh", its geometry [m]
+                              (point, normal | lo, hi | center, radius | inside), restitution,
                               friction when set; k = 0, 1, ... in the world's order
+            vertices, faces   a mesh's vertices (V, 3) float64 [m] and triangles (F, 3) int64
+                              (datasets: an attribute holds at most 64 KiB)
 
 A 2D world is written 3D, z = 0 and its box open along z, so that 3D readers (MDAnalysis,
 znh5md) read it; ``/parameters/kinema`` ``dim = 2`` makes it 2D again for kinema, which
@@ -80,7 +82,7 @@ from ._checks import available_memory, number
 from ._files import TrajectoryFileError, frames_of, hdf5_file, os_errors_as_write_errors
 from ._h5md_checks import check_frames, edges_problem, fail, increase_problem, links_out
 from ._h5md_layout import BY_FORCE, ELEMENTS, H5MD_VERSION, OBSERVABLES, import_h5py
-from .h5md_reader import LoadedTrajectory, read
+from .h5md_reader import MESH_DATASETS, LoadedTrajectory, read
 from .h5md_units import from_si, parse_unit, system_of
 
 __all__ = ["H5MD_VERSION", "LoadedTrajectory", "load_h5md", "parse_unit", "save_h5md"]
@@ -315,11 +317,19 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
         # One group per collider, named by its index; the values are attributes (H5MD
         # leaves /parameters to the program), lengths in m, ±inf for an open box face.
         group_of = params.create_group("colliders", track_order=True)
+        # A mesh's vertices and faces are datasets (a 20,000-triangle mesh is 480 kB of
+        # faces; an attribute holds 64 KiB) and its inside flag a bool.
         for k, c in enumerate(colliders):
             g = group_of.create_group(str(k), track_order=True)
             g.attrs["type"] = c["type"]
             for name, value in c.items():
-                if name != "type":
+                if name == "type":
+                    continue
+                if name in MESH_DATASETS:
+                    g.create_dataset(name, data=np.asarray(value, dtype=MESH_DATASETS[name]).reshape(-1, 3), compression=compression)
+                elif name == "inside":
+                    g.attrs.create(name, np.bool_(value))
+                else:
                     g.attrs.create(name, np.asarray(value, dtype=np.float64))
 
 

@@ -98,9 +98,17 @@ class LoadedTrajectory:
     path: Path | None = None
 
 
+#: A mesh collider's arrays, datasets of its group (``save_h5md``), and their dtypes.
+MESH_DATASETS = {"vertices": "float64", "faces": "int64"}
+#: The collider types a file holds.
+COLLIDER_TYPES = ("plane", "box", "sphere", "mesh")
+
+
 def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
     """The descriptions under /parameters/kinema/colliders, in index order, each checked by
-    the engine as ``World.add`` checks a collider (in a world of ``dim`` dimensions)."""
+    the engine as ``World.add`` checks a collider (in a world of ``dim`` dimensions): the
+    attributes are numbers (a mesh's ``inside`` a bool), a mesh's ``vertices`` (V, 3) real
+    numbers and ``faces`` (F, 3) integers are datasets of its group."""
     h5py = import_h5py()
     group = params.get("colliders")
     if not isinstance(group, h5py.Group):
@@ -109,18 +117,35 @@ def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
     names = []
     for name in sorted(group, key=lambda n: int(n) if n.isdigit() else -1):
         g = group[name]
-        kind = g.attrs.get("type")
+        kind = g.attrs.get("type") if isinstance(g, h5py.Group) else None
         kind = kind.decode() if isinstance(kind, bytes) else kind
-        if not name.isdigit() or not isinstance(g, h5py.Group) or not isinstance(kind, str) or kind not in ("plane", "box", "sphere"):
-            raise fail(path, f"{g.name} is not a kinema collider (a group named by its index with type plane, box or sphere)")
+        if not name.isdigit() or not isinstance(g, h5py.Group) or not isinstance(kind, str) or kind not in COLLIDER_TYPES:
+            raise fail(
+                path, f"{g.name} is not a kinema collider (a group named by its index with type {', '.join(COLLIDER_TYPES[:-1])} or {COLLIDER_TYPES[-1]})"
+            )
         d: dict[str, Any] = {"type": str(kind)}
         for key, value in g.attrs.items():
-            if key != "type":
-                a = np.asarray(value)
-                if a.size == 0 or dtype_problem(a.dtype) is not None:
-                    raise fail(path, f"attribute {key!r} ({g.name}) = {shown(value)} is not a number")
-                a = a.astype(np.float64)
-                d[key] = float(a) if a.ndim == 0 else a.tolist()
+            if key == "type":
+                continue
+            a = np.asarray(value)
+            if key == "inside" and kind == "mesh":
+                if a.size != 1 or a.dtype.kind != "b":
+                    raise fail(path, f"attribute 'inside' ({g.name}) = {shown(value)} is not a bool")
+                d[key] = bool(a.reshape(()))
+                continue
+            if a.size == 0 or dtype_problem(a.dtype) is not None:
+                raise fail(path, f"attribute {key!r} ({g.name}) = {shown(value)} is not a number")
+            a = a.astype(np.float64)
+            d[key] = float(a) if a.ndim == 0 else a.tolist()
+        for key in g:
+            ds = g[key]
+            if kind != "mesh" or key not in MESH_DATASETS or not isinstance(ds, h5py.Dataset):
+                raise fail(path, f"{ds.name} is not part of a kinema collider (a mesh's group holds the datasets vertices and faces, nothing else does)")
+            integer = MESH_DATASETS[key] == "int64"
+            if ds.shape is None or len(ds.shape) != 2 or ds.shape[1] != 3 or dtype_problem(ds.dtype, integer) is not None:
+                must = "integers" if integer else "real numbers"
+                raise fail(path, f"{ds.name} has shape {ds.shape} of {ds.dtype}; it must be (N, 3) {must}")
+            d[key] = np.asarray(ds[()], dtype=MESH_DATASETS[key]).tolist()
         out.append(d)
         names.append(g.name)
     if out:
@@ -143,17 +168,18 @@ def collider_problem(names: list[str], colliders: list[dict[str, Any]], dim: int
     reading a file needs no world module (which imports ``kinema.trajectory``, which imports
     this). ``save_h5md`` checks what it writes with it."""
     from .. import _core
-    from ..colliders import Box, Plane, SphereObstacle
+    from ..colliders import Box, Mesh, Plane, SphereObstacle
     from ..render import _KIND
 
     core = _core.World(dim, 1e-3, "verlet")
-    make = {"plane": Plane, "box": Box, "sphere": SphereObstacle}
+    make = {"plane": Plane, "box": Box, "sphere": SphereObstacle, "mesh": Mesh}
     for name, d in zip(names, colliders, strict=True):
         needed = _KIND[d["type"]]
         missing = [k for k in needed if k not in d]
         if missing:
-            return f"{name} (a {d['type']}) has no attribute {missing[0]!r}"
-        args = {k: d[k] for k in (*needed, "restitution", "friction") if k in d}
+            return f"{name} (a {d['type']}) has no {'dataset' if d['type'] == 'mesh' else 'attribute'} {missing[0]!r}"
+        flags = ("inside",) if d["type"] == "mesh" else ()
+        args = {k: d[k] for k in (*needed, *flags, "restitution", "friction") if k in d}
         try:
             make[d["type"]](**args)._attach(core)
         except (ValueError, TypeError) as e:
