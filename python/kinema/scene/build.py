@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..colliders import Box, Plane, SphereObstacle
+from ..colliders import Box, Mesh, Plane, SphereObstacle
 from ..emitter import Emitter, KillBox, KillPlane, KillSphere
 from ..forces import Attractor, Drag, Gravity, Spring, Wind
 from ..world import World
@@ -27,6 +27,7 @@ from .tables import (
     LatticeBlock,
     ListBlock,
     Maxwell,
+    MeshCollider,
     PlaneCollider,
     SpringForce,
     Uniform,
@@ -230,6 +231,11 @@ def _collider(c: Any, dim: int) -> Any:
         return Plane(_v3(c.point), _v3(c.normal), **s)
     if isinstance(c, BoxCollider):
         return Box(list(c.lo), list(c.hi), **s)
+    if isinstance(c, MeshCollider):
+        shape = {"scale": c.scale, "rotation": c.rotation, "translation": c.translation, "inside": c.inside}
+        if c.file is not None:
+            return Mesh(c.file, **shape, **s)
+        return Mesh(vertices=c.vertices, faces=c.faces, **shape, **s)
     return SphereObstacle(_v3(c.center), c.radius, **s)
 
 

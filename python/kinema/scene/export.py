@@ -4,6 +4,7 @@ package gives on import (``World.to_scene``, ``World.scene``, ``World.save_check
 
 from __future__ import annotations
 
+import os
 import re
 from typing import Any
 
@@ -11,7 +12,7 @@ import numpy as np
 
 from .. import _checks
 from ..checkpoint import load_checkpoint, save_checkpoint
-from ..colliders import Box, Plane
+from ..colliders import Box, Mesh, Plane
 from ..emitter import KillBox, KillSphere
 from ..forces import Attractor, Drag, Gravity, Spring, Wind
 from ..world import World
@@ -154,6 +155,14 @@ def to_scene(world: World) -> Scene:
             colliders.append({"type": "plane", "point": _v3(list(np.ravel(c.point))), "normal": _v3(list(np.ravel(c.normal))), **s})
         elif isinstance(c, Box):
             colliders.append({"type": "box", "lo": np.ravel(c.lo).astype(float).tolist(), "hi": np.ravel(c.hi).astype(float).tolist(), **s})
+        elif isinstance(c, Mesh):
+            # its file and transform where it was read from one (the scene stays small), else
+            # its vertices as the world has them (after the transform) and its faces
+            if c.file is not None:
+                shape = {"file": os.path.abspath(c.file), "scale": list(c.scale), "rotation": list(c.rotation), "translation": list(c.translation)}
+            else:
+                shape = {"vertices": c.vertices.tolist(), "faces": c.faces.tolist()}
+            colliders.append({"type": "mesh", **shape, "inside": c.inside, **s})
         else:
             colliders.append({"type": "sphere", "center": _v3(list(np.ravel(c.center))), "radius": float(c.radius), **s})
     emitters = []

@@ -33,6 +33,7 @@ from .tables import (
     KillItem,
     LatticeBlock,
     ListBlock,
+    MeshCollider,
     OutputTable,
     PlaneCollider,
     RandomBlock,
@@ -82,6 +83,9 @@ class Scene(_Model):
             if isinstance(f, SpringForce) and f.block is not None and f.block >= len(self.particles):
                 raise ValueError(f"a spring names block = {f.block}, but the scene has {len(self.particles)} [[particles]] blocks")
         camera, dim = self.render.camera, self.world.dim
+        for k, c in enumerate(self.colliders):
+            if isinstance(c, MeshCollider) and dim != 3:
+                raise ValueError(f"colliders[{k}].type: 'mesh' is invalid: a triangle mesh is a 3D collider, and this is a {dim}D world (world.dim = {dim})")
         if camera is not None and camera.type != f"{dim}d":
             raise ValueError(f"render.camera.type: '{camera.type}' is invalid: a {dim}D world (world.dim = {dim}) needs a '{dim}d' camera")
         return self
@@ -121,12 +125,15 @@ class Scene(_Model):
         except UnicodeDecodeError as e:
             raise SceneError(f"{path}: cannot be read ({e})") from None
         scene = cls.from_string(text, source=str(path))
-        # A file block's relative path names a file beside the scene file: made absolute here,
+        # A file block's relative path (a mesh's file) names a file beside the scene file: made absolute here,
         # so that the scene builds from any working folder and writes back (to_toml) as one
         # that does.
         for block in scene.particles:
             if isinstance(block, FileBlock) and not os.path.isabs(block.path):
                 block.path = os.path.abspath(os.path.join(path.parent, block.path))
+        for collider in scene.colliders:  # a mesh's file too
+            if isinstance(collider, MeshCollider) and collider.file is not None and not os.path.isabs(collider.file):
+                collider.file = os.path.abspath(os.path.join(path.parent, collider.file))
         return scene
 
     @classmethod
@@ -385,6 +392,7 @@ _TAGGED = {
         PlaneCollider,
         BoxCollider,
         SphereCollider,
+        MeshCollider,
         Camera2DTable,
         Camera3DTable,
     )

@@ -6,6 +6,7 @@ other way round)."""
 from __future__ import annotations
 
 import math
+import os
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, field_validator, model_validator
@@ -34,6 +35,7 @@ MAX_NESTING = 32  # arrays and tables inside each other (a scene's deepest key p
 
 
 Vec = Annotated[list[float], Field(min_length=2, max_length=3)]
+Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 NonNeg = Annotated[float, Field(ge=0)]
 Positive = Annotated[float, Field(gt=0)]
 SpeciesName = Annotated[str, Field(pattern=f"^{_checks.SPECIES_PATTERN}$")]  # one word, as World.add_particles takes it
@@ -392,7 +394,59 @@ class SphereCollider(_Surface):
     radius: NonNeg
 
 
-ColliderItem = _typed(PlaneCollider, BoxCollider, SphereCollider)
+class MeshCollider(_Surface):
+    """A triangle mesh (``kinema.Mesh``, 3D only): from ``file`` (OBJ, STL, PLY, glTF, USD; a
+    path relative to the scene file) or from ``vertices`` (m) and ``faces`` (vertex indices)
+    written in the table; then scaled by ``scale`` (one factor or 3), rotated by ``rotation``
+    (degrees about the fixed x, then y, then z axis) and moved by ``translation`` (m).
+    ``inside``: particles live inside this closed mesh (a container)."""
+
+    type: Literal["mesh"] = "mesh"
+    file: Annotated[str, Field(min_length=1)] | None = None
+    vertices: Annotated[list[Vec3], Field(min_length=1)] | None = None
+    faces: Annotated[list[Annotated[list[Annotated[int, Field(ge=0, le=2**32 - 1)]], Field(min_length=3, max_length=3)]], Field(min_length=1)] | None = None
+    scale: _by_kind(float, Vec3) = 1.0
+    rotation: Vec3 = [0.0, 0.0, 0.0]
+    translation: Vec3 = [0.0, 0.0, 0.0]
+    inside: bool = False
+
+    @field_validator("file")
+    @classmethod
+    def _format(cls, v: str | None) -> str | None:
+        from ..io.mesh_files import formats_text, mesh_format
+
+        if v is not None and mesh_format(v) is None:
+            suffix = os.path.splitext(v)[1]
+            raise ValueError(f"unknown mesh format {repr(suffix) if suffix else '(no suffix)'}; the formats read are {formats_text()}")
+        return v
+
+    @field_validator("scale")
+    @classmethod
+    def _factors(cls, v: Any) -> Any:
+        if not all(math.isfinite(c) and c != 0 for c in (v if isinstance(v, list) else [v])):
+            raise ValueError("each scale factor must be finite and non-zero (a negative one mirrors)")
+        return v
+
+    @field_validator("rotation", "translation", "vertices")
+    @classmethod
+    def _finite(cls, v: Any, info: Any) -> Any:
+        rows = v if v is None or not v or not isinstance(v[0], list) else [c for row in v for c in row]
+        if rows is not None and not all(math.isfinite(c) for c in rows):
+            unit = "degrees" if info.field_name == "rotation" else "m"
+            raise ValueError(f"{info.field_name} must be finite numbers ({unit})")
+        return v
+
+    @model_validator(mode="after")
+    def _source(self) -> MeshCollider:
+        arrays = self.vertices is not None or self.faces is not None
+        if self.file is not None and arrays:
+            raise ValueError("give either file or vertices and faces, not both")
+        if self.file is None and not (self.vertices is not None and self.faces is not None):
+            raise ValueError("a mesh needs file (a mesh file beside the scene) or both vertices and faces")
+        return self
+
+
+ColliderItem = _typed(PlaneCollider, BoxCollider, SphereCollider, MeshCollider)
 
 # -- [[emitters]], [[kill_volumes]] ------------------------------------------------------------
 # The emitter checks its own values (kinema.Emitter); the tables check the types and names.
@@ -500,9 +554,6 @@ class Camera2DTable(_Model):
             )
         _engine_takes_camera(view=corners)  # (a width beyond float64, -1e308 to 1e308)
         return self
-
-
-Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 
 
 class Camera3DTable(_Model):
