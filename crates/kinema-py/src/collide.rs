@@ -4,10 +4,10 @@
 //! per class); every rule is the engine's, and its errors name the parameter.
 
 use kinema::collide::colliders::{check_planar, PLANE_IN_2D, SPHERE_IN_2D};
-use kinema::collide::{BoxContainer, Collider, Contact, Material, Partner, Plane, SphereObstacle, Surface, TriangleMesh};
+use kinema::collide::{BoxContainer, Collider, Contact, Material, Motion, Partner, Plane, SphereObstacle, Surface, TriangleMesh};
 use kinema::world::{CollisionParams, CollisionStats, ContactModel};
 use kinema::Error;
-use numpy::{PyArray1, PyArrayMethods};
+use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -67,8 +67,69 @@ fn check_contact_model(model: &str, stiffness: Option<f64>, damping: Option<f64>
         .map_err(crate::errors::to_py)
 }
 
+/// A collider's prescribed motion from its parts (the keyword arguments of
+/// `World.set_collider_motion` and of `collider_poses`): steady (`velocity`, m/s,
+/// `angular_velocity`, rad/s) or keyframes (`times`, s, with `translations`, m, and
+/// `rotations`, unit quaternions w, x, y, z), about `pivot` (m); `None` when none is given.
+#[allow(clippy::too_many_arguments)]
+pub fn motion(
+    velocity: Option<[f64; 3]>,
+    angular_velocity: Option<[f64; 3]>,
+    pivot: Option<[f64; 3]>,
+    times: Option<Vec<f64>>,
+    translations: Option<Vec<[f64; 3]>>,
+    rotations: Option<Vec<[f64; 4]>>,
+) -> Result<Option<Motion>, Error> {
+    let pivot = pivot.unwrap_or([0.0; 3]);
+    match (times, velocity.is_some() || angular_velocity.is_some()) {
+        (Some(_), true) => Err(Error::invalid(
+            "times",
+            "given with a velocity",
+            "a collider's motion is steady (velocity, angular_velocity) or keyframes (times, translations, rotations), not both",
+        )),
+        (Some(times), false) => {
+            let n = times.len();
+            let translations = translations.unwrap_or_else(|| vec![[0.0; 3]; n]);
+            let rotations = rotations.unwrap_or_else(|| vec![[1.0, 0.0, 0.0, 0.0]; n]);
+            Motion::keyframes(times, translations, rotations, pivot).map(Some)
+        }
+        (None, true) => Motion::steady(velocity.unwrap_or([0.0; 3]), angular_velocity.unwrap_or([0.0; 3]), pivot).map(Some),
+        (None, false) => Ok(None),
+    }
+}
+
+/// Where a collider with this motion is at each of `at` (s): (len(at), 3, 4) matrices
+/// [R | o] with x = R x₀ + o for a point x₀ of its placement as added (m); the one
+/// implementation of the motion that the pictures, the viewer and the USD export share.
+#[pyfunction]
+#[pyo3(signature = (at, velocity=None, angular_velocity=None, pivot=None, times=None, translations=None, rotations=None))]
+#[allow(clippy::too_many_arguments)]
+fn collider_poses<'py>(
+    py: Python<'py>,
+    at: Vec<f64>,
+    velocity: Option<[f64; 3]>,
+    angular_velocity: Option<[f64; 3]>,
+    pivot: Option<[f64; 3]>,
+    times: Option<Vec<f64>>,
+    translations: Option<Vec<[f64; 3]>>,
+    rotations: Option<Vec<[f64; 4]>>,
+) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    let m = motion(velocity, angular_velocity, pivot, times, translations, rotations).map_err(crate::errors::to_py)?;
+    let mut out = Vec::with_capacity(12 * at.len());
+    for &t in &at {
+        let pose = m.as_ref().map_or(kinema::collide::Pose::IDENTITY, |m| m.at(t).0);
+        let o = pose.point([0.0; 3]);
+        for (row, oc) in pose.rotation.iter().zip(o) {
+            out.extend_from_slice(row);
+            out.push(oc);
+        }
+    }
+    Ok(PyArray1::from_vec(py, out).reshape([at.len(), 3, 4])?)
+}
+
 /// Registers the module-level functions of the collision settings.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(collider_poses, m)?)?;
     m.add_function(wrap_pyfunction!(collision_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(check_contact_model, m)?)?;
     m.add("CONTACT_MODELS", ContactModel::NAMES.to_vec())?;

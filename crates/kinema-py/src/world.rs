@@ -333,6 +333,42 @@ impl PyWorld {
         (x, y, z)
     }
 
+    /// Gives collider k a prescribed motion: steady (`velocity`, m/s; `angular_velocity`,
+    /// rad/s; about `pivot`, m), or keyframes (`times`, s; `translations`, m, K × 3;
+    /// `rotations`, unit quaternions w, x, y, z, K × 4; about `pivot`); all None: still.
+    #[pyo3(signature = (k, velocity=None, angular_velocity=None, pivot=None, times=None, translations=None, rotations=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn set_collider_motion(
+        &mut self,
+        k: usize,
+        velocity: Option<[f64; 3]>,
+        angular_velocity: Option<[f64; 3]>,
+        pivot: Option<[f64; 3]>,
+        times: Option<Vec<f64>>,
+        translations: Option<Vec<[f64; 3]>>,
+        rotations: Option<Vec<[f64; 4]>>,
+    ) -> PyResult<()> {
+        let motion = collide::motion(velocity, angular_velocity, pivot, times, translations, rotations).map_err(to_py)?;
+        self.inner.set_collider_motion(k, motion).map_err(to_py)
+    }
+
+    /// What the particles gave each collider over all steps: {"momentum": (K, 3) N·s,
+    /// "angular_momentum": (K, 3) N·m·s about the origin, "work": (K,) J done by the
+    /// collider on the particles}.
+    fn collider_books<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let books = self.inner.collider_books();
+        let n = books.len();
+        let flat = |f: fn(&kinema::world::ColliderBooks) -> [f64; 3]| books.iter().flat_map(f).collect::<Vec<f64>>();
+        let out = PyDict::new(py);
+        out.set_item("momentum", PyArray1::from_vec(py, flat(|b| b.momentum)).reshape([n, 3])?)?;
+        out.set_item(
+            "angular_momentum",
+            PyArray1::from_vec(py, flat(|b| b.angular_momentum)).reshape([n, 3])?,
+        )?;
+        out.set_item("work", PyArray1::from_vec(py, books.iter().map(|b| b.work).collect()))?;
+        Ok(out)
+    }
+
     /// The contacts at the end of the last step, as arrays.
     fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         collide::contacts_dict(py, self.inner.contacts())
