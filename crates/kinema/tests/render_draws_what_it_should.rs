@@ -357,8 +357,9 @@ mod render {
         0.299 * c[0] as f64 + 0.587 * c[1] as f64 + 0.114 * c[2] as f64
     }
 
-    /// The darkest luma and the count of pixels darker than the bare floor by more than 4,
-    /// outside the ball's own pixels (those the ball covers with no scenery, grown by 2 px).
+    /// The darkest luma and the count of the pixels darker than the bare floor by more than 4
+    /// (the shadow's), outside the ball's own pixels (those the ball covers with no scenery,
+    /// grown by 2 px).
     fn shadow_of(cam: &Camera, centre: [f64; 3], r: f64, scenery: &Scenery, w: usize, h: usize) -> (f64, usize) {
         let red = [[200, 30, 30]];
         let ball = scene_frame(cam, &[centre], &[r], &red, &items(vec![]), w, h);
@@ -375,8 +376,8 @@ mod render {
                     continue;
                 }
                 let (l, l0) = (luma(pixel(&img, w, i, j)), luma(pixel(&bare, w, i, j)));
-                darkest = darkest.min(l);
                 if l < l0 - 4.0 {
+                    darkest = darkest.min(l);
                     count += 1;
                 }
             }
@@ -776,6 +777,60 @@ mod render {
             eprintln!("edge {e:?}: {c:?}");
             assert!(is_grey(c, 12) && luma(c) < face - 15.0, "a line on the edge at {e:?}: {c:?}");
         }
+    }
+
+    #[test]
+    fn a_mesh_takes_contact_shadows_where_it_faces_up() {
+        let (w, h) = (200, 150);
+        let cam = Camera::perspective([0.0, -4.0, 4.0], [0.0, 0.0, 0.3], [0.0, 0.0, 1.0], 40.0).unwrap();
+        // A square floor of two triangles, seen from above and from below.
+        let floor = mesh(
+            vec![[-3.0, -3.0, 0.0], [3.0, -3.0, 0.0], [3.0, 3.0, 0.0], [-3.0, 3.0, 0.0]],
+            vec![[0, 1, 2], [0, 2, 3]],
+        );
+        let square = Scenery {
+            colliders: vec![floor],
+            extent: Some(([-3.0, -3.0, 0.0], [3.0, 3.0, 2.0])),
+        };
+        let r = 0.3;
+        // The darkest luma and the count of the pixels darker by more than 4 than the same
+        // frame with the ball out of sight (behind the eye, beside the mesh: no shadow, the
+        // same radius and so the same pieces of the mesh), the ball's own pixels left out.
+        let shadow = |cam: &Camera, centre: [f64; 3]| {
+            let red = [[200, 30, 30]];
+            let ball = scene_frame(cam, &[centre], &[r], &red, &items(vec![]), w, h);
+            let away = scene_frame(cam, &[[0.0, -100.0, 50.0]], &[r], &red, &square, w, h);
+            let img = scene_frame(cam, &[centre], &[r], &red, &square, w, h);
+            let (mut darkest, mut count) = (255.0f64, 0);
+            for j in 0..h {
+                for i in 0..w {
+                    let near_ball = (i.saturating_sub(2)..(i + 3).min(w))
+                        .any(|x| (j.saturating_sub(2)..(j + 3).min(h)).any(|y| pixel(&ball, w, x, y) != BG));
+                    let (l, l0) = (luma(pixel(&img, w, i, j)), luma(pixel(&away, w, i, j)));
+                    if !near_ball && l < l0 - 4.0 {
+                        darkest = darkest.min(l);
+                        count += 1;
+                    }
+                }
+            }
+            (darkest, count)
+        };
+        let bare = luma(pixel(&scene_frame(&cam, &[], &[], &[], &square, w, h), w, 100, 75));
+        let (rest_dark, rest_n) = shadow(&cam, [0.0, 0.0, r]);
+        let (up_dark, up_n) = shadow(&cam, [0.0, 0.0, r + 1.0]);
+        eprintln!("mesh floor {bare:.1}; resting: darkest {rest_dark:.1}, {rest_n} px; 1 m up: {up_dark:.1}, {up_n} px");
+        assert!(
+            rest_dark < bare - 40.0,
+            "a shadow where the ball rests: {rest_dark} on {bare}"
+        );
+        assert!(
+            up_dark > rest_dark + 20.0 && up_n > rest_n,
+            "fainter and wider 1 m up: {up_dark}, {up_n} px"
+        );
+        // Seen from below (the ball above the mesh, seen through it) no shadow is drawn on
+        // the mesh's far side; nor is one under a ball beside the mesh.
+        let below = Camera::perspective([0.0, -4.0, -3.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 40.0).unwrap();
+        assert_eq!((shadow(&below, [0.0, 0.0, r]).1, shadow(&cam, [3.6, 0.0, r]).1), (0, 0));
     }
 
     #[test]

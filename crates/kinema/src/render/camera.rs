@@ -424,6 +424,16 @@ impl Projector {
         }
     }
 
+    /// The focal length f and the image centre (cx, cy), pixels, of a perspective camera
+    /// (a point at camera coordinates (x, y, z) lands at (cx + f·x/z, cy − f·y/z)); the
+    /// orthographic camera's scale and offsets.
+    pub(crate) fn focal(&self) -> (f64, f64, f64) {
+        match *self {
+            Projector::Ortho { cx, cy, s } => (s, cx, cy),
+            Projector::Persp { f, cx, cy, .. } => (f, cx, cy),
+        }
+    }
+
     /// Pixel position of a point given in camera coordinates with zc > 0 (the pinhole
     /// projection of [`Projector::project`]); for the orthographic camera, of the world point
     /// (x, y, ·).

@@ -27,7 +27,7 @@
 use super::camera::{invalid, Camera, Projector};
 use super::clip::{clip_halfplane, clip_polygon_near, clip_segment_near, clip_where, dot2, guard_rect, near_depth, GUARD};
 use super::extent::{clamp_box, Region};
-use super::mesh_paint::paint_mesh;
+use super::mesh_paint::{paint_mesh, MeshFloors};
 use super::pixels::Sprite;
 use super::prim::{fill, line, push, Prim};
 use crate::collide::Collider;
@@ -84,6 +84,9 @@ pub const MESH_EDGE_COLOR: [u8; 3] = [140, 140, 146];
 pub const SHADOW_COLOR: [u8; 3] = [30, 30, 38];
 /// Opacity of the core of the shadow of a particle resting on a floor.
 pub const SHADOW_ALPHA: f32 = 0.55;
+/// A plane, or a mesh's triangle, is a floor that takes shadows when its normal's z is at
+/// least this fraction of its length (about 72° from level at most).
+pub(super) const FLOOR_NZ: f64 = 0.3;
 
 /// Line widths, pixels.
 const PATCH_OUTLINE_PX: f64 = 1.5;
@@ -146,6 +149,11 @@ pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View, particl
                     _ => None,
                 })
                 .collect();
+            // Mesh triangles spanning more depth than the smallest particle's radius (or than
+            // 1/64 of the scene's diagonal, whichever is larger: the pieces stay few) are
+            // halved, so that their depth order with the particles holds (`mesh_paint`).
+            let smallest = particles.1.iter().copied().filter(|&r| r > 0.0).fold(f64::INFINITY, f64::min);
+            let split = smallest.max(norm(sub(extent.1, extent.0)) / 64.0);
             let mut k = 0;
             for collider in colliders {
                 match collider {
@@ -156,11 +164,11 @@ pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View, particl
                         p3.plane(&mut out.background, p.point(), p.normal(), eye, extent, &others)
                     }
                     Collider::Box(b) => p3.container(&mut out.background, b.lo(), b.hi(), extent, world_up),
-                    Collider::Mesh(m) => paint_mesh(&p3, m, eye, view.light, &mut out.ordered),
+                    Collider::Mesh(m) => paint_mesh(&p3, m, eye, view.light, split, &mut out.ordered),
                     Collider::Sphere(_) => {}
                 }
             }
-            shadows(&p3, colliders, eye, particles, &mut out.background);
+            shadows(&p3, colliders, eye, particles, &mut out);
             for collider in colliders {
                 if let Collider::Sphere(sphere) = collider {
                     let (center, radius) = (sphere.center(), sphere.radius());
@@ -493,14 +501,26 @@ fn clip_segment_halfspaces(a: [f64; 3], b: [f64; 3], planes: &[([f64; 3], [f64; 
     (s1 > s0).then(|| (add(a, scale(s0, sub(b, a))), add(a, scale(s1, sub(b, a)))))
 }
 
-/// A floor a particle can stand over: a plane whose normal points up (n_z ≥ 0.3 of its
-/// length), or a box's closed bottom face (only over the box's xy extent).
+/// A floor a particle can stand over: a plane whose normal points up (n_z ≥ [`FLOOR_NZ`] of
+/// its length), or a box's closed bottom face (only over the box's xy extent). (A mesh's
+/// floors are its triangles, [`MeshFloors`].)
 struct Floor {
     point: [f64; 3],
     /// Unit normal, pointing into the free side.
     n: [f64; 3],
     /// The xy rectangle it covers (a box's bottom), else unbounded.
     xy: Option<([f64; 2], [f64; 2])>,
+}
+
+/// The floor a particle's shadow falls on: the drop t (m) along −z from its centre to it,
+/// the centre's distance d ≥ 0 from the floor's plane, its unit normal n (into the free
+/// side), a point of it, and the plane or box (none: a mesh's triangle).
+struct Below<'a> {
+    t: f64,
+    d: f64,
+    n: [f64; 3],
+    point: [f64; 3],
+    floor: Option<&'a Floor>,
 }
 
 /// Contact shadows: each particle above a floor darkens a soft disc of that floor straight
@@ -510,18 +530,25 @@ struct Floor {
 /// floor sits on a dark patch, one a few radii up casts a wide faint one, and one higher
 /// than about 7 radii none. The soft edge is six concentric discs (24-gons in the floor
 /// plane) of equal opacity, spread more widely the higher the particle, each cut to its
-/// floor (a box's bottom face; a plane's part on the free side of the other planes). Drawn after the
-/// scenery and before every particle (particles stand above their floors, so nothing a
-/// shadow could cover is in front of it); floors seen from below (the eye on their solid
-/// side) get none.
-fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64], &[f64]), out: &mut Vec<Prim>) {
+/// floor (a box's bottom face; a plane's part on the free side of the other planes). On a
+/// plane or a box the shadow is drawn after the scenery and before every particle (particles
+/// stand above their floors, so nothing a shadow could cover is in front of it). On a
+/// mesh's triangle (the bottom of a bowl; uncut: a fine mesh curves away from the disc by
+/// less than it can show) it joins the depth order just behind its particle, so that the
+/// mesh's facets behind it are drawn under it and those in front over it. Floors seen from
+/// below (the eye on their solid side) get none.
+fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64], &[f64]), out: &mut Painted) {
     let (positions, radius) = particles;
+    if radius.is_empty() {
+        return;
+    }
     let mut floors = Vec::new();
+    let mut meshes = Vec::new();
     for c in colliders {
         match c {
             Collider::Plane(p) => {
                 let n = scale(1.0 / norm(p.normal()), p.normal());
-                if n[2] >= 0.3 {
+                if n[2] >= FLOOR_NZ {
                     floors.push(Floor {
                         point: p.point(),
                         n,
@@ -539,10 +566,11 @@ fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64
                     });
                 }
             }
-            Collider::Sphere(_) | Collider::Mesh(_) => {}
+            Collider::Mesh(m) => meshes.extend(MeshFloors::new(m)),
+            Collider::Sphere(_) => {}
         }
     }
-    if floors.is_empty() {
+    if floors.is_empty() && meshes.is_empty() {
         return;
     }
     // Each shadow is cut to its floor: a box's bottom face, or the part of a plane on the
@@ -550,13 +578,14 @@ fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64
     let planes: Vec<([f64; 3], [f64; 3])> = floors.iter().filter(|f| f.xy.is_none()).map(|f| (f.point, f.n)).collect();
     const SIDES: usize = 24;
     const RINGS: usize = 6;
+    let mut on_mesh = Vec::new();
     for (c, &r) in positions.chunks_exact(3).zip(radius) {
         let c = [c[0], c[1], c[2]];
         if !(r > 0.0) {
             continue;
         }
-        // The first floor below the centre along −z: the least drop t = d / n_z, d ≥ 0.
-        let mut best: Option<(f64, f64, &Floor)> = None;
+        // The first floor below the centre along −z: the least drop t = d / n_z.
+        let mut best: Option<Below> = None;
         for f in &floors {
             if let Some((lo, hi)) = f.xy {
                 if c[0] < lo[0] || c[0] > hi[0] || c[1] < lo[1] || c[1] > hi[1] {
@@ -568,14 +597,33 @@ fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64
                 continue;
             }
             let t = d / f.n[2];
-            if best.is_none_or(|(bt, _, _)| t < bt) {
-                best = Some((t, d, f));
+            if best.as_ref().is_none_or(|b| t < b.t) {
+                best = Some(Below {
+                    t,
+                    d,
+                    n: f.n,
+                    point: f.point,
+                    floor: Some(f),
+                });
             }
         }
-        let Some((t, d, f)) = best else {
+        for m in &meshes {
+            if let Some((t, n, q)) = m.below(c) {
+                if best.as_ref().is_none_or(|b| t < b.t) {
+                    best = Some(Below {
+                        t,
+                        d: t * n[2],
+                        n,
+                        point: q,
+                        floor: None,
+                    });
+                }
+            }
+        }
+        let Some(Below { t, d, n, point, floor }) = best else {
             continue;
         };
-        if dot(sub(eye, f.point), f.n) <= 0.0 {
+        if dot(sub(eye, point), n) <= 0.0 {
             continue; // the floor is seen from below
         }
         let h = (d - r).max(0.0);
@@ -588,14 +636,14 @@ fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64
         // The soft edge: rings from (1 − b) to (1 + b) of rs, b from 0.3 (resting) to 0.7.
         let b = 0.3 + 0.4 * h / (h + r);
         let ring_alpha = 1.0 - (1.0 - alpha).powf(1.0 / RINGS as f32);
-        let k = (0..3).min_by(|&i, &j| f.n[i].abs().total_cmp(&f.n[j].abs())).unwrap_or(0);
+        let k = (0..3).min_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs())).unwrap_or(0);
         let mut axis = [0.0; 3];
         axis[k] = 1.0;
         let t1 = {
-            let v = cross(f.n, axis);
+            let v = cross(n, axis);
             scale(1.0 / norm(v), v)
         };
-        let t2 = cross(f.n, t1);
+        let t2 = cross(n, t1);
         for ring in 0..RINGS {
             let rr = rs * (1.0 - b + 2.0 * b * ring as f64 / (RINGS - 1) as f64);
             let mut poly: Vec<[f64; 3]> = (0..SIDES)
@@ -604,8 +652,8 @@ fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64
                     add(foot, add(scale(rr * a.cos(), t1), scale(rr * a.sin(), t2)))
                 })
                 .collect();
-            match f.xy {
-                Some((lo, hi)) => {
+            match floor.map(|f| f.xy) {
+                Some(Some((lo, hi))) => {
                     for (q, m) in [
                         ([lo[0], 0.0, 0.0], [1.0, 0.0, 0.0]),
                         ([hi[0], 0.0, 0.0], [-1.0, 0.0, 0.0]),
@@ -617,17 +665,23 @@ fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64
                         }
                     }
                 }
-                None => {
+                Some(None) => {
                     for &(q, m) in &planes {
-                        if (q, m) != (f.point, f.n) {
+                        if (q, m) != (point, n) {
                             poly = clip_polygon_halfspace(&poly, q, m);
                         }
                     }
                 }
+                None => {}
             }
             if poly.len() >= 3 {
-                p3.polygon(out, &poly, SHADOW_COLOR, ring_alpha);
+                let layer = if floor.is_some() { &mut out.background } else { &mut on_mesh };
+                p3.polygon(layer, &poly, SHADOW_COLOR, ring_alpha);
             }
         }
+        // Just behind the particle in the depth order (its depth, one step further: the same
+        // zc as its sprite's), after every facet behind it.
+        let behind = p3.proj.camera_coords(c)[2].next_up();
+        out.ordered.extend(on_mesh.drain(..).map(|p| (behind, p)));
     }
 }
