@@ -1,6 +1,6 @@
 """The default camera frames where the particles spend the run and where they end (issue 28):
 a pile at the bottom of a tall box fills the frame, a particle flung away does not shrink the
-rest to a dot, and a 2D table stays whole."""
+rest to a dot, a 2D table stays whole, and so does a bowl (a mesh) with a pile in it."""
 
 from __future__ import annotations
 
@@ -91,3 +91,29 @@ def test_a_2d_camera_keeps_the_walls_of_its_box():
     # The walls are drawn inside the frame, not cut off at its edges, and fill its width.
     assert rows.min() > 0 and rows.max() < height - 1 and cols.min() > 0 and cols.max() < width - 1
     assert (np.ptp(cols) + 1) / width >= 0.85
+
+
+def test_a_pile_in_a_bowl_keeps_the_whole_bowl_in_view():
+    # A hemispherical bowl of radius 1 (a mesh, rim at z = 1) and a pile in its bottom
+    # 0.5 m wide: the bowl's rim stays in the frame (the pile alone filled it, cutting the bowl).
+    rings, segments = 16, 64
+    theta = np.linspace(0, np.pi / 2, rings + 1)[1:]
+    phi = np.linspace(0, 2 * np.pi, segments, endpoint=False)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    ring = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), 1.0 - np.cos(t)], axis=-1).reshape(-1, 3)
+    vertices = np.vstack([[0.0, 0.0, 0.0], ring])
+    at = lambda i, j: 1 + i * segments + j % segments  # noqa: E731
+    faces = [[0, at(0, j), at(0, j + 1)] for j in range(segments)]
+    faces += [
+        f for i in range(rings - 1) for j in range(segments) for f in ([at(i, j), at(i + 1, j), at(i + 1, j + 1)], [at(i, j), at(i + 1, j + 1), at(i, j + 1)])
+    ]
+    bowl = {"type": "mesh", "vertices": vertices.tolist(), "faces": faces, "inside": False}
+    rng = np.random.default_rng(2)
+    x = np.repeat(rng.uniform([-0.25, -0.25, 0.1], [0.25, 0.25, 0.3], (1, 40, 3)), 5, axis=0)
+    width, height = 320, 240
+    frame = list(render_frames(x, 0.04, np.linspace(0, 1, 5), colliders=[bowl], width=width, height=height, legend=False, time_format=None))[-1]
+    drawn = (frame.astype(int) < 250).any(axis=2)
+    rows, cols = np.flatnonzero(drawn.any(axis=1)), np.flatnonzero(drawn.any(axis=0))
+    # The bowl is drawn inside the frame, not cut at its edges, and fills its width or height.
+    assert rows.min() > 0 and rows.max() < height - 1 and cols.min() > 0 and cols.max() < width - 1, (rows.min(), rows.max(), cols.min(), cols.max())
+    assert max((np.ptp(cols) + 1) / width, (np.ptp(rows) + 1) / height) >= 0.85

@@ -88,6 +88,10 @@ DENSITY_BINS = 48
 #: span beyond it widens the region to that wall (the box the particles are in, whole on
 #: that side); a farther wall (the top of a tall box, an open top) does not.
 WALL_REACH = 0.5
+#: A mesh whose box holds the particles' region in x and y (a bowl they rest in) is framed
+#: whole when its largest span is at most this many times the region's: the bowl reads as a
+#: bowl, not as a curved floor under a pile; a larger one (a terrain) is a wall as above.
+MESH_REACH = 4.0
 #: The most frames and particles per frame sampled for the default camera (evenly spaced).
 _SAMPLE_FRAMES, _SAMPLE_PARTICLES = 240, 20000
 
@@ -96,13 +100,16 @@ def _frame_corners(x, r, colliders, lo, hi, marks=None, dim: int = 3) -> np.ndar
     """(P, 3): the points the default camera frames: the 8 corners of the particles' region
     (``_particle_region``: where they spend the run and where they end), widened to the walls
     of the colliders that bound it (``colliders``: descriptions, ``_describe_colliders``; a
-    box's finite walls, a sphere's cube; planes and infinite bounds none), and the ``marks``
+    box's finite walls, a sphere's cube, a mesh's box; planes and infinite bounds none), the
+    vertices of a mesh around them (``MESH_REACH``: the bowl they rest in, whole), and the
+    ``marks``
     (attractors). In 2D a box of finite walls that holds the particles is framed whole (the
     table). No particle alive in any frame: the colliders' finite parts, else [lo, hi] (the
     scene's extent)."""
     marks = np.zeros((0, 3)) if marks is None or not len(marks) else np.asarray(marks, np.float64).reshape(-1, 3)
     region = _particle_region(x, r)
     boxes = [box for box in map(_collider_box, colliders) if box is not None]
+    meshes = [np.asarray(d["vertices"], np.float64).reshape(-1, 3) for d in colliders if d["type"] == "mesh"]
     if region is None:
         finite = [np.clip(_corners(a, b), lo, hi) for a, b in boxes]
         return np.concatenate(finite + [marks]) if finite else np.concatenate([_corners(lo, hi), marks])
@@ -121,18 +128,26 @@ def _frame_corners(x, r, colliders, lo, hi, marks=None, dim: int = 3) -> np.ndar
         near_hi = (b > high) & (b - high <= reach)
         grown_lo = np.where(near_lo, np.minimum(grown_lo, a), grown_lo)
         grown_hi = np.where(near_hi, np.maximum(grown_hi, b), grown_hi)
-    return np.concatenate([_corners(grown_lo, grown_hi), marks])
+    around = []  # the vertices (up to _SAMPLE_PARTICLES, evenly spaced) of the meshes around them
+    for v in meshes:
+        a, b = v.min(axis=0), v.max(axis=0)
+        if np.all(a[:2] <= low[:2]) and np.all(b[:2] >= high[:2]) and np.max(b - a) <= MESH_REACH * float(np.max(high - low)):
+            around.append(v[np.unique(np.round(np.linspace(0, len(v) - 1, min(len(v), _SAMPLE_PARTICLES))).astype(int))])
+    return np.concatenate([_corners(grown_lo, grown_hi), *around, marks])
 
 
 def _collider_box(d):
     """(lo, hi) (3,) of a collider description: a box's bounds (z 0 in 2D; may be infinite),
-    a sphere's cube; None for a plane."""
+    a sphere's cube, the box of a mesh's vertices; None for a plane."""
     if d["type"] == "box":
         lo, hi = (np.append(np.asarray(d[k], np.float64), 0.0)[:3] for k in ("lo", "hi"))
         return lo, hi
     if d["type"] == "sphere":
         c, radius = np.asarray(d["center"], np.float64), float(d["radius"])
         return c - radius, c + radius
+    if d["type"] == "mesh":
+        vertices = np.asarray(d["vertices"], np.float64).reshape(-1, 3)
+        return vertices.min(axis=0), vertices.max(axis=0)
     return None
 
 
