@@ -189,7 +189,9 @@ fn a_turning_drum_carries_a_ball_with_its_wall_until_it_slips() {
     );
     let slip = slip.expect("it slips").to_degrees();
     eprintln!("slips at {slip}°");
-    assert!(slip > 45.0 - 0.7 && slip < 46.5, "slips at {slip}°");
+    // the onset within a facet's tilt (π/256 rad = 0.7°) of 45°; detected when the sliding speed,
+    // u ≈ √2 g ω t² / 2 after it, reaches ω s / 2: 0.03 s, 0.85° of turn later
+    assert!(slip > 45.0 - 0.7 && slip < 45.0 + 0.7 + 1.0, "slips at {slip}°");
     // momentum: m v(t) − 0 = m g t + J_wall, J_wall = −books.momentum
     let p = w.particles();
     let t = w.time();

@@ -15,95 +15,9 @@
 use super::contact::{Contact, Partner};
 pub use super::mesh::{Side, TriangleMesh};
 use super::motion::{Pose, SurfaceVelocity};
+pub use super::surface::{Surface, Touch};
 use crate::error::Error;
 use crate::vec3;
-
-/// A collider's own restitution and friction; `None` uses the particle's value (the world's
-/// global value where particles have none). See [`crate::collide::response::MaterialTable`].
-/// And the velocity of its surface: zero for a still collider, the rigid field of its motion
-/// for a moving one.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Surface {
-    restitution: Option<f64>,
-    friction: Option<f64>,
-    velocity: SurfaceVelocity,
-}
-
-impl Surface {
-    /// A surface with restitution e ∈ [0, 1] and Coulomb friction coefficient μ ≥ 0 (finite),
-    /// each `None` to use the particle's value.
-    pub fn new(restitution: Option<f64>, friction: Option<f64>) -> Result<Self, Error> {
-        if let Some(e) = restitution {
-            if !(0.0..=1.0).contains(&e) {
-                return Err(Error::invalid(
-                    "restitution",
-                    e,
-                    "the coefficient of restitution must be in [0, 1]",
-                ));
-            }
-        }
-        if let Some(mu) = friction {
-            if !(mu.is_finite() && mu >= 0.0) {
-                return Err(Error::invalid(
-                    "friction",
-                    mu,
-                    "the friction coefficient must be finite and >= 0",
-                ));
-            }
-        }
-        Ok(Surface {
-            restitution,
-            friction,
-            velocity: SurfaceVelocity::default(),
-        })
-    }
-
-    /// The same surface moving with `velocity`.
-    pub fn with_velocity(self, velocity: SurfaceVelocity) -> Surface {
-        Surface { velocity, ..self }
-    }
-
-    /// The velocity field of the surface (zero for a still collider).
-    pub fn velocity(&self) -> SurfaceVelocity {
-        self.velocity
-    }
-
-    /// Restitution e, if the surface sets its own.
-    pub fn restitution(&self) -> Option<f64> {
-        self.restitution
-    }
-
-    /// Friction coefficient μ, if the surface sets its own.
-    pub fn friction(&self) -> Option<f64> {
-        self.friction
-    }
-}
-
-/// Where a particle touches a collider: the normal into the free side and the overlap.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Touch {
-    /// Unit normal into the free side.
-    pub normal: [f64; 3],
-    /// Penetration depth, m (> 0 when overlapping; < 0 for a gap within the tolerance).
-    pub overlap: f64,
-}
-
-impl Touch {
-    /// The contact of particle `i` (centre `p`, m; velocity `v`, m/s; radius `r`, m) with
-    /// collider `k` that made this touch: u_n = (v − u)·n with u the collider surface's
-    /// velocity at the contact point p − (r − overlap) n (exactly v·n for a still collider).
-    pub fn contact(self, i: usize, k: usize, collider: &Collider, p: [f64; 3], v: [f64; 3], r: f64) -> Contact {
-        let w = collider.velocity_at(vec3::sub(p, vec3::scale(r - self.overlap, self.normal)));
-        Contact {
-            i,
-            other: Partner::Collider(k),
-            normal: self.normal,
-            overlap: self.overlap,
-            u_n: vec3::dot(vec3::sub(v, w), self.normal),
-            wall_velocity: w,
-        }
-    }
-}
 
 /// A plane through `point` with unit normal n: particles belong to the side n points to.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -482,6 +396,22 @@ impl Collider {
         }
     }
 
+    /// The contact of particle `i` (centre `p`, m; velocity `v`, m/s; radius `r`, m) with this
+    /// collider, its index `k`, from the touch `t`: u_n = (v − u)·n with u the surface's
+    /// velocity at the contact point p − (r − overlap) n (exactly v·n for a still collider).
+    #[allow(clippy::too_many_arguments)]
+    pub fn contact(&self, k: usize, t: Touch, i: usize, p: [f64; 3], v: [f64; 3], r: f64) -> Contact {
+        let w = self.velocity_at(vec3::sub(p, vec3::scale(r - t.overlap, t.normal)));
+        Contact {
+            i,
+            other: Partner::Collider(k),
+            normal: t.normal,
+            overlap: t.overlap,
+            u_n: vec3::dot(vec3::sub(v, w), t.normal),
+            wall_velocity: w,
+        }
+    }
+
     /// Whether its surface moves now.
     pub fn is_moving(&self) -> bool {
         !self.surface().velocity().is_still()
@@ -515,7 +445,7 @@ impl From<SphereObstacle> for Collider {
 /// Appends to `contacts` (not cleared, so that it can follow the particle pairs' contacts)
 /// every particle–collider contact within `tolerance`, particle by particle, then collider
 /// by collider, then wall by wall: `Partner::Collider(k)` is the index in `colliders`, and
-/// u_n = (v_i − u)·n, u the collider surface's velocity there ([`Touch::contact`]).
+/// u_n = (v_i − u)·n, u the collider surface's velocity there ([`Collider::contact`]).
 ///
 /// `x`, `v`: positions (m) and velocities (m/s), 3 per particle; `radius`: m, one per
 /// particle; `tolerance`: m (finite, ≥ 0).
@@ -547,7 +477,7 @@ pub fn collider_contacts(
     for (i, &r) in radius.iter().enumerate() {
         let (p, vi) = (vec3::get(x, i), vec3::get(v, i));
         for (k, collider) in colliders.iter().enumerate() {
-            collider.for_each_touch(p, r, tolerance, |t| contacts.push(t.contact(i, k, collider, p, vi, r)));
+            collider.for_each_touch(p, r, tolerance, |t| contacts.push(collider.contact(k, t, i, p, vi, r)));
         }
     }
     Ok(())

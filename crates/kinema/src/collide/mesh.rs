@@ -16,17 +16,28 @@
 //! edge or at a vertex (Ericson, *Real-Time Collision Detection* §5.1.5). Neighbouring
 //! triangles report the same edge or vertex as their closest point, and a ball resting on a
 //! flat patch of two coplanar triangles sees the face of one and the shared edge of the
-//! other, tilted: a "ghost" contact that would kick it sideways at every seam. Two rules keep
+//! other, tilted: a "ghost" contact that would kick it sideways at every seam. Three rules keep
 //! exactly the contacts of the surface's true features:
 //!
 //! 1. contacts at the same point (the same edge or vertex seen from several triangles) are one;
-//! 2. an edge or vertex contact whose point lies in the plane of a face contact's triangle is
-//!    that face's own boundary (a coplanar seam, or the rim of the face it rests on) and is
-//!    dropped.
+//! 2. an edge or vertex contact is one of the surface only if every triangle around that edge
+//!    or vertex has its nearest point there: the centre then lies in the edge's (vertex's)
+//!    Voronoi region of the whole surface, not only of one triangle. A neighbour with a
+//!    nearer point (the face a ball rests on, beside the seam or rim the other triangle
+//!    reports) makes it no contact.
 //!
-//! In a concave crease (the bottom of a faceted bowl) the ball touches two faces: two face
-//! contacts, both kept. On a convex edge it touches the edge: one contact, normal from the
-//! edge to the centre.
+//! 3. touches whose normals lie within 10° of each other are one, with the deepest overlap
+//!    and their mean normal (weighted by depth): a ball in a faceted bowl, or at the apex of a
+//!    fan of thin triangles (the pole of a UV sphere, where it is tangent to every spoke),
+//!    rests on the smooth surface the facets stand for, not on hundreds of nearly parallel
+//!    contacts that the solver would take up one by one.
+//!
+//! In a concave crease sharper than 10° (a V, a box's inner corner) the ball touches two
+//! faces: two face contacts, both kept. On a convex edge it touches the edge: one contact, normal from the
+//! edge to the centre. Centred exactly over a seam of a flat patch, both triangles report
+//! the seam: one contact, along the patch's normal. At the apex of a fan of thin triangles
+//! (the pole of a UV sphere) only the true nearest point remains, not one per spoke. An
+//! edge of an open mesh's border belongs to one triangle and needs no neighbour.
 //!
 //! **Continuous detection.** [`TriangleMesh::toi`] sweeps the sphere along a straight path
 //! against each triangle the hierarchy finds near it: the first time its centre comes within r
@@ -36,9 +47,10 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use super::colliders::{Surface, Touch};
+use super::surface::{Surface, Touch};
 use super::motion::Pose;
-use super::toi::toi_half_space;
+use super::roots::toi_half_space;
+use smallvec::SmallVec;
 use crate::error::Error;
 use crate::vec3;
 
@@ -53,12 +65,13 @@ pub enum Side {
     Inside,
 }
 
-/// Where on a triangle its closest point to a query point lies.
+/// Where on a triangle its closest point to a query point lies: its face, its edge k (from
+/// its vertex k to vertex k + 1 mod 3), or its vertex k.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Feature {
     Face,
-    Edge,
-    Vertex,
+    Edge(u8),
+    Vertex(u8),
 }
 
 /// A node of the hierarchy: a box and either two children (the left one follows the node,
@@ -71,6 +84,61 @@ struct Node {
     start: u32,
     count: u32,
 }
+
+/// Contacts whose normals differ by less than this merge (rule 3 of the module's doc): cos 10°.
+const PARALLEL: f64 = 0.984_807_753_012_208;
+
+/// Rule 3 of the module's doc: the touches whose normals lie within 10° of a deeper one's are
+/// one touch, with the deepest overlap and the mean of their normals weighted by how much
+/// deeper than the shallowest each is (plus 0.1 % of r, so that equal ones weigh alike).
+fn merge_parallel(kept: &mut Found, r: f64) {
+    kept.sort_by(|a, b| b.1.overlap.total_cmp(&a.1.overlap).then(a.0.cmp(&b.0)));
+    let mut out = Found::new();
+    let mut taken = vec![false; kept.len()];
+    for s in 0..kept.len() {
+        if taken[s] {
+            continue;
+        }
+        // within 10° of the deepest, then (twice) of the members' mean: a symmetric ring of
+        // normals (a cone's apex) is gathered whole whichever member seeds it
+        let mut seed = kept[s].1.normal;
+        let mut members: SmallVec<[usize; 8]> = SmallVec::new();
+        for _ in 0..3 {
+            members = (s..kept.len())
+                .filter(|&k| !taken[k] && (k == s || vec3::dot(kept[k].1.normal, seed) >= PARALLEL))
+                .collect();
+            let sum = members.iter().fold([0.0; 3], |a, &k| vec3::add(a, kept[k].1.normal));
+            seed = vec3::scale(1.0 / vec3::norm(sum), sum);
+        }
+        if members.len() == 1 {
+            taken[s] = true;
+            out.push(kept[s]);
+            continue;
+        }
+        let least = members.iter().map(|&k| kept[k].1.overlap).fold(f64::INFINITY, f64::min);
+        let mut sum = [0.0; 3];
+        for &k in &members {
+            taken[k] = true;
+            let w = kept[k].1.overlap - least + 1e-3 * r;
+            sum = vec3::add(sum, vec3::scale(w, kept[k].1.normal));
+        }
+        let (t, touch, q, feature) = kept[s];
+        out.push((
+            t,
+            Touch {
+                normal: vec3::scale(1.0 / vec3::norm(sum), sum),
+                overlap: touch.overlap,
+            },
+            q,
+            feature,
+        ));
+    }
+    out.sort_by_key(|f| f.0);
+    *kept = out;
+}
+
+/// Touches with their triangle, nearest point (m) and feature.
+type Found = SmallVec<[(usize, Touch, [f64; 3], Feature); 4]>;
 
 /// A triangle `t` near a point p: its nearest point q, the feature q lies on, d = p − q and |d|.
 #[derive(Debug, Clone, Copy)]
@@ -99,6 +167,11 @@ struct Geometry {
     closed: bool,
     /// Largest |coordinate| of a vertex, m.
     scale: f64,
+    /// For each triangle, how many triangles share each of its edges (itself included; 1 on
+    /// an open mesh's border), at most 255.
+    edge_faces: Vec<[u8; 3]>,
+    /// How many triangles each vertex belongs to.
+    valence: Vec<u32>,
 }
 
 /// A static triangle mesh that particles collide with. Cloning is cheap: copies share the
@@ -173,7 +246,7 @@ impl TriangleMesh {
                 "a mesh needs at least one triangle with three distinct, non-collinear vertices",
             ));
         }
-        let closed = is_closed(&faces);
+        let (closed, edge_faces) = adjacency(&faces);
         if closed {
             let volume: f64 = faces
                 .iter()
@@ -203,6 +276,12 @@ impl TriangleMesh {
             })
             .collect();
         let scale = vertices.iter().flatten().fold(0.0_f64, |m, c| m.max(c.abs()));
+        let mut valence = vec![0u32; vertices.len()];
+        for f in &faces {
+            for &k in f {
+                valence[k as usize] += 1;
+            }
+        }
         let mut geometry = Geometry {
             vertices,
             faces,
@@ -211,6 +290,8 @@ impl TriangleMesh {
             nodes: Vec::new(),
             closed,
             scale,
+            edge_faces,
+            valence,
         };
         geometry.build();
         let side = match (closed, inside) {
@@ -327,6 +408,13 @@ impl TriangleMesh {
     fn near(&self, t: usize, p: [f64; 3], reach: f64) -> Option<Near> {
         let g = &*self.geometry;
         let [a, b, c] = g.faces[t].map(|k| g.vertices[k as usize]);
+        // no point of the triangle is nearer than its plane, or than its box: cheap
+        // rejections before the closest point
+        if vec3::dot(vec3::sub(p, a), g.normals[t]).abs() >= reach
+            || (0..3).any(|k| a[k].min(b[k]).min(c[k]) >= p[k] + reach || a[k].max(b[k]).max(c[k]) <= p[k] - reach)
+        {
+            return None;
+        }
         let (q, feature) = closest_on_triangle(p, a, b, c);
         let d = vec3::sub(p, q);
         let len = vec3::norm(d);
@@ -344,7 +432,7 @@ impl TriangleMesh {
     /// centre is on is the nearest triangles' verdict: the sign of Σ d·n_face over those at
     /// the least distance (on a convex edge seen from outside both say outside). A far face
     /// of a solid thinner than the ball, behind the centre, is then no push through the solid.
-    fn touches_of(&self, near: &[Near], r: f64) -> Vec<(Touch, [f64; 3], Feature)> {
+    fn touches_of(&self, near: &[Near], r: f64) -> SmallVec<[(Touch, [f64; 3], Feature); 8]> {
         let g = &*self.geometry;
         let wrong_side = match self.side {
             Side::Both => false,
@@ -417,32 +505,47 @@ impl TriangleMesh {
 
     /// The touches of [`TriangleMesh::for_each_touch`] with each one's triangle and closest
     /// point (m) and feature, all in the frame the geometry was added in (`p` too).
-    fn touches(&self, p: [f64; 3], r: f64, tolerance: f64) -> Vec<(usize, Touch, [f64; 3], Feature)> {
+    fn touches(&self, p: [f64; 3], r: f64, tolerance: f64) -> Found {
         let reach = r + tolerance.max(0.0);
         let (lo, hi) = ([0, 1, 2].map(|k| p[k] - reach), [0, 1, 2].map(|k| p[k] + reach));
-        let mut near: Vec<Near> = Vec::new();
+        let mut near: SmallVec<[Near; 8]> = SmallVec::new();
         self.geometry.visit(lo, hi, |t| near.extend(self.near(t, p, reach)));
+        self.true_features(&mut near, p, r)
+    }
+
+    /// The touches of the triangles `near` a sphere at `p` of radius `r` (m), their true
+    /// features only (the module's doc, rules 1 and 2), in the order of the triangles. Every
+    /// triangle within the reach is in `near` (each around a reported edge or vertex is: it
+    /// contains the reported point).
+    fn true_features(&self, near: &mut [Near], p: [f64; 3], r: f64) -> Found {
+        let mut kept = Found::new();
         if near.is_empty() {
-            return Vec::new();
+            return kept;
         }
         near.sort_unstable_by_key(|c| c.t);
-        let found = self.touches_of(&near, r);
+        let found = self.touches_of(near, r);
         let eps = self.eps(p, r);
-        let faces: Vec<(usize, [f64; 3])> = near
-            .iter()
-            .filter(|c| c.feature == Feature::Face)
-            .map(|c| (c.t, c.q))
-            .collect();
-        let mut kept: Vec<(usize, Touch, [f64; 3], Feature)> = Vec::with_capacity(found.len());
+        let g = &*self.geometry;
         for (c, (touch, q, feature)) in near.iter().zip(found) {
-            if feature != Feature::Face {
-                // rule 2: the boundary of a face touched; rule 1: seen from another triangle
+            let around = match feature {
+                Feature::Face => 1,
+                Feature::Edge(k) => g.edge_faces[c.t][k as usize] as usize,
+                Feature::Vertex(k) => g.valence[g.faces[c.t][k as usize] as usize] as usize,
+            };
+            if around > 1 {
+                // rule 2: every triangle around the edge or vertex has its nearest point there,
+                // or one of them has a nearer one and this is no contact of the surface
+                let reports = near.iter().filter(|o| vec3::norm(vec3::sub(o.q, q)) <= eps).count();
+                // rule 1: seen from another triangle
                 let seen = kept.iter().any(|k| vec3::norm(vec3::sub(k.2, q)) <= eps);
-                if seen || self.in_face_plane(&faces, q, eps) {
+                if reports < around || seen {
                     continue;
                 }
             }
             kept.push((c.t, touch, q, feature));
+        }
+        if kept.len() > 1 {
+            merge_parallel(&mut kept, r);
         }
         kept
     }
@@ -474,34 +577,49 @@ impl TriangleMesh {
             return None;
         }
         let (x, v, a) = (self.local(x), self.local_vector(v), self.local_vector(a));
-        let now = self.touches(x, r, 0.0);
-        if let Some(&(t, ..)) = now.iter().find(|f| vec3::dot(v, f.1.normal) < 0.0) {
-            return Some((0.0, t));
-        }
         let (g, accel) = (&*self.geometry, a);
-        let eps = self.eps(x, r);
-        let faces: Vec<(usize, [f64; 3])> = now.iter().filter(|f| f.3 == Feature::Face).map(|f| (f.0, f.2)).collect();
         let chord = [0, 1, 2].map(|k| v[k] + 0.5 * a[k] * horizon);
         let end = [0, 1, 2].map(|k| x[k] + chord[k] * horizon);
         let bulge = 0.125 * vec3::norm(a) * horizon * horizon;
         let lo = [0, 1, 2].map(|k| x[k].min(end[k]) - r - bulge);
         let hi = [0, 1, 2].map(|k| x[k].max(end[k]) + r + bulge);
-        let mut first: Option<(f64, usize)> = None;
+        // one traversal over the path's box: the triangles it may meet, and those it
+        // touches now (the path's box holds the sphere's)
+        let mut candidates: SmallVec<[u32; 16]> = SmallVec::new();
+        let mut near: SmallVec<[Near; 8]> = SmallVec::new();
         g.visit(lo, hi, |t| {
+            // the path's distance from the plane changes by at most |v·n| T + ½ |a·n| T²: a
+            // triangle whose plane stays farther than r is never met
+            let n = g.normals[t];
+            let s0 = vec3::dot(vec3::sub(x, g.vertices[g.faces[t][0] as usize]), n).abs();
+            if s0 - r > vec3::dot(v, n).abs() * horizon + 0.5 * vec3::dot(accel, n).abs() * horizon * horizon {
+                return;
+            }
+            match self.near(t, x, r) {
+                Some(c) => near.push(c),
+                None => candidates.push(t as u32),
+            }
+        });
+        let now = self.true_features(&mut near, x, r);
+        if let Some(&(t, ..)) = now.iter().find(|f| vec3::dot(v, f.1.normal) < 0.0) {
+            return Some((0.0, t));
+        }
+        let eps = self.eps(x, r);
+        let faces: SmallVec<[(usize, [f64; 3]); 8]> = now.iter().filter(|f| f.3 == Feature::Face).map(|f| (f.0, f.2)).collect();
+        let mut first: Option<(f64, usize)> = None;
+        // (triangles touched now, true features or ghosts, are not met again: handled above)
+        for t in candidates.into_iter().map(|t| t as usize) {
             let limit = first.map_or(horizon, |f| f.0);
             let [a, b, c] = g.faces[t].map(|k| g.vertices[k as usize]);
-            if vec3::norm(vec3::sub(x, closest_on_triangle(x, a, b, c).0)) <= r {
-                return; // touching now: a true feature was handled above, a ghost is none
-            }
             if let Some((tau, q, feature)) = toi_triangle(Path { x, v, a: accel, chord }, r, [a, b, c], g.normals[t], limit) {
                 if feature != Feature::Face && self.in_face_plane(&faces, q, eps) {
-                    return;
+                    continue;
                 }
                 if first.is_none_or(|f| tau < f.0 || (tau == f.0 && t < f.1)) {
                     first = Some((tau, t));
                 }
             }
-        });
+        }
         first
     }
 
@@ -593,7 +711,7 @@ impl Geometry {
 
     /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi].
     fn visit(&self, lo: [f64; 3], hi: [f64; 3], mut each: impl FnMut(usize)) {
-        let mut stack = vec![0u32];
+        let mut stack = Stack::new();
         while let Some(k) = stack.pop() {
             let node = self.nodes[k as usize];
             if (0..3).any(|a| node.hi[a] < lo[a] || node.lo[a] > hi[a]) {
@@ -612,7 +730,7 @@ impl Geometry {
 
     /// Calls `each(t)` with every triangle whose leaf's box the ray p + s d (s ≥ 0) meets.
     fn visit_ray(&self, p: [f64; 3], d: [f64; 3], mut each: impl FnMut(usize)) {
-        let mut stack = vec![0u32];
+        let mut stack = Stack::new();
         while let Some(k) = stack.pop() {
             let node = self.nodes[k as usize];
             // the slab test: the ray's parameter interval inside each axis's slab
@@ -643,22 +761,64 @@ impl Geometry {
     }
 }
 
-/// Whether every edge is shared by exactly two faces that run along it in opposite directions.
-fn is_closed(faces: &[[u32; 3]]) -> bool {
+/// The nodes a traversal has still to visit, on the stack of the thread (no allocation per
+/// query). A median split halves the triangles at each level, so a path from the root is at
+/// most ⌈log₂ T⌉ + 1 nodes long (33 for 2³² triangles), and a depth-first traversal holds at
+/// most one sibling per level: 64 entries always suffice.
+struct Stack {
+    nodes: [u32; 64],
+    len: usize,
+}
+
+impl Stack {
+    fn new() -> Self {
+        Stack { nodes: [0; 64], len: 1 }
+    }
+
+    fn push(&mut self, k: u32) {
+        self.nodes[self.len] = k;
+        self.len += 1;
+    }
+
+    fn pop(&mut self) -> Option<u32> {
+        (self.len > 0).then(|| {
+            self.len -= 1;
+            self.nodes[self.len]
+        })
+    }
+}
+
+/// Whether every edge is shared by exactly two faces that run along it in opposite directions
+/// (the mesh is closed), and for each face how many faces share each of its edges.
+fn adjacency(faces: &[[u32; 3]]) -> (bool, Vec<[u8; 3]>) {
     // per undirected edge: (uses a→b with a < b, uses b→a)
     let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(3 * faces.len() / 2);
+    let key = |f: &[u32; 3], k: usize| {
+        let (a, b) = (f[k], f[(k + 1) % 3]);
+        ((a.min(b), a.max(b)), a < b)
+    };
     for f in faces {
         for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            let e = edges.entry((a.min(b), a.max(b))).or_default();
-            if a < b {
+            let (e, up) = key(f, k);
+            let e = edges.entry(e).or_default();
+            if up {
                 e.0 += 1;
             } else {
                 e.1 += 1;
             }
         }
     }
-    edges.values().all(|&(up, down)| up == 1 && down == 1)
+    let closed = edges.values().all(|&(up, down)| up == 1 && down == 1);
+    let counts = faces
+        .iter()
+        .map(|f| {
+            [0, 1, 2].map(|k| {
+                let (up, down) = edges[&key(f, k).0];
+                (up + down).min(255) as u8
+            })
+        })
+        .collect();
+    (closed, counts)
 }
 
 /// The point of triangle abc closest to p, and the feature it lies on (Ericson, *Real-Time
@@ -671,34 +831,34 @@ fn closest_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> ([
     let d1 = vec3::dot(ab, ap);
     let d2 = vec3::dot(ac, ap);
     if d1 <= 0.0 && d2 <= 0.0 {
-        return (a, Feature::Vertex);
+        return (a, Feature::Vertex(0));
     }
     let bp = vec3::sub(p, b);
     let d3 = vec3::dot(ab, bp);
     let d4 = vec3::dot(ac, bp);
     if d3 >= 0.0 && d4 <= d3 {
-        return (b, Feature::Vertex);
+        return (b, Feature::Vertex(1));
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
         let s = d1 / (d1 - d3);
-        return (vec3::add(a, vec3::scale(s, ab)), Feature::Edge);
+        return (vec3::add(a, vec3::scale(s, ab)), Feature::Edge(0));
     }
     let cp = vec3::sub(p, c);
     let d5 = vec3::dot(ab, cp);
     let d6 = vec3::dot(ac, cp);
     if d6 >= 0.0 && d5 <= d6 {
-        return (c, Feature::Vertex);
+        return (c, Feature::Vertex(2));
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
         let s = d2 / (d2 - d6);
-        return (vec3::add(a, vec3::scale(s, ac)), Feature::Edge);
+        return (vec3::add(a, vec3::scale(s, ac)), Feature::Edge(2));
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
         let s = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (vec3::add(b, vec3::scale(s, vec3::sub(c, b))), Feature::Edge);
+        return (vec3::add(b, vec3::scale(s, vec3::sub(c, b))), Feature::Edge(1));
     }
     let denom = 1.0 / (va + vb + vc);
     let (v, w) = (vb * denom, vc * denom);
@@ -768,7 +928,7 @@ fn toi_triangle(path: Path, r: f64, tri: [[f64; 3]; 3], n: [f64; 3], h: f64) -> 
         }
     }
     // the edges: the centre's distance from the edge's line, the parts across the edge
-    for (p0, p1) in [(a, b), (b, c), (c, a)] {
+    for (k, (p0, p1)) in [(a, b), (b, c), (c, a)].into_iter().enumerate() {
         let e = vec3::sub(p1, p0);
         let ee = vec3::dot(e, e);
         let d = vec3::sub(x, p0);
@@ -776,13 +936,13 @@ fn toi_triangle(path: Path, r: f64, tri: [[f64; 3]; 3], n: [f64; 3], h: f64) -> 
         if let Some(tau) = first_approach(across(d), across(v), r, h) {
             let along = vec3::dot(vec3::add(d, vec3::scale(tau, v)), e) / ee;
             if (0.0..=1.0).contains(&along) {
-                take(tau, vec3::add(p0, vec3::scale(along, e)), Feature::Edge);
+                take(tau, vec3::add(p0, vec3::scale(along, e)), Feature::Edge(k as u8));
             }
         }
     }
-    for p0 in [a, b, c] {
+    for (k, p0) in [a, b, c].into_iter().enumerate() {
         if let Some(tau) = first_approach(vec3::sub(x, p0), v, r, h) {
-            take(tau, p0, Feature::Vertex);
+            take(tau, p0, Feature::Vertex(k as u8));
         }
     }
     first

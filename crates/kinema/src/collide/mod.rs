@@ -41,6 +41,7 @@
 /// A particle's radius is refused above it; a state beyond it is a diverged step.
 pub const GEOMETRY_LIMIT: f64 = 1e150;
 
+pub mod books;
 pub mod broad_phase;
 pub mod colliders;
 pub mod contact;
@@ -55,9 +56,11 @@ pub(crate) mod neighbour_list;
 pub mod penalty;
 pub(crate) mod placement;
 pub mod response;
+mod roots;
 pub(crate) mod sleep;
 pub(crate) mod soft_step;
 pub(crate) mod stage;
+pub mod surface;
 pub(crate) mod sweeps;
 pub mod toi;
 pub(crate) mod wake;

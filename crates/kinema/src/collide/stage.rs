@@ -7,6 +7,7 @@
 //! Newton's restitution law, distribute each impulse onto both particles.
 
 use crate::collide::impulse::{ImpulseModel, StageSetting};
+pub use crate::collide::books::ColliderBooks;
 use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Motion, Partner, Periodic};
 use crate::error::Error;
 use crate::particles::Particles;
@@ -213,36 +214,6 @@ pub(crate) struct CollideStage {
     pub motions: Vec<Option<(Motion, Collider)>>,
     /// What the particles gave each collider over all steps.
     pub collider_books: Vec<ColliderBooks>,
-}
-
-/// What the particles gave one collider (the impulse model's impacts and end-of-step
-/// contacts): momentum, and the work the collider did on them.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct ColliderBooks {
-    /// Momentum the collider received, −Σ J over the impulses J it gave particles, N·s (a
-    /// collider has infinite mass: this is what it would have taken up, the force it felt
-    /// integrated over time).
-    pub momentum: [f64; 3],
-    /// Angular momentum the collider received about the world's origin, −Σ x_c × J, N·m·s
-    /// (x_c the contact point on its surface).
-    pub angular_momentum: [f64; 3],
-    /// Work the collider's surface did on the particles, Σ J·u(x_c), J (0 for a still one:
-    /// a moving wall's energy input, which the collisions' `energy_lost` books as negative
-    /// loss).
-    pub work: f64,
-}
-
-impl ColliderBooks {
-    /// Books the impulse `j` (N·s) the collider gave a particle at the point `at` (m) of its
-    /// surface moving at `u` (m/s).
-    pub(crate) fn book(&mut self, at: [f64; 3], u: [f64; 3], j: [f64; 3]) {
-        let torque = crate::vec3::cross(at, j);
-        for k in 0..3 {
-            self.momentum[k] -= j[k];
-            self.angular_momentum[k] -= torque[k];
-        }
-        self.work += crate::vec3::dot(j, u);
-    }
 }
 
 impl CollideStage {

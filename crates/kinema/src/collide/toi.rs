@@ -14,20 +14,10 @@
 //! A step length h that is negative or NaN finds nothing.
 
 use super::colliders::{Plane, SphereObstacle};
+use super::roots::toi_half_space;
+#[cfg(test)]
+use super::roots::distinct_roots;
 use crate::vec3;
-
-/// The two real roots of A τ² + B τ + C = 0, smaller first, for A ≠ 0 and a positive
-/// discriminant; `None` otherwise (no roots, or a double root: a tangency).
-fn distinct_roots(a: f64, b: f64, c: f64) -> Option<(f64, f64)> {
-    let disc = b * b - 4.0 * a * c;
-    if a == 0.0 || disc <= 0.0 || disc.is_nan() {
-        return None;
-    }
-    // sign(B) with sign(0) = +1: then |q| ≥ ½ √disc > 0, so C / q is defined.
-    let q = -0.5 * (b + disc.sqrt().copysign(if b < 0.0 { -1.0 } else { 1.0 }));
-    let (r1, r2) = (q / a, c / q);
-    Some(if r1 <= r2 { (r1, r2) } else { (r2, r1) })
-}
 
 /// First time τ ∈ [0, h] (s) at which two spheres in linear relative motion touch while
 /// approaching; `None` if they do not within the step.
@@ -94,43 +84,6 @@ pub fn toi_spheres(dx: [f64; 3], dv: [f64; 3], radius_sum: f64, h: f64) -> Optio
 /// start and moving away has no impact unless it leaves the contact and comes back within h.
 pub fn toi_plane(x0: [f64; 3], v0: [f64; 3], a: [f64; 3], radius: f64, plane: &Plane, h: f64) -> Option<f64> {
     toi_half_space(x0, v0, a, radius, plane.point(), plane.normal(), h)
-}
-
-/// [`toi_plane`] for the plane through `point` with unit normal `n` (a mesh's face).
-pub(crate) fn toi_half_space(
-    x0: [f64; 3],
-    v0: [f64; 3],
-    a: [f64; 3],
-    radius: f64,
-    point: [f64; 3],
-    n: [f64; 3],
-    h: f64,
-) -> Option<f64> {
-    if h < 0.0 || h.is_nan() {
-        return None;
-    }
-    let qa = 0.5 * vec3::dot(a, n);
-    let qb = vec3::dot(v0, n);
-    let qc = vec3::dot(vec3::sub(x0, point), n) - radius;
-    if qc <= 0.0 && (qb < 0.0 || (qb == 0.0 && qa < 0.0)) {
-        return Some(0.0);
-    }
-    let tau = if qa == 0.0 {
-        // linear: g(τ) = C + B τ falls through 0 at −C / B when B < 0 (then C > 0 here)
-        if qb < 0.0 {
-            -qc / qb
-        } else {
-            return None;
-        }
-    } else {
-        let (lo, hi) = distinct_roots(qa, qb, qc)?;
-        if qa > 0.0 {
-            lo
-        } else {
-            hi
-        }
-    };
-    (0.0..=h).contains(&tau).then_some(tau)
 }
 
 /// First time τ ∈ [0, h] (s) at which a sphere of radius `radius` (m) at `x0` (m) moving with

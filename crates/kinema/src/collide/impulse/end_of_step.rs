@@ -91,7 +91,7 @@ impl ImpulseModel {
             for &(_, k) in list.walls[first..].iter().take_while(|w| w.0 == i) {
                 let collider = &set.colliders[k];
                 collider.for_each_touch(p, radius[i], 2.0 * SPECULATIVE * radius[i], |t| {
-                    let c = t.contact(i, k, collider, p, vi, radius[i]);
+                    let c = collider.contact(k, t, i, p, vi, radius[i]);
                     if !on_periodic_wall(&c, set.colliders, set.domain) {
                         self.contacts.push(c);
                     }

@@ -16,7 +16,7 @@ use super::islands::Islands;
 use super::neighbour_list::NeighbourList;
 use super::sleep::{Sleep, WarmEntry};
 use super::soft_step::Target;
-use super::stage::ColliderBooks;
+use super::books::ColliderBooks;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
 use crate::error::Error;

@@ -43,16 +43,16 @@ fn closest_point_regions_by_hand() {
         closest_on_triangle([0.5, 0.5, 3.0], a, b, c),
         ([0.5, 0.5, 0.0], Feature::Face)
     );
-    assert_eq!(closest_on_triangle([-1.0, -1.0, 1.0], a, b, c), (a, Feature::Vertex));
-    assert_eq!(closest_on_triangle([3.0, -0.5, 0.0], a, b, c), (b, Feature::Vertex));
+    assert_eq!(closest_on_triangle([-1.0, -1.0, 1.0], a, b, c), (a, Feature::Vertex(0)));
+    assert_eq!(closest_on_triangle([3.0, -0.5, 0.0], a, b, c), (b, Feature::Vertex(1)));
     assert_eq!(
         closest_on_triangle([1.0, -1.0, 0.5], a, b, c),
-        ([1.0, 0.0, 0.0], Feature::Edge)
+        ([1.0, 0.0, 0.0], Feature::Edge(0))
     );
     // beyond the hypotenuse x + y = 2: the foot on it
     assert_eq!(
         closest_on_triangle([2.0, 2.0, 0.0], a, b, c),
-        ([1.0, 1.0, 0.0], Feature::Edge)
+        ([1.0, 1.0, 0.0], Feature::Edge(1))
     );
 }
 
@@ -95,6 +95,50 @@ fn a_flat_patch_of_triangles_gives_one_contact_at_its_seams() {
         assert!(close(t[0].normal, [0.0, 0.0, 1.0]), "{p:?}: {t:?}");
         assert!((t[0].overlap - 0.01).abs() < 1e-14, "{p:?}: {t:?}");
     }
+}
+
+#[test]
+fn a_ball_over_a_seam_or_a_fan_apex_touches_once() {
+    // A flat grid of 20 x 20 squares (two triangles each) at z = 0: a ball centred exactly
+    // over a diagonal seam, over a square's corner (where 6 triangles meet) and over an edge
+    // between squares touches the patch once, along +z, overlap 0.001.
+    let k = 20u32;
+    let mut v = Vec::new();
+    for j in 0..=k {
+        for i in 0..=k {
+            v.push([i as f64 * 0.05, j as f64 * 0.05, 0.0]);
+        }
+    }
+    let mut f = Vec::new();
+    for j in 0..k {
+        for i in 0..k {
+            let a = j * (k + 1) + i;
+            f.push([a, a + 1, a + k + 2]);
+            f.push([a, a + k + 2, a + k + 1]);
+        }
+    }
+    let grid = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
+    for p in [[0.1125, 0.1125, 0.019], [0.15, 0.25, 0.019], [0.125, 0.2, 0.019], [0.37, 0.41, 0.019]] {
+        let t = touches(&grid, p, 0.02);
+        assert_eq!(t.len(), 1, "{p:?}: {t:?}");
+        assert!(close(t[0].normal, [0.0, 0.0, 1.0]) && (t[0].overlap - 0.001).abs() < 1e-14, "{p:?}: {t:?}");
+    }
+    // The pole of a shallow cone of 200 thin triangles (a UV sphere's cap): a ball resting
+    // at the apex is tangent to every spoke (200 face contacts tilted 5.7°, rule 2 keeps
+    // them all); rule 3 makes them one, along the axis by symmetry. Off the axis, one or two.
+    let n = 200u32;
+    let mut v = vec![[0.0, 0.0, 0.0]];
+    for s in 0..n {
+        let a = std::f64::consts::TAU * s as f64 / n as f64;
+        v.push([0.1 * a.cos(), 0.1 * a.sin(), 0.01]);
+    }
+    let f: Vec<[u32; 3]> = (0..n).map(|s| [0, 1 + s, 1 + (s + 1) % n]).collect();
+    let cone = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
+    let t = touches(&cone, [0.0, 0.0, 0.0199], 0.02);
+    assert_eq!(t.len(), 1, "{t:?}");
+    assert!(t[0].normal[2] > 1.0 - 1e-12, "{t:?}");
+    let t = touches(&cone, [0.003, 0.001, 0.02], 0.02);
+    assert!((1..=2).contains(&t.len()), "{} contacts", t.len());
 }
 
 #[test]
