@@ -100,7 +100,7 @@ impl ContactForce {
         let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
         let collider = &self.colliders[k];
         collider.for_each_touch(p, self.radius[i], 0.0, |t| {
-            let c = t.contact(i, k, collider, p, vi, self.radius[i]);
+            let c = collider.contact(k, t, i, p, vi, self.radius[i]);
             if !on_periodic_wall(&c, &self.colliders, &self.domain) {
                 each(&c);
             }
