@@ -351,13 +351,20 @@ impl Scene<'_> {
             } else {
                 (xi, vi)
             };
-            if now == 0.0 && self.touches(k, xi, self.radius[i], 2.0 * SPECULATIVE * self.radius[i]) {
-                // touching a collider at the start, or within the speculative margin of it,
-                // approaching or not: a contact of the step's end
+            // touching a collider at the start, or within the speculative margin of it,
+            // approaching or not: a contact of the step's end (a mesh answers with its time of
+            // impact, from the same traversal of its hierarchy)
+            let margin = (now == 0.0).then_some(2.0 * SPECULATIVE * self.radius[i]);
+            let path = Parabola { x: xi, v: vi, a: ai };
+            let mut touching = false;
+            if let (Some(tolerance), false) = (margin, matches!(self.colliders[k], Collider::Mesh(_))) {
+                touching = self.touches(k, xi, self.radius[i], tolerance);
+            }
+            if touching {
                 each(Found::Touching(None));
             }
-            let path = Parabola { x: xi, v: vi, a: ai };
-            self.collider_events(i, k, path, rest, |wall, tau| {
+            let mut near = false;
+            self.collider_events(i, k, path, rest, margin, &mut near, |wall, tau| {
                 if wall.1 > -self.slow || (tau == 0.0 && self.is_resting(i, Partner::Collider(k), now)) {
                     each(Found::Touching(None)); // meets it too slowly, or rests on it: a contact
                     return;
@@ -370,6 +377,9 @@ impl Scene<'_> {
                     partner_version: 0,
                 }));
             });
+            if near {
+                each(Found::Touching(None));
+            }
         }
     }
 
@@ -409,7 +419,7 @@ impl Scene<'_> {
                 v: vi,
                 a: [0.0; 3],
             };
-            self.collider_events(i, k, line, horizon, |_, tau| meet(tau));
+            self.collider_events(i, k, line, horizon, None, &mut false, |_, tau| meet(tau));
         }
         first
     }
@@ -435,7 +445,20 @@ impl Scene<'_> {
 
     /// Calls `each((wall, u_n), τ)` with the first impact of a sphere at (x, v, a) with each
     /// active wall of collider k within `rest`, u_n its normal velocity then (< 0).
-    fn collider_events(&self, i: usize, k: usize, path: Parabola, rest: f64, mut each: impl FnMut((usize, f64), f64)) {
+    ///
+    /// A mesh also sets `near` when the sphere comes within `margin` (m) of it now (the
+    /// other colliders leave that to [`Scene::touches`]).
+    #[allow(clippy::too_many_arguments)]
+    fn collider_events(
+        &self,
+        i: usize,
+        k: usize,
+        path: Parabola,
+        rest: f64,
+        margin: Option<f64>,
+        near: &mut bool,
+        mut each: impl FnMut((usize, f64), f64),
+    ) {
         let Parabola { x, v, a } = path;
         let r = self.radius[i];
         match &self.colliders[k] {
@@ -466,7 +489,9 @@ impl Scene<'_> {
             Collider::Mesh(m) => {
                 // faces on the parabola, edges and vertices on its chord; the wall is the
                 // triangle met
-                if let Some((t, tri)) = m.toi(x, v, a, r, rest) {
+                let (touching, first) = m.toi_within(x, v, a, r, rest, margin);
+                *near |= touching;
+                if let Some((t, tri)) = first {
                     let at = [0, 1, 2].map(|c| x[c] + v[c] * t + 0.5 * a[c] * t * t);
                     let n = m.touch_of_triangle(tri, at, r).normal;
                     each((tri, vec3::dot([0, 1, 2].map(|c| v[c] + a[c] * t), n)), t);

@@ -47,12 +47,12 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use super::surface::{Surface, Touch};
 use super::motion::Pose;
 use super::roots::toi_half_space;
-use smallvec::SmallVec;
+use super::surface::{Surface, Touch};
 use crate::error::Error;
 use crate::vec3;
+use smallvec::SmallVec;
 
 /// Which side of a mesh particles belong to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -573,21 +573,42 @@ impl TriangleMesh {
     /// that slides along a face it touches meets no edge or vertex in that face's plane (the
     /// seams of a flat patch, as rule 2 of the module's doc).
     pub fn toi(&self, x: [f64; 3], v: [f64; 3], a: [f64; 3], r: f64, horizon: f64) -> Option<(f64, usize)> {
+        self.toi_within(x, v, a, r, horizon, None).1
+    }
+
+    /// [`TriangleMesh::toi`], and whether the sphere comes within `margin` (m) of a true
+    /// feature now ([`TriangleMesh::for_each_touch`] with that tolerance finds a touch), from
+    /// one traversal of the hierarchy (`None`: not asked, false).
+    pub fn toi_within(
+        &self,
+        x: [f64; 3],
+        v: [f64; 3],
+        a: [f64; 3],
+        r: f64,
+        horizon: f64,
+        margin: Option<f64>,
+    ) -> (bool, Option<(f64, usize)>) {
         if horizon.is_nan() || horizon < 0.0 {
-            return None;
+            let touching = margin.is_some_and(|m| !self.touches(self.local(x), r, m).is_empty());
+            return (touching, None);
         }
         let (x, v, a) = (self.local(x), self.local_vector(v), self.local_vector(a));
+        let margin_len = margin.unwrap_or(0.0).max(0.0);
         let (g, accel) = (&*self.geometry, a);
         let chord = [0, 1, 2].map(|k| v[k] + 0.5 * a[k] * horizon);
         let end = [0, 1, 2].map(|k| x[k] + chord[k] * horizon);
         let bulge = 0.125 * vec3::norm(a) * horizon * horizon;
-        let lo = [0, 1, 2].map(|k| x[k].min(end[k]) - r - bulge);
-        let hi = [0, 1, 2].map(|k| x[k].max(end[k]) + r + bulge);
-        // one traversal over the path's box: the triangles it may meet, and those it
-        // touches now (the path's box holds the sphere's)
+        let lo = [0, 1, 2].map(|k| x[k].min(end[k]) - r - bulge - margin_len);
+        let hi = [0, 1, 2].map(|k| x[k].max(end[k]) + r + bulge + margin_len);
+        // one traversal over the path's box: the triangles it may meet, those it touches now
+        // and those within the margin (the path's box holds the sphere's)
         let mut candidates: SmallVec<[u32; 16]> = SmallVec::new();
         let mut near: SmallVec<[Near; 8]> = SmallVec::new();
+        let mut within: SmallVec<[Near; 8]> = SmallVec::new();
         g.visit(lo, hi, |t| {
+            if margin.is_some() {
+                within.extend(self.near(t, x, r + margin_len));
+            }
             // the path's distance from the plane changes by at most |v·n| T + ½ |a·n| T²: a
             // triangle whose plane stays farther than r is never met
             let n = g.normals[t];
@@ -600,9 +621,10 @@ impl TriangleMesh {
                 None => candidates.push(t as u32),
             }
         });
+        let touching = margin.is_some() && !self.true_features(&mut within, x, r).is_empty();
         let now = self.true_features(&mut near, x, r);
         if let Some(&(t, ..)) = now.iter().find(|f| vec3::dot(v, f.1.normal) < 0.0) {
-            return Some((0.0, t));
+            return (touching, Some((0.0, t)));
         }
         let eps = self.eps(x, r);
         let faces: SmallVec<[(usize, [f64; 3]); 8]> = now.iter().filter(|f| f.3 == Feature::Face).map(|f| (f.0, f.2)).collect();
@@ -620,7 +642,7 @@ impl TriangleMesh {
                 }
             }
         }
-        first
+        (touching, first)
     }
 
     /// Whether point `p` (m) lies inside the closed mesh (false for an open one): the parity
