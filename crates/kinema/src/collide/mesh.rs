@@ -75,14 +75,36 @@ enum Feature {
 }
 
 /// A node of the hierarchy: a box and either two children (the left one follows the node,
-/// the right one at `right`) or `count` triangles of `order` from `start`.
+/// the right one at `right`) or `count` triangles of `order` from `start`. The box is kept in
+/// f32, rounded outwards (it only ever holds more than the triangles): 40 bytes a node
+/// rather than 64, and a traversal of a large mesh is bound by the nodes it loads.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Node {
-    lo: [f64; 3],
-    hi: [f64; 3],
+    lo: [f32; 3],
+    hi: [f32; 3],
     right: u32,
     start: u32,
     count: u32,
+}
+
+/// The largest f32 at most `x` (a box's lower side, rounded outwards).
+fn f32_below(x: f64) -> f32 {
+    let y = x as f32;
+    if f64::from(y) > x {
+        y.next_down()
+    } else {
+        y
+    }
+}
+
+/// The smallest f32 at least `x`.
+fn f32_above(x: f64) -> f32 {
+    let y = x as f32;
+    if f64::from(y) < x {
+        y.next_up()
+    } else {
+        y
+    }
 }
 
 /// Contacts whose normals differ by less than this merge (rule 3 of the module's doc): cos 10°.
@@ -167,6 +189,8 @@ struct Geometry {
     closed: bool,
     /// Largest |coordinate| of a vertex, m.
     scale: f64,
+    /// The box around the vertices of the triangles, (lo, hi), m.
+    bounds: ([f64; 3], [f64; 3]),
     /// For each triangle, how many triangles share each of its edges (itself included; 1 on
     /// an open mesh's border), at most 255.
     edge_faces: Vec<[u8; 3]>,
@@ -290,10 +314,20 @@ impl TriangleMesh {
             nodes: Vec::new(),
             closed,
             scale,
+            bounds: ([0.0; 3], [0.0; 3]),
             edge_faces,
             valence,
         };
         geometry.build();
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for &v in geometry.faces.iter().flatten() {
+            let p = geometry.vertices[v as usize];
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        geometry.bounds = (lo, hi);
         let side = match (closed, inside) {
             (false, _) => Side::Both,
             (true, false) => Side::Outside,
@@ -358,13 +392,13 @@ impl TriangleMesh {
     /// The box around all vertices where the mesh is now, (lo, hi), m (around the turned
     /// box of its vertices as added, for a turned mesh).
     pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        let root = self.geometry.nodes[0];
+        let root = self.geometry.bounds;
         let Some(pose) = self.pose else {
-            return (root.lo, root.hi);
+            return root;
         };
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         for corner in 0..8 {
-            let c = [0, 1, 2].map(|k| if corner >> k & 1 == 0 { root.lo[k] } else { root.hi[k] });
+            let c = [0, 1, 2].map(|k| if corner >> k & 1 == 0 { root.0[k] } else { root.1[k] });
             let p = pose.point(c);
             for k in 0..3 {
                 lo[k] = lo[k].min(p[k]);
@@ -698,8 +732,8 @@ impl Geometry {
         }
         let me = nodes.len();
         nodes.push(Node {
-            lo,
-            hi,
+            lo: lo.map(f32_below),
+            hi: hi.map(f32_above),
             right: 0,
             start: start as u32,
             count: order.len() as u32,
@@ -736,7 +770,7 @@ impl Geometry {
         let mut stack = Stack::new();
         while let Some(k) = stack.pop() {
             let node = self.nodes[k as usize];
-            if (0..3).any(|a| node.hi[a] < lo[a] || node.lo[a] > hi[a]) {
+            if (0..3).any(|a| f64::from(node.hi[a]) < lo[a] || f64::from(node.lo[a]) > hi[a]) {
                 continue;
             }
             if node.count > 0 {
@@ -758,12 +792,13 @@ impl Geometry {
             // the slab test: the ray's parameter interval inside each axis's slab
             let (mut enter, mut leave) = (0.0_f64, f64::INFINITY);
             for a in 0..3 {
+                let (lo, hi) = (f64::from(node.lo[a]), f64::from(node.hi[a]));
                 if d[a] == 0.0 {
-                    if p[a] < node.lo[a] || p[a] > node.hi[a] {
+                    if p[a] < lo || p[a] > hi {
                         leave = -1.0;
                     }
                 } else {
-                    let (s1, s2) = ((node.lo[a] - p[a]) / d[a], (node.hi[a] - p[a]) / d[a]);
+                    let (s1, s2) = ((lo - p[a]) / d[a], (hi - p[a]) / d[a]);
                     enter = enter.max(s1.min(s2));
                     leave = leave.min(s1.max(s2));
                 }
