@@ -18,8 +18,9 @@ is drawn over the rendered frames: they are cut to the rows or columns they use,
 side with Pillow under titles that carry the time, and one caption line with numbers measured
 in the run is printed per scene, for the README.
 
-kepler_euler, kepler_rk4 and kepler_verlet make one matplotlib figure together,
-scene_kepler.png (the planet's x–y path over the run against the closed-form orbit in grey).
+kepler_euler, kepler_rk4 and kepler_verlet make one picture together, scene_kepler.png:
+each run's last frame by kinema's renderer, with the planet's whole path as its trail and the
+attractor marked, on one camera that holds the widest orbit.
 maxwell_gas calls examples/maxwell_gas.py (``main``, which runs the scene and plots the speed
 histogram and the Kolmogorov–Smirnov distance) and puts one rendered frame of the gas, coloured
 by speed, to the left of that figure.
@@ -315,37 +316,36 @@ def cloth_on_sphere(out: Path) -> str:
 
 
 def kepler(out: Path) -> str:
-    fig, axes = plt.subplots(1, 3, figsize=(10.5, 3.9))
-    drift = {}
-    for ax, method in zip(axes, ["euler", "rk4", "verlet"], strict=True):
-        world, traj = run_scene(f"kepler_{method}")
+    runs = {method: run_scene(f"kepler_{method}") for method in ("euler", "rk4", "verlet")}
+    lim = max(2.0, 1.08 * max(float(np.abs(traj.positions[:, 0, :2]).max()) for _, traj in runs.values()))
+    camera = kinema.Camera2D(-lim, -lim, lim, lim)
+    drift, panels = {}, []
+    for method, (world, traj) in runs.items():
         mu = float(world.scene.forces[0].strength)
         p, v = traj.positions[:, 0, :2], traj.velocities[:, 0, :2]
         energy = 0.5 * np.sum(v**2, axis=1) - mu / np.linalg.norm(p, axis=1)
-        # The closed-form orbit of the initial state: r = (h²/μ) / (1 + e cos(θ − ω)).
-        h = p[0, 0] * v[0, 1] - p[0, 1] * v[0, 0]
-        ecc = np.array([v[0, 1] * h, -v[0, 0] * h]) / mu - p[0] / np.linalg.norm(p[0])
-        theta = np.linspace(0.0, 2.0 * np.pi, 400)
-        rr = h**2 / mu / (1.0 + np.linalg.norm(ecc) * np.cos(theta - np.arctan2(ecc[1], ecc[0])))
-        ax.plot(rr * np.cos(theta), rr * np.sin(theta), color="0.75", lw=4)
-        ax.plot(p[:, 0], p[:, 1], color="C3" if method == "euler" else "C0", lw=1.2)
-        ax.plot(*p[0], "ko", ms=4)
-        ax.plot(*p[-1], "o", color="C3" if method == "euler" else "C0", ms=5)
-        ax.plot(0, 0, marker="*", color="orange", ms=12)
         rel = (energy - energy[0]) / abs(energy[0])
         drift[method] = (rel[-1], np.abs(rel).max(), np.linalg.norm(p[-1]))
-        ax.set_title(f"{method}: ΔE/|E₀| = {rel[-1]:+.2g} at the end\n(largest |ΔE|/|E₀| {np.abs(rel).max():.2g})", fontsize=10)
-        lim = max(2.0, 1.08 * np.abs(p).max())
-        ax.set_xlim(-lim, lim)
-        ax.set_ylim(-lim, lim)
-        ax.set_aspect("equal")
-        ax.set_xlabel("x")
-        ax.grid(True, alpha=0.3)
-    axes[0].set_ylabel("y")
-    fig.suptitle(f"Kepler orbit, 3 periods at dt = {world.dt:g}: path (colour), exact orbit (grey), start (black dot), end (coloured dot)", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(out / "scene_kepler.png", dpi=90)
-    plt.close(fig)
+        # kinema's renderer alone: the planet at the end with its whole path as a trail, the
+        # attractor marked at its point
+        *_, last = kinema.render_frames(
+            traj.positions,
+            traj.radii,
+            traj.t,
+            dim=2,
+            velocities=traj.velocities,
+            color_by="speed",
+            width=330,
+            height=330,
+            camera=camera,
+            time_format=None,
+            legend=False,
+            min_radius_px=4.0,  # the planet (r = 0.02 m) would be 1.6 px
+            trail=float(traj.t[-1]),
+            attractors=[world.scene.forces[0].point],
+        )
+        panels.append(titled(np.array(last), f"{method}: ΔE/|E₀| = {rel[-1]:+.2g} at t = {traj.t[-1]:.2f} s"))
+    save(hstack(panels), out / "scene_kepler.png")
     e, r, v = drift["euler"], drift["rk4"], drift["verlet"]
     return (
         f"kepler_euler / kepler_rk4 / kepler_verlet: the circular orbit (μ = 1, r = 1, period 2π) for three periods at dt = 0.05. Euler spirals out "
