@@ -352,6 +352,12 @@ impl PyWorld {
         self.inner.set_collider_motion(k, motion).map_err(to_py)
     }
 
+    /// The overlaps the last placement check accepted but that the collisions will push
+    /// apart, as a sentence (count and deepest), once; None if there were none.
+    fn take_placement_notice(&mut self) -> Option<String> {
+        self.inner.take_placement_notice()
+    }
+
     /// What the particles gave each collider over all steps: {"momentum": (K, 3) N·s,
     /// "angular_momentum": (K, 3) N·m·s about the origin, "work": (K,) J done by the
     /// collider on the particles}.

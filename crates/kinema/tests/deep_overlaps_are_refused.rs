@@ -152,3 +152,37 @@ fn a_centre_exactly_on_a_wall_is_allowed_despite_rounding() {
     add(&mut w, &[0.5, 0.1 + 0.2 + 0.3, 0.5], 0.05);
     w.step().unwrap();
 }
+
+#[test]
+fn shallow_overlaps_at_the_start_are_noticed_with_their_count() {
+    // Two pairs overlapping by 10 % and 30 % of r_i + r_j, and a ball 0.02 m into the floor
+    // (20 % of its radius): accepted by both models, and noticed once, with the count (3)
+    // and the deepest (the 30 % pair); touching ones (δ = 0) are not noticed.
+    for model in [
+        ContactModel::Impulse,
+        ContactModel::SpringDashpot {
+            stiffness: 1e4,
+            damping: None,
+        },
+    ] {
+        let mut w = World::new(WorldParams::default()).unwrap();
+        w.set_collisions(CollisionParams {
+            model,
+            ..CollisionParams::default()
+        })
+        .unwrap();
+        let x = [
+            0.0, 0.0, 1.0, 0.18, 0.0, 1.0, 5.0, 0.0, 1.0, 5.14, 0.0, 1.0, 9.0, 0.0, 0.08, 12.0, 0.0, 1.0, 12.2, 0.0, 1.0,
+        ];
+        w.add_particles(&x, &[0.0; 21], &[1.0; 7], &[0.1; 7], &[false; 7]).unwrap();
+        w.add_collider(Plane::new([0.0; 3], [0.0, 0.0, 1.0], Surface::default()).unwrap())
+            .unwrap();
+        w.step().unwrap();
+        let notice = w.take_placement_notice().expect("noticed");
+        assert!(notice.starts_with("3 overlaps at the start"), "{notice}");
+        assert!(notice.contains("particles 2 and 3 overlap by 0.06 m"), "{notice}");
+        assert_eq!(w.take_placement_notice(), None);
+        w.step().unwrap();
+        assert_eq!(w.take_placement_notice(), None, "only at the placement's check");
+    }
+}

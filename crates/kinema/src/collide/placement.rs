@@ -59,6 +59,22 @@ pub struct Placed<'a> {
     pub user_of: Option<&'a [u32]>,
 }
 
+/// Overlaps a contact model resolves but that start the run with a push: particles
+/// overlapping each other, or a collider's surface, by more than [`NOTICE`] of the lengths
+/// involved. The collisions push them apart in the first steps (the impulse model removes
+/// the overlap, the spring–dashpot model pushes with k_n δ), which sets them moving: worth a
+/// warning, not a refusal.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overlaps {
+    /// How many pairs and particle–collider overlaps (at most [`COUNT_LIMIT`]).
+    pub count: usize,
+    /// The deepest, in words.
+    pub deepest: Option<String>,
+}
+
+/// An overlap is noticed beyond this fraction of r_i + r_j (a pair) or of r (a collider).
+pub const NOTICE: f64 = 0.01;
+
 /// The deepest placement found, in words, and how deep (0 at the limit of what is allowed,
 /// 1 when centres coincide or a centre is a body's depth inside).
 struct Deepest {
@@ -70,8 +86,15 @@ struct Deepest {
 /// included) by `rule` and against `colliders` (a centre inside a sphere obstacle, behind a
 /// plane or outside a box).
 /// Errors: [`Error::Placement`] naming the deepest and how many; what the broad phase's grid
-/// refuses (non-finite values).
-pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[Collider], rule: Rule) -> Result<(), Error> {
+/// refuses (non-finite values). Otherwise the overlaps it accepts but that will push
+/// particles apart ([`Overlaps`]).
+pub fn check(
+    grid: &mut Grid,
+    place: &Placed<'_>,
+    domain: &Domain,
+    colliders: &[Collider],
+    rule: Rule,
+) -> Result<Overlaps, Error> {
     let Placed {
         x,
         radius,
@@ -98,6 +121,17 @@ pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[
         count >= COUNT_LIMIT
     };
     let mut full = false;
+    let mut shallow = Overlaps::default();
+    let mut shallowest_depth = 0.0;
+    let mut notice = |depth: f64, what: &dyn Fn() -> String| {
+        if shallow.count < COUNT_LIMIT {
+            shallow.count += 1;
+        }
+        if depth > shallowest_depth {
+            shallowest_depth = depth;
+            shallow.deepest = Some(what());
+        }
+    };
     // Particles against particles: a refused pair is also a touching one (d < r_i + r_j),
     // so the grid's partners are the candidates; a pair is looked at from its later index
     // among those checked (i ≥ from, and j < from or j < i).
@@ -120,6 +154,20 @@ pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[
                     Rule::CentreInside => d < bound,
                     Rule::Coincident => d <= bound,
                 };
+                let sum = radius[i] + radius[j];
+                if !refused && d < sum * (1.0 - NOTICE) {
+                    let (a, b) = if user(i) < user(j) { (i, j) } else { (j, i) };
+                    notice((sum - d) / sum, &|| {
+                        format!(
+                            "particles {} and {} overlap by {} m (radii {} and {} m)",
+                            user(a),
+                            user(b),
+                            short(sum - d),
+                            radius[a],
+                            radius[b]
+                        )
+                    });
+                }
                 if refused {
                     let (a, b) = if user(i) < user(j) { (i, j) } else { (j, i) };
                     let words = || {
@@ -182,6 +230,21 @@ pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[
                     }
                 },
             };
+            if inside.is_none() {
+                // the centre on the right side, the sphere into the surface
+                let mut depth: f64 = 0.0;
+                c.for_each_touch(p, radius[i], 0.0, |t| depth = depth.max(t.overlap));
+                if depth > NOTICE * radius[i] {
+                    let u = user(i);
+                    notice(depth / radius[i], &|| {
+                        format!(
+                            "particle {u} overlaps colliders[{k}] by {} m (radius {} m)",
+                            short(depth),
+                            radius[i]
+                        )
+                    });
+                }
+            }
             if let Some((depth, words)) = inside {
                 let u = user(i);
                 if note(depth, &|| {
@@ -193,7 +256,7 @@ pub fn check(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, colliders: &[
         }
     }
     match deepest {
-        None => Ok(()),
+        None => Ok(shallow),
         Some(d) => Err(Error::Placement {
             deepest: d.what,
             count: match count {

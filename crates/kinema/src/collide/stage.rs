@@ -6,8 +6,8 @@
 //! detect collisions (continuously inside the step, then as contacts at its end), respond by
 //! Newton's restitution law, distribute each impulse onto both particles.
 
-use crate::collide::impulse::{ImpulseModel, StageSetting};
 pub use crate::collide::books::ColliderBooks;
+use crate::collide::impulse::{ImpulseModel, StageSetting};
 use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Motion, Partner, Periodic};
 use crate::error::Error;
 use crate::particles::Particles;
@@ -365,7 +365,7 @@ impl CollideStage {
 
     /// Refuses particles `from` on placed where this contact model cannot resolve them
     /// ([`placement::check`], with the impulse model's grid).
-    pub fn check_placement(&mut self, p: &Particles, from: usize, user_of: Option<&[u32]>) -> Result<(), Error> {
+    pub fn check_placement(&mut self, p: &Particles, from: usize, user_of: Option<&[u32]>) -> Result<placement::Overlaps, Error> {
         let rule = match self.params.model {
             ContactModel::Impulse => placement::Rule::CentreInside,
             ContactModel::SpringDashpot { .. } => placement::Rule::Coincident,

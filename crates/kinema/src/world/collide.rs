@@ -102,10 +102,30 @@ impl World {
     /// collisions are on, before the first step after they were placed (`collide/placement.rs`).
     pub(super) fn check_placement(&mut self, from: usize) -> Result<(), Error> {
         if let Some(stage) = &mut self.collide_stage {
-            stage.check_placement(&self.particles, from, self.sorted.as_deref())?;
+            let overlaps = stage.check_placement(&self.particles, from, self.sorted.as_deref())?;
+            if let Some(deepest) = overlaps.deepest {
+                let count = overlaps.count;
+                let many = if count >= crate::collide::placement::COUNT_LIMIT {
+                    "at least "
+                } else {
+                    ""
+                };
+                self.placement_notice = Some(format!(
+                    "{many}{count} overlap{} at the start that the collisions will push apart (more than {} % of the radii; \
+                     the deepest: {deepest}): they set the particles moving; place them apart to start at rest",
+                    if count == 1 { "" } else { "s" },
+                    crate::collide::placement::NOTICE * 100.0
+                ));
+            }
         }
         self.placement_from = None;
         Ok(())
+    }
+
+    /// The overlaps the last placement check accepted but that will push particles apart (a
+    /// sentence with their count and the deepest), once: taken by the caller.
+    pub fn take_placement_notice(&mut self) -> Option<String> {
+        self.placement_notice.take()
     }
 
     /// Turns collisions on (or changes their settings): stages 2–4 of every step with the

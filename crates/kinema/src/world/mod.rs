@@ -99,6 +99,8 @@ pub struct World {
     /// on, a collider, periodic axes, positions written before the first step), the first
     /// newcomer's index after particles are added; `None`: nothing to check.
     placement_from: Option<usize>,
+    /// What the last placement check accepted but will push apart (`World::take_placement_notice`).
+    placement_notice: Option<String>,
     /// Wall-clock time spent in each stage so far.
     times: StageTimes,
     /// Asked between the stages of a step and inside long ones whether to stop (Ctrl-C).
@@ -149,6 +151,7 @@ impl World {
             sorts: 0,
             contact_dirty: false,
             placement_from: None,
+            placement_notice: None,
             times: StageTimes::default(),
             interrupt: Interrupt::none(),
         })
