@@ -11,9 +11,11 @@ The public API (everything else is private):
   ``KillPlane`` (added with ``World.add``), ``World.remove_particles``, ``World.ids``,
   ``Trajectory.alive``; the module ``kinema.emitter``
 - Collisions: the colliders ``Plane``, ``Box``, ``SphereObstacle``, ``Mesh`` (a triangle
-  mesh from a file or arrays; added with ``World.add``); ``World.set_collisions``,
-  ``World.collisions``, ``World.periodic``, ``World.contacts``, ``World.collision_stats``;
-  per-particle ``restitution`` and ``friction`` in ``World.add_particles``
+  mesh from a file or arrays; added with ``World.add``), moved by ``Motion`` (steady) or
+  ``Keyframes`` (their ``motion=``, ``World.set_motion``); ``World.set_collisions``,
+  ``World.collisions``, ``World.periodic``, ``World.contacts``, ``World.collision_stats``,
+  ``World.collider_books``; per-particle ``restitution`` and ``friction`` in
+  ``World.add_particles``
 - Trajectory files: ``Trajectory.save`` (H5MD), ``load_trajectory``, ``Trajectory.export``
   (VTK, PLY, extended XYZ, CSV); the module ``kinema.io``
 - Pictures: ``render_frames`` (2D discs, 3D shaded spheres, coloured by speed, id or a field,
@@ -37,7 +39,7 @@ from . import (
 )
 from ._core import __version__
 from .checkpoint import resume_run
-from .colliders import Box, Mesh, Plane, SphereObstacle
+from .colliders import Box, Keyframes, Mesh, Motion, Plane, SphereObstacle
 from .convergence import ConvergenceResult, convergence
 from .emitter import Emitter, KillBox, KillPlane, KillSphere
 from .forces import Attractor, Drag, Gravity, PythonForce, Spring, Wind
@@ -72,7 +74,9 @@ __all__ = [
     "KillPlane",
     "KillSphere",
     "Gravity",
+    "Keyframes",
     "Mesh",
+    "Motion",
     "Plane",
     "Scene",
     "SceneError",

@@ -117,6 +117,17 @@ class World:
     def add_mesh(
         self, vertices: npt.NDArray[np.float64], faces: npt.NDArray[np.int64], inside: bool, restitution: float | None, friction: float | None
     ) -> int: ...
+    def set_collider_motion(
+        self,
+        k: int,
+        velocity: Sequence[float] | None = None,
+        angular_velocity: Sequence[float] | None = None,
+        pivot: Sequence[float] | None = None,
+        times: Sequence[float] | None = None,
+        translations: Sequence[Sequence[float]] | None = None,
+        rotations: Sequence[Sequence[float]] | None = None,
+    ) -> None: ...
+    def collider_books(self) -> dict[str, npt.NDArray[np.float64]]: ...
     def set_periodic(self, axes: list[bool]) -> None: ...
     @property
     def periodic(self) -> tuple[bool, bool, bool]: ...
@@ -220,4 +231,13 @@ def rgb_to_yuv420p(frame: npt.NDArray[np.uint8]) -> bytes: ...
 CONTACT_MODELS: list[str]
 
 def collision_defaults() -> dict[str, Any]: ...
+def collider_poses(
+    at: Sequence[float],
+    velocity: Sequence[float] | None = None,
+    angular_velocity: Sequence[float] | None = None,
+    pivot: Sequence[float] | None = None,
+    times: Sequence[float] | None = None,
+    translations: Sequence[Sequence[float]] | None = None,
+    rotations: Sequence[Sequence[float]] | None = None,
+) -> npt.NDArray[np.float64]: ...
 def check_contact_model(model: str, stiffness: float | None, damping: float | None) -> None: ...

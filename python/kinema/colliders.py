@@ -1,7 +1,11 @@
-"""Static colliders for ``kinema.World``: planes, boxes, sphere obstacles and triangle meshes.
+"""Colliders for ``kinema.World``: planes, boxes, sphere obstacles and triangle meshes, still
+or moving by a prescribed motion (``Motion``: steady; ``Keyframes``).
 
-A collider never moves and has infinite mass. Add one with ``world.add(...)``, which turns
-collisions on (with ``World.set_collisions``' defaults if they were off). Its values are
+A collider has infinite mass: nothing the particles do moves it. It stays where it was placed,
+or follows its ``motion`` (the ``motion=`` keyword of every collider, or
+``World.set_motion``): its placement and its surface's velocity at each contact are the
+motion's (docs/collisions.md, "Moving colliders"). Add one with ``world.add(...)``, which
+turns collisions on (with ``World.set_collisions``' defaults if they were off). Its values are
 checked by the engine when it is added; a bad one is a ``ValueError`` that names it.
 
 ``restitution`` e ∈ [0, 1] and ``friction`` μ ≥ 0 are the collider's own: where set, they
@@ -13,6 +17,7 @@ from __future__ import annotations
 
 import math
 import os
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -30,12 +35,17 @@ def _surface(c: Any) -> tuple[float | None, float | None]:
 class Collider:
     """Base of the colliders (a world tells them from forces by it). A collider checks its
     values' types when built (a bad one raises there, naming it); the engine checks their
-    ranges when it is added."""
+    ranges when it is added. ``motion``: a ``Motion``, ``Keyframes`` or None (still)."""
 
     __slots__ = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "motion", _motion_of(self.motion))
         object.__setattr__(self, "_args", self._checked())
+
+    def _moved(self, motion: Any) -> Collider:
+        """This collider with another ``motion`` (``World.set_motion`` keeps it so)."""
+        return dataclasses.replace(self, motion=motion)
 
     def _checked(self) -> tuple:  # pragma: no cover - every collider overrides it
         raise NotImplementedError
@@ -48,12 +58,13 @@ class Collider:
 class Plane(Collider):
     """The plane through ``point`` (m) with ``normal`` (non-zero, normalised by the engine):
     particles stay on the side the normal points to. In a 2D world the normal lies in the
-    xy-plane."""
+    xy-plane. ``motion``: a ``Motion`` or ``Keyframes`` that moves it (None: still)."""
 
     point: Any
     normal: Any
     restitution: float | None = None
     friction: float | None = None
+    motion: Motion | Keyframes | None = None
 
     def _checked(self) -> tuple:
         return _vec3("point", self.point), _vec3("normal", self.normal), *_surface(self)
@@ -68,14 +79,24 @@ class Box(Collider):
 
     3 values per corner in a 3D world; 2 (x, y) in a 2D world, where it is a rectangle open
     along z. A bound may be infinite (−inf for ``lo``, +inf for ``hi``): that face has no
-    wall. Its sides also give the cell of periodic axes (``World.periodic``)."""
+    wall. Its sides also give the cell of periodic axes (``World.periodic``).
+
+    ``motion``: a ``Motion`` or ``Keyframes`` that translates it (None: still). A box stays
+    axis-aligned: a motion that turns it is refused (``motion = ... is invalid``); a turning
+    container is a closed ``Mesh`` with ``inside=True``."""
 
     lo: Any
     hi: Any
     restitution: float | None = None
     friction: float | None = None
+    motion: Motion | Keyframes | None = None
 
     def _checked(self) -> tuple:
+        if self.motion is not None and self.motion.turns:
+            raise ValueError(
+                f"motion = {self.motion!r} is invalid: a Box stays axis-aligned and can only translate; "
+                "a turning container is a closed kinema.Mesh with inside=True"
+            )
         lo = _checks.real_array("lo", self.lo).reshape(-1).tolist()
         hi = _checks.real_array("hi", self.hi).reshape(-1).tolist()
         return lo, hi, *_surface(self)
@@ -87,12 +108,15 @@ class Box(Collider):
 @dataclass(frozen=True)
 class SphereObstacle(Collider):
     """A fixed sphere (a circle in 2D) of ``center`` (m) and ``radius`` (m, ≥ 0) that keeps
-    particles outside. In a 2D world its centre has z = 0."""
+    particles outside. In a 2D world its centre has z = 0. ``motion``: a ``Motion`` or
+    ``Keyframes`` that moves it (None: still; a turn about its centre moves only its surface,
+    which then drags particles by friction)."""
 
     center: Any
     radius: float
     restitution: float | None = None
     friction: float | None = None
+    motion: Motion | Keyframes | None = None
 
     def _checked(self) -> tuple:
         return _vec3("center", self.center), _checks.real("radius", self.radius), *_surface(self)
@@ -102,10 +126,11 @@ class SphereObstacle(Collider):
 
 
 class Mesh(Collider):
-    """A static triangle mesh (3D worlds only), from a file or from arrays::
+    """A triangle mesh (3D worlds only), from a file or from arrays, still or moving::
 
         kinema.Mesh("bowl.obj", scale=1.0, rotation=(0, 0, 0), translation=(0, 0, 0), inside=False)
         kinema.Mesh(vertices=V, faces=F)
+        kinema.Mesh("drum.obj", inside=True, motion=kinema.Motion(angular_velocity=(0, 1.5, 0)))
 
     ``file``: a mesh file, OBJ (.obj), STL (.stl), PLY (.ply), glTF (.gltf, .glb) or USD
     (.usd, .usda, .usdc, .usdz; needs ``pip install usd-core``), read by
@@ -133,6 +158,9 @@ class Mesh(Collider):
     it is on, and ``inside=True`` is refused. The engine drops faces of zero area and turns a
     closed mesh's faces outwards (docs/collisions.md, "Triangle meshes").
 
+    ``motion``: a ``Motion`` or ``Keyframes`` that moves the mesh from this placement (the
+    vertices after the transform; None: still).
+
     Refused when built, a ``ValueError`` naming the parameter: a file and arrays both given,
     or neither; a missing file, an unknown suffix (the formats read are listed), a file that
     cannot be read; arrays of the wrong shape; a zero or non-finite scale, rotation or
@@ -141,7 +169,7 @@ class Mesh(Collider):
     area, a 2D world).
     """
 
-    __slots__ = ("_file", "_vertices", "_faces", "_scale", "_rotation", "_translation", "_inside", "_restitution", "_friction", "_args", "_closed")
+    __slots__ = ("_file", "_vertices", "_faces", "_scale", "_rotation", "_translation", "_inside", "_restitution", "_friction", "_motion", "_args", "_closed")
 
     def __init__(
         self,
@@ -155,7 +183,9 @@ class Mesh(Collider):
         inside: bool = False,
         restitution: float | None = None,
         friction: float | None = None,
+        motion: Motion | Keyframes | None = None,
     ) -> None:
+        motion = _motion_of(motion)
         arrays = vertices is not None or faces is not None
         if file is not None and arrays:
             given = " and ".join(n for n, v in (("vertices", vertices), ("faces", faces)) if v is not None)
@@ -200,6 +230,7 @@ class Mesh(Collider):
             ("_inside", inside),
             ("_restitution", restitution),
             ("_friction", friction),
+            ("_motion", motion),
             ("_args", (v, f, inside, *surface)),
             ("_closed", None),
         ):
@@ -251,9 +282,23 @@ class Mesh(Collider):
     def friction(self) -> float | None:
         return self._friction
 
+    @property
+    def motion(self) -> Motion | Keyframes | None:
+        """The mesh's prescribed motion, or None (still)."""
+        return self._motion
+
+    def _moved(self, motion: Any) -> Mesh:
+        """This mesh with another ``motion`` (``World.set_motion`` keeps it so)."""
+        out = Mesh.__new__(Mesh)
+        for name in Mesh.__slots__:
+            object.__setattr__(out, name, getattr(self, name))
+        object.__setattr__(out, "_motion", _motion_of(motion))
+        return out
+
     def __repr__(self) -> str:
         source = repr(str(self._file)) if self._file is not None else "vertices=..., faces=..."
-        return f"Mesh({source}, {len(self._vertices)} vertices, {len(self._faces)} triangles, inside={self._inside})"
+        moving = f", motion={self._motion!r}" if self._motion is not None else ""
+        return f"Mesh({source}, {len(self._vertices)} vertices, {len(self._faces)} triangles, inside={self._inside}{moving})"
 
     def _attach(self, core: Any) -> int:
         return core.add_mesh(*self._args)
@@ -351,3 +396,175 @@ def _is_closed(vertices: np.ndarray, faces: np.ndarray) -> bool:
         return False  # an edge run twice the same way
     undirected, counts = np.unique(np.sort(directed, axis=1), axis=0, return_counts=True)
     return bool(len(undirected) and np.all(counts == 2))
+
+
+# -- prescribed motion --------------------------------------------------------------------------
+# The engine moves a collider (collide/motion.rs): at time t a point x₀ of the placement it was
+# added in is at x(t) = R(t) (x₀ − c) + c + T(t), c the pivot; its surface moves at
+# u(x) = Ṫ + ω × (x − c − T). These two classes say which R and T; `_core.collider_poses` is the
+# one implementation of them (the pictures call it, never a copy in Python).
+
+
+@dataclass(frozen=True)
+class Motion:
+    """A steady motion of a collider: it translates at ``velocity`` V (m/s) and turns at
+    ``angular_velocity`` ω (rad/s, the axis's direction by the right-hand rule, its length
+    the rate) about ``pivot`` c (m, a point of the collider's placement as added)::
+
+        x(t) = R(t) (x₀ − c) + c + V t,     R(t) = the rotation by the angle |ω| t about ω
+
+    on the world's clock (t = 0 is the world's time 0, not the time the collider is added).
+    A drum turning about its own axis: ``Motion(angular_velocity=(0, 2.0, 0), pivot=(0, 0,
+    0.3))`` with the pivot on the axis. Each is 3 finite numbers (a ``ValueError`` naming it
+    otherwise; a wrong type is a ``TypeError``). A ``Box`` can only translate (ω = 0); in a 2D
+    world V lies in the xy-plane and ω along z."""
+
+    velocity: Any = (0.0, 0.0, 0.0)
+    angular_velocity: Any = (0.0, 0.0, 0.0)
+    pivot: Any = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        for name, unit in (("velocity", "m/s"), ("angular_velocity", "rad/s"), ("pivot", "m")):
+            object.__setattr__(self, name, _finite3(name, getattr(self, name), unit))
+
+    @property
+    def turns(self) -> bool:
+        """Whether it rotates the collider (ω ≠ 0)."""
+        return any(c != 0.0 for c in self.angular_velocity)
+
+    def _binding(self) -> dict[str, Any]:
+        """The keyword arguments of ``_core.World.set_collider_motion`` and ``_core.collider_poses``."""
+        return {"velocity": list(self.velocity), "angular_velocity": list(self.angular_velocity), "pivot": list(self.pivot)}
+
+
+@dataclass(frozen=True)
+class Keyframes:
+    """A collider's motion by keys: at ``times[k]`` (s, strictly increasing, at least one) the
+    collider is turned by ``rotations[k]`` about ``pivot`` c (m) and displaced by
+    ``translations[k]`` (m)::
+
+        x(t) = R(t) (x₀ − c) + c + T(t)
+
+    ``rotations``: (K, 3) Euler angles in degrees, about the fixed x, then y, then z axis
+    (extrinsic XYZ, as ``kinema.Mesh``'s ``rotation``); ``None``: no turn. ``translations``:
+    (K, 3), m; ``None``: no displacement. Between two keys T moves linearly and R turns at a
+    constant rate (spherical linear interpolation of the keys' quaternions), so the
+    collider's velocity jumps at each key; before the first key and after the last it rests
+    there. On the world's clock (t = 0 is the world's time 0).
+
+    Between two keys the collider turns the shorter way, by less than 180°: a key whose angle
+    differs from the one before by 180° or more about an axis is refused (put keys in
+    between). ``quaternions`` gives the rotations as unit quaternions (w, x, y, z), the form the
+    engine and the descriptions take. Refused with a ``ValueError`` naming the parameter: no
+    time, times not finite or not increasing, a number of translations or rotations other than
+    one per time, a value that is not finite; a wrong type is a ``TypeError``. A ``Box`` can
+    only translate (rotations must be 0); in a 2D world translations lie in the xy-plane and
+    turns are about z."""
+
+    times: Any
+    translations: Any = None
+    rotations: Any = None
+    pivot: Any = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        t = _checks.real_array("times", self.times).reshape(-1) if np.ndim(self.times) <= 1 else None
+        if t is None:
+            raise ValueError(f"times = {_checks.describe(self.times)} is invalid: it must be a list of keyframe times, s")
+        if t.size == 0:
+            raise ValueError("times = [] is invalid: keyframes need at least one time, s")
+        for k, value in enumerate(t.tolist()):
+            if not math.isfinite(value) or (k > 0 and not value > t[k - 1]):
+                raise ValueError(f"times[{k}] = {_checks.describe(value)} is invalid: keyframe times must be finite and strictly increasing, s")
+        object.__setattr__(self, "times", tuple(t.tolist()))
+        for name, unit in (("translations", "m"), ("rotations", "degrees")):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, _rows(name, value, len(self.times), unit))
+        object.__setattr__(self, "pivot", _finite3("pivot", self.pivot, "m"))
+        if self.rotations is not None:
+            for k in range(1, len(self.rotations)):
+                step = np.abs(np.subtract(self.rotations[k], self.rotations[k - 1]))
+                if step.max() >= 180.0:
+                    axis = "xyz"[int(step.argmax())]
+                    raise ValueError(
+                        f"rotations[{k}] = {_checks.describe(list(self.rotations[k]))} is invalid: it is {step.max():g}° about {axis} from "
+                        f"rotations[{k - 1}]; between two keys the collider turns the shorter way (less than 180°): put keys in between"
+                    )
+
+    @property
+    def turns(self) -> bool:
+        """Whether it rotates the collider (a rotation not 0)."""
+        return self.rotations is not None and any(c != 0.0 for row in self.rotations for c in row)
+
+    @property
+    def quaternions(self) -> np.ndarray | None:
+        """(K, 4) unit quaternions (w, x, y, z) of ``rotations`` (None without them)."""
+        if self.rotations is None:
+            return None
+        return np.array([quaternion(r) for r in self.rotations])
+
+    def _binding(self) -> dict[str, Any]:
+        """The keyword arguments of ``_core.World.set_collider_motion`` and ``_core.collider_poses``."""
+        q = self.quaternions
+        return {
+            "times": list(self.times),
+            "translations": None if self.translations is None else [list(r) for r in self.translations],
+            "rotations": None if q is None else q.tolist(),
+            "pivot": list(self.pivot),
+        }
+
+
+MOTIONS = (Motion, Keyframes)
+
+
+def _finite3(name: str, value: Any, unit: str) -> tuple[float, float, float]:
+    """``value`` as 3 finite floats (a ``ValueError`` naming ``name`` and the ``unit`` otherwise)."""
+    v = _checks.real_array(name, value).reshape(-1)
+    if v.size != 3 or not np.all(np.isfinite(v)):
+        raise ValueError(f"{name} = {_checks.describe(value)} is invalid: it must be 3 finite numbers (x, y, z), {unit}")
+    return tuple(v.tolist())
+
+
+def _rows(name: str, value: Any, n: int, unit: str) -> tuple[tuple[float, float, float], ...]:
+    """``value`` as ``n`` rows of 3 finite numbers (a ``ValueError`` naming ``name`` otherwise)."""
+    a = _checks.real_array(name, value)
+    if a.shape != (n, 3):
+        raise ValueError(f"{name} has shape {a.shape}; it must be ({n}, 3): one (x, y, z) per keyframe time, {unit}")
+    bad = np.argwhere(~np.isfinite(a))
+    if bad.size:
+        k, c = bad[0]
+        raise ValueError(f"{name}[{k}][{c}] = {_checks.describe(a[k, c])} is invalid: it must be finite, {unit}")
+    return tuple(tuple(row) for row in a.tolist())
+
+
+def _motion_of(value: Any) -> Motion | Keyframes | None:
+    """A collider's ``motion``: a ``Motion``, ``Keyframes`` or None (a ``TypeError`` naming it)."""
+    if value is None or isinstance(value, MOTIONS):
+        return value
+    raise TypeError(f"motion = {_checks.describe(value)} is invalid: it must be a kinema.Motion, kinema.Keyframes or None, not {_checks._type_words(value)}")
+
+
+def quaternion(rotation: Any) -> tuple[float, float, float, float]:
+    """The unit quaternion (w, x, y, z), w ≥ 0, of Euler angles (α, β, γ) in degrees about the
+    fixed x, y, z axes (extrinsic XYZ, the matrix of :func:`rotation_matrix`). From the matrix
+    R by Shepperd's method: of 4w² = 1 + tr R, 4x² = 1 + 2R₀₀ − tr R, ... the largest is taken
+    (its square root loses no digits), the others from the off-diagonal sums and differences."""
+    r = rotation_matrix(rotation)
+    tr = r[0, 0] + r[1, 1] + r[2, 2]
+    squares = [1.0 + tr, 1.0 + 2 * r[0, 0] - tr, 1.0 + 2 * r[1, 1] - tr, 1.0 + 2 * r[2, 2] - tr]  # 4w², 4x², 4y², 4z²
+    k = int(np.argmax(squares))
+    s = 2.0 * math.sqrt(squares[k])  # 4 times the largest component
+    d = (r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1])  # 4w·(x, y, z)
+    sums = {(0, 1): r[0, 1] + r[1, 0], (0, 2): r[0, 2] + r[2, 0], (1, 2): r[1, 2] + r[2, 1]}  # 4xy, 4xz, 4yz
+    if k == 0:
+        q = [s / 4, d[0] / s, d[1] / s, d[2] / s]
+    else:
+        a = k - 1
+        q = [d[a] / s, 0.0, 0.0, 0.0]
+        q[k] = s / 4
+        for b in range(3):
+            if b != a:
+                q[b + 1] = sums[(min(a, b), max(a, b))] / s
+    if q[0] < 0:
+        q = [-c for c in q]
+    return tuple(float(c) for c in q)

@@ -45,11 +45,31 @@ def _other_thread(owner: int) -> RuntimeError:
     )
 
 
-def _inside(c: Collider, p: np.ndarray) -> bool:
-    """Whether the point ``p`` (m) lies inside the collider ``c``: behind a plane, outside a
-    box, inside a sphere obstacle, on the wrong side of a closed mesh (the rule of
-    collide/placement.rs, without its tolerance)."""
+def _check_motion(dim: int, c: Collider, motion: Any) -> None:
+    """Refuses what the engine would refuse of ``motion`` on ``c`` in a ``dim``-D world (a
+    turning box, a motion out of the xy-plane in 2D), before ``c`` is added: the motion is
+    set on a stand-in of its kind (its own box; a plane for the others) in an empty engine
+    world. The engine's message names the parameter."""
+    scratch = _core.World(dim, 1e-3, "verlet")
+    if isinstance(c, Box):
+        scratch.add_box(*c._args)
+    else:
+        scratch.add_plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], None, None)
+    scratch.set_collider_motion(0, **motion._binding())
+
+
+def _inside(c: Collider, p: np.ndarray, t: float = 0.0) -> bool:
+    """Whether the point ``p`` (m) lies inside the collider ``c`` at time ``t`` (s): behind a
+    plane, outside a box, inside a sphere obstacle, on the wrong side of a closed mesh (the
+    rule of collide/placement.rs, without its tolerance). A moving collider is asked at the
+    point of its placement as added that is at ``p`` at ``t``: x₀ = Rᵀ (p − o) of its pose
+    [R | o] then (``_core.collider_poses``)."""
     from .colliders import Mesh, Plane, SphereObstacle
+
+    if c.motion is not None:
+        pose = _core.collider_poses([float(t)], **c.motion._binding())[0]
+        p = np.asarray(p, float)[:3]
+        p = pose[:, :3].T @ (p - pose[:, 3])
 
     if isinstance(c, Mesh):
         return c._contains(p)
@@ -107,6 +127,7 @@ class World(WorldCollisions):
         self._core = _core.World(dim, _checks.real("dt", dt), method)
         self._forces: list[Any] = []
         self._colliders: list[Collider] = []
+        self._added: list[Collider] = []  # the objects given to add (set_motion knows them by these too)
         self._method_arg = method
         self._warned = False
         self._advice_due = True
@@ -357,7 +378,10 @@ class World(WorldCollisions):
     def add(self, item: Any) -> Any:
         """Add a force (``kinema.Gravity``, ``Drag``, ``Spring``, ``Attractor``, ``Wind``,
         ``PythonForce``) or a collider (``kinema.Plane``, ``Box``, ``SphereObstacle``,
-        ``Mesh``; this turns collisions on); returns it."""
+        ``Mesh``; this turns collisions on); returns it. A collider's ``motion`` moves it from
+        then on, placed where the motion has it at the world's time now (the motion's t = 0
+        is the world's time 0); a motion the engine refuses (a turning ``Box``, a motion out
+        of the xy-plane in a 2D world) is a ``ValueError`` naming it, and nothing is added."""
         attach = getattr(item, "_attach", None)
         if attach is None:
             raise TypeError(
@@ -368,9 +392,14 @@ class World(WorldCollisions):
             attach(self)
             return item
         self._push()
+        if isinstance(item, Collider) and item.motion is not None:
+            _check_motion(self.dim, item, item.motion)  # refused before the collider is added
         attached = attach(self._core)
         if isinstance(item, Collider):
+            if item.motion is not None:
+                self._core.set_collider_motion(attached, **item.motion._binding())
             self._colliders.append(item)
+            self._added.append(item)
         else:
             self._forces.append(item)
             self._advice_due = True
@@ -382,6 +411,29 @@ class World(WorldCollisions):
                 ends = np.array([i, j], dtype=np.int64).T.reshape(-1, 2)
                 self._spring_ids = np.concatenate([self._spring_ids, self.ids[ends]])
         return item
+
+    def set_motion(self, collider: Any, motion: Any) -> None:
+        """Give a collider another prescribed motion: ``collider`` is one of :attr:`colliders`
+        (the object added) or its index; ``motion`` a ``kinema.Motion``, ``kinema.Keyframes``
+        or None (back to its placement as added, still). The motion is from the placement the
+        collider was added in, on the world's clock (its t = 0 is the world's time 0), and
+        places the collider at the world's time now. ``w.colliders[k]`` is then a copy of the
+        collider that carries the new motion (colliders are frozen; the object added keeps
+        its own, and still names the collider here). A refused motion (a turning ``Box``, one out of the xy-plane in a 2D world)
+        is a ``ValueError`` naming it, and the collider keeps its motion."""
+        if isinstance(collider, Collider):
+            k = next((k for k, pair in enumerate(zip(self._colliders, self._added, strict=True)) if any(c is collider for c in pair)), None)
+            if k is None:
+                raise ValueError(f"collider = {collider!r} is invalid: it is not one of this world's colliders (w.colliders); give one of them or its index")
+        else:
+            n = len(self._colliders)
+            k = _checks.integer("collider", collider)
+            if not 0 <= k < n:
+                raise ValueError(f"collider = {k} is invalid: {f'an index of w.colliders, 0..{n - 1}' if n else 'the world has no colliders'}")
+        moved = self._colliders[k]._moved(motion)  # checks the motion (a TypeError, a box's turn)
+        self._push()
+        self._core.set_collider_motion(k, **({} if moved.motion is None else moved.motion._binding()))
+        self._colliders[k] = moved
 
     # -- running ----------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
@@ -448,7 +500,8 @@ class World(WorldCollisions):
         if self.collisions is None:
             return free
         # a centre inside a collider is no place either (the contacts cannot push it out: collide/placement.rs)
-        free &= ~np.array([any(_inside(c, p) for c in self._colliders) for p in x], dtype=bool)
+        t = self.time
+        free &= ~np.array([any(_inside(c, p, t) for c in self._colliders) for p in x], dtype=bool)
         here, radius = self._x, np.asarray(self._core.radii)
         for k in range(len(r)):
             taken = np.concatenate([here, x[:k][free[:k]]])

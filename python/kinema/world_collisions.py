@@ -1,6 +1,6 @@
 """The collision part of ``kinema.World``'s API: the settings (``set_collisions``,
 ``collisions``), the colliders added, the periodic axes, what the collision stages report
-(``contacts``, ``collision_stats``) and the time each stage of a step took
+(``contacts``, ``collision_stats``, ``collider_books``) and the time each stage of a step took
 (``stage_times``). ``WorldCollisions`` is a base class of ``World``, not used alone: its
 methods use the world's engine (``_core``), its views (``_push``, ``_pull``), its colliders
 (``_colliders``, which ``World.add`` fills), its ``dim`` and the advisor's flag
@@ -139,6 +139,29 @@ class WorldCollisions:
         the last step's. ``None`` while collisions are off."""
         self._push()
         return self._core.collision_stats()
+
+    def collider_books(self) -> dict[str, np.ndarray]:
+        """What each collider gave and took from the particles over all steps, in the order of
+        :attr:`colliders` (K of them), as arrays:
+
+        - ``momentum`` (K, 3), N·s: the momentum the particles gave the collider, −Σ J over
+          the impulses J it gave them (the force it felt, integrated over time; of infinite
+          mass, it does not move for it). It balances the particles' momentum change with the
+          forces' impulse: Σ m Δv = −Σ_k ``momentum[k]`` + ∫ ΣF dt (m g t per particle under
+          gravity; the impulses between particles cancel, by action and reaction);
+        - ``angular_momentum`` (K, 3), N·m·s: the angular momentum about the origin the
+          particles gave it, −Σ x_c × J, x_c the contact point on its surface;
+        - ``work`` (K,), J: the work the collider did on the particles, Σ J·u(x_c) of each
+          impulse J it gave with its surface velocity u there (0 for a still collider). The
+          energy the collisions dissipated is ``collision_stats()["total"]["energy_lost"]``
+          + Σ ``work`` (``energy_lost`` counts the particles' mechanical energy the
+          collisions took, which a moving wall can give back: it is negative for a paddle
+          that throws balls).
+
+        The impulse model books them (impacts inside steps and the end-of-step contacts); the
+        spring–dashpot model books nothing here (zeros). Empty (K = 0) without colliders."""
+        self._push()
+        return self._core.collider_books()
 
     def stage_times(self) -> dict[str, float]:
         """Wall-clock seconds spent so far in each of the seed's four stages of a step:
