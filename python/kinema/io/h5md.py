@@ -36,6 +36,11 @@ specification allows, and requires for the box; units shown for ``units="SI"``, 
                               friction when set; k = 0, 1, ... in the world's order
             vertices, faces   a mesh's vertices (V, 3) float64 [m] and triangles (F, 3) int64
                               (datasets: an attribute holds at most 64 KiB)
+            motion        +-- a moving collider's motion (its geometry above is the placement
+                              as added): steady, attributes velocity [m s-1],
+                              angular_velocity [s-1, rad], pivot [m]; or keyframes, attribute
+                              pivot [m] and datasets times (K,) [s], translations (K, 3) [m],
+                              rotations (K, 4) unit quaternions w, x, y, z
 
 A 2D world is written 3D, z = 0 and its box open along z, so that 3D readers (MDAnalysis,
 znh5md) read it; ``/parameters/kinema`` ``dim = 2`` makes it 2D again for kinema, which
@@ -82,7 +87,7 @@ from ._checks import available_memory, number
 from ._files import TrajectoryFileError, frames_of, hdf5_file, os_errors_as_write_errors
 from ._h5md_checks import check_frames, edges_problem, fail, increase_problem, links_out
 from ._h5md_layout import BY_FORCE, ELEMENTS, H5MD_VERSION, OBSERVABLES, import_h5py
-from .h5md_reader import MESH_DATASETS, LoadedTrajectory, read
+from .h5md_reader import MESH_DATASETS, MOTION_DATASETS, LoadedTrajectory, read
 from .h5md_units import from_si, parse_unit, system_of
 
 __all__ = ["H5MD_VERSION", "LoadedTrajectory", "load_h5md", "parse_unit", "save_h5md"]
@@ -327,10 +332,23 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
                     continue
                 if name in MESH_DATASETS:
                     g.create_dataset(name, data=np.asarray(value, dtype=MESH_DATASETS[name]).reshape(-1, 3), compression=compression)
+                elif name == "motion":
+                    _write_motion(g.create_group("motion", track_order=True), value)
                 elif name == "inside":
                     g.attrs.create(name, np.bool_(value))
                 else:
                     g.attrs.create(name, np.asarray(value, dtype=np.float64))
+
+
+def _write_motion(g: Any, motion: dict[str, Any]) -> None:
+    """A collider's motion description into its group ``g``: the 3-vectors (velocity,
+    angular_velocity, pivot) as attributes, the keyframes' arrays (times, translations,
+    rotations: as many rows as keys) as datasets, in SI."""
+    for key, value in motion.items():
+        if key in MOTION_DATASETS:
+            g.create_dataset(key, data=np.asarray(value, dtype=np.float64))
+        else:
+            g.attrs.create(key, np.asarray(value, dtype=np.float64))
 
 
 def _check_writable(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:

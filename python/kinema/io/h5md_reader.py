@@ -100,6 +100,10 @@ class LoadedTrajectory:
 
 #: A mesh collider's arrays, datasets of its group (``save_h5md``), and their dtypes.
 MESH_DATASETS = {"vertices": "float64", "faces": "int64"}
+#: A moving collider's keyframe arrays, datasets of its ``motion`` group, and their shapes (K: keys).
+MOTION_DATASETS = {"times": ("K",), "translations": ("K", 3), "rotations": ("K", 4)}
+#: A motion group's attributes: 3-vectors (steady: velocity, angular_velocity; both kinds: pivot).
+MOTION_ATTRIBUTES = ("velocity", "angular_velocity", "pivot")
 #: The collider types a file holds.
 COLLIDER_TYPES = ("plane", "box", "sphere", "mesh")
 
@@ -139,8 +143,13 @@ def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
             d[key] = float(a) if a.ndim == 0 else a.tolist()
         for key in g:
             ds = g[key]
+            if key == "motion" and isinstance(ds, h5py.Group):
+                d["motion"] = _read_motion(path, ds)
+                continue
             if kind != "mesh" or key not in MESH_DATASETS or not isinstance(ds, h5py.Dataset):
-                raise fail(path, f"{ds.name} is not part of a kinema collider (a mesh's group holds the datasets vertices and faces, nothing else does)")
+                raise fail(
+                    path, f"{ds.name} is not part of a kinema collider (a mesh's group holds the datasets vertices and faces, any collider's a group motion)"
+                )
             integer = MESH_DATASETS[key] == "int64"
             if ds.shape is None or len(ds.shape) != 2 or ds.shape[1] != 3 or dtype_problem(ds.dtype, integer) is not None:
                 must = "integers" if integer else "real numbers"
@@ -150,6 +159,28 @@ def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
         names.append(g.name)
     if out:
         _check_colliders(path, names, out, dim)
+    return out
+
+
+def _read_motion(path: Path, g: Any) -> dict[str, Any]:
+    """A collider's ``motion`` group: 3-vector attributes (velocity, angular_velocity, pivot)
+    and keyframe datasets (times (K,), translations (K, 3), rotations (K, 4)), numbers of the
+    shapes said; the engine checks the rest (``collider_problem``)."""
+    h5py = import_h5py()
+    out: dict[str, Any] = {}
+    for key, value in g.attrs.items():
+        a = np.asarray(value)
+        if key not in MOTION_ATTRIBUTES or a.shape != (3,) or dtype_problem(a.dtype) is not None:
+            raise fail(path, f"attribute {key!r} ({g.name}) = {shown(value)} is not part of a motion (attributes {', '.join(MOTION_ATTRIBUTES)}: 3 numbers each)")
+        out[key] = a.astype(np.float64).tolist()
+    for key in g:
+        ds = g[key]
+        shape = MOTION_DATASETS.get(key)
+        ok = shape is not None and isinstance(ds, h5py.Dataset) and ds.shape is not None and len(ds.shape) == len(shape)
+        if not (ok and all(w == "K" or w == n for n, w in zip(ds.shape, shape, strict=True)) and dtype_problem(ds.dtype) is None):
+            want = ", ".join(f"{k} {MOTION_DATASETS[k]}" for k in MOTION_DATASETS)
+            raise fail(path, f"{ds.name} is not part of a motion (its datasets are real numbers: {want}, K keys)")
+        out[key] = np.asarray(ds[()], dtype=np.float64).tolist()
     return out
 
 
@@ -163,7 +194,8 @@ def _check_colliders(path: Path, names: list[str], colliders: list[dict[str, Any
 def collider_problem(names: list[str], colliders: list[dict[str, Any]], dim: int) -> str | None:
     """Adds each collider to an empty engine world of ``dim`` dimensions, as ``World.add``
     does: the engine's checks (finite values, a non-zero normal, hi > lo, 2 or 3 values,
-    restitution in [0, 1], ...); returns ``"<name> (a plane): <the engine's message>"`` for
+    restitution in [0, 1], ..., and a motion's: finite, times increasing, one key each, a box
+    that only translates, a 2D motion in the xy-plane); returns ``"<name> (a plane): <the engine's message>"`` for
     the first it refuses, else ``None``. The engine's own ``World``, not ``kinema.World``:
     reading a file needs no world module (which imports ``kinema.trajectory``, which imports
     this). ``save_h5md`` checks what it writes with it."""
@@ -181,7 +213,9 @@ def collider_problem(names: list[str], colliders: list[dict[str, Any]], dim: int
         flags = ("inside",) if d["type"] == "mesh" else ()
         args = {k: d[k] for k in (*needed, *flags, "restitution", "friction") if k in d}
         try:
-            make[d["type"]](**args)._attach(core)
+            k = make[d["type"]](**args)._attach(core)
+            if d.get("motion") is not None:
+                core.set_collider_motion(k, **d["motion"])
         except (ValueError, TypeError) as e:
             first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
             return f"{name} (a {d['type']}): {first}"

@@ -1,10 +1,12 @@
 """Colliders as plain descriptions (the dicts ``Trajectory.colliders`` holds), the form the
-engine's ``_core.Scenery`` takes them in."""
+engine's ``_core.Scenery`` takes them in, and where a moving one is at given times
+(``collider_poses``, from its description's ``motion``)."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .. import _core
 from .._checks import describe
 
 _KIND = {"plane": ("point", "normal"), "box": ("lo", "hi"), "sphere": ("center", "radius"), "mesh": ("vertices", "faces")}
@@ -16,7 +18,11 @@ def _describe_colliders(colliders) -> list[dict]:
     {"type": "box", "lo": [2 or 3], "hi": [2 or 3]} (bounds may be ±inf), {"type": "sphere",
     "center": [3], "radius": r}, {"type": "mesh", "vertices": [[x, y, z], ...] (m, after the
     mesh's transform), "faces": [[i, j, k], ...] (ints), "inside": bool}, with "restitution"
-    and "friction" where the collider sets them."""
+    and "friction" where the collider sets them, and "motion" where it moves: {"velocity":
+    [3] m/s, "angular_velocity": [3] rad/s, "pivot": [3] m} (steady) or {"times": [K] s,
+    "translations": [K][3] m, "rotations": [K][4] unit quaternions (w, x, y, z), "pivot": [3]
+    m} (keyframes) — the geometry is the placement as added, which the motion moves
+    (:func:`collider_poses`)."""
     from ..colliders import Box, Mesh, Plane, SphereObstacle
 
     def floats(name, value, sizes=(3,)):
@@ -60,8 +66,69 @@ def _describe_colliders(colliders) -> list[dict]:
                 d[name] = float(value)
             else:
                 d.pop(name, None)
+        motion = c.get("motion") if isinstance(c, dict) else getattr(c, "motion", None)
+        if motion is not None:
+            d["motion"] = _motion(f"colliders[{k}].motion", motion)
+        else:
+            d.pop("motion", None)
         out.append(d)
     return out
+
+
+#: A motion description's keys: steady, keyframes (``_describe_colliders``).
+STEADY_KEYS = ("velocity", "angular_velocity", "pivot")
+KEYFRAME_KEYS = ("times", "translations", "rotations", "pivot")
+
+
+def _motion(name: str, motion) -> dict:
+    """A motion's description: from a ``kinema.Motion`` or ``kinema.Keyframes`` (its rotations
+    as unit quaternions), or a description already, checked (its keys, shapes, and the
+    engine's rules, by placing it once)."""
+    from ..colliders import MOTIONS
+
+    if isinstance(motion, MOTIONS):
+        binding = motion._binding()
+        if "times" in binding:
+            k = len(binding["times"])
+            binding["translations"] = binding["translations"] or [[0.0, 0.0, 0.0]] * k
+            binding["rotations"] = binding["rotations"] or [[1.0, 0.0, 0.0, 0.0]] * k
+        return binding
+    if not isinstance(motion, dict):
+        raise ValueError(f"{name} = {describe(motion)} is invalid: a motion is a kinema.Motion, kinema.Keyframes or its description (a dict)")
+    keys = KEYFRAME_KEYS if "times" in motion else STEADY_KEYS
+    unknown = sorted(set(motion) - set(keys))
+    if unknown:
+        kind = "keyframes (they have times)" if keys is KEYFRAME_KEYS else "a steady motion (it has no times)"
+        raise ValueError(f"{name} has the key {unknown[0]!r}, which {kind} do not take; the keys are {', '.join(keys)}")
+    out = {}
+    for key in keys:
+        value = motion.get(key)
+        if value is None:
+            continue
+        a = np.asarray(value, dtype=np.float64)
+        shape = {"times": (None,), "translations": (None, 3), "rotations": (None, 4)}.get(key, (3,))
+        if a.ndim != len(shape) or any(want is not None and got != want for got, want in zip(a.shape, shape, strict=True)):
+            want = "(" + ", ".join("K" if w is None else str(w) for w in shape) + ("," if len(shape) == 1 else "") + ")"
+            raise ValueError(f"{name}.{key} has shape {a.shape}; it must be {want}")
+        out[key] = a.tolist()
+    try:
+        _core.collider_poses([0.0], **out)  # the engine's checks (finite, increasing times, one key each)
+    except ValueError as e:
+        raise ValueError(f"{name}: {e}") from None
+    return out
+
+
+def collider_poses(description: dict, times) -> np.ndarray:
+    """Where the collider of ``description`` (one of ``Trajectory.colliders``) is at each of
+    ``times`` (s): (T, 3, 4) float64 matrices [R | o], a point x₀ of its geometry as described
+    (the placement as added) being at R x₀ + o; the identity for a still collider (no
+    "motion"). The engine's own motion (``_core.collider_poses``), the one implementation the
+    pictures, the viewer and the exports share."""
+    t = np.asarray(times, dtype=np.float64).reshape(-1)
+    motion = description.get("motion") if isinstance(description, dict) else None
+    if motion is None:
+        return np.broadcast_to(np.eye(3, 4), (t.size, 3, 4)).copy()
+    return _core.collider_poses(t.tolist(), **_motion("motion", motion))
 
 
 def _mesh_arrays(name: str, vertices, faces) -> tuple[list, list]:
