@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..colliders import Box, Mesh, Plane, SphereObstacle
+from ..colliders import Box, Keyframes, Mesh, Motion, Plane, SphereObstacle
 from ..emitter import Emitter, KillBox, KillPlane, KillSphere
 from ..forces import Attractor, Drag, Gravity, Spring, Wind
 from ..world import World
@@ -30,6 +30,7 @@ from .tables import (
     MeshCollider,
     PlaneCollider,
     SpringForce,
+    SteadyMotion,
     Uniform,
     WindForce,
 )
@@ -225,8 +226,19 @@ def _particles(block: Any, dim: int) -> tuple:
     return x, v, m, r, np.broadcast_to(pinned, (n,)), e, mu
 
 
+def _motion(m: Any) -> Motion | Keyframes | None:
+    """A [[colliders]] table's motion as ``kinema.Motion`` or ``kinema.Keyframes`` (2 values of
+    a vector: z = 0)."""
+    if m is None:
+        return None
+    if isinstance(m, SteadyMotion):
+        return Motion(_v3(m.velocity), list(m.angular_velocity), _v3(m.pivot))
+    translations = None if m.translations is None else [_v3(t) for t in m.translations]
+    return Keyframes(list(m.times), translations, None if m.rotations is None else [list(r) for r in m.rotations], _v3(m.pivot))
+
+
 def _collider(c: Any, dim: int) -> Any:
-    s = {"restitution": c.restitution, "friction": c.friction}
+    s = {"restitution": c.restitution, "friction": c.friction, "motion": _motion(c.motion)}
     if isinstance(c, PlaneCollider):
         return Plane(_v3(c.point), _v3(c.normal), **s)
     if isinstance(c, BoxCollider):

@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import _checks
 from ..checkpoint import load_checkpoint, save_checkpoint
-from ..colliders import Box, Mesh, Plane
+from ..colliders import Box, Keyframes, Mesh, Motion, Plane
 from ..emitter import KillBox, KillSphere
 from ..forces import Attractor, Drag, Gravity, Spring, Wind
 from ..world import World
@@ -151,6 +151,8 @@ def to_scene(world: World) -> Scene:
     colliders = []
     for c in world.colliders:
         s = {k: float(v) for k, v in (("restitution", c.restitution), ("friction", c.friction)) if v is not None}
+        if c.motion is not None:
+            s["motion"] = _motion_table(c.motion)
         if isinstance(c, Plane):
             colliders.append({"type": "plane", "point": _v3(list(np.ravel(c.point))), "normal": _v3(list(np.ravel(c.normal))), **s})
         elif isinstance(c, Box):
@@ -208,6 +210,21 @@ def to_scene(world: World) -> Scene:
         lines = str(e).splitlines() or [f"{_SOURCE}: not a valid scene"]
         more = f" (and {len(lines) - 1} more problems)" if len(lines) > 1 else ""
         raise SceneError(lines[0] + more) from None
+
+
+def _motion_table(m: Motion | Keyframes) -> dict[str, Any]:
+    """A collider's motion as its scene table: steady (velocity, angular_velocity, pivot) or
+    keyframes (times, translations, rotations in degrees as given, pivot; those not given left
+    out)."""
+    if isinstance(m, Motion):
+        return {"velocity": list(m.velocity), "angular_velocity": list(m.angular_velocity), "pivot": list(m.pivot)}
+    out: dict[str, Any] = {"times": list(m.times)}
+    for name in ("translations", "rotations"):
+        rows = getattr(m, name)
+        if rows is not None:
+            out[name] = [list(r) for r in rows]
+    out["pivot"] = list(m.pivot)
+    return out
 
 
 World.to_scene = to_scene  # ``world.to_scene()``; the world module stays free of the scene format

@@ -29,6 +29,7 @@ from .tables import (
     EmitterTable,
     FileBlock,
     ForceItem,
+    KeyframesMotion,
     GravityForce,
     KillItem,
     LatticeBlock,
@@ -40,6 +41,7 @@ from .tables import (
     RenderTable,
     SphereCollider,
     SpringForce,
+    SteadyMotion,
     WindForce,
     WorldTable,
     _Model,
@@ -86,6 +88,10 @@ class Scene(_Model):
         for k, c in enumerate(self.colliders):
             if isinstance(c, MeshCollider) and dim != 3:
                 raise ValueError(f"colliders[{k}].type: 'mesh' is invalid: a triangle mesh is a 3D collider, and this is a {dim}D world (world.dim = {dim})")
+            if dim == 2 and c.motion is not None:
+                problem = _planar_problem(c.motion)
+                if problem is not None:
+                    raise ValueError(f"colliders[{k}].motion.{problem} is invalid: in a 2D world (world.dim = 2) a collider moves in the xy-plane and turns about z")
         if camera is not None and camera.type != f"{dim}d":
             raise ValueError(f"render.camera.type: '{camera.type}' is invalid: a {dim}D world (world.dim = {dim}) needs a '{dim}d' camera")
         return self
@@ -215,6 +221,20 @@ class Scene(_Model):
         from .build import build
 
         return build(self, source)
+
+
+def _planar_problem(motion: Any) -> str | None:
+    """``"<key> = <value>"`` of the first value of a collider's motion that leaves the xy-plane
+    (a velocity or translation with z ≠ 0, a turn about x or y), else None."""
+    if isinstance(motion, SteadyMotion):
+        checks = [("velocity", motion.velocity, (2,)), ("angular_velocity", motion.angular_velocity, (0, 1))]
+    else:
+        checks = [(f"translations[{k}]", row, (2,)) for k, row in enumerate(motion.translations or [])]
+        checks += [(f"rotations[{k}]", row, (0, 1)) for k, row in enumerate(motion.rotations or [])]
+    for name, value, axes in checks:
+        if any(a < len(value) and value[a] != 0 for a in axes):
+            return f"{name} = {value}"
+    return None
 
 
 def block_size(block: Any) -> int:
@@ -397,6 +417,7 @@ _TAGGED = {
         Camera3DTable,
     )
 }
+_TAGGED.update({"~steady": SteadyMotion, "~keyframes": KeyframesMotion})  # a collider's motion, told apart by its times
 
 
 def _allowed_keys(loc: tuple) -> list[str]:

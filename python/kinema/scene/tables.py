@@ -369,11 +369,91 @@ class WindForce(_Model):
 ForceItem = _typed(GravityForce, DragForce, SpringForce, AttractorForce, WindForce)
 
 # -- [[colliders]] ----------------------------------------------------------------------------
+# A collider's `motion` (kinema.Motion, kinema.Keyframes): a steady table, or keyframes (a
+# table with `times`), told apart by that key.
+
+
+def _all_finite(values: Any, name: str, unit: str) -> None:
+    flat = values if not values or not isinstance(values[0], list) else [c for row in values for c in row]
+    if not all(math.isfinite(c) for c in flat):
+        raise ValueError(f"{name} must be finite numbers ({unit})")
+
+
+class SteadyMotion(_Model):
+    """``motion = { velocity = [..], angular_velocity = [..], pivot = [..] }``: translation at
+    ``velocity`` (m/s) and a turn at ``angular_velocity`` (rad/s, about its direction) about
+    ``pivot`` (m, a point of the collider's placement), from the world's time 0."""
+
+    velocity: Vec = [0.0, 0.0, 0.0]
+    angular_velocity: Vec3 = [0.0, 0.0, 0.0]
+    pivot: Vec = [0.0, 0.0, 0.0]
+
+    @field_validator("velocity", "angular_velocity", "pivot")
+    @classmethod
+    def _finite(cls, v: Any, info: Any) -> Any:
+        _all_finite(v, info.field_name, {"velocity": "m/s", "angular_velocity": "rad/s"}.get(info.field_name, "m"))
+        return v
+
+    def turns(self) -> bool:
+        return any(c != 0 for c in self.angular_velocity)
+
+
+class KeyframesMotion(_Model):
+    """``[colliders.motion]`` with ``times`` (s, strictly increasing), ``translations`` (m, one
+    per time) and ``rotations`` (degrees about the fixed x, then y, then z axis, one per time;
+    less than 180° apart about each axis from one key to the next) about ``pivot`` (m)."""
+
+    times: Annotated[list[float], Field(min_length=1)]
+    translations: list[Vec] | None = None
+    rotations: list[Vec3] | None = None
+    pivot: Vec = [0.0, 0.0, 0.0]
+
+    @field_validator("times")
+    @classmethod
+    def _increasing(cls, v: list[float]) -> list[float]:
+        for k, t in enumerate(v):
+            if not math.isfinite(t) or (k > 0 and not t > v[k - 1]):
+                raise ValueError(f"keyframe times must be finite and strictly increasing, s (times[{k}] = {t:g})")
+        return v
+
+    @field_validator("translations", "rotations", "pivot")
+    @classmethod
+    def _finite(cls, v: Any, info: Any) -> Any:
+        if v is not None:
+            _all_finite(v, info.field_name, "degrees" if info.field_name == "rotations" else "m")
+        return v
+
+    @model_validator(mode="after")
+    def _one_per_time(self) -> KeyframesMotion:
+        k = len(self.times)
+        for name in ("translations", "rotations"):
+            rows = getattr(self, name)
+            if rows is not None and len(rows) != k:
+                raise ValueError(f"{name} has {len(rows)} rows for {k} times; give one per keyframe time")
+        for j in range(1, len(self.rotations or [])):
+            step = [abs(a - b) for a, b in zip(self.rotations[j], self.rotations[j - 1], strict=True)]
+            if max(step) >= 180:
+                raise ValueError(
+                    f"rotations[{j}] is {max(step):g}° about {'xyz'[step.index(max(step))]} from rotations[{j - 1}]; between two keys a collider "
+                    "turns the shorter way (less than 180°): put keys in between"
+                )
+        return self
+
+    def turns(self) -> bool:
+        return any(c != 0 for row in self.rotations or [] for c in row)
+
+
+def _motion_kind(v: Any) -> str:
+    return "~keyframes" if (isinstance(v, dict) and "times" in v) or isinstance(v, KeyframesMotion) else "~steady"
+
+
+MotionItem = Annotated[Annotated[SteadyMotion, Tag("~steady")] | Annotated[KeyframesMotion, Tag("~keyframes")], Discriminator(_motion_kind)]
 
 
 class _Surface(_Model):
     restitution: Unit | None = None
     friction: NonNeg | None = None
+    motion: MotionItem | None = None
 
 
 class PlaneCollider(_Surface):
@@ -386,6 +466,14 @@ class BoxCollider(_Surface):
     type: Literal["box"] = "box"
     lo: Vec
     hi: Vec
+
+    @field_validator("motion")
+    @classmethod
+    def _translates(cls, v: Any) -> Any:
+        if v is not None and v.turns():
+            turn = "angular_velocity" if isinstance(v, SteadyMotion) else "rotations"
+            raise ValueError(f"a box stays axis-aligned and can only translate ({turn} must be 0); a turning container is a mesh with inside = true")
+        return v
 
 
 class SphereCollider(_Surface):
