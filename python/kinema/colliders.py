@@ -15,9 +15,9 @@ ball); ``None`` uses the particle's value (its own, else the world's).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
-import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any

@@ -171,7 +171,9 @@ def _read_motion(path: Path, g: Any) -> dict[str, Any]:
     for key, value in g.attrs.items():
         a = np.asarray(value)
         if key not in MOTION_ATTRIBUTES or a.shape != (3,) or dtype_problem(a.dtype) is not None:
-            raise fail(path, f"attribute {key!r} ({g.name}) = {shown(value)} is not part of a motion (attributes {', '.join(MOTION_ATTRIBUTES)}: 3 numbers each)")
+            raise fail(
+                path, f"attribute {key!r} ({g.name}) = {shown(value)} is not part of a motion (attributes {', '.join(MOTION_ATTRIBUTES)}: 3 numbers each)"
+            )
         out[key] = a.astype(np.float64).tolist()
     for key in g:
         ds = g[key]

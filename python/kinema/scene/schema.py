@@ -29,8 +29,8 @@ from .tables import (
     EmitterTable,
     FileBlock,
     ForceItem,
-    KeyframesMotion,
     GravityForce,
+    KeyframesMotion,
     KillItem,
     LatticeBlock,
     ListBlock,
@@ -91,7 +91,9 @@ class Scene(_Model):
             if dim == 2 and c.motion is not None:
                 problem = _planar_problem(c.motion)
                 if problem is not None:
-                    raise ValueError(f"colliders[{k}].motion.{problem} is invalid: in a 2D world (world.dim = 2) a collider moves in the xy-plane and turns about z")
+                    raise ValueError(
+                        f"colliders[{k}].motion.{problem} is invalid: in a 2D world (world.dim = 2) a collider moves in the xy-plane and turns about z"
+                    )
         if camera is not None and camera.type != f"{dim}d":
             raise ValueError(f"render.camera.type: '{camera.type}' is invalid: a {dim}D world (world.dim = {dim}) needs a '{dim}d' camera")
         return self
