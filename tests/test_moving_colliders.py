@@ -289,3 +289,13 @@ def test_scene_motion_errors_name_the_field():
         with pytest.raises(SceneError) as e:
             Scene.from_string(text, "s.toml")
         assert words in str(e.value), (text, str(e.value))
+
+
+def test_the_docs_example_prints_what_the_docs_say(capsys):
+    """docs/collisions.md, "Moving colliders": the rising floor's example and its output."""
+    text = (Path(__file__).resolve().parent.parent / "docs" / "collisions.md").read_text()
+    after = text[text.index("A ball rising into a floor moving") :]
+    code = after.split("```python\n", 1)[1].split("```", 1)[0]
+    printed = after.split("```text\n", 1)[1].split("```", 1)[0]
+    exec(compile(code, "docs/collisions.md", "exec"), {})
+    assert capsys.readouterr().out == printed
