@@ -34,13 +34,19 @@
 //! order just behind the particle, after the facets under it and before those in front.
 
 use super::clip::{clip_segment_near, GUARD};
-use super::paint::{Persp3, FLOOR_NZ, MESH_COLOR, MESH_EDGE_COLOR};
+use super::frame3::{Persp3, FLOOR_NZ, PLANE_ALPHA};
 use super::prim::{line, Facet, Prim};
 use crate::collide::TriangleMesh;
 use crate::vec3::{add, dot, scale, sub};
 
-/// Opacity of a mesh's facets.
-pub const MESH_ALPHA: f32 = super::paint::PLANE_ALPHA;
+/// Mesh colliders' triangles, RGB8, lit by [`MESH_AMBIENT`] and the light, and drawn at
+/// [`MESH_ALPHA`] like the planes.
+pub const MESH_COLOR: [u8; 3] = [150, 150, 142];
+/// Mesh colliders' rims, creases and outlines, RGB8: [`super::paint::LINE_COLOR`] at about
+/// half strength over white, drawn opaque.
+pub const MESH_EDGE_COLOR: [u8; 3] = [140, 140, 146];
+/// Opacity of a mesh's facets: the planes' ([`PLANE_ALPHA`]).
+pub const MESH_ALPHA: f32 = PLANE_ALPHA;
 /// The shade of a facet turned away from the light, as a fraction of [`MESH_COLOR`].
 pub const MESH_AMBIENT: f64 = 0.45;
 /// An edge whose two triangles' normals differ by more than this (degrees) is a crease, drawn.

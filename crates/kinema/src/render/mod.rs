@@ -31,13 +31,16 @@
 //! The modules, each using only those listed before it (besides the camera): `camera`;
 //! `pixels` (sprites and the row painters); `clip` (the near cut and the guard rectangle);
 //! `prim` (pixel-space fills, lines and mesh facets); [`extent`] (the region infinite
-//! scenery is drawn in); [`paint`] (colliders → primitives and sprites), with
-//! [`mesh_paint`] for mesh colliders; `raster` (the four stages).
+//! scenery is drawn in); `frame3` (what the 3D scenery painters share: a frame's
+//! constants, the surfaces' opacity, the floor rule); [`mesh_paint`] (mesh colliders →
+//! facets and lines); [`paint`] (colliders → primitives and sprites, meshes through
+//! `mesh_paint`); `raster` (the four stages).
 
 mod camera;
 mod clip;
 pub mod colormap;
 pub mod extent;
+mod frame3;
 pub mod mesh_paint;
 pub mod paint;
 mod pixels;

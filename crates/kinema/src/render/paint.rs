@@ -14,7 +14,7 @@
 //! |          | ([`super::mesh_paint`])                                  |                                       |
 //!
 //! Everything is in fixed neutral colours ([`FLOOR_COLOR`], [`BOX_FLOOR_COLOR`],
-//! [`LINE_COLOR`], [`OBSTACLE_COLOR`], [`MESH_COLOR`]) so that the particles' colours keep
+//! [`LINE_COLOR`], [`OBSTACLE_COLOR`], [`super::mesh_paint::MESH_COLOR`]) so that the particles' colours keep
 //! their meaning.
 //!
 //! Geometry is turned into a few pixel-space primitives (`Prim`: a convex polygon, a line
@@ -27,6 +27,8 @@
 use super::camera::{invalid, Camera, Projector};
 use super::clip::{clip_halfplane, clip_polygon_near, clip_segment_near, clip_where, dot2, guard_rect, near_depth, GUARD};
 use super::extent::{clamp_box, Region};
+pub use super::frame3::PLANE_ALPHA;
+use super::frame3::{Persp3, FLOOR_NZ};
 use super::mesh_paint::{paint_mesh, MeshFloors};
 use super::pixels::Sprite;
 use super::prim::{fill, line, push, Prim};
@@ -72,21 +74,10 @@ pub const OBSTACLE_COLOR: [u8; 3] = [176, 178, 184];
 /// 3D plane patches: a grey drawn at [`PLANE_ALPHA`], so that what lies behind a plane shows
 /// through it; over white one plane reads about as [`FLOOR_COLOR`], two crossing ones darker.
 pub const PLANE_COLOR: [u8; 3] = [150, 150, 142];
-/// Opacity of a 3D plane patch.
-pub const PLANE_ALPHA: f32 = 0.3;
-/// Mesh colliders' triangles, RGB8, lit ([`super::mesh_paint`]) and drawn at
-/// [`super::mesh_paint::MESH_ALPHA`] like the planes.
-pub const MESH_COLOR: [u8; 3] = [150, 150, 142];
-/// Mesh colliders' rims, creases and outlines, RGB8: [`LINE_COLOR`] at about half strength
-/// over white, drawn opaque.
-pub const MESH_EDGE_COLOR: [u8; 3] = [140, 140, 146];
 /// Contact shadows on 3D floors ([`shadows`]): this colour at up to [`SHADOW_ALPHA`].
 pub const SHADOW_COLOR: [u8; 3] = [30, 30, 38];
 /// Opacity of the core of the shadow of a particle resting on a floor.
 pub const SHADOW_ALPHA: f32 = 0.55;
-/// A plane, or a mesh's triangle, is a floor that takes shadows when its normal's z is at
-/// least this fraction of its length (about 72° from level at most).
-pub(super) const FLOOR_NZ: f64 = 0.3;
 
 /// Line widths, pixels.
 const PATCH_OUTLINE_PX: f64 = 1.5;
@@ -253,14 +244,7 @@ pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View, particl
     out
 }
 
-/// A 3D frame's constants: the projector, the clipping depth and the image size.
-pub(super) struct Persp3<'a> {
-    pub(super) proj: &'a Projector,
-    pub(super) zn: f64,
-    pub(super) w: f64,
-    pub(super) h: f64,
-}
-
+/// The plane and box painters (the struct is shared with [`super::mesh_paint`]).
 impl Persp3<'_> {
     /// A planar convex polygon in world coordinates, filled.
     fn polygon(&self, out: &mut Vec<Prim>, world: &[[f64; 3]], color: [u8; 3], alpha: f32) {
