@@ -112,7 +112,9 @@ class World(WorldCollisions):
     ``Box``, ``SphereObstacle``) is added, or particles get their own ``restitution`` or
     ``friction``; particles then collide as spheres of their ``radius``. Those methods
     (``set_collisions``, ``collisions``, ``colliders``, ``periodic``, ``contacts``,
-    ``collision_stats``, ``stage_times``) are in ``kinema.world_collisions``.
+    ``collision_stats``, ``collider_books``, ``stage_times``) are in
+    ``kinema.world_collisions``; a collider's ``motion`` (``kinema.Motion``,
+    ``kinema.Keyframes``) moves it, and :meth:`set_motion` changes it.
 
     The particle count may change: :meth:`remove_particles`, and ``kinema.Emitter`` and kill
     volumes (``KillBox``, ``KillSphere``, ``KillPlane``) added with :meth:`add`, which give
