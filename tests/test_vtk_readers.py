@@ -169,6 +169,49 @@ def test_vtk_reads_the_colliders(tmp_path):
         assert np.cross(p[1] - p[0], p[2] - p[0]) @ (p.mean(axis=0) - SPHERE["center"]) > 0
 
 
+# A closed tetrahedron, its faces anticlockwise seen from outside, standing at (2, 1, 0).
+TETRA = {
+    "type": "mesh",
+    "vertices": [[2.0, 1.0, 0.0], [3.0, 1.0, 0.0], [2.0, 2.0, 0.0], [2.0, 1.0, 1.25]],
+    "faces": [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+    "inside": False,
+}
+
+
+def test_vtk_reads_a_mesh_collider_as_its_triangles(tmp_path):
+    # A mesh collider once failed the export (KeyError 'center': every collider that was
+    # not a plane or a box was taken for a sphere).
+    tr = synthetic(colliders=[BOX, TETRA, SPHERE])
+    export(tr, tmp_path / "run.pvd")
+    poly = read_vtp(tmp_path / "run_colliders.vtp")
+    points = vtk_to_numpy(poly.GetPoints().GetData())
+    lines, polys = cells(poly.GetLines()), cells(poly.GetPolys())
+    assert len(lines) == 12 and len(polys) == 4 + 512
+    assert vtk_to_numpy(poly.GetCellData().GetArray("collider")).tolist() == [0] * 12 + [1] * 4 + [2] * 512
+    # Its triangles are its faces over its vertices, exactly, in its order (so its normals).
+    triangles = np.array([points[c] for c in polys[:4]])
+    np.testing.assert_array_equal(triangles, np.array(TETRA["vertices"])[np.array(TETRA["faces"])])
+    centre = np.mean(TETRA["vertices"], axis=0)
+    for p in triangles:
+        assert np.cross(p[1] - p[0], p[2] - p[0]) @ (p.mean(axis=0) - centre) > 0  # facing out
+
+    # A world's own mesh (kinema.Mesh, through Trajectory.colliders) and a mesh beyond the
+    # particles: the scene (a plane's square) grows to hold it.
+    far = {**TETRA, "vertices": (np.array(TETRA["vertices"]) + [40.0, 0.0, 0.0]).tolist()}
+    export(synthetic(colliders=[far, PLANE]), tmp_path / "far.pvd")
+    poly = read_vtp(tmp_path / "far_colliders.vtp")
+    square = vtk_to_numpy(poly.GetPoints().GetData())[cells(poly.GetPolys())[4]]
+    assert square[:, 0].max() > 42.0
+
+    w = kinema.World(dt=0.01)
+    w.add_particles([[2.2, 1.2, 2.0]], radius=0.05)
+    w.add(kinema.Mesh(vertices=TETRA["vertices"], faces=TETRA["faces"]))
+    export(w.run(0.02, fps=100), tmp_path / "world.pvd")
+    poly = read_vtp(tmp_path / "world_colliders.vtp")
+    assert poly.GetNumberOfPolys() == 4 and poly.GetNumberOfLines() == 0
+    np.testing.assert_array_equal(np.sort(vtk_to_numpy(poly.GetPoints().GetData()), axis=0), np.sort(TETRA["vertices"], axis=0))
+
+
 def test_open_box_faces_and_2d_colliders(tmp_path):
     # An open top (hi z = inf) ends where the scene does: above every particle.
     tr = synthetic(colliders=[{"type": "box", "lo": [-5.0, -5.0, -5.0], "hi": [5.0, 5.0, np.inf]}])

@@ -1,5 +1,6 @@
 """VTK XML PolyData series for ParaView and OVITO: a .pvd collection of one .vtp per frame (a
-.vtm per frame with the springs' own .vtp), and the colliders as a .vtp of lines and polygons."""
+.vtm per frame with the springs' own .vtp), and the colliders as a .vtp of lines and polygons
+(a mesh collider: its own triangles)."""
 
 from __future__ import annotations
 
@@ -35,10 +36,12 @@ def _vtk_strings(name: str, values: Sequence[str]) -> str:
 
 
 def _cells(cells: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """The connectivity and offsets arrays of a list of cells (each an array of point indices)."""
+    """The connectivity and offsets arrays of a list of cells: each an array of point
+    indices, or a (C, k) array of C cells of k points (a mesh's triangles, in one piece)."""
     if not cells:
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    return np.concatenate(cells).astype(np.int64), np.cumsum([len(c) for c in cells], dtype=np.int64)
+    sizes = np.concatenate([np.full(len(c), c.shape[1]) if c.ndim == 2 else [len(c)] for c in cells])
+    return np.concatenate([c.reshape(-1) for c in cells]).astype(np.int64), np.cumsum(sizes, dtype=np.int64)
 
 
 def _polydata(
@@ -168,6 +171,9 @@ def _scene_bounds(traj: Any, fr: Frames, colliders: list[dict]) -> tuple[np.ndar
                 b[: len(bound)] = bound
                 finite = np.isfinite(b)
                 lo[finite], hi[finite] = np.minimum(lo[finite], b[finite]), np.maximum(hi[finite], b[finite])
+        elif d["type"] == "mesh" and len(d["vertices"]):
+            v = np.asarray(d["vertices"], dtype=np.float64)
+            lo, hi = np.minimum(lo, v.min(axis=0)), np.maximum(hi, v.max(axis=0))
     return lo, hi
 
 
@@ -191,15 +197,20 @@ def _uv_sphere() -> tuple[np.ndarray, list[np.ndarray]]:
 
 
 def _collider_geometry(traj: Any, fr: Frames) -> tuple[np.ndarray, list[tuple[int, np.ndarray]], list[tuple[int, np.ndarray]]] | None:
-    """The trajectory's colliders as points (m) and line and polygon cells, each cell with
-    the index of its collider; ``None`` without colliders.
+    """The trajectory's colliders as points (m) and line and polygon cells, each cell (or
+    (C, k) block of cells, ``_cells``) with the index of its collider; ``None`` without
+    colliders.
 
     A box is its 12 edges (a 2D trajectory's box: the 4 edges of its rectangle at z = 0), an
     open face at the bound of ``_scene_bounds``; a plane is a square centred on the point
     of the plane nearest the middle of the scene, as wide as the scene's diagonal, so that it
     covers the scene (2D: a line segment at z = 0); a sphere obstacle is a UV sphere of
     ``_SPHERE_BANDS`` × ``_SPHERE_SEGMENTS`` faces, its points at exactly its radius (2D: a
-    disk of ``_DISK_SEGMENTS`` sides at z = 0)."""
+    disk of ``_DISK_SEGMENTS`` sides at z = 0); a mesh is its own vertices and triangles, as
+    described (its faces' vertex order, so their normals, kept).
+
+    The geometry is each collider's placement as added: a moving one's ``motion`` is not
+    applied (one file for the whole series)."""
     if not getattr(traj, "colliders", None):
         return None
     from ..render import _describe_colliders
@@ -246,6 +257,9 @@ def _collider_geometry(traj: Any, fr: Frames) -> tuple[np.ndarray, list[tuple[in
                 w = np.cross(n, u)  # u × w = n: the square's corners turn anticlockwise seen from the side n points to
                 corners = [centre + half * (su * u + sw * w) for su, sw in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
                 polys.append((k, add(corners) + np.arange(4)))
+        elif d["type"] == "mesh":
+            first = add(np.asarray(d["vertices"], dtype=np.float64).reshape(-1, 3))
+            polys.append((k, first + np.asarray(d["faces"], dtype=np.int64).reshape(-1, 3)))  # (F, 3): F cells
         else:
             c, r = np.asarray(d["center"], dtype=np.float64), float(d["radius"])
             if fr.dim == 2:
@@ -267,7 +281,7 @@ def _colliders_vtp(traj: Any, fr: Frames) -> str | None:
     if geometry is None:
         return None
     points, lines, polys = geometry
-    index = np.array([k for k, _ in lines] + [k for k, _ in polys], dtype=np.int64)  # VTK numbers lines before polygons
+    index = np.concatenate([np.full(len(c) if c.ndim == 2 else 1, k, dtype=np.int64) for k, c in lines + polys])  # VTK numbers lines before polygons
     return _polydata(
         points,
         cell_data=[_vtk_array("collider", index)],
@@ -292,7 +306,8 @@ def write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     whose ends are alive (``_springs_vtp``), which OVITO reads as Lines. When the trajectory
     has ``colliders``, ``<stem>_colliders.vtp`` beside the .pvd holds them: a box as its 12
     edges (lines), a plane as a square (a polygon) that covers the scene, a sphere obstacle
-    as a sphere of polygons (2D: a rectangle, a segment and a disk at z = 0), the cell data
+    as a sphere of polygons (2D: a rectangle, a segment and a disk at z = 0), a mesh as its
+    triangles (polygons), the cell data
     ``collider`` the index in ``colliders`` (``_collider_geometry``). OVITO reads the
     polygons of that file, not the lines. The stem is the name of ``path`` less its suffix
     where that is .pvd or .vtp, the whole name otherwise.
