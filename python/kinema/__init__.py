@@ -58,7 +58,7 @@ from .render import Camera2D, Camera3D, render_frames, write_video
 from .scene import Scene, SceneError, load_scene
 from .sweeps import SweepResult, sweep
 from .trajectory import Trajectory
-from .world import SimulationDiverged, StabilityWarning, World
+from .world import PlacementWarning, SimulationDiverged, StabilityWarning, World
 
 load_trajectory = Trajectory.load
 
@@ -85,6 +85,7 @@ __all__ = [
     "PythonForce",
     "SimulationDiverged",
     "SphereObstacle",
+    "PlacementWarning",
     "StabilityWarning",
     "Spring",
     "sweep",

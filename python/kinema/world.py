@@ -28,6 +28,15 @@ class StabilityWarning(UserWarning):
     """The time step exceeds the stable-step advisor's limit for the world's method."""
 
 
+class PlacementWarning(UserWarning):
+    """Particles placed overlapping each other or a collider's surface (by more than 1 % of
+    the radii): accepted, but the collisions push them apart in the first steps, which sets
+    them moving. Said once per placement (the engine's check before the first step after
+    particles, colliders or collisions change), with the count and the deepest overlap.
+    Deeper placements, a centre inside another particle or a collider, are refused with a
+    ``ValueError`` instead."""
+
+
 # The most particle-steps World.run takes unless told otherwise: hours of work (5 hours at 6e6
 # particle-steps a second in a gas, days in a pile of contacts); the command line's limit too.
 MAX_WORK = 1e11
@@ -464,6 +473,7 @@ class World(WorldCollisions):
         if not self._changes_count():
             with self._engine() as core:
                 core.step(n)
+                self._notice_placement(core)
             return
         for _ in range(n):
             self._births()
@@ -475,9 +485,18 @@ class World(WorldCollisions):
             try:
                 with self._engine() as core:
                     core.step(1)
+                    self._notice_placement(core)
             finally:
                 self._pull()
             self._deaths()
+
+    @staticmethod
+    def _notice_placement(core: Any) -> None:
+        """Warns of the overlaps the engine's placement check accepted in the steps just taken
+        (``PlacementWarning``: they will be pushed apart)."""
+        notice = core.take_placement_notice()
+        if notice:
+            warnings.warn(notice, PlacementWarning, stacklevel=4)
 
     def _births(self) -> None:
         t = self.time
