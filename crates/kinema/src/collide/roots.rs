@@ -54,4 +54,3 @@ pub(crate) fn toi_half_space(
     };
     (0.0..=h).contains(&tau).then_some(tau)
 }
-

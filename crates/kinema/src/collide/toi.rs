@@ -14,9 +14,9 @@
 //! A step length h that is negative or NaN finds nothing.
 
 use super::colliders::{Plane, SphereObstacle};
-use super::roots::toi_half_space;
 #[cfg(test)]
 use super::roots::distinct_roots;
+use super::roots::toi_half_space;
 use crate::vec3;
 
 /// First time τ ∈ [0, h] (s) at which two spheres in linear relative motion touch while

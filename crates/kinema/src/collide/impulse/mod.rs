@@ -11,12 +11,12 @@ pub(crate) mod impacts;
 
 use std::time::{Duration, Instant};
 
+use super::books::ColliderBooks;
 use super::events::{EventQueue, PathStore, Paths};
 use super::islands::Islands;
 use super::neighbour_list::NeighbourList;
 use super::sleep::{Sleep, WarmEntry};
 use super::soft_step::Target;
-use super::books::ColliderBooks;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
 use crate::error::Error;

@@ -118,10 +118,18 @@ fn a_ball_over_a_seam_or_a_fan_apex_touches_once() {
         }
     }
     let grid = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
-    for p in [[0.1125, 0.1125, 0.019], [0.15, 0.25, 0.019], [0.125, 0.2, 0.019], [0.37, 0.41, 0.019]] {
+    for p in [
+        [0.1125, 0.1125, 0.019],
+        [0.15, 0.25, 0.019],
+        [0.125, 0.2, 0.019],
+        [0.37, 0.41, 0.019],
+    ] {
         let t = touches(&grid, p, 0.02);
         assert_eq!(t.len(), 1, "{p:?}: {t:?}");
-        assert!(close(t[0].normal, [0.0, 0.0, 1.0]) && (t[0].overlap - 0.001).abs() < 1e-14, "{p:?}: {t:?}");
+        assert!(
+            close(t[0].normal, [0.0, 0.0, 1.0]) && (t[0].overlap - 0.001).abs() < 1e-14,
+            "{p:?}: {t:?}"
+        );
     }
     // The pole of a shallow cone of 200 thin triangles (a UV sphere's cap): a ball resting
     // at the apex is tangent to every spoke (200 face contacts tilted 5.7°, rule 2 keeps
