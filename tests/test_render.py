@@ -532,3 +532,72 @@ def test_a_kepler_orbit_draws_its_trail_on_the_circle_and_its_attractor():
     bare = list(render_frames(traj.positions, traj.radii, traj.t, dim=2, camera=cam, width=360, height=360, time_format=None, legend=False, trail=0))[-1]
     t = t_end - 0.5
     assert (bare[int(180 - 90 * np.sin(t)), int(180 + 90 * np.cos(t))] == 255).all()
+
+
+# -- moving colliders -------------------------------------------------------------------------
+
+
+def _grey_centre(frame):
+    """(x, y) pixel coordinates of the middle of the box around the neutral grey pixels (a
+    sphere obstacle, its shading aside; pixel (i, j) spans x from i to i + 1), and their count."""
+    g = frame.astype(int)
+    grey = (np.abs(g[..., 0] - g[..., 1]) < 12) & (np.abs(g[..., 1] - g[..., 2]) < 12) & (g[..., 0] < 250)
+    rows, cols = np.nonzero(grey)
+    return np.array([cols.min() + cols.max() + 1, rows.min() + rows.max() + 1]) / 2, grey.sum()
+
+
+MOVING_SPHERE = {"type": "sphere", "center": [0.0, 0.0, 0.5], "radius": 0.2, "motion": {"velocity": [1.0, 0.0, 0.0]}}
+
+
+def test_a_moving_collider_is_drawn_where_it_is_at_each_frame_time():
+    # Seen from straight above, 4.5 m over the sphere's plane: 1 m along x is f/4.5 pixels
+    # (f = 120 / tan 20°, the focal length of 240 rows at 40°); a red particle stays put, out
+    # of sight.
+    t = np.array([0.0, 0.5, 1.0])
+    x = np.tile([[0.5, 50.0, 0.1]], (3, 1, 1))
+    cam = Camera3D(eye=(0.5, 0.0, 5.0), target=(0.5, 0.0, 0.5), up=(0.0, 1.0, 0.0), fov_deg=40.0)
+    red = np.array([[220, 40, 40]], np.uint8)
+    kw = dict(color_by=red, width=320, height=240, camera=cam, time_format=None)
+    frames = list(render_frames(x, 0.1, t, colliders=[MOVING_SPHERE], **kw))
+    (c0, n0), (c1, n1), (c2, n2) = (_grey_centre(f) for f in frames)
+    px_per_m = 120.0 / np.tan(np.radians(20.0)) / 4.5
+    assert n0 > 500 and abs(n1 - n0) < 0.02 * n0 and abs(n2 - n0) < 0.02 * n0  # the same sphere, seen from above
+    np.testing.assert_allclose(c2 - c0, [px_per_m, 0.0], atol=1.0)  # 1 m further along x at t = 1 s
+    np.testing.assert_allclose(c1 - c0, [px_per_m / 2, 0.0], atol=1.0)
+    np.testing.assert_allclose(c0, [160 - 0.5 * px_per_m, 120.0], atol=1.0)  # at its centre at t = 0
+    # Frame k is the still sphere placed where collider_poses puts it at t[k], byte for byte.
+    for k in range(3):
+        here = {"type": "sphere", "center": [t[k], 0.0, 0.5], "radius": 0.2}
+        still = next(render_frames(x[k : k + 1], 0.1, t[k : k + 1], colliders=[here], **kw))
+        assert np.array_equal(frames[k], still)
+
+
+def test_still_scenes_draw_the_same_with_or_without_a_motion_key_and_a_world_run_moves_its_mesh():
+    # A still collider (no motion) takes the one-scenery path; a motion of zero velocity the
+    # per-frame path: the same pictures.
+    x, t = _scene(frames=3, n=2)
+    floor = {"type": "plane", "point": [0.0, 0.0, -0.5], "normal": [0.0, 0.0, 1.0]}
+    ball = {"type": "sphere", "center": [1.0, 1.0, 0.0], "radius": 0.3}
+    still = list(render_frames(x, 0.2, t, colliders=[floor, ball], width=160, height=96))
+    resting = list(render_frames(x, 0.2, t, colliders=[floor, {**ball, "motion": {"velocity": [0.0, 0.0, 0.0]}}], width=160, height=96))
+    assert all(np.array_equal(a, b) for a, b in zip(still, resting, strict=True))
+
+    # A world's mesh lifted by keyframes: its trajectory's frames show it rising, and the same
+    # frame drawn from the mesh placed by collider_poses is the same picture.
+    from kinema.render.descriptions import collider_poses
+
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[3.0, 3.0, 0.5]], radius=0.1)
+    square = dict(vertices=[[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], faces=[[0, 1, 2], [0, 2, 3]])
+    w.add(kinema.Mesh(**square, motion=kinema.Keyframes(times=[0.0, 0.2], translations=[[0, 0, 0], [0, 0, 1.0]])))
+    traj = w.run(0.2, fps=10)
+    assert traj.colliders[0]["motion"]["times"] == [0.0, 0.2]
+    cam = Camera3D(eye=(0.0, -6.0, 1.0), target=(0.0, 0.0, 0.5))
+    kw = dict(width=160, height=96, camera=cam, time_format=None)
+    frames = list(render_frames(traj.positions, 0.1, traj.t, colliders=traj.colliders, **kw))
+    assert not np.array_equal(frames[0], frames[-1])
+    pose = collider_poses(traj.colliders[0], traj.t)[-1]
+    placed = {**{k: v for k, v in traj.colliders[0].items() if k != "motion"}}
+    placed["vertices"] = (np.asarray(placed["vertices"]) @ pose[:, :3].T + pose[:, 3]).tolist()
+    last = next(render_frames(traj.positions[-1:], 0.1, traj.t[-1:], colliders=[placed], **kw))
+    assert np.abs(frames[-1].astype(int) - last).max() <= 2  # the same but for rounding at edges

@@ -182,7 +182,14 @@ FRAME_MARGIN: float
 class Scenery:
     """The colliders a video draws, made into the engine's once, with the video's extent."""
 
-    def __init__(self, colliders: Sequence[dict[str, Any]], positions: npt.NDArray[np.float64], radius: npt.NDArray[np.float64]) -> None: ...
+    def __init__(
+        self,
+        colliders: Sequence[dict[str, Any]],
+        positions: npt.NDArray[np.float64],
+        radius: npt.NDArray[np.float64],
+        poses: npt.NDArray[np.float64] | None = None,
+    ) -> None: ...
+    def posed(self, poses: npt.NDArray[np.float64]) -> Scenery: ...
     @property
     def extent(self) -> tuple[list[float], list[float]]: ...
     @property

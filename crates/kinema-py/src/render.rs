@@ -2,6 +2,7 @@
 
 use std::borrow::Cow;
 
+use kinema::collide::{Collider, Pose};
 use kinema::render::{
     categorical, collider_boxes, render_frame as render_core, scene_extent, text, yuv, Camera, Colormap, Frame, Region,
     RenderParams, Scenery,
@@ -9,7 +10,7 @@ use kinema::render::{
 use numpy::ndarray::Dimension;
 use numpy::{
     Element, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
-    PyUntypedArrayMethods,
+    PyReadonlyArray4, PyUntypedArrayMethods,
 };
 use pyo3::conversion::FromPyObjectOwned;
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -39,17 +40,34 @@ pub struct PyScenery {
     inner: Scenery,
 }
 
+/// The poses of `(.., C, 3, 4)` matrices [R | o] (x = R x₀ + o), in C order: pivot 0,
+/// translation o. Shapes were checked by the caller.
+fn poses_of(m: &[f64]) -> Vec<Pose> {
+    m.chunks_exact(12)
+        .map(|a| Pose {
+            rotation: [[a[0], a[1], a[2]], [a[4], a[5], a[6]], [a[8], a[9], a[10]]],
+            pivot: [0.0; 3],
+            translation: [a[3], a[7], a[11]],
+        })
+        .collect()
+}
+
 #[pymethods]
 impl PyScenery {
     /// `colliders`: descriptions as `Trajectory.colliders` holds them; `positions`: (P, 3),
-    /// m, the particles of every frame (NaN where one is not alive); `radius`: (N,), m. An
-    /// error names the collider (`colliders[2].radius`).
+    /// m, the particles of every frame (NaN where one is not alive); `radius`: (N,), m;
+    /// `poses`: where moving colliders are at each frame, (F, C, 3, 4) matrices [R | o]
+    /// (`kinema.render.descriptions.collider_poses`), so that the extent holds them at every
+    /// frame too (None: the colliders as described). An error names the collider
+    /// (`colliders[2].radius`).
     #[new]
+    #[pyo3(signature = (colliders, positions, radius, poses=None))]
     fn new(
         py: Python<'_>,
         colliders: Vec<Description>,
         positions: PyReadonlyArray2<'_, f64>,
         radius: PyReadonlyArray1<'_, f64>,
+        poses: Option<PyReadonlyArray4<'_, f64>>,
     ) -> PyResult<Self> {
         if positions.shape()[1] != 3 {
             return Err(bad(
@@ -60,13 +78,45 @@ impl PyScenery {
         }
         let colliders = collide::colliders(&colliders).map_err(to_py)?;
         let (pos, rad) = (data(&positions), data(&radius));
-        let extent = py.detach(|| scene_extent(&pos, &rad, &colliders)).map_err(to_py)?;
-        Ok(PyScenery {
-            inner: Scenery {
-                colliders,
-                extent: Some(extent),
-            },
-        })
+        let mut inner = Scenery { colliders, extent: None };
+        // The extent of a scene with moving colliders holds them at every frame's pose.
+        let mut every: Vec<Collider> = Vec::new();
+        if let Some(poses) = &poses {
+            let shape = poses.shape();
+            if shape[1] != inner.colliders.len() || shape[2] != 3 || shape[3] != 4 {
+                return Err(bad(
+                    "poses",
+                    format!("an array of shape {shape:?}"),
+                    &format!(
+                        "shape (F, {}, 3, 4): a matrix [R | o] per frame and collider",
+                        inner.colliders.len()
+                    ),
+                ));
+            }
+            for frame in poses_of(&data(poses)).chunks_exact(inner.colliders.len().max(1)) {
+                every.extend(inner.posed(frame).map_err(to_py)?.colliders);
+            }
+        }
+        let all = if every.is_empty() { &inner.colliders } else { &every };
+        inner.extent = Some(py.detach(|| scene_extent(&pos, &rad, all)).map_err(to_py)?);
+        Ok(PyScenery { inner })
+    }
+
+    /// The same scenery with its colliders where `poses` ((C, 3, 4) matrices [R | o], one per
+    /// collider, from `collider_poses` at a frame's time) put them, its extent kept: one
+    /// frame of a video with moving colliders (`kinema::render::Scenery::posed`).
+    fn posed(&self, py: Python<'_>, poses: PyReadonlyArray3<'_, f64>) -> PyResult<Self> {
+        let shape = poses.shape();
+        if shape[0] != self.inner.colliders.len() || shape[1] != 3 || shape[2] != 4 {
+            return Err(bad(
+                "poses",
+                format!("an array of shape {shape:?}"),
+                &format!("shape ({}, 3, 4): a matrix [R | o] per collider", self.inner.colliders.len()),
+            ));
+        }
+        let poses = poses_of(&data(&poses));
+        let inner = py.detach(|| self.inner.posed(&poses)).map_err(to_py)?;
+        Ok(PyScenery { inner })
     }
 
     /// (lo, hi), m: the region the scenery is laid out in.

@@ -3,7 +3,8 @@
 //! for every thread count; with scenery, floors below the horizon, sphere obstacles in depth
 //! order with the particles, box outlines on their edges only, and named errors; springs as
 //! lines from rim to rim, in depth order in 3D; cameras that fit a box into both fields of view;
-//! mesh colliders translucent, outlined on their creases, and ordered by depth.
+//! mesh colliders translucent, outlined on their creases, and ordered by depth; moving
+//! colliders drawn where their poses put them.
 
 // The tests sit in a module named `render` so that `cargo test render` selects them.
 mod render {
@@ -849,6 +850,92 @@ mod render {
         }
         for j in 70..h {
             assert!((0..w).all(|i| is_grey(pixel(&img, w, i, j), 10)), "ground row {j} is mesh");
+        }
+    }
+
+    /// A bar of 2 × 0.5 × 0.5 m along x centred at (0, 0, 0.25), as a closed mesh of 12
+    /// triangles, each corner moved by `place`.
+    fn bar(place: impl Fn([f64; 3]) -> [f64; 3]) -> Collider {
+        let half = [1.0, 0.25, 0.25];
+        let corners: Vec<[f64; 3]> = (0..8)
+            .map(|k| {
+                place(std::array::from_fn(|a| {
+                    [0.0, 0.0, 0.25][a] + if k >> a & 1 == 1 { half[a] } else { -half[a] }
+                }))
+            })
+            .collect();
+        let faces = vec![
+            [0, 2, 3],
+            [0, 3, 1],
+            [4, 5, 7],
+            [4, 7, 6],
+            [0, 1, 5],
+            [0, 5, 4],
+            [2, 6, 7],
+            [2, 7, 3],
+            [0, 4, 6],
+            [0, 6, 2],
+            [1, 3, 7],
+            [1, 7, 5],
+        ];
+        mesh(corners, faces)
+    }
+
+    #[test]
+    fn a_posed_scenery_draws_each_collider_where_its_pose_puts_it() {
+        use kinema::collide::Pose;
+        let (w, h) = (200, 150);
+        let cam = Camera::perspective([1.0, -6.0, 4.0], [0.5, 0.0, 0.3], [0.0, 0.0, 1.0], 45.0).unwrap();
+        let extent = Some(([-2.0, -2.0, -0.5], [3.0, 2.0, 1.5]));
+        let (pos, r, red) = ([[0.0, 1.5, 0.6]], [0.15], [[200, 30, 30]]);
+        // As added: a floor, a box, an obstacle and a bar along x, all at rest.
+        let rest = Scenery {
+            colliders: vec![
+                plane([0.0, 0.0, -0.25], [0.0, 0.0, 1.0]),
+                cuboid([-1.5, -1.0, -0.25], [-0.5, 0.0, 0.375]),
+                obstacle([0.0, -1.0, 0.25], 0.25),
+                bar(|p| p),
+            ],
+            extent,
+        };
+        // Posed: the floor, the box and the obstacle moved by t = (1, 0.5, 0.25), the bar
+        // turned a quarter about z (about the origin) and moved by t: the scene built there
+        // directly (every number a short binary fraction: the same bytes).
+        let t = [1.0, 0.5, 0.25];
+        let moved = Pose {
+            rotation: Pose::IDENTITY.rotation,
+            pivot: [0.0; 3],
+            translation: t,
+        };
+        let turned = Pose {
+            rotation: [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+            ..moved
+        };
+        let posed = rest.posed(&[moved, moved, moved, turned]).unwrap();
+        assert_eq!(posed.extent, extent, "the extent is kept");
+        let there = Scenery {
+            colliders: vec![
+                plane([1.0, 0.5, 0.0], [0.0, 0.0, 1.0]),
+                cuboid([-0.5, -0.5, 0.0], [0.5, 0.5, 0.625]),
+                obstacle([1.0, -0.5, 0.5], 0.25),
+                bar(|[x, y, z]| [-y + t[0], x + t[1], z + t[2]]),
+            ],
+            extent,
+        };
+        let (a, b) = (
+            scene_frame(&cam, &pos, &r, &red, &posed, w, h),
+            scene_frame(&cam, &pos, &r, &red, &there, w, h),
+        );
+        let differ = (0..w * h).filter(|&k| a[3 * k..3 * k + 3] != b[3 * k..3 * k + 3]).count();
+        assert_eq!(differ, 0, "pixels that differ from the scene built where the poses put it");
+        assert_ne!(a, scene_frame(&cam, &pos, &r, &red, &rest, w, h), "the scene moved");
+        // The identity keeps a collider as it is; a box turns not, and a pose per collider.
+        assert_eq!(rest.posed(&[Pose::IDENTITY; 4]).unwrap(), rest);
+        for (poses, name) in [(vec![moved, turned, moved, moved], "rotation"), (vec![moved], "poses")] {
+            match rest.posed(&poses) {
+                Err(Error::InvalidParameter { parameter, .. }) => assert_eq!(parameter, name),
+                other => panic!("{other:?}"),
+            }
         }
     }
 

@@ -7,7 +7,8 @@ and each frame carries a time stamp. The world's colliders can be drawn with the
 cut where other planes meet it (a bowl of planes shows its facets), a box its edges and a
 lightly filled floor, a sphere obstacle a grey shaded sphere, and each particle casts a soft
 contact shadow straight down on the floor below it, fading with its height; in 2D a plane is a thick line
-with its solid side shaded, a box a rectangle outline, a sphere obstacle a grey disc. Pixels
+with its solid side shaded, a box a rectangle outline, a sphere obstacle a grey disc; a
+collider with a ``motion`` is drawn where it is at each frame's time. Pixels
 are drawn by the engine (``kinema._core``, in parallel, with the GIL released); this module
 chooses cameras and colours and writes files. Springs (``springs=``, pairs of particles) are
 lines between the particles, and particles not alive in a frame (``alive=``, or NaN

@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import _core
 from .cameras import Camera2D, Camera3D, _auto_camera, _frame_corners
-from .descriptions import _describe_colliders
+from .descriptions import _describe_colliders, collider_poses
 from .legend import _Legend
 
 #: Names accepted by ``colormap=``.
@@ -92,7 +92,9 @@ def render_frames(
     colliders: colliders to draw, ``kinema.Plane`` / ``Box`` / ``SphereObstacle`` objects or
       their descriptions (``Trajectory.colliders``: dicts {"type": "plane", "point",
       "normal"}, {"type": "box", "lo", "hi"}, {"type": "sphere", "center", "radius"}); None
-      draws none. Infinite box bounds (an open top) are drawn up to the scene's extent.
+      draws none. Infinite box bounds (an open top) are drawn up to the scene's extent. A
+      collider with a ``motion`` is drawn where it is at each frame's time (``collider_poses``,
+      the engine's motion), and the scene's extent holds it at every frame.
     alive: (F, N) bools (or (N,), the same in every frame): the particles that exist in each
       frame (``Trajectory.alive``: births and deaths). Those that do not, and any with a
       non-finite position, are not drawn, count for neither the camera nor the colour range,
@@ -149,7 +151,8 @@ def render_frames(
     # the largest radius), one extent for every frame, so that floors and open walls stay put.
     everything = np.concatenate([x.reshape(-1, 3), marks]) if len(marks) else x.reshape(-1, 3)
     described = _describe_colliders(colliders) if colliders is not None else []
-    scenery = _core.Scenery(described, everything, r)
+    poses = _moving_poses(described, times)
+    scenery = _core.Scenery(described, everything, r, poses=poses)
     lo, hi = (np.array(corner) for corner in scenery.extent)
     bg = tuple(int(c) for c in background)
     luminance = 0.299 * bg[0] + 0.587 * bg[1] + 0.114 * bg[2]
@@ -189,7 +192,7 @@ def render_frames(
     if time_format is not None:
         stamps = [time_format.format(v) for v in times]
         common["label_at"] = _label_corner(x, r, live, windows, stamps, int(label_scale), key.box if key is not None else None, common)
-    if len(scenery):
+    if len(scenery) and poses is None:
         common["scenery"] = scenery
     for k in range(n_frames):
         label = time_format.format(times[k]) if time_format is not None else None
@@ -211,10 +214,21 @@ def render_frames(
             frame_pairs = pairs
         if windows[k] < k:  # (N, L, 3): the trail's points, oldest first, NaN where not alive
             colour_kw["trails"] = pick(np.ascontiguousarray(x[windows[k] : k + 1].transpose(1, 0, 2)))
+        if poses is not None:  # moving colliders: this frame's scenery, where they are at times[k]
+            colour_kw["scenery"] = scenery.posed(poses[k])
         frame = _core.render_frame(pick(x[k]), pick(r), label=label, springs=frame_pairs, **colour_kw, **common)
         if key is not None:
             key.draw(frame)
         yield frame
+
+
+def _moving_poses(described: list[dict], times: np.ndarray) -> np.ndarray | None:
+    """(F, C, 3, 4): each collider's pose [R | o] at each frame's time (``collider_poses``:
+    the identity for a still one), or None when none has a ``motion`` (a still scene is drawn
+    from one scenery for every frame)."""
+    if not any(d.get("motion") is not None for d in described):
+        return None
+    return np.ascontiguousarray(np.stack([collider_poses(d, times) for d in described], axis=1))
 
 
 def _attractor_points(attractors, dim: int) -> np.ndarray:

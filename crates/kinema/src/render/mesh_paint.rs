@@ -29,9 +29,15 @@
 //! facing it, the other not: the outline of a smooth bowl, found anew each frame). Edges of
 //! three or more triangles are drawn too. Finding them sorts the 3F edge keys, O(F log F).
 //!
+//! **Where.** A moving mesh (one with a pose, [`TriangleMesh::pose`]) is drawn where its
+//! pose puts it: its vertices and normals displaced each frame ([`Placed`]); a still one's
+//! are used as they are.
+//!
 //! **Shadows.** A mesh is a floor too ([`MeshFloors`]): a particle over one of its triangles
 //! that faces up casts its contact shadow there (the bottom of a bowl), drawn in the depth
 //! order just behind the particle, after the facets under it and before those in front.
+
+use std::borrow::Cow;
 
 use super::clip::{clip_segment_near, GUARD};
 use super::frame3::{Persp3, FLOOR_NZ, PLANE_ALPHA};
@@ -53,6 +59,41 @@ pub const MESH_AMBIENT: f64 = 0.45;
 pub const FEATURE_ANGLE_DEG: f64 = 30.0;
 /// Width of those lines, pixels.
 const EDGE_PX: f64 = 1.2;
+
+/// A mesh where it is drawn: its vertices and face normals displaced by its pose (a moving
+/// mesh), or borrowed as added (a still one).
+struct Placed<'a> {
+    mesh: &'a TriangleMesh,
+    vertices: Cow<'a, [[f64; 3]]>,
+    /// The turned face normals; `None`: the mesh's own.
+    normals: Option<Vec<[f64; 3]>>,
+}
+
+impl<'a> Placed<'a> {
+    fn new(mesh: &'a TriangleMesh) -> Self {
+        match mesh.pose() {
+            None => Placed {
+                mesh,
+                vertices: Cow::Borrowed(mesh.vertices()),
+                normals: None,
+            },
+            Some(pose) => Placed {
+                mesh,
+                vertices: Cow::Owned(mesh.vertices().iter().map(|&v| pose.point(v)).collect()),
+                normals: Some((0..mesh.faces().len()).map(|t| pose.vector(mesh.face_normal(t))).collect()),
+            },
+        }
+    }
+
+    fn faces(&self) -> &'a [[u32; 3]] {
+        self.mesh.faces()
+    }
+
+    /// The unit normal of triangle `t` where it is drawn.
+    fn normal(&self, t: usize) -> [f64; 3] {
+        self.normals.as_ref().map_or_else(|| self.mesh.face_normal(t), |n| n[t])
+    }
+}
 
 /// How many times a facet is cut into four at most ([`paint_mesh`]'s `split`): 4^6 =
 /// 4096 pieces of a triangle.
@@ -78,7 +119,8 @@ pub(super) fn paint_mesh(
     split: f64,
     out: &mut Vec<(f64, Prim)>,
 ) {
-    let (vertices, faces) = (mesh.vertices(), mesh.faces());
+    let placed = Placed::new(mesh);
+    let (vertices, faces) = (&placed.vertices[..], placed.faces());
     let proj = p3.proj;
     let cam: Vec<[f64; 3]> = vertices.iter().map(|&v| proj.camera_coords(v)).collect();
     // The camera axes as a rotation: camera_coords(d) − camera_coords(0) = (d·right, d·up,
@@ -96,7 +138,7 @@ pub(super) fn paint_mesh(
         if outside(&sides, &tri, p3.zn) {
             continue;
         }
-        let mut n = mesh.face_normal(t);
+        let mut n = placed.normal(t);
         let centroid = scale(1.0 / 3.0, add(add(vertices[a], vertices[b]), vertices[c]));
         if dot(n, sub(eye, centroid)) < 0.0 {
             n = scale(-1.0, n);
@@ -105,7 +147,7 @@ pub(super) fn paint_mesh(
         let color = MESH_COLOR.map(|v| (v as f64 * shade).round().min(255.0) as u8);
         facet(p3, &sides, tri, color, split, 0, out);
     }
-    for (i, j) in outline_edges(mesh, eye) {
+    for (i, j) in outline_edges(&placed, eye) {
         edge(p3, cam[i], cam[j], out);
     }
 }
@@ -197,8 +239,8 @@ fn edge(p3: &Persp3, a: [f64; 3], b: [f64; 3], out: &mut Vec<(f64, Prim)>) {
 
 /// The edges (vertex index pairs) drawn as lines from `eye`: boundary, crease, silhouette
 /// and non-manifold edges (see the module's comment), in a fixed order.
-fn outline_edges(mesh: &TriangleMesh, eye: [f64; 3]) -> Vec<(usize, usize)> {
-    let (vertices, faces) = (mesh.vertices(), mesh.faces());
+fn outline_edges(mesh: &Placed, eye: [f64; 3]) -> Vec<(usize, usize)> {
+    let (vertices, faces) = (&mesh.vertices[..], mesh.faces());
     // (lower index << 32 | higher index, triangle, whether the triangle runs lower → higher).
     let mut edges: Vec<(u64, u32, bool)> = Vec::with_capacity(3 * faces.len());
     for (t, f) in faces.iter().enumerate() {
@@ -218,8 +260,8 @@ fn outline_edges(mesh: &TriangleMesh, eye: [f64; 3]) -> Vec<(usize, usize)> {
         let drawn = match run {
             2 => {
                 let ((_, t1, up1), (_, t2, up2)) = (edges[k], edges[k + 1]);
-                let n1 = mesh.face_normal(t1 as usize);
-                let mut n2 = mesh.face_normal(t2 as usize);
+                let n1 = mesh.normal(t1 as usize);
+                let mut n2 = mesh.normal(t2 as usize);
                 // Two triangles that run along the edge the same way disagree on which side
                 // is out (an open mesh may): turn one round before comparing.
                 if up1 == up2 {
@@ -246,7 +288,7 @@ fn outline_edges(mesh: &TriangleMesh, eye: [f64; 3]) -> Vec<(usize, usize)> {
 /// vertical through a particle's centre is tested against the few triangles over its cell.
 /// Built per frame in O(F), only where there are particles to cast shadows.
 pub(super) struct MeshFloors<'a> {
-    mesh: &'a TriangleMesh,
+    mesh: Placed<'a>,
     lo: [f64; 2],
     /// Cells per metre along x and y.
     per_m: [f64; 2],
@@ -262,15 +304,16 @@ const FLOOR_GRID: usize = 512;
 impl<'a> MeshFloors<'a> {
     /// `None` when no triangle of the mesh is a floor.
     pub(super) fn new(mesh: &'a TriangleMesh) -> Option<Self> {
-        let (vertices, faces) = (mesh.vertices(), mesh.faces());
+        let mesh = Placed::new(mesh);
+        let faces = mesh.faces();
         let floors: Vec<u32> = (0..faces.len())
-            .filter(|&t| mesh.face_normal(t)[2].abs() >= FLOOR_NZ)
+            .filter(|&t| mesh.normal(t)[2].abs() >= FLOOR_NZ)
             .map(|t| t as u32)
             .collect();
         if floors.is_empty() {
             return None;
         }
-        let (lo, hi) = mesh.bounds();
+        let (lo, hi) = mesh.mesh.bounds();
         let size = [hi[0] - lo[0], hi[1] - lo[1]];
         let cell = (size[0] * size[1] / floors.len() as f64).sqrt();
         let n: [usize; 2] = std::array::from_fn(|k| {
@@ -292,7 +335,7 @@ impl<'a> MeshFloors<'a> {
         // Counting sort of (cell, triangle): count, prefix sums, fill.
         // The cells under a triangle's xy box: rows j0..=j1 of columns i0..=i1.
         let cells_of = |g: &MeshFloors, t: u32| {
-            let f = faces[t as usize].map(|k| vertices[k as usize]);
+            let f = faces[t as usize].map(|k| g.mesh.vertices[k as usize]);
             let (x0, x1) = (f[0][0].min(f[1][0]).min(f[2][0]), f[0][0].max(f[1][0]).max(f[2][0]));
             let (y0, y1) = (f[0][1].min(f[1][1]).min(f[2][1]), f[0][1].max(f[1][1]).max(f[2][1]));
             let ((i0, j0), (i1, j1)) = (g.cell([x0, y0]), g.cell([x1, y1]));
@@ -330,13 +373,13 @@ impl<'a> MeshFloors<'a> {
     /// The point is inside a triangle when its barycentric coordinates in the xy projection
     /// are ≥ 0 (edges included, so that no seam between two triangles lets it through).
     pub(super) fn below(&self, c: [f64; 3]) -> Option<(f64, [f64; 3], [f64; 3])> {
-        let (lo, hi) = self.mesh.bounds();
+        let (lo, hi) = self.mesh.mesh.bounds();
         if c[0] < lo[0] || c[0] > hi[0] || c[1] < lo[1] || c[1] > hi[1] || c[2] < lo[2] {
             return None;
         }
         let (i, j) = self.cell([c[0], c[1]]);
         let k = j * self.n[0] + i;
-        let (vertices, faces) = (self.mesh.vertices(), self.mesh.faces());
+        let (vertices, faces) = (&self.mesh.vertices[..], self.mesh.faces());
         let mut best: Option<(f64, u32)> = None;
         for &t in &self.tris[self.start[k] as usize..self.start[k + 1] as usize] {
             let [a, b, q] = faces[t as usize].map(|v| vertices[v as usize]);
@@ -357,7 +400,7 @@ impl<'a> MeshFloors<'a> {
             }
         }
         let (drop, t) = best?;
-        let n = self.mesh.face_normal(t as usize);
+        let n = self.mesh.normal(t as usize);
         let n = if n[2] < 0.0 { scale(-1.0, n) } else { n };
         Some((drop, n, [c[0], c[1], c[2] - drop]))
     }

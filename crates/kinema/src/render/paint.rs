@@ -32,7 +32,7 @@ use super::frame3::{Persp3, FLOOR_NZ};
 use super::mesh_paint::{paint_mesh, MeshFloors};
 use super::pixels::Sprite;
 use super::prim::{fill, line, push, Prim};
-use crate::collide::Collider;
+use crate::collide::{Collider, Pose, SurfaceVelocity};
 use crate::vec3::{add, cross, dot, norm, scale, sub};
 use crate::Error;
 
@@ -59,6 +59,38 @@ impl Scenery {
             }
         }
         Ok(())
+    }
+
+    /// The same scenery with its colliders where a frame's `poses` (one per collider, in
+    /// order) put them, its extent kept: how a video draws moving colliders, one scenery a
+    /// frame. A collider whose pose is the identity is kept as it is; the others are displaced
+    /// as the engine places a moving collider ([`Collider::posed`]: a box only translated).
+    /// The pose of a collider comes from its motion (`kinema.render.descriptions.
+    /// collider_poses`, the engine's `Motion::at`), never from here.
+    pub fn posed(&self, poses: &[Pose]) -> Result<Scenery, Error> {
+        if poses.len() != self.colliders.len() {
+            return Err(invalid(
+                "poses",
+                format!("{} poses", poses.len()),
+                &format!("one per collider ({})", self.colliders.len()),
+            ));
+        }
+        let colliders = self
+            .colliders
+            .iter()
+            .zip(poses)
+            .map(|(c, pose)| {
+                if *pose == Pose::IDENTITY {
+                    Ok(c.clone())
+                } else {
+                    c.posed(pose, SurfaceVelocity::default())
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Scenery {
+            colliders,
+            extent: self.extent,
+        })
     }
 }
 
