@@ -288,6 +288,86 @@ def test_a_mesh_reaches_the_page_as_float32_and_uint32_and_is_framed(tmp_path):
     assert _page_data(viewer.write_html(_falling(colliders=bad), tmp_path / "b.html").read_text(encoding="utf-8"))["colliders"] == []
 
 
+# --- Moving colliders --------------------------------------------------------------------------
+
+MOVING_SPHERE = {"type": "sphere", "center": [0.0, 0.0, 0.5], "radius": 0.2, "motion": {"velocity": [1.0, 0.0, 0.0]}}
+LIFTED_MESH = {
+    "type": "mesh",
+    "vertices": [[-0.5, 1.0, 0.0], [0.5, 1.0, 0.0], [0.0, 1.5, 0.0]],
+    "faces": [[0, 1, 2]],
+    "motion": {
+        "times": [0.0, 1.0],
+        "translations": [[0, 0, 0], [0, 0, 0.5]],
+        "rotations": [[1, 0, 0, 0], [0.7071067811865476, 0, 0, 0.7071067811865476]],
+        "pivot": [0, 1.25, 0],
+    },
+}
+
+
+def _beside_a_moving_sphere() -> kinema.Trajectory:
+    """Four balls resting on a line for 1 s (11 frames), beside a sphere moving 1 m along x, a
+    triangle rising and turning, and a still floor."""
+    positions = np.zeros((11, 4, 3))
+    positions[:, :, 0] = np.linspace(-0.5, 1.5, 4)
+    positions[:, :, 1] = -0.8
+    positions[:, :, 2] = 0.1
+    floor = {"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 1]}
+    return _traj(positions, colliders=[floor, MOVING_SPHERE, LIFTED_MESH])
+
+
+def _page_poses(entry: dict) -> np.ndarray:
+    """A page collider's poses as (F, 4, 4) row-major matrices."""
+    return np.frombuffer(base64.b64decode(entry["poses"]), "<f4").reshape(-1, 4, 4).transpose(0, 2, 1)
+
+
+def test_moving_colliders_reach_the_page_as_a_matrix_per_frame(tmp_path):
+    from kinema.render.descriptions import collider_poses
+
+    traj = _beside_a_moving_sphere()
+    data = _page_data(viewer.write_html(traj, tmp_path / "m.html").read_text(encoding="utf-8"))
+    floor, sphere, mesh = data["colliders"]
+    assert "poses" not in floor  # still: drawn as described
+    # The sphere and the mesh are described as added, with the engine's pose at each frame time.
+    assert sphere["center"] == [0.0, 0.0, 0.5] and mesh["lo"] == [-0.5, 1.0, 0.0]
+    for entry, description in ((sphere, MOVING_SPHERE), (mesh, LIFTED_MESH)):
+        poses = _page_poses(entry)
+        assert poses.shape == (11, 4, 4)
+        expected = collider_poses(description, data["t"])
+        np.testing.assert_allclose(poses[:, :3, :], expected, atol=1e-6)
+        np.testing.assert_array_equal(poses[:, 3], np.tile([0, 0, 0, 1], (11, 1)))
+    np.testing.assert_allclose(_page_poses(sphere)[-1, :3, 3], [1.0, 0.0, 0.0], atol=1e-6)  # 1 m along x at t = 1 s
+    # The extent holds where they go: the sphere's far side at x = 1.2, the mesh's top at z = 0.5.
+    assert data["extent"]["max"][0] >= 1.2 - 1e-9 and data["extent"]["max"][2] >= 0.5 - 1e-9
+    # A motion the engine refuses is not drawn (as a malformed description is not).
+    bad = {**MOVING_SPHERE, "motion": {"velocity": [1.0, 0.0]}}
+    assert _page_data(viewer.write_html(_falling(colliders=[bad]), tmp_path / "b.html").read_text(encoding="utf-8"))["colliders"] == []
+
+
+@pytest.mark.parametrize("served", [False, True])
+def test_a_moving_collider_moves_on_the_page_from_frame_to_frame(open_page, tmp_path, served):
+    traj = _beside_a_moving_sphere()
+    page = open_page(traj, served=served)
+    first = page.show(0)
+    assert [m["type"] for m in first["moving"]] == ["sphere", "mesh"]
+    start = page.pixels(tmp_path / "start.png")
+    last = page.show(10)
+    end = page.pixels(tmp_path / "end.png")
+    # The objects are drawn with the poses of the frame shown.
+    data = viewer_page.pack(traj, viewer_page.HTML_MAX_BYTES)
+    for m, entry in zip(last["moving"], data.meta["colliders"][1:], strict=True):
+        np.testing.assert_allclose(np.reshape(m["matrix"], (4, 4)).T, _page_poses(entry)[10], atol=1e-6)
+    np.testing.assert_allclose(np.reshape(first["moving"][0]["matrix"], (4, 4)), np.eye(4), atol=1e-7)
+    _assert_in_view(last)
+    # The sphere moved across the view: the shaded grey (darker than the floor and its grid)
+    # seen only at the start and that seen only at the end lie a sixth of the width apart.
+    grey = lambda image: (np.ptp(image, axis=2) < 12) & (image.mean(axis=2) > 60) & (image.mean(axis=2) < 170)  # noqa: E731
+    a, b = grey(start), grey(end)
+    gone, come = a & ~b, b & ~a
+    assert gone.sum() > 500 and come.sum() > 500
+    shift = np.nonzero(come)[1].mean() - np.nonzero(gone)[1].mean()
+    assert abs(shift) > start.shape[1] / 6, f"the sphere moved {shift:.1f} px"
+
+
 # --- Springs, births and deaths ----------------------------------------------------------------
 
 

@@ -4,8 +4,10 @@
 // The page carries `<script type="application/json" id="kinema-data">` with the metadata
 // written by python/kinema/viewer: n (particles), frames, dim, t (times, s), bounds
 // {min, max} (m, the particles), extent {min, max} (m: the live particles with their radii
-// over every frame and the colliders' finite parts), colliders (plain descriptions, 3 values
-// per vector, ±inf bounds as null), speedMin/speedMax (m/s, over the live particles of the
+// over every frame and the colliders' finite parts, a moving one's wherever it goes),
+// colliders (plain descriptions, 3 values per vector, ±inf bounds as null; a moving one with
+// `poses`, base64 little-endian float32, a 4×4 matrix per frame in column-major order: where
+// it is at that frame's time, x = M x₀ for a point x₀ of it as described), speedMin/speedMax (m/s, over the live particles of the
 // frames shown), idRange (the lowest and highest id shown), springCount, aliveBytes,
 // defaultRadius, note, colorBy (the colouring to open with: "speed", "id", "color", "none" or
 // null), noOwnColor (RGB bytes: what "color" draws a particle without its own colour in, the
@@ -21,7 +23,9 @@
 // line with its solid side filled (2D); boxes as their edges less those of open faces, with
 // the walls of open faces reaching the extent, and a floor face; sphere obstacles as shaded
 // spheres (3D) or discs (2D); triangle meshes (3D) as a translucent lit surface seen from
-// both sides, with its rim and creases as lines, so that what is inside shows. 3D: a perspective camera looking from VIEW_DIRECTION, z up,
+// both sides, with its rim and creases as lines, so that what is inside shows. A moving
+// collider's objects sit in a group of their own whose matrix is set to its pose at the
+// frame shown (planes, boxes, spheres and meshes alike). 3D: a perspective camera looking from VIEW_DIRECTION, z up,
 // placed so that the extent and the colliders' corners fill the view at the canvas's aspect
 // ratio, its orbit kept above the floor (see keepAboveFloor); 2D: an orthographic camera on
 // the xy-plane, fitted likewise. Refitted on resize until the user moves the camera.
@@ -325,7 +329,8 @@ function boxCorners(lo, hi) {
 // 3D, sides in 2D), `meshes` (per mesh: its triangles and edge lines drawn and its surface's
 // material: opacity, depthWrite, double-sided), `corners` (the finite corners of what was
 // drawn: floor patches, boxes with their open bounds at the extent, spheres' and meshes'
-// bounding boxes; the camera frames them),
+// bounding boxes; the camera frames them), `moving` (per moving collider: its type, the group
+// holding its objects, its poses and the indices of its corners in `corners`),
 // `lineMaterials` (their resolution follows the canvas) and `floor` (3D: the height of the
 // lowest floor, null without one: a plane facing up, less than FLOOR_TILT from level, at its
 // patch's lowest corner, or a box's closed bottom).
@@ -341,7 +346,9 @@ function buildScenery(meta, group) {
   let floor = null;
   const floorAt = (z) => (floor = floor === null ? z : Math.min(floor, z));
   const lineMaterials = [];
+  const moving = [];
   let boxEdges = 0;
+  let holder = group; // where the collider being built puts its objects
   // 2D: the scenery lies under everything, drawn first without depth.
   const flat = (material, order = -2) => {
     if (dim === 2) {
@@ -353,7 +360,7 @@ function buildScenery(meta, group) {
   const add = (object, [material, order]) => {
     object.material = material;
     if (dim === 2) object.renderOrder = order;
-    group.add(object);
+    holder.add(object);
     return object;
   };
   const fatLines = (points, width) => {
@@ -375,7 +382,8 @@ function buildScenery(meta, group) {
     return add(new THREE.Mesh(geometry), flat(material, -3));
   };
 
-  for (const c of meta.colliders || []) {
+  // One collider's objects, into `holder`.
+  const buildCollider = (c) => {
     if (c.type === "plane") {
       const n = vec(c.normal).normalize();
       const p = vec(c.point);
@@ -383,7 +391,7 @@ function buildScenery(meta, group) {
         // The line n·(q − p) = 0 of the normal's xy part, its solid side (against the normal)
         // lightly filled, both reaching far past the scene.
         const nxy = new THREE.Vector3(c.normal[0], c.normal[1], 0);
-        if (nxy.length() <= 1e-9 * vec(c.normal).length()) continue;
+        if (nxy.length() <= 1e-9 * vec(c.normal).length()) return;
         nxy.normalize();
         const t = new THREE.Vector3(-nxy.y, nxy.x, 0);
         const foot = new THREE.Vector3(p.x, p.y, 0).addScaledVector(t, t.dot(ecentre.clone().sub(p)));
@@ -393,7 +401,7 @@ function buildScenery(meta, group) {
         quad(a, b, b.clone().addScaledVector(nxy, -reach), a.clone().addScaledVector(nxy, -reach), FLOOR_COLOR, 0.3);
         fatLines([a, b], PLANE_2D_PX);
         counts.plane++;
-        continue;
+        return;
       }
       // A finite floor patch under the scene: the extent's box projected on the plane (along
       // tangents t1, t2: for a horizontal floor, x and y), each side at least 0.6 of the
@@ -527,8 +535,23 @@ function buildScenery(meta, group) {
       corners.push(...boxCorners(vec(c.lo), vec(c.hi)));
       counts.mesh++;
     }
+  };
+
+  for (const c of meta.colliders || []) {
+    holder = group;
+    let mover = null;
+    if (c.poses) {
+      // A moving collider: drawn as described, in a group placed at each frame's pose.
+      holder = new THREE.Group();
+      holder.matrixAutoUpdate = false;
+      group.add(holder);
+      mover = { type: c.type, group: holder, poses: new Float32Array(decodeBase64(c.poses)), first: corners.length, end: corners.length };
+      moving.push(mover);
+    }
+    buildCollider(c);
+    if (mover) mover.end = corners.length;
   }
-  return { counts, boxEdges, meshes, corners, lineMaterials, floor };
+  return { counts, boxEdges, meshes, corners, lineMaterials, floor, moving };
 }
 
 // Keeps the 3D orbit above the floor (height `floor`): the camera at least `clearance` over
@@ -804,9 +827,18 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
     }
   }
 
+  // Moving colliders where they are at frame k: each one's group takes its pose.
+  function placeColliders(k) {
+    for (const m of drawn.moving) {
+      m.group.matrix.fromArray(m.poses, 16 * k);
+      m.group.matrixWorldNeedsUpdate = true;
+    }
+  }
+
   function setFrame(k, keepTime = false) {
     k = Math.max(0, Math.min(frames - 1, Math.round(k)));
     if (k !== state.frame) {
+      placeColliders(k);
       position.array = frameSlice(positions, k, 3);
       position.needsUpdate = true;
       fillAliveAndSprings(k, position.array);
@@ -863,7 +895,7 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   }
 
   // A read-only description of what is drawn at the frame shown (for tests): the colliders'
-  // objects by type, box edges, springs and particles visible, the legend, whether every
+  // objects by type, box edges, moving colliders' matrices, springs and particles visible, the legend, whether every
   // visible particle (its disc) and every corner of the colliders' drawing project inside
   // the canvas (`room`: the least distance in CSS pixels from one to the canvas's border,
   // negative outside), and how much of the canvas the framed points span (`fill`, of its
@@ -894,8 +926,11 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
       p.fromArray(frame, 3 * i);
       particleRoom = Math.min(particleRoom, room(p, radius.array[i]));
     }
+    // A moving collider's corners where it is now.
+    const placed = drawn.corners.map((c) => c.clone());
+    for (const m of drawn.moving) for (let i = m.first; i < m.end; i++) placed[i].applyMatrix4(m.group.matrix);
     let colliderRoom = Infinity;
-    for (const c of drawn.corners) colliderRoom = Math.min(colliderRoom, room(c, 0));
+    for (const c of placed) colliderRoom = Math.min(colliderRoom, room(c, 0));
     let framedRoom = Infinity;
     for (const c of framed) framedRoom = Math.min(framedRoom, room(c, 0, true));
     return {
@@ -906,6 +941,8 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
       boxEdges: drawn.boxEdges,
       meshes: drawn.meshes,
       colliderCorners: drawn.corners.length,
+      // Each moving collider's type and the matrix (column-major) its objects are drawn with.
+      moving: drawn.moving.map((m) => ({ type: m.type, matrix: Array.from(m.group.matrix.elements) })),
       particles: { total: n, visible },
       springs: { total: springCount, visible: springsVisible },
       legend: legendShown ? { shown: true, label: legendShown.label, min: legendShown.min, max: legendShown.max, text: ui.legend.innerText } : { shown: false },

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..io._files import atomic_file
 from ..render import NO_OWN_COLOR
+from ..render.descriptions import collider_poses
 
 _HERE = Path(__file__).parent
 BUNDLE = _HERE / "static" / "viewer.js"
@@ -109,37 +110,91 @@ def _mesh(c: dict[str, Any]) -> dict[str, Any] | None:
     }
 
 
-def _colliders(colliders: Any) -> list[dict[str, Any]]:
+def _poses(c: dict[str, Any], t: np.ndarray) -> np.ndarray | None:
+    """A moving collider's pose at each of the page's frame times ``t``: (F, 4, 4) matrices
+    [[R, o], [0, 0, 0, 1]] (x = R x₀ + o for a point x₀ of it as described), from the engine's
+    motion (``collider_poses``); None for a still one (no "motion"). A malformed motion is a
+    ValueError."""
+    if c.get("motion") is None:
+        return None
+    pose = collider_poses(c, t)
+    out = np.zeros((len(t), 4, 4))
+    out[:, :3, :] = pose
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def _path_box(c: dict[str, Any], poses: np.ndarray) -> dict[str, Any] | None:
+    """The box (as a page "box": lo, hi, None where open) around where a moving collider's
+    finite parts go over ``poses``: a box's finite bounds moved (a box only translates), the
+    corners of a sphere's or a mesh's box turned and moved; None for a plane."""
+    if c["type"] == "box":
+        o = poses[:, :3, 3]
+        lo = [None if b is None else float(b + o[:, k].min()) for k, b in enumerate(c["lo"])]
+        hi = [None if b is None else float(b + o[:, k].max()) for k, b in enumerate(c["hi"])]
+        return {"type": "box", "lo": lo, "hi": hi}
+    if c["type"] == "sphere":
+        r = c["radius"]
+        lo, hi = np.asarray(c["center"]) - r, np.asarray(c["center"]) + r
+    elif c["type"] == "mesh":
+        lo, hi = np.asarray(c["lo"]), np.asarray(c["hi"])
+    else:
+        return None
+    corners = np.array([[hi[k] if j >> k & 1 else lo[k] for k in range(3)] for j in range(8)])
+    moved = np.einsum("fij,cj->fci", poses[:, :3, :3], corners) + poses[:, None, :3, 3]
+    return {"type": "box", "lo": moved.min(axis=(0, 1)).tolist(), "hi": moved.max(axis=(0, 1)).tolist()}
+
+
+def _colliders(colliders: Any, t: np.ndarray) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """The trajectory's collider descriptions as the page draws them: 3 values per vector
     (a 2-value box is open along z), ±inf bounds as None, a mesh's arrays in base64
-    (``_mesh``); what cannot be drawn (a malformed description, a plane with no finite
-    normal) is left out."""
+    (``_mesh``); what cannot be drawn (a malformed description or motion, a plane with no
+    finite normal) is left out. A collider with a "motion" carries ``poses``: its pose at
+    each of the page's frame times ``t`` (``_poses``), base64 little-endian float32, 16 a
+    frame in column-major order (three.js's ``Matrix4.fromArray``). Also returns the boxes
+    the moving colliders sweep (``_path_box``), for the extent."""
     out: list[dict[str, Any]] = []
+    paths: list[dict[str, Any]] = []
     for c in colliders or []:
-        if not isinstance(c, dict):
+        drawn = _drawn(c) if isinstance(c, dict) else None
+        if drawn is None:
             continue
-        kind = c.get("type")
-        if kind == "plane":
-            point, normal = _finite_or_none(c.get("point"), pad=0.0), _finite_or_none(c.get("normal"), pad=0.0)
-            if point and normal and None not in point and None not in normal and any(normal):
-                out.append({"type": "plane", "point": point, "normal": normal})
-        elif kind == "box":
-            lo, hi = _finite_or_none(c.get("lo")), _finite_or_none(c.get("hi"))
-            if lo and hi and all(a is None or b is None or a < b for a, b in zip(lo, hi, strict=True)):
-                out.append({"type": "box", "lo": lo, "hi": hi})
-        elif kind == "sphere":
-            center = _finite_or_none(c.get("center"), pad=0.0)
-            try:
-                radius = float(c.get("radius"))
-            except (TypeError, ValueError):
-                continue
-            if center and None not in center and math.isfinite(radius) and radius >= 0:
-                out.append({"type": "sphere", "center": center, "radius": radius})
-        elif kind == "mesh":
-            mesh = _mesh(c)
-            if mesh is not None:
-                out.append(mesh)
-    return out
+        try:
+            poses = _poses(c, t)
+        except (TypeError, ValueError):
+            continue
+        if poses is not None:
+            drawn["poses"] = _b64(np.ascontiguousarray(poses.transpose(0, 2, 1), dtype="<f4"))
+            path = _path_box(drawn, poses)
+            if path is not None:
+                paths.append(path)
+        out.append(drawn)
+    return out, paths
+
+
+def _drawn(c: dict[str, Any]) -> dict[str, Any] | None:
+    """The description ``c`` as the page draws it (``_colliders``); None when it cannot be
+    drawn."""
+    kind = c.get("type")
+    if kind == "plane":
+        point, normal = _finite_or_none(c.get("point"), pad=0.0), _finite_or_none(c.get("normal"), pad=0.0)
+        if point and normal and None not in point and None not in normal and any(normal):
+            return {"type": "plane", "point": point, "normal": normal}
+    elif kind == "box":
+        lo, hi = _finite_or_none(c.get("lo")), _finite_or_none(c.get("hi"))
+        if lo and hi and all(a is None or b is None or a < b for a, b in zip(lo, hi, strict=True)):
+            return {"type": "box", "lo": lo, "hi": hi}
+    elif kind == "sphere":
+        center = _finite_or_none(c.get("center"), pad=0.0)
+        try:
+            radius = float(c.get("radius"))
+        except (TypeError, ValueError):
+            return None
+        if center and None not in center and math.isfinite(radius) and radius >= 0:
+            return {"type": "sphere", "center": center, "radius": radius}
+    elif kind == "mesh":
+        return _mesh(c)
+    return None
 
 
 def _extent(lo: np.ndarray, hi: np.ndarray, colliders: list[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
@@ -281,8 +336,8 @@ def pack(traj: Any, max_bytes: int, color_by: str | None = None) -> Packed:
         radii = np.full(positions.shape[1], default_radius) if radii is None else np.where(radii > 0, radii, default_radius)
     if not alive.any():
         plo, phi = np.full(3, np.nan), np.full(3, np.nan)
-    colliders = _colliders(getattr(traj, "colliders", None))
-    elo, ehi = _extent(plo, phi, colliders)
+    colliders, paths = _colliders(getattr(traj, "colliders", None), t)
+    elo, ehi = _extent(plo, phi, colliders + paths)
     ids = getattr(traj, "ids", None)
     ids = np.arange(particles) if ids is None or np.size(ids) != particles else np.asarray(ids).reshape(-1)
     ids = ids[::ps]
@@ -297,7 +352,7 @@ def pack(traj: Any, max_bytes: int, color_by: str | None = None) -> Packed:
         "bounds": {"min": [float(x) - pad for x in lo], "max": [float(x) + pad for x in hi]},
         # What the camera frames and the colliders are drawn within (open boxes up to it,
         # floor patches around it): the live particles with their radii, over every frame,
-        # and the colliders' finite parts.
+        # and the colliders' finite parts (a moving one's wherever it goes).
         "extent": {"min": [float(x) for x in elo], "max": [float(x) for x in ehi]},
         "colliders": colliders,
         "speedMin": speed_min,
