@@ -333,6 +333,74 @@ def test_a_mesh_collider_is_a_translucent_guide_mesh_of_its_triangles(tmp_path):
         assert list(UsdGeom.Mesh(stage.GetPrimAtPath(f"/World/colliders/{name}")).GetDisplayOpacityPrimvar().Get()) == pytest.approx([0.3])
 
 
+def _moving_run():
+    """A ball for 1 s (11 frames, 0.1 s apart) beside a sphere moving 1 m along x (a steady
+    motion, described by hand) and a cube turning a quarter about z and rising (keyframes)
+    above a still floor."""
+    positions = np.zeros((11, 1, 3))
+    positions[:, 0] = [2.0, 2.0, 0.5]
+    zeros, three = np.zeros(11), np.zeros((11, 3))
+    _, cube = _bowl_and_cube()
+    half = [np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)]
+    cube["motion"] = {"times": [0.0, 1.0], "translations": [[0, 0, 0], [0, 0, 0.5]], "rotations": [[1, 0, 0, 0], half], "pivot": [0.1, 0.1, 0.1]}
+    colliders = [
+        {"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 1]},
+        {"type": "sphere", "center": [0.0, 0.0, 0.5], "radius": 0.2, "motion": {"velocity": [1.0, 0.0, 0.0]}},
+        cube,
+    ]
+    return kinema.Trajectory(
+        t=np.arange(11) * 0.1,
+        positions=positions,
+        velocities=np.zeros_like(positions),
+        kinetic=zeros,
+        potential={},
+        momentum=three,
+        angular_momentum=three,
+        contacts=np.zeros(11, dtype=int),
+        impulse_balance=three,
+        collision_energy_lost=zeros,
+        radii=np.array([0.05]),
+        colliders=colliders,
+    )
+
+
+def test_a_moving_collider_has_a_time_sampled_transform_from_its_motion(tmp_path):
+    from kinema.render.descriptions import collider_poses
+
+    traj = _moving_run()
+    traj.export(tmp_path / "run.usda")
+    stage = Usd.Stage.Open(str(tmp_path / "run.usda"))
+    floor = UsdGeom.Xformable(stage.GetPrimAtPath("/World/colliders/plane_0"))
+    assert floor.GetOrderedXformOps() == []  # still: no transform
+    for name, described in (("sphere_1", traj.colliders[1]), ("mesh_2", traj.colliders[2])):
+        prim = stage.GetPrimAtPath(f"/World/colliders/{name}")
+        xform = UsdGeom.Xformable(prim)
+        [op] = xform.GetOrderedXformOps()
+        assert op.GetOpType() == UsdGeom.XformOp.TypeTransform
+        assert op.GetTimeSamples() == [float(k) for k in range(11)]  # one per frame, at its time code
+        poses = collider_poses(described, traj.t)
+        for k in range(11):
+            m = np.array(op.Get(Usd.TimeCode(k)))  # acts on row vectors: [R | o] transposed
+            np.testing.assert_allclose(m[:, :3].T, poses[k], atol=1e-12)
+            np.testing.assert_array_equal(m[:, 3], [0, 0, 0, 1])
+        # The points are as described; the transform carries them where the motion puts them.
+        points, _ = mesh_of(prim)
+        at_end = np.array([xform.ComputeLocalToWorldTransform(Usd.TimeCode(10)).Transform(pxr.Gf.Vec3d(*map(float, p))) for p in points])
+        np.testing.assert_allclose(at_end, points @ poses[10][:, :3].T + poses[10][:, 3], atol=1e-6)
+    # The sphere is 1 m further along x at t = 1 s; the cube turned a quarter about its pivot and rose 0.5 m.
+    sphere = UsdGeom.Xformable(stage.GetPrimAtPath("/World/colliders/sphere_1"))
+    centre = sphere.ComputeLocalToWorldTransform(Usd.TimeCode(10)).Transform(pxr.Gf.Vec3d(0.0, 0.0, 0.5))
+    np.testing.assert_allclose(list(centre), [1.0, 0.0, 0.5], atol=1e-12)
+    cube = UsdGeom.Xformable(stage.GetPrimAtPath("/World/colliders/mesh_2"))
+    corner = cube.ComputeLocalToWorldTransform(Usd.TimeCode(10)).Transform(pxr.Gf.Vec3d(0.2, 0.1, 0.1))
+    np.testing.assert_allclose(list(corner), [0.1, 0.2, 0.6], atol=1e-12)
+    # A motion the engine refuses is a ValueError naming the collider, and nothing is written.
+    traj.colliders[1] = {**traj.colliders[1], "motion": {"velocity": [1.0, 0.0]}}
+    with pytest.raises(ValueError, match=r"colliders\[1\]\.motion"):
+        traj.export(tmp_path / "bad.usda")
+    assert not (tmp_path / "bad.usda").exists()
+
+
 def test_kinema_export_writes_usd_beside_the_trajectory(tmp_path):
     _run().save(tmp_path / "run.h5")
     out = subprocess.run([sys.executable, "-m", "kinema", "export", str(tmp_path / "run.h5"), "-f", "usd"], capture_output=True, text=True)

@@ -63,7 +63,10 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
       ``guide`` purpose so that renders show the particles only, ``displayOpacity``
       ``COLLIDER_OPACITY`` (translucent where a viewer shows guides, as kinema's videos draw
       planes and meshes, so that what is inside shows) and ``kinema:collider`` naming the
-      type.
+      type. A moving collider (one with a ``motion``) is described as added and carries a
+      time-sampled ``xformOp:transform``, its pose at each frame's time code (from the
+      engine's motion, ``collider_poses``), so that it moves in a 3D application as in
+      kinema's videos.
 
     In Blender (5.0): File → Import → Universal Scene Description, then play: the Points
     prim becomes a point cloud whose positions follow the time samples, with the attributes
@@ -386,6 +389,8 @@ def _frame_rate(t: np.ndarray) -> float:
 
 def _colliders(stage: Any, traj: Any, fr: Frames, pxr: tuple) -> None:
     """The trajectory's colliders as meshes under /World/colliders (see write_usd)."""
+    from ..render.descriptions import collider_poses
+
     Gf, Sdf, Usd, UsdGeom, Vt = pxr
     described = [c for c in getattr(traj, "colliders", None) or [] if isinstance(c, dict)]
     if not described:
@@ -428,6 +433,17 @@ def _colliders(stage: Any, traj: Any, fr: Frames, pxr: tuple) -> None:
         mesh.CreatePurposeAttr(UsdGeom.Tokens.guide)
         mesh.CreateDisplayOpacityPrimvar(UsdGeom.Tokens.constant).Set(Vt.FloatArray([COLLIDER_OPACITY]))
         mesh.GetPrim().CreateAttribute("kinema:collider", Sdf.ValueTypeNames.Token).Set(kind)
+        if c.get("motion") is not None:
+            try:
+                poses = collider_poses(c, fr.t)  # (F, 3, 4) [R | o]: x = R x0 + o
+            except ValueError as e:
+                raise ValueError(f"colliders[{k}].{e}") from None
+            # Gf matrices act on row vectors (x' = x M): M is [R | o] transposed.
+            transform = UsdGeom.Xformable(mesh).AddTransformOp()
+            for i, pose in enumerate(poses):
+                m = np.eye(4)
+                m[:3, :] = pose
+                transform.Set(Gf.Matrix4d(m.T.tolist()), Usd.TimeCode(float(i)))
 
 
 #: The colliders' ``displayOpacity``: kinema's renderer draws planes and meshes at 0.3.
