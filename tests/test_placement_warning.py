@@ -79,3 +79,16 @@ normal = [0, 0, 1]
         check=True,
     )
     assert "warning:" in out.stderr and "1 overlap at the start" in out.stderr, out.stderr
+
+
+def test_a_periodic_side_is_no_wall():
+    # a ball across the periodic face x = 0 of its cell overlaps no wall (the wall is not
+    # there); the same ball against the closed face z = 0 is noticed
+    w = kinema.World(dim=3)
+    w.add(kinema.Box((0, 0, 0), (1, 1, 1)))
+    w.periodic = (True, True, False)
+    w.add_particles([[0.01, 0.5, 0.5]], np.zeros((1, 3)), mass=1.0, radius=0.02)
+    assert caught(w) == []
+    w.add_particles([[0.5, 0.5, 0.01]], np.zeros((1, 3)), mass=1.0, radius=0.02)
+    (said,) = caught(w)
+    assert "particle 1 overlaps colliders[0] by 0.01 m" in said, said

@@ -232,8 +232,18 @@ pub fn check(
             };
             if inside.is_none() {
                 // the centre on the right side, the sphere into the surface
+                // (a box's walls along periodic axes do not exist)
+                let periodic = domain.periodic_box().map(|b| b.axes());
+                let exists = |n: [f64; 3]| match (c, periodic) {
+                    (Collider::Box(_), Some(axes)) => !(0..3).any(|k| axes[k] && n[k] != 0.0),
+                    _ => true,
+                };
                 let mut depth: f64 = 0.0;
-                c.for_each_touch(p, radius[i], 0.0, |t| depth = depth.max(t.overlap));
+                c.for_each_touch(p, radius[i], 0.0, |t| {
+                    if exists(t.normal) {
+                        depth = depth.max(t.overlap);
+                    }
+                });
                 if depth > NOTICE * radius[i] {
                     let u = user(i);
                     notice(depth / radius[i], &|| {
