@@ -762,3 +762,22 @@ def test_everything_is_in_view_at_a_wide_and_a_tall_aspect(open_page, scene):
             _assert_in_view(page.show(k))
     if scene == "cradle":
         assert info["springs"] == {"total": 5, "visible": 5} and info["particles"]["visible"] == 10
+
+
+def test_slow_particles_stay_visible_on_the_dark_background(open_page, tmp_path):
+    # Issue 28: viridis's bottom (luma 30) is near black on the page's near-black background;
+    # the slowest value sits at low_end("viridis") = 0.25 of the map, as in kinema's renderer:
+    # a ball at rest beside a fast one is steel blue (luma about 80), not near black.
+    assert kinema.render.low_end("viridis") == 0.25
+    x = np.array([[[-0.3, 0.0, 0.0], [0.3, 0.0, 0.0]]] * 3)
+    v = np.zeros_like(x)
+    v[:, 1, 0] = 2.0  # the right ball moves at 2 m/s, the left one is at rest
+    traj = _traj(x, v, radii=np.full(2, 0.2))
+    page = open_page(traj, frame=1, color_by="speed")
+    image = page.pixels(tmp_path / "slow.png").astype(float)
+    luma = image @ [0.299, 0.587, 0.114]
+    left = luma[:, : image.shape[1] // 3]  # the slow ball's side (the fast one is right of centre)
+    slow = left[left > 20]  # its pixels: the background's luma is about 16
+    assert slow.size > 500, slow.size
+    # steel blue (median luma 66 as drawn, shaded) where viridis's own bottom gave 27
+    assert np.median(slow) > 50, np.median(slow)

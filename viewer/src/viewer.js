@@ -97,6 +97,11 @@ const VIRIDIS = [
 ];
 const glslVec = (c) => `vec3(${c.join(", ")})`;
 
+// Where on viridis the lowest value sits: its bottom colour (luma 30) is near black on the
+// page's near-black background, so the values use the map from 0.25 up (steel blue), as
+// kinema's renderer does (kinema.render.low_end("viridis")); the legend shows that part.
+const LOW_END = 0.25;
+
 const VERTEX = /* glsl */ `
 uniform float uPixelsPerUnit;  // perspective: viewport height / (2 tan(fov/2)), pixels per metre at 1 m depth;
                                // orthographic: pixels per metre
@@ -136,7 +141,7 @@ void main() {
   float perUnit = uOrtho == 1 ? uPixelsPerUnit : uPixelsPerUnit / max(-mv.z, 1e-6);
   gl_PointSize = max(2.0, 2.0 * aRadius * perUnit);
   const vec3 plain = vec3(0.35, 0.65, 0.95);
-  vColor = uMode == 0 ? plain : uMode == 2 ? (aColor.a > 0.5 ? aColor.rgb : uNoOwn) : viridis((aValue - uOffset) * uScale);
+  vColor = uMode == 0 ? plain : uMode == 2 ? (aColor.a > 0.5 ? aColor.rgb : uNoOwn) : viridis(${LOW_END.toFixed(2)} + ${(1 - LOW_END).toFixed(2)} * clamp((aValue - uOffset) * uScale, 0.0, 1.0));
 }
 `;
 
@@ -281,7 +286,7 @@ function buildUi(root, view) {
   // The colour legend: what the colours mean, over the view's top right corner.
   const legend = document.createElement("div");
   legend.id = "kinema-legend";
-  const stops = Array.from({ length: 11 }, (_, i) => `${viridisCss(i / 10)} ${i * 10}%`).join(", ");
+  const stops = Array.from({ length: 11 }, (_, i) => `${viridisCss(LOW_END + ((1 - LOW_END) * i) / 10)} ${i * 10}%`).join(", ");
   legend.innerHTML = `<div id="kinema-legend-label"></div><div id="kinema-legend-bar" style="background: linear-gradient(to right, ${stops})"></div>
     <div id="kinema-legend-ticks"><span id="kinema-legend-min"></span><span id="kinema-legend-max"></span></div>`;
   view.appendChild(legend);
