@@ -320,16 +320,8 @@ impl Persp3<'_> {
         let r_scene = 0.5 * norm(sub(ehi, elo));
         let c = sub(centre, scale(dot(sub(centre, point), n), n));
         let half = (2.5 * norm(sub(eye, c))).max(2.0 * r_scene).max(1e-9);
-        // Tangents: the world axis least aligned with n, made orthogonal to it, and n × that;
-        // a horizontal floor gets a grid along the world's x and y.
-        let k = (0..3).min_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs())).unwrap_or(0);
-        let mut axis = [0.0; 3];
-        axis[k] = 1.0;
-        let t1 = {
-            let v = cross(n, axis);
-            scale(1.0 / norm(v), v)
-        };
-        let t2 = cross(n, t1);
+        // a horizontal floor gets a grid along the world's x and y
+        let (t1, t2) = tangents(n);
         let at = |u: f64, v: f64| add(add(point, scale(u, t1)), scale(v, t2));
         let (uc, vc) = (dot(sub(c, point), t1), dot(sub(c, point), t2));
         let corners = [
@@ -652,14 +644,7 @@ fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64
         // The soft edge: rings from (1 − b) to (1 + b) of rs, b from 0.3 (resting) to 0.7.
         let b = 0.3 + 0.4 * h / (h + r);
         let ring_alpha = 1.0 - (1.0 - alpha).powf(1.0 / RINGS as f32);
-        let k = (0..3).min_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs())).unwrap_or(0);
-        let mut axis = [0.0; 3];
-        axis[k] = 1.0;
-        let t1 = {
-            let v = cross(n, axis);
-            scale(1.0 / norm(v), v)
-        };
-        let t2 = cross(n, t1);
+        let (t1, t2) = tangents(n);
         for ring in 0..RINGS {
             let rr = rs * (1.0 - b + 2.0 * b * ring as f64 / (RINGS - 1) as f64);
             let mut poly: Vec<[f64; 3]> = (0..SIDES)
@@ -700,4 +685,15 @@ fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64
         let behind = p3.proj.camera_coords(c)[2].next_up();
         out.ordered.extend(on_mesh.drain(..).map(|p| (behind, p)));
     }
+}
+
+/// Two unit tangents of the unit normal `n`: the world axis least aligned with n, made
+/// orthogonal to it, and n × that (a horizontal plane gets the world's x and y).
+fn tangents(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let k = (0..3).min_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs())).unwrap_or(0);
+    let mut axis = [0.0; 3];
+    axis[k] = 1.0;
+    let v = cross(n, axis);
+    let t1 = scale(1.0 / norm(v), v);
+    (t1, cross(n, t1))
 }
