@@ -282,6 +282,7 @@ def test_settings_read_back_and_round_trip():
         "sleep_speed": None,
         "stiffness": None,
         "damping": None,
+        "event_driven": False,
     }
     assert w.collisions == expected
     w.set_collisions(**w.collisions)
@@ -503,6 +504,7 @@ def test_collision_defaults_and_contact_models_are_the_engines():
         "sleep_speed": None,
         "stiffness": None,
         "damping": None,
+        "event_driven": False,
     }
     signature = inspect.signature(kinema.World.set_collisions)
     assert {k: p.default for k, p in signature.parameters.items() if k != "self"} == engine

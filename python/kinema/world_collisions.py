@@ -34,6 +34,7 @@ class WorldCollisions:
         sleep_speed: float | None = _DEFAULTS["sleep_speed"],
         stiffness: float | None = _DEFAULTS["stiffness"],
         damping: float | None = _DEFAULTS["damping"],
+        event_driven: bool = _DEFAULTS["event_driven"],
     ) -> None:
         """Turn collisions on, or replace every one of their settings.
 
@@ -53,6 +54,12 @@ class WorldCollisions:
         until an impact, a touch, a write or a change of forces or colliders wakes it
         (Box2D's, Bullet's and Chipmunk's sleeping; docs/collisions.md).
 
+        ``event_driven``: with the impulse model and no forces (a gas), run from frame to
+        frame by events instead of steps: every impact at its exact time, by the same rule,
+        one scheduled event per particle (Smallenburg's event-driven dynamics; much faster for
+        gases, docs/collisions.md). Colliders must be still planes and boxes; a step of such a
+        world refuses anything else with a ValueError that says why.
+
         With ``"spring_dashpot"`` the contacts are a force (its elastic energy is the potential
         ``"contact"`` of :meth:`diagnostics` and of the ``Trajectory``), which the stable-step
         advisor and the ``StabilityWarning`` count; :meth:`contacts` and
@@ -60,7 +67,7 @@ class WorldCollisions:
 
         ``w.set_collisions(**w.collisions)`` changes nothing. The defaults are the engine's
         (``model="impulse"``, ``restitution=1.0``, ``friction=0.0``, ``ccd=True``,
-        ``sleep_time=0.5``, the rest ``None``), read from it.
+        ``sleep_time=0.5``, ``event_driven=False``, the rest ``None``), read from it.
         """
         settings = {
             "model": _checks.text("model", model),
@@ -72,6 +79,7 @@ class WorldCollisions:
             "sleep_speed": _checks.real("sleep_speed", sleep_speed, optional=True),
             "stiffness": _checks.real("stiffness", stiffness, optional=True),
             "damping": _checks.real("damping", damping, optional=True),
+            "event_driven": _checks.boolean("event_driven", event_driven),
         }
         self._push()
         self._core.set_collisions(settings)

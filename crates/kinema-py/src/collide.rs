@@ -33,6 +33,8 @@ pub struct CollisionArgs {
     stiffness: Option<f64>,
     #[pyo3(item)]
     damping: Option<f64>,
+    #[pyo3(item)]
+    event_driven: bool,
 }
 
 impl CollisionArgs {
@@ -46,6 +48,7 @@ impl CollisionArgs {
             restitution_threshold: self.restitution_threshold,
             sleep_time: self.sleep_time,
             sleep_speed: self.sleep_speed,
+            event_driven: self.event_driven,
         })
     }
 }
@@ -149,6 +152,7 @@ pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<
     out.set_item("sleep_speed", p.sleep_speed)?;
     out.set_item("stiffness", stiffness)?;
     out.set_item("damping", damping)?;
+    out.set_item("event_driven", p.event_driven)?;
     Ok(out)
 }
 

@@ -605,6 +605,7 @@ class CollisionsTable(_Model):
     sleep_speed: Positive | None = _COLLISION_DEFAULTS["sleep_speed"]
     stiffness: Positive | None = _COLLISION_DEFAULTS["stiffness"]
     damping: NonNeg | None = _COLLISION_DEFAULTS["damping"]
+    event_driven: bool = _COLLISION_DEFAULTS["event_driven"]
     periodic: Annotated[list[bool], Field(min_length=2, max_length=3)] | None = None
 
     @model_validator(mode="after")

@@ -7,9 +7,11 @@
 //! Newton's restitution law, distribute each impulse onto both particles.
 
 pub use crate::collide::books::ColliderBooks;
+use crate::collide::event_driven::{unsupported_collider, EventDriven};
 use crate::collide::impulse::{ImpulseModel, StageSetting};
 use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Motion, Partner, Periodic};
 use crate::error::Error;
+use crate::interrupt::Interrupt;
 use crate::particles::Particles;
 
 pub(crate) use crate::collide::impulse::end_of_step::on_periodic_wall;
@@ -114,6 +116,11 @@ pub struct CollisionParams {
     /// The speed below which a particle is calm, m/s. `None` (default): the largest speed
     /// change the forces gave a particle in the step (g·dt under gravity; Chipmunk's rule).
     pub sleep_speed: Option<f64>,
+    /// Event-driven dynamics (`collide/event_driven/`): with the impulse model and no forces,
+    /// the world jumps from impact to impact between frames instead of stepping, each impact
+    /// at its exact time, by the same rule. Needs still planes and boxes as the only
+    /// colliders. Default false (stepped).
+    pub event_driven: bool,
 }
 
 impl Default for CollisionParams {
@@ -126,6 +133,7 @@ impl Default for CollisionParams {
             restitution_threshold: None,
             sleep_time: Some(SLEEP_TIME),
             sleep_speed: None,
+            event_driven: false,
         }
     }
 }
@@ -214,6 +222,9 @@ pub(crate) struct CollideStage {
     pub motions: Vec<Option<(Motion, Collider)>>,
     /// What the particles gave each collider over all steps.
     pub collider_books: Vec<ColliderBooks>,
+    /// The event-driven state between calls (`None`: made afresh at the next), with
+    /// `params.event_driven`.
+    events: Option<EventDriven>,
 }
 
 impl CollideStage {
@@ -233,6 +244,7 @@ impl CollideStage {
             times: CollisionTimes::default(),
             motions: Vec::new(),
             collider_books: Vec::new(),
+            events: None,
         })
     }
 
@@ -305,6 +317,7 @@ impl CollideStage {
     pub fn set_params(&mut self, params: CollisionParams) -> Result<(), Error> {
         self.material = params.check()?;
         self.params = params.normalised();
+        self.events = None;
         self.refresh_materials()
     }
 
@@ -361,6 +374,7 @@ impl CollideStage {
     /// changed).
     pub fn forget_list(&mut self) {
         self.impulse.forget_list();
+        self.events = None;
     }
 
     /// Refuses particles `from` on placed where this contact model cannot resolve them
@@ -414,5 +428,51 @@ impl CollideStage {
         self.last = stats;
         self.total.accumulate(&stats);
         Ok(changed)
+    }
+
+    /// Why the event-driven path cannot run on this stage (a sentence), or `None`: it needs
+    /// the impulse model, no forces (`forces`: the world's force names), no moving collider,
+    /// and still planes and boxes as colliders.
+    pub fn events_refused(&self, forces: &[&str]) -> Option<String> {
+        if self.params.model != ContactModel::Impulse {
+            return Some("it is a way of running the impulse model, not the spring–dashpot one".into());
+        }
+        if let Some(name) = forces.first() {
+            return Some(format!(
+                "particles must fly free between impacts, and this world has the force '{name}'"
+            ));
+        }
+        if self.has_motion() {
+            return Some("a collider moves".into());
+        }
+        if let Some((k, what)) = unsupported_collider(&self.colliders) {
+            return Some(format!("collider {k} is {what}; only planes and boxes are walls to it"));
+        }
+        None
+    }
+
+    /// Runs the particles `p` by events from time `t0` to `t1` (s) ([`EventDriven::advance`]),
+    /// keeping the state for the next call; books the impacts like [`CollideStage::run`]. The
+    /// caller checked [`CollideStage::events_refused`].
+    pub fn advance_events(&mut self, p: &mut Particles, t0: f64, t1: f64, interrupt: &mut Interrupt) -> Result<(), Error> {
+        self.domain.check_radii(&p.radius)?;
+        let start = std::time::Instant::now();
+        let mut events = match self.events.take() {
+            Some(e) if e.is_at(p.len(), t0) => e,
+            _ => EventDriven::new(p, &self.colliders, &self.domain, t0),
+        };
+        let table = MaterialTable::uniform(self.material).with_colliders(&self.colliders);
+        let materials = match &self.particle_materials {
+            Some(m) => table.with_particles(m),
+            None => table,
+        };
+        let threshold = self.params.restitution_threshold.unwrap_or(0.0);
+        self.collider_books.resize(self.colliders.len(), ColliderBooks::default());
+        let stats = events.advance(p, &materials, threshold, &self.domain, t1, &mut self.collider_books, interrupt)?;
+        self.events = Some(events);
+        self.times.detect += start.elapsed();
+        self.last = stats;
+        self.total.accumulate(&stats);
+        Ok(())
     }
 }

@@ -18,6 +18,7 @@ mod collide;
 mod contact_force;
 mod contents;
 mod divergence;
+mod event_driven;
 mod dynamics;
 mod implicit;
 mod integrate;
@@ -227,6 +228,9 @@ impl World {
     /// [`World::restore_order`] puts them back in the user's (every other method expects
     /// that order: call it before anything else).
     pub fn advance_in_engine_order(&mut self, n: u64) -> Result<(), Error> {
+        if n > 0 && self.collide_stage.as_ref().is_some_and(|s| s.params.event_driven) {
+            return self.advance_by_events(n);
+        }
         for _ in 0..n {
             self.step_once()?;
         }

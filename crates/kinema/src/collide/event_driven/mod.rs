@@ -1,0 +1,520 @@
+//! Event-driven dynamics of the impulse model, for particles that fly free between impacts
+//! (no forces): from one frame to the next the world jumps from impact to impact instead of
+//! stepping (`CollisionParams::event_driven`; `World::advance` calls [`EventDriven::advance`]).
+//!
+//! Between impacts a particle moves on a straight line, x(t) = x_i + v_i (t − t_i), so each
+//! particle keeps its own time t_i (the time its stored position is for) and is only moved
+//! when something happens to it. What can happen is an *event*:
+//!
+//! - **impact** of i and j: the first root of |d + u τ| = r_i + r_j, d = x_i − x_j and
+//!   u = v_i − v_j taken at a common time (the minimum image when periodic):
+//!
+//!   ```text
+//!     b = d·u < 0 (approaching),  c = |d|² − (r_i + r_j)²,  disc = b² − |u|² c ≥ 0
+//!     τ = c / (−b + √disc)        (the smaller root, written without cancellation)
+//!   ```
+//!
+//!   (c ≤ 0 with b < 0: an overlap that still approaches, τ = 0). It is answered by the same
+//!   rule as the stepped model's impacts, [`restitution_impulse`] (Newton's u_n⁺ = −e u_n⁻,
+//!   Coulomb friction), each impulse onto both particles;
+//! - **a wall**: a plane (or a box collider's wall) at distance s = (x − p)·n − r, reached at
+//!   τ = s / (−v·n) when v·n < 0, answered by the same rule;
+//! - **leaving the shell**: the particle's neighbour list expires (`shells.rs`), and is made
+//!   again around where it is.
+//!
+//! **One event per particle** (Smallenburg, EPJE 45:22 (2022)): a particle keeps only its
+//! earliest event, in a bucketed calendar (`calendar.rs`). After an impact of i and j only
+//! their events are found again. A third particle k whose event was an impact with i is not
+//! touched: its event carries the *path* i had (the count of i's impacts), and when it comes
+//! up with a path that is no longer i's, k's event is found again from that time. That is
+//! enough: k's other partners met k no sooner than that stale event (it was k's earliest),
+//! and an earlier impact of k with i's new path is i's own earliest-event search's business.
+//! Making a list again changes no path, so it stales nothing.
+//!
+//! Everything is found from the present: an event's search moves no particle, it reads each
+//! position at the event's time. Between calls the state is kept (the world drops it when
+//! particles, colliders or settings change), so a run of many frames builds the lists once.
+
+mod calendar;
+mod shells;
+
+use super::colliders::Collider;
+use super::contact::{Contact, Partner};
+use super::response::{restitution_impulse, MaterialTable};
+use super::books::ColliderBooks;
+use super::impulse::CollisionStats;
+use super::morton::morton_order;
+use super::Domain;
+use crate::error::Error;
+use crate::interrupt::Interrupt;
+use crate::particles::Particles;
+use crate::vec3;
+use calendar::{Calendar, Entry};
+use shells::Shells;
+
+/// The shell δ as a fraction of the mean diameter. A thin shell is left often (a particle
+/// whose flights between impacts are λ long leaves a shell of radius δ/2 after about
+/// (δ/2λ)² of them), a thick one holds many partners to look at after each event; on the hard-sphere gas of `benchmarks/hard_sphere_gas.py` (φ = 0.25) the cost per
+/// collision was lowest and flat from 0.6 to 0.8 (0.3: 1.3× slower, 1.3: 1.4×).
+pub const SHELL: f64 = 0.7;
+
+/// Events between two asks of the interrupt (Ctrl-C) check.
+const POLL_EVERY: u64 = 1 << 14;
+
+/// A particle: where it is at its own time, how it moves, and its counts (64 bytes: one
+/// cache line, everything an event reads of a particle but its radius).
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct Body {
+    /// Position at time `t`, m.
+    x: [f64; 3],
+    /// The particle's own time, s.
+    t: f64,
+    /// Velocity, m/s.
+    v: [f64; 3],
+    /// Its path: its impacts so far.
+    path: u32,
+    /// Its schedule: how often its event was found (the calendar's live entry carries the
+    /// latest).
+    schedule: u32,
+}
+
+impl Body {
+    /// Where the particle is at time `at`, s.
+    #[inline]
+    fn at(&self, at: f64) -> [f64; 3] {
+        let dt = at - self.t;
+        [self.x[0] + self.v[0] * dt, self.x[1] + self.v[1] * dt, self.x[2] + self.v[2] * dt]
+    }
+}
+
+/// What a particle's next event is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    /// An impact with particle `j` while j is on path `path` (its impacts so far).
+    Pair { j: u32, path: u32 },
+    /// An impact with wall `k` of `EventDriven::walls`.
+    Wall(u32),
+    /// Leaving its shell: its neighbour list is made again.
+    Shell,
+    /// Nothing ever (at rest, alone).
+    Nothing,
+}
+
+/// A flat wall: a plane collider, or a box collider's wall (not along a periodic axis).
+#[derive(Debug, Clone, Copy)]
+struct Wall {
+    point: [f64; 3],
+    /// Unit normal, towards the particles' side.
+    normal: [f64; 3],
+    /// The collider it belongs to.
+    collider: usize,
+}
+
+/// The event-driven state of a world's particles (module doc).
+pub(crate) struct EventDriven {
+    /// The particles in our own order (`order[k]`: the world's index of our particle k).
+    bodies: Vec<Body>,
+    order: Vec<u32>,
+    /// Radii in our order, m.
+    radius: Vec<f64>,
+    shells: Shells,
+    /// Each particle's next event (its time and kind).
+    calendar: Calendar<Kind>,
+    walls: Vec<Wall>,
+    /// Particles' own times are all this, s, between calls.
+    time: f64,
+}
+
+/// What the event-driven path cannot do, or `None`: a collider other than a still plane or
+/// box (spheres and meshes are not walls).
+pub(crate) fn unsupported_collider(colliders: &[Collider]) -> Option<(usize, &'static str)> {
+    colliders.iter().enumerate().find_map(|(k, c)| match c {
+        Collider::Plane(_) | Collider::Box(_) => None,
+        Collider::Sphere(_) => Some((k, "a sphere obstacle")),
+        Collider::Mesh(_) => Some((k, "a triangle mesh")),
+    })
+}
+
+impl EventDriven {
+    /// The state of particles `p` at time `t0` (s): positions wrapped into the periodic cell,
+    /// every neighbour list made, every particle's first event scheduled. The colliders must
+    /// be planes and boxes ([`unsupported_collider`]); the radii must suit the domain
+    /// ([`Domain::check_radii`]).
+    pub fn new(p: &Particles, colliders: &[Collider], domain: &Domain, t0: f64) -> Self {
+        let n = p.len();
+        let cell = domain.periodic_box().copied();
+        let r_max = p.radius.iter().cloned().fold(0.0, f64::max);
+        let r_mean = if n > 0 { p.radius.iter().sum::<f64>() / n as f64 } else { 0.0 };
+        // Our own order, along a Morton curve of cells about a list's reach wide: the partners
+        // an event reads then mostly sit in nearby memory (the state is larger than a core's
+        // cache from ~10⁴ particles on, and an event is a chain of such reads).
+        let lowest = (0..3).map(|k| (0..n).map(|i| p.x[3 * i + k]).fold(f64::INFINITY, f64::min));
+        let origin: Vec<f64> = lowest.map(|v| if v.is_finite() { v } else { 0.0 }).collect();
+        let order = morton_order(&p.x, [origin[0], origin[1], origin[2]], (2.0 * r_max).max(f64::MIN_POSITIVE) * (1.0 + SHELL));
+        let bodies: Vec<Body> = order
+            .iter()
+            .map(|&i| {
+                let i = i as usize;
+                let x = vec3::get(&p.x, i);
+                Body {
+                    x: cell.map_or(x, |c| c.wrap(x)),
+                    t: t0,
+                    v: vec3::get(&p.v, i),
+                    path: 0,
+                    schedule: 0,
+                }
+            })
+            .collect();
+        let radius: Vec<f64> = order.iter().map(|&i| p.radius[i as usize]).collect();
+        let walls = collect_walls(colliders, domain);
+
+        // The cells' range: the periodic cell along its axes, the particles' extent elsewhere.
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for b in &bodies {
+            for k in 0..3 {
+                lo[k] = lo[k].min(b.x[k]);
+                hi[k] = hi[k].max(b.x[k]);
+            }
+        }
+        if let Some(c) = &cell {
+            for k in (0..3).filter(|&k| c.axes()[k]) {
+                lo[k] = c.lo()[k];
+                hi[k] = c.hi()[k];
+            }
+        }
+        if n == 0 {
+            lo = [0.0; 3];
+            hi = [0.0; 3];
+        }
+        let mut delta = SHELL * 2.0 * r_mean;
+        // the minimum image must find every partner within reach: 2 r_max + δ < L/2
+        if let Some(c) = &cell {
+            for k in (0..3).filter(|&k| c.axes()[k]) {
+                delta = delta.min(0.9 * (0.5 * c.period(k) - 2.0 * r_max));
+            }
+        }
+        if delta.is_nan() || delta <= 0.0 {
+            delta = f64::MIN_POSITIVE; // point particles: the list holds touching pairs only
+        }
+        let centres: Vec<[f64; 3]> = bodies.iter().map(|b| b.x).collect();
+        let shells = Shells::new(&centres, &radius, domain, lo, hi, delta);
+        let mut state = EventDriven {
+            bodies,
+            order,
+            radius,
+            shells,
+            calendar: Calendar::new(t0, 1.0, 1),
+            walls,
+            time: t0,
+        };
+        // First events, then a calendar sized for them.
+        let first: Vec<(f64, Kind)> = (0..n).map(|i| state.find(i, t0, domain)).collect();
+        let waits: Vec<f64> = first.iter().map(|e| e.0 - t0).filter(|w| w.is_finite()).collect();
+        let mean_wait = if waits.is_empty() { 1.0 } else { waits.iter().sum::<f64>() / waits.len() as f64 };
+        let width = Calendar::<Kind>::width_for(waits.len(), mean_wait);
+        state.calendar = Calendar::new(t0, width, n.next_power_of_two().clamp(64, 1 << 20));
+        for (i, e) in first.into_iter().enumerate() {
+            state.enter(i, e);
+        }
+        state
+    }
+
+    /// Whether the state is for `n` particles at time `t` (s): what the world checks before
+    /// going on with it.
+    pub fn is_at(&self, n: usize, t: f64) -> bool {
+        self.bodies.len() == n && self.time == t
+    }
+
+    /// Runs every event up to time `t1` (s), then moves every particle to t1 and writes
+    /// positions (wrapped into the periodic cell) and velocities into `p`. Returns the books of
+    /// the impacts (impacts, impulses, energy lost, impulse balance) and adds what the walls
+    /// took to `walls_books` (one per collider). Stops with the interrupt's error, leaving the
+    /// particles as they were at the call (the state is then of no further use).
+    #[allow(clippy::too_many_arguments)]
+    pub fn advance(
+        &mut self,
+        p: &mut Particles,
+        materials: &MaterialTable<'_>,
+        restitution_threshold: f64,
+        domain: &Domain,
+        t1: f64,
+        walls_books: &mut [ColliderBooks],
+        interrupt: &mut Interrupt,
+    ) -> Result<CollisionStats, Error> {
+        let mut stats = CollisionStats::default();
+        let mut events = 0u64;
+        loop {
+            events += 1;
+            if events % POLL_EVERY == 0 {
+                interrupt.poll()?;
+            }
+            let bodies = &self.bodies;
+            let Some(entry) = self.calendar.pop_until(t1, |e| e.version == bodies[e.particle as usize].schedule) else {
+                break;
+            };
+            let (i, now) = (entry.particle as usize, entry.time);
+            match entry.what {
+                Kind::Pair { j, path } if self.bodies[j as usize].path != path => {
+                    // j changed course since: i's event is found again from now
+                    self.reschedule(i, now, domain);
+                }
+                Kind::Pair { j, .. } => {
+                    let j = j as usize;
+                    self.impact_pair(i, j, now, p, materials, restitution_threshold, domain, &mut stats);
+                    self.reschedule(i, now, domain);
+                    self.reschedule(j, now, domain);
+                }
+                Kind::Wall(k) => {
+                    self.impact_wall(i, k as usize, now, p, materials, restitution_threshold, &mut stats, walls_books);
+                    self.reschedule(i, now, domain);
+                }
+                Kind::Shell => {
+                    let b = &mut self.bodies[i];
+                    let x = b.at(now);
+                    b.x = domain.periodic_box().map_or(x, |c| c.wrap(x));
+                    b.t = now;
+                    self.shells.remake(i, b.x, &self.radius, domain);
+                    self.reschedule(i, now, domain);
+                }
+                Kind::Nothing => {}
+            }
+        }
+        // Every particle to t1, into the world's arrays.
+        for (b, &i) in self.bodies.iter_mut().zip(&self.order) {
+            let x = b.at(t1);
+            b.x = domain.periodic_box().map_or(x, |c| c.wrap(x));
+            b.t = t1;
+            let i = i as usize;
+            p.x[3 * i..3 * i + 3].copy_from_slice(&b.x);
+            p.v[3 * i..3 * i + 3].copy_from_slice(&b.v);
+        }
+        self.time = t1;
+        Ok(stats)
+    }
+
+    /// Finds particle i's event from time `now` again and schedules it.
+    fn reschedule(&mut self, i: usize, now: f64, domain: &Domain) {
+        let next = self.find(i, now, domain);
+        self.enter(i, next);
+    }
+
+    /// Enters particle i's event (its time, s, and kind) into the calendar (a new schedule:
+    /// older entries go stale).
+    fn enter(&mut self, i: usize, (time, what): (f64, Kind)) {
+        let b = &mut self.bodies[i];
+        b.schedule = b.schedule.wrapping_add(1);
+        if time.is_finite() {
+            self.calendar.push(Entry {
+                time,
+                particle: i as u32,
+                version: b.schedule,
+                what,
+            });
+        }
+    }
+
+    /// Particle i's earliest event after `now` (s): an impact with a partner of its list or a
+    /// wall, or leaving its shell (module doc).
+    fn find(&self, i: usize, now: f64, domain: &Domain) -> (f64, Kind) {
+        let bi = self.bodies[i];
+        let ri = self.radius[i];
+        let xi = bi.at(now);
+        // leaving the shell: |d + v τ| = δ/2 with d = x − c inside (|d| ≤ δ/2)
+        let half = 0.5 * self.shells.delta;
+        let d = domain.displacement(xi, self.shells.centre[i]);
+        let a = vec3::dot(bi.v, bi.v);
+        let mut best = (f64::INFINITY, Kind::Nothing);
+        if a > 0.0 {
+            let b = vec3::dot(d, bi.v);
+            let c = vec3::dot(d, d) - half * half;
+            let tau = if c >= 0.0 { 0.0 } else { (-b + (b * b - a * c).sqrt()) / a };
+            best = (now + tau, Kind::Shell);
+        }
+        for &j in self.shells.of(i) {
+            let bj = &self.bodies[j as usize];
+            let d = domain.displacement(xi, bj.at(now));
+            let u = vec3::sub(bi.v, bj.v);
+            let b = vec3::dot(d, u);
+            if b >= 0.0 {
+                continue; // apart or parting
+            }
+            let reach = ri + self.radius[j as usize];
+            let c = vec3::dot(d, d) - reach * reach;
+            let tau = if c <= 0.0 {
+                0.0
+            } else {
+                let uu = vec3::dot(u, u);
+                let disc = b * b - uu * c;
+                if disc < 0.0 {
+                    continue; // passes by
+                }
+                c / (-b + disc.sqrt())
+            };
+            if now + tau < best.0 {
+                best = (
+                    now + tau,
+                    Kind::Pair {
+                        j,
+                        path: bj.path,
+                    },
+                );
+            }
+        }
+        for (k, w) in self.walls.iter().enumerate() {
+            let u = vec3::dot(bi.v, w.normal);
+            if u >= 0.0 {
+                continue;
+            }
+            let s = vec3::dot(vec3::sub(xi, w.point), w.normal) - ri;
+            let tau = s.max(0.0) / -u;
+            if now + tau < best.0 {
+                best = (now + tau, Kind::Wall(k as u32));
+            }
+        }
+        best
+    }
+
+    /// The impact of i and j at time `now` (s): both moved there, the impulse of
+    /// [`restitution_impulse`] given to i and its opposite to j; both paths change.
+    #[allow(clippy::too_many_arguments)]
+    fn impact_pair(
+        &mut self,
+        i: usize,
+        j: usize,
+        now: f64,
+        p: &Particles,
+        materials: &MaterialTable<'_>,
+        threshold: f64,
+        domain: &Domain,
+        stats: &mut CollisionStats,
+    ) {
+        for k in [i, j] {
+            let b = &mut self.bodies[k];
+            b.x = b.at(now);
+            b.t = now;
+        }
+        let (bi, bj) = (self.bodies[i], self.bodies[j]);
+        let d = domain.displacement(bi.x, bj.x);
+        let dist = vec3::norm(d);
+        if dist == 0.0 {
+            return; // coincident centres have no normal (placement refuses them)
+        }
+        let (wi, wj) = (self.order[i] as usize, self.order[j] as usize); // the world's indices
+        let contact = Contact {
+            i: wi,
+            other: Partner::Particle(wj),
+            normal: vec3::scale(1.0 / dist, d),
+            overlap: self.radius[i] + self.radius[j] - dist,
+            u_n: 0.0,
+            wall_velocity: [0.0; 3],
+        };
+        let material = materials.pair(&contact);
+        // the same rule as the stepped impacts, on the pair alone (i as 0, j as 1)
+        let v = [bi.v[0], bi.v[1], bi.v[2], bj.v[0], bj.v[1], bj.v[2]];
+        let w = [p.inv_mass[wi], p.inv_mass[wj]];
+        let pair = Contact {
+            i: 0,
+            other: Partner::Particle(1),
+            ..contact
+        };
+        let Some(imp) = restitution_impulse(&pair, &v, &w, material, threshold) else {
+            return;
+        };
+        let (vi, vj) = (&mut self.bodies[i].v, vec3::add(bj.v, vec3::scale(-w[1], imp.vector)));
+        *vi = vec3::add(*vi, vec3::scale(w[0], imp.vector));
+        self.bodies[j].v = vj;
+        for k in 0..3 {
+            // Σ m Δv of the two: zero by action and reaction up to rounding
+            let mut balance = 0.0;
+            if w[0] > 0.0 {
+                balance += p.mass[wi] * (self.bodies[i].v[k] - bi.v[k]);
+            }
+            if w[1] > 0.0 {
+                balance += p.mass[wj] * (self.bodies[j].v[k] - bj.v[k]);
+            }
+            stats.impulse_balance[k] += balance;
+        }
+        self.bodies[i].path = self.bodies[i].path.wrapping_add(1);
+        self.bodies[j].path = self.bodies[j].path.wrapping_add(1);
+        stats.impacts += 1;
+        stats.impulses += 1;
+        stats.energy_lost += imp.energy_lost;
+    }
+
+    /// The impact of i with wall k at time `now` (s), by the same rule; the wall's collider
+    /// books what it took.
+    #[allow(clippy::too_many_arguments)]
+    fn impact_wall(
+        &mut self,
+        i: usize,
+        k: usize,
+        now: f64,
+        p: &Particles,
+        materials: &MaterialTable<'_>,
+        threshold: f64,
+        stats: &mut CollisionStats,
+        books: &mut [ColliderBooks],
+    ) {
+        let b = &mut self.bodies[i];
+        b.x = b.at(now);
+        b.t = now;
+        let wall = self.walls[k];
+        let wi = self.order[i] as usize; // the world's index
+        let contact = Contact {
+            i: wi,
+            other: Partner::Collider(wall.collider),
+            normal: wall.normal,
+            overlap: self.radius[i] - vec3::dot(vec3::sub(b.x, wall.point), wall.normal),
+            u_n: 0.0,
+            wall_velocity: [0.0; 3],
+        };
+        let material = materials.pair(&contact);
+        let alone = Contact { i: 0, ..contact };
+        let Some(imp) = restitution_impulse(&alone, &b.v, &[p.inv_mass[wi]], material, threshold) else {
+            return;
+        };
+        b.v = vec3::add(b.v, vec3::scale(p.inv_mass[wi], imp.vector));
+        b.path = b.path.wrapping_add(1);
+        stats.impacts += 1;
+        stats.impulses += 1;
+        stats.energy_lost += imp.energy_lost;
+        if let Some(book) = books.get_mut(wall.collider) {
+            // where it touched: the sphere's point on the wall
+            let at = vec3::sub(b.x, vec3::scale(self.radius[i], wall.normal));
+            book.momentum = vec3::sub(book.momentum, imp.vector);
+            book.angular_momentum = vec3::sub(book.angular_momentum, vec3::cross(at, imp.vector));
+        }
+    }
+}
+
+/// The walls of the colliders: every plane, and every box wall not along a periodic axis.
+fn collect_walls(colliders: &[Collider], domain: &Domain) -> Vec<Wall> {
+    let periodic = domain.periodic_box().map_or([false; 3], |p| p.axes());
+    let mut walls = Vec::new();
+    for (k, c) in colliders.iter().enumerate() {
+        match c {
+            Collider::Plane(plane) => walls.push(Wall {
+                point: plane.point(),
+                normal: plane.normal(),
+                collider: k,
+            }),
+            Collider::Box(b) => {
+                for plane in b.walls() {
+                    let n = plane.normal();
+                    if (0..3).any(|a| periodic[a] && n[a] != 0.0) {
+                        continue;
+                    }
+                    walls.push(Wall {
+                        point: plane.point(),
+                        normal: n,
+                        collider: k,
+                    });
+                }
+            }
+            _ => {}
+        }
+    }
+    walls
+}

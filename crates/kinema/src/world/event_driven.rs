@@ -1,0 +1,32 @@
+//! The world's event-driven advance (`CollisionParams::event_driven`): from t to t + n·dt by
+//! events instead of n steps (`collide/event_driven/`, run by the collide stage).
+
+use super::World;
+use crate::error::Error;
+
+impl World {
+    /// Advances by `n` steps' time with event-driven dynamics: every impact at its exact time,
+    /// by the stepped model's rule; then t = (steps + n)·dt. Refused (naming why) when the
+    /// particles do not fly free between impacts. An interrupt leaves the world at the start.
+    pub(super) fn advance_by_events(&mut self, n: u64) -> Result<(), Error> {
+        self.check_pending_placement()?;
+        let t1 = self.params_time_after(self.steps + n);
+        let names: Vec<&str> = self.forces.iter().map(|f| f.name()).collect();
+        let Some(stage) = self.collide_stage.as_mut() else {
+            return Ok(());
+        };
+        if let Some(why) = stage.events_refused(&names) {
+            return Err(Error::invalid(
+                "event_driven",
+                "True",
+                format!("event-driven dynamics cannot run this world: {why} (event_driven=False steps it)"),
+            ));
+        }
+        stage.advance_events(&mut self.particles, self.time, t1, &mut self.interrupt)?;
+        // a method's cache (Verlet's last acceleration) is for the state before
+        self.stepper = None;
+        self.time = t1;
+        self.steps += n;
+        Ok(())
+    }
+}

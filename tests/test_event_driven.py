@@ -1,0 +1,209 @@
+"""Event-driven dynamics of the impulse model (``set_collisions(event_driven=True)``,
+crates/kinema/src/collide/event_driven/) against closed forms, kinetic theory and the stepped
+model on the same scenes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import kinema
+
+
+def fcc_gas(ncell: int, phi: float, seed: int = 7, event_driven: bool = True, restitution: float = 1.0, dt: float = 0.01):
+    """4·ncell³ unit spheres (σ = 1, m = 1) on an FCC lattice in a periodic cube at packing
+    fraction φ, Maxwell velocities at kT = 1 with no net momentum."""
+    n = 4 * ncell**3
+    side = (n * math.pi / 6.0 / phi) ** (1.0 / 3.0)
+    basis = np.array([[0, 0, 0], [0.5, 0.5, 0], [0.5, 0, 0.5], [0, 0.5, 0.5]])
+    cells = np.stack(np.meshgrid(*[np.arange(ncell)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    x = ((cells[:, None, :] + basis[None]).reshape(-1, 3) + 0.25) * side / ncell
+    v = np.random.default_rng(seed).normal(size=(n, 3))
+    v -= v.mean(axis=0)
+    v *= math.sqrt((3 * n - 3) / (v**2).sum())
+    w = kinema.World(dt=dt, method="verlet")
+    w.add_particles(x, velocity=v, mass=1.0, radius=0.5)
+    w.add(kinema.Box([0.0] * 3, [side] * 3))
+    w.periodic = (True, True, True)
+    w.set_collisions(restitution=restitution, event_driven=event_driven)
+    return w, side
+
+
+def enskog_rate(n: int, side: float) -> float:
+    """Collisions per unit time in a hard-sphere gas (σ = m = kT = 1): N ω_E / 2 with Enskog's
+    ω_E = 4 √π n σ² χ √(kT/m) and Carnahan–Starling's χ = (1 − φ/2)/(1 − φ)³."""
+    density = n / side**3
+    phi = math.pi * density / 6
+    chi = (1 - phi / 2) / (1 - phi) ** 3
+    return 0.5 * n * 4 * math.sqrt(math.pi) * density * chi
+
+
+def min_distance(x: np.ndarray, side: float) -> float:
+    d = x[:, None, :] - x[None, :, :]
+    d -= side * np.round(d / side)
+    r = np.sqrt((d**2).sum(-1))
+    np.fill_diagonal(r, np.inf)
+    return float(r.min())
+
+
+def test_a_head_on_impact_is_at_its_exact_time_with_newtons_law():
+    # Two spheres (r = 0.1, masses 1 and 3) approach at 2 m/s from a gap of 0.3 m: they touch
+    # at t = 0.15 s exactly; Newton's law with e = 0.5 gives v1' = (m1 − e m2) v/(m1 + m2) + ...
+    # in closed form: u' = −e u, momentum kept. After t = 0.4 s each has flown 0.25 s apart.
+    w = kinema.World(dt=0.1, method="verlet")
+    w.add_particles([[0.0, 0, 0], [0.5, 0, 0]], velocity=[[1.0, 0, 0], [-1.0, 0, 0]], mass=[1.0, 3.0], radius=0.1)
+    w.set_collisions(restitution=0.5, event_driven=True)
+    w.step(4)
+    m1, m2, e = 1.0, 3.0, 0.5
+    p = m1 * 1.0 + m2 * -1.0
+    # u' = v2' − v1' = e (v1 − v2) = 1.0; m1 v1' + m2 v2' = p
+    v1 = (p - m2 * e * 2.0) / (m1 + m2)
+    v2 = v1 + e * 2.0
+    np.testing.assert_allclose(w.velocities[:, 0], [v1, v2], rtol=0, atol=1e-15)
+    t_hit = 0.15
+    x_hit = [0.0 + 1.0 * t_hit, 0.5 - 1.0 * t_hit]
+    np.testing.assert_allclose(w.positions[:, 0], [x_hit[0] + v1 * 0.25, x_hit[1] + v2 * 0.25], rtol=0, atol=1e-15)
+    s = w.collision_stats()["total"]
+    assert s["impacts"] == 1
+    # ½ (1 − e²) μ u² lost, μ the reduced mass
+    assert s["energy_lost"] == pytest.approx(0.5 * (1 - e * e) * (m1 * m2 / (m1 + m2)) * 4.0, rel=1e-14)
+    assert w.time == pytest.approx(0.4, abs=1e-15)
+
+
+def test_the_cradle_passes_the_momentum_down_the_row_as_the_stepped_model_does():
+    # Five touching equal balls, the first hit at 1 m/s (e = 1): by Newton's law each touching
+    # pair exchanges velocities in turn; the last ball leaves at 1 m/s and the others stand.
+    # The stepped model does the same (issue 29: the same results as today's model).
+    finals = []
+    for event_driven in (True, False):
+        w = kinema.World(dt=1e-3, method="verlet")
+        x = [[-0.5, 0, 0]] + [[0.2 * k, 0, 0] for k in range(5)]
+        v = [[1.0, 0, 0]] + [[0.0, 0, 0]] * 5
+        w.add_particles(x, velocity=v, mass=1.0, radius=0.1)
+        w.set_collisions(restitution=1.0, event_driven=event_driven)
+        w.step(1000)
+        finals.append(w.velocities[:, 0].copy())
+    np.testing.assert_allclose(finals[0], [0, 0, 0, 0, 0, 1.0], rtol=0, atol=1e-14)
+    np.testing.assert_allclose(finals[0], finals[1], rtol=0, atol=1e-14)
+
+
+def test_an_elastic_gas_keeps_energy_and_momentum_and_never_overlaps():
+    w, side = fcc_gas(5, 0.35)  # 500 spheres, moderately dense
+    d0 = w.diagnostics()
+    w.step(200)  # t = 2: ~20 collisions a sphere
+    d1 = w.diagnostics()
+    assert w.collision_stats()["total"]["impacts"] > 5000
+    assert abs(d1["kinetic"] - d0["kinetic"]) <= 1e-12 * d0["kinetic"]
+    np.testing.assert_allclose(d1["momentum"], d0["momentum"], rtol=0, atol=1e-11)
+    assert w.collision_stats()["total"]["energy_lost"] == 0.0
+    assert min_distance(w.positions, side) > 1.0 - 1e-9
+    assert np.all((w.positions >= 0) & (w.positions < side))
+
+
+def test_the_collision_rate_is_enskogs_and_the_stepped_models():
+    # Enskog's rate with Carnahan–Starling's χ holds to ~1 % at φ = 0.25 (Alder, Gass and
+    # Wainwright's MD); the event-driven and the stepped gas from the same start count the
+    # same collisions to within the noise (~1 % for ~30,000 collisions of a gas this small).
+    counts = {}
+    for event_driven in (True, False):
+        w, side = fcc_gas(8, 0.25, event_driven=event_driven)  # 2048 spheres
+        w.step(100)  # settle from the lattice
+        before = w.collision_stats()["total"]["impacts"]
+        w.step(200)
+        counts[event_driven] = w.collision_stats()["total"]["impacts"] - before
+    expected = enskog_rate(len(w), side) * 2.0
+    assert counts[True] / expected == pytest.approx(1.0, abs=0.03)
+    assert counts[True] / counts[False] == pytest.approx(1.0, abs=0.02)
+
+
+def test_haffs_law_with_enskogs_time_in_a_dilute_inelastic_gas():
+    # Haff's law T = T₀/(1 + t/τ)², Enskog's 1/τ = (1 − e²) ω_E(T₀)/6 (examples/sweeps/haff.py
+    # derives it): at n σ³ = 0.05, e = 0.9, τ fitted from √(T_s/T) after the lattice is
+    # forgotten, within 4 % as the stepped model's test (tests/test_sweeps.py).
+    ncell, density, e = 8, 0.05, 0.9  # 2048 spheres, simple cubic would be the sweep's; FCC here
+    phi = math.pi * density / 6
+    w, side = fcc_gas(ncell, phi, restitution=e, dt=0.5)
+    n = len(w)
+    chi = (1 - phi / 2) / (1 - phi) ** 3
+    tau_theory = 6.0 / ((1 - e * e) * 4 * math.sqrt(math.pi) * density * chi)
+    t, temp = [], []
+    for _ in range(120):  # t = 0 … 60
+        t.append(w.time)
+        temp.append((w.velocities**2).sum() / (3 * n))
+        w.step(1)
+    t, temp = np.array(t), np.array(temp)
+    late = t >= 10.0
+    t_s, temp_s = t[late][0], temp[late][0]
+    slope = np.polyfit(t[late] - t_s, np.sqrt(temp_s / temp[late]), 1)[0]
+    tau = math.sqrt(temp_s / temp[0]) / slope
+    assert tau / tau_theory == pytest.approx(1.0, abs=0.04)
+    # the books: the energy the impacts removed is what the gas lost
+    lost = w.collision_stats()["total"]["energy_lost"]
+    assert lost == pytest.approx(1.5 * n * (temp[0] - (w.velocities**2).sum() / (3 * n)), rel=1e-9)
+
+
+def test_walls_keep_the_gas_in_and_book_the_momentum_they_took():
+    # A gas in a closed box (no periodic axes): every sphere stays inside, energy is kept
+    # (e = 1), and the momentum the particles gained is what the walls' books gave away.
+    rng = np.random.default_rng(3)
+    x = np.stack(np.meshgrid(*[np.arange(6) * 0.15 + 0.1] * 3, indexing="ij"), -1).reshape(-1, 3)
+    v = rng.normal(size=x.shape)
+    w = kinema.World(dt=0.01, method="verlet")
+    w.add_particles(x, velocity=v, mass=2.0, radius=0.05)
+    w.add(kinema.Box([0.0] * 3, [1.0] * 3))
+    w.set_collisions(event_driven=True)
+    p0, e0 = w.diagnostics()["momentum"], w.diagnostics()["kinetic"]
+    w.step(300)
+    d = w.diagnostics()
+    assert np.all(w.positions >= 0.05 - 1e-12) and np.all(w.positions <= 0.95 + 1e-12)
+    assert abs(d["kinetic"] - e0) <= 1e-12 * e0
+    books = w.collider_books()
+    np.testing.assert_allclose(np.array(d["momentum"]) - p0, -books["momentum"][0], rtol=0, atol=1e-10)
+
+
+def test_a_2d_gas_stays_in_its_plane():
+    rng = np.random.default_rng(4)
+    g = np.stack(np.meshgrid(np.arange(20) * 0.05 + 0.025, np.arange(20) * 0.05 + 0.025, indexing="ij"), -1).reshape(-1, 2)
+    x = np.column_stack([g, np.zeros(len(g))])
+    v = np.column_stack([rng.normal(size=(len(g), 2)), np.zeros(len(g))])
+    w = kinema.World(dt=0.01, method="verlet", dim=2)
+    w.add_particles(x, velocity=v, mass=1.0, radius=0.015)
+    w.add(kinema.Box([0.0, 0.0], [1.0, 1.0]))
+    w.periodic = (True, True)
+    w.set_collisions(event_driven=True)
+    e0 = w.diagnostics()["kinetic"]
+    w.step(100)
+    assert w.collision_stats()["total"]["impacts"] > 1000
+    assert np.all(w.positions[:, 2] == 0) and np.all(w.velocities[:, 2] == 0)
+    assert abs(w.diagnostics()["kinetic"] - e0) <= 1e-12 * e0
+
+
+def test_frames_continue_the_same_run():
+    # The state is kept between calls: ten calls of 10 steps follow the same events as one call
+    # of 100 (positions agree to rounding over these few collisions a sphere).
+    a, _ = fcc_gas(3, 0.3)
+    b, _ = fcc_gas(3, 0.3)
+    a.step(100)
+    for _ in range(10):
+        b.step(10)
+    assert a.collision_stats()["total"]["impacts"] == b.collision_stats()["total"]["impacts"]
+    np.testing.assert_allclose(a.positions, b.positions, rtol=0, atol=1e-9)
+
+
+def test_what_it_cannot_run_is_refused_naming_why():
+    w, _ = fcc_gas(2, 0.2)
+    w.add(kinema.Gravity([0, 0, -9.81]))
+    with pytest.raises(ValueError, match=r"event_driven = True is invalid: .*force 'gravity'"):
+        w.step(1)
+    w2 = kinema.World(dt=0.01)
+    w2.add_particles([[0.0, 0, 0]], velocity=[[1.0, 0, 0]], radius=0.1)
+    w2.add(kinema.SphereObstacle([2.0, 0, 0], 0.5))
+    w2.set_collisions(event_driven=True)
+    with pytest.raises(ValueError, match="collider 0 is a sphere obstacle"):
+        w2.step(1)
+    # the settings round-trip, and a scene's [collisions] takes the key
+    assert w.collisions["event_driven"] is True
+    w.set_collisions(**w.collisions)
+    assert w.collisions["event_driven"] is True
