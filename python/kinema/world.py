@@ -593,7 +593,7 @@ class World(WorldCollisions):
         self._push()
         with self._engine() as core:
             self._advise(core)
-        rec = Trajectory._recorder()
+        rec = Trajectory._recorder(frames + 1)
         rec.add(self)
         run = {"frames_done": 0, "frames_total": frames, "per_frame": per_frame, "every": every, "fps": fps, "recorder": rec}
         return self._record(run, callback, None if checkpoint is None else Path(checkpoint))
