@@ -192,11 +192,79 @@ def test_frames_continue_the_same_run():
     np.testing.assert_allclose(a.positions, b.positions, rtol=0, atol=1e-9)
 
 
+def test_an_elastic_ball_bounces_on_the_exact_parabola_under_gravity():
+    # Dropped from rest with its bottom h = 0.5 m above a floor, e = 1: it falls for
+    # √(2h/g), bounces, and repeats with period T = 2√(2h/g); between bounces
+    # z(t) = r + h − ½ g s², s the time from the nearest apex. Events fly the parabola exactly
+    # and find each bounce by its quadratic, so after ten bounces the closed form holds to
+    # rounding; the stepped model (velocity Verlet, exact on parabolas) agrees.
+    g, h, r = 9.81, 0.5, 0.05
+    period = 2 * math.sqrt(2 * h / g)
+    worlds = []
+    for event_driven in (True, False):
+        w = kinema.World(dt=1e-3, method="verlet")
+        w.add_particles([[0.0, 0.0, r + h]], radius=r)
+        w.add(kinema.Gravity([0, 0, -g]))
+        w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution=1.0))
+        w.set_collisions(restitution=1.0, event_driven=event_driven)
+        worlds.append(w)
+    zs = []
+    for _ in range(34):  # to t = 10.2 s: 16 bounces
+        for w in worlds:
+            w.step(300)
+        t = worlds[0].time
+        s = (t + period / 2) % period - period / 2
+        expected = r + h - 0.5 * g * s * s
+        assert worlds[0].positions[0, 2] == pytest.approx(expected, abs=1e-11)
+        zs.append((worlds[0].positions[0, 2], worlds[1].positions[0, 2]))
+    assert worlds[0].collision_stats()["total"]["impacts"] == 16
+    np.testing.assert_allclose(*np.array(zs).T, rtol=0, atol=1e-9)
+
+
+def test_an_elastic_gas_under_gravity_keeps_its_energy():
+    # 512 spheres in a box periodic across, floored and lidded, under g: kinetic plus
+    # gravitational energy is kept to rounding through thousands of impacts and bounces (3,622 in 5 s).
+    w, side = fcc_gas(5, 0.1)
+    w.periodic = (True, True, False)
+    w.add(kinema.Gravity([0, 0, -0.5]))
+    w.set_collisions(restitution=1.0, event_driven=True)
+    energy = lambda d: d["kinetic"] + sum(d["potential"].values())  # noqa: E731
+    e0 = energy(w.diagnostics())
+    w.step(500)
+    d = w.diagnostics()
+    assert w.collision_stats()["total"]["impacts"] > 3000
+    assert abs(energy(d) - e0) <= 1e-11 * abs(e0)
+    assert np.all(w.positions[:, 2] >= 0.5 - 1e-9) and np.all(w.positions[:, 2] <= side - 0.5 + 1e-9)
+
+
 def test_what_it_cannot_run_is_refused_naming_why():
     w, _ = fcc_gas(2, 0.2)
-    w.add(kinema.Gravity([0, 0, -9.81]))
-    with pytest.raises(ValueError, match=r"event_driven = True is invalid: .*force 'gravity'"):
+    w.add(kinema.Drag(0.1))
+    with pytest.raises(ValueError, match=r"event_driven = True is invalid: .*force 'drag'"):
         w.step(1)
+    # under a field: a pinned particle would not fall, a dissipative floor would need resting
+    # contact, and so would a particle placed at rest on the floor
+    w3 = kinema.World(dt=0.01)
+    w3.add_particles([[0.0, 0, 1.0], [1.0, 0, 1.0]], radius=0.1, pinned=[False, True])
+    w3.add(kinema.Gravity())
+    w3.set_collisions(event_driven=True)
+    with pytest.raises(ValueError, match="particle 1 is pinned"):
+        w3.step(1)
+    w4 = kinema.World(dt=0.01)
+    w4.add_particles([[0.0, 0, 1.0]], radius=0.1)
+    w4.add(kinema.Gravity())
+    w4.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w4.set_collisions(restitution=0.9, event_driven=True)
+    with pytest.raises(ValueError, match="every restitution must be 1"):
+        w4.step(1)
+    w5 = kinema.World(dt=0.01)
+    w5.add_particles([[0.0, 0, 0.1]], radius=0.1)
+    w5.add(kinema.Gravity())
+    w5.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w5.set_collisions(restitution=1.0, event_driven=True)
+    with pytest.raises(ValueError, match="particle 0 rests on collider 0 under the field"):
+        w5.step(1)
+    np.testing.assert_array_equal(w5.positions, [[0.0, 0, 0.1]])  # the world as it was
     w2 = kinema.World(dt=0.01)
     w2.add_particles([[0.0, 0, 0]], velocity=[[1.0, 0, 0]], radius=0.1)
     w2.add(kinema.SphereObstacle([2.0, 0, 0], 0.5))

@@ -431,16 +431,36 @@ impl CollideStage {
     }
 
     /// Why the event-driven path cannot run on this stage (a sentence), or `None`: it needs
-    /// the impulse model, no forces (`forces`: the world's force names), no moving collider,
-    /// and still planes and boxes as colliders.
-    pub fn events_refused(&self, forces: &[&str]) -> Option<String> {
+    /// the impulse model, no forces but uniform fields (`other`: the name of a force that is
+    /// not one; `field`: their summed acceleration, m/s²), no moving collider, and still
+    /// planes and boxes as colliders. Under a field, no particle may be pinned (it would not
+    /// fall with the others) and, with walls, every restitution must be 1: a dissipative
+    /// bounce on a floor comes to rest through infinitely many ever smaller bounces, which
+    /// events cannot run and a resting contact needs the stepped model for.
+    pub fn events_refused(&self, other: Option<&str>, field: [f64; 3], p: &Particles) -> Option<String> {
         if self.params.model != ContactModel::Impulse {
             return Some("it is a way of running the impulse model, not the spring–dashpot one".into());
         }
-        if let Some(name) = forces.first() {
+        if let Some(name) = other {
             return Some(format!(
-                "particles must fly free between impacts, and this world has the force '{name}'"
+                "particles must fly free between impacts (forces: none or uniform fields such as gravity), and this world has the force '{name}'"
             ));
+        }
+        if field != [0.0; 3] {
+            if let Some(i) = p.inv_mass.iter().position(|&w| w == 0.0) {
+                return Some(format!("particle {i} is pinned, and under a field it would not fall with the others"));
+            }
+            let walls = self.colliders.iter().any(|c| matches!(c, Collider::Plane(_) | Collider::Box(_)));
+            let global = self.material.restitution() < 1.0;
+            let own = self.particle_materials.as_ref().is_some_and(|m| m.iter().any(|m| m.restitution() < 1.0));
+            let surface = self.colliders.iter().any(|c| c.surface().restitution().is_some_and(|e| e < 1.0));
+            if walls && (global || own || surface) {
+                return Some(
+                    "under a field with walls every restitution must be 1: a dissipative bounce on a floor comes to rest \
+                     through ever smaller bounces, a resting contact that only the stepped model holds"
+                        .into(),
+                );
+            }
         }
         if self.has_motion() {
             return Some("a collider moves".into());
@@ -451,15 +471,16 @@ impl CollideStage {
         None
     }
 
-    /// Runs the particles `p` by events from time `t0` to `t1` (s) ([`EventDriven::advance`]),
+    /// Runs the particles `p` by events from time `t0` to `t1` (s) under the uniform field
+    /// `field` (m/s²) ([`EventDriven::advance`]),
     /// keeping the state for the next call; books the impacts like [`CollideStage::run`]. The
     /// caller checked [`CollideStage::events_refused`].
-    pub fn advance_events(&mut self, p: &mut Particles, t0: f64, t1: f64, interrupt: &mut Interrupt) -> Result<(), Error> {
+    pub fn advance_events(&mut self, p: &mut Particles, t0: f64, t1: f64, field: [f64; 3], interrupt: &mut Interrupt) -> Result<(), Error> {
         self.domain.check_radii(&p.radius)?;
         let start = std::time::Instant::now();
         let mut events = match self.events.take() {
-            Some(e) if e.is_at(p.len(), t0) => e,
-            _ => EventDriven::new(p, &self.colliders, &self.domain, t0),
+            Some(e) if e.is_at(p.len(), t0, field) => e,
+            _ => EventDriven::new(p, &self.colliders, &self.domain, t0, field),
         };
         let table = MaterialTable::uniform(self.material).with_colliders(&self.colliders);
         let materials = match &self.particle_materials {

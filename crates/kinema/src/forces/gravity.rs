@@ -62,6 +62,11 @@ impl Force for Gravity {
         "gravity"
     }
 
+    /// g, the same for every particle of any mass (F = m g).
+    fn uniform_acceleration(&self) -> Option<[f64; 3]> {
+        Some(self.g)
+    }
+
     /// Adds m_i g to each particle's force, N.
     fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
         check_buffers(self.name(), s, &[("f", f.len())])?;

@@ -197,6 +197,14 @@ pub trait Force {
     /// [`Properties::renumbers`] says yes. A force without per-particle data has nothing to
     /// do (the default).
     fn reindex(&mut self, _new_of_old: &[u32]) {}
+
+    /// The acceleration, m/s², this force gives every movable particle at every time,
+    /// position and velocity, if it is such a uniform field (gravity); `None` otherwise (the
+    /// default). Event-driven dynamics flies particles on parabolas under it
+    /// (`collide/event_driven/`).
+    fn uniform_acceleration(&self) -> Option<[f64; 3]> {
+        None
+    }
 }
 
 /// A force's Jacobian prepared at one state `s` (see [`Force::linearize`]); its methods are

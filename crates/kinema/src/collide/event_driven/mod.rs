@@ -41,6 +41,7 @@ mod shells;
 use super::colliders::Collider;
 use super::contact::{Contact, Partner};
 use super::response::{restitution_impulse, MaterialTable};
+use super::roots::toi_half_space;
 use super::books::ColliderBooks;
 use super::impulse::CollisionStats;
 use super::morton::morton_order;
@@ -80,11 +81,39 @@ struct Body {
 }
 
 impl Body {
-    /// Where the particle is at time `at`, s.
+    /// Where the particle is at time `at`, s, under the uniform field `g` (m/s²):
+    /// x + v Δt + ½ g Δt² (with g = 0 the straight line, to the bit).
     #[inline]
-    fn at(&self, at: f64) -> [f64; 3] {
+    fn at(&self, at: f64, g: [f64; 3]) -> [f64; 3] {
         let dt = at - self.t;
-        [self.x[0] + self.v[0] * dt, self.x[1] + self.v[1] * dt, self.x[2] + self.v[2] * dt]
+        let h = 0.5 * dt * dt;
+        [0, 1, 2].map(|k| self.x[k] + self.v[k] * dt + g[k] * h)
+    }
+
+    /// Where the particle is at time `at`, s, without a field: x + v Δt.
+    #[inline]
+    fn line(&self, at: f64) -> [f64; 3] {
+        let dt = at - self.t;
+        [0, 1, 2].map(|k| self.x[k] + self.v[k] * dt)
+    }
+
+    /// Its velocity at time `at`, s: v + g Δt.
+    #[inline]
+    fn velocity(&self, at: f64, g: [f64; 3]) -> [f64; 3] {
+        let dt = at - self.t;
+        [0, 1, 2].map(|k| self.v[k] + g[k] * dt)
+    }
+
+    /// Moves it to time `at`, s (position wrapped into the periodic cell when `wrap`).
+    #[inline]
+    fn move_to(&mut self, at: f64, g: [f64; 3], domain: Option<&Domain>) {
+        let x = self.at(at, g);
+        self.x = match domain.and_then(|d| d.periodic_box()) {
+            Some(c) => c.wrap(x),
+            None => x,
+        };
+        self.v = self.velocity(at, g);
+        self.t = at;
     }
 }
 
@@ -124,6 +153,8 @@ pub(crate) struct EventDriven {
     walls: Vec<Wall>,
     /// Particles' own times are all this, s, between calls.
     time: f64,
+    /// The uniform field, m/s²: the particles' acceleration between impacts.
+    g: [f64; 3],
 }
 
 /// What the event-driven path cannot do, or `None`: a collider other than a still plane or
@@ -141,7 +172,7 @@ impl EventDriven {
     /// every neighbour list made, every particle's first event scheduled. The colliders must
     /// be planes and boxes ([`unsupported_collider`]); the radii must suit the domain
     /// ([`Domain::check_radii`]).
-    pub fn new(p: &Particles, colliders: &[Collider], domain: &Domain, t0: f64) -> Self {
+    pub fn new(p: &Particles, colliders: &[Collider], domain: &Domain, t0: f64, g: [f64; 3]) -> Self {
         let n = p.len();
         let cell = domain.periodic_box().copied();
         let r_max = p.radius.iter().cloned().fold(0.0, f64::max);
@@ -208,6 +239,7 @@ impl EventDriven {
             calendar: Calendar::new(t0, 1.0, 1),
             walls,
             time: t0,
+            g,
         };
         // First events, then a calendar sized for them.
         let first: Vec<(f64, Kind)> = (0..n).map(|i| state.find(i, t0, domain)).collect();
@@ -223,8 +255,8 @@ impl EventDriven {
 
     /// Whether the state is for `n` particles at time `t` (s): what the world checks before
     /// going on with it.
-    pub fn is_at(&self, n: usize, t: f64) -> bool {
-        self.bodies.len() == n && self.time == t
+    pub fn is_at(&self, n: usize, t: f64, g: [f64; 3]) -> bool {
+        self.bodies.len() == n && self.time == t && self.g == g
     }
 
     /// Runs every event up to time `t1` (s), then moves every particle to t1 and writes
@@ -267,14 +299,26 @@ impl EventDriven {
                     self.reschedule(j, now, domain);
                 }
                 Kind::Wall(k) => {
-                    self.impact_wall(i, k as usize, now, p, materials, restitution_threshold, &mut stats, walls_books);
+                    let k = k as usize;
+                    let bounced = self.impact_wall(i, k, now, p, materials, restitution_threshold, &mut stats, walls_books);
+                    let n = self.walls[k].normal;
+                    if !bounced && vec3::dot(self.g, n) < 0.0 && vec3::dot(self.bodies[i].v, n) >= 0.0 {
+                        // at rest on the wall with the field pressing it there: its next
+                        // event would be this one again, forever
+                        return Err(Error::invalid(
+                            "event_driven",
+                            "True",
+                            format!(
+                                "particle {} rests on collider {} under the field, a contact that events cannot hold (event_driven=False steps it)",
+                                self.order[i], self.walls[k].collider
+                            ),
+                        ));
+                    }
                     self.reschedule(i, now, domain);
                 }
                 Kind::Shell => {
                     let b = &mut self.bodies[i];
-                    let x = b.at(now);
-                    b.x = domain.periodic_box().map_or(x, |c| c.wrap(x));
-                    b.t = now;
+                    b.move_to(now, self.g, Some(domain));
                     self.shells.remake(i, b.x, &self.radius, domain);
                     self.reschedule(i, now, domain);
                 }
@@ -283,9 +327,7 @@ impl EventDriven {
         }
         // Every particle to t1, into the world's arrays.
         for (b, &i) in self.bodies.iter_mut().zip(&self.order) {
-            let x = b.at(t1);
-            b.x = domain.periodic_box().map_or(x, |c| c.wrap(x));
-            b.t = t1;
+            b.move_to(t1, self.g, Some(domain));
             let i = i as usize;
             p.x[3 * i..3 * i + 3].copy_from_slice(&b.x);
             p.v[3 * i..3 * i + 3].copy_from_slice(&b.v);
@@ -318,24 +360,47 @@ impl EventDriven {
     /// Particle i's earliest event after `now` (s): an impact with a partner of its list or a
     /// wall, or leaving its shell (module doc).
     fn find(&self, i: usize, now: f64, domain: &Domain) -> (f64, Kind) {
+        if self.g == [0.0; 3] {
+            self.find_in::<false>(i, now, domain)
+        } else {
+            self.find_in::<true>(i, now, domain)
+        }
+    }
+
+    /// [`EventDriven::find`] with (`FIELD`) or without a field: the force-free search skips
+    /// the field's terms, which are 0 there (its results are the same to the bit).
+    #[inline(always)]
+    fn find_in<const FIELD: bool>(&self, i: usize, now: f64, domain: &Domain) -> (f64, Kind) {
+        let g = if FIELD { self.g } else { [0.0; 3] };
         let bi = self.bodies[i];
         let ri = self.radius[i];
-        let xi = bi.at(now);
-        // leaving the shell: |d + v τ| = δ/2 with d = x − c inside (|d| ≤ δ/2)
+        let (xi, vi) = if FIELD { (bi.at(now, g), bi.velocity(now, g)) } else { (bi.line(now), bi.v) };
+        // leaving the shell: |d + v τ| = δ/2 with d = x − c inside (|d| ≤ δ/2); under a field
+        // |d + v τ + ½ g τ²| ≤ |d| + |v| τ + ½ |g| τ², whose reaching δ/2 comes no later
         let half = 0.5 * self.shells.delta;
         let d = domain.displacement(xi, self.shells.centre[i]);
-        let a = vec3::dot(bi.v, bi.v);
+        let a = vec3::dot(vi, vi);
         let mut best = (f64::INFINITY, Kind::Nothing);
-        if a > 0.0 {
-            let b = vec3::dot(d, bi.v);
-            let c = vec3::dot(d, d) - half * half;
-            let tau = if c >= 0.0 { 0.0 } else { (-b + (b * b - a * c).sqrt()) / a };
+        if !FIELD {
+            if a > 0.0 {
+                let b = vec3::dot(d, vi);
+                let c = vec3::dot(d, d) - half * half;
+                let tau = if c >= 0.0 { 0.0 } else { (-b + (b * b - a * c).sqrt()) / a };
+                best = (now + tau, Kind::Shell);
+            }
+        } else {
+            // ½|g| τ² + |v| τ − (δ/2 − |d|) = 0, its positive root written without cancellation
+            let room = (half - vec3::norm(d)).max(0.0);
+            let (speed, pull) = (a.sqrt(), 0.5 * vec3::norm(g));
+            let tau = 2.0 * room / (speed + (speed * speed + 4.0 * pull * room).sqrt());
             best = (now + tau, Kind::Shell);
         }
         for &j in self.shells.of(i) {
             let bj = &self.bodies[j as usize];
-            let d = domain.displacement(xi, bj.at(now));
-            let u = vec3::sub(bi.v, bj.v);
+            // the field moves both alike: their relative motion is a straight line
+            let (xj, vj) = if FIELD { (bj.at(now, g), bj.velocity(now, g)) } else { (bj.line(now), bj.v) };
+            let d = domain.displacement(xi, xj);
+            let u = vec3::sub(vi, vj);
             let b = vec3::dot(d, u);
             if b >= 0.0 {
                 continue; // apart or parting
@@ -363,12 +428,20 @@ impl EventDriven {
             }
         }
         for (k, w) in self.walls.iter().enumerate() {
-            let u = vec3::dot(bi.v, w.normal);
-            if u >= 0.0 {
-                continue;
-            }
-            let s = vec3::dot(vec3::sub(xi, w.point), w.normal) - ri;
-            let tau = s.max(0.0) / -u;
+            let tau = if !FIELD {
+                let u = vec3::dot(vi, w.normal);
+                if u >= 0.0 {
+                    continue;
+                }
+                let s = vec3::dot(vec3::sub(xi, w.point), w.normal) - ri;
+                s.max(0.0) / -u
+            } else {
+                // the parabola's first touch of the wall's half-space
+                match toi_half_space(xi, vi, g, ri, w.point, w.normal, f64::INFINITY) {
+                    Some(tau) => tau,
+                    None => continue,
+                }
+            };
             if now + tau < best.0 {
                 best = (now + tau, Kind::Wall(k as u32));
             }
@@ -391,9 +464,7 @@ impl EventDriven {
         stats: &mut CollisionStats,
     ) {
         for k in [i, j] {
-            let b = &mut self.bodies[k];
-            b.x = b.at(now);
-            b.t = now;
+            self.bodies[k].move_to(now, self.g, None);
         }
         let (bi, bj) = (self.bodies[i], self.bodies[j]);
         let d = domain.displacement(bi.x, bj.x);
@@ -444,7 +515,7 @@ impl EventDriven {
     }
 
     /// The impact of i with wall k at time `now` (s), by the same rule; the wall's collider
-    /// books what it took.
+    /// books what it took. Whether an impulse was given (none when i does not approach).
     #[allow(clippy::too_many_arguments)]
     fn impact_wall(
         &mut self,
@@ -456,10 +527,9 @@ impl EventDriven {
         threshold: f64,
         stats: &mut CollisionStats,
         books: &mut [ColliderBooks],
-    ) {
+    ) -> bool {
         let b = &mut self.bodies[i];
-        b.x = b.at(now);
-        b.t = now;
+        b.move_to(now, self.g, None);
         let wall = self.walls[k];
         let wi = self.order[i] as usize; // the world's index
         let contact = Contact {
@@ -473,7 +543,7 @@ impl EventDriven {
         let material = materials.pair(&contact);
         let alone = Contact { i: 0, ..contact };
         let Some(imp) = restitution_impulse(&alone, &b.v, &[p.inv_mass[wi]], material, threshold) else {
-            return;
+            return false;
         };
         b.v = vec3::add(b.v, vec3::scale(p.inv_mass[wi], imp.vector));
         b.path = b.path.wrapping_add(1);
@@ -486,6 +556,7 @@ impl EventDriven {
             book.momentum = vec3::sub(book.momentum, imp.vector);
             book.angular_momentum = vec3::sub(book.angular_momentum, vec3::cross(at, imp.vector));
         }
+        true
     }
 }
 
