@@ -261,7 +261,7 @@ impl Springs {
     }
 
     /// Unit vector n from i to j and the distance L of spring s; `None` for coincident ends.
-    #[inline]
+    #[inline(always)]
     fn axis(&self, x: &[f64], s: usize) -> Option<([f64; 3], f64)> {
         let (a, b) = (3 * self.i[s], 3 * self.j[s]);
         let d = [x[b] - x[a], x[b + 1] - x[a + 1], x[b + 2] - x[a + 2]];
@@ -270,7 +270,7 @@ impl Springs {
     }
 
     /// u = v_j − v_i of spring s.
-    #[inline]
+    #[inline(always)]
     fn relative(&self, v: &[f64], s: usize) -> [f64; 3] {
         let (a, b) = (3 * self.i[s], 3 * self.j[s]);
         [v[b] - v[a], v[b + 1] - v[a + 1], v[b + 2] - v[a + 2]]
