@@ -78,7 +78,7 @@ impl ContactForce {
     /// the same operations as [`ContactForce::pair`]'s test of the pair (lower index first),
     /// bit for bit, since x_i − x_j = −(x_j − x_i) exactly, the minimum image is odd and the
     /// squares and r_i + r_j do not care about the order.
-    #[inline]
+    #[inline(always)]
     fn overlaps(&self, xi: [f64; 3], ri: f64, j: usize, x: &[f64]) -> bool {
         let d = self.domain.displacement(xi, [x[3 * j], x[3 * j + 1], x[3 * j + 2]]);
         let reach = ri + self.radius[j] + 0.0;

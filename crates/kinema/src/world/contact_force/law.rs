@@ -61,7 +61,7 @@ impl ContactForce {
 
     /// The force of contact `c` along its normal, N (> 0 pushes apart), or `None` when it
     /// exerts none (not overlapping, or both sides immovable).
-    #[inline]
+    #[inline(always)]
     pub(super) fn normal_force(&self, c: &Contact) -> Option<f64> {
         let w = self.inverse_mass_sum(c);
         if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
