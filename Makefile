@@ -78,6 +78,8 @@ fuzz: build
 	KINEMA_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q tests/test_fuzz.py
 
 bench: build $(TEST_STAMP)
+	command -v lmp >/dev/null || apt-get install -y -q lammps >/dev/null || echo "LAMMPS could not be installed: the benchmarks beside it will say so"
+	OPENBLAS_NUM_THREADS=1 $(PY) benchmarks/speed_targets.py
 	$(PY) benchmarks/ode_overhead.py
 	$(PY) benchmarks/render.py
 	$(PY) benchmarks/viewer.py
@@ -89,6 +91,7 @@ bench: build $(TEST_STAMP)
 	$(PY) benchmarks/springs.py
 	$(PY) benchmarks/mixed_radii.py
 	$(PY) benchmarks/impacts.py
+	$(PY) benchmarks/hard_sphere_gas.py
 	$(PIP) install --disable-pip-version-check -q -r requirements/bench.txt
 	$(PY) benchmarks/piles.py
 
