@@ -378,7 +378,7 @@ class _Recorder:
             self.sets.append((ids, info["masses"], info["radii"], info["species"], info["colors"]))
         springs = world._spring_ids  # springs added mid-run count
         self.about["springs"] = springs.copy() if springs.size else None
-        d = world.diagnostics()
+        d = world._diagnostics_as_pulled()
         stats = world.collision_stats()
         if stats is None:
             contacts, balance, lost = 0, np.zeros(3), 0.0

@@ -793,6 +793,12 @@ class World(WorldCollisions):
         with self._engine() as core:
             return core.diagnostics()
 
+    def _diagnostics_as_pulled(self) -> dict:
+        """:meth:`diagnostics` right after the views were read from the engine, with nothing
+        written since (the recorder's frames): without comparing the views with the engine."""
+        with self._engine() as core:
+            return core.diagnostics()
+
     def __repr__(self) -> str:
         if isinstance(self._core, _Busy):
             return "World(stepping)"
