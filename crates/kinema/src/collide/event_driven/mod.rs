@@ -20,7 +20,7 @@
 //! - **a wall**: a plane (or a box collider's wall) at distance s = (x − p)·n − r, reached at
 //!   τ = s / (−v·n) when v·n < 0, answered by the same rule;
 //! - **leaving the shell**: the particle's neighbour list expires (`shells.rs`), and is made
-//!   again around where it is.
+//!   again around a new centre a little ahead of it on its way ([`AHEAD`]).
 //!
 //! **One event per particle** (Smallenburg, EPJE 45:22 (2022)): a particle keeps only its
 //! earliest event, in a bucketed calendar (`calendar.rs`). After an impact of i and j only
@@ -58,6 +58,14 @@ use shells::Shells;
 /// (δ/2λ)² of them), a thick one holds many partners to look at after each event; on the hard-sphere gas of `benchmarks/hard_sphere_gas.py` (φ = 0.25) the cost per
 /// collision was lowest and flat from 0.6 to 0.8 (0.3: 1.3× slower, 1.3: 1.4×).
 pub const SHELL: f64 = 0.7;
+
+/// Where a particle's new shell is centred: AHEAD · δ/2 ahead of it along its velocity, not
+/// where it is. It then crosses the shell's middle on its way instead of starting there: its
+/// first flight after leaving is mostly spent, not lost, and it leaves the new shell later (on
+/// the gas of `benchmarks/hard_sphere_gas.py`, 27 % fewer shell events at 0.8 than at 0, at
+/// the same impacts). The centre stays inside the shell (AHEAD < 1): the particle is within
+/// δ/2 of it, all the lists' bound needs.
+const AHEAD: f64 = 0.75;
 
 /// Events between two asks of the interrupt (Ctrl-C) check.
 const POLL_EVERY: u64 = 1 << 14;
@@ -319,7 +327,15 @@ impl EventDriven {
                 Kind::Shell => {
                     let b = &mut self.bodies[i];
                     b.move_to(now, self.g, Some(domain));
-                    self.shells.remake(i, b.x, &self.radius, domain);
+                    // the new shell's centre lies ahead on its way (module doc)
+                    let speed = vec3::norm(b.v);
+                    let c = if speed > 0.0 {
+                        vec3::add(b.x, vec3::scale(AHEAD * 0.5 * self.shells.delta / speed, b.v))
+                    } else {
+                        b.x
+                    };
+                    let c = domain.periodic_box().map_or(c, |p| p.wrap(c));
+                    self.shells.remake(i, c, &self.radius, domain);
                     self.reschedule(i, now, domain);
                 }
                 Kind::Nothing => {}
