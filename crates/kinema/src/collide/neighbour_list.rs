@@ -7,7 +7,7 @@
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use super::{Collider, Domain, Grid};
+use super::{Collider, Domain, Grid, Plane};
 use crate::error::Error;
 
 /// The neighbour list's default skin, as a fraction of the particles' mean radius.
@@ -213,9 +213,11 @@ impl NeighbourList {
         }
         self.walls.clear();
         if !colliders.is_empty() {
+            // a box whose walls all lie along periodic axes has none: no particle's candidate
+            let walled: Vec<bool> = active_walls(colliders, domain).iter().map(|a| a.iter().any(|&w| w)).collect();
             for (i, &r) in radius.iter().enumerate() {
                 let p = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
-                for (k, c) in colliders.iter().enumerate() {
+                for (k, c) in colliders.iter().enumerate().filter(|&(k, _)| walled[k]) {
                     // a moving collider can reach a particle that stays put: every particle
                     // is its candidate
                     let mut near = c.is_moving();
@@ -312,6 +314,36 @@ impl NeighbourList {
             })
             .collect();
         self.built_at = built;
+    }
+}
+
+/// Which walls of each collider exist: a box's walls along periodic axes do not.
+pub(crate) fn active_walls(colliders: &[Collider], domain: &Domain) -> Vec<[bool; 6]> {
+    colliders
+        .iter()
+        .map(|c| {
+            let mut active = [false; 6];
+            match c {
+                Collider::Box(b) => {
+                    for (w, wall) in b.walls().iter().enumerate() {
+                        active[w] = wall_active(domain, wall);
+                    }
+                }
+                _ => active[0] = true,
+            }
+            active
+        })
+        .collect()
+}
+
+/// Whether a wall is active: a box's walls along periodic axes are not.
+fn wall_active(domain: &Domain, plane: &Plane) -> bool {
+    match domain.periodic_box() {
+        Some(p) => {
+            let n = plane.normal();
+            !(0..3).any(|k| p.axes()[k] && n[k] != 0.0)
+        }
+        None => true,
     }
 }
 

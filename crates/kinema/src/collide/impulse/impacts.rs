@@ -11,9 +11,9 @@ use rayon::prelude::*;
 use super::end_of_step::distribute;
 use super::{CollisionStats, ImpulseModel, StageSetting};
 use crate::collide::events::{swept_reach, Event, Paths, Scene};
-use crate::collide::neighbour_list::{collider_scale, ListBuild, CHUNK, SKIN_PER_RADIUS};
+use crate::collide::neighbour_list::{active_walls, collider_scale, ListBuild, CHUNK, SKIN_PER_RADIUS};
 use crate::collide::response::VELOCITY_TOLERANCE;
-use crate::collide::{restitution_impulse, Collider, Contact, Domain, Partner, Plane};
+use crate::collide::{restitution_impulse, Collider, Contact, Partner};
 use crate::error::{Divergence, Error};
 use crate::vec3;
 
@@ -520,36 +520,6 @@ fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event, h: f64) -> O
         u_n: 0.0,
         wall_velocity,
     })
-}
-
-/// Which walls of each collider exist: a box's walls along periodic axes do not.
-pub(super) fn active_walls(colliders: &[Collider], domain: &Domain) -> Vec<[bool; 6]> {
-    colliders
-        .iter()
-        .map(|c| {
-            let mut active = [false; 6];
-            match c {
-                Collider::Box(b) => {
-                    for (w, wall) in b.walls().iter().enumerate() {
-                        active[w] = wall_active(domain, wall);
-                    }
-                }
-                _ => active[0] = true,
-            }
-            active
-        })
-        .collect()
-}
-
-/// Whether a wall is active: a box's walls along periodic axes are not.
-fn wall_active(domain: &Domain, plane: &Plane) -> bool {
-    match domain.periodic_box() {
-        Some(p) => {
-            let n = plane.normal();
-            !(0..3).any(|k| p.axes()[k] && n[k] != 0.0)
-        }
-        None => true,
-    }
 }
 
 /// Combines (largest, second largest, largest velocity change, NaN met) of two parts.

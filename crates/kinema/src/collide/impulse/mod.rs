@@ -23,7 +23,8 @@ use crate::error::Error;
 use crate::interrupt::Interrupt;
 use crate::vec3;
 use end_of_step::distribute;
-use impacts::{active_walls, least_impact_speed, Search};
+use crate::collide::neighbour_list::active_walls;
+use impacts::{least_impact_speed, Search};
 
 /// What the collision stages did, over one step or summed over many.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
