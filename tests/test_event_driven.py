@@ -237,41 +237,75 @@ def test_an_elastic_gas_under_gravity_keeps_its_energy():
     assert np.all(w.positions[:, 2] >= 0.5 - 1e-9) and np.all(w.positions[:, 2] <= side - 0.5 + 1e-9)
 
 
-def test_what_it_cannot_run_is_refused_naming_why():
-    w, _ = fcc_gas(2, 0.2)
-    w.add(kinema.Drag(0.1))
-    with pytest.raises(ValueError, match=r"event_driven = True is invalid: .*force 'drag'"):
+def one_ball(z: float, restitution: float = 1.0, gravity: bool = True, floor: bool = True, pinned: bool = False):
+    """A ball of r = 0.1 m at height z (m), under gravity over a floor, with a second ball
+    beside it (pinned when `pinned`), event-driven."""
+    w = kinema.World(dt=0.01)
+    w.add_particles([[0.0, 0, z], [1.0, 0, z]], radius=0.1, pinned=[False, pinned])
+    if gravity:
+        w.add(kinema.Gravity())
+    if floor:
+        w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w.set_collisions(restitution=restitution, event_driven=True)
+    return w
+
+
+def plus(w, thing):
+    w.add(thing)
+    return w
+
+
+@pytest.mark.parametrize(
+    "world, why",
+    [
+        # a force that is not a uniform field
+        (lambda: plus(fcc_gas(2, 0.2)[0], kinema.Drag(0.1)), r"event_driven = True is invalid: .*force 'drag'"),
+        # under a field: a pinned particle would not fall with the others, a dissipative floor
+        # would end in resting contact, and a ball placed at rest on the floor is one
+        (lambda: one_ball(1.0, floor=False, pinned=True), "particle 1 is pinned"),
+        (lambda: one_ball(1.0, restitution=0.9), "every restitution must be 1"),
+        (lambda: one_ball(0.1), "particle 0 rests on collider 0 under the field"),
+        # colliders other than planes and boxes
+        (lambda: plus(one_ball(0.0, gravity=False, floor=False), kinema.SphereObstacle([0.0, 2.0, 0], 0.5)), "collider 0 is a sphere obstacle"),
+    ],
+)
+def test_what_it_cannot_run_is_refused_naming_why(world, why):
+    w = world()
+    before = w.positions.copy()
+    with pytest.raises(ValueError, match=why):
         w.step(1)
-    # under a field: a pinned particle would not fall, a dissipative floor would need resting
-    # contact, and so would a particle placed at rest on the floor
-    w3 = kinema.World(dt=0.01)
-    w3.add_particles([[0.0, 0, 1.0], [1.0, 0, 1.0]], radius=0.1, pinned=[False, True])
-    w3.add(kinema.Gravity())
-    w3.set_collisions(event_driven=True)
-    with pytest.raises(ValueError, match="particle 1 is pinned"):
-        w3.step(1)
-    w4 = kinema.World(dt=0.01)
-    w4.add_particles([[0.0, 0, 1.0]], radius=0.1)
-    w4.add(kinema.Gravity())
-    w4.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
-    w4.set_collisions(restitution=0.9, event_driven=True)
-    with pytest.raises(ValueError, match="every restitution must be 1"):
-        w4.step(1)
-    w5 = kinema.World(dt=0.01)
-    w5.add_particles([[0.0, 0, 0.1]], radius=0.1)
-    w5.add(kinema.Gravity())
-    w5.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
-    w5.set_collisions(restitution=1.0, event_driven=True)
-    with pytest.raises(ValueError, match="particle 0 rests on collider 0 under the field"):
-        w5.step(1)
-    np.testing.assert_array_equal(w5.positions, [[0.0, 0, 0.1]])  # the world as it was
-    w2 = kinema.World(dt=0.01)
-    w2.add_particles([[0.0, 0, 0]], velocity=[[1.0, 0, 0]], radius=0.1)
-    w2.add(kinema.SphereObstacle([2.0, 0, 0], 0.5))
-    w2.set_collisions(event_driven=True)
-    with pytest.raises(ValueError, match="collider 0 is a sphere obstacle"):
-        w2.step(1)
-    # the settings round-trip, and a scene's [collisions] takes the key
+    np.testing.assert_array_equal(w.positions, before)  # the world as it was
+
+
+def test_the_setting_round_trips_and_scenes_take_it():
+    w, _ = fcc_gas(2, 0.2)
     assert w.collisions["event_driven"] is True
     w.set_collisions(**w.collisions)
     assert w.collisions["event_driven"] is True
+    scene = """
+[world]
+dt = 0.01
+duration = 0.5
+[[particles]]
+type = "lattice"
+origin = [0.5, 0.5, 0.5]
+counts = [4, 4, 4]
+spacing = 1.5
+radius = 0.5
+velocity = { kT = 1.0, zero_momentum = true }
+seed = 1
+[[colliders]]
+type = "box"
+lo = [0, 0, 0]
+hi = [6, 6, 6]
+[collisions]
+event_driven = true
+periodic = [true, true, true]
+"""
+    built = kinema.Scene.from_string(scene).build()
+    assert built.collisions["event_driven"] is True
+    e0 = built.diagnostics()["kinetic"]
+    built.step(50)
+    assert built.collision_stats()["total"]["impacts"] > 10
+    assert built.diagnostics()["kinetic"] == pytest.approx(e0, rel=1e-12)
+    assert kinema.Scene.from_string(kinema.Scene.from_string(scene).to_toml_string()).collisions.event_driven is True
