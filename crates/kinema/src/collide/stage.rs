@@ -448,12 +448,23 @@ impl CollideStage {
         }
         if field != [0.0; 3] {
             if let Some(i) = p.inv_mass.iter().position(|&w| w == 0.0) {
-                return Some(format!("particle {i} is pinned, and under a field it would not fall with the others"));
+                return Some(format!(
+                    "particle {i} is pinned, and under a field it would not fall with the others"
+                ));
             }
-            let walls = self.colliders.iter().any(|c| matches!(c, Collider::Plane(_) | Collider::Box(_)));
+            let walls = self
+                .colliders
+                .iter()
+                .any(|c| matches!(c, Collider::Plane(_) | Collider::Box(_)));
             let global = self.material.restitution() < 1.0;
-            let own = self.particle_materials.as_ref().is_some_and(|m| m.iter().any(|m| m.restitution() < 1.0));
-            let surface = self.colliders.iter().any(|c| c.surface().restitution().is_some_and(|e| e < 1.0));
+            let own = self
+                .particle_materials
+                .as_ref()
+                .is_some_and(|m| m.iter().any(|m| m.restitution() < 1.0));
+            let surface = self
+                .colliders
+                .iter()
+                .any(|c| c.surface().restitution().is_some_and(|e| e < 1.0));
             if walls && (global || own || surface) {
                 return Some(
                     "under a field with walls every restitution must be 1: a dissipative bounce on a floor comes to rest \
@@ -475,7 +486,14 @@ impl CollideStage {
     /// `field` (m/s²) ([`EventDriven::advance`]),
     /// keeping the state for the next call; books the impacts like [`CollideStage::run`]. The
     /// caller checked [`CollideStage::events_refused`].
-    pub fn advance_events(&mut self, p: &mut Particles, t0: f64, t1: f64, field: [f64; 3], interrupt: &mut Interrupt) -> Result<(), Error> {
+    pub fn advance_events(
+        &mut self,
+        p: &mut Particles,
+        t0: f64,
+        t1: f64,
+        field: [f64; 3],
+        interrupt: &mut Interrupt,
+    ) -> Result<(), Error> {
         self.domain.check_radii(&p.radius)?;
         let start = std::time::Instant::now();
         let mut events = match self.events.take() {
@@ -489,7 +507,15 @@ impl CollideStage {
         };
         let threshold = self.params.restitution_threshold.unwrap_or(0.0);
         self.collider_books.resize(self.colliders.len(), ColliderBooks::default());
-        let stats = events.advance(p, &materials, threshold, &self.domain, t1, &mut self.collider_books, interrupt)?;
+        let stats = events.advance(
+            p,
+            &materials,
+            threshold,
+            &self.domain,
+            t1,
+            &mut self.collider_books,
+            interrupt,
+        )?;
         self.events = Some(events);
         self.times.detect += start.elapsed();
         self.last = stats;

@@ -158,7 +158,12 @@ impl<T: Copy> Calendar<T> {
         let len = self.ring.len() as i64;
         if self.in_ring == 0 {
             // Nothing in the ring: the next event is in the overflow; go straight to it.
-            let first = self.overflow.iter().map(|e| self.bucket(e.time)).min().unwrap_or(self.current + 1);
+            let first = self
+                .overflow
+                .iter()
+                .map(|e| self.bucket(e.time))
+                .min()
+                .unwrap_or(self.current + 1);
             self.current = first.max(self.current + 1);
             self.sweep();
         } else {
@@ -208,13 +213,23 @@ mod tests {
         let mut due = vec![0.0; n];
         for i in 0..n {
             due[i] = 10.0 * next();
-            cal.push(Entry { time: due[i], particle: i as u32, version: 0, what: () });
+            cal.push(Entry {
+                time: due[i],
+                particle: i as u32,
+                version: 0,
+                what: (),
+            });
         }
         // reschedule a third of them (the old entries go stale)
         for i in (0..n).step_by(3) {
             version[i] += 1;
             due[i] = 10.0 * next();
-            cal.push(Entry { time: due[i], particle: i as u32, version: version[i], what: () });
+            cal.push(Entry {
+                time: due[i],
+                particle: i as u32,
+                version: version[i],
+                what: (),
+            });
         }
         assert_eq!(cal.len(), n + (n + 2) / 3);
         let mut expected: Vec<(f64, u32)> = (0..n).map(|i| (due[i], i as u32)).collect();
@@ -232,13 +247,23 @@ mod tests {
     fn stops_at_until_and_keeps_the_rest() {
         let mut cal: Calendar<()> = Calendar::new(0.0, 1.0, 4);
         for (k, t) in [0.5, 2.5, 30.0].into_iter().enumerate() {
-            cal.push(Entry { time: t, particle: k as u32, version: 0, what: () });
+            cal.push(Entry {
+                time: t,
+                particle: k as u32,
+                version: 0,
+                what: (),
+            });
         }
         let live = |_: &Entry<()>| true;
         assert_eq!(cal.pop_until(1.0, live).map(|e| e.particle), Some(0));
         assert!(cal.pop_until(1.0, live).is_none());
         assert_eq!(cal.pop_until(3.0, live).map(|e| e.particle), Some(1));
-        cal.push(Entry { time: 2.9, particle: 7, version: 0, what: () });
+        cal.push(Entry {
+            time: 2.9,
+            particle: 7,
+            version: 0,
+            what: (),
+        });
         assert_eq!(cal.pop_until(100.0, live).map(|e| e.particle), Some(7));
         assert_eq!(cal.pop_until(100.0, live).map(|e| e.particle), Some(2));
         assert!(cal.pop_until(f64::INFINITY, live).is_none());

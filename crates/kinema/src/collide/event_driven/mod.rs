@@ -38,13 +38,13 @@
 mod calendar;
 mod shells;
 
+use super::books::ColliderBooks;
 use super::colliders::Collider;
 use super::contact::{Contact, Partner};
-use super::response::{restitution_impulse, MaterialTable};
-use super::roots::toi_half_space;
-use super::books::ColliderBooks;
 use super::impulse::CollisionStats;
 use super::morton::morton_order;
+use super::response::{restitution_impulse, MaterialTable};
+use super::roots::toi_half_space;
 use super::Domain;
 use crate::error::Error;
 use crate::interrupt::Interrupt;
@@ -190,7 +190,11 @@ impl EventDriven {
         // cache from ~10⁴ particles on, and an event is a chain of such reads).
         let lowest = (0..3).map(|k| (0..n).map(|i| p.x[3 * i + k]).fold(f64::INFINITY, f64::min));
         let origin: Vec<f64> = lowest.map(|v| if v.is_finite() { v } else { 0.0 }).collect();
-        let order = morton_order(&p.x, [origin[0], origin[1], origin[2]], (2.0 * r_max).max(f64::MIN_POSITIVE) * (1.0 + SHELL));
+        let order = morton_order(
+            &p.x,
+            [origin[0], origin[1], origin[2]],
+            (2.0 * r_max).max(f64::MIN_POSITIVE) * (1.0 + SHELL),
+        );
         let bodies: Vec<Body> = order
             .iter()
             .map(|&i| {
@@ -252,7 +256,11 @@ impl EventDriven {
         // First events, then a calendar sized for them.
         let first: Vec<(f64, Kind)> = (0..n).map(|i| state.find(i, t0, domain)).collect();
         let waits: Vec<f64> = first.iter().map(|e| e.0 - t0).filter(|w| w.is_finite()).collect();
-        let mean_wait = if waits.is_empty() { 1.0 } else { waits.iter().sum::<f64>() / waits.len() as f64 };
+        let mean_wait = if waits.is_empty() {
+            1.0
+        } else {
+            waits.iter().sum::<f64>() / waits.len() as f64
+        };
         let width = Calendar::<Kind>::width_for(waits.len(), mean_wait);
         state.calendar = Calendar::new(t0, width, n.next_power_of_two().clamp(64, 1 << 20));
         for (i, e) in first.into_iter().enumerate() {
@@ -291,7 +299,10 @@ impl EventDriven {
                 interrupt.poll()?;
             }
             let bodies = &self.bodies;
-            let Some(entry) = self.calendar.pop_until(t1, |e| e.version == bodies[e.particle as usize].schedule) else {
+            let Some(entry) = self
+                .calendar
+                .pop_until(t1, |e| e.version == bodies[e.particle as usize].schedule)
+            else {
                 break;
             };
             let (i, now) = (entry.particle as usize, entry.time);
@@ -390,7 +401,11 @@ impl EventDriven {
         let g = if FIELD { self.g } else { [0.0; 3] };
         let bi = self.bodies[i];
         let ri = self.radius[i];
-        let (xi, vi) = if FIELD { (bi.at(now, g), bi.velocity(now, g)) } else { (bi.line(now), bi.v) };
+        let (xi, vi) = if FIELD {
+            (bi.at(now, g), bi.velocity(now, g))
+        } else {
+            (bi.line(now), bi.v)
+        };
         // leaving the shell: |d + v τ| = δ/2 with d = x − c inside (|d| ≤ δ/2); under a field
         // |d + v τ + ½ g τ²| ≤ |d| + |v| τ + ½ |g| τ², whose reaching δ/2 comes no later
         let half = 0.5 * self.shells.delta;
@@ -414,7 +429,11 @@ impl EventDriven {
         for &j in self.shells.of(i) {
             let bj = &self.bodies[j as usize];
             // the field moves both alike: their relative motion is a straight line
-            let (xj, vj) = if FIELD { (bj.at(now, g), bj.velocity(now, g)) } else { (bj.line(now), bj.v) };
+            let (xj, vj) = if FIELD {
+                (bj.at(now, g), bj.velocity(now, g))
+            } else {
+                (bj.line(now), bj.v)
+            };
             let d = domain.displacement(xi, xj);
             let u = vec3::sub(vi, vj);
             let b = vec3::dot(d, u);
@@ -434,13 +453,7 @@ impl EventDriven {
                 c / (-b + disc.sqrt())
             };
             if now + tau < best.0 {
-                best = (
-                    now + tau,
-                    Kind::Pair {
-                        j,
-                        path: bj.path,
-                    },
-                );
+                best = (now + tau, Kind::Pair { j, path: bj.path });
             }
         }
         for (k, w) in self.walls.iter().enumerate() {
@@ -653,24 +666,34 @@ mod tests {
         let mut impacts = 0;
         for frame in 1..=20 {
             let t = frame as f64;
-            let stats = state.advance(&mut p, &table, 0.0, &domain, t, &mut books, &mut interrupt).unwrap();
+            let stats = state
+                .advance(&mut p, &table, 0.0, &domain, t, &mut books, &mut interrupt)
+                .unwrap();
             impacts += stats.impacts;
             let n = p.len();
             for i in 0..n {
                 let c = state.shells.centre[i];
                 let moved = vec3::norm(domain.displacement(state.bodies[i].x, c));
-                assert!(moved <= 0.5 * state.shells.delta * (1.0 + 1e-12), "particle {i} left its shell");
+                assert!(
+                    moved <= 0.5 * state.shells.delta * (1.0 + 1e-12),
+                    "particle {i} left its shell"
+                );
                 for j in 0..n {
                     if i == j {
                         continue;
                     }
                     let listed = state.shells.of(i).contains(&(j as u32));
-                    assert_eq!(listed, state.shells.of(j).contains(&(i as u32)), "lists of {i} and {j} differ");
+                    assert_eq!(
+                        listed,
+                        state.shells.of(j).contains(&(i as u32)),
+                        "lists of {i} and {j} differ"
+                    );
                     let reach = state.radius[i] + state.radius[j] + state.shells.delta;
                     if vec3::norm(domain.displacement(c, state.shells.centre[j])) < reach {
                         assert!(listed, "{i} and {j} are within reach but not listed");
                     }
-                    let gap = vec3::norm(domain.displacement(state.bodies[i].x, state.bodies[j].x)) - state.radius[i] - state.radius[j];
+                    let gap =
+                        vec3::norm(domain.displacement(state.bodies[i].x, state.bodies[j].x)) - state.radius[i] - state.radius[j];
                     assert!(gap > -1e-9, "{i} and {j} overlap by {}", -gap);
                 }
             }

@@ -19,11 +19,11 @@ use super::sleep::{Sleep, WarmEntry};
 use super::soft_step::Target;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
+use crate::collide::neighbour_list::active_walls;
 use crate::error::Error;
 use crate::interrupt::Interrupt;
 use crate::vec3;
 use end_of_step::distribute;
-use crate::collide::neighbour_list::active_walls;
 use impacts::{least_impact_speed, Search};
 
 /// What the collision stages did, over one step or summed over many.
