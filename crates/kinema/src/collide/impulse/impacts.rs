@@ -142,7 +142,6 @@ impl ImpulseModel {
             self.list
                 .update(&mut self.grid, x0, set.radius, set.colliders, set.domain, build)?;
             self.list.verified = None;
-            self.drop_inactive_walls(set);
             self.rebuilt = true;
             top = sweep(&self.list.built_at, paths.accel);
             if top.3 || !top.0.is_finite() {
@@ -417,15 +416,7 @@ impl ImpulseModel {
         self.list
             .update(&mut self.grid, &x, radius, set.colliders, set.domain, build)?;
         self.list.verified = None;
-        self.drop_inactive_walls(set);
         Ok(largest)
-    }
-
-    /// Leaves out of the list's collider candidates a box whose walls all lie along
-    /// periodic axes (a fully periodic cell has no walls to meet).
-    fn drop_inactive_walls(&mut self, set: &StageSetting<'_>) {
-        let active = active_walls(set.colliders, set.domain);
-        self.list.walls.retain(|&(_, k)| active[k].iter().any(|a| *a));
     }
 }
 
