@@ -300,13 +300,30 @@ impl Grid {
     /// finer level, whose cells may be much narrower than i, the cells within
     /// r_i + r_max + margin of it (r_max the finer level's largest radius).
     pub fn partners(&self, i: usize, x: &[f64], radius: &[f64], domain: &Domain, margin: f64, out: &mut Vec<u32>) {
+        self.partners_from(i, 0, x, radius, domain, margin, out);
+    }
+
+    /// [`Grid::partners`] among the particles j ≥ `lowest` only (`lowest` = i + 1: each pair
+    /// found once, from its lower index, for a half neighbour list); the others are passed
+    /// over before the distance test.
+    #[allow(clippy::too_many_arguments)]
+    pub fn partners_from(
+        &self,
+        i: usize,
+        lowest: usize,
+        x: &[f64],
+        radius: &[f64],
+        domain: &Domain,
+        margin: f64,
+        out: &mut Vec<u32>,
+    ) {
         let first = out.len();
         let (xi, ri) = (vec3::get(x, i), radius[i]);
         let own = self.level_of.get(i).map_or(0, |&l| l as usize);
         let mut search = |level: &Level, at: [usize; 3], span: [usize; 3]| {
             level.visit(at, span, |b| {
                 let j = level.order[b] as usize;
-                if j != i && touches(domain, xi, vec3::get(x, j), ri, radius[j], margin) {
+                if j != i && j >= lowest && touches(domain, xi, vec3::get(x, j), ri, radius[j], margin) {
                     out.push(j as u32);
                 }
             });

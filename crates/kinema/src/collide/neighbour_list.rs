@@ -80,9 +80,15 @@ pub(crate) struct ListBuild {
 /// still exact.)
 #[derive(Default)]
 pub(crate) struct NeighbourList {
-    /// Each chunk of [`CHUNK`] particles' partners, ascending (a full list: a pair is listed
-    /// from both sides).
+    /// Each chunk of [`CHUNK`] particles' partners, ascending: a full list lists a pair
+    /// from both sides, a half list ([`NeighbourList::half`]) once, in the row of its lower
+    /// index.
     pub(crate) rows: Vec<Rows>,
+    /// Whether this is a half list: particle i's row holds its partners j > i only. The
+    /// spring–dashpot force's list is one (each pair's force computed once, for both
+    /// sides); the impulse model sweeps each particle against all its partners, and keeps
+    /// a full one.
+    pub(crate) half: bool,
     /// The candidate (particle, collider) pairs, sorted.
     pub(crate) walls: Vec<(usize, usize)>,
     /// Positions at the build, m (empty: no list).
@@ -178,6 +184,7 @@ impl NeighbourList {
         // machine's memory (an abort Python could not catch).
         self.rows.resize_with(n.div_ceil(CHUNK), Rows::default);
         let grid = &*grid;
+        let half = self.half;
         let entries = AtomicUsize::new(0);
         let limit = self
             .entry_limit
@@ -191,7 +198,8 @@ impl NeighbourList {
             let mut over = false;
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 if searched && !over {
-                    grid.partners(i, x, radius, domain, skin, partners);
+                    let lowest = if half { i + 1 } else { 0 };
+                    grid.partners_from(i, lowest, x, radius, domain, skin, partners);
                     if i % 64 == 63 {
                         let added = partners.len() - counted;
                         counted = partners.len();
@@ -284,24 +292,12 @@ impl NeighbourList {
         if self.built_at.is_empty() {
             return;
         }
-        let n = new_of_old.len();
         let old = std::mem::take(&mut self.rows);
-        let mut rows: Vec<Rows> = Vec::new();
-        rows.resize_with(n.div_ceil(CHUNK), Rows::default);
-        rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
-            rows.start.clear();
-            rows.partners.clear();
-            rows.start.push(0);
-            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                let o = old_of_new[i] as usize;
-                let first = rows.partners.len();
-                rows.partners
-                    .extend(old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]));
-                rows.partners[first..].sort_unstable();
-                rows.start.push(rows.partners.len() as u32);
-            }
-        });
-        self.rows = rows;
+        if self.half {
+            self.rows = reoriented(&old, new_of_old);
+        } else {
+            self.rows = renumbered(&old, new_of_old, old_of_new);
+        }
         for w in &mut self.walls {
             w.0 = new_of_old[w.0] as usize;
         }
@@ -315,6 +311,76 @@ impl NeighbourList {
             .collect();
         self.built_at = built;
     }
+}
+
+/// A full list's rows in the new numbering: particle i's row is its old row, renumbered
+/// and sorted again.
+fn renumbered(old: &[Rows], new_of_old: &[u32], old_of_new: &[u32]) -> Vec<Rows> {
+    let n = new_of_old.len();
+    let mut rows: Vec<Rows> = Vec::new();
+    rows.resize_with(n.div_ceil(CHUNK), Rows::default);
+    rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
+        rows.start.clear();
+        rows.partners.clear();
+        rows.start.push(0);
+        for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+            let o = old_of_new[i] as usize;
+            let first = rows.partners.len();
+            rows.partners
+                .extend(old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]));
+            rows.partners[first..].sort_unstable();
+            rows.start.push(rows.partners.len() as u32);
+        }
+    });
+    rows
+}
+
+/// A half list's rows in the new numbering. A pair (a, b), a < b, sat in a's row; in the new
+/// numbering it belongs in the row of the lower of its two new indices, which may be b's: so
+/// the rows are made again from the pairs, by a counting sort on that lower index, and each
+/// row sorted (the same rows, in the same order, as a build at the same positions would list).
+fn reoriented(old: &[Rows], new_of_old: &[u32]) -> Vec<Rows> {
+    let n = new_of_old.len();
+    let pairs = || {
+        old.iter().enumerate().flat_map(move |(c, rows)| {
+            (0..rows.len()).flat_map(move |l| {
+                let a = new_of_old[c * CHUNK + l];
+                rows.of(l).iter().map(move |&b| {
+                    let b = new_of_old[b as usize];
+                    (a.min(b) as usize, a.max(b))
+                })
+            })
+        })
+    };
+    let mut count = vec![0u32; n];
+    for (lo, _) in pairs() {
+        count[lo] += 1;
+    }
+    // where each particle's partners start in its chunk's `partners`
+    let mut rows: Vec<Rows> = Vec::new();
+    rows.resize_with(n.div_ceil(CHUNK), Rows::default);
+    let mut cursor = vec![0u32; n];
+    for (c, rows) in rows.iter_mut().enumerate() {
+        rows.start.push(0);
+        let mut at = 0;
+        for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+            cursor[i] = at;
+            at += count[i];
+            rows.start.push(at);
+        }
+        rows.partners.resize(at as usize, 0);
+    }
+    for (lo, hi) in pairs() {
+        rows[lo / CHUNK].partners[cursor[lo] as usize] = hi;
+        cursor[lo] += 1;
+    }
+    rows.par_iter_mut().for_each(|rows| {
+        for l in 0..rows.len() {
+            let (a, b) = (rows.start[l] as usize, rows.start[l + 1] as usize);
+            rows.partners[a..b].sort_unstable();
+        }
+    });
+    rows
 }
 
 /// Which walls of each collider exist: a box's walls along periodic axes do not.

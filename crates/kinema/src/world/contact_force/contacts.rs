@@ -11,7 +11,7 @@ use crate::forces::State;
 
 impl ContactForce {
     /// Calls `each` with every contact at state `s`, in the order of a full search: particle
-    /// pairs by (i, j) (those of the neighbour list that touch, each tested exactly as
+    /// pairs by (i, j), i < j (those of the (half) neighbour list that touch, each tested exactly as
     /// [`pair_contact`] tests it), then particle by particle, collider by collider, wall by
     /// wall (box walls along periodic axes left out), as
     /// [`collider_contacts`](crate::collide::collider_contacts) lists them.
@@ -49,37 +49,12 @@ impl ContactForce {
         pair_contact(i, j, x, v, &self.radius, &self.domain, 0.0)
     }
 
-    /// Calls `each(contact, first)` with the contact of particle i with each listed partner j
-    /// it overlaps at (x, v), in the row's order; the contact is computed with the lower index
-    /// first (`first`: i is that one), so both sides of a pair see the same numbers.
-    #[inline]
-    pub(super) fn for_each_partner_contact(
-        &self,
-        i: usize,
-        partners: &[u32],
-        x: &[f64],
-        v: &[f64],
-        mut each: impl FnMut(&Contact, bool),
-    ) {
-        let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
-        for &j in partners {
-            let j = j as usize;
-            if !self.overlaps(xi, ri, j, x) {
-                continue;
-            }
-            let (lo, hi) = if i < j { (i, j) } else { (j, i) };
-            if let Some(contact) = pair_contact(lo, hi, x, v, &self.radius, &self.domain, 0.0) {
-                each(&contact, i == lo);
-            }
-        }
-    }
-
     /// Whether particles i and j overlap at `x`, tested from i's side with x_i already loaded:
     /// the same operations as [`ContactForce::pair`]'s test of the pair (lower index first),
     /// bit for bit, since x_i − x_j = −(x_j − x_i) exactly, the minimum image is odd and the
     /// squares and r_i + r_j do not care about the order.
     #[inline(always)]
-    fn overlaps(&self, xi: [f64; 3], ri: f64, j: usize, x: &[f64]) -> bool {
+    pub(super) fn overlaps(&self, xi: [f64; 3], ri: f64, j: usize, x: &[f64]) -> bool {
         let d = self.domain.displacement(xi, [x[3 * j], x[3 * j + 1], x[3 * j + 2]]);
         let reach = ri + self.radius[j] + 0.0;
         d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach

@@ -13,19 +13,12 @@ impl Force for ContactForce {
         "contact"
     }
 
-    /// The contact forces at `s`: particle pairs on all threads, then colliders.
+    /// The contact forces at `s`: particle pairs and colliders, on all threads.
     fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
         let mut scratch = std::mem::take(&mut *self.scratch());
         let result = self.update_list(s, &mut scratch);
         if result.is_ok() {
-            self.pair_pass(s, &mut scratch, Some(f));
-            self.for_each_wall_contact(s, &scratch.list, |c| {
-                if let Some(force) = self.normal_force(c) {
-                    for k in 0..3 {
-                        f[3 * c.i + k] += force * c.normal[k];
-                    }
-                }
-            });
+            self.pair_pass(s, &mut scratch, Some(f), true);
         }
         *self.scratch() = scratch;
         match result {

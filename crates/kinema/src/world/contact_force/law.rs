@@ -1,60 +1,37 @@
-//! The spring–dashpot law of [`ContactForce`]: the pair pass that sums the particles' forces
-//! and energies chunk by chunk, the normal force and spring energy of a contact, and the
+//! The spring–dashpot law of [`ContactForce`]: the particles' summed forces and energies
+//! (the pair pass of `pairs.rs`), the normal force and spring energy of a contact, and the
 //! damping ratios of the pair materials.
 
 use rayon::prelude::*;
 
+use super::pairs::PassOptions;
 use super::{ContactForce, Scratch, CHUNK};
-use crate::collide::neighbour_list::Rows;
 use crate::collide::{damping_ratio, dashpot_coefficient, spring_dashpot_force, Collider, Contact, Material, Partner};
 use crate::error::Error;
 use crate::forces::State;
 
 impl ContactForce {
-    /// The pair forces at `s` added to `f` (N, 3 per particle), and the pairs' energy
-    /// Σ ½ k_n δ² (J). Chunk by chunk in parallel: particle i sums the forces of its listed
-    /// partners in ascending order of j, each pair's contact computed with the lower index
-    /// first, so i and j get F_n n and −F_n n to the bit; a pair's energy is counted by its
-    /// lower index, and the chunks' sums are added in chunk order. Without `f`, the energy only.
-    pub(super) fn pair_pass(&self, s: &State, scratch: &mut Scratch, f: Option<&mut [f64]>) -> f64 {
-        let Scratch { list, chunk_energy, .. } = scratch;
-        let (x, v) = (s.x, s.v);
-        let chunk = |c: usize, rows: &Rows, mut fc: Option<&mut [f64]>| {
-            let mut energy = -0.0;
-            for (l, i) in (c * CHUNK..).take(rows.len()).enumerate() {
-                self.for_each_partner_contact(i, rows.of(l), x, v, |contact, first| {
-                    if first {
-                        if let Some(u) = self.spring_energy(contact) {
-                            energy += u;
-                        }
-                    }
-                    let (Some(fc), Some(force)) = (fc.as_deref_mut(), self.normal_force(contact)) else {
-                        return;
-                    };
-                    for k in 0..3 {
-                        if first {
-                            fc[3 * l + k] += force * contact.normal[k];
-                        } else {
-                            fc[3 * l + k] -= force * contact.normal[k];
-                        }
-                    }
-                });
-            }
-            energy
-        };
+    /// The pair forces at `s` added to `f` (N, 3 per particle), with the colliders' when
+    /// `walls`, and the pairs' energy Σ ½ k_n δ² (J), each pair counted once and the chunks'
+    /// sums added in chunk order (see `pairs.rs` for the order of the forces' sums). Without
+    /// `f`, the energy only.
+    pub(super) fn pair_pass(&self, s: &State, scratch: &mut Scratch, f: Option<&mut [f64]>, walls: bool) -> f64 {
+        let Scratch {
+            list,
+            chunk_energy,
+            exchange,
+            ..
+        } = scratch;
+        let options = PassOptions { energy: true, walls };
         match f {
-            Some(f) => f
-                .par_chunks_mut(3 * CHUNK)
-                .zip(list.rows.par_iter())
-                .enumerate()
-                .map(|(c, (fc, rows))| chunk(c, rows, Some(fc)))
-                .collect_into_vec(chunk_energy),
-            None => list
-                .rows
-                .par_iter()
-                .enumerate()
-                .map(|(c, rows)| chunk(c, rows, None))
-                .collect_into_vec(chunk_energy),
+            Some(f) => {
+                self.pair_forces(s.x, s.v, list, Some(&mut *f), |_, _| {}, options, exchange, chunk_energy);
+                let exchange = &*exchange;
+                f.par_chunks_mut(3 * CHUNK)
+                    .enumerate()
+                    .for_each(|(d, fc)| exchange.receive(d, fc));
+            }
+            None => self.pair_forces(s.x, s.v, list, None, |_, _| {}, options, exchange, chunk_energy),
         }
         chunk_energy.iter().fold(-0.0, |sum, u| sum + u)
     }
@@ -73,14 +50,14 @@ impl ContactForce {
     /// ½ k_n δ² of contact `c` if it counts in the potential energy (overlapping, with a
     /// movable particle), J.
     #[inline]
-    fn spring_energy(&self, c: &Contact) -> Option<f64> {
+    pub(super) fn spring_energy(&self, c: &Contact) -> Option<f64> {
         (c.overlap > 0.0 && self.inverse_mass_sum(c) > 0.0).then_some(0.5 * self.stiffness * c.overlap * c.overlap)
     }
 
     /// U = Σ ½ k_n δ² at the positions of `s` (J), summed as the force evaluation sums it.
     pub(super) fn potential_at(&self, s: &State, scratch: &mut Scratch) -> Result<f64, Error> {
         self.update_list(s, scratch)?;
-        let mut energy = self.pair_pass(s, scratch, None);
+        let mut energy = self.pair_pass(s, scratch, None, false);
         self.for_each_wall_contact(s, &scratch.list, |c| {
             if let Some(u) = self.spring_energy(c) {
                 energy += u;

@@ -7,16 +7,17 @@
 //! tests what is listed exactly, so the contacts, and the forces, are those of a search at
 //! every evaluation, bit for bit.
 //!
-//! The list is a full one (each pair listed from both sides) kept in chunks of
-//! [`CHUNK`] particles, so that the build and the force pass run on all threads with rayon and
-//! each particle's force is summed by one thread alone, in a fixed order: the result does not
-//! depend on the number of threads.
+//! The list is a half one (each pair listed once, in the row of its lower index) kept in
+//! chunks of [`CHUNK`] particles, so that the build and the force pass run on all threads
+//! with rayon. Each pair's force is computed once and given to both sides; what a chunk owes
+//! particles of later chunks is exchanged in a second stage in a fixed order (`pairs.rs`), so
+//! every particle's force is summed in the same order on any number of threads.
 //!
 //! The parts: this file holds the force's data, its constructor and the neighbour list's
 //! upkeep; `contacts.rs` finds the contacts (listed pairs that overlap, collider touches),
-//! `law.rs` holds the force law, the pair pass and the damping ratios, `verlet.rs` the fused
-//! Verlet force-and-kick pass, `force.rs` the [`Force`](crate::forces::Force) impl and the
-//! rates.
+//! `pairs.rs` the pair pass and its exchange between chunks, `law.rs` the force law, the
+//! summed forces and energy and the damping ratios, `verlet.rs` the fused Verlet
+//! force-and-kick pass, `force.rs` the [`Force`](crate::forces::Force) impl and the rates.
 
 use std::sync::{Mutex, MutexGuard};
 
@@ -26,11 +27,13 @@ use crate::collide::{Collider, Domain, Grid, Material};
 use crate::error::Error;
 use crate::forces::State;
 use law::DampingRatios;
+use pairs::Exchange;
 pub(crate) use verlet::VerletKick;
 
 mod contacts;
 mod force;
 mod law;
+mod pairs;
 mod verlet;
 
 /// Penalty contacts between particles and with colliders (the DEM way).
@@ -70,12 +73,28 @@ pub(crate) struct ContactForce {
     scratch: Mutex<Scratch>,
 }
 
-#[derive(Default)]
 struct Scratch {
     grid: Grid,
+    /// A half list (each pair once, in the row of its lower index).
     list: NeighbourList,
     /// Each chunk's share of the contact energy, J (kept to allocate nothing per evaluation).
     chunk_energy: Vec<f64>,
+    /// The forces chunks owe particles of later chunks (`pairs.rs`).
+    exchange: Exchange,
+}
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Scratch {
+            grid: Grid::default(),
+            list: NeighbourList {
+                half: true,
+                ..NeighbourList::default()
+            },
+            chunk_energy: Vec::new(),
+            exchange: Exchange::default(),
+        }
+    }
 }
 
 /// What a [`ContactForce`] is made of: the law's constants, the pair materials, the

@@ -3,7 +3,8 @@
 
 use rayon::prelude::*;
 
-use super::{ContactForce, CHUNK};
+use super::pairs::PassOptions;
+use super::{ContactForce, Scratch, CHUNK};
 use crate::error::Error;
 use crate::forces::State;
 
@@ -32,11 +33,14 @@ impl ContactForce {
     /// the particles (see `VerletBuffers` in `world/mod.rs`): for each particle i,
     ///
     /// ```text
-    ///   F_i  = other_i + Σ_j contact forces (pairs, then colliders: as `accumulate` sums them)
+    ///   F_i  = other_i + Σ_j contact forces (pairs and colliders, summed in `v_out` in the
+    ///          order of `pairs.rs`, as `accumulate` sums them)
     ///   a'_i = F_i / m_i           (into `a`, which held a_i: only i reads its own a_i)
-    ///   v_i  ← v_i + h/2 (a_i + a'_i)   (into `v_out`)
+    ///   v_i  ← v_i + h/2 (a_i + a'_i)   (into `v_out`, over F_i: only i reads its own F_i)
     /// ```
     ///
+    /// The pair stage writes each chunk's F into its part of `v_out`; the second stage, chunk
+    /// by chunk, receives what earlier chunks sent and kicks.
     /// at the drifted state `s` (x', and the predictor v' that the dashpot sees), with
     /// [`VerletKick`]'s `v` the velocities at the step's start, `other` the other forces' sum
     /// (N; `None`: none), `inv_mass` (0 pinned) and `flat` (2D: a_z = 0). Saves the separate passes that clear the
@@ -54,49 +58,38 @@ impl ContactForce {
         } = kick;
         let mut scratch = self.scratch();
         self.update_list(s, &mut scratch)?;
-        let list = &scratch.list;
+        let Scratch {
+            list,
+            chunk_energy,
+            exchange,
+            ..
+        } = &mut *scratch;
         let (x, vp) = (s.x, s.v);
+        // F_i summed in v_out (each chunk's part is written by that chunk alone), started
+        // at the other forces' sum
+        let start = |c: usize, fc: &mut [f64]| match other {
+            Some(o) => fc.copy_from_slice(&o[3 * c * CHUNK..3 * c * CHUNK + fc.len()]),
+            None => fc.fill(0.0),
+        };
+        let options = PassOptions {
+            energy: false,
+            walls: true,
+        };
+        self.pair_forces(x, vp, list, Some(&mut *v_out), start, options, exchange, chunk_energy);
+        let exchange = &*exchange;
         let bad = a
             .par_chunks_mut(3 * CHUNK)
             .zip(v_out.par_chunks_mut(3 * CHUNK))
-            .zip(list.rows.par_iter())
             .enumerate()
-            .map(|(c, ((ac, vc), rows))| {
+            .map(|(c, (ac, vc))| {
+                exchange.receive(c, vc);
                 let first = c * CHUNK;
-                // this chunk's wall candidates (sorted by particle)
-                let w0 = list.walls.partition_point(|w| w.0 < first);
-                let w1 = list.walls.partition_point(|w| w.0 < first + rows.len());
-                let mut walls = list.walls[w0..w1].iter().peekable();
                 let mut bad = None;
-                for (l, i) in (first..).take(rows.len()).enumerate() {
-                    let mut f = match other {
-                        Some(o) => [o[3 * i], o[3 * i + 1], o[3 * i + 2]],
-                        None => [0.0; 3],
-                    };
-                    self.for_each_partner_contact(i, rows.of(l), x, vp, |contact, first| {
-                        if let Some(force) = self.normal_force(contact) {
-                            for k in 0..3 {
-                                if first {
-                                    f[k] += force * contact.normal[k];
-                                } else {
-                                    f[k] -= force * contact.normal[k];
-                                }
-                            }
-                        }
-                    });
-                    while let Some(&(_, k)) = walls.next_if(|w| w.0 == i) {
-                        self.wall_contacts(i, k, x, vp, |contact| {
-                            if let Some(force) = self.normal_force(contact) {
-                                for (fk, nk) in f.iter_mut().zip(contact.normal) {
-                                    *fk += force * nk;
-                                }
-                            }
-                        });
-                    }
+                for (l, i) in (first..).take(ac.len() / 3).enumerate() {
                     let w = inv_mass[i];
                     for k in 0..3 {
-                        let a_new = if flat && k == 2 { 0.0 } else { f[k] * w };
                         let q = 3 * l + k;
+                        let a_new = if flat && k == 2 { 0.0 } else { vc[q] * w };
                         vc[q] = v[3 * i + k] + 0.5 * h * (ac[q] + a_new);
                         ac[q] = a_new;
                         if bad.is_none() && !(vc[q].is_finite() && x[3 * i + k].is_finite()) {

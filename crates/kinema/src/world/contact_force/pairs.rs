@@ -1,0 +1,186 @@
+//! The pair pass of [`ContactForce`] over its half neighbour list: each listed pair is tested
+//! once, from its lower index, and its force goes to both sides, in a fixed order whatever the
+//! number of threads.
+//!
+//! The pass runs in two stages, chunk by chunk ([`CHUNK`] particles, a fixed partition):
+//!
+//! 1. **Pairs.** Chunk c, on one thread, starts its particles' forces (the caller's `init`),
+//!    then for each particle i in order and each listed j > i that overlaps it, computes the
+//!    contact (i first, so the pair's numbers are those of a search) and its force F n:
+//!    +F n onto i, −F n onto j if j is in the same chunk, else into the chunk's outbox
+//!    `sent[c]` as (j, F n). Then i's collider contacts, when asked. Nothing but chunk c's
+//!    own memory is written.
+//! 2. **Exchange.** Each outbox is sorted (stably) by its receivers' chunks and indexed by
+//!    receiving chunk; chunk d then subtracts what the earlier chunks sent it, chunk by chunk
+//!    in ascending order, each outbox in the order it was filled ([`Exchange::receive`]).
+//!
+//! So particle i's force is summed in this order: the forces of its same-chunk partners
+//! j < i (as they were met), its own pairs (ascending j), its colliders, and what the earlier
+//! chunks sent it (ascending chunk). The order depends on the list and the chunk partition
+//! alone: the forces are the same to the bit on any number of threads. A pair's two forces
+//! are F n and −F n exactly (both from one product, one added, one subtracted), so momentum
+//! is kept to rounding, as with the full list this replaced, which computed each pair twice.
+
+use rayon::prelude::*;
+
+use super::{ContactForce, CHUNK};
+use crate::collide::neighbour_list::{NeighbourList, Rows};
+use crate::collide::pair_contact;
+
+/// The forces chunks send to particles of later chunks (stage 2 of the pair pass), kept
+/// between evaluations so that a pass allocates nothing once warm.
+#[derive(Default)]
+pub(super) struct Exchange {
+    /// Per chunk: (j, F n) for each contact force, N, it owes particle j of a later chunk;
+    /// after stage 1, sorted by j's chunk (stably: the order found within a chunk kept).
+    sent: Vec<Vec<(u32, [f64; 3])>>,
+    /// Per receiving chunk d: (chunk c, start, end) of what `sent[c]` owes d, ascending c.
+    inbox: Vec<Vec<(u32, u32, u32)>>,
+}
+
+impl Exchange {
+    /// Subtracts from chunk `d`'s forces `fc` (N, 3 per particle of the chunk) what the
+    /// earlier chunks sent it, in ascending order of sending chunk.
+    #[inline]
+    pub(super) fn receive(&self, d: usize, fc: &mut [f64]) {
+        let first = d * CHUNK;
+        for &(c, start, end) in &self.inbox[d] {
+            for (j, fv) in &self.sent[c as usize][start as usize..end as usize] {
+                let l = *j as usize - first;
+                for k in 0..3 {
+                    fc[3 * l + k] -= fv[k];
+                }
+            }
+        }
+    }
+
+    /// How many forces the last pass sent between chunks.
+    #[cfg(test)]
+    pub(super) fn sent_count(&self) -> usize {
+        self.sent.iter().map(Vec::len).sum()
+    }
+
+    /// Sorts each outbox by receiving chunk and indexes the runs by receiver.
+    fn index(&mut self, chunks: usize) {
+        self.sent.par_iter_mut().for_each(|s| s.sort_by_key(|e| e.0 as usize / CHUNK));
+        self.inbox.resize_with(chunks, Vec::new);
+        self.inbox.iter_mut().for_each(Vec::clear);
+        for (c, sent) in self.sent.iter().enumerate() {
+            let mut start = 0;
+            while start < sent.len() {
+                let d = sent[start].0 as usize / CHUNK;
+                let end = start + sent[start..].partition_point(|e| e.0 as usize / CHUNK == d);
+                self.inbox[d].push((c as u32, start as u32, end as u32));
+                start = end;
+            }
+        }
+    }
+}
+
+/// What stage 1 of the pair pass is asked to do besides the pair forces.
+#[derive(Clone, Copy)]
+pub(super) struct PassOptions {
+    /// Sum each chunk's pair energy Σ ½ k_n δ² (J).
+    pub energy: bool,
+    /// Add each particle's collider contact forces after its pairs'.
+    pub walls: bool,
+}
+
+impl ContactForce {
+    /// Stage 1 of the pair pass (see the module doc) at positions `x` (m) and velocities `v`
+    /// (m/s), with the list `list` (holding at `x`), and the exchange indexed for stage 2.
+    ///
+    /// `forces`: the force buffer, N (3 per particle), chunk c's part started by
+    /// `init(c, part)` before its pairs are added; `None`: energies only. Returns each
+    /// chunk's pair energy in `chunk_energy` (−0.0 where not asked).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn pair_forces(
+        &self,
+        x: &[f64],
+        v: &[f64],
+        list: &NeighbourList,
+        forces: Option<&mut [f64]>,
+        init: impl Fn(usize, &mut [f64]) + Sync,
+        options: PassOptions,
+        exchange: &mut Exchange,
+        chunk_energy: &mut Vec<f64>,
+    ) {
+        debug_assert!(list.half, "the contact force keeps a half list");
+        let chunks = list.rows.len();
+        exchange.sent.resize_with(chunks, Vec::new);
+        let chunk = |c: usize, rows: &Rows, sent: &mut Vec<(u32, [f64; 3])>, mut fc: Option<&mut [f64]>| {
+            sent.clear();
+            let first = c * CHUNK;
+            let len = rows.len();
+            if let Some(fc) = fc.as_deref_mut() {
+                init(c, fc);
+            }
+            // this chunk's wall candidates (sorted by particle)
+            let w0 = list.walls.partition_point(|w| w.0 < first);
+            let w1 = list.walls.partition_point(|w| w.0 < first + len);
+            let mut walls = list.walls[w0..w1].iter().peekable();
+            let mut energy = -0.0;
+            for l in 0..len {
+                let i = first + l;
+                let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
+                for &j in rows.of(l) {
+                    let j = j as usize;
+                    if !self.overlaps(xi, ri, j, x) {
+                        continue;
+                    }
+                    let Some(contact) = pair_contact(i, j, x, v, &self.radius, &self.domain, 0.0) else {
+                        continue;
+                    };
+                    if options.energy {
+                        if let Some(u) = self.spring_energy(&contact) {
+                            energy += u;
+                        }
+                    }
+                    let (Some(fc), Some(force)) = (fc.as_deref_mut(), self.normal_force(&contact)) else {
+                        continue;
+                    };
+                    let fv = contact.normal.map(|n| force * n);
+                    for k in 0..3 {
+                        fc[3 * l + k] += fv[k];
+                    }
+                    if j < first + len {
+                        for k in 0..3 {
+                            fc[3 * (j - first) + k] -= fv[k];
+                        }
+                    } else {
+                        sent.push((j as u32, fv));
+                    }
+                }
+                let Some(fc) = fc.as_deref_mut().filter(|_| options.walls) else {
+                    continue;
+                };
+                while let Some(&(_, k)) = walls.next_if(|w| w.0 == i) {
+                    self.wall_contacts(i, k, x, v, |contact| {
+                        if let Some(force) = self.normal_force(contact) {
+                            for k in 0..3 {
+                                fc[3 * l + k] += force * contact.normal[k];
+                            }
+                        }
+                    });
+                }
+            }
+            energy
+        };
+        match forces {
+            Some(f) => f
+                .par_chunks_mut(3 * CHUNK)
+                .zip(list.rows.par_iter().zip(exchange.sent.par_iter_mut()))
+                .enumerate()
+                .map(|(c, (fc, (rows, sent)))| chunk(c, rows, sent, Some(fc)))
+                .collect_into_vec(chunk_energy),
+            None => list
+                .rows
+                .par_iter()
+                .zip(exchange.sent.par_iter_mut())
+                .enumerate()
+                .map(|(c, (rows, sent))| chunk(c, rows, sent, None))
+                .collect_into_vec(chunk_energy),
+        }
+        exchange.index(chunks);
+    }
+}
