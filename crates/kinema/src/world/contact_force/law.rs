@@ -17,23 +17,24 @@ impl ContactForce {
     /// `f`, the energy only.
     pub(super) fn pair_pass(&self, s: &State, scratch: &mut Scratch, f: Option<&mut [f64]>, walls: bool) -> f64 {
         let Scratch {
-            list,
-            chunk_energy,
-            exchange,
-            ..
+            list, sums, exchange, ..
         } = scratch;
-        let options = PassOptions { energy: true, walls };
+        let options = PassOptions {
+            energy: true,
+            walls,
+            check_positions: false,
+        };
         match f {
             Some(f) => {
-                self.pair_forces(s.x, s.v, list, Some(&mut *f), |_, _| {}, options, exchange, chunk_energy);
+                self.pair_forces(s.x, s.v, list, Some(&mut *f), |_, _| {}, options, exchange, sums);
                 let exchange = &*exchange;
                 f.par_chunks_mut(3 * CHUNK)
                     .enumerate()
                     .for_each(|(d, fc)| exchange.receive(d, fc));
             }
-            None => self.pair_forces(s.x, s.v, list, None, |_, _| {}, options, exchange, chunk_energy),
+            None => self.pair_forces(s.x, s.v, list, None, |_, _| {}, options, exchange, sums),
         }
-        chunk_energy.iter().fold(-0.0, |sum, u| sum + u)
+        sums.iter().fold(-0.0, |sum, c| sum + c.energy)
     }
 
     /// The force of contact `c` along its normal, N (> 0 pushes apart), or `None` when it

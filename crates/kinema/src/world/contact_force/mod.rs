@@ -27,7 +27,7 @@ use crate::collide::{Collider, Domain, Grid, Material};
 use crate::error::Error;
 use crate::forces::State;
 use law::DampingRatios;
-use pairs::Exchange;
+use pairs::{ChunkSums, Exchange};
 pub(crate) use verlet::VerletKick;
 
 mod contacts;
@@ -77,8 +77,9 @@ struct Scratch {
     grid: Grid,
     /// A half list (each pair once, in the row of its lower index).
     list: NeighbourList,
-    /// Each chunk's share of the contact energy, J (kept to allocate nothing per evaluation).
-    chunk_energy: Vec<f64>,
+    /// What each chunk's pairs summed (its share of the contact energy, J), kept to allocate
+    /// nothing per evaluation.
+    sums: Vec<ChunkSums>,
     /// The forces chunks owe particles of later chunks (`pairs.rs`).
     exchange: Exchange,
 }
@@ -91,7 +92,7 @@ impl Default for Scratch {
                 half: true,
                 ..NeighbourList::default()
             },
-            chunk_energy: Vec::new(),
+            sums: Vec::new(),
             exchange: Exchange::default(),
         }
     }

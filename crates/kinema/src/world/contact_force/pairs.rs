@@ -84,6 +84,18 @@ pub(super) struct PassOptions {
     pub energy: bool,
     /// Add each particle's collider contact forces after its pairs'.
     pub walls: bool,
+    /// Find each chunk's first non-finite position coordinate (x_i is at hand here: the
+    /// Verlet kick need not read the positions again for its check).
+    pub check_positions: bool,
+}
+
+/// What stage 1 of the pair pass found in one chunk.
+#[derive(Clone, Copy, Default)]
+pub(super) struct ChunkSums {
+    /// The chunk's pair energy, J (−0.0 where not asked).
+    pub energy: f64,
+    /// The index of its first non-finite position coordinate, when asked and there is one.
+    pub bad: Option<usize>,
 }
 
 impl ContactForce {
@@ -92,7 +104,7 @@ impl ContactForce {
     ///
     /// `forces`: the force buffer, N (3 per particle), chunk c's part started by
     /// `init(c, part)` before its pairs are added; `None`: energies only. Returns each
-    /// chunk's pair energy in `chunk_energy` (−0.0 where not asked).
+    /// chunk's energy and first non-finite position in `sums`.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn pair_forces(
         &self,
@@ -103,7 +115,7 @@ impl ContactForce {
         init: impl Fn(usize, &mut [f64]) + Sync,
         options: PassOptions,
         exchange: &mut Exchange,
-        chunk_energy: &mut Vec<f64>,
+        sums: &mut Vec<ChunkSums>,
     ) {
         debug_assert!(list.half, "the contact force keeps a half list");
         let chunks = list.rows.len();
@@ -120,9 +132,13 @@ impl ContactForce {
             let w1 = list.walls.partition_point(|w| w.0 < first + len);
             let mut walls = list.walls[w0..w1].iter().peekable();
             let mut energy = -0.0;
+            let mut bad = None;
             for l in 0..len {
                 let i = first + l;
                 let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
+                if options.check_positions && bad.is_none() {
+                    bad = xi.iter().position(|c| !c.is_finite()).map(|k| 3 * i + k);
+                }
                 for &j in rows.of(l) {
                     let j = j as usize;
                     if !self.overlaps(xi, ri, j, x) {
@@ -164,7 +180,7 @@ impl ContactForce {
                     });
                 }
             }
-            energy
+            ChunkSums { energy, bad }
         };
         match forces {
             Some(f) => f
@@ -172,14 +188,14 @@ impl ContactForce {
                 .zip(list.rows.par_iter().zip(exchange.sent.par_iter_mut()))
                 .enumerate()
                 .map(|(c, (fc, (rows, sent)))| chunk(c, rows, sent, Some(fc)))
-                .collect_into_vec(chunk_energy),
+                .collect_into_vec(sums),
             None => list
                 .rows
                 .par_iter()
                 .zip(exchange.sent.par_iter_mut())
                 .enumerate()
                 .map(|(c, (rows, sent))| chunk(c, rows, sent, None))
-                .collect_into_vec(chunk_energy),
+                .collect_into_vec(sums),
         }
         exchange.index(chunks);
     }

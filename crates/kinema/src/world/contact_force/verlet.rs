@@ -59,10 +59,7 @@ impl ContactForce {
         let mut scratch = self.scratch();
         self.update_list(s, &mut scratch)?;
         let Scratch {
-            list,
-            chunk_energy,
-            exchange,
-            ..
+            list, sums, exchange, ..
         } = &mut *scratch;
         let (x, vp) = (s.x, s.v);
         // F_i summed in v_out (each chunk's part is written by that chunk alone), started
@@ -74,8 +71,10 @@ impl ContactForce {
         let options = PassOptions {
             energy: false,
             walls: true,
+            check_positions: true,
         };
-        self.pair_forces(x, vp, list, Some(&mut *v_out), start, options, exchange, chunk_energy);
+        self.pair_forces(x, vp, list, Some(&mut *v_out), start, options, exchange, sums);
+        let bad_x = sums.iter().find_map(|c| c.bad);
         let exchange = &*exchange;
         let bad = a
             .par_chunks_mut(3 * CHUNK)
@@ -92,7 +91,7 @@ impl ContactForce {
                         let a_new = if flat && k == 2 { 0.0 } else { vc[q] * w };
                         vc[q] = v[3 * i + k] + 0.5 * h * (ac[q] + a_new);
                         ac[q] = a_new;
-                        if bad.is_none() && !(vc[q].is_finite() && x[3 * i + k].is_finite()) {
+                        if bad.is_none() && !vc[q].is_finite() {
                             bad = Some(3 * i + k);
                         }
                     }
@@ -101,6 +100,8 @@ impl ContactForce {
             })
             .flatten() // (Option's own order puts None first: drop the clean chunks)
             .min();
+        // the first non-finite coordinate of x' or of the new velocities
+        let bad = bad.into_iter().chain(bad_x).min();
         Ok(bad)
     }
 }
