@@ -12,7 +12,7 @@ use crate::ode::explicit_rk::ExplicitRk;
 use crate::ode::stepper::{first_non_finite, StepFailure, Stepper, Termination};
 use crate::ode::symplectic_euler::SymplecticEuler;
 use crate::ode::system::{FirstOrderForm, OdeSystem, SecondOrderSystem};
-use crate::ode::{self, Integrator, Method, MethodKind, SolveOptions};
+use crate::ode::{self, verlet, Integrator, Method, MethodKind, SolveOptions};
 use rayon::prelude::*;
 
 /// The stepper a world keeps between steps (so that a method's cache survives).
@@ -174,8 +174,7 @@ impl World {
                     let chunk = 3 * CHUNK * c..3 * CHUNK * c + xn.len();
                     let (x, v, a) = (&p.x[chunk.clone()], &p.v[chunk.clone()], &a[chunk]);
                     for ((((xn, vn), x), v), a) in xn.iter_mut().zip(vn.iter_mut()).zip(x).zip(v).zip(a) {
-                        *xn = x + (h * v + 0.5 * h * h * a);
-                        *vn = v + h * a;
+                        (*xn, *vn) = verlet::drift(*x, *v, *a, h);
                     }
                     if let Some(cell) = cell {
                         let (lo, hi, axes) = (cell.lo(), cell.hi(), cell.axes());
@@ -250,7 +249,7 @@ impl World {
                     let base = 3 * CHUNK * c;
                     let mut bad = None;
                     for k in 0..vn.len() {
-                        vn[k] = p.v[base + k] + 0.5 * h * (a[base + k] + a_next[base + k]);
+                        vn[k] = verlet::kick(p.v[base + k], a[base + k], a_next[base + k], h);
                         if bad.is_none() && !(vn[k].is_finite() && xn[k].is_finite()) {
                             bad = Some(base + k);
                         }

@@ -7,6 +7,7 @@ use super::pairs::PassOptions;
 use super::{ContactForce, Scratch, CHUNK};
 use crate::error::Error;
 use crate::forces::State;
+use crate::ode::verlet;
 
 /// The rest of what [`ContactForce::force_and_kick`] needs besides the drifted state: the
 /// step's other forces, masses and size, the velocities at its start, and the buffers it
@@ -89,7 +90,7 @@ impl ContactForce {
                     for k in 0..3 {
                         let q = 3 * l + k;
                         let a_new = if flat && k == 2 { 0.0 } else { vc[q] * w };
-                        vc[q] = v[3 * i + k] + 0.5 * h * (ac[q] + a_new);
+                        vc[q] = verlet::kick(v[3 * i + k], ac[q], a_new, h);
                         ac[q] = a_new;
                         if bad.is_none() && !vc[q].is_finite() {
                             bad = Some(3 * i + k);
