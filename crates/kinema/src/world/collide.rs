@@ -28,9 +28,11 @@ impl World {
         }
         if stage.params.model != ContactModel::Impulse {
             // The spring–dashpot model acted in stage 1, as a force; what is left here is
-            // keeping positions in the periodic cell.
+            // keeping positions in the periodic cell (Verlet's drift wrapped them already,
+            // before its force evaluation: a second pass would change nothing).
             stage.clear_step();
-            if let Some(p) = stage.domain.periodic_box() {
+            let wrapped = matches!(self.stepper, Some(WorldStepper::Verlet(_)));
+            if let Some(p) = stage.domain.periodic_box().filter(|_| !wrapped) {
                 p.wrap_positions(&mut self.x_next);
             }
             return Ok(());
