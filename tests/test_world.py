@@ -276,3 +276,36 @@ def test_a_python_force_that_raises_propagates_unchanged():
     with pytest.raises(Oops):
         w.step()
     assert w.time == 0.0
+
+
+def test_a_large_run_records_into_a_block_the_kernel_mapped_at_once():
+    # A run's frames go into one block (World.run knows how many); from 4 MiB on it is
+    # mapped with MAP_POPULATE (trajectory._prefaulted) where the system has the flag. The
+    # frames must be the states the world passed through, whichever memory holds them:
+    # particles without collisions under gravity, x(t) = x0 + v0 t + g t^2 / 2 (Verlet is
+    # exact for a constant force) to rounding.
+    import mmap
+
+    from kinema.trajectory import _prefaulted
+
+    small = _prefaulted((2, 10, 3))
+    assert small.shape == (2, 10, 3) and small.dtype == np.float64 and small.flags.writeable
+    big = _prefaulted((3, 200_000, 3))
+    assert big.shape == (3, 200_000, 3) and big.flags.writeable
+    if getattr(mmap, "MAP_POPULATE", 0):
+        owner = big
+        while isinstance(owner, (np.ndarray, memoryview)):
+            owner = owner.base if isinstance(owner, np.ndarray) else owner.obj
+        assert isinstance(owner, mmap.mmap), "populated at once on Linux"
+    n = 180_000  # 2 frames x 180,000 x 3 x 8 B > 4 MiB
+    rng = np.random.default_rng(5)
+    x0, v0 = rng.uniform(-1, 1, (n, 3)), rng.uniform(-1, 1, (n, 3))
+    w = kinema.World(dt=0.01, method="verlet")
+    w.add_particles(x0, velocity=v0, mass=1.0, radius=0.01)
+    w.add(kinema.Gravity(g=(0.0, 0.0, -9.81)))
+    traj = w.run(0.1, fps=20.0)
+    assert len(traj.t) == 3
+    for k, t in enumerate(traj.t):
+        expected = x0 + v0 * t + 0.5 * np.array([0.0, 0.0, -9.81]) * t * t
+        np.testing.assert_allclose(traj.positions[k], expected, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(traj.velocities[k], v0 + np.array([0.0, 0.0, -9.81]) * t, rtol=0, atol=1e-12)
