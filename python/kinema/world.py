@@ -102,7 +102,6 @@ class _Busy:
         raise RuntimeError(REENTRY)
 
 
-
 # What the Python world keeps per particle besides the engine's state — each particle's time of
 # death (s, inf: none) and own colour (r, g, b; NaN: none) — is, while no particle has one, a
 # read-only broadcast of that one value: no memory per particle (32 B at 10⁶ particles each).
@@ -123,6 +122,7 @@ def _kept(a: np.ndarray, keep: np.ndarray) -> np.ndarray:
     if _unset(a) and a.size:
         return np.broadcast_to(a.flat[0], (int(keep.sum()), *a.shape[1:]))
     return a[keep]
+
 
 class World(WorldCollisions):
     """Particles, forces, an integrator, a time step and the time.
