@@ -388,3 +388,69 @@ def test_an_emitter_never_places_a_particle_inside_another():
     # the k-th particle's speed is what it was drawn with: 0.5 m/s along x (nothing touches
     # them once they leave in a row)
     np.testing.assert_allclose(w.velocities[:, 0], 0.5, rtol=1e-12)
+
+
+def _fountain(seed=9):
+    """Sparse births (10 per second at dt = 1 ms: one every 100 steps), lifetimes, a kill box
+    and a kill plane: a world whose count changes by births and by both kinds of death."""
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Gravity())
+    w.add(Emitter(rate=10.0, speed=2.0, spread=30.0, mass=1.0, lifetime=0.35, lifetime_spread=0.1, seed=seed))
+    w.add(KillBox([0.05, -1.0, -1.0], [1.0, 1.0, 1.0]))
+    w.add(KillPlane([0.0, 0.0, -0.05], [0.0, 0.0, 1.0]))
+    return w
+
+
+def test_deaths_in_the_engine_and_batched_births_are_the_same_as_one_step_at_a_time():
+    # The engine carries out deaths after each step and the Python world runs the steps
+    # between births in one call: the same particles must live and die at the same step
+    # boundaries, to the bit, as when every step is its own call.
+    whole, single = _fountain(), _fountain()
+    whole.step(1500)
+    for _ in range(1500):
+        single.step(1)
+    assert whole.time == single.time
+    assert whole.ids.tolist() == single.ids.tolist()
+    np.testing.assert_array_equal(whole.positions, single.positions)
+    np.testing.assert_array_equal(whole.velocities, single.velocities)
+    # and both kinds of death happened: ids below the last one are gone
+    assert 0 < len(whole) < 15 and whole.ids.min() > 0
+
+
+def test_the_steps_between_births_run_in_one_engine_call(monkeypatch):
+    # 10 births a second at dt = 1 ms: between two births the engine takes ~100 steps in one
+    # call (the emitter's own due() decides the boundary), not one call a step.
+    w = _fountain()
+    calls = []
+    monkeypatch.setattr(w, "_core", _Counting(w._core, calls))
+    w.step(1000)
+    assert w._core.steps == 1000
+    assert len(calls) <= 12, f"{len(calls)} engine calls for 1000 steps with 10 births"
+    assert sum(calls) == 1000
+
+
+class _Counting:
+    """The engine, with each step(n) call's n noted."""
+
+    def __init__(self, core, calls):
+        self._core, self._calls = core, calls
+
+    def step(self, n):
+        self._calls.append(n)
+        return self._core.step(n)
+
+    def __getattr__(self, name):
+        return getattr(self._core, name)
+
+
+def test_the_engine_refuses_bad_deaths_with_the_parameter_named():
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[0.0, 0.0, 0.0]], mass=1.0)
+    with pytest.raises(ValueError, match=r"time_of_death.*one per particle"):
+        w._core.set_deaths(np.array([1.0, 2.0]), [])
+    with pytest.raises(ValueError, match=r"time_of_death\[0\]"):
+        w._core.set_deaths(np.array([np.nan]), [])
+    with pytest.raises(ValueError, match=r"radius"):
+        w._core.set_deaths(None, [("sphere", [0.0, 0.0, 0.0], -1.0)])
+    with pytest.raises(ValueError, match=r"unknown"):
+        w._core.set_deaths(None, [("cone", [0.0, 0.0, 0.0], 1.0)])

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import _checks, _core
 from .colliders import Box, Collider
-from .emitter import KILL_VOLUMES, Emitter
+from .emitter import KILL_VOLUMES, Emitter, KillBox, KillSphere
 from .forces import Spring
 from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
@@ -488,29 +488,84 @@ class World(WorldCollisions):
         return bool(self._emitters or self._kills or (not _unset(self._death) and np.isfinite(self._death).any()))
 
     def _advance(self, n: int) -> None:
-        """``n`` steps. With emitters, kill volumes or particles that die of age, one step at
-        a time: the births due by the step's start are added before it (``kinema.emitter``),
-        the dead removed after it. The stable-step advisor looks at the newborn at the next
-        call of :meth:`step` or the next frame of :meth:`run`."""
+        """``n`` steps. With emitters, the steps run in batches up to the next step boundary at
+        which a birth is due (or one at a time while a newborn waits for its place): the births
+        due by a step's start are added before it (``kinema.emitter``). Deaths (times of death,
+        kill volumes) are the engine's, after each step (``World::set_deaths``). The stable-step
+        advisor looks at the newborn at the next call of :meth:`step` or the next frame of
+        :meth:`run`."""
         if not self._changes_count():
             with self._engine() as core:
                 core.step(n)
                 self._notice_placement(core)
             return
-        for _ in range(n):
+        left = n
+        while left > 0:
             self._births()
             if self._advice_due and len(self) >= 2 * self._advised_at:
                 # newborns may be stiffer than what was there (contacts of a first pair): the
                 # advisor looks again at the first births and whenever the count has doubled
                 with self._engine() as core:
                     self._advise(core)
+            k = self._steps_before_births(left)
+            before = np.asarray(self._core.ids, dtype=np.int64)
             try:
                 with self._engine() as core:
-                    core.step(1)
+                    self._send_deaths(core)
+                    core.step(k)
                     self._notice_placement(core)
             finally:
+                self._drop_removed(before)
                 self._pull()
-            self._deaths()
+            left -= k
+
+    def _steps_before_births(self, most: int) -> int:
+        """How many steps (1 to ``most``) the engine may take before the next step boundary at
+        which some emitter has a particle due: each source's next birth time, as its own
+        ``due`` counts it at the boundaries t = s·dt (the engine's clock), or 1 while one holds
+        back a particle whose place was taken."""
+        if not self._emitters:
+            return most
+        dt, now = self._core.dt, self._core.steps
+        k = most
+        for source in self._emitters:
+            if source.waiting is not None:
+                return 1
+            c = source.c
+            born = c["start"] + source.emitted / c["rate"]  # the next particle's birth time
+            if not born < c["end"] or not np.isfinite(born):
+                continue
+            s = max(now + 1, int(born / dt) - 1)
+            while s - now < k and source.due(float(s) * dt) <= source.emitted:
+                s += 1
+            k = min(k, s - now)
+        return max(k, 1)
+
+    def _send_deaths(self, core: Any) -> None:
+        """Hands the engine the times of death and the kill volumes (``core``: lent by
+        :meth:`_engine`)."""
+        death = None if _unset(self._death) or not np.isfinite(self._death).any() else np.ascontiguousarray(self._death, dtype=float)
+        kills = []
+        for volume in self._kills:
+            if isinstance(volume, KillBox):
+                kills.append(("box", list(map(float, volume.lo)), [float(c) for c in volume.hi]))
+            elif isinstance(volume, KillSphere):
+                kills.append(("sphere", list(map(float, volume.center)), float(volume.radius)))
+            else:
+                kills.append(("plane", list(map(float, volume.point)), [float(c) for c in volume.normal]))
+        core.set_deaths(death, kills)
+
+    def _drop_removed(self, before: np.ndarray) -> None:
+        """Drops what the Python world holds for the particles the engine's deaths removed
+        (``before``: the ids the world had, in its order)."""
+        gone = np.asarray(self._core.take_removed_ids(), dtype=np.int64)
+        if gone.size == 0:
+            return
+        keep = ~np.isin(before, gone)
+        self._species = [s for s, k in zip(self._species, keep, strict=True) if k]
+        self._death, self._colors = _kept(self._death, keep), _kept(self._colors, keep)
+        self._new_views()
+        self._advice_due = True
 
     @staticmethod
     def _notice_placement(core: Any) -> None:
@@ -552,13 +607,6 @@ class World(WorldCollisions):
             if taken.size and (np.einsum("ij,ij->i", taken - x[k], taken - x[k]) < reach * reach).any():
                 free[k] = False
         return free
-
-    def _deaths(self) -> None:
-        dead = self._death <= self.time
-        for volume in self._kills:
-            dead |= volume.inside(self._x)
-        if dead.any():
-            self.remove_particles(dead)
 
     def run(
         self,

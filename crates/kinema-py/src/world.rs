@@ -4,6 +4,7 @@
 
 use kinema::collide::{Partner, Surface};
 use kinema::forces::{Attractor, Drag, Gravity, Springs, Wind};
+use kinema::world::KillVolume;
 use kinema::{World, WorldParams};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -185,6 +186,45 @@ impl PyWorld {
     /// Removes the particles at these indices (checked; repeats allowed).
     fn remove_particles(&mut self, indices: Vec<usize>) -> PyResult<()> {
         self.inner.remove_particles(&indices).map_err(to_py)
+    }
+
+    /// Sets the deaths the engine carries out after each step: each particle's time of
+    /// death (s, inf: never; None: nobody dies of age) and the kill volumes, each
+    /// ("box", lo, hi), ("sphere", center, radius) or ("plane", point, normal).
+    #[pyo3(signature = (time_of_death, kills))]
+    fn set_deaths(
+        &mut self,
+        time_of_death: Option<PyReadonlyArray1<'_, f64>>,
+        kills: Vec<(String, [f64; 3], Bound<'_, PyAny>)>,
+    ) -> PyResult<()> {
+        let time_of_death = time_of_death.map(|t| t.as_array().to_vec());
+        let kills = kills
+            .into_iter()
+            .map(|(kind, a, b)| {
+                Ok(match kind.as_str() {
+                    "box" => KillVolume::Box { lo: a, hi: b.extract()? },
+                    "sphere" => KillVolume::Sphere {
+                        center: a,
+                        radius: b.extract()?,
+                    },
+                    "plane" => KillVolume::Plane {
+                        point: a,
+                        normal: b.extract()?,
+                    },
+                    other => {
+                        return Err(PyValueError::new_err(format!(
+                            "kill volume {other:?} is unknown: \"box\", \"sphere\" or \"plane\""
+                        )))
+                    }
+                })
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        self.inner.set_deaths(time_of_death, kills).map_err(to_py)
+    }
+
+    /// The ids of the particles the engine's deaths removed since the last call.
+    fn take_removed_ids(&mut self) -> Vec<u64> {
+        self.inner.take_removed_ids()
     }
 
     fn add_gravity(&mut self, g: [f64; 3]) -> PyResult<()> {

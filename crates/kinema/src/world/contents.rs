@@ -28,6 +28,9 @@ impl World {
             }
         }
         let range = self.particles.add(x, v, mass, radius, pinned)?;
+        if !self.deaths.time.is_empty() {
+            self.deaths.time.resize(self.particles.len(), f64::INFINITY); // (live until set)
+        }
         for f in &self.forces {
             f.validate(self.particles.len())?;
         }
@@ -78,6 +81,7 @@ impl World {
         for v in [&mut self.x_next, &mut self.v_next] {
             crate::particles::retain_rows(v, 3, &keep);
         }
+        crate::particles::retain_rows(&mut self.deaths.time, 1, &keep);
         for f in &mut self.forces {
             f.reindex(&new_of_old);
         }

@@ -9,6 +9,7 @@
 //!   collision settings, colliders, materials and periodic axes;
 //! - `divergence.rs`: the non-finite and runaway-energy checks that refuse a step;
 //! - `contents.rs`: adding and removing particles and forces;
+//! - `deaths.rs`: the deaths (times of death, kill volumes) carried out after each step;
 //! - `checkpoint.rs`: what a checkpoint takes and gives back besides the particles' state;
 //! - `measures.rs`: diagnostics, accelerations, the advisor's rates, counters and timings.
 
@@ -17,6 +18,7 @@ mod checkpoint;
 mod collide;
 mod contact_force;
 mod contents;
+mod deaths;
 mod divergence;
 mod dynamics;
 mod event_driven;
@@ -28,6 +30,7 @@ mod order;
 pub use crate::collide::stage::{ColliderBooks, CollisionParams, CollisionStats, ContactModel};
 pub use crate::interrupt::Interrupt;
 pub use advisor::Rates;
+pub use deaths::KillVolume;
 pub use divergence::{RUNAWAY_CHECK_EVERY, RUNAWAY_FACTOR};
 pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
 pub use measures::LinearSolve;
@@ -39,6 +42,7 @@ use crate::ode::stepper::Stats;
 use crate::ode::{Integrator, Method};
 use crate::particles::Particles;
 use contact_force::{ContactForce, CHUNK};
+use deaths::Deaths;
 use divergence::EnergyWatch;
 use integrate::WorldStepper;
 use std::cell::RefCell;
@@ -106,6 +110,10 @@ pub struct World {
     times: StageTimes,
     /// Asked between the stages of a step and inside long ones whether to stop (Ctrl-C).
     interrupt: Interrupt,
+    /// The deaths carried out after each step (`deaths.rs`).
+    deaths: Deaths,
+    /// The ids of the particles those deaths removed, until taken.
+    removed_ids: Vec<u64>,
 }
 
 /// Wall-clock time spent in the seed's four stages of [`World::step`], summed over all steps.
@@ -155,6 +163,8 @@ impl World {
             placement_notice: None,
             times: StageTimes::default(),
             interrupt: Interrupt::none(),
+            deaths: Deaths::default(),
+            removed_ids: Vec::new(),
         })
     }
 
@@ -227,12 +237,23 @@ impl World {
     /// engine's order (sorted along space) after it, for the next slice, until
     /// [`World::restore_order`] puts them back in the user's (every other method expects
     /// that order: call it before anything else).
+    ///
+    /// After each step the deaths set by [`World::set_deaths`] are carried out (which puts
+    /// the particles back in the user's order when someone dies).
     pub fn advance_in_engine_order(&mut self, n: u64) -> Result<(), Error> {
         if n > 0 && self.collide_stage.as_ref().is_some_and(|s| s.params.event_driven) {
-            return self.advance_by_events(n);
+            if !self.deaths.any() {
+                return self.advance_by_events(n);
+            }
+            for _ in 0..n {
+                self.advance_by_events(1)?;
+                self.carry_out_deaths()?;
+            }
+            return Ok(());
         }
         for _ in 0..n {
             self.step_once()?;
+            self.carry_out_deaths()?;
         }
         Ok(())
     }

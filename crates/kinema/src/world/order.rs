@@ -159,6 +159,7 @@ impl World {
         gather(&mut p.inv_mass, old_of_new);
         gather(&mut p.radius, old_of_new);
         gather(&mut p.id, old_of_new);
+        gather(&mut self.deaths.time, old_of_new);
         if let Some(stage) = &mut self.collide_stage {
             gather(&mut stage.own, old_of_new);
         }
