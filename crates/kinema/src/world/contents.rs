@@ -57,8 +57,9 @@ impl World {
     /// Removes the particles at the given indices (the user's order; repeats allowed); the
     /// others keep their order, their ids and their state. A removed particle takes with it
     /// what the forces hold for it (springs ending on it, [`Force::remove_particles`]) and its
-    /// own collision materials; the integrator's and the collision stage's caches start
-    /// again, as after [`World::add_particles`]. Between steps only: the time, the step
+    /// own collision materials; the integrator's caches start again, as after
+    /// [`World::add_particles`]; the impulse model's contacts between survivors keep their
+    /// warm start (every island wakes). Between steps only: the time, the step
     /// count and the collision books go on.
     pub fn remove_particles(&mut self, indices: &[usize]) -> Result<(), Error> {
         let n = self.particles.len();
@@ -78,6 +79,12 @@ impl World {
             keep[i] = false;
         }
         let new_of_old = self.particles.retain(&keep);
+        // The survivors' contacts keep their warm start (renumbered), as Rapier's change
+        // flags keep the contacts of what did not change.
+        let kept = self
+            .collide_stage
+            .as_mut()
+            .map(|stage| stage.impulse.take_contacts_renumbered(&new_of_old));
         for v in [&mut self.x_next, &mut self.v_next] {
             crate::particles::retain_rows(v, 3, &keep);
         }
@@ -93,7 +100,13 @@ impl World {
         if self.placement_from.is_some() {
             self.placement_from = Some(0); // (the pending newcomers were renumbered)
         }
-        self.rebuild_contact_force()
+        self.rebuild_contact_force()?;
+        if let (Some(stage), Some(kept)) = (&mut self.collide_stage, kept) {
+            if stage.params.model == ContactModel::Impulse {
+                stage.impulse.keep_contacts(kept, self.particles.len());
+            }
+        }
+        Ok(())
     }
 
     /// Adds a force, checked against the current particles (before the spring–dashpot contact

@@ -265,6 +265,34 @@ impl ImpulseModel {
         }
     }
 
+    /// Particles are being removed (`new_of_old[i]`: particle i's index after,
+    /// [`GONE`](crate::particles::GONE) for a removed one): the contacts between survivors,
+    /// renumbered, with their warm starts, for [`ImpulseModel::keep_contacts`]. Every island
+    /// wakes (a sleeping island's contacts join the others): what is removed may have held
+    /// any of them up.
+    pub fn take_contacts_renumbered(&mut self, new_of_old: &[u32]) -> KeptContacts {
+        use crate::particles::GONE;
+        let warm = self
+            .all_warm()
+            .into_iter()
+            .filter_map(|(i, partner, impulse)| {
+                let i = *new_of_old.get(i).filter(|&&i| i != GONE)?;
+                let partner = match partner {
+                    Partner::Particle(j) => Partner::Particle(*new_of_old.get(j).filter(|&&j| j != GONE)? as usize),
+                    other => other,
+                };
+                Some((i as usize, partner, impulse))
+            })
+            .collect();
+        self.warm.clear();
+        self.resting.clear();
+        self.sleep.wake_all();
+        KeptContacts {
+            warm,
+            sleep: Sleep::default(),
+        }
+    }
+
     /// Particles were added (now `n`): the list is rebuilt, and the contacts of the others
     /// and their islands asleep, taken before, stay (their numbers did not change).
     pub fn keep_contacts(&mut self, kept: KeptContacts, n: usize) {
