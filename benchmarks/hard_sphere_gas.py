@@ -133,8 +133,7 @@ def main() -> int:
 
     n = runs[modes[0]][0]["n"]
     expected = enskog_collisions(n, args.time)
-    print(f"hard-sphere gas: N = {n}, packing fraction {PHI}, e = 1, periodic, t = 0 → {args.time}; "
-          f"{args.threads} thread(s), {args.repeat} runs each, medians")
+    print(f"hard-sphere gas: N = {n}, packing fraction {PHI}, e = 1, periodic, t = 0 → {args.time}; {args.threads} thread(s), {args.repeat} runs each, medians")
     print(f"Enskog's collision count for this run: {expected:.4g}")
     print(f"{'mode':<22} {'collisions':>11} {'/Enskog':>8} {'CPU s':>8} {'wall s':>8} {'coll/CPU-s':>11} {'coll/wall-s':>12} {'energy drift':>13}")
     best = {}
@@ -145,8 +144,10 @@ def main() -> int:
         wall = statistics.median(r["wall"] for r in rs)
         rate = statistics.median(r["collisions"] / r["cpu"] for r in rs)
         best[mode] = rate
-        print(f"{'kinema ' + mode:<22} {coll:>11.0f} {coll / expected:>8.3f} {cpu:>8.2f} {wall:>8.2f} {rate:>11.3g} "
-              f"{statistics.median(r['collisions'] / r['wall'] for r in rs):>12.3g} {max(r['energy_drift'] for r in rs):>13.2e}")
+        print(
+            f"{'kinema ' + mode:<22} {coll:>11.0f} {coll / expected:>8.3f} {cpu:>8.2f} {wall:>8.2f} {rate:>11.3g} "
+            f"{statistics.median(r['collisions'] / r['wall'] for r in rs):>12.3g} {max(r['energy_drift'] for r in rs):>13.2e}"
+        )
     print(f"{'published EDMD, 1 core':<22} {'':>11} {'':>8} {'':>8} {'':>8} {PUBLISHED_PER_CORE:>11.3g}")
     for mode in modes:
         print(f"kinema {mode} / published EDMD per CPU-second: {best[mode] / PUBLISHED_PER_CORE:.2f}×")

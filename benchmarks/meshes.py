@@ -148,9 +148,7 @@ def main() -> None:
     for scene in args.scenes:
         for _ in range(args.repeat):
             for container in CONTAINERS:
-                out = subprocess.run(
-                    [sys.executable, __file__, "--worker", scene, container], capture_output=True, text=True, check=True
-                )
+                out = subprocess.run([sys.executable, __file__, "--worker", scene, container], capture_output=True, text=True, check=True)
                 runs.setdefault((scene, container), []).append(json.loads(out.stdout.strip().splitlines()[-1]))
     print(f"N = {N_SIDE * N_SIDE} balls, {STEPS} steps of 1 ms; medians of {args.repeat} runs each, interleaved")
     print(f"{'scene':6} {'container':9} {'triangles':>10} {'ms/step':>9} {'x box':>7} {'build s':>8} {'impacts':>8} {'contacts':>9} {'inside':>7}")
