@@ -313,6 +313,55 @@ impl NeighbourList {
     }
 }
 
+impl NeighbourList {
+    /// Follows a removal of particles (`new_of_old[i]`: particle i's new index,
+    /// [`GONE`](crate::particles::GONE) for a removed one; the survivors keep their order):
+    /// the pairs and collider candidates of the survivors stay, renumbered, with the build's
+    /// positions. The list still holds what it held: every pair of survivors within reach at
+    /// the build is listed (a removal takes pairs away, never adds one), and a half list
+    /// stays a half one (the renumbering keeps the order of indices).
+    pub(crate) fn retain_survivors(&mut self, new_of_old: &[u32]) {
+        use crate::particles::GONE;
+        self.verified = None;
+        if self.built_at.is_empty() {
+            return;
+        }
+        let old_of_new: Vec<u32> = (0..new_of_old.len() as u32)
+            .filter(|&o| new_of_old[o as usize] != GONE)
+            .collect();
+        let n = old_of_new.len();
+        let old = std::mem::take(&mut self.rows);
+        let mut rows: Vec<Rows> = Vec::new();
+        rows.resize_with(n.div_ceil(CHUNK), Rows::default);
+        rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
+            rows.start.clear();
+            rows.partners.clear();
+            rows.start.push(0);
+            for &o in &old_of_new[c * CHUNK..((c + 1) * CHUNK).min(n)] {
+                let o = o as usize;
+                let kept = old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]);
+                rows.partners.extend(kept.filter(|&j| j != GONE));
+                rows.start.push(rows.partners.len() as u32);
+            }
+        });
+        self.rows = rows;
+        self.walls.retain_mut(|w| match new_of_old[w.0] {
+            GONE => false,
+            k => {
+                w.0 = k as usize;
+                true
+            }
+        });
+        self.built_at = old_of_new
+            .iter()
+            .flat_map(|&o| {
+                let o = 3 * o as usize;
+                [self.built_at[o], self.built_at[o + 1], self.built_at[o + 2]]
+            })
+            .collect();
+    }
+}
+
 /// A full list's rows in the new numbering: particle i's row is its old row, renumbered
 /// and sorted again.
 fn renumbered(old: &[Rows], new_of_old: &[u32], old_of_new: &[u32]) -> Vec<Rows> {

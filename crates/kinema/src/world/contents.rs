@@ -59,7 +59,8 @@ impl World {
     /// what the forces hold for it (springs ending on it, [`Force::remove_particles`]) and its
     /// own collision materials; the integrator's caches start again, as after
     /// [`World::add_particles`]; the impulse model's contacts between survivors keep their
-    /// warm start (every island wakes). Between steps only: the time, the step
+    /// warm start (every island wakes), and the spring–dashpot force's neighbour list their
+    /// pairs. Between steps only: the time, the step
     /// count and the collision books go on.
     pub fn remove_particles(&mut self, indices: &[usize]) -> Result<(), Error> {
         let n = self.particles.len();
@@ -85,6 +86,8 @@ impl World {
             .collide_stage
             .as_mut()
             .map(|stage| stage.impulse.take_contacts_renumbered(&new_of_old));
+        // and the spring–dashpot force's neighbour list keeps the survivors' pairs
+        let list = self.contact.as_ref().map(|c| c.borrow_mut().take_list());
         for v in [&mut self.x_next, &mut self.v_next] {
             crate::particles::retain_rows(v, 3, &keep);
         }
@@ -105,6 +108,9 @@ impl World {
             if stage.params.model == ContactModel::Impulse {
                 stage.impulse.keep_contacts(kept, self.particles.len());
             }
+        }
+        if let (Some(contact), Some(list)) = (&self.contact, list) {
+            contact.borrow_mut().keep_list(list, &new_of_old);
         }
         Ok(())
     }

@@ -189,6 +189,22 @@ impl ContactForce {
         self.scratch().list.verified = None;
     }
 
+    /// Takes this force's neighbour list (for the force that replaces it after a removal,
+    /// [`ContactForce::keep_list`]); this force is left without one.
+    pub fn take_list(&mut self) -> NeighbourList {
+        std::mem::take(&mut self.scratch().list)
+    }
+
+    /// Gives this force the list of the force it replaces, after particles were removed
+    /// (`new_of_old` as [`NeighbourList::retain_survivors`] takes it): the survivors' pairs
+    /// stay listed, so the next evaluation need not search the grid again.
+    pub fn keep_list(&mut self, mut list: NeighbourList, new_of_old: &[u32]) {
+        list.retain_survivors(new_of_old);
+        if list.half {
+            self.scratch().list = list;
+        }
+    }
+
     /// The width of the cells the neighbour list searches, 2 r_max + skin, m.
     pub fn reach(&self) -> f64 {
         2.0 * self.radius.iter().fold(0.0, |m: f64, r| m.max(*r)) + self.skin

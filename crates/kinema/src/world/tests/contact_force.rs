@@ -598,3 +598,66 @@ fn a_renumbered_half_list_has_the_rows_of_a_build_in_the_new_order() {
         "the build's positions moved with their particles"
     );
 }
+
+#[test]
+fn after_a_removal_the_kept_list_gives_the_forces_of_a_fresh_one_without_a_search() {
+    // A removal takes pairs out of the list and adds none: the force that replaces the old
+    // one keeps the survivors' pairs (renumbered), does not search the grid at its first
+    // evaluation, and gives the forces of a force built afresh on the survivors, bit for bit
+    // (the pairs that do not touch add nothing, and those that do are summed in the same
+    // order).
+    let n = 2 * CHUNK + 300;
+    let (mut force, x, v, mass) = chunked_gas(n);
+    let s = State {
+        t: 0.0,
+        x: &x,
+        v: &v,
+        mass: &mass,
+    };
+    let mut f = vec![0.0; 3 * n];
+    force.accumulate(&s, &mut f).unwrap();
+    let builds = force.list_builds();
+    // every third particle goes
+    let keep: Vec<bool> = (0..n).map(|i| i % 3 != 1).collect();
+    let mut new_of_old = vec![crate::particles::GONE; n];
+    let mut next = 0u32;
+    for (i, _) in keep.iter().enumerate().filter(|(_, k)| **k) {
+        new_of_old[i] = next;
+        next += 1;
+    }
+    let pick = |a: &[f64], width: usize| -> Vec<f64> {
+        a.chunks(width)
+            .zip(&keep)
+            .filter(|(_, k)| **k)
+            .flat_map(|(c, _)| c.to_vec())
+            .collect()
+    };
+    let (x2, v2, m2) = (pick(&x, 3), pick(&v, 3), pick(&mass, 1));
+    let survivors = |force: &ContactForce| ContactForceParams {
+        stiffness: force.stiffness,
+        damping: force.damping,
+        global: force.global,
+        own: None,
+        radius: pick(&force.radius, 1),
+        inv_mass: pick(&force.inv_mass, 1),
+        colliders: Vec::new(),
+        domain: force.domain,
+    };
+    let mut kept = ContactForce::from_params(survivors(&force));
+    kept.keep_list(force.take_list(), &new_of_old);
+    assert_eq!(kept.scratch().list.built_at.len(), x2.len(), "a list, before any evaluation");
+    let mut fresh = ContactForce::from_params(survivors(&force));
+    let s2 = State {
+        t: 0.0,
+        x: &x2,
+        v: &v2,
+        mass: &m2,
+    };
+    let (mut fk, mut ff) = (vec![0.0; x2.len()], vec![0.0; x2.len()]);
+    kept.accumulate(&s2, &mut fk).unwrap();
+    fresh.accumulate(&s2, &mut ff).unwrap();
+    assert_eq!(kept.list_builds(), builds, "no search: the kept list holds");
+    assert_eq!(fresh.list_builds(), 1);
+    assert!(ff.iter().any(|c| *c != 0.0), "the survivors touch");
+    assert_eq!(bits(&fk), bits(&ff), "the forces of a fresh list");
+}
