@@ -89,7 +89,11 @@ impl World {
             self.integrate_joined()?;
         }
         if self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0 {
-            self.check_runaway()?;
+            let checked = self.check_runaway();
+            if let Some(contact) = &self.contact {
+                contact.borrow().forget_energy();
+            }
+            checked?;
         }
         Ok(())
     }
@@ -227,6 +231,7 @@ impl World {
                         v: &p.v,
                         a: &mut b.a,
                         v_out: &mut b.a_next,
+                        energy: self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0,
                     },
                 )?;
                 std::mem::swap(&mut b.a, &mut b.a_next); // a_next = a'

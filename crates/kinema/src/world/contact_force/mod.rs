@@ -82,6 +82,12 @@ struct Scratch {
     sums: Vec<ChunkSums>,
     /// The forces chunks owe particles of later chunks (`pairs.rs`).
     exchange: Exchange,
+    /// The pair energy Σ ½ k_n δ² (J) the fused Verlet pass summed on its way, with the
+    /// positions' buffer (address, length) it was summed at: the runaway check asks for the
+    /// energy at those positions right after, and takes it from here instead of a second
+    /// pass (the same sum, in the same order). Taken once; the world forgets it after the
+    /// check ([`ContactForce::forget_energy`]).
+    pair_energy: Option<((usize, usize), f64)>,
 }
 
 impl Default for Scratch {
@@ -94,6 +100,7 @@ impl Default for Scratch {
             },
             sums: Vec::new(),
             exchange: Exchange::default(),
+            pair_energy: None,
         }
     }
 }
@@ -203,6 +210,12 @@ impl ContactForce {
         if list.half {
             self.scratch().list = list;
         }
+    }
+
+    /// Forgets the pair energy the last fused pass kept (the world calls this after the
+    /// runaway check, so that a buffer reused later is summed again).
+    pub fn forget_energy(&self) {
+        self.scratch().pair_energy = None;
     }
 
     /// The width of the cells the neighbour list searches, 2 r_max + skin, m.

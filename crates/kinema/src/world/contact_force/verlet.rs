@@ -27,6 +27,9 @@ pub(crate) struct VerletKick<'a> {
     pub a: &'a mut [f64],
     /// Out: the new velocities, m/s.
     pub v_out: &'a mut [f64],
+    /// Also sum the pair energy at the drifted positions, for the runaway check that asks
+    /// for it right after ([`ContactForce::forget_energy`] drops it).
+    pub energy: bool,
 }
 
 impl ContactForce {
@@ -56,11 +59,16 @@ impl ContactForce {
             v,
             a,
             v_out,
+            energy,
         } = kick;
         let mut scratch = self.scratch();
         self.update_list(s, &mut scratch)?;
         let Scratch {
-            list, sums, exchange, ..
+            list,
+            sums,
+            exchange,
+            pair_energy,
+            ..
         } = &mut *scratch;
         let (x, vp) = (s.x, s.v);
         // F_i summed in v_out (each chunk's part is written by that chunk alone), started
@@ -70,11 +78,17 @@ impl ContactForce {
             None => fc.fill(0.0),
         };
         let options = PassOptions {
-            energy: false,
+            energy,
             walls: true,
             check_positions: true,
         };
         self.pair_forces(x, vp, list, Some(&mut *v_out), start, options, exchange, sums);
+        *pair_energy = energy.then(|| {
+            (
+                (x.as_ptr() as usize, x.len()),
+                sums.iter().fold(-0.0, |sum, c| sum + c.energy),
+            )
+        });
         let bad_x = sums.iter().find_map(|c| c.bad);
         let exchange = &*exchange;
         let bad = a

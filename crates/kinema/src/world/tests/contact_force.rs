@@ -661,3 +661,53 @@ fn after_a_removal_the_kept_list_gives_the_forces_of_a_fresh_one_without_a_searc
     assert!(ff.iter().any(|c| *c != 0.0), "the survivors touch");
     assert_eq!(bits(&fk), bits(&ff), "the forces of a fresh list");
 }
+
+#[test]
+fn the_fused_pass_keeps_the_pair_energy_the_runaway_check_asks_for_once() {
+    // The fused Verlet pass, asked for the energy, sums Σ ½ k_n δ² on its way; the next
+    // potential_energy at the same positions takes that sum (the same bits as a pass of its
+    // own), once; after forget_energy, or at other positions, it sums again.
+    let n = 2 * CHUNK + 300;
+    let (force, x, v, mass) = chunked_gas(n);
+    let s = State {
+        t: 0.0,
+        x: &x,
+        v: &v,
+        mass: &mass,
+    };
+    let own = force.potential_energy(&s).unwrap();
+    assert!(own > 0.0);
+    let (mut a, mut v_out) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
+    let kick = |a: &'_ mut [f64], v_out: &'_ mut [f64], energy: bool| {
+        force
+            .force_and_kick(
+                &s,
+                VerletKick {
+                    other: None,
+                    inv_mass: &force.inv_mass,
+                    flat: false,
+                    h: 1e-4,
+                    v: &v,
+                    a,
+                    v_out,
+                    energy,
+                },
+            )
+            .unwrap();
+    };
+    kick(&mut a, &mut v_out, true);
+    assert_eq!(force.scratch().pair_energy.map(|e| e.1.to_bits()), Some(own.to_bits()));
+    assert_eq!(force.potential_energy(&s).unwrap().to_bits(), own.to_bits());
+    assert!(force.scratch().pair_energy.is_none(), "taken once");
+    kick(&mut a, &mut v_out, false);
+    assert!(force.scratch().pair_energy.is_none(), "not asked: not kept");
+    kick(&mut a, &mut v_out, true);
+    force.forget_energy();
+    assert!(force.scratch().pair_energy.is_none());
+    // kept for one buffer: other positions (a copy, one sphere moved) are summed afresh
+    kick(&mut a, &mut v_out, true);
+    let mut moved = x.clone();
+    moved[0] += 1e-3;
+    let s2 = State { x: &moved, ..s };
+    assert_ne!(force.potential_energy(&s2).unwrap().to_bits(), own.to_bits());
+}
