@@ -329,22 +329,8 @@ impl NeighbourList {
         let old_of_new: Vec<u32> = (0..new_of_old.len() as u32)
             .filter(|&o| new_of_old[o as usize] != GONE)
             .collect();
-        let n = old_of_new.len();
         let old = std::mem::take(&mut self.rows);
-        let mut rows: Vec<Rows> = Vec::new();
-        rows.resize_with(n.div_ceil(CHUNK), Rows::default);
-        rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
-            rows.start.clear();
-            rows.partners.clear();
-            rows.start.push(0);
-            for &o in &old_of_new[c * CHUNK..((c + 1) * CHUNK).min(n)] {
-                let o = o as usize;
-                let kept = old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]);
-                rows.partners.extend(kept.filter(|&j| j != GONE));
-                rows.start.push(rows.partners.len() as u32);
-            }
-        });
-        self.rows = rows;
+        self.rows = renumbered(&old, new_of_old, &old_of_new);
         self.walls.retain_mut(|w| match new_of_old[w.0] {
             GONE => false,
             k => {
@@ -362,10 +348,13 @@ impl NeighbourList {
     }
 }
 
-/// A full list's rows in the new numbering: particle i's row is its old row, renumbered
-/// and sorted again.
+/// The rows in the new numbering, particle i's being old particle `old_of_new[i]`'s row,
+/// renumbered, without the partners that are gone ([`GONE`](crate::particles::GONE) in
+/// `new_of_old`), sorted again (a full list after any renumbering; any list after a
+/// removal, which keeps the order of indices).
 fn renumbered(old: &[Rows], new_of_old: &[u32], old_of_new: &[u32]) -> Vec<Rows> {
-    let n = new_of_old.len();
+    use crate::particles::GONE;
+    let n = old_of_new.len();
     let mut rows: Vec<Rows> = Vec::new();
     rows.resize_with(n.div_ceil(CHUNK), Rows::default);
     rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
@@ -375,8 +364,8 @@ fn renumbered(old: &[Rows], new_of_old: &[u32], old_of_new: &[u32]) -> Vec<Rows>
         for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
             let o = old_of_new[i] as usize;
             let first = rows.partners.len();
-            rows.partners
-                .extend(old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]));
+            let kept = old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]);
+            rows.partners.extend(kept.filter(|&j| j != GONE));
             rows.partners[first..].sort_unstable();
             rows.start.push(rows.partners.len() as u32);
         }
