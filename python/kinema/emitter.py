@@ -350,8 +350,9 @@ class KillBox:
         if not np.all(hi >= lo):
             raise ValueError(f"lo = {lo.tolist()}, hi = {hi.tolist()} are invalid: hi must be >= lo along every axis")
 
-    def inside(self, x: np.ndarray) -> np.ndarray:
-        return np.all((x >= np.asarray(self.lo, float)) & (x <= np.asarray(self.hi, float)), axis=1)
+    def _spec(self) -> tuple:
+        """What the engine's deaths test (``KillVolume::Box``: lo <= x <= hi along every axis)."""
+        return ("box", [float(c) for c in self.lo], [float(c) for c in self.hi])
 
     def _attach(self, world: Any) -> None:
         world._kills.append(self)
@@ -368,8 +369,9 @@ class KillSphere:
         _vec3("center", self.center)
         _positive("radius", self.radius, "it must be a finite number > 0 m")
 
-    def inside(self, x: np.ndarray) -> np.ndarray:
-        return np.sum((x - np.asarray(self.center, float)) ** 2, axis=1) <= float(self.radius) ** 2
+    def _spec(self) -> tuple:
+        """What the engine's deaths test (``KillVolume::Sphere``: |x - center|^2 <= radius^2)."""
+        return ("sphere", [float(c) for c in self.center], float(self.radius))
 
     def _attach(self, world: Any) -> None:
         world._kills.append(self)
@@ -388,8 +390,9 @@ class KillPlane:
         if not np.linalg.norm(_vec3("normal", self.normal)) > 0:
             raise ValueError(f"normal = {list(self.normal)} is invalid: it must be a non-zero vector")
 
-    def inside(self, x: np.ndarray) -> np.ndarray:
-        return (x - np.asarray(self.point, float)) @ np.asarray(self.normal, float) < 0
+    def _spec(self) -> tuple:
+        """What the engine's deaths test (``KillVolume::Plane``: (x - point)·normal < 0)."""
+        return ("plane", [float(c) for c in self.point], [float(c) for c in self.normal])
 
     def _attach(self, world: Any) -> None:
         world._kills.append(self)

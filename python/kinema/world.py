@@ -15,7 +15,7 @@ import numpy as np
 
 from . import _checks, _core
 from .colliders import Box, Collider
-from .emitter import KILL_VOLUMES, Emitter, KillBox, KillSphere
+from .emitter import KILL_VOLUMES, Emitter
 from .forces import Spring
 from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
@@ -395,10 +395,7 @@ class World(WorldCollisions):
         self._core.remove_particles(gone.tolist())
         keep = np.ones(n, dtype=bool)
         keep[gone] = False
-        self._species = [s for s, k in zip(self._species, keep, strict=True) if k]
-        self._death, self._colors = _kept(self._death, keep), _kept(self._colors, keep)
-        self._new_views()
-        self._advice_due = True
+        self._forget(keep)
 
     @property
     def ids(self) -> np.ndarray:
@@ -545,15 +542,7 @@ class World(WorldCollisions):
         """Hands the engine the times of death and the kill volumes (``core``: lent by
         :meth:`_engine`)."""
         death = None if _unset(self._death) or not np.isfinite(self._death).any() else np.ascontiguousarray(self._death, dtype=float)
-        kills = []
-        for volume in self._kills:
-            if isinstance(volume, KillBox):
-                kills.append(("box", list(map(float, volume.lo)), [float(c) for c in volume.hi]))
-            elif isinstance(volume, KillSphere):
-                kills.append(("sphere", list(map(float, volume.center)), float(volume.radius)))
-            else:
-                kills.append(("plane", list(map(float, volume.point)), [float(c) for c in volume.normal]))
-        core.set_deaths(death, kills)
+        core.set_deaths(death, [volume._spec() for volume in self._kills])
 
     def _drop_removed(self, before: np.ndarray) -> None:
         """Drops what the Python world holds for the particles the engine's deaths removed
@@ -561,7 +550,11 @@ class World(WorldCollisions):
         gone = np.asarray(self._core.take_removed_ids(), dtype=np.int64)
         if gone.size == 0:
             return
-        keep = ~np.isin(before, gone)
+        self._forget(~np.isin(before, gone))
+
+    def _forget(self, keep: np.ndarray) -> None:
+        """Keeps what the Python world holds per particle for the particles ``keep`` (a mask
+        over the particles before a removal) and reads the state anew."""
         self._species = [s for s, k in zip(self._species, keep, strict=True) if k]
         self._death, self._colors = _kept(self._death, keep), _kept(self._colors, keep)
         self._new_views()
