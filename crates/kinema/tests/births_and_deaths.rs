@@ -150,3 +150,142 @@ fn ids_are_never_reused_and_bad_indices_are_named() {
     w.advance(3).unwrap(); // an empty world steps
     assert_eq!(w.steps(), 3);
 }
+
+/// A spring–dashpot world under gravity and drag in a box: a heap of `n` on a lattice (the
+/// lower half touching), and what `extra` adds (positions), with velocity Verlet.
+fn verlet_world(x: &[f64], v: &[f64], m: &[f64], r: &[f64], springs: bool) -> World {
+    let mut w = World::new(WorldParams {
+        dt: 2e-4,
+        method: Integrator::Named(Method::Verlet),
+        dim: 3,
+    })
+    .unwrap();
+    w.set_collisions(CollisionParams {
+        model: ContactModel::SpringDashpot {
+            stiffness: 2e3,
+            damping: None,
+        },
+        restitution: 0.7,
+        ..CollisionParams::default()
+    })
+    .unwrap();
+    w.add_collider(BoxContainer::new([0.0; 3], [4.0, 4.0, 4.0], Surface::default()).unwrap())
+        .unwrap();
+    w.add_particles(x, v, m, r, &vec![false; m.len()]).unwrap();
+    w.add_force(Box::new(Gravity::new([0.0, 0.0, -9.81]).unwrap())).unwrap();
+    w.add_force(Box::new(kinema::forces::Drag::new(1e-4, 1e-5).unwrap())).unwrap();
+    if springs {
+        w.add_force(Box::new(
+            Springs::with_rest_from_positions(vec![0], vec![1], 50.0, 0.0, x).unwrap(),
+        ))
+        .unwrap();
+    }
+    w
+}
+
+/// Particle i's position and velocity (6 values).
+fn state_of(w: &World, i: usize) -> Vec<f64> {
+    let p = w.particles();
+    [&p.x[3 * i..3 * i + 3], &p.v[3 * i..3 * i + 3]].concat()
+}
+
+#[test]
+fn a_birth_or_death_that_touches_nothing_keeps_verlets_acceleration() {
+    // Under per-particle forces (gravity, drag) and the contact force, a removal of
+    // particles that touch no survivor, and a birth of particles that touch nothing, leave
+    // every other particle's force as it was: the world keeps velocity Verlet's
+    // acceleration (the next step evaluates the forces once, not twice), and every particle
+    // moves, bit for bit, as in a world without the change. The drag makes that a test of the
+    // kept acceleration itself: Verlet's a_n is evaluated at the predictor v + h a (the
+    // dashpot's and the drag's velocity), so an acceleration evaluated afresh at the state
+    // would differ in the last bits. A change that touches, or a force between particles
+    // (a spring), drops it as before.
+    let (mut x, mut v, mut m, mut r) = lattice(300);
+    // 20 loners high above the heap, in free flight, none touching another
+    for k in 0..20 {
+        x.extend([0.2 + 0.18 * k as f64, 2.0, 3.0]);
+        v.extend([0.0, 0.1, 0.0]);
+        m.push(1e-3);
+        r.push(0.02);
+    }
+    let n = m.len();
+    let mut a = verlet_world(&x, &v, &m, &r, false);
+    let mut same = verlet_world(&x, &v, &m, &r, false); // never changed
+    a.advance(30).unwrap();
+    same.advance(30).unwrap();
+    let evals = |w: &World| w.stats().nfev;
+
+    // A death among the loners: one evaluation for the next step (its kick), not two.
+    let gone: Vec<usize> = (n - 20..n).step_by(2).collect();
+    a.remove_particles(&gone).unwrap();
+    let before = evals(&a);
+    a.advance(1).unwrap();
+    assert_eq!(evals(&a) - before, 1, "the kept acceleration: one evaluation per step");
+    a.advance(40).unwrap();
+    same.advance(41).unwrap();
+    let stayed: Vec<usize> = (0..n).filter(|i| !gone.contains(i)).collect();
+    for (now, &i) in stayed.iter().enumerate() {
+        assert_eq!(state_of(&a, now), state_of(&same, i), "after a death: particle {i}");
+    }
+
+    // A birth in free space: the newborns' acceleration from the per-particle forces alone;
+    // they move as they would alone in a world of their own, the others as before.
+    let born = [1.0, 3.0, 3.5, 2.0, 3.0, 3.5, 3.0, 3.0, 3.5];
+    let (vb, mb, rb, pinned) = (
+        [0.0, 0.0, -1.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [2e-3, 1e-3, 1e-3],
+        [0.03, 0.02, 0.02],
+        [false, false, true],
+    );
+    a.add_particles(&born, &vb, &mb, &rb, &pinned).unwrap();
+    let mut alone = World::new(WorldParams {
+        dt: 2e-4,
+        method: Integrator::Named(Method::Verlet),
+        dim: 3,
+    })
+    .unwrap();
+    alone.set_collisions(a.collision_params().unwrap()).unwrap();
+    alone
+        .add_collider(BoxContainer::new([0.0; 3], [4.0, 4.0, 4.0], Surface::default()).unwrap())
+        .unwrap();
+    alone.add_particles(&born, &vb, &mb, &rb, &pinned).unwrap();
+    alone.add_force(Box::new(Gravity::new([0.0, 0.0, -9.81]).unwrap())).unwrap();
+    alone
+        .add_force(Box::new(kinema::forces::Drag::new(1e-4, 1e-5).unwrap()))
+        .unwrap();
+    let before = evals(&a);
+    a.advance(1).unwrap();
+    assert_eq!(evals(&a) - before, 1, "a birth that touches nothing keeps it too");
+    a.advance(40).unwrap();
+    same.advance(41).unwrap();
+    alone.advance(41).unwrap();
+    for (now, &i) in stayed.iter().enumerate() {
+        assert_eq!(state_of(&a, now), state_of(&same, i), "after a birth: particle {i}");
+    }
+    for k in 0..3 {
+        assert_eq!(state_of(&a, stayed.len() + k), state_of(&alone, k), "newborn {k}");
+    }
+    assert!(state_of(&a, stayed.len())[2] < 3.5 - 0.005, "the newborn falls");
+
+    // A birth of two that overlap, and then the death of one of them while they still do:
+    // evaluated afresh.
+    let pair = [3.0, 1.0, 1.0, 3.05, 1.0, 1.0];
+    a.add_particles(&pair, &[0.0; 6], &[1e-3; 2], &[0.03; 2], &[false; 2])
+        .unwrap();
+    let before = evals(&a);
+    a.advance(1).unwrap();
+    assert_eq!(evals(&a) - before, 2, "newborns that touch: afresh");
+    let last = a.particles().len() - 1;
+    a.remove_particles(&[last]).unwrap();
+    let before = evals(&a);
+    a.advance(1).unwrap();
+    assert_eq!(evals(&a) - before, 2, "a death that touched a survivor: afresh");
+
+    // A spring between particles: any change evaluates afresh.
+    let mut s = verlet_world(&x, &v, &m, &r, true);
+    s.advance(5).unwrap();
+    s.remove_particles(&[n - 1]).unwrap();
+    let before = evals(&s);
+    s.advance(1).unwrap();
+    assert_eq!(evals(&s) - before, 2, "with a spring: afresh");
+}

@@ -95,6 +95,11 @@ pub(crate) struct NeighbourList {
     pub(crate) built_at: Vec<f64>,
     /// The list holds while the two largest displacements since the build sum to less, m.
     pub(crate) allowance: f64,
+    /// The build's skin s, m, and the parts of its rounding allowance's scale (see the type's
+    /// doc): the largest |coordinate| of particles and colliders, the periods' sum and the
+    /// largest radius, m. A birth's admission ([`NeighbourList::admit`]) tests with them.
+    pub(crate) skin: f64,
+    pub(crate) extent: [f64; 3],
     /// Builds so far.
     pub(crate) builds: usize,
     /// The buffer (address, length) at which [`ContactForce::list_expired`] just found that
@@ -243,8 +248,9 @@ impl NeighbourList {
         let periods = domain
             .periodic_box()
             .map_or(0.0, |p| (0..3).filter(|&k| p.axes()[k]).map(|k| p.period(k)).sum());
-        let scale = largest(x).max(collider_scale) + periods + 2.0 * largest(radius) + skin;
-        self.allowance = skin - 1e-12 * scale;
+        self.skin = skin;
+        self.extent = [largest(x).max(collider_scale), periods, largest(radius)];
+        self.allowance = self.allowance_now();
         self.builds += 1;
         Ok(())
     }
@@ -345,6 +351,105 @@ impl NeighbourList {
                 [self.built_at[o], self.built_at[o + 1], self.built_at[o + 2]]
             })
             .collect();
+    }
+}
+
+impl NeighbourList {
+    /// The most particles × newborns [`NeighbourList::admit`] tests one by one; more
+    /// newborns than that at once are cheaper to find by a new build on the grid.
+    pub(crate) const ADMIT_MAX_TESTS: usize = 1 << 24;
+
+    /// Follows a birth: particles `start..` of `x`, `radius` (m) are new, the others are the
+    /// list's own. Each newborn k is listed with every particle i that is within
+    /// r_i + r_k + s of it, i's position taken where the build saw it (a newborn's: where it
+    /// is born), and as a candidate of every collider within s; its build position is where
+    /// it is now. That is the build's own criterion against the build's positions, so the
+    /// argument of the type's doc carries over unchanged: a newborn has moved 0 since its
+    /// "build", and a pair left out was at least r_i + r_k + s apart in build positions. The
+    /// rounding allowance grows with the scale if the newborns lie farther out. The rows stay
+    /// ascending (a newborn's index exceeds every old one), so the contacts are summed in the
+    /// order a new build would give.
+    ///
+    /// Returns false, leaving no list (the next evaluation builds one), when there is none to
+    /// extend or the newborns are too many to test one by one ([`Self::ADMIT_MAX_TESTS`]).
+    pub(crate) fn admit(&mut self, x: &[f64], radius: &[f64], colliders: &[Collider], domain: &Domain, start: usize) -> bool {
+        self.verified = None;
+        let n = radius.len();
+        let fresh = n - start;
+        if self.built_at.len() != 3 * start || fresh.saturating_mul(n) > Self::ADMIT_MAX_TESTS || n > u32::MAX as usize {
+            self.built_at.clear();
+            return false;
+        }
+        if fresh == 0 {
+            return true;
+        }
+        let skin = self.skin;
+        self.built_at.extend_from_slice(&x[3 * start..]);
+        let at = |i: usize, b: &[f64]| [b[3 * i], b[3 * i + 1], b[3 * i + 2]];
+        // The new pairs (i, k), i < k, k a newborn, by the row of i.
+        let mut added: Vec<(u32, u32)> = Vec::new();
+        for k in start..n {
+            let xk = at(k, &self.built_at);
+            for i in 0..k {
+                let d = domain.displacement(xk, at(i, &self.built_at));
+                let reach = radius[i] + radius[k] + skin;
+                if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach {
+                    added.push((i as u32, k as u32));
+                }
+            }
+        }
+        added.sort_unstable();
+        // Each chunk's rows again, with the additions after each particle's old partners.
+        self.rows.resize_with(n.div_ceil(CHUNK), Rows::default);
+        let mut next = added.iter().peekable();
+        for (c, rows) in self.rows.iter_mut().enumerate() {
+            let first = c * CHUNK;
+            let end = ((c + 1) * CHUNK).min(n);
+            if next.peek().is_none_or(|&&(i, _)| i as usize >= end) && rows.len() == end - first {
+                continue; // nothing new in this chunk
+            }
+            let old = std::mem::take(rows);
+            rows.start.push(0);
+            for i in first..end {
+                if i - first < old.len() {
+                    rows.partners.extend_from_slice(old.of(i - first));
+                }
+                while let Some(&&(a, b)) = next.peek() {
+                    if a as usize != i {
+                        break;
+                    }
+                    rows.partners.push(b);
+                    next.next();
+                }
+                rows.start.push(rows.partners.len() as u32);
+            }
+        }
+        if !colliders.is_empty() {
+            let walled: Vec<bool> = active_walls(colliders, domain).iter().map(|a| a.iter().any(|&w| w)).collect();
+            for i in start..n {
+                for (k, c) in colliders.iter().enumerate().filter(|&(k, _)| walled[k]) {
+                    let mut near = c.is_moving();
+                    if !near {
+                        c.for_each_touch(at(i, x), radius[i], skin, |_| near = true);
+                    }
+                    if near {
+                        self.walls.push((i, k));
+                    }
+                }
+            }
+        }
+        let largest = |a: &[f64]| a.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
+        self.extent[0] = self.extent[0].max(largest(&x[3 * start..]));
+        self.extent[2] = self.extent[2].max(largest(&radius[start..]));
+        self.allowance = self.allowance_now();
+        true
+    }
+
+    /// s − 10⁻¹² scale, scale = the largest |coordinate| + the periods + 2 r_max + s (the
+    /// type's doc).
+    fn allowance_now(&self) -> f64 {
+        let [coordinates, periods, r_max] = self.extent;
+        self.skin - 1e-12 * (coordinates + periods + 2.0 * r_max + self.skin)
     }
 }
 

@@ -116,6 +116,7 @@ impl Force for Attractor {
             depends_on_velocity: false,
             internal: false,
             renumbers: true,
+            per_particle: true,
         }
     }
 

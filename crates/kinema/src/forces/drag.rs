@@ -81,6 +81,7 @@ impl Force for Drag {
             depends_on_velocity: true,
             internal: false,
             renumbers: true,
+            per_particle: true,
         }
     }
 

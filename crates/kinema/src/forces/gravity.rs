@@ -100,6 +100,7 @@ impl Force for Gravity {
             depends_on_velocity: false,
             internal: false,
             renumbers: true,
+            per_particle: true,
         }
     }
 

@@ -79,6 +79,13 @@ pub struct Properties {
     /// near each other in memory; the user never sees that order. False for a force that
     /// knows particles by index and cannot follow: the world then keeps the user's order.
     pub renumbers: bool,
+    /// Whether each particle's force depends on that particle's own position, velocity and
+    /// mass only (a field: gravity, drag, wind, an attractor), with no per-particle data: it
+    /// can be evaluated on any subset of the particles alone, and adding or removing particles
+    /// leaves the others' forces as they were. The world then keeps Verlet's acceleration
+    /// across births and deaths (`world/contents.rs`). False for springs, contacts and
+    /// forces the world knows nothing about.
+    pub per_particle: bool,
 }
 
 impl Properties {
@@ -90,6 +97,7 @@ impl Properties {
         depends_on_velocity: true,
         internal: false,
         renumbers: false,
+        per_particle: false,
     };
 
     /// Whether F is the same for every position and velocity (a uniform field): then a

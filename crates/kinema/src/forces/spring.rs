@@ -469,6 +469,7 @@ impl Force for Springs {
             depends_on_velocity: damped,
             internal: true,
             renumbers: true,
+            per_particle: false,
         }
     }
 

@@ -77,6 +77,7 @@ impl Force for Wind {
             depends_on_velocity: true,
             internal: false,
             renumbers: true,
+            per_particle: true,
         }
     }
 

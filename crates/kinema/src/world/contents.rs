@@ -35,8 +35,12 @@ impl World {
             f.validate(self.particles.len())?;
         }
         // The state changed size; the others' contacts (their warm start, the islands asleep)
-        // stay: their numbers did not change, and a newborn wakes what it touches.
+        // stay: their numbers did not change, and a newborn wakes what it touches. So do the
+        // spring–dashpot force's neighbour list (the newborns' pairs added) and, where the
+        // newborns touch nothing, Verlet's acceleration (`carry.rs`).
         let kept = self.collide_stage.as_mut().map(|stage| stage.impulse.take_contacts());
+        let list = self.contact.as_ref().map(|c| c.borrow_mut().take_list());
+        let a = self.acceleration_before_birth(range.start);
         self.reset_caches();
         self.check_placement_from(range.start);
         if let Some(stage) = &mut self.collide_stage {
@@ -51,14 +55,21 @@ impl World {
                 stage.impulse.keep_contacts(kept, self.particles.len());
             }
         }
+        let admitted = match (&self.contact, list) {
+            (Some(contact), Some(list)) => contact
+                .borrow_mut()
+                .keep_list_with_newborns(list, &self.particles.x, range.start),
+            _ => false,
+        };
+        self.acceleration_after_birth(a, range.start, admitted)?;
         Ok(range)
     }
 
     /// Removes the particles at the given indices (the user's order; repeats allowed); the
     /// others keep their order, their ids and their state. A removed particle takes with it
     /// what the forces hold for it (springs ending on it, [`Force::remove_particles`]) and its
-    /// own collision materials; the integrator's caches start again, as after
-    /// [`World::add_particles`]; the impulse model's contacts between survivors keep their
+    /// own collision materials; velocity Verlet keeps the survivors' acceleration where the
+    /// removal leaves it right (`carry.rs`), the other methods' caches start again; the impulse model's contacts between survivors keep their
     /// warm start (every island wakes), and the spring–dashpot force's neighbour list their
     /// pairs. Between steps only: the time, the step
     /// count and the collision books go on.
@@ -79,6 +90,8 @@ impl World {
         for &i in indices {
             keep[i] = false;
         }
+        // Verlet's acceleration for the survivors, where the removal leaves it right (`carry.rs`)
+        let a = self.acceleration_after_removal(&keep);
         let new_of_old = self.particles.retain(&keep);
         // The survivors' contacts keep their warm start (renumbered), as Rapier's change
         // flags keep the contacts of what did not change.
@@ -112,6 +125,7 @@ impl World {
         if let (Some(contact), Some(list)) = (&self.contact, list) {
             contact.borrow_mut().keep_list(list, &new_of_old);
         }
+        self.keep_acceleration(a);
         Ok(())
     }
 

@@ -9,11 +9,13 @@
 //!   collision settings, colliders, materials and periodic axes;
 //! - `divergence.rs`: the non-finite and runaway-energy checks that refuse a step;
 //! - `contents.rs`: adding and removing particles and forces;
+//! - `carry.rs`: what a birth or death keeps of velocity Verlet's acceleration;
 //! - `deaths.rs`: the deaths (times of death, kill volumes) carried out after each step;
 //! - `checkpoint.rs`: what a checkpoint takes and gives back besides the particles' state;
 //! - `measures.rs`: diagnostics, accelerations, the advisor's rates, counters and timings.
 
 mod advisor;
+mod carry;
 mod checkpoint;
 mod collide;
 mod contact_force;

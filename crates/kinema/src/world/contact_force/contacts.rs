@@ -81,4 +81,47 @@ impl ContactForce {
             }
         });
     }
+
+    /// Whether, at positions `x` (m), some particle that stays (`keep[i]`) touches one that
+    /// goes, or `None` when the list does not hold at `x` (nothing can be said from it).
+    pub(crate) fn touches_across(&self, x: &[f64], keep: &[bool]) -> Option<bool> {
+        let scratch = self.scratch();
+        let list = &scratch.list;
+        if keep.len() != self.radius.len() || !list.holds(x, &self.domain) {
+            return None;
+        }
+        Some(self.listed_touch(list, x, |i, j| keep[i] != keep[j]))
+    }
+
+    /// Whether a newborn (a particle from `start` on) touches another particle or a collider
+    /// at (x, v), by the list, which must hold there ([`ContactForce::keep_list_with_newborns`]
+    /// admitted them); true when it does not hold (nothing can be said from it).
+    pub(crate) fn newborns_touch(&self, x: &[f64], v: &[f64], start: usize) -> bool {
+        let scratch = self.scratch();
+        let list = &scratch.list;
+        if x.len() != 3 * self.radius.len() || !list.holds(x, &self.domain) {
+            return true;
+        }
+        if self.listed_touch(list, x, |i, j| i.max(j) >= start) {
+            return true;
+        }
+        let mut touch = false;
+        for &(i, k) in list.walls.iter().filter(|w| w.0 >= start) {
+            self.wall_contacts(i, k, x, v, |_| touch = true);
+        }
+        touch
+    }
+
+    /// Whether some listed pair (i, j) that `which` picks overlaps at `x`.
+    fn listed_touch(&self, list: &NeighbourList, x: &[f64], which: impl Fn(usize, usize) -> bool) -> bool {
+        list.rows.iter().enumerate().any(|(c, rows)| {
+            (0..rows.len()).any(|l| {
+                let i = c * CHUNK + l;
+                let xi = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
+                rows.of(l)
+                    .iter()
+                    .any(|&j| which(i, j as usize) && self.overlaps(xi, self.radius[i], j as usize, x))
+            })
+        })
+    }
 }

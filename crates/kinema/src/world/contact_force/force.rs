@@ -50,6 +50,7 @@ impl Force for ContactForce {
             depends_on_velocity: true,
             internal: self.colliders.is_empty(),
             renumbers: true,
+            per_particle: false,
         }
     }
 

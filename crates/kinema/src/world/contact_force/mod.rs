@@ -212,6 +212,17 @@ impl ContactForce {
         }
     }
 
+    /// Gives this force the list of the force it replaces, after particles `start..` were
+    /// born ([`NeighbourList::admit`]: the newborns' pairs are added, the others stay);
+    /// false when the list could not be kept (the next evaluation builds one).
+    pub fn keep_list_with_newborns(&mut self, mut list: NeighbourList, x: &[f64], start: usize) -> bool {
+        if !list.half || !list.admit(x, &self.radius, &self.colliders, &self.domain, start) {
+            return false;
+        }
+        self.scratch().list = list;
+        true
+    }
+
     /// Forgets the pair energy the last fused pass kept (the world calls this after the
     /// runaway check, so that a buffer reused later is summed again).
     pub fn forget_energy(&self) {

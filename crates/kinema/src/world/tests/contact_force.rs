@@ -711,3 +711,111 @@ fn the_fused_pass_keeps_the_pair_energy_the_runaway_check_asks_for_once() {
     let s2 = State { x: &moved, ..s };
     assert_ne!(force.potential_energy(&s2).unwrap().to_bits(), own.to_bits());
 }
+
+#[test]
+fn after_a_birth_the_admitted_list_gives_the_forces_of_a_fresh_one_without_a_search() {
+    // A birth adds the newborns' pairs to the list the force had (each newborn tested
+    // against every particle's build position): the force over all particles then needs no
+    // search at its first evaluation and gives the forces of a force built afresh, bit for
+    // bit, while the old particles have moved since the build (less than the skin allows).
+    let n = 2 * CHUNK + 300;
+    let born = 150; // the last ones, some overlapping old particles and one another
+    let (all, x, v, mass) = chunked_gas(n);
+    let params = |count: usize| ContactForceParams {
+        stiffness: all.stiffness,
+        damping: all.damping,
+        global: all.global,
+        own: None,
+        radius: all.radius[..count].to_vec(),
+        inv_mass: all.inv_mass[..count].to_vec(),
+        colliders: Vec::new(),
+        domain: all.domain,
+    };
+    let old = n - born;
+    let mut before = ContactForce::from_params(params(old));
+    let s_old = State {
+        t: 0.0,
+        x: &x[..3 * old],
+        v: &v[..3 * old],
+        mass: &mass[..old],
+    };
+    before.accumulate(&s_old, &mut vec![0.0; 3 * old]).unwrap();
+    let builds = before.list_builds();
+    // the old particles move a little (a tenth of the skin, along x) before the birth
+    let skin = before.skin;
+    let mut x1 = x.clone();
+    for (i, c) in x1[..3 * old].iter_mut().step_by(3).enumerate() {
+        *c += 0.1 * skin * ((i % 7) as f64 / 7.0);
+    }
+    let mut kept = ContactForce::from_params(params(n));
+    assert!(kept.keep_list_with_newborns(before.take_list(), &x1, old), "admitted");
+    assert!(kept.newborns_touch(&x1, &v, old), "this gas's newborns overlap");
+    let s = State {
+        t: 0.0,
+        x: &x1,
+        v: &v,
+        mass: &mass,
+    };
+    let mut fresh = ContactForce::from_params(params(n));
+    let (mut fk, mut ff) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
+    kept.accumulate(&s, &mut fk).unwrap();
+    fresh.accumulate(&s, &mut ff).unwrap();
+    assert_eq!(kept.list_builds(), builds, "no search: the admitted list holds");
+    assert!(ff[3 * old..].iter().any(|c| *c != 0.0), "the newborns touch");
+    assert_eq!(bits(&fk), bits(&ff), "the forces of a fresh list");
+
+    // Too many newborns at once for one-by-one tests: no list is kept.
+    let mut many = ContactForce::from_params(params(n));
+    let mut list = ContactForce::from_params(params(old));
+    list.accumulate(&s_old, &mut vec![0.0; 3 * old]).unwrap();
+    let mut taken = list.take_list();
+    taken.skin = skin;
+    assert!(n * born <= NeighbourList::ADMIT_MAX_TESTS);
+    let limit_n = NeighbourList::ADMIT_MAX_TESTS / n + 1;
+    assert!(!many.keep_list_with_newborns(taken, &x1, n - limit_n), "a new build instead");
+}
+
+#[test]
+fn the_list_tells_which_changes_touch() {
+    // Two touching pairs and a loner: a removal of the loner touches no survivor, one of a
+    // pair's partners does; a newborn far from all touches nothing, one on a particle does.
+    let domain = Domain::open(3).unwrap();
+    let params = |radius: Vec<f64>| ContactForceParams {
+        stiffness: 1e3,
+        damping: None,
+        global: Material::new(0.5, 0.0).unwrap(),
+        own: None,
+        inv_mass: vec![1.0; radius.len()],
+        radius,
+        colliders: Vec::new(),
+        domain,
+    };
+    let x = [0.0, 0.0, 0.0, 0.15, 0.0, 0.0, 1.0, 0.0, 0.0, 1.15, 0.0, 0.0, 3.0, 0.0, 0.0];
+    let v = [0.0; 15];
+    let mass = [1.0; 5];
+    let mut force = ContactForce::from_params(params(vec![0.1; 5]));
+    let s = State {
+        t: 0.0,
+        x: &x,
+        v: &v,
+        mass: &mass,
+    };
+    force.accumulate(&s, &mut [0.0; 15]).unwrap();
+    assert_eq!(force.touches_across(&x, &[true, true, true, true, false]), Some(false));
+    assert_eq!(force.touches_across(&x, &[true, false, true, true, true]), Some(true));
+    let far = [50.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    assert_eq!(
+        force.touches_across(&far, &[true; 3]),
+        None,
+        "a list over other particles says nothing"
+    );
+    for (at, touches) in [(5.0, false), (3.1, true)] {
+        let mut x6 = x.to_vec();
+        x6.extend([at, 0.0, 0.0]);
+        let mut born = ContactForce::from_params(params(vec![0.1; 6]));
+        let mut old = ContactForce::from_params(params(vec![0.1; 5]));
+        old.accumulate(&s, &mut [0.0; 15]).unwrap();
+        assert!(born.keep_list_with_newborns(old.take_list(), &x6, 5));
+        assert_eq!(born.newborns_touch(&x6, &[0.0; 18], 5), touches, "newborn at x = {at}");
+    }
+}
