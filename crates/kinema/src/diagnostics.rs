@@ -19,7 +19,7 @@ pub struct Diagnostics {
 
 impl Diagnostics {
     /// Measures the state `s` under `forces`.
-    pub fn measure(s: &State, forces: &[Box<dyn Force>]) -> Self {
+    pub fn measure(s: &State, forces: &[&dyn Force]) -> Self {
         let mut kinetic = 0.0;
         let mut p = [0.0; 3];
         let mut l = [0.0; 3];

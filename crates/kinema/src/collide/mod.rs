@@ -45,6 +45,7 @@ pub mod books;
 pub mod broad_phase;
 pub mod colliders;
 pub mod contact;
+pub(crate) mod contact_force;
 pub mod domain;
 pub(crate) mod event_driven;
 pub(crate) mod events;

@@ -145,8 +145,8 @@ impl NeighbourList {
     /// The fewest entries a list may hold before it stops (16 MiB).
     pub(crate) const MIN_ENTRIES: usize = 1 << 22;
 
-    /// Makes the list hold for positions `x` (rebuilt with `grid` and skin `build.skin` if
-    /// needed); `build.collider_scale` is the colliders' largest |coordinate|.
+    /// Makes the list hold for positions `x` (rebuilt with `grid` if needed, with the skin
+    /// and the colliders' largest |coordinate| that `build` works out then).
     pub(crate) fn update(
         &mut self,
         grid: &mut Grid,
@@ -154,9 +154,8 @@ impl NeighbourList {
         radius: &[f64],
         colliders: &[Collider],
         domain: &Domain,
-        build: ListBuild,
+        build: impl FnOnce() -> ListBuild,
     ) -> Result<(), Error> {
-        let ListBuild { skin, collider_scale } = build;
         let moving_now = colliders
             .iter()
             .enumerate()
@@ -165,6 +164,7 @@ impl NeighbourList {
             return Ok(());
         }
         self.verified = None;
+        let ListBuild { skin, collider_scale } = build();
         self.moving = colliders.iter().map(Collider::is_moving).collect();
         self.built_at.clear(); // no list until the build succeeds (non-finite positions fail)
         let n = radius.len();
@@ -577,17 +577,10 @@ mod tests {
             ..NeighbourList::default()
         };
         let err = list
-            .update(
-                &mut grid,
-                &x,
-                &radius,
-                &[],
-                &domain,
-                ListBuild {
-                    skin: 0.1,
-                    collider_scale: 0.0,
-                },
-            )
+            .update(&mut grid, &x, &radius, &[], &domain, || ListBuild {
+                skin: 0.1,
+                collider_scale: 0.0,
+            })
             .unwrap_err();
         assert!(matches!(err, Error::OutOfMemory { .. }), "{err}");
         assert!(
@@ -597,17 +590,10 @@ mod tests {
         );
         assert!(list.rows.is_empty() && list.built_at.is_empty(), "no list is left behind");
         list.entry_limit = None;
-        list.update(
-            &mut grid,
-            &x,
-            &radius,
-            &[],
-            &domain,
-            ListBuild {
-                skin: 0.1,
-                collider_scale: 0.0,
-            },
-        )
+        list.update(&mut grid, &x, &radius, &[], &domain, || ListBuild {
+            skin: 0.1,
+            collider_scale: 0.0,
+        })
         .unwrap();
         let entries: usize = list.rows.iter().map(|r| r.partners.len()).sum();
         assert_eq!(entries, n * (n - 1));

@@ -7,6 +7,7 @@
 //! Newton's restitution law, distribute each impulse onto both particles.
 
 pub use crate::collide::books::ColliderBooks;
+use crate::collide::contact_force::{particle_ratios, Bodies, ContactForce, SpringDashpot};
 use crate::collide::event_driven::{unsupported_collider, EventDriven};
 use crate::collide::impulse::{ImpulseModel, StageSetting};
 use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Motion, Partner, Periodic};
@@ -199,6 +200,14 @@ impl CollisionParams {
     }
 }
 
+/// The spring–dashpot model the settings ask for: `Some` with that model.
+fn spring_dashpot_of(params: &CollisionParams) -> Option<SpringDashpot> {
+    match params.model {
+        ContactModel::SpringDashpot { stiffness, damping } => Some(SpringDashpot::new(stiffness, damping)),
+        ContactModel::Impulse => None,
+    }
+}
+
 /// The collision stages of a world, with their settings, colliders and books; the impulse
 /// model's buffers are its [`ImpulseModel`].
 pub(crate) struct CollideStage {
@@ -214,6 +223,11 @@ pub(crate) struct CollideStage {
     pub domain: Domain,
     /// Detection and response of the impulse model, and their buffers.
     pub impulse: ImpulseModel,
+    /// The spring–dashpot model's constants and buffers, with that model
+    /// ([`CollideStage::contact_force`] lends it out with what it reads).
+    pub spring_dashpot: Option<SpringDashpot>,
+    /// Each particle's (e, ζ) from `particle_materials`, for the spring–dashpot damping.
+    particle_ratios: Option<Vec<(f64, f64)>>,
     pub total: CollisionStats,
     pub last: CollisionStats,
     pub times: CollisionTimes,
@@ -239,6 +253,8 @@ impl CollideStage {
             colliders: Vec::new(),
             domain: Domain::open(dim)?,
             impulse: ImpulseModel::new(),
+            spring_dashpot: spring_dashpot_of(&params),
+            particle_ratios: None,
             total: CollisionStats::default(),
             last: CollisionStats::default(),
             times: CollisionTimes::default(),
@@ -317,6 +333,15 @@ impl CollideStage {
     pub fn set_params(&mut self, params: CollisionParams) -> Result<(), Error> {
         self.material = params.check()?;
         self.params = params.normalised();
+        // the spring–dashpot model's list stays (it lists pairs by geometry alone); its
+        // constants are the new ones
+        self.spring_dashpot = match (self.spring_dashpot.take(), spring_dashpot_of(&self.params)) {
+            (Some(mut kept), Some(new)) => {
+                (kept.stiffness, kept.damping) = (new.stiffness, new.damping);
+                Some(kept)
+            }
+            (_, new) => new,
+        };
         self.events = None;
         self.refresh_materials()
     }
@@ -346,6 +371,7 @@ impl CollideStage {
     pub fn refresh_materials(&mut self) -> Result<(), Error> {
         if self.own.iter().all(|(e, m)| e.is_none() && m.is_none()) {
             self.particle_materials = None;
+            self.particle_ratios = None;
             return Ok(());
         }
         let global = self.material;
@@ -355,7 +381,27 @@ impl CollideStage {
                 .map(|(e, m)| Material::new(e.unwrap_or(global.restitution()), m.unwrap_or(global.friction())))
                 .collect::<Result<_, _>>()?,
         );
+        self.particle_ratios = self.particle_materials.as_deref().map(particle_ratios);
         Ok(())
+    }
+
+    /// The spring–dashpot contact force on particles of radii `radius` (m) and inverse masses
+    /// `inv_mass` (1/kg), with this stage's materials, colliders and domain, for one call;
+    /// `None` with the impulse model.
+    pub fn contact_force<'a>(&'a self, radius: &'a [f64], inv_mass: &'a [f64]) -> Option<ContactForce<'a>> {
+        let model = self.spring_dashpot.as_ref()?;
+        let own = self.particle_materials.as_deref().zip(self.particle_ratios.as_deref());
+        Some(ContactForce::new(
+            model,
+            Bodies {
+                global: self.material,
+                own,
+                radius,
+                inv_mass,
+                colliders: &self.colliders,
+                domain: &self.domain,
+            },
+        ))
     }
 
     /// Makes the axes `axes` periodic with the cell [lo, hi) (m); the walls of a box

@@ -77,7 +77,7 @@ impl Rates {
 
 /// Estimates the [`Rates`] of the forces at state `s` for particles of inverse masses
 /// `inv_mass` (0 = pinned), in `dim` dimensions.
-pub(crate) fn estimate(forces: &mut [Box<dyn Force>], s: &State, inv_mass: &[f64], dim: usize) -> Result<Rates, CallbackError> {
+pub(crate) fn estimate(forces: &mut [&mut dyn Force], s: &State, inv_mass: &[f64], dim: usize) -> Result<Rates, CallbackError> {
     // The bounds add, and hold when every force has one; the stiffest standby oscillation
     // counts whatever the others say.
     let mut all = ForceRates::default();
@@ -111,7 +111,7 @@ pub(crate) fn estimate(forces: &mut [Box<dyn Force>], s: &State, inv_mass: &[f64
 
     // y = M^(−½)(−J_·)M^(−½) u for the stiffness (position) or the damping (velocity) part
     // (the product is written into y, then scaled where it stands).
-    let mut apply = |forces: &mut [Box<dyn Force>], u: &[f64], velocity: bool, y: &mut [f64]| {
+    let mut apply = |forces: &mut [&mut dyn Force], u: &[f64], velocity: bool, y: &mut [f64]| {
         for k in 0..n {
             dx[k] = scale[k] * u[k];
         }

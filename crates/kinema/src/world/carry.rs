@@ -17,23 +17,20 @@
 //! since a contact force that touches nothing adds nothing. Otherwise the cache is dropped,
 //! as before, and the next step starts afresh.
 
+use super::forces::contact_force;
 use super::integrate::{VerletBuffers, WorldStepper};
 use super::World;
 use crate::error::Error;
 use crate::forces::State;
 
 impl World {
-    /// Whether Verlet's acceleration is kept for `n` particles and every force but the
-    /// contact force is a per-particle one.
+    /// Whether Verlet's acceleration is kept for `n` particles and every force (the contact
+    /// force aside) is a per-particle one.
     fn acceleration_carries(&self, n: usize) -> bool {
         let Some(WorldStepper::Verlet(b)) = &self.stepper else {
             return false;
         };
-        let fields = self
-            .forces
-            .iter()
-            .enumerate()
-            .all(|(k, f)| Some(k) == self.contact_force || f.properties().per_particle);
+        let fields = self.forces.iter().all(|f| f.properties().per_particle);
         b.fresh && b.a.len() == 3 * n && fields
     }
 
@@ -54,8 +51,8 @@ impl World {
         if !self.acceleration_carries(keep.len()) {
             return None;
         }
-        if let Some(contact) = &self.contact {
-            if contact.borrow().touches_across(&self.particles.x, keep) != Some(false) {
+        if let Some(contact) = contact_force(&self.collide_stage, &self.particles) {
+            if contact.touches_across(&self.particles.x, keep) != Some(false) {
                 return None;
             }
         }
@@ -88,8 +85,8 @@ impl World {
             return Ok(());
         };
         let p = &self.particles;
-        if let Some(contact) = &self.contact {
-            if !admitted || contact.borrow().newborns_touch(&p.x, &p.v, start) {
+        if let Some(contact) = contact_force(&self.collide_stage, p) {
+            if !admitted || contact.newborns_touch(&p.x, &p.v, start) {
                 return Ok(());
             }
         }
@@ -102,10 +99,8 @@ impl World {
             mass: &p.mass[start..],
         };
         let mut f = vec![0.0; s.x.len()];
-        for (k, force) in self.forces.iter_mut().enumerate() {
-            if Some(k) != self.contact_force {
-                force.accumulate(&s, &mut f)?;
-            }
+        for force in self.forces.iter_mut() {
+            force.accumulate(&s, &mut f)?;
         }
         for (fi, inv_m) in f.chunks_exact(3).zip(&p.inv_mass[start..]) {
             a.extend(fi.iter().map(|fk| fk * inv_m));

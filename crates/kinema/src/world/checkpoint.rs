@@ -57,7 +57,8 @@ impl World {
         self.restore_user_order();
         self.reset_caches();
         self.placement_from = None;
-        self.rebuild_contact_force()
+        self.contacts_changed();
+        Ok(())
     }
 
     /// What the method carries from one step to the next, in the user's order: Verlet's

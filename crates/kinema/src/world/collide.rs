@@ -1,18 +1,15 @@
 //! Stages 2–4 of the world's step, the collide stage, as the world holds it: the step's call
 //! ([`World::collide`], which runs `collide::stage::CollideStage`) and the user's side of it:
-//! turning collisions on, the contact model (and the spring–dashpot contact force it puts
-//! among the forces), the particles' own materials, colliders, periodic axes, and what the
+//! turning collisions on, the contact model (the spring–dashpot model's force is the collide
+//! stage's, lent to each evaluation: `forces.rs`), the particles' own materials, colliders, periodic axes, and what the
 //! stage found (contacts, their books).
 
-use super::contact_force::{ContactForce, ContactForceParams};
 use super::integrate::WorldStepper;
-use super::{order, CollisionParams, CollisionStats, ContactModel, World};
+use super::{CollisionParams, CollisionStats, ContactModel, World};
 use crate::collide::stage::{CollideStage, ColliderBooks, StepFrame};
 use crate::collide::{Collider, Contact, Motion, Periodic};
 use crate::error::{Divergence, Error};
 use crate::forces::EnergyClass;
-use std::cell::RefCell;
-use std::rc::Rc;
 
 impl World {
     /// Stages 2–4 on the integrated state in `x_next`, `v_next` (a no-op without collisions):
@@ -142,54 +139,21 @@ impl World {
                 self.check_placement_from(0);
             }
         }
-        self.rebuild_contact_force()
+        self.contacts_changed();
+        Ok(())
     }
 
-    /// Makes the spring–dashpot contact force match the collision settings, colliders and
-    /// particles (added to the forces, replaced, or removed).
-    pub(super) fn rebuild_contact_force(&mut self) -> Result<(), Error> {
-        self.contact_dirty = false;
+    /// After a change of the collision settings, colliders, materials or the domain: the
+    /// contact lists start over (the impulse model's and the spring–dashpot model's), and so
+    /// do the method's caches.
+    pub(super) fn contacts_changed(&mut self) {
         if let Some(stage) = &mut self.collide_stage {
-            stage.forget_list(); // the impulse model's list: colliders, domain or particles changed
-        }
-        let wanted = match self.collide_stage.as_ref().map(|c| c.params.model) {
-            Some(ContactModel::SpringDashpot { stiffness, damping }) => Some((stiffness, damping)),
-            _ => None,
-        };
-        match (wanted, self.contact_force) {
-            (None, None) => return Ok(()),
-            (None, Some(k)) => {
-                self.forces.remove(k);
-                self.contact_force = None;
-                self.contact = None;
-            }
-            (Some((stiffness, damping)), index) => {
-                let stage = self.collide_stage.as_ref().expect("collisions are on");
-                let (global, own) = stage.materials_parts();
-                let p = &self.particles;
-                let contact = Rc::new(RefCell::new(ContactForce::from_params(ContactForceParams {
-                    stiffness,
-                    damping,
-                    global,
-                    own,
-                    radius: p.radius.clone(),
-                    inv_mass: p.inv_mass.clone(),
-                    colliders: stage.colliders.clone(),
-                    domain: stage.domain,
-                })));
-                let force = Box::new(order::SharedContact(contact.clone()));
-                self.contact = Some(contact);
-                match index {
-                    Some(k) => self.forces[k] = force,
-                    None => {
-                        self.forces.push(force);
-                        self.contact_force = Some(self.forces.len() - 1);
-                    }
-                }
+            stage.forget_list();
+            if let Some(model) = &stage.spring_dashpot {
+                model.forget_list();
             }
         }
         self.reset_caches();
-        Ok(())
     }
 
     /// Gives particles `start..start + len` their own restitution e ∈ [0, 1] and friction μ ≥ 0
@@ -238,7 +202,8 @@ impl World {
             stage.own[start + k] = (*e, *m);
         }
         stage.refresh_materials()?;
-        self.rebuild_contact_force()
+        self.contacts_changed();
+        Ok(())
     }
 
     /// Each particle's own restitution and friction (`None`: the world's value); empty when
@@ -264,7 +229,7 @@ impl World {
         stage.colliders.push(collider);
         let index = stage.colliders.len() - 1;
         self.check_placement_from(0);
-        self.rebuild_contact_force()?;
+        self.contacts_changed();
         Ok(index)
     }
 
@@ -287,7 +252,8 @@ impl World {
         stage.set_motion(k, motion, t)?;
         self.watch = None;
         self.check_placement_from(0);
-        self.rebuild_contact_force()
+        self.contacts_changed();
+        Ok(())
     }
 
     /// Whether some collider has a prescribed motion.
@@ -307,19 +273,13 @@ impl World {
         books
     }
 
-    /// Places the moving colliders where their motions have them at time `t` (s), in the
-    /// collide stage and the contact force; returns whether any collider moves.
+    /// Places the moving colliders where their motions have them at time `t` (s) (the
+    /// spring–dashpot force reads them there); returns whether any collider moves.
     pub(super) fn place_moving_colliders(&mut self, t: f64) -> Result<bool, Error> {
         let Some(stage) = self.collide_stage.as_mut() else {
             return Ok(false);
         };
-        if !stage.place_colliders(t)? {
-            return Ok(false);
-        }
-        if let Some(contact) = &self.contact {
-            contact.borrow_mut().place_colliders(&stage.colliders);
-        }
-        Ok(true)
+        stage.place_colliders(t)
     }
 
     /// The colliders, in the order they were added (a moving one where it is now).
@@ -337,7 +297,8 @@ impl World {
         let stage = self.collide_stage.as_mut().expect("collisions are on");
         if !axes.iter().any(|a| *a) {
             stage.set_periodic(None)?;
-            return self.rebuild_contact_force();
+            self.contacts_changed();
+            return Ok(());
         }
         if self.params.dim == 2 && axes[2] {
             return Err(Error::invalid(
@@ -360,8 +321,7 @@ impl World {
         if let Some(p) = stage.domain.periodic_box() {
             p.wrap_positions(&mut self.particles.x);
         }
-        self.rebuild_contact_force()?;
-        self.reset_caches();
+        self.contacts_changed();
         self.check_placement_from(0);
         Ok(())
     }

@@ -1,6 +1,7 @@
 //! What a world holds between steps: adding and removing particles and forces, and the caches
 //! that changing them drops.
 
+use super::forces::contact_force;
 use super::{ContactModel, World};
 use crate::error::Error;
 use crate::forces::Force;
@@ -39,7 +40,6 @@ impl World {
         // spring–dashpot force's neighbour list (the newborns' pairs added) and, where the
         // newborns touch nothing, Verlet's acceleration (`carry.rs`).
         let kept = self.collide_stage.as_mut().map(|stage| stage.impulse.take_contacts());
-        let list = self.contact.as_ref().map(|c| c.borrow_mut().take_list());
         let a = self.acceleration_before_birth(range.start);
         self.reset_caches();
         self.check_placement_from(range.start);
@@ -49,18 +49,13 @@ impl World {
             }
             stage.refresh_materials()?;
         }
-        self.rebuild_contact_force()?;
         if let (Some(stage), Some(kept)) = (&mut self.collide_stage, kept) {
             if stage.params.model == ContactModel::Impulse {
                 stage.impulse.keep_contacts(kept, self.particles.len());
             }
         }
-        let admitted = match (&self.contact, list) {
-            (Some(contact), Some(list)) => contact
-                .borrow_mut()
-                .keep_list_with_newborns(list, &self.particles.x, range.start),
-            _ => false,
-        };
+        let admitted =
+            contact_force(&self.collide_stage, &self.particles).is_some_and(|c| c.admit_newborns(&self.particles.x, range.start));
         self.acceleration_after_birth(a, range.start, admitted)?;
         Ok(range)
     }
@@ -99,8 +94,6 @@ impl World {
             .collide_stage
             .as_mut()
             .map(|stage| stage.impulse.take_contacts_renumbered(&new_of_old));
-        // and the spring–dashpot force's neighbour list keeps the survivors' pairs
-        let list = self.contact.as_ref().map(|c| c.borrow_mut().take_list());
         for v in [&mut self.x_next, &mut self.v_next] {
             crate::particles::retain_rows(v, 3, &keep);
         }
@@ -116,32 +109,23 @@ impl World {
         if self.placement_from.is_some() {
             self.placement_from = Some(0); // (the pending newcomers were renumbered)
         }
-        self.rebuild_contact_force()?;
         if let (Some(stage), Some(kept)) = (&mut self.collide_stage, kept) {
             if stage.params.model == ContactModel::Impulse {
                 stage.impulse.keep_contacts(kept, self.particles.len());
             }
         }
-        if let (Some(contact), Some(list)) = (&self.contact, list) {
-            contact.borrow_mut().keep_list(list, &new_of_old);
+        // and the spring–dashpot force's neighbour list keeps the survivors' pairs
+        if let Some(model) = self.spring_dashpot() {
+            model.retain_survivors(&new_of_old);
         }
         self.keep_acceleration(a);
         Ok(())
     }
 
-    /// Adds a force, checked against the current particles (before the spring–dashpot contact
-    /// force, which is always the last one).
+    /// Adds a force, checked against the current particles.
     pub fn add_force(&mut self, force: Box<dyn Force>) -> Result<(), Error> {
         force.validate(self.particles.len())?;
-        // The spring–dashpot contact force stays last: Verlet's fused pass adds it after the
-        // sum of the others, the order in which the forces are summed everywhere else.
-        match self.contact_force {
-            Some(k) => {
-                self.forces.insert(k, force);
-                self.contact_force = Some(k + 1);
-            }
-            None => self.forces.push(force),
-        }
+        self.forces.push(force);
         self.reset_caches();
         Ok(())
     }
@@ -159,7 +143,10 @@ impl World {
             // (placed by hand before the first step; later writes are the user's dynamics)
             self.check_placement_from(0);
         }
-        self.contact_dirty = self.contact_force.is_some();
+        // (radii may change: the spring–dashpot list starts over)
+        if let Some(model) = self.spring_dashpot() {
+            model.forget_list();
+        }
         &mut self.particles
     }
 

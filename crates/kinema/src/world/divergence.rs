@@ -1,6 +1,7 @@
 //! The checks that refuse a step: a non-finite state, runaway energy (see [`World::step`]),
 //! a state beyond the collision geometry; and the error a refused step returns.
 
+use super::forces::{contact_force, every_force_ref};
 use super::World;
 use crate::collide::GEOMETRY_LIMIT;
 use crate::error::{Divergence, Error};
@@ -62,7 +63,8 @@ impl World {
             mass: &p.mass,
         };
         let (mut energy, mut scale) = (kinetic, kinetic);
-        for f in &self.forces {
+        let contact = contact_force(&self.collide_stage, p);
+        for f in every_force_ref(&self.forces, contact.as_ref()) {
             if let Some(u) = f.potential_energy(&s) {
                 energy += u;
                 scale += u.abs();

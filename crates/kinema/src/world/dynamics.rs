@@ -7,8 +7,9 @@ use crate::ode::system::SecondOrderSystem;
 /// The dynamics of the particles as a second-order system: x'' = F(t, x, v) / m.
 ///
 /// Pinned particles (inverse mass 0) get no acceleration; in 2D the z acceleration is 0.
-pub(crate) struct Dynamics<'a> {
-    pub forces: &'a mut [Box<dyn Force>],
+pub(crate) struct Dynamics<'a, 'f> {
+    /// Every force of the evaluation ([`super::forces::every_force`]).
+    pub forces: &'a mut [&'f mut dyn Force],
     pub mass: &'a [f64],
     pub inv_mass: &'a [f64],
     pub dim: usize,
@@ -16,11 +17,11 @@ pub(crate) struct Dynamics<'a> {
     pub force: &'a mut Vec<f64>,
 }
 
-impl<'a> Dynamics<'a> {
+impl<'a, 'f> Dynamics<'a, 'f> {
     /// The dynamics of `particles` under `forces` in `dim` dimensions, with `force` as the
     /// buffer of the summed forces.
     pub fn new(
-        forces: &'a mut [Box<dyn Force>],
+        forces: &'a mut [&'f mut dyn Force],
         particles: &'a crate::particles::Particles,
         dim: usize,
         force: &'a mut Vec<f64>,
@@ -51,7 +52,7 @@ impl<'a> Dynamics<'a> {
     }
 }
 
-impl SecondOrderSystem for Dynamics<'_> {
+impl SecondOrderSystem for Dynamics<'_, '_> {
     fn dim(&self) -> usize {
         3 * self.mass.len()
     }
@@ -111,7 +112,7 @@ pub(crate) struct ForceJacobian {
 impl ForceJacobian {
     /// Prepares products at state `s`: finds which forces give their own, and evaluates the
     /// others once at `s` (the base of the differences).
-    pub fn prepare(&mut self, forces: &mut [Box<dyn Force>], s: &State, definite: bool) -> Result<(), CallbackError> {
+    pub fn prepare(&mut self, forces: &mut [&mut dyn Force], s: &State, definite: bool) -> Result<(), CallbackError> {
         let n = s.x.len();
         self.analytic.clear();
         self.fp.clear();
@@ -149,7 +150,7 @@ impl ForceJacobian {
     /// Writes J·(dx, dv) into `out` (N per unit of dx, dv), at the prepared state `s`.
     pub fn apply(
         &mut self,
-        forces: &mut [Box<dyn Force>],
+        forces: &mut [&mut dyn Force],
         s: &State,
         dx: &[f64],
         dv: &[f64],
@@ -238,6 +239,7 @@ mod tests {
             Box::new(Drag::new(0.3, 0.0).unwrap()),
         ];
         let mut jac = ForceJacobian::default();
+        let mut forces: Vec<&mut dyn Force> = forces.iter_mut().map(|f| &mut **f as &mut dyn Force).collect();
         jac.prepare(&mut forces, &s, false).unwrap();
         let dx = [0.3, -0.1, 0.2, 0.0, 0.4, -0.2];
         let dv = [0.1, 0.2, -0.3, 0.05, 0.0, 0.1];

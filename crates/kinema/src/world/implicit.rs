@@ -89,7 +89,7 @@ impl BaraffWitkin {
     }
 
     /// Advances (x, v) at time t by h into (x_out, v_out) (see [`StepSpan`]).
-    pub fn step(&mut self, dynamics: &mut Dynamics, span: StepSpan<'_>, stats: &mut Stats) -> Result<(), CallbackError> {
+    pub fn step(&mut self, dynamics: &mut Dynamics<'_, '_>, span: StepSpan<'_>, stats: &mut Stats) -> Result<(), CallbackError> {
         let StepSpan {
             t,
             h,
@@ -232,7 +232,7 @@ impl BaraffWitkin {
     }
 
     /// q = A p = M p − h J(h p, p), filtered.
-    fn product(&mut self, dynamics: &mut Dynamics, s: &State, h: f64, p: &[f64]) -> Result<(), CallbackError> {
+    fn product(&mut self, dynamics: &mut Dynamics<'_, '_>, s: &State, h: f64, p: &[f64]) -> Result<(), CallbackError> {
         for (hp, pk) in self.hp.iter_mut().zip(p) {
             *hp = h * pk;
         }

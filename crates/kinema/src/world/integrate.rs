@@ -2,10 +2,11 @@
 //! positions and velocities over one step (velocity Verlet on the particles' own arrays, the
 //! other methods on the joined state [x, v]).
 
-use super::contact_force::{VerletKick, CHUNK};
 use super::dynamics::Dynamics;
+use super::forces::{contact_force, every_force};
 use super::implicit::{BaraffWitkin, StepSpan};
 use super::{World, RUNAWAY_CHECK_EVERY};
+use crate::collide::contact_force::{VerletKick, CHUNK};
 use crate::error::{Divergence, Error};
 use crate::forces::State;
 use crate::ode::explicit_rk::ExplicitRk;
@@ -90,8 +91,8 @@ impl World {
         }
         if self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0 {
             let checked = self.check_runaway();
-            if let Some(contact) = &self.contact {
-                contact.borrow().forget_energy();
+            if let Some(model) = self.spring_dashpot() {
+                model.forget_energy();
             }
             checked?;
         }
@@ -108,8 +109,9 @@ impl World {
         let Some(WorldStepper::Verlet(mut b)) = self.stepper.take() else {
             unreachable!("called for verlet only")
         };
+        let contacts = self.has_contact_force();
         let result = (|| {
-            if self.forces.is_empty() {
+            if self.forces.is_empty() && !contacts {
                 // No force at all (a gas of the impulse model): a = a' = 0, so the drift is
                 // x + h v and both kicks add nothing. One pass instead of three, the same
                 // numbers (to the sign of a zero).
@@ -153,7 +155,9 @@ impl World {
             if !b.fresh || b.a.len() != n {
                 b.a.resize(n, 0.0);
                 let p = &self.particles;
-                let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
+                let mut contact = contact_force(&self.collide_stage, p);
+                let mut forces = every_force(&mut self.forces, contact.as_mut());
+                let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
                 dynamics.accel(t, &p.x, &p.v, &mut b.a)?;
                 self.stats.nfev += 1;
                 b.fresh = true;
@@ -167,7 +171,7 @@ impl World {
                 .collide_stage
                 .as_ref()
                 .and_then(|c| c.domain.periodic_box())
-                .filter(|_| self.contact.is_some());
+                .filter(|_| contacts);
             let p = &self.particles;
             let a = &b.a;
             self.x_next
@@ -191,12 +195,14 @@ impl World {
                         }
                     }
                 });
-            if self.sortable() && self.contact.as_ref().is_some_and(|c| c.borrow().list_expired(&self.x_next)) {
+            if self.sortable()
+                && contact_force(&self.collide_stage, &self.particles).is_some_and(|c| c.list_expired(&self.x_next))
+            {
                 self.sort_along_space(&mut b.a);
             }
             b.a_next.resize(n, 0.0);
             let p = &self.particles;
-            if let Some(contact) = &self.contact {
+            if let Some(contact) = contact_force(&self.collide_stage, p) {
                 // The contact force and the closing kick in one pass, the other forces first.
                 let s1 = State {
                     t: t + h,
@@ -204,13 +210,11 @@ impl World {
                     v: &self.v_next,
                     mass: &p.mass,
                 };
-                let other = if self.forces.len() > 1 {
+                let other = if !self.forces.is_empty() {
                     self.force.clear();
                     self.force.resize(n, 0.0);
-                    for (k, f) in self.forces.iter_mut().enumerate() {
-                        if Some(k) != self.contact_force {
-                            f.accumulate(&s1, &mut self.force)?;
-                        }
+                    for f in self.forces.iter_mut() {
+                        f.accumulate(&s1, &mut self.force)?;
                     }
                     Some(&self.force[..])
                 } else {
@@ -221,7 +225,7 @@ impl World {
                 // The pass writes a' over a and the new velocities into a_next; two swaps put
                 // a' in a_next (the next step's a once accepted) and the velocities in v_next
                 // (v' there, the predictor, becomes spare).
-                let bad = contact.borrow().force_and_kick(
+                let bad = contact.force_and_kick(
                     &s1,
                     VerletKick {
                         other,
@@ -240,7 +244,8 @@ impl World {
                 b.fresh = true;
                 return Ok::<_, Error>(bad);
             }
-            let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
+            let mut forces = every_force(&mut self.forces, None);
+            let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
             dynamics.accel(t + h, &self.x_next, &self.v_next, &mut b.a_next)?;
             self.stats.nfev += 1;
             b.fresh = true; // a_next, the next step's a once accepted
@@ -266,8 +271,8 @@ impl World {
             Ok::<_, Error>(bad)
         })();
         self.stepper = Some(WorldStepper::Verlet(b));
-        if let Some(contact) = &self.contact {
-            contact.borrow().forget_verified();
+        if let Some(model) = self.spring_dashpot() {
+            model.forget_verified();
         }
         match result? {
             Some(index) => Err(self.diverged(Divergence::NonFinite, Some(index / 3))),
@@ -280,12 +285,14 @@ impl World {
     fn integrate_joined(&mut self) -> Result<(), Error> {
         let n = 3 * self.particles.len();
         let (t, h) = (self.time, self.params.dt);
-        let p = &mut self.particles;
+        let p = &self.particles;
         self.y.resize(2 * n, 0.0);
         self.y_next.resize(2 * n, 0.0);
         FirstOrderForm::join(&p.x, &p.v, n, &mut self.y);
         let stepper = self.stepper.as_mut().expect("made by integrate");
-        let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
+        let mut contact = contact_force(&self.collide_stage, p);
+        let mut forces = every_force(&mut self.forces, contact.as_mut());
+        let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
         let outcome = match stepper {
             WorldStepper::Verlet(_) => unreachable!("verlet steps the particles' arrays"),
             WorldStepper::SecondOrder(s) => s.step(&mut dynamics, t, &self.y, h, &mut self.y_next, &mut self.stats),

@@ -2,6 +2,7 @@
 //! the stable-step advisor's rates, work counters and the time spent in each stage.
 
 use super::dynamics::Dynamics;
+use super::forces::{contact_force, every_force, every_force_ref};
 use super::{advisor, Rates, StageTimes, World, WorldStepper};
 use crate::diagnostics::Diagnostics;
 use crate::error::Error;
@@ -36,6 +37,7 @@ impl World {
     /// Energies and momenta now.
     pub fn diagnostics(&self) -> Diagnostics {
         let p = &self.particles;
+        let contact = contact_force(&self.collide_stage, p);
         Diagnostics::measure(
             &State {
                 t: self.time,
@@ -43,7 +45,7 @@ impl World {
                 v: &p.v,
                 mass: &p.mass,
             },
-            &self.forces,
+            &every_force_ref(&self.forces, contact.as_ref()),
         )
     }
 
@@ -51,7 +53,9 @@ impl World {
     pub fn accelerations(&mut self) -> Result<Vec<f64>, Error> {
         self.check_pending_placement()?;
         let p = &self.particles;
-        let mut dynamics = Dynamics::new(&mut self.forces, p, self.params.dim, &mut self.force);
+        let mut contact = contact_force(&self.collide_stage, p);
+        let mut forces = every_force(&mut self.forces, contact.as_mut());
+        let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
         let mut a = vec![0.0; p.x.len()];
         dynamics.accel(self.time, &p.x, &p.v, &mut a)?;
         Ok(a)
@@ -68,7 +72,9 @@ impl World {
             v: &p.v,
             mass: &p.mass,
         };
-        Ok(advisor::estimate(&mut self.forces, &s, &p.inv_mass, self.params.dim)?)
+        let mut contact = contact_force(&self.collide_stage, p);
+        let mut forces = every_force(&mut self.forces, contact.as_mut());
+        Ok(advisor::estimate(&mut forces, &s, &p.inv_mass, self.params.dim)?)
     }
 
     /// The largest stable time step (s) of `method` at the current state, by the advisor

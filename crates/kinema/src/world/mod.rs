@@ -7,6 +7,8 @@
 //! - `collide.rs`: stages 2–4, `World::collide`, which runs the collide stage
 //!   (`collide::stage::CollideStage`, detection and response in `collide/`), and the
 //!   collision settings, colliders, materials and periodic axes;
+//! - `forces.rs`: the forces of one evaluation, the world's own and the spring–dashpot
+//!   contact force the collide stage lends (`collide/contact_force/`);
 //! - `divergence.rs`: the non-finite and runaway-energy checks that refuse a step;
 //! - `contents.rs`: adding and removing particles and forces;
 //! - `carry.rs`: what a birth or death keeps of velocity Verlet's acceleration;
@@ -18,12 +20,12 @@ mod advisor;
 mod carry;
 mod checkpoint;
 mod collide;
-mod contact_force;
 mod contents;
 mod deaths;
 mod divergence;
 mod dynamics;
 mod event_driven;
+mod forces;
 mod implicit;
 mod integrate;
 mod measures;
@@ -37,18 +39,16 @@ pub use divergence::{RUNAWAY_CHECK_EVERY, RUNAWAY_FACTOR};
 pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
 pub use measures::LinearSolve;
 
+use crate::collide::contact_force::CHUNK;
 use crate::collide::stage::CollideStage;
 use crate::error::{CallbackError, Error};
 use crate::forces::{EnergyClass, Force};
 use crate::ode::stepper::Stats;
 use crate::ode::{Integrator, Method};
 use crate::particles::Particles;
-use contact_force::{ContactForce, CHUNK};
 use deaths::Deaths;
 use divergence::EnergyWatch;
 use integrate::WorldStepper;
-use std::cell::RefCell;
-use std::rc::Rc;
 
 /// Parameters of a world. Units SI.
 #[derive(Debug, Clone, PartialEq)]
@@ -90,17 +90,11 @@ pub struct World {
     watch: Option<EnergyWatch>,
     /// Stages 2–4, when collisions are on.
     collide_stage: Option<CollideStage>,
-    /// Index in `forces` of the spring–dashpot contact force, with that model, and the
-    /// force itself (shared: the world asks it when its list expires and sorts by it).
-    contact_force: Option<usize>,
-    contact: Option<Rc<RefCell<ContactForce>>>,
     /// The particles' order: `Some(user_of)` while they are sorted along space, with
     /// `user_of[i]` the user's index of particle i (see `order.rs`); `None` in the user's order.
     sorted: Option<Vec<u32>>,
     /// Sorts along space so far.
     sorts: u64,
-    /// The contact force must be rebuilt before the next step (particles changed).
-    contact_dirty: bool,
     /// The particles' placement is checked before the next step from this index on
     /// (`collide/placement.rs`): 0 after anything that places them all (collisions turned
     /// on, a collider, periodic axes, positions written before the first step), the first
@@ -156,11 +150,8 @@ impl World {
             force: Vec::new(),
             watch: None,
             collide_stage: None,
-            contact_force: None,
-            contact: None,
             sorted: None,
             sorts: 0,
-            contact_dirty: false,
             placement_from: None,
             placement_notice: None,
             times: StageTimes::default(),
@@ -170,9 +161,20 @@ impl World {
         })
     }
 
-    /// The forces, in the order they were added.
+    /// The forces, in the order they were added (the spring–dashpot contact force, with that
+    /// model, is the collide stage's, not among them).
     pub fn forces(&self) -> &[Box<dyn Force>] {
         &self.forces
+    }
+
+    /// Whether the spring–dashpot contact force acts (collisions on with that model).
+    pub(super) fn has_contact_force(&self) -> bool {
+        self.spring_dashpot().is_some()
+    }
+
+    /// The spring–dashpot model's constants and buffers, with that model.
+    pub(super) fn spring_dashpot(&self) -> Option<&crate::collide::contact_force::SpringDashpot> {
+        self.collide_stage.as_ref()?.spring_dashpot.as_ref()
     }
 
     /// The parameters.
@@ -267,9 +269,6 @@ impl World {
 
     fn step_once(&mut self) -> Result<(), Error> {
         self.check_pending_placement()?;
-        if self.contact_dirty {
-            self.rebuild_contact_force()?;
-        }
         // A moving collider stands where it will be at the step's end (`collide/events.rs`);
         // it can add energy, so the runaway watch is off while one moves.
         let moving = self.place_moving_colliders(self.params_time_after(self.steps + 1))?;

@@ -21,47 +21,14 @@
 //! from an unsorted run in the last bits; it depends on the positions alone, so it is the
 //! same for any number of threads.
 
-use std::cell::RefCell;
-use std::rc::Rc;
-
 use rayon::prelude::*;
 
-use super::contact_force::ContactForce;
+use super::forces::contact_force;
 use super::{World, WorldStepper};
 use crate::collide::morton::morton_order;
-use crate::error::{CallbackError, Error};
-use crate::forces::{Force, Properties, Rates, State};
 
 /// The fewest particles the world sorts along space.
 pub(crate) const SORT_MIN_PARTICLES: usize = 2 * super::CHUNK;
-
-/// The world's spring–dashpot contact force, shared between the forces (where it acts like
-/// any other) and the world (which asks it when its neighbour list expires).
-pub(crate) struct SharedContact(pub Rc<RefCell<ContactForce>>);
-
-impl Force for SharedContact {
-    fn name(&self) -> &str {
-        "contact"
-    }
-    fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
-        self.0.borrow_mut().accumulate(s, f)
-    }
-    fn validate(&self, n: usize) -> Result<(), Error> {
-        self.0.borrow().validate(n)
-    }
-    fn potential_energy(&self, s: &State) -> Option<f64> {
-        self.0.borrow().potential_energy(s)
-    }
-    fn properties(&self) -> Properties {
-        self.0.borrow().properties()
-    }
-    fn rates(&self, s: &State, inv_mass: &[f64]) -> Option<Rates> {
-        self.0.borrow().rates(s, inv_mass)
-    }
-    fn reindex(&mut self, new_of_old: &[u32]) {
-        self.0.borrow_mut().reindex(new_of_old)
-    }
-}
 
 /// `a` (3 values per particle) in the new order.
 fn gather3(a: &mut Vec<f64>, old_of_new: &[u32]) {
@@ -88,7 +55,7 @@ impl World {
     /// Whether the particles may be sorted along space now (see the module doc; the caller
     /// is the Verlet step).
     pub(super) fn sortable(&self) -> bool {
-        self.contact.is_some()
+        self.has_contact_force()
             && self.particles.len() >= SORT_MIN_PARTICLES
             && self.collide_stage.as_ref().is_some_and(|c| c.materials_parts().1.is_none())
             && self.forces.iter().all(|f| f.properties().renumbers)
@@ -98,11 +65,10 @@ impl World {
     /// drifted state, where the neighbour list is about to be rebuilt), with Verlet's
     /// acceleration `a`.
     pub(super) fn sort_along_space(&mut self, a: &mut Vec<f64>) {
-        let Some(contact) = &self.contact else {
-            return;
-        };
         let (width, origin) = {
-            let contact = contact.borrow();
+            let Some(contact) = contact_force(&self.collide_stage, &self.particles) else {
+                return;
+            };
             let mut origin = [0.0; 3];
             for (k, o) in origin.iter_mut().enumerate() {
                 *o = match contact.domain().periodic_box() {
@@ -169,6 +135,9 @@ impl World {
         }
         for f in &mut self.forces {
             f.reindex(&new_of_old);
+        }
+        if let Some(model) = self.spring_dashpot() {
+            model.renumber(&new_of_old, old_of_new);
         }
     }
 }

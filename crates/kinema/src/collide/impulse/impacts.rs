@@ -140,7 +140,7 @@ impl ImpulseModel {
                 collider_scale: scale,
             };
             self.list
-                .update(&mut self.grid, x0, set.radius, set.colliders, set.domain, build)?;
+                .update(&mut self.grid, x0, set.radius, set.colliders, set.domain, || build)?;
             self.list.verified = None;
             self.rebuilt = true;
             top = sweep(&self.list.built_at, paths.accel);
@@ -414,7 +414,7 @@ impl ImpulseModel {
             collider_scale: scale,
         };
         self.list
-            .update(&mut self.grid, &x, radius, set.colliders, set.domain, build)?;
+            .update(&mut self.grid, &x, radius, set.colliders, set.domain, || build)?;
         self.list.verified = None;
         Ok(largest)
     }

@@ -9,7 +9,7 @@ use crate::collide::{pair_contact, Contact};
 use crate::error::Error;
 use crate::forces::State;
 
-impl ContactForce {
+impl ContactForce<'_> {
     /// Calls `each` with every contact at state `s`, in the order of a full search: particle
     /// pairs by (i, j), i < j (those of the (half) neighbour list that touch, each tested exactly as
     /// [`pair_contact`] tests it), then particle by particle, collider by collider, wall by

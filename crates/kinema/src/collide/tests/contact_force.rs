@@ -10,12 +10,135 @@ use crate::collide::{
     all_pairs, collider_contacts, damping_ratio, sphere_contacts, BoxContainer, MaterialTable, Periodic, Plane, SphereObstacle,
     Surface,
 };
+use crate::error::CallbackError;
 use crate::forces::testing::Rng;
 use crate::forces::Force;
 
+/// What a [`ContactForce`] reads, owned: the law's constants, the pair materials, the
+/// particles' radii and inverse masses, the colliders and the domain (the world keeps them
+/// in its particles and collide stage).
+struct ContactForceParams {
+    stiffness: f64,
+    damping: Option<f64>,
+    global: Material,
+    own: Option<Vec<Material>>,
+    radius: Vec<f64>,
+    inv_mass: Vec<f64>,
+    colliders: Vec<Collider>,
+    domain: Domain,
+}
+
+/// A spring–dashpot model with what it reads, for the tests: each call goes through a
+/// [`ContactForce`] made for it, as the world's do.
+struct Owned {
+    stiffness: f64,
+    damping: Option<f64>,
+    global: Material,
+    own: Option<Vec<Material>>,
+    ratios: Option<Vec<(f64, f64)>>,
+    radius: Vec<f64>,
+    inv_mass: Vec<f64>,
+    colliders: Vec<Collider>,
+    domain: Domain,
+    model: SpringDashpot,
+}
+
+impl Owned {
+    fn from_params(p: ContactForceParams) -> Self {
+        Owned {
+            stiffness: p.stiffness,
+            damping: p.damping,
+            global: p.global,
+            ratios: p.own.as_deref().map(particle_ratios),
+            own: p.own,
+            radius: p.radius,
+            inv_mass: p.inv_mass,
+            colliders: p.colliders,
+            domain: p.domain,
+            model: SpringDashpot::new(p.stiffness, p.damping),
+        }
+    }
+
+    /// The same force with a neighbour-list skin of `skin` m (0 searches the grid at every
+    /// evaluation).
+    fn with_skin(mut self, skin: f64) -> Self {
+        self.model.skin = Some(skin);
+        self
+    }
+
+    fn view(&self) -> ContactForce<'_> {
+        ContactForce::new(
+            &self.model,
+            Bodies {
+                global: self.global,
+                own: self.own.as_deref().zip(self.ratios.as_deref()),
+                radius: &self.radius,
+                inv_mass: &self.inv_mass,
+                colliders: &self.colliders,
+                domain: &self.domain,
+            },
+        )
+    }
+
+    fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
+        self.view().accumulate(s, f)
+    }
+
+    fn potential_energy(&self, s: &State) -> Option<f64> {
+        self.view().potential_energy(s)
+    }
+
+    fn rates(&self, s: &State, inv_mass: &[f64]) -> Option<crate::forces::Rates> {
+        self.view().rates(s, inv_mass)
+    }
+
+    fn force_and_kick(&self, s: &State, kick: VerletKick<'_>) -> Result<Option<usize>, Error> {
+        self.view().force_and_kick(s, kick)
+    }
+
+    fn touches_across(&self, x: &[f64], keep: &[bool]) -> Option<bool> {
+        self.view().touches_across(x, keep)
+    }
+
+    fn newborns_touch(&self, x: &[f64], v: &[f64], start: usize) -> bool {
+        self.view().newborns_touch(x, v, start)
+    }
+
+    fn list_builds(&self) -> usize {
+        self.model.list_builds()
+    }
+
+    fn scratch(&self) -> MutexGuard<'_, Scratch> {
+        self.model.scratch()
+    }
+
+    fn forget_energy(&self) {
+        self.model.forget_energy()
+    }
+
+    /// Takes the model's neighbour list (for the force that replaces it).
+    fn take_list(&mut self) -> NeighbourList {
+        std::mem::take(&mut self.model.scratch().list)
+    }
+
+    /// Gives this force the list of the force it replaces after a removal, as the world's
+    /// model keeps its own ([`SpringDashpot::retain_survivors`]).
+    fn keep_list(&mut self, list: NeighbourList, new_of_old: &[u32]) {
+        self.model.scratch().list = list;
+        self.model.retain_survivors(new_of_old);
+    }
+
+    /// Gives this force the list of the force it replaces after a birth of particles
+    /// `start..`, as the world's model admits the newborns into its own.
+    fn keep_list_with_newborns(&mut self, list: NeighbourList, x: &[f64], start: usize) -> bool {
+        self.model.scratch().list = list;
+        self.view().admit_newborns(x, start)
+    }
+}
+
 /// Forces (N) and U (J) from the contacts of an exhaustive search at `s`, by the law as
 /// it was written before the neighbour list.
-fn reference(force: &ContactForce, s: &State) -> (Vec<f64>, f64) {
+fn reference(force: &Owned, s: &State) -> (Vec<f64>, f64) {
     let (mut pairs, mut contacts, mut walls) = (Vec::new(), Vec::new(), Vec::new());
     all_pairs(s.x, &force.radius, &force.domain, 0.0, &mut pairs).unwrap();
     sphere_contacts(s.x, s.v, &force.radius, &pairs, &force.domain, 0.0, &mut contacts).unwrap();
@@ -28,7 +151,7 @@ fn reference(force: &ContactForce, s: &State) -> (Vec<f64>, f64) {
     };
     let mut f = vec![0.0; s.x.len()];
     for c in &contacts {
-        let w = force.inverse_mass_sum(c);
+        let w = force.view().inverse_mass_sum(c);
         if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
             continue;
         }
@@ -46,7 +169,7 @@ fn reference(force: &ContactForce, s: &State) -> (Vec<f64>, f64) {
     }
     let u = contacts
         .iter()
-        .filter(|c| c.overlap > 0.0 && force.inverse_mass_sum(c) > 0.0)
+        .filter(|c| c.overlap > 0.0 && force.view().inverse_mass_sum(c) > 0.0)
         .map(|c| 0.5 * force.stiffness * c.overlap * c.overlap)
         .sum();
     (f, u)
@@ -57,7 +180,7 @@ fn bits(a: &[f64]) -> Vec<u64> {
 }
 
 struct Scene {
-    force: ContactForce,
+    force: Owned,
     x: Vec<f64>,
     v: Vec<f64>,
     mass: Vec<f64>,
@@ -73,7 +196,7 @@ struct Scene {
 /// list's builds and how many times a particle was wrapped through a periodic side.
 fn run(mut scene: Scene, steps: usize, dt: f64, kicks: &[(usize, usize, [f64; 3])]) -> (usize, usize) {
     let n = scene.mass.len();
-    let mut every_call = ContactForce::from_params(ContactForceParams {
+    let mut every_call = Owned::from_params(ContactForceParams {
         stiffness: scene.force.stiffness,
         damping: scene.force.damping,
         global: scene.force.global,
@@ -202,7 +325,7 @@ fn a_periodic_gas_crossing_its_cell_gets_the_forces_of_a_search_at_every_call() 
     );
     let walls = vec![Collider::Box(BoxContainer::new(lo, hi, Surface::default()).unwrap())];
     let material = Material::new(0.5, 0.0).unwrap();
-    let force = ContactForce::from_params(ContactForceParams {
+    let force = Owned::from_params(ContactForceParams {
         stiffness: 1e4,
         damping: None,
         global: material,
@@ -273,7 +396,7 @@ fn a_pile_on_colliders_with_own_materials_gets_the_forces_of_a_search_at_every_c
         Collider::Sphere(SphereObstacle::new([0.3, 0.3, 0.3], 0.1, Surface::new(Some(0.9), None).unwrap()).unwrap()),
     ];
     let material = Material::new(0.4, 0.0).unwrap();
-    let force = ContactForce::from_params(ContactForceParams {
+    let force = Owned::from_params(ContactForceParams {
         stiffness: 5e3,
         damping: None,
         global: material,
@@ -323,7 +446,7 @@ fn a_2d_strip_periodic_along_x_with_a_given_damping() {
     );
     let rect = BoxContainer::rect([-1.0, 0.0], [1.0, 0.5], Surface::default()).unwrap();
     let material = Material::new(0.7, 0.0).unwrap();
-    let force = ContactForce::from_params(ContactForceParams {
+    let force = Owned::from_params(ContactForceParams {
         stiffness: 1e4,
         damping: Some(30.0),
         global: material,
@@ -354,7 +477,7 @@ fn a_head_on_pair_just_outside_the_list_is_caught_before_it_touches() {
     // the list is rebuilt with them in it. A criterion 30 % looser would miss the touch.
     let x = vec![0.0, 0.0, 0.0, 0.2 + 0.02 * 1.001, 0.0, 0.0, 5.0, 5.0, 5.0];
     let v = vec![1.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-    let force = ContactForce::from_params(ContactForceParams {
+    let force = Owned::from_params(ContactForceParams {
         stiffness: 10.0,
         damping: None,
         global: Material::new(0.5, 0.0).unwrap(),
@@ -394,7 +517,7 @@ fn the_energy_is_that_of_the_positions_asked_about() {
             speed: 1.0,
         },
     );
-    let mut force = ContactForce::from_params(ContactForceParams {
+    let mut force = Owned::from_params(ContactForceParams {
         stiffness: 1e3,
         damping: None,
         global: Material::new(0.5, 0.0).unwrap(),
@@ -448,23 +571,23 @@ fn the_allowance_leaves_a_rounding_margin_below_the_skin() {
         skin: 2e-4,
         collider_scale: 0.0,
     };
-    list.update(&mut grid, &x, &radius, &[], &domain, build).unwrap();
+    list.update(&mut grid, &x, &radius, &[], &domain, || build).unwrap();
     assert!(list.allowance < 2e-4 && list.allowance > 2e-4 * (1.0 - 1e-10));
     assert_eq!(
         (list.rows[0].of(0), list.rows[0].of(1)),
         (&[1][..], &[0][..]),
         "listed from both sides"
     );
-    list.update(&mut grid, &x, &radius, &[], &domain, build).unwrap();
+    list.update(&mut grid, &x, &radius, &[], &domain, || build).unwrap();
     assert_eq!(list.builds, 1, "nothing moved");
     let far = [1e9, 0.0, 0.0, 1e9 + 1.5e-3, 0.0, 0.0];
-    list.update(&mut grid, &far, &radius, &[], &domain, build).unwrap();
+    list.update(&mut grid, &far, &radius, &[], &domain, || build).unwrap();
     assert!(list.allowance < 0.0);
-    list.update(&mut grid, &far, &radius, &[], &domain, build).unwrap();
+    list.update(&mut grid, &far, &radius, &[], &domain, || build).unwrap();
     assert_eq!(list.builds, 3);
     // two particles that together moved the allowance (exactly: half each, along
     // coordinates that were 0): rebuilt; a hair less: kept
-    list.update(&mut grid, &x, &radius, &[], &domain, build).unwrap();
+    list.update(&mut grid, &x, &radius, &[], &domain, || build).unwrap();
     let half = 0.5 * list.allowance;
     assert!(!list.holds(&[-half, 0.0, 0.0, 1.5e-3, half, 0.0], &domain));
     let less = 0.99 * half;
@@ -474,7 +597,7 @@ fn the_allowance_leaves_a_rounding_margin_below_the_skin() {
 
 /// A periodic gas of `n` overlapping particles (drawn anywhere, in creation order: most
 /// pairs join particles of different chunks), with the contact force over it.
-fn chunked_gas(n: usize) -> (ContactForce, Vec<f64>, Vec<f64>, Vec<f64>) {
+fn chunked_gas(n: usize) -> (Owned, Vec<f64>, Vec<f64>, Vec<f64>) {
     let mut rng = Rng::new(11);
     let (lo, hi) = ([0.0; 3], [1.0; 3]);
     let domain = Domain::periodic(3, Periodic::new(lo, hi, [true; 3]).unwrap()).unwrap();
@@ -490,7 +613,7 @@ fn chunked_gas(n: usize) -> (ContactForce, Vec<f64>, Vec<f64>, Vec<f64>) {
             speed: 1.0,
         },
     );
-    let force = ContactForce::from_params(ContactForceParams {
+    let force = Owned::from_params(ContactForceParams {
         stiffness: 1e4,
         damping: None,
         global: Material::new(0.5, 0.0).unwrap(),
@@ -518,7 +641,7 @@ fn a_gas_of_several_chunks_sums_each_pair_once_the_same_on_any_number_of_threads
         v: &v,
         mass: &mass,
     };
-    let on = |threads: usize, force: &mut ContactForce| {
+    let on = |threads: usize, force: &mut Owned| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
             let mut f = vec![0.0; 3 * n];
@@ -560,7 +683,8 @@ fn a_renumbered_half_list_has_the_rows_of_a_build_in_the_new_order() {
         ..NeighbourList::default()
     };
     let (mut list, mut grid) = (new_list(), Grid::new());
-    list.update(&mut grid, &x, &force.radius, &[], &force.domain, build).unwrap();
+    list.update(&mut grid, &x, &force.radius, &[], &force.domain, || build)
+        .unwrap();
     let entries = |l: &NeighbourList| l.rows.iter().map(|r| r.partners.len()).sum::<usize>();
     assert!(entries(&list) > n / 2, "{} pairs", entries(&list));
     // a shuffle: new index of old particle i
@@ -581,7 +705,9 @@ fn a_renumbered_half_list_has_the_rows_of_a_build_in_the_new_order() {
         .collect();
     let radius: Vec<f64> = old_of_new.iter().map(|&o| force.radius[o as usize]).collect();
     let mut fresh = new_list();
-    fresh.update(&mut grid, &moved, &radius, &[], &force.domain, build).unwrap();
+    fresh
+        .update(&mut grid, &moved, &radius, &[], &force.domain, || build)
+        .unwrap();
     assert_eq!(list.rows.len(), fresh.rows.len());
     for (c, (a, b)) in list.rows.iter().zip(&fresh.rows).enumerate() {
         assert_eq!(a.start, b.start, "chunk {c}: row lengths");
@@ -633,7 +759,7 @@ fn after_a_removal_the_kept_list_gives_the_forces_of_a_fresh_one_without_a_searc
             .collect()
     };
     let (x2, v2, m2) = (pick(&x, 3), pick(&v, 3), pick(&mass, 1));
-    let survivors = |force: &ContactForce| ContactForceParams {
+    let survivors = |force: &Owned| ContactForceParams {
         stiffness: force.stiffness,
         damping: force.damping,
         global: force.global,
@@ -643,10 +769,10 @@ fn after_a_removal_the_kept_list_gives_the_forces_of_a_fresh_one_without_a_searc
         colliders: Vec::new(),
         domain: force.domain,
     };
-    let mut kept = ContactForce::from_params(survivors(&force));
+    let mut kept = Owned::from_params(survivors(&force));
     kept.keep_list(force.take_list(), &new_of_old);
     assert_eq!(kept.scratch().list.built_at.len(), x2.len(), "a list, before any evaluation");
-    let mut fresh = ContactForce::from_params(survivors(&force));
+    let mut fresh = Owned::from_params(survivors(&force));
     let s2 = State {
         t: 0.0,
         x: &x2,
@@ -732,7 +858,7 @@ fn after_a_birth_the_admitted_list_gives_the_forces_of_a_fresh_one_without_a_sea
         domain: all.domain,
     };
     let old = n - born;
-    let mut before = ContactForce::from_params(params(old));
+    let mut before = Owned::from_params(params(old));
     let s_old = State {
         t: 0.0,
         x: &x[..3 * old],
@@ -742,12 +868,12 @@ fn after_a_birth_the_admitted_list_gives_the_forces_of_a_fresh_one_without_a_sea
     before.accumulate(&s_old, &mut vec![0.0; 3 * old]).unwrap();
     let builds = before.list_builds();
     // the old particles move a little (a tenth of the skin, along x) before the birth
-    let skin = before.skin;
+    let skin = before.view().skin();
     let mut x1 = x.clone();
     for (i, c) in x1[..3 * old].iter_mut().step_by(3).enumerate() {
         *c += 0.1 * skin * ((i % 7) as f64 / 7.0);
     }
-    let mut kept = ContactForce::from_params(params(n));
+    let mut kept = Owned::from_params(params(n));
     assert!(kept.keep_list_with_newborns(before.take_list(), &x1, old), "admitted");
     assert!(kept.newborns_touch(&x1, &v, old), "this gas's newborns overlap");
     let s = State {
@@ -756,7 +882,7 @@ fn after_a_birth_the_admitted_list_gives_the_forces_of_a_fresh_one_without_a_sea
         v: &v,
         mass: &mass,
     };
-    let mut fresh = ContactForce::from_params(params(n));
+    let mut fresh = Owned::from_params(params(n));
     let (mut fk, mut ff) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
     kept.accumulate(&s, &mut fk).unwrap();
     fresh.accumulate(&s, &mut ff).unwrap();
@@ -765,8 +891,8 @@ fn after_a_birth_the_admitted_list_gives_the_forces_of_a_fresh_one_without_a_sea
     assert_eq!(bits(&fk), bits(&ff), "the forces of a fresh list");
 
     // Too many newborns at once for one-by-one tests: no list is kept.
-    let mut many = ContactForce::from_params(params(n));
-    let mut list = ContactForce::from_params(params(old));
+    let mut many = Owned::from_params(params(n));
+    let mut list = Owned::from_params(params(old));
     list.accumulate(&s_old, &mut vec![0.0; 3 * old]).unwrap();
     let mut taken = list.take_list();
     taken.skin = skin;
@@ -793,7 +919,7 @@ fn the_list_tells_which_changes_touch() {
     let x = [0.0, 0.0, 0.0, 0.15, 0.0, 0.0, 1.0, 0.0, 0.0, 1.15, 0.0, 0.0, 3.0, 0.0, 0.0];
     let v = [0.0; 15];
     let mass = [1.0; 5];
-    let mut force = ContactForce::from_params(params(vec![0.1; 5]));
+    let mut force = Owned::from_params(params(vec![0.1; 5]));
     let s = State {
         t: 0.0,
         x: &x,
@@ -812,8 +938,8 @@ fn the_list_tells_which_changes_touch() {
     for (at, touches) in [(5.0, false), (3.1, true)] {
         let mut x6 = x.to_vec();
         x6.extend([at, 0.0, 0.0]);
-        let mut born = ContactForce::from_params(params(vec![0.1; 6]));
-        let mut old = ContactForce::from_params(params(vec![0.1; 5]));
+        let mut born = Owned::from_params(params(vec![0.1; 6]));
+        let mut old = Owned::from_params(params(vec![0.1; 5]));
         old.accumulate(&s, &mut [0.0; 15]).unwrap();
         assert!(born.keep_list_with_newborns(old.take_list(), &x6, 5));
         assert_eq!(born.newborns_touch(&x6, &[0.0; 18], 5), touches, "newborn at x = {at}");

@@ -1,14 +1,13 @@
-//! [`ContactForce`] as a [`Force`]: the forces and energy at a state, its properties, the
-//! renumbering of its particles, and the rates the step advisor reads (with the standby
+//! [`ContactForce`] as a [`Force`]: the forces and energy at a state, its properties and
+//! the rates the step advisor reads (with the standby
 //! oscillation of contacts not touching yet).
 
 use super::ContactForce;
 use crate::collide::{damping_ratio, GEOMETRY_LIMIT};
 use crate::error::{CallbackError, Error};
 use crate::forces::{EnergyClass, Force, Properties, Rates, Standby, State};
-use crate::particles::GONE;
 
-impl Force for ContactForce {
+impl Force for ContactForce<'_> {
     fn name(&self) -> &str {
         "contact"
     }
@@ -42,7 +41,9 @@ impl Force for ContactForce {
     }
 
     /// Dissipative (the spring is conservative and the dashpot dissipative), a function of
-    /// positions and velocities, internal when no collider pushes; it follows a renumbering.
+    /// positions and velocities, internal when no collider pushes; it follows a renumbering
+    /// (the world renumbers its list, [`SpringDashpot::renumber`](super::SpringDashpot::renumber):
+    /// all else it reads where it lives).
     fn properties(&self) -> Properties {
         Properties {
             energy: EnergyClass::Dissipative,
@@ -52,31 +53,6 @@ impl Force for ContactForce {
             renumbers: true,
             per_particle: false,
         }
-    }
-
-    /// Radii, inverse masses, materials and the neighbour list follow their particles. A
-    /// removal (some [`GONE`]) is left to the world, which rebuilds this force from the
-    /// survivors ([`crate::World::remove_particles`]).
-    fn reindex(&mut self, new_of_old: &[u32]) {
-        if new_of_old.contains(&GONE) {
-            return;
-        }
-        let mut old_of_new = vec![0u32; new_of_old.len()];
-        for (old, &new) in new_of_old.iter().enumerate() {
-            old_of_new[new as usize] = old as u32;
-        }
-        fn gather<T: Copy>(a: &[T], old_of_new: &[u32]) -> Vec<T> {
-            old_of_new.iter().map(|&o| a[o as usize]).collect()
-        }
-        self.radius = gather(&self.radius, &old_of_new);
-        self.inv_mass = gather(&self.inv_mass, &old_of_new);
-        if let Some(own) = &self.own {
-            self.own = Some(gather(own, &old_of_new));
-        }
-        if let Some(p) = &self.ratios.particles {
-            self.ratios.particles = Some(gather(p, &old_of_new));
-        }
-        self.scratch().list.renumber(new_of_old, &old_of_new);
     }
 
     /// Gershgorin over the contacts at `s`: a contact adds k_n w_p to particle p's row twice
@@ -110,7 +86,7 @@ impl Force for ContactForce {
     }
 }
 
-impl ContactForce {
+impl ContactForce<'_> {
     /// A contact that is not touching yet counts as a spring: ω² = k_n (w_i + w_j) for the
     /// two lightest movable particles (or k_n w against a collider), with the ζ of the
     /// largest restitution's opposite, the least damped contact.
@@ -133,7 +109,7 @@ impl ContactForce {
             None => {
                 let e_max = self
                     .own
-                    .iter()
+                    .into_iter()
                     .flatten()
                     .map(|m| m.restitution())
                     .chain(self.colliders.iter().filter_map(|c| c.surface().restitution()))

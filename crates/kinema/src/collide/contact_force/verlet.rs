@@ -32,7 +32,7 @@ pub(crate) struct VerletKick<'a> {
     pub energy: bool,
 }
 
-impl ContactForce {
+impl ContactForce<'_> {
     /// Velocity Verlet's force evaluation and closing kick fused into one parallel pass over
     /// the particles (see `VerletBuffers` in `world/mod.rs`): for each particle i,
     ///

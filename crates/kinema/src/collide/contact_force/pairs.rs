@@ -98,7 +98,7 @@ pub(super) struct ChunkSums {
     pub bad: Option<usize>,
 }
 
-impl ContactForce {
+impl ContactForce<'_> {
     /// Stage 1 of the pair pass (see the module doc) at positions `x` (m) and velocities `v`
     /// (m/s), with the list `list` (holding at `x`), and the exchange indexed for stage 2.
     ///

@@ -10,7 +10,7 @@ use crate::collide::{damping_ratio, dashpot_coefficient, spring_dashpot_force, C
 use crate::error::Error;
 use crate::forces::State;
 
-impl ContactForce {
+impl ContactForce<'_> {
     /// The pair forces at `s` added to `f` (N, 3 per particle), with the colliders' when
     /// `walls`, and the pairs' energy Σ ½ k_n δ² (J), each pair counted once and the chunks'
     /// sums added in chunk order (see `pairs.rs` for the order of the forces' sums). Without
@@ -95,28 +95,38 @@ impl ContactForce {
 /// the particle with the larger e (either one when they are equal: the same e gives the same
 /// ζ), bit for bit what `damping_ratio(max(e_i, e_j))` gives. Against a collider, the
 /// collider's own e where it sets one, else the particle's.
-pub(super) struct DampingRatios {
+pub(super) struct DampingRatios<'a> {
     /// ζ of the global e.
     global: f64,
-    /// (e, ζ) of each particle, when particles have their own materials.
-    pub(super) particles: Option<Vec<(f64, f64)>>,
+    /// (e, ζ) of each particle, when particles have their own materials (the collide
+    /// stage works them out with the materials, [`particle_ratios`]).
+    particles: Option<&'a [(f64, f64)]>,
     /// ζ of each collider's own e, where it sets one.
     colliders: Vec<Option<f64>>,
 }
 
-impl DampingRatios {
-    pub(super) fn new(global: Material, own: Option<&[Material]>, colliders: &[Collider]) -> Self {
-        let zeta = |e: f64| damping_ratio(e).unwrap_or(0.0);
+/// ζ of restitution e (0 where e gives none).
+fn zeta(e: f64) -> f64 {
+    damping_ratio(e).unwrap_or(0.0)
+}
+
+/// Each particle's (e, ζ) from its material, for [`Bodies::own`](super::Bodies).
+pub(crate) fn particle_ratios(own: &[Material]) -> Vec<(f64, f64)> {
+    own.iter().map(|m| (m.restitution(), zeta(m.restitution()))).collect()
+}
+
+impl<'a> DampingRatios<'a> {
+    pub(super) fn new(global: Material, particles: Option<&'a [(f64, f64)]>, colliders: &[Collider]) -> Self {
         DampingRatios {
             global: zeta(global.restitution()),
-            particles: own.map(|m| m.iter().map(|m| (m.restitution(), zeta(m.restitution()))).collect()),
+            particles,
             colliders: colliders.iter().map(|c| c.surface().restitution().map(zeta)).collect(),
         }
     }
 
     /// Particle i's (e, ζ), or `None` when every particle has the global material.
     fn particle(&self, i: usize) -> Option<(f64, f64)> {
-        self.particles.as_ref().map(|p| p[i])
+        self.particles.map(|p| p[i])
     }
 
     /// ζ of contact `c`.

@@ -1,0 +1,289 @@
+//! The spring–dashpot contact model: contacts found at every force evaluation push
+//! overlapping bodies apart with F_n = k_n δ − m_eff γ_n u_n, a force of stage 1.
+//!
+//! The collide stage owns the model ([`SpringDashpot`]: the law's constants and the buffers
+//! kept between evaluations, the neighbour list above all) beside the impulse model; each call
+//! sees the particles' radii and inverse masses, the materials, the colliders and the domain
+//! where they live, through a [`ContactForce`] made for it
+//! ([`CollideStage::contact_force`](crate::collide::stage::CollideStage::contact_force)).
+//! Nothing is copied, so nothing is kept fresh: a birth, a death, a new collider or material is
+//! seen by the next call as it is.
+//!
+//! The contacts come from a Verlet neighbour list ([`NeighbourList`]): the grid's candidate
+//! pairs within r_i + r_j + skin (and the particles within the skin of a collider), kept until
+//! the particles have moved far enough that something left out could touch. Every evaluation
+//! tests what is listed exactly, so the contacts, and the forces, are those of a search at
+//! every evaluation, bit for bit.
+//!
+//! The list is a half one (each pair listed once, in the row of its lower index) kept in
+//! chunks of [`CHUNK`] particles, so that the build and the force pass run on all threads
+//! with rayon. Each pair's force is computed once and given to both sides; what a chunk owes
+//! particles of later chunks is exchanged in a second stage in a fixed order (`pairs.rs`), so
+//! every particle's force is summed in the same order on any number of threads.
+//!
+//! The parts: this file holds the model, the view of a call and the neighbour list's upkeep;
+//! `contacts.rs` finds the contacts (listed pairs that overlap, collider touches),
+//! `pairs.rs` the pair pass and its exchange between chunks, `law.rs` the force law, the
+//! summed forces and energy and the damping ratios, `verlet.rs` the fused Verlet
+//! force-and-kick pass, `force.rs` the [`Force`](crate::forces::Force) impl and the rates.
+
+use std::sync::{Mutex, MutexGuard};
+
+pub(crate) use crate::collide::neighbour_list::CHUNK;
+use crate::collide::neighbour_list::{collider_scale, ListBuild, NeighbourList, SKIN_PER_RADIUS};
+use crate::collide::{Collider, Domain, Grid, Material};
+use crate::error::Error;
+use crate::forces::State;
+pub(crate) use law::particle_ratios;
+use law::DampingRatios;
+use pairs::{ChunkSums, Exchange};
+pub(crate) use verlet::VerletKick;
+
+mod contacts;
+mod force;
+mod law;
+mod pairs;
+mod verlet;
+
+/// The spring–dashpot model between calls: the law's constants and the buffers one
+/// evaluation leaves the next (the neighbour list, the grid, the exchange between chunks).
+pub(crate) struct SpringDashpot {
+    /// k_n, N/m.
+    pub stiffness: f64,
+    /// γ_n, 1/s (`None`: the damping follows from each pair's restitution e).
+    pub damping: Option<f64>,
+    /// A fixed skin, m (tests); `None`: [`SKIN_PER_RADIUS`] times the mean radius, at each
+    /// build of the list.
+    skin: Option<f64>,
+    /// Buffers kept between evaluations (a mutex, not a `RefCell`: the passes share `&self`
+    /// across threads).
+    scratch: Mutex<Scratch>,
+}
+
+impl SpringDashpot {
+    /// The model with stiffness k_n (N/m) and damping rate γ_n (1/s; `None`: from e).
+    pub fn new(stiffness: f64, damping: Option<f64>) -> Self {
+        SpringDashpot {
+            stiffness,
+            damping,
+            skin: None,
+            scratch: Mutex::new(Scratch::default()),
+        }
+    }
+
+    /// The buffers (a panic in another evaluation leaves them usable: each build starts over).
+    fn scratch(&self) -> MutexGuard<'_, Scratch> {
+        self.scratch.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Forgets the neighbour list (colliders, the domain or the particles' radii changed):
+    /// the next evaluation builds one.
+    pub fn forget_list(&self) {
+        let mut scratch = self.scratch();
+        scratch.list.built_at.clear();
+        scratch.list.verified = None;
+    }
+
+    /// Follows a renumbering of the particles (`new_of_old`, `old_of_new`): the list stays
+    /// the same list in the new numbering.
+    pub fn renumber(&self, new_of_old: &[u32], old_of_new: &[u32]) {
+        self.scratch().list.renumber(new_of_old, old_of_new);
+    }
+
+    /// Follows a removal of particles (`new_of_old` as [`NeighbourList::retain_survivors`]
+    /// takes it): the survivors' pairs stay listed, so the next evaluation need not search
+    /// the grid again.
+    pub fn retain_survivors(&self, new_of_old: &[u32]) {
+        self.scratch().list.retain_survivors(new_of_old);
+    }
+
+    /// Forgets what [`ContactForce::list_expired`] found (the world calls this at the end of
+    /// each step, so that a buffer reused later is checked again).
+    pub fn forget_verified(&self) {
+        self.scratch().list.verified = None;
+    }
+
+    /// Forgets the pair energy the last fused pass kept (the world calls this after the
+    /// runaway check, so that a buffer reused later is summed again).
+    pub fn forget_energy(&self) {
+        self.scratch().pair_energy = None;
+    }
+
+    /// How many times the neighbour list was built so far.
+    #[cfg(test)]
+    fn list_builds(&self) -> usize {
+        self.scratch().list.builds
+    }
+}
+
+/// Penalty contacts between particles and with colliders (the DEM way), as one call sees them.
+///
+/// While particle i overlaps its partner by δ > 0, the pair feels F_n n on i and −F_n n on a
+/// partner particle (a collider takes the reaction), N, with
+///
+/// ```text
+///   F_n = k_n δ − c_n u_n,      c_n = 2 ζ √(k_n m_eff)   (ζ from e, closed form)
+///                               c_n = m_eff γ_n           (γ_n given)
+/// ```
+///
+/// m_eff = 1/(w_i + w_j) the reduced mass and u_n the normal relative velocity. The damping
+/// ratio ζ = −ln e / √(π² + ln² e) makes the contact's damped half-oscillation bounce back with
+/// exactly the requested e ([`crate::collide::penalty`]); e is the pair's material (global,
+/// per particle, per collider, combined as in the impulse model). The spring part is
+/// conservative, with U = Σ ½ k_n δ² over overlapping contacts; the dashpot only removes
+/// energy. No friction: tangential forces belong to the impulse model.
+///
+/// Everything here is borrowed for the call: the model's constants and buffers, the
+/// particles' radii and inverse masses, the materials, the colliders and the domain.
+pub(crate) struct ContactForce<'a> {
+    model: &'a SpringDashpot,
+    stiffness: f64,
+    damping: Option<f64>,
+    global: Material,
+    own: Option<&'a [Material]>,
+    /// ζ of the pair materials.
+    ratios: DampingRatios<'a>,
+    radius: &'a [f64],
+    inv_mass: &'a [f64],
+    colliders: &'a [Collider],
+    domain: &'a Domain,
+}
+
+/// What a [`ContactForce`] reads besides its model: the pair materials (with each
+/// particle's (e, ζ) where particles have their own), the particles' radii and inverse
+/// masses, the colliders and the domain.
+pub(crate) struct Bodies<'a> {
+    /// The material of every pair without its own.
+    pub global: Material,
+    /// Each particle's own material and its (e, ζ), if particles have their own.
+    pub own: Option<(&'a [Material], &'a [(f64, f64)])>,
+    /// Radii, m.
+    pub radius: &'a [f64],
+    /// Inverse masses, 1/kg (0: pinned).
+    pub inv_mass: &'a [f64],
+    pub colliders: &'a [Collider],
+    /// 2D/3D, periodic axes.
+    pub domain: &'a Domain,
+}
+
+struct Scratch {
+    grid: Grid,
+    /// A half list (each pair once, in the row of its lower index).
+    list: NeighbourList,
+    /// What each chunk's pairs summed (its share of the contact energy, J), kept to allocate
+    /// nothing per evaluation.
+    sums: Vec<ChunkSums>,
+    /// The forces chunks owe particles of later chunks (`pairs.rs`).
+    exchange: Exchange,
+    /// The pair energy Σ ½ k_n δ² (J) the fused Verlet pass summed on its way, with the
+    /// positions' buffer (address, length) it was summed at: the runaway check asks for the
+    /// energy at those positions right after, and takes it from here instead of a second
+    /// pass (the same sum, in the same order). Taken once; the world forgets it after the
+    /// check ([`ContactForce::forget_energy`]).
+    pair_energy: Option<((usize, usize), f64)>,
+}
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Scratch {
+            grid: Grid::default(),
+            list: NeighbourList {
+                half: true,
+                ..NeighbourList::default()
+            },
+            sums: Vec::new(),
+            exchange: Exchange::default(),
+            pair_energy: None,
+        }
+    }
+}
+
+impl<'a> ContactForce<'a> {
+    /// The force of `model` on `bodies`, for one call.
+    pub fn new(model: &'a SpringDashpot, bodies: Bodies<'a>) -> Self {
+        ContactForce {
+            model,
+            stiffness: model.stiffness,
+            damping: model.damping,
+            ratios: DampingRatios::new(bodies.global, bodies.own.map(|o| o.1), bodies.colliders),
+            global: bodies.global,
+            own: bodies.own.map(|o| o.0),
+            radius: bodies.radius,
+            inv_mass: bodies.inv_mass,
+            colliders: bodies.colliders,
+            domain: bodies.domain,
+        }
+    }
+
+    /// Whether the neighbour list must be rebuilt before an evaluation at positions `x` (m,
+    /// 3 per particle): there is none, or the particles have moved too far since its build.
+    ///
+    /// The world asks this right before the force evaluation at the same `x`; a yes is
+    /// remembered for that buffer, so the evaluation does not check a second time.
+    pub fn list_expired(&self, x: &[f64]) -> bool {
+        let list = &mut self.scratch().list;
+        let holds = list.holds(x, &self.domain);
+        list.verified = holds.then_some((x.as_ptr() as usize, x.len()));
+        !holds
+    }
+
+    /// Adds the newborns, particles `start..` at positions `x` (m), to the neighbour list
+    /// ([`NeighbourList::admit`]: their pairs are added, the others stay); false when the
+    /// list could not be kept (the next evaluation builds one).
+    pub fn admit_newborns(&self, x: &[f64], start: usize) -> bool {
+        self.scratch().list.admit(x, self.radius, self.colliders, self.domain, start)
+    }
+
+    /// The neighbour list's skin at a build now, m: the model's fixed one, or
+    /// [`SKIN_PER_RADIUS`] times the mean radius.
+    fn skin(&self) -> f64 {
+        self.model.skin.unwrap_or_else(|| {
+            let mean_radius = if self.radius.is_empty() {
+                0.0
+            } else {
+                self.radius.iter().sum::<f64>() / self.radius.len() as f64
+            };
+            SKIN_PER_RADIUS * mean_radius
+        })
+    }
+
+    /// The width of the cells the neighbour list searches, 2 r_max + skin, m.
+    pub fn reach(&self) -> f64 {
+        2.0 * self.radius.iter().fold(0.0, |m: f64, r| m.max(*r)) + self.skin()
+    }
+
+    /// The domain (2D/3D, periodic axes).
+    pub fn domain(&self) -> &Domain {
+        self.domain
+    }
+
+    /// The model's buffers.
+    fn scratch(&self) -> MutexGuard<'a, Scratch> {
+        self.model.scratch()
+    }
+
+    /// Checks the state's lengths and makes the neighbour list hold at its positions.
+    fn update_list(&self, s: &State, scratch: &mut Scratch) -> Result<(), Error> {
+        let n = self.radius.len();
+        for (name, len) in [("x", s.x.len()), ("v", s.v.len())] {
+            if len != 3 * n {
+                return Err(Error::invalid(
+                    name,
+                    format!("{len} values"),
+                    format!("3 per particle ({} for the {n} radii)", 3 * n),
+                ));
+            }
+        }
+        let Scratch { grid, list, .. } = scratch;
+        // (worked out at a build only: O(N) and O(colliders))
+        let build = || ListBuild {
+            skin: self.skin(),
+            collider_scale: self.colliders.iter().map(collider_scale).fold(0.0, f64::max),
+        };
+        list.update(grid, s.x, self.radius, self.colliders, self.domain, build)
+    }
+}
+
+#[cfg(test)]
+#[path = "../tests/contact_force.rs"]
+mod tests;
