@@ -146,7 +146,8 @@ pub(crate) struct ContactForce<'a> {
     radius: &'a [f64],
     inv_mass: &'a [f64],
     colliders: &'a [Collider],
-    domain: &'a Domain,
+    /// (a copy: the hot loops read it without a pointer to follow)
+    domain: Domain,
 }
 
 /// What a [`ContactForce`] reads besides its model: the pair materials (with each
@@ -211,7 +212,7 @@ impl<'a> ContactForce<'a> {
             radius: bodies.radius,
             inv_mass: bodies.inv_mass,
             colliders: bodies.colliders,
-            domain: bodies.domain,
+            domain: *bodies.domain,
         }
     }
 
@@ -231,7 +232,7 @@ impl<'a> ContactForce<'a> {
     /// ([`NeighbourList::admit`]: their pairs are added, the others stay); false when the
     /// list could not be kept (the next evaluation builds one).
     pub fn admit_newborns(&self, x: &[f64], start: usize) -> bool {
-        self.scratch().list.admit(x, self.radius, self.colliders, self.domain, start)
+        self.scratch().list.admit(x, self.radius, self.colliders, &self.domain, start)
     }
 
     /// The neighbour list's skin at a build now, m: the model's fixed one, or
@@ -254,7 +255,7 @@ impl<'a> ContactForce<'a> {
 
     /// The domain (2D/3D, periodic axes).
     pub fn domain(&self) -> &Domain {
-        self.domain
+        &self.domain
     }
 
     /// The model's buffers.
@@ -280,7 +281,7 @@ impl<'a> ContactForce<'a> {
             skin: self.skin(),
             collider_scale: self.colliders.iter().map(collider_scale).fold(0.0, f64::max),
         };
-        list.update(grid, s.x, self.radius, self.colliders, self.domain, build)
+        list.update(grid, s.x, self.radius, self.colliders, &self.domain, build)
     }
 }
 
