@@ -89,7 +89,7 @@ impl World {
             Some(user_of) => old_of_new.iter().map(|&o| user_of[o as usize]).collect(),
             None => old_of_new.clone(),
         };
-        self.permute(&old_of_new, a);
+        self.permute(&old_of_new, a, true);
         self.sorted = Some(user_of);
         self.sorts += 1;
     }
@@ -108,18 +108,26 @@ impl World {
             Some(WorldStepper::Verlet(b)) => std::mem::take(&mut b.a),
             _ => Vec::new(),
         };
-        self.permute(&old_of_new, &mut a);
+        // (between steps `x_next`, `v_next` hold nothing the next step reads: its drift
+        // writes them first)
+        self.permute(&old_of_new, &mut a, false);
         if let Some(WorldStepper::Verlet(b)) = &mut self.stepper {
             b.a = a;
         }
     }
 
     /// Moves every per-particle value of the world to the new order (`old_of_new[i]`: the
-    /// index now of the particle that goes to place i), and tells the forces.
-    fn permute(&mut self, old_of_new: &[u32], a: &mut Vec<f64>) {
+    /// index now of the particle that goes to place i), and tells the forces; with
+    /// `step_buffers`, the step's `x_next`, `v_next` too (inside a step, where they hold the
+    /// drifted state).
+    fn permute(&mut self, old_of_new: &[u32], a: &mut Vec<f64>, step_buffers: bool) {
         let p = &mut self.particles;
-        for v in [&mut p.x, &mut p.v, &mut self.x_next, &mut self.v_next, a] {
+        for v in [&mut p.x, &mut p.v, a] {
             gather3(v, old_of_new);
+        }
+        if step_buffers {
+            gather3(&mut self.x_next, old_of_new);
+            gather3(&mut self.v_next, old_of_new);
         }
         gather(&mut p.mass, old_of_new);
         gather(&mut p.inv_mass, old_of_new);
