@@ -183,6 +183,28 @@ fn verlet_world(x: &[f64], v: &[f64], m: &[f64], r: &[f64], springs: bool) -> Wo
     w
 }
 
+/// `n` particles on the lattice, then 20 loners high above them, in free flight, none
+/// touching another (positions, velocities, masses, radii).
+fn heap_and_loners(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+    let (mut x, mut v, mut m, mut r) = lattice(n);
+    for k in 0..20 {
+        x.extend([0.2 + 0.18 * k as f64, 2.0, 3.0]);
+        v.extend([0.0, 0.1, 0.0]);
+        m.push(1e-3);
+        r.push(0.02);
+    }
+    (x, v, m, r)
+}
+
+/// Two equal spring–dashpot worlds of these particles ([`verlet_world`], no spring), 30
+/// steps on.
+fn twins(x: &[f64], v: &[f64], m: &[f64], r: &[f64]) -> (World, World) {
+    let mut pair = (verlet_world(x, v, m, r, false), verlet_world(x, v, m, r, false));
+    pair.0.advance(30).unwrap();
+    pair.1.advance(30).unwrap();
+    pair
+}
+
 /// Particle i's position and velocity (6 values).
 fn state_of(w: &World, i: usize) -> Vec<f64> {
     let p = w.particles();
@@ -200,19 +222,9 @@ fn a_birth_or_death_that_touches_nothing_keeps_verlets_acceleration() {
     // dashpot's and the drag's velocity), so an acceleration evaluated afresh at the state
     // would differ (by about h γ a / m: 2e-5 of g here). A change that touches, or a force
     // between particles (a spring), drops it as before.
-    let (mut x, mut v, mut m, mut r) = lattice(300);
-    // 20 loners high above the heap, in free flight, none touching another
-    for k in 0..20 {
-        x.extend([0.2 + 0.18 * k as f64, 2.0, 3.0]);
-        v.extend([0.0, 0.1, 0.0]);
-        m.push(1e-3);
-        r.push(0.02);
-    }
+    let (x, v, m, r) = heap_and_loners(300);
     let n = m.len();
-    let mut a = verlet_world(&x, &v, &m, &r, false);
-    let mut same = verlet_world(&x, &v, &m, &r, false); // never changed
-    a.advance(30).unwrap();
-    same.advance(30).unwrap();
+    let (mut a, mut same) = twins(&x, &v, &m, &r); // `same` is never changed
     let evals = |w: &World| w.stats().nfev;
 
     // A death among the loners: one evaluation for the next step (its kick), not two.
@@ -298,18 +310,9 @@ fn in_a_world_sorted_along_space_a_death_keeps_verlets_acceleration_too() {
     // evaluation, and the others move as in the world without it, bit for bit; with the
     // acceleration evaluated afresh after the death (the cache dropped, as before), the
     // positions 40 steps on differ by up to 7.9e-15 m (measured), so the comparison is exact.
-    let (mut x, mut v, mut m, mut r) = lattice(5000);
-    for k in 0..20 {
-        x.extend([0.2 + 0.18 * k as f64, 2.0, 3.0]);
-        v.extend([0.0, 0.1, 0.0]);
-        m.push(1e-3);
-        r.push(0.02);
-    }
+    let (x, v, m, r) = heap_and_loners(5000);
     let n = m.len();
-    let mut a = verlet_world(&x, &v, &m, &r, false);
-    let mut same = verlet_world(&x, &v, &m, &r, false);
-    a.advance(30).unwrap();
-    same.advance(30).unwrap();
+    let (mut a, mut same) = twins(&x, &v, &m, &r);
     assert!(a.sorts() > 0, "the world sorted its particles along space");
     let gone: Vec<usize> = (n - 20..n).step_by(2).collect();
     a.remove_particles(&gone).unwrap();

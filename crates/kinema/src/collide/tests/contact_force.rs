@@ -136,6 +136,11 @@ impl Owned {
     }
 }
 
+/// The state (x, v) of particles of masses `mass` at t = 0.
+fn state<'a>(x: &'a [f64], v: &'a [f64], mass: &'a [f64]) -> State<'a> {
+    State { t: 0.0, x, v, mass }
+}
+
 /// Forces (N) and U (J) from the contacts of an exhaustive search at `s`, by the law as
 /// it was written before the neighbour list.
 fn reference(force: &Owned, s: &State) -> (Vec<f64>, f64) {
@@ -527,12 +532,7 @@ fn the_energy_is_that_of_the_positions_asked_about() {
         colliders: vec![],
         domain: Domain::open(3).unwrap(),
     });
-    let s = State {
-        t: 0.0,
-        x: &x,
-        v: &v,
-        mass: &mass,
-    };
+    let s = state(&x, &v, &mass);
     let mut f = vec![0.0; x.len()];
     force.accumulate(&s, &mut f).unwrap();
     let u = force.potential_energy(&s).unwrap();
@@ -635,12 +635,7 @@ fn a_gas_of_several_chunks_sums_each_pair_once_the_same_on_any_number_of_threads
     // Σ F = 0 (each pair gives +F n and −F n exactly) to rounding.
     let n = 3 * CHUNK + 100;
     let (mut force, x, v, mass) = chunked_gas(n);
-    let s = State {
-        t: 0.0,
-        x: &x,
-        v: &v,
-        mass: &mass,
-    };
+    let s = state(&x, &v, &mass);
     let on = |threads: usize, force: &mut Owned| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| {
@@ -734,12 +729,7 @@ fn after_a_removal_the_kept_list_gives_the_forces_of_a_fresh_one_without_a_searc
     // order).
     let n = 2 * CHUNK + 300;
     let (mut force, x, v, mass) = chunked_gas(n);
-    let s = State {
-        t: 0.0,
-        x: &x,
-        v: &v,
-        mass: &mass,
-    };
+    let s = state(&x, &v, &mass);
     let mut f = vec![0.0; 3 * n];
     force.accumulate(&s, &mut f).unwrap();
     let builds = force.list_builds();
@@ -795,12 +785,7 @@ fn the_fused_pass_keeps_the_pair_energy_the_runaway_check_asks_for_once() {
     // own), once; after forget_energy, or at other positions, it sums again.
     let n = 2 * CHUNK + 300;
     let (force, x, v, mass) = chunked_gas(n);
-    let s = State {
-        t: 0.0,
-        x: &x,
-        v: &v,
-        mass: &mass,
-    };
+    let s = state(&x, &v, &mass);
     let own = force.potential_energy(&s).unwrap();
     assert!(own > 0.0);
     let (mut a, mut v_out) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
@@ -920,12 +905,7 @@ fn the_list_tells_which_changes_touch() {
     let v = [0.0; 15];
     let mass = [1.0; 5];
     let mut force = Owned::from_params(params(vec![0.1; 5]));
-    let s = State {
-        t: 0.0,
-        x: &x,
-        v: &v,
-        mass: &mass,
-    };
+    let s = state(&x, &v, &mass);
     force.accumulate(&s, &mut [0.0; 15]).unwrap();
     assert_eq!(force.touches_across(&x, &[true, true, true, true, false]), Some(false));
     assert_eq!(force.touches_across(&x, &[true, false, true, true, true]), Some(true));
