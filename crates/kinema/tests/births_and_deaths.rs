@@ -3,7 +3,7 @@
 //! colliders), bit for bit over the steps that follow, for both contact models and the
 //! integrators; ids are never reused; springs die with an end.
 
-use kinema::collide::{BoxContainer, Surface};
+use kinema::collide::{BoxContainer, Collider, Surface};
 use kinema::forces::{Gravity, Springs};
 use kinema::ode::{Integrator, Method};
 use kinema::world::{CollisionParams, ContactModel};
@@ -151,13 +151,24 @@ fn ids_are_never_reused_and_bad_indices_are_named() {
     assert_eq!(w.steps(), 3);
 }
 
-/// A spring–dashpot world under gravity and drag in a box: a heap of `n` on a lattice (the
-/// lower half touching), and what `extra` adds (positions), with velocity Verlet.
-fn verlet_world(x: &[f64], v: &[f64], m: &[f64], r: &[f64], springs: bool) -> World {
+/// A world of the particles (x, v, m, r, `pinned`) in `dim` dimensions with spring–dashpot
+/// contacts (k_n = 2e3 N/m, e = 0.7), `collider`, gravity g (m/s²) and drag, stepped by
+/// velocity Verlet with dt = 2e-4 s.
+#[allow(clippy::too_many_arguments)]
+fn contact_world(
+    dim: usize,
+    collider: Collider,
+    g: [f64; 3],
+    x: &[f64],
+    v: &[f64],
+    m: &[f64],
+    r: &[f64],
+    pinned: &[bool],
+) -> World {
     let mut w = World::new(WorldParams {
         dt: 2e-4,
         method: Integrator::Named(Method::Verlet),
-        dim: 3,
+        dim,
     })
     .unwrap();
     w.set_collisions(CollisionParams {
@@ -169,11 +180,18 @@ fn verlet_world(x: &[f64], v: &[f64], m: &[f64], r: &[f64], springs: bool) -> Wo
         ..CollisionParams::default()
     })
     .unwrap();
-    w.add_collider(BoxContainer::new([0.0; 3], [4.0, 4.0, 4.0], Surface::default()).unwrap())
-        .unwrap();
-    w.add_particles(x, v, m, r, &vec![false; m.len()]).unwrap();
-    w.add_force(Box::new(Gravity::new([0.0, 0.0, -9.81]).unwrap())).unwrap();
+    w.add_collider(collider).unwrap();
+    w.add_particles(x, v, m, r, pinned).unwrap();
+    w.add_force(Box::new(Gravity::new(g).unwrap())).unwrap();
     w.add_force(Box::new(kinema::forces::Drag::new(1e-4, 1e-5).unwrap())).unwrap();
+    w
+}
+
+/// [`contact_world`] in 3D in a 4 m box under g = 9.81 m/s² downwards (−z), nothing pinned;
+/// with `springs`, a spring between particles 0 and 1 too.
+fn verlet_world(x: &[f64], v: &[f64], m: &[f64], r: &[f64], springs: bool) -> World {
+    let bounds = BoxContainer::new([0.0; 3], [4.0, 4.0, 4.0], Surface::default()).unwrap();
+    let mut w = contact_world(3, bounds.into(), [0.0, 0.0, -9.81], x, v, m, r, &vec![false; m.len()]);
     if springs {
         w.add_force(Box::new(
             Springs::with_rest_from_positions(vec![0], vec![1], 50.0, 0.0, x).unwrap(),
@@ -250,21 +268,8 @@ fn a_birth_or_death_that_touches_nothing_keeps_verlets_acceleration() {
         [false, false, true],
     );
     a.add_particles(&born, &vb, &mb, &rb, &pinned).unwrap();
-    let mut alone = World::new(WorldParams {
-        dt: 2e-4,
-        method: Integrator::Named(Method::Verlet),
-        dim: 3,
-    })
-    .unwrap();
-    alone.set_collisions(a.collision_params().unwrap()).unwrap();
-    alone
-        .add_collider(BoxContainer::new([0.0; 3], [4.0, 4.0, 4.0], Surface::default()).unwrap())
-        .unwrap();
-    alone.add_particles(&born, &vb, &mb, &rb, &pinned).unwrap();
-    alone.add_force(Box::new(Gravity::new([0.0, 0.0, -9.81]).unwrap())).unwrap();
-    alone
-        .add_force(Box::new(kinema::forces::Drag::new(1e-4, 1e-5).unwrap()))
-        .unwrap();
+    let bounds = BoxContainer::new([0.0; 3], [4.0, 4.0, 4.0], Surface::default()).unwrap();
+    let mut alone = contact_world(3, bounds.into(), [0.0, 0.0, -9.81], &born, &vb, &mb, &rb, &pinned);
     let before = evals(&a);
     a.advance(1).unwrap();
     assert_eq!(evals(&a) - before, 1, "a birth that touches nothing keeps it too");
@@ -330,4 +335,58 @@ fn in_a_world_sorted_along_space_a_death_keeps_verlets_acceleration_too() {
         }
     }
     assert_eq!(worst, 0.0, "the survivors' states differ by up to {worst:e}");
+}
+
+#[test]
+fn in_2d_a_birth_or_death_that_touches_nothing_keeps_verlets_acceleration() {
+    // The same in the xy-plane (a_z = 0 for the newborns too): discs on a floor line under
+    // gravity and drag, 20 loners above them; a death of loners and a birth in free space
+    // cost no evaluation, and every particle moves as without the change, bit for bit.
+    let disc_world = |x: &[f64], v: &[f64], m: &[f64], r: &[f64]| {
+        let floor = kinema::collide::Plane::new([0.0; 3], [0.0, 1.0, 0.0], Surface::default()).unwrap();
+        contact_world(2, floor.into(), [0.0, -9.81, 0.0], x, v, m, r, &vec![false; m.len()])
+    };
+    let (mut x, mut v, mut m, mut r) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for k in 0..60 {
+        // a row of discs resting just into the floor (touching it), and loners up high
+        let loner = k >= 40;
+        let (px, py) = if loner {
+            (0.3 * (k - 40) as f64, 2.0)
+        } else {
+            (0.05 * k as f64, 0.0099)
+        };
+        x.extend([px, py, 0.0]);
+        v.extend([if loner { 0.1 } else { 0.0 }, 0.0, 0.0]);
+        m.push(1e-3);
+        r.push(0.01);
+    }
+    let n = m.len();
+    let (mut a, mut same) = (disc_world(&x, &v, &m, &r), disc_world(&x, &v, &m, &r));
+    a.advance(30).unwrap();
+    same.advance(30).unwrap();
+    let gone: Vec<usize> = (n - 20..n).step_by(2).collect();
+    a.remove_particles(&gone).unwrap();
+    let before = a.stats().nfev;
+    a.advance(1).unwrap();
+    assert_eq!(a.stats().nfev - before, 1, "a death: one evaluation");
+    let born = [0.5, 3.0, 0.0, 1.5, 3.0, 0.0];
+    let (vb, mb, rb) = ([0.2, 0.3, 0.0, 0.0, 0.0, 0.0], [2e-3, 1e-3], [0.02, 0.01]);
+    a.add_particles(&born, &vb, &mb, &rb, &[false; 2]).unwrap();
+    let mut alone = disc_world(&born, &vb, &mb, &rb);
+    let before = a.stats().nfev;
+    a.advance(1).unwrap();
+    assert_eq!(a.stats().nfev - before, 1, "a birth: one evaluation");
+    a.advance(40).unwrap();
+    same.advance(42).unwrap();
+    alone.advance(41).unwrap();
+    let stayed: Vec<usize> = (0..n).filter(|i| !gone.contains(i)).collect();
+    for (now, &i) in stayed.iter().enumerate() {
+        assert_eq!(state_of(&a, now), state_of(&same, i), "particle {i}");
+    }
+    for k in 0..2 {
+        let s = state_of(&a, stayed.len() + k);
+        assert_eq!(s, state_of(&alone, k), "newborn {k}");
+        assert!(s[2] == 0.0 && s[5] == 0.0, "in the plane");
+    }
+    assert!(state_of(&a, 0)[1] != 0.0099, "the row moved against the floor");
 }

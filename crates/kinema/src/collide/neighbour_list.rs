@@ -102,7 +102,7 @@ pub(crate) struct NeighbourList {
     pub(crate) extent: [f64; 3],
     /// Builds so far.
     pub(crate) builds: usize,
-    /// The buffer (address, length) at which [`ContactForce::list_expired`] just found that
+    /// The buffer (address, length) at which [`SpringDashpot::list_expired`](crate::collide::contact_force::SpringDashpot::list_expired) just found that
     /// the list holds: the next update at that buffer, the world's force evaluation of the
     /// same step with nothing written in between, need not check again. Any update clears it.
     pub(crate) verified: Option<(usize, usize)>,

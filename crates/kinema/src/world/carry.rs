@@ -17,6 +17,7 @@
 //! since a contact force that touches nothing adds nothing. Otherwise the cache is dropped,
 //! as before, and the next step starts afresh.
 
+use super::dynamics::newton;
 use super::forces::contact_force;
 use super::integrate::{VerletBuffers, WorldStepper};
 use super::World;
@@ -90,8 +91,8 @@ impl World {
                 return Ok(());
             }
         }
-        // F on the newborns alone (every force here is a per-particle one), then a = F/m
-        // with 1/m = 0 for the pinned and no z in 2D, as the force evaluation does.
+        // F on the newborns alone (every force here is a per-particle one), then Newton's
+        // a = F/m as the force evaluation has it
         let s = State {
             t: self.time,
             x: &p.x[3 * start..],
@@ -102,13 +103,9 @@ impl World {
         for force in self.forces.iter_mut() {
             force.accumulate(&s, &mut f)?;
         }
-        for (fi, inv_m) in f.chunks_exact(3).zip(&p.inv_mass[start..]) {
-            a.extend(fi.iter().map(|fk| fk * inv_m));
-            if self.params.dim == 2 {
-                let last = a.len() - 1;
-                a[last] = 0.0;
-            }
-        }
+        let old = a.len();
+        a.resize(old + f.len(), 0.0);
+        newton(&f, &p.inv_mass[start..], self.params.dim, &mut a[old..]);
         self.keep_acceleration(Some(a));
         Ok(())
     }

@@ -59,16 +59,21 @@ impl SecondOrderSystem for Dynamics<'_, '_> {
 
     fn accel(&mut self, t: f64, x: &[f64], v: &[f64], acc: &mut [f64]) -> Result<(), CallbackError> {
         self.total_force(t, x, v)?;
-        // Newton's second law, a = F/m, with 1/m = 0 for pinned particles.
-        for (i, inv_m) in self.inv_mass.iter().enumerate() {
-            for k in 0..3 {
-                acc[3 * i + k] = self.force[3 * i + k] * inv_m;
-            }
-            if self.dim == 2 {
-                acc[3 * i + 2] = 0.0;
-            }
-        }
+        newton(self.force, self.inv_mass, self.dim, acc);
         Ok(())
+    }
+}
+
+/// Newton's second law, a = F/m (m/s², 3 per particle) from the forces `force` (N), with
+/// 1/m = `inv_mass` (0 for pinned particles) and a_z = 0 in 2D.
+pub(crate) fn newton(force: &[f64], inv_mass: &[f64], dim: usize, acc: &mut [f64]) {
+    for (i, inv_m) in inv_mass.iter().enumerate() {
+        for k in 0..3 {
+            acc[3 * i + k] = force[3 * i + k] * inv_m;
+        }
+        if dim == 2 {
+            acc[3 * i + 2] = 0.0;
+        }
     }
 }
 

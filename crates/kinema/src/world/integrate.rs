@@ -196,7 +196,11 @@ impl World {
                     }
                 });
             if self.sortable()
-                && contact_force(&self.collide_stage, &self.particles).is_some_and(|c| c.list_expired(&self.x_next))
+                && self
+                    .collide_stage
+                    .as_ref()
+                    .and_then(|s| s.spring_dashpot.as_ref().map(|m| m.list_expired(&self.x_next, &s.domain)))
+                    .unwrap_or(false)
             {
                 self.sort_along_space(&mut b.a);
             }

@@ -46,7 +46,7 @@ impl ContactForce<'_> {
         if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] >= reach * reach {
             return None;
         }
-        pair_contact(i, j, x, v, &self.radius, &self.domain, 0.0)
+        pair_contact(i, j, x, v, self.radius, &self.domain, 0.0)
     }
 
     /// Whether particles i and j overlap at `x`, tested from i's side with x_i already loaded:
@@ -76,7 +76,7 @@ impl ContactForce<'_> {
         let collider = &self.colliders[k];
         collider.for_each_touch(p, self.radius[i], 0.0, |t| {
             let c = collider.contact(k, t, i, p, vi, self.radius[i]);
-            if !on_periodic_wall(&c, &self.colliders, &self.domain) {
+            if !on_periodic_wall(&c, self.colliders, &self.domain) {
                 each(&c);
             }
         });

@@ -97,7 +97,20 @@ impl SpringDashpot {
         self.scratch().list.retain_survivors(new_of_old);
     }
 
-    /// Forgets what [`ContactForce::list_expired`] found (the world calls this at the end of
+    /// Whether the neighbour list must be rebuilt before an evaluation at positions `x` (m,
+    /// 3 per particle) in `domain`: there is none, or the particles have moved too far since
+    /// its build.
+    ///
+    /// The world asks this right before the force evaluation at the same `x`; a list that
+    /// holds is remembered for that buffer, so the evaluation does not check a second time.
+    pub fn list_expired(&self, x: &[f64], domain: &Domain) -> bool {
+        let list = &mut self.scratch().list;
+        let holds = list.holds(x, domain);
+        list.verified = holds.then_some((x.as_ptr() as usize, x.len()));
+        !holds
+    }
+
+    /// Forgets what [`SpringDashpot::list_expired`] found (the world calls this at the end of
     /// each step, so that a buffer reused later is checked again).
     pub fn forget_verified(&self) {
         self.scratch().list.verified = None;
@@ -214,18 +227,6 @@ impl<'a> ContactForce<'a> {
             colliders: bodies.colliders,
             domain: *bodies.domain,
         }
-    }
-
-    /// Whether the neighbour list must be rebuilt before an evaluation at positions `x` (m,
-    /// 3 per particle): there is none, or the particles have moved too far since its build.
-    ///
-    /// The world asks this right before the force evaluation at the same `x`; a yes is
-    /// remembered for that buffer, so the evaluation does not check a second time.
-    pub fn list_expired(&self, x: &[f64]) -> bool {
-        let list = &mut self.scratch().list;
-        let holds = list.holds(x, &self.domain);
-        list.verified = holds.then_some((x.as_ptr() as usize, x.len()));
-        !holds
     }
 
     /// Adds the newborns, particles `start..` at positions `x` (m), to the neighbour list

@@ -144,7 +144,7 @@ impl ContactForce<'_> {
                     if !self.overlaps(xi, ri, j, x) {
                         continue;
                     }
-                    let Some(contact) = pair_contact(i, j, x, v, &self.radius, &self.domain, 0.0) else {
+                    let Some(contact) = pair_contact(i, j, x, v, self.radius, &self.domain, 0.0) else {
                         continue;
                     };
                     if options.energy {
