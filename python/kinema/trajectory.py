@@ -407,7 +407,7 @@ class _Recorder:
         springs = world._spring_ids  # springs added mid-run count
         self.about["springs"] = springs.copy() if springs.size else None
         d = world._diagnostics_as_pulled()
-        stats = world.collision_stats()
+        stats = world._collision_stats_as_pulled()
         if stats is None:
             contacts, balance, lost = 0, np.zeros(3), 0.0
         else:

@@ -862,6 +862,11 @@ class World(WorldCollisions):
         with self._engine() as core:
             return core.diagnostics()
 
+    def _collision_stats_as_pulled(self) -> dict | None:
+        """``collision_stats()`` for the recorder, as :meth:`_diagnostics_as_pulled`: the books of
+        the steps taken, with nothing written into the views since they were read."""
+        return self._core.collision_stats()
+
     def __repr__(self) -> str:
         if isinstance(self._core, _Busy):
             return "World(stepping)"

@@ -45,6 +45,17 @@ struct NewParticles<'py> {
 }
 
 /// The particle world (see kinema.World).
+///
+/// The engine keeps its own order between calls: with spring–dashpot contacts it sorts the
+/// particles along space (`kinema::world::order`) and `step` leaves them so, where the
+/// world used to put them back in the user's order after every call (5 × 3N + 5N values
+/// permuted and the neighbour list renumbered, to be sorted again at the next rebuild).
+/// What Python reads every frame (positions, velocities, masses, radii, ids) is scattered
+/// into the user's order through [`World::user_of`]; `sync` compares through it and moves
+/// nothing when nothing was written; the diagnostics are sums over the engine's order. Every
+/// other method (those given particle indices, those that change the world, the advisor, the
+/// checkpoint's carries) first puts the particles back (`restore_order`, a no-op when they
+/// are), and the engine sorts them again at its next rebuild.
 #[pyclass(name = "World", module = "kinema._core", unsendable)]
 pub struct PyWorld {
     inner: World,
@@ -82,6 +93,7 @@ impl PyWorld {
     /// Appends particles; returns (first, end) indices. `restitution` and `friction` (one per
     /// particle, NaN: the world's global value) are checked before anything is added.
     fn add_particles(&mut self, particles: NewParticles<'_>) -> PyResult<(usize, usize)> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let NewParticles {
             x,
             v,
@@ -104,16 +116,19 @@ impl PyWorld {
     /// Refuses now what the first step would: particles placed where contacts cannot resolve
     /// them (`World::check_pending_placement`).
     fn check_placement(&mut self) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.check_pending_placement().map_err(to_py)
     }
 
     /// A checkpoint's time, steps and ids (see `World::restore_clock_and_ids`).
     fn restore_clock_and_ids(&mut self, time: f64, steps: u64, ids: Vec<u64>, next_id: u64) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.restore_clock_and_ids(time, steps, &ids, next_id).map_err(to_py)
     }
 
     /// A checkpoint's collision books (dicts as `collision_stats` gives them).
     fn restore_collision_stats(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let (total, last) = (collide::stats_from(&total)?, collide::stats_from(&last)?);
         self.inner.restore_collision_stats(total, last);
         Ok(())
@@ -121,20 +136,24 @@ impl PyWorld {
 
     /// Starts the caches again (a checkpoint's restart point).
     fn restart_caches(&mut self) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.restart_caches().map_err(to_py)
     }
 
     /// What the method carries from step to step (Verlet's a, implicit Euler's Δv), or None.
     fn integrator_carry<'py>(&mut self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.integrator_carry().map(|c| PyArray1::from_vec(py, c))
     }
 
     fn restore_integrator_carry(&mut self, carry: Vec<f64>) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.restore_integrator_carry(carry).map_err(to_py)
     }
 
     /// The impulse model's warm start: (particle, partner is a collider, partner index, totals).
     fn collision_carry(&mut self) -> Vec<(usize, bool, usize, [f64; 3])> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner
             .collision_carry()
             .into_iter()
@@ -146,6 +165,7 @@ impl PyWorld {
     }
 
     fn restore_collision_carry(&mut self, carry: Vec<(usize, bool, usize, [f64; 3])>) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let carry = carry
             .into_iter()
             .map(|(i, collider, j, t)| {
@@ -165,16 +185,19 @@ impl PyWorld {
 
     /// Sleeping's carry: each particle's calm time (s) and sleeping island (-1: awake).
     fn sleep_carry<'py>(&mut self, py: Python<'py>) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>) {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let (calm, island) = self.inner.sleep_carry();
         (PyArray1::from_vec(py, calm), PyArray1::from_vec(py, island))
     }
 
     fn restore_sleep_carry(&mut self, calm: Vec<f64>, island: Vec<i64>) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.restore_sleep_carry(calm, island).map_err(to_py)
     }
 
     /// Each particle's own (restitution, friction), None where not set; empty if none has.
-    fn particle_materials(&self) -> Vec<(Option<f64>, Option<f64>)> {
+    fn particle_materials(&mut self) -> Vec<(Option<f64>, Option<f64>)> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.particle_materials()
     }
 
@@ -185,6 +208,7 @@ impl PyWorld {
 
     /// Removes the particles at these indices (checked; repeats allowed).
     fn remove_particles(&mut self, indices: Vec<usize>) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.remove_particles(&indices).map_err(to_py)
     }
 
@@ -228,10 +252,12 @@ impl PyWorld {
     }
 
     fn add_gravity(&mut self, g: [f64; 3]) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.add_force(Box::new(Gravity::new(g).map_err(to_py)?)).map_err(to_py)
     }
 
     fn add_drag(&mut self, linear: f64, quadratic: f64) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner
             .add_force(Box::new(Drag::new(linear, quadratic).map_err(to_py)?))
             .map_err(to_py)
@@ -247,6 +273,7 @@ impl PyWorld {
         rest_length: Option<Vec<f64>>,
         damping: Vec<f64>,
     ) -> PyResult<Vec<f64>> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let rest = match rest_length {
             Some(r) => r,
             None => {
@@ -273,24 +300,28 @@ impl PyWorld {
     }
 
     fn add_attractor(&mut self, point: [f64; 3], strength: f64, softening: f64) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner
             .add_force(Box::new(Attractor::new(point, strength, softening).map_err(to_py)?))
             .map_err(to_py)
     }
 
     fn add_wind(&mut self, velocity: [f64; 3], coefficient: f64) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner
             .add_force(Box::new(Wind::new(velocity, coefficient).map_err(to_py)?))
             .map_err(to_py)
     }
 
     fn add_python_force(&mut self, f: Py<PyAny>, name: String) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.add_force(Box::new(PythonForce { f, name })).map_err(to_py)
     }
 
     /// Turns collisions on, or changes their settings (every one of them), from the dict of
     /// `World.set_collisions`' keyword arguments.
     fn set_collisions(&mut self, settings: collide::CollisionArgs) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let params = settings.params().map_err(to_py)?;
         self.inner.set_collisions(params).map_err(to_py)
     }
@@ -312,6 +343,7 @@ impl PyWorld {
         restitution: Option<f64>,
         friction: Option<f64>,
     ) -> PyResult<usize> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
         let plane = collide::plane(self.inner.params().dim, point, normal, surface).map_err(to_py)?;
         self.inner.add_collider(plane).map_err(to_py)
@@ -319,6 +351,7 @@ impl PyWorld {
 
     /// Adds a box container (2 values per corner in 2D, 3 in 3D); returns its index.
     fn add_box(&mut self, lo: Vec<f64>, hi: Vec<f64>, restitution: Option<f64>, friction: Option<f64>) -> PyResult<usize> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
         let b = collide::box_container(self.inner.params().dim, &lo, &hi, surface).map_err(to_py)?;
         self.inner.add_collider(b).map_err(to_py)
@@ -332,6 +365,7 @@ impl PyWorld {
         restitution: Option<f64>,
         friction: Option<f64>,
     ) -> PyResult<usize> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
         let s = collide::sphere_obstacle(self.inner.params().dim, center, radius, surface).map_err(to_py)?;
         self.inner.add_collider(s).map_err(to_py)
@@ -347,6 +381,7 @@ impl PyWorld {
         restitution: Option<f64>,
         friction: Option<f64>,
     ) -> PyResult<usize> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
         let (v, f) = (vertices.as_array(), faces.as_array());
         if v.ncols() != 3 || f.ncols() != 3 {
@@ -364,6 +399,7 @@ impl PyWorld {
 
     /// Makes the axes periodic with the cell of the box collider (wraps the positions).
     fn set_periodic(&mut self, axes: [bool; 3]) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         self.inner.set_periodic(axes).map_err(to_py)
     }
 
@@ -388,6 +424,7 @@ impl PyWorld {
         translations: Option<Vec<[f64; 3]>>,
         rotations: Option<Vec<[f64; 4]>>,
     ) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let motion = collide::motion(velocity, angular_velocity, pivot, times, translations, rotations).map_err(to_py)?;
         self.inner.set_collider_motion(k, motion).map_err(to_py)
     }
@@ -416,7 +453,8 @@ impl PyWorld {
     }
 
     /// The contacts at the end of the last step, as arrays.
-    fn contacts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    fn contacts<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         collide::contacts_dict(py, self.inner.contacts())
     }
 
@@ -438,9 +476,7 @@ impl PyWorld {
     /// checked between slices: `KeyboardInterrupt` within [`SLICE`]'s order of time, the
     /// world at the end of its last whole step.
     fn step(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
-        let result = step_in_slices(py, &mut self.inner, n);
-        self.inner.restore_order();
-        result
+        step_in_slices(py, &mut self.inner, n) // (in the engine's order: see `PyWorld`'s doc)
     }
 
     #[getter]
@@ -461,6 +497,11 @@ impl PyWorld {
     #[getter]
     fn sorts(&self) -> u64 {
         self.inner.sorts()
+    }
+    /// Whether the engine holds the particles in its own order now (internal; for tests).
+    #[getter]
+    fn in_engine_order(&self) -> bool {
+        self.inner.user_of().is_some()
     }
     #[getter]
     fn steps(&self) -> u64 {
@@ -488,27 +529,27 @@ impl PyWorld {
     }
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        rows(py, &self.inner.particles().x)
+        rows(py, &self.inner.in_user_order(&self.inner.particles().x, 3))
     }
     #[getter]
     fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        rows(py, &self.inner.particles().v)
+        rows(py, &self.inner.in_user_order(&self.inner.particles().v, 3))
     }
     #[getter]
     fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.particles().mass)
+        PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().mass, 1))
     }
     #[getter]
     fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
-        PyArray1::from_slice(py, &self.inner.particles().id)
+        PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().id, 1))
     }
     #[getter]
     fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.particles().radius)
+        PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().radius, 1))
     }
     #[getter]
     fn inverse_masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.particles().inv_mass)
+        PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().inv_mass, 1))
     }
 
     /// Copies positions, velocities and masses from the caller's arrays into the world when
@@ -528,13 +569,22 @@ impl PyWorld {
                  assign new values into them instead of resizing"
             )));
         }
-        let p = self.inner.particles();
-        let same = x.iter().zip(&p.x).all(|(a, b)| a.to_bits() == b.to_bits())
-            && v.iter().zip(&p.v).all(|(a, b)| a.to_bits() == b.to_bits())
-            && m.iter().zip(&p.mass).all(|(a, b)| a.to_bits() == b.to_bits());
-        if same {
+        let unchanged = match (x.as_slice(), v.as_slice(), m.as_slice()) {
+            (Some(xs), Some(vs), Some(ms)) => self.inner.state_is(xs, vs, ms),
+            _ => {
+                let flat = |a: numpy::ndarray::ArrayViewD<'_, f64>| a.iter().copied().collect::<Vec<f64>>();
+                let (xs, vs, ms) = (
+                    flat(x.view().into_dyn()),
+                    flat(v.view().into_dyn()),
+                    flat(m.view().into_dyn()),
+                );
+                self.inner.state_is(&xs, &vs, &ms)
+            }
+        };
+        if unchanged {
             return Ok(false);
         }
+        self.inner.restore_order(); // (a write: the user's order, the values checked below)
         for (name, arr) in [("positions", &x), ("velocities", &v)] {
             if let Some(((i, k), c)) = arr.indexed_iter().find(|(_, c)| !c.is_finite()) {
                 return Err(PyValueError::new_err(format!(
@@ -571,26 +621,34 @@ impl PyWorld {
 
     /// Writes the positions and velocities into the caller's (N, 3) arrays.
     fn read_state(&self, mut x: PyReadwriteArray2<'_, f64>, mut v: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
-        let p = self.inner.particles();
-        let n = p.len();
+        let n = self.inner.particles().len();
         let (mut x, mut v) = (x.as_array_mut(), v.as_array_mut());
         if x.shape() != [n, 3] || v.shape() != [n, 3] {
             return Err(PyValueError::new_err(format!("state arrays must have shape ({n}, 3)")));
         }
-        x.iter_mut().zip(&p.x).for_each(|(d, s)| *d = *s);
-        v.iter_mut().zip(&p.v).for_each(|(d, s)| *d = *s);
+        match (x.as_slice_mut(), v.as_slice_mut()) {
+            (Some(xs), Some(vs)) => self.inner.read_state_into(xs, vs),
+            _ => {
+                let (mut xs, mut vs) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
+                self.inner.read_state_into(&mut xs, &mut vs);
+                x.iter_mut().zip(&xs).for_each(|(d, s)| *d = *s);
+                v.iter_mut().zip(&vs).for_each(|(d, s)| *d = *s);
+            }
+        }
         Ok(())
     }
 
     /// The advisor's largest stable step (s) for `method` (a name or tableau) at the current
     /// state; inf when no step is too large.
     fn stable_step(&mut self, method: Bound<'_, PyAny>) -> PyResult<f64> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let method = integrator_from(&method)?;
         self.inner.stable_step(&method).map_err(world_err)
     }
 
     /// The advisor's rates at the current state, as a dict.
     fn rates<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let r = self.inner.rates().map_err(world_err)?;
         let out = PyDict::new(py);
         out.set_item("omega", r.omega)?;
@@ -611,6 +669,7 @@ impl PyWorld {
 
     /// Sets positions and velocities (both (N, 3)); method caches restart.
     fn set_state(&mut self, x: PyReadonlyArray2<'_, f64>, v: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let (x, v) = (flat3("positions", &x)?, flat3("velocities", &v)?);
         let n = self.inner.particles().len();
         if x.len() != 3 * n || v.len() != 3 * n {
@@ -630,11 +689,12 @@ impl PyWorld {
     }
 
     fn accelerations<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
         let a = self.inner.accelerations().map_err(world_err)?;
         rows(py, &a)
     }
 
-    /// Energies and momenta now, as a dict.
+    /// Energies and momenta now, as a dict (sums over the engine's order: see `PyWorld`).
     fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = self.inner.diagnostics();
         let out = PyDict::new(py);

@@ -101,7 +101,7 @@ impl World {
     /// collisions are on, before the first step after they were placed (`collide/placement.rs`).
     pub(super) fn check_placement(&mut self, from: usize) -> Result<(), Error> {
         if let Some(stage) = &mut self.collide_stage {
-            let overlaps = stage.check_placement(&self.particles, from, self.sorted.as_deref())?;
+            let overlaps = stage.check_placement(&self.particles, from, self.sorted.as_ref().map(|o| o.user_of()))?;
             if let Some(deepest) = overlaps.deepest {
                 let count = overlaps.count;
                 let many = if count >= crate::collide::placement::COUNT_LIMIT {

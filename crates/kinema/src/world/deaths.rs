@@ -146,9 +146,13 @@ impl World {
         for k in &kills {
             k.validate()?;
         }
-        self.restore_user_order();
+        // (in the engine's order, where it keeps one: the particles stay where they are)
+        let time = time_of_death.map(|t| match self.user_of() {
+            Some(user_of) => user_of.iter().map(|&u| t[u as usize]).collect(),
+            None => t,
+        });
         self.deaths = Deaths {
-            time: time_of_death.unwrap_or_default(),
+            time: time.unwrap_or_default(),
             kills,
         };
         Ok(())

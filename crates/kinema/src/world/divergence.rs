@@ -92,7 +92,7 @@ impl World {
     /// The error of a refused step, with the advisor's step at the kept state.
     pub(super) fn diverged(&mut self, reason: Divergence, particle: Option<usize>) -> Error {
         self.stepper = None;
-        let particle = particle.map(|i| self.sorted.as_ref().map_or(i, |user_of| user_of[i] as usize));
+        let particle = particle.map(|i| self.user_of().map_or(i, |user_of| user_of[i] as usize));
         let method = self.params.method.clone();
         let advised_dt = self.stable_step(&method).ok().filter(|h| h.is_finite());
         Error::Diverged {

@@ -90,9 +90,9 @@ pub struct World {
     watch: Option<EnergyWatch>,
     /// Stages 2–4, when collisions are on.
     collide_stage: Option<CollideStage>,
-    /// The particles' order: `Some(user_of)` while they are sorted along space, with
-    /// `user_of[i]` the user's index of particle i (see `order.rs`); `None` in the user's order.
-    sorted: Option<Vec<u32>>,
+    /// The particles' order: `Some` while they are sorted along space (see `order.rs`);
+    /// `None` in the user's order.
+    sorted: Option<order::Order>,
     /// Sorts along space so far.
     sorts: u64,
     /// The particles' placement is checked before the next step from this index on
@@ -239,8 +239,10 @@ impl World {
 
     /// [`World::advance`] for a caller that advances in slices: the particles stay in the
     /// engine's order (sorted along space) after it, for the next slice, until
-    /// [`World::restore_order`] puts them back in the user's (every other method expects
-    /// that order: call it before anything else).
+    /// [`World::restore_order`] puts them back in the user's. Every other method expects
+    /// that order (call it before them), except the reads through the maps between the two
+    /// orders ([`World::user_of`], [`World::in_user_order`], [`World::read_state_into`],
+    /// [`World::state_is`]) and [`World::diagnostics`] (sums over the engine's order).
     ///
     /// After each step the deaths set by [`World::set_deaths`] are carried out (which puts
     /// the particles back in the user's order when someone dies).

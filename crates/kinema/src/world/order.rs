@@ -11,9 +11,16 @@
 //! of the three cell coordinates makes the code of cells near in space mostly near in value,
 //! so the particles of a cell and of its neighbours end up in a few nearby runs of memory.
 //!
-//! The permutation never leaves the world: [`World::advance`] puts the particles back in
-//! the user's order before it returns (ids, positions, velocities, forces' indices), and an
-//! error names the user's particle. The sort runs only where every force can follow a
+//! The permutation never shows outside the world, but it need not be undone per call:
+//! [`World::advance`] puts the particles back in the user's order before it returns (ids,
+//! positions, velocities, forces' indices), while [`World::advance_in_engine_order`] leaves
+//! them sorted, as LAMMPS keeps its sorted atoms with a tag → index map (`atom->map`). A
+//! caller that keeps the engine's order (the Python binding, between calls of `step` and
+//! the frames of `run`) reads what it shows every frame through the two maps of [`Order`]
+//! ([`World::read_state_into`], [`World::in_user_order`], [`World::state_is`]: gathers, not
+//! permutations of the world), and puts the particles back ([`World::restore_order`]) only
+//! before a method that takes or gives particle indices or changes the world. An error
+//! names the user's particle. The sort runs only where every force can follow a
 //! renumbering ([`Force::can_renumber`]: a Python force cannot, and then the world keeps the
 //! user's order), with velocity Verlet, without per-particle materials and from
 //! [`SORT_MIN_PARTICLES`] particles (below, everything fits in cache anyway). Sorting changes
@@ -21,14 +28,43 @@
 //! from an unsorted run in the last bits; it depends on the positions alone, so it is the
 //! same for any number of threads.
 
+use std::borrow::Cow;
+
 use rayon::prelude::*;
 
 use super::forces::contact_force;
-use super::{World, WorldStepper};
+use super::{World, WorldStepper, CHUNK};
 use crate::collide::morton::morton_order;
+
+/// The particles' order while the engine keeps its own: the two maps between it and the
+/// user's, each the other's inverse.
+pub(super) struct Order {
+    /// `user_of[i]`: the user's index of the particle the engine holds at index i.
+    user_of: Vec<u32>,
+    /// `engine_of[u]`: where the engine holds the user's particle u.
+    engine_of: Vec<u32>,
+}
+
+impl Order {
+    /// `user_of[i]`: the user's index of the particle the engine holds at index i.
+    pub(super) fn user_of(&self) -> &[u32] {
+        &self.user_of
+    }
+}
 
 /// The fewest particles the world sorts along space.
 pub(crate) const SORT_MIN_PARTICLES: usize = 2 * super::CHUNK;
+
+/// `out[u]` = `a[engine_of[u]]`, `width` values per particle.
+fn gather_into<T: Copy + Send + Sync>(out: &mut [T], a: &[T], engine_of: &[u32], width: usize) {
+    out.par_chunks_exact_mut(width)
+        .zip(engine_of.par_iter())
+        .with_min_len(CHUNK)
+        .for_each(|(o, &i)| {
+            let i = width * i as usize;
+            o.copy_from_slice(&a[i..i + width]);
+        });
+}
 
 /// `a` (3 values per particle) in the new order.
 fn gather3(a: &mut Vec<f64>, old_of_new: &[u32]) {
@@ -86,24 +122,84 @@ impl World {
             return; // already in order
         }
         let user_of: Vec<u32> = match &self.sorted {
-            Some(user_of) => old_of_new.iter().map(|&o| user_of[o as usize]).collect(),
+            Some(order) => old_of_new.par_iter().map(|&o| order.user_of[o as usize]).collect(),
             None => old_of_new.clone(),
         };
+        let mut engine_of = vec![0u32; user_of.len()];
+        for (i, &u) in user_of.iter().enumerate() {
+            engine_of[u as usize] = i as u32;
+        }
         self.permute(&old_of_new, a, true);
-        self.sorted = Some(user_of);
+        self.sorted = Some(Order { user_of, engine_of });
         self.sorts += 1;
+    }
+
+    /// Where the particles stand while the engine keeps its own order: `Some(user_of)` while
+    /// they are sorted along space, `user_of[i]` being the user's index of the particle the
+    /// engine holds at index i; `None` when the two orders are one. A caller that keeps the
+    /// engine's order between calls ([`World::advance_in_engine_order`]) reads per-particle
+    /// values through it instead of putting the particles back.
+    pub fn user_of(&self) -> Option<&[u32]> {
+        self.sorted.as_ref().map(Order::user_of)
+    }
+
+    /// `a` (`width` values per particle, in the engine's order) in the user's order: a copy
+    /// gathered through the engine's index of each user's particle, or `a` itself when the
+    /// orders are one.
+    pub fn in_user_order<'a, T: Copy + Default + Send + Sync>(&self, a: &'a [T], width: usize) -> Cow<'a, [T]> {
+        let Some(order) = &self.sorted else {
+            return Cow::Borrowed(a);
+        };
+        let mut out = vec![T::default(); a.len()];
+        gather_into(&mut out, a, &order.engine_of, width);
+        Cow::Owned(out)
+    }
+
+    /// Writes the positions (m) and velocities (m/s), 3 per particle, into `x` and `v` in the
+    /// user's order (which the engine need not keep: a gather, not a permutation of the world).
+    pub fn read_state_into(&self, x: &mut [f64], v: &mut [f64]) {
+        let p = &self.particles;
+        match &self.sorted {
+            Some(order) => {
+                gather_into(x, &p.x, &order.engine_of, 3);
+                gather_into(v, &p.v, &order.engine_of, 3);
+            }
+            None => {
+                x.copy_from_slice(&p.x);
+                v.copy_from_slice(&p.v);
+            }
+        }
+    }
+
+    /// Whether `x`, `v` (3 per particle) and `m` (one per particle), in the user's order, are
+    /// bit for bit the world's positions, velocities and masses (the caller's copies, unwritten).
+    pub fn state_is(&self, x: &[f64], v: &[f64], m: &[f64]) -> bool {
+        let p = &self.particles;
+        let same = |a: &f64, b: &f64| a.to_bits() == b.to_bits();
+        match &self.sorted {
+            Some(order) => order.engine_of.par_iter().enumerate().with_min_len(CHUNK).all(|(u, &i)| {
+                let (u, i) = (u, i as usize);
+                (0..3).all(|k| same(&x[3 * u + k], &p.x[3 * i + k]) && same(&v[3 * u + k], &p.v[3 * i + k]))
+                    && same(&m[u], &p.mass[i])
+            }),
+            None => {
+                let (x, v) = ((x, &p.x), (v, &p.v));
+                [x, v].into_iter().all(|(a, b)| {
+                    a.par_chunks(CHUNK)
+                        .zip(b.par_chunks(CHUNK))
+                        .all(|(a, b)| a.iter().zip(b).all(|(a, b)| same(a, b)))
+                }) && m.iter().zip(&p.mass).all(|(a, b)| same(a, b))
+            }
+        }
     }
 
     /// Puts the particles back in the user's order, if they are sorted.
     pub(super) fn restore_user_order(&mut self) {
-        let Some(user_of) = self.sorted.take() else {
+        let Some(order) = self.sorted.take() else {
             return;
         };
-        // The particle now at i goes back to place user_of[i].
-        let mut old_of_new = vec![0u32; user_of.len()];
-        for (i, &u) in user_of.iter().enumerate() {
-            old_of_new[u as usize] = i as u32;
-        }
+        // The user's particle u goes back to place u from where the engine holds it.
+        let old_of_new = order.engine_of;
         let mut a = match &mut self.stepper {
             Some(WorldStepper::Verlet(b)) => std::mem::take(&mut b.a),
             _ => Vec::new(),
