@@ -489,7 +489,9 @@ def test_show_rejects_an_unknown_mode(traj):
 
 def test_show_in_jupyter_inlines_the_viewer_and_a_video(traj, tmp_path, monkeypatch):
     # A real kernel runs the cells (nbclient): show() gives the viewer's page in an iframe with
-    # the frames inside, show(mode="video") an HTML5 video with the MP4 inside.
+    # the frames inside, without IPython's "Consider using IPython.display.IFrame" warning,
+    # show(mode="video") an HTML5 video with the MP4 inside, and a trajectory as a cell's last
+    # line a short table (and a one-line text repr), not every frame.
     nbformat = pytest.importorskip("nbformat", reason="nbformat is not installed: pip install -r requirements/viewer-test.txt")
     nbclient = pytest.importorskip("nbclient", reason="nbclient is not installed: pip install -r requirements/viewer-test.txt")
     pytest.importorskip("ipykernel", reason="ipykernel is not installed: pip install -r requirements/viewer-test.txt")
@@ -499,7 +501,7 @@ def test_show_in_jupyter_inlines_the_viewer_and_a_video(traj, tmp_path, monkeypa
     argv = [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"]
     (spec / "kernel.json").write_text(json.dumps({"argv": argv, "display_name": "kinema test", "language": "python"}))
     monkeypatch.setenv("JUPYTER_PATH", str(tmp_path / "jupyter"))
-    cells = [TRAJECTORY_CODE, "traj.show()", 'traj.show(mode="video", width=320, height=240)']
+    cells = [TRAJECTORY_CODE, "traj.show()", 'traj.show(mode="video", width=320, height=240)', "traj"]
     notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code) for code in cells])
     client = nbclient.NotebookClient(notebook, timeout=600, kernel_name="kinema-test", resources={"metadata": {"path": str(tmp_path)}})
     client.execute()
@@ -509,8 +511,10 @@ def test_show_in_jupyter_inlines_the_viewer_and_a_video(traj, tmp_path, monkeypa
         assert len(found) == 1, cell.outputs
         return found[0]
 
-    frame = re.fullmatch(r'<iframe srcdoc="([^"]*)"[^>]*></iframe>', html_output(notebook.cells[1]))
+    frame = re.fullmatch(r'<div><iframe srcdoc="([^"]*)"[^>]*></iframe></div>', html_output(notebook.cells[1]))
     assert frame, "show() gave no iframe"
+    streams = [o.get("text", "") for cell in notebook.cells for o in cell.outputs if o["output_type"] == "stream"]
+    assert not any("Warning" in text for text in streams), streams
     page = html.unescape(frame.group(1))
     assert viewer_page.bundle() in page  # the bundled viewer, inlined
     data = _page_data(page)
@@ -521,3 +525,8 @@ def test_show_in_jupyter_inlines_the_viewer_and_a_video(traj, tmp_path, monkeypa
     assert video, "show(mode='video') gave no inline video"
     mp4 = base64.b64decode(video.group(1))
     assert mp4[4:8] == b"ftyp" and len(mp4) > 1000
+
+    summary = html_output(notebook.cells[3])
+    assert "kinema.Trajectory" in summary and f"<td style='text-align:left'>{traj.positions.shape[0]}</td>" in summary, summary
+    (text,) = [o["data"]["text/plain"] for o in notebook.cells[3].outputs if o["output_type"] == "execute_result"]
+    assert text.startswith("Trajectory(frames=") and len(text) < 200, text

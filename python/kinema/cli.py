@@ -81,7 +81,9 @@ def _split_methods(methods: str) -> list[str]:
     valid = kinema.method_names()
     for n in names:
         if n not in valid:
-            _fail(f"--methods: unknown method '{n}'; valid methods are: {', '.join(valid)}")
+            meant = kinema._core.method_suggestion(n)
+            hint = f" did you mean {meant!r}?" if meant else ""
+            _fail(f"--methods: unknown method '{n}';{hint} valid methods are: {', '.join(valid)}")
     return names
 
 
@@ -90,15 +92,22 @@ def methods() -> None:
     """List the integration methods of the registry."""
     import kinema
 
+    registry = kinema.methods()
     table = Table(title="kinema methods")
     for col in ("name", "order", "kind", "f evals/step", "summary"):
-        table.add_column(col)
-    for m in kinema.methods():
+        table.add_column(col, no_wrap=col != "summary")
+    for m in registry:
         table.add_row(m.name, str(m.order), m.kind, str(m.evals_per_step), m.summary)
-    console.print(table)
+    if console.measure(table, options=console.options.update_width(10_000)).maximum <= console.width:
+        console.print(table)
+        return
+    # narrower than the table (80 columns): two lines per method, the summary unwrapped below
+    for m in registry:
+        console.print(f"[bold]{m.name}[/bold]  order {m.order}, {m.kind}, {m.evals_per_step} f evals/step", highlight=False)
+        console.print(f"    {m.summary}", highlight=False, markup=False, soft_wrap=True)
 
 
-@app.command()
+@app.command(short_help="Stability regions |R(hλ)| ≤ 1 and the largest stable steps.")
 def stability(
     methods: Annotated[str, typer.Option(help="Comma-separated method names.")] = "euler,midpoint,rk4,implicit_euler",
     out: Annotated[Path, typer.Option(help="Image to write (.png, .svg, .pdf).")] = Path("regions.png"),
@@ -137,7 +146,7 @@ def stability(
     console.print(f"wrote {path}")
 
 
-@app.command()
+@app.command(short_help="Every method on x'' = −x: portraits, stability regions, orders.")
 def demo(
     out: Annotated[Path, typer.Option(help="Folder for the pictures.")] = Path("out"),
 ) -> None:
@@ -240,7 +249,7 @@ def _load(path: Path, units: str | None):
         raise
 
 
-@app.command()
+@app.command(short_help="Simulate a scene: trajectory (H5MD), video, energy plot.")
 @_guarded
 def run(
     scene: Annotated[Path, typer.Argument(help="Scene file (.toml), see docs/scenes.md.")],
@@ -264,7 +273,7 @@ def run(
     )
 
 
-@app.command()
+@app.command(short_help="Render a saved trajectory to a video (MP4, GIF).")
 @_guarded
 def render(
     traj: Annotated[Path, typer.Argument(help=_TRAJ_HELP)],
@@ -323,7 +332,7 @@ def render(
     console.print(f"wrote {path}", highlight=False, soft_wrap=True)
 
 
-@app.command()
+@app.command(short_help="Export a trajectory for other programs (VTK, PLY, XYZ, GSD, USD).")
 @_guarded
 def export(
     traj: Annotated[Path, typer.Argument(help=_TRAJ_HELP)],
@@ -383,18 +392,18 @@ def export(
     console.print("wrote " + " and ".join(main), highlight=False, soft_wrap=True)
 
 
-@app.command()
+@app.command(short_help="Run a parameter sweep or ensemble of a scene on Dask.")
 @_guarded
 def sweep(
     scene: Annotated[Path, typer.Argument(help="Scene file (.toml): the base of every member.")],
     vary: Annotated[
         list[str] | None,
-        typer.Option("--vary", help="KEY=V1,V2,... : a scene key path and its values (TOML values); repeat for a grid."),
+        typer.Option("--vary", metavar="KEY=V1,V2,...", help="A scene key path and its values (TOML values); repeat for a grid."),
     ] = None,
-    seeds: Annotated[int | None, typer.Option("--seeds", help="Members per point of the grid, each with its own seed (0 … N−1).", min=1)] = None,
+    seeds: Annotated[int | None, typer.Option("--seeds", metavar="N", help="Members per point of the grid, each with its own seed (0 … N−1).", min=1)] = None,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Sweep folder (default: out/<scene name>_sweep); rerun into it to resume.")] = None,
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="A Dask scheduler's address (tcp://host:8786); default: worker processes here.")] = None,
-    workers: Annotated[int | None, typer.Option("--workers", help="Local worker processes (default: the cores).", min=1)] = None,
+    workers: Annotated[int | None, typer.Option("--workers", metavar="K", help="Local worker processes (default: the cores).", min=1)] = None,
     duration: Annotated[float | None, typer.Option(help="Simulated time of each member, s (default: the scene's).")] = None,
     checkpoint_every: Annotated[
         float | None, typer.Option("--checkpoint-every", help="Each member writes a checkpoint this often (simulated s); a rerun resumes from it.")
@@ -404,7 +413,7 @@ def sweep(
     --seeds, each member a scene with those keys set (validated first), run, saved (H5MD)
     and measured. Writes summary.csv (one row per member), timings.csv and summary.png into
     the folder; members already finished there are skipped (resume). See docs/sweeps.md."""
-    from .sweeps import parse_values
+    from .sweeps import default_folder, parse_values
     from .sweeps import sweep as run_sweep
 
     grid = {}
@@ -418,7 +427,7 @@ def sweep(
             grid[key.strip()] = parse_values(values)
         except ValueError as e:
             raise ValueError(f"--vary {item!r}: {e}") from None
-    folder = out if out is not None else Path("out") / f"{scene.stem}_sweep"
+    folder = out if out is not None else default_folder(scene)
     result = run_sweep(scene, grid, seeds=seeds, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every)
     failed = result.failed
     console.print(f"{len(result.rows)} members, {len(failed)} failed; wrote {folder / 'summary.csv'}", highlight=False, soft_wrap=True)
@@ -428,7 +437,7 @@ def sweep(
         raise typer.Exit(1)
 
 
-@app.command()
+@app.command(short_help="Play a trajectory or a scene in the browser (three.js).")
 @_guarded
 def view(
     source: Annotated[Path, typer.Argument(help="A scene (.toml, run first) or a" + _TRAJ_HELP[1:])],

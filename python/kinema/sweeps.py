@@ -277,13 +277,19 @@ def _plain(v: Any) -> Any:
 # -- the sweep --------------------------------------------------------------------------------
 
 
+def default_folder(scene: Scene | str | Path | dict) -> Path:
+    """Where a sweep of ``scene`` writes when no folder is given: ``out/<name>_sweep`` for a
+    scene file, ``out/sweep`` for a scene given as an object."""
+    return Path("out") / (f"{Path(scene).stem}_sweep" if isinstance(scene, str | Path) else "sweep")
+
+
 def sweep(
     scene: Scene | str | Path | dict,
     vary: dict[str, Iterable[Any]] | None = None,
     seeds: int | None = None,
     measure: Callable[[Any, Any], dict] | None = None,
     client: Any = None,
-    out: str | Path = "sweep",
+    out: str | Path | None = None,
     duration: float | None = None,
     workers: int | None = None,
     progress: bool = True,
@@ -299,8 +305,13 @@ def sweep(
     workers: a module-level function). ``duration`` overrides the scene's.
     ``checkpoint_every`` (simulated s): each member writes ``checkpoint.ckpt`` in its folder
     that often, and a member interrupted mid-run (its worker killed, the sweep stopped) goes on
-    from it when run again, bit for bit."""
-    folder = Path(out)
+    from it when run again, bit for bit.
+
+    ``out``: the sweep's folder; rerun into it to resume (default: ``out/<scene file's
+    name>_sweep`` as ``kinema sweep``'s, ``out/sweep`` for a scene given as an object).
+    ``workers``: local worker processes when ``client`` is None. ``progress``: a progress bar
+    while the members run. ``plot``: ``summary.png`` of the measurements against the varied keys."""
+    folder = Path(out) if out is not None else default_folder(scene)
     grid = members(scene, vary, seeds)
     folder.mkdir(parents=True, exist_ok=True)
     asked = {"scene": _scene_data(scene)[0], "vary": {k: list(v) for k, v in (vary or {}).items()}, "seeds": seeds, "duration": duration}

@@ -33,7 +33,7 @@ class FileInfo:
     box_edges_by_frame: np.ndarray | None = None
 
 
-@dataclass
+@dataclass(repr=False)
 class Trajectory:
     """Frames of a run. ``t`` (F,), ``positions`` and ``velocities`` (F, N, 3); energies in J:
     ``kinetic`` (F,), ``potential`` {force name: (F,)}, ``total`` (F,); ``momentum`` and
@@ -97,6 +97,33 @@ class Trajectory:
     colors: np.ndarray | None = None
     source: FileInfo | None = None
     total: np.ndarray = field(init=False)
+
+    def _summary(self) -> list[tuple[str, str]]:
+        """What the short repr and the notebook's table show: (what, value) pairs."""
+        frames, n = self.positions.shape[:2]
+        span = f"{self.t[0]:g} .. {self.t[-1]:g} s" if frames else "none"
+        rows = [("frames", f"{frames}"), ("t", span), ("particles", f"{n}"), ("dim", f"{self.dim}")]
+        if self.method is not None:
+            rows.append(("method", f"{self.method!r}"))
+        if self.dt is not None:
+            rows.append(("dt", f"{self.dt:g} s"))
+        if frames:
+            rows.append(("energy", f"{self.total[0]:.6g} J → {self.total[-1]:.6g} J"))
+        if self.source is not None:
+            rows.append(("file", str(self.source.path)))
+        return rows
+
+    def __repr__(self) -> str:
+        """One line (a dataclass's repr would print every frame: 26,516 characters for 5 s of
+        a spring)."""
+        return "Trajectory(" + ", ".join(f"{k}={v}" for k, v in self._summary()) + ")"
+
+    def _repr_html_(self) -> str:
+        """A small table for Jupyter (``show()`` plays the frames)."""
+        from html import escape
+
+        cells = "".join(f"<tr><th style='text-align:left'>{escape(k)}</th><td style='text-align:left'>{escape(v)}</td></tr>" for k, v in self._summary())
+        return f"<table><caption style='text-align:left'><b>kinema.Trajectory</b> (<code>.show()</code> plays it)</caption>{cells}</table>"
 
     def __post_init__(self) -> None:
         self.total = self.kinetic + sum(self.potential.values(), np.zeros_like(self.kinetic))
@@ -316,7 +343,9 @@ class Trajectory:
 
             options = {k: v for k, v in options.items() if k not in ("open_browser", "port")}
             page = html_page(self, **options)
-            return HTML(f'<iframe srcdoc="{html.escape(page)}" style="width:100%;height:480px;border:0"></iframe>')
+            # (in a div: IPython warns "Consider using IPython.display.IFrame" of any HTML that
+            # is one bare iframe, but IFrame takes a URL, and the page is embedded whole)
+            return HTML(f'<div><iframe srcdoc="{html.escape(page)}" style="width:100%;height:480px;border:0"></iframe></div>')
         from .viewer import serve
 
         url, _server = serve(self, **options)

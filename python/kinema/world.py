@@ -871,3 +871,20 @@ class World(WorldCollisions):
         if isinstance(self._core, _Busy):
             return "World(stepping)"
         return f"World(dim={self.dim}, dt={self.dt}, method={self.method!r}, particles={len(self)}, t={self.time:g})"
+
+    def _repr_html_(self) -> str:
+        """A small table for Jupyter: the repr's values, the forces, colliders and collisions."""
+        from html import escape
+
+        if isinstance(self._core, _Busy):
+            return "<b>kinema.World</b> (stepping)"
+        collisions = self.collisions
+        rows = [
+            ("particles", f"{len(self)} in {self.dim}D"),
+            ("time", f"t = {self.time:g} s, dt = {self.dt:g} s, method {self.method!r}"),
+            ("forces", ", ".join(type(f).__name__ for f in self._forces) or "none"),
+            ("colliders", ", ".join(type(c).__name__ for c in self._colliders) or "none"),
+            ("collisions", "off" if collisions is None else f"{collisions.get('model', 'impulse')}"),
+        ]
+        cells = "".join(f"<tr><th style='text-align:left'>{escape(k)}</th><td style='text-align:left'>{escape(v)}</td></tr>" for k, v in rows)
+        return f"<table><caption style='text-align:left'><b>kinema.World</b></caption>{cells}</table>"

@@ -129,6 +129,13 @@ fn kind_name(k: MethodKind) -> &'static str {
     }
 }
 
+/// The registered name an unknown method name probably means (`"RK4"` → `"rk4"`,
+/// `"backward_euler"` → `"implicit_euler"`), or None: `Method::suggestion`.
+#[pyfunction]
+fn method_suggestion(name: &str) -> Option<&'static str> {
+    Method::suggestion(name).map(Method::name)
+}
+
 /// The registry: one dict per method (name, order, kind, evals_per_step, summary).
 #[pyfunction]
 fn methods<'py>(py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
@@ -265,6 +272,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyButcherTableau>()?;
     m.add_class::<PyDenseOutput>()?;
     m.add_function(wrap_pyfunction!(methods, m)?)?;
+    m.add_function(wrap_pyfunction!(method_suggestion, m)?)?;
     m.add_function(wrap_pyfunction!(solve, m)?)?;
     m.add_function(wrap_pyfunction!(solve_second_order, m)?)?;
     Ok(())

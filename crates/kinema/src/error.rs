@@ -45,10 +45,13 @@ pub enum Error {
         count: String,
     },
     /// A method name that is not in the registry.
-    #[error("unknown method '{name}'; valid methods are: {valid}")]
+    #[error("unknown method '{name}';{hint} valid methods are: {valid}")]
     UnknownMethod {
         /// The name that was asked for.
         name: String,
+        /// " did you mean 'rk4'?" where [`Method::suggestion`](crate::ode::Method::suggestion)
+        /// finds the method meant, else empty.
+        hint: String,
         /// The registered names, comma separated.
         valid: String,
     },

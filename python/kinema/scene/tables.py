@@ -173,7 +173,9 @@ class WorldTable(_Model):
     @classmethod
     def _known(cls, v: str) -> str:
         if v not in method_names():
-            raise ValueError(f"unknown method; valid methods are: {', '.join(method_names())}")
+            meant = _core.method_suggestion(v)
+            hint = f" did you mean {meant!r}?" if meant else ""
+            raise ValueError(f"unknown method;{hint} valid methods are: {', '.join(method_names())}")
         return v
 
     @field_validator("dt")

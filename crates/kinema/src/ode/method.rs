@@ -40,6 +40,34 @@ pub enum Method {
     Verlet,
 }
 
+/// Other names of the registered methods, in textbooks, the lecture notes (`../seed`) and
+/// other libraries (SciPy's `RK45`, MATLAB's `ode45`), for [`Method::suggestion`]; lower
+/// case, words joined by `_`.
+pub const OTHER_NAMES: [(&str, Method); 22] = [
+    ("explicit_euler", Method::Euler),
+    ("forward_euler", Method::Euler),
+    ("euler_forward", Method::Euler),
+    ("explicit_midpoint", Method::Midpoint),
+    ("modified_euler", Method::Heun),
+    ("improved_euler", Method::Heun),
+    ("explicit_trapezoid", Method::Heun),
+    ("runge_kutta", Method::Rk4),
+    ("classical_rk4", Method::Rk4),
+    ("runge_kutta_4", Method::Rk4),
+    ("backward_euler", Method::ImplicitEuler),
+    ("euler_backward", Method::ImplicitEuler),
+    ("implicit", Method::ImplicitEuler),
+    ("dopri5", Method::Rk45),
+    ("dormand_prince", Method::Rk45),
+    ("ode45", Method::Rk45),
+    ("semi_implicit_euler", Method::SymplecticEuler),
+    ("euler_cromer", Method::SymplecticEuler),
+    ("velocity_verlet", Method::Verlet),
+    ("leapfrog", Method::Verlet),
+    ("stormer_verlet", Method::Verlet),
+    ("störmer_verlet", Method::Verlet),
+];
+
 impl Method {
     /// Every registered method, in the order they are documented.
     pub const ALL: [Method; 8] = [
@@ -67,7 +95,8 @@ impl Method {
         }
     }
 
-    /// Looks a name up; the error lists every valid name.
+    /// Looks a name up; the error lists every valid name, and the one meant where
+    /// [`Method::suggestion`] finds it ("did you mean 'rk4'?").
     pub fn from_name(name: &str) -> Result<Self, Error> {
         Method::ALL
             .iter()
@@ -75,8 +104,33 @@ impl Method {
             .find(|m| m.name() == name)
             .ok_or_else(|| Error::UnknownMethod {
                 name: name.to_string(),
+                hint: Method::suggestion(name)
+                    .map(|m| format!(" did you mean '{}'?", m.name()))
+                    .unwrap_or_default(),
                 valid: Method::ALL.iter().map(|m| m.name()).collect::<Vec<_>>().join(", "),
             })
+    }
+
+    /// The registered method an unknown name probably means: the same name in other capitals
+    /// or separators (`RK4`, `Implicit-Euler`), a name the literature and the lecture notes give
+    /// it ([`OTHER_NAMES`]: `forward_euler`, `backward_euler`, `leapfrog`), or else a
+    /// registered or other name within two edits of it (a typo: `verlett`, `rk54`); `None`
+    /// when nothing is that close. Only for messages: a name is never taken for another.
+    pub fn suggestion(name: &str) -> Option<Method> {
+        let plain: String = name
+            .trim()
+            .chars()
+            .map(|c| if c == '-' || c == ' ' { '_' } else { c.to_ascii_lowercase() })
+            .collect();
+        let names = Method::ALL.iter().map(|&m| (m.name(), m)).chain(OTHER_NAMES.iter().copied());
+        if let Some((_, m)) = names.clone().find(|(n, _)| *n == plain) {
+            return Some(m);
+        }
+        names
+            .map(|(n, m)| (strsim::levenshtein(n, &plain), m))
+            .filter(|&(d, _)| d <= 2)
+            .min_by_key(|&(d, _)| d)
+            .map(|(_, m)| m)
     }
 
     /// How it steps.
@@ -197,6 +251,38 @@ mod tests {
     fn names_round_trip() {
         for m in Method::ALL {
             assert_eq!(Method::from_name(m.name()).unwrap(), m);
+        }
+    }
+
+    #[test]
+    fn an_unknown_name_is_told_the_method_it_probably_means() {
+        // The lecture's and the textbooks' names, other capitals and separators, typos;
+        // nothing for a name far from all of them. A suggestion is never taken for the name.
+        for (asked, meant) in [
+            ("RK4", "rk4"),
+            ("explicit_euler", "euler"),
+            ("forward_euler", "euler"),
+            ("Forward Euler", "euler"),
+            ("backward_euler", "implicit_euler"),
+            ("Implicit-Euler", "implicit_euler"),
+            ("leapfrog", "verlet"),
+            ("velocity_verlet", "verlet"),
+            ("verlett", "verlet"),
+            ("euler_cromer", "symplectic_euler"),
+            ("RK45", "rk45"),
+            ("ode45", "rk45"),
+        ] {
+            assert_eq!(Method::suggestion(asked).map(Method::name), Some(meant), "{asked}");
+            let e = Method::from_name(asked).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("'{asked}'; did you mean '{meant}'? valid methods are: euler")),
+                "{e}"
+            );
+        }
+        for far in ["", "gear", "adams_bashforth", "bdf2"] {
+            assert_eq!(Method::suggestion(far), None, "{far}");
+            let e = Method::from_name(far).unwrap_err().to_string();
+            assert!(!e.contains("did you mean") && e.contains("; valid methods are: euler"), "{e}");
         }
     }
 
