@@ -93,7 +93,7 @@ impl PyWorld {
     /// Appends particles; returns (first, end) indices. `restitution` and `friction` (one per
     /// particle, NaN: the world's global value) are checked before anything is added.
     fn add_particles(&mut self, particles: NewParticles<'_>) -> PyResult<(usize, usize)> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let NewParticles {
             x,
             v,
@@ -116,19 +116,19 @@ impl PyWorld {
     /// Refuses now what the first step would: particles placed where contacts cannot resolve
     /// them (`World::check_pending_placement`).
     fn check_placement(&mut self) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.check_pending_placement().map_err(to_py)
     }
 
     /// A checkpoint's time, steps and ids (see `World::restore_clock_and_ids`).
     fn restore_clock_and_ids(&mut self, time: f64, steps: u64, ids: Vec<u64>, next_id: u64) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.restore_clock_and_ids(time, steps, &ids, next_id).map_err(to_py)
     }
 
     /// A checkpoint's collision books (dicts as `collision_stats` gives them).
     fn restore_collision_stats(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let (total, last) = (collide::stats_from(&total)?, collide::stats_from(&last)?);
         self.inner.restore_collision_stats(total, last);
         Ok(())
@@ -136,24 +136,24 @@ impl PyWorld {
 
     /// Starts the caches again (a checkpoint's restart point).
     fn restart_caches(&mut self) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.restart_caches().map_err(to_py)
     }
 
     /// What the method carries from step to step (Verlet's a, implicit Euler's Δv), or None.
     fn integrator_carry<'py>(&mut self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.integrator_carry().map(|c| PyArray1::from_vec(py, c))
     }
 
     fn restore_integrator_carry(&mut self, carry: Vec<f64>) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.restore_integrator_carry(carry).map_err(to_py)
     }
 
     /// The impulse model's warm start: (particle, partner is a collider, partner index, totals).
     fn collision_carry(&mut self) -> Vec<(usize, bool, usize, [f64; 3])> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner
             .collision_carry()
             .into_iter()
@@ -165,7 +165,7 @@ impl PyWorld {
     }
 
     fn restore_collision_carry(&mut self, carry: Vec<(usize, bool, usize, [f64; 3])>) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let carry = carry
             .into_iter()
             .map(|(i, collider, j, t)| {
@@ -185,19 +185,19 @@ impl PyWorld {
 
     /// Sleeping's carry: each particle's calm time (s) and sleeping island (-1: awake).
     fn sleep_carry<'py>(&mut self, py: Python<'py>) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>) {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let (calm, island) = self.inner.sleep_carry();
         (PyArray1::from_vec(py, calm), PyArray1::from_vec(py, island))
     }
 
     fn restore_sleep_carry(&mut self, calm: Vec<f64>, island: Vec<i64>) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.restore_sleep_carry(calm, island).map_err(to_py)
     }
 
     /// Each particle's own (restitution, friction), None where not set; empty if none has.
     fn particle_materials(&mut self) -> Vec<(Option<f64>, Option<f64>)> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.particle_materials()
     }
 
@@ -208,7 +208,7 @@ impl PyWorld {
 
     /// Removes the particles at these indices (checked; repeats allowed).
     fn remove_particles(&mut self, indices: Vec<usize>) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.remove_particles(&indices).map_err(to_py)
     }
 
@@ -252,12 +252,12 @@ impl PyWorld {
     }
 
     fn add_gravity(&mut self, g: [f64; 3]) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.add_force(Box::new(Gravity::new(g).map_err(to_py)?)).map_err(to_py)
     }
 
     fn add_drag(&mut self, linear: f64, quadratic: f64) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner
             .add_force(Box::new(Drag::new(linear, quadratic).map_err(to_py)?))
             .map_err(to_py)
@@ -273,7 +273,7 @@ impl PyWorld {
         rest_length: Option<Vec<f64>>,
         damping: Vec<f64>,
     ) -> PyResult<Vec<f64>> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let rest = match rest_length {
             Some(r) => r,
             None => {
@@ -300,28 +300,28 @@ impl PyWorld {
     }
 
     fn add_attractor(&mut self, point: [f64; 3], strength: f64, softening: f64) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner
             .add_force(Box::new(Attractor::new(point, strength, softening).map_err(to_py)?))
             .map_err(to_py)
     }
 
     fn add_wind(&mut self, velocity: [f64; 3], coefficient: f64) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner
             .add_force(Box::new(Wind::new(velocity, coefficient).map_err(to_py)?))
             .map_err(to_py)
     }
 
     fn add_python_force(&mut self, f: Py<PyAny>, name: String) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.add_force(Box::new(PythonForce { f, name })).map_err(to_py)
     }
 
     /// Turns collisions on, or changes their settings (every one of them), from the dict of
     /// `World.set_collisions`' keyword arguments.
     fn set_collisions(&mut self, settings: collide::CollisionArgs) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let params = settings.params().map_err(to_py)?;
         self.inner.set_collisions(params).map_err(to_py)
     }
@@ -343,7 +343,7 @@ impl PyWorld {
         restitution: Option<f64>,
         friction: Option<f64>,
     ) -> PyResult<usize> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
         let plane = collide::plane(self.inner.params().dim, point, normal, surface).map_err(to_py)?;
         self.inner.add_collider(plane).map_err(to_py)
@@ -351,7 +351,7 @@ impl PyWorld {
 
     /// Adds a box container (2 values per corner in 2D, 3 in 3D); returns its index.
     fn add_box(&mut self, lo: Vec<f64>, hi: Vec<f64>, restitution: Option<f64>, friction: Option<f64>) -> PyResult<usize> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
         let b = collide::box_container(self.inner.params().dim, &lo, &hi, surface).map_err(to_py)?;
         self.inner.add_collider(b).map_err(to_py)
@@ -365,7 +365,7 @@ impl PyWorld {
         restitution: Option<f64>,
         friction: Option<f64>,
     ) -> PyResult<usize> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
         let s = collide::sphere_obstacle(self.inner.params().dim, center, radius, surface).map_err(to_py)?;
         self.inner.add_collider(s).map_err(to_py)
@@ -381,7 +381,7 @@ impl PyWorld {
         restitution: Option<f64>,
         friction: Option<f64>,
     ) -> PyResult<usize> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
         let (v, f) = (vertices.as_array(), faces.as_array());
         if v.ncols() != 3 || f.ncols() != 3 {
@@ -399,7 +399,7 @@ impl PyWorld {
 
     /// Makes the axes periodic with the cell of the box collider (wraps the positions).
     fn set_periodic(&mut self, axes: [bool; 3]) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         self.inner.set_periodic(axes).map_err(to_py)
     }
 
@@ -424,7 +424,7 @@ impl PyWorld {
         translations: Option<Vec<[f64; 3]>>,
         rotations: Option<Vec<[f64; 4]>>,
     ) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let motion = collide::motion(velocity, angular_velocity, pivot, times, translations, rotations).map_err(to_py)?;
         self.inner.set_collider_motion(k, motion).map_err(to_py)
     }
@@ -454,7 +454,7 @@ impl PyWorld {
 
     /// The contacts at the end of the last step, as arrays.
     fn contacts<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         collide::contacts_dict(py, self.inner.contacts())
     }
 
@@ -641,14 +641,14 @@ impl PyWorld {
     /// The advisor's largest stable step (s) for `method` (a name or tableau) at the current
     /// state; inf when no step is too large.
     fn stable_step(&mut self, method: Bound<'_, PyAny>) -> PyResult<f64> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let method = integrator_from(&method)?;
         self.inner.stable_step(&method).map_err(world_err)
     }
 
     /// The advisor's rates at the current state, as a dict.
     fn rates<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let r = self.inner.rates().map_err(world_err)?;
         let out = PyDict::new(py);
         out.set_item("omega", r.omega)?;
@@ -669,7 +669,7 @@ impl PyWorld {
 
     /// Sets positions and velocities (both (N, 3)); method caches restart.
     fn set_state(&mut self, x: PyReadonlyArray2<'_, f64>, v: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let (x, v) = (flat3("positions", &x)?, flat3("velocities", &v)?);
         let n = self.inner.particles().len();
         if x.len() != 3 * n || v.len() != 3 * n {
@@ -689,7 +689,7 @@ impl PyWorld {
     }
 
     fn accelerations<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.inner.restore_order(); // (the user's order: see `PyWorld`'s doc)
+        self.inner.restore_order();
         let a = self.inner.accelerations().map_err(world_err)?;
         rows(py, &a)
     }

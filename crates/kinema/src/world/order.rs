@@ -55,10 +55,11 @@ impl Order {
 /// The fewest particles the world sorts along space.
 pub(crate) const SORT_MIN_PARTICLES: usize = 2 * super::CHUNK;
 
-/// `out[u]` = `a[engine_of[u]]`, `width` values per particle.
-fn gather_into<T: Copy + Send + Sync>(out: &mut [T], a: &[T], engine_of: &[u32], width: usize) {
+/// `out[i]` = `a[from[i]]`, `width` values per particle (`from`: each new place's old index,
+/// as `engine_of` is for the user's order and `old_of_new` for a sort).
+fn gather_into<T: Copy + Send + Sync>(out: &mut [T], a: &[T], from: &[u32], width: usize) {
     out.par_chunks_exact_mut(width)
-        .zip(engine_of.par_iter())
+        .zip(from.par_iter())
         .with_min_len(CHUNK)
         .for_each(|(o, &i)| {
             let i = width * i as usize;
@@ -66,25 +67,14 @@ fn gather_into<T: Copy + Send + Sync>(out: &mut [T], a: &[T], engine_of: &[u32],
         });
 }
 
-/// `a` (3 values per particle) in the new order.
-fn gather3(a: &mut Vec<f64>, old_of_new: &[u32]) {
-    if a.len() != 3 * old_of_new.len() {
+/// `a` (`width` values per particle) in the new order.
+fn gather<T: Copy + Default + Send + Sync>(a: &mut Vec<T>, old_of_new: &[u32], width: usize) {
+    if a.len() != width * old_of_new.len() {
         return; // not in use (an empty buffer)
     }
-    let mut out = vec![0.0; a.len()];
-    out.par_chunks_exact_mut(3).zip(old_of_new.par_iter()).for_each(|(o, &i)| {
-        let i = 3 * i as usize;
-        o.copy_from_slice(&a[i..i + 3]);
-    });
+    let mut out = vec![T::default(); a.len()];
+    gather_into(&mut out, a, old_of_new, width);
     *a = out;
-}
-
-/// `a` (one value per particle) in the new order.
-fn gather<T: Copy + Send + Sync>(a: &mut Vec<T>, old_of_new: &[u32]) {
-    if a.len() != old_of_new.len() {
-        return; // not in use (an empty buffer)
-    }
-    *a = old_of_new.par_iter().map(|&i| a[i as usize]).collect();
 }
 
 impl World {
@@ -219,19 +209,19 @@ impl World {
     fn permute(&mut self, old_of_new: &[u32], a: &mut Vec<f64>, step_buffers: bool) {
         let p = &mut self.particles;
         for v in [&mut p.x, &mut p.v, a] {
-            gather3(v, old_of_new);
+            gather(v, old_of_new, 3);
         }
         if step_buffers {
-            gather3(&mut self.x_next, old_of_new);
-            gather3(&mut self.v_next, old_of_new);
+            gather(&mut self.x_next, old_of_new, 3);
+            gather(&mut self.v_next, old_of_new, 3);
         }
-        gather(&mut p.mass, old_of_new);
-        gather(&mut p.inv_mass, old_of_new);
-        gather(&mut p.radius, old_of_new);
-        gather(&mut p.id, old_of_new);
-        gather(&mut self.deaths.time, old_of_new);
+        gather(&mut p.mass, old_of_new, 1);
+        gather(&mut p.inv_mass, old_of_new, 1);
+        gather(&mut p.radius, old_of_new, 1);
+        gather(&mut p.id, old_of_new, 1);
+        gather(&mut self.deaths.time, old_of_new, 1);
         if let Some(stage) = &mut self.collide_stage {
-            gather(&mut stage.own, old_of_new);
+            gather(&mut stage.own, old_of_new, 1);
         }
         let mut new_of_old = vec![0u32; old_of_new.len()];
         for (new, &old) in old_of_new.iter().enumerate() {
