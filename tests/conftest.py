@@ -24,3 +24,24 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         with open(where, "w", encoding="utf-8") as f:
             json.dump({"examples": int(os.environ.get("KINEMA_FUZZ_EXAMPLES", "40")), "categories": table, "total": total}, f, indent=1)
         terminalreporter.write_line(f"(written to {where})")
+
+
+import pytest  # noqa: E402
+
+
+@pytest.fixture
+def jupyter_kernel(tmp_path, monkeypatch):
+    """The name of a Jupyter kernel of this very Python (where kinema is), whatever other
+    kernels are installed, for nbclient; skips without the notebook extras
+    (requirements/viewer-test.txt)."""
+    import json
+    import sys
+
+    for module in ("nbformat", "nbclient", "ipykernel"):
+        pytest.importorskip(module, reason=f"{module} is not installed: pip install -r requirements/viewer-test.txt")
+    spec = tmp_path / "jupyter" / "kernels" / "kinema-test"
+    spec.mkdir(parents=True)
+    argv = [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"]
+    (spec / "kernel.json").write_text(json.dumps({"argv": argv, "display_name": "kinema test", "language": "python"}))
+    monkeypatch.setenv("JUPYTER_PATH", str(tmp_path / "jupyter"))
+    return "kinema-test"

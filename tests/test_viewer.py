@@ -487,23 +487,17 @@ def test_show_rejects_an_unknown_mode(traj):
         traj.show(mode="movie")
 
 
-def test_show_in_jupyter_inlines_the_viewer_and_a_video(traj, tmp_path, monkeypatch):
+def test_show_in_jupyter_inlines_the_viewer_and_a_video(traj, tmp_path, jupyter_kernel):
     # A real kernel runs the cells (nbclient): show() gives the viewer's page in an iframe with
     # the frames inside, without IPython's "Consider using IPython.display.IFrame" warning,
     # show(mode="video") an HTML5 video with the MP4 inside, and a trajectory as a cell's last
     # line a short table (and a one-line text repr), not every frame.
-    nbformat = pytest.importorskip("nbformat", reason="nbformat is not installed: pip install -r requirements/viewer-test.txt")
-    nbclient = pytest.importorskip("nbclient", reason="nbclient is not installed: pip install -r requirements/viewer-test.txt")
-    pytest.importorskip("ipykernel", reason="ipykernel is not installed: pip install -r requirements/viewer-test.txt")
-    # A kernel of this very Python (where kinema is), whatever other kernels are installed.
-    spec = tmp_path / "jupyter" / "kernels" / "kinema-test"
-    spec.mkdir(parents=True)
-    argv = [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"]
-    (spec / "kernel.json").write_text(json.dumps({"argv": argv, "display_name": "kinema test", "language": "python"}))
-    monkeypatch.setenv("JUPYTER_PATH", str(tmp_path / "jupyter"))
+    import nbclient
+    import nbformat
+
     cells = [TRAJECTORY_CODE, "traj.show()", 'traj.show(mode="video", width=320, height=240)', "traj"]
     notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code) for code in cells])
-    client = nbclient.NotebookClient(notebook, timeout=600, kernel_name="kinema-test", resources={"metadata": {"path": str(tmp_path)}})
+    client = nbclient.NotebookClient(notebook, timeout=600, kernel_name=jupyter_kernel, resources={"metadata": {"path": str(tmp_path)}})
     client.execute()
 
     def html_output(cell) -> str:
