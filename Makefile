@@ -3,6 +3,7 @@
 #   make test   set up, build, then cargo test and pytest
 #   make bench  set up, build, run the benchmarks (kinema beside its peers, one table each)
 #   make fuzz   set up, build, run the fuzz suite (tests/test_fuzz.py) with many more cases
+#   make docs   the documentation site (MkDocs, strict: a broken link or reference fails) → site/
 #   make pictures  the README's pictures of the example scenes (docs/img/scene_*.png)
 #   make fmt    format Rust and Python sources
 
@@ -15,7 +16,7 @@ TEST_STAMP := $(VENV)/.test-deps-installed
 BUILT  := $(VENV)/.kinema-built
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml pyproject.toml
 
-.PHONY: demo test test-rust test-python fuzz bench pictures fmt setup build viewer wheel-check clean
+.PHONY: demo test test-rust test-python fuzz bench pictures fmt setup build viewer wheel-check clean docs
 
 setup: $(STAMP)
 
@@ -37,6 +38,16 @@ build: $(BUILT)
 $(BUILT): $(STAMP) $(RUST_SOURCES)
 	$(VENV)/bin/maturin develop --release -q
 	touch $@
+
+# The documentation site: docs/ with the API reference from the docstrings (mkdocstrings) and
+# the command line's (mkdocs-click), built strictly (mkdocs.yml: a warning fails) into site/.
+DOCS_STAMP := $(VENV)/.docs-deps-installed
+$(DOCS_STAMP): $(STAMP) requirements/docs.txt
+	$(PIP) install --disable-pip-version-check -q -r requirements/docs.txt
+	touch $@
+
+docs: $(BUILT) $(DOCS_STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict
 
 # The browser viewer's script: three.js and viewer/src bundled by esbuild (pinned in
 # viewer/package-lock.json). The bundle is committed, so that building and installing kinema

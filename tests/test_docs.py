@@ -8,13 +8,18 @@ The conventions, in the fence line of a block (docs/architecture.md, "Documentat
   Python process whose working directory is a new temporary folder holding a link to the
   repository's ``examples/``: a page's blocks are one continuous example, and a name one
   block defines is there for the next ones.
-- ```` ```python skip: <reason> ````: does not run, and says why beside it (a Slurm cluster, a
-  GPU); a ``skip`` without a reason fails.
-- ```` ```toml file=camera.toml ```` (any language): the block is written to that file in
-  the working folder before the page runs, for the Python blocks that read it.
-- ```` ```text output ```` right after a Python block: what that block prints, compared with
-  ``doctest``'s checker (``...`` stands for any text; runs of spaces and newlines compare as
-  one space). Other ```` ```text ```` blocks (formulas, tables, shell sessions) are prose.
+- ```` ```python {.skip reason="..."} ````: does not run, and says why beside it (a Slurm
+  cluster, a GPU); a ``skip`` without a reason fails.
+- ```` ```toml {file="camera.toml"} ```` (any language): the block is written to that file
+  in the working folder before the page runs, for the Python blocks that read it.
+- ```` ```text {.output} ```` right after a Python block: what that block prints, compared
+  with ``doctest``'s checker (``...`` stands for any text; runs of spaces and newlines
+  compare as one space). Other ```` ```text ```` blocks (formulas, tables, shell sessions)
+  are prose.
+
+The options are an attribute list in braces, which GitHub shows as the language's block and
+the documentation site (pymdownx.superfences) renders as code; anything else after the
+language is refused (the site would print the block as one line of inline code).
 
 The page's blocks are parsed by markdown-it-py (CommonMark, the parser rich uses), not by
 regular expressions, so fences inside lists and indented fences count as the reader sees them.
@@ -24,10 +29,12 @@ from __future__ import annotations
 
 import doctest
 import os
+import re
 import subprocess
 import sys
 import tempfile
 import textwrap
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -48,17 +55,43 @@ class Block:
     output: str | None = None  # what the page shows it prints
 
 
-def files(page: Path) -> dict[str, str]:
-    """The page's blocks marked ``file=<name>`` (any language), by name."""
-    out = {}
+OPTION = re.compile(r'\.([\w-]+)|([\w-]+)="([^"]*)"')
+
+
+def fences(page: Path) -> Iterator[tuple[int, str, set[str], dict[str, str], str]]:
+    """Each fence of the page: its line (1-based), language, classes and key="value" options
+    (``{.skip reason="..."}``), and text."""
     for token in MarkdownIt("commonmark").parse(page.read_text(encoding="utf-8")):
-        if token.type == "fence":
-            for word in token.info.split()[1:]:
-                if word.startswith("file="):
-                    name = word.removeprefix("file=")
-                    if not name or "/" in name or name in out:
-                        raise AssertionError(f"{page.name}:{token.map[0] + 1 if token.map else 0}: file={name!r}: a new plain file name")
-                    out[name] = token.content
+        if token.type != "fence":
+            continue
+        line = token.map[0] + 1 if token.map else 0
+        lang, _, rest = token.info.strip().partition(" ")
+        rest = rest.strip()
+        classes: set[str] = set()
+        options: dict[str, str] = {}
+        if rest:
+            inside = rest[1:-1] if rest.startswith("{") and rest.endswith("}") else None
+            if inside is None or OPTION.sub("", inside).strip():
+                raise AssertionError(
+                    f'{page.name}:{line}: fence options {rest!r}: write them in braces, {{.skip reason="..."}}, {{.output}} or {{file="name"}}'
+                )
+            for cls, key, value in OPTION.findall(inside):
+                if cls:
+                    classes.add(cls)
+                else:
+                    options[key] = value
+        yield line, lang, classes, options, token.content
+
+
+def files(page: Path) -> dict[str, str]:
+    """The page's blocks marked ``{file="<name>"}`` (any language), by name."""
+    out = {}
+    for line, _, _, options, text in fences(page):
+        if "file" in options:
+            name = options["file"]
+            if not name or "/" in name or name in out:
+                raise AssertionError(f"{page.name}:{line}: file={name!r}: a new plain file name")
+            out[name] = text
     return out
 
 
@@ -66,28 +99,25 @@ def blocks(page: Path) -> list[Block]:
     """The page's Python blocks with their skip reasons and shown output, in page order."""
     found: list[Block] = []
     last: Block | None = None
-    for token in MarkdownIt("commonmark").parse(page.read_text(encoding="utf-8")):
-        if token.type != "fence":
-            continue
-        lang, _, rest = token.info.strip().partition(" ")
-        rest = rest.strip()
-        line = token.map[0] + 1 if token.map else 0
+    for line, lang, classes, options, text in fences(page):
+        known = {"python": ({"skip"}, {"reason"}), "text": ({"output"}, {"file"})}.get(lang, (set(), {"file"}))
+        if classes - known[0] or set(options) - known[1]:
+            raise AssertionError(f"{page.name}:{line}: unknown fence option in {lang} {{{' '.join(sorted(classes | set(options)))}}}")
         if lang == "python":
-            skip = None
-            if rest:
-                if not rest.startswith("skip"):
-                    raise AssertionError(f"{page.name}:{line}: unknown fence option {rest!r} (`python skip: <reason>`)")
-                skip = rest.removeprefix("skip").lstrip(":").strip()
-                if not skip:
-                    raise AssertionError(f"{page.name}:{line}: `python skip` needs its reason: `python skip: <why>`")
-            last = Block(line, token.content, skip)
+            reason = options.get("reason", "").strip()
+            if "skip" in classes and not reason:
+                raise AssertionError(f'{page.name}:{line}: a skipped block needs its reason: {{.skip reason="<why>"}}')
+            if reason and "skip" not in classes:
+                raise AssertionError(f"{page.name}:{line}: a reason without .skip")
+            last = Block(line, text, reason or None)
             found.append(last)
             continue
-        if lang == "text" and rest == "output":
+        if "output" in classes:
             if last is None or last.output is not None:
-                raise AssertionError(f"{page.name}:{line}: a `text output` block must follow the Python block it shows")
-            last.output = token.content
-        last = None if lang != "text" or rest != "output" else last
+                raise AssertionError(f"{page.name}:{line}: a {{.output}} block must follow the Python block it shows")
+            last.output = text
+        else:
+            last = None
     return found
 
 
@@ -145,13 +175,16 @@ def test_the_conventions_are_enforced(tmp_path: Path) -> None:
     # A skip without its reason and an output block with no block before it are errors of
     # the page, not silent passes; an output block is tied to the block right before it.
     page = tmp_path / "page.md"
-    page.write_text("```python skip\nx = 1\n```\n")
+    page.write_text("```python {.skip}\nx = 1\n```\n")
     with pytest.raises(AssertionError, match="needs its reason"):
         blocks(page)
-    page.write_text("text\n\n```text output\n1\n```\n")
+    page.write_text("```python skip: no braces\nx = 1\n```\n")
+    with pytest.raises(AssertionError, match="in braces"):
+        blocks(page)
+    page.write_text("text\n\n```text {.output}\n1\n```\n")
     with pytest.raises(AssertionError, match="must follow"):
         blocks(page)
-    page.write_text("```python\nprint(1)\n```\n\n```text output\n1\n```\n\n```python skip: needs a cluster\nx\n```\n")
+    page.write_text('```python\nprint(1)\n```\n\n```text {.output}\n1\n```\n\n```python {.skip reason="needs a cluster"}\nx\n```\n')
     got = blocks(page)
     assert [(b.output, b.skip) for b in got] == [("1\n", None), (None, "needs a cluster")]
 
@@ -160,11 +193,27 @@ def test_a_wrong_output_and_a_failing_block_are_reported(tmp_path: Path) -> None
     # The checks can fail: a shown output that differs from the printed one, and a block that
     # raises (named by its line, after a block that ran); `...` matches any text.
     page = tmp_path / "page.md"
-    page.write_text("```python\nx = 2 + 2\nprint(x, 'apples')\n```\n\n```text output\n5 apples\n```\n")
+    page.write_text("```python\nx = 2 + 2\nprint(x, 'apples')\n```\n\n```text {.output}\n5 apples\n```\n")
     (wrong,) = problems(page)
     assert "line 1 printed" in wrong and "5 apples" in wrong, wrong
-    page.write_text("```python\nprint(2 + 2, 'apples')\n```\n\n```text output\n4 ...\n```\n")
+    page.write_text("```python\nprint(2 + 2, 'apples')\n```\n\n```text {.output}\n4 ...\n```\n")
     assert problems(page) == []
     page.write_text("```python\nx = 1\n```\n\ntext\n\n```python\nraise ValueError('bad dt')\n```\n")
     (failed,) = problems(page)
     assert "line 7 fails" in failed and "ValueError: bad dt" in failed, failed
+
+
+def test_every_public_name_and_command_has_a_reference_entry():
+    # The site's reference (mkdocs.yml): one `::: kinema.NAME` per name of kinema.__all__ in
+    # docs/reference/python.md (mkdocstrings renders it from the docstring; a name it cannot
+    # find fails `make docs`), and the command line's page renders the whole `kinema` group
+    # (mkdocs-click, every command at depth 1) from kinema.cli's click command.
+    import kinema
+    from kinema import cli
+
+    text = (ROOT / "docs" / "reference" / "python.md").read_text(encoding="utf-8")
+    listed = set(re.findall(r"^::: kinema\.(\w+)$", text, re.M))
+    assert listed == set(kinema.__all__) - {"__version__"}, (set(kinema.__all__) - listed, listed - set(kinema.__all__))
+    page = (ROOT / "docs" / "reference" / "cli.md").read_text(encoding="utf-8")
+    assert ":module: kinema.cli" in page and ":command: click_command" in page and ":depth: 1" in page
+    assert set(cli.click_command.commands) == {"methods", "stability", "demo", "run", "render", "export", "sweep", "view"}

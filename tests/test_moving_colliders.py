@@ -296,6 +296,6 @@ def test_the_docs_example_prints_what_the_docs_say(capsys):
     text = (Path(__file__).resolve().parent.parent / "docs" / "collisions.md").read_text()
     after = text[text.index("A ball rising into a floor moving") :]
     code = after.split("```python\n", 1)[1].split("```", 1)[0]
-    printed = after.split("```text output\n", 1)[1].split("```", 1)[0]  # (also checked by test_docs.py)
+    printed = after.split("```text {.output}\n", 1)[1].split("```", 1)[0]  # (also checked by test_docs.py)
     exec(compile(code, "docs/collisions.md", "exec"), {})
     assert capsys.readouterr().out == printed
