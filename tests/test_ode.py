@@ -262,3 +262,13 @@ def test_dense_output_backwards_in_time():
     sol = kinema.solve(lambda t, y: -y, [1.0], (2.0, 0.0), h=0.01, method="rk4", dense_output=True)
     assert sol.sol.span == (2.0, 0.0)
     np.testing.assert_allclose(sol.sol([1.0, 0.0])[:, 0], np.exp([1.0, 2.0]), rtol=1e-9)
+
+
+@pytest.mark.parametrize("method", ["euler", "rk4"])
+def test_a_failed_step_is_named_by_the_h_the_user_gave(method):
+    # The steps run between grid times t0 + k h, so the step from t = 10.9 is 11.0 − 10.9 =
+    # 0.09999999999999964 in floating point (and 0.10000000000000142 from 29.5); the message
+    # echoes h = 0.1 as given, not its rounded difference.
+    with pytest.warns(kinema.SolverWarning), np.errstate(over="ignore", invalid="ignore"):
+        sol = kinema.solve(lambda t, y: 100 * y, [1.0], (0.0, 100.0), h=0.1, method=method)
+    assert not sol.success and " with h = 0.1 produced a non-finite value" in sol.message, sol.message

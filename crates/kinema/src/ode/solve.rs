@@ -310,16 +310,18 @@ fn run_fixed<S: ?Sized>(
             t0 + dir * (k + 1) as f64 * h
         };
         let hk = t_b - t_a;
+        // what a message calls the step: h as given, but the last step, which is cut to t_end
+        let asked = if k + 1 == nsteps { hk } else { dir * h };
         match stepper.step(sys, t_a, &y, hk, &mut y_next, &mut stats) {
             Ok(()) => {}
             Err(StepFailure::Stop(t)) => {
-                termination = Some(t);
+                termination = Some(t.with_step_asked(hk, asked));
                 break;
             }
             Err(StepFailure::Error(e)) => return Err(e),
         }
         if let Some(index) = first_non_finite(&y_next) {
-            termination = Some(Termination::NonFinite { t: t_a, h: hk, index });
+            termination = Some(Termination::NonFinite { t: t_a, h: asked, index });
             break;
         }
         stats.nsteps += 1;

@@ -61,6 +61,32 @@ pub enum Termination {
     },
 }
 
+impl Termination {
+    /// The termination with the step the caller asked for, `asked`, where it names the step
+    /// `taken`. A fixed-step solve takes steps between grid times t₀ + k h, so a step is
+    /// t_{k+1} − t_k: h to rounding (0.09999999999999964 for h = 0.1 near t = 10), which a
+    /// message should not echo back as if the user had given it.
+    pub fn with_step_asked(self, taken: f64, asked: f64) -> Self {
+        match self {
+            Termination::NewtonFailed {
+                t,
+                h,
+                h_min,
+                t_fail,
+                halvings,
+            } if h == taken => Termination::NewtonFailed {
+                t,
+                h: asked,
+                h_min,
+                t_fail,
+                halvings,
+            },
+            Termination::NonFinite { t, h, index } if h == taken => Termination::NonFinite { t, h: asked, index },
+            other => other,
+        }
+    }
+}
+
 impl fmt::Display for Termination {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
