@@ -282,3 +282,31 @@ def test_a_member_whose_worker_dies_is_run_again(tmp_path):
     result = kinema.sweep(gas(), {"collisions.restitution": [0.5, 0.9]}, measure=die_once, out=tmp_path / "s", workers=2, progress=False, plot=False)
     assert marker.exists() and not result.failed
     assert all(r["top"] > 0 for r in result.rows)
+
+
+def test_the_summary_plot_says_its_units_and_drops_what_never_changes():
+    # summary.png's panels: each measurement against each numeric varied key, labelled with
+    # its unit (J, s, ...); the frames of a fixed duration are equal in every member and get
+    # no panel; a measure's own column keeps its bare name.
+    from kinema.sweeps import _figure
+
+    rows = [
+        {
+            "member": f"m{k}",
+            "world.dt": dt,
+            "seed": s,
+            "final_kinetic": 1.0 + dt * s,
+            "energy_lost": 0.1 * s,
+            "frames": 61,
+            "impacts": 3 + s,
+            "spread": 0.5 * s,
+            "error": "",
+        }
+        for k, (dt, s) in enumerate((dt, s) for dt in (0.001, 0.002) for s in range(3))
+    ]
+    fig = _figure(rows, ["world.dt"])
+    labels = [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes]
+    assert labels == [("world.dt (s)", "final_kinetic (J)"), ("world.dt (s)", "energy_lost (J)"), ("world.dt (s)", "impacts"), ("world.dt (s)", "spread")], (
+        labels
+    )
+    assert _figure([{**r, "final_kinetic": 1.0, "energy_lost": 0.0, "impacts": 0, "spread": 0.0} for r in rows], ["world.dt"]) is None

@@ -448,23 +448,60 @@ def _cell(v: Any) -> Any:
 
 
 def _plot(path: Path, rows: list[dict[str, Any]], keys: list[str]) -> None:
-    """Each numeric measurement against each varied key: the mean over the other values and
-    seeds with its standard deviation as error bars, and the members as dots."""
+    """summary.png: each measurement against each numeric varied key (``_figure``)."""
+    fig = _figure(rows, keys)
+    if fig is not None:
+        import matplotlib.pyplot as plt
+
+        from .runner import save_figure_atomically
+
+        save_figure_atomically(fig, path)
+        plt.close(fig)
+
+
+#: Units of the measurements a sweep takes itself, and of the scene keys most often varied
+#: (by their last part); a ``measure``'s own columns are labelled by their names alone.
+UNITS = {
+    "final_kinetic": "J",
+    "final_total": "J",
+    "energy_lost": "J",
+    "dt": "s",
+    "duration": "s",
+    "fps": "1/s",
+    "radius": "m",
+    "mass": "kg",
+    "rate": "1/s",
+    "stiffness": "N/m",
+    "damping": "1/s",
+    "speed": "m/s",
+    "lifetime": "s",
+}
+
+
+def _label(name: str) -> str:
+    unit = UNITS.get(name.rsplit(".", 1)[-1])
+    return f"{name} ({unit})" if unit else name
+
+
+def _figure(rows: list[dict[str, Any]], keys: list[str]) -> Any:
+    """The members' measurements (rows) against each numeric varied key: the members as dots,
+    the mean over the other values and seeds with its standard deviation; axes labelled with
+    units where known. A measurement equal in every member (the frames of a fixed duration)
+    has no panel. None when nothing numeric varies."""
     import matplotlib
 
-    matplotlib.use("Agg")
+    matplotlib.use("Agg")  # (workers and scripts without a display)
     import matplotlib.pyplot as plt
-
-    from .runner import save_figure_atomically
 
     ok = [r for r in rows if not r.get("error")]
     skip = {"member", "seed", "error", *keys}
     names = [k for k in dict.fromkeys(k for r in ok for k in r) if k not in skip and all(_number(r.get(k)) for r in ok)]
+    names = [k for k in names if len({float(r[k]) for r in ok}) > 1]
     if not ok or not names:
-        return
+        return None
     numeric_keys = [k for k in keys if all(_number(r[k]) for r in ok)]
     if not numeric_keys:
-        return
+        return None
     fig, axes = plt.subplots(len(names), len(numeric_keys), figsize=(4.2 * len(numeric_keys), 2.6 * len(names)), squeeze=False)
     for i, name in enumerate(names):
         for j, key in enumerate(numeric_keys):
@@ -476,12 +513,11 @@ def _plot(path: Path, rows: list[dict[str, Any]], keys: list[str]) -> None:
             mean = np.array([ys[xs == u].mean() for u in ux])
             spread = np.array([ys[xs == u].std() for u in ux])
             ax.errorbar(ux, mean, yerr=spread, fmt="o-", color="C0", capsize=3)
-            ax.set_xlabel(key)
-            ax.set_ylabel(name)
+            ax.set_xlabel(_label(key))
+            ax.set_ylabel(_label(name))
             ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    save_figure_atomically(fig, path)
-    plt.close(fig)
+    return fig
 
 
 def _number(v: Any) -> bool:
