@@ -1,4 +1,5 @@
 import matplotlib
+import pytest
 
 matplotlib.use("Agg")
 
@@ -24,9 +25,6 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         with open(where, "w", encoding="utf-8") as f:
             json.dump({"examples": int(os.environ.get("KINEMA_FUZZ_EXAMPLES", "40")), "categories": table, "total": total}, f, indent=1)
         terminalreporter.write_line(f"(written to {where})")
-
-
-import pytest  # noqa: E402
 
 
 @pytest.fixture
