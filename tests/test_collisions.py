@@ -283,6 +283,8 @@ def test_settings_read_back_and_round_trip():
         "stiffness": None,
         "damping": None,
         "event_driven": False,
+        "youngs_modulus": None,
+        "poisson_ratio": None,
     }
     assert w.collisions == expected
     w.set_collisions(**w.collisions)
@@ -505,6 +507,8 @@ def test_collision_defaults_and_contact_models_are_the_engines():
         "stiffness": None,
         "damping": None,
         "event_driven": False,
+        "youngs_modulus": None,
+        "poisson_ratio": None,
     }
     signature = inspect.signature(kinema.World.set_collisions)
     assert {k: p.default for k, p in signature.parameters.items() if k != "self"} == engine

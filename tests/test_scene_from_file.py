@@ -143,7 +143,10 @@ def test_units_of_a_file_block(start):
         ),
         ('path = "start.xyz"\nunits = [1.0]', r"particles\[0\]\.units: \[1\.0\] is invalid: give a unit style's name or a table"),
         ('path = ""', r"particles\[0\]\.path: '' is invalid: string should have at least 1 character"),
-        ('path = "start.xyz"\nscale = 2.0', r"particles\[0\]\.scale: unknown key allowed keys here: atom_style, format, frame, friction, mass, path, pinned"),
+        (
+            'path = "start.xyz"\nscale = 2.0',
+            r"particles\[0\]\.scale: unknown key allowed keys here: angular_velocity, atom_style, format, frame, friction, inertia, mass, path, pinned",
+        ),
     ],
 )
 def test_bad_keys_of_a_file_block_are_one_line_each(start, block, message):

@@ -40,6 +40,7 @@ from . import (
 from ._core import __version__
 from .checkpoint import resume_run
 from .colliders import Box, Keyframes, Mesh, Motion, Plane, SphereObstacle
+from .contact_time import ContactTimeWarning
 from .convergence import ConvergenceResult, convergence
 from .emitter import Emitter, KillBox, KillPlane, KillSphere
 from .forces import Attractor, Drag, Gravity, PythonForce, Spring, Wind
@@ -87,6 +88,7 @@ __all__ = [
     "SphereObstacle",
     "PlacementWarning",
     "StabilityWarning",
+    "ContactTimeWarning",
     "Spring",
     "sweep",
     "SweepResult",

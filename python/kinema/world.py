@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _checks, _core
+from . import _checks, _core, contact_time
 from .colliders import Box, Collider
 from .emitter import KILL_VOLUMES, Emitter
 from .forces import Spring
@@ -127,9 +127,18 @@ def _kept(a: np.ndarray, keep: np.ndarray) -> np.ndarray:
 class World(WorldCollisions):
     """Particles, forces, an integrator, a time step and the time.
 
-    ``World(dim=3, dt=1e-3, method="verlet")``: ``dim`` 2 keeps every particle in the
-    xy-plane (z = 0 exactly); ``dt`` in s; ``method`` any name of ``kinema.method_names()`` or
-    a ``ButcherTableau``.
+    ``World(dim=3, dt=1e-3, method="verlet", spin=False)``: ``dim`` 2 keeps every particle in
+    the xy-plane (z = 0 exactly); ``dt`` in s; ``method`` any name of ``kinema.method_names()``
+    or a ``ButcherTableau``.
+
+    ``spin=True`` gives every particle an angular velocity (:attr:`angular_velocities`, rad/s,
+    0 to start; a 2D world turns about z) and a moment of inertia (:attr:`inertia`, kg·m²: a
+    solid sphere's 2/5 m r² in 3D, a disc's 1/2 m r² in 2D, unless ``add_particles`` is given
+    ``inertia``). Collision impulses then act at the contact point: friction acts on the
+    contact point's velocity (v + ω × r) and turns both particles, so a ball with enough
+    friction rolls, and :meth:`diagnostics` adds the rotational kinetic energy and the
+    particles' own angular momentum Σ I ω. Without spin particles are points with mass, and
+    every result is what it was before spin existed, bit for bit.
 
     ``positions``, ``velocities`` and ``masses`` are live NumPy views of the state: stepping
     updates them in place, and writing into them changes the world (checked at the next step).
@@ -154,15 +163,19 @@ class World(WorldCollisions):
     current arrays and shift when particles are removed.
     """
 
-    def __init__(self, dim: int = 3, dt: float = 1e-3, method: str | ButcherTableau = "verlet"):
+    def __init__(self, dim: int = 3, dt: float = 1e-3, method: str | ButcherTableau = "verlet", spin: bool = False):
         dim = _checks.integer("dim", dim, 2, 3, what="a world is 2D (the xy-plane) or 3D: dim must be 2 or 3")
+        spin = _checks.boolean("spin", spin)
         self._owner = threading.get_ident()
         self._core = _core.World(dim, _checks.real("dt", dt), method)
+        if spin:
+            self._core.set_spin(True)
         self._forces: list[Any] = []
         self._colliders: list[Collider] = []
         self._added: list[Collider] = []  # the objects given to add (set_motion knows them by these too)
         self._method_arg = method
         self._warned = False
+        self._contact_warned = False
         self._advice_due = True
         self._species: list[str] = []  # per particle ("": none given)
         # Births and deaths: the emitters at work, the kill volumes, and per particle its time
@@ -202,7 +215,7 @@ class World(WorldCollisions):
             self._core = _Busy()
             # The views are read-only meanwhile: a write into one from a force would be lost or
             # kept depending on what called it (a step reads the state back after, `rates` not).
-            for a in (self._x, self._v, self._m):
+            for a in (self._x, self._v, self._m, self._w):
                 if a.flags.writeable:
                     a.flags.writeable = False
                     views.append(a)
@@ -218,12 +231,17 @@ class World(WorldCollisions):
         self._v = np.empty((n, 3))
         self._core.read_state(self._x, self._v)
         self._m = np.array(self._core.masses)
+        self._w = np.zeros((n, 3) if self._core.spin else (0, 3))
+        if self._core.spin:
+            self._core.read_spin(self._w)
 
     def _push(self) -> None:
         """Hands what the user wrote into the views to the world (a no-op when unchanged). A
         bad value is refused whole: the world keeps its state and the views show it again."""
         try:
             self._core.sync(self._x, self._v, self._m)
+            if self._core.spin:
+                self._core.sync_spin(self._w)
         except ValueError:
             self._pull()
             self._m[...] = self._core.masses
@@ -234,6 +252,8 @@ class World(WorldCollisions):
             self._new_views()
             return
         self._core.read_state(self._x, self._v)
+        if self._core.spin:
+            self._core.read_spin(self._w)
 
     def _advise(self, core: Any) -> None:
         """Warns once if dt is beyond the advisor's limit for the world's method (``core``: the
@@ -242,8 +262,13 @@ class World(WorldCollisions):
             return
         self._advice_due = False
         self._advised_at = core.len
-        contact_springs = (core.collisions or {}).get("model") == "spring_dashpot"
-        if self._warned or core.len == 0 or not (self._forces or contact_springs):
+        contact_springs = (core.collisions or {}).get("model") in ("spring_dashpot", "hertz")
+        if core.len == 0 or not (self._forces or contact_springs):
+            return
+        if contact_springs and not self._contact_warned:
+            # a step coarser than t_c / 20 of the shortest contact (kinema.contact_time)
+            self._contact_warned = contact_time.advise(core, core.rates())
+        if self._warned:
             return
         limit = core.stable_step(self._method_arg)
         if core.dt > limit:
@@ -276,12 +301,19 @@ class World(WorldCollisions):
         restitution: Any = None,
         friction: Any = None,
         species: Any = None,
+        angular_velocity: Any = None,
+        inertia: Any = None,
     ) -> np.ndarray:
         """Add particles; returns their indices.
 
         ``position`` (N, 3) in m (a single (3,) point adds one particle); ``velocity`` (N, 3)
         in m/s (default 0); ``mass`` in kg and ``radius`` in m, scalars or (N,); ``pinned``
-        bool, scalar or (N,): a pinned particle never moves (inverse mass 0).
+        bool, scalar or (N,): a pinned particle never moves (inverse mass 0) nor turns.
+
+        In a world with spin: ``angular_velocity`` (N, 3) or one (3,) vector, rad/s (default
+        0; a 2D world turns about z only, so x and y must be 0); ``inertia`` the moment of
+        inertia about the centre, kg·m², a scalar or (N,) (default 2/5 m r² in 3D, 1/2 m r² in
+        2D). Either in a world without spin is a ``ValueError``.
 
         ``restitution`` e ∈ [0, 1] and ``friction`` μ ≥ 0: each particle's own collision
         values, scalars or (N,) (``None`` or NaN entries: the world's values of
@@ -314,7 +346,16 @@ class World(WorldCollisions):
             for name, a in (("restitution", restitution), ("friction", friction))
         )
         names = self._species_names(species, n)
-        return self._add(x, v, m, r, p, e, mu, names)
+        spin = None
+        if angular_velocity is not None or inertia is not None:
+            if not self._core.spin:
+                given = "angular_velocity" if angular_velocity is not None else "inertia"
+                raise ValueError(f"{given} is given, but this world has no spin: make it with kinema.World(..., spin=True)")
+            w = None if angular_velocity is None else np.atleast_2d(_checks.real_array("angular_velocity", angular_velocity))
+            w = None if w is None else _checks.broadcast("angular_velocity", w, (n, 3), f"a (3,) vector or one per particle, ({n}, 3)")
+            i = None if inertia is None else _checks.broadcast("inertia", _checks.real_array("inertia", inertia), (n,), each)
+            spin = (w, i)
+        return self._add(x, v, m, r, p, e, mu, names, spin=spin)
 
     def add_particles_from(
         self,
@@ -362,14 +403,20 @@ class World(WorldCollisions):
         names = got["species"] if got["species"] is not None else species
         return self.add_particles(x, v, m, r, pinned=pinned, restitution=restitution, friction=friction, species=names)
 
-    def _add(self, x, v, m, r, p, e, mu, names, death=None, color=None) -> np.ndarray:
-        """Adds checked particles with their species names, times of death and colours."""
+    def _add(self, x, v, m, r, p, e, mu, names, death=None, color=None, spin=None) -> np.ndarray:
+        """Adds checked particles with their species names, times of death, colours and, in a
+        world with spin, their (angular velocities, inertias) where given."""
         n = len(m)
         self._push()
+        if spin is not None:
+            # checked before anything is added: a bad value adds nothing
+            self._core.check_particle_spin(*(None if a is None else np.ascontiguousarray(a, dtype=float) for a in spin))
         arrays = {
             k: np.ascontiguousarray(a, dtype=d) for k, a, d in (("x", x, float), ("v", v, float), ("mass", m, float), ("radius", r, float), ("pinned", p, bool))
         }
         start, end = self._core.add_particles({**arrays, "restitution": e, "friction": mu})
+        if spin is not None:
+            self._core.set_particle_spin(start, end, *(None if a is None else np.ascontiguousarray(a, dtype=float) for a in spin))
         self._species += names
         self._death = _grown(self._death, n, np.inf, death)
         self._colors = _grown(self._colors, n, np.nan, None if color is None else np.broadcast_to(color, (n, 3)))
@@ -739,6 +786,36 @@ class World(WorldCollisions):
         """Masses (N,), kg: a live view (pinned particles keep theirs and stay pinned)."""
         return self._m
 
+    @property
+    def spin(self) -> bool:
+        """Whether the particles turn (``World(spin=True)``)."""
+        return self._core.spin
+
+    @property
+    def angular_velocities(self) -> np.ndarray:
+        """Angular velocities ω (N, 3), rad/s, in a world with spin: a live view (updated by each
+        step; writes turn the particles; pinned particles keep 0; a 2D world turns about z)."""
+        self._need_spin("angular_velocities")
+        return self._w
+
+    @angular_velocities.setter
+    def angular_velocities(self, value: Any) -> None:
+        self._need_spin("angular_velocities")
+        self._assign(self._w, value, "angular_velocities", (len(self), 3))
+
+    @property
+    def inertia(self) -> np.ndarray:
+        """Moments of inertia about the centres (N,), kg·m², in a world with spin (a new
+        read-only array; set by ``add_particles(..., inertia=...)``)."""
+        self._need_spin("inertia")
+        out = np.asarray(self._core.inertia)
+        out.flags.writeable = False
+        return out
+
+    def _need_spin(self, name: str) -> None:
+        if not self._core.spin:
+            raise ValueError(f"{name}: this world has no spin (its particles are points with mass); make it with kinema.World(..., spin=True)")
+
     @masses.setter
     def masses(self, value: Any) -> None:
         self._assign(self._m, value, "masses", (len(self),))
@@ -851,7 +928,10 @@ class World(WorldCollisions):
         return self._core.len
 
     def diagnostics(self) -> dict:
-        """Kinetic energy, potential energy per conservative force, linear and angular momentum now."""
+        """Kinetic energy (J), potential energy per conservative force (J), linear momentum
+        (kg·m/s) and angular momentum about the origin (kg·m²/s) now. With spin: ``rotational``,
+        Σ ½ I |ω|² (J), and ``spin_angular_momentum``, Σ I ω (kg·m²/s), which
+        ``angular_momentum`` includes."""
         self._push()
         with self._engine() as core:
             return core.diagnostics()
@@ -870,7 +950,8 @@ class World(WorldCollisions):
     def __repr__(self) -> str:
         if isinstance(self._core, _Busy):
             return "World(stepping)"
-        return f"World(dim={self.dim}, dt={self.dt}, method={self.method!r}, particles={len(self)}, t={self.time:g})"
+        spin = ", spin=True" if self._core.spin else ""
+        return f"World(dim={self.dim}, dt={self.dt}, method={self.method!r}{spin}, particles={len(self)}, t={self.time:g})"
 
     def _repr_html_(self) -> str:
         """A small table for Jupyter: the repr's values, the forces, colliders and collisions."""

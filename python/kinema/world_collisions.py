@@ -35,13 +35,20 @@ class WorldCollisions:
         stiffness: float | None = _DEFAULTS["stiffness"],
         damping: float | None = _DEFAULTS["damping"],
         event_driven: bool = _DEFAULTS["event_driven"],
+        youngs_modulus: float | None = _DEFAULTS["youngs_modulus"],
+        poisson_ratio: float | None = _DEFAULTS["poisson_ratio"],
     ) -> None:
         """Turn collisions on, or replace every one of their settings.
 
         ``model``: ``"impulse"`` (Newton's restitution law u_n⁺ = −e u_n⁻ by impulses after
         each integration step) or ``"spring_dashpot"`` (a force k_n δ − m_eff γ_n u_n while
         two bodies overlap by δ, integrated with the other forces; it needs ``stiffness`` k_n
-        in N/m, and ``damping`` γ_n in 1/s defaults to the value that gives ``restitution``).
+        in N/m, and ``damping`` γ_n in 1/s defaults to the value that gives ``restitution``)
+        or ``"hertz"`` (Hertz's elastic spheres, the same way: F_n = 4/3 E* √R* δ^(3/2) −
+        c_n u_n, R* = r_i r_j/(r_i + r_j), E* = E/(2(1 − ν²)) from ``youngs_modulus`` E in Pa
+        and ``poisson_ratio`` ν (default 0.3), the dashpot 2 ζ √(k_n m_eff) at the current
+        stiffness k_n = 4/3 E* √(R* δ) with ζ from ``restitution``: LAMMPS's
+        ``hertz/material`` with ``damping coeff_restitution``).
         ``restitution`` e ∈ [0, 1] and ``friction`` (Coulomb μ ≥ 0) are the values of every
         particle without its own. ``ccd``: find impacts at their time inside the step, so
         nothing passes through a particle or a wall however fast. ``restitution_threshold``
@@ -60,7 +67,7 @@ class WorldCollisions:
         gases, docs/collisions.md). Colliders must be still planes and boxes; a step of such a
         world refuses anything else with a ValueError that says why.
 
-        With ``"spring_dashpot"`` the contacts are a force (its elastic energy is the potential
+        With ``"spring_dashpot"`` and ``"hertz"`` the contacts are a force (its elastic energy is the potential
         ``"contact"`` of :meth:`diagnostics` and of the ``Trajectory``), which the stable-step
         advisor and the ``StabilityWarning`` count; :meth:`contacts` and
         :meth:`collision_stats` report the impulse model only.
@@ -79,11 +86,29 @@ class WorldCollisions:
             "sleep_speed": _checks.real("sleep_speed", sleep_speed, optional=True),
             "stiffness": _checks.real("stiffness", stiffness, optional=True),
             "damping": _checks.real("damping", damping, optional=True),
+            "youngs_modulus": _checks.real("youngs_modulus", youngs_modulus, optional=True),
+            "poisson_ratio": _checks.real("poisson_ratio", poisson_ratio, optional=True),
             "event_driven": _checks.boolean("event_driven", event_driven),
         }
         self._push()
         self._core.set_collisions(settings)
         self._advice_due = True  # the spring-dashpot model's contacts are stiff springs
+
+    def contact_time(self) -> float | None:
+        """The duration of the shortest contact the particles can make, s, with the
+        ``"spring_dashpot"`` or ``"hertz"`` model (``None`` with the impulse model, and for
+        Hertz while nothing moves): half a damped period π / (ω₀ √(1 − ζ²)) of the stiffest
+        pair's spring (ω₀² = k_n / m*), or a Hertzian impact's 2.943 δ_max / u at the fastest
+        approach the velocities allow now (``kinema.contact_time``). A step should span at
+        least 20 of it: a coarser one warns (``ContactTimeWarning``) with the restitution it
+        gives instead of the one set."""
+        from . import contact_time
+
+        settings = self.collisions or {}
+        if settings.get("model") not in ("spring_dashpot", "hertz"):
+            return None
+        rates = self.rates()
+        return contact_time.contact_time(settings["model"], rates.get("standby_omega"), rates.get("standby_zeta"))
 
     @property
     def collisions(self) -> dict | None:

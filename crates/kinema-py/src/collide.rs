@@ -5,7 +5,7 @@
 
 use kinema::collide::colliders::{check_planar, PLANE_IN_2D, SPHERE_IN_2D};
 use kinema::collide::{BoxContainer, Collider, Contact, Material, Motion, Partner, Plane, SphereObstacle, Surface, TriangleMesh};
-use kinema::world::{CollisionParams, CollisionStats, ContactModel};
+use kinema::world::{CollisionParams, CollisionStats, ContactModel, ModelArgs};
 use kinema::Error;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
@@ -34,6 +34,10 @@ pub struct CollisionArgs {
     #[pyo3(item)]
     damping: Option<f64>,
     #[pyo3(item)]
+    youngs_modulus: Option<f64>,
+    #[pyo3(item)]
+    poisson_ratio: Option<f64>,
+    #[pyo3(item)]
     event_driven: bool,
 }
 
@@ -41,7 +45,15 @@ impl CollisionArgs {
     /// The engine's settings: the model by its name (the engine's rule), the rest as given.
     pub fn params(&self) -> Result<CollisionParams, Error> {
         Ok(CollisionParams {
-            model: ContactModel::from_name(&self.model, self.stiffness, self.damping)?,
+            model: ContactModel::from_name(
+                &self.model,
+                ModelArgs {
+                    stiffness: self.stiffness,
+                    damping: self.damping,
+                    youngs_modulus: self.youngs_modulus,
+                    poisson_ratio: self.poisson_ratio,
+                },
+            )?,
             restitution: self.restitution,
             friction: self.friction,
             ccd: self.ccd,
@@ -60,14 +72,24 @@ fn collision_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     params_dict(py, &CollisionParams::default())
 }
 
-/// Checks a contact model's name and which of stiffness and damping it takes, by the
-/// engine's rule (for the scene files, before any world is built); ValueError otherwise.
+/// Checks a contact model's name and which of its parameters it takes, by the engine's rule
+/// (for the scene files, before any world is built); ValueError otherwise.
 #[pyfunction]
-#[pyo3(signature = (model, stiffness, damping))]
-fn check_contact_model(model: &str, stiffness: Option<f64>, damping: Option<f64>) -> PyResult<()> {
-    ContactModel::from_name(model, stiffness, damping)
-        .map(|_| ())
-        .map_err(crate::errors::to_py)
+#[pyo3(signature = (model, stiffness, damping, youngs_modulus=None, poisson_ratio=None))]
+fn check_contact_model(
+    model: &str,
+    stiffness: Option<f64>,
+    damping: Option<f64>,
+    youngs_modulus: Option<f64>,
+    poisson_ratio: Option<f64>,
+) -> PyResult<()> {
+    let args = ModelArgs {
+        stiffness,
+        damping,
+        youngs_modulus,
+        poisson_ratio,
+    };
+    ContactModel::from_name(model, args).map(|_| ()).map_err(crate::errors::to_py)
 }
 
 /// A collider's prescribed motion from its parts (the keyword arguments of
@@ -142,7 +164,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// The settings as the keyword arguments of `World.set_collisions` (so that they round-trip).
 pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<'py, PyDict>> {
     let out = PyDict::new(py);
-    let (model, stiffness, damping) = p.model.named();
+    let (model, args) = p.model.named();
     out.set_item("model", model)?;
     out.set_item("restitution", p.restitution)?;
     out.set_item("friction", p.friction)?;
@@ -150,8 +172,10 @@ pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<
     out.set_item("restitution_threshold", p.restitution_threshold)?;
     out.set_item("sleep_time", p.sleep_time)?;
     out.set_item("sleep_speed", p.sleep_speed)?;
-    out.set_item("stiffness", stiffness)?;
-    out.set_item("damping", damping)?;
+    out.set_item("stiffness", args.stiffness)?;
+    out.set_item("damping", args.damping)?;
+    out.set_item("youngs_modulus", args.youngs_modulus)?;
+    out.set_item("poisson_ratio", args.poisson_ratio)?;
     out.set_item("event_driven", p.event_driven)?;
     Ok(out)
 }

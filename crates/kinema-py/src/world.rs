@@ -619,6 +619,94 @@ impl PyWorld {
         Ok(true)
     }
 
+    /// Turns spin on or off (`World::set_spin`).
+    fn set_spin(&mut self, on: bool) {
+        self.inner.restore_order();
+        self.inner.set_spin(on);
+    }
+    #[getter]
+    fn spin(&self) -> bool {
+        self.inner.has_spin()
+    }
+
+    /// Sets the angular velocities ((K, 3), rad/s) and moments of inertia ((K,), kg m²) of
+    /// the particles first..end, where given.
+    fn set_particle_spin(
+        &mut self,
+        first: usize,
+        end: usize,
+        omega: Option<PyReadonlyArray2<'_, f64>>,
+        inertia: Option<PyReadonlyArray1<'_, f64>>,
+    ) -> PyResult<()> {
+        let omega = omega.as_ref().map(|w| flat3("angular_velocity", w)).transpose()?;
+        let inertia = inertia.as_ref().map(|i| i.as_slice()).transpose()?;
+        self.inner
+            .set_particle_spin(first..end, omega.as_deref(), inertia)
+            .map_err(to_py)
+    }
+
+    /// Checks angular velocities ((K, 3), rad/s) and moments of inertia ((K,), kg m²) for K
+    /// particles about to be added (the checks of `set_particle_spin`).
+    fn check_particle_spin(
+        &self,
+        omega: Option<PyReadonlyArray2<'_, f64>>,
+        inertia: Option<PyReadonlyArray1<'_, f64>>,
+    ) -> PyResult<()> {
+        let omega = omega.as_ref().map(|w| flat3("angular_velocity", w)).transpose()?;
+        let inertia = inertia.as_ref().map(|i| i.as_slice()).transpose()?;
+        let n = omega.as_ref().map_or_else(|| inertia.map_or(0, |i| i.len()), |w| w.len() / 3);
+        kinema::Particles::check_spin(n, omega.as_deref(), inertia, self.inner.params().dim).map_err(to_py)
+    }
+
+    /// The moments of inertia, kg m² (N,), in the user's order (empty without spin).
+    #[getter]
+    fn inertia<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().inertia, 1))
+    }
+
+    /// Writes the angular velocities (rad/s) into the caller's (N, 3) array, in the user's
+    /// order (needs spin).
+    fn read_spin(&self, mut w: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
+        let p = self.inner.particles();
+        let n = p.len();
+        let mut w = w.as_array_mut();
+        if w.shape() != [n, 3] || p.omega.len() != 3 * n {
+            return Err(PyValueError::new_err(format!(
+                "angular velocities: a world with spin reads them into an ({n}, 3) array"
+            )));
+        }
+        let omega = self.inner.in_user_order(&p.omega, 3);
+        w.iter_mut().zip(omega.iter()).for_each(|(d, s)| *d = *s);
+        Ok(())
+    }
+
+    /// Copies the angular velocities (rad/s, (N, 3), the user's order) into the world when
+    /// they differ from its own; returns whether they did. Every value is checked first.
+    fn sync_spin(&mut self, w: PyReadonlyArray2<'_, f64>) -> PyResult<bool> {
+        let n = self.inner.particles().len();
+        let w = w.as_array();
+        if w.shape() != [n, 3] {
+            return Err(PyValueError::new_err(format!(
+                "angular_velocities must keep its shape ({n}, 3); assign new values into it instead of resizing"
+            )));
+        }
+        let given: Vec<f64> = w.iter().copied().collect();
+        if *self.inner.in_user_order(&self.inner.particles().omega, 3) == given[..] {
+            return Ok(false);
+        }
+        // (named as the user wrote them: into the view)
+        if let Some(k) = given.iter().position(|c| !c.is_finite()) {
+            return Err(PyValueError::new_err(format!(
+                "angular_velocities[{}][{}] = {} is invalid: it must be finite, rad/s",
+                k / 3,
+                k % 3,
+                given[k]
+            )));
+        }
+        self.inner.set_particle_spin(0..n, Some(&given), None).map_err(to_py)?;
+        Ok(true)
+    }
+
     /// Writes the positions and velocities into the caller's (N, 3) arrays.
     fn read_state(&self, mut x: PyReadwriteArray2<'_, f64>, mut v: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
         let n = self.inner.particles().len();
@@ -708,6 +796,10 @@ impl PyWorld {
         out.set_item("potential", pot)?;
         out.set_item("momentum", d.momentum.to_vec())?;
         out.set_item("angular_momentum", d.angular_momentum.to_vec())?;
+        if self.inner.has_spin() {
+            out.set_item("rotational", d.rotational)?;
+            out.set_item("spin_angular_momentum", d.spin.to_vec())?;
+        }
         Ok(out)
     }
 }

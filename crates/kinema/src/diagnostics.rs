@@ -13,8 +13,14 @@ pub struct Diagnostics {
     pub potential: Vec<(String, f64)>,
     /// Linear momentum Σ m v, kg·m/s.
     pub momentum: [f64; 3],
-    /// Angular momentum about the origin Σ m x × v, kg·m²/s.
+    /// Angular momentum about the origin, kg·m²/s: Σ m x × v, plus with spin each
+    /// particle's own, Σ I ω (the sum that impulses at contact points conserve).
     pub angular_momentum: [f64; 3],
+    /// With spin: the rotational kinetic energy Σ ½ I |ω|², J (0 without).
+    pub rotational: f64,
+    /// With spin: the particles' own angular momentum Σ I ω, kg·m²/s (0 without; part of
+    /// `angular_momentum`).
+    pub spin: [f64; 3],
 }
 
 impl Diagnostics {
@@ -46,7 +52,24 @@ impl Diagnostics {
             potential,
             momentum: p,
             angular_momentum: l,
+            rotational: 0.0,
+            spin: [0.0; 3],
         }
+    }
+
+    /// Adds the particles' spin: angular velocities `omega` (rad/s, 3 per particle) and
+    /// moments of inertia `inertia` (kg·m², one per particle).
+    pub fn with_spin(mut self, omega: &[f64], inertia: &[f64]) -> Self {
+        for (w, &i) in omega.chunks_exact(3).zip(inertia) {
+            self.rotational += 0.5 * i * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+            for k in 0..3 {
+                self.spin[k] += i * w[k];
+            }
+        }
+        for k in 0..3 {
+            self.angular_momentum[k] += self.spin[k];
+        }
+        self
     }
 
     /// Total potential energy, J.
@@ -54,8 +77,9 @@ impl Diagnostics {
         self.potential.iter().map(|(_, u)| u).sum()
     }
 
-    /// Kinetic plus potential energy, J (the energy conserved by conservative forces).
+    /// Kinetic (translational and rotational) plus potential energy, J (the energy conserved
+    /// by conservative forces).
     pub fn total_energy(&self) -> f64 {
-        self.kinetic + self.potential_total()
+        self.kinetic + self.rotational + self.potential_total()
     }
 }

@@ -1,4 +1,5 @@
-//! Particles: struct of arrays — positions, velocities, masses, radii, ids.
+//! Particles: struct of arrays — positions, velocities, masses, radii, ids, and with spin
+//! their angular velocities and moments of inertia.
 
 use crate::collide::GEOMETRY_LIMIT;
 use crate::error::Error;
@@ -26,6 +27,18 @@ pub struct Particles {
     pub id: Vec<u64>,
     /// The id the next particle added gets.
     pub next_id: u64,
+    /// With spin ([`Particles::enable_spin`]): angular velocities, rad/s (3 per particle; a
+    /// 2D world turns about z only); empty without.
+    pub omega: Vec<f64>,
+    /// With spin: moments of inertia about the centre, kg·m² (≥ 0, one per particle); empty
+    /// without.
+    pub inertia: Vec<f64>,
+    /// With spin: inverse moments of inertia, 1/(kg·m²): 1/I, or 0 for a pinned particle and
+    /// for a particle without inertia (a point: no contact can turn it); empty without.
+    pub inv_inertia: Vec<f64>,
+    /// With spin: I / (m r²) of a particle added without its own inertia: 2/5 for a solid
+    /// sphere (3D), 1/2 for a disc (2D); 0 without spin.
+    pub inertia_factor: f64,
 }
 
 /// In a `new_of_old` map of [`Particles::retain`]: the particle was removed.
@@ -128,7 +141,120 @@ impl Particles {
             .extend(mass.iter().zip(pinned).map(|(m, p)| if *p { 0.0 } else { 1.0 / m }));
         self.radius.extend_from_slice(radius);
         self.id.extend((0..n as u64).map(|k| first_id + k));
+        if self.has_spin() {
+            // at rest, with the inertia of a solid sphere (a disc in 2D)
+            self.omega.resize(3 * self.len(), 0.0);
+            let f = self.inertia_factor;
+            self.inertia.extend(mass.iter().zip(radius).map(|(m, r)| f * m * r * r));
+            for q in start..start + n {
+                self.inv_inertia
+                    .push(Self::inverse_inertia(self.inertia[q], self.inv_mass[q]));
+            }
+        }
         Ok(start..start + n)
+    }
+
+    /// Whether the particles carry spin (angular velocities and moments of inertia).
+    pub fn has_spin(&self) -> bool {
+        self.inertia_factor > 0.0
+    }
+
+    /// Gives every particle, now and later, an angular velocity (0 to start) and a moment of
+    /// inertia `factor` m r² (2/5: solid spheres in 3D; 1/2: discs in 2D), or takes them away
+    /// (`factor` 0). A no-op if spin is already on with this factor.
+    pub fn enable_spin(&mut self, factor: f64) {
+        if factor == self.inertia_factor {
+            return;
+        }
+        self.inertia_factor = factor;
+        self.omega.clear();
+        self.inertia.clear();
+        self.inv_inertia.clear();
+        if factor > 0.0 {
+            self.omega.resize(3 * self.len(), 0.0);
+            self.inertia
+                .extend(self.mass.iter().zip(&self.radius).map(|(m, r)| factor * m * r * r));
+            self.inv_inertia.extend(
+                self.inertia
+                    .iter()
+                    .zip(&self.inv_mass)
+                    .map(|(&i, &w)| Self::inverse_inertia(i, w)),
+            );
+        }
+    }
+
+    /// 1/I, or 0 for a pinned particle (`inv_mass` 0) or one without inertia.
+    fn inverse_inertia(inertia: f64, inv_mass: f64) -> f64 {
+        if inv_mass == 0.0 || inertia == 0.0 {
+            0.0
+        } else {
+            1.0 / inertia
+        }
+    }
+
+    /// Sets the angular velocities (rad/s, 3 per particle) and moments of inertia (kg·m², one
+    /// per particle) of the particles `range`, where given; needs spin. A pinned particle
+    /// keeps ω = 0. In 2D (`dim` 2) ω turns about z only. Errors name the first bad value.
+    pub fn set_spin(
+        &mut self,
+        range: std::ops::Range<usize>,
+        omega: Option<&[f64]>,
+        inertia: Option<&[f64]>,
+        dim: usize,
+    ) -> Result<(), Error> {
+        if !self.has_spin() {
+            return Err(Error::invalid(
+                "angular_velocity",
+                "given",
+                "a world without spin has none: turn spin on first (World(spin=True), [world] spin = true)",
+            ));
+        }
+        Self::check_spin(range.len(), omega, inertia, dim)?;
+        for (k, q) in range.enumerate() {
+            if let Some(i) = inertia {
+                self.inertia[q] = i[k];
+                self.inv_inertia[q] = Self::inverse_inertia(i[k], self.inv_mass[q]);
+            }
+            if let Some(w) = omega.filter(|_| self.inv_mass[q] > 0.0) {
+                self.omega[3 * q..3 * q + 3].copy_from_slice(&w[3 * k..3 * k + 3]);
+            }
+        }
+        Ok(())
+    }
+
+    /// The checks of [`Particles::set_spin`] on the values for `n` particles: 3 finite
+    /// components each (x, y zero in 2D), inertias finite and ≥ 0.
+    pub fn check_spin(n: usize, omega: Option<&[f64]>, inertia: Option<&[f64]>, dim: usize) -> Result<(), Error> {
+        if let Some(w) = omega {
+            check_per_particle("angular_velocity", w.len(), 3, n, "particles")?;
+            if let Some(k) = w.iter().position(|c| !c.is_finite()) {
+                return Err(Error::invalid(
+                    format!("angular_velocity[{}][{}]", k / 3, k % 3),
+                    w[k],
+                    "angular velocities must be finite, rad/s",
+                ));
+            }
+            if dim == 2 {
+                if let Some(k) = w.chunks(3).position(|c| c[0] != 0.0 || c[1] != 0.0) {
+                    return Err(Error::invalid(
+                        format!("angular_velocity[{k}]"),
+                        format!("{:?}", &w[3 * k..3 * k + 3]),
+                        "a 2D world turns about z only: the x and y components must be 0",
+                    ));
+                }
+            }
+        }
+        if let Some(i) = inertia {
+            check_per_particle("inertia", i.len(), 1, n, "particles")?;
+            if let Some(k) = i.iter().position(|c| !(c.is_finite() && *c >= 0.0)) {
+                return Err(Error::invalid(
+                    format!("inertia[{k}]"),
+                    i[k],
+                    "moments of inertia must be finite and >= 0 kg m^2",
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Keeps the particles where `keep[i]` holds, in their order, and removes the others;
@@ -151,7 +277,14 @@ impl Particles {
         for v in [&mut self.x, &mut self.v] {
             retain_rows(v, 3, keep);
         }
-        for v in [&mut self.mass, &mut self.inv_mass, &mut self.radius] {
+        retain_rows(&mut self.omega, 3, keep);
+        for v in [
+            &mut self.mass,
+            &mut self.inv_mass,
+            &mut self.radius,
+            &mut self.inertia,
+            &mut self.inv_inertia,
+        ] {
             retain_rows(v, 1, keep);
         }
         retain_rows(&mut self.id, 1, keep);

@@ -39,13 +39,14 @@ from .tables import (
 def build(scene: Scene, source: str = "<scene>") -> World:
     """The body of ``Scene.build`` (see its docstring): the World ``scene`` describes."""
     dim = scene.world.dim
-    w = World(dim=dim, dt=scene.world.dt, method=scene.world.method)
+    w = World(dim=dim, dt=scene.world.dt, method=scene.world.method, spin=scene.world.spin)
     starts: list[tuple[int, int]] = []
     for b, block in enumerate(scene.particles):
         where = f"{source}: particles[{b}]"
         try:
             x, v, m, r, p, e, mu = _particles(block, dim)
-            idx = w.add_particles(x, v, m, r, p, e, mu, species=_species(block))
+            spin = _spin(block, len(m))
+            idx = w.add_particles(x, v, m, r, p, e, mu, species=_species(block), **spin)
         except ValueError as err:
             raise SceneError(f"{where}: {err}") from None
         starts.append((int(idx[0]), int(idx[-1]) + 1))
@@ -224,6 +225,28 @@ def _particles(block: Any, dim: int) -> tuple:
     e = None if block.restitution is None else _per_particle("restitution", block.restitution, n, _rng(block.seed, 4))
     mu = None if block.friction is None else _per_particle("friction", block.friction, n, _rng(block.seed, 5))
     return x, v, m, r, np.broadcast_to(pinned, (n,)), e, mu
+
+
+def _spin(block: Any, n: int) -> dict[str, Any]:
+    """A block's ``angular_velocity`` (one vector [wx, wy, wz], or one per particle, rad/s; a 2D
+    world turns about z: [0, 0, wz]) and ``inertia`` (kg m², per particle), where given, as
+    ``add_particles`` takes them (which refuses them in a world without spin)."""
+    out: dict[str, Any] = {}
+    w = block.angular_velocity
+    if w is not None:
+        if w and isinstance(w[0], list):
+            if len(w) != n:
+                raise ValueError(f"angular_velocity has {len(w)} vectors for {n} particles")
+            if any(len(u) != 3 for u in w):
+                raise ValueError("angular_velocity: each vector must have 3 values [wx, wy, wz], rad/s")
+            out["angular_velocity"] = np.array(w, dtype=float)
+        else:
+            if len(w) != 3:
+                raise ValueError(f"angular_velocity = {w} is invalid: it must be a vector of 3 values, rad/s")
+            out["angular_velocity"] = np.broadcast_to(np.array(w, dtype=float), (n, 3)).copy()
+    if block.inertia is not None:
+        out["inertia"] = _per_particle("inertia", block.inertia, n, _rng(block.seed, 6))
+    return out
 
 
 def _motion(m: Any) -> Motion | Keyframes | None:

@@ -105,6 +105,9 @@ def to_scene(world: World) -> Scene:
         }
         if world.species is not None:
             block["species"] = world.species.tolist()
+        if world.spin:
+            block["angular_velocity"] = world.angular_velocities.tolist()
+            block["inertia"] = world.inertia.tolist()
         own = world._core.particle_materials()  # each particle's own values, as the engine holds them
         if len(own) == n:
             for k, name in enumerate(("restitution", "friction")):
@@ -186,7 +189,7 @@ def to_scene(world: World) -> Scene:
         else:
             kills.append({"type": "plane", "point": _v3(list(np.ravel(k.point))), "normal": _v3(list(np.ravel(k.normal)))})
     data: dict[str, Any] = {
-        "world": {"dim": world.dim, "dt": world.dt, "method": world.method},
+        "world": {"dim": world.dim, "dt": world.dt, "method": world.method, **({"spin": True} if world.spin else {})},
         "particles": blocks,
         "forces": forces,
         "colliders": colliders,

@@ -166,6 +166,7 @@ class WorldTable(_Model):
     method: str = "verlet"
     duration: float = 1.0
     fps: float = 60.0
+    spin: bool = False
 
     _dim = field_validator("dim", mode="before")(_exact(2, 3))
 
@@ -212,6 +213,8 @@ class _Block(_Model):
     friction: Material | None = None
     species: SpeciesName | list[SpeciesName] | None = None
     seed: Seed = 0
+    angular_velocity: list[float] | list[list[float]] | None = None
+    inertia: PerParticle | None = None
 
     @field_validator("velocity")
     @classmethod
@@ -598,7 +601,7 @@ _COLLISION_DEFAULTS = _core.collision_defaults()
 
 
 class CollisionsTable(_Model):
-    model: Literal["impulse", "spring_dashpot"] = _COLLISION_DEFAULTS["model"]
+    model: Literal["impulse", "spring_dashpot", "hertz"] = _COLLISION_DEFAULTS["model"]
     restitution: Unit = _COLLISION_DEFAULTS["restitution"]
     friction: NonNeg = _COLLISION_DEFAULTS["friction"]
     ccd: bool = _COLLISION_DEFAULTS["ccd"]
@@ -607,13 +610,15 @@ class CollisionsTable(_Model):
     sleep_speed: Positive | None = _COLLISION_DEFAULTS["sleep_speed"]
     stiffness: Positive | None = _COLLISION_DEFAULTS["stiffness"]
     damping: NonNeg | None = _COLLISION_DEFAULTS["damping"]
+    youngs_modulus: Positive | None = _COLLISION_DEFAULTS["youngs_modulus"]
+    poisson_ratio: NonNeg | None = _COLLISION_DEFAULTS["poisson_ratio"]
     event_driven: bool = _COLLISION_DEFAULTS["event_driven"]
     periodic: Annotated[list[bool], Field(min_length=2, max_length=3)] | None = None
 
     @model_validator(mode="after")
     def _model_takes_its_parameters(self) -> CollisionsTable:
         # "spring_dashpot needs stiffness", "only spring_dashpot takes damping": the engine's rule.
-        _core.check_contact_model(self.model, self.stiffness, self.damping)
+        _core.check_contact_model(self.model, self.stiffness, self.damping, self.youngs_modulus, self.poisson_ratio)
         return self
 
 

@@ -26,6 +26,7 @@ use rayon::prelude::*;
 use super::contact::{Contact, Partner};
 use super::response::{Material, MaterialTable};
 use super::soft_step::{soft_step, SoftContacts, SoftParams, SoftStats, Target};
+use super::spin::Rotation;
 use super::sweeps::SweepGroup;
 use crate::error::Error;
 use crate::vec3;
@@ -128,12 +129,14 @@ impl Islands {
 }
 
 /// The end-of-step problem the islands split: the contacts, each one's targets
-/// (`collide/soft_step.rs`), the particles' inverse masses (1/kg) and the materials.
+/// (`collide/soft_step.rs`), the particles' inverse masses (1/kg), the materials and, with
+/// spin, the particles' rotation and angular velocities (rad/s, 3 per particle).
 pub(crate) struct EndProblem<'a> {
     pub contacts: &'a [Contact],
     pub targets: &'a [Target],
     pub inv_mass: &'a [f64],
     pub materials: MaterialTable<'a>,
+    pub spin: Option<(Rotation<'a>, &'a [f64])>,
     pub params: SoftParams,
 }
 
@@ -231,6 +234,9 @@ struct Local {
     inv_mass: Vec<f64>,
     materials: Vec<Material>,
     groups: Vec<SweepGroup>,
+    /// With spin: the particles' inverse inertias and radii.
+    inv_inertia: Vec<f64>,
+    radius: Vec<f64>,
 }
 
 impl Local {
@@ -258,7 +264,18 @@ impl Local {
             out.clear();
             out.extend(parts.iter().flat_map(|&q| vec3::get(from, q)));
         };
-        gather(&mut self.v, v);
+        match problem.spin {
+            // with spin, each particle's velocity and angular velocity, 6 values
+            Some((_, omega)) => {
+                self.v.clear();
+                self.v.extend(
+                    parts
+                        .iter()
+                        .flat_map(|&q| vec3::get(v, q).into_iter().chain(vec3::get(omega, q))),
+                );
+            }
+            None => gather(&mut self.v, v),
+        }
         gather(&mut self.x, x);
         self.inv_mass.clear();
         self.inv_mass.extend(parts.iter().map(|&q| problem.inv_mass[q]));
@@ -296,21 +313,27 @@ impl Local {
             params.solve_sweeps *= COLD_SWEEPS;
             params.relax_sweeps *= COLD_SWEEPS;
         }
+        let rotation = problem.spin.map(|(r, _)| {
+            self.inv_inertia.clear();
+            self.inv_inertia.extend(parts.iter().map(|&q| r.inv_inertia[q]));
+            self.radius.clear();
+            self.radius.extend(parts.iter().map(|&q| r.radius[q]));
+        });
         let held = SoftContacts {
             contacts: &self.contacts,
             targets: &self.targets,
             inv_mass: &self.inv_mass,
             materials: &materials,
+            rotation: rotation.map(|()| Rotation {
+                inv_inertia: &self.inv_inertia,
+                radius: &self.radius,
+            }),
         };
-        let soft = soft_step(
-            held,
-            &params,
-            &mut self.v,
-            &mut self.x,
-            &mut solved,
-            &mut totals,
-            &self.groups,
-        )?;
+        let (v, x, groups) = (&mut self.v, &mut self.x, &self.groups);
+        let soft = match held.rotation {
+            Some(_) => soft_step::<6>(held, &params, v, x, &mut solved, &mut totals, groups)?,
+            None => soft_step::<3>(held, &params, v, x, &mut solved, &mut totals, groups)?,
+        };
         let moved: Vec<usize> = (0..parts.len()).filter(|&l| self.inv_mass[l] > 0.0).collect();
         Ok(Solved {
             order,
@@ -468,6 +491,7 @@ mod tests {
             targets,
             inv_mass,
             materials: MaterialTable::uniform(Material::new(0.0, 0.3).unwrap()).with_colliders(floor),
+            spin: None,
             params: SoftParams {
                 h: H,
                 tolerance: 0.0,
@@ -551,6 +575,7 @@ mod tests {
             targets: &targets,
             inv_mass: &inv_mass,
             materials: &p.materials,
+            rotation: None,
         };
         let in_order = [SweepGroup::in_order(0..contacts.len())];
         let cold = SoftParams {
@@ -558,7 +583,7 @@ mod tests {
             relax_sweeps: 7 * COLD_SWEEPS,
             ..p.params
         };
-        soft_step(
+        soft_step::<3>(
             held,
             &cold,
             &mut v_all,

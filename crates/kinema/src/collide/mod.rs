@@ -62,6 +62,7 @@ pub mod response;
 mod roots;
 pub(crate) mod sleep;
 pub(crate) mod soft_step;
+pub mod spin;
 pub(crate) mod stage;
 pub mod surface;
 pub(crate) mod sweeps;

@@ -20,14 +20,19 @@
 //! (`Contact::wall_velocity`): the law acts on the relative velocity, and the surface does
 //! work on the particle, which the energy books (the particles' kinetic energy lost) count.
 //!
-//! Particles have no rotational inertia, so a tangential impulse j_t changes the tangential
-//! relative velocity u_t by (w_i + w_j) j_t, the same effective mass as along the normal.
-//! Coulomb friction gives the impulse that stops the sliding, |u_t| / (w_i + w_j), unless it
-//! exceeds the cone μ j; then it slides with j_t = μ j. Either way it opposes u_t and changes
-//! the kinetic energy by −j_t |u_t| + ½ (w_i + w_j) j_t² ≤ −½ j_t |u_t| ≤ 0.
+//! Without spin, particles have no rotational inertia, so a tangential impulse j_t changes the
+//! tangential relative velocity u_t by (w_i + w_j) j_t, the same effective mass as along the
+//! normal. With spin (`collide/spin.rs`) u_t is the contact point's sliding velocity
+//! u_t − (ρ_i ω_i + ρ_j ω_j) × n and the tangential inverse mass is w_t = w_i + w_j + k_i ρ_i² +
+//! k_j ρ_j² (k = 1/I); without, w_t = w_i + w_j. Coulomb friction gives the impulse that stops
+//! the sliding, |u_t| / w_t (a tangential restitution of 0: the contact point leaves with the
+//! partner's velocity), unless it exceeds the cone μ j; then it slides with j_t = μ j. Either
+//! way it opposes u_t and changes the kinetic energy (with spin: translational and
+//! rotational) by −j_t |u_t| + ½ w_t j_t² ≤ −½ j_t |u_t| ≤ 0.
 
 use super::colliders::Collider;
 use super::contact::{Contact, Partner};
+use super::spin::ContactSpin;
 use crate::error::Error;
 use crate::vec3;
 
@@ -163,13 +168,15 @@ pub struct Impulse {
 /// particle) if the pair approaches (current u_n < 0), without applying it; `None` otherwise,
 /// and when neither side can move. `inv_mass`: 1/kg, 0 for pinned. Approach speeds |u_n|
 /// below `restitution_threshold` (m/s) use e = 0. The contact's own `u_n` is not read: the
-/// current one is computed from `v`. Indices must be in range.
+/// current one is computed from `v`. `spin`: what the bodies' turning adds to the contact
+/// (`collide/spin.rs`), `None` without spin. Indices must be in range.
 pub fn restitution_impulse(
     c: &Contact,
     v: &[f64],
     inv_mass: &[f64],
     material: Material,
     restitution_threshold: f64,
+    spin: Option<ContactSpin>,
 ) -> Option<Impulse> {
     let partner = c.partner_particle();
     let (wi, wj) = (inv_mass[c.i], partner.map_or(0.0, |j| inv_mass[j]));
@@ -194,9 +201,13 @@ pub fn restitution_impulse(
 
     // Friction: the impulse that stops the sliding, capped by the Coulomb cone μ j.
     let u_t = vec3::sub(u, vec3::scale(u_n, n));
+    let (u_t, w_t) = match spin {
+        Some(s) => (vec3::sub(u_t, s.turning), w + s.w_rot),
+        None => (u_t, w),
+    };
     let slide = vec3::norm(u_t);
     let (j_t, t) = if material.friction > 0.0 && slide > 0.0 {
-        ((slide / w).min(material.friction * j_n), vec3::scale(1.0 / slide, u_t))
+        ((slide / w_t).min(material.friction * j_n), vec3::scale(1.0 / slide, u_t))
     } else {
         (0.0, [0.0; 3])
     };
@@ -205,7 +216,7 @@ pub fn restitution_impulse(
     // Energy (module doc): ½ (1 − e²) μ u_n² along n, j_t (|u_t| − ½ w j_t) across. These
     // assume both bodies' kinetic energies change by v·J + ½ w J²; a pinned particle's does
     // not change, so if one moves (kinematically) the v·J it would have taken is put back.
-    let mut lost = 0.5 * (1.0 - e * e) * u_n * u_n / w + j_t * (slide - 0.5 * w * j_t);
+    let mut lost = 0.5 * (1.0 - e * e) * u_n * u_n / w + j_t * (slide - 0.5 * w_t * j_t);
     if wi == 0.0 {
         lost += vec3::dot(vi, impulse);
     }

@@ -31,9 +31,17 @@
 //! All stages work on the same accumulated totals (λ ≥ 0 along n, |t| ≤ μ λ), so an impulse
 //! that the relax finds too large shrinks again. A body resting under any method ends each
 //! step where it started, at rest: its gap is closed exactly and its velocity relaxed to 0.
+//!
+//! With spin (`collide/spin.rs`) the sweeps carry each particle's velocity and angular
+//! velocity (6 values), the tangential targets are the contact point's velocity, and the
+//! tangential effective mass is 1/w_t. The sticking target is the same: stage 1 does not
+//! turn a particle, so the contact point's slip over the step with the solve's impulse taken
+//! at its start is d_t + h (u_c − u₁t), zero for u_c = u₁t − d_t/h (a ball rolling on a floor
+//! has u₁t = d_t/h and keeps rolling; the relax then holds its contact point still).
 
 use super::contact::Contact;
 use super::response::MaterialTable;
+use super::spin::Rotation;
 use super::sweeps::{sweeps, Ends, SweepGroup};
 use crate::error::Error;
 use crate::vec3;
@@ -52,6 +60,9 @@ pub(crate) struct Target {
     /// Newton's target −e u⁻ > 0 when the contact approached faster than the threshold at
     /// the step's start (`None`: no bounce).
     pub bounce: Option<f64>,
+    /// The overlap the solve leaves, m (≥ 0; 0 for a contact that ends touching or apart):
+    /// where its impulse acts, for the lever arms of spin (`collide/spin.rs`).
+    pub rest: f64,
 }
 
 /// Overlap removed per step by the solve stage (Baumgarte's β: 0.2, as Box2D v2 and Chipmunk
@@ -90,6 +101,7 @@ impl Target {
             solve_n: u_n + (least - gap) / h,
             stick_t: vec3::sub(tangential(u1, u_n), vec3::scale(1.0 / h, tangential(d, d_n))),
             bounce,
+            rest: (-least).max(0.0),
         }
     }
 }
@@ -134,23 +146,26 @@ pub(crate) struct SoftStats {
 }
 
 /// What [`soft_step`] holds: the contacts (indices into the arrays it is given), their
-/// targets, the particles' inverse masses (1/kg, 0 for pinned) and the materials.
+/// targets, the particles' inverse masses (1/kg, 0 for pinned), the materials and, with
+/// spin, the particles' inverse inertias and radii.
 #[derive(Clone, Copy)]
 pub(crate) struct SoftContacts<'a> {
     pub contacts: &'a [Contact],
     pub targets: &'a [Target],
     pub inv_mass: &'a [f64],
     pub materials: &'a MaterialTable<'a>,
+    pub rotation: Option<Rotation<'a>>,
 }
 
-/// The soft step's stages (see the module's doc) on velocities `v` and positions `x` (3 per
-/// particle, updated in place), with each sweep visiting the contacts group by group (as
+/// The soft step's stages (see the module's doc) on velocities `v` (N per particle: the
+/// velocity, then with spin, N = 6, the angular velocity) and positions `x` (3 per particle),
+/// updated in place, with each sweep visiting the contacts group by group (as
 /// `collide/sweeps.rs` describes: the same result on any number of threads).
 ///
 /// `solved`: each contact's starting total on entry (the last step's solve, for the warm
 /// start; zeros if none), its solve stage's total on return (the next step's warm start).
 /// `totals`: each contact's final total impulse on i, N·s (−total on a partner particle).
-pub(crate) fn soft_step(
+pub(crate) fn soft_step<const N: usize>(
     held: SoftContacts<'_>,
     params: &SoftParams,
     v: &mut [f64],
@@ -164,18 +179,36 @@ pub(crate) fn soft_step(
         targets,
         inv_mass,
         materials,
+        rotation,
     } = held;
+    debug_assert!(N == 3 || (N == 6 && rotation.is_some()));
     let h = params.h;
     let ends: Vec<Option<Ends>> = contacts.iter().map(|c| Ends::of(c, inv_mass)).collect();
     let rows: Vec<Row> = contacts
         .iter()
-        .map(|c| {
+        .zip(targets)
+        .map(|(c, target)| {
             let (wi, wj) = (inv_mass[c.i], c.partner_particle().map_or(0.0, |j| inv_mass[j]));
             let w = wi + wj;
+            let mass = if w > 0.0 { 1.0 / w } else { 0.0 };
+            // with spin: the arms, the turn per unit of n × p, and the tangential mass
+            let (turn, mass_t) = match rotation {
+                Some(r) => {
+                    let ((rho_i, rho_j), (ki, kj)) = (r.arms(c, target.rest), r.inverse_inertias(c));
+                    let w_t = w + ki * rho_i * rho_i + kj * rho_j * rho_j;
+                    (
+                        [rho_i, rho_j, ki * rho_i, kj * rho_j],
+                        if w_t > 0.0 { 1.0 / w_t } else { 0.0 },
+                    )
+                }
+                None => ([0.0; 4], mass),
+            };
             Row {
                 wi,
                 wj,
-                mass: if w > 0.0 { 1.0 / w } else { 0.0 },
+                mass,
+                mass_t,
+                turn,
                 mu: materials.pair(c).friction(),
                 n: c.normal,
                 has_j: c.partner_particle().is_some(),
@@ -195,14 +228,14 @@ pub(crate) fn soft_step(
         let lambda = vec3::dot(start, r.n).max(0.0);
         let t = r.clamp(vec3::sub(start, vec3::scale(vec3::dot(start, r.n), r.n)), lambda);
         acc[k] = (lambda, t);
-        let (mut vi, mut vj) = e.load(v);
+        let (mut vi, mut vj) = e.load::<N>(v);
         r.apply(&mut vi, &mut vj, vec3::add(vec3::scale(lambda, r.n), t));
         e.store(v, vi, vj);
     }
     let mut stats = SoftStats::default();
 
     // Solve: the position targets, as velocities.
-    let done = sweeps(
+    let done = sweeps::<N, _>(
         groups,
         &ends,
         v,
@@ -218,9 +251,10 @@ pub(crate) fn soft_step(
     }
 
     // Integrate: the positions follow the solve's velocity change over the whole step.
-    for (q, (xq, (vq, bq))) in x.iter_mut().zip(v.iter().zip(&before)).enumerate() {
-        if inv_mass[q / 3] > 0.0 {
-            *xq += h * (vq - bq);
+    for (q, xq) in x.iter_mut().enumerate() {
+        let (p, d) = (q / 3, q % 3);
+        if inv_mass[p] > 0.0 {
+            *xq += h * (v[N * p + d] - before[N * p + d]);
         }
     }
 
@@ -231,8 +265,8 @@ pub(crate) fn soft_step(
         .zip(targets)
         .map(|((r, e), t)| {
             let Some(e) = e else { return 0.0 };
-            let (vi, vj) = e.load(v);
-            let gap = t.gap + h * (vec3::dot(vec3::sub(vi, vj), r.n) - t.u_n);
+            let (vi, vj) = e.load::<N>(v);
+            let gap = t.gap + h * (vec3::dot(r.relative(&vi, &vj), r.n) - t.u_n);
             if gap > 0.0 {
                 -gap / h
             } else {
@@ -240,7 +274,7 @@ pub(crate) fn soft_step(
             }
         })
         .collect();
-    let relaxed = sweeps(
+    let relaxed = sweeps::<N, _>(
         groups,
         &ends,
         v,
@@ -259,7 +293,7 @@ pub(crate) fn soft_step(
         .collect();
     stats.bounced = bouncing.iter().flatten().count();
     if stats.bounced > 0 {
-        let bounced = sweeps(
+        let bounced = sweeps::<N, _>(
             groups,
             &ends,
             v,
@@ -284,25 +318,53 @@ pub(crate) fn soft_step(
 }
 
 /// A contact of [`soft_step`]: its inverse masses w (1/kg), effective mass 1/(w_i + w_j)
-/// (kg), friction μ, normal n, and whether its partner is a particle.
+/// (kg) along n and 1/w_t across (the same without spin), friction μ, normal n, whether its
+/// partner is a particle, and with spin `turn` = [ρ_i, ρ_j, k_i ρ_i, k_j ρ_j] (m, m and
+/// 1/(kg·m); `collide/spin.rs`).
 struct Row {
     wi: f64,
     wj: f64,
     mass: f64,
+    mass_t: f64,
+    turn: [f64; 4],
     mu: f64,
     n: [f64; 3],
     has_j: bool,
 }
 
 impl Row {
-    /// The impulse p on i and −p on j: v_i += w_i p, v_j −= w_j p.
-    fn apply(&self, vi: &mut [f64; 3], vj: &mut [f64; 3], p: [f64; 3]) {
+    /// The velocity of i's contact point relative to j's: v_i − v_j, less
+    /// (ρ_i ω_i + ρ_j ω_j) × n with spin (N = 6).
+    fn relative<const N: usize>(&self, vi: &[f64; N], vj: &[f64; N]) -> [f64; 3] {
+        let u = [vi[0] - vj[0], vi[1] - vj[1], vi[2] - vj[2]];
+        if N == 6 {
+            let w = std::array::from_fn(|k| self.turn[0] * vi[3 + k] + self.turn[1] * vj[3 + k]);
+            vec3::sub(u, vec3::cross(w, self.n))
+        } else {
+            u
+        }
+    }
+
+    /// The impulse p on i and −p on j, at their contact points: v_i += w_i p, v_j −= w_j p,
+    /// and with spin ω_i −= k_i ρ_i n × p, ω_j −= k_j ρ_j n × p.
+    fn apply<const N: usize>(&self, vi: &mut [f64; N], vj: &mut [f64; N], p: [f64; 3]) {
         for k in 0..3 {
             vi[k] += self.wi * p[k];
         }
         if self.has_j {
             for k in 0..3 {
                 vj[k] -= self.wj * p[k];
+            }
+        }
+        if N == 6 {
+            let np = vec3::cross(self.n, p);
+            for k in 0..3 {
+                vi[3 + k] -= self.turn[2] * np[k];
+            }
+            if self.has_j {
+                for k in 0..3 {
+                    vj[3 + k] -= self.turn[3] * np[k];
+                }
             }
         }
     }
@@ -320,16 +382,16 @@ impl Row {
     /// One visit with the totals (λ, t): the normal total that brings u_n to at least `b_n`
     /// (clamped at 0), then, with `b_t`, the tangential total that brings the tangential
     /// velocity to `b_t` within the cone. Returns the largest change, as a velocity (m/s).
-    fn visit(
+    fn visit<const N: usize>(
         &self,
-        vi: &mut [f64; 3],
-        vj: &mut [f64; 3],
+        vi: &mut [f64; N],
+        vj: &mut [f64; N],
         (normal, tangent): &mut (f64, [f64; 3]),
         b_n: f64,
         b_t: Option<[f64; 3]>,
     ) -> f64 {
         let mut change: f64 = 0.0;
-        let u_n = vec3::dot(vec3::sub(*vi, *vj), self.n);
+        let u_n = vec3::dot(self.relative(vi, vj), self.n);
         let total = (*normal - (u_n - b_n) * self.mass).max(0.0);
         let dn = total - *normal;
         *normal = total;
@@ -339,13 +401,13 @@ impl Row {
         }
         if let Some(b_t) = b_t {
             if self.mu > 0.0 {
-                let u = vec3::sub(*vi, *vj);
+                let u = self.relative(vi, vj);
                 let u_t = vec3::sub(u, vec3::scale(vec3::dot(u, self.n), self.n));
                 let old = *tangent;
-                let t = self.clamp(vec3::sub(old, vec3::scale(self.mass, vec3::sub(u_t, b_t))), total);
+                let t = self.clamp(vec3::sub(old, vec3::scale(self.mass_t, vec3::sub(u_t, b_t))), total);
                 let dt = vec3::sub(t, old);
                 if dt != [0.0; 3] {
-                    change = change.max(vec3::norm(dt) / self.mass);
+                    change = change.max(vec3::norm(dt) / self.mass_t);
                     *tangent = t;
                     self.apply(vi, vj, dt);
                 }

@@ -2,8 +2,9 @@
 //! over the contacts one after the other, or, where the contacts come in colours
 //! (`collide/islands.rs`), colour by colour on all threads.
 //!
-//! A sweep visits every contact once; a visit reads and writes the 3-vectors of its two
-//! particles (velocities or positions) and its own state (the totals of impulse). The
+//! A sweep visits every contact once; a visit reads and writes the N-vectors of its two
+//! particles (velocities, N = 3; velocities and angular velocities, N = 6, with spin) and its
+//! own state (the totals of impulse). The
 //! contacts of one colour share no movable particle, so their visits commute: done at once,
 //! they give what they give in order, and the result cannot depend on the thread count.
 //!
@@ -19,7 +20,6 @@
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use super::contact::Contact;
-use crate::vec3;
 
 /// Sweeps run on all threads when a colour has at least this many contacts (below, the
 /// waits cost more than the visits; the result is the same either way).
@@ -71,19 +71,27 @@ impl Ends {
         })
     }
 
-    /// The velocities of i and j (a collider's surface velocity) in the flat array `a` of
-    /// velocities.
-    pub fn load(&self, a: &[f64]) -> ([f64; 3], [f64; 3]) {
-        (vec3::get(a, self.i), self.j.map_or(self.wall, |j| vec3::get(a, j)))
+    /// A collider's side as an N-vector: its surface's velocity, and no turning.
+    fn wall<const N: usize>(&self) -> [f64; N] {
+        let mut w = [0.0; N];
+        w[..3].copy_from_slice(&self.wall);
+        w
     }
 
-    /// Writes back the 3-vectors of the movable sides.
-    pub fn store(&self, a: &mut [f64], ai: [f64; 3], aj: [f64; 3]) {
+    /// The N-vectors of i and j (a collider's surface velocity) in the flat array `a` of N
+    /// values per particle.
+    pub fn load<const N: usize>(&self, a: &[f64]) -> ([f64; N], [f64; N]) {
+        let get = |q: usize| -> [f64; N] { a[N * q..N * q + N].try_into().expect("N values") };
+        (get(self.i), self.j.map_or_else(|| self.wall(), get))
+    }
+
+    /// Writes back the N-vectors of the movable sides.
+    pub fn store<const N: usize>(&self, a: &mut [f64], ai: [f64; N], aj: [f64; N]) {
         if self.write_i {
-            a[3 * self.i..3 * self.i + 3].copy_from_slice(&ai);
+            a[N * self.i..N * self.i + N].copy_from_slice(&ai);
         }
         if let Some(j) = self.j.filter(|_| self.write_j) {
-            a[3 * j..3 * j + 3].copy_from_slice(&aj);
+            a[N * j..N * j + N].copy_from_slice(&aj);
         }
     }
 
@@ -91,9 +99,9 @@ impl Ends {
     ///
     /// # Safety
     /// `a` points to an array that holds both particles, which no thread writes meanwhile.
-    unsafe fn load_from(&self, a: *const f64) -> ([f64; 3], [f64; 3]) {
-        let get = |q: usize| [*a.add(3 * q), *a.add(3 * q + 1), *a.add(3 * q + 2)];
-        (get(self.i), self.j.map_or(self.wall, get))
+    unsafe fn load_from<const N: usize>(&self, a: *const f64) -> ([f64; N], [f64; N]) {
+        let get = |q: usize| -> [f64; N] { std::array::from_fn(|d| *a.add(N * q + d)) };
+        (get(self.i), self.j.map_or_else(|| self.wall(), get))
     }
 
     /// [`Ends::store`] through a pointer to the array.
@@ -101,8 +109,8 @@ impl Ends {
     /// # Safety
     /// `a` points to an array that holds both particles, whose movable sides no other thread
     /// reads or writes meanwhile.
-    unsafe fn store_to(&self, a: *mut f64, ai: [f64; 3], aj: [f64; 3]) {
-        let put = |q: usize, v: [f64; 3]| (0..3).for_each(|d| *a.add(3 * q + d) = v[d]);
+    unsafe fn store_to<const N: usize>(&self, a: *mut f64, ai: [f64; N], aj: [f64; N]) {
+        let put = |q: usize, v: [f64; N]| (0..N).for_each(|d| *a.add(N * q + d) = v[d]);
         if self.write_i {
             put(self.i, ai);
         }
@@ -123,16 +131,16 @@ pub(crate) struct Swept {
 
 /// Sweeps over the contacts, group after group (`groups` cover them in order), until a sweep
 /// changes nothing by more than `tolerance` or `most` sweeps are made: each contact k with
-/// ends is visited by `visit(k, state[k], a_i, a_j)` on the 3-vectors of its ends in `a`,
+/// ends is visited by `visit(k, state[k], a_i, a_j)` on the N-vectors of its ends in `a`,
 /// which returns the largest change it made (≥ 0).
-pub(crate) fn sweeps<T: Send>(
+pub(crate) fn sweeps<const N: usize, T: Send>(
     groups: &[SweepGroup],
     ends: &[Option<Ends>],
     a: &mut [f64],
     state: &mut [T],
     most: usize,
     tolerance: f64,
-    visit: impl Fn(usize, &mut T, &mut [f64; 3], &mut [f64; 3]) -> f64 + Sync,
+    visit: impl Fn(usize, &mut T, &mut [f64; N], &mut [f64; N]) -> f64 + Sync,
 ) -> Swept {
     let threads = rayon::current_num_threads();
     if most > 0 && threads > 1 && groups.iter().any(|g| g.together && g.range.len() >= PARALLEL_COLOUR) {
@@ -152,7 +160,7 @@ pub(crate) fn sweeps<T: Send>(
         let mut change: f64 = 0.0;
         for k in groups.iter().flat_map(|g| g.range.clone()) {
             let Some(e) = ends[k] else { continue };
-            let (mut ai, mut aj) = e.load(a);
+            let (mut ai, mut aj) = e.load::<N>(a);
             change = change.max(visit(k, &mut state[k], &mut ai, &mut aj));
             e.store(a, ai, aj);
         }
@@ -190,13 +198,13 @@ struct Run {
 }
 
 /// [`sweeps`] on all threads (see the module's doc).
-fn on_threads<T: Send>(
+fn on_threads<const N: usize, T: Send>(
     groups: &[SweepGroup],
     ends: &[Option<Ends>],
     a: &mut [f64],
     state: &mut [T],
     run: Run,
-    visit: impl Fn(usize, &mut T, &mut [f64; 3], &mut [f64; 3]) -> f64 + Sync,
+    visit: impl Fn(usize, &mut T, &mut [f64; N], &mut [f64; N]) -> f64 + Sync,
 ) -> Swept {
     let Run {
         most,
@@ -244,9 +252,9 @@ fn on_threads<T: Send>(
                         // group in order is one block): nothing this visit writes is read or
                         // written by another thread in this phase; the phases are ordered by
                         // the release of `finished` and the acquire of the wait below.
-                        debug_assert!(k < state_len && 3 * e.i.max(e.j.unwrap_or(0)) + 2 < a_len);
+                        debug_assert!(k < state_len && N * e.i.max(e.j.unwrap_or(0)) + N - 1 < a_len);
                         unsafe {
-                            let (mut ai, mut aj) = e.load_from(a_at.0);
+                            let (mut ai, mut aj) = e.load_from::<N>(a_at.0);
                             largest = largest.max(visit(k, &mut *state_at.0.add(k), &mut ai, &mut aj));
                             e.store_to(a_at.0, ai, aj);
                         }

@@ -34,6 +34,8 @@ impl World {
             }
             return Ok(());
         }
+        // (the angular velocities lent to the stage for the step, beside the particles it reads)
+        let mut omega = std::mem::take(&mut self.particles.omega);
         let p = &self.particles;
         let (x1, v1) = (&mut self.x_next[..], &mut self.v_next[..]);
         let accel = match &self.stepper {
@@ -62,7 +64,9 @@ impl World {
             wrapped: steady && accel.is_some(),
             may_sleep,
         };
-        let changed = match stage.run(&frame, p, x1, v1) {
+        let ran = stage.run(&frame, p, x1, v1, &mut omega);
+        self.particles.omega = omega;
+        let changed = match ran {
             Ok(changed) => changed,
             Err(Error::Diverged { reason, particle, .. }) => return Err(self.diverged(reason, particle)),
             Err(Error::InvalidParameter { .. }) if Self::beyond_geometry(&self.x_next, &self.v_next) => {

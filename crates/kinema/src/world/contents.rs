@@ -163,4 +163,45 @@ impl World {
             stage.forget_list();
         }
     }
+
+    /// Turns spin on or off. With spin every particle, those there now and those added later,
+    /// has an angular velocity (rad/s; 0 to start) and a moment of inertia, by default a
+    /// solid sphere's 2/5 m r² in 3D and a disc's 1/2 m r² in 2D (`set_particle_spin` sets
+    /// others); the impulse model's impulses act at the contact point and turn the particles
+    /// (`collide/spin.rs`), and the diagnostics count the rotation. Without spin (the
+    /// default) particles are points with mass: nothing of the above exists or is computed,
+    /// and every result is what it was before spin existed, bit for bit.
+    pub fn set_spin(&mut self, on: bool) {
+        let factor = match (on, self.params.dim) {
+            (false, _) => 0.0,
+            (true, 2) => 0.5,
+            (true, _) => 0.4,
+        };
+        self.particles.enable_spin(factor);
+    }
+
+    /// Whether the particles carry spin ([`World::set_spin`]).
+    pub fn has_spin(&self) -> bool {
+        self.particles.has_spin()
+    }
+
+    /// Sets the angular velocities (rad/s, 3 per particle) and moments of inertia (kg·m², one
+    /// per particle) of the particles `range` (the user's order), where given
+    /// ([`Particles::set_spin`]); needs spin.
+    pub fn set_particle_spin(
+        &mut self,
+        range: std::ops::Range<usize>,
+        omega: Option<&[f64]>,
+        inertia: Option<&[f64]>,
+    ) -> Result<(), Error> {
+        if range.end > self.particles.len() {
+            return Err(Error::invalid(
+                "range",
+                format!("{range:?}"),
+                format!("particles 0..{}", self.particles.len()),
+            ));
+        }
+        self.restore_user_order();
+        self.particles.set_spin(range, omega, inertia, self.params.dim)
+    }
 }

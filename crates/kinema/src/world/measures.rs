@@ -38,7 +38,7 @@ impl World {
     pub fn diagnostics(&self) -> Diagnostics {
         let p = &self.particles;
         let contact = contact_force(&self.collide_stage, p);
-        Diagnostics::measure(
+        let d = Diagnostics::measure(
             &State {
                 t: self.time,
                 x: &p.x,
@@ -46,7 +46,12 @@ impl World {
                 mass: &p.mass,
             },
             &every_force_ref(&self.forces, contact.as_ref()),
-        )
+        );
+        if p.has_spin() {
+            d.with_spin(&p.omega, &p.inertia)
+        } else {
+            d
+        }
     }
 
     /// The accelerations a = F/m now, m/s² (3 per particle).

@@ -31,7 +31,7 @@ mod integrate;
 mod measures;
 mod order;
 
-pub use crate::collide::stage::{ColliderBooks, CollisionParams, CollisionStats, ContactModel};
+pub use crate::collide::stage::{ColliderBooks, CollisionParams, CollisionStats, ContactModel, ModelArgs};
 pub use crate::interrupt::Interrupt;
 pub use advisor::Rates;
 pub use deaths::KillVolume;

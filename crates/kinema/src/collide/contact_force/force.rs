@@ -67,15 +67,18 @@ impl Force for ContactForce<'_> {
                 return;
             }
             let times = if c.partner_particle().is_some() { 2.0 } else { 1.0 };
-            let dashpot = self.dashpot(c, w);
+            let k = self.stiffness_of(c);
+            let dashpot = self.dashpot_at(c, w, k);
+            // dF/dδ: k_n (Hooke); 3/2 of the secant with Hertz's δ^(3/2)
+            let tangent = if self.hertz.is_some() { 1.5 * k } else { k };
             for p in std::iter::once(c.i).chain(c.partner_particle()) {
-                k_row[p] += times * self.stiffness;
+                k_row[p] += times * tangent;
                 c_row[p] += times * dashpot;
             }
         })
         .ok()?;
         let mut rates = Rates {
-            standby: self.standby(inv_mass),
+            standby: self.standby(inv_mass, s.v),
             ..Rates::default()
         };
         for (p, w) in inv_mass.iter().enumerate() {
@@ -90,7 +93,13 @@ impl ContactForce<'_> {
     /// A contact that is not touching yet counts as a spring: ω² = k_n (w_i + w_j) for the
     /// two lightest movable particles (or k_n w against a collider), with the ζ of the
     /// largest restitution's opposite, the least damped contact.
-    fn standby(&self, inv_mass: &[f64]) -> Option<Standby> {
+    ///
+    /// With Hertz's law the stiffness is the one the contact reaches: the tangent stiffness
+    /// 3/2 k_n at the deepest overlap of an elastic impact at the fastest approach the
+    /// velocities `v` allow (2 |v|max between particles), δ_max = (5 m_eff u² / (4 k_h))^(2/5)
+    /// with k_h = 4/3 E* √R* (energy: ½ m_eff u² = 2/5 k_h δ^(5/2)), R* the largest radius
+    /// (the stiffest); none while nothing moves.
+    fn standby(&self, inv_mass: &[f64], v: &[f64]) -> Option<Standby> {
         let mut lightest = [0.0_f64; 2];
         for w in inv_mass {
             if *w > lightest[0] {
@@ -103,7 +112,24 @@ impl ContactForce<'_> {
         if w == 0.0 || (inv_mass.len() < 2 && self.colliders.is_empty()) {
             return None;
         }
-        let omega_squared = self.stiffness * w;
+        let stiffness = match self.hertz {
+            None => self.stiffness,
+            Some(e_star) => {
+                let fastest = v
+                    .chunks_exact(3)
+                    .map(|c| c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
+                    .fold(0.0, f64::max)
+                    .sqrt();
+                let (u, r) = (2.0 * fastest, self.radius.iter().copied().fold(0.0, f64::max));
+                let k_h = super::law::HERTZ * e_star * r.sqrt();
+                if !(u > 0.0 && k_h > 0.0) {
+                    return None;
+                }
+                let deepest = (5.0 * u * u / (4.0 * k_h * w)).powf(0.4);
+                1.5 * k_h * deepest.sqrt()
+            }
+        };
+        let omega_squared = stiffness * w;
         let zeta = match self.damping {
             Some(gamma) => gamma / (2.0 * omega_squared.sqrt()),
             None => {

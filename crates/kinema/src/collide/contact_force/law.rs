@@ -10,6 +10,12 @@ use crate::collide::{damping_ratio, dashpot_coefficient, spring_dashpot_force, C
 use crate::error::Error;
 use crate::forces::State;
 
+/// The 4/3 of Hertz's law F = 4/3 E* √R* δ^(3/2).
+pub(super) const HERTZ: f64 = 4.0 / 3.0;
+
+/// √5 / 2: Hertz's dashpot against the linear one of the same e ([`ContactForce::dashpot_at`]).
+const HERTZ_DAMPING: f64 = 1.118_033_988_749_895;
+
 impl ContactForce<'_> {
     /// The pair forces at `s` added to `f` (N, 3 per particle), with the colliders' when
     /// `walls`, and the pairs' energy Σ ½ k_n δ² (J), each pair counted once and the chunks'
@@ -45,14 +51,40 @@ impl ContactForce<'_> {
         if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
             return None;
         }
-        Some(spring_dashpot_force(self.stiffness, self.dashpot(c, w), c.overlap, c.u_n))
+        let k = self.stiffness_of(c);
+        Some(spring_dashpot_force(k, self.dashpot_at(c, w, k), c.overlap, c.u_n))
     }
 
-    /// ½ k_n δ² of contact `c` if it counts in the potential energy (overlapping, with a
-    /// movable particle), J.
+    /// The secant stiffness F_el/δ of contact `c` at its overlap δ > 0, N/m: k_n with Hooke's
+    /// law; with Hertz's, 4/3 E* a, a = √(R* δ) the contact radius (Johnson, Contact
+    /// Mechanics, §4.2: F = 4/3 E* √R* δ^(3/2)).
+    #[inline(always)]
+    pub(super) fn stiffness_of(&self, c: &Contact) -> f64 {
+        match self.hertz {
+            None => self.stiffness,
+            Some(e_star) => HERTZ * e_star * (self.reduced_radius(c) * c.overlap).sqrt(),
+        }
+    }
+
+    /// R* = r_i r_j / (r_i + r_j) of a pair (r_i against a collider), m.
+    #[inline]
+    pub(super) fn reduced_radius(&self, c: &Contact) -> f64 {
+        let ri = self.radius[c.i];
+        match c.partner_particle() {
+            Some(j) => ri * self.radius[j] / (ri + self.radius[j]),
+            None => ri,
+        }
+    }
+
+    /// The elastic energy of contact `c` if it counts in the potential energy (overlapping,
+    /// with a movable particle), J: ½ k_n δ² (Hooke), ∫ 4/3 E* √R* δ^(3/2) dδ = 2/5 k_n δ²
+    /// (Hertz, k_n the secant stiffness at δ).
     #[inline]
     pub(super) fn spring_energy(&self, c: &Contact) -> Option<f64> {
-        (c.overlap > 0.0 && self.inverse_mass_sum(c) > 0.0).then_some(0.5 * self.stiffness * c.overlap * c.overlap)
+        (c.overlap > 0.0 && self.inverse_mass_sum(c) > 0.0).then(|| match self.hertz {
+            None => 0.5 * self.stiffness * c.overlap * c.overlap,
+            Some(_) => 0.4 * self.stiffness_of(c) * c.overlap * c.overlap,
+        })
     }
 
     /// U = Σ ½ k_n δ² at the positions of `s` (J), summed as the force evaluation sums it.
@@ -79,11 +111,18 @@ impl ContactForce<'_> {
         self.inv_mass[c.i] + c.partner_particle().map_or(0.0, |j| self.inv_mass[j])
     }
 
-    /// c_n (kg/s) of a contact with w = w_i + w_j > 0.
-    pub(super) fn dashpot(&self, c: &Contact, w: f64) -> f64 {
-        match self.damping {
-            Some(gamma) => gamma / w,
-            None => dashpot_coefficient(self.stiffness, self.ratios.of(c), w),
+    /// c_n (kg/s) of a contact with w = w_i + w_j > 0 and secant stiffness `k` (N/m):
+    /// m_eff γ_n with a given rate, else 2 ζ √(k m_eff) with ζ = −ln e / √(π² + ln² e), the
+    /// damped linear oscillator's exact rule; with Hertz's law √5/2 of that at the current k,
+    /// −√5 ln e / √(π² + ln² e) √(k m_eff) = −2 √(5/6) ln e / √(π² + ln² e) √(S m_eff) with
+    /// S = 3/2 k the tangent stiffness (Tsuji et al. 1992's form, LAMMPS's `damping
+    /// coeff_restitution` for Hertzian contacts): an approximation of the set e, which comes
+    /// out the same at every impact speed (the table in docs/collisions.md).
+    pub(super) fn dashpot_at(&self, c: &Contact, w: f64, k: f64) -> f64 {
+        match (self.damping, self.hertz) {
+            (Some(gamma), _) => gamma / w,
+            (None, None) => dashpot_coefficient(k, self.ratios.of(c), w),
+            (None, Some(_)) => HERTZ_DAMPING * dashpot_coefficient(k, self.ratios.of(c), w),
         }
     }
 }

@@ -48,8 +48,11 @@ mod verlet;
 /// The spring–dashpot model between calls: the law's constants and the buffers one
 /// evaluation leaves the next (the neighbour list, the grid, the exchange between chunks).
 pub(crate) struct SpringDashpot {
-    /// k_n, N/m.
+    /// k_n, N/m (Hooke's law; unused with Hertz's).
     pub stiffness: f64,
+    /// Hertz's law instead of Hooke's: the effective Young's modulus E* = E / (2 (1 − ν²)),
+    /// Pa (`law.rs`).
+    pub hertz: Option<f64>,
     /// γ_n, 1/s (`None`: the damping follows from each pair's restitution e).
     pub damping: Option<f64>,
     /// A fixed skin, m (tests); `None`: [`SKIN_PER_RADIUS`] times the mean radius, at each
@@ -65,6 +68,7 @@ impl SpringDashpot {
     pub fn new(stiffness: f64, damping: Option<f64>) -> Self {
         SpringDashpot {
             stiffness,
+            hertz: None,
             damping,
             skin: None,
             scratch: Mutex::new(Scratch::default()),
@@ -146,11 +150,19 @@ impl SpringDashpot {
 /// conservative, with U = Σ ½ k_n δ² over overlapping contacts; the dashpot only removes
 /// energy. No friction: tangential forces belong to the impulse model.
 ///
+/// With Hertz's law (`ContactModel::Hertz`, LAMMPS's `hertz/material` with `damping
+/// coeff_restitution`) the stiffness grows with the contact's area: k_n = 4/3 E* a, a =
+/// √(R* δ), R* = r_i r_j / (r_i + r_j) (r_i against a collider), so that F_n = 4/3 E* √R*
+/// δ^(3/2) − c_n u_n with the same c_n = 2 ζ √(k_n m_eff) at the current k_n, and
+/// U = Σ 2/5 k_n δ² (`law.rs`).
+///
 /// Everything here is borrowed for the call: the model's constants and buffers, the
 /// particles' radii and inverse masses, the materials, the colliders and the domain.
 pub(crate) struct ContactForce<'a> {
     model: &'a SpringDashpot,
     stiffness: f64,
+    /// E*, Pa, with Hertz's law.
+    hertz: Option<f64>,
     damping: Option<f64>,
     global: Material,
     own: Option<&'a [Material]>,
@@ -218,6 +230,7 @@ impl<'a> ContactForce<'a> {
         ContactForce {
             model,
             stiffness: model.stiffness,
+            hertz: model.hertz,
             damping: model.damping,
             ratios: DampingRatios::new(bodies.global, bodies.own.map(|o| o.1), bodies.colliders),
             global: bodies.global,

@@ -519,7 +519,7 @@ impl EventDriven {
             other: Partner::Particle(1),
             ..contact
         };
-        let Some(imp) = restitution_impulse(&pair, &v, &w, material, threshold) else {
+        let Some(imp) = restitution_impulse(&pair, &v, &w, material, threshold, None) else {
             return;
         };
         let (vi, vj) = (&mut self.bodies[i].v, vec3::add(bj.v, vec3::scale(-w[1], imp.vector)));
@@ -571,7 +571,7 @@ impl EventDriven {
         };
         let material = materials.pair(&contact);
         let alone = Contact { i: 0, ..contact };
-        let Some(imp) = restitution_impulse(&alone, &b.v, &[p.inv_mass[wi]], material, threshold) else {
+        let Some(imp) = restitution_impulse(&alone, &b.v, &[p.inv_mass[wi]], material, threshold, None) else {
             return false;
         };
         b.v = vec3::add(b.v, vec3::scale(p.inv_mass[wi], imp.vector));

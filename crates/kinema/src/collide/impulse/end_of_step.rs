@@ -9,6 +9,7 @@ use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::CHUNK;
 use crate::collide::response::VELOCITY_TOLERANCE;
 use crate::collide::soft_step::{SoftParams, Target, SLOP, SPECULATIVE};
+use crate::collide::spin::rotational_energy;
 use crate::collide::{pair_contact, Collider, Contact, Domain, Partner};
 use crate::error::Error;
 use crate::vec3;
@@ -131,7 +132,7 @@ impl ImpulseModel {
         set: &StageSetting<'_>,
         x0: &[f64],
         x1: &[f64],
-        v1: &mut [f64],
+        (v1, omega): (&mut [f64], &mut [f64]),
         h: f64,
         speed: f64,
         time: f64,
@@ -144,7 +145,13 @@ impl ImpulseModel {
             }
             let v = vec3::get(v1, q);
             let d = domain.displacement(vec3::get(x1, q), vec3::get(x0, q));
-            let calm = vec3::dot(v, v) <= speed * speed && vec3::dot(d, d) <= reach * reach;
+            let mut calm = vec3::dot(v, v) <= speed * speed && vec3::dot(d, d) <= reach * reach;
+            if let Some(r) = set.rotation {
+                // and its surface turns no faster than that speed (a ball spinning in place
+                // is not at rest)
+                let w = vec3::get(omega, q);
+                calm &= r.radius[q] * r.radius[q] * vec3::dot(w, w) <= speed * speed;
+            }
             // (a little under `time` counts: h added k times need not reach k h exactly)
             self.sleep.calm[q] = if calm { self.sleep.calm[q] + h } else { 0.0 };
         }
@@ -179,6 +186,11 @@ impl ImpulseModel {
                 island_of[q] = k;
                 lost += 0.5 * set.mass[q] * vec3::dot(vec3::get(v1, q), vec3::get(v1, q));
                 v1[3 * q..3 * q + 3].fill(0.0);
+                if let Some(r) = set.rotation {
+                    // an island asleep does not turn either
+                    lost += rotational_energy(std::iter::once(q), omega, r.inv_inertia);
+                    omega[3 * q..3 * q + 3].fill(0.0);
+                }
             }
             let overlap = contacts
                 .iter()
@@ -212,7 +224,7 @@ impl ImpulseModel {
         set: &StageSetting<'_>,
         paths: &Paths<'_>,
         h: f64,
-        v1: &[f64],
+        (v1, omega): (&[f64], &[f64]),
         x1: &mut [f64],
         threshold: f64,
     ) -> Result<IslandStats, Error> {
@@ -309,6 +321,7 @@ impl ImpulseModel {
             targets: &self.prepared,
             inv_mass,
             materials,
+            spin: set.rotation.map(|r| (r, omega)),
             params: SoftParams {
                 h,
                 tolerance: VELOCITY_TOLERANCE,
@@ -365,16 +378,23 @@ impl ImpulseModel {
     /// particle no impact hit, so a body held at rest books exactly 0 with every method (it
     /// ends the step where and as it began); an impact inside the step books its own
     /// ½ (1 − e²) μ u_n², exactly 0 for e = 1.
-    pub(super) fn energy_books(&self, set: &StageSetting<'_>, accel: &[f64], x1: &[f64], v1: &[f64]) -> f64 {
+    ///
+    /// With spin, each one's rotational energy at its reference minus now is added,
+    /// Σ ½ I (|ω_b|² − |ω|²) (stage 1 does not turn a particle: no work to subtract).
+    pub(super) fn energy_books(&self, set: &StageSetting<'_>, accel: &[f64], x1: &[f64], v1: &[f64], omega: &[f64]) -> f64 {
         let (mass, inv_mass) = (set.mass, set.inv_mass);
         let mut lost = 0.0;
-        for &(q, xb, vb) in &self.books {
+        for (k, &(q, xb, vb)) in self.books.iter().enumerate() {
             if inv_mass[q] == 0.0 || !self.acted.get(q).copied().unwrap_or(false) {
                 continue;
             }
             let (x, v, a) = (vec3::get(x1, q), vec3::get(v1, q), vec3::get(accel, q));
             let dx = set.domain.displacement(x, xb);
             lost += 0.5 * mass[q] * (vec3::dot(vb, vb) - vec3::dot(v, v)) + mass[q] * vec3::dot(a, dx);
+            if let Some(r) = set.rotation.filter(|r| r.inv_inertia[q] > 0.0) {
+                let (wb, w) = (self.books_spin[k], vec3::get(omega, q));
+                lost += 0.5 * (vec3::dot(wb, wb) - vec3::dot(w, w)) / r.inv_inertia[q];
+            }
         }
         lost
     }

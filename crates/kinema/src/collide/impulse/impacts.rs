@@ -165,6 +165,7 @@ impl ImpulseModel {
         mut reach: f64,
         only_woken: bool,
         stats: &mut CollisionStats,
+        omega: &mut [f64],
     ) -> Result<(Duration, Duration, Duration, bool), Error> {
         let (h, threshold) = (s.h, s.threshold);
         let (inv_mass, mass) = (s.set.inv_mass, s.set.mass);
@@ -219,13 +220,17 @@ impl ImpulseModel {
             let clock = Instant::now();
             let impulse = contact.and_then(|c| {
                 let material = s.set.materials.pair(&c);
-                restitution_impulse(&c, paths.v_ref(), inv_mass, material, threshold)
+                let spin = s.set.rotation.map(|r| r.of(&c, omega));
+                restitution_impulse(&c, paths.v_ref(), inv_mass, material, threshold, spin).map(|imp| (imp, c))
             });
             t_respond += clock.elapsed();
 
             // Stage 4: onto both particles.
             let clock = Instant::now();
-            if let Some(imp) = impulse {
+            if let Some((imp, c)) = impulse {
+                if let Some(r) = s.set.rotation {
+                    r.kick(&c, c.overlap, imp.vector, omega);
+                }
                 any = true;
                 stats.impacts += 1;
                 stats.impulses += 1;

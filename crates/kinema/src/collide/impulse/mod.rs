@@ -17,6 +17,7 @@ use super::islands::Islands;
 use super::neighbour_list::NeighbourList;
 use super::sleep::{Sleep, WarmEntry};
 use super::soft_step::Target;
+use super::spin::Rotation;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
 use crate::collide::neighbour_list::active_walls;
@@ -146,6 +147,8 @@ pub(crate) struct StageSetting<'a> {
     pub radius: &'a [f64],
     pub inv_mass: &'a [f64],
     pub mass: &'a [f64],
+    /// With spin: the particles' inverse moments of inertia and radii (`collide/spin.rs`).
+    pub rotation: Option<Rotation<'a>>,
 }
 
 /// What the stages keep of their contacts while particles are added
@@ -179,6 +182,8 @@ pub(crate) struct ImpulseModel {
     /// Each touched particle's reference state for the energy books: at the step's start, or
     /// after its impacts (x, v).
     pub(super) books: Vec<(usize, [f64; 3], [f64; 3])>,
+    /// With spin, the angular velocity of each entry of `books` at its reference, rad/s.
+    pub(super) books_spin: Vec<[f64; 3]>,
     pub(super) contacts: Vec<Contact>,
     /// The end-of-step contacts as detected (overlap and u_n before the response).
     pub detected: Vec<Contact>,
@@ -218,6 +223,7 @@ impl ImpulseModel {
             fastest_hit: 0.0,
             touched: Vec::new(),
             books: Vec::new(),
+            books_spin: Vec::new(),
             contacts: Vec::new(),
             detected: Vec::new(),
             totals: Vec::new(),
@@ -369,6 +375,10 @@ impl ImpulseModel {
     ///   distribute  the totals onto both particles; impulse balance; energy books
     /// ```
     ///
+    /// With spin (`set.rotation`), `omega` holds the angular velocities (rad/s, 3 per
+    /// particle; empty without): every impulse acts at its contact point and turns both
+    /// particles (`collide/spin.rs`), and friction acts on the contact point's velocity.
+    ///
     /// Continuous detection interleaves the stages in time: an impact's impulse changes the
     /// two paths, and the next impacts of those two can only be found after it is applied.
     /// The end-of-step solve comes after all impacts, on the state they leave.
@@ -380,6 +390,7 @@ impl ImpulseModel {
         v0: &[f64],
         x1: &mut [f64],
         v1: &mut [f64],
+        omega: &mut [f64],
     ) -> Result<(bool, CollisionStats, CollisionTimes), Error> {
         let clock = Instant::now();
         let h = frame.h;
@@ -421,7 +432,7 @@ impl ImpulseModel {
             }
         };
         let mut paths = Paths::begin(&mut store, x0, v0, accel);
-        let result = self.run_on_paths(set, &mut paths, clock, frame, x1, v1);
+        let result = self.run_on_paths(set, &mut paths, clock, frame, (x1, v1, omega));
         self.paths = store;
         self.fitted = fitted;
         result
@@ -435,8 +446,7 @@ impl ImpulseModel {
         paths: &mut Paths<'_>,
         clock: Instant,
         frame: &StepFrame<'_>,
-        x1: &mut [f64],
-        v1: &mut [f64],
+        (x1, v1, omega): (&mut [f64], &mut [f64], &mut [f64]),
     ) -> Result<(bool, CollisionStats, CollisionTimes), Error> {
         let (t0, h) = (frame.t0, frame.h);
         let (inv_mass, mass) = (set.inv_mass, set.mass);
@@ -493,7 +503,7 @@ impl ImpulseModel {
                 h,
                 threshold,
             };
-            let (d, r, s, any) = self.impacts(&search, paths, reach, only_woken, &mut stats)?;
+            let (d, r, s, any) = self.impacts(&search, paths, reach, only_woken, &mut stats, omega)?;
             t_detect += d;
             t_respond += r;
             t_distribute += s;
@@ -532,6 +542,13 @@ impl ImpulseModel {
                 (q, vec3::get(x1, q), vec3::get(v1, q))
             });
         }
+        // (with spin, each one's angular velocity now: the step's start's, or after its
+        // impacts, as above; stage 1 does not turn a particle)
+        self.books_spin.clear();
+        if set.rotation.is_some() {
+            self.books_spin
+                .extend(self.books.iter().map(|&(q, _, _)| vec3::get(omega, q)));
+        }
         // A pair that only touches (no overlap) and approaches faster than an impact's least
         // speed meets exactly at the step's end: its impact belongs to the next step's t = 0,
         // where the law resolves it pair by pair, like every other impact (with ccd).
@@ -543,7 +560,7 @@ impl ImpulseModel {
 
         // Stage 3: the soft step's totals; the positions follow its solve stage.
         let clock = Instant::now();
-        let solved = self.solve(set, paths, h, v1, x1, threshold)?;
+        let solved = self.solve(set, paths, h, (v1, omega), x1, threshold)?;
         stats.solver_sweeps = solved.soft.sweeps;
         stats.unconverged = stats.unconverged.max(usize::from(!solved.soft.converged));
         stats.islands = solved.islands;
@@ -560,23 +577,26 @@ impl ImpulseModel {
 
         // Stage 4: the totals onto both particles; the books.
         let clock = Instant::now();
-        for (c, p) in self.contacts.iter().zip(&self.totals) {
+        for (k, (c, p)) in self.contacts.iter().zip(&self.totals).enumerate() {
             if *p == [0.0; 3] {
                 continue;
             }
             changed = true;
             stats.impulses += 1;
             distribute(c.i, c.partner_particle(), *p, v1, inv_mass, mass, &mut stats.impulse_balance);
+            if let Some(r) = set.rotation {
+                r.kick(c, self.prepared[k].rest, *p, omega);
+            }
             if let Partner::Collider(k) = c.other {
                 let at = vec3::sub(vec3::get(x1, c.i), vec3::scale(set.radius[c.i] - c.overlap, c.normal));
                 self.collider_books[k].book(at, c.wall_velocity, *p);
             }
         }
-        stats.energy_lost += self.energy_books(set, paths.accel, x1, v1);
+        stats.energy_lost += self.energy_books(set, paths.accel, x1, v1, omega);
         // Islands calm long enough fall asleep (their velocities to 0, that energy booked).
         if let (Some(time), true) = (set.sleep_time, frame.may_sleep) {
             let speed = set.sleep_speed.unwrap_or(kick);
-            let (slept, lost) = self.settle(set, paths.x0, x1, v1, h, speed, time);
+            let (slept, lost) = self.settle(set, paths.x0, x1, (v1, omega), h, speed, time);
             stats.slept += slept;
             stats.energy_lost += lost;
         }

@@ -63,7 +63,7 @@ fn restitution_impulse_follows_newtons_law_and_coulombs_cone() {
     // cone allows μ j = 0.48 N·s. Energy: ½ (1 − e²) u_n² / w + j_t (|u_t| − ½ w j_t).
     let c = pair(0, 1, [1.0, 0.0, 0.0], 0.0);
     let v = [-1.0, 2.0, 0.0, 1.0, -1.0, 0.0];
-    let imp = restitution_impulse(&c, &v, &[1.0, 0.25], m(0.5, 0.2), 0.0).unwrap();
+    let imp = restitution_impulse(&c, &v, &[1.0, 0.25], m(0.5, 0.2), 0.0, None).unwrap();
     assert!(
         (imp.normal - 2.4).abs() < 1e-15 && (imp.tangent - 0.48).abs() < 1e-15,
         "{imp:?}"
@@ -76,10 +76,10 @@ fn restitution_impulse_follows_newtons_law_and_coulombs_cone() {
     assert!((imp.energy_lost - lost).abs() < 1e-14, "{imp:?}");
     assert_eq!(imp.restitution, 0.5);
     // below the threshold: e = 0; separating, or both immovable: nothing
-    let slow = restitution_impulse(&c, &v, &[1.0, 0.25], m(0.5, 0.0), 2.5).unwrap();
+    let slow = restitution_impulse(&c, &v, &[1.0, 0.25], m(0.5, 0.0), 2.5, None).unwrap();
     assert_eq!(slow.restitution, 0.0);
     assert!((slow.normal - 1.6).abs() < 1e-15, "{slow:?}");
     let apart = [1.0, 0.0, 0.0, -1.0, 0.0, 0.0];
-    assert!(restitution_impulse(&c, &apart, &[1.0, 0.25], m(0.5, 0.2), 0.0).is_none());
-    assert!(restitution_impulse(&c, &v, &[0.0, 0.0], m(0.5, 0.2), 0.0).is_none());
+    assert!(restitution_impulse(&c, &apart, &[1.0, 0.25], m(0.5, 0.2), 0.0, None).is_none());
+    assert!(restitution_impulse(&c, &v, &[0.0, 0.0], m(0.5, 0.2), 0.0, None).is_none());
 }

@@ -1,0 +1,125 @@
+"""How long a contact of the force models lasts, and what a coarse step does to its restitution.
+
+A spring–dashpot contact is a damped oscillator of the pair's reduced mass m* on the spring
+k_n: it lasts half a damped period,
+
+    t_c = π / (ω₀ √(1 − ζ²)),   ω₀² = k_n / m*,   ζ = −ln e / √(π² + ln² e)
+
+(ζ ≥ 1, e = 0: π / ω₀, the time to the deepest overlap and back to the start of the spring's
+push). A Hertzian contact at approach speed u lasts t_c = 2 I δ_max / u with δ_max = (5 m* u² /
+(4 k_h))^(2/5), k_h = 4/3 E* √R*, I = ∫₀¹ dx / √(1 − x^(5/2)) = 1.4716 (Landau & Lifshitz §9):
+in terms of the tangent stiffness at δ_max, ω_t² = 3/2 k_h √δ_max / m* = 15/8 (u/δ_max)², so
+t_c = 2 I √(15/8) / ω_t = 4.0302 / ω_t. The stable-step advisor's ``standby_omega`` is that ω₀
+(ω_t for Hertz: the contact reached at the fastest approach the velocities allow) of the
+stiffest contact the particles can make, with the ζ of the least damped; ``contact_time``
+turns it into t_c.
+
+A step of more than t_c / 20 (:data:`STEPS_PER_CONTACT`) changes the restitution the contact
+gives: the integrator samples the force too coarsely. ``restitution_at`` measures it, on one
+head-on pair with the world's method and the same dt / t_c, and the ``ContactTimeWarning``
+says what it is. Measured (velocity Verlet, a head-on pair; docs/collisions.md has the table
+and the command, docs/restitution_table.py): at 10 steps per contact e = 0.3 comes out 0.282
+(Hooke) and 0.281 (Hertz), e = 0.1 0.064 and 0.087, at 5 steps 0.229 and 0.238 (and e = 0.1
+0.713 with Hooke); at 50 steps within 1 % of the set e.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any
+
+#: Steps a contact should span at least: below, its restitution drifts (the table above).
+STEPS_PER_CONTACT = 20
+
+#: I = ∫₀¹ dx / √(1 − x^(5/2)) (module doc; scipy's quad to 1e-15).
+HERTZ_INTEGRAL = 1.471_637_592_162_107
+
+#: t_c ω_t of an elastic Hertzian contact (module doc): 2 I √(15/8) = 4.0302.
+HERTZ_TIME_OMEGA = 2 * HERTZ_INTEGRAL * math.sqrt(15 / 8)
+
+
+class ContactTimeWarning(UserWarning):
+    """The time step is coarser than a twentieth of the shortest contact's duration, so the
+    spring–dashpot or Hertz contacts bounce with another restitution than the one set."""
+
+
+def _zeta(e: float) -> float:
+    if e <= 0.0:
+        return 1.0
+    ln = abs(math.log(e))
+    return ln / math.sqrt(math.pi**2 + ln * ln)
+
+
+def contact_time(model: str, omega: float | None, zeta: float | None) -> float | None:
+    """t_c (s) of a contact of ``model`` (``"spring_dashpot"`` or ``"hertz"``) whose stiffest
+    mode is ``omega`` (rad/s; the advisor's ``standby_omega``) with damping ratio ``zeta``;
+    ``None`` without one."""
+    if not omega or omega <= 0.0 or not math.isfinite(omega):
+        return None
+    if model == "hertz":
+        return HERTZ_TIME_OMEGA / omega
+    z = zeta or 0.0
+    return math.pi / omega if z >= 1.0 else math.pi / (omega * math.sqrt(1.0 - z * z))
+
+
+def restitution_at(model: str, method: Any, steps_per_contact: float, restitution: float) -> float:
+    """The restitution a head-on pair comes out with when its contact of ``model`` spans
+    ``steps_per_contact`` steps of ``method``, for the set ``restitution`` (a pair with
+    m* = 1 kg, ω₀ = 1 rad/s or k_h = 1 N/m^(3/2) at 1 m/s: the ratio depends on dt / t_c
+    alone)."""
+    from .world import World  # (world imports this module)
+
+    if model == "hertz":
+        # r = 2 m each: R* = 1 m; E* = 3/4 Pa: k_h = 1; m = 2 kg each: m* = 1 kg
+        radius, params = 2.0, {"youngs_modulus": 0.75 * 2 * (1 - 0.3**2), "poisson_ratio": 0.3}
+        t_c = HERTZ_TIME_OMEGA / math.sqrt(1.5 * 1.25**0.2)  # ω_t at δ_max = (5/4)^(2/5) m
+    else:
+        radius, params = 1.0, {"stiffness": 1.0}
+        t_c = contact_time(model, 1.0, _zeta(restitution))
+    dt = t_c / steps_per_contact
+    w = World(dt=dt, method=method)
+    w._contact_warned = True  # (the probe itself is coarse: it does not advise)
+    w.set_collisions(model=model, restitution=restitution, **params)
+    gap = 1.5 * dt  # closed within the first two steps at 1 m/s
+    w.add_particles([[-radius - gap / 2, 0, 0], [radius + gap / 2, 0, 0]], velocity=[[0.5, 0, 0], [-0.5, 0, 0]], mass=2.0, radius=radius)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        w.step(int(3 * steps_per_contact) + 10)
+    return float(w.velocities[1, 0] - w.velocities[0, 0])
+
+
+def advise(core: Any, rates: dict) -> bool:
+    """Warns (``ContactTimeWarning``) if the world's step spans fewer than
+    :data:`STEPS_PER_CONTACT` steps of its shortest contact, with the restitution that step
+    gives; returns whether it warned. ``core``: the world's engine (``World._core``), ``rates``
+    the advisor's."""
+    settings = core.collisions or {}
+    model = settings.get("model")
+    if model not in ("spring_dashpot", "hertz") or settings.get("damping") is not None:
+        return False
+    t_c = contact_time(model, rates.get("standby_omega"), rates.get("standby_zeta"))
+    if t_c is None or core.dt * STEPS_PER_CONTACT <= t_c:
+        return False
+    steps = t_c / core.dt
+    e = _restitution_of(rates.get("standby_zeta"), settings["restitution"])
+    got = restitution_at(model, core.method, steps, e)
+    warnings.warn(
+        f"dt = {core.dt:.4g} s spans {steps:.3g} steps of the shortest contact (t_c = {t_c:.4g} s, the "
+        f"{'Hertzian contact at the fastest approach now' if model == 'hertz' else 'stiffest spring–dashpot pair'}); "
+        f"below {STEPS_PER_CONTACT} a contact's restitution drifts: with method {core.method!r} this step "
+        f"gives e = {got:.4g} where e = {e:.4g} is set (a head-on pair, measured). Use dt <= {t_c / STEPS_PER_CONTACT:.4g} s",
+        ContactTimeWarning,
+        stacklevel=4,
+    )
+    return True
+
+
+def _restitution_of(zeta: float | None, fallback: float) -> float:
+    """The e whose damping ratio is ``zeta`` (ζ = −ln e / √(π² + ln² e) inverted), else
+    ``fallback``."""
+    if zeta is None:
+        return fallback
+    if zeta >= 1.0:
+        return 0.0
+    return math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta))
