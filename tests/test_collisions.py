@@ -285,6 +285,7 @@ def test_settings_read_back_and_round_trip():
         "event_driven": False,
         "youngs_modulus": None,
         "poisson_ratio": None,
+        "rolling_friction": 0.0,
     }
     assert w.collisions == expected
     w.set_collisions(**w.collisions)
@@ -509,6 +510,7 @@ def test_collision_defaults_and_contact_models_are_the_engines():
         "event_driven": False,
         "youngs_modulus": None,
         "poisson_ratio": None,
+        "rolling_friction": 0.0,
     }
     signature = inspect.signature(kinema.World.set_collisions)
     assert {k: p.default for k, p in signature.parameters.items() if k != "self"} == engine

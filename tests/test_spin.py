@@ -297,3 +297,45 @@ def test_a_checkpoint_of_a_spinning_world_resumes_bit_for_bit(tmp_path):
     assert np.array_equal(w.positions, again.positions) and np.array_equal(w.velocities, again.velocities)
     assert np.array_equal(w.angular_velocities, again.angular_velocities)
     assert np.array_equal(again.inertia, [0.0004])
+
+
+def test_rolling_resistance_slows_a_rolling_ball_at_five_sevenths_mu_r_g_and_stops_it():
+    # A rolling torque μ_r r N against the turning: m a = −F, I α = F r − μ_r r m g, a = α r
+    # ⇒ a = −μ_r g / (1 + I/(m r²)) = −5/7 μ_r g until it stops, and then it stays.
+    r, mu_r, v0 = 0.05, 0.02, 1.0
+    w = kinema.World(dt=1e-4, spin=True)
+    w.add(kinema.Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]))
+    w.add(kinema.Gravity([0.0, 0.0, -G]))
+    w.set_collisions(restitution=0.0, friction=0.5, rolling_friction=mu_r)
+    w.add_particles([0.0, 0.0, r], velocity=[v0, 0.0, 0.0], mass=0.3, radius=r, angular_velocity=[0.0, v0 / r, 0.0])
+    speeds = []
+    for _ in range(200):
+        w.step(1)
+        speeds.append(w.velocities[0, 0])
+    np.testing.assert_allclose(np.diff(speeds) / w.dt, -5 / 7 * mu_r * G, rtol=1e-9)
+    stop = v0 / (5 / 7 * mu_r * G)  # 7.14 s
+    w.step(int((stop + 1.0) / w.dt) - 200)
+    assert abs(w.velocities[0, 0]) < 1e-9 and np.abs(w.angular_velocities[0]).max() < 1e-9 / r
+    # it went as far as the closed form says: v0² / (2 · 5/7 μ_r g)
+    assert w.positions[0, 0] == pytest.approx(v0 * v0 / (2 * 5 / 7 * mu_r * G), rel=1e-3)
+
+
+@pytest.mark.parametrize("ratio, moves", [(0.8, False), (1.2, True)])
+def test_rolling_resistance_holds_a_ball_on_a_slope_below_tan_theta_equal_mu_r(ratio, moves):
+    # Torques about the contact point: gravity's m g r sin θ against at most μ_r r m g cos θ.
+    mu_r = 0.1
+    theta = np.degrees(np.arctan(ratio * mu_r))
+    w, down, _, r = slope_world(theta, 0.5)
+    w.set_collisions(restitution=0.0, friction=0.5, rolling_friction=mu_r)
+    a = accelerations_along(w, down, 300)
+    th = np.radians(theta)
+    expected = 5 / 7 * G * (np.sin(th) - mu_r * np.cos(th)) if moves else 0.0
+    np.testing.assert_allclose(a[5:], expected, atol=1e-9)
+
+
+def test_rolling_resistance_needs_spin():
+    w = kinema.World()
+    with pytest.raises(ValueError, match="rolling_friction = 0.1 is invalid: rolling resistance acts on turning particles"):
+        w.set_collisions(rolling_friction=0.1)
+    with pytest.raises(ValueError, match="rolling_friction = -1 is invalid"):
+        kinema.World(spin=True).set_collisions(rolling_friction=-1.0)

@@ -127,7 +127,7 @@ def _write_run(g: Any, run: dict) -> None:
     for key in ("frames_done", "frames_total", "per_frame", "every"):
         g.attrs[key] = int(run[key])
     g.attrs["fps"] = float(run["fps"])
-    t, x, v, ke, pot, p, ang, contacts, balance, lost, ids = (list(c) for c in zip(*rec.frames, strict=True))
+    t, x, v, ke, pot, p, ang, contacts, balance, lost, ids, impacts, virial, kinetic = (list(c) for c in zip(*rec.frames, strict=True))
     counts = np.array([len(i) for i in ids], dtype=np.int64)
     for name, data in (
         ("t", np.array(t)),
@@ -137,6 +137,9 @@ def _write_run(g: Any, run: dict) -> None:
         ("contacts", np.array(contacts, dtype=np.int64)),
         ("impulse_total", np.array(balance).reshape(-1, 3)),
         ("energy_lost", np.array(lost)),
+        ("impacts_total", np.array(impacts, dtype=np.int64)),
+        ("virial_total", np.array(virial).reshape(-1, 9)),
+        ("kinetic_tensor", np.array(kinetic).reshape(-1, 9)),
         ("counts", counts),
         ("x", np.concatenate(x).reshape(-1, 3)),
         ("v", np.concatenate(v).reshape(-1, 3)),
@@ -573,7 +576,7 @@ def _collision_books(r: _Reader) -> dict:
         at = f"{field} {part}"
         if not isinstance(stats, dict):
             raise r.invalid(at, stats, "it must be a dict of the collision figures")
-        unknown = set(stats) - {*_STATS_NEEDED, *_STATS_LATER, "impulse_balance", "energy_lost", "max_overlap", "converged"}
+        unknown = set(stats) - {*_STATS_NEEDED, *_STATS_LATER, "impulse_balance", "virial", "energy_lost", "max_overlap", "converged"}
         if unknown:
             raise r.fail(f"{at}.{sorted(unknown)[0]}", "is not a collision figure kinema writes")
         clean: dict[str, Any] = {}
@@ -586,6 +589,10 @@ def _collision_books(r: _Reader) -> dict:
         balance = r.array(f"{at}.impulse_balance", stats["impulse_balance"], (3,), "real")
         r.each(f"{at}.impulse_balance", balance, np.isfinite(balance), "3 finite numbers, N·s")
         clean["impulse_balance"] = balance
+        if "virial" in stats:  # (older checkpoints lack it: zeros)
+            virial = r.array(f"{at}.virial", stats["virial"], (3, 3), "real")
+            r.each(f"{at}.virial", virial, np.isfinite(virial), "3 × 3 finite numbers, N·m·s")
+            clean["virial"] = virial
         for key in ("energy_lost", "max_overlap"):
             clean[key] = r.real(f"{at}.{key}", stats[key], math.isfinite, "a finite number")
         if "converged" in stats and not isinstance(stats["converged"], bool):
@@ -724,6 +731,13 @@ def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
     _, contacts = r.ints("run/contacts", (frames,), 0, _INT64_MAX, "each frame's number of contacts: an integer >= 0")
     _, balance = r.reals("run/impulse_total", (frames, 3), finite, "each frame's impulse total: 3 finite numbers")
     _, lost = r.reals("run/energy_lost", (frames,), finite, "each frame's energy taken by the collisions: finite, J")
+    # (checkpoints written before these were recorded lack all three: zeros)
+    if any(f"run/{name}" in r.f for name in ("impacts_total", "virial_total", "kinetic_tensor")):
+        _, impacts = r.ints("run/impacts_total", (frames,), 0, _INT64_MAX, "the impacts up to each frame: integers >= 0")
+        _, virial = r.reals("run/virial_total", (frames, 9), finite, "the virial summed up to each frame: 9 finite numbers, N m s")
+        _, kinetic_tensor = r.reals("run/kinetic_tensor", (frames, 9), finite, "each frame's sum of m v v: 9 finite numbers, J")
+    else:
+        impacts, virial, kinetic_tensor = np.zeros(frames, dtype=np.int64), np.zeros((frames, 9)), np.zeros((frames, 9))
     _, counts = r.ints("run/counts", (frames,), 0, _INT64_MAX, "the particles at each frame: integers >= 0")
     rows = sum(counts.tolist())
     field_x, x = r.reals("run/x", (rows, 3), finite, f"the positions of the particles at each frame ({rows} in all, run/counts), finite")
@@ -761,6 +775,9 @@ def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
             list(balance),
             lost.tolist(),
             ids_by_frame,
+            impacts.tolist(),
+            list(virial),
+            list(kinetic_tensor),
             strict=True,
         )
     )

@@ -33,6 +33,22 @@ class FileInfo:
     box_edges_by_frame: np.ndarray | None = None
 
 
+def _pressure(t: np.ndarray, virial: np.ndarray, kinetic: np.ndarray, about: dict) -> np.ndarray | None:
+    """The pressure tensor at each frame (``Trajectory.pressure``) from the time ``t`` (F,),
+    the virial summed over all steps (F, 9), N·m·s, and Σ m v ⊗ v (F, 9) at each frame, in a
+    periodic cell (``about``: its ``dim``, ``periodic`` and ``box_edges``); ``None`` without
+    one."""
+    dim, periodic, edges = about.get("dim", 3), about.get("periodic"), about.get("box_edges")
+    if periodic is None or edges is None or not all(periodic[:dim]):
+        return None
+    volume = float(np.prod(np.asarray(edges, dtype=float)[:dim]))
+    pressure = np.full((len(t), 3, 3), np.nan)
+    if len(t) > 1:
+        rate = np.diff(virial, axis=0) / np.diff(t)[:, None]
+        pressure[1:] = ((kinetic[1:] + rate) / volume).reshape(-1, 3, 3)
+    return pressure
+
+
 @dataclass(repr=False)
 class Trajectory:
     """Frames of a run. ``t`` (F,), ``positions`` and ``velocities`` (F, N, 3); energies in J:
@@ -43,7 +59,17 @@ class Trajectory:
     the frame; ``impulse_balance`` (F, 3), N·s, the sum of the impulses between movable
     particles since the previous frame (0 at frame 0), zero by action and reaction up to
     rounding; ``collision_energy_lost`` (F,), J, the mechanical energy the collisions took
-    since they were turned on (total energy + it is conserved).
+    since they were turned on (total energy + it is conserved); ``impacts`` (F,), the impacts
+    since the previous frame (0 at frame 0): found inside the steps by the impulse model, the
+    events of an event-driven gas, the contacts begun with the spring–dashpot and Hertz models
+    (velocity Verlet), so that ``impacts / diff(t)`` is the collision frequency.
+
+    ``pressure`` (F, 3, 3): the pressure tensor of a periodic world (every axis of its
+    dimension periodic; ``None`` otherwise, and for a file), Pa in 3D (N/m in 2D): the kinetic
+    part Σ m v ⊗ v / V at the frame plus the virial of the pair impulses and contact forces,
+    Σ (x_i − x_j) ⊗ J / (V Δt), over the Δt since the previous frame (NaN at frame 0); V the
+    cell's volume (area in 2D). Its trace over the dimension is the pressure (LAMMPS's
+    ``compute pressure``; for hard spheres the virial route of the equation of state).
 
     About the world (``None`` when unknown): ``masses`` (N,) kg, ``radii`` (N,) m, ``ids``
     (N,), ``species`` (N,) names (``World.add_particles(species=)``), ``dim`` (2 or 3), ``dt`` s, ``method``, ``periodic`` (3 bools) and ``box_edges``
@@ -81,6 +107,8 @@ class Trajectory:
     contacts: np.ndarray
     impulse_balance: np.ndarray
     collision_energy_lost: np.ndarray
+    impacts: np.ndarray | None = None
+    pressure: np.ndarray | None = None
     masses: np.ndarray | None = None
     radii: np.ndarray | None = None
     ids: np.ndarray | None = None
@@ -236,6 +264,7 @@ class Trajectory:
             "contacts": lambda: np.zeros(f, dtype=np.int64),
             "impulse_balance": lambda: np.zeros((f, 3)),
             "collision_energy_lost": lambda: np.zeros(f),
+            "impacts": lambda: np.zeros(f, dtype=np.int64),
         }
         args = {}
         for fl in fields(cls):
@@ -438,12 +467,16 @@ class _Recorder:
         d = world._diagnostics_as_pulled()
         stats = world._collision_stats_as_pulled()
         if stats is None:
-            contacts, balance, lost = 0, np.zeros(3), 0.0
+            contacts, balance, lost, impacts, virial = 0, np.zeros(3), 0.0, 0, np.zeros(9)
         else:
-            contacts, balance, lost = stats["last"]["contacts"], stats["total"]["impulse_balance"], stats["total"]["energy_lost"]
+            total = stats["total"]
+            contacts, balance, lost = stats["last"]["contacts"], total["impulse_balance"], total["energy_lost"]
+            impacts, virial = total["impacts"], np.ravel(total["virial"])
         x, v = self._keep(world.positions, world.velocities)
+        # Σ m v ⊗ v, row-major (the kinetic part of the pressure tensor, times the volume)
+        kinetic = np.einsum("i,ij,ik->jk", world.masses, v, v).ravel()
         frame = (d["t"], x, v, d["kinetic"], d["potential"], d["momentum"], d["angular_momentum"])
-        self.frames.append((*frame, contacts, balance, lost, ids))
+        self.frames.append((*frame, contacts, balance, lost, ids, impacts, virial, kinetic))
 
     def _keep(self, x: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Copies of this frame's positions and velocities: places in the block when they fit."""
@@ -469,7 +502,7 @@ class _Recorder:
         return np.array(x), np.array(v)
 
     def finish(self) -> Trajectory:
-        t, x, v, ke, pot, p, ang, contacts, balance, lost, ids = zip(*self.frames, strict=True)
+        t, x, v, ke, pot, p, ang, contacts, balance, lost, ids, impacts, virial, kinetic = zip(*self.frames, strict=True)
         names = list(dict.fromkeys(name for frame in pot for name in frame))  # a force added mid-run counts from then
         # The world sums the impulse balance over all its steps; a frame gets what its steps
         # added (the first frame none).
@@ -490,6 +523,8 @@ class _Recorder:
             contacts=np.array(contacts, dtype=np.int64),
             impulse_balance=balance,
             collision_energy_lost=np.array(lost),
+            impacts=np.diff(np.array(impacts, dtype=np.int64), prepend=impacts[0]),
+            pressure=_pressure(np.array(t), np.array(virial), np.array(kinetic), about),
             alive=alive,
             **about,
         )

@@ -37,6 +37,7 @@ class WorldCollisions:
         event_driven: bool = _DEFAULTS["event_driven"],
         youngs_modulus: float | None = _DEFAULTS["youngs_modulus"],
         poisson_ratio: float | None = _DEFAULTS["poisson_ratio"],
+        rolling_friction: float = _DEFAULTS["rolling_friction"],
     ) -> None:
         """Turn collisions on, or replace every one of their settings.
 
@@ -60,6 +61,12 @@ class WorldCollisions:
         the step, g·dt under gravity) for that long, sleeps: velocities exactly 0, no work
         until an impact, a touch, a write or a change of forces or colliders wakes it
         (Box2D's, Bullet's and Chipmunk's sleeping; docs/collisions.md).
+
+        ``rolling_friction`` μ_r ≥ 0 (a world with spin, the impulse model): resting and
+        rolling contacts resist the two bodies' relative turning across their normal with a
+        torque of at most μ_r R* F_n, R* = r_i r_j/(r_i + r_j) (r against a collider), as
+        LAMMPS's ``rolling sds`` at its slider's limit: a ball rolling on a floor slows at
+        5/7 μ_r g and one on a slope of tan θ ≤ μ_r stays put.
 
         ``event_driven``: with the impulse model and no forces (a gas), run from frame to
         frame by events instead of steps: every impact at its exact time, by the same rule,
@@ -89,7 +96,12 @@ class WorldCollisions:
             "youngs_modulus": _checks.real("youngs_modulus", youngs_modulus, optional=True),
             "poisson_ratio": _checks.real("poisson_ratio", poisson_ratio, optional=True),
             "event_driven": _checks.boolean("event_driven", event_driven),
+            "rolling_friction": _checks.real("rolling_friction", rolling_friction),
         }
+        if settings["rolling_friction"] and not self._core.spin:
+            raise ValueError(
+                f"rolling_friction = {rolling_friction!r} is invalid: rolling resistance acts on turning particles; make the world with kinema.World(..., spin=True)"
+            )
         self._push()
         self._core.set_collisions(settings)
         self._advice_due = True  # the spring-dashpot model's contacts are stiff springs

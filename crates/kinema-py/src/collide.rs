@@ -39,6 +39,8 @@ pub struct CollisionArgs {
     poisson_ratio: Option<f64>,
     #[pyo3(item)]
     event_driven: bool,
+    #[pyo3(item)]
+    rolling_friction: f64,
 }
 
 impl CollisionArgs {
@@ -61,6 +63,7 @@ impl CollisionArgs {
             sleep_time: self.sleep_time,
             sleep_speed: self.sleep_speed,
             event_driven: self.event_driven,
+            rolling_friction: self.rolling_friction,
         })
     }
 }
@@ -177,6 +180,7 @@ pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<
     out.set_item("youngs_modulus", args.youngs_modulus)?;
     out.set_item("poisson_ratio", args.poisson_ratio)?;
     out.set_item("event_driven", p.event_driven)?;
+    out.set_item("rolling_friction", p.rolling_friction)?;
     Ok(out)
 }
 
@@ -409,6 +413,7 @@ pub fn stats_dict<'py>(py: Python<'py>, s: &CollisionStats) -> PyResult<Bound<'p
     out.set_item("impulses", s.impulses)?;
     out.set_item("impulse_balance", PyArray1::from_slice(py, &s.impulse_balance))?;
     out.set_item("energy_lost", s.energy_lost)?;
+    out.set_item("virial", PyArray1::from_slice(py, &s.virial).reshape([3, 3])?)?;
     out.set_item("max_overlap", s.max_overlap)?;
     out.set_item("solver_sweeps", s.solver_sweeps)?;
     out.set_item("islands", s.islands)?;
@@ -439,6 +444,14 @@ pub fn stats_from(d: &Bound<'_, PyDict>) -> PyResult<CollisionStats> {
         impulses: get("impulses")?.extract()?,
         impulse_balance: get("impulse_balance")?.extract()?,
         energy_lost: get("energy_lost")?.extract()?,
+        virial: match d.get_item("virial")? {
+            Some(v) => {
+                let flat: Vec<f64> = v.call_method0("ravel")?.extract()?;
+                flat.try_into()
+                    .map_err(|_| pyo3::exceptions::PyValueError::new_err("collision stats: virial must hold 3 × 3 values"))?
+            }
+            None => [0.0; 9],
+        },
         max_overlap: get("max_overlap")?.extract()?,
         solver_sweeps: get("solver_sweeps")?.extract()?,
         islands: get("islands")?.extract()?,

@@ -17,6 +17,7 @@ OBSERVABLES = {
     "contacts": ("contacts", None),
     "impulse_balance": ("impulse_balance", "kg m s-1"),
     "collision_energy_lost": ("collision_energy_lost", "J"),
+    "impacts": ("impacts", None),
 }
 # the group of /observables with one potential energy per force, J
 BY_FORCE = "potential_energy_by_force"

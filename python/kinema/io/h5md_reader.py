@@ -77,6 +77,7 @@ class LoadedTrajectory:
     contacts: np.ndarray | None = None
     impulse_balance: np.ndarray | None = None
     collision_energy_lost: np.ndarray | None = None
+    impacts: np.ndarray | None = None
     masses: np.ndarray | None = None
     radii: np.ndarray | None = None
     ids: np.ndarray | None = None

@@ -613,6 +613,7 @@ class CollisionsTable(_Model):
     youngs_modulus: Positive | None = _COLLISION_DEFAULTS["youngs_modulus"]
     poisson_ratio: NonNeg | None = _COLLISION_DEFAULTS["poisson_ratio"]
     event_driven: bool = _COLLISION_DEFAULTS["event_driven"]
+    rolling_friction: NonNeg = _COLLISION_DEFAULTS["rolling_friction"]
     periodic: Annotated[list[bool], Field(min_length=2, max_length=3)] | None = None
 
     @model_validator(mode="after")

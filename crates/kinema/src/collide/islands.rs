@@ -137,6 +137,8 @@ pub(crate) struct EndProblem<'a> {
     pub inv_mass: &'a [f64],
     pub materials: MaterialTable<'a>,
     pub spin: Option<(Rotation<'a>, &'a [f64])>,
+    /// Rolling resistance μ_r (with spin).
+    pub rolling: f64,
     pub params: SoftParams,
 }
 
@@ -153,12 +155,14 @@ pub(crate) struct IslandStats {
 /// particles. `solved` holds each contact's starting total (the warm start) on entry and its
 /// solve stage's total on return; `totals` receives each contact's final total impulse on i
 /// (N·s; the caller applies them to the velocities, `v` is not changed); the positions `x`
-/// are moved in place by what the solve stage did.
+/// are moved in place by what the solve stage did. With rolling resistance, `rolls` receives
+/// each contact's angular impulse on i (N·m·s; left empty without).
 pub(crate) fn solve(
     islands: &Islands,
     problem: &EndProblem<'_>,
     solved: &mut [[f64; 3]],
     totals: &mut [[f64; 3]],
+    rolls: &mut Vec<[f64; 3]>,
     v: &[f64],
     x: &mut [f64],
 ) -> Result<IslandStats, Error> {
@@ -186,6 +190,10 @@ pub(crate) fn solve(
     // two immovable bodies, carries nothing).
     solved.fill([0.0; 3]);
     totals.fill([0.0; 3]);
+    rolls.clear();
+    if problem.spin.is_some() && problem.rolling > 0.0 {
+        rolls.resize(totals.len(), [0.0; 3]);
+    }
     let mut stats = IslandStats {
         islands: islands.len(),
         soft: SoftStats {
@@ -197,6 +205,9 @@ pub(crate) fn solve(
         for ((&c, p), s) in island.order.iter().zip(&island.totals).zip(&island.solved) {
             totals[c] = *p;
             solved[c] = *s;
+        }
+        for (&c, m) in island.order.iter().zip(&island.rolls) {
+            rolls[c] = *m;
         }
         for (&q, p) in island.moved.iter().zip(&island.positions) {
             x[3 * q..3 * q + 3].copy_from_slice(p);
@@ -217,6 +228,7 @@ pub(crate) fn solve(
 struct Solved {
     order: Vec<usize>,
     totals: Vec<[f64; 3]>,
+    rolls: Vec<[f64; 3]>,
     solved: Vec<[f64; 3]>,
     moved: Vec<usize>,
     positions: Vec<[f64; 3]>,
@@ -328,16 +340,19 @@ impl Local {
                 inv_inertia: &self.inv_inertia,
                 radius: &self.radius,
             }),
+            rolling: problem.rolling,
         };
         let (v, x, groups) = (&mut self.v, &mut self.x, &self.groups);
+        let mut rolls = Vec::new();
         let soft = match held.rotation {
-            Some(_) => soft_step::<6>(held, &params, v, x, &mut solved, &mut totals, groups)?,
-            None => soft_step::<3>(held, &params, v, x, &mut solved, &mut totals, groups)?,
+            Some(_) => soft_step::<6>(held, &params, v, x, &mut solved, &mut totals, &mut rolls, groups)?,
+            None => soft_step::<3>(held, &params, v, x, &mut solved, &mut totals, &mut rolls, groups)?,
         };
         let moved: Vec<usize> = (0..parts.len()).filter(|&l| self.inv_mass[l] > 0.0).collect();
         Ok(Solved {
             order,
             totals,
+            rolls,
             solved,
             positions: moved.iter().map(|&l| vec3::get(&self.x, l)).collect(),
             moved: moved.iter().map(|&l| parts[l]).collect(),
@@ -492,6 +507,7 @@ mod tests {
             inv_mass,
             materials: MaterialTable::uniform(Material::new(0.0, 0.3).unwrap()).with_colliders(floor),
             spin: None,
+            rolling: 0.0,
             params: SoftParams {
                 h: H,
                 tolerance: 0.0,
@@ -564,7 +580,7 @@ mod tests {
         let mut solved = vec![[0.0; 3]; contacts.len()];
         let mut totals = vec![[0.0; 3]; contacts.len()];
         let mut x_islands = x.clone();
-        let stats = solve(&islands, &p, &mut solved, &mut totals, &v, &mut x_islands).unwrap();
+        let stats = solve(&islands, &p, &mut solved, &mut totals, &mut Vec::new(), &v, &mut x_islands).unwrap();
         assert_eq!((stats.soft.sweeps, stats.islands), (7 * COLD_SWEEPS, 3));
 
         let mut all_solved = vec![[0.0; 3]; contacts.len()];
@@ -576,6 +592,7 @@ mod tests {
             inv_mass: &inv_mass,
             materials: &p.materials,
             rotation: None,
+            rolling: 0.0,
         };
         let in_order = [SweepGroup::in_order(0..contacts.len())];
         let cold = SoftParams {
@@ -590,6 +607,7 @@ mod tests {
             &mut x_all,
             &mut all_solved,
             &mut all_totals,
+            &mut Vec::new(),
             &in_order,
         )
         .unwrap();
@@ -623,7 +641,7 @@ mod tests {
                 let mut solved = vec![[0.0; 3]; contacts.len()];
                 let mut totals = vec![[0.0; 3]; contacts.len()];
                 let mut x = x.clone();
-                let stats = solve(&islands, &p, &mut solved, &mut totals, &v, &mut x).unwrap();
+                let stats = solve(&islands, &p, &mut solved, &mut totals, &mut Vec::new(), &v, &mut x).unwrap();
                 (totals, x, stats)
             })
         };

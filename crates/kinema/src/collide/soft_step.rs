@@ -34,7 +34,12 @@
 //!
 //! With spin (`collide/spin.rs`) the sweeps carry each particle's velocity and angular
 //! velocity (6 values), the tangential targets are the contact point's velocity, and the
-//! tangential effective mass is 1/w_t. The sticking target is the same: stage 1 does not
+//! tangential effective mass is 1/w_t. Rolling resistance (`rolling_friction` μ_r > 0) adds a
+//! third total to each contact: an angular impulse M ⊥ n, +M on i and −M on j, that brings the
+//! relative turning (ω_i − ω_j) across n to 0 in the solve and relax stages, within the cone
+//! |M| ≤ μ_r R* λ (R* = r_i r_j / (r_i + r_j), r_i against a collider: the rolling torque
+//! μ_r R* F_n of LAMMPS's `rolling sds` at its slider's limit). Its effective mass is
+//! 1/(k_i + k_j) (k = 1/I). The sticking target is the same: stage 1 does not
 //! turn a particle, so the contact point's slip over the step with the solve's impulse taken
 //! at its start is d_t + h (u_c − u₁t), zero for u_c = u₁t − d_t/h (a ball rolling on a floor
 //! has u₁t = d_t/h and keeps rolling; the relax then holds its contact point still).
@@ -155,6 +160,8 @@ pub(crate) struct SoftContacts<'a> {
     pub inv_mass: &'a [f64],
     pub materials: &'a MaterialTable<'a>,
     pub rotation: Option<Rotation<'a>>,
+    /// Rolling resistance μ_r (≥ 0; with spin).
+    pub rolling: f64,
 }
 
 /// The soft step's stages (see the module's doc) on velocities `v` (N per particle: the
@@ -164,7 +171,9 @@ pub(crate) struct SoftContacts<'a> {
 ///
 /// `solved`: each contact's starting total on entry (the last step's solve, for the warm
 /// start; zeros if none), its solve stage's total on return (the next step's warm start).
-/// `totals`: each contact's final total impulse on i, N·s (−total on a partner particle).
+/// `totals`: each contact's final total impulse on i, N·s (−total on a partner particle);
+/// `rolls`: with rolling resistance, its final angular impulse on i, N·m·s (−on a partner).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn soft_step<const N: usize>(
     held: SoftContacts<'_>,
     params: &SoftParams,
@@ -172,6 +181,7 @@ pub(crate) fn soft_step<const N: usize>(
     x: &mut [f64],
     solved: &mut [[f64; 3]],
     totals: &mut Vec<[f64; 3]>,
+    rolls: &mut Vec<[f64; 3]>,
     groups: &[SweepGroup],
 ) -> Result<SoftStats, Error> {
     let SoftContacts {
@@ -180,6 +190,7 @@ pub(crate) fn soft_step<const N: usize>(
         inv_mass,
         materials,
         rotation,
+        rolling,
     } = held;
     debug_assert!(N == 3 || (N == 6 && rotation.is_some()));
     let h = params.h;
@@ -192,16 +203,25 @@ pub(crate) fn soft_step<const N: usize>(
             let w = wi + wj;
             let mass = if w > 0.0 { 1.0 / w } else { 0.0 };
             // with spin: the arms, the turn per unit of n × p, and the tangential mass
-            let (turn, mass_t) = match rotation {
+            let (turn, mass_t, roll) = match rotation {
                 Some(r) => {
                     let ((rho_i, rho_j), (ki, kj)) = (r.arms(c, target.rest), r.inverse_inertias(c));
                     let w_t = w + ki * rho_i * rho_i + kj * rho_j * rho_j;
+                    let ri = r.radius[c.i];
+                    let r_star = c.partner_particle().map_or(ri, |j| ri * r.radius[j] / (ri + r.radius[j]));
+                    let roll = Roll {
+                        k: [ki, kj],
+                        mass: if ki + kj > 0.0 { 1.0 / (ki + kj) } else { 0.0 },
+                        cap: rolling * r_star,
+                        r_star,
+                    };
                     (
                         [rho_i, rho_j, ki * rho_i, kj * rho_j],
                         if w_t > 0.0 { 1.0 / w_t } else { 0.0 },
+                        roll,
                     )
                 }
-                None => ([0.0; 4], mass),
+                None => ([0.0; 4], mass, Roll::default()),
             };
             Row {
                 wi,
@@ -209,6 +229,7 @@ pub(crate) fn soft_step<const N: usize>(
                 mass,
                 mass_t,
                 turn,
+                roll,
                 mu: materials.pair(c).friction(),
                 n: c.normal,
                 has_j: c.partner_particle().is_some(),
@@ -218,7 +239,7 @@ pub(crate) fn soft_step<const N: usize>(
     let before = v.to_vec();
 
     // Warm start: each starting total projected onto λ ≥ 0 and the cone, then applied.
-    let mut acc: Vec<(f64, [f64; 3])> = vec![(0.0, [0.0; 3]); contacts.len()];
+    let mut acc: Vec<(f64, [f64; 3], [f64; 3])> = vec![(0.0, [0.0; 3], [0.0; 3]); contacts.len()];
     for (k, (r, e)) in rows.iter().zip(&ends).enumerate() {
         let start = solved[k];
         let Some(e) = e else { continue };
@@ -227,7 +248,7 @@ pub(crate) fn soft_step<const N: usize>(
         }
         let lambda = vec3::dot(start, r.n).max(0.0);
         let t = r.clamp(vec3::sub(start, vec3::scale(vec3::dot(start, r.n), r.n)), lambda);
-        acc[k] = (lambda, t);
+        acc[k] = (lambda, t, [0.0; 3]);
         let (mut vi, mut vj) = e.load::<N>(v);
         r.apply(&mut vi, &mut vj, vec3::add(vec3::scale(lambda, r.n), t));
         e.store(v, vi, vj);
@@ -309,24 +330,44 @@ pub(crate) fn soft_step<const N: usize>(
     }
 
     totals.clear();
-    totals.extend(rows.iter().zip(&acc).zip(&ends).map(|((r, (lambda, t)), e)| match e {
+    totals.extend(rows.iter().zip(&acc).zip(&ends).map(|((r, (lambda, t, _)), e)| match e {
         Some(_) => vec3::add(vec3::scale(*lambda, r.n), *t),
         None => [0.0; 3],
     }));
+    rolls.clear();
+    if N == 6 && rolling > 0.0 {
+        rolls.extend(
+            acc.iter()
+                .zip(&ends)
+                .map(|((_, _, m), e)| if e.is_some() { *m } else { [0.0; 3] }),
+        );
+    }
     stats.active = totals.iter().filter(|p| **p != [0.0; 3]).count();
     Ok(stats)
+}
+
+/// A contact's rolling resistance (module doc): the inverse inertias k_i, k_j (1/(kg·m²)),
+/// the angular effective mass 1/(k_i + k_j) (kg·m²), the cap μ_r R* (m; the angular
+/// impulse's bound per unit normal impulse) and R* (m). Without: all 0.
+#[derive(Clone, Copy, Default)]
+struct Roll {
+    k: [f64; 2],
+    mass: f64,
+    cap: f64,
+    r_star: f64,
 }
 
 /// A contact of [`soft_step`]: its inverse masses w (1/kg), effective mass 1/(w_i + w_j)
 /// (kg) along n and 1/w_t across (the same without spin), friction μ, normal n, whether its
 /// partner is a particle, and with spin `turn` = [ρ_i, ρ_j, k_i ρ_i, k_j ρ_j] (m, m and
-/// 1/(kg·m); `collide/spin.rs`).
+/// 1/(kg·m); `collide/spin.rs`) and its rolling resistance.
 struct Row {
     wi: f64,
     wj: f64,
     mass: f64,
     mass_t: f64,
     turn: [f64; 4],
+    roll: Roll,
     mu: f64,
     n: [f64; 3],
     has_j: bool,
@@ -386,7 +427,7 @@ impl Row {
         &self,
         vi: &mut [f64; N],
         vj: &mut [f64; N],
-        (normal, tangent): &mut (f64, [f64; 3]),
+        (normal, tangent, roll): &mut (f64, [f64; 3], [f64; 3]),
         b_n: f64,
         b_t: Option<[f64; 3]>,
     ) -> f64 {
@@ -421,6 +462,53 @@ impl Row {
                 self.apply(vi, vj, dt);
             }
         }
+        if N == 6 && self.roll.cap > 0.0 {
+            let change_roll = self.visit_roll(vi, vj, roll, total, b_t.is_some());
+            change = change.max(change_roll);
+        }
         change
+    }
+
+    /// The rolling resistance's part of a visit: with `hold`, the angular impulse M that
+    /// brings the relative turning across n to 0 within |M| ≤ μ_r R* λ; without (the
+    /// restitution stage), M kept within the cone of a shrinking λ. Returns the change as a
+    /// velocity at R*, m/s.
+    fn visit_roll<const N: usize>(
+        &self,
+        vi: &mut [f64; N],
+        vj: &mut [f64; N],
+        roll: &mut [f64; 3],
+        lambda: f64,
+        hold: bool,
+    ) -> f64 {
+        let r = self.roll;
+        let old = *roll;
+        let wanted = if hold {
+            let w: [f64; 3] = std::array::from_fn(|k| vi[3 + k] - vj[3 + k]);
+            let w_t = vec3::sub(w, vec3::scale(vec3::dot(w, self.n), self.n));
+            vec3::sub(old, vec3::scale(r.mass, w_t))
+        } else {
+            old
+        };
+        let (len, cap) = (vec3::norm(wanted), r.cap * lambda);
+        let m = if len > cap {
+            vec3::scale(if len > 0.0 { cap / len } else { 0.0 }, wanted)
+        } else {
+            wanted
+        };
+        let dm = vec3::sub(m, old);
+        if dm == [0.0; 3] {
+            return 0.0;
+        }
+        *roll = m;
+        for k in 0..3 {
+            vi[3 + k] += r.k[0] * dm[k];
+        }
+        if self.has_j {
+            for k in 0..3 {
+                vj[3 + k] -= r.k[1] * dm[k];
+            }
+        }
+        vec3::norm(dm) / r.mass.max(f64::MIN_POSITIVE) * r.r_star
     }
 }

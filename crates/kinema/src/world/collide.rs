@@ -27,7 +27,7 @@ impl World {
             // The spring–dashpot model acted in stage 1, as a force; what is left here is
             // keeping positions in the periodic cell (Verlet's drift wrapped them already,
             // before its force evaluation: a second pass would change nothing).
-            stage.clear_step();
+            stage.book_contact_force(self.params.dt);
             let wrapped = matches!(self.stepper, Some(WorldStepper::Verlet(_)));
             if let Some(p) = stage.domain.periodic_box().filter(|_| !wrapped) {
                 p.wrap_positions(&mut self.x_next);

@@ -29,6 +29,7 @@ impl ContactForce<'_> {
             energy: true,
             walls,
             check_positions: false,
+            books: None,
         };
         match f {
             Some(f) => {
@@ -45,14 +46,16 @@ impl ContactForce<'_> {
 
     /// The force of contact `c` along its normal, N (> 0 pushes apart), or `None` when it
     /// exerts none (not overlapping, or both sides immovable).
+    /// With its dashpot c_n, kg/s.
     #[inline(always)]
-    pub(super) fn normal_force(&self, c: &Contact) -> Option<f64> {
+    pub(super) fn normal_force_parts(&self, c: &Contact) -> Option<(f64, f64)> {
         let w = self.inverse_mass_sum(c);
         if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
             return None;
         }
         let k = self.stiffness_of(c);
-        Some(spring_dashpot_force(k, self.dashpot_at(c, w, k), c.overlap, c.u_n))
+        let dashpot = self.dashpot_at(c, w, k);
+        Some((spring_dashpot_force(k, dashpot, c.overlap, c.u_n), dashpot))
     }
 
     /// The secant stiffness F_el/δ of contact `c` at its overlap δ > 0, N/m: k_n with Hooke's

@@ -120,6 +120,11 @@ impl SpringDashpot {
         self.scratch().list.verified = None;
     }
 
+    /// The contact books of the last fused Verlet pass, once (`None`: no such pass since).
+    pub(crate) fn take_books(&self) -> Option<pairs::ContactBooks> {
+        self.scratch().books.take()
+    }
+
     /// Forgets the pair energy the last fused pass kept (the world calls this after the
     /// runaway check, so that a buffer reused later is summed again).
     pub fn forget_energy(&self) {
@@ -207,6 +212,9 @@ struct Scratch {
     /// pass (the same sum, in the same order). Taken once; the world forgets it after the
     /// check ([`ContactForce::forget_energy`]).
     pair_energy: Option<((usize, usize), f64)>,
+    /// The contact books of the last fused Verlet pass, until the world takes them
+    /// ([`SpringDashpot::take_books`]).
+    books: Option<pairs::ContactBooks>,
 }
 
 impl Default for Scratch {
@@ -220,6 +228,7 @@ impl Default for Scratch {
             sums: Vec::new(),
             exchange: Exchange::default(),
             pair_energy: None,
+            books: None,
         }
     }
 }

@@ -87,6 +87,51 @@ pub(super) struct PassOptions {
     /// Find each chunk's first non-finite position coordinate (x_i is at hand here: the
     /// Verlet kick need not read the positions again for its check).
     pub check_positions: bool,
+    /// Keep the contacts' books ([`ContactBooks`]) for a step of this length, s.
+    pub books: Option<f64>,
+}
+
+/// What the contacts of one force evaluation did, for the collision books (a step's: the
+/// step's force evaluation of velocity Verlet).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct ContactBooks {
+    /// Contacts pushing (overlapping pairs and particle–collider contacts).
+    pub contacts: usize,
+    /// Of them, those that began within the step: δ − h δ' ≤ 0, the overlap one step earlier
+    /// on the current approach (δ' = −u_n), is no overlap. An impact's count.
+    pub begun: usize,
+    /// The dashpots' power Σ c_n u_n², W (≥ 0).
+    pub power: f64,
+    /// Σ (x_i − x_j) ⊗ F of the pairs (colliders left out), N·m, row-major 3 × 3.
+    pub virial: [f64; 9],
+}
+
+impl ContactBooks {
+    fn add(&mut self, other: &ContactBooks) {
+        self.contacts += other.contacts;
+        self.begun += other.begun;
+        self.power += other.power;
+        for k in 0..9 {
+            self.virial[k] += other.virial[k];
+        }
+    }
+
+    /// The books of a contact with force `force` (N, along n) and dashpot `dashpot` (kg/s),
+    /// `arm` its separation |x_i − x_j| (m; `None` against a collider), in a step `h`.
+    #[inline]
+    fn book(&mut self, c: &crate::collide::Contact, force: f64, dashpot: f64, arm: Option<f64>, h: f64) {
+        self.contacts += 1;
+        self.begun += usize::from(c.overlap + c.u_n * h <= 0.0);
+        self.power += dashpot * c.u_n * c.u_n;
+        if let Some(d) = arm {
+            let n = c.normal;
+            for r in 0..3 {
+                for k in 0..3 {
+                    self.virial[3 * r + k] += d * force * n[r] * n[k];
+                }
+            }
+        }
+    }
 }
 
 /// What stage 1 of the pair pass found in one chunk.
@@ -96,6 +141,17 @@ pub(super) struct ChunkSums {
     pub energy: f64,
     /// The index of its first non-finite position coordinate, when asked and there is one.
     pub bad: Option<usize>,
+    /// The chunk's contact books, when asked.
+    pub books: ContactBooks,
+}
+
+/// The chunks' books summed in chunk order (the same on any number of threads).
+pub(super) fn summed_books(sums: &[ChunkSums]) -> ContactBooks {
+    let mut all = ContactBooks::default();
+    for s in sums {
+        all.add(&s.books);
+    }
+    all
 }
 
 impl ContactForce<'_> {
@@ -133,6 +189,7 @@ impl ContactForce<'_> {
             let mut walls = list.walls[w0..w1].iter().peekable();
             let mut energy = -0.0;
             let mut bad = None;
+            let mut books = ContactBooks::default();
             for l in 0..len {
                 let i = first + l;
                 let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
@@ -152,9 +209,14 @@ impl ContactForce<'_> {
                             energy += u;
                         }
                     }
-                    let (Some(fc), Some(force)) = (fc.as_deref_mut(), self.normal_force(&contact)) else {
+                    let Some(fc) = fc.as_deref_mut() else { continue };
+                    let Some((force, dashpot)) = self.normal_force_parts(&contact) else {
                         continue;
                     };
+                    if let Some(h) = options.books {
+                        let arm = self.radius[i] + self.radius[j] - contact.overlap;
+                        books.book(&contact, force, dashpot, Some(arm), h);
+                    }
                     let fv = contact.normal.map(|n| force * n);
                     for k in 0..3 {
                         fc[3 * l + k] += fv[k];
@@ -172,7 +234,10 @@ impl ContactForce<'_> {
                 };
                 while let Some(&(_, k)) = walls.next_if(|w| w.0 == i) {
                     self.wall_contacts(i, k, x, v, |contact| {
-                        if let Some(force) = self.normal_force(contact) {
+                        if let Some((force, dashpot)) = self.normal_force_parts(contact) {
+                            if let Some(h) = options.books {
+                                books.book(contact, force, dashpot, None, h);
+                            }
                             for k in 0..3 {
                                 fc[3 * l + k] += force * contact.normal[k];
                             }
@@ -180,7 +245,7 @@ impl ContactForce<'_> {
                     });
                 }
             }
-            ChunkSums { energy, bad }
+            ChunkSums { energy, bad, books }
         };
         match forces {
             Some(f) => f

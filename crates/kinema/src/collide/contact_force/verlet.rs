@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::pairs::PassOptions;
+use super::pairs::{summed_books, ChunkSums, ContactBooks, PassOptions};
 use super::{ContactForce, Scratch, CHUNK};
 use crate::error::Error;
 use crate::forces::State;
@@ -30,6 +30,11 @@ pub(crate) struct VerletKick<'a> {
     /// Also sum the pair energy at the drifted positions, for the runaway check that asks
     /// for it right after ([`ContactForce::forget_energy`] drops it).
     pub energy: bool,
+}
+
+/// The step's contact books, summed from the chunks' (in chunk order), for the world to take.
+fn scratch_books(books: &mut Option<ContactBooks>, sums: &[ChunkSums]) {
+    *books = Some(summed_books(sums));
 }
 
 impl ContactForce<'_> {
@@ -68,6 +73,7 @@ impl ContactForce<'_> {
             sums,
             exchange,
             pair_energy,
+            books,
             ..
         } = &mut *scratch;
         let (x, vp) = (s.x, s.v);
@@ -81,8 +87,10 @@ impl ContactForce<'_> {
             energy,
             walls: true,
             check_positions: true,
+            books: Some(h),
         };
         self.pair_forces(x, vp, list, Some(&mut *v_out), start, options, exchange, sums);
+        scratch_books(books, sums);
         *pair_energy = energy.then(|| {
             (
                 (x.as_ptr() as usize, x.len()),

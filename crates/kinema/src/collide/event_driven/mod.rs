@@ -536,6 +536,7 @@ impl EventDriven {
             }
             stats.impulse_balance[k] += balance;
         }
+        crate::collide::impulse::add_outer(&mut stats.virial, d, imp.vector);
         self.bodies[i].path = self.bodies[i].path.wrapping_add(1);
         self.bodies[j].path = self.bodies[j].path.wrapping_add(1);
         stats.impacts += 1;

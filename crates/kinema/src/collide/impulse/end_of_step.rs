@@ -322,6 +322,7 @@ impl ImpulseModel {
             inv_mass,
             materials,
             spin: set.rotation.map(|r| (r, omega)),
+            rolling: set.rolling_friction,
             params: SoftParams {
                 h,
                 tolerance: VELOCITY_TOLERANCE,
@@ -330,7 +331,15 @@ impl ImpulseModel {
             },
         };
         self.islands = Islands::find(&self.contacts, inv_mass);
-        let stats = islands::solve(&self.islands, &problem, &mut self.solved, &mut self.totals, v1, x1)?;
+        let stats = islands::solve(
+            &self.islands,
+            &problem,
+            &mut self.solved,
+            &mut self.totals,
+            &mut self.rolls,
+            v1,
+            x1,
+        )?;
         for &(q, c) in &euler {
             vec3::add_scaled(x1, q, 1.0, c);
         }

@@ -244,6 +244,10 @@ impl ImpulseModel {
                     mass,
                     &mut stats.impulse_balance,
                 );
+                if let Some(j) = partner {
+                    let d = s.set.domain.displacement(paths.x_ref(event.i), paths.x_ref(j));
+                    super::add_outer(&mut stats.virial, d, imp.vector);
+                }
                 if let (Partner::Collider(k), Some(c)) = (event.partner, contact) {
                     let at = vec3::sub(paths.x_ref(event.i), vec3::scale(s.set.radius[event.i], c.normal));
                     self.collider_books[k].book(at, c.wall_velocity, imp.vector);

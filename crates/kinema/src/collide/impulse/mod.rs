@@ -50,7 +50,15 @@ pub struct CollisionStats {
     /// particles, zero by action and reaction up to rounding.
     pub impulse_balance: [f64; 3],
     /// Kinetic energy removed by the collisions, J (≥ 0; 0 for e = 1 without friction).
+    /// With the spring–dashpot and Hertz models (velocity Verlet): the dashpots' power
+    /// c_n u_n² at each step's force evaluation times the step.
     pub energy_lost: f64,
+    /// The virial of the pair interactions, Σ (x_i − x_j) ⊗ J (N·m·s, row-major 3 × 3): each
+    /// impulse J between two particles at their separation (the minimum image), and with the
+    /// force models h Σ (x_i − x_j) ⊗ F at each step's force evaluation; summed over steps.
+    /// Divided by a time and a volume it is the interactions' part of the pressure tensor
+    /// (colliders excluded: `Trajectory.pressure`).
+    pub virial: [f64; 9],
     /// The largest overlap left after the step, m.
     pub max_overlap: f64,
     /// Sweeps of the end-of-step velocity solver (the latest step's; the most any island took).
@@ -84,6 +92,9 @@ impl CollisionStats {
             self.impulse_balance[k] += step.impulse_balance[k];
         }
         self.energy_lost += step.energy_lost;
+        for k in 0..9 {
+            self.virial[k] += step.virial[k];
+        }
         self.max_overlap = step.max_overlap;
         self.solver_sweeps = step.solver_sweeps;
         self.islands = step.islands;
@@ -92,6 +103,15 @@ impl CollisionStats {
         self.slept += step.slept;
         self.woke += step.woke;
         self.unconverged += step.unconverged;
+    }
+}
+
+/// Adds the outer product a ⊗ b to the row-major 3 × 3 `m` (a virial's Σ r ⊗ J).
+pub(crate) fn add_outer(m: &mut [f64; 9], a: [f64; 3], b: [f64; 3]) {
+    for r in 0..3 {
+        for c in 0..3 {
+            m[3 * r + c] += a[r] * b[c];
+        }
     }
 }
 
@@ -149,6 +169,8 @@ pub(crate) struct StageSetting<'a> {
     pub mass: &'a [f64],
     /// With spin: the particles' inverse moments of inertia and radii (`collide/spin.rs`).
     pub rotation: Option<Rotation<'a>>,
+    /// Rolling resistance μ_r ([`crate::world::CollisionParams::rolling_friction`]; with spin).
+    pub rolling_friction: f64,
 }
 
 /// What the stages keep of their contacts while particles are added
@@ -191,6 +213,9 @@ pub(crate) struct ImpulseModel {
     pub(super) totals: Vec<[f64; 3]>,
     /// The solve stage's totals (the next step's warm start), N·s.
     pub(super) solved: Vec<[f64; 3]>,
+    /// With rolling resistance, each end-of-step contact's final angular impulse on i,
+    /// N·m·s (empty without).
+    pub(super) rolls: Vec<[f64; 3]>,
     /// The particles the end-of-step stage acted on in this step (for the books).
     pub(super) acted: Vec<bool>,
     /// Each end-of-step contact's targets (`collide/soft_step.rs`).
@@ -228,6 +253,7 @@ impl ImpulseModel {
             detected: Vec::new(),
             totals: Vec::new(),
             solved: Vec::new(),
+            rolls: Vec::new(),
             acted: Vec::new(),
             prepared: Vec::new(),
             warm: Vec::new(),
@@ -584,8 +610,19 @@ impl ImpulseModel {
             changed = true;
             stats.impulses += 1;
             distribute(c.i, c.partner_particle(), *p, v1, inv_mass, mass, &mut stats.impulse_balance);
+            if let Some(j) = c.partner_particle() {
+                let d = set.domain.displacement(vec3::get(x1, c.i), vec3::get(x1, j));
+                add_outer(&mut stats.virial, d, *p);
+            }
             if let Some(r) = set.rotation {
                 r.kick(c, self.prepared[k].rest, *p, omega);
+            }
+            if let (Some(r), Some(m)) = (set.rotation, self.rolls.get(k)) {
+                // the rolling resistance's angular impulse: +M on i, −M on j
+                vec3::add_scaled(omega, c.i, r.inv_inertia[c.i], *m);
+                if let Some(j) = c.partner_particle() {
+                    vec3::add_scaled(omega, j, -r.inv_inertia[j], *m);
+                }
             }
             if let Partner::Collider(k) = c.other {
                 let at = vec3::sub(vec3::get(x1, c.i), vec3::scale(set.radius[c.i] - c.overlap, c.normal));
