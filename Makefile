@@ -41,13 +41,15 @@ $(BUILT): $(STAMP) $(RUST_SOURCES)
 
 # The documentation site: docs/ with the API reference from the docstrings (mkdocstrings) and
 # the command line's (mkdocs-click), built strictly (mkdocs.yml: a warning fails) into site/.
+# JUPYTER_CONFIG_PATH: requirements/jupyter/jupyter_config.json has the notebooks' kernels
+# started with CurveZMQ encryption, not over plain TCP (ipykernel warns of that once per notebook).
 DOCS_STAMP := $(VENV)/.docs-deps-installed
 $(DOCS_STAMP): $(STAMP) requirements/docs.txt
 	$(PIP) install --disable-pip-version-check -q -r requirements/docs.txt
 	touch $@
 
 docs: $(BUILT) $(DOCS_STAMP)
-	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict
+	JUPYTER_CONFIG_PATH=$(CURDIR)/requirements/jupyter NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict
 
 # The browser viewer's script: three.js and viewer/src bundled by esbuild (pinned in
 # viewer/package-lock.json). The bundle is committed, so that building and installing kinema

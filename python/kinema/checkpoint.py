@@ -3,9 +3,9 @@ goes on exactly as the one that wrote it.
 
 What a checkpoint holds (an HDF5 file, written under a temporary name and renamed):
 
-- the world as a scene (``World.to_scene``: particles with their state to every bit, masses,
+- the world as a scene (`World.to_scene`: particles with their state to every bit, masses,
   radii, pinned, species and own materials; forces, colliders, collision settings,
-  periodicity, emitters and kill volumes), in the attribute ``scene`` (TOML);
+  periodicity, emitters and kill volumes), in the attribute `scene` (TOML);
 - the time, the step count, each particle's id and the next id;
 - what the Python world keeps per particle: time of death, own colour; the springs' end ids;
 - each emitter's progress (particles emitted, births held back) and the state of its four random streams;
@@ -23,14 +23,14 @@ world sorted along space. In a dense pile under the impulse model the rebuilt ca
 changes the last bits (measured: the demo's pile first differs 54 steps after a checkpoint,
 by 2e-6 m, then chaotically); the run and its resumption still agree to every bit.
 
-A world with a ``PythonForce`` cannot be written (a Python function is not data); a scene's
+A world with a `PythonForce` cannot be written (a Python function is not data); a scene's
 duration, fps and render settings come along when the world was loaded from a scene.
 
 Reading one back checks every field first (present, of its type, shape, finite, in range,
 consistent with the others; the scene by the scene's validation): a damaged, truncated or
-foreign file is one ``CheckpointError``, one line naming the file, the field and the value
-(see "reading, every field checked" below). ``run_plan`` reads what a run in progress has
-left to do without building its world, for a work estimate (``kinema run --resume``).
+foreign file is one `CheckpointError`, one line naming the file, the field and the value
+(see "reading, every field checked" below). `run_plan` reads what a run in progress has
+left to do without building its world, for a work estimate (`kinema run --resume`).
 """
 
 from __future__ import annotations
@@ -54,8 +54,8 @@ VERSION = 1
 
 
 def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> Path:
-    """Write ``world`` to ``path`` (see the module doc) and restart its caches; returns the path.
-    (``_run``: the progress of ``World.run``, written by it; see ``resume_run``.)"""
+    """Write `world` to `path` (see the module doc) and restart its caches; returns the path.
+    (`_run`: the progress of `World.run`, written by it; see `resume_run`.)"""
     from . import __version__
     from .io._files import hdf5_file
 
@@ -178,9 +178,9 @@ def _plain(value: Any) -> Any:
 class CheckpointError(TrajectoryFileError):
     """A checkpoint that cannot be read back: missing, not HDF5, truncated, not a kinema
     checkpoint, or with a field missing or damaged. The message is one line naming the file
-    and the field (``attribute 'time'``, ``dataset 'run/x'``, ``attribute 'emitters'
-    [0].emitted``), the value found and what is allowed. A ``ValueError`` (by way of
-    ``kinema.io.TrajectoryFileError``): the command line prints it as one line, exit 2."""
+    and the field (`attribute 'time'`, `dataset 'run/x'`, `attribute 'emitters'
+    [0].emitted`), the value found and what is allowed. A `ValueError` (by way of
+    `kinema.io.TrajectoryFileError`): the command line prints it as one line, exit 2."""
 
     __module__ = "kinema.checkpoint"
 
@@ -215,7 +215,7 @@ def _at(field: str, index: tuple[int, ...]) -> str:
 
 
 class _Reader:
-    """The checked reads of one open checkpoint. ``field`` is what is being read, named in
+    """The checked reads of one open checkpoint. `field` is what is being read, named in
     the message when h5py or numpy fails on it."""
 
     def __init__(self, path: Path, f: Any) -> None:
@@ -258,8 +258,8 @@ class _Reader:
         return v
 
     def numbers(self, field: str, value: Any, shape: tuple[int | None, ...], integer: bool = False) -> np.ndarray:
-        """A JSON list nested as ``shape`` (None: any length) of numbers (integers when
-        ``integer``; a bool is neither) as an array (int64 or float64)."""
+        """A JSON list nested as `shape` (None: any length) of numbers (integers when
+        `integer`; a bool is neither) as an array (int64 or float64)."""
         must = "an integer" if integer else "a number"
 
         def walk(v: Any, depth: int, index: tuple[int, ...]) -> None:
@@ -284,7 +284,7 @@ class _Reader:
         return a.reshape([-1 if s is None else s for s in shape]) if a.size == 0 else a
 
     def array(self, field: str, value: Any, shape: tuple[int | None, ...], kind: str) -> np.ndarray:
-        """An array as ``_plain`` writes it, {"__array__": [...], "dtype": "..."}: ``kind``
+        """An array as `_plain` writes it, {"__array__": [...], "dtype": "..."}: `kind`
         "int", "real" or "text" (names)."""
         if not (isinstance(value, dict) and set(value) == {"__array__", "dtype"}):
             raise self.invalid(field, value, "it must be an array written as {'__array__': [...], 'dtype': '...'}")
@@ -307,7 +307,7 @@ class _Reader:
         return np.array(data, dtype=str)
 
     def each(self, field: str, a: np.ndarray, ok: np.ndarray, allowed: str) -> None:
-        """Refuses the first element of ``a`` where ``ok`` is False, naming its index."""
+        """Refuses the first element of `a` where `ok` is False, naming its index."""
         ok = np.asarray(ok)
         if ok.size and not ok.all():
             index = np.unravel_index(int(np.argmin(ok)), ok.shape)
@@ -315,7 +315,7 @@ class _Reader:
 
     # -- the file
     def attr(self, name: str, group: str | None = None) -> tuple[str, Any]:
-        """The value of an attribute of the file (or of ``group``): one value, not an array."""
+        """The value of an attribute of the file (or of `group`): one value, not an array."""
         key = name if group is None else f"{group}/{name}"
         field = self.field = f"attribute {key!r}"
         holder = self.f if group is None else self.group(group)
@@ -373,8 +373,8 @@ class _Reader:
         return g
 
     def dataset(self, name: str, kind: str, shape: tuple[int | None, ...], allowed: str, read: bool = True) -> tuple[str, Any]:
-        """A dataset holding ``kind`` ("real": numbers, "int": integers, "bool") of ``shape``
-        (None: any length), checked before it is read, and read (its shape when not ``read``)."""
+        """A dataset holding `kind` ("real": numbers, "int": integers, "bool") of `shape`
+        (None: any length), checked before it is read, and read (its shape when not `read`)."""
         import h5py
 
         from .io._checks import dtype_problem
@@ -418,7 +418,7 @@ class _Reader:
         return field, a
 
     def engine(self, field: str, call: Any, *args: Any) -> Any:
-        """``call(*args)``, an engine's restore: what it refuses, named by ``field``."""
+        """`call(*args)`, an engine's restore: what it refuses, named by `field`."""
         self.field = field
         try:
             return call(*args)
@@ -428,8 +428,8 @@ class _Reader:
 
 @contextmanager
 def _reading(path: Path) -> Iterator[_Reader]:
-    """The checkpoint at ``path`` open, its format and version checked; any failure while
-    it is read is a ``CheckpointError``."""
+    """The checkpoint at `path` open, its format and version checked; any failure while
+    it is read is a `CheckpointError`."""
     import h5py
 
     if not path.exists():
@@ -495,7 +495,7 @@ def _scene_and_clock(r: _Reader, read_ids: bool = True) -> dict:
 
 
 def _load_world(r: _Reader) -> Any:
-    """The world of the checkpoint ``r`` reads, every field checked (see ``_reading``)."""
+    """The world of the checkpoint `r` reads, every field checked (see `_reading`)."""
     from .scene import SceneError
 
     c = _scene_and_clock(r)
@@ -566,8 +566,8 @@ def _load_world(r: _Reader) -> Any:
 
 
 def _collision_books(r: _Reader) -> dict:
-    """The collision books (attribute ``collision_stats``): "total" and "last", each the
-    counts and sums ``World.collision_stats`` gives."""
+    """The collision books (attribute `collision_stats`): "total" and "last", each the
+    counts and sums `World.collision_stats` gives."""
     field, books = r.json("collision_stats")
     if not (isinstance(books, dict) and set(books) == {"total", "last"}):
         raise r.invalid(field, books, "it must be {'total': {...}, 'last': {...}}")
@@ -602,7 +602,7 @@ def _collision_books(r: _Reader) -> dict:
 
 
 def _restore_emitters(r: _Reader, world: Any, time: float) -> None:
-    """Each emitter's progress and random streams (attribute ``emitters``), checked, given to
+    """Each emitter's progress and random streams (attribute `emitters`), checked, given to
     the world's emitters."""
     field, saved = r.json("emitters")
     sources = world._emitters
@@ -633,7 +633,7 @@ def _restore_emitters(r: _Reader, world: Any, time: float) -> None:
 
 
 def _check_stream(r: _Reader, field: str, state: Any) -> None:
-    """A PCG64 state as ``Generator.bit_generator.state`` gives it."""
+    """A PCG64 state as `Generator.bit_generator.state` gives it."""
     keys = {"bit_generator", "state", "has_uint32", "uinteger"}
     if not (isinstance(state, dict) and set(state) == keys):
         raise r.invalid(field, state, "it must be a PCG64 state {'bit_generator': 'PCG64', 'state': {'state', 'inc'}, 'has_uint32', 'uinteger'}")
@@ -679,8 +679,8 @@ def _check_waiting(r: _Reader, field: str, waiting: Any, dim: int) -> dict[str, 
 
 
 def _run_progress(r: _Reader, dt: float, steps: int) -> dict:
-    """How far the run in progress has come (the attributes of the group ``run``), checked:
-    frames recorded and in all, steps per frame (what ``fps`` makes of ``dt``), how often a
+    """How far the run in progress has come (the attributes of the group `run`), checked:
+    frames recorded and in all, steps per frame (what `fps` makes of `dt`), how often a
     checkpoint is written; and that it ends within the steps a clock counts."""
     if "run" not in r.f:
         raise CheckpointError(f"{r.path}: a checkpoint of a world, not of a run in progress (no group 'run'; World.run(checkpoint=...) writes those)")
@@ -711,7 +711,7 @@ def _run_progress(r: _Reader, dt: float, steps: int) -> dict:
 
 def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
     """The run in progress: its progress and the frames it has recorded, every one checked
-    (``World.run`` records them: ``kinema.trajectory._Recorder``)."""
+    (`World.run` records them: `kinema.trajectory._Recorder`)."""
     from .render import _describe_colliders
     from .trajectory import Trajectory
 
@@ -787,7 +787,7 @@ def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
 
 
 def _recorded_sets(r: _Reader, frames: int, ids_by_frame: list[np.ndarray]) -> list[tuple]:
-    """The particle sets recorded (attribute ``run/sets``): (ids, masses, radii, species,
+    """The particle sets recorded (attribute `run/sets`): (ids, masses, radii, species,
     colors) each time the particles changed, in the order the frames show them."""
     field, raw = r.json("sets", "run")
     if not isinstance(raw, list) or not raw:
@@ -828,7 +828,7 @@ def _recorded_sets(r: _Reader, frames: int, ids_by_frame: list[np.ndarray]) -> l
 
 
 def _recorded_about(r: _Reader, world: Any, first: tuple, describe_colliders: Any) -> dict:
-    """What the recording knows of the world (attribute ``run/about``, ``World._trajectory_info``)."""
+    """What the recording knows of the world (attribute `run/about`, `World._trajectory_info`)."""
     field, about = r.json("about", "run")
     if not isinstance(about, dict):
         raise r.invalid(field, about, "it must be a dict of what the trajectory knows of the world")
@@ -880,31 +880,31 @@ def _recorded_about(r: _Reader, world: Any, first: tuple, describe_colliders: An
 
 
 def load_checkpoint(path: str | Path) -> Any:
-    """The world written by ``save_checkpoint`` at ``path``, ready to go on. Every field is
-    checked first; a missing, damaged or foreign file is a ``CheckpointError`` (a
-    ``ValueError``), one line naming the file, the field and the value."""
+    """The world written by `save_checkpoint` at `path`, ready to go on. Every field is
+    checked first; a missing, damaged or foreign file is a `CheckpointError` (a
+    `ValueError`), one line naming the file, the field and the value."""
     with _reading(Path(path)) as r:
         return _load_world(r)
 
 
 def load_run(path: str | Path) -> tuple[Any, dict]:
-    """The world of the checkpoint ``path`` and the run in progress that wrote it (the
-    frames recorded, how far it has come), every field checked (``CheckpointError``):
-    ``resume_run`` goes on with it."""
+    """The world of the checkpoint `path` and the run in progress that wrote it (the
+    frames recorded, how far it has come), every field checked (`CheckpointError`):
+    `resume_run` goes on with it."""
     with _reading(Path(path)) as r:
         world = _load_world(r)
         return world, _read_run(r, world, world.time, world._core.steps)
 
 
 def resume_run(path: str | Path, callback: Any = None, *, max_work: float | None = MAX_WORK) -> tuple[Any, Any]:
-    """Goes on with the ``World.run`` that wrote the checkpoint ``path`` (``checkpoint=``),
-    writing checkpoints to the same file as it did, to its end; returns ``(world,
-    trajectory)``: the trajectory of the whole run, the frames before the checkpoint
+    """Goes on with the `World.run` that wrote the checkpoint `path` (`checkpoint=`),
+    writing checkpoints to the same file as it did, to its end; returns `(world,
+    trajectory)`: the trajectory of the whole run, the frames before the checkpoint
     included, the same bits as the run never stopped. The checkpoint is checked first, as
-    ``load_checkpoint`` checks it, and the run's progress and frames with it
-    (``CheckpointError``). ``max_work``: as ``World.run``'s, the most particle-steps the rest
+    `load_checkpoint` checks it, and the run's progress and frames with it
+    (`CheckpointError`). `max_work`: as `World.run`'s, the most particle-steps the rest
     of the run may take (particles now × the steps left), refused before any step with a
-    ``ValueError`` (``None``: no limit)."""
+    `ValueError` (`None`: no limit)."""
     limit = _checks.real("max_work", max_work, optional=True)
     if limit is not None and not limit > 0:
         raise ValueError(f"max_work = {describe(max_work)} is invalid: it must be a number of particle-steps > 0, or None for no limit")
@@ -920,11 +920,11 @@ def resume_run(path: str | Path, callback: Any = None, *, max_work: float | None
 
 
 def run_plan(path: str | Path) -> dict:
-    """What the run in progress that wrote the checkpoint ``path`` has left to do, read and
-    checked without building its world (for a work estimate before resuming it: ``kinema
-    run --resume``): ``scene`` (a ``Scene``), ``particles`` now, ``born`` (at most, by the
-    emitters until the end), ``steps`` taken, ``time`` (s), ``frames_done``,
-    ``frames_total``, ``per_frame``, ``every``, ``fps``."""
+    """What the run in progress that wrote the checkpoint `path` has left to do, read and
+    checked without building its world (for a work estimate before resuming it: `kinema
+    run --resume`): `scene` (a `Scene`), `particles` now, `born` (at most, by the
+    emitters until the end), `steps` taken, `time` (s), `frames_done`,
+    `frames_total`, `per_frame`, `every`, `fps`."""
     with _reading(Path(path)) as r:
         c = _scene_and_clock(r, read_ids=False)
         run = _run_progress(r, c["scene"].world.dt, c["steps"])
@@ -938,6 +938,6 @@ def run_plan(path: str | Path) -> dict:
 
 
 def run_progress(path: str | Path) -> tuple[int, int]:
-    """(frames recorded, frames in all) of the run in progress that wrote ``path``."""
+    """(frames recorded, frames in all) of the run in progress that wrote `path`."""
     plan = run_plan(path)
     return plan["frames_done"], plan["frames_total"]

@@ -1,16 +1,16 @@
-"""Colliders for ``kinema.World``: planes, boxes, sphere obstacles and triangle meshes, still
-or moving by a prescribed motion (``Motion``: steady; ``Keyframes``).
+"""Colliders for `kinema.World`: planes, boxes, sphere obstacles and triangle meshes, still
+or moving by a prescribed motion (`Motion`: steady; `Keyframes`).
 
 A collider has infinite mass: nothing the particles do moves it. It stays where it was placed,
-or follows its ``motion`` (the ``motion=`` keyword of every collider, or
-``World.set_motion``): its placement and its surface's velocity at each contact are the
-motion's (docs/collisions.md, "Moving colliders"). Add one with ``world.add(...)``, which
-turns collisions on (with ``World.set_collisions``' defaults if they were off). Its values are
-checked by the engine when it is added; a bad one is a ``ValueError`` that names it.
+or follows its `motion` (the `motion=` keyword of every collider, or
+`World.set_motion`): its placement and its surface's velocity at each contact are the
+motion's (docs/collisions.md, "Moving colliders"). Add one with `world.add(...)`, which
+turns collisions on (with `World.set_collisions`' defaults if they were off). Its values are
+checked by the engine when it is added; a bad one is a `ValueError` that names it.
 
-``restitution`` e ∈ [0, 1] and ``friction`` μ ≥ 0 are the collider's own: where set, they
+`restitution` e ∈ [0, 1] and `friction` μ ≥ 0 are the collider's own: where set, they
 override the particle's value for every contact with it (a dead floor, e = 0, stops a bouncy
-ball); ``None`` uses the particle's value (its own, else the world's).
+ball); `None` uses the particle's value (its own, else the world's).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ def _surface(c: Any) -> tuple[float | None, float | None]:
 class Collider:
     """Base of the colliders (a world tells them from forces by it). A collider checks its
     values' types when built (a bad one raises there, naming it); the engine checks their
-    ranges when it is added. ``motion``: a ``Motion``, ``Keyframes`` or None (still)."""
+    ranges when it is added. `motion`: a `Motion`, `Keyframes` or None (still)."""
 
     __slots__ = ()
 
@@ -44,7 +44,7 @@ class Collider:
         object.__setattr__(self, "_args", self._checked())
 
     def _moved(self, motion: Any) -> Collider:
-        """This collider with another ``motion`` (``World.set_motion`` keeps it so)."""
+        """This collider with another `motion` (`World.set_motion` keeps it so)."""
         return dataclasses.replace(self, motion=motion)
 
     def _checked(self) -> tuple:  # pragma: no cover - every collider overrides it
@@ -56,9 +56,9 @@ class Collider:
 
 @dataclass(frozen=True)
 class Plane(Collider):
-    """The plane through ``point`` (m) with ``normal`` (non-zero, normalised by the engine):
+    """The plane through `point` (m) with `normal` (non-zero, normalised by the engine):
     particles stay on the side the normal points to. In a 2D world the normal lies in the
-    xy-plane. ``motion``: a ``Motion`` or ``Keyframes`` that moves it (None: still)."""
+    xy-plane. `motion`: a `Motion` or `Keyframes` that moves it (None: still)."""
 
     point: Any
     normal: Any
@@ -78,12 +78,12 @@ class Box(Collider):
     """The axis-aligned box [lo, hi] (m, hi > lo along each axis) that keeps particles inside.
 
     3 values per corner in a 3D world; 2 (x, y) in a 2D world, where it is a rectangle open
-    along z. A bound may be infinite (−inf for ``lo``, +inf for ``hi``): that face has no
-    wall. Its sides also give the cell of periodic axes (``World.periodic``).
+    along z. A bound may be infinite (−inf for `lo`, +inf for `hi`): that face has no
+    wall. Its sides also give the cell of periodic axes (`World.periodic`).
 
-    ``motion``: a ``Motion`` or ``Keyframes`` that translates it (None: still). A box stays
-    axis-aligned: a motion that turns it is refused (``motion = ... is invalid``); a turning
-    container is a closed ``Mesh`` with ``inside=True``."""
+    `motion`: a `Motion` or `Keyframes` that translates it (None: still). A box stays
+    axis-aligned: a motion that turns it is refused (`motion = ... is invalid`); a turning
+    container is a closed `Mesh` with `inside=True`."""
 
     lo: Any
     hi: Any
@@ -107,9 +107,9 @@ class Box(Collider):
 
 @dataclass(frozen=True)
 class SphereObstacle(Collider):
-    """A fixed sphere (a circle in 2D) of ``center`` (m) and ``radius`` (m, ≥ 0) that keeps
-    particles outside. In a 2D world its centre has z = 0. ``motion``: a ``Motion`` or
-    ``Keyframes`` that moves it (None: still; a turn about its centre moves only its surface,
+    """A fixed sphere (a circle in 2D) of `center` (m) and `radius` (m, ≥ 0) that keeps
+    particles outside. In a 2D world its centre has z = 0. `motion`: a `Motion` or
+    `Keyframes` that moves it (None: still; a turn about its centre moves only its surface,
     which then drags particles by friction)."""
 
     center: Any
@@ -126,45 +126,45 @@ class SphereObstacle(Collider):
 
 
 class Mesh(Collider):
-    """A triangle mesh (3D worlds only), from a file or from arrays, still or moving::
+    """A triangle mesh (3D worlds only), from a file or from arrays, still or moving:
 
         kinema.Mesh("bowl.obj", scale=1.0, rotation=(0, 0, 0), translation=(0, 0, 0), inside=False)
         kinema.Mesh(vertices=V, faces=F)
         kinema.Mesh("drum.obj", inside=True, motion=kinema.Motion(angular_velocity=(0, 1.5, 0)))
 
-    ``file``: a mesh file, OBJ (.obj), STL (.stl), PLY (.ply), glTF (.gltf, .glb) or USD
-    (.usd, .usda, .usdc, .usdz; needs ``pip install usd-core``), read by
-    ``kinema.io.mesh_files.read_mesh``: polygons cut into triangles, a file of several meshes
+    `file`: a mesh file, OBJ (.obj), STL (.stl), PLY (.ply), glTF (.gltf, .glb) or USD
+    (.usd, .usda, .usdc, .usdz; needs `pip install usd-core`), read by
+    `kinema.io.mesh_files.read_mesh`: polygons cut into triangles, a file of several meshes
     taken whole, vertices of equal coordinates made one. Its coordinates are metres (glTF's
-    +y is up by its specification, kinema's +z: ``rotation=(90, 0, 0)`` turns one into the
-    other). Or ``vertices`` (V, 3), m, and ``faces`` (F, 3), the indices of each triangle's
+    +y is up by its specification, kinema's +z: `rotation=(90, 0, 0)` turns one into the
+    other). Or `vertices` (V, 3), m, and `faces` (F, 3), the indices of each triangle's
     three vertices (integers, from 0).
 
     The vertices are then scaled, rotated and translated, in that order, about the origin of
     the file's (the arrays') coordinates: x' = R (s ⊙ x) + t, with
 
-    - ``scale`` s: one factor or three (x, y, z), each finite and non-zero (a negative one
+    - `scale` s: one factor or three (x, y, z), each finite and non-zero (a negative one
       mirrors);
-    - ``rotation`` (α, β, γ): Euler angles in degrees about the fixed x, then y, then z axis
+    - `rotation` (α, β, γ): Euler angles in degrees about the fixed x, then y, then z axis
       (extrinsic XYZ, Blender's default 'XYZ' rotation mode): R = R_z(γ) R_y(β) R_x(α);
-    - ``translation`` t (m).
+    - `translation` t (m).
 
-    ``vertices`` (V, 3) float64 (after the transform) and ``faces`` (F, 3) int64 are
-    read-only arrays; ``file`` is the ``Path`` given (None for arrays).
+    `vertices` (V, 3) float64 (after the transform) and `faces` (F, 3) int64 are
+    read-only arrays; `file` is the `Path` given (None for arrays).
 
     A *closed* mesh (every edge shared by exactly two faces running along it in opposite
     directions) bounds a solid: particles stay outside it (an obstacle), or inside it with
-    ``inside=True`` (a container). An *open* mesh is two-sided: a particle stays on the side
-    it is on, and ``inside=True`` is refused. The engine drops faces of zero area and turns a
+    `inside=True` (a container). An *open* mesh is two-sided: a particle stays on the side
+    it is on, and `inside=True` is refused. The engine drops faces of zero area and turns a
     closed mesh's faces outwards (docs/collisions.md, "Triangle meshes").
 
-    ``motion``: a ``Motion`` or ``Keyframes`` that moves the mesh from this placement (the
+    `motion`: a `Motion` or `Keyframes` that moves the mesh from this placement (the
     vertices after the transform; None: still).
 
-    Refused when built, a ``ValueError`` naming the parameter: a file and arrays both given,
+    Refused when built, a `ValueError` naming the parameter: a file and arrays both given,
     or neither; a missing file, an unknown suffix (the formats read are listed), a file that
     cannot be read; arrays of the wrong shape; a zero or non-finite scale, rotation or
-    translation (a wrong type is a ``TypeError``). The engine checks the rest when the mesh
+    translation (a wrong type is a `TypeError`). The engine checks the rest when the mesh
     is added (an index out of range, a face with a repeated vertex, no face of non-zero
     area, a 2D world).
     """
@@ -288,7 +288,7 @@ class Mesh(Collider):
         return self._motion
 
     def _moved(self, motion: Any) -> Mesh:
-        """This mesh with another ``motion`` (``World.set_motion`` keeps it so)."""
+        """This mesh with another `motion` (`World.set_motion` keeps it so)."""
         out = Mesh.__new__(Mesh)
         for name in Mesh.__slots__:
             object.__setattr__(out, name, getattr(self, name))
@@ -304,7 +304,7 @@ class Mesh(Collider):
         return core.add_mesh(*self._args)
 
     def _contains(self, p: Any) -> bool:
-        """Whether the point ``p`` (m) lies where no particle may be: inside a closed obstacle,
+        """Whether the point `p` (m) lies where no particle may be: inside a closed obstacle,
         outside a closed container; never for an open mesh (two-sided). By the winding number
         of the surface about p (the sum of the solid angles of its triangles over 4π, Van
         Oosterom and Strackee's formula): 1 inside, 0 outside."""
@@ -322,9 +322,9 @@ class Mesh(Collider):
 
 
 def transformed(vertices: np.ndarray, scale: Any, rotation: Any, translation: Any) -> np.ndarray:
-    """x' = R (s ⊙ x) + t for each row x of ``vertices`` (V, 3), m: ``scale`` s (3,), then
-    ``rotation`` (α, β, γ) in degrees about the fixed x, y and z axes in that order, R = R_z(γ)
-    R_y(β) R_x(α) (extrinsic XYZ, Blender's 'XYZ' mode), then ``translation`` t (3,), m."""
+    """x' = R (s ⊙ x) + t for each row x of `vertices` (V, 3), m: `scale` s (3,), then
+    `rotation` (α, β, γ) in degrees about the fixed x, y and z axes in that order, R = R_z(γ)
+    R_y(β) R_x(α) (extrinsic XYZ, Blender's 'XYZ' mode), then `translation` t (3,), m."""
     scaled = np.asarray(vertices, dtype=np.float64) * np.asarray(scale, dtype=np.float64)
     return scaled @ rotation_matrix(rotation).T + np.asarray(translation, dtype=np.float64)
 
@@ -349,7 +349,7 @@ def _surface_values(restitution: Any, friction: Any) -> tuple[float | None, floa
 
 
 def _factors(scale: Any) -> list[float]:
-    """``scale`` as 3 factors (one number: the same along each axis), each finite and non-zero."""
+    """`scale` as 3 factors (one number: the same along each axis), each finite and non-zero."""
     s = _checks.real_array("scale", scale).reshape(-1)
     if s.size == 1:
         s = np.repeat(s, 3)
@@ -361,8 +361,8 @@ def _factors(scale: Any) -> list[float]:
 
 
 def _indices(faces: Any) -> np.ndarray:
-    """``faces`` as an (F, 3) int64 array: integers only (a float, even 2.0, or a bool is a
-    ``TypeError`` naming it); ranges are the engine's to check."""
+    """`faces` as an (F, 3) int64 array: integers only (a float, even 2.0, or a bool is a
+    `TypeError` naming it); ranges are the engine's to check."""
     arr = _checks._as_array("faces", faces)
     if isinstance(faces, np.ndarray) and arr.dtype.kind in "iu":
         if arr.dtype.kind == "u" and arr.size and int(arr.max()) > _checks.INT64_MAX:
@@ -407,16 +407,16 @@ def _is_closed(vertices: np.ndarray, faces: np.ndarray) -> bool:
 
 @dataclass(frozen=True)
 class Motion:
-    """A steady motion of a collider: it translates at ``velocity`` V (m/s) and turns at
-    ``angular_velocity`` ω (rad/s, the axis's direction by the right-hand rule, its length
-    the rate) about ``pivot`` c (m, a point of the collider's placement as added)::
+    """A steady motion of a collider: it translates at `velocity` V (m/s) and turns at
+    `angular_velocity` ω (rad/s, the axis's direction by the right-hand rule, its length
+    the rate) about `pivot` c (m, a point of the collider's placement as added):
 
         x(t) = R(t) (x₀ − c) + c + V t,     R(t) = the rotation by the angle |ω| t about ω
 
     on the world's clock (t = 0 is the world's time 0, not the time the collider is added).
-    A drum turning about its own axis: ``Motion(angular_velocity=(0, 2.0, 0), pivot=(0, 0,
-    0.3))`` with the pivot on the axis. Each is 3 finite numbers (a ``ValueError`` naming it
-    otherwise; a wrong type is a ``TypeError``). A ``Box`` can only translate (ω = 0); in a 2D
+    A drum turning about its own axis: `Motion(angular_velocity=(0, 2.0, 0), pivot=(0, 0,
+    0.3))` with the pivot on the axis. Each is 3 finite numbers (a `ValueError` naming it
+    otherwise; a wrong type is a `TypeError`). A `Box` can only translate (ω = 0); in a 2D
     world V lies in the xy-plane and ω along z."""
 
     velocity: Any = (0.0, 0.0, 0.0)
@@ -433,31 +433,31 @@ class Motion:
         return any(c != 0.0 for c in self.angular_velocity)
 
     def _binding(self) -> dict[str, Any]:
-        """The keyword arguments of ``_core.World.set_collider_motion`` and ``_core.collider_poses``."""
+        """The keyword arguments of `_core.World.set_collider_motion` and `_core.collider_poses`."""
         return {"velocity": list(self.velocity), "angular_velocity": list(self.angular_velocity), "pivot": list(self.pivot)}
 
 
 @dataclass(frozen=True)
 class Keyframes:
-    """A collider's motion by keys: at ``times[k]`` (s, strictly increasing, at least one) the
-    collider is turned by ``rotations[k]`` about ``pivot`` c (m) and displaced by
-    ``translations[k]`` (m)::
+    """A collider's motion by keys: at `times[k]` (s, strictly increasing, at least one) the
+    collider is turned by `rotations[k]` about `pivot` c (m) and displaced by
+    `translations[k]` (m):
 
         x(t) = R(t) (x₀ − c) + c + T(t)
 
-    ``rotations``: (K, 3) Euler angles in degrees, about the fixed x, then y, then z axis
-    (extrinsic XYZ, as ``kinema.Mesh``'s ``rotation``); ``None``: no turn. ``translations``:
-    (K, 3), m; ``None``: no displacement. Between two keys T moves linearly and R turns at a
+    `rotations`: (K, 3) Euler angles in degrees, about the fixed x, then y, then z axis
+    (extrinsic XYZ, as `kinema.Mesh`'s `rotation`); `None`: no turn. `translations`:
+    (K, 3), m; `None`: no displacement. Between two keys T moves linearly and R turns at a
     constant rate (spherical linear interpolation of the keys' quaternions), so the
     collider's velocity jumps at each key; before the first key and after the last it rests
     there. On the world's clock (t = 0 is the world's time 0).
 
     Between two keys the collider turns the shorter way, by less than 180°: a key whose angle
     differs from the one before by 180° or more about an axis is refused (put keys in
-    between). ``quaternions`` gives the rotations as unit quaternions (w, x, y, z), the form the
-    engine and the descriptions take. Refused with a ``ValueError`` naming the parameter: no
+    between). `quaternions` gives the rotations as unit quaternions (w, x, y, z), the form the
+    engine and the descriptions take. Refused with a `ValueError` naming the parameter: no
     time, times not finite or not increasing, a number of translations or rotations other than
-    one per time, a value that is not finite; a wrong type is a ``TypeError``. A ``Box`` can
+    one per time, a value that is not finite; a wrong type is a `TypeError`. A `Box` can
     only translate (rotations must be 0); in a 2D world translations lie in the xy-plane and
     turns are about z."""
 
@@ -498,13 +498,13 @@ class Keyframes:
 
     @property
     def quaternions(self) -> np.ndarray | None:
-        """(K, 4) unit quaternions (w, x, y, z) of ``rotations`` (None without them)."""
+        """(K, 4) unit quaternions (w, x, y, z) of `rotations` (None without them)."""
         if self.rotations is None:
             return None
         return np.array([quaternion(r) for r in self.rotations])
 
     def _binding(self) -> dict[str, Any]:
-        """The keyword arguments of ``_core.World.set_collider_motion`` and ``_core.collider_poses``."""
+        """The keyword arguments of `_core.World.set_collider_motion` and `_core.collider_poses`."""
         q = self.quaternions
         return {
             "times": list(self.times),
@@ -518,7 +518,7 @@ MOTIONS = (Motion, Keyframes)
 
 
 def _finite3(name: str, value: Any, unit: str) -> tuple[float, float, float]:
-    """``value`` as 3 finite floats (a ``ValueError`` naming ``name`` and the ``unit`` otherwise)."""
+    """`value` as 3 finite floats (a `ValueError` naming `name` and the `unit` otherwise)."""
     v = _checks.real_array(name, value).reshape(-1)
     if v.size != 3 or not np.all(np.isfinite(v)):
         raise ValueError(f"{name} = {_checks.describe(value)} is invalid: it must be 3 finite numbers (x, y, z), {unit}")
@@ -526,7 +526,7 @@ def _finite3(name: str, value: Any, unit: str) -> tuple[float, float, float]:
 
 
 def _rows(name: str, value: Any, n: int, unit: str) -> tuple[tuple[float, float, float], ...]:
-    """``value`` as ``n`` rows of 3 finite numbers (a ``ValueError`` naming ``name`` otherwise)."""
+    """`value` as `n` rows of 3 finite numbers (a `ValueError` naming `name` otherwise)."""
     a = _checks.real_array(name, value)
     if a.shape != (n, 3):
         raise ValueError(f"{name} has shape {a.shape}; it must be ({n}, 3): one (x, y, z) per keyframe time, {unit}")
@@ -538,7 +538,7 @@ def _rows(name: str, value: Any, n: int, unit: str) -> tuple[tuple[float, float,
 
 
 def _motion_of(value: Any) -> Motion | Keyframes | None:
-    """A collider's ``motion``: a ``Motion``, ``Keyframes`` or None (a ``TypeError`` naming it)."""
+    """A collider's `motion`: a `Motion`, `Keyframes` or None (a `TypeError` naming it)."""
     if value is None or isinstance(value, MOTIONS):
         return value
     raise TypeError(f"motion = {_checks.describe(value)} is invalid: it must be a kinema.Motion, kinema.Keyframes or None, not {_checks._type_words(value)}")
@@ -546,7 +546,7 @@ def _motion_of(value: Any) -> Motion | Keyframes | None:
 
 def quaternion(rotation: Any) -> tuple[float, float, float, float]:
     """The unit quaternion (w, x, y, z), w ≥ 0, of Euler angles (α, β, γ) in degrees about the
-    fixed x, y, z axes (extrinsic XYZ, the matrix of :func:`rotation_matrix`). From the matrix
+    fixed x, y, z axes (extrinsic XYZ, the matrix of `rotation_matrix`). From the matrix
     R by Shepperd's method: of 4w² = 1 + tr R, 4x² = 1 + 2R₀₀ − tr R, ... the largest is taken
     (its square root loses no digits), the others from the off-diagonal sums and differences."""
     r = rotation_matrix(rotation)

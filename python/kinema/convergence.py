@@ -1,7 +1,7 @@
 """Measured orders of accuracy: the slopes of error against step size on a log-log scale.
 
 A method of order p has a local (one-step) error C h^{p+1} and a global error C' h^p at a
-fixed end time. ``convergence`` measures both on a problem with an exact solution and fits
+fixed end time. `convergence` measures both on a problem with an exact solution and fits
 the slopes by least squares on log(error) against log(h).
 """
 
@@ -66,13 +66,13 @@ def convergence(
     steps: Sequence[int] = (16, 32, 64, 128, 256),
     local_steps: Sequence[int] = (8, 16, 32, 64),
 ) -> ConvergenceResult:
-    """Measure the global and local orders of ``method`` on ``problem``.
+    """Measure the global and local orders of `method` on `problem`.
 
-    Global: integrate over the problem's ``t_span`` with N equal steps for each N in
-    ``steps`` and take the max-norm error at the end. Local: one step of h = T/N for each N in
-    ``local_steps`` from the exact initial state, against the exact solution. Mechanical
-    problems run through ``solve_second_order`` (so ``verlet`` and ``symplectic_euler`` apply),
-    others through ``solve``.
+    Global: integrate over the problem's `t_span` with N equal steps for each N in
+    `steps` and take the max-norm error at the end. Local: one step of h = T/N for each N in
+    `local_steps` from the exact initial state, against the exact solution. Mechanical
+    problems run through `solve_second_order` (so `verlet` and `symplectic_euler` apply),
+    others through `solve`.
     """
     if isinstance(method, str) and method == "rk45":
         raise ValueError(

@@ -1,8 +1,8 @@
 """Emitters and kill volumes: particles born over time at a rate, living for a while, dying.
 
-An :class:`Emitter` is what Blender's particle system, Houdini's POP Source and Niagara call a
-source: a shape (a point, a box, a disc or a sphere's surface) that emits ``rate`` particles
-per second from ``start`` to ``end``, each with an initial velocity (a direction, a speed, a
+An `Emitter` is what Blender's particle system, Houdini's POP Source and Niagara call a
+source: a shape (a point, a box, a disc or a sphere's surface) that emits `rate` particles
+per second from `start` to `end`, each with an initial velocity (a direction, a speed, a
 cone of spread), a mass, a radius, a colour and a lifetime. A kill volume removes every
 particle that enters it (Houdini's POP Kill by bounding region).
 
@@ -10,13 +10,13 @@ Births are exact in time and do not depend on the step: particle k of an emitter
 t_k = start + k / rate (while t_k < end). It joins the world at the first step boundary
 t ≥ t_k, carried along its initial velocity for the time it has already lived,
 x = x_born + v₀ (t − t_k), so that a stream stays a stream at any dt (Houdini's sub-frame
-emission). Its random draws come from the emitter's own streams (``numpy.random.PCG64``
-seeded by ``seed``), one stream per quantity, consumed particle by particle: the k-th
+emission). Its random draws come from the emitter's own streams (`numpy.random.PCG64`
+seeded by `seed`), one stream per quantity, consumed particle by particle: the k-th
 particle is the same whatever the step, the frame rate or the number of threads.
 
 A particle dies at the first step boundary at or after t_k + its lifetime, or at the first
 step boundary where it is inside a kill volume. Deaths are removals
-(``World.remove_particles``): springs ending on a dead particle die with it, and its id is
+(`World.remove_particles`): springs ending on a dead particle die with it, and its id is
 never given again.
 """
 
@@ -39,7 +39,7 @@ def _vec3(name: str, value: Any) -> np.ndarray:
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
-    """``v`` (non-zero, finite) divided by its length, scaled first by its largest component so
+    """`v` (non-zero, finite) divided by its length, scaled first by its largest component so
     that the length cannot overflow ([1e300, 0, -1] has |v|² = inf)."""
     v = v / np.abs(v).max()
     return v / np.linalg.norm(v)
@@ -61,7 +61,7 @@ def _colour(value: Any) -> np.ndarray | None:
 
 
 def _basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Two unit vectors perpendicular to the unit ``normal`` (3,) or normals (n, 3) and to
+    """Two unit vectors perpendicular to the unit `normal` (3,) or normals (n, 3) and to
     each other (crossed with x, or with y where the normal is near x)."""
     near_x = np.abs(normal[..., :1]) >= 0.9
     helper = np.where(near_x, [0.0, 1.0, 0.0], [1.0, 0.0, 0.0])
@@ -81,28 +81,28 @@ def _positive(name: str, value: Any, what: str, *, zero: bool = False, optional:
 
 @dataclass(frozen=True)
 class Emitter:
-    """Emits ``rate`` particles per second from a shape between ``start`` and ``end`` (s).
+    """Emits `rate` particles per second from a shape between `start` and `end` (s).
 
-    Shapes (lengths in m): ``"point"`` at ``center``; ``"box"``, uniform inside the box of
-    edge lengths ``size`` (3,) centred at ``center``; ``"disc"``, uniform on the disc of
-    ``radius`` through ``center`` perpendicular to ``normal`` (in 2D: the segment of
-    half-length ``radius`` perpendicular to ``normal``); ``"sphere"``, uniform on the surface
-    of the sphere (a circle in 2D) of ``radius`` about ``center``.
+    Shapes (lengths in m): `"point"` at `center`; `"box"`, uniform inside the box of
+    edge lengths `size` (3,) centred at `center`; `"disc"`, uniform on the disc of
+    `radius` through `center` perpendicular to `normal` (in 2D: the segment of
+    half-length `radius` perpendicular to `normal`); `"sphere"`, uniform on the surface
+    of the sphere (a circle in 2D) of `radius` about `center`.
 
-    Velocity: ``speed`` (m/s) ± ``speed_spread`` (uniform) along ``direction``, deviated
-    uniformly over the cone of half-angle ``spread`` (degrees; 180: every direction).
-    ``direction`` None: the disc's ``normal``, the sphere's outward normal at the point of
+    Velocity: `speed` (m/s) ± `speed_spread` (uniform) along `direction`, deviated
+    uniformly over the cone of half-angle `spread` (degrees; 180: every direction).
+    `direction` None: the disc's `normal`, the sphere's outward normal at the point of
     birth, else +z (+y in 2D).
 
-    Each particle: ``particle_radius`` (m) ± ``radius_spread`` (uniform); ``mass`` (kg), or
-    if None ``density`` (kg/m³) times the sphere's volume 4/3 π r³; ``lifetime`` (s,
-    ``inf``: until killed) ± ``lifetime_spread`` (uniform, s); ``color`` ('#rrggbb' or r, g,
-    b in [0, 1]; drawn by the renderer and the viewer with ``color_by="color"``);
-    ``species`` (a name, as in ``World.add_particles``); ``restitution`` and ``friction`` (the
+    Each particle: `particle_radius` (m) ± `radius_spread` (uniform); `mass` (kg), or
+    if None `density` (kg/m³) times the sphere's volume 4/3 π r³; `lifetime` (s,
+    `inf`: until killed) ± `lifetime_spread` (uniform, s); `color` ('#rrggbb' or r, g,
+    b in [0, 1]; drawn by the renderer and the viewer with `color_by="color"`);
+    `species` (a name, as in `World.add_particles`); `restitution` and `friction` (the
     particle's own collision values, None: the world's).
 
-    ``seed``: the emitter's random streams (position, velocity, size, lifetime); the same
-    seed gives the same particles, bit for bit. Add it with ``World.add``.
+    `seed`: the emitter's random streams (position, velocity, size, lifetime); the same
+    seed gives the same particles, bit for bit. Add it with `World.add`.
     """
 
     rate: float
@@ -248,14 +248,14 @@ class _Source:
         return new
 
     def hold_back(self, births: dict[str, Any], held: np.ndarray) -> None:
-        """Keeps the particles ``held`` (a mask over ``births``) for the next step: their place
+        """Keeps the particles `held` (a mask over `births`) for the next step: their place
         is taken (an emitter never creates a particle inside another)."""
         if held.any():
             self.waiting = {key: value[held] for key, value in births.items()}
 
     def _drawn(self, t: float) -> dict[str, Any] | None:
         """The particles due by t not drawn yet, carried to t; None if none. More than
-        ``BIRTHS_AT_ONCE`` at once is a ``MemoryError`` (rate = 1e300 asked numpy for 1e297)."""
+        `BIRTHS_AT_ONCE` at once is a `MemoryError` (rate = 1e300 asked numpy for 1e297)."""
         due = self.due(t)
         if due - self.emitted > BIRTHS_AT_ONCE:
             raise MemoryError(
@@ -351,7 +351,7 @@ class KillBox:
             raise ValueError(f"lo = {lo.tolist()}, hi = {hi.tolist()} are invalid: hi must be >= lo along every axis")
 
     def _spec(self) -> tuple:
-        """What the engine's deaths test (``KillVolume::Box``: lo <= x <= hi along every axis)."""
+        """What the engine's deaths test (`KillVolume::Box`: lo <= x <= hi along every axis)."""
         return ("box", [float(c) for c in self.lo], [float(c) for c in self.hi])
 
     def _attach(self, world: Any) -> None:
@@ -360,7 +360,7 @@ class KillBox:
 
 @dataclass(frozen=True)
 class KillSphere:
-    """Removes every particle whose centre is inside the sphere of ``radius`` (m) about ``center``."""
+    """Removes every particle whose centre is inside the sphere of `radius` (m) about `center`."""
 
     center: Any
     radius: float
@@ -370,7 +370,7 @@ class KillSphere:
         _positive("radius", self.radius, "it must be a finite number > 0 m")
 
     def _spec(self) -> tuple:
-        """What the engine's deaths test (``KillVolume::Sphere``: |x - center|^2 <= radius^2)."""
+        """What the engine's deaths test (`KillVolume::Sphere`: |x - center|^2 <= radius^2)."""
         return ("sphere", [float(c) for c in self.center], float(self.radius))
 
     def _attach(self, world: Any) -> None:
@@ -379,8 +379,8 @@ class KillSphere:
 
 @dataclass(frozen=True)
 class KillPlane:
-    """Removes every particle whose centre is behind the plane through ``point`` with
-    ``normal``: (x − point)·normal < 0 (a floor that swallows what falls through it)."""
+    """Removes every particle whose centre is behind the plane through `point` with
+    `normal`: (x − point)·normal < 0 (a floor that swallows what falls through it)."""
 
     point: Any
     normal: Any
@@ -391,7 +391,7 @@ class KillPlane:
             raise ValueError(f"normal = {list(self.normal)} is invalid: it must be a non-zero vector")
 
     def _spec(self) -> tuple:
-        """What the engine's deaths test (``KillVolume::Plane``: (x - point)·normal < 0)."""
+        """What the engine's deaths test (`KillVolume::Plane`: (x - point)·normal < 0)."""
         return ("plane", [float(c) for c in self.point], [float(c) for c in self.normal])
 
     def _attach(self, world: Any) -> None:

@@ -1,7 +1,7 @@
-"""Forces for ``kinema.World``: descriptions that a world turns into engine forces.
+"""Forces for `kinema.World`: descriptions that a world turns into engine forces.
 
 Each class states its formula and units; the computation runs in the engine, except for
-``PythonForce``, which calls your function once per force evaluation with whole arrays.
+`PythonForce`, which calls your function once per force evaluation with whole arrays.
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ class _Checked:
 class Gravity(_Checked):
     """Uniform gravity: F_i = m_i g (N); g in m/s². The default is down at 9.81 m/s²: along −z
     in a 3D world (z is up), along −y in a 2D world (the xy-plane, y up), as a scene's
-    ``[[forces]] type = "gravity"`` without ``g``."""
+    `[[forces]] type = "gravity"` without `g`."""
 
     g: Any = None
 
@@ -56,7 +56,7 @@ class Gravity(_Checked):
 
 @dataclass(frozen=True)
 class Drag(_Checked):
-    """Drag: F_i = −b₁ v_i − b₂ |v_i| v_i (N); b₁ = ``linear`` in kg/s, b₂ = ``quadratic`` in kg/m."""
+    """Drag: F_i = −b₁ v_i − b₂ |v_i| v_i (N); b₁ = `linear` in kg/s, b₂ = `quadratic` in kg/m."""
 
     linear: float = 0.0
     quadratic: float = 0.0
@@ -73,7 +73,7 @@ class Spring(_Checked):
     """Springs between particles i[s] and j[s]: Hooke's law plus a dashpot along the spring,
     F_i = [k (L − L₀) + c (v_j − v_i)·n] n = −F_j, n the unit vector from i to j, L its length.
 
-    ``k`` in N/m, ``rest_length`` L₀ in m (None: the current distance when added), ``damping``
+    `k` in N/m, `rest_length` L₀ in m (None: the current distance when added), `damping`
     c in N·s/m. Scalars broadcast over the index arrays, so one object holds many springs.
     Indices are integers (ints, NumPy integers or integer arrays; not floats, not bools) >= 0.
     """
@@ -106,7 +106,7 @@ class Spring(_Checked):
 class Attractor(_Checked):
     """Inverse-square pull toward a fixed point: F_i = −μ m_i r / (|r|² + ε²)^{3/2}, r = x_i − point.
 
-    ``strength`` μ = G·M in m³/s², ``softening`` ε in m.
+    `strength` μ = G·M in m³/s², `softening` ε in m.
     """
 
     point: Any = (0.0, 0.0, 0.0)
@@ -122,8 +122,8 @@ class Attractor(_Checked):
 
 @dataclass(frozen=True)
 class Wind(_Checked):
-    """A uniform wind field: F_i = b (w − v_i), drag relative to air moving at ``velocity`` w
-    (m/s), ``coefficient`` b in kg/s."""
+    """A uniform wind field: F_i = b (w − v_i), drag relative to air moving at `velocity` w
+    (m/s), `coefficient` b in kg/s."""
 
     velocity: Any = (1.0, 0.0, 0.0)
     coefficient: float = 1.0
@@ -137,7 +137,7 @@ class Wind(_Checked):
 
 @dataclass(frozen=True)
 class PythonForce(_Checked):
-    """Your own force: ``fn(t, x, v) -> F`` receives positions and velocities as (N, 3) arrays
+    """Your own force: `fn(t, x, v) -> F` receives positions and velocities as (N, 3) arrays
     (m, m/s) and returns forces (N) of the same shape; called once per force evaluation."""
 
     fn: Callable[[float, np.ndarray, np.ndarray], Any]

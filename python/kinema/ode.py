@@ -1,8 +1,8 @@
-"""Numerical solution of ODEs: ``solve`` for y' = f(t, y), ``solve_second_order`` for
+"""Numerical solution of ODEs: `solve` for y' = f(t, y), `solve_second_order` for
 x'' = a(t, x, v).
 
-Every method of the registry (``kinema.methods()``) is available by name, and any explicit
-Runge-Kutta method by its Butcher tableau (``kinema.ButcherTableau``). The stepping runs in
+Every method of the registry (`kinema.methods()`) is available by name, and any explicit
+Runge-Kutta method by its Butcher tableau (`kinema.ButcherTableau`). The stepping runs in
 the Rust engine; a Python right-hand side is called once per stage with a NumPy array.
 """
 
@@ -22,12 +22,12 @@ if TYPE_CHECKING:
 
 
 class ButcherTableau(_core.ButcherTableau):
-    """An explicit Runge-Kutta method given by its Butcher tableau: ``a`` (s x s, strictly
-    lower triangular), weights ``b`` and nodes ``c`` (length s) and its declared ``order``.
+    """An explicit Runge-Kutta method given by its Butcher tableau: `a` (s x s, strictly
+    lower triangular), weights `b` and nodes `c` (length s) and its declared `order`.
 
     The arguments are checked as the API's numbers are (real numbers, not bools or strings; an
     integer order); the engine then checks the tableau itself (square A, rows of A summing to
-    c, weights summing to 1). ``ButcherTableau.of("rk4")`` gives a registered method's.
+    c, weights summing to 1). `ButcherTableau.of("rk4")` gives a registered method's.
     """
 
     __slots__ = ()
@@ -41,8 +41,8 @@ class ButcherTableau(_core.ButcherTableau):
 
     @classmethod
     def of(cls, method: str) -> ButcherTableau:
-        """The tableau of a registered explicit method (``euler``, ``midpoint``, ``heun``,
-        ``rk4``, ``rk45``)."""
+        """The tableau of a registered explicit method (`euler`, `midpoint`, `heun`,
+        `rk4`, `rk45`)."""
         t = _core.ButcherTableau.of(_checks.text("method", method))
         return cls(t.A, t.b, t.c, t.order, t.name)
 
@@ -51,7 +51,7 @@ Method = "str | ButcherTableau"
 
 
 class SolverWarning(RuntimeWarning):
-    """A solve stopped before the end of its interval (``Solution.success`` is False)."""
+    """A solve stopped before the end of its interval (`Solution.success` is False)."""
 
 
 @dataclass(frozen=True)
@@ -76,10 +76,10 @@ def method_names() -> list[str]:
 
 
 class DenseSolution:
-    """The continuous solution of a solve with ``dense_output=True``: ``sol(t)``.
+    """The continuous solution of a solve with `dense_output=True`: `sol(t)`.
 
-    A scalar ``t`` gives one state (y0's shape); an array of times gives one state per time,
-    stacked along the first axis (as ``Solution.y``; SciPy's ``OdeSolution`` puts time last).
+    A scalar `t` gives one state (y0's shape); an array of times gives one state per time,
+    stacked along the first axis (as `Solution.y`; SciPy's `OdeSolution` puts time last).
     """
 
     def __init__(self, core: Any, shape: tuple[int, ...]):
@@ -102,11 +102,11 @@ class DenseSolution:
 
 @dataclass
 class Solution:
-    """Result of ``solve`` / ``solve_second_order``.
+    """Result of `solve` / `solve_second_order`.
 
-    ``t`` has shape (T,); ``y`` has shape (T, n), or (T, batch, n) for a batch. For
-    second-order problems ``y`` is [x, v] along the last axis and ``x``, ``v`` are its halves.
-    ``sol`` is the continuous solution when ``dense_output=True`` was given, else None.
+    `t` has shape (T,); `y` has shape (T, n), or (T, batch, n) for a batch. For
+    second-order problems `y` is [x, v] along the last axis and `x`, `v` are its halves.
+    `sol` is the continuous solution when `dense_output=True` was given, else None.
     """
 
     t: np.ndarray
@@ -180,51 +180,60 @@ def solve(
     max_steps: int = 10_000_000,
     h_min: float | None = None,
 ) -> Solution:
-    """Solve the initial value problem y' = f(t, y), y(t0) = y0 over ``t_span = (t0, t_end)``.
+    """Solve the initial value problem y' = f(t, y), y(t0) = y0 over `t_span = (t0, t_end)`.
 
     Parameters
     ----------
-    f : callable ``f(t, y) -> array``
-        Right-hand side; returns dy/dt with y's shape.
-    y0 : array_like, shape (n,), or (batch, n) with ``vectorized=True``
-        Initial state.
+    f : callable
+        Right-hand side `f(t, y) -> array`; returns dy/dt with y's shape.
+    y0 : array_like
+        Initial state, shape (n,), or (batch, n) with `vectorized=True`; in the units of y.
     t_span : (t0, t_end)
-        Interval; ``t_end < t0`` integrates backwards.
+        Interval, in the units of t; `t_end < t0` integrates backwards.
     h : float, optional
-        Step size (> 0). Required by the fixed-step methods (the last step is shortened to end
-        at t_end); for ``rk45`` the first step (chosen automatically when omitted).
+        Step size (> 0), in the units of t. Required by the fixed-step methods (the last step
+        is shortened to end at t_end); for `rk45` the first step (chosen automatically when
+        omitted).
     h_max : float, optional
-        Largest step ``rk45`` may take (default: no limit); fixed-step methods ignore it.
+        Largest step `rk45` may take, in the units of t (default: no limit); fixed-step
+        methods ignore it.
     method : str or ButcherTableau
-        A registered name (``kinema.method_names()``) or an explicit tableau. Default ``rk4``.
-    jac : callable ``jac(t, y) -> (n, n) array``, optional
-        ∂f/∂y for ``implicit_euler`` ((batch, n, n) with a batch); finite differences otherwise.
-    rtol, atol : float
-        Tolerances: rk45's error control, implicit Euler's Newton iterations.
+        A registered name (`kinema.method_names()`) or an explicit tableau. Default `rk4`.
+    jac : callable, optional
+        ∂f/∂y for `implicit_euler`, `jac(t, y) -> (n, n) array` ((batch, n, n) with a batch);
+        finite differences otherwise (the default, None).
+    rtol : float
+        Relative tolerance (dimensionless), default 1e-6: rk45's error control, implicit
+        Euler's Newton iterations. Each component's error is weighed against
+        `atol + rtol |y|`.
+    atol : float
+        Absolute tolerance, in the units of y, default 1e-9: rk45's error control, implicit
+        Euler's Newton iterations, with `rtol` as above.
     t_eval : array_like, optional
-        Times at which to report the solution (interpolated between steps); default: every step.
+        Times at which to report the solution (interpolated between steps), in the units of t;
+        default: every step.
     vectorized : bool
-        With a 2-D ``y0`` of shape (batch, n): solve every row as its own initial condition,
-        calling ``f`` once per stage with the whole (batch, n) array.
+        With a 2-D `y0` of shape (batch, n): solve every row as its own initial condition,
+        calling `f` once per stage with the whole (batch, n) array. Default False.
     dense_output : bool
-        Keep every step's interpolant: ``Solution.sol(t)`` then gives the state at any time of
+        Keep every step's interpolant: `Solution.sol(t)` then gives the state at any time of
         the interval (rk45: Dormand-Prince's fourth-order extension; fixed-step methods: cubic
         Hermite, which costs one extra evaluation of f per step except for explicit
-        Runge-Kutta methods).
+        Runge-Kutta methods). Default False.
     max_steps : int
-        Most steps (default 10⁷): a fixed step ``h``, or an ``h_max``, that needs more over
-        ``t_span`` is refused up front (``ValueError``); ``rk45`` stops there otherwise, with
-        ``success=False`` and the reason.
+        Most steps (default 10⁷): a fixed step `h`, or an `h_max`, that needs more over
+        `t_span` is refused up front (`ValueError`); `rk45` stops there otherwise, with
+        `success=False` and the reason.
     h_min : float, optional
-        Smallest step ``rk45`` may take (default: what the time variable can resolve); below
-        it the solve stops ("step too small").
+        Smallest step `rk45` may take, in the units of t (default: what the time variable can
+        resolve); below it the solve stops ("step too small").
 
     Returns
     -------
     Solution
-        ``t``, ``y`` (shape (len(t), n) or (len(t), batch, n)), counters and status. A solve that
+        `t`, `y` (shape (len(t), n) or (len(t), batch, n)), counters and status. A solve that
         stops early (Newton failure, step too small, a non-finite state) returns what it had
-        with ``success=False`` and a ``message``, and warns with ``SolverWarning``.
+        with `success=False` and a `message`, and warns with `SolverWarning`.
     """
     _callable("f", f)
     if jac is not None:
@@ -265,10 +274,47 @@ def solve_second_order(
 ) -> Solution:
     """Solve x'' = a(t, x, v), x(t0) = x0, x'(t0) = v0 — Newton's law with a = F/m.
 
-    Takes every method: ``symplectic_euler`` and ``verlet`` (default) work on x and v
-    directly; the others integrate the first-order form y = [x, v]. The solution has ``x`` and
-    ``v`` (each with x0's shape per time) besides ``y`` = [x, v] along the last axis.
-    Parameters are those of ``solve``.
+    Takes every method: `symplectic_euler` and `verlet` (default) work on x and v
+    directly; the others integrate the first-order form y = [x, v]. The solution has `x` and
+    `v` (each with x0's shape per time) besides `y` = [x, v] along the last axis.
+    Parameters are those of `solve`.
+
+    Parameters
+    ----------
+    a : callable
+        Acceleration `a(t, x, v) -> array`; returns x'' with x's shape.
+    x0 : array_like
+        Initial position, shape (n,), or (batch, n) with `vectorized=True`; in the units of x.
+    v0 : array_like
+        Initial velocity, x0's shape; in the units of x per unit of t.
+    t_span : (t0, t_end)
+        Interval, in the units of t; `t_end < t0` integrates backwards.
+    h : float, optional
+        Step size (> 0), in the units of t; as in `solve`.
+    h_max : float, optional
+        Largest step `rk45` may take, in the units of t (default: no limit); as in `solve`.
+    method : str or ButcherTableau
+        A registered name (`kinema.method_names()`) or an explicit tableau. Default `verlet`.
+    rtol : float
+        Relative tolerance (dimensionless), default 1e-6; as in `solve`.
+    atol : float
+        Absolute tolerance, in the units of y = [x, v], default 1e-9; as in `solve`.
+    t_eval : array_like, optional
+        Times at which to report the solution, in the units of t; default: every step.
+    vectorized : bool
+        With 2-D `x0` and `v0` of shape (batch, n): solve every row as its own initial
+        condition, calling `a` with whole (batch, n) arrays. Default False.
+    dense_output : bool
+        Keep every step's interpolant (`Solution.sol(t)`); as in `solve`. Default False.
+    max_steps : int
+        Most steps (default 10⁷); as in `solve`.
+    h_min : float, optional
+        Smallest step `rk45` may take, in the units of t; as in `solve`.
+
+    Returns
+    -------
+    Solution
+        As `solve`'s, with `x` and `v`.
     """
     _callable("a", a)
     x = _state("x0", x0)
@@ -307,8 +353,8 @@ def _options(
     max_steps: Any,
     h_min: Any,
 ) -> tuple[bool, _SolveOptions]:
-    """The checked arguments of a solve: ``vectorized``, and the options the engine reads as
-    its ``SolveOptions`` (a dict keyed by the fields' names). Checked in the order of the
+    """The checked arguments of a solve: `vectorized`, and the options the engine reads as
+    its `SolveOptions` (a dict keyed by the fields' names). Checked in the order of the
     public signature (method and jac aside), so that the first bad argument is the one
     reported."""
     span = _t_span(t_span)

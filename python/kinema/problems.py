@@ -1,7 +1,7 @@
 """Initial value problems with known exact solutions, for measuring orders of accuracy.
 
-Each ``Problem`` has a first-order right-hand side ``f(t, y)``, its exact solution
-``exact(t)`` and, for mechanical problems, the acceleration ``a(t, x, v)`` of the
+Each `Problem` has a first-order right-hand side `f(t, y)`, its exact solution
+`exact(t)` and, for mechanical problems, the acceleration `a(t, x, v)` of the
 second-order form (then y = [x, v]).
 """
 
@@ -95,7 +95,7 @@ BY_NAME: dict[str, Callable[[], Problem]] = {
 
 
 def get(name: str) -> Problem:
-    """A problem by name (``kinema.problems.BY_NAME`` lists them)."""
+    """A problem by name (`kinema.problems.BY_NAME` lists them)."""
     try:
         return BY_NAME[name]()
     except KeyError:

@@ -1,9 +1,9 @@
 """Linear stability of a time step on the test equation p' = λp.
 
 A method applied to p' = λp multiplies p by R(z), z = hλ, every step; the step is stable when
-|R(z)| ≤ 1. ``amplification`` evaluates R, ``max_step`` gives the largest stable h for a λ,
-``real_interval`` / ``imag_interval`` the stable stretches of the axes, and ``plot_regions``
-draws the regions {z : |R(z)| ≤ 1}. ``max_step_oscillator`` gives the stable step of every
+|R(z)| ≤ 1. `amplification` evaluates R, `max_step` gives the largest stable h for a λ,
+`real_interval` / `imag_interval` the stable stretches of the axes, and `plot_regions`
+draws the regions {z : |R(z)| ≤ 1}. `max_step_oscillator` gives the stable step of every
 method (symplectic ones included) on a damped spring.
 """
 
@@ -31,7 +31,7 @@ class Interval(NamedTuple):
 
 
 def amplification(method: str | ButcherTableau, z: Any) -> np.ndarray:
-    """R(z) for every z of a (complex) array; same shape as ``z``.
+    """R(z) for every z of a (complex) array; same shape as `z`.
 
     Explicit Runge-Kutta (any tableau): R(z) = 1 + z bᵀ(I − zA)⁻¹𝟙, a polynomial.
     Implicit Euler: 1/(1 − z). Symplectic Euler and Verlet, which integrate x'' = λ²x only:
@@ -46,7 +46,7 @@ def amplification(method: str | ButcherTableau, z: Any) -> np.ndarray:
 def max_step(method: str | ButcherTableau, lam: Any) -> Any:
     """Largest h with |R(sλ)| ≤ 1 for all 0 < s ≤ h; elementwise over an array of λ.
 
-    ``inf`` where no step is too large (e.g. implicit Euler for Re λ ≤ 0), ``0`` where no
+    `inf` where no step is too large (e.g. implicit Euler for Re λ ≤ 0), `0` where no
     positive step is stable (e.g. forward Euler on the imaginary axis).
     """
     arr = _checks.complex_array("lam", lam)
@@ -104,11 +104,11 @@ def plot_regions(
     extent: tuple[float, float, float, float] = (-5.0, 3.0, -4.0, 4.0),
     resolution: int = 600,
 ) -> Any:
-    """Draw the stability regions {z : |R(z)| ≤ 1} of ``methods`` in the z = hλ plane.
+    """Draw the stability regions {z : |R(z)| ≤ 1} of `methods` in the z = hλ plane.
 
     Each bounded region is filled (translucent, so overlaps show), an unbounded one (e.g.
     implicit Euler's, the outside of a disc) hatched; all are outlined, with a legend; axes are
-    equal. ``extent`` = (re_min, re_max, im_min, im_max). Returns the matplotlib Axes.
+    equal. `extent` = (re_min, re_max, im_min, im_max). Returns the matplotlib Axes.
     """
     import matplotlib.pyplot as plt
     from matplotlib.colors import to_rgba

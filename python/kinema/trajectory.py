@@ -1,8 +1,8 @@
 """Recorded frames of a world run: times, positions, velocities and diagnostics as arrays,
-and what a trajectory read from a file knows of that file (``FileInfo``).
+and what a trajectory read from a file knows of that file (`FileInfo`).
 
-This module imports ``kinema.io`` only inside the methods that write or read files; the
-readers and writers of ``kinema.io`` take any object with a ``Trajectory``'s attributes and
+This module imports `kinema.io` only inside the methods that write or read files; the
+readers and writers of `kinema.io` take any object with a `Trajectory`'s attributes and
 never import this module."""
 
 from __future__ import annotations
@@ -18,12 +18,12 @@ import numpy as np
 
 @dataclass
 class FileInfo:
-    """What only the file a trajectory was read from knows (``Trajectory.source``): its
-    ``path``, the particle ``group`` read (/particles/<group>), ``step`` (F,) the integration
-    step of each frame as the file numbers them, the file's ``author`` and ``creator``
-    (program and version; ``None`` where it names none) and ``box_edges_by_frame`` (F, 3) m,
-    the periodic cell at each frame (a box that may change; ``Trajectory.box_edges`` is the
-    first frame's), ``None`` with open boundaries."""
+    """What only the file a trajectory was read from knows (`Trajectory.source`): its
+    `path`, the particle `group` read (/particles/<group>), `step` (F,) the integration
+    step of each frame as the file numbers them, the file's `author` and `creator`
+    (program and version; `None` where it names none) and `box_edges_by_frame` (F, 3) m,
+    the periodic cell at each frame (a box that may change; `Trajectory.box_edges` is the
+    first frame's), `None` with open boundaries."""
 
     path: Path
     group: str
@@ -34,9 +34,9 @@ class FileInfo:
 
 
 def _pressure(t: np.ndarray, virial: np.ndarray, kinetic: np.ndarray, about: dict) -> np.ndarray | None:
-    """The pressure tensor at each frame (``Trajectory.pressure``) from the time ``t`` (F,),
+    """The pressure tensor at each frame (`Trajectory.pressure`) from the time `t` (F,),
     the virial summed over all steps (F, 9), N·m·s, and Σ m v ⊗ v (F, 9) at each frame, in a
-    periodic cell (``about``: its ``dim``, ``periodic`` and ``box_edges``); ``None`` without
+    periodic cell (`about`: its `dim`, `periodic` and `box_edges`); `None` without
     one."""
     dim, periodic, edges = about.get("dim", 3), about.get("periodic"), about.get("box_edges")
     if periodic is None or edges is None or not all(periodic[:dim]):
@@ -51,51 +51,51 @@ def _pressure(t: np.ndarray, virial: np.ndarray, kinetic: np.ndarray, about: dic
 
 @dataclass(repr=False)
 class Trajectory:
-    """Frames of a run. ``t`` (F,), ``positions`` and ``velocities`` (F, N, 3); energies in J:
-    ``kinetic`` (F,), ``potential`` {force name: (F,)}, ``total`` (F,); ``momentum`` and
-    ``angular_momentum`` (F, 3).
+    """Frames of a run. `t` (F,), `positions` and `velocities` (F, N, 3); energies in J:
+    `kinetic` (F,), `potential` {force name: (F,)}, `total` (F,); `momentum` and
+    `angular_momentum` (F, 3).
 
-    Collisions (all zeros while they are off): ``contacts`` (F,), the number of contacts at
-    the frame; ``impulse_balance`` (F, 3), N·s, the sum of the impulses between movable
+    Collisions (all zeros while they are off): `contacts` (F,), the number of contacts at
+    the frame; `impulse_balance` (F, 3), N·s, the sum of the impulses between movable
     particles since the previous frame (0 at frame 0), zero by action and reaction up to
-    rounding; ``collision_energy_lost`` (F,), J, the mechanical energy the collisions took
-    since they were turned on (total energy + it is conserved); ``impacts`` (F,), the impacts
+    rounding; `collision_energy_lost` (F,), J, the mechanical energy the collisions took
+    since they were turned on (total energy + it is conserved); `impacts` (F,), the impacts
     since the previous frame (0 at frame 0): found inside the steps by the impulse model, the
     events of an event-driven gas, the contacts begun with the spring–dashpot and Hertz models
-    (velocity Verlet), so that ``impacts / diff(t)`` is the collision frequency.
+    (velocity Verlet), so that `impacts / diff(t)` is the collision frequency.
 
-    ``pressure`` (F, 3, 3): the pressure tensor of a periodic world (every axis of its
-    dimension periodic; ``None`` otherwise, and for a file), Pa in 3D (N/m in 2D): the kinetic
+    `pressure` (F, 3, 3): the pressure tensor of a periodic world (every axis of its
+    dimension periodic; `None` otherwise, and for a file), Pa in 3D (N/m in 2D): the kinetic
     part Σ m v ⊗ v / V at the frame plus the virial of the pair impulses and contact forces,
     Σ (x_i − x_j) ⊗ J / (V Δt), over the Δt since the previous frame (NaN at frame 0); V the
     cell's volume (area in 2D). Its trace over the dimension is the pressure (LAMMPS's
-    ``compute pressure``; for hard spheres the virial route of the equation of state).
+    `compute pressure`; for hard spheres the virial route of the equation of state).
 
-    About the world (``None`` when unknown): ``masses`` (N,) kg, ``radii`` (N,) m, ``ids``
-    (N,), ``species`` (N,) names (``World.add_particles(species=)``), ``dim`` (2 or 3), ``dt`` s, ``method``, ``periodic`` (3 bools) and ``box_edges``
-    (3,) m, the periodic cell. ``fps``: the frames per second asked of ``World.run`` (a frame
+    About the world (`None` when unknown): `masses` (N,) kg, `radii` (N,) m, `ids`
+    (N,), `species` (N,) names (`World.add_particles(species=)`), `dim` (2 or 3), `dt` s, `method`, `periodic` (3 bools) and `box_edges`
+    (3,) m, the periodic cell. `fps`: the frames per second asked of `World.run` (a frame
     is recorded every round(1/(fps·dt)) steps, so the frames may be a little more or less
-    than 1/fps s apart); saved in H5MD files, it is the default rate of a video of them. ``colliders``: the world's colliders as plain descriptions, in
+    than 1/fps s apart); saved in H5MD files, it is the default rate of a video of them. `colliders`: the world's colliders as plain descriptions, in
     the order added — {"type": "plane", "point": [3], "normal": [3]}, {"type": "box", "lo",
     "hi"} (2 or 3 values each, ±inf for an open face), {"type": "sphere", "center": [3],
     "radius"}, with "restitution" and "friction" where the collider sets them; m. Empty when
     there are none or they are unknown (a file written before they were recorded).
 
-    Births and deaths (emitters, ``World.remove_particles``): N counts every particle alive
-    in some frame, one column per particle in the order of their ``ids`` (stable, never
-    reused); ``alive`` (F, N) bool says which exist at each frame, and their positions and
-    velocities are NaN where they do not. Without births or deaths ``alive`` is all True.
-    ``springs`` (S, 2): the ids at the ends of each spring, drawn while both are alive.
-    ``colors`` (N, 3): each particle's own colour, r g b in [0, 1] (NaN: none; an
-    ``Emitter``'s ``color``), or None.
+    Births and deaths (emitters, `World.remove_particles`): N counts every particle alive
+    in some frame, one column per particle in the order of their `ids` (stable, never
+    reused); `alive` (F, N) bool says which exist at each frame, and their positions and
+    velocities are NaN where they do not. Without births or deaths `alive` is all True.
+    `springs` (S, 2): the ids at the ends of each spring, drawn while both are alive.
+    `colors` (N, 3): each particle's own colour, r g b in [0, 1] (NaN: none; an
+    `Emitter`'s `color`), or None.
 
-    ``source``: a trajectory read from a file (``Trajectory.load``) keeps what only the file
-    knows, a :class:`FileInfo` (path, group, step of each frame, author, creator, the cell
-    at each frame); ``None`` for one recorded by ``World.run``.
+    `source`: a trajectory read from a file (`Trajectory.load`) keeps what only the file
+    knows, a `FileInfo` (path, group, step of each frame, author, creator, the cell
+    at each frame); `None` for one recorded by `World.run`.
 
-    ``save`` writes an H5MD file, ``Trajectory.load`` (or ``kinema.load_trajectory``) reads
-    one back, ``export`` writes VTK, PLY, extended XYZ or CSV (see ``kinema.io``), ``render``
-    a video (see ``kinema.render``)."""
+    `save` writes an H5MD file, `Trajectory.load` (or `kinema.load_trajectory`) reads
+    one back, `export` writes VTK, PLY, extended XYZ or CSV (see `kinema.io`), `render`
+    a video (see `kinema.render`)."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -147,7 +147,7 @@ class Trajectory:
         return "Trajectory(" + ", ".join(f"{k}={v}" for k, v in self._summary()) + ")"
 
     def _repr_html_(self) -> str:
-        """A small table for Jupyter (``show()`` plays the frames)."""
+        """A small table for Jupyter (`show()` plays the frames)."""
         from html import escape
 
         cells = "".join(f"<tr><th style='text-align:left'>{escape(k)}</th><td style='text-align:left'>{escape(v)}</td></tr>" for k, v in self._summary())
@@ -171,8 +171,8 @@ class Trajectory:
         return not bool(self.alive.all())
 
     def frame(self, k: int) -> dict[str, np.ndarray]:
-        """The particles alive at frame ``k``: ``ids``, ``positions``, ``velocities`` and, where
-        known, ``masses``, ``radii`` and ``species``, each with one row per live particle."""
+        """The particles alive at frame `k`: `ids`, `positions`, `velocities` and, where
+        known, `masses`, `radii` and `species`, each with one row per live particle."""
         live = self.alive[k]
         out = {"ids": (self.ids if self.ids is not None else np.arange(live.size))[live]}
         out["positions"], out["velocities"] = self.positions[k][live], self.velocities[k][live]
@@ -187,14 +187,14 @@ class Trajectory:
         return _Recorder(expected)
 
     def save(self, path: Any, group: str = "all", **options: Any) -> Any:
-        """Write the frames to an H5MD file (``kinema.io.save_h5md``); returns its path.
+        """Write the frames to an H5MD file (`kinema.io.save_h5md`); returns its path.
 
-        What is written is first checked by the rules :meth:`load` reads it with (finite
+        What is written is first checked by the rules `load` reads it with (finite
         times that increase, finite positions and velocities, masses > 0, radii >= 0, ...):
         a trajectory that would not load back is refused before anything is written, with a
-        one-line ``kinema.io.TrajectoryFileError`` naming the file, the attribute and the
+        one-line `kinema.io.TrajectoryFileError` naming the file, the attribute and the
         value. A failure of the system (a name too long, a full disk) is a
-        ``kinema.io.FileWriteError`` naming the file."""
+        `kinema.io.FileWriteError` naming the file."""
         from .io import save_h5md
 
         return save_h5md(self, path, group=group, **options)
@@ -212,49 +212,49 @@ class Trajectory:
     ) -> Trajectory:
         """Read a trajectory file, kinema's or another program's, in SI units; what only the file
         knows (its path, group, step of each frame, author, creator, the cell at each frame) is
-        ``source``, a :class:`FileInfo`. Quantities the file does not hold are filled in as
-        ``_from_file`` says (velocities and energies NaN, "unknown").
+        `source`, a `FileInfo`. Quantities the file does not hold are filled in as
+        `_from_file` says (velocities and energies NaN, "unknown").
 
-        Formats (``format``, default: told by the file's first bytes, its suffix, its first
-        lines; ``kinema.io.readers``): ``"h5md"`` (``save``'s and other programs' H5MD;
-        ``kinema.io.load_h5md``), ``"xyz"`` (extended XYZ: ASE's, OVITO's, kinema's ``.xyz``),
-        ``"gsd"`` (HOOMD-blue's, kinema's ``.gsd``), ``"lammps"`` (a LAMMPS text dump),
-        ``"lammps-data"`` (a LAMMPS data file), ``"usd"`` (kinema's USD exports and another
-        program's first ``UsdGeom.Points``, through usd-core), and kinema's own exports ``"csv"``,
-        ``"vtk"`` (the ``.pvd`` series) and ``"ply"`` (the ``<stem>_ply/`` series). docs/files.md says
+        Formats (`format`, default: told by the file's first bytes, its suffix, its first
+        lines; `kinema.io.readers`): `"h5md"` (`save`'s and other programs' H5MD;
+        `kinema.io.load_h5md`), `"xyz"` (extended XYZ: ASE's, OVITO's, kinema's `.xyz`),
+        `"gsd"` (HOOMD-blue's, kinema's `.gsd`), `"lammps"` (a LAMMPS text dump),
+        `"lammps-data"` (a LAMMPS data file), `"usd"` (kinema's USD exports and another
+        program's first `UsdGeom.Points`, through usd-core), and kinema's own exports `"csv"`,
+        `"vtk"` (the `.pvd` series) and `"ply"` (the `<stem>_ply/` series). docs/files.md says
         what each gives (ids, births and deaths, units).
 
-        ``units``: for a file that does not say its units, what they are: a LAMMPS unit style
-        (``"real"``, ``"metal"``, ``"si"``, ``"cgs"``, ``"electron"``, ``"micro"``,
-        ``"nano"``), ``"ase"``, or {"length": m, "time": s, "mass": kg}; a LAMMPS file that
+        `units`: for a file that does not say its units, what they are: a LAMMPS unit style
+        (`"real"`, `"metal"`, `"si"`, `"cgs"`, `"electron"`, `"micro"`,
+        `"nano"`), `"ase"`, or {"length": m, "time": s, "mass": kg}; a LAMMPS file that
         says neither is refused, a HOOMD GSD file without them is read as SI with a
-        ``kinema.io.UnitWarning``. ``atom_style``: a LAMMPS data file's atom style, where its
+        `kinema.io.UnitWarning`. `atom_style`: a LAMMPS data file's atom style, where its
         Atoms section does not name it.
 
         What the file holds is checked as it is read (H5MD: shapes, types and the memory they
         need before any data; every format: finite positions, velocities and times, times that
         increase, masses > 0, radii >= 0 and at most 1e150 m, printable species names, a box
-        along the axes, an id once per frame): a ``kinema.io.TrajectoryFileError`` (a
-        ``ValueError``), one line, names the file, where in it and the bad value. A file of
+        along the axes, an id once per frame): a `kinema.io.TrajectoryFileError` (a
+        `ValueError`), one line, names the file, where in it and the bad value. A file of
         no format kinema reads is refused with the list of those it reads.
 
         An H5MD file is read alone: one with an external link, a virtual dataset of another file
-        or data stored in external files is refused, unless ``follow_links=True`` (then those
-        other files are read too); ``group`` picks its particle group."""
+        or data stored in external files is refused, unless `follow_links=True` (then those
+        other files are read too); `group` picks its particle group."""
         from .io.readers import read_trajectory
 
         return cls._from_file(read_trajectory(path, format=format, units=units, group=group, follow_links=follow_links, atom_style=atom_style))
 
     @classmethod
     def _from_file(cls, read: Any) -> Trajectory:
-        """The ``Trajectory`` of what ``kinema.io.load_h5md`` read (a ``LoadedTrajectory``):
+        """The `Trajectory` of what `kinema.io.load_h5md` read (a `LoadedTrajectory`):
         every field the constructor takes, from the attribute of the same name, so it follows
         the class as it grows. What the file does not hold is filled in: velocities, kinetic
         energy, momentum and angular momentum that were not recorded (a file of another
-        program) are NaN, "unknown" (``total`` is then NaN too), absent collision observables
+        program) are NaN, "unknown" (`total` is then NaN too), absent collision observables
         zeros, other absent attributes their defaults. The file's own facts become
-        ``source``; the periodic cell is the first frame's (``box_edges``), a box that
-        changes keeps every frame's in ``source.box_edges_by_frame``."""
+        `source`; the periodic cell is the first frame's (`box_edges`), a box that
+        changes keeps every frame's in `source.box_edges_by_frame`."""
         f, n = read.positions.shape[:2]
         unknown = {
             "velocities": lambda: np.full((f, n, 3), np.nan),
@@ -286,21 +286,21 @@ class Trajectory:
         return cls(**args, source=source)
 
     def render(self, path: Any, fps: float | None = None, draw_colliders: bool = True, **options: Any) -> Any:
-        """Render the frames to a video, ``.mp4`` (H.264) or ``.gif``, and return its path.
+        """Render the frames to a video, `.mp4` (H.264) or `.gif`, and return its path.
 
-        ``fps`` defaults to real time (``kinema.render.playback_rate``): the trajectory's own
-        ``fps`` (the rate asked of ``World.run``, also read from an H5MD file kinema wrote),
+        `fps` defaults to real time (`kinema.render.playback_rate`): the trajectory's own
+        `fps` (the rate asked of `World.run`, also read from an H5MD file kinema wrote),
         else the nearest of the common rates 24, 25, 30, 50 and 60 within 2 % of the
         recording's rate, else the recording's rate; the frames are placed by their times
-        (``write_video(times=)``: a recording every 33 ms, 30.30 a second, makes a 30 fps
+        (`write_video(times=)`: a recording every 33 ms, 30.30 a second, makes a 30 fps
         video with one frame in about a hundred dropped, and a GIF, whose delays are whole
-        1/100 s, still plays in real time; the rate written is ``kinema.render.video_rate``).
+        1/100 s, still plays in real time; the rate written is `kinema.render.video_rate`).
         A number gives one video frame per recorded frame at that rate. The trajectory's
-        ``colliders`` are drawn with the particles unless ``draw_colliders`` is False (or
-        ``colliders=`` gives others). ``options`` go to ``kinema.render_frames``
-        (``color_by``, ``width``, ``height``, ``camera``, ...) and ``preset``/``crf`` to
-        ``kinema.write_video``. Particles without a radius are drawn at 1/200 of the scene's
-        size. Each frame shows the particles ``alive`` then, and the ``springs`` whose ends
+        `colliders` are drawn with the particles unless `draw_colliders` is False (or
+        `colliders=` gives others). `options` go to `kinema.render_frames`
+        (`color_by`, `width`, `height`, `camera`, ...) and `preset`/`crf` to
+        `kinema.write_video`. Particles without a radius are drawn at 1/200 of the scene's
+        size. Each frame shows the particles `alive` then, and the `springs` whose ends
         both are, as lines."""
         from .render import _trajectory_options, own_colours, playback_rate, render_frames, write_video
 
@@ -321,19 +321,19 @@ class Trajectory:
     def show(self, mode: str = "viewer", **options: Any) -> Any:
         """Play the frames, inline in Jupyter, else outside it.
 
-        ``mode="viewer"`` (the default): the browser viewer (three.js, bundled; play/pause,
-        scrub, speed, orbit camera, colouring). In a notebook, returns an IPython ``HTML``
-        object holding the self-contained page in an iframe (``options``: ``title``,
-        ``max_bytes``; ``open_browser`` and ``port`` are ignored there); elsewhere, serves it
-        on 127.0.0.1 (``kinema.viewer.serve``: ``open_browser``, ``port``, ``title``,
-        ``max_bytes``), opens the user's browser when there is one and returns the page's
+        `mode="viewer"` (the default): the browser viewer (three.js, bundled; play/pause,
+        scrub, speed, orbit camera, colouring). In a notebook, returns an IPython `HTML`
+        object holding the self-contained page in an iframe (`options`: `title`,
+        `max_bytes`; `open_browser` and `port` are ignored there); elsewhere, serves it
+        on 127.0.0.1 (`kinema.viewer.serve`: `open_browser`, `port`, `title`,
+        `max_bytes`), opens the user's browser when there is one and returns the page's
         URL. The server runs on a daemon thread until the process ends.
 
-        ``mode="video"``: an H.264 MP4 rendered by :meth:`render` (``options`` go to it:
-        ``fps``, ``color_by``, ``width``, ``height``, ``camera``, ...). In a notebook, returns
-        an IPython ``Video`` embedded in the notebook (an HTML5 ``<video>`` with the MP4 as a
+        `mode="video"`: an H.264 MP4 rendered by `render` (`options` go to it:
+        `fps`, `color_by`, `width`, `height`, `camera`, ...). In a notebook, returns
+        an IPython `Video` embedded in the notebook (an HTML5 `<video>` with the MP4 as a
         base64 data URI; nothing is left on disk); elsewhere, writes the MP4 to a new
-        temporary file (``kinema-*.mp4`` in the system's temporary folder) and returns its
+        temporary file (`kinema-*.mp4` in the system's temporary folder) and returns its
         path."""
         if mode not in ("viewer", "video"):
             raise ValueError(f"mode = {mode!r} is invalid: use 'viewer' (the browser viewer) or 'video' (an MP4)")
@@ -381,9 +381,9 @@ class Trajectory:
         return url
 
     def export(self, path: Any, format: str | None = None) -> list[Any]:
-        """Write the frames for other tools: ``vtk`` (ParaView), ``ply`` (Blender, Houdini),
-        ``xyz`` (OVITO), ``csv``, ``gsd``, ``lammps`` or ``usd``, inferred from the suffix when
-        ``format`` is None; returns the files written (``kinema.io.export``). Values the
+        """Write the frames for other tools: `vtk` (ParaView), `ply` (Blender, Houdini),
+        `xyz` (OVITO), `csv`, `gsd`, `lammps` or `usd`, inferred from the suffix when
+        `format` is None; returns the files written (`kinema.io.export`). Values the
         format's readers or kinema's would refuse are refused before anything is written."""
         from .io import export
 
@@ -410,14 +410,14 @@ class Trajectory:
 
 
 def _prefaulted(shape: tuple[int, ...]) -> np.ndarray:
-    """An uninitialised float64 array of ``shape`` whose memory the kernel maps in one go
-    (``MAP_POPULATE``, Linux) rather than one page fault at a time as the frames are written.
+    """An uninitialised float64 array of `shape` whose memory the kernel maps in one go
+    (`MAP_POPULATE`, Linux) rather than one page fault at a time as the frames are written.
 
     A run's block of frames is fresh memory, and writing it the first time faults in every
     4 KiB page: measured on this project's machine (a VM), 48 ms per frame of 10⁶ particles'
     positions, against 2 ms for the copy itself and 8 ms per frame populated at once. Small
     blocks, systems without the flag, and blocks over half of the memory available now
-    (which faulting in at once could exhaust) get a plain ``np.empty``."""
+    (which faulting in at once could exhaust) get a plain `np.empty`."""
     size = 8 * int(np.prod(shape))
     populate = getattr(mmap, "MAP_POPULATE", 0)
     if not populate or size < (1 << 22):
@@ -439,7 +439,7 @@ class _Recorder:
     """Collects frames while a world runs. Particles are columns by id: when the set of ids
     changes (births, deaths), the columns are the union of all ids, NaN where not alive.
 
-    With the number of frames ``expected`` (``World.run`` knows it), positions and velocities
+    With the number of frames `expected` (`World.run` knows it), positions and velocities
     are copied straight into one block of that many frames, which the trajectory then uses as
     it is: each frame's state is copied once, not once into the frame and again into the stack
     (for 10⁶ particles that second copy was a fifth of a 60 fps run's time). A frame that does

@@ -1,18 +1,18 @@
 """Trajectory files: H5MD (HDF5) to save and load runs, and exports for other programs.
 
-- ``save_h5md(traj, path)`` / ``load_h5md(path)``: the H5MD 1.1 layout, read back exactly
+- `save_h5md(traj, path)` / `load_h5md(path)`: the H5MD 1.1 layout, read back exactly
   (needs h5py). Loading checks what it reads (shapes, types and the memory needed before
   any data is read, then the values) and names the file, the dataset and the bad value.
-- ``export(traj, path, format)``: VTK PolyData series with a .pvd collection and the
+- `export(traj, path, format)`: VTK PolyData series with a .pvd collection and the
   colliders (ParaView, OVITO), PLY per frame (Blender, Houdini), extended XYZ (OVITO, ASE),
   CSV, GSD (HOOMD, OVITO), a LAMMPS dump (OVITO, ASE, VMD).
-- ``TrajectoryFileError``: a file that cannot be read, or a target refused before writing (a
-  ``ValueError`` whose message is one line naming the file).
-- ``FileWriteError``: a write the system failed (a full disk, a file-size limit, an I/O
-  error; an ``OSError`` with the system's ``errno``, one line naming the file).
+- `TrajectoryFileError`: a file that cannot be read, or a target refused before writing (a
+  `ValueError` whose message is one line naming the file).
+- `FileWriteError`: a write the system failed (a full disk, a file-size limit, an I/O
+  error; an `OSError` with the system's `errno`, one line naming the file).
 
-Births and deaths (``Trajectory.alive``) are written by every format: H5MD keeps one column
-per particle with its ``id`` element's fill value where it does not exist (and reads it back,
+Births and deaths (`Trajectory.alive`) are written by every format: H5MD keeps one column
+per particle with its `id` element's fill value where it does not exist (and reads it back,
 with the springs), the exports write each frame's live particles with their ids.
 
 Every writer writes under a temporary name and renames at the end: a failed write leaves no

@@ -1,6 +1,6 @@
-"""The frames a reader of another program's format found (``RawFrame``: each frame's rows, in
-the file's units), checked and made one ``LoadedTrajectory`` in SI units (``assemble``): one
-column per particle id, NaN and ``alive`` False where a particle is not in a frame, the
+"""The frames a reader of another program's format found (`RawFrame`: each frame's rows, in
+the file's units), checked and made one `LoadedTrajectory` in SI units (`assemble`): one
+column per particle id, NaN and `alive` False where a particle is not in a frame, the
 per-particle values where each particle first appears, the box of the first frame as the
 periodic cell."""
 
@@ -19,7 +19,7 @@ from .units import Scales
 
 @dataclass
 class Box:
-    """A frame's orthogonal box, in the file's units: ``lo`` and ``hi`` (3,), ``periodic`` (3,)
+    """A frame's orthogonal box, in the file's units: `lo` and `hi` (3,), `periodic` (3,)
     bools."""
 
     lo: np.ndarray
@@ -29,11 +29,11 @@ class Box:
 
 @dataclass
 class RawFrame:
-    """One frame as a file holds it, in the file's units: ``positions`` (n, 3) and, where the file
-    has them, ``ids`` (n,) ints, ``velocities`` (n, 3), ``masses`` and ``radii`` (n,),
-    ``species`` (n,) names, ``colors`` (n, 3) r g b in [0, 1], the frame's ``time`` and
-    ``step`` and its ``box``. ``where`` names the frame in messages (``"frame 3"``, ``"frame 3
-    (line 120)"``)."""
+    """One frame as a file holds it, in the file's units: `positions` (n, 3) and, where the file
+    has them, `ids` (n,) ints, `velocities` (n, 3), `masses` and `radii` (n,),
+    `species` (n,) names, `colors` (n, 3) r g b in [0, 1], the frame's `time` and
+    `step` and its `box`. `where` names the frame in messages (`"frame 3"`, `"frame 3
+    (line 120)"`)."""
 
     positions: np.ndarray
     where: str
@@ -80,21 +80,21 @@ def assemble(
     group: str = "all",
     springs: np.ndarray | None = None,
 ) -> LoadedTrajectory:
-    """The trajectory of ``frames``, converted to SI by ``scales``.
+    """The trajectory of `frames`, converted to SI by `scales`.
 
     Particles are followed by their ids where every frame has them (one column per id that
-    appears, ascending; ``alive`` False and NaN positions and velocities where a particle is
+    appears, ascending; `alive` False and NaN positions and velocities where a particle is
     not in a frame); without ids every frame must hold the same number of rows, the particles
-    in the same order. Velocities are ``None`` when no frame has them (NaN in a frame without
+    in the same order. Velocities are `None` when no frame has them (NaN in a frame without
     them when others have them); masses, radii and species are each particle's where it first
-    appears, ``None`` when no frame has them (so are colours). ``springs`` (S, 2) are the ids
+    appears, `None` when no frame has them (so are colours). `springs` (S, 2) are the ids
     at the ends of each spring, as the file names them. Times are the frames' own times, or, when the file
-    has none, the frame index (0, 1, 2, ... s; ``source.step`` keeps the file's steps).
-    The first frame's box gives ``periodic``, ``box_edges`` and, with a periodic axis, a box
+    has none, the frame index (0, 1, 2, ... s; `source.step` keeps the file's steps).
+    The first frame's box gives `periodic`, `box_edges` and, with a periodic axis, a box
     collider at its faces (±inf on open axes), which keeps the cell's corner where kinema's
-    exports and renderer look for it; ``box_edges_by_frame`` holds every frame's edges.
+    exports and renderer look for it; `box_edges_by_frame` holds every frame's edges.
 
-    Raises ``TrajectoryFileError`` naming ``path`` and the frame when a value is not finite, a
+    Raises `TrajectoryFileError` naming `path` and the frame when a value is not finite, a
     mass not > 0, a radius < 0, an id appears twice in one frame, times do not increase,
     the number of rows changes without ids, some frames have times and others not, or the
     file holds no frame or no particle."""

@@ -22,7 +22,7 @@ ELEMENTS = frozenset(
 
 
 def box_corners(description: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-    """(lo, hi), (3,) each, m, of a box collider's description (``Trajectory.colliders``):
+    """(lo, hi), (3,) each, m, of a box collider's description (`Trajectory.colliders`):
     ±inf for open faces and along z of a 2D box (2 values each)."""
     lo, hi = np.full(3, -np.inf), np.full(3, np.inf)
     a = np.asarray(description["lo"], dtype=np.float64).reshape(-1)[:3]
@@ -32,8 +32,8 @@ def box_corners(description: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def box_collider(traj: Any) -> tuple[np.ndarray, np.ndarray] | None:
-    """The corners (``box_corners``) of the trajectory's first box collider (the one a
-    world's periodic cell comes from); ``None`` without one."""
+    """The corners (`box_corners`) of the trajectory's first box collider (the one a
+    world's periodic cell comes from); `None` without one."""
     for c in getattr(traj, "colliders", None) or []:
         if isinstance(c, dict) and c.get("type") == "box":
             return box_corners(c)
@@ -54,14 +54,14 @@ def trajectory_cell(traj: Any, fr: Frames) -> Cell:
     each frame: births and deaths leave no trace).
 
     A periodic axis takes the bounds of the trajectory's box collider (the world's periodic
-    cell), or, when it records none, its ``box_edges`` from the lowest coordinate on that
+    cell), or, when it records none, its `box_edges` from the lowest coordinate on that
     axis; so does an axis where the box has two walls and all frames' particles lie between
     them. Any other axis takes the bounds of all frames' particles widened on each side by
-    ``margin``: the largest radius plus 5 % of their largest extent (of 1 m when all sit at
+    `margin`: the largest radius plus 5 % of their largest extent (of 1 m when all sit at
     one point), so the spheres fit with room. In 2D, z is [-margin, margin] and not
-    periodic: no edge is ever zero (OVITO's cell analysis and ASE's ``get_volume`` need a 3D
+    periodic: no edge is ever zero (OVITO's cell analysis and ASE's `get_volume` need a 3D
     box; HOOMD's Lz = 0 is the GSD writer's own). A periodic axis with no edge is a
-    ``ValueError``."""
+    `ValueError`."""
     periodic = getattr(traj, "periodic", None)
     periodic = np.zeros(3, dtype=bool) if periodic is None else np.resize(np.asarray(periodic, dtype=bool).reshape(-1), 3)
     edges = getattr(traj, "box_edges", None)
@@ -89,7 +89,7 @@ def trajectory_cell(traj: Any, fr: Frames) -> Cell:
 
 
 def frame_steps(fr: Frames) -> np.ndarray:
-    """The step number of each frame: round(t/dt) when ``dt`` is known and those numbers are
+    """The step number of each frame: round(t/dt) when `dt` is known and those numbers are
     >= 0 and increase; otherwise the frame index."""
     if fr.dt is not None and fr.dt > 0 and np.all(np.isfinite(fr.t)):
         steps = np.rint(fr.t / fr.dt)
@@ -100,7 +100,7 @@ def frame_steps(fr: Frames) -> np.ndarray:
 
 def particle_types(traj: Any, n: int) -> tuple[list[str], np.ndarray]:
     """(type names, type index of each particle (N,)): the sorted distinct names of the
-    trajectory's ``species`` (N,) when it has them, else the single type ``"A"``."""
+    trajectory's `species` (N,) when it has them, else the single type `"A"`."""
     names = getattr(traj, "species", None)
     if names is None:
         return ["A"], np.zeros(n, dtype=np.int64)
@@ -112,8 +112,8 @@ def particle_types(traj: Any, n: int) -> tuple[list[str], np.ndarray]:
 
 
 def spring_columns(traj: Any, fr: Frames) -> np.ndarray:
-    """(S, 2) int64: the columns (the particles, in the order of ``fr.ids``) at the two ends
-    of each of the trajectory's ``springs`` (pairs of ids), in the order of ``springs``; a
+    """(S, 2) int64: the columns (the particles, in the order of `fr.ids`) at the two ends
+    of each of the trajectory's `springs` (pairs of ids), in the order of `springs`; a
     spring with an end whose id the trajectory does not hold is left out, as the renderer
     leaves it out. (0, 2) without springs."""
     springs = getattr(traj, "springs", None)
@@ -130,9 +130,9 @@ def spring_columns(traj: Any, fr: Frames) -> np.ndarray:
 
 
 def live_springs(columns: np.ndarray, fr: Frames, i: int) -> np.ndarray:
-    """(K, 2) int64: the springs of ``columns`` (``spring_columns``) whose two ends are alive
-    at frame ``i``, as rows of that frame (indices into ``fr.live(i)``: the order every
-    format writes the frame's particles in), in the order of ``columns``."""
+    """(K, 2) int64: the springs of `columns` (`spring_columns`) whose two ends are alive
+    at frame `i`, as rows of that frame (indices into `fr.live(i)`: the order every
+    format writes the frame's particles in), in the order of `columns`."""
     row = np.full(fr.n_particles, -1, dtype=np.int64)
     live = fr.live(i)
     row[live] = np.arange(live.size)
@@ -141,10 +141,10 @@ def live_springs(columns: np.ndarray, fr: Frames, i: int) -> np.ndarray:
 
 
 def particle_colors(traj: Any, n: int) -> np.ndarray | None:
-    """(N, 3) float64: each particle's own colour (``Trajectory.colors``, r g b in [0, 1]),
-    the renderer's ``NO_OWN_COLOR`` (RGB 70 130 200, the colour a video draws such a particle
-    with) where it has none (a row with NaN); ``None`` when the trajectory has no colours.
-    A colour outside [0, 1] or infinite is a ``ValueError``."""
+    """(N, 3) float64: each particle's own colour (`Trajectory.colors`, r g b in [0, 1]),
+    the renderer's `NO_OWN_COLOR` (RGB 70 130 200, the colour a video draws such a particle
+    with) where it has none (a row with NaN); `None` when the trajectory has no colours.
+    A colour outside [0, 1] or infinite is a `ValueError`."""
     colors = getattr(traj, "colors", None)
     if colors is None:
         return None
@@ -163,14 +163,14 @@ def particle_colors(traj: Any, n: int) -> np.ndarray | None:
 
 
 def colors_uint8(colors: np.ndarray) -> np.ndarray:
-    """(N, 3) uint8 of ``particle_colors``: round(255 c), as the renderer's own colours."""
+    """(N, 3) uint8 of `particle_colors`: round(255 c), as the renderer's own colours."""
     return np.round(colors * 255.0).astype(np.uint8)
 
 
 def element_names(traj: Any, n: int) -> list[str] | None:
-    """The species names of the particles' types (``particle_types``) when every one is a
-    chemical symbol or ``X`` (ASE's dummy element), as a LAMMPS ``element`` column needs them
-    (ASE refuses other words there); ``None`` without species or when one is another word."""
+    """The species names of the particles' types (`particle_types`) when every one is a
+    chemical symbol or `X` (ASE's dummy element), as a LAMMPS `element` column needs them
+    (ASE refuses other words there); `None` without species or when one is another word."""
     if getattr(traj, "species", None) is None:
         return None
     names, _ = particle_types(traj, n)
@@ -178,10 +178,10 @@ def element_names(traj: Any, n: int) -> list[str] | None:
 
 
 class Extras:
-    """What a trajectory adds to its particles beyond ``Frames``, computed once before the
-    files: the type names and each particle's type (``None`` without species), the colours
-    (``particle_colors``; ``None`` without) and the springs as pairs of columns
-    (``spring_columns``; ``None`` without)."""
+    """What a trajectory adds to its particles beyond `Frames`, computed once before the
+    files: the type names and each particle's type (`None` without species), the colours
+    (`particle_colors`; `None` without) and the springs as pairs of columns
+    (`spring_columns`; `None` without)."""
 
     def __init__(self, traj: Any, fr: Frames) -> None:
         self.names, self.typeid = particle_types(traj, fr.n_particles) if getattr(traj, "species", None) is not None else (None, None)

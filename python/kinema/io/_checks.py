@@ -13,9 +13,9 @@ _GIB = 1 << 30
 
 
 def available_memory() -> int | None:
-    """Bytes of memory this process can still use: the kernel's ``MemAvailable`` (free memory
-    and what the page cache can give back), else the free pages (``SC_AVPHYS_PAGES``), and
-    no more than what the control group's limit leaves (a container); ``None`` when unknown."""
+    """Bytes of memory this process can still use: the kernel's `MemAvailable` (free memory
+    and what the page cache can give back), else the free pages (`SC_AVPHYS_PAGES`), and
+    no more than what the control group's limit leaves (a container); `None` when unknown."""
     known: list[int] = []
     try:
         with open("/proc/meminfo") as f:
@@ -42,13 +42,13 @@ def available_memory() -> int | None:
 
 
 def gib(nbytes: int) -> str:
-    """``nbytes`` in GiB, as a message shows it: 21.8, 0.004."""
+    """`nbytes` in GiB, as a message shows it: 21.8, 0.004."""
     g = nbytes / _GIB
     return f"{g:,.1f}" if g >= 1 else f"{g:.2g}"
 
 
 def number(value: Any) -> str:
-    """A number as a message shows it: ``-1`` for -1.0, ``0.3``, ``nan``, ``inf``."""
+    """A number as a message shows it: `-1` for -1.0, `0.3`, `nan`, `inf`."""
     v = value.item() if isinstance(value, np.generic) else value
     if isinstance(v, float):
         if math.isfinite(v) and v.is_integer() and abs(v) < 1e15:
@@ -58,7 +58,7 @@ def number(value: Any) -> str:
 
 
 def shown(value: Any) -> str:
-    """An attribute's value as a message shows it: ``'fast'`` (a string), ``0.01``, ``[1, 2]``."""
+    """An attribute's value as a message shows it: `'fast'` (a string), `0.01`, `[1, 2]`."""
     if isinstance(value, bytes):
         value = value.decode("utf-8", "replace")
     if isinstance(value, str):
@@ -71,8 +71,8 @@ def shown(value: Any) -> str:
 
 
 def dtype_problem(dtype: np.dtype, integer: bool = False) -> str | None:
-    """What a dataset of ``dtype`` holds when that is not real numbers (integers when
-    ``integer``): ``"strings"``, ``"complex numbers (complex128)"``, ...; ``None`` when it is."""
+    """What a dataset of `dtype` holds when that is not real numbers (integers when
+    `integer`): `"strings"`, `"complex numbers (complex128)"`, ...; `None` when it is."""
     import h5py
 
     if dtype.kind in "SU" or h5py.check_string_dtype(dtype) is not None:
@@ -93,7 +93,7 @@ def dtype_problem(dtype: np.dtype, integer: bool = False) -> str | None:
 
 
 def first_non_finite(a: np.ndarray) -> tuple[int, ...] | None:
-    """The index of the first NaN or ±inf in ``a`` (C order), ``None`` when there is none."""
+    """The index of the first NaN or ±inf in `a` (C order), `None` when there is none."""
     if a.dtype.kind != "f" or a.size == 0:
         return None
     ok = np.isfinite(a)

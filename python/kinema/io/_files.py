@@ -29,16 +29,16 @@ class TrajectoryFileError(ValueError):
 class FileWriteError(OSError):
     """A write the system failed: a full disk (ENOSPC), a file-size limit (EFBIG), an I/O
     error (EIO), a permission refused while writing. The message is one line naming the file
-    and the system's reason; ``errno`` is the system's. The target is left as it was and no
+    and the system's reason; `errno` is the system's. The target is left as it was and no
     temporary file remains. (A target refused before writing, such as a folder or a device,
-    is a ``TrajectoryFileError``.)"""
+    is a `TrajectoryFileError`.)"""
 
     __module__ = "kinema.io"
 
     @classmethod
     def of(cls, path: str | os.PathLike, e: OSError) -> FileWriteError:
-        """The error for ``path`` from the system's ``e`` (``errno``, ``strerror`` and
-        ``filename`` set as an ``OSError``'s)."""
+        """The error for `path` from the system's `e` (`errno`, `strerror` and
+        `filename` set as an `OSError`'s)."""
         reason = e.strerror or str(e)
         return cls(e.errno, reason, os.fspath(path))
 
@@ -50,10 +50,10 @@ _BOTH: dict[type, type] = {}
 
 
 def write_error(path: str | os.PathLike, code: int, reason: str) -> FileWriteError:
-    """A ``FileWriteError`` for ``path`` of errno ``code`` that is also the built-in ``OSError``
-    subclass of that errno (``FileNotFoundError`` for ENOENT, ``IsADirectoryError`` for
-    EISDIR, ...), as ``OSError(code, ...)`` would be: code that caught the built-in error
-    before it became a ``FileWriteError`` still catches it."""
+    """A `FileWriteError` for `path` of errno `code` that is also the built-in `OSError`
+    subclass of that errno (`FileNotFoundError` for ENOENT, `IsADirectoryError` for
+    EISDIR, ...), as `OSError(code, ...)` would be: code that caught the built-in error
+    before it became a `FileWriteError` still catches it."""
     builtin = type(OSError(code, reason))
     if builtin is OSError:
         return FileWriteError(code, reason, os.fspath(path))
@@ -65,10 +65,10 @@ def write_error(path: str | os.PathLike, code: int, reason: str) -> FileWriteErr
 
 @contextmanager
 def os_errors_as_write_errors(path: str | os.PathLike) -> Iterator[None]:
-    """Turns an ``OSError`` raised in the block that is not a ``FileWriteError`` yet (a name
+    """Turns an `OSError` raised in the block that is not a `FileWriteError` yet (a name
     too long for the file system, a folder that is not searchable, a temporary file that
-    cannot be made) into a ``FileWriteError`` naming ``path``, of the same errno (and the
-    same built-in subclass, ``write_error``): every failure of a writer's system calls is one
+    cannot be made) into a `FileWriteError` naming `path`, of the same errno (and the
+    same built-in subclass, `write_error`): every failure of a writer's system calls is one
     line naming the file it was asked to write."""
     try:
         yield
@@ -114,12 +114,12 @@ def host_name() -> str:
 
 
 def owner_tag() -> str:
-    """``<host>-<pid>``: what a temporary name says of the process that made it."""
+    """`<host>-<pid>`: what a temporary name says of the process that made it."""
     return f"{host_name()}-{os.getpid()}"
 
 
 def alive(pid: int) -> bool:
-    """Whether process ``pid`` runs on this machine (another user's counts as running)."""
+    """Whether process `pid` runs on this machine (another user's counts as running)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -132,8 +132,8 @@ def alive(pid: int) -> bool:
 
 
 def remove_stale(folder: Path, prefix: str, suffix: str = "") -> list[Path]:
-    """Removes the temporary files and folders ``<prefix><owner>.<random><suffix>`` in
-    ``folder`` whose writer is gone: its process no longer runs on this host, or, with no
+    """Removes the temporary files and folders `<prefix><owner>.<random><suffix>` in
+    `folder` whose writer is gone: its process no longer runs on this host, or, with no
     owner in the name, it is more than a day old. Those of live writers and of other hosts
     are kept. Returns what was removed."""
     import time
@@ -166,9 +166,9 @@ def remove_stale(folder: Path, prefix: str, suffix: str = "") -> list[Path]:
 
 
 def _temporary_file(parent: Path, prefix: str, suffix: str) -> Path:
-    """A new empty file ``<prefix><random><suffix>`` in ``parent``, created exclusively with
-    mode 0666 as an ordinary ``open()`` creates files: the kernel applies the umask (and a
-    default ACL of the folder), so 0644 under umask 022. ``tempfile.mkstemp`` would make it
+    """A new empty file `<prefix><random><suffix>` in `parent`, created exclusively with
+    mode 0666 as an ordinary `open()` creates files: the kernel applies the umask (and a
+    default ACL of the folder), so 0644 under umask 022. `tempfile.mkstemp` would make it
     0600."""
     flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0)
     for _ in range(_NAME_TRIES):
@@ -183,8 +183,8 @@ def _temporary_file(parent: Path, prefix: str, suffix: str) -> Path:
 
 
 def _temporary_folder(parent: Path, prefix: str, suffix: str) -> Path:
-    """A new empty folder in ``parent``, made with mode 0777 as ``os.mkdir`` makes folders
-    (0755 under umask 022; ``tempfile.mkdtemp`` would make it 0700)."""
+    """A new empty folder in `parent`, made with mode 0777 as `os.mkdir` makes folders
+    (0755 under umask 022; `tempfile.mkdtemp` would make it 0700)."""
     for _ in range(_NAME_TRIES):
         path = parent / f"{prefix}{owner_tag()}.{secrets.token_hex(6)}{suffix}"
         try:
@@ -204,7 +204,7 @@ _KINDS = (
 
 
 def special_kind(mode: int) -> str | None:
-    """What a file of ``st_mode`` is if it is a device, a FIFO or a socket (else None)."""
+    """What a file of `st_mode` is if it is a device, a FIFO or a socket (else None)."""
     return next((kind for test, kind in _KINDS if test(mode)), None)
 
 
@@ -246,11 +246,11 @@ def _writable_parent(path: Path) -> Path:
 
 @contextmanager
 def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
-    """Yields a temporary path in the folder of ``path``; when the block ends without an
-    exception the temporary file is renamed to ``path`` (``os.replace``, atomic on one file
-    system), otherwise it is removed and ``path`` is left as it was. The file gets the mode
-    an ordinary ``open()`` would give it (0666 less the umask). An ``OSError`` while writing
-    becomes a ``FileWriteError`` naming ``path``."""
+    """Yields a temporary path in the folder of `path`; when the block ends without an
+    exception the temporary file is renamed to `path` (`os.replace`, atomic on one file
+    system), otherwise it is removed and `path` is left as it was. The file gets the mode
+    an ordinary `open()` would give it (0666 less the umask). An `OSError` while writing
+    becomes a `FileWriteError` naming `path`."""
     path = Path(path)
     parent = _writable_parent(path)
     remove_stale(parent, f".{path.name}.", ".part")  # left by a writer of it that was killed
@@ -270,14 +270,14 @@ def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
 
 @contextmanager
 def hdf5_file(path: str | os.PathLike, **options: Any) -> Iterator[Any]:
-    """Yields an ``h5py.File`` open for writing whose contents become ``path`` when the block
-    ends without an exception (written as ``atomic_file`` writes; ``options`` go to
-    ``h5py.File``).
+    """Yields an `h5py.File` open for writing whose contents become `path` when the block
+    ends without an exception (written as `atomic_file` writes; `options` go to
+    `h5py.File`).
 
     HDF5 never writes to the disk here: it builds the file in memory (h5py's file-object
-    driver on a ``BytesIO``), and Python writes the finished bytes. A write that fails (a full
-    disk, a file-size limit, an I/O error) then fails in Python, as one ``FileWriteError``
-    naming ``path``, with the temporary file removed. Given to HDF5 itself, the failure leaves
+    driver on a `BytesIO`), and Python writes the finished bytes. A write that fails (a full
+    disk, a file-size limit, an I/O error) then fails in Python, as one `FileWriteError`
+    naming `path`, with the temporary file removed. Given to HDF5 itself, the failure leaves
     objects that cannot be closed, since closing writes: their deallocation prints dozens of
     tracebacks and the interpreter crashes at exit (h5py issues 914, 1775, 2160). The cost is
     the file's size in memory while it is built, about what the trajectory already holds."""
@@ -299,10 +299,10 @@ SERIES_DIGITS = 5  # frame numbers in series file names: stem_00000.vtp
 
 
 def series_names(path: Path, format: str, suffix: str, own_suffixes: tuple[str, ...]) -> tuple[Path, str, str]:
-    """The folder of a series (``<stem>_<format>``), the stem of its file names and the
-    regular expression of those names (``<stem>_00000<suffix>``, ``SERIES_DIGITS`` digits
-    or more). The stem is the name of ``path`` less its suffix where that is one of the
-    format's ``own_suffixes`` (``export`` refuses another format's), the whole name
+    """The folder of a series (`<stem>_<format>`), the stem of its file names and the
+    regular expression of those names (`<stem>_00000<suffix>`, `SERIES_DIGITS` digits
+    or more). The stem is the name of `path` less its suffix where that is one of the
+    format's `own_suffixes` (`export` refuses another format's), the whole name
     otherwise."""
     stem = path.stem if path.suffix.lower() in own_suffixes else path.name
     return path.with_name(f"{stem}_{format}"), stem, rf"{re.escape(stem)}_\d{{{SERIES_DIGITS},}}{re.escape(suffix)}"
@@ -310,11 +310,11 @@ def series_names(path: Path, format: str, suffix: str, own_suffixes: tuple[str, 
 
 @contextmanager
 def atomic_folder(folder: str | os.PathLike, pattern: str) -> Iterator[Path]:
-    """Yields a temporary folder beside ``folder``; when the block ends without an exception
-    it takes the place of ``folder``, otherwise it is removed with all it holds. An existing
-    ``folder`` is replaced only if every file in it matches the regular expression
-    ``pattern`` (a series written before), so no other file is ever deleted. The folder
-    gets the mode ``os.mkdir`` gives (0777 less the umask), the files in it the mode their
+    """Yields a temporary folder beside `folder`; when the block ends without an exception
+    it takes the place of `folder`, otherwise it is removed with all it holds. An existing
+    `folder` is replaced only if every file in it matches the regular expression
+    `pattern` (a series written before), so no other file is ever deleted. The folder
+    gets the mode `os.mkdir` gives (0777 less the umask), the files in it the mode their
     writer gave them."""
     folder = Path(folder)
     _check_series_folder(folder, pattern)
@@ -346,15 +346,15 @@ def atomic_folder(folder: str | os.PathLike, pattern: str) -> Iterator[Path]:
 @contextmanager
 def private_folder(path: str | os.PathLike) -> Iterator[Path]:
     """Yields a new private folder (mode 0700) in the system's temporary folder
-    (``tempfile.gettempdir()``: ``$TMPDIR``, else /tmp) for a library that writes its own file
-    (gsd, usd-core) to build ``path`` in, apart from ``path``'s file system; the folder is
+    (`tempfile.gettempdir()`: `$TMPDIR`, else /tmp) for a library that writes its own file
+    (gsd, usd-core) to build `path` in, apart from `path`'s file system; the folder is
     removed with all it holds when the block ends, however it ends. Such a library cannot be
     trusted with a failed write (a full disk, a file-size limit): gsd 5.0.1 leaves its file
     open or raises its own RuntimeError, usd-core reports a truncated .usdz as made. Built
-    apart, the finished file goes to ``path`` by ``copy_into``, Python's own writes, whose
-    failure is one ``FileWriteError``. ``path`` is checked first as ``atomic_file`` checks it
-    (a folder, a device, a missing folder are refused before any work); an ``OSError`` of
-    making the folder, or raised in the block, becomes a ``FileWriteError`` naming ``path``."""
+    apart, the finished file goes to `path` by `copy_into`, Python's own writes, whose
+    failure is one `FileWriteError`. `path` is checked first as `atomic_file` checks it
+    (a folder, a device, a missing folder are refused before any work); an `OSError` of
+    making the folder, or raised in the block, becomes a `FileWriteError` naming `path`."""
     path = Path(path)
     _writable_parent(path)
     try:
@@ -372,10 +372,10 @@ def private_folder(path: str | os.PathLike) -> Iterator[Path]:
 
 
 def copy_into(source: str | os.PathLike, path: str | os.PathLike) -> Path:
-    """Writes the bytes of the file ``source`` to ``path`` as ``atomic_file`` writes (a
+    """Writes the bytes of the file `source` to `path` as `atomic_file` writes (a
     temporary name beside it, renamed over it when complete): a write that fails (a full
-    disk, a file-size limit) is a ``FileWriteError`` naming ``path``, the temporary file
-    removed and what was at ``path`` left as it was. Returns ``path``."""
+    disk, a file-size limit) is a `FileWriteError` naming `path`, the temporary file
+    removed and what was at `path` left as it was. Returns `path`."""
     path = Path(path)
     with atomic_file(path) as tmp, open(source, "rb") as src, open(tmp, "wb") as out:
         shutil.copyfileobj(src, out, 1 << 20)
@@ -383,9 +383,9 @@ def copy_into(source: str | os.PathLike, path: str | os.PathLike) -> Path:
 
 
 def close_descriptors_on(path: str | os.PathLike) -> list[int]:
-    """Closes this process's descriptors open on the file ``path`` (also once it is deleted)
+    """Closes this process's descriptors open on the file `path` (also once it is deleted)
     and returns their numbers: those a library left open on its own file when it believes it
-    closed it (gsd 5.0.1's ``gsd_close`` returns before ``close(fd)`` when its last flush
+    closed it (gsd 5.0.1's `gsd_close` returns before `close(fd)` when its last flush
     fails). Only for a file nothing else of this process opened. Linux's /proc/self/fd; a
     no-op where there is none."""
     target = os.path.abspath(os.fspath(path))
@@ -409,8 +409,8 @@ def close_descriptors_on(path: str | os.PathLike) -> list[int]:
 
 
 def _check_series_folder(folder: Path, pattern: str) -> None:
-    """Refuses ``folder`` as a series' folder (as ``atomic_folder`` does): a file of that
-    name, a folder holding files other than an earlier series (names matching ``pattern``),
+    """Refuses `folder` as a series' folder (as `atomic_folder` does): a file of that
+    name, a folder holding files other than an earlier series (names matching `pattern`),
     a parent folder that does not exist."""
     if folder.exists():
         if not folder.is_dir():
@@ -425,16 +425,16 @@ def _check_series_folder(folder: Path, pattern: str) -> None:
 
 
 class Outputs:
-    """The files and folders of one write (``atomic_outputs``), each staged under a temporary
-    name beside its target: ``file(path)`` as ``atomic_file`` makes it, ``folder(folder,
-    pattern)`` as ``atomic_folder`` does (an earlier series is replaced only if it holds
+    """The files and folders of one write (`atomic_outputs`), each staged under a temporary
+    name beside its target: `file(path)` as `atomic_file` makes it, `folder(folder,
+    pattern)` as `atomic_folder` does (an earlier series is replaced only if it holds
     nothing else)."""
 
     def __init__(self) -> None:
         self._staged: list[tuple[Path, Path, Path | None]] = []  # (temporary, target, holder of a folder's earlier series)
 
     def file(self, path: str | os.PathLike) -> Path:
-        """A new empty temporary file that will take the place of ``path``."""
+        """A new empty temporary file that will take the place of `path`."""
         path = Path(path)
         parent = _writable_parent(path)
         remove_stale(parent, f".{path.name}.", ".part")
@@ -446,7 +446,7 @@ class Outputs:
         return tmp
 
     def folder(self, folder: str | os.PathLike, pattern: str) -> Path:
-        """A new empty temporary folder that will take the place of ``folder``. Where an
+        """A new empty temporary folder that will take the place of `folder`. Where an
         earlier series is there, the folder it will be moved into is made now, so that
         putting the outputs in place needs no new file (a full disk, no inode left)."""
         folder = Path(folder)
@@ -469,8 +469,8 @@ class Outputs:
     @staticmethod
     @contextmanager
     def naming(path: str | os.PathLike) -> Iterator[None]:
-        """An ``OSError`` in the block (writing the temporary of ``path``) becomes a
-        ``FileWriteError`` naming ``path``."""
+        """An `OSError` in the block (writing the temporary of `path`) becomes a
+        `FileWriteError` naming `path`."""
         try:
             yield
         except OSError as e:
@@ -539,15 +539,15 @@ class Outputs:
 
 @contextmanager
 def atomic_outputs(path: str | os.PathLike) -> Iterator[Outputs]:
-    """Yields an ``Outputs`` on which the block stages the files and folders of one write (a
+    """Yields an `Outputs` on which the block stages the files and folders of one write (a
     VTK series: its folder of frames, the colliders file, the .pvd that points at both) and
     writes them; when the block ends without an exception they are all put in place, the
     last staged first, so stage the file that refers to the others first (it is put in place
     last, when what it refers to is there). Otherwise, or if putting one in place fails,
     every temporary is removed and what was there before is left as it was (the targets
     already replaced restored): a failed write leaves neither new files nor an earlier
-    output changed. An ``OSError`` not yet a ``FileWriteError`` becomes one naming
-    ``path``."""
+    output changed. An `OSError` not yet a `FileWriteError` becomes one naming
+    `path`."""
     outputs = Outputs()
     try:
         yield outputs
@@ -561,11 +561,11 @@ def atomic_outputs(path: str | os.PathLike) -> Iterator[Outputs]:
 
 @dataclass(frozen=True)
 class Frames:
-    """The per-particle data of a trajectory-like object, checked and in SI units: ``t``
-    (F,) s; ``positions`` (F, N, 3) m and ``velocities`` (F, N, 3) m/s (z = 0 in 2D worlds);
-    ``masses`` (N,) kg and ``radii`` (N,) m, ``None`` when the object has none; ``ids`` (N,)
-    (0..N-1 by default); ``dim`` 2 or 3; ``dt`` s and ``method``, ``None`` when unknown;
-    ``alive`` (F, N) bool, which particles exist at each frame (all True without births and
+    """The per-particle data of a trajectory-like object, checked and in SI units: `t`
+    (F,) s; `positions` (F, N, 3) m and `velocities` (F, N, 3) m/s (z = 0 in 2D worlds);
+    `masses` (N,) kg and `radii` (N,) m, `None` when the object has none; `ids` (N,)
+    (0..N-1 by default); `dim` 2 or 3; `dt` s and `method`, `None` when unknown;
+    `alive` (F, N) bool, which particles exist at each frame (all True without births and
     deaths; positions and velocities are NaN where not)."""
 
     t: np.ndarray
@@ -593,7 +593,7 @@ class Frames:
         return not bool(self.alive.all())
 
     def live(self, i: int) -> np.ndarray:
-        """The columns (particles) alive at frame ``i``, in column order (that of ``ids``)."""
+        """The columns (particles) alive at frame `i`, in column order (that of `ids`)."""
         return np.flatnonzero(self.alive[i])
 
 
@@ -618,9 +618,9 @@ def _per_particle(traj: Any, names: tuple[str, ...], n: int, dtype: Any) -> np.n
 
 
 def frames_of(traj: Any) -> Frames:
-    """Reads ``t``, ``positions``, ``velocities`` and the optional ``masses`` (or ``mass``),
-    ``radii`` (or ``radius``), ``ids``, ``alive``, ``dim``, ``dt`` and ``method`` of a
-    trajectory-like object and checks their shapes; raises ``ValueError`` naming the
+    """Reads `t`, `positions`, `velocities` and the optional `masses` (or `mass`),
+    `radii` (or `radius`), `ids`, `alive`, `dim`, `dt` and `method` of a
+    trajectory-like object and checks their shapes; raises `ValueError` naming the
     attribute that is wrong."""
     t = np.asarray(traj.t, dtype=np.float64)
     if t.ndim != 1:

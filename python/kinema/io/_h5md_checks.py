@@ -1,16 +1,16 @@
-"""Checked reads of an H5MD file's elements (for ``kinema.io.h5md_reader``): ``Reader``
+"""Checked reads of an H5MD file's elements (for `kinema.io.h5md_reader`): `Reader`
 checks the type, shape and unit of each dataset and adds up the memory the reads need before
 any data is read, then that the values read are finite; the datasets of a time-dependent
-element, its step and time made one per frame; and ``Live``, the particles of a file whose
-number varies (H5MD's time-dependent ``id`` with a fill value). Errors are
-``TrajectoryFileError``, one line naming the file, the dataset (by meaning and by path) and the
+element, its step and time made one per frame; and `Live`, the particles of a file whose
+number varies (H5MD's time-dependent `id` with a fill value). Errors are
+`TrajectoryFileError`, one line naming the file, the dataset (by meaning and by path) and the
 value.
 
-The rules on values (``mass_problem``, ``radius_problem``, ``species_problem``,
-``color_problem``, ``boundary_problem``, ``non_finite``, ``increase_problem``) are shared
+The rules on values (`mass_problem`, `radius_problem`, `species_problem`,
+`color_problem`, `boundary_problem`, `non_finite`, `increase_problem`) are shared
 with the writers:
-``check_frames`` refuses, before anything is written, a trajectory that these rules would
-refuse when it is read back (``save_h5md``, ``export``); ``links_out`` finds what in a file
+`check_frames` refuses, before anything is written, a trajectory that these rules would
+refuse when it is read back (`save_h5md`, `export`); `links_out` finds what in a file
 points out of it (external links, virtual datasets of other files, external storage)."""
 
 from __future__ import annotations
@@ -39,8 +39,8 @@ FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 def non_finite(a: np.ndarray, axes: tuple[str, ...]) -> str | None:
-    """``"has a non-finite value (nan) at frame 3, particle 7"`` for the first NaN or ±inf in
-    ``a`` (``axes`` name its leading indices), ``None`` when all are finite."""
+    """`"has a non-finite value (nan) at frame 3, particle 7"` for the first NaN or ±inf in
+    `a` (`axes` name its leading indices), `None` when all are finite."""
     at = first_non_finite(a)
     if at is None:
         return None
@@ -49,8 +49,8 @@ def non_finite(a: np.ndarray, axes: tuple[str, ...]) -> str | None:
 
 
 def increase_problem(t: np.ndarray) -> str | None:
-    """``"must increase: t[4] = 0.2 after t[3] = 0.3"`` where the times ``t`` do not increase
-    strictly, else ``None``."""
+    """`"must increase: t[4] = 0.2 after t[3] = 0.3"` where the times `t` do not increase
+    strictly, else `None`."""
     back = np.flatnonzero(np.diff(t) <= 0)
     if not back.size:
         return None
@@ -59,8 +59,8 @@ def increase_problem(t: np.ndarray) -> str | None:
 
 
 def mass_problem(a: np.ndarray) -> str | None:
-    """``"has mass[2] = -1 (masses must be finite and > 0 kg)"`` for the first mass that is not
-    finite and > 0, else ``None``."""
+    """`"has mass[2] = -1 (masses must be finite and > 0 kg)"` for the first mass that is not
+    finite and > 0, else `None`."""
     bad = ~(np.isfinite(a) & (a > 0))
     if not bad.any():
         return None
@@ -69,8 +69,8 @@ def mass_problem(a: np.ndarray) -> str | None:
 
 
 def radius_problem(a: np.ndarray) -> str | None:
-    """``"has radius[1] = -0.5 (radii must be finite and >= 0 m)"`` for the first radius that
-    is not finite, >= 0 m and at most ``MAX_RADIUS``, else ``None``."""
+    """`"has radius[1] = -0.5 (radii must be finite and >= 0 m)"` for the first radius that
+    is not finite, >= 0 m and at most `MAX_RADIUS`, else `None`."""
     bad = ~(np.isfinite(a) & (a >= 0))
     if bad.any():
         i = int(np.argmax(bad))
@@ -83,9 +83,9 @@ def radius_problem(a: np.ndarray) -> str | None:
 
 
 def species_problem(names: Any, label: str = "species") -> str | None:
-    """``"has species[3] = 'a\\x00b' (species names must be non-empty printable text: ...)"``
-    for the first of ``names`` that is not a non-empty printable string (no NUL, no control
-    characters), else ``None``; ``label`` names the list in the message."""
+    """`"has species[3] = 'a\\x00b' (species names must be non-empty printable text: ...)"`
+    for the first of `names` that is not a non-empty printable string (no NUL, no control
+    characters), else `None`; `label` names the list in the message."""
     for k, name in enumerate(names):
         if not isinstance(name, str) or not name or not name.isprintable():
             return f"has {label}[{k}] = {shown(name)} (species names must be non-empty printable text: no NUL or control characters)"
@@ -93,8 +93,8 @@ def species_problem(names: Any, label: str = "species") -> str | None:
 
 
 def color_problem(a: np.ndarray) -> str | None:
-    """``"has color[2] = [0.5, 1.5, 0] (colours are r, g, b in [0, 1], or NaN: none)"`` for the
-    first colour (a row of ``a`` (N, 3)) with a value neither NaN nor in [0, 1], else ``None``."""
+    """`"has color[2] = [0.5, 1.5, 0] (colours are r, g, b in [0, 1], or NaN: none)"` for the
+    first colour (a row of `a` (N, 3)) with a value neither NaN nor in [0, 1], else `None`."""
     bad = ~(np.isnan(a) | ((a >= 0) & (a <= 1)))
     if not bad.any():
         return None
@@ -103,8 +103,8 @@ def color_problem(a: np.ndarray) -> str | None:
 
 
 def boundary_problem(values: list[str]) -> str | None:
-    """``"has boundary 'spherical' ..."`` for the first value of an H5MD box's ``boundary``
-    that is not one of ``BOUNDARIES``, else ``None``."""
+    """`"has boundary 'spherical' ..."` for the first value of an H5MD box's `boundary`
+    that is not one of `BOUNDARIES`, else `None`."""
     for k, b in enumerate(values):
         if b not in BOUNDARIES:
             return f"has boundary[{k}] = {b!r}; allowed: {' or '.join(map(repr, BOUNDARIES))} (kinema's box is axis-aligned, periodic or open on each axis)"
@@ -112,17 +112,17 @@ def boundary_problem(values: list[str]) -> str | None:
 
 
 def triclinic_at(rows: np.ndarray) -> int | None:
-    """The first row of ``rows`` (F, D, D), edge vectors, with an entry off the diagonal that is
-    not 0 (NaN counts: it is not 0), else ``None``."""
+    """The first row of `rows` (F, D, D), edge vectors, with an entry off the diagonal that is
+    not 0 (NaN counts: it is not 0), else `None`."""
     d = rows.shape[1]
     off = np.flatnonzero(((rows != 0) & ~np.eye(d, dtype=bool)).reshape(rows.shape[0], -1).any(axis=1))
     return int(off[0]) if off.size else None
 
 
 def edges_problem(rows: np.ndarray, periodic: Any, by_frame: bool) -> str | None:
-    """What is wrong with the box edges ``rows`` (F, D) m: ``"has edge[0] = nan at frame 3 (box
-    edges must be finite, in m)"``, or an edge <= 0 on a periodic axis; ``None`` when they are
-    right. ``by_frame``: name the frame (a box that changes)."""
+    """What is wrong with the box edges `rows` (F, D) m: `"has edge[0] = nan at frame 3 (box
+    edges must be finite, in m)"`, or an edge <= 0 on a periodic axis; `None` when they are
+    right. `by_frame`: name the frame (a box that changes)."""
     frame = (lambda i: f" at frame {i}") if by_frame else (lambda i: "")
     bad = ~np.isfinite(rows)
     if bad.any():
@@ -136,10 +136,10 @@ def edges_problem(rows: np.ndarray, periodic: Any, by_frame: bool) -> str | None
 
 
 def _per_frame_problem(a: np.ndarray, alive: np.ndarray, find: Any) -> tuple[int, ...] | None:
-    """The index (frame, particle, ...) in ``a`` (F, N, ...) of the first entry ``find`` finds
-    among the particles that exist (``alive`` (F, N)), or ``None``; ``find(rows)`` gives the
-    index of a hit in ``rows`` or ``None``. With particles that come and go it is applied
-    frame by frame, so ``a`` is never copied whole."""
+    """The index (frame, particle, ...) in `a` (F, N, ...) of the first entry `find` finds
+    among the particles that exist (`alive` (F, N)), or `None`; `find(rows)` gives the
+    index of a hit in `rows` or `None`. With particles that come and go it is applied
+    frame by frame, so `a` is never copied whole."""
     if alive.all():
         return find(a)
     for i in range(a.shape[0]):
@@ -163,15 +163,15 @@ def _place(a: np.ndarray, at: tuple[int, ...], axes: tuple[str, ...]) -> str:
 
 
 def check_frames(path: Any, traj: Any, fr: Frames, float32: str | None = None, int32_ids: str | None = None) -> None:
-    """Refuses, before anything is written to ``path``, a trajectory whose values kinema's
+    """Refuses, before anything is written to `path`, a trajectory whose values kinema's
     reader would refuse, by the reader's rules: finite times that increase; finite positions
     and velocities where a particle exists (velocities may be all NaN: unknown, not written
-    to H5MD); masses finite and > 0 kg, radii finite, >= 0 m and at most ``MAX_RADIUS`` (of
+    to H5MD); masses finite and > 0 kg, radii finite, >= 0 m and at most `MAX_RADIUS` (of
     the particles that exist at some frame); species names of printable text; ids once per
-    frame. ``float32`` (a format's name) also refuses values beyond float32, which that
-    format stores (they would be inf); ``int32_ids`` ids beyond int32. Raises
-    ``TrajectoryFileError`` (a ``ValueError``), one line: ``cannot write run.h5: trajectory
-    'masses' has mass[2] = -1 (masses must be finite and > 0 kg)``. The (F, N, 3) arrays are
+    frame. `float32` (a format's name) also refuses values beyond float32, which that
+    format stores (they would be inf); `int32_ids` ids beyond int32. Raises
+    `TrajectoryFileError` (a `ValueError`), one line: `cannot write run.h5: trajectory
+    'masses' has mass[2] = -1 (masses must be finite and > 0 kg)`. The (F, N, 3) arrays are
     checked frame by frame where particles come and go, never copied whole."""
 
     def refuse(word: str, problem: str | None) -> None:
@@ -225,7 +225,7 @@ def check_frames(path: Any, traj: Any, fr: Frames, float32: str | None = None, i
 
 
 def fail(path: Path, what: str) -> TrajectoryFileError:
-    """The error of a file at ``path`` of which ``what`` is wrong: one line naming it."""
+    """The error of a file at `path` of which `what` is wrong: one line naming it."""
     return TrajectoryFileError(f"{path}: {what}")
 
 
@@ -254,8 +254,8 @@ def as_text(value: Any) -> str:
 
 class Reader:
     """The reads of one file. Every dataset's type and shape is checked, and the bytes it
-    needs added up (``plan``), before any data is read; ``check_memory`` then refuses a file
-    that does not fit in the memory there is; ``finite`` checks values once read."""
+    needs added up (`plan`), before any data is read; `check_memory` then refuses a file
+    that does not fit in the memory there is; `finite` checks values once read."""
 
     def __init__(self, path: Path, creator: str | None = None) -> None:
         self.path = path
@@ -266,7 +266,7 @@ class Reader:
         return fail(self.path, what)
 
     def numbers(self, word: str, ds: Any, integer: bool = False) -> tuple[int, ...]:
-        """The shape of ``ds``, which must hold real numbers (integers when ``integer``)."""
+        """The shape of `ds`, which must hold real numbers (integers when `integer`)."""
         must = "integers" if integer else "real numbers"
         if ds.shape is None:
             raise self.fail(f"{where(word, ds)} holds no data (an empty dataspace); it must hold {must}")
@@ -276,7 +276,7 @@ class Reader:
         return tuple(ds.shape)
 
     def clock(self, word: str, ds: Any, value_word: str, value: Any, integer: bool = False) -> None:
-        """``ds`` (the step or time of an element) holds one number per frame of ``value``,
+        """`ds` (the step or time of an element) holds one number per frame of `value`,
         or one number (H5MD's fixed interval)."""
         shape = self.numbers(word, ds, integer)
         n = value.shape[0]
@@ -285,11 +285,11 @@ class Reader:
             raise self.fail(f"{where(word, ds)} has shape {shape} but {where(value_word, value)} has {n} frames: one {one} per frame")
 
     def unit(self, word: str, ds: Any, dims: tuple[int, int, int]) -> Fraction:
-        """The exact factor that converts the values of ``ds`` to SI, from its ``unit``
-        attribute, which must be a unit of the dimension ``dims`` (``parse_unit``). Without one:
+        """The exact factor that converts the values of `ds` to SI, from its `unit`
+        attribute, which must be a unit of the dimension `dims` (`parse_unit`). Without one:
         1 in kinema's files (SI, which they write a unit for anyway), else what
-        ``assumed_unit`` takes for the file's creator (ASE's units for znh5md, SI for the
-        others), said by a ``UnitWarning``, one line naming the file, the dataset and the unit
+        `assumed_unit` takes for the file's creator (ASE's units for znh5md, SI for the
+        others), said by a `UnitWarning`, one line naming the file, the dataset and the unit
         taken."""
         if "unit" not in ds.attrs:
             if self.creator == "kinema":
@@ -332,7 +332,7 @@ class Reader:
             )
 
     def finite(self, word: str, ds: Any, a: np.ndarray, axes: tuple[str, ...]) -> None:
-        """Refuses a NaN or ±inf in ``a`` (read from ``ds``), naming its place: ``axes`` name
+        """Refuses a NaN or ±inf in `a` (read from `ds`), naming its place: `axes` name
         the leading indices (frame, particle)."""
         problem = non_finite(a, axes)
         if problem is not None:
@@ -340,9 +340,9 @@ class Reader:
 
 
 def links_out(f: Any) -> str | None:
-    """What in the open HDF5 file ``f`` reads data from another file, as a message names it:
-    an external link (``h5py.ExternalLink``), a virtual dataset with a source in another file
-    (``h5py.VirtualLayout``), a dataset whose raw data is stored in external files; ``None``
+    """What in the open HDF5 file `f` reads data from another file, as a message names it:
+    an external link (`h5py.ExternalLink`), a virtual dataset with a source in another file
+    (`h5py.VirtualLayout`), a dataset whose raw data is stored in external files; `None`
     when nothing does. Links are inspected without being followed (soft links stay inside
     the file and are skipped: their targets are reached by their own paths), so the other
     file is never opened."""
@@ -377,8 +377,8 @@ def links_out(f: Any) -> str | None:
 
 
 def element_datasets(path: Path, parent: Any, name: str, required: bool = False) -> tuple[Any, Any, Any] | None:
-    """The (value, step, time) datasets of a time-dependent element (time ``None`` when it
-    has none), or ``None`` when it is absent."""
+    """The (value, step, time) datasets of a time-dependent element (time `None` when it
+    has none), or `None` when it is absent."""
     h5py = import_h5py()
     if name not in parent:
         if required:
@@ -392,8 +392,8 @@ def element_datasets(path: Path, parent: Any, name: str, required: bool = False)
 
 
 def per_frame(ds: Any, a: np.ndarray, n: int, dtype: Any) -> np.ndarray:
-    """A step or time read from ``ds``: one per frame, or H5MD's fixed interval (a scalar
-    ``a`` and the ``offset`` attribute) made one per frame."""
+    """A step or time read from `ds`: one per frame, or H5MD's fixed interval (a scalar
+    `a` and the `offset` attribute) made one per frame."""
     if np.ndim(a) != 0:
         return np.asarray(a)
     offset = ds.attrs.get("offset", 0)
@@ -403,10 +403,10 @@ def per_frame(ds: Any, a: np.ndarray, n: int, dtype: Any) -> np.ndarray:
 
 
 def varying_ids(path: Path, p: Any) -> Any:
-    """The ``value`` dataset of the particle group's time-dependent ``id`` element when it has
+    """The `value` dataset of the particle group's time-dependent `id` element when it has
     a fill value (set when it was created): the mark, in H5MD, of a number of particles that
     varies (an entry equal to it is a particle that does not exist at that frame); else
-    ``None``."""
+    `None`."""
     h5py = import_h5py()
     if not isinstance(p.get("id"), h5py.Group):
         return None
@@ -419,8 +419,8 @@ def varying_ids(path: Path, p: Any) -> Any:
 class Live:
     """The particles of a file whose number varies: the id of each of its (F, N) entries or
     the fill value (H5MD's "no particle here"). kinema's trajectories have one column per
-    particle, the ids ascending, so the entries are gathered by id: ``ids`` (U,) the ids
-    that exist at some frame, ``alive`` (F, U). A file whose particles keep their slot (as
+    particle, the ids ascending, so the entries are gathered by id: `ids` (U,) the ids
+    that exist at some frame, `alive` (F, U). A file whose particles keep their slot (as
     kinema writes them, with ascending ids) reads back column for column."""
 
     def __init__(self, r: Reader, ds: Any, frames: int, n: int) -> None:
@@ -445,18 +445,18 @@ class Live:
         self.first_entry = np.unique(self.column, return_index=True)[1]
 
     def masked(self, a: np.ndarray) -> np.ndarray:
-        """``a`` (F, N, ...) with 0 where no particle exists: what is checked for finite values."""
+        """`a` (F, N, ...) with 0 where no particle exists: what is checked for finite values."""
         mask = self.present.reshape(self.present.shape + (1,) * (a.ndim - 2))
         return np.where(mask, a, 0)
 
     def columns(self, a: np.ndarray) -> np.ndarray:
-        """``a`` (F, N, D) by particle: (F, U, D), NaN where a particle does not exist."""
+        """`a` (F, N, D) by particle: (F, U, D), NaN where a particle does not exist."""
         out = np.full((self.frames, self.ids.size) + a.shape[2:], np.nan)
         out[self.frame, self.column] = a[self.frame, self.slot]
         return out
 
     def first(self, a: np.ndarray, element: bool) -> np.ndarray:
-        """A per-particle value (U,) from ``a``, (F, N) (a time-dependent element) or (N,):
+        """A per-particle value (U,) from `a`, (F, N) (a time-dependent element) or (N,):
         its value at the first entry of each particle."""
         e = self.first_entry
         return a[self.frame[e], self.slot[e]] if element else a[self.slot[e]]

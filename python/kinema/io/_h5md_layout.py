@@ -1,4 +1,4 @@
-"""What the writer and the reader of kinema's H5MD files share (``kinema.io.h5md``): the
+"""What the writer and the reader of kinema's H5MD files share (`kinema.io.h5md`): the
 version written, the names and units of the observables, the chemical symbols (species
 written as atomic numbers), and h5py, imported when a file is written or read (an optional
 dependency)."""
@@ -33,7 +33,7 @@ ELEMENTS = tuple(
 
 
 def import_h5py() -> Any:
-    """The h5py module; an ``ImportError`` that says how to install it when it is missing."""
+    """The h5py module; an `ImportError` that says how to install it when it is missing."""
     try:
         import h5py
     except ImportError:

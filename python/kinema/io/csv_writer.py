@@ -23,7 +23,7 @@ def _csv_header(fr: Frames, extras: Extras) -> str:
 
 
 def _csv(fr: Frames, i: int, extras: Extras) -> str:
-    """The rows of frame ``i``, one per particle alive at it: frame,time,id,x,y,z,vx,vy,vz,
+    """The rows of frame `i`, one per particle alive at it: frame,time,id,x,y,z,vx,vy,vz,
     then mass, radius, species (its name) and r,g,b (its colour in [0, 1]) where the
     trajectory has them (17 significant digits)."""
     t = repr(float(fr.t[i]))
@@ -38,13 +38,13 @@ def _csv(fr: Frames, i: int, extras: Extras) -> str:
 
 
 def write_csv(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    """Write ``fr`` to one CSV file at ``path``; returns ``[path]``.
+    """Write `fr` to one CSV file at `path`; returns `[path]`.
 
-    The header ``frame,time,id,x,y,z,vx,vy,vz,mass,radius,species,r,g,b`` (``_csv_header``:
+    The header `frame,time,id,x,y,z,vx,vy,vz,mass,radius,species,r,g,b` (`_csv_header`:
     mass and radius where the trajectory has them, species and r,g,b where it has species
-    and colours), then a row per particle and frame (``_csv``), every float with 17
+    and colours), then a row per particle and frame (`_csv`), every float with 17
     significant digits (exact for float64), in SI units. The file is written under a
-    temporary name and renamed at the end. ``on_frame(i)`` is called after frame ``i`` is
+    temporary name and renamed at the end. `on_frame(i)` is called after frame `i` is
     written."""
     extras = Extras(traj, fr)
     with atomic_file(path) as tmp, open(tmp, "w", encoding="ascii", newline="") as f:

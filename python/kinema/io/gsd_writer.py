@@ -1,5 +1,5 @@
 """HOOMD-blue's GSD trajectory format (OVITO, HOOMD-blue, freud, MDAnalysis), written with the
-``gsd`` package."""
+`gsd` package."""
 
 from __future__ import annotations
 
@@ -16,53 +16,53 @@ from ._files import FileWriteError, Frames, close_descriptors_on, copy_into, pri
 
 
 def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    """Write ``fr`` to one GSD file (HOOMD schema) at ``path``; returns ``[path]``.
+    """Write `fr` to one GSD file (HOOMD schema) at `path`; returns `[path]`.
 
-    One GSD frame per trajectory frame: ``configuration/step`` (round(t/dt) when ``dt`` is
-    known, else the frame index), ``configuration/dimensions`` (2 or 3) and
-    ``configuration/box`` [Lx, Ly, Lz, 0, 0, 0] (Lz = 0 in 2D, as HOOMD does); ``particles/N``,
-    ``types`` (``["A"]``, or the trajectory's ``species`` names), ``typeid``, ``position`` (m),
-    ``velocity`` (m/s), ``mass`` (kg) and ``diameter`` (2 × radius, m) where the trajectory
+    One GSD frame per trajectory frame: `configuration/step` (round(t/dt) when `dt` is
+    known, else the frame index), `configuration/dimensions` (2 or 3) and
+    `configuration/box` [Lx, Ly, Lz, 0, 0, 0] (Lz = 0 in 2D, as HOOMD does); `particles/N`,
+    `types` (`["A"]`, or the trajectory's `species` names), `typeid`, `position` (m),
+    `velocity` (m/s), `mass` (kg) and `diameter` (2 × radius, m) where the trajectory
     has masses and radii.
 
     The box: GSD's box is periodic on every axis, as HOOMD's always is. Along a periodic axis
-    it is the world's periodic cell. Along another axis the cell (``_cell.trajectory_cell``:
-    the walls of the world's ``Box`` where all particles stay between them, else the extent
+    it is the world's periodic cell. Along another axis the cell (`_cell.trajectory_cell`:
+    the walls of the world's `Box` where all particles stay between them, else the extent
     of all frames' particles with a margin) is doubled in length about its centre, room
     beyond the walls: two particles in the cell are at most its length L apart along that
     axis, so their image across the padded box is at least L away, and no neighbour search
     whose cut-off is below half the box's length (the largest freud accepts) finds a pair
-    across a wall. ``log/kinema/periodic`` (3,) uint8 says which axes are periodic (1) and
+    across a wall. `log/kinema/periodic` (3,) uint8 says which axes are periodic (1) and
     which are padded (0): the cell is the box with a padded axis halved.
 
     Precision: GSD's HOOMD schema stores particle data as float32, so positions (relative to
     the box centre), velocities, masses and diameters keep about 7 significant digits (a
     relative error up to 6e-8). GSD's box is centred at the origin: the writer subtracts the
-    box centre, and stores it in float64 as ``log/kinema/origin`` (3,), m; a position in
-    kinema's coordinates is ``position + origin``. ``log/kinema/time`` (1,) is the frame
-    time t in s (float64, exact) and ``log/particles/kinema/id`` (N,) the particle ids.
-    OVITO shows the log values as the global attributes ``kinema/origin``, ``kinema/time``
-    and ``kinema/periodic`` and the ids as the particle property ``kinema_id``.
+    box centre, and stores it in float64 as `log/kinema/origin` (3,), m; a position in
+    kinema's coordinates is `position + origin`. `log/kinema/time` (1,) is the frame
+    time t in s (float64, exact) and `log/particles/kinema/id` (N,) the particle ids.
+    OVITO shows the log values as the global attributes `kinema/origin`, `kinema/time`
+    and `kinema/periodic` and the ids as the particle property `kinema_id`.
 
-    Springs (``traj.springs``): each frame's ``bonds/N``, ``bonds/types`` (``["spring"]``),
-    ``bonds/typeid`` (0) and ``bonds/group`` (the two ends as indices into the frame's
+    Springs (`traj.springs`): each frame's `bonds/N`, `bonds/types` (`["spring"]`),
+    `bonds/typeid` (0) and `bonds/group` (the two ends as indices into the frame's
     particles) hold the springs whose two ends are alive then; OVITO reads them as its Bonds.
-    Colours (``traj.colors``): ``log/particles/Color`` (N, 3) float32, r g b in [0, 1] (the
-    renderer's ``NO_OWN_COLOR`` for a particle without its own), which HOOMD's schema has no
+    Colours (`traj.colors`): `log/particles/Color` (N, 3) float32, r g b in [0, 1] (the
+    renderer's `NO_OWN_COLOR` for a particle without its own), which HOOMD's schema has no
     place for and OVITO reads as its Color property.
 
-    Births and deaths (``alive``): a frame holds the particles alive at it only, GSD's
-    ``particles/N`` varying from frame to frame as HOOMD's does; ``typeid``, ``mass``,
-    ``diameter``, the colours and ``log/particles/kinema/id`` are those of the live
+    Births and deaths (`alive`): a frame holds the particles alive at it only, GSD's
+    `particles/N` varying from frame to frame as HOOMD's does; `typeid`, `mass`,
+    `diameter`, the colours and `log/particles/kinema/id` are those of the live
     particles, in the order of their ids, so a particle is followed across frames by its id
     (a frame may hold none).
 
-    ``on_frame(i)`` is called after frame ``i`` is written. Needs the ``gsd`` package.
+    `on_frame(i)` is called after frame `i` is written. Needs the `gsd` package.
 
     gsd builds the file in a private folder of the system's temporary folder
-    (``tempfile.gettempdir()``), and Python copies it to a temporary name beside ``path``,
-    renamed over ``path`` when complete: a failure of the system (a full disk, a file-size
-    limit, there or at ``path``) is one ``FileWriteError`` naming ``path``, with ``path`` left
+    (`tempfile.gettempdir()`), and Python copies it to a temporary name beside `path`,
+    renamed over `path` when complete: a failure of the system (a full disk, a file-size
+    limit, there or at `path`) is one `FileWriteError` naming `path`, with `path` left
     as it was and no file or descriptor left behind."""
     try:
         import gsd.hoomd
@@ -140,9 +140,9 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
 
 
 def _gsd_call(path: Path, scratch: Path, fn: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
-    """``fn(*args, **kwargs)``, a gsd call on the file it builds for ``path`` in the folder
-    ``scratch``: its failure (gsd's OSError of the system's errno, or its RuntimeError of a
-    state its own failure left) is a ``FileWriteError`` naming ``path``, its reason saying
+    """`fn(*args, **kwargs)`, a gsd call on the file it builds for `path` in the folder
+    `scratch`: its failure (gsd's OSError of the system's errno, or its RuntimeError of a
+    state its own failure left) is a `FileWriteError` naming `path`, its reason saying
     where it happened (the system's temporary folder, which may be the full one)."""
     where = f"in the temporary folder {scratch.parent}, where gsd builds the file"
     try:

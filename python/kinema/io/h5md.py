@@ -1,9 +1,9 @@
 """H5MD 1.1 trajectory files (HDF5 through h5py): writing a trajectory and reading it back,
 and reading the H5MD files of other programs.
 
-Layout written by :func:`save_h5md` (``(F)`` frames, ``N`` particles; every time-dependent
-element shares one ``step`` and one ``time`` dataset through HDF5 hard links, as the
-specification allows, and requires for the box; units shown for ``units="SI"``, the default)::
+Layout written by `save_h5md` (`(F)` frames, `N` particles; every time-dependent
+element shares one `step` and one `time` dataset through HDF5 hard links, as the
+specification allows, and requires for the box; units shown for `units="SI"`, the default):
 
     /h5md                 +-- version = [1, 1]
         author            +-- name                      (fixed-length string)
@@ -43,32 +43,32 @@ specification allows, and requires for the box; units shown for ``units="SI"``, 
                               rotations (K, 4) unit quaternions w, x, y, z
 
 A 2D world is written 3D, z = 0 and its box open along z, so that 3D readers (MDAnalysis,
-znh5md) read it; ``/parameters/kinema`` ``dim = 2`` makes it 2D again for kinema, which
+znh5md) read it; `/parameters/kinema` `dim = 2` makes it 2D again for kinema, which
 also reads the (F, N, 2) files of 2D worlds it wrote before.
 
-Units follow the H5MD units module: a ``unit`` attribute (a variable-length ASCII string:
-MDAnalysis reads no other) on each ``value`` (and ``time``) dataset, written as
-space-separated factors with integer powers; ``units="MD"`` writes nm, ps, nm ps-1, u and
-kJ mol-1 instead of m, s, m s-1, kg and J (``/parameters/kinema`` stays SI). The per-particle
+Units follow the H5MD units module: a `unit` attribute (a variable-length ASCII string:
+MDAnalysis reads no other) on each `value` (and `time`) dataset, written as
+space-separated factors with integer powers; `units="MD"` writes nm, ps, nm ps-1, u and
+kJ mol-1 instead of m, s, m s-1, kg and J (`/parameters/kinema` stays SI). The per-particle
 elements (species, mass, radius, id, color) and the box are time-dependent, constant over the
 frames, because znh5md (ASE's H5MD reader) reads only that form; MDAnalysis's reader and
 pyh5md read them too.
 
-Births and deaths (``Trajectory.alive`` not all True) are written as H5MD 1.1 provides for a
+Births and deaths (`Trajectory.alive` not all True) are written as H5MD 1.1 provides for a
 number of particles that varies: the arrays keep N columns, one per particle that exists at
-some frame, and the ``id`` element's value dataset gets a fill value (-1, or one less than
-the least id), which it holds where that particle does not exist; there ``position``,
-``velocity``, ``mass``, ``radius`` and ``color`` hold their datasets' fill value, NaN, and
-``species`` and ``species_index`` -1. Without births and deaths no fill value is set and the
+some frame, and the `id` element's value dataset gets a fill value (-1, or one less than
+the least id), which it holds where that particle does not exist; there `position`,
+`velocity`, `mass`, `radius` and `color` hold their datasets' fill value, NaN, and
+`species` and `species_index` -1. Without births and deaths no fill value is set and the
 layout is as above.
 
-:func:`load_h5md` converts the units of what it reads to SI (``parse_unit``: "nm", "Ang",
+`load_h5md` converts the units of what it reads to SI (`parse_unit`: "nm", "Ang",
 "ps", "nm ps-1", "u", "kJ mol-1", ...), accepts files without velocities or observables and
 reads a box that changes from frame to frame.
 
-This module writes (``save_h5md``) and opens a file to read (``load_h5md``); the reading
-itself is ``kinema.io.h5md_reader`` (with the checks of ``kinema.io._h5md_checks``), the
-units ``kinema.io.h5md_units``, what both sides share ``kinema.io._h5md_layout``.
+This module writes (`save_h5md`) and opens a file to read (`load_h5md`); the reading
+itself is `kinema.io.h5md_reader` (with the checks of `kinema.io._h5md_checks`), the
+units `kinema.io.h5md_units`, what both sides share `kinema.io._h5md_layout`.
 """
 
 from __future__ import annotations
@@ -94,7 +94,7 @@ __all__ = ["H5MD_VERSION", "LoadedTrajectory", "load_h5md", "parse_unit", "save_
 
 
 def _chunks(shape: tuple[int, ...]) -> tuple[int, ...] | None:
-    """About 1 MiB of float64 per chunk, whole frames along the first axis; ``None``
+    """About 1 MiB of float64 per chunk, whole frames along the first axis; `None`
     (contiguous) for an empty dataset, which HDF5 cannot chunk."""
     if 0 in shape:
         return None
@@ -115,14 +115,14 @@ def _storage(shape: tuple[int, ...], compression: str | None, time_series: bool)
 
 
 def _set_unit(ds: Any, unit: str | None) -> None:
-    """The H5MD units module's ``unit`` attribute: a variable-length ASCII string."""
+    """The H5MD units module's `unit` attribute: a variable-length ASCII string."""
     if unit is not None:
         ds.attrs.create("unit", unit, dtype=import_h5py().string_dtype("ascii"))
 
 
 def _fixed_string(obj: Any, name: str, value: str | list[str]) -> None:
-    """A string attribute of H5MD's fixed-length string type (``author``, ``creator``,
-    ``boundary``): ASCII when it is, else UTF-8, as long as its longest value (at least 1)."""
+    """A string attribute of H5MD's fixed-length string type (`author`, `creator`,
+    `boundary`): ASCII when it is, else UTF-8, as long as its longest value (at least 1)."""
     values = [value] if isinstance(value, str) else list(value)
     encoded = [v.encode("utf-8") for v in values]
     length = max([1, *(len(b) for b in encoded)])
@@ -132,7 +132,7 @@ def _fixed_string(obj: Any, name: str, value: str | list[str]) -> None:
 
 
 def _dataset(group: Any, name: str, data: np.ndarray, unit: str | None, compression: str | None, time_series: bool = False, fill: Any = None) -> Any:
-    """A dataset of ``data``; ``fill``, when given, is its HDF5 fill value (H5MD's mark of an
+    """A dataset of `data`; `fill`, when given, is its HDF5 fill value (H5MD's mark of an
     entry of a particle that does not exist)."""
     options = _storage(data.shape, compression, time_series)
     if fill is not None:
@@ -143,8 +143,8 @@ def _dataset(group: Any, name: str, data: np.ndarray, unit: str | None, compress
 
 
 def _element(parent: Any, name: str, value: np.ndarray, unit: str | None, clock: Any, compression: str | None, fill: Any = None) -> Any:
-    """A time-dependent H5MD element: a group with ``step`` and ``time`` (hard links to the
-    shared clock datasets) and ``value`` (of fill value ``fill`` when given)."""
+    """A time-dependent H5MD element: a group with `step` and `time` (hard links to the
+    shared clock datasets) and `value` (of fill value `fill` when given)."""
     g = parent.create_group(name)
     g["step"] = clock["step"]
     g["time"] = clock["time"]
@@ -155,9 +155,9 @@ def _element(parent: Any, name: str, value: np.ndarray, unit: str | None, clock:
 def _constant_element(
     parent: Any, name: str, row: np.ndarray, unit: str | None, clock: Any, compression: str | None, alive: np.ndarray | None = None, fill: Any = None
 ) -> Any:
-    """A time-dependent H5MD element whose value is ``row`` at every frame, written chunk by
-    chunk (the (F, ...) array is never made whole). With ``alive`` (F, N), the entries of the
-    particles not alive hold ``fill``, the dataset's fill value (all of a particle's row (N,
+    """A time-dependent H5MD element whose value is `row` at every frame, written chunk by
+    chunk (the (F, ...) array is never made whole). With `alive` (F, N), the entries of the
+    particles not alive hold `fill`, the dataset's fill value (all of a particle's row (N,
     3) of colours)."""
     g = parent.create_group(name)
     g["step"] = clock["step"]
@@ -200,7 +200,7 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     units.attrs.create("system", "SI", dtype=h5py.string_dtype("ascii"))
 
     def unit(a: Any, si: str | None) -> tuple[np.ndarray, str | None]:
-        """``a`` (in the SI unit ``si``, or a plain number when ``None``) as written: in the
+        """`a` (in the SI unit `si`, or a plain number when `None`) as written: in the
         file's unit system, with that system's unit."""
         if si is None:
             return np.asarray(a), None
@@ -341,7 +341,7 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
 
 
 def _write_motion(g: Any, motion: dict[str, Any]) -> None:
-    """A collider's motion description into its group ``g``: the 3-vectors (velocity,
+    """A collider's motion description into its group `g`: the 3-vectors (velocity,
     angular_velocity, pivot) as attributes, the keyframes' arrays (times, translations,
     rotations: as many rows as keys) as datasets, in SI."""
     for key, value in motion.items():
@@ -352,11 +352,11 @@ def _write_motion(g: Any, motion: dict[str, Any]) -> None:
 
 
 def _check_writable(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
-    """Refuses, before anything is written, a trajectory that ``load_h5md`` would refuse to read
-    back: the values ``check_frames`` checks, and the box edges (finite, > 0 m on periodic
+    """Refuses, before anything is written, a trajectory that `load_h5md` would refuse to read
+    back: the values `check_frames` checks, and the box edges (finite, > 0 m on periodic
     axes), the time step, the observables' shapes and the colliders (as the reader checks them: the engine's rules), and values
-    that the unit ``system`` would make infinite or times it would make equal. One line naming the file,
-    the attribute and the value (a ``TrajectoryFileError``)."""
+    that the unit `system` would make infinite or times it would make equal. One line naming the file,
+    the attribute and the value (a `TrajectoryFileError`)."""
     check_frames(path, tr, fr)
     _check_units(path, tr, fr, system)
     periodic, edges = getattr(tr, "periodic", None), getattr(tr, "box_edges", None)
@@ -395,7 +395,7 @@ def _check_writable(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> Non
 
 
 def _check_units(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
-    """Refuses values that the unit ``system`` makes infinite (1e300 m is 1e309 nm, beyond
+    """Refuses values that the unit `system` makes infinite (1e300 m is 1e309 nm, beyond
     float64) or times it makes equal (two times a float64 apart may round to one in ps)."""
     if system["m"] == "m":
         return
@@ -420,7 +420,7 @@ def _check_units(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
 
 
 def _colliders_of(tr: Any) -> list[dict[str, Any]]:
-    """The trajectory's collider descriptions (``Trajectory.colliders``), checked; [] when it
+    """The trajectory's collider descriptions (`Trajectory.colliders`), checked; [] when it
     has none."""
     colliders = getattr(tr, "colliders", None) or []
     if not colliders:
@@ -431,49 +431,49 @@ def _colliders_of(tr: Any) -> list[dict[str, Any]]:
 
 
 def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: str | None = None, compression: str | None = "gzip", units: str = "SI") -> Path:
-    """Write ``traj`` to the H5MD 1.1 file ``path`` (see the module doc for the layout) and
+    """Write `traj` to the H5MD 1.1 file `path` (see the module doc for the layout) and
     return the path.
 
-    ``traj`` is a ``kinema.Trajectory`` or any object with its attributes: ``t`` (F,) s,
-    ``positions`` and ``velocities`` (F, N, 3) m and m/s, ``kinetic`` (F,) J, ``potential``
-    {name: (F,)} J, ``momentum`` (F, 3) kg m/s, ``angular_momentum`` (F, 3) kg m²/s and,
-    when present, ``total`` (F,) J, ``contacts`` (F,), ``impulse_balance`` (F, 3) N s,
-    ``collision_energy_lost`` (F,) J, ``masses`` (N,) kg, ``radii`` (N,) m, ``ids`` (N,),
-    ``dim`` (2: stored 3D with z = 0, ``dim`` in /parameters/kinema), ``dt`` s, ``method``,
-    ``periodic`` (D bools) with ``box_edges`` (D,) m, ``species`` (N,) names (the
-    ``species`` element: the atomic number of a name that is a chemical symbol, else 0, and
-    ``species_index``: the index of each particle's name among the sorted names, which its
-    ``names`` attribute holds; all 0 and no ``species_index`` without ``species``),
-    ``colors`` (N, 3) r, g, b in [0, 1], NaN: none (the ``color`` element),
-    ``colliders`` (``Trajectory.colliders``' descriptions or ``kinema`` collider objects),
-    ``alive`` (F, N) bool, which particles exist at each frame (births and deaths: written
-    with H5MD's fill values, see the module doc), ``springs`` (S, 2) the ids at the ends of
-    each spring (``/connectivity/springs``). Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
+    `traj` is a `kinema.Trajectory` or any object with its attributes: `t` (F,) s,
+    `positions` and `velocities` (F, N, 3) m and m/s, `kinetic` (F,) J, `potential`
+    {name: (F,)} J, `momentum` (F, 3) kg m/s, `angular_momentum` (F, 3) kg m²/s and,
+    when present, `total` (F,) J, `contacts` (F,), `impulse_balance` (F, 3) N s,
+    `collision_energy_lost` (F,) J, `masses` (N,) kg, `radii` (N,) m, `ids` (N,),
+    `dim` (2: stored 3D with z = 0, `dim` in /parameters/kinema), `dt` s, `method`,
+    `periodic` (D bools) with `box_edges` (D,) m, `species` (N,) names (the
+    `species` element: the atomic number of a name that is a chemical symbol, else 0, and
+    `species_index`: the index of each particle's name among the sorted names, which its
+    `names` attribute holds; all 0 and no `species_index` without `species`),
+    `colors` (N, 3) r, g, b in [0, 1], NaN: none (the `color` element),
+    `colliders` (`Trajectory.colliders`' descriptions or `kinema` collider objects),
+    `alive` (F, N) bool, which particles exist at each frame (births and deaths: written
+    with H5MD's fill values, see the module doc), `springs` (S, 2) the ids at the ends of
+    each spring (`/connectivity/springs`). Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
     without them) are not written.
 
-    ``group`` names the particle group (/particles/<group>); ``author`` the /h5md/author name
-    (default: the login name); ``compression`` "gzip", "lzf" or None for the chunked
-    datasets; ``units`` the unit system of the values: "SI" (m, s, kg, J), read back
+    `group` names the particle group (/particles/<group>); `author` the /h5md/author name
+    (default: the login name); `compression` "gzip", "lzf" or None for the chunked
+    datasets; `units` the unit system of the values: "SI" (m, s, kg, J), read back
     exactly, or "MD" (nm, ps, u, kJ mol-1: GROMACS's, which MDAnalysis reads), each value the
     float64 nearest its exact conversion where the factor or its inverse is a float64 (nm,
     ps, nm ps-1), else within one rounding more (u, kJ mol-1), read back within one ulp.
-    ``/parameters/kinema`` (dt, the colliders) stays in SI. The file is written under a
+    `/parameters/kinema` (dt, the colliders) stays in SI. The file is written under a
     temporary name in the same folder and renamed at the end, so a failed write leaves
-    ``path`` as it was.
+    `path` as it was.
 
-    What is written is checked first, by the rules ``load_h5md`` reads it with, so that every
+    What is written is checked first, by the rules `load_h5md` reads it with, so that every
     file kinema writes reads back: finite times that increase, finite positions and
     velocities (velocities all NaN, unknown, are left out), masses finite and > 0 kg, radii
     finite, >= 0 m and at most 1e150 m, printable species names, colours in [0, 1] or NaN,
-    box edges finite and > 0 m on periodic axes, ids once per frame, ``dt`` > 0, observables
-    one value per frame, the colliders as the engine checks them; with ``units="MD"`` values
+    box edges finite and > 0 m on periodic axes, ids once per frame, `dt` > 0, observables
+    one value per frame, the colliders as the engine checks them; with `units="MD"` values
     that float64 holds in those units (1e300 m is 1e309 nm) and times that stay apart. A value that breaks them is refused before
-    anything is written (a ``TrajectoryFileError``, one line: ``cannot write run.h5:
-    trajectory 'masses' has mass[2] = -1 (masses must be finite and > 0 kg)``).
+    anything is written (a `TrajectoryFileError`, one line: `cannot write run.h5:
+    trajectory 'masses' has mass[2] = -1 (masses must be finite and > 0 kg)`).
 
-    Raises ``TrajectoryFileError`` when ``path`` cannot be written or the values would not
-    read back, ``FileWriteError`` (an ``OSError``) when the system fails the write or refuses
-    the name (a name too long), and ``ValueError`` for a malformed trajectory."""
+    Raises `TrajectoryFileError` when `path` cannot be written or the values would not
+    read back, `FileWriteError` (an `OSError`) when the system fails the write or refuses
+    the name (a name too long), and `ValueError` for a malformed trajectory."""
     import_h5py()  # the ImportError that says how to get it, before any work
     if not group or "/" in group or group in (".", ".."):
         raise ValueError(f"group = {group!r} is invalid: it must be a non-empty name without '/'")
@@ -492,62 +492,62 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
 
 
 def load_h5md(path: str | os.PathLike, group: str | None = None, follow_links: bool = False) -> LoadedTrajectory:
-    """Read the particle group ``group`` of the H5MD file ``path`` (``None``: the file's only
-    group) with its observables; returns a :class:`LoadedTrajectory`, what the file holds
-    (``kinema.Trajectory.load`` makes a ``kinema.Trajectory`` of it). Arrays of kinema's
-    files come back exactly as written (within one ulp from ``units="MD"``); a 2D world's
-    file (``dim = 2`` in /parameters/kinema, or (F, N, 2) positions) gives ``dim`` 2, z = 0.
+    """Read the particle group `group` of the H5MD file `path` (`None`: the file's only
+    group) with its observables; returns a `LoadedTrajectory`, what the file holds
+    (`kinema.Trajectory.load` makes a `kinema.Trajectory` of it). Arrays of kinema's
+    files come back exactly as written (within one ulp from `units="MD"`); a 2D world's
+    file (`dim = 2` in /parameters/kinema, or (F, N, 2) positions) gives `dim` 2, z = 0.
 
-    Files of other programs are read too. Each dataset's ``unit`` attribute (H5MD's units
-    module) is converted to SI by its exact factor (``parse_unit``: "Ang", "nm", "ps",
-    "nm ps-1", "u", "kJ mol-1", ...; ``h5md_units.to_si``); a unit kinema does not know, or of
+    Files of other programs are read too. Each dataset's `unit` attribute (H5MD's units
+    module) is converted to SI by its exact factor (`parse_unit`: "Ang", "nm", "ps",
+    "nm ps-1", "u", "kJ mol-1", ...; `h5md_units.to_si`); a unit kinema does not know, or of
     the wrong kind, is an error. A dataset without one is SI in kinema's files; in others it
-    is taken as ``h5md_units.assumed_unit`` says (ASE's units in znh5md's files: its masses in
-    u, else SI), with a ``kinema.io.UnitWarning`` naming the file, the dataset and the unit
+    is taken as `h5md_units.assumed_unit` says (ASE's units in znh5md's files: its masses in
+    u, else SI), with a `kinema.io.UnitWarning` naming the file, the dataset and the unit
     taken. Velocities and
-    observables may be absent (``None``; ``Trajectory.load`` makes them NaN, unknown). The box
+    observables may be absent (`None`; `Trajectory.load` makes them NaN, unknown). The box
     may be fixed (edges (D,)) or time-dependent (one row per frame, a box that may change:
-    ``box_edges_by_frame``), edges or a (D, D) matrix of edge vectors along the axes. Step
-    and time may be H5MD's fixed interval (a scalar with an ``offset``).
+    `box_edges_by_frame`), edges or a (D, D) matrix of edge vectors along the axes. Step
+    and time may be H5MD's fixed interval (a scalar with an `offset`).
 
-    A number of particles that varies (H5MD's time-dependent ``id`` with a fill value, as
+    A number of particles that varies (H5MD's time-dependent `id` with a fill value, as
     kinema writes births and deaths) is read by id, whatever slot a particle takes at each
-    frame: one column per id that exists at some frame, ascending, ``alive`` (F, N) where it
+    frame: one column per id that exists at some frame, ascending, `alive` (F, N) where it
     exists, NaN positions and velocities where not, and its mass, radius and species where
     it first exists. Only the entries that exist are checked (finite, an id once per frame).
-    ``/connectivity/springs`` (ids, as kinema writes them) becomes ``springs``.
+    `/connectivity/springs` (ids, as kinema writes them) becomes `springs`.
 
     What is read is checked first: the types and shapes of every dataset before any data
     is read (positions (F, N, 3) or (F, N, 2) with F, N > 0; velocities as positions; one
     time and one step per frame; masses, radii and ids (N,), or (frames, N) of which the
     first frame is read; observables and a time-dependent box one value or vector per frame;
     real numbers, integers for steps and ids; units), then the memory it needs against the
-    memory available (``kinema.io._checks.available_memory``), then the values: finite
+    memory available (`kinema.io._checks.available_memory`), then the values: finite
     positions, velocities and times, times that increase, masses > 0, radii >= 0 and at most
     1e150 m (the engine's limit), species names of printable text (no NUL or control
-    characters), colours in [0, 1] or NaN, z = 0 in a file of a 2D world, a box ``boundary`` of "periodic" or "none" on each axis and edges along the
+    characters), colours in [0, 1] or NaN, z = 0 in a file of a 2D world, a box `boundary` of "periodic" or "none" on each axis and edges along the
     axes (a matrix of edge vectors must be diagonal, with open boundaries too), finite box
-    edges, > 0 on periodic axes, at every frame, ``dt`` a positive number, ``method`` a name
-    and each collider as ``World.add`` checks it. Observables are not checked for finite
+    edges, > 0 on periodic axes, at every frame, `dt` a positive number, `method` a name
+    and each collider as `World.add` checks it. Observables are not checked for finite
     values (a potential energy may be -inf).
 
-    The file is read alone: a file with an external link (``h5py.ExternalLink``), a virtual
-    dataset with a source in another file (``h5py.VirtualLayout``) or a dataset stored in
+    The file is read alone: a file with an external link (`h5py.ExternalLink`), a virtual
+    dataset with a source in another file (`h5py.VirtualLayout`) or a dataset stored in
     external files is refused before anything is read, since reading it would read other
     files, perhaps outside its folder (soft links stay inside the file and are followed).
-    ``follow_links=True`` reads such a file, following its links (HDF5 looks for a relative
-    name from the folder of the file, then from the working directory). The ``path`` itself
+    `follow_links=True` reads such a file, following its links (HDF5 looks for a relative
+    name from the folder of the file, then from the working directory). The `path` itself
     may be a symbolic link: the caller named it.
 
-    Raises ``TrajectoryFileError`` (a ``ValueError``), one line naming the file, when it is
+    Raises `TrajectoryFileError` (a `ValueError`), one line naming the file, when it is
     missing, a directory, not HDF5 or corrupt, its name cannot be used (too long), it has
-    links to other files (without ``follow_links``), an HDF5 file without /h5md and /particles, of
-    another major H5MD version, lacks ``group`` (the message lists the groups there), or when
+    links to other files (without `follow_links`), an HDF5 file without /h5md and /particles, of
+    another major H5MD version, lacks `group` (the message lists the groups there), or when
     a check fails: the message names the dataset (its meaning and its path in the file) or
-    attribute and the bad value, e.g. ``run.h5: dataset 'positions'
-    (/particles/all/position/value) has a non-finite value (nan) at frame 3, particle 7``
-    or ``md.h5: dataset 'velocities' (/particles/atoms/velocity/value) has unit 'furlong
-    fortnight-1', which kinema cannot read: 'furlong' is not a unit symbol kinema knows``."""
+    attribute and the bad value, e.g. `run.h5: dataset 'positions'
+    (/particles/all/position/value) has a non-finite value (nan) at frame 3, particle 7`
+    or `md.h5: dataset 'velocities' (/particles/atoms/velocity/value) has unit 'furlong
+    fortnight-1', which kinema cannot read: 'furlong' is not a unit symbol kinema knows`."""
     h5py = import_h5py()
     path = Path(path)
     try:

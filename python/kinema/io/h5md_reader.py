@@ -1,6 +1,6 @@
-"""Reading H5MD files (``kinema.io.load_h5md``): ``read`` turns an open file into a
-``LoadedTrajectory``, what the file holds in SI units, checking what it reads (through
-``kinema.io._h5md_checks``): shapes, types and the memory needed before any data, then the
+"""Reading H5MD files (`kinema.io.load_h5md`): `read` turns an open file into a
+`LoadedTrajectory`, what the file holds in SI units, checking what it reads (through
+`kinema.io._h5md_checks`): shapes, types and the memory needed before any data, then the
 values. Besides the frames: the box (fixed or changing), per-particle masses, radii, ids,
 species and colours, the observables, kinema's parameters and colliders, and the springs."""
 
@@ -40,30 +40,30 @@ from .h5md_units import LENGTH, MASS, TIME, parse_unit, to_si
 
 @dataclass
 class LoadedTrajectory:
-    """What an H5MD file holds, as :func:`load_h5md` reads it: the arrays of a
-    ``kinema.Trajectory`` under its attribute names, in SI units whatever the file's units,
-    each ``None`` where the file does not hold it (``potential``, ``colliders``: empty).
-    ``kinema.Trajectory.load`` makes a ``Trajectory`` of it, which fills what is missing
+    """What an H5MD file holds, as `load_h5md` reads it: the arrays of a
+    `kinema.Trajectory` under its attribute names, in SI units whatever the file's units,
+    each `None` where the file does not hold it (`potential`, `colliders`: empty).
+    `kinema.Trajectory.load` makes a `Trajectory` of it, which fills what is missing
     (NaN velocities and energies, "unknown") and keeps the file's own facts as
-    ``Trajectory.source``; this record keeps the difference between "not in the file" and a
-    value, which a ``Trajectory`` cannot.
+    `Trajectory.source`; this record keeps the difference between "not in the file" and a
+    value, which a `Trajectory` cannot.
 
-    ``t`` (F,) s; ``positions``, ``velocities`` (F, N, 3) m and m/s (z = 0 when ``dim`` is
-    2); ``kinetic``, ``total`` (F,) J and ``potential`` {force name: (F,)} J; ``momentum``
-    (F, 3) kg m/s and ``angular_momentum`` (F, 3) kg m²/s; ``contacts`` (F,),
-    ``impulse_balance`` (F, 3) N s and ``collision_energy_lost`` (F,) J; ``masses`` (N,) kg,
-    ``radii`` (N,) m, ``ids`` (N,), ``species`` (N,) names (kinema's files), ``colors`` (N, 3)
-    r, g, b in [0, 1], NaN: none (kinema's files), ``dim``, ``dt`` s, ``method``, ``fps`` (the
-    frames per second asked of ``World.run``; kinema's files), ``periodic`` (3 bools) and ``box_edges`` (3,) m, the periodic cell at the
-    first frame; ``colliders`` (descriptions, as ``Trajectory.colliders``), ``alive`` (F, N)
-    bool, which particles exist at each frame (``None`` when all do: a file whose number of
-    particles does not vary), ``springs`` (S, 2) the ids at the ends of each spring. Where
-    particles come and go, ``positions`` and ``velocities`` are NaN where they do not exist,
+    `t` (F,) s; `positions`, `velocities` (F, N, 3) m and m/s (z = 0 when `dim` is
+    2); `kinetic`, `total` (F,) J and `potential` {force name: (F,)} J; `momentum`
+    (F, 3) kg m/s and `angular_momentum` (F, 3) kg m²/s; `contacts` (F,),
+    `impulse_balance` (F, 3) N s and `collision_energy_lost` (F,) J; `masses` (N,) kg,
+    `radii` (N,) m, `ids` (N,), `species` (N,) names (kinema's files), `colors` (N, 3)
+    r, g, b in [0, 1], NaN: none (kinema's files), `dim`, `dt` s, `method`, `fps` (the
+    frames per second asked of `World.run`; kinema's files), `periodic` (3 bools) and `box_edges` (3,) m, the periodic cell at the
+    first frame; `colliders` (descriptions, as `Trajectory.colliders`), `alive` (F, N)
+    bool, which particles exist at each frame (`None` when all do: a file whose number of
+    particles does not vary), `springs` (S, 2) the ids at the ends of each spring. Where
+    particles come and go, `positions` and `velocities` are NaN where they do not exist,
     one column per id (ascending).
 
-    What only a file has (``Trajectory.source`` after ``Trajectory.load``): ``step`` (F,) the
-    integration step of each frame, ``box_edges_by_frame`` (F, 3) m, the cell at each frame
-    (a box that changes), ``group``, the file's ``author`` and ``creator`` and its ``path``."""
+    What only a file has (`Trajectory.source` after `Trajectory.load`): `step` (F,) the
+    integration step of each frame, `box_edges_by_frame` (F, 3) m, the cell at each frame
+    (a box that changes), `group`, the file's `author` and `creator` and its `path`."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -111,9 +111,9 @@ COLLIDER_TYPES = ("plane", "box", "sphere", "mesh")
 
 def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
     """The descriptions under /parameters/kinema/colliders, in index order, each checked by
-    the engine as ``World.add`` checks a collider (in a world of ``dim`` dimensions): the
-    attributes are numbers (a mesh's ``inside`` a bool), a mesh's ``vertices`` (V, 3) real
-    numbers and ``faces`` (F, 3) integers are datasets of its group."""
+    the engine as `World.add` checks a collider (in a world of `dim` dimensions): the
+    attributes are numbers (a mesh's `inside` a bool), a mesh's `vertices` (V, 3) real
+    numbers and `faces` (F, 3) integers are datasets of its group."""
     h5py = import_h5py()
     group = params.get("colliders")
     if not isinstance(group, h5py.Group):
@@ -164,9 +164,9 @@ def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
 
 
 def _read_motion(path: Path, g: Any) -> dict[str, Any]:
-    """A collider's ``motion`` group: 3-vector attributes (velocity, angular_velocity, pivot)
+    """A collider's `motion` group: 3-vector attributes (velocity, angular_velocity, pivot)
     and keyframe datasets (times (K,), translations (K, 3), rotations (K, 4)), numbers of the
-    shapes said; the engine checks the rest (``collider_problem``)."""
+    shapes said; the engine checks the rest (`collider_problem`)."""
     h5py = import_h5py()
     out: dict[str, Any] = {}
     for key, value in g.attrs.items():
@@ -188,20 +188,20 @@ def _read_motion(path: Path, g: Any) -> dict[str, Any]:
 
 
 def _check_colliders(path: Path, names: list[str], colliders: list[dict[str, Any]], dim: int) -> None:
-    """Refuses the first collider ``collider_problem`` finds wrong, named by its group."""
+    """Refuses the first collider `collider_problem` finds wrong, named by its group."""
     problem = collider_problem(names, colliders, dim)
     if problem is not None:
         raise fail(path, f"collider {problem}")
 
 
 def collider_problem(names: list[str], colliders: list[dict[str, Any]], dim: int) -> str | None:
-    """Adds each collider to an empty engine world of ``dim`` dimensions, as ``World.add``
+    """Adds each collider to an empty engine world of `dim` dimensions, as `World.add`
     does: the engine's checks (finite values, a non-zero normal, hi > lo, 2 or 3 values,
     restitution in [0, 1], ..., and a motion's: finite, times increasing, one key each, a box
-    that only translates, a 2D motion in the xy-plane); returns ``"<name> (a plane): <the engine's message>"`` for
-    the first it refuses, else ``None``. The engine's own ``World``, not ``kinema.World``:
-    reading a file needs no world module (which imports ``kinema.trajectory``, which imports
-    this). ``save_h5md`` checks what it writes with it."""
+    that only translates, a 2D motion in the xy-plane); returns `"<name> (a plane): <the engine's message>"` for
+    the first it refuses, else `None`. The engine's own `World`, not `kinema.World`:
+    reading a file needs no world module (which imports `kinema.trajectory`, which imports
+    this). `save_h5md` checks what it writes with it."""
     from .. import _core
     from ..colliders import Box, Mesh, Plane, SphereObstacle
     from ..render import _KIND
@@ -226,8 +226,8 @@ def collider_problem(names: list[str], colliders: list[dict[str, Any]], dim: int
 
 
 def _species_names(r: Any, obj: Any, index: np.ndarray) -> np.ndarray | None:
-    """The species names of the particles: ``names[index]`` when the species element (or
-    dataset) ``obj`` has a ``names`` attribute (kinema writes one), else ``None`` (H5MD's
+    """The species names of the particles: `names[index]` when the species element (or
+    dataset) `obj` has a `names` attribute (kinema writes one), else `None` (H5MD's
     species are integers, and a name cannot be made up for them)."""
     if "names" not in obj.attrs:
         return None
@@ -242,7 +242,7 @@ def _species_names(r: Any, obj: Any, index: np.ndarray) -> np.ndarray | None:
 
 
 def _box_edges(r: Reader, ds: Any, e: np.ndarray, by_frame: bool, periodic: tuple[bool, ...]) -> np.ndarray:
-    """The edges of the box at each frame, (F, D) m, from the values ``e`` of ``ds`` in m:
+    """The edges of the box at each frame, (F, D) m, from the values `e` of `ds` in m:
     (D,) or (F, D) edges, or (D, D) or (F, D, D) edge vectors, which must lie along the axes
     (a cuboid: kinema has no triclinic cells). Each edge is finite, > 0 on a periodic axis."""
     rows = e[None] if not by_frame else e
@@ -257,7 +257,7 @@ def _box_edges(r: Reader, ds: Any, e: np.ndarray, by_frame: bool, periodic: tupl
 
 
 def _refuse_triclinic(r: Reader, ds: Any, rows: np.ndarray, by_frame: bool) -> None:
-    """Refuses edge vectors ``rows`` (F, D, D) with an entry off the diagonal that is not 0."""
+    """Refuses edge vectors `rows` (F, D, D) with an entry off the diagonal that is not 0."""
     i = triclinic_at(rows)
     if i is not None:
         at = f" at frame {i}" if by_frame else ""
@@ -265,8 +265,8 @@ def _refuse_triclinic(r: Reader, ds: Any, rows: np.ndarray, by_frame: bool) -> N
 
 
 def _read_springs(r: Reader, f: Any, p: Any, ids: np.ndarray) -> np.ndarray | None:
-    """The springs (S, 2) ids of ``/connectivity/springs`` (kinema's: H5MD's time-independent
-    list of pairs, whose ``particles_group`` is the particle group read), ``None`` without
+    """The springs (S, 2) ids of `/connectivity/springs` (kinema's: H5MD's time-independent
+    list of pairs, whose `particles_group` is the particle group read), `None` without
     them."""
     h5py = import_h5py()
     ds = f.get("connectivity/springs")

@@ -1,7 +1,7 @@
-"""The units of H5MD files (the H5MD units module): ``parse_unit`` reads a unit string into
-its exact SI factor and its dimension, ``to_si`` converts values read from a file to SI
-(m, s, kg, J, m/s, kg m/s) and ``from_si`` values to write to a file's units; ``SYSTEMS``,
-the unit systems ``save_h5md`` writes; ``assumed_unit``, what a dataset without a unit is
+"""The units of H5MD files (the H5MD units module): `parse_unit` reads a unit string into
+its exact SI factor and its dimension, `to_si` converts values read from a file to SI
+(m, s, kg, J, m/s, kg m/s) and `from_si` values to write to a file's units; `SYSTEMS`,
+the unit systems `save_h5md` writes; `assumed_unit`, what a dataset without a unit is
 taken in."""
 
 from __future__ import annotations
@@ -71,7 +71,7 @@ def _symbol(token: str) -> tuple[Fraction, tuple[int, int, int]] | None:
 
 def parse_unit(text: str) -> tuple[Fraction, tuple[int, int, int]]:
     """The SI factor (exact) and the dimension (powers of length, time, mass) of an H5MD unit
-    string: ``parse_unit("nm ps-1") == (Fraction(1000), (1, -1, 0))``. Raises ``ValueError``
+    string: `parse_unit("nm ps-1") == (Fraction(1000), (1, -1, 0))`. Raises `ValueError`
     saying which factor it does not know."""
     tokens = text.split()
     if not tokens:
@@ -106,8 +106,8 @@ def parse_unit(text: str) -> tuple[Fraction, tuple[int, int, int]]:
 
 
 def _exact_inverse(factor: Fraction) -> float | None:
-    """The integer 1 / ``factor`` as a float when it is one and float64 holds it exactly (1e9
-    for "nm", 1e10 for "Ang"), else ``None``."""
+    """The integer 1 / `factor` as a float when it is one and float64 holds it exactly (1e9
+    for "nm", 1e10 for "Ang"), else `None`."""
     inverse = 1 / factor
     if inverse.denominator != 1 or Fraction(float(inverse)) != inverse:
         return None
@@ -115,8 +115,8 @@ def _exact_inverse(factor: Fraction) -> float | None:
 
 
 def to_si(a: Any, factor: Fraction | float) -> Any:
-    """``a`` (just read from a file) in SI: times ``factor`` (in place when it is float64, else
-    as float64); ``a`` itself when the factor is 1. A factor whose inverse float64 holds
+    """`a` (just read from a file) in SI: times `factor` (in place when it is float64, else
+    as float64); `a` itself when the factor is 1. A factor whose inverse float64 holds
     exactly (1e-9 for "nm": 1e9) divides by that inverse instead, so that each value is the
     float64 nearest the exact product (1e-9 itself is not a float64)."""
     if factor == 1:
@@ -131,9 +131,9 @@ def to_si(a: Any, factor: Fraction | float) -> Any:
 
 
 def from_si(a: Any, unit: str) -> np.ndarray:
-    """``a`` in SI as float64 values in ``unit`` (``"nm"``: times 1e9), each the float64
+    """`a` in SI as float64 values in `unit` (`"nm"`: times 1e9), each the float64
     nearest the exact quotient where the factor or its inverse is a float64 (powers of ten up
-    to 1e22, 1000 for "nm ps-1"), else within one rounding more; ``a`` itself (as an array)
+    to 1e22, 1000 for "nm ps-1"), else within one rounding more; `a` itself (as an array)
     when the factor is 1. NaN stays NaN."""
     factor = parse_unit(unit)[0]
     if factor == 1:
@@ -156,7 +156,7 @@ SYSTEMS: dict[str, dict[str, str]] = {
 
 
 def system_of(units: Any) -> dict[str, str]:
-    """The units of the unit system named ``units`` ("SI" or "MD", any case); a ``ValueError``
+    """The units of the unit system named `units` ("SI" or "MD", any case); a `ValueError`
     naming the value and the names allowed."""
     if isinstance(units, str) and units.upper() in SYSTEMS:
         return SYSTEMS[units.upper()]
@@ -172,8 +172,8 @@ ZNH5MD = "znh5md"
 
 
 def assumed_unit(creator: str | None, dims: tuple[int, int, int]) -> tuple[Fraction, str]:
-    """What a dataset of dimension ``dims`` without a ``unit`` attribute is taken in, in a file
-    ``creator`` (its /h5md/creator name) wrote, as (the SI factor, the words a warning says):
+    """What a dataset of dimension `dims` without a `unit` attribute is taken in, in a file
+    `creator` (its /h5md/creator name) wrote, as (the SI factor, the words a warning says):
     ASE's units in znh5md's files (Å, u, fs for time, Å per ASE's time unit Å √(u/eV) for
     velocities), else SI. kinema's own files write a unit on every dataset that has one."""
     si = _SI_OF.get(dims, "SI")

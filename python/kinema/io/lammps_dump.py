@@ -1,4 +1,4 @@
-"""LAMMPS's text dump format (``dump custom``), for OVITO, ASE, VMD and LAMMPS's own tools."""
+"""LAMMPS's text dump format (`dump custom`), for OVITO, ASE, VMD and LAMMPS's own tools."""
 
 from __future__ import annotations
 
@@ -22,32 +22,32 @@ def _lammps_ids(fr: Frames) -> np.ndarray:
 
 
 def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    """Write ``fr`` to one LAMMPS text dump file at ``path``, the frames one after the other, as
-    LAMMPS's ``dump custom`` writes them; returns ``[path]``.
+    """Write `fr` to one LAMMPS text dump file at `path`, the frames one after the other, as
+    LAMMPS's `dump custom` writes them; returns `[path]`.
 
-    Each frame: ``ITEM: TIMESTEP`` (round(t/dt) when ``dt`` is known, else the frame index),
-    ``ITEM: NUMBER OF ATOMS``, ``ITEM: BOX BOUNDS`` with ``pp`` for a periodic axis (the
-    world's periodic cell) and ``ff`` for the others (the walls of the world's ``Box`` where
+    Each frame: `ITEM: TIMESTEP` (round(t/dt) when `dt` is known, else the frame index),
+    `ITEM: NUMBER OF ATOMS`, `ITEM: BOX BOUNDS` with `pp` for a periodic axis (the
+    world's periodic cell) and `ff` for the others (the walls of the world's `Box` where
     all particles stay between them, else bounds that enclose all frames' particles with a
-    margin; a 2D trajectory's z is ``pp`` from −margin to +margin, as LAMMPS's 2D boxes are
-    periodic in z), then ``ITEM: ATOMS id type element x y z vx vy vz radius mass`` and a row
+    margin; a 2D trajectory's z is `pp` from −margin to +margin, as LAMMPS's 2D boxes are
+    periodic in z), then `ITEM: ATOMS id type element x y z vx vy vz radius mass` and a row
     per particle: id + 1 (LAMMPS ids start at 1; 1..N in row order if the ids are not
     distinct and >= 0), type 1 (or 1 + the index of the particle's name in the trajectory's
-    sorted ``species``), ``element`` the species name only where every name is a chemical
+    sorted `species`), `element` the species name only where every name is a chemical
     symbol or X (ASE reads the column as symbols and refuses other words; OVITO names its
     particle types by it, MDAnalysis reads it as the elements), radius and mass only where
     the trajectory has them. Every value is in SI units (m, m/s, kg).
 
-    No ``ITEM: UNITS`` or ``ITEM: TIME``: MDAnalysis's reader takes the first line of each
-    frame as ``ITEM: TIMESTEP`` and counts a frame as N + 9 lines, and fails on either
+    No `ITEM: UNITS` or `ITEM: TIME`: MDAnalysis's reader takes the first line of each
+    frame as `ITEM: TIMESTEP` and counts a frame as N + 9 lines, and fails on either
     ("invalid literal for int() with base 10: '0.0'"); a frame's time is TIMESTEP × dt.
 
-    Births and deaths (``alive``): each timestep lists the atoms alive at it only (``NUMBER
-    OF ATOMS`` varies; 0 for a frame with none), each with its own id, so a particle keeps
+    Births and deaths (`alive`): each timestep lists the atoms alive at it only (`NUMBER
+    OF ATOMS` varies; 0 for a frame with none), each with its own id, so a particle keeps
     its id from frame to frame. The dump has no bonds (the springs) and no colours. Floats
     are written with 17 significant digits: exact for float64 (ASE reads them back bit for
-    bit; OVITO 3.17's parser can land 1 or 2 units in the last place off). ``on_frame(i)``
-    is called after frame ``i`` is written."""
+    bit; OVITO 3.17's parser can land 1 or 2 units in the last place off). `on_frame(i)`
+    is called after frame `i` is written."""
     lo, hi, periodic, margin = trajectory_cell(traj, fr)
     if fr.dim == 2:  # LAMMPS's 2D boxes are periodic in z
         periodic[2] = True

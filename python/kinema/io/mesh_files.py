@@ -1,7 +1,7 @@
-"""Reading triangle meshes from files for ``kinema.Mesh``: OBJ, STL, PLY and glTF (.gltf, .glb)
-through ``trimesh``, USD (.usd, .usda, .usdc, .usdz) through Pixar's ``usd-core`` (``pxr``).
+"""Reading triangle meshes from files for `kinema.Mesh`: OBJ, STL, PLY and glTF (.gltf, .glb)
+through `trimesh`, USD (.usd, .usda, .usdc, .usdz) through Pixar's `usd-core` (`pxr`).
 
-``read_mesh(path)`` gives the file's vertices (V, 3) float64, in the file's own coordinates
+`read_mesh(path)` gives the file's vertices (V, 3) float64, in the file's own coordinates
 (m for kinema), and its triangles (F, 3) int64: polygons (quads, n-gons) are cut into fans
 (v0, vk, vk+1), a file of several meshes gives all of them, concatenated, each placed by its
 node's or prim's transform. Vertices at exactly the same coordinates are made one (the first
@@ -10,7 +10,7 @@ an STL file stores every triangle's corners apart, and a UV seam splits a vertex
 collider they are one point, and only a surface whose triangles share their vertices is known
 to be closed. Faces left with a repeated vertex by that (they had no area) are dropped.
 
-A refused file is a ``ValueError`` of one line: ``file = '<path>' is invalid: <why>`` (no such
+A refused file is a `ValueError` of one line: `file = '<path>' is invalid: <why>` (no such
 file, a directory, a format not read (the list of those read), a file the format's reader
 cannot read, one with no triangle).
 """
@@ -36,7 +36,7 @@ MESH_FORMATS = {
 
 
 def mesh_format(path: str | os.PathLike) -> str | None:
-    """The format ``path`` names by its suffix (a key of ``MESH_FORMATS``), or None."""
+    """The format `path` names by its suffix (a key of `MESH_FORMATS`), or None."""
     suffix = Path(path).suffix.lower()
     return next((name for name, suffixes in MESH_FORMATS.items() if suffix in suffixes), None)
 
@@ -47,8 +47,8 @@ def formats_text() -> str:
 
 
 def read_mesh(path: str | os.PathLike, name: str = "file") -> tuple[np.ndarray, np.ndarray]:
-    """The vertices (V, 3) float64 and triangles (F, 3) int64 of the mesh file ``path`` (see
-    the module doc); ``name`` is the parameter a refusal names."""
+    """The vertices (V, 3) float64 and triangles (F, 3) int64 of the mesh file `path` (see
+    the module doc); `name` is the parameter a refusal names."""
     path = Path(path)
 
     def refuse(why: str) -> ValueError:
@@ -118,9 +118,9 @@ def fan(counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
 
 
 def _read_trimesh(path: Path, fmt: str, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
-    """OBJ, STL, PLY, glTF through trimesh, as the file has them (``process=False``: no vertex
+    """OBJ, STL, PLY, glTF through trimesh, as the file has them (`process=False`: no vertex
     merged, reordered or dropped by trimesh; a scene of several meshes concatenated with its
-    nodes' transforms by ``force="mesh"``)."""
+    nodes' transforms by `force="mesh"`)."""
     try:
         import trimesh
     except ImportError:
@@ -136,12 +136,12 @@ def _read_trimesh(path: Path, fmt: str, refuse: Any) -> tuple[np.ndarray, np.nda
 
 
 def _read_usd(path: Path, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Every ``UsdGeom.Mesh`` prim of the stage but guides (its purpose ``guide``: kinema's own
-    export draws its colliders so), at the earliest time code: ``points`` by the prim's
-    local-to-world transform, × the stage's ``metersPerUnit`` (USD's fallback 0.01,
-    centimetres, with a ``UnitWarning`` where the stage does not say it, as
-    ``kinema.io.read_usd`` reads particles); ``faceVertexCounts`` and ``faceVertexIndices``
-    cut into fans; a ``leftHanded`` prim's triangles turned to run counter-clockwise."""
+    """Every `UsdGeom.Mesh` prim of the stage but guides (its purpose `guide`: kinema's own
+    export draws its colliders so), at the earliest time code: `points` by the prim's
+    local-to-world transform, × the stage's `metersPerUnit` (USD's fallback 0.01,
+    centimetres, with a `UnitWarning` where the stage does not say it, as
+    `kinema.io.read_usd` reads particles); `faceVertexCounts` and `faceVertexIndices`
+    cut into fans; a `leftHanded` prim's triangles turned to run counter-clockwise."""
     try:
         from pxr import Tf, Usd, UsdGeom
     except ImportError:

@@ -16,12 +16,12 @@ SUFFIXES = (".ply",)  # a path's suffixes that name a PLY export (``exports._SUF
 
 
 def _ply(fr: Frames, i: int, extras: Extras) -> bytes:
-    """Frame ``i`` as a binary little-endian PLY: one vertex per particle alive at it, float32
+    """Frame `i` as a binary little-endian PLY: one vertex per particle alive at it, float32
     x y z vx vy vz radius, uchar red green blue (the colour, where the trajectory has
-    colours), int32 type (the index of its species in the ``comment type <index> <name>``
+    colours), int32 type (the index of its species in the `comment type <index> <name>`
     lines, where it has species) and int32 id, the types Blender's and Houdini's importers
     read (Blender keeps the other properties as point attributes and red green blue as the
-    colour attribute ``Col``); then, where the trajectory has springs, one edge per spring
+    colour attribute `Col`); then, where the trajectory has springs, one edge per spring
     whose two ends are alive, int32 vertex1 vertex2 (its ends' vertex indices), which
     Blender imports as the mesh's edges."""
     columns = [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("vx", "<f4"), ("vy", "<f4"), ("vz", "<f4")]
@@ -63,18 +63,18 @@ def _ply(fr: Frames, i: int, extras: Extras) -> bytes:
 
 
 def write_ply(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    """Write ``fr`` as a PLY series for Blender and Houdini; returns the paths of the frames'
+    """Write `fr` as a PLY series for Blender and Houdini; returns the paths of the frames'
     files.
 
-    The folder ``<stem>_ply/`` with one binary little-endian PLY per frame,
-    ``<stem>_00000.ply``, ``<stem>_00001.ply``, ... (``_ply``): vertex properties x y z vx vy
+    The folder `<stem>_ply/` with one binary little-endian PLY per frame,
+    `<stem>_00000.ply`, `<stem>_00001.ply`, ... (`_ply`): vertex properties x y z vx vy
     vz (float32; m, m/s), radius (float32, m), red green blue (uchar, the colour), type
-    (int32, the species, named in ``comment type k name`` lines) and id (int32); with
-    springs, ``element edge`` (vertex1 vertex2), one edge per spring whose ends are alive.
-    The stem is the name of ``path`` less its suffix where that is .ply, the whole name
+    (int32, the species, named in `comment type k name` lines) and id (int32); with
+    springs, `element edge` (vertex1 vertex2), one edge per spring whose ends are alive.
+    The stem is the name of `path` less its suffix where that is .ply, the whole name
     otherwise. The series is built in a temporary folder that takes the place of
-    ``<stem>_ply/`` only when complete (an existing one is replaced only if it holds nothing
-    but an earlier series). ``on_frame(i)`` is called after frame ``i`` is written."""
+    `<stem>_ply/` only when complete (an existing one is replaced only if it holds nothing
+    but an earlier series). `on_frame(i)` is called after frame `i` is written."""
     folder, stem, pattern = series_names(path, "ply", ".ply", SUFFIXES)
     extras = Extras(traj, fr)
     names = [f"{stem}_{i:0{SERIES_DIGITS}d}.ply" for i in range(fr.n_frames)]

@@ -1,6 +1,6 @@
-"""Reading kinema's own exports back: the CSV (``read_csv``), the VTK series of a ``.pvd``
-collection (``read_vtk``) and the PLY series folder (``read_ply``), each to a
-``LoadedTrajectory`` in SI units, the units kinema writes them in. The CSV's and VTK's float64
+"""Reading kinema's own exports back: the CSV (`read_csv`), the VTK series of a `.pvd`
+collection (`read_vtk`) and the PLY series folder (`read_ply`), each to a
+`LoadedTrajectory` in SI units, the units kinema writes them in. The CSV's and VTK's float64
 values read back bit for bit, PLY's float32 as float32."""
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ _CSV_COLUMNS = ("frame", "time", "id", "x", "y", "z", "vx", "vy", "vz")
 
 
 def read_csv(path: Path) -> LoadedTrajectory:
-    """Read a CSV kinema exported: the header ``frame,time,id,x,y,z,vx,vy,vz``, then any of
-    ``mass``, ``radius``, ``species`` and ``r,g,b`` (the colour), a row per particle and frame,
-    SI units. Frames are the distinct ``frame`` numbers, in order; a frame in which no particle
+    """Read a CSV kinema exported: the header `frame,time,id,x,y,z,vx,vy,vz`, then any of
+    `mass`, `radius`, `species` and `r,g,b` (the colour), a row per particle and frame,
+    SI units. Frames are the distinct `frame` numbers, in order; a frame in which no particle
     was alive has no row, so it is not read."""
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
@@ -111,7 +111,7 @@ def _xml(path: Path, file: Path, where: str) -> ET.Element:
 
 
 def _inside(path: Path, folder: Path, name: str | None, where: str) -> Path:
-    """The file ``name`` a collection names, in ``folder`` or below it (never outside it)."""
+    """The file `name` a collection names, in `folder` or below it (never outside it)."""
     if not name or Path(name).is_absolute() or ".." in Path(name).parts:
         raise fail(path, f"{where}: the file {name!r} is not a name inside the collection's folder")
     return folder / name
@@ -148,13 +148,13 @@ def _vtp(path: Path, file: Path, where: str) -> dict[str, np.ndarray]:
 
 
 def read_vtk(path: Path) -> LoadedTrajectory:
-    """Read a VTK series through its ``.pvd`` collection: each DataSet's ``timestep`` (the
+    """Read a VTK series through its `.pvd` collection: each DataSet's `timestep` (the
     frame's time) and PolyData file (XML, inline binary or ascii, uncompressed; or the
     multi-block file of a frame with springs, its block 0), its points and the point data
-    ``v`` (velocities), ``radius``, ``mass``, ``id``, ``type`` (names: the field data
-    ``type_names``) and ``Color``, in SI units, the
-    units kinema writes them in. A series without kinema's ``speed`` point data (another
-    program's) is read in the same units, with a ``UnitWarning``."""
+    `v` (velocities), `radius`, `mass`, `id`, `type` (names: the field data
+    `type_names`) and `Color`, in SI units, the
+    units kinema writes them in. A series without kinema's `speed` point data (another
+    program's) is read in the same units, with a `UnitWarning`."""
     try:
         root = ET.parse(path).getroot()
     except ET.ParseError as e:
@@ -247,10 +247,10 @@ def _ply_frame(path: Path, file: Path, where: str) -> RawFrame:
 
 
 def read_ply(folder: Path) -> LoadedTrajectory:
-    """Read the PLY series kinema exported into ``folder`` (``<stem>_ply/``, its files
-    ``<stem>_00000.ply``, ... in the order of their numbers): each frame's vertices x y z, vx vy
-    vz, radius and id (float32 and int32, as written), the species (``type`` and the ``comment
-    type <index> <name>`` lines), the colour (``red green blue``, /255) and its ``comment time``,
+    """Read the PLY series kinema exported into `folder` (`<stem>_ply/`, its files
+    `<stem>_00000.ply`, ... in the order of their numbers): each frame's vertices x y z, vx vy
+    vz, radius and id (float32 and int32, as written), the species (`type` and the `comment
+    type <index> <name>` lines), the colour (`red green blue`, /255) and its `comment time`,
     SI units. PLY holds no masses."""
     files = sorted((p for p in folder.iterdir() if p.suffix.lower() == ".ply"), key=lambda p: (len(p.stem), p.stem))
     numbered = [p for p in files if re.search(r"_\d+$", p.stem)]

@@ -1,5 +1,5 @@
-"""Reading GSD files (HOOMD-blue's schema, and kinema's own ``.gsd``) with the ``gsd`` package:
-``read_gsd`` gives a ``LoadedTrajectory`` in SI units."""
+"""Reading GSD files (HOOMD-blue's schema, and kinema's own `.gsd`) with the `gsd` package:
+`read_gsd` gives a `LoadedTrajectory` in SI units."""
 
 from __future__ import annotations
 
@@ -18,8 +18,8 @@ MAGIC = bytes.fromhex("df65df65df65df65")  # the first 8 bytes of every GSD file
 
 
 def _log(f: Any, k: int, name: str) -> np.ndarray | None:
-    """The chunk ``log/<name>`` of frame ``k`` (or of frame 0, where GSD keeps a value that does
-    not change), ``None`` where there is none."""
+    """The chunk `log/<name>` of frame `k` (or of frame 0, where GSD keeps a value that does
+    not change), `None` where there is none."""
     for frame in (k, 0):
         if f.file.chunk_exists(frame=frame, name=f"log/{name}"):
             return f.file.read_chunk(frame=frame, name=f"log/{name}")
@@ -27,25 +27,25 @@ def _log(f: Any, k: int, name: str) -> np.ndarray | None:
 
 
 def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
-    """Read the GSD file ``path`` (schema "hoomd") with ``gsd.hoomd``.
+    """Read the GSD file `path` (schema "hoomd") with `gsd.hoomd`.
 
-    Each frame: ``particles/position`` (+ ``log/kinema/origin`` in kinema's files, whose GSD box
-    is centred at 0), ``velocity``, ``mass`` and ``diameter`` (radius = diameter / 2) as HOOMD
+    Each frame: `particles/position` (+ `log/kinema/origin` in kinema's files, whose GSD box
+    is centred at 0), `velocity`, `mass` and `diameter` (radius = diameter / 2) as HOOMD
     reads them, its defaults where a file has none (mass 1, diameter 1, velocity 0, as the
     schema says: gsd leaves out a value equal to its default), the type names
-    (``particles/types`` by ``typeid``) as species, ``configuration/step``,
-    ``configuration/dimensions`` and the box [Lx, Ly, Lz] centred at the origin (periodic on
+    (`particles/types` by `typeid`) as species, `configuration/step`,
+    `configuration/dimensions` and the box [Lx, Ly, Lz] centred at the origin (periodic on
     every axis, as HOOMD's box is; a tilted box is refused). A number of particles that varies
-    is read by kinema's ids (``log/particles/kinema/id``); without them it is refused.
-    kinema's files also give the periodic axes (``log/kinema/periodic``: along another axis
+    is read by kinema's ids (`log/particles/kinema/id`); without them it is refused.
+    kinema's files also give the periodic axes (`log/kinema/periodic`: along another axis
     the cell is the box halved), the springs (bonds of type "spring", as ids) and the
-    colours (``log/particles/Color``).
+    colours (`log/particles/Color`).
 
-    Units: HOOMD is unitless. A file kinema wrote (``log/kinema/time``) is SI and its times are
-    ``log/kinema/time``; another file's numbers are in the units ``units`` gives (see
-    ``kinema.io.units.scales``), or, without them, taken as SI with a ``UnitWarning`` naming the
+    Units: HOOMD is unitless. A file kinema wrote (`log/kinema/time`) is SI and its times are
+    `log/kinema/time`; another file's numbers are in the units `units` gives (see
+    `kinema.io.units.scales`), or, without them, taken as SI with a `UnitWarning` naming the
     file (its masses as kg). Its frames' times are their index (0, 1, 2, ... s; the steps are
-    ``source.step``)."""
+    `source.step`)."""
     try:
         import gsd.hoomd
     except ImportError:

@@ -1,12 +1,12 @@
-"""Reading LAMMPS's text files: dumps (``dump custom`` and ``dump atom``; kinema's own
-``.lammpstrj``) with ``read_dump`` and data files (``read_data``'s format, ``write_data``'s and
-ASE's) with ``read_data``, each to a ``LoadedTrajectory`` in SI units. The numbers are parsed
+"""Reading LAMMPS's text files: dumps (`dump custom` and `dump atom`; kinema's own
+`.lammpstrj`) with `read_dump` and data files (`read_data`'s format, `write_data`'s and
+ASE's) with `read_data`, each to a `LoadedTrajectory` in SI units. The numbers are parsed
 exactly (each decimal to the nearest float64), so a dump kinema wrote reads back bit for bit.
 
-Units are LAMMPS's unit styles (``kinema.io.units.LAMMPS_STYLES``), by LAMMPS's own constants:
-a dump's ``ITEM: UNITS`` (``dump_modify units yes``), a data file's title ``units = real``
-(``write_data``), else the ``units`` argument; a file without either is refused (its masses
-would be in no known unit), as is the style ``lj`` without its scales."""
+Units are LAMMPS's unit styles (`kinema.io.units.LAMMPS_STYLES`), by LAMMPS's own constants:
+a dump's `ITEM: UNITS` (`dump_modify units yes`), a data file's title `units = real`
+(`write_data`), else the `units` argument; a file without either is refused (its masses
+would be in no known unit), as is the style `lj` without its scales."""
 
 from __future__ import annotations
 
@@ -48,8 +48,8 @@ _SECTIONS = frozenset(s.replace("\0", " ") for s in _SECTIONS)
 
 
 def _unit_scales(path: Path, stated: str | None, units: Any, how: str) -> Scales:
-    """The units of a LAMMPS file: its own ``stated`` style (``how`` it says it), which a
-    ``units`` argument must not contradict, else ``units``; neither is refused."""
+    """The units of a LAMMPS file: its own `stated` style (`how` it says it), which a
+    `units` argument must not contradict, else `units`; neither is refused."""
     if stated is not None:
         try:
             own = scales(stated, f"{path}: {how}")
@@ -68,7 +68,7 @@ def _unit_scales(path: Path, stated: str | None, units: Any, how: str) -> Scales
 
 
 def _words(path: Path, lines: list[str], first: int, width: int, where: str) -> np.ndarray:
-    """The rows ``lines`` (the first at line ``first``, counting from 1) as an (n, ``width``)
+    """The rows `lines` (the first at line `first`, counting from 1) as an (n, `width`)
     array of words; a row of another width is refused, naming its line."""
     words = " ".join(lines).split()
     if len(words) != len(lines) * width:
@@ -107,15 +107,15 @@ def _two_d(frames: list[RawFrame]) -> bool:
 
 
 def read_dump(path: Path, units: Any = None) -> LoadedTrajectory:
-    """Read the LAMMPS text dump ``path`` (``dump custom``, ``dump atom``; frames one after the
-    other, as ``dump_modify units yes time yes`` writes them too).
+    """Read the LAMMPS text dump `path` (`dump custom`, `dump atom`; frames one after the
+    other, as `dump_modify units yes time yes` writes them too).
 
-    Read: ``id`` (particles followed by id: a number of atoms that changes is read as births
-    and deaths), ``type`` as the species name (``element``, from ``dump_modify element``, where
-    there is one), the positions of ``x y z``, else ``xu yu zu``, else the scaled ``xs ys zs``
-    or ``xsu ysu zsu`` (times the box's edges), ``vx vy vz``, ``mass``, ``radius`` (or
-    ``diameter`` / 2); ``ITEM: TIME`` (the frames' times), ``ITEM: TIMESTEP`` (``source.step``),
-    the box of ``ITEM: BOX BOUNDS``, periodic where its flag is ``pp`` (a tilted box is
+    Read: `id` (particles followed by id: a number of atoms that changes is read as births
+    and deaths), `type` as the species name (`element`, from `dump_modify element`, where
+    there is one), the positions of `x y z`, else `xu yu zu`, else the scaled `xs ys zs`
+    or `xsu ysu zsu` (times the box's edges), `vx vy vz`, `mass`, `radius` (or
+    `diameter` / 2); `ITEM: TIME` (the frames' times), `ITEM: TIMESTEP` (`source.step`),
+    the box of `ITEM: BOX BOUNDS`, periodic where its flag is `pp` (a tilted box is
     refused). A dump whose box is periodic in z and whose z are all 0 is a 2D run."""
     lines = _text(path).splitlines()
     frames: list[RawFrame] = []
@@ -163,7 +163,7 @@ def read_dump(path: Path, units: Any = None) -> LoadedTrajectory:
 
 
 def _axis_box(path: Path, vectors: np.ndarray, origin: np.ndarray, periodic: np.ndarray, where: str) -> Box:
-    """The box of edge vectors ``vectors`` (3, 3) (rows a, b, c) from ``origin``: they must lie
+    """The box of edge vectors `vectors` (3, 3) (rows a, b, c) from `origin`: they must lie
     along x, y and z (kinema's box is axis-aligned)."""
     if np.any(vectors[~np.eye(3, dtype=bool)] != 0) or np.any(np.diag(vectors) <= 0):
         raise fail(path, f"{where}: a box of edge vectors {vectors.tolist()}; kinema reads boxes along the axes only (a along x, b along y, c along z)")
@@ -171,9 +171,9 @@ def _axis_box(path: Path, vectors: np.ndarray, origin: np.ndarray, periodic: np.
 
 
 def _dump_box(path: Path, lines: list[str], i: int, words: list[str], where: str) -> Box:
-    """``ITEM: BOX BOUNDS`` at line ``i``: orthogonal (``xlo xhi`` rows), restricted triclinic
-    (``xy xz yz``: rows ``lo hi tilt``, tilts 0 only) or general triclinic (``abc origin``:
-    rows ``a_x a_y a_z origin_x``, LAMMPS 2024's and OVITO 3.10's), with the boundary flags."""
+    """`ITEM: BOX BOUNDS` at line `i`: orthogonal (`xlo xhi` rows), restricted triclinic
+    (`xy xz yz`: rows `lo hi tilt`, tilts 0 only) or general triclinic (`abc origin`:
+    rows `a_x a_y a_z origin_x`, LAMMPS 2024's and OVITO 3.10's), with the boundary flags."""
     if words[:2] == ["abc", "origin"]:
         rows = _as(path, _words(path, lines[i + 1 : i + 4], i + 2, 4, where), np.float64, "BOX BOUNDS", where, i + 2)
         return _axis_box(path, rows[:, :3], rows[:, 3], _periodic_flags(path, words[2:], where), where)
@@ -292,8 +292,8 @@ def _count(path: Path, header: dict[str, str], key: str) -> int:
 
 
 def _style(path: Path, comment: str, width: int, atom_style: str | None) -> str:
-    """The atom style of the Atoms section: its ``# style`` comment (LAMMPS's write_data and ASE
-    write one), else ``atom_style``, else the one style with rows of ``width`` values (with or
+    """The atom style of the Atoms section: its `# style` comment (LAMMPS's write_data and ASE
+    write one), else `atom_style`, else the one style with rows of `width` values (with or
     without 3 image flags)."""
     named = comment.split()[0] if comment else None
     if named is not None and atom_style is not None and named != atom_style:
@@ -322,8 +322,8 @@ def _numbers(path: Path, header: dict[str, str], key: str, count: int) -> np.nda
 
 
 def _data_box(path: Path, header: dict[str, str]) -> Box:
-    """The header's box: ``xlo xhi``, ``ylo yhi``, ``zlo zhi`` (and ``xy xz yz``, 0 only), or
-    LAMMPS 2024's general triclinic ``avec``, ``bvec``, ``cvec`` and ``abc origin`` (along the
+    """The header's box: `xlo xhi`, `ylo yhi`, `zlo zhi` (and `xy xz yz`, 0 only), or
+    LAMMPS 2024's general triclinic `avec`, `bvec`, `cvec` and `abc origin` (along the
     axes only), periodic on every axis (a data file does not say its boundaries: LAMMPS's
     default)."""
     periodic = np.ones(3, dtype=bool)
@@ -345,18 +345,18 @@ def _data_box(path: Path, header: dict[str, str]) -> Box:
 
 
 def read_data(path: Path, units: Any = None, atom_style: str | None = None) -> LoadedTrajectory:
-    """Read the LAMMPS data file ``path`` (``read_data``'s format) as a one-frame trajectory.
+    """Read the LAMMPS data file `path` (`read_data`'s format) as a one-frame trajectory.
 
-    Read: the header's atom count and box (``xlo xhi`` ...; a tilted box, ``xy xz yz`` not 0,
-    is refused), the ``Masses`` (per type), the ``Atoms`` in the styles of ``ATOM_STYLES``
-    (named by the section's ``# style`` comment, else by ``atom_style``, else by the number of
+    Read: the header's atom count and box (`xlo xhi` ...; a tilted box, `xy xz yz` not 0,
+    is refused), the `Masses` (per type), the `Atoms` in the styles of `ATOM_STYLES`
+    (named by the section's `# style` comment, else by `atom_style`, else by the number of
     values of a row where only one style has that many; image flags are skipped; style
-    ``sphere`` gives the radius, diameter / 2, and the mass, density × 4π/3 r³, or the density
-    itself where the diameter is 0, as LAMMPS computes it), the ``Velocities``; the species
-    are the names of ``Atom Type Labels``, else those of the ``Masses`` comments where each
-    type has one word (ASE writes ``1 55.845 # Fe``), else the type numbers. A data file does
+    `sphere` gives the radius, diameter / 2, and the mass, density × 4π/3 r³, or the density
+    itself where the diameter is 0, as LAMMPS computes it), the `Velocities`; the species
+    are the names of `Atom Type Labels`, else those of the `Masses` comments where each
+    type has one word (ASE writes `1 55.845 # Fe`), else the type numbers. A data file does
     not say its boundaries: its box is taken as periodic on every axis (LAMMPS's default,
-    ``boundary p p p``). The step is the title's ``timestep = N`` (LAMMPS's write_data), the
+    `boundary p p p`). The step is the title's `timestep = N` (LAMMPS's write_data), the
     time 0."""
     lines = _text(path).splitlines()
     if not lines:
@@ -433,7 +433,7 @@ def read_data(path: Path, units: Any = None, atom_style: str | None = None) -> L
 
 
 def _per_type(path: Path, section: _Section, ntypes: int, name: str) -> np.ndarray:
-    """A section of one value per atom type (rows ``type value``), as (ntypes,)."""
+    """A section of one value per atom type (rows `type value`), as (ntypes,)."""
     table = _words(path, section.rows, section.first, 2, f"{name} section")
     types = _as(path, table[:, 0], np.int64, "type", f"{name} section", section.first)
     values = _as(path, table[:, 1], np.float64, name, f"{name} section", section.first)
@@ -448,7 +448,7 @@ def _per_type(path: Path, section: _Section, ntypes: int, name: str) -> np.ndarr
 
 
 def _type_names(sections: dict[str, _Section], ntypes: int) -> np.ndarray:
-    """Each type's name: ``Atom Type Labels``, else the ``Masses`` comments where every type
+    """Each type's name: `Atom Type Labels`, else the `Masses` comments where every type
     has one word, else the type's number."""
     names = np.array([str(k + 1) for k in range(ntypes)], dtype=object)
     if "Atom Type Labels" in sections:

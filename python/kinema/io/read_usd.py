@@ -1,7 +1,7 @@
-"""Reading USD stages (``.usd``, ``.usda``, ``.usdc``, ``.usdz``) with Pixar's ``usd-core``:
-``read_usd`` gives a ``LoadedTrajectory`` in SI units of kinema's own USD export (its
-``/World/particles``, ``kinema:time``, own colours and springs back) or of another program's
-stage (its first ``UsdGeom.Points`` prim, in the stage's ``metersPerUnit``)."""
+"""Reading USD stages (`.usd`, `.usda`, `.usdc`, `.usdz`) with Pixar's `usd-core`:
+`read_usd` gives a `LoadedTrajectory` in SI units of kinema's own USD export (its
+`/World/particles`, `kinema:time`, own colours and springs back) or of another program's
+stage (its first `UsdGeom.Points` prim, in the stage's `metersPerUnit`)."""
 
 from __future__ import annotations
 
@@ -21,29 +21,29 @@ MAGIC_CRATE, MAGIC_TEXT = b"PXR-USDC", b"#usda"
 
 
 def read_usd(path: Path) -> LoadedTrajectory:
-    """Read the USD stage ``path``.
+    """Read the USD stage `path`.
 
-    kinema's own export (``/World`` has ``kinema:time``; see ``usd_writer.write_usd``):
-    ``/World/particles`` at time code k = frame k, its time ``kinema:time`` (s); ``points``
-    (m), ``velocities`` (m/s), ``widths`` / 2 (radii, m), ``ids``, the primvars ``mass``
-    (kg) and ``species``; the colours (``displayColor``, linear, back to sRGB) of the
-    particles ``kinema:colorIds`` names, the others' being the speed colour map's (NaN:
-    none); the springs (``kinema:springs``, id pairs). float32 values come back as the
+    kinema's own export (`/World` has `kinema:time`; see `usd_writer.write_usd`):
+    `/World/particles` at time code k = frame k, its time `kinema:time` (s); `points`
+    (m), `velocities` (m/s), `widths` / 2 (radii, m), `ids`, the primvars `mass`
+    (kg) and `species`; the colours (`displayColor`, linear, back to sRGB) of the
+    particles `kinema:colorIds` names, the others' being the speed colour map's (NaN:
+    none); the springs (`kinema:springs`, id pairs). float32 values come back as the
     float64 of the float32. The colliders (guide meshes) are not read.
 
-    Another stage: its first ``UsdGeom.Points`` prim (in the order of the stage's tree), a
-    frame at each time sample of its ``points`` (one frame, at time 0, without any), its time
-    the time code / ``timeCodesPerSecond``; positions with the prim's transform, velocities
-    (USD's are per second) with its rotation and scale, radii ``widths`` / 2 (m: × the cube
-    root of the scale's volume factor), all × the stage's ``metersPerUnit`` (USD's fallback
-    0.01, centimetres, with a ``UnitWarning`` where the stage does not say it); ``ids`` and
-    the primvar ``species`` where it has them; the primvar ``mass`` only where the stage says
-    ``kilogramsPerUnit`` (UsdPhysics), else no masses (a ``UnitWarning`` says so); no colours
-    (its ``displayColor`` is not said to be the particles' own). A stage whose up axis is
-    not Z is read as it is, with a ``UnitWarning`` (kinema's gravity points along -z).
+    Another stage: its first `UsdGeom.Points` prim (in the order of the stage's tree), a
+    frame at each time sample of its `points` (one frame, at time 0, without any), its time
+    the time code / `timeCodesPerSecond`; positions with the prim's transform, velocities
+    (USD's are per second) with its rotation and scale, radii `widths` / 2 (m: × the cube
+    root of the scale's volume factor), all × the stage's `metersPerUnit` (USD's fallback
+    0.01, centimetres, with a `UnitWarning` where the stage does not say it); `ids` and
+    the primvar `species` where it has them; the primvar `mass` only where the stage says
+    `kilogramsPerUnit` (UsdPhysics), else no masses (a `UnitWarning` says so); no colours
+    (its `displayColor` is not said to be the particles' own). A stage whose up axis is
+    not Z is read as it is, with a `UnitWarning` (kinema's gravity points along -z).
 
-    Raises ``ImportError`` naming ``pip install usd-core`` without it, and
-    ``TrajectoryFileError`` naming ``path``: not a stage usd-core opens, no Points prim, an
+    Raises `ImportError` naming `pip install usd-core` without it, and
+    `TrajectoryFileError` naming `path`: not a stage usd-core opens, no Points prim, an
     attribute whose length is not the number of points."""
     try:
         from pxr import Tf, Usd, UsdGeom, UsdPhysics
@@ -103,7 +103,7 @@ def read_usd(path: Path) -> LoadedTrajectory:
 
 
 def _open(path: Path) -> Any:
-    """The stage of ``path``. usd-core tells a layer's format by its suffix only, so a file
+    """The stage of `path`. usd-core tells a layer's format by its suffix only, so a file
     named otherwise (known by its first bytes) is read into an anonymous layer of its format."""
     from pxr import Sdf, Usd
 
@@ -123,7 +123,7 @@ def _open(path: Path) -> Any:
 
 
 class _Reading:
-    """The frames of one Points prim, read one time code at a time; ``colours``: the sRGB
+    """The frames of one Points prim, read one time code at a time; `colours`: the sRGB
     colour of each particle that has its own (by id), where it first appears."""
 
     def __init__(self, path: Path, points: Any, own: bool, kilograms: float | None, Usd: Any, UsdGeom: Any) -> None:
@@ -139,9 +139,9 @@ class _Reading:
         self.constant = UsdGeom.Tokens.constant
 
     def _values(self, attr: Any, code: Any, n: int | None, name: str, where: str, width: int = 1, constant: bool = False) -> np.ndarray | None:
-        """The values of ``attr`` (an attribute, or a primvar: flattened through its indices)
-        at ``code`` as a NumPy array of ``n`` rows (any number where ``n`` is None; a
-        ``constant`` value stands for every point's), ``None`` where it has none."""
+        """The values of `attr` (an attribute, or a primvar: flattened through its indices)
+        at `code` as a NumPy array of `n` rows (any number where `n` is None; a
+        `constant` value stands for every point's), `None` where it has none."""
         if not attr or not attr.HasAuthoredValue():
             return None
         v = attr.ComputeFlattened(code) if hasattr(attr, "ComputeFlattened") else attr.Get(code)
@@ -208,7 +208,7 @@ class _Reading:
 
 def linear_to_srgb(c: np.ndarray) -> np.ndarray:
     """Linear values in [0, 1] to sRGB-encoded ones (IEC 61966-2-1), the inverse of
-    ``usd_writer._srgb_to_linear``; clipped to [0, 1]."""
+    `usd_writer._srgb_to_linear`; clipped to [0, 1]."""
     c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
     return np.clip(np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055), 0.0, 1.0)
 

@@ -1,6 +1,6 @@
-"""Reading extended XYZ files (ASE's, OVITO's and kinema's own ``.xyz``) and plain XYZ:
-``read_xyz`` gives a ``LoadedTrajectory`` in SI units. The numbers are parsed exactly (each
-decimal to the nearest float64, as Python's ``float`` does), so a file kinema wrote reads back
+"""Reading extended XYZ files (ASE's, OVITO's and kinema's own `.xyz`) and plain XYZ:
+`read_xyz` gives a `LoadedTrajectory` in SI units. The numbers are parsed exactly (each
+decimal to the nearest float64, as Python's `float` does), so a file kinema wrote reads back
 bit for bit."""
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ _NAMES = ("type", "species", "element")  # the first the file has names the part
 
 
 def comment_keys(line: str) -> dict[str, str] | None:
-    """The key=value pairs of an extended XYZ comment line (a key alone is ``"T"``), or ``None``
+    """The key=value pairs of an extended XYZ comment line (a key alone is `"T"`), or `None`
     for a line that is not pairs (plain XYZ's free comment)."""
     out: dict[str, str] = {}
     pos, line = 0, line.rstrip("\r\n")
@@ -51,7 +51,7 @@ def comment_keys(line: str) -> dict[str, str] | None:
 
 
 def _properties(path: Path, text: str, where: str) -> list[tuple[str, str, int]]:
-    """``Properties=name:type:count:...`` as (name, type letter, count) triples."""
+    """`Properties=name:type:count:...` as (name, type letter, count) triples."""
     parts = text.split(":")
     if len(parts) % 3:
         raise fail(path, f"{where}: Properties={text!r} is not name:type:count triples")
@@ -83,8 +83,8 @@ def _numbers(path: Path, text: str, count: int, key: str, where: str) -> np.ndar
 
 
 def _box(path: Path, keys: dict[str, str], where: str) -> Box | None:
-    """The cell of ``Lattice`` (its vectors along the axes: kinema's box is axis-aligned),
-    placed at ``Origin`` (OVITO's and kinema's key; 0 without it), periodic along ``pbc``
+    """The cell of `Lattice` (its vectors along the axes: kinema's box is axis-aligned),
+    placed at `Origin` (OVITO's and kinema's key; 0 without it), periodic along `pbc`
     (ASE's default with a Lattice: T T T)."""
     if "Lattice" not in keys:
         return None
@@ -97,7 +97,7 @@ def _box(path: Path, keys: dict[str, str], where: str) -> Box | None:
 
 
 def _column(path: Path, table: np.ndarray, start: int, count: int, kind: str, name: str, where: str) -> np.ndarray:
-    """Columns ``start .. start + count`` of the frame's words as their type's values."""
+    """Columns `start .. start + count` of the frame's words as their type's values."""
     words = table[:, start : start + count]
     try:
         if kind == "R":
@@ -123,8 +123,8 @@ def _first(columns: dict[str, np.ndarray], names: tuple[str, ...]) -> np.ndarray
 
 def _ase_masses(path: Path, names: np.ndarray, warned: list[bool]) -> np.ndarray | None:
     """The masses (amu) ASE gives particles of these chemical symbols without a masses column
-    (``Atoms.get_masses()``: its table of standard atomic weights), so that an ASE file's
-    ``momenta`` give velocities as in ASE; said once with a ``UnitWarning``. ``None`` where a
+    (`Atoms.get_masses()`: its table of standard atomic weights), so that an ASE file's
+    `momenta` give velocities as in ASE; said once with a `UnitWarning`. `None` where a
     name is not a chemical symbol, or ASE (the table's keeper) is not installed."""
     try:
         from ase.data import atomic_masses, atomic_numbers
@@ -141,21 +141,21 @@ def _ase_masses(path: Path, names: np.ndarray, warned: list[bool]) -> np.ndarray
 
 
 def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
-    """Read the extended XYZ (or plain XYZ) file ``path``.
+    """Read the extended XYZ (or plain XYZ) file `path`.
 
     Each frame: the number of particles, the comment line of key=value pairs, one row per
-    particle with the columns ``Properties`` names (``species:S:1:pos:R:3`` when it names
-    none). Read: ``pos`` (positions), ``velo`` (velocities; else ``momenta`` / masses), ``mass``
-    or ``masses`` (else, in a file of ASE's units whose names are all chemical symbols, ASE's
-    standard atomic masses, as ``Atoms.get_masses()`` gives, with a ``UnitWarning``), ``radius``,
-    ``id`` (particles followed by id: a number of rows that varies
-    is read as births and deaths), the names of ``type`` (OVITO's and kinema's particle type),
-    else ``species``, ``color`` (r g b in [0, 1], kinema's); the cell of ``Lattice`` (along the axes only) at ``Origin`` with ``pbc``;
-    ``Time`` (or ``time``). Other columns and keys are skipped.
+    particle with the columns `Properties` names (`species:S:1:pos:R:3` when it names
+    none). Read: `pos` (positions), `velo` (velocities; else `momenta` / masses), `mass`
+    or `masses` (else, in a file of ASE's units whose names are all chemical symbols, ASE's
+    standard atomic masses, as `Atoms.get_masses()` gives, with a `UnitWarning`), `radius`,
+    `id` (particles followed by id: a number of rows that varies
+    is read as births and deaths), the names of `type` (OVITO's and kinema's particle type),
+    else `species`, `color` (r g b in [0, 1], kinema's); the cell of `Lattice` (along the axes only) at `Origin` with `pbc`;
+    `Time` (or `time`). Other columns and keys are skipped.
 
-    Units: a file's ``units=`` key (kinema writes ``units=SI``) says them; a file without one
+    Units: a file's `units=` key (kinema writes `units=SI`) says them; a file without one
     is in ASE's units, the convention of the format (Å, amu, Å per ASE time unit, ASE's
-    ``Time``), unless ``units`` (see ``kinema.io.units.scales``) says otherwise. A ``units``
+    `Time`), unless `units` (see `kinema.io.units.scales`) says otherwise. A `units`
     argument that contradicts the file's key is refused. Extended XYZ has no dimension: the
     trajectory is 3D (a 2D run's z is 0)."""
     try:

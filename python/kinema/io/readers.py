@@ -1,7 +1,7 @@
-"""Which reader reads a trajectory file: ``read_trajectory`` tells the format by the file's
+"""Which reader reads a trajectory file: `read_trajectory` tells the format by the file's
 magic bytes (HDF5, GSD), else by its suffix, else by its first lines, and reads it with that
-format's reader into a ``LoadedTrajectory`` in SI units (``Trajectory.load`` makes a
-``Trajectory`` of it). A file of no format kinema reads is refused with the list of those it
+format's reader into a `LoadedTrajectory` in SI units (`Trajectory.load` makes a
+`Trajectory` of it). A file of no format kinema reads is refused with the list of those it
 reads."""
 
 from __future__ import annotations
@@ -50,8 +50,8 @@ def formats_read() -> str:
 
 
 def _ply_series(path: Path) -> Path | None:
-    """The folder of a PLY series ``path`` names: the folder itself (``run_ply/``), or the
-    ``<stem>_ply/`` of the export ``run.ply`` named when it was written."""
+    """The folder of a PLY series `path` names: the folder itself (`run_ply/`), or the
+    `<stem>_ply/` of the export `run.ply` named when it was written."""
     if path.is_dir():
         return path if any(p.suffix.lower() == ".ply" for p in path.iterdir()) else None
     if path.suffix.lower() == ".ply" and not path.exists():
@@ -61,9 +61,9 @@ def _ply_series(path: Path) -> Path | None:
 
 
 def _sniff_text(head: bytes) -> tuple[str | None, bool]:
-    """The text format the first bytes of a file look like (or ``None``), and whether the sign
-    is sure (a LAMMPS dump's ``ITEM:``, kinema's CSV header, a VTK collection) rather than a
-    guess (a count alone on the first line: XYZ; ``N atoms`` in a header: a LAMMPS data file)."""
+    """The text format the first bytes of a file look like (or `None`), and whether the sign
+    is sure (a LAMMPS dump's `ITEM:`, kinema's CSV header, a VTK collection) rather than a
+    guess (a count alone on the first line: XYZ; `N atoms` in a header: a LAMMPS data file)."""
     text = head.decode("utf-8", errors="replace")
     lines = [line.strip() for line in text.splitlines()]
     first = next((line for line in lines if line), "")
@@ -81,11 +81,11 @@ def _sniff_text(head: bytes) -> tuple[str | None, bool]:
 
 
 def detect_format(path: Path) -> str:
-    """The format of the file ``path``: HDF5's, GSD's or USD's magic bytes first, then a sure sign in
-    the first lines (``ITEM:`` a LAMMPS dump, kinema's CSV header, a VTK collection), then the
-    suffix (``READ_FORMATS``), then a guess from the first lines (a count alone an XYZ file,
-    ``N atoms`` in the header a LAMMPS data file).
-    Raises ``TrajectoryFileError`` naming the formats kinema reads when none fits."""
+    """The format of the file `path`: HDF5's, GSD's or USD's magic bytes first, then a sure sign in
+    the first lines (`ITEM:` a LAMMPS dump, kinema's CSV header, a VTK collection), then the
+    suffix (`READ_FORMATS`), then a guess from the first lines (a count alone an XYZ file,
+    `N atoms` in the header a LAMMPS data file).
+    Raises `TrajectoryFileError` naming the formats kinema reads when none fits."""
     if _ply_series(path) is not None:
         return "ply"
     with open(path, "rb") as f:
@@ -121,18 +121,18 @@ def read_trajectory(
     follow_links: bool = False,
     atom_style: str | None = None,
 ) -> LoadedTrajectory:
-    """Read the trajectory file ``path`` in its ``format`` (default: ``detect_format``); returns
-    a ``LoadedTrajectory`` in SI units.
+    """Read the trajectory file `path` in its `format` (default: `detect_format`); returns
+    a `LoadedTrajectory` in SI units.
 
-    ``units``: the units of a file that does not say them (a LAMMPS file without ``ITEM:
-    UNITS``, a HOOMD GSD file, an XYZ file not in ASE's units): a name (``"real"``,
-    ``"metal"``, ``"si"``, ``"cgs"``, ``"electron"``, ``"micro"``, ``"nano"``, ``"ase"``) or
+    `units`: the units of a file that does not say them (a LAMMPS file without `ITEM:
+    UNITS`, a HOOMD GSD file, an XYZ file not in ASE's units): a name (`"real"`,
+    `"metal"`, `"si"`, `"cgs"`, `"electron"`, `"micro"`, `"nano"`, `"ase"`) or
     {"length": m, "time": s, "mass": kg}; refused for H5MD and kinema's own CSV, VTK and PLY,
-    which are in known units, and USD, whose stage says them. ``group`` and ``follow_links``
-    are H5MD's (``load_h5md``), ``atom_style`` a LAMMPS data file's
-    (``read_lammps.read_data``).
+    which are in known units, and USD, whose stage says them. `group` and `follow_links`
+    are H5MD's (`load_h5md`), `atom_style` a LAMMPS data file's
+    (`read_lammps.read_data`).
 
-    Raises ``TrajectoryFileError`` (a ``ValueError``), one line naming the file: missing, a
+    Raises `TrajectoryFileError` (a `ValueError`), one line naming the file: missing, a
     directory or a device, of no format kinema reads (the message names those it reads), or
     what its format's reader refuses."""
     path = Path(path)
@@ -213,17 +213,17 @@ def particles_from(
     format: str | None = None,
     atom_style: str | None = None,
 ) -> dict[str, Any]:
-    """The particles of frame ``frame`` (an index, negative from the end: -1 the last) of the
-    trajectory file ``path`` (any format ``read_trajectory`` reads, with its ``units``,
-    ``format`` and ``atom_style``), in SI units, as a world takes them: ``positions`` (n, 3) m,
-    ``velocities`` (n, 3) m/s or ``None`` where the file has none, ``masses`` kg, ``radii`` m
-    and ``species`` (n,) or ``None`` each where the file has none, ``ids`` (n,): the particles
+    """The particles of frame `frame` (an index, negative from the end: -1 the last) of the
+    trajectory file `path` (any format `read_trajectory` reads, with its `units`,
+    `format` and `atom_style`), in SI units, as a world takes them: `positions` (n, 3) m,
+    `velocities` (n, 3) m/s or `None` where the file has none, `masses` kg, `radii` m
+    and `species` (n,) or `None` each where the file has none, `ids` (n,): the particles
     alive at that frame, in the order of their ids.
 
     The last file read is kept (by its path, size and time of change and the arguments), so a
     scene that counts its particles before it builds them reads the file once. Raises
-    ``ValueError`` for a ``frame`` that is not an integer within the file's frames or a frame
-    that holds no particle, and ``TrajectoryFileError`` as ``read_trajectory``."""
+    `ValueError` for a `frame` that is not an integer within the file's frames or a frame
+    that holds no particle, and `TrajectoryFileError` as `read_trajectory`."""
     if isinstance(frame, bool) or not isinstance(frame, int | np.integer):
         raise TypeError(f"frame = {frame!r} is invalid: give an integer, the index of a frame (-1: the last)")
     path = Path(path)

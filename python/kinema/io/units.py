@@ -1,8 +1,8 @@
 """The units of files that do not carry H5MD's: LAMMPS's unit styles, ASE's units, kinema's
-own SI, or scales given by the caller; and ``UnitWarning``, said when a reader takes a file's
+own SI, or scales given by the caller; and `UnitWarning`, said when a reader takes a file's
 numbers in units the file does not state.
 
-``scales(units, where)`` turns a ``units=`` argument into ``Scales``: the SI value of one of
+`scales(units, where)` turns a `units=` argument into `Scales`: the SI value of one of
 the file's units of length, time, mass and velocity, by which the numbers read are
 multiplied."""
 
@@ -17,14 +17,14 @@ from typing import Any, NamedTuple
 class UnitWarning(UserWarning):
     """A reader took a file's numbers in units the file does not state (a HOOMD GSD file, whose
     format has no units: its numbers taken as SI, its masses as kg). The message names the file
-    and the assumption; give ``units=`` to say what they are."""
+    and the assumption; give `units=` to say what they are."""
 
     __module__ = "kinema.io"
 
 
 class Scales(NamedTuple):
-    """One of a file's units in SI: ``length`` m, ``time`` s, ``mass`` kg, ``velocity`` m/s
-    (``length / time``, rounded once), and ``name``, how messages and docs name the system."""
+    """One of a file's units in SI: `length` m, `time` s, `mass` kg, `velocity` m/s
+    (`length / time`, rounded once), and `name`, how messages and docs name the system."""
 
     length: float
     time: float
@@ -70,10 +70,10 @@ _KEYS = ("length", "time", "mass")
 
 
 def scales(units: Any, where: str) -> Scales:
-    """The ``Scales`` of a ``units=`` argument: a name of ``NAMES`` (``"real"``, ``"metal"``,
-    ``"SI"``, ``"ase"``, ...; ``"lj"`` is refused: its scales are the caller's to give) or a
+    """The `Scales` of a `units=` argument: a name of `NAMES` (`"real"`, `"metal"`,
+    `"SI"`, `"ase"`, ...; `"lj"` is refused: its scales are the caller's to give) or a
     mapping {"length": m, "time": s, "mass": kg} of the file's units in SI (each finite and > 0;
-    the velocity is length / time). Raises ``ValueError`` naming ``where`` (the argument or the
+    the velocity is length / time). Raises `ValueError` naming `where` (the argument or the
     key) and the value."""
     if isinstance(units, str):
         key = units.lower()

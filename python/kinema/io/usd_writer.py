@@ -1,6 +1,6 @@
-"""Pixar's USD (Blender, Houdini, Omniverse, usdview), written with the ``usd-core`` package:
-the particles as one ``UsdGeom.Points`` prim with time samples (and the primvars Blender and
-Houdini read), the springs as ``UsdGeom.BasisCurves``, the colliders as guide meshes."""
+"""Pixar's USD (Blender, Houdini, Omniverse, usdview), written with the `usd-core` package:
+the particles as one `UsdGeom.Points` prim with time samples (and the primvars Blender and
+Houdini read), the springs as `UsdGeom.BasisCurves`, the colliders as guide meshes."""
 
 from __future__ import annotations
 
@@ -20,70 +20,70 @@ SUFFIXES = (".usd", ".usda", ".usdc", ".usdz")
 
 
 def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    """Write ``fr`` to one USD stage at ``path``; returns ``[path]``.
+    """Write `fr` to one USD stage at `path`; returns `[path]`.
 
-    The stage: ``upAxis`` Z (kinema's gravity points along -z), ``metersPerUnit`` 1 (kinema
-    is SI); frame k at time code k (k = 0 … F − 1: ``startTimeCode`` 0, ``endTimeCode``
-    F − 1), ``timeCodesPerSecond`` = ``framesPerSecond`` = the recording's frame rate (1 / the
+    The stage: `upAxis` Z (kinema's gravity points along -z), `metersPerUnit` 1 (kinema
+    is SI); frame k at time code k (k = 0 … F − 1: `startTimeCode` 0, `endTimeCode`
+    F − 1), `timeCodesPerSecond` = `framesPerSecond` = the recording's frame rate (1 / the
     median interval), so that a 3D application asking at whole frames, as Blender and Houdini
     do, gets each frame exactly (time codes t × rate, 1.0000000000000027, 2.0000000000000053,
     …, gave the previous frame in 172 of the fountain's 182 frames). The frames' own times (s,
-    float64) are the time samples of ``/World``'s ``kinema:time``. ``/World`` (the default
+    float64) are the time samples of `/World`'s `kinema:time`. `/World` (the default
     prim, an Xform) holds:
 
-    - ``/World/particles``, a ``UsdGeom.Points``: ``points`` (m) and ``velocities`` (m/s:
+    - `/World/particles`, a `UsdGeom.Points`: `points` (m) and `velocities` (m/s:
       USD's velocities are in units per second, whatever the time codes) as a time sample per
-      frame, float32 as USD's point arrays are; ``widths`` 2r (m), ``ids`` (int64, Houdini's
-      ``id``), the primvar ``id`` (int32: the ids again, as Blender's importer takes them; it
-      drops ``ids``; left out if an id is beyond int32), the primvar ``mass`` (kg) where the
-      trajectory has masses and ``species`` (strings) where it has species names, constant.
-      ``displayColor`` (vertex): each particle's own colour (``traj.colors``) where it has
-      one, the others by speed as kinema's videos colour them (see ``_Colours``), a time
-      sample per frame unless all have their own. With births and deaths (``alive``) each
-      time sample holds the particles alive at that frame only: ``points``, ``velocities``,
-      ``widths``, ``ids`` and every primvar are then all time-sampled, their length varying
-      from frame to frame (0 for a frame with none), and ``ids`` tells which particle each
-      point is. ``kinema:colorIds`` (int64, constant; where some particle has its own
-      colour): the ids of the particles whose ``displayColor`` is their own colour, which
+      frame, float32 as USD's point arrays are; `widths` 2r (m), `ids` (int64, Houdini's
+      `id`), the primvar `id` (int32: the ids again, as Blender's importer takes them; it
+      drops `ids`; left out if an id is beyond int32), the primvar `mass` (kg) where the
+      trajectory has masses and `species` (strings) where it has species names, constant.
+      `displayColor` (vertex): each particle's own colour (`traj.colors`) where it has
+      one, the others by speed as kinema's videos colour them (see `_Colours`), a time
+      sample per frame unless all have their own. With births and deaths (`alive`) each
+      time sample holds the particles alive at that frame only: `points`, `velocities`,
+      `widths`, `ids` and every primvar are then all time-sampled, their length varying
+      from frame to frame (0 for a frame with none), and `ids` tells which particle each
+      point is. `kinema:colorIds` (int64, constant; where some particle has its own
+      colour): the ids of the particles whose `displayColor` is their own colour, which
       kinema's reader gives back (the others' is the speed colour map's).
-    - ``/World/springs`` where the trajectory has springs: a ``UsdGeom.BasisCurves`` of
-      ``linear`` curves of 2 vertices (``curveVertexCounts`` all 2), one per spring whose two
-      ends are alive at the frame, its ``points`` the two particles' positions as a time
-      sample per frame; ``widths`` half the smallest radius of their ends (m), grey as in
+    - `/World/springs` where the trajectory has springs: a `UsdGeom.BasisCurves` of
+      `linear` curves of 2 vertices (`curveVertexCounts` all 2), one per spring whose two
+      ends are alive at the frame, its `points` the two particles' positions as a time
+      sample per frame; `widths` half the smallest radius of their ends (m), grey as in
       kinema's videos, with the default purpose: a cloth's springs render. A spring whose
-      ends are ids the trajectory does not hold is left out. ``kinema:springs`` (int64,
+      ends are ids the trajectory does not hold is left out. `kinema:springs` (int64,
       constant): the ids at the two ends of each spring, a pair after pair (2 S values); a
       frame's curves are the springs among them whose two ends are alive, in that order.
-    - ``/World/colliders``: a ``UsdGeom.Mesh`` per collider, ``box_k`` (its 8 corners and 6
-      quads; open faces closed at the scene's extent), ``plane_k`` (one square quad in the
+    - `/World/colliders`: a `UsdGeom.Mesh` per collider, `box_k` (its 8 corners and 6
+      quads; open faces closed at the scene's extent), `plane_k` (one square quad in the
       plane, twice the scene's size wide, centred on the plane's point nearest the scene's
-      centre), ``sphere_k`` (a UV sphere of 448 quads and 64 triangles, with its normals)
-      and ``mesh_k`` (a triangle mesh's vertices and triangles as they are described, a
+      centre), `sphere_k` (a UV sphere of 448 quads and 64 triangles, with its normals)
+      and `mesh_k` (a triangle mesh's vertices and triangles as they are described, a
       closed one turned to face out), in world coordinates (m), facing out, with the
-      ``guide`` purpose so that renders show the particles only, ``displayOpacity``
-      ``COLLIDER_OPACITY`` (translucent where a viewer shows guides, as kinema's videos draw
-      planes and meshes, so that what is inside shows) and ``kinema:collider`` naming the
-      type. A moving collider (one with a ``motion``) is described as added and carries a
-      time-sampled ``xformOp:transform``, its pose at each frame's time code (from the
-      engine's motion, ``collider_poses``), so that it moves in a 3D application as in
+      `guide` purpose so that renders show the particles only, `displayOpacity`
+      `COLLIDER_OPACITY` (translucent where a viewer shows guides, as kinema's videos draw
+      planes and meshes, so that what is inside shows) and `kinema:collider` naming the
+      type. A moving collider (one with a `motion`) is described as added and carries a
+      time-sampled `xformOp:transform`, its pose at each frame's time code (from the
+      engine's motion, `collider_poses`), so that it moves in a 3D application as in
       kinema's videos.
 
     In Blender (5.0): File → Import → Universal Scene Description, then play: the Points
     prim becomes a point cloud whose positions follow the time samples, with the attributes
-    ``radius``, ``velocity``, ``id``, ``mass`` and ``displayColor`` (not ``species``: it
+    `radius`, `velocity`, `id`, `mass` and `displayColor` (not `species`: it
     takes no strings); the springs a Curves object; the colliders come only with the
     import's Guide option. Blender asks at time code = frame, and takes the frame range but
-    not the rate: set Output → Frame Rate to the stage's ``framesPerSecond`` for real time.
-    In Houdini: a LOP network's Sublayer or a SOP ``usdimport``. ``on_frame(i)`` is called
-    after frame ``i``.
+    not the rate: set Output → Frame Rate to the stage's `framesPerSecond` for real time.
+    In Houdini: a LOP network's Sublayer or a SOP `usdimport`. `on_frame(i)` is called
+    after frame `i`.
 
-    The suffix of ``path`` chooses the file: ``.usd`` or ``.usdc`` (binary), ``.usda``
-    (text), ``.usdz`` (the binary stage in a zip package, ``UsdUtils.CreateNewUsdzPackage``);
-    another is a ``ValueError`` listing them, before anything is written. A failure of the
-    system (a name too long, a full disk) is a ``FileWriteError`` naming ``path``, with
-    ``path`` left as it was: the stage (and its package, checked whole) is built in a private
-    folder of the system's temporary folder (``tempfile.gettempdir()``, ``$TMPDIR``) and
-    copied to a temporary name beside ``path``, renamed over it when complete."""
+    The suffix of `path` chooses the file: `.usd` or `.usdc` (binary), `.usda`
+    (text), `.usdz` (the binary stage in a zip package, `UsdUtils.CreateNewUsdzPackage`);
+    another is a `ValueError` listing them, before anything is written. A failure of the
+    system (a name too long, a full disk) is a `FileWriteError` naming `path`, with
+    `path` left as it was: the stage (and its package, checked whole) is built in a private
+    folder of the system's temporary folder (`tempfile.gettempdir()`, `$TMPDIR`) and
+    copied to a temporary name beside `path`, renamed over it when complete."""
     if path.suffix.lower() not in SUFFIXES:
         raise ValueError(f"path = {str(path)!r}: the suffix {path.suffix or '(none)'!r} is not a USD file's; allowed: {', '.join(SUFFIXES)}")
     try:
@@ -117,8 +117,8 @@ def _write_stage(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
 
 
 def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, parts: tuple, on_frame: Callable[[int], Any], pxr: tuple) -> None:
-    """Writes the stage of ``fr`` in the folder ``staging`` and copies it (or its .usdz
-    package) to ``path``; ``parts``: the particles' colours, species and the springs'
+    """Writes the stage of `fr` in the folder `staging` and copies it (or its .usdz
+    package) to `path`; `parts`: the particles' colours, species and the springs'
     columns."""
     Gf, Sdf, Usd, UsdGeom, Vt = pxr
     where = f"in the temporary folder {staging.parent}, where the stage is built"  # (usd-core's failures are there)
@@ -176,7 +176,7 @@ def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, 
 
 
 class _Particles:
-    """``/World/particles``, a ``UsdGeom.Points``, written one frame at a time (see write_usd).
+    """`/World/particles`, a `UsdGeom.Points`, written one frame at a time (see write_usd).
     Without births and deaths the per-particle values are constant (one default value); with
     them, a time sample per frame of the live particles' values."""
 
@@ -215,7 +215,7 @@ class _Particles:
         self.lo, self.hi = np.full(3, np.inf), np.full(3, -np.inf)
 
     def write(self, i: int) -> None:
-        """The time samples of frame ``i`` (time code ``i``)."""
+        """The time samples of frame `i` (time code `i`)."""
         Gf, Sdf, Usd, UsdGeom, Vt = self.pxr
         code, live = Usd.TimeCode(float(i)), self.fr.live(i)
         x = self.fr.positions[i][live]
@@ -237,7 +237,7 @@ class _Particles:
 
 
 def _vt(array: Any, values: np.ndarray, Vt: Any) -> Any:
-    """``values`` as the Vt array type ``array`` (numeric ones straight from numpy)."""
+    """`values` as the Vt array type `array` (numeric ones straight from numpy)."""
     return array.FromNumpy(np.ascontiguousarray(values)) if array in (Vt.FloatArray, Vt.IntArray, Vt.Int64Array) else array(values)
 
 
@@ -250,10 +250,10 @@ SPEED_COLORMAP = "viridis"
 
 
 class _Colours:
-    """The particles' ``displayColor``, linear RGB as USD's colours are (sRGB decoded: a
+    """The particles' `displayColor`, linear RGB as USD's colours are (sRGB decoded: a
     colour looks in a 3D application as it does in kinema's videos): a particle's own colour
-    (``traj.colors``, sRGB in [0, 1], NaN: none) where it has one; the others by speed, |v|
-    through ``SPEED_COLORMAP`` (as ``kinema.render_frames``' default ``color_by="speed"``)
+    (`traj.colors`, sRGB in [0, 1], NaN: none) where it has one; the others by speed, |v|
+    through `SPEED_COLORMAP` (as `kinema.render_frames`' default `color_by="speed"`)
     from the lowest to the highest speed of those particles over the run (m/s). A particle
     whose speed is unknown (NaN velocities) gets the low end's colour."""
 
@@ -279,7 +279,7 @@ class _Colours:
                 self.vmin, self.vmax = float(counted.min()), float(counted.max())
 
     def at(self, i: int, columns: np.ndarray) -> np.ndarray:
-        """(len(columns), 3) float32 linear RGB of those particles at frame ``i``."""
+        """(len(columns), 3) float32 linear RGB of those particles at frame `i`."""
         out = self.own_linear[columns]
         if self.speed is not None:
             by_speed = ~self.has_own[columns]
@@ -314,7 +314,7 @@ SPRING_COLOR = (96, 96, 100)
 
 
 class _Springs:
-    """``/World/springs``, a ``UsdGeom.BasisCurves`` of linear curves, one of 2 vertices per
+    """`/World/springs`, a `UsdGeom.BasisCurves` of linear curves, one of 2 vertices per
     spring whose two ends are alive at the frame, from one particle's centre to the other's
     (see write_usd)."""
 
@@ -343,7 +343,7 @@ class _Springs:
         self.lo, self.hi = np.full(3, np.inf), np.full(3, -np.inf)
 
     def write(self, i: int) -> None:
-        """The time samples of frame ``i`` (time code ``i``)."""
+        """The time samples of frame `i` (time code `i`)."""
         Gf, Sdf, Usd, UsdGeom, Vt = self.pxr
         code, alive = Usd.TimeCode(float(i)), self.fr.alive[i]
         pairs = self.pairs[alive[self.pairs[:, 0]] & alive[self.pairs[:, 1]]] if self.changes else self.pairs
@@ -363,7 +363,7 @@ class _Springs:
 
 
 def _whole_package(packed: Path, layer: Path) -> bool:
-    """Whether the .usdz ``packed`` is a whole zip archive holding the stage ``layer`` as it
+    """Whether the .usdz `packed` is a whole zip archive holding the stage `layer` as it
     was saved (its size, every member's CRC): usd-core reports a package as made though a
     write of it failed."""
     import zipfile
@@ -451,7 +451,7 @@ COLLIDER_OPACITY = 0.3
 
 
 def triangle_mesh(c: dict) -> tuple[np.ndarray, np.ndarray] | None:
-    """A ``{"type": "mesh"}`` description's vertices (V, 3) (m) and triangles (F, 3), a closed
+    """A `{"type": "mesh"}` description's vertices (V, 3) (m) and triangles (F, 3), a closed
     mesh's (every edge run once each way by two triangles) turned to face out (as the engine
     turns it: when its signed volume, the sum of a · (b × c) / 6, is negative); None when it
     is malformed (vertices not V × 3 finite numbers, faces not F × 3 indices below V)."""
@@ -480,8 +480,8 @@ def box_mesh(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, list[list[int]
 
 
 def plane_mesh(point: np.ndarray, normal: np.ndarray, centre: np.ndarray, size: float) -> tuple[np.ndarray, list[list[int]]]:
-    """The plane through ``point`` with ``normal`` as one square quad 2 ``size`` wide (m),
-    centred on the plane's point nearest ``centre``, counter-clockwise seen from the side the
+    """The plane through `point` with `normal` as one square quad 2 `size` wide (m),
+    centred on the plane's point nearest `centre`, counter-clockwise seen from the side the
     normal points to; its sides along the axes where the normal is one."""
     n = normal / np.linalg.norm(normal)
     foot = centre - np.dot(centre - point, n) * n
@@ -499,7 +499,7 @@ SPHERE_SEGMENTS, SPHERE_RINGS = 32, 16
 
 def sphere_mesh(centre: np.ndarray, radius: float) -> tuple[np.ndarray, list[list[int]]]:
     """The sphere as a UV sphere (m): its points on the sphere, a pole at each end of z and
-    ``SPHERE_RINGS`` − 1 rings of ``SPHERE_SEGMENTS`` between; quads between the rings and
+    `SPHERE_RINGS` − 1 rings of `SPHERE_SEGMENTS` between; quads between the rings and
     triangles at the poles (448 quads and 64 triangles), counter-clockwise seen from outside."""
     m, rings = SPHERE_SEGMENTS, SPHERE_RINGS
     theta = np.pi * np.arange(1, rings) / rings  # from +z

@@ -53,10 +53,10 @@ def _polydata(
     declared: Sequence[str] = ("Verts", "Lines", "Strips", "Polys"),
     **cells: tuple[np.ndarray, np.ndarray],
 ) -> str:
-    """An XML PolyData file (one Piece): ``points`` (n, 3) float64, the DataArrays of
-    ``point_data``, ``cell_data`` and ``field_data``, ``attributes`` of <PointData> (the
-    active ``Scalars`` and ``Vectors``), and the cells ``verts``, ``lines``, ``polys`` as
-    (connectivity, offsets) pairs; the <Piece> states the counts of the kinds ``declared``
+    """An XML PolyData file (one Piece): `points` (n, 3) float64, the DataArrays of
+    `point_data`, `cell_data` and `field_data`, `attributes` of <PointData> (the
+    active `Scalars` and `Vectors`), and the cells `verts`, `lines`, `polys` as
+    (connectivity, offsets) pairs; the <Piece> states the counts of the kinds `declared`
     (VTK takes a count left out as 0).
 
     The <FieldData> comes after the Piece: VTK reads it anywhere in <PolyData>, but OVITO's
@@ -87,12 +87,12 @@ def _polydata(
 
 
 def _vtp(fr: Frames, i: int, extras: Extras) -> str:
-    """Frame ``i``: the particles alive at it as points and vertex cells, point data ``v``
-    (velocity), ``speed``, ``radius``, ``mass``, ``id`` (the names OVITO maps to Velocity,
-    Radius, Mass and Particle Identifier; ParaView takes ``v`` as the active vectors),
-    ``type`` (the index of the particle's species in the field ``type_names``) and ``Color``
+    """Frame `i`: the particles alive at it as points and vertex cells, point data `v`
+    (velocity), `speed`, `radius`, `mass`, `id` (the names OVITO maps to Velocity,
+    Radius, Mass and Particle Identifier; ParaView takes `v` as the active vectors),
+    `type` (the index of the particle's species in the field `type_names`) and `Color`
     (r g b in [0, 1], the name OVITO maps to its Color) where the trajectory has them, the
-    field ``TimeValue``."""
+    field `TimeValue`."""
     live = fr.live(i)
     n = live.size
     x, v = fr.positions[i][live], fr.velocities[i][live]
@@ -115,15 +115,15 @@ def _vtp(fr: Frames, i: int, extras: Extras) -> str:
 
 
 def _springs_vtp(fr: Frames, i: int, springs: np.ndarray, rest: np.ndarray) -> str:
-    """The springs of frame ``i`` whose two ends are alive: one line cell per spring between
-    its own two points (the ends' positions, m), the cell data ``id1`` and ``id2`` the ends'
+    """The springs of frame `i` whose two ends are alive: one line cell per spring between
+    its own two points (the ends' positions, m), the cell data `id1` and `id2` the ends'
     ids. This is the layout of a contact network beside a particles file (Aspherix's), which
     OVITO reads as lines between particle ids; a particle file with line cells it does not
     open at all. The <Piece> states the numbers of points and lines only: OVITO takes a file
     that states as many vertices as points for particles.
 
-    A frame in which no spring has both ends alive holds one line of zero length at ``rest``
-    (the middle of the scene) with ``id1`` = ``id2`` = -1: OVITO 3.17 dies of a floating
+    A frame in which no spring has both ends alive holds one line of zero length at `rest`
+    (the middle of the scene) with `id1` = `id2` = -1: OVITO 3.17 dies of a floating
     point exception on a file of no lines, and keeps the previous frame's lines where the
     frame has no springs file."""
     rows = live_springs(springs, fr, i)
@@ -138,8 +138,8 @@ def _springs_vtp(fr: Frames, i: int, springs: np.ndarray, rest: np.ndarray) -> s
 
 
 def _vtm(particles: str, springs: str) -> str:
-    """A multi-block file of one frame: block 0 ``particles`` (the frame's .vtp), block 1
-    ``springs`` (its springs' .vtp)."""
+    """A multi-block file of one frame: block 0 `particles` (the frame's .vtp), block 1
+    `springs` (its springs' .vtp)."""
     return (
         '<?xml version="1.0"?>\n<VTKFile type="vtkMultiBlockDataSet" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n'
         f'<vtkMultiBlockDataSet>\n<DataSet index="0" name="particles" file={quoteattr(particles)}/>\n'
@@ -156,7 +156,7 @@ def _unit(a: np.ndarray) -> np.ndarray:
 
 
 def _scene_bounds(traj: Any, fr: Frames, colliders: list[dict]) -> tuple[np.ndarray, np.ndarray]:
-    """(lo, hi) of the trajectory's cell (``_cell.trajectory_cell``: all particles of all
+    """(lo, hi) of the trajectory's cell (`_cell.trajectory_cell`: all particles of all
     frames, or the box's walls) and of the colliders' finite parts: the room open box faces
     and planes are drawn in."""
     cell = trajectory_cell(traj, fr)
@@ -178,7 +178,7 @@ def _scene_bounds(traj: Any, fr: Frames, colliders: list[dict]) -> tuple[np.ndar
 
 
 def _uv_sphere() -> tuple[np.ndarray, list[np.ndarray]]:
-    """The unit sphere as ``_SPHERE_BANDS`` bands of ``_SPHERE_SEGMENTS`` faces: its points
+    """The unit sphere as `_SPHERE_BANDS` bands of `_SPHERE_SEGMENTS` faces: its points
     (the poles first and last, the rings between) and its faces (triangles at the poles,
     quads between), anticlockwise seen from outside."""
     m, s = _SPHERE_BANDS, _SPHERE_SEGMENTS
@@ -198,18 +198,18 @@ def _uv_sphere() -> tuple[np.ndarray, list[np.ndarray]]:
 
 def _collider_geometry(traj: Any, fr: Frames) -> tuple[np.ndarray, list[tuple[int, np.ndarray]], list[tuple[int, np.ndarray]]] | None:
     """The trajectory's colliders as points (m) and line and polygon cells, each cell (or
-    (C, k) block of cells, ``_cells``) with the index of its collider; ``None`` without
+    (C, k) block of cells, `_cells`) with the index of its collider; `None` without
     colliders.
 
     A box is its 12 edges (a 2D trajectory's box: the 4 edges of its rectangle at z = 0), an
-    open face at the bound of ``_scene_bounds``; a plane is a square centred on the point
+    open face at the bound of `_scene_bounds`; a plane is a square centred on the point
     of the plane nearest the middle of the scene, as wide as the scene's diagonal, so that it
     covers the scene (2D: a line segment at z = 0); a sphere obstacle is a UV sphere of
-    ``_SPHERE_BANDS`` × ``_SPHERE_SEGMENTS`` faces, its points at exactly its radius (2D: a
-    disk of ``_DISK_SEGMENTS`` sides at z = 0); a mesh is its own vertices and triangles, as
+    `_SPHERE_BANDS` × `_SPHERE_SEGMENTS` faces, its points at exactly its radius (2D: a
+    disk of `_DISK_SEGMENTS` sides at z = 0); a mesh is its own vertices and triangles, as
     described (its faces' vertex order, so their normals, kept).
 
-    The geometry is each collider's placement as added: a moving one's ``motion`` is not
+    The geometry is each collider's placement as added: a moving one's `motion` is not
     applied (one file for the whole series)."""
     if not getattr(traj, "colliders", None):
         return None
@@ -274,8 +274,8 @@ def _collider_geometry(traj: Any, fr: Frames) -> tuple[np.ndarray, list[tuple[in
 
 
 def _colliders_vtp(traj: Any, fr: Frames) -> str | None:
-    """The colliders file: the geometry of ``_collider_geometry`` as line and polygon cells,
-    with the cell data ``collider`` (the index in ``traj.colliders``); ``None`` without
+    """The colliders file: the geometry of `_collider_geometry` as line and polygon cells,
+    with the cell data `collider` (the index in `traj.colliders`); `None` without
     colliders."""
     geometry = _collider_geometry(traj, fr)
     if geometry is None:
@@ -291,32 +291,32 @@ def _colliders_vtp(traj: Any, fr: Frames) -> str | None:
 
 
 def write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    """Write ``fr`` as a VTK series for ParaView and OVITO; returns the paths written: the
+    """Write `fr` as a VTK series for ParaView and OVITO; returns the paths written: the
     .pvd, the colliders file where the trajectory has colliders, then each frame's files.
 
-    ``<stem>.pvd`` (open this one: a collection whose timesteps are the frame times) and the
-    folder ``<stem>_vtk/`` with one XML PolyData file per frame, ``<stem>_00000.vtp``: points
-    (m) as vertex cells, point data ``v`` (velocity, m/s), ``speed`` (m/s), ``radius`` (m),
-    ``mass`` (kg), ``id``; float64 and int64, base64; ``type`` (the index of the species in
-    the field ``type_names``) and ``Color`` (r g b in [0, 1]) where the trajectory has
-    species and colours (``_vtp``). OVITO maps ``v``, ``radius``, ``mass``, ``id`` and
-    ``Color`` to Velocity, Radius, Mass, Particle Identifier and Color, ``type`` to Material
-    Type. With ``springs``, each frame is a multi-block ``<stem>_00000.vtm`` (the one the
-    .pvd names) of the particles .vtp and ``<stem>_springs_00000.vtp``, a line per spring
-    whose ends are alive (``_springs_vtp``), which OVITO reads as Lines. When the trajectory
-    has ``colliders``, ``<stem>_colliders.vtp`` beside the .pvd holds them: a box as its 12
+    `<stem>.pvd` (open this one: a collection whose timesteps are the frame times) and the
+    folder `<stem>_vtk/` with one XML PolyData file per frame, `<stem>_00000.vtp`: points
+    (m) as vertex cells, point data `v` (velocity, m/s), `speed` (m/s), `radius` (m),
+    `mass` (kg), `id`; float64 and int64, base64; `type` (the index of the species in
+    the field `type_names`) and `Color` (r g b in [0, 1]) where the trajectory has
+    species and colours (`_vtp`). OVITO maps `v`, `radius`, `mass`, `id` and
+    `Color` to Velocity, Radius, Mass, Particle Identifier and Color, `type` to Material
+    Type. With `springs`, each frame is a multi-block `<stem>_00000.vtm` (the one the
+    .pvd names) of the particles .vtp and `<stem>_springs_00000.vtp`, a line per spring
+    whose ends are alive (`_springs_vtp`), which OVITO reads as Lines. When the trajectory
+    has `colliders`, `<stem>_colliders.vtp` beside the .pvd holds them: a box as its 12
     edges (lines), a plane as a square (a polygon) that covers the scene, a sphere obstacle
     as a sphere of polygons (2D: a rectangle, a segment and a disk at z = 0), a mesh as its
     triangles (polygons), the cell data
-    ``collider`` the index in ``colliders`` (``_collider_geometry``). OVITO reads the
-    polygons of that file, not the lines. The stem is the name of ``path`` less its suffix
+    `collider` the index in `colliders` (`_collider_geometry`). OVITO reads the
+    polygons of that file, not the lines. The stem is the name of `path` less its suffix
     where that is .pvd or .vtp, the whole name otherwise.
 
     The folder, the colliders file and the .pvd are all written under temporary names before
     any is put in place, the .pvd last, so a failed export leaves nothing new and an earlier
     export (its .pvd, its series and its colliders) as it was; the new folder takes the
-    place of an existing ``<stem>_vtk/`` only if that holds nothing but an earlier series.
-    ``on_frame(i)`` is called after frame ``i`` is written."""
+    place of an existing `<stem>_vtk/` only if that holds nothing but an earlier series.
+    `on_frame(i)` is called after frame `i` is written."""
     folder, stem, _ = series_names(path, "vtk", ".vtp", SUFFIXES)
     # the frames, and with springs their springs files and the multi-block files of both
     pattern = rf"{re.escape(stem)}(_springs)?_\d{{{SERIES_DIGITS},}}\.(vtp|vtm)"

@@ -13,9 +13,9 @@ from ._files import Frames, atomic_file
 
 
 def _xyz(fr: Frames, i: int, header: str, first: list[str], after_pos: list[str], colors: np.ndarray | None) -> str:
-    """Frame ``i`` of an extended XYZ file: the count, the comment line (``header`` and the
-    frame's ``Time``), one row per particle alive at it: the columns of ``Properties``, its
-    ``first`` word (its type or species name), pos, its ``after_pos`` word (its ``species``
+    """Frame `i` of an extended XYZ file: the count, the comment line (`header` and the
+    frame's `Time`), one row per particle alive at it: the columns of `Properties`, its
+    `first` word (its type or species name), pos, its `after_pos` word (its `species`
     symbol; empty without), velo, momenta, radius, mass, masses, color, id (those the
     trajectory has; 17 significant digits, exact float64)."""
     live = fr.live(i)
@@ -39,44 +39,44 @@ def _xyz(fr: Frames, i: int, header: str, first: list[str], after_pos: list[str]
 
 
 def write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
-    """Write ``fr`` to one extended XYZ file at ``path`` for OVITO, ASE and MDAnalysis, the
-    frames one after the other; returns ``[path]``.
+    """Write `fr` to one extended XYZ file at `path` for OVITO, ASE and MDAnalysis, the
+    frames one after the other; returns `[path]`.
 
-    Each frame (``_xyz``): N, the comment line ``Lattice="ax 0 0 0 by 0 0 0 cz" Origin="ox oy
+    Each frame (`_xyz`): N, the comment line `Lattice="ax 0 0 0 by 0 0 0 cz" Origin="ox oy
     oz" pbc="T T F" units=SI Properties=species:S:1:pos:R:3:velo:R:3:
-    momenta:R:3:radius:R:1:mass:R:1:masses:R:1:color:R:3:id:I:1 Time=t``, then one row per
-    particle; ``color`` (r g b in [0, 1], OVITO's Color) where the trajectory has colours.
+    momenta:R:3:radius:R:1:mass:R:1:masses:R:1:color:R:3:id:I:1 Time=t`, then one row per
+    particle; `color` (r g b in [0, 1], OVITO's Color) where the trajectory has colours.
 
-    Units are SI, as ``units=SI`` says: positions, ``Lattice`` and ``Origin`` in m, ``velo``
-    in m/s, ``momenta`` (mass × velocity) in kg·m/s, ``mass`` and ``masses`` in kg,
-    ``radius`` in m, ``Time`` in s. OVITO maps ``velo`` to Velocity, ``mass`` to Mass,
-    ``radius`` to Radius, ``id`` to Particle Identifier and ``species`` to Particle Type, and
-    places the cell at ``Origin``. ASE reads ``masses`` as ``atoms.get_masses()`` and
-    ``momenta`` as ``atoms.get_momenta()``, so ``atoms.get_velocities()`` (momenta / masses)
+    Units are SI, as `units=SI` says: positions, `Lattice` and `Origin` in m, `velo`
+    in m/s, `momenta` (mass × velocity) in kg·m/s, `mass` and `masses` in kg,
+    `radius` in m, `Time` in s. OVITO maps `velo` to Velocity, `mass` to Mass,
+    `radius` to Radius, `id` to Particle Identifier and `species` to Particle Type, and
+    places the cell at `Origin`. ASE reads `masses` as `atoms.get_masses()` and
+    `momenta` as `atoms.get_momenta()`, so `atoms.get_velocities()` (momenta / masses)
     gives the velocities in m/s; ASE's own units are Å, amu and Å per ASE time unit, so
     these numbers are SI only, to be converted before ASE calculators see them. ASE keeps
-    ``Origin`` in ``atoms.info["Origin"]`` (its cell starts at 0). ``momenta``, ``mass`` and
-    ``masses`` are written only when the trajectory has masses, ``radius`` when it has radii.
+    `Origin` in `atoms.info["Origin"]` (its cell starts at 0). `momenta`, `mass` and
+    `masses` are written only when the trajectory has masses, `radius` when it has radii.
 
-    The cell (``_cell.trajectory_cell``, shared with GSD and LAMMPS) is an orthogonal box,
+    The cell (`_cell.trajectory_cell`, shared with GSD and LAMMPS) is an orthogonal box,
     the same in every frame, that holds every particle of every frame: along a periodic axis
-    the periodic cell (the world's ``Box``); along an axis where that box has two walls and
+    the periodic cell (the world's `Box`); along an axis where that box has two walls and
     every particle stays between them, the walls; otherwise the particles' extent over all
     frames widened on each side by the largest radius or 5 % of the largest extent,
     whichever is more; a 2D trajectory's z spans that margin. No edge is zero, so OVITO's
-    cell analysis and ``atoms.get_volume()`` work.
+    cell analysis and `atoms.get_volume()` work.
 
-    Particle types: a trajectory with ``species`` names (``World.add_particles(species=)``, a
-    scene's ``species``) gets a first column ``type:S:1`` of the names, which OVITO takes as
+    Particle types: a trajectory with `species` names (`World.add_particles(species=)`, a
+    scene's `species`) gets a first column `type:S:1` of the names, which OVITO takes as
     its Particle Type and MDAnalysis as the atom names (it reads a row as a name and x y z),
-    then the positions, then a ``species`` column of the name where it is a chemical symbol
-    and ``X`` (ASE's dummy element) where not, as ASE refuses other words; ASE keeps the
-    names in ``atoms.arrays["type"]``. Without species names the first column is
-    ``species``, every one ``X``.
+    then the positions, then a `species` column of the name where it is a chemical symbol
+    and `X` (ASE's dummy element) where not, as ASE refuses other words; ASE keeps the
+    names in `atoms.arrays["type"]`. Without species names the first column is
+    `species`, every one `X`.
 
     Every float is written with 17 significant digits (exact for float64). The file is
-    written under a temporary name and renamed at the end. ``on_frame(i)`` is called after
-    frame ``i`` is written."""
+    written under a temporary name and renamed at the end. `on_frame(i)` is called after
+    frame `i` is written."""
     # A trajectory's species names go to a `type` column, first: OVITO takes the first of
     # `type` and `species` as its Particle Type, and MDAnalysis's XYZ reader takes a row as a
     # name and x y z, so the positions come second. ASE reads `species` as chemical symbols

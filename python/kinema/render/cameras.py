@@ -1,4 +1,4 @@
-"""Cameras: ``Camera2D`` (orthographic, xy) and ``Camera3D`` (pinhole), and the default camera
+"""Cameras: `Camera2D` (orthographic, xy) and `Camera3D` (pinhole), and the default camera
 that frames where the particles spend the run and where they end (with the walls of the box
 they are in) into the frame, clear of the legend."""
 
@@ -23,7 +23,7 @@ class Camera2D:
 
     @classmethod
     def framing(cls, lo, hi, margin: float = 0.0) -> Camera2D:
-        """The box [lo, hi] (xy, m) widened by ``margin`` (m) on every side."""
+        """The box [lo, hi] (xy, m) widened by `margin` (m) on every side."""
         return cls(lo[0] - margin, lo[1] - margin, hi[0] + margin, hi[1] + margin)
 
     def _kwargs(self) -> dict:
@@ -32,8 +32,8 @@ class Camera2D:
 
 @dataclass(frozen=True)
 class Camera3D:
-    """Pinhole camera at ``eye`` (m) looking at ``target`` (m), ``up`` the image's up direction
-    (z is up by default), ``fov_deg`` the vertical field of view in degrees."""
+    """Pinhole camera at `eye` (m) looking at `target` (m), `up` the image's up direction
+    (z is up by default), `fov_deg` the vertical field of view in degrees."""
 
     eye: tuple[float, float, float]
     target: tuple[float, float, float]
@@ -42,10 +42,10 @@ class Camera3D:
 
     @classmethod
     def framing(cls, lo, hi, direction=(1.0, -1.6, 0.9), fov_deg: float = 40.0, width: int = 1280, height: int = 720, margin: float | None = None) -> Camera3D:
-        """A camera looking at the box [lo, hi] (m) from ``direction`` (box → eye), as near
+        """A camera looking at the box [lo, hi] (m) from `direction` (box → eye), as near
         as it can be with all 8 corners in view: they fill the image's width or height (both
-        fields of view are fitted) up to ``margin`` (a fraction of each side; default
-        ``FRAME_MARGIN``, 3 %), centred."""
+        fields of view are fitted) up to `margin` (a fraction of each side; default
+        `FRAME_MARGIN`, 3 %), centred."""
         m = _core.FRAME_MARGIN if margin is None else float(margin)
         if not 0.0 <= m < 0.5:
             raise ValueError(f"margin = {margin!r} is invalid: a fraction of the image in [0, 0.5)")
@@ -98,11 +98,11 @@ _SAMPLE_FRAMES, _SAMPLE_PARTICLES = 240, 20000
 
 def _frame_corners(x, r, colliders, lo, hi, marks=None, dim: int = 3) -> np.ndarray:
     """(P, 3): the points the default camera frames: the 8 corners of the particles' region
-    (``_particle_region``: where they spend the run and where they end), widened to the walls
-    of the colliders that bound it (``colliders``: descriptions, ``_describe_colliders``; a
+    (`_particle_region`: where they spend the run and where they end), widened to the walls
+    of the colliders that bound it (`colliders`: descriptions, `_describe_colliders`; a
     box's finite walls, a sphere's cube, a mesh's box; planes and infinite bounds none), the
-    vertices of a mesh around them (``MESH_REACH``: the bowl they rest in, whole), and the
-    ``marks``
+    vertices of a mesh around them (`MESH_REACH`: the bowl they rest in, whole), and the
+    `marks`
     (attractors). In 2D a box of finite walls that holds the particles is framed whole (the
     table). No particle alive in any frame: the colliders' finite parts, else [lo, hi] (the
     scene's extent)."""
@@ -153,9 +153,9 @@ def _collider_box(d):
 
 def _particle_region(x, r):
     """(lo, hi), the box of the particles (radii included) that the default camera frames, or
-    None when none is alive: where they spend the run (all frames, up to ``_SAMPLE_FRAMES``
-    evenly spaced, each weighing the same; ``OUTLIER_SHARE`` and the sparse tails left out,
-    ``_dense_span``) and where they end (the last frame, ``OUTLIER_SHARE`` left out)."""
+    None when none is alive: where they spend the run (all frames, up to `_SAMPLE_FRAMES`
+    evenly spaced, each weighing the same; `OUTLIER_SHARE` and the sparse tails left out,
+    `_dense_span`) and where they end (the last frame, `OUTLIER_SHARE` left out)."""
     live = np.all(np.isfinite(x), axis=2)
     rows = np.flatnonzero(live.any(axis=1))
     if rows.size == 0:
@@ -178,9 +178,9 @@ def _particle_region(x, r):
 
 
 def _dense_span(v, r, w):
-    """(lo, hi) along one axis of the weighted positions ``v`` (radii ``r``): less
-    ``OUTLIER_SHARE`` of the weight at each side, then less the sparse tails (bins under
-    ``SPARSE_DENSITY`` of the typical density, at most ``TRANSIENT_SHARE`` of the weight)."""
+    """(lo, hi) along one axis of the weighted positions `v` (radii `r`): less
+    `OUTLIER_SHARE` of the weight at each side, then less the sparse tails (bins under
+    `SPARSE_DENSITY` of the typical density, at most `TRANSIENT_SHARE` of the weight)."""
     total = w.sum()
     lo = _weighted_end(v - r, w, OUTLIER_SHARE * total, low=True)
     hi = _weighted_end(v + r, w, OUTLIER_SHARE * total, low=False)
@@ -209,7 +209,7 @@ def _dense_span(v, r, w):
 
 
 def _weighted_end(values, weights, beyond, low):
-    """The least value (``low``; else the greatest) with at most the weight ``beyond`` of the
+    """The least value (`low`; else the greatest) with at most the weight `beyond` of the
     others below it (above it)."""
     order = np.argsort(values if low else -values, kind="stable")
     before = np.cumsum(weights[order]) - weights[order]
@@ -218,7 +218,7 @@ def _weighted_end(values, weights, beyond, low):
 
 def _robust_box(x, r, live):
     """(lo, hi) (3,) of the live particles of one frame, radii included, less
-    ``OUTLIER_SHARE`` of them on each side of each axis."""
+    `OUTLIER_SHARE` of them on each side of each axis."""
     idx = np.flatnonzero(live)
     if idx.size > _SAMPLE_PARTICLES:
         idx = idx[np.round(np.linspace(0, idx.size - 1, _SAMPLE_PARTICLES)).astype(int)]
@@ -229,10 +229,10 @@ def _robust_box(x, r, live):
 
 
 def _auto_camera(lo, hi, dim, width, height, avoid=None, fov_deg: float = 40.0, points=None):
-    """The camera that fits the scene into the frame to ``FRAME_MARGIN`` of its sides (2D: the
-    xy rectangle of the box [lo, hi], orthographic; 3D: ``points``, by default the 8 corners
-    of [lo, hi], seen from ``_VIEW_FROM``, both fields of view fitted). When the scene would
-    overlap ``avoid`` (x0, y0, x1, y1 pixels: the legend), it is fitted either between it and
+    """The camera that fits the scene into the frame to `FRAME_MARGIN` of its sides (2D: the
+    xy rectangle of the box [lo, hi], orthographic; 3D: `points`, by default the 8 corners
+    of [lo, hi], seen from `_VIEW_FROM`, both fields of view fitted). When the scene would
+    overlap `avoid` (x0, y0, x1, y1 pixels: the legend), it is fitted either between it and
     its mirror image on the left or below it, whichever leaves it larger."""
     m = _core.FRAME_MARGIN
     w, h = float(width), float(height)

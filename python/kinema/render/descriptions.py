@@ -1,6 +1,6 @@
-"""Colliders as plain descriptions (the dicts ``Trajectory.colliders`` holds), the form the
-engine's ``_core.Scenery`` takes them in, and where a moving one is at given times
-(``collider_poses``, from its description's ``motion``)."""
+"""Colliders as plain descriptions (the dicts `Trajectory.colliders` holds), the form the
+engine's `_core.Scenery` takes them in, and where a moving one is at given times
+(`collider_poses`, from its description's `motion`)."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ _KIND = {"plane": ("point", "normal"), "box": ("lo", "hi"), "sphere": ("center",
 
 
 def _describe_colliders(colliders) -> list[dict]:
-    """Plain descriptions of colliders (``kinema.Plane``, ``Box``, ``SphereObstacle``,
-    ``Mesh`` or such descriptions already): {"type": "plane", "point": [3], "normal": [3]},
+    """Plain descriptions of colliders (`kinema.Plane`, `Box`, `SphereObstacle`,
+    `Mesh` or such descriptions already): {"type": "plane", "point": [3], "normal": [3]},
     {"type": "box", "lo": [2 or 3], "hi": [2 or 3]} (bounds may be ±inf), {"type": "sphere",
     "center": [3], "radius": r}, {"type": "mesh", "vertices": [[x, y, z], ...] (m, after the
     mesh's transform), "faces": [[i, j, k], ...] (ints), "inside": bool}, with "restitution"
@@ -22,7 +22,7 @@ def _describe_colliders(colliders) -> list[dict]:
     [3] m/s, "angular_velocity": [3] rad/s, "pivot": [3] m} (steady) or {"times": [K] s,
     "translations": [K][3] m, "rotations": [K][4] unit quaternions (w, x, y, z), "pivot": [3]
     m} (keyframes) — the geometry is the placement as added, which the motion moves
-    (:func:`collider_poses`)."""
+    (`collider_poses`)."""
     from ..colliders import Box, Mesh, Plane, SphereObstacle
 
     def floats(name, value, sizes=(3,)):
@@ -81,7 +81,7 @@ KEYFRAME_KEYS = ("times", "translations", "rotations", "pivot")
 
 
 def _motion(name: str, motion) -> dict:
-    """A motion's description: from a ``kinema.Motion`` or ``kinema.Keyframes`` (its rotations
+    """A motion's description: from a `kinema.Motion` or `kinema.Keyframes` (its rotations
     as unit quaternions), or a description already, checked (its keys, shapes, and the
     engine's rules, by placing it once)."""
     from ..colliders import MOTIONS
@@ -119,10 +119,10 @@ def _motion(name: str, motion) -> dict:
 
 
 def collider_poses(description: dict, times) -> np.ndarray:
-    """Where the collider of ``description`` (one of ``Trajectory.colliders``) is at each of
-    ``times`` (s): (T, 3, 4) float64 matrices [R | o], a point x₀ of its geometry as described
+    """Where the collider of `description` (one of `Trajectory.colliders`) is at each of
+    `times` (s): (T, 3, 4) float64 matrices [R | o], a point x₀ of its geometry as described
     (the placement as added) being at R x₀ + o; the identity for a still collider (no
-    "motion"). The engine's own motion (``_core.collider_poses``), the one implementation the
+    "motion"). The engine's own motion (`_core.collider_poses`), the one implementation the
     pictures, the viewer and the exports share."""
     t = np.asarray(times, dtype=np.float64).reshape(-1)
     motion = description.get("motion") if isinstance(description, dict) else None
@@ -133,7 +133,7 @@ def collider_poses(description: dict, times) -> np.ndarray:
 
 def _mesh_arrays(name: str, vertices, faces) -> tuple[list, list]:
     """A mesh description's vertices as (V, 3) nested lists of floats (m) and faces as (F, 3)
-    nested lists of ints; a ``ValueError`` naming ``name`` for another shape or for faces that
+    nested lists of ints; a `ValueError` naming `name` for another shape or for faces that
     are not integers."""
     v = np.asarray(vertices, dtype=np.float64)
     if v.ndim != 2 or v.shape[1] != 3:

@@ -1,4 +1,4 @@
-"""``render_frames``: a trajectory's frames as images, drawn by the engine one call per frame;
+"""`render_frames`: a trajectory's frames as images, drawn by the engine one call per frame;
 the colours (by speed, id, a field or fixed), the live particles, the springs, the scene laid
 out once for every frame."""
 
@@ -27,9 +27,9 @@ TRAIL_PARTICLES = 10
 
 
 def low_end(colormap: str) -> float:
-    """Where on ``colormap`` (0 … 1) ``render_frames`` puts the lowest value: the first of
-    t = k/64 whose colour has a luma of at least ``LOW_END_LUMA`` (viridis 0.25, magma
-    0.41, gray 0.31). The values from ``vmin`` to ``vmax`` use the map from there to 1, and
+    """Where on `colormap` (0 … 1) `render_frames` puts the lowest value: the first of
+    t = k/64 whose colour has a luma of at least `LOW_END_LUMA` (viridis 0.25, magma
+    0.41, gray 0.31). The values from `vmin` to `vmax` use the map from there to 1, and
     the colour bar shows that part."""
     t = np.arange(65) / 64.0
     rgb = _core.colormap(t, colormap, 0.0, 1.0).astype(np.float64)
@@ -66,55 +66,55 @@ def render_frames(
 ) -> Iterator[np.ndarray]:
     """Yield one (height, width, 3) uint8 RGB frame per time.
 
-    positions: (F, N, 3) or, for ``dim=2``, (F, N, 2) positions in m (2D uses x and y).
+    positions: (F, N, 3) or, for `dim=2`, (F, N, 2) positions in m (2D uses x and y).
     radius: one radius for all particles or one per particle (N,), m.
-    t: (F,) times, s, stamped on each frame with ``time_format`` (None: no stamp; the stamp
+    t: (F,) times, s, stamped on each frame with `time_format` (None: no stamp; the stamp
       may use only digits, '.', '-', '+', ':', '=', ' ', 't', 's', 'e'). The stamp goes into
       the corner (top left, bottom left, top right, bottom right, the first of the fewest)
       where the fewest particle pixels lie under it over the video (up to 24 frames evenly
       spaced, drawn without scenery to count them), clear of the colour bar; one corner for
       the whole video.
-    color_by: "speed" (|v|, from ``velocities`` (F, N, dim) or else from finite differences of
+    color_by: "speed" (|v|, from `velocities` (F, N, dim) or else from finite differences of
       the positions in t), "id" (categorical colours by particle index), a field of floats of
-      shape (N,) or (F, N) mapped through ``colormap`` between ``vmin`` and ``vmax`` (default:
+      shape (N,) or (F, N) mapped through `colormap` between `vmin` and `vmax` (default:
       the field's minimum and maximum over all frames, so colours mean the same in every
       frame), or fixed uint8 colours of shape (N, 3) or (F, N, 3). Values use the colormap
-      from ``low_end(colormap)`` up (viridis from 0.25: ``vmin`` is steel blue, not near
+      from `low_end(colormap)` up (viridis from 0.25: `vmin` is steel blue, not near
       black), so the slowest particles stay visible and their shading shows.
     camera: a Camera2D / Camera3D; default: one for the whole video, framing where the
-      live particles (with their radii) spend the run and where they end (``cameras.
-      _particle_region``: outliers and sparse transient tails such as the column a pile
+      live particles (with their radii) spend the run and where they end (`cameras.
+      _particle_region`: outliers and sparse transient tails such as the column a pile
       fell from left out), widened to the walls of a box that bounds them (2D: a box with
       finite walls whole) and the attractors; it fills the frame's width or height,
       whichever binds, to 3 % of its sides, centred (a 3D box seen from the front right and
       above; both fields of view are fitted), and kept clear of the legend.
     background: RGB8 colour.
-    colliders: colliders to draw, ``kinema.Plane`` / ``Box`` / ``SphereObstacle`` objects or
-      their descriptions (``Trajectory.colliders``: dicts {"type": "plane", "point",
+    colliders: colliders to draw, `kinema.Plane` / `Box` / `SphereObstacle` objects or
+      their descriptions (`Trajectory.colliders`: dicts {"type": "plane", "point",
       "normal"}, {"type": "box", "lo", "hi"}, {"type": "sphere", "center", "radius"}); None
       draws none. Infinite box bounds (an open top) are drawn up to the scene's extent. A
-      collider with a ``motion`` is drawn where it is at each frame's time (``collider_poses``,
+      collider with a `motion` is drawn where it is at each frame's time (`collider_poses`,
       the engine's motion), and the scene's extent holds it at every frame.
     alive: (F, N) bools (or (N,), the same in every frame): the particles that exist in each
-      frame (``Trajectory.alive``: births and deaths). Those that do not, and any with a
+      frame (`Trajectory.alive`: births and deaths). Those that do not, and any with a
       non-finite position, are not drawn, count for neither the camera nor the colour range,
       and their springs are not drawn. A frame with none alive shows the scenery alone.
-    springs: (S, 2) particle indices (columns of ``positions``) joined by springs, strings or
-      bonds, each drawn as a grey line (``_core.LINE_COLOR``) ``spring_width`` pixels wide
+    springs: (S, 2) particle indices (columns of `positions`) joined by springs, strings or
+      bonds, each drawn as a grey line (`_core.LINE_COLOR`) `spring_width` pixels wide
       (default: 1 per 480 rows, at least 1) from one particle's rim to the other's, in frames
       where both are alive.
     legend: when the particles are coloured by a quantity (speed or a field of values; not
-      ids or fixed colours), a colour bar from ``vmin`` to ``vmax`` with the quantity's name
+      ids or fixed colours), a colour bar from `vmin` to `vmax` with the quantity's name
       and units ("speed (m/s)"; a string gives them, e.g. "temperature (K)"; a field is
       "value" otherwise) in the top right corner, beside the time stamp, its text as tall
-      (``label_scale``). False: none. It is left out of frames under 160 × 120 pixels or too
+      (`label_scale`). False: none. It is left out of frames under 160 × 120 pixels or too
       narrow for it, which have no room for it.
     trail: seconds of each particle's recent path drawn behind it (its positions in the
-      frames of the last ``trail`` seconds, as a line in its colour fading with age,
-      ``trail_width`` pixels wide, default 1 per 300 rows, at least 1.5). Default: a third of
-      the recording's span for at most ``TRAIL_PARTICLES`` (10) particles (a Kepler orbit of
+      frames of the last `trail` seconds, as a line in its colour fading with age,
+      `trail_width` pixels wide, default 1 per 300 rows, at least 1.5). Default: a third of
+      the recording's span for at most `TRAIL_PARTICLES` (10) particles (a Kepler orbit of
       three periods shows one), none for more; 0: none.
-    attractors: (A, 3) or (A, 2) points, m (the ``point`` of ``kinema.Attractor`` forces),
+    attractors: (A, 3) or (A, 2) points, m (the `point` of `kinema.Attractor` forces),
       each drawn as an amber disc with a dark rim (radius 1 per 80 rows, at least 4 pixels);
       the default camera frames them with the particles.
     """
@@ -223,8 +223,8 @@ def render_frames(
 
 
 def _moving_poses(described: list[dict], times: np.ndarray) -> np.ndarray | None:
-    """(F, C, 3, 4): each collider's pose [R | o] at each frame's time (``collider_poses``:
-    the identity for a still one), or None when none has a ``motion`` (a still scene is drawn
+    """(F, C, 3, 4): each collider's pose [R | o] at each frame's time (`collider_poses`:
+    the identity for a still one), or None when none has a `motion` (a still scene is drawn
     from one scenery for every frame)."""
     if not any(d.get("motion") is not None for d in described):
         return None
@@ -250,7 +250,7 @@ def _attractor_points(attractors, dim: int) -> np.ndarray:
 
 
 def _trail_seconds(trail, n: int, times: np.ndarray) -> float:
-    """The trail's length, s: ``trail``, or by default a third of the span for few particles."""
+    """The trail's length, s: `trail`, or by default a third of the span for few particles."""
     if trail is None:
         span = float(times[-1] - times[0]) if times.size > 1 else 0.0
         return span / 3.0 if 0 < n <= TRAIL_PARTICLES and np.isfinite(span) else 0.0
@@ -272,10 +272,10 @@ _CORNERS = ((0, 0), (0, 1), (1, 0), (1, 1))
 
 
 def _label_corner(x, r, live, windows, stamps, scale: int, avoid, common: dict) -> tuple[int, int]:
-    """(column, row) of the stamp's top left corner: the corner of the frame (``_CORNERS``,
+    """(column, row) of the stamp's top left corner: the corner of the frame (`_CORNERS`,
     4 font pixels in) whose box holds the fewest particle, trail and marker pixels over up to
     24 frames evenly spaced, drawn without scenery (black on white); corners that meet the
-    colour bar ``avoid`` (x0, y0, x1, y1) are not taken, unless all do."""
+    colour bar `avoid` (x0, y0, x1, y1) are not taken, unless all do."""
     width, height = common["width"], common["height"]
     margin = 4 * max(scale, 1)
     lw = max((len(s) for s in stamps), default=0) * 6 * scale
@@ -313,7 +313,7 @@ def _label_corner(x, r, live, windows, stamps, scale: int, avoid, common: dict) 
 
 
 def _trajectory_options(traj) -> dict:
-    """``render_frames``' radius, alive and springs for a ``Trajectory``: its radii (or, where
+    """`render_frames`' radius, alive and springs for a `Trajectory`: its radii (or, where
     it has none, 1/200 of the size of what its live particles span), its alive mask, and its
     springs (particle ids) as pairs of columns, those whose ids it does not hold left out."""
     x = np.asarray(traj.positions, dtype=np.float64)
@@ -339,8 +339,8 @@ NO_OWN_COLOR = (70, 130, 200)
 
 
 def own_colours(traj) -> np.ndarray:
-    """Each particle's own colour (``Trajectory.colors``: an ``Emitter``'s ``color``) as uint8
-    RGB (N, 3) for ``render_frames(color_by=...)``; ``NO_OWN_COLOR`` where it has none."""
+    """Each particle's own colour (`Trajectory.colors`: an `Emitter`'s `color`) as uint8
+    RGB (N, 3) for `render_frames(color_by=...)`; `NO_OWN_COLOR` where it has none."""
     n = np.shape(traj.positions)[1]
     colors = getattr(traj, "colors", None)
     out = np.tile(np.array(NO_OWN_COLOR, dtype=np.uint8), (n, 1))

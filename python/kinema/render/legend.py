@@ -1,4 +1,4 @@
-"""The colour bar of ``render_frames(legend=...)``: drawn once by Pillow, blended into each
+"""The colour bar of `render_frames(legend=...)`: drawn once by Pillow, blended into each
 frame."""
 
 from __future__ import annotations
@@ -12,12 +12,12 @@ from .. import _core
 
 class _Legend:
     """A colour bar, drawn into frames: in the top right corner, on the time stamp's row (or
-    under it where the row is too short for both), the quantity's name, ``vmin``, a horizontal
-    bar of the colormap (the colour of ``vmin`` on the left, its top colour on the right) and
-    ``vmax`` (the map from ``start`` to 1, as the particles are coloured), on a panel of the
+    under it where the row is too short for both), the quantity's name, `vmin`, a horizontal
+    bar of the colormap (the colour of `vmin` on the left, its top colour on the right) and
+    `vmax` (the map from `start` to 1, as the particles are coloured), on a panel of the
     background colour (3/4 opaque). Pillow draws it once, its text
     in DejaVu Sans (matplotlib's) as tall as the time stamp; each frame gets it by blending,
-    ``box`` (x0, y0, x1, y1) pixels being where it goes."""
+    `box` (x0, y0, x1, y1) pixels being where it goes."""
 
     def __init__(self, name, colormap, vmin, vmax, width, height, scale, ink, background, stamp_chars=0, start=0.0):
         from PIL import Image, ImageDraw

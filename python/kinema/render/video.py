@@ -1,5 +1,5 @@
-"""Video files: ``write_video`` (MP4 through imageio-ffmpeg's ffmpeg: H.264, BT.709, tagged,
-``moov`` first; GIF through Pillow) and ``video_rate``, the exact frame rate a file is
+"""Video files: `write_video` (MP4 through imageio-ffmpeg's ffmpeg: H.264, BT.709, tagged,
+`moov` first; GIF through Pillow) and `video_rate`, the exact frame rate a file is
 written at."""
 
 from __future__ import annotations
@@ -29,45 +29,45 @@ def write_video(
     preset: str = "ultrafast",
     crf: int = 20,
 ) -> Path:
-    """Write RGB uint8 frames of one size to ``path`` and return it as a Path.
+    """Write RGB uint8 frames of one size to `path` and return it as a Path.
 
-    The frame rate written is ``video_rate(fps, path)``, exactly:
+    The frame rate written is `video_rate(fps, path)`, exactly:
 
-    - ``.mp4``: ``fps`` as a fraction with a denominator of at most 1001 (30 → 30/1,
-      29.97 → 2997/100, 30000/1001 stays; ``fps`` may be a ``fractions.Fraction``), so a
+    - `.mp4`: `fps` as a fraction with a denominator of at most 1001 (30 → 30/1,
+      29.97 → 2997/100, 30000/1001 stays; `fps` may be a `fractions.Fraction`), so a
       30 fps video says 30 fps, not 30.00003.
-    - ``.gif``: a GIF counts each frame's delay in whole 1/100 s, and browsers play a delay of
+    - `.gif`: a GIF counts each frame's delay in whole 1/100 s, and browsers play a delay of
       0 or 1/100 s as 1/10 s: the delay is the whole number of 1/100 s from 2 to 65535 whose
-      rate is closest to ``fps`` (ratio nearest 1), so 60 fps is written at 50 (2/100 s),
+      rate is closest to `fps` (ratio nearest 1), so 60 fps is written at 50 (2/100 s),
       30 fps at 33.3 (3/100 s), 25 at 25, 12 at 12.5 (8/100 s).
 
-    ``times`` (seconds, increasing, one per frame; optional): the frames were recorded at these
+    `times` (seconds, increasing, one per frame; optional): the frames were recorded at these
     times and are to play in real time. The video is written at the rate above and each of its
-    frames shows the recorded frame nearest in time to it (from ``times[0]``, every 1/rate s up
+    frames shows the recorded frame nearest in time to it (from `times[0]`, every 1/rate s up
     to the last time): frames are repeated or dropped where the recording interval differs from
-    1/rate, and none are when it equals it (``World.run(fps=30)`` with dt = 1 ms records every
+    1/rate, and none are when it equals it (`World.run(fps=30)` with dt = 1 ms records every
     33 ms, 30.30 a second: at 30 fps one frame in about a hundred is dropped). Without
-    ``times``, each frame is one video frame at that rate (its playback speed is up to you).
+    `times`, each frame is one video frame at that rate (its playback speed is up to you).
 
-    ``.mp4``: H.264 (libx264, yuv420p, 4:2:0) by the ffmpeg that imageio-ffmpeg ships. The RGB
+    `.mp4`: H.264 (libx264, yuv420p, 4:2:0) by the ffmpeg that imageio-ffmpeg ships. The RGB
     is converted with the BT.709 matrix into limited ("tv") range by ffmpeg's scaler and the
-    stream and the MP4 say so (``colr`` box and H.264 VUI: primaries, transfer and matrix
-    BT.709, limited range), so players convert it back with the same matrix; the ``moov`` box
-    comes before the media data (``-movflags +faststart``), so a browser plays the file while
-    it downloads. Odd sizes are padded by one edge row/column. x264 ``preset`` (ultrafast …
+    stream and the MP4 say so (`colr` box and H.264 VUI: primaries, transfer and matrix
+    BT.709, limited range), so players convert it back with the same matrix; the `moov` box
+    comes before the media data (`-movflags +faststart`), so a browser plays the file while
+    it downloads. Odd sizes are padded by one edge row/column. x264 `preset` (ultrafast …
     veryslow; the default ultrafast keeps 10,000 particles at 1280×720 above 60 frames per
-    second on two cores, ``benchmarks/render.py``; slower presets give smaller files) and
-    constant-quality ``crf`` (0 lossless … 51 worst).
-    ``.gif``: Pillow, looping, at most 256 colours a frame.
+    second on two cores, `benchmarks/render.py`; slower presets give smaller files) and
+    constant-quality `crf` (0 lossless … 51 worst).
+    `.gif`: Pillow, looping, at most 256 colours a frame.
 
     The file is written under a temporary name in the same directory and renamed when
     complete: on any error nothing is left behind and an existing file is untouched. It gets
-    the mode an ordinary ``open()`` gives a new file, 0666 less the umask (0644 under umask
+    the mode an ordinary `open()` gives a new file, 0666 less the umask (0644 under umask
     022), as every kinema writer's files do.
 
-    A name the system cannot write is a ``kinema.io.FileWriteError`` (an ``OSError``), one
-    line naming ``path``: a folder that does not exist (also a ``FileNotFoundError``), a
-    directory (also an ``IsADirectoryError``), a name too long, a full disk.
+    A name the system cannot write is a `kinema.io.FileWriteError` (an `OSError`), one
+    line naming `path`: a folder that does not exist (also a `FileNotFoundError`), a
+    directory (also an `IsADirectoryError`), a name too long, a full disk.
     """
     path = Path(path)
     ext = path.suffix.lower()
@@ -114,20 +114,20 @@ COMMON_RATE_TOLERANCE = 0.02
 
 
 def playback_rate(times, fps=None, limits=None) -> tuple[float, bool, str]:
-    """The default frame rate of a video of frames recorded at ``times`` (s), to play them in
-    real time: ``(rate, real_time, how)``, where ``real_time`` says whether the frames are
-    to be placed by their times (``write_video(times=)``) and ``how`` says why, in words.
+    """The default frame rate of a video of frames recorded at `times` (s), to play them in
+    real time: `(rate, real_time, how)`, where `real_time` says whether the frames are
+    to be placed by their times (`write_video(times=)`) and `how` says why, in words.
 
-    - ``fps``, the frames per second the recording was asked for (``Trajectory.fps``, from
-      ``World.run(fps=)`` or an H5MD file kinema wrote), when the recording interval is
-      its rounding to whole steps (from 1/1.5 to 1/0.5 of it): ``World.run(fps=30)`` with
+    - `fps`, the frames per second the recording was asked for (`Trajectory.fps`, from
+      `World.run(fps=)` or an H5MD file kinema wrote), when the recording interval is
+      its rounding to whole steps (from 1/1.5 to 1/0.5 of it): `World.run(fps=30)` with
       dt = 1 ms records every 33 steps, 30.30 frames a second, and the video is 30 fps with
       one frame in about a hundred dropped.
-    - Else the common rate (``COMMON_RATES``: 24, 25, 30, 50, 60) nearest the recording's
+    - Else the common rate (`COMMON_RATES`: 24, 25, 30, 50, 60) nearest the recording's
       rate, 1 / the median interval, when within 2 % of it (a file of another program,
-      or of a kinema older than ``fps`` in its files).
-    - Else the recording's rate; ``limits`` (lo, hi) clamp it, and a clamped rate is not
-      real time (one video frame per recorded frame). A single frame: 30 fps (``fps`` if
+      or of a kinema older than `fps` in its files).
+    - Else the recording's rate; `limits` (lo, hi) clamp it, and a clamped rate is not
+      real time (one video frame per recorded frame). A single frame: 30 fps (`fps` if
       given), not real time."""
     t = np.asarray(times, dtype=np.float64).reshape(-1)
     recorded = 1.0 / float(np.median(np.diff(t))) if t.size > 1 else float("nan")
@@ -153,11 +153,11 @@ GIF_DELAYS_CS = (2, 65535)
 
 
 def video_rate(fps, path=".mp4") -> Fraction:
-    """The exact frame rate ``write_video`` writes for ``fps`` into ``path`` (a file name or
-    just its extension, ".mp4" or ".gif"), in frames per second: for MP4 ``fps`` as a fraction
-    with a denominator up to 1001 (``video_rate(30) == 30``; below 1/1001, 1/n for n whole
+    """The exact frame rate `write_video` writes for `fps` into `path` (a file name or
+    just its extension, ".mp4" or ".gif"), in frames per second: for MP4 `fps` as a fraction
+    with a denominator up to 1001 (`video_rate(30) == 30`; below 1/1001, 1/n for n whole
     seconds a frame); for GIF 100/d, d the delay in 1/100 s from 2 to 65535 whose rate is
-    nearest ``fps`` (``video_rate(60, ".gif") == 50``)."""
+    nearest `fps` (`video_rate(60, ".gif") == 50`)."""
     if isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not (math.isfinite(fps) and fps > 0):
         raise ValueError(f"fps = {fps!r} is invalid: frames per second must be a finite number > 0")
     ext = str(path).lower()
@@ -177,7 +177,7 @@ def video_rate(fps, path=".mp4") -> Fraction:
 
 
 def _repeats(times, rate: Fraction) -> np.ndarray:
-    """How many video frames at ``rate`` each frame recorded at ``times`` fills, for playback
+    """How many video frames at `rate` each frame recorded at `times` fills, for playback
     in real time: video frame k (at times[0] + k/rate, k = 0 … round(span·rate)) shows the
     recorded frame nearest in time (the earlier one on a tie); 0 drops the frame."""
     t = np.asarray(times, dtype=np.float64)
@@ -255,7 +255,7 @@ def _encoder_failure(path: Path, e: OSError | None) -> FileWriteError:
 
 
 def _check_mp4(tmp: Path, path: Path, count: int) -> None:
-    """The MP4 at ``tmp`` holds all ``count`` frames, or raises ``FileWriteError``: ffmpeg's
+    """The MP4 at `tmp` holds all `count` frames, or raises `FileWriteError`: ffmpeg's
     exit status is not reported through imageio-ffmpeg's writer, and a disk that fills while
     it writes the last packets or the index (moov) leaves a file no player opens."""
     import imageio_ffmpeg
