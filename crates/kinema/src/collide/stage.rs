@@ -652,9 +652,6 @@ impl CollideStage {
         if self.params.model != ContactModel::Impulse {
             return Some("it is a way of running the impulse model, not the spring–dashpot one".into());
         }
-        if p.has_spin() {
-            return Some("the event-driven path does not turn particles yet: a world with spin steps".into());
-        }
         if let Some(name) = other {
             return Some(format!(
                 "particles must fly free between impacts (forces: none or uniform fields such as gravity), and this world has the force '{name}'"

@@ -45,6 +45,7 @@ use super::impulse::CollisionStats;
 use super::morton::morton_order;
 use super::response::{restitution_impulse, MaterialTable};
 use super::roots::toi_half_space;
+use super::spin::Rotation;
 use super::Domain;
 use crate::error::Error;
 use crate::interrupt::Interrupt;
@@ -486,7 +487,7 @@ impl EventDriven {
         i: usize,
         j: usize,
         now: f64,
-        p: &Particles,
+        p: &mut Particles,
         materials: &MaterialTable<'_>,
         threshold: f64,
         domain: &Domain,
@@ -519,9 +520,19 @@ impl EventDriven {
             other: Partner::Particle(1),
             ..contact
         };
-        let Some(imp) = restitution_impulse(&pair, &v, &w, material, threshold, None) else {
+        // with spin, on the contact point's velocity, and both turn (`collide/spin.rs`; the
+        // world's angular velocities: nothing turns between impacts)
+        let rotation = p.has_spin().then_some(Rotation {
+            inv_inertia: &p.inv_inertia,
+            radius: &p.radius,
+        });
+        let spin = rotation.map(|r| r.of(&contact, &p.omega));
+        let Some(imp) = restitution_impulse(&pair, &v, &w, material, threshold, spin) else {
             return;
         };
+        if let Some(r) = rotation {
+            r.kick(&contact, contact.overlap, imp.vector, &mut p.omega);
+        }
         let (vi, vj) = (&mut self.bodies[i].v, vec3::add(bj.v, vec3::scale(-w[1], imp.vector)));
         *vi = vec3::add(*vi, vec3::scale(w[0], imp.vector));
         self.bodies[j].v = vj;
@@ -552,7 +563,7 @@ impl EventDriven {
         i: usize,
         k: usize,
         now: f64,
-        p: &Particles,
+        p: &mut Particles,
         materials: &MaterialTable<'_>,
         threshold: f64,
         stats: &mut CollisionStats,
@@ -572,9 +583,17 @@ impl EventDriven {
         };
         let material = materials.pair(&contact);
         let alone = Contact { i: 0, ..contact };
-        let Some(imp) = restitution_impulse(&alone, &b.v, &[p.inv_mass[wi]], material, threshold, None) else {
+        let rotation = p.has_spin().then_some(Rotation {
+            inv_inertia: &p.inv_inertia,
+            radius: &p.radius,
+        });
+        let spin = rotation.map(|r| r.of(&contact, &p.omega));
+        let Some(imp) = restitution_impulse(&alone, &b.v, &[p.inv_mass[wi]], material, threshold, spin) else {
             return false;
         };
+        if let Some(r) = rotation {
+            r.kick(&contact, contact.overlap, imp.vector, &mut p.omega);
+        }
         b.v = vec3::add(b.v, vec3::scale(p.inv_mass[wi], imp.vector));
         b.path = b.path.wrapping_add(1);
         stats.impacts += 1;
