@@ -340,3 +340,20 @@ def test_rolling_resistance_needs_spin():
         w.set_collisions(rolling_friction=0.1)
     with pytest.raises(ValueError, match="rolling_friction = -1 is invalid"):
         kinema.World(spin=True).set_collisions(rolling_friction=-1.0)
+
+
+def test_rolling_resistance_also_stops_a_ball_spinning_on_its_axis():
+    # a twist about the contact normal against μ_r r m g: ω̇ = μ_r g r m / I = 5/2 μ_r g / r
+    r, mu_r = 0.05, 0.02
+    w = kinema.World(dt=1e-4, spin=True)
+    w.add(kinema.Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]))
+    w.add(kinema.Gravity([0.0, 0.0, -G]))
+    w.set_collisions(restitution=0.0, friction=0.5, rolling_friction=mu_r)
+    w.add_particles([0.0, 0.0, r], mass=0.3, radius=r, angular_velocity=[0.0, 0.0, 20.0])
+    spins = []
+    for _ in range(300):
+        w.step(1)
+        spins.append(w.angular_velocities[0, 2])
+    np.testing.assert_allclose(np.diff(spins) / w.dt, -2.5 * mu_r * G / r, rtol=1e-9)
+    w.step(25_000)  # 20 rad/s at 9.81 rad/s² stops after 2.04 s
+    assert abs(w.angular_velocities[0, 2]) < 1e-9 and np.abs(w.velocities[0]).max() < 1e-9

@@ -63,10 +63,10 @@ class WorldCollisions:
         (Box2D's, Bullet's and Chipmunk's sleeping; docs/collisions.md).
 
         ``rolling_friction`` μ_r ≥ 0 (a world with spin, the impulse model): resting and
-        rolling contacts resist the two bodies' relative turning across their normal with a
-        torque of at most μ_r R* F_n, R* = r_i r_j/(r_i + r_j) (r against a collider), as
-        LAMMPS's ``rolling sds`` at its slider's limit: a ball rolling on a floor slows at
-        5/7 μ_r g and one on a slope of tan θ ≤ μ_r stays put.
+        rolling contacts resist the two bodies' relative turning, rolling and twisting, with
+        a torque of at most μ_r R* F_n, R* = r_i r_j/(r_i + r_j) (r against a collider), as
+        LAMMPS's ``rolling sds`` and ``twisting sds`` at their sliders' limit: a ball rolling
+        on a floor slows at 5/7 μ_r g, one on a slope of tan θ ≤ μ_r stays put.
 
         ``event_driven``: with the impulse model and no forces (a gas), run from frame to
         frame by events instead of steps: every impact at its exact time, by the same rule,
