@@ -79,6 +79,33 @@ def test_a_hard_sphere_gas_has_carnahan_and_starlings_pressure(event_driven):
     assert np.abs(virial - np.trace(virial) / 3 * np.eye(3)).max() < 0.03 * np.trace(virial) / 3
 
 
+def test_a_hard_disc_gas_has_hendersons_pressure_in_newtons_per_metre():
+    # 2D: p A = N k T Z, Z = (1 + φ²/8) / (1 − φ)² (Henderson 1975), the pressure the trace
+    # over x and y over 2, per unit length
+    phi, n_side = 0.3, 24
+    a = np.sqrt(np.pi / (4 * phi))  # square lattice of discs of diameter 1 m
+    side = n_side * a
+    g = (np.arange(n_side) + 0.5) * a
+    xy = np.array(np.meshgrid(g, g, indexing="ij")).reshape(2, -1).T
+    rng = np.random.default_rng(1)
+    v = rng.normal(0.0, 1.0, (len(xy), 3))
+    v[:, 2] = 0.0
+    v -= v.mean(axis=0)
+    w = kinema.World(dim=2, dt=0.01)
+    w.add(kinema.Box([0, 0], [side, side]))
+    w.periodic = (True, True)
+    w.set_collisions(restitution=1.0, event_driven=True)
+    w.add_particles(np.c_[xy, np.zeros(len(xy))], velocity=v, mass=1.0, radius=0.5)
+    w.run(10.0, fps=1)
+    tr = w.run(40.0, fps=2)
+    n = len(xy)
+    kT = tr.kinetic[1:].mean() / n  # two degrees of freedom
+    p = np.trace(tr.pressure[1:, :2, :2], axis1=1, axis2=2) / 2
+    assert np.all(tr.pressure[1:, 2, :] == 0) and np.all(tr.pressure[1:, :, 2] == 0)
+    z = p.mean() * side * side / (n * kT)
+    assert z == pytest.approx((1 + phi**2 / 8) / (1 - phi) ** 2, rel=0.02)
+
+
 def test_the_spring_dashpot_model_books_its_contacts_dissipation_and_impacts():
     # a damped linear contact returns e u and dissipates ½ m* u² (1 − e²)
     k, m, e, u = 1e4, 1e-3, 0.5, 1.0
