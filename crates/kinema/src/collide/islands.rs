@@ -325,18 +325,18 @@ impl Local {
             params.solve_sweeps *= COLD_SWEEPS;
             params.relax_sweeps *= COLD_SWEEPS;
         }
-        let rotation = problem.spin.map(|(r, _)| {
+        if let Some((r, _)) = problem.spin {
             self.inv_inertia.clear();
             self.inv_inertia.extend(parts.iter().map(|&q| r.inv_inertia[q]));
             self.radius.clear();
             self.radius.extend(parts.iter().map(|&q| r.radius[q]));
-        });
+        }
         let held = SoftContacts {
             contacts: &self.contacts,
             targets: &self.targets,
             inv_mass: &self.inv_mass,
             materials: &materials,
-            rotation: rotation.map(|()| Rotation {
+            rotation: problem.spin.is_some().then_some(Rotation {
                 inv_inertia: &self.inv_inertia,
                 radius: &self.radius,
             }),

@@ -34,17 +34,19 @@
 //!
 //! With spin (`collide/spin.rs`) the sweeps carry each particle's velocity and angular
 //! velocity (6 values), the tangential targets are the contact point's velocity, and the
-//! tangential effective mass is 1/w_t. Rolling resistance (`rolling_friction` μ_r > 0) adds a
+//! tangential effective mass is 1/w_t. The sticking target is the same: stage 1 does not
+//! turn a particle, so the contact point's slip over the step with the solve's impulse taken
+//! at its start is d_t + h (u_c − u₁t), zero for u_c = u₁t − d_t/h (a ball rolling on a floor
+//! has u₁t = d_t/h and keeps rolling; the relax then holds its contact point still).
+//!
+//! Rolling resistance (`rolling_friction` μ_r > 0) adds a
 //! third total to each contact: an angular impulse M, +M on i and −M on j, that brings the
 //! relative turning ω_i − ω_j to 0 in the solve and relax stages, within the cone
 //! |M| ≤ μ_r R* λ (R* = r_i r_j / (r_i + r_j), r_i against a collider): across n it is
 //! rolling resistance, the torque μ_r R* F_n of LAMMPS's `rolling sds` at its slider's limit;
 //! along n twisting resistance, LAMMPS's `twisting sds` with the same coefficient. Without
 //! the twist, a pile's grains kept spinning in place about their contact normals, nothing
-//! resisting them, and the pile never slept. Its effective mass is 1/(k_i + k_j) (k = 1/I). The sticking target is the same: stage 1 does not
-//! turn a particle, so the contact point's slip over the step with the solve's impulse taken
-//! at its start is d_t + h (u_c − u₁t), zero for u_c = u₁t − d_t/h (a ball rolling on a floor
-//! has u₁t = d_t/h and keeps rolling; the relax then holds its contact point still).
+//! resisting them, and the pile never slept. Its effective mass is 1/(k_i + k_j) (k = 1/I).
 
 use super::contact::Contact;
 use super::response::MaterialTable;
