@@ -286,6 +286,11 @@ def test_settings_read_back_and_round_trip():
         "youngs_modulus": None,
         "poisson_ratio": None,
         "rolling_friction": 0.0,
+        "tangential": None,
+        "tangential_stiffness": None,
+        "tangential_damping": None,
+        "rolling_stiffness": None,
+        "rolling_damping": None,
     }
     assert w.collisions == expected
     w.set_collisions(**w.collisions)
@@ -511,6 +516,11 @@ def test_collision_defaults_and_contact_models_are_the_engines():
         "youngs_modulus": None,
         "poisson_ratio": None,
         "rolling_friction": 0.0,
+        "tangential": None,
+        "tangential_stiffness": None,
+        "tangential_damping": None,
+        "rolling_stiffness": None,
+        "rolling_damping": None,
     }
     signature = inspect.signature(kinema.World.set_collisions)
     assert {k: p.default for k, p in signature.parameters.items() if k != "self"} == engine

@@ -64,6 +64,8 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
     scene = world.to_scene()  # a PythonForce raises ValueError here, before anything is written
     core = world._core
     carry = core.integrator_carry()
+    spin_carry = core.spin_carry()
+    memory = core.contact_history()
     warm = core.collision_carry()
     calm, island = core.sleep_carry()
     with hdf5_file(path) as f:
@@ -94,6 +96,18 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
         )
         if carry is not None:  # Verlet's a or implicit Euler's last Δv, to every bit
             f.create_dataset("integrator_carry", data=carry)
+        if spin_carry is not None:  # Verlet's α under the contacts' torques
+            f.create_dataset("spin_carry", data=spin_carry)
+        if memory[0] or memory[1]:  # the force models' tangential springs
+            pairs, walls = memory
+            h = f.create_group("contact_history")
+            h.create_dataset("pair_i", data=np.array([p[0] for p in pairs], dtype=np.int64))
+            h.create_dataset("pair_j", data=np.array([p[1] for p in pairs], dtype=np.int64))
+            h.create_dataset("pair_springs", data=np.array([p[2] for p in pairs], dtype=float).reshape(-1, 7))
+            h.create_dataset("wall_particle", data=np.array([w[0] for w in walls], dtype=np.int64))
+            h.create_dataset("wall_collider", data=np.array([w[1] for w in walls], dtype=np.int64))
+            h.create_dataset("wall_normal", data=np.array([w[2] for w in walls], dtype=float).reshape(-1, 3))
+            h.create_dataset("wall_springs", data=np.array([w[3] for w in walls], dtype=float).reshape(-1, 7))
         g = f.create_group("collision_carry")  # the impulse solver's warm start
         g.create_dataset("particle", data=np.array([w[0] for w in warm], dtype=np.int64))
         g.create_dataset("collider", data=np.array([w[1] for w in warm], dtype=bool))
@@ -113,6 +127,8 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
     core.restore_sleep_carry(calm.tolist(), island.tolist())
     if carry is not None:
         core.restore_integrator_carry(carry.tolist())
+    if spin_carry is not None:
+        core.restore_spin_carry(spin_carry.tolist())
     return path
 
 
@@ -528,6 +544,29 @@ def _load_world(r: _Reader) -> Any:
         if world.method not in ("verlet", "implicit_euler"):
             raise r.fail("dataset 'integrator_carry'", f"is there but the method is {world.method}; only verlet and implicit_euler carry anything")
         _, carry = r.reals("integrator_carry", (3 * n,), np.isfinite, "3 finite numbers per particle (Verlet's a, m/s², or implicit Euler's last Δv, m/s)")
+    spin_carry = None
+    if "spin_carry" in r.f:
+        if carry is None or world.method != "verlet" or not world.spin:
+            raise r.fail("dataset 'spin_carry'", "is there without Verlet's carry in a world with spin; only such a world carries angular accelerations")
+        _, spin_carry = r.reals("spin_carry", (3 * n,), np.isfinite, "3 finite numbers per particle (Verlet's α, rad/s²)")
+    memory: tuple[list, list] = ([], [])
+    if "contact_history" in r.f:
+        r.group("contact_history")
+        springs = "7 finite numbers per contact (the tangential spring's stretch, m, 3; the rolling spring's, m, 3; the twist, rad)"
+        _, pi = r.ints("contact_history/pair_i", (None,), 0, n - 1, f"a particle index from 0 to {n - 1}")
+        kp = pi.shape[0]
+        _, pj = r.ints("contact_history/pair_j", (kp,), 0, n - 1, f"a particle index from 0 to {n - 1}")
+        _, ps = r.reals("contact_history/pair_springs", (kp, 7), np.isfinite, springs)
+        _, wi = r.ints("contact_history/wall_particle", (None,), 0, n - 1, f"a particle index from 0 to {n - 1}")
+        kw = wi.shape[0]
+        colliders = len(world.colliders)
+        _, wk = r.ints("contact_history/wall_collider", (kw,), 0, max(colliders - 1, 0), f"a collider index below {colliders}")
+        _, wn = r.reals("contact_history/wall_normal", (kw, 3), np.isfinite, "3 finite numbers per touch (its normal)")
+        _, ws = r.reals("contact_history/wall_springs", (kw, 7), np.isfinite, springs)
+        memory = (
+            list(zip(pi.tolist(), pj.tolist(), ps.tolist(), strict=True)),
+            list(zip(wi.tolist(), wk.tolist(), wn.tolist(), ws.tolist(), strict=True)),
+        )
     g = r.group("collision_carry")
     _, particle = r.ints("collision_carry/particle", (None,), 0, n - 1, f"the particle of each contact: an index from 0 to {n - 1}")
     k = particle.shape[0]
@@ -562,6 +601,10 @@ def _load_world(r: _Reader) -> Any:
     r.engine("dataset 'collision_carry/sleep_island'", core.restore_sleep_carry, *sleep)
     if carry is not None:
         r.engine("dataset 'integrator_carry'", core.restore_integrator_carry, carry.tolist())
+    if spin_carry is not None:
+        r.engine("dataset 'spin_carry'", core.restore_spin_carry, spin_carry.tolist())
+    if memory[0] or memory[1]:
+        r.engine("group 'contact_history'", core.restore_contact_history, *memory)
     return world
 
 

@@ -38,6 +38,11 @@ class WorldCollisions:
         youngs_modulus: float | None = _DEFAULTS["youngs_modulus"],
         poisson_ratio: float | None = _DEFAULTS["poisson_ratio"],
         rolling_friction: float = _DEFAULTS["rolling_friction"],
+        tangential: str | None = _DEFAULTS["tangential"],
+        tangential_stiffness: float | None = _DEFAULTS["tangential_stiffness"],
+        tangential_damping: float | None = _DEFAULTS["tangential_damping"],
+        rolling_stiffness: float | None = _DEFAULTS["rolling_stiffness"],
+        rolling_damping: float | None = _DEFAULTS["rolling_damping"],
     ) -> None:
         """Turn collisions on, or replace every one of their settings.
 
@@ -62,11 +67,25 @@ class WorldCollisions:
         until an impact, a touch, a write or a change of forces or colliders wakes it
         (Box2D's, Bullet's and Chipmunk's sleeping; docs/collisions.md).
 
-        ``rolling_friction`` μ_r ≥ 0 (a world with spin, the impulse model): resting and
-        rolling contacts resist the two bodies' relative turning, rolling and twisting, with
-        a torque of at most μ_r R* F_n, R* = r_i r_j/(r_i + r_j) (r against a collider), as
+        ``rolling_friction`` μ_r ≥ 0 (a world with spin): resting and rolling contacts resist
+        the two bodies' relative turning, rolling and twisting. The impulse model: with a
+        torque of at most μ_r R* F_n, R* = r_i r_j/(r_i + r_j) (r against a collider), as
         LAMMPS's ``rolling sds`` and ``twisting sds`` at their sliders' limit: a ball rolling
-        on a floor slows at 5/7 μ_r g, one on a slope of tan θ ≤ μ_r stays put.
+        on a floor slows at 5/7 μ_r g, one on a slope of tan θ ≤ μ_r stays put. The force
+        models: LAMMPS's ``rolling sds`` (a spring ``rolling_stiffness`` k_r in N/m, default
+        the contact's k_t, and dashpot ``rolling_damping`` γ_r in kg/s, default its γ_t, on
+        the rolling displacement R* (ω_i − ω_j) × n, its force capped at μ_r |F_n|) and
+        ``twisting marshall``.
+
+        Friction with the force models (``"spring_dashpot"``, ``"hertz"``): wherever a contact
+        has μ > 0 it has a tangential spring with memory, F_t = −k_t ξ − γ_t v_t capped at
+        μ |F_n| (LAMMPS's ``tangential``): ``tangential="linear_history"`` (the default with
+        ``"spring_dashpot"``; k_t = ``tangential_stiffness`` N/m, default 2/7 k_n) or
+        ``"mindlin"`` (the default with ``"hertz"``: k_t = 8 G* √(R* δ) from E and ν);
+        ``tangential_damping`` x_γt ≥ 0 (default 0.5) makes γ_t = x_γt c_n. The springs
+        stretch once per step: such a world steps with ``method="verlet"`` only, and with spin
+        the torques turn the particles (velocity Verlet for ω, as LAMMPS's ``fix
+        nve/sphere``). docs/collisions.md has the formulas.
 
         ``event_driven``: with the impulse model and no forces (a gas), run from frame to
         frame by events instead of steps: every impact at its exact time, by the same rule,
@@ -97,6 +116,11 @@ class WorldCollisions:
             "poisson_ratio": _checks.real("poisson_ratio", poisson_ratio, optional=True),
             "event_driven": _checks.boolean("event_driven", event_driven),
             "rolling_friction": _checks.real("rolling_friction", rolling_friction),
+            "tangential": None if tangential is None else _checks.text("tangential", tangential),
+            "tangential_stiffness": _checks.real("tangential_stiffness", tangential_stiffness, optional=True),
+            "tangential_damping": _checks.real("tangential_damping", tangential_damping, optional=True),
+            "rolling_stiffness": _checks.real("rolling_stiffness", rolling_stiffness, optional=True),
+            "rolling_damping": _checks.real("rolling_damping", rolling_damping, optional=True),
         }
         if settings["rolling_friction"] and not self._core.spin:
             raise ValueError(

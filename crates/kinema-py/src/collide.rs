@@ -5,7 +5,7 @@
 
 use kinema::collide::colliders::{check_planar, PLANE_IN_2D, SPHERE_IN_2D};
 use kinema::collide::{BoxContainer, Collider, Contact, Material, Motion, Partner, Plane, SphereObstacle, Surface, TriangleMesh};
-use kinema::world::{CollisionParams, CollisionStats, ContactModel, ModelArgs};
+use kinema::world::{CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind};
 use kinema::Error;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
@@ -41,6 +41,16 @@ pub struct CollisionArgs {
     event_driven: bool,
     #[pyo3(item)]
     rolling_friction: f64,
+    #[pyo3(item)]
+    tangential: Option<String>,
+    #[pyo3(item)]
+    tangential_stiffness: Option<f64>,
+    #[pyo3(item)]
+    tangential_damping: Option<f64>,
+    #[pyo3(item)]
+    rolling_stiffness: Option<f64>,
+    #[pyo3(item)]
+    rolling_damping: Option<f64>,
 }
 
 impl CollisionArgs {
@@ -64,6 +74,13 @@ impl CollisionArgs {
             sleep_speed: self.sleep_speed,
             event_driven: self.event_driven,
             rolling_friction: self.rolling_friction,
+            tangential: TangentialArgs {
+                kind: self.tangential.as_deref().map(TangentialKind::from_name).transpose()?,
+                stiffness: self.tangential_stiffness,
+                damping: self.tangential_damping,
+                rolling_stiffness: self.rolling_stiffness,
+                rolling_damping: self.rolling_damping,
+            },
         })
     }
 }
@@ -161,6 +178,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(collision_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(check_contact_model, m)?)?;
     m.add("CONTACT_MODELS", ContactModel::NAMES.to_vec())?;
+    m.add("TANGENTIAL_MODELS", TangentialKind::NAMES.to_vec())?;
     Ok(())
 }
 
@@ -181,6 +199,12 @@ pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<
     out.set_item("poisson_ratio", args.poisson_ratio)?;
     out.set_item("event_driven", p.event_driven)?;
     out.set_item("rolling_friction", p.rolling_friction)?;
+    let t = p.tangential;
+    out.set_item("tangential", t.kind.map(|k| k.name()))?;
+    out.set_item("tangential_stiffness", t.stiffness)?;
+    out.set_item("tangential_damping", t.damping)?;
+    out.set_item("rolling_stiffness", t.rolling_stiffness)?;
+    out.set_item("rolling_damping", t.rolling_damping)?;
     Ok(out)
 }
 

@@ -151,6 +151,29 @@ impl PyWorld {
         self.inner.restore_integrator_carry(carry).map_err(to_py)
     }
 
+    /// Verlet's angular accelerations under the contacts' torques (a checkpoint's carry).
+    fn spin_carry<'py>(&mut self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner.spin_carry().map(|c| PyArray1::from_vec(py, c))
+    }
+
+    fn restore_spin_carry(&mut self, carry: Vec<f64>) -> PyResult<()> {
+        self.inner.restore_spin_carry(carry).map_err(to_py)
+    }
+
+    /// The force models' contact memory: ([(i, j, springs[7])], [(i, collider, normal, springs[7])]).
+    #[allow(clippy::type_complexity)]
+    fn contact_history(&mut self) -> (Vec<kinema::world::PairMemory>, Vec<kinema::world::WallMemory>) {
+        self.inner.contact_history()
+    }
+
+    fn restore_contact_history(
+        &mut self,
+        pairs: Vec<kinema::world::PairMemory>,
+        walls: Vec<kinema::world::WallMemory>,
+    ) -> PyResult<()> {
+        self.inner.restore_contact_history(pairs, walls).map_err(to_py)
+    }
+
     /// The impulse model's warm start: (particle, partner is a collider, partner index, totals).
     fn collision_carry(&mut self) -> Vec<(usize, bool, usize, [f64; 3])> {
         self.inner.restore_order();

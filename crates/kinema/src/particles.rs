@@ -30,6 +30,10 @@ pub struct Particles {
     /// With spin ([`Particles::enable_spin`]): angular velocities, rad/s (3 per particle; a
     /// 2D world turns about z only); empty without.
     pub omega: Vec<f64>,
+    /// With spin: the angular accelerations at the current state, rad/s² (3 per particle):
+    /// velocity Verlet's carry under the contacts' torques (`collide/contact_force/verlet.rs`),
+    /// zero where nothing turns them; empty without spin.
+    pub alpha: Vec<f64>,
     /// With spin: moments of inertia about the centre, kg·m² (≥ 0, one per particle); empty
     /// without.
     pub inertia: Vec<f64>,
@@ -144,6 +148,7 @@ impl Particles {
         if self.has_spin() {
             // at rest, with the inertia of a solid sphere (a disc in 2D)
             self.omega.resize(3 * self.len(), 0.0);
+            self.alpha.resize(3 * self.len(), 0.0);
             let f = self.inertia_factor;
             self.inertia.extend(mass.iter().zip(radius).map(|(m, r)| f * m * r * r));
             for q in start..start + n {
@@ -168,10 +173,12 @@ impl Particles {
         }
         self.inertia_factor = factor;
         self.omega.clear();
+        self.alpha.clear();
         self.inertia.clear();
         self.inv_inertia.clear();
         if factor > 0.0 {
             self.omega.resize(3 * self.len(), 0.0);
+            self.alpha.resize(3 * self.len(), 0.0);
             self.inertia
                 .extend(self.mass.iter().zip(&self.radius).map(|(m, r)| factor * m * r * r));
             self.inv_inertia.extend(
@@ -278,6 +285,7 @@ impl Particles {
             retain_rows(v, 3, keep);
         }
         retain_rows(&mut self.omega, 3, keep);
+        retain_rows(&mut self.alpha, 3, keep);
         for v in [
             &mut self.mass,
             &mut self.inv_mass,

@@ -614,6 +614,11 @@ class CollisionsTable(_Model):
     poisson_ratio: NonNeg | None = _COLLISION_DEFAULTS["poisson_ratio"]
     event_driven: bool = _COLLISION_DEFAULTS["event_driven"]
     rolling_friction: NonNeg = _COLLISION_DEFAULTS["rolling_friction"]
+    tangential: Literal["linear_history", "mindlin"] | None = _COLLISION_DEFAULTS["tangential"]
+    tangential_stiffness: Positive | None = _COLLISION_DEFAULTS["tangential_stiffness"]
+    tangential_damping: NonNeg | None = _COLLISION_DEFAULTS["tangential_damping"]
+    rolling_stiffness: Positive | None = _COLLISION_DEFAULTS["rolling_stiffness"]
+    rolling_damping: NonNeg | None = _COLLISION_DEFAULTS["rolling_damping"]
     periodic: Annotated[list[bool], Field(min_length=2, max_length=3)] | None = None
 
     @model_validator(mode="after")

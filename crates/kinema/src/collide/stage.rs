@@ -7,7 +7,9 @@
 //! Newton's restitution law, distribute each impulse onto both particles.
 
 pub use crate::collide::books::ColliderBooks;
-use crate::collide::contact_force::{particle_ratios, Bodies, ContactForce, SpringDashpot};
+use crate::collide::contact_force::{
+    particle_ratios, Bodies, ContactForce, RollingModel, SpringDashpot, TangentialLaw, TangentialModel,
+};
 use crate::collide::event_driven::{unsupported_collider, EventDriven};
 use crate::collide::impulse::{ImpulseModel, StageSetting};
 use crate::collide::spin::Rotation;
@@ -44,6 +46,76 @@ pub enum ContactModel {
         /// Poisson's ratio ν, in [0, 0.5). E* = E / (2 (1 − ν²)) between two such bodies.
         poisson_ratio: f64,
     },
+}
+
+/// LAMMPS's tangential sub-models with history, by name ([`TangentialArgs`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TangentialKind {
+    /// `linear_history`: a tangential spring of constant stiffness k_t.
+    LinearHistory,
+    /// `mindlin`: k_t = 8 G* a, from Hertz's material (model `hertz` only).
+    Mindlin,
+}
+
+impl TangentialKind {
+    /// The names, as the binding and the scene files spell them.
+    pub const NAMES: [&'static str; 2] = ["linear_history", "mindlin"];
+
+    /// The kind named `name`.
+    pub fn from_name(name: &str) -> Result<Self, Error> {
+        match name {
+            "linear_history" => Ok(TangentialKind::LinearHistory),
+            "mindlin" => Ok(TangentialKind::Mindlin),
+            other => Err(Error::invalid(
+                "tangential",
+                format!("'{other}'"),
+                "the tangential model must be 'linear_history' or 'mindlin'",
+            )),
+        }
+    }
+
+    /// Its name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            TangentialKind::LinearHistory => Self::NAMES[0],
+            TangentialKind::Mindlin => Self::NAMES[1],
+        }
+    }
+}
+
+/// The tangential part of the force models (`spring_dashpot`, `hertz`) as a caller names it
+/// (`collide/contact_force/tangent.rs`): it acts wherever a contact has friction μ > 0, as
+/// Coulomb's cone does in the impulse model. Every field `None` takes its default.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TangentialArgs {
+    /// The law. Default: `linear_history` with `spring_dashpot`, `mindlin` with `hertz`.
+    pub kind: Option<TangentialKind>,
+    /// k_t of `linear_history`, N/m (> 0). Default with `spring_dashpot`: 2/7 k_n (Silbert et
+    /// al. 2001, LAMMPS's `gran/hooke/history`); `hertz` with `linear_history` needs it.
+    pub stiffness: Option<f64>,
+    /// x_γt ≥ 0, the tangential dashpot as a fraction of the normal one. Default 1/2 (LAMMPS's
+    /// `gran/hooke/history`: γ_t = γ_n / 2).
+    pub damping: Option<f64>,
+    /// k_r of rolling resistance, N/m (> 0; with `rolling_friction`). Default: the
+    /// contact's k_t.
+    pub rolling_stiffness: Option<f64>,
+    /// γ_r of rolling resistance, kg/s (≥ 0). Default: the contact's γ_t.
+    pub rolling_damping: Option<f64>,
+}
+
+impl TangentialArgs {
+    /// The tangential damping fraction when none is given.
+    pub const DAMPING: f64 = 0.5;
+
+    /// The fields that are set, by name.
+    fn named(&self) -> [(&'static str, Option<f64>); 4] {
+        [
+            ("tangential_stiffness", self.stiffness),
+            ("tangential_damping", self.damping),
+            ("rolling_stiffness", self.rolling_stiffness),
+            ("rolling_damping", self.rolling_damping),
+        ]
+    }
 }
 
 /// The parameters of the contact models as a caller names them; each belongs to its models
@@ -218,8 +290,12 @@ pub struct CollisionParams {
     pub event_driven: bool,
     /// Rolling resistance μ_r ≥ 0 (dimensionless) in a world with spin: the end-of-step
     /// contacts resist the relative turning of the two bodies across their normal with a
-    /// torque of at most μ_r R* F_n (`collide/soft_step.rs`). Default 0.
+    /// torque of at most μ_r R* F_n (`collide/soft_step.rs`). Default 0. With the force
+    /// models, LAMMPS's `rolling sds` and `twisting marshall` (`tangent.rs`).
     pub rolling_friction: f64,
+    /// The tangential part of the force models (ignored by the impulse model, which refuses
+    /// it set).
+    pub tangential: TangentialArgs,
 }
 
 impl Default for CollisionParams {
@@ -234,6 +310,7 @@ impl Default for CollisionParams {
             sleep_speed: None,
             event_driven: false,
             rolling_friction: 0.0,
+            tangential: TangentialArgs::default(),
         }
     }
 }
@@ -287,6 +364,65 @@ impl CollisionParams {
                 ));
             }
         }
+        let t = self.tangential;
+        if self.model == ContactModel::Impulse {
+            let named = t.named();
+            if let Some((param, v)) = named.iter().find(|p| p.1.is_some()) {
+                return Err(Error::invalid(
+                    *param,
+                    v.unwrap_or(f64::NAN),
+                    "only the force models ('spring_dashpot', 'hertz') use it; the impulse model's friction is Coulomb's cone",
+                ));
+            }
+            if let Some(k) = t.kind {
+                return Err(Error::invalid(
+                    "tangential",
+                    format!("'{}'", k.name()),
+                    "only the force models ('spring_dashpot', 'hertz') use it; the impulse model's friction is Coulomb's cone",
+                ));
+            }
+        }
+        for (param, value, what, zero) in [
+            ("tangential_stiffness", t.stiffness, "finite and > 0 N/m", false),
+            (
+                "tangential_damping",
+                t.damping,
+                "finite and >= 0 (a fraction of the normal dashpot)",
+                true,
+            ),
+            ("rolling_stiffness", t.rolling_stiffness, "finite and > 0 N/m", false),
+            ("rolling_damping", t.rolling_damping, "finite and >= 0 kg/s", true),
+        ] {
+            if let Some(v) = value {
+                if !(v.is_finite() && (v > 0.0 || (zero && v == 0.0))) {
+                    return Err(Error::invalid(param, v, format!("it must be {what}")));
+                }
+            }
+        }
+        match (self.model, t.kind) {
+            (ContactModel::SpringDashpot { .. }, Some(TangentialKind::Mindlin)) => {
+                return Err(Error::invalid(
+                    "tangential",
+                    "'mindlin'",
+                    "Mindlin's tangential stiffness 8 G* a needs Hertz's material: model='hertz' (or tangential='linear_history')",
+                ))
+            }
+            (ContactModel::Hertz { .. }, Some(TangentialKind::Mindlin) | None) if t.stiffness.is_some() => {
+                return Err(Error::invalid(
+                    "tangential_stiffness",
+                    t.stiffness.unwrap_or(f64::NAN),
+                    "Mindlin's tangential stiffness is 8 G* a from Young's modulus and Poisson's ratio; a constant k_t belongs to tangential='linear_history'",
+                ))
+            }
+            (ContactModel::Hertz { .. }, Some(TangentialKind::LinearHistory)) if t.stiffness.is_none() => {
+                return Err(Error::invalid(
+                    "tangential_stiffness",
+                    "None",
+                    "model='hertz' with tangential='linear_history' needs the tangential stiffness k_t, finite and > 0 N/m",
+                ))
+            }
+            _ => {}
+        }
         if !(self.rolling_friction.is_finite() && self.rolling_friction >= 0.0) {
             return Err(Error::invalid(
                 "rolling_friction",
@@ -328,15 +464,51 @@ impl CollisionParams {
 
 /// The spring–dashpot model the settings ask for: `Some` with that model.
 fn spring_dashpot_of(params: &CollisionParams) -> Option<SpringDashpot> {
-    match params.model {
-        ContactModel::SpringDashpot { stiffness, damping } => Some(SpringDashpot::new(stiffness, damping)),
+    let mut model = match params.model {
+        ContactModel::SpringDashpot { stiffness, damping } => SpringDashpot::new(stiffness, damping),
         ContactModel::Hertz { .. } => {
             let mut model = SpringDashpot::new(0.0, None);
             model.hertz = params.model.effective_modulus();
-            Some(model)
+            model
         }
-        ContactModel::Impulse => None,
-    }
+        ContactModel::Impulse => return None,
+    };
+    model.tangential = tangential_of(params);
+    Some(model)
+}
+
+/// The tangential part of a force model from the settings (checked), with its defaults
+/// ([`TangentialArgs`]).
+fn tangential_of(params: &CollisionParams) -> Option<TangentialModel> {
+    let t = params.tangential;
+    let law = match (params.model, t.kind) {
+        (ContactModel::SpringDashpot { stiffness, .. }, _) => TangentialLaw::LinearHistory {
+            stiffness: t.stiffness.unwrap_or(2.0 / 7.0 * stiffness),
+        },
+        (ContactModel::Hertz { .. }, Some(TangentialKind::LinearHistory)) => {
+            TangentialLaw::LinearHistory { stiffness: t.stiffness? }
+        }
+        (
+            ContactModel::Hertz {
+                youngs_modulus,
+                poisson_ratio,
+            },
+            _,
+        ) => TangentialLaw::Mindlin {
+            // G* between two bodies of the material: 1/G* = 2 · 2 (2 − ν)(1 + ν)/E
+            shear_modulus: youngs_modulus / (4.0 * (2.0 - poisson_ratio) * (1.0 + poisson_ratio)),
+        },
+        (ContactModel::Impulse, _) => return None,
+    };
+    Some(TangentialModel {
+        law,
+        damping: t.damping.unwrap_or(TangentialArgs::DAMPING),
+        rolling: (params.rolling_friction > 0.0).then_some(RollingModel {
+            friction: params.rolling_friction,
+            stiffness: t.rolling_stiffness,
+            damping: t.rolling_damping,
+        }),
+    })
 }
 
 /// The collision stages of a world, with their settings, colliders and books; the impulse
@@ -469,6 +641,10 @@ impl CollideStage {
         self.spring_dashpot = match (self.spring_dashpot.take(), spring_dashpot_of(&self.params)) {
             (Some(mut kept), Some(new)) => {
                 (kept.stiffness, kept.hertz, kept.damping) = (new.stiffness, new.hertz, new.damping);
+                if kept.tangential != new.tangential {
+                    kept.forget_history();
+                }
+                kept.tangential = new.tangential;
                 Some(kept)
             }
             (_, new) => new,
@@ -539,7 +715,7 @@ impl CollideStage {
     /// The spring–dashpot contact force on particles of radii `radius` (m) and inverse masses
     /// `inv_mass` (1/kg), with this stage's materials, colliders and domain, for one call;
     /// `None` with the impulse model.
-    pub fn contact_force<'a>(&'a self, radius: &'a [f64], inv_mass: &'a [f64]) -> Option<ContactForce<'a>> {
+    pub fn contact_force<'a>(&'a self, radius: &'a [f64], inv_mass: &'a [f64], omega: &'a [f64]) -> Option<ContactForce<'a>> {
         let model = self.spring_dashpot.as_ref()?;
         let own = self.particle_materials.as_deref().zip(self.particle_ratios.as_deref());
         Some(ContactForce::new(
@@ -551,6 +727,7 @@ impl CollideStage {
                 inv_mass,
                 colliders: &self.colliders,
                 domain: &self.domain,
+                omega,
             },
         ))
     }

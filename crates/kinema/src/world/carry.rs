@@ -116,6 +116,8 @@ impl World {
             self.stepper = Some(WorldStepper::Verlet(Box::new(VerletBuffers {
                 a,
                 a_next: Vec::new(),
+                omega_next: Vec::new(),
+                alpha_next: Vec::new(),
                 fresh: true,
             })));
         }

@@ -207,3 +207,149 @@ impl World {
         Ok(())
     }
 }
+
+/// A touching pair's memory as a checkpoint holds it: (i, j, springs), the springs as
+/// ξ_t (3, m), ξ_r (3, m), θ_tw (rad) (`collide/contact_force/history.rs`).
+pub type PairMemory = (usize, usize, [f64; 7]);
+
+/// A collider touch's memory as a checkpoint holds it: (particle, collider, the touch's
+/// normal, springs).
+pub type WallMemory = (usize, usize, [f64; 3], [f64; 7]);
+
+impl World {
+    /// Whether the contacts have a tangential part (a force model, and friction somewhere).
+    fn has_tangential_contacts(&self) -> bool {
+        super::forces::contact_force(&self.collide_stage, &self.particles).is_some_and(|c| c.has_tangential())
+    }
+
+    /// What spin carries from step to step under the contacts' torques, in the user's order:
+    /// the angular accelerations α at the current state (rad/s², 3 per particle), while
+    /// Verlet's carry is up to date; `None` otherwise.
+    pub fn spin_carry(&mut self) -> Option<Vec<f64>> {
+        self.restore_user_order();
+        let n = 3 * self.particles.len();
+        let fresh = matches!(&self.stepper, Some(WorldStepper::Verlet(b)) if b.fresh && b.a.len() == n);
+        (fresh && self.particles.has_spin() && self.has_tangential_contacts()).then(|| self.particles.alpha.clone())
+    }
+
+    /// Gives back what [`World::spin_carry`] took (a checkpoint's), after
+    /// [`World::restore_integrator_carry`].
+    pub fn restore_spin_carry(&mut self, alpha: Vec<f64>) -> Result<(), Error> {
+        let n = 3 * self.particles.len();
+        if !self.particles.has_spin() {
+            return Err(Error::invalid(
+                "spin_carry",
+                "given",
+                "only a world with spin carries angular accelerations",
+            ));
+        }
+        if alpha.len() != n {
+            return Err(Error::invalid(
+                "spin_carry",
+                format!("{} values", alpha.len()),
+                format!("3 per particle ({n})"),
+            ));
+        }
+        if let Some((k, v)) = crate::vec3::first_non_finite(&alpha) {
+            return Err(Error::invalid(
+                format!("spin_carry[{k}]"),
+                v,
+                "angular accelerations must be finite",
+            ));
+        }
+        self.restore_user_order();
+        self.particles.alpha = alpha;
+        Ok(())
+    }
+
+    /// The contacts' memory (the force models' tangential springs), in the user's order:
+    /// touching pairs i < j, and particles touching colliders. Empty without it.
+    pub fn contact_history(&mut self) -> (Vec<PairMemory>, Vec<WallMemory>) {
+        self.restore_user_order();
+        let Some(model) = self.spring_dashpot() else {
+            return (Vec::new(), Vec::new());
+        };
+        let (pairs, walls) = model.history();
+        (
+            pairs
+                .iter()
+                .map(|p| (p.i as usize, p.j as usize, p.slip.to_array()))
+                .collect(),
+            walls
+                .iter()
+                .map(|w| (w.i as usize, w.k as usize, w.normal, w.slip.to_array()))
+                .collect(),
+        )
+    }
+
+    /// Gives back what [`World::contact_history`] took (a checkpoint's): checks that each
+    /// index is in range and each number finite.
+    pub fn restore_contact_history(&mut self, pairs: Vec<PairMemory>, walls: Vec<WallMemory>) -> Result<(), Error> {
+        use crate::collide::contact_force::{PairSlip, Slip, WallSlip};
+        let n = self.particles.len();
+        let colliders = self.collide_stage.as_ref().map_or(0, |s| s.colliders.len());
+        for (k, (i, j, s)) in pairs.iter().enumerate() {
+            if *i >= n || *j >= n || i == j {
+                return Err(Error::invalid(
+                    format!("contact_history pair {k}"),
+                    format!("({i}, {j})"),
+                    format!("two different particles, each below {n}"),
+                ));
+            }
+            if s.iter().any(|c| !c.is_finite()) {
+                return Err(Error::invalid(
+                    format!("contact_history pair {k}"),
+                    format!("{s:?}"),
+                    "finite springs",
+                ));
+            }
+        }
+        for (q, (i, k, normal, s)) in walls.iter().enumerate() {
+            if *i >= n || *k >= colliders {
+                return Err(Error::invalid(
+                    format!("contact_history wall {q}"),
+                    format!("({i}, {k})"),
+                    format!("a particle below {n} and a collider below {colliders}"),
+                ));
+            }
+            if s.iter().chain(normal).any(|c| !c.is_finite()) {
+                return Err(Error::invalid(
+                    format!("contact_history wall {q}"),
+                    format!("{s:?}"),
+                    "finite springs and normal",
+                ));
+            }
+        }
+        self.restore_user_order();
+        let Some(model) = self.spring_dashpot() else {
+            if pairs.is_empty() && walls.is_empty() {
+                return Ok(());
+            }
+            return Err(Error::invalid(
+                "contact_history",
+                "given",
+                "only the force models keep a contact history",
+            ));
+        };
+        model.set_history(
+            pairs
+                .into_iter()
+                .map(|(i, j, s)| PairSlip {
+                    i: i as u32,
+                    j: j as u32,
+                    slip: Slip::from_array(s),
+                })
+                .collect(),
+            walls
+                .into_iter()
+                .map(|(i, k, normal, s)| WallSlip {
+                    i: i as u32,
+                    k: k as u32,
+                    normal,
+                    slip: Slip::from_array(s),
+                })
+                .collect(),
+        );
+        Ok(())
+    }
+}

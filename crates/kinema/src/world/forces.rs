@@ -11,7 +11,9 @@ use crate::particles::Particles;
 
 /// The spring–dashpot contact force on `particles` for one call (`None` without it).
 pub(super) fn contact_force<'a>(stage: &'a Option<CollideStage>, particles: &'a Particles) -> Option<ContactForce<'a>> {
-    stage.as_ref()?.contact_force(&particles.radius, &particles.inv_mass)
+    stage
+        .as_ref()?
+        .contact_force(&particles.radius, &particles.inv_mass, &particles.omega)
 }
 
 /// `forces` and then `contact`, in the order they are summed.

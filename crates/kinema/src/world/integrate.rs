@@ -6,7 +6,7 @@ use super::dynamics::Dynamics;
 use super::forces::{contact_force, every_force};
 use super::implicit::{BaraffWitkin, StepSpan};
 use super::{World, RUNAWAY_CHECK_EVERY};
-use crate::collide::contact_force::{VerletKick, CHUNK};
+use crate::collide::contact_force::{SpinKick, VerletKick, CHUNK};
 use crate::error::{Divergence, Error};
 use crate::forces::State;
 use crate::ode::explicit_rk::ExplicitRk;
@@ -62,6 +62,10 @@ impl WorldStepper {
 pub(super) struct VerletBuffers {
     pub(super) a: Vec<f64>,
     pub(super) a_next: Vec<f64>,
+    /// With spin under the contacts' torques (`SpinKick`): ω and α at the step's end, until
+    /// the step is accepted; empty otherwise.
+    pub(super) omega_next: Vec<f64>,
+    pub(super) alpha_next: Vec<f64>,
     /// `a` holds the acceleration at the current state.
     pub(super) fresh: bool,
 }
@@ -87,6 +91,15 @@ impl World {
         if matches!(self.stepper, Some(WorldStepper::Verlet(_))) {
             self.verlet()?;
         } else {
+            if contact_force(&self.collide_stage, &self.particles).is_some_and(|c| c.has_tangential()) {
+                return Err(Error::invalid(
+                    "method",
+                    format!("'{}'", self.params.method.name()),
+                    "contacts with friction under a force model ('spring_dashpot', 'hertz') step with method='verlet' \
+                     only: their tangential springs stretch once per step, at its one force evaluation (LAMMPS's fix \
+                     nve/sphere); use method='verlet', or friction=0",
+                ));
+            }
             self.integrate_joined()?;
         }
         if self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0 {
@@ -160,6 +173,25 @@ impl World {
                 let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
                 dynamics.accel(t, &p.x, &p.v, &mut b.a)?;
                 self.stats.nfev += 1;
+                // and α = τ/I, where the contacts' torques turn the particles
+                if let Some(c) = contact.as_ref().filter(|c| c.has_tangential() && p.has_spin()) {
+                    let s = State {
+                        t,
+                        x: &p.x,
+                        v: &p.v,
+                        mass: &p.mass,
+                    };
+                    let mut alpha = vec![0.0; n];
+                    c.torques_at(&s, &mut alpha)?;
+                    for (q, a) in alpha.iter_mut().enumerate() {
+                        *a = if self.params.dim == 2 && q % 3 < 2 {
+                            0.0
+                        } else {
+                            *a * p.inv_inertia[q / 3]
+                        };
+                    }
+                    self.particles.alpha = alpha;
+                }
                 b.fresh = true;
             }
             // With spring–dashpot contacts in a periodic cell, x' is wrapped into the cell in
@@ -207,7 +239,13 @@ impl World {
             b.a_next.resize(n, 0.0);
             let p = &self.particles;
             if let Some(contact) = contact_force(&self.collide_stage, p) {
-                // The contact force and the closing kick in one pass, the other forces first.
+                // The contact force and the closing kick in one pass, the other forces first
+                // (and with spin under the contacts' torques, the angular kick beside).
+                let turns = contact.has_tangential() && p.has_spin();
+                if turns {
+                    b.omega_next.resize(n, 0.0);
+                    b.alpha_next.resize(n, 0.0);
+                }
                 let s1 = State {
                     t: t + h,
                     x: &self.x_next,
@@ -240,8 +278,18 @@ impl World {
                         a: &mut b.a,
                         v_out: &mut b.a_next,
                         energy: self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0,
+                        spin: turns.then(|| SpinKick {
+                            omega: &p.omega,
+                            alpha: &p.alpha,
+                            inv_inertia: &p.inv_inertia,
+                            alpha_out: &mut b.alpha_next,
+                            omega_out: &mut b.omega_next,
+                        }),
                     },
                 )?;
+                if !turns {
+                    b.omega_next.clear();
+                }
                 std::mem::swap(&mut b.a, &mut b.a_next); // a_next = a'
                 std::mem::swap(&mut b.a, &mut self.v_next); // v_next = v(t + h); a = spare
                 self.stats.nfev += 1;

@@ -19,6 +19,7 @@
 mod advisor;
 mod carry;
 mod checkpoint;
+pub use checkpoint::{PairMemory, WallMemory};
 mod collide;
 mod contents;
 mod deaths;
@@ -31,7 +32,9 @@ mod integrate;
 mod measures;
 mod order;
 
-pub use crate::collide::stage::{ColliderBooks, CollisionParams, CollisionStats, ContactModel, ModelArgs};
+pub use crate::collide::stage::{
+    ColliderBooks, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind,
+};
 pub use crate::interrupt::Interrupt;
 pub use advisor::Rates;
 pub use deaths::KillVolume;
@@ -296,6 +299,14 @@ impl World {
         std::mem::swap(&mut self.particles.v, &mut self.v_next);
         if let Some(WorldStepper::Verlet(b)) = &mut self.stepper {
             std::mem::swap(&mut b.a, &mut b.a_next);
+            if !b.omega_next.is_empty() {
+                // turned by the contacts' torques in stage 1
+                std::mem::swap(&mut self.particles.omega, &mut b.omega_next);
+                std::mem::swap(&mut self.particles.alpha, &mut b.alpha_next);
+            }
+        }
+        if let Some(model) = self.spring_dashpot() {
+            model.accept_history();
         }
         self.time = self.params_time_after(self.steps + 1);
         self.steps += 1;

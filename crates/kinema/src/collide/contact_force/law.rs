@@ -23,7 +23,12 @@ impl ContactForce<'_> {
     /// `f`, the energy only.
     pub(super) fn pair_pass(&self, s: &State, scratch: &mut Scratch, f: Option<&mut [f64]>, walls: bool) -> f64 {
         let Scratch {
-            list, sums, exchange, ..
+            list,
+            sums,
+            exchange,
+            histories,
+            torque_exchange,
+            ..
         } = scratch;
         let options = PassOptions {
             energy: true,
@@ -33,15 +38,73 @@ impl ContactForce<'_> {
         };
         match f {
             Some(f) => {
-                self.pair_forces(s.x, s.v, list, Some(&mut *f), |_, _| {}, options, exchange, sums);
+                // the springs read as they are (`tangent.rs`)
+                let turn = super::turning(self.tangential, self.omega, histories, torque_exchange, None, None);
+                let turn = turn.as_ref().map(|(t, _)| (t, super::pairs::TurningOut::default()));
+                self.pair_forces(s.x, s.v, list, Some(&mut *f), |_, _| {}, options, exchange, sums, turn);
                 let exchange = &*exchange;
                 f.par_chunks_mut(3 * CHUNK)
                     .enumerate()
                     .for_each(|(d, fc)| exchange.receive(d, fc));
             }
-            None => self.pair_forces(s.x, s.v, list, None, |_, _| {}, options, exchange, sums),
+            None => self.pair_forces(s.x, s.v, list, None, |_, _| {}, options, exchange, sums, None),
         }
         sums.iter().fold(-0.0, |sum, c| sum + c.energy)
+    }
+
+    /// The contact torques at `s` (N·m, 3 per particle) into `torque`, with the springs as
+    /// they are (`tangent.rs`; zeros without a tangential part): Verlet's first angular
+    /// acceleration.
+    pub(crate) fn torques_at(&self, s: &State, torque: &mut [f64]) -> Result<(), Error> {
+        torque.fill(0.0);
+        if self.tangential.is_none() {
+            return Ok(());
+        }
+        let mut scratch = self.scratch();
+        self.update_list(s, &mut scratch)?;
+        let options = PassOptions {
+            energy: false,
+            walls: true,
+            check_positions: false,
+            books: None,
+        };
+        let mut forces = vec![0.0; s.x.len()];
+        {
+            let Scratch {
+                list,
+                sums,
+                exchange,
+                histories,
+                torque_exchange,
+                ..
+            } = &mut *scratch;
+            if let Some((t, o)) = super::turning(
+                self.tangential,
+                self.omega,
+                histories,
+                torque_exchange,
+                None,
+                Some(&mut *torque),
+            ) {
+                self.pair_forces(
+                    s.x,
+                    s.v,
+                    list,
+                    Some(&mut forces),
+                    |_, _| {},
+                    options,
+                    exchange,
+                    sums,
+                    Some((&t, o)),
+                );
+            }
+        }
+        let exchange = &scratch.torque_exchange;
+        torque
+            .par_chunks_mut(3 * CHUNK)
+            .enumerate()
+            .for_each(|(d, tc)| exchange.receive(d, tc));
+        Ok(())
     }
 
     /// The force of contact `c` along its normal, N (> 0 pushes apart), or `None` when it

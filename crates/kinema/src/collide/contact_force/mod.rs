@@ -34,15 +34,20 @@ use crate::collide::neighbour_list::{collider_scale, ListBuild, NeighbourList, S
 use crate::collide::{Collider, Domain, Grid, Material};
 use crate::error::Error;
 use crate::forces::State;
+use history::Histories;
+pub(crate) use history::{PairSlip, Slip, WallSlip};
 pub(crate) use law::particle_ratios;
 use law::DampingRatios;
-use pairs::{ChunkSums, Exchange};
-pub(crate) use verlet::VerletKick;
+use pairs::{ChunkSums, Exchange, Turning, TurningOut};
+pub use tangent::{RollingModel, TangentialLaw, TangentialModel};
+pub(crate) use verlet::{SpinKick, VerletKick};
 
 mod contacts;
 mod force;
+mod history;
 mod law;
 mod pairs;
+mod tangent;
 mod verlet;
 
 /// The spring–dashpot model between calls: the law's constants and the buffers one
@@ -55,6 +60,8 @@ pub(crate) struct SpringDashpot {
     pub hertz: Option<f64>,
     /// γ_n, 1/s (`None`: the damping follows from each pair's restitution e).
     pub damping: Option<f64>,
+    /// The tangential part with memory (`tangent.rs`), when contacts have friction.
+    pub tangential: Option<TangentialModel>,
     /// A fixed skin, m (tests); `None`: [`SKIN_PER_RADIUS`] times the mean radius, at each
     /// build of the list.
     skin: Option<f64>,
@@ -70,6 +77,7 @@ impl SpringDashpot {
             stiffness,
             hertz: None,
             damping,
+            tangential: None,
             skin: None,
             scratch: Mutex::new(Scratch::default()),
         }
@@ -91,14 +99,55 @@ impl SpringDashpot {
     /// Follows a renumbering of the particles (`new_of_old`, `old_of_new`): the list stays
     /// the same list in the new numbering.
     pub fn renumber(&self, new_of_old: &[u32], old_of_new: &[u32]) {
-        self.scratch().list.renumber(new_of_old, old_of_new);
+        let mut scratch = self.scratch();
+        scratch.list.renumber(new_of_old, old_of_new);
+        scratch.histories.renumber(new_of_old);
     }
 
     /// Follows a removal of particles (`new_of_old` as [`NeighbourList::retain_survivors`]
     /// takes it): the survivors' pairs stay listed, so the next evaluation need not search
     /// the grid again.
     pub fn retain_survivors(&self, new_of_old: &[u32]) {
-        self.scratch().list.retain_survivors(new_of_old);
+        let mut scratch = self.scratch();
+        scratch.list.retain_survivors(new_of_old);
+        scratch.histories.renumber(new_of_old);
+    }
+
+    /// Forgets the contacts' memory (the tangential model changed).
+    pub fn forget_history(&self) {
+        self.scratch().histories.clear();
+    }
+
+    /// The memory the last Verlet pass made becomes the contacts' own (its step was
+    /// accepted; `history.rs`).
+    pub fn accept_history(&self) {
+        self.scratch().histories.accept();
+    }
+
+    /// The contacts' memory: touching pairs (i, j, springs) and collider touches (i, k,
+    /// normal, springs), in the engine's numbering.
+    pub fn history(&self) -> (Vec<PairSlip>, Vec<WallSlip>) {
+        let scratch = self.scratch();
+        (scratch.histories.pairs.clone(), scratch.histories.walls.clone())
+    }
+
+    /// Sets the contacts' memory (a checkpoint's), sorted here; pairs with i ≥ j are
+    /// turned round.
+    pub fn set_history(&self, pairs: Vec<PairSlip>, walls: Vec<WallSlip>) {
+        let mut scratch = self.scratch();
+        let h = &mut scratch.histories;
+        h.clear();
+        h.pairs = pairs;
+        h.walls = walls;
+        let n = h
+            .pairs
+            .iter()
+            .map(|p| p.i.max(p.j) as usize + 1)
+            .chain(h.walls.iter().map(|w| w.i as usize + 1))
+            .max()
+            .unwrap_or(0);
+        let identity: Vec<u32> = (0..n as u32).collect();
+        h.renumber(&identity);
     }
 
     /// Whether the neighbour list must be rebuilt before an evaluation at positions `x` (m,
@@ -178,6 +227,10 @@ pub(crate) struct ContactForce<'a> {
     colliders: &'a [Collider],
     /// (a copy: the hot loops read it without a pointer to follow)
     domain: Domain,
+    /// The tangential part (`tangent.rs`), when some contact has friction.
+    tangential: Option<TangentialModel>,
+    /// The angular velocities, rad/s (3 per particle; empty without spin).
+    omega: &'a [f64],
 }
 
 /// What a [`ContactForce`] reads besides its model: the pair materials (with each
@@ -195,6 +248,43 @@ pub(crate) struct Bodies<'a> {
     pub colliders: &'a [Collider],
     /// 2D/3D, periodic axes.
     pub domain: &'a Domain,
+    /// Angular velocities, rad/s (3 per particle; empty without spin).
+    pub omega: &'a [f64],
+}
+
+/// A pass's tangential part over the memory in `histories`, with the angular velocities
+/// `omega` (rad/s), the step `step` (s; `None`: the springs are read, not stretched) and the
+/// torques into `torque` (N·m; `None`: forces only).
+fn turning<'s>(
+    model: Option<TangentialModel>,
+    omega: &'s [f64],
+    histories: &'s mut Histories,
+    torque_exchange: &'s mut Exchange,
+    step: Option<f64>,
+    torque: Option<&'s mut [f64]>,
+) -> Option<(Turning<'s>, TurningOut<'s>)> {
+    let model = model?;
+    histories.pending |= step.is_some();
+    let Histories {
+        pairs,
+        walls,
+        pending_pairs,
+        pending_walls,
+        ..
+    } = histories;
+    Some((
+        Turning {
+            model,
+            omega,
+            pairs,
+            walls,
+            step,
+        },
+        TurningOut {
+            torque: torque.map(|t| (t, torque_exchange)),
+            memory: step.map(|_| (pending_pairs, pending_walls)),
+        },
+    ))
 }
 
 struct Scratch {
@@ -215,6 +305,12 @@ struct Scratch {
     /// The contact books of the last fused Verlet pass, until the world takes them
     /// ([`SpringDashpot::take_books`]).
     books: Option<pairs::ContactBooks>,
+    /// The contacts' memory (`history.rs`).
+    histories: Histories,
+    /// The torques chunks owe particles of later chunks (as `exchange` the forces).
+    torque_exchange: Exchange,
+    /// The torques of Verlet's pass, N·m (3 per particle).
+    torque: Vec<f64>,
 }
 
 impl Default for Scratch {
@@ -229,6 +325,9 @@ impl Default for Scratch {
             exchange: Exchange::default(),
             pair_energy: None,
             books: None,
+            histories: Histories::default(),
+            torque_exchange: Exchange::default(),
+            torque: Vec::new(),
         }
     }
 }
@@ -248,6 +347,27 @@ impl<'a> ContactForce<'a> {
             inv_mass: bodies.inv_mass,
             colliders: bodies.colliders,
             domain: *bodies.domain,
+            tangential: model
+                .tangential
+                .filter(|_| has_friction(bodies.global, bodies.own.map(|o| o.0), bodies.colliders)),
+            omega: bodies.omega,
+        }
+    }
+
+    /// Whether the contacts have a tangential part (`tangent.rs`): the model has one and some
+    /// contact has friction.
+    pub fn has_tangential(&self) -> bool {
+        self.tangential.is_some()
+    }
+
+    /// μ of contact `c` (`MaterialTable::pair`'s rule: √(μ_i μ_j) between particles, the
+    /// collider's own where it sets one).
+    #[inline]
+    pub(super) fn friction_of(&self, c: &crate::collide::Contact) -> f64 {
+        let own = |i: usize| self.own.map_or(self.global, |m| m[i]);
+        match c.other {
+            crate::collide::Partner::Particle(j) => Material::combine(own(c.i), own(j)).friction(),
+            crate::collide::Partner::Collider(k) => self.colliders[k].surface().friction().unwrap_or(own(c.i).friction()),
         }
     }
 
@@ -306,6 +426,13 @@ impl<'a> ContactForce<'a> {
         };
         list.update(grid, s.x, self.radius, self.colliders, &self.domain, build)
     }
+}
+
+/// Whether some contact can have friction: the global μ, a particle's own or a collider's.
+fn has_friction(global: Material, own: Option<&[Material]>, colliders: &[Collider]) -> bool {
+    global.friction() > 0.0
+        || own.is_some_and(|o| o.iter().any(|m| m.friction() > 0.0))
+        || colliders.iter().any(|c| c.surface().friction().is_some_and(|f| f > 0.0))
 }
 
 #[cfg(test)]

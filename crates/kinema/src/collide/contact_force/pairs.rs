@@ -23,9 +23,12 @@
 
 use rayon::prelude::*;
 
+use super::history::{pair_slip, wall_slip, PairSlip, WallSlip};
+use super::tangent::{Tangent, TangentialModel, Touch};
 use super::{ContactForce, CHUNK};
 use crate::collide::neighbour_list::{NeighbourList, Rows};
-use crate::collide::pair_contact;
+use crate::collide::{pair_contact, Contact};
+use crate::vec3;
 
 /// The forces chunks send to particles of later chunks (stage 2 of the pair pass), kept
 /// between evaluations so that a pass allocates nothing once warm.
@@ -100,7 +103,7 @@ pub(crate) struct ContactBooks {
     /// Of them, those that began within the step: δ − h δ' ≤ 0, the overlap one step earlier
     /// on the current approach (δ' = −u_n), is no overlap. An impact's count.
     pub begun: usize,
-    /// The dashpots' power Σ c_n u_n², W (≥ 0).
+    /// The dashpots' power Σ c_n u_n², W (≥ 0), and the tangential parts' (`tangent.rs`).
     pub power: f64,
     /// Σ (x_i − x_j) ⊗ F of the pairs (colliders left out), N·m, row-major 3 × 3.
     pub virial: [f64; 9],
@@ -117,17 +120,41 @@ impl ContactBooks {
     }
 
     /// The books of a contact with force `force` (N, along n) and dashpot `dashpot` (kg/s),
-    /// `arm` its separation |x_i − x_j| (m; `None` against a collider), in a step `h`.
+    /// `arm` its separation |x_i − x_j| (m; `None` against a collider), in a step `h`; with a
+    /// tangential part, its force on i (N) and the power it dissipates (W).
     #[inline]
-    fn book(&mut self, c: &crate::collide::Contact, force: f64, dashpot: f64, arm: Option<f64>, h: f64) {
+    #[allow(clippy::too_many_arguments)]
+    fn book(
+        &mut self,
+        c: &Contact,
+        force: f64,
+        dashpot: f64,
+        arm: Option<f64>,
+        h: f64,
+        tangential_power: f64,
+        tangential: Option<[f64; 3]>,
+    ) {
         self.contacts += 1;
         self.begun += usize::from(c.overlap + c.u_n * h <= 0.0);
-        self.power += dashpot * c.u_n * c.u_n;
+        self.power += dashpot * c.u_n * c.u_n + tangential_power;
         if let Some(d) = arm {
+            // (x_i − x_j) ⊗ F = d n ⊗ (F_n n + F_t)
             let n = c.normal;
-            for r in 0..3 {
-                for k in 0..3 {
-                    self.virial[3 * r + k] += d * force * n[r] * n[k];
+            match tangential {
+                None => {
+                    for r in 0..3 {
+                        for k in 0..3 {
+                            self.virial[3 * r + k] += d * force * n[r] * n[k];
+                        }
+                    }
+                }
+                Some(ft) => {
+                    let f = vec3::add(vec3::scale(force, n), ft);
+                    for r in 0..3 {
+                        for k in 0..3 {
+                            self.virial[3 * r + k] += d * n[r] * f[k];
+                        }
+                    }
                 }
             }
         }
@@ -154,13 +181,49 @@ pub(super) fn summed_books(sums: &[ChunkSums]) -> ContactBooks {
     all
 }
 
+/// The tangential part of a pass (`tangent.rs`): the model, the angular velocities it sees,
+/// the contacts' memory it reads and, in Verlet's pass, the step that stretches the springs.
+pub(super) struct Turning<'p> {
+    pub model: TangentialModel,
+    /// ω at the evaluation, rad/s (3 per particle; empty: nothing turns).
+    pub omega: &'p [f64],
+    /// The memory read (sorted, [`Histories`](super::history::Histories)).
+    pub pairs: &'p [PairSlip],
+    pub walls: &'p [WallSlip],
+    /// h, s: stretch the springs by the step's slip and write the new memory (Verlet's pass).
+    pub step: Option<f64>,
+}
+
+/// Where a pass with a tangential part writes: the torques (N·m, 3 per particle; `None`:
+/// forces only), what chunks owe later chunks' torques, and per chunk the new memory (with a
+/// step).
+#[derive(Default)]
+pub(super) struct TurningOut<'o> {
+    /// The torques and what chunks owe later chunks' torques.
+    pub torque: Option<(&'o mut [f64], &'o mut Exchange)>,
+    /// The new memory, per chunk.
+    pub memory: Option<(&'o mut Vec<Vec<PairSlip>>, &'o mut Vec<Vec<WallSlip>>)>,
+}
+
+/// One chunk's share of a pass's outputs.
+struct ChunkOut<'o> {
+    forces: Option<&'o mut [f64]>,
+    sent: &'o mut Vec<(u32, [f64; 3])>,
+    torque: Option<&'o mut [f64]>,
+    torque_sent: Option<&'o mut Vec<(u32, [f64; 3])>>,
+    pairs: Option<&'o mut Vec<PairSlip>>,
+    walls: Option<&'o mut Vec<WallSlip>>,
+}
+
 impl ContactForce<'_> {
     /// Stage 1 of the pair pass (see the module doc) at positions `x` (m) and velocities `v`
     /// (m/s), with the list `list` (holding at `x`), and the exchange indexed for stage 2.
     ///
     /// `forces`: the force buffer, N (3 per particle), chunk c's part started by
     /// `init(c, part)` before its pairs are added; `None`: energies only. Returns each
-    /// chunk's energy and first non-finite position in `sums`.
+    /// chunk's energy and first non-finite position in `sums`. With `turning` (a model with
+    /// friction), each contact's tangential force is added to its normal one, and its
+    /// torques, new memory and what chunks owe later chunks' torques go to `out`.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn pair_forces(
         &self,
@@ -172,17 +235,95 @@ impl ContactForce<'_> {
         options: PassOptions,
         exchange: &mut Exchange,
         sums: &mut Vec<ChunkSums>,
+        turning: Option<(&Turning<'_>, TurningOut<'_>)>,
     ) {
         debug_assert!(list.half, "the contact force keeps a half list");
         let chunks = list.rows.len();
         exchange.sent.resize_with(chunks, Vec::new);
-        let chunk = |c: usize, rows: &Rows, sent: &mut Vec<(u32, [f64; 3])>, mut fc: Option<&mut [f64]>| {
+        // each chunk's outputs, side by side
+        let mut force_parts: Vec<Option<&mut [f64]>> = match forces {
+            Some(f) => f.chunks_mut(3 * CHUNK).map(Some).collect(),
+            None => (0..chunks).map(|_| None).collect(),
+        };
+        force_parts.resize_with(chunks, || None);
+        let (turn, mut turn_out) = match turning {
+            Some((t, o)) => (Some(t), Some(o)),
+            None => (None, None),
+        };
+        let mut outs: Vec<ChunkOut<'_>> = Vec::with_capacity(chunks);
+        {
+            let mut torque_parts: Vec<Option<&mut [f64]>> = Vec::new();
+            let mut torque_sent: Vec<Option<&mut Vec<(u32, [f64; 3])>>> = Vec::new();
+            let mut new_pairs: Vec<Option<&mut Vec<PairSlip>>> = Vec::new();
+            let mut new_walls: Vec<Option<&mut Vec<WallSlip>>> = Vec::new();
+            if let Some(o) = turn_out.as_mut() {
+                if let Some((tq, ex)) = o.torque.as_mut() {
+                    torque_parts = tq.chunks_mut(3 * CHUNK).map(Some).collect();
+                    ex.sent.resize_with(chunks, Vec::new);
+                    torque_sent = ex.sent.iter_mut().map(Some).collect();
+                }
+                if let Some((pairs, walls)) = o.memory.as_mut() {
+                    pairs.resize_with(chunks, Vec::new);
+                    walls.resize_with(chunks, Vec::new);
+                    new_pairs = pairs.iter_mut().map(Some).collect();
+                    new_walls = walls.iter_mut().map(Some).collect();
+                }
+            }
+            torque_parts.resize_with(chunks, || None);
+            torque_sent.resize_with(chunks, || None);
+            new_pairs.resize_with(chunks, || None);
+            new_walls.resize_with(chunks, || None);
+            let parts = force_parts
+                .into_iter()
+                .zip(exchange.sent.iter_mut())
+                .zip(torque_parts.into_iter().zip(torque_sent))
+                .zip(new_pairs.into_iter().zip(new_walls));
+            for (((forces, sent), (torque, torque_sent)), (pairs, walls)) in parts {
+                outs.push(ChunkOut {
+                    forces,
+                    sent,
+                    torque,
+                    torque_sent,
+                    pairs,
+                    walls,
+                });
+            }
+        }
+        let chunk = |c: usize, rows: &Rows, out: ChunkOut<'_>| {
+            let ChunkOut {
+                forces: mut fc,
+                sent,
+                torque: mut tc,
+                torque_sent: mut ts,
+                pairs: mut new_pairs,
+                walls: mut new_walls,
+            } = out;
             sent.clear();
             let first = c * CHUNK;
             let len = rows.len();
             if let Some(fc) = fc.as_deref_mut() {
                 init(c, fc);
             }
+            if let Some(tc) = tc.as_deref_mut() {
+                tc.fill(0.0);
+            }
+            if let Some(ts) = ts.as_deref_mut() {
+                ts.clear();
+            }
+            if let Some(p) = new_pairs.as_deref_mut() {
+                p.clear();
+            }
+            if let Some(w) = new_walls.as_deref_mut() {
+                w.clear();
+            }
+            // this chunk's part of the memory
+            let (old_pairs, old_walls) = match turn {
+                Some(t) => (
+                    part_of(t.pairs, first, first + len, |p| p.i),
+                    part_of(t.walls, first, first + len, |w| w.i),
+                ),
+                None => (&[][..], &[][..]),
+            };
             // this chunk's wall candidates (sorted by particle)
             let w0 = list.walls.partition_point(|w| w.0 < first);
             let w1 = list.walls.partition_point(|w| w.0 < first + len);
@@ -213,11 +354,26 @@ impl ContactForce<'_> {
                     let Some((force, dashpot)) = self.normal_force_parts(&contact) else {
                         continue;
                     };
+                    let mut fv = contact.normal.map(|n| force * n);
+                    let mut tangent = None;
+                    if let Some(t) = turn {
+                        let slip = pair_slip(old_pairs, i as u32, j as u32);
+                        let tg = self.tangent_of(t, &contact, force, dashpot, v, slip);
+                        if let Some(p) = new_pairs.as_deref_mut() {
+                            p.push(PairSlip {
+                                i: i as u32,
+                                j: j as u32,
+                                slip: tg.slip,
+                            });
+                        }
+                        fv = vec3::add(fv, tg.force);
+                        tangent = Some(tg);
+                    }
                     if let Some(h) = options.books {
                         let arm = self.radius[i] + self.radius[j] - contact.overlap;
-                        books.book(&contact, force, dashpot, Some(arm), h);
+                        let extra = tangent.map_or(0.0, |t| t.power);
+                        books.book(&contact, force, dashpot, Some(arm), h, extra, tangent.map(|t| t.force));
                     }
-                    let fv = contact.normal.map(|n| force * n);
                     for k in 0..3 {
                         fc[3 * l + k] += fv[k];
                     }
@@ -228,6 +384,20 @@ impl ContactForce<'_> {
                     } else {
                         sent.push((j as u32, fv));
                     }
+                    if let (Some(tg), Some(tc)) = (tangent, tc.as_deref_mut()) {
+                        let (ti, tj) = self.torques(&contact, &tg);
+                        for k in 0..3 {
+                            tc[3 * l + k] += ti[k];
+                        }
+                        if j < first + len {
+                            for k in 0..3 {
+                                tc[3 * (j - first) + k] += tj[k];
+                            }
+                        } else if let Some(ts) = ts.as_deref_mut() {
+                            // (the receiver subtracts what it is sent)
+                            ts.push((j as u32, tj.map(|c| -c)));
+                        }
+                    }
                 }
                 let Some(fc) = fc.as_deref_mut().filter(|_| options.walls) else {
                     continue;
@@ -235,11 +405,34 @@ impl ContactForce<'_> {
                 while let Some(&(_, k)) = walls.next_if(|w| w.0 == i) {
                     self.wall_contacts(i, k, x, v, |contact| {
                         if let Some((force, dashpot)) = self.normal_force_parts(contact) {
+                            let mut fv = contact.normal.map(|n| force * n);
+                            let mut tangent = None;
+                            if let Some(t) = turn {
+                                let slip = wall_slip(old_walls, i as u32, k as u32, contact.normal);
+                                let tg = self.tangent_of(t, contact, force, dashpot, v, slip);
+                                if let Some(w) = new_walls.as_deref_mut() {
+                                    w.push(WallSlip {
+                                        i: i as u32,
+                                        k: k as u32,
+                                        normal: contact.normal,
+                                        slip: tg.slip,
+                                    });
+                                }
+                                fv = vec3::add(fv, tg.force);
+                                tangent = Some(tg);
+                            }
                             if let Some(h) = options.books {
-                                books.book(contact, force, dashpot, None, h);
+                                let extra = tangent.map_or(0.0, |t| t.power);
+                                books.book(contact, force, dashpot, None, h, extra, None);
                             }
                             for k in 0..3 {
-                                fc[3 * l + k] += force * contact.normal[k];
+                                fc[3 * l + k] += fv[k];
+                            }
+                            if let (Some(tg), Some(tc)) = (tangent, tc.as_deref_mut()) {
+                                let (ti, _) = self.torques(contact, &tg);
+                                for k in 0..3 {
+                                    tc[3 * l + k] += ti[k];
+                                }
                             }
                         }
                     });
@@ -247,21 +440,92 @@ impl ContactForce<'_> {
             }
             ChunkSums { energy, bad, books }
         };
-        match forces {
-            Some(f) => f
-                .par_chunks_mut(3 * CHUNK)
-                .zip(list.rows.par_iter().zip(exchange.sent.par_iter_mut()))
-                .enumerate()
-                .map(|(c, (fc, (rows, sent)))| chunk(c, rows, sent, Some(fc)))
-                .collect_into_vec(sums),
-            None => list
-                .rows
-                .par_iter()
-                .zip(exchange.sent.par_iter_mut())
-                .enumerate()
-                .map(|(c, (rows, sent))| chunk(c, rows, sent, None))
-                .collect_into_vec(sums),
-        }
+        outs.into_par_iter()
+            .zip(list.rows.par_iter())
+            .enumerate()
+            .map(|(c, (out, rows))| chunk(c, rows, out))
+            .collect_into_vec(sums);
         exchange.index(chunks);
+        if let Some((_, ex)) = turn_out.and_then(|o| o.torque) {
+            ex.index(chunks);
+        }
     }
+
+    /// The tangential part of `contact` (normal force `force`, N, and dashpot `dashpot`,
+    /// kg/s) at (x, v) with the memory `slip` (`tangent.rs`).
+    #[inline]
+    fn tangent_of(
+        &self,
+        t: &Turning<'_>,
+        c: &Contact,
+        force: f64,
+        dashpot: f64,
+        v: &[f64],
+        slip: super::history::Slip,
+    ) -> Tangent {
+        let vi = vec3::get(v, c.i);
+        let turning = !t.omega.is_empty();
+        let (u, omega, reduced) = match c.partner_particle() {
+            Some(j) => (
+                vec3::sub(vi, vec3::get(v, j)),
+                if turning {
+                    [vec3::get(t.omega, c.i), vec3::get(t.omega, j)]
+                } else {
+                    [[0.0; 3]; 2]
+                },
+                self.reduced_radius(c),
+            ),
+            None => (
+                vec3::sub(vi, c.wall_velocity),
+                if turning {
+                    [vec3::get(t.omega, c.i), [0.0; 3]]
+                } else {
+                    [[0.0; 3]; 2]
+                },
+                self.radius[c.i],
+            ),
+        };
+        let touch = Touch {
+            normal: c.normal,
+            overlap: c.overlap,
+            reduced_radius: reduced,
+            u,
+            omega,
+            arms: self.arms(c),
+            normal_force: force.abs(),
+            dashpot,
+            friction: self.friction_of(c),
+        };
+        t.model.at(&touch, slip, t.step)
+    }
+
+    /// The lever arms (ρ_i, ρ_j) of contact `c`, m (`collide/spin.rs`: the distance of centres
+    /// split by the radii; r_i − δ against a collider).
+    #[inline]
+    fn arms(&self, c: &Contact) -> (f64, f64) {
+        crate::collide::spin::Rotation {
+            inv_inertia: &[],
+            radius: self.radius,
+        }
+        .arms(c, c.overlap)
+    }
+
+    /// The torques of a contact's tangential part on i and on its partner, N·m: −ρ n × F_t
+    /// each, and the couple (+ on i, − on j).
+    #[inline]
+    fn torques(&self, c: &Contact, t: &Tangent) -> ([f64; 3], [f64; 3]) {
+        let (rho_i, rho_j) = self.arms(c);
+        let nf = vec3::cross(c.normal, t.force);
+        (
+            vec3::add(vec3::scale(-rho_i, nf), t.couple),
+            vec3::sub(vec3::scale(-rho_j, nf), t.couple),
+        )
+    }
+}
+
+/// The part of a sorted store whose particle lies in `first..end`.
+fn part_of<T>(all: &[T], first: usize, end: usize, key: impl Fn(&T) -> u32) -> &[T] {
+    let a = all.partition_point(|e| (key(e) as usize) < first);
+    let b = all.partition_point(|e| (key(e) as usize) < end);
+    &all[a..b]
 }

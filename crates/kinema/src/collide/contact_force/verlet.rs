@@ -30,6 +30,30 @@ pub(crate) struct VerletKick<'a> {
     /// Also sum the pair energy at the drifted positions, for the runaway check that asks
     /// for it right after ([`ContactForce::forget_energy`] drops it).
     pub energy: bool,
+    /// The turning of the particles under the contacts' torques (spin with a tangential
+    /// part, `tangent.rs`; `None`: nothing turns in stage 1).
+    pub spin: Option<SpinKick<'a>>,
+}
+
+/// Velocity Verlet for the angular velocities, beside the velocities' (LAMMPS's `fix
+/// nve/sphere`, in the same drift–predict–kick form as `VerletBuffers` in `world/integrate.rs`):
+///
+/// ```text
+///   ω' = ω + h α                       (the predictor the contacts see)
+///   α' = τ(t + h, x', v', ω') / I      (the torques of the force evaluation)
+///   ω  ← ω + h/2 (α + α')
+/// ```
+pub(crate) struct SpinKick<'a> {
+    /// ω at the step's start, rad/s (3 per particle).
+    pub omega: &'a [f64],
+    /// α at the step's start, rad/s².
+    pub alpha: &'a [f64],
+    /// 1/I, 1/(kg·m²) (0: cannot turn).
+    pub inv_inertia: &'a [f64],
+    /// Out: α', rad/s².
+    pub alpha_out: &'a mut [f64],
+    /// Out: ω at the step's end, rad/s (the predictor meanwhile).
+    pub omega_out: &'a mut [f64],
 }
 
 /// The step's contact books, summed from the chunks' (in chunk order), for the world to take.
@@ -65,6 +89,7 @@ impl ContactForce<'_> {
             a,
             v_out,
             energy,
+            spin,
         } = kick;
         let mut scratch = self.scratch();
         self.update_list(s, &mut scratch)?;
@@ -74,8 +99,27 @@ impl ContactForce<'_> {
             exchange,
             pair_energy,
             books,
+            histories,
+            torque_exchange,
+            torque,
             ..
         } = &mut *scratch;
+        // the predictor ω' = ω + h α, which the contacts see
+        let mut spin = spin;
+        if let Some(k) = spin.as_mut() {
+            let (omega, alpha) = (k.omega, k.alpha);
+            k.omega_out.par_chunks_mut(3 * CHUNK).enumerate().for_each(|(c, wc)| {
+                let base = 3 * CHUNK * c;
+                for (q, w) in wc.iter_mut().enumerate() {
+                    *w = omega[base + q] + h * alpha[base + q];
+                }
+            });
+            torque.resize(s.x.len(), 0.0);
+        }
+        let predictor: &[f64] = match spin.as_ref() {
+            Some(k) => k.omega_out,
+            None => self.omega,
+        };
         let (x, vp) = (s.x, s.v);
         // F_i summed in v_out (each chunk's part is written by that chunk alone), started
         // at the other forces' sum
@@ -89,7 +133,21 @@ impl ContactForce<'_> {
             check_positions: true,
             books: Some(h),
         };
-        self.pair_forces(x, vp, list, Some(&mut *v_out), start, options, exchange, sums);
+        let turned = spin.is_some();
+        let turn = super::turning(
+            self.tangential,
+            predictor,
+            histories,
+            torque_exchange,
+            Some(h),
+            turned.then_some(&mut torque[..]),
+        );
+        let (turning, out) = match turn {
+            Some((t, o)) => (Some(t), Some(o)),
+            None => (None, None),
+        };
+        let turn = turning.as_ref().zip(out);
+        self.pair_forces(x, vp, list, Some(&mut *v_out), start, options, exchange, sums, turn);
         scratch_books(books, sums);
         *pair_energy = energy.then(|| {
             (
@@ -123,8 +181,48 @@ impl ContactForce<'_> {
             })
             .flatten() // (Option's own order puts None first: drop the clean chunks)
             .min();
-        // the first non-finite coordinate of x' or of the new velocities
-        let bad = bad.into_iter().chain(bad_x).min();
+        // the angular kick, beside: α' = τ/I, ω ← ω + h/2 (α + α')
+        let bad_w = match spin {
+            Some(k) => {
+                let exchange = &*torque_exchange;
+                let SpinKick {
+                    omega,
+                    alpha,
+                    inv_inertia,
+                    alpha_out,
+                    omega_out,
+                } = k;
+                omega_out
+                    .par_chunks_mut(3 * CHUNK)
+                    .zip(alpha_out.par_chunks_mut(3 * CHUNK))
+                    .zip(torque.par_chunks_mut(3 * CHUNK))
+                    .enumerate()
+                    .map(|(c, ((wc, alc), tc))| {
+                        exchange.receive(c, tc);
+                        let first = c * CHUNK;
+                        let mut bad = None;
+                        for (l, i) in (first..).take(wc.len() / 3).enumerate() {
+                            let k_i = inv_inertia[i];
+                            for k in 0..3 {
+                                let q = 3 * l + k;
+                                // (a disc turns about z alone)
+                                let alpha_new = if flat && k < 2 { 0.0 } else { tc[q] * k_i };
+                                wc[q] = verlet::kick(omega[3 * i + k], alpha[3 * i + k], alpha_new, h);
+                                alc[q] = alpha_new;
+                                if bad.is_none() && !wc[q].is_finite() {
+                                    bad = Some(3 * i + k);
+                                }
+                            }
+                        }
+                        bad
+                    })
+                    .flatten()
+                    .min()
+            }
+            None => None,
+        };
+        // the first non-finite coordinate of x', of the new velocities or angular velocities
+        let bad = bad.into_iter().chain(bad_x).chain(bad_w).min();
         Ok(bad)
     }
 }

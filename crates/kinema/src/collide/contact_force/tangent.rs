@@ -1,0 +1,301 @@
+//! The tangential part of the force models, with memory: LAMMPS GRANULAR's `tangential
+//! linear_history` and `mindlin`, `rolling sds` and `twisting marshall`, as its `pair
+//! granular` computes them (read from its source; Luding, Granular Matter 10 (2008) 235 for
+//! the spring's frame; Marshall, J. Comp. Phys. 228 (2009) 1541 for the twist).
+//!
+//! Contact c between particle i and its partner j (a particle, or a collider's surface
+//! moving at w) has the normal n from j towards i, the overlap δ and the lever arms ρ_i, ρ_j
+//! of `collide/spin.rs` (the contact point splits the distance of centres by the radii). The
+//! contact point of i slides over the partner's at
+//!
+//! ```text
+//!   v_t = u − (u·n) n − (ρ_i ω_i + ρ_j ω_j) × n,      u = v_i − v_j   (v_i − w at a collider)
+//! ```
+//!
+//! **Tangential spring (sliding friction).** The spring's stretch ξ_t is the slip
+//! accumulated while the contact lasts. At each step (Verlet's one force evaluation) it is
+//! first turned into the current tangent plane, keeping its length (the pair has rolled
+//! round: ξ ← |ξ| (ξ − (ξ·n) n)/|ξ − (ξ·n) n|), then stretched by the step's slip, ξ += h v_t,
+//! and the force on i is
+//!
+//! ```text
+//!   F_t = −k_t ξ_t − γ_t v_t,        |F_t| ≤ μ |F_n|          (Coulomb's cone)
+//! ```
+//!
+//! k_t is the tangential stiffness: constant (`linear_history`, N/m), or Mindlin's 8 G* a
+//! with the contact radius a = √(R* δ) and G* the effective shear modulus (`mindlin`); γ_t =
+//! x_γt c_n, a fraction of the normal dashpot. Beyond the cone the force is cut to μ |F_n|
+//! along itself and the spring set to the stretch that gives it, ξ_t = −(μ |F_n| F̂_t +
+//! γ_t v_t)/k_t: the contact slides, and the stretch stays at the cone's edge, so a sliding
+//! contact that stops sticks at once with the friction it had. Below the cone it sticks: a
+//! block on a slope tan θ < μ holds with ξ_t = m g sin θ / k_t exactly.
+//!
+//! F_t acts at the contact point: −F_t on a particle partner, and torques −ρ_i n × F_t on i
+//! and −ρ_j n × F_t on j (both turn the same way; the pair's angular momentum is kept, since
+//! the arms meet at one point).
+//!
+//! **Rolling resistance** (`rolling sds`, with rolling friction μ_r > 0): a spring on the
+//! rolling displacement, v_r = R* (ω_i − ω_j) × n (R* = r_i r_j/(r_i + r_j); r_i at a
+//! collider), stretched and turned as ξ_t is: f_r = −k_r ξ_r − γ_r v_r, |f_r| ≤ μ_r |F_n|;
+//! the couple R* n × f_r on i and its opposite on j.
+//!
+//! **Twisting resistance** (`twisting marshall`, with rolling friction): on the relative spin
+//! about the normal, Ω = (ω_i − ω_j)·n: M = −k_tw θ − γ_tw Ω, |M| ≤ μ_tw |F_n|, with
+//! Marshall's k_tw = ½ k_t a², γ_tw = ½ γ_t a², μ_tw = ⅔ a μ from the sliding contact; the
+//! couple M n on i and its opposite on j.
+//!
+//! Only velocity Verlet steps these models (the springs stretch once per step, by the step's
+//! slip at its one force evaluation, as LAMMPS's `fix nve/sphere` does). The other force
+//! evaluations (the first step's, the advisor's, `accelerations`) read the springs as they
+//! are, stretching nothing.
+
+use super::history::Slip;
+use crate::vec3;
+
+/// LAMMPS's tangential sub-models with history.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TangentialLaw {
+    /// `linear_history`: k_t constant, N/m.
+    LinearHistory {
+        /// k_t, N/m (> 0).
+        stiffness: f64,
+    },
+    /// `mindlin`: k_t = 8 G* a, a = √(R* δ), with the effective shear modulus G* =
+    /// E / (4 (2 − ν)(1 + ν)) between two bodies of the Hertz model's material, Pa.
+    Mindlin {
+        /// G*, Pa (> 0).
+        shear_modulus: f64,
+    },
+}
+
+/// The tangential part of a force model (LAMMPS's `tangential`, and with rolling friction
+/// `rolling sds` and `twisting marshall`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TangentialModel {
+    pub law: TangentialLaw,
+    /// x_γt ≥ 0: the tangential dashpot γ_t = x_γt c_n, a fraction of the normal one.
+    pub damping: f64,
+    /// Rolling and twisting resistance (`None`: none).
+    pub rolling: Option<RollingModel>,
+}
+
+/// Rolling resistance (`rolling sds`) and with it Marshall's twisting resistance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RollingModel {
+    /// μ_r > 0: the rolling spring's force is at most μ_r |F_n|.
+    pub friction: f64,
+    /// k_r, N/m (`None`: the contact's k_t).
+    pub stiffness: Option<f64>,
+    /// γ_r, kg/s (`None`: the contact's γ_t).
+    pub damping: Option<f64>,
+}
+
+/// What the tangential part of one contact does now.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(super) struct Tangent {
+    /// F_t on i, N (⊥ n; −F_t on a particle partner).
+    pub force: [f64; 3],
+    /// The couple on i from rolling and twisting resistance, N·m (its opposite on j).
+    pub couple: [f64; 3],
+    /// The springs after this evaluation.
+    pub slip: Slip,
+    /// The power the tangential part dissipates, W (≥ 0): γ_t |v_t|² while it sticks, |F_t·v_t|
+    /// while it slides (the books' `energy_lost`).
+    pub power: f64,
+}
+
+/// One contact as the tangential law sees it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Touch {
+    /// n, from the partner towards i.
+    pub normal: [f64; 3],
+    /// δ, m (> 0).
+    pub overlap: f64,
+    /// R*, m.
+    pub reduced_radius: f64,
+    /// u = v_i − v_j (or v_i − w), m/s.
+    pub u: [f64; 3],
+    /// ω_i and ω_j (0 at a collider), rad/s.
+    pub omega: [[f64; 3]; 2],
+    /// ρ_i, ρ_j, m.
+    pub arms: (f64, f64),
+    /// |F_n|, N: the normal force, dashpot included (LAMMPS's Fncrit).
+    pub normal_force: f64,
+    /// c_n, kg/s.
+    pub dashpot: f64,
+    /// μ of the pair's material.
+    pub friction: f64,
+}
+
+/// ξ turned into the plane ⊥ n, its length kept (a spring of zero length stays so).
+#[inline]
+fn into_plane(xi: [f64; 3], n: [f64; 3]) -> [f64; 3] {
+    let along = vec3::dot(xi, n);
+    if along == 0.0 {
+        return xi;
+    }
+    let before = vec3::norm(xi);
+    let flat = vec3::sub(xi, vec3::scale(along, n));
+    let after = vec3::norm(flat);
+    if after > 0.0 {
+        vec3::scale(before / after, flat)
+    } else {
+        [0.0; 3]
+    }
+}
+
+/// A spring–dashpot slider, F = −k ξ − γ v with |F| ≤ cap: the force, and the stretch after
+/// a slide (set to where the force stays at the cap).
+#[inline]
+fn slider(xi: [f64; 3], v: [f64; 3], k: f64, gamma: f64, cap: f64) -> ([f64; 3], [f64; 3], bool) {
+    let f = [
+        -k * xi[0] - gamma * v[0],
+        -k * xi[1] - gamma * v[1],
+        -k * xi[2] - gamma * v[2],
+    ];
+    let size = vec3::norm(f);
+    if size <= cap {
+        return (f, xi, false);
+    }
+    if vec3::norm(xi) == 0.0 || k == 0.0 {
+        // no stretch to hold the cap with (LAMMPS: no force)
+        return ([0.0; 3], xi, true);
+    }
+    let s = cap / size;
+    let f = vec3::scale(s, f);
+    let xi = [
+        -(f[0] + gamma * v[0]) / k,
+        -(f[1] + gamma * v[1]) / k,
+        -(f[2] + gamma * v[2]) / k,
+    ];
+    (f, xi, true)
+}
+
+impl TangentialModel {
+    /// The tangential force and couples of contact `t` with memory `slip`; with `step` (h, s)
+    /// the springs are turned and stretched by the step's motion first (module doc).
+    #[inline]
+    pub(super) fn at(&self, t: &Touch, slip: Slip, step: Option<f64>) -> Tangent {
+        let n = t.normal;
+        let (rho_i, rho_j) = t.arms;
+        let [wi, wj] = t.omega;
+        let spin = vec3::add(vec3::scale(rho_i, wi), vec3::scale(rho_j, wj));
+        let un = vec3::dot(t.u, n);
+        let vt = vec3::sub(vec3::sub(t.u, vec3::scale(un, n)), vec3::cross(spin, n));
+        let a = (t.reduced_radius * t.overlap).sqrt();
+        let k_t = match self.law {
+            TangentialLaw::LinearHistory { stiffness } => stiffness,
+            TangentialLaw::Mindlin { shear_modulus } => 8.0 * shear_modulus * a,
+        };
+        let gamma_t = self.damping * t.dashpot;
+        let mut shear = slip.shear;
+        if let Some(h) = step {
+            shear = into_plane(shear, n);
+            for k in 0..3 {
+                shear[k] += h * vt[k];
+            }
+        }
+        let (force, shear, slides) = slider(shear, vt, k_t, gamma_t, t.friction * t.normal_force);
+        let power = if slides {
+            vec3::dot(force, vt).abs()
+        } else {
+            gamma_t * vec3::dot(vt, vt)
+        };
+        let mut out = Tangent {
+            force,
+            couple: [0.0; 3],
+            slip: Slip { shear, ..slip },
+            power,
+        };
+        if let Some(r) = &self.rolling {
+            let rel = vec3::sub(wi, wj);
+            // rolling: v_r = R* Δω × n
+            let vr = vec3::scale(t.reduced_radius, vec3::cross(rel, n));
+            let mut roll = slip.roll;
+            if let Some(h) = step {
+                roll = into_plane(roll, n);
+                for k in 0..3 {
+                    roll[k] += h * vr[k];
+                }
+            }
+            let (k_r, gamma_r) = (r.stiffness.unwrap_or(k_t), r.damping.unwrap_or(gamma_t));
+            let (fr, roll, _) = slider(roll, vr, k_r, gamma_r, r.friction * t.normal_force);
+            // twisting (Marshall): Ω = Δω·n
+            let spin_n = vec3::dot(rel, n);
+            let mut twist = slip.twist;
+            if let Some(h) = step {
+                twist += h * spin_n;
+            }
+            let (k_tw, gamma_tw, cap) = (
+                0.5 * k_t * a * a,
+                0.5 * gamma_t * a * a,
+                2.0 / 3.0 * a * t.friction * t.normal_force,
+            );
+            let mut m = -k_tw * twist - gamma_tw * spin_n;
+            if m.abs() > cap {
+                let sign = if spin_n > 0.0 {
+                    1.0
+                } else if spin_n < 0.0 {
+                    -1.0
+                } else {
+                    0.0
+                };
+                if k_tw > 0.0 {
+                    twist = (cap * sign - gamma_tw * spin_n) / k_tw;
+                }
+                m = -cap * sign;
+            }
+            out.couple = vec3::add(vec3::scale(t.reduced_radius, vec3::cross(n, fr)), vec3::scale(m, n));
+            out.slip.roll = roll;
+            out.slip.twist = twist;
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn touch(u: [f64; 3]) -> Touch {
+        Touch {
+            normal: [0.0, 0.0, 1.0],
+            overlap: 1e-4,
+            reduced_radius: 0.01,
+            u,
+            omega: [[0.0; 3]; 2],
+            arms: (0.01, 0.0),
+            normal_force: 10.0,
+            dashpot: 0.0,
+            friction: 0.5,
+        }
+    }
+
+    #[test]
+    fn the_spring_sticks_inside_the_cone_and_slides_at_its_edge() {
+        let model = TangentialModel {
+            law: TangentialLaw::LinearHistory { stiffness: 1e4 },
+            damping: 0.0,
+            rolling: None,
+        };
+        // a step of slip 1e-4 m: F = −1 N, inside μ F_n = 5 N
+        let t = model.at(&touch([1.0, 0.0, 0.0]), Slip::default(), Some(1e-4));
+        assert_eq!(t.slip.shear, [1e-4, 0.0, 0.0]);
+        assert_eq!(t.force, [-1.0, 0.0, 0.0]);
+        // 1e-3 m more: −11 N, cut to the cone's −5 N with the stretch 5e-4 m
+        let t = model.at(&touch([1.0, 0.0, 0.0]), t.slip, Some(1e-3));
+        assert!((t.force[0] + 5.0).abs() < 1e-12, "{:?}", t.force);
+        assert!((t.slip.shear[0] - 5e-4).abs() < 1e-16);
+        // read without a step: the same force, the spring unchanged
+        let again = model.at(&touch([0.0; 3]), t.slip, None);
+        assert!((again.force[0] + 5.0).abs() < 1e-12);
+        assert_eq!(again.slip, t.slip);
+    }
+
+    #[test]
+    fn a_spring_turned_out_of_the_plane_keeps_its_length() {
+        let xi = into_plane([3.0, 0.0, 4.0], [0.0, 0.0, 1.0]);
+        assert_eq!(xi, [5.0, 0.0, 0.0]);
+        assert_eq!(into_plane([0.0, 0.0, 4.0], [0.0, 0.0, 1.0]), [0.0; 3]);
+    }
+}
