@@ -253,14 +253,15 @@ pub(crate) struct Bodies<'a> {
 }
 
 /// A pass's tangential part over the memory in `histories`, with the angular velocities
-/// `omega` (rad/s), the step `step` (s; `None`: the springs are read, not stretched) and the
-/// torques into `torque` (N·m; `None`: forces only).
+/// `omega` (rad/s), the step `step` (h in s, with the velocities and angular velocities at its
+/// start; `None`: the springs are read, not stretched) and the torques into `torque` (N·m;
+/// `None`: forces only).
 fn turning<'s>(
     model: Option<TangentialModel>,
     omega: &'s [f64],
     histories: &'s mut Histories,
     torque_exchange: &'s mut Exchange,
-    step: Option<f64>,
+    step: Option<(f64, &'s [f64], &'s [f64])>,
     torque: Option<&'s mut [f64]>,
 ) -> Option<(Turning<'s>, TurningOut<'s>)> {
     let model = model?;
@@ -278,7 +279,8 @@ fn turning<'s>(
             omega,
             pairs,
             walls,
-            step,
+            step: step.map(|s| s.0),
+            start: step.map(|s| (s.1, s.2)),
         },
         TurningOut {
             torque: torque.map(|t| (t, torque_exchange)),

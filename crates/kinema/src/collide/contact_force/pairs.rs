@@ -192,6 +192,9 @@ pub(super) struct Turning<'p> {
     pub walls: &'p [WallSlip],
     /// h, s: stretch the springs by the step's slip and write the new memory (Verlet's pass).
     pub step: Option<f64>,
+    /// With a step: the velocities and angular velocities at its start (ω empty: nothing
+    /// turns), whose means with the evaluation's are the velocities over the step.
+    pub start: Option<(&'p [f64], &'p [f64])>,
 }
 
 /// Where a pass with a tangential part writes: the torques (N·m, 3 per particle; `None`:
@@ -485,12 +488,37 @@ impl ContactForce<'_> {
                 self.radius[c.i],
             ),
         };
+        // the velocities over the step: the means of those at its start and the evaluation's
+        let moved = t.start.map(|(v0, w0)| {
+            let mean = |a: [f64; 3], b: [f64; 3]| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])];
+            let vi0 = vec3::get(v0, c.i);
+            let turning0 = !w0.is_empty();
+            match c.partner_particle() {
+                Some(j) => (
+                    mean(u, vec3::sub(vi0, vec3::get(v0, j))),
+                    if turning0 {
+                        [mean(omega[0], vec3::get(w0, c.i)), mean(omega[1], vec3::get(w0, j))]
+                    } else {
+                        [[0.0; 3]; 2]
+                    },
+                ),
+                None => (
+                    mean(u, vec3::sub(vi0, c.wall_velocity)),
+                    if turning0 {
+                        [mean(omega[0], vec3::get(w0, c.i)), [0.0; 3]]
+                    } else {
+                        [[0.0; 3]; 2]
+                    },
+                ),
+            }
+        });
         let touch = Touch {
             normal: c.normal,
             overlap: c.overlap,
             reduced_radius: reduced,
             u,
             omega,
+            moved,
             arms: self.arms(c),
             normal_force: force.abs(),
             dashpot,

@@ -15,8 +15,11 @@
 //! **Tangential spring (sliding friction).** The spring's stretch ξ_t is the slip
 //! accumulated while the contact lasts. At each step (Verlet's one force evaluation) it is
 //! first turned into the current tangent plane, keeping its length (the pair has rolled
-//! round: ξ ← |ξ| (ξ − (ξ·n) n)/|ξ − (ξ·n) n|), then stretched by the step's slip, ξ += h v_t,
-//! and the force on i is
+//! round: ξ ← |ξ| (ξ − (ξ·n) n)/|ξ − (ξ·n) n|), then stretched by the step's slip, ξ += h v̄_t
+//! with v̄ the velocities over the step (x(t + h) − x(t))/h = v + h/2 a, Verlet's half-step
+//! velocity as in LAMMPS (so that ξ is the contact point's displacement, to rounding: a block
+//! held on a slope sits exactly ξ = m g sin θ / k_t below where it touched), and the force on
+//! i, with v_t at the velocities the evaluation sees (the dashpots'), is
 //!
 //! ```text
 //!   F_t = −k_t ξ_t − γ_t v_t,        |F_t| ≤ μ |F_n|          (Coulomb's cone)
@@ -117,6 +120,10 @@ pub(super) struct Touch {
     pub u: [f64; 3],
     /// ω_i and ω_j (0 at a collider), rad/s.
     pub omega: [[f64; 3]; 2],
+    /// With a step: u and ω over it, (x(t + h) − x(t))/h (Verlet's v + h/2 a, the mean of the
+    /// velocities at the step's start and its predictor), which stretch the springs, so that
+    /// ξ is the contact point's displacement to rounding; `None`: `u`, `omega`.
+    pub moved: Option<([f64; 3], [[f64; 3]; 2])>,
     /// ρ_i, ρ_j, m.
     pub arms: (f64, f64),
     /// |F_n|, N: the normal force, dashpot included (LAMMPS's Fncrit).
@@ -178,10 +185,18 @@ impl TangentialModel {
     pub(super) fn at(&self, t: &Touch, slip: Slip, step: Option<f64>) -> Tangent {
         let n = t.normal;
         let (rho_i, rho_j) = t.arms;
+        // the contact point's sliding velocity at (u, ω)
+        let sliding = |u: [f64; 3], [wi, wj]: [[f64; 3]; 2]| {
+            let spin = vec3::add(vec3::scale(rho_i, wi), vec3::scale(rho_j, wj));
+            vec3::sub(vec3::sub(u, vec3::scale(vec3::dot(u, n), n)), vec3::cross(spin, n))
+        };
         let [wi, wj] = t.omega;
-        let spin = vec3::add(vec3::scale(rho_i, wi), vec3::scale(rho_j, wj));
-        let un = vec3::dot(t.u, n);
-        let vt = vec3::sub(vec3::sub(t.u, vec3::scale(un, n)), vec3::cross(spin, n));
+        let vt = sliding(t.u, t.omega);
+        // what stretches the springs over the step
+        let (vt_step, rel_step) = match t.moved {
+            Some((u, w)) => (sliding(u, w), vec3::sub(w[0], w[1])),
+            None => (vt, vec3::sub(wi, wj)),
+        };
         let a = (t.reduced_radius * t.overlap).sqrt();
         let k_t = match self.law {
             TangentialLaw::LinearHistory { stiffness } => stiffness,
@@ -192,7 +207,7 @@ impl TangentialModel {
         if let Some(h) = step {
             shear = into_plane(shear, n);
             for k in 0..3 {
-                shear[k] += h * vt[k];
+                shear[k] += h * vt_step[k];
             }
         }
         let (force, shear, slides) = slider(shear, vt, k_t, gamma_t, t.friction * t.normal_force);
@@ -213,9 +228,10 @@ impl TangentialModel {
             let vr = vec3::scale(t.reduced_radius, vec3::cross(rel, n));
             let mut roll = slip.roll;
             if let Some(h) = step {
+                let vr_step = vec3::scale(t.reduced_radius, vec3::cross(rel_step, n));
                 roll = into_plane(roll, n);
                 for k in 0..3 {
-                    roll[k] += h * vr[k];
+                    roll[k] += h * vr_step[k];
                 }
             }
             let (k_r, gamma_r) = (r.stiffness.unwrap_or(k_t), r.damping.unwrap_or(gamma_t));
@@ -224,7 +240,7 @@ impl TangentialModel {
             let spin_n = vec3::dot(rel, n);
             let mut twist = slip.twist;
             if let Some(h) = step {
-                twist += h * spin_n;
+                twist += h * vec3::dot(rel_step, n);
             }
             let (k_tw, gamma_tw, cap) = (
                 0.5 * k_t * a * a,
@@ -264,6 +280,7 @@ mod tests {
             reduced_radius: 0.01,
             u,
             omega: [[0.0; 3]; 2],
+            moved: None,
             arms: (0.01, 0.0),
             normal_force: 10.0,
             dashpot: 0.0,

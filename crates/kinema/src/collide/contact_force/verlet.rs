@@ -134,12 +134,16 @@ impl ContactForce<'_> {
             books: Some(h),
         };
         let turned = spin.is_some();
+        let omega_start: &[f64] = match spin.as_ref() {
+            Some(k) => k.omega,
+            None => self.omega,
+        };
         let turn = super::turning(
             self.tangential,
             predictor,
             histories,
             torque_exchange,
-            Some(h),
+            Some((h, v, omega_start)),
             turned.then_some(&mut torque[..]),
         );
         let (turning, out) = match turn {

@@ -76,6 +76,7 @@ impl Owned {
                 inv_mass: &self.inv_mass,
                 colliders: &self.colliders,
                 domain: &self.domain,
+                omega: &[],
             },
         )
     }
@@ -802,6 +803,7 @@ fn the_fused_pass_keeps_the_pair_energy_the_runaway_check_asks_for_once() {
                     a,
                     v_out,
                     energy,
+                    spin: None,
                 },
             )
             .unwrap();
