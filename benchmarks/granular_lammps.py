@@ -9,7 +9,11 @@ slipping: closed form t* = 2 v₀ / ((7 μ − 5 μ_r) g) = 97.55 ms at v* = v�
 μ_r = 0). From there rolling resistance slows it at 5/7 μ_r g.
 
   kinema   World(spin=True), the impulse model: set_collisions(restitution=0.5, friction=μ,
-           rolling_friction=μ_r), Plane z = 0, dt = 10 µs
+           rolling_friction=μ_r), Plane z = 0, dt = 10 µs; and LAMMPS's contact in kinema's
+           force model: set_collisions(model="hertz", youngs_modulus=E, poisson_ratio=ν,
+           friction=μ, rolling_friction=μ_r, tangential="linear_history",
+           tangential_stiffness=k_t, tangential_damping=1, rolling_stiffness=k_r,
+           rolling_damping=0), started at its static overlap
   LAMMPS   atom_style sphere, fix nve/sphere, fix gravity; fix wall/gran granular
            hertz/material E e ν tangential linear_history k_t 1 μ rolling sds k_r γ_r μ_r
            damping tsuji on zplane 0 (E = 10 MPa, ν = 0.3, k_t = 200 N/m, k_r = 200 N/m,
@@ -18,7 +22,8 @@ slipping: closed form t* = 2 v₀ / ((7 μ − 5 μ_r) g) = 97.55 ms at v* = v�
 Printed: each engine's slip-to-roll time (the slip velocity v − ω r reaching 1e-3 v₀,
 interpolated), the speed when rolling begins and the rolling deceleration, beside the closed
 forms. The LAMMPS contact is a spring (k_t) with damping, so its stick begins with a short
-elastic ring; kinema's impulse contact has none (it is exact to rounding: tests/test_spin.py).
+elastic ring, and so does kinema's force model; kinema's impulse contact has none (it is exact
+to rounding: tests/test_spin.py).
 No timings: this is about the same physics. LAMMPS missing: one line, status 0.
 
     python benchmarks/granular_lammps.py
@@ -63,15 +68,35 @@ def measured(t: np.ndarray, v: np.ndarray, w: np.ndarray) -> dict[str, float]:
     return {"t_star": t_star, "v_star": float(v_star), "decel": decel}
 
 
-def run_kinema() -> dict[str, float]:
+def run_kinema(force_model: bool = False) -> dict[str, float]:
+    """The impulse model, or (`force_model`) LAMMPS's own contact: Hertz with the tangential
+    spring and rolling sds of the same constants, the sphere started at its static overlap."""
     sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "python"))
     import kinema
 
     w = kinema.World(dt=DT, spin=True)
     w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
     w.add(kinema.Gravity([0, 0, -G]))
-    w.set_collisions(restitution=E_REST, friction=MU, rolling_friction=MU_R)
-    w.add_particles([0, 0, R], velocity=[V0, 0, 0], mass=M, radius=R)
+    if force_model:
+        w.set_collisions(
+            model="hertz",
+            youngs_modulus=E,
+            poisson_ratio=NU,
+            restitution=E_REST,
+            friction=MU,
+            rolling_friction=MU_R,
+            tangential="linear_history",
+            tangential_stiffness=K_T,
+            tangential_damping=1.0,
+            rolling_stiffness=K_ROLL,
+            rolling_damping=0.0,
+        )
+        e_star = E / (2 * (1 - NU * NU))
+        z0 = R - (M * G / (4 / 3 * e_star * math.sqrt(R))) ** (2 / 3)
+    else:
+        w.set_collisions(restitution=E_REST, friction=MU, rolling_friction=MU_R)
+        z0 = R
+    w.add_particles([0, 0, z0], velocity=[V0, 0, 0], mass=M, radius=R)
     every = 10
     t, v, om = [], [], []
     for _ in range(int(T_END / DT) // every):
@@ -131,7 +156,11 @@ def run_lammps(lmp: str) -> dict[str, float] | None:
 def main() -> int:
     lmp = shutil.which("lmp") or shutil.which("lmp_serial")
     closed = closed_forms()
-    rows = [("closed form", closed), ("kinema (impulses)", run_kinema())]
+    rows = [
+        ("closed form", closed),
+        ("kinema (impulses)", run_kinema()),
+        ("kinema (hertz, linear_history, rolling sds)", run_kinema(force_model=True)),
+    ]
     if lmp is None:
         print("LAMMPS (lmp) not installed: apt-get install -y lammps; kinema alone below")
     else:

@@ -141,3 +141,59 @@ def test_pressure_needs_a_periodic_cell():
     w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
     w.add_particles([0.5, 0.5, 0.5], velocity=[1, 0, 0], radius=0.1)
     assert w.run(0.1, fps=10).pressure is None  # walls: no volume the virial knows
+
+
+def test_the_per_particle_stress_of_a_resting_stack_is_half_the_contact_force_times_the_distance():
+    # Two spheres stacked on a floor, at rest under gravity (the force model): the upper one
+    # rests on the lower with F = m g along z, at the distance of centres d = 2 r − δ, δ =
+    # m g / k_n. Each gets ½ d m g in zz and nothing else (the floor's contact is a collider's,
+    # left out); summed, Σ_pairs (x_i − x_j) ⊗ F = d m g.
+    r, m, k, g = 0.01, 0.002, 1e4, 9.81
+    w = kinema.World(dt=1e-5, method="verlet")
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w.add(kinema.Gravity([0, 0, -g]))
+    w.set_collisions(model="spring_dashpot", stiffness=k, restitution=0.2, friction=0.4)
+    d_floor = 2 * m * g / k
+    d_pair = m * g / k
+    w.add_particles([[0, 0, r - d_floor], [0, 0, 3 * r - d_floor - d_pair]], mass=m, radius=r)
+    w.step(20_000)
+    s = w.particle_stress(kinetic=False)
+    closed = 0.5 * (2 * r - d_pair) * m * g
+    for p in (0, 1):
+        assert s[p, 2, 2] == pytest.approx(closed, rel=1e-9)
+        off = s[p].copy()
+        off[2, 2] = 0.0
+        assert np.abs(off).max() < 1e-12 * closed
+    # the kinetic part: m v ⊗ v (at rest: nothing)
+    np.testing.assert_allclose(w.particle_stress() - s, 0.0, atol=1e-20)
+    # a moving particle alone: m v ⊗ v exactly
+    free = kinema.World()
+    free.add_particles([0, 0, 0], velocity=[1.0, 2.0, 0.0], mass=3.0)
+    np.testing.assert_array_equal(free.particle_stress()[0], 3.0 * np.outer([1.0, 2.0, 0.0], [1.0, 2.0, 0.0]))
+    # the impulse model has impulses, not forces
+    imp = kinema.World()
+    imp.add_particles([0, 0, 0], radius=0.1)
+    imp.set_collisions()
+    with pytest.raises(ValueError, match=r"model = 'impulse' is invalid: a per-particle stress needs contact forces"):
+        imp.particle_stress()
+
+
+def test_the_per_particle_stresses_sum_to_the_pressure_of_a_compressed_periodic_packing():
+    # A periodic packing of soft spheres squeezed into a cell smaller than their lattice, at
+    # rest: the pressure tensor of the trajectory (its virial over a frame / V, the kinetic
+    # part ~0) is the per-particle stresses' sum / V.
+    n_side, d, squeeze = 4, 1.0, 0.98
+    side = n_side * d * squeeze
+    g = (np.arange(n_side) + 0.5) * d * squeeze
+    x = np.array(np.meshgrid(g, g, g, indexing="ij")).reshape(3, -1).T
+    w = kinema.World(dt=1e-3, method="verlet")
+    w.add(kinema.Box([0, 0, 0], [side] * 3))
+    w.periodic = (True, True, True)
+    w.set_collisions(model="spring_dashpot", stiffness=1e3, restitution=0.5)
+    w.add_particles(x, mass=1.0, radius=d / 2)
+    with pytest.warns(kinema.PlacementWarning):  # (squeezed on purpose)
+        tr = w.run(0.2, fps=50)
+    s = w.particle_stress()
+    np.testing.assert_allclose(s.sum(axis=0) / side**3, tr.pressure[-1], rtol=1e-9, atol=1e-12 * np.abs(tr.pressure[-1]).max())
+    # a simple cubic packing squeezed by 2 %: each of its 3 N contacts pushes k δ, δ = 0.02 d
+    assert s.sum(axis=0)[0, 0] == pytest.approx(n_side**3 * 1e3 * 0.02 * d * (d - 0.02 * d), rel=1e-9)

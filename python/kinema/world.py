@@ -855,6 +855,22 @@ class World(WorldCollisions):
         out.flags.writeable = False
         return out
 
+    def particle_stress(self, kinetic: bool = True) -> np.ndarray:
+        """Each particle's share of the stress now, (N, 3, 3) in N·m (Pa·m³: stress times
+        volume): ½ Σ_j (x_i − x_j) ⊗ F_ij over the particles it touches (the force models'
+        contact forces, tangential part included; colliders left out, as in
+        ``Trajectory.pressure``), plus m_i v_i ⊗ v_i with ``kinetic``. Summed over the
+        particles and divided by the volume (an area in 2D) it is the pressure tensor; LAMMPS's
+        ``compute stress/atom`` gives its negative. Needs the ``"spring_dashpot"`` or
+        ``"hertz"`` model (the impulse model's collisions are impulses, not forces: a
+        ``ValueError`` says so); without collisions, the kinetic part alone. A new read-only
+        array."""
+        self._push()
+        with self._engine() as core:
+            out = core.particle_stress(_checks.boolean("kinetic", kinetic))
+        out.flags.writeable = False
+        return out
+
     @property
     def time(self) -> float:
         return self._core.time

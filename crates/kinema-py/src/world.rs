@@ -6,7 +6,7 @@ use kinema::collide::{Partner, Surface};
 use kinema::forces::{Attractor, Drag, Gravity, Springs, Wind};
 use kinema::world::KillVolume;
 use kinema::{World, WorldParams};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods, PyArray3};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -803,6 +803,14 @@ impl PyWorld {
         self.inner.restore_order();
         let a = self.inner.accelerations().map_err(world_err)?;
         rows(py, &a)
+    }
+
+    /// Each particle's share of the contacts' virial (and of the kinetic tensor), N·m: (N, 3, 3).
+    fn particle_stress<'py>(&mut self, py: Python<'py>, kinetic: bool) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        self.inner.restore_order();
+        let s = self.inner.particle_stress(kinetic).map_err(world_err)?;
+        let n = s.len() / 9;
+        Ok(PyArray1::from_vec(py, s).reshape([n, 3, 3])?)
     }
 
     /// Energies and momenta now, as a dict (sums over the engine's order: see `PyWorld`).

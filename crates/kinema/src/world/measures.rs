@@ -110,3 +110,49 @@ pub struct LinearSolve {
     /// [`CG_MAX_ITERATIONS`](super::CG_MAX_ITERATIONS).
     pub converged: bool,
 }
+
+impl World {
+    /// Each particle's share of the contacts' virial and of the kinetic tensor now, N·m
+    /// (Pa·m³; 9 per particle, row-major 3 × 3): ½ Σ_j (x_i − x_j) ⊗ F_ij over its touching
+    /// partners (the force models' contact forces, tangential part included; colliders left
+    /// out), plus m_i v_i ⊗ v_i with `kinetic`. Summed over the particles and divided by the
+    /// volume it is the pressure tensor; LAMMPS's `compute stress/atom` is its negative.
+    /// The impulse model has no forces to share: an error that says so.
+    pub fn particle_stress(&mut self, kinetic: bool) -> Result<Vec<f64>, Error> {
+        self.check_pending_placement()?;
+        let p = &self.particles;
+        let mut out = vec![0.0; 9 * p.len()];
+        match self.collide_stage.as_ref().map(|c| c.params.model) {
+            Some(crate::collide::stage::ContactModel::Impulse) => {
+                return Err(Error::invalid(
+                    "model",
+                    "'impulse'",
+                    "a per-particle stress needs contact forces: the force models ('spring_dashpot', 'hertz'); the impulse model's collisions are impulses (their virial is collision_stats()['virial'])",
+                ))
+            }
+            Some(_) => {
+                let s = State {
+                    t: self.time,
+                    x: &p.x,
+                    v: &p.v,
+                    mass: &p.mass,
+                };
+                if let Some(contact) = contact_force(&self.collide_stage, p) {
+                    contact.particle_virial(&s, &mut out)?;
+                }
+            }
+            None => {}
+        }
+        if kinetic {
+            for i in 0..p.len() {
+                let v = crate::vec3::get(&p.v, i);
+                for r in 0..3 {
+                    for k in 0..3 {
+                        out[9 * i + 3 * r + k] += p.mass[i] * v[r] * v[k];
+                    }
+                }
+            }
+        }
+        Ok(out)
+    }
+}

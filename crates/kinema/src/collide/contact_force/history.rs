@@ -221,7 +221,7 @@ mod tests {
         h.renumber(&[0, GONE, 1]);
         assert_eq!(h.pairs.len(), 1);
         assert_eq!((h.pairs[0].i, h.pairs[0].j), (0, 1));
-        assert_eq!(pair_slip(&h.pairs, 0, 1), slip(2.0).swapped());
+        assert_eq!(pair_slip(&h.pairs, 0, 1), slip(1.0).swapped());
         assert_eq!(pair_slip(&h.pairs, 0, 2), Slip::default());
     }
 

@@ -47,6 +47,7 @@ mod force;
 mod history;
 mod law;
 mod pairs;
+mod stress;
 mod tangent;
 mod verlet;
 

@@ -457,7 +457,7 @@ impl ContactForce<'_> {
     /// The tangential part of `contact` (normal force `force`, N, and dashpot `dashpot`,
     /// kg/s) at (x, v) with the memory `slip` (`tangent.rs`).
     #[inline]
-    fn tangent_of(
+    pub(super) fn tangent_of(
         &self,
         t: &Turning<'_>,
         c: &Contact,
