@@ -6,7 +6,9 @@ use kinema::collide::{Partner, Surface};
 use kinema::forces::{Attractor, Drag, Gravity, Springs, Wind};
 use kinema::world::KillVolume;
 use kinema::{World, WorldParams};
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods, PyArray3};
+use numpy::{
+    PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
