@@ -20,7 +20,7 @@ model, in kinema its force model `spring_dashpot` with the tangential part:
            as above, fix wall/gran granular (the same) yplane 0, dt = 30 µs
 
 After T seconds each pile's free surface (the highest disc top in bins of 2 d along x) is fitted
-by a line on each flank, between 20 % and 80 % of the pile's height; the angle is the mean of
+by a line on each flank, between 10 % and 90 % of the pile's height; the angle is the mean of
 the two flanks' atan |slope|. Printed: each engine's angle per seed and their difference (the
 issue's target: within 2°), with the largest speed left (the pile at rest) and the wall time.
 LAMMPS missing: kinema alone, status 0.
@@ -105,7 +105,7 @@ def angle(x: np.ndarray, y: np.ndarray, r: np.ndarray) -> float:
     c, h = np.array(centres), np.array(heights)
     peak = h.max()
     apex = c[np.argmax(h)]
-    flank = (h > 0.2 * peak) & (h < 0.8 * peak)
+    flank = (h > 0.1 * peak) & (h < 0.9 * peak)
     angles = []
     for side in (c < apex, c > apex):
         sel = flank & side

@@ -197,3 +197,32 @@ def test_the_per_particle_stresses_sum_to_the_pressure_of_a_compressed_periodic_
     np.testing.assert_allclose(s.sum(axis=0) / side**3, tr.pressure[-1], rtol=1e-9, atol=1e-12 * np.abs(tr.pressure[-1]).max())
     # a simple cubic packing squeezed by 2 %: each of its 3 N contacts pushes k δ, δ = 0.02 d
     assert s.sum(axis=0)[0, 0] == pytest.approx(n_side**3 * 1e3 * 0.02 * d * (d - 0.02 * d), rel=1e-9)
+
+
+@pytest.mark.parametrize("units", ["SI", "MD"])
+def test_the_pressure_tensor_goes_into_h5md_and_back(tmp_path, units):
+    # /observables/pressure: (F, 3, 3) in Pa (kJ mol-1 nm-3 in MD units), NaN at frame 0; read
+    # back the same to rounding (the MD conversion's), and by h5py as written.
+    import h5py
+
+    w, side = periodic_gas(0.2, 4, model="spring_dashpot")
+    tr = w.run(0.05, fps=200)
+    path = tr.save(tmp_path / "gas.h5", units=units)
+    with h5py.File(path, "r") as f:
+        ds = f["observables/pressure/value"]
+        assert ds.shape == tr.pressure.shape
+        assert ds.attrs["unit"] == ("Pa" if units == "SI" else "kJ mol-1 nm-3")
+    back = kinema.load_trajectory(path)
+    np.testing.assert_allclose(back.pressure, tr.pressure, rtol=1e-12, equal_nan=True)
+    assert np.isnan(back.pressure[0]).all() and np.isfinite(back.pressure[1:]).all()
+    # a 2D world's: N m-1
+    flat = kinema.World(dim=2, dt=1e-3)
+    flat.add(kinema.Box([0, 0], [4, 4]))
+    flat.periodic = (True, True)
+    flat.set_collisions(restitution=1.0)
+    flat.add_particles([[1, 1, 0], [3, 3, 0]], velocity=[[1, 0.5, 0], [-1, 0.2, 0]], radius=0.2)
+    tr2 = flat.run(0.02, fps=100)
+    p2 = tr2.save(tmp_path / "flat.h5")
+    with h5py.File(p2, "r") as f:
+        assert f["observables/pressure/value"].attrs["unit"] == "N m-1"
+    np.testing.assert_allclose(kinema.load_trajectory(p2).pressure, tr2.pressure, rtol=0, equal_nan=True)

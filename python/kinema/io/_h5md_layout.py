@@ -19,6 +19,9 @@ OBSERVABLES = {
     "collision_energy_lost": ("collision_energy_lost", "J"),
     "impacts": ("impacts", None),
 }
+# /observables/pressure: the pressure tensor per frame (F, 3, 3), by the world's dimension:
+# Pa in 3D, a force per length in 2D
+PRESSURE_UNIT = {3: "Pa", 2: "N m-1"}
 # the group of /observables with one potential energy per force, J
 BY_FORCE = "potential_energy_by_force"
 

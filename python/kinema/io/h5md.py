@@ -86,7 +86,7 @@ from ._cell import particle_types
 from ._checks import available_memory, number
 from ._files import TrajectoryFileError, frames_of, hdf5_file, os_errors_as_write_errors
 from ._h5md_checks import check_frames, edges_problem, fail, increase_problem, links_out
-from ._h5md_layout import BY_FORCE, ELEMENTS, H5MD_VERSION, OBSERVABLES, import_h5py
+from ._h5md_layout import BY_FORCE, ELEMENTS, H5MD_VERSION, OBSERVABLES, PRESSURE_UNIT, import_h5py
 from .h5md_reader import MESH_DATASETS, MOTION_DATASETS, LoadedTrajectory, read
 from .h5md_units import from_si, parse_unit, system_of
 
@@ -279,6 +279,9 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
         a = getattr(tr, attr, None)
         if a is not None and not _unknown(a):
             _element(obs, name, *unit(a, si), clock, compression)
+    pressure = getattr(tr, "pressure", None)
+    if pressure is not None and not _unknown(pressure):  # (F, 3, 3), NaN at frame 0
+        _element(obs, "pressure", *unit(np.asarray(pressure, dtype=np.float64), PRESSURE_UNIT[d]), clock, compression)
     if potential:
         by_force = obs.create_group(BY_FORCE, track_order=True)
         by_force.attrs.create("names", list(potential), dtype=string)
@@ -380,6 +383,9 @@ def _check_writable(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> Non
         want = (fr.n_frames, 3) if vector else (fr.n_frames,)
         if s != want and not (vector and s == (fr.n_frames, 2)):
             raise TrajectoryFileError(f"cannot write {path}: trajectory {attr!r} has shape {s}; it must be {want}, one value per frame")
+    pressure = getattr(tr, "pressure", None)
+    if pressure is not None and np.shape(pressure) != (fr.n_frames, 3, 3):
+        raise TrajectoryFileError(f"cannot write {path}: trajectory 'pressure' has shape {np.shape(pressure)}; it must be ({fr.n_frames}, 3, 3), a tensor per frame")
     for name, u in (dict(getattr(tr, "potential", None) or {})).items():
         if np.shape(u) != (fr.n_frames,):
             raise TrajectoryFileError(
@@ -407,6 +413,7 @@ def _check_units(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
     arrays += [("box_edges", getattr(tr, "box_edges", None), "m"), ("total", getattr(tr, "total", None), "J")]
     arrays += [(attr, getattr(tr, attr, None), si) for attr, si in OBSERVABLES.values() if si is not None]
     arrays += [(f"potential {name!r}", u, "J") for name, u in (getattr(tr, "potential", None) or {}).items()]
+    arrays += [("pressure", getattr(tr, "pressure", None), PRESSURE_UNIT[fr.dim])]
     for word, a, si in arrays:
         if a is None or np.size(a) == 0:
             continue

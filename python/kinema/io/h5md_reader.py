@@ -34,7 +34,7 @@ from ._h5md_checks import (
     varying_ids,
     where,
 )
-from ._h5md_layout import BY_FORCE, OBSERVABLES, import_h5py
+from ._h5md_layout import BY_FORCE, OBSERVABLES, PRESSURE_UNIT, import_h5py
 from .h5md_units import LENGTH, MASS, TIME, parse_unit, to_si
 
 
@@ -78,6 +78,7 @@ class LoadedTrajectory:
     impulse_balance: np.ndarray | None = None
     collision_energy_lost: np.ndarray | None = None
     impacts: np.ndarray | None = None
+    pressure: np.ndarray | None = None
     masses: np.ndarray | None = None
     radii: np.ndarray | None = None
     ids: np.ndarray | None = None
@@ -504,6 +505,17 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
                 raise r.fail(f"attribute 'fps' ({params.name}) = {shown(raw)} is not a positive number (the frames per second recorded)")
             fps = float(a.reshape(()))
         colliders = _read_colliders(path, params, dim)
+    if isinstance(obs, h5py.Group) and "pressure" in obs:  # (F, 3, 3), in Pa (N m-1 in 2D)
+        value, p_step, p_time = element_datasets(path, obs, "pressure", True)
+        s = r.numbers("pressure", value)
+        if tuple(s) != (frames, 3, 3):
+            raise r.fail(f"{where('pressure', value)} has shape {s}; it must be ({frames}, 3, 3), a tensor per frame of {where('positions', x_ds)} {shape}")
+        r.clock("steps", p_step, "pressure", value, integer=True)
+        if p_time is not None:
+            r.clock("times", p_time, "pressure", value)
+        units[value.name] = r.unit("pressure", value, parse_unit(PRESSURE_UNIT[dim])[1])
+        r.plan("pressure", value, value.size * max(8, value.dtype.itemsize))
+        observables["pressure"] = value
 
     r.check_memory(memory)
 

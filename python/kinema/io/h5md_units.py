@@ -42,6 +42,7 @@ _SYMBOLS: dict[str, tuple[Fraction, tuple[int, int, int]]] = {
     "cal": (Fraction("4.1868"), _ENERGY),
     "erg": (Fraction(1, 10**7), _ENERGY),
     "N": (Fraction(1), (1, -2, 1)),
+    "Pa": (Fraction(1), (-1, -2, 1)),
     "Hz": (Fraction(1), (0, -1, 0)),
     "mol": (Fraction("6.02214076e23"), (0, 0, 0)),
 }
@@ -56,6 +57,8 @@ QUANTITY = {
     _ENERGY: "an energy (J)",
     (1, -1, 1): "a momentum (kg m s-1)",
     (2, -1, 1): "an angular momentum (kg m2 s-1)",
+    (-1, -2, 1): "a pressure (Pa)",
+    (0, -2, 1): "a pressure of a 2D world, a force per length (N m-1)",
 }
 
 
@@ -148,10 +151,20 @@ def from_si(a: Any, unit: str) -> np.ndarray:
 # The unit systems save_h5md writes, as the unit of each SI unit kinema's values are in.
 # "MD": GROMACS's units (nm, ps, u, kJ mol-1), which MDAnalysis reads (its H5MD reader knows
 # the lengths Å, nm, pm, fm and not m), as do VMD and the H5MD readers of the MD codes.
-SI_UNITS = ("m", "s", "m s-1", "kg", "J", "kg m s-1", "kg m2 s-1")
+SI_UNITS = ("m", "s", "m s-1", "kg", "J", "kg m s-1", "kg m2 s-1", "Pa", "N m-1")
 SYSTEMS: dict[str, dict[str, str]] = {
     "SI": {u: u for u in SI_UNITS},
-    "MD": {"m": "nm", "s": "ps", "m s-1": "nm ps-1", "kg": "u", "J": "kJ mol-1", "kg m s-1": "u nm ps-1", "kg m2 s-1": "u nm2 ps-1"},
+    "MD": {
+        "m": "nm",
+        "s": "ps",
+        "m s-1": "nm ps-1",
+        "kg": "u",
+        "J": "kJ mol-1",
+        "kg m s-1": "u nm ps-1",
+        "kg m2 s-1": "u nm2 ps-1",
+        "Pa": "kJ mol-1 nm-3",
+        "N m-1": "kJ mol-1 nm-2",
+    },
 }
 
 
