@@ -107,6 +107,8 @@ bench: build $(TEST_STAMP)
 	$(PY) benchmarks/hard_sphere_gas.py
 	$(PIP) install --disable-pip-version-check -q -r requirements/bench.txt
 	$(PY) benchmarks/piles.py
+	$(PY) benchmarks/granular_lammps.py
+	$(PY) benchmarks/angle_of_repose.py
 
 pictures: build
 	$(PY) docs/pictures.py docs/img

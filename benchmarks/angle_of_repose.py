@@ -25,7 +25,7 @@ the two flanks' atan |slope|. Printed: each engine's angle per seed and their di
 issue's target: within 2°), with the largest speed left (the pile at rest) and the wall time.
 LAMMPS missing: kinema alone, status 0.
 
-    python benchmarks/angle_of_repose.py [--n 1200] [--seeds 3] [--t 2.0]
+    python benchmarks/angle_of_repose.py [--n 1200] [--seeds 6] [--settle 1.5]
 """
 
 from __future__ import annotations
@@ -231,8 +231,8 @@ def run_lammps(lmp: str, n: int, seed: int, settle: float) -> dict | None:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--n", type=int, default=600)
-    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--n", type=int, default=1200)
+    ap.add_argument("--seeds", type=int, default=6)
     ap.add_argument("--settle", type=float, default=SETTLE, help="simulated time after the last pour, s")
     args = ap.parse_args()
     lmp = shutil.which("lmp") or shutil.which("lmp_serial")
@@ -259,7 +259,11 @@ def main() -> int:
     if theirs:
         a, b = float(np.mean(ours)), float(np.mean(theirs))
         spread = float(np.std(ours + theirs))
-        print(f"mean: kinema {a:.2f}°, LAMMPS {b:.2f}°, difference {a - b:+.2f}° (target: within 2°); spread of all piles {spread:.2f}°")
+        sem = spread * math.sqrt(1 / len(ours) + 1 / len(theirs))
+        print(
+            f"mean: kinema {a:.2f}°, LAMMPS {b:.2f}°, difference {a - b:+.2f}° ± {sem:.2f}° (its standard error; target: within 2°); "
+            f"spread of all piles {spread:.2f}°"
+        )
     else:
         print(f"mean: kinema {float(np.mean(ours)):.2f}°")
     return 0
