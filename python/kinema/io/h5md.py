@@ -385,7 +385,9 @@ def _check_writable(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> Non
             raise TrajectoryFileError(f"cannot write {path}: trajectory {attr!r} has shape {s}; it must be {want}, one value per frame")
     pressure = getattr(tr, "pressure", None)
     if pressure is not None and np.shape(pressure) != (fr.n_frames, 3, 3):
-        raise TrajectoryFileError(f"cannot write {path}: trajectory 'pressure' has shape {np.shape(pressure)}; it must be ({fr.n_frames}, 3, 3), a tensor per frame")
+        raise TrajectoryFileError(
+            f"cannot write {path}: trajectory 'pressure' has shape {np.shape(pressure)}; it must be ({fr.n_frames}, 3, 3), a tensor per frame"
+        )
     for name, u in (dict(getattr(tr, "potential", None) or {})).items():
         if np.shape(u) != (fr.n_frames,):
             raise TrajectoryFileError(
