@@ -205,7 +205,7 @@ def test_an_elastic_rough_gas_keeps_momentum_and_angular_momentum(n, dim):
     scale = np.sum(np.abs(np.cross(w.positions, w.masses[:, None] * w.velocities))) + np.sum(np.abs(w.inertia[:, None] * w.angular_velocities))
     w.step(1500)
     d1 = w.diagnostics()
-    assert w.collision_stats()["total"]["contacts"] > 0 or True
+    assert w.collision_stats()["total"]["impacts"] > n // 10  # (the gas collides)
     spin = np.abs(w.angular_velocities).max()
     assert spin > 0
     np.testing.assert_allclose(d1["momentum"], d0["momentum"], rtol=0, atol=1e-13 * np.sum(w.masses * np.linalg.norm(w.velocities, axis=1)) + 1e-18)
@@ -294,7 +294,7 @@ def test_the_thread_count_changes_no_bit():
         assert res.returncode == 0, res.stderr
         out[t] = res.stdout.strip()
     assert out[1] == out[2], out
-    assert hashlib.sha256(b"").hexdigest() not in out[1]
+    assert len(out[1]) == 64 and out[1] != hashlib.sha256(b"").hexdigest()
 
 
 def test_the_refusals_name_their_parameter():

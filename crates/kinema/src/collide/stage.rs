@@ -529,6 +529,8 @@ pub(crate) struct CollideStage {
     /// The spring–dashpot model's constants and buffers, with that model
     /// ([`CollideStage::contact_force`] lends it out with what it reads).
     pub spring_dashpot: Option<SpringDashpot>,
+    /// Whether some particle's own material has friction (the force models' tangential part).
+    own_friction: bool,
     /// Each particle's (e, ζ) from `particle_materials`, for the spring–dashpot damping.
     particle_ratios: Option<Vec<(f64, f64)>>,
     pub total: CollisionStats,
@@ -553,6 +555,7 @@ impl CollideStage {
             material,
             own: Vec::new(),
             particle_materials: None,
+            own_friction: false,
             colliders: Vec::new(),
             domain: Domain::open(dim)?,
             impulse: ImpulseModel::new(),
@@ -699,6 +702,7 @@ impl CollideStage {
         if self.own.iter().all(|(e, m)| e.is_none() && m.is_none()) {
             self.particle_materials = None;
             self.particle_ratios = None;
+            self.own_friction = false;
             return Ok(());
         }
         let global = self.material;
@@ -709,6 +713,10 @@ impl CollideStage {
                 .collect::<Result<_, _>>()?,
         );
         self.particle_ratios = self.particle_materials.as_deref().map(particle_ratios);
+        self.own_friction = self
+            .particle_materials
+            .as_deref()
+            .is_some_and(|o| o.iter().any(|m| m.friction() > 0.0));
         Ok(())
     }
 
@@ -723,6 +731,7 @@ impl CollideStage {
             Bodies {
                 global: self.material,
                 own,
+                own_friction: self.own_friction,
                 radius,
                 inv_mass,
                 colliders: &self.colliders,

@@ -242,6 +242,9 @@ pub(crate) struct Bodies<'a> {
     pub global: Material,
     /// Each particle's own material and its (e, ζ), if particles have their own.
     pub own: Option<(&'a [Material], &'a [(f64, f64)])>,
+    /// Whether some particle's own material has friction (worked out with the materials,
+    /// not at each call).
+    pub own_friction: bool,
     /// Radii, m.
     pub radius: &'a [f64],
     /// Inverse masses, 1/kg (0: pinned).
@@ -352,7 +355,7 @@ impl<'a> ContactForce<'a> {
             domain: *bodies.domain,
             tangential: model
                 .tangential
-                .filter(|_| has_friction(bodies.global, bodies.own.map(|o| o.0), bodies.colliders)),
+                .filter(|_| has_friction(bodies.global, bodies.own_friction, bodies.colliders)),
             omega: bodies.omega,
         }
     }
@@ -431,11 +434,10 @@ impl<'a> ContactForce<'a> {
     }
 }
 
-/// Whether some contact can have friction: the global μ, a particle's own or a collider's.
-fn has_friction(global: Material, own: Option<&[Material]>, colliders: &[Collider]) -> bool {
-    global.friction() > 0.0
-        || own.is_some_and(|o| o.iter().any(|m| m.friction() > 0.0))
-        || colliders.iter().any(|c| c.surface().friction().is_some_and(|f| f > 0.0))
+/// Whether some contact can have friction: the global μ, a particle's own (`own`) or a
+/// collider's.
+fn has_friction(global: Material, own: bool, colliders: &[Collider]) -> bool {
+    global.friction() > 0.0 || own || colliders.iter().any(|c| c.surface().friction().is_some_and(|f| f > 0.0))
 }
 
 #[cfg(test)]

@@ -466,52 +466,17 @@ impl ContactForce<'_> {
         v: &[f64],
         slip: super::history::Slip,
     ) -> Tangent {
-        let vi = vec3::get(v, c.i);
-        let turning = !t.omega.is_empty();
-        let (u, omega, reduced) = match c.partner_particle() {
-            Some(j) => (
-                vec3::sub(vi, vec3::get(v, j)),
-                if turning {
-                    [vec3::get(t.omega, c.i), vec3::get(t.omega, j)]
-                } else {
-                    [[0.0; 3]; 2]
-                },
-                self.reduced_radius(c),
-            ),
-            None => (
-                vec3::sub(vi, c.wall_velocity),
-                if turning {
-                    [vec3::get(t.omega, c.i), [0.0; 3]]
-                } else {
-                    [[0.0; 3]; 2]
-                },
-                self.radius[c.i],
-            ),
-        };
+        let (u, omega) = self.relative(c, v, t.omega);
         // the velocities over the step: the means of those at its start and the evaluation's
         let moved = t.start.map(|(v0, w0)| {
             let mean = |a: [f64; 3], b: [f64; 3]| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])];
-            let vi0 = vec3::get(v0, c.i);
-            let turning0 = !w0.is_empty();
-            match c.partner_particle() {
-                Some(j) => (
-                    mean(u, vec3::sub(vi0, vec3::get(v0, j))),
-                    if turning0 {
-                        [mean(omega[0], vec3::get(w0, c.i)), mean(omega[1], vec3::get(w0, j))]
-                    } else {
-                        [[0.0; 3]; 2]
-                    },
-                ),
-                None => (
-                    mean(u, vec3::sub(vi0, c.wall_velocity)),
-                    if turning0 {
-                        [mean(omega[0], vec3::get(w0, c.i)), [0.0; 3]]
-                    } else {
-                        [[0.0; 3]; 2]
-                    },
-                ),
-            }
+            let (u0, omega0) = self.relative(c, v0, w0);
+            (mean(u, u0), [mean(omega[0], omega0[0]), mean(omega[1], omega0[1])])
         });
+        let reduced = match c.partner_particle() {
+            Some(_) => self.reduced_radius(c),
+            None => self.radius[c.i],
+        };
         let touch = Touch {
             normal: c.normal,
             overlap: c.overlap,
@@ -525,6 +490,19 @@ impl ContactForce<'_> {
             friction: self.friction_of(c),
         };
         t.model.at(&touch, slip, t.step)
+    }
+
+    /// The relative velocity u = v_i − v_j (v_i − w at a collider) of contact `c` at the
+    /// velocities `v`, and the two sides' angular velocities from `omega` (0 at a collider,
+    /// and everywhere when `omega` is empty: nothing turns).
+    #[inline]
+    fn relative(&self, c: &Contact, v: &[f64], omega: &[f64]) -> ([f64; 3], [[f64; 3]; 2]) {
+        let vi = vec3::get(v, c.i);
+        let turn = |q: usize| if omega.is_empty() { [0.0; 3] } else { vec3::get(omega, q) };
+        match c.partner_particle() {
+            Some(j) => (vec3::sub(vi, vec3::get(v, j)), [turn(c.i), turn(j)]),
+            None => (vec3::sub(vi, c.wall_velocity), [turn(c.i), [0.0; 3]]),
+        }
     }
 
     /// The lever arms (ρ_i, ρ_j) of contact `c`, m (`collide/spin.rs`: the distance of centres

@@ -72,6 +72,7 @@ impl Owned {
             Bodies {
                 global: self.global,
                 own: self.own.as_deref().zip(self.ratios.as_deref()),
+                own_friction: self.own.as_deref().is_some_and(|o| o.iter().any(|m| m.friction() > 0.0)),
                 radius: &self.radius,
                 inv_mass: &self.inv_mass,
                 colliders: &self.colliders,
