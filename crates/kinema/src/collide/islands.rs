@@ -52,51 +52,80 @@ pub struct Islands {
     starts: Vec<usize>,
 }
 
+/// The union–find arrays of [`Islands::find_with`], one entry per particle: each particle's
+/// parent (itself between calls) and its tree's island (`u32::MAX` between calls).
+#[derive(Debug, Default, Clone)]
+pub(crate) struct Forest {
+    parent: Vec<u32>,
+    label: Vec<u32>,
+}
+
+impl Forest {
+    /// Sized for `n` particles (resized only when the count changed).
+    fn reset(&mut self, n: usize) {
+        if self.parent.len() != n {
+            self.parent.clear();
+            self.parent.extend(0..n as u32);
+            self.label.clear();
+            self.label.resize(n, u32::MAX);
+        }
+    }
+}
+
 impl Islands {
     /// The islands of `contacts` in a world with these inverse masses (0: pinned), numbered
     /// in the order of their first contact; a contact of two immovable bodies is in none.
+    #[cfg(test)]
     pub fn find(contacts: &[Contact], inv_mass: &[f64]) -> Islands {
-        // The movable particles of the contacts, numbered by rank; a union–find over them
-        // (the lower rank is the root: the same forest for the same list).
+        Islands::find_with(contacts, inv_mass, &mut Forest::default())
+    }
+
+    /// [`Islands::find`] with the union–find's arrays of a [`Forest`] kept from step to step
+    /// (each touched entry is put back after use: the work follows the contacts, not N).
+    pub fn find_with(contacts: &[Contact], inv_mass: &[f64], forest: &mut Forest) -> Islands {
+        // A union–find over the contacts' movable particles, by their index (the lower index
+        // is the root: each tree's root is its least particle, the same forest for the same
+        // list whatever the order of the unions).
         let movable = |q: usize| inv_mass[q] > 0.0;
-        let mut ranked: Vec<usize> = contacts
-            .iter()
-            .flat_map(|c| std::iter::once(c.i).chain(c.partner_particle()))
-            .filter(|&q| movable(q))
-            .collect();
-        ranked.sort_unstable();
-        ranked.dedup();
-        let rank = |q: usize| ranked.binary_search(&q).ok();
-        let mut parent: Vec<usize> = (0..ranked.len()).collect();
-        fn root(parent: &mut [usize], mut a: usize) -> usize {
-            while parent[a] != a {
-                parent[a] = parent[parent[a]]; // path halving
-                a = parent[a];
+        forest.reset(inv_mass.len());
+        let Forest { parent, label } = forest;
+        fn root(parent: &mut [u32], mut a: u32) -> u32 {
+            while parent[a as usize] != a {
+                parent[a as usize] = parent[parent[a as usize] as usize]; // path halving
+                a = parent[a as usize];
             }
             a
         }
         for c in contacts {
-            if let (Some(a), Some(b)) = (rank(c.i), c.partner_particle().and_then(rank)) {
-                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-                parent[ra.max(rb)] = ra.min(rb);
+            if let (true, Some(j)) = (movable(c.i), c.partner_particle().filter(|&j| movable(j))) {
+                let (ra, rb) = (root(parent, c.i as u32), root(parent, j as u32));
+                parent[ra.max(rb) as usize] = ra.min(rb);
             }
         }
         // Each contact's island: that of its movable side (a contact of two immovable bodies,
         // which the solvers skip, is in none).
-        let mut island_of_root = vec![usize::MAX; ranked.len()];
         let mut count = 0;
         let labels: Vec<Option<usize>> = contacts
             .iter()
             .map(|c| {
-                let side = rank(c.i).or_else(|| c.partner_particle().and_then(rank))?;
-                let r = root(&mut parent, side);
-                if island_of_root[r] == usize::MAX {
-                    island_of_root[r] = count;
+                let side = Some(c.i)
+                    .filter(|&q| movable(q))
+                    .or_else(|| c.partner_particle().filter(|&q| movable(q)))?;
+                let r = root(parent, side as u32) as usize;
+                if label[r] == u32::MAX {
+                    label[r] = count as u32;
                     count += 1;
                 }
-                Some(island_of_root[r])
+                Some(label[r] as usize)
             })
             .collect();
+        // (the arrays back as they were: each particle its own root, no label)
+        for c in contacts {
+            for q in std::iter::once(c.i).chain(c.partner_particle()) {
+                parent[q] = q as u32;
+                label[q] = u32::MAX;
+            }
+        }
         // Counting sort by island, stable: each island's contacts stay in list order.
         let mut starts = vec![0; count + 1];
         for &l in labels.iter().flatten() {
@@ -157,8 +186,16 @@ pub(crate) struct IslandStats {
 /// (N·s; the caller applies them to the velocities, `v` is not changed); the positions `x`
 /// are moved in place by what the solve stage did. With rolling resistance, `rolls` receives
 /// each contact's angular impulse on i (N·m·s; left empty without).
+///
+/// An island whose contacts are all `idle` ([`soft_step::idle`](super::soft_step::idle): no
+/// warm start, targets met by the velocities as they are) is not gathered nor solved: its
+/// soft step would give exactly nothing. In a gas nearly every island is such a pair
+/// (speculative contacts that do not close), and the step's cost then follows the contacts
+/// that act.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn solve(
     islands: &Islands,
+    idle: &[bool],
     problem: &EndProblem<'_>,
     solved: &mut [[f64; 3]],
     totals: &mut [[f64; 3]],
@@ -182,10 +219,13 @@ pub(crate) fn solve(
         .map(|batch| {
             let mut local = Local::default();
             batch
-                .map(|k| local.solve(islands.island(k), problem, warm, v, seen))
+                .map(|k| islands.island(k))
+                .filter(|island| !island.iter().all(|&c| idle[c]))
+                .map(|island| local.solve(island, problem, warm, v, seen))
                 .collect()
         })
         .collect();
+    let any_idle = (0..islands.len()).any(|k| islands.island(k).iter().all(|&c| idle[c]));
     // Scattered back, and the figures combined, in island order (a contact in no island, of
     // two immovable bodies, carries nothing).
     solved.fill([0.0; 3]);
@@ -194,10 +234,14 @@ pub(crate) fn solve(
     if problem.spin.is_some() && problem.rolling > 0.0 {
         rolls.resize(totals.len(), [0.0; 3]);
     }
+    // (an idle island's soft step is one sweep of each of the solve and relax stages that
+    // changes nothing)
     let mut stats = IslandStats {
         islands: islands.len(),
         soft: SoftStats {
             converged: true,
+            sweeps: usize::from(any_idle),
+            relax_sweeps: usize::from(any_idle),
             ..SoftStats::default()
         },
     };

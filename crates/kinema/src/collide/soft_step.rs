@@ -202,43 +202,7 @@ pub(crate) fn soft_step<const N: usize>(
     let rows: Vec<Row> = contacts
         .iter()
         .zip(targets)
-        .map(|(c, target)| {
-            let (wi, wj) = (inv_mass[c.i], c.partner_particle().map_or(0.0, |j| inv_mass[j]));
-            let w = wi + wj;
-            let mass = if w > 0.0 { 1.0 / w } else { 0.0 };
-            // with spin: the arms, the turn per unit of n × p, and the tangential mass
-            let (turn, mass_t, roll) = match rotation {
-                Some(r) => {
-                    let ((rho_i, rho_j), (ki, kj)) = (r.arms(c, target.rest), r.inverse_inertias(c));
-                    let w_t = w + ki * rho_i * rho_i + kj * rho_j * rho_j;
-                    let ri = r.radius[c.i];
-                    let r_star = c.partner_particle().map_or(ri, |j| ri * r.radius[j] / (ri + r.radius[j]));
-                    let roll = Roll {
-                        k: [ki, kj],
-                        mass: if ki + kj > 0.0 { 1.0 / (ki + kj) } else { 0.0 },
-                        cap: rolling * r_star,
-                        r_star,
-                    };
-                    (
-                        [rho_i, rho_j, ki * rho_i, kj * rho_j],
-                        if w_t > 0.0 { 1.0 / w_t } else { 0.0 },
-                        roll,
-                    )
-                }
-                None => ([0.0; 4], mass, Roll::default()),
-            };
-            Row {
-                wi,
-                wj,
-                mass,
-                mass_t,
-                turn,
-                roll,
-                mu: materials.pair(c).friction(),
-                n: c.normal,
-                has_j: c.partner_particle().is_some(),
-            }
-        })
+        .map(|(c, target)| Row::new(c, target, inv_mass, rotation, rolling, materials.pair(c).friction()))
         .collect();
     let before = v.to_vec();
 
@@ -350,6 +314,61 @@ pub(crate) fn soft_step<const N: usize>(
     Ok(stats)
 }
 
+/// Whether [`soft_step`] leaves contact `c` alone: it has no warm start (`warm` = 0, N·s),
+/// and at the velocities `v` the step ends with (m/s, 3 per particle; with spin also the
+/// angular velocities `omega`, rad/s) its relative normal velocity u already meets both its
+/// solve target and its relax target (u ≥ −g/h across the gap g it ends with, else u ≥ 0).
+/// Then every visit of every stage finds λ = 0 and leaves it there, and with λ = 0 the cone
+/// holds friction and rolling resistance at 0: the contact gives nothing, moves nothing, and
+/// bounces not (the restitution stage takes only contacts that carry load). An island whose
+/// contacts are all idle would be solved to exactly nothing (`collide/islands.rs` leaves it
+/// out). u is computed as the visits compute it, from the same row, bit for bit; a value
+/// that is not finite is never idle (the solve decides what it does).
+pub(crate) fn idle(
+    c: &Contact,
+    target: &Target,
+    warm: [f64; 3],
+    inv_mass: &[f64],
+    spin: Option<(Rotation<'_>, &[f64])>,
+    v: &[f64],
+    h: f64,
+) -> bool {
+    if warm != [0.0; 3] {
+        return false;
+    }
+    let Some(e) = Ends::of(c, inv_mass) else {
+        return true; // two immovable sides: the solve skips it
+    };
+    let (vi, vj) = e.load::<3>(v);
+    let u_n = match spin {
+        None => {
+            let row = Row::new(c, target, inv_mass, None, 0.0, 0.0);
+            let finite = vi.iter().chain(&vj).all(|a| a.is_finite());
+            if !finite {
+                return false;
+            }
+            vec3::dot(row.relative::<3>(&vi, &vj), row.n)
+        }
+        Some((r, omega)) => {
+            let row = Row::new(c, target, inv_mass, Some(r), 0.0, 0.0);
+            let wj = e.j.map_or([0.0; 3], |j| vec3::get(omega, j));
+            let six = |a: [f64; 3], w: [f64; 3]| -> [f64; 6] { [a[0], a[1], a[2], w[0], w[1], w[2]] };
+            let (ai, aj) = (six(vi, vec3::get(omega, c.i)), six(vj, wj));
+            if !ai.iter().chain(&aj).all(|a| a.is_finite()) {
+                return false;
+            }
+            vec3::dot(row.relative::<6>(&ai, &aj), row.n)
+        }
+    };
+    let finite = [target.gap, target.u_n, target.solve_n]
+        .iter()
+        .chain(&target.stick_t)
+        .all(|a| a.is_finite());
+    let gap = target.gap + h * (u_n - target.u_n);
+    let relax_n = if gap > 0.0 { -gap / h } else { 0.0 };
+    finite && u_n >= target.solve_n && u_n >= relax_n
+}
+
 /// A contact's rolling resistance (module doc): the inverse inertias k_i, k_j (1/(kg·m²)),
 /// the angular effective mass 1/(k_i + k_j) (kg·m²), the cap μ_r R* (m; the angular
 /// impulse's bound per unit normal impulse) and R* (m). Without: all 0.
@@ -378,6 +397,46 @@ struct Row {
 }
 
 impl Row {
+    /// The row of contact `c` with its targets, among particles of these inverse masses
+    /// (1/kg), with spin `rotation`, rolling resistance μ_r `rolling` and friction μ `mu`.
+    fn new(c: &Contact, target: &Target, inv_mass: &[f64], rotation: Option<Rotation<'_>>, rolling: f64, mu: f64) -> Row {
+        let (wi, wj) = (inv_mass[c.i], c.partner_particle().map_or(0.0, |j| inv_mass[j]));
+        let w = wi + wj;
+        let mass = if w > 0.0 { 1.0 / w } else { 0.0 };
+        // with spin: the arms, the turn per unit of n × p, and the tangential mass
+        let (turn, mass_t, roll) = match rotation {
+            Some(r) => {
+                let ((rho_i, rho_j), (ki, kj)) = (r.arms(c, target.rest), r.inverse_inertias(c));
+                let w_t = w + ki * rho_i * rho_i + kj * rho_j * rho_j;
+                let ri = r.radius[c.i];
+                let r_star = c.partner_particle().map_or(ri, |j| ri * r.radius[j] / (ri + r.radius[j]));
+                let roll = Roll {
+                    k: [ki, kj],
+                    mass: if ki + kj > 0.0 { 1.0 / (ki + kj) } else { 0.0 },
+                    cap: rolling * r_star,
+                    r_star,
+                };
+                (
+                    [rho_i, rho_j, ki * rho_i, kj * rho_j],
+                    if w_t > 0.0 { 1.0 / w_t } else { 0.0 },
+                    roll,
+                )
+            }
+            None => ([0.0; 4], mass, Roll::default()),
+        };
+        Row {
+            wi,
+            wj,
+            mass,
+            mass_t,
+            turn,
+            roll,
+            mu,
+            n: c.normal,
+            has_j: c.partner_particle().is_some(),
+        }
+    }
+
     /// The velocity of i's contact point relative to j's: v_i − v_j, less
     /// (ρ_i ω_i + ρ_j ω_j) × n with spin (N = 6).
     fn relative<const N: usize>(&self, vi: &[f64; N], vj: &[f64; N]) -> [f64; 3] {

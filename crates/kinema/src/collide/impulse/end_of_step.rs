@@ -8,11 +8,12 @@ use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::CHUNK;
 use crate::collide::response::VELOCITY_TOLERANCE;
-use crate::collide::soft_step::{SoftParams, Target, SLOP, SPECULATIVE};
+use crate::collide::soft_step::{self, SoftParams, Target, SLOP, SPECULATIVE};
 use crate::collide::spin::rotational_energy;
 use crate::collide::{pair_contact, Collider, Contact, Domain, Partner};
 use crate::error::Error;
 use crate::vec3;
+use rayon::prelude::*;
 
 /// Most sweeps of the soft step's solve stage, and of its relax and restitution stages.
 /// Warm-started, a heap at rest converges in one or two sweeps a step; the caps matter while
@@ -83,7 +84,8 @@ impl ImpulseModel {
             self.warm.sort_by_key(|w| (w.0, w.1));
             self.resting.sort_by_key(|w| (w.0, w.1));
         }
-        self.contacts.sort_by_key(|c| (c.i, c.other));
+        // (each pair is found once: its key is unique, and an unstable sort gives the one order)
+        self.contacts.sort_unstable_by_key(|c| (c.i, c.other));
         let pairs = self.contacts.len();
         let list = &self.list;
         for i in (0..n).filter(|&i| self.touched[i]) {
@@ -227,6 +229,7 @@ impl ImpulseModel {
         (v1, omega): (&[f64], &[f64]),
         x1: &mut [f64],
         threshold: f64,
+        force_free: bool,
     ) -> Result<IslandStats, Error> {
         let (materials, inv_mass, domain) = (set.materials, set.inv_mass, set.domain);
         let x0 = paths.x0;
@@ -330,9 +333,17 @@ impl ImpulseModel {
                 relax_sweeps: RELAX_SWEEPS,
             },
         };
-        self.islands = Islands::find(&self.contacts, inv_mass);
+        self.islands = Islands::find_with(&self.contacts, inv_mass, &mut self.forest);
+        // Each contact's check that the solve would leave it alone (most of a gas's contacts)
+        let spin = set.rotation.map(|r| (r, omega));
+        let idle: Vec<bool> = (&self.contacts, &self.prepared, &self.solved)
+            .into_par_iter()
+            .with_min_len(CHUNK)
+            .map(|(c, t, w)| soft_step::idle(c, t, *w, inv_mass, spin, v1, h))
+            .collect();
         let stats = islands::solve(
             &self.islands,
+            &idle,
             &problem,
             &mut self.solved,
             &mut self.totals,
@@ -354,18 +365,39 @@ impl ImpulseModel {
                 }
             }
         }
+        // The contacts the next step keeps (its warm start, and the particles it looks at
+        // first). In a force-free world, a contact of an island the solve left alone, apart
+        // beyond the slop and separating, is not kept: it carries nothing, its particles move
+        // on straight lines that part, and the next step finds the pair again if continuous
+        // detection sees either of them hit or a kept contact reaches them. In a gas that is
+        // nearly every contact, and the next step's work then follows the contacts that act.
+        // (Under forces a parting pair may turn back within the step, a pile's contact under
+        // gravity: every contact is kept, as the pile's solve needs them.)
+        let mut kept = vec![true; self.contacts.len()];
+        for k in 0..self.islands.len() {
+            let island = self.islands.island(k);
+            if force_free && island.iter().all(|&c| idle[c]) {
+                for &c in island {
+                    let (contact, t) = (&self.contacts[c], &self.prepared[c]);
+                    let sum = set.radius[contact.i] + contact.partner_particle().map_or(set.radius[contact.i], |j| set.radius[j]);
+                    kept[c] = !(force_free && t.gap > SLOP * sum && t.u_n >= 0.0);
+                }
+            }
+        }
         self.warm.clear();
-        self.warm
-            .extend(self.contacts.iter().zip(&self.solved).map(|(c, p)| (c.i, c.other, *p)));
-        self.warm.sort_by_key(|w| (w.0, w.1));
         self.resting.clear();
-        let loaded: Vec<(usize, Partner, bool)> = self
+        for (((c, p), total), _) in self
             .contacts
             .iter()
+            .zip(&self.solved)
             .zip(&self.totals)
-            .map(|(c, p)| (c.i, c.other, *p != [0.0; 3]))
-            .collect();
-        self.resting.extend(loaded);
+            .zip(&kept)
+            .filter(|(_, &k)| k)
+        {
+            self.warm.push((c.i, c.other, *p));
+            self.resting.push((c.i, c.other, *total != [0.0; 3]));
+        }
+        self.warm.sort_by_key(|w| (w.0, w.1));
         self.resting.sort_by_key(|w| (w.0, w.1));
         Ok(stats)
     }

@@ -384,7 +384,8 @@ impl ImpulseModel {
             let mut involved: Vec<usize> = self.books.iter().map(|b| b.0).chain(self.woken.iter().copied()).collect();
             involved.sort_unstable();
             involved.dedup();
-            let times: Vec<(usize, Option<f64>)> = involved.into_iter().map(|q| (q, at(q))).collect();
+            // (each one's meeting is its own search: on all threads, set in order)
+            let times: Vec<(usize, Option<f64>)> = involved.into_par_iter().with_min_len(CHUNK / 8).map(|q| (q, at(q))).collect();
             for (q, time) in times {
                 self.wake.table.set(q, time);
             }

@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use super::books::ColliderBooks;
 use super::events::{EventQueue, PathStore, Paths};
-use super::islands::Islands;
+use super::islands::{Forest, Islands};
 use super::neighbour_list::NeighbourList;
 use super::sleep::{Sleep, WarmEntry};
 use super::soft_step::Target;
@@ -225,6 +225,8 @@ pub(crate) struct ImpulseModel {
     pub(super) resting: Vec<(usize, Partner, bool)>,
     /// The islands of the last end-of-step solve (`collide/islands.rs`).
     pub(super) islands: Islands,
+    /// The union–find arrays the islands are found with.
+    pub(super) forest: Forest,
     /// What the particles gave each collider in the last step.
     pub(crate) collider_books: Vec<ColliderBooks>,
     /// Each particle's calm time and the islands asleep (`collide/sleep.rs`).
@@ -259,6 +261,7 @@ impl ImpulseModel {
             warm: Vec::new(),
             resting: Vec::new(),
             islands: Islands::default(),
+            forest: Forest::default(),
             collider_books: Vec::new(),
             sleep: Sleep::default(),
             interrupt: Interrupt::none(),
@@ -586,7 +589,7 @@ impl ImpulseModel {
 
         // Stage 3: the soft step's totals; the positions follow its solve stage.
         let clock = Instant::now();
-        let solved = self.solve(set, paths, h, (v1, omega), x1, threshold)?;
+        let solved = self.solve(set, paths, h, (v1, omega), x1, threshold, frame.steady)?;
         stats.solver_sweeps = solved.soft.sweeps;
         stats.unconverged = stats.unconverged.max(usize::from(!solved.soft.converged));
         stats.islands = solved.islands;
