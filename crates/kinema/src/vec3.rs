@@ -14,6 +14,14 @@ pub(crate) fn add_scaled(a: &mut [f64], i: usize, s: f64, d: [f64; 3]) {
     }
 }
 
+/// The parabola of a constant acceleration, x + v t + ½ a t² (m; x in m, v in m/s, a in
+/// m/s², t in s): a particle's path within a step, or a pair's separation with the relative
+/// v and a. The one place it is written (summed in this order: the same bits everywhere).
+#[inline]
+pub(crate) fn parabola(x: [f64; 3], v: [f64; 3], a: [f64; 3], t: f64) -> [f64; 3] {
+    [0, 1, 2].map(|k| x[k] + v[k] * t + 0.5 * a[k] * t * t)
+}
+
 #[inline]
 pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]

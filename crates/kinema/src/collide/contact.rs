@@ -49,6 +49,23 @@ impl Contact {
     }
 }
 
+/// Action and reaction, the one place a pair's impulse meets both sides: `+k_i p` onto
+/// particle i's entry and `−k_j p` onto its partner j's (none for a collider) in `a`, a flat
+/// array of 3 values per particle. With velocities and k the inverse masses (1/kg) it is an
+/// impulse p (N·s) applied to a pair; with angular velocities and k the inverse inertias
+/// times the lever arms, the turn it gives them (`collide/spin.rs`).
+#[inline]
+pub(crate) fn action_reaction(a: &mut [f64], i: usize, j: Option<usize>, (k_i, k_j): (f64, f64), p: [f64; 3]) {
+    for d in 0..3 {
+        a[3 * i + d] += k_i * p[d];
+    }
+    if let Some(j) = j {
+        for d in 0..3 {
+            a[3 * j + d] -= k_j * p[d];
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -492,7 +492,7 @@ impl Scene<'_> {
                 let (touching, first) = m.toi_within(x, v, a, r, rest, margin);
                 *near |= touching;
                 if let Some((t, tri)) = first {
-                    let at = [0, 1, 2].map(|c| x[c] + v[c] * t + 0.5 * a[c] * t * t);
+                    let at = vec3::parabola(x, v, a, t);
                     let n = m.touch_of_triangle(tri, at, r).normal;
                     each((tri, vec3::dot([0, 1, 2].map(|c| v[c] + a[c] * t), n)), t);
                 }

@@ -978,7 +978,7 @@ fn toi_triangle(path: Path, r: f64, tri: [[f64; 3]; 3], n: [f64; 3], h: f64) -> 
         vec3::scale(-1.0, n)
     };
     if let Some(tau) = toi_half_space(x, v0, accel, r, a, side, h) {
-        let p = [0, 1, 2].map(|k| x[k] + v0[k] * tau + 0.5 * accel[k] * tau * tau);
+        let p = vec3::parabola(x, v0, accel, tau);
         let (q, feature) = closest_on_triangle(p, a, b, c);
         if feature == Feature::Face {
             take(tau, q, feature);

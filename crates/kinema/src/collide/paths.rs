@@ -97,14 +97,8 @@ impl<'a> Paths<'a> {
         } else {
             (self.x0, self.v0, t)
         };
-        let mut x = [0.0; 3];
-        let mut v = [0.0; 3];
-        for k in 0..3 {
-            let c = 3 * q + k;
-            x[k] = x_ref[c] + v_ref[c] * dt + 0.5 * self.accel[c] * dt * dt;
-            v[k] = v_ref[c] + self.accel[c] * dt;
-        }
-        (x, v)
+        let (x, v, a) = (vec3::get(x_ref, q), vec3::get(v_ref, q), vec3::get(self.accel, q));
+        (vec3::parabola(x, v, a, dt), [0, 1, 2].map(|k| v[k] + a[k] * dt))
     }
 
     /// Impacts particle q has had in the step (its path's version).
@@ -214,7 +208,7 @@ pub(crate) fn pair_toi(d0: [f64; 3], u: [f64; 3], da: [f64; 3], big_r: f64, rest
     }
     // a meeting at τ > 0: an impact if u_n = (u + Δa τ)·d(τ)/|d(τ)| < −slow there
     let meet = |tau: f64| {
-        let d = [0, 1, 2].map(|k| d0[k] + u[k] * tau + 0.5 * da[k] * tau * tau);
+        let d = vec3::parabola(d0, u, da, tau);
         let w = [0, 1, 2].map(|k| u[k] + da[k] * tau);
         if vec3::dot(d, w) < -slow * vec3::norm(d) {
             Toi::At(tau)
@@ -247,7 +241,7 @@ pub(crate) fn pair_toi(d0: [f64; 3], u: [f64; 3], da: [f64; 3], big_r: f64, rest
         return Toi::Never;
     };
     for _ in 0..8 {
-        let d = [0, 1, 2].map(|k| d0[k] + u[k] * tau + 0.5 * da[k] * tau * tau);
+        let d = vec3::parabola(d0, u, da, tau);
         let dd = [0, 1, 2].map(|k| u[k] + da[k] * tau);
         let g = vec3::dot(d, d) - r2;
         let dg = 2.0 * vec3::dot(d, dd);

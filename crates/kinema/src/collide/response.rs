@@ -192,10 +192,10 @@ pub fn restitution_impulse(
     if u_n >= 0.0 || u_n.is_nan() {
         return None;
     }
-    let e = if -u_n < restitution_threshold {
-        0.0
-    } else {
+    let e = if bounces(u_n, restitution_threshold) {
         material.restitution
+    } else {
+        0.0
     };
     let j_n = -(1.0 + e) * u_n / w;
 
@@ -231,6 +231,14 @@ pub fn restitution_impulse(
         restitution: e,
         energy_lost: lost,
     })
+}
+
+/// Newton's law's threshold, the one rule for every impact and every end-of-step contact:
+/// a pair meeting at normal velocity u_n (m/s, < 0 approaching) bounces, u_n⁺ = −e u_n⁻, when
+/// it approaches at least as fast as `threshold` (m/s); a slower meeting is plastic (e = 0),
+/// which is what keeps a resting body from hopping on rounding.
+pub(crate) fn bounces(u_n: f64, threshold: f64) -> bool {
+    u_n < 0.0 && -u_n >= threshold
 }
 
 /// The speed below which a pair counts as not approaching, m/s: slower approaches are left

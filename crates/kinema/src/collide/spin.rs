@@ -41,7 +41,7 @@
 //! w_t = 7/(2m), so friction that stops the sliding takes 2/7 of the slip velocity from the
 //! centre, and a ball on a slope rolls at 5/7 g sin θ.
 
-use super::contact::Contact;
+use super::contact::{action_reaction, Contact};
 use crate::vec3;
 
 /// What spin adds to one contact: the contact point's velocity from the turning, and the
@@ -115,11 +115,9 @@ impl Rotation<'_> {
     pub fn kick(&self, c: &Contact, overlap: f64, impulse: [f64; 3], omega: &mut [f64]) {
         let (rho_i, rho_j) = self.arms(c, overlap);
         let (ki, kj) = self.inverse_inertias(c);
+        // (both turn the same way: j's arm points the other way, −ρ_j n, and it takes −J)
         let nj = vec3::cross(c.normal, impulse);
-        vec3::add_scaled(omega, c.i, -ki * rho_i, nj);
-        if let Some(j) = c.partner_particle() {
-            vec3::add_scaled(omega, j, -kj * rho_j, nj);
-        }
+        action_reaction(omega, c.i, c.partner_particle(), (-ki * rho_i, kj * rho_j), nj);
     }
 }
 

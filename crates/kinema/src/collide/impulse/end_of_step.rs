@@ -4,10 +4,11 @@
 //! each impulse onto both particles and the energy books (distribution).
 
 use super::{ImpulseModel, StageSetting};
+use crate::collide::contact::action_reaction;
 use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::CHUNK;
-use crate::collide::response::VELOCITY_TOLERANCE;
+use crate::collide::response::{bounces, VELOCITY_TOLERANCE};
 use crate::collide::soft_step::{self, SoftParams, Target, SLOP, SPECULATIVE};
 use crate::collide::spin::rotational_energy;
 use crate::collide::{pair_contact, Collider, Contact, Domain, Partner};
@@ -298,7 +299,7 @@ impl ImpulseModel {
             let start = -c.overlap - vec3::dot(rel(c, &moved, h), n);
             let u1 = rel(c, &|q| vec3::get(v1, q), 1.0);
             let u_pre = vec3::dot(rel(c, &|q| paths.reference_velocity(q), 1.0), n);
-            let bounce = (u_pre < 0.0 && -u_pre >= threshold).then(|| -materials.pair(c).restitution() * u_pre);
+            let bounce = bounces(u_pre, threshold).then(|| -materials.pair(c).restitution() * u_pre);
             let slop = SLOP * (set.radius[c.i] + c.partner_particle().map_or(set.radius[c.i], |j| set.radius[j]));
             Target::new(start, slop, rel(c, &base, h), u1, n, h, bounce)
         }));
@@ -489,13 +490,8 @@ pub(super) fn distribute(
     balance: &mut [f64; 3],
 ) {
     let (wi, wj) = (inv_mass[i], j.map_or(0.0, |j| inv_mass[j]));
-    for k in 0..3 {
-        v[3 * i + k] += wi * impulse[k];
-    }
+    action_reaction(v, i, j, (wi, wj), impulse);
     if let Some(j) = j {
-        for k in 0..3 {
-            v[3 * j + k] -= wj * impulse[k];
-        }
         if wi > 0.0 && wj > 0.0 {
             for k in 0..3 {
                 balance[k] += mass[i] * (wi * impulse[k]) - mass[j] * (wj * impulse[k]);

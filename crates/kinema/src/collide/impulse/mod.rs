@@ -12,6 +12,7 @@ pub(crate) mod impacts;
 use std::time::{Duration, Instant};
 
 use super::books::ColliderBooks;
+use super::contact::action_reaction;
 use super::events::{EventQueue, PathStore, Paths};
 use super::islands::{Forest, Islands};
 use super::neighbour_list::NeighbourList;
@@ -622,10 +623,8 @@ impl ImpulseModel {
             }
             if let (Some(r), Some(m)) = (set.rotation, self.rolls.get(k)) {
                 // the rolling resistance's angular impulse: +M on i, −M on j
-                vec3::add_scaled(omega, c.i, r.inv_inertia[c.i], *m);
-                if let Some(j) = c.partner_particle() {
-                    vec3::add_scaled(omega, j, -r.inv_inertia[j], *m);
-                }
+                let k_j = c.partner_particle().map_or(0.0, |j| r.inv_inertia[j]);
+                action_reaction(omega, c.i, c.partner_particle(), (r.inv_inertia[c.i], k_j), *m);
             }
             if let Partner::Collider(k) = c.other {
                 let at = vec3::sub(vec3::get(x1, c.i), vec3::scale(set.radius[c.i] - c.overlap, c.normal));
