@@ -106,6 +106,7 @@ bench: build $(TEST_STAMP)
 	$(PY) benchmarks/impacts.py
 	$(PY) benchmarks/hard_sphere_gas.py
 	$(PIP) install --disable-pip-version-check -q -r requirements/bench.txt
+	command -v cmake >/dev/null && dpkg -s libclang-dev >/dev/null 2>&1 || apt-get install -y -q cmake libclang-dev >/dev/null || echo "cmake/libclang could not be installed: piles.py will say whether it could build its Box2D/Jolt peers"
 	$(PY) benchmarks/piles.py
 	$(PY) benchmarks/granular_lammps.py
 	$(PY) benchmarks/angle_of_repose.py
