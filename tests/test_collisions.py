@@ -596,3 +596,24 @@ def test_removing_a_particle_keeps_the_warm_start_of_the_contacts_that_stay():
     c.step(50)
     np.testing.assert_array_equal(a.positions, c.positions)
     np.testing.assert_array_equal(a.velocities, c.velocities)
+
+
+def test_stage_times_name_the_impulse_models_stages_in_the_order_a_step_runs_them():
+    # A pile falling onto a floor: every stage of the impulse model runs (impacts, contacts,
+    # the soft step, the books). The seed's four stages come first; the impulse model's own
+    # stages follow in its order, and they cover the collision time the four report
+    # (measured by the same clock's laps: at least detect + respond + distribute).
+    w = kinema.World(dt=1e-3, method="verlet")
+    rng = np.random.default_rng(3)
+    x = np.array([[0.1 * i + 0.05, 0.1 * j + 0.05, 0.06 + 0.1 * k] for i in range(3) for j in range(3) for k in range(3)])
+    w.add_particles(x + rng.uniform(-0.005, 0.005, x.shape), mass=1.0, radius=0.04)
+    w.add(kinema.Gravity())
+    w.add(kinema.Box([0, 0, 0], [0.3, 0.3, 1.0]))
+    w.set_collisions(restitution=0.5, friction=0.3)
+    w.step(300)
+    t = w.stage_times()
+    stages = ["list", "impacts", "contacts", "solve", "apply", "settle", "wake"]
+    assert list(t) == ["integrate", "detect", "respond", "distribute", *stages]
+    assert all(t[k] >= 0.0 for k in t)
+    assert t["impacts"] > 0.0 and t["contacts"] > 0.0 and t["solve"] > 0.0
+    assert sum(t[k] for k in stages) >= t["detect"] + t["respond"] + t["distribute"] - 1e-6

@@ -235,5 +235,11 @@ class WorldCollisions:
     def stage_times(self) -> dict[str, float]:
         """Wall-clock seconds spent so far in each of the seed's four stages of a step:
         ``integrate`` (forces included; with spring–dashpot contacts, those too),
-        ``detect``, ``respond`` and ``distribute`` (collisions of the impulse model)."""
+        ``detect``, ``respond`` and ``distribute`` (collisions of the impulse model); and with
+        collisions on, the same collision time by the impulse model's own stages, in the
+        order a step runs them: ``list`` (the neighbour list holds or is rebuilt), ``impacts``
+        (continuous detection, each impact at its time), ``contacts`` (the end-of-step
+        contacts), ``solve`` (the soft step), ``apply`` (the totals onto both particles, the
+        energy books), ``settle`` (sleeping, the largest overlap, periodic wrapping) and
+        ``wake`` (a force-free world's wake times)."""
         return self._core.stage_times()

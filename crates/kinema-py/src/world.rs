@@ -516,6 +516,9 @@ impl PyWorld {
         out.set_item("detect", t.detect.as_secs_f64())?;
         out.set_item("respond", t.respond.as_secs_f64())?;
         out.set_item("distribute", t.distribute.as_secs_f64())?;
+        for (name, time) in t.impulse.iter().filter(|(name, _)| !name.is_empty()) {
+            out.set_item(*name, time.as_secs_f64())?;
+        }
         Ok(out)
     }
     /// How many times the engine sorted the particles along space (internal; for tests).

@@ -19,17 +19,15 @@
 //!   order[start[cell_of[i]]++] = i, for i ascending            → particles sorted by cell
 //! ```
 //!
-//! The search then runs cell by cell over copies of the positions and radii stored in that
-//! order, so that a cell's neighbours are read from nearby memory; the pairs it finds are put
-//! in (i, j) order by a second counting sort, by i.
+//! A particle's partners are then searched in the cells around it, particle by particle
+//! ([`Grid::partners`], [`Grid::partners_from`]): the neighbour lists (`neighbour_list.rs`)
+//! are built so, on all threads, and the placement check (`placement.rs`) searches so.
+//! The O(N²) search they are tested against is `all_pairs` in `oracles.rs`.
 
 use super::domain::Domain;
 use super::grid_level::{Level, LevelSort};
 use crate::error::Error;
 use crate::vec3;
-
-/// A candidate pair (i, j) of particle indices, i < j.
-pub type Pair = (usize, usize);
 
 /// Neighbouring levels' cell widths differ by at most this factor (the level index below is
 /// a log₂, so this is 2 and nothing else): a particle goes to level
@@ -44,20 +42,9 @@ const MAX_LEVELS: usize = 16;
 /// The most particles the grid indexes (its slots and cells are u32; 2N + 16 cells must fit).
 pub const MAX_PARTICLES: usize = (u32::MAX as usize - 16) / 2;
 
-/// Candidate pairs a search may find per particle before it stops ([`Grid::find_pairs`]), with
-/// at least [`MIN_PAIR_LIMIT`] in all. Spheres that do not overlap touch at most 12 equal
-/// neighbours (6 in 2D), so a pile averages 6 pairs a particle and a gas with the widest
-/// margin of continuous detection a few dozen; 64 (1 KiB of pairs a particle, the memory the
-/// command line's estimate counts) is reached only by particles piled inside each other,
-/// whose N²/2 pairs would otherwise take all memory (30,000 at one point: 2.7 GB, then an abort).
-pub const PAIRS_PER_PARTICLE: usize = 64;
-
-/// The fewest candidate pairs a search may find before it stops (64 MiB of pairs).
-pub const MIN_PAIR_LIMIT: usize = 1 << 22;
-
 /// The broad phase's grid: one uniform grid per size class of particles (a hierarchical grid,
 /// as MercuryDPM's HGrid). It keeps its buffers between calls: once warm, a call allocates
-/// nothing unless the number of particles, of levels or of found pairs grows.
+/// nothing unless the number of particles or of levels grows.
 ///
 /// A uniform grid needs cells as wide as the largest particle, so one boulder among fine
 /// grains puts thousands of grains into each cell and the search becomes quadratic. Here each
@@ -81,12 +68,6 @@ pub struct Grid {
     level_of: Vec<u8>,
     /// Cell of each particle in its own level's grid.
     cell_of: Vec<u32>,
-    /// Pairs in the order found, and per-particle counts for sorting them.
-    scratch: Vec<Pair>,
-    count: Vec<usize>,
-    /// The most pairs a search may find (`None`: [`PAIRS_PER_PARTICLE`] a particle, at least
-    /// [`MIN_PAIR_LIMIT`]; tests set less).
-    pub(crate) pair_limit: Option<usize>,
 }
 
 impl Grid {
@@ -119,92 +100,20 @@ impl Grid {
         self.levels.first().filter(|_| self.used > 0).map_or([0.0; 3], |l| l.width)
     }
 
-    /// Writes into `pairs` (cleared first) every pair (i, j), i < j, with
-    /// |x_i − x_j| < r_i + r_j + `margin`, the distance being the minimum image along the
-    /// domain's periodic axes; sorted by i, then j.
+    /// Sorts the particles into the levels' cells for [`Grid::partners`], for the pairs
+    /// (i, j) with |x_i − x_j| < r_i + r_j + `margin`, the distance being the minimum image
+    /// along the domain's periodic axes. Returns false when nothing can pair (fewer than two
+    /// particles, or zero reach): every particle has no partner then.
     ///
     /// `x`: positions, m (3 per particle, finite); `radius`: radii, m (≥ 0, finite, one per
-    /// particle); `margin`: m (≥ 0, finite; 0 for contacts now, the distance both can travel
-    /// within the step for continuous detection). Zero-radius particles never pair with each
-    /// other unless `margin` > 0 (the test is strict: a distance < 0 is impossible).
+    /// particle); `margin`: m (≥ 0, finite; the skin of a neighbour list, 0 for contacts now).
+    /// Zero-radius particles never pair with each other unless `margin` > 0 (the test is
+    /// strict: a distance < 0 is impossible).
     ///
-    /// The result is exactly [`all_pairs`]'s, in O(N + pairs) time when each level's
+    /// It keeps no copies of the positions and radii in cell order: its callers sort their
+    /// particles along space themselves. The search is O(N + pairs) when each level's
     /// particles fill their bounding box (or the periodic box) roughly evenly.
-    pub fn find_pairs(
-        &mut self,
-        x: &[f64],
-        radius: &[f64],
-        domain: &Domain,
-        margin: f64,
-        pairs: &mut Vec<Pair>,
-    ) -> Result<(), Error> {
-        pairs.clear();
-        if !self.sort(x, radius, domain, margin, true)? {
-            return Ok(());
-        }
-        // Level by level, cell by cell, so that neighbouring cells (and the copies of their
-        // particles' positions, stored in cell order) are read from memory close together.
-        let mut found = std::mem::take(&mut self.scratch);
-        found.clear();
-        let limit = self
-            .pair_limit
-            .unwrap_or((PAIRS_PER_PARTICLE * radius.len()).max(MIN_PAIR_LIMIT));
-        let levels = &self.levels[..self.used];
-        for (l, level) in levels.iter().enumerate() {
-            let cells = level.dims.iter().product::<usize>();
-            for cell in 0..cells {
-                let at = level.unflatten(cell);
-                for a in level.start[cell] as usize..level.start[cell + 1] as usize {
-                    let (i, xi, ri) = (level.order[a] as usize, level.pos[a], level.rad[a]);
-                    // its own level: each pair once, from its lower index
-                    level.visit(at, [1; 3], |b| {
-                        let j = level.order[b] as usize;
-                        if j > i && touches(domain, xi, level.pos[b], ri, level.rad[b], margin) {
-                            found.push((i, j));
-                        }
-                    });
-                    // coarser levels: the pair is found from this, the smaller, side only
-                    for coarse in &levels[l + 1..] {
-                        coarse.visit(coarse.cell_at(xi, domain), [1; 3], |b| {
-                            let j = coarse.order[b] as usize;
-                            if touches(domain, xi, coarse.pos[b], ri, coarse.rad[b], margin) {
-                                found.push((i.min(j), i.max(j)));
-                            }
-                        });
-                    }
-                    // (checked per particle: one adds at most N pairs beyond the limit)
-                    if found.len() > limit {
-                        self.scratch = found;
-                        return Err(Error::out_of_memory(
-                            format!(
-                                "the candidate pairs of {} particles (more than {limit}, {PAIRS_PER_PARTICLE} a particle: \
-                                 particles inside each other, or a margin of {margin} m wide against their radii)",
-                                radius.len()
-                            ),
-                            radius.len() * (radius.len() - 1) / 2 * std::mem::size_of::<Pair>(),
-                        ));
-                    }
-                }
-            }
-        }
-        self.scratch = found;
-        self.sort_pairs(radius.len(), pairs);
-        Ok(())
-    }
-
-    /// Sorts the particles into the levels' cells for [`Grid::partners`] (same arguments,
-    /// checks and cell layout as [`Grid::find_pairs`]). Returns false when nothing can pair
-    /// (fewer than two particles, or zero reach): every particle has no partner then.
-    ///
-    /// Unlike [`Grid::find_pairs`] it keeps no copies of the positions and radii in cell
-    /// order (32 B per particle): its callers sort their particles along space themselves.
     pub fn prepare(&mut self, x: &[f64], radius: &[f64], domain: &Domain, margin: f64) -> Result<bool, Error> {
-        self.sort(x, radius, domain, margin, false)
-    }
-
-    /// Sorts the particles into the levels' cells, with copies of their positions and radii
-    /// in cell order when `copies`. False when nothing can pair.
-    fn sort(&mut self, x: &[f64], radius: &[f64], domain: &Domain, margin: f64, copies: bool) -> Result<bool, Error> {
         check_inputs(x, radius, margin)?;
         let n = radius.len();
         let (r_min, r_max) = radius
@@ -240,7 +149,6 @@ impl Grid {
             let sort = LevelSort {
                 members: None,
                 reach: reach_max,
-                copies,
             };
             l.build(x, radius, domain, sort, &mut self.cell_of);
             return Ok(true);
@@ -282,7 +190,6 @@ impl Grid {
             let sort = LevelSort {
                 members: Some(&members),
                 reach,
-                copies,
             };
             level.build(x, radius, domain, sort, &mut self.cell_of);
             level.members = members;
@@ -291,8 +198,8 @@ impl Grid {
     }
 
     /// Particle i's partners in the grid of the last [`Grid::prepare`] (same positions `x`,
-    /// m, and `radius`, m): every j ≠ i with |x_i − x_j| < r_i + r_j + `margin` (the pair
-    /// test of [`Grid::find_pairs`]), appended to `out` in ascending order of j. Reads the
+    /// m, and `radius`, m, and `margin`, m): every j ≠ i with |x_i − x_j| < r_i + r_j +
+    /// `margin` (minimum image), appended to `out` in ascending order of j. Reads the
     /// grid only, so particles can be searched in parallel:
     /// each pair is found twice, once from each side (a full neighbour list).
     ///
@@ -349,59 +256,20 @@ impl Grid {
         }
         out[first..].sort_unstable();
     }
-
-    /// Moves the pairs found (in cell order) from `scratch` into `pairs`, sorted by i, then
-    /// j: a counting sort by i (O(N + pairs)), then each particle's few partners sorted.
-    fn sort_pairs(&mut self, n: usize, pairs: &mut Vec<Pair>) {
-        self.count.clear();
-        self.count.resize(n + 1, 0);
-        for &(i, _) in &self.scratch {
-            self.count[i + 1] += 1;
-        }
-        for i in 1..=n {
-            self.count[i] += self.count[i - 1];
-        }
-        pairs.clear();
-        pairs.resize(self.scratch.len(), (0, 0));
-        for &pair in &self.scratch {
-            pairs[self.count[pair.0]] = pair;
-            self.count[pair.0] += 1;
-        }
-        // count[i] is now the end of i's run, which starts where i − 1's ends
-        let mut begin = 0;
-        for i in 0..n {
-            pairs[begin..self.count[i]].sort_unstable();
-            begin = self.count[i];
-        }
-    }
 }
 
-/// The O(N²) reference for [`Grid::find_pairs`]: the same pairs, by testing every pair.
-/// Same arguments and the same errors.
-pub fn all_pairs(x: &[f64], radius: &[f64], domain: &Domain, margin: f64, pairs: &mut Vec<Pair>) -> Result<(), Error> {
-    check_inputs(x, radius, margin)?;
-    pairs.clear();
-    let n = radius.len();
-    for i in 0..n {
-        for j in i + 1..n {
-            if touches(domain, vec3::get(x, i), vec3::get(x, j), radius[i], radius[j], margin) {
-                pairs.push((i, j));
-            }
-        }
-    }
-    Ok(())
-}
-
-/// The pair test of both searches, the same floating-point operations in both:
+/// The pair test of the grid's search and of the O(N²) one the tests check it against
+/// (`all_pairs` in `oracles.rs`), the same floating-point operations in both:
 /// |d|² < (r_i + r_j + margin)², d = x_i − x_j as its minimum image.
 #[inline]
-fn touches(domain: &Domain, xi: [f64; 3], xj: [f64; 3], ri: f64, rj: f64, margin: f64) -> bool {
+pub(crate) fn touches(domain: &Domain, xi: [f64; 3], xj: [f64; 3], ri: f64, rj: f64, margin: f64) -> bool {
     let d = domain.displacement(xi, xj);
     let reach = ri + rj + margin;
     vec3::dot(d, d) < reach * reach
 }
 
-fn check_inputs(x: &[f64], radius: &[f64], margin: f64) -> Result<(), Error> {
+/// The checks of [`Grid::prepare`]'s arguments (and of the O(N²) search's).
+pub(crate) fn check_inputs(x: &[f64], radius: &[f64], margin: f64) -> Result<(), Error> {
     if radius.len() > MAX_PARTICLES {
         return Err(Error::invalid(
             "particles",

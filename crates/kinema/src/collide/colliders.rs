@@ -442,49 +442,9 @@ impl From<SphereObstacle> for Collider {
     }
 }
 
-/// Appends to `contacts` (not cleared, so that it can follow the particle pairs' contacts)
-/// every particle–collider contact within `tolerance`, particle by particle, then collider
-/// by collider, then wall by wall: `Partner::Collider(k)` is the index in `colliders`, and
-/// u_n = (v_i − u)·n, u the collider surface's velocity there ([`Collider::contact`]).
-///
-/// `x`, `v`: positions (m) and velocities (m/s), 3 per particle; `radius`: m, one per
-/// particle; `tolerance`: m (finite, ≥ 0).
-pub fn collider_contacts(
-    colliders: &[Collider],
-    x: &[f64],
-    v: &[f64],
-    radius: &[f64],
-    tolerance: f64,
-    contacts: &mut Vec<Contact>,
-) -> Result<(), Error> {
-    let n = radius.len();
-    for (name, len) in [("x", x.len()), ("v", v.len())] {
-        if len != 3 * n {
-            return Err(Error::invalid(
-                name,
-                format!("{len} values"),
-                format!("3 per particle ({} for the {n} radii)", 3 * n),
-            ));
-        }
-    }
-    if !(tolerance.is_finite() && tolerance >= 0.0) {
-        return Err(Error::invalid(
-            "tolerance",
-            tolerance,
-            "the contact tolerance must be finite and >= 0 m",
-        ));
-    }
-    for (i, &r) in radius.iter().enumerate() {
-        let (p, vi) = (vec3::get(x, i), vec3::get(v, i));
-        for (k, collider) in colliders.iter().enumerate() {
-            collider.for_each_touch(p, r, tolerance, |t| contacts.push(collider.contact(k, t, i, p, vi, r)));
-        }
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
+    use super::super::oracles::collider_contacts;
     use super::*;
 
     #[test]

@@ -44,29 +44,21 @@ pub(super) struct Level {
     pub(super) start: Vec<u32>,
     /// Particle indices sorted by cell.
     pub(super) order: Vec<u32>,
-    /// Positions, m, and radii, m, in the order of `order` (for
-    /// [`Grid::find_pairs`](super::broad_phase::Grid::find_pairs) only; empty after
-    /// [`Grid::prepare`](super::broad_phase::Grid::prepare)).
-    pub(super) pos: Vec<[f64; 3]>,
-    pub(super) rad: Vec<f64>,
 }
 
-/// What [`Level::build`] sorts and how: the level's particles (`members`, or all when None),
-/// the least cell width `reach`, m, and whether to keep copies of their positions and radii
-/// in cell order (`copies`).
+/// What [`Level::build`] sorts and how: the level's particles (`members`, or all when None)
+/// and the least cell width `reach`, m.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct LevelSort<'a> {
     pub members: Option<&'a [u32]>,
     pub reach: f64,
-    pub copies: bool,
 }
 
 impl Level {
     /// Lays the level out for cells at least `reach` wide and sorts its particles (`members`,
-    /// or all when None) into them; writes each one's cell into `cell_of`; copies their
-    /// positions and radii in cell order when `copies` (else frees the copies).
+    /// or all when None) into them; writes each one's cell into `cell_of`.
     pub(super) fn build(&mut self, x: &[f64], radius: &[f64], domain: &Domain, sort: LevelSort<'_>, cell_of: &mut [u32]) {
-        let LevelSort { members, reach, copies } = sort;
+        let LevelSort { members, reach } = sort;
         let count = members.map_or(radius.len(), |m| m.len());
         let member = |k: usize| members.map_or(k, |m| m[k] as usize);
         self.layout(x, count, member, domain, reach);
@@ -101,14 +93,6 @@ impl Level {
             self.start[c] = self.start[c - 1];
         }
         self.start[0] = 0;
-        if !copies {
-            (self.pos, self.rad) = (Vec::new(), Vec::new());
-            return;
-        }
-        self.pos.clear();
-        self.pos.extend(self.order.iter().map(|&i| vec3::get(x, i as usize)));
-        self.rad.clear();
-        self.rad.extend(self.order.iter().map(|&i| radius[i as usize]));
     }
 
     /// Chooses the axes' modes, origins, cell counts and widths for cells at least `reach`

@@ -624,7 +624,17 @@ mod tests {
         let mut solved = vec![[0.0; 3]; contacts.len()];
         let mut totals = vec![[0.0; 3]; contacts.len()];
         let mut x_islands = x.clone();
-        let stats = solve(&islands, &p, &mut solved, &mut totals, &mut Vec::new(), &v, &mut x_islands).unwrap();
+        let stats = solve(
+            &islands,
+            &vec![false; contacts.len()],
+            &p,
+            &mut solved,
+            &mut totals,
+            &mut Vec::new(),
+            &v,
+            &mut x_islands,
+        )
+        .unwrap();
         assert_eq!((stats.soft.sweeps, stats.islands), (7 * COLD_SWEEPS, 3));
 
         let mut all_solved = vec![[0.0; 3]; contacts.len()];
@@ -662,6 +672,68 @@ mod tests {
     }
 
     #[test]
+    fn an_idle_island_is_left_out_and_the_solve_gives_the_same_bits() {
+        // A block resting on a floor (an island that acts) beside pairs apart, each within
+        // the speculative margin: one parting (idle: skipped), one closing within the step
+        // beyond its target (acts), one approaching slowly enough that it ends the step short
+        // of touching but would close the gap in the next (the relax acts: not idle), and one
+        // parting with a warm start (not idle). `soft_step::idle` decides; the solve with the
+        // idle islands left out gives what the solve of every island gives, bit for bit.
+        let (mut contacts, mut v, mut x) = block(2, 2, 2, 1e-3);
+        let mut targets = targets(&contacts);
+        let mut warm = vec![[0.0; 3]; contacts.len()];
+        // (gap at the step's start, relative displacement over the step, relative velocity)
+        let pairs = [
+            (0.02, 0.01, 1.0, [0.0; 3]),        // parting: idle
+            (0.02, -0.03, -3.0, [0.0; 3]),      // closes beyond the gap in the step
+            (0.02, -0.015, -15.0, [0.0; 3]),    // ends 0.005 apart, would close it in the next step
+            (0.02, 0.01, 1.0, [0.1, 0.0, 0.0]), // parting, warm-started
+        ];
+        for (gap, d, u, w) in pairs {
+            let i = v.len() / 3;
+            v.extend([u, 0.0, 0.0, 0.0, 0.0, 0.0]);
+            x.extend([10.0 + i as f64, 0.0, 5.0, 10.0 + i as f64 - 1.0 - gap - d, 0.0, 5.0]);
+            contacts.push(Contact {
+                i,
+                other: Partner::Particle(i + 1),
+                normal: [1.0, 0.0, 0.0],
+                overlap: -(gap + d),
+                u_n: u,
+                wall_velocity: [0.0; 3],
+            });
+            targets.push(Target::new(gap, 0.0, [d, 0.0, 0.0], [u, 0.0, 0.0], [1.0, 0.0, 0.0], H, None));
+            warm.push(w);
+        }
+        let inv_mass = vec![1.0; v.len() / 3];
+        let idle: Vec<bool> = contacts
+            .iter()
+            .zip(&targets)
+            .zip(&warm)
+            .map(|((c, t), w)| super::super::soft_step::idle(c, t, *w, &inv_mass, None, &v, H))
+            .collect();
+        let n_block = idle.len() - 4;
+        assert_eq!(&idle[n_block..], &[true, false, false, false]);
+        // (the block's pairs move together and are idle alone; its floor contacts act, so
+        // its island is solved, and with it those pairs)
+        let on_floor = |k: usize| contacts[k].partner_particle().is_none();
+        assert!((0..n_block).all(|k| idle[k] != on_floor(k)), "{idle:?}");
+        let islands = Islands::find(&contacts, &inv_mass);
+        assert_eq!(islands.len(), 5);
+        let floor = floor();
+        let p = problem(&contacts, &targets, &inv_mass, &floor, 50);
+        let run = |idle: &[bool]| {
+            let (mut solved, mut totals, mut x) = (warm.clone(), vec![[0.0; 3]; contacts.len()], x.clone());
+            let stats = solve(&islands, idle, &p, &mut solved, &mut totals, &mut Vec::new(), &v, &mut x).unwrap();
+            (solved, totals, x, stats.soft.active)
+        };
+        let (skipped, all) = (run(&idle), run(&vec![false; contacts.len()]));
+        assert!(skipped == all, "leaving the idle island out changed the solve");
+        let (_, totals, _, _) = all;
+        assert_eq!(totals[n_block], [0.0; 3]); // the parting pair carries nothing
+        assert!(totals[n_block + 1][0] > 0.0 && totals[n_block + 2][0] > 0.0); // both closing pairs are stopped
+    }
+
+    #[test]
     fn a_coloured_island_is_the_same_on_any_number_of_threads_and_holds_the_block_up() {
         // A block of 12·12·6 balls: 2,448 contacts, one island, coloured, with colours large
         // enough to be swept on threads. Its soft step on 1, 2 and 3 threads, bit for bit; and
@@ -685,7 +757,17 @@ mod tests {
                 let mut solved = vec![[0.0; 3]; contacts.len()];
                 let mut totals = vec![[0.0; 3]; contacts.len()];
                 let mut x = x.clone();
-                let stats = solve(&islands, &p, &mut solved, &mut totals, &mut Vec::new(), &v, &mut x).unwrap();
+                let stats = solve(
+                    &islands,
+                    &vec![false; contacts.len()],
+                    &p,
+                    &mut solved,
+                    &mut totals,
+                    &mut Vec::new(),
+                    &v,
+                    &mut x,
+                )
+                .unwrap();
                 (totals, x, stats)
             })
         };

@@ -1,37 +1,79 @@
-//! The collide stage, stages 2–4 of a world step, and its kernels: detection (broad phase →
-//! narrow phase, colliders) and response (impulses, the end-of-step contact solve, or
-//! penalty forces), on flat particle arrays.
+//! The collide stage, stages 2–4 of a world step, and its kernels: detection (the grid and
+//! the neighbour lists, continuous detection, the contacts of particle pairs and colliders)
+//! and response (impulses, the end-of-step contact solve, or spring–dashpot forces), on flat
+//! particle arrays.
 //!
-//! `World::collide` (`world/collide.rs`) calls `stage::CollideStage::run` (`stage.rs`: the
-//! settings, colliders, domain, materials and books), which runs the impulse model over the
-//! step (`impulse/`: `impulse::ImpulseModel` and its buffers). Its stages, in order, each
-//! writing a buffer that the next one reads:
+//! What runs in a step of the impulse model, each function with its file (under `collide/`
+//! unless under `world/`), in order; each stage writes buffers that the next one reads:
 //!
 //! ```text
-//!   positions ──broad_phase::Grid::find_pairs──▶ pairs (i < j), sorted
-//!   pairs ──narrow_phase::sphere_contacts──▶ contacts (normal, overlap, u_n)
-//!     + colliders::collider_contacts (planes, boxes, sphere obstacles) appended
-//!   impacts inside the step ──response::restitution_impulse──▶ velocities: Newton's
-//!                                   restitution u_n⁺ = −e u_n⁻ and Coulomb friction
-//!   contacts at the step's end ──soft_step (by islands)──▶ velocities and positions:
-//!                                   resting contacts held, overlap removed
-//!   islands at rest ──sleep──▶ asleep: frozen, skipped by the impact search and the solve,
-//!                                   until an impact or an awake particle's contact wakes them
+//! World::step_once()                  world/mod.rs: one step
+//! ├ World::place_moving_colliders()   world/collide.rs: moving colliders where the step ends
+//! ├ World::integrate()                world/integrate.rs: stage 1, into x_next, v_next
+//! └ World::collide()                  world/collide.rs: stages 2–4
+//!   └ CollideStage::run()             stage.rs: the settings, colliders, materials, books
+//!     └ ImpulseModel::run()           impulse/mod.rs: sleepers held; the step's parabolas,
+//!       │                             Paths::begin() (paths.rs)
+//!       └ ImpulseModel::run_on_paths()  impulse/mod.rs, its stages:
+//!         prepare()                   impulse/impacts.rs: the neighbour list made to hold for
+//!                                     the step's sweep, else rebuilt at x₀ by
+//!                                     NeighbourList::update() (neighbour_list.rs) →
+//!                                     Grid::prepare(), Grid::partners_from() (broad_phase.rs);
+//!                                     the restitution threshold
+//!         wake_up()                   impulse/impacts.rs: a force-free world's wake times
+//!         impacts()                   impulse/impacts.rs, with ccd: every first impact,
+//!                                     Scene::all_impacts() (events.rs), into the queue; then in
+//!                                     time order: contact_at(), restitution_impulse()
+//!                                     (response.rs), distribute() (impulse/end_of_step.rs),
+//!                                     the two particles' next impacts, Scene::earliest()
+//!         Paths::finish()             paths.rs: hit particles end on their last parabola
+//!         end_contacts()              impulse/end_of_step.rs: the contacts at the step's end,
+//!                                     breadth first from the touched particles over the list:
+//!                                     pair_contact() (narrow_phase.rs), then the colliders'
+//!                                     Collider::for_each_touch(), Collider::contact()
+//!                                     (colliders.rs)
+//!         solve()                     impulse/end_of_step.rs: Target::new() (soft_step.rs),
+//!                                     Islands::find_with() (islands.rs), soft_step::idle(),
+//!                                     islands::solve() → soft_step(), island by island
+//!         distribute()                impulse/end_of_step.rs: each total onto both particles
+//!         energy_books()              impulse/end_of_step.rs: the energy the stages took
+//!         settle()                    impulse/end_of_step.rs: calm islands fall asleep
+//!         max_overlap()               impulse/end_of_step.rs: the overlap left
+//!         wake_up()                   impulse/impacts.rs: the next steps' wake times
 //! ```
 //!
-//! The order matters: the end-of-step solve needs contacts that describe the current
-//! positions.
+//! The order matters: the impacts change the paths the end-of-step contacts are found on,
+//! and the end-of-step solve needs contacts that describe the positions the impacts left.
 //!
-//! The penalty model replaces the response stages: [`penalty::PenaltyLaw::accumulate`] turns
-//! the contacts into spring–dashpot forces that the integrator applies within the step.
+//! The force models (spring–dashpot, Hertz) act in stage 1 instead, as the last of the forces
+//! (`contact_force/`):
 //!
-//! The broad and narrow phases are discrete: they see overlaps at the end of a step, and a
+//! ```text
+//! World::integrate()                   world/integrate.rs: contact_force() (world/forces.rs)
+//!                                      → CollideStage::contact_force() (stage.rs): a call's view
+//! ├ ContactForce::force_and_kick()     contact_force/verlet.rs: velocity Verlet's fused pass
+//! └ ContactForce::accumulate()         contact_force/force.rs: the other methods → pair_pass()
+//!   both: update_list() (contact_force/mod.rs) → NeighbourList::update() (a half list);
+//!   pair_forces() (contact_force/pairs.rs): pair_contact(), normal_force_parts()
+//!   (contact_force/law.rs) → spring_dashpot_force() (penalty.rs), tangent_of() with
+//!   friction; wall_contacts() (contact_force/contacts.rs) → Collider::contact()
+//! ```
+//!
+//! With `CollisionParams::event_driven`, `World::advance` runs `World::advance_by_events`
+//! (`world/event_driven.rs`, `event_driven/`) instead of these steps.
+//!
+//! The test oracles, O(N²) and plain references that the tests check these paths against
+//! (`all_pairs`, `sphere_contacts`, `collider_contacts`, `PenaltyLaw`), are in `oracles.rs`,
+//! compiled for the tests only; `tests/map.rs` checks that every function the two maps above
+//! name is defined and called outside the tests.
+//!
+//! The contacts at a step's end are discrete: they see overlaps at the end of a step, and a
 //! particle fast enough to cross another (or a wall) within one step is missed by them. The
-//! continuous part is [`toi`]: the time of impact inside the step, for sphere pairs and
-//! sphere obstacles in linear motion and for spheres against planes under constant
-//! acceleration. The broad phase finds the candidates for it when given a `margin` of the
-//! distance two particles can close within the step (h times the largest relative speed,
-//! 2 h |v|_max).
+//! continuous part is [`toi`] (with `paths.rs` and `events.rs`): the time of impact inside the
+//! step, for sphere pairs and sphere obstacles in linear motion and for spheres against planes
+//! under constant acceleration. The neighbour list finds the candidates for it: `prepare`
+//! makes it hold for the distance each particle sweeps within the step (rebuilt with a skin
+//! of at least four times the largest sweep).
 //!
 //! Space is described by a [`Domain`]: 2D (circles in the xy-plane) or 3D, open or
 //! periodic along any axis (the minimum image is used throughout).
@@ -51,11 +93,14 @@ pub(crate) mod event_driven;
 pub(crate) mod events;
 pub(crate) mod impulse;
 pub(crate) mod islands;
+pub(crate) mod marks;
 pub mod mesh;
 pub(crate) mod morton;
 pub mod motion;
 pub mod narrow_phase;
 pub(crate) mod neighbour_list;
+#[cfg(test)]
+pub(crate) mod oracles;
 pub mod penalty;
 pub(crate) mod placement;
 pub mod response;
@@ -72,13 +117,13 @@ pub(crate) mod wake;
 mod grid_level;
 mod paths;
 
-pub use broad_phase::{all_pairs, Grid, Pair};
-pub use colliders::{collider_contacts, BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};
+pub use broad_phase::Grid;
+pub use colliders::{BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};
 pub use contact::{Contact, Partner};
 pub use domain::{Domain, Periodic};
 pub use mesh::{Side, TriangleMesh};
 pub use motion::{Motion, Pose, SurfaceVelocity};
-pub use narrow_phase::{pair_contact, sphere_contacts};
-pub use penalty::{damping_ratio, dashpot_coefficient, restitution_of_damping, spring_dashpot_force, PenaltyLaw};
+pub use narrow_phase::pair_contact;
+pub use penalty::{damping_ratio, dashpot_coefficient, spring_dashpot_force};
 pub use response::{restitution_impulse, Impulse, Material, MaterialTable};
 pub use toi::{toi_plane, toi_sphere_obstacle, toi_spheres};

@@ -1,4 +1,4 @@
-//! Narrow phase: sphere–sphere (circle–circle in 2D) contacts from the broad phase's pairs.
+//! Narrow phase: the sphere–sphere (circle–circle in 2D) contact of a candidate pair.
 //!
 //! For a pair (i, j) with d = x_i − x_j (minimum image along periodic axes) and L = |d|:
 //!
@@ -12,18 +12,17 @@
 //! so that the result does not depend on anything but the input (any unit vector would
 //! separate them; +x lies in the plane of a 2D domain).
 
-use super::broad_phase::Pair;
 use super::contact::{Contact, Partner};
 use super::domain::Domain;
-use crate::error::Error;
-use crate::particles::check_per_particle;
 use crate::vec3;
 
 /// The contact of particles i and j if their distance is below r_i + r_j + `tolerance`
 /// (m, ≥ 0; > 0 also reports near misses, with overlap −gap < 0), else `None`.
 ///
 /// `x`, `v`: positions (m) and velocities (m/s), 3 per particle; `radius`: m. Indices must
-/// be in range (see [`sphere_contacts`] for the checked version).
+/// be in range (the callers' lists hold them so). Every particle pair's contact in kinema is
+/// this function's: the end-of-step contacts of the impulse model, and the spring–dashpot
+/// force's at each evaluation.
 pub fn pair_contact(
     i: usize,
     j: usize,
@@ -57,52 +56,10 @@ pub fn pair_contact(
     })
 }
 
-/// Appends to `contacts` (cleared first) the contact of each pair of `pairs` whose distance is
-/// below r_i + r_j + `tolerance`, in the order of `pairs`, with `i` the pair's first index.
-///
-/// `x`: positions, m, and `v`: velocities, m/s (3 per particle); `radius`: m (one per
-/// particle); `tolerance`: m (finite, ≥ 0; 0 keeps only overlapping pairs). Errors name a
-/// buffer of the wrong length, a pair with an index out of range or i = j, or a bad
-/// tolerance.
-pub fn sphere_contacts(
-    x: &[f64],
-    v: &[f64],
-    radius: &[f64],
-    pairs: &[Pair],
-    domain: &Domain,
-    tolerance: f64,
-    contacts: &mut Vec<Contact>,
-) -> Result<(), Error> {
-    let n = radius.len();
-    for (name, len) in [("x", x.len()), ("v", v.len())] {
-        check_per_particle(name, len, 3, n, "radii")?;
-    }
-    if !(tolerance.is_finite() && tolerance >= 0.0) {
-        return Err(Error::invalid(
-            "tolerance",
-            tolerance,
-            "the contact tolerance must be finite and >= 0 m",
-        ));
-    }
-    if let Some(p) = pairs.iter().position(|&(i, j)| i >= n || j >= n || i == j) {
-        return Err(Error::invalid(
-            format!("pairs[{p}]"),
-            format!("{:?}", pairs[p]),
-            format!("pairs join two distinct particles of the {n} (indices < {n})"),
-        ));
-    }
-    contacts.clear();
-    contacts.extend(
-        pairs
-            .iter()
-            .filter_map(|&(i, j)| pair_contact(i, j, x, v, radius, domain, tolerance)),
-    );
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::super::domain::Periodic;
+    use super::super::oracles::sphere_contacts;
     use super::*;
 
     #[test]

@@ -48,7 +48,7 @@ pub(crate) struct ListBuild {
 }
 
 /// A Verlet neighbour list: the particle pairs (i, j) with |x_i − x_j| < r_i + r_j + s at the
-/// build (the grid's [`Grid::find_pairs`] with margin s, the skin), and the particles within
+/// build (the grid's [`Grid::partners`] with margin s, the skin), and the particles within
 /// s of touching each collider, reused until the particles have moved far enough that
 /// something left out could touch.
 ///

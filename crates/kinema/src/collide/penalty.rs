@@ -35,10 +35,7 @@
 //! early and bounce back faster than the e asked for, which the formula above would no
 //! longer give.
 
-use super::contact::Contact;
 use crate::error::Error;
-use crate::particles::check_per_particle;
-use crate::vec3;
 
 /// The damping ratio ζ of the contact oscillator that bounces back with restitution `e`
 /// (in [0, 1]): ζ = −ln e / √(π² + ln² e); 0 for e = 1, 1 (critical) for e = 0.
@@ -58,22 +55,11 @@ pub fn damping_ratio(restitution: f64) -> Result<f64, Error> {
     Ok(l / (std::f64::consts::PI * std::f64::consts::PI + l * l).sqrt())
 }
 
-/// The restitution of the contact oscillator with damping ratio ζ (≥ 0):
-/// e = exp(−ζ π / √(1 − ζ²)) for ζ < 1, 0 from ζ = 1 on (no rebound). The inverse of
-/// [`damping_ratio`].
-pub fn restitution_of_damping(zeta: f64) -> f64 {
-    if zeta >= 1.0 {
-        0.0
-    } else {
-        (-zeta * std::f64::consts::PI / (1.0 - zeta * zeta).sqrt()).exp()
-    }
-}
-
 /// The spring–dashpot law itself, F_n = k_n δ − c_n u_n (N, > 0 pushes the pair apart):
 /// stiffness k_n (N/m), dashpot coefficient c_n (kg/s), overlap δ (m) and normal velocity u_n
 /// (m/s, < 0 approaching). Every spring–dashpot contact in kinema is this function: the
-/// world's contact force calls it for each contact, and [`PenaltyLaw`] (whose restitution
-/// the tests measure) through [`PenaltyLaw::normal_force`].
+/// world's contact force calls it for each contact (`contact_force/law.rs`), and so does the
+/// tests' `PenaltyLaw` (`oracles.rs`), whose restitution they measure.
 #[inline]
 pub fn spring_dashpot_force(stiffness: f64, dashpot: f64, overlap: f64, u_n: f64) -> f64 {
     stiffness * overlap - dashpot * u_n
@@ -86,133 +72,10 @@ pub fn dashpot_coefficient(stiffness: f64, zeta: f64, inverse_mass_sum: f64) -> 
     2.0 * zeta * (stiffness / inverse_mass_sum).sqrt()
 }
 
-/// A linear spring–dashpot contact law with stiffness k_n and the damping that gives a
-/// restitution e for every pair.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PenaltyLaw {
-    stiffness: f64,
-    restitution: f64,
-    zeta: f64,
-}
-
-impl PenaltyLaw {
-    /// A law of normal stiffness `stiffness` (k_n, N/m, finite, > 0) and restitution
-    /// `restitution` (e ∈ [0, 1]).
-    pub fn new(stiffness: f64, restitution: f64) -> Result<Self, Error> {
-        if !(stiffness.is_finite() && stiffness > 0.0) {
-            return Err(Error::invalid(
-                "stiffness",
-                stiffness,
-                "the contact stiffness must be finite and > 0 N/m",
-            ));
-        }
-        Ok(PenaltyLaw {
-            stiffness,
-            restitution,
-            zeta: damping_ratio(restitution)?,
-        })
-    }
-
-    /// k_n, N/m.
-    pub fn stiffness(&self) -> f64 {
-        self.stiffness
-    }
-
-    /// The restitution asked for.
-    pub fn restitution(&self) -> f64 {
-        self.restitution
-    }
-
-    /// ζ, the damping ratio (see [`damping_ratio`]).
-    pub fn damping_ratio(&self) -> f64 {
-        self.zeta
-    }
-
-    /// ω₀² = k_n / m_eff, 1/s², of a contact with reduced mass `m_eff` (kg). With inverse
-    /// masses, ω₀² = k_n (w_i + w_j), see [`PenaltyLaw::contact_omega_squared`].
-    pub fn omega_squared(&self, m_eff: f64) -> f64 {
-        self.stiffness / m_eff
-    }
-
-    /// γ_n = 2 ζ √(k_n / m_eff), 1/s, for reduced mass `m_eff` (kg).
-    pub fn damping_rate(&self, m_eff: f64) -> f64 {
-        2.0 * self.zeta * self.omega_squared(m_eff).sqrt()
-    }
-
-    /// t_c = π / ω_d (s), how long a collision lasts for reduced mass `m_eff` (kg); infinite
-    /// for e = 0. An integrator resolves e well with 50 or more steps per contact.
-    pub fn contact_duration(&self, m_eff: f64) -> f64 {
-        let omega_d = self.omega_squared(m_eff).sqrt() * (1.0 - self.zeta * self.zeta).sqrt();
-        std::f64::consts::PI / omega_d
-    }
-
-    /// F_n = k_n δ − m_eff γ_n u_n, N, pushing the pair apart when > 0; for overlap `overlap`
-    /// (δ, m), normal velocity `u_n` (m/s, < 0 approaching) and reduced mass `m_eff` (kg).
-    /// The same arithmetic as the world's contact force: [`spring_dashpot_force`] with
-    /// c_n = [`dashpot_coefficient`]`(k_n, ζ, 1/m_eff)`.
-    pub fn normal_force(&self, overlap: f64, u_n: f64, m_eff: f64) -> f64 {
-        spring_dashpot_force(
-            self.stiffness,
-            dashpot_coefficient(self.stiffness, self.zeta, 1.0 / m_eff),
-            overlap,
-            u_n,
-        )
-    }
-
-    /// ω₀² = k_n (w_i + w_j), 1/s², of contact `c`, with `inv_mass` the inverse masses (1/kg;
-    /// 0 pinned, and a collider's is 0): the rate to keep h ω₀ below an explicit method's
-    /// stability limit. A particle pressed by several contacts at once oscillates faster (up
-    /// to the sum of its contacts' rates), as in a spring network. Indices must be in range.
-    pub fn contact_omega_squared(&self, c: &Contact, inv_mass: &[f64]) -> f64 {
-        self.stiffness * (inv_mass[c.i] + c.partner_particle().map_or(0.0, |j| inv_mass[j]))
-    }
-
-    /// The largest ω₀² (1/s²) over `contacts`, 0 without contacts.
-    pub fn max_omega_squared(&self, contacts: &[Contact], inv_mass: &[f64]) -> f64 {
-        contacts
-            .iter()
-            .map(|c| self.contact_omega_squared(c, inv_mass))
-            .fold(0.0, f64::max)
-    }
-
-    /// Adds each overlapping contact's force F_n n to particle i's entries of `f` (N, 3 per
-    /// particle) and −F_n n to its partner particle's (a collider takes the reaction), so that
-    /// particle pairs change no total momentum. Contacts with δ ≤ 0 add nothing; nor does a
-    /// contact of two immovable bodies (w_i + w_j = 0). The contacts must describe the state
-    /// the force is wanted at (recompute them at each force evaluation).
-    ///
-    /// m_eff γ_n = 2 ζ √(k_n m_eff) = 2 ζ √(k_n / (w_i + w_j)).
-    pub fn accumulate(&self, contacts: &[Contact], inv_mass: &[f64], f: &mut [f64]) -> Result<(), Error> {
-        let n = inv_mass.len();
-        check_per_particle("f", f.len(), 3, n, "inverse masses")?;
-        if let Some(p) = contacts
-            .iter()
-            .position(|c| c.i >= n || c.partner_particle().is_some_and(|j| j >= n || j == c.i))
-        {
-            return Err(Error::invalid(
-                format!("contacts[{p}]"),
-                format!("particle {} with {:?}", contacts[p].i, contacts[p].other),
-                format!("contacts join distinct particles of the {n} (indices < {n})"),
-            ));
-        }
-        for c in contacts {
-            let w = inv_mass[c.i] + c.partner_particle().map_or(0.0, |j| inv_mass[j]);
-            if c.overlap <= 0.0 || c.overlap.is_nan() || w == 0.0 {
-                continue;
-            }
-            let force = self.stiffness * c.overlap - 2.0 * self.zeta * (self.stiffness / w).sqrt() * c.u_n;
-            vec3::add_scaled(f, c.i, force, c.normal);
-            if let Some(j) = c.partner_particle() {
-                vec3::add_scaled(f, j, -force, c.normal);
-            }
-        }
-        Ok(())
-    }
-}
-
 #[cfg(test)]
 mod tests {
-    use super::super::contact::Partner;
+    use super::super::contact::{Contact, Partner};
+    use super::super::oracles::{restitution_of_damping, PenaltyLaw};
     use super::*;
 
     #[test]

@@ -29,7 +29,7 @@ pub enum ContactModel {
     Impulse,
     /// A spring–dashpot force while bodies overlap (the DEM way), integrated with the other
     /// forces in stage 1: F_n = k_n δ − m_eff γ_n u_n with γ_n from the requested e by the
-    /// damped oscillator's closed form ([`crate::collide::PenaltyLaw`]), or given.
+    /// damped oscillator's closed form (`collide/penalty.rs`, `damping_ratio`), or given.
     SpringDashpot {
         /// Normal stiffness k_n, N/m (> 0).
         stiffness: f64,
@@ -822,6 +822,9 @@ impl CollideStage {
         self.times.detect += times.detect;
         self.times.respond += times.respond;
         self.times.distribute += times.distribute;
+        for (all, step) in self.times.stages.iter_mut().zip(times.stages) {
+            *all += step;
+        }
         self.last = stats;
         self.total.accumulate(&stats);
         Ok(changed)

@@ -260,11 +260,6 @@ impl World {
         Ok(())
     }
 
-    /// Whether some collider has a prescribed motion.
-    pub fn has_moving_colliders(&self) -> bool {
-        self.collide_stage.as_ref().is_some_and(|s| s.has_motion())
-    }
-
     /// What the particles gave each collider over all steps (momentum, angular momentum
     /// about the origin, the work the collider did on them), in the colliders' order; the
     /// impulse model's books (the spring–dashpot model books nothing here).

@@ -4,6 +4,7 @@
 use super::dynamics::Dynamics;
 use super::forces::{contact_force, every_force, every_force_ref};
 use super::{advisor, Rates, StageTimes, World, WorldStepper};
+use crate::collide::impulse::ImpulseStage;
 use crate::diagnostics::Diagnostics;
 use crate::error::Error;
 use crate::forces::State;
@@ -30,6 +31,9 @@ impl World {
             times.detect = stage.times.detect;
             times.respond = stage.times.respond;
             times.distribute = stage.times.distribute;
+            for (k, stage_time) in stage.times.stages.iter().enumerate() {
+                times.impulse[k] = (ImpulseStage::ALL[k].name(), *stage_time);
+            }
         }
         times
     }

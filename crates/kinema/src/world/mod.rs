@@ -127,6 +127,9 @@ pub struct StageTimes {
     pub respond: std::time::Duration,
     /// Stage 4: each impulse distributed onto both particles.
     pub distribute: std::time::Duration,
+    /// Stages 2–4 of the impulse model by its own stages, in the order a step runs them
+    /// (`collide/impulse/mod.rs`, `ImpulseStage`): each one's name and time.
+    pub impulse: [(&'static str, std::time::Duration); 7],
 }
 
 impl World {

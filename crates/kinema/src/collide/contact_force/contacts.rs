@@ -13,8 +13,8 @@ impl ContactForce<'_> {
     /// Calls `each` with every contact at state `s`, in the order of a full search: particle
     /// pairs by (i, j), i < j (those of the (half) neighbour list that touch, each tested exactly as
     /// [`pair_contact`] tests it), then particle by particle, collider by collider, wall by
-    /// wall (box walls along periodic axes left out), as
-    /// [`collider_contacts`](crate::collide::collider_contacts) lists them.
+    /// wall (box walls along periodic axes left out), as the tests' `collider_contacts`
+    /// (`collide/oracles.rs`) lists them.
     pub(super) fn for_each_contact(&self, s: &State, scratch: &mut Scratch, mut each: impl FnMut(&Contact)) -> Result<(), Error> {
         self.update_list(s, scratch)?;
         let list = &scratch.list;

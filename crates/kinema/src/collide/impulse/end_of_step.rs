@@ -52,8 +52,10 @@ impl ImpulseModel {
     pub(super) fn end_contacts(&mut self, set: &StageSetting<'_>, x1: &[f64], v1: &[f64]) -> usize {
         self.contacts.clear();
         let (n, radius) = (set.radius.len(), set.radius);
-        let mut work: Vec<usize> = (0..n).filter(|&i| self.touched[i]).collect();
-        let mut done = vec![false; n];
+        let mut work: Vec<usize> = self.touched.sorted().to_vec();
+        // (each particle whose row was walked: the pair of two of them was seen already)
+        let mut done = std::mem::take(&mut self.scratch);
+        done.reset(n, false);
         let mut next = 0;
         let mut woke = 0;
         while next < work.len() {
@@ -61,7 +63,7 @@ impl ImpulseModel {
             next += 1;
             for k in 0..self.list.rows[i / CHUNK].of(i % CHUNK).len() {
                 let j = self.list.rows[i / CHUNK].of(i % CHUNK)[k] as usize;
-                if done[j] {
+                if done.get(j) {
                     continue; // the pair was seen from j's side
                 }
                 let (lo, hi) = (i.min(j), i.max(j));
@@ -73,14 +75,14 @@ impl ImpulseModel {
                     self.contacts.push(c);
                     if self.sleep.is_asleep(j) {
                         woke += self.wake_island(j, &mut work);
-                    } else if !self.touched[j] {
-                        self.touched[j] = true;
+                    } else if self.touched.mark(j) {
                         work.push(j);
                     }
                 }
             }
-            done[i] = true;
+            done.mark(i);
         }
+        self.scratch = done;
         if woke > 0 {
             self.warm.sort_by_key(|w| (w.0, w.1));
             self.resting.sort_by_key(|w| (w.0, w.1));
@@ -89,7 +91,8 @@ impl ImpulseModel {
         self.contacts.sort_unstable_by_key(|c| (c.i, c.other));
         let pairs = self.contacts.len();
         let list = &self.list;
-        for i in (0..n).filter(|&i| self.touched[i]) {
+        let contacts = &mut self.contacts;
+        for &i in self.touched.sorted() {
             let (p, vi) = (vec3::get(x1, i), vec3::get(v1, i));
             let first = list.walls.partition_point(|w| w.0 < i);
             for &(_, k) in list.walls[first..].iter().take_while(|w| w.0 == i) {
@@ -97,7 +100,7 @@ impl ImpulseModel {
                 collider.for_each_touch(p, radius[i], 2.0 * SPECULATIVE * radius[i], |t| {
                     let c = collider.contact(k, t, i, p, vi, radius[i]);
                     if !on_periodic_wall(&c, set.colliders, set.domain) {
-                        self.contacts.push(c);
+                        contacts.push(c);
                     }
                 });
             }
@@ -115,7 +118,7 @@ impl ImpulseModel {
     pub(super) fn wake_island(&mut self, q: usize, work: &mut Vec<usize>) -> usize {
         let Some(island) = self.sleep.wake(q) else { return 0 };
         for &m in &island.members {
-            self.touched[m] = true;
+            self.touched.mark(m);
             work.push(m);
         }
         self.resting.extend(island.warm.iter().map(|w| (w.0, w.1, w.2 != [0.0; 3])));
@@ -253,7 +256,8 @@ impl ImpulseModel {
         // step, or that the step would close beyond what its target allows (moving by
         // symplectic Euler, below). No impact hit them in this step.
         let euler_step = |q: usize| vec3::scale(h, vec3::get(v1, q));
-        let mut resting = vec![false; inv_mass.len()];
+        let mut resting = std::mem::take(&mut self.scratch);
+        resting.reset(inv_mass.len(), false);
         // A particle touching a resting one (within the slop, by a contact that carried no load
         // in the last step) rests too: a column placed at rest on a floor then moves as one by
         // symplectic Euler from its first step, as it will in every step after, so that the
@@ -269,7 +273,9 @@ impl ImpulseModel {
             let closes = start + vec3::dot(rel(c, &euler_step, h), c.normal) < least;
             if *warm != [0.0; 3] || closes {
                 for q in std::iter::once(c.i).chain(c.partner_particle()) {
-                    resting[q] = paths.version(q) == 0;
+                    if paths.version(q) == 0 {
+                        resting.mark(q);
+                    }
                 }
             } else if let Some(j) = c.partner_particle() {
                 let slop = SLOP * (set.radius[c.i] + set.radius[j]);
@@ -282,8 +288,9 @@ impl ImpulseModel {
         while spread {
             spread = false;
             for &(i, j) in &touching {
-                if resting[i] != resting[j] {
-                    (resting[i], resting[j]) = (true, true);
+                if resting.get(i) != resting.get(j) {
+                    resting.mark(i);
+                    resting.mark(j);
                     spread = true;
                 }
             }
@@ -292,7 +299,7 @@ impl ImpulseModel {
         // resting contact moves by symplectic Euler, as in Box2D (x = x₀ + h v: held at v = 0
         // it stays where it was, whatever the method); any other as it was integrated (the
         // method's own accuracy, an impact's exact path).
-        let base = |q: usize| if resting[q] { euler_step(q) } else { moved(q) };
+        let base = |q: usize| if resting.get(q) { euler_step(q) } else { moved(q) };
         self.prepared.clear();
         self.prepared.extend(self.contacts.iter().map(|c| {
             let n = c.normal;
@@ -305,15 +312,18 @@ impl ImpulseModel {
         }));
         // What moving by symplectic Euler adds to the integrated position of each particle in
         // resting contact.
-        let euler: Vec<(usize, [f64; 3])> = (0..inv_mass.len())
-            .filter(|&q| resting[q] && inv_mass[q] > 0.0)
-            .map(|q| (q, vec3::sub(euler_step(q), moved(q))))
+        let euler: Vec<(usize, [f64; 3])> = resting
+            .sorted()
+            .iter()
+            .filter(|&&q| inv_mass[q] > 0.0)
+            .map(|&q| (q, vec3::sub(euler_step(q), moved(q))))
             .collect();
         self.totals.clear();
         self.totals.resize(self.contacts.len(), [0.0; 3]);
         if self.contacts.is_empty() {
             self.islands = Islands::default();
-            self.acted.clear();
+            self.acted.reset(inv_mass.len(), false);
+            self.scratch = resting;
             self.warm.clear();
             self.resting.clear();
             let mut done = IslandStats::default();
@@ -356,13 +366,16 @@ impl ImpulseModel {
             vec3::add_scaled(x1, q, 1.0, c);
         }
         // What the stage acted on, for the books: moved by symplectic Euler, or pushed.
-        self.acted.clear();
-        self.acted.extend(resting.iter().map(|&r| r));
+        self.acted.reset(inv_mass.len(), false);
+        for &q in resting.sorted() {
+            self.acted.mark(q);
+        }
+        self.scratch = resting;
         for (c, (p, s)) in self.contacts.iter().zip(self.totals.iter().zip(&self.solved)) {
             if *p != [0.0; 3] || *s != [0.0; 3] {
-                self.acted[c.i] = true;
+                self.acted.mark(c.i);
                 if let Some(j) = c.partner_particle() {
-                    self.acted[j] = true;
+                    self.acted.mark(j);
                 }
             }
         }
@@ -427,7 +440,7 @@ impl ImpulseModel {
         let (mass, inv_mass) = (set.mass, set.inv_mass);
         let mut lost = 0.0;
         for (k, &(q, xb, vb)) in self.books.iter().enumerate() {
-            if inv_mass[q] == 0.0 || !self.acted.get(q).copied().unwrap_or(false) {
+            if inv_mass[q] == 0.0 || !self.acted.get(q) {
                 continue;
             }
             let (x, v, a) = (vec3::get(x1, q), vec3::get(v1, q), vec3::get(accel, q));

@@ -194,7 +194,9 @@ impl ImpulseModel {
             if partner.is_some_and(|j| paths.version(j) != event.partner_version) {
                 // the partner's path changed since: predicted on a path that no longer exists
                 let next = scene.earliest(paths, event.i, t, h);
-                self.touched[event.i] |= next.touching;
+                if next.touching {
+                    self.touched.mark(event.i);
+                }
                 self.queue.schedule(event.i, next.event);
                 t_detect += clock.elapsed();
                 continue;
@@ -205,7 +207,7 @@ impl ImpulseModel {
             }
             if processed > cap {
                 stats.unconverged += 1;
-                self.touched.iter_mut().for_each(|f| *f = true);
+                self.touched.mark_all();
                 t_detect += clock.elapsed();
                 break;
             }
@@ -254,7 +256,7 @@ impl ImpulseModel {
                 }
                 for q in std::iter::once(event.i).chain(partner) {
                     paths.changed(q);
-                    self.touched[q] = true;
+                    self.touched.mark(q);
                     self.fastest_hit = self.fastest_hit.max(vec3::norm(vec3::get(paths.v_ref(), q)));
                 }
             }
@@ -278,7 +280,9 @@ impl ImpulseModel {
                 for q in std::iter::once(event.i).chain(partner) {
                     if impulse.is_some() || q == event.i {
                         let next = scene.earliest(paths, q, t, h);
-                        self.touched[q] |= next.touching;
+                        if next.touching {
+                            self.touched.mark(q);
+                        }
                         self.queue.schedule(q, next.event);
                     }
                 }
@@ -295,7 +299,7 @@ impl ImpulseModel {
         let scene = scene!(self, s);
         let (mut events, touching) = scene.all_impacts(paths, now, s.h);
         for q in touching {
-            self.touched[q] = true;
+            self.touched.mark(q);
         }
         // Each particle's earliest: every pair's impact counts for both of its particles.
         let mirrored: Vec<Event> = events
@@ -329,7 +333,9 @@ impl ImpulseModel {
         let scene = scene!(self, s);
         for &q in &self.woken {
             let next = scene.earliest(paths, q, 0.0, s.h);
-            self.touched[q] |= next.touching;
+            if next.touching {
+                self.touched.mark(q);
+            }
             self.queue.schedule(q, next.event);
         }
     }

@@ -15,6 +15,7 @@ use super::books::ColliderBooks;
 use super::contact::action_reaction;
 use super::events::{EventQueue, PathStore, Paths};
 use super::islands::{Forest, Islands};
+use super::marks::Marks;
 use super::neighbour_list::NeighbourList;
 use super::sleep::{Sleep, WarmEntry};
 use super::soft_step::Target;
@@ -127,6 +128,72 @@ pub struct CollisionTimes {
     pub respond: std::time::Duration,
     /// Stage 4: each impulse onto both particles, the impulse balance and the energy books.
     pub distribute: std::time::Duration,
+    /// The same time by [`ImpulseStage`], in its order.
+    pub stages: [std::time::Duration; 7],
+}
+
+/// The impulse model's stages in the order a step runs them (as Box2D's `b2SolverStage`
+/// lists its solver's), each with its own timer ([`CollisionTimes::stages`]). Continuous
+/// detection interleaves detect, respond and distribute inside `Impacts`; the rest run once
+/// a step, in this order, because each reads what the one before it wrote.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImpulseStage {
+    /// The neighbour list holds for the step's sweep, or is rebuilt (with the wake times of
+    /// a force-free world); who is looked at.
+    List,
+    /// Continuous detection: each impact at its time, by Newton's law, onto both particles.
+    Impacts,
+    /// The end-of-step contacts of the touched particles and of the piles they reach.
+    Contacts,
+    /// The soft step: targets, islands, the sweeps (idle islands skipped).
+    Solve,
+    /// The totals onto both particles; the energy books.
+    Apply,
+    /// Sleeping, the largest overlap, positions wrapped into the periodic cell.
+    Settle,
+    /// The next steps' wake times (a force-free world).
+    Wake,
+}
+
+impl ImpulseStage {
+    /// Every stage, in order.
+    pub const ALL: [ImpulseStage; 7] = [
+        ImpulseStage::List,
+        ImpulseStage::Impacts,
+        ImpulseStage::Contacts,
+        ImpulseStage::Solve,
+        ImpulseStage::Apply,
+        ImpulseStage::Settle,
+        ImpulseStage::Wake,
+    ];
+
+    /// Its name in `World.stage_times()`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ImpulseStage::List => "list",
+            ImpulseStage::Impacts => "impacts",
+            ImpulseStage::Contacts => "contacts",
+            ImpulseStage::Solve => "solve",
+            ImpulseStage::Apply => "apply",
+            ImpulseStage::Settle => "settle",
+            ImpulseStage::Wake => "wake",
+        }
+    }
+}
+
+/// The stages' timers within one step: each lap ends a stage.
+struct Laps {
+    at: Instant,
+    stages: [Duration; 7],
+}
+
+impl Laps {
+    /// The time since the last lap (or `start`) to `stage`.
+    fn lap(&mut self, stage: ImpulseStage) {
+        let now = Instant::now();
+        self.stages[stage as usize] += now - self.at;
+        self.at = now;
+    }
 }
 
 /// What the world tells the collision stages about the step they follow.
@@ -201,7 +268,9 @@ pub(crate) struct ImpulseModel {
     pub(super) fastest_hit: f64,
     /// Particles that touched something at the step's start or were hit in it: the only
     /// ones that can be in contact at its end (continuous detection saw every other path).
-    pub(super) touched: Vec<bool>,
+    pub(super) touched: Marks,
+    /// Scratch flags, one per particle, all false between uses (`end_of_step.rs`).
+    pub(super) scratch: Marks,
     /// Each touched particle's reference state for the energy books: at the step's start, or
     /// after its impacts (x, v).
     pub(super) books: Vec<(usize, [f64; 3], [f64; 3])>,
@@ -218,7 +287,7 @@ pub(crate) struct ImpulseModel {
     /// N·m·s (empty without).
     pub(super) rolls: Vec<[f64; 3]>,
     /// The particles the end-of-step stage acted on in this step (for the books).
-    pub(super) acted: Vec<bool>,
+    pub(super) acted: Marks,
     /// Each end-of-step contact's targets (`collide/soft_step.rs`).
     pub(super) prepared: Vec<Target>,
     pub(super) warm: Vec<(usize, Partner, [f64; 3])>,
@@ -249,7 +318,8 @@ impl ImpulseModel {
             woken: Vec::new(),
             rebuilt: false,
             fastest_hit: 0.0,
-            touched: Vec::new(),
+            touched: Marks::default(),
+            scratch: Marks::default(),
             books: Vec::new(),
             books_spin: Vec::new(),
             contacts: Vec::new(),
@@ -257,7 +327,7 @@ impl ImpulseModel {
             totals: Vec::new(),
             solved: Vec::new(),
             rolls: Vec::new(),
-            acted: Vec::new(),
+            acted: Marks::default(),
             prepared: Vec::new(),
             warm: Vec::new(),
             resting: Vec::new(),
@@ -482,6 +552,10 @@ impl ImpulseModel {
         let (inv_mass, mass) = (set.inv_mass, set.mass);
         let n = set.radius.len();
         let mut stats = CollisionStats::default();
+        let mut laps = Laps {
+            at: clock,
+            stages: [Duration::ZERO; 7],
+        };
         // The wake times hold only if this step ends well (an error leaves them invalid).
         let steady = frame.steady && set.ccd;
         let quiet = std::mem::replace(&mut self.wake.valid, false) && steady;
@@ -501,11 +575,11 @@ impl ImpulseModel {
         if only_woken {
             self.woken = self.wake.due(t0 + h, h);
         }
-        self.touched.clear();
-        self.touched.resize(n, !set.ccd);
-        if !set.ccd && self.sleep.any() {
-            for q in 0..n {
-                self.touched[q] = !self.sleep.is_asleep(q);
+        let everyone = !set.ccd && !self.sleep.any();
+        self.touched.reset(n, everyone);
+        if !set.ccd && !everyone {
+            for q in (0..n).filter(|&q| !self.sleep.is_asleep(q)) {
+                self.touched.mark(q);
             }
         }
         // The last step's contacts stay contacts (a resting pile is solved at every step's end,
@@ -516,13 +590,14 @@ impl ImpulseModel {
                 Partner::Collider(_) => None,
             }) {
                 if q < n {
-                    self.touched[q] = true;
+                    self.touched.mark(q);
                 }
             }
         }
         self.books.clear();
         let mut changed = false;
         let mut t_detect = clock.elapsed();
+        laps.lap(ImpulseStage::List);
         let (mut t_respond, mut t_distribute) = (Duration::ZERO, Duration::ZERO);
 
         if set.ccd {
@@ -539,6 +614,7 @@ impl ImpulseModel {
             t_distribute += s;
             changed |= any;
         }
+        laps.lap(ImpulseStage::Impacts);
         let clock = Instant::now();
         if set.ccd {
             paths.finish(x1, v1, h);
@@ -547,8 +623,9 @@ impl ImpulseModel {
         // with its island (`collide/sleep.rs`).
         if self.sleep.any() {
             let mut work = Vec::new();
-            for q in 0..n {
-                if self.touched[q] && self.sleep.is_asleep(q) {
+            let touched: Vec<usize> = self.touched.sorted().to_vec();
+            for q in touched {
+                if self.sleep.is_asleep(q) {
                     stats.woke += self.wake_island(q, &mut work);
                 }
             }
@@ -565,7 +642,7 @@ impl ImpulseModel {
         // The books' reference state of each touched particle: its state at the step's start
         // if no impact changed its path (a body at rest then books 0 whatever the method), else
         // the integrated state after its impacts (which booked their own loss).
-        for q in (0..n).filter(|&q| self.touched[q]) {
+        for &q in self.touched.sorted() {
             self.books.push(if paths.version(q) == 0 {
                 (q, vec3::get(paths.x0, q), vec3::get(paths.v0, q))
             } else {
@@ -587,6 +664,7 @@ impl ImpulseModel {
             self.contacts.retain(|c| !(c.overlap <= 0.0 && c.u_n < -slow));
         }
         t_detect += clock.elapsed();
+        laps.lap(ImpulseStage::Contacts);
 
         // Stage 3: the soft step's totals; the positions follow its solve stage.
         let clock = Instant::now();
@@ -604,6 +682,7 @@ impl ImpulseModel {
             .count();
         changed |= self.solved.iter().any(|p| *p != [0.0; 3]);
         t_respond += clock.elapsed();
+        laps.lap(ImpulseStage::Solve);
 
         // Stage 4: the totals onto both particles; the books.
         let clock = Instant::now();
@@ -632,6 +711,7 @@ impl ImpulseModel {
             }
         }
         stats.energy_lost += self.energy_books(set, paths.accel, x1, v1, omega);
+        laps.lap(ImpulseStage::Apply);
         // Islands calm long enough fall asleep (their velocities to 0, that energy booked).
         if let (Some(time), true) = (set.sleep_time, frame.may_sleep) {
             let speed = set.sleep_speed.unwrap_or(kick);
@@ -653,6 +733,7 @@ impl ImpulseModel {
             }
         }
         t_distribute += clock.elapsed();
+        laps.lap(ImpulseStage::Settle);
 
         // The next steps' wake times: of the particles this step looked at, or of all.
         if steady {
@@ -660,11 +741,13 @@ impl ImpulseModel {
             self.wake_up(set, x1, v1, t0 + h, h, only_woken && !self.rebuilt);
             t_detect += clock.elapsed();
         }
+        laps.lap(ImpulseStage::Wake);
 
         let times = CollisionTimes {
             detect: t_detect,
             respond: t_respond,
             distribute: t_distribute,
+            stages: laps.stages,
         };
         Ok((changed, stats, times))
     }

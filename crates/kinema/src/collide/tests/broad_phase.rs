@@ -1,9 +1,12 @@
 use super::super::domain::Periodic;
+use super::super::oracles::{all_pairs, grid_pairs, Pair};
 use super::*;
 
+/// The pairs of the grid's partner lists (full and half, [`grid_pairs`]) and of the O(N²)
+/// search.
 fn both(x: &[f64], radius: &[f64], domain: &Domain, margin: f64) -> (Vec<Pair>, Vec<Pair>) {
-    let (mut fast, mut slow) = (Vec::new(), Vec::new());
-    Grid::new().find_pairs(x, radius, domain, margin, &mut fast).unwrap();
+    let mut slow = Vec::new();
+    let fast = grid_pairs(&mut Grid::new(), x, radius, domain, margin);
     all_pairs(x, radius, domain, margin, &mut slow).unwrap();
     (fast, slow)
 }
@@ -37,8 +40,7 @@ fn pairs_across_a_periodic_boundary_once_even_in_a_two_cell_box() {
     assert_eq!(fast, vec![(0, 1)]);
     assert_eq!(fast, slow);
     let mut g = Grid::new();
-    let mut pairs = Vec::new();
-    g.find_pairs(&x, &r, &d, 0.12, &mut pairs).unwrap();
+    let pairs = grid_pairs(&mut g, &x, &r, &d, 0.12);
     assert_eq!(g.cells(), [1, 1, 1]);
     assert_eq!(pairs, vec![(0, 1), (0, 2), (1, 2)]);
 }
@@ -66,30 +68,6 @@ fn a_chain_just_inside_contact_distance_is_found_link_by_link() {
             }
         }
     }
-}
-
-/// Every particle's partners from [`Grid::partners`], as (i, j) pairs with i < j (each
-/// pair must be found from both sides: the count of each is checked).
-fn by_partners(x: &[f64], radius: &[f64], domain: &Domain, margin: f64) -> Vec<Pair> {
-    let mut g = Grid::new();
-    let mut pairs = Vec::new();
-    if !g.prepare(x, radius, domain, margin).unwrap() {
-        return pairs;
-    }
-    let mut both_sides = std::collections::BTreeMap::new();
-    for i in 0..radius.len() {
-        let mut out = Vec::new();
-        g.partners(i, x, radius, domain, margin, &mut out);
-        assert!(out.windows(2).all(|w| w[0] < w[1]), "partners of {i} not ascending: {out:?}");
-        for j in out {
-            *both_sides.entry(((j as usize).min(i), (j as usize).max(i))).or_insert(0) += 1;
-        }
-    }
-    for (pair, seen) in both_sides {
-        assert_eq!(seen, 2, "{pair:?} found from {seen} side(s)");
-        pairs.push(pair);
-    }
-    pairs
 }
 
 #[test]
@@ -122,7 +100,6 @@ fn boulders_among_grains_get_levels_of_their_own() {
                 slow.len()
             );
             assert_eq!(fast, slow);
-            assert_eq!(by_partners(&x, &radius, &domain, margin), slow);
             let mut g = Grid::new();
             g.prepare(&x, &radius, &domain, margin).unwrap();
             assert_eq!(g.level_count(), 3);
@@ -138,8 +115,7 @@ fn sparse_particles_coarsen_the_grid_instead_of_allocating_it() {
     let x = [0.0, 0.0, 0.0, 1e6, 1e6, 1e6, 1e6, 1e6, 1e6 + 1e-3];
     let r = [1e-3; 3];
     let mut g = Grid::new();
-    let mut pairs = Vec::new();
-    g.find_pairs(&x, &r, &Domain::open(3).unwrap(), 0.0, &mut pairs).unwrap();
+    let pairs = grid_pairs(&mut g, &x, &r, &Domain::open(3).unwrap(), 0.0);
     assert_eq!(pairs, vec![(1, 2)]);
     assert!(g.cells().iter().product::<usize>() <= 2 * 3 + 16, "{:?}", g.cells());
 }
@@ -153,7 +129,6 @@ fn points_beside_balls_make_a_level_of_their_own() {
     let (fast, slow) = both(&x, &r, &d, 0.0);
     assert_eq!(fast, vec![(0, 4)]);
     assert_eq!(fast, slow);
-    assert_eq!(by_partners(&x, &r, &d, 0.0), slow);
 }
 
 #[test]
@@ -170,17 +145,14 @@ fn buffers_are_kept_between_calls() {
     let r = vec![0.2; 100];
     let d = Domain::open(3).unwrap();
     let mut g = Grid::new();
-    let mut pairs = Vec::new();
-    g.find_pairs(&x, &r, &d, 0.0, &mut pairs).unwrap();
-    let caps = |g: &Grid, pairs: &Vec<Pair>| {
+    let first = grid_pairs(&mut g, &x, &r, &d, 0.0);
+    let caps = |g: &Grid| {
         let l = &g.levels[0];
-        (g.cell_of.capacity(), l.start.capacity(), l.order.capacity(), pairs.capacity())
+        (g.cell_of.capacity(), l.start.capacity(), l.order.capacity())
     };
-    let before = caps(&g, &pairs);
-    let first = pairs.clone();
-    g.find_pairs(&x, &r, &d, 0.0, &mut pairs).unwrap();
-    assert_eq!(pairs, first);
-    assert_eq!(before, caps(&g, &pairs));
+    let before = caps(&g);
+    assert_eq!(grid_pairs(&mut g, &x, &r, &d, 0.0), first);
+    assert_eq!(before, caps(&g));
 }
 
 #[test]
@@ -188,13 +160,10 @@ fn bad_input_is_named() {
     let d = Domain::open(3).unwrap();
     let mut pairs = Vec::new();
     let mut g = Grid::new();
-    let e = g
-        .find_pairs(&[0.0; 5], &[1.0; 2], &d, 0.0, &mut pairs)
-        .unwrap_err()
-        .to_string();
+    let e = g.prepare(&[0.0; 5], &[1.0; 2], &d, 0.0).unwrap_err().to_string();
     assert!(e.starts_with("x = 5 values is invalid"), "{e}");
     let e = g
-        .find_pairs(&[0.0, 0.0, 0.0, 0.0, f64::INFINITY, 0.0], &[1.0; 2], &d, 0.0, &mut pairs)
+        .prepare(&[0.0, 0.0, 0.0, 0.0, f64::INFINITY, 0.0], &[1.0; 2], &d, 0.0)
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("x[1][1] = inf is invalid"), "{e}");
@@ -206,28 +175,4 @@ fn bad_input_is_named() {
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("margin = NaN is invalid"), "{e}");
-}
-
-#[test]
-fn a_search_beyond_its_pair_limit_is_an_out_of_memory_error_not_an_allocation() {
-    // 300 particles at one point: 44,850 pairs. With a limit of 1,000 the search stops after
-    // the particle that crossed it (at most 1,000 + 299 pairs held), with Error::OutOfMemory;
-    // without the limit (the default, 4 Mi pairs) it finds all 44,850, as all_pairs does.
-    let n = 300;
-    let (x, r) = (vec![0.0; 3 * n], vec![0.1; n]);
-    let d = Domain::open(3).unwrap();
-    let mut g = Grid::new();
-    g.pair_limit = Some(1_000);
-    let mut pairs = Vec::new();
-    let e = g.find_pairs(&x, &r, &d, 0.0, &mut pairs).unwrap_err();
-    assert!(matches!(e, Error::OutOfMemory { .. }), "{e}");
-    assert!(
-        e.to_string().contains("the candidate pairs of 300 particles (more than 1000"),
-        "{e}"
-    );
-    assert!(g.scratch.len() <= 1_000 + n, "{}", g.scratch.len());
-    assert!(pairs.is_empty());
-    g.pair_limit = None;
-    g.find_pairs(&x, &r, &d, 0.0, &mut pairs).unwrap();
-    assert_eq!(pairs.len(), n * (n - 1) / 2);
 }

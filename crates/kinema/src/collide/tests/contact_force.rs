@@ -5,11 +5,9 @@
 //! move: through the sides of a periodic cell, at speeds that force rebuilds.
 
 use super::*;
+use crate::collide::oracles::{all_pairs, collider_contacts, sphere_contacts};
 use crate::collide::stage::on_periodic_wall;
-use crate::collide::{
-    all_pairs, collider_contacts, damping_ratio, sphere_contacts, BoxContainer, MaterialTable, Periodic, Plane, SphereObstacle,
-    Surface,
-};
+use crate::collide::{damping_ratio, BoxContainer, MaterialTable, Periodic, Plane, SphereObstacle, Surface};
 use crate::error::CallbackError;
 use crate::forces::testing::Rng;
 use crate::forces::Force;

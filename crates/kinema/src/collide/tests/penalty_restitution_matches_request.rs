@@ -10,7 +10,8 @@
 //! measured e is within 0.5 % of the requested one, the contact lasts t_c, and the pair's
 //! momentum is conserved.
 
-use kinema::collide::{pair_contact, Domain, PenaltyLaw};
+use super::PenaltyLaw;
+use crate::collide::{pair_contact, Domain};
 
 const MASS: [f64; 2] = [1.0, 3.0];
 const RADIUS: [f64; 2] = [0.1, 0.2];

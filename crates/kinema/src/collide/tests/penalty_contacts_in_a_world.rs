@@ -2,11 +2,12 @@
 //! stable-step advisor counts a contact's stiffness before it touches, and the contact
 //! force's neighbour list steps a crowded periodic box exactly as a search at every step.
 
-use kinema::collide::{all_pairs, collider_contacts, sphere_contacts, BoxContainer, Domain, Periodic, Plane, Surface};
-use kinema::forces::Gravity;
-use kinema::ode::{Integrator, Method};
-use kinema::world::{CollisionParams, ContactModel};
-use kinema::{World, WorldParams};
+use super::{all_pairs, collider_contacts, sphere_contacts};
+use crate::collide::{BoxContainer, Domain, Periodic, Plane, Surface};
+use crate::forces::Gravity;
+use crate::ode::{Integrator, Method};
+use crate::world::{CollisionParams, ContactModel};
+use crate::{World, WorldParams};
 
 const K: f64 = 1e5; // N/m
 
