@@ -44,6 +44,14 @@
 //!
 //! The order matters: the impacts change the paths the end-of-step contacts are found on,
 //! and the end-of-step solve needs contacts that describe the positions the impacts left.
+//! `impulse::ImpulseStage` names these stages as they are timed (`World.stage_times()`):
+//! list (`prepare`, the first `wake_up`), impacts, contacts (`Paths::finish`,
+//! `end_contacts`), solve, apply (`distribute`, `energy_books`), settle (`settle`,
+//! `max_overlap`, the periodic wrap) and wake (the last `wake_up`). Their cost follows what
+//! the step touched: the touched particles are flags and a list (`marks.rs`), an island
+//! whose contacts the soft step would leave alone is not solved (`soft_step::idle`), and in
+//! a force-free world a parting contact that carried nothing is not carried into the next
+//! step (`end_of_step.rs`).
 //!
 //! The force models (spring–dashpot, Hertz) act in stage 1 instead, as the last of the forces
 //! (`contact_force/`):
