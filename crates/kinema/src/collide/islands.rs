@@ -521,6 +521,28 @@ mod tests {
 
     const H: f64 = 1e-3;
 
+    /// [`solve`] with no island left out as idle.
+    fn solve_every_island(
+        islands: &Islands,
+        p: &EndProblem<'_>,
+        solved: &mut [[f64; 3]],
+        totals: &mut [[f64; 3]],
+        v: &[f64],
+        x: &mut [f64],
+    ) -> IslandStats {
+        solve(
+            islands,
+            &vec![false; p.contacts.len()],
+            p,
+            solved,
+            totals,
+            &mut Vec::new(),
+            v,
+            x,
+        )
+        .unwrap()
+    }
+
     /// The soft-step targets of `block`'s contacts: a step of h in which every ball fell
     /// 1 m/s · h, ending `sink` into the floor (they started touching it).
     fn targets(contacts: &[Contact]) -> Vec<Target> {
@@ -624,17 +646,7 @@ mod tests {
         let mut solved = vec![[0.0; 3]; contacts.len()];
         let mut totals = vec![[0.0; 3]; contacts.len()];
         let mut x_islands = x.clone();
-        let stats = solve(
-            &islands,
-            &vec![false; contacts.len()],
-            &p,
-            &mut solved,
-            &mut totals,
-            &mut Vec::new(),
-            &v,
-            &mut x_islands,
-        )
-        .unwrap();
+        let stats = solve_every_island(&islands, &p, &mut solved, &mut totals, &v, &mut x_islands);
         assert_eq!((stats.soft.sweeps, stats.islands), (7 * COLD_SWEEPS, 3));
 
         let mut all_solved = vec![[0.0; 3]; contacts.len()];
@@ -757,17 +769,7 @@ mod tests {
                 let mut solved = vec![[0.0; 3]; contacts.len()];
                 let mut totals = vec![[0.0; 3]; contacts.len()];
                 let mut x = x.clone();
-                let stats = solve(
-                    &islands,
-                    &vec![false; contacts.len()],
-                    &p,
-                    &mut solved,
-                    &mut totals,
-                    &mut Vec::new(),
-                    &v,
-                    &mut x,
-                )
-                .unwrap();
+                let stats = solve_every_island(&islands, &p, &mut solved, &mut totals, &v, &mut x);
                 (totals, x, stats)
             })
         };
