@@ -217,9 +217,14 @@ impl NeighbourList {
         });
         if entries.into_inner() > limit {
             self.rows.clear();
+            // (the skin is the impulse model's four largest sweeps of a step when those
+            // exceed its base: a fast particle at a long step widens every particle's reach)
             let what = format!(
-                "the contact list of {n} particles (over {} neighbours per particle: \
-                 radii far too large for the space the particles fill)",
+                "the contact list of {n} particles (over {} neighbours per particle within \
+                 r_i + r_j + {skin:.3} m, the list's skin: radii far too large for the space the \
+                 particles fill, or, with impulses, a step in which the fastest particle sweeps \
+                 far, as the skin is at least four times the largest sweep of a step: a shorter \
+                 dt shortens it)",
                 limit / n.max(1)
             );
             return Err(Error::out_of_memory(what, limit * std::mem::size_of::<u32>()));
@@ -586,6 +591,10 @@ mod tests {
         assert!(
             err.to_string()
                 .starts_with("the contact list of 300 particles (over 33 neighbours per particle"),
+            "{err}"
+        );
+        assert!(
+            err.to_string().contains("within r_i + r_j + 0.100 m, the list's skin"),
             "{err}"
         );
         assert!(list.rows.is_empty() && list.built_at.is_empty(), "no list is left behind");
