@@ -145,6 +145,12 @@ impl Islands {
         Islands { members, starts }
     }
 
+    /// Which islands have only contacts marked in `idle` (one flag per contact; an island
+    /// none of whose contacts acts, [`soft_step::idle`](super::soft_step::idle)).
+    pub fn all_of(&self, idle: &[bool]) -> Vec<bool> {
+        (0..self.len()).map(|k| self.island(k).iter().all(|&c| idle[c])).collect()
+    }
+
     /// The number of islands.
     #[allow(clippy::len_without_is_empty)]
     pub fn len(&self) -> usize {
@@ -187,9 +193,10 @@ pub(crate) struct IslandStats {
 /// are moved in place by what the solve stage did. With rolling resistance, `rolls` receives
 /// each contact's angular impulse on i (N·m·s; left empty without).
 ///
-/// An island whose contacts are all `idle` ([`soft_step::idle`](super::soft_step::idle): no
-/// warm start, targets met by the velocities as they are) is not gathered nor solved: its
-/// soft step would give exactly nothing. In a gas nearly every island is such a pair
+/// An island marked in `idle` (one flag per island: all its contacts idle,
+/// [`Islands::all_of`] of [`soft_step::idle`](super::soft_step::idle): no warm start, targets
+/// met by the velocities as they are) is not gathered nor solved: its soft step would give
+/// exactly nothing. In a gas nearly every island is such a pair
 /// (speculative contacts that do not close), and the step's cost then follows the contacts
 /// that act.
 #[allow(clippy::too_many_arguments)]
@@ -219,13 +226,12 @@ pub(crate) fn solve(
         .map(|batch| {
             let mut local = Local::default();
             batch
-                .map(|k| islands.island(k))
-                .filter(|island| !island.iter().all(|&c| idle[c]))
-                .map(|island| local.solve(island, problem, warm, v, seen))
+                .filter(|&k| !idle[k])
+                .map(|k| local.solve(islands.island(k), problem, warm, v, seen))
                 .collect()
         })
         .collect();
-    let any_idle = (0..islands.len()).any(|k| islands.island(k).iter().all(|&c| idle[c]));
+    let any_idle = idle.iter().any(|&i| i);
     // Scattered back, and the figures combined, in island order (a contact in no island, of
     // two immovable bodies, carries nothing).
     solved.fill([0.0; 3]);
@@ -733,12 +739,14 @@ mod tests {
         assert_eq!(islands.len(), 5);
         let floor = floor();
         let p = problem(&contacts, &targets, &inv_mass, &floor, 50);
+        let idle_islands = islands.all_of(&idle);
+        assert_eq!(idle_islands.iter().filter(|&&i| i).count(), 1);
         let run = |idle: &[bool]| {
             let (mut solved, mut totals, mut x) = (warm.clone(), vec![[0.0; 3]; contacts.len()], x.clone());
             let stats = solve(&islands, idle, &p, &mut solved, &mut totals, &mut Vec::new(), &v, &mut x).unwrap();
             (solved, totals, x, stats.soft.active)
         };
-        let (skipped, all) = (run(&idle), run(&vec![false; contacts.len()]));
+        let (skipped, all) = (run(&idle_islands), run(&vec![false; islands.len()]));
         assert!(skipped == all, "leaving the idle island out changed the solve");
         let (_, totals, _, _) = all;
         assert_eq!(totals[n_block], [0.0; 3]); // the parting pair carries nothing

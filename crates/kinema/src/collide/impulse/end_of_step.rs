@@ -300,6 +300,8 @@ impl ImpulseModel {
         // it stays where it was, whatever the method); any other as it was integrated (the
         // method's own accuracy, an impact's exact path).
         let base = |q: usize| if resting.get(q) { euler_step(q) } else { moved(q) };
+        // the overlap a contact may keep: of r_i + r_j, or of the diameter against a collider
+        let slop = |c: &Contact| SLOP * (set.radius[c.i] + c.partner_particle().map_or(set.radius[c.i], |j| set.radius[j]));
         self.prepared.clear();
         self.prepared.extend(self.contacts.iter().map(|c| {
             let n = c.normal;
@@ -307,8 +309,7 @@ impl ImpulseModel {
             let u1 = rel(c, &|q| vec3::get(v1, q), 1.0);
             let u_pre = vec3::dot(rel(c, &|q| paths.reference_velocity(q), 1.0), n);
             let bounce = bounces(u_pre, threshold).then(|| -materials.pair(c).restitution() * u_pre);
-            let slop = SLOP * (set.radius[c.i] + c.partner_particle().map_or(set.radius[c.i], |j| set.radius[j]));
-            Target::new(start, slop, rel(c, &base, h), u1, n, h, bounce)
+            Target::new(start, slop(c), rel(c, &base, h), u1, n, h, bounce)
         }));
         // What moving by symplectic Euler adds to the integrated position of each particle in
         // resting contact.
@@ -352,6 +353,7 @@ impl ImpulseModel {
             .with_min_len(CHUNK)
             .map(|(c, t, w)| soft_step::idle(c, t, *w, inv_mass, spin, v1, h))
             .collect();
+        let idle = self.islands.all_of(&idle);
         let stats = islands::solve(
             &self.islands,
             &idle,
@@ -388,13 +390,11 @@ impl ImpulseModel {
         // (Under forces a parting pair may turn back within the step, a pile's contact under
         // gravity: every contact is kept, as the pile's solve needs them.)
         let mut kept = vec![true; self.contacts.len()];
-        for k in 0..self.islands.len() {
-            let island = self.islands.island(k);
-            if force_free && island.iter().all(|&c| idle[c]) {
-                for &c in island {
-                    let (contact, t) = (&self.contacts[c], &self.prepared[c]);
-                    let sum = set.radius[contact.i] + contact.partner_particle().map_or(set.radius[contact.i], |j| set.radius[j]);
-                    kept[c] = !(force_free && t.gap > SLOP * sum && t.u_n >= 0.0);
+        if force_free {
+            for k in (0..self.islands.len()).filter(|&k| idle[k]) {
+                for &c in self.islands.island(k) {
+                    let t = &self.prepared[c];
+                    kept[c] = !(t.gap > slop(&self.contacts[c]) && t.u_n >= 0.0);
                 }
             }
         }
