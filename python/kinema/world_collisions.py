@@ -191,6 +191,31 @@ class WorldCollisions:
         self._push()
         return self._core.contacts()
 
+    def record_contact_events(self, on: bool = True) -> None:
+        """Start (or stop) recording when pairs begin and end touching, as Box2D's begin and
+        end touch events and Rapier's ``CollisionEvent`` give them; read them with
+        :meth:`contact_events`. A pair touches at a step's end when the end-of-step solve
+        gave it an impulse or its gap is at most 0, and keeps touching while its island
+        sleeps; it *begins* when it touched in a step (an impact inside it counts) and did not
+        at the last step's end, at its first impact's time or else at the step's end; it
+        *ends* at the end of the step it stops touching in (a bounce within one step begins
+        and ends there), or when one of its particles is removed. Pairs whose last contact
+        carried an impulse touch already when recording starts; checkpoints and scene files do
+        not keep the setting. The impulse model only
+        (``ValueError`` with a force model, an event-driven world, or collisions off)."""
+        self._push()
+        self._core.record_contact_events(bool(on))
+
+    def contact_events(self) -> dict[str, np.ndarray]:
+        """The begin and end of touch events recorded since the last call (see
+        :meth:`record_contact_events`), taken out, in order (each step's begins by time,
+        then its ends), as arrays of length E: ``time`` (s), ``begin`` (bool: False is an
+        end), ``i`` (the particle's id, :attr:`ids`), ``j`` (the other particle's id, −1
+        against a collider), ``collider`` (the index in :attr:`colliders`, −1 between
+        particles) and ``impulse`` (N·s, ≥ 0: the normal impulse the pair exchanged in the
+        event's step). Empty arrays when nothing was recorded."""
+        return self._core.contact_events()
+
     def collision_stats(self) -> dict | None:
         """What the collision stages did in the last step (``"last"``) and over all steps
         (``"total"``), each a dict: ``contacts`` (at the end of the step: pairs and

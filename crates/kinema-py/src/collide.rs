@@ -427,6 +427,22 @@ pub fn contacts_dict<'py>(py: Python<'py>, contacts: &[Contact]) -> PyResult<Bou
     Ok(out)
 }
 
+/// Begin and end of touch events as arrays: `time`, `begin` (bool), `i` and `j` (ids; −1
+/// against a collider), `collider` (−1 between particles) and `impulse`.
+pub fn touch_events_dict<'py>(py: Python<'py>, events: &[kinema::collide::TouchEvent]) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    let ids = |f: &dyn Fn(&kinema::collide::TouchEvent) -> Option<u64>| -> Vec<i64> {
+        events.iter().map(|e| f(e).map_or(-1, |v| v as i64)).collect()
+    };
+    out.set_item("time", PyArray1::from_vec(py, events.iter().map(|e| e.time).collect()))?;
+    out.set_item("begin", PyArray1::from_vec(py, events.iter().map(|e| e.begin).collect()))?;
+    out.set_item("i", PyArray1::from_vec(py, ids(&|e| Some(e.i))))?;
+    out.set_item("j", PyArray1::from_vec(py, ids(&|e| e.j)))?;
+    out.set_item("collider", PyArray1::from_vec(py, ids(&|e| e.collider.map(|k| k as u64))))?;
+    out.set_item("impulse", PyArray1::from_vec(py, events.iter().map(|e| e.impulse).collect()))?;
+    Ok(out)
+}
+
 pub fn stats_dict<'py>(py: Python<'py>, s: &CollisionStats) -> PyResult<Bound<'py, PyDict>> {
     let out = PyDict::new(py);
     out.set_item("contacts", s.contacts)?;

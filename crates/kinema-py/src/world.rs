@@ -483,6 +483,16 @@ impl PyWorld {
         collide::contacts_dict(py, self.inner.contacts())
     }
 
+    /// Starts or stops recording begin and end of touch.
+    fn record_contact_events(&mut self, on: bool) -> PyResult<()> {
+        self.inner.record_contact_events(on).map_err(to_py)
+    }
+
+    /// The begin and end of touch events since the last call, taken out, as arrays.
+    fn contact_events<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        collide::touch_events_dict(py, &self.inner.take_contact_events())
+    }
+
     /// {"last": ..., "total": ...} of the collision stages, or None without collisions.
     fn collision_stats<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         let Some((last, total)) = self.inner.collision_stats() else {

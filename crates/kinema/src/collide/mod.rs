@@ -39,6 +39,8 @@
 //!         energy_books()              impulse/end_of_step.rs: the energy the stages took
 //!         settle()                    impulse/end_of_step.rs: calm islands fall asleep
 //!         max_overlap()               impulse/end_of_step.rs: the overlap left
+//!         Touches::end_step()         touch.rs: begin and end of touch, when recorded (the
+//!                                     impacts were noted by Touches::hit())
 //!         wake_up()                   impulse/impacts.rs: the next steps' wake times
 //! ```
 //!
@@ -120,6 +122,7 @@ pub(crate) mod stage;
 pub mod surface;
 pub(crate) mod sweeps;
 pub mod toi;
+pub mod touch;
 pub(crate) mod wake;
 
 mod grid_level;
@@ -135,3 +138,4 @@ pub use narrow_phase::pair_contact;
 pub use penalty::{damping_ratio, dashpot_coefficient, spring_dashpot_force};
 pub use response::{restitution_impulse, Impulse, Material, MaterialTable};
 pub use toi::{toi_plane, toi_sphere_obstacle, toi_spheres};
+pub use touch::TouchEvent;

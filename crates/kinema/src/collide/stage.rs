@@ -802,6 +802,7 @@ impl CollideStage {
             sleep_time: self.params.sleep_time,
             sleep_speed: self.params.sleep_speed,
             radius: &p.radius,
+            id: &p.id,
             inv_mass: &p.inv_mass,
             mass: &p.mass,
             rotation: p.has_spin().then_some(Rotation {

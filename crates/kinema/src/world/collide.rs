@@ -7,7 +7,7 @@
 use super::integrate::WorldStepper;
 use super::{CollisionParams, CollisionStats, ContactModel, World};
 use crate::collide::stage::{CollideStage, ColliderBooks, StepFrame};
-use crate::collide::{Collider, Contact, Motion, Periodic};
+use crate::collide::{Collider, Contact, Motion, Periodic, TouchEvent};
 use crate::error::{Divergence, Error};
 use crate::forces::EnergyClass;
 
@@ -339,6 +339,46 @@ impl World {
     /// whose contacts live inside the force evaluations.
     pub fn contacts(&self) -> &[Contact] {
         self.collide_stage.as_ref().map_or(&[], |c| &c.impulse.detected)
+    }
+
+    /// Starts (`on`) or stops recording when pairs begin and end touching
+    /// (`collide/touch.rs`): the impulse model's steps only. Started, the pairs whose last
+    /// step's contact carried an impulse count as touching already; stopped, the events not
+    /// yet taken stay.
+    pub fn record_contact_events(&mut self, on: bool) -> Result<(), Error> {
+        let refuse = |why: &str| {
+            Error::invalid(
+                "record_contact_events",
+                if on { "True" } else { "False" },
+                format!("begin and end of touch are recorded by the impulse model's steps only: {why}"),
+            )
+        };
+        let Some(stage) = &mut self.collide_stage else {
+            return Err(refuse("collisions are off (set_collisions first)"));
+        };
+        if on && stage.params.model != ContactModel::Impulse {
+            return Err(refuse(
+                "this world's contacts are a force (the spring–dashpot or Hertz model)",
+            ));
+        }
+        if on && stage.params.event_driven {
+            return Err(refuse("this world is event-driven"));
+        }
+        let loaded: Vec<_> = stage
+            .all_warm()
+            .into_iter()
+            .filter(|w| w.2 != [0.0; 3])
+            .map(|w| (w.0, w.1))
+            .collect();
+        stage.impulse.touches.record(on, loaded.into_iter());
+        Ok(())
+    }
+
+    /// The begin and end of touch events recorded since the last call, in order, taken out.
+    pub fn take_contact_events(&mut self) -> Vec<TouchEvent> {
+        self.collide_stage
+            .as_mut()
+            .map_or_else(Vec::new, |s| s.impulse.touches.take())
     }
 
     /// What the collision stages did in the last step, and summed over all steps; `None`

@@ -87,7 +87,13 @@ impl World {
         }
         // Verlet's acceleration for the survivors, where the removal leaves it right (`carry.rs`)
         let a = self.acceleration_after_removal(&keep);
+        let recording = self.collide_stage.as_ref().is_some_and(|s| s.impulse.touches.on);
+        let ids_before = if recording { self.particles.id.clone() } else { Vec::new() };
         let new_of_old = self.particles.retain(&keep);
+        if let Some(stage) = &mut self.collide_stage {
+            // the touches of the removed end now (`collide/touch.rs`)
+            stage.impulse.touches.renumber(&new_of_old, self.time, &ids_before);
+        }
         // The survivors' contacts keep their warm start (renumbered), as Rapier's change
         // flags keep the contacts of what did not change.
         let kept = self

@@ -29,6 +29,8 @@ pub(super) fn least_impact_speed(threshold: f64) -> f64 {
 pub(super) struct Search<'s, 'a> {
     pub set: &'s StageSetting<'a>,
     pub active: &'s [[bool; 6]],
+    /// The world's time at the step's start, s.
+    pub t0: f64,
     pub h: f64,
     pub threshold: f64,
 }
@@ -236,6 +238,10 @@ impl ImpulseModel {
                 any = true;
                 stats.impacts += 1;
                 stats.impulses += 1;
+                if let Some(c) = contact {
+                    self.touches
+                        .hit(s.t0 + t, event.i, event.partner, vec3::dot(imp.vector, c.normal));
+                }
                 stats.energy_lost += imp.energy_lost;
                 distribute(
                     event.i,
@@ -381,6 +387,7 @@ impl ImpulseModel {
         let search = Search {
             set,
             active: &active,
+            t0: end,
             h,
             threshold: 0.0,
         };

@@ -20,6 +20,7 @@ use super::neighbour_list::NeighbourList;
 use super::sleep::{Sleep, WarmEntry};
 use super::soft_step::Target;
 use super::spin::Rotation;
+use super::touch::Touches;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
 use crate::collide::neighbour_list::active_walls;
@@ -233,6 +234,8 @@ pub(crate) struct StageSetting<'a> {
     pub sleep_time: Option<f64>,
     pub sleep_speed: Option<f64>,
     pub radius: &'a [f64],
+    /// The particles' ids (for the touch events, `collide/touch.rs`).
+    pub id: &'a [u64],
     pub inv_mass: &'a [f64],
     pub mass: &'a [f64],
     /// With spin: the particles' inverse moments of inertia and radii (`collide/spin.rs`).
@@ -301,6 +304,8 @@ pub(crate) struct ImpulseModel {
     pub(crate) collider_books: Vec<ColliderBooks>,
     /// Each particle's calm time and the islands asleep (`collide/sleep.rs`).
     pub(super) sleep: Sleep,
+    /// The pairs touching and the begin and end events, when recorded (`collide/touch.rs`).
+    pub(crate) touches: Touches,
     /// The world's check that may stop a step, asked inside a long run of impacts.
     pub interrupt: Interrupt,
 }
@@ -335,6 +340,7 @@ impl ImpulseModel {
             forest: Forest::default(),
             collider_books: Vec::new(),
             sleep: Sleep::default(),
+            touches: Touches::default(),
             interrupt: Interrupt::none(),
         }
     }
@@ -561,6 +567,7 @@ impl ImpulseModel {
         let quiet = std::mem::replace(&mut self.wake.valid, false) && steady;
         self.rebuilt = false;
         self.fastest_hit = 0.0;
+        self.touches.begin_step();
         let (threshold, reach, kick) = self.prepare(set, paths, x1, v1, h, quiet)?;
         let mut only_woken = quiet && !self.rebuilt;
         if steady && !only_woken {
@@ -605,6 +612,7 @@ impl ImpulseModel {
             let search = Search {
                 set,
                 active: &active,
+                t0,
                 h,
                 threshold,
             };
@@ -733,6 +741,10 @@ impl ImpulseModel {
             }
         }
         t_distribute += clock.elapsed();
+        // The pairs that began or ended touching in this step (when recorded).
+        let sleep = &self.sleep;
+        self.touches
+            .end_step(t0 + h, &self.contacts, &self.totals, |q| sleep.is_asleep(q), set.id);
         laps.lap(ImpulseStage::Settle);
 
         // The next steps' wake times: of the particles this step looked at, or of all.
