@@ -293,6 +293,8 @@ impl PenaltyLaw {
 
 #[path = "tests/broad_phase_finds_every_pair.rs"]
 mod broad_phase_finds_every_pair;
+#[path = "tests/impulse_list.rs"]
+mod impulse_list;
 #[path = "tests/map.rs"]
 mod map;
 #[path = "tests/penalty_contacts_in_a_world.rs"]

@@ -374,6 +374,12 @@ impl World {
         Ok(())
     }
 
+    /// The impulse model's candidate list's skin, m (`None`: collisions off; for the tests).
+    #[cfg(test)]
+    pub(crate) fn impulse_list_skin(&self) -> Option<f64> {
+        self.collide_stage.as_ref().map(|s| s.impulse.list.skin)
+    }
+
     /// The begin and end of touch events recorded since the last call, in order, taken out.
     pub fn take_contact_events(&mut self) -> Vec<TouchEvent> {
         self.collide_stage

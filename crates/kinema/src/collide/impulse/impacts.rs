@@ -90,7 +90,7 @@ impl ImpulseModel {
                 .zip(built.par_chunks(3 * CHUNK))
                 .enumerate()
                 .map(|(c, ((x0, x1), b))| {
-                    let mut top = (0.0_f64, 0.0_f64, 0.0_f64, false);
+                    let mut top = Sweep::default();
                     for l in 0..x0.len() / 3 {
                         let q = c * CHUNK + l;
                         let bq = vec3::get(b, l);
@@ -98,17 +98,21 @@ impl ImpulseModel {
                         let d1 = domain.displacement(vec3::get(x1, l), bq);
                         let a = vec3::get(accel, q);
                         let bulge2 = vec3::dot(a, a);
-                        let mut d = vec3::dot(d0, d0).max(vec3::dot(d1, d1)).sqrt();
-                        if bulge2 > 0.0 {
-                            d += 0.125 * bulge2.sqrt() * h * h;
-                        }
+                        let bulge = if bulge2 > 0.0 { 0.125 * bulge2.sqrt() * h * h } else { 0.0 };
+                        let d = vec3::dot(d0, d0).max(vec3::dot(d1, d1)).sqrt() + bulge;
+                        let step = domain.displacement(vec3::get(x1, l), vec3::get(x0, l));
                         let w = vec3::sub(vec3::get(v1, q), vec3::get(v0, q));
-                        let dv = vec3::dot(w, w);
-                        top = top_two(top, (d, 0.0, dv, d.is_nan()));
+                        top = top.with(Sweep {
+                            first: d,
+                            second: 0.0,
+                            kick2: vec3::dot(w, w),
+                            nan: d.is_nan(),
+                            step: vec3::norm(step) + bulge,
+                        });
                     }
                     top
                 })
-                .reduce(|| (0.0, 0.0, 0.0, false), top_two)
+                .reduce(Sweep::default, Sweep::with)
         };
         // (with `quiet` the bound said the list may not hold: rebuilt without the check, which
         // the actual displacements would pass only for a few more steps)
@@ -116,10 +120,18 @@ impl ImpulseModel {
         let mut top = if fresh {
             sweep(&self.list.built_at, paths.accel)
         } else {
-            (f64::INFINITY, 0.0, 0.0, false)
+            Sweep {
+                first: f64::INFINITY,
+                ..Sweep::default()
+            }
         };
-        let holds = top.0 + top.1 < self.list.allowance;
-        if top.3 || !holds {
+        let holds = top.first + top.second < self.list.allowance;
+        // A list built for a fast step (its skin four of that step's largest sweeps) is
+        // rebuilt once the steps are much slower, though it still holds: a pile that came to
+        // rest with the skin of its fall kept every particle's candidates within that skin
+        // (at 60 Hz, the whole of the demo's box), and every impact swept them all again.
+        let loose = self.list.skin > LOOSE * self.base_skin.max(4.0 * top.step);
+        if top.nan || !holds || loose {
             // Rebuild at x0, with a skin of the base (0.6 mean radius) or four of this step's
             // largest sweeps, whichever is more: the list then lasts at least two such steps.
             let accel = paths.accel;
@@ -134,7 +146,8 @@ impl ImpulseModel {
                 .reduce(|| (0.0, 0), |a, b| if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) { b } else { a });
             check_travel(set, x0, largest_move, fastest, h)?;
             let mean_radius = set.radius.iter().sum::<f64>() / set.radius.len().max(1) as f64;
-            let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest_move);
+            self.base_skin = SKIN_PER_RADIUS * mean_radius;
+            let skin = self.base_skin.max(4.0 * largest_move);
             let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
             self.list.built_at.clear();
             let build = ListBuild {
@@ -146,15 +159,15 @@ impl ImpulseModel {
             self.list.verified = None;
             self.rebuilt = true;
             top = sweep(&self.list.built_at, paths.accel);
-            if top.3 || !top.0.is_finite() {
+            if top.nan || !top.first.is_finite() {
                 // non-finite positions: the list's build named them already; a NaN velocity
                 // change is caught by the world
-                top.0 = f64::INFINITY;
+                top.first = f64::INFINITY;
             }
         }
-        let kick = top.2.sqrt();
+        let kick = top.kick2.sqrt();
         let threshold = set.restitution_threshold.unwrap_or(2.0 * kick);
-        Ok((threshold, top.0, kick))
+        Ok((threshold, top.first, kick))
     }
 
     /// Continuous detection and the impacts in time order (see [`ImpulseModel::run`]):
@@ -537,6 +550,31 @@ fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event, h: f64) -> O
 }
 
 /// Combines (largest, second largest, largest velocity change, NaN met) of two parts.
-fn top_two(a: (f64, f64, f64, bool), b: (f64, f64, f64, bool)) -> (f64, f64, f64, bool) {
-    (a.0.max(b.0), a.0.min(b.0).max(a.1).max(b.1), a.2.max(b.2), a.3 || b.3)
+/// What `prepare` learns of the step's paths in one pass: the two largest displacements
+/// from the list's build positions over the step (m), the largest velocity change squared
+/// (m²/s²), whether a displacement is NaN, and the largest displacement over the step (m).
+#[derive(Debug, Clone, Copy, Default)]
+struct Sweep {
+    first: f64,
+    second: f64,
+    kick2: f64,
+    nan: bool,
+    step: f64,
 }
+
+impl Sweep {
+    /// Both passes' figures together.
+    fn with(self, b: Sweep) -> Sweep {
+        Sweep {
+            first: self.first.max(b.first),
+            second: self.first.min(b.first).max(self.second).max(b.second),
+            kick2: self.kick2.max(b.kick2),
+            nan: self.nan || b.nan,
+            step: self.step.max(b.step),
+        }
+    }
+}
+
+/// A list whose skin is more than this many times what a rebuild now would choose is rebuilt
+/// (a factor that leaves room for the steps' speeds to vary without a rebuild each step).
+const LOOSE: f64 = 4.0;

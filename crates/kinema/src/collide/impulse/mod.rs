@@ -255,7 +255,9 @@ pub(crate) struct KeptContacts {
 pub(crate) struct ImpulseModel {
     pub(crate) grid: Grid,
     /// Candidate pairs of continuous detection and of the end-of-step contacts.
-    pub(super) list: NeighbourList,
+    pub(crate) list: NeighbourList,
+    /// The least skin of the list's last build, m (`SKIN_PER_RADIUS` of the mean radius).
+    pub(super) base_skin: f64,
     /// The particles' paths through the step and the queue of their next impacts.
     pub(super) paths: PathStore,
     /// The step's constant accelerations when the method gives none (the parabola
@@ -316,6 +318,7 @@ impl ImpulseModel {
         ImpulseModel {
             grid: Grid::new(),
             list: NeighbourList::default(),
+            base_skin: 0.0,
             paths: PathStore::default(),
             fitted: Vec::new(),
             queue: EventQueue::default(),
