@@ -83,7 +83,8 @@
 //! step, for sphere pairs and sphere obstacles in linear motion and for spheres against planes
 //! under constant acceleration. The neighbour list finds the candidates for it: `prepare`
 //! makes it hold for the distance each particle sweeps within the step (rebuilt with a skin
-//! of at least four times the largest sweep).
+//! of four times the largest sweep, 2.5 where four would pass the list's memory bound, and
+//! rebuilt tighter once the steps are four times slower than the skin was made for).
 //!
 //! Space is described by a [`Domain`]: 2D (circles in the xy-plane) or 3D, open or
 //! periodic along any axis (the minimum image is used throughout).

@@ -142,8 +142,11 @@ impl NeighbourList {
     /// command line's work estimate counts it.
     pub(crate) const ENTRIES_PER_PARTICLE: usize = 128;
 
-    /// The fewest entries a list may hold before it stops (16 MiB).
-    pub(crate) const MIN_ENTRIES: usize = 1 << 22;
+    /// The fewest entries a list may hold before it stops (128 MiB): room for a few thousand
+    /// candidates a particle in scenes of 10⁴ particles, which a lattice falling at 60 Hz
+    /// needs while it falls (the 10,000-ball pour of `benchmarks/piles.py`: more than 419 a
+    /// particle, refused at 16 MiB).
+    pub(crate) const MIN_ENTRIES: usize = 1 << 25;
 
     /// Makes the list hold for positions `x` (rebuilt with `grid` if needed, with the skin
     /// and the colliders' largest |coordinate| that `build` works out then).
@@ -218,12 +221,13 @@ impl NeighbourList {
         if entries.into_inner() > limit {
             self.rows.clear();
             // (the skin is the impulse model's four largest sweeps of a step when those
-            // exceed its base: a fast particle at a long step widens every particle's reach)
+            // exceed its base, 2.5 where four would not fit: a fast particle at a long step
+            // widens every particle's reach)
             let what = format!(
                 "the contact list of {n} particles (over {} neighbours per particle within \
                  r_i + r_j + {skin:.3} m, the list's skin: radii far too large for the space the \
                  particles fill, or, with impulses, a step in which the fastest particle sweeps \
-                 far, as the skin is at least four times the largest sweep of a step: a shorter \
+                 far, as the skin is at least 2.5 times the largest sweep of a step: a shorter \
                  dt shortens it)",
                 limit / n.max(1)
             );

@@ -380,6 +380,14 @@ impl World {
         self.collide_stage.as_ref().map(|s| s.impulse.list.skin)
     }
 
+    /// Bounds the impulse model's candidate list to `entries` (for the tests).
+    #[cfg(test)]
+    pub(crate) fn set_impulse_list_limit(&mut self, entries: usize) {
+        if let Some(s) = self.collide_stage.as_mut() {
+            s.impulse.list.entry_limit = Some(entries);
+        }
+    }
+
     /// The begin and end of touch events recorded since the last call, in order, taken out.
     pub fn take_contact_events(&mut self) -> Vec<TouchEvent> {
         self.collide_stage

@@ -145,18 +145,7 @@ impl ImpulseModel {
                 })
                 .reduce(|| (0.0, 0), |a, b| if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) { b } else { a });
             check_travel(set, x0, largest_move, fastest, h)?;
-            let mean_radius = set.radius.iter().sum::<f64>() / set.radius.len().max(1) as f64;
-            self.base_skin = SKIN_PER_RADIUS * mean_radius;
-            let skin = self.base_skin.max(4.0 * largest_move);
-            let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
-            self.list.built_at.clear();
-            let build = ListBuild {
-                skin,
-                collider_scale: scale,
-            };
-            self.list
-                .update(&mut self.grid, x0, set.radius, set.colliders, set.domain, || build)?;
-            self.list.verified = None;
+            self.build_list(set, x0, largest_move)?;
             self.rebuilt = true;
             top = sweep(&self.list.built_at, paths.accel);
             if top.nan || !top.first.is_finite() {
@@ -429,7 +418,7 @@ impl ImpulseModel {
     /// Rebuilds the list at the particles' positions at time t (their references moved there)
     /// for the rest of the step; returns the largest swept displacement from there, m.
     fn rebuild_at(&mut self, set: &StageSetting<'_>, paths: &mut Paths<'_>, t: f64, h: f64) -> Result<f64, Error> {
-        let (n, radius) = (set.radius.len(), set.radius);
+        let n = set.radius.len();
         let mut x = vec![0.0; 3 * n];
         let (mut largest, mut fastest) = (0.0_f64, 0);
         for q in 0..n {
@@ -441,18 +430,35 @@ impl ImpulseModel {
             }
         }
         check_travel(set, &x, largest, fastest, h - t)?;
-        let mean_radius = radius.iter().sum::<f64>() / n.max(1) as f64;
-        let skin = (SKIN_PER_RADIUS * mean_radius).max(4.0 * largest);
-        let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
-        self.list.built_at.clear();
-        let build = ListBuild {
-            skin,
-            collider_scale: scale,
-        };
-        self.list
-            .update(&mut self.grid, &x, radius, set.colliders, set.domain, || build)?;
-        self.list.verified = None;
+        self.build_list(set, &x, largest)?;
         Ok(largest)
+    }
+
+    /// Builds the candidate list at `x` for paths that sweep at most `largest` (m) from there
+    /// in the step: with a skin of the base (0.6 mean radius) or four of `largest`, whichever
+    /// is more, so that it lasts at least two such steps. Where that list would pass its
+    /// memory bound (a whole lattice falling fast at 60 Hz: each ball's candidates within
+    /// four of its 10 cm sweep), one with a skin of [`LEAST_SWEEPS`] of `largest`, which holds
+    /// for this step and is built again at the next.
+    fn build_list(&mut self, set: &StageSetting<'_>, x: &[f64], largest: f64) -> Result<(), Error> {
+        let n = set.radius.len();
+        let mean_radius = set.radius.iter().sum::<f64>() / n.max(1) as f64;
+        self.base_skin = SKIN_PER_RADIUS * mean_radius;
+        let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
+        let mut build = |skin: f64| {
+            self.list.built_at.clear();
+            self.list.verified = None;
+            let build = ListBuild {
+                skin,
+                collider_scale: scale,
+            };
+            self.list
+                .update(&mut self.grid, x, set.radius, set.colliders, set.domain, || build)
+        };
+        match build(self.base_skin.max(4.0 * largest)) {
+            Err(Error::OutOfMemory { .. }) if LEAST_SWEEPS * largest > self.base_skin => build(LEAST_SWEEPS * largest),
+            done => done,
+        }
     }
 }
 
@@ -574,6 +580,11 @@ impl Sweep {
         }
     }
 }
+
+/// The least skin of a candidate list, in sweeps of the step it is built for: the two
+/// particles that sweep farthest may together sweep two (the list must hold for them), and
+/// the rest is room for the rounding allowance and the list's own check.
+const LEAST_SWEEPS: f64 = 2.5;
 
 /// A list whose skin is more than this many times what a rebuild now would choose is rebuilt
 /// (a factor that leaves room for the steps' speeds to vary without a rebuild each step).
