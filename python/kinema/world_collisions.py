@@ -201,7 +201,7 @@ class WorldCollisions:
         *ends* at the end of the step it stops touching in (a bounce within one step begins
         and ends there), or when one of its particles is removed. Pairs whose last contact
         carried an impulse touch already when recording starts; checkpoints and scene files do
-        not keep the setting. The impulse model only
+        not keep the setting, and a change to a force model or to event-driven steps stops it. The impulse model only
         (``ValueError`` with a force model, an event-driven world, or collisions off)."""
         self._push()
         self._core.record_contact_events(bool(on))

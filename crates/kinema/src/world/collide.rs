@@ -135,7 +135,14 @@ impl World {
     /// impulse model, a contact force in stage 1 with the spring–dashpot model.
     pub fn set_collisions(&mut self, params: CollisionParams) -> Result<(), Error> {
         match &mut self.collide_stage {
-            Some(stage) => stage.set_params(params)?,
+            Some(stage) => {
+                stage.set_params(params)?;
+                if stage.params.model != ContactModel::Impulse || stage.params.event_driven {
+                    // no step of the impulse model records touches now (the events not yet
+                    // taken stay)
+                    stage.impulse.touches.record(false, std::iter::empty());
+                }
+            }
             None => {
                 let mut stage = CollideStage::new(params, self.params.dim)?;
                 stage.impulse.interrupt = self.interrupt;
