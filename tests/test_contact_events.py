@@ -183,7 +183,7 @@ def test_a_change_to_a_force_model_stops_recording_and_keeps_what_was_recorded()
     # the spring–dashpot model's steps do not run the impulse model's stages: no touch they
     # could record would be right, so recording stops; the events taken before stay
     w = bouncing_ball(0.8, 1.0, 1e-3, seconds=0.5)
-    w.set_collisions(model="spring_dashpot", stiffness=1e7, restitution=0.8)
+    w.set_collisions(model="spring_dashpot", stiffness=1e4, restitution=0.8)
     w.step(500)
     ev = w.contact_events()
     assert list(ev["begin"]) == [True, False] and ev["time"][0] < 0.5
