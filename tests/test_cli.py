@@ -395,3 +395,66 @@ def test_view_opens_a_scene_in_its_own_colouring(tmp_path):
     res = runner.invoke(app, ["view", str(tmp_path / "o" / "trajectory.h5"), "--html", str(tmp_path / "t.html")])
     assert res.exit_code == 0, res.output
     assert '"colorBy":"id"' not in (tmp_path / "t.html").read_text()
+
+
+BOUNCE = """
+[world]
+dim = 3
+dt = 0.001
+duration = 3.0
+fps = 10.0
+
+[[particles]]
+type = "list"
+positions = [[0, 0, 1.1]]
+radius = 0.1
+
+[[forces]]
+type = "gravity"
+
+[[colliders]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+
+[collisions]
+restitution = 0.8
+{extra}
+[output]
+video = false
+plot = false
+contact_events = true
+"""
+
+
+def test_run_writes_the_contact_events_that_numpy_reads_at_the_closed_form_times(tmp_path):
+    # A ball dropped from 1 m (its lowest point) onto a floor with e = 0.8: its k-th impact
+    # comes at t₁ + Σ 2 eᵐ v₁/g (t₁ = √(2H/g), v₁ = g t₁), each a begin at its impact time
+    # and an end at the end of that step (tests/test_contact_events.py for the API).
+    import math
+
+    import numpy as np
+
+    out = tmp_path / "out"
+    res = runner.invoke(app, ["run", str(small_scene(tmp_path, BOUNCE.format(extra=""), "bounce.toml")), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in out.iterdir()) == ["contact_events.csv", "trajectory.h5"]
+    ev = np.genfromtxt(out / "contact_events.csv", delimiter=",", names=True)
+    assert ev.dtype.names == ("time", "begin", "i", "j", "collider", "impulse")
+    g, e = 9.81, 0.8
+    v1 = math.sqrt(2 * g * 1.0)
+    times = [v1 / g + sum(2 * e ** (m + 1) * v1 / g for m in range(k)) for k in range(4)]
+    begins = ev[ev["begin"] == 1]
+    np.testing.assert_allclose(begins["time"][:4], times, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(begins["impulse"][:4], [(1 + e) * v1 * e**k for k in range(4)], rtol=1e-9)
+    assert (ev["i"] == 0).all() and (ev["j"] == -1).all() and (ev["collider"] == 0).all()
+
+
+def test_run_refuses_contact_events_it_cannot_record(tmp_path):
+    force = BOUNCE.format(extra='model = "spring_dashpot"\nstiffness = 1e4\n')
+    res = runner.invoke(app, ["run", str(small_scene(tmp_path, force, "force.toml")), "-o", str(tmp_path / "a")])
+    assert res.exit_code != 0
+    assert "[output] contact_events = true: record_contact_events = True is invalid" in res.output.replace("\n", " ")
+    plain = small_scene(tmp_path, BOUNCE.format(extra=""), "plain.toml")
+    res = runner.invoke(app, ["run", str(plain), "-o", str(tmp_path / "b"), "--checkpoint-every", "0.5"])
+    assert res.exit_code != 0 and "checkpoint does not keep them" in res.output.replace("\n", " ")

@@ -121,12 +121,12 @@ def test_removing_a_touching_particle_ends_its_touches_at_that_time_by_id():
     ev = w.contact_events()
     assert list(ev["begin"]) == [False, False]
     np.testing.assert_allclose(ev["time"], w.time)
-    pairs = {tuple(sorted((int(i), int(j)))) for i, j in zip(ev["i"], ev["j"])}
+    pairs = {tuple(sorted((int(i), int(j)))) for i, j in zip(ev["i"], ev["j"], strict=True)}
     assert pairs == {(ids[1], ids[2]), (ids[2], ids[3])}
     # the column above falls onto the second disc: the third id's new touch begins
     w.step(500)
     ev = w.contact_events()
-    began = {tuple(sorted((int(i), int(j)))) for i, j, b in zip(ev["i"], ev["j"], ev["begin"]) if b}
+    began = {tuple(sorted((int(i), int(j)))) for i, j, b in zip(ev["i"], ev["j"], ev["begin"], strict=True) if b}
     assert (ids[1], ids[3]) in began
 
 
@@ -167,13 +167,13 @@ def test_in_a_shaken_heap_every_pair_alternates_begin_and_end_and_what_overlaps_
     assert ev["begin"].sum() > n
     assert np.all(np.diff(ev["time"]) >= -1e-3)  # (begins by time within a step; ends at its end)
     state: dict[tuple, bool] = {}
-    for b, i, j, k in zip(ev["begin"], ev["i"], ev["j"], ev["collider"]):
+    for b, i, j, k in zip(ev["begin"], ev["i"], ev["j"], ev["collider"], strict=True):
         key = (min(i, j), max(i, j), -1) if j >= 0 else (i, -1, k)
         assert state.get(key, False) != b, f"pair {key} {'began' if b else 'ended'} twice in a row"
         state[key] = bool(b)
     c = w.contacts()
     ids = w.ids
-    for i, j, k, overlap in zip(c["i"], c["j"], c["collider"], c["overlap"]):
+    for i, j, k, overlap in zip(c["i"], c["j"], c["collider"], c["overlap"], strict=True):
         if overlap >= 0:
             key = (min(ids[i], ids[j]), max(ids[i], ids[j]), -1) if j >= 0 else (ids[i], -1, k)
             assert state.get(key), f"the overlapping pair {key} has no open begin"

@@ -46,6 +46,9 @@ def test_example_loads_and_runs_shortened(name):
 
 
 @pytest.mark.filterwarnings("ignore::kinema.StabilityWarning")
+# (the demo's heap at 60 Hz overlaps by up to 10 % of r mid-fall, which a world read from it
+# is told of as a placement)
+@pytest.mark.filterwarnings("ignore::kinema.PlacementWarning")
 @pytest.mark.parametrize("name", EXAMPLES)
 def test_example_round_trips_to_an_identical_world(name, tmp_path):
     w = load(name)

@@ -306,6 +306,12 @@ def simulate_scene(
     if not (np.isfinite(seconds) and seconds >= 0):
         raise ValueError(f"--duration {seconds}: give a finite number of seconds >= 0")
     video = sc.output.video if not no_video else False
+    events = sc.output.contact_events
+    if events and (resume or checkpoint_every is not None):
+        raise ValueError(
+            "[output] contact_events = true: the events are recorded in one run from its start, "
+            "and a checkpoint does not keep them; run without --checkpoint-every/--resume"
+        )
     ckpt = outdir / "checkpoint.ckpt"
     if resume:  # the checkpoint's remaining work, estimated and refused as a fresh run's, then all of it checked
         if not ckpt.is_file():
@@ -318,9 +324,18 @@ def simulate_scene(
         estimate = _scene_work(sc, scene, seconds, "world.duration" if duration is None else "--duration", bool(video), force)
         world = sc.build(source=str(scene))
     outdir = _outdir(outdir)
-    _refuse_special_outputs(
-        outdir, [n for n, on in (("trajectory.h5", sc.output.trajectory), (f"{scene.stem}.{video}", video), ("energy.png", sc.output.plot)) if on]
+    outputs = (
+        ("trajectory.h5", sc.output.trajectory),
+        (f"{scene.stem}.{video}", video),
+        ("energy.png", sc.output.plot),
+        ("contact_events.csv", events),
     )
+    _refuse_special_outputs(outdir, [n for n, on in outputs if on])
+    if events:
+        try:
+            world.record_contact_events()
+        except ValueError as e:
+            raise ValueError(f"[output] contact_events = true: {e}") from None
     _remove_stale_stages(outdir)
     fps = sc.world.fps
     if resume:
@@ -377,6 +392,9 @@ def simulate_scene(
         if sc.output.plot:
             _energy_plot(traj, stage / "energy.png")
             names.append("energy.png")
+        if events:
+            _contact_events_csv(world.contact_events(), stage / "contact_events.csv")
+            names.append("contact_events.csv")
         from .io._files import _umask
 
         for name in names:
@@ -390,6 +408,21 @@ def simulate_scene(
     for path in written:
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)
     return traj, written
+
+
+def _contact_events_csv(events: dict, out: Path) -> Path:
+    """The begin and end of touch events (``World.contact_events``) as a CSV file with a
+    header: time (s, 17 significant digits), begin (1 or 0), i and j (particle ids, j = −1
+    against a collider), collider (its index, −1 between particles), impulse (N·s)."""
+    import csv
+
+    with open(out, "w", newline="") as f:
+        rows = csv.writer(f)
+        rows.writerow(["time", "begin", "i", "j", "collider", "impulse"])
+        columns = (events[k] for k in ("time", "begin", "i", "j", "collider", "impulse"))
+        for t, b, i, j, k, p in zip(*columns, strict=True):
+            rows.writerow([repr(float(t)), int(b), int(i), int(j), int(k), repr(float(p))])
+    return out
 
 
 # A run writes into a hidden staging folder .kinema-run.<host>-<pid>.<random> in its output

@@ -701,5 +701,7 @@ class OutputTable(_Model):
     trajectory: bool = True
     video: Literal["mp4", "gif", False] = "mp4"
     plot: bool = True
+    # contact_events.csv: every begin and end of touch (World.contact_events), impulse model
+    contact_events: bool = False
 
     _video = field_validator("video", mode="before")(_exact("mp4", "gif", False))
