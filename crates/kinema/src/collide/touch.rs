@@ -27,6 +27,7 @@
 //! touches a step); the events wait, in order, until they are taken.
 
 use super::contact::{Contact, Partner};
+use crate::vec3;
 
 /// One begin or end of touch.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -43,6 +44,24 @@ pub struct TouchEvent {
     pub collider: Option<usize>,
     /// The normal impulse the pair exchanged in the step of the event, N·s (≥ 0).
     pub impulse: f64,
+}
+
+impl TouchEvent {
+    /// The event of the pair (i, `other`) (engine indices), its particles named by `id`.
+    fn of(time: f64, begin: bool, (i, other): (usize, Partner), impulse: f64, id: &[u64]) -> TouchEvent {
+        let (j, collider) = match other {
+            Partner::Particle(j) => (Some(id[j]), None),
+            Partner::Collider(k) => (None, Some(k)),
+        };
+        TouchEvent {
+            time,
+            begin,
+            i: id[i],
+            j,
+            collider,
+            impulse,
+        }
+    }
 }
 
 /// The pairs touching at the last step's end, this step's impacts, and the events waiting.
@@ -99,8 +118,8 @@ impl Touches {
             .iter()
             .zip(totals)
             .map(|(c, p)| {
-                let total = p[0] * c.normal[0] + p[1] * c.normal[1] + p[2] * c.normal[2];
-                (ordered(c.i, c.other), *p != [0.0; 3] || c.overlap >= 0.0, total.abs(), None)
+                let touching = *p != [0.0; 3] || c.overlap >= 0.0;
+                (ordered(c.i, c.other), touching, vec3::dot(*p, c.normal).abs(), None)
             })
             .collect();
         step.extend(self.hits.iter().map(|&(t, a, b, imp)| ((a, b), false, imp, Some(t))));
@@ -120,20 +139,7 @@ impl Touches {
                 _ => merged.push(s),
             }
         }
-        let event = |time: f64, begin: bool, (i, other): (usize, Partner), impulse: f64| TouchEvent {
-            time,
-            begin,
-            i: id[i],
-            j: match other {
-                Partner::Particle(j) => Some(id[j]),
-                Partner::Collider(_) => None,
-            },
-            collider: match other {
-                Partner::Collider(k) => Some(k),
-                Partner::Particle(_) => None,
-            },
-            impulse,
-        };
+        let event = |time: f64, begin: bool, pair: (usize, Partner), impulse: f64| TouchEvent::of(time, begin, pair, impulse, id);
         let was = |pair: &(usize, Partner)| self.touching.binary_search(pair).is_ok();
         let mut now: Vec<(usize, Partner)> = Vec::with_capacity(self.touching.len());
         let (mut begins, mut ends): (Vec<TouchEvent>, Vec<TouchEvent>) = (Vec::new(), Vec::new());
@@ -178,25 +184,11 @@ impl Touches {
         if !self.on {
             return;
         }
+        let gone = |q: usize| new_of_old.get(q).is_none_or(|&n| n == GONE);
         let mut kept = Vec::with_capacity(self.touching.len());
         for &(i, other) in &self.touching {
-            let gone = |q: usize| new_of_old.get(q).is_none_or(|&n| n == GONE);
-            let j = match other {
-                Partner::Particle(j) => Some(j),
-                Partner::Collider(_) => None,
-            };
-            if gone(i) || j.is_some_and(gone) {
-                self.events.push(TouchEvent {
-                    time,
-                    begin: false,
-                    i: id[i],
-                    j: j.map(|j| id[j]),
-                    collider: match other {
-                        Partner::Collider(k) => Some(k),
-                        Partner::Particle(_) => None,
-                    },
-                    impulse: 0.0,
-                });
+            if gone(i) || matches!(other, Partner::Particle(j) if gone(j)) {
+                self.events.push(TouchEvent::of(time, false, (i, other), 0.0, id));
                 continue;
             }
             let other = match other {

@@ -25,11 +25,11 @@ use rayon::prelude::*;
 /// step) the 2D pour still boiled after 5 s (KE 107 J) and the frictional pour of 10,000 too
 /// (max |v| 2.4 m/s), though a frictionless demo heap ran 2.8× faster.
 const SOLVE_SWEEPS: usize = 100;
+const RELAX_SWEEPS: usize = 30;
 
 /// An island sleeps only while its deepest overlap is at most this many slops (1 % of r for
 /// equal spheres): a pile rests at 0.23–0.26 % of r at 1 ms.
 const SLEEP_OVERLAP: f64 = 5.0;
-const RELAX_SWEEPS: usize = 30;
 
 /// Whether contact `c` is with a wall of a box collider along a periodic axis of `domain`:
 /// such walls do not exist (a particle leaving one side comes back on the other). Box walls
@@ -189,12 +189,16 @@ impl ImpulseModel {
             }
             // nor while an overlap deeper than SLEEP_OVERLAP slops is still being pushed out
             // (at a long step a pile comes to rest before its solve has taken out what its
-            // fall pressed in, and asleep it would keep it)
-            let pressed = contacts.iter().any(|&c| {
+            // fall pressed in, and asleep it would keep it); the deepest goes to sleep with it
+            let mut overlap: f64 = 0.0;
+            let mut pressed = false;
+            for &c in contacts {
                 let (i, other) = (self.contacts[c].i, self.contacts[c].other);
                 let size = set.radius[i] + self.contacts[c].partner_particle().map_or(set.radius[i], |j| set.radius[j]);
-                deepest(set, x1, i, other) > SLEEP_OVERLAP * SLOP * size
-            });
+                let depth = deepest(set, x1, i, other);
+                pressed |= depth > SLEEP_OVERLAP * SLOP * size;
+                overlap = overlap.max(depth);
+            }
             if pressed {
                 continue;
             }
@@ -213,10 +217,6 @@ impl ImpulseModel {
                     omega[3 * q..3 * q + 3].fill(0.0);
                 }
             }
-            let overlap = contacts
-                .iter()
-                .map(|&c| deepest(set, x1, self.contacts[c].i, self.contacts[c].other))
-                .fold(0.0, f64::max);
             // its contacts' warm start goes with it (a pair's movable particles are in one
             // island; a pinned one is in none)
             let of = |i: usize, other: Partner| match (island_of[i], other) {
