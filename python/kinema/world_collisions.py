@@ -43,6 +43,7 @@ class WorldCollisions:
         tangential_damping: float | None = _DEFAULTS["tangential_damping"],
         rolling_stiffness: float | None = _DEFAULTS["rolling_stiffness"],
         rolling_damping: float | None = _DEFAULTS["rolling_damping"],
+        accuracy: str = _DEFAULTS["accuracy"],
     ) -> None:
         """Turn collisions on, or replace every one of their settings.
 
@@ -93,6 +94,15 @@ class WorldCollisions:
         gases, docs/collisions.md). Colliders must be still planes and boxes; a step of such a
         world refuses anything else with a ValueError that says why.
 
+        ``accuracy`` (the impulse model, stepped): ``"physics"`` (the default) solves each
+        step's resting contacts by action and reaction alone, up to 100 sweeps a step, and
+        holds piles at 0.2–0.3 % of r at ``dt = 1e-3``; ``"animation"`` adds shock
+        propagation (the pile's levels stopped bottom up, each on its supports held still;
+        Guendelman et al. 2003) with up to 10 sweeps, and holds deep piles at rest within
+        about 1 % of r at ``dt = 1/120``, several times faster. Its pushes are taken up by
+        the ground rather than by the particles below: momentum is not exchanged by action and
+        reaction there (docs/collisions.md, "The accuracy setting").
+
         With ``"spring_dashpot"`` and ``"hertz"`` the contacts are a force (its elastic energy is the potential
         ``"contact"`` of :meth:`diagnostics` and of the ``Trajectory``), which the stable-step
         advisor and the ``StabilityWarning`` count; :meth:`contacts` and
@@ -100,7 +110,7 @@ class WorldCollisions:
 
         ``w.set_collisions(**w.collisions)`` changes nothing. The defaults are the engine's
         (``model="impulse"``, ``restitution=1.0``, ``friction=0.0``, ``ccd=True``,
-        ``sleep_time=0.5``, ``event_driven=False``, the rest ``None``), read from it.
+        ``sleep_time=0.5``, ``event_driven=False``, ``accuracy="physics"``, the rest ``None``), read from it.
         """
         settings = {
             "model": _checks.text("model", model),
@@ -121,6 +131,7 @@ class WorldCollisions:
             "tangential_damping": _checks.real("tangential_damping", tangential_damping, optional=True),
             "rolling_stiffness": _checks.real("rolling_stiffness", rolling_stiffness, optional=True),
             "rolling_damping": _checks.real("rolling_damping", rolling_damping, optional=True),
+            "accuracy": _checks.text("accuracy", accuracy),
         }
         if settings["rolling_friction"] and not self._core.spin:
             raise ValueError(

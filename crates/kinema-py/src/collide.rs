@@ -5,7 +5,7 @@
 
 use kinema::collide::colliders::{check_planar, PLANE_IN_2D, SPHERE_IN_2D};
 use kinema::collide::{BoxContainer, Collider, Contact, Material, Motion, Partner, Plane, SphereObstacle, Surface, TriangleMesh};
-use kinema::world::{CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind};
+use kinema::world::{Accuracy, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind};
 use kinema::Error;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
@@ -51,6 +51,8 @@ pub struct CollisionArgs {
     rolling_stiffness: Option<f64>,
     #[pyo3(item)]
     rolling_damping: Option<f64>,
+    #[pyo3(item)]
+    accuracy: String,
 }
 
 impl CollisionArgs {
@@ -81,6 +83,7 @@ impl CollisionArgs {
                 rolling_stiffness: self.rolling_stiffness,
                 rolling_damping: self.rolling_damping,
             },
+            accuracy: Accuracy::from_name(&self.accuracy)?,
         })
     }
 }
@@ -179,6 +182,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_contact_model, m)?)?;
     m.add("CONTACT_MODELS", ContactModel::NAMES.to_vec())?;
     m.add("TANGENTIAL_MODELS", TangentialKind::NAMES.to_vec())?;
+    m.add("ACCURACIES", Accuracy::NAMES.to_vec())?;
     Ok(())
 }
 
@@ -205,6 +209,7 @@ pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<
     out.set_item("tangential_damping", t.damping)?;
     out.set_item("rolling_stiffness", t.rolling_stiffness)?;
     out.set_item("rolling_damping", t.rolling_damping)?;
+    out.set_item("accuracy", p.accuracy.name())?;
     Ok(out)
 }
 

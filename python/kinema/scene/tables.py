@@ -619,6 +619,7 @@ class CollisionsTable(_Model):
     tangential_damping: NonNeg | None = _COLLISION_DEFAULTS["tangential_damping"]
     rolling_stiffness: Positive | None = _COLLISION_DEFAULTS["rolling_stiffness"]
     rolling_damping: NonNeg | None = _COLLISION_DEFAULTS["rolling_damping"]
+    accuracy: Literal["physics", "animation"] = _COLLISION_DEFAULTS["accuracy"]
     periodic: Annotated[list[bool], Field(min_length=2, max_length=3)] | None = None
 
     @model_validator(mode="after")

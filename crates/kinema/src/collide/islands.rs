@@ -174,6 +174,9 @@ pub(crate) struct EndProblem<'a> {
     pub spin: Option<(Rotation<'a>, &'a [f64])>,
     /// Rolling resistance μ_r (with spin).
     pub rolling: f64,
+    /// With shock propagation (`collide/shock.rs`): each particle's acceleration, m/s² (3
+    /// per particle).
+    pub shock: Option<&'a [f64]>,
     pub params: SoftParams,
 }
 
@@ -191,7 +194,9 @@ pub(crate) struct IslandStats {
 /// solve stage's total on return; `totals` receives each contact's final total impulse on i
 /// (N·s; the caller applies them to the velocities, `v` is not changed); the positions `x`
 /// are moved in place by what the solve stage did. With rolling resistance, `rolls` receives
-/// each contact's angular impulse on i (N·m·s; left empty without).
+/// each contact's angular impulse on i (N·m·s; left empty without). With shock propagation,
+/// `kicks` receives the velocity change of each particle the shock stages moved (m/s, then
+/// with spin rad/s), which no total carries (also applied by the caller).
 ///
 /// An island marked in `idle` (one flag per island: all its contacts idle,
 /// [`Islands::all_of`] of [`soft_step::idle`](super::soft_step::idle): no warm start, targets
@@ -207,6 +212,7 @@ pub(crate) fn solve(
     solved: &mut [[f64; 3]],
     totals: &mut [[f64; 3]],
     rolls: &mut Vec<[f64; 3]>,
+    kicks: &mut Vec<(usize, [f64; 6])>,
     v: &[f64],
     x: &mut [f64],
 ) -> Result<IslandStats, Error> {
@@ -237,6 +243,7 @@ pub(crate) fn solve(
     solved.fill([0.0; 3]);
     totals.fill([0.0; 3]);
     rolls.clear();
+    kicks.clear();
     if problem.spin.is_some() && problem.rolling > 0.0 {
         rolls.resize(totals.len(), [0.0; 3]);
     }
@@ -262,6 +269,7 @@ pub(crate) fn solve(
         for (&q, p) in island.moved.iter().zip(&island.positions) {
             x[3 * q..3 * q + 3].copy_from_slice(p);
         }
+        kicks.extend(island.moved.iter().copied().zip(island.kicks));
         let (s, all) = (island.soft, &mut stats.soft);
         all.sweeps = all.sweeps.max(s.sweeps);
         all.converged &= s.converged;
@@ -282,6 +290,8 @@ struct Solved {
     solved: Vec<[f64; 3]>,
     moved: Vec<usize>,
     positions: Vec<[f64; 3]>,
+    /// With shock propagation, the moved particles' kicks (velocity, then angular velocity).
+    kicks: Vec<[f64; 6]>,
     soft: SoftStats,
 }
 
@@ -299,6 +309,8 @@ struct Local {
     /// With spin: the particles' inverse inertias and radii.
     inv_inertia: Vec<f64>,
     radius: Vec<f64>,
+    /// With shock propagation: the particles' accelerations.
+    accel: Vec<f64>,
 }
 
 impl Local {
@@ -381,6 +393,9 @@ impl Local {
             self.radius.clear();
             self.radius.extend(parts.iter().map(|&q| r.radius[q]));
         }
+        if let Some(a) = problem.shock {
+            gather(&mut self.accel, a);
+        }
         let held = SoftContacts {
             contacts: &self.contacts,
             targets: &self.targets,
@@ -391,14 +406,25 @@ impl Local {
                 radius: &self.radius,
             }),
             rolling: problem.rolling,
+            shock: problem.shock.map(|_| self.accel.as_slice()),
         };
         let (v, x, groups) = (&mut self.v, &mut self.x, &self.groups);
-        let mut rolls = Vec::new();
+        let (mut rolls, mut kicks) = (Vec::new(), Vec::new());
+        let out = (&mut solved, &mut totals, &mut rolls, &mut kicks);
         let soft = match held.rotation {
-            Some(_) => soft_step::<6>(held, &params, v, x, &mut solved, &mut totals, &mut rolls, groups)?,
-            None => soft_step::<3>(held, &params, v, x, &mut solved, &mut totals, &mut rolls, groups)?,
+            Some(_) => soft_step::<6>(held, &params, v, x, out.0, out.1, out.2, out.3, groups)?,
+            None => soft_step::<3>(held, &params, v, x, out.0, out.1, out.2, out.3, groups)?,
         };
         let moved: Vec<usize> = (0..parts.len()).filter(|&l| self.inv_mass[l] > 0.0).collect();
+        let width = if held.rotation.is_some() { 6 } else { 3 };
+        let kicks = if kicks.is_empty() {
+            Vec::new()
+        } else {
+            moved
+                .iter()
+                .map(|&l| std::array::from_fn(|d| if d < width { kicks[width * l + d] } else { 0.0 }))
+                .collect()
+        };
         Ok(Solved {
             order,
             totals,
@@ -406,6 +432,7 @@ impl Local {
             solved,
             positions: moved.iter().map(|&l| vec3::get(&self.x, l)).collect(),
             moved: moved.iter().map(|&l| parts[l]).collect(),
+            kicks,
             soft,
         })
     }
@@ -543,6 +570,7 @@ mod tests {
             solved,
             totals,
             &mut Vec::new(),
+            &mut Vec::new(),
             v,
             x,
         )
@@ -580,6 +608,7 @@ mod tests {
             materials: MaterialTable::uniform(Material::new(0.0, 0.3).unwrap()).with_colliders(floor),
             spin: None,
             rolling: 0.0,
+            shock: None,
             params: SoftParams {
                 h: H,
                 tolerance: 0.0,
@@ -665,6 +694,7 @@ mod tests {
             materials: &p.materials,
             rotation: None,
             rolling: 0.0,
+            shock: None,
         };
         let in_order = [SweepGroup::in_order(0..contacts.len())];
         let cold = SoftParams {
@@ -679,6 +709,7 @@ mod tests {
             &mut x_all,
             &mut all_solved,
             &mut all_totals,
+            &mut Vec::new(),
             &mut Vec::new(),
             &in_order,
         )
@@ -743,7 +774,18 @@ mod tests {
         assert_eq!(idle_islands.iter().filter(|&&i| i).count(), 1);
         let run = |idle: &[bool]| {
             let (mut solved, mut totals, mut x) = (warm.clone(), vec![[0.0; 3]; contacts.len()], x.clone());
-            let stats = solve(&islands, idle, &p, &mut solved, &mut totals, &mut Vec::new(), &v, &mut x).unwrap();
+            let stats = solve(
+                &islands,
+                idle,
+                &p,
+                &mut solved,
+                &mut totals,
+                &mut Vec::new(),
+                &mut Vec::new(),
+                &v,
+                &mut x,
+            )
+            .unwrap();
             (solved, totals, x, stats.soft.active)
         };
         let (skipped, all) = (run(&idle_islands), run(&vec![false; islands.len()]));
@@ -807,5 +849,76 @@ mod tests {
             let layer = (q / 144) as f64;
             assert!((z - layer).abs() < 1e-9, "ball {q} at z = {z}");
         }
+    }
+
+    #[test]
+    fn shock_propagation_stops_a_deep_column_in_few_sweeps_and_the_floor_takes_its_momentum() {
+        // A plastic column of 40 unit balls landing at 1 m/s on a floor, cold, with 10 sweeps
+        // (1 × COLD_SWEEPS): Gauss–Seidel carries the floor's stop one ball per sweep, and the
+        // upper balls end the step sunk into the ones below. With shock propagation every
+        // ball ends at its lattice height (the closed form of a column at rest: z = k) and at
+        // rest, and the momentum the shock's pushes gave the column (40 kg · 1 m/s in all,
+        // with the floor's totals) is what the floor took up.
+        let (contacts, v, x) = block(1, 1, 40, H);
+        let inv_mass = vec![1.0; 40];
+        let targets = targets(&contacts);
+        let islands = Islands::find(&contacts, &inv_mass);
+        let floor = floor();
+        let accel: Vec<f64> = (0..40).flat_map(|_| [0.0, 0.0, -9.81]).collect();
+        let run = |shock: Option<&[f64]>| {
+            let mut p = problem(&contacts, &targets, &inv_mass, &floor, 1);
+            p.shock = shock;
+            let (mut solved, mut totals, mut x) = (vec![[0.0; 3]; contacts.len()], vec![[0.0; 3]; contacts.len()], x.clone());
+            let mut kicks = Vec::new();
+            let every = vec![false; islands.len()];
+            solve(
+                &islands,
+                &every,
+                &p,
+                &mut solved,
+                &mut totals,
+                &mut Vec::new(),
+                &mut kicks,
+                &v,
+                &mut x,
+            )
+            .unwrap();
+            let mut after = v.clone();
+            for (c, t) in contacts.iter().zip(&totals) {
+                vec3::add_scaled(&mut after, c.i, 1.0, *t);
+                if let Some(j) = c.partner_particle() {
+                    vec3::add_scaled(&mut after, j, -1.0, *t);
+                }
+            }
+            for &(q, k) in &kicks {
+                vec3::add_scaled(&mut after, q, 1.0, [k[0], k[1], k[2]]);
+            }
+            let sunk = x
+                .iter()
+                .skip(2)
+                .step_by(3)
+                .enumerate()
+                .map(|(k, z)| k as f64 - z)
+                .fold(0.0, f64::max);
+            let pushed: f64 = kicks.iter().map(|(_, k)| k[2]).sum();
+            let floor_took: f64 = totals
+                .iter()
+                .zip(&contacts)
+                .filter(|(_, c)| c.partner_particle().is_none())
+                .map(|(t, _)| t[2])
+                .sum();
+            (sunk, after, pushed, floor_took, kicks.iter().all(|(_, k)| k[2] >= 0.0))
+        };
+        let (sunk, _, _, _, _) = run(None);
+        assert!(
+            sunk > 0.1 * H,
+            "without the shock the sweeps alone should leave it sunk: {sunk}"
+        );
+        let (sunk, after, pushed, floor_took, upward) = run(Some(&accel));
+        assert!(sunk < 1e-9, "{sunk}");
+        let fastest = after.iter().fold(0.0_f64, |m, u| m.max(u.abs()));
+        assert!(fastest < 1e-9, "{fastest}");
+        assert!(upward && pushed > 0.0, "the shock only pushes up: {pushed}");
+        assert!((pushed + floor_took - 40.0).abs() < 1e-9, "{pushed} + {floor_took}");
     }
 }

@@ -116,6 +116,7 @@ pub mod penalty;
 pub(crate) mod placement;
 pub mod response;
 mod roots;
+pub(crate) mod shock;
 pub(crate) mod sleep;
 pub(crate) mod soft_step;
 pub mod spin;

@@ -21,9 +21,13 @@
 //!                slop, and a part β of the excess removed per step beyond it;
 //!                tangential velocity u_t → u₁t − d_t/h (no sliding over the step: d_t is
 //!                the tangential displacement the step made), |t| ≤ μ λ (Coulomb)
+//!   shock        at the `animation` accuracy only (`collide/shock.rs`): the solve's normal
+//!                targets again, level by level bottom up, each particle pushed off its
+//!                supports, which are held still
 //!   integrate    x += h Δv of the solve (positions follow the solve, not the later stages)
 //!   relax        u ≥ 0 where the solve left them touching, u ≥ −g/h across a gap g; u_t → 0:
 //!                the velocity the solve needed to move positions is not kept (Box2D's relax)
+//!                (and at the `animation` accuracy its shock stage, as after the solve)
 //!   restitution  u⁺ = −e u⁻ for each contact that carries load and approached faster than
 //!                the threshold at the step's start (Newton's law, Box2D's restitution stage)
 //! ```
@@ -50,6 +54,7 @@
 
 use super::contact::Contact;
 use super::response::MaterialTable;
+use super::shock::{levels, order, Held, ShockOrder, SUPPORT_COSINE};
 use super::spin::Rotation;
 use super::sweeps::{sweeps, Ends, SweepGroup};
 use crate::error::Error;
@@ -166,6 +171,9 @@ pub(crate) struct SoftContacts<'a> {
     pub rotation: Option<Rotation<'a>>,
     /// Rolling resistance μ_r (≥ 0; with spin).
     pub rolling: f64,
+    /// With shock propagation (`collide/shock.rs`): each particle's acceleration from the
+    /// forces (m/s², 3 per particle), which tells its supports.
+    pub shock: Option<&'a [f64]>,
 }
 
 /// The soft step's stages (see the module's doc) on velocities `v` (N per particle: the
@@ -177,6 +185,8 @@ pub(crate) struct SoftContacts<'a> {
 /// start; zeros if none), its solve stage's total on return (the next step's warm start).
 /// `totals`: each contact's final total impulse on i, N·s (−total on a partner particle);
 /// `rolls`: with rolling resistance, its final angular impulse on i, N·m·s (−on a partner).
+/// `kicks`: with shock propagation, the velocity change of the shock stages (N per
+/// particle), which no total carries; left empty without.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn soft_step<const N: usize>(
     held: SoftContacts<'_>,
@@ -186,6 +196,7 @@ pub(crate) fn soft_step<const N: usize>(
     solved: &mut [[f64; 3]],
     totals: &mut Vec<[f64; 3]>,
     rolls: &mut Vec<[f64; 3]>,
+    kicks: &mut Vec<f64>,
     groups: &[SweepGroup],
 ) -> Result<SoftStats, Error> {
     let SoftContacts {
@@ -195,6 +206,7 @@ pub(crate) fn soft_step<const N: usize>(
         materials,
         rotation,
         rolling,
+        shock,
     } = held;
     debug_assert!(N == 3 || (N == 6 && rotation.is_some()));
     let h = params.h;
@@ -238,6 +250,15 @@ pub(crate) fn soft_step<const N: usize>(
     for (k, r) in rows.iter().enumerate() {
         solved[k] = vec3::add(vec3::scale(acc[k].0, r.n), acc[k].1);
     }
+    // Shock: the solve's targets again, level by level bottom up, the level below held still.
+    kicks.clear();
+    let shocks = shock.map(|accel| {
+        kicks.resize(v.len(), 0.0);
+        Shocks::new(contacts, targets, &rows, &ends, &acc, accel, v.len() / N)
+    });
+    if let Some(s) = &shocks {
+        s.run::<N>(v, kicks, params, |k| targets[k].solve_n);
+    }
 
     // Integrate: the positions follow the solve's velocity change over the whole step.
     for (q, xq) in x.iter_mut().enumerate() {
@@ -273,6 +294,9 @@ pub(crate) fn soft_step<const N: usize>(
         |k, a, vi, vj| rows[k].visit(vi, vj, a, relax_n[k], Some([0.0; 3])),
     );
     stats.relax_sweeps = relaxed.sweeps;
+    if let Some(s) = &shocks {
+        s.run::<N>(v, kicks, params, |k| relax_n[k]);
+    }
 
     // Restitution: Newton's law on the contacts that carry load and came in fast.
     let bouncing: Vec<Option<f64>> = targets
@@ -312,6 +336,105 @@ pub(crate) fn soft_step<const N: usize>(
     }
     stats.active = totals.iter().filter(|p| **p != [0.0; 3]).count();
     Ok(stats)
+}
+
+/// Most sweeps of a shock stage over one level's contacts.
+const SHOCK_SWEEPS: usize = 10;
+
+/// The shock stages of one island (`collide/shock.rs`): its contacts bottom up by level,
+/// each with its row and ends with the lower side held still.
+struct Shocks {
+    order: ShockOrder,
+    rows: Vec<Row>,
+    ends: Vec<Ends>,
+}
+
+impl Shocks {
+    /// The levels of the island's `n` particles from the contacts that touch (carry load
+    /// after the solve, or overlap at the step's end) and the particles' accelerations
+    /// `accel` (m/s², 3 per particle), and the visits they give.
+    fn new(
+        contacts: &[Contact],
+        targets: &[Target],
+        rows: &[Row],
+        ends: &[Option<Ends>],
+        acc: &[(f64, [f64; 3], [f64; 3])],
+        accel: &[f64],
+        n: usize,
+    ) -> Shocks {
+        // whether a push along `dir` holds q up: against its acceleration
+        let holds = |q: usize, dir: [f64; 3]| {
+            let a = vec3::get(accel, q);
+            vec3::dot(dir, a) < -SUPPORT_COSINE * vec3::norm(a)
+        };
+        // each touching contact's support: (particle held up, its support if a movable
+        // particle, the side held still)
+        let support: Vec<Option<(usize, Option<usize>, Held)>> = contacts
+            .iter()
+            .zip(ends)
+            .enumerate()
+            .map(|(k, (c, e))| {
+                let e = (*e)?;
+                let touching = acc[k].0 > 0.0 || targets[k].gap <= 0.0;
+                let (nrm, j) = (rows[k].n, e.j.filter(|_| e.writes_j()));
+                if !touching {
+                    None
+                } else if e.writes_i() && holds(c.i, nrm) {
+                    Some((c.i, j, if j.is_some() { Held::J } else { Held::Neither }))
+                } else if let Some(j) = j.filter(|&j| holds(j, vec3::scale(-1.0, nrm))) {
+                    Some((
+                        j,
+                        e.writes_i().then_some(c.i),
+                        if e.writes_i() { Held::I } else { Held::Neither },
+                    ))
+                } else {
+                    None
+                }
+            })
+            .collect();
+        let grounded: Vec<usize> = support.iter().flatten().filter(|s| s.1.is_none()).map(|s| s.0).collect();
+        let edges: Vec<(usize, usize)> = support.iter().flatten().filter_map(|s| s.1.map(|p| (p, s.0))).collect();
+        let level = levels(n, &grounded, &edges);
+        let order = order(support.iter().map(|s| s.map(|(q, _, held)| (level[q], held))));
+        Shocks {
+            rows: order.visits.iter().map(|&(k, held)| rows[k].held(held)).collect(),
+            ends: order
+                .visits
+                .iter()
+                .map(|&(k, held)| ends[k].expect("a visit has ends").held(held))
+                .collect(),
+            order,
+        }
+    }
+
+    /// One shock stage on the velocities `v` (N per particle): level by level, its support
+    /// contacts swept until no visit changes more than the tolerance (at most
+    /// [`SHOCK_SWEEPS`]; a level's visits are each particle's own few supports) toward the
+    /// normal velocity `target(k)` of contact k. Each contact's push starts from 0 and stays
+    /// ≥ 0: the stage only stops what sinks into its supports, and leaves friction to the
+    /// sweeps. The velocity changes are added to `kicks`.
+    fn run<const N: usize>(&self, v: &mut [f64], kicks: &mut [f64], params: &SoftParams, target: impl Fn(usize) -> f64) {
+        let before = v.to_vec();
+        let visits = &self.order.visits;
+        let mut state = vec![(0.0, [0.0; 3], [0.0; 3]); visits.len()];
+        for level in self.order.starts.windows(2) {
+            for _ in 0..SHOCK_SWEEPS {
+                let mut change: f64 = 0.0;
+                for m in level[0]..level[1] {
+                    let e = &self.ends[m];
+                    let (mut vi, mut vj) = e.load::<N>(v);
+                    change = change.max(self.rows[m].visit(&mut vi, &mut vj, &mut state[m], target(visits[m].0), None));
+                    e.store(v, vi, vj);
+                }
+                if change <= params.tolerance {
+                    break;
+                }
+            }
+        }
+        for (kick, (now, was)) in kicks.iter_mut().zip(v.iter().zip(&before)) {
+            *kick += now - was;
+        }
+    }
 }
 
 /// Whether [`soft_step`] leaves contact `c` alone: it has no warm start (`warm` = 0, N·s),
@@ -384,6 +507,7 @@ struct Roll {
 /// (kg) along n and 1/w_t across (the same without spin), friction μ, normal n, whether its
 /// partner is a particle, and with spin `turn` = [ρ_i, ρ_j, k_i ρ_i, k_j ρ_j] (m, m and
 /// 1/(kg·m); `collide/spin.rs`) and its rolling resistance.
+#[derive(Clone, Copy)]
 struct Row {
     wi: f64,
     wj: f64,
@@ -435,6 +559,23 @@ impl Row {
             n: c.normal,
             has_j: c.partner_particle().is_some(),
         }
+    }
+
+    /// The row with one side held still (`collide/shock.rs`): its inverse mass and inertia
+    /// taken as 0, the effective masses those of the other side alone.
+    fn held(&self, held: Held) -> Row {
+        let mut r = *self;
+        match held {
+            Held::Neither => return r,
+            Held::I => (r.wi, r.turn[2], r.roll.k[0]) = (0.0, 0.0, 0.0),
+            Held::J => (r.wj, r.turn[3], r.roll.k[1]) = (0.0, 0.0, 0.0),
+        }
+        let inverse = |w: f64| if w > 0.0 { 1.0 / w } else { 0.0 };
+        let w = r.wi + r.wj;
+        r.mass = inverse(w);
+        r.mass_t = inverse(w + r.turn[2] * r.turn[0] + r.turn[3] * r.turn[1]);
+        r.roll.mass = inverse(r.roll.k[0] + r.roll.k[1]);
+        r
     }
 
     /// The velocity of i's contact point relative to j's: v_i − v_j, less

@@ -20,6 +20,7 @@
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 use super::contact::Contact;
+use super::shock::Held;
 
 /// Sweeps run on all threads when a colour has at least this many contacts (below, the
 /// waits cost more than the visits; the result is the same either way).
@@ -69,6 +70,23 @@ impl Ends {
             write_i: wi > 0.0,
             write_j: wj > 0.0,
         })
+    }
+
+    /// Whether a visit may change i's, and j's, N-vector.
+    pub fn writes_i(&self) -> bool {
+        self.write_i
+    }
+    pub fn writes_j(&self) -> bool {
+        self.write_j
+    }
+
+    /// The same ends with one side held still (`collide/shock.rs`).
+    pub fn held(self, held: Held) -> Ends {
+        Ends {
+            write_i: self.write_i && held != Held::I,
+            write_j: self.write_j && held != Held::J,
+            ..self
+        }
     }
 
     /// A collider's side as an N-vector: its surface's velocity, and no turning.

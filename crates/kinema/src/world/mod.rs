@@ -33,7 +33,7 @@ mod measures;
 mod order;
 
 pub use crate::collide::stage::{
-    ColliderBooks, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind,
+    Accuracy, ColliderBooks, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind,
 };
 pub use crate::interrupt::Interrupt;
 pub use advisor::Rates;

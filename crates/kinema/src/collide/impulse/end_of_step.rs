@@ -11,21 +11,30 @@ use crate::collide::neighbour_list::CHUNK;
 use crate::collide::response::{bounces, VELOCITY_TOLERANCE};
 use crate::collide::soft_step::{self, SoftParams, Target, SLOP, SPECULATIVE};
 use crate::collide::spin::rotational_energy;
+use crate::collide::stage::Accuracy;
 use crate::collide::{pair_contact, Collider, Contact, Domain, Partner};
 use crate::error::Error;
 use crate::vec3;
 use rayon::prelude::*;
 
-/// Most sweeps of the soft step's solve stage, and of its relax and restitution stages.
-/// Warm-started, a heap at rest converges in one or two sweeps a step; the caps matter while
-/// it settles, and for a frictionless heap, which converges slowly. Measured on
-/// `benchmarks/piles.py` (docs/collisions.md): with caps of 100 and 30 the 2D pour of 2,000
-/// discs, the 20-row pyramid, the 60-deep column and the frictional pour of 10,000 balls all
-/// come to rest within 5 s; with 10 and 10 (Box2D's and Chipmunk's habit of a few sweeps a
-/// step) the 2D pour still boiled after 5 s (KE 107 J) and the frictional pour of 10,000 too
-/// (max |v| 2.4 m/s), though a frictionless demo heap ran 2.8× faster.
+/// Most sweeps of the soft step's solve stage, and of its relax and restitution stages, at
+/// the `physics` accuracy. Warm-started, a heap at rest converges in one or two sweeps a
+/// step; the caps matter while it settles, and for a frictionless heap, which converges
+/// slowly. Measured on `benchmarks/piles.py` (docs/collisions.md): with caps of 100 and 30
+/// the 2D pour of 2,000 discs, the 20-row pyramid, the 60-deep column and the frictional pour
+/// of 10,000 balls all come to rest within 5 s at 1 ms; with 10 and 10 (Box2D's and
+/// Chipmunk's habit of a few sweeps a step) the 2D pour still boiled after 5 s (KE 107 J)
+/// and the frictional pour of 10,000 too (max |v| 2.4 m/s), though a frictionless demo heap
+/// ran 2.8× faster.
 const SOLVE_SWEEPS: usize = 100;
 const RELAX_SWEEPS: usize = 30;
+
+/// The caps at the `animation` accuracy, where shock propagation (`collide/shock.rs`) stops
+/// each level on the one below whatever the sweeps left: at 120 Hz the 2D pour rested at
+/// 0.64 % of r in 2.9 s with 10 and 5, at 1.1 % in 8.5 s with 100 and 30 (the 60-deep column:
+/// 0.47 % in 3.1 s, 0.24 % in 4.8 s).
+const ANIMATION_SOLVE_SWEEPS: usize = 10;
+const ANIMATION_RELAX_SWEEPS: usize = 5;
 
 /// An island sleeps only while its deepest overlap is at most this many slops (1 % of r for
 /// equal spheres): a pile rests at 0.23–0.26 % of r at 1 ms.
@@ -338,6 +347,7 @@ impl ImpulseModel {
         self.totals.resize(self.contacts.len(), [0.0; 3]);
         if self.contacts.is_empty() {
             self.islands = Islands::default();
+            self.kicks.clear();
             self.acted.reset(inv_mass.len(), false);
             self.scratch = resting;
             self.warm.clear();
@@ -353,11 +363,18 @@ impl ImpulseModel {
             materials,
             spin: set.rotation.map(|r| (r, omega)),
             rolling: set.rolling_friction,
+            shock: (set.accuracy == Accuracy::Animation).then_some(paths.accel),
             params: SoftParams {
                 h,
                 tolerance: VELOCITY_TOLERANCE,
-                solve_sweeps: SOLVE_SWEEPS,
-                relax_sweeps: RELAX_SWEEPS,
+                solve_sweeps: match set.accuracy {
+                    Accuracy::Physics => SOLVE_SWEEPS,
+                    Accuracy::Animation => ANIMATION_SOLVE_SWEEPS,
+                },
+                relax_sweeps: match set.accuracy {
+                    Accuracy::Physics => RELAX_SWEEPS,
+                    Accuracy::Animation => ANIMATION_RELAX_SWEEPS,
+                },
             },
         };
         self.islands = Islands::find_with(&self.contacts, inv_mass, &mut self.forest);
@@ -376,6 +393,7 @@ impl ImpulseModel {
             &mut self.solved,
             &mut self.totals,
             &mut self.rolls,
+            &mut self.kicks,
             v1,
             x1,
         )?;
@@ -388,6 +406,9 @@ impl ImpulseModel {
             self.acted.mark(q);
         }
         self.scratch = resting;
+        for &(q, _) in &self.kicks {
+            self.acted.mark(q);
+        }
         for (c, (p, s)) in self.contacts.iter().zip(self.totals.iter().zip(&self.solved)) {
             if *p != [0.0; 3] || *s != [0.0; 3] {
                 self.acted.mark(c.i);

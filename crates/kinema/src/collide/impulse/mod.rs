@@ -20,6 +20,7 @@ use super::neighbour_list::NeighbourList;
 use super::sleep::{Sleep, WarmEntry};
 use super::soft_step::Target;
 use super::spin::Rotation;
+use super::stage::Accuracy;
 use super::touch::Touches;
 use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
@@ -242,6 +243,8 @@ pub(crate) struct StageSetting<'a> {
     pub rotation: Option<Rotation<'a>>,
     /// Rolling resistance μ_r ([`crate::world::CollisionParams::rolling_friction`]; with spin).
     pub rolling_friction: f64,
+    /// The end-of-step solve's accuracy setting ([`crate::world::CollisionParams::accuracy`]).
+    pub accuracy: Accuracy,
 }
 
 /// What the stages keep of their contacts while particles are added
@@ -291,6 +294,9 @@ pub(crate) struct ImpulseModel {
     /// With rolling resistance, each end-of-step contact's final angular impulse on i,
     /// N·m·s (empty without).
     pub(super) rolls: Vec<[f64; 3]>,
+    /// With shock propagation, the end-of-step solve's velocity changes that no total carries
+    /// (particle, velocity then angular velocity), m/s and rad/s.
+    pub(super) kicks: Vec<(usize, [f64; 6])>,
     /// The particles the end-of-step stage acted on in this step (for the books).
     pub(super) acted: Marks,
     /// Each end-of-step contact's targets (`collide/soft_step.rs`).
@@ -335,6 +341,7 @@ impl ImpulseModel {
             totals: Vec::new(),
             solved: Vec::new(),
             rolls: Vec::new(),
+            kicks: Vec::new(),
             acted: Marks::default(),
             prepared: Vec::new(),
             warm: Vec::new(),
@@ -719,6 +726,14 @@ impl ImpulseModel {
             if let Partner::Collider(k) = c.other {
                 let at = vec3::sub(vec3::get(x1, c.i), vec3::scale(set.radius[c.i] - c.overlap, c.normal));
                 self.collider_books[k].book(at, c.wall_velocity, *p);
+            }
+        }
+        // (with shock propagation, what its stages gave with a side held still)
+        for &(q, kick) in &self.kicks {
+            changed = true;
+            vec3::add_scaled(v1, q, 1.0, [kick[0], kick[1], kick[2]]);
+            if set.rotation.is_some() {
+                vec3::add_scaled(omega, q, 1.0, [kick[3], kick[4], kick[5]]);
             }
         }
         stats.energy_lost += self.energy_books(set, paths.accel, x1, v1, omega);
