@@ -35,6 +35,8 @@
 //!         solve()                     impulse/end_of_step.rs: Target::new() (soft_step.rs),
 //!                                     Islands::find_with() (islands.rs), soft_step::idle(),
 //!                                     islands::solve() → soft_step(), island by island
+//!                                     (at accuracy 'animation' with its shock stages:
+//!                                     shock.rs levels(), order())
 //!         distribute()                impulse/end_of_step.rs: each total onto both particles
 //!         energy_books()              impulse/end_of_step.rs: the energy the stages took
 //!         settle()                    impulse/end_of_step.rs: calm islands fall asleep
