@@ -118,8 +118,9 @@ kinema misses a target (--quick's 1 s runs are judged by the full scenes' target
 `--work-precision`: for each scene, each engine at several settings, the CPU seconds beside the
 rest figures, one table a scene (sorted by engine, then CPU seconds), the rows also written as
 JSON to out/piles_work_precision.json; no targets judged. The settings:
-  kinema   KINEMA_SETTINGS: dt 1, 2, 4 ms and 1/60 s (each a dict of World and
-           set_collisions keyword arguments, so that an accuracy setting can join them);
+  kinema   KINEMA_SETTINGS: dt 1, 2, 4 ms and 1/60 s at the default accuracy ("physics"),
+           and accuracy="animation" (shock propagation) at 1/120 s and 1/60 s (each a dict of
+           World and set_collisions keyword arguments);
   box2d    dt {1 ms, 1/60 s} x substeps {4, 8, 16} x contact hertz {30, 2000} (with --quick
            the four of 1 ms/16/2000 Hz, the issue's figure setting, 1 ms/4/30, 1/60 s/4/30 and
            1/60 s/8/30);
@@ -186,6 +187,8 @@ KINEMA_SETTINGS: list[dict] = [
     {"world": {"dt": 2e-3}, "collisions": {}},
     {"world": {"dt": 4e-3}, "collisions": {}},
     {"world": {"dt": 1 / 60}, "collisions": {}},
+    {"world": {"dt": 1 / 120}, "collisions": {"accuracy": "animation"}},
+    {"world": {"dt": 1 / 60}, "collisions": {"accuracy": "animation"}},
 ]
 # Box2D's own defaults (4 substeps, contact hertz 30) at 1 ms for the plain table
 BOX2D_DEFAULT = {"dt": 1e-3, "substeps": 4, "contact_hertz": 30.0}
@@ -611,7 +614,10 @@ def build_engine_peers() -> str | None:
 
 
 def dt_words(dt: float) -> str:
-    return "1/60 s" if abs(dt - 1 / 60) < 1e-12 else f"{dt * 1e3:g} ms"
+    for k in (60, 120):
+        if abs(dt - 1 / k) < 1e-12:
+            return f"1/{k} s"
+    return f"{dt * 1e3:g} ms"
 
 
 def setting_words(engine: str, setting: dict | None) -> str:

@@ -294,6 +294,7 @@ def test_settings_read_back_and_round_trip():
         "tangential_damping": None,
         "rolling_stiffness": None,
         "rolling_damping": None,
+        "accuracy": "physics",
     }
     assert w.collisions == expected
     w.set_collisions(**w.collisions)
@@ -524,6 +525,7 @@ def test_collision_defaults_and_contact_models_are_the_engines():
         "tangential_damping": None,
         "rolling_stiffness": None,
         "rolling_damping": None,
+        "accuracy": "physics",
     }
     signature = inspect.signature(kinema.World.set_collisions)
     assert {k: p.default for k, p in signature.parameters.items() if k != "self"} == engine

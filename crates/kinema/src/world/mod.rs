@@ -32,8 +32,9 @@ mod integrate;
 mod measures;
 mod order;
 
+pub use crate::collide::shock::Accuracy;
 pub use crate::collide::stage::{
-    Accuracy, ColliderBooks, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind,
+    ColliderBooks, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind,
 };
 pub use crate::interrupt::Interrupt;
 pub use advisor::Rates;
