@@ -2,7 +2,9 @@
 that wrote it, for every integrator and both contact models, with springs, emitters,
 lifetimes, own materials and particles sorted along space."""
 
+import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -849,3 +851,17 @@ def test_a_spring_made_without_a_rest_length_keeps_the_one_it_was_made_with(tmp_
     w.step(50)
     back.step(50)
     assert np.array_equal(w.positions, back.positions)
+
+
+def test_a_pile_at_the_animation_accuracy_resumes_bit_for_bit(tmp_path):
+    # The shock (collide/shock.rs) keeps nothing from step to step but what the physics grade
+    # keeps (the warm start): a settling pile resumed from a checkpoint goes on bit for bit,
+    # and the setting comes back with it.
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_collisions import _column
+
+    w, _ = _column(2, 8, 20, 1 / 120, 11, seconds=0.4, accuracy="animation")
+    a, b = run_alongside(w, tmp_path, before=30, after=60)
+    assert b.collisions["accuracy"] == "animation"
+    assert a.collision_stats()["total"]["impulses"] > 1000  # a pile in contact, not a gas
+    assert_same(a, b)
