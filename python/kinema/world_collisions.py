@@ -98,7 +98,7 @@ class WorldCollisions:
         step's resting contacts by action and reaction alone, up to 100 sweeps a step, and
         holds piles at 0.2–0.3 % of r at ``dt = 1e-3``; ``"animation"`` adds shock
         propagation (the pile's levels stopped bottom up, each on its supports held still;
-        Guendelman et al. 2003) with up to 10 sweeps, and holds deep piles at rest within
+        Guendelman et al. 2003) with up to 10 sweeps of the solve, and holds deep piles at rest within
         about 1 % of r at ``dt = 1/120``, several times faster. Its pushes are taken up by
         the ground rather than by the particles below: momentum is not exchanged by action and
         reaction there (docs/collisions.md, "The accuracy setting").
