@@ -375,21 +375,16 @@ impl Shocks {
             .enumerate()
             .map(|(k, (c, e))| {
                 let e = (*e)?;
-                let touching = acc[k].0 > 0.0 || targets[k].gap <= 0.0;
-                let (nrm, j) = (rows[k].n, e.j.filter(|_| e.writes_j()));
-                if !touching {
-                    None
-                } else if e.writes_i() && holds(c.i, nrm) {
-                    Some((c.i, j, if j.is_some() { Held::J } else { Held::Neither }))
-                } else if let Some(j) = j.filter(|&j| holds(j, vec3::scale(-1.0, nrm))) {
-                    Some((
-                        j,
-                        e.writes_i().then_some(c.i),
-                        if e.writes_i() { Held::I } else { Held::Neither },
-                    ))
-                } else {
-                    None
+                if !(acc[k].0 > 0.0 || targets[k].gap <= 0.0) {
+                    return None; // not touching
                 }
+                let (nrm, j) = (rows[k].n, e.j.filter(|_| e.writes_j()));
+                if e.writes_i() && holds(c.i, nrm) {
+                    return Some((c.i, j, if j.is_some() { Held::J } else { Held::Neither }));
+                }
+                let i = e.writes_i().then_some(c.i);
+                j.filter(|&j| holds(j, vec3::scale(-1.0, nrm)))
+                    .map(|j| (j, i, if i.is_some() { Held::I } else { Held::Neither }))
             })
             .collect();
         let grounded: Vec<usize> = support.iter().flatten().filter(|s| s.1.is_none()).map(|s| s.0).collect();
