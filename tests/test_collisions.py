@@ -603,6 +603,31 @@ def test_removing_a_particle_keeps_the_warm_start_of_the_contacts_that_stay():
     np.testing.assert_array_equal(a.velocities, c.velocities)
 
 
+def test_a_ball_pressed_into_a_box_corner_warm_starts_each_wall_from_its_own_record():
+    # A ball at rest in a corner of a box, pressed into its floor and two walls by a tilted
+    # gravity: three contacts with one key (the ball, the box). Each carries m g_k h a step
+    # along its wall's normal, the same every step, so a warm start from each contact's own
+    # record is already the answer and the solve stops after one sweep. Read by key alone,
+    # the three shared one record (the floor's push projected on a wall's normal is 0):
+    # two sweeps every step. The ball stays where it was (closed form: at rest).
+    w = kinema.World(dt=1e-3, method="verlet")
+    r = 0.05
+    w.add_particles([[r, r, r]], mass=1.0, radius=r)
+    w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+    w.add(kinema.Gravity(g=[-2.0, -1.0, -9.81]))
+    w.set_collisions(restitution=0.5, friction=0.3)
+    w.step(50)
+    sweeps = []
+    for _ in range(20):
+        w.step(1)
+        last = w.collision_stats()["last"]
+        assert (last["contacts"], last["resting"]) == (3, 3), last
+        sweeps.append(last["solver_sweeps"])
+    assert sweeps == [1] * 20
+    np.testing.assert_allclose(w.positions[0], [r, r, r], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(w.velocities[0], 0.0, rtol=0, atol=1e-12)
+
+
 def test_stage_times_name_the_impulse_models_stages_in_the_order_a_step_runs_them():
     # A pile falling onto a floor: every stage of the impulse model runs (impacts, contacts,
     # the soft step, the books). The seed's four stages come first; the impulse model's own

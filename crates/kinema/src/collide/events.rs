@@ -34,6 +34,7 @@ use super::contact::Partner;
 use super::domain::Domain;
 use super::neighbour_list::{NeighbourList, CHUNK};
 use super::paths::{pair_toi, Toi};
+use super::records::Records;
 use super::sleep::AWAKE;
 use super::soft_step::SPECULATIVE;
 use super::toi::{toi_plane, toi_sphere_obstacle, toi_spheres};
@@ -196,7 +197,7 @@ pub(crate) struct Scene<'a> {
     /// solve left, or a pile's contact pressed by a neighbour's correction); later in the
     /// step, the loaded ones (a body landing on a pile: its load is carried down at once,
     /// as shock propagation does, rather than by impacts cascading pair by pair).
-    pub resting: &'a [(usize, Partner, bool)],
+    pub resting: &'a Records,
     /// Each particle's sleeping island or `sleep::AWAKE` (empty while none sleeps,
     /// `collide/sleep.rs`): a sleeper whose path no impact changed yet is a body at rest, and
     /// two of them meet nothing.
@@ -218,13 +219,7 @@ impl Scene<'_> {
     }
 
     fn is_resting(&self, i: usize, partner: Partner, now: f64) -> bool {
-        let key = match partner {
-            Partner::Particle(j) if j < i => (j, Partner::Particle(i)),
-            _ => (i, partner),
-        };
-        self.resting
-            .binary_search_by(|r| (r.0, r.1).cmp(&key))
-            .is_ok_and(|k| now == 0.0 || self.resting[k].2)
+        self.resting.has(i, partner, now != 0.0)
     }
 }
 

@@ -32,11 +32,13 @@
 //!                                     pair_contact() (narrow_phase.rs), then the colliders'
 //!                                     Collider::for_each_touch(), Collider::contact()
 //!                                     (colliders.rs)
-//!         solve()                     impulse/end_of_step.rs: Target::new() (soft_step.rs),
-//!                                     Islands::find_with() (islands.rs), soft_step::idle(),
-//!                                     islands::solve() → soft_step(), island by island
-//!                                     (at accuracy 'animation' with its shock stages:
-//!                                     shock.rs levels(), order())
+//!         solve()                     impulse/end_of_step.rs: each contact's record read by
+//!                                     Records::match_up() (records.rs), Target::new()
+//!                                     (soft_step.rs), Islands::find_with() (islands.rs),
+//!                                     soft_step::idle(), islands::solve() → soft_step(),
+//!                                     island by island (at accuracy 'animation' with its
+//!                                     shock stages: shock.rs levels(), order()); the
+//!                                     step's records by Records::replace()
 //!         distribute()                impulse/end_of_step.rs: each total onto both particles
 //!         energy_books()              impulse/end_of_step.rs: the energy the stages took
 //!         settle()                    impulse/end_of_step.rs: calm islands fall asleep
@@ -116,6 +118,7 @@ pub(crate) mod neighbour_list;
 pub(crate) mod oracles;
 pub mod penalty;
 pub(crate) mod placement;
+pub(crate) mod records;
 pub mod response;
 mod roots;
 pub(crate) mod shock;

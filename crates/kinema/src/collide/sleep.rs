@@ -36,22 +36,18 @@
 //! An island wakes with the velocities it slept with (0) and its warm start, so a pile woken
 //! by a touch is solved from where it was.
 
-use super::contact::Partner;
+use super::records::ContactRecord;
 
 /// A particle that sleeps in no island.
 pub(crate) const AWAKE: u32 = u32::MAX;
-
-/// A warm-start entry: (particle, partner, the solve stage's totals N·s), as
-/// `ImpulseModel::warm` keeps them.
-pub(crate) type WarmEntry = (usize, Partner, [f64; 3]);
 
 /// An island asleep.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct SleepingIsland {
     /// Its particles, ascending.
     pub members: Vec<usize>,
-    /// Its contacts' warm start, sorted by (particle, partner).
-    pub warm: Vec<WarmEntry>,
+    /// Its contacts' records (`collide/records.rs`), sorted by key.
+    pub records: Vec<ContactRecord>,
     /// The largest overlap of its contacts, m (its particles do not move while it sleeps).
     pub max_overlap: f64,
 }
@@ -125,9 +121,9 @@ impl Sleep {
         self.islands.iter().flatten().map(|s| s.max_overlap).fold(0.0, f64::max)
     }
 
-    /// Puts an island to sleep: its particles `members` (ascending), its contacts' warm start
-    /// `warm` (sorted) and their largest overlap (m). Their calm times start again.
-    pub fn put_to_sleep(&mut self, members: Vec<usize>, warm: Vec<WarmEntry>, max_overlap: f64) {
+    /// Puts an island to sleep: its particles `members` (ascending), its contacts' records
+    /// (sorted) and their largest overlap (m). Their calm times start again.
+    pub fn put_to_sleep(&mut self, members: Vec<usize>, records: Vec<ContactRecord>, max_overlap: f64) {
         let n = self.calm.len();
         if self.island.len() != n {
             self.island.clear();
@@ -145,10 +141,10 @@ impl Sleep {
             self.calm[q] = 0.0;
         }
         self.asleep += members.len();
-        self.contacts += warm.len();
+        self.contacts += records.len();
         self.islands[k] = Some(SleepingIsland {
             members,
-            warm,
+            records,
             max_overlap,
         });
     }
@@ -165,7 +161,7 @@ impl Sleep {
             self.island[m] = AWAKE;
         }
         self.asleep -= island.members.len();
-        self.contacts -= island.warm.len();
+        self.contacts -= island.records.len();
         if self.asleep == 0 {
             self.island.clear();
             self.islands.clear();
@@ -188,10 +184,10 @@ impl Sleep {
         (calm, island)
     }
 
-    /// The sleeping islands' warm starts, merged (for a checkpoint: the world's warm start
-    /// with these is every contact's).
-    pub fn warm(&self) -> impl Iterator<Item = &WarmEntry> {
-        self.islands.iter().flatten().flat_map(|s| s.warm.iter())
+    /// The sleeping islands' contact records (for a checkpoint: the awake records with these
+    /// are every contact's).
+    pub fn records(&self) -> impl Iterator<Item = &ContactRecord> {
+        self.islands.iter().flatten().flat_map(|s| s.records.iter())
     }
 }
 
@@ -204,12 +200,17 @@ mod tests {
         let mut s = Sleep::default();
         s.resize(6);
         assert!(!s.any() && s.marks().is_empty());
+        use crate::collide::Partner;
         let warm = vec![
-            (1, Partner::Particle(2), [0.0, 1.0, 0.0]),
-            (2, Partner::Collider(0), [0.0, 2.0, 0.0]),
+            ContactRecord::loaded(1, Partner::Particle(2), [0.0, 1.0, 0.0]),
+            ContactRecord::loaded(2, Partner::Collider(0), [0.0, 2.0, 0.0]),
         ];
         s.put_to_sleep(vec![1, 2], warm.clone(), 1e-5);
-        s.put_to_sleep(vec![4], vec![(4, Partner::Collider(0), [0.0, 3.0, 0.0])], 2e-5);
+        s.put_to_sleep(
+            vec![4],
+            vec![ContactRecord::loaded(4, Partner::Collider(0), [0.0, 3.0, 0.0])],
+            2e-5,
+        );
         assert_eq!((s.asleep(), s.contacts()), (3, 3));
         assert!(s.is_asleep(1) && s.is_asleep(2) && s.is_asleep(4) && !s.is_asleep(0));
         assert_eq!(s.max_overlap(), 2e-5);
@@ -217,7 +218,7 @@ mod tests {
         // waking one member wakes its island, and gives its warm start back
         let woken = s.wake(2).expect("2 sleeps");
         assert_eq!(woken.members, vec![1, 2]);
-        assert_eq!(woken.warm, warm);
+        assert_eq!(woken.records, warm);
         assert!(!s.is_asleep(1) && s.is_asleep(4));
         assert!(s.wake(1).is_none(), "already awake");
         assert_eq!(s.max_overlap(), 2e-5);

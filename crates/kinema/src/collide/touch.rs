@@ -27,6 +27,7 @@
 //! touches a step); the events wait, in order, until they are taken.
 
 use super::contact::{Contact, Partner};
+use super::records::key_of as ordered;
 use crate::vec3;
 
 /// One begin or end of touch.
@@ -204,14 +205,6 @@ impl Touches {
     /// The events recorded since the last take, in order, taken out.
     pub fn take(&mut self) -> Vec<TouchEvent> {
         std::mem::take(&mut self.events)
-    }
-}
-
-/// A pair's key: the lower particle index first.
-fn ordered(i: usize, other: Partner) -> (usize, Partner) {
-    match other {
-        Partner::Particle(j) if j < i => (j, Partner::Particle(i)),
-        o => (i, o),
     }
 }
 

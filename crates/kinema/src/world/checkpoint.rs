@@ -128,7 +128,7 @@ impl World {
             return Err(Error::invalid("sleep_island", n, "nothing sleeps: collisions are off"));
         };
         let pinned = |q: usize| self.particles.inv_mass[q] == 0.0;
-        if let Some(w) = stage.impulse.warm_start().iter().find(|w| match w.1 {
+        if let Some(w) = stage.impulse.records().iter().map(|r| r.carry()).find(|w| match w.1 {
             Partner::Particle(j) => island[w.0] != island[j] && !pinned(w.0) && !pinned(j),
             Partner::Collider(_) => false,
         }) {

@@ -8,6 +8,7 @@ use crate::collide::contact::action_reaction;
 use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::CHUNK;
+use crate::collide::records::ContactRecord;
 use crate::collide::response::{bounces, VELOCITY_TOLERANCE};
 use crate::collide::shock::Accuracy;
 use crate::collide::soft_step::{self, SoftParams, Target, SLOP, SPECULATIVE};
@@ -101,8 +102,7 @@ impl ImpulseModel {
         }
         self.scratch = done;
         if woke > 0 {
-            self.warm.sort_by_key(|w| (w.0, w.1));
-            self.resting.sort_by_key(|w| (w.0, w.1));
+            self.records.sort();
         }
         // (each pair is found once: its key is unique, and an unstable sort gives the one order)
         self.contacts.sort_unstable_by_key(|c| (c.i, c.other));
@@ -130,16 +130,16 @@ impl ImpulseModel {
     }
 
     /// Wakes the island particle q sleeps in (1 if it slept, else 0): its particles touched
-    /// and added to `work`, its contacts' warm start back among the awake ones (`warm` and
-    /// `resting` are left unsorted: the caller sorts them).
+    /// and added to `work`, its contacts' records back among the awake ones (left unsorted:
+    /// the caller sorts them), each of them loaded if it holds an impulse.
     pub(super) fn wake_island(&mut self, q: usize, work: &mut Vec<usize>) -> usize {
         let Some(island) = self.sleep.wake(q) else { return 0 };
         for &m in &island.members {
             self.touched.mark(m);
             work.push(m);
         }
-        self.resting.extend(island.warm.iter().map(|w| (w.0, w.1, w.2 != [0.0; 3])));
-        self.warm.extend(island.warm);
+        self.records
+            .append(island.records.iter().map(|r| ContactRecord::loaded(r.i, r.other, r.impulse)));
         1
     }
 
@@ -236,9 +236,7 @@ impl ImpulseModel {
                 (usize::MAX, Partner::Particle(j)) => island_of[j],
                 (k, _) => k,
             };
-            let (mine, rest): (Vec<_>, Vec<_>) = self.warm.iter().partition(|w| of(w.0, w.1) == k);
-            self.warm = rest;
-            self.resting.retain(|r| of(r.0, r.1) != k);
+            let mine = self.records.take_where(|r| of(r.i, r.other) == k);
             self.sleep.put_to_sleep(members, mine, overlap);
             slept += 1;
         }
@@ -274,12 +272,12 @@ impl ImpulseModel {
             None if c.wall_velocity == [0.0; 3] => f(c.i),
             None => vec3::sub(f(c.i), vec3::scale(per, c.wall_velocity)),
         };
-        let warm = &self.warm;
+        // Each contact's warm start: its record's total, read (`collide/records.rs`).
+        self.records.match_up(&self.contacts, &mut self.matched);
+        let records = self.records.rows();
         self.solved.clear();
-        self.solved.extend(self.contacts.iter().map(|c| {
-            warm.binary_search_by(|w| (w.0, w.1).cmp(&(c.i, c.other)))
-                .map_or([0.0; 3], |k| warm[k].2)
-        }));
+        self.solved
+            .extend(self.matched.iter().map(|m| m.map_or([0.0; 3], |k| records[k].impulse)));
         // The particles in resting contact: named by a contact that carried load in the last
         // step, or that the step would close beyond what its target allows (moving by
         // symplectic Euler, below). No impact hit them in this step.
@@ -354,8 +352,7 @@ impl ImpulseModel {
             self.kicks.clear();
             self.acted.reset(inv_mass.len(), false);
             self.scratch = resting;
-            self.warm.clear();
-            self.resting.clear();
+            self.records.clear();
             let mut done = IslandStats::default();
             done.soft.converged = true;
             return Ok(done);
@@ -438,21 +435,7 @@ impl ImpulseModel {
                 }
             }
         }
-        self.warm.clear();
-        self.resting.clear();
-        for (((c, p), total), _) in self
-            .contacts
-            .iter()
-            .zip(&self.solved)
-            .zip(&self.totals)
-            .zip(&kept)
-            .filter(|(_, &k)| k)
-        {
-            self.warm.push((c.i, c.other, *p));
-            self.resting.push((c.i, c.other, *total != [0.0; 3]));
-        }
-        self.warm.sort_by_key(|w| (w.0, w.1));
-        self.resting.sort_by_key(|w| (w.0, w.1));
+        self.records.replace(&self.contacts, &self.solved, &self.totals, &kept);
         Ok(stats)
     }
 

@@ -47,7 +47,7 @@ macro_rules! scene {
             domain: $search.set.domain,
             list: &$stage.list,
             slow: least_impact_speed($search.threshold),
-            resting: &$stage.resting,
+            resting: &$stage.records,
             asleep: $stage.sleep.marks(),
             inv_mass: $search.set.inv_mass,
         }

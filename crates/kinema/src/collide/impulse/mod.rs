@@ -17,8 +17,9 @@ use super::events::{EventQueue, PathStore, Paths};
 use super::islands::{Forest, Islands};
 use super::marks::Marks;
 use super::neighbour_list::NeighbourList;
+use super::records::{ContactRecord, Records};
 use super::shock::Accuracy;
-use super::sleep::{Sleep, WarmEntry};
+use super::sleep::Sleep;
 use super::soft_step::Target;
 use super::spin::Rotation;
 use super::touch::Touches;
@@ -301,9 +302,11 @@ pub(crate) struct ImpulseModel {
     pub(super) acted: Marks,
     /// Each end-of-step contact's targets (`collide/soft_step.rs`).
     pub(super) prepared: Vec<Target>,
-    pub(super) warm: Vec<(usize, Partner, [f64; 3])>,
-    /// The contacts of `warm` and whether each carried load (see `Scene::resting`).
-    pub(super) resting: Vec<(usize, Partner, bool)>,
+    /// The awake contacts' records: the last step's totals (the warm start) and whether each
+    /// carried load (`collide/records.rs`).
+    pub(super) records: Records,
+    /// Each end-of-step contact's record, by index into `records` (`None`: a new contact).
+    pub(super) matched: Vec<Option<usize>>,
     /// The islands of the last end-of-step solve (`collide/islands.rs`).
     pub(super) islands: Islands,
     /// The union–find arrays the islands are found with.
@@ -344,8 +347,8 @@ impl ImpulseModel {
             kicks: Vec::new(),
             acted: Marks::default(),
             prepared: Vec::new(),
-            warm: Vec::new(),
-            resting: Vec::new(),
+            records: Records::default(),
+            matched: Vec::new(),
             islands: Islands::default(),
             forest: Forest::default(),
             collider_books: Vec::new(),
@@ -355,17 +358,15 @@ impl ImpulseModel {
         }
     }
 
-    /// The end-of-step solver's warm start: each contact of the last step (particle, partner)
-    /// with the impulse totals it carried, N·s, sorted by (particle, partner).
-    pub fn warm_start(&self) -> &[(usize, Partner, [f64; 3])] {
-        &self.warm
+    /// The awake contacts' records (`collide/records.rs`), sorted by key.
+    pub(crate) fn records(&self) -> &[ContactRecord] {
+        self.records.rows()
     }
 
-    /// Sets the warm start (a checkpoint's), and with it which contacts rested.
-    pub fn set_warm_start(&mut self, mut warm: Vec<(usize, Partner, [f64; 3])>) {
-        warm.sort_by_key(|w| (w.0, w.1));
-        self.resting = warm.iter().map(|w| (w.0, w.1, w.2 != [0.0; 3])).collect();
-        self.warm = warm;
+    /// Sets the contacts' records from a warm start (a checkpoint's: (particle, partner,
+    /// impulse totals N·s)); a contact that holds an impulse carried load.
+    pub fn set_warm_start(&mut self, warm: Vec<(usize, Partner, [f64; 3])>) {
+        self.records = Records::from_unsorted(warm.into_iter().map(|(i, o, p)| ContactRecord::loaded(i, o, p)).collect());
     }
 
     /// Forgets the candidate list and the warm start, and wakes every island (particles,
@@ -373,8 +374,7 @@ impl ImpulseModel {
     pub fn forget_list(&mut self) {
         self.list.built_at.clear();
         self.wake.valid = false;
-        self.warm.clear();
-        self.resting.clear();
+        self.records.clear();
         self.sleep.wake_all();
     }
 
@@ -382,7 +382,7 @@ impl ImpulseModel {
     /// [`ImpulseModel::keep_contacts`] gives them back).
     pub fn take_contacts(&mut self) -> KeptContacts {
         KeptContacts {
-            warm: std::mem::take(&mut self.warm),
+            warm: self.records.take().iter().map(ContactRecord::carry).collect(),
             sleep: std::mem::take(&mut self.sleep),
         }
     }
@@ -406,8 +406,7 @@ impl ImpulseModel {
                 Some((i as usize, partner, impulse))
             })
             .collect();
-        self.warm.clear();
-        self.resting.clear();
+        self.records.clear();
         self.sleep.wake_all();
         KeptContacts {
             warm,
@@ -425,10 +424,11 @@ impl ImpulseModel {
         self.sleep.resize(n);
     }
 
-    /// Every contact's warm start: the awake ones' and the sleeping islands', sorted.
+    /// Every contact's warm start, as a checkpoint keeps it: the awake records' and the
+    /// sleeping islands', sorted by key.
     pub fn all_warm(&self) -> Vec<(usize, Partner, [f64; 3])> {
-        let mut all = self.warm.clone();
-        all.extend(self.sleep.warm().copied());
+        let mut all: Vec<_> = self.records.rows().iter().map(ContactRecord::carry).collect();
+        all.extend(self.sleep.records().map(ContactRecord::carry));
         all.sort_by_key(|w| (w.0, w.1));
         all
     }
@@ -447,7 +447,7 @@ impl ImpulseModel {
         self.sleep.calm = calm;
         // Each island's members and contacts, gathered in one pass each (a contact with a
         // pinned particle, which sleeps in no island, is its partner's).
-        let mut islands: std::collections::BTreeMap<i64, (Vec<usize>, Vec<WarmEntry>)> = Default::default();
+        let mut islands: std::collections::BTreeMap<i64, (Vec<usize>, Vec<ContactRecord>)> = Default::default();
         for (q, &k) in island.iter().enumerate().filter(|(_, &k)| k >= 0) {
             islands.entry(k).or_default().0.push(q);
         }
@@ -455,17 +455,16 @@ impl ImpulseModel {
             (-1, Partner::Particle(j)) => island[j],
             (k, _) => k,
         };
-        let mut awake = Vec::with_capacity(self.warm.len());
-        for w in self.warm.drain(..) {
-            match islands.get_mut(&of(w.0, w.1)) {
+        let mut awake = Vec::with_capacity(self.records.len());
+        for w in self.records.take() {
+            match islands.get_mut(&of(w.i, w.other)) {
                 Some(entry) => entry.1.push(w),
                 None => awake.push(w),
             }
         }
-        self.warm = awake;
-        self.resting.retain(|r| of(r.0, r.1) < 0);
+        self.records = Records::from_unsorted(awake);
         for (members, mine) in islands.into_values() {
-            let overlap = mine.iter().map(|w| deepest(w.0, w.1)).fold(0.0, f64::max);
+            let overlap = mine.iter().map(|w| deepest(w.i, w.other)).fold(0.0, f64::max);
             self.sleep.put_to_sleep(members, mine, overlap);
         }
     }
@@ -601,7 +600,7 @@ impl ImpulseModel {
         }
         // The last step's contacts stay contacts (a resting pile is solved at every step's end,
         // whether or not its pairs touch to the last bit).
-        for &(i, other, _) in &self.warm {
+        for &ContactRecord { i, other, .. } in self.records.rows() {
             for q in std::iter::once(i).chain(match other {
                 Partner::Particle(j) => Some(j),
                 Partner::Collider(_) => None,
@@ -648,8 +647,7 @@ impl ImpulseModel {
                 }
             }
             if !work.is_empty() {
-                self.warm.sort_by_key(|w| (w.0, w.1));
-                self.resting.sort_by_key(|w| (w.0, w.1));
+                self.records.sort();
             }
         }
         // Stage 2 at the end of the step: the contacts of the touched particles and of the
