@@ -205,6 +205,38 @@ pub(crate) struct Scene<'a> {
     /// The particles' inverse masses, 1/kg (0: pinned): while some sleep, a pinned particle
     /// is a body at rest too, and meets no sleeper.
     pub inv_mass: &'a [f64],
+    /// How far each particle can be from where the list was built, for the rest of the step:
+    /// a pair farther apart there than their radii and both bounds meets nothing in it.
+    pub bound: SweepBound<'a>,
+}
+
+/// A bound on how far each particle's path is from its position at the list's build
+/// (`NeighbourList::built_at`) from now to the step's end, m (max over τ of |x(τ) − b|).
+///
+/// Why a pair beyond it meets nothing: a pair touches at τ when |x_i(τ) − x_j(τ)| ≤ r_i + r_j;
+/// by the triangle inequality |x_i(τ) − x_j(τ)| ≥ |b_i − b_j| − |x_i(τ) − b_i| − |x_j(τ) − b_j|
+/// ≥ |b_i − b_j| − B_i − B_j. So a pair with |b_i − b_j| > r_i + r_j + B_i + B_j neither
+/// touches now nor meets before the step's end, and its time of impact need not be solved
+/// for. A list candidate is within r_i + r_j + s of its partner at the build (s the skin,
+/// four times the step's largest sweep); each particle's own bound is mostly far less (the
+/// fastest particle sets the skin), so most candidates are passed over by this check, which
+/// reads two build positions instead of two paths.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum SweepBound<'a> {
+    /// Each particle's own bound.
+    Each(&'a [f64]),
+    /// One bound for every particle.
+    All(f64),
+}
+
+impl SweepBound<'_> {
+    #[inline]
+    fn of(&self, q: usize) -> f64 {
+        match self {
+            SweepBound::Each(b) => b[q],
+            SweepBound::All(b) => *b,
+        }
+    }
 }
 
 impl Scene<'_> {
@@ -307,10 +339,20 @@ impl Scene<'_> {
         let rest = h - now;
         let still = self.still(paths, i);
         let asleep = still && self.inv_mass[i] > 0.0;
+        // (the bound's check, with the list's rounding allowance on top: the bounds and the
+        // distance are computed in floating point)
+        let built = &self.list.built_at;
+        let (bi, reach_i) = (vec3::get(built, i), self.bound.of(i));
+        let slack = (self.list.skin - self.list.allowance).max(0.0);
         for &j in partners {
             let j = j as usize;
             if still && self.still(paths, j) {
                 continue; // two bodies at rest
+            }
+            let apart = self.domain.displacement(bi, vec3::get(built, j));
+            let reach = self.radius[i] + self.radius[j] + reach_i + self.bound.of(j) + slack;
+            if vec3::dot(apart, apart) > reach * reach {
+                continue; // too far apart to meet in the rest of the step (SweepBound)
             }
             let (xj, vj) = paths.state_at(j, now);
             let d0 = self.domain.displacement(xi, xj);

@@ -387,6 +387,15 @@ impl World {
         self.collide_stage.as_ref().map(|s| s.impulse.list.skin)
     }
 
+    /// Turns the impact search's check of each particle's sweep bound off (for the tests:
+    /// every candidate's time of impact solved for, `collide::events::SweepBound`).
+    #[cfg(test)]
+    pub(crate) fn search_unbounded(&mut self) {
+        if let Some(s) = self.collide_stage.as_mut() {
+            s.impulse.unbounded = true;
+        }
+    }
+
     /// Bounds the impulse model's candidate list to `entries` (for the tests).
     #[cfg(test)]
     pub(crate) fn set_impulse_list_limit(&mut self, entries: usize) {

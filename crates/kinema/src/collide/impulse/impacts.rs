@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use super::end_of_step::distribute;
 use super::{CollisionStats, ImpulseModel, StageSetting};
-use crate::collide::events::{swept_reach, Event, Paths, Scene};
+use crate::collide::events::{swept_reach, Event, Paths, Scene, SweepBound};
 use crate::collide::neighbour_list::{active_walls, collider_scale, ListBuild, CHUNK, SKIN_PER_RADIUS};
 use crate::collide::response::VELOCITY_TOLERANCE;
 use crate::collide::{restitution_impulse, Collider, Contact, Partner};
@@ -39,7 +39,7 @@ pub(super) struct Search<'s, 'a> {
 /// and the stage's own fields (a macro, not a method: the event loop holds it while it
 /// changes other fields).
 macro_rules! scene {
-    ($stage:ident, $search:expr) => {
+    ($stage:ident, $search:expr, $reach:expr) => {
         Scene {
             radius: $search.set.radius,
             colliders: $search.set.colliders,
@@ -50,11 +50,33 @@ macro_rules! scene {
             resting: &$stage.records,
             asleep: $stage.sleep.marks(),
             inv_mass: $search.set.inv_mass,
+            bound: sweep_bound(&$stage.bounds, $stage.bounded, $stage.unbounded(), $reach),
         }
     };
 }
 
+/// The impact search's bound on each particle's sweep (`events::SweepBound`): its own
+/// (`bounds`) when `bounded`, else the step's largest, `reach` (m); none with `unbounded`
+/// (the tests' search without the check).
+fn sweep_bound(bounds: &[f64], bounded: bool, unbounded: bool, reach: f64) -> SweepBound<'_> {
+    if unbounded {
+        SweepBound::All(f64::INFINITY)
+    } else if bounded {
+        SweepBound::Each(bounds)
+    } else {
+        SweepBound::All(reach)
+    }
+}
+
 impl ImpulseModel {
+    /// Whether the tests turned the sweep bound's check off (never outside them).
+    fn unbounded(&self) -> bool {
+        #[cfg(test)]
+        return self.unbounded;
+        #[cfg(not(test))]
+        false
+    }
+
     /// Makes the neighbour list hold for the whole step's sweep (rebuilt at x0 if not) and
     /// returns the restitution threshold (m/s), the largest swept displacement of any particle
     /// from the list's build positions (m) and the largest speed change the forces gave a
@@ -80,16 +102,21 @@ impl ImpulseModel {
     ) -> Result<(f64, f64, f64), Error> {
         let reach = self.wake.reach_after(h);
         let (x0, v0) = (paths.x0, paths.v0);
+        // (the per-particle bounds are made by the sweep below; a quiet step has the one)
+        self.bounded = false;
         if quiet && self.list.built_at.len() == x0.len() && 2.0 * reach < self.list.allowance {
             return Ok((set.restitution_threshold.unwrap_or(0.0), reach, 0.0));
         }
         let domain = *set.domain;
-        let sweep = |built: &[f64], accel: &[f64]| {
+        // (each particle's swept displacement is also its bound for the impact search,
+        // `events::SweepBound`, written into `bounds`)
+        let sweep = |built: &[f64], accel: &[f64], bounds: &mut [f64]| {
             x0.par_chunks(3 * CHUNK)
                 .zip(x1.par_chunks(3 * CHUNK))
                 .zip(built.par_chunks(3 * CHUNK))
+                .zip(bounds.par_chunks_mut(CHUNK))
                 .enumerate()
-                .map(|(c, ((x0, x1), b))| {
+                .map(|(c, (((x0, x1), b), bounds))| {
                     let mut top = Sweep::default();
                     for l in 0..x0.len() / 3 {
                         let q = c * CHUNK + l;
@@ -100,6 +127,7 @@ impl ImpulseModel {
                         let bulge2 = vec3::dot(a, a);
                         let bulge = if bulge2 > 0.0 { 0.125 * bulge2.sqrt() * h * h } else { 0.0 };
                         let d = vec3::dot(d0, d0).max(vec3::dot(d1, d1)).sqrt() + bulge;
+                        bounds[l] = d;
                         let step = domain.displacement(vec3::get(x1, l), vec3::get(x0, l));
                         let w = vec3::sub(vec3::get(v1, q), vec3::get(v0, q));
                         top = top.with(Sweep {
@@ -117,8 +145,10 @@ impl ImpulseModel {
         // (with `quiet` the bound said the list may not hold: rebuilt without the check, which
         // the actual displacements would pass only for a few more steps)
         let fresh = self.list.built_at.len() == x0.len() && !quiet;
+        let mut bounds = std::mem::take(&mut self.bounds);
+        bounds.resize(x0.len() / 3, 0.0);
         let mut top = if fresh {
-            sweep(&self.list.built_at, paths.accel)
+            sweep(&self.list.built_at, paths.accel, &mut bounds)
         } else {
             Sweep {
                 first: f64::INFINITY,
@@ -147,13 +177,15 @@ impl ImpulseModel {
             check_travel(set, x0, largest_move, fastest, h)?;
             self.build_list(set, x0, largest_move)?;
             self.rebuilt = true;
-            top = sweep(&self.list.built_at, paths.accel);
+            top = sweep(&self.list.built_at, paths.accel, &mut bounds);
             if top.nan || !top.first.is_finite() {
                 // non-finite positions: the list's build named them already; a NaN velocity
                 // change is caught by the world
                 top.first = f64::INFINITY;
             }
         }
+        self.bounds = bounds;
+        self.bounded = true;
         let kick = top.kick2.sqrt();
         let threshold = set.restitution_threshold.unwrap_or(2.0 * kick);
         Ok((threshold, top.first, kick))
@@ -176,9 +208,9 @@ impl ImpulseModel {
         let n = s.set.radius.len();
         let clock = Instant::now();
         if only_woken {
-            self.schedule_woken(s, paths);
+            self.schedule_woken(s, paths, reach);
         } else {
-            self.schedule_all(s, paths, 0.0);
+            self.schedule_all(s, paths, 0.0, reach);
         }
         let (mut t_detect, mut t_respond, mut t_distribute) = (clock.elapsed(), Duration::ZERO, Duration::ZERO);
         // A cap keeps an inelastic collapse (a particle wedged between two others, hit back
@@ -190,7 +222,7 @@ impl ImpulseModel {
             let clock = Instant::now();
             let Some(event) = self.queue.pop() else { break };
             let t = event.time;
-            let scene = scene!(self, s);
+            let scene = scene!(self, s, reach);
             let partner = match event.partner {
                 Partner::Particle(j) => Some(j),
                 Partner::Collider(_) => None,
@@ -273,18 +305,23 @@ impl ImpulseModel {
             // Stage 2 again: the two particles' next impacts, on the list if it still holds.
             let clock = Instant::now();
             let built = &self.list.built_at;
-            let farthest = std::iter::once(event.i)
-                .chain(partner)
-                .map(|q| swept_reach(paths, q, t, h, vec3::get(built, q), s.set.domain))
-                .fold(0.0, f64::max);
+            let swept =
+                [Some(event.i), partner].map(|q| q.map(|q| (q, swept_reach(paths, q, t, h, vec3::get(built, q), s.set.domain))));
+            let farthest = swept.iter().flatten().map(|&(_, r)| r).fold(0.0, f64::max);
             if farthest + reach >= self.list.allowance {
                 // a new path could reach beyond the list: rebuild it at t, predict everything again
                 reach = self.rebuild_at(s.set, paths, t, h)?;
                 self.rebuilt = true;
-                self.schedule_all(s, paths, t);
+                self.schedule_all(s, paths, t, reach);
             } else {
                 reach = reach.max(farthest);
-                let scene = scene!(self, s);
+                if self.bounded {
+                    // (the new paths' bounds from t on; the larger keeps it a bound of both)
+                    for &(q, r) in swept.iter().flatten() {
+                        self.bounds[q] = self.bounds[q].max(r);
+                    }
+                }
+                let scene = scene!(self, s, reach);
                 for q in std::iter::once(event.i).chain(partner) {
                     if impulse.is_some() || q == event.i {
                         let next = scene.earliest(paths, q, t, h);
@@ -302,9 +339,9 @@ impl ImpulseModel {
 
     /// Every particle's first impact after `now` into the queue (the queue emptied first),
     /// on all threads; with `flag`, the particles touching something at `now` are marked.
-    fn schedule_all(&mut self, s: &Search<'_, '_>, paths: &Paths<'_>, now: f64) {
+    fn schedule_all(&mut self, s: &Search<'_, '_>, paths: &Paths<'_>, now: f64, reach: f64) {
         let n = s.set.radius.len();
-        let scene = scene!(self, s);
+        let scene = scene!(self, s, reach);
         let (mut events, touching) = scene.all_impacts(paths, now, s.h);
         for q in touching {
             self.touched.mark(q);
@@ -336,9 +373,9 @@ impl ImpulseModel {
 
     /// The first impacts of the particles woken for this step only (the others are quiet:
     /// their lines meet nothing in it, `collide/wake.rs`), into the emptied queue.
-    fn schedule_woken(&mut self, s: &Search<'_, '_>, paths: &Paths<'_>) {
+    fn schedule_woken(&mut self, s: &Search<'_, '_>, paths: &Paths<'_>, reach: f64) {
         self.queue.reset(s.set.radius.len());
-        let scene = scene!(self, s);
+        let scene = scene!(self, s, reach);
         for &q in &self.woken {
             let next = scene.earliest(paths, q, 0.0, s.h);
             if next.touching {
@@ -393,7 +430,7 @@ impl ImpulseModel {
             h,
             threshold: 0.0,
         };
-        let scene = scene!(self, search);
+        let scene = scene!(self, search, f64::INFINITY);
         let at = |q: usize| scene.first_meeting(x1, v1, q, horizon).map(|tau| end + tau);
         if incremental {
             let mut involved: Vec<usize> = self.books.iter().map(|b| b.0).chain(self.woken.iter().copied()).collect();
@@ -421,14 +458,18 @@ impl ImpulseModel {
         let n = set.radius.len();
         let mut x = vec![0.0; 3 * n];
         let (mut largest, mut fastest) = (0.0_f64, 0);
+        // (each particle's sweep from x is its bound for the rest of the step)
+        self.bounds.resize(n, 0.0);
         for q in 0..n {
             paths.advance(q, t);
             x[3 * q..3 * q + 3].copy_from_slice(&paths.x_ref(q));
             let reach = swept_reach(paths, q, t, h, vec3::get(&x, q), set.domain);
+            self.bounds[q] = reach;
             if reach > largest {
                 (largest, fastest) = (reach, q);
             }
         }
+        self.bounded = true;
         check_travel(set, &x, largest, fastest, h - t)?;
         self.build_list(set, &x, largest)?;
         Ok(largest)

@@ -268,6 +268,13 @@ pub(crate) struct ImpulseModel {
     /// through x₁), m/s².
     pub(super) fitted: Vec<f64>,
     pub(super) queue: EventQueue,
+    /// Each particle's bound on its distance from its list build position for the rest of
+    /// the step, m, when `bounded` (`events::SweepBound`; else the step's one bound `reach`).
+    pub(super) bounds: Vec<f64>,
+    pub(super) bounded: bool,
+    /// The tests' switch that turns the bounds' check off (every candidate solved for).
+    #[cfg(test)]
+    pub(crate) unbounded: bool,
     /// In a force-free world, each particle's wake time (see `collide/wake.rs`), the
     /// particles woken in this step, whether this step rebuilt the list, and the fastest
     /// speed an impact of this step left.
@@ -331,6 +338,10 @@ impl ImpulseModel {
             paths: PathStore::default(),
             fitted: Vec::new(),
             queue: EventQueue::default(),
+            bounds: Vec::new(),
+            bounded: false,
+            #[cfg(test)]
+            unbounded: false,
             wake: Wake::default(),
             woken: Vec::new(),
             rebuilt: false,
