@@ -291,6 +291,20 @@ impl PenaltyLaw {
     }
 }
 
+/// A small deterministic generator for the tests (splitmix64), uniform in [lo, hi).
+pub(crate) struct Rng(pub u64);
+
+impl Rng {
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        lo + (hi - lo) * ((z >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
 #[path = "tests/broad_phase_finds_every_pair.rs"]
 mod broad_phase_finds_every_pair;
 #[path = "tests/impulse_list.rs"]

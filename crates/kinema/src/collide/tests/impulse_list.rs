@@ -1,6 +1,9 @@
 //! The impulse model's candidate list in a World: a list built for a fast step is rebuilt
-//! tight once the particles are slow again (`impulse/impacts.rs`, `prepare`'s `loose`).
+//! tight once the particles are slow again (`impulse/impacts.rs`, `prepare`'s `loose`), and
+//! the impact search passes over only the candidates that cannot meet within the step
+//! (`events::SweepBound`).
 
+use super::Rng;
 use crate::collide::{BoxContainer, Surface};
 use crate::forces::Gravity;
 use crate::ode::{Integrator, Method};
@@ -98,20 +101,6 @@ fn a_lattice_too_fast_for_a_list_of_four_sweeps_is_stepped_on_one_of_two_and_a_h
         skin < 3.0 * largest && skin >= 2.5 * largest,
         "skin {skin} m, sweep {largest} m"
     );
-}
-
-/// A small deterministic generator (splitmix64), uniform in [lo, hi).
-struct Rng(u64);
-
-impl Rng {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        lo + (hi - lo) * ((z >> 11) as f64 / (1u64 << 53) as f64)
-    }
 }
 
 /// One member of the class the sweep bound's check must leave unchanged (`events::SweepBound`).

@@ -2,7 +2,7 @@
 //! stable-step advisor counts a contact's stiffness before it touches, and the contact
 //! force's neighbour list steps a crowded periodic box exactly as a search at every step.
 
-use super::{all_pairs, collider_contacts, sphere_contacts};
+use super::{all_pairs, collider_contacts, sphere_contacts, Rng};
 use crate::collide::{BoxContainer, Domain, Periodic, Plane, Surface};
 use crate::forces::Gravity;
 use crate::ode::{Integrator, Method};
@@ -145,20 +145,6 @@ fn the_advised_step_separates_stable_from_unstable() {
                 "{method}: stable at twice the advised step"
             );
         }
-    }
-}
-
-/// A small deterministic generator (splitmix64), uniform in [lo, hi).
-struct Rng(u64);
-
-impl Rng {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        lo + (hi - lo) * ((z >> 11) as f64 / (1u64 << 53) as f64)
     }
 }
 
