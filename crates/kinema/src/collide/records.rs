@@ -16,12 +16,17 @@
 //! **The key.** A pair's key is (i, partner) with the lower particle index first; a
 //! particle against a collider is (i, collider). Those are one contact each, except
 //! against a collider that touches a ball in several places at once (a box's floor and
-//! wall in a corner, a mesh's two faces in a crease): such contacts share their key and
-//! come in the order of the collider's features (`Collider::for_each_touch`: a box's walls
-//! in order, a mesh's triangles in order), and the k-th contact of a key reads the k-th
-//! record of it. (Matching them by key alone, as a search by key does, gave both contacts
-//! of a corner the same record: the floor's total projected on the wall's normal, and the
-//! floor then started cold.)
+//! wall in a corner, a mesh's two faces in a crease): such contacts share their key, and
+//! a record keeps its contact's normal to tell them apart. A collider's contact reads the
+//! record of its key whose normal is nearest its own, within [`SAME_FEATURE`] (a box's
+//! walls are 90° apart: each wall reads its own; a wall the ball did not touch in the last
+//! step has none), and so does the question whether an impact on a wall meets a resting
+//! contact (`Records::has`). A record loaded from a checkpoint has no normal: the k-th
+//! contact of its key, in the collider's order of features, reads the k-th record, as they
+//! were saved. (Matching them by key alone, as a search by key did, gave every contact of
+//! a corner one record: the floor's total projected on the wall's normal, and the floor
+//! then started cold; and an impact on a side wall counted as resting whenever the floor
+//! carried.)
 //!
 //! **The read.** The step's contacts come in runs sorted by key (the colliders' contacts,
 //! then the pairs'; `ImpulseModel::end_contacts`), and the records are sorted by key: each
@@ -42,6 +47,11 @@ pub(crate) fn key_of(i: usize, other: Partner) -> Key {
     }
 }
 
+/// The least cosine between a collider contact's normal and its record's: a box's walls are
+/// 90° apart, a mesh's faces at a crease of more than 25°; a step turns a ball rolling on a
+/// curved surface by far less.
+pub(crate) const SAME_FEATURE: f64 = 0.9;
+
 /// One contact's record (see the module's doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ContactRecord {
@@ -49,6 +59,9 @@ pub(crate) struct ContactRecord {
     pub i: usize,
     /// Its partner: the other particle, or a collider.
     pub other: Partner,
+    /// The contact's unit normal (on i) when the record was made; zero when loaded from a
+    /// checkpoint (unknown).
+    pub normal: [f64; 3],
     /// The solve stage's total impulse on i in the last step, N·s (world frame): the warm
     /// start of the next.
     pub impulse: [f64; 3],
@@ -69,6 +82,7 @@ impl ContactRecord {
         ContactRecord {
             i,
             other,
+            normal: [0.0; 3],
             impulse,
             carried: impulse != [0.0; 3],
         }
@@ -132,29 +146,43 @@ impl Records {
     }
 
     /// Whether the pair of i and `other` has a record (without `loaded`), or one that
-    /// carried load (with). Against a collider with several records (a box's walls in a
-    /// corner), the record of its first feature answers: which wall an impact strikes is not
-    /// in the key. (Measured on the 5 × 5 column of `benchmarks/piles.py`, deep3d at 1 ms: with
-    /// the first, 14.1 s and 2,060 steps at the sweep cap; with the last, what a search by
-    /// key used to find, 19.6 s and 2,521; with any of them, 21.3 s and 2,730: an impact on a
-    /// side wall taken as resting because the floor carries. Columns of 750 of three other
-    /// seeds, 4 s: the first 6.6, 9.3 and 7.0 s, all asleep; the last 5.5, 12.3 and 11.4 s,
-    /// two of them awake; the search by key 8.2, 9.2 and 10.9 s. A key with the feature
-    /// would answer exactly.)
-    pub fn has(&self, i: usize, other: Partner, loaded: bool) -> bool {
+    /// carried load (with): against a collider, the record of the feature with `normal` (a
+    /// box's wall an impact strikes: [`Records::feature`]), or the first of its key when the
+    /// normal is not known.
+    pub fn has(&self, i: usize, other: Partner, normal: Option<[f64; 3]>, loaded: bool) -> bool {
         let key = key_of(i, other);
         let first = self.rows.partition_point(|r| r.key() < key);
-        self.rows[first..]
-            .iter()
-            .take_while(|r| r.key() == key)
-            .next()
-            .is_some_and(|r| !loaded || r.carried)
+        let group = &self.rows[first..first + self.rows[first..].iter().take_while(|r| r.key() == key).count()];
+        let found = match (normal, other) {
+            (Some(n), Partner::Collider(_)) => Records::feature(group, n, 0),
+            _ => (!group.is_empty()).then_some(0),
+        };
+        found.is_some_and(|k| !loaded || group[k].carried)
+    }
+
+    /// Which of the records `group` of one collider key the `ordinal`-th contact of the key
+    /// with normal `n` reads: the record whose normal is nearest, within [`SAME_FEATURE`];
+    /// or, when no record of the group knows its normal (loaded from a checkpoint), the
+    /// `ordinal`-th.
+    fn feature(group: &[ContactRecord], n: [f64; 3], ordinal: usize) -> Option<usize> {
+        if group.iter().all(|r| r.normal == [0.0; 3]) {
+            return (ordinal < group.len()).then_some(ordinal);
+        }
+        let cosine = |r: &ContactRecord| r.normal.iter().zip(&n).map(|(a, b)| a * b).sum::<f64>();
+        let mut best: Option<(usize, f64)> = None;
+        for (k, r) in group.iter().enumerate() {
+            let c = cosine(r);
+            if c >= SAME_FEATURE && best.is_none_or(|(_, b)| c > b) {
+                best = Some((k, c));
+            }
+        }
+        best.map(|(k, _)| k)
     }
 
     /// Each of `contacts`' record, by index into [`Records::rows`] (`None`: a new contact),
     /// into `out`. `contacts` come in runs sorted by key (each contact's `i` the lower index
-    /// of a pair): one pass over the contacts and the records of each run, the k-th contact of
-    /// a key matched with the k-th record of it.
+    /// of a pair): one pass over the contacts and the records of each run. A pair reads the
+    /// record of its key; a collider's contact the record of its feature (the module's doc).
     pub fn match_up(&self, contacts: &[Contact], out: &mut Vec<Option<usize>>) {
         out.clear();
         let rows = &self.rows;
@@ -177,8 +205,14 @@ impl Records {
                     at += 1;
                 }
             }
-            let k = at + ordinal;
-            out.push((k < rows.len() && rows[k].key() == key).then_some(k));
+            let found = match c.other {
+                Partner::Particle(_) => (ordinal == 0 && at < rows.len() && rows[at].key() == key).then_some(at),
+                Partner::Collider(_) => {
+                    let len = rows[at..].iter().take_while(|r| r.key() == key).count();
+                    Records::feature(&rows[at..at + len], c.normal, ordinal).map(|k| at + k)
+                }
+            };
+            out.push(found);
         }
     }
 
@@ -190,6 +224,7 @@ impl Records {
             self.rows.push(ContactRecord {
                 i: c.i,
                 other: c.other,
+                normal: c.normal,
                 impulse: *s,
                 carried: *t != [0.0; 3],
             });
@@ -246,7 +281,41 @@ mod tests {
         // a corner's third contact has no record; a key's lookup sees each pair from both sides
         records.match_up(&[contact(0, C(0)), contact(0, C(0)), contact(0, C(0))], &mut out);
         assert_eq!(out, [Some(1), Some(2), None]);
-        assert!(records.has(2, P(1), true) && records.has(1, P(2), true) && !records.has(2, P(0), false));
+        assert!(records.has(2, P(1), None, true) && records.has(1, P(2), None, true) && !records.has(2, P(0), None, false));
+    }
+
+    #[test]
+    fn a_colliders_contacts_read_the_records_of_their_own_walls() {
+        use Partner::Collider as C;
+        // ball 0 rested on the floor of box 0 and against its −x wall (inward normals +z and
+        // +x), the floor carrying; this step it touches the −y wall too, and the walls come
+        // in the box's order (−x, −y, floor)
+        let wall = |normal: [f64; 3], z: f64, carried: bool| ContactRecord {
+            normal,
+            carried,
+            ..ContactRecord::loaded(0, C(0), [0.0, 0.0, z])
+        };
+        let records = Records::from_unsorted(vec![wall([1.0, 0.0, 0.0], 0.5, false), wall([0.0, 0.0, 1.0], 2.0, true)]);
+        let touch = |normal: [f64; 3]| Contact {
+            normal,
+            ..contact(0, C(0))
+        };
+        let mut out = Vec::new();
+        records.match_up(
+            &[touch([1.0, 0.0, 0.0]), touch([0.0, 1.0, 0.0]), touch([0.0, 0.0, 1.0])],
+            &mut out,
+        );
+        assert_eq!(out, [Some(0), None, Some(1)]);
+        // an impact on the −y wall meets no resting contact; on the floor it does
+        assert!(!records.has(0, C(0), Some([0.0, 1.0, 0.0]), false));
+        assert!(records.has(0, C(0), Some([0.0, 0.0, 1.0]), true));
+        assert!(
+            !records.has(0, C(0), Some([1.0, 0.0, 0.0]), true),
+            "the −x wall carried nothing"
+        );
+        // a ball that left the floor reads nothing of it from a wall within 90°
+        records.match_up(&[touch([0.0, 1.0, 0.0])], &mut out);
+        assert_eq!(out, [None]);
     }
 
     #[test]
@@ -260,6 +329,6 @@ mod tests {
         let keys: Vec<Key> = records.rows().iter().map(ContactRecord::key).collect();
         assert_eq!(keys, [(0, P(3)), (3, C(1))]);
         assert!(records.rows()[1].carried && !records.rows()[0].carried);
-        assert!(records.has(3, C(1), true) && !records.has(3, P(0), true) && records.has(3, P(0), false));
+        assert!(records.has(3, C(1), None, true) && !records.has(3, P(0), None, true) && records.has(3, P(0), None, false));
     }
 }
