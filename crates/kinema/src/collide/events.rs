@@ -250,10 +250,8 @@ impl Scene<'_> {
         }
     }
 
-    /// Whether an approach of i and `partner` at `now` is a resting contact (see `resting`);
-    /// against a collider, of its feature with `normal` where known (a box's wall).
-    fn is_resting(&self, i: usize, partner: Partner, normal: Option<[f64; 3]>, now: f64) -> bool {
-        self.resting.has(i, partner, normal, now != 0.0)
+    fn is_resting(&self, i: usize, partner: Partner, now: f64) -> bool {
+        self.resting.has(i, partner, now != 0.0)
     }
 }
 
@@ -363,9 +361,7 @@ impl Scene<'_> {
             match pair_toi(d0, u, da, self.radius[i] + self.radius[j], rest, self.slow) {
                 Toi::Never => {}
                 Toi::Touching => each(Found::Touching(Some(j))),
-                Toi::At(tau) if tau == 0.0 && self.is_resting(i, Partner::Particle(j), None, now) => {
-                    each(Found::Touching(Some(j)))
-                }
+                Toi::At(tau) if tau == 0.0 && self.is_resting(i, Partner::Particle(j), now) => each(Found::Touching(Some(j))),
                 Toi::At(tau) => each(Found::Impact(Event {
                     time: now + tau,
                     i,
@@ -406,12 +402,7 @@ impl Scene<'_> {
             }
             let mut near = false;
             self.collider_events(i, k, path, rest, margin, &mut near, |wall, tau| {
-                // (a box's wall is known by its normal; the other colliders' one record needs none)
-                let normal = match &self.colliders[k] {
-                    Collider::Box(b) => Some(b.walls()[wall.0].normal()),
-                    _ => None,
-                };
-                if wall.1 > -self.slow || (tau == 0.0 && self.is_resting(i, Partner::Collider(k), normal, now)) {
+                if wall.1 > -self.slow || (tau == 0.0 && self.is_resting(i, Partner::Collider(k), now)) {
                     each(Found::Touching(None)); // meets it too slowly, or rests on it: a contact
                     return;
                 }
