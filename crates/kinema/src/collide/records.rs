@@ -16,16 +16,12 @@
 //! **The key.** A pair's key is (i, partner) with the lower particle index first; a
 //! particle against a collider is (i, collider). Those are one contact each, except
 //! against a collider that touches a ball in several places at once (a box's floor and
-//! wall in a corner, a mesh's two faces in a crease): such contacts share their key, and
-//! a record keeps its contact's normal to tell them apart. A collider's contact reads the
-//! record of its key whose normal is nearest its own, within [`SAME_FEATURE`] (a box's
-//! walls are 90° apart: each wall reads its own; a wall the ball did not touch in the last
-//! step has none). A record loaded from a checkpoint has no normal: the k-th
-//! contact of its key, in the collider's order of features, reads the k-th record, as they
-//! were saved. (Matching them by key alone, as a search by key did, gave every contact of
-//! a corner one record: the floor's total projected on the wall's normal, and the floor
-//! then started cold; and an impact on a side wall counted as resting whenever the floor
-//! carried.)
+//! wall in a corner, a mesh's two faces in a crease): such contacts share their key and
+//! come in the order of the collider's features (`Collider::for_each_touch`: a box's walls
+//! in order, a mesh's triangles in order), and the k-th contact of a key reads the k-th
+//! record of it. (Matching them by key alone, as a search by key does, gave both contacts
+//! of a corner the same record: the floor's total projected on the wall's normal, and the
+//! floor then started cold.)
 //!
 //! **The read.** The step's contacts come in runs sorted by key (the colliders' contacts,
 //! then the pairs'; `ImpulseModel::end_contacts`), and the records are sorted by key: each
@@ -46,11 +42,6 @@ pub(crate) fn key_of(i: usize, other: Partner) -> Key {
     }
 }
 
-/// The least cosine between a collider contact's normal and its record's: a box's walls are
-/// 90° apart, a mesh's faces at a crease of more than 25°; a step turns a ball rolling on a
-/// curved surface by far less.
-pub(crate) const SAME_FEATURE: f64 = 0.9;
-
 /// One contact's record (see the module's doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ContactRecord {
@@ -58,9 +49,6 @@ pub(crate) struct ContactRecord {
     pub i: usize,
     /// Its partner: the other particle, or a collider.
     pub other: Partner,
-    /// The contact's unit normal (on i) when the record was made; zero when loaded from a
-    /// checkpoint (unknown).
-    pub normal: [f64; 3],
     /// The solve stage's total impulse on i in the last step, N·s (world frame): the warm
     /// start of the next.
     pub impulse: [f64; 3],
@@ -81,7 +69,6 @@ impl ContactRecord {
         ContactRecord {
             i,
             other,
-            normal: [0.0; 3],
             impulse,
             carried: impulse != [0.0; 3],
         }
@@ -146,44 +133,28 @@ impl Records {
 
     /// Whether the pair of i and `other` has a record (without `loaded`), or one that
     /// carried load (with). Against a collider with several records (a box's walls in a
-    /// corner) the first of its key answers, whichever wall the impact strikes.
-    ///
-    /// Why not the struck wall's own record: with it, the demo's frictionless heap (400 balls,
-    /// 60 Hz, `make demo`) still jiggled after 4 s (max |v| 0.2 m/s, awake), and 3 of the
-    /// demo's 5 seeds came to rest in 4 s, 4 of 5 with the first: an impact on a side wall
-    /// taken as an impact rather than as a resting contact of the heap keeps a frictionless
-    /// heap bouncing. With any record of the key, an impact on a side wall counted as resting
-    /// whenever the floor carried: the 5 × 5 column of `benchmarks/piles.py` at 1 ms took
-    /// 21.3 s, 14.1 s with the first.
+    /// corner), the record of its first feature answers: which wall an impact strikes is not
+    /// in the key. (Measured on the 5 × 5 column of `benchmarks/piles.py`, deep3d at 1 ms: with
+    /// the first, 14.1 s and 2,060 steps at the sweep cap; with the last, what a search by
+    /// key used to find, 19.6 s and 2,521; with any of them, 21.3 s and 2,730: an impact on a
+    /// side wall taken as resting because the floor carries. Columns of 750 of three other
+    /// seeds, 4 s: the first 6.6, 9.3 and 7.0 s, all asleep; the last 5.5, 12.3 and 11.4 s,
+    /// two of them awake; the search by key 8.2, 9.2 and 10.9 s. A key with the feature
+    /// would answer exactly.)
     pub fn has(&self, i: usize, other: Partner, loaded: bool) -> bool {
         let key = key_of(i, other);
         let first = self.rows.partition_point(|r| r.key() < key);
-        self.rows.get(first).is_some_and(|r| r.key() == key && (!loaded || r.carried))
-    }
-
-    /// Which of the records `group` of one collider key the `ordinal`-th contact of the key
-    /// with normal `n` reads: the record whose normal is nearest, within [`SAME_FEATURE`];
-    /// or, when no record of the group knows its normal (loaded from a checkpoint), the
-    /// `ordinal`-th.
-    fn feature(group: &[ContactRecord], n: [f64; 3], ordinal: usize) -> Option<usize> {
-        if group.iter().all(|r| r.normal == [0.0; 3]) {
-            return (ordinal < group.len()).then_some(ordinal);
-        }
-        let cosine = |r: &ContactRecord| r.normal.iter().zip(&n).map(|(a, b)| a * b).sum::<f64>();
-        let mut best: Option<(usize, f64)> = None;
-        for (k, r) in group.iter().enumerate() {
-            let c = cosine(r);
-            if c >= SAME_FEATURE && best.is_none_or(|(_, b)| c > b) {
-                best = Some((k, c));
-            }
-        }
-        best.map(|(k, _)| k)
+        self.rows[first..]
+            .iter()
+            .take_while(|r| r.key() == key)
+            .next()
+            .is_some_and(|r| !loaded || r.carried)
     }
 
     /// Each of `contacts`' record, by index into [`Records::rows`] (`None`: a new contact),
     /// into `out`. `contacts` come in runs sorted by key (each contact's `i` the lower index
-    /// of a pair): one pass over the contacts and the records of each run. A pair reads the
-    /// record of its key; a collider's contact the record of its feature (the module's doc).
+    /// of a pair): one pass over the contacts and the records of each run, the k-th contact of
+    /// a key matched with the k-th record of it.
     pub fn match_up(&self, contacts: &[Contact], out: &mut Vec<Option<usize>>) {
         out.clear();
         let rows = &self.rows;
@@ -206,14 +177,8 @@ impl Records {
                     at += 1;
                 }
             }
-            let found = match c.other {
-                Partner::Particle(_) => (ordinal == 0 && at < rows.len() && rows[at].key() == key).then_some(at),
-                Partner::Collider(_) => {
-                    let len = rows[at..].iter().take_while(|r| r.key() == key).count();
-                    Records::feature(&rows[at..at + len], c.normal, ordinal).map(|k| at + k)
-                }
-            };
-            out.push(found);
+            let k = at + ordinal;
+            out.push((k < rows.len() && rows[k].key() == key).then_some(k));
         }
     }
 
@@ -225,7 +190,6 @@ impl Records {
             self.rows.push(ContactRecord {
                 i: c.i,
                 other: c.other,
-                normal: c.normal,
                 impulse: *s,
                 carried: *t != [0.0; 3],
             });
@@ -283,33 +247,6 @@ mod tests {
         records.match_up(&[contact(0, C(0)), contact(0, C(0)), contact(0, C(0))], &mut out);
         assert_eq!(out, [Some(1), Some(2), None]);
         assert!(records.has(2, P(1), true) && records.has(1, P(2), true) && !records.has(2, P(0), false));
-    }
-
-    #[test]
-    fn a_colliders_contacts_read_the_records_of_their_own_walls() {
-        use Partner::Collider as C;
-        // ball 0 rested on the floor of box 0 and against its −x wall (inward normals +z and
-        // +x), the floor carrying; this step it touches the −y wall too, and the walls come
-        // in the box's order (−x, −y, floor)
-        let wall = |normal: [f64; 3], z: f64, carried: bool| ContactRecord {
-            normal,
-            carried,
-            ..ContactRecord::loaded(0, C(0), [0.0, 0.0, z])
-        };
-        let records = Records::from_unsorted(vec![wall([1.0, 0.0, 0.0], 0.5, false), wall([0.0, 0.0, 1.0], 2.0, true)]);
-        let touch = |normal: [f64; 3]| Contact {
-            normal,
-            ..contact(0, C(0))
-        };
-        let mut out = Vec::new();
-        records.match_up(
-            &[touch([1.0, 0.0, 0.0]), touch([0.0, 1.0, 0.0]), touch([0.0, 0.0, 1.0])],
-            &mut out,
-        );
-        assert_eq!(out, [Some(0), None, Some(1)]);
-        // a ball that left the floor reads nothing of it from a wall within 90°
-        records.match_up(&[touch([0.0, 1.0, 0.0])], &mut out);
-        assert_eq!(out, [None]);
     }
 
     #[test]
