@@ -12,16 +12,20 @@ What a checkpoint holds (an HDF5 file, written under a temporary name and rename
 - the collision books (totals since collisions were turned on: impacts, energy lost, ...).
 
 What is carried from step to step is written too, to every bit: Verlet's acceleration at the
-current state, implicit Euler's last Δv (its warm start), the impulse solver's warm start (the
-impulse totals of the last step's contacts). The lists of candidate pairs and the particles'
-order along space are not written: a checkpoint is a restart point for them. After writing it
-the world builds them again, as the world read from it does, so a run resumed from a
-checkpoint and the run that wrote it go on bit for bit alike. Where the lists decide no bit, a
-run that writes checkpoints is also the same bits as one that writes none: tested for every
-method with both contact models in a gas under gravity with springs, and for a spring–dashpot
-world sorted along space. In a dense pile under the impulse model the rebuilt candidate list
-changes the last bits (measured: the demo's pile first differs 54 steps after a checkpoint,
-by 2e-6 m, then chaotically); the run and its resumption still agree to every bit.
+current state, implicit Euler's last Δv (its warm start), the impulse model's contact records
+(each contact of the last step: its solve stage's impulse, the feature of its collider it
+touches, whether it carried load) and where its candidate list was built, with its skin. The
+list itself is built again there, so it is rebuilt at the same steps as in the run that wrote
+it: a rebuild inside a step moves every path's reference and predicts the impacts again, and
+in a dense pile that decides the last bits (the demo's pile at dt = 1 ms, written at step 500,
+differed by 0.27 m at step 1500 from a run that wrote none while the list was built afresh;
+now it is the same bits). The spring–dashpot model's neighbour list and the particles' order
+along space are not written: a checkpoint is a restart point for them. After writing it the
+world builds them again, as the world read from it does, so a run resumed from a checkpoint
+and the run that wrote it go on bit for bit alike; a run that writes checkpoints is also the
+same bits as one that writes none where those decide no bit (tested for every method with
+both contact models in a gas under gravity with springs, and for a spring–dashpot world
+sorted along space).
 
 A world with a `PythonForce` cannot be written (a Python function is not data); a scene's
 duration, fps and render settings come along when the world was loaded from a scene.
@@ -68,6 +72,7 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
     memory = core.contact_history()
     warm = core.collision_carry()
     calm, island = core.sleep_carry()
+    built = core.list_carry()
     with hdf5_file(path) as f:
         f.attrs["format"] = FORMAT
         f.attrs["version"] = VERSION
@@ -112,11 +117,19 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
         g.create_dataset("particle", data=np.array([w[0] for w in warm], dtype=np.int64))
         g.create_dataset("collider", data=np.array([w[1] for w in warm], dtype=bool))
         g.create_dataset("partner", data=np.array([w[2] for w in warm], dtype=np.int64))
-        g.create_dataset("impulse", data=np.array([w[3] for w in warm], dtype=float).reshape(-1, 3))
+        # which of a collider's features each touches (a box's wall, a mesh's triangle)
+        g.create_dataset("feature", data=np.array([w[3] for w in warm], dtype=np.int64))
+        g.create_dataset("impulse", data=np.array([w[4] for w in warm], dtype=float).reshape(-1, 3))
+        # whether each carried load at the step's end (an impact on it is then a resting contact)
+        g.create_dataset("carried", data=np.array([w[5] for w in warm], dtype=bool))
         # sleeping: each particle's calm time (s) and island (-1: awake); the islands'
         # contacts are in the warm start above
         g.create_dataset("sleep_calm", data=calm)
         g.create_dataset("sleep_island", data=island)
+        if built is not None:  # where the candidate list was built, and its skin (m): the
+            # resumed run rebuilds it at the same steps, as the run that wrote it does
+            g.create_dataset("list_built_at", data=built[0].reshape(-1, 3))
+            g.create_dataset("list_skin", data=built[1])
         stats = core.collision_stats()
         if stats is not None:  # the collision books go on where they were
             f.attrs["collision_stats"] = json.dumps(_plain(stats))
@@ -125,6 +138,8 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
     core.restart_caches()
     core.restore_collision_carry(warm)
     core.restore_sleep_carry(calm.tolist(), island.tolist())
+    if built is not None:
+        core.restore_list_carry(built[0].tolist(), built[1])
     if carry is not None:
         core.restore_integrator_carry(carry.tolist())
     if spin_carry is not None:
@@ -579,8 +594,14 @@ def _load_world(r: _Reader) -> Any:
         np.where(collider, partner < colliders, partner < n),
         f"the partner of each contact: one of the {n} particles, or of the {colliders} colliders",
     )
+    feature = np.zeros(k, dtype=np.int64)
+    if "feature" in g:  # (a checkpoint from before features: each contact's first, 0)
+        _, feature = r.ints("collision_carry/feature", (k,), 0, 2**32 - 1, "which feature of its collider each contact touches: an index >= 0 (0 for a pair)")
     _, impulse = r.reals("collision_carry/impulse", (k, 3), np.isfinite, "each contact's impulse totals, 3 finite numbers, N·s")
-    warm = list(zip(particle.tolist(), collider.tolist(), partner.tolist(), impulse.tolist(), strict=True))
+    carried: list = [None] * k  # (a checkpoint from before: taken from the impulse)
+    if "carried" in g:
+        carried = r.dataset("collision_carry/carried", "bool", (k,), "one bool per contact (whether it carried load)")[1].tolist()
+    warm = list(zip(particle.tolist(), collider.tolist(), partner.tolist(), feature.tolist(), impulse.tolist(), carried, strict=True))
     sleep: list[list] = [[], []]
     present = [name in g for name in ("sleep_calm", "sleep_island")]
     if any(present):  # (a checkpoint from before sleeping has neither: everything awake)
@@ -593,12 +614,23 @@ def _load_world(r: _Reader) -> Any:
         _, calm = r.reals("collision_carry/sleep_calm", (m,), lambda a: np.isfinite(a) & (a >= 0), "each particle's calm time: finite, >= 0 s")
         _, island = r.ints("collision_carry/sleep_island", (m,), -1, _INT64_MAX, "each particle's island: an integer >= 0, or -1 (awake)")
         sleep = [calm.tolist(), island.tolist()]
+    built = None
+    present = [name in g for name in ("list_built_at", "list_skin")]
+    if any(present):  # (a checkpoint from before: the list is built afresh)
+        if not all(present):
+            missing = "list_skin" if present[0] else "list_built_at"
+            raise r.fail(f"dataset 'collision_carry/{missing}'", "is missing (list_built_at and list_skin go together)")
+        _, at = r.reals("collision_carry/list_built_at", (n, 3), np.isfinite, "where the candidate list was built: 3 finite numbers per particle, m")
+        _, skin = r.reals("collision_carry/list_skin", (), lambda a: np.isfinite(a) & (a > 0), "the candidate list's skin: a finite number > 0, m")
+        built = (at.reshape(-1).tolist(), float(skin))
     _restore_emitters(r, world, time)
     world._advice_due = False  # the advisor had looked at this state already (its warning is in `warned`)
     world._new_views()
     # last: nothing after these may start the caches again
     r.engine("group 'collision_carry'", core.restore_collision_carry, warm)
     r.engine("dataset 'collision_carry/sleep_island'", core.restore_sleep_carry, *sleep)
+    if built is not None:
+        r.engine("dataset 'collision_carry/list_built_at'", core.restore_list_carry, *built)
     if carry is not None:
         r.engine("dataset 'integrator_carry'", core.restore_integrator_carry, carry.tolist())
     if spin_carry is not None:

@@ -2,7 +2,7 @@
 //! collisions (conversions in `collide.rs`; stepping and SimulationDiverged in
 //! `stepping.rs`; the Python force in `callbacks.rs`).
 
-use kinema::collide::{Partner, Surface};
+use kinema::collide::{ContactRecord, Partner, Surface};
 use kinema::forces::{Attractor, Drag, Gravity, Springs, Wind};
 use kinema::world::KillVolume;
 use kinema::{World, WorldParams};
@@ -176,36 +176,56 @@ impl PyWorld {
         self.inner.restore_contact_history(pairs, walls).map_err(to_py)
     }
 
-    /// The impulse model's warm start: (particle, partner is a collider, partner index, totals).
-    fn collision_carry(&mut self) -> Vec<(usize, bool, usize, [f64; 3])> {
+    /// The impulse model's contact records: (particle, partner is a collider, partner index,
+    /// the collider's feature, the solve stage's impulse, whether it carried load).
+    #[allow(clippy::type_complexity)]
+    fn collision_carry(&mut self) -> Vec<(usize, bool, usize, u32, [f64; 3], bool)> {
         self.inner.restore_order();
         self.inner
             .collision_carry()
             .into_iter()
-            .map(|(i, other, t)| match other {
-                Partner::Particle(j) => (i, false, j, t),
-                Partner::Collider(c) => (i, true, c, t),
+            .map(|r| match r.other {
+                Partner::Particle(j) => (r.i, false, j, r.feature, r.impulse, r.carried),
+                Partner::Collider(c) => (r.i, true, c, r.feature, r.impulse, r.carried),
             })
             .collect()
     }
 
-    fn restore_collision_carry(&mut self, carry: Vec<(usize, bool, usize, [f64; 3])>) -> PyResult<()> {
+    /// Gives the records back; `carried` None: taken from the impulse (a checkpoint written
+    /// before the records kept it).
+    #[allow(clippy::type_complexity)]
+    fn restore_collision_carry(&mut self, carry: Vec<(usize, bool, usize, u32, [f64; 3], Option<bool>)>) -> PyResult<()> {
         self.inner.restore_order();
         let carry = carry
             .into_iter()
-            .map(|(i, collider, j, t)| {
-                (
-                    i,
-                    if collider {
-                        Partner::Collider(j)
-                    } else {
-                        Partner::Particle(j)
-                    },
-                    t,
-                )
+            .map(|(i, collider, j, feature, impulse, carried)| {
+                let other = if collider {
+                    Partner::Collider(j)
+                } else {
+                    Partner::Particle(j)
+                };
+                let record = ContactRecord::loaded(i, other, feature, impulse);
+                ContactRecord {
+                    carried: carried.unwrap_or(record.carried),
+                    ..record
+                }
             })
             .collect();
         self.inner.restore_collision_carry(carry).map_err(to_py)
+    }
+
+    /// The impulse model's candidate list's build: the positions it was built at (m, N×3)
+    /// and its skin (m); None before a first build.
+    fn list_carry<'py>(&mut self, py: Python<'py>) -> Option<(Bound<'py, PyArray1<f64>>, f64)> {
+        self.inner.restore_order();
+        self.inner
+            .list_carry()
+            .map(|(built_at, skin)| (PyArray1::from_vec(py, built_at), skin))
+    }
+
+    fn restore_list_carry(&mut self, built_at: Vec<f64>, skin: f64) -> PyResult<()> {
+        self.inner.restore_order();
+        self.inner.restore_list_carry(built_at, skin).map_err(to_py)
     }
 
     /// Sleeping's carry: each particle's calm time (s) and sleeping island (-1: awake).

@@ -514,6 +514,7 @@ mod tests {
         let pair = |i, j, normal| Contact {
             i,
             other: Partner::Particle(j),
+            feature: 0,
             normal,
             overlap: 0.0,
             u_n: 0.0,
@@ -539,6 +540,7 @@ mod tests {
             contacts.push(Contact {
                 i,
                 other: Partner::Collider(0),
+                feature: 0,
                 normal: [0.0, 0.0, 1.0],
                 overlap: sink,
                 u_n: -1.0,
@@ -625,6 +627,7 @@ mod tests {
         let c = |i, other| Contact {
             i,
             other,
+            feature: 0,
             normal: [1.0, 0.0, 0.0],
             overlap: 0.0,
             u_n: 0.0,
@@ -745,6 +748,7 @@ mod tests {
             contacts.push(Contact {
                 i,
                 other: Partner::Particle(i + 1),
+                feature: 0,
                 normal: [1.0, 0.0, 0.0],
                 overlap: -(gap + d),
                 u_n: u,

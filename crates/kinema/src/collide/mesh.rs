@@ -149,7 +149,7 @@ fn merge_parallel(kept: &mut Found, r: f64) {
             t,
             Touch {
                 normal: vec3::scale(1.0 / vec3::norm(sum), sum),
-                overlap: touch.overlap,
+                ..touch
             },
             q,
             feature,
@@ -514,7 +514,16 @@ impl TriangleMesh {
                     }
                 };
                 let overlap = if wrong_side { r + c.len } else { r - c.len };
-                (Touch { normal, overlap }, c.q, c.feature)
+                let feature = c.t as u32;
+                (
+                    Touch {
+                        normal,
+                        overlap,
+                        feature,
+                    },
+                    c.q,
+                    c.feature,
+                )
             })
             .collect()
     }

@@ -143,6 +143,7 @@ pub use mesh::{Side, TriangleMesh};
 pub use motion::{Motion, Pose, SurfaceVelocity};
 pub use narrow_phase::pair_contact;
 pub use penalty::{damping_ratio, dashpot_coefficient, spring_dashpot_force};
+pub use records::ContactRecord;
 pub use response::{restitution_impulse, Impulse, Material, MaterialTable};
 pub use toi::{toi_plane, toi_sphere_obstacle, toi_spheres};
 pub use touch::TouchEvent;

@@ -12,9 +12,10 @@ use crate::collide::contact_force::{
 };
 use crate::collide::event_driven::{unsupported_collider, EventDriven};
 use crate::collide::impulse::{ImpulseModel, StageSetting};
+use crate::collide::records::ContactRecord;
 use crate::collide::shock::Accuracy;
 use crate::collide::spin::Rotation;
-use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Motion, Partner, Periodic};
+use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Motion, Periodic};
 use crate::error::Error;
 use crate::interrupt::Interrupt;
 use crate::particles::Particles;
@@ -700,12 +701,12 @@ impl CollideStage {
     }
 
     /// Every contact's warm start, the sleeping islands' too (for a checkpoint).
-    pub fn all_warm(&self) -> Vec<(usize, Partner, [f64; 3])> {
+    pub fn all_warm(&self) -> Vec<ContactRecord> {
         self.impulse.all_warm()
     }
 
     /// Sets the warm start (a checkpoint's), and with it which contacts rested.
-    pub fn set_warm_start(&mut self, warm: Vec<(usize, Partner, [f64; 3])>) {
+    pub fn set_warm_start(&mut self, warm: Vec<ContactRecord>) {
         self.impulse.set_warm_start(warm);
     }
 

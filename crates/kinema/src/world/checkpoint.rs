@@ -4,8 +4,9 @@
 
 use super::{CollisionStats, World, WorldStepper};
 use crate::collide::impulse::end_of_step::overlap_at;
-use crate::collide::Partner;
+use crate::collide::{ContactRecord, Partner};
 use crate::error::Error;
+use crate::vec3;
 
 impl World {
     /// Restores what a checkpoint holds besides the particles' state: the time (s), the
@@ -75,11 +76,48 @@ impl World {
         }
     }
 
-    /// The impulse model's warm start carried to the next step: each contact of the last
-    /// step, (particle, partner, impulse totals in N·s), sorted; empty without collisions.
-    pub fn collision_carry(&mut self) -> Vec<(usize, Partner, [f64; 3])> {
+    /// The impulse model's records carried to the next step: each contact of the last step
+    /// (its particle, partner, the collider's feature, its solve stage's impulse in N·s and
+    /// whether it carried load), sorted; empty without collisions.
+    pub fn collision_carry(&mut self) -> Vec<ContactRecord> {
         self.restore_user_order();
         self.collide_stage.as_ref().map(|c| c.all_warm()).unwrap_or_default()
+    }
+
+    /// The impulse model's candidate list as built (`ImpulseModel::list_carry`): the
+    /// positions it was built at (m, 3 per particle) and its skin (m); `None` before a first
+    /// build or without collisions.
+    pub fn list_carry(&mut self) -> Option<(Vec<f64>, f64)> {
+        self.restore_user_order();
+        self.collide_stage.as_ref()?.impulse.list_carry()
+    }
+
+    /// Builds the impulse model's candidate list where [`World::list_carry`] says it was
+    /// built (a checkpoint's), so that it is rebuilt at the same steps as in the run that
+    /// wrote it. Checks the length and that the values are finite.
+    pub fn restore_list_carry(&mut self, built_at: Vec<f64>, skin: f64) -> Result<(), Error> {
+        let n = self.particles.len();
+        if built_at.len() != 3 * n {
+            return Err(Error::invalid(
+                "list_built_at",
+                format!("{} values", built_at.len()),
+                format!("3 per particle ({})", 3 * n),
+            ));
+        }
+        if let Some((k, value)) = vec3::first_non_finite(&built_at) {
+            return Err(Error::invalid(format!("list_built_at[{k}]"), value, "finite positions, m"));
+        }
+        if !(skin.is_finite() && skin > 0.0) {
+            return Err(Error::invalid("list_skin", skin, "a finite skin > 0 m"));
+        }
+        self.restore_user_order();
+        let Some(stage) = &mut self.collide_stage else {
+            return Err(Error::invalid("list_built_at", n, "no candidate list: collisions are off"));
+        };
+        let (colliders, domain) = (stage.colliders.clone(), stage.domain);
+        stage
+            .impulse
+            .restore_list(&built_at, skin, &self.particles.radius, &colliders, &domain)
     }
 
     /// What sleeping carries to the next step (`collide/sleep.rs`): each particle's calm time
@@ -128,8 +166,8 @@ impl World {
             return Err(Error::invalid("sleep_island", n, "nothing sleeps: collisions are off"));
         };
         let pinned = |q: usize| self.particles.inv_mass[q] == 0.0;
-        if let Some(w) = stage.impulse.records().iter().map(|r| r.carry()).find(|w| match w.1 {
-            Partner::Particle(j) => island[w.0] != island[j] && !pinned(w.0) && !pinned(j),
+        if let Some(w) = stage.impulse.records().iter().find(|w| match w.other {
+            Partner::Particle(j) => island[w.i] != island[j] && !pinned(w.i) && !pinned(j),
             Partner::Collider(_) => false,
         }) {
             return Err(Error::invalid(
@@ -146,21 +184,24 @@ impl World {
     }
 
     /// Gives the impulse model back what [`World::collision_carry`] took (a checkpoint's);
-    /// checks the particles and colliders it names.
-    pub fn restore_collision_carry(&mut self, carry: Vec<(usize, Partner, [f64; 3])>) -> Result<(), Error> {
-        let (n, colliders) = (self.particles.len(), self.colliders().len());
-        if let Some(k) = carry.iter().position(|(i, other, t)| {
-            *i >= n
-                || !t.iter().all(|c| c.is_finite())
-                || match other {
-                    Partner::Particle(j) => *j >= n,
-                    Partner::Collider(c) => *c >= colliders,
+    /// checks the particles, colliders and features it names.
+    pub fn restore_collision_carry(&mut self, carry: Vec<ContactRecord>) -> Result<(), Error> {
+        let (n, colliders) = (self.particles.len(), self.colliders());
+        if let Some(k) = carry.iter().position(|r| {
+            r.i >= n
+                || !r.impulse.iter().all(|c| c.is_finite())
+                || match r.other {
+                    Partner::Particle(j) => j >= n || r.feature != 0,
+                    Partner::Collider(c) => colliders.get(c).is_none_or(|c| r.feature as usize >= c.features()),
                 }
         }) {
             return Err(Error::invalid(
                 format!("collision_carry[{k}]"),
                 format!("{:?}", carry[k]),
-                format!("contacts between the {n} particles and {colliders} colliders, with finite impulses"),
+                format!(
+                    "contacts between the {n} particles and {} colliders, each with one of its collider's features (0 for a pair) and finite impulses",
+                    colliders.len()
+                ),
             ));
         }
         match &mut self.collide_stage {

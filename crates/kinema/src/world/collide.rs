@@ -374,8 +374,8 @@ impl World {
         let loaded: Vec<_> = stage
             .all_warm()
             .into_iter()
-            .filter(|w| w.2 != [0.0; 3])
-            .map(|w| (w.0, w.1))
+            .filter(|w| w.impulse != [0.0; 3])
+            .map(|w| (w.i, w.other))
             .collect();
         stage.impulse.touches.record(on, loaded.into_iter());
         Ok(())

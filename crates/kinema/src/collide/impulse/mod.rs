@@ -251,7 +251,7 @@ pub(crate) struct StageSetting<'a> {
 /// What the stages keep of their contacts while particles are added
 /// ([`ImpulseModel::take_contacts`]).
 pub(crate) struct KeptContacts {
-    warm: Vec<(usize, Partner, [f64; 3])>,
+    warm: Vec<ContactRecord>,
     sleep: Sleep,
 }
 
@@ -374,10 +374,9 @@ impl ImpulseModel {
         self.records.rows()
     }
 
-    /// Sets the contacts' records from a warm start (a checkpoint's: (particle, partner,
-    /// impulse totals N·s)); a contact that holds an impulse carried load.
-    pub fn set_warm_start(&mut self, warm: Vec<(usize, Partner, [f64; 3])>) {
-        self.records = Records::from_unsorted(warm.into_iter().map(|(i, o, p)| ContactRecord::loaded(i, o, p)).collect());
+    /// Sets the contacts' records (a checkpoint's).
+    pub fn set_warm_start(&mut self, warm: Vec<ContactRecord>) {
+        self.records = Records::from_unsorted(warm);
     }
 
     /// Forgets the candidate list and the warm start, and wakes every island (particles,
@@ -393,7 +392,7 @@ impl ImpulseModel {
     /// [`ImpulseModel::keep_contacts`] gives them back).
     pub fn take_contacts(&mut self) -> KeptContacts {
         KeptContacts {
-            warm: self.records.take().iter().map(ContactRecord::carry).collect(),
+            warm: self.records.take(),
             sleep: std::mem::take(&mut self.sleep),
         }
     }
@@ -408,13 +407,17 @@ impl ImpulseModel {
         let warm = self
             .all_warm()
             .into_iter()
-            .filter_map(|(i, partner, impulse)| {
-                let i = *new_of_old.get(i).filter(|&&i| i != GONE)?;
-                let partner = match partner {
+            .filter_map(|r| {
+                let i = *new_of_old.get(r.i).filter(|&&i| i != GONE)?;
+                let other = match r.other {
                     Partner::Particle(j) => Partner::Particle(*new_of_old.get(j).filter(|&&j| j != GONE)? as usize),
                     other => other,
                 };
-                Some((i as usize, partner, impulse))
+                Some(ContactRecord {
+                    i: i as usize,
+                    other,
+                    ..r
+                })
             })
             .collect();
         self.records.clear();
@@ -437,10 +440,10 @@ impl ImpulseModel {
 
     /// Every contact's warm start, as a checkpoint keeps it: the awake records' and the
     /// sleeping islands', sorted by key.
-    pub fn all_warm(&self) -> Vec<(usize, Partner, [f64; 3])> {
-        let mut all: Vec<_> = self.records.rows().iter().map(ContactRecord::carry).collect();
-        all.extend(self.sleep.records().map(ContactRecord::carry));
-        all.sort_by_key(|w| (w.0, w.1));
+    pub fn all_warm(&self) -> Vec<ContactRecord> {
+        let mut all = self.records.rows().to_vec();
+        all.extend(self.sleep.records().copied());
+        all.sort_by_key(ContactRecord::key);
         all
     }
 
