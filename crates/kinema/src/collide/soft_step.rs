@@ -575,6 +575,7 @@ impl Row {
 
     /// The velocity of i's contact point relative to j's: v_i − v_j, less
     /// (ρ_i ω_i + ρ_j ω_j) × n with spin (N = 6).
+    #[inline(always)]
     fn relative<const N: usize>(&self, vi: &[f64; N], vj: &[f64; N]) -> [f64; 3] {
         let u = [vi[0] - vj[0], vi[1] - vj[1], vi[2] - vj[2]];
         if N == 6 {
@@ -587,6 +588,7 @@ impl Row {
 
     /// The impulse p on i and −p on j, at their contact points: v_i += w_i p, v_j −= w_j p,
     /// and with spin ω_i −= k_i ρ_i n × p, ω_j −= k_j ρ_j n × p.
+    #[inline(always)]
     fn apply<const N: usize>(&self, vi: &mut [f64; N], vj: &mut [f64; N], p: [f64; 3]) {
         for k in 0..3 {
             vi[k] += self.wi * p[k];
@@ -610,6 +612,7 @@ impl Row {
     }
 
     /// A tangential total clamped to the cone |t| ≤ μ λ.
+    #[inline(always)]
     fn clamp(&self, t: [f64; 3], lambda: f64) -> [f64; 3] {
         let (len, cap) = (vec3::norm(t), self.mu * lambda);
         if len > cap {
@@ -622,6 +625,8 @@ impl Row {
     /// One visit with the totals (λ, t): the normal total that brings u_n to at least `b_n`
     /// (clamped at 0), then, with `b_t`, the tangential total that brings the tangential
     /// velocity to `b_t` within the cone. Returns the largest change, as a velocity (m/s).
+    #[inline(always)]
+    #[inline(always)]
     fn visit<const N: usize>(
         &self,
         vi: &mut [f64; N],
@@ -672,6 +677,7 @@ impl Row {
     /// impulse M that brings the relative turning to 0 within |M| ≤ μ_r R* λ; without (the
     /// restitution stage), M kept within the cone of a shrinking λ. Returns the change as a
     /// velocity at R*, m/s.
+    #[inline(always)]
     fn visit_roll<const N: usize>(
         &self,
         vi: &mut [f64; N],
