@@ -464,11 +464,11 @@ DATASETS = (
     "run/ids",
 )
 # not read / absent before a first step (verlet) and for methods that carry nothing / absent
-# in a checkpoint written before the contacts' features were saved (each then its first)
+# in a checkpoint written before the records' `carried` and the list's build were saved
 OPTIONAL = (
     "kinema",
     "integrator_carry",
-    *(f"collision_carry/{d}" for d in ("feature", "carried", "list_built_at", "list_skin")),
+    *(f"collision_carry/{d}" for d in ("carried", "list_built_at", "list_skin")),
 )
 NUMERIC_ATTRS = ("version", "time", "steps", "next_id", "advised_at", *(f"run/{a}" for a in RUN_ATTRS[:5]))
 JSON_ATTRS = ("emitters", "collision_stats", "run/potential", "run/about", "run/sets")
@@ -551,12 +551,6 @@ CASES = [
     ("particle huge", edit_ds("collision_carry/particle", at(0, 2**62)), "'collision_carry/particle'"),
     ("partner huge", edit_ds("collision_carry/partner", at(0, 2**62)), "'collision_carry/partner'"),
     ("partner collider out of range", edit_ds("collision_carry/partner", lambda a: a + 1000), "'collision_carry/partner'"),
-    ("feature negative", edit_ds("collision_carry/feature", at(0, -1)), "'collision_carry/feature'"),
-    ("feature huge", edit_ds("collision_carry/feature", at(0, 2**40)), "'collision_carry/feature'"),
-    ("feature float", edit_ds("collision_carry/feature", lambda a: a + 0.5), "'collision_carry/feature'"),
-    ("feature text", edit_ds("collision_carry/feature", lambda a: np.full(a.shape, b"x")), "'collision_carry/feature'"),
-    ("feature one less", edit_ds("collision_carry/feature", lambda a: a[:-1]), "'collision_carry/feature'"),
-    ("feature past its collider's", edit_ds("collision_carry/feature", lambda a: a + 7), "'collision_carry'"),
     ("carried integers", edit_ds("collision_carry/carried", lambda a: a.astype(np.int64)), "'collision_carry/carried'"),
     ("carried one less", edit_ds("collision_carry/carried", lambda a: a[:-1]), "'collision_carry/carried'"),
     ("list_built_at nan", edit_ds("collision_carry/list_built_at", at((0, 1), float("nan"))), "'collision_carry/list_built_at'"),
@@ -889,17 +883,17 @@ def test_a_pile_at_the_animation_accuracy_resumes_bit_for_bit(tmp_path):
     assert_same(a, b)
 
 
-def test_a_heap_whose_walls_change_resumes_bit_for_bit_with_each_walls_record(tmp_path):
-    """18 balls fall into a box and slide into its corner under a tilted gravity: balls come
-    to touch the floor and then one or two walls, each wall a contact of the same pair (the
-    ball, the box). Each contact's record is keyed by the wall it touches (its feature), and
-    the checkpoint keeps the features, whether each record carried load, and where the
-    candidate list was built (a rebuild inside a step moves every path's reference and
-    predicts the impacts again: the resumed run must rebuild at the same steps). A run
-    resumed from a checkpoint written every 25 steps goes on bit for bit, and so does the run
-    that wrote it. A checkpoint written before features were saved reads each
-    record as its collider's first feature (a ball's floor then starts cold): it still
-    resumes, and its heap comes to rest in the same corner."""
+def test_a_heap_sliding_into_a_corner_resumes_bit_for_bit_from_any_step(tmp_path):
+    """18 balls fall into a box and slide into its corner under a tilted gravity (e = 0.3,
+    mu = 0.3, 1 ms): impacts, resting contacts, walls touched and left. The impulse model's
+    candidate list is rebuilt inside some of these steps, which moves every path's reference
+    and predicts the impacts again, so where it was built decides the last bits: the
+    checkpoint keeps where it was built and its skin, and the contact records whole (whether
+    each carried load, which the solve's impulse alone does not tell). A run resumed from a
+    checkpoint written every 25 steps goes on bit for bit, and so does the run that wrote it.
+    (With the list built afresh on reading, 3 of these 19 resumes differed within 300 steps,
+    and the demo's pile at 1 ms, written at step 500, by 0.27 m at step 1500.) A checkpoint
+    written before the list was saved still resumes, its heap at rest in the same corner."""
 
     def heap():
         w = kinema.World(dt=1e-3, method="verlet")
@@ -913,8 +907,6 @@ def test_a_heap_whose_walls_change_resumes_bit_for_bit_with_each_walls_record(tm
     steps = 500
     whole = heap()
     whole.step(steps)
-    corner = whole._core.collision_carry()
-    assert {c[3] for c in corner if c[1]} == {0, 2, 4}  # the walls -x, -y, -z (features of the box)
     differ = 0
     # (after 99 steps a ball on the floor has a record that carried load with no impulse of
     # the solve stage: it bounced, so the checkpoint must say it carried)
@@ -922,9 +914,6 @@ def test_a_heap_whose_walls_change_resumes_bit_for_bit_with_each_walls_record(tm
         w = heap()
         w.step(at)
         w.save_checkpoint(tmp_path / "w.ckpt")
-        with h5py.File(tmp_path / "w.ckpt") as f:
-            features = f["collision_carry/feature"][()]
-        assert features.tolist() == [c[3] for c in w._core.collision_carry()]
         again = kinema.World.load_checkpoint(tmp_path / "w.ckpt")
         assert again._core.collision_carry() == w._core.collision_carry()  # every record whole
         again.step(steps - at)
@@ -932,9 +921,9 @@ def test_a_heap_whose_walls_change_resumes_bit_for_bit_with_each_walls_record(tm
         w.step(steps - at)  # (and writing it changed no bit of the writer's run)
         assert_same(whole, w)
         with h5py.File(tmp_path / "w.ckpt", "r+") as f:
-            del f["collision_carry/feature"]
+            del f["collision_carry/list_built_at"], f["collision_carry/list_skin"]
         older = kinema.World.load_checkpoint(tmp_path / "w.ckpt")
         older.step(steps - at)
         differ += not np.array_equal(older.positions, whole.positions)
         np.testing.assert_allclose(older.positions, whole.positions, rtol=0, atol=0.02)
-    assert differ > 0  # (the features were needed: without them some resumed run differs)
+    assert differ > 0  # (the list's build was needed: without it some resumed run differs)

@@ -13,8 +13,8 @@ What a checkpoint holds (an HDF5 file, written under a temporary name and rename
 
 What is carried from step to step is written too, to every bit: Verlet's acceleration at the
 current state, implicit Euler's last Δv (its warm start), the impulse model's contact records
-(each contact of the last step: its solve stage's impulse, the feature of its collider it
-touches, whether it carried load) and where its candidate list was built, with its skin. The
+(each contact of the last step: its solve stage's impulse and whether it carried load) and
+where its candidate list was built, with its skin. The
 list itself is built again there, so it is rebuilt at the same steps as in the run that wrote
 it: a rebuild inside a step moves every path's reference and predicts the impacts again, and
 in a dense pile that decides the last bits (the demo's pile at dt = 1 ms, written at step 500,
@@ -117,11 +117,9 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
         g.create_dataset("particle", data=np.array([w[0] for w in warm], dtype=np.int64))
         g.create_dataset("collider", data=np.array([w[1] for w in warm], dtype=bool))
         g.create_dataset("partner", data=np.array([w[2] for w in warm], dtype=np.int64))
-        # which of a collider's features each touches (a box's wall, a mesh's triangle)
-        g.create_dataset("feature", data=np.array([w[3] for w in warm], dtype=np.int64))
-        g.create_dataset("impulse", data=np.array([w[4] for w in warm], dtype=float).reshape(-1, 3))
+        g.create_dataset("impulse", data=np.array([w[3] for w in warm], dtype=float).reshape(-1, 3))
         # whether each carried load at the step's end (an impact on it is then a resting contact)
-        g.create_dataset("carried", data=np.array([w[5] for w in warm], dtype=bool))
+        g.create_dataset("carried", data=np.array([w[4] for w in warm], dtype=bool))
         # sleeping: each particle's calm time (s) and island (-1: awake); the islands'
         # contacts are in the warm start above
         g.create_dataset("sleep_calm", data=calm)
@@ -594,14 +592,11 @@ def _load_world(r: _Reader) -> Any:
         np.where(collider, partner < colliders, partner < n),
         f"the partner of each contact: one of the {n} particles, or of the {colliders} colliders",
     )
-    feature = np.zeros(k, dtype=np.int64)
-    if "feature" in g:  # (a checkpoint from before features: each contact's first, 0)
-        _, feature = r.ints("collision_carry/feature", (k,), 0, 2**32 - 1, "which feature of its collider each contact touches: an index >= 0 (0 for a pair)")
     _, impulse = r.reals("collision_carry/impulse", (k, 3), np.isfinite, "each contact's impulse totals, 3 finite numbers, N·s")
     carried: list = [None] * k  # (a checkpoint from before: taken from the impulse)
     if "carried" in g:
         carried = r.dataset("collision_carry/carried", "bool", (k,), "one bool per contact (whether it carried load)")[1].tolist()
-    warm = list(zip(particle.tolist(), collider.tolist(), partner.tolist(), feature.tolist(), impulse.tolist(), carried, strict=True))
+    warm = list(zip(particle.tolist(), collider.tolist(), partner.tolist(), impulse.tolist(), carried, strict=True))
     sleep: list[list] = [[], []]
     present = [name in g for name in ("sleep_calm", "sleep_island")]
     if any(present):  # (a checkpoint from before sleeping has neither: everything awake)

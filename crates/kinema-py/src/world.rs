@@ -177,16 +177,15 @@ impl PyWorld {
     }
 
     /// The impulse model's contact records: (particle, partner is a collider, partner index,
-    /// the collider's feature, the solve stage's impulse, whether it carried load).
-    #[allow(clippy::type_complexity)]
-    fn collision_carry(&mut self) -> Vec<(usize, bool, usize, u32, [f64; 3], bool)> {
+    /// the solve stage's impulse, whether it carried load).
+    fn collision_carry(&mut self) -> Vec<(usize, bool, usize, [f64; 3], bool)> {
         self.inner.restore_order();
         self.inner
             .collision_carry()
             .into_iter()
             .map(|r| match r.other {
-                Partner::Particle(j) => (r.i, false, j, r.feature, r.impulse, r.carried),
-                Partner::Collider(c) => (r.i, true, c, r.feature, r.impulse, r.carried),
+                Partner::Particle(j) => (r.i, false, j, r.impulse, r.carried),
+                Partner::Collider(c) => (r.i, true, c, r.impulse, r.carried),
             })
             .collect()
     }
@@ -194,17 +193,17 @@ impl PyWorld {
     /// Gives the records back; `carried` None: taken from the impulse (a checkpoint written
     /// before the records kept it).
     #[allow(clippy::type_complexity)]
-    fn restore_collision_carry(&mut self, carry: Vec<(usize, bool, usize, u32, [f64; 3], Option<bool>)>) -> PyResult<()> {
+    fn restore_collision_carry(&mut self, carry: Vec<(usize, bool, usize, [f64; 3], Option<bool>)>) -> PyResult<()> {
         self.inner.restore_order();
         let carry = carry
             .into_iter()
-            .map(|(i, collider, j, feature, impulse, carried)| {
+            .map(|(i, collider, j, impulse, carried)| {
                 let other = if collider {
                     Partner::Collider(j)
                 } else {
                     Partner::Particle(j)
                 };
-                let record = ContactRecord::loaded(i, other, feature, impulse);
+                let record = ContactRecord::loaded(i, other, impulse);
                 ContactRecord {
                     carried: carried.unwrap_or(record.carried),
                     ..record

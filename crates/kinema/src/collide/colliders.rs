@@ -86,7 +86,6 @@ impl Plane {
         (s < r + tolerance).then_some(Touch {
             normal: self.normal,
             overlap: r - s,
-            feature: 0,
         })
     }
 }
@@ -266,7 +265,6 @@ impl SphereObstacle {
                 [1.0, 0.0, 0.0]
             },
             overlap: sum - dist,
-            feature: 0,
         })
     }
 }
@@ -345,16 +343,6 @@ impl Collider {
         }
     }
 
-    /// How many features its touches may name ([`Touch::feature`] is below it): a box's
-    /// walls, a mesh's triangles, 1 for a plane or an obstacle.
-    pub fn features(&self) -> usize {
-        match self {
-            Collider::Plane(_) | Collider::Sphere(_) => 1,
-            Collider::Box(b) => b.walls().len(),
-            Collider::Mesh(m) => m.faces().len(),
-        }
-    }
-
     /// Calls `each` with every touch of a sphere at `p` (m) of radius `r` (m) within
     /// `tolerance` (m): at most one for a plane or an obstacle, up to three for a box (a
     /// particle in a corner touches three walls), one per face, convex edge or vertex
@@ -362,12 +350,7 @@ impl Collider {
     pub fn for_each_touch(&self, p: [f64; 3], r: f64, tolerance: f64, each: impl FnMut(Touch)) {
         match self {
             Collider::Plane(plane) => plane.touch(p, r, tolerance).into_iter().for_each(each),
-            Collider::Box(b) => b
-                .walls()
-                .iter()
-                .zip(0..)
-                .filter_map(|(w, k)| w.touch(p, r, tolerance).map(|t| Touch { feature: k, ..t }))
-                .for_each(each),
+            Collider::Box(b) => b.walls().iter().filter_map(|w| w.touch(p, r, tolerance)).for_each(each),
             Collider::Sphere(s) => s.touch(p, r, tolerance).into_iter().for_each(each),
             Collider::Mesh(m) => m.for_each_touch(p, r, tolerance, each),
         }
@@ -422,7 +405,6 @@ impl Collider {
         Contact {
             i,
             other: Partner::Collider(k),
-            feature: t.feature,
             normal: t.normal,
             overlap: t.overlap,
             u_n: vec3::dot(vec3::sub(v, w), t.normal),

@@ -20,9 +20,6 @@ pub struct Contact {
     pub i: usize,
     /// What it touches.
     pub other: Partner,
-    /// Which feature of a collider partner it touches ([`Touch::feature`](super::Touch):
-    /// a box's wall, a mesh's triangle); 0 for a plane, an obstacle or a particle partner.
-    pub feature: u32,
     /// Unit normal n, from the partner towards particle `i`.
     pub normal: [f64; 3],
     /// Penetration depth δ, m: > 0 when the two overlap (for two spheres δ = r_i + r_j − |x_i − x_j|),
@@ -78,7 +75,6 @@ mod tests {
         let c = Contact {
             i: 0,
             other: Partner::Particle(3),
-            feature: 0,
             normal: [1.0, 0.0, 0.0],
             overlap: 0.1,
             u_n: -2.0,

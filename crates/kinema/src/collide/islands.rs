@@ -514,7 +514,6 @@ mod tests {
         let pair = |i, j, normal| Contact {
             i,
             other: Partner::Particle(j),
-            feature: 0,
             normal,
             overlap: 0.0,
             u_n: 0.0,
@@ -540,7 +539,6 @@ mod tests {
             contacts.push(Contact {
                 i,
                 other: Partner::Collider(0),
-                feature: 0,
                 normal: [0.0, 0.0, 1.0],
                 overlap: sink,
                 u_n: -1.0,
@@ -627,7 +625,6 @@ mod tests {
         let c = |i, other| Contact {
             i,
             other,
-            feature: 0,
             normal: [1.0, 0.0, 0.0],
             overlap: 0.0,
             u_n: 0.0,
@@ -748,7 +745,6 @@ mod tests {
             contacts.push(Contact {
                 i,
                 other: Partner::Particle(i + 1),
-                feature: 0,
                 normal: [1.0, 0.0, 0.0],
                 overlap: -(gap + d),
                 u_n: u,

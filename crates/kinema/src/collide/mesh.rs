@@ -149,7 +149,7 @@ fn merge_parallel(kept: &mut Found, r: f64) {
             t,
             Touch {
                 normal: vec3::scale(1.0 / vec3::norm(sum), sum),
-                ..touch
+                overlap: touch.overlap,
             },
             q,
             feature,
@@ -514,16 +514,7 @@ impl TriangleMesh {
                     }
                 };
                 let overlap = if wrong_side { r + c.len } else { r - c.len };
-                let feature = c.t as u32;
-                (
-                    Touch {
-                        normal,
-                        overlap,
-                        feature,
-                    },
-                    c.q,
-                    c.feature,
-                )
+                (Touch { normal, overlap }, c.q, c.feature)
             })
             .collect()
     }

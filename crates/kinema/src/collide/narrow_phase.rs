@@ -49,7 +49,6 @@ pub fn pair_contact(
     Some(Contact {
         i,
         other: Partner::Particle(j),
-        feature: 0,
         normal,
         overlap: sum - dist,
         u_n: vec3::dot(u, normal),

@@ -106,7 +106,6 @@ mod tests {
             Contact {
                 i: 0,
                 other: Partner::Particle(1),
-                feature: 0,
                 normal: [0.6, 0.0, 0.8],
                 overlap: 1e-3,
                 u_n: -0.7,
@@ -115,7 +114,6 @@ mod tests {
             Contact {
                 i: 1,
                 other: Partner::Collider(0),
-                feature: 0,
                 normal: [0.0, 0.0, 1.0],
                 overlap: 2e-3,
                 u_n: 0.1,
@@ -125,7 +123,6 @@ mod tests {
             Contact {
                 i: 2,
                 other: Partner::Particle(0),
-                feature: 0,
                 normal: [1.0, 0.0, 0.0],
                 overlap: -1e-3,
                 u_n: -5.0,

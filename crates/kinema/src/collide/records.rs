@@ -13,18 +13,20 @@
 //! (`collide/sleep.rs`); a checkpoint saves them (`World::collision_carry`); removing and
 //! adding particles renumbers them (`ImpulseModel::take_contacts_renumbered`).
 //!
-//! **The key.** A contact's key is (i, partner, feature) with the lower particle index
-//! first for a pair; a particle against a collider is (i, collider, feature), the feature
-//! being which part of the collider it touches (`Touch::feature`: a box's wall, a mesh's
-//! triangle; 0 for a plane, an obstacle and a pair). A ball in a box's corner touches its
-//! floor and a wall at once, two contacts of one pair, and each reads its own record,
-//! however the set of walls it touches changes from step to step and through a
-//! checkpoint, which saves the feature. (Matching them by pair alone, as a search by pair
-//! does, gave both contacts of a corner the same record: the floor's total projected on the
-//! wall's normal, and the floor then started cold; matching them by their order among the
-//! pair's contacts gave a ball that came to touch a side wall the floor's record on the
-//! wall, and none on the floor.) Several contacts of one key, which a mesh may give, read
-//! its records in order.
+//! **The key.** A pair's key is (i, partner) with the lower particle index first; a
+//! particle against a collider is (i, collider). Those are one contact each, except
+//! against a collider that touches a ball in several places at once (a box's floor and
+//! wall in a corner, a mesh's two faces in a crease): such contacts share their key and
+//! come in the order of the collider's features (`Collider::for_each_touch`: a box's walls
+//! in order, a mesh's triangles in order), and the k-th contact of a key reads the k-th
+//! record of it. (Matching them by key alone, as a search by key does, gave both contacts
+//! of a corner the same record: the floor's total projected on the wall's normal, and the
+//! floor then started cold.) A key with the feature touched (Box2D's feature ids) would
+//! match a corner's contacts exactly also while its set of walls changes; measured, it
+//! did not pay: on the demo's heap (16 seeds at 60 Hz) 15 % more steps at the solve's
+//! sweep cap, 3 seeds awake after 4 s against 1 (5 seeds at 1 ms: 9 % more); a contact
+//! that a wall's changed record left cold costs less than one that an exact record
+//! pushes with the impulse of its last touch.
 //!
 //! **The read.** The step's contacts come in runs sorted by key (the colliders' contacts,
 //! then the pairs'; `ImpulseModel::end_contacts`), and the records are sorted by key: each
@@ -33,15 +35,12 @@
 
 use super::contact::{Contact, Partner};
 
-/// A pair: (particle, partner), the lower particle index first for two particles.
-pub(crate) type Pair = (usize, Partner);
+/// A contact's key: (particle, partner), the lower particle index first for a pair.
+pub(crate) type Key = (usize, Partner);
 
-/// A contact's key: its pair and the feature of a collider partner (0 for a particle).
-pub(crate) type Key = (usize, Partner, u32);
-
-/// The pair of particle i with `other`.
+/// The key of the contact of particle i with `other`.
 #[inline]
-pub(crate) fn pair_of(i: usize, other: Partner) -> Pair {
+pub(crate) fn key_of(i: usize, other: Partner) -> Key {
     match other {
         Partner::Particle(j) if j < i => (j, Partner::Particle(i)),
         o => (i, o),
@@ -56,8 +55,6 @@ pub struct ContactRecord {
     pub i: usize,
     /// Its partner: the other particle, or a collider.
     pub other: Partner,
-    /// The collider's feature it touches (0 for a particle partner).
-    pub feature: u32,
     /// The solve stage's total impulse on i in the last step, N·s (world frame): the warm
     /// start of the next.
     pub impulse: [f64; 3],
@@ -69,23 +66,16 @@ impl ContactRecord {
     /// Its key.
     #[inline]
     pub fn key(&self) -> Key {
-        (self.i, self.other, self.feature)
-    }
-
-    /// Its pair.
-    #[inline]
-    pub fn pair(&self) -> Pair {
         (self.i, self.other)
     }
 
     /// The record of a contact that holds `impulse` (N·s) from its solve stage, taken to
     /// have carried load if that is not zero (a sleeping island's record as it wakes; a
     /// checkpoint's written before the records kept whether they carried).
-    pub fn loaded(i: usize, other: Partner, feature: u32, impulse: [f64; 3]) -> ContactRecord {
+    pub fn loaded(i: usize, other: Partner, impulse: [f64; 3]) -> ContactRecord {
         ContactRecord {
             i,
             other,
-            feature,
             impulse,
             carried: impulse != [0.0; 3],
         }
@@ -145,8 +135,8 @@ impl Records {
 
     /// Whether the pair of i and `other` has a record (without `loaded`), or one that
     /// carried load (with). Against a collider with several records (a box's walls in a
-    /// corner), the record of its first feature answers, whichever wall an impact strikes.
-    /// (Measured on the 5 × 5 column of `benchmarks/piles.py`, deep3d at 1 ms: with
+    /// corner), the record of its first feature answers: which wall an impact strikes is not
+    /// in the key. (Measured on the 5 × 5 column of `benchmarks/piles.py`, deep3d at 1 ms: with
     /// the first, 14.1 s and 2,060 steps at the sweep cap; with the last, what a search by
     /// key used to find, 19.6 s and 2,521; with any of them, 21.3 s and 2,730: an impact on a
     /// side wall taken as resting because the floor carries. Columns of 750 of three other
@@ -154,18 +144,18 @@ impl Records {
     /// two of them awake; the search by key 8.2, 9.2 and 10.9 s. A key with the feature
     /// would answer exactly.)
     pub fn has(&self, i: usize, other: Partner, loaded: bool) -> bool {
-        let pair = pair_of(i, other);
-        let first = self.rows.partition_point(|r| r.pair() < pair);
+        let key = key_of(i, other);
+        let first = self.rows.partition_point(|r| r.key() < key);
         self.rows
             .get(first)
-            .filter(|r| r.pair() == pair)
+            .filter(|r| r.key() == key)
             .is_some_and(|r| !loaded || r.carried)
     }
 
     /// Each of `contacts`' record, by index into [`Records::rows`] (`None`: a new contact),
     /// into `out`. `contacts` come in runs sorted by key (each contact's `i` the lower index
     /// of a pair): one pass over the contacts and the records of each run, the k-th contact of
-    /// a key (if a key has several) matched with the k-th record of it.
+    /// a key matched with the k-th record of it.
     pub fn match_up(&self, contacts: &[Contact], out: &mut Vec<Option<usize>>) {
         out.clear();
         let rows = &self.rows;
@@ -173,7 +163,7 @@ impl Records {
         let mut at = 0;
         let mut last: Option<(Key, usize)> = None;
         for c in contacts {
-            let key = (c.i, c.other, c.feature);
+            let key = (c.i, c.other);
             let ordinal = match last {
                 Some((k, n)) if k == key => n + 1,
                 Some((k, _)) if k > key => {
@@ -201,7 +191,6 @@ impl Records {
             self.rows.push(ContactRecord {
                 i: c.i,
                 other: c.other,
-                feature: c.feature,
                 impulse: *s,
                 carried: *t != [0.0; 3],
             });
@@ -215,11 +204,10 @@ impl Records {
 mod tests {
     use super::*;
 
-    fn contact(i: usize, other: Partner, feature: u32) -> Contact {
+    fn contact(i: usize, other: Partner) -> Contact {
         Contact {
             i,
             other,
-            feature,
             normal: [0.0, 0.0, 1.0],
             overlap: 0.0,
             u_n: 0.0,
@@ -227,60 +215,51 @@ mod tests {
         }
     }
 
-    fn record(i: usize, other: Partner, feature: u32, z: f64) -> ContactRecord {
-        ContactRecord::loaded(i, other, feature, [0.0, 0.0, z])
-    }
-
-    fn read(records: &Records, contacts: &[Contact]) -> Vec<Option<f64>> {
-        let mut out = Vec::new();
-        records.match_up(contacts, &mut out);
-        out.iter().map(|k| k.map(|k| records.rows()[k].impulse[2])).collect()
+    fn record(i: usize, other: Partner, z: f64) -> ContactRecord {
+        ContactRecord::loaded(i, other, [0.0, 0.0, z])
     }
 
     #[test]
-    fn each_contact_reads_its_own_record_and_each_wall_of_a_corner_its_own() {
+    fn each_contact_reads_its_own_record_and_a_corner_its_two() {
         use Partner::{Collider as C, Particle as P};
-        // the records of the last step, sorted: ball 0 in a corner of box 0 (its walls −x and
-        // −z: features 0 and 4), pairs 0–1 and 1–2, ball 2 on the floor
+        // the records of the last step, sorted: ball 0 in a corner of box 0 (two walls),
+        // pairs 0–1 and 1–2, ball 2 on the floor
         let records = Records::from_unsorted(vec![
-            record(2, C(0), 4, 5.0),
-            record(0, C(0), 4, 2.0),
-            record(0, C(0), 0, 1.0),
-            record(1, P(2), 0, 4.0),
-            record(0, P(1), 0, 3.0),
+            record(2, C(0), 5.0),
+            record(0, C(0), 1.0),
+            record(0, C(0), 2.0),
+            record(1, P(2), 4.0),
+            record(0, P(1), 3.0),
         ]);
         // this step's contacts as end_contacts makes them: the colliders' run, then the pairs';
         // ball 0 in its corner still, 2 has left the floor, a new pair 0–2
         let contacts = [
-            contact(0, C(0), 0),
-            contact(0, C(0), 4),
-            contact(0, P(1), 0),
-            contact(0, P(2), 0),
-            contact(1, P(2), 0),
+            contact(0, C(0)),
+            contact(0, C(0)),
+            contact(0, P(1)),
+            contact(0, P(2)),
+            contact(1, P(2)),
         ];
-        assert_eq!(read(&records, &contacts), [Some(1.0), Some(2.0), Some(3.0), None, Some(4.0)]);
-        // ball 0 comes to touch the wall −y (feature 2) and leaves the wall −x: the floor keeps
-        // its record, the new wall has none (read by their order among the ball's contacts,
-        // the wall −y took the record of the wall −x)
-        assert_eq!(read(&records, &[contact(0, C(0), 2), contact(0, C(0), 4)]), [None, Some(2.0)]);
-        // ball 2 on the floor comes to touch the wall −x: the floor's record is still its own
-        // (read by their order, the wall took the floor's record and the floor started cold)
-        assert_eq!(read(&records, &[contact(2, C(0), 0), contact(2, C(0), 4)]), [None, Some(5.0)]);
-        // a pair's lookup sees it from both sides; against a collider, its first feature answers
+        let mut out = Vec::new();
+        records.match_up(&contacts, &mut out);
+        let read: Vec<Option<f64>> = out.iter().map(|k| k.map(|k| records.rows()[k].impulse[2])).collect();
+        assert_eq!(read, [Some(1.0), Some(2.0), Some(3.0), None, Some(4.0)]);
+        // a corner's third contact has no record; a key's lookup sees each pair from both sides
+        records.match_up(&[contact(0, C(0)), contact(0, C(0)), contact(0, C(0))], &mut out);
+        assert_eq!(out, [Some(1), Some(2), None]);
         assert!(records.has(2, P(1), true) && records.has(1, P(2), true) && !records.has(2, P(0), false));
-        assert!(records.has(0, C(0), true) && records.has(2, C(0), true) && !records.has(1, C(0), false));
     }
 
     #[test]
     fn the_records_of_a_step_are_its_kept_contacts_sorted_by_key() {
         use Partner::{Collider as C, Particle as P};
-        let contacts = [contact(3, C(1), 2), contact(0, P(3), 0), contact(1, P(2), 0)];
+        let contacts = [contact(3, C(1)), contact(0, P(3)), contact(1, P(2))];
         let solved = [[0.0, 0.0, 1.0], [0.0; 3], [0.0, 0.0, 2.0]];
         let totals = [[0.0, 0.0, 1.5], [0.0; 3], [0.0; 3]];
         let mut records = Records::default();
         records.replace(&contacts, &solved, &totals, &[true, true, false]);
         let keys: Vec<Key> = records.rows().iter().map(ContactRecord::key).collect();
-        assert_eq!(keys, [(0, P(3), 0), (3, C(1), 2)]);
+        assert_eq!(keys, [(0, P(3)), (3, C(1))]);
         assert!(records.rows()[1].carried && !records.rows()[0].carried);
         assert!(records.has(3, C(1), true) && !records.has(3, P(0), true) && records.has(3, P(0), false));
     }

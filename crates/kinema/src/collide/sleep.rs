@@ -202,13 +202,13 @@ mod tests {
         assert!(!s.any() && s.marks().is_empty());
         use crate::collide::Partner;
         let warm = vec![
-            ContactRecord::loaded(1, Partner::Particle(2), 0, [0.0, 1.0, 0.0]),
-            ContactRecord::loaded(2, Partner::Collider(0), 0, [0.0, 2.0, 0.0]),
+            ContactRecord::loaded(1, Partner::Particle(2), [0.0, 1.0, 0.0]),
+            ContactRecord::loaded(2, Partner::Collider(0), [0.0, 2.0, 0.0]),
         ];
         s.put_to_sleep(vec![1, 2], warm.clone(), 1e-5);
         s.put_to_sleep(
             vec![4],
-            vec![ContactRecord::loaded(4, Partner::Collider(0), 0, [0.0, 3.0, 0.0])],
+            vec![ContactRecord::loaded(4, Partner::Collider(0), [0.0, 3.0, 0.0])],
             2e-5,
         );
         assert_eq!((s.asleep(), s.contacts()), (3, 3));

@@ -626,7 +626,6 @@ impl Row {
     /// (clamped at 0), then, with `b_t`, the tangential total that brings the tangential
     /// velocity to `b_t` within the cone. Returns the largest change, as a velocity (m/s).
     #[inline(always)]
-    #[inline(always)]
     fn visit<const N: usize>(
         &self,
         vi: &mut [f64; N],

@@ -71,9 +71,4 @@ pub struct Touch {
     pub normal: [f64; 3],
     /// Penetration depth, m (> 0 when overlapping; < 0 for a gap within the tolerance).
     pub overlap: f64,
-    /// Which of the collider's features is touched: a box's wall (its index in
-    /// `BoxContainer::walls`), a mesh's triangle (its index); 0 for a plane or an obstacle.
-    /// A particle in a box's corner touches it several times at once, one touch per wall,
-    /// and each contact keeps its own record by it (`collide/records.rs`).
-    pub feature: u32,
 }

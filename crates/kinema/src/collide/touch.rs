@@ -27,7 +27,7 @@
 //! touches a step); the events wait, in order, until they are taken.
 
 use super::contact::{Contact, Partner};
-use super::records::pair_of as ordered;
+use super::records::key_of as ordered;
 use crate::vec3;
 
 /// One begin or end of touch.
@@ -216,7 +216,6 @@ mod tests {
         Contact {
             i,
             other,
-            feature: 0,
             normal: [0.0, 0.0, 1.0],
             overlap,
             u_n: 0.0,

@@ -77,8 +77,9 @@ impl World {
     }
 
     /// The impulse model's records carried to the next step: each contact of the last step
-    /// (its particle, partner, the collider's feature, its solve stage's impulse in N·s and
-    /// whether it carried load), sorted; empty without collisions.
+    /// (its particle, partner, its solve stage's impulse in N·s and whether it carried
+    /// load), sorted (a collider's several contacts with one particle in the order of its
+    /// features); empty without collisions.
     pub fn collision_carry(&mut self) -> Vec<ContactRecord> {
         self.restore_user_order();
         self.collide_stage.as_ref().map(|c| c.all_warm()).unwrap_or_default()
@@ -184,24 +185,21 @@ impl World {
     }
 
     /// Gives the impulse model back what [`World::collision_carry`] took (a checkpoint's);
-    /// checks the particles, colliders and features it names.
+    /// checks the particles and colliders it names.
     pub fn restore_collision_carry(&mut self, carry: Vec<ContactRecord>) -> Result<(), Error> {
-        let (n, colliders) = (self.particles.len(), self.colliders());
+        let (n, colliders) = (self.particles.len(), self.colliders().len());
         if let Some(k) = carry.iter().position(|r| {
             r.i >= n
                 || !r.impulse.iter().all(|c| c.is_finite())
                 || match r.other {
-                    Partner::Particle(j) => j >= n || r.feature != 0,
-                    Partner::Collider(c) => colliders.get(c).is_none_or(|c| r.feature as usize >= c.features()),
+                    Partner::Particle(j) => j >= n,
+                    Partner::Collider(c) => c >= colliders,
                 }
         }) {
             return Err(Error::invalid(
                 format!("collision_carry[{k}]"),
                 format!("{:?}", carry[k]),
-                format!(
-                    "contacts between the {n} particles and {} colliders, each with one of its collider's features (0 for a pair) and finite impulses",
-                    colliders.len()
-                ),
+                format!("contacts between the {n} particles and {colliders} colliders, with finite impulses"),
             ));
         }
         match &mut self.collide_stage {

@@ -506,7 +506,6 @@ impl EventDriven {
         let contact = Contact {
             i: wi,
             other: Partner::Particle(wj),
-            feature: 0,
             normal: vec3::scale(1.0 / dist, d),
             overlap: self.radius[i] + self.radius[j] - dist,
             u_n: 0.0,
@@ -577,7 +576,6 @@ impl EventDriven {
         let contact = Contact {
             i: wi,
             other: Partner::Collider(wall.collider),
-            feature: 0,
             normal: wall.normal,
             overlap: self.radius[i] - vec3::dot(vec3::sub(b.x, wall.point), wall.normal),
             u_n: 0.0,

@@ -138,12 +138,8 @@ impl ImpulseModel {
             self.touched.mark(m);
             work.push(m);
         }
-        self.records.append(
-            island
-                .records
-                .iter()
-                .map(|r| ContactRecord::loaded(r.i, r.other, r.feature, r.impulse)),
-        );
+        self.records
+            .append(island.records.iter().map(|r| ContactRecord::loaded(r.i, r.other, r.impulse)));
         1
     }
 
@@ -502,7 +498,6 @@ pub(crate) fn overlap_at(radius: &[f64], colliders: &[Collider], domain: &Domain
                 let c = Contact {
                     i,
                     other,
-                    feature: t.feature,
                     normal: t.normal,
                     overlap: t.overlap,
                     u_n: 0.0,

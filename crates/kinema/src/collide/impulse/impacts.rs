@@ -625,7 +625,6 @@ fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event, h: f64) -> O
     Some(Contact {
         i: e.i,
         other: e.partner,
-        feature: e.wall as u32,
         normal,
         overlap: 0.0,
         u_n: 0.0,

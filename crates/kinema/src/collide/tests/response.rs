@@ -9,7 +9,6 @@ fn pair(i: usize, j: usize, normal: [f64; 3], overlap: f64) -> Contact {
     Contact {
         i,
         other: Partner::Particle(j),
-        feature: 0,
         normal,
         overlap,
         u_n: 0.0,
