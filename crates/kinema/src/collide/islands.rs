@@ -497,6 +497,7 @@ fn colour(
 mod tests {
     use super::super::colliders::{Collider, Plane, Surface};
     use super::*;
+    use crate::collide::sweeps::PARALLEL_COLOUR;
 
     fn floor() -> Vec<Collider> {
         vec![Collider::Plane(
@@ -797,19 +798,22 @@ mod tests {
 
     #[test]
     fn a_coloured_island_is_the_same_on_any_number_of_threads_and_holds_the_block_up() {
-        // A block of 12·12·6 balls: 2,448 contacts, one island, coloured, with colours large
+        // A block of 16·16·6 balls: 4,416 contacts, one island, coloured, with colours large
         // enough to be swept on threads. Its soft step on 1, 2 and 3 threads, bit for bit; and
         // the physics of a plastic block landing on a floor (e = 0): every ball stops, the
-        // floor takes the block's momentum, 864 kg · 1 m/s, to the solver's tolerance, and the
-        // solve lifts the block out of the floor by the step's fall (it ends touching).
-        let (contacts, v, x) = block(12, 12, 6, H);
+        // floor takes the block's momentum, 1,536 kg · 1 m/s, to the solver's tolerance, and
+        // the solve lifts the block out of the floor by the step's fall (it ends touching).
+        let (contacts, v, x) = block(16, 16, 6, H);
         let inv_mass = vec![1.0; v.len() / 3];
         let targets = targets(&contacts);
         let islands = Islands::find(&contacts, &inv_mass);
-        assert_eq!((islands.len(), islands.island(0).len()), (1, 2448));
+        assert_eq!((islands.len(), islands.island(0).len()), (1, 4416));
         let mut groups = Vec::new();
         colour(islands.island(0), &contacts, &inv_mass, |q| q, &mut groups);
-        assert!(groups.iter().any(|g| g.together && g.range.len() >= 256), "{groups:?}");
+        assert!(
+            groups.iter().any(|g| g.together && g.range.len() >= PARALLEL_COLOUR),
+            "{groups:?}"
+        );
         let floor = floor();
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
@@ -834,7 +838,7 @@ mod tests {
             .filter(|(_, c)| c.partner_particle().is_none())
             .map(|(t, _)| t[2])
             .sum();
-        assert!((floor - 864.0).abs() < 1e-6, "{floor}");
+        assert!((floor - 1536.0).abs() < 1e-6, "{floor}");
         let mut after = v.clone();
         for (c, t) in contacts.iter().zip(&totals) {
             vec3::add_scaled(&mut after, c.i, 1.0, *t);
@@ -846,7 +850,7 @@ mod tests {
         assert!(fastest < 1e-6, "{fastest}");
         // every ball back at its lattice height (the bottom layer touching the floor at −½)
         for (q, z) in x_after.iter().skip(2).step_by(3).enumerate() {
-            let layer = (q / 144) as f64;
+            let layer = (q / 256) as f64;
             assert!((z - layer).abs() < 1e-9, "ball {q} at z = {z}");
         }
     }
