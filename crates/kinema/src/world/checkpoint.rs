@@ -87,10 +87,16 @@ impl World {
 
     /// The impulse model's candidate list as built (`ImpulseModel::list_carry`): the
     /// positions it was built at (m, 3 per particle) and its skin (m); `None` before a first
-    /// build or without collisions.
+    /// build, without collisions, or when the list is stale (the particles changed since).
     pub fn list_carry(&mut self) -> Option<(Vec<f64>, f64)> {
         self.restore_user_order();
-        self.collide_stage.as_ref()?.impulse.list_carry()
+        let n = 3 * self.particles.len();
+        // (a list built before particles were added or removed is stale: built afresh)
+        self.collide_stage
+            .as_ref()?
+            .impulse
+            .list_carry()
+            .filter(|(built_at, _)| built_at.len() == n)
     }
 
     /// Builds the impulse model's candidate list where [`World::list_carry`] says it was
@@ -115,10 +121,10 @@ impl World {
         let Some(stage) = &mut self.collide_stage else {
             return Err(Error::invalid("list_built_at", n, "no candidate list: collisions are off"));
         };
-        let (colliders, domain) = (stage.colliders.clone(), stage.domain);
+        let radius = &self.particles.radius;
         stage
             .impulse
-            .restore_list(&built_at, skin, &self.particles.radius, &colliders, &domain)
+            .restore_list(&built_at, skin, radius, &stage.colliders, &stage.domain)
     }
 
     /// What sleeping carries to the next step (`collide/sleep.rs`): each particle's calm time

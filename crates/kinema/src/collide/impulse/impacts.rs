@@ -482,24 +482,32 @@ impl ImpulseModel {
     /// four of its 10 cm sweep), one with a skin of [`LEAST_SWEEPS`] of `largest`, which holds
     /// for this step and is built again at the next.
     fn build_list(&mut self, set: &StageSetting<'_>, x: &[f64], largest: f64) -> Result<(), Error> {
-        let n = set.radius.len();
-        let mean_radius = set.radius.iter().sum::<f64>() / n.max(1) as f64;
-        self.base_skin = SKIN_PER_RADIUS * mean_radius;
-        let scale = set.colliders.iter().map(collider_scale).fold(0.0, f64::max);
-        let mut build = |skin: f64| {
-            self.list.built_at.clear();
-            self.list.verified = None;
-            let build = ListBuild {
-                skin,
-                collider_scale: scale,
-            };
-            self.list
-                .update(&mut self.grid, x, set.radius, set.colliders, set.domain, || build)
-        };
-        match build(self.base_skin.max(4.0 * largest)) {
-            Err(Error::OutOfMemory { .. }) if LEAST_SWEEPS * largest > self.base_skin => build(LEAST_SWEEPS * largest),
+        let (radius, colliders, domain) = (set.radius, set.colliders, set.domain);
+        self.base_skin = base_skin(radius);
+        match self.build_with_skin(x, self.base_skin.max(4.0 * largest), radius, colliders, domain) {
+            Err(Error::OutOfMemory { .. }) if LEAST_SWEEPS * largest > self.base_skin => {
+                self.build_with_skin(x, LEAST_SWEEPS * largest, radius, colliders, domain)
+            }
             done => done,
         }
+    }
+
+    /// Builds the candidate list at `x` (m, 3 per particle) with `skin` (m).
+    fn build_with_skin(
+        &mut self,
+        x: &[f64],
+        skin: f64,
+        radius: &[f64],
+        colliders: &[Collider],
+        domain: &Domain,
+    ) -> Result<(), Error> {
+        let build = ListBuild {
+            skin,
+            collider_scale: colliders.iter().map(collider_scale).fold(0.0, f64::max),
+        };
+        self.list.built_at.clear();
+        self.list.verified = None;
+        self.list.update(&mut self.grid, x, radius, colliders, domain, || build)
     }
 
     /// The candidate list's build as a checkpoint keeps it: the positions it was built at
@@ -525,18 +533,14 @@ impl ImpulseModel {
         colliders: &[Collider],
         domain: &Domain,
     ) -> Result<(), Error> {
-        let n = radius.len();
-        let mean_radius = radius.iter().sum::<f64>() / n.max(1) as f64;
-        self.base_skin = SKIN_PER_RADIUS * mean_radius;
-        let build = ListBuild {
-            skin,
-            collider_scale: colliders.iter().map(collider_scale).fold(0.0, f64::max),
-        };
-        self.list.built_at.clear();
-        self.list.verified = None;
-        self.list
-            .update(&mut self.grid, built_at, radius, colliders, domain, || build)
+        self.base_skin = base_skin(radius);
+        self.build_with_skin(built_at, skin, radius, colliders, domain)
     }
+}
+
+/// The least skin of a list of particles of these radii, m: [`SKIN_PER_RADIUS`] of the mean.
+fn base_skin(radius: &[f64]) -> f64 {
+    SKIN_PER_RADIUS * radius.iter().sum::<f64>() / radius.len().max(1) as f64
 }
 
 /// How many times the scene's extent a particle may travel in the rest of a step: more would
