@@ -10,50 +10,57 @@
 //! World::step_once()                  world/mod.rs: one step
 //! ├ World::place_moving_colliders()   world/collide.rs: moving colliders where the step ends
 //! ├ World::integrate()                world/integrate.rs: stage 1, into x_next, v_next
-//! └ World::collide()                  world/collide.rs: stages 2–4
-//!   └ CollideStage::run()             stage.rs: the settings, colliders, materials, books
-//!     └ ImpulseModel::run()           impulse/mod.rs: sleepers held; the step's parabolas,
-//!       │                             Paths::begin() (paths.rs)
-//!       └ ImpulseModel::run_on_paths()  impulse/mod.rs, its stages:
-//!         prepare()                   impulse/impacts.rs: the neighbour list made to hold for
-//!                                     the step's sweep, else rebuilt at x₀ by
+//! └ World::collide()                  world/collide.rs: stages 2–4, with what they see of the
+//!   │                                 world (CollideStage::impulse_and_setting(), stage.rs),
+//!   │                                 then their books (CollideStage::book_step())
+//!   └ ImpulseModel::step()            impulse/step.rs: sleepers held; the step's parabolas,
+//!                                     Paths::begin() (paths.rs); then the stage list
+//!                                     ImpulseStage::ALL (impulse/mod.rs), each stage timed:
+//!     list_stage()                    prepare() (impulse/impacts.rs): the neighbour list made
+//!                                     to hold for the step's sweep, else rebuilt at x₀ by
 //!                                     NeighbourList::update() (neighbour_list.rs) →
 //!                                     Grid::prepare(), Grid::partners_from() (broad_phase.rs);
-//!                                     the restitution threshold
-//!         wake_up()                   impulse/impacts.rs: a force-free world's wake times
-//!         impacts()                   impulse/impacts.rs, with ccd: every first impact,
-//!                                     Scene::all_impacts() (events.rs), into the queue; then in
-//!                                     time order: contact_at(), restitution_impulse()
-//!                                     (response.rs), distribute() (impulse/end_of_step.rs),
-//!                                     the two particles' next impacts, Scene::earliest()
-//!         Paths::finish()             paths.rs: hit particles end on their last parabola
-//!         end_contacts()              impulse/end_of_step.rs: the contacts at the step's end,
-//!                                     breadth first from the touched particles over the list:
-//!                                     pair_contact() (narrow_phase.rs), then the colliders'
+//!                                     the restitution threshold; wake_up() (impulse/impacts.rs): a
+//!                                     force-free world's wake times
+//!     impacts_stage()                 impacts() (impulse/impacts.rs), with ccd: every first
+//!                                     impact, Scene::all_impacts() (events.rs), into the
+//!                                     queue; then in time order: contact_at(),
+//!                                     restitution_impulse() (response.rs), distribute()
+//!                                     (impulse/end_of_step.rs), the two particles' next
+//!                                     impacts, Scene::earliest()
+//!     contacts_stage()                Paths::finish() (paths.rs): hit particles end on their
+//!                                     last parabola; end_contacts() (impulse/end_of_step.rs):
+//!                                     the contacts at the step's end, breadth first from the
+//!                                     touched particles over the list: pair_contact()
+//!                                     (narrow_phase.rs), then the colliders'
 //!                                     Collider::for_each_touch(), Collider::contact()
 //!                                     (colliders.rs)
-//!         solve()                     impulse/end_of_step.rs: each contact's record read by
-//!                                     Records::match_up() (records.rs), Target::new()
+//!     solve()                         impulse/end_of_step.rs: each contact's record
+//!                                     read by Records::match_up() (records.rs), Target::new()
 //!                                     (soft_step.rs), Islands::find_with() (islands.rs),
 //!                                     soft_step::idle(), islands::solve() → soft_step(),
 //!                                     island by island (at accuracy 'animation' with its
 //!                                     shock stages: shock.rs levels(), order()); the
 //!                                     step's records by Records::replace()
-//!         distribute()                impulse/end_of_step.rs: each total onto both particles
-//!         energy_books()              impulse/end_of_step.rs: the energy the stages took
-//!         settle()                    impulse/end_of_step.rs: calm islands fall asleep
-//!         max_overlap()               impulse/end_of_step.rs: the overlap left
-//!         Touches::end_step()         touch.rs: begin and end of touch, when recorded (the
-//!                                     impacts were noted by Touches::hit())
-//!         wake_up()                   impulse/impacts.rs: the next steps' wake times
+//!     apply_stage()                   distribute() (impulse/end_of_step.rs): each total onto
+//!                                     both particles; energy_books(): the energy the stages
+//!                                     took
+//!     settle_stage()                  settle() (impulse/end_of_step.rs): calm islands fall
+//!                                     asleep; max_overlap(): the overlap left;
+//!                                     Touches::end_step() (touch.rs): begin and end of touch,
+//!                                     when recorded (the impacts were noted by Touches::hit())
+//!     wake_stage()                    wake_up() (impulse/impacts.rs): the next steps' wake
+//!                                     times
 //! ```
 //!
 //! The order matters: the impacts change the paths the end-of-step contacts are found on,
 //! and the end-of-step solve needs contacts that describe the positions the impacts left.
-//! `impulse::ImpulseStage` names these stages as they are timed (`World.stage_times()`):
-//! list (`prepare`, the first `wake_up`), impacts, contacts (`Paths::finish`,
-//! `end_contacts`), solve, apply (`distribute`, `energy_books`), settle (`settle`,
-//! `max_overlap`, the periodic wrap) and wake (the last `wake_up`). Their cost follows what
+//! `impulse::ImpulseStage` names the stages, and each has its own timer in
+//! `World.stage_times()` (the seed's detect, respond and distribute are sums of the same
+//! laps). The deepest call of a step, to the impulse of one contact in the solve, is eight
+//! calls below `World::step_once`: `collide` → `ImpulseModel::step` → `solve` →
+//! `islands::solve` → `Local::solve` → `soft_step` → `sweeps` → `Row::visit` (the last two
+//! inlined into the soft step, so that seven are frames at run time). Their cost follows what
 //! the step touched: the touched particles are flags and a list (`marks.rs`), an island
 //! whose contacts the soft step would leave alone is not solved (`soft_step::idle`), and in
 //! a force-free world a parting contact that carried nothing is not carried into the next

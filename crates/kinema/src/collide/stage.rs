@@ -789,19 +789,10 @@ impl CollideStage {
         placement::check(&mut self.impulse.grid, &place, &self.domain, &self.colliders, rule)
     }
 
-    /// Stages 2–4 of the impulse model on the step from the particles' state (x0, v0) to the
-    /// integrated (x1, v1), updated in place ([`ImpulseModel::run`]); books what they did and
-    /// their time, and returns whether anything changed.
-    /// With spin, `omega` (the angular velocities, rad/s, 3 per particle; empty without) is
-    /// updated in place too.
-    pub fn run(
-        &mut self,
-        frame: &StepFrame<'_>,
-        p: &Particles,
-        x1: &mut [f64],
-        v1: &mut [f64],
-        omega: &mut [f64],
-    ) -> Result<bool, Error> {
+    /// The impulse model, lent for a step (`World::collide` runs its
+    /// [`ImpulseModel::step`]), and what its stages see of the world: these settings,
+    /// colliders, domain and materials, and the particles `p`.
+    pub fn impulse_and_setting<'a>(&'a mut self, p: &'a Particles) -> (&'a mut ImpulseModel, StageSetting<'a>) {
         let table = MaterialTable::uniform(self.material).with_colliders(&self.colliders);
         let set = StageSetting {
             colliders: &self.colliders,
@@ -825,7 +816,12 @@ impl CollideStage {
             rolling_friction: self.params.rolling_friction,
             accuracy: self.params.accuracy,
         };
-        let (changed, stats, times) = self.impulse.run(&set, frame, &p.x, &p.v, x1, v1, omega)?;
+        (&mut self.impulse, set)
+    }
+
+    /// Books what a step of the impulse model did (`stats`) and its time: the sums over
+    /// steps, and what the particles gave each collider.
+    pub fn book_step(&mut self, stats: CollisionStats, times: CollisionTimes) {
         self.collider_books.resize(self.colliders.len(), ColliderBooks::default());
         for (books, given) in self.collider_books.iter_mut().zip(&self.impulse.collider_books) {
             for k in 0..3 {
@@ -842,7 +838,6 @@ impl CollideStage {
         }
         self.last = stats;
         self.total.accumulate(&stats);
-        Ok(changed)
     }
 
     /// Why the event-driven path cannot run on this stage (a sentence), or `None`: it needs
@@ -899,7 +894,7 @@ impl CollideStage {
 
     /// Runs the particles `p` by events from time `t0` to `t1` (s) under the uniform field
     /// `field` (m/s²) ([`EventDriven::advance`]),
-    /// keeping the state for the next call; books the impacts like [`CollideStage::run`]. The
+    /// keeping the state for the next call; books the impacts like [`CollideStage::book_step`]. The
     /// caller checked [`CollideStage::events_refused`].
     pub fn advance_events(
         &mut self,

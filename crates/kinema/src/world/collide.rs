@@ -1,5 +1,5 @@
 //! Stages 2–4 of the world's step, the collide stage, as the world holds it: the step's call
-//! ([`World::collide`], which runs `collide::stage::CollideStage`) and the user's side of it:
+//! ([`World::collide`], which runs the impulse model's stages, `collide/impulse/step.rs`) and the user's side of it:
 //! turning collisions on, the contact model (the spring–dashpot model's force is the collide
 //! stage's, lent to each evaluation: `forces.rs`), the particles' own materials, colliders, periodic axes, and what the
 //! stage found (contacts, their books).
@@ -64,10 +64,14 @@ impl World {
             wrapped: steady && accel.is_some(),
             may_sleep,
         };
-        let ran = stage.run(&frame, p, x1, v1, &mut omega);
+        let (impulse, set) = stage.impulse_and_setting(p);
+        let ran = impulse.step(&set, &frame, &p.x, &p.v, x1, v1, &mut omega);
         self.particles.omega = omega;
         let changed = match ran {
-            Ok(changed) => changed,
+            Ok((changed, stats, times)) => {
+                stage.book_step(stats, times);
+                changed
+            }
             Err(Error::Diverged { reason, particle, .. }) => return Err(self.diverged(reason, particle)),
             Err(Error::InvalidParameter { .. }) if Self::beyond_geometry(&self.x_next, &self.v_next) => {
                 // The collision stages' own quantities (a margin, a threshold) overflowed: the

@@ -1,4 +1,4 @@
-//! The end of an impulse-model step (stages 2–4 after the impacts, [`ImpulseModel::run`]):
+//! The end of an impulse-model step (stages 2–4 after the impacts, [`ImpulseModel::step`]):
 //! the contacts of the touched particles and of the piles they reach (detection), the
 //! velocity solve of Newton's law with its warm start and the overlap removed (response),
 //! each impulse onto both particles and the energy books (distribution).

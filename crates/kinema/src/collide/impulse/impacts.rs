@@ -1,5 +1,5 @@
 //! Continuous detection of the impulse model and its impacts in time order (stages 2–4 inside
-//! the step, [`ImpulseModel::run`]): the neighbour list made to hold for the step's sweep,
+//! the step, [`ImpulseModel::step`]): the neighbour list made to hold for the step's sweep,
 //! each particle's first impact into the queue, the impacts popped in time order, each
 //! resolved by Newton's law and distributed at its time, and the force-free world's wake
 //! times (`wake.rs`) for the next steps.
@@ -191,7 +191,7 @@ impl ImpulseModel {
         Ok((threshold, top.first, kick))
     }
 
-    /// Continuous detection and the impacts in time order (see [`ImpulseModel::run`]):
+    /// Continuous detection and the impacts in time order (see [`ImpulseModel::step`]):
     /// returns the time spent detecting, responding and distributing, and whether any impulse
     /// was applied. `reach`: the largest swept displacement from the list's build positions.
     pub(super) fn impacts(

@@ -469,3 +469,124 @@ fn the_map_check_fails_on_what_is_gone_or_runs_only_in_tests() {
     assert_eq!(blanked.lines().count(), 2);
     assert!(!blanked.contains("fake") && blanked.contains("real();"), "{blanked}");
 }
+
+/// The body of `named`'s definition (the lines from its `fn` to the brace that closes it),
+/// found as [`check`] finds definitions; `None` if there is no such definition.
+fn body_of(engine: &Engine, named: &Named) -> Option<Vec<String>> {
+    let name = named.name.as_str();
+    let qualifier = named.qualifier.as_deref();
+    for (file, lines) in &engine.files {
+        for (k, line) in lines.iter().enumerate() {
+            if !word_at(line, name).iter().any(|&at| line[..at].trim_end().ends_with("fn")) {
+                continue;
+            }
+            let fits = match qualifier {
+                Some(t) if t.starts_with(|c: char| c.is_ascii_uppercase()) => lines[..k]
+                    .iter()
+                    .rev()
+                    .find(|l| l.starts_with("impl") || l.trim_end() == "}")
+                    .is_some_and(|l| l.starts_with("impl") && !word_at(l, t).is_empty()),
+                Some(m) => {
+                    let stem = file.file_stem().unwrap().to_str().unwrap();
+                    (stem == m || (stem == "mod" && file.parent().and_then(|p| p.file_name()).and_then(|n| n.to_str()) == Some(m)))
+                        && !line.starts_with(char::is_whitespace)
+                }
+                None => true,
+            };
+            if !fits {
+                continue;
+            }
+            let mut depth = 0i64;
+            for (m, l) in lines.iter().enumerate().skip(k) {
+                depth += l.matches('{').count() as i64 - l.matches('}').count() as i64;
+                if depth == 0 && l.contains('}') {
+                    return Some(lines[k..=m].to_vec());
+                }
+            }
+        }
+    }
+    None
+}
+
+/// Whether `body` calls `callee` (`name(`, `name::<…>(`, as `.name(`, `Type::name(` or
+/// `module::name(` when it is qualified).
+fn calls(body: &[String], callee: &Named) -> bool {
+    let name = callee.name.as_str();
+    body.iter().skip(1).any(|line| {
+        word_at(line, name).into_iter().any(|at| {
+            let after = line[at + name.len()..].trim_start();
+            let before = line[..at].trim_end();
+            let call = after.starts_with('(') || after.starts_with("::<");
+            let how = match callee.qualifier.as_deref() {
+                Some(q) => before.ends_with('.') || before.ends_with(&format!("{q}::")) || before.ends_with("Self::"),
+                None => !before.ends_with('.'),
+            };
+            call && how
+        })
+    })
+}
+
+/// The links of `chain` (names as the maps write them, caller first) that the engine's code
+/// does not make: each name must call the next, or hand the function it calls a closure that
+/// does (the caller's caller calls it: `soft_step` hands `sweeps` the visit).
+fn broken_links(engine: &Engine, chain: &[&str]) -> Vec<String> {
+    let named: Vec<Named> = chain
+        .iter()
+        .map(|c| named_in(&format!("{c}()")).into_iter().next().expect("a name"))
+        .collect();
+    let mut broken = Vec::new();
+    for k in 1..named.len() {
+        let Some(body) = body_of(engine, &named[k - 1]) else {
+            broken.push(format!("{}: no definition", named[k - 1]));
+            continue;
+        };
+        let through_closure = k >= 2 && body_of(engine, &named[k - 2]).is_some_and(|b| calls(&b, &named[k]));
+        if !calls(&body, &named[k]) && !through_closure {
+            broken.push(format!("{} does not call {}", named[k - 1], named[k]));
+        }
+    }
+    broken
+}
+
+/// The deepest call of a step as `collide/mod.rs`'s doc states it: the names in backticks
+/// after "calls below `World::step_once`:", up to the next full stop.
+fn deepest_call() -> Vec<String> {
+    let doc = std::fs::read_to_string(crate_root().join("src/collide/mod.rs")).unwrap();
+    let text: String = doc
+        .lines()
+        .map_while(|l| l.strip_prefix("//!"))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let from = text.find("calls below `World::step_once`:").expect("the doc states the deepest call");
+    let rest = &text[from + "calls below `World::step_once`:".len()..];
+    let sentence = &rest[..rest.find(" (").unwrap_or(rest.len())];
+    sentence.split('`').skip(1).step_by(2).map(str::to_string).collect()
+}
+
+#[test]
+fn the_deepest_call_of_a_step_is_at_most_eight_calls_below_step_once() {
+    // The bound on reading one step: from `World::step_once` to the impulse of one
+    // contact in the solve, at most 8 calls. The chain is the doc's, and every link of it is
+    // checked against the code: a new layer makes the chain the doc states false.
+    let engine = Engine::read();
+    let chain = deepest_call();
+    assert!(chain.len() <= 8, "{} calls below World::step_once: {chain:?}", chain.len());
+    assert_eq!(chain.last().map(String::as_str), Some("Row::visit"), "{chain:?}");
+    let mut full = vec!["World::step_once"];
+    full.extend(chain.iter().map(|c| c.trim_end_matches("()")));
+    // the doc writes the world's methods and the model's by their bare names where clear
+    let full: Vec<String> = full
+        .iter()
+        .map(|c| match *c {
+            "collide" => "World::collide".to_string(),
+            "solve" => "ImpulseModel::solve".to_string(),
+            other => other.to_string(),
+        })
+        .collect();
+    let full: Vec<&str> = full.iter().map(String::as_str).collect();
+    let broken = broken_links(&engine, &full);
+    assert!(broken.is_empty(), "the deepest call the doc states is not the code's: {broken:?}");
+    // and the check fails on a chain with a link the code does not make
+    let wrong = broken_links(&engine, &["World::step_once", "World::collide", "soft_step", "Row::visit"]);
+    assert_eq!(wrong, vec!["World::collide does not call soft_step".to_string()]);
+}
