@@ -706,10 +706,10 @@ def work_precision(args: argparse.Namespace, repeat: int, peers: dict[str, str |
     tables: list[str] = []
     for name in args.scenes:
         s = SCENES[name]
-        entries: list[tuple[str, dict | None]] = [("kinema", k) for k in KINEMA_SETTINGS]
-        if peers.get(s.peer):
+        entries: list[tuple[str, dict | None]] = [("kinema", k) for k in KINEMA_SETTINGS] if "kinema" in args.engines else []
+        if peers.get(s.peer) and s.peer in args.engines:
             entries.append((s.peer, None))
-        if peers.get(s.engine_peer):
+        if peers.get(s.engine_peer) and s.engine_peer in args.engines:
             listed = BOX2D_SETTINGS_QUICK if (s.engine_peer == "box2d" and args.quick) else BOX2D_SETTINGS if s.engine_peer == "box2d" else JOLT_SETTINGS
             entries += [(s.engine_peer, {**k, "threads": args.peer_threads}) for k in listed]
         runs: list[list[dict]] = [[] for _ in entries]
@@ -800,6 +800,13 @@ def main() -> int:
         help="run the peers (--no-peers: kinema alone, e.g. for pour3d, whose pybullet run takes ~30 min)",
     )
     ap.add_argument(
+        "--engines",
+        nargs="+",
+        choices=ENGINE_ORDER,
+        default=list(ENGINE_ORDER),
+        help="the engines to run (default all; e.g. --engines kinema jolt leaves out pour3d's 30-min pybullet run)",
+    )
+    ap.add_argument(
         "--work-precision",
         action="store_true",
         help="each engine at several settings (KINEMA_SETTINGS, BOX2D_SETTINGS, JOLT_SETTINGS): CPU s beside the rest figures; rows also to out/piles_work_precision.json",
@@ -828,8 +835,8 @@ def main() -> int:
     scaling: dict[int, list[dict]] = {1: [], 2: []}
     for name in args.scenes:
         s = SCENES[name]
-        peer = s.peer if peers[s.peer] and args.peers else None
-        other = s.engine_peer if peers.get(s.engine_peer) else None
+        peer = s.peer if peers[s.peer] and args.peers and s.peer in args.engines else None
+        other = s.engine_peer if peers.get(s.engine_peer) and s.engine_peer in args.engines else None
         runs: dict[str, list[dict]] = {"kinema": [], **({peer: []} if peer else {}), **({other: []} if other else {})}
         scale = args.threads_scaling and name == "pour3d"
         # the runs of each engine: kinema at --threads, the peer, and for the scaling kinema at
