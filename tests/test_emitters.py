@@ -454,3 +454,18 @@ def test_the_engine_refuses_bad_deaths_with_the_parameter_named():
         w._core.set_deaths(None, [("sphere", [0.0, 0.0, 0.0], -1.0)])
     with pytest.raises(ValueError, match=r"unknown"):
         w._core.set_deaths(None, [("cone", [0.0, 0.0, 0.0], 1.0)])
+
+
+def test_the_work_limit_of_run_counts_what_the_emitters_will_add():
+    # An empty world with an emitter: the work of a run is the births over it, each counted
+    # from the start as the command line counts a scene's (10,001 births × 100 steps = 1e6
+    # particle-steps at most). Before, World.run counted the particles now (none) and ran
+    # whatever the emitters made, until memory ran out for a fast one.
+    w = kinema.World(dt=1e-2)
+    w.add(Emitter(rate=1e4, center=(0, 0, 0), speed=1.0, mass=1.0, seed=1))
+    with pytest.raises(ValueError, match=r"1\.0e\+06 particle-steps \(0 particles and up to 10,001 from the emitters × 100 steps.*over max_work = 1\.0e\+05"):
+        w.run(1.0, fps=100, max_work=1e5)
+    assert len(w) == 0 and w.time == 0.0  # refused before any step
+    # within the limit it runs, and its births are at most those counted (501 by t = 0.05 s)
+    traj = w.run(0.05, fps=100, max_work=1e6)
+    assert 0 < len(w) <= 501 and len(traj.t) == 6

@@ -973,17 +973,20 @@ def resume_run(path: str | Path, callback: Any = None, *, max_work: float | None
     included, the same bits as the run never stopped. The checkpoint is checked first, as
     `load_checkpoint` checks it, and the run's progress and frames with it
     (`CheckpointError`). `max_work`: as `World.run`'s, the most particle-steps the rest
-    of the run may take (particles now × the steps left), refused before any step with a
+    of the run may take (particles now and those the emitters will add × the steps left),
+    refused before any step with a
     `ValueError` (`None`: no limit)."""
     limit = _checks.real("max_work", max_work, optional=True)
     if limit is not None and not limit > 0:
         raise ValueError(f"max_work = {describe(max_work)} is invalid: it must be a number of particle-steps > 0, or None for no limit")
     world, run = load_run(path)
     steps = (run["frames_total"] - run["frames_done"]) * run["per_frame"]
-    work = float(len(world)) * steps
+    born = world._births_until(world.time + steps * world.dt)
+    work = float(len(world) + born) * steps
     if limit is not None and work > limit:
+        whom = f"{len(world):,} particles" + (f" and up to {born:,} from the emitters" if born else "")
         raise ValueError(
-            f"{path}: the rest of the run would take {work:.1e} particle-steps ({len(world):,} particles × {steps:,} steps of dt = {world.dt:g} s, "
+            f"{path}: the rest of the run would take {work:.1e} particle-steps ({whom} × {steps:,} steps of dt = {world.dt:g} s, "
             f"{run['frames_total'] - run['frames_done']:,} frames to go), over max_work = {limit:.1e}; give max_work=None (or a larger number) to run it anyway"
         )
     return world, world._record(run, callback, Path(path))

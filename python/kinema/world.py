@@ -667,7 +667,8 @@ class World(WorldCollisions):
         (``kinema.checkpoint``), replacing the last; ``kinema.resume_run(path)`` goes on from
         it to the same end, bit for bit as this run.
 
-        ``max_work``: the most particle-steps (particles now × steps) the run may take; a run
+        ``max_work``: the most particle-steps (particles now and those the emitters will add,
+        × steps) the run may take; a run
         over it is refused before any step with a ``ValueError`` that gives the estimate
         (default ``MAX_WORK`` = 1e11, the command line's limit: hours of work; ``None``: no
         limit)."""
@@ -694,10 +695,13 @@ class World(WorldCollisions):
         limit = _checks.real("max_work", max_work, optional=True)
         if limit is not None and not limit > 0:
             raise ValueError(f"max_work = {_checks.describe(max_work)} is invalid: it must be a number of particle-steps > 0, or None for no limit")
-        work = float(len(self)) * frames * per_frame
+        born = self._births_until(self.time + frames * per_frame * self.dt)
+        n = len(self) + born
+        work = float(n) * frames * per_frame
         if limit is not None and work > limit:
+            whom = f"{len(self):,} particles" + (f" and up to {born:,} from the emitters" if born else "")
             raise ValueError(
-                f"the run would take {work:.1e} particle-steps ({len(self):,} particles × {frames * per_frame:,} steps of dt = {self.dt:g} s "
+                f"the run would take {work:.1e} particle-steps ({whom} × {frames * per_frame:,} steps of dt = {self.dt:g} s "
                 f"for duration = {duration:g} s), over max_work = {limit:.1e}; give max_work=None (or a larger number) to run it anyway"
             )
         self._push()
@@ -707,6 +711,12 @@ class World(WorldCollisions):
         rec.add(self)
         run = {"frames_done": 0, "frames_total": frames, "per_frame": per_frame, "every": every, "fps": fps, "recorder": rec}
         return self._record(run, callback, None if checkpoint is None else Path(checkpoint))
+
+    def _births_until(self, t: float) -> int:
+        """How many particles the emitters will add from now to time ``t`` (s), those held
+        back for their place included: a work estimate counts each from the start, as the
+        command line counts a scene's."""
+        return sum(max(0, s.due(t) - s.emitted) + (0 if s.waiting is None else len(s.waiting["m"])) for s in self._emitters)
 
     def _record(self, run: dict, callback: Any, checkpoint: Path | None) -> Trajectory:
         """The frames of ``run`` from ``frames_done`` on, writing ``checkpoint`` every
