@@ -215,6 +215,20 @@ impl Motion {
         })
     }
 
+    /// Whether the collider moves at some time within [t0, t1] (s): a steady motion with a
+    /// velocity or an angular velocity always, keyframes between their first key and their
+    /// last (before the first and after the last the collider rests at them).
+    pub fn moves_within(&self, t0: f64, t1: f64) -> bool {
+        match self {
+            Motion::Steady {
+                velocity,
+                angular_velocity,
+                ..
+            } => *velocity != [0.0; 3] || *angular_velocity != [0.0; 3],
+            Motion::Keyframes { times, .. } => t1 > times[0] && t0 < times[times.len() - 1],
+        }
+    }
+
     /// The displacement at time `t` (s) and the surface's velocity field then.
     pub fn at(&self, t: f64) -> (Pose, SurfaceVelocity) {
         match self {

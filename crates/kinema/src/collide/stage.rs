@@ -629,18 +629,24 @@ impl CollideStage {
         Ok(())
     }
 
-    /// Places every moving collider where its motion has it at time `t` (s); returns whether
-    /// any collider has a motion.
-    pub fn place_colliders(&mut self, t: f64) -> Result<bool, Error> {
+    /// Places the colliders with a prescribed motion where it has them at the step's end `t1`
+    /// (s); returns whether any of them moves within the step from `t0` (a keyframed one
+    /// outside its keys rests: [`Motion::moves_within`]).
+    pub fn place_colliders(&mut self, t0: f64, t1: f64) -> Result<bool, Error> {
         let mut any = false;
         for (k, m) in self.motions.iter().enumerate() {
             if let Some((motion, rest)) = m {
-                let (pose, velocity) = motion.at(t);
+                let (pose, velocity) = motion.at(t1);
                 self.colliders[k] = rest.posed(&pose, velocity)?;
-                any = true;
+                any |= motion.moves_within(t0, t1);
             }
         }
         Ok(any)
+    }
+
+    /// Whether some collider moves within the step from `t0` to `t1` (s).
+    pub fn moves_within(&self, t0: f64, t1: f64) -> bool {
+        self.motions.iter().flatten().any(|(m, _)| m.moves_within(t0, t1))
     }
 
     /// Whether some collider has a prescribed motion.

@@ -17,6 +17,7 @@ impl World {
     /// equal and opposite on the two particles (see [`CollisionParams`]).
     pub(super) fn collide(&mut self) -> Result<(), Error> {
         let n = 3 * self.particles.len();
+        let t_end = self.params_time_after(self.steps + 1);
         let Some(stage) = self.collide_stage.as_mut() else {
             return Ok(());
         };
@@ -46,7 +47,7 @@ impl World {
         // each particle's wake time and looks only at those due (collide/wake.rs). Verlet's
         // force-free pass wrapped x1 into the periodic cell already.
         // (a moving collider meets particles that stay put: no wake times, no sleep)
-        let moving = stage.has_motion();
+        let moving = stage.moves_within(self.time, t_end);
         let steady = self.forces.is_empty() && !moving;
         // Islands may sleep under forces that cannot pull a sleeper nobody looks at: none
         // depends on the positions or adds energy (gravity, drag; `collide/sleep.rs`).
@@ -283,13 +284,15 @@ impl World {
         books
     }
 
-    /// Places the moving colliders where their motions have them at time `t` (s) (the
-    /// spring–dashpot force reads them there); returns whether any collider moves.
-    pub(super) fn place_moving_colliders(&mut self, t: f64) -> Result<bool, Error> {
+    /// Places the moving colliders where their motions have them at the step's end `t1` (s)
+    /// (the spring–dashpot force reads them there); returns whether any collider moves within
+    /// the step from the world's time.
+    pub(super) fn place_moving_colliders(&mut self, t1: f64) -> Result<bool, Error> {
+        let t0 = self.time;
         let Some(stage) = self.collide_stage.as_mut() else {
             return Ok(false);
         };
-        stage.place_colliders(t)
+        stage.place_colliders(t0, t1)
     }
 
     /// The colliders, in the order they were added (a moving one where it is now).
@@ -416,9 +419,14 @@ impl World {
     }
 
     /// What the collision stages did in the last step, and summed over all steps; `None`
-    /// without collisions.
+    /// without collisions. The particles and contacts asleep are those asleep now: a write
+    /// to the state, a removal or an addition since the last step may have woken them.
     pub fn collision_stats(&self) -> Option<(CollisionStats, CollisionStats)> {
-        self.collide_stage.as_ref().map(|c| (c.last, c.total))
+        self.collide_stage.as_ref().map(|c| {
+            let mut last = c.last;
+            (last.asleep, last.asleep_contacts) = c.impulse.asleep();
+            (last, c.total)
+        })
     }
 }
 

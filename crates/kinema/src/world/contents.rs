@@ -208,6 +208,11 @@ impl World {
             ));
         }
         self.restore_user_order();
-        self.particles.set_spin(range, omega, inertia, self.params.dim)
+        self.particles.set_spin(range.clone(), omega, inertia, self.params.dim)?;
+        if let (Some(_), Some(stage)) = (omega, &mut self.collide_stage) {
+            // a write to the state: a sleeper's island wakes (asleep it would ignore it)
+            stage.impulse.wake_particles(range);
+        }
+        Ok(())
     }
 }

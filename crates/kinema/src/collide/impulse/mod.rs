@@ -347,6 +347,27 @@ impl ImpulseModel {
         }
     }
 
+    /// Wakes the islands asleep of the particles `range` (their state was written), each with
+    /// its contacts' warm start; returns how many woke.
+    pub fn wake_particles(&mut self, range: std::ops::Range<usize>) -> usize {
+        let mut work = Vec::new();
+        let mut woke = 0;
+        for q in range {
+            if self.sleep.is_asleep(q) {
+                woke += self.wake_island(q, &mut work);
+            }
+        }
+        if woke > 0 {
+            self.records.sort();
+        }
+        woke
+    }
+
+    /// The particles and the contacts in the islands asleep now.
+    pub fn asleep(&self) -> (usize, usize) {
+        (self.sleep.asleep(), self.sleep.contacts())
+    }
+
     /// The awake contacts' records (`collide/records.rs`), sorted by key.
     pub(crate) fn records(&self) -> &[ContactRecord] {
         self.records.rows()

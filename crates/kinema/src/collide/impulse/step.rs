@@ -32,7 +32,8 @@ use crate::collide::books::ColliderBooks;
 use crate::collide::contact::action_reaction;
 use crate::collide::events::Paths;
 use crate::collide::islands::IslandStats;
-use crate::collide::neighbour_list::active_walls;
+use crate::collide::neighbour_list::{active_walls, CHUNK};
+use crate::collide::paths::{pair_toi, Toi};
 use crate::collide::records::ContactRecord;
 use crate::collide::Partner;
 use crate::error::Error;
@@ -91,8 +92,16 @@ impl ImpulseModel {
         } else if !self.sleep.calm.is_empty() {
             self.sleep.wake_all();
         }
-        // A particle asleep stays where it is, at rest: what the integrator made of it is
-        // dropped (x₀ = x₁, v₀ = v₁ = 0, and its path has no acceleration).
+        // An island asleep that an awake particle meets within the step wakes first, so that
+        // the step runs for it as for the awake, from what stage 1 made of it (a body held at
+        // rest would take the impact as an immovable stack of impacts). Any other particle
+        // asleep stays where it is, at rest: what the integrator made of it is dropped
+        // (x₀ = x₁, v₀ = v₁ = 0, and its path has no acceleration).
+        let woke = if self.sleep.any() {
+            self.wake_reached(set, frame, (x0, v0), (x1, v1))?
+        } else {
+            0
+        };
         let sleeping = self.sleep.any();
         if sleeping {
             for q in (0..x0.len() / 3).filter(|&q| self.sleep.is_asleep(q)) {
@@ -123,6 +132,7 @@ impl ImpulseModel {
         };
         let mut paths = Paths::begin(&mut store, x0, v0, accel);
         let mut step = StepState::default();
+        step.stats.woke = woke;
         let mut ran = Ok(());
         for stage in ImpulseStage::ALL {
             let (paths, x1, v1, omega) = (&mut paths, &mut *x1, &mut *v1, &mut *omega);
@@ -160,6 +170,81 @@ impl ImpulseModel {
             stages: laps,
         };
         Ok((step.changed, step.stats, times))
+    }
+
+    /// Wakes each island asleep that an awake movable particle meets within the step on
+    /// the paths stage 1 gave both, or with the sleeper held at rest (a meeting at any speed,
+    /// touching at the start included: `pair_toi` on the candidates of a list made to hold
+    /// for those paths); returns the
+    /// islands woken. Box2D v3 wakes an island when a contact with it begins; here the
+    /// impacts inside the step come before any contact, so the wake comes before them: the
+    /// step then runs for the woken as if they had never slept.
+    fn wake_reached(
+        &mut self,
+        set: &StageSetting<'_>,
+        frame: &StepFrame<'_>,
+        (x0, v0): (&[f64], &[f64]),
+        (x1, v1): (&[f64], &[f64]),
+    ) -> Result<usize, Error> {
+        let (h, n) = (frame.h, x0.len() / 3);
+        if self.sleep.asleep() >= n {
+            return Ok(0); // no one awake to meet them
+        }
+        let mut fitted = std::mem::take(&mut self.fitted);
+        let accel: &[f64] = match frame.accel {
+            Some(a) => a,
+            None => {
+                fitted.clear();
+                fitted.extend((0..x0.len()).map(|c| 2.0 * (x1[c] - x0[c] - v0[c] * h) / (h * h)));
+                &fitted
+            }
+        };
+        let mut store = std::mem::take(&mut self.paths);
+        let paths = Paths::begin(&mut store, x0, v0, accel);
+        // (the list for the paths of all, sleepers' included; its bounds are each one's sweep)
+        let prepared = self.prepare(set, &paths, x1, v1, h, false);
+        let mut reached = Vec::new();
+        if prepared.is_ok() {
+            let list = &self.list;
+            let slack = (list.skin - list.allowance).max(0.0);
+            for i in (0..n).filter(|&i| !self.sleep.is_asleep(i) && set.inv_mass[i] > 0.0) {
+                for &j in list.rows[i / CHUNK].of(i % CHUNK) {
+                    let j = j as usize;
+                    if !self.sleep.is_asleep(j) {
+                        continue;
+                    }
+                    let sum = set.radius[i] + set.radius[j];
+                    let apart = set
+                        .domain
+                        .displacement(vec3::get(&list.built_at, i), vec3::get(&list.built_at, j));
+                    let reach = sum + self.bounds[i] + self.bounds[j] + slack;
+                    if vec3::dot(apart, apart) > reach * reach {
+                        continue; // too far apart to meet in the step
+                    }
+                    // on j's path awake, or held at rest (as the impacts would see it asleep:
+                    // a meeting either way must find j awake)
+                    let d0 = set.domain.displacement(vec3::get(x0, i), vec3::get(x0, j));
+                    let u = vec3::sub(vec3::get(v0, i), vec3::get(v0, j));
+                    let (ai, aj) = (vec3::get(accel, i), vec3::get(accel, j));
+                    let meets = |da: [f64; 3]| !matches!(pair_toi(d0, u, da, sum, h, 0.0), Toi::Never);
+                    if meets(vec3::sub(ai, aj)) || meets(ai) {
+                        reached.push(j);
+                    }
+                }
+            }
+        }
+        self.paths = store;
+        self.fitted = fitted;
+        prepared?;
+        let mut work = Vec::new();
+        let mut woke = 0;
+        for j in reached {
+            woke += self.wake_island(j, &mut work);
+        }
+        if woke > 0 {
+            self.records.sort();
+        }
+        Ok(woke)
     }
 
     /// The list stage: the neighbour list made to hold for the step's sweep, else rebuilt at

@@ -488,7 +488,8 @@ fn body_of(engine: &Engine, named: &Named) -> Option<Vec<String>> {
                     .is_some_and(|l| l.starts_with("impl") && !word_at(l, t).is_empty()),
                 Some(m) => {
                     let stem = file.file_stem().unwrap().to_str().unwrap();
-                    (stem == m || (stem == "mod" && file.parent().and_then(|p| p.file_name()).and_then(|n| n.to_str()) == Some(m)))
+                    (stem == m
+                        || (stem == "mod" && file.parent().and_then(|p| p.file_name()).and_then(|n| n.to_str()) == Some(m)))
                         && !line.starts_with(char::is_whitespace)
                 }
                 None => true,
@@ -552,12 +553,10 @@ fn broken_links(engine: &Engine, chain: &[&str]) -> Vec<String> {
 /// after "calls below `World::step_once`:", up to the next full stop.
 fn deepest_call() -> Vec<String> {
     let doc = std::fs::read_to_string(crate_root().join("src/collide/mod.rs")).unwrap();
-    let text: String = doc
-        .lines()
-        .map_while(|l| l.strip_prefix("//!"))
-        .collect::<Vec<_>>()
-        .join(" ");
-    let from = text.find("calls below `World::step_once`:").expect("the doc states the deepest call");
+    let text: String = doc.lines().map_while(|l| l.strip_prefix("//!")).collect::<Vec<_>>().join(" ");
+    let from = text
+        .find("calls below `World::step_once`:")
+        .expect("the doc states the deepest call");
     let rest = &text[from + "calls below `World::step_once`:".len()..];
     let sentence = &rest[..rest.find(" (").unwrap_or(rest.len())];
     sentence.split('`').skip(1).step_by(2).map(str::to_string).collect()
@@ -585,7 +584,10 @@ fn the_deepest_call_of_a_step_is_at_most_eight_calls_below_step_once() {
         .collect();
     let full: Vec<&str> = full.iter().map(String::as_str).collect();
     let broken = broken_links(&engine, &full);
-    assert!(broken.is_empty(), "the deepest call the doc states is not the code's: {broken:?}");
+    assert!(
+        broken.is_empty(),
+        "the deepest call the doc states is not the code's: {broken:?}"
+    );
     // and the check fails on a chain with a link the code does not make
     let wrong = broken_links(&engine, &["World::step_once", "World::collide", "soft_step", "Row::visit"]);
     assert_eq!(wrong, vec!["World::collide does not call soft_step".to_string()]);

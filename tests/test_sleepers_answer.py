@@ -1,0 +1,157 @@
+"""Sleepers answer like the awake (issue 46): an island asleep is a shortcut for an island at
+rest, never a different physics. Whatever reaches it (an impact inside a step, a write to a
+sleeper's state) finds it as it would find it awake, and what the world reports of sleeping
+is what sleeps now.
+
+Theory used: a ball of speed u hitting the top of a resting column with restitution e
+leaves at the speed Newton's law and the column's response give, whether the column was
+asleep or awake; the rebound of a ball on a column resting on a floor is the same process
+in both worlds, so the two outcomes agree to rounding. A ball spun at ω on a floor with
+friction starts to roll (Coulomb's law), so a write of ω to a sleeping ball must set it
+moving."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import kinema
+
+G = 9.81
+
+
+def _column(depth: int, e: float, sleep: bool, dt: float = 1e-3, mu: float = 0.0) -> kinema.World:
+    """`depth` balls of radius 5 cm stacked on a floor at z = 0, at rest, under gravity;
+    stepped 1.5 s (asleep after 0.5 s of calm when `sleep`)."""
+    w = kinema.World(dt=dt, method="verlet")
+    r = 0.05
+    w.add_particles([[0.0, 0.0, r + 2 * r * k] for k in range(depth)], mass=1.0, radius=r)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w.set_collisions(restitution=e, friction=mu, sleep_time=0.5 if sleep else None)
+    w.step(int(round(1.5 / dt)))
+    return w
+
+
+def _drop_on(w: kinema.World, depth: int, speed: float) -> dict:
+    """A ball 1 mm above the column's top falling at `speed`, stepped 20 steps: its largest
+    upward speed after the impact, the impacts of the step that met the column, and the
+    state at the end."""
+    r = 0.05
+    top = w.positions[depth - 1, 2]
+    w.add_particles([[0.0, 0.0, top + 2 * r + 1e-3]], velocity=[[0.0, 0.0, -speed]], mass=1.0, radius=r)
+    w.step(1)
+    first = w.collision_stats()["last"]["impacts"]
+    rebound = -np.inf
+    for _ in range(19):
+        w.step(1)
+        rebound = max(rebound, w.velocities[-1, 2])
+    return {"rebound": rebound, "first_step_impacts": first, "x": w.positions.copy(), "v": w.velocities.copy()}
+
+
+@pytest.mark.parametrize("depth, e, speed", [(2, 0.3, 5.0), (2, 0.9, 3.0), (5, 0.5, 2.0)])
+def test_an_impact_on_a_sleeping_column_is_the_impact_on_the_awake_column(depth, e, speed):
+    # Before, the sleeping column was a body held at rest through the step: the ball's impact
+    # ran through it as a chain of pair impacts against still bodies (25 of them in one step
+    # for e = 0.3) and stopped it dead, where on the awake column it rebounds (0.31 m/s). Now
+    # the island wakes before the step's impacts, and the two worlds go on bit for bit.
+    asleep = _column(depth, e, sleep=True)
+    assert asleep.collision_stats()["last"]["asleep"] == depth
+    awake = _column(depth, e, sleep=False)
+    assert awake.collision_stats()["last"]["asleep"] == 0
+    np.testing.assert_array_equal(asleep.positions, awake.positions)  # the same column at rest
+    a, b = _drop_on(asleep, depth, speed), _drop_on(awake, depth, speed)
+    assert b["rebound"] > 0.1, "the awake column throws the ball back"
+    assert a["first_step_impacts"] == b["first_step_impacts"] == 1
+    if depth == 2:
+        # a column of two holds the same totals step after step: the same bits
+        assert a["rebound"] == b["rebound"]
+        np.testing.assert_array_equal(a["x"], b["x"])
+        np.testing.assert_array_equal(a["v"], b["v"])
+    else:
+        # a deeper one's warm start, kept asleep, differs from the one kept awake in the last
+        # bits of its totals: the same outcome to rounding
+        assert a["rebound"] == pytest.approx(b["rebound"], rel=1e-12)
+        np.testing.assert_allclose(a["x"], b["x"], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(a["v"], b["v"], rtol=0, atol=1e-12 * speed)
+
+
+def test_a_write_of_angular_velocity_wakes_a_sleeping_ball_and_it_rolls():
+    # A ball asleep on a floor with friction, then spun at 100 rad/s about y: friction
+    # turns the spin into rolling along x (Coulomb's law), as it does for the same ball awake.
+    w = kinema.World(dt=1e-3, method="verlet", spin=True)
+    w.add_particles([[0.0, 0.0, 0.05]], mass=1.0, radius=0.05)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w.set_collisions(restitution=0.0, friction=0.5)
+    w.step(1000)
+    assert w.collision_stats()["last"]["asleep"] == 1
+    w.angular_velocities[0] = [0.0, 100.0, 0.0]
+    w.step(1)
+    assert w.collision_stats()["last"]["asleep"] == 0
+    w.step(199)
+    # sliding until it rolls (at t = 2 ω r / (7 μ g) = 0.29 s): kinetic friction μ m g
+    # speeds it up along +x and slows its spin, α = (μ m g r) / (2/5 m r²)
+    mu, r, t = 0.5, 0.05, 0.2
+    assert w.velocities[0, 0] == pytest.approx(mu * G * t, rel=1e-9)
+    assert w.angular_velocities[0, 1] == pytest.approx(100.0 - 2.5 * mu * G / r * t, rel=1e-9)
+
+
+def test_the_asleep_count_is_what_sleeps_now():
+    # After every particle is removed nothing sleeps; before, collision_stats()["last"]
+    # still reported the 16 of the last step.
+    w = kinema.World(dt=1e-3, method="verlet")
+    w.add_particles([[0.12 * i, 0.12 * j, 0.05] for i in range(4) for j in range(4)], mass=1.0, radius=0.05)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    w.set_collisions(restitution=0.0)
+    w.step(1000)
+    assert w.collision_stats()["last"]["asleep"] == 16
+    w.remove_particles(range(16))
+    assert w.collision_stats()["last"]["asleep"] == 0
+    assert w.collision_stats()["last"]["asleep_contacts"] == 0
+
+
+@pytest.mark.parametrize("stop", [0.3, 1.0])
+def test_a_pile_sleeps_again_once_its_floors_keyframes_have_ended(stop):
+    # Keyframes move the floor up 2 cm by `stop` s, then it rests at its last key: the
+    # balls on it come to rest and sleep, as on a floor that never moved. Before, any
+    # collider with a motion kept every island awake for ever.
+    w = kinema.World(dt=1e-3, method="verlet")
+    w.add_particles([[0.12 * i, 0.0, 0.05] for i in range(3)], mass=1.0, radius=0.05)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1], motion=kinema.Keyframes(times=[0.0, stop], translations=[[0, 0, 0], [0, 0, 0.02]])))
+    w.set_collisions(restitution=0.0)
+    w.step(int(round((stop + 1.5) / 1e-3)))
+    assert w.collision_stats()["last"]["asleep"] == 3
+    np.testing.assert_allclose(w.positions[:, 2], 0.07, atol=1e-3)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    depth=st.integers(1, 4),
+    e=st.floats(0.0, 1.0),
+    mu=st.sampled_from([0.0, 0.3]),
+    speed=st.floats(0.5, 8.0),
+    dt=st.sampled_from([1e-3, 2e-3, 1 / 240]),
+    offset=st.floats(-0.03, 0.03),
+)
+def test_an_impact_on_a_sleeping_column_of_any_depth_speed_and_step_is_the_awake_one(depth, e, mu, speed, dt, offset):
+    # The class of the case above: columns of 1–4, any restitution, with and without
+    # friction, other steps, the ball off the axis by up to 3 cm (so the impact turns it).
+    def run(sleep: bool) -> kinema.World:
+        w = _column(depth, e, sleep=sleep, dt=dt, mu=mu)
+        assert w.collision_stats()["last"]["asleep"] == (depth if sleep else 0)
+        top = w.positions[depth - 1, 2]
+        w.add_particles([[offset, 0.0, top + 0.1 + 1e-3]], velocity=[[0.0, 0.0, -speed]], mass=1.0, radius=0.05)
+        w.step(int(round(0.03 / dt)))
+        return w
+
+    # Mostly the same bits, or the same to 1e-12. Where the impact's step ends its solve at
+    # the sweep cap (a column of 4 at e = 0.97), what differs in the last bits before it (a
+    # sleeper is exactly at rest, the awake column moves at 1e-17 m/s) grows to 1e-5–1e-4
+    # of r over the 30 ms. Before, the sleeping column stopped the ball: a difference of
+    # the order of its speed.
+    a, b = run(True), run(False)
+    np.testing.assert_allclose(a.positions, b.positions, rtol=0, atol=1e-3 * 0.05)
+    np.testing.assert_allclose(a.velocities, b.velocities, rtol=0, atol=1e-3 * speed)
