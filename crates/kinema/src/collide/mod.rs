@@ -13,7 +13,9 @@
 //! └ World::collide()                  world/collide.rs: stages 2–4, with what they see of the
 //!   │                                 world (CollideStage::impulse_and_setting(), stage.rs),
 //!   │                                 then their books (CollideStage::book_step())
-//!   └ ImpulseModel::step()            impulse/step.rs: sleepers held; the step's parabolas,
+//!   └ ImpulseModel::step()            impulse/step.rs: wake_reached(): the islands asleep
+//!                                     that an awake particle meets in the step wake; the
+//!                                     others held; the step's parabolas,
 //!                                     Paths::begin() (paths.rs); then the stage list
 //!                                     ImpulseStage::ALL (impulse/mod.rs), each stage timed:
 //!     list_stage()                    prepare() (impulse/impacts.rs): the neighbour list made

@@ -4,6 +4,8 @@
 //! stage below is the glue between the kernels it calls (`impacts.rs`, `end_of_step.rs`).
 //!
 //! ```text
+//!   (before)  the islands asleep that an awake particle meets within the step wake
+//!             (`wake_reached`); the other sleepers are held at rest
 //!   list      the neighbour list holds for the step's sweep (else rebuilt at x₀); the
 //!             restitution threshold; who is looked at (the touched particles)
 //!   impacts   with ccd: each particle's first impact into the queue, then in time order
