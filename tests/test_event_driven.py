@@ -5,6 +5,9 @@ model on the same scenes."""
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -180,16 +183,24 @@ def test_a_2d_gas_stays_in_its_plane():
     assert abs(w.diagnostics()["kinetic"] - e0) <= 1e-12 * e0
 
 
-def test_frames_continue_the_same_run():
-    # The state is kept between calls: ten calls of 10 steps follow the same events as one call
-    # of 100 (positions agree to rounding over these few collisions a sphere).
+@pytest.mark.parametrize("cuts", [[10] * 10, [1] * 100, [37, 63], [99, 1]])
+@pytest.mark.parametrize("gravity", [False, True])
+def test_a_run_is_the_same_bits_however_it_is_cut_into_calls(cuts, gravity):
+    # The state is kept between calls, each particle at its own time: ten calls of 10 steps,
+    # a hundred of 1, or any cut follow the same events as one call of 100, to the bit (as the
+    # stepped model does). Before, each call moved every particle to its end, rounding there,
+    # and 200 calls of 1 step, 20 of 10 and one of 200 gave three different runs.
     a, _ = fcc_gas(3, 0.3)
     b, _ = fcc_gas(3, 0.3)
-    a.step(100)
-    for _ in range(10):
-        b.step(10)
-    assert a.collision_stats()["total"]["impacts"] == b.collision_stats()["total"]["impacts"]
-    np.testing.assert_allclose(a.positions, b.positions, rtol=0, atol=1e-9)
+    if gravity:
+        for w in (a, b):
+            w.add(kinema.Gravity(g=(0.0, 0.0, -2.0)))
+    a.step(sum(cuts))
+    for n in cuts:
+        b.step(n)
+    assert a.collision_stats()["total"]["impacts"] == b.collision_stats()["total"]["impacts"] > 0
+    np.testing.assert_array_equal(a.positions, b.positions)
+    np.testing.assert_array_equal(a.velocities, b.velocities)
 
 
 def test_an_elastic_ball_bounces_on_the_exact_parabola_under_gravity():
@@ -309,3 +320,19 @@ periodic = [true, true, true]
     assert built.collision_stats()["total"]["impacts"] > 10
     assert built.diagnostics()["kinetic"] == pytest.approx(e0, rel=1e-12)
     assert kinema.Scene.from_string(kinema.Scene.from_string(scene).to_toml_string()).collisions.event_driven is True
+
+
+def test_a_run_is_the_same_bits_on_any_number_of_threads():
+    # The lists and shells are built on all threads; the events run in one calendar order:
+    # 1, 2 and 3 threads give the same bits, cut into calls or not.
+    script = (
+        "import sys, hashlib; sys.path.insert(0, 'tests'); import test_event_driven as t; "
+        "w, _ = t.fcc_gas(4, 0.3); [w.step(n) for n in (13, 50, 37)]; "
+        "print(hashlib.sha256(w.positions.tobytes() + w.velocities.tobytes()).hexdigest())"
+    )
+    out = {}
+    for threads in (1, 2, 3):
+        env = {**os.environ, "RAYON_NUM_THREADS": str(threads)}
+        res = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
+        out[threads] = res.stdout.strip()
+    assert out[1] == out[2] == out[3], out

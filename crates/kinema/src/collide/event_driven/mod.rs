@@ -353,12 +353,15 @@ impl EventDriven {
                 Kind::Nothing => {}
             }
         }
-        // Every particle to t1, into the world's arrays.
-        for (b, &i) in self.bodies.iter_mut().zip(&self.order) {
-            b.move_to(t1, self.g, Some(domain));
+        // Every particle where it is at t1, into the world's arrays. The bodies themselves stay
+        // at their own times: moved to t1 (rounded there), the next call would go on from other
+        // bits than one call over both spans, and how a run is cut into calls would change it.
+        for (b, &i) in self.bodies.iter().zip(&self.order) {
+            let mut now = *b;
+            now.move_to(t1, self.g, Some(domain));
             let i = i as usize;
-            p.x[3 * i..3 * i + 3].copy_from_slice(&b.x);
-            p.v[3 * i..3 * i + 3].copy_from_slice(&b.v);
+            p.x[3 * i..3 * i + 3].copy_from_slice(&now.x);
+            p.v[3 * i..3 * i + 3].copy_from_slice(&now.v);
         }
         self.time = t1;
         Ok(stats)
