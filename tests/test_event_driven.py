@@ -336,3 +336,44 @@ def test_a_run_is_the_same_bits_on_any_number_of_threads():
         res = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
         out[threads] = res.stdout.strip()
     assert out[1] == out[2] == out[3], out
+
+
+def _folded(x0: np.ndarray, v: np.ndarray, t: float, lo: float, hi: float) -> np.ndarray:
+    """Free flight between two walls at lo and hi, reflected elastically: the unfolded line
+    x0 + v t folded back into [lo, hi] (period 2 (hi − lo))."""
+    span = hi - lo
+    u = np.mod(x0 + v * t - lo, 2 * span)
+    return lo + np.where(u > span, 2 * span - u, u)
+
+
+@pytest.mark.parametrize("radius", [0.0, 1e-9])
+def test_point_particles_bounce_in_a_box_on_their_closed_form_paths(radius):
+    # Points meet nothing but the walls: each coordinate is the free flight folded back into
+    # the box. Before, their shells were of no size (0.7 of a diameter of 0): every move left
+    # one, and 20 steps of 1 ms never ended.
+    rng = np.random.default_rng(1)
+    x0, v = rng.uniform(0.1, 0.9, (200, 3)), rng.normal(0, 1, (200, 3))
+    w = kinema.World(dt=1e-3)
+    w.add_particles(x0, velocity=v, radius=radius, mass=1.0)
+    w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+    w.set_collisions(restitution=1.0, event_driven=True)
+    w.step(1000)
+    assert w.collision_stats()["total"]["impacts"] > 400
+    np.testing.assert_allclose(w.positions, _folded(x0, v, 1.0, radius, 1.0 - radius), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.abs(w.velocities), np.abs(v), rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("speed", [1e10, 1e151, 1e200])
+def test_speeds_the_events_cannot_follow_are_refused_as_a_step_refuses_them(speed):
+    # 1e10 m/s in a 1 m box is 1e7 wall events a millisecond: the stepped model stops such a
+    # step (SimulationDiverged, "would travel ... over 1000 times the scene's extent"), and so
+    # do the events now, before any event, the world left as it was. Before, 1e10–1e151 m/s
+    # never returned and 1e200 m/s returned at once with every ball outside the box.
+    w = kinema.World(dt=1e-3)
+    w.add_particles([[0.5, 0.5, 0.5], [0.2, 0.2, 0.2]], velocity=[[speed, 0, 0], [0, 0, 0]], radius=0.05, mass=1.0)
+    w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+    w.set_collisions(restitution=1.0, event_driven=True)
+    with pytest.raises(kinema.SimulationDiverged, match=r"at step 1 \(t = 0 s.*particle 0: a particle would travel .* over 1000 times the scene's extent"):
+        w.step(1)
+    assert w.time == 0.0
+    np.testing.assert_array_equal(w.positions, [[0.5, 0.5, 0.5], [0.2, 0.2, 0.2]])

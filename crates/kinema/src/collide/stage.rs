@@ -11,6 +11,7 @@ use crate::collide::contact_force::{
     particle_ratios, Bodies, ContactForce, RollingModel, SpringDashpot, TangentialLaw, TangentialModel,
 };
 use crate::collide::event_driven::{unsupported_collider, EventDriven};
+use crate::collide::impulse::impacts::check_travel;
 use crate::collide::impulse::{ImpulseModel, StageSetting};
 use crate::collide::records::ContactRecord;
 use crate::collide::shock::Accuracy;
@@ -19,6 +20,7 @@ use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Motio
 use crate::error::Error;
 use crate::interrupt::Interrupt;
 use crate::particles::Particles;
+use crate::vec3;
 
 pub(crate) use crate::collide::impulse::end_of_step::on_periodic_wall;
 pub use crate::collide::impulse::CollisionStats;
@@ -911,6 +913,27 @@ impl CollideStage {
         interrupt: &mut Interrupt,
     ) -> Result<(), Error> {
         self.domain.check_radii(&p.radius)?;
+        // As a step refuses it (`impulse/impacts.rs`, `check_travel`): a particle that would
+        // cross the scene more than TRAVEL_LIMIT times until t1 takes more events than any run
+        // can follow (1e10 m/s in a 1 m box: 1e7 wall events a millisecond).
+        // (by the largest component, which does not overflow where |v|² would: 1e200 m/s)
+        let largest = |a: [f64; 3]| a.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
+        let (fastest, speed) = (0..p.len())
+            .map(|i| (i, largest(vec3::get(&p.v, i))))
+            .fold((0, 0.0), |a, b| if b.1 > a.1 || b.1.is_nan() { b } else { a });
+        let span = t1 - t0;
+        let travel = speed * span + 0.5 * largest(field) * span * span;
+        if travel.is_nan() || travel.is_infinite() {
+            return Err(Error::Diverged {
+                step: 0,
+                time: 0.0,
+                particle: Some(fastest),
+                dt: span,
+                reason: crate::error::Divergence::NonFinite,
+                advised_dt: None,
+            });
+        }
+        check_travel(&self.colliders, &p.radius, &p.x, travel, fastest, span)?;
         let start = std::time::Instant::now();
         let mut events = match self.events.take() {
             Some(e) if e.is_at(p.len(), t0, field) => e,

@@ -31,7 +31,11 @@ impl World {
                 format!("event-driven dynamics cannot run this world: {why} (event_driven=False steps it)"),
             ));
         }
-        stage.advance_events(&mut self.particles, self.time, t1, field, &mut self.interrupt)?;
+        match stage.advance_events(&mut self.particles, self.time, t1, field, &mut self.interrupt) {
+            // too fast to follow, as a step would say it (with the step, the time and the advice)
+            Err(Error::Diverged { reason, particle, .. }) => return Err(self.diverged(reason, particle)),
+            other => other?,
+        }
         // a method's cache (Verlet's last acceleration) is for the state before
         self.stepper = None;
         self.time = t1;

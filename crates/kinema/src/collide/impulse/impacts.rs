@@ -174,7 +174,7 @@ impl ImpulseModel {
                     (d, q)
                 })
                 .reduce(|| (0.0, 0), |a, b| if b.0 > a.0 || (b.0 == a.0 && b.1 < a.1) { b } else { a });
-            check_travel(set, x0, largest_move, fastest, h)?;
+            check_travel(set.colliders, set.radius, x0, largest_move, fastest, h)?;
             self.build_list(set, x0, largest_move)?;
             self.rebuilt = true;
             top = sweep(&self.list.built_at, paths.accel, &mut bounds);
@@ -470,7 +470,7 @@ impl ImpulseModel {
             }
         }
         self.bounded = true;
-        check_travel(set, &x, largest, fastest, h - t)?;
+        check_travel(set.colliders, set.radius, &x, largest, fastest, h - t)?;
         self.build_list(set, &x, largest)?;
         Ok(largest)
     }
@@ -554,7 +554,7 @@ pub(crate) const TRAVEL_LIMIT: f64 = 1000.0;
 /// a 10 m box: 5 s a step for 1,000 particles) bounce to the cap of continuous detection in
 /// every step while resolving nothing. An extent of 0 (one particle, no box) has nothing to
 /// bounce between.
-fn check_travel(set: &StageSetting<'_>, x: &[f64], largest: f64, fastest: usize, rest: f64) -> Result<(), Error> {
+pub(crate) fn check_travel(colliders: &[Collider], radius: &[f64], x: &[f64], largest: f64, fastest: usize, rest: f64) -> Result<(), Error> {
     if !(largest > 0.0) {
         return Ok(());
     }
@@ -568,7 +568,7 @@ fn check_travel(set: &StageSetting<'_>, x: &[f64], largest: f64, fastest: usize,
         }
     };
     x.chunks_exact(3).for_each(|p| grow([p[0], p[1], p[2]]));
-    for c in set.colliders {
+    for c in colliders {
         if let Collider::Box(b) = c {
             grow(b.lo());
             grow(b.hi());
@@ -577,7 +577,7 @@ fn check_travel(set: &StageSetting<'_>, x: &[f64], largest: f64, fastest: usize,
     let extent = (0..3)
         .map(|k| if hi[k] >= lo[k] { hi[k] - lo[k] } else { 0.0 })
         .fold(0.0, f64::max);
-    let r_max = set.radius.iter().copied().fold(0.0, f64::max);
+    let r_max = radius.iter().copied().fold(0.0, f64::max);
     let scale = extent + 2.0 * r_max;
     if scale > 0.0 && largest > TRAVEL_LIMIT * scale {
         // (the world fills in the step, the time and the advice: World::collide)
