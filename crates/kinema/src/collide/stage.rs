@@ -918,9 +918,10 @@ impl CollideStage {
         // can follow (1e10 m/s in a 1 m box: 1e7 wall events a millisecond).
         // (by the largest component, which does not overflow where |v|² would: 1e200 m/s)
         let largest = |a: [f64; 3]| a.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
-        let (fastest, speed) = (0..p.len())
-            .map(|i| (i, largest(vec3::get(&p.v, i))))
-            .fold((0, 0.0), |a, b| if b.1 > a.1 || b.1.is_nan() { b } else { a });
+        let (fastest, speed) =
+            (0..p.len())
+                .map(|i| (i, largest(vec3::get(&p.v, i))))
+                .fold((0, 0.0), |a, b| if b.1 > a.1 || b.1.is_nan() { b } else { a });
         let span = t1 - t0;
         let travel = speed * span + 0.5 * largest(field) * span * span;
         if travel.is_nan() || travel.is_infinite() {

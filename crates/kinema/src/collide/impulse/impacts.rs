@@ -554,7 +554,14 @@ pub(crate) const TRAVEL_LIMIT: f64 = 1000.0;
 /// a 10 m box: 5 s a step for 1,000 particles) bounce to the cap of continuous detection in
 /// every step while resolving nothing. An extent of 0 (one particle, no box) has nothing to
 /// bounce between.
-pub(crate) fn check_travel(colliders: &[Collider], radius: &[f64], x: &[f64], largest: f64, fastest: usize, rest: f64) -> Result<(), Error> {
+pub(crate) fn check_travel(
+    colliders: &[Collider],
+    radius: &[f64],
+    x: &[f64],
+    largest: f64,
+    fastest: usize,
+    rest: f64,
+) -> Result<(), Error> {
     if !(largest > 0.0) {
         return Ok(());
     }
