@@ -1,3 +1,7 @@
+import os
+import subprocess
+import sys
+
 import matplotlib
 import pytest
 
@@ -43,3 +47,20 @@ def jupyter_kernel(tmp_path, monkeypatch):
     (spec / "kernel.json").write_text(json.dumps({"argv": argv, "display_name": "kinema test", "language": "python"}))
     monkeypatch.setenv("JUPYTER_PATH", str(tmp_path / "jupyter"))
     return "kinema-test"
+
+
+@pytest.fixture
+def on_threads():
+    """Runs a Python `script` (from the repository root, printing one line) once per thread
+    count (RAYON_NUM_THREADS) and returns {threads: its line}: a result that must not depend
+    on the engine's threads gives one line for all."""
+
+    def run(script: str, threads: tuple[int, ...] = (1, 2, 3)) -> dict[int, str]:
+        out = {}
+        for n in threads:
+            env = {**os.environ, "RAYON_NUM_THREADS": str(n)}
+            res = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
+            out[n] = res.stdout.strip()
+        return out
+
+    return run

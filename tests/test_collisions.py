@@ -1,9 +1,6 @@
 """Collisions in kinema.World from Python, against Newton's restitution law, conservation laws
 and the guarantees of continuous detection."""
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -729,19 +726,14 @@ def test_the_animation_accuracy_brings_deep_columns_to_rest_at_120_hz(dim, per_r
     assert energy(e0) - energy(e1) == pytest.approx(lost, rel=1e-9)
 
 
-def test_the_animation_accuracy_is_the_same_on_any_number_of_threads():
+def test_the_animation_accuracy_is_the_same_on_any_number_of_threads(on_threads):
     # The shock runs island by island on one thread each, in an order of the island's own
     # (levels, then list order): 1, 2 and 3 threads give the same bits.
-    script = (
+    out = on_threads(
         "import sys, hashlib; sys.path.insert(0, 'tests'); import test_collisions as t; "
         "w, _ = t._column(3, 6, 20, 1 / 120, 3, seconds=0.5, accuracy='animation'); "
         "print(hashlib.sha256(w.positions.tobytes() + w.velocities.tobytes()).hexdigest())"
     )
-    out = {}
-    for threads in (1, 2, 3):
-        env = {**os.environ, "RAYON_NUM_THREADS": str(threads)}
-        res = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
-        out[threads] = res.stdout.strip()
     assert out[1] == out[2] == out[3], out
 
 

@@ -5,9 +5,6 @@ model on the same scenes."""
 from __future__ import annotations
 
 import math
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -322,19 +319,14 @@ periodic = [true, true, true]
     assert kinema.Scene.from_string(kinema.Scene.from_string(scene).to_toml_string()).collisions.event_driven is True
 
 
-def test_a_run_is_the_same_bits_on_any_number_of_threads():
+def test_a_run_is_the_same_bits_on_any_number_of_threads(on_threads):
     # The lists and shells are built on all threads; the events run in one calendar order:
     # 1, 2 and 3 threads give the same bits, cut into calls or not.
-    script = (
+    out = on_threads(
         "import sys, hashlib; sys.path.insert(0, 'tests'); import test_event_driven as t; "
         "w, _ = t.fcc_gas(4, 0.3); [w.step(n) for n in (13, 50, 37)]; "
         "print(hashlib.sha256(w.positions.tobytes() + w.velocities.tobytes()).hexdigest())"
     )
-    out = {}
-    for threads in (1, 2, 3):
-        env = {**os.environ, "RAYON_NUM_THREADS": str(threads)}
-        res = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
-        out[threads] = res.stdout.strip()
     assert out[1] == out[2] == out[3], out
 
 
