@@ -130,16 +130,17 @@ impl ImpulseModel {
     }
 
     /// Wakes the island particle q sleeps in (1 if it slept, else 0): its particles touched
-    /// and added to `work`, its contacts' records back among the awake ones (left unsorted:
-    /// the caller sorts them), each of them loaded if it holds an impulse.
+    /// and added to `work`, its contacts' records back among the awake ones as they fell
+    /// asleep (left unsorted: the caller sorts them).
     pub(super) fn wake_island(&mut self, q: usize, work: &mut Vec<usize>) -> usize {
         let Some(island) = self.sleep.wake(q) else { return 0 };
         for &m in &island.members {
             self.touched.mark(m);
             work.push(m);
         }
-        self.records
-            .append(island.records.iter().map(|r| ContactRecord::loaded(r.i, r.other, r.impulse)));
+        // (whole: whether each carried load is the engine's own flag from the step it fell
+        // asleep in, as the awake island would have it)
+        self.records.append(island.records.iter().copied());
         1
     }
 
