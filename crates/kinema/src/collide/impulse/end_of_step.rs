@@ -8,7 +8,6 @@ use crate::collide::contact::action_reaction;
 use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
 use crate::collide::neighbour_list::CHUNK;
-use crate::collide::records::ContactRecord;
 use crate::collide::response::{bounces, VELOCITY_TOLERANCE};
 use crate::collide::shock::Accuracy;
 use crate::collide::soft_step::{self, SoftParams, Target, SLOP, SPECULATIVE};
