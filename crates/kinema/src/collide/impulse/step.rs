@@ -126,11 +126,7 @@ impl ImpulseModel {
                 &fitted
             }
             Some(a) => a,
-            None => {
-                fitted.clear();
-                fitted.extend((0..x0.len()).map(|c| 2.0 * (x1[c] - x0[c] - v0[c] * h) / (h * h)));
-                &fitted
-            }
+            None => fit_parabolas(&mut fitted, (x0, v0, x1), h),
         };
         let mut paths = Paths::begin(&mut store, x0, v0, accel);
         let mut step = StepState::default();
@@ -177,8 +173,7 @@ impl ImpulseModel {
     /// Wakes each island asleep that an awake movable particle meets within the step on
     /// the paths stage 1 gave both, or with the sleeper held at rest (a meeting at any speed,
     /// touching at the start included: `pair_toi` on the candidates of a list made to hold
-    /// for those paths); returns the
-    /// islands woken. Box2D v3 wakes an island when a contact with it begins; here the
+    /// for those paths); returns the islands woken. Box2D v3 wakes an island when a contact with it begins; here the
     /// impacts inside the step come before any contact, so the wake comes before them: the
     /// step then runs for the woken as if they had never slept.
     fn wake_reached(
@@ -195,11 +190,7 @@ impl ImpulseModel {
         let mut fitted = std::mem::take(&mut self.fitted);
         let accel: &[f64] = match frame.accel {
             Some(a) => a,
-            None => {
-                fitted.clear();
-                fitted.extend((0..x0.len()).map(|c| 2.0 * (x1[c] - x0[c] - v0[c] * h) / (h * h)));
-                &fitted
-            }
+            None => fit_parabolas(&mut fitted, (x0, v0, x1), h),
         };
         let mut store = std::mem::take(&mut self.paths);
         let paths = Paths::begin(&mut store, x0, v0, accel);
@@ -520,4 +511,13 @@ impl ImpulseModel {
         }
         Ok(())
     }
+}
+
+/// Each particle's constant acceleration over the step when the method gives none: the
+/// parabola through x₀ with v₀ that ends at x₁ after h s, a = 2 (x₁ − x₀ − v₀ h) / h²
+/// (m/s², 3 per particle), written into `fitted`.
+fn fit_parabolas<'a>(fitted: &'a mut Vec<f64>, (x0, v0, x1): (&[f64], &[f64], &[f64]), h: f64) -> &'a [f64] {
+    fitted.clear();
+    fitted.extend((0..x0.len()).map(|c| 2.0 * (x1[c] - x0[c] - v0[c] * h) / (h * h)));
+    fitted
 }
