@@ -30,6 +30,8 @@ The public API (everything else is private):
   ``kinema.problems`` (problems with exact solutions)
 """
 
+import os as _os
+
 from . import (
     io,
     problems,
@@ -37,7 +39,7 @@ from . import (
     scene,  # importing it attaches World.to_scene
     stability,
 )
-from ._core import __version__
+from ._core import __version__, _after_fork_in_child
 from .checkpoint import resume_run
 from .colliders import Box, Keyframes, Mesh, Motion, Plane, SphereObstacle
 from .contact_time import ContactTimeWarning
@@ -115,3 +117,7 @@ __all__ = [
     "solve_second_order",
     "stability",
 ]
+
+# A child forked after the engine ran has none of its threads (fork copies only the thread that
+# called it); the child's forking thread builds a pool of its own (docs/performance.md, "Threads").
+_os.register_at_fork(after_in_child=_after_fork_in_child)

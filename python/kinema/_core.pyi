@@ -8,6 +8,9 @@ import numpy.typing as npt
 
 __version__: str
 
+def _after_fork_in_child() -> None:
+    """Called in a child process right after fork: the forking thread builds the child's own thread pool."""
+
 class ButcherTableau:
     """An explicit Runge-Kutta method (A, b, c), checked when built."""
 

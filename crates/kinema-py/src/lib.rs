@@ -10,6 +10,7 @@ mod ode;
 mod render;
 mod stability;
 mod stepping;
+mod threads;
 mod world;
 
 use pyo3::prelude::*;
@@ -21,5 +22,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     stability::register(m)?;
     world::register(m)?;
     render::register(m)?;
+    threads::register(m)?;
     Ok(())
 }
