@@ -451,7 +451,7 @@ impl ImpulseModel {
 
     /// The mechanical energy the end-of-step stage took, J, over the particles it acted on
     /// (moved by symplectic Euler in resting contact, or pushed by a nonzero total): each one's kinetic energy at its books' reference state minus
-    /// now, minus the work the step's forces (the constant accelerations of the paths) did
+    /// now, minus the work the step's forces (`accel`: their accelerations over the step) did
     /// since: Σ ½ m (|v_b|² − |v|²) + Σ m a·(x − x_b). The reference is the step's start for a
     /// particle no impact hit, so a body held at rest books exactly 0 with every method (it
     /// ends the step where and as it began); an impact inside the step books its own

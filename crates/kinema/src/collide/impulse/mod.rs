@@ -245,6 +245,9 @@ pub(crate) struct ImpulseModel {
     /// The step's constant accelerations when the method gives none (the parabola
     /// through x₁), m/s².
     pub(super) fitted: Vec<f64>,
+    /// The step's accelerations by the forces when the method gives none, (v₁ − v₀)/h, for
+    /// the energy books, m/s².
+    pub(super) forced: Vec<f64>,
     pub(super) queue: EventQueue,
     /// Each particle's bound on its distance from its list build position for the rest of
     /// the step, m, when `bounded` (`events::SweepBound`; else the step's one bound `reach`).
@@ -315,6 +318,7 @@ impl ImpulseModel {
             base_skin: 0.0,
             paths: PathStore::default(),
             fitted: Vec::new(),
+            forced: Vec::new(),
             queue: EventQueue::default(),
             bounds: Vec::new(),
             bounded: false,

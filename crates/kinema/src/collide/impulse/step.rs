@@ -129,6 +129,13 @@ impl ImpulseModel {
             None => fit_parabolas(&mut fitted, (x0, v0, x1), h),
         };
         let mut paths = Paths::begin(&mut store, x0, v0, accel);
+        // The forces' own accelerations, for the energy books: the fitted parabola is the
+        // force for the second-order methods only (Euler's x₁ has none, symplectic Euler's twice).
+        let mut forced = std::mem::take(&mut self.forced);
+        let forces = match frame.accel {
+            Some(a) => a,
+            None => velocity_slopes(&mut forced, (v0, v1), h),
+        };
         let mut step = StepState::default();
         step.stats.woke = woke;
         let mut ran = Ok(());
@@ -141,7 +148,7 @@ impl ImpulseModel {
                 ImpulseStage::Solve => self
                     .solve(set, paths, frame.h, (v1, omega), x1, step.threshold, frame.steady)
                     .map(|solved| self.count_solve(&solved, &mut step)),
-                ImpulseStage::Apply => self.apply_stage(set, paths, (x1, v1, omega), &mut step),
+                ImpulseStage::Apply => self.apply_stage(set, forces, (x1, v1, omega), &mut step),
                 ImpulseStage::Settle => self.settle_stage(set, frame, paths, (x1, v1, omega), &mut step),
                 ImpulseStage::Wake => self.wake_stage(set, frame, x1, v1, &step),
             };
@@ -154,6 +161,7 @@ impl ImpulseModel {
         }
         self.paths = store;
         self.fitted = fitted;
+        self.forced = forced;
         ran?;
         // The seed's three stages from the same laps: the impacts interleave all three.
         let lap = |s: ImpulseStage| laps[s as usize];
@@ -404,7 +412,7 @@ impl ImpulseModel {
     fn apply_stage(
         &mut self,
         set: &StageSetting<'_>,
-        paths: &mut Paths<'_>,
+        forces: &[f64],
         (x1, v1, omega): (&mut [f64], &mut [f64], &mut [f64]),
         step: &mut StepState,
     ) -> Result<(), Error> {
@@ -449,7 +457,7 @@ impl ImpulseModel {
                 vec3::add_scaled(omega, q, 1.0, [kick[3], kick[4], kick[5]]);
             }
         }
-        stats.energy_lost += self.energy_books(set, paths.accel, x1, v1, omega);
+        stats.energy_lost += self.energy_books(set, forces, x1, v1, omega);
         Ok(())
     }
 
@@ -511,6 +519,16 @@ impl ImpulseModel {
         }
         Ok(())
     }
+}
+
+/// Each particle's acceleration by the forces over the step when the method gives none:
+/// a = (v₁ − v₀) / h (m/s², 3 per particle), written into `out`. Every method's velocity
+/// update is v₀ + h a for a force constant over the step (Euler's a(t₀), symplectic and
+/// implicit Euler's a(t₁), the Runge–Kutta stages' mean), whatever its position update.
+fn velocity_slopes<'a>(out: &'a mut Vec<f64>, (v0, v1): (&[f64], &[f64]), h: f64) -> &'a [f64] {
+    out.clear();
+    out.extend(v0.iter().zip(v1).map(|(a, b)| (b - a) / h));
+    out
 }
 
 /// Each particle's constant acceleration over the step when the method gives none: the
