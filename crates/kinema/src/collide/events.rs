@@ -378,13 +378,21 @@ impl Scene<'_> {
         let first = walls.partition_point(|w| w.0 < i);
         for &(_, k) in walls[first..].iter().take_while(|w| w.0 == i) {
             // A moving collider stands where it will be at the step's end; the particle's
-            // path is seen from it, displaced by the surface's motion over the rest of the
-            // step: x + u (h − now), v − u, with u the surface's velocity at x (exact for a
-            // translation; for a turn, the motion of the surface point nearest the particle,
-            // the end-of-step contacts taking up the second-order rest).
+            // path is seen from it, carried by the surface's motion over the rest of the
+            // step (`SurfaceVelocity::carried`): x + u (h − now) and v − u for a translation,
+            // exact; for a turn, from x turned by ω (h − now) to the particle's own end point
+            // on the chord between, v + (x − x')/(h − now): both ends exact, so a particle
+            // inside a turning container at the step's start that ends outside crosses a
+            // wall on the way, however fast the turn.
             let (xi, vi) = if self.colliders[k].is_moving() {
-                let u = self.colliders[k].velocity_at(xi);
-                (vec3::add(xi, vec3::scale(rest, u)), vec3::sub(vi, u))
+                let field = self.colliders[k].surface().velocity();
+                if field.angular == [0.0; 3] || rest <= 0.0 {
+                    let u = self.colliders[k].velocity_at(xi);
+                    (vec3::add(xi, vec3::scale(rest, u)), vec3::sub(vi, u))
+                } else {
+                    let seen = field.carried(xi, rest);
+                    (seen, vec3::add(vi, vec3::scale(1.0 / rest, vec3::sub(xi, seen))))
+                }
             } else {
                 (xi, vi)
             };
@@ -401,8 +409,14 @@ impl Scene<'_> {
                 each(Found::Touching(None));
             }
             let mut near = false;
+            // (a contact resting on a moving collider is left to the step's end only if the
+            // end still finds it: it approaches by less than r over the rest of the step; a
+            // fast-turning container's wall that carries a particle faster is an impact)
+            let moving = self.colliders[k].is_moving();
+            let r = self.radius[i];
             self.collider_events(i, k, path, rest, margin, &mut near, |wall, tau| {
-                if wall.1 > -self.slow || (tau == 0.0 && self.is_resting(i, Partner::Collider(k), now)) {
+                let resting = tau == 0.0 && self.is_resting(i, Partner::Collider(k), now) && !(moving && -wall.1 * rest > r);
+                if wall.1 > -self.slow || resting {
                     each(Found::Touching(None)); // meets it too slowly, or rests on it: a contact
                     return;
                 }

@@ -521,11 +521,13 @@ impl TriangleMesh {
 
     /// The touch of a sphere at `p` of radius `r` (m) with triangle `t`, however far (the
     /// normal and overlap of an impact the continuous detection found on that triangle).
+    /// `p` is where the mesh is now, and so is the normal (a moved mesh's geometry keeps the
+    /// frame it was added in: the point goes into it, the normal comes out of it).
     pub fn touch_of_triangle(&self, t: usize, p: [f64; 3], r: f64) -> Touch {
         let near = self
-            .near(t, p, f64::INFINITY)
+            .near(t, self.local(p), f64::INFINITY)
             .expect("every triangle is within an infinite reach");
-        self.touches_of(&[near], r)[0].0
+        self.placed(self.touches_of(&[near], r)[0].0)
     }
 
     /// Calls `each` with every touch of a sphere at `p` (m) of radius `r` (m) within

@@ -95,6 +95,26 @@ impl SurfaceVelocity {
         vec3::add(self.linear, vec3::cross(self.angular, vec3::sub(x, self.center)))
     }
 
+    /// Where a point `x` (m) near the surface `back` s before it reaches this placement is
+    /// seen from this placement: the surface's motion over those `back` s, steady at this
+    /// field, carried onto x. A translation adds V back; a turn also turns x by ω back about
+    /// the centre where it was then, c − V back:
+    ///
+    /// ```text
+    ///   x' = c + R(ω back) (x − c + V back)
+    /// ```
+    ///
+    /// (for a point of the surface itself, where that point is now: the continuous detection
+    /// sees a particle's path from the collider placed at the step's end through this map).
+    pub fn carried(&self, x: [f64; 3], back: f64) -> [f64; 3] {
+        if self.angular == [0.0; 3] {
+            return vec3::add(x, vec3::scale(back, self.at(x)));
+        }
+        let turn = rotation_of_vector(vec3::scale(back, self.angular));
+        let d = vec3::add(vec3::sub(x, self.center), vec3::scale(back, self.linear));
+        vec3::add(self.center, turn.map(|row| vec3::dot(row, d)))
+    }
+
     /// Whether the surface is still.
     pub fn is_still(&self) -> bool {
         self.linear == [0.0; 3] && self.angular == [0.0; 3]
@@ -229,6 +249,29 @@ impl Motion {
         }
     }
 
+    /// The displacement at the step's end `t1` (s) and the surface's velocity field over the
+    /// step from `t0`: a steady motion's own; for keyframes, the steady field that moves the
+    /// collider from where it is at t0 to where it is at t1 (its chord: V = (T₁ − T₀)/h, ω
+    /// the turn R₁ R₀ᵀ over h), so that a key inside the step, or a jump of many metres
+    /// between two keys within it, is swept as the displacement it makes, not as the
+    /// velocity it has at t1 (none once the last key is passed).
+    pub fn over(&self, t0: f64, t1: f64) -> (Pose, SurfaceVelocity) {
+        let (pose, velocity) = self.at(t1);
+        let h = t1 - t0;
+        if matches!(self, Motion::Steady { .. }) || !(h > 0.0) || !self.moves_within(t0, t1) {
+            return (pose, velocity);
+        }
+        let (start, _) = self.at(t0);
+        let linear = vec3::scale(1.0 / h, vec3::sub(pose.translation, start.translation));
+        let turn = turn_vector(relative_rotation(start.rotation, pose.rotation));
+        let field = SurfaceVelocity {
+            linear,
+            angular: vec3::scale(1.0 / h, turn),
+            center: velocity.center,
+        };
+        (pose, field)
+    }
+
     /// The displacement at time `t` (s) and the surface's velocity field then.
     pub fn at(&self, t: f64) -> (Pose, SurfaceVelocity) {
         match self {
@@ -322,6 +365,24 @@ impl Motion {
             Motion::Keyframes { rotations, .. } => rotations.iter().any(|q| q[1] != 0.0 || q[2] != 0.0 || q[3] != 0.0),
         }
     }
+}
+
+/// R₁ R₀ᵀ: the turn from rotation R₀ to R₁ (rows).
+fn relative_rotation(r0: [[f64; 3]; 3], r1: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    // (R₁ R₀ᵀ)_ij = Σ_k R₁_ik R₀_jk = row i of R₁ · row j of R₀
+    r1.map(|row| [0, 1, 2].map(|j| vec3::dot(row, r0[j])))
+}
+
+/// The rotation vector θ (rad: the axis times the angle, in [0, π)) of a rotation matrix:
+/// sin|θ| â from its skew part, cos|θ| from its trace.
+pub fn turn_vector(r: [[f64; 3]; 3]) -> [f64; 3] {
+    let w = [r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]];
+    let sin = 0.5 * vec3::norm(w);
+    if sin == 0.0 {
+        return [0.0; 3];
+    }
+    let cos = 0.5 * (r[0][0] + r[1][1] + r[2][2] - 1.0);
+    vec3::scale(sin.atan2(cos) / (2.0 * sin), w)
 }
 
 /// The rotation by the angle |θ| about θ/|θ| (Rodrigues: R = I + sin|θ| K + (1 − cos|θ|) K²,

@@ -606,15 +606,19 @@ pub(crate) fn check_travel(
 
 /// The contact of an event at its time (the particles already moved there).
 fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event, h: f64) -> Option<Contact> {
-    let xi = paths.x_ref(e.i);
+    let at = paths.x_ref(e.i);
     // A moving collider stands where it will be at the step's end: the particle is seen
-    // displaced by the surface's motion over the rest of the step (`events.rs`).
-    let (xi, wall) = match e.partner {
+    // carried by the surface's motion over the rest of the step (`events.rs`). A turning
+    // one's surface velocity is then that carriage's chord, (x' − x)/(h − t), the one the
+    // detection's path saw: the impulse leaves the particle leaving on that path, where
+    // the surface's velocity at the impact would leave it meeting the wall again at once.
+    let back = h - e.time;
+    let (xi, field) = match e.partner {
         Partner::Collider(k) if set.colliders[k].is_moving() => {
-            let u = set.colliders[k].velocity_at(xi);
-            (vec3::add(xi, vec3::scale(h - e.time, u)), true)
+            let field = set.colliders[k].surface().velocity();
+            (field.carried(at, back), Some(field))
         }
-        _ => (xi, false),
+        _ => (at, None),
     };
     let unit = |d: [f64; 3]| {
         let len = vec3::norm(d);
@@ -629,9 +633,10 @@ fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event, h: f64) -> O
             Collider::Mesh(m) => m.touch_of_triangle(e.wall, xi, set.radius[e.i]).normal,
         },
     };
-    let wall_velocity = match e.partner {
-        Partner::Collider(k) if wall => set.colliders[k].velocity_at(vec3::sub(xi, vec3::scale(set.radius[e.i], normal))),
-        _ => [0.0; 3],
+    let wall_velocity = match field {
+        Some(f) if f.angular != [0.0; 3] && back > 0.0 => vec3::scale(1.0 / back, vec3::sub(xi, at)),
+        Some(f) => f.at(vec3::sub(xi, vec3::scale(set.radius[e.i], normal))),
+        None => [0.0; 3],
     };
     Some(Contact {
         i: e.i,
