@@ -146,3 +146,40 @@ def test_a_floor_keyframed_up_within_a_step_throws_the_ball_it_carries(kind, spa
     assert w.positions[0, 2] >= 10.0 + r - 1e-6
     # e = 0: it leaves with the floor's speed 10/span, less g t since
     assert w.velocities[0, 2] == pytest.approx(10.0 / span - 9.81 * (w.time - span), rel=0.02)
+
+
+def _thrown(kind, at, slide, speed, e=0.5):
+    w = kinema.World(dim=3, dt=1e-3)
+    w.add_particles(np.array([[at[0], at[1], 0.2]]), radius=0.05)
+    motion = kinema.Motion(velocity=(slide[0], slide[1], speed))
+    if kind == "mesh":
+        # (100 m wide: the ball stays over it while it slides)
+        w.add(kinema.Mesh(vertices=PLATE_V * 50, faces=PLATE_F, motion=motion))
+    else:
+        w.add(kinema.Plane([0, 0, 0], [0, 0, 1], motion=motion))
+    w.set_collisions(restitution=e)
+    w.step(int(np.ceil(0.15 / speed / 1e-3)) + 3)  # the plate meets the ball at 0.15 / speed
+    return w.velocities[0]
+
+
+def test_a_plate_sliding_in_its_own_plane_gives_no_sideways_kick_at_its_seam():
+    # the case: a flat two-triangle plate moving at (7.5, 0, 25) m/s sent a
+    # frictionless ball on its seam (x = y) off at (4.70, -4.70, 37.73) m/s; a Plane, and the
+    # plate away from its seam, throw it straight up at (1 + e) 25 = 37.5 m/s
+    for at in [(0.0, 0.0), (0.3, 0.3), (1.0, 1.0), (0.5, -0.7)]:
+        assert np.array_equal(_thrown("mesh", at, (7.5, 0.0), 25.0), _thrown("plane", at, (7.5, 0.0), 25.0))
+        assert _thrown("mesh", at, (7.5, 0.0), 25.0) == pytest.approx([0.0, 0.0, 37.5], abs=1e-9)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    along=st.floats(-1.5, 1.5),
+    off=st.sampled_from([0.0, 1e-9, 0.01]),
+    slide=st.tuples(st.floats(-20, 20), st.floats(-20, 20)),
+    speed=st.floats(1.0, 40.0),
+    e=st.floats(0.0, 1.0),
+)
+def test_a_plate_sliding_in_its_plane_throws_a_frictionless_ball_straight_at_its_seam_as_a_plane(along, off, slide, speed, e):
+    # on the seam (x = y), beside it, or at its ends (the shared vertices): (0, 0, (1 + e) V_z)
+    v = _thrown("mesh", (along + off, along), slide, speed, e)
+    assert v == pytest.approx([0.0, 0.0, (1 + e) * speed], abs=1e-9 * speed)
