@@ -299,3 +299,63 @@ def test_the_docs_example_prints_what_the_docs_say(capsys):
     printed = after.split("```text {.output}\n", 1)[1].split("```", 1)[0]  # (also checked by test_docs.py)
     exec(compile(code, "docs/collisions.md", "exec"), {})
     assert capsys.readouterr().out == printed
+
+
+# -- a Motion starts when it is given (issue 46) ---------------------------------------------
+def _ball_on_a_floor():
+    w = kinema.World(dim=3, dt=1e-3)
+    w.add_particles(np.array([[0.0, 0.0, 0.1]]), radius=0.1)
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1], restitution=0.0))
+    w.add(kinema.Gravity())
+    return w
+
+
+def test_a_motion_set_late_starts_where_the_collider_is():
+    # Before, a Motion set at t = 4 s ran on the world's clock from 0: the floor jumped 4 m up
+    # at once and threw the ball. Now it starts then, from where the floor is: over the next
+    # 0.5 s the ball rides it up 0.5 m (closed form: the floor's V t, the ball on it).
+    w = _ball_on_a_floor()
+    w.step(4000)
+    t0 = w.time
+    w.set_motion(0, kinema.Motion(velocity=(0, 0, 1.0)))
+    assert w.colliders[0].motion.start == t0
+    w.step(500)
+    assert w.positions[0, 2] == pytest.approx(0.1 + (w.time - t0), abs=2e-3)
+    assert w.velocities[0, 2] == pytest.approx(1.0, abs=1e-9)
+
+
+def test_a_motion_with_a_start_rests_until_then():
+    w = _ball_on_a_floor()
+    w.set_motion(0, kinema.Motion(velocity=(0, 0, 1.0), start=0.25))
+    w.step(200)
+    assert w.positions[0, 2] == pytest.approx(0.1, abs=1e-6)  # at rest on the floor at 0.2 s
+    w.step(300)
+    assert w.positions[0, 2] == pytest.approx(0.1 + (w.time - 0.25), abs=2e-3)
+    # a turning motion from its start: at 0.25 s + τ the plane has turned by ω τ
+    poses = _core.collider_poses([0.0, 0.25, 0.75], **kinema.Motion(angular_velocity=(0, 0, 2.0), start=0.25)._binding())
+    assert np.array_equal(poses[0], np.eye(3, 4)) and np.array_equal(poses[1], np.eye(3, 4))
+    assert np.allclose(poses[2, :, :3], rotation_matrix([0, 0, np.degrees(2.0 * 0.5)]))
+
+
+def test_a_late_motion_goes_through_a_scene_a_checkpoint_and_h5md(tmp_path):
+    w = _ball_on_a_floor()
+    w.step(1500)
+    w.set_motion(0, kinema.Motion(velocity=(0, 0, 0.5)))
+    w.step(100)
+    start = w.colliders[0].motion.start
+    again = Scene.from_string(w.to_scene().to_toml_string()).build()
+    assert again.colliders[0].motion == w.colliders[0].motion
+    w.save_checkpoint(tmp_path / "w.ckpt")
+    back = kinema.World.load_checkpoint(tmp_path / "w.ckpt")
+    assert back.colliders[0].motion.start == start
+    traj = w.run(0.1, fps=100)
+    back.run(0.1, fps=100)
+    assert np.array_equal(w.positions, back.positions) and np.array_equal(w.velocities, back.velocities)
+    path = traj.save(tmp_path / "late.h5")
+    assert kinema.load_trajectory(path).colliders[0]["motion"]["start"] == start
+
+
+@pytest.mark.parametrize("start", [math.nan, math.inf, "soon"])
+def test_a_bad_start_is_refused_by_name(start):
+    with pytest.raises((ValueError, TypeError), match="start"):
+        kinema.Motion(velocity=(0, 0, 1), start=start)

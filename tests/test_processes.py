@@ -76,9 +76,7 @@ def test_a_child_forked_after_the_world_stepped_goes_on_with_the_parents_bits(tm
     script.write_text(SCRIPT)
     env = {**os.environ, "RAYON_NUM_THREADS": str(threads)}
     try:
-        res = subprocess.run(
-            [sys.executable, str(script), "fork"], env=env, capture_output=True, text=True, timeout=150
-        )
+        res = subprocess.run([sys.executable, str(script), "fork"], env=env, capture_output=True, text=True, timeout=150)
     except subprocess.TimeoutExpired:
         pytest.fail("the forked child's first step never returned")
     assert res.returncode == 0, res.stderr[-2000:]

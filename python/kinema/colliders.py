@@ -411,21 +411,37 @@ class Motion:
     `angular_velocity` ω (rad/s, the axis's direction by the right-hand rule, its length
     the rate) about `pivot` c (m, a point of the collider's placement as added):
 
-        x(t) = R(t) (x₀ − c) + c + V t,     R(t) = the rotation by the angle |ω| t about ω
+        x(t) = R(t − t_s) (x₀ − c) + c + V (t − t_s),     R(τ) = the rotation by |ω| τ about ω
 
-    on the world's clock (t = 0 is the world's time 0, not the time the collider is added).
-    A drum turning about its own axis: `Motion(angular_velocity=(0, 2.0, 0), pivot=(0, 0,
-    0.3))` with the pivot on the axis. Each is 3 finite numbers (a `ValueError` naming it
+    from its `start` t_s (s, on the world's clock) on; before it the collider rests where it
+    was added. `start=None` (the default) is the time the motion is given: the world's time
+    when the collider is added (`World.add`) or the motion set (`World.set_motion`), so a
+    motion set at t = 4 s starts there, where the collider is, rather than jumping to where
+    it would be had it moved since 0; the world keeps it with that time filled in
+    (`w.colliders[k].motion.start`). A drum turning about its own axis:
+    `Motion(angular_velocity=(0, 2.0, 0), pivot=(0, 0, 0.3))` with the pivot on the axis.
+    Each vector is 3 finite numbers, `start` a finite time (a `ValueError` naming it
     otherwise; a wrong type is a `TypeError`). A `Box` can only translate (ω = 0); in a 2D
     world V lies in the xy-plane and ω along z."""
 
     velocity: Any = (0.0, 0.0, 0.0)
     angular_velocity: Any = (0.0, 0.0, 0.0)
     pivot: Any = (0.0, 0.0, 0.0)
+    start: Any = None
 
     def __post_init__(self) -> None:
         for name, unit in (("velocity", "m/s"), ("angular_velocity", "rad/s"), ("pivot", "m")):
             object.__setattr__(self, name, _finite3(name, getattr(self, name), unit))
+        if self.start is not None:
+            start = _checks.real("start", self.start)
+            if not math.isfinite(start):
+                raise ValueError(f"start = {_checks.describe(self.start)} is invalid: it must be a finite time, s")
+            object.__setattr__(self, "start", start)
+
+    def _given_at(self, t: float) -> Motion:
+        """This motion with its start filled in: `t` (s, the world's time it is given) when
+        it has none."""
+        return self if self.start is not None else dataclasses.replace(self, start=float(t))
 
     @property
     def turns(self) -> bool:
@@ -434,7 +450,12 @@ class Motion:
 
     def _binding(self) -> dict[str, Any]:
         """The keyword arguments of `_core.World.set_collider_motion` and `_core.collider_poses`."""
-        return {"velocity": list(self.velocity), "angular_velocity": list(self.angular_velocity), "pivot": list(self.pivot)}
+        return {
+            "velocity": list(self.velocity),
+            "angular_velocity": list(self.angular_velocity),
+            "pivot": list(self.pivot),
+            "start": 0.0 if self.start is None else self.start,
+        }
 
 
 @dataclass(frozen=True)
@@ -502,6 +523,10 @@ class Keyframes:
         if self.rotations is None:
             return None
         return np.array([quaternion(r) for r in self.rotations])
+
+    def _given_at(self, t: float) -> Keyframes:
+        """Keys are on the world's clock: the same keyframes whenever they are given."""
+        return self
 
     def _binding(self) -> dict[str, Any]:
         """The keyword arguments of `_core.World.set_collider_motion` and `_core.collider_poses`."""

@@ -456,9 +456,11 @@ class World(WorldCollisions):
         """Add a force (``kinema.Gravity``, ``Drag``, ``Spring``, ``Attractor``, ``Wind``,
         ``PythonForce``) or a collider (``kinema.Plane``, ``Box``, ``SphereObstacle``,
         ``Mesh``; this turns collisions on); returns it. A collider's ``motion`` moves it from
-        then on, placed where the motion has it at the world's time now (the motion's t = 0
-        is the world's time 0); a motion the engine refuses (a turning ``Box``, a motion out
-        of the xy-plane in a 2D world) is a ``ValueError`` naming it, and nothing is added."""
+        then on: a ``Motion`` without a ``start`` starts now, from where the collider is
+        placed (``w.colliders[k]`` is then a copy whose motion has the world's time now as its
+        start); ``Keyframes`` place it where their keys have it at the world's time now.
+        A motion the engine refuses (a turning ``Box``, a motion out of the xy-plane in a 2D
+        world) is a ``ValueError`` naming it, and nothing is added."""
         attach = getattr(item, "_attach", None)
         if attach is None:
             raise TypeError(
@@ -473,9 +475,12 @@ class World(WorldCollisions):
             _check_motion(self.dim, item, item.motion)  # refused before the collider is added
         attached = attach(self._core)
         if isinstance(item, Collider):
+            kept = item
             if item.motion is not None:
-                self._core.set_collider_motion(attached, **item.motion._binding())
-            self._colliders.append(item)
+                given = item.motion._given_at(self.time)  # a Motion starts when it is given
+                kept = item if given is item.motion else item._moved(given)
+                self._core.set_collider_motion(attached, **given._binding())
+            self._colliders.append(kept)
             self._added.append(item)
         else:
             self._forces.append(item)
@@ -493,8 +498,10 @@ class World(WorldCollisions):
         """Give a collider another prescribed motion: ``collider`` is one of :attr:`colliders`
         (the object added) or its index; ``motion`` a ``kinema.Motion``, ``kinema.Keyframes``
         or None (back to its placement as added, still). The motion is from the placement the
-        collider was added in, on the world's clock (its t = 0 is the world's time 0), and
-        places the collider at the world's time now. ``w.colliders[k]`` is then a copy of the
+        collider was added in; a ``Motion`` without a ``start`` starts at the world's time
+        now (so a floor given ``Motion(velocity=(0, 0, 1))`` at t = 4 s moves from where it
+        was added, not 4 m at once), ``Keyframes`` are on the world's clock and place the
+        collider where their keys have it now. ``w.colliders[k]`` is then a copy of the
         collider that carries the new motion (colliders are frozen; the object added keeps
         its own, and still names the collider here). A refused motion (a turning ``Box``, one out of the xy-plane in a 2D world)
         is a ``ValueError`` naming it, and the collider keeps its motion."""
@@ -508,6 +515,8 @@ class World(WorldCollisions):
             if not 0 <= k < n:
                 raise ValueError(f"collider = {k} is invalid: {f'an index of w.colliders, 0..{n - 1}' if n else 'the world has no colliders'}")
         moved = self._colliders[k]._moved(motion)  # checks the motion (a TypeError, a box's turn)
+        if moved.motion is not None:
+            moved = moved._moved(moved.motion._given_at(self.time))  # a Motion starts when it is given
         self._push()
         self._core.set_collider_motion(k, **({} if moved.motion is None else moved.motion._binding()))
         self._colliders[k] = moved

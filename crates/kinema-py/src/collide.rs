@@ -127,6 +127,7 @@ pub fn motion(
     times: Option<Vec<f64>>,
     translations: Option<Vec<[f64; 3]>>,
     rotations: Option<Vec<[f64; 4]>>,
+    start: Option<f64>,
 ) -> Result<Option<Motion>, Error> {
     let pivot = pivot.unwrap_or([0.0; 3]);
     match (times, velocity.is_some() || angular_velocity.is_some()) {
@@ -141,7 +142,9 @@ pub fn motion(
             let rotations = rotations.unwrap_or_else(|| vec![[1.0, 0.0, 0.0, 0.0]; n]);
             Motion::keyframes(times, translations, rotations, pivot).map(Some)
         }
-        (None, true) => Motion::steady(velocity.unwrap_or([0.0; 3]), angular_velocity.unwrap_or([0.0; 3]), pivot).map(Some),
+        (None, true) => Motion::steady(velocity.unwrap_or([0.0; 3]), angular_velocity.unwrap_or([0.0; 3]), pivot)
+            .and_then(|m| m.starting_at(start.unwrap_or(0.0)))
+            .map(Some),
         (None, false) => Ok(None),
     }
 }
@@ -150,7 +153,7 @@ pub fn motion(
 /// [R | o] with x = R x₀ + o for a point x₀ of its placement as added (m); the one
 /// implementation of the motion that the pictures, the viewer and the USD export share.
 #[pyfunction]
-#[pyo3(signature = (at, velocity=None, angular_velocity=None, pivot=None, times=None, translations=None, rotations=None))]
+#[pyo3(signature = (at, velocity=None, angular_velocity=None, pivot=None, times=None, translations=None, rotations=None, start=None))]
 #[allow(clippy::too_many_arguments)]
 fn collider_poses<'py>(
     py: Python<'py>,
@@ -161,8 +164,9 @@ fn collider_poses<'py>(
     times: Option<Vec<f64>>,
     translations: Option<Vec<[f64; 3]>>,
     rotations: Option<Vec<[f64; 4]>>,
+    start: Option<f64>,
 ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-    let m = motion(velocity, angular_velocity, pivot, times, translations, rotations).map_err(crate::errors::to_py)?;
+    let m = motion(velocity, angular_velocity, pivot, times, translations, rotations, start).map_err(crate::errors::to_py)?;
     let mut out = Vec::with_capacity(12 * at.len());
     for &t in &at {
         let pose = m.as_ref().map_or(kinema::collide::Pose::IDENTITY, |m| m.at(t).0);

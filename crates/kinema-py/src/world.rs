@@ -456,7 +456,7 @@ impl PyWorld {
     /// Gives collider k a prescribed motion: steady (`velocity`, m/s; `angular_velocity`,
     /// rad/s; about `pivot`, m), or keyframes (`times`, s; `translations`, m, K × 3;
     /// `rotations`, unit quaternions w, x, y, z, K × 4; about `pivot`); all None: still.
-    #[pyo3(signature = (k, velocity=None, angular_velocity=None, pivot=None, times=None, translations=None, rotations=None))]
+    #[pyo3(signature = (k, velocity=None, angular_velocity=None, pivot=None, times=None, translations=None, rotations=None, start=None))]
     #[allow(clippy::too_many_arguments)]
     fn set_collider_motion(
         &mut self,
@@ -467,9 +467,10 @@ impl PyWorld {
         times: Option<Vec<f64>>,
         translations: Option<Vec<[f64; 3]>>,
         rotations: Option<Vec<[f64; 4]>>,
+        start: Option<f64>,
     ) -> PyResult<()> {
         self.inner.restore_order();
-        let motion = collide::motion(velocity, angular_velocity, pivot, times, translations, rotations).map_err(to_py)?;
+        let motion = collide::motion(velocity, angular_velocity, pivot, times, translations, rotations, start).map_err(to_py)?;
         self.inner.set_collider_motion(k, motion).map_err(to_py)
     }
 

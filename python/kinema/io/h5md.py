@@ -38,7 +38,8 @@ specification allows, and requires for the box; units shown for `units="SI"`, th
                               (datasets: an attribute holds at most 64 KiB)
             motion        +-- a moving collider's motion (its geometry above is the placement
                               as added): steady, attributes velocity [m s-1],
-                              angular_velocity [s-1, rad], pivot [m]; or keyframes, attribute
+                              angular_velocity [s-1, rad], pivot [m], and start [s] when
+                              it does not start at 0; or keyframes, attribute
                               pivot [m] and datasets times (K,) [s], translations (K, 3) [m],
                               rotations (K, 4) unit quaternions w, x, y, z
 

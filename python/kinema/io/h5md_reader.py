@@ -104,8 +104,9 @@ class LoadedTrajectory:
 MESH_DATASETS = {"vertices": "float64", "faces": "int64"}
 #: A moving collider's keyframe arrays, datasets of its ``motion`` group, and their shapes (K: keys).
 MOTION_DATASETS = {"times": ("K",), "translations": ("K", 3), "rotations": ("K", 4)}
-#: A motion group's attributes: 3-vectors (steady: velocity, angular_velocity; both kinds: pivot).
-MOTION_ATTRIBUTES = ("velocity", "angular_velocity", "pivot")
+#: A motion group's attributes: 3-vectors (steady: velocity, angular_velocity; both kinds: pivot),
+#: and a steady motion's start (s), one number.
+MOTION_ATTRIBUTES = ("velocity", "angular_velocity", "pivot", "start")
 #: The collider types a file holds.
 COLLIDER_TYPES = ("plane", "box", "sphere", "mesh")
 
@@ -172,11 +173,13 @@ def _read_motion(path: Path, g: Any) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, value in g.attrs.items():
         a = np.asarray(value)
-        if key not in MOTION_ATTRIBUTES or a.shape != (3,) or dtype_problem(a.dtype) is not None:
+        if key not in MOTION_ATTRIBUTES or a.shape != (() if key == "start" else (3,)) or dtype_problem(a.dtype) is not None:
             raise fail(
-                path, f"attribute {key!r} ({g.name}) = {shown(value)} is not part of a motion (attributes {', '.join(MOTION_ATTRIBUTES)}: 3 numbers each)"
+                path,
+                f"attribute {key!r} ({g.name}) = {shown(value)} is not part of a motion "
+                f"(attributes {', '.join(MOTION_ATTRIBUTES[:3])}: 3 numbers each; start: one number, s)",
             )
-        out[key] = a.astype(np.float64).tolist()
+        out[key] = float(a) if key == "start" else a.astype(np.float64).tolist()
     for key in g:
         ds = g[key]
         shape = MOTION_DATASETS.get(key)

@@ -76,7 +76,7 @@ def _describe_colliders(colliders) -> list[dict]:
 
 
 #: A motion description's keys: steady, keyframes (``_describe_colliders``).
-STEADY_KEYS = ("velocity", "angular_velocity", "pivot")
+STEADY_KEYS = ("velocity", "angular_velocity", "pivot", "start")
 KEYFRAME_KEYS = ("times", "translations", "rotations", "pivot")
 
 
@@ -88,6 +88,8 @@ def _motion(name: str, motion) -> dict:
 
     if isinstance(motion, MOTIONS):
         binding = motion._binding()
+        if binding.get("start") == 0.0:
+            del binding["start"]  # from the world's time 0: the description has no start
         if "times" in binding:
             k = len(binding["times"])
             binding["translations"] = binding["translations"] or [[0.0, 0.0, 0.0]] * k
@@ -106,11 +108,11 @@ def _motion(name: str, motion) -> dict:
         if value is None:
             continue
         a = np.asarray(value, dtype=np.float64)
-        shape = {"times": (None,), "translations": (None, 3), "rotations": (None, 4)}.get(key, (3,))
+        shape = {"times": (None,), "translations": (None, 3), "rotations": (None, 4), "start": ()}.get(key, (3,))
         if a.ndim != len(shape) or any(want is not None and got != want for got, want in zip(a.shape, shape, strict=True)):
             want = "(" + ", ".join("K" if w is None else str(w) for w in shape) + ("," if len(shape) == 1 else "") + ")"
             raise ValueError(f"{name}.{key} has shape {a.shape}; it must be {want}")
-        out[key] = a.tolist()
+        out[key] = float(a) if key == "start" else a.tolist()
     try:
         _core.collider_poses([0.0], **out)  # the engine's checks (finite, increasing times, one key each)
     except ValueError as e:

@@ -255,7 +255,7 @@ def _motion(m: Any) -> Motion | Keyframes | None:
     if m is None:
         return None
     if isinstance(m, SteadyMotion):
-        return Motion(_v3(m.velocity), list(m.angular_velocity), _v3(m.pivot))
+        return Motion(_v3(m.velocity), list(m.angular_velocity), _v3(m.pivot), m.start)
     translations = None if m.translations is None else [_v3(t) for t in m.translations]
     return Keyframes(list(m.times), translations, None if m.rotations is None else [list(r) for r in m.rotations], _v3(m.pivot))
 

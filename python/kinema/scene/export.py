@@ -216,11 +216,15 @@ def to_scene(world: World) -> Scene:
 
 
 def _motion_table(m: Motion | Keyframes) -> dict[str, Any]:
-    """A collider's motion as its scene table: steady (velocity, angular_velocity, pivot) or
+    """A collider's motion as its scene table: steady (velocity, angular_velocity, pivot, and
+    its start when not 0) or
     keyframes (times, translations, rotations in degrees as given, pivot; those not given left
     out)."""
     if isinstance(m, Motion):
-        return {"velocity": list(m.velocity), "angular_velocity": list(m.angular_velocity), "pivot": list(m.pivot)}
+        table = {"velocity": list(m.velocity), "angular_velocity": list(m.angular_velocity), "pivot": list(m.pivot)}
+        if m.start:  # (0 and None: from the scene's time 0)
+            table["start"] = m.start
+        return table
     out: dict[str, Any] = {"times": list(m.times)}
     for name in ("translations", "rotations"):
         rows = getattr(m, name)

@@ -387,16 +387,25 @@ def _all_finite(values: Any, name: str, unit: str) -> None:
 class SteadyMotion(_Model):
     """``motion = { velocity = [..], angular_velocity = [..], pivot = [..] }``: translation at
     ``velocity`` (m/s) and a turn at ``angular_velocity`` (rad/s, about its direction) about
-    ``pivot`` (m, a point of the collider's placement), from the world's time 0."""
+    ``pivot`` (m, a point of the collider's placement), from ``start`` (s, on the world's
+    clock; left out: from when the collider is added, the scene's time 0)."""
 
     velocity: Vec = [0.0, 0.0, 0.0]
     angular_velocity: Vec3 = [0.0, 0.0, 0.0]
     pivot: Vec = [0.0, 0.0, 0.0]
+    start: float | None = None
 
     @field_validator("velocity", "angular_velocity", "pivot")
     @classmethod
     def _finite(cls, v: Any, info: Any) -> Any:
         _all_finite(v, info.field_name, {"velocity": "m/s", "angular_velocity": "rad/s"}.get(info.field_name, "m"))
+        return v
+
+    @field_validator("start")
+    @classmethod
+    def _finite_start(cls, v: Any) -> Any:
+        if v is not None and not math.isfinite(v):
+            raise ValueError(f"start = {v} is invalid: it must be a finite time, s")
         return v
 
     def turns(self) -> bool:

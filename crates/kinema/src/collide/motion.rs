@@ -124,7 +124,9 @@ impl SurfaceVelocity {
 /// A prescribed motion (see the module's doc).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Motion {
-    /// Constant velocity V (m/s) and angular velocity ω (rad/s) about `pivot` (m).
+    /// Constant velocity V (m/s) and angular velocity ω (rad/s) about `pivot` (m), from the
+    /// time `start` (s, on the world's clock) on; before it the collider rests where it
+    /// was added: T = V (t − t_s), R = exp((t − t_s) [ω]×) for t ≥ t_s.
     Steady {
         /// V, m/s.
         velocity: [f64; 3],
@@ -132,6 +134,8 @@ pub enum Motion {
         angular_velocity: [f64; 3],
         /// c, m.
         pivot: [f64; 3],
+        /// t_s, s.
+        start: f64,
     },
     /// Keyframes: at `times[k]` (s, increasing) the collider is displaced by `translations[k]`
     /// (m) and turned by the unit quaternion `rotations[k]` (w, x, y, z) about `pivot` (m).
@@ -168,7 +172,34 @@ impl Motion {
             velocity,
             angular_velocity,
             pivot,
+            start: 0.0,
         })
+    }
+
+    /// This steady motion started at `start` (s, finite) instead of the world's time 0: the
+    /// collider rests where it was added until then (keyframes keep their own times: refused).
+    pub fn starting_at(self, start: f64) -> Result<Motion, Error> {
+        if !start.is_finite() {
+            return Err(Error::invalid("start", start, "a motion's start must be a finite time, s"));
+        }
+        match self {
+            Motion::Steady {
+                velocity,
+                angular_velocity,
+                pivot,
+                ..
+            } => Ok(Motion::Steady {
+                velocity,
+                angular_velocity,
+                pivot,
+                start,
+            }),
+            Motion::Keyframes { .. } => Err(Error::invalid(
+                "start",
+                start,
+                "keyframes start at their first time: shift the times instead",
+            )),
+        }
     }
 
     /// Keyframes at `times` (s, finite, strictly increasing, at least one) of `translations`
@@ -243,14 +274,16 @@ impl Motion {
             Motion::Steady {
                 velocity,
                 angular_velocity,
+                start,
                 ..
-            } => *velocity != [0.0; 3] || *angular_velocity != [0.0; 3],
+            } => (*velocity != [0.0; 3] || *angular_velocity != [0.0; 3]) && t1 > *start,
             Motion::Keyframes { times, .. } => t1 > times[0] && t0 < times[times.len() - 1],
         }
     }
 
     /// The displacement at the step's end `t1` (s) and the surface's velocity field over the
-    /// step from `t0`: a steady motion's own; for keyframes, the steady field that moves the
+    /// step from `t0`: a steady motion's own (once started); for keyframes, and a steady
+    /// motion that starts within the step, the steady field that moves the
     /// collider from where it is at t0 to where it is at t1 (its chord: V = (T₁ − T₀)/h, ω
     /// the turn R₁ R₀ᵀ over h), so that a key inside the step, or a jump of many metres
     /// between two keys within it, is swept as the displacement it makes, not as the
@@ -258,7 +291,8 @@ impl Motion {
     pub fn over(&self, t0: f64, t1: f64) -> (Pose, SurfaceVelocity) {
         let (pose, velocity) = self.at(t1);
         let h = t1 - t0;
-        if matches!(self, Motion::Steady { .. }) || !(h > 0.0) || !self.moves_within(t0, t1) {
+        let steady_through = matches!(self, Motion::Steady { start, .. } if t0 >= *start);
+        if steady_through || !(h > 0.0) || !self.moves_within(t0, t1) {
             return (pose, velocity);
         }
         let (start, _) = self.at(t0);
@@ -279,7 +313,23 @@ impl Motion {
                 velocity,
                 angular_velocity,
                 pivot,
+                start,
             } => {
+                if t < *start {
+                    let rest = SurfaceVelocity {
+                        center: *pivot,
+                        ..SurfaceVelocity::default()
+                    };
+                    return (
+                        Pose {
+                            pivot: *pivot,
+                            ..Pose::IDENTITY
+                        },
+                        rest,
+                    );
+                }
+                // (t − 0.0 is t: a motion from the world's time 0 keeps its bits)
+                let t = t - *start;
                 let translation = vec3::scale(t, *velocity);
                 let pose = Pose {
                     rotation: rotation_of_vector(vec3::scale(t, *angular_velocity)),

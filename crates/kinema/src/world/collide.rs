@@ -439,6 +439,7 @@ fn check_planar_motion(m: &Motion) -> Result<(), Error> {
             velocity,
             angular_velocity,
             pivot,
+            ..
         } => {
             for (name, v) in [
                 ("velocity[2]", velocity[2]),
