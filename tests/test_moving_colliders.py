@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import kinema
 from kinema import _core
@@ -359,3 +361,25 @@ def test_a_late_motion_goes_through_a_scene_a_checkpoint_and_h5md(tmp_path):
 def test_a_bad_start_is_refused_by_name(start):
     with pytest.raises((ValueError, TypeError), match="start"):
         kinema.Motion(velocity=(0, 0, 1), start=start)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    start=st.floats(-2.0, 5.0),
+    velocity=st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-3, 3)),
+    omega=st.tuples(st.floats(-4, 4), st.floats(-4, 4), st.floats(-4, 4)),
+    pivot=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)),
+    times=st.lists(st.floats(-3.0, 8.0), min_size=1, max_size=6),
+)
+def test_a_steady_motion_is_its_closed_form_from_its_start(start, velocity, omega, pivot, times):
+    # x(t) = R(ω (t − t_s)) (x₀ − c) + c + V (t − t_s) from t_s on, the placement before it
+    from scipy.spatial.transform import Rotation
+
+    motion = kinema.Motion(velocity=velocity, angular_velocity=omega, pivot=pivot, start=start)
+    poses = _core.collider_poses(times, **motion._binding())
+    c = np.array(pivot)
+    for t, pose in zip(times, poses, strict=True):
+        tau = max(t - start, 0.0)
+        turn = Rotation.from_rotvec(tau * np.array(omega)).as_matrix()
+        assert np.allclose(pose[:, :3], turn, atol=1e-12)
+        assert np.allclose(pose[:, 3], c - turn @ c + tau * np.array(velocity), atol=1e-12)
