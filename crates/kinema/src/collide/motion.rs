@@ -292,7 +292,7 @@ impl Motion {
         let (pose, velocity) = self.at(t1);
         let h = t1 - t0;
         let steady_through = matches!(self, Motion::Steady { start, .. } if t0 >= *start);
-        if steady_through || !(h > 0.0) || !self.moves_within(t0, t1) {
+        if steady_through || h.is_nan() || h <= 0.0 || !self.moves_within(t0, t1) {
             return (pose, velocity);
         }
         let (start, _) = self.at(t0);
