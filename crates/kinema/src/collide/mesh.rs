@@ -504,7 +504,20 @@ impl TriangleMesh {
                         vec3::scale(-1.0, n)
                     }
                 } else if c.len > 0.0 {
-                    vec3::scale(1.0 / c.len, c.d)
+                    // an edge or vertex straight above (or below) it, to the coordinates'
+                    // precision, is the face's: the normal of a flat patch's seam is then its
+                    // plane's, exactly, not tilted by the rounding of where the centre is
+                    let off = vec3::sub(c.d, vec3::scale(vec3::dot(c.d, n), n));
+                    let eps = 1e-10 * (g.scale + vec3::norm(vec3::add(c.q, c.d)) + r);
+                    if vec3::norm(off) <= eps {
+                        if vec3::dot(c.d, n) >= 0.0 {
+                            n
+                        } else {
+                            vec3::scale(-1.0, n)
+                        }
+                    } else {
+                        vec3::scale(1.0 / c.len, c.d)
+                    }
                 } else {
                     // the centre on the surface itself: the face's normal towards the free side
                     if self.side == Side::Inside {
@@ -924,16 +937,22 @@ fn closest_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> ([
     (vec3::add(a, vec3::add(vec3::scale(v, ab), vec3::scale(w, ac))), Feature::Face)
 }
 
-/// First root τ ∈ [0, h] of |d + u τ|² = R² while the distance falls, for |d| > R: the
+/// First root τ ∈ [0, h] of |d + u τ|² = R² while the distance falls, for |d| ≥ R: the
 /// smaller root of a τ² + 2 b τ + c (a = u·u, b = d·u, c = |d|² − R²), in the
-/// cancellation-free form c / (−b + √(b² − a c)) of `toi.rs`.
+/// cancellation-free form c / (−b + √(b² − a c)) of `toi.rs`. At exactly |d| = R and
+/// approaching, 0: such a sphere is no touch of [`TriangleMesh::near`] (within R, strictly),
+/// and a ball placed exactly on a flat mesh's seam and driven into it fell through between
+/// the two.
 fn first_approach(d: [f64; 3], u: [f64; 3], radius: f64, h: f64) -> Option<f64> {
     let a = vec3::dot(u, u);
     let b = vec3::dot(d, u);
     let len = vec3::norm(d);
     let c = (len - radius) * (len + radius);
-    if c <= 0.0 || b >= 0.0 || a == 0.0 {
+    if c < 0.0 || b >= 0.0 || a == 0.0 {
         return None;
+    }
+    if c == 0.0 {
+        return Some(0.0);
     }
     let disc = b * b - a * c;
     if disc <= 0.0 {
