@@ -13,6 +13,10 @@ NumPy scalar, ``{"$a": [flat values], "shape": [2, 3], "dtype": "int64"}`` a Num
 (``dtype`` "list": nested Python lists of that shape), ``{"$ref": "tableau"}`` the
 ``ButcherTableau`` an earlier op built. Python ints of any size are JSON ints.
 
+An ``oracle`` op (``{"op": "oracle", "name": ..., "kwargs": {...}}``) runs one of the checks
+of ``ORACLES``: a small world built through the public API, run, and compared with a closed
+form; a physically wrong result is the verdict ``"wrong answer"`` (a silent wrong answer).
+
 ``Worker`` (the test process's side) keeps one ``python tests/fuzz_cases.py --worker``
 process, which imports kinema once and runs cases read from its stdin, one JSON line each,
 answering one JSON line each: the outcome of every op (``"ok"`` or the exception's type,
@@ -158,6 +162,8 @@ def to_python(case: dict) -> str:
     lines = ["import numpy as np", "import kinema", "w = kinema.World()"]
     if any(op["op"] == "world" for op in case["ops"]):
         lines.pop()
+    if all(op["op"] == "oracle" for op in case["ops"]):  # (from the repository root)
+        lines = ["import sys", "sys.path.insert(0, 'tests')", "from fuzz_cases import ORACLES  # each raises fuzz_cases.WrongAnswer on a wrong answer"]
     for op in case["ops"]:
         kind = op["op"]
         if kind == "world":
@@ -193,6 +199,8 @@ def to_python(case: dict) -> str:
             lines.append(text)
         elif kind == "stability":
             lines.append(_call(f"kinema.stability.{op['fn']}", op))
+        elif kind == "oracle":
+            lines.append(_call(f"ORACLES[{op['name']!r}]", op))
         else:
             lines.append(f"# {json.dumps(op)}")
     text = "\n".join(lines)
@@ -328,10 +336,10 @@ class Worker:
 
 def findings(answer: dict, allow_exit_1_divergence: bool = True) -> list[tuple[str, str]]:
     """What is wrong with a worker's answer, as (kind, text) pairs (empty: nothing). The kinds
-    (the columns of the session's report): crash, hang, panic, unexpected exception, CLI
-    traceback, CLI exit, and the faults of tests/fuzz_faults.py (destructive write, leftover
-    temp file, partial output, bad read-back, node changed, not refused, leaked fd, broken
-    world, stale result)."""
+    (the columns of the session's report): crash, hang, panic, unexpected exception, wrong
+    answer (an oracle's: the call succeeded, the physics is wrong), CLI traceback, CLI exit,
+    and the faults of tests/fuzz_faults.py (destructive write, leftover temp file, partial
+    output, bad read-back, node changed, not refused, leaked fd, broken world, stale result)."""
     status = answer.get("status")
     if status == "crash":
         return [("crash", f"the worker process died (returncode {answer['returncode']}, signal {answer['signal']}); stderr:\n{answer['stderr']}")]
@@ -342,6 +350,8 @@ def findings(answer: dict, allow_exit_1_divergence: bool = True) -> list[tuple[s
         out.append(("panic", f"a Rust panic was printed:\n{answer['panic_output']}"))
 
     def judged(k: int, r: dict, where: str) -> None:
+        if r.get("verdict") == "wrong answer":
+            out.append(("wrong answer", f"op {k} ({where}): a wrong answer: {r['message']}"))
         if r.get("verdict") == "bad":
             kind = "panic" if r.get("type") == "PanicException" else "unexpected exception"
             why = f" ({r['why']})" if r.get("why") else ""
@@ -444,6 +454,475 @@ def format_report(table: dict) -> str:
     return "\n".join(lines)
 
 
+# -- oracles: physics against closed forms ---------------------------------------------------
+# An oracle op, {"op": "oracle", "name": ..., "kwargs": {...}}, runs ORACLES[name](**kwargs) in
+# the worker: the check builds its world through kinema's public API, runs it and compares what
+# it did with a closed form. A result that is physically wrong raises WrongAnswer (the op's
+# verdict "wrong answer": a silent wrong answer, the call succeeded); so does a refusal
+# (ValueError, TypeError, SimulationDiverged) where the physics must work (``_oracle``). The
+# refusals that are the right answer (a turn beyond the detection's sweep, speeds the events
+# cannot follow) are expected by the check itself, and a refusal of another kind there is wrong
+# too. Each check returns what it checked (in the op's answer). A reproducer, from the
+# repository root: ``import sys; sys.path.insert(0, "tests"); from fuzz_cases import ORACLES;
+# ORACLES[name](**kwargs)`` (``to_python`` writes it).
+G = 9.81  # kinema.Gravity()'s
+BALL = 0.05  # the balls' radius
+PLATE_FACES = [[0, 1, 2], [0, 2, 3]]  # a square's two triangles, their seam x = y
+
+
+class WrongAnswer(Exception):
+    """An oracle's verdict: kinema answered, but not what the physics gives."""
+
+
+def _plate(half: float) -> list[list[float]]:
+    """A flat square of half-width ``half`` m in z = 0, centred at the origin."""
+    return [[-half, -half, 0.0], [half, -half, 0.0], [half, half, 0.0], [-half, half, 0.0]]
+
+
+def _cube(half: float = 0.5) -> tuple[Any, Any]:
+    """A closed cube mesh (tests/test_moving_meshes_hold.py's): its 8 corners and 12 outward triangles."""
+    import itertools
+
+    import numpy as np
+
+    v = np.array(list(itertools.product((-half, half), repeat=3)), float)
+    faces = []
+    for axis in range(3):
+        for sign in (-1, 1):
+            quad = [k for k in range(8) if np.sign(v[k, axis]) == sign]
+            c = v[quad].mean(axis=0)
+            others = [a for a in range(3) if a != axis]
+            angle = np.arctan2(v[quad, others[1]] - c[others[1]], v[quad, others[0]] - c[others[0]])
+            ring = [quad[k] for k in np.argsort(angle)]
+            a, b, d = v[ring[0]], v[ring[1]], v[ring[2]]
+            if np.dot(np.cross(b - a, d - a), c) < 0:
+                ring = ring[::-1]
+            faces += [[ring[0], ring[1], ring[2]], [ring[0], ring[2], ring[3]]]
+    return v, np.array(faces)
+
+
+def _finite(w: Any, what: str) -> None:
+    import numpy as np
+
+    if not (np.all(np.isfinite(w.positions)) and np.all(np.isfinite(w.velocities))):
+        raise WrongAnswer(f"{what}: a position or velocity is not finite at t = {w.time!r} s: {w.positions.tolist()} {w.velocities.tolist()}")
+
+
+def moving_plate_side(
+    kind: str, half: float, plate: list, start: list, ball: list, side: int, gap: float, dt: float, gravity: bool, restitution: float, steps: int
+) -> dict:
+    """A ball (r = 0.05 m) starting ``gap`` m on one ``side`` (±1) of a plate (a two-triangle
+    ``"mesh"`` of half-width ``half``, or a one-sided ``"plane"``: side +1 only) that moves at
+    the constant velocity ``plate``: whenever its centre is over the plate (0.1 m inside its
+    edges) it is on its side of the plate, whose z at time t is plate_z t. A plate is a wall:
+    no speed of the ball or the plate, no restitution, no step takes the ball through it."""
+    import kinema
+
+    w = kinema.World(dim=3, dt=dt)
+    w.add_particles([[start[0], start[1], side * gap]], velocity=[ball], radius=BALL)
+    motion = kinema.Motion(velocity=plate)
+    if kind == "mesh":
+        w.add(kinema.Mesh(vertices=_plate(half), faces=PLATE_FACES, motion=motion))
+    else:
+        w.add(kinema.Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], motion=motion))
+    if gravity:
+        w.add(kinema.Gravity())
+    w.set_collisions(restitution=restitution)
+    checked = 0
+    for k in range(1, steps + 1):
+        w.step(1)
+        _finite(w, f"step {k}")
+        x, t = w.positions[0], w.time
+        if kind == "plane" or (abs(x[0] - plate[0] * t) < half - 0.1 and abs(x[1] - plate[1] * t) < half - 0.1):
+            checked += 1
+            beyond = -(x[2] - plate[2] * t) * side
+            if beyond > 0:
+                raise WrongAnswer(
+                    f"the ball went through the moving plate: after step {k} (t = {t!r} s) its centre is {beyond:.6g} m on the other side "
+                    f"(z = {x[2]!r}, the plate at z = {plate[2] * t!r}; over the plate at x - plate_x = {x[0] - plate[0] * t:.6g}, y - plate_y = {x[1] - plate[1] * t:.6g})"
+                )
+    return {"checked": checked}
+
+
+def sliding_plate_throw(kind: str, at: list, slide: list, speed: float, restitution: float) -> dict:
+    """A plate (a 100 m wide two-triangle ``"mesh"``, or a ``"plane"``) moving at (slide_x,
+    slide_y, ``speed``) up to a frictionless ball at rest at (at_x, at_y, 0.2) (on the mesh's
+    seam x = y, beside it or at its shared vertices): the ball leaves at (0, 0, (1 + e) speed),
+    to 1e-9 speed (the plate's sliding in its own plane gives a frictionless ball no sideways
+    kick; Newton's law with the plate's normal speed)."""
+    import math
+
+    import numpy as np
+
+    import kinema
+
+    dt = 1e-3
+    w = kinema.World(dim=3, dt=dt)
+    w.add_particles([[at[0], at[1], 0.2]], radius=BALL)
+    motion = kinema.Motion(velocity=(slide[0], slide[1], speed))
+    if kind == "mesh":
+        w.add(kinema.Mesh(vertices=_plate(100.0), faces=PLATE_FACES, motion=motion))
+    else:
+        w.add(kinema.Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], motion=motion))
+    w.set_collisions(restitution=restitution)
+    steps = int(math.ceil(0.15 / speed / dt)) + 3  # the plate meets the ball at 0.15 / speed s
+    w.step(steps)
+    v, want = w.velocities[0], np.array([0.0, 0.0, (1.0 + restitution) * speed])
+    err = float(np.max(np.abs(v - want)))
+    if not err <= 1e-9 * speed:
+        raise WrongAnswer(f"after {steps} steps the ball's velocity is {v.tolist()}, not {want.tolist()} (off by {err:.3g} m/s > 1e-9 x {speed!r})")
+    return {"steps": steps}
+
+
+def turning_cube(turn: float, axis: list, count: int, restitution: float, friction: float, steps: int, half: float = 0.5) -> dict:
+    """``count`` balls (r = 0.05 m) on a grid (±0.6 ``half``) in a closed cube mesh container
+    (half-width ``half`` m, ``inside=True``) turning about ``axis`` through its centre, the
+    origin, by ``turn`` rad a step (dt = 1 ms), under gravity: every ball stays inside, in the
+    cube's own frame (positions turned back by R(ω t)ᵀ: every coordinate within ±``half``;
+    a ball's centre stays r inside, so the check allows the end-of-step overlap). A turn above 0.1 rad a step must be
+    refused instead, by a ValueError naming the collider (the right answer there; a turn within
+    1e-12 of 0.1 may go either way)."""
+    import math
+
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    import kinema
+
+    dt = 1e-3
+    a = np.asarray(axis, float)
+    omega = a / np.linalg.norm(a) * (turn / dt)
+    per_step = float(np.linalg.norm(omega)) * dt
+    v, f = _cube(half)
+    k = math.ceil(round(count ** (1 / 3), 9))
+    g = np.linspace(-0.6 * half, 0.6 * half, k)
+    grid = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)[:count]
+    w = kinema.World(dim=3, dt=dt)
+    w.add_particles(grid, radius=BALL)
+    w.add(kinema.Mesh(vertices=v, faces=f, inside=True, motion=kinema.Motion(angular_velocity=tuple(omega.tolist()))))
+    w.add(kinema.Gravity())
+    w.set_collisions(restitution=restitution, friction=friction)
+    worst = 0.0
+    for step in range(1, steps + 1):
+        try:
+            w.step(1)
+        except ValueError as e:
+            if per_step > 0.1 - 1e-12 and "collider" in str(e):
+                return {"refused": str(e)[:200]}
+            raise
+        _finite(w, f"step {step}")
+        local = w.positions @ Rotation.from_rotvec(omega * w.time).as_matrix()  # Rᵀ x, row by row
+        out = np.max(np.abs(local), axis=1)
+        worst = max(worst, float(out.max()))
+        if out.max() > half:
+            i = int(np.argmax(out))
+            raise WrongAnswer(
+                f"ball {i} left the turning cube: after step {step} (t = {w.time!r} s) it is at {local[i].tolist()} in the cube's frame (|coordinate| > {half!r}); "
+                f"{per_step:.6g} rad a step"
+            )
+    if per_step > 0.1 + 1e-12:
+        raise WrongAnswer(f"a turn of {per_step!r} rad a step (above 0.1) was run, not refused naming the collider (the balls stayed in: {worst:.6g})")
+    return {"worst": worst}
+
+
+def keyframed_floor(kind: str, span: float, height: float, at: list) -> dict:
+    """A floor (a ``"plane"`` or a 12 m wide plate ``"mesh"``) keyframed from z = 0 up to
+    ``height`` m within ``span`` steps (dt = 1 ms; Keyframes(times=[0, span dt])) under a ball
+    resting on it (r = 0.05 m at z = r, e = 0, gravity): after 0.05 s the ball is above the
+    floor, z ≥ height + r − 1e-6 (a floor carries what rests on it however fast it moves)."""
+    import kinema
+
+    dt = 1e-3
+    motion = kinema.Keyframes(times=[0.0, span * dt], translations=[[0.0, 0.0, 0.0], [0.0, 0.0, height]])
+    w = kinema.World(dim=3, dt=dt)
+    w.add_particles([[at[0], at[1], BALL]], radius=BALL)
+    w.add(kinema.Gravity())
+    if kind == "plane":
+        w.add(kinema.Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], motion=motion))
+    else:
+        w.add(kinema.Mesh(vertices=_plate(6.0), faces=PLATE_FACES, motion=motion))
+    w.set_collisions(restitution=0.0)
+    w.step(50)
+    _finite(w, "after 50 steps")
+    z = float(w.positions[0, 2])
+    if not z >= height + BALL - 1e-6:
+        raise WrongAnswer(
+            f"after 0.05 s the ball is at z = {z!r}, below the floor keyframed up to {height!r} m (its centre must be at least {height + BALL!r})"
+        )
+    return {"z": z}
+
+
+def _resting(w: Any, count: int, what: str, limit: int = 2000) -> int:
+    """Steps ``w`` until its ``count`` particles sleep (WrongAnswer after ``limit`` steps)."""
+    for n in range(limit + 1):
+        if w.collision_stats()["last"]["asleep"] == count:
+            return n
+        w.step(1)
+    sleep_time = w.collisions["sleep_time"]
+    raise WrongAnswer(
+        f"{what}: {count} balls at rest on a floor, sleep_time = {sleep_time!r} s, are not asleep after {limit} steps ({w.collision_stats()['last']['asleep']} asleep)"
+    )
+
+
+def _column(depth: int, restitution: float, friction: float, dt: float, sleep: float | None) -> Any:
+    import kinema
+
+    w = kinema.World(dt=dt, method="verlet")
+    w.add_particles([[0.0, 0.0, BALL + 2 * BALL * k] for k in range(depth)], mass=1.0, radius=BALL)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]))
+    w.set_collisions(restitution=restitution, friction=friction, sleep_time=sleep)
+    return w
+
+
+def sleeping_column_impact(
+    depth: int, restitution: float, friction: float, speed: float, dt: float, offset: float, sleep_time: float, settle: float | None
+) -> dict:
+    """A column of ``depth`` balls (r = 0.05 m, 1 kg) resting on a floor, stepped ``settle`` s
+    (asleep by then: ``sleep_time`` s of calm), then a ball dropped on it at ``speed`` m/s from 1 mm
+    above (``offset`` m off its axis): through the step of the impact and the two after it, the
+    world answers as the same scene never allowed to sleep, stepped as long
+    (tests/test_sleepers_answer.py: positions within g dt², velocities within 1e-6 speed; an
+    island asleep is a shortcut for an island at rest, never another physics).
+
+    ``settle`` = None drops the ball at the step the column falls asleep. The awake twin is not
+    at rest then: its speeds are still ~1e-13 m/s (~1e-17 after 0.5 s) and flip the stepped
+    model's exact decisions (an impact or a resting contact), so its answer to the same drop
+    changes from step to step by up to the ball's speed; the fuzz cases settle 0.5-1.5 s past
+    ``sleep_time``, as the test file does (1.5 s)."""
+    import numpy as np
+
+    asleep = _column(depth, restitution, friction, dt, sleep=sleep_time)
+    if settle is None:
+        n = _resting(asleep, depth, "the column", limit=int(round((sleep_time + 2.0) / dt)))
+    else:
+        n = int(round(settle / dt))
+        asleep.step(n)
+        if asleep.collision_stats()["last"]["asleep"] != depth:
+            raise WrongAnswer(
+                f"a column of {depth} at rest on a floor, sleep_time = {sleep_time!r} s, is not asleep after {settle!r} s ({asleep.collision_stats()['last']['asleep']} asleep)"
+            )
+    awake = _column(depth, restitution, friction, dt, sleep=None)
+    awake.step(n)
+    if awake.collision_stats()["last"]["asleep"] != 0:
+        raise WrongAnswer(f"with sleep_time = None, {awake.collision_stats()['last']['asleep']} balls sleep")
+    met = []
+    for w in (asleep, awake):
+        top = w.positions[depth - 1, 2]
+        w.add_particles([[offset, 0.0, top + 2 * BALL + 1e-3]], velocity=[[0.0, 0.0, -speed]], mass=1.0, radius=BALL)
+        steps = 0  # until the ball meets the column (an impact, or a contact more)
+        while steps < 100:
+            w.step(1)
+            steps += 1
+            last = w.collision_stats()["last"]
+            if last["impacts"] or last["resting"] > depth:
+                break
+        w.step(2)
+        _finite(w, "after the impact")
+        met.append(steps)
+    if not met[0] == met[1] < 100:
+        raise WrongAnswer(f"the ball met the sleeping column at step {met[0]}, the awake one at step {met[1]} (of at most 100)")
+    dx = float(np.max(np.abs(asleep.positions - awake.positions)))
+    dv = float(np.max(np.abs(asleep.velocities - awake.velocities)))
+    if not (dx <= G * dt**2 and dv <= 1e-6 * speed):
+        raise WrongAnswer(
+            f"two steps after the impact the sleeping column's world differs from the awake one's by {dx:.3g} m (g dt² = {G * dt**2:.3g}) "
+            f"and {dv:.3g} m/s (1e-6 speed = {1e-6 * speed:.3g}); velocities asleep {asleep.velocities.tolist()} awake {awake.velocities.tolist()}"
+        )
+    return {"steps_before": n, "met_at": met[0], "dx": dx, "dv": dv}
+
+
+def sleeper_write(what: str, count: int, index: int, value: list, friction: float, dt: float, spin: bool) -> dict:
+    """``count`` balls (r = 0.05 m, 1 kg, 0.3 m apart) asleep on a floor (e = 0, μ =
+    ``friction``); then one of them written: its velocity (``value``: lifted, v_z ≥ g dt, or
+    sliding, v_z = 0), its position (moved by ``value``: lifted by h = value_z ≥ 2 g dt², or
+    along the floor, h = 0) or its angular velocity (spin worlds; ``value`` ω). The write reads back,
+    wakes the ball, and after one step (dt) the ball is where the closed form puts it: free
+    flight (x + v dt + ½ g dt², v + g dt, to rounding) when lifted; on the floor Coulomb's
+    sliding, v − μ g dt v̂ (with spin, ω = 5/2 μ g dt / r ẑ × v̂), or a spun ball's start to roll,
+    v = μ g dt â × ẑ and ω − 5/2 μ g dt / r â (â: ω's horizontal direction), to 1e-9 of the speed
+    (the positions there within g dt²); a ball moved along the floor rests where it was put.
+    The other balls stay at rest. (Lifted by less than 1.5 g dt², a ball ends the step within
+    g dt² of the floor, where the end-of-step contacts hold it to reach the floor by the next
+    step's end, u ≥ −gap/dt, docs/collisions.md "End-of-step contacts" and "The soft step":
+    not free flight, awake or asleep alike.)"""
+    import numpy as np
+
+    import kinema
+
+    w = kinema.World(dt=dt, method="verlet", spin=spin)
+    w.add_particles([[0.3 * i, 0.0, BALL] for i in range(count)], mass=1.0, radius=BALL)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]))
+    w.set_collisions(restitution=0.0, friction=friction, sleep_time=0.05)
+    _resting(w, count, "before the write")
+    x0, value = w.positions.copy(), np.array(value, float)
+    gvec, up, mu = np.array([0.0, 0.0, -G]), np.array([0.0, 0.0, 1.0]), friction
+    if what == "velocity":
+        w.velocities[index] = value
+        wrote = w.velocities[index]
+    elif what == "position":
+        w.positions[index] = x0[index] + value
+        wrote = w.positions[index]
+    else:
+        w.angular_velocities[index] = value
+        wrote = w.angular_velocities[index]
+    written = value if what != "position" else x0[index] + value
+    if not np.array_equal(wrote, written):
+        raise WrongAnswer(f"the write of {what} {written.tolist()} to a sleeping ball reads back as {np.asarray(wrote).tolist()}")
+    w.step(1)
+    _finite(w, "after the write")
+    x, v = w.positions[index], w.velocities[index]
+    omega = w.angular_velocities[index] if spin else np.zeros(3)
+    want_w = np.zeros(3)
+    tight = 1e-12  # to rounding: free flight
+    if what == "velocity" and value[2] > 0:
+        start = x0[index]
+        want_x, want_v, pos_tol = start + value * dt + 0.5 * gvec * dt**2, value + gvec * dt, tight * (1 + np.abs(start).max() + np.abs(value).max() * dt)
+        vel_tol = tight * (1 + np.abs(value).max())
+    elif what == "velocity":
+        s = float(np.linalg.norm(value))
+        hat = value / s
+        want_v = value - mu * G * dt * hat
+        want_x = x0[index] + value * dt - 0.5 * mu * G * dt**2 * hat
+        want_w = 2.5 * mu * G * dt / BALL * np.cross(up, hat) if spin else want_w
+        pos_tol, vel_tol = G * dt**2, 1e-9 * s
+    elif what == "position" and value[2] > 0:
+        want_x, want_v = written + 0.5 * gvec * dt**2, gvec * dt
+        pos_tol, vel_tol = tight * (1 + np.abs(written).max()), tight
+    elif what == "position":
+        want_x, want_v, pos_tol, vel_tol = written, np.zeros(3), G * dt**2, G * dt
+    else:
+        flat = np.array([value[0], value[1], 0.0])
+        hat = flat / np.linalg.norm(flat) if np.any(flat) else flat
+        want_x, want_v = x0[index] + 0.5 * mu * G * dt**2 * np.cross(hat, up), mu * G * dt * np.cross(hat, up)
+        want_w = value - 2.5 * mu * G * dt / BALL * hat
+        pos_tol, vel_tol = G * dt**2, 1e-9 * max(1.0, float(np.linalg.norm(value)) * BALL)
+    errs = {
+        "position": float(np.max(np.abs(x - want_x))),
+        "velocity": float(np.max(np.abs(v - want_v))),
+        "angular velocity": float(np.max(np.abs(omega - want_w))),
+    }
+    tols = {"position": pos_tol, "velocity": vel_tol, "angular velocity": vel_tol / BALL}
+    for name, err in errs.items():
+        if not err <= tols[name]:
+            raise WrongAnswer(
+                f"one step after writing the {what} of sleeping ball {index} ({written.tolist()}), its {name} is off the closed form by {err:.3g} (> {tols[name]:.3g}): "
+                f"x {x.tolist()} (want {want_x.tolist()}), v {v.tolist()} (want {want_v.tolist()}), ω {omega.tolist()} (want {want_w.tolist()})"
+            )
+    others = [i for i in range(count) if i != index]
+    if others:
+        dx = float(np.max(np.abs(w.positions[others] - x0[others])))
+        dv = float(np.max(np.abs(w.velocities[others])))
+        if not (dx <= G * dt**2 and dv <= G * dt):
+            raise WrongAnswer(f"the other balls (at rest, not written) moved {dx:.3g} m at up to {dv:.3g} m/s in the step after the write")
+    return {"errors": errs}
+
+
+def _gas(count: int, radius: float, seed: int, gravity: bool, restitution: float, dt: float, speed: float, periodic: list) -> Any:
+    """``count`` balls on a jittered grid in a unit box with normal velocities of scale ``speed``, event-driven."""
+    import math
+
+    import numpy as np
+
+    import kinema
+
+    rng = np.random.default_rng(seed)
+    k = math.ceil(round(count ** (1 / 3), 9))
+    g = (np.arange(k) + 0.5) / k
+    x = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)[:count]
+    x = x + rng.uniform(-0.1, 0.1, x.shape) / k
+    v = rng.normal(size=x.shape) * speed
+    w = kinema.World(dt=dt)
+    w.add_particles(x, velocity=v, radius=radius, mass=1.0)
+    w.add(kinema.Box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]))
+    if any(periodic):
+        w.periodic = tuple(periodic)
+    if gravity:
+        w.add(kinema.Gravity())
+    w.set_collisions(restitution=restitution, event_driven=True)
+    return w
+
+
+def event_driven_cuts(count: int, radius: float, seed: int, gravity: bool, restitution: float, dt: float, speed: float, periodic: list, cuts: list) -> dict:
+    """A gas of ``count`` balls in a unit box (some axes periodic), event-driven, stepped as
+    one ``step(sum(cuts))`` and, from the same start, as ``step(c)`` for each c of ``cuts``:
+    the same bits (positions, velocities, time, impacts). The state is the same however the
+    run is cut into calls."""
+    import numpy as np
+
+    a = _gas(count, radius, seed, gravity, restitution, dt, speed, periodic)
+    b = _gas(count, radius, seed, gravity, restitution, dt, speed, periodic)
+    a.step(sum(cuts))
+    for c in cuts:
+        b.step(c)
+    ia, ib = a.collision_stats()["total"]["impacts"], b.collision_stats()["total"]["impacts"]
+    if not (np.array_equal(a.positions, b.positions) and np.array_equal(a.velocities, b.velocities) and a.time == b.time and ia == ib):
+        dx = float(np.max(np.abs(a.positions - b.positions)))
+        dv = float(np.max(np.abs(a.velocities - b.velocities)))
+        raise WrongAnswer(
+            f"step({sum(cuts)}) and steps of {cuts} differ: positions by {dx:.3g} m, velocities by {dv:.3g} m/s, time {a.time!r} and {b.time!r}, impacts {ia} and {ib}"
+        )
+    _finite(a, "event-driven")
+    return {"impacts": ia}
+
+
+def event_driven_too_fast(count: int, speed: float, direction: list, radius: float, dt: float, gravity: bool, periodic: list) -> dict:
+    """An event-driven world in a unit box whose first ball moves at ``speed`` ≥ 1e10 m/s
+    along ``direction``: its first step raises kinema.SimulationDiverged (events it cannot
+    follow, as a stepped world refuses such a step) before any event, the world as it was;
+    never a hang (the worker's timeout) nor a run."""
+    import numpy as np
+
+    import kinema
+
+    d = np.asarray(direction, float)
+    v = np.zeros((count, 3))
+    v[0] = d / np.linalg.norm(d) * speed
+    x = [[0.5, 0.5, 0.5]] + [[0.15 + 0.17 * k, 0.2, 0.2] for k in range(count - 1)]
+    w = kinema.World(dt=dt)
+    w.add_particles(x, velocity=v, radius=radius, mass=1.0)
+    w.add(kinema.Box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]))
+    if any(periodic):
+        w.periodic = tuple(periodic)
+    if gravity:
+        w.add(kinema.Gravity())
+    w.set_collisions(restitution=1.0, event_driven=True)
+    before = w.positions.copy()
+    try:
+        w.step(1)
+    except kinema.SimulationDiverged as e:
+        if not (w.time == 0.0 and np.array_equal(w.positions, before)):
+            raise WrongAnswer(f"the refused step changed the world: time {w.time!r}, positions {w.positions.tolist()}") from e
+        return {"refused": str(e)[:200]}
+    raise WrongAnswer(f"a step at {float(np.linalg.norm(v[0])):.6g} m/s ran (time {w.time!r}, positions {w.positions.tolist()}): events it cannot follow")
+
+
+ORACLES = {
+    f.__name__: f
+    for f in (
+        moving_plate_side,
+        sliding_plate_throw,
+        turning_cube,
+        keyframed_floor,
+        sleeping_column_impact,
+        sleeper_write,
+        event_driven_cuts,
+        event_driven_too_fast,
+    )
+}
+
+
+def _oracle(name: str, kwargs: dict) -> Any:
+    """Run one check; a refusal where the physics must work is a wrong answer."""
+    import kinema
+
+    try:
+        return ORACLES[name](**kwargs)
+    except (ValueError, TypeError, MemoryError, kinema.SimulationDiverged) as e:
+        raise WrongAnswer(f"refused where the physics must work: {type(e).__name__}: {e}") from e
+
+
 # -- the worker ------------------------------------------------------------------------------
 class _Ctx:
     def __init__(self) -> None:
@@ -453,11 +932,13 @@ class _Ctx:
 
 
 def _classify(e: BaseException, op: dict, ctx: _Ctx) -> str:
-    """The verdict on an exception an op raised: "allowed" or "bad"."""
+    """The verdict on an exception an op raised: "allowed", "bad" or (an oracle's) "wrong answer"."""
     import kinema
     from kinema.io import TrajectoryFileError
     from kinema.scene import SceneError
 
+    if isinstance(e, WrongAnswer):
+        return "wrong answer"  # an oracle's verdict (fuzz_cases.ORACLES)
     if any(e is u for u in ctx.user_errors):
         return "allowed"  # the case's own function raised it (10**400 * y): kinema passes it on unchanged
     names = [c.__name__ for c in type(e).__mro__]
@@ -705,6 +1186,8 @@ def _op(ctx: _Ctx, op: dict) -> Any:
     if kind == "world":
         ctx.world = kinema.World(*args, **kwargs)
         return None
+    if kind == "oracle":
+        return _oracle(op["name"], kwargs)
     if kind == "tableau":
         ctx.tableau = kinema.ButcherTableau(*args, **kwargs)
         return None
