@@ -825,14 +825,19 @@ def _gas(count: int, radius: float, seed: int, gravity: bool, restitution: float
 
     import numpy as np
 
-    import kinema
-
     rng = np.random.default_rng(seed)
     k = math.ceil(round(count ** (1 / 3), 9))
     g = (np.arange(k) + 0.5) / k
     x = np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)[:count]
     x = x + rng.uniform(-0.1, 0.1, x.shape) / k
     v = rng.normal(size=x.shape) * speed
+    return _event_driven_box(x, v, radius, dt, periodic, gravity, restitution)
+
+
+def _event_driven_box(x: Any, v: Any, radius: float, dt: float, periodic: list, gravity: bool, restitution: float) -> Any:
+    """An event-driven world of balls (1 kg) at ``x`` with velocities ``v`` in a unit box."""
+    import kinema
+
     w = kinema.World(dt=dt)
     w.add_particles(x, velocity=v, radius=radius, mass=1.0)
     w.add(kinema.Box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]))
@@ -880,14 +885,7 @@ def event_driven_too_fast(count: int, speed: float, direction: list, radius: flo
     v = np.zeros((count, 3))
     v[0] = d / np.linalg.norm(d) * speed
     x = [[0.5, 0.5, 0.5]] + [[0.15 + 0.17 * k, 0.2, 0.2] for k in range(count - 1)]
-    w = kinema.World(dt=dt)
-    w.add_particles(x, velocity=v, radius=radius, mass=1.0)
-    w.add(kinema.Box([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]))
-    if any(periodic):
-        w.periodic = tuple(periodic)
-    if gravity:
-        w.add(kinema.Gravity())
-    w.set_collisions(restitution=1.0, event_driven=True)
+    w = _event_driven_box(x, v, radius, dt, periodic, gravity, 1.0)
     before = w.positions.copy()
     try:
         w.step(1)

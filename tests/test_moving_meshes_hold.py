@@ -13,10 +13,9 @@ Closed forms: a plate is two-sided, so a ball never changes sides of a moving pl
 closed container keeps every ball inside it (in the container's own frame, |x| ≤ L/2 − r up
 to the end-of-step overlap)."""
 
-import itertools
-
 import numpy as np
 import pytest
+from fuzz_cases import _cube  # the fuzz suite's turning-cube oracle uses the same cube
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -24,24 +23,6 @@ import kinema
 
 PLATE_V = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0.0]]) * 2
 PLATE_F = np.array([[0, 1, 2], [0, 2, 3]])
-
-
-def _cube(half=0.5):
-    v = np.array(list(itertools.product((-half, half), repeat=3)), float)
-    faces = []
-    for axis in range(3):
-        for sign in (-1, 1):
-            quad = [k for k in range(8) if np.sign(v[k, axis]) == sign]
-            # the quad's corners around its normal (outward: sign along axis)
-            c = v[quad].mean(axis=0)
-            others = [a for a in range(3) if a != axis]
-            angle = np.arctan2(v[quad, others[1]] - c[others[1]], v[quad, others[0]] - c[others[0]])
-            ring = [quad[k] for k in np.argsort(angle)]
-            a, b, d = v[ring[0]], v[ring[1]], v[ring[2]]
-            if np.dot(np.cross(b - a, d - a), c) < 0:
-                ring = ring[::-1]
-            faces += [[ring[0], ring[1], ring[2]], [ring[0], ring[2], ring[3]]]
-    return v, np.array(faces)
 
 
 def _side_kept(plate_speed, ball_speed, side, dt, gravity, steps=60):
