@@ -425,7 +425,7 @@ fn relative_rotation(r0: [[f64; 3]; 3], r1: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
 
 /// The rotation vector θ (rad: the axis times the angle, in [0, π)) of a rotation matrix:
 /// sin|θ| â from its skew part, cos|θ| from its trace.
-pub fn turn_vector(r: [[f64; 3]; 3]) -> [f64; 3] {
+fn turn_vector(r: [[f64; 3]; 3]) -> [f64; 3] {
     let w = [r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]];
     let sin = 0.5 * vec3::norm(w);
     if sin == 0.0 {
