@@ -691,10 +691,8 @@ def test_a_column_sleeps_only_once_its_overlaps_are_within_a_percent_of_r(dim, p
     # its overlaps within 5 slops, 1 % of the two radii's mean (a pile rests at 0.23 % of r
     # at 1 ms). The 40-row column at 60 Hz fell asleep at 6.6 % of r before, at 30 Hz at 21 %;
     # at 60 Hz it now rests within 1 %, at 30 Hz (whose solve cannot push it out) it stays
-    # awake. Asleep particles are those of velocity exactly 0 (sleeping sets it). The time
-    # a 40-row column at 60 Hz takes to rest is chaotic: 2.1 to 7.3 s over 20 seeds (median
-    # 4.3 s), so each is given 8 s.
-    w, r = _column(dim, per_row, layers, dt, seed, seconds=8.0)
+    # awake. Asleep particles are those of velocity exactly 0 (sleeping sets it).
+    w, r = _column(dim, per_row, layers, dt, seed)
     overlap = _overlaps(w, r)
     asleep = np.all(w.velocities == 0.0, axis=1)
     both = asleep[:, None] & asleep[None, :]

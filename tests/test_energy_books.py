@@ -97,12 +97,16 @@ def test_the_slope_books_balance_for_every_method_angle_friction_and_step(method
 # so a body at rest ends a step within that of 0 at both ends, and gravity's potential within
 # 2 m g · 1e-9 m/s · h of its own (plus a relative 1e-12 of the energy for the sums' rounding).
 #
-# Before, a body resting on a support fell on the forces' parabola inside the step: a ball
-# dropped on it met it late, low and moving down, and the end-of-step solve lifted the pair
-# back at no cost (m g · ½ g τ²: 1.1e-6 J in one step for the ball below). It is now held at
-# rest until its first impact (collide/impulse/support.rs).
+# Today a body resting on a support falls on the forces' parabola inside the step (its
+# supports act only in the end-of-step solve): a ball dropped on it meets it late, low and
+# moving down, and the solve lifts the pair back at no cost (m g · ½ g τ²: 1.1e-6 J in one
+# step for the first case below). These tests fail on that, and are strict xfails until it
+# is fixed (issue 46; the hold of commit 8517506 passed them all, docs/collisions.md).
 
 VELOCITY_TOLERANCE = 1e-9  # m/s, collide/response.rs
+RESTING_BODY_FALLS = pytest.mark.xfail(
+    strict=True, reason="issue 46: a resting body falls inside the step; an impact on it creates energy (docs/collisions.md, Energy books)"
+)
 
 
 def _stack(layers, per, gap, dt=1e-3, method="verlet", e=1.0, mu=0.0, r=0.05):
@@ -133,10 +137,11 @@ def _created(w, seconds):
     return below, hit
 
 
+@RESTING_BODY_FALLS
 @pytest.mark.parametrize("gap", [0.01, 0.004, 0.02])
 def test_a_ball_dropped_on_a_resting_ball_creates_no_energy(gap):
     # a ball `gap` above one resting on a floor Plane, e = 1: it falls on the lower one
-    # (before, at 1 cm: one step of −1.12e-6 J, m g · ½ g τ² at τ = 0.15 ms into the step;
+    # (today, at 1 cm: one step of −1.12e-6 J, m g · ½ g τ² at τ = 0.15 ms into the step;
     # at 4 mm −1.5e-5 J, at 2 cm −3.6e-5 J)
     r = 0.05
     w = kinema.World(dim=3, dt=1e-3)
@@ -148,16 +153,18 @@ def test_a_ball_dropped_on_a_resting_ball_creates_no_energy(gap):
     assert hit > 0 and below == []
 
 
+@RESTING_BODY_FALLS
 def test_a_bouncing_column_and_a_stack_of_96_create_no_energy():
     # the issue's cases at the default step: an e = 1 column of 5 with 2 mm gaps and a 3D e = 1
-    # stack of 96 (4 × 4 × 6) bouncing for 2 s (before: four steps down to −2.6e-5 J in the
+    # stack of 96 (4 × 4 × 6) bouncing for 2 s (today: four steps down to −2.6e-5 J in the
     # column, one of −4.5e-6 J in the stack)
     for w in (_stack(5, 1, 0.002), _stack(6, 4, 0.01)):
         below, hit = _created(w, 2.0)
         assert hit > 50 and below == [], below[:5]
 
 
-@settings(max_examples=25, deadline=None)
+@RESTING_BODY_FALLS
+@settings(max_examples=25, deadline=None, derandomize=True, database=None)
 @given(
     layers=st.integers(2, 8),
     per=st.sampled_from([1, 2]),
@@ -170,8 +177,7 @@ def test_a_bouncing_column_and_a_stack_of_96_create_no_energy():
 def test_bouncing_stacks_never_create_energy(layers, per, gap, dt, method, e, mu):
     # the class: stacks of 2–32 balls bouncing on a floor for 1 s, any second-order method
     # (the first-order ones book their own contact error, m a² h² a step: see the slope above).
-    # Measured over 100 such cases: 20 created up to 1.05e-4 J in a step before, none now.
-    # Below 2 mm gaps at 1 ms, and from 2 ms steps, multi-impact cascades through loaded
-    # contacts still can (docs/collisions.md, "Energy books").
+    # Measured over 100 such cases: 20 create up to 1.05e-4 J in a step today; none with the
+    # hold of commit 8517506. (Derandomized: a strict xfail must fail the same way each run.)
     below, hit = _created(_stack(layers, per, gap, dt, method, e, mu), 1.0)
     assert hit > 0 and below == [], below[:5]

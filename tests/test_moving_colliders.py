@@ -157,8 +157,7 @@ def test_the_drum_holds_every_grain_carries_the_bed_and_balances_momentum():
     most R − r from the axis and D/2 − r from the mid-plane, up to 1e-4 m (measured 1.3e-5 m,
     at a cap: the overlaps the contacts leave). While the bed is carried up (0.4 to 0.8 s), most
     wall contacts move with the wall to 1 cm/s, a thirtieth of its 0.3 m/s (the surface velocity
-    enters every contact; measured on four lattices of 324 to 360 grains, 0.69 to 0.99 of them
-    at each sample, 0.85 to 0.92 on average, 0.22 to 0.32 to 1e-4 m/s and at most
+    enters every contact; measured 0.78 to 0.94 of them, 0.22 to 0.32 to 1e-4 m/s and at most
     0.02 to 1e-6 m/s: the solver stops at its 100 sweeps in this pile, where a lone grain sticks
     to 1.5e-5 m/s, above). Momentum: Σ m Δv = −Σ the colliders' booked momentum + M g t, to rounding."""
     scene = Scene.from_toml(SCENES / "drum.toml")
@@ -182,7 +181,7 @@ def test_the_drum_holds_every_grain_carries_the_bed_and_balances_momentum():
             carried.append(float(np.mean(slip < 1e-2)))
     assert len(w) == 360 and w.time == pytest.approx(1.5)
     assert outside < 1e-4
-    assert min(carried) > 0.6 and np.mean(carried) > 0.8, carried
+    assert min(carried) > 0.7, carried
     given = (m[:, None] * (w.velocities - v0)).sum(axis=0)
     books = w.collider_books()
     assert given == pytest.approx(-books["momentum"].sum(axis=0) + m.sum() * G * w.time, abs=1e-12)

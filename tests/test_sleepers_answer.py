@@ -127,16 +127,17 @@ def test_a_pile_sleeps_again_once_its_floors_keyframes_have_ended(stop):
     np.testing.assert_allclose(w.positions[:, 2], 0.07, atol=1e-3)
 
 
+@pytest.mark.xfail(strict=True, reason="issue 46: a resting body falls inside the step, so the awake column is met a step late (docs/collisions.md)")
 @pytest.mark.parametrize("depth, speed, dt", [(4, 0.5, 2e-3), (2, 0.5, 2e-3), (3, 0.25, 4e-3), (1, 1.0, 1e-3)])
 def test_a_ball_that_meets_a_resting_column_at_the_steps_end_meets_it_awake_as_asleep(depth, speed, dt):
     # A ball 1 mm above the column's top falling at `speed` meets the resting column just
-    # inside the step (1 mm at `speed` takes one step; gravity makes it a little less). Before,
-    # the awake column's top ball fell on its free parabola inside the step like the ball, so
-    # they met only at the step's end: the awake world missed the impact for a step and
-    # ended ½ g h² (2e-5 m at 2 ms) lower than the sleeping one, whose column is held at
-    # rest (the make-fuzz "sleeping" row's 7 wrong answers of 4,000). A body at rest on its
-    # supports is now held there until its first impact (collide/impulse/support.rs): both
-    # meet it in the same step, to rounding.
+    # inside the step (1 mm at `speed` takes one step; gravity makes it a little less). Today
+    # the awake column's top ball falls on its free parabola inside the step like the ball, so
+    # they meet only at the step's end: the awake world misses the impact for a step and
+    # ends ½ g h² (2e-5 m at 2 ms) lower than the sleeping one, whose column is held at
+    # rest (the make-fuzz "sleeping" row's 7 wrong answers of 4,000). Holding a body at rest
+    # on its supports until its first impact (commit 8517506, reverted for its cost) made
+    # both meet it in the same step, to rounding.
     def run(sleep: bool) -> tuple[kinema.World, int]:
         w = _column(depth, 0.0, sleep=sleep, dt=dt)
         assert w.collision_stats()["last"]["asleep"] == (depth if sleep else 0)

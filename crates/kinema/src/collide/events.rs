@@ -335,7 +335,7 @@ impl Scene<'_> {
     /// or touching), then each of its colliders.
     fn visit(&self, paths: &Paths<'_>, i: usize, partners: &[u32], now: f64, h: f64, mut each: impl FnMut(Found)) {
         let (xi, vi) = paths.state_at(i, now);
-        let ai = paths.accel_of(i);
+        let ai = vec3::get(paths.accel, i);
         let rest = h - now;
         let still = self.still(paths, i);
         let asleep = still && self.inv_mass[i] > 0.0;
@@ -357,7 +357,7 @@ impl Scene<'_> {
             let (xj, vj) = paths.state_at(j, now);
             let d0 = self.domain.displacement(xi, xj);
             let u = vec3::sub(vi, vj);
-            let da = vec3::sub(ai, paths.accel_of(j));
+            let da = vec3::sub(ai, vec3::get(paths.accel, j));
             match pair_toi(d0, u, da, self.radius[i] + self.radius[j], rest, self.slow) {
                 Toi::Never => {}
                 Toi::Touching => each(Found::Touching(Some(j))),

@@ -41,20 +41,14 @@ pub(crate) struct PathStore {
 }
 
 /// The particles' paths through one step (see the module doc): each starts at (x0, v0) at
-/// τ = 0 with constant acceleration `accel` (or, if `held`, at rest at x0 until its first
-/// impact), until an impact opens it (its reference moves to the impact, where its velocity
-/// gets the impulse).
+/// τ = 0 with constant acceleration `accel`, until an impact opens it (its reference moves
+/// to the impact, where its velocity gets the impulse).
 pub(crate) struct Paths<'a> {
     /// The world's state at the step's start, m and m/s.
     pub x0: &'a [f64],
     pub v0: &'a [f64],
-    /// Constant acceleration of the step by the forces, m/s², 3 per particle.
+    /// Constant acceleration of the step, m/s², 3 per particle.
     pub accel: &'a [f64],
-    /// Whether each particle is held at rest by the contacts that carried it in the last
-    /// step, until its first impact (empty: none is; `impulse/support.rs`): a body resting
-    /// on a pile stays where it is until something hits it, instead of falling inside the
-    /// step and meeting what falls on it late and low.
-    pub held: &'a [bool],
     store: &'a mut PathStore,
 }
 
@@ -74,47 +68,7 @@ impl<'a> Paths<'a> {
             store.v_ref.resize(3 * n, 0.0);
         }
         store.open.clear();
-        Paths {
-            x0,
-            v0,
-            accel,
-            held: &[],
-            store,
-        }
-    }
-
-    /// The paths with the particles `held` (one flag per particle, or empty; see
-    /// [`Paths::held`]) at rest until their first impact.
-    pub fn holding(self, held: &'a [bool]) -> Self {
-        debug_assert!(held.is_empty() || 3 * held.len() == self.accel.len());
-        Paths { held, ..self }
-    }
-
-    /// Whether particle q is still held at rest: held, and no impact yet.
-    #[inline]
-    pub fn is_held(&self, q: usize) -> bool {
-        !self.held.is_empty() && self.held[q] && self.version(q) == 0
-    }
-
-    /// Particle q's acceleration on its current path, m/s²: the forces', or 0 while it is
-    /// held.
-    #[inline]
-    pub fn accel_of(&self, q: usize) -> [f64; 3] {
-        if self.is_held(q) {
-            [0.0; 3]
-        } else {
-            vec3::get(self.accel, q)
-        }
-    }
-
-    /// Particle q's velocity at the step's start on its path, m/s: v0, or 0 if held.
-    #[inline]
-    fn start_velocity(&self, q: usize) -> [f64; 3] {
-        if self.is_held(q) {
-            [0.0; 3]
-        } else {
-            vec3::get(self.v0, q)
-        }
+        Paths { x0, v0, accel, store }
     }
 
     fn is_open(&self, q: usize) -> bool {
@@ -131,22 +85,19 @@ impl<'a> Paths<'a> {
         s.open.push(q);
         s.t_ref[q] = 0.0;
         s.version[q] = 0;
-        let v = self.start_velocity(q);
-        let s = &mut *self.store;
         s.x_ref[3 * q..3 * q + 3].copy_from_slice(&self.x0[3 * q..3 * q + 3]);
-        s.v_ref[3 * q..3 * q + 3].copy_from_slice(&v);
+        s.v_ref[3 * q..3 * q + 3].copy_from_slice(&self.v0[3 * q..3 * q + 3]);
     }
 
     /// Position and velocity of particle q at time t on its current path.
     #[inline]
     pub fn state_at(&self, q: usize, t: f64) -> ([f64; 3], [f64; 3]) {
-        let (x, v, dt) = if self.is_open(q) {
-            let s = &self.store;
-            (vec3::get(&s.x_ref, q), vec3::get(&s.v_ref, q), t - s.t_ref[q])
+        let (x_ref, v_ref, dt) = if self.is_open(q) {
+            (&self.store.x_ref[..], &self.store.v_ref[..], t - self.store.t_ref[q])
         } else {
-            (vec3::get(self.x0, q), self.start_velocity(q), t)
+            (self.x0, self.v0, t)
         };
-        let a = self.accel_of(q);
+        let (x, v, a) = (vec3::get(x_ref, q), vec3::get(v_ref, q), vec3::get(self.accel, q));
         (vec3::parabola(x, v, a, dt), [0, 1, 2].map(|k| v[k] + a[k] * dt))
     }
 
@@ -207,9 +158,7 @@ impl<'a> Paths<'a> {
     }
 
     /// Puts each particle that was hit at its last path's point at h, with velocity
-    /// v(h) + (v1 − (v0 + a h)): what the integrator added beyond the parabola is kept (a
-    /// the forces' acceleration: a particle held is held only until its first impact, and the
-    /// end-of-step solve finds the contacts that still carry it).
+    /// v(h) + (v1 − (v0 + a h)): what the integrator added beyond the parabola is kept.
     pub fn finish(&self, x1: &mut [f64], v1: &mut [f64], h: f64) {
         for &q in &self.store.open {
             if self.store.version[q] == 0 {
@@ -318,7 +267,7 @@ pub(crate) fn pair_toi(d0: [f64; 3], u: [f64; 3], da: [f64; 3], big_r: f64, rest
 pub(crate) fn swept_reach(paths: &Paths<'_>, q: usize, t: f64, h: f64, from: [f64; 3], domain: &Domain) -> f64 {
     let (x, v) = paths.state_at(q, t);
     let rest = h - t;
-    vec3::norm(domain.displacement(x, from)) + vec3::norm(v) * rest + 0.5 * vec3::norm(paths.accel_of(q)) * rest * rest
+    vec3::norm(domain.displacement(x, from)) + vec3::norm(v) * rest + 0.5 * vec3::norm(vec3::get(paths.accel, q)) * rest * rest
 }
 
 #[cfg(test)]

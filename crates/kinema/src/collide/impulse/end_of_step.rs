@@ -351,7 +351,6 @@ impl ImpulseModel {
             self.islands = Islands::default();
             self.kicks.clear();
             self.acted.reset(inv_mass.len(), false);
-            self.mark_holds();
             self.scratch = resting;
             self.records.clear();
             let mut done = IslandStats::default();
@@ -411,7 +410,6 @@ impl ImpulseModel {
         for &(q, _) in &self.kicks {
             self.acted.mark(q);
         }
-        self.mark_holds();
         for (c, (p, s)) in self.contacts.iter().zip(self.totals.iter().zip(&self.solved)) {
             if *p != [0.0; 3] || *s != [0.0; 3] {
                 self.acted.mark(c.i);

@@ -126,7 +126,6 @@ impl ImpulseModel {
                         let a = vec3::get(accel, q);
                         let bulge2 = vec3::dot(a, a);
                         let bulge = if bulge2 > 0.0 { 0.125 * bulge2.sqrt() * h * h } else { 0.0 };
-                        // (a particle held stays at x0, within this bound)
                         let d = vec3::dot(d0, d0).max(vec3::dot(d1, d1)).sqrt() + bulge;
                         bounds[l] = d;
                         let step = domain.displacement(vec3::get(x1, l), vec3::get(x0, l));
@@ -296,11 +295,6 @@ impl ImpulseModel {
                     self.collider_books[k].book(at, c.wall_velocity, imp.vector);
                 }
                 for q in std::iter::once(event.i).chain(partner) {
-                    if paths.is_held(q) {
-                        // (a body held lets go at its first impact: its supports' impulse
-                        // until then, and the energy the hold took, booked; `support.rs`)
-                        stats.energy_lost += self.let_go(s.set, paths, q, t);
-                    }
                     paths.changed(q);
                     self.touched.mark(q);
                     self.fastest_hit = self.fastest_hit.max(vec3::norm(vec3::get(paths.v_ref(), q)));

@@ -9,7 +9,6 @@
 pub(crate) mod end_of_step;
 pub(crate) mod impacts;
 mod step;
-mod support;
 
 use super::books::ColliderBooks;
 use super::events::{EventQueue, PathStore};
@@ -249,13 +248,6 @@ pub(crate) struct ImpulseModel {
     /// The step's accelerations by the forces when the method gives none, (v₁ − v₀)/h, for
     /// the energy books, m/s².
     pub(super) forced: Vec<f64>,
-    /// Whether each particle is held at rest on its path until its first impact
-    /// (`support.rs`; empty: none is).
-    pub(super) held: Vec<bool>,
-    /// The holds' impulses of the particles that let go in the step (particle, N·s), and
-    /// what of them stayed with a particle (`support.rs`, `carry_holds`).
-    pub(super) hold_loads: Vec<(usize, [f64; 3])>,
-    pub(super) hold_kicks: Vec<(usize, [f64; 3])>,
     pub(super) queue: EventQueue,
     /// Each particle's bound on its distance from its list build position for the rest of
     /// the step, m, when `bounded` (`events::SweepBound`; else the step's one bound `reach`).
@@ -327,9 +319,6 @@ impl ImpulseModel {
             paths: PathStore::default(),
             fitted: Vec::new(),
             forced: Vec::new(),
-            held: Vec::new(),
-            hold_loads: Vec::new(),
-            hold_kicks: Vec::new(),
             queue: EventQueue::default(),
             bounds: Vec::new(),
             bounded: false,

@@ -128,17 +128,7 @@ impl ImpulseModel {
             Some(a) => a,
             None => fit_parabolas(&mut fitted, (x0, v0, x1), h),
         };
-        // A body at rest that the last step's contacts carried stays at rest until its first
-        // impact (`support.rs`).
-        if set.ccd {
-            self.fill_held(set.inv_mass, v0, accel, h);
-        } else {
-            self.held.clear();
-            self.hold_loads.clear();
-            self.hold_kicks.clear();
-        }
-        let held = std::mem::take(&mut self.held);
-        let mut paths = Paths::begin(&mut store, x0, v0, accel).holding(&held);
+        let mut paths = Paths::begin(&mut store, x0, v0, accel);
         // The forces' own accelerations, for the energy books: the fitted parabola is the
         // force for the second-order methods only (Euler's x₁ has none, symplectic Euler's twice).
         let mut forced = std::mem::take(&mut self.forced);
@@ -169,11 +159,9 @@ impl ImpulseModel {
             laps[stage as usize] += now - at;
             at = now;
         }
-        drop(paths);
         self.paths = store;
         self.fitted = fitted;
         self.forced = forced;
-        self.held = held;
         ran?;
         // The seed's three stages from the same laps: the impacts interleave all three.
         let lap = |s: ImpulseStage| laps[s as usize];
@@ -389,12 +377,6 @@ impl ImpulseModel {
         if set.rotation.is_some() {
             self.books_spin
                 .extend(self.books.iter().map(|&(q, _, _)| vec3::get(omega, q)));
-        }
-        // The holds' impulses carried down to the colliders (`support.rs`); what stays with a
-        // particle is in the end-of-step books like the solve's impulses.
-        if !self.hold_loads.is_empty() {
-            step.changed = true;
-            self.carry_holds(set, paths.x0, v1);
         }
         // A pair that only touches (no overlap) and approaches faster than an impact's least
         // speed meets exactly at the step's end: its impact belongs to the next step's t = 0,
