@@ -108,6 +108,7 @@ bench: build $(TEST_STAMP)
 	$(PIP) install --disable-pip-version-check -q -r requirements/bench.txt
 	command -v cmake >/dev/null && dpkg -s libclang-dev >/dev/null 2>&1 || apt-get install -y -q cmake libclang-dev >/dev/null || echo "cmake/libclang could not be installed: piles.py will say whether it could build its Box2D/Jolt peers"
 	$(PY) benchmarks/piles.py
+	cargo bench -p kinema --bench pile_solve
 	$(PY) benchmarks/granular_lammps.py
 	$(PY) benchmarks/angle_of_repose.py
 
