@@ -20,31 +20,22 @@ use std::time::Duration;
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use kinema::collide::{BoxContainer, Surface};
 use kinema::forces::Gravity;
-use kinema::ode::{Integrator, Method};
+use kinema::ode::Method;
 use kinema::world::CollisionParams;
-use kinema::{World, WorldParams};
+use kinema::World;
 
-/// Splitmix64, uniform in [0, 1).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+#[path = "../tests/common/mod.rs"]
+mod common;
+use common::{impulse_world, Rng};
 
 /// The demo's heap at dt = 1 ms, stepped `landing` steps.
 fn heap(landing: u64) -> World {
-    let mut w = World::new(WorldParams {
-        dt: 1e-3,
-        method: Integrator::Named(Method::Verlet),
-        dim: 3,
-    })
-    .unwrap();
+    let collisions = CollisionParams {
+        restitution: 0.7,
+        sleep_time: None,
+        ..CollisionParams::default()
+    };
+    let mut w = impulse_world(3, Method::Verlet, 1e-3, collisions);
     let mut rng = Rng(2026);
     let (mut x, mut v, mut radius) = (Vec::new(), Vec::new(), Vec::new());
     for layer in 0..16 {
@@ -64,12 +55,6 @@ fn heap(landing: u64) -> World {
     w.add_force(Box::new(Gravity::new([0.0, 0.0, -9.81]).unwrap())).unwrap();
     w.add_collider(BoxContainer::new([0.0; 3], [0.5, 0.5, 3.0], Surface::default()).unwrap())
         .unwrap();
-    w.set_collisions(CollisionParams {
-        restitution: 0.7,
-        sleep_time: None,
-        ..CollisionParams::default()
-    })
-    .unwrap();
     w.advance(landing).unwrap();
     w
 }
