@@ -101,12 +101,27 @@ def test_the_slope_books_balance_for_every_method_angle_friction_and_step(method
 # supports act only in the end-of-step solve): a ball dropped on it meets it late, low and
 # moving down, and the solve lifts the pair back at no cost (m g · ½ g τ²: 1.1e-6 J in one
 # step for the first case below). These tests fail on that, and are strict xfails until it
-# is fixed (issue 46; the hold of commit 8517506 passed them all, docs/collisions.md).
+# is fixed (issue 46; the hold of commit 8517506 passed all but the sweep, docs/collisions.md).
 
 VELOCITY_TOLERANCE = 1e-9  # m/s, collide/response.rs
+
+
+class EnergyCreated(AssertionError):
+    """A converged step booked less than the solve's floor: the bug these tests expect. Any
+    other failure (a scene with no impacts at all) is not it, and fails them."""
+
+
 RESTING_BODY_FALLS = pytest.mark.xfail(
-    strict=True, reason="issue 46: a resting body falls inside the step; an impact on it creates energy (docs/collisions.md, Energy books)"
+    strict=True,
+    raises=EnergyCreated,
+    reason="issue 46: a resting body falls inside the step; an impact on it creates energy (docs/collisions.md, Energy books)",
 )
+
+
+def _assert_none_created(below, hit, least_hits=1):
+    assert hit >= least_hits, f"only {hit} steps had impacts: the scene tests nothing"
+    if below:
+        raise EnergyCreated(f"{len(below)} converged steps created energy: {below[:5]}")
 
 
 def _stack(layers, per, gap, dt=1e-3, method="verlet", e=1.0, mu=0.0, r=0.05):
@@ -149,8 +164,7 @@ def test_a_ball_dropped_on_a_resting_ball_creates_no_energy(gap):
     w.add(kinema.Gravity())
     w.add(kinema.Plane(point=[0, 0, 0], normal=[0, 0, 1]))
     w.set_collisions(restitution=1.0)
-    below, hit = _created(w, 0.3)
-    assert hit > 0 and below == []
+    _assert_none_created(*_created(w, 0.3))
 
 
 @RESTING_BODY_FALLS
@@ -159,8 +173,7 @@ def test_a_bouncing_column_and_a_stack_of_96_create_no_energy():
     # stack of 96 (4 × 4 × 6) bouncing for 2 s (today: four steps down to −2.6e-5 J in the
     # column, one of −4.5e-6 J in the stack)
     for w in (_stack(5, 1, 0.002), _stack(6, 4, 0.01)):
-        below, hit = _created(w, 2.0)
-        assert hit > 50 and below == [], below[:5]
+        _assert_none_created(*_created(w, 2.0), least_hits=51)
 
 
 @RESTING_BODY_FALLS
@@ -177,8 +190,8 @@ def test_a_bouncing_column_and_a_stack_of_96_create_no_energy():
 def test_bouncing_stacks_never_create_energy(layers, per, gap, dt, method, e, mu):
     # the class: stacks of 2–32 balls bouncing on a floor for 1 s, any second-order method
     # (the first-order ones book their own contact error, m a² h² a step: see the slope above).
-    # Measured over 100 such cases: 20 create up to 1.05e-4 J in a step today; none with the
-    # hold of commit 8517506. (Derandomized: a strict xfail must fail the same way each run;
-    # not shrunk: it stops at its first failing stack.)
-    below, hit = _created(_stack(layers, per, gap, dt, method, e, mu), 1.0)
-    assert hit > 0 and below == [], below[:5]
+    # Measured over 100 such cases: 20 create up to 1.05e-4 J in a step today, none with the
+    # hold of commit 8517506; but this sweep's own draws find one the hold misses too (7 balls,
+    # 1 cm gaps, rk45, e = 0.9: −3.4e-6 J in one step). (Derandomized: a strict xfail must
+    # fail the same way each run; not shrunk: it stops at its first failing stack.)
+    _assert_none_created(*_created(_stack(layers, per, gap, dt, method, e, mu), 1.0))

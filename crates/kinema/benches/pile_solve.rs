@@ -1,6 +1,6 @@
 //! The end-of-step contact solve on a settling pile, as a criterion bench: the kernel where
 //! a pile's time goes (`collide/soft_step.rs` through `collide/islands.rs`: the solve stage
-//! is 3.85 s of the 4.48 s the demo's first 3 s take at dt = 1 ms, by `stage_times`).
+//! is 3.85 s of the 4.38 s of CPU the demo's first 3 s take at dt = 1 ms, by `stage_times`).
 //!
 //! Why a kernel bench beside `benchmarks/`: the Python benchmarks time whole scenes, whose
 //! histories move with every change to the physics. Here the physics is fixed (the same
