@@ -229,8 +229,9 @@ def test_contacts_report_pairs_and_colliders():
     # stays put, and the relax stage leaves both at rest (docs/collisions.md).
     w = kinema.World(dt=1e-3)
     empty = w.contacts()
-    assert set(empty) == {"i", "j", "collider", "normal", "overlap", "u_n"}
-    assert empty["normal"].shape == (0, 3) and all(empty[k].shape == (0,) for k in ("i", "j", "collider", "overlap", "u_n"))
+    assert set(empty) == {"i", "j", "collider", "normal", "overlap", "u_n", "point", "force_n", "force_t", "sliding"}
+    assert all(empty[k].shape == (0, 3) for k in ("normal", "point", "force_n", "force_t"))
+    assert all(empty[k].shape == (0,) for k in ("i", "j", "collider", "overlap", "u_n", "sliding"))
     w.add_particles([[0, 0, 0], [0.15, 0, 0]], mass=[1.0, 2.0], radius=0.1)
     w.set_collisions()
     w.step()

@@ -245,7 +245,7 @@ class WorldCollisions:
         self._push()
         return self._core.collision_stats()
 
-    def collider_books(self) -> dict[str, np.ndarray]:
+    def collider_books(self, last: bool = False) -> dict[str, np.ndarray]:
         """What each collider gave and took from the particles over all steps, in the order of
         :attr:`colliders` (K of them), as arrays:
 
@@ -263,10 +263,22 @@ class WorldCollisions:
           collisions took, which a moving wall can give back: it is negative for a paddle
           that throws balls).
 
-        The impulse model books them (impacts inside steps and the end-of-step contacts); the
-        spring–dashpot model books nothing here (zeros). Empty (K = 0) without colliders."""
+        - ``normal`` and ``tangential`` (K, 3), N·s: the parts of ``momentum`` along and
+          across each contact's normal, −Σ (J·n) n and the rest: divided by the time, the
+          force that presses on the collider and the shear (friction) on it, as LIGGGHTS's
+          wall stress and a Janssen silo's wall pressure need.
+
+        ``last=True`` gives what the last step alone gave (the last call of an event-driven
+        world); divided by ``dt``, the step's mean forces.
+
+        Every contact model books them: the impulse model its impacts inside steps and its
+        end-of-step contacts, the event-driven model its wall impacts, the force models
+        (``"spring_dashpot"``, ``"hertz"``) their contact forces integrated over the step as
+        velocity Verlet applies them, h/2 (F + F'), exactly what the particles took. The force
+        models book with the ``verlet`` method only (the method whose step the books come
+        from; zeros with the others). Empty (K = 0) without colliders."""
         self._push()
-        return self._core.collider_books()
+        return self._core.collider_books(last=bool(last))
 
     def stage_times(self) -> dict[str, float]:
         """Wall-clock seconds spent so far in each of the seed's four stages of a step:

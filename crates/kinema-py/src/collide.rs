@@ -4,7 +4,9 @@
 //! per class); every rule is the engine's, and its errors name the parameter.
 
 use kinema::collide::colliders::{check_planar, PLANE_IN_2D, SPHERE_IN_2D};
-use kinema::collide::{BoxContainer, Collider, Contact, Material, Motion, Partner, Plane, SphereObstacle, Surface, TriangleMesh};
+use kinema::collide::{
+    BoxContainer, Collider, ContactReport, Material, Motion, Partner, Plane, SphereObstacle, Surface, TriangleMesh,
+};
 use kinema::world::{Accuracy, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind};
 use kinema::Error;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
@@ -410,11 +412,17 @@ pub fn materials(
 }
 
 /// The contacts as arrays: `i`, `j` (−1 against a collider), `collider` (−1 between
-/// particles), `normal` (K, 3), `overlap` and `u_n`.
-pub fn contacts_dict<'py>(py: Python<'py>, contacts: &[Contact]) -> PyResult<Bound<'py, PyDict>> {
+/// particles), `normal` (K, 3), `overlap`, `u_n`, `point` (K, 3), `force_n` and `force_t`
+/// (K, 3), `sliding`; with `impulses` (the impulse model) also `impulse_n` and `impulse_t`
+/// (K, 3).
+pub fn contacts_dict<'py>(py: Python<'py>, reports: &[ContactReport], impulses: bool) -> PyResult<Bound<'py, PyDict>> {
+    let k = reports.len();
     let (mut i, mut j, mut collider) = (Vec::new(), Vec::new(), Vec::new());
     let (mut normal, mut overlap, mut u_n) = (Vec::new(), Vec::new(), Vec::new());
-    for c in contacts {
+    let (mut point, mut force_n, mut force_t, mut sliding) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut impulse_n, mut impulse_t) = (Vec::new(), Vec::new());
+    for r in reports {
+        let c = &r.contact;
         i.push(c.i as i64);
         let (pj, pk) = match c.other {
             Partner::Particle(j) => (j as i64, -1),
@@ -425,14 +433,29 @@ pub fn contacts_dict<'py>(py: Python<'py>, contacts: &[Contact]) -> PyResult<Bou
         normal.extend_from_slice(&c.normal);
         overlap.push(c.overlap);
         u_n.push(c.u_n);
+        point.extend_from_slice(&r.point);
+        force_n.extend_from_slice(&r.force_n);
+        force_t.extend_from_slice(&r.force_t);
+        sliding.push(r.sliding);
+        impulse_n.extend_from_slice(&r.impulse[0]);
+        impulse_t.extend_from_slice(&r.impulse[1]);
     }
     let out = PyDict::new(py);
+    let rows = |v: Vec<f64>| PyArray1::from_vec(py, v).reshape([k, 3]);
     out.set_item("i", PyArray1::from_vec(py, i))?;
     out.set_item("j", PyArray1::from_vec(py, j))?;
     out.set_item("collider", PyArray1::from_vec(py, collider))?;
-    out.set_item("normal", PyArray1::from_vec(py, normal).reshape([contacts.len(), 3])?)?;
+    out.set_item("normal", rows(normal)?)?;
     out.set_item("overlap", PyArray1::from_vec(py, overlap))?;
     out.set_item("u_n", PyArray1::from_vec(py, u_n))?;
+    out.set_item("point", rows(point)?)?;
+    out.set_item("force_n", rows(force_n)?)?;
+    out.set_item("force_t", rows(force_t)?)?;
+    out.set_item("sliding", PyArray1::from_vec(py, sliding))?;
+    if impulses {
+        out.set_item("impulse_n", rows(impulse_n)?)?;
+        out.set_item("impulse_t", rows(impulse_t)?)?;
+    }
     Ok(out)
 }
 

@@ -480,11 +480,13 @@ impl PyWorld {
         self.inner.take_placement_notice()
     }
 
-    /// What the particles gave each collider over all steps: {"momentum": (K, 3) N·s,
-    /// "angular_momentum": (K, 3) N·m·s about the origin, "work": (K,) J done by the
-    /// collider on the particles}.
-    fn collider_books<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let books = self.inner.collider_books();
+    /// What the particles gave each collider over all steps (with `last`, in the last step):
+    /// {"momentum": (K, 3) N·s, "angular_momentum": (K, 3) N·m·s about the origin, "work":
+    /// (K,) J done by the collider on the particles, "normal" and "tangential": (K, 3) N·s,
+    /// the momentum's parts along and across the contacts' normals}.
+    #[pyo3(signature = (last = false))]
+    fn collider_books<'py>(&self, py: Python<'py>, last: bool) -> PyResult<Bound<'py, PyDict>> {
+        let books = self.inner.collider_books(last);
         let n = books.len();
         let flat = |f: fn(&kinema::world::ColliderBooks) -> [f64; 3]| books.iter().flat_map(f).collect::<Vec<f64>>();
         let out = PyDict::new(py);
@@ -494,13 +496,21 @@ impl PyWorld {
             PyArray1::from_vec(py, flat(|b| b.angular_momentum)).reshape([n, 3])?,
         )?;
         out.set_item("work", PyArray1::from_vec(py, books.iter().map(|b| b.work).collect()))?;
+        out.set_item("normal", PyArray1::from_vec(py, flat(|b| b.normal)).reshape([n, 3])?)?;
+        out.set_item("tangential", PyArray1::from_vec(py, flat(|b| b.tangential)).reshape([n, 3])?)?;
         Ok(out)
     }
 
-    /// The contacts at the end of the last step, as arrays.
+    /// The contacts now (the impulse model's: of the last step's end), as arrays, with their
+    /// points, forces and whether they slide.
     fn contacts<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         self.inner.restore_order();
-        collide::contacts_dict(py, self.inner.contacts())
+        let impulses = self
+            .inner
+            .collision_params()
+            .is_some_and(|p| p.model == kinema::world::ContactModel::Impulse);
+        let reports = self.inner.contact_reports().map_err(to_py)?;
+        collide::contacts_dict(py, &reports, impulses)
     }
 
     /// Starts or stops recording begin and end of touch.

@@ -1,9 +1,12 @@
-//! What the particles gave each collider: the impulse model's books of moving and still walls.
+//! What the particles gave each collider, by every contact model: the momentum and work of
+//! moving and still walls, split into the contacts' normal and tangential parts (the wall's
+//! pressure and shear, LIGGGHTS's wall stress).
 
 use crate::vec3;
 
 /// What the particles gave one collider (the impulse model's impacts and end-of-step
-/// contacts): momentum, and the work the collider did on them.
+/// contacts; the force models' contact forces integrated over the step): momentum, and the
+/// work the collider did on them.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ColliderBooks {
     /// Momentum the collider received, −Σ J over the impulses J it gave particles, N·s (a
@@ -17,17 +20,37 @@ pub struct ColliderBooks {
     /// a moving wall's energy input, which the collisions' `energy_lost` books as negative
     /// loss).
     pub work: f64,
+    /// Of `momentum`, the part along each contact's normal, −Σ (J·n) n, N·s: divided by the
+    /// time, the force that presses on the collider.
+    pub normal: [f64; 3],
+    /// Of `momentum`, the part across each contact's normal (friction), −Σ (J − (J·n) n),
+    /// N·s: divided by the time, the shear force on the collider.
+    pub tangential: [f64; 3],
 }
 
 impl ColliderBooks {
     /// Books the impulse `j` (N·s) the collider gave a particle at the point `at` (m) of its
-    /// surface moving at `u` (m/s).
-    pub(crate) fn book(&mut self, at: [f64; 3], u: [f64; 3], j: [f64; 3]) {
+    /// surface moving at `u` (m/s), across the contact's unit normal `n`.
+    pub(crate) fn book(&mut self, at: [f64; 3], u: [f64; 3], j: [f64; 3], n: [f64; 3]) {
         let torque = vec3::cross(at, j);
+        let along = vec3::scale(vec3::dot(j, n), n);
         for k in 0..3 {
             self.momentum[k] -= j[k];
             self.angular_momentum[k] -= torque[k];
+            self.normal[k] -= along[k];
+            self.tangential[k] -= j[k] - along[k];
         }
         self.work += vec3::dot(j, u);
+    }
+
+    /// Adds `other`'s figures, each scaled by `s`.
+    pub(crate) fn add_scaled(&mut self, s: f64, other: &ColliderBooks) {
+        for k in 0..3 {
+            self.momentum[k] += s * other.momentum[k];
+            self.angular_momentum[k] += s * other.angular_momentum[k];
+            self.normal[k] += s * other.normal[k];
+            self.tangential[k] += s * other.tangential[k];
+        }
+        self.work += s * other.work;
     }
 }

@@ -34,6 +34,41 @@ pub struct Contact {
     pub wall_velocity: [f64; 3],
 }
 
+/// What a contact carries, for output (`World::contact_report`): the contact, its point,
+/// and the force on particle i split along and across n (the force models' at the state;
+/// the impulse model's step impulse over dt, its mean force), and whether it slides.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactReport {
+    /// The contact as detected (at the step's end).
+    pub contact: Contact,
+    /// The contact point, m: on the line of centres, where the two surfaces' overlap is
+    /// split in the ratio of the radii (ρ_i = d r_i/(r_i + r_j) from i); on a collider's
+    /// surface.
+    pub point: [f64; 3],
+    /// The normal force on i, N (along n; −it on a partner particle).
+    pub force_n: [f64; 3],
+    /// The tangential (friction) force on i, N (⊥ n).
+    pub force_t: [f64; 3],
+    /// With the impulse model, the step's impulse on i (N·s, normal then tangential part);
+    /// zeros with the force models.
+    pub impulse: [[f64; 3]; 2],
+    /// Whether the contact slides: its tangential force at the Coulomb bound μ |F_n|.
+    pub sliding: bool,
+}
+
+impl ContactReport {
+    /// The contact point of `c` for particle i at `xi` (m) of radius `ri` and a partner
+    /// particle of radius `rj` (`None`: a collider), m.
+    pub fn point_of(c: &Contact, xi: [f64; 3], ri: f64, rj: Option<f64>) -> [f64; 3] {
+        let arm = match rj {
+            Some(rj) if ri + rj > 0.0 => (ri + rj - c.overlap) * ri / (ri + rj),
+            Some(_) => 0.0,
+            None => ri - c.overlap,
+        };
+        crate::vec3::sub(xi, crate::vec3::scale(arm, c.normal))
+    }
+}
+
 impl Contact {
     /// The partner particle's index, or `None` for a collider.
     pub fn partner_particle(&self) -> Option<usize> {

@@ -146,7 +146,7 @@ mod paths;
 
 pub use broad_phase::Grid;
 pub use colliders::{BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};
-pub use contact::{Contact, Partner};
+pub use contact::{Contact, ContactReport, Partner};
 pub use domain::{Domain, Periodic};
 pub use mesh::{Side, TriangleMesh};
 pub use motion::{Motion, Pose, SurfaceVelocity};

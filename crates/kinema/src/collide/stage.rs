@@ -11,12 +11,13 @@ use crate::collide::contact_force::{
     particle_ratios, Bodies, ContactForce, RollingModel, SpringDashpot, TangentialLaw, TangentialModel,
 };
 use crate::collide::event_driven::{unsupported_collider, EventDriven};
+use crate::collide::impulse::end_of_step::overlap_at;
 use crate::collide::impulse::impacts::check_travel;
 use crate::collide::impulse::{ImpulseModel, StageSetting};
 use crate::collide::records::ContactRecord;
 use crate::collide::shock::Accuracy;
 use crate::collide::spin::Rotation;
-use crate::collide::{placement, Collider, Domain, Material, MaterialTable, Motion, Periodic};
+use crate::collide::{placement, Collider, Contact, Domain, Material, MaterialTable, Motion, Periodic};
 use crate::error::Error;
 use crate::interrupt::Interrupt;
 use crate::particles::Particles;
@@ -564,6 +565,8 @@ pub(crate) struct CollideStage {
     pub motions: Vec<Option<(Motion, Collider)>>,
     /// What the particles gave each collider over all steps.
     pub collider_books: Vec<ColliderBooks>,
+    /// What they gave each collider in the last step (the last call, event-driven).
+    pub collider_last: Vec<ColliderBooks>,
     /// The event-driven state between calls (`None`: made afresh at the next), with
     /// `params.event_driven`.
     events: Option<EventDriven>,
@@ -589,6 +592,7 @@ impl CollideStage {
             times: CollisionTimes::default(),
             motions: Vec::new(),
             collider_books: Vec::new(),
+            collider_last: Vec::new(),
             events: None,
         })
     }
@@ -702,6 +706,7 @@ impl CollideStage {
     pub fn clear_step(&mut self) {
         self.impulse.detected.clear();
         self.last = CollisionStats::default();
+        self.collider_last.clear();
     }
 
     /// A step of the force models (`h`, s): the books its force evaluation kept (velocity
@@ -710,9 +715,10 @@ impl CollideStage {
     /// times h as the energy lost, h times the pairs' virial.
     pub fn book_contact_force(&mut self, h: f64) {
         self.clear_step();
-        let Some(books) = self.spring_dashpot.as_ref().and_then(|m| m.take_books()) else {
+        let Some((books, walls)) = self.spring_dashpot.as_ref().and_then(|m| m.take_books()) else {
             return;
         };
+        self.book_colliders(walls);
         let step = CollisionStats {
             contacts: books.contacts,
             impacts: books.begun,
@@ -722,6 +728,46 @@ impl CollideStage {
         };
         self.last = step;
         self.total.accumulate(&step);
+    }
+
+    /// The impulse model's end-of-step contacts of the last step, then those of the islands
+    /// asleep (their last awake step's loads), each with its impulse and its mean force over
+    /// the step h (s): the impulse's normal part (J·n) n and the rest,
+    /// each over h; sliding when the tangential part is at the Coulomb bound μ (J·n) (to
+    /// 1e-9 of it). `x` (m, 3 per particle) and `radius` place the points.
+    pub fn impulse_reports(&self, x: &[f64], radius: &[f64], h: f64) -> Vec<crate::collide::ContactReport> {
+        let table = MaterialTable::uniform(self.material).with_colliders(&self.colliders);
+        let materials = match &self.particle_materials {
+            Some(m) => table.with_particles(m),
+            None => table,
+        };
+        let asleep = self.impulse.sleeping_contacts(x, radius, &self.colliders, &self.domain);
+        self.impulse
+            .detected_with_totals()
+            .map(|(c, p)| (*c, p))
+            .chain(asleep)
+            .map(|(c, p)| {
+                let c = &c;
+                let lambda = vec3::dot(p, c.normal);
+                let along = vec3::scale(lambda, c.normal);
+                let across = vec3::sub(p, along);
+                let cap = materials.pair(c).friction() * lambda;
+                let rj = c.partner_particle().map(|j| radius[j]);
+                // the point where the contact is now (the overlap as detected was pushed out)
+                let now = Contact {
+                    overlap: overlap_at(radius, &self.colliders, &self.domain, x, c.i, c.other),
+                    ..*c
+                };
+                crate::collide::ContactReport {
+                    contact: *c,
+                    point: crate::collide::ContactReport::point_of(&now, vec3::get(x, c.i), radius[c.i], rj),
+                    force_n: vec3::scale(1.0 / h, along),
+                    force_t: vec3::scale(1.0 / h, across),
+                    impulse: [along, across],
+                    sliding: cap > 0.0 && vec3::norm(across) >= cap * (1.0 - 1e-9),
+                }
+            })
+            .collect()
     }
 
     /// The global material and the per-particle ones (if any particle has its own).
@@ -848,17 +894,23 @@ impl CollideStage {
         (&mut self.impulse, set)
     }
 
+    /// What the particles gave each collider in a step (`step`, one per collider, or fewer:
+    /// the rest gave nothing): the last step's, and added to the sums over steps.
+    fn book_colliders(&mut self, mut step: Vec<ColliderBooks>) {
+        let n = self.colliders.len();
+        step.resize(n, ColliderBooks::default());
+        self.collider_books.resize(n, ColliderBooks::default());
+        for (all, given) in self.collider_books.iter_mut().zip(&step) {
+            all.add_scaled(1.0, given);
+        }
+        self.collider_last = step;
+    }
+
     /// Books what a step of the impulse model did (`stats`) and its time: the sums over
     /// steps, and what the particles gave each collider.
     pub fn book_step(&mut self, stats: CollisionStats, times: CollisionTimes) {
-        self.collider_books.resize(self.colliders.len(), ColliderBooks::default());
-        for (books, given) in self.collider_books.iter_mut().zip(&self.impulse.collider_books) {
-            for k in 0..3 {
-                books.momentum[k] += given.momentum[k];
-                books.angular_momentum[k] += given.angular_momentum[k];
-            }
-            books.work += given.work;
-        }
+        let step = self.impulse.collider_books.clone();
+        self.book_colliders(step);
         self.times.detect += times.detect;
         self.times.respond += times.respond;
         self.times.distribute += times.distribute;
@@ -967,16 +1019,9 @@ impl CollideStage {
             None => table,
         };
         let threshold = self.params.restitution_threshold.unwrap_or(0.0);
-        self.collider_books.resize(self.colliders.len(), ColliderBooks::default());
-        let stats = events.advance(
-            p,
-            &materials,
-            threshold,
-            &self.domain,
-            t1,
-            &mut self.collider_books,
-            interrupt,
-        )?;
+        let mut given = vec![ColliderBooks::default(); self.colliders.len()];
+        let stats = events.advance(p, &materials, threshold, &self.domain, t1, &mut given, interrupt)?;
+        self.book_colliders(given);
         self.events = Some(events);
         self.times.detect += start.elapsed();
         self.last = stats;

@@ -273,13 +273,19 @@ impl World {
     }
 
     /// What the particles gave each collider over all steps (momentum, angular momentum
-    /// about the origin, the work the collider did on them), in the colliders' order; the
-    /// impulse model's books (the spring–dashpot model books nothing here).
-    pub fn collider_books(&self) -> Vec<ColliderBooks> {
+    /// about the origin, the work the collider did on them, the momentum's normal and
+    /// tangential parts), in the colliders' order, by every contact model (the force models'
+    /// with velocity Verlet, the method whose step books them); with `last`, in the last
+    /// step alone (the last call, event-driven).
+    pub fn collider_books(&self, last: bool) -> Vec<ColliderBooks> {
         let Some(stage) = self.collide_stage.as_ref() else {
             return Vec::new();
         };
-        let mut books = stage.collider_books.clone();
+        let mut books = if last {
+            stage.collider_last.clone()
+        } else {
+            stage.collider_books.clone()
+        };
         books.resize(stage.colliders.len(), ColliderBooks::default());
         books
     }
@@ -353,6 +359,34 @@ impl World {
     /// whose contacts live inside the force evaluations.
     pub fn contacts(&self) -> &[Contact] {
         self.collide_stage.as_ref().map_or(&[], |c| &c.impulse.detected)
+    }
+
+    /// The contacts now, each with its point, its force split along and across the normal,
+    /// and whether it slides ([`ContactReport`](crate::collide::ContactReport)): with the
+    /// force models, every contact that pushes at the current state, its forces as the next
+    /// evaluation finds them; with the impulse model, the last step's end-of-step contacts
+    /// with the impulse each took and its mean force over the step (impacts inside the step
+    /// are not among them: `contact_events` and `collision_stats` count those). Empty
+    /// without collisions, and for an event-driven world (its impacts are instants).
+    pub fn contact_reports(&mut self) -> Result<Vec<crate::collide::ContactReport>, Error> {
+        self.check_pending_placement()?;
+        let Some(stage) = self.collide_stage.as_ref() else {
+            return Ok(Vec::new());
+        };
+        if stage.params.model == ContactModel::Impulse {
+            return Ok(stage.impulse_reports(&self.particles.x, &self.particles.radius, self.params.dt));
+        }
+        let p = &self.particles;
+        let s = crate::forces::State {
+            t: self.time,
+            x: &p.x,
+            v: &p.v,
+            mass: &p.mass,
+        };
+        match super::forces::contact_force(&self.collide_stage, p) {
+            Some(contact) => contact.contact_reports(&s),
+            None => Ok(Vec::new()),
+        }
     }
 
     /// Starts (`on`) or stops recording when pairs begin and end touching

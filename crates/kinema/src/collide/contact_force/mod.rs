@@ -29,6 +29,7 @@
 
 use std::sync::{Mutex, MutexGuard};
 
+use crate::collide::books::ColliderBooks;
 pub(crate) use crate::collide::neighbour_list::CHUNK;
 use crate::collide::neighbour_list::{collider_scale, ListBuild, NeighbourList, SKIN_PER_RADIUS};
 use crate::collide::{Collider, Domain, Grid, Material};
@@ -46,6 +47,7 @@ mod contacts;
 mod force;
 mod history;
 mod law;
+mod listing;
 mod pairs;
 mod stress;
 mod tangent;
@@ -95,6 +97,7 @@ impl SpringDashpot {
         let mut scratch = self.scratch();
         scratch.list.built_at.clear();
         scratch.list.verified = None;
+        scratch.wall_forces = None;
     }
 
     /// Follows a renumbering of the particles (`new_of_old`, `old_of_new`): the list stays
@@ -170,8 +173,9 @@ impl SpringDashpot {
         self.scratch().list.verified = None;
     }
 
-    /// The contact books of the last fused Verlet pass, once (`None`: no such pass since).
-    pub(crate) fn take_books(&self) -> Option<pairs::ContactBooks> {
+    /// The contact books of the last fused Verlet pass and what each collider took over its
+    /// step, once (`None`: no such pass since).
+    pub(crate) fn take_books(&self) -> Option<(pairs::ContactBooks, Vec<ColliderBooks>)> {
         self.scratch().books.take()
     }
 
@@ -308,9 +312,12 @@ struct Scratch {
     /// pass (the same sum, in the same order). Taken once; the world forgets it after the
     /// check ([`ContactForce::forget_energy`]).
     pair_energy: Option<((usize, usize), f64)>,
-    /// The contact books of the last fused Verlet pass, until the world takes them
-    /// ([`SpringDashpot::take_books`]).
-    books: Option<pairs::ContactBooks>,
+    /// The contact books of the last fused Verlet pass, with what each collider took over
+    /// its step, until the world takes them ([`SpringDashpot::take_books`]).
+    books: Option<(pairs::ContactBooks, Vec<ColliderBooks>)>,
+    /// The collider forces of the last fused Verlet pass, as rates (N, N·m, W in the books'
+    /// fields): the start of the next step's ([`ColliderBooks`]; `None` after a change).
+    wall_forces: Option<Vec<ColliderBooks>>,
     /// The contacts' memory (`history.rs`).
     histories: Histories,
     /// The torques chunks owe particles of later chunks (as `exchange` the forces).
@@ -331,6 +338,7 @@ impl Default for Scratch {
             exchange: Exchange::default(),
             pair_energy: None,
             books: None,
+            wall_forces: None,
             histories: Histories::default(),
             torque_exchange: Exchange::default(),
             torque: Vec::new(),

@@ -161,8 +161,20 @@ impl ContactBooks {
     }
 }
 
+/// One collider contact's force in a pass kept for the collider's books: on particle i, N
+/// (tangential part included), with the contact's normal, its point on the collider's
+/// surface (m) and the surface's velocity there (m/s).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct WallPush {
+    pub collider: usize,
+    pub force: [f64; 3],
+    pub normal: [f64; 3],
+    pub at: [f64; 3],
+    pub u: [f64; 3],
+}
+
 /// What stage 1 of the pair pass found in one chunk.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Default)]
 pub(super) struct ChunkSums {
     /// The chunk's pair energy, J (−0.0 where not asked).
     pub energy: f64,
@@ -170,6 +182,8 @@ pub(super) struct ChunkSums {
     pub bad: Option<usize>,
     /// The chunk's contact books, when asked.
     pub books: ContactBooks,
+    /// With the books, the chunk's collider contact forces, particle by particle.
+    pub pushes: Vec<WallPush>,
 }
 
 /// The chunks' books summed in chunk order (the same on any number of threads).
@@ -334,6 +348,7 @@ impl ContactForce<'_> {
             let mut energy = -0.0;
             let mut bad = None;
             let mut books = ContactBooks::default();
+            let mut pushes = Vec::new();
             for l in 0..len {
                 let i = first + l;
                 let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
@@ -427,6 +442,13 @@ impl ContactForce<'_> {
                             if let Some(h) = options.books {
                                 let extra = tangent.map_or(0.0, |t| t.power);
                                 books.book(contact, force, dashpot, None, h, extra, None);
+                                pushes.push(WallPush {
+                                    collider: k,
+                                    force: fv,
+                                    normal: contact.normal,
+                                    at: vec3::sub(xi, vec3::scale(ri - contact.overlap, contact.normal)),
+                                    u: contact.wall_velocity,
+                                });
                             }
                             for k in 0..3 {
                                 fc[3 * l + k] += fv[k];
@@ -441,7 +463,12 @@ impl ContactForce<'_> {
                     });
                 }
             }
-            ChunkSums { energy, bad, books }
+            ChunkSums {
+                energy,
+                bad,
+                books,
+                pushes,
+            }
         };
         outs.into_par_iter()
             .zip(list.rows.par_iter())

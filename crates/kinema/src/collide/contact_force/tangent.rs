@@ -105,6 +105,9 @@ pub(super) struct Tangent {
     /// The power the tangential part dissipates, W (≥ 0): γ_t |v_t|² while it sticks, |F_t·v_t|
     /// while it slides (the books' `energy_lost`).
     pub power: f64,
+    /// Whether the contact slides: its force at the Coulomb bound μ |F_n| (to 1e-9 of it,
+    /// so that a spring left at the bound by the last step's slide reads as sliding).
+    pub slides: bool,
 }
 
 /// One contact as the tangential law sees it.
@@ -216,11 +219,13 @@ impl TangentialModel {
         } else {
             gamma_t * vec3::dot(vt, vt)
         };
+        let cap = t.friction * t.normal_force;
         let mut out = Tangent {
             force,
             couple: [0.0; 3],
             slip: Slip { shear, ..slip },
             power,
+            slides: slides || (cap > 0.0 && vec3::norm(force) >= cap * (1.0 - 1e-9)),
         };
         if let Some(r) = &self.rolling {
             let rel = vec3::sub(wi, wj);

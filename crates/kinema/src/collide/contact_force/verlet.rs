@@ -5,6 +5,7 @@ use rayon::prelude::*;
 
 use super::pairs::{summed_books, ChunkSums, ContactBooks, PassOptions};
 use super::{ContactForce, Scratch, CHUNK};
+use crate::collide::books::ColliderBooks;
 use crate::error::Error;
 use crate::forces::State;
 use crate::ode::verlet;
@@ -56,9 +57,38 @@ pub(crate) struct SpinKick<'a> {
     pub omega_out: &'a mut [f64],
 }
 
-/// The step's contact books, summed from the chunks' (in chunk order), for the world to take.
-fn scratch_books(books: &mut Option<ContactBooks>, sums: &[ChunkSums]) {
-    *books = Some(summed_books(sums));
+/// The step's contact books, summed from the chunks' (in chunk order), for the world to take,
+/// with what each of the `colliders` took over the step h (s). Verlet's kick
+/// v ← v + h/2 (a + a') gives a particle h/2 (F + F') from a collider, F the force of the last
+/// pass (at the step's start, `walls`) and F' this one's, so that is what the collider books
+/// (exactly what the particles took, to rounding); after a change that dropped the last
+/// pass's forces (a new list), h F'.
+fn scratch_books(
+    books: &mut Option<(ContactBooks, Vec<ColliderBooks>)>,
+    walls: &mut Option<Vec<ColliderBooks>>,
+    sums: &[ChunkSums],
+    colliders: usize,
+    h: f64,
+) {
+    // the forces of this pass as rates: N, N·m and W where the books hold N·s, N·m·s and J
+    let mut now = vec![ColliderBooks::default(); colliders];
+    for p in sums.iter().flat_map(|s| &s.pushes) {
+        if let Some(b) = now.get_mut(p.collider) {
+            b.book(p.at, p.u, p.force, p.normal);
+        }
+    }
+    let mut step = vec![ColliderBooks::default(); colliders];
+    for (k, s) in step.iter_mut().enumerate() {
+        match walls.as_ref().and_then(|w| w.get(k)) {
+            Some(before) => {
+                s.add_scaled(0.5 * h, before);
+                s.add_scaled(0.5 * h, &now[k]);
+            }
+            None => s.add_scaled(h, &now[k]),
+        }
+    }
+    *walls = Some(now);
+    *books = Some((summed_books(sums), step));
 }
 
 impl ContactForce<'_> {
@@ -99,6 +129,7 @@ impl ContactForce<'_> {
             exchange,
             pair_energy,
             books,
+            wall_forces,
             histories,
             torque_exchange,
             torque,
@@ -152,7 +183,7 @@ impl ContactForce<'_> {
         };
         let turn = turning.as_ref().zip(out);
         self.pair_forces(x, vp, list, Some(&mut *v_out), start, options, exchange, sums, turn);
-        scratch_books(books, sums);
+        scratch_books(books, wall_forces, sums, self.colliders.len(), h);
         *pair_energy = energy.then(|| {
             (
                 (x.as_ptr() as usize, x.len()),

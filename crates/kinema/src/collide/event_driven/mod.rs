@@ -616,8 +616,7 @@ impl EventDriven {
         if let Some(book) = books.get_mut(wall.collider) {
             // where it touched: the sphere's point on the wall
             let at = vec3::sub(b.x, vec3::scale(self.radius[i], wall.normal));
-            book.momentum = vec3::sub(book.momentum, imp.vector);
-            book.angular_momentum = vec3::sub(book.angular_momentum, vec3::cross(at, imp.vector));
+            book.book(at, [0.0; 3], imp.vector, wall.normal);
         }
         true
     }

@@ -292,7 +292,7 @@ impl ImpulseModel {
                 }
                 if let (Partner::Collider(k), Some(c)) = (event.partner, contact) {
                     let at = vec3::sub(paths.x_ref(event.i), vec3::scale(s.set.radius[event.i], c.normal));
-                    self.collider_books[k].book(at, c.wall_velocity, imp.vector);
+                    self.collider_books[k].book(at, c.wall_velocity, imp.vector, c.normal);
                 }
                 for q in std::iter::once(event.i).chain(partner) {
                     paths.changed(q);

@@ -18,7 +18,7 @@ use super::neighbour_list::NeighbourList;
 use super::records::{ContactRecord, Records};
 use super::shock::Accuracy;
 use super::sleep::Sleep;
-use super::soft_step::Target;
+use super::soft_step::{Target, SPECULATIVE};
 use super::spin::Rotation;
 use super::touch::Touches;
 use super::wake::Wake;
@@ -310,6 +310,86 @@ pub(crate) struct ImpulseModel {
 }
 
 impl ImpulseModel {
+    /// The end-of-step contacts of the last step as detected, each with the total impulse
+    /// the step's soft step gave it (N·s, on i; zeros where it gave none, and for every
+    /// contact after a step that solved none), less those of the islands that went to sleep
+    /// at its end ([`ImpulseModel::sleeping_contacts`] has them).
+    pub fn detected_with_totals(&self) -> impl Iterator<Item = (&Contact, [f64; 3])> + '_ {
+        let aligned = self.totals.len() == self.detected.len();
+        let asleep = self.sleep.any();
+        self.detected
+            .iter()
+            .enumerate()
+            .filter(move |(_, c)| !(asleep && self.sleep.is_asleep(c.i)))
+            .map(move |(k, c)| (c, if aligned { self.totals[k] } else { [0.0; 3] }))
+    }
+
+    /// The contacts of the islands asleep, each with the impulse its last awake step's solve
+    /// gave it (N·s on i; the load it carries in each step asleep), their normals and
+    /// overlaps measured at the positions `x` (m, 3 per particle): a pair along its line of
+    /// centres, a collider by its touch within the speculative margin whose normal is most
+    /// along the impulse. A collider contact no longer found is left out.
+    pub(crate) fn sleeping_contacts(
+        &self,
+        x: &[f64],
+        radius: &[f64],
+        colliders: &[Collider],
+        domain: &Domain,
+    ) -> Vec<(Contact, [f64; 3])> {
+        let contact = |i: usize, other: Partner, normal: [f64; 3], overlap: f64| Contact {
+            i,
+            other,
+            normal,
+            overlap,
+            u_n: 0.0,
+            wall_velocity: [0.0; 3],
+        };
+        let mut out = Vec::new();
+        for r in self.sleep.records() {
+            let xi = crate::vec3::get(x, r.i);
+            match r.other {
+                Partner::Particle(j) => {
+                    let d = domain.displacement(xi, crate::vec3::get(x, j));
+                    let dist = crate::vec3::norm(d);
+                    if dist > 0.0 {
+                        let n = crate::vec3::scale(1.0 / dist, d);
+                        out.push((contact(r.i, r.other, n, radius[r.i] + radius[j] - dist), r.impulse));
+                    }
+                }
+                Partner::Collider(k) => {
+                    let mut best: Option<(f64, super::Touch)> = None;
+                    // (the end-of-step contacts' margin against a collider)
+                    colliders[k].for_each_touch(xi, radius[r.i], 2.0 * SPECULATIVE * radius[r.i], |t| {
+                        let along = crate::vec3::dot(t.normal, r.impulse);
+                        if best.as_ref().is_none_or(|(a, _)| along > *a) {
+                            best = Some((along, t));
+                        }
+                    });
+                    if let Some((_, t)) = best {
+                        out.push((contact(r.i, r.other, t.normal, t.overlap), r.impulse));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Books what the islands asleep at the positions `x` give the colliders in a step: each
+    /// collider contact's load, as in its last awake step (a still collider: no work).
+    pub(super) fn book_sleepers(&mut self, x: &[f64], radius: &[f64], colliders: &[Collider], domain: &Domain) {
+        for (c, p) in self.sleeping_contacts(x, radius, colliders, domain) {
+            if let Partner::Collider(k) = c.other {
+                let at = crate::vec3::sub(
+                    crate::vec3::get(x, c.i),
+                    crate::vec3::scale(radius[c.i] - c.overlap, c.normal),
+                );
+                if let Some(b) = self.collider_books.get_mut(k) {
+                    b.book(at, [0.0; 3], p, c.normal);
+                }
+            }
+        }
+    }
+
     /// Empty buffers; no check may stop a step.
     pub fn new() -> Self {
         ImpulseModel {

@@ -106,6 +106,8 @@ impl ImpulseModel {
         };
         let sleeping = self.sleep.any();
         if sleeping {
+            // what the islands still asleep give the colliders over the step: their loads
+            self.book_sleepers(x0, set.radius, set.colliders, set.domain);
             for q in (0..x0.len() / 3).filter(|&q| self.sleep.is_asleep(q)) {
                 x1[3 * q..3 * q + 3].copy_from_slice(&x0[3 * q..3 * q + 3]);
                 v1[3 * q..3 * q + 3].fill(0.0);
@@ -446,7 +448,7 @@ impl ImpulseModel {
             }
             if let Partner::Collider(k) = c.other {
                 let at = vec3::sub(vec3::get(x1, c.i), vec3::scale(set.radius[c.i] - c.overlap, c.normal));
-                self.collider_books[k].book(at, c.wall_velocity, *p);
+                self.collider_books[k].book(at, c.wall_velocity, *p, c.normal);
             }
         }
         // (with shock propagation, what its stages gave with a side held still)
