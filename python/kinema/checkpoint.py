@@ -103,6 +103,8 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
             f.create_dataset("integrator_carry", data=carry)
         if spin_carry is not None:  # Verlet's α under the contacts' torques
             f.create_dataset("spin_carry", data=spin_carry)
+        if world.spin:  # how far each particle has turned
+            f.create_dataset("orientations", data=world.orientations)
         if memory[0] or memory[1]:  # the force models' tangential springs
             pairs, walls = memory
             h = f.create_group("contact_history")
@@ -562,6 +564,13 @@ def _load_world(r: _Reader) -> Any:
         if carry is None or world.method != "verlet" or not world.spin:
             raise r.fail("dataset 'spin_carry'", "is there without Verlet's carry in a world with spin; only such a world carries angular accelerations")
         _, spin_carry = r.reals("spin_carry", (3 * n,), np.isfinite, "3 finite numbers per particle (Verlet's α, rad/s²)")
+    orientations = None
+    if "orientations" in r.f:  # (a checkpoint from before: unturned)
+        if not world.spin:
+            raise r.fail("dataset 'orientations'", "is there in a world without spin; only particles that turn have orientations")
+        _, orientations = r.reals(
+            "orientations", (n, 4), lambda a: np.isfinite(a) & (np.linalg.norm(a, axis=-1, keepdims=True) > 0), "a finite quaternion (w, x, y, z) per particle"
+        )
     memory: tuple[list, list] = ([], [])
     if "contact_history" in r.f:
         r.group("contact_history")
@@ -619,6 +628,8 @@ def _load_world(r: _Reader) -> Any:
         _, skin = r.reals("collision_carry/list_skin", (), lambda a: np.isfinite(a) & (a > 0), "the candidate list's skin: a finite number > 0, m")
         built = (at.reshape(-1).tolist(), float(skin))
     _restore_emitters(r, world, time)
+    if orientations is not None:
+        r.engine("dataset 'orientations'", core.set_orientations, np.ascontiguousarray(orientations))
     world._advice_due = False  # the advisor had looked at this state already (its warning is in `warned`)
     world._new_views()
     # last: nothing after these may start the caches again

@@ -823,6 +823,24 @@ class World(WorldCollisions):
         self._assign(self._w, value, "angular_velocities", (len(self), 3))
 
     @property
+    def orientations(self) -> np.ndarray:
+        """Orientations (N, 4) in a world with spin: unit quaternions (w, x, y, z), the
+        identity when a particle is added, turned at each step by the rotation
+        (cos(θ/2), sin(θ/2) ω̂), θ = dt |ω̄|, of the step's mean angular velocity ω̄ (world
+        frame; exact for a steady spin: a ball that rolls at v turns by v t / ρ). A new
+        read-only array; assign an (N, 4) array to set them (each is normalised)."""
+        self._need_spin("orientations")
+        out = np.asarray(self._core.orientations)
+        out.flags.writeable = False
+        return out
+
+    @orientations.setter
+    def orientations(self, value: Any) -> None:
+        self._need_spin("orientations")
+        q = np.ascontiguousarray(_checks.real_array("orientations", value), dtype=float)
+        self._core.set_orientations(q.reshape(-1, 4) if q.ndim == 1 and q.size == 4 * len(self) else q)
+
+    @property
     def inertia(self) -> np.ndarray:
         """Moments of inertia about the centres (N,), kg·m², in a world with spin (a new
         read-only array; set by ``add_particles(..., inertia=...)``)."""

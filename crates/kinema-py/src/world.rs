@@ -732,6 +732,30 @@ impl PyWorld {
         PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().inertia, 1))
     }
 
+    /// The orientations, unit quaternions (w, x, y, z), (N, 4), in the user's order (N = 0
+    /// rows without spin).
+    #[getter]
+    fn orientations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let q = self.inner.in_user_order(&self.inner.particles().orientation, 4);
+        let n = q.len() / 4;
+        Ok(PyArray1::from_vec(py, q.to_vec()).reshape([n, 4])?)
+    }
+
+    /// Sets the orientations of all particles ((N, 4) unit quaternions (w, x, y, z), the
+    /// user's order; each normalised). Needs spin.
+    fn set_orientations(&mut self, q: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
+        let n = self.inner.particles().len();
+        let q = q.as_array();
+        if q.shape() != [n, 4] {
+            return Err(PyValueError::new_err(format!(
+                "orientations of shape {:?} is invalid: it must be ({n}, 4), a quaternion (w, x, y, z) per particle",
+                q.shape()
+            )));
+        }
+        let given: Vec<f64> = q.iter().copied().collect();
+        self.inner.set_orientations(0..n, &given).map_err(to_py)
+    }
+
     /// Writes the angular velocities (rad/s) into the caller's (N, 3) array, in the user's
     /// order (needs spin).
     fn read_spin(&self, mut w: PyReadwriteArray2<'_, f64>) -> PyResult<()> {

@@ -215,4 +215,42 @@ impl World {
         }
         Ok(())
     }
+
+    /// Sets the orientations of particles `range` (unit quaternions (w, x, y, z), 4 per
+    /// particle; each is normalised, and must be finite and not zero). Needs spin.
+    pub fn set_orientations(&mut self, range: std::ops::Range<usize>, q: &[f64]) -> Result<(), Error> {
+        if !self.particles.has_spin() {
+            return Err(Error::invalid(
+                "orientations",
+                "given",
+                "a world with spin (spin=True) turns its particles; without spin they have no orientation",
+            ));
+        }
+        if range.end > self.particles.len() || q.len() != 4 * range.len() {
+            return Err(Error::invalid(
+                "orientations",
+                format!("{} values for particles {range:?}", q.len()),
+                format!("4 per particle (w, x, y, z), of particles 0..{}", self.particles.len()),
+            ));
+        }
+        for (k, c) in q.chunks_exact(4).enumerate() {
+            let len = c.iter().map(|a| a * a).sum::<f64>().sqrt();
+            if !(len.is_finite() && len > 0.0) {
+                return Err(Error::invalid(
+                    format!("orientations[{k}]"),
+                    format!("{c:?}"),
+                    "a finite quaternion (w, x, y, z) other than 0 (it is normalised)",
+                ));
+            }
+        }
+        self.restore_user_order();
+        for (k, c) in q.chunks_exact(4).enumerate() {
+            let len = c.iter().map(|a| a * a).sum::<f64>().sqrt();
+            let p = range.start + k;
+            for d in 0..4 {
+                self.particles.orientation[4 * p + d] = c[d] / len;
+            }
+        }
+        Ok(())
+    }
 }

@@ -88,6 +88,9 @@ pub struct World {
     y_next: Vec<f64>,
     /// The state a step produces, m and m/s (3 per particle); swapped in when accepted.
     x_next: Vec<f64>,
+    /// With spin, the angular velocities at the start of the step being taken, rad/s (3 per
+    /// particle): with those at its end they turn the orientations.
+    omega_before: Vec<f64>,
     v_next: Vec<f64>,
     force: Vec<f64>,
     /// The energy reference of the runaway check; `None` until the next step sets it.
@@ -153,6 +156,7 @@ impl World {
             y: Vec::new(),
             y_next: Vec::new(),
             x_next: Vec::new(),
+            omega_before: Vec::new(),
             v_next: Vec::new(),
             force: Vec::new(),
             watch: None,
@@ -293,6 +297,9 @@ impl World {
         }
         let start = std::time::Instant::now();
         self.poll_interrupt()?;
+        // the angular velocities at the step's start, which turn the orientations with those
+        // at its end
+        self.omega_before.clone_from(&self.particles.omega);
         self.integrate()?; // 1: the integrated state, in x_next, v_next
         self.times.integrate += start.elapsed();
         // 2–4: detect, respond, distribute, on x_next, v_next (timed inside)
@@ -312,6 +319,9 @@ impl World {
         if let Some(model) = self.spring_dashpot() {
             model.accept_history();
         }
+        let h = self.params.dt;
+        let p = &mut self.particles;
+        crate::particles::turn_orientations(&mut p.orientation, &self.omega_before, &p.omega, h);
         self.time = self.params_time_after(self.steps + 1);
         self.steps += 1;
         Ok(())

@@ -220,6 +220,7 @@ impl World {
         gather(&mut p.radius, old_of_new, 1);
         gather(&mut p.id, old_of_new, 1);
         gather(&mut p.omega, old_of_new, 3);
+        gather(&mut p.orientation, old_of_new, 4);
         gather(&mut p.alpha, old_of_new, 3);
         gather(&mut p.inertia, old_of_new, 1);
         gather(&mut p.inv_inertia, old_of_new, 1);
