@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _checks, _core, contact_time
+from . import _checks, _core, first_step
 from .colliders import Box, Collider
 from .emitter import KILL_VOLUMES, Emitter
 from .forces import Spring
@@ -263,11 +263,12 @@ class World(WorldCollisions):
         self._advice_due = False
         self._advised_at = core.len
         contact_springs = (core.collisions or {}).get("model") in ("spring_dashpot", "hertz")
+        if contact_springs and not self._contact_warned and (core.len or self._emitters):
+            # a step coarser than t_c / 20 of the fastest impact the scene can produce, or than
+            # 0.2 of the Rayleigh time (kinema.first_step), emitters' particles counted
+            self._contact_warned = first_step.advise(self, core)
         if core.len == 0 or not (self._forces or contact_springs):
             return
-        if contact_springs and not self._contact_warned:
-            # a step coarser than t_c / 20 of the shortest contact (kinema.contact_time)
-            self._contact_warned = contact_time.advise(core, core.rates())
         if self._warned:
             return
         limit = core.stable_step(self._method_arg)
