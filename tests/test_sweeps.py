@@ -4,6 +4,7 @@ and the examples' science (apex ratio e², Haff's τ against Enskog)."""
 
 import csv
 import importlib.util
+import json
 import os
 import shutil
 import socket
@@ -310,3 +311,31 @@ def test_the_summary_plot_says_its_units_and_drops_what_never_changes():
         labels
     )
     assert _figure([{**r, "final_kinetic": 1.0, "energy_lost": 0.0, "impacts": 0, "spread": 0.0} for r in rows], ["world.dt"]) is None
+
+
+def forever(traj, world):
+    return {"forever": float("inf"), "undefined": float("nan")}
+
+
+def test_the_sweeps_json_files_are_standard_json_and_read_back(tmp_path):
+    # Before, sweep.json held the bare token Infinity (an emitter's lifetime), which JSON
+    # parsers other than Python's refuse (RFC 8259 has no infinity). Python's parse_constant
+    # is called for exactly those tokens: a strict parser here.
+    def strict(token):
+        raise ValueError(f"not standard JSON: {token}")
+
+    scene = gas(count=5, duration=0.1)
+    scene["emitters"] = [{"rate": 10.0, "center": [0.5, 0.5, 0.8], "particle_radius": 0.04, "mass": 1.0}]
+    out = tmp_path / "s"
+    first = kinema.sweep(scene, {"collisions.restitution": [0.5]}, measure=forever, out=out, progress=False, plot=False)
+    asked = json.loads((out / "sweep.json").read_text(), parse_constant=strict)
+    assert asked["scene"]["emitters"][0]["lifetime"] == "Infinity"
+    assert kinema.sweeps.read_json(out / "sweep.json")["scene"]["emitters"][0]["lifetime"] == float("inf")
+    result = out / "members" / first.members[0].name / "result.json"
+    assert json.loads(result.read_text(), parse_constant=strict)["row"]["forever"] == "Infinity"
+    # run again: the finished member is read back from its result.json, numbers and all
+    stamp = result.stat().st_mtime_ns
+    again = kinema.sweep(scene, {"collisions.restitution": [0.5]}, measure=forever, out=out, progress=False, plot=False)
+    assert result.stat().st_mtime_ns == stamp
+    assert again.rows[0]["forever"] == float("inf") and np.isnan(again.rows[0]["undefined"])
+    assert first.rows[0]["forever"] == float("inf")
