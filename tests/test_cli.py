@@ -5,6 +5,7 @@ import subprocess
 import sys
 import time
 
+import pytest
 from typer.testing import CliRunner
 
 import kinema
@@ -458,3 +459,52 @@ def test_run_refuses_contact_events_it_cannot_record(tmp_path):
     plain = small_scene(tmp_path, BOUNCE.format(extra=""), "plain.toml")
     res = runner.invoke(app, ["run", str(plain), "-o", str(tmp_path / "b"), "--checkpoint-every", "0.5"])
     assert res.exit_code != 0 and "checkpoint does not keep them" in res.output.replace("\n", " ")
+
+
+SUMMARY = """
+[world]
+dim = 3
+dt = 0.0005
+duration = 1.5
+fps = 10.0
+
+[[particles]]
+type = "list"
+positions = [[0, 0, 1.1]]
+velocity = [0, 0, {v}]
+radius = 0.1
+mass = 1.0
+{gravity}
+[[colliders]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+
+[collisions]
+restitution = 0.8
+{extra}
+[output]
+video = false
+plot = false
+"""
+
+
+@pytest.mark.parametrize(
+    ("extra", "said"),
+    [
+        ("", "2 impacts inside steps, "),
+        ('model = "spring_dashpot"\nstiffness = 1e5\n', "2 contacts begun, "),
+        ("event_driven = true\n", "1 impact, "),
+    ],
+)
+def test_the_run_summary_counts_what_each_model_has(tmp_path, extra, said):
+    # A ball dropped from 1 m onto a floor with e = 0.8 meets it at t₁ = √(2/g) = 0.452 s and
+    # again 2 e v₁/g = 0.723 s later, at 1.174 s: two impacts by 1.5 s with the impulse model,
+    # two contacts begun with a spring–dashpot (t_c = π/√(k/m) = 9.9 ms, 20 steps); the
+    # event-driven model has no forces, so the ball is thrown at the floor at 1 m/s from
+    # 1 m and leaves it once, one impact.
+    driven = "event_driven" in extra
+    scene = SUMMARY.format(v=-1.0 if driven else 0.0, gravity="" if driven else '\n[[forces]]\ntype = "gravity"\n', extra=extra)
+    res = runner.invoke(app, ["run", str(small_scene(tmp_path, scene, "summary.toml")), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert said in res.output, res.output

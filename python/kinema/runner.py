@@ -49,6 +49,19 @@ FRAME_BYTES = 96  # per particle and recorded frame: positions and velocities (4
 RENDER_BYTES = 32  # per particle and frame while rendering: the renderer's copy of the positions, the speeds
 
 
+def _counted(settings: dict, impacts: int) -> str:
+    """What ``collision_stats()["total"]["impacts"]`` counts, in the words of the model of
+    ``settings`` (``World.collisions``): a force model's contacts begun (it has no impacts, its
+    contacts last many steps), the event-driven model's impacts, each at its time, and the
+    stepped impulse model's impacts found inside steps by continuous detection (those at a
+    step's end are its contacts)."""
+    if settings["model"] in ("spring_dashpot", "hertz"):
+        return _count(impacts, "contact") + " begun"
+    if settings["event_driven"]:
+        return _count(impacts, "impact")
+    return _count(impacts, "impact") + " inside steps"
+
+
 def _count(n: int, noun: str) -> str:
     """``1 particle``, ``2 particles``, ``1,000 frames``."""
     return f"{n:,} {noun}" + ("" if n == 1 else "s")
@@ -373,7 +386,7 @@ def simulate_scene(
     stats = world.collision_stats()
     if stats is not None:
         total = stats["total"]
-        console.print(f"{total['impacts']} impacts inside steps, {total['energy_lost']:.4g} J taken by the collisions", highlight=False)
+        console.print(f"{_counted(world.collisions, total['impacts'])}, {total['energy_lost']:.4g} J taken by the collisions", highlight=False)
     # Everything is written in a hidden folder inside OUTDIR and moved into place at the end,
     # so a failure leaves no file half-written and none of this run's files at all.
     stage = Path(tempfile.mkdtemp(prefix=_stage_prefix(), dir=outdir))
