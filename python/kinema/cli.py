@@ -261,15 +261,32 @@ def run(
         float | None, typer.Option("--checkpoint-every", help="Write OUT/checkpoint.ckpt every this many simulated seconds (whole frames).")
     ] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Go on from OUT/checkpoint.ckpt, left by a run with --checkpoint-every that stopped.")] = False,
+    keep_checkpoint: Annotated[
+        Path | None,
+        typer.Option(
+            "--keep-checkpoint",
+            metavar="PATH",
+            help="Write the world at the run's end to PATH as a checkpoint (spins and tangential springs included): kinema.World.load_checkpoint(PATH) gives it back.",
+        ),
+    ] = None,
 ) -> None:
     """Simulate a scene; write the trajectory (H5MD), a video and an energy/momentum plot.
 
     The work is estimated first (particles × steps, video pixels, memory); a run over the
     limits is refused unless --force is given. With --checkpoint-every T the world and the
     frames so far are written to OUT/checkpoint.ckpt every T s of simulated time (removed when
-    the run ends well); --resume goes on from it, to the same files, bit for bit."""
+    the run ends well); --resume goes on from it, to the same files, bit for bit. With
+    --keep-checkpoint PATH the world at the end is kept there, to measure it in Python
+    (particle_stress needs a live world) or to go on from it, bit for bit."""
     simulate_scene(
-        scene, out if out is not None else Path("out") / scene.stem, duration, no_video, force=force, checkpoint_every=checkpoint_every, resume=resume
+        scene,
+        out if out is not None else Path("out") / scene.stem,
+        duration,
+        no_video,
+        force=force,
+        checkpoint_every=checkpoint_every,
+        resume=resume,
+        keep_checkpoint=keep_checkpoint,
     )
 
 

@@ -279,6 +279,19 @@ def _refuse_special_outputs(outdir: Path, names: list[str]) -> None:
         refuse_special_target(outdir / name)
 
 
+def _writable_file(path: Path, option: str) -> None:
+    """Refuses (ValueError naming ``option``) a ``path`` that is a folder or whose folder
+    cannot be made or written; makes the folder."""
+    if path.is_dir():
+        raise ValueError(f"{option} {path}: is a folder; give a file name (e.g. {path / 'final.ckpt'})")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ValueError(f"{option} {path}: cannot create its folder ({e.strerror})") from None
+    if not os.access(path.parent, os.W_OK | os.X_OK):
+        raise ValueError(f"{option} {path}: its folder is not writable")
+
+
 def _outdir(out: Path) -> Path:
     if out.exists() and not out.is_dir():
         raise ValueError(f"-o {out}: exists and is not a folder")
@@ -300,6 +313,7 @@ def simulate_scene(
     force: bool = False,
     checkpoint_every: float | None = None,
     resume: bool = False,
+    keep_checkpoint: Path | None = None,
 ) -> tuple[Any, list[Path]]:
     """`kinema run`'s work: load ``scene``, simulate ``duration`` s (default: the scene's) with
     a progress bar, and write what its [output] table asks for into the folder ``outdir``
@@ -308,6 +322,10 @@ def simulate_scene(
     ``force``. Staging folders left in ``outdir`` by runs that were killed are removed.
     With ``resume`` the run goes on from ``outdir``/checkpoint.ckpt instead, read and checked
     first, the work it has left estimated and refused as a fresh run's (``_resume_work``).
+    ``keep_checkpoint``: a path where the world at the run's end is written as a checkpoint
+    (``kinema.checkpoint``: its state to every bit, spins and the contacts' tangential
+    springs included; ``World.load_checkpoint`` gives the world back, to measure it or go
+    on), after the other files; its folder is checked before the run.
     Returns the trajectory and the paths written."""
     import shutil
     import warnings
@@ -326,6 +344,8 @@ def simulate_scene(
             "and a checkpoint does not keep them; run without --checkpoint-every/--resume"
         )
     ckpt = outdir / "checkpoint.ckpt"
+    if keep_checkpoint is not None:  # checked before hours of work, not after
+        _writable_file(keep_checkpoint, "--keep-checkpoint")
     if resume:  # the checkpoint's remaining work, estimated and refused as a fresh run's, then all of it checked
         if not ckpt.is_file():
             raise ValueError(f"--resume: there is no checkpoint to resume in {outdir} ({ckpt.name}; a run with --checkpoint-every writes it)")
@@ -416,6 +436,10 @@ def simulate_scene(
             written.append(outdir / name)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+    if keep_checkpoint is not None:
+        from .checkpoint import save_checkpoint
+
+        written.append(save_checkpoint(world, keep_checkpoint))
     if checkpoint_every is not None or resume:
         ckpt.unlink(missing_ok=True)  # the run is whole: its files are written
     for path in written:
