@@ -425,12 +425,21 @@ def sweep(
     checkpoint_every: Annotated[
         float | None, typer.Option("--checkpoint-every", help="Each member writes a checkpoint this often (simulated s); a rerun resumes from it.")
     ] = None,
+    measure: Annotated[
+        str | None,
+        typer.Option(
+            "--measure",
+            metavar="MODULE:FUNCTION",
+            help="A function measure(trajectory, world) -> dict whose values join each member's row: a module importable from here (the current folder first) or FILE.py.",
+        ),
+    ] = None,
 ) -> None:
     """Run a parameter sweep or ensemble on Dask: every combination of the --vary values ×
     --seeds, each member a scene with those keys set (validated first), run, saved (H5MD)
-    and measured. Writes summary.csv (one row per member), timings.csv and summary.png into
-    the folder; members already finished there are skipped (resume). See docs/sweeps.md."""
-    from .sweeps import default_folder, parse_values
+    and measured (and by --measure's function, as sweep(measure=...) in Python). Writes
+    summary.csv (one row per member), timings.csv and summary.png into the folder; members
+    already finished there are skipped (resume). See docs/sweeps.md."""
+    from .sweeps import default_folder, load_measure, parse_values
     from .sweeps import sweep as run_sweep
 
     grid = {}
@@ -445,7 +454,10 @@ def sweep(
         except ValueError as e:
             raise ValueError(f"--vary {item!r}: {e}") from None
     folder = out if out is not None else default_folder(scene)
-    result = run_sweep(scene, grid, seeds=seeds, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every)
+    fn = None if measure is None else load_measure(measure)
+    result = run_sweep(
+        scene, grid, seeds=seeds, measure=fn, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every
+    )
     failed = result.failed
     console.print(f"{len(result.rows)} members, {len(failed)} failed; wrote {folder / 'summary.csv'}", highlight=False, soft_wrap=True)
     for row in failed:

@@ -206,6 +206,50 @@ def _scene_data(scene: Scene | str | Path | dict) -> tuple[dict, str]:
 # -- one member -------------------------------------------------------------------------------
 
 
+def load_measure(text: str) -> Callable[[Any, Any], dict]:
+    """The measure named by ``text``, ``MODULE:FUNCTION`` (``kinema sweep --measure``): a
+    module importable from here, the current folder first (``mymeasures:top``, as uvicorn
+    and gunicorn name an app), or a Python file (``path/to/measures.py:top``), and a function
+    ``measure(trajectory, world) -> dict`` in it. A module from the current folder or a file
+    is sent to the workers by value (``cloudpickle.register_pickle_by_value``), so workers
+    that cannot import it (another folder, another machine) still run it. A ``ValueError``
+    naming the option and the value where it cannot be had."""
+    import importlib
+    import importlib.util
+    import sys
+
+    where, colon, name = text.rpartition(":")
+    if not colon or not where or not name.isidentifier():
+        raise ValueError(f"--measure {text!r}: use MODULE:FUNCTION or FILE.py:FUNCTION (e.g. mymeasures:top_height)")
+    try:
+        if where.endswith(".py"):
+            path = Path(where).resolve()
+            if not path.is_file():
+                raise ValueError(f"--measure {text!r}: there is no file {where}")
+            spec = importlib.util.spec_from_file_location(f"kinema_measure_{path.stem}", path)
+            assert spec is not None and spec.loader is not None
+            module = importlib.util.module_from_spec(spec)
+            sys.modules[spec.name] = module
+            spec.loader.exec_module(module)
+        else:
+            if os.getcwd() not in sys.path:
+                sys.path.insert(0, os.getcwd())
+            module = importlib.import_module(where)
+    except ValueError:
+        raise
+    except Exception as e:  # the module's own error (ImportError, SyntaxError, what it raised)
+        raise ValueError(f"--measure {text!r}: cannot import {where}: {type(e).__name__}: {e}") from None
+    fn = getattr(module, name, None)
+    if not callable(fn):
+        raise ValueError(f"--measure {text!r}: {where} has no function {name}" + ("" if fn is None else f" ({name} is a {type(fn).__name__})"))
+    origin = Path(getattr(module, "__file__", None) or "/").resolve()
+    if where.endswith(".py") or origin.is_relative_to(Path.cwd().resolve()):
+        import cloudpickle
+
+        cloudpickle.register_pickle_by_value(module)
+    return fn
+
+
 def _measure_id(measure: Callable | None) -> str:
     """What identifies a measure for a member's key: its module and name, and the hash of its
     code where it has one (a changed body under the same name is another measure)."""
