@@ -105,8 +105,9 @@ class WorldCollisions:
 
         With ``"spring_dashpot"`` and ``"hertz"`` the contacts are a force (its elastic energy is the potential
         ``"contact"`` of :meth:`diagnostics` and of the ``Trajectory``), which the stable-step
-        advisor and the ``StabilityWarning`` count; :meth:`contacts` and
-        :meth:`collision_stats` report the impulse model only.
+        advisor and the ``StabilityWarning`` count; :meth:`contacts` reports the impulse model
+        only (:meth:`collision_stats` reports both: the contacts, those begun, the dashpots'
+        energy).
 
         ``w.set_collisions(**w.collisions)`` changes nothing. The defaults are the engine's
         (``model="impulse"``, ``restitution=1.0``, ``friction=0.0``, ``ccd=True``,
