@@ -38,11 +38,11 @@ can be too short for the step. This check looks ahead instead, in four stages:
 
 4. **The safe step** dt_safe = min(t_c / 20, 0.2 T_R) (20 = ``contact_time.STEPS_PER_CONTACT``:
    below it the restitution drifts). A coarser dt gives one ``ContactTimeWarning`` that names
-   dt, the limiting figure and dt_safe, with the restitution that step gives one head-on pair
-   (``contact_time.restitution_at``) and, where dt is also beyond the method's stable step on
-   that contact's stiffness (``stability.max_step_oscillator`` at the tangent stiffness of its
-   deepest overlap, ω_t = 4.0302 / t_c for Hertz, ω₀ for Hooke), that the run will likely
-   diverge. It warns rather than refuses: the speeds are an upper bound (a particle need not
+   dt, the limiting figure and dt_safe and, for the contact, either that dt is beyond the
+   method's stable step on that contact's stiffness (``stability.max_step_oscillator`` at the
+   tangent stiffness of its deepest overlap, ω_t = 4.0302 / t_c for Hertz, ω₀ for Hooke), so
+   that the run will likely diverge, or the restitution that step gives one head-on pair
+   (``contact_time.restitution_at``). It warns rather than refuses: the speeds are an upper bound (a particle need not
    fall all the way, two need not meet head on), so a step beyond it is not certainly unstable.
 
 Not counted: forces other than ``Gravity`` (a ``PythonForce``, springs) and the speeds they
@@ -323,14 +323,14 @@ def advise(world: Any, core: Any) -> bool:
         return False
     dt, parts = core.dt, []
     contact = found.contact
-    if contact is not None:
+    if contact is not None and dt * STEPS_PER_CONTACT > contact.t_c:
         steps = contact.t_c / dt
         speed = "" if contact.speed is None else f" at {contact.speed:.3g} m/s"
         parts.append(f"dt = {dt:g} s spans {steps:.3g} steps of the shortest contact the scene can make (t_c = {contact.t_c:.3g} s: {contact.what}{speed})")
         limit = _max_step(world, contact)
-        if dt > limit:
+        if dt > limit:  # (a restitution measured there would be the instability's)
             parts.append(f"dt is beyond the stable step of method {core.method!r} on that contact ({limit:.3g} s): the run will likely diverge")
-        if core.collisions.get("damping") is None:
+        elif core.collisions.get("damping") is None:
             e = core.collisions["restitution"]
             got = contact_time.restitution_at(core.collisions["model"], core.method, steps, e)
             parts.append(
