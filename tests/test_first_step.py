@@ -175,6 +175,17 @@ def test_a_moving_collider_adds_its_speed():
     assert w.contact_time() == pytest.approx(johnson(M, R, 3.0), rel=1e-9)
 
 
+def test_a_sphere_obstacle_bounds_the_fall_by_its_bottom():
+    # a ball h = 0.1 m above a sphere obstacle's top (R = 0.2 m): conservatively, the fall
+    # ends resting on the obstacle's lowest point, 2R + h below (module doc, stage 1)
+    w = kinema.World(dt=1e-6)
+    w.add(kinema.Gravity([0, 0, -G]))
+    w.add(kinema.SphereObstacle([0, 0, 0], 0.2))
+    w.set_collisions(model="hertz", youngs_modulus=E, poisson_ratio=NU)
+    w.add_particles([0, 0, 0.2 + R + 0.1], mass=M, radius=R)
+    assert w.contact_time() == pytest.approx(johnson(M, R, np.sqrt(2 * G * (0.4 + 0.1))), rel=1e-12)
+
+
 def test_the_spring_dashpot_contact_time_does_not_wait_for_speed():
     # Hooke: t_c = π / (ω₀ √(1 − ζ²)), ω₀² = k / m*, whatever the speeds; a lone particle
     # over a floor: m* = m

@@ -14,9 +14,10 @@ can be too short for the step. This check looks ahead instead, in four stages:
 
    d_ik ≥ 0 is the drop along g before the sphere of radius r_i touches k: a plane facing
    up, falling straight onto it, d = ((x − p)·n − r) / (−n·ĝ); a box (a container) the same
-   for each of its finite faces, the largest; a sphere obstacle or a mesh, conservatively,
-   the drop to the lowest point it could touch (the sphere's bottom, R + r below its centre;
-   the mesh's lowest vertex). A plane that does not face up, or no gravity, gives d = 0.
+   for each of its finite faces, the largest; a sphere obstacle, a mesh or the pinned
+   particles, conservatively, the drop until the particle rests on their lowest point (the
+   sphere's bottom, R below its centre; the mesh's lowest vertex; a fall onto them ends
+   higher). A plane that does not face up, or no gravity, gives d = 0.
    Between particles, the two fastest speeds u_i = max_k √(|v_i|² + 2 |g| d_ik) add (two
    particles meet at most at the sum of their speeds; a particle that has bounced off
    something meets a falling one at no more). An ``Emitter`` counts as particles of its
@@ -206,11 +207,11 @@ def drop_and_speed(c: Any, x: np.ndarray, r: np.ndarray, down: np.ndarray, t: fl
                     p = np.zeros(3)
                     p[axis] = bound
                     d = np.maximum(d, onto_plane(p + shift, n))
-    elif isinstance(c, SphereObstacle):
-        lowest = float(placed(c._args[0]) @ down) + float(c._args[1])  # its bottom; touched with r below it
-        d = np.maximum(0.0, lowest - x @ down)
-    elif isinstance(c, Mesh):
-        lowest = float(np.max((c.vertices @ rot.T + shift) @ down))
+    elif isinstance(c, SphereObstacle | Mesh):  # down to resting on its lowest point (a bound)
+        if isinstance(c, SphereObstacle):
+            lowest = float(placed(c._args[0]) @ down) + float(c._args[1])  # its bottom, R below its centre
+        else:
+            lowest = float(np.max((c.vertices @ rot.T + shift) @ down))  # its lowest vertex
         d = np.maximum(0.0, lowest - x @ down - r)
     else:  # pragma: no cover - every collider is one of the four
         raise TypeError(f"unknown collider {c!r}")
@@ -232,7 +233,7 @@ def _obstacles(bodies: Bodies, colliders: list[Any], down: np.ndarray, t: float,
         out.append((f"collider {k} ({type(c).__name__})", d, s))
     if len(bodies.fixed_r):
         lowest = float(np.max(bodies.fixed_x @ down + bodies.fixed_r)) if down.any() else -np.inf
-        d = np.maximum(0.0, lowest - bodies.x @ down)
+        d = np.maximum(0.0, lowest - bodies.x @ down - bodies.r)
         out.append(("a pinned particle", d, np.zeros(len(bodies.r))))
     return out
 
