@@ -5,6 +5,7 @@ import subprocess
 import sys
 import time
 
+import pytest
 from typer.testing import CliRunner
 
 import kinema
@@ -458,3 +459,121 @@ def test_run_refuses_contact_events_it_cannot_record(tmp_path):
     plain = small_scene(tmp_path, BOUNCE.format(extra=""), "plain.toml")
     res = runner.invoke(app, ["run", str(plain), "-o", str(tmp_path / "b"), "--checkpoint-every", "0.5"])
     assert res.exit_code != 0 and "checkpoint does not keep them" in res.output.replace("\n", " ")
+
+
+SUMMARY = """
+[world]
+dim = 3
+dt = 0.0005
+duration = 1.5
+fps = 10.0
+
+[[particles]]
+type = "list"
+positions = [[0, 0, 1.1]]
+velocity = [0, 0, {v}]
+radius = 0.1
+mass = 1.0
+{gravity}
+[[colliders]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+
+[collisions]
+restitution = 0.8
+{extra}
+[output]
+video = false
+plot = false
+"""
+
+
+@pytest.mark.parametrize(
+    ("extra", "said"),
+    [
+        ("", "2 impacts inside steps, "),
+        ('model = "spring_dashpot"\nstiffness = 1e5\n', "2 contacts begun, "),
+        ("event_driven = true\n", "1 impact, "),
+    ],
+)
+def test_the_run_summary_counts_what_each_model_has(tmp_path, extra, said):
+    # A ball dropped from 1 m onto a floor with e = 0.8 meets it at t₁ = √(2/g) = 0.452 s and
+    # again 2 e v₁/g = 0.723 s later, at 1.174 s: two impacts by 1.5 s with the impulse model,
+    # two contacts begun with a spring–dashpot (t_c = π/√(k/m) = 9.9 ms, 20 steps); the
+    # event-driven model has no forces, so the ball is thrown at the floor at 1 m/s from
+    # 1 m and leaves it once, one impact.
+    driven = "event_driven" in extra
+    scene = SUMMARY.format(v=-1.0 if driven else 0.0, gravity="" if driven else '\n[[forces]]\ntype = "gravity"\n', extra=extra)
+    res = runner.invoke(app, ["run", str(small_scene(tmp_path, scene, "summary.toml")), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert said in res.output, res.output
+
+
+KEPT = """
+[world]
+dim = 3
+dt = 2e-5
+duration = 0.05
+fps = 100.0
+spin = true
+
+[[particles]]
+type = "list"
+positions = [[0, 0, 0.00995], [0.05, 0, 0.00995], [0.1, 0, 0.02995]]
+velocity = [[1.0, 0, 0], [-0.5, 0.2, 0], [0, 0, 0]]
+angular_velocity = [[0, 0, 30.0], [0, -20.0, 0], [5.0, 0, 0]]
+radius = 0.01
+mass = 0.01
+
+[[forces]]
+type = "gravity"
+
+[[colliders]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 0, 1]
+
+[collisions]
+model = "hertz"
+youngs_modulus = 1e7
+poisson_ratio = 0.3
+restitution = 0.5
+friction = 0.4
+
+[output]
+video = false
+plot = false
+"""
+
+
+def test_run_keeps_its_world_and_the_kept_world_goes_on_bit_for_bit(tmp_path):
+    # Balls sliding and spinning on a floor under Hertz + Mindlin: at the run's end the contacts
+    # hold tangential springs. `kinema run --keep-checkpoint` writes that world; read back and
+    # stepped on, it is the uninterrupted run's world to every bit (positions, velocities and
+    # spins): the springs' memory and Verlet's angular accelerations came back with it.
+    import numpy as np
+
+    from kinema.scene import Scene
+
+    path = small_scene(tmp_path, KEPT, "kept.toml")
+    kept = tmp_path / "keep" / "final.ckpt"
+    res = runner.invoke(app, ["run", str(path), "-o", str(tmp_path / "out"), "--keep-checkpoint", str(kept)])
+    assert res.exit_code == 0, res.output
+    assert str(kept) in res.output.replace("\n", "")
+    again = kinema.World.load_checkpoint(kept)
+    pairs, walls = again._core.contact_history()
+    assert len(walls) == 2 and all(any(spring[3]) for spring in walls)  # the two on the floor: stretched springs
+    whole = Scene.from_toml(path).build()
+    whole.run(0.05, fps=100.0)
+    assert again.time == whole.time and np.array_equal(again.angular_velocities, whole.angular_velocities)
+    for w in (again, whole):
+        w.step(2000)
+    assert np.array_equal(again.positions, whole.positions)
+    assert np.array_equal(again.velocities, whole.velocities)
+    assert np.array_equal(again.angular_velocities, whole.angular_velocities)
+    assert not np.array_equal(again.angular_velocities[0], [0, 0, 30.0])  # friction turned them
+    # a folder given as the file is refused before the run, naming the option
+    bad = runner.invoke(app, ["run", str(path), "-o", str(tmp_path / "o2"), "--keep-checkpoint", str(tmp_path)])
+    assert bad.exit_code == 2 and "--keep-checkpoint" in bad.output and "is a folder" in bad.output
+    assert not (tmp_path / "o2").exists()

@@ -146,17 +146,19 @@ def test_a_step_coarser_than_a_twentieth_of_the_contact_warns_with_the_restituti
 
 
 def test_the_hertz_contact_time_is_the_fastest_approachs():
-    # the advisor's bound: the stiffest pair (the largest radius, R* = r as against a wall) at
-    # twice the fastest speed
+    # kinema.first_step's bound between particles: the lightest pair (m* = M/2), the largest
+    # radii (R* = r/2) at the sum of the two fastest speeds, 1 + 0.5 m/s: here the pair's own
+    # head-on contact, t_c = 2 I δ_max / u
     w = kinema.World(dt=1e-6)
     w.set_collisions(model="hertz", youngs_modulus=E, poisson_ratio=NU)
     w.add_particles([[0, 0, 0], [0.05, 0, 0]], velocity=[[1.0, 0, 0], [-0.5, 0, 0]], mass=M, radius=R)
-    k_h = 4 / 3 * E_STAR * np.sqrt(R)
-    u = 2.0
-    bound = TWICE_I * (5 * M_STAR * u * u / (4 * k_h)) ** 0.4 / u
-    assert w.contact_time() == pytest.approx(bound, rel=1e-5)
-    assert w.contact_time() < closed_contact_time(1.5)  # the pair's own (R* = r/2, u = 1.5 m/s)
+    assert w.contact_time() == pytest.approx(closed_contact_time(1.5), rel=1e-12)
+    # a third, slower particle changes nothing; a faster one shortens it
+    w.add_particles([0.1, 0, 0], velocity=[0, 0.2, 0], mass=M, radius=R)
+    assert w.contact_time() == pytest.approx(closed_contact_time(1.5), rel=1e-12)
+    w.velocities[2] = [0, 3.0, 0]
+    assert w.contact_time() == pytest.approx(closed_contact_time(4.0), rel=1e-12)
     still = kinema.World()
     still.set_collisions(model="hertz", youngs_modulus=E)
     still.add_particles([[0, 0, 0], [0.05, 0, 0]], radius=R)
-    assert still.contact_time() is None  # nothing moves: no contact to time
+    assert still.contact_time() is None  # nothing moves, nothing falls: no contact to time

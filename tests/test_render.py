@@ -601,3 +601,26 @@ def test_still_scenes_draw_the_same_with_or_without_a_motion_key_and_a_world_run
     placed["vertices"] = (np.asarray(placed["vertices"]) @ pose[:, :3].T + pose[:, 3]).tolist()
     last = next(render_frames(traj.positions[-1:], 0.1, traj.t[-1:], colliders=[placed], **kw))
     assert np.abs(frames[-1].astype(int) - last).max() <= 2  # the same but for rounding at edges
+
+
+def test_a_colour_bar_end_within_rounding_of_zero_prints_0():
+    # The pile video's bar started at "7.31e-17": the rounding of a speed that is 0, beside a
+    # top speed of 2 m/s. Within 1e-12 of the larger end it prints as 0; a small value of its
+    # own scale prints as it is.
+    from kinema.render.legend import bar_labels
+
+    assert bar_labels(7.31e-17, 2.0) == ("0", "2")
+    assert bar_labels(-3e-16, 0.5) == ("0", "0.5")
+    assert bar_labels(1e-3, 2.0) == ("0.001", "2")
+    assert bar_labels(1e-17, 2e-17) == ("1e-17", "2e-17")
+    assert bar_labels(0.0, 0.0) == ("0", "0")
+    x = np.zeros((1, 2, 2))
+    x[0, 1, 0] = 2.0
+    cam = Camera2D(-1.0, -1.0, 3.0, 3.0)
+
+    def frame(vmin):
+        kw = dict(dim=2, camera=cam, width=240, height=240, time_format=None, trail=0, color_by=np.array([0.0, 2.0]), vmax=2.0)
+        return next(render_frames(x, 0.3, [0.0], vmin=vmin, **kw))
+
+    assert np.array_equal(frame(7.31e-17), frame(0.0))
+    assert not np.array_equal(frame(1e-3), frame(0.0))

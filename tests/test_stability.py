@@ -194,3 +194,27 @@ def test_oscillator_bad_input():
         stability.max_step_oscillator("verlet", -1.0)
     with pytest.raises(ValueError, match="zeta = -0.5 is invalid"):
         stability.max_step_oscillator("verlet", 1.0, -0.5)
+
+
+@pytest.mark.parametrize("friction", [0.0, 0.5])
+def test_the_stability_warning_advises_only_the_methods_the_world_accepts(friction):
+    # a spring–dashpot pair at rest: its standby contact (ω₀² = k / m*) limits Verlet to
+    # dt <= 2/ω₀ = 2 √(0.5 / 1e4) = 0.0141 s; with friction the world steps with Verlet only
+    # (a ValueError for any other method), so implicit_euler is no advice there
+    w = kinema.World(dt=0.05)
+    w.set_collisions(model="spring_dashpot", stiffness=1e4, restitution=1.0, friction=friction)
+    w.add_particles([[0, 0, 0], [0.5, 0, 0]], mass=1.0, radius=0.1)
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        w.step(1)
+    said = [str(g.message) for g in got if issubclass(g.category, kinema.StabilityWarning)]
+    assert len(said) == 1 and "dt = 0.05 s exceeds the stable-step advisor's limit 0.01414 s" in said[0]
+    if friction:
+        assert "implicit_euler" not in said[0] and "reduce dt (contacts with friction under a force model step with method='verlet' only)" in said[0]
+        other = kinema.World(dt=0.05, method="implicit_euler")
+        other.set_collisions(model="spring_dashpot", stiffness=1e4, friction=friction)
+        other.add_particles([[0, 0, 0], [0.5, 0, 0]], mass=1.0, radius=0.1)
+        with pytest.raises(ValueError, match="step with method='verlet' only"):
+            other.step(1)
+    else:
+        assert "reduce dt or use method='implicit_euler'" in said[0]

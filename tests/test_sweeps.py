@@ -4,6 +4,7 @@ and the examples' science (apex ratio e², Haff's τ against Enskog)."""
 
 import csv
 import importlib.util
+import json
 import os
 import shutil
 import socket
@@ -310,3 +311,66 @@ def test_the_summary_plot_says_its_units_and_drops_what_never_changes():
         labels
     )
     assert _figure([{**r, "final_kinetic": 1.0, "energy_lost": 0.0, "impacts": 0, "spread": 0.0} for r in rows], ["world.dt"]) is None
+
+
+def forever(traj, world):
+    return {"forever": float("inf"), "undefined": float("nan")}
+
+
+def test_the_sweeps_json_files_are_standard_json_and_read_back(tmp_path):
+    # Before, sweep.json held the bare token Infinity (an emitter's lifetime), which JSON
+    # parsers other than Python's refuse (RFC 8259 has no infinity). Python's parse_constant
+    # is called for exactly those tokens: a strict parser here.
+    def strict(token):
+        raise ValueError(f"not standard JSON: {token}")
+
+    scene = gas(count=5, duration=0.1)
+    scene["emitters"] = [{"rate": 10.0, "center": [0.5, 0.5, 0.8], "particle_radius": 0.04, "mass": 1.0}]
+    out = tmp_path / "s"
+    first = kinema.sweep(scene, {"collisions.restitution": [0.5]}, measure=forever, out=out, progress=False, plot=False)
+    asked = json.loads((out / "sweep.json").read_text(), parse_constant=strict)
+    assert asked["scene"]["emitters"][0]["lifetime"] == "Infinity"
+    assert kinema.sweeps.read_json(out / "sweep.json")["scene"]["emitters"][0]["lifetime"] == float("inf")
+    result = out / "members" / first.members[0].name / "result.json"
+    assert json.loads(result.read_text(), parse_constant=strict)["row"]["forever"] == "Infinity"
+    # run again: the finished member is read back from its result.json, numbers and all
+    stamp = result.stat().st_mtime_ns
+    again = kinema.sweep(scene, {"collisions.restitution": [0.5]}, measure=forever, out=out, progress=False, plot=False)
+    assert result.stat().st_mtime_ns == stamp
+    assert again.rows[0]["forever"] == float("inf") and np.isnan(again.rows[0]["undefined"])
+    assert first.rows[0]["forever"] == float("inf")
+
+
+MEASURE = '''
+def top(traj, world):
+    """The highest centre at the end, m, and the restitution the member ran with."""
+    return {"top": float(traj.positions[-1][:, 2].max()), "e": world.collisions["restitution"]}
+'''
+
+
+def test_the_command_takes_a_measure_by_module_and_function(tmp_path):
+    # `kinema sweep --measure MODULE:FUNCTION`: a module in the folder the command runs in,
+    # run by two worker processes (which get it by value), its values in each member's row.
+    scene = tmp_path / "gas.toml"
+    kinema.scene.Scene.from_dict(gas(count=8, duration=0.1)).to_toml(scene)
+    (tmp_path / "mymeasures.py").write_text(MEASURE)
+    args = [str(BIN / "kinema"), "sweep", str(scene), "--vary", "collisions.restitution=0.5,0.9", "--workers", "2"]
+    res = subprocess.run([*args, "--measure", "mymeasures:top", "-o", "s"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    table = rows(tmp_path / "s")
+    assert [float(r["e"]) for r in table] == [0.5, 0.9]
+    assert all(0.0 < float(r["top"]) < 1.0 for r in table)
+    # a file by its path, from elsewhere
+    res = subprocess.run([*args, "--measure", f"{tmp_path / 'mymeasures.py'}:top", "-o", str(tmp_path / "f")], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert [float(r["e"]) for r in rows(tmp_path / "f")] == [0.5, 0.9]
+    # what cannot be had is exit 2, one line naming the option and the value, before any work
+    for given, said in [
+        ("mymeasures", "use MODULE:FUNCTION or FILE.py:FUNCTION"),
+        ("mymeasures:bottom", "mymeasures has no function bottom"),
+        ("nomodule:top", "cannot import nomodule: ModuleNotFoundError"),
+        ("missing.py:top", "there is no file missing.py"),
+    ]:
+        bad = subprocess.run([*args, "--measure", given, "-o", "x"], cwd=tmp_path, capture_output=True, text=True, timeout=60)
+        assert bad.returncode == 2 and f"--measure {given!r}: {said}" in bad.stderr, bad.stderr
+        assert not (tmp_path / "x").exists()

@@ -261,15 +261,32 @@ def run(
         float | None, typer.Option("--checkpoint-every", help="Write OUT/checkpoint.ckpt every this many simulated seconds (whole frames).")
     ] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Go on from OUT/checkpoint.ckpt, left by a run with --checkpoint-every that stopped.")] = False,
+    keep_checkpoint: Annotated[
+        Path | None,
+        typer.Option(
+            "--keep-checkpoint",
+            metavar="PATH",
+            help="Write the world at the run's end to PATH as a checkpoint (spins and tangential springs included): kinema.World.load_checkpoint(PATH) gives it back.",
+        ),
+    ] = None,
 ) -> None:
     """Simulate a scene; write the trajectory (H5MD), a video and an energy/momentum plot.
 
     The work is estimated first (particles × steps, video pixels, memory); a run over the
     limits is refused unless --force is given. With --checkpoint-every T the world and the
     frames so far are written to OUT/checkpoint.ckpt every T s of simulated time (removed when
-    the run ends well); --resume goes on from it, to the same files, bit for bit."""
+    the run ends well); --resume goes on from it, to the same files, bit for bit. With
+    --keep-checkpoint PATH the world at the end is kept there, to measure it in Python
+    (particle_stress needs a live world) or to go on from it, bit for bit."""
     simulate_scene(
-        scene, out if out is not None else Path("out") / scene.stem, duration, no_video, force=force, checkpoint_every=checkpoint_every, resume=resume
+        scene,
+        out if out is not None else Path("out") / scene.stem,
+        duration,
+        no_video,
+        force=force,
+        checkpoint_every=checkpoint_every,
+        resume=resume,
+        keep_checkpoint=keep_checkpoint,
     )
 
 
@@ -408,12 +425,21 @@ def sweep(
     checkpoint_every: Annotated[
         float | None, typer.Option("--checkpoint-every", help="Each member writes a checkpoint this often (simulated s); a rerun resumes from it.")
     ] = None,
+    measure: Annotated[
+        str | None,
+        typer.Option(
+            "--measure",
+            metavar="MODULE:FUNCTION",
+            help="A function measure(trajectory, world) -> dict whose values join each member's row: a module importable from here (the current folder first) or FILE.py.",
+        ),
+    ] = None,
 ) -> None:
     """Run a parameter sweep or ensemble on Dask: every combination of the --vary values ×
     --seeds, each member a scene with those keys set (validated first), run, saved (H5MD)
-    and measured. Writes summary.csv (one row per member), timings.csv and summary.png into
-    the folder; members already finished there are skipped (resume). See docs/sweeps.md."""
-    from .sweeps import default_folder, parse_values
+    and measured (and by --measure's function, as sweep(measure=...) in Python). Writes
+    summary.csv (one row per member), timings.csv and summary.png into the folder; members
+    already finished there are skipped (resume). See docs/sweeps.md."""
+    from .sweeps import default_folder, load_measure, parse_values
     from .sweeps import sweep as run_sweep
 
     grid = {}
@@ -428,7 +454,10 @@ def sweep(
         except ValueError as e:
             raise ValueError(f"--vary {item!r}: {e}") from None
     folder = out if out is not None else default_folder(scene)
-    result = run_sweep(scene, grid, seeds=seeds, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every)
+    fn = None if measure is None else load_measure(measure)
+    result = run_sweep(
+        scene, grid, seeds=seeds, measure=fn, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every
+    )
     failed = result.failed
     console.print(f"{len(result.rows)} members, {len(failed)} failed; wrote {folder / 'summary.csv'}", highlight=False, soft_wrap=True)
     for row in failed:

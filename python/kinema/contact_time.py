@@ -17,7 +17,8 @@ turns it into t_c.
 A step of more than t_c / 20 (:data:`STEPS_PER_CONTACT`) changes the restitution the contact
 gives: the integrator samples the force too coarsely. ``restitution_at`` measures it, on one
 head-on pair with the world's method and the same dt / t_c, and the ``ContactTimeWarning``
-says what it is. Measured (velocity Verlet, a head-on pair; docs/collisions.md has the table
+(issued by ``kinema.first_step`` before the first step, for the fastest impact the scene can
+produce) says what it is. Measured (velocity Verlet, a head-on pair; docs/collisions.md has the table
 and the command, docs/restitution_table.py): at 10 steps per contact e = 0.3 comes out 0.282
 (Hooke) and 0.281 (Hertz), e = 0.1 0.064 and 0.087, at 5 steps 0.229 and 0.238 (and e = 0.1
 0.713 with Hooke); at 50 steps within 1 % of the set e.
@@ -28,6 +29,8 @@ from __future__ import annotations
 import math
 import warnings
 from typing import Any
+
+import numpy as np
 
 #: Steps a contact should span at least: below, its restitution drifts (the table above).
 STEPS_PER_CONTACT = 20
@@ -63,6 +66,18 @@ def contact_time(model: str, omega: float | None, zeta: float | None) -> float |
     return math.pi / omega if z >= 1.0 else math.pi / (omega * math.sqrt(1.0 - z * z))
 
 
+def hertz_contact_time(m_star: Any, r_star: Any, e_star: float, u: Any) -> Any:
+    """t_c (s) of an elastic Hertzian impact at approach speed ``u`` (m/s) of reduced mass
+    ``m_star`` m* (kg) and reduced radius ``r_star`` R* (m), with ``e_star`` E* (Pa):
+    2 I δ_max / u, δ_max = (5 m* u² / (4 k_h))^(2/5), k_h = 4/3 E* √R* (module doc). In
+    Johnson's form (Contact Mechanics, §11.4: δ_max = (15 m* u² / (16 E* √R*))^(2/5)) it is
+    2 I (15/16)^(2/5) (m*² / (R* E*² u))^(1/5) = 2.868 (m*² / (R* E*² u))^(1/5), his 2.87.
+    Elementwise on arrays."""
+    k_h = 4.0 / 3.0 * e_star * np.sqrt(r_star)
+    deepest = (5.0 * m_star * u * u / (4.0 * k_h)) ** 0.4
+    return 2.0 * HERTZ_INTEGRAL * deepest / u
+
+
 def restitution_at(model: str, method: Any, steps_per_contact: float, restitution: float) -> float:
     """The restitution a head-on pair comes out with when its contact of ``model`` spans
     ``steps_per_contact`` steps of ``method``, for the set ``restitution`` (a pair with
@@ -87,39 +102,3 @@ def restitution_at(model: str, method: Any, steps_per_contact: float, restitutio
         warnings.simplefilter("ignore")
         w.step(int(3 * steps_per_contact) + 10)
     return float(w.velocities[1, 0] - w.velocities[0, 0])
-
-
-def advise(core: Any, rates: dict) -> bool:
-    """Warns (``ContactTimeWarning``) if the world's step spans fewer than
-    :data:`STEPS_PER_CONTACT` steps of its shortest contact, with the restitution that step
-    gives; returns whether it warned. ``core``: the world's engine (``World._core``), ``rates``
-    the advisor's."""
-    settings = core.collisions or {}
-    model = settings.get("model")
-    if model not in ("spring_dashpot", "hertz") or settings.get("damping") is not None:
-        return False
-    t_c = contact_time(model, rates.get("standby_omega"), rates.get("standby_zeta"))
-    if t_c is None or core.dt * STEPS_PER_CONTACT <= t_c:
-        return False
-    steps = t_c / core.dt
-    e = _restitution_of(rates.get("standby_zeta"), settings["restitution"])
-    got = restitution_at(model, core.method, steps, e)
-    warnings.warn(
-        f"dt = {core.dt:.4g} s spans {steps:.3g} steps of the shortest contact (t_c = {t_c:.4g} s, the "
-        f"{'Hertzian contact at the fastest approach now' if model == 'hertz' else 'stiffest spring–dashpot pair'}); "
-        f"below {STEPS_PER_CONTACT} a contact's restitution drifts: with method {core.method!r} this step "
-        f"gives e = {got:.4g} where e = {e:.4g} is set (a head-on pair, measured). Use dt <= {t_c / STEPS_PER_CONTACT:.4g} s",
-        ContactTimeWarning,
-        stacklevel=4,
-    )
-    return True
-
-
-def _restitution_of(zeta: float | None, fallback: float) -> float:
-    """The e whose damping ratio is ``zeta`` (ζ = −ln e / √(π² + ln² e) inverted), else
-    ``fallback``."""
-    if zeta is None:
-        return fallback
-    if zeta >= 1.0:
-        return 0.0
-    return math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta))

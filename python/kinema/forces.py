@@ -47,11 +47,15 @@ class Gravity(_Checked):
     def _checked(self) -> tuple:
         return (None if self.g is None else _vec3("g", self.g),)
 
-    def _attach(self, core: Any) -> None:
+    def vector(self, dim: int) -> list[float]:
+        """g (m/s²) in a world of ``dim`` 2 or 3: the one given, else the default down."""
         (g,) = self._args
         if g is None:
-            g = [0.0, -STANDARD_GRAVITY, 0.0] if core.dim == 2 else [0.0, 0.0, -STANDARD_GRAVITY]
-        core.add_gravity(g)
+            g = [0.0, -STANDARD_GRAVITY, 0.0] if dim == 2 else [0.0, 0.0, -STANDARD_GRAVITY]
+        return list(g)
+
+    def _attach(self, core: Any) -> None:
+        core.add_gravity(self.vector(core.dim))
 
 
 @dataclass(frozen=True)

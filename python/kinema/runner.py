@@ -49,6 +49,19 @@ FRAME_BYTES = 96  # per particle and recorded frame: positions and velocities (4
 RENDER_BYTES = 32  # per particle and frame while rendering: the renderer's copy of the positions, the speeds
 
 
+def _counted(settings: dict, impacts: int) -> str:
+    """What ``collision_stats()["total"]["impacts"]`` counts, in the words of the model of
+    ``settings`` (``World.collisions``): a force model's contacts begun (it has no impacts, its
+    contacts last many steps), the event-driven model's impacts, each at its time, and the
+    stepped impulse model's impacts found inside steps by continuous detection (those at a
+    step's end are its contacts)."""
+    if settings["model"] in ("spring_dashpot", "hertz"):
+        return _count(impacts, "contact") + " begun"
+    if settings["event_driven"]:
+        return _count(impacts, "impact")
+    return _count(impacts, "impact") + " inside steps"
+
+
 def _count(n: int, noun: str) -> str:
     """``1 particle``, ``2 particles``, ``1,000 frames``."""
     return f"{n:,} {noun}" + ("" if n == 1 else "s")
@@ -266,6 +279,19 @@ def _refuse_special_outputs(outdir: Path, names: list[str]) -> None:
         refuse_special_target(outdir / name)
 
 
+def _writable_file(path: Path, option: str) -> None:
+    """Refuses (ValueError naming ``option``) a ``path`` that is a folder or whose folder
+    cannot be made or written; makes the folder."""
+    if path.is_dir():
+        raise ValueError(f"{option} {path}: is a folder; give a file name (e.g. {path / 'final.ckpt'})")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise ValueError(f"{option} {path}: cannot create its folder ({e.strerror})") from None
+    if not os.access(path.parent, os.W_OK | os.X_OK):
+        raise ValueError(f"{option} {path}: its folder is not writable")
+
+
 def _outdir(out: Path) -> Path:
     if out.exists() and not out.is_dir():
         raise ValueError(f"-o {out}: exists and is not a folder")
@@ -287,6 +313,7 @@ def simulate_scene(
     force: bool = False,
     checkpoint_every: float | None = None,
     resume: bool = False,
+    keep_checkpoint: Path | None = None,
 ) -> tuple[Any, list[Path]]:
     """`kinema run`'s work: load ``scene``, simulate ``duration`` s (default: the scene's) with
     a progress bar, and write what its [output] table asks for into the folder ``outdir``
@@ -295,6 +322,10 @@ def simulate_scene(
     ``force``. Staging folders left in ``outdir`` by runs that were killed are removed.
     With ``resume`` the run goes on from ``outdir``/checkpoint.ckpt instead, read and checked
     first, the work it has left estimated and refused as a fresh run's (``_resume_work``).
+    ``keep_checkpoint``: a path where the world at the run's end is written as a checkpoint
+    (``kinema.checkpoint``: its state to every bit, spins and the contacts' tangential
+    springs included; ``World.load_checkpoint`` gives the world back, to measure it or go
+    on), after the other files; its folder is checked before the run.
     Returns the trajectory and the paths written."""
     import shutil
     import warnings
@@ -313,6 +344,8 @@ def simulate_scene(
             "and a checkpoint does not keep them; run without --checkpoint-every/--resume"
         )
     ckpt = outdir / "checkpoint.ckpt"
+    if keep_checkpoint is not None:  # checked before hours of work, not after
+        _writable_file(keep_checkpoint, "--keep-checkpoint")
     if resume:  # the checkpoint's remaining work, estimated and refused as a fresh run's, then all of it checked
         if not ckpt.is_file():
             raise ValueError(f"--resume: there is no checkpoint to resume in {outdir} ({ckpt.name}; a run with --checkpoint-every writes it)")
@@ -373,7 +406,7 @@ def simulate_scene(
     stats = world.collision_stats()
     if stats is not None:
         total = stats["total"]
-        console.print(f"{total['impacts']} impacts inside steps, {total['energy_lost']:.4g} J taken by the collisions", highlight=False)
+        console.print(f"{_counted(world.collisions, total['impacts'])}, {total['energy_lost']:.4g} J taken by the collisions", highlight=False)
     # Everything is written in a hidden folder inside OUTDIR and moved into place at the end,
     # so a failure leaves no file half-written and none of this run's files at all.
     stage = Path(tempfile.mkdtemp(prefix=_stage_prefix(), dir=outdir))
@@ -403,6 +436,10 @@ def simulate_scene(
             written.append(outdir / name)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+    if keep_checkpoint is not None:
+        from .checkpoint import save_checkpoint
+
+        written.append(save_checkpoint(world, keep_checkpoint))
     if checkpoint_every is not None or resume:
         ckpt.unlink(missing_ok=True)  # the run is whole: its files are written
     for path in written:

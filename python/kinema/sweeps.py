@@ -5,6 +5,8 @@ scheduler started by hand, or Slurm/PBS through dask-jobqueue), results in plain
 A sweep's folder::
 
     sweep.json               what was asked: the scene, the varied keys and values, the seeds
+                             (standard JSON: an infinite lifetime is the string "Infinity",
+                             ``NON_FINITE``; ``read_json`` reads it back)
     members/<name>/          one folder per member: scene.toml (the member's scene),
                              trajectory.h5 (H5MD), result.json (its measurements, or its error),
                              checkpoint.ckpt while it runs with checkpoint_every
@@ -50,6 +52,47 @@ from .scene import Scene, SceneError
 
 #: The measurements every member reports (besides what ``measure`` returns).
 MEASURED = ("final_kinetic", "final_total", "energy_lost", "impacts", "frames")
+
+#: How sweep.json and result.json write a number JSON cannot hold (RFC 8259 has no infinity
+#: nor NaN; Python's json writes the bare tokens Infinity and NaN, which other parsers refuse):
+#: as these strings, which JavaScript's ``Number()`` and Python's ``float()`` read as the
+#: number. :func:`read_json` reads them back as floats (so a text value spelled exactly so,
+#: a species named "NaN", would read back as the number too).
+NON_FINITE = {"Infinity": math.inf, "-Infinity": -math.inf, "NaN": math.nan}
+
+
+def _standard(v: Any) -> Any:
+    """``v`` with each non-finite float (numpy's too) written as its :data:`NON_FINITE` word."""
+    if isinstance(v, float | np.floating) and not math.isfinite(v):
+        return "NaN" if math.isnan(v) else ("Infinity" if v > 0 else "-Infinity")
+    if isinstance(v, dict):
+        return {k: _standard(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_standard(x) for x in v]
+    return v
+
+
+def _numbers(v: Any) -> Any:
+    """``v`` read from JSON with the :data:`NON_FINITE` words made floats again."""
+    if isinstance(v, str):
+        return NON_FINITE.get(v, v)
+    if isinstance(v, dict):
+        return {k: _numbers(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_numbers(x) for x in v]
+    return v
+
+
+def to_json(v: Any) -> str:
+    """Standard JSON text of ``v`` (indented): non-finite numbers as :data:`NON_FINITE`'s
+    strings; what JSON has no type for (a path) as its ``str``."""
+    return json.dumps(_standard(v), indent=1, default=str, allow_nan=False)
+
+
+def read_json(path: str | Path) -> Any:
+    """A sweep's JSON file (``sweep.json``, a member's ``result.json``) as written: the
+    :data:`NON_FINITE` strings back as floats."""
+    return _numbers(json.loads(Path(path).read_text()))
 
 
 @dataclass(frozen=True)
@@ -163,6 +206,50 @@ def _scene_data(scene: Scene | str | Path | dict) -> tuple[dict, str]:
 # -- one member -------------------------------------------------------------------------------
 
 
+def load_measure(text: str) -> Callable[[Any, Any], dict]:
+    """The measure named by ``text``, ``MODULE:FUNCTION`` (``kinema sweep --measure``): a
+    module importable from here, the current folder first (``mymeasures:top``, as uvicorn
+    and gunicorn name an app), or a Python file (``path/to/measures.py:top``), and a function
+    ``measure(trajectory, world) -> dict`` in it. A module from the current folder or a file
+    is sent to the workers by value (``cloudpickle.register_pickle_by_value``), so workers
+    that cannot import it (another folder, another machine) still run it. A ``ValueError``
+    naming the option and the value where it cannot be had."""
+    import importlib
+    import importlib.util
+    import sys
+
+    where, colon, name = text.rpartition(":")
+    if not colon or not where or not name.isidentifier():
+        raise ValueError(f"--measure {text!r}: use MODULE:FUNCTION or FILE.py:FUNCTION (e.g. mymeasures:top_height)")
+    try:
+        if where.endswith(".py"):
+            path = Path(where).resolve()
+            if not path.is_file():
+                raise ValueError(f"--measure {text!r}: there is no file {where}")
+            spec = importlib.util.spec_from_file_location(f"kinema_measure_{path.stem}", path)
+            assert spec is not None and spec.loader is not None
+            module = importlib.util.module_from_spec(spec)
+            sys.modules[spec.name] = module
+            spec.loader.exec_module(module)
+        else:
+            if os.getcwd() not in sys.path:
+                sys.path.insert(0, os.getcwd())
+            module = importlib.import_module(where)
+    except ValueError:
+        raise
+    except Exception as e:  # the module's own error (ImportError, SyntaxError, what it raised)
+        raise ValueError(f"--measure {text!r}: cannot import {where}: {type(e).__name__}: {e}") from None
+    fn = getattr(module, name, None)
+    if not callable(fn):
+        raise ValueError(f"--measure {text!r}: {where} has no function {name}" + ("" if fn is None else f" ({name} is a {type(fn).__name__})"))
+    origin = Path(getattr(module, "__file__", None) or "/").resolve()
+    if where.endswith(".py") or origin.is_relative_to(Path.cwd().resolve()):
+        import cloudpickle
+
+        cloudpickle.register_pickle_by_value(module)
+    return fn
+
+
 def _measure_id(measure: Callable | None) -> str:
     """What identifies a measure for a member's key: its module and name, and the hash of its
     code where it has one (a changed body under the same name is another measure)."""
@@ -188,7 +275,7 @@ def member_key(member: Member, duration: float | None, measure: Callable | None)
 def _finished(where: Path, key: str) -> dict | None:
     """The member's result.json if it holds ``key`` (else None: not run, or run for another key)."""
     try:
-        result = json.loads((where / "result.json").read_text())
+        result = read_json(where / "result.json")
     except (OSError, ValueError):
         return None
     return result if isinstance(result, dict) and result.get("key") == key else None
@@ -260,7 +347,7 @@ def run_member(
         (where / "error.txt").write_text(traceback.format_exc())
     timing = {"wall_s": time.perf_counter() - start, "host": socket.gethostname(), "pid": os.getpid()}
     with atomic_file(where / "result.json") as tmp:
-        tmp.write_text(json.dumps({"row": row, "timing": timing, "key": key}, indent=1))
+        tmp.write_text(to_json({"row": row, "timing": timing, "key": key}))
     # The member's World belongs to this thread: freed here (with any cycle it is in), not
     # later by a collection on another thread of the worker, where pyo3 would refuse to drop it.
     world = traj = None
@@ -315,7 +402,7 @@ def sweep(
     grid = members(scene, vary, seeds)
     folder.mkdir(parents=True, exist_ok=True)
     asked = {"scene": _scene_data(scene)[0], "vary": {k: list(v) for k, v in (vary or {}).items()}, "seeds": seeds, "duration": duration}
-    (folder / "sweep.json").write_text(json.dumps(asked, indent=1, default=str))
+    (folder / "sweep.json").write_text(to_json(asked))
     results: dict[int, dict] = {}
     todo = []
     keys = {m.index: member_key(m, duration, measure) for m in grid}
@@ -443,7 +530,7 @@ def _cell(v: Any) -> Any:
     if isinstance(v, float):
         return repr(v)  # every bit: the shortest text that reads back as the same float
     if isinstance(v, (list, dict)):
-        return json.dumps(v)
+        return json.dumps(_standard(v), allow_nan=False)
     return "" if v is None else v
 
 

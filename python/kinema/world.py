@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _checks, _core, contact_time
+from . import _checks, _core, first_step
 from .colliders import Box, Collider
 from .emitter import KILL_VOLUMES, Emitter
 from .forces import Spring
@@ -90,6 +90,17 @@ def _inside(c: Collider, p: np.ndarray, t: float = 0.0) -> bool:
         return float(np.linalg.norm(p[: centre.size] - centre)) < float(c.radius)
     lo, hi = np.ravel(np.asarray(c.lo, float)), np.ravel(np.asarray(c.hi, float))
     return bool(np.any(p[: lo.size] < lo) or np.any(p[: hi.size] > hi))
+
+
+def _verlet_only(core: Any, colliders: list[Collider]) -> bool:
+    """Whether the world (its engine ``core``, its ``colliders``) steps with ``method="verlet"``
+    only: a force model's contacts with friction somewhere, the world's, a particle's own or a
+    collider's (the engine's rule: ``has_friction`` in collide/contact_force/mod.rs)."""
+    settings = core.collisions or {}
+    if settings.get("model") not in ("spring_dashpot", "hertz"):
+        return False
+    own = any(mu is not None and mu > 0 for _, mu in core.particle_materials())
+    return settings["friction"] > 0 or own or any((c.friction or 0) > 0 for c in colliders)
 
 
 class _Busy:
@@ -263,11 +274,12 @@ class World(WorldCollisions):
         self._advice_due = False
         self._advised_at = core.len
         contact_springs = (core.collisions or {}).get("model") in ("spring_dashpot", "hertz")
+        if contact_springs and not self._contact_warned and (core.len or self._emitters):
+            # a step coarser than t_c / 20 of the fastest impact the scene can produce, or than
+            # 0.2 of the Rayleigh time (kinema.first_step), emitters' particles counted
+            self._contact_warned = first_step.advise(self, core)
         if core.len == 0 or not (self._forces or contact_springs):
             return
-        if contact_springs and not self._contact_warned:
-            # a step coarser than t_c / 20 of the shortest contact (kinema.contact_time)
-            self._contact_warned = contact_time.advise(core, core.rates())
         if self._warned:
             return
         limit = core.stable_step(self._method_arg)
@@ -275,18 +287,29 @@ class World(WorldCollisions):
             self._warned = True
             rates = core.rates()
             omega = max(rates["omega"], rates["standby_omega"] or 0.0)  # contacts not yet touching count
+            # advise only what this world accepts: frictional contacts of a force model step
+            # with Verlet alone (the engine refuses the others, world/integrate.rs)
+            verlet_only = _verlet_only(core, self._colliders)
             if limit > 0:
                 text = (
-                    f"dt = {core.dt:.4g} s exceeds the stable-step advisor's limit {limit:.4g} s for method "
-                    f"{core.method!r} on these forces (stiffest mode: omega = {omega:.4g} rad/s); "
-                    "the simulation will likely blow up: reduce dt or use method='implicit_euler'"
+                    f"dt = {core.dt:g} s exceeds the stable-step advisor's limit {limit:.4g} s for method "
+                    f"{core.method!r} on these forces (stiffest mode: omega = {omega:.4g} rad/s); the simulation will likely blow up: "
+                    + (
+                        "reduce dt (contacts with friction under a force model step with method='verlet' only)"
+                        if verlet_only
+                        else "reduce dt or use method='implicit_euler'"
+                    )
                 )
             else:  # |R(iωh)| > 1 for every h > 0: e.g. forward Euler on an undamped oscillation
                 text = (
                     f"method {core.method!r} is unstable at every step on these forces: their stiffest mode "
                     f"(omega = {omega:.4g} rad/s) is undamped and each step multiplies its amplitude by more than 1, "
-                    "so the energy grows; a smaller dt only slows the growth: use a symplectic method "
-                    "('verlet', 'symplectic_euler'), 'rk4' or 'implicit_euler'"
+                    "so the energy grows; a smaller dt only slows the growth: "
+                    + (
+                        "use method='verlet' (contacts with friction under a force model step with it only)"
+                        if verlet_only
+                        else "use a symplectic method ('verlet', 'symplectic_euler'), 'rk4' or 'implicit_euler'"
+                    )
                 )
             warnings.warn(text, StabilityWarning, stacklevel=3)
 

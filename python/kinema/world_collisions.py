@@ -105,8 +105,9 @@ class WorldCollisions:
 
         With ``"spring_dashpot"`` and ``"hertz"`` the contacts are a force (its elastic energy is the potential
         ``"contact"`` of :meth:`diagnostics` and of the ``Trajectory``), which the stable-step
-        advisor and the ``StabilityWarning`` count; :meth:`contacts` and
-        :meth:`collision_stats` report the impulse model only.
+        advisor and the ``StabilityWarning`` count; :meth:`contacts` reports the impulse model
+        only (:meth:`collision_stats` reports both: the contacts, those begun, the dashpots'
+        energy).
 
         ``w.set_collisions(**w.collisions)`` changes nothing. The defaults are the engine's
         (``model="impulse"``, ``restitution=1.0``, ``friction=0.0``, ``ccd=True``,
@@ -142,20 +143,21 @@ class WorldCollisions:
         self._advice_due = True  # the spring-dashpot model's contacts are stiff springs
 
     def contact_time(self) -> float | None:
-        """The duration of the shortest contact the particles can make, s, with the
-        ``"spring_dashpot"`` or ``"hertz"`` model (``None`` with the impulse model, and for
-        Hertz while nothing moves): half a damped period π / (ω₀ √(1 − ζ²)) of the stiffest
-        pair's spring (ω₀² = k_n / m*), or a Hertzian impact's 2.943 δ_max / u at the fastest
-        approach the velocities allow now (``kinema.contact_time``). A step should span at
-        least 20 of it: a coarser one warns (``ContactTimeWarning``) with the restitution it
-        gives instead of the one set."""
-        from . import contact_time
+        """The duration of the shortest contact the scene can produce, s, with the
+        ``"spring_dashpot"`` or ``"hertz"`` model (``None`` with the impulse model, and when
+        no contact can happen: for Hertz, while nothing moves and nothing can fall onto
+        anything): half a damped period π / (ω₀ √(1 − ζ²)) of the lightest pair's spring
+        (ω₀² = k_n / m*), or a Hertzian impact's 2.868 (m*² / (R* E*² u))^(1/5) at the fastest
+        approach the particles' speeds, their fall under gravity onto the colliders (and the
+        colliders' motion) and the emitters allow (``kinema.first_step``). A step should span
+        at least 20 of it, and with Hertz stay under 0.2 of the particles' Rayleigh time:
+        before the first step, a coarser one warns (``ContactTimeWarning``) with the safe
+        step and the restitution it gives instead of the one set."""
+        from . import first_step
 
-        settings = self.collisions or {}
-        if settings.get("model") not in ("spring_dashpot", "hertz"):
-            return None
-        rates = self.rates()
-        return contact_time.contact_time(settings["model"], rates.get("standby_omega"), rates.get("standby_zeta"))
+        self._push()
+        found = first_step.check(self, self._core)
+        return None if found is None or found.contact is None else found.contact.t_c
 
     @property
     def collisions(self) -> dict | None:

@@ -9,6 +9,22 @@ import numpy as np
 
 from .. import _core
 
+#: A bar's end within this fraction of the larger end's magnitude is 0 up to rounding: a speed
+#: of 7.31e-17 m/s beside 2 m/s is the rounding of a sum that is 0, not a value to print
+#: (a double's rounding is 1.1e-16 of a value; sums of thousands of terms stay far below this).
+ROUNDING = 1e-12
+
+
+def bar_labels(vmin: float, vmax: float) -> tuple[str, str]:
+    """The colour bar's two end labels, 3 significant digits each; an end within
+    :data:`ROUNDING` of the other's magnitude prints as 0."""
+    scale = max(abs(vmin), abs(vmax))
+
+    def label(v: float) -> str:
+        return "0" if abs(v) <= ROUNDING * scale else f"{v:.3g}"
+
+    return label(vmin), label(vmax)
+
 
 class _Legend:
     """A colour bar, drawn into frames: in the top right corner, on the time stamp's row (or
@@ -26,7 +42,7 @@ class _Legend:
         size = max(9, 7 * scale)  # the time stamp's glyphs are 7 font pixels of `scale` tall
         font = _legend_font(size)
         margin, pad, gap = 4 * scale, max(2, size // 5), max(3, size // 3)
-        low, high = f"{vmin:.3g}", f"{vmax:.3g}"
+        low, high = bar_labels(vmin, vmax)
         probe = ImageDraw.Draw(Image.new("L", (1, 1)))
         name_w, low_w, high_w = (round(probe.textlength(text, font=font)) for text in (name, low, high))
         bar_w, bar_h = int(min(max(0.2 * width, 40), 240)), max(6, round(0.75 * size))
