@@ -7,6 +7,8 @@
 - :func:`fabric`: the fabric tensor and its anisotropy (:class:`Fabric`).
 - :func:`force_distribution`: P(f/⟨f⟩) (:class:`ForceDistribution`).
 - :func:`angle_of_repose`: a heap's angle from its free surface (:class:`Repose`).
+- :func:`slab_fields`, :func:`grid_fields`: coarse-grained density, velocity, kinetic and
+  contact stress (:class:`Fields`) with the kernels :class:`Gaussian`, :class:`Lucy`.
 - :func:`janssen_pressure`, :func:`janssen_wall_pressure` (closed forms) and
   :func:`wall_pressure` (measured on the walls, :class:`WallPressure`).
 
@@ -16,16 +18,22 @@ table), so that it can be fed from a World, a trajectory, or another program's o
 from .contacts import FIELDS, contact_table, geometric_contacts
 from .coordination import Coordination, coordination
 from .fabric import Fabric, fabric
+from .fields import Fields, grid_fields, slab_fields
 from .force_distribution import ForceDistribution, force_distribution
 from .janssen import WallPressure, janssen_pressure, janssen_wall_pressure, wall_pressure
+from .kernels import Binning, Gaussian, Lucy
 from .repose import Repose, angle_of_repose
 from .snapshot import Snapshot
 
 __all__ = [
     "FIELDS",
+    "Binning",
     "Coordination",
     "Fabric",
+    "Fields",
     "ForceDistribution",
+    "Gaussian",
+    "Lucy",
     "Repose",
     "Snapshot",
     "WallPressure",
@@ -35,7 +43,9 @@ __all__ = [
     "fabric",
     "force_distribution",
     "geometric_contacts",
+    "grid_fields",
     "janssen_pressure",
     "janssen_wall_pressure",
+    "slab_fields",
     "wall_pressure",
 ]
