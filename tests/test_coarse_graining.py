@@ -292,6 +292,39 @@ def test_the_slabs_virial_of_a_resting_world_is_the_sum_of_its_particle_stresses
     assert mid.contact_stress[0, 2, 2] == pytest.approx(m / (2 * r * A) * g * (H - zc), rel=1e-3)
 
 
+def test_a_hertz_columns_own_contacts_give_the_statics_and_kinemas_virial():
+    # World.contacts() of a settled Hertz column (7 balls on a floor, friction 0.3) read
+    # straight into the slabs. Closed form (statics): the contact below ball k carries the
+    # weight of the n − k balls from it up, so the binned slab of width 2r about ball k holds
+    # half of each of its two contacts' branches: σ_zz A = (n − k − ½) m g, whatever the
+    # overlaps. Independent: ∫ σᶜ dV over the pairs is Σ World.particle_stress(kinetic=False).
+    n, r, m, g = 7, 0.01, 0.01, 9.81
+    w = kinema.World(dt=1e-5)
+    w.add_particles([[0.0, 0.0, r + 2 * k * r] for k in range(n)], radius=r, mass=m)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]))
+    w.set_collisions(restitution=0.1, friction=0.3, model="hertz", youngs_modulus=1e8, poisson_ratio=0.3)
+    w.step(100_000)  # 1 s: at rest, each contact's force its weight to 1e-6 (tests/test_contact_reports.py)
+    snap = analysis.Snapshot.of_world(w)
+    assert len(snap.contacts["i"]) == n and np.abs(snap.velocities).max() < 1e-6
+    A = (2 * r) ** 2
+    x = snap.positions
+    for k in range(1, n):
+        slab = analysis.slab_fields(x, m, edges=[x[k, 2] - r, x[k, 2] + r], cross_section=A, contacts=snap.contacts)
+        assert slab.contact_stress[0, 2, 2] * A == pytest.approx((n - k - 0.5) * m * g, rel=1e-6)
+    # ball 0's slab also holds the floor's branch, from its centre to the contact point
+    # (r − δ_floor long, all inside), carrying n m g: (n m g (r − δ) + (n − 1) m g r) / 2r
+    floor = int(np.flatnonzero(snap.contacts["j"] < 0)[0])
+    bottom = analysis.slab_fields(x, m, edges=[x[0, 2] - r, x[0, 2] + r], cross_section=A, contacts=snap.contacts)
+    reach = x[0, 2] - snap.contacts["point"][floor, 2]
+    assert bottom.contact_stress[0, 2, 2] * A * 2 * r == pytest.approx(n * m * g * reach + (n - 1) * m * g * r, rel=1e-6)
+    edges = np.linspace(-0.05, 0.2, 251)
+    f = analysis.slab_fields(x, m, edges=edges, cross_section=A, kernel=Lucy(0.01), contacts=snap.contacts, colliders=False)
+    virial = (f.contact_stress * np.diff(edges)[:, None, None]).sum(axis=0) * A
+    kinema_virial = w.particle_stress(kinetic=False).sum(axis=0)
+    np.testing.assert_allclose(virial, kinema_virial, rtol=0, atol=1e-12 * kinema_virial[2, 2])
+
+
 # -- refusals ---------------------------------------------------------------------------------
 def test_the_fields_refuse_what_they_cannot_measure():
     x, table = column(4)

@@ -15,6 +15,7 @@ point      (K, 3)  m     the contact point
 force_n    (K, 3)  N     the normal force on i (the impulse model: the step's mean)
 force_t    (K, 3)  N     the tangential (friction) force on i
 sliding    (K,)          whether the contact slides (Coulomb's limit reached)
+u_n        (K,)    m/s   (v_i − v_j)·n when the contact was found (< 0: approaching)
 impulse_n  (K, 3)  N·s   the impulse model only: the normal impulse on i
 impulse_t  (K, 3)  N·s   the impulse model only: the tangential impulse on i
 ========== ======= ===== ============================================================
