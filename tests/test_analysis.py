@@ -180,7 +180,8 @@ def test_the_fabric_of_a_square_lattice_and_of_chains_is_exact():
     n = 6
     x = np.array([[i, j, 0] for i in range(n) for j in range(n)], dtype=float)
     f = analysis.fabric(with_forces(analysis.geometric_contacts(x, 0.5, period=(n, n, 0))), dim=2)
-    np.testing.assert_array_equal(f.tensor, np.diag([0.5, 0.5])) and f.count == 2 * n * n
+    np.testing.assert_array_equal(f.tensor, np.diag([0.5, 0.5]))
+    assert f.count == 2 * n * n
     assert f.anisotropy == 0.0
     x[:, 1] *= 1.5
     f = analysis.fabric(with_forces(analysis.geometric_contacts(x, 0.5, period=(n, 1.5 * n, 0))), dim=2)
