@@ -28,11 +28,15 @@ The public API (everything else is private):
 - Sweeps and ensembles on Dask: ``sweep``, ``SweepResult``; the module ``kinema.sweeps``
 - Measured orders of accuracy: ``convergence``, ``ConvergenceResult``, the module
   ``kinema.problems`` (problems with exact solutions)
+- Granular analysis: the module ``kinema.analysis`` (coordination number, fabric tensor,
+  contact-force distribution, angle of repose, coarse-grained fields, Janssen's silo;
+  docs/analysis.md)
 """
 
 import os as _os
 
 from . import (
+    analysis,
     io,
     problems,
     render,
@@ -67,6 +71,7 @@ load_trajectory = Trajectory.load
 
 __all__ = [
     "__version__",
+    "analysis",
     "Attractor",
     "Box",
     "Camera2D",
