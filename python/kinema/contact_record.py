@@ -73,7 +73,8 @@ class ContactRecord:
             raise ValueError(f"contact record: offsets {problem}")
         total = int(self.offsets[-1])
         values = {}
-        for name, a in self.values.items():
+        order = [n for n in FIELDS if n in self.values] + [n for n in self.values if n not in FIELDS]  # FIELDS' order, whatever a file's
+        for name, a in ((n, self.values[n]) for n in order):
             a = np.asarray(a, dtype=field_dtype(name))
             if a.ndim == 0 or a.shape[0] != total:
                 raise ValueError(f"contact record: column {name!r} has shape {a.shape}; it must have {total} rows, one per contact (offsets[-1])")
