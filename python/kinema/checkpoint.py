@@ -179,8 +179,9 @@ def _write_run(g: Any, run: dict) -> None:
     g.attrs["potential"] = json.dumps(pot)
     g.attrs["about"] = json.dumps({k: _plain(v) for k, v in rec.about.items()})
     g.attrs["sets"] = json.dumps([[_plain(a) for a in entry] for entry in rec.sets])
-    # a world with spin: each frame's angular velocities (w) and orientations (q), rows as x
-    for name, key in (("w", "angular_velocities"), ("q", "orientations")):
+    # a world with spin: each frame's angular velocities (w), orientations (q) and moments of
+    # inertia (inertia, a column), rows as x
+    for name, key in (("w", "angular_velocities"), ("q", "orientations"), ("inertia", "inertia")):
         rows = [f.get(key) for f in rec.turning]
         if rows and all(r is not None for r in rows):
             g.create_dataset(name, data=np.concatenate(rows))
@@ -844,7 +845,7 @@ def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
     sets = _recorded_sets(r, frames, ids_by_frame)
     about = _recorded_about(r, world, sets[0], _describe_colliders)
     turning: list[dict[str, np.ndarray]] = [{} for _ in range(frames)]
-    for name, key, width in (("w", "angular_velocities", 3), ("q", "orientations", 4)):
+    for name, key, width in (("w", "angular_velocities", 3), ("q", "orientations", 4), ("inertia", "inertia", 1)):
         if f"run/{name}" in r.f:
             _, a = r.reals(
                 f"run/{name}", (rows, width), finite, f"the {key.replace('_', ' ')} of the particles at each frame ({rows} in all, run/counts), finite"

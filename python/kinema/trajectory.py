@@ -106,7 +106,8 @@ class Trajectory:
     rad/s, each particle's ω at each frame; `orientations` (F, N, 4), each particle's
     orientation as a unit quaternion (w, x, y, z) that turns its body frame into the world's
     (identity at the world's start, integrated from ω by the engine; `None` where the engine
-    has none). NaN where a particle is not alive.
+    has none). NaN where a particle is not alive. `inertia` (N,), kg·m², each particle's
+    moment of inertia about its centre (`World.inertia`).
 
     `contact_record`: the contacts at each frame (`World.run(record_contacts=True)`), a
     `kinema.contact_record.ContactRecord` whose `frame(k)` is what `World.contacts()`
@@ -148,6 +149,7 @@ class Trajectory:
     colors: np.ndarray | None = None
     angular_velocities: np.ndarray | None = None
     orientations: np.ndarray | None = None
+    inertia: np.ndarray | None = None
     contact_record: ContactRecord | None = None
     source: FileInfo | None = None
     total: np.ndarray = field(init=False)
@@ -197,6 +199,10 @@ class Trajectory:
                 if value.shape != (frames, n, width):
                     raise ValueError(f"{name} has shape {value.shape}; it must be (frames, particles, {width}) = {(frames, n, width)}")
                 setattr(self, name, value)
+        if self.inertia is not None:
+            self.inertia = np.asarray(self.inertia, dtype=np.float64)
+            if self.inertia.shape != (n,):
+                raise ValueError(f"inertia has shape {self.inertia.shape}; it must be (particles,) = ({n},)")
         if self.contact_record is not None and self.contact_record.n_frames != frames:
             raise ValueError(f"contact_record has {self.contact_record.n_frames} frames; the trajectory has {frames}")
 
@@ -566,10 +572,11 @@ class _Recorder:
             (positions, velocities), alive = self._stacked(x, v), None
         else:
             positions, velocities, alive = self._by_id(x, v, ids, about)
-        turning = {
-            name: _stacked_by_id([f.get(name) for f in self.turning], ids, about["ids"] if alive is not None else None)
-            for name in ("angular_velocities", "orientations")
-        }
+        every = about["ids"] if alive is not None else None
+        turning = {name: _stacked_by_id([f.get(name) for f in self.turning], ids, every) for name in ("angular_velocities", "orientations")}
+        inertia = _stacked_by_id([f.get("inertia") for f in self.turning], ids, every)
+        if inertia is not None:  # each particle's, from the first frame it is alive in
+            inertia = inertia[np.argmax(np.isfinite(inertia[..., 0]), axis=0), np.arange(inertia.shape[1]), 0]
         return Trajectory(
             t=np.array(t),
             positions=positions,
@@ -586,6 +593,7 @@ class _Recorder:
             alive=alive,
             contact_record=ContactRecord.from_frames(self.touching) if self.contacts else None,
             **turning,
+            inertia=inertia,
             **about,
         )
 
@@ -619,11 +627,12 @@ class _Recorder:
 
 
 def _turning(world: Any) -> dict[str, np.ndarray]:
-    """Copies of the world's angular velocities and orientations now, those it has: none
-    without spin; orientations where the engine integrates them (`World.orientations`)."""
+    """Copies of the world's angular velocities, moments of inertia (n, 1) and orientations
+    now, those it has: none without spin; orientations where the engine integrates them
+    (`World.orientations`)."""
     if not world._core.spin:
         return {}
-    out = {"angular_velocities": world._w.copy()}
+    out = {"angular_velocities": world._w.copy(), "inertia": np.asarray(world._core.inertia, dtype=np.float64).reshape(-1, 1)}
     if hasattr(type(world), "orientations"):
         out["orientations"] = np.array(world.orientations, dtype=np.float64)
     return out

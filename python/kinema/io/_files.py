@@ -567,8 +567,8 @@ class Frames:
     (0..N-1 by default); `dim` 2 or 3; `dt` s and `method`, `None` when unknown;
     `alive` (F, N) bool, which particles exist at each frame (all True without births and
     deaths; positions and velocities are NaN where not); with spin `angular_velocities`
-    (F, N, 3) rad/s and `orientations` (F, N, 4) unit quaternions (w, x, y, z), `None`
-    where the trajectory has none."""
+    (F, N, 3) rad/s, `orientations` (F, N, 4) unit quaternions (w, x, y, z) and
+    `inertia` (N,) kg·m², `None` where the trajectory has none."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -582,6 +582,7 @@ class Frames:
     alive: np.ndarray
     angular_velocities: np.ndarray | None = None
     orientations: np.ndarray | None = None
+    inertia: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -636,7 +637,7 @@ def _per_particle(traj: Any, names: tuple[str, ...], n: int, dtype: Any) -> np.n
 def frames_of(traj: Any) -> Frames:
     """Reads `t`, `positions`, `velocities` and the optional `masses` (or `mass`),
     `radii` (or `radius`), `ids`, `alive`, `dim`, `dt`, `method`,
-    `angular_velocities` and `orientations` of a
+    `angular_velocities`, `orientations` and `inertia` of a
     trajectory-like object and checks their shapes; raises `ValueError` naming the
     attribute that is wrong."""
     t = np.asarray(traj.t, dtype=np.float64)
@@ -673,4 +674,5 @@ def frames_of(traj: Any) -> Frames:
         alive=alive,
         angular_velocities=_per_frame_rows(traj, "angular_velocities", (t.shape[0], n, 3)),
         orientations=_per_frame_rows(traj, "orientations", (t.shape[0], n, 4)),
+        inertia=_per_particle(traj, ("inertia",), n, np.float64),
     )

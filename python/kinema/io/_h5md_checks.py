@@ -230,6 +230,12 @@ def check_frames(path: Any, traj: Any, fr: Frames, float32: str | None = None, i
         )
     refuse("contact_record", contact_record_problem(getattr(traj, "contact_record", None), fr))
     exists = fr.alive.any(axis=0)
+    if fr.inertia is not None:
+        bad = exists & ~(np.isfinite(fr.inertia) & (fr.inertia >= 0))
+        refuse(
+            "inertia",
+            None if not bad.any() else f"has inertia[{int(np.argmax(bad))}] = {fr.inertia[np.argmax(bad)]!r} (moments of inertia are finite and >= 0 kg m2)",
+        )
     if fr.masses is not None:
         refuse("masses", mass_problem(np.where(exists, fr.masses, 1.0)))
     if fr.radii is not None:

@@ -24,6 +24,7 @@ specification allows, and requires for the box; units shown for `units="SI"`, th
                           (when the trajectory has colours)
         angular_velocity  step, time, value (F, N, 3) [s-1]: each particle's ω, rad/s (a world with
                           spin; H5MD has no element for it: kinema's name)
+        moment_of_inertia step, time, value (F, N) [kg m2]: about the centre (with spin; kinema's name)
         orientation       step, time, value (F, N, 4): each particle's orientation, a unit
                           quaternion w, x, y, z turning its body frame into the world's (with spin,
                           where the engine integrates it; kinema's name)
@@ -284,6 +285,7 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
         ("species_index", index.astype(np.int32) if named else None, None, -1),
         ("mass", fr.masses, "kg", np.nan),
         ("radius", fr.radii, "m", np.nan),
+        ("moment_of_inertia", fr.inertia, "kg m2", np.nan),
         ("id", fr.ids, None, no_id),
         ("color", None if colors is None else np.asarray(colors, dtype=np.float64), None, np.nan),
     )
@@ -451,7 +453,7 @@ def _check_units(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
     if problem is not None:
         raise TrajectoryFileError(f"cannot write {path}: trajectory 't' in {system['s']} (units 'MD') {problem}")
     arrays = [("t", fr.t, "s"), ("positions", fr.positions, "m"), ("velocities", fr.velocities, "m s-1"), ("masses", fr.masses, "kg"), ("radii", fr.radii, "m")]
-    arrays += [("angular_velocities", fr.angular_velocities, "s-1")]
+    arrays += [("angular_velocities", fr.angular_velocities, "s-1"), ("inertia", fr.inertia, "kg m2")]
     record = getattr(tr, "contact_record", None)
     if record is not None:
         arrays += [(f"contact_record {name!r}", a, FIELDS[name].unit) for name, a in record.values.items() if name in FIELDS and FIELDS[name].unit is not None]
@@ -501,8 +503,8 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     `alive` (F, N) bool, which particles exist at each frame (births and deaths: written
     with H5MD's fill values, see the module doc), `springs` (S, 2) the ids at the ends of
     each spring (`/connectivity/springs`), `angular_velocities` (F, N, 3) rad/s and
-    `orientations` (F, N, 4) of a world with spin (the `angular_velocity` and
-    `orientation` elements), `contact_record` (a `kinema.contact_record.ContactRecord`:
+    `orientations` (F, N, 4) and `inertia` (N,) kg m² of a world with spin (the
+    `angular_velocity`, `orientation` and `moment_of_inertia` elements), `contact_record` (a `kinema.contact_record.ContactRecord`:
     the group `/contacts`). Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
     without them) are not written.
 

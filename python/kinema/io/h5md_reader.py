@@ -59,8 +59,8 @@ class LoadedTrajectory:
     first frame; `colliders` (descriptions, as `Trajectory.colliders`), `alive` (F, N)
     bool, which particles exist at each frame (`None` when all do: a file whose number of
     particles does not vary), `springs` (S, 2) the ids at the ends of each spring,
-    `angular_velocities` (F, N, 3) rad/s and `orientations` (F, N, 4) (a world with
-    spin), `contact_record` (the contacts of each frame, a
+    `angular_velocities` (F, N, 3) rad/s, `orientations` (F, N, 4) and `inertia` (N,)
+    kg m² (a world with spin), `contact_record` (the contacts of each frame, a
     `kinema.contact_record.ContactRecord`). Where
     particles come and go, `positions` and `velocities` are NaN where they do not exist,
     one column per id (ascending).
@@ -100,6 +100,7 @@ class LoadedTrajectory:
     springs: np.ndarray | None = None
     angular_velocities: np.ndarray | None = None
     orientations: np.ndarray | None = None
+    inertia: np.ndarray | None = None
     contact_record: ContactRecord | None = None
     group: str = "all"
     author: str | None = None
@@ -297,6 +298,7 @@ def _read_springs(r: Reader, f: Any, p: Any, ids: np.ndarray) -> np.ndarray | No
 
 
 TIME_INVERSE = (0, -1, 0)  # an angular velocity's dimension (rad/s)
+MOMENT_OF_INERTIA = (2, 0, 1)  # kg m2
 
 
 def _contact_datasets(r: Reader, f: Any, p: Any) -> dict[str, Any] | None:
@@ -478,7 +480,14 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
     # files before it, the species element with `names`; H5MD's own species are integers with
     # no names, which a trajectory has no use for (znh5md writes them as floats)
     named = next((k for k in ("species_index", "species") if k in p and "names" in p[k].attrs), None)
-    each = (("mass", "masses", False), ("radius", "radii", False), ("id", "ids", True), (named, "species", True), ("color", "colors", False))
+    each = (
+        ("mass", "masses", False),
+        ("radius", "radii", False),
+        ("moment_of_inertia", "inertia", False),
+        ("id", "ids", True),
+        (named, "species", True),
+        ("color", "colors", False),
+    )
     for name, attr, integer in each:
         if name is None or name not in p or (name == "id" and id_table is not None):
             continue
@@ -500,8 +509,8 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
                 raise r.fail(f"{where(attr, obj)} has shape {s}; it must be ({must}), one value per particle ({where('positions', x_ds)} {shape})")
             r.plan(attr, obj, (frames if id_table is not None else 1) * n * (3 if tail else 1) * obj.dtype.itemsize)
             per_particle[attr] = (obj, True)
-        if attr in ("masses", "radii"):
-            units[attr] = r.unit(attr, obj, MASS if attr == "masses" else LENGTH)
+        if attr in ("masses", "radii", "inertia"):
+            units[attr] = r.unit(attr, obj, {"masses": MASS, "radii": LENGTH, "inertia": MOMENT_OF_INERTIA}[attr])
 
     # The box: edges (D,) or a (D, D) matrix of edge vectors, fixed, or time-dependent with
     # one row per frame (a box that may change). Its boundary is "periodic" or "none" on each
@@ -676,6 +685,8 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
         if attr != "colors":  # a colour may be NaN: none
             r.finite(attr, ds, a, ("particle",))
         problem = mass_problem(a) if attr == "masses" else radius_problem(a) if attr == "radii" else color_problem(a) if attr == "colors" else None
+        if attr == "inertia" and (a < 0).any():
+            problem = f"has inertia[{int(np.argmax(a < 0))}] = {number(a[np.argmax(a < 0)])} (moments of inertia are >= 0 kg m2)"
         if problem is not None:
             raise r.fail(f"{where(attr, ds)} {problem}")
         if attr == "species":  # names where the file gives them (kinema's ``names``), else none
