@@ -261,15 +261,29 @@ def run(
         float | None, typer.Option("--checkpoint-every", help="Write OUT/checkpoint.ckpt every this many simulated seconds (whole frames).")
     ] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Go on from OUT/checkpoint.ckpt, left by a run with --checkpoint-every that stopped.")] = False,
+    record_contacts: Annotated[
+        bool,
+        typer.Option("--record-contacts", help="Keep each frame's contacts in trajectory.h5 (/contacts), as the scene's [output] contacts = true does."),
+    ] = False,
 ) -> None:
     """Simulate a scene; write the trajectory (H5MD), a video and an energy/momentum plot.
 
     The work is estimated first (particles × steps, video pixels, memory); a run over the
     limits is refused unless --force is given. With --checkpoint-every T the world and the
     frames so far are written to OUT/checkpoint.ckpt every T s of simulated time (removed when
-    the run ends well); --resume goes on from it, to the same files, bit for bit."""
+    the run ends well); --resume goes on from it, to the same files, bit for bit.
+    --record-contacts keeps each frame's contacts (World.run(record_contacts=True)); kinema
+    export then writes them too (lammps: run_contacts.dump and run_collider_contacts.dump;
+    vtk: force-chain lines)."""
     simulate_scene(
-        scene, out if out is not None else Path("out") / scene.stem, duration, no_video, force=force, checkpoint_every=checkpoint_every, resume=resume
+        scene,
+        out if out is not None else Path("out") / scene.stem,
+        duration,
+        no_video,
+        force=force,
+        checkpoint_every=checkpoint_every,
+        resume=resume,
+        record_contacts=record_contacts,
     )
 
 
@@ -357,6 +371,10 @@ def export(
     run_ply/ (run_00000.ply, ...); xyz run.xyz (extended XYZ, SI units); csv run.csv; gsd
     run.gsd; lammps run.lammpstrj (dump custom); usd run.usd (Blender, Houdini; needs
     pip install kinema[usd]). So the formats never overwrite each other.
+    A trajectory with spin carries its angular velocities and orientations in every
+    format; one with contacts (kinema run --record-contacts) adds them to lammps
+    (run_contacts.dump and run_collider_contacts.dump, LAMMPS dump local) and vtk (lines
+    between the particles in contact, coloured by force in ParaView).
     A suffix of -o that names another format (-f vtk -o x.ply) is refused."""
     from .io import FORMATS
     from .io import export as write_export

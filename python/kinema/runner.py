@@ -287,6 +287,7 @@ def simulate_scene(
     force: bool = False,
     checkpoint_every: float | None = None,
     resume: bool = False,
+    record_contacts: bool = False,
 ) -> tuple[Any, list[Path]]:
     """`kinema run`'s work: load ``scene``, simulate ``duration`` s (default: the scene's) with
     a progress bar, and write what its [output] table asks for into the folder ``outdir``
@@ -295,6 +296,9 @@ def simulate_scene(
     ``force``. Staging folders left in ``outdir`` by runs that were killed are removed.
     With ``resume`` the run goes on from ``outdir``/checkpoint.ckpt instead, read and checked
     first, the work it has left estimated and refused as a fresh run's (``_resume_work``).
+    ``record_contacts`` (or the scene's ``[output] contacts``) records each frame's contacts
+    in the trajectory (``World.run(record_contacts=True)``; a resumed run keeps what its
+    checkpoint says).
     Returns the trajectory and the paths written."""
     import shutil
     import warnings
@@ -366,7 +370,8 @@ def simulate_scene(
                 else:
                     task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
                     saving = {"checkpoint": ckpt, "checkpoint_every": checkpoint_every} if checkpoint_every is not None else {}
-                    traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task), max_work=None, **saving)
+                    contacts = record_contacts or sc.output.contacts
+                    traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task), max_work=None, record_contacts=contacts, **saving)
         finally:  # a StabilityWarning explains a divergence: show it before the error
             for w in caught:
                 err_console.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)

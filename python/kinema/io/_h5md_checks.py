@@ -226,7 +226,7 @@ def check_frames(path: Any, traj: Any, fr: Frames, float32: str | None = None, i
             "orientations",
             None
             if at is None
-            else f"has |q| = {np.linalg.norm(fr.orientations[at[:2]])!r} {_place(fr.orientations, at, axes)}: a unit quaternion (w, x, y, z) has |q| = 1 (within {UNIT_QUATERNION})",
+            else f"has |q| = {float(np.linalg.norm(fr.orientations[at[:2]])):.17g} {_place(fr.orientations, at, axes)}: a unit quaternion (w, x, y, z) has |q| = 1 (within {UNIT_QUATERNION})",
         )
     refuse("contact_record", contact_record_problem(getattr(traj, "contact_record", None), fr))
     exists = fr.alive.any(axis=0)
