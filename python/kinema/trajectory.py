@@ -430,7 +430,9 @@ class Trajectory:
         """Write the frames for other tools: `vtk` (ParaView), `ply` (Blender, Houdini),
         `xyz` (OVITO), `csv`, `gsd`, `lammps` or `usd`, inferred from the suffix when
         `format` is None; returns the files written (`kinema.io.export`). Values the
-        format's readers or kinema's would refuse are refused before anything is written."""
+        format's readers or kinema's would refuse are refused before anything is written.
+        The spins go into every format but PLY, the `contact_record` into `lammps` (dump
+        local files) and `vtk` (force-chain lines)."""
         from .io import export
 
         return export(self, path, format)
