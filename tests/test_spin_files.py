@@ -3,7 +3,8 @@ spin (and the orientations, where the engine integrates them), and every format 
 carries them, read back by kinema's readers and by the outside tool each format is for: h5py
 (H5MD), OVITO and kinema's reader (LAMMPS dump), ASE and OVITO (extended XYZ), gsd (HOOMD's
 GSD: orientation, HOOMD's angular momentum, moment of inertia), VTK's XML reader (ParaView's),
-usd-core (a PointInstancer's orientations and angular velocities) and NumPy (CSV).
+usd-core (a PointInstancer's orientations and angular velocities) and NumPy (CSV); the PLY
+frames by kinema's reader.
 
 The physics: a ball rolling without slipping on a floor (the impulse model, friction) records
 ω = v / r about n × v̂ at every frame, the closed form of rolling; with the engine's
@@ -106,7 +107,16 @@ def spinning():
 
 @pytest.mark.parametrize(
     "name, exact",
-    [("run.h5", True), ("run.lammpstrj", True), ("run.xyz", True), ("run.csv", True), ("run.pvd", True), ("run.gsd", False), ("run.usda", False)],
+    [
+        ("run.h5", True),
+        ("run.lammpstrj", True),
+        ("run.xyz", True),
+        ("run.csv", True),
+        ("run.pvd", True),
+        ("run.gsd", False),
+        ("run.usda", False),
+        ("run.ply", False),
+    ],
 )
 def test_kinemas_readers_give_the_spins_back(tmp_path, spinning, name, exact):
     (spinning.save if name.endswith(".h5") else spinning.export)(tmp_path / name)
@@ -114,7 +124,7 @@ def test_kinemas_readers_give_the_spins_back(tmp_path, spinning, name, exact):
     if exact:
         np.testing.assert_array_equal(back.angular_velocities, spinning.angular_velocities)
         np.testing.assert_array_equal(back.orientations, spinning.orientations)
-    else:  # float32 files (GSD's HOOMD schema, USD's arrays): ω exact in GSD's own log
+    else:  # float32 files (GSD's HOOMD schema, USD's arrays, PLY): ω exact in GSD's own log
         np.testing.assert_allclose(back.angular_velocities, spinning.angular_velocities, rtol=1e-6, atol=1e-6)
         np.testing.assert_allclose(back.orientations, spinning.orientations, atol=1e-6)
     if name.endswith((".h5", ".gsd")):

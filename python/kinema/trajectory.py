@@ -431,7 +431,7 @@ class Trajectory:
         `xyz` (OVITO), `csv`, `gsd`, `lammps` or `usd`, inferred from the suffix when
         `format` is None; returns the files written (`kinema.io.export`). Values the
         format's readers or kinema's would refuse are refused before anything is written.
-        The spins go into every format but PLY, the `contact_record` into `lammps` (dump
+        The spins go into every format, the `contact_record` into `lammps` (dump
         local files) and `vtk` (force-chain lines)."""
         from .io import export
 

@@ -92,9 +92,9 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
       `ValueError` (USD picks its file format from the suffix).
 
     Spin and contacts: a trajectory with `angular_velocities` (and `orientations`) writes
-    them in every format but PLY (LAMMPS `omegax.. quatw..`, XYZ `omega`, `orientation`,
+    them in every format (LAMMPS `omegax.. quatw..`, XYZ `omega`, `orientation`,
     GSD HOOMD's orientation and angmom, VTK point data, USD a PointInstancer of balls, CSV
-    columns); one with a `contact_record` (`World.run(record_contacts=True)`) adds its
+    and PLY columns); one with a `contact_record` (`World.run(record_contacts=True)`) adds its
     contacts to `"lammps"` (`<stem>_contacts.dump` and `<stem>_collider_contacts.dump`,
     LAMMPS `dump local`) and `"vtk"` (a `contacts` block of lines per frame): docs/files.md,
     "Spins and contacts".

@@ -251,6 +251,8 @@ def _ply_frame(path: Path, file: Path, where: str) -> RawFrame:
         radii=rows["radius"].astype(np.float64) if "radius" in names else None,
         species=species,
         colors=np.stack([rows[c] for c in rgb], axis=1) / 255.0 if names.issuperset(rgb) else None,
+        angular_velocities=np.stack([rows[c] for c in SPIN_CSV], axis=1).astype(np.float64) if names.issuperset(SPIN_CSV) else None,
+        orientations=np.stack([rows[c] for c in ORIENTATION_CSV], axis=1).astype(np.float64) if names.issuperset(ORIENTATION_CSV) else None,
         time=None if time is None else float(time),
     )
 
