@@ -359,3 +359,25 @@ def test_a_record_refuses_columns_of_the_wrong_length():
         ContactRecord(np.array([0, 1, 3]), {"i": np.zeros(3), "j": np.zeros(3), "collider": np.zeros(3), "overlap": np.zeros(2)})
     with pytest.raises(ValueError, match="offsets start at 1"):
         ContactRecord(np.array([1, 3]), {"i": np.zeros(3), "j": np.zeros(3), "collider": np.zeros(3)})
+
+
+def test_a_force_chain_across_a_periodic_side_joins_the_nearest_image(tmp_path):
+    vtk_xml = pytest.importorskip("vtkmodules.vtkIOXML")
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    # Two balls touching through the periodic x side of a unit box: the line runs from i to
+    # j's image one box length away (x − 1), not across the box.
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Box([0, 0, 0], [1, 1, 1]))
+    w.periodic = (True, False, False)
+    w.add_particles([[0.045, 0.5, 0.5], [0.955, 0.5, 0.5]], radius=0.05)
+    w.set_collisions(restitution=1.0)
+    tr = run(w, seconds=0.002, fps=500)
+    assert tr.contact_record.frame(1)["j"].tolist() == [1]
+    export(tr, tmp_path / "run.pvd")
+    reader = vtk_xml.vtkXMLPolyDataReader()
+    reader.SetFileName(str(tmp_path / "run_vtk" / "run_contacts_00001.vtp"))
+    reader.Update()
+    ends = vtk_to_numpy(reader.GetOutput().GetPoints().GetData())
+    np.testing.assert_array_equal(ends[0], tr.positions[1, 0])
+    np.testing.assert_allclose(ends[1], tr.positions[1, 1] - [1.0, 0.0, 0.0], rtol=0, atol=1e-15)
