@@ -286,6 +286,8 @@ def test_a_checkpointed_run_resumes_with_the_same_spins(tmp_path):
     _, resumed = kinema.resume_run(tmp_path / "c.ckpt")
     np.testing.assert_array_equal(resumed.angular_velocities, whole.angular_velocities)
     np.testing.assert_array_equal(resumed.inertia, [1e-3, 2e-3])
+    if HAS_ORIENTATIONS:  # (the checkpoint keeps the world's orientations: the frames after it turn on from there)
+        np.testing.assert_array_equal(resumed.orientations, whole.orientations)
 
 
 def test_orientations_that_are_not_unit_quaternions_are_refused(tmp_path, spinning):
