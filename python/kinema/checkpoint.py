@@ -50,6 +50,7 @@ import numpy as np
 
 from . import _checks
 from ._checks import _dtype_words, _type_words, describe
+from .contact_record import FIELDS, ContactRecord, offsets_problem
 from .io._files import TrajectoryFileError
 from .world import MAX_WORK
 
@@ -180,6 +181,18 @@ def _write_run(g: Any, run: dict) -> None:
     g.attrs["potential"] = json.dumps(pot)
     g.attrs["about"] = json.dumps({k: _plain(v) for k, v in rec.about.items()})
     g.attrs["sets"] = json.dumps([[_plain(a) for a in entry] for entry in rec.sets])
+    # a world with spin: each frame's angular velocities (w), orientations (q) and moments of
+    # inertia (inertia, a column), rows as x
+    for name, key in (("w", "angular_velocities"), ("q", "orientations"), ("inertia", "inertia")):
+        rows = [f.get(key) for f in rec.turning]
+        if rows and all(r is not None for r in rows):
+            g.create_dataset(name, data=np.concatenate(rows))
+    if rec.contacts:  # each frame's contacts, one table (kinema.contact_record); its presence says the run records them
+        record = ContactRecord.from_frames(rec.touching)
+        c = g.create_group("contact_record")
+        c.create_dataset("offsets", data=record.offsets)
+        for name, a in record.values.items():
+            c.create_dataset(name, data=a)
 
 
 def _plain(value: Any) -> Any:
@@ -842,7 +855,19 @@ def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
             r.real(f"{field_pot} [{k}].{name}", value, lambda u: not math.isnan(u), "an energy in J, not NaN")
     sets = _recorded_sets(r, frames, ids_by_frame)
     about = _recorded_about(r, world, sets[0], _describe_colliders)
-    rec = Trajectory._recorder()
+    turning: list[dict[str, np.ndarray]] = [{} for _ in range(frames)]
+    for name, key, width in (("w", "angular_velocities", 3), ("q", "orientations", 4), ("inertia", "inertia", 1)):
+        if f"run/{name}" in r.f:
+            _, a = r.reals(
+                f"run/{name}", (rows, width), finite, f"the {key.replace('_', ' ')} of the particles at each frame ({rows} in all, run/counts), finite"
+            )
+            for k, part in enumerate(np.split(a, cut)):
+                turning[k][key] = part
+    record_contacts = "contact_record" in r.group("run")  # (the run records contacts: World.run(record_contacts=True))
+    rec = Trajectory._recorder(contacts=record_contacts)
+    rec.turning = turning
+    if record_contacts:
+        rec.touching = _recorded_contacts(r, frames)
     rec.frames = list(
         zip(
             t.tolist(),
@@ -865,6 +890,37 @@ def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
     rec.about, rec.sets = about, sets
     run.update(recorder=rec)
     return run
+
+
+def _recorded_contacts(r: _Reader, frames: int) -> list[dict[str, np.ndarray]]:
+    """Each recorded frame's contacts (group `run/contact_record`: `offsets` (frames + 1,) and a
+    column of each `kinema.contact_record.FIELDS` name), checked as a `ContactRecord`."""
+    _, offsets = r.ints("run/contact_record/offsets", (frames + 1,), 0, _INT64_MAX, "each frame's first row of the contact table, from 0, never decreasing")
+    problem = offsets_problem(offsets)
+    if problem is not None:
+        raise r.fail("dataset 'run/contact_record/offsets'", problem)
+    total = int(offsets[-1])
+    values = {}
+    for name in r.group("run/contact_record"):
+        if name == "offsets":
+            continue
+        known = FIELDS.get(name)
+        if known is None:
+            raise r.fail(f"dataset 'run/contact_record/{name}'", f"is not a column of a contact record ({', '.join(FIELDS)})")
+        # a vector per contact, or one number (a column the engine gives as a number)
+        shape = (total,) if getattr(r.f[f"run/contact_record/{name}"], "ndim", 1) == 1 else (total, None)
+        if known.kind == "int":
+            _, a = r.ints(f"run/contact_record/{name}", shape, -1, _INT64_MAX, f"the contacts' {name}: integers >= -1")
+        elif known.kind == "bool":
+            _, a = r.dataset(f"run/contact_record/{name}", "bool", shape, f"the contacts' {name}: a flag per contact")
+        else:
+            _, a = r.reals(f"run/contact_record/{name}", shape, lambda a: ~np.isinf(a), f"the contacts' {name}: numbers (NaN where not given)")
+        values[name] = a
+    try:
+        record = ContactRecord(offsets, values)
+    except ValueError as e:
+        raise r.fail("group 'run/contact_record'", str(e)) from None
+    return [record.frame(k) for k in range(frames)]
 
 
 def _recorded_sets(r: _Reader, frames: int, ids_by_frame: list[np.ndarray]) -> list[tuple]:

@@ -269,6 +269,10 @@ def run(
             help="Write the world at the run's end to PATH as a checkpoint (spins and tangential springs included): kinema.World.load_checkpoint(PATH) gives it back.",
         ),
     ] = None,
+    record_contacts: Annotated[
+        bool,
+        typer.Option("--record-contacts", help="Keep each frame's contacts in trajectory.h5 (/contacts), as the scene's [output] contacts = true does."),
+    ] = False,
 ) -> None:
     """Simulate a scene; write the trajectory (H5MD), a video and an energy/momentum plot.
 
@@ -277,7 +281,10 @@ def run(
     frames so far are written to OUT/checkpoint.ckpt every T s of simulated time (removed when
     the run ends well); --resume goes on from it, to the same files, bit for bit. With
     --keep-checkpoint PATH the world at the end is kept there, to measure it in Python
-    (particle_stress needs a live world) or to go on from it, bit for bit."""
+    (particle_stress needs a live world) or to go on from it, bit for bit.
+    --record-contacts keeps each frame's contacts (World.run(record_contacts=True)); kinema
+    export then writes them too (lammps: run_contacts.dump and run_collider_contacts.dump;
+    vtk: force-chain lines)."""
     simulate_scene(
         scene,
         out if out is not None else Path("out") / scene.stem,
@@ -287,6 +294,7 @@ def run(
         checkpoint_every=checkpoint_every,
         resume=resume,
         keep_checkpoint=keep_checkpoint,
+        record_contacts=record_contacts,
     )
 
 
@@ -374,6 +382,10 @@ def export(
     run_ply/ (run_00000.ply, ...); xyz run.xyz (extended XYZ, SI units); csv run.csv; gsd
     run.gsd; lammps run.lammpstrj (dump custom); usd run.usd (Blender, Houdini; needs
     pip install kinema[usd]). So the formats never overwrite each other.
+    A trajectory with spin carries its angular velocities and orientations in every
+    format; one with contacts (kinema run --record-contacts) adds them to lammps
+    (run_contacts.dump and run_collider_contacts.dump, LAMMPS dump local) and vtk (lines
+    between the particles in contact, coloured by force in ParaView).
     A suffix of -o that names another format (-f vtk -o x.ply) is refused."""
     from .io import FORMATS
     from .io import export as write_export

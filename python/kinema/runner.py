@@ -314,6 +314,7 @@ def simulate_scene(
     checkpoint_every: float | None = None,
     resume: bool = False,
     keep_checkpoint: Path | None = None,
+    record_contacts: bool = False,
 ) -> tuple[Any, list[Path]]:
     """`kinema run`'s work: load ``scene``, simulate ``duration`` s (default: the scene's) with
     a progress bar, and write what its [output] table asks for into the folder ``outdir``
@@ -326,6 +327,9 @@ def simulate_scene(
     (``kinema.checkpoint``: its state to every bit, spins and the contacts' tangential
     springs included; ``World.load_checkpoint`` gives the world back, to measure it or go
     on), after the other files; its folder is checked before the run.
+    ``record_contacts`` (or the scene's ``[output] contacts``) records each frame's contacts
+    in the trajectory (``World.run(record_contacts=True)``; a resumed run keeps what its
+    checkpoint says).
     Returns the trajectory and the paths written."""
     import shutil
     import warnings
@@ -399,7 +403,8 @@ def simulate_scene(
                 else:
                     task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
                     saving = {"checkpoint": ckpt, "checkpoint_every": checkpoint_every} if checkpoint_every is not None else {}
-                    traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task), max_work=None, **saving)
+                    contacts = record_contacts or sc.output.contacts
+                    traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task), max_work=None, record_contacts=contacts, **saving)
         finally:  # a StabilityWarning explains a divergence: show it before the error
             for w in caught:
                 err_console.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from .contact_record import ContactRecord, as_ids
+
 
 @dataclass
 class FileInfo:
@@ -100,6 +102,17 @@ class Trajectory:
     `colors` (N, 3): each particle's own colour, r g b in [0, 1] (NaN: none; an
     `Emitter`'s `color`), or None.
 
+    Spin (a world made with `spin=True`; `None` otherwise): `angular_velocities` (F, N, 3),
+    rad/s, each particle's ω at each frame; `orientations` (F, N, 4), each particle's
+    orientation as a unit quaternion (w, x, y, z) that turns its body frame into the world's
+    (identity at the world's start, integrated from ω by the engine; `None` where the engine
+    has none). NaN where a particle is not alive. `inertia` (N,), kg·m², each particle's
+    moment of inertia about its centre (`World.inertia`).
+
+    `contact_record`: the contacts at each frame (`World.run(record_contacts=True)`), a
+    `kinema.contact_record.ContactRecord` whose `frame(k)` is what `World.contacts()`
+    gave at frame k, particles named by their ids; `None` when not recorded.
+
     `source`: a trajectory read from a file (`Trajectory.load`) keeps what only the file
     knows, a `FileInfo` (path, group, step of each frame, author, creator, the cell
     at each frame); `None` for one recorded by `World.run`.
@@ -134,6 +147,10 @@ class Trajectory:
     alive: np.ndarray | None = None
     springs: np.ndarray | None = None
     colors: np.ndarray | None = None
+    angular_velocities: np.ndarray | None = None
+    orientations: np.ndarray | None = None
+    inertia: np.ndarray | None = None
+    contact_record: ContactRecord | None = None
     source: FileInfo | None = None
     total: np.ndarray = field(init=False)
 
@@ -175,6 +192,19 @@ class Trajectory:
                 raise ValueError(f"alive has shape {self.alive.shape}; it must be (frames, particles) = {(frames, n)}")
         if self.springs is not None:
             self.springs = np.asarray(self.springs, dtype=np.int64).reshape(-1, 2)
+        for name, width in (("angular_velocities", 3), ("orientations", 4)):
+            value = getattr(self, name)
+            if value is not None:
+                value = np.asarray(value, dtype=np.float64)
+                if value.shape != (frames, n, width):
+                    raise ValueError(f"{name} has shape {value.shape}; it must be (frames, particles, {width}) = {(frames, n, width)}")
+                setattr(self, name, value)
+        if self.inertia is not None:
+            self.inertia = np.asarray(self.inertia, dtype=np.float64)
+            if self.inertia.shape != (n,):
+                raise ValueError(f"inertia has shape {self.inertia.shape}; it must be (particles,) = ({n},)")
+        if self.contact_record is not None and self.contact_record.n_frames != frames:
+            raise ValueError(f"contact_record has {self.contact_record.n_frames} frames; the trajectory has {frames}")
 
     @property
     def changes_count(self) -> bool:
@@ -183,10 +213,15 @@ class Trajectory:
 
     def frame(self, k: int) -> dict[str, np.ndarray]:
         """The particles alive at frame `k`: `ids`, `positions`, `velocities` and, where
-        known, `masses`, `radii` and `species`, each with one row per live particle."""
+        known, `angular_velocities`, `orientations`, `masses`, `radii` and `species`,
+        each with one row per live particle."""
         live = self.alive[k]
         out = {"ids": (self.ids if self.ids is not None else np.arange(live.size))[live]}
         out["positions"], out["velocities"] = self.positions[k][live], self.velocities[k][live]
+        for name in ("angular_velocities", "orientations"):
+            value = getattr(self, name)
+            if value is not None:
+                out[name] = value[k][live]
         for name in ("masses", "radii", "species", "colors"):
             value = getattr(self, name)
             if value is not None:
@@ -194,8 +229,8 @@ class Trajectory:
         return out
 
     @staticmethod
-    def _recorder(expected: int = 0) -> _Recorder:
-        return _Recorder(expected)
+    def _recorder(expected: int = 0, contacts: bool = False) -> _Recorder:
+        return _Recorder(expected, contacts)
 
     def save(self, path: Any, group: str = "all", **options: Any) -> Any:
         """Write the frames to an H5MD file (`kinema.io.save_h5md`); returns its path.
@@ -395,7 +430,9 @@ class Trajectory:
         """Write the frames for other tools: `vtk` (ParaView), `ply` (Blender, Houdini),
         `xyz` (OVITO), `csv`, `gsd`, `lammps` or `usd`, inferred from the suffix when
         `format` is None; returns the files written (`kinema.io.export`). Values the
-        format's readers or kinema's would refuse are refused before anything is written."""
+        format's readers or kinema's would refuse are refused before anything is written.
+        The spins go into every format, the `contact_record` into `lammps` (dump
+        local files) and `vtk` (force-chain lines)."""
         from .io import export
 
         return export(self, path, format)
@@ -454,15 +491,24 @@ class _Recorder:
     are copied straight into one block of that many frames, which the trajectory then uses as
     it is: each frame's state is copied once, not once into the frame and again into the stack
     (for 10⁶ particles that second copy was a fifth of a 60 fps run's time). A frame that does
-    not fit the block (a changed set of particles, more frames) is kept on its own."""
+    not fit the block (a changed set of particles, more frames) is kept on its own.
 
-    def __init__(self, expected: int = 0) -> None:
+    In a world with spin each frame also keeps its angular velocities and, where the engine
+    has them, its orientations (`turning`); with `contacts`, each frame's `World.contacts()`,
+    particles named by id (`touching`)."""
+
+    def __init__(self, expected: int = 0, contacts: bool = False) -> None:
         self.frames: list[tuple] = []
         self._expected = expected
         self._block: tuple[np.ndarray, np.ndarray] | None = None
         self.about: dict[str, Any] = {}
         # (ids, masses, radii, species, colors) each time the set of particles changed
         self.sets: list[tuple] = []
+        # per frame: {"angular_velocities": (n, 3), "orientations": (n, 4)}, those the world has
+        self.turning: list[dict[str, np.ndarray]] = []
+        # per frame with `contacts`: World.contacts() with ids for indices
+        self.contacts = contacts
+        self.touching: list[dict[str, np.ndarray]] = []
 
     def add(self, world: Any) -> None:
         # What the world is (masses, radii, species, colliders, ...) is read only when its set of
@@ -490,6 +536,9 @@ class _Recorder:
         kinetic = ((v * world.masses[:, None]).T @ v).ravel() if _has_cell(self.about) else _NO_TENSOR
         frame = (d["t"], x, v, d["kinetic"], d["potential"], d["momentum"], d["angular_momentum"])
         self.frames.append((*frame, contacts, balance, lost, ids, impacts, virial, kinetic))
+        self.turning.append(_turning(world))
+        if self.contacts:
+            self.touching.append(as_ids(world._core.contacts(), ids))
 
     def _keep(self, x: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Copies of this frame's positions and velocities: places in the block when they fit."""
@@ -525,6 +574,11 @@ class _Recorder:
             (positions, velocities), alive = self._stacked(x, v), None
         else:
             positions, velocities, alive = self._by_id(x, v, ids, about)
+        every = about["ids"] if alive is not None else None
+        turning = {name: _stacked_by_id([f.get(name) for f in self.turning], ids, every) for name in ("angular_velocities", "orientations")}
+        inertia = _stacked_by_id([f.get("inertia") for f in self.turning], ids, every)
+        if inertia is not None:  # each particle's, from the first frame it is alive in
+            inertia = inertia[np.argmax(np.isfinite(inertia[..., 0]), axis=0), np.arange(inertia.shape[1]), 0]
         return Trajectory(
             t=np.array(t),
             positions=positions,
@@ -539,6 +593,9 @@ class _Recorder:
             impacts=np.diff(np.array(impacts, dtype=np.int64), prepend=impacts[0]),
             pressure=_pressure(np.array(t), np.array(virial), np.array(kinetic), about),
             alive=alive,
+            contact_record=ContactRecord.from_frames(self.touching) if self.contacts else None,
+            **turning,
+            inertia=inertia,
             **about,
         )
 
@@ -569,3 +626,29 @@ class _Recorder:
             colors=colors,
         )
         return positions, velocities, alive
+
+
+def _turning(world: Any) -> dict[str, np.ndarray]:
+    """Copies of the world's angular velocities, moments of inertia (n, 1) and orientations
+    now, those it has: none without spin; orientations where the engine integrates them
+    (`World.orientations`)."""
+    if not world._core.spin:
+        return {}
+    out = {"angular_velocities": world._w.copy(), "inertia": np.asarray(world._core.inertia, dtype=np.float64).reshape(-1, 1)}
+    if hasattr(type(world), "orientations"):
+        out["orientations"] = np.array(world.orientations, dtype=np.float64)
+    return out
+
+
+def _stacked_by_id(rows: list[np.ndarray | None], ids: tuple, every: np.ndarray | None) -> np.ndarray | None:
+    """Per-frame rows (n_k, w) as (F, N, w): stacked where the particles never change
+    (`every` None), else one column per id of `every`, NaN where a particle is not alive;
+    `None` unless every frame has them."""
+    if not rows or any(r is None for r in rows):
+        return None
+    if every is None:
+        return np.array(rows)
+    out = np.full((len(rows), every.size, rows[0].shape[1]), np.nan)
+    for k, (r, ik) in enumerate(zip(rows, ids, strict=True)):
+        out[k, np.searchsorted(every, ik)] = r
+    return out

@@ -689,10 +689,18 @@ class World(WorldCollisions):
         checkpoint_every: float | None = None,
         *,
         max_work: float | None = MAX_WORK,
+        record_contacts: bool = False,
     ) -> Trajectory:
         """Simulate ``duration`` seconds from now, recording a frame every 1/fps s (rounded to
         a whole number of steps), the current state included; ``callback(world)`` runs after
-        each recorded frame. Returns the ``Trajectory``.
+        each recorded frame. Returns the ``Trajectory``. In a world with spin each frame
+        keeps the angular velocities (and the orientations, where the engine integrates them):
+        ``Trajectory.angular_velocities`` and ``orientations``.
+
+        ``record_contacts=True`` keeps :meth:`contacts` at each frame, the particles named by
+        their ids, in ``Trajectory.contact_record`` (a ``kinema.contact_record.ContactRecord``):
+        saved in H5MD (``/contacts``), exported as a LAMMPS ``dump local`` file and as VTK lines
+        (docs/files.md).
 
         ``checkpoint`` (a path) with ``checkpoint_every`` (simulated seconds, rounded to whole
         frames): at those frames the world and the frames recorded so far are written there
@@ -736,10 +744,11 @@ class World(WorldCollisions):
                 f"the run would take {work:.1e} particle-steps ({whom} × {frames * per_frame:,} steps of dt = {self.dt:g} s "
                 f"for duration = {duration:g} s), over max_work = {limit:.1e}; give max_work=None (or a larger number) to run it anyway"
             )
+        record_contacts = _checks.boolean("record_contacts", record_contacts)
         self._push()
         with self._engine() as core:
             self._advise(core)
-        rec = Trajectory._recorder(frames + 1)
+        rec = Trajectory._recorder(frames + 1, contacts=record_contacts)
         rec.add(self)
         run = {"frames_done": 0, "frames_total": frames, "per_frame": per_frame, "every": every, "fps": fps, "recorder": rec}
         return self._record(run, callback, None if checkpoint is None else Path(checkpoint))

@@ -31,9 +31,10 @@ class Box:
 class RawFrame:
     """One frame as a file holds it, in the file's units: `positions` (n, 3) and, where the file
     has them, `ids` (n,) ints, `velocities` (n, 3), `masses` and `radii` (n,),
-    `species` (n,) names, `colors` (n, 3) r g b in [0, 1], the frame's `time` and
-    `step` and its `box`. `where` names the frame in messages (`"frame 3"`, `"frame 3
-    (line 120)"`)."""
+    `species` (n,) names, `colors` (n, 3) r g b in [0, 1], `angular_velocities` (n, 3)
+    (in 1 / the file's time unit) and `orientations` (n, 4) unit quaternions (w, x, y,
+    z), `inertia` (n,) moments of inertia, the frame's `time` and `step` and its `box`. `where` names the frame in messages
+    (`"frame 3"`, `"frame 3 (line 120)"`)."""
 
     positions: np.ndarray
     where: str
@@ -43,6 +44,9 @@ class RawFrame:
     radii: np.ndarray | None = None
     species: np.ndarray | None = None
     colors: np.ndarray | None = None
+    angular_velocities: np.ndarray | None = None
+    orientations: np.ndarray | None = None
+    inertia: np.ndarray | None = None
     time: float | None = None
     step: int | None = None
     box: Box | None = None
@@ -51,7 +55,12 @@ class RawFrame:
 def _check_rows(path: Path, fr: RawFrame) -> None:
     """The values of one frame: finite positions and velocities, masses > 0, radii >= 0,
     printable species names, ids once each."""
-    for word, a in (("positions", fr.positions), ("velocities", fr.velocities)):
+    for word, a in (
+        ("positions", fr.positions),
+        ("velocities", fr.velocities),
+        ("angular velocities", fr.angular_velocities),
+        ("orientations", fr.orientations),
+    ):
         at = None if a is None else first_non_finite(a)
         if at is not None:
             raise fail(path, f"{fr.where}: {word} have a non-finite value ({number(a[at])}) at row {at[0]}")
@@ -86,7 +95,8 @@ def assemble(
     appears, ascending; `alive` False and NaN positions and velocities where a particle is
     not in a frame); without ids every frame must hold the same number of rows, the particles
     in the same order. Velocities are `None` when no frame has them (NaN in a frame without
-    them when others have them); masses, radii and species are each particle's where it first
+    them when others have them), and so are angular velocities (converted by the file's
+    time unit) and orientations; masses, radii and species are each particle's where it first
     appears, `None` when no frame has them (so are colours). `springs` (S, 2) are the ids
     at the ends of each spring, as the file names them. Times are the frames' own times, or, when the file
     has none, the frame index (0, 1, 2, ... s; `source.step` keeps the file's steps).
@@ -129,21 +139,29 @@ def assemble(
     positions = np.full((f, n, 3), np.nan)
     has_v = any(fr.velocities is not None for fr in frames)
     velocities = np.full((f, n, 3), np.nan) if has_v else None
+    spin = {
+        name: np.full((f, n, width), np.nan) if any(getattr(fr, name) is not None for fr in frames) else None
+        for name, width in (("angular_velocities", 3), ("orientations", 4))
+    }
     alive = np.zeros((f, n), dtype=bool)
     masses = np.full(n, np.nan) if any(fr.masses is not None for fr in frames) else None
     radii = np.full(n, np.nan) if any(fr.radii is not None for fr in frames) else None
     species = np.full(n, "X", dtype=object) if any(fr.species is not None for fr in frames) else None
     colors = np.full((n, 3), np.nan) if any(fr.colors is not None for fr in frames) else None
+    inertia = np.full(n, np.nan) if any(fr.inertia is not None for fr in frames) else None
     seen = np.zeros(n, dtype=bool)  # the particles whose per-particle values are set
     for k, fr in enumerate(frames):
         col = np.searchsorted(ids, fr.ids) if by_id else np.arange(n)
         positions[k, col] = fr.positions
         if fr.velocities is not None:
             velocities[k, col] = fr.velocities
+        for name, whole in spin.items():
+            if whole is not None and getattr(fr, name) is not None:
+                whole[k, col] = getattr(fr, name)
         alive[k, col] = True
         new = ~seen[col]
         if new.any():
-            for whole, rows in ((masses, fr.masses), (radii, fr.radii), (species, fr.species), (colors, fr.colors)):
+            for whole, rows in ((masses, fr.masses), (radii, fr.radii), (species, fr.species), (colors, fr.colors), (inertia, fr.inertia)):
                 if whole is not None and rows is not None:
                     whole[col[new]] = np.asarray(rows)[new]
             seen[col[new]] = True
@@ -173,6 +191,9 @@ def assemble(
         path=path,
         springs=None if springs is None or not len(springs) else np.asarray(springs, dtype=np.int64).reshape(-1, 2),
         colors=colors,
+        angular_velocities=None if spin["angular_velocities"] is None else spin["angular_velocities"] / scales.time,
+        orientations=spin["orientations"],
+        inertia=None if inertia is None else inertia * scales.mass * scales.length**2,
     )
     # a particle that has no value of its own where it first appears (another frame's column
     # had one): unknown values are refused, as a file of another program would be

@@ -566,7 +566,9 @@ class Frames:
     `masses` (N,) kg and `radii` (N,) m, `None` when the object has none; `ids` (N,)
     (0..N-1 by default); `dim` 2 or 3; `dt` s and `method`, `None` when unknown;
     `alive` (F, N) bool, which particles exist at each frame (all True without births and
-    deaths; positions and velocities are NaN where not)."""
+    deaths; positions and velocities are NaN where not); with spin `angular_velocities`
+    (F, N, 3) rad/s, `orientations` (F, N, 4) unit quaternions (w, x, y, z) and
+    `inertia` (N,) kg·m², `None` where the trajectory has none."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -578,6 +580,9 @@ class Frames:
     dt: float | None
     method: str | None
     alive: np.ndarray
+    angular_velocities: np.ndarray | None = None
+    orientations: np.ndarray | None = None
+    inertia: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -606,6 +611,18 @@ def _per_frame_vectors(traj: Any, name: str, n_frames: int) -> np.ndarray:
     return a
 
 
+def _per_frame_rows(traj: Any, name: str, shape: tuple[int, int, int]) -> np.ndarray | None:
+    """The optional (F, N, w) array `name` of `traj` (angular velocities, orientations),
+    shape-checked; `None` where it has none."""
+    value = getattr(traj, name, None)
+    if value is None:
+        return None
+    a = np.asarray(value, dtype=np.float64)
+    if a.shape != shape:
+        raise ValueError(f"{name} has shape {a.shape}; it must be {shape}, (F, N, {shape[2]})")
+    return a
+
+
 def _per_particle(traj: Any, names: tuple[str, ...], n: int, dtype: Any) -> np.ndarray | None:
     for name in names:
         value = getattr(traj, name, None)
@@ -619,7 +636,8 @@ def _per_particle(traj: Any, names: tuple[str, ...], n: int, dtype: Any) -> np.n
 
 def frames_of(traj: Any) -> Frames:
     """Reads `t`, `positions`, `velocities` and the optional `masses` (or `mass`),
-    `radii` (or `radius`), `ids`, `alive`, `dim`, `dt` and `method` of a
+    `radii` (or `radius`), `ids`, `alive`, `dim`, `dt`, `method`,
+    `angular_velocities`, `orientations` and `inertia` of a
     trajectory-like object and checks their shapes; raises `ValueError` naming the
     attribute that is wrong."""
     t = np.asarray(traj.t, dtype=np.float64)
@@ -654,4 +672,7 @@ def frames_of(traj: Any) -> Frames:
         dt=None if dt is None else float(dt),
         method=None if method is None else str(method),
         alive=alive,
+        angular_velocities=_per_frame_rows(traj, "angular_velocities", (t.shape[0], n, 3)),
+        orientations=_per_frame_rows(traj, "orientations", (t.shape[0], n, 4)),
+        inertia=_per_particle(traj, ("inertia",), n, np.float64),
     )

@@ -150,6 +150,35 @@ def _per_frame_problem(a: np.ndarray, alive: np.ndarray, find: Any) -> tuple[int
     return None
 
 
+#: How far from 1 the norm of an orientation quaternion written may be.
+UNIT_QUATERNION = 1e-6
+
+
+def _first_not_unit(rows: np.ndarray) -> tuple[int, ...] | None:
+    """The index of the first quaternion of `rows` (..., 4) whose norm is not 1 within
+    `UNIT_QUATERNION`, or `None`."""
+    bad = np.abs(np.linalg.norm(rows, axis=-1) - 1.0) > UNIT_QUATERNION
+    return tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), bad.shape)) if bad.any() else None
+
+
+def contact_record_problem(record: Any, fr: Any) -> str | None:
+    """What is wrong with a trajectory's `contact_record` (a `ContactRecord`, or `None`)
+    for the frames `fr`, or `None`: one entry per frame, and particles named by ids of
+    the trajectory (`j` may be -1, a collider)."""
+    if record is None:
+        return None
+    if record.n_frames != fr.n_frames:
+        return f"has {record.n_frames} frames; the trajectory has {fr.n_frames}"
+    for name in ("i", "j"):
+        ids = record[name]
+        known = np.isin(ids, fr.ids) | ((ids == -1) if name == "j" else False)
+        if not known.all():
+            k = int(np.argmax(~known))
+            frame = int(np.searchsorted(record.offsets, k, side="right")) - 1
+            return f"names particle {name} = {int(ids[k])} at frame {frame}, which is not an id of the trajectory"
+    return None
+
+
 def _first_beyond_float32_at(a: np.ndarray) -> tuple[int, ...] | None:
     if a.size == 0 or not (np.nanmax(a, initial=-np.inf) > FLOAT32_MAX or np.nanmin(a, initial=np.inf) < -FLOAT32_MAX):
         return None  # reductions only: no copy of a
@@ -188,7 +217,25 @@ def check_frames(path: Any, traj: Any, fr: Frames, float32: str | None = None, i
     if known:
         at = _per_frame_problem(fr.velocities, fr.alive, first_non_finite)
         refuse("velocities", None if at is None else f"has a non-finite value {_place(fr.velocities, at, axes)}")
+    for word, a in (("angular_velocities", fr.angular_velocities), ("orientations", fr.orientations)):
+        at = None if a is None else _per_frame_problem(a, fr.alive, first_non_finite)
+        refuse(word, None if at is None else f"has a non-finite value {_place(a, at, axes)}")
+    if fr.orientations is not None:
+        at = _per_frame_problem(fr.orientations, fr.alive, _first_not_unit)
+        refuse(
+            "orientations",
+            None
+            if at is None
+            else f"has |q| = {float(np.linalg.norm(fr.orientations[at[:2]])):.17g} {_place(fr.orientations, at, axes)}: a unit quaternion (w, x, y, z) has |q| = 1 (within {UNIT_QUATERNION})",
+        )
+    refuse("contact_record", contact_record_problem(getattr(traj, "contact_record", None), fr))
     exists = fr.alive.any(axis=0)
+    if fr.inertia is not None:
+        bad = exists & ~(np.isfinite(fr.inertia) & (fr.inertia >= 0))
+        refuse(
+            "inertia",
+            None if not bad.any() else f"has inertia[{int(np.argmax(bad))}] = {fr.inertia[np.argmax(bad)]!r} (moments of inertia are finite and >= 0 kg m2)",
+        )
     if fr.masses is not None:
         refuse("masses", mass_problem(np.where(exists, fr.masses, 1.0)))
     if fr.radii is not None:
@@ -209,7 +256,9 @@ def check_frames(path: Any, traj: Any, fr: Frames, float32: str | None = None, i
                 refuse("ids", f"has id {int(uniq[np.argmax(counts > 1)])} twice at frame {i} (an id names one particle)")
     if float32 is not None:
         beyond = f"beyond float32 (at most {FLOAT32_MAX:.8g} in magnitude), which format {float32!r} stores"
-        for word, a in (("positions", fr.positions), ("velocities", fr.velocities)):
+        for word, a in (("positions", fr.positions), ("velocities", fr.velocities), ("angular_velocities", fr.angular_velocities)):
+            if a is None:
+                continue
             at = _per_frame_problem(a, fr.alive, _first_beyond_float32_at)
             refuse(word, None if at is None else f"has a value {_place(a, at, axes)} {beyond}")
         for word, a in (("masses", fr.masses), ("radii", None if fr.radii is None else 2 * fr.radii)):

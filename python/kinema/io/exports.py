@@ -91,6 +91,14 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
       and the colliders as guide prims (see `usd_writer.write_usd`); another suffix is a
       `ValueError` (USD picks its file format from the suffix).
 
+    Spin and contacts: a trajectory with `angular_velocities` (and `orientations`) writes
+    them in every format (LAMMPS `omegax.. quatw..`, XYZ `omega`, `orientation`,
+    GSD HOOMD's orientation and angmom, VTK point data, USD a PointInstancer of balls, CSV
+    and PLY columns); one with a `contact_record` (`World.run(record_contacts=True)`) adds its
+    contacts to `"lammps"` (`<stem>_contacts.dump` and `<stem>_collider_contacts.dump`,
+    LAMMPS `dump local`) and `"vtk"` (a `contacts` block of lines per frame): docs/files.md,
+    "Spins and contacts".
+
     A particle without its own colour (a NaN row of `colors`) is written in the renderer's
     `NO_OWN_COLOR` (RGB 70 130 200); a spring is written at a frame when both its ends are
     alive then.

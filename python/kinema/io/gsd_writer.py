@@ -13,6 +13,7 @@ import numpy as np
 
 from ._cell import frame_steps, live_springs, particle_colors, particle_types, spring_columns, trajectory_cell
 from ._files import FileWriteError, Frames, close_descriptors_on, copy_into, private_folder, write_error
+from ._quaternions import hoomd_angmom
 
 
 def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
@@ -57,6 +58,17 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     particles, in the order of their ids, so a particle is followed across frames by its id
     (a frame may hold none).
 
+    Spin (a trajectory with angular velocities): `particles/orientation` (N, 4) the unit
+    quaternion (w, x, y, z) that turns the particle's body frame into the world's, HOOMD's
+    convention (identity where the trajectory has no orientations), `particles/moment_inertia`
+    (N, 3) = (I, I, I) kg·m², a sphere's, and `particles/angmom` (N, 4) HOOMD's quaternion
+    conjugate momentum of the angular velocity ω, p = 2 q ⊗ (0, I ω_body) with ω_body =
+    q* ⊗ ω ⊗ q, which for a sphere is 2 I (0, ω) ⊗ q (derived in
+    `_quaternions.hoomd_angmom`), so that HOOMD goes on with the same spins and
+    `log/particles/kinema/omega` (N, 3) float64, ω itself in rad/s, exactly. The moments of
+    inertia are the trajectory's `inertia`, else a solid sphere's 2/5 m r² (a disc's 1/2 m
+    r² in 2D), what `World(spin=True)` gives by default.
+
     `on_frame(i)` is called after frame `i` is written. Needs the `gsd` package.
 
     gsd builds the file in a private folder of the system's temporary folder
@@ -82,6 +94,16 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     colors = None if colors is None else colors.astype(np.float32)
     springs = spring_columns(traj, fr)
     ids = fr.ids.astype(np.int64)
+    inertia = None
+    if fr.angular_velocities is not None:
+        inertia = fr.inertia
+        if inertia is None:  # World(spin=True)'s default: a solid sphere's, a disc's in 2D
+            inertia = (
+                (0.4 if fr.dim == 3 else 0.5)
+                * (fr.masses if fr.masses is not None else np.ones(fr.n_particles))
+                * (fr.radii if fr.radii is not None else np.zeros(fr.n_particles)) ** 2
+            )
+        inertia = np.asarray(inertia, dtype=np.float64)
     steps = frame_steps(fr)
     # gsd writes its file in a private folder of the system's temporary folder, never on the
     # target's file system, and the finished bytes are copied to the target by Python: gsd
@@ -111,6 +133,13 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
                         p.mass = masses[live]
                     if diameters is not None:
                         p.diameter = diameters[live]
+                    if inertia is not None:
+                        q = fr.orientations[i][live] if fr.orientations is not None else np.tile([1.0, 0.0, 0.0, 0.0], (live.size, 1))
+                        omega = fr.angular_velocities[i][live]
+                        p.orientation = q.astype(np.float32)
+                        p.moment_inertia = np.repeat(inertia[live][:, None], 3, axis=1).astype(np.float32)
+                        p.angmom = hoomd_angmom(q, omega, inertia[live]).astype(np.float32)
+                        frame.log["particles/kinema/omega"] = np.ascontiguousarray(omega, dtype=np.float64)
                     if springs.size:
                         # A frame whose springs are all gone still writes bonds/N = 0: gsd
                         # gives a frame without the chunk the value of frame 0.

@@ -22,6 +22,21 @@ specification allows, and requires for the box; units shown for `units="SI"`, th
         mass [kg], radius [m], id      step, time, value (F, N), when known (id: always)
         color             step, time, value (F, N, 3) float64: r, g, b in [0, 1], NaN: none
                           (when the trajectory has colours)
+        angular_velocity  step, time, value (F, N, 3) [s-1]: each particle's ω, rad/s (a world with
+                          spin; H5MD has no element for it: kinema's name)
+        moment_of_inertia step, time, value (F, N) [kg m2]: about the centre (with spin; kinema's name)
+        orientation       step, time, value (F, N, 4): each particle's orientation, a unit
+                          quaternion w, x, y, z turning its body frame into the world's (with spin,
+                          where the engine integrates it; kinema's name)
+    /contacts             the contacts of each frame (World.run(record_contacts=True)), an extension
+                          group of kinema's; attribute particles_group: a reference to the group
+        step, time        the clock of position (hard links)
+        offsets           (F + 1,) int64: frame k's contacts are rows offsets[k] to offsets[k + 1]
+        i, j, collider    (K,) int64: the particle's id, the other particle's id (-1: a collider),
+                          the collider's index in /parameters/kinema/colliders (-1: a particle)
+        point [m], normal (K, 3); overlap [m], u_n [m s-1] (K,); force_n, force_t (K, 3) [N];
+        sliding (K,) bool; impulse_n, impulse_t (K, 3) [kg m s-1]: those the world gave
+                          (kinema.contact_record.FIELDS says what each is)
     /connectivity/springs (S, 2) int64: the ids at the ends of each spring, when the trajectory
                           has springs; attribute particles_group: a reference to the group
     /observables
@@ -83,6 +98,7 @@ from typing import Any
 
 import numpy as np
 
+from ..contact_record import FIELDS
 from ._cell import particle_types
 from ._checks import available_memory, number
 from ._files import TrajectoryFileError, frames_of, hdf5_file, os_errors_as_write_errors
@@ -251,6 +267,11 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     _constant_element(box, "pbc", np.array(flags, dtype=bool), None, clock, compression)
     if not _unknown(fr.velocities[fr.alive]):
         _element(particles, "velocity", *unit(placed(fr.velocities), "m s-1"), clock, compression, fill=nan)
+    # Spin: H5MD has no element for it; kinema's names beside position and velocity, the
+    # same form (a 2D world turns about z: ω's x and y are 0, kept as they are)
+    for name, a, si in (("angular_velocity", fr.angular_velocities, "s-1"), ("orientation", fr.orientations, None)):
+        if a is not None and not _unknown(a[fr.alive]):
+            _element(particles, name, *unit(a if not changes else np.where(fr.alive[..., None], a, np.nan), si), clock, compression, fill=nan)
     # Species: H5MD's integers, for ASE (znh5md) the atomic number of a name that is a chemical
     # symbol, else 0 (ASE's "X"); kinema's names in species_index, each particle's index among
     # the sorted names (two names that are no element would share 0).
@@ -264,6 +285,7 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
         ("species_index", index.astype(np.int32) if named else None, None, -1),
         ("mass", fr.masses, "kg", np.nan),
         ("radius", fr.radii, "m", np.nan),
+        ("moment_of_inertia", fr.inertia, "kg m2", np.nan),
         ("id", fr.ids, None, no_id),
         ("color", None if colors is None else np.asarray(colors, dtype=np.float64), None, np.nan),
     )
@@ -296,6 +318,10 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
         total = np.asarray(kinetic) + sum((np.asarray(u) for u in potential.values()), np.zeros(fr.n_frames))
     if total is not None and not _unknown(total):
         _element(obs, "total_energy", *unit(np.asarray(total, dtype=np.float64), "J"), clock, compression)
+
+    record = getattr(tr, "contact_record", None)
+    if record is not None:
+        _write_contacts(f.create_group("contacts"), record, particles, clock, unit, compression)
 
     springs = getattr(tr, "springs", None)
     if springs is not None:
@@ -342,6 +368,20 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
                     g.attrs.create(name, np.bool_(value))
                 else:
                     g.attrs.create(name, np.asarray(value, dtype=np.float64))
+
+
+def _write_contacts(g: Any, record: Any, particles: Any, clock: Any, unit: Any, compression: str | None) -> None:
+    """The contacts of each frame (a `kinema.contact_record.ContactRecord`) in the group
+    `/contacts`, an extension of H5MD (see the module doc): the clock's `step` and `time`
+    (hard links), `offsets` (F + 1,) and one dataset per column, in the file's units;
+    `particles_group` refers to the particle group whose ids `i` and `j` are."""
+    g.attrs["particles_group"] = particles.ref
+    g["step"] = clock["step"]
+    g["time"] = clock["time"]
+    _dataset(g, "offsets", record.offsets, None, compression)
+    for name, a in record.values.items():
+        known = FIELDS.get(name)
+        _dataset(g, name, *unit(a, None if known is None else known.unit), compression)
 
 
 def _write_motion(g: Any, motion: dict[str, Any]) -> None:
@@ -413,6 +453,10 @@ def _check_units(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
     if problem is not None:
         raise TrajectoryFileError(f"cannot write {path}: trajectory 't' in {system['s']} (units 'MD') {problem}")
     arrays = [("t", fr.t, "s"), ("positions", fr.positions, "m"), ("velocities", fr.velocities, "m s-1"), ("masses", fr.masses, "kg"), ("radii", fr.radii, "m")]
+    arrays += [("angular_velocities", fr.angular_velocities, "s-1"), ("inertia", fr.inertia, "kg m2")]
+    record = getattr(tr, "contact_record", None)
+    if record is not None:
+        arrays += [(f"contact_record {name!r}", a, FIELDS[name].unit) for name, a in record.values.items() if name in FIELDS and FIELDS[name].unit is not None]
     arrays += [("box_edges", getattr(tr, "box_edges", None), "m"), ("total", getattr(tr, "total", None), "J")]
     arrays += [(attr, getattr(tr, attr, None), si) for attr, si in OBSERVABLES.values() if si is not None]
     arrays += [(f"potential {name!r}", u, "J") for name, u in (getattr(tr, "potential", None) or {}).items()]
@@ -458,7 +502,10 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     `colliders` (`Trajectory.colliders`' descriptions or `kinema` collider objects),
     `alive` (F, N) bool, which particles exist at each frame (births and deaths: written
     with H5MD's fill values, see the module doc), `springs` (S, 2) the ids at the ends of
-    each spring (`/connectivity/springs`). Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
+    each spring (`/connectivity/springs`), `angular_velocities` (F, N, 3) rad/s and
+    `orientations` (F, N, 4) and `inertia` (N,) kg m² of a world with spin (the
+    `angular_velocity`, `orientation` and `moment_of_inertia` elements), `contact_record` (a `kinema.contact_record.ContactRecord`:
+    the group `/contacts`). Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
     without them) are not written.
 
     `group` names the particle group (/particles/<group>); `author` the /h5md/author name

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from ..contact_record import FIELDS, ContactRecord, offsets_problem
 from ._checks import dtype_problem, number, shown
 from ._files import TrajectoryFileError
 from ._h5md_checks import (
@@ -57,7 +58,10 @@ class LoadedTrajectory:
     frames per second asked of `World.run`; kinema's files), `periodic` (3 bools) and `box_edges` (3,) m, the periodic cell at the
     first frame; `colliders` (descriptions, as `Trajectory.colliders`), `alive` (F, N)
     bool, which particles exist at each frame (`None` when all do: a file whose number of
-    particles does not vary), `springs` (S, 2) the ids at the ends of each spring. Where
+    particles does not vary), `springs` (S, 2) the ids at the ends of each spring,
+    `angular_velocities` (F, N, 3) rad/s, `orientations` (F, N, 4) and `inertia` (N,)
+    kg m² (a world with spin), `contact_record` (the contacts of each frame, a
+    `kinema.contact_record.ContactRecord`). Where
     particles come and go, `positions` and `velocities` are NaN where they do not exist,
     one column per id (ascending).
 
@@ -94,6 +98,10 @@ class LoadedTrajectory:
     colliders: list[dict[str, Any]] = field(default_factory=list)
     alive: np.ndarray | None = None
     springs: np.ndarray | None = None
+    angular_velocities: np.ndarray | None = None
+    orientations: np.ndarray | None = None
+    inertia: np.ndarray | None = None
+    contact_record: ContactRecord | None = None
     group: str = "all"
     author: str | None = None
     creator: str | None = None
@@ -289,6 +297,85 @@ def _read_springs(r: Reader, f: Any, p: Any, ids: np.ndarray) -> np.ndarray | No
     return pairs
 
 
+TIME_INVERSE = (0, -1, 0)  # an angular velocity's dimension (rad/s)
+MOMENT_OF_INERTIA = (2, 0, 1)  # kg m2
+
+
+def _contact_datasets(r: Reader, f: Any, p: Any) -> dict[str, Any] | None:
+    """The datasets of `/contacts` (kinema's extension group: the contacts of each frame)
+    whose `particles_group` is the group read, with their units, checked before any data is
+    read: `offsets` (F + 1,) integers and one column per `FIELDS` name of as many rows as
+    the last offset (read later); `None` without them."""
+    h5py = import_h5py()
+    g = f.get("contacts")
+    if not isinstance(g, h5py.Group):
+        return None
+    ref = g.attrs.get("particles_group")
+    if isinstance(ref, h5py.Reference) and ref and f[ref].name != p.name:
+        return None  # the contacts of another particle group
+    out: dict[str, Any] = {}
+    for name in g:
+        ds = g[name]
+        if name in ("step", "time"):
+            continue
+        known = FIELDS.get(name)
+        if name != "offsets" and known is None:
+            raise r.fail(f"{ds.name} is not a column of kinema's contacts ({', '.join(['offsets', *FIELDS])})")
+        if not isinstance(ds, h5py.Dataset):
+            raise r.fail(f"{ds.name} is a group; it must be a dataset")
+        if known is not None and known.kind == "bool":
+            if ds.shape is None or ds.dtype.kind != "b":
+                raise r.fail(f"{where(name, ds)} holds {ds.dtype}; it must hold flags (bool), one per contact")
+            shape = tuple(ds.shape)
+        else:
+            shape = r.numbers(name, ds, integer=name == "offsets" or (known is not None and known.kind == "int"))
+        if known is not None and known.unit is not None:
+            out[("unit", name)] = r.unit(name, ds, parse_unit(known.unit)[1])
+        r.plan(name, ds, ds.size * 8)
+        out[name] = (ds, shape)
+    if "offsets" not in out:
+        raise r.fail(f"{g.name} has no offsets dataset (frame k's contacts are rows offsets[k] to offsets[k + 1])")
+    return out
+
+
+def _read_contacts(r: Reader, found: dict[str, Any], frames: int, ids: np.ndarray) -> ContactRecord:
+    """The contacts of `_contact_datasets`, read and checked: `offsets` one per frame and
+    one more, from 0, never decreasing; each column as many rows as the last offset, finite
+    or NaN (a column a frame did not have); `i` and `j` ids of the particles read (`j` -1:
+    a collider)."""
+    ds, shape = found["offsets"]
+    if shape != (frames + 1,):
+        raise r.fail(f"{where('offsets', ds)} has shape {shape}; it must be ({frames + 1},), one per frame and one more")
+    offsets = np.asarray(ds[()], dtype=np.int64)
+    problem = offsets_problem(offsets)
+    if problem is not None:
+        raise r.fail(f"{where('offsets', ds)} {problem}")
+    total = int(offsets[-1])
+    values = {}
+    for name, entry in found.items():
+        if name == "offsets" or isinstance(name, tuple):
+            continue
+        ds, shape = entry
+        if not shape or shape[0] != total or len(shape) > 2:
+            raise r.fail(f"{where(name, ds)} has shape {shape}; it must have {total} rows, one per contact ({where('offsets', found['offsets'][0])}[-1])")
+        a = ds[()]
+        if ("unit", name) in found:
+            a = to_si(a, found[("unit", name)])
+        if FIELDS[name].kind == "real" and np.isinf(a).any():
+            raise r.fail(f"{where(name, ds)} has an infinite value at row {int(np.argmax(np.isinf(a).reshape(len(a), -1).any(axis=1)))}")
+        values[name] = a
+    try:
+        record = ContactRecord(offsets, values)
+    except ValueError as e:
+        raise r.fail(f"{found['offsets'][0].parent.name}: {e}") from None
+    for name in ("i", "j"):
+        known = np.isin(record[name], ids) | ((record[name] == -1) if name == "j" else False)
+        if not known.all():
+            k = int(np.argmax(~known))
+            raise r.fail(f"{where(name, found[name][0])} names particle {int(record[name][k])} at row {k}, which is no particle's id")
+    return record
+
+
 # /observables read back: (name, attribute of the trajectory, a vector per frame)
 _READ_OBSERVABLES = [(name, attr, attr in ("momentum", "angular_momentum", "impulse_balance")) for name, (attr, _) in OBSERVABLES.items()]
 
@@ -355,6 +442,27 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
         units["velocities"] = r.unit("velocities", v_ds, (1, -1, 0))
         r.plan("velocities", v_ds, vector_bytes(v_ds, units["velocities"]))
 
+    # Spin (kinema's elements: H5MD has none): the angular velocities and the orientations,
+    # one row per particle and frame as the positions
+    spin = {}
+    for name, attr, width, dims in (("angular_velocity", "angular_velocities", 3, TIME_INVERSE), ("orientation", "orientations", 4, None)):
+        e = element_datasets(path, p, name)
+        if e is None:
+            continue
+        ds = e[0]
+        if r.numbers(attr, ds) != (frames, n, width):
+            raise r.fail(
+                f"{where(attr, ds)} has shape {ds.shape}; it must be ({frames}, {n}, {width}), as {where('positions', x_ds)} {shape} with {width} values"
+            )
+        r.clock("steps", e[1], attr, ds, integer=True)
+        if e[2] is not None:
+            r.clock("times", e[2], attr, ds)
+        if dims is not None:
+            units[attr] = r.unit(attr, ds, dims)
+        r.plan(attr, ds, ds.size * 8 * 2)
+        spin[attr] = ds
+    contacts = _contact_datasets(r, f, p)
+
     # A varying number of particles (births and deaths): H5MD marks the entries of a particle
     # that does not exist at a frame by the fill value of the time-dependent id element.
     id_table = varying_ids(path, p)
@@ -372,7 +480,14 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
     # files before it, the species element with `names`; H5MD's own species are integers with
     # no names, which a trajectory has no use for (znh5md writes them as floats)
     named = next((k for k in ("species_index", "species") if k in p and "names" in p[k].attrs), None)
-    each = (("mass", "masses", False), ("radius", "radii", False), ("id", "ids", True), (named, "species", True), ("color", "colors", False))
+    each = (
+        ("mass", "masses", False),
+        ("radius", "radii", False),
+        ("moment_of_inertia", "inertia", False),
+        ("id", "ids", True),
+        (named, "species", True),
+        ("color", "colors", False),
+    )
     for name, attr, integer in each:
         if name is None or name not in p or (name == "id" and id_table is not None):
             continue
@@ -394,8 +509,8 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
                 raise r.fail(f"{where(attr, obj)} has shape {s}; it must be ({must}), one value per particle ({where('positions', x_ds)} {shape})")
             r.plan(attr, obj, (frames if id_table is not None else 1) * n * (3 if tail else 1) * obj.dtype.itemsize)
             per_particle[attr] = (obj, True)
-        if attr in ("masses", "radii"):
-            units[attr] = r.unit(attr, obj, MASS if attr == "masses" else LENGTH)
+        if attr in ("masses", "radii", "inertia"):
+            units[attr] = r.unit(attr, obj, {"masses": MASS, "radii": LENGTH, "inertia": MOMENT_OF_INERTIA}[attr])
 
     # The box: edges (D,) or a (D, D) matrix of edge vectors, fixed, or time-dependent with
     # one row per frame (a box that may change). Its boundary is "periodic" or "none" on each
@@ -557,6 +672,10 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
     out = LoadedTrajectory(t=t, positions=positions, velocities=velocities, step=step, dim=dim, group=group, path=path)
     if live is not None:
         out.ids, out.alive = live.ids, live.alive
+    for attr, ds in spin.items():
+        a = to_si(ds[()], units.get(attr, Fraction(1)))
+        r.finite(attr, ds, a if live is None else live.masked(a), ("frame", "particle"))
+        setattr(out, attr, np.asarray(a, dtype=np.float64) if live is None else live.columns(a))
     for attr, (ds, element) in per_particle.items():
         if live is None:
             a = ds[0] if element else ds[()]
@@ -566,6 +685,8 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
         if attr != "colors":  # a colour may be NaN: none
             r.finite(attr, ds, a, ("particle",))
         problem = mass_problem(a) if attr == "masses" else radius_problem(a) if attr == "radii" else color_problem(a) if attr == "colors" else None
+        if attr == "inertia" and (a < 0).any():
+            problem = f"has inertia[{int(np.argmax(a < 0))}] = {number(a[np.argmax(a < 0)])} (moments of inertia are >= 0 kg m2)"
         if problem is not None:
             raise r.fail(f"{where(attr, ds)} {problem}")
         if attr == "species":  # names where the file gives them (kinema's ``names``), else none
@@ -593,6 +714,8 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
         out.total = out.kinetic + sum(out.potential.values(), np.zeros_like(out.kinetic))
     out.dt, out.method, out.fps, out.colliders = dt, method, fps, colliders
     out.springs = _read_springs(r, f, p, out.ids if out.ids is not None else np.arange(out.positions.shape[1]))
+    if contacts is not None:
+        out.contact_record = _read_contacts(r, contacts, frames, out.ids if out.ids is not None else np.arange(out.positions.shape[1]))
     author = f["h5md"].get("author")
     creator = f["h5md"].get("creator")
     out.author = None if author is None else as_text(author.attrs.get("name", ""))

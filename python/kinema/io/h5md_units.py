@@ -59,6 +59,9 @@ QUANTITY = {
     (2, -1, 1): "an angular momentum (kg m2 s-1)",
     (-1, -2, 1): "a pressure (Pa)",
     (0, -2, 1): "a pressure of a 2D world, a force per length (N m-1)",
+    (0, -1, 0): "an angular velocity (s-1, rad/s)",
+    (1, -2, 1): "a force (N)",
+    (2, 0, 1): "a moment of inertia (kg m2)",
 }
 
 
@@ -151,7 +154,7 @@ def from_si(a: Any, unit: str) -> np.ndarray:
 # The unit systems save_h5md writes, as the unit of each SI unit kinema's values are in.
 # "MD": GROMACS's units (nm, ps, u, kJ mol-1), which MDAnalysis reads (its H5MD reader knows
 # the lengths Å, nm, pm, fm and not m), as do VMD and the H5MD readers of the MD codes.
-SI_UNITS = ("m", "s", "m s-1", "kg", "J", "kg m s-1", "kg m2 s-1", "Pa", "N m-1")
+SI_UNITS = ("m", "s", "m s-1", "kg", "J", "kg m s-1", "kg m2 s-1", "Pa", "N m-1", "s-1", "N", "kg m2")
 SYSTEMS: dict[str, dict[str, str]] = {
     "SI": {u: u for u in SI_UNITS},
     "MD": {
@@ -164,6 +167,9 @@ SYSTEMS: dict[str, dict[str, str]] = {
         "kg m2 s-1": "u nm2 ps-1",
         "Pa": "kJ mol-1 nm-3",
         "N m-1": "kJ mol-1 nm-2",
+        "s-1": "ps-1",
+        "N": "kJ mol-1 nm-1",
+        "kg m2": "u nm2",
     },
 }
 

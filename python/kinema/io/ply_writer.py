@@ -11,6 +11,7 @@ import numpy as np
 
 from ._cell import Extras, colors_uint8, live_springs
 from ._files import SERIES_DIGITS, Frames, atomic_folder, series_names
+from .csv_writer import ORIENTATION_CSV, SPIN_CSV
 
 SUFFIXES = (".ply",)  # a path's suffixes that name a PLY export (``exports._SUFFIXES``)
 
@@ -19,7 +20,8 @@ def _ply(fr: Frames, i: int, extras: Extras) -> bytes:
     """Frame `i` as a binary little-endian PLY: one vertex per particle alive at it, float32
     x y z vx vy vz radius, uchar red green blue (the colour, where the trajectory has
     colours), int32 type (the index of its species in the `comment type <index> <name>`
-    lines, where it has species) and int32 id, the types Blender's and Houdini's importers
+    lines, where it has species), float32 wx wy wz (the angular velocity, rad/s) and qw qx qy
+    qz (the orientation) where it has spin, and int32 id, the types Blender's and Houdini's importers
     read (Blender keeps the other properties as point attributes and red green blue as the
     colour attribute `Col`); then, where the trajectory has springs, one edge per spring
     whose two ends are alive, int32 vertex1 vertex2 (its ends' vertex indices), which
@@ -31,6 +33,8 @@ def _ply(fr: Frames, i: int, extras: Extras) -> bytes:
         columns += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
     if extras.names is not None:
         columns.append(("type", "<i4"))
+    spin = [(names, a) for names, a in ((SPIN_CSV, fr.angular_velocities), (ORIENTATION_CSV, fr.orientations)) if a is not None]
+    columns += [(name, "<f4") for names, _ in spin for name in names]
     columns.append(("id", "<i4"))
     live = fr.live(i)
     rows = np.empty(live.size, dtype=columns)
@@ -45,6 +49,9 @@ def _ply(fr: Frames, i: int, extras: Extras) -> bytes:
             rows[name] = rgb[:, k]
     if extras.names is not None:
         rows["type"] = extras.typeid[live]
+    for names, a in spin:
+        for k, name in enumerate(names):
+            rows[name] = a[i, live, k]
     rows["id"] = fr.ids[live]
     edges = None if extras.springs is None else live_springs(extras.springs, fr, i).astype("<i4")
     ply_type = {"<f4": "float", "<i4": "int", "u1": "uchar"}
@@ -69,7 +76,8 @@ def write_ply(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     The folder `<stem>_ply/` with one binary little-endian PLY per frame,
     `<stem>_00000.ply`, `<stem>_00001.ply`, ... (`_ply`): vertex properties x y z vx vy
     vz (float32; m, m/s), radius (float32, m), red green blue (uchar, the colour), type
-    (int32, the species, named in `comment type k name` lines) and id (int32); with
+    (int32, the species, named in `comment type k name` lines), wx wy wz and qw qx qy qz
+    (float32: the angular velocity, rad/s, and the orientation, with spin) and id (int32); with
     springs, `element edge` (vertex1 vertex2), one edge per spring whose ends are alive.
     The stem is the name of `path` less its suffix where that is .ply, the whole name
     otherwise. The series is built in a temporary folder that takes the place of

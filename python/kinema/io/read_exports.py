@@ -15,6 +15,7 @@ import numpy as np
 
 from ._assemble import RawFrame, assemble
 from ._h5md_checks import fail
+from .csv_writer import ORIENTATION_CSV, SPIN_CSV
 from .h5md_reader import LoadedTrajectory
 from .units import SI, UnitWarning
 
@@ -23,7 +24,8 @@ _CSV_COLUMNS = ("frame", "time", "id", "x", "y", "z", "vx", "vy", "vz")
 
 def read_csv(path: Path) -> LoadedTrajectory:
     """Read a CSV kinema exported: the header `frame,time,id,x,y,z,vx,vy,vz`, then any of
-    `mass`, `radius`, `species` and `r,g,b` (the colour), a row per particle and frame,
+    `mass`, `radius`, `species`, `r,g,b` (the colour), `wx,wy,wz` (the angular velocity)
+    and `qw,qx,qy,qz` (the orientation), a row per particle and frame,
     SI units. Frames are the distinct `frame` numbers, in order; a frame in which no particle
     was alive has no row, so it is not read."""
     try:
@@ -32,9 +34,12 @@ def read_csv(path: Path) -> LoadedTrajectory:
         raise fail(path, f"not a text file ({e.reason} at byte {e.start}), so not a CSV") from None
     header = lines[0].strip().split(",") if lines else []
     extra = header[len(_CSV_COLUMNS) :]
-    known = {"mass", "radius", "species", "r", "g", "b"}
+    known = {"mass", "radius", "species", "r", "g", "b", *SPIN_CSV, *ORIENTATION_CSV}
     if tuple(header[: len(_CSV_COLUMNS)]) != _CSV_COLUMNS or not set(extra) <= known or len(set(extra)) != len(extra):
-        raise fail(path, f"a CSV whose header is not kinema's ({','.join(_CSV_COLUMNS)}[,mass][,radius][,species][,r,g,b]); kinema reads back its own CSV only")
+        raise fail(
+            path,
+            f"a CSV whose header is not kinema's ({','.join(_CSV_COLUMNS)}[,mass][,radius][,species][,r,g,b][,wx,wy,wz][,qw,qx,qy,qz]); kinema reads back its own CSV only",
+        )
     rows = [line for line in lines[1:] if line.strip()]
     width = len(header)
     words = ",".join(rows).split(",")
@@ -72,6 +77,8 @@ def read_csv(path: Path) -> LoadedTrajectory:
                 radii=v[:, at["radius"]] if "radius" in at else None,
                 species=table[rows_at, at["species"]].astype(object) if "species" in at else None,
                 colors=v[:, rgb] if rgb else None,
+                angular_velocities=v[:, [at[c] for c in SPIN_CSV]] if all(c in at for c in SPIN_CSV) else None,
+                orientations=v[:, [at[c] for c in ORIENTATION_CSV]] if all(c in at for c in ORIENTATION_CSV) else None,
                 time=float(times[0]),
                 step=int(number),
             )
@@ -152,7 +159,7 @@ def read_vtk(path: Path) -> LoadedTrajectory:
     frame's time) and PolyData file (XML, inline binary or ascii, uncompressed; or the
     multi-block file of a frame with springs, its block 0), its points and the point data
     `v` (velocities), `radius`, `mass`, `id`, `type` (names: the field data
-    `type_names`) and `Color`, in SI units, the
+    `type_names`), `Color`, `angular_velocity` and `orientation` (w x y z), in SI units, the
     units kinema writes them in. A series without kinema's `speed` point data (another
     program's) is read in the same units, with a `UnitWarning`."""
     try:
@@ -183,6 +190,8 @@ def read_vtk(path: Path) -> LoadedTrajectory:
                 radii=data["radius"].astype(np.float64) if "radius" in data else None,
                 species=data["type_names"][data["type"].astype(np.int64)] if "type" in data and "type_names" in data else None,
                 colors=data["Color"].reshape(n, 3).astype(np.float64) if "Color" in data else None,
+                angular_velocities=data["angular_velocity"].reshape(n, 3).astype(np.float64) if "angular_velocity" in data else None,
+                orientations=data["orientation"].reshape(n, 4).astype(np.float64) if "orientation" in data else None,
                 time=time,
                 step=k,
             )
@@ -242,6 +251,8 @@ def _ply_frame(path: Path, file: Path, where: str) -> RawFrame:
         radii=rows["radius"].astype(np.float64) if "radius" in names else None,
         species=species,
         colors=np.stack([rows[c] for c in rgb], axis=1) / 255.0 if names.issuperset(rgb) else None,
+        angular_velocities=np.stack([rows[c] for c in SPIN_CSV], axis=1).astype(np.float64) if names.issuperset(SPIN_CSV) else None,
+        orientations=np.stack([rows[c] for c in ORIENTATION_CSV], axis=1).astype(np.float64) if names.issuperset(ORIENTATION_CSV) else None,
         time=None if time is None else float(time),
     )
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from ._assemble import Box, RawFrame, assemble
 from ._h5md_checks import fail
+from ._quaternions import omega_of_angmom
 from .h5md_reader import LoadedTrajectory
 from .units import SI, UnitWarning, scales
 
@@ -26,6 +27,29 @@ def _log(f: Any, k: int, name: str) -> np.ndarray | None:
     return None
 
 
+def _spin(f: Any, k: int, p: Any, own: bool) -> dict[str, np.ndarray]:
+    """The spin of frame `k` (particles `p`) where the file has one: `orientations`
+    (`particles/orientation`, HOOMD's w x y z), `inertia` (the x moment of
+    `particles/moment_inertia`) and `angular_velocities`, in kinema's files
+    `log/particles/kinema/omega` (float64, exact), in another's from `particles/angmom` and
+    `particles/moment_inertia` (HOOMD's conjugate momentum of a sphere: its x moment of
+    inertia; `_quaternions.omega_of_angmom`). Nothing for a file whose frames leave them at
+    their defaults (identity, 0), as HOOMD writes a run without rotation."""
+    out: dict[str, np.ndarray] = {}
+    has = {name: f.file.chunk_exists(frame=k, name=name) or f.file.chunk_exists(frame=0, name=name) for name in ("particles/orientation", "particles/angmom")}
+    if not any(has.values()):
+        return out
+    q = np.asarray(p.orientation, dtype=np.float64).reshape(-1, 4)
+    out["orientations"] = q / np.linalg.norm(q, axis=1, keepdims=True)
+    out["inertia"] = np.asarray(p.moment_inertia, dtype=np.float64).reshape(-1, 3)[:, 0]
+    omega = _log(f, k, "particles/kinema/omega") if own else None
+    if omega is not None:
+        out["angular_velocities"] = np.asarray(omega, dtype=np.float64).reshape(-1, 3)
+    elif has["particles/angmom"]:
+        out["angular_velocities"] = omega_of_angmom(out["orientations"], np.asarray(p.angmom, dtype=np.float64).reshape(-1, 4), out["inertia"])
+    return out
+
+
 def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
     """Read the GSD file `path` (schema "hoomd") with `gsd.hoomd`.
 
@@ -39,7 +63,9 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
     is read by kinema's ids (`log/particles/kinema/id`); without them it is refused.
     kinema's files also give the periodic axes (`log/kinema/periodic`: along another axis
     the cell is the box halved), the springs (bonds of type "spring", as ids) and the
-    colours (`log/particles/Color`).
+    colours (`log/particles/Color`). Spin: `particles/orientation` as the orientations,
+    and the angular velocities from kinema's `log/particles/kinema/omega`, else from
+    HOOMD's `particles/angmom` and `moment_inertia` (a sphere's: `_spin`).
 
     Units: HOOMD is unitless. A file kinema wrote (`log/kinema/time`) is SI and its times are
     `log/kinema/time`; another file's numbers are in the units `units` gives (see
@@ -104,6 +130,7 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
             if typeid.size and (typeid.min() < 0 or typeid.max() >= len(types)):
                 raise fail(path, f"{where}: particles/typeid holds {int(typeid.max())}, but particles/types names {len(types)} types")
             color = _log(f, k, "particles/Color") if own else None
+            spin = _spin(f, k, p, own)
             if ids is not None and frame.bonds.N and list(frame.bonds.types) == ["spring"]:
                 ends = np.asarray(ids, dtype=np.int64).reshape(-1)[np.asarray(frame.bonds.group, dtype=np.int64).reshape(-1, 2)]
                 springs.extend(map(tuple, ends.tolist()))
@@ -117,6 +144,7 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
                     radii=np.asarray(p.diameter, dtype=np.float64).reshape(-1) / 2,
                     species=np.array(types, dtype=object)[typeid] if types else None,
                     colors=None if color is None else np.asarray(color, dtype=np.float64).reshape(-1, 3),
+                    **spin,
                     time=None if time is None else float(np.asarray(time).reshape(-1)[0]),
                     step=int(c.step),
                     box=Box(origin - lengths / 2, origin + lengths / 2, periodic),

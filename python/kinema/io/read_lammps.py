@@ -18,9 +18,11 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .._checks import SPECIES_PATTERN
+from ..contact_record import FIELDS, ContactRecord
 from ._assemble import Box, RawFrame, assemble
 from ._h5md_checks import fail
 from .h5md_reader import LoadedTrajectory
+from .lammps_dump import LOCAL_COLUMNS, ORIENTATION_COLUMNS, SPIN_COLUMNS
 from .units import NAMES, Scales, scales
 
 # A dump's coordinates, in the order kinema takes them: wrapped, unwrapped, scaled, scaled unwrapped.
@@ -156,10 +158,81 @@ def read_dump(path: Path, units: Any = None) -> LoadedTrajectory:
                 raise fail(path, f"{where}: the file ends before the {n} atoms of the frame")
             time = step = n = None
             i += 1 + len(frames[-1].positions)
+        elif item == "NUMBER OF ENTRIES":
+            raise fail(
+                path,
+                f"line {i + 1}: a LAMMPS dump local file (ITEM: NUMBER OF ENTRIES), not a dump of atoms; read kinema's contacts with kinema.io.read_contacts_dump",
+            )
         else:
             raise fail(path, f"line {i + 1}: ITEM: {item[:40]} is not an item of a LAMMPS dump kinema reads")
     scale = _unit_scales(path, stated, units, "ITEM: UNITS")
     return assemble(path, frames, scale, dim=2 if frames and _two_d(frames) else 3, creator="LAMMPS dump")
+
+
+def read_contacts_dump(path: str | Path) -> tuple[np.ndarray, ContactRecord]:
+    """Read a contacts file of kinema's LAMMPS export (`<stem>_contacts.dump` or
+    `<stem>_collider_contacts.dump`, `lammps_dump.write_contacts_local`: LAMMPS's `dump
+    local` layout) back: the `ITEM: TIMESTEP` of each frame (F,) and the contacts as a
+    `kinema.contact_record.ContactRecord` in SI units, `i` and `j` kinema's ids (the
+    file's `id1`, `id2` − 1; `j` −1 in the colliders' file), `collider` −1 in the
+    particles' file. Columns other than kinema's (`LOCAL_COLUMNS`) are skipped. A file that
+    is not such a dump is a `TrajectoryFileError` naming the line."""
+    path = Path(path)
+    lines = _text(path).splitlines()
+    by_stem = {stem: name for name, stem in LOCAL_COLUMNS.items()}
+    steps: list[int] = []
+    frames: list[dict[str, np.ndarray]] = []
+    i, step, n = 0, None, None
+    while i < len(lines):
+        line = lines[i].strip()
+        if not line:
+            i += 1
+            continue
+        if not line.startswith("ITEM:"):
+            raise fail(path, f"line {i + 1}: {line[:40]!r} where an ITEM: line was due")
+        item = line[5:].strip()
+        if item == "TIMESTEP":
+            step = _value(path, lines, i, int, "ITEM: TIMESTEP")
+            i += 2
+        elif item == "NUMBER OF ENTRIES":
+            n = _value(path, lines, i, int, "ITEM: NUMBER OF ENTRIES")
+            if n < 0:
+                raise fail(path, f"line {i + 2}: NUMBER OF ENTRIES = {n} is invalid: it must be >= 0")
+            i += 2
+        elif item.startswith("BOX BOUNDS"):
+            i += 4
+        elif item.startswith("ENTRIES"):
+            if n is None or step is None:
+                raise fail(path, f"line {i + 1}: ITEM: ENTRIES before ITEM: TIMESTEP and ITEM: NUMBER OF ENTRIES")
+            columns = item.split()[1:]
+            if len(lines) < i + 1 + n:
+                raise fail(path, f"line {i + 1}: the file ends before the {n} entries of the frame")
+            table = _words(path, lines[i + 1 : i + 1 + n], i + 2, len(columns), f"timestep {step}")
+            at = {c: k for k, c in enumerate(columns)}
+            if "id1" not in at:
+                raise fail(path, f"line {i + 1}: ITEM: ENTRIES has no id1 column (kinema's contacts: {' '.join(columns)})")
+            frame: dict[str, np.ndarray] = {}
+            for stem, name in by_stem.items():
+                kind = FIELDS[name].kind
+                dtype = np.float64 if kind == "real" else np.int64
+                if stem in at:
+                    frame[name] = _as(path, table[:, at[stem]], dtype, stem, f"timestep {step}", i + 2)
+                elif all(stem + c in at for c in "xyz"):
+                    frame[name] = np.stack([_as(path, table[:, at[stem + c]], dtype, stem + c, f"timestep {step}", i + 2) for c in "xyz"], axis=1)
+            frame["i"] = frame["i"] - 1
+            frame["j"] = frame["j"] - 1 if "j" in frame else np.full(n, -1, dtype=np.int64)
+            frame.setdefault("collider", np.full(n, -1, dtype=np.int64))
+            if "sliding" in frame:
+                frame["sliding"] = frame["sliding"] != 0
+            steps.append(int(step))
+            frames.append(frame)
+            step = n = None
+            i += 1 + len(table)
+        else:
+            raise fail(path, f"line {i + 1}: ITEM: {item[:40]} is not an item of a LAMMPS dump local file")
+    if not frames:
+        raise fail(path, "holds no frame (no ITEM: ENTRIES)")
+    return np.array(steps, dtype=np.int64), ContactRecord.from_frames(frames)
 
 
 def _axis_box(path: Path, vectors: np.ndarray, origin: np.ndarray, periodic: np.ndarray, where: str) -> Box:
@@ -223,6 +296,10 @@ def _dump_frame(path: Path, columns: list[str], rows: list[str], first: int, whe
             raise fail(path, f"{where}: scaled positions ({' '.join(names)}) but no ITEM: BOX BOUNDS")
         x = box.lo + x * (box.hi - box.lo)
     v = np.stack([col(a) for a in ("vx", "vy", "vz")], axis=1) if all(a in at for a in ("vx", "vy", "vz")) else None
+    spin = {}
+    for name, columns in (("angular_velocities", SPIN_COLUMNS), ("orientations", ORIENTATION_COLUMNS)):
+        if all(a in at for a in columns.split()):
+            spin[name] = np.stack([col(a) for a in columns.split()], axis=1)
     radii = col("radius") if "radius" in at else col("diameter") / 2 if "diameter" in at else None
     kind = "element" if "element" in at else "type" if "type" in at else None
     return RawFrame(
@@ -233,6 +310,7 @@ def _dump_frame(path: Path, columns: list[str], rows: list[str], first: int, whe
         masses=col("mass") if "mass" in at else None,
         radii=radii,
         species=None if kind is None else table[:, at[kind]].astype(str).astype(object),
+        **spin,
         time=time,
         step=step,
         box=box,

@@ -28,7 +28,8 @@ def read_usd(path: Path) -> LoadedTrajectory:
     (m), `velocities` (m/s), `widths` / 2 (radii, m), `ids`, the primvars `mass`
     (kg) and `species`; the colours (`displayColor`, linear, back to sRGB) of the
     particles `kinema:colorIds` names, the others' being the speed colour map's (NaN:
-    none); the springs (`kinema:springs`, id pairs). float32 values come back as the
+    none); the springs (`kinema:springs`, id pairs); the spin of `/World/spheres` (its
+    `orientationsf` and `angularVelocities`, degrees per second as rad/s). float32 values come back as the
     float64 of the float32. The colliders (guide meshes) are not read.
 
     Another stage: its first `UsdGeom.Points` prim (in the order of the stage's tree), a
@@ -87,6 +88,8 @@ def read_usd(path: Path) -> LoadedTrajectory:
         if not codes:
             codes, times = [None], [None]  # the default values: one frame, at time 0
     reading = _Reading(path, points, own, kilograms, Usd, UsdGeom)
+    spheres = stage.GetPrimAtPath("/World/spheres") if own else None
+    reading.spheres = UsdGeom.PointInstancer(spheres) if spheres and spheres.IsA(UsdGeom.PointInstancer) else None
     frames = [reading.frame(k, code, time) for k, (code, time) in enumerate(zip(codes, times, strict=True))]
     springs = None
     if own:
@@ -137,6 +140,7 @@ class _Reading:
         self.colours: dict[int, np.ndarray] = {}
         self.xformable = UsdGeom.Xformable(points)
         self.constant = UsdGeom.Tokens.constant
+        self.spheres: Any = None  # kinema's /World/spheres (a PointInstancer: the spin)
 
     def _values(self, attr: Any, code: Any, n: int | None, name: str, where: str, width: int = 1, constant: bool = False) -> np.ndarray | None:
         """The values of `attr` (an attribute, or a primvar: flattened through its indices)
@@ -180,10 +184,12 @@ class _Reading:
             if display is not None:
                 for i, rgb in zip(ids[mine].tolist(), display[mine], strict=True):
                     self.colours.setdefault(int(i), linear_to_srgb(rgb.astype(np.float64)))
+        spin = self._spin(at, ids, n, where) if self.spheres is not None else {}
         return RawFrame(
             positions=x,
             where=where,
             ids=None if ids is None else ids.astype(np.int64),
+            **spin,
             velocities=v,
             masses=None if masses is None else masses.astype(np.float64),
             radii=radii,
@@ -191,6 +197,29 @@ class _Reading:
             time=time,
             step=k,
         )
+
+    def _spin(self, at: Any, ids: np.ndarray | None, n: int, where: str) -> dict[str, np.ndarray]:
+        """kinema's spin of a frame, from `/World/spheres` (`usd_writer._Spheres`): the
+        orientations (`orientationsf`, else the half-precision `orientations`), w first, and
+        the angular velocities (`angularVelocities`, degrees per second, as rad/s), one per
+        point of the frame in the same order (its `ids` must be the points')."""
+        s = self.spheres
+        own_ids = self._values(s.GetIdsAttr(), at, n, "/World/spheres ids", where)
+        if own_ids is not None and ids is not None and not np.array_equal(own_ids, ids):
+            raise fail(
+                self.path,
+                f"{where}: /World/spheres has the ids {own_ids[:5].tolist()}... but /World/particles {ids[:5].tolist()}...: they must be the same particles",
+            )
+        out = {}
+        full = s.GetOrientationsfAttr()
+        q = self._values(full if full and full.HasAuthoredValue() else s.GetOrientationsAttr(), at, n, "/World/spheres orientations", where, 4)
+        if q is not None:  # (numpy of Gf quaternions: i, j, k, w)
+            q = q.astype(np.float64)[:, [3, 0, 1, 2]]
+            out["orientations"] = q / np.linalg.norm(q, axis=1, keepdims=True) if len(q) else q
+        w = self._values(s.GetAngularVelocitiesAttr(), at, n, "/World/spheres angularVelocities", where, 3)
+        if w is not None:
+            out["angular_velocities"] = np.radians(w.astype(np.float64))
+        return out
 
     def _placed(self, at: Any, x: np.ndarray, v: np.ndarray | None, radii: np.ndarray | None) -> tuple:
         """Another stage's points in its world: the prim's local-to-world transform on the

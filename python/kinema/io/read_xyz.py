@@ -117,6 +117,21 @@ def _column(path: Path, table: np.ndarray, start: int, count: int, kind: str, na
     return words
 
 
+#: An `orientation` column (x y z w, OVITO's order, as kinema writes it) as kinema's w x y z.
+WXYZ = [3, 0, 1, 2]
+
+
+def _vectors(path: Path, columns: dict[str, np.ndarray], name: str, width: int, where: str) -> np.ndarray | None:
+    """The column `name` of `width` real numbers per particle (`omega:R:3`,
+    `orientation:R:4`), `None` where the frame has none; another shape is refused."""
+    a = columns.get(name)
+    if a is None:
+        return None
+    if a.ndim != 2 or a.shape[1] != width or a.dtype != np.float64:
+        raise fail(path, f"{where}: column {name!r} must be {width} real numbers ({name}:R:{width})")
+    return a
+
+
 def _first(columns: dict[str, np.ndarray], names: tuple[str, ...]) -> np.ndarray | None:
     return next((columns[n] for n in names if n in columns), None)
 
@@ -150,7 +165,9 @@ def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
     standard atomic masses, as `Atoms.get_masses()` gives, with a `UnitWarning`), `radius`,
     `id` (particles followed by id: a number of rows that varies
     is read as births and deaths), the names of `type` (OVITO's and kinema's particle type),
-    else `species`, `color` (r g b in [0, 1], kinema's); the cell of `Lattice` (along the axes only) at `Origin` with `pbc`;
+    else `species`, `color` (r g b in [0, 1], kinema's), `omega` (angular velocities, in 1 /
+    the time unit) and `orientation` (unit quaternions x y z w, OVITO's order, given back w
+    first); the cell of `Lattice` (along the axes only) at `Origin` with `pbc`;
     `Time` (or `time`). Other columns and keys are skipped.
 
     Units: a file's `units=` key (kinema writes `units=SI`) says them; a file without one
@@ -222,6 +239,8 @@ def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
                 radii=_first(columns, _RADII),
                 species=None if names is None else names.astype(str),
                 colors=columns["color"] if "color" in columns and columns["color"].ndim == 2 and columns["color"].shape[1] == 3 else None,
+                angular_velocities=_vectors(path, columns, "omega", 3, where),
+                orientations=None if (q := _vectors(path, columns, "orientation", 4, where)) is None else q[:, WXYZ],
                 time=time,
                 box=box,
             )

@@ -54,6 +54,18 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
       ends are ids the trajectory does not hold is left out. `kinema:springs` (int64,
       constant): the ids at the two ends of each spring, a pair after pair (2 S values); a
       frame's curves are the springs among them whose two ends are alive, in that order.
+    - `/World/spheres` where the trajectory has spin (angular velocities, orientations): a
+      `UsdGeom.PointInstancer` of one prototype, `/World/spheres/prototypes/ball`, a unit
+      UV sphere with texture coordinates (`primvars:st`) and stripes of two greys along its
+      meridians (`displayColor`, uniform), so that a ball seen turning turns: per frame
+      (time sample) `positions` (m), `scales` (r, r, r), `protoIndices` (all 0), `ids`,
+      `velocities` (m/s), `angularVelocities` (degrees per second, as USD's schema has
+      them) and the orientations, as `orientations` (quath, the attribute every reader
+      knows, Blender's importer among them) and `orientationsf` (quatf, which USD prefers
+      where both are there), identity where the trajectory has angular velocities but no
+      orientations. In Blender the instancer's balls turn with the particles: give the
+      prototype a material with an image texture (its UVs are there) to see a textured ball
+      roll; hide `/World/particles`, whose point cloud draws spheres at the same places.
     - `/World/colliders`: a `UsdGeom.Mesh` per collider, `box_k` (its 8 corners and 6
       quads; open faces closed at the scene's extent), `plane_k` (one square quad in the
       plane, twice the scene's size wide, centred on the plane's point nearest the scene's
@@ -140,14 +152,19 @@ def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, 
             time.Set(float(fr.t[k]), Usd.TimeCode(float(k)))
         particles = _Particles(stage, fr, colours, species, pxr)
         springs = _Springs(stage, fr, pairs, pxr) if len(pairs) else None
+        spheres = _Spheres(stage, fr, pxr) if fr.angular_velocities is not None or fr.orientations is not None else None
         for i in range(fr.n_frames):
             particles.write(i)
             if springs is not None:
                 springs.write(i)
+            if spheres is not None:
+                spheres.write(i)
             on_frame(i)
         particles.finish()
         if springs is not None:
             springs.finish()
+        if spheres is not None:
+            spheres.finish(particles.lo, particles.hi)
         _colliders(stage, traj, fr, pxr)
         if not stage.GetRootLayer().Save():
             raise FileWriteError(errno.EIO, f"usd-core could not save the stage ({where})", str(path))
@@ -158,7 +175,7 @@ def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, 
             if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(tmp)), str(packed)) or not _whole_package(packed, tmp):
                 raise FileWriteError(errno.EIO, f"usd-core could not make the .usdz package ({where})", str(path))
             tmp = packed
-        del stage, particles, springs  # (its layer lets go of the file)
+        del stage, particles, springs, spheres  # (its layer lets go of the file)
         copy_into(tmp, path)
     except OSError as e:
         if isinstance(e, FileWriteError):
@@ -360,6 +377,97 @@ class _Springs:
             reach = 0.5 * (self.width or 0.0)
             lo, hi = self.lo - reach, self.hi + reach
             self.prim.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
+
+
+#: The two greys of a ball's stripes (sRGB 8-bit), by meridian: its turning shows.
+BALL_STRIPES = ((220, 220, 220), (60, 60, 60))
+
+
+class _Spheres:
+    """`/World/spheres`, a `UsdGeom.PointInstancer` of a textured unit ball placed, scaled
+    and turned as each particle alive at the frame (see write_usd)."""
+
+    def __init__(self, stage: Any, fr: Frames, pxr: tuple) -> None:
+        Gf, Sdf, Usd, UsdGeom, Vt = pxr
+        self.fr, self.pxr = fr, pxr
+        self.prim = instancer = UsdGeom.PointInstancer.Define(stage, "/World/spheres")
+        # the prototype beneath the instancer, as USD advises: drawn only where it is instanced
+        UsdGeom.Scope.Define(stage, "/World/spheres/prototypes")
+        ball = UsdGeom.Mesh.Define(stage, "/World/spheres/prototypes/ball")
+        points, faces, st, stripes = ball_mesh()
+        ball.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points.astype(np.float32)))
+        ball.CreateFaceVertexCountsAttr(Vt.IntArray([len(f) for f in faces]))
+        ball.CreateFaceVertexIndicesAttr(Vt.IntArray([int(i) for f in faces for i in f]))
+        ball.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(points.astype(np.float32)))
+        ball.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+        ball.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+        ball.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(-1.0, -1.0, -1.0), Gf.Vec3f(1.0, 1.0, 1.0)]))
+        primvars = UsdGeom.PrimvarsAPI(ball)
+        primvars.CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying).Set(Vt.Vec2fArray.FromNumpy(st.astype(np.float32)))
+        grey = _srgb_to_linear(np.array(BALL_STRIPES, dtype=np.float64) / 255.0)[stripes]
+        ball.CreateDisplayColorPrimvar(UsdGeom.Tokens.uniform).Set(Vt.Vec3fArray.FromNumpy(grey.astype(np.float32)))
+        instancer.CreatePrototypesRel().SetTargets([ball.GetPath()])
+        self.attrs = {
+            "positions": instancer.CreatePositionsAttr(),
+            "scales": instancer.CreateScalesAttr(),
+            "protoIndices": instancer.CreateProtoIndicesAttr(),
+            "ids": instancer.CreateIdsAttr(),
+            "velocities": instancer.CreateVelocitiesAttr(),
+            "angularVelocities": instancer.CreateAngularVelocitiesAttr(),
+            "orientations": instancer.CreateOrientationsAttr(),
+            "orientationsf": instancer.CreateOrientationsfAttr(),
+        }
+        self.radii = fr.radii if fr.radii is not None else np.zeros(fr.n_particles)
+
+    def write(self, i: int) -> None:
+        """The time samples of frame `i` (time code `i`)."""
+        Gf, Sdf, Usd, UsdGeom, Vt = self.pxr
+        fr, code, live = self.fr, Usd.TimeCode(float(i)), self.fr.live(i)
+        q = fr.orientations[i][live] if fr.orientations is not None else np.tile([1.0, 0.0, 0.0, 0.0], (live.size, 1))
+        omega = fr.angular_velocities[i][live] if fr.angular_velocities is not None else np.zeros((live.size, 3))
+        # Vt's quaternion arrays from NumPy take (i, j, k, w): the imaginary part first
+        ijkw = np.ascontiguousarray(q[:, [1, 2, 3, 0]])
+        values = {
+            "positions": Vt.Vec3fArray.FromNumpy(fr.positions[i][live].astype(np.float32)),
+            "scales": Vt.Vec3fArray.FromNumpy(np.repeat(self.radii[live][:, None], 3, axis=1).astype(np.float32)),
+            "protoIndices": Vt.IntArray.FromNumpy(np.zeros(live.size, dtype=np.int32)),
+            "ids": Vt.Int64Array.FromNumpy(fr.ids[live].astype(np.int64)),
+            "velocities": Vt.Vec3fArray.FromNumpy(fr.velocities[i][live].astype(np.float32)),
+            "angularVelocities": Vt.Vec3fArray.FromNumpy(np.degrees(omega).astype(np.float32)),
+            "orientations": Vt.QuathArray.FromNumpy(ijkw.astype(np.float16)),
+            "orientationsf": Vt.QuatfArray.FromNumpy(ijkw.astype(np.float32)),
+        }
+        for name, value in values.items():
+            self.attrs[name].Set(value, code)
+
+    def finish(self, lo: np.ndarray, hi: np.ndarray) -> None:
+        """The instancer's extent: the particles' (`_Particles`' `lo`, `hi`, m)."""
+        Gf, Sdf, Usd, UsdGeom, Vt = self.pxr
+        if np.all(lo <= hi):
+            self.prim.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, lo)), Gf.Vec3f(*map(float, hi))]))
+
+
+def ball_mesh() -> tuple[np.ndarray, list[list[int]], np.ndarray, np.ndarray]:
+    """The unit ball of `_Spheres`: a UV sphere as `sphere_mesh` makes it (its points,
+    its faces counter-clockwise seen from outside), with its texture coordinates per face
+    vertex (u = longitude / 2π, v = 1 − colatitude / π: an equirectangular image wraps it
+    once) and the stripe of each face (0 or 1 by longitude segment, for `BALL_STRIPES`)."""
+    points, faces = sphere_mesh(np.zeros(3), 1.0)
+    m, rings = SPHERE_SEGMENTS, SPHERE_RINGS
+    st, stripes = [], []
+    # sphere_mesh's faces: m north triangles, (rings - 2) × m quads, m south triangles
+    for k in range(m):
+        st += [((k + 0.5) / m, 1.0), (k / m, 1 - 1 / rings), ((k + 1) / m, 1 - 1 / rings)]
+        stripes.append(k % 2)
+    for j in range(rings - 2):
+        for k in range(m):
+            top, bottom = 1 - (j + 1) / rings, 1 - (j + 2) / rings
+            st += [(k / m, top), (k / m, bottom), ((k + 1) / m, bottom), ((k + 1) / m, top)]
+            stripes.append(k % 2)
+    for k in range(m):
+        st += [((k + 0.5) / m, 0.0), ((k + 1) / m, 1 / rings), (k / m, 1 / rings)]
+        stripes.append(k % 2)
+    return points, faces, np.array(st, dtype=np.float64), np.array(stripes, dtype=np.int64)
 
 
 def _whole_package(packed: Path, layer: Path) -> bool:

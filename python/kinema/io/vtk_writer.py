@@ -90,9 +90,10 @@ def _vtp(fr: Frames, i: int, extras: Extras) -> str:
     """Frame `i`: the particles alive at it as points and vertex cells, point data `v`
     (velocity), `speed`, `radius`, `mass`, `id` (the names OVITO maps to Velocity,
     Radius, Mass and Particle Identifier; ParaView takes `v` as the active vectors),
-    `type` (the index of the particle's species in the field `type_names`) and `Color`
-    (r g b in [0, 1], the name OVITO maps to its Color) where the trajectory has them, the
-    field `TimeValue`."""
+    `type` (the index of the particle's species in the field `type_names`), `Color`
+    (r g b in [0, 1], the name OVITO maps to its Color), `angular_velocity` (rad/s) and
+    `orientation` (the unit quaternion w x y z) where the trajectory has them, the field
+    `TimeValue`."""
     live = fr.live(i)
     n = live.size
     x, v = fr.positions[i][live], fr.velocities[i][live]
@@ -108,6 +109,10 @@ def _vtp(fr: Frames, i: int, extras: Extras) -> str:
         field_data.append(_vtk_strings("type_names", extras.names))
     if extras.colors is not None:
         point_data.append(_vtk_array("Color", extras.colors[live], 3))
+    if fr.angular_velocities is not None:
+        point_data.append(_vtk_array("angular_velocity", fr.angular_velocities[i][live], 3))
+    if fr.orientations is not None:
+        point_data.append(_vtk_array("orientation", fr.orientations[i][live], 4))
     # One vertex cell per particle, so that ParaView draws the points without a filter (and
     # OVITO reads the file as particles: as many vertices as points, no other cells).
     cells = np.arange(n, dtype=np.int64)
@@ -137,13 +142,63 @@ def _springs_vtp(fr: Frames, i: int, springs: np.ndarray, rest: np.ndarray) -> s
     return _polydata(points, cell_data=[_vtk_array("id1", id1), _vtk_array("id2", id2)], declared=("Lines",), lines=(k, k[1::2] + 1))
 
 
-def _vtm(particles: str, springs: str) -> str:
-    """A multi-block file of one frame: block 0 `particles` (the frame's .vtp), block 1
-    `springs` (its springs' .vtp)."""
+def _contacts_vtp(fr: Frames, i: int, record: Any, periodic: np.ndarray, edges: np.ndarray, rest: np.ndarray) -> str:
+    """The contacts between particles at frame `i` (`record`, a
+    `kinema.contact_record.ContactRecord`) as a force network: one line cell per contact
+    from the centre of `i` to the centre of `j` (each its own two points, m; across a
+    periodic boundary, `j`'s image nearest `i`: the `periodic` axes of cell `edges`),
+    cell data `force_n_magnitude` and `force_t_magnitude` (N), `sliding` (1 or 0),
+    `overlap` (m), `impulse_n_magnitude` and `impulse_t_magnitude` (N s, the impulse
+    model's) where the record has them, and `id1`, `id2` the two ids. ParaView colours the
+    lines by a cell array (a force chain picture), OVITO reads the file as lines.
+
+    A frame without a contact between particles holds one line of zero length at `rest`
+    with `id1` = `id2` = -1 and zeros, as `_springs_vtp` does (OVITO 3.17 dies on a file
+    of no lines). Contacts with colliders are not drawn (no second centre)."""
+    part = record.frame(i)
+    pairs = part["j"] >= 0
+    k = int(pairs.sum())
+    if k:
+        order = np.argsort(fr.ids, kind="stable")  # the columns of ids
+        at = order[np.searchsorted(fr.ids[order], np.concatenate([part["i"][pairs], part["j"][pairs]]))]
+        a, b = fr.positions[i][at[:k]], fr.positions[i][at[k:]]
+        if periodic.any():  # j's image nearest i
+            length = np.where(periodic, edges, 1.0)
+            b = b + np.where(periodic, np.round((a - b) / length) * length, 0.0)
+        points = np.stack([a, b], axis=1).reshape(-1, 3)
+        id1, id2 = part["i"][pairs], part["j"][pairs]
+    else:
+        points, id1, id2 = np.stack([rest, rest]), np.array([-1], dtype=np.int64), np.array([-1], dtype=np.int64)
+
+    def per_line(values: np.ndarray) -> np.ndarray:
+        return values if k else np.zeros(1, dtype=values.dtype)
+
+    cell_data = []
+    for name, word in (
+        ("force_n", "force_n_magnitude"),
+        ("force_t", "force_t_magnitude"),
+        ("impulse_n", "impulse_n_magnitude"),
+        ("impulse_t", "impulse_t_magnitude"),
+    ):
+        if name in part:
+            a = np.asarray(part[name], dtype=np.float64)[pairs]
+            cell_data.append(_vtk_array(word, per_line(np.abs(a) if a.ndim == 1 else np.linalg.norm(a, axis=1))))
+    if "sliding" in part:
+        cell_data.append(_vtk_array("sliding", per_line(np.asarray(part["sliding"])[pairs].astype(np.int64))))
+    if "overlap" in part:
+        cell_data.append(_vtk_array("overlap", per_line(np.asarray(part["overlap"], dtype=np.float64)[pairs])))
+    cell_data += [_vtk_array("id1", np.asarray(id1, dtype=np.int64)), _vtk_array("id2", np.asarray(id2, dtype=np.int64))]
+    ends = np.arange(len(points), dtype=np.int64)
+    return _polydata(points, cell_data=cell_data, declared=("Lines",), lines=(ends, ends[1::2] + 1))
+
+
+def _vtm(blocks: list[tuple[str, str]]) -> str:
+    """A multi-block file of one frame: its blocks (name, file) in order: `particles` (the
+    frame's .vtp), then `springs` and `contacts` where the trajectory has them."""
+    sets = "".join(f'<DataSet index="{k}" name={quoteattr(name)} file={quoteattr(file)}/>\n' for k, (name, file) in enumerate(blocks))
     return (
         '<?xml version="1.0"?>\n<VTKFile type="vtkMultiBlockDataSet" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n'
-        f'<vtkMultiBlockDataSet>\n<DataSet index="0" name="particles" file={quoteattr(particles)}/>\n'
-        f'<DataSet index="1" name="springs" file={quoteattr(springs)}/>\n</vtkMultiBlockDataSet>\n</VTKFile>\n'
+        f"<vtkMultiBlockDataSet>\n{sets}</vtkMultiBlockDataSet>\n</VTKFile>\n"
     )
 
 
@@ -303,7 +358,13 @@ def write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     `Color` to Velocity, Radius, Mass, Particle Identifier and Color, `type` to Material
     Type. With `springs`, each frame is a multi-block `<stem>_00000.vtm` (the one the
     .pvd names) of the particles .vtp and `<stem>_springs_00000.vtp`, a line per spring
-    whose ends are alive (`_springs_vtp`), which OVITO reads as Lines. When the trajectory
+    whose ends are alive (`_springs_vtp`), which OVITO reads as Lines. With a
+    `contact_record` (`World.run(record_contacts=True)`) each frame's .vtm also holds
+    `<stem>_contacts_00000.vtp`, the contacts between particles as lines from centre to
+    centre with the cell data `force_n_magnitude`, `force_t_magnitude`, `sliding`,
+    `overlap` (and the impulse model's `impulse_n_magnitude`, `impulse_t_magnitude`),
+    `id1` and `id2` (`_contacts_vtp`): force chains, which ParaView colours by a force
+    (Color by `force_n_magnitude` on that block). When the trajectory
     has `colliders`, `<stem>_colliders.vtp` beside the .pvd holds them: a box as its 12
     edges (lines), a plane as a square (a polygon) that covers the scene, a sphere obstacle
     as a sphere of polygons (2D: a rectangle, a segment and a disk at z = 0), a mesh as its
@@ -318,19 +379,23 @@ def write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     place of an existing `<stem>_vtk/` only if that holds nothing but an earlier series.
     `on_frame(i)` is called after frame `i` is written."""
     folder, stem, _ = series_names(path, "vtk", ".vtp", SUFFIXES)
-    # the frames, and with springs their springs files and the multi-block files of both
-    pattern = rf"{re.escape(stem)}(_springs)?_\d{{{SERIES_DIGITS},}}\.(vtp|vtm)"
+    # the frames, and with springs or contacts their files and the multi-block files of all
+    pattern = rf"{re.escape(stem)}(_springs|_contacts)?_\d{{{SERIES_DIGITS},}}\.(vtp|vtm)"
     pvd = path.with_name(stem + ".pvd")
     colliders = path.with_name(stem + "_colliders.vtp")
     scenery = _colliders_vtp(traj, fr)  # before anything is written: a bad collider is a ValueError
     extras = Extras(traj, fr)
-    middle = np.zeros(3)  # where a frame without springs puts its line of zero length
-    if extras.springs is not None:
+    record = getattr(traj, "contact_record", None)
+    middle = np.zeros(3)  # where a frame without springs (contacts) puts its line of zero length
+    periodic, edges = np.zeros(3, dtype=bool), np.zeros(3)
+    if extras.springs is not None or record is not None:
         cell = trajectory_cell(traj, fr)
         middle = 0.5 * (cell.lo + cell.hi)
+        periodic, edges = np.asarray(cell.periodic, dtype=bool), cell.hi - cell.lo
     names = [f"{stem}_{i:0{SERIES_DIGITS}d}.vtp" for i in range(fr.n_frames)]
-    # With springs each frame is a multi-block file (.vtm) of its particles and its springs.
-    entries = names if extras.springs is None else [f"{stem}_{i:0{SERIES_DIGITS}d}.vtm" for i in range(fr.n_frames)]
+    # With springs or contacts each frame is a multi-block file (.vtm) of its particles and those.
+    blocks = extras.springs is not None or record is not None
+    entries = names if not blocks else [f"{stem}_{i:0{SERIES_DIGITS}d}.vtm" for i in range(fr.n_frames)]
     datasets = "\n".join(f'<DataSet timestep="{float(fr.t[i])!r}" part="0" file={quoteattr(f"{folder.name}/{name}")}/>' for i, name in enumerate(entries))
     collection = (
         f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="1.0" byte_order="LittleEndian">\n<Collection>\n{datasets}\n</Collection>\n</VTKFile>\n'
@@ -347,11 +412,16 @@ def write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
         with out.naming(folder):
             for i, name in enumerate(names):
                 (tmp / name).write_text(_vtp(fr, i, extras), encoding="ascii")
-                if extras.springs is not None:
-                    spring_name = f"{stem}_springs_{i:0{SERIES_DIGITS}d}.vtp"
-                    (tmp / spring_name).write_text(_springs_vtp(fr, i, extras.springs, middle), encoding="ascii")
-                    (tmp / entries[i]).write_text(_vtm(name, spring_name), encoding="utf-8")
-                    written += [folder / entries[i], folder / name, folder / spring_name]
+                if blocks:
+                    parts = [("particles", name)]
+                    if extras.springs is not None:
+                        parts.append(("springs", f"{stem}_springs_{i:0{SERIES_DIGITS}d}.vtp"))
+                        (tmp / parts[-1][1]).write_text(_springs_vtp(fr, i, extras.springs, middle), encoding="ascii")
+                    if record is not None:
+                        parts.append(("contacts", f"{stem}_contacts_{i:0{SERIES_DIGITS}d}.vtp"))
+                        (tmp / parts[-1][1]).write_text(_contacts_vtp(fr, i, record, periodic, edges, middle), encoding="ascii")
+                    (tmp / entries[i]).write_text(_vtm(parts), encoding="utf-8")
+                    written += [folder / entries[i], *(folder / file for _, file in parts)]
                 else:
                     written.append(folder / name)
                 on_frame(i)

@@ -11,13 +11,18 @@ import numpy as np
 from ._cell import ELEMENTS, Extras, trajectory_cell
 from ._files import Frames, atomic_file
 
+#: The order of an orientation quaternion's components in the `orientation` column: x y z w,
+#: as OVITO reads and writes it (kinema's quaternions are w x y z).
+XYZW = [1, 2, 3, 0]
+
 
 def _xyz(fr: Frames, i: int, header: str, first: list[str], after_pos: list[str], colors: np.ndarray | None) -> str:
     """Frame `i` of an extended XYZ file: the count, the comment line (`header` and the
     frame's `Time`), one row per particle alive at it: the columns of `Properties`, its
     `first` word (its type or species name), pos, its `after_pos` word (its `species`
-    symbol; empty without), velo, momenta, radius, mass, masses, color, id (those the
-    trajectory has; 17 significant digits, exact float64)."""
+    symbol; empty without), velo, momenta, radius, mass, masses, color, omega,
+    orientation (x y z w), id (those the trajectory has; 17 significant digits, exact
+    float64)."""
     live = fr.live(i)
     v = fr.velocities[i][live]
     masses = None if fr.masses is None else fr.masses[live][:, None]
@@ -30,6 +35,10 @@ def _xyz(fr: Frames, i: int, header: str, first: list[str], after_pos: list[str]
         cols += [masses, masses]
     if colors is not None:
         cols.append(colors[live])
+    if fr.angular_velocities is not None:
+        cols.append(fr.angular_velocities[i][live])
+    if fr.orientations is not None:
+        cols.append(fr.orientations[i][live][:, XYZW])
     pos, rest = fr.positions[i][live].tolist(), np.hstack(cols).tolist()
     rows = "".join(
         f"{first[c]} " + " ".join(map(repr, x)) + after_pos[c] + " " + " ".join(map(repr, r)) + f" {int(k)}\n"
@@ -74,6 +83,12 @@ def write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     names in `atoms.arrays["type"]`. Without species names the first column is
     `species`, every one `X`.
 
+    Spin: a trajectory with angular velocities gets an `omega:R:3` column (rad/s), one with
+    orientations an `orientation:R:4` column, the unit quaternion in the order x y z w:
+    OVITO's, which reads (and writes) these two columns as its Angular Velocity and
+    Orientation (X, Y, Z, W); ASE keeps them in `atoms.arrays["omega"]` and
+    `atoms.arrays["orientation"]`. kinema's reader gives the orientation back w first.
+
     Every float is written with 17 significant digits (exact for float64). The file is
     written under a temporary name and renamed at the end. `on_frame(i)` is called after
     frame `i` is written."""
@@ -98,6 +113,8 @@ def write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
         + ":radius:R:1" * has_r
         + ":mass:R:1:masses:R:1" * has_m
         + ":color:R:3" * has_c
+        + ":omega:R:3" * (fr.angular_velocities is not None)
+        + ":orientation:R:4" * (fr.orientations is not None)
         + ":id:I:1"
     )
     cell = trajectory_cell(traj, fr)

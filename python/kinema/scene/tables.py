@@ -713,5 +713,7 @@ class OutputTable(_Model):
     plot: bool = True
     # contact_events.csv: every begin and end of touch (World.contact_events), impulse model
     contact_events: bool = False
+    # each frame's contacts (World.run(record_contacts=True)) in trajectory.h5's /contacts
+    contacts: bool = False
 
     _video = field_validator("video", mode="before")(_exact("mp4", "gif", False))
