@@ -201,11 +201,6 @@ def test_the_spring_dashpot_contact_time_does_not_wait_for_speed():
         w.step(1)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 47: SimulationDiverged's message is built in Rust (crates/kinema/src/error.rs, Error::Diverged and advice()), "
-    "which advises implicit_euler to every world and prints t with Rust's shortest round trip in exponent form (5.9000000000000004e-2)",
-)
 def test_the_divergence_message_advises_only_what_the_world_accepts_and_prints_times_as_written():
     # the column with friction steps with Verlet only (a ValueError for implicit_euler)
     w = column(1e-3)

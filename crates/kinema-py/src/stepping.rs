@@ -27,6 +27,7 @@ pub fn world_err(e: Error) -> PyErr {
             dt,
             reason,
             advised_dt,
+            ..
         } => {
             let err = SimulationDiverged::new_err(e.to_string());
             Python::attach(|py| {

@@ -71,10 +71,10 @@ pub enum Error {
     /// world keeps the state from before the step.
     #[error(
         "the simulation diverged at step {step} (t = {} s, dt = {} s){}: {reason}; {}",
-        compact(time.to_string()),
-        compact(dt.to_string()),
+        significant(*time),
+        significant(*dt),
         particle.map(|p| format!(", first at particle {p}")).unwrap_or_default(),
-        advice(*dt, *advised_dt)
+        advice(*dt, *advised_dt, *verlet_only)
     )]
     Diverged {
         /// The step that failed (1 = the first step).
@@ -91,6 +91,9 @@ pub enum Error {
         /// The stable-step advisor's largest stable step for the world's method at the state
         /// before the step, s, when it could be estimated.
         advised_dt: Option<f64>,
+        /// Whether the world steps with velocity Verlet only (contacts with friction under a
+        /// force model): the advice then names no other method.
+        verlet_only: bool,
     },
     /// The user's callback failed; the inner error is its own.
     #[error("callback failed: {0}")]
@@ -156,13 +159,48 @@ impl fmt::Display for Divergence {
     }
 }
 
-/// The advice of a divergence message: the advisor's step when known.
-fn advice(dt: f64, advised: Option<f64>) -> String {
-    match advised {
+/// The advice of a divergence message: the advisor's step when known, and another method
+/// only where the world accepts one (`verlet_only`: it does not).
+fn advice(dt: f64, advised: Option<f64>, verlet_only: bool) -> String {
+    let step = match advised {
         Some(h) if h.is_finite() && h < dt => {
-            format!("the stable-step advisor gives dt <= {h:.4e} s for this method; reduce dt, or use implicit_euler for stiff springs")
+            format!("the stable-step advisor gives dt <= {} s for this method; ", significant(h))
         }
-        _ => "reduce dt, or use a more stable method (implicit_euler for stiff springs)".to_string(),
+        _ => String::new(),
+    };
+    if verlet_only {
+        format!("{step}reduce dt (contacts with friction under a force model step with velocity Verlet only)")
+    } else if step.is_empty() {
+        "reduce dt, or use a more stable method (implicit_euler for stiff springs)".to_string()
+    } else {
+        format!("{step}reduce dt, or use implicit_euler for stiff springs")
+    }
+}
+
+/// A number as a user writes it: six significant digits, trailing zeros dropped, in fixed
+/// notation from 1e-4 up to 1e6 and in exponent notation beyond (Python's `:g`, and its
+/// exponent's sign and two digits): 0.059, 0.001, 1e-05, 2.5e+07.
+pub(crate) fn significant(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return format!("{x}");
+    }
+    // the exponent after rounding to six digits (9.999995 rounds up to 10)
+    let sci = format!("{x:.5e}");
+    let (mantissa, exp) = sci.split_once('e').expect("a formatted exponent");
+    let exp: i32 = exp.parse().expect("an integer exponent");
+    let trim = |t: &str| -> String {
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t.to_string()
+        }
+    };
+    if (-4..6).contains(&exp) {
+        let decimals = (5 - exp).max(0) as usize;
+        trim(&format!("{x:.decimals$}"))
+    } else {
+        let sign = if exp < 0 { '-' } else { '+' };
+        format!("{}e{sign}{:02}", trim(mantissa), exp.abs())
     }
 }
 
@@ -230,5 +268,34 @@ mod compact_tests {
             Error::invalid("name", "a long name that is not a number", "short").to_string(),
             "name = a long name that is not a number is invalid: short"
         );
+    }
+
+    #[test]
+    fn times_in_messages_read_as_a_user_writes_them() {
+        // Python's `:g`: six significant digits, fixed from 1e-4 up to 1e6
+        assert_eq!(significant(0.059000000000000004), "0.059");
+        assert_eq!(significant(1e-3), "0.001");
+        assert_eq!(significant(7.6712345e-5), "7.67123e-05");
+        assert_eq!(significant(2.5e7), "2.5e+07");
+        assert_eq!(significant(9.9999996), "10");
+        assert_eq!(significant(123456.7), "123457");
+        assert_eq!(significant(-0.5), "-0.5");
+        assert_eq!(significant(0.0), "0");
+        let diverged = |verlet_only| Error::Diverged {
+            step: 60,
+            time: 0.059000000000000004,
+            particle: Some(3),
+            dt: 1e-3,
+            reason: Divergence::NonFinite,
+            advised_dt: Some(7.67e-5),
+            verlet_only,
+        };
+        let text = diverged(true).to_string();
+        assert!(text.contains("(t = 0.059 s, dt = 0.001 s)"), "{text}");
+        assert!(
+            text.contains("dt <= 7.67e-05 s") && !text.contains("implicit_euler"),
+            "{text}"
+        );
+        assert!(diverged(false).to_string().contains("implicit_euler"));
     }
 }

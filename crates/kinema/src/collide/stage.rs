@@ -1005,6 +1005,7 @@ impl CollideStage {
                 dt: span,
                 reason: crate::error::Divergence::NonFinite,
                 advised_dt: None,
+                verlet_only: false,
             });
         }
         check_travel(&self.colliders, &p.radius, &p.x, travel, fastest, span)?;

@@ -599,6 +599,7 @@ pub(crate) fn check_travel(
                 limit: TRAVEL_LIMIT,
             },
             advised_dt: None,
+            verlet_only: false,
         });
     }
     Ok(())
