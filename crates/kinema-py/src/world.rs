@@ -738,7 +738,7 @@ impl PyWorld {
     fn orientations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let q = self.inner.in_user_order(&self.inner.particles().orientation, 4);
         let n = q.len() / 4;
-        Ok(PyArray1::from_vec(py, q.to_vec()).reshape([n, 4])?)
+        PyArray1::from_vec(py, q.to_vec()).reshape([n, 4])
     }
 
     /// Sets the orientations of all particles ((N, 4) unit quaternions (w, x, y, z), the

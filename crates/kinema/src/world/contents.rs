@@ -247,8 +247,8 @@ impl World {
         for (k, c) in q.chunks_exact(4).enumerate() {
             let len = c.iter().map(|a| a * a).sum::<f64>().sqrt();
             let p = range.start + k;
-            for d in 0..4 {
-                self.particles.orientation[4 * p + d] = c[d] / len;
+            for (q, a) in self.particles.orientation[4 * p..4 * p + 4].iter_mut().zip(c) {
+                *q = a / len;
             }
         }
         Ok(())

@@ -3,7 +3,7 @@
 //! each with its normal force F_n n and its tangential force F_t as the next evaluation would
 //! find them (the springs read, not stretched: `tangent.rs`), whether it slides, and its point.
 
-use super::history::{pair_slip, wall_slip};
+use super::history::{pair_slip, wall_slip, Histories};
 use super::pairs::Turning;
 use super::ContactForce;
 use crate::collide::{Contact, ContactReport};
@@ -12,21 +12,26 @@ use crate::forces::State;
 use crate::vec3;
 
 impl ContactForce<'_> {
-    /// Every contact at `s` that pushes (an overlap and a movable side), in the order of a
-    /// full search: pairs by (i, j), i < j, then particle by particle, collider by collider.
-    pub(crate) fn contact_reports(&self, s: &State) -> Result<Vec<ContactReport>, Error> {
-        let mut scratch = self.scratch();
-        let mut found: Vec<Contact> = Vec::new();
-        self.for_each_contact(s, &mut scratch, |c| found.push(*c))?;
-        let histories = &scratch.histories;
-        let turn = self.tangential.map(|model| Turning {
+    /// The tangential part as an output reads it (`None` without friction): the memory
+    /// `histories` as it is, not stretched by a step (`tangent.rs`).
+    pub(super) fn reading<'s>(&'s self, histories: &'s Histories) -> Option<Turning<'s>> {
+        self.tangential.map(|model| Turning {
             model,
             omega: self.omega,
             pairs: &histories.pairs,
             walls: &histories.walls,
             step: None,
             start: None,
-        });
+        })
+    }
+
+    /// Every contact at `s` that pushes (an overlap and a movable side), in the order of a
+    /// full search: pairs by (i, j), i < j, then particle by particle, collider by collider.
+    pub(crate) fn contact_reports(&self, s: &State) -> Result<Vec<ContactReport>, Error> {
+        let mut scratch = self.scratch();
+        let mut found: Vec<Contact> = Vec::new();
+        self.for_each_contact(s, &mut scratch, |c| found.push(*c))?;
+        let turn = self.reading(&scratch.histories);
         let mut out = Vec::with_capacity(found.len());
         for c in &found {
             let Some((force, dashpot)) = self.normal_force_parts(c) else {

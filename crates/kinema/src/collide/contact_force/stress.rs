@@ -24,14 +24,7 @@ impl ContactForce<'_> {
             }
         })?;
         let Scratch { histories, .. } = &*scratch;
-        let turn = self.tangential.map(|model| Turning {
-            model,
-            omega: self.omega,
-            pairs: &histories.pairs,
-            walls: &histories.walls,
-            step: None,
-            start: None,
-        });
+        let turn = self.reading(histories);
         for c in &pairs {
             self.add_pair_virial(c, s, turn.as_ref(), out);
         }
