@@ -462,6 +462,7 @@ DATASETS = (
     "run/x",
     "run/v",
     "run/ids",
+    *(f"collider_books/{part}/{key}" for part in ("total", "last") for key in ("momentum", "angular_momentum", "work", "normal", "tangential")),
 )
 # not read / absent before a first step (verlet) and for methods that carry nothing / absent
 # in a checkpoint written before the records' `carried` and the list's build were saved
@@ -525,6 +526,8 @@ CASES = [
             "run/energy_lost",
             "run/x",
             "run/v",
+            "collider_books/total/momentum",
+            "collider_books/last/work",
         )
     ),
     *(
@@ -581,6 +584,9 @@ CASES = [
     ("run/x one more", edit_ds("run/x", lambda a: np.vstack([a, a[:1]])), "'run/x'"),
     ("run/v one less", edit_ds("run/v", lambda a: a[:-1]), "'run/v'"),
     ("run/ids one more", edit_ds("run/ids", lambda a: np.append(a, 10**6)), "'run/ids'"),
+    ("collider_books/total/normal one more", edit_ds("collider_books/total/normal", lambda a: np.vstack([a, a[:1]])), "'collider_books/total/normal'"),
+    ("collider_books/last/work 2-D", edit_ds("collider_books/last/work", lambda a: a[:, None]), "'collider_books/last/work'"),
+    ("collider_books a dataset", lambda f: (f.__delitem__("collider_books"), f.create_dataset("collider_books", data=[1])), "'collider_books'"),
     # values that do not fit the others
     ("per_frame 0", set_attr("run/per_frame", 0), "'run/per_frame'"),
     ("per_frame another", set_attr("run/per_frame", 41), "'run/per_frame'"),
