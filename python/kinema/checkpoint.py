@@ -161,6 +161,8 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
 
 
 def _write_run(g: Any, run: dict) -> None:
+    from .trajectory import _stacked_walls
+
     rec = run["recorder"]
     for key in ("frames_done", "frames_total", "per_frame", "every"):
         g.attrs[key] = int(run[key])
@@ -193,6 +195,10 @@ def _write_run(g: Any, run: dict) -> None:
         rows = [f.get(key) for f in rec.turning]
         if rows and all(r is not None for r in rows):
             g.create_dataset(name, data=np.concatenate(rows))
+    if rec.walls is not None:  # what the particles had given each collider at each frame, (frames, K, 3) N·s
+        stacked = _stacked_walls(rec.walls)
+        for name, a in stacked.items():
+            g.create_dataset(name, data=a if a is not None else np.zeros((len(rec.walls), 0, 3)))
     if rec.contacts:  # each frame's contacts, one table (kinema.contact_record); its presence says the run records them
         record = ContactRecord.from_frames(rec.touching)
         c = g.create_group("contact_record")
@@ -895,6 +901,7 @@ def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
     record_contacts = "contact_record" in r.group("run")  # (the run records contacts: World.run(record_contacts=True))
     rec = Trajectory._recorder(contacts=record_contacts)
     rec.turning = turning
+    rec.walls = _recorded_walls(r, frames, len(world.colliders))
     if record_contacts:
         rec.touching = _recorded_contacts(r, frames)
     rec.frames = list(
@@ -919,6 +926,26 @@ def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
     rec.about, rec.sets = about, sets
     run.update(recorder=rec)
     return run
+
+
+def _recorded_walls(r: _Reader, frames: int, colliders: int) -> list[dict[str, np.ndarray]] | None:
+    """What the particles had given each collider at each recorded frame (datasets
+    `run/collider_momentum`, `run/collider_normal`, `run/collider_tangential`, (frames, K, 3)
+    N·s, K at most the world's colliders): the recorder's `walls`; `None` where the run
+    records none (its steps book nothing, or a checkpoint from before)."""
+    from .trajectory import COLLIDER_RECORD
+
+    if not any(f"run/{name}" in r.f for name in COLLIDER_RECORD):
+        return None
+    arrays, k = {}, None
+    for name, key in COLLIDER_RECORD.items():
+        shape = (frames, k, 3)
+        what = f"what the particles had given each collider by each frame (run/frames_done + 1 = {frames}), 3 finite numbers per collider, N·s"
+        field, a = r.reals(f"run/{name}", shape, np.isfinite, what)
+        if a.shape[1] > colliders:
+            raise r.fail(field, f"has rows for {a.shape[1]} colliders; the world has {colliders}")
+        arrays[key], k = a, a.shape[1]
+    return [{key: a[i] for key, a in arrays.items()} for i in range(frames)]
 
 
 def _recorded_contacts(r: _Reader, frames: int) -> list[dict[str, np.ndarray]]:

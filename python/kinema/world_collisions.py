@@ -283,7 +283,11 @@ class WorldCollisions:
         A world read from a checkpoint goes on with the books of the world that wrote it: the
         engine books from zero, and the checkpoint's sums are added to its own (equal to the
         sums of the world that wrote it and went on, to rounding: about 1e-15 of them, the
-        additions come in another order), its last step's given until it takes a step."""
+        additions come in another order), its last step's given until it takes a step.
+
+        ``World.run`` records ``momentum``, ``normal`` and ``tangential`` at each frame
+        (``Trajectory.collider_momentum``, ``collider_normal``, ``collider_tangential``;
+        ``Trajectory.collider_forces()`` the mean forces between frames)."""
         self._push()
         return self._collider_books_as_pulled(last)
 
@@ -300,6 +304,13 @@ class WorldCollisions:
                 return books
             return {key: _padded(a, len(books[key])) for key, a in carried["last"].items()}
         return {key: _padded(books[key], len(a)) + _padded(a, len(books[key])) for key, a in carried["total"].items()}
+
+    def _books_colliders(self) -> bool:
+        """Whether the world's steps book what the particles give its colliders: not with a
+        force model (``"spring_dashpot"``, ``"hertz"``) stepped by a method other than
+        ``verlet``, whose steps book nothing (the engine's rule, :meth:`collider_books`)."""
+        model = (self._core.collisions or {}).get("model")
+        return model not in ("spring_dashpot", "hertz") or self._core.method == "verlet"
 
     def stage_times(self) -> dict[str, float]:
         """Wall-clock seconds spent so far in each of the seed's four stages of a step:
