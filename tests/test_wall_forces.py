@@ -2,7 +2,7 @@
 `World.run` keeps what the particles had given each collider since the world began
 (`World.collider_books()`: `Trajectory.collider_momentum`, `collider_normal`,
 `collider_tangential`), and `Trajectory.collider_forces()` makes of them the mean pressure and
-shear force on each collider between frames; checkpoints of a run keep them.
+shear force on each collider between frames; H5MD files and checkpoints of a run keep them.
 
 Each physics test compares with a closed form and says which: a resting column's floor bears
 n m g over every frame interval and no shear (statics), with the Hertz model and with the
@@ -105,13 +105,34 @@ def quiet_run(w, *args, **options):
         return w.run(*args, **options)
 
 
-def test_a_trajectory_without_colliders_or_books_has_no_wall_forces():
+def test_h5md_keeps_the_wall_forces_bit_for_bit(tmp_path):
+    tr = quiet_run(bin_of_balls(), 0.3, fps=50)
+    assert tr.collider_normal.shape == (len(tr.t), 2, 3) and np.abs(tr.collider_tangential[-1]).min(axis=1).max() > 0
+    tr.save(tmp_path / "run.h5")
+    back = kinema.Trajectory.load(tmp_path / "run.h5")
+    for name in RECORD:
+        np.testing.assert_array_equal(getattr(back, name), getattr(tr, name), err_msg=name)
+    tr.save(tmp_path / "md.h5", units="MD")  # u nm ps-1, within one rounding of the exact factor
+    md = kinema.Trajectory.load(tmp_path / "md.h5")
+    for name in RECORD:
+        np.testing.assert_allclose(getattr(md, name), getattr(tr, name), rtol=4e-16, atol=0, err_msg=name)
+    import h5py
+
+    with h5py.File(tmp_path / "md.h5") as f:
+        value = f["observables/collider_normal/value"]
+        assert value.shape == (len(tr.t), 2, 3) and value.attrs["unit"] == "u nm ps-1"
+        assert f["observables/collider_normal/step"] == f["particles/all/position/step"]  # the one clock, hard-linked
+
+
+def test_a_trajectory_without_colliders_or_books_has_no_wall_forces(tmp_path):
     w = kinema.World()
     w.add_particles([0.0, 0.0, 0.0], velocity=[1.0, 0.0, 0.0])
     tr = w.run(0.05, fps=100)
     assert all(getattr(tr, name) is None for name in RECORD)
     with pytest.raises(ValueError, match="no collider_momentum"):
         tr.collider_forces()
+    tr.save(tmp_path / "run.h5")
+    assert kinema.Trajectory.load(tmp_path / "run.h5").collider_normal is None
     # a force model stepped by a method other than verlet books nothing: no record, not zeros
     w = kinema.World(dt=1e-4, method="rk4")
     w.add(kinema.Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]))

@@ -264,7 +264,7 @@ class Trajectory:
         if missing:
             raise ValueError(
                 f"this trajectory has no {missing[0]}: World.run records the collider books in a world with colliders "
-                "(and, with a force model, the verlet method)"
+                "(and, with a force model, the verlet method), and H5MD files keep them"
             )
         dt = np.diff(self.t)[:, None, None]
         normal, tangential = np.diff(self.collider_normal, axis=0) / dt, np.diff(self.collider_tangential, axis=0) / dt
