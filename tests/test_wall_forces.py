@@ -13,6 +13,7 @@ keeps 5/7 of its speed: angular momentum about the contact point), and no shear 
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
@@ -244,3 +245,26 @@ def test_a_world_read_from_a_checkpoint_goes_on_with_the_books_of_the_one_that_w
         np.testing.assert_allclose(read[key], mine[key], rtol=0, atol=1e-14 * np.abs(mine[key]).max(), err_msg=key)
     for key, a in w.collider_books(last=True).items():  # its own last step's, the engine's
         np.testing.assert_array_equal(again.collider_books(last=True)[key], a, err_msg=key)
+
+
+def test_wall_forces_of_another_shape_are_refused_writing_and_reading(tmp_path):
+    import h5py
+
+    tr = quiet_run(bin_of_balls(), 0.1, fps=50)
+    tr.collider_tangential = tr.collider_tangential[:, :1]  # one collider where the others have two
+    with pytest.raises(kinema.io.TrajectoryFileError, match=r"'collider_tangential' has shape \(6, 1, 3\); it must be \(6, 2, 3\)"):
+        tr.save(tmp_path / "run.h5")
+    assert not (tmp_path / "run.h5").exists()
+    with pytest.raises(ValueError, match=r"collider_normal has shape \(6, 2\); it must be \(frames, colliders, 3\)"):
+        dataclasses.replace(tr, collider_normal=tr.collider_normal[..., 0])
+    tr.collider_tangential = None
+    tr.save(tmp_path / "run.h5")
+    with h5py.File(tmp_path / "run.h5", "a") as f:
+        value = f["observables/collider_normal/value"]
+        data = value[()]
+        del f["observables/collider_normal/value"]
+        f["observables/collider_normal"].create_dataset("value", data=data[..., :2])
+    with pytest.raises(
+        kinema.io.TrajectoryFileError, match=r"'collider_normal' \(/observables/collider_normal/value\) has shape \(6, 2, 2\); it must be \(6, 2, 3\)"
+    ):
+        kinema.Trajectory.load(tmp_path / "run.h5")
