@@ -121,7 +121,7 @@ def test_a_sliding_ball_reports_coulomb_friction_until_it_rolls(model):
     last = w.collider_books(last=True)
     shear, press = np.linalg.norm(last["tangential"][0]), np.linalg.norm(last["normal"][0])
     assert shear == pytest.approx(mu * press, rel=1e-3)
-    # t* = 2 v₀ / (7 μ g) ≈ 0.068 s to roll; at 0.3 s it rolls and sticks
+    # t* = 2 v₀ / (7 μ g) ≈ 0.097 s to roll; at 0.3 s it rolls and sticks
     w.step(int(round(0.3 / dt)))
     assert w.velocities[0, 0] == pytest.approx(5 / 7 * v0, rel=2e-3)
     c = w.contacts()

@@ -9,7 +9,8 @@ What a checkpoint holds (an HDF5 file, written under a temporary name and rename
 - the time, the step count, each particle's id and the next id;
 - what the Python world keeps per particle: time of death, own colour; the springs' end ids;
 - each emitter's progress (particles emitted, births held back) and the state of its four random streams;
-- the collision books (totals since collisions were turned on: impacts, energy lost, ...).
+- the collision books (totals since collisions were turned on: impacts, energy lost, ...) and
+  what the particles gave each collider (`World.collider_books`, summed and in the last step).
 
 What is carried from step to step is written too, to every bit: Verlet's acceleration at the
 current state, implicit Euler's last Δv (its warm start), the impulse model's contact records
@@ -134,6 +135,11 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
         stats = core.collision_stats()
         if stats is not None:  # the collision books go on where they were
             f.attrs["collision_stats"] = json.dumps(_plain(stats))
+            # and what the particles gave each collider, summed and in the last step (the
+            # engine takes neither back: the world read from it adds them, `collider_books`)
+            for part, last in (("total", False), ("last", True)):
+                for key, a in world._collider_books_as_pulled(last).items():
+                    f.create_dataset(f"collider_books/{part}/{key}", data=np.asarray(a, dtype=np.float64))
         if _run is not None:
             _write_run(f.create_group("run"), _run)
     core.restart_caches()
@@ -155,6 +161,8 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
 
 
 def _write_run(g: Any, run: dict) -> None:
+    from .trajectory import _stacked_walls
+
     rec = run["recorder"]
     for key in ("frames_done", "frames_total", "per_frame", "every"):
         g.attrs[key] = int(run[key])
@@ -187,6 +195,10 @@ def _write_run(g: Any, run: dict) -> None:
         rows = [f.get(key) for f in rec.turning]
         if rows and all(r is not None for r in rows):
             g.create_dataset(name, data=np.concatenate(rows))
+    if rec.walls is not None:  # what the particles had given each collider at each frame, (frames, K, 3) N·s
+        stacked = _stacked_walls(rec.walls)
+        for name, a in stacked.items():
+            g.create_dataset(name, data=a if a is not None else np.zeros((len(rec.walls), 0, 3)))
     if rec.contacts:  # each frame's contacts, one table (kinema.contact_record); its presence says the run records them
         record = ContactRecord.from_frames(rec.touching)
         c = g.create_group("contact_record")
@@ -564,8 +576,12 @@ def _load_world(r: _Reader) -> Any:
     if world.collision_stats() is not None:
         books = _collision_books(r)
         r.engine("attribute 'collision_stats'", core.restore_collision_stats, books["total"], books["last"])
+        if "collider_books" in r.f:  # (a checkpoint from before: the world books from zero)
+            world._carried_books = _carried_books(r, len(world.colliders), c["steps"])
     elif "collision_stats" in r.f.attrs:
         raise r.fail("attribute 'collision_stats'", "is there but attribute 'scene' has collisions off; only a world with collisions has collision books")
+    elif "collider_books" in r.f:
+        raise r.fail("group 'collider_books'", "is there but attribute 'scene' has collisions off; only a world with collisions has collider books")
     # what is carried from step to step
     carry = None
     if "integrator_carry" in r.f:
@@ -657,6 +673,25 @@ def _load_world(r: _Reader) -> Any:
     if memory[0] or memory[1]:
         r.engine("group 'contact_history'", core.restore_contact_history, *memory)
     return world
+
+
+# What the particles gave each collider (`World.collider_books`): each key's unit and width.
+_COLLIDER_BOOKS = {"momentum": ("N·s", 3), "angular_momentum": ("N·m·s", 3), "work": ("J", 0), "normal": ("N·s", 3), "tangential": ("N·s", 3)}
+
+
+def _carried_books(r: _Reader, colliders: int, steps: int) -> dict:
+    """The collider books the world that wrote the checkpoint had (group `collider_books`:
+    `total` and `last`, each a dataset per key of `World.collider_books`, one row per
+    collider), for the world read from it to go on with (`World._carried_books`)."""
+    r.group("collider_books")
+    out: dict = {"steps": steps}
+    for part in ("total", "last"):
+        out[part] = {}
+        for key, (unit, width) in _COLLIDER_BOOKS.items():
+            shape = (colliders, width) if width else (colliders,)
+            what = f"{'over all steps' if part == 'total' else 'in the last step'}: one {'vector' if width else 'number'} per collider ({colliders}), finite, {unit}"
+            out[part][key] = r.reals(f"collider_books/{part}/{key}", shape, np.isfinite, f"what the particles gave each collider {what}")[1]
+    return out
 
 
 def _collision_books(r: _Reader) -> dict:
@@ -866,6 +901,7 @@ def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
     record_contacts = "contact_record" in r.group("run")  # (the run records contacts: World.run(record_contacts=True))
     rec = Trajectory._recorder(contacts=record_contacts)
     rec.turning = turning
+    rec.walls = _recorded_walls(r, frames, len(world.colliders))
     if record_contacts:
         rec.touching = _recorded_contacts(r, frames)
     rec.frames = list(
@@ -890,6 +926,26 @@ def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
     rec.about, rec.sets = about, sets
     run.update(recorder=rec)
     return run
+
+
+def _recorded_walls(r: _Reader, frames: int, colliders: int) -> list[dict[str, np.ndarray]] | None:
+    """What the particles had given each collider at each recorded frame (datasets
+    `run/collider_momentum`, `run/collider_normal`, `run/collider_tangential`, (frames, K, 3)
+    N·s, K at most the world's colliders): the recorder's `walls`; `None` where the run
+    records none (its steps book nothing, or a checkpoint from before)."""
+    from .trajectory import COLLIDER_RECORD
+
+    if not any(f"run/{name}" in r.f for name in COLLIDER_RECORD):
+        return None
+    arrays, k = {}, None
+    for name, key in COLLIDER_RECORD.items():
+        shape = (frames, k, 3)
+        what = f"what the particles had given each collider by each frame (run/frames_done + 1 = {frames}), 3 finite numbers per collider, N·s"
+        field, a = r.reals(f"run/{name}", shape, np.isfinite, what)
+        if a.shape[1] > colliders:
+            raise r.fail(field, f"has rows for {a.shape[1]} colliders; the world has {colliders}")
+        arrays[key], k = a, a.shape[1]
+    return [{key: a[i] for key, a in arrays.items()} for i in range(frames)]
 
 
 def _recorded_contacts(r: _Reader, frames: int) -> list[dict[str, np.ndarray]]:

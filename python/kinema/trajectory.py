@@ -61,6 +61,26 @@ def _pressure(t: np.ndarray, virial: np.ndarray, kinetic: np.ndarray, about: dic
 # The kinetic tensor of a frame where no pressure is made (zeros: what a checkpoint writes).
 _NO_TENSOR = np.zeros(9)
 
+# The collider books `World.run` records at each frame: the trajectory's attribute and the key
+# of `World.collider_books` it holds (F, K, 3), N·s.
+COLLIDER_RECORD = {"collider_momentum": "momentum", "collider_normal": "normal", "collider_tangential": "tangential"}
+
+
+@dataclass(frozen=True)
+class ColliderForces:
+    """The mean forces the particles exerted on each of K colliders over the F − 1 intervals
+    between frames (`Trajectory.collider_forces`), N: the interval k runs from `start[k]` to
+    `end[k]` (F − 1,), s; `normal` (F − 1, K, 3) is the force along the contacts' normals,
+    which presses on the collider (on a floor under a resting pile of mass M: (0, 0, −M g)),
+    `tangential` the shear across them (friction), `total` their sum, the change of the
+    momentum the collider took over the interval's time."""
+
+    start: np.ndarray
+    end: np.ndarray
+    normal: np.ndarray
+    tangential: np.ndarray
+    total: np.ndarray
+
 
 @dataclass(repr=False)
 class Trajectory:
@@ -109,6 +129,15 @@ class Trajectory:
     has none). NaN where a particle is not alive. `inertia` (N,), kg·m², each particle's
     moment of inertia about its centre (`World.inertia`).
 
+    Wall forces (a world with colliders; `None` otherwise): `collider_momentum` (F, K, 3),
+    N·s, the momentum the particles had given each of its K colliders (in the order of
+    `colliders`) since the world began, at each frame (`World.collider_books()["momentum"]`:
+    −Σ J over the impulses and the contact forces' impulses J the collider gave them), and its
+    parts along and across each contact's normal, `collider_normal` and `collider_tangential`
+    (F, K, 3), N·s: the pressure's and the shear's impulses. `collider_forces()` makes the
+    mean forces between frames of them. `None` where the steps book nothing: a force model
+    (`"spring_dashpot"`, `"hertz"`) stepped by a method other than `verlet`.
+
     `contact_record`: the contacts at each frame (`World.run(record_contacts=True)`), a
     `kinema.contact_record.ContactRecord` whose `frame(k)` is what `World.contacts()`
     gave at frame k, particles named by their ids; `None` when not recorded.
@@ -151,6 +180,9 @@ class Trajectory:
     orientations: np.ndarray | None = None
     inertia: np.ndarray | None = None
     contact_record: ContactRecord | None = None
+    collider_momentum: np.ndarray | None = None
+    collider_normal: np.ndarray | None = None
+    collider_tangential: np.ndarray | None = None
     source: FileInfo | None = None
     total: np.ndarray = field(init=False)
 
@@ -205,11 +237,38 @@ class Trajectory:
                 raise ValueError(f"inertia has shape {self.inertia.shape}; it must be (particles,) = ({n},)")
         if self.contact_record is not None and self.contact_record.n_frames != frames:
             raise ValueError(f"contact_record has {self.contact_record.n_frames} frames; the trajectory has {frames}")
+        colliders = None
+        for name in COLLIDER_RECORD:
+            value = getattr(self, name)
+            if value is not None:
+                value = np.asarray(value, dtype=np.float64)
+                if value.ndim != 3 or value.shape[0] != frames or value.shape[2] != 3 or colliders not in (None, value.shape[1]):
+                    k = "K" if colliders is None else colliders
+                    raise ValueError(f"{name} has shape {value.shape}; it must be (frames, colliders, 3) = ({frames}, {k}, 3)")
+                colliders = value.shape[1]
+                setattr(self, name, value)
 
     @property
     def changes_count(self) -> bool:
         """Whether particles are born or die during the recording (some are not alive at some frame)."""
         return not bool(self.alive.all())
+
+    def collider_forces(self) -> ColliderForces:
+        """The mean force the particles exerted on each collider over each interval between
+        frames, the change of the recorded impulses over the interval's time,
+        Δ`collider_normal` / Δt and Δ`collider_tangential` / Δt (LIGGGHTS's wall force, the
+        base pressure of a pile, a silo wall's Janssen pressure): a `ColliderForces`, (F − 1,
+        K, 3) N. A `ValueError` where the trajectory has no such record (`None`: a world
+        without colliders, a file without them)."""
+        missing = [name for name in COLLIDER_RECORD if getattr(self, name) is None]
+        if missing:
+            raise ValueError(
+                f"this trajectory has no {missing[0]}: World.run records the collider books in a world with colliders "
+                "(and, with a force model, the verlet method), and H5MD files keep them"
+            )
+        dt = np.diff(self.t)[:, None, None]
+        normal, tangential = np.diff(self.collider_normal, axis=0) / dt, np.diff(self.collider_tangential, axis=0) / dt
+        return ColliderForces(self.t[:-1], self.t[1:], normal, tangential, np.diff(self.collider_momentum, axis=0) / dt)
 
     def frame(self, k: int) -> dict[str, np.ndarray]:
         """The particles alive at frame `k`: `ids`, `positions`, `velocities` and, where
@@ -495,7 +554,8 @@ class _Recorder:
 
     In a world with spin each frame also keeps its angular velocities and, where the engine
     has them, its orientations (`turning`); with `contacts`, each frame's `World.contacts()`,
-    particles named by id (`touching`)."""
+    particles named by id (`touching`); each frame, what the particles had given each
+    collider so far (`walls`, `COLLIDER_RECORD`'s keys of `World.collider_books`)."""
 
     def __init__(self, expected: int = 0, contacts: bool = False) -> None:
         self.frames: list[tuple] = []
@@ -509,6 +569,9 @@ class _Recorder:
         # per frame with `contacts`: World.contacts() with ids for indices
         self.contacts = contacts
         self.touching: list[dict[str, np.ndarray]] = []
+        # per frame: {"momentum", "normal", "tangential"} (K, 3) N·s, the collider books so far
+        # (K: the colliders then); None for good once a frame's steps booked nothing
+        self.walls: list[dict[str, np.ndarray]] | None = []
 
     def add(self, world: Any) -> None:
         # What the world is (masses, radii, species, colliders, ...) is read only when its set of
@@ -539,6 +602,12 @@ class _Recorder:
         self.turning.append(_turning(world))
         if self.contacts:
             self.touching.append(as_ids(world._core.contacts(), ids))
+        if self.walls is not None:
+            if world._books_colliders():
+                books = world._collider_books_as_pulled()
+                self.walls.append({key: books[key] for key in COLLIDER_RECORD.values()})
+            else:
+                self.walls = None
 
     def _keep(self, x: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Copies of this frame's positions and velocities: places in the block when they fit."""
@@ -594,6 +663,7 @@ class _Recorder:
             pressure=_pressure(np.array(t), np.array(virial), np.array(kinetic), about),
             alive=alive,
             contact_record=ContactRecord.from_frames(self.touching) if self.contacts else None,
+            **_stacked_walls(self.walls),
             **turning,
             inertia=inertia,
             **about,
@@ -637,6 +707,22 @@ def _turning(world: Any) -> dict[str, np.ndarray]:
     out = {"angular_velocities": world._w.copy(), "inertia": np.asarray(world._core.inertia, dtype=np.float64).reshape(-1, 1)}
     if hasattr(type(world), "orientations"):
         out["orientations"] = np.array(world.orientations, dtype=np.float64)
+    return out
+
+
+def _stacked_walls(walls: list[dict[str, np.ndarray]] | None) -> dict[str, np.ndarray | None]:
+    """The recorder's collider books per frame (`_Recorder.walls`) as the trajectory's
+    `COLLIDER_RECORD` arrays (F, K, 3), K the most colliders of any frame (a collider added
+    later took nothing before: zeros); all `None` without colliders or books."""
+    k = max((len(f["momentum"]) for f in walls), default=0) if walls is not None else 0
+    if k == 0:
+        return dict.fromkeys(COLLIDER_RECORD)
+    out = {}
+    for name, key in COLLIDER_RECORD.items():
+        a = np.zeros((len(walls), k, 3))
+        for i, f in enumerate(walls):
+            a[i, : len(f[key])] = f[key]
+        out[name] = a
     return out
 
 

@@ -24,6 +24,14 @@ OBSERVABLES = {
 PRESSURE_UNIT = {3: "Pa", 2: "N m-1"}
 # the group of /observables with one potential energy per force, J
 BY_FORCE = "potential_energy_by_force"
+# /observables with a row per collider, value (F, K, 3): what the particles had given each of
+# the world's K colliders by each frame (World.collider_books: its momentum and the parts
+# along and across the contacts' normals), N s, row k the collider /parameters/kinema/colliders/k
+COLLIDER_OBSERVABLES = {
+    "collider_momentum": ("collider_momentum", "kg m s-1"),
+    "collider_normal": ("collider_normal", "kg m s-1"),
+    "collider_tangential": ("collider_tangential", "kg m s-1"),
+}
 
 # The chemical symbols by atomic number (IUPAC, 1 to 118); 0 is "X", no element (as ASE has it).
 # A species named by one is written as its atomic number, which ASE (znh5md) reads as that element.

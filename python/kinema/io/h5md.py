@@ -44,6 +44,10 @@ specification allows, and requires for the box; units shown for `units="SI"`, th
         potential_energy_by_force/<force name>             step, time, value (F,) [J]
         momentum (F, 3) [kg m s-1], angular_momentum (F, 3) [kg m2 s-1]
         contacts (F,), impulse_balance (F, 3) [kg m s-1], collision_energy_lost (F,) [J]
+        collider_momentum, collider_normal, collider_tangential    step, time, value (F, K, 3)
+                          [kg m s-1]: what the particles had given each of the world's K
+                          colliders by each frame (World.collider_books; row k: colliders/k
+                          below), kinema's names
     /parameters/kinema    +-- dim = 2 | 3, dt [s], method, fps [s-1]   (each but dim when known;
                               fps: the frames per second asked of World.run, a video's rate)
         colliders/<k>     +-- type = "plane" | "box" | "sphere" | "mesh", its geometry [m]
@@ -103,7 +107,7 @@ from ._cell import particle_types
 from ._checks import available_memory, number
 from ._files import TrajectoryFileError, frames_of, hdf5_file, os_errors_as_write_errors
 from ._h5md_checks import check_frames, edges_problem, fail, increase_problem, links_out
-from ._h5md_layout import BY_FORCE, ELEMENTS, H5MD_VERSION, OBSERVABLES, PRESSURE_UNIT, import_h5py
+from ._h5md_layout import BY_FORCE, COLLIDER_OBSERVABLES, ELEMENTS, H5MD_VERSION, OBSERVABLES, PRESSURE_UNIT, import_h5py
 from .h5md_reader import MESH_DATASETS, MOTION_DATASETS, LoadedTrajectory, read
 from .h5md_units import from_si, parse_unit, system_of
 
@@ -305,6 +309,10 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     pressure = getattr(tr, "pressure", None)
     if pressure is not None and not _unknown(pressure):  # (F, 3, 3), NaN at frame 0
         _element(obs, "pressure", *unit(np.asarray(pressure, dtype=np.float64), PRESSURE_UNIT[d]), clock, compression)
+    for name, (attr, si) in COLLIDER_OBSERVABLES.items():  # (F, K, 3), a row per collider
+        a = getattr(tr, attr, None)
+        if a is not None:
+            _element(obs, name, *unit(np.asarray(a, dtype=np.float64), si), clock, compression)
     if potential:
         by_force = obs.create_group(BY_FORCE, track_order=True)
         by_force.attrs.create("names", list(potential), dtype=string)
@@ -429,6 +437,18 @@ def _check_writable(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> Non
         raise TrajectoryFileError(
             f"cannot write {path}: trajectory 'pressure' has shape {np.shape(pressure)}; it must be ({fr.n_frames}, 3, 3), a tensor per frame"
         )
+    colliders = None  # (K: the same in each)
+    for attr, _ in COLLIDER_OBSERVABLES.values():
+        a = getattr(tr, attr, None)
+        if a is None:
+            continue
+        s = np.shape(a)
+        if len(s) != 3 or s[0] != fr.n_frames or s[2] != 3 or colliders not in (None, s[1]):
+            k = "K" if colliders is None else colliders
+            raise TrajectoryFileError(
+                f"cannot write {path}: trajectory {attr!r} has shape {s}; it must be ({fr.n_frames}, {k}, 3), a vector per frame and collider"
+            )
+        colliders = s[1]
     for name, u in (dict(getattr(tr, "potential", None) or {})).items():
         if np.shape(u) != (fr.n_frames,):
             raise TrajectoryFileError(
@@ -461,6 +481,7 @@ def _check_units(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
     arrays += [(attr, getattr(tr, attr, None), si) for attr, si in OBSERVABLES.values() if si is not None]
     arrays += [(f"potential {name!r}", u, "J") for name, u in (getattr(tr, "potential", None) or {}).items()]
     arrays += [("pressure", getattr(tr, "pressure", None), PRESSURE_UNIT[fr.dim])]
+    arrays += [(attr, getattr(tr, attr, None), si) for attr, si in COLLIDER_OBSERVABLES.values()]
     for word, a, si in arrays:
         if a is None or np.size(a) == 0:
             continue
@@ -505,7 +526,8 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     each spring (`/connectivity/springs`), `angular_velocities` (F, N, 3) rad/s and
     `orientations` (F, N, 4) and `inertia` (N,) kg m² of a world with spin (the
     `angular_velocity`, `orientation` and `moment_of_inertia` elements), `contact_record` (a `kinema.contact_record.ContactRecord`:
-    the group `/contacts`). Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
+    the group `/contacts`), `collider_momentum`, `collider_normal` and `collider_tangential`
+    (F, K, 3) N s, what the particles had given each collider (observables of those names). Velocities and observables that are all NaN (unknown: a trajectory loaded from a file
     without them) are not written.
 
     `group` names the particle group (/particles/<group>); `author` the /h5md/author name

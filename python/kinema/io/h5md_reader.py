@@ -35,7 +35,7 @@ from ._h5md_checks import (
     varying_ids,
     where,
 )
-from ._h5md_layout import BY_FORCE, OBSERVABLES, PRESSURE_UNIT, import_h5py
+from ._h5md_layout import BY_FORCE, COLLIDER_OBSERVABLES, OBSERVABLES, PRESSURE_UNIT, import_h5py
 from .h5md_units import LENGTH, MASS, TIME, parse_unit, to_si
 
 
@@ -61,7 +61,9 @@ class LoadedTrajectory:
     particles does not vary), `springs` (S, 2) the ids at the ends of each spring,
     `angular_velocities` (F, N, 3) rad/s, `orientations` (F, N, 4) and `inertia` (N,)
     kg m² (a world with spin), `contact_record` (the contacts of each frame, a
-    `kinema.contact_record.ContactRecord`). Where
+    `kinema.contact_record.ContactRecord`), `collider_momentum`, `collider_normal` and
+    `collider_tangential` (F, K, 3) N s, what the particles had given each collider by each
+    frame. Where
     particles come and go, `positions` and `velocities` are NaN where they do not exist,
     one column per id (ascending).
 
@@ -102,6 +104,9 @@ class LoadedTrajectory:
     orientations: np.ndarray | None = None
     inertia: np.ndarray | None = None
     contact_record: ContactRecord | None = None
+    collider_momentum: np.ndarray | None = None
+    collider_normal: np.ndarray | None = None
+    collider_tangential: np.ndarray | None = None
     group: str = "all"
     author: str | None = None
     creator: str | None = None
@@ -634,6 +639,24 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
         units[value.name] = r.unit("pressure", value, parse_unit(PRESSURE_UNIT[dim])[1])
         r.plan("pressure", value, value.size * max(8, value.dtype.itemsize))
         observables["pressure"] = value
+    colliders_k = None  # (F, K, 3) each, K the same in all: a row per collider
+    for name, (attr, si) in COLLIDER_OBSERVABLES.items():
+        if not (isinstance(obs, h5py.Group) and name in obs):
+            continue
+        value, c_step, c_time = element_datasets(path, obs, name, True)
+        s = r.numbers(name, value)
+        if len(s) != 3 or s[0] != frames or s[2] != 3 or colliders_k not in (None, s[1]):
+            k = "K" if colliders_k is None else colliders_k
+            raise r.fail(
+                f"{where(name, value)} has shape {s}; it must be ({frames}, {k}, 3), a vector per frame of {where('positions', x_ds)} {shape} and collider"
+            )
+        colliders_k = s[1]
+        r.clock("steps", c_step, name, value, integer=True)
+        if c_time is not None:
+            r.clock("times", c_time, name, value)
+        units[value.name] = r.unit(name, value, parse_unit(si)[1])
+        r.plan(name, value, value.size * max(8, value.dtype.itemsize))
+        observables[attr] = value
 
     r.check_memory(memory)
 
