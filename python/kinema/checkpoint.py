@@ -135,8 +135,7 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
         stats = core.collision_stats()
         if stats is not None:  # the collision books go on where they were
             f.attrs["collision_stats"] = json.dumps(_plain(stats))
-            # and what the particles gave each collider, summed and in the last step (the
-            # engine takes neither back: the world read from it adds them, `collider_books`)
+            # and what the particles gave each collider, summed and in the last step
             for part, last in (("total", False), ("last", True)):
                 for key, a in world._collider_books_as_pulled(last).items():
                     f.create_dataset(f"collider_books/{part}/{key}", data=np.asarray(a, dtype=np.float64))
@@ -577,7 +576,8 @@ def _load_world(r: _Reader) -> Any:
         books = _collision_books(r)
         r.engine("attribute 'collision_stats'", core.restore_collision_stats, books["total"], books["last"])
         if "collider_books" in r.f:  # (a checkpoint from before: the world books from zero)
-            world._carried_books = _carried_books(r, len(world.colliders), c["steps"])
+            carried = _carried_books(r, len(world.colliders))
+            r.engine("group 'collider_books'", core.restore_collider_books, carried["total"], carried["last"])
     elif "collision_stats" in r.f.attrs:
         raise r.fail("attribute 'collision_stats'", "is there but attribute 'scene' has collisions off; only a world with collisions has collision books")
     elif "collider_books" in r.f:
@@ -679,12 +679,12 @@ def _load_world(r: _Reader) -> Any:
 _COLLIDER_BOOKS = {"momentum": ("N·s", 3), "angular_momentum": ("N·m·s", 3), "work": ("J", 0), "normal": ("N·s", 3), "tangential": ("N·s", 3)}
 
 
-def _carried_books(r: _Reader, colliders: int, steps: int) -> dict:
+def _carried_books(r: _Reader, colliders: int) -> dict:
     """The collider books the world that wrote the checkpoint had (group `collider_books`:
     `total` and `last`, each a dataset per key of `World.collider_books`, one row per
-    collider), for the world read from it to go on with (`World._carried_books`)."""
+    collider), for the world read from it to go on with."""
     r.group("collider_books")
-    out: dict = {"steps": steps}
+    out: dict = {}
     for part in ("total", "last"):
         out[part] = {}
         for key, (unit, width) in _COLLIDER_BOOKS.items():

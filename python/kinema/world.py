@@ -198,8 +198,6 @@ class World(WorldCollisions):
         self._spring_ids = np.empty((0, 2), dtype=np.int64)
         self._spring_rest: dict[int, np.ndarray] = {}  # index in the forces -> each spring's rest length, m
         self._advised_at = 0  # particles when the advisor last looked
-        # what a checkpoint carried of the collider books, which the engine cannot take (collider_books)
-        self._carried_books: dict[str, Any] | None = None
         self._new_views()
 
     # The engine is the thread's that made the world (pyo3's `unsendable`: its Python forces

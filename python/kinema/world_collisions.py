@@ -280,10 +280,8 @@ class WorldCollisions:
         models book with the ``verlet`` method only (the method whose step the books come
         from; zeros with the others). Empty (K = 0) without colliders.
 
-        A world read from a checkpoint goes on with the books of the world that wrote it: the
-        engine books from zero, and the checkpoint's sums are added to its own (equal to the
-        sums of the world that wrote it and went on, to rounding: about 1e-15 of them, the
-        additions come in another order), its last step's given until it takes a step.
+        A world read from a checkpoint goes on with the books of the world that wrote it, bit
+        for bit.
 
         ``World.run`` records ``momentum``, ``normal`` and ``tangential`` at each frame
         (``Trajectory.collider_momentum``, ``collider_normal``, ``collider_tangential``;
@@ -293,17 +291,8 @@ class WorldCollisions:
 
     def _collider_books_as_pulled(self, last: bool = False) -> dict[str, np.ndarray]:
         """:meth:`collider_books` with nothing written into the engine (the recorder's and the
-        checkpoint's): the engine's books and those a checkpoint carried (``_carried_books``:
-        {"total", "last": books, "steps": the step count it was read at}, or None)."""
-        books = self._core.collider_books(last=bool(last))
-        carried = self._carried_books
-        if carried is None:
-            return books
-        if last:
-            if self._core.steps != carried["steps"]:
-                return books
-            return {key: _padded(a, len(books[key])) for key, a in carried["last"].items()}
-        return {key: _padded(books[key], len(a)) + _padded(a, len(books[key])) for key, a in carried["total"].items()}
+        checkpoint's)."""
+        return self._core.collider_books(last=bool(last))
 
     def _books_colliders(self) -> bool:
         """Whether the world's steps book what the particles give its colliders: not with a
@@ -323,9 +312,3 @@ class WorldCollisions:
         energy books), ``settle`` (sleeping, the largest overlap, periodic wrapping) and
         ``wake`` (a force-free world's wake times)."""
         return self._core.stage_times()
-
-
-def _padded(a: np.ndarray, k: int) -> np.ndarray:
-    """``a`` (K, ...) with rows of zeros after its own, up to ``k`` rows: the books of
-    colliders added since, which took nothing before."""
-    return a if len(a) >= k else np.concatenate([a, np.zeros((k - len(a), *a.shape[1:]))])

@@ -136,6 +136,47 @@ impl PyWorld {
         Ok(())
     }
 
+    /// A checkpoint's collider books: `total` and `last`, dicts of arrays as `collider_books`
+    /// gives them (one row per collider).
+    fn restore_collider_books(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
+        let books = |d: &Bound<'_, PyDict>| -> PyResult<Vec<kinema::world::ColliderBooks>> {
+            let rows = |key: &str| -> PyResult<Vec<f64>> {
+                let item = d
+                    .get_item(key)?
+                    .ok_or_else(|| PyValueError::new_err(format!("collider_books: '{key}' is missing")))?;
+                let a: numpy::PyReadonlyArrayDyn<'_, f64> = item.extract()?;
+                Ok(a.as_array().iter().copied().collect())
+            };
+            let (p, l, w, n, t) = (
+                rows("momentum")?,
+                rows("angular_momentum")?,
+                rows("work")?,
+                rows("normal")?,
+                rows("tangential")?,
+            );
+            let k = w.len();
+            if [&p, &l, &n, &t].iter().any(|v| v.len() != 3 * k) {
+                return Err(PyValueError::new_err(format!(
+                    "collider_books: each of momentum, angular_momentum, normal and tangential must hold 3 numbers per collider ({k})"
+                )));
+            }
+            let three = |v: &[f64], c: usize| [v[3 * c], v[3 * c + 1], v[3 * c + 2]];
+            Ok((0..k)
+                .map(|c| kinema::world::ColliderBooks {
+                    momentum: three(&p, c),
+                    angular_momentum: three(&l, c),
+                    work: w[c],
+                    normal: three(&n, c),
+                    tangential: three(&t, c),
+                })
+                .collect())
+        };
+        self.inner.restore_order();
+        self.inner
+            .restore_collider_books(books(&total)?, books(&last)?)
+            .map_err(to_py)
+    }
+
     /// Starts the caches again (a checkpoint's restart point).
     fn restart_caches(&mut self) -> PyResult<()> {
         self.inner.restore_order();

@@ -2,7 +2,7 @@
 //! the clock and ids, the collision books, and what the method and the impulse model carry
 //! from one step to the next.
 
-use super::{CollisionStats, World, WorldStepper};
+use super::{ColliderBooks, CollisionStats, World, WorldStepper};
 use crate::collide::impulse::end_of_step::overlap_at;
 use crate::collide::{ContactRecord, Partner};
 use crate::error::Error;
@@ -44,6 +44,30 @@ impl World {
             stage.total = total;
             stage.last = last;
         }
+    }
+
+    /// A checkpoint's collider books: what the particles gave each collider over all steps
+    /// (`total`) and in the last step (`last`), one per collider (`collider_books`). A world
+    /// read from a checkpoint goes on from the same sums, bit for bit.
+    pub fn restore_collider_books(&mut self, total: Vec<ColliderBooks>, last: Vec<ColliderBooks>) -> Result<(), Error> {
+        let Some(stage) = &mut self.collide_stage else {
+            return Err(Error::invalid(
+                "collider_books",
+                "given",
+                "a world with collisions (set_collisions first): only its colliders keep books",
+            ));
+        };
+        let n = stage.colliders.len();
+        if total.len() != n || last.len() != n {
+            return Err(Error::invalid(
+                "collider_books",
+                format!("{} and {} rows", total.len(), last.len()),
+                format!("one per collider ({n}) in both `total` and `last`"),
+            ));
+        }
+        stage.collider_books = total;
+        stage.collider_last = last;
+        Ok(())
     }
 
     /// Starts the collision stage's and the contact force's caches again, as after changing
