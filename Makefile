@@ -111,6 +111,7 @@ bench: build $(TEST_STAMP)
 	cargo bench -p kinema --bench pile_solve
 	$(PY) benchmarks/granular_lammps.py
 	$(PY) benchmarks/angle_of_repose.py
+	$(PY) benchmarks/pile_measures.py
 
 pictures: build
 	$(PY) docs/pictures.py docs/img

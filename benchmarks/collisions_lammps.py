@@ -126,8 +126,11 @@ def run_kinema(n: int, steps: int, threads: str, out: str) -> float:
 
 
 # -- LAMMPS ------------------------------------------------------------------------------------
-def write_data(path: str, x: np.ndarray, v: np.ndarray | None, box: tuple[float, ...]) -> None:
+def write_data(path: str, x: np.ndarray, v: np.ndarray | None, box: tuple[float, ...], diameters: np.ndarray | None = None) -> None:
+    """A LAMMPS data file (atom_style sphere) of spheres of glass (RHO) at `x`, of diameter D
+    or each its own (`diameters`), moving at `v` (no spin) or at rest (None)."""
     density = M / (4.0 / 3.0 * math.pi * R**3)  # LAMMPS: rmass = 4π/3 r³ ρ
+    d = np.full(len(x), D) if diameters is None else np.asarray(diameters, dtype=float)
     lines = [
         "kinema benchmark",
         "",
@@ -141,7 +144,7 @@ def write_data(path: str, x: np.ndarray, v: np.ndarray | None, box: tuple[float,
         "Atoms # sphere",
         "",
     ]
-    lines += [f"{i + 1} 1 {D!r} {density!r} {float(p[0])!r} {float(p[1])!r} {float(p[2])!r}" for i, p in enumerate(x)]
+    lines += [f"{i + 1} 1 {float(d[i])!r} {density!r} {float(p[0])!r} {float(p[1])!r} {float(p[2])!r}" for i, p in enumerate(x)]
     if v is not None:
         lines += ["", "Velocities", ""]
         lines += [f"{i + 1} {float(q[0])!r} {float(q[1])!r} {float(q[2])!r} 0 0 0" for i, q in enumerate(v)]
