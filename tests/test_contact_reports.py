@@ -141,7 +141,7 @@ def test_a_contact_point_lies_on_the_line_of_centres_split_by_the_radii(model):
     assert len(c["i"]) == 1
     xi, xj = w.positions[c["i"][0]], w.positions[c["j"][0]]
     d = np.linalg.norm(xj - xi)
-    radii = np.array([R, 2 * R])
-    ri, rj = radii[c["i"][0]], radii[c["j"][0]]
+    np.testing.assert_array_equal(w.radii, [R, 2 * R])
+    ri, rj = w.radii[c["i"][0]], w.radii[c["j"][0]]
     np.testing.assert_allclose(c["point"][0], xi + (xj - xi) * ri / (ri + rj), atol=1e-12)
     np.testing.assert_allclose(np.linalg.norm(c["point"][0] - xj), d * rj / (ri + rj), rtol=1e-9)

@@ -11,6 +11,8 @@ rest on a belt moving at V is pushed by the sliding friction μ m g, v = μ g t,
 at V from t = V/(μ g) on.
 """
 
+import math
+
 import numpy as np
 import pytest
 
@@ -113,3 +115,17 @@ def test_a_force_model_drum_lifts_a_grain():
     x, v = w.positions[0], w.velocities[0]
     assert np.degrees(np.arctan2(-x[0], -x[2])) > 30.0
     assert np.linalg.norm(v) == pytest.approx(omega * (np.hypot(x[0], x[2]) + r), rel=1e-3)
+
+
+@pytest.mark.parametrize("model", [dict(model="spring_dashpot", stiffness=1e4), dict(model="hertz", youngs_modulus=1e7)])
+def test_the_force_models_wrap_positions_into_a_periodic_cell(model):
+    # collisions.md §Periodic boxes: positions are wrapped into [lo, hi) after every step with
+    # every contact model: a ball crossing x = 1 at 1 m/s from 0.9 is at 0.9 + 0.3 − 1 = 0.2
+    # after 0.3 s
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Box([0, 0, 0], [1, 1, math.inf]))
+    w.periodic = (True, True, False)
+    w.set_collisions(**model)
+    w.add_particles([[0.9, 0.5, 0.5]], velocity=[[1.0, 0, 0]], mass=1.0, radius=0.01)
+    w.step(300)
+    np.testing.assert_allclose(w.positions[0], [0.2, 0.5, 0.5], atol=1e-12)

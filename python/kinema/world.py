@@ -838,6 +838,13 @@ class World(WorldCollisions):
         return self._m
 
     @property
+    def radii(self) -> np.ndarray:
+        """Radii (N,), m: a new read-only array (set by ``add_particles(..., radius=...)``)."""
+        out = np.asarray(self._core.radii, dtype=np.float64)
+        out.flags.writeable = False
+        return out
+
+    @property
     def spin(self) -> bool:
         """Whether the particles turn (``World(spin=True)``)."""
         return self._core.spin
