@@ -259,5 +259,11 @@ def collider_poses(
     rotations: Sequence[Sequence[float]] | None = None,
 ) -> npt.NDArray[np.float64]: ...
 def check_contact_model(
-    model: str, stiffness: float | None, damping: float | None, youngs_modulus: float | None = None, poisson_ratio: float | None = None
+    model: str,
+    stiffness: float | None,
+    damping: float | None,
+    youngs_modulus: float | None = None,
+    poisson_ratio: float | None = None,
+    cohesion: str | None = None,
+    surface_energy: float | None = None,
 ) -> None: ...

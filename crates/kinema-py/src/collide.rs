@@ -40,6 +40,10 @@ pub struct CollisionArgs {
     #[pyo3(item)]
     poisson_ratio: Option<f64>,
     #[pyo3(item)]
+    cohesion: Option<String>,
+    #[pyo3(item)]
+    surface_energy: Option<f64>,
+    #[pyo3(item)]
     event_driven: bool,
     #[pyo3(item)]
     rolling_friction: f64,
@@ -68,6 +72,7 @@ impl CollisionArgs {
                     damping: self.damping,
                     youngs_modulus: self.youngs_modulus,
                     poisson_ratio: self.poisson_ratio,
+                    dmt: dmt_of(self.cohesion.as_deref(), self.surface_energy)?,
                 },
             )?,
             restitution: self.restitution,
@@ -90,6 +95,37 @@ impl CollisionArgs {
     }
 }
 
+/// The names of the cohesion models (`World.set_collisions(cohesion=...)`), in the order an
+/// error lists them.
+const COHESION: [&str; 1] = ["dmt"];
+
+/// DMT adhesion's surface energy γ (J/m²) from the `cohesion` model's name and the
+/// `surface_energy`: the two go together.
+fn dmt_of(cohesion: Option<&str>, surface_energy: Option<f64>) -> Result<Option<f64>, Error> {
+    match (cohesion, surface_energy) {
+        (None, None) => Ok(None),
+        (None, Some(g)) => Err(Error::invalid(
+            "surface_energy",
+            g,
+            "it is the surface energy of a cohesion model: give cohesion='dmt' with it",
+        )),
+        (Some("dmt"), Some(g)) => Ok(Some(g)),
+        (Some("dmt"), None) => Err(Error::invalid(
+            "surface_energy",
+            "None",
+            "cohesion='dmt' needs the surface energy γ, finite and >= 0 J/m² (its pull-off force is 4π γ R*)",
+        )),
+        (Some(other), _) => Err(Error::invalid(
+            "cohesion",
+            format!("'{other}'"),
+            format!(
+                "the cohesion model must be one of {} (Derjaguin–Muller–Toporov, with model='hertz'), or None",
+                COHESION.map(|n| format!("'{n}'")).join(", ")
+            ),
+        )),
+    }
+}
+
 /// The engine's default collision settings, as `World.set_collisions`' keyword arguments:
 /// the one place Python reads them from (its signature, the scene files' defaults).
 #[pyfunction]
@@ -100,19 +136,23 @@ fn collision_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 /// Checks a contact model's name and which of its parameters it takes, by the engine's rule
 /// (for the scene files, before any world is built); ValueError otherwise.
 #[pyfunction]
-#[pyo3(signature = (model, stiffness, damping, youngs_modulus=None, poisson_ratio=None))]
+#[pyo3(signature = (model, stiffness, damping, youngs_modulus=None, poisson_ratio=None, cohesion=None, surface_energy=None))]
+#[allow(clippy::too_many_arguments)]
 fn check_contact_model(
     model: &str,
     stiffness: Option<f64>,
     damping: Option<f64>,
     youngs_modulus: Option<f64>,
     poisson_ratio: Option<f64>,
+    cohesion: Option<&str>,
+    surface_energy: Option<f64>,
 ) -> PyResult<()> {
     let args = ModelArgs {
         stiffness,
         damping,
         youngs_modulus,
         poisson_ratio,
+        dmt: dmt_of(cohesion, surface_energy).map_err(crate::errors::to_py)?,
     };
     ContactModel::from_name(model, args).map(|_| ()).map_err(crate::errors::to_py)
 }
@@ -207,6 +247,8 @@ pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<
     out.set_item("damping", args.damping)?;
     out.set_item("youngs_modulus", args.youngs_modulus)?;
     out.set_item("poisson_ratio", args.poisson_ratio)?;
+    out.set_item("cohesion", args.dmt.map(|_| COHESION[0]))?;
+    out.set_item("surface_energy", args.dmt)?;
     out.set_item("event_driven", p.event_driven)?;
     out.set_item("rolling_friction", p.rolling_friction)?;
     let t = p.tangential;

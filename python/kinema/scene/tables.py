@@ -621,6 +621,8 @@ class CollisionsTable(_Model):
     damping: NonNeg | None = _COLLISION_DEFAULTS["damping"]
     youngs_modulus: Positive | None = _COLLISION_DEFAULTS["youngs_modulus"]
     poisson_ratio: NonNeg | None = _COLLISION_DEFAULTS["poisson_ratio"]
+    cohesion: Literal["dmt"] | None = _COLLISION_DEFAULTS["cohesion"]
+    surface_energy: NonNeg | None = _COLLISION_DEFAULTS["surface_energy"]
     event_driven: bool = _COLLISION_DEFAULTS["event_driven"]
     rolling_friction: NonNeg = _COLLISION_DEFAULTS["rolling_friction"]
     tangential: Literal["linear_history", "mindlin"] | None = _COLLISION_DEFAULTS["tangential"]
@@ -634,7 +636,9 @@ class CollisionsTable(_Model):
     @model_validator(mode="after")
     def _model_takes_its_parameters(self) -> CollisionsTable:
         # "spring_dashpot needs stiffness", "only spring_dashpot takes damping": the engine's rule.
-        _core.check_contact_model(self.model, self.stiffness, self.damping, self.youngs_modulus, self.poisson_ratio)
+        _core.check_contact_model(
+            self.model, self.stiffness, self.damping, self.youngs_modulus, self.poisson_ratio, self.cohesion, self.surface_energy
+        )
         return self
 
 

@@ -58,6 +58,10 @@ pub enum ContactModel {
         youngs_modulus: f64,
         /// Poisson's ratio ν, in [0, 0.5). E* = E / (2 (1 − ν²)) between two such bodies.
         poisson_ratio: f64,
+        /// DMT adhesion (LAMMPS's `dmt`): the surface energy γ, J/m² (≥ 0; `None`: none).
+        /// A contact pulls its bodies together by F_po = 4π γ R* while they overlap
+        /// (Derjaguin–Muller–Toporov; 2π w R* with w = 2γ the work of adhesion).
+        dmt: Option<f64>,
     },
 }
 
@@ -143,6 +147,8 @@ pub struct ModelArgs {
     pub youngs_modulus: Option<f64>,
     /// ν (`hertz`; default [`ContactModel::POISSON_RATIO`]).
     pub poisson_ratio: Option<f64>,
+    /// γ, J/m²: DMT adhesion (`hertz`).
+    pub dmt: Option<f64>,
 }
 
 impl ContactModel {
@@ -161,6 +167,7 @@ impl ContactModel {
             ContactModel::Hertz {
                 youngs_modulus,
                 poisson_ratio,
+                ..
             } => Some(youngs_modulus / (2.0 * (1.0 - poisson_ratio * poisson_ratio))),
             _ => None,
         }
@@ -176,6 +183,7 @@ impl ContactModel {
             damping,
             youngs_modulus,
             poisson_ratio,
+            dmt,
         } = args;
         let only = |params: &[(&str, Option<f64>)], owner: &str| -> Result<(), Error> {
             match params.iter().find(|p| p.1.is_some()) {
@@ -188,7 +196,11 @@ impl ContactModel {
             }
         };
         let spring = [("stiffness", stiffness), ("damping", damping)];
-        let hertz = [("youngs_modulus", youngs_modulus), ("poisson_ratio", poisson_ratio)];
+        let hertz = [
+            ("youngs_modulus", youngs_modulus),
+            ("poisson_ratio", poisson_ratio),
+            ("surface_energy", dmt),
+        ];
         match name {
             "impulse" => {
                 only(&spring, "'spring_dashpot'")?;
@@ -219,6 +231,7 @@ impl ContactModel {
                     Some(youngs_modulus) => Ok(ContactModel::Hertz {
                         youngs_modulus,
                         poisson_ratio: poisson_ratio.unwrap_or(Self::POISSON_RATIO),
+                        dmt,
                     }),
                     None => Err(Error::invalid(
                         "youngs_modulus",
@@ -254,11 +267,13 @@ impl ContactModel {
             ContactModel::Hertz {
                 youngs_modulus,
                 poisson_ratio,
+                dmt,
             } => (
                 Self::NAMES[2],
                 ModelArgs {
                     youngs_modulus: Some(youngs_modulus),
                     poisson_ratio: Some(poisson_ratio),
+                    dmt,
                     ..ModelArgs::default()
                 },
             ),
@@ -364,8 +379,18 @@ impl CollisionParams {
         if let ContactModel::Hertz {
             youngs_modulus,
             poisson_ratio,
+            dmt,
         } = self.model
         {
+            if let Some(gamma) = dmt {
+                if !(gamma.is_finite() && gamma >= 0.0) {
+                    return Err(Error::invalid(
+                        "surface_energy",
+                        gamma,
+                        "the surface energy γ of DMT adhesion must be finite and >= 0 J/m²",
+                    ));
+                }
+            }
             if !(youngs_modulus.is_finite() && youngs_modulus > 0.0) {
                 return Err(Error::invalid(
                     "youngs_modulus",
@@ -490,9 +515,10 @@ impl CollisionParams {
 fn spring_dashpot_of(params: &CollisionParams) -> Option<SpringDashpot> {
     let mut model = match params.model {
         ContactModel::SpringDashpot { stiffness, damping } => SpringDashpot::new(stiffness, damping),
-        ContactModel::Hertz { .. } => {
+        ContactModel::Hertz { dmt, .. } => {
             let mut model = SpringDashpot::new(0.0, None);
             model.hertz = params.model.effective_modulus();
+            model.dmt = dmt.filter(|&g| g > 0.0);
             model
         }
         ContactModel::Impulse => return None,
@@ -516,6 +542,7 @@ fn tangential_of(params: &CollisionParams) -> Option<TangentialModel> {
             ContactModel::Hertz {
                 youngs_modulus,
                 poisson_ratio,
+                ..
             },
             _,
         ) => TangentialLaw::Mindlin {

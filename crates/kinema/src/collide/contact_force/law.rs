@@ -110,6 +110,11 @@ impl ContactForce<'_> {
     /// The force of contact `c` along its normal, N (> 0 pushes apart), or `None` when it
     /// exerts none (not overlapping, or both sides immovable).
     /// With its dashpot c_n, kg/s.
+    ///
+    /// With DMT adhesion (Derjaguin, Muller and Toporov 1975; LAMMPS's `dmt`) the pull-off
+    /// force F_po = 4π γ R* is taken off while the bodies overlap: F_n = 4/3 E* √R* δ^(3/2)
+    /// − c_n u_n − F_po. The contact ends at δ = 0, so a body held by it comes free under a
+    /// pull above F_po (at rest, δ → 0⁺ leaves −F_po).
     #[inline(always)]
     pub(super) fn normal_force_parts(&self, c: &Contact) -> Option<(f64, f64)> {
         let w = self.inverse_mass_sum(c);
@@ -118,7 +123,18 @@ impl ContactForce<'_> {
         }
         let k = self.stiffness_of(c);
         let dashpot = self.dashpot_at(c, w, k);
-        Some((spring_dashpot_force(k, dashpot, c.overlap, c.u_n), dashpot))
+        let force = spring_dashpot_force(k, dashpot, c.overlap, c.u_n);
+        Some((force - self.pull_off_of(c), dashpot))
+    }
+
+    /// The DMT pull-off force of contact `c`, 4π γ R*, N (0 without adhesion).
+    #[inline(always)]
+    pub(super) fn pull_off_of(&self, c: &Contact) -> f64 {
+        if self.pull_off > 0.0 {
+            self.pull_off * self.reduced_radius(c)
+        } else {
+            0.0
+        }
     }
 
     /// The secant stiffness F_el/δ of contact `c` at its overlap δ > 0, N/m: k_n with Hooke's
@@ -144,12 +160,13 @@ impl ContactForce<'_> {
 
     /// The elastic energy of contact `c` if it counts in the potential energy (overlapping,
     /// with a movable particle), J: ½ k_n δ² (Hooke), ∫ 4/3 E* √R* δ^(3/2) dδ = 2/5 k_n δ²
-    /// (Hertz, k_n the secant stiffness at δ).
+    /// (Hertz, k_n the secant stiffness at δ), less F_po δ with DMT adhesion (the work of the
+    /// constant pull over the overlap).
     #[inline]
     pub(super) fn spring_energy(&self, c: &Contact) -> Option<f64> {
         (c.overlap > 0.0 && self.inverse_mass_sum(c) > 0.0).then(|| match self.hertz {
             None => 0.5 * self.stiffness * c.overlap * c.overlap,
-            Some(_) => 0.4 * self.stiffness_of(c) * c.overlap * c.overlap,
+            Some(_) => 0.4 * self.stiffness_of(c) * c.overlap * c.overlap - self.pull_off_of(c) * c.overlap,
         })
     }
 

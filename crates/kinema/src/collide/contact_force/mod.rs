@@ -63,6 +63,8 @@ pub(crate) struct SpringDashpot {
     pub hertz: Option<f64>,
     /// γ_n, 1/s (`None`: the damping follows from each pair's restitution e).
     pub damping: Option<f64>,
+    /// DMT adhesion with Hertz's law: the surface energy γ, J/m² (`law.rs`).
+    pub dmt: Option<f64>,
     /// The tangential part with memory (`tangent.rs`), when contacts have friction.
     pub tangential: Option<TangentialModel>,
     /// A fixed skin, m (tests); `None`: [`SKIN_PER_RADIUS`] times the mean radius, at each
@@ -80,6 +82,7 @@ impl SpringDashpot {
             stiffness,
             hertz: None,
             damping,
+            dmt: None,
             tangential: None,
             skin: None,
             scratch: Mutex::new(Scratch::default()),
@@ -213,7 +216,8 @@ impl SpringDashpot {
 /// coeff_restitution`) the stiffness grows with the contact's area: k_n = 4/3 E* a, a =
 /// √(R* δ), R* = r_i r_j / (r_i + r_j) (r_i against a collider), so that F_n = 4/3 E* √R*
 /// δ^(3/2) − c_n u_n with the same c_n = 2 ζ √(k_n m_eff) at the current k_n, and
-/// U = Σ 2/5 k_n δ² (`law.rs`).
+/// U = Σ 2/5 k_n δ² (`law.rs`); with DMT adhesion, less the pull-off 4π γ R* while they
+/// overlap.
 ///
 /// Everything here is borrowed for the call: the model's constants and buffers, the
 /// particles' radii and inverse masses, the materials, the colliders and the domain.
@@ -223,6 +227,8 @@ pub(crate) struct ContactForce<'a> {
     /// E*, Pa, with Hertz's law.
     hertz: Option<f64>,
     damping: Option<f64>,
+    /// 4π γ, N/m, with DMT adhesion: the pull-off force per unit R* (`law.rs`).
+    pull_off: f64,
     global: Material,
     own: Option<&'a [Material]>,
     /// ζ of the pair materials.
@@ -354,6 +360,10 @@ impl<'a> ContactForce<'a> {
             stiffness: model.stiffness,
             hertz: model.hertz,
             damping: model.damping,
+            pull_off: model
+                .dmt
+                .filter(|_| model.hertz.is_some())
+                .map_or(0.0, |g| 4.0 * std::f64::consts::PI * g),
             ratios: DampingRatios::new(bodies.global, bodies.own.map(|o| o.1), bodies.colliders),
             global: bodies.global,
             own: bodies.own.map(|o| o.0),

@@ -512,7 +512,9 @@ impl ContactForce<'_> {
             omega,
             moved,
             arms: self.arms(c),
-            normal_force: force.abs(),
+            // (LAMMPS's Fncrit: with DMT adhesion |F_n + 2 F_po|, the bound of friction
+            // measured from the pull-off, so that a contact held by adhesion alone still rubs)
+            normal_force: (force + 2.0 * self.pull_off_of(c)).abs(),
             dashpot,
             friction: self.friction_of(c),
         };
