@@ -71,6 +71,7 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
     core = world._core
     carry = core.integrator_carry()
     spin_carry = core.spin_carry()
+    wall_carry = core.wall_force_carry()
     memory = core.contact_history()
     warm = core.collision_carry()
     calm, island = core.sleep_carry()
@@ -139,6 +140,9 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
             for part, last in (("total", False), ("last", True)):
                 for key, a in world._collider_books_as_pulled(last).items():
                     f.create_dataset(f"collider_books/{part}/{key}", data=np.asarray(a, dtype=np.float64))
+            if wall_carry is not None:  # a force model's collider forces of the last step (rates)
+                for key, a in wall_carry.items():
+                    f.create_dataset(f"collider_books/carry/{key}", data=np.asarray(a, dtype=np.float64))
         if _run is not None:
             _write_run(f.create_group("run"), _run)
     core.restart_caches()
@@ -150,6 +154,8 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
         core.restore_integrator_carry(carry.tolist())
     if spin_carry is not None:
         core.restore_spin_carry(spin_carry.tolist())
+    if wall_carry is not None:
+        core.restore_wall_force_carry(wall_carry)
     return path
 
 
@@ -572,12 +578,14 @@ def _load_world(r: _Reader) -> Any:
     world._warned = r.bool_attr("warned")
     world._advised_at = r.int_attr("advised_at", 0, _INT64_MAX, "the particles when the advisor last looked: an integer >= 0")
     # the collision books: there exactly when collisions are on
+    wall_carry = None
     if world.collision_stats() is not None:
         books = _collision_books(r)
         r.engine("attribute 'collision_stats'", core.restore_collision_stats, books["total"], books["last"])
         if "collider_books" in r.f:  # (a checkpoint from before: the world books from zero)
             carried = _carried_books(r, len(world.colliders))
             r.engine("group 'collider_books'", core.restore_collider_books, carried["total"], carried["last"])
+            wall_carry = carried.get("carry")
     elif "collision_stats" in r.f.attrs:
         raise r.fail("attribute 'collision_stats'", "is there but attribute 'scene' has collisions off; only a world with collisions has collision books")
     elif "collider_books" in r.f:
@@ -670,6 +678,8 @@ def _load_world(r: _Reader) -> Any:
         r.engine("dataset 'integrator_carry'", core.restore_integrator_carry, carry.tolist())
     if spin_carry is not None:
         r.engine("dataset 'spin_carry'", core.restore_spin_carry, spin_carry.tolist())
+    if wall_carry is not None:
+        r.engine("group 'collider_books/carry'", core.restore_wall_force_carry, wall_carry)
     if memory[0] or memory[1]:
         r.engine("group 'contact_history'", core.restore_contact_history, *memory)
     return world
@@ -682,14 +692,19 @@ _COLLIDER_BOOKS = {"momentum": ("N·s", 3), "angular_momentum": ("N·m·s", 3), 
 def _carried_books(r: _Reader, colliders: int) -> dict:
     """The collider books the world that wrote the checkpoint had (group `collider_books`:
     `total` and `last`, each a dataset per key of `World.collider_books`, one row per
-    collider), for the world read from it to go on with."""
-    r.group("collider_books")
+    collider; and with a force model `carry`, the last step's collider forces as rates), for
+    the world read from it to go on with."""
+    g = r.group("collider_books")
     out: dict = {}
-    for part in ("total", "last"):
+    for part in ("total", "last", "carry"):
+        if part == "carry" and "carry" not in g:
+            continue
         out[part] = {}
         for key, (unit, width) in _COLLIDER_BOOKS.items():
             shape = (colliders, width) if width else (colliders,)
-            what = f"{'over all steps' if part == 'total' else 'in the last step'}: one {'vector' if width else 'number'} per collider ({colliders}), finite, {unit}"
+            when = {"total": "over all steps", "last": "in the last step", "carry": "per second at the last step's end"}[part]
+            rate = {"N·s": "N", "N·m·s": "N·m", "J": "W"}[unit] if part == "carry" else unit
+            what = f"{when}: one {'vector' if width else 'number'} per collider ({colliders}), finite, {rate}"
             out[part][key] = r.reals(f"collider_books/{part}/{key}", shape, np.isfinite, f"what the particles gave each collider {what}")[1]
     return out
 

@@ -501,6 +501,56 @@ pub fn contacts_dict<'py>(py: Python<'py>, reports: &[ContactReport], impulses: 
     Ok(out)
 }
 
+/// What each collider took, as arrays (`World.collider_books`): `momentum`,
+/// `angular_momentum`, `normal`, `tangential` (K, 3) and `work` (K,).
+pub fn books_dict<'py>(py: Python<'py>, books: &[kinema::world::ColliderBooks]) -> PyResult<Bound<'py, PyDict>> {
+    let n = books.len();
+    let rows = |f: fn(&kinema::world::ColliderBooks) -> [f64; 3]| {
+        PyArray1::from_vec(py, books.iter().flat_map(f).collect::<Vec<f64>>()).reshape([n, 3])
+    };
+    let out = PyDict::new(py);
+    out.set_item("momentum", rows(|b| b.momentum)?)?;
+    out.set_item("angular_momentum", rows(|b| b.angular_momentum)?)?;
+    out.set_item("work", PyArray1::from_vec(py, books.iter().map(|b| b.work).collect()))?;
+    out.set_item("normal", rows(|b| b.normal)?)?;
+    out.set_item("tangential", rows(|b| b.tangential)?)?;
+    Ok(out)
+}
+
+/// [`books_dict`]'s arrays back (a checkpoint's): one row per collider.
+pub fn books_from(d: &Bound<'_, PyDict>) -> PyResult<Vec<kinema::world::ColliderBooks>> {
+    let values = |key: &str| -> PyResult<Vec<f64>> {
+        let item = d
+            .get_item(key)?
+            .ok_or_else(|| pyo3::exceptions::PyValueError::new_err(format!("collider books: '{key}' is missing")))?;
+        let a: numpy::PyReadonlyArrayDyn<'_, f64> = item.extract()?;
+        Ok(a.as_array().iter().copied().collect())
+    };
+    let (p, l, w, n, t) = (
+        values("momentum")?,
+        values("angular_momentum")?,
+        values("work")?,
+        values("normal")?,
+        values("tangential")?,
+    );
+    let k = w.len();
+    if [&p, &l, &n, &t].iter().any(|v| v.len() != 3 * k) {
+        return Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "collider books: each of momentum, angular_momentum, normal and tangential must hold 3 numbers per collider ({k})"
+        )));
+    }
+    let three = |v: &[f64], c: usize| [v[3 * c], v[3 * c + 1], v[3 * c + 2]];
+    Ok((0..k)
+        .map(|c| kinema::world::ColliderBooks {
+            momentum: three(&p, c),
+            angular_momentum: three(&l, c),
+            work: w[c],
+            normal: three(&n, c),
+            tangential: three(&t, c),
+        })
+        .collect())
+}
+
 /// Begin and end of touch events as arrays: `time`, `begin` (bool), `i` and `j` (ids; −1
 /// against a collider), `collider` (−1 between particles) and `impulse`.
 pub fn touch_events_dict<'py>(py: Python<'py>, events: &[kinema::collide::TouchEvent]) -> PyResult<Bound<'py, PyDict>> {

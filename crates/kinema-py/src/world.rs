@@ -139,42 +139,9 @@ impl PyWorld {
     /// A checkpoint's collider books: `total` and `last`, dicts of arrays as `collider_books`
     /// gives them (one row per collider).
     fn restore_collider_books(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
-        let books = |d: &Bound<'_, PyDict>| -> PyResult<Vec<kinema::world::ColliderBooks>> {
-            let rows = |key: &str| -> PyResult<Vec<f64>> {
-                let item = d
-                    .get_item(key)?
-                    .ok_or_else(|| PyValueError::new_err(format!("collider_books: '{key}' is missing")))?;
-                let a: numpy::PyReadonlyArrayDyn<'_, f64> = item.extract()?;
-                Ok(a.as_array().iter().copied().collect())
-            };
-            let (p, l, w, n, t) = (
-                rows("momentum")?,
-                rows("angular_momentum")?,
-                rows("work")?,
-                rows("normal")?,
-                rows("tangential")?,
-            );
-            let k = w.len();
-            if [&p, &l, &n, &t].iter().any(|v| v.len() != 3 * k) {
-                return Err(PyValueError::new_err(format!(
-                    "collider_books: each of momentum, angular_momentum, normal and tangential must hold 3 numbers per collider ({k})"
-                )));
-            }
-            let three = |v: &[f64], c: usize| [v[3 * c], v[3 * c + 1], v[3 * c + 2]];
-            Ok((0..k)
-                .map(|c| kinema::world::ColliderBooks {
-                    momentum: three(&p, c),
-                    angular_momentum: three(&l, c),
-                    work: w[c],
-                    normal: three(&n, c),
-                    tangential: three(&t, c),
-                })
-                .collect())
-        };
+        let (total, last) = (collide::books_from(&total)?, collide::books_from(&last)?);
         self.inner.restore_order();
-        self.inner
-            .restore_collider_books(books(&total)?, books(&last)?)
-            .map_err(to_py)
+        self.inner.restore_collider_books(total, last).map_err(to_py)
     }
 
     /// Starts the caches again (a checkpoint's restart point).
@@ -527,19 +494,21 @@ impl PyWorld {
     /// the momentum's parts along and across the contacts' normals}.
     #[pyo3(signature = (last = false))]
     fn collider_books<'py>(&self, py: Python<'py>, last: bool) -> PyResult<Bound<'py, PyDict>> {
-        let books = self.inner.collider_books(last);
-        let n = books.len();
-        let flat = |f: fn(&kinema::world::ColliderBooks) -> [f64; 3]| books.iter().flat_map(f).collect::<Vec<f64>>();
-        let out = PyDict::new(py);
-        out.set_item("momentum", PyArray1::from_vec(py, flat(|b| b.momentum)).reshape([n, 3])?)?;
-        out.set_item(
-            "angular_momentum",
-            PyArray1::from_vec(py, flat(|b| b.angular_momentum)).reshape([n, 3])?,
-        )?;
-        out.set_item("work", PyArray1::from_vec(py, books.iter().map(|b| b.work).collect()))?;
-        out.set_item("normal", PyArray1::from_vec(py, flat(|b| b.normal)).reshape([n, 3])?)?;
-        out.set_item("tangential", PyArray1::from_vec(py, flat(|b| b.tangential)).reshape([n, 3])?)?;
-        Ok(out)
+        collide::books_dict(py, &self.inner.collider_books(last))
+    }
+
+    /// The force models' collider forces of the last step's Verlet pass, as rates (the keys
+    /// of `collider_books`, in N, N·m and W), which the next step's books start from; None
+    /// when none are kept (for a checkpoint).
+    fn wall_force_carry<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.inner.wall_force_carry().map(|b| collide::books_dict(py, &b)).transpose()
+    }
+
+    /// Sets what `wall_force_carry` gave (a checkpoint's).
+    fn restore_wall_force_carry(&mut self, carry: Bound<'_, PyDict>) -> PyResult<()> {
+        let carry = collide::books_from(&carry)?;
+        self.inner.restore_wall_force_carry(Some(carry));
+        Ok(())
     }
 
     /// The contacts now (the impulse model's: of the last step's end), as arrays, with their

@@ -636,9 +636,7 @@ class CollisionsTable(_Model):
     @model_validator(mode="after")
     def _model_takes_its_parameters(self) -> CollisionsTable:
         # "spring_dashpot needs stiffness", "only spring_dashpot takes damping": the engine's rule.
-        _core.check_contact_model(
-            self.model, self.stiffness, self.damping, self.youngs_modulus, self.poisson_ratio, self.cohesion, self.surface_energy
-        )
+        _core.check_contact_model(self.model, self.stiffness, self.damping, self.youngs_modulus, self.poisson_ratio, self.cohesion, self.surface_energy)
         return self
 
 

@@ -80,10 +80,28 @@ impl World {
     /// go on as the one that wrote it.
     pub fn restart_caches(&mut self) -> Result<(), Error> {
         self.restore_user_order();
+        // (the force models' last collider forces are a value of the state, not a cache:
+        // kept, as a checkpoint keeps them, so that writing one changes no bit of the books)
+        let walls = self.wall_force_carry();
         self.reset_caches();
         self.placement_from = None;
         self.contacts_changed();
+        self.restore_wall_force_carry(walls);
         Ok(())
+    }
+
+    /// The force models' collider forces of the last step's Verlet pass, as rates (N, N·m
+    /// and W in [`ColliderBooks`]' fields), which the next step's collider books start from;
+    /// `None` when there are none (no force model, or none kept since a change).
+    pub fn wall_force_carry(&self) -> Option<Vec<ColliderBooks>> {
+        self.collide_stage.as_ref()?.spring_dashpot.as_ref()?.wall_carry()
+    }
+
+    /// Sets what [`World::wall_force_carry`] gave (a checkpoint's).
+    pub fn restore_wall_force_carry(&mut self, carry: Option<Vec<ColliderBooks>>) {
+        if let Some(model) = self.collide_stage.as_ref().and_then(|c| c.spring_dashpot.as_ref()) {
+            model.set_wall_carry(carry);
+        }
     }
 
     /// What the method carries from one step to the next, in the user's order: Verlet's

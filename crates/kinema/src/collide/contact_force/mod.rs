@@ -120,6 +120,18 @@ impl SpringDashpot {
         scratch.histories.renumber(new_of_old);
     }
 
+    /// The collider forces of the last fused Verlet pass, as rates (what the next step's
+    /// collider books start from: `verlet.rs`), for a checkpoint; `None` when none is kept.
+    pub fn wall_carry(&self) -> Option<Vec<ColliderBooks>> {
+        self.scratch().wall_forces.clone()
+    }
+
+    /// Sets what [`SpringDashpot::wall_carry`] gave (a checkpoint's, or the same world's
+    /// across a restart of its caches).
+    pub fn set_wall_carry(&self, carry: Option<Vec<ColliderBooks>>) {
+        self.scratch().wall_forces = carry;
+    }
+
     /// Forgets the contacts' memory (the tangential model changed).
     pub fn forget_history(&self) {
         self.scratch().histories.clear();
