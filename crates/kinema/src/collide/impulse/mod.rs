@@ -325,10 +325,8 @@ impl ImpulseModel {
     }
 
     /// The contacts of the islands asleep, each with the impulse its last awake step's solve
-    /// gave it (N·s on i; the load it carries in each step asleep), their normals and
-    /// overlaps measured at the positions `x` (m, 3 per particle): a pair along its line of
-    /// centres, a collider by its touch within the speculative margin whose normal is most
-    /// along the impulse. A collider contact no longer found is left out.
+    /// gave it (N·s on i; the load it carries in each step asleep), measured at the positions
+    /// `x` (m, 3 per particle) as [`sleeping_contact`] measures them.
     pub(crate) fn sleeping_contacts(
         &self,
         x: &[f64],
@@ -336,56 +334,31 @@ impl ImpulseModel {
         colliders: &[Collider],
         domain: &Domain,
     ) -> Vec<(Contact, [f64; 3])> {
-        let contact = |i: usize, other: Partner, normal: [f64; 3], overlap: f64| Contact {
-            i,
-            other,
-            normal,
-            overlap,
-            u_n: 0.0,
-            wall_velocity: [0.0; 3],
-        };
-        let mut out = Vec::new();
-        for r in self.sleep.records() {
-            let xi = crate::vec3::get(x, r.i);
-            match r.other {
-                Partner::Particle(j) => {
-                    let d = domain.displacement(xi, crate::vec3::get(x, j));
-                    let dist = crate::vec3::norm(d);
-                    if dist > 0.0 {
-                        let n = crate::vec3::scale(1.0 / dist, d);
-                        out.push((contact(r.i, r.other, n, radius[r.i] + radius[j] - dist), r.impulse));
-                    }
-                }
-                Partner::Collider(k) => {
-                    let mut best: Option<(f64, super::Touch)> = None;
-                    // (the end-of-step contacts' margin against a collider)
-                    colliders[k].for_each_touch(xi, radius[r.i], 2.0 * SPECULATIVE * radius[r.i], |t| {
-                        let along = crate::vec3::dot(t.normal, r.impulse);
-                        if best.as_ref().is_none_or(|(a, _)| along > *a) {
-                            best = Some((along, t));
-                        }
-                    });
-                    if let Some((_, t)) = best {
-                        out.push((contact(r.i, r.other, t.normal, t.overlap), r.impulse));
-                    }
-                }
-            }
-        }
-        out
+        self.sleep
+            .records()
+            .filter_map(|r| sleeping_contact(r, x, radius, colliders, domain).map(|c| (c, r.impulse)))
+            .collect()
     }
 
     /// Books what the islands asleep at the positions `x` give the colliders in a step: each
-    /// collider contact's load, as in its last awake step (a still collider: no work).
+    /// collider contact's load, as in its last awake step (a still collider: no work). Only
+    /// the collider records are measured: a pile asleep costs its few wall contacts a step.
     pub(super) fn book_sleepers(&mut self, x: &[f64], radius: &[f64], colliders: &[Collider], domain: &Domain) {
-        for (c, p) in self.sleeping_contacts(x, radius, colliders, domain) {
-            if let Partner::Collider(k) = c.other {
+        let walls = self.sleep.records().filter(|r| matches!(r.other, Partner::Collider(_)));
+        let given: Vec<(usize, [f64; 3], [f64; 3], [f64; 3])> = walls
+            .filter_map(|r| {
+                let c = sleeping_contact(r, x, radius, colliders, domain)?;
+                let Partner::Collider(k) = c.other else { return None };
                 let at = crate::vec3::sub(
                     crate::vec3::get(x, c.i),
                     crate::vec3::scale(radius[c.i] - c.overlap, c.normal),
                 );
-                if let Some(b) = self.collider_books.get_mut(k) {
-                    b.book(at, [0.0; 3], p, c.normal);
-                }
+                Some((k, at, r.impulse, c.normal))
+            })
+            .collect();
+        for (k, at, p, n) in given {
+            if let Some(b) = self.collider_books.get_mut(k) {
+                b.book(at, [0.0; 3], p, n);
             }
         }
     }
@@ -565,4 +538,40 @@ impl ImpulseModel {
             self.sleep.put_to_sleep(members, mine, overlap);
         }
     }
+}
+
+/// The contact of a sleeping island's record `r` at the positions `x` (m): a pair along its
+/// line of centres; a collider by its touch within the end-of-step contacts' margin whose
+/// normal is most along the record's impulse (`None` when it touches no longer).
+fn sleeping_contact(r: &ContactRecord, x: &[f64], radius: &[f64], colliders: &[Collider], domain: &Domain) -> Option<Contact> {
+    let xi = crate::vec3::get(x, r.i);
+    let (normal, overlap) = match r.other {
+        Partner::Particle(j) => {
+            let d = domain.displacement(xi, crate::vec3::get(x, j));
+            let dist = crate::vec3::norm(d);
+            if dist <= 0.0 {
+                return None;
+            }
+            (crate::vec3::scale(1.0 / dist, d), radius[r.i] + radius[j] - dist)
+        }
+        Partner::Collider(k) => {
+            let mut best: Option<(f64, [f64; 3], f64)> = None;
+            colliders[k].for_each_touch(xi, radius[r.i], 2.0 * SPECULATIVE * radius[r.i], |t| {
+                let along = crate::vec3::dot(t.normal, r.impulse);
+                if best.is_none_or(|(a, _, _)| along > a) {
+                    best = Some((along, t.normal, t.overlap));
+                }
+            });
+            let (_, normal, overlap) = best?;
+            (normal, overlap)
+        }
+    };
+    Some(Contact {
+        i: r.i,
+        other: r.other,
+        normal,
+        overlap,
+        u_n: 0.0,
+        wall_velocity: [0.0; 3],
+    })
 }
