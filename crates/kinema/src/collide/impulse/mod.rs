@@ -345,20 +345,17 @@ impl ImpulseModel {
     /// the collider records are measured: a pile asleep costs its few wall contacts a step.
     pub(super) fn book_sleepers(&mut self, x: &[f64], radius: &[f64], colliders: &[Collider], domain: &Domain) {
         let walls = self.sleep.records().filter(|r| matches!(r.other, Partner::Collider(_)));
-        let given: Vec<(usize, [f64; 3], [f64; 3], [f64; 3])> = walls
-            .filter_map(|r| {
-                let c = sleeping_contact(r, x, radius, colliders, domain)?;
-                let Partner::Collider(k) = c.other else { return None };
-                let at = crate::vec3::sub(
-                    crate::vec3::get(x, c.i),
-                    crate::vec3::scale(radius[c.i] - c.overlap, c.normal),
-                );
-                Some((k, at, r.impulse, c.normal))
-            })
+        let given: Vec<(Contact, [f64; 3])> = walls
+            .filter_map(|r| sleeping_contact(r, x, radius, colliders, domain).map(|c| (c, r.impulse)))
             .collect();
-        for (k, at, p, n) in given {
+        for (c, p) in given {
+            let Partner::Collider(k) = c.other else { continue };
+            let at = crate::vec3::sub(
+                crate::vec3::get(x, c.i),
+                crate::vec3::scale(radius[c.i] - c.overlap, c.normal),
+            );
             if let Some(b) = self.collider_books.get_mut(k) {
-                b.book(at, [0.0; 3], p, n);
+                b.book(at, [0.0; 3], p, c.normal);
             }
         }
     }
