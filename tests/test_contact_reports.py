@@ -91,12 +91,10 @@ def test_a_dropped_ball_leaves_the_floor_exactly_the_momentum_it_took(model, e):
     assert floor[2] < -M * 1.0 * (1 + 0.9 * e), "the floor took the bounce's momentum"
 
 
-@pytest.mark.parametrize("model", ["hertz", "impulse"])
-def test_a_sliding_ball_reports_coulomb_friction_until_it_rolls(model):
-    # A ball thrown along a rough floor without spin slides, its friction μ times its normal
-    # force against its motion (Coulomb), until it rolls at v₀ / (1 + I/(m ρ²)) ≈ 5/7 v₀
-    # (angular momentum about the contact point is kept), where the contact sticks.
-    mu, v0 = 0.3, 1.0
+def resting_ball(model, mu):
+    """A spinning ball resting on a rough floor (friction μ; Hertz with Mindlin's tangential
+    spring, placed at Hertz's static overlap δ = (3 m g / (4 E* √R))^(2/3), E* = E / (2 (1 −
+    ν²))), its normal force settled for 10 ms."""
     dt = 1e-5 if model == "hertz" else 1e-3
     w = kinema.World(dim=3, dt=dt, spin=True)
     w.add(kinema.Gravity())
@@ -105,11 +103,21 @@ def test_a_sliding_ball_reports_coulomb_friction_until_it_rolls(model):
     w.set_collisions(restitution=0.3, friction=mu, **kw)
     delta = 0.0
     if model == "hertz":
-        # at Hertz's static overlap δ = (3 m g / (4 E* √R))^(2/3), E* = E / (2 (1 − ν²))
         e_star = 1e8 / (2 * (1 - 0.3**2))
         delta = (3 * M * G / (4 * e_star * np.sqrt(R))) ** (2 / 3)
     w.add_particles([0.0, 0.0, R - delta], radius=R, mass=M)
-    w.step(int(round(0.01 / dt)))  # settle the normal force
+    w.step(int(round(0.01 / dt)))
+    return w
+
+
+@pytest.mark.parametrize("model", ["hertz", "impulse"])
+def test_a_sliding_ball_reports_coulomb_friction_until_it_rolls(model):
+    # A ball thrown along a rough floor without spin slides, its friction μ times its normal
+    # force against its motion (Coulomb), until it rolls at v₀ / (1 + I/(m ρ²)) ≈ 5/7 v₀
+    # (angular momentum about the contact point is kept), where the contact sticks.
+    mu, v0 = 0.3, 1.0
+    w = resting_ball(model, mu)
+    dt = w.dt
     w.velocities = [[v0, 0.0, 0.0]]
     w.step(int(round(0.05 / dt)))
     c = w.contacts()

@@ -18,7 +18,7 @@ import warnings
 
 import numpy as np
 import pytest
-from test_contact_reports import MODELS, G, M, R, column
+from test_contact_reports import G, M, column, resting_ball
 
 import kinema
 
@@ -57,16 +57,7 @@ def test_a_sliding_ball_shears_the_floor_by_mu_times_its_weight_until_it_rolls(m
     # slides until v = ω R, at t* = 2 v₀ / (7 μ g) = 0.097 s, then rolls at 5/7 v₀ with no
     # friction: over the slide the floor took m v₀ − m (5/7) v₀ = 2/7 m v₀ along x.
     mu, v0 = 0.3, 1.0
-    dt = 1e-5 if model == "hertz" else 1e-3
-    w = kinema.World(dim=3, dt=dt, spin=True)
-    w.add(kinema.Gravity())
-    w.add(kinema.Plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]))
-    w.set_collisions(restitution=0.3, friction=mu, **(dict(MODELS[model], tangential="mindlin") if model == "hertz" else {}))
-    delta = 0.0
-    if model == "hertz":  # at Hertz's static overlap δ = (3 m g / (4 E* √R))^(2/3), E* = E / (2 (1 − ν²))
-        delta = (3 * M * G / (4 * 1e8 / (2 * (1 - 0.3**2)) * np.sqrt(R))) ** (2 / 3)
-    w.add_particles([0.0, 0.0, R - delta], radius=R, mass=M)
-    w.step(int(round(0.01 / dt)))  # the normal force settles
+    w = resting_ball(model, mu)
     w.velocities = [[v0, 0.0, 0.0]]
     tr = w.run(0.2, fps=100)
     forces = tr.collider_forces()
