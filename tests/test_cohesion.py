@@ -1,5 +1,6 @@
 """Cohesion of the force models (issue 47): DMT adhesion with Hertz's law (LAMMPS GRANULAR's
-``dmt``, ``World.set_collisions(model="hertz", cohesion="dmt", surface_energy=γ)``).
+``dmt``, ``World.set_collisions(model="hertz", cohesion="dmt", surface_energy=γ)``; JKR's
+is in test_jkr.py).
 
 Closed forms (Derjaguin, Muller and Toporov 1975): while two bodies overlap by δ the contact
 pulls them together by the pull-off force F_po = 4π γ R* (2π w R* with w = 2γ the work of
@@ -118,8 +119,8 @@ def test_the_cohesion_parameters_are_checked_by_name():
         w.set_collisions(**hertz, surface_energy=0.1)
     with pytest.raises(ValueError, match=r"surface_energy = None is invalid: cohesion='dmt' needs"):
         w.set_collisions(**hertz, cohesion="dmt")
-    with pytest.raises(ValueError, match=r"cohesion = 'jkr' is invalid: .*'dmt'"):
-        w.set_collisions(**hertz, cohesion="jkr", surface_energy=0.1)
+    with pytest.raises(ValueError, match=r"cohesion = 'bmt' is invalid: .*'dmt'"):
+        w.set_collisions(**hertz, cohesion="bmt", surface_energy=0.1)
     with pytest.raises(ValueError, match=r"surface_energy = -0.1 is invalid"):
         w.set_collisions(**hertz, cohesion="dmt", surface_energy=-0.1)
     with pytest.raises(ValueError, match=r"surface_energy = 0.1 is invalid: only model='hertz' uses it"):

@@ -90,6 +90,13 @@ class WorldCollisions:
         the torques turn the particles (velocity Verlet for ω, as LAMMPS's ``fix
         nve/sphere``). docs/collisions.md has the formulas.
 
+        ``cohesion`` (with ``"hertz"``), adhesion of touching bodies by their ``surface_energy``
+        γ in J/m² (LAMMPS GRANULAR's ``dmt`` and ``jkr``; w = 2γ the work of adhesion):
+        ``"dmt"`` pulls overlapping bodies together by 4π γ R* and lets go at δ = 0;
+        ``"jkr"`` follows Johnson–Kendall–Roberts' contact, which, once made, holds past
+        δ = 0 until it is pulled apart at 3π γ R* (it remembers its touches, so it steps with
+        ``method="verlet"`` only).
+
         ``event_driven``: with the impulse model and no forces (a gas), run from frame to
         frame by events instead of steps: every impact at its exact time, by the same rule,
         one scheduled event per particle (Smallenburg's event-driven dynamics; much faster for

@@ -7,7 +7,9 @@ use kinema::collide::colliders::{check_planar, PLANE_IN_2D, SPHERE_IN_2D};
 use kinema::collide::{
     BoxContainer, Collider, ContactReport, Material, Motion, Partner, Plane, SphereObstacle, Surface, TriangleMesh,
 };
-use kinema::world::{Accuracy, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind};
+use kinema::world::{
+    Accuracy, Cohesion, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind,
+};
 use kinema::Error;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
@@ -72,7 +74,7 @@ impl CollisionArgs {
                     damping: self.damping,
                     youngs_modulus: self.youngs_modulus,
                     poisson_ratio: self.poisson_ratio,
-                    dmt: dmt_of(self.cohesion.as_deref(), self.surface_energy)?,
+                    cohesion: cohesion_of(self.cohesion.as_deref(), self.surface_energy)?,
                 },
             )?,
             restitution: self.restitution,
@@ -95,34 +97,28 @@ impl CollisionArgs {
     }
 }
 
-/// The names of the cohesion models (`World.set_collisions(cohesion=...)`), in the order an
-/// error lists them.
-const COHESION: [&str; 1] = ["dmt"];
-
-/// DMT adhesion's surface energy γ (J/m²) from the `cohesion` model's name and the
-/// `surface_energy`: the two go together.
-fn dmt_of(cohesion: Option<&str>, surface_energy: Option<f64>) -> Result<Option<f64>, Error> {
+/// The cohesion model from its name and the `surface_energy` γ (J/m²): the two go together.
+fn cohesion_of(cohesion: Option<&str>, surface_energy: Option<f64>) -> Result<Option<Cohesion>, Error> {
     match (cohesion, surface_energy) {
         (None, None) => Ok(None),
         (None, Some(g)) => Err(Error::invalid(
             "surface_energy",
             g,
-            "it is the surface energy of a cohesion model: give cohesion='dmt' with it",
+            "it is the surface energy of a cohesion model: give cohesion='dmt' or 'jkr' with it",
         )),
-        (Some("dmt"), Some(g)) => Ok(Some(g)),
-        (Some("dmt"), None) => Err(Error::invalid(
-            "surface_energy",
-            "None",
-            "cohesion='dmt' needs the surface energy γ, finite and >= 0 J/m² (its pull-off force is 4π γ R*)",
-        )),
-        (Some(other), _) => Err(Error::invalid(
-            "cohesion",
-            format!("'{other}'"),
-            format!(
-                "the cohesion model must be one of {} (Derjaguin–Muller–Toporov, with model='hertz'), or None",
-                COHESION.map(|n| format!("'{n}'")).join(", ")
-            ),
-        )),
+        (Some(name), None) => {
+            let model = Cohesion::from_name(name, 0.0)?;
+            let pull_off = match model {
+                Cohesion::Dmt { .. } => "4π γ R*",
+                Cohesion::Jkr { .. } => "3π γ R*",
+            };
+            Err(Error::invalid(
+                "surface_energy",
+                "None",
+                format!("cohesion='{name}' needs the surface energy γ, finite and >= 0 J/m² (its pull-off force is {pull_off})"),
+            ))
+        }
+        (Some(name), Some(g)) => Cohesion::from_name(name, g).map(Some),
     }
 }
 
@@ -152,7 +148,7 @@ fn check_contact_model(
         damping,
         youngs_modulus,
         poisson_ratio,
-        dmt: dmt_of(cohesion, surface_energy).map_err(crate::errors::to_py)?,
+        cohesion: cohesion_of(cohesion, surface_energy).map_err(crate::errors::to_py)?,
     };
     ContactModel::from_name(model, args).map(|_| ()).map_err(crate::errors::to_py)
 }
@@ -247,8 +243,8 @@ pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<
     out.set_item("damping", args.damping)?;
     out.set_item("youngs_modulus", args.youngs_modulus)?;
     out.set_item("poisson_ratio", args.poisson_ratio)?;
-    out.set_item("cohesion", args.dmt.map(|_| COHESION[0]))?;
-    out.set_item("surface_energy", args.dmt)?;
+    out.set_item("cohesion", args.cohesion.map(|c| c.name()))?;
+    out.set_item("surface_energy", args.cohesion.map(|c| c.surface_energy()))?;
     out.set_item("event_driven", p.event_driven)?;
     out.set_item("rolling_friction", p.rolling_friction)?;
     let t = p.tangential;

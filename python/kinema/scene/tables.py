@@ -621,7 +621,7 @@ class CollisionsTable(_Model):
     damping: NonNeg | None = _COLLISION_DEFAULTS["damping"]
     youngs_modulus: Positive | None = _COLLISION_DEFAULTS["youngs_modulus"]
     poisson_ratio: NonNeg | None = _COLLISION_DEFAULTS["poisson_ratio"]
-    cohesion: Literal["dmt"] | None = _COLLISION_DEFAULTS["cohesion"]
+    cohesion: Literal["dmt", "jkr"] | None = _COLLISION_DEFAULTS["cohesion"]
     surface_energy: NonNeg | None = _COLLISION_DEFAULTS["surface_energy"]
     event_driven: bool = _COLLISION_DEFAULTS["event_driven"]
     rolling_friction: NonNeg = _COLLISION_DEFAULTS["rolling_friction"]

@@ -44,6 +44,10 @@ pub(crate) fn collider_scale(c: &Collider) -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ListBuild {
     pub skin: f64,
+    /// How far past touching a contact can act, m (JKR's pull-off distance; 0 for the
+    /// others): the list lists pairs within r_i + r_j + s, and holds while the particles
+    /// have moved less than s − reach (see [`NeighbourList`]).
+    pub reach: f64,
     pub collider_scale: f64,
 }
 
@@ -99,6 +103,8 @@ pub(crate) struct NeighbourList {
     /// doc): the largest |coordinate| of particles and colliders, the periods' sum and the
     /// largest radius, m. A birth's admission ([`NeighbourList::admit`]) tests with them.
     pub(crate) skin: f64,
+    /// The build's reach past touching, m ([`ListBuild::reach`]).
+    pub(crate) reach: f64,
     pub(crate) extent: [f64; 3],
     /// Builds so far.
     pub(crate) builds: usize,
@@ -167,7 +173,11 @@ impl NeighbourList {
             return Ok(());
         }
         self.verified = None;
-        let ListBuild { skin, collider_scale } = build();
+        let ListBuild {
+            skin,
+            reach,
+            collider_scale,
+        } = build();
         self.moving = colliders.iter().map(Collider::is_moving).collect();
         self.built_at.clear(); // no list until the build succeeds (non-finite positions fail)
         let n = radius.len();
@@ -258,6 +268,7 @@ impl NeighbourList {
             .periodic_box()
             .map_or(0.0, |p| (0..3).filter(|&k| p.axes()[k]).map(|k| p.period(k)).sum());
         self.skin = skin;
+        self.reach = reach;
         self.extent = [largest(x).max(collider_scale), periods, largest(radius)];
         self.allowance = self.allowance_now();
         self.builds += 1;
@@ -454,11 +465,12 @@ impl NeighbourList {
         true
     }
 
-    /// s − 10⁻¹² scale, scale = the largest |coordinate| + the periods + 2 r_max + s (the
-    /// type's doc).
+    /// s − reach − 10⁻¹² scale, scale = the largest |coordinate| + the periods + 2 r_max + s
+    /// (the type's doc; contacts that act up to `reach` past touching are all listed while
+    /// the two largest moves sum to less than s − reach).
     fn allowance_now(&self) -> f64 {
         let [coordinates, periods, r_max] = self.extent;
-        self.skin - 1e-12 * (coordinates + periods + 2.0 * r_max + self.skin)
+        self.skin - self.reach - 1e-12 * (coordinates + periods + 2.0 * r_max + self.skin)
     }
 }
 
@@ -588,6 +600,7 @@ mod tests {
         let err = list
             .update(&mut grid, &x, &radius, &[], &domain, || ListBuild {
                 skin: 0.1,
+                reach: 0.0,
                 collider_scale: 0.0,
             })
             .unwrap_err();
@@ -605,6 +618,7 @@ mod tests {
         list.entry_limit = None;
         list.update(&mut grid, &x, &radius, &[], &domain, || ListBuild {
             skin: 0.1,
+            reach: 0.0,
             collider_scale: 0.0,
         })
         .unwrap();

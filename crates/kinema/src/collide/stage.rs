@@ -58,11 +58,63 @@ pub enum ContactModel {
         youngs_modulus: f64,
         /// Poisson's ratio ν, in [0, 0.5). E* = E / (2 (1 − ν²)) between two such bodies.
         poisson_ratio: f64,
-        /// DMT adhesion (LAMMPS's `dmt`): the surface energy γ, J/m² (≥ 0; `None`: none).
-        /// A contact pulls its bodies together by F_po = 4π γ R* while they overlap
-        /// (Derjaguin–Muller–Toporov; 2π w R* with w = 2γ the work of adhesion).
-        dmt: Option<f64>,
+        /// Adhesion of the touching bodies (LAMMPS's `dmt` and `jkr`; `None`: none).
+        cohesion: Option<Cohesion>,
     },
+}
+
+/// Adhesion between touching bodies of Hertz's model, by the surface energy γ, J/m² (≥ 0;
+/// w = 2γ the work of adhesion), as LAMMPS GRANULAR's `dmt` and `jkr` normal models have it
+/// (`collide/contact_force/cohesion.rs`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Cohesion {
+    /// Derjaguin–Muller–Toporov (1975): Hertz's force less a constant pull F_po = 4π γ R*
+    /// (2π w R*) while the bodies overlap; the contact ends at δ = 0.
+    Dmt {
+        /// γ, J/m².
+        surface_energy: f64,
+    },
+    /// Johnson–Kendall–Roberts (1971): the contact radius a and the force from the overlap
+    /// by the JKR relations; a contact, once made, holds beyond δ = 0 until the pull reaches
+    /// F_po = 3π γ R* (3/2 π w R*), at δ = −(3π² γ² R* / (16 E*²))^(1/3).
+    Jkr {
+        /// γ, J/m².
+        surface_energy: f64,
+    },
+}
+
+impl Cohesion {
+    /// The names, as the binding and the scene files spell them.
+    pub const NAMES: [&'static str; 2] = ["dmt", "jkr"];
+
+    /// The model named `name` with surface energy γ (J/m²).
+    pub fn from_name(name: &str, surface_energy: f64) -> Result<Cohesion, Error> {
+        match name {
+            "dmt" => Ok(Cohesion::Dmt { surface_energy }),
+            "jkr" => Ok(Cohesion::Jkr { surface_energy }),
+            other => Err(Error::invalid(
+                "cohesion",
+                format!("'{other}'"),
+                "the cohesion model must be 'dmt' (Derjaguin–Muller–Toporov) or 'jkr' \
+                 (Johnson–Kendall–Roberts), with model='hertz', or None",
+            )),
+        }
+    }
+
+    /// Its name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Cohesion::Dmt { .. } => Self::NAMES[0],
+            Cohesion::Jkr { .. } => Self::NAMES[1],
+        }
+    }
+
+    /// γ, J/m².
+    pub fn surface_energy(&self) -> f64 {
+        match *self {
+            Cohesion::Dmt { surface_energy } | Cohesion::Jkr { surface_energy } => surface_energy,
+        }
+    }
 }
 
 /// LAMMPS's tangential sub-models with history, by name ([`TangentialArgs`]).
@@ -147,8 +199,8 @@ pub struct ModelArgs {
     pub youngs_modulus: Option<f64>,
     /// ν (`hertz`; default [`ContactModel::POISSON_RATIO`]).
     pub poisson_ratio: Option<f64>,
-    /// γ, J/m²: DMT adhesion (`hertz`).
-    pub dmt: Option<f64>,
+    /// Adhesion (`hertz`).
+    pub cohesion: Option<Cohesion>,
 }
 
 impl ContactModel {
@@ -183,7 +235,7 @@ impl ContactModel {
             damping,
             youngs_modulus,
             poisson_ratio,
-            dmt,
+            cohesion,
         } = args;
         let only = |params: &[(&str, Option<f64>)], owner: &str| -> Result<(), Error> {
             match params.iter().find(|p| p.1.is_some()) {
@@ -199,7 +251,7 @@ impl ContactModel {
         let hertz = [
             ("youngs_modulus", youngs_modulus),
             ("poisson_ratio", poisson_ratio),
-            ("surface_energy", dmt),
+            ("surface_energy", cohesion.map(|c| c.surface_energy())),
         ];
         match name {
             "impulse" => {
@@ -231,7 +283,7 @@ impl ContactModel {
                     Some(youngs_modulus) => Ok(ContactModel::Hertz {
                         youngs_modulus,
                         poisson_ratio: poisson_ratio.unwrap_or(Self::POISSON_RATIO),
-                        dmt,
+                        cohesion,
                     }),
                     None => Err(Error::invalid(
                         "youngs_modulus",
@@ -267,13 +319,13 @@ impl ContactModel {
             ContactModel::Hertz {
                 youngs_modulus,
                 poisson_ratio,
-                dmt,
+                cohesion,
             } => (
                 Self::NAMES[2],
                 ModelArgs {
                     youngs_modulus: Some(youngs_modulus),
                     poisson_ratio: Some(poisson_ratio),
-                    dmt,
+                    cohesion,
                     ..ModelArgs::default()
                 },
             ),
@@ -379,15 +431,19 @@ impl CollisionParams {
         if let ContactModel::Hertz {
             youngs_modulus,
             poisson_ratio,
-            dmt,
+            cohesion,
         } = self.model
         {
-            if let Some(gamma) = dmt {
+            if let Some(c) = cohesion {
+                let gamma = c.surface_energy();
                 if !(gamma.is_finite() && gamma >= 0.0) {
                     return Err(Error::invalid(
                         "surface_energy",
                         gamma,
-                        "the surface energy γ of DMT adhesion must be finite and >= 0 J/m²",
+                        format!(
+                            "the surface energy γ of {} adhesion must be finite and >= 0 J/m²",
+                            c.name().to_uppercase()
+                        ),
                     ));
                 }
             }
@@ -515,10 +571,10 @@ impl CollisionParams {
 fn spring_dashpot_of(params: &CollisionParams) -> Option<SpringDashpot> {
     let mut model = match params.model {
         ContactModel::SpringDashpot { stiffness, damping } => SpringDashpot::new(stiffness, damping),
-        ContactModel::Hertz { dmt, .. } => {
+        ContactModel::Hertz { cohesion, .. } => {
             let mut model = SpringDashpot::new(0.0, None);
             model.hertz = params.model.effective_modulus();
-            model.dmt = dmt.filter(|&g| g > 0.0);
+            model.cohesion = cohesion.filter(|c| c.surface_energy() > 0.0);
             model
         }
         ContactModel::Impulse => return None,
@@ -739,7 +795,8 @@ impl CollideStage {
     /// A step of the force models (`h`, s): the books its force evaluation kept (velocity
     /// Verlet's fused pass; none with the other methods) as the step's collision figures:
     /// the contacts pushing, those begun in the step as its impacts, the dashpots' power
-    /// times h as the energy lost, h times the pairs' virial.
+    /// times h as the energy lost (with what JKR's contacts lost as they let go), h times the
+    /// pairs' virial.
     pub fn book_contact_force(&mut self, h: f64) {
         self.clear_step();
         let Some((books, walls)) = self.spring_dashpot.as_ref().and_then(|m| m.take_books()) else {
@@ -749,7 +806,7 @@ impl CollideStage {
         let step = CollisionStats {
             contacts: books.contacts,
             impacts: books.begun,
-            energy_lost: h * books.power,
+            energy_lost: h * books.power + books.lost,
             virial: books.virial.map(|w| h * w),
             ..CollisionStats::default()
         };

@@ -95,7 +95,7 @@ impl World {
         let particle = particle.map(|i| self.user_of().map_or(i, |user_of| user_of[i] as usize));
         let method = self.params.method.clone();
         let advised_dt = self.stable_step(&method).ok().filter(|h| h.is_finite());
-        let verlet_only = super::forces::contact_force(&self.collide_stage, &self.particles).is_some_and(|c| c.has_tangential());
+        let verlet_only = super::forces::contact_force(&self.collide_stage, &self.particles).is_some_and(|c| c.has_memory());
         Error::Diverged {
             step: self.steps + 1,
             time: self.time,

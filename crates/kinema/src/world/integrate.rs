@@ -91,13 +91,20 @@ impl World {
         if matches!(self.stepper, Some(WorldStepper::Verlet(_))) {
             self.verlet()?;
         } else {
-            if contact_force(&self.collide_stage, &self.particles).is_some_and(|c| c.has_tangential()) {
+            if let Some(c) = contact_force(&self.collide_stage, &self.particles).filter(|c| c.has_memory()) {
+                let (what, instead) = if c.has_tangential() {
+                    ("contacts with friction", "friction=0")
+                } else {
+                    ("JKR cohesion", "cohesion='dmt'")
+                };
                 return Err(Error::invalid(
                     "method",
                     format!("'{}'", self.params.method.name()),
-                    "contacts with friction under a force model ('spring_dashpot', 'hertz') step with method='verlet' \
-                     only: their tangential springs stretch once per step, at its one force evaluation (LAMMPS's fix \
-                     nve/sphere); use method='verlet', or friction=0",
+                    format!(
+                        "{what} under a force model ('spring_dashpot', 'hertz') step with method='verlet' only: \
+                         the contacts' memory (tangential springs, JKR's touches) is renewed once per step, at its \
+                         one force evaluation (LAMMPS's fix nve/sphere); use method='verlet', or {instead}"
+                    ),
                 ));
             }
             self.integrate_joined()?;

@@ -34,7 +34,7 @@ mod order;
 
 pub use crate::collide::shock::Accuracy;
 pub use crate::collide::stage::{
-    ColliderBooks, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind,
+    Cohesion, ColliderBooks, CollisionParams, CollisionStats, ContactModel, ModelArgs, TangentialArgs, TangentialKind,
 };
 pub use crate::interrupt::Interrupt;
 pub use advisor::Rates;

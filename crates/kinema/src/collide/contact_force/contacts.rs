@@ -2,6 +2,7 @@
 //! tested exactly as [`pair_contact`] tests it, and the particles' contacts with the colliders
 //! (box walls along periodic axes left out).
 
+use super::history::{pair_memory, touches_of, wall_memory, PairSlip, WallSlip};
 use super::{ContactForce, Scratch, CHUNK};
 use crate::collide::neighbour_list::NeighbourList;
 use crate::collide::stage::on_periodic_wall;
@@ -15,23 +16,56 @@ impl ContactForce<'_> {
     /// [`pair_contact`] tests it), then particle by particle, collider by collider, wall by
     /// wall (box walls along periodic axes left out), as the tests' `collider_contacts`
     /// (`collide/oracles.rs`) lists them.
+    ///
+    /// With JKR's contacts, those held past touching are among them (the contacts' memory
+    /// says which touched at the last step: `cohesion.rs`).
     pub(super) fn for_each_contact(&self, s: &State, scratch: &mut Scratch, mut each: impl FnMut(&Contact)) -> Result<(), Error> {
         self.update_list(s, scratch)?;
-        let list = &scratch.list;
+        let Scratch { list, histories, .. } = &*scratch;
         let (x, v) = (s.x, s.v);
+        let mut lost = 0.0;
         for (c, rows) in list.rows.iter().enumerate() {
             for (l, i) in (c * CHUNK..).take(rows.len()).enumerate() {
                 for &j in rows.of(l) {
                     if j as usize > i {
-                        if let Some(contact) = self.pair(i, j as usize, x, v) {
+                        let j = j as usize;
+                        let found = match self.pair(i, j, x, v) {
+                            None if self.jkr.is_some() => self.held_pair(i, j, x, v, &histories.pairs, &mut lost),
+                            found => found,
+                        };
+                        if let Some(contact) = found {
                             each(&contact);
                         }
                     }
                 }
             }
         }
-        self.for_each_wall_contact(s, list, each);
+        self.for_each_wall_contact(s, list, &histories.walls, each);
         Ok(())
+    }
+
+    /// With JKR's contacts, the contact of particles i < j at (x, v) that touched at the last
+    /// step (`memory`, sorted) and are apart now but within its pull-off distance; `None` for
+    /// the others, and for a pair that went past it, whose contact lets go: the energy it
+    /// loses is added to `lost` (J, `cohesion.rs`).
+    #[cold]
+    pub(super) fn held_pair(
+        &self,
+        i: usize,
+        j: usize,
+        x: &[f64],
+        v: &[f64],
+        memory: &[PairSlip],
+        lost: &mut f64,
+    ) -> Option<Contact> {
+        let (jkr, reach) = self.jkr?;
+        pair_memory(memory, i as u32, j as u32)?;
+        let r = self.radius[i] * self.radius[j] / (self.radius[i] + self.radius[j]);
+        let held = pair_contact(i, j, x, v, self.radius, &self.domain, reach).filter(|c| c.overlap > -jkr.pull_off_distance(r));
+        if held.is_none() {
+            *lost += jkr.separation_energy(r);
+        }
+        held
     }
 
     /// The contact of particles i < j at (x, v), if they overlap: `pair_contact`, after its own
@@ -61,11 +95,60 @@ impl ContactForce<'_> {
     }
 
     /// Calls `each` with every contact of a particle with a collider at `s`, particle by
-    /// particle, collider by collider (the list must hold at `s`).
-    pub(super) fn for_each_wall_contact(&self, s: &State, list: &NeighbourList, mut each: impl FnMut(&Contact)) {
+    /// particle, collider by collider (the list must hold at `s`), JKR's held ones among them
+    /// by the touches in `memory` ([`ContactForce::wall_contacts_held`]).
+    pub(super) fn for_each_wall_contact(
+        &self,
+        s: &State,
+        list: &NeighbourList,
+        memory: &[WallSlip],
+        mut each: impl FnMut(&Contact),
+    ) {
+        let mut lost = 0.0;
         for &(i, k) in &list.walls {
-            self.wall_contacts(i, k, s.x, s.v, &mut each);
+            self.wall_contacts_held(i, k, s.x, s.v, memory, &mut lost, &mut each);
         }
+    }
+
+    /// Calls `each` with the contacts of particle i with collider k at (x, v): those that
+    /// overlap and, with JKR's contacts, those apart now but within the pull-off distance
+    /// that touched at the last step (`memory`, the store's part with i's touches, by
+    /// their normals); the energy of each remembered touch that let go is added to `lost`
+    /// (J, `cohesion.rs`).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub(super) fn wall_contacts_held(
+        &self,
+        i: usize,
+        k: usize,
+        x: &[f64],
+        v: &[f64],
+        memory: &[WallSlip],
+        lost: &mut f64,
+        mut each: impl FnMut(&Contact),
+    ) {
+        let Some((jkr, reach)) = self.jkr else {
+            return self.wall_contacts(i, k, x, v, each);
+        };
+        let remembered = touches_of(memory, i as u32, k as u32);
+        let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
+        let (collider, r) = (&self.colliders[k], self.radius[i]);
+        let mut held = 0;
+        collider.for_each_touch(p, r, reach, |t| {
+            let c = collider.contact(k, t, i, p, vi, r);
+            if on_periodic_wall(&c, self.colliders, &self.domain) {
+                return;
+            }
+            if c.overlap > 0.0 {
+                held += usize::from(wall_memory(remembered, i as u32, k as u32, c.normal).is_some());
+                each(&c);
+            } else if c.overlap > -jkr.pull_off_distance(r) && wall_memory(remembered, i as u32, k as u32, c.normal).is_some() {
+                held += 1;
+                each(&c);
+            }
+        });
+        // (the remembered touches not found again let go)
+        *lost += remembered.len().saturating_sub(held) as f64 * jkr.separation_energy(r);
     }
 
     /// Calls `each` with the contacts of particle i with collider k at (x, v) (a box's walls

@@ -148,27 +148,32 @@ impl Histories {
     }
 }
 
-/// The memory of pair (i, j) in a chunk's part of the store (sorted), or unstretched springs.
+/// The memory of pair (i, j) in a chunk's part of the store (sorted), if it touched.
 #[inline]
-pub(super) fn pair_slip(part: &[PairSlip], i: u32, j: u32) -> Slip {
-    match part.binary_search_by_key(&(i, j), |p| (p.i, p.j)) {
-        Ok(at) => part[at].slip,
-        Err(_) => Slip::default(),
-    }
+pub(super) fn pair_memory(part: &[PairSlip], i: u32, j: u32) -> Option<Slip> {
+    part.binary_search_by_key(&(i, j), |p| (p.i, p.j))
+        .ok()
+        .map(|at| part[at].slip)
 }
 
 /// The memory of particle i's touch of collider k with normal `normal` in a chunk's part of
-/// the store, or unstretched springs.
+/// the store, if it touched.
 #[inline]
-pub(super) fn wall_slip(part: &[WallSlip], i: u32, k: u32, normal: [f64; 3]) -> Slip {
-    let a = part.partition_point(|w| (w.i, w.k) < (i, k));
-    part[a..]
+pub(super) fn wall_memory(part: &[WallSlip], i: u32, k: u32, normal: [f64; 3]) -> Option<Slip> {
+    touches_of(part, i, k)
         .iter()
-        .take_while(|w| (w.i, w.k) == (i, k))
         .map(|w| (crate::vec3::dot(w.normal, normal), w.slip))
         .filter(|(cos, _)| *cos > SAME_TOUCH)
         .max_by(|a, b| a.0.total_cmp(&b.0))
-        .map_or(Slip::default(), |(_, s)| s)
+        .map(|(_, s)| s)
+}
+
+/// The touches of collider k by particle i remembered in a chunk's part of the store.
+#[inline]
+pub(super) fn touches_of(part: &[WallSlip], i: u32, k: u32) -> &[WallSlip] {
+    let a = part.partition_point(|w| (w.i, w.k) < (i, k));
+    let b = a + part[a..].partition_point(|w| (w.i, w.k) == (i, k));
+    &part[a..b]
 }
 
 #[cfg(test)]
@@ -221,8 +226,8 @@ mod tests {
         h.renumber(&[0, GONE, 1]);
         assert_eq!(h.pairs.len(), 1);
         assert_eq!((h.pairs[0].i, h.pairs[0].j), (0, 1));
-        assert_eq!(pair_slip(&h.pairs, 0, 1), slip(1.0).swapped());
-        assert_eq!(pair_slip(&h.pairs, 0, 2), Slip::default());
+        assert_eq!(pair_memory(&h.pairs, 0, 1), Some(slip(1.0).swapped()));
+        assert_eq!(pair_memory(&h.pairs, 0, 2), None);
     }
 
     #[test]
@@ -241,9 +246,9 @@ mod tests {
                 slip: slip(2.0),
             },
         ];
-        assert_eq!(wall_slip(&part, 3, 0, [0.1, 0.0, 0.99]), slip(1.0));
-        assert_eq!(wall_slip(&part, 3, 0, [0.99, 0.0, 0.1]), slip(2.0));
-        assert_eq!(wall_slip(&part, 3, 0, [0.0, 1.0, 0.0]), Slip::default());
-        assert_eq!(wall_slip(&part, 3, 1, [0.0, 0.0, 1.0]), Slip::default());
+        assert_eq!(wall_memory(&part, 3, 0, [0.1, 0.0, 0.99]), Some(slip(1.0)));
+        assert_eq!(wall_memory(&part, 3, 0, [0.99, 0.0, 0.1]), Some(slip(2.0)));
+        assert_eq!(wall_memory(&part, 3, 0, [0.0, 1.0, 0.0]), None);
+        assert_eq!(wall_memory(&part, 3, 1, [0.0, 0.0, 1.0]), None);
     }
 }

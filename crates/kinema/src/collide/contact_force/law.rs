@@ -36,18 +36,26 @@ impl ContactForce<'_> {
             check_positions: false,
             books: None,
         };
+        // the springs read as they are (`tangent.rs`); JKR's held contacts from the memory
+        let turn = super::turning(
+            self.tangential,
+            self.jkr.is_some(),
+            self.omega,
+            histories,
+            torque_exchange,
+            None,
+            None,
+        );
+        let turn = turn.as_ref().map(|(t, _)| (t, super::pairs::TurningOut::default()));
         match f {
             Some(f) => {
-                // the springs read as they are (`tangent.rs`)
-                let turn = super::turning(self.tangential, self.omega, histories, torque_exchange, None, None);
-                let turn = turn.as_ref().map(|(t, _)| (t, super::pairs::TurningOut::default()));
                 self.pair_forces(s.x, s.v, list, Some(&mut *f), |_, _| {}, options, exchange, sums, turn);
                 let exchange = &*exchange;
                 f.par_chunks_mut(3 * CHUNK)
                     .enumerate()
                     .for_each(|(d, fc)| exchange.receive(d, fc));
             }
-            None => self.pair_forces(s.x, s.v, list, None, |_, _| {}, options, exchange, sums, None),
+            None => self.pair_forces(s.x, s.v, list, None, |_, _| {}, options, exchange, sums, turn),
         }
         sums.iter().fold(-0.0, |sum, c| sum + c.energy)
     }
@@ -80,6 +88,7 @@ impl ContactForce<'_> {
             } = &mut *scratch;
             if let Some((t, o)) = super::turning(
                 self.tangential,
+                false,
                 self.omega,
                 histories,
                 torque_exchange,
@@ -115,10 +124,26 @@ impl ContactForce<'_> {
     /// force F_po = 4π γ R* is taken off while the bodies overlap: F_n = 4/3 E* √R* δ^(3/2)
     /// − c_n u_n − F_po. The contact ends at δ = 0, so a body held by it comes free under a
     /// pull above F_po (at rest, δ → 0⁺ leaves −F_po).
+    ///
+    /// With JKR's (`cohesion.rs`) the force is F(a) − c_n u_n at the contact radius a of the
+    /// overlap δ, down to δ = −|δ_f|: the caller gives a contact apart (δ ≤ 0) only if it
+    /// touched at the last step.
     #[inline(always)]
     pub(super) fn normal_force_parts(&self, c: &Contact) -> Option<(f64, f64)> {
         let w = self.inverse_mass_sum(c);
-        if c.overlap.is_nan() || c.overlap <= 0.0 || w == 0.0 {
+        if c.overlap.is_nan() || w == 0.0 {
+            return None;
+        }
+        if let Some((jkr, _)) = self.jkr {
+            let r = self.reduced_radius(c);
+            if c.overlap <= -jkr.pull_off_distance(r) {
+                return None;
+            }
+            let a = jkr.contact_radius(r, c.overlap);
+            let dashpot = self.dashpot_at(c, w, HERTZ * jkr.e_star * a);
+            return Some((jkr.force(r, a) - dashpot * c.u_n, dashpot));
+        }
+        if c.overlap <= 0.0 {
             return None;
         }
         let k = self.stiffness_of(c);
@@ -127,24 +152,36 @@ impl ContactForce<'_> {
         Some((force - self.pull_off_of(c), dashpot))
     }
 
-    /// The DMT pull-off force of contact `c`, 4π γ R*, N (0 without adhesion).
+    /// The pull-off force of contact `c`, N: DMT's 4π γ R*, JKR's 3π γ R* (0 without
+    /// adhesion).
     #[inline(always)]
     pub(super) fn pull_off_of(&self, c: &Contact) -> f64 {
         if self.pull_off > 0.0 {
             self.pull_off * self.reduced_radius(c)
+        } else if let Some((jkr, _)) = self.jkr {
+            jkr.pull_off_force(self.reduced_radius(c))
         } else {
             0.0
         }
     }
 
+    /// The radius of the contact disc of `c`, m: √(R* δ) (Hertz), JKR's a with its adhesion.
+    #[inline]
+    pub(super) fn contact_radius_of(&self, c: &Contact) -> f64 {
+        match self.jkr {
+            Some((jkr, _)) => jkr.contact_radius(self.reduced_radius(c), c.overlap),
+            None => (self.reduced_radius(c) * c.overlap).sqrt(),
+        }
+    }
+
     /// The secant stiffness F_el/δ of contact `c` at its overlap δ > 0, N/m: k_n with Hooke's
-    /// law; with Hertz's, 4/3 E* a, a = √(R* δ) the contact radius (Johnson, Contact
-    /// Mechanics, §4.2: F = 4/3 E* √R* δ^(3/2)).
+    /// law; with Hertz's, 4/3 E* a, a the contact radius (Johnson, Contact Mechanics, §4.2:
+    /// F = 4/3 E* √R* δ^(3/2), a = √(R* δ); JKR's a with its adhesion).
     #[inline(always)]
     pub(super) fn stiffness_of(&self, c: &Contact) -> f64 {
         match self.hertz {
             None => self.stiffness,
-            Some(e_star) => HERTZ * e_star * (self.reduced_radius(c) * c.overlap).sqrt(),
+            Some(e_star) => HERTZ * e_star * self.contact_radius_of(c),
         }
     }
 
@@ -159,12 +196,20 @@ impl ContactForce<'_> {
     }
 
     /// The elastic energy of contact `c` if it counts in the potential energy (overlapping,
-    /// with a movable particle), J: ½ k_n δ² (Hooke), ∫ 4/3 E* √R* δ^(3/2) dδ = 2/5 k_n δ²
-    /// (Hertz, k_n the secant stiffness at δ), less F_po δ with DMT adhesion (the work of the
-    /// constant pull over the overlap).
+    /// or JKR's held contact, with a movable particle), J: ½ k_n δ² (Hooke), ∫ 4/3 E* √R*
+    /// δ^(3/2) dδ = 2/5 k_n δ² (Hertz, k_n the secant stiffness at δ), less F_po δ with DMT
+    /// adhesion (the work of the constant pull over the overlap); JKR's ∫₀^δ F dδ'
+    /// (`cohesion.rs`).
     #[inline]
     pub(super) fn spring_energy(&self, c: &Contact) -> Option<f64> {
-        (c.overlap > 0.0 && self.inverse_mass_sum(c) > 0.0).then(|| match self.hertz {
+        if self.inverse_mass_sum(c) == 0.0 {
+            return None;
+        }
+        if let Some((jkr, _)) = self.jkr {
+            let r = self.reduced_radius(c);
+            return (c.overlap > -jkr.pull_off_distance(r)).then(|| jkr.energy(r, jkr.contact_radius(r, c.overlap)));
+        }
+        (c.overlap > 0.0).then(|| match self.hertz {
             None => 0.5 * self.stiffness * c.overlap * c.overlap,
             Some(_) => 0.4 * self.stiffness_of(c) * c.overlap * c.overlap - self.pull_off_of(c) * c.overlap,
         })
@@ -181,7 +226,7 @@ impl ContactForce<'_> {
                 self.pair_pass(s, scratch, None, false)
             }
         };
-        self.for_each_wall_contact(s, &scratch.list, |c| {
+        self.for_each_wall_contact(s, &scratch.list, &scratch.histories.walls, |c| {
             if let Some(u) = self.spring_energy(c) {
                 energy += u;
             }

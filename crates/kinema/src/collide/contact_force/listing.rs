@@ -3,7 +3,7 @@
 //! each with its normal force F_n n and its tangential force F_t as the next evaluation would
 //! find them (the springs read, not stretched: `tangent.rs`), whether it slides, and its point.
 
-use super::history::{pair_slip, wall_slip, Histories};
+use super::history::{pair_memory, wall_memory, Histories};
 use super::pairs::Turning;
 use super::ContactForce;
 use crate::collide::{Contact, ContactReport};
@@ -12,11 +12,11 @@ use crate::forces::State;
 use crate::vec3;
 
 impl ContactForce<'_> {
-    /// The tangential part as an output reads it (`None` without friction): the memory
-    /// `histories` as it is, not stretched by a step (`tangent.rs`).
+    /// The contacts' memory as an output reads it (`None` without friction or JKR's
+    /// contacts): `histories` as it is, not stretched by a step (`tangent.rs`).
     pub(super) fn reading<'s>(&'s self, histories: &'s Histories) -> Option<Turning<'s>> {
-        self.tangential.map(|model| Turning {
-            model,
+        (self.tangential.is_some() || self.jkr.is_some()).then_some(Turning {
+            model: self.tangential,
             omega: self.omega,
             pairs: &histories.pairs,
             walls: &histories.walls,
@@ -25,7 +25,8 @@ impl ContactForce<'_> {
         })
     }
 
-    /// Every contact at `s` that pushes (an overlap and a movable side), in the order of a
+    /// Every contact at `s` that acts (an overlap, or JKR's held contact, and a movable
+    /// side), in the order of a
     /// full search: pairs by (i, j), i < j, then particle by particle, collider by collider.
     pub(crate) fn contact_reports(&self, s: &State) -> Result<Vec<ContactReport>, Error> {
         let mut scratch = self.scratch();
@@ -38,12 +39,12 @@ impl ContactForce<'_> {
                 continue;
             };
             let (mut force_t, mut sliding) = ([0.0; 3], false);
-            if let Some(t) = &turn {
+            if let Some((t, model)) = turn.as_ref().and_then(|t| t.model.map(|m| (t, m))) {
                 let slip = match c.other {
-                    crate::collide::Partner::Particle(j) => pair_slip(t.pairs, c.i as u32, j as u32),
-                    crate::collide::Partner::Collider(k) => wall_slip(t.walls, c.i as u32, k as u32, c.normal),
+                    crate::collide::Partner::Particle(j) => pair_memory(t.pairs, c.i as u32, j as u32),
+                    crate::collide::Partner::Collider(k) => wall_memory(t.walls, c.i as u32, k as u32, c.normal),
                 };
-                let tg = self.tangent_of(t, c, force, dashpot, s.v, slip);
+                let tg = self.tangent_of(model, t, c, force, dashpot, s.v, slip.unwrap_or_default());
                 (force_t, sliding) = (tg.force, tg.slides);
             }
             let xi = vec3::get(s.x, c.i);

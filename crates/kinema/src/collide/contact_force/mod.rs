@@ -32,9 +32,11 @@ use std::sync::{Mutex, MutexGuard};
 use crate::collide::books::ColliderBooks;
 pub(crate) use crate::collide::neighbour_list::CHUNK;
 use crate::collide::neighbour_list::{collider_scale, ListBuild, NeighbourList, SKIN_PER_RADIUS};
+use crate::collide::stage::Cohesion;
 use crate::collide::{Collider, Domain, Grid, Material};
 use crate::error::Error;
 use crate::forces::State;
+use cohesion::Jkr;
 use history::Histories;
 pub(crate) use history::{PairSlip, Slip, WallSlip};
 pub(crate) use law::particle_ratios;
@@ -43,6 +45,7 @@ use pairs::{ChunkSums, Exchange, Turning, TurningOut};
 pub use tangent::{RollingModel, TangentialLaw, TangentialModel};
 pub(crate) use verlet::{SpinKick, VerletKick};
 
+mod cohesion;
 mod contacts;
 mod force;
 mod history;
@@ -63,8 +66,8 @@ pub(crate) struct SpringDashpot {
     pub hertz: Option<f64>,
     /// γ_n, 1/s (`None`: the damping follows from each pair's restitution e).
     pub damping: Option<f64>,
-    /// DMT adhesion with Hertz's law: the surface energy γ, J/m² (`law.rs`).
-    pub dmt: Option<f64>,
+    /// Adhesion with Hertz's law (DMT's pull in `law.rs`, JKR's contact in `cohesion.rs`).
+    pub cohesion: Option<Cohesion>,
     /// The tangential part with memory (`tangent.rs`), when contacts have friction.
     pub tangential: Option<TangentialModel>,
     /// A fixed skin, m (tests); `None`: [`SKIN_PER_RADIUS`] times the mean radius, at each
@@ -82,7 +85,7 @@ impl SpringDashpot {
             stiffness,
             hertz: None,
             damping,
-            dmt: None,
+            cohesion: None,
             tangential: None,
             skin: None,
             scratch: Mutex::new(Scratch::default()),
@@ -241,6 +244,9 @@ pub(crate) struct ContactForce<'a> {
     damping: Option<f64>,
     /// 4π γ, N/m, with DMT adhesion: the pull-off force per unit R* (`law.rs`).
     pull_off: f64,
+    /// JKR's contact (`cohesion.rs`), with its reach past touching: the largest pull-off
+    /// distance of a pair, m.
+    jkr: Option<(Jkr, f64)>,
     global: Material,
     own: Option<&'a [Material]>,
     /// ζ of the pair materials.
@@ -281,16 +287,20 @@ pub(crate) struct Bodies<'a> {
 /// A pass's tangential part over the memory in `histories`, with the angular velocities
 /// `omega` (rad/s), the step `step` (h in s, with the velocities and angular velocities at its
 /// start; `None`: the springs are read, not stretched) and the torques into `torque` (N·m;
-/// `None`: forces only).
+/// `None`: forces only). Without a tangential `model`, the memory alone when `remember`
+/// (JKR's contacts, which hold past touching once made: `cohesion.rs`), else `None`.
 fn turning<'s>(
     model: Option<TangentialModel>,
+    remember: bool,
     omega: &'s [f64],
     histories: &'s mut Histories,
     torque_exchange: &'s mut Exchange,
     step: Option<(f64, &'s [f64], &'s [f64])>,
     torque: Option<&'s mut [f64]>,
 ) -> Option<(Turning<'s>, TurningOut<'s>)> {
-    let model = model?;
+    if model.is_none() && !remember {
+        return None;
+    }
     histories.pending |= step.is_some();
     let Histories {
         pairs,
@@ -372,10 +382,22 @@ impl<'a> ContactForce<'a> {
             stiffness: model.stiffness,
             hertz: model.hertz,
             damping: model.damping,
-            pull_off: model
-                .dmt
-                .filter(|_| model.hertz.is_some())
-                .map_or(0.0, |g| 4.0 * std::f64::consts::PI * g),
+            pull_off: match (model.cohesion, model.hertz) {
+                (Some(Cohesion::Dmt { surface_energy }), Some(_)) => 4.0 * std::f64::consts::PI * surface_energy,
+                _ => 0.0,
+            },
+            jkr: match (model.cohesion, model.hertz) {
+                (Some(Cohesion::Jkr { surface_energy }), Some(e_star)) => {
+                    let jkr = Jkr {
+                        e_star,
+                        gamma: surface_energy,
+                    };
+                    // (R* is largest for a particle against a collider: R* = r_i)
+                    let r_max = bodies.radius.iter().fold(0.0_f64, |m, r| m.max(*r));
+                    Some((jkr, jkr.pull_off_distance(r_max)))
+                }
+                _ => None,
+            },
             ratios: DampingRatios::new(bodies.global, bodies.own.map(|o| o.1), bodies.colliders),
             global: bodies.global,
             own: bodies.own.map(|o| o.0),
@@ -394,6 +416,13 @@ impl<'a> ContactForce<'a> {
     /// contact has friction.
     pub fn has_tangential(&self) -> bool {
         self.tangential.is_some()
+    }
+
+    /// Whether the contacts keep a memory from step to step, which only Verlet's one force
+    /// evaluation per step stretches and renews: friction's springs (`tangent.rs`), JKR's
+    /// touches (`cohesion.rs`).
+    pub fn has_memory(&self) -> bool {
+        self.tangential.is_some() || self.jkr.is_some()
     }
 
     /// μ of contact `c` (`MaterialTable::pair`'s rule: √(μ_i μ_j) between particles, the
@@ -429,7 +458,12 @@ impl<'a> ContactForce<'a> {
 
     /// The width of the cells the neighbour list searches, 2 r_max + skin, m.
     pub fn reach(&self) -> f64 {
-        2.0 * self.radius.iter().fold(0.0, |m: f64, r| m.max(*r)) + self.skin()
+        2.0 * self.radius.iter().fold(0.0, |m: f64, r| m.max(*r)) + self.skin() + self.reach_past_touching()
+    }
+
+    /// How far past touching a contact can hold, m: JKR's largest pull-off distance, else 0.
+    fn reach_past_touching(&self) -> f64 {
+        self.jkr.map_or(0.0, |(_, d)| d)
     }
 
     /// The domain (2D/3D, periodic axes).
@@ -456,8 +490,12 @@ impl<'a> ContactForce<'a> {
         }
         let Scratch { grid, list, .. } = scratch;
         // (worked out at a build only: O(N) and O(colliders))
+        // (JKR's contacts hold past touching: the list reaches that much further, and holds
+        // while the particles have moved less than its skin beyond it)
+        let reach = self.reach_past_touching();
         let build = || ListBuild {
-            skin: self.skin(),
+            skin: self.skin() + reach,
+            reach,
             collider_scale: self.colliders.iter().map(collider_scale).fold(0.0, f64::max),
         };
         list.update(grid, s.x, self.radius, self.colliders, &self.domain, build)

@@ -23,7 +23,7 @@
 
 use rayon::prelude::*;
 
-use super::history::{pair_slip, wall_slip, PairSlip, WallSlip};
+use super::history::{pair_memory, wall_memory, PairSlip, Slip, WallSlip};
 use super::tangent::{Tangent, TangentialModel, Touch};
 use super::{ContactForce, CHUNK};
 use crate::collide::neighbour_list::{NeighbourList, Rows};
@@ -105,6 +105,8 @@ pub(crate) struct ContactBooks {
     pub begun: usize,
     /// The dashpots' power Σ c_n u_n², W (≥ 0), and the tangential parts' (`tangent.rs`).
     pub power: f64,
+    /// The energy JKR contacts lost as they let go, J (≥ 0; `cohesion.rs`).
+    pub lost: f64,
     /// Σ (x_i − x_j) ⊗ F of the pairs (colliders left out), N·m, row-major 3 × 3.
     pub virial: [f64; 9],
 }
@@ -114,6 +116,7 @@ impl ContactBooks {
         self.contacts += other.contacts;
         self.begun += other.begun;
         self.power += other.power;
+        self.lost += other.lost;
         for k in 0..9 {
             self.virial[k] += other.virial[k];
         }
@@ -198,7 +201,9 @@ pub(super) fn summed_books(sums: &[ChunkSums]) -> ContactBooks {
 /// The tangential part of a pass (`tangent.rs`): the model, the angular velocities it sees,
 /// the contacts' memory it reads and, in Verlet's pass, the step that stretches the springs.
 pub(super) struct Turning<'p> {
-    pub model: TangentialModel,
+    /// The tangential law (`None`: the memory is kept for JKR's contacts alone, which hold
+    /// past touching once made).
+    pub model: Option<TangentialModel>,
     /// ω at the evaluation, rad/s (3 per particle; empty: nothing turns).
     pub omega: &'p [f64],
     /// The memory read (sorted, [`Histories`](super::history::Histories)).
@@ -348,6 +353,7 @@ impl ContactForce<'_> {
             let mut energy = -0.0;
             let mut bad = None;
             let mut books = ContactBooks::default();
+            let mut wall_lost = 0.0;
             let mut pushes = Vec::new();
             for l in 0..len {
                 let i = first + l;
@@ -357,10 +363,14 @@ impl ContactForce<'_> {
                 }
                 for &j in rows.of(l) {
                     let j = j as usize;
-                    if !self.overlaps(xi, ri, j, x) {
-                        continue;
-                    }
-                    let Some(contact) = pair_contact(i, j, x, v, self.radius, &self.domain, 0.0) else {
+                    let found = if self.overlaps(xi, ri, j, x) {
+                        pair_contact(i, j, x, v, self.radius, &self.domain, 0.0)
+                    } else if self.jkr.is_some() {
+                        self.held_pair(i, j, x, v, old_pairs, &mut books.lost)
+                    } else {
+                        None
+                    };
+                    let Some(contact) = found else {
                         continue;
                     };
                     if options.energy {
@@ -375,17 +385,19 @@ impl ContactForce<'_> {
                     let mut fv = contact.normal.map(|n| force * n);
                     let mut tangent = None;
                     if let Some(t) = turn {
-                        let slip = pair_slip(old_pairs, i as u32, j as u32);
-                        let tg = self.tangent_of(t, &contact, force, dashpot, v, slip);
+                        let slip = pair_memory(old_pairs, i as u32, j as u32).unwrap_or_default();
+                        let tg = t.model.map(|m| self.tangent_of(m, t, &contact, force, dashpot, v, slip));
                         if let Some(p) = new_pairs.as_deref_mut() {
                             p.push(PairSlip {
                                 i: i as u32,
                                 j: j as u32,
-                                slip: tg.slip,
+                                slip: tg.map_or(Slip::default(), |tg| tg.slip),
                             });
                         }
-                        fv = vec3::add(fv, tg.force);
-                        tangent = Some(tg);
+                        if let Some(tg) = tg {
+                            fv = vec3::add(fv, tg.force);
+                            tangent = Some(tg);
+                        }
                     }
                     if let Some(h) = options.books {
                         let arm = self.radius[i] + self.radius[j] - contact.overlap;
@@ -421,23 +433,25 @@ impl ContactForce<'_> {
                     continue;
                 };
                 while let Some(&(_, k)) = walls.next_if(|w| w.0 == i) {
-                    self.wall_contacts(i, k, x, v, |contact| {
+                    self.wall_contacts_held(i, k, x, v, old_walls, &mut wall_lost, |contact| {
                         if let Some((force, dashpot)) = self.normal_force_parts(contact) {
                             let mut fv = contact.normal.map(|n| force * n);
                             let mut tangent = None;
                             if let Some(t) = turn {
-                                let slip = wall_slip(old_walls, i as u32, k as u32, contact.normal);
-                                let tg = self.tangent_of(t, contact, force, dashpot, v, slip);
+                                let slip = wall_memory(old_walls, i as u32, k as u32, contact.normal).unwrap_or_default();
+                                let tg = t.model.map(|m| self.tangent_of(m, t, contact, force, dashpot, v, slip));
                                 if let Some(w) = new_walls.as_deref_mut() {
                                     w.push(WallSlip {
                                         i: i as u32,
                                         k: k as u32,
                                         normal: contact.normal,
-                                        slip: tg.slip,
+                                        slip: tg.map_or(Slip::default(), |tg| tg.slip),
                                     });
                                 }
-                                fv = vec3::add(fv, tg.force);
-                                tangent = Some(tg);
+                                if let Some(tg) = tg {
+                                    fv = vec3::add(fv, tg.force);
+                                    tangent = Some(tg);
+                                }
                             }
                             if let Some(h) = options.books {
                                 let extra = tangent.map_or(0.0, |t| t.power);
@@ -463,6 +477,7 @@ impl ContactForce<'_> {
                     });
                 }
             }
+            books.lost += wall_lost;
             ChunkSums {
                 energy,
                 bad,
@@ -484,8 +499,10 @@ impl ContactForce<'_> {
     /// The tangential part of `contact` (normal force `force`, N, and dashpot `dashpot`,
     /// kg/s) at (x, v) with the memory `slip` (`tangent.rs`).
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn tangent_of(
         &self,
+        model: TangentialModel,
         t: &Turning<'_>,
         c: &Contact,
         force: f64,
@@ -506,19 +523,19 @@ impl ContactForce<'_> {
         };
         let touch = Touch {
             normal: c.normal,
-            overlap: c.overlap,
+            contact_radius: self.contact_radius_of(c),
             reduced_radius: reduced,
             u,
             omega,
             moved,
             arms: self.arms(c),
-            // (LAMMPS's Fncrit: with DMT adhesion |F_n + 2 F_po|, the bound of friction
-            // measured from the pull-off, so that a contact held by adhesion alone still rubs)
+            // (LAMMPS's Fncrit: with adhesion |F_n + 2 F_po|, the bound of friction measured
+            // from the pull-off, so that a contact held by adhesion alone still rubs)
             normal_force: (force + 2.0 * self.pull_off_of(c)).abs(),
             dashpot,
             friction: self.friction_of(c),
         };
-        t.model.at(&touch, slip, t.step)
+        model.at(&touch, slip, t.step)
     }
 
     /// The relative velocity u = v_i − v_j (v_i − w at a collider) of contact `c` at the

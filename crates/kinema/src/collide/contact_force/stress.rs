@@ -2,7 +2,7 @@
 //! sign): ½ Σ_j (x_i − x_j) ⊗ F_ij over the particle pairs that touch, the force F_ij on i,
 //! tangential part included, with the springs as they are.
 
-use super::history::{pair_slip, Slip};
+use super::history::pair_memory;
 use super::pairs::Turning;
 use super::{ContactForce, Scratch};
 use crate::collide::Contact;
@@ -37,9 +37,9 @@ impl ContactForce<'_> {
             return;
         };
         let mut f = vec3::scale(force, c.normal);
-        if let Some(t) = turn {
-            let slip: Slip = pair_slip(t.pairs, c.i as u32, j as u32);
-            f = vec3::add(f, self.tangent_of(t, c, force, dashpot, s.v, slip).force);
+        if let Some((t, model)) = turn.and_then(|t| t.model.map(|m| (t, m))) {
+            let slip = pair_memory(t.pairs, c.i as u32, j as u32).unwrap_or_default();
+            f = vec3::add(f, self.tangent_of(model, t, c, force, dashpot, s.v, slip).force);
         }
         // x_i − x_j = d n, d = r_i + r_j − δ (the minimum image along periodic axes)
         let d = self.radius[c.i] + self.radius[j] - c.overlap;

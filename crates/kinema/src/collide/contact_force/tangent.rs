@@ -115,8 +115,9 @@ pub(super) struct Tangent {
 pub(super) struct Touch {
     /// n, from the partner towards i.
     pub normal: [f64; 3],
-    /// δ, m (> 0).
-    pub overlap: f64,
+    /// a, m: the radius of the contact disc (√(R* δ) with Hertz's law, JKR's with its
+    /// adhesion: `cohesion.rs`).
+    pub contact_radius: f64,
     /// R*, m.
     pub reduced_radius: f64,
     /// u = v_i − v_j (or v_i − w), m/s.
@@ -200,7 +201,7 @@ impl TangentialModel {
             Some((u, w)) => (sliding(u, w), vec3::sub(w[0], w[1])),
             None => (vt, vec3::sub(wi, wj)),
         };
-        let a = (t.reduced_radius * t.overlap).sqrt();
+        let a = t.contact_radius;
         let k_t = match self.law {
             TangentialLaw::LinearHistory { stiffness } => stiffness,
             TangentialLaw::Mindlin { shear_modulus } => 8.0 * shear_modulus * a,
@@ -281,7 +282,7 @@ mod tests {
     fn touch(u: [f64; 3]) -> Touch {
         Touch {
             normal: [0.0, 0.0, 1.0],
-            overlap: 1e-4,
+            contact_radius: (0.01_f64 * 1e-4).sqrt(),
             reduced_radius: 0.01,
             u,
             omega: [[0.0; 3]; 2],

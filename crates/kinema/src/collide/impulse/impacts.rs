@@ -503,6 +503,7 @@ impl ImpulseModel {
     ) -> Result<(), Error> {
         let build = ListBuild {
             skin,
+            reach: 0.0,
             collider_scale: colliders.iter().map(collider_scale).fold(0.0, f64::max),
         };
         self.list.built_at.clear();

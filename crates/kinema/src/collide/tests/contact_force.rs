@@ -569,6 +569,7 @@ fn the_allowance_leaves_a_rounding_margin_below_the_skin() {
     let x = [0.0, 0.0, 0.0, 1.5e-3, 0.0, 0.0];
     let build = ListBuild {
         skin: 2e-4,
+        reach: 0.0,
         collider_scale: 0.0,
     };
     list.update(&mut grid, &x, &radius, &[], &domain, || build).unwrap();
@@ -671,6 +672,7 @@ fn a_renumbered_half_list_has_the_rows_of_a_build_in_the_new_order() {
     let (force, x, _, _) = chunked_gas(n);
     let build = ListBuild {
         skin: 0.02,
+        reach: 0.0,
         collider_scale: 0.0,
     };
     let new_list = || NeighbourList {
