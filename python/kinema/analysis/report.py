@@ -79,13 +79,13 @@ def axis_index(axis: str | None, dim: int, option: str = "--axis") -> int:
     return AXES.index(axis)
 
 
-def needs_contacts(trajectory: Any, measures: list[str], option: str = "--measure") -> None:
+def needs_contacts(trajectory: Any, measures: list[str], option: str = "--measure", what: str = "the trajectory") -> None:
     """Refuse (``ValueError`` naming ``option``) contact measures of a trajectory that
-    recorded no contacts."""
+    recorded no contacts; ``what`` names the trajectory (its file)."""
     wanted = [m for m in measures if m in CONTACT_MEASURES]
     if wanted and getattr(trajectory, "contact_record", None) is None:
         raise ValueError(
-            f"{option} {wanted[0]}: the trajectory records no contacts, and {', '.join(CONTACT_MEASURES)} need them: "
+            f"{option} {wanted[0]}: {what} records no contacts, and {', '.join(CONTACT_MEASURES)} need them: "
             "write it with kinema run --record-contacts (or [output] contacts = true, or an [analysis] table); repose and profile work without"
         )
 
