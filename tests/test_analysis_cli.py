@@ -330,3 +330,15 @@ def test_a_bad_analysis_table_names_its_key(table, says, tmp_path):
     with pytest.raises(kinema.SceneError) as e:
         kinema.Scene.from_toml(scene)
     assert says in str(e.value), str(e.value)
+
+
+def test_a_world_loaded_from_the_scene_writes_its_analysis_table_back(tmp_path):
+    # to_scene keeps [render] and [output] of the scene a world was loaded from; [analysis] too
+    scene = tmp_path / "pile.toml"
+    scene.write_text(SCENE + ANALYSIS)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", kinema.PlacementWarning)
+        back = kinema.load_scene(scene).to_scene()
+    assert back.analysis == kinema.Scene.from_toml(scene).analysis and back.output.contacts is True
+    again = kinema.Scene.from_string(back.to_toml_string(), "again.toml")
+    assert again.analysis == back.analysis
