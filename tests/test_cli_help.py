@@ -9,7 +9,7 @@ import kinema
 from kinema.cli import app
 
 runner = CliRunner()
-COMMANDS = ["methods", "stability", "demo", "run", "render", "export", "sweep", "view"]
+COMMANDS = ["methods", "stability", "demo", "run", "render", "export", "sweep", "analyze", "view"]
 
 
 @pytest.mark.parametrize("flag", ["--version", "-V"])
@@ -38,7 +38,7 @@ def test_demo_help_says_what_the_demo_writes():
 
 def test_the_command_list_says_each_command_whole_in_80_columns():
     # click cuts a command's description at 45 characters with "..." unless it has a short
-    # help: every one of the 8 has its own, whole on one line of an 80-column terminal.
+    # help: every one of the 9 has its own, whole on one line of an 80-column terminal.
     res = runner.invoke(app, ["-h"], terminal_width=80, env={"COLUMNS": "80"})
     listed = res.output.split("Commands:")[1].strip().splitlines()
     assert [line.split()[0] for line in listed] == COMMANDS, listed

@@ -216,4 +216,4 @@ def test_every_public_name_and_command_has_a_reference_entry():
     assert listed == set(kinema.__all__) - {"__version__"}, (set(kinema.__all__) - listed, listed - set(kinema.__all__))
     page = (ROOT / "docs" / "reference" / "cli.md").read_text(encoding="utf-8")
     assert ":module: kinema.cli" in page and ":command: click_command" in page and ":depth: 1" in page
-    assert set(cli.click_command.commands) == {"methods", "stability", "demo", "run", "render", "export", "sweep", "view"}
+    assert set(cli.click_command.commands) == {"methods", "stability", "demo", "run", "render", "export", "sweep", "analyze", "view"}

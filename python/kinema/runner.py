@@ -327,9 +327,11 @@ def simulate_scene(
     (``kinema.checkpoint``: its state to every bit, spins and the contacts' tangential
     springs included; ``World.load_checkpoint`` gives the world back, to measure it or go
     on), after the other files; its folder is checked before the run.
-    ``record_contacts`` (or the scene's ``[output] contacts``) records each frame's contacts
-    in the trajectory (``World.run(record_contacts=True)``; a resumed run keeps what its
-    checkpoint says).
+    ``record_contacts`` (or the scene's ``[output] contacts``, which an ``[analysis]`` table
+    of contact measures turns on) records each frame's contacts in the trajectory
+    (``World.run(record_contacts=True)``; a resumed run keeps what its checkpoint says).
+    A scene's ``[analysis]`` table: its measures of the trajectory (``kinema.analysis.report``)
+    printed and written as analysis.json.
     Returns the trajectory and the paths written."""
     import shutil
     import warnings
@@ -366,6 +368,7 @@ def simulate_scene(
         (f"{scene.stem}.{video}", video),
         ("energy.png", sc.output.plot),
         ("contact_events.csv", events),
+        ("analysis.json", sc.analysis is not None),
     )
     _refuse_special_outputs(outdir, [n for n, on in outputs if on])
     if events:
@@ -433,6 +436,9 @@ def simulate_scene(
         if events:
             _contact_events_csv(world.contact_events(), stage / "contact_events.csv")
             names.append("contact_events.csv")
+        if sc.analysis is not None:
+            _analysis_json(traj, sc.analysis, stage / "analysis.json", "trajectory.h5" if sc.output.trajectory else None)
+            names.append("analysis.json")
         from .io._files import _umask
 
         for name in names:
@@ -450,6 +456,25 @@ def simulate_scene(
     for path in written:
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)
     return traj, written
+
+
+def _analysis_json(traj, table, out: Path, source: str | None) -> Path:
+    """The measures the scene's ``[analysis]`` table asks of ``traj``, printed one line each
+    and written to ``out`` as standard JSON (``kinema.analysis.report``, as ``kinema analyze``)."""
+    from .analysis import report
+
+    doc = report.analyze(
+        traj,
+        measures=table.measures,
+        frame="all" if table.frames == "all" else -1,
+        axis=table.axis,
+        bins=table.bins,
+        cross_section=table.cross_section,
+        source=source,
+    )
+    for name, words in report.summary(doc):
+        console.print(f"analysis: {name}: {words}", highlight=False, soft_wrap=True, markup=False)
+    return report.write_json(doc, out)
 
 
 def _contact_events_csv(events: dict, out: Path) -> Path:

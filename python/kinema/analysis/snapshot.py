@@ -53,14 +53,20 @@ class Snapshot:
     @classmethod
     def of_frame(cls, trajectory: Any, frame: int, contacts: dict[str, Any] | None = None) -> Snapshot:
         """Frame ``frame`` of a Trajectory (recorded or loaded), the particles alive at it
-        only (rows in the order of their ids). A trajectory records no contact table:
-        ``contacts`` gives one (indexing these rows), or use :meth:`with_geometric_contacts`."""
+        only (rows in the order of their ids). The contacts: ``contacts`` when given (a table
+        indexing these rows); else the trajectory's own record of that frame where it has one
+        (``World.run(record_contacts=True)``, ``kinema run --record-contacts``: its ids made
+        these rows); else none (:meth:`with_geometric_contacts` finds them from geometry)."""
+        frame = range(len(trajectory.t))[frame]  # (-1: the last; an IndexError past the ends)
         alive = np.isfinite(trajectory.positions[frame]).all(axis=1)
         if getattr(trajectory, "alive", None) is not None:
             alive &= np.asarray(trajectory.alive[frame], dtype=bool)
         if trajectory.masses is None or trajectory.radii is None:
             raise ValueError("trajectory.masses or trajectory.radii is None: a snapshot needs both (a file that records them, or World.run's trajectory)")
         ids = trajectory.ids if trajectory.ids is not None else np.arange(trajectory.positions.shape[1])
+        record = getattr(trajectory, "contact_record", None)
+        if contacts is None and record is not None:
+            contacts = _rows_of_ids(record.frame(frame), np.asarray(ids)[alive], frame)
         return cls(
             positions=np.array(trajectory.positions[frame][alive], dtype=float),
             velocities=np.array(trajectory.velocities[frame][alive], dtype=float),
@@ -85,3 +91,23 @@ def _period(periodic: Any, edges: Any) -> np.ndarray:
     if periodic is None or edges is None:
         return np.zeros(3)
     return np.where(np.asarray(periodic, dtype=bool), np.asarray(edges, dtype=float), 0.0)
+
+
+def _rows_of_ids(contacts: dict[str, np.ndarray], ids: np.ndarray, frame: int) -> dict[str, np.ndarray]:
+    """A recorded frame's contacts (``i``, ``j`` particle ids, −1 a collider) with ``i`` and
+    ``j`` made rows of ``ids`` (the particles alive at the frame, in their rows); copies."""
+    order = np.argsort(ids, kind="stable")
+    known = np.asarray(ids, dtype=np.int64)[order]
+    out = {name: np.array(a) for name, a in contacts.items()}
+    for name in ("i", "j"):
+        named = np.asarray(out[name], dtype=np.int64)
+        particle = named >= 0 if name == "j" else np.ones(len(named), dtype=bool)
+        at = np.minimum(np.searchsorted(known, named[particle]), max(len(known) - 1, 0))
+        found = known[at] == named[particle] if len(known) else np.zeros(len(at), dtype=bool)
+        if not found.all():
+            missing = int(named[particle][np.argmin(found)])
+            raise ValueError(f"contact_record: frame {frame} has a contact of the particle of id {missing}, which is not alive at that frame")
+        named = named.copy()
+        named[particle] = order[at]
+        out[name] = named
+    return out

@@ -81,7 +81,7 @@ def _check_particles(block: dict[str, Any], dim: int) -> None:
 
 def to_scene(world: World) -> Scene:
     """The scene of ``world`` as it is now: one explicit particle list, its forces, colliders
-    and settings; duration, fps, render and output options come from ``world.scene`` when
+    and settings; duration, fps, render, output and analysis options come from ``world.scene`` when
     the world was loaded from one. Each particle's own restitution and friction come from the
     engine; a ``PythonForce`` cannot be written and raises ``ValueError``.
 
@@ -200,6 +200,8 @@ def to_scene(world: World) -> Scene:
         data["world"].update(duration=old.world.duration, fps=old.world.fps)
         data["render"] = old.render.model_dump(exclude_none=True)
         data["output"] = old.output.model_dump()
+        if old.analysis is not None:
+            data["analysis"] = old.analysis.model_dump(exclude_none=True)
     if world.collisions is not None:
         c = {k: v for k, v in world.collisions.items() if v is not None}
         if world.collisions.get("sleep_time", 0.5) is None:

@@ -18,6 +18,7 @@ from pydantic import BaseModel, Field, ValidationError, model_validator
 
 from .tables import (
     MAX_NESTING,
+    AnalysisTable,
     AttractorForce,
     Block,
     BoxCollider,
@@ -78,6 +79,7 @@ class Scene(_Model):
     collisions: CollisionsTable | None = None
     render: RenderTable = Field(default_factory=RenderTable)
     output: OutputTable = Field(default_factory=OutputTable)
+    analysis: AnalysisTable | None = None
 
     @model_validator(mode="after")
     def _references(self) -> Scene:
@@ -94,6 +96,16 @@ class Scene(_Model):
                     raise ValueError(
                         f"colliders[{k}].motion.{problem} is invalid: in a 2D world (world.dim = 2) a collider moves in the xy-plane and turns about z"
                     )
+        if self.analysis is not None:
+            if self.analysis.needs_contacts and "contacts" in self.output.model_fields_set and not self.output.contacts:
+                raise ValueError(
+                    f"output.contacts: false is invalid with analysis.measures {self.analysis.needs_contacts[0]!r}: it needs each frame's contacts, "
+                    "which an [analysis] table records; remove output.contacts = false, or that measure"
+                )
+            if self.analysis.axis == "z" and dim == 2:
+                raise ValueError("analysis.axis: 'z' is invalid: a 2D world (world.dim = 2) has the axes x and y")
+            if self.analysis.needs_contacts and not self.output.contacts:
+                self.output.contacts = True  # the measures read the recorded contacts (and the file keeps them)
         if camera is not None and camera.type != f"{dim}d":
             raise ValueError(f"render.camera.type: '{camera.type}' is invalid: a {dim}D world (world.dim = {dim}) needs a '{dim}d' camera")
         return self

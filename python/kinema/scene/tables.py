@@ -1,5 +1,6 @@
 """A scene file's value types and the pydantic models of its tables: [world], [[particles]],
-[[forces]], [[colliders]], [[emitters]], [[kill_volumes]], [collisions], [render], [output].
+[[forces]], [[colliders]], [[emitters]], [[kill_volumes]], [collisions], [render], [output],
+[analysis].
 The whole file, ``Scene``, is in ``kinema.scene.schema``, which imports this module (never the
 other way round)."""
 
@@ -719,3 +720,30 @@ class OutputTable(_Model):
     contacts: bool = False
 
     _video = field_validator("video", mode="before")(_exact("mp4", "gif", False))
+
+
+# -- [analysis] -------------------------------------------------------------------------------
+# The measures kinema run makes of its trajectory after the run and writes as analysis.json
+# (kinema.analysis.report, the same document as kinema analyze --json).
+_MEASURES = ("coordination", "fabric", "forces", "repose", "profile")  # kinema.analysis.report.MEASURES
+
+
+class AnalysisTable(_Model):
+    measures: Annotated[list[Literal["coordination", "fabric", "forces", "repose", "profile"]], Field(min_length=1)] = list(_MEASURES)
+    frames: Literal["last", "all"] = "last"  # all: the last frame's measures and their time series
+    axis: Literal["x", "y", "z"] | None = None  # the height; None: y in a 2D world, z in 3D
+    bins: Annotated[int, Field(ge=1, le=100_000)] = 20  # the profile's slabs, the force histogram's bins
+    cross_section: Annotated[float, Field(gt=0, allow_inf_nan=False)] | None = None  # m² (m in 2D); None: the cell's, a box's or the pile's
+
+    @field_validator("measures")
+    @classmethod
+    def _once(cls, v: list[str]) -> list[str]:
+        twice = sorted({m for m in v if v.count(m) > 1})
+        if twice:
+            raise ValueError(f"{twice[0]!r} is named twice; name each measure once")
+        return v
+
+    @property
+    def needs_contacts(self) -> list[str]:
+        """The measures asked that need each frame's contacts recorded."""
+        return [m for m in self.measures if m in ("coordination", "fabric", "forces")]
