@@ -1,7 +1,7 @@
 """kinema's USD imported into Blender itself (bpy 5.0, Blender as a Python module), as a user
 would: File → Import → USD, then play. Every frame of the timeline holds that frame's live
 particles (count, positions, ids, colours), the springs are curves between their ends, the
-colliders come with the import's Guide option, and the timeline spans the frames.
+colliders are rendered meshes, and the timeline spans the frames.
 
 bpy 5.0.1 needs numpy < 2, which kinema's venv does not have, so Blender runs in a venv of its
 own (.venv-blender, made by `make test` from requirements/blender-test.txt) as a separate
@@ -187,8 +187,9 @@ def test_blender_draws_the_springs_as_curves_between_their_ends(blender, name):
         np.testing.assert_allclose(imported.get(springs, "radius", k), 0.012 / 4, rtol=1e-6)  # half the USD width
 
 
-def test_blender_imports_the_colliders_only_with_its_guide_option(blender):
-    assert blender["fountain, default options"].objects("MESH") == []
+def test_blender_imports_the_colliders_as_rendered_meshes(blender):
+    # the default purpose: imported without the Guide option, and rendered
+    assert blender["fountain, default options"].objects("MESH") == ["box_1", "plane_0"]
     assert blender["fountain"].objects("MESH") == ["box_1", "plane_0"]
     imported = blender["colliders"]
     assert imported.objects("MESH") == ["box_0", "plane_1", "sphere_2"]
