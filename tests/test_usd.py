@@ -489,3 +489,9 @@ def test_kinemas_own_colliders_are_not_read_back_as_a_mesh(tmp_path):
     with pytest.raises(ValueError, match="no UsdGeom.Mesh prim"):
         read_mesh(tmp_path / "run.usda")
 
+
+def test_a_blend_without_blender_is_refused_before_anything_is_written(tmp_path, monkeypatch):
+    monkeypatch.setenv("KINEMA_BLENDER", str(tmp_path / "no-such-blender"))
+    with pytest.raises(RuntimeError, match=r"no-such-blender.*\$KINEMA_BLENDER.*not an executable"):
+        _run().export(tmp_path / "run.blend")
+    assert list(tmp_path.iterdir()) == []
