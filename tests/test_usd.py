@@ -155,7 +155,8 @@ def test_a_fountain_at_60_fps_gives_every_frame_at_its_whole_time_code(tmp_path)
     stage = Usd.Stage.Open(str(tmp_path / "fountain.usdc"))
     frames = len(traj.t)
     assert stage.GetEndTimeCode() == frames - 1
-    assert stage.GetFramesPerSecond() == pytest.approx(1 / 0.017, rel=1e-12)
+    # the 60 frames a second asked, exactly, though the frames are 17 ms apart (58.8 a second)
+    assert stage.GetFramesPerSecond() == stage.GetTimeCodesPerSecond() == 60.0
     points = UsdGeom.Points(stage.GetPrimAtPath("/World/particles"))
     wrong = 0
     for k in range(frames):
@@ -247,13 +248,14 @@ def face_normal(points, face):
     return n / np.linalg.norm(n)
 
 
-def test_the_colliders_are_guide_meshes_where_the_world_has_them(tmp_path):
+def test_the_colliders_are_rendered_meshes_where_the_world_has_them(tmp_path):
     _run().export(tmp_path / "run.usda")
     stage = Usd.Stage.Open(str(tmp_path / "run.usda"))
     box, plane, sphere = (stage.GetPrimAtPath(f"/World/colliders/{n}") for n in ("box_0", "plane_1", "sphere_2"))
     assert [p.GetTypeName() for p in (box, plane, sphere)] == ["Mesh"] * 3
     assert [p.GetAttribute("kinema:collider").Get() for p in (box, plane, sphere)] == ["box", "plane", "sphere"]
-    assert all(UsdGeom.Imageable(p).GetPurposeAttr().Get() == UsdGeom.Tokens.guide for p in (box, plane, sphere))
+    # the default purpose: rendered (a guide never renders), in kinema's colliders' material
+    assert all(UsdGeom.Imageable(p).ComputePurpose() == UsdGeom.Tokens.default_ for p in (box, plane, sphere))
     assert all(UsdGeom.Mesh(p).GetSubdivisionSchemeAttr().Get() == UsdGeom.Tokens.none for p in (box, plane, sphere))
     # the box: its 8 corners, 6 quads whose normals point out of it
     points, faces = mesh_of(box)
@@ -302,7 +304,7 @@ def _bowl_and_cube():
     return bowl, cube
 
 
-def test_a_mesh_collider_is_a_translucent_guide_mesh_of_its_triangles(tmp_path):
+def test_a_mesh_collider_is_a_translucent_mesh_of_its_triangles(tmp_path):
     traj = _run()
     bowl, cube = _bowl_and_cube()
     traj.colliders = list(traj.colliders) + [bowl, cube, {"type": "mesh", "vertices": [[0, 0, 0]], "faces": [[0, 1, 2]]}]
@@ -314,7 +316,7 @@ def test_a_mesh_collider_is_a_translucent_guide_mesh_of_its_triangles(tmp_path):
     for prim, described in zip(meshes, (bowl, cube), strict=True):
         mesh = UsdGeom.Mesh(prim)
         assert prim.GetAttribute("kinema:collider").Get() == "mesh"
-        assert mesh.GetPurposeAttr().Get() == UsdGeom.Tokens.guide
+        assert mesh.ComputePurpose() == UsdGeom.Tokens.default_
         assert mesh.GetSubdivisionSchemeAttr().Get() == UsdGeom.Tokens.none and mesh.GetDoubleSidedAttr().Get()
         opacity = mesh.GetDisplayOpacityPrimvar()
         assert opacity.GetInterpolation() == UsdGeom.Tokens.constant and list(opacity.Get()) == pytest.approx([0.3])
@@ -328,7 +330,7 @@ def test_a_mesh_collider_is_a_translucent_guide_mesh_of_its_triangles(tmp_path):
     assert mesh_of(meshes[0])[1] == bowl["faces"]
     points, faces = mesh_of(meshes[1])
     assert all(np.dot(face_normal(points, f), points[f].mean(axis=0) - 0.1) > 0 for f in faces)
-    # Every collider is translucent where guides are shown.
+    # Every collider is translucent.
     for name in ("box_0", "plane_1", "sphere_2"):
         assert list(UsdGeom.Mesh(stage.GetPrimAtPath(f"/World/colliders/{name}")).GetDisplayOpacityPrimvar().Get()) == pytest.approx([0.3])
 
@@ -419,3 +421,77 @@ def test_without_usd_core_the_command_says_how_to_get_it(tmp_path):
     assert out.returncode == 2, out.stderr
     assert "writing USD needs the usd-core package: pip install usd-core (or kinema[usd])" in out.stderr
     assert "Traceback" not in out.stderr and not (tmp_path / "run.usd").exists()
+
+
+def bound_surface(stage, path):
+    """The `UsdPreviewSurface` of the material bound to the prim at `path` (for all purposes)."""
+    from pxr import UsdShade
+
+    material, _ = UsdShade.MaterialBindingAPI(stage.GetPrimAtPath(path)).ComputeBoundMaterial()
+    assert material, f"{path} has no bound material"
+    source = material.GetSurfaceOutput().GetConnectedSources()[0][0].source
+    shader = UsdShade.Shader(source.GetPrim())
+    assert shader.GetIdAttr().Get() == "UsdPreviewSurface"
+    return shader
+
+
+def test_every_prim_a_render_shows_has_a_bound_preview_surface(tmp_path):
+    from pxr import UsdShade
+
+    traj = _run()
+    traj.export(tmp_path / "run.usda")
+    stage = Usd.Stage.Open(str(tmp_path / "run.usda"))
+    # the particles: diffuseColor from their own displayColor, through a primvar reader
+    # (Blender's importer makes an Attribute node of it; usdview, Houdini, Omniverse read it)
+    shader = bound_surface(stage, "/World/particles")
+    [source] = shader.GetInput("diffuseColor").GetConnectedSources()[0]
+    reader = UsdShade.Shader(source.source.GetPrim())
+    assert reader.GetIdAttr().Get() == "UsdPrimvarReader_float3" and source.sourceName == "result"
+    assert reader.GetInput("varname").Get() == "displayColor"
+    assert stage.GetPrimAtPath("/World/particles").HasAPI(UsdShade.MaterialBindingAPI)
+    # the colliders: kinema's videos' plane grey (sRGB 150 150 142, linear here) at opacity 0.3
+    for name in ("box_0", "plane_1", "sphere_2"):
+        shader = bound_surface(stage, f"/World/colliders/{name}")
+        np.testing.assert_allclose(np.array(shader.GetInput("diffuseColor").Get()), srgb_to_linear(np.array([150, 150, 142]) / 255), rtol=1e-6)
+        assert shader.GetInput("opacity").Get() == pytest.approx(0.3)
+
+
+@pytest.mark.parametrize(
+    ("dt", "fps", "stored", "rate"),
+    [
+        (1e-3, 30, True, 30.0),  # every 33 steps: 30.30 a second; the 30 asked
+        (1e-3, 60, True, 60.0),  # every 17 steps: 58.82 a second
+        (1e-3, 30, False, 30.0),  # no fps kept (another program's file): the common rate within 2 %
+        (0.01, 25, True, 25.0),  # every 4 steps: 1 / 0.04 = 24.999999999999996 from the times
+        (1e-3, 40, False, 40.0),  # every 25 steps; no common rate near: the recording's, 40 exactly
+        (1e-3, 1000 / 23, False, 1000 / 23),  # every 23 steps: 43.48 a second
+    ],
+)
+def test_the_stage_plays_at_the_rate_asked(tmp_path, dt, fps, stored, rate):
+    w = kinema.World(dt=dt)
+    w.add_particles([[0, 0, 0]], velocity=[[1, 0, 0]], radius=0.1, mass=1.0)
+    traj = w.run(0.5, fps=fps)
+    if not stored:
+        traj = dataclasses.replace(traj, fps=None)
+    traj.export(tmp_path / "run.usda")
+    stage = Usd.Stage.Open(str(tmp_path / "run.usda"))
+    assert stage.GetTimeCodesPerSecond() == stage.GetFramesPerSecond() == pytest.approx(rate, rel=1e-12)
+    if rate == round(rate):
+        assert stage.GetFramesPerSecond() == rate  # exactly: 25, not 24.999999999999996
+
+
+def test_kinemas_own_colliders_are_not_read_back_as_a_mesh(tmp_path):
+    # Rendered now (the default purpose), they are still no mesh of the stage's: a kinema
+    # stage given to kinema.Mesh holds none (kinema:collider marks them)
+    from kinema.io.mesh_files import read_mesh
+
+    _run().export(tmp_path / "run.usda")
+    with pytest.raises(ValueError, match="no UsdGeom.Mesh prim"):
+        read_mesh(tmp_path / "run.usda")
+
+
+def test_a_blend_without_blender_is_refused_before_anything_is_written(tmp_path, monkeypatch):
+    monkeypatch.setenv("KINEMA_BLENDER", str(tmp_path / "no-such-blender"))
+    with pytest.raises(RuntimeError, match=r"no-such-blender.*\$KINEMA_BLENDER.*not an executable"):
+        _run().export(tmp_path / "run.blend")
+    assert list(tmp_path.iterdir()) == []

@@ -1,7 +1,9 @@
 """kinema's USD imported into Blender itself (bpy 5.0, Blender as a Python module), as a user
 would: File → Import → USD, then play. Every frame of the timeline holds that frame's live
 particles (count, positions, ids, colours), the springs are curves between their ends, the
-colliders come with the import's Guide option, and the timeline spans the frames.
+colliders are rendered meshes, and the timeline spans the frames. And the .blend that
+`export(format="blend")` builds through Blender, opened and rendered (Cycles and Eevee): the
+rate asked, the balls in their colours, the floor, a moving collider where it moves.
 
 bpy 5.0.1 needs numpy < 2, which kinema's venv does not have, so Blender runs in a venv of its
 own (.venv-blender, made by `make test` from requirements/blender-test.txt) as a separate
@@ -13,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
+import kinema
 
 pytest.importorskip("pxr")
 from test_usd import _run, cloth, expected_colours, fountain, spring_ends  # noqa: E402
@@ -187,8 +191,9 @@ def test_blender_draws_the_springs_as_curves_between_their_ends(blender, name):
         np.testing.assert_allclose(imported.get(springs, "radius", k), 0.012 / 4, rtol=1e-6)  # half the USD width
 
 
-def test_blender_imports_the_colliders_only_with_its_guide_option(blender):
-    assert blender["fountain, default options"].objects("MESH") == []
+def test_blender_imports_the_colliders_as_rendered_meshes(blender):
+    # the default purpose: imported without the Guide option, and rendered
+    assert blender["fountain, default options"].objects("MESH") == ["box_1", "plane_0"]
     assert blender["fountain"].objects("MESH") == ["box_1", "plane_0"]
     imported = blender["colliders"]
     assert imported.objects("MESH") == ["box_0", "plane_1", "sphere_2"]
@@ -258,3 +263,182 @@ def test_blender_turns_a_rolling_ball_as_kinema_does(tmp_path):
         np.testing.assert_allclose(mats[k, 0, :3, :3], r * turn, atol=r * 2e-3)  # quath: 11-bit mantissa
         np.testing.assert_allclose(mats[k, 0, :3, 3], traj.positions[k, 0], atol=1e-6)
     assert np.ptp(mats[:, 0, 0, 0]) > r, "the ball turns"
+
+
+# Runs in Blender's Python: opens the .blend that `kinema export --format blend` built and
+# writes, as JSON to argv[2], the scene's rate and range, each object's material slots, and
+# for each render asked (engine, frame) the colour (8-bit sRGB, as the PNG holds it) at the
+# pixels where named world points land (the balls' centres, a floor point, the moving
+# collider's centres), with the collider's place at that frame.
+BLENDER_RENDER = r"""
+import json, sys
+import bpy, numpy as np
+from bpy_extras.object_utils import world_to_camera_view
+from mathutils import Vector
+
+job = json.load(open(sys.argv[1]))
+bpy.ops.wm.open_mainfile(filepath=job["blend"])
+scene = bpy.context.scene
+out = {"fps": scene.render.fps, "fps_base": scene.render.fps_base, "frame_start": scene.frame_start, "frame_end": scene.frame_end,
+       "camera": scene.camera is not None, "caches": [c.filepath for c in bpy.data.cache_files],
+       "objects": {ob.name: {"type": ob.type, "hide_render": ob.hide_render, "slots": [[s.link, s.material.name if s.material else None] for s in ob.material_slots]} for ob in scene.objects},
+       "renders": []}
+scene.render.resolution_x, scene.render.resolution_y = job["size"]
+scene.render.resolution_percentage = 100
+scene.cycles.samples, scene.cycles.device = 16, "CPU"
+scene.eevee.taa_render_samples = 4
+for n, (engine, frame) in enumerate(job["renders"]):
+    scene.render.engine = engine
+    scene.frame_set(frame)
+    scene.render.filepath = job["png"] % n
+    entry = {"engine": engine, "frame": frame, "png": scene.render.filepath}
+    try:
+        bpy.ops.render.render(write_still=True)
+    except RuntimeError as e:
+        entry["error"] = str(e)
+        out["renders"].append(entry)
+        continue
+    image = bpy.data.images.load(scene.render.filepath)
+    w, h = image.size
+    pixels = np.array(image.pixels[:]).reshape(h, w, image.channels)
+    graph = bpy.context.evaluated_depsgraph_get()
+    mover = scene.objects[job["mover"]].evaluated_get(graph)
+    entry["mover"] = list(mover.matrix_world.translation)
+    entry["background"] = (pixels[h - 2, w // 2, :3] * 255).tolist()
+    entry["points"] = {}
+    for name, point in job["points"].items():
+        p = world_to_camera_view(scene, scene.camera, Vector(point))
+        i, j = int(p.x * w), int(p.y * h)  # rows from the bottom, as image.pixels
+        entry["points"][name] = (pixels[j, i, :3] * 255).tolist() if 0 <= i < w and 0 <= j < h else None
+    out["renders"].append(entry)
+json.dump(out, open(sys.argv[2], "w"))
+"""
+
+
+def three_balls():
+    """Red, green and blue balls at rest on a floor (a plane), a cube (a mesh collider)
+    moving past behind them at 0.5 m/s, recorded at fps = 30 with dt = 1 ms (a frame every
+    33 steps: 30.30 a second)."""
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Gravity())
+    w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+    corners = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], float) * 0.2 - [0.1, 0.1, 0.0] + [-0.2, 0.35, 0.0]
+    quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
+    faces = [t for a, b, c, d in quads for t in ([a, b, c], [a, c, d])]
+    w.add(kinema.Mesh(vertices=corners, faces=faces, motion=kinema.Motion(velocity=(0.5, 0, 0))))
+    w.add_particles([[-0.25, 0, 0.08], [0, 0, 0.08], [0.25, 0, 0.08]], radius=0.08, mass=1.0)
+    traj = w.run(0.5, fps=30)
+    traj.colors = np.array([[1.0, 0, 0], [0, 1.0, 0], [0, 0, 1.0]])
+    return traj
+
+
+@pytest.fixture(scope="module")
+def blend(tmp_path_factory):
+    """The three balls exported with `format="blend"` (Blender: .venv-blender's Python, by
+    $KINEMA_BLENDER), opened in Blender and rendered: (traj, what Blender says)."""
+    if not BLENDER_PYTHON.exists():
+        pytest.skip(f"Blender (bpy) is not installed: no {BLENDER_PYTHON} (make test installs it from requirements/blender-test.txt)")
+    folder = tmp_path_factory.mktemp("blend")
+    traj = three_balls()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("KINEMA_BLENDER", str(BLENDER_PYTHON))
+        written = traj.export(folder / "balls.blend")
+    assert written == [folder / "balls.blend", folder / "balls.usdc"]
+    late = len(traj.t) - 1
+    cube = lambda k: [-0.2 + 0.5 * traj.t[k], 0.35, 0.1]  # noqa: E731
+    job = {
+        "blend": str(folder / "balls.blend"),
+        "png": str(folder / "render_%d.png"),
+        "size": [160, 120],
+        "renders": [["CYCLES", 0], ["CYCLES", late], ["BLENDER_EEVEE", 0]],
+        "mover": "mesh_1",
+        "points": {
+            "red": traj.positions[0, 0].tolist(),
+            "green": traj.positions[0, 1].tolist(),
+            "blue": traj.positions[0, 2].tolist(),
+            "floor": [0.0, -0.22, 0.0],
+            "cube then": cube(0),
+            "cube now": cube(late),
+        },
+    }
+    (folder / "job.json").write_text(json.dumps(job))
+    (folder / "render.py").write_text(BLENDER_RENDER)
+    run = subprocess.run(
+        [str(BLENDER_PYTHON), str(folder / "render.py"), str(folder / "job.json"), str(folder / "out.json")], capture_output=True, text=True, timeout=600
+    )
+    if run.returncode != 0 and "No module named 'bpy'" in run.stderr:
+        pytest.skip(f"Blender (bpy) cannot be imported by {BLENDER_PYTHON}")
+    assert run.returncode == 0, run.stderr[-3000:]
+    return traj, json.loads((folder / "out.json").read_text())
+
+
+def dominant(rgb, channel):
+    """Whether `channel` of the 8-bit colour `rgb` exceeds both others by 100 and more."""
+    others = [v for k, v in enumerate(rgb) if k != channel]
+    return rgb[channel] >= max(others) + 100
+
+
+def test_the_blend_plays_at_the_asked_rate_over_the_frames(blend):
+    traj, out = blend
+    # World.run(fps=30) at dt = 1 ms records every 33 ms (30.30 a second); the scene plays
+    # the 30 frames a second asked, frame k the stage's time code k
+    assert np.median(np.diff(traj.t)) == pytest.approx(0.033)
+    assert (out["fps"], out["fps_base"]) == (30, 1.0)
+    assert (out["frame_start"], out["frame_end"]) == (0, len(traj.t) - 1)
+    assert out["caches"] == ["//balls.usdc"]  # beside the .blend, wherever the two are moved
+    assert out["camera"]
+
+
+def test_the_blend_gives_the_point_cloud_its_colours_material_on_the_object(blend):
+    _, out = blend
+    objects = out["objects"]
+    # on the object, not the data: the cache modifier's data of each frame has no material
+    assert objects["particles"]["slots"] == [["OBJECT", "kinema particles"]]
+    # the colliders are rendered meshes with the stage's material (imported without Guide)
+    assert objects["plane_0"]["slots"] == objects["mesh_1"]["slots"] == [["DATA", "colliders"]]
+    assert not objects["plane_0"]["hide_render"] and not objects["mesh_1"]["hide_render"]
+
+
+@pytest.mark.parametrize("render", [0, 1, 2], ids=["cycles frame 0", "cycles last frame", "eevee frame 0"])
+def test_a_render_shows_the_balls_in_their_colours_and_the_floor(blend, render):
+    _, out = blend
+    shot = out["renders"][render]
+    assert "error" not in shot, shot.get("error")
+    points = shot["points"]
+    for channel, name in enumerate(["red", "green", "blue"]):
+        assert dominant(points[name], channel), f"{shot['engine']}: the {name} ball renders {points[name]}"
+    # the floor renders (the white background where nothing is; a guide would leave it)
+    assert shot["background"] == [255, 255, 255]
+    floor = points["floor"]
+    assert max(floor) <= 245 and max(floor) - min(floor) <= 6, f"the floor renders {floor}"
+
+
+def test_the_moving_collider_moves_in_the_render(blend):
+    traj, out = blend
+    first, last = out["renders"][0], out["renders"][1]
+    # the cube's transform follows its motion (0.5 m/s along x) ...
+    np.testing.assert_allclose(first["mover"], [0, 0, 0], atol=1e-6)
+    np.testing.assert_allclose(last["mover"], [0.5 * traj.t[-1], 0, 0], atol=1e-6)
+    # ... and the render shows it there: darker than the floor where it is, not where it was
+    floor = np.mean(first["points"]["floor"])
+    assert np.mean(first["points"]["cube then"]) < floor - 20 and np.mean(last["points"]["cube now"]) < floor - 20
+    assert abs(np.mean(last["points"]["cube then"]) - floor) < 8 and abs(np.mean(first["points"]["cube now"]) - floor) < 8
+
+
+def test_kinema_export_format_blend_from_a_saved_run(tmp_path, monkeypatch):
+    # The issue's way: `kinema run` saves run.h5 (its fps kept), `kinema export -f blend`
+    # writes run.blend and run.usdc beside it, the stage at the 30 frames a second asked
+    if not BLENDER_PYTHON.exists():
+        pytest.skip(f"Blender (bpy) is not installed: no {BLENDER_PYTHON}")
+    from pxr import Usd
+    from typer.testing import CliRunner
+
+    from kinema.cli import app
+
+    three_balls().save(tmp_path / "run.h5")
+    monkeypatch.setenv("KINEMA_BLENDER", str(BLENDER_PYTHON))
+    result = CliRunner().invoke(app, ["export", str(tmp_path / "run.h5"), "-f", "blend"])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.blend", "run.h5", "run.usdc"]
+    assert Usd.Stage.Open(str(tmp_path / "run.usdc")).GetFramesPerSecond() == 30.0
+    assert (tmp_path / "run.blend").read_bytes()[:7] == b"BLENDER"

@@ -364,7 +364,9 @@ def export(
     format: Annotated[
         str,
         typer.Option(
-            "--format", "-f", help="vtk (ParaView), ply (Blender), xyz (OVITO, ASE), csv, gsd (HOOMD, OVITO), lammps (a LAMMPS dump), usd (Blender, Houdini)."
+            "--format",
+            "-f",
+            help="vtk (ParaView), ply (Blender), xyz (OVITO, ASE), csv, gsd (HOOMD, OVITO), lammps (a LAMMPS dump), usd (Blender, Houdini), blend (a Blender scene, built by Blender).",
         ),
     ],
     out: Annotated[
@@ -381,7 +383,10 @@ def export(
     run_colliders.vtp; ply one file a frame in the folder
     run_ply/ (run_00000.ply, ...); xyz run.xyz (extended XYZ, SI units); csv run.csv; gsd
     run.gsd; lammps run.lammpstrj (dump custom); usd run.usd (Blender, Houdini; needs
-    pip install kinema[usd]). So the formats never overwrite each other.
+    pip install kinema[usd]); blend run.blend and the stage it plays, run.usdc (needs
+    usd-core and Blender: `blender` on the PATH or $KINEMA_BLENDER; open run.blend and
+    render: the frame rate, colours, colliders, camera and light are set). So the formats
+    never overwrite each other.
     A trajectory with spin carries its angular velocities and orientations in every
     format; one with contacts (kinema run --record-contacts) adds them to lammps
     (run_contacts.dump and run_collider_contacts.dump, LAMMPS dump local) and vtk (lines

@@ -487,7 +487,8 @@ class Trajectory:
 
     def export(self, path: Any, format: str | None = None) -> list[Any]:
         """Write the frames for other tools: `vtk` (ParaView), `ply` (Blender, Houdini),
-        `xyz` (OVITO), `csv`, `gsd`, `lammps` or `usd`, inferred from the suffix when
+        `xyz` (OVITO), `csv`, `gsd`, `lammps`, `usd` or `blend` (a Blender scene, built by
+        Blender, and the USD stage it plays), inferred from the suffix when
         `format` is None; returns the files written (`kinema.io.export`). Values the
         format's readers or kinema's would refuse are refused before anything is written.
         The spins go into every format, the `contact_record` into `lammps` (dump

@@ -12,6 +12,7 @@ from typing import Any
 
 from ._files import frames_of, os_errors_as_write_errors
 from ._h5md_checks import check_frames
+from .blend_writer import write_blend
 from .csv_writer import write_csv
 from .gsd_writer import write_gsd
 from .lammps_dump import write_lammps
@@ -21,7 +22,7 @@ from .usd_writer import write_usd
 from .vtk_writer import write_vtk
 from .xyz_writer import write_xyz
 
-FORMATS = ("vtk", "ply", "xyz", "csv", "gsd", "lammps", "usd")
+FORMATS = ("vtk", "ply", "xyz", "csv", "gsd", "lammps", "usd", "blend")
 _SUFFIXES = {
     ".pvd": "vtk",
     ".vtp": "vtk",
@@ -36,6 +37,7 @@ _SUFFIXES = {
     ".usda": "usd",
     ".usdc": "usd",
     ".usdz": "usd",
+    ".blend": "blend",
 }
 SUFFIX = {
     "vtk": ".pvd",
@@ -45,9 +47,10 @@ SUFFIX = {
     "gsd": ".gsd",
     "lammps": ".lammpstrj",
     "usd": ".usd",
+    "blend": ".blend",
 }  # the main file's suffix of each format
 _TRAJECTORY_SUFFIXES = (".h5", ".hdf5", ".h5md")  # H5MD trajectories: never the name of an export
-_FLOAT32 = ("ply", "gsd", "usd")  # the formats that store particle data as float32
+_FLOAT32 = ("ply", "gsd", "usd", "blend")  # the formats that store particle data as float32
 
 
 def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_frame: Callable[[int], Any] | None = None) -> list[Path]:
@@ -87,9 +90,13 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
       17 significant digits (see `lammps_dump.write_lammps`).
     - `"usd"` (.usd, .usda, .usdc, .usdz): Pixar's USD for Blender and Houdini, written
       with the `usd-core` package: a `UsdGeom.Points` prim with positions and velocities
-      as time samples at the recording's frame rate, widths 2r and ids, Z up, 1 m per unit,
-      and the colliders as guide prims (see `usd_writer.write_usd`); another suffix is a
+      as time samples at the frame rate asked, widths 2r and ids, Z up, 1 m per unit,
+      and the colliders as translucent meshes, with bound materials (see `usd_writer.write_usd`); another suffix is a
       `ValueError` (USD picks its file format from the suffix).
+    - `"blend"` (.blend): a Blender scene built by Blender itself (`blender` on the PATH,
+      `$KINEMA_BLENDER`, or `bpy` in this Python), and beside it `<stem>.usdc`, the stage
+      it plays: the frame rate asked, the particles in their colours in Cycles and Eevee,
+      the colliders rendered, a camera and a light (see `blend_writer.write_blend`).
 
     Spin and contacts: a trajectory with `angular_velocities` (and `orientations`) writes
     them in every format (LAMMPS `omegax.. quatw..`, XYZ `omega`, `orientation`,
@@ -154,7 +161,16 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
         raise ValueError(f"path = {str(path)!r}: the suffix {path.suffix or '(none)'!r} is not a USD file's; allowed: {', '.join(USD_SUFFIXES)}")
     fr = frames_of(traj)
     check_frames(path, traj, fr, float32=format if format in _FLOAT32 else None, int32_ids="ply" if format == "ply" else None)
-    writer = {"vtk": write_vtk, "ply": write_ply, "xyz": write_xyz, "csv": write_csv, "gsd": write_gsd, "lammps": write_lammps, "usd": write_usd}[format]
+    writer = {
+        "vtk": write_vtk,
+        "ply": write_ply,
+        "xyz": write_xyz,
+        "csv": write_csv,
+        "gsd": write_gsd,
+        "lammps": write_lammps,
+        "usd": write_usd,
+        "blend": write_blend,
+    }[format]
     with os_errors_as_write_errors(path):
         return writer(traj, fr, path, on_frame or (lambda i: None))
 

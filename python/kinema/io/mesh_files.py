@@ -137,7 +137,7 @@ def _read_trimesh(path: Path, fmt: str, refuse: Any) -> tuple[np.ndarray, np.nda
 
 def _read_usd(path: Path, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
     """Every `UsdGeom.Mesh` prim of the stage but guides (its purpose `guide`: kinema's own
-    export draws its colliders so), at the earliest time code: `points` by the prim's
+    export drew its colliders so) and kinema's exported colliders (`kinema:collider`), at the earliest time code: `points` by the prim's
     local-to-world transform, × the stage's `metersPerUnit` (USD's fallback 0.01,
     centimetres, with a `UnitWarning` where the stage does not say it, as
     `kinema.io.read_usd` reads particles); `faceVertexCounts` and `faceVertexIndices`
@@ -160,7 +160,7 @@ def _read_usd(path: Path, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
     time = Usd.TimeCode.EarliestTime()
     parts_v, parts_f, offset = [], [], 0
     for prim in stage.Traverse():
-        if not prim.IsA(UsdGeom.Mesh) or UsdGeom.Imageable(prim).ComputePurpose() == UsdGeom.Tokens.guide:
+        if not prim.IsA(UsdGeom.Mesh) or UsdGeom.Imageable(prim).ComputePurpose() == UsdGeom.Tokens.guide or prim.HasAttribute("kinema:collider"):
             continue
         mesh = UsdGeom.Mesh(prim)
         points = mesh.GetPointsAttr().Get(time)

@@ -1,6 +1,7 @@
 """Pixar's USD (Blender, Houdini, Omniverse, usdview), written with the `usd-core` package:
 the particles as one `UsdGeom.Points` prim with time samples (and the primvars Blender and
-Houdini read), the springs as `UsdGeom.BasisCurves`, the colliders as guide meshes."""
+Houdini read), the springs as `UsdGeom.BasisCurves`, the colliders as rendered translucent
+meshes, every one with a bound `UsdPreviewSurface` material."""
 
 from __future__ import annotations
 
@@ -24,8 +25,10 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
 
     The stage: `upAxis` Z (kinema's gravity points along -z), `metersPerUnit` 1 (kinema
     is SI); frame k at time code k (k = 0 … F − 1: `startTimeCode` 0, `endTimeCode`
-    F − 1), `timeCodesPerSecond` = `framesPerSecond` = the recording's frame rate (1 / the
-    median interval), so that a 3D application asking at whole frames, as Blender and Houdini
+    F − 1), `timeCodesPerSecond` = `framesPerSecond` = the rate the frames were asked at
+    (`_frame_rate`: `traj.fps`, 30 for `World.run(fps=30)`, though at dt = 1 ms it records
+    every 33 ms; else a common rate within 2 % of the recording's, else 1 / the median
+    interval), so that a 3D application asking at whole frames, as Blender and Houdini
     do, gets each frame exactly (time codes t × rate, 1.0000000000000027, 2.0000000000000053,
     …, gave the previous frame in 172 of the fountain's 182 frames). The frames' own times (s,
     float64) are the time samples of `/World`'s `kinema:time`. `/World` (the default
@@ -72,20 +75,26 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
       centre), `sphere_k` (a UV sphere of 448 quads and 64 triangles, with its normals)
       and `mesh_k` (a triangle mesh's vertices and triangles as they are described, a
       closed one turned to face out), in world coordinates (m), facing out, with the
-      `guide` purpose so that renders show the particles only, `displayOpacity`
-      `COLLIDER_OPACITY` (translucent where a viewer shows guides, as kinema's videos draw
-      planes and meshes, so that what is inside shows) and `kinema:collider` naming the
-      type. A moving collider (one with a `motion`) is described as added and carries a
+      default purpose (rendered), `displayColor` `COLLIDER_COLOR` and `displayOpacity`
+      `COLLIDER_OPACITY` (translucent, as kinema's videos draw planes and meshes, so that
+      what is inside shows) and `kinema:collider` naming the type. A moving collider (one with a `motion`) is described as added and carries a
       time-sampled `xformOp:transform`, its pose at each frame's time code (from the
       engine's motion, `collider_poses`), so that it moves in a 3D application as in
       kinema's videos.
+    - `/World/materials`: `particles`, a `UsdPreviewSurface` whose `diffuseColor` is the
+      prim's own `displayColor` (a `UsdPrimvarReader_float3`), bound to the particles, the
+      springs and the spheres' ball; `colliders`, `COLLIDER_COLOR` at opacity
+      `COLLIDER_OPACITY`, bound to every collider. usdview, Houdini and Omniverse render
+      the colours; Blender's importer makes the colliders' material and the ball's (an
+      Attribute node reading `displayColor`) but gives its point clouds no material, and
+      keeps its scene's frame rate: `blend_writer.write_blend` makes the Blender scene.
 
     In Blender (5.0): File → Import → Universal Scene Description, then play: the Points
     prim becomes a point cloud whose positions follow the time samples, with the attributes
     `radius`, `velocity`, `id`, `mass` and `displayColor` (not `species`: it
-    takes no strings); the springs a Curves object; the colliders come only with the
-    import's Guide option. Blender asks at time code = frame, and takes the frame range but
-    not the rate: set Output → Frame Rate to the stage's `framesPerSecond` for real time.
+    takes no strings); the springs a Curves object; the colliders meshes with their material. Blender asks at
+    time code = frame, and takes the frame range but not the rate nor the point cloud's
+    material (`kinema export --format blend` sets both).
     In Houdini: a LOP network's Sublayer or a SOP `usdimport`. `on_frame(i)` is called
     after frame `i`.
 
@@ -108,7 +117,7 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
 
 def _write_stage(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any], pxr: tuple) -> list[Path]:
     # (ValueErrors before anything is written)
-    rate = _frame_rate(fr.t)
+    rate = _frame_rate(fr.t, getattr(traj, "fps", None))
     parts = (_Colours(traj, fr), _species(traj, fr), spring_columns(traj, fr))
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
@@ -166,6 +175,7 @@ def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, 
         if spheres is not None:
             spheres.finish(particles.lo, particles.hi)
         _colliders(stage, traj, fr, pxr)
+        _bind_materials(stage, pxr)
         if not stage.GetRootLayer().Save():
             raise FileWriteError(errno.EIO, f"usd-core could not save the stage ({where})", str(path))
         if package:
@@ -484,15 +494,76 @@ def _whole_package(packed: Path, layer: Path) -> bool:
         return False
 
 
-def _frame_rate(t: np.ndarray) -> float:
-    """Frames per second of the recording (the stage's time codes per second): 1 / the median
-    interval, 24 (USD's default) for a single frame."""
-    if t.size < 2:
+def _frame_rate(t: np.ndarray, asked: Any = None) -> float:
+    """Frames per second of the stage's time codes: the rate the frames were asked at
+    where the trajectory says it (`Trajectory.fps`, `World.run(fps=)`, kept in kinema's
+    H5MD) and the recording's rate, 1 / the median interval, is its rounding to whole steps
+    (`render.playback_rate`: 30 for `fps=30` at dt = 1 ms, which records every 33 steps,
+    30.30 a second); else the common rate (24, 25, 30, 50, 60) within 2 % of the recording's;
+    else the recording's. A rate within 1e-9 of a fraction of denominator up to 1001 is
+    written as it (25, not 24.99999999999998; 30000/1001). 24 (USD's default) for a single
+    frame without an asked rate."""
+    from ..render.video import playback_rate
+
+    if t.size >= 2:
+        step = float(np.median(np.diff(t)))
+        if not (np.isfinite(step) and step > 0):
+            raise ValueError(f"t: the frames' times must increase to give USD a frame rate (median interval {step!r} s)")
+    elif not (isinstance(asked, (int, float, np.floating, np.integer)) and np.isfinite(asked) and asked > 0):
         return 24.0
-    step = float(np.median(np.diff(t)))
-    if not (np.isfinite(step) and step > 0):
-        raise ValueError(f"t: the frames' times must increase to give USD a frame rate (median interval {step!r} s)")
-    return 1.0 / step
+    rate = float(playback_rate(t, asked)[0])
+    from fractions import Fraction
+
+    near = Fraction(rate).limit_denominator(1001)
+    return float(near) if abs(float(near) - rate) <= 1e-9 * rate else rate
+
+
+def _material(stage: Any, path: str, pxr: tuple, colour: Any = None, opacity: float | None = None) -> Any:
+    """A `UsdShade.Material` at `path` whose surface is a `UsdPreviewSurface`: its
+    `diffuseColor` `colour` (linear RGB), or where `colour` is None the prim's own
+    `displayColor` through a `UsdPrimvarReader_float3` (Blender's importer makes it an
+    Attribute node reading `displayColor`); `opacity` where given."""
+    from pxr import UsdShade
+
+    Gf, Sdf, Usd, UsdGeom, Vt = pxr
+    material = UsdShade.Material.Define(stage, path)
+    surface = UsdShade.Shader.Define(stage, f"{path}/surface")
+    surface.CreateIdAttr("UsdPreviewSurface")
+    diffuse = surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f)
+    if colour is None:
+        reader = UsdShade.Shader.Define(stage, f"{path}/displayColor")
+        reader.CreateIdAttr("UsdPrimvarReader_float3")
+        reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("displayColor")
+        reader.CreateInput("fallback", Sdf.ValueTypeNames.Float3).Set(Gf.Vec3f(0.5, 0.5, 0.5))
+        diffuse.ConnectToSource(reader.CreateOutput("result", Sdf.ValueTypeNames.Float3))
+    else:
+        diffuse.Set(Gf.Vec3f(*map(float, colour)))
+    surface.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.5)
+    if opacity is not None:
+        surface.CreateInput("opacity", Sdf.ValueTypeNames.Float).Set(float(opacity))
+    material.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
+    return material
+
+
+def _bind_materials(stage: Any, pxr: tuple) -> None:
+    """`/World/materials`: `particles` (each prim's own `displayColor`), bound to the
+    particles, the springs and the spheres' ball; `colliders` (`COLLIDER_COLOR` at
+    `COLLIDER_OPACITY`), bound to every collider (see write_usd)."""
+    from pxr import UsdShade
+
+    Gf, Sdf, Usd, UsdGeom, Vt = pxr
+    UsdGeom.Scope.Define(stage, "/World/materials")
+    own = _material(stage, "/World/materials/particles", pxr)
+    for path in ("/World/particles", "/World/springs", "/World/spheres/prototypes/ball"):
+        prim = stage.GetPrimAtPath(path)
+        if prim:
+            UsdShade.MaterialBindingAPI.Apply(prim).Bind(own)
+    colliders = stage.GetPrimAtPath("/World/colliders")
+    if colliders and colliders.GetChildren():
+        grey = _srgb_to_linear(np.array(COLLIDER_COLOR) / 255.0)
+        shared = _material(stage, "/World/materials/colliders", pxr, grey, COLLIDER_OPACITY)
+        for prim in colliders.GetChildren():
+            UsdShade.MaterialBindingAPI.Apply(prim).Bind(shared)
 
 
 def _colliders(stage: Any, traj: Any, fr: Frames, pxr: tuple) -> None:
@@ -538,7 +609,8 @@ def _colliders(stage: Any, traj: Any, fr: Frames, pxr: tuple) -> None:
         if normals is not None:
             mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(normals.astype(np.float32)))
             mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
-        mesh.CreatePurposeAttr(UsdGeom.Tokens.guide)
+        grey = _srgb_to_linear(np.array(COLLIDER_COLOR) / 255.0)
+        mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.constant).Set(Vt.Vec3fArray([Gf.Vec3f(*map(float, grey))]))
         mesh.CreateDisplayOpacityPrimvar(UsdGeom.Tokens.constant).Set(Vt.FloatArray([COLLIDER_OPACITY]))
         mesh.GetPrim().CreateAttribute("kinema:collider", Sdf.ValueTypeNames.Token).Set(kind)
         if c.get("motion") is not None:
@@ -554,8 +626,12 @@ def _colliders(stage: Any, traj: Any, fr: Frames, pxr: tuple) -> None:
                 transform.Set(Gf.Matrix4d(m.T.tolist()), Usd.TimeCode(float(i)))
 
 
-#: The colliders' ``displayOpacity``: kinema's renderer draws planes and meshes at 0.3.
+#: The colliders' ``displayOpacity`` and their material's opacity: kinema's renderer draws
+#: planes and meshes at 0.3.
 COLLIDER_OPACITY = 0.3
+
+#: The colliders' colour (sRGB 8-bit): kinema's videos' planes and meshes (``PLANE_COLOR``).
+COLLIDER_COLOR = (150, 150, 142)
 
 
 def triangle_mesh(c: dict) -> tuple[np.ndarray, np.ndarray] | None:
