@@ -10,6 +10,9 @@ notebook whose numbers drift fails here. Each ends with the viewer inline
 
 from __future__ import annotations
 
+import ast
+import json
+import re
 from pathlib import Path
 
 import pytest
@@ -45,10 +48,6 @@ def test_the_notebook_runs_and_its_checks_hold(name, tmp_path, jupyter_kernel):
 
 
 # -- what a reader sees (issue 48), checked without a kernel ----------------------------------
-
-import ast  # noqa: E402
-import json  # noqa: E402
-import re  # noqa: E402
 
 # the matplotlib calls whose value Jupyter would print under the cell (`Text(0.5, 1.0, '...')`)
 ARTIST_CALLS = {
