@@ -632,7 +632,7 @@ def test_a_ball_pressed_into_a_box_corner_warm_starts_each_wall_from_its_own_rec
 
 def test_stage_times_name_the_impulse_models_stages_in_the_order_a_step_runs_them():
     # A pile falling onto a floor: every stage of the impulse model runs (impacts, contacts,
-    # the soft step, the books). The seed's four stages come first; the impulse model's own
+    # the soft step, the books). The lecture notes' four stages come first; the impulse model's own
     # stages follow in its order, and they cover the collision time the four report
     # (measured by the same clock's laps: at least detect + respond + distribute).
     w = kinema.World(dt=1e-3, method="verlet")

@@ -217,3 +217,33 @@ def test_every_public_name_and_command_has_a_reference_entry():
     page = (ROOT / "docs" / "reference" / "cli.md").read_text(encoding="utf-8")
     assert ":module: kinema.cli" in page and ":command: click_command" in page and ":depth: 1" in page
     assert set(cli.click_command.commands) == {"methods", "stability", "demo", "run", "render", "export", "sweep", "analyze", "view"}
+
+
+def test_the_site_has_an_install_page_linked_from_the_home_page_and_the_nav():
+    import yaml
+
+    page = (ROOT / "docs" / "install.md").read_text(encoding="utf-8")
+    for needed in ("pip install", "venv", "make demo", "make test", "ffmpeg", "bpy", "ovito", "lammps"):
+        assert needed in page.lower() or needed in page, f"docs/install.md does not say {needed!r}"
+    assert "](install.md)" in (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+
+    def pages(nav):
+        for item in nav:
+            for value in item.values() if isinstance(item, dict) else [item]:
+                yield from pages(value) if isinstance(value, list) else [value]
+
+    config = yaml.load((ROOT / "mkdocs.yml").read_text(encoding="utf-8"), Loader=yaml.BaseLoader)
+    assert "install.md" in list(pages(config["nav"]))
+
+
+def test_no_page_speaks_of_the_seed_or_links_it():
+    """The lecture notes the project grew from are not in the repository: pages name them
+    "the lecture notes" and quote them, and link no path that is not there. (A random
+    seed, "the seed" of a particle block or a sweep's member, is another thing.)"""
+    for page in [*PAGES, ROOT / "python" / "kinema" / "demo.py", ROOT / "python" / "kinema" / "world_collisions.py"]:
+        text = page.read_text(encoding="utf-8")
+        assert not re.search(r"\bseed's\b|\.\./seed\b|\(seed/|the seed, shown", text, re.IGNORECASE), f"{page.name} speaks of the seed"
+        if page.suffix == ".md":
+            for target in re.findall(r"\]\(([^)#\s]+)", text):
+                if not re.match(r"[a-z]+:", target):
+                    assert (page.parent / target).exists(), f"{page.name} links {target}, which is not in the repository"

@@ -218,3 +218,60 @@ def test_the_stability_warning_advises_only_the_methods_the_world_accepts(fricti
             other.step(1)
     else:
         assert "reduce dt or use method='implicit_euler'" in said[0]
+
+
+# -- stable sets with no area (issue 48: Verlet's and symplectic Euler's plots were empty) ----
+
+
+@pytest.mark.parametrize("method", ["verlet", "symplectic_euler"])
+def test_the_symplectic_methods_are_stable_on_the_imaginary_segment_only(method):
+    assert stability.segments(method) == [(-2j, 2j)]
+    y = np.linspace(-2.0, 2.0, 401)
+    assert np.all(np.abs(stability.amplification(method, 1j * y)) <= 1.0 + 1e-12)
+    # just off the axis, on either side, and just beyond ±2i: unstable
+    for off in (1e-3, -1e-3, 0.3, -0.3):
+        assert np.all(np.abs(stability.amplification(method, off + 1j * y)) > 1.0)
+    assert np.all(np.abs(stability.amplification(method, 1j * np.array([-2.01, 2.01, 3.0]))) > 1.0)
+
+
+@pytest.mark.parametrize("method", ["euler", "midpoint", "heun", "rk4", "rk45", "implicit_euler"])
+def test_a_region_with_an_area_has_no_segments(method):
+    assert stability.segments(method) == []
+
+
+def test_plot_regions_draws_the_segment_of_a_method_with_no_area():
+    import matplotlib.pyplot as plt
+
+    ax = stability.plot_regions(["euler", "verlet", "symplectic_euler"])
+    drawn = {line.get_gid(): line for line in ax.get_lines() if (line.get_gid() or "").startswith("segment:")}
+    assert set(drawn) == {"segment:verlet", "segment:symplectic_euler"}
+    for line in drawn.values():
+        np.testing.assert_array_equal(line.get_xdata(), [0.0, 0.0])
+        np.testing.assert_array_equal(line.get_ydata(), [-2.0, 2.0])
+        assert line.get_linewidth() >= 2.0
+    # both show: the one drawn on top is narrower
+    assert drawn["segment:symplectic_euler"].get_linewidth() < drawn["segment:verlet"].get_linewidth()
+    assert drawn["segment:symplectic_euler"].get_zorder() > drawn["segment:verlet"].get_zorder()
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == ["euler", "verlet: only [−2i, 2i]", "symplectic_euler: only [−2i, 2i]"]
+    plt.close(ax.figure)
+
+
+def test_each_filled_region_shows_its_legend_colour():
+    """Euler's disc lies inside midpoint's, RK4's and RK45's regions: translucent fills mixed
+    their colours there, so the disc did not show the colour of its legend patch."""
+    import matplotlib.pyplot as plt
+
+    methods = ["euler", "midpoint", "rk4", "rk45", "implicit_euler"]
+    fig, ax = plt.subplots(figsize=(6, 6), dpi=100)
+    stability.plot_regions(methods, ax=ax)
+    faces = dict(zip(methods, (h.get_facecolor() for h in ax.get_legend().legend_handles), strict=True))
+    fig.canvas.draw()
+    pixels = np.asarray(fig.canvas.buffer_rgba())
+    # a point of each region outside the smaller ones (and off the axes' lines and outlines)
+    for method, z in (("euler", -1.0 + 0.5j), ("midpoint", -1.5 + 1.2j), ("rk4", -2.5 + 0.3j), ("rk45", -3.1 + 0.3j)):
+        x, y = ax.transData.transform((z.real, z.imag))
+        seen = pixels[int(round(pixels.shape[0] - y)), int(round(x)), :3] / 255.0
+        np.testing.assert_allclose(seen, faces[method][:3], atol=2 / 255, err_msg=method)
+        assert faces[method][3] == 1.0
+    plt.close(fig)

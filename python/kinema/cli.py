@@ -633,13 +633,17 @@ def view(
             traj = world.run(settings.duration, fps=settings.fps, callback=lambda w: bar.advance(task), max_work=None)
     else:
         traj = _load(source, units)  # (a missing file or a folder: its one-line refusal)
-    color_by = sc.render.color_by if source.suffix.lower() == ".toml" else None  # (a scene opens in its own colouring)
+    # A scene opens in its own colouring, and at its own [render] camera when it has one.
+    from .runner import _camera as _scene_camera
+
+    color_by = sc.render.color_by if source.suffix.lower() == ".toml" else None
+    camera = _scene_camera(sc.render.camera) if source.suffix.lower() == ".toml" else None
     if html is not None:
-        path = write_html(traj, html, color_by=color_by)
+        path = write_html(traj, html, color_by=color_by, camera=camera)
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)
         return
     try:
-        url, server = serve(traj, open_browser=not no_browser, port=port, announce=False, color_by=color_by)
+        url, server = serve(traj, open_browser=not no_browser, port=port, announce=False, color_by=color_by, camera=camera)
     except BundleMissingError:
         raise
     except OSError as e:  # the port is taken or not ours to bind

@@ -1,4 +1,4 @@
-"""`kinema demo`: the seed, shown.
+"""`kinema demo`: the lecture notes, shown.
 
 First half: one problem — the harmonic oscillator x'' = −x over ten periods — integrated by
 every method of the registry at the same step, then three pictures: the phase portraits
@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from rich.console import Console
@@ -53,32 +54,61 @@ def _phase_portraits(results: dict, out: Path) -> Path:
     return path
 
 
+REGIONS = ["euler", "midpoint", "rk4", "rk45", "implicit_euler", "verlet"]
+"""The methods of the stability picture: Verlet's stable set is the segment [−2i, 2i], a line."""
+
+CONVERGENCE = ["euler", "symplectic_euler", "implicit_euler", "midpoint", "heun", "verlet", "rk4"]
+
+# Each method's line in the convergence picture: its own marker and line style, not the colour
+# alone. Midpoint and Heun have the same R(z) = 1 + z + z²/2, so on the linear oscillator their
+# errors coincide: midpoint is drawn wide with large open circles, Heun narrow and dashed with
+# small crosses inside them, so both show.
+STYLES = {
+    "euler": {"marker": "p", "linestyle": "-", "lw": 1.5, "ms": 6},
+    "symplectic_euler": {"marker": "s", "linestyle": "-", "lw": 1.5, "ms": 6},
+    "implicit_euler": {"marker": "v", "linestyle": ":", "lw": 1.8, "ms": 6},
+    "midpoint": {"marker": "o", "linestyle": "-", "lw": 4.0, "ms": 12, "mfc": "none", "mew": 2.0},
+    "heun": {"marker": "x", "linestyle": "--", "lw": 1.5, "ms": 6, "mew": 1.5},
+    "verlet": {"marker": "^", "linestyle": "-.", "lw": 1.5, "ms": 6},
+    "rk4": {"marker": "D", "linestyle": "-", "lw": 1.5, "ms": 5},
+}
+
+
 def _regions(out: Path) -> Path:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7.5, 6.5))
-    stability.plot_regions(["euler", "midpoint", "rk4", "rk45", "implicit_euler"], ax=ax, extent=(-5.0, 3.0, -4.0, 4.0))
+    stability.plot_regions(REGIONS, ax=ax, extent=(-5.0, 3.0, -4.0, 4.0))
     path = save_figure_atomically(fig, out / "stability_regions.png")
     plt.close(fig)
     return path
 
 
-def _convergence(out: Path, console: Console) -> Path:
+def convergence_figure() -> tuple[Any, Table]:
+    """The convergence picture (global error against h on x'' = −x, one line per method of
+    ``CONVERGENCE`` in its ``STYLES``) and the table of measured orders."""
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7.5, 6))
     table = Table(title="measured orders on x'' = -x (least-squares slopes of log error vs log h)")
     for col in ("method", "order", "global slope", "local slope"):
         table.add_column(col, justify="right")
-    for name in ["euler", "symplectic_euler", "implicit_euler", "midpoint", "heun", "verlet", "rk4"]:
+    for name in CONVERGENCE:
         r = convergence(name, problems.harmonic_oscillator())
-        ax.loglog(r.h_global, r.global_error, "o-", label=f"{name}: slope {r.global_order:.2f}")
+        ax.loglog(r.h_global, r.global_error, label=f"{name}: slope {r.global_order:.2f}", gid=name, **STYLES[name])
         table.add_row(name, str(r.expected_order), f"{r.global_order:.3f}", f"{r.local_order:.3f}")
-    ax.set_xlabel("step size h")
-    ax.set_ylabel("global error at t = 2")
-    ax.set_title("Convergence: global error ~ h^p")
+    ax.set_xlabel("step size $h$")
+    ax.set_ylabel("global error at $t = 2$")
+    ax.set_title("Convergence: global error $\\propto h^p$")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize="small")
+    return fig, table
+
+
+def _convergence(out: Path, console: Console) -> Path:
+    import matplotlib.pyplot as plt
+
+    fig, table = convergence_figure()
     path = save_figure_atomically(fig, out / "convergence.png")
     plt.close(fig)
     console.print(table)

@@ -25,6 +25,20 @@ def _vec3(name: str, value: Any) -> list[float]:
     return arr.tolist()
 
 
+def _vec(name: str, value: Any, unit: str) -> list[float]:
+    """A force's vector as 3 numbers: [x, y, z], or [x, y] meaning (x, y, 0), the scene
+    file's rule (so ``Gravity([0, -9.81])`` in a 2D world is ``g = [0, -9.81]`` in its scene)."""
+    arr = _checks.real_array(name, value).reshape(-1)
+    if arr.size == 2:
+        return [*arr.tolist(), 0.0]
+    if arr.size != 3:
+        raise ValueError(
+            f"{name} = {_checks.describe(value)} is invalid: it has {arr.size} component{'' if arr.size == 1 else 's'}; "
+            f"give [x, y, z] or, as in a scene file, [x, y] meaning (x, y, 0) ({unit})"
+        )
+    return arr.tolist()
+
+
 class _Checked:
     """Checks its values when built (a bad one raises there, naming it) and keeps them,
     converted, for the world it is added to; the fields keep what was given."""
@@ -40,12 +54,13 @@ class _Checked:
 class Gravity(_Checked):
     """Uniform gravity: F_i = m_i g (N); g in m/s². The default is down at 9.81 m/s²: along −z
     in a 3D world (z is up), along −y in a 2D world (the xy-plane, y up), as a scene's
-    `[[forces]] type = "gravity"` without `g`."""
+    `[[forces]] type = "gravity"` without `g`. A 2-vector ``g = [gx, gy]`` means (gx, gy, 0),
+    as in a scene file."""
 
     g: Any = None
 
     def _checked(self) -> tuple:
-        return (None if self.g is None else _vec3("g", self.g),)
+        return (None if self.g is None else _vec("g", self.g, "m/s²"),)
 
     def vector(self, dim: int) -> list[float]:
         """g (m/s²) in a world of ``dim`` 2 or 3: the one given, else the default down."""
@@ -110,7 +125,7 @@ class Spring(_Checked):
 class Attractor(_Checked):
     """Inverse-square pull toward a fixed point: F_i = −μ m_i r / (|r|² + ε²)^{3/2}, r = x_i − point.
 
-    `strength` μ = G·M in m³/s², `softening` ε in m.
+    `strength` μ = G·M in m³/s², `softening` ε in m; `point` [x, y, z] or [x, y] (z = 0), m.
     """
 
     point: Any = (0.0, 0.0, 0.0)
@@ -118,7 +133,7 @@ class Attractor(_Checked):
     softening: float = 0.0
 
     def _checked(self) -> tuple:
-        return _vec3("point", self.point), _checks.real("strength", self.strength), _checks.real("softening", self.softening)
+        return _vec("point", self.point, "m"), _checks.real("strength", self.strength), _checks.real("softening", self.softening)
 
     def _attach(self, core: Any) -> None:
         core.add_attractor(*self._args)
@@ -127,13 +142,13 @@ class Attractor(_Checked):
 @dataclass(frozen=True)
 class Wind(_Checked):
     """A uniform wind field: F_i = b (w − v_i), drag relative to air moving at `velocity` w
-    (m/s), `coefficient` b in kg/s."""
+    (m/s; [x, y, z] or [x, y] meaning (x, y, 0)), `coefficient` b in kg/s."""
 
     velocity: Any = (1.0, 0.0, 0.0)
     coefficient: float = 1.0
 
     def _checked(self) -> tuple:
-        return _vec3("velocity", self.velocity), _checks.real("coefficient", self.coefficient)
+        return _vec("velocity", self.velocity, "m/s"), _checks.real("coefficient", self.coefficient)
 
     def _attach(self, core: Any) -> None:
         core.add_wind(*self._args)

@@ -2,8 +2,9 @@
 
 A method applied to p' = λp multiplies p by R(z), z = hλ, every step; the step is stable when
 |R(z)| ≤ 1. `amplification` evaluates R, `max_step` gives the largest stable h for a λ,
-`real_interval` / `imag_interval` the stable stretches of the axes, and `plot_regions`
-draws the regions {z : |R(z)| ≤ 1}. `max_step_oscillator` gives the stable step of every
+`real_interval` / `imag_interval` the stable stretches of the axes, `segments` the stable set
+of a method whose region has no area (Verlet's [−2i, 2i]), and `plot_regions` draws the
+regions {z : |R(z)| ≤ 1}, segments included. `max_step_oscillator` gives the stable step of every
 method (symplectic ones included) on a damped spring.
 """
 
@@ -97,6 +98,57 @@ def _name(method: str | ButcherTableau) -> str:
     return method if isinstance(method, str) else method.name
 
 
+# How far off an axis `segments` looks for stable points (relative to the stretch's length):
+# small enough to stay inside any region of positive area that contains the stretch, large
+# enough that |R| of a method with a thin stable set (1 + O(δ) off the axis) is > 1 by far
+# more than rounding.
+_OFF_AXIS = 1e-6
+
+
+def segments(method: str | ButcherTableau) -> list[tuple[complex, complex]]:
+    """The stable set of a method whose stability region has no interior, as (start, end)
+    pairs of z: the stretches of the real and imaginary axes where |R(z)| ≤ 1 when no point
+    just off them is stable. ``[]`` for a method whose region has an area (it is a filled
+    region on a plot).
+
+    Symplectic Euler and Verlet: ``[(-2j, 2j)]``, the segment [−2i, 2i] of the imaginary
+    axis (hω ≤ 2 on an undamped oscillator); every z off the axis is unstable (|R| > 1), since
+    R is the larger root of μ² − (2 + z²)μ + 1 = 0 and the roots' product is 1. Found from the
+    method's own analysis: the axes' stable intervals (`real_interval`, `imag_interval`) and
+    `amplification` at points beside them, not from a table of names.
+    """
+    stretches = []
+    for interval, axis, across in ((real_interval(method), 1.0, 1j), (imag_interval(method), 1j, 1.0)):
+        if interval.empty:
+            continue
+        lo, hi = max(interval.lo, -1e3), min(interval.hi, 1e3)  # (implicit Euler's are infinite)
+        t = np.linspace(lo, hi, 65)
+        delta = _OFF_AXIS * max(1.0, hi - lo)
+        beside = np.concatenate([t * axis + delta * across, t * axis - delta * across])
+        if np.any(np.abs(amplification(method, beside)) <= 1.0):
+            return []  # a region with an area touches this stretch: it is drawn filled
+        ends = [complex(x + 0.0, 0.0) if axis == 1.0 else complex(0.0, x + 0.0) for x in interval]  # (+ 0.0: no −0)
+        stretches.append((ends[0], ends[1]))
+    return stretches
+
+
+def _segment_text(a: complex, b: complex) -> str:
+    def num(x: float) -> str:
+        return f"{x:.4g}".replace("-", "\u2212")
+
+    if a.real == 0.0 and b.real == 0.0:
+        return f"[{num(a.imag)}i, {num(b.imag)}i]"
+    return f"[{num(a.real)}, {num(b.real)}]"
+
+
+def _pale(color: Any, strength: float = 0.35) -> tuple[float, float, float, float]:
+    """``color`` mixed with white, opaque: a region's fill and its legend patch's face."""
+    from matplotlib.colors import to_rgb
+
+    r, g, b = to_rgb(color)
+    return (1 - strength * (1 - r), 1 - strength * (1 - g), 1 - strength * (1 - b), 1.0)
+
+
 def plot_regions(
     methods: Sequence[str | ButcherTableau] = ("euler", "midpoint", "rk4", "implicit_euler"),
     ax: Any = None,
@@ -106,12 +158,17 @@ def plot_regions(
 ) -> Any:
     """Draw the stability regions {z : |R(z)| ≤ 1} of `methods` in the z = hλ plane.
 
-    Each bounded region is filled (translucent, so overlaps show), an unbounded one (e.g.
-    implicit Euler's, the outside of a disc) hatched; all are outlined, with a legend; axes are
-    equal. `extent` = (re_min, re_max, im_min, im_max). Returns the matplotlib Axes.
+    Each bounded region is filled with a pale opaque colour, the larger regions under the
+    smaller ones (so each region shows its own colour, the one of its legend patch, where no
+    smaller region covers it); an unbounded one (e.g. implicit Euler's, the outside of a disc)
+    is hatched beneath them; all are outlined on top, with a legend; axes are equal. A stable
+    set with no area (`segments`: symplectic Euler's and Verlet's segment [−2i, 2i] of the
+    imaginary axis) is drawn as a thick line along the axis, labelled with the segment.
+    `extent` = (re_min, re_max, im_min, im_max). Returns the matplotlib Axes.
     """
     import matplotlib.pyplot as plt
     from matplotlib.colors import to_rgba
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     if ax is None:
@@ -121,25 +178,41 @@ def plot_regions(
     z = re[None, :] + 1j * im[:, None]
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     handles = []
+    fills = []  # (area, method index, magnitude, colour) of the bounded regions
+    thin = 0
     for k, m in enumerate(methods):
         color = colors[k % len(colors)]
         mag = np.abs(amplification(m, z))
         stable = mag <= 1.0
+        lines = segments(m)
+        if lines:
+            # No area: |R| ≤ 1 only on a stretch of an axis, which no grid point hits. A thick
+            # line along it; the next thin set is drawn narrower on top, so both show.
+            width = max(7.0 - 2.5 * thin, 2.0)
+            thin += 1
+            for a, b in lines:
+                ax.plot([a.real, b.real], [a.imag, b.imag], color=color, lw=width, solid_capstyle="butt", zorder=4 + thin, gid=f"segment:{_name(m)}")
+            text = " and ".join(_segment_text(a, b) for a, b in lines)
+            handles.append(Line2D([], [], color=color, lw=width, label=f"{_name(m)}: only {text}"))
+            continue
         # A region that reaches the frame on every side (implicit Euler: the outside of a
-        # disc) is hatched rather than filled, so it does not tint the bounded regions.
+        # disc) is hatched beneath the filled regions, so it does not tint them.
         unbounded = stable[0, :].any() and stable[-1, :].any() and stable[:, 0].any() and stable[:, -1].any()
         if unbounded:
             faint = to_rgba(color, 0.4)
-            cs = ax.contourf(re, im, mag, levels=[0.0, 1.0], colors="none", hatches=["/"])
+            cs = ax.contourf(re, im, mag, levels=[0.0, 1.0], colors="none", hatches=["/"], zorder=0.5)
             cs.set_edgecolor(faint)
             cs.set_linewidth(0.0)
             handles.append(Patch(facecolor="none", edgecolor=faint, hatch="/", label=_name(m)))
         else:
-            ax.contourf(re, im, mag, levels=[0.0, 1.0], colors=[color], alpha=0.25)
-            handles.append(Patch(facecolor=color, edgecolor=color, alpha=0.5, label=_name(m)))
-        ax.contour(re, im, mag, levels=[1.0], colors=[color], linewidths=1.5)
-    ax.axhline(0.0, color="0.3", lw=0.6)
-    ax.axvline(0.0, color="0.3", lw=0.6)
+            fills.append((int(stable.sum()), k, mag, color))
+            handles.append(Patch(facecolor=_pale(color), edgecolor=color, label=_name(m)))
+        ax.contour(re, im, mag, levels=[1.0], colors=[color], linewidths=1.5, zorder=3)
+    # Opaque fills, the largest first: a region nested in another shows its own colour.
+    for rank, (_, _, mag, color) in enumerate(sorted(fills, key=lambda f: (-f[0], f[1]))):
+        ax.contourf(re, im, mag, levels=[0.0, 1.0], colors=[_pale(color)], zorder=1 + rank / max(len(fills), 1))
+    ax.axhline(0.0, color="0.3", lw=0.6, zorder=2.5)
+    ax.axvline(0.0, color="0.3", lw=0.6, zorder=2.5)
     ax.set_aspect("equal")
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])

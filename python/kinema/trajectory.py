@@ -429,9 +429,9 @@ class Trajectory:
         `mode="viewer"` (the default): the browser viewer (three.js, bundled; play/pause,
         scrub, speed, orbit camera, colouring). In a notebook, returns an IPython `HTML`
         object holding the self-contained page in an iframe (`options`: `title`,
-        `max_bytes`; `open_browser` and `port` are ignored there); elsewhere, serves it
-        on 127.0.0.1 (`kinema.viewer.serve`: `open_browser`, `port`, `title`,
-        `max_bytes`), opens the user's browser when there is one and returns the page's
+        `max_bytes`, `color_by`, `camera`; `open_browser` and `port` are ignored there);
+        elsewhere, serves it on 127.0.0.1 (`kinema.viewer.serve`: `open_browser`, `port`,
+        `title`, `max_bytes`, `color_by`, `camera`), opens the user's browser when there is one and returns the page's
         URL. The server runs on a daemon thread until the process ends.
 
         `mode="video"`: an H.264 MP4 rendered by `render` (`options` go to it:

@@ -313,7 +313,7 @@ class WorldCollisions:
         return model not in ("spring_dashpot", "hertz") or self._core.method == "verlet"
 
     def stage_times(self) -> dict[str, float]:
-        """Wall-clock seconds spent so far in each of the seed's four stages of a step:
+        """Wall-clock seconds spent so far in each of the lecture notes' four stages of a step:
         ``integrate`` (forces included; with spring–dashpot contacts, those too),
         ``detect``, ``respond`` and ``distribute`` (collisions of the impulse model); and with
         collisions on, the same collision time by the impulse model's own stages, in the

@@ -11,7 +11,9 @@
 // frames shown), idRange (the lowest and highest id shown), springCount, aliveBytes,
 // defaultRadius, note, colorBy (the colouring to open with: "speed", "id", "color", "none" or
 // null), noOwnColor (RGB bytes: what "color" draws a particle without its own colour in, the
-// renderer's NO_OWN_COLOR), and either base64 blobs
+// renderer's NO_OWN_COLOR), camera (the view to open with, a scene's [render] camera, or
+// null: {type: "3d", eye, target, up, fovDeg} or {type: "2d", view: [xmin, ymin, xmax,
+// ymax]}), and either base64 blobs
 // (positions, speed, radii: little-endian float32; springs: int32 column pairs; alive: per
 // frame aliveBytes bytes, bit i of byte j for particle 8 j + i, absent when every particle is
 // alive throughout; colors: RGBA bytes per particle, alpha 0 for none) or `source` naming a
@@ -28,7 +30,10 @@
 // frame shown (planes, boxes, spheres and meshes alike). 3D: a perspective camera looking from VIEW_DIRECTION, z up,
 // placed so that the extent and the colliders' corners fill the view at the canvas's aspect
 // ratio, its orbit kept above the floor (see keepAboveFloor); 2D: an orthographic camera on
-// the xy-plane, fitted likewise. Refitted on resize until the user moves the camera.
+// the xy-plane, fitted likewise. A scene's own camera (meta.camera) replaces the fitted view:
+// 3D the pinhole at eye looking at target with its up and vertical field of view, as kinema's
+// renderer draws it; 2D its rectangle fitted to the canvas, centred, aspect kept. Refitted on
+// resize until the user moves the camera.
 //
 // Colourings (the menu): "speed" and "id" through viridis with a legend of the real least and
 // greatest values shown, "color" each particle's own colour (noOwnColor where it has none;
@@ -653,6 +658,13 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
 
   const camera = dim === 2 ? new THREE.OrthographicCamera(-1, 1, 1, -1, extent * 1e-3, extent * 100) : new THREE.PerspectiveCamera(45, 1, extent * 1e-3, extent * 100);
   if (dim !== 2) camera.up.set(0, 0, 1); // kinema's worlds have z up (gravity along -z)
+  // The scene's own camera ([render] camera), when it has one: the view the page opens with.
+  // Its up and field of view are set before the orbit controls are made (they orbit about up).
+  const given = meta.camera ?? null;
+  if (given && given.type === "3d" && dim !== 2) {
+    camera.up.fromArray(given.up).normalize();
+    camera.fov = given.fovDeg;
+  }
   const controls = new OrbitControls(camera, renderer.domElement);
   if (dim === 2) {
     controls.enableRotate = false; // a plane seen from above; pan and zoom
@@ -664,9 +676,31 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   const clearance = FLOOR_CLEARANCE * extent;
   if (floor !== null) keepAboveFloor(controls, camera, floor, clearance);
 
-  // Place the camera so that everything framed is in view at the canvas's aspect ratio.
+  // Place the camera so that everything framed is in view at the canvas's aspect ratio, or
+  // where the scene's camera says.
   function fit(aspect) {
-    if (dim === 2) {
+    if (given && given.type === "2d" && dim === 2) {
+      // The rectangle fits the canvas, centred, aspect kept (as kinema's renderer draws it).
+      const [x0, y0, x1, y1] = given.view;
+      const half = Math.max((y1 - y0) / 2, (x1 - x0) / 2 / aspect, 1e-300);
+      Object.assign(camera, { left: -half * aspect, right: half * aspect, top: half, bottom: -half, zoom: 1 });
+      const cx = (x0 + x1) / 2;
+      const cy = (y0 + y1) / 2;
+      camera.position.set(cx, cy, ehi.z + extent);
+      camera.near = extent * 1e-3;
+      camera.far = ehi.z - elo.z + 3 * extent;
+      controls.target.set(cx, cy, centre.z);
+    } else if (given && given.type === "3d" && dim !== 2) {
+      camera.aspect = aspect;
+      const eye = vec(given.eye);
+      const target = vec(given.target);
+      let far = 0;
+      for (const p of framed) far = Math.max(far, p.distanceTo(eye));
+      camera.position.copy(eye);
+      camera.near = Math.max(eye.distanceTo(target), extent) * 1e-3;
+      camera.far = 10 * Math.max(far, extent);
+      controls.target.copy(target);
+    } else if (dim === 2) {
       let [x0, x1, y0, y1] = [Infinity, -Infinity, Infinity, -Infinity];
       for (const p of framed) {
         [x0, x1, y0, y1] = [Math.min(x0, p.x), Math.max(x1, p.x), Math.min(y0, p.y), Math.max(y1, p.y)];
@@ -851,7 +885,7 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
       state.stats.steps++;
       ui.scrub.value = String(k);
       const count = alive ? `${visible.toLocaleString()} of ${n.toLocaleString()}` : n.toLocaleString();
-      ui.info.textContent = `${count} particles · t = ${times[k].toFixed(3)} s · frame ${k + 1}/${frames}${infoSuffix}`;
+      ui.info.textContent = `${count} ${n === 1 ? "particle" : "particles"} · t = ${times[k].toFixed(3)} s · frame ${k + 1}/${frames}${infoSuffix}`;
     }
     state.frame = k;
     if (!keepTime) playbackTime = times[k];
@@ -954,8 +988,21 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
       colouring: { choice: colouring, mode: material.uniforms.uMode.value, options: Array.from(ui.colour.options, (o) => o.value), noOwnColor: noOwn.map((c) => Math.round(255 * c)) },
       // The orbit: polar angle from +z (rad) and its limit, the floor's height (null: none).
       camera: {
+        given: given ? given.type : null, // the scene's camera opened the view (null: fitted)
         position: camera.position.toArray(),
         target: controls.target.toArray(),
+        up: camera.up.toArray(),
+        fov: dim === 2 ? null : camera.fov,
+        // 2D: the xy rectangle seen (xmin, ymin, xmax, ymax); 3D: null
+        view:
+          dim === 2
+            ? [
+                camera.position.x + camera.left / camera.zoom,
+                camera.position.y + camera.bottom / camera.zoom,
+                camera.position.x + camera.right / camera.zoom,
+                camera.position.y + camera.top / camera.zoom,
+              ]
+            : null,
         polar: controls.getPolarAngle(),
         maxPolar: controls.maxPolarAngle,
         floor,

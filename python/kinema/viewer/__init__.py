@@ -4,7 +4,11 @@ up or closed box bottom), and the colour menu: ``speed`` and ``id`` (viridis, wi
 the least and greatest value shown), ``color`` (each particle's own, ``Trajectory.colors``:
 an emitter's ``color``; the renderer's ``NO_OWN_COLOR`` for a particle without one; offered
 when some particle has one) and ``none``. ``color_by=`` picks the colouring the page opens
-with (a scene's ``[render] color_by``); by default speed. The trajectory's colliders are
+with (a scene's ``[render] color_by``); by default speed. ``camera=`` (a scene's ``[render]
+camera``: a ``kinema.Camera3D``, eye, target, up and vertical field of view, or a
+``kinema.Camera2D``, the xy rectangle fitted centred) is the view the page opens with,
+instead of the one it fits to the scene; ``kinema view SCENE.toml`` passes the scene's. The
+page counts "1 particle", "N particles". The trajectory's colliders are
 drawn (planes as floor patches, boxes as their edges less the open faces', sphere obstacles;
 in 2D lines, rectangles and discs), its springs as lines, and only the particles alive at
 each frame (births and deaths).

@@ -272,17 +272,48 @@ def _id_range(ids: np.ndarray) -> list[int]:
 COLOR_BY = ("speed", "id", "color", "none")
 
 
-def pack(traj: Any, max_bytes: int, color_by: str | None = None) -> Packed:
+def camera_meta(camera: Any, dim: int) -> dict[str, Any] | None:
+    """The camera the page opens with, as the page reads it: ``None`` (the page fits its own
+    view to the scene), a ``kinema.Camera3D`` (3D: ``{"type": "3d", "eye", "target", "up",
+    "fovDeg"}``, a pinhole at eye looking at target, fovDeg the vertical field of view, as the
+    renderer draws it) or a ``kinema.Camera2D`` (2D: ``{"type": "2d", "view": [xmin, ymin,
+    xmax, ymax]}``, the rectangle fitted to the canvas, centred, aspect kept): a scene's
+    ``[render] camera``. A camera of the other dimension than the trajectory's is refused."""
+    from ..render import Camera2D, Camera3D
+
+    if camera is None:
+        return None
+    if isinstance(camera, Camera3D):
+        if dim == 2:
+            raise ValueError(f"camera = {camera!r} is invalid: a 2D trajectory is viewed by a kinema.Camera2D (its xy rectangle)")
+        out = {"type": "3d", **{k: [float(x) for x in v] for k, v in camera._kwargs().items() if k != "fov_deg"}, "fovDeg": float(camera.fov_deg)}
+    elif isinstance(camera, Camera2D):
+        if dim != 2:
+            raise ValueError(f"camera = {camera!r} is invalid: a 3D trajectory is viewed by a kinema.Camera3D (eye, target, up, fov_deg)")
+        out = {"type": "2d", "view": [float(x) for x in camera._kwargs()["view"]]}
+    else:
+        raise TypeError(f"camera = {camera!r} is invalid: give a kinema.Camera3D (3D), a kinema.Camera2D (2D) or None (the page fits its own view)")
+    values = [x for k, v in out.items() if k != "type" for x in (v if isinstance(v, list) else [v])]
+    if not all(math.isfinite(x) for x in values):
+        raise ValueError(f"camera = {camera!r} is invalid: its values must be finite")
+    return out
+
+
+def pack(traj: Any, max_bytes: int, color_by: str | None = None, camera: Any = None) -> Packed:
     """The frames of ``traj`` as a page shows them, left out by strides if they are over
     ``max_bytes`` (a ``ViewerWarning`` says so, and the page shows a note). ``color_by`` (one
     of ``COLOR_BY``, as a scene's ``[render] color_by``) is the colouring the page opens
-    with; None: speed (id when the speeds are unknown)."""
+    with; None: speed (id when the speeds are unknown). ``camera`` (a scene's ``[render]
+    camera``: ``kinema.Camera3D`` or ``kinema.Camera2D``) is the view it opens with; None:
+    its own, fitted to the scene (see ``camera_meta``)."""
     if color_by is not None and color_by not in COLOR_BY:
         raise ValueError(f"color_by = {color_by!r} is invalid: use one of {', '.join(COLOR_BY)}")
     positions = np.asarray(traj.positions, dtype=np.float64)
     if positions.ndim != 3 or positions.shape[2] != 3 or positions.shape[0] == 0:
         raise ValueError(f"positions must be (frames, particles, 3) with at least one frame, got {positions.shape}")
     frames, particles, _ = positions.shape
+    dim = int(getattr(traj, "dim", 3) or 3)
+    opening_view = camera_meta(camera, dim)
     velocities = getattr(traj, "velocities", None)
     has_speed = velocities is not None and np.shape(velocities) == positions.shape
     per_particle = 4 * (3 + (1 if has_speed else 0))
@@ -347,7 +378,7 @@ def pack(traj: Any, max_bytes: int, color_by: str | None = None) -> Packed:
     meta = {
         "n": int(positions.shape[1]),
         "frames": int(positions.shape[0]),
-        "dim": int(getattr(traj, "dim", 3) or 3),
+        "dim": dim,
         "t": [float(x) for x in t],
         "bounds": {"min": [float(x) - pad for x in lo], "max": [float(x) + pad for x in hi]},
         # What the camera frames and the colliders are drawn within (open boxes up to it,
@@ -365,6 +396,8 @@ def pack(traj: Any, max_bytes: int, color_by: str | None = None) -> Packed:
         "colorBy": color_by,
         # What "color" draws a particle without its own colour in (the renderer's colour).
         "noOwnColor": list(NO_OWN_COLOR),
+        # The view the page opens with (a scene's [render] camera); None: fitted to the scene.
+        "camera": opening_view,
     }
     return Packed(meta, out_positions, speed, np.ascontiguousarray(radii, dtype="<f4"), springs, bits, _colors(traj, particles, ps))
 
@@ -390,10 +423,10 @@ def _b64(array: np.ndarray) -> str:
     return base64.b64encode(array.tobytes()).decode("ascii")
 
 
-def html_page(traj: Any, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYTES, color_by: str | None = None) -> str:
+def html_page(traj: Any, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYTES, color_by: str | None = None, camera: Any = None) -> str:
     """The self-contained page of ``traj`` as text (see :func:`write_html`)."""
     bundle()  # fail before any work when the script is not built
-    packed = pack(traj, max_bytes, color_by)
+    packed = pack(traj, max_bytes, color_by, camera)
     meta = dict(packed.meta, positions=_b64(packed.positions), radii=_b64(packed.radii))
     for name in ("speed", "springs", "alive", "colors"):
         array = getattr(packed, name)
@@ -401,14 +434,19 @@ def html_page(traj: Any, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYT
     return page(meta, title)
 
 
-def write_html(traj: Any, path: str | os.PathLike, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYTES, color_by: str | None = None) -> Path:
+def write_html(
+    traj: Any, path: str | os.PathLike, *, title: str = "kinema", max_bytes: int = HTML_MAX_BYTES, color_by: str | None = None, camera: Any = None
+) -> Path:
     """Write one self-contained HTML file that plays ``traj`` offline (the script and the
     frames inlined, the frames as base64 float32) and return its path. The file is written
     under a temporary name and renamed. Frames, then particles, are left out by strides when
     the frame data is over ``max_bytes`` (a ``ViewerWarning`` says so). ``color_by``: the
     colouring the page opens with, ``speed``, ``id``, ``color`` (each particle's own, as
-    ``[render] color_by = "color"``) or ``none``; None: speed."""
-    text = html_page(traj, title=title, max_bytes=max_bytes, color_by=color_by)
+    ``[render] color_by = "color"``) or ``none``; None: speed. ``camera``: the view the page
+    opens with, a scene's ``[render] camera`` (``kinema.Camera3D``: eye, target, up, vertical
+    field of view; ``kinema.Camera2D``: the xy rectangle, fitted centred); None: the page's
+    own view, fitted to the scene."""
+    text = html_page(traj, title=title, max_bytes=max_bytes, color_by=color_by, camera=camera)
     path = Path(path)
     with atomic_file(path) as tmp:
         tmp.write_text(text, encoding="utf-8")

@@ -465,6 +465,7 @@ def serve(
     announce: bool = True,
     idle_timeout: float = IDLE_TIMEOUT_S,
     color_by: str | None = None,
+    camera: Any = None,
 ) -> tuple[str, ViewerServer]:
     """Serve the viewer for ``traj`` on 127.0.0.1 (``port`` 0: a free one) from a daemon
     thread; print the URL (unless ``announce`` is False) and open it in the user's browser when ``open_browser`` and a
@@ -474,9 +475,10 @@ def serve(
     is over ``max_bytes`` (a ``ViewerWarning`` says so). That one thread serves all clients;
     a connection is closed when it has not sent its request ``idle_timeout`` s after it was
     accepted, or has taken none of its answer for that long (see ``IDLE_TIMEOUT_S``).
-    ``color_by``: the colouring the page opens with (as :func:`kinema.viewer.write_html`)."""
+    ``color_by`` and ``camera``: the colouring and the view the page opens with (as
+    :func:`kinema.viewer.write_html`)."""
     bundle()  # fail before any work when the script is not built
-    packed = pack(traj, max_bytes, color_by)
+    packed = pack(traj, max_bytes, color_by, camera)
     data, layout = _binary(packed)
     html = page(dict(packed.meta, source="data.bin", layout=layout), title).encode("utf-8")
     routes = {"/": ("text/html; charset=utf-8", html), "/index.html": ("text/html; charset=utf-8", html), "/data.bin": ("application/octet-stream", data)}
