@@ -446,8 +446,8 @@ def edit_scene(old, new):
     return damage
 
 
-ROOT_ATTRS = ("format", "version", "scene", "time", "steps", "next_id", "warned", "advised_at", "emitters", "collision_stats")
-RUN_ATTRS = ("frames_done", "frames_total", "per_frame", "every", "fps", "potential", "about", "sets")
+ROOT_ATTRS = ("format", "version", "scene", "time", "steps", "clock_steps", "clock_time", "next_id", "warned", "advised_at", "emitters", "collision_stats")
+RUN_ATTRS = ("frames_done", "frames_total", "per_frame", "every", "fps", "t0", "duration", "potential", "about", "sets")
 DATASETS = (
     "ids",
     "death",
@@ -483,7 +483,7 @@ OPTIONAL = (
     "integrator_carry",
     *(f"collision_carry/{d}" for d in ("carried", "list_built_at", "list_skin")),
 )
-NUMERIC_ATTRS = ("version", "time", "steps", "next_id", "advised_at", *(f"run/{a}" for a in RUN_ATTRS[:5]))
+NUMERIC_ATTRS = ("version", "time", "steps", "clock_steps", "clock_time", "next_id", "advised_at", *(f"run/{a}" for a in RUN_ATTRS[:7]))
 JSON_ATTRS = ("emitters", "collision_stats", "run/potential", "run/about", "run/sets")
 NUMERIC_DATASETS = tuple(d for d in (*DATASETS, "integrator_carry") if d != "collision_carry/collider")
 
@@ -507,7 +507,7 @@ CASES = [
     # the wrong type: text for numbers, numbers for text, bools for numbers and numbers for bools
     *((f"{a} text", set_attr(a, "x"), f"'{a}'") for a in NUMERIC_ATTRS),
     *((f"{a} bool", set_attr(a, True), f"'{a}'") for a in NUMERIC_ATTRS),
-    *((f"{a} float", set_attr(a, 2.5), f"'{a}'") for a in NUMERIC_ATTRS if a not in ("time", "run/fps")),
+    *((f"{a} float", set_attr(a, 2.5), f"'{a}'") for a in NUMERIC_ATTRS if a not in ("time", "clock_time", "run/fps", "run/t0", "run/duration")),
     *((f"{a} a number", set_attr(a, 1.5), f"'{a}'") for a in ("scene", *JSON_ATTRS)),
     *((f"{a} array", set_attr(a, np.array([1, 2])), f"'{a}'") for a in ("steps", "time", "run/per_frame")),
     ("warned a number", set_attr("warned", 1), "'warned'"),
@@ -628,7 +628,9 @@ CASES = [
     ("scene not TOML", set_attr("scene", "[[[ nonsense"), "'scene'"),
     ("scene dt negative", edit_scene("dt = 0.0005", "dt = -1.0"), "'scene'"),
     ("scene unknown key", edit_scene("[world]", "[world]\nwarp = 9"), "'scene'"),
-    ("scene another dt", edit_scene("dt = 0.0005", "dt = 0.001"), "'time'"),
+    ("scene another dt", edit_scene("dt = 0.0005", "dt = 0.001"), "'run/per_frame'"),
+    ("clock_time a bit later", lambda f: f.attrs.__setitem__("clock_time", f.attrs["clock_time"] + 1e-9), "'time'"),
+    ("run/duration another", lambda f: f["run"].attrs.__setitem__("duration", f["run"].attrs["duration"] * 2), "'run/frames_total'"),
     (
         "scene a billion particles",
         set_attr("scene", Scene.from_dict({"particles": [{"type": "random", "count": 10**9, "lo": [0, 0, 0], "hi": [1, 1, 1]}]}).to_toml_string()),
@@ -837,6 +839,7 @@ def test_kinema_run_resume_refuses_absurd_remaining_work_before_running(pristine
     scene_file, out = _resumable(pristine, tmp_path)
     with h5py.File(out / "checkpoint.ckpt", "r+") as f:
         f["run"].attrs["frames_total"] = 10**10
+        f["run"].attrs["duration"] = 10**10 / f["run"].attrs["fps"]
     start = time.monotonic()
     res = CliRunner().invoke(app, ["run", str(scene_file), "--no-video", "--resume", "-o", str(out)])
     assert res.exit_code == 2, res.output
@@ -869,6 +872,7 @@ def test_resume_run_refuses_absurd_remaining_work_as_world_run_does(pristine, tm
     shutil.copy(pristine, path)
     with h5py.File(path, "r+") as f:
         f["run"].attrs["frames_total"] = 10**10  # 4e11 steps more: valid, but years of work
+        f["run"].attrs["duration"] = 10**10 / f["run"].attrs["fps"]
     start = time.monotonic()
     with pytest.raises(ValueError, match=r"the rest of the run would take .* over max_work = 1\.0e\+11; give max_work=None"):
         kinema.resume_run(path)

@@ -282,14 +282,15 @@ def test_a_run_over_the_limits_is_refused_before_any_work(tmp_path, monkeypatch)
     # a billion particles: refused at once
     path = small_scene(tmp_path, HUGE, name="huge.toml")
     line = one_error_line(runner.invoke(app, ["run", str(path), "-o", str(tmp_path / "o")]))
-    assert line.startswith(f"error: {path}: the run would take 9.9e+11 particle-steps (1,000,000,000 particles × 986 steps: ")
+    # (1 s at 60 fps: 60 frames of ⌈1/(60 · 1 ms)⌉ = 17 steps)
+    assert line.startswith(f"error: {path}: the run would take 1.0e+12 particle-steps (1,000,000,000 particles × 1,020 steps: ")
     assert "world.duration = 1 s at world.dt = 0.001 s; particles[0].count = 1000000000" in line
     assert "over the limits of 1e+11 particle-steps, 1e+11 pixels and 8.0 GiB of memory; give --force to run it anyway" in line
     assert "TiB of memory" in line
     # ten particles for a billion seconds
     path = small_scene(tmp_path, HUGE.replace("count = 1000000000", "count = 10").replace("duration = 1.0", "duration = 1e9"), name="long.toml")
     line = one_error_line(runner.invoke(app, ["run", str(path), "-o", str(tmp_path / "o"), "--no-video"]))
-    assert "1.0e+13 particle-steps (10 particles × 999,999,999,987 steps: world.duration = 1e+09 s at world.dt = 0.001 s" in line
+    assert "1.0e+13 particle-steps (10 particles × 1,020,000,000,000 steps: world.duration = 1e+09 s at world.dt = 0.001 s" in line
     # --duration names itself; more steps than can be counted are refused even with --force
     line = one_error_line(runner.invoke(app, ["run", str(small_scene(tmp_path)), "--duration", "1e300", "--force", "-o", str(tmp_path / "o")]))
     assert "the run would take 1.0e+302 steps (--duration = 1e+300 s at world.dt = 0.01 s), more than can be counted (1e+18), even with --force" in line

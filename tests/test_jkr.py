@@ -72,9 +72,7 @@ def jkr_world(gamma, dt=1e-6, restitution=0.1, gravity=(0, 0, -G), **collisions)
     w = kinema.World(dt=dt)
     if gravity is not None:
         w.add(kinema.Gravity(list(gravity)))
-    w.set_collisions(
-        model="hertz", youngs_modulus=E, poisson_ratio=NU, restitution=restitution, cohesion="jkr", surface_energy=gamma, **collisions
-    )
+    w.set_collisions(model="hertz", youngs_modulus=E, poisson_ratio=NU, restitution=restitution, cohesion="jkr", surface_energy=gamma, **collisions)
     return w
 
 

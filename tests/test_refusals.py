@@ -92,14 +92,14 @@ def test_run_over_its_work_limit_is_refused_before_any_step_and_max_work_lifts_i
     w.add_particles(position=np.arange(30.0).reshape(10, 3))
     with pytest.raises(
         ValueError,
-        match=r"1\.0e\+13 particle-steps \(10 particles × 999,999,999,987 steps of dt = 0\.001 s for duration = 1e\+09 s\), over max_work = 1\.0e\+11",
+        match=r"1\.0e\+13 particle-steps \(10 particles × 1,020,000,000,000 steps of dt = 0\.001 s for duration = 1e\+09 s\), over max_work = 1\.0e\+11",
     ):
         w.run(1e9)
     assert w.time == 0.0
     with pytest.raises(ValueError, match="over max_work = 5.0e"):
-        w.run(1.0, max_work=5e3)  # 10 × 986 steps
-    assert len(w.run(1.0, max_work=1e4).t) == 59  # 58 frames of 17 steps after the first: 9,860 particle-steps
-    assert len(w.run(0.1, max_work=None).t) == 6
+        w.run(1.0, max_work=5e3)  # 10 × 1,020 steps
+    assert len(w.run(1.0, max_work=1.02e4).t) == 61  # 60 frames of 17 steps after the first: 10,200 particle-steps
+    assert len(w.run(0.1, max_work=None).t) == 7
     with pytest.raises(ValueError, match="max_work = -1 is invalid"):
         w.run(0.1, max_work=-1)
     with pytest.raises(TypeError, match="max_work = True is invalid"):

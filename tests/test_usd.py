@@ -459,8 +459,8 @@ def test_every_prim_a_render_shows_has_a_bound_preview_surface(tmp_path):
 @pytest.mark.parametrize(
     ("dt", "fps", "stored", "rate"),
     [
-        (1e-3, 30, True, 30.0),  # every 33 steps: 30.30 a second; the 30 asked
-        (1e-3, 60, True, 60.0),  # every 17 steps: 58.82 a second
+        (1e-3, 30, True, 30.0),  # frame k at k/30 s: the 30 asked
+        (1e-3, 60, True, 60.0),  # frame k at k/60 s
         (1e-3, 30, False, 30.0),  # no fps kept (another program's file): the common rate within 2 %
         (0.01, 25, True, 25.0),  # every 4 steps: 1 / 0.04 = 24.999999999999996 from the times
         (1e-3, 40, False, 40.0),  # every 25 steps; no common rate near: the recording's, 40 exactly

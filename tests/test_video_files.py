@@ -210,7 +210,7 @@ def test_kinema_run_writes_the_scene_fps_and_says_so(tmp_path):
     from typer.testing import CliRunner
 
     scene = tmp_path / "s.toml"
-    # dt = 0.01 s and fps = 30 record every 3 steps, 33.3 frames a second.
+    # dt = 0.01 s and fps = 30: frame k at k/30 s (4 steps of 8.3 ms a frame).
     scene.write_text(
         '[world]\ndim = 2\ndt = 0.01\nduration = 3.0\nfps = 30.0\n\n[[particles]]\ntype = "list"\npositions = [[0, 1]]\nradius = 0.1\n\n'
         "[render]\nwidth = 64\nheight = 48\n\n[output]\ntrajectory = false\nplot = false\n"
@@ -225,7 +225,7 @@ def test_kinema_run_writes_the_scene_fps_and_says_so(tmp_path):
     res = CliRunner().invoke(app, ["run", str(scene), "-o", str(tmp_path / "slow")])
     assert res.exit_code == 0, res.output
     assert "video: 10 fps, one video frame per recorded frame" in res.output
-    assert mp4_timing(tmp_path / "slow" / "s.mp4") == (10, 101)
+    assert mp4_timing(tmp_path / "slow" / "s.mp4") == (10, 91)
 
 
 def _scene(tmp_path, fps=30.0, dt=1e-3, duration=1.0) -> Path:
@@ -246,17 +246,17 @@ def _run_and_save(tmp_path, **scene) -> Path:
 
 
 def test_kinema_render_of_a_saved_run_plays_at_the_scene_fps(tmp_path):
-    # fps = 30 and dt = 1 ms record every 33 steps, 30.30 frames a second; the file says the
-    # scene's 30 (/parameters/kinema fps), and the video is 30 fps in real time (it was
-    # 1000/33 = 30.30 fps, one video frame per recorded frame).
+    # fps = 30 and dt = 1 ms record frame k at k/30 s; the file says the scene's 30
+    # (/parameters/kinema fps), and the video is 30 fps in real time (it was 1000/33 = 30.30
+    # fps when frames came every 33 steps).
     from typer.testing import CliRunner
 
     saved = _run_and_save(tmp_path)
     traj = kinema.Trajectory.load(saved)
-    assert traj.fps == 30.0 and traj.t.size == 31 and traj.t[1] == pytest.approx(0.033)
+    assert traj.fps == 30.0 and traj.t.size == 31 and traj.t[1] == 1 / 30
     res = CliRunner().invoke(app, ["render", str(saved), "-o", str(tmp_path / "v.mp4"), "--width", "64", "--height", "48"])
     assert res.exit_code == 0, res.output
-    assert "video: 30 fps, real time, 30.3 recorded frames a second placed by their times" in res.output
+    assert "video: 30 fps, real time, 30 recorded frames a second placed by their times" in res.output
     path = tmp_path / "v.mp4"
     assert mp4_timing(path) == (30, round(traj.t[-1] * 30) + 1)  # 0.99 s at 30 fps, both ends
     assert imageio_ffmpeg.read_frames(str(path)).__next__()["fps"] == 30.0
@@ -288,14 +288,14 @@ def test_a_trajectory_without_fps_plays_at_the_common_rate_within_2_percent(tmp_
 
 
 def test_a_trajectory_far_from_the_common_rates_is_written_at_its_own_rate_exactly(tmp_path):
-    # Every 45 ms, 22.2 frames a second: 7.4 % from 24, so the recording's own rate, 200/9.
+    # Every 1/22.2 s: 7.5 % from 24, so the recording's own rate, 22.2 = 111/5.
     w = kinema.World(dt=1e-3, dim=2)
     w.add_particles([[0.0, 0.0, 0.0]], radius=0.1)
     traj = w.run(0.5, fps=22.2)
-    assert traj.t[1] == pytest.approx(0.045)
+    assert traj.t[1] == 1 / 22.2
     traj.fps = None
     path = _render_video(traj, tmp_path / "own.mp4", {"width": W, "height": H}, None, "rendering")
-    assert mp4_timing(path) == (Fraction(200, 9), traj.t.size)
+    assert mp4_timing(path) == (Fraction(111, 5), traj.t.size)
 
 
 @pytest.mark.parametrize(("mask", "mode"), [(0o022, 0o644), (0o027, 0o640)], ids=["umask022", "umask027"])
@@ -374,12 +374,12 @@ def test_gif_with_times_plays_in_real_time_at_its_rate(tmp_path):
 
 
 def test_trajectory_gif_plays_in_real_time(tmp_path):
-    # Recorded every 33 ms (30.30 a second), written at 100/3 (3/100 s a frame): placed by their
-    # times, 1.98 s make 67 GIF frames, 2.01 s with the last one (not 61 frames, 1.83 s).
+    # Recorded at k/30 s, written at 100/3 (3/100 s a frame): placed by their times, 1.98 s
+    # make 67 GIF frames, 2.01 s with the last one (not 60 frames, 1.8 s).
     w = kinema.World(dt=1e-3, dim=2)
     w.add_particles([[0.0, 0.0, 0.0]], velocity=[[1.0, 0.0, 0.0]], radius=0.1)
     traj = w.run(1.98, fps=30)
-    assert traj.t.size == 61
+    assert traj.t.size == 60
     path = traj.render(tmp_path / "t.gif", width=W, height=H)
     delays = gif_delays_ms(path)
     assert sum(delays) == 67 * 30 and set(delays) == {30, 60}  # Pillow merges a repeated frame into one of 60 ms

@@ -52,11 +52,12 @@ import numpy as np
 from . import _checks
 from ._checks import _dtype_words, _type_words, describe
 from .contact_record import FIELDS, ContactRecord, offsets_problem
+from .frames import plan as frames_plan
 from .io._files import TrajectoryFileError
 from .world import MAX_WORK
 
 FORMAT = "kinema-checkpoint"
-VERSION = 1
+VERSION = 2  # 2: the clock's anchor and the run's t0 and duration (frames at exact times)
 
 
 def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> Path:
@@ -83,6 +84,13 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
         f.attrs["scene"] = scene.to_toml_string()
         f.attrs["time"] = core.time
         f.attrs["steps"] = core.steps
+        # the clock's anchor: the time after k steps is clock_time + (k − clock_steps)·dt
+        # (frames at exact times move it: kinema.frames)
+        k0, t0, _, landing = core.clock
+        if landing is not None:
+            raise ValueError("a checkpoint between the steps of a frame cannot be written: write it at a frame (World.run's checkpoint=)")
+        f.attrs["clock_steps"] = k0
+        f.attrs["clock_time"] = t0
         f.attrs["next_id"] = core.next_id
         f.attrs["warned"] = world._warned
         f.attrs["advised_at"] = world._advised_at
@@ -171,7 +179,8 @@ def _write_run(g: Any, run: dict) -> None:
     rec = run["recorder"]
     for key in ("frames_done", "frames_total", "per_frame", "every"):
         g.attrs[key] = int(run[key])
-    g.attrs["fps"] = float(run["fps"])
+    for key in ("fps", "t0", "duration"):
+        g.attrs[key] = float(run[key])
     t, x, v, ke, pot, p, ang, contacts, balance, lost, ids, impacts, virial, kinetic = (list(c) for c in zip(*rec.frames, strict=True))
     counts = np.array([len(i) for i in ids], dtype=np.int64)
     for name, data in (
@@ -282,6 +291,7 @@ class _Reader:
     def __init__(self, path: Path, f: Any) -> None:
         self.path, self.f = path, f
         self.field = "the file"
+        self.version = VERSION
         self._available: int | None = -1
 
     # -- messages
@@ -510,6 +520,7 @@ def _reading(path: Path) -> Iterator[_Reader]:
             version = r.int_attr("version", 1, _INT64_MAX, f"a checkpoint version from 1 to {VERSION}")
             if version > VERSION:
                 raise CheckpointError(f"{path}: attribute 'version' = {version}: checkpoint version {version} is newer than this kinema reads ({VERSION})")
+            r.version = version
             yield r
     except CheckpointError:
         raise
@@ -538,10 +549,16 @@ def _scene_and_clock(r: _Reader, read_ids: bool = True) -> dict:
     dt = scene.world.dt
     steps = r.int_attr("steps", 0, _TIME_STEPS, "the steps taken: an integer from 0 to 2**53")
     time = r.real_attr("time", lambda t: math.isfinite(t) and t >= 0, "the time: a finite number of seconds >= 0")
-    if time != float(steps) * dt:
+    # the clock's anchor (checkpoints before frames at exact times: 0 steps at 0 s)
+    k0, t0 = 0, 0.0  # (version 1: a clock from 0)
+    if r.version >= 2:
+        k0 = r.int_attr("clock_steps", 0, steps, f"the steps at the clock's anchor: an integer from 0 to attribute 'steps' = {steps}")
+        t0 = r.real_attr("clock_time", math.isfinite, "the time at the clock's anchor: a finite number of seconds")
+    if time != t0 + float(steps - k0) * dt:
         raise r.fail(
             "attribute 'time'",
-            f"= {describe(time)} is invalid: it must be the time after attribute 'steps' = {steps} steps of dt = {dt:g} s ({describe(float(steps) * dt)} s)",
+            f"= {describe(time)} is invalid: it must be the time after attribute 'steps' = {steps} steps of dt = {dt:g} s from "
+            f"{k0} steps at {describe(t0)} s (attributes 'clock_steps', 'clock_time'): {describe(t0 + float(steps - k0) * dt)} s",
         )
     next_id = r.int_attr("next_id", 0, _INT64_MAX, "the id the next particle gets: an integer from 0 to 2**63 - 1")
     if read_ids:
@@ -552,7 +569,7 @@ def _scene_and_clock(r: _Reader, read_ids: bool = True) -> dict:
                 raise r.invalid(_at(field_ids, (k,)), ids[k], f"ids must increase strictly (ids[{k - 1}] = {ids[k - 1]})")
         if n and next_id <= ids[-1]:
             raise r.invalid("attribute 'next_id'", next_id, f"it must be above every id (the largest is {ids[-1]})")
-    return {"scene": scene, "ids": ids, "n": n, "steps": steps, "time": time, "next_id": next_id}
+    return {"scene": scene, "ids": ids, "n": n, "steps": steps, "time": time, "next_id": next_id, "clock": (k0, t0)}
 
 
 def _load_world(r: _Reader) -> Any:
@@ -569,6 +586,7 @@ def _load_world(r: _Reader) -> Any:
         raise r.fail("attribute 'scene'", f"cannot be built: {_first_line(e)}") from None
     core = world._core
     r.engine("dataset 'ids'", core.restore_clock_and_ids, time, c["steps"], ids.tolist(), next_id)
+    r.engine("attribute 'clock_steps'", core.restore_clock, *c["clock"])
     # what the Python world keeps per particle
     _, world._death = r.reals("death", (n,), lambda a: ~np.isnan(a), "one time of death per particle, s (inf: none), not NaN")
     _, world._colors = r.reals("colors", (n, 3), lambda a: np.isnan(a) | ((a >= 0) & (a <= 1)), "one colour per particle, r g b in [0, 1] (NaN: none)")
@@ -836,13 +854,27 @@ def _run_progress(r: _Reader, dt: float, steps: int) -> dict:
     steps_per_frame = 1.0 / fps / dt
     if not steps_per_frame < 2.0**63:
         raise r.invalid("attribute 'run/fps'", fps, f"one frame would take {steps_per_frame:.3g} steps of dt = {dt:g} s (at most 2**63)")
-    if per_frame != max(1, round(steps_per_frame)):
+    if r.version < 2:
+        raise CheckpointError(
+            f"{r.path}: a run in progress written by checkpoint version 1, before frames came at exact times: "
+            "load_checkpoint reads its world; run it again from there with World.run"
+        )
+    t0 = r.real_attr("t0", lambda v: math.isfinite(v) and v >= 0, "the time the run started: a finite number of seconds >= 0", "run")
+    duration = r.real_attr("duration", lambda v: math.isfinite(v) and v >= 0, "the run's duration: a finite number of seconds >= 0", "run")
+    plan = frames_plan(duration, dt, fps)
+    if per_frame != plan.per_frame:
         raise r.invalid(
             "attribute 'run/per_frame'",
             per_frame,
-            f"the run records a frame every round(1/(fps·dt)) = {max(1, round(steps_per_frame))} steps (run/fps = {fps:g}, dt = {dt:g} s)",
+            f"the run records a frame every ⌈1/(fps·dt)⌉ = {plan.per_frame} steps (run/fps = {fps:g}, dt = {dt:g} s)",
         )
-    end = steps + (total - done) * per_frame
+    if total != plan.frames:
+        raise r.invalid(
+            "attribute 'run/frames_total'",
+            total,
+            f"a run of run/duration = {describe(duration)} s at run/fps = {fps:g} records {plan.frames} frames after its first",
+        )
+    end = steps + (total - done) * per_frame + plan.tail
     if end > _TIME_STEPS:
         raise r.invalid(
             "attribute 'run/frames_total'",
@@ -850,7 +882,7 @@ def _run_progress(r: _Reader, dt: float, steps: int) -> dict:
             f"the run would end after {end:.3g} steps ({total - done} frames to go × {per_frame} steps from step {steps}), more than 2**53, "
             "where t = steps·dt no longer grows with every step",
         )
-    return {"frames_done": done, "frames_total": total, "per_frame": per_frame, "every": every, "fps": fps}
+    return {"frames_done": done, "frames_total": total, "per_frame": per_frame, "every": every, "fps": fps, "t0": t0, "duration": duration}
 
 
 def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
@@ -1118,8 +1150,9 @@ def resume_run(path: str | Path, callback: Any = None, *, max_work: float | None
     if limit is not None and not limit > 0:
         raise ValueError(f"max_work = {describe(max_work)} is invalid: it must be a number of particle-steps > 0, or None for no limit")
     world, run = load_run(path)
-    steps = (run["frames_total"] - run["frames_done"]) * run["per_frame"]
-    born = world._births_until(world.time + steps * world.dt)
+    plan = frames_plan(run["duration"], world.dt, run["fps"])
+    steps = (run["frames_total"] - run["frames_done"]) * run["per_frame"] + plan.tail
+    born = world._births_until(run["t0"] + run["duration"])
     work = float(len(world) + born) * steps
     if limit is not None and work > limit:
         whom = f"{len(world):,} particles" + (f" and up to {born:,} from the emitters" if born else "")
@@ -1140,7 +1173,7 @@ def run_plan(path: str | Path) -> dict:
         c = _scene_and_clock(r, read_ids=False)
         run = _run_progress(r, c["scene"].world.dt, c["steps"])
     scene, time = c["scene"], c["time"]
-    end = float(c["steps"] + (run["frames_total"] - run["frames_done"]) * run["per_frame"]) * scene.world.dt
+    end = run["t0"] + run["duration"]
     try:
         born: float = max(0, scene.emitted_count(end) - scene.emitted_count(time))
     except OverflowError:  # more births than a float counts (rate × time): work no limit allows

@@ -321,8 +321,7 @@ def render(
     LAMMPS dump or data; docs/files.md).
 
     Without --fps the video plays in real time: at the fps the scene asked for when the file
-    says it (an H5MD file of kinema run: 30, not the 30.30 frames a second that dt = 1 ms
-    records), else at the nearest of 24, 25, 30, 50 and 60 fps within 2 % of the recording's
+    says it (an H5MD file of kinema run: 30, at which it was recorded), else at the nearest of 24, 25, 30, 50 and 60 fps within 2 % of the recording's
     rate, else at that rate; frames are dropped or repeated to keep time. --fps F writes every
     recorded frame at exactly F (slow or fast motion).
 

@@ -21,6 +21,7 @@ import numpy as np
 from rich.console import Console
 from rich.markup import escape
 
+from .frames import plan as frames_plan
 from .world import MAX_WORK
 
 console = Console()
@@ -76,11 +77,10 @@ def _size(n: float) -> str:
 
 
 def _frames_and_steps(seconds: float, dt: float, fps: float) -> tuple[float, float]:
-    """Recorded frames after the first, and steps, as ``World.run`` takes them (floats: they
-    may be far too many to count)."""
-    per_frame = max(1, round(1.0 / (fps * dt)))
-    frames = float(np.floor(seconds / (per_frame * dt) + 1e-9))
-    return frames, frames * per_frame
+    """Recorded frames after the first, and steps, as ``World.run`` takes them
+    (``kinema.frames``; floats: they may be far too many to count)."""
+    p = frames_plan(seconds, dt, fps)
+    return float(p.frames), float(p.steps)
 
 
 def _over_limits(what: str, estimate: str, particle_steps: float, pixels: float, memory: float, force: bool) -> None:
@@ -209,9 +209,9 @@ def _render_video(
     ``fps``: one video frame per recorded frame at this rate. None: real time
     (``kinema.render.playback_rate``), the frames placed by their times
     (``write_video(times=)``), at the ``scene_fps`` the scene asked for or else the
-    trajectory's own ``fps`` (a file saved by ``kinema run`` says it): World.run records every
-    round(1/(fps·dt)) steps, 33 ms for 30 fps and dt = 1 ms, so one frame in about a hundred
-    is dropped to play 30.30 recorded frames a second at exactly 30. Without either, or when
+    trajectory's own ``fps`` (a file saved by ``kinema run`` says it): World.run records frame
+    k at k/fps exactly (an older kinema's every round(1/(fps·dt)) steps, 33 ms for 30 fps and
+    dt = 1 ms, plays with one frame in about a hundred dropped). Without either, or when
     the recording interval is not that rate's rounding (clamped to one step), at the common
     rate (24, 25, 30, 50, 60) within 2 % of the recording's, else at the recording's own rate
     (clamped to ``VIDEO_FPS``, and then not real time). The rate written
@@ -393,6 +393,9 @@ def simulate_scene(
             highlight=False,
             soft_wrap=True,
         )
+    note = frames_plan(seconds, world.dt, fps).note()
+    if note is not None:
+        console.print(f"note: {note}", highlight=False, soft_wrap=True)
     if checkpoint_every is not None and not (np.isfinite(checkpoint_every) and checkpoint_every > 0):
         raise ValueError(f"--checkpoint-every {checkpoint_every}: give a finite number of simulated seconds > 0")
     with warnings.catch_warnings(record=True) as caught:

@@ -106,9 +106,9 @@ class Trajectory:
 
     About the world (`None` when unknown): `masses` (N,) kg, `radii` (N,) m, `ids`
     (N,), `species` (N,) names (`World.add_particles(species=)`), `dim` (2 or 3), `dt` s, `method`, `periodic` (3 bools) and `box_edges`
-    (3,) m, the periodic cell. `fps`: the frames per second asked of `World.run` (a frame
-    is recorded every round(1/(fps·dt)) steps, so the frames may be a little more or less
-    than 1/fps s apart); saved in H5MD files, it is the default rate of a video of them. `colliders`: the world's colliders as plain descriptions, in
+    (3,) m, the periodic cell. `fps`: the frames per second asked of `World.run` (frame k
+    is at t₀ + k/fps exactly; `step`: the steps' length where dt does not divide a frame,
+    `kinema.frames`); saved in H5MD files, it is the default rate of a video of them. `colliders`: the world's colliders as plain descriptions, in
     the order added — {"type": "plane", "point": [3], "normal": [3]}, {"type": "box", "lo",
     "hi"} (2 or 3 values each, ±inf for an open face), {"type": "sphere", "center": [3],
     "radius"}, with "restitution" and "friction" where the collider sets them; m. Empty when
@@ -170,6 +170,9 @@ class Trajectory:
     dt: float | None = None
     method: str | None = None
     fps: float | None = None
+    # the length of the run's steps, s, where a frame of 1/fps is not whole steps of dt
+    # (``kinema.frames``: ⌈1/(fps·dt)⌉ steps of (1/fps)/⌈1/(fps·dt)⌉); None: dt
+    step: float | None = None
     periodic: tuple[bool, bool, bool] | None = None
     box_edges: np.ndarray | None = None
     colliders: list[dict[str, Any]] = field(default_factory=list)
@@ -195,6 +198,8 @@ class Trajectory:
             rows.append(("method", f"{self.method!r}"))
         if self.dt is not None:
             rows.append(("dt", f"{self.dt:g} s"))
+        if self.step is not None:
+            rows.append(("step", f"{float(self.step):.6g} s"))
         if frames:
             rows.append(("energy", f"{self.total[0]:.6g} J → {self.total[-1]:.6g} J"))
         if self.source is not None:
@@ -397,8 +402,8 @@ class Trajectory:
         `fps` (the rate asked of `World.run`, also read from an H5MD file kinema wrote),
         else the nearest of the common rates 24, 25, 30, 50 and 60 within 2 % of the
         recording's rate, else the recording's rate; the frames are placed by their times
-        (`write_video(times=)`: a recording every 33 ms, 30.30 a second, makes a 30 fps
-        video with one frame in about a hundred dropped, and a GIF, whose delays are whole
+        (`write_video(times=)`: a recording every 33 ms, 30.30 a second, as an older kinema
+        made them, makes a 30 fps video with one frame in about a hundred dropped, and a GIF, whose delays are whole
         1/100 s, still plays in real time; the rate written is `kinema.render.video_rate`).
         A number gives one video frame per recorded frame at that rate. The trajectory's
         `colliders` are drawn with the particles unless `draw_colliders` is False (or

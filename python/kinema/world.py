@@ -17,6 +17,7 @@ from . import _checks, _core, first_step
 from .colliders import Box, Collider
 from .emitter import KILL_VOLUMES, Emitter
 from .forces import Spring
+from .frames import plan as frames_plan
 from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
 from .world_collisions import WorldCollisions
@@ -598,11 +599,12 @@ class World(WorldCollisions):
     def _steps_before_births(self, most: int) -> int:
         """How many steps (1 to ``most``) the engine may take before the next step boundary at
         which some emitter has a particle due: each source's next birth time, as its own
-        ``due`` counts it at the boundaries t = s·dt (the engine's clock), or 1 while one holds
+        ``due`` counts it at the step boundaries (the engine's clock, ``_time_at``), or 1 while one holds
         back a particle whose place was taken."""
         if not self._emitters:
             return most
-        dt, now = self._core.dt, self._core.steps
+        now, t = self._core.steps, self._core.time
+        h = self._core.clock[2]
         k = most
         for source in self._emitters:
             if source.waiting is not None:
@@ -611,8 +613,8 @@ class World(WorldCollisions):
             born = c["start"] + source.emitted / c["rate"]  # the next particle's birth time
             if not born < c["end"] or not np.isfinite(born):
                 continue
-            s = max(now + 1, int(born / dt) - 1)
-            while s - now < k and source.due(float(s) * dt) <= source.emitted:
+            s = now + max(1, int((born - t) / h) - 1)
+            while s - now < k and source.due(self._time_at(s)) <= source.emitted:
                 s += 1
             k = min(k, s - now)
         return max(k, 1)
@@ -691,8 +693,11 @@ class World(WorldCollisions):
         max_work: float | None = MAX_WORK,
         record_contacts: bool = False,
     ) -> Trajectory:
-        """Simulate ``duration`` seconds from now, recording a frame every 1/fps s (rounded to
-        a whole number of steps), the current state included; ``callback(world)`` runs after
+        """Simulate ``duration`` seconds from now, recording a frame every 1/fps s, the current
+        state included: frame k at t₀ + k/fps exactly, each frame ⌈1/(fps·dt)⌉ equal steps of
+        at most dt (dt itself where it divides the frame; ``Trajectory.step`` says which:
+        ``kinema.frames``), and the world ends at t₀ + ``duration`` (a last part-frame
+        stepped, unrecorded, when the duration is no whole number of frames). ``callback(world)`` runs after
         each recorded frame. Returns the ``Trajectory``. In a world with spin each frame
         keeps the angular velocities (and the orientations, where the engine integrates them):
         ``Trajectory.angular_velocities`` and ``orientations``.
@@ -729,19 +734,19 @@ class World(WorldCollisions):
             raise ValueError(
                 f"fps = {_checks.describe(fps)} is invalid: one frame would take {steps_per_frame:.3g} steps of dt = {self.dt:g} s (at most 2**63)"
             )
-        per_frame = max(1, round(steps_per_frame))
-        frames = int(np.floor(duration / (per_frame * self.dt) + 1e-9))
-        every = 0 if every_s is None else max(1, round(every_s / (per_frame * self.dt)))
+        plan = frames_plan(duration, self.dt, fps)
+        frames = plan.frames
+        every = 0 if every_s is None else max(1, round(every_s * fps))
         limit = _checks.real("max_work", max_work, optional=True)
         if limit is not None and not limit > 0:
             raise ValueError(f"max_work = {_checks.describe(max_work)} is invalid: it must be a number of particle-steps > 0, or None for no limit")
-        born = self._births_until(self.time + frames * per_frame * self.dt)
+        born = self._births_until(self.time + duration)
         n = len(self) + born
-        work = float(n) * frames * per_frame
+        work = float(n) * plan.steps
         if limit is not None and work > limit:
             whom = f"{len(self):,} particles" + (f" and up to {born:,} from the emitters" if born else "")
             raise ValueError(
-                f"the run would take {work:.1e} particle-steps ({whom} × {frames * per_frame:,} steps of dt = {self.dt:g} s "
+                f"the run would take {work:.1e} particle-steps ({whom} × {plan.steps:,} steps of dt = {self.dt:g} s "
                 f"for duration = {duration:g} s), over max_work = {limit:.1e}; give max_work=None (or a larger number) to run it anyway"
             )
         record_contacts = _checks.boolean("record_contacts", record_contacts)
@@ -750,7 +755,16 @@ class World(WorldCollisions):
             self._advise(core)
         rec = Trajectory._recorder(frames + 1, contacts=record_contacts)
         rec.add(self)
-        run = {"frames_done": 0, "frames_total": frames, "per_frame": per_frame, "every": every, "fps": fps, "recorder": rec}
+        run = {
+            "frames_done": 0,
+            "frames_total": frames,
+            "per_frame": plan.per_frame,
+            "every": every,
+            "fps": fps,
+            "t0": self.time,
+            "duration": duration,
+            "recorder": rec,
+        }
         return self._record(run, callback, None if checkpoint is None else Path(checkpoint))
 
     def _births_until(self, t: float) -> int:
@@ -765,12 +779,14 @@ class World(WorldCollisions):
         from .checkpoint import save_checkpoint
 
         rec = run["recorder"]
+        plan = frames_plan(run["duration"], self.dt, run["fps"])
         while run["frames_done"] < run["frames_total"]:
             try:
                 if self._advice_due and self._changes_count():
                     with self._engine() as core:
                         self._advise(core)
-                self._advance(run["per_frame"])
+                # frame k + 1 at t0 + (k + 1)/fps exactly (kinema.frames)
+                self._land(plan.time(run["t0"], run["frames_done"] + 1), plan.per_frame)
             finally:
                 self._pull()
             rec.add(self)
@@ -780,9 +796,31 @@ class World(WorldCollisions):
                 self._push()
             if checkpoint is not None and run["frames_done"] % run["every"] == 0 and run["frames_done"] < run["frames_total"]:
                 save_checkpoint(self, checkpoint, _run=run)
+        if plan.tail:
+            # a duration of no whole number of frames: on to its end, unrecorded
+            try:
+                self._land(run["t0"] + run["duration"], plan.tail)
+            finally:
+                self._pull()
         traj = rec.finish()
         traj.fps = float(run["fps"])  # (saved with it: a video's default rate)
+        traj.step = None if plan.divides else plan.step
         return traj
+
+    def _land(self, t1: float, n: int) -> None:
+        """``n`` steps ending at time ``t1`` (s) exactly, each (t1 − t)/n long (the engine's
+        clock: ``World::land_at``)."""
+        with self._engine() as core:
+            core.land_at(t1, n)
+        self._advance(n)
+
+    def _time_at(self, k: int) -> float:
+        """The engine's time after ``k`` steps, s, as its clock computes it (the same
+        operations: ``crates/kinema/src/world/clock.rs``)."""
+        k0, t0, h, landing = self._core.clock
+        if landing is not None and k >= landing[0]:
+            return landing[1] + float(k - landing[0]) * self._core.dt
+        return t0 + float(k - k0) * h
 
     # -- stability --------------------------------------------------------------------------
     def stable_step(self, method: str | ButcherTableau | None = None) -> float | dict[str, float]:

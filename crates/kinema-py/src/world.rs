@@ -128,6 +128,23 @@ impl PyWorld {
         self.inner.restore_clock_and_ids(time, steps, &ids, next_id).map_err(to_py)
     }
 
+    /// A checkpoint's clock anchor (see `World::restore_clock`).
+    fn restore_clock(&mut self, k0: u64, t0: f64) -> PyResult<()> {
+        self.inner.restore_clock(k0, t0).map_err(to_py)
+    }
+
+    /// The clock: (k0 steps, t0 s, h s, landing (k1, t1) or None) (see `World::clock`).
+    #[getter]
+    fn clock(&self) -> (u64, f64, f64, Option<(u64, f64)>) {
+        let c = self.inner.clock();
+        (c.k0, c.t0, c.h, c.landing)
+    }
+
+    /// Plans the next `n` steps to end at `t1` s exactly (see `World::land_at`).
+    fn land_at(&mut self, t1: f64, n: u64) -> PyResult<()> {
+        self.inner.land_at(t1, n).map_err(to_py)
+    }
+
     /// A checkpoint's collision books (dicts as `collision_stats` gives them).
     fn restore_collision_stats(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
         self.inner.restore_order();

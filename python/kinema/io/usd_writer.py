@@ -26,8 +26,8 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     The stage: `upAxis` Z (kinema's gravity points along -z), `metersPerUnit` 1 (kinema
     is SI); frame k at time code k (k = 0 … F − 1: `startTimeCode` 0, `endTimeCode`
     F − 1), `timeCodesPerSecond` = `framesPerSecond` = the rate the frames were asked at
-    (`_frame_rate`: `traj.fps`, 30 for `World.run(fps=30)`, though at dt = 1 ms it records
-    every 33 ms; else a common rate within 2 % of the recording's, else 1 / the median
+    (`_frame_rate`: `traj.fps`, 30 for `World.run(fps=30)`, which records frame k at k/30 s;
+    else a common rate within 2 % of the recording's, else 1 / the median
     interval), so that a 3D application asking at whole frames, as Blender and Houdini
     do, gets each frame exactly (time codes t × rate, 1.0000000000000027, 2.0000000000000053,
     …, gave the previous frame in 172 of the fountain's 182 frames). The frames' own times (s,
@@ -498,8 +498,8 @@ def _frame_rate(t: np.ndarray, asked: Any = None) -> float:
     """Frames per second of the stage's time codes: the rate the frames were asked at
     where the trajectory says it (`Trajectory.fps`, `World.run(fps=)`, kept in kinema's
     H5MD) and the recording's rate, 1 / the median interval, is its rounding to whole steps
-    (`render.playback_rate`: 30 for `fps=30` at dt = 1 ms, which records every 33 steps,
-    30.30 a second); else the common rate (24, 25, 30, 50, 60) within 2 % of the recording's;
+    (`render.playback_rate`: 30 for `fps=30`; an older kinema recorded every 33 steps of
+    1 ms, 30.30 a second); else the common rate (24, 25, 30, 50, 60) within 2 % of the recording's;
     else the recording's. A rate within 1e-9 of a fraction of denominator up to 1001 is
     written as it (25, not 24.99999999999998; 30000/1001). 24 (USD's default) for a single
     frame without an asked rate."""

@@ -45,8 +45,8 @@ def write_video(
     times and are to play in real time. The video is written at the rate above and each of its
     frames shows the recorded frame nearest in time to it (from `times[0]`, every 1/rate s up
     to the last time): frames are repeated or dropped where the recording interval differs from
-    1/rate, and none are when it equals it (`World.run(fps=30)` with dt = 1 ms records every
-    33 ms, 30.30 a second: at 30 fps one frame in about a hundred is dropped). Without
+    1/rate, and none are when it equals it (`World.run(fps=30)` records frame k at k/30 s: none
+    dropped; a recording every 33 ms, 30.30 a second, loses one in about a hundred). Without
     `times`, each frame is one video frame at that rate (its playback speed is up to you).
 
     `.mp4`: H.264 (libx264, yuv420p, 4:2:0) by the ffmpeg that imageio-ffmpeg ships. The RGB
@@ -120,9 +120,9 @@ def playback_rate(times, fps=None, limits=None) -> tuple[float, bool, str]:
 
     - `fps`, the frames per second the recording was asked for (`Trajectory.fps`, from
       `World.run(fps=)` or an H5MD file kinema wrote), when the recording interval is
-      its rounding to whole steps (from 1/1.5 to 1/0.5 of it): `World.run(fps=30)` with
-      dt = 1 ms records every 33 steps, 30.30 frames a second, and the video is 30 fps with
-      one frame in about a hundred dropped.
+      its rounding to whole steps (from 1/1.5 to 1/0.5 of it): `World.run(fps=30)` records
+      frame k at k/30 s and the video is 30 fps (an older kinema's recording every 33 steps
+      of 1 ms, 30.30 frames a second, plays at 30 with one frame in about a hundred dropped).
     - Else the common rate (`COMMON_RATES`: 24, 25, 30, 50, 60) nearest the recording's
       rate, 1 / the median interval, when within 2 % of it (a file of another program,
       or of a kinema older than `fps` in its files).

@@ -32,8 +32,43 @@ impl World {
         self.restore_user_order();
         self.time = time;
         self.steps = steps;
+        // the clock of a world stepped by dt from 0 (`restore_clock` sets another)
+        self.clock = if time == steps as f64 * self.params.dt {
+            super::Clock::new(self.params.dt)
+        } else {
+            super::Clock {
+                k0: steps,
+                t0: time,
+                h: self.params.dt,
+                landing: None,
+            }
+        };
         self.particles.id.copy_from_slice(ids);
         self.particles.next_id = next_id;
+        Ok(())
+    }
+
+    /// Restores a checkpoint's clock (`clock.rs`): the anchor, `k0` steps at `t0` s, from
+    /// which the time after k steps is t0 + (k − k0)·dt, which must give the time restored
+    /// ([`World::restore_clock_and_ids`]) to the bit.
+    pub fn restore_clock(&mut self, k0: u64, t0: f64) -> Result<(), Error> {
+        let clock = super::Clock {
+            k0,
+            t0,
+            h: self.params.dt,
+            landing: None,
+        };
+        if k0 > self.steps || !t0.is_finite() || clock.time_after(self.steps, self.params.dt) != self.time {
+            return Err(Error::invalid(
+                "clock",
+                format!("({k0} steps, {t0} s)"),
+                format!(
+                    "the anchor of a clock at t = {} s after {} steps of dt = {} s: t0 + (steps − k0)·dt must be t",
+                    self.time, self.steps, self.params.dt
+                ),
+            ));
+        }
+        self.clock = clock;
         Ok(())
     }
 

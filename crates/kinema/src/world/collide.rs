@@ -18,6 +18,7 @@ impl World {
     pub(super) fn collide(&mut self) -> Result<(), Error> {
         let n = 3 * self.particles.len();
         let t_end = self.params_time_after(self.steps + 1);
+        let h = self.step_length();
         let Some(stage) = self.collide_stage.as_mut() else {
             return Ok(());
         };
@@ -28,7 +29,7 @@ impl World {
             // The spring–dashpot model acted in stage 1, as a force; what is left here is
             // keeping positions in the periodic cell (Verlet's drift wrapped them already,
             // before its force evaluation: a second pass would change nothing).
-            stage.book_contact_force(self.params.dt);
+            stage.book_contact_force(h);
             let wrapped = matches!(self.stepper, Some(WorldStepper::Verlet(_)));
             if let Some(p) = stage.domain.periodic_box().filter(|_| !wrapped) {
                 p.wrap_positions(&mut self.x_next);
@@ -59,7 +60,7 @@ impl World {
             });
         let frame = StepFrame {
             t0: self.time,
-            h: self.params.dt,
+            h,
             accel,
             steady,
             wrapped: steady && accel.is_some(),
@@ -374,7 +375,7 @@ impl World {
             return Ok(Vec::new());
         };
         if stage.params.model == ContactModel::Impulse {
-            return Ok(stage.impulse_reports(&self.particles.x, &self.particles.radius, self.params.dt));
+            return Ok(stage.impulse_reports(&self.particles.x, &self.particles.radius, self.last_step));
         }
         let p = &self.particles;
         let s = crate::forces::State {

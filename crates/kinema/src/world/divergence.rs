@@ -100,7 +100,7 @@ impl World {
             step: self.steps + 1,
             time: self.time,
             particle,
-            dt: self.params.dt,
+            dt: self.step_length(),
             reason,
             advised_dt,
             verlet_only,

@@ -6,7 +6,7 @@ use crate::error::Error;
 
 impl World {
     /// Advances by `n` steps' time with event-driven dynamics: every impact at its exact time,
-    /// by the stepped model's rule; then t = (steps + n)·dt. The forces must be uniform fields
+    /// by the stepped model's rule; then t is the clock's after steps + n (`clock.rs`). The forces must be uniform fields
     /// (gravity): the particles fly on straight lines or parabolas between impacts. Refused
     /// (naming why) otherwise. An interrupt leaves the world at the start.
     pub(super) fn advance_by_events(&mut self, n: u64) -> Result<(), Error> {
@@ -40,6 +40,7 @@ impl World {
         self.stepper = None;
         self.time = t1;
         self.steps += n;
+        self.clock.reached(self.steps, self.params.dt);
         Ok(())
     }
 }

@@ -125,7 +125,7 @@ impl World {
     /// parallel pass that also finds a non-finite value.
     fn verlet(&mut self) -> Result<(), Error> {
         let n = 3 * self.particles.len();
-        let (t, h) = (self.time, self.params.dt);
+        let (t, h) = (self.time, self.step_length());
         let Some(WorldStepper::Verlet(mut b)) = self.stepper.take() else {
             unreachable!("called for verlet only")
         };
@@ -343,7 +343,7 @@ impl World {
     /// vector): joined into `y`, stepped into `y_next`, split into `x_next`, `v_next`.
     fn integrate_joined(&mut self) -> Result<(), Error> {
         let n = 3 * self.particles.len();
-        let (t, h) = (self.time, self.params.dt);
+        let (t, h) = (self.time, self.step_length());
         let p = &self.particles;
         self.y.resize(2 * n, 0.0);
         self.y_next.resize(2 * n, 0.0);

@@ -20,6 +20,7 @@ mod advisor;
 mod carry;
 mod checkpoint;
 pub use checkpoint::{PairMemory, WallMemory};
+mod clock;
 mod collide;
 mod contents;
 mod deaths;
@@ -38,6 +39,7 @@ pub use crate::collide::stage::{
 };
 pub use crate::interrupt::Interrupt;
 pub use advisor::Rates;
+pub use clock::Clock;
 pub use deaths::KillVolume;
 pub use divergence::{RUNAWAY_CHECK_EVERY, RUNAWAY_FACTOR};
 pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
@@ -82,6 +84,10 @@ pub struct World {
     params: WorldParams,
     time: f64,
     steps: u64,
+    /// The time after each step and the next step's length (`clock.rs`).
+    clock: Clock,
+    /// The length of the last step taken, s (dt before the first).
+    last_step: f64,
     stats: Stats,
     stepper: Option<WorldStepper>,
     y: Vec<f64>,
@@ -145,12 +151,15 @@ impl World {
         if params.dim != 2 && params.dim != 3 {
             return Err(Error::invalid("dim", params.dim, "a world is 2D (the xy-plane) or 3D"));
         }
+        let dt = params.dt;
         Ok(Self {
             particles: Particles::default(),
             forces: Vec::new(),
             params,
             time: 0.0,
             steps: 0,
+            clock: Clock::new(dt),
+            last_step: dt,
             stats: Stats::default(),
             stepper: None,
             y: Vec::new(),
@@ -319,17 +328,36 @@ impl World {
         if let Some(model) = self.spring_dashpot() {
             model.accept_history();
         }
-        let h = self.params.dt;
+        let h = self.step_length();
         let p = &mut self.particles;
         crate::particles::turn_orientations(&mut p.orientation, &self.omega_before, &p.omega, h);
         self.time = self.params_time_after(self.steps + 1);
         self.steps += 1;
+        self.last_step = h;
+        self.clock.reached(self.steps, self.params.dt);
         Ok(())
     }
 
-    /// Time after `k` steps: t = k·dt, computed by multiplication so it does not drift.
+    /// Time after `k` steps: t = t₀ + (k − k₀)·h from the clock's anchor (`clock.rs`),
+    /// computed by multiplication so it does not drift.
     fn params_time_after(&self, k: u64) -> f64 {
-        k as f64 * self.params.dt
+        self.clock.time_after(k, self.params.dt)
+    }
+
+    /// The length of the next step, s: dt, or a planned frame's share (`clock.rs`).
+    pub(super) fn step_length(&self) -> f64 {
+        self.clock.step_after(self.steps, self.params.dt)
+    }
+
+    /// Plans the next `n` steps to end at time `t1` (s) exactly, each (t₁ − t)/n ≤ dt long;
+    /// then steps of dt again (`clock.rs`: how `World.run` lands on its frames).
+    pub fn land_at(&mut self, t1: f64, n: u64) -> Result<(), Error> {
+        self.clock.land(self.steps, self.time, t1, n, self.params.dt)
+    }
+
+    /// The clock (`clock.rs`), for a checkpoint.
+    pub fn clock(&self) -> Clock {
+        self.clock
     }
 
     /// Sets the check that may stop a step (`None`: none): asked at most every

@@ -28,6 +28,62 @@
 
 use std::f64::consts::PI;
 
+use crate::error::Error;
+
+/// Adhesion between touching bodies of Hertz's model, by the surface energy γ, J/m² (≥ 0;
+/// w = 2γ the work of adhesion), as LAMMPS GRANULAR's `dmt` and `jkr` normal models have it
+/// (`cohesion.rs` here).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Cohesion {
+    /// Derjaguin–Muller–Toporov (1975): Hertz's force less a constant pull F_po = 4π γ R*
+    /// (2π w R*) while the bodies overlap; the contact ends at δ = 0.
+    Dmt {
+        /// γ, J/m².
+        surface_energy: f64,
+    },
+    /// Johnson–Kendall–Roberts (1971): the contact radius a and the force from the overlap
+    /// by the JKR relations; a contact, once made, holds beyond δ = 0 until the pull reaches
+    /// F_po = 3π γ R* (3/2 π w R*), at δ = −(3π² γ² R* / (16 E*²))^(1/3).
+    Jkr {
+        /// γ, J/m².
+        surface_energy: f64,
+    },
+}
+
+impl Cohesion {
+    /// The names, as the binding and the scene files spell them.
+    pub const NAMES: [&'static str; 2] = ["dmt", "jkr"];
+
+    /// The model named `name` with surface energy γ (J/m²).
+    pub fn from_name(name: &str, surface_energy: f64) -> Result<Cohesion, Error> {
+        match name {
+            "dmt" => Ok(Cohesion::Dmt { surface_energy }),
+            "jkr" => Ok(Cohesion::Jkr { surface_energy }),
+            other => Err(Error::invalid(
+                "cohesion",
+                format!("'{other}'"),
+                "the cohesion model must be 'dmt' (Derjaguin–Muller–Toporov) or 'jkr' \
+                 (Johnson–Kendall–Roberts), with model='hertz', or None",
+            )),
+        }
+    }
+
+    /// Its name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Cohesion::Dmt { .. } => Self::NAMES[0],
+            Cohesion::Jkr { .. } => Self::NAMES[1],
+        }
+    }
+
+    /// γ, J/m².
+    pub fn surface_energy(&self) -> f64 {
+        match *self {
+            Cohesion::Dmt { surface_energy } | Cohesion::Jkr { surface_energy } => surface_energy,
+        }
+    }
+}
+
 /// The JKR contact of bodies with effective modulus E* (Pa) and surface energy γ (J/m²).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Jkr {
