@@ -135,13 +135,20 @@ class Mesh(Collider):
     `file`: a mesh file, OBJ (.obj), STL (.stl), PLY (.ply), glTF (.gltf, .glb) or USD
     (.usd, .usda, .usdc, .usdz; needs `pip install usd-core`), read by
     `kinema.io.mesh_files.read_mesh`: polygons cut into triangles, a file of several meshes
-    taken whole, vertices of equal coordinates made one. Its coordinates are metres (glTF's
-    +y is up by its specification, kinema's +z: `rotation=(90, 0, 0)` turns one into the
-    other). Or `vertices` (V, 3), m, and `faces` (F, 3), the indices of each triangle's
-    three vertices (integers, from 0).
+    taken whole, vertices of equal coordinates made one. Its coordinates are metres. Or
+    `vertices` (V, 3), m, and `faces` (F, 3), the indices of each triangle's three vertices
+    (integers, from 0).
+
+    `up_axis`: which way is up in the file (the arrays): "z" (kinema's own: gravity points
+    along −z) or "y" (Blender's OBJ export, Maya, Unity, three.js); a +y-up mesh is turned so
+    that its +y is +z, (x, y, z) → (x, −z, y) (+90° about x). OBJ, STL, PLY and arrays say
+    no axis: None means "z". glTF (+y up by its specification) and USD (its stage's
+    `upAxis`) say theirs and are always read by it; an `up_axis` that disagrees is refused.
+    `Mesh.up_axis` is the one read with. A +y-up file read as +z-up lies on its side: a
+    `MeshPlacementWarning` says so at the first step under gravity (`kinema.colliders`).
 
     The vertices are then scaled, rotated and translated, in that order, about the origin of
-    the file's (the arrays') coordinates: x' = R (s ⊙ x) + t, with
+    the file's (the arrays') coordinates, +z up: x' = R (s ⊙ x) + t, with
 
     - `scale` s: one factor or three (x, y, z), each finite and non-zero (a negative one
       mirrors);
@@ -169,7 +176,21 @@ class Mesh(Collider):
     area, a 2D world).
     """
 
-    __slots__ = ("_file", "_vertices", "_faces", "_scale", "_rotation", "_translation", "_inside", "_restitution", "_friction", "_motion", "_args", "_closed")
+    __slots__ = (
+        "_file",
+        "_vertices",
+        "_faces",
+        "_up_axis",
+        "_scale",
+        "_rotation",
+        "_translation",
+        "_inside",
+        "_restitution",
+        "_friction",
+        "_motion",
+        "_args",
+        "_closed",
+    )
 
     def __init__(
         self,
@@ -177,6 +198,7 @@ class Mesh(Collider):
         *,
         vertices: Any = None,
         faces: Any = None,
+        up_axis: str | None = None,
         scale: Any = 1.0,
         rotation: Any = (0.0, 0.0, 0.0),
         translation: Any = (0.0, 0.0, 0.0),
@@ -192,6 +214,9 @@ class Mesh(Collider):
             raise ValueError(f"file = {_checks.describe(_text(file))} and {given} are given: give either a file or vertices and faces, not both")
         if file is None and not arrays:
             raise ValueError("Mesh needs a file (Mesh('bowl.obj')) or vertices and faces (Mesh(vertices=V, faces=F)); neither is given")
+        from .io.mesh_files import check_up_axis, read_mesh_axis, y_up_to_z_up
+
+        up = check_up_axis(up_axis)
         s = _factors(scale)
         rot = _vec3("rotation", rotation)
         t = _vec3("translation", translation)
@@ -199,12 +224,10 @@ class Mesh(Collider):
             if not all(math.isfinite(c) for c in value):
                 raise ValueError(f"{name} = {_checks.describe(value)} is invalid: it must be 3 finite numbers ({'degrees' if name == 'rotation' else 'm'})")
         if file is not None:
-            from .io.mesh_files import read_mesh
-
             if not isinstance(file, (str, os.PathLike)):
                 raise TypeError(f"file = {_checks.describe(file)} is invalid: it must be a path (a str or a pathlib.Path), not {_checks._type_words(file)}")
             path = Path(file)
-            v, f = read_mesh(path, "file")
+            v, f, up = read_mesh_axis(path, "file", up)
         else:
             path = None
             if vertices is None or faces is None:
@@ -214,6 +237,9 @@ class Mesh(Collider):
             if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] == 0:
                 raise ValueError(f"vertices has shape {v.shape}; it must be (V, 3): x, y, z (m) of each vertex")
             f = _indices(faces)
+            up = up or "z"
+            if up == "y":
+                v = y_up_to_z_up(v)
         v = transformed(v, s, rot, t)
         v.flags.writeable = False
         f = np.ascontiguousarray(f, dtype=np.int64)
@@ -224,6 +250,7 @@ class Mesh(Collider):
             ("_file", path),
             ("_vertices", v),
             ("_faces", f),
+            ("_up_axis", up),
             ("_scale", tuple(s)),
             ("_rotation", tuple(rot)),
             ("_translation", tuple(t)),
@@ -253,6 +280,11 @@ class Mesh(Collider):
     def faces(self) -> np.ndarray:
         """(F, 3) int64: each triangle's three vertex indices (read-only)."""
         return self._faces
+
+    @property
+    def up_axis(self) -> str:
+        """The up axis the file (the arrays) was read with, "z" or "y" (turned to +z)."""
+        return self._up_axis
 
     @property
     def scale(self) -> tuple[float, float, float]:

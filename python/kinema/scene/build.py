@@ -267,7 +267,7 @@ def _collider(c: Any, dim: int) -> Any:
     if isinstance(c, BoxCollider):
         return Box(list(c.lo), list(c.hi), **s)
     if isinstance(c, MeshCollider):
-        shape = {"scale": c.scale, "rotation": c.rotation, "translation": c.translation, "inside": c.inside}
+        shape = {"up_axis": c.up_axis, "scale": c.scale, "rotation": c.rotation, "translation": c.translation, "inside": c.inside}
         if c.file is not None:
             return Mesh(c.file, **shape, **s)
         return Mesh(vertices=c.vertices, faces=c.faces, **shape, **s)

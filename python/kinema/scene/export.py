@@ -164,7 +164,13 @@ def to_scene(world: World) -> Scene:
             # its file and transform where it was read from one (the scene stays small), else
             # its vertices as the world has them (after the transform) and its faces
             if c.file is not None:
-                shape = {"file": os.path.abspath(c.file), "scale": list(c.scale), "rotation": list(c.rotation), "translation": list(c.translation)}
+                shape = {
+                    "file": os.path.abspath(c.file),
+                    "up_axis": c.up_axis,
+                    "scale": list(c.scale),
+                    "rotation": list(c.rotation),
+                    "translation": list(c.translation),
+                }
             else:
                 shape = {"vertices": c.vertices.tolist(), "faces": c.faces.tolist()}
             colliders.append({"type": "mesh", **shape, "inside": c.inside, **s})

@@ -500,14 +500,17 @@ class SphereCollider(_Surface):
 class MeshCollider(_Surface):
     """A triangle mesh (``kinema.Mesh``, 3D only): from ``file`` (OBJ, STL, PLY, glTF, USD; a
     path relative to the scene file) or from ``vertices`` (m) and ``faces`` (vertex indices)
-    written in the table; then scaled by ``scale`` (one factor or 3), rotated by ``rotation``
-    (degrees about the fixed x, then y, then z axis) and moved by ``translation`` (m).
+    written in the table, whose up axis is ``up_axis`` ("z", kinema's, or "y"; none: the
+    file's own for glTF and USD, else "z"); then scaled by ``scale`` (one factor or 3),
+    rotated by ``rotation`` (degrees about the fixed x, then y, then z axis) and moved by
+    ``translation`` (m).
     ``inside``: particles live inside this closed mesh (a container)."""
 
     type: Literal["mesh"] = "mesh"
     file: Annotated[str, Field(min_length=1)] | None = None
     vertices: Annotated[list[Vec3], Field(min_length=1)] | None = None
     faces: Annotated[list[Annotated[list[Annotated[int, Field(ge=0, le=2**32 - 1)]], Field(min_length=3, max_length=3)]], Field(min_length=1)] | None = None
+    up_axis: Literal["z", "y"] | None = None
     scale: _by_kind(float, Vec3) = 1.0
     rotation: Vec3 = [0.0, 0.0, 0.0]
     translation: Vec3 = [0.0, 0.0, 0.0]
