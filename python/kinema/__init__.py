@@ -7,7 +7,7 @@ The public API (everything else is private):
 - Stability on p' = λp: the module ``kinema.stability``
 - Particle worlds: ``World``, the forces ``Gravity``, ``Drag``, ``Spring``, ``Attractor``,
   ``Wind``, ``PythonForce``, the recorded ``Trajectory`` and ``SimulationDiverged``
-- Births and deaths: ``Emitter`` and the kill volumes ``KillBox``, ``KillSphere``,
+- Births and deaths: ``Emitter`` (``EmitterWarning``) and the kill volumes ``KillBox``, ``KillSphere``,
   ``KillPlane`` (added with ``World.add``), ``World.remove_particles``, ``World.ids``,
   ``Trajectory.alive``; the module ``kinema.emitter``
 - Collisions: the colliders ``Plane``, ``Box``, ``SphereObstacle``, ``Mesh`` (a triangle
@@ -48,7 +48,7 @@ from .checkpoint import resume_run
 from .colliders import Box, Keyframes, Mesh, Motion, Plane, SphereObstacle
 from .contact_time import ContactTimeWarning
 from .convergence import ConvergenceResult, convergence
-from .emitter import Emitter, KillBox, KillPlane, KillSphere
+from .emitter import Emitter, EmitterWarning, KillBox, KillPlane, KillSphere
 from .forces import Attractor, Drag, Gravity, PythonForce, Spring, Wind
 from .ode import (
     ButcherTableau,
@@ -78,6 +78,7 @@ __all__ = [
     "Camera3D",
     "Drag",
     "Emitter",
+    "EmitterWarning",
     "KillBox",
     "KillPlane",
     "KillSphere",

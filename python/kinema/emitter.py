@@ -30,6 +30,16 @@ import numpy as np
 from . import _checks
 
 SHAPES = ("point", "box", "disc", "sphere")
+BEHIND = 0.01  # an emitter whose births wait for room, more than this fraction of those due, is said at a run's end
+
+
+class EmitterWarning(UserWarning):
+    """An emitter did not keep its rate: births found no room at the source (a particle or a
+    collider in their place) and waited, and those still waiting at `end` were dropped. Once
+    per emitter as its `end` passes, and at the end of `World.run` for one still behind by more
+    than 1 % of the births due; the message gives the counts and the rate achieved."""
+
+
 BIRTHS_AT_ONCE = 10**8  # particles one emitter may add in one step (about 100 GB of world)
 REACH_LIMIT = 1e150  # m and m/s: an emitter's extent from the origin and its fastest speed (the contacts' GEOMETRY_LIMIT)
 
@@ -220,10 +230,18 @@ class _Source:
         self.emitter, self.c, self.dim = emitter, emitter._checked, dim
         streams = np.random.SeedSequence(self.c["seed"]).spawn(4)
         self.rng = {name: np.random.Generator(np.random.PCG64(s)) for name, s in zip(("position", "velocity", "size", "life"), streams, strict=True)}
-        self.emitted = 0
+        self.emitted = 0  # drawn from the streams: born, waiting or dropped
+        self.dropped = 0  # drawn, but found no room before `end` (never born)
+        self.told = False  # whether its EmitterWarning at `end` has been given
         # Particles drawn but held back because their place was taken (``hold_back``): each
-        # keeps what it was drawn with and is born where it was to be born once that is free.
+        # keeps what it was drawn with and is born where it was to be born once that is free,
+        # if that is before `end`.
         self.waiting: dict[str, np.ndarray] | None = None
+
+    @property
+    def born(self) -> int:
+        """The particles this emitter has added to the world."""
+        return self.emitted - self.dropped - (0 if self.waiting is None else len(self.waiting["m"]))
 
     def due(self, t: float) -> int:
         """How many particles have birth times <= t (and < end): k with start + k/rate <= t."""
@@ -238,8 +256,12 @@ class _Source:
 
     def births(self, t: float) -> dict[str, Any] | None:
         """The particles born up to time t not yet emitted, carried to t, after those held back
-        (born now at their spawn points); None if none."""
+        (born now at their spawn points); None if none. At t >= end those held back are
+        dropped instead: born now, they would be born after `end`."""
         waiting, self.waiting = self.waiting, None
+        if waiting is not None and not t < self.c["end"]:
+            self.dropped += len(waiting["m"])
+            waiting = None
         new = self._drawn(t)
         if waiting is not None:
             waiting = {**waiting, "x": waiting["spawn"].copy(), "born": np.full(len(waiting["m"]), t)}
@@ -247,11 +269,52 @@ class _Source:
             new = waiting if new is None else {key: np.concatenate([waiting[key], new[key]]) for key in new}
         return new
 
-    def hold_back(self, births: dict[str, Any], held: np.ndarray) -> None:
+    def hold_back(self, births: dict[str, Any], held: np.ndarray, t: float) -> None:
         """Keeps the particles `held` (a mask over `births`) for the next step: their place
-        is taken (an emitter never creates a particle inside another)."""
-        if held.any():
+        is taken (an emitter never creates a particle inside another). At a step boundary t
+        at or after `end` they are dropped: the next chance would be after `end`."""
+        if not held.any():
+            return
+        if t < self.c["end"]:
             self.waiting = {key: value[held] for key, value in births.items()}
+        else:
+            self.dropped += int(held.sum())
+
+    def finished(self, t: float) -> bool:
+        """Whether every particle this emitter will ever emit has been drawn and is born or
+        dropped (t at or after `end`, nothing waiting)."""
+        return not t < self.c["end"] and self.waiting is None and self.emitted >= self.due(t)
+
+    def stats(self, t: float) -> dict[str, Any]:
+        """Its promise and what it kept by time t (s): see `World.emitter_stats`."""
+        c = self.c
+        until = min(t, c["end"])
+        due = self.due(t)
+        span = until - c["start"]
+        born = self.born
+        return {
+            "rate": c["rate"],
+            "start": c["start"],
+            "until": until,
+            "due": due,
+            "born": born,
+            "waiting": 0 if self.waiting is None else len(self.waiting["m"]),
+            "dropped": self.dropped,
+            "achieved_rate": born / span if span > 0 else float("nan"),
+        }
+
+    def shortfall(self, k: int, t: float) -> str:
+        """The words of its `EmitterWarning` (emitter k, at time t)."""
+        st = self.stats(t)
+        head = (
+            f"emitter {k}: {st['born']:,} of {st['due']:,} particles born by t = {st['until']:g} s "
+            f"({st['achieved_rate']:.4g}/s of the {st['rate']:g}/s asked): no room at the source"
+        )
+        if st["dropped"]:
+            head += f"; {st['dropped']:,} found none before end = {self.c['end']:g} s and were dropped"
+        if st["waiting"]:
+            head += f"; {st['waiting']:,} wait for it"
+        return head + " (births wait while a particle or a collider takes their place: a larger source, a lower rate or a faster speed makes room)"
 
     def _drawn(self, t: float) -> dict[str, Any] | None:
         """The particles due by t not drawn yet, carried to t; None if none. More than

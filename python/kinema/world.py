@@ -15,7 +15,7 @@ import numpy as np
 
 from . import _checks, _core, first_step
 from .colliders import Box, Collider
-from .emitter import KILL_VOLUMES, Emitter
+from .emitter import BEHIND, KILL_VOLUMES, Emitter, EmitterWarning
 from .forces import Spring
 from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
@@ -654,13 +654,40 @@ class World(WorldCollisions):
             if b is None:
                 continue
             free = self._free_places(b["x"], b["r"])
-            source.hold_back(b, ~free)
-            if not free.any():
-                continue
-            b = {key: value[free] for key, value in b.items()}
-            c, k = source.c, len(b["m"])
-            e, mu = ([c[name]] * k if c[name] is not None else None for name in ("restitution", "friction"))
-            self._add(b["x"], b["v"], b["m"], b["r"], np.zeros(k, bool), e, mu, [c["species"] or ""] * k, b["death"], c["color"])
+            source.hold_back(b, ~free, t)
+            if free.any():
+                b = {key: value[free] for key, value in b.items()}
+                c, k = source.c, len(b["m"])
+                e, mu = ([c[name]] * k if c[name] is not None else None for name in ("restitution", "friction"))
+                self._add(b["x"], b["v"], b["m"], b["r"], np.zeros(k, bool), e, mu, [c["species"] or ""] * k, b["death"], c["color"])
+        self._tell_dropped(t)
+
+    def _tell_dropped(self, t: float) -> None:
+        """One ``EmitterWarning`` for each emitter that has passed its ``end`` having dropped
+        births for lack of room (once in its life: its counts are final then)."""
+        for k, source in enumerate(self._emitters):
+            if not source.told and source.dropped and source.finished(t):
+                source.told = True
+                warnings.warn(source.shortfall(k, t), EmitterWarning, stacklevel=5)
+
+    def _tell_behind(self) -> None:
+        """At the end of a run: one ``EmitterWarning`` for each emitter not yet past its ``end``
+        whose births waiting for room are more than ``emitter.BEHIND`` of those due."""
+        t = self.time
+        for k, source in enumerate(self._emitters):
+            st = source.stats(t)
+            if not source.finished(t) and st["waiting"] > max(1.0, BEHIND * st["due"]):
+                warnings.warn(source.shortfall(k, t), EmitterWarning, stacklevel=4)
+
+    def emitter_stats(self) -> list[dict[str, Any]]:
+        """Each emitter's promise and what it kept by now, in the order they were added: a dict
+        of ``rate`` (asked, /s), ``start`` and ``until`` (s: its start, and now or its ``end``
+        if sooner), ``due`` (particles due by ``until``: start + k/rate before ``end``),
+        ``born`` (added to the world), ``waiting`` (drawn, waiting for room at the source),
+        ``dropped`` (found no room before ``end``: never born) and ``achieved_rate``
+        (born / (until − start), /s; NaN before the start). ``due`` = born + waiting + dropped
+        once the births due have been drawn (at the step boundary after their time)."""
+        return [source.stats(self.time) for source in self._emitters]
 
     def _free_places(self, x: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Which of the particles to be born at ``x`` (m) with radii ``r`` (m) overlap neither a
@@ -782,6 +809,7 @@ class World(WorldCollisions):
                 save_checkpoint(self, checkpoint, _run=run)
         traj = rec.finish()
         traj.fps = float(run["fps"])  # (saved with it: a video's default rate)
+        self._tell_behind()
         return traj
 
     # -- stability --------------------------------------------------------------------------
