@@ -102,3 +102,66 @@ def test_the_scene_key_up_axis_goes_there_and_back(tmp_path):
     assert np.array_equal(back.colliders[0].vertices, v)
     with pytest.raises(kinema.SceneError, match=r"colliders\[0\]\.up_axis"):
         Scene.from_string(text.replace('"y"', '"x"'))
+
+
+# -- where a mesh collider lies ---------------------------------------------------------------
+
+
+def placement_warnings(world, seconds=0.01):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        world.run(seconds, fps=100)
+    return [str(c.message) for c in caught if issubclass(c.category, kinema.MeshPlacementWarning)]
+
+
+def poured_into(mesh, **emitter):
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Gravity())
+    w.add(mesh)
+    w.add(kinema.Emitter(rate=100, shape="disc", center=[0, 0, 0.8], radius=0.05, normal=[0, 0, -1], particle_radius=0.01, mass=0.01, **emitter))
+    return w
+
+
+def test_a_bowl_on_its_side_is_said_and_an_upright_one_is_not(tmp_path):
+    v, f = bowl_arrays()
+    path = blender_obj(tmp_path / "bowl.obj", v, f)
+    # the case: a Blender OBJ read as +z-up, its opening facing −y
+    said = placement_warnings(poured_into(kinema.Mesh(path)))
+    assert len(said) == 1
+    assert said[0].startswith("colliders[0], the mesh 'bowl.obj': it lies on its side: the axis of its opening")
+    assert "leans 90° from the vertical" in said[0] and "give up_axis='y'" in said[0]
+    # read upright: nothing to say (the example bowl too, 19,800 triangles)
+    assert placement_warnings(poured_into(kinema.Mesh(path, up_axis="y"))) == []
+    assert placement_warnings(poured_into(kinema.Mesh(SCENES / "bowl.obj"))) == []
+    # tipped 45°: within 60° of the vertical; 75°: on its side
+    assert placement_warnings(poured_into(kinema.Mesh(path, up_axis="y", rotation=[45, 0, 0]))) == []
+    assert len(placement_warnings(poured_into(kinema.Mesh(path, up_axis="y", rotation=[75, 0, 0])))) == 1
+    # no gravity: no side to lie on; a flat sheet stood up is a wall, not a bowl
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Mesh(path))
+    w.add_particles([0.0, 0.0, 0.3], radius=0.01)
+    assert placement_warnings(w) == []
+    wall = kinema.Mesh(vertices=[[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]], faces=[[0, 1, 2], [0, 2, 3]])
+    assert placement_warnings(poured_into(wall)) == []
+
+
+def test_a_mesh_far_from_everything_is_said_once():
+    v, f = bowl_arrays()
+    far = kinema.Mesh(vertices=v, faces=f, translation=[5, 0, 0])  # 1 m wide, 0.5 m deep (diagonal 1.5 m), 4.5 m away
+    w = poured_into(far)
+    said = placement_warnings(w)
+    assert len(said) == 1 and said[0].startswith("colliders[0], the mesh of arrays: every particle and emitter lies outside its bounding box")
+    assert "by more than its size (1.5 m), the nearest 4.46 m away" in said[0]  # the spout: (4.45, 0, 0.3) m from the box
+    assert placement_warnings(w) == []  # once: the next run says nothing
+    # a particle near it, or an emitter's source: nothing to say
+    w = poured_into(kinema.Mesh(vertices=v, faces=f, translation=[5, 0, 0]))
+    w.add_particles([5.0, 0.0, 1.0], radius=0.01)
+    assert placement_warnings(w) == []
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Mesh(vertices=v, faces=f, translation=[5, 0, 0]))
+    w.add(kinema.Emitter(rate=10, shape="box", center=[5, 0, 2], size=[1, 1, 1], mass=1.0))
+    assert placement_warnings(w) == []
+    # nothing to collide yet: nothing to say
+    w = kinema.World(dt=1e-3)
+    w.add(kinema.Mesh(vertices=v, faces=f, translation=[5, 0, 0]))
+    assert placement_warnings(w) == []

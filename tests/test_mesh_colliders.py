@@ -278,7 +278,10 @@ def test_the_poured_bowl_holds_every_ball_at_every_step_and_comes_to_rest():
         if len(x):
             lowest = min(lowest, float(x[:, 2].min()))
         touched = max(touched, int(np.sum(w.contacts()["collider"] == 0)))
-    assert len(w) == 200
+    # every ball born is still there; a few of the 200 due found the spout crowded until its
+    # end and were dropped (issue 48: never a birth after end)
+    st = w.emitter_stats()[0]
+    assert len(w) == st["born"] >= 195 and st["born"] + st["dropped"] == 200
     assert worst <= tolerance, f"a ball went {worst:.3g} m beyond the bowl's surface"
     assert lowest >= r - tolerance  # nobody below the bowl
     assert np.all(w.positions[:, 2] < BOWL_CENTER[2])  # all in the bowl at the end

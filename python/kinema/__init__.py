@@ -11,7 +11,7 @@ The public API (everything else is private):
   ``KillPlane`` (added with ``World.add``), ``World.remove_particles``, ``World.ids``,
   ``Trajectory.alive``; the module ``kinema.emitter``
 - Collisions: the colliders ``Plane``, ``Box``, ``SphereObstacle``, ``Mesh`` (a triangle
-  mesh from a file or arrays; added with ``World.add``), moved by ``Motion`` (steady) or
+  mesh from a file or arrays; added with ``World.add``; ``MeshPlacementWarning``), moved by ``Motion`` (steady) or
   ``Keyframes`` (their ``motion=``, ``World.set_motion``); ``World.set_collisions``,
   ``World.collisions``, ``World.periodic``, ``World.contacts``, ``World.collision_stats``,
   ``World.collider_books``; per-particle ``restitution`` and ``friction`` in
@@ -45,7 +45,7 @@ from . import (
 )
 from ._core import __version__, _after_fork_in_child
 from .checkpoint import resume_run
-from .colliders import Box, Keyframes, Mesh, Motion, Plane, SphereObstacle
+from .colliders import Box, Keyframes, Mesh, MeshPlacementWarning, Motion, Plane, SphereObstacle
 from .contact_time import ContactTimeWarning
 from .convergence import ConvergenceResult, convergence
 from .emitter import Emitter, EmitterWarning, KillBox, KillPlane, KillSphere
@@ -85,6 +85,7 @@ __all__ = [
     "Gravity",
     "Keyframes",
     "Mesh",
+    "MeshPlacementWarning",
     "Motion",
     "Plane",
     "Scene",

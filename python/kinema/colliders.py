@@ -353,6 +353,62 @@ class Mesh(Collider):
         return winding < 0.5 if self._inside else winding > 0.5
 
 
+class MeshPlacementWarning(UserWarning):
+    """A mesh collider placed where it will likely do nothing, or lying on its side (see
+    `placement_problems`): said once per mesh, at the first `World.step` or `World.run` after
+    it is added."""
+
+
+#: An open mesh is "curved" (a bowl, a cup, a chute: it has an opening) when the length of its
+#: vector area |Σ A_f n_f| is between these fractions of its area Σ A_f; a flat sheet's is all
+#: of it, a tube's or a closed surface's none.
+CURVED = (0.05, 0.95)
+#: The most the opening's axis may lean from the vertical (degrees) before a mesh is said to
+#: lie on its side.
+SIDEWAYS_DEG = 60.0
+
+
+def placement_problems(mesh: Mesh, points: np.ndarray, regions: list[tuple[np.ndarray, np.ndarray]], g: np.ndarray) -> list[str]:
+    """What is wrong with where a still mesh collider is, in words (none: []):
+
+    - **far**: there is something to collide (particles at `points` (N, 3) or emitters whose
+      source regions are the boxes `regions` [(lo, hi), ...]) and every one of them lies
+      outside the mesh's bounding box by more than its size (the box's diagonal L);
+    - **on its side**: under gravity `g` (m/s²), an open, curved mesh (its vector area
+      |Σ A_f n_f| from 5 % to 95 % of its area Σ A_f: a bowl, a cup, a chute) whose opening's
+      axis, the direction of Σ A_f n_f (the rim's normal, the same whichever way its faces
+      are wound up to sign), leans more than 60° from the vertical: a bowl lying on its side,
+      as a +y-up file read as +z-up lies. Flat sheets, tubes and closed meshes have no
+      opening and are never said to lie on their side."""
+    v, f = mesh.vertices, mesh.faces
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    size = float(np.linalg.norm(hi - lo))
+    said = []
+    far = [float(np.linalg.norm(np.maximum(np.maximum(lo - points, points - hi), 0.0), axis=1).min())] if len(points) else []
+    far += [float(np.linalg.norm(np.maximum(np.maximum(lo - r_hi, r_lo - hi), 0.0))) for r_lo, r_hi in regions]
+    if far and min(far) > size:
+        said.append(
+            f"every particle and emitter lies outside its bounding box {lo.tolist()} to {hi.tolist()} m by more than its size "
+            f"({size:.3g} m), the nearest {min(far):.3g} m away: is it placed (translation, scale, up_axis) where they are?"
+        )
+    gn = float(np.linalg.norm(g))
+    if gn > 0 and not _is_closed(v, f):
+        a, b, c = (v[f[:, k]] for k in range(3))
+        cross = np.cross(b - a, c - a)
+        area = float(np.linalg.norm(cross, axis=1).sum())
+        axis = cross.sum(axis=0)
+        fraction = float(np.linalg.norm(axis)) / area if area > 0 else 0.0
+        if CURVED[0] <= fraction <= CURVED[1]:
+            lean = math.degrees(math.acos(min(1.0, abs(float(axis @ g)) / (float(np.linalg.norm(axis)) * gn))))
+            if lean > SIDEWAYS_DEG:
+                up = "" if mesh.up_axis == "y" else " (a +y-up file, as Blender exports OBJ, read as +z-up lies so: give up_axis='y')"
+                said.append(
+                    f"it lies on its side: the axis of its opening (the direction of its faces' area-weighted normals, "
+                    f"{(axis / np.linalg.norm(axis)).round(3).tolist()}) leans {lean:.0f}° from the vertical (gravity {np.round(g, 3).tolist()} m/s²){up}"
+                )
+    return said
+
+
 def transformed(vertices: np.ndarray, scale: Any, rotation: Any, translation: Any) -> np.ndarray:
     """x' = R (s ⊙ x) + t for each row x of `vertices` (V, 3), m: `scale` s (3,), then
     `rotation` (α, β, γ) in degrees about the fixed x, y and z axes in that order, R = R_z(γ)

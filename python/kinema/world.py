@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from . import _checks, _core, first_step
-from .colliders import Box, Collider
+from .colliders import Box, Collider, Mesh, MeshPlacementWarning, placement_problems
 from .emitter import BEHIND, KILL_VOLUMES, Emitter, EmitterWarning
 from .forces import Spring
 from .ode import ButcherTableau, method_names
@@ -128,6 +128,14 @@ def _grown(a: np.ndarray, n: int, default: float, values: Any) -> np.ndarray:
     return np.concatenate([a, np.full((n, *a.shape[1:]), default) if values is None else values])
 
 
+def _region(c: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The box (lo, hi) of an emitter's source (its checked values ``c``): where it gives birth."""
+    if c["shape"] == "mesh":
+        return c["mesh_box"]
+    half = np.asarray(c["size"], float) / 2.0 if c["shape"] == "box" else np.full(3, c["radius"] if c["shape"] in ("disc", "sphere") else 0.0)
+    return c["center"] - half, c["center"] + half
+
+
 def _kept(a: np.ndarray, keep: np.ndarray) -> np.ndarray:
     """``a`` of the particles that ``keep`` keeps."""
     if _unset(a) and a.size:
@@ -198,6 +206,7 @@ class World(WorldCollisions):
         self._spring_ids = np.empty((0, 2), dtype=np.int64)
         self._spring_rest: dict[int, np.ndarray] = {}  # index in the forces -> each spring's rest length, m
         self._advised_at = 0  # particles when the advisor last looked
+        self._placed = 0  # the colliders whose placement has been looked at (MeshPlacementWarning)
         self._new_views()
 
     # The engine is the thread's that made the world (pyo3's `unsendable`: its Python forces
@@ -553,6 +562,7 @@ class World(WorldCollisions):
         if n > _checks.UINT64_MAX:
             raise ValueError(f"n = {_checks.describe(n)} is invalid: the number of steps must be < 2**64")
         self._push()
+        self._look_at_meshes()
         try:
             with self._engine() as core:
                 self._advise(core)
@@ -773,12 +783,32 @@ class World(WorldCollisions):
             )
         record_contacts = _checks.boolean("record_contacts", record_contacts)
         self._push()
+        self._look_at_meshes()
         with self._engine() as core:
             self._advise(core)
         rec = Trajectory._recorder(frames + 1, contacts=record_contacts)
         rec.add(self)
         run = {"frames_done": 0, "frames_total": frames, "per_frame": per_frame, "every": every, "fps": fps, "recorder": rec}
         return self._record(run, callback, None if checkpoint is None else Path(checkpoint))
+
+    def _look_at_meshes(self) -> None:
+        """One ``MeshPlacementWarning`` for each still mesh collider added since the last look
+        that is far from every particle and emitter, or lies on its side under gravity
+        (``kinema.colliders.placement_problems``)."""
+        if self._placed >= len(self._colliders):
+            return
+        fresh = range(self._placed, len(self._colliders))
+        self._placed = len(self._colliders)
+        meshes = [(k, self._colliders[k]) for k in fresh if isinstance(self._colliders[k], Mesh) and self._colliders[k].motion is None]
+        if not meshes:
+            return
+        g = first_step.gravity(self._forces, self.dim)
+        regions = [_region(source.c) for source in self._emitters]
+        for k, mesh in meshes:
+            said = placement_problems(mesh, self._x, regions, g)
+            if said:
+                name = f"'{mesh.file.name}'" if mesh.file is not None else "of arrays"
+                warnings.warn(f"colliders[{k}], the mesh {name}: {'; '.join(said)}", MeshPlacementWarning, stacklevel=3)
 
     def _births_until(self, t: float) -> int:
         """How many particles the emitters will add from now to time ``t`` (s), those held
