@@ -367,24 +367,27 @@ def test_each_particle_is_drawn_in_its_own_colour():
 
 
 def test_an_emitter_never_places_a_particle_inside_another():
-    # A point emitter (every particle born at one point) at 200 a second, 1 cm balls leaving at
-    # 0.5 m/s: each needs 40 ms to clear the point for the next, so most births must wait (the
-    # 20 drawn by 0.1 s are all out by 20 · 40 ms = 0.8 s, not before 0.6 s). No
-    # two particles ever overlap by more than the contact solver's slop at a step's end (0.2 %
-    # of r, docs/collisions.md), every particle is still emitted once, in order, with what it
-    # was drawn with, and none is born before its time start + k/rate.
+    # A point emitter (every particle born at one point) at 200 a second until 0.8 s, 1 cm
+    # balls leaving at 0.5 m/s: each needs 40 ms to clear the point for the next, so most
+    # births must wait, and those still waiting at end are dropped (issue 48: never a birth
+    # after end): 20 born (at 0, 40, ..., 760 ms), 140 dropped. No two particles ever overlap
+    # by more than the contact solver's slop at a step's end (0.2 % of r, docs/collisions.md),
+    # the particles born come in order, with what they were drawn with, none before its time
+    # start + k/rate nor after end.
     w = kinema.World(dt=1e-3)
-    w.add(kinema.Emitter(shape="point", center=[0, 0, 0], rate=200, end=0.1, speed=0.5, direction=[1, 0, 0], particle_radius=0.01, seed=4))
+    w.add(kinema.Emitter(shape="point", center=[0, 0, 0], rate=200, end=0.8, speed=0.5, direction=[1, 0, 0], particle_radius=0.01, seed=4))
     w.set_collisions(restitution=0.5)
-    for step in range(1000):
-        w.step()
-        if step == 599:
-            assert 14 <= len(w) <= 16
-        x = w.positions
-        if len(x) > 1:
-            d = np.linalg.norm(x[:, None] - x[None], axis=2) + np.eye(len(x))
-            assert d.min() >= 0.02 * (1 - 1e-3), (w.time, d.min())
+    with pytest.warns(kinema.EmitterWarning, match=r"emitter 0: 20 of 160 particles born by t = 0\.8 s \(25/s of the 200/s asked\)"):
+        for step in range(1000):
+            w.step()
+            if step == 599:
+                assert 14 <= len(w) <= 16
+            x = w.positions
+            if len(x) > 1:
+                d = np.linalg.norm(x[:, None] - x[None], axis=2) + np.eye(len(x))
+                assert d.min() >= 0.02 * (1 - 1e-3), (w.time, d.min())
     assert len(w) == 20 and (np.diff(w.ids) > 0).all()
+    assert w.emitter_stats()[0]["dropped"] == 140
     # the k-th particle's speed is what it was drawn with: 0.5 m/s along x (nothing touches
     # them once they leave in a row)
     np.testing.assert_allclose(w.velocities[:, 0], 0.5, rtol=1e-12)
@@ -469,3 +472,95 @@ def test_the_work_limit_of_run_counts_what_the_emitters_will_add():
     # within the limit it runs, and its births are at most those counted (501 by t = 0.05 s)
     traj = w.run(0.05, fps=100, max_work=1e6)
     assert 0 < len(w) <= 501 and len(traj.t) == 6
+
+
+# -- emitters that keep their word (issue 48) ---------------------------------------------------
+
+CROWDED = """
+[world]
+dim = 3
+dt = 0.001
+duration = 2.5
+fps = 50
+
+[[emitters]]
+shape = "box"
+center = [0.25, 0.25, 0.25]
+size = [0.3, 0.3, 0.3]
+rate = 200
+end = 1.5
+particle_radius = 0.05
+mass = 1.0
+seed = 1
+
+[[colliders]]
+type = "box"
+lo = [0, 0, 0]
+hi = [0.5, 0.5, 0.5]
+
+[output]
+plot = false
+video = false
+"""
+
+
+def test_an_emitter_that_finds_no_room_never_gives_a_birth_after_end_and_says_so():
+    # 10 cm balls asked at 200/s into a 30 cm box inside a closed 50 cm box, no gravity, at
+    # rest: it fills within a few dozen and no ball ever moves out of the way. Births due
+    # (t_k = k/200 < 1.5 s: 300) that find no room wait; at end they are dropped, so not one
+    # is born after end (before, the backlog was born whenever room came, past end).
+    w = kinema.Scene.from_string(CROWDED).build()
+    born_at: dict[int, float] = {}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(2500):
+            before = w.time
+            w.step()
+            for i in w.ids.tolist():
+                born_at.setdefault(i, before)  # added at the step boundary before this step
+    assert max(born_at.values()) < 1.5  # the last due, t_299 = 1.495 s, joins at its boundary
+    st = w.emitter_stats()[0]
+    assert st["due"] == 300 and st["born"] == len(w) == len(born_at) and st["waiting"] == 0
+    assert st["born"] + st["dropped"] == 300 and 0 < st["born"] < 100
+    assert st["achieved_rate"] == st["born"] / 1.5
+    told = [c for c in caught if issubclass(c.category, kinema.EmitterWarning)]
+    assert len(told) == 1  # once per emitter, not once a step
+    assert str(told[0].message).startswith(
+        f"emitter 0: {st['born']} of 300 particles born by t = 1.5 s ({st['born'] / 1.5:.4g}/s of the 200/s asked): no room at the source; "
+        f"{300 - st['born']} found none before end = 1.5 s and were dropped"
+    )
+
+
+def test_a_run_still_behind_at_its_end_says_so_once(tmp_path):
+    w = kinema.Scene.from_string(CROWDED.replace("end = 1.5", "end = inf")).build()
+    with pytest.warns(
+        kinema.EmitterWarning, match=r"emitter 0: \d+ of 201 particles born by t = 1 s .*of the 200/s asked\): no room at the source; \d+ wait"
+    ) as told:
+        w.run(1.0, fps=50)
+    assert len([c for c in told if issubclass(c.category, kinema.EmitterWarning)]) == 1
+    # an emitter that keeps up says nothing
+    calm = kinema.World(dt=1e-3)
+    calm.add(Emitter(rate=100.0, speed=1.0, particle_radius=0.001, mass=1.0, end=0.5))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", kinema.EmitterWarning)
+        calm.run(1.0, fps=50)
+    assert calm.emitter_stats()[0] == {"rate": 100.0, "start": 0.0, "until": 0.5, "due": 50, "born": 50, "waiting": 0, "dropped": 0, "achieved_rate": 100.0}
+
+
+def test_the_run_summary_gives_each_emitters_achieved_rate(tmp_path):
+    from typer.testing import CliRunner
+
+    from kinema.cli import app
+
+    (tmp_path / "crowded.toml").write_text(CROWDED)
+    res = CliRunner().invoke(app, ["run", str(tmp_path / "crowded.toml"), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    traj = kinema.load_trajectory(tmp_path / "out" / "trajectory.h5")
+    born = traj.ids.size  # every particle ever alive: the births counted
+    assert born == traj.alive[-1].sum() and born == traj.alive[int(1.52 * 50)].sum()  # none after end
+    text = " ".join(res.output.split())
+    assert (
+        f"emitter 0: {born:,} of 300 particles born from t = 0 to 1.5 s, {born / 1.5:.4g}/s of the 200/s asked ({300 - born:,} dropped for lack of room)"
+        in text
+    )
+    assert f"warning: emitter 0: {born} of 300 particles born by t = 1.5 s" in text

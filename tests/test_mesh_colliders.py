@@ -61,13 +61,16 @@ def test_every_file_format_gives_the_same_triangles(tmp_path):
     box = trimesh.creation.box(extents=(1.0, 2.0, 0.5))
     box.apply_translation([0.25, -0.5, 0.75])
     want = triangles(box.vertices, box.faces)
+    # glTF's +y is up by its specification: its (x, y, z) is kinema's (x, −z, y), exactly
+    y_up = np.stack([box.vertices[:, 0], -box.vertices[:, 2], box.vertices[:, 1]], axis=1) + 0.0
     for suffix in (".obj", ".stl", ".ply", ".glb"):
         path = tmp_path / f"box{suffix}"
         box.export(path)
         m = kinema.Mesh(path)
         assert m.file == path
         assert m.vertices.dtype == np.float64 and m.faces.dtype == np.int64
-        assert triangles(m.vertices, m.faces) == want, suffix
+        assert m.up_axis == ("y" if suffix == ".glb" else "z")
+        assert triangles(m.vertices, m.faces) == (triangles(y_up, box.faces) if suffix == ".glb" else want), suffix
         # vertices shared again (an STL stores each triangle's corners apart): closed, so a container
         assert len(m.vertices) == 8, suffix
         w = kinema.World(dt=1e-3)
@@ -275,7 +278,10 @@ def test_the_poured_bowl_holds_every_ball_at_every_step_and_comes_to_rest():
         if len(x):
             lowest = min(lowest, float(x[:, 2].min()))
         touched = max(touched, int(np.sum(w.contacts()["collider"] == 0)))
-    assert len(w) == 200
+    # every ball born is still there; a few of the 200 due found the spout crowded until its
+    # end and were dropped (issue 48: never a birth after end)
+    st = w.emitter_stats()[0]
+    assert len(w) == st["born"] >= 195 and st["born"] + st["dropped"] == 200
     assert worst <= tolerance, f"a ball went {worst:.3g} m beyond the bowl's surface"
     assert lowest >= r - tolerance  # nobody below the bowl
     assert np.all(w.positions[:, 2] < BOWL_CENTER[2])  # all in the bowl at the end

@@ -7,11 +7,11 @@ The public API (everything else is private):
 - Stability on p' = λp: the module ``kinema.stability``
 - Particle worlds: ``World``, the forces ``Gravity``, ``Drag``, ``Spring``, ``Attractor``,
   ``Wind``, ``PythonForce``, the recorded ``Trajectory`` and ``SimulationDiverged``
-- Births and deaths: ``Emitter`` and the kill volumes ``KillBox``, ``KillSphere``,
+- Births and deaths: ``Emitter`` (``EmitterWarning``) and the kill volumes ``KillBox``, ``KillSphere``,
   ``KillPlane`` (added with ``World.add``), ``World.remove_particles``, ``World.ids``,
   ``Trajectory.alive``; the module ``kinema.emitter``
 - Collisions: the colliders ``Plane``, ``Box``, ``SphereObstacle``, ``Mesh`` (a triangle
-  mesh from a file or arrays; added with ``World.add``), moved by ``Motion`` (steady) or
+  mesh from a file or arrays; added with ``World.add``; ``MeshPlacementWarning``), moved by ``Motion`` (steady) or
   ``Keyframes`` (their ``motion=``, ``World.set_motion``); ``World.set_collisions``,
   ``World.collisions``, ``World.periodic``, ``World.contacts``, ``World.collision_stats``,
   ``World.collider_books``; per-particle ``restitution`` and ``friction`` in
@@ -45,10 +45,10 @@ from . import (
 )
 from ._core import __version__, _after_fork_in_child
 from .checkpoint import resume_run
-from .colliders import Box, Keyframes, Mesh, Motion, Plane, SphereObstacle
+from .colliders import Box, Keyframes, Mesh, MeshPlacementWarning, Motion, Plane, SphereObstacle
 from .contact_time import ContactTimeWarning
 from .convergence import ConvergenceResult, convergence
-from .emitter import Emitter, KillBox, KillPlane, KillSphere
+from .emitter import Emitter, EmitterWarning, KillBox, KillPlane, KillSphere
 from .forces import Attractor, Drag, Gravity, PythonForce, Spring, Wind
 from .ode import (
     ButcherTableau,
@@ -78,12 +78,14 @@ __all__ = [
     "Camera3D",
     "Drag",
     "Emitter",
+    "EmitterWarning",
     "KillBox",
     "KillPlane",
     "KillSphere",
     "Gravity",
     "Keyframes",
     "Mesh",
+    "MeshPlacementWarning",
     "Motion",
     "Plane",
     "Scene",

@@ -102,6 +102,8 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
             [
                 {
                     "emitted": s.emitted,
+                    "dropped": s.dropped,  # (born = emitted - dropped - waiting)
+                    "told": s.told,
                     "streams": {name: g.bit_generator.state for name, g in s.rng.items()},
                     # the births held back because their place was taken (floats round-trip
                     # exactly through JSON's shortest repr)
@@ -772,8 +774,8 @@ def _restore_emitters(r: _Reader, world: Any, time: float) -> None:
         raise r.invalid(field, saved, f"it must be a list of the {len(sources)} emitters' states (attribute 'scene' has {len(sources)})")
     for k, (source, state) in enumerate(zip(sources, saved, strict=True)):
         at = f"{field} [{k}]"
-        if not isinstance(state, dict) or not {"emitted", "streams"} <= set(state) <= {"emitted", "streams", "waiting"}:
-            raise r.invalid(at, state, "it must be {'emitted': n, 'streams': {...}, 'waiting': ...}")
+        if not isinstance(state, dict) or not {"emitted", "streams"} <= set(state) <= {"emitted", "streams", "waiting", "dropped", "told"}:
+            raise r.invalid(at, state, "it must be {'emitted': n, 'streams': {...}, 'waiting': ..., 'dropped': n, 'told': bool}")
         due = min(source.due(time), _INT64_MAX)
         emitted = r.integer(
             f"{at}.emitted", state["emitted"], 0, due, f"the particles emitted by t = {time:g} s: an integer from 0 to {due} (those due by then)"
@@ -786,7 +788,18 @@ def _restore_emitters(r: _Reader, world: Any, time: float) -> None:
         waiting = state.get("waiting")
         if waiting is not None:
             waiting = _check_waiting(r, f"{at}.waiting", waiting, world.dim)
-        source.emitted, source.waiting = emitted, waiting
+        held = 0 if waiting is None else len(waiting["m"])
+        dropped = r.integer(
+            f"{at}.dropped",
+            state.get("dropped", 0),
+            0,
+            emitted - held,
+            f"the births dropped: an integer from 0 to {emitted - held} (emitted, less those waiting)",
+        )
+        told = state.get("told", False)
+        if not isinstance(told, bool):
+            raise r.invalid(f"{at}.told", told, "it must be true or false")
+        source.emitted, source.waiting, source.dropped, source.told = emitted, waiting, dropped, told
         for name in _STREAMS:
             try:
                 source.rng[name].bit_generator.state = streams[name]

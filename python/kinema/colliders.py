@@ -135,13 +135,20 @@ class Mesh(Collider):
     `file`: a mesh file, OBJ (.obj), STL (.stl), PLY (.ply), glTF (.gltf, .glb) or USD
     (.usd, .usda, .usdc, .usdz; needs `pip install usd-core`), read by
     `kinema.io.mesh_files.read_mesh`: polygons cut into triangles, a file of several meshes
-    taken whole, vertices of equal coordinates made one. Its coordinates are metres (glTF's
-    +y is up by its specification, kinema's +z: `rotation=(90, 0, 0)` turns one into the
-    other). Or `vertices` (V, 3), m, and `faces` (F, 3), the indices of each triangle's
-    three vertices (integers, from 0).
+    taken whole, vertices of equal coordinates made one. Its coordinates are metres. Or
+    `vertices` (V, 3), m, and `faces` (F, 3), the indices of each triangle's three vertices
+    (integers, from 0).
+
+    `up_axis`: which way is up in the file (the arrays): "z" (kinema's own: gravity points
+    along −z) or "y" (Blender's OBJ export, Maya, Unity, three.js); a +y-up mesh is turned so
+    that its +y is +z, (x, y, z) → (x, −z, y) (+90° about x). OBJ, STL, PLY and arrays say
+    no axis: None means "z". glTF (+y up by its specification) and USD (its stage's
+    `upAxis`) say theirs and are always read by it; an `up_axis` that disagrees is refused.
+    `Mesh.up_axis` is the one read with. A +y-up file read as +z-up lies on its side: a
+    `MeshPlacementWarning` says so at the first step under gravity (`kinema.colliders`).
 
     The vertices are then scaled, rotated and translated, in that order, about the origin of
-    the file's (the arrays') coordinates: x' = R (s ⊙ x) + t, with
+    the file's (the arrays') coordinates, +z up: x' = R (s ⊙ x) + t, with
 
     - `scale` s: one factor or three (x, y, z), each finite and non-zero (a negative one
       mirrors);
@@ -169,7 +176,21 @@ class Mesh(Collider):
     area, a 2D world).
     """
 
-    __slots__ = ("_file", "_vertices", "_faces", "_scale", "_rotation", "_translation", "_inside", "_restitution", "_friction", "_motion", "_args", "_closed")
+    __slots__ = (
+        "_file",
+        "_vertices",
+        "_faces",
+        "_up_axis",
+        "_scale",
+        "_rotation",
+        "_translation",
+        "_inside",
+        "_restitution",
+        "_friction",
+        "_motion",
+        "_args",
+        "_closed",
+    )
 
     def __init__(
         self,
@@ -177,6 +198,7 @@ class Mesh(Collider):
         *,
         vertices: Any = None,
         faces: Any = None,
+        up_axis: str | None = None,
         scale: Any = 1.0,
         rotation: Any = (0.0, 0.0, 0.0),
         translation: Any = (0.0, 0.0, 0.0),
@@ -192,6 +214,9 @@ class Mesh(Collider):
             raise ValueError(f"file = {_checks.describe(_text(file))} and {given} are given: give either a file or vertices and faces, not both")
         if file is None and not arrays:
             raise ValueError("Mesh needs a file (Mesh('bowl.obj')) or vertices and faces (Mesh(vertices=V, faces=F)); neither is given")
+        from .io.mesh_files import check_up_axis, read_mesh_axis, y_up_to_z_up
+
+        up = check_up_axis(up_axis)
         s = _factors(scale)
         rot = _vec3("rotation", rotation)
         t = _vec3("translation", translation)
@@ -199,12 +224,10 @@ class Mesh(Collider):
             if not all(math.isfinite(c) for c in value):
                 raise ValueError(f"{name} = {_checks.describe(value)} is invalid: it must be 3 finite numbers ({'degrees' if name == 'rotation' else 'm'})")
         if file is not None:
-            from .io.mesh_files import read_mesh
-
             if not isinstance(file, (str, os.PathLike)):
                 raise TypeError(f"file = {_checks.describe(file)} is invalid: it must be a path (a str or a pathlib.Path), not {_checks._type_words(file)}")
             path = Path(file)
-            v, f = read_mesh(path, "file")
+            v, f, up = read_mesh_axis(path, "file", up)
         else:
             path = None
             if vertices is None or faces is None:
@@ -214,6 +237,9 @@ class Mesh(Collider):
             if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] == 0:
                 raise ValueError(f"vertices has shape {v.shape}; it must be (V, 3): x, y, z (m) of each vertex")
             f = _indices(faces)
+            up = up or "z"
+            if up == "y":
+                v = y_up_to_z_up(v)
         v = transformed(v, s, rot, t)
         v.flags.writeable = False
         f = np.ascontiguousarray(f, dtype=np.int64)
@@ -224,6 +250,7 @@ class Mesh(Collider):
             ("_file", path),
             ("_vertices", v),
             ("_faces", f),
+            ("_up_axis", up),
             ("_scale", tuple(s)),
             ("_rotation", tuple(rot)),
             ("_translation", tuple(t)),
@@ -253,6 +280,11 @@ class Mesh(Collider):
     def faces(self) -> np.ndarray:
         """(F, 3) int64: each triangle's three vertex indices (read-only)."""
         return self._faces
+
+    @property
+    def up_axis(self) -> str:
+        """The up axis the file (the arrays) was read with, "z" or "y" (turned to +z)."""
+        return self._up_axis
 
     @property
     def scale(self) -> tuple[float, float, float]:
@@ -319,6 +351,62 @@ class Mesh(Collider):
         den = la * lb * lc + np.einsum("ij,ij->i", a, b) * lc + np.einsum("ij,ij->i", a, c) * lb + np.einsum("ij,ij->i", b, c) * la
         winding = abs(float(np.sum(2.0 * np.arctan2(num, den))) / (4.0 * math.pi))
         return winding < 0.5 if self._inside else winding > 0.5
+
+
+class MeshPlacementWarning(UserWarning):
+    """A mesh collider placed where it will likely do nothing, or lying on its side (see
+    `placement_problems`): said once per mesh, at the first `World.step` or `World.run` after
+    it is added."""
+
+
+#: An open mesh is "curved" (a bowl, a cup, a chute: it has an opening) when the length of its
+#: vector area |Σ A_f n_f| is between these fractions of its area Σ A_f; a flat sheet's is all
+#: of it, a tube's or a closed surface's none.
+CURVED = (0.05, 0.95)
+#: The most the opening's axis may lean from the vertical (degrees) before a mesh is said to
+#: lie on its side.
+SIDEWAYS_DEG = 60.0
+
+
+def placement_problems(mesh: Mesh, points: np.ndarray, regions: list[tuple[np.ndarray, np.ndarray]], g: np.ndarray) -> list[str]:
+    """What is wrong with where a still mesh collider is, in words (none: []):
+
+    - **far**: there is something to collide (particles at `points` (N, 3) or emitters whose
+      source regions are the boxes `regions` [(lo, hi), ...]) and every one of them lies
+      outside the mesh's bounding box by more than its size (the box's diagonal L);
+    - **on its side**: under gravity `g` (m/s²), an open, curved mesh (its vector area
+      |Σ A_f n_f| from 5 % to 95 % of its area Σ A_f: a bowl, a cup, a chute) whose opening's
+      axis, the direction of Σ A_f n_f (the rim's normal, the same whichever way its faces
+      are wound up to sign), leans more than 60° from the vertical: a bowl lying on its side,
+      as a +y-up file read as +z-up lies. Flat sheets, tubes and closed meshes have no
+      opening and are never said to lie on their side."""
+    v, f = mesh.vertices, mesh.faces
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    size = float(np.linalg.norm(hi - lo))
+    said = []
+    far = [float(np.linalg.norm(np.maximum(np.maximum(lo - points, points - hi), 0.0), axis=1).min())] if len(points) else []
+    far += [float(np.linalg.norm(np.maximum(np.maximum(lo - r_hi, r_lo - hi), 0.0))) for r_lo, r_hi in regions]
+    if far and min(far) > size:
+        said.append(
+            f"every particle and emitter lies outside its bounding box {lo.tolist()} to {hi.tolist()} m by more than its size "
+            f"({size:.3g} m), the nearest {min(far):.3g} m away: is it placed (translation, scale, up_axis) where they are?"
+        )
+    gn = float(np.linalg.norm(g))
+    if gn > 0 and not _is_closed(v, f):
+        a, b, c = (v[f[:, k]] for k in range(3))
+        cross = np.cross(b - a, c - a)
+        area = float(np.linalg.norm(cross, axis=1).sum())
+        axis = cross.sum(axis=0)
+        fraction = float(np.linalg.norm(axis)) / area if area > 0 else 0.0
+        if CURVED[0] <= fraction <= CURVED[1]:
+            lean = math.degrees(math.acos(min(1.0, abs(float(axis @ g)) / (float(np.linalg.norm(axis)) * gn))))
+            if lean > SIDEWAYS_DEG:
+                up = "" if mesh.up_axis == "y" else " (a +y-up file, as Blender exports OBJ, read as +z-up lies so: give up_axis='y')"
+                said.append(
+                    f"it lies on its side: the axis of its opening (the direction of its faces' area-weighted normals, "
+                    f"{(axis / np.linalg.norm(axis)).round(3).tolist()}) leans {lean:.0f}° from the vertical (gravity {np.round(g, 3).tolist()} m/s²){up}"
+                )
+    return said
 
 
 def transformed(vertices: np.ndarray, scale: Any, rotation: Any, translation: Any) -> np.ndarray:

@@ -1,7 +1,8 @@
 """Emitters and kill volumes: particles born over time at a rate, living for a while, dying.
 
 An `Emitter` is what Blender's particle system, Houdini's POP Source and Niagara call a
-source: a shape (a point, a box, a disc or a sphere's surface) that emits `rate` particles
+source: a shape (a point, a box, a disc, a sphere's surface, or a triangle mesh's faces,
+vertices or volume) that emits `rate` particles
 per second from `start` to `end`, each with an initial velocity (a direction, a speed, a
 cone of spread), a mass, a radius, a colour and a lifetime. A kill volume removes every
 particle that enters it (Houdini's POP Kill by bounding region).
@@ -14,6 +15,23 @@ emission). Its random draws come from the emitter's own streams (`numpy.random.P
 seeded by `seed`), one stream per quantity, consumed particle by particle: the k-th
 particle is the same whatever the step, the frame rate or the number of threads.
 
+A particle whose place is taken (by another particle, or a collider about its centre) waits
+for it, and is born there once it is free, at that step boundary; one still waiting at the
+first step boundary at or after `end` is dropped, never born (so no particle is born at or
+after `end`), and counted (`World.emitter_stats`, an `EmitterWarning`).
+
+A mesh source (`shape="mesh"`, Blender's "Emit From": Faces, Verts, Volume): `"faces"`, a
+triangle drawn with probability ∝ its area, then a point uniform on it by the square-root
+rule, x = (1 − √u) a + √u (1 − w) b + √u w c (Turk, "Generating random points in triangles",
+Graphics Gems, 1990), the initial direction its normal; `"vertices"`, a vertex of a face drawn
+uniformly, the direction its normal (the sum of its faces' normals weighted by their areas);
+`"volume"`, uniform inside a closed mesh by rejection: points uniform in its bounding box,
+kept where the winding number of the surface about them is 1 (each candidate takes 3 draws of
+the position stream, and exactly the candidates up to the last one kept are consumed, so the
+k-th particle does not depend on how many are born at once). A face's normal follows its
+winding (counter-clockwise seen from the side it points to); a closed mesh's normals point
+out of it.
+
 A particle dies at the first step boundary at or after t_k + its lifetime, or at the first
 step boundary where it is inside a kill volume. Deaths are removals
 (`World.remove_particles`): springs ending on a dead particle die with it, and its id is
@@ -22,14 +40,28 @@ never given again.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from . import _checks
+from .colliders import Mesh, _is_closed
 
-SHAPES = ("point", "box", "disc", "sphere")
+SHAPES = ("point", "box", "disc", "sphere", "mesh")
+EMIT_FROM = ("faces", "volume", "vertices")  # a mesh's: Blender's "Emit From" Faces, Volume, Verts
+WINDING_BLOCK = 2_000_000  # candidate points × faces per block of the volume's inside test
+BEHIND = 0.01  # an emitter whose births wait for room, more than this fraction of those due, is said at a run's end
+
+
+class EmitterWarning(UserWarning):
+    """An emitter did not keep its rate: births found no room at the source (a particle or a
+    collider in their place) and waited, and those still waiting at `end` were dropped. Once
+    per emitter as its `end` passes, and at the end of `World.run` for one still behind by more
+    than 1 % of the births due; the message gives the counts and the rate achieved."""
+
+
 BIRTHS_AT_ONCE = 10**8  # particles one emitter may add in one step (about 100 GB of world)
 REACH_LIMIT = 1e150  # m and m/s: an emitter's extent from the origin and its fastest speed (the contacts' GEOMETRY_LIMIT)
 
@@ -87,12 +119,16 @@ class Emitter:
     edge lengths `size` (3,) centred at `center`; `"disc"`, uniform on the disc of
     `radius` through `center` perpendicular to `normal` (in 2D: the segment of
     half-length `radius` perpendicular to `normal`); `"sphere"`, uniform on the surface
-    of the sphere (a circle in 2D) of `radius` about `center`.
+    of the sphere (a circle in 2D) of `radius` about `center`; `"mesh"` (3D only), from
+    `mesh`, a `kinema.Mesh` (placed by its own `up_axis`, `scale`, `rotation`,
+    `translation`; not moving) or a mesh file's path (read as `Mesh(path)`), as
+    `emit_from` says: `"faces"` (area-weighted, uniform on each triangle), `"vertices"` or
+    `"volume"` (uniform inside; a closed mesh only). `center` plays no part there.
 
     Velocity: `speed` (m/s) ± `speed_spread` (uniform) along `direction`, deviated
     uniformly over the cone of half-angle `spread` (degrees; 180: every direction).
     `direction` None: the disc's `normal`, the sphere's outward normal at the point of
-    birth, else +z (+y in 2D).
+    birth, a mesh face's normal (a vertex's, for `"vertices"`), else +z (+y in 2D).
 
     Each particle: `particle_radius` (m) ± `radius_spread` (uniform); `mass` (kg), or
     if None `density` (kg/m³) times the sphere's volume 4/3 π r³; `lifetime` (s,
@@ -128,6 +164,8 @@ class Emitter:
     restitution: float | None = None
     friction: float | None = None
     seed: int = 0
+    mesh: Any = None
+    emit_from: str = "faces"
     _checked: dict = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -137,6 +175,7 @@ class Emitter:
         if shape not in SHAPES:
             raise ValueError(f"shape = {shape!r} is invalid: use one of {', '.join(map(repr, SHAPES))}")
         c["shape"] = shape
+        c.update(_mesh_source(shape, self.mesh, self.emit_from))
         c["center"] = _vec3("center", self.center)
         c["size"] = _vec3("size", self.size)
         if shape == "box" and not np.all(c["size"] >= 0):
@@ -168,6 +207,8 @@ class Emitter:
         # contacts' geometry limit (kinema.collide's GEOMETRY_LIMIT, 1e150 m and m/s).
         with np.errstate(over="ignore", invalid="ignore"):
             reach = float(np.abs(c["center"]).max() + np.abs(c["size"]).max() + c["radius"])
+            if shape == "mesh":
+                reach = max(reach, float(np.abs(c["mesh_vertices"]).max()))
         if not reach <= REACH_LIMIT:
             raise ValueError(
                 f"center = {c['center'].tolist()}, size = {c['size'].tolist()}, radius = {c['radius']:g} are invalid: the emitter "
@@ -210,7 +251,89 @@ class Emitter:
         object.__setattr__(self, "_checked", c)
 
     def _attach(self, world: Any) -> None:
+        if world.dim == 2 and self._checked["shape"] == "mesh":
+            raise ValueError("shape = 'mesh' is invalid in a 2D world: a triangle mesh is 3D only (emit from a disc, a box or a point)")
         world._emitters.append(_Source(self, world.dim))
+
+
+def _mesh_source(shape: str, mesh: Any, emit_from: Any) -> dict[str, Any]:
+    """What a mesh source samples (`shape="mesh"`): its vertices and kept faces (non-zero
+    area), their cumulative areas and unit normals (out of a closed mesh), the vertices'
+    normals, whether it is closed, its bounding box; {} for another shape (which refuses a
+    `mesh`)."""
+    if shape != "mesh":
+        if mesh is not None:
+            raise ValueError(f"mesh = {_checks.describe(mesh)} is given to shape = {shape!r}: a mesh is the source of shape = 'mesh' only")
+        return {}
+    if mesh is None:
+        raise ValueError("shape = 'mesh' needs mesh = a kinema.Mesh or a mesh file's path (OBJ, STL, PLY, glTF, USD)")
+    if isinstance(mesh, (str, os.PathLike)):
+        mesh = Mesh(mesh)
+    elif not isinstance(mesh, Mesh):
+        raise TypeError(f"mesh = {_checks.describe(mesh)} is invalid: it must be a kinema.Mesh or a mesh file's path, not {_checks._type_words(mesh)}")
+    if mesh.motion is not None:
+        raise ValueError("mesh is invalid: it has a motion; an emitter's mesh stays where it is placed (give it without motion=)")
+    how = _checks.text("emit_from", emit_from)
+    if how not in EMIT_FROM:
+        raise ValueError(f"emit_from = {how!r} is invalid: use one of {', '.join(map(repr, EMIT_FROM))} (Blender's Faces, Volume, Verts)")
+    v, f = mesh.vertices, mesh.faces
+    if f.min() < 0 or f.max() >= len(v):
+        raise ValueError(f"mesh is invalid: its faces hold the vertex index {int(f.max() if f.max() >= len(v) else f.min())}; it has {len(v)} vertices")
+    a, b, cc = (v[f[:, k]] for k in range(3))
+    cross = np.cross(b - a, cc - a)
+    twice = np.linalg.norm(cross, axis=1)
+    kept = twice > 0
+    if not kept.any():
+        raise ValueError("mesh is invalid: it has no face of non-zero area to emit from")
+    f, cross, twice = f[kept], cross[kept], twice[kept]
+    closed = _is_closed(v, f)
+    a, b, cc = (v[f[:, k]] for k in range(3))
+    volume = float(np.einsum("ij,ij->i", a, np.cross(b, cc)).sum()) / 6.0  # signed: > 0 when the faces face out
+    if closed and volume < 0:
+        cross = -cross
+    if how == "volume" and not (closed and volume != 0):
+        raise ValueError(
+            "emit_from = 'volume' needs a closed (watertight) mesh, every edge shared by exactly two faces running along it in "
+            "opposite directions, to have an inside; this mesh is open (emit from its 'faces' or 'vertices', or close it)"
+        )
+    used = np.unique(f)
+    vn = np.zeros_like(v)
+    for k in range(3):
+        np.add.at(vn, f[:, k], cross)  # each face's normal × twice its area
+    vn = vn[used]
+    length = np.linalg.norm(vn, axis=1, keepdims=True)
+    vn = np.where(length > 0, vn / np.where(length > 0, length, 1.0), [0.0, 0.0, 1.0])  # (a vertex whose faces cancel: +z)
+    return {
+        "mesh": mesh,
+        "emit_from": how,
+        "mesh_vertices": v,
+        "mesh_faces": f,
+        "mesh_area": np.cumsum(twice / 2.0),
+        "mesh_normals": cross / twice[:, None],
+        "mesh_used": used,
+        "mesh_vertex_normals": vn,
+        "mesh_closed": closed,
+        "mesh_volume": abs(volume),
+        "mesh_box": (v[used].min(axis=0), v[used].max(axis=0)),
+    }
+
+
+def winding_numbers(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """The winding number (N,) of the closed surface `faces` about each of `points` (N, 3):
+    the sum of the solid angles its triangles subtend there over 4π (Van Oosterom and
+    Strackee's formula, as `kinema.Mesh`'s inside test): ±1 inside, 0 outside."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    out = np.empty(len(points))
+    block = max(1, WINDING_BLOCK // max(1, len(faces)))
+    tri = vertices[faces]  # (F, 3, 3)
+    for lo in range(0, len(points), block):
+        p = points[lo : lo + block, None, :]
+        a, b, c = tri[None, :, 0] - p, tri[None, :, 1] - p, tri[None, :, 2] - p
+        la, lb, lc = (np.linalg.norm(x, axis=2) for x in (a, b, c))
+        num = np.einsum("ijk,ijk->ij", a, np.cross(b, c))
+        den = la * lb * lc + np.einsum("ijk,ijk->ij", a, b) * lc + np.einsum("ijk,ijk->ij", a, c) * lb + np.einsum("ijk,ijk->ij", b, c) * la
+        out[lo : lo + block] = np.sum(2.0 * np.arctan2(num, den), axis=1) / (4.0 * np.pi)
+    return out
 
 
 class _Source:
@@ -220,10 +343,18 @@ class _Source:
         self.emitter, self.c, self.dim = emitter, emitter._checked, dim
         streams = np.random.SeedSequence(self.c["seed"]).spawn(4)
         self.rng = {name: np.random.Generator(np.random.PCG64(s)) for name, s in zip(("position", "velocity", "size", "life"), streams, strict=True)}
-        self.emitted = 0
+        self.emitted = 0  # drawn from the streams: born, waiting or dropped
+        self.dropped = 0  # drawn, but found no room before `end` (never born)
+        self.told = False  # whether its EmitterWarning at `end` has been given
         # Particles drawn but held back because their place was taken (``hold_back``): each
-        # keeps what it was drawn with and is born where it was to be born once that is free.
+        # keeps what it was drawn with and is born where it was to be born once that is free,
+        # if that is before `end`.
         self.waiting: dict[str, np.ndarray] | None = None
+
+    @property
+    def born(self) -> int:
+        """The particles this emitter has added to the world."""
+        return self.emitted - self.dropped - (0 if self.waiting is None else len(self.waiting["m"]))
 
     def due(self, t: float) -> int:
         """How many particles have birth times <= t (and < end): k with start + k/rate <= t."""
@@ -238,8 +369,12 @@ class _Source:
 
     def births(self, t: float) -> dict[str, Any] | None:
         """The particles born up to time t not yet emitted, carried to t, after those held back
-        (born now at their spawn points); None if none."""
+        (born now at their spawn points); None if none. At t >= end those held back are
+        dropped instead: born now, they would be born after `end`."""
         waiting, self.waiting = self.waiting, None
+        if waiting is not None and not t < self.c["end"]:
+            self.dropped += len(waiting["m"])
+            waiting = None
         new = self._drawn(t)
         if waiting is not None:
             waiting = {**waiting, "x": waiting["spawn"].copy(), "born": np.full(len(waiting["m"]), t)}
@@ -247,11 +382,52 @@ class _Source:
             new = waiting if new is None else {key: np.concatenate([waiting[key], new[key]]) for key in new}
         return new
 
-    def hold_back(self, births: dict[str, Any], held: np.ndarray) -> None:
+    def hold_back(self, births: dict[str, Any], held: np.ndarray, t: float) -> None:
         """Keeps the particles `held` (a mask over `births`) for the next step: their place
-        is taken (an emitter never creates a particle inside another)."""
-        if held.any():
+        is taken (an emitter never creates a particle inside another). At a step boundary t
+        at or after `end` they are dropped: the next chance would be after `end`."""
+        if not held.any():
+            return
+        if t < self.c["end"]:
             self.waiting = {key: value[held] for key, value in births.items()}
+        else:
+            self.dropped += int(held.sum())
+
+    def finished(self, t: float) -> bool:
+        """Whether every particle this emitter will ever emit has been drawn and is born or
+        dropped (t at or after `end`, nothing waiting)."""
+        return not t < self.c["end"] and self.waiting is None and self.emitted >= self.due(t)
+
+    def stats(self, t: float) -> dict[str, Any]:
+        """Its promise and what it kept by time t (s): see `World.emitter_stats`."""
+        c = self.c
+        until = min(t, c["end"])
+        due = self.due(t)
+        span = until - c["start"]
+        born = self.born
+        return {
+            "rate": c["rate"],
+            "start": c["start"],
+            "until": until,
+            "due": due,
+            "born": born,
+            "waiting": 0 if self.waiting is None else len(self.waiting["m"]),
+            "dropped": self.dropped,
+            "achieved_rate": born / span if span > 0 else float("nan"),
+        }
+
+    def shortfall(self, k: int, t: float) -> str:
+        """The words of its `EmitterWarning` (emitter k, at time t)."""
+        st = self.stats(t)
+        head = (
+            f"emitter {k}: {st['born']:,} of {st['due']:,} particles born by t = {st['until']:g} s "
+            f"({st['achieved_rate']:.4g}/s of the {st['rate']:g}/s asked): no room at the source"
+        )
+        if st["dropped"]:
+            head += f"; {st['dropped']:,} found none before end = {self.c['end']:g} s and were dropped"
+        if st["waiting"]:
+            head += f"; {st['waiting']:,} wait for it"
+        return head + " (births wait while a particle or a collider takes their place: a larger source, a lower rate or a faster speed makes room)"
 
     def _drawn(self, t: float) -> dict[str, Any] | None:
         """The particles due by t not drawn yet, carried to t; None if none. More than
@@ -286,6 +462,8 @@ class _Source:
         centre, shape = c["center"], c["shape"]
         if shape == "point":
             return np.tile(centre, (n, 1)), None
+        if shape == "mesh":
+            return self._mesh_positions(n)
         if shape == "box":
             return centre + (rng.random((n, 3)) - 0.5) * c["size"], None
         if shape == "disc":
@@ -307,6 +485,40 @@ class _Source:
             s = np.sqrt(np.maximum(0.0, 1 - z * z))
             normals = np.stack([s * np.cos(phi), s * np.sin(phi), z], axis=1)
         return centre + c["radius"] * normals, normals
+
+    def _mesh_positions(self, n: int) -> tuple[np.ndarray, np.ndarray | None]:
+        """Points of birth (n, 3) on a mesh source and, from faces or vertices, the normals there."""
+        c, rng = self.c, self.rng["position"]
+        v, f = c["mesh_vertices"], c["mesh_faces"]
+        if c["emit_from"] == "faces":
+            u = rng.random((n, 3))  # the face (∝ area), then √u and w of the square-root rule
+            cum = c["mesh_area"]
+            k = np.minimum(np.searchsorted(cum, u[:, 0] * cum[-1], side="right"), len(cum) - 1)
+            s, w = np.sqrt(u[:, 1:2]), u[:, 2:3]
+            a, b, cc = (v[f[k, j]] for j in range(3))
+            return (1.0 - s) * a + s * (1.0 - w) * b + s * w * cc, c["mesh_normals"][k]
+        if c["emit_from"] == "vertices":
+            used = c["mesh_used"]
+            k = np.minimum((rng.random(n) * len(used)).astype(np.int64), len(used) - 1)
+            return v[used[k]].copy(), c["mesh_vertex_normals"][k]
+        # volume: candidates uniform in the box, kept inside; the stream is left just after the
+        # last candidate used, so that the draws do not depend on n
+        lo, hi = c["mesh_box"]
+        inside = c["mesh_volume"] / max(float(np.prod(hi - lo)), 1e-300)
+        kept: list[np.ndarray] = []
+        have = 0
+        while have < n:
+            start = rng.bit_generator.state
+            m = int(min(1e6, np.ceil((n - have) / max(inside, 1e-3) * 1.25) + 16))
+            cand = lo + rng.random((m, 3)) * (hi - lo)
+            ok = np.abs(winding_numbers(cand, v, f)) > 0.5
+            picked = np.flatnonzero(ok)[: n - have]
+            if have + len(picked) >= n:  # rewind to just after the last candidate used
+                rng.bit_generator.state = start
+                rng.random((int(picked[-1]) + 1, 3))
+            kept.append(cand[picked])
+            have += len(picked)
+        return np.concatenate(kept) if kept else np.empty((0, 3)), None
 
     def _velocities(self, n: int, normals: np.ndarray | None) -> np.ndarray:
         """Initial velocities: speed ± spread along the direction, deviated over the cone."""

@@ -140,7 +140,10 @@ def bodies_of(world: Any, core: Any) -> Bodies:
     up = -g / np.linalg.norm(g) if g.any() else np.zeros(3)
     for k, source in enumerate(world._emitters):
         c = source.c
-        top = np.asarray(c["center"], float) + _reach(c, up) * up
+        if c["shape"] == "mesh":  # its highest vertex (its faces, vertices and volume lie below)
+            top = c["mesh_vertices"][int(np.argmax(c["mesh_vertices"] @ up))]
+        else:
+            top = np.asarray(c["center"], float) + _reach(c, up) * up
         speed = c["speed"] + c["speed_spread"]
         for radius in sorted({c["particle_radius"] - c["radius_spread"], c["particle_radius"] + c["radius_spread"]}):
             if radius <= 0:

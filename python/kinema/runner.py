@@ -63,6 +63,19 @@ def _counted(settings: dict, impacts: int) -> str:
     return _count(impacts, "impact") + " inside steps"
 
 
+def _emitter_summary(k: int, st: dict) -> str:
+    """One line of a run's summary for emitter ``k`` (``World.emitter_stats``): the particles
+    born of those due, and the rate achieved of the rate asked."""
+    if not st["until"] > st["start"]:
+        return f"emitter {k}: not started (start = {st['start']:g} s)"
+    line = (
+        f"emitter {k}: {st['born']:,} of {st['due']:,} particles born from t = {st['start']:g} to {st['until']:g} s, "
+        f"{st['achieved_rate']:.4g}/s of the {st['rate']:g}/s asked"
+    )
+    lost = [f"{st[key]:,} {words}" for key, words in (("dropped", "dropped for lack of room"), ("waiting", "waiting for room")) if st[key]]
+    return line + (f" ({', '.join(lost)})" if lost else "")
+
+
 def _count(n: int, noun: str) -> str:
     """``1 particle``, ``2 particles``, ``1,000 frames``."""
     return f"{n:,} {noun}" + ("" if n == 1 else "s")
@@ -418,6 +431,8 @@ def simulate_scene(
     if stats is not None:
         total = stats["total"]
         console.print(f"{_counted(world.collisions, total['impacts'])}, {total['energy_lost']:.4g} J taken by the collisions", highlight=False)
+    for k, st in enumerate(world.emitter_stats()):
+        console.print(_emitter_summary(k, st), highlight=False, soft_wrap=True)
     # Everything is written in a hidden folder inside OUTDIR and moved into place at the end,
     # so a failure leaves no file half-written and none of this run's files at all.
     stage = Path(tempfile.mkdtemp(prefix=_stage_prefix(), dir=outdir))

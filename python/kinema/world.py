@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 
 from . import _checks, _core, first_step
-from .colliders import Box, Collider
-from .emitter import KILL_VOLUMES, Emitter
+from .colliders import Box, Collider, Mesh, MeshPlacementWarning, placement_problems
+from .emitter import BEHIND, KILL_VOLUMES, Emitter, EmitterWarning
 from .forces import Spring
 from .frames import plan as frames_plan
 from .ode import ButcherTableau, method_names
@@ -129,6 +129,14 @@ def _grown(a: np.ndarray, n: int, default: float, values: Any) -> np.ndarray:
     return np.concatenate([a, np.full((n, *a.shape[1:]), default) if values is None else values])
 
 
+def _region(c: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The box (lo, hi) of an emitter's source (its checked values ``c``): where it gives birth."""
+    if c["shape"] == "mesh":
+        return c["mesh_box"]
+    half = np.asarray(c["size"], float) / 2.0 if c["shape"] == "box" else np.full(3, c["radius"] if c["shape"] in ("disc", "sphere") else 0.0)
+    return c["center"] - half, c["center"] + half
+
+
 def _kept(a: np.ndarray, keep: np.ndarray) -> np.ndarray:
     """``a`` of the particles that ``keep`` keeps."""
     if _unset(a) and a.size:
@@ -199,6 +207,7 @@ class World(WorldCollisions):
         self._spring_ids = np.empty((0, 2), dtype=np.int64)
         self._spring_rest: dict[int, np.ndarray] = {}  # index in the forces -> each spring's rest length, m
         self._advised_at = 0  # particles when the advisor last looked
+        self._placed = 0  # the colliders whose placement has been looked at (MeshPlacementWarning)
         self._new_views()
 
     # The engine is the thread's that made the world (pyo3's `unsendable`: its Python forces
@@ -554,6 +563,7 @@ class World(WorldCollisions):
         if n > _checks.UINT64_MAX:
             raise ValueError(f"n = {_checks.describe(n)} is invalid: the number of steps must be < 2**64")
         self._push()
+        self._look_at_meshes()
         try:
             with self._engine() as core:
                 self._advise(core)
@@ -656,13 +666,40 @@ class World(WorldCollisions):
             if b is None:
                 continue
             free = self._free_places(b["x"], b["r"])
-            source.hold_back(b, ~free)
-            if not free.any():
-                continue
-            b = {key: value[free] for key, value in b.items()}
-            c, k = source.c, len(b["m"])
-            e, mu = ([c[name]] * k if c[name] is not None else None for name in ("restitution", "friction"))
-            self._add(b["x"], b["v"], b["m"], b["r"], np.zeros(k, bool), e, mu, [c["species"] or ""] * k, b["death"], c["color"])
+            source.hold_back(b, ~free, t)
+            if free.any():
+                b = {key: value[free] for key, value in b.items()}
+                c, k = source.c, len(b["m"])
+                e, mu = ([c[name]] * k if c[name] is not None else None for name in ("restitution", "friction"))
+                self._add(b["x"], b["v"], b["m"], b["r"], np.zeros(k, bool), e, mu, [c["species"] or ""] * k, b["death"], c["color"])
+        self._tell_dropped(t)
+
+    def _tell_dropped(self, t: float) -> None:
+        """One ``EmitterWarning`` for each emitter that has passed its ``end`` having dropped
+        births for lack of room (once in its life: its counts are final then)."""
+        for k, source in enumerate(self._emitters):
+            if not source.told and source.dropped and source.finished(t):
+                source.told = True
+                warnings.warn(source.shortfall(k, t), EmitterWarning, stacklevel=5)
+
+    def _tell_behind(self) -> None:
+        """At the end of a run: one ``EmitterWarning`` for each emitter not yet past its ``end``
+        whose births waiting for room are more than ``emitter.BEHIND`` of those due."""
+        t = self.time
+        for k, source in enumerate(self._emitters):
+            st = source.stats(t)
+            if not source.finished(t) and st["waiting"] > max(1.0, BEHIND * st["due"]):
+                warnings.warn(source.shortfall(k, t), EmitterWarning, stacklevel=4)
+
+    def emitter_stats(self) -> list[dict[str, Any]]:
+        """Each emitter's promise and what it kept by now, in the order they were added: a dict
+        of ``rate`` (asked, /s), ``start`` and ``until`` (s: its start, and now or its ``end``
+        if sooner), ``due`` (particles due by ``until``: start + k/rate before ``end``),
+        ``born`` (added to the world), ``waiting`` (drawn, waiting for room at the source),
+        ``dropped`` (found no room before ``end``: never born) and ``achieved_rate``
+        (born / (until − start), /s; NaN before the start). ``due`` = born + waiting + dropped
+        once the births due have been drawn (at the step boundary after their time)."""
+        return [source.stats(self.time) for source in self._emitters]
 
     def _free_places(self, x: np.ndarray, r: np.ndarray) -> np.ndarray:
         """Which of the particles to be born at ``x`` (m) with radii ``r`` (m) overlap neither a
@@ -751,6 +788,7 @@ class World(WorldCollisions):
             )
         record_contacts = _checks.boolean("record_contacts", record_contacts)
         self._push()
+        self._look_at_meshes()
         with self._engine() as core:
             self._advise(core)
         rec = Trajectory._recorder(frames + 1, contacts=record_contacts)
@@ -766,6 +804,25 @@ class World(WorldCollisions):
             "recorder": rec,
         }
         return self._record(run, callback, None if checkpoint is None else Path(checkpoint))
+
+    def _look_at_meshes(self) -> None:
+        """One ``MeshPlacementWarning`` for each still mesh collider added since the last look
+        that is far from every particle and emitter, or lies on its side under gravity
+        (``kinema.colliders.placement_problems``)."""
+        if self._placed >= len(self._colliders):
+            return
+        fresh = range(self._placed, len(self._colliders))
+        self._placed = len(self._colliders)
+        meshes = [(k, self._colliders[k]) for k in fresh if isinstance(self._colliders[k], Mesh) and self._colliders[k].motion is None]
+        if not meshes:
+            return
+        g = first_step.gravity(self._forces, self.dim)
+        regions = [_region(source.c) for source in self._emitters]
+        for k, mesh in meshes:
+            said = placement_problems(mesh, self._x, regions, g)
+            if said:
+                name = f"'{mesh.file.name}'" if mesh.file is not None else "of arrays"
+                warnings.warn(f"colliders[{k}], the mesh {name}: {'; '.join(said)}", MeshPlacementWarning, stacklevel=3)
 
     def _births_until(self, t: float) -> int:
         """How many particles the emitters will add from now to time ``t`` (s), those held
@@ -805,6 +862,7 @@ class World(WorldCollisions):
         traj = rec.finish()
         traj.fps = float(run["fps"])  # (saved with it: a video's default rate)
         traj.step = None if plan.divides else plan.step
+        self._tell_behind()
         return traj
 
     def _land(self, t1: float, n: int) -> None:

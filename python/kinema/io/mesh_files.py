@@ -1,14 +1,22 @@
 """Reading triangle meshes from files for `kinema.Mesh`: OBJ, STL, PLY and glTF (.gltf, .glb)
 through `trimesh`, USD (.usd, .usda, .usdc, .usdz) through Pixar's `usd-core` (`pxr`).
 
-`read_mesh(path)` gives the file's vertices (V, 3) float64, in the file's own coordinates
-(m for kinema), and its triangles (F, 3) int64: polygons (quads, n-gons) are cut into fans
+`read_mesh(path)` gives the file's vertices (V, 3) float64, in metres with +z up (kinema's
+axes), and its triangles (F, 3) int64: polygons (quads, n-gons) are cut into fans
 (v0, vk, vk+1), a file of several meshes gives all of them, concatenated, each placed by its
 node's or prim's transform. Vertices at exactly the same coordinates are made one (the first
 keeps its place in the file's order, so a file without such duplicates keeps its vertex order):
 an STL file stores every triangle's corners apart, and a UV seam splits a vertex in two; for a
 collider they are one point, and only a surface whose triangles share their vertices is known
 to be closed. Faces left with a repeated vertex by that (they had no area) are dropped.
+
+Up axes. kinema's gravity points along −z: +z is up. glTF and USD say which way is up, and
+are read so: glTF's +y is up by its specification (2.0, §3.4: "+Y is up"), USD's the stage's
+`upAxis` (Y or Z). OBJ, STL and PLY carry no axis: `up_axis` says it, "z" (the default) or
+"y" (Blender's OBJ export, Maya, Unity, three.js). A +y-up file is turned so that its +y is
++z, a right-handed +90° turn about x: (x, y, z) → (x, −z, y). Blender's OBJ exporter writes
+a Blender point (x, y, z) as (x, z, −y) (forward −Z, up +Y, its defaults), so reading that
+file with up_axis="y" gives back (x, y, z), exactly (a permutation and a sign: no rounding).
 
 A refused file is a `ValueError` of one line: `file = '<path>' is invalid: <why>` (no such
 file, a directory, a format not read (the list of those read), a file the format's reader
@@ -24,6 +32,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+#: The up axes a file may be read with (`up_axis`): kinema's own, and the common other one.
+UP_AXES = ("z", "y")
+#: The formats that say their own up axis (glTF by its specification, USD by its stage's
+#: upAxis); `up_axis` is for the others.
+OWN_AXIS = ("glTF", "USD")
 
 #: The formats read, with the suffixes that name them (the one home of this list).
 MESH_FORMATS = {
@@ -46,10 +60,40 @@ def formats_text() -> str:
     return ", ".join(f"{name} ({', '.join(s)})" for name, s in MESH_FORMATS.items())
 
 
-def read_mesh(path: str | os.PathLike, name: str = "file") -> tuple[np.ndarray, np.ndarray]:
+def y_up_to_z_up(vertices: np.ndarray) -> np.ndarray:
+    """The points (V, 3) of a +y-up file in kinema's +z-up axes: (x, y, z) → (x, −z, y), the
+    right-handed +90° turn about x that takes +y to +z (and +z to −y). Exact: no rounding."""
+    v = np.asarray(vertices, dtype=np.float64)
+    return np.stack([v[:, 0], -v[:, 2], v[:, 1]], axis=1) + 0.0  # (−0.0 + 0.0 = 0.0)
+
+
+def check_up_axis(value: object, name: str = "up_axis") -> str | None:
+    """`value` ("z", "y", upper case too, or None: the file's own or z) as "z", "y" or None; else a
+    `ValueError` naming `name`."""
+    if value is None:
+        return None
+    if isinstance(value, str) and value.strip().lower() in UP_AXES:
+        return value.strip().lower()
+    raise ValueError(f'{name} = {value!r} is invalid: use "z" (+z is up, kinema\'s own) or "y" (+y is up: Blender\'s OBJ export, glTF)')
+
+
+def read_mesh(path: str | os.PathLike, name: str = "file", up_axis: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The vertices (V, 3) float64 and triangles (F, 3) int64 of the mesh file `path`, in
+    kinema's axes: `read_mesh_axis`'s first two."""
+    vertices, faces, _ = read_mesh_axis(path, name, up_axis)
+    return vertices, faces
+
+
+def read_mesh_axis(path: str | os.PathLike, name: str = "file", up_axis: str | None = None) -> tuple[np.ndarray, np.ndarray, str]:
     """The vertices (V, 3) float64 and triangles (F, 3) int64 of the mesh file `path` (see
-    the module doc); `name` is the parameter a refusal names."""
+    the module doc), in kinema's axes (+z up); `name` is the parameter a refusal names.
+
+    `up_axis`: the file's up axis, "z" or "y", for a format that does not say it (OBJ, STL,
+    PLY; None: "z"). glTF (+y up) and USD (its stage's upAxis) say theirs and are read by it;
+    an `up_axis` given for them that disagrees is a `ValueError` (it would be a second turn).
+    The third value is the up axis the file was read with, "z" or "y"."""
     path = Path(path)
+    up_axis = check_up_axis(up_axis)
 
     def refuse(why: str) -> ValueError:
         return ValueError(f"{name} = {str(path)!r} is invalid: {why}")
@@ -72,9 +116,19 @@ def read_mesh(path: str | os.PathLike, name: str = "file") -> tuple[np.ndarray, 
 
         raise refuse(f"is not a regular file (a {special_kind(mode) or 'special file'}); a mesh is a file")
     if fmt == "USD":
-        vertices, faces = _read_usd(path, refuse)
+        vertices, faces, own = _read_usd(path, refuse)
     else:
         vertices, faces = _read_trimesh(path, fmt, refuse)
+        own = "y" if fmt == "glTF" else None
+    if own is not None and up_axis is not None and up_axis != own:
+        said = "by the glTF specification" if fmt == "glTF" else "by its stage's upAxis"
+        raise ValueError(
+            f"up_axis = {up_axis!r} is invalid for {path}: a {fmt} file says its own up axis (+{own} {said}) and is read "
+            f"by it, turned to kinema's +z up; leave up_axis out (it is for OBJ, STL and PLY, which say none)"
+        )
+    axis = own or up_axis or "z"
+    if axis == "y":
+        vertices = y_up_to_z_up(np.asarray(vertices, dtype=np.float64).reshape(-1, 3))
     vertices, faces = _merged(vertices, faces)
     if len(faces) == 0:
         raise refuse("it holds no triangle (a mesh collider needs faces; a point cloud or a set of lines has none)")
@@ -82,7 +136,7 @@ def read_mesh(path: str | os.PathLike, name: str = "file") -> tuple[np.ndarray, 
     if bad.any():
         v, k = (int(i) for i in np.argwhere(bad)[0])
         raise refuse(f"its vertex {v} has the coordinate {vertices[v, k]!r}; a mesh's vertices must be finite")
-    return vertices, faces
+    return vertices, faces, axis
 
 
 def _merged(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -141,7 +195,8 @@ def _read_usd(path: Path, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
     local-to-world transform, × the stage's `metersPerUnit` (USD's fallback 0.01,
     centimetres, with a `UnitWarning` where the stage does not say it, as
     `kinema.io.read_usd` reads particles); `faceVertexCounts` and `faceVertexIndices`
-    cut into fans; a `leftHanded` prim's triangles turned to run counter-clockwise."""
+    cut into fans; a `leftHanded` prim's triangles turned to run counter-clockwise. Also the
+    stage's up axis, "y" or "z" (read_mesh turns a +y-up stage's points to +z up)."""
     try:
         from pxr import Tf, Usd, UsdGeom
     except ImportError:
@@ -193,9 +248,7 @@ def _read_usd(path: Path, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
     said = []
     if not UsdGeom.StageHasAuthoredMetersPerUnit(stage):
         said.append(f"the stage does not say its metersPerUnit: USD's fallback {metres!r} m (centimetres) is taken")
-    up = UsdGeom.GetStageUpAxis(stage)
-    if up != UsdGeom.Tokens.z:
-        said.append(f"its up axis is {up}, kinema's is z (gravity along -z): the coordinates are read as they are (rotation=(90, 0, 0) turns +y to +z)")
+    up = "y" if UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.y else "z"  # (USD allows Y or Z; its fallback is Y)
     if said:
         warnings.warn(f"{path}: {'; '.join(said)}", UnitWarning, stacklevel=4)
-    return np.concatenate(parts_v) * metres, np.concatenate(parts_f)
+    return np.concatenate(parts_v) * metres, np.concatenate(parts_f), up

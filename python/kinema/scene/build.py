@@ -93,11 +93,19 @@ def load_scene(path: str | Path) -> World:
 
 
 def _emitter(e: EmitterTable) -> Emitter:
-    values = e.model_dump()
+    values = e.model_dump(exclude={"mesh"})
     for name in ("center", "size", "normal", "direction"):
         if values[name] is not None:
             values[name] = _v3(values[name])
-    return Emitter(**values)
+    return Emitter(**values, mesh=None if e.mesh is None else _mesh(e.mesh))
+
+
+def _mesh(c: Any, **more: Any) -> Mesh:
+    """The ``kinema.Mesh`` of a mesh table (``MeshShape``: an emitter's mesh, a collider's)."""
+    shape = {"up_axis": c.up_axis, "scale": c.scale, "rotation": c.rotation, "translation": c.translation, **more}
+    if c.file is not None:
+        return Mesh(c.file, **shape)
+    return Mesh(vertices=c.vertices, faces=c.faces, **shape)
 
 
 def _kill(k: Any) -> Any:
@@ -267,10 +275,7 @@ def _collider(c: Any, dim: int) -> Any:
     if isinstance(c, BoxCollider):
         return Box(list(c.lo), list(c.hi), **s)
     if isinstance(c, MeshCollider):
-        shape = {"scale": c.scale, "rotation": c.rotation, "translation": c.translation, "inside": c.inside}
-        if c.file is not None:
-            return Mesh(c.file, **shape, **s)
-        return Mesh(vertices=c.vertices, faces=c.faces, **shape, **s)
+        return _mesh(c, inside=c.inside, **s)
     return SphereObstacle(_v3(c.center), c.radius, **s)
 
 

@@ -22,6 +22,21 @@ from .tables import EmitterTable
 
 # -- world -> scene ---------------------------------------------------------------------------
 
+
+def _mesh_table(c: Mesh) -> dict[str, Any]:
+    """A mesh's keys in a scene: its file (absolute) and placement where it was read from one
+    (the scene stays small), else its vertices as placed (after the transform) and its faces."""
+    if c.file is not None:
+        return {
+            "file": os.path.abspath(c.file),
+            "up_axis": c.up_axis,
+            "scale": list(c.scale),
+            "rotation": list(c.rotation),
+            "translation": list(c.translation),
+        }
+    return {"vertices": c.vertices.tolist(), "faces": c.faces.tolist()}
+
+
 _SOURCE = "<world>"  # what the messages of to_scene name
 
 
@@ -163,11 +178,7 @@ def to_scene(world: World) -> Scene:
         elif isinstance(c, Mesh):
             # its file and transform where it was read from one (the scene stays small), else
             # its vertices as the world has them (after the transform) and its faces
-            if c.file is not None:
-                shape = {"file": os.path.abspath(c.file), "scale": list(c.scale), "rotation": list(c.rotation), "translation": list(c.translation)}
-            else:
-                shape = {"vertices": c.vertices.tolist(), "faces": c.faces.tolist()}
-            colliders.append({"type": "mesh", **shape, "inside": c.inside, **s})
+            colliders.append({"type": "mesh", **_mesh_table(c), "inside": c.inside, **s})
         else:
             colliders.append({"type": "sphere", "center": _v3(list(np.ravel(c.center))), "radius": float(c.radius), **s})
     emitters = []
@@ -180,6 +191,8 @@ def to_scene(world: World) -> Scene:
                 emitters[-1][name] = np.asarray(emitters[-1][name], float).tolist()
         if isinstance(e.color, (tuple, list, np.ndarray)):
             emitters[-1]["color"] = np.asarray(e.color, float).tolist()
+        if e.mesh is not None:
+            emitters[-1]["mesh"] = _mesh_table(source.c["mesh"])
     kills = []
     for k in world._kills:
         if isinstance(k, KillBox):

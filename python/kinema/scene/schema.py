@@ -154,6 +154,9 @@ class Scene(_Model):
         for collider in scene.colliders:  # a mesh's file too
             if isinstance(collider, MeshCollider) and collider.file is not None and not os.path.isabs(collider.file):
                 collider.file = os.path.abspath(os.path.join(path.parent, collider.file))
+        for emitter in scene.emitters:  # and an emitter's mesh's
+            if emitter.mesh is not None and emitter.mesh.file is not None and not os.path.isabs(emitter.mesh.file):
+                emitter.mesh.file = os.path.abspath(os.path.join(path.parent, emitter.mesh.file))
         return scene
 
     @classmethod

@@ -497,21 +497,22 @@ class SphereCollider(_Surface):
     radius: NonNeg
 
 
-class MeshCollider(_Surface):
-    """A triangle mesh (``kinema.Mesh``, 3D only): from ``file`` (OBJ, STL, PLY, glTF, USD; a
-    path relative to the scene file) or from ``vertices`` (m) and ``faces`` (vertex indices)
-    written in the table; then scaled by ``scale`` (one factor or 3), rotated by ``rotation``
-    (degrees about the fixed x, then y, then z axis) and moved by ``translation`` (m).
-    ``inside``: particles live inside this closed mesh (a container)."""
+class MeshShape(_Model):
+    """A triangle mesh's shape and placement (``kinema.Mesh``, 3D only): from ``file`` (OBJ,
+    STL, PLY, glTF, USD; a path relative to the scene file) or from ``vertices`` (m) and
+    ``faces`` (vertex indices) written in the table, whose up axis is ``up_axis`` ("z",
+    kinema's, or "y"; none: the file's own for glTF and USD, else "z"); then scaled by
+    ``scale`` (one factor or 3), rotated by ``rotation`` (degrees about the fixed x, then y,
+    then z axis) and moved by ``translation`` (m). An emitter's ``mesh``, and the mesh
+    collider's keys."""
 
-    type: Literal["mesh"] = "mesh"
     file: Annotated[str, Field(min_length=1)] | None = None
     vertices: Annotated[list[Vec3], Field(min_length=1)] | None = None
     faces: Annotated[list[Annotated[list[Annotated[int, Field(ge=0, le=2**32 - 1)]], Field(min_length=3, max_length=3)]], Field(min_length=1)] | None = None
+    up_axis: Literal["z", "y"] | None = None
     scale: _by_kind(float, Vec3) = 1.0
     rotation: Vec3 = [0.0, 0.0, 0.0]
     translation: Vec3 = [0.0, 0.0, 0.0]
-    inside: bool = False
 
     @field_validator("file")
     @classmethod
@@ -540,13 +541,21 @@ class MeshCollider(_Surface):
         return v
 
     @model_validator(mode="after")
-    def _source(self) -> MeshCollider:
+    def _source(self) -> Any:
         arrays = self.vertices is not None or self.faces is not None
         if self.file is not None and arrays:
             raise ValueError("give either file or vertices and faces, not both")
         if self.file is None and not (self.vertices is not None and self.faces is not None):
             raise ValueError("a mesh needs file (a mesh file beside the scene) or both vertices and faces")
         return self
+
+
+class MeshCollider(_Surface, MeshShape):
+    """A triangle mesh collider (``kinema.Mesh``): ``MeshShape``'s keys, and ``inside``:
+    particles live inside this closed mesh (a container)."""
+
+    type: Literal["mesh"] = "mesh"
+    inside: bool = False
 
 
 ColliderItem = _typed(PlaneCollider, BoxCollider, SphereCollider, MeshCollider)
@@ -557,7 +566,7 @@ ColliderItem = _typed(PlaneCollider, BoxCollider, SphereCollider, MeshCollider)
 
 class EmitterTable(_Model):
     rate: Positive
-    shape: Literal["point", "box", "disc", "sphere"] = "point"
+    shape: Literal["point", "box", "disc", "sphere", "mesh"] = "point"
     center: Vec = [0.0, 0.0, 0.0]
     size: Vec = [0.0, 0.0, 0.0]
     radius: NonNeg = 0.0
@@ -579,6 +588,8 @@ class EmitterTable(_Model):
     restitution: Unit | None = None
     friction: NonNeg | None = None
     seed: Annotated[int, Field(ge=0, le=2**63 - 1)] = 0
+    mesh: MeshShape | None = None
+    emit_from: Literal["faces", "volume", "vertices"] = "faces"
 
 
 class KillBoxTable(_Model):
