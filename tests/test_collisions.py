@@ -295,6 +295,7 @@ def test_settings_read_back_and_round_trip():
         "rolling_stiffness": None,
         "rolling_damping": None,
         "accuracy": "physics",
+        "self_collisions": True,
     }
     assert w.collisions == expected
     w.set_collisions(**w.collisions)
@@ -528,6 +529,7 @@ def test_collision_defaults_and_contact_models_are_the_engines():
         "rolling_stiffness": None,
         "rolling_damping": None,
         "accuracy": "physics",
+        "self_collisions": True,
     }
     signature = inspect.signature(kinema.World.set_collisions)
     assert {k: p.default for k, p in signature.parameters.items() if k != "self"} == engine

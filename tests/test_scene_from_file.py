@@ -145,7 +145,7 @@ def test_units_of_a_file_block(start):
         ('path = ""', r"particles\[0\]\.path: '' is invalid: string should have at least 1 character"),
         (
             'path = "start.xyz"\nscale = 2.0',
-            r"particles\[0\]\.scale: unknown key allowed keys here: angular_velocity, atom_style, format, frame, friction, inertia, mass, path, pinned",
+            r"particles\[0\]\.scale: unknown key allowed keys here: angular_velocity, atom_style, format, frame, friction, group, inertia, mass, path, pinned",
         ),
     ],
 )

@@ -403,3 +403,48 @@ def broadcast(name: str, arr: np.ndarray, shape: tuple[int, ...], what: str) -> 
         return np.broadcast_to(arr, shape)
     except ValueError:
         raise ValueError(f"{name} has shape {arr.shape}; it must be {what}") from None
+
+
+GROUPS = 32  # collision groups: a group is a bit of a 32-bit mask (kinema::collide::GROUPS)
+
+
+def groups(name: str, value: Any, n: int | None = None) -> np.ndarray:
+    """``value`` as collision groups: one integer in 0..31, or a 1-D list/array of them (with
+    ``n``: a scalar is broadcast to (n,), and a list must have n). Integers only (a float, a bool
+    or a string is a ``TypeError`` naming the element); outside 0..31 a ``ValueError`` naming it."""
+    arr = _as_array(name, value)
+    if n is not None and arr.ndim == 1 and arr.shape != (n,):
+        raise ValueError(f"{name} has shape {arr.shape}; it must be a group (an integer in 0..{GROUPS - 1}) or one per particle, ({n},)")
+    if arr.ndim > 1:
+        raise ValueError(f"{name} has shape {arr.shape}; it must be a group (an integer in 0..{GROUPS - 1}) or a 1-D list of them")
+    obj = _objects(value) if not (isinstance(value, np.ndarray) and value.dtype.kind in "iu") else arr
+    if obj.dtype.kind not in "iu":
+        if isinstance(value, np.ndarray) and value.dtype.kind not in "O":
+            raise _fail(TypeError, name, value, f"collision groups are integers in 0..{GROUPS - 1}, not {_dtype_words(arr.dtype)}")
+        bad = _first_bad(name, obj, _is_integer)
+        if bad is not None:
+            raise _fail(TypeError, bad[0], bad[1], f"a collision group is an integer in 0..{GROUPS - 1}, not {_type_words(bad[1])}")
+    values = [int(x) for x in np.asarray(obj).reshape(-1).tolist()]
+    for k, v in enumerate(values):
+        if not 0 <= v < GROUPS:
+            at = name if arr.ndim == 0 else f"{name}[{k}]"
+            raise ValueError(f"{at} = {v} is invalid: a collision group is an integer in 0..{GROUPS - 1} (a bit of a 32-bit mask)")
+    out = np.array(values, dtype=np.int64).reshape(arr.shape)
+    return np.broadcast_to(out, (n,)).copy() if n is not None and out.ndim == 0 else out
+
+
+def group_mask(name: str, value: Any) -> int:
+    """``value`` (None: every group; else a group or a list of groups, 0..31) as a 32-bit mask."""
+    if value is None:
+        return (1 << GROUPS) - 1
+    mask = 0
+    for g in groups(name, value).reshape(-1).tolist():
+        mask |= 1 << g
+    return mask
+
+
+def mask_groups(mask: int) -> list[int] | None:
+    """The groups of a 32-bit mask (None for every group): :func:`group_mask`'s inverse."""
+    if mask == (1 << GROUPS) - 1:
+        return None
+    return [g for g in range(GROUPS) if mask >> g & 1]

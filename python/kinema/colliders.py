@@ -11,6 +11,9 @@ checked by the engine when it is added; a bad one is a `ValueError` that names i
 `restitution` e ∈ [0, 1] and `friction` μ ≥ 0 are the collider's own: where set, they
 override the particle's value for every contact with it (a dead floor, e = 0, stops a bouncy
 ball); `None` uses the particle's value (its own, else the world's).
+
+`collides_with`: the collision groups (integers in 0..31, `World.groups`) whose particles the
+collider stops; the others pass through it (Box2D's mask bits). `None` (the default): every group.
 """
 
 from __future__ import annotations
@@ -42,6 +45,12 @@ class Collider:
     def __post_init__(self) -> None:
         object.__setattr__(self, "motion", _motion_of(self.motion))
         object.__setattr__(self, "_args", self._checked())
+        object.__setattr__(self, "collides_with", _collides_with(self.collides_with))
+
+    @property
+    def _group_mask(self) -> int:
+        """The groups it collides with as a 32-bit mask (every bit: all)."""
+        return _checks.group_mask("collides_with", self.collides_with)
 
     def _moved(self, motion: Any) -> Collider:
         """This collider with another `motion` (`World.set_motion` keeps it so)."""
@@ -65,6 +74,7 @@ class Plane(Collider):
     restitution: float | None = None
     friction: float | None = None
     motion: Motion | Keyframes | None = None
+    collides_with: Any = None
 
     def _checked(self) -> tuple:
         return _vec3("point", self.point), _vec3("normal", self.normal), *_surface(self)
@@ -90,6 +100,7 @@ class Box(Collider):
     restitution: float | None = None
     friction: float | None = None
     motion: Motion | Keyframes | None = None
+    collides_with: Any = None
 
     def _checked(self) -> tuple:
         if self.motion is not None and self.motion.turns:
@@ -117,6 +128,7 @@ class SphereObstacle(Collider):
     restitution: float | None = None
     friction: float | None = None
     motion: Motion | Keyframes | None = None
+    collides_with: Any = None
 
     def _checked(self) -> tuple:
         return _vec3("center", self.center), _checks.real("radius", self.radius), *_surface(self)
@@ -190,6 +202,7 @@ class Mesh(Collider):
         "_motion",
         "_args",
         "_closed",
+        "_collides_with",
     )
 
     def __init__(
@@ -206,8 +219,10 @@ class Mesh(Collider):
         restitution: float | None = None,
         friction: float | None = None,
         motion: Motion | Keyframes | None = None,
+        collides_with: Any = None,
     ) -> None:
         motion = _motion_of(motion)
+        collides_with = _collides_with(collides_with)
         arrays = vertices is not None or faces is not None
         if file is not None and arrays:
             given = " and ".join(n for n, v in (("vertices", vertices), ("faces", faces)) if v is not None)
@@ -260,6 +275,7 @@ class Mesh(Collider):
             ("_motion", motion),
             ("_args", (v, f, inside, *surface)),
             ("_closed", None),
+            ("_collides_with", collides_with),
         ):
             object.__setattr__(self, name, value)
 
@@ -318,6 +334,11 @@ class Mesh(Collider):
     def motion(self) -> Motion | Keyframes | None:
         """The mesh's prescribed motion, or None (still)."""
         return self._motion
+
+    @property
+    def collides_with(self) -> tuple[int, ...] | None:
+        """The collision groups it stops (None: every group)."""
+        return self._collides_with
 
     def _moved(self, motion: Any) -> Mesh:
         """This mesh with another `motion` (`World.set_motion` keeps it so)."""
@@ -426,6 +447,13 @@ def rotation_matrix(rotation: Any) -> np.ndarray:
     ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
     rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
     return rz @ ry @ rx
+
+
+def _collides_with(value: Any) -> tuple[int, ...] | None:
+    """`collides_with` checked: None (every group) or the sorted groups, each once."""
+    if value is None:
+        return None
+    return tuple(sorted({int(g) for g in _checks.groups("collides_with", value).reshape(-1).tolist()}))
 
 
 def _text(file: Any) -> Any:

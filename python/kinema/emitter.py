@@ -135,7 +135,9 @@ class Emitter:
     `inf`: until killed) ± `lifetime_spread` (uniform, s); `color` ('#rrggbb' or r, g,
     b in [0, 1]; drawn by the renderer and the viewer with `color_by="color"`);
     `species` (a name, as in `World.add_particles`); `restitution` and `friction` (the
-    particle's own collision values, None: the world's).
+    particle's own collision values, None: the world's); `group` (the particles' collision
+    group, 0..31, as in `World.add_particles`: a jet whose group does not collide with itself
+    stays a jet).
 
     `seed`: the emitter's random streams (position, velocity, size, lifetime); the same
     seed gives the same particles, bit for bit. Add it with `World.add`.
@@ -163,6 +165,7 @@ class Emitter:
     species: str | None = None
     restitution: float | None = None
     friction: float | None = None
+    group: int = 0
     seed: int = 0
     mesh: Any = None
     emit_from: str = "faces"
@@ -247,6 +250,7 @@ class Emitter:
         c["species"] = None if self.species is None else _checks.species("species", self.species)
         for name in ("restitution", "friction"):
             c[name] = _checks.real(name, getattr(self, name), optional=True)
+        c["group"] = _checks.integer("group", self.group, 0, _checks.GROUPS - 1, what=f"a collision group is an integer in 0..{_checks.GROUPS - 1}")
         c["seed"] = _checks.integer("seed", self.seed, 0, 2**63 - 1, what="the seed must be an integer from 0 to 2**63 - 1")
         object.__setattr__(self, "_checked", c)
 

@@ -20,7 +20,8 @@ can be too short for the step. This check looks ahead instead, in four stages:
    higher). A plane that does not face up, or no gravity, gives d = 0.
    Between particles, the two fastest speeds u_i = max_k √(|v_i|² + 2 |g| d_ik) add (two
    particles meet at most at the sum of their speeds; a particle that has bounced off
-   something meets a falling one at no more). An ``Emitter`` counts as particles of its
+   something meets a falling one at no more); not when no pair collides
+   (``self_collisions=False``). An ``Emitter`` counts as particles of its
    smallest and largest radius born at the top of its shape at its fastest speed.
 
 2. **The shortest contact** of those impacts. Hertz (Landau & Lifshitz §9; Johnson, Contact
@@ -246,7 +247,11 @@ def shortest_contact(settings: dict, bodies: Bodies, colliders: list[Any], g: np
     no contact can happen (one particle and nothing fixed; Hertz: nothing moves or falls)."""
     n = len(bodies.r)
     fixed = bool(colliders) or len(bodies.fixed_r) > 0
-    if n == 0 or (n < 2 and not fixed):
+    # pairs of particles can meet unless no pair collides (self_collisions off); a matrix that
+    # spares some pairs and colliders that let some groups through are counted as colliding,
+    # an upper bound as the rest of the check is
+    pairs = n > 1 and settings.get("self_collisions", True)
+    if n == 0 or (not pairs and not fixed):
         return None
     model = settings["model"]
     gabs = float(np.linalg.norm(g))
@@ -257,12 +262,12 @@ def shortest_contact(settings: dict, bodies: Bodies, colliders: list[Any], g: np
         k = settings["stiffness"]
         lightest_first = np.sort(bodies.w)[::-1]
         w_pair = lightest_first[0] + (lightest_first[1] if n > 1 else 0.0)
-        w_eff = max(w_pair if n > 1 else 0.0, lightest_first[0] if fixed else 0.0)
+        w_eff = max(w_pair if pairs else 0.0, lightest_first[0] if fixed else 0.0)
         omega = math.sqrt(k * w_eff)
         if settings.get("damping") is not None:
             zeta = settings["damping"] / (2.0 * omega)
         t_c = contact_time.contact_time(model, omega, zeta)
-        what = "the stiffest spring–dashpot pair (the lightest)" if w_eff == w_pair and n > 1 else "the lightest particle against a collider"
+        what = "the stiffest spring–dashpot pair (the lightest)" if w_eff == w_pair and pairs else "the lightest particle against a collider"
         return Impact(t_c, omega, zeta, None, what)
     # Hertz: each particle against each collider, and the lightest, largest pair at the two
     # fastest speeds
@@ -279,7 +284,7 @@ def shortest_contact(settings: dict, bodies: Bodies, colliders: list[Any], g: np
         if np.isfinite(t_c[i]) and (best is None or t_c[i] < best[0]):
             how = f"falling {d[i]:.3g} m" if d[i] > 0 else "at its speed"
             best = (float(t_c[i]), float(u[i]), f"{bodies.label[i]} (r = {bodies.r[i]:g} m) {how} onto {name}")
-    if n > 1:
+    if pairs:
         order = np.argsort(free)[::-1]
         u = float(free[order[0]] + free[order[1]])
         w1, w2 = np.sort(bodies.w)[::-1][:2]

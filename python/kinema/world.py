@@ -336,6 +336,7 @@ class World(WorldCollisions):
         species: Any = None,
         angular_velocity: Any = None,
         inertia: Any = None,
+        group: Any = 0,
     ) -> np.ndarray:
         """Add particles; returns their indices.
 
@@ -359,6 +360,11 @@ class World(WorldCollisions):
         ASE's chemical symbol, HOOMD's types, H5MD's species); particles without one are
         ``X`` once any particle has one.
 
+        ``group``: the particles' collision group, an integer in 0..31 or one per particle
+        (default 0): which particles and colliders they collide with is set per group
+        (:meth:`set_group_collisions`, :attr:`collision_matrix`, a collider's
+        ``collides_with``; Box2D's category bits). :attr:`groups` reads and changes them.
+
         Nothing is coerced: numbers are real numbers (ints or floats, NumPy scalars or arrays
         of an int or float dtype), and a bool, a complex number, a string or a date among them
         is a ``TypeError`` naming the parameter and the value; ``pinned`` takes only bools
@@ -379,6 +385,7 @@ class World(WorldCollisions):
             for name, a in (("restitution", restitution), ("friction", friction))
         )
         names = self._species_names(species, n)
+        groups = _checks.groups("group", group, n)
         spin = None
         if angular_velocity is not None or inertia is not None:
             if not self._core.spin:
@@ -388,7 +395,7 @@ class World(WorldCollisions):
             w = None if w is None else _checks.broadcast("angular_velocity", w, (n, 3), f"a (3,) vector or one per particle, ({n}, 3)")
             i = None if inertia is None else _checks.broadcast("inertia", _checks.real_array("inertia", inertia), (n,), each)
             spin = (w, i)
-        return self._add(x, v, m, r, p, e, mu, names, spin=spin)
+        return self._add(x, v, m, r, p, e, mu, names, spin=spin, group=groups)
 
     def add_particles_from(
         self,
@@ -436,9 +443,10 @@ class World(WorldCollisions):
         names = got["species"] if got["species"] is not None else species
         return self.add_particles(x, v, m, r, pinned=pinned, restitution=restitution, friction=friction, species=names)
 
-    def _add(self, x, v, m, r, p, e, mu, names, death=None, color=None, spin=None) -> np.ndarray:
-        """Adds checked particles with their species names, times of death, colours and, in a
-        world with spin, their (angular velocities, inertias) where given."""
+    def _add(self, x, v, m, r, p, e, mu, names, death=None, color=None, spin=None, group=None) -> np.ndarray:
+        """Adds checked particles with their species names, times of death, colours, collision
+        groups (checked, (N,); None: group 0) and, in a world with spin, their (angular
+        velocities, inertias) where given."""
         n = len(m)
         self._push()
         if spin is not None:
@@ -447,7 +455,8 @@ class World(WorldCollisions):
         arrays = {
             k: np.ascontiguousarray(a, dtype=d) for k, a, d in (("x", x, float), ("v", v, float), ("mass", m, float), ("radius", r, float), ("pinned", p, bool))
         }
-        start, end = self._core.add_particles({**arrays, "restitution": e, "friction": mu})
+        given = None if group is None or not np.any(group) else np.asarray(group, dtype=np.int64).tolist()
+        start, end = self._core.add_particles({**arrays, "restitution": e, "friction": mu, "group": given})
         if spin is not None:
             self._core.set_particle_spin(start, end, *(None if a is None else np.ascontiguousarray(a, dtype=float) for a in spin))
         self._species += names
@@ -508,6 +517,8 @@ class World(WorldCollisions):
             _check_motion(self.dim, item, item.motion)  # refused before the collider is added
         attached = attach(self._core)
         if isinstance(item, Collider):
+            if item._group_mask != (1 << _checks.GROUPS) - 1:
+                self._core.set_collider_mask(attached, item._group_mask)
             kept = item
             if item.motion is not None:
                 given = item.motion._given_at(self.time)  # a Motion starts when it is given
@@ -665,13 +676,14 @@ class World(WorldCollisions):
             b = source.births(t)
             if b is None:
                 continue
-            free = self._free_places(b["x"], b["r"])
+            free = self._free_places(b["x"], b["r"], source.c["group"])
             source.hold_back(b, ~free, t)
             if free.any():
                 b = {key: value[free] for key, value in b.items()}
                 c, k = source.c, len(b["m"])
                 e, mu = ([c[name]] * k if c[name] is not None else None for name in ("restitution", "friction"))
-                self._add(b["x"], b["v"], b["m"], b["r"], np.zeros(k, bool), e, mu, [c["species"] or ""] * k, b["death"], c["color"])
+                group = np.full(k, c["group"], dtype=np.int64)
+                self._add(b["x"], b["v"], b["m"], b["r"], np.zeros(k, bool), e, mu, [c["species"] or ""] * k, b["death"], c["color"], group=group)
         self._tell_dropped(t)
 
     def _tell_dropped(self, t: float) -> None:
@@ -701,20 +713,31 @@ class World(WorldCollisions):
         once the births due have been drawn (at the step boundary after their time)."""
         return [source.stats(self.time) for source in self._emitters]
 
-    def _free_places(self, x: np.ndarray, r: np.ndarray) -> np.ndarray:
-        """Which of the particles to be born at ``x`` (m) with radii ``r`` (m) overlap neither a
-        particle of the world nor one of them before it (in order), and have their centre
-        outside every collider; the others wait (with collisions off, every place is free)."""
+    def _free_places(self, x: np.ndarray, r: np.ndarray, group: int = 0) -> np.ndarray:
+        """Which of the particles to be born at ``x`` (m) with radii ``r`` (m) in collision group
+        ``group`` overlap neither a particle of the world nor one of them before it (in order),
+        and have their centre outside every collider; the others wait (with collisions off, every
+        place is free). Particles and colliders that ``group`` does not collide with take no place."""
         free = np.ones(len(r), bool)
         if self.collisions is None:
             return free
         # a centre inside a collider is no place either (the contacts cannot push it out: collide/placement.rs)
         t = self.time
-        free &= ~np.array([any(_inside(c, p, t) for c in self._colliders) for p in x], dtype=bool)
+        masks = self._core.collider_masks
+        walls = [c for c, mask in zip(self._colliders, masks, strict=True) if mask >> group & 1]
+        free &= ~np.array([any(_inside(c, p, t) for c in walls) for p in x], dtype=bool)
+        row = self._core.group_masks[group] if self.collisions["self_collisions"] else 0
+        if row == 0:
+            return free  # the group collides with no particle
         here, radius = self._x, np.asarray(self._core.radii)
+        if row != (1 << _checks.GROUPS) - 1:
+            near = (row >> np.asarray(self._core.groups, dtype=np.int64)) & 1 == 1
+            here, radius = here[near], radius[near]
+        own = row >> group & 1 == 1  # whether the newborns collide with each other
         for k in range(len(r)):
-            taken = np.concatenate([here, x[:k][free[:k]]])
-            reach = np.concatenate([radius, r[:k][free[:k]]]) + r[k]
+            before = free[:k] & own
+            taken = np.concatenate([here, x[:k][before]])
+            reach = np.concatenate([radius, r[:k][before]]) + r[k]
             if taken.size and (np.einsum("ij,ij->i", taken - x[k], taken - x[k]) < reach * reach).any():
                 free[k] = False
         return free
@@ -939,6 +962,22 @@ class World(WorldCollisions):
         out = np.asarray(self._core.radii, dtype=np.float64)
         out.flags.writeable = False
         return out
+
+    @property
+    def groups(self) -> np.ndarray:
+        """Each particle's collision group (N,), an integer in 0..31 (default 0): a new
+        read-only array. Assign ``w.groups = ...`` (a group for all, or one per particle) to
+        move particles to other groups; ``add_particles(..., group=...)`` and an emitter's
+        ``group`` set them at birth. Which groups collide: :attr:`collision_matrix`."""
+        out = np.asarray(self._core.groups, dtype=np.int64)
+        out.flags.writeable = False
+        return out
+
+    @groups.setter
+    def groups(self, value: Any) -> None:
+        g = _checks.groups("groups", value, len(self))
+        self._push()
+        self._core.set_groups(0, g.tolist())
 
     @property
     def spin(self) -> bool:

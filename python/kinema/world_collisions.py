@@ -46,6 +46,7 @@ class WorldCollisions:
         rolling_stiffness: float | None = _DEFAULTS["rolling_stiffness"],
         rolling_damping: float | None = _DEFAULTS["rolling_damping"],
         accuracy: str = _DEFAULTS["accuracy"],
+        self_collisions: bool = _DEFAULTS["self_collisions"],
     ) -> None:
         """Turn collisions on, or replace every one of their settings.
 
@@ -112,6 +113,11 @@ class WorldCollisions:
         the ground rather than by the particles below: momentum is not exchanged by action and
         reaction there (docs/collisions.md, "The accuracy setting").
 
+        ``self_collisions=False``: particles never collide with each other, only with the
+        colliders (Blender's particles; a fountain's jet that does not burst into spray). It
+        overrides the groups' matrix (:meth:`set_group_collisions`), which says which particle
+        pairs collide when it is true (the default).
+
         With ``"spring_dashpot"`` and ``"hertz"`` the contacts are a force (its elastic energy is the potential
         ``"contact"`` of :meth:`diagnostics` and of the ``Trajectory``), which the stable-step
         advisor and the ``StabilityWarning`` count; :meth:`contacts` reports the impulse model
@@ -120,7 +126,7 @@ class WorldCollisions:
 
         ``w.set_collisions(**w.collisions)`` changes nothing. The defaults are the engine's
         (``model="impulse"``, ``restitution=1.0``, ``friction=0.0``, ``ccd=True``,
-        ``sleep_time=0.5``, ``event_driven=False``, ``accuracy="physics"``, the rest ``None``), read from it.
+        ``sleep_time=0.5``, ``event_driven=False``, ``accuracy="physics"``, ``self_collisions=True``, the rest ``None``), read from it.
         """
         settings = {
             "model": _checks.text("model", model),
@@ -144,6 +150,7 @@ class WorldCollisions:
             "rolling_stiffness": _checks.real("rolling_stiffness", rolling_stiffness, optional=True),
             "rolling_damping": _checks.real("rolling_damping", rolling_damping, optional=True),
             "accuracy": _checks.text("accuracy", accuracy),
+            "self_collisions": _checks.boolean("self_collisions", self_collisions),
         }
         if settings["rolling_friction"] and not self._core.spin:
             raise ValueError(
@@ -152,6 +159,51 @@ class WorldCollisions:
         self._push()
         self._core.set_collisions(settings)
         self._advice_due = True  # the spring-dashpot model's contacts are stiff springs
+
+    def set_group_collisions(self, a: Any, b: Any, collide: bool = True) -> None:
+        """Say whether collision groups ``a`` and ``b`` collide (both ways: the matrix stays
+        symmetric; Box2D's category and mask bits, Bullet's collision filter groups). ``a`` and
+        ``b`` are groups (integers in 0..31) or lists of them: every pair (one of ``a``, one of
+        ``b``) is set. ``set_group_collisions(1, 1, False)``: group 1's particles pass through
+        each other; ``set_group_collisions(0, 1, False)``: groups 0 and 1 pass through each
+        other, each still colliding with itself. Every pair collides by default; a particle's
+        group is :attr:`groups` (``add_particles(..., group=k)``), a collider's groups its
+        ``collides_with``. Turns collisions on if they are off. Contacts, islands and the
+        neighbour lists start over."""
+        ga = _checks.groups("a", a).reshape(-1).tolist()
+        gb = _checks.groups("b", b).reshape(-1).tolist()
+        on = _checks.boolean("collide", collide)
+        matrix = self.collision_matrix.copy()
+        for i in ga:
+            for j in gb:
+                matrix[i, j] = matrix[j, i] = on
+        self.collision_matrix = matrix
+
+    @property
+    def collision_matrix(self) -> np.ndarray:
+        """Which collision groups collide: a (32, 32) symmetric bool array (a copy), entry
+        [a, b] true when particles of groups a and b collide (all true by default). Assign a
+        (32, 32) symmetric bool array to set it whole; :meth:`set_group_collisions` sets pairs.
+        ``set_collisions(self_collisions=False)`` turns every pair off over it."""
+        rows = np.asarray(self._core.group_masks, dtype=np.uint64)
+        return (rows[:, None] >> np.arange(_checks.GROUPS, dtype=np.uint64)[None, :]) & 1 == 1
+
+    @collision_matrix.setter
+    def collision_matrix(self, value: Any) -> None:
+        m = _checks.bool_array("collision_matrix", value)
+        n = _checks.GROUPS
+        if m.shape != (n, n):
+            raise ValueError(f"collision_matrix has shape {m.shape}; it must be ({n}, {n}): one row and column per collision group")
+        bad = np.argwhere(m != m.T)
+        if bad.size:
+            a, b = (int(k) for k in bad[0])
+            raise ValueError(
+                f"collision_matrix[{a}][{b}] = {bool(m[a, b])} is invalid: the matrix must be symmetric "
+                f"(collision_matrix[{b}][{a}] is {bool(m[b, a])}); groups {a} and {b} collide or not both ways"
+            )
+        rows = [int(np.sum(np.left_shift(np.uint64(1), np.arange(n, dtype=np.uint64))[row])) for row in m]
+        self._push()
+        self._core.set_group_masks(rows)
 
     def contact_time(self) -> float | None:
         """The duration of the shortest contact the scene can produce, s, with the

@@ -61,6 +61,8 @@ pub struct CollisionArgs {
     rolling_damping: Option<f64>,
     #[pyo3(item)]
     accuracy: String,
+    #[pyo3(item)]
+    self_collisions: bool,
 }
 
 impl CollisionArgs {
@@ -93,6 +95,7 @@ impl CollisionArgs {
                 rolling_damping: self.rolling_damping,
             },
             accuracy: Accuracy::from_name(&self.accuracy)?,
+            self_collisions: self.self_collisions,
         })
     }
 }
@@ -254,6 +257,7 @@ pub fn params_dict<'py>(py: Python<'py>, p: &CollisionParams) -> PyResult<Bound<
     out.set_item("rolling_stiffness", t.rolling_stiffness)?;
     out.set_item("rolling_damping", t.rolling_damping)?;
     out.set_item("accuracy", p.accuracy.name())?;
+    out.set_item("self_collisions", p.self_collisions)?;
     Ok(out)
 }
 

@@ -44,6 +44,9 @@ struct NewParticles<'py> {
     /// Each particle's own μ (NaN: the global one), or None.
     #[pyo3(item)]
     friction: Option<Vec<f64>>,
+    /// Each particle's collision group (0..32), or None (group 0).
+    #[pyo3(item)]
+    group: Option<Vec<u32>>,
 }
 
 /// The particle world (see kinema.World).
@@ -104,11 +107,15 @@ impl PyWorld {
             pinned,
             restitution,
             friction,
+            group,
         } = particles;
         let (x, v) = (flat3("position", &x)?, flat3("velocity", &v)?);
         let (mass, radius, pinned) = (mass.as_slice()?, radius.as_slice()?, pinned.as_slice()?);
         let own = collide::materials(mass.len(), restitution, friction).map_err(to_py)?;
-        let r = self.inner.add_particles(&x, &v, mass, radius, pinned).map_err(world_err)?;
+        let r = self
+            .inner
+            .add_particles_in_groups(&x, &v, mass, radius, pinned, group.as_deref())
+            .map_err(world_err)?;
         if let Some((e, mu)) = own {
             self.inner.set_particle_materials(r.start, &e, &mu).map_err(to_py)?;
         }
@@ -268,6 +275,51 @@ impl PyWorld {
     fn particle_materials(&mut self) -> Vec<(Option<f64>, Option<f64>)> {
         self.inner.restore_order();
         self.inner.particle_materials()
+    }
+
+    /// Each particle's collision group, in the user's order.
+    #[getter]
+    fn groups(&mut self) -> Vec<u32> {
+        self.inner.restore_order();
+        self.inner.particle_groups()
+    }
+
+    /// Puts particles start.. into the collision groups `group` (checked: 0..32).
+    fn set_groups(&mut self, start: usize, group: Vec<u32>) -> PyResult<()> {
+        self.inner.restore_order();
+        self.inner.set_particle_groups(start, &group).map_err(to_py)
+    }
+
+    /// The collision groups' matrix as one 32-bit mask per group (bit h of row g: g and h
+    /// collide).
+    #[getter]
+    fn group_masks(&self) -> Vec<u32> {
+        self.inner.group_masks().rows().to_vec()
+    }
+
+    /// Sets the matrix from 32 masks (checked symmetric).
+    fn set_group_masks(&mut self, masks: [u32; 32]) -> PyResult<()> {
+        self.inner.restore_order();
+        let masks = kinema::collide::GroupMasks::from_rows(masks).map_err(to_py)?;
+        self.inner.set_group_masks(masks).map_err(to_py)
+    }
+
+    /// Sets whether groups a and b collide (both ways).
+    fn set_group_collisions(&mut self, a: usize, b: usize, collide: bool) -> PyResult<()> {
+        self.inner.restore_order();
+        self.inner.set_group_collisions(a, b, collide).map_err(to_py)
+    }
+
+    /// Sets the mask of the groups collider k collides with.
+    fn set_collider_mask(&mut self, k: usize, mask: u32) -> PyResult<()> {
+        self.inner.restore_order();
+        self.inner.set_collider_mask(k, mask).map_err(to_py)
+    }
+
+    /// Each collider's mask of the groups it collides with.
+    #[getter]
+    fn collider_masks(&self) -> Vec<u32> {
+        self.inner.collider_masks()
     }
 
     #[getter]

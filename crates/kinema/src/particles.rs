@@ -47,6 +47,9 @@ pub struct Particles {
     /// With spin: I / (m r²) of a particle added without its own inertia: 2/5 for a solid
     /// sphere (3D), 1/2 for a disc (2D); 0 without spin.
     pub inertia_factor: f64,
+    /// Collision groups, 0..32 (`collide/groups.rs`), one per particle; empty while every
+    /// particle is in group 0 (no byte spent on them).
+    pub group: Vec<u8>,
 }
 
 /// In a `new_of_old` map of [`Particles::retain`]: the particle was removed.
@@ -161,6 +164,9 @@ impl Particles {
                 self.inv_inertia
                     .push(Self::inverse_inertia(self.inertia[q], self.inv_mass[q]));
             }
+        }
+        if !self.group.is_empty() {
+            self.group.resize(self.len(), 0);
         }
         Ok(start..start + n)
     }
@@ -306,6 +312,7 @@ impl Particles {
             retain_rows(v, 1, keep);
         }
         retain_rows(&mut self.id, 1, keep);
+        retain_rows(&mut self.group, 1, keep);
         new_of_old
     }
 

@@ -46,14 +46,16 @@ def build(scene: Scene, source: str = "<scene>") -> World:
         try:
             x, v, m, r, p, e, mu = _particles(block, dim)
             spin = _spin(block, len(m))
-            idx = w.add_particles(x, v, m, r, p, e, mu, species=_species(block), **spin)
+            idx = w.add_particles(x, v, m, r, p, e, mu, species=_species(block), group=block.group, **spin)
         except ValueError as err:
             raise SceneError(f"{where}: {err}") from None
         starts.append((int(idx[0]), int(idx[-1]) + 1))
     if scene.collisions is not None:
-        c = scene.collisions.model_dump(exclude={"periodic"})
+        c = scene.collisions.model_dump(exclude={"periodic", "ignore_groups"})
         try:
             w.set_collisions(**c)
+            for a, b in scene.collisions.ignore_groups or []:
+                w.set_group_collisions(a, b, False)
         except ValueError as err:
             raise SceneError(f"{source}: collisions: {err}") from None
     for k, col in enumerate(scene.colliders):
@@ -269,7 +271,7 @@ def _motion(m: Any) -> Motion | Keyframes | None:
 
 
 def _collider(c: Any, dim: int) -> Any:
-    s = {"restitution": c.restitution, "friction": c.friction, "motion": _motion(c.motion)}
+    s = {"restitution": c.restitution, "friction": c.friction, "motion": _motion(c.motion), "collides_with": c.collides_with}
     if isinstance(c, PlaneCollider):
         return Plane(_v3(c.point), _v3(c.normal), **s)
     if isinstance(c, BoxCollider):

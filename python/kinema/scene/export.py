@@ -120,6 +120,8 @@ def to_scene(world: World) -> Scene:
         }
         if world.species is not None:
             block["species"] = world.species.tolist()
+        if world.groups.any():
+            block["group"] = world.groups.tolist()
         if world.spin:
             block["angular_velocity"] = world.angular_velocities.tolist()
             block["inertia"] = world.inertia.tolist()
@@ -171,6 +173,8 @@ def to_scene(world: World) -> Scene:
         s = {k: float(v) for k, v in (("restitution", c.restitution), ("friction", c.friction)) if v is not None}
         if c.motion is not None:
             s["motion"] = _motion_table(c.motion)
+        if c.collides_with is not None:
+            s["collides_with"] = list(c.collides_with)
         if isinstance(c, Plane):
             colliders.append({"type": "plane", "point": _v3(list(np.ravel(c.point))), "normal": _v3(list(np.ravel(c.normal))), **s})
         elif isinstance(c, Box):
@@ -221,6 +225,10 @@ def to_scene(world: World) -> Scene:
             c["sleep_time"] = float("inf")  # nothing sleeps (TOML has no None)
         if any(world.periodic):
             c["periodic"] = list(world.periodic)
+        m = world.collision_matrix
+        off = [[a, b] for a in range(len(m)) for b in range(a, len(m)) if not m[a, b]]
+        if off:
+            c["ignore_groups"] = off
         data["collisions"] = c
     try:
         return Scene.from_dict(data, _SOURCE)

@@ -44,6 +44,7 @@ Unit = Annotated[float, Field(ge=0, le=1)]
 Index = Annotated[int, Field(ge=0, lt=MAX_PARTICLES)]
 Count = Annotated[int, Field(ge=1, le=MAX_PARTICLES)]
 Seed = Annotated[int, Field(ge=0, le=MAX_SEED)]
+Group = Annotated[int, Field(ge=0, le=_checks.GROUPS - 1, strict=True)]  # a collision group (World.add_particles' group)
 
 
 def _exact(*allowed: Any) -> Any:
@@ -213,6 +214,7 @@ class _Block(_Model):
     restitution: Material | None = None
     friction: Material | None = None
     species: SpeciesName | list[SpeciesName] | None = None
+    group: Group | list[Group] = 0
     seed: Seed = 0
     angular_velocity: list[float] | list[list[float]] | None = None
     inertia: PerParticle | None = None
@@ -469,6 +471,7 @@ class _Surface(_Model):
     restitution: Unit | None = None
     friction: NonNeg | None = None
     motion: MotionItem | None = None
+    collides_with: list[Group] | None = None  # the collision groups it stops (None: all)
 
 
 class PlaneCollider(_Surface):
@@ -587,6 +590,7 @@ class EmitterTable(_Model):
     species: SpeciesName | None = None
     restitution: Unit | None = None
     friction: NonNeg | None = None
+    group: Group = 0
     seed: Annotated[int, Field(ge=0, le=2**63 - 1)] = 0
     mesh: MeshShape | None = None
     emit_from: Literal["faces", "volume", "vertices"] = "faces"
@@ -643,6 +647,9 @@ class CollisionsTable(_Model):
     rolling_stiffness: Positive | None = _COLLISION_DEFAULTS["rolling_stiffness"]
     rolling_damping: NonNeg | None = _COLLISION_DEFAULTS["rolling_damping"]
     accuracy: Literal["physics", "animation"] = _COLLISION_DEFAULTS["accuracy"]
+    self_collisions: bool = _COLLISION_DEFAULTS["self_collisions"]
+    # the pairs of collision groups that pass through each other (World.set_group_collisions(a, b, False))
+    ignore_groups: list[Annotated[list[Group], Field(min_length=2, max_length=2)]] | None = None
     periodic: Annotated[list[bool], Field(min_length=2, max_length=3)] | None = None
 
     @model_validator(mode="after")

@@ -7,6 +7,7 @@
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use super::groups::Filter;
 use super::{Collider, Domain, Grid, Plane};
 use crate::error::Error;
 
@@ -155,7 +156,12 @@ impl NeighbourList {
     pub(crate) const MIN_ENTRIES: usize = 1 << 25;
 
     /// Makes the list hold for positions `x` (rebuilt with `grid` if needed, with the skin
-    /// and the colliders' largest |coordinate| that `build` works out then).
+    /// and the colliders' largest |coordinate| that `build` works out then). With a `filter`
+    /// (collision groups, `groups.rs`) a pair or particle–collider pair that does not collide
+    /// is never listed: the list is the unfiltered one less those pairs, so the argument of
+    /// the type's doc holds for the pairs that collide. The filter must stay as it was while
+    /// the list is kept (the world forgets the list when groups or masks change).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn update(
         &mut self,
         grid: &mut Grid,
@@ -163,6 +169,7 @@ impl NeighbourList {
         radius: &[f64],
         colliders: &[Collider],
         domain: &Domain,
+        filter: Option<Filter<'_>>,
         build: impl FnOnce() -> ListBuild,
     ) -> Result<(), Error> {
         let moving_now = colliders
@@ -194,7 +201,8 @@ impl NeighbourList {
                 b.check_fill(domain.dim(), x, radius)?;
             }
         }
-        let searched = grid.prepare(x, radius, domain, skin)?;
+        // (no pair collides: no pair search, only the colliders' candidates)
+        let searched = filter.is_none_or(|f| !f.no_pairs()) && grid.prepare(x, radius, domain, skin)?;
         // The rows, chunk by chunk on all threads; each particle's row depends on the
         // positions only, so the list is the same for any number of threads. The entries are
         // counted as they come (into a shared count every 64 particles, so the threads rarely
@@ -215,9 +223,13 @@ impl NeighbourList {
             let mut counted = 0;
             let mut over = false;
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                if searched && !over {
+                if searched && !over && filter.is_none_or(|f| f.mask(i) != 0) {
                     let lowest = if half { i + 1 } else { 0 };
+                    let before = partners.len();
                     grid.partners_from(i, lowest, x, radius, domain, skin, partners);
+                    if let Some(f) = filter {
+                        retain_colliding(partners, before, |j| f.pair(i, j));
+                    }
                     if i % 64 == 63 {
                         let added = partners.len() - counted;
                         counted = partners.len();
@@ -249,7 +261,11 @@ impl NeighbourList {
             let walled: Vec<bool> = active_walls(colliders, domain).iter().map(|a| a.iter().any(|&w| w)).collect();
             for (i, &r) in radius.iter().enumerate() {
                 let p = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
-                for (k, c) in colliders.iter().enumerate().filter(|&(k, _)| walled[k]) {
+                for (k, c) in colliders
+                    .iter()
+                    .enumerate()
+                    .filter(|&(k, _)| walled[k] && filter.is_none_or(|f| f.wall(i, k)))
+                {
                     // a moving collider can reach a particle that stays put: every particle
                     // is its candidate
                     let mut near = c.is_moving();
@@ -339,6 +355,19 @@ impl NeighbourList {
     }
 }
 
+/// Keeps, of `partners[from..]`, those for which `collides` holds, in their order.
+fn retain_colliding(partners: &mut Vec<u32>, from: usize, collides: impl Fn(usize) -> bool) {
+    let mut kept = from;
+    for k in from..partners.len() {
+        let j = partners[k];
+        if collides(j as usize) {
+            partners[kept] = j;
+            kept += 1;
+        }
+    }
+    partners.truncate(kept);
+}
+
 impl NeighbourList {
     /// Follows a removal of particles (`new_of_old[i]`: particle i's new index,
     /// [`GONE`](crate::particles::GONE) for a removed one; the survivors keep their order):
@@ -392,7 +421,16 @@ impl NeighbourList {
     ///
     /// Returns false, leaving no list (the next evaluation builds one), when there is none to
     /// extend or the newborns are too many to test one by one ([`Self::ADMIT_MAX_TESTS`]).
-    pub(crate) fn admit(&mut self, x: &[f64], radius: &[f64], colliders: &[Collider], domain: &Domain, start: usize) -> bool {
+    /// With a `filter` the pairs that do not collide are left out, as a build leaves them.
+    pub(crate) fn admit(
+        &mut self,
+        x: &[f64],
+        radius: &[f64],
+        colliders: &[Collider],
+        domain: &Domain,
+        filter: Option<Filter<'_>>,
+        start: usize,
+    ) -> bool {
         self.verified = None;
         let n = radius.len();
         let fresh = n - start;
@@ -413,7 +451,7 @@ impl NeighbourList {
             for i in 0..k {
                 let d = domain.displacement(xk, at(i, &self.built_at));
                 let reach = radius[i] + radius[k] + skin;
-                if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach {
+                if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach && filter.is_none_or(|f| f.pair(i, k)) {
                     added.push((i as u32, k as u32));
                 }
             }
@@ -447,7 +485,11 @@ impl NeighbourList {
         if !colliders.is_empty() {
             let walled: Vec<bool> = active_walls(colliders, domain).iter().map(|a| a.iter().any(|&w| w)).collect();
             for i in start..n {
-                for (k, c) in colliders.iter().enumerate().filter(|&(k, _)| walled[k]) {
+                for (k, c) in colliders
+                    .iter()
+                    .enumerate()
+                    .filter(|&(k, _)| walled[k] && filter.is_none_or(|f| f.wall(i, k)))
+                {
                     let mut near = c.is_moving();
                     if !near {
                         c.for_each_touch(at(i, x), radius[i], skin, |_| near = true);
@@ -598,7 +640,7 @@ mod tests {
             ..NeighbourList::default()
         };
         let err = list
-            .update(&mut grid, &x, &radius, &[], &domain, || ListBuild {
+            .update(&mut grid, &x, &radius, &[], &domain, None, || ListBuild {
                 skin: 0.1,
                 reach: 0.0,
                 collider_scale: 0.0,
@@ -616,7 +658,7 @@ mod tests {
         );
         assert!(list.rows.is_empty() && list.built_at.is_empty(), "no list is left behind");
         list.entry_limit = None;
-        list.update(&mut grid, &x, &radius, &[], &domain, || ListBuild {
+        list.update(&mut grid, &x, &radius, &[], &domain, None, || ListBuild {
             skin: 0.1,
             reach: 0.0,
             collider_scale: 0.0,

@@ -57,6 +57,9 @@ pub struct Placed<'a> {
     pub radius: &'a [f64],
     pub from: usize,
     pub user_of: Option<&'a [u32]>,
+    /// The collision groups' filter (`groups.rs`): pairs that do not collide may overlap, and
+    /// a particle may lie behind a collider it does not collide with.
+    pub filter: Option<crate::collide::groups::Filter<'a>>,
 }
 
 /// Overlaps a contact model resolves but that start the run with a push: particles
@@ -100,6 +103,7 @@ pub fn check(
         radius,
         from,
         user_of,
+        filter,
     } = *place;
     let n = radius.len();
     // First what the neighbour list refuses at its build, whose words say more about such a
@@ -142,7 +146,7 @@ pub fn check(
             grid.partners(i, x, radius, domain, 0.0, &mut out);
             for &j in &out {
                 let j = j as usize;
-                if j >= from && j > i {
+                if (j >= from && j > i) || filter.is_some_and(|f| !f.pair(i, j)) {
                     continue;
                 }
                 let d = vec3::norm(domain.displacement(vec3::get(x, i), vec3::get(x, j)));
@@ -196,6 +200,9 @@ pub fn check(
         let p = vec3::get(x, i);
         let slack = TOLERANCE * (radius[i] + vec3::norm(p));
         for (k, c) in colliders.iter().enumerate() {
+            if filter.is_some_and(|f| !f.wall(i, k)) {
+                continue;
+            }
             let inside = match c {
                 Collider::Sphere(s) => {
                     let d = vec3::norm(vec3::sub(p, s.center()));

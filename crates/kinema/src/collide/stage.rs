@@ -12,6 +12,7 @@ use crate::collide::contact_force::{
     particle_ratios, Bodies, ContactForce, RollingModel, SpringDashpot, TangentialLaw, TangentialModel,
 };
 use crate::collide::event_driven::{unsupported_collider, EventDriven};
+use crate::collide::groups::{Filter, GroupMasks};
 use crate::collide::impulse::end_of_step::overlap_at;
 use crate::collide::impulse::impacts::check_travel;
 use crate::collide::impulse::{ImpulseModel, StageSetting};
@@ -326,6 +327,10 @@ pub struct CollisionParams {
     /// The impulse model's accuracy setting ([`Accuracy`]). Default `Physics`; the force
     /// models and event-driven dynamics refuse `Animation` (they have no end-of-step solve).
     pub accuracy: Accuracy,
+    /// Whether particles collide with each other at all (`collide/groups.rs`): false, no
+    /// particle pair collides, whatever the groups' matrix says, while every particle still
+    /// collides with the colliders (Blender's particles). Default true.
+    pub self_collisions: bool,
 }
 
 impl Default for CollisionParams {
@@ -342,6 +347,7 @@ impl Default for CollisionParams {
             rolling_friction: 0.0,
             tangential: TangentialArgs::default(),
             accuracy: Accuracy::Physics,
+            self_collisions: true,
         }
     }
 }
@@ -600,6 +606,10 @@ pub(crate) struct CollideStage {
     /// The event-driven state between calls (`None`: made afresh at the next), with
     /// `params.event_driven`.
     events: Option<EventDriven>,
+    /// Which collision groups collide with which (`collide/groups.rs`; all by default).
+    pub group_masks: GroupMasks,
+    /// Each collider's mask of the groups it collides with (one per collider, all by default).
+    pub collider_masks: Vec<u32>,
 }
 
 impl CollideStage {
@@ -624,7 +634,15 @@ impl CollideStage {
             collider_books: Vec::new(),
             collider_last: Vec::new(),
             events: None,
+            group_masks: GroupMasks::default(),
+            collider_masks: Vec::new(),
         })
+    }
+
+    /// The collision groups' filter for particles in `groups` (`Particles::group`), or `None`
+    /// when every pair collides.
+    pub fn filter<'a>(&'a self, groups: &'a [u8]) -> Option<Filter<'a>> {
+        Filter::of(groups, &self.group_masks, self.params.self_collisions, &self.collider_masks)
     }
 
     /// Gives collider k a prescribed motion from the placement it was added in (`None`:
@@ -842,7 +860,13 @@ impl CollideStage {
     /// The spring–dashpot contact force on particles of radii `radius` (m) and inverse masses
     /// `inv_mass` (1/kg), with this stage's materials, colliders and domain, for one call;
     /// `None` with the impulse model.
-    pub fn contact_force<'a>(&'a self, radius: &'a [f64], inv_mass: &'a [f64], omega: &'a [f64]) -> Option<ContactForce<'a>> {
+    pub fn contact_force<'a>(
+        &'a self,
+        radius: &'a [f64],
+        inv_mass: &'a [f64],
+        omega: &'a [f64],
+        group: &'a [u8],
+    ) -> Option<ContactForce<'a>> {
         let model = self.spring_dashpot.as_ref()?;
         let own = self.particle_materials.as_deref().zip(self.particle_ratios.as_deref());
         Some(ContactForce::new(
@@ -856,6 +880,7 @@ impl CollideStage {
                 colliders: &self.colliders,
                 domain: &self.domain,
                 omega,
+                filter: self.filter(group),
             },
         ))
     }
@@ -891,6 +916,7 @@ impl CollideStage {
             radius: &p.radius,
             from,
             user_of,
+            filter: Filter::of(&p.group, &self.group_masks, self.params.self_collisions, &self.collider_masks),
         };
         placement::check(&mut self.impulse.grid, &place, &self.domain, &self.colliders, rule)
     }
@@ -921,6 +947,7 @@ impl CollideStage {
             }),
             rolling_friction: self.params.rolling_friction,
             accuracy: self.params.accuracy,
+            filter: Filter::of(&p.group, &self.group_masks, self.params.self_collisions, &self.collider_masks),
         };
         (&mut self.impulse, set)
     }
@@ -1043,7 +1070,10 @@ impl CollideStage {
         let start = std::time::Instant::now();
         let mut events = match self.events.take() {
             Some(e) if e.is_at(p.len(), t0, field) => e,
-            _ => EventDriven::new(p, &self.colliders, &self.domain, t0, field),
+            _ => {
+                let filter = Filter::of(&p.group, &self.group_masks, self.params.self_collisions, &self.collider_masks);
+                EventDriven::new(p, &self.colliders, &self.domain, filter, t0, field)
+            }
         };
         let table = MaterialTable::uniform(self.material).with_colliders(&self.colliders);
         let materials = match &self.particle_materials {

@@ -199,9 +199,15 @@ impl World {
             return Err(Error::invalid("list_built_at", n, "no candidate list: collisions are off"));
         };
         let radius = &self.particles.radius;
+        let filter = crate::collide::groups::Filter::of(
+            &self.particles.group,
+            &stage.group_masks,
+            stage.params.self_collisions,
+            &stage.collider_masks,
+        );
         stage
             .impulse
-            .restore_list(&built_at, skin, radius, &stage.colliders, &stage.domain)
+            .restore_list(&built_at, skin, radius, &stage.colliders, &stage.domain, filter)
     }
 
     /// What sleeping carries to the next step (`collide/sleep.rs`): each particle's calm time

@@ -17,6 +17,24 @@ impl World {
         radius: &[f64],
         pinned: &[bool],
     ) -> Result<std::ops::Range<usize>, Error> {
+        self.add_particles_in_groups(x, v, mass, radius, pinned, None)
+    }
+
+    /// [`World::add_particles`] with each newborn's collision group (`group`, one per particle,
+    /// 0..32, `collide/groups.rs`; `None`: group 0), checked before anything is added. The
+    /// newborns are placed and listed in their groups from the start.
+    pub fn add_particles_in_groups(
+        &mut self,
+        x: &[f64],
+        v: &[f64],
+        mass: &[f64],
+        radius: &[f64],
+        pinned: &[bool],
+        group: Option<&[u32]>,
+    ) -> Result<std::ops::Range<usize>, Error> {
+        if let Some(g) = group {
+            check_groups(g, mass.len())?;
+        }
         if self.params.dim == 2 {
             for (name, values) in [("position", x), ("velocity", v)] {
                 if let Some(i) = values.chunks(3).position(|c| c.len() == 3 && c[2] != 0.0) {
@@ -29,6 +47,13 @@ impl World {
             }
         }
         let range = self.particles.add(x, v, mass, radius, pinned)?;
+        if let Some(g) = group.filter(|g| g.iter().any(|&g| g != 0)) {
+            let p = &mut self.particles;
+            p.group.resize(p.len(), 0);
+            for (k, &g) in g.iter().enumerate() {
+                p.group[range.start + k] = g as u8;
+            }
+        }
         if !self.deaths.time.is_empty() {
             self.deaths.time.resize(self.particles.len(), f64::INFINITY); // (live until set)
         }
@@ -253,4 +278,20 @@ impl World {
         }
         Ok(())
     }
+}
+
+/// Refuses a group list of another length than `n` or with a group outside 0..32; the error
+/// names the first.
+pub(super) fn check_groups(group: &[u32], n: usize) -> Result<(), Error> {
+    if group.len() != n {
+        return Err(Error::invalid(
+            "group",
+            format!("{} values", group.len()),
+            format!("one collision group per particle ({n})"),
+        ));
+    }
+    for (k, &g) in group.iter().enumerate() {
+        crate::collide::groups::check_group(&format!("group[{k}]"), g as u64)?;
+    }
+    Ok(())
 }

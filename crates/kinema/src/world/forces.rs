@@ -13,7 +13,7 @@ use crate::particles::Particles;
 pub(super) fn contact_force<'a>(stage: &'a Option<CollideStage>, particles: &'a Particles) -> Option<ContactForce<'a>> {
     stage
         .as_ref()?
-        .contact_force(&particles.radius, &particles.inv_mass, &particles.omega)
+        .contact_force(&particles.radius, &particles.inv_mass, &particles.omega, &particles.group)
 }
 
 /// `forces` and then `contact`, in the order they are summed.

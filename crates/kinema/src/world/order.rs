@@ -219,6 +219,7 @@ impl World {
         gather(&mut p.inv_mass, old_of_new, 1);
         gather(&mut p.radius, old_of_new, 1);
         gather(&mut p.id, old_of_new, 1);
+        gather(&mut p.group, old_of_new, 1);
         gather(&mut p.omega, old_of_new, 3);
         gather(&mut p.orientation, old_of_new, 4);
         gather(&mut p.alpha, old_of_new, 3);

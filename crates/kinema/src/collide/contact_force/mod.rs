@@ -30,6 +30,7 @@
 use std::sync::{Mutex, MutexGuard};
 
 use crate::collide::books::ColliderBooks;
+use crate::collide::groups::Filter;
 pub(crate) use crate::collide::neighbour_list::CHUNK;
 use crate::collide::neighbour_list::{collider_scale, ListBuild, NeighbourList, SKIN_PER_RADIUS};
 use crate::collide::{Collider, Domain, Grid, Material};
@@ -260,6 +261,9 @@ pub(crate) struct ContactForce<'a> {
     tangential: Option<TangentialModel>,
     /// The angular velocities, rad/s (3 per particle; empty without spin).
     omega: &'a [f64],
+    /// The collision groups' filter, applied where the neighbour list is built (`None`:
+    /// every pair collides).
+    filter: Option<Filter<'a>>,
 }
 
 /// What a [`ContactForce`] reads besides its model: the pair materials (with each
@@ -282,6 +286,8 @@ pub(crate) struct Bodies<'a> {
     pub domain: &'a Domain,
     /// Angular velocities, rad/s (3 per particle; empty without spin).
     pub omega: &'a [f64],
+    /// The collision groups' filter (`collide/groups.rs`; `None`: every pair collides).
+    pub filter: Option<Filter<'a>>,
 }
 
 /// A pass's tangential part over the memory in `histories`, with the angular velocities
@@ -409,6 +415,7 @@ impl<'a> ContactForce<'a> {
                 .tangential
                 .filter(|_| has_friction(bodies.global, bodies.own_friction, bodies.colliders)),
             omega: bodies.omega,
+            filter: bodies.filter,
         }
     }
 
@@ -440,7 +447,9 @@ impl<'a> ContactForce<'a> {
     /// ([`NeighbourList::admit`]: their pairs are added, the others stay); false when the
     /// list could not be kept (the next evaluation builds one).
     pub fn admit_newborns(&self, x: &[f64], start: usize) -> bool {
-        self.scratch().list.admit(x, self.radius, self.colliders, &self.domain, start)
+        self.scratch()
+            .list
+            .admit(x, self.radius, self.colliders, &self.domain, self.filter, start)
     }
 
     /// The neighbour list's skin at a build now, m: the model's fixed one, or
@@ -498,7 +507,7 @@ impl<'a> ContactForce<'a> {
             reach,
             collider_scale: self.colliders.iter().map(collider_scale).fold(0.0, f64::max),
         };
-        list.update(grid, s.x, self.radius, self.colliders, &self.domain, build)
+        list.update(grid, s.x, self.radius, self.colliders, &self.domain, self.filter, build)
     }
 }
 

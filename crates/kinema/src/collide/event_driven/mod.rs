@@ -41,6 +41,7 @@ mod shells;
 use super::books::ColliderBooks;
 use super::colliders::Collider;
 use super::contact::{Contact, Partner};
+use super::groups::Filter;
 use super::impulse::CollisionStats;
 use super::morton::morton_order;
 use super::response::{restitution_impulse, MaterialTable};
@@ -147,6 +148,8 @@ struct Wall {
     normal: [f64; 3],
     /// The collider it belongs to.
     collider: usize,
+    /// The groups it collides with (its collider's mask, `collide/groups.rs`).
+    mask: u32,
 }
 
 /// The event-driven state of a world's particles (module doc).
@@ -164,6 +167,9 @@ pub(crate) struct EventDriven {
     time: f64,
     /// The uniform field, m/s²: the particles' acceleration between impacts.
     g: [f64; 3],
+    /// With collision groups (`collide/groups.rs`): each particle's group in our order and
+    /// the groups' masks in effect; `None` when every pair collides.
+    groups: Option<(Vec<u8>, [u32; crate::collide::GROUPS])>,
 }
 
 /// What the event-driven path cannot do, or `None`: a collider other than a still plane or
@@ -181,7 +187,7 @@ impl EventDriven {
     /// every neighbour list made, every particle's first event scheduled. The colliders must
     /// be planes and boxes ([`unsupported_collider`]); the radii must suit the domain
     /// ([`Domain::check_radii`]).
-    pub fn new(p: &Particles, colliders: &[Collider], domain: &Domain, t0: f64, g: [f64; 3]) -> Self {
+    pub fn new(p: &Particles, colliders: &[Collider], domain: &Domain, filter: Option<Filter<'_>>, t0: f64, g: [f64; 3]) -> Self {
         let n = p.len();
         let cell = domain.periodic_box().copied();
         let r_max = p.radius.iter().cloned().fold(0.0, f64::max);
@@ -211,7 +217,14 @@ impl EventDriven {
             })
             .collect();
         let radius: Vec<f64> = order.iter().map(|&i| p.radius[i as usize]).collect();
-        let walls = collect_walls(colliders, domain);
+        let mut walls = collect_walls(colliders, domain);
+        let groups = filter.map(|f| {
+            for w in &mut walls {
+                w.mask = f.collider_mask(w.collider);
+            }
+            let ours: Vec<u8> = order.iter().map(|&i| f.group(i as usize) as u8).collect();
+            (ours, f.masks())
+        });
 
         // The cells' range: the periodic cell along its axes, the particles' extent elsewhere.
         let mut lo = [f64::INFINITY; 3];
@@ -264,6 +277,7 @@ impl EventDriven {
             walls,
             time: t0,
             g,
+            groups,
         };
         // First events, then a calendar sized for them.
         let first: Vec<(f64, Kind)> = (0..n).map(|i| state.find(i, t0, domain)).collect();
@@ -441,7 +455,14 @@ impl EventDriven {
             let tau = 2.0 * room / (speed + (speed * speed + 4.0 * pull * room).sqrt());
             best = (now + tau, Kind::Shell);
         }
+        // (with collision groups: i's group, and the groups i collides with)
+        let (gi, mi) = self.groups.as_ref().map_or((0, u32::MAX), |(g, m)| (g[i], m[g[i] as usize]));
         for &j in self.shells.of(i) {
+            if let Some((g, _)) = &self.groups {
+                if mi >> g[j as usize] & 1 == 0 {
+                    continue; // a pair that does not collide
+                }
+            }
             let bj = &self.bodies[j as usize];
             // the field moves both alike: their relative motion is a straight line
             let (xj, vj) = if FIELD {
@@ -472,6 +493,9 @@ impl EventDriven {
             }
         }
         for (k, w) in self.walls.iter().enumerate() {
+            if w.mask >> gi & 1 == 0 {
+                continue; // a wall that lets i's group through
+            }
             let tau = if !FIELD {
                 let u = vec3::dot(vi, w.normal);
                 if u >= 0.0 {
@@ -632,6 +656,7 @@ fn collect_walls(colliders: &[Collider], domain: &Domain) -> Vec<Wall> {
                 point: plane.point(),
                 normal: plane.normal(),
                 collider: k,
+                mask: u32::MAX,
             }),
             Collider::Box(b) => {
                 for plane in b.walls() {
@@ -643,6 +668,7 @@ fn collect_walls(colliders: &[Collider], domain: &Domain) -> Vec<Wall> {
                         point: plane.point(),
                         normal: n,
                         collider: k,
+                        mask: u32::MAX,
                     });
                 }
             }
@@ -692,7 +718,7 @@ mod tests {
     #[test]
     fn the_lists_hold_every_partner_and_no_spheres_overlap() {
         let (mut p, domain) = gas(300, 9.0, 5);
-        let mut state = EventDriven::new(&p, &[], &domain, 0.0, [0.0; 3]);
+        let mut state = EventDriven::new(&p, &[], &domain, None, 0.0, [0.0; 3]);
         let table = MaterialTable::uniform(Material::new(1.0, 0.0).unwrap());
         let mut books = [];
         let mut interrupt = Interrupt::none();

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 use super::end_of_step::distribute;
 use super::{CollisionStats, ImpulseModel, StageSetting};
 use crate::collide::events::{swept_reach, Event, Paths, Scene, SweepBound};
+use crate::collide::groups::Filter;
 use crate::collide::neighbour_list::{active_walls, collider_scale, ListBuild, CHUNK, SKIN_PER_RADIUS};
 use crate::collide::response::VELOCITY_TOLERANCE;
 use crate::collide::{restitution_impulse, Collider, Contact, Domain, Partner};
@@ -482,17 +483,18 @@ impl ImpulseModel {
     /// four of its 10 cm sweep), one with a skin of [`LEAST_SWEEPS`] of `largest`, which holds
     /// for this step and is built again at the next.
     fn build_list(&mut self, set: &StageSetting<'_>, x: &[f64], largest: f64) -> Result<(), Error> {
-        let (radius, colliders, domain) = (set.radius, set.colliders, set.domain);
+        let (radius, colliders, domain, filter) = (set.radius, set.colliders, set.domain, set.filter);
         self.base_skin = base_skin(radius);
-        match self.build_with_skin(x, self.base_skin.max(4.0 * largest), radius, colliders, domain) {
+        match self.build_with_skin(x, self.base_skin.max(4.0 * largest), radius, colliders, domain, filter) {
             Err(Error::OutOfMemory { .. }) if LEAST_SWEEPS * largest > self.base_skin => {
-                self.build_with_skin(x, LEAST_SWEEPS * largest, radius, colliders, domain)
+                self.build_with_skin(x, LEAST_SWEEPS * largest, radius, colliders, domain, filter)
             }
             done => done,
         }
     }
 
-    /// Builds the candidate list at `x` (m, 3 per particle) with `skin` (m).
+    /// Builds the candidate list at `x` (m, 3 per particle) with `skin` (m), of the pairs that
+    /// collide (`filter`: the collision groups, `None` when all do).
     fn build_with_skin(
         &mut self,
         x: &[f64],
@@ -500,6 +502,7 @@ impl ImpulseModel {
         radius: &[f64],
         colliders: &[Collider],
         domain: &Domain,
+        filter: Option<Filter<'_>>,
     ) -> Result<(), Error> {
         let build = ListBuild {
             skin,
@@ -508,7 +511,8 @@ impl ImpulseModel {
         };
         self.list.built_at.clear();
         self.list.verified = None;
-        self.list.update(&mut self.grid, x, radius, colliders, domain, || build)
+        self.list
+            .update(&mut self.grid, x, radius, colliders, domain, filter, || build)
     }
 
     /// The candidate list's build as a checkpoint keeps it: the positions it was built at
@@ -533,9 +537,10 @@ impl ImpulseModel {
         radius: &[f64],
         colliders: &[Collider],
         domain: &Domain,
+        filter: Option<Filter<'_>>,
     ) -> Result<(), Error> {
         self.base_skin = base_skin(radius);
-        self.build_with_skin(built_at, skin, radius, colliders, domain)
+        self.build_with_skin(built_at, skin, radius, colliders, domain, filter)
     }
 }
 

@@ -224,6 +224,9 @@ pub(crate) struct StageSetting<'a> {
     pub rolling_friction: f64,
     /// The end-of-step solve's accuracy setting ([`crate::world::CollisionParams::accuracy`]).
     pub accuracy: Accuracy,
+    /// The collision groups' filter (`collide/groups.rs`), applied where the neighbour list
+    /// is built; `None` when every pair collides.
+    pub filter: Option<crate::collide::groups::Filter<'a>>,
 }
 
 /// What the stages keep of their contacts while particles are added

@@ -76,6 +76,7 @@ impl Owned {
                 colliders: &self.colliders,
                 domain: &self.domain,
                 omega: &[],
+                filter: None,
             },
         )
     }
@@ -572,23 +573,23 @@ fn the_allowance_leaves_a_rounding_margin_below_the_skin() {
         reach: 0.0,
         collider_scale: 0.0,
     };
-    list.update(&mut grid, &x, &radius, &[], &domain, || build).unwrap();
+    list.update(&mut grid, &x, &radius, &[], &domain, None, || build).unwrap();
     assert!(list.allowance < 2e-4 && list.allowance > 2e-4 * (1.0 - 1e-10));
     assert_eq!(
         (list.rows[0].of(0), list.rows[0].of(1)),
         (&[1][..], &[0][..]),
         "listed from both sides"
     );
-    list.update(&mut grid, &x, &radius, &[], &domain, || build).unwrap();
+    list.update(&mut grid, &x, &radius, &[], &domain, None, || build).unwrap();
     assert_eq!(list.builds, 1, "nothing moved");
     let far = [1e9, 0.0, 0.0, 1e9 + 1.5e-3, 0.0, 0.0];
-    list.update(&mut grid, &far, &radius, &[], &domain, || build).unwrap();
+    list.update(&mut grid, &far, &radius, &[], &domain, None, || build).unwrap();
     assert!(list.allowance < 0.0);
-    list.update(&mut grid, &far, &radius, &[], &domain, || build).unwrap();
+    list.update(&mut grid, &far, &radius, &[], &domain, None, || build).unwrap();
     assert_eq!(list.builds, 3);
     // two particles that together moved the allowance (exactly: half each, along
     // coordinates that were 0): rebuilt; a hair less: kept
-    list.update(&mut grid, &x, &radius, &[], &domain, || build).unwrap();
+    list.update(&mut grid, &x, &radius, &[], &domain, None, || build).unwrap();
     let half = 0.5 * list.allowance;
     assert!(!list.holds(&[-half, 0.0, 0.0, 1.5e-3, half, 0.0], &domain));
     let less = 0.99 * half;
@@ -680,7 +681,7 @@ fn a_renumbered_half_list_has_the_rows_of_a_build_in_the_new_order() {
         ..NeighbourList::default()
     };
     let (mut list, mut grid) = (new_list(), Grid::new());
-    list.update(&mut grid, &x, &force.radius, &[], &force.domain, || build)
+    list.update(&mut grid, &x, &force.radius, &[], &force.domain, None, || build)
         .unwrap();
     let entries = |l: &NeighbourList| l.rows.iter().map(|r| r.partners.len()).sum::<usize>();
     assert!(entries(&list) > n / 2, "{} pairs", entries(&list));
@@ -703,7 +704,7 @@ fn a_renumbered_half_list_has_the_rows_of_a_build_in_the_new_order() {
     let radius: Vec<f64> = old_of_new.iter().map(|&o| force.radius[o as usize]).collect();
     let mut fresh = new_list();
     fresh
-        .update(&mut grid, &moved, &radius, &[], &force.domain, || build)
+        .update(&mut grid, &moved, &radius, &[], &force.domain, None, || build)
         .unwrap();
     assert_eq!(list.rows.len(), fresh.rows.len());
     for (c, (a, b)) in list.rows.iter().zip(&fresh.rows).enumerate() {
