@@ -6,7 +6,8 @@ The public API (everything else is private):
   ``method_names``, ``MethodInfo``, ``SolverWarning``
 - Stability on p' = λp: the module ``kinema.stability``
 - Particle worlds: ``World``, the forces ``Gravity``, ``Drag``, ``Spring``, ``Attractor``,
-  ``Wind``, ``PythonForce``, the recorded ``Trajectory`` and ``SimulationDiverged``
+  ``Wind``, ``PythonForce``, the force fields ``Turbulence`` (curl noise) and ``Vortex``
+  shaped by a ``Falloff``, the recorded ``Trajectory`` and ``SimulationDiverged``
 - Births and deaths: ``Emitter`` and the kill volumes ``KillBox``, ``KillSphere``,
   ``KillPlane`` (added with ``World.add``), ``World.remove_particles``, ``World.ids``,
   ``Trajectory.alive``; the module ``kinema.emitter``
@@ -49,7 +50,7 @@ from .colliders import Box, Keyframes, Mesh, Motion, Plane, SphereObstacle
 from .contact_time import ContactTimeWarning
 from .convergence import ConvergenceResult, convergence
 from .emitter import Emitter, KillBox, KillPlane, KillSphere
-from .forces import Attractor, Drag, Gravity, PythonForce, Spring, Wind
+from .forces import Attractor, Drag, Falloff, Gravity, PythonForce, Spring, Turbulence, Vortex, Wind
 from .ode import (
     ButcherTableau,
     DenseSolution,
@@ -78,6 +79,7 @@ __all__ = [
     "Camera3D",
     "Drag",
     "Emitter",
+    "Falloff",
     "KillBox",
     "KillPlane",
     "KillSphere",
@@ -100,6 +102,8 @@ __all__ = [
     "sweep",
     "SweepResult",
     "Trajectory",
+    "Turbulence",
+    "Vortex",
     "io",
     "load_trajectory",
     "render",
