@@ -364,3 +364,11 @@ seed = 5
 def test_bad_input_is_named(make, error, match):
     with pytest.raises(error, match=match):
         world([[0.0, 0.0, 0.0]]).add(make())
+
+
+def test_a_2d_vortex_turns_about_z():
+    w = world([[1.0, 0.0, 0.0]], dim=2)
+    with pytest.raises(ValueError, match=r"axis = \[1, 0\] is invalid: in a 2D world \(the xy-plane\) a vortex turns about z"):
+        w.add(kinema.Vortex(axis=[1, 0]))
+    w.add(kinema.Vortex(axis=[0, 0, -2], strength=1.0, radius=1.0))
+    np.testing.assert_allclose(w.accelerations, [[0.0, -1.0, 0.0]], atol=1e-15)

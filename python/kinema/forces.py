@@ -295,6 +295,11 @@ class Vortex(_Checked):
         )
 
     def _attach(self, core: Any) -> None:
+        axis = self._args[1]
+        if core.dim == 2 and (axis[0] != 0 or axis[1] != 0):
+            raise ValueError(
+                f"axis = {_checks.describe(self.axis)} is invalid: in a 2D world (the xy-plane) a vortex turns about z; give axis = [0, 0, 1] (or [0, 0, -1])"
+            )
         core.add_vortex(*self._args)
 
 
