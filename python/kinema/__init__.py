@@ -6,7 +6,8 @@ The public API (everything else is private):
   ``method_names``, ``MethodInfo``, ``SolverWarning``
 - Stability on p' = λp: the module ``kinema.stability``
 - Particle worlds: ``World``, the forces ``Gravity``, ``Drag``, ``Spring``, ``Attractor``,
-  ``Wind``, ``PythonForce``, the recorded ``Trajectory`` and ``SimulationDiverged``
+  ``Wind``, ``PythonForce``, the force fields ``Turbulence`` (curl noise) and ``Vortex``
+  shaped by a ``Falloff``, the recorded ``Trajectory`` and ``SimulationDiverged``
 - Births and deaths: ``Emitter`` (``EmitterWarning``) and the kill volumes ``KillBox``, ``KillSphere``,
   ``KillPlane`` (added with ``World.add``), ``World.remove_particles``, ``World.ids``,
   ``Trajectory.alive``; the module ``kinema.emitter``
@@ -49,7 +50,7 @@ from .colliders import Box, Keyframes, Mesh, MeshPlacementWarning, Motion, Plane
 from .contact_time import ContactTimeWarning
 from .convergence import ConvergenceResult, convergence
 from .emitter import Emitter, EmitterWarning, KillBox, KillPlane, KillSphere
-from .forces import Attractor, Drag, Gravity, PythonForce, Spring, Wind
+from .forces import Attractor, Drag, Falloff, Gravity, PythonForce, Spring, Turbulence, Vortex, Wind
 from .ode import (
     ButcherTableau,
     DenseSolution,
@@ -79,6 +80,7 @@ __all__ = [
     "Drag",
     "Emitter",
     "EmitterWarning",
+    "Falloff",
     "KillBox",
     "KillPlane",
     "KillSphere",
@@ -102,6 +104,8 @@ __all__ = [
     "sweep",
     "SweepResult",
     "Trajectory",
+    "Turbulence",
+    "Vortex",
     "io",
     "load_trajectory",
     "render",

@@ -6,6 +6,7 @@ Each class states its formula and units; the computation runs in the engine, exc
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -121,37 +122,234 @@ class Spring(_Checked):
         return core.add_springs(*self._args)  # the rest lengths, taken from the positions when not given
 
 
+FALLOFF_SHAPES = ("sphere", "tube", "box")
+FALLOFF_LAWS = ("constant", "linear", "smooth", "inverse_square")
+VORTEX_PROFILES = ("rankine", "lamb_oseen", "constant")
+
+
+def _choice(name: str, value: Any, allowed: tuple[str, ...]) -> str:
+    value = _checks.text(name, value)
+    if value not in allowed:
+        raise ValueError(f"{name} = {value!r} is invalid: it must be one of {', '.join(repr(a) for a in allowed)}")
+    return value
+
+
+@dataclass(frozen=True)
+class Falloff(_Checked):
+    """Where a field force acts: a weight φ(x) in [0, 1] that multiplies it, F = φ(x) F₀ (as the
+    falloff of Blender's force fields: Shape, Min/Max Distance).
+
+    The distance d (m) is measured from a `shape`:
+
+    - ``"sphere"``: from `center`;
+    - ``"tube"``: from the line through `center` along `axis` (distance across it);
+    - ``"box"``: from the axis-aligned box `center` ± `half_size` (0 inside it).
+
+    `center` None is the force's own point (a `Vortex`'s or an `Attractor`'s; a `Wind` or a
+    `Turbulence` has none, so give it); a tube's `axis` None is a `Vortex`'s axis, else z.
+    The `law`, with r₀ = `min_distance` and r₁ = `max_distance` (None: no limit), gives φ = 1
+    for d ≤ r₀, φ = 0 for d > r₁ and between, with t = (d − r₀)/(r₁ − r₀):
+    ``"constant"`` φ = 1 (a cut at r₁); ``"linear"`` φ = 1 − t; ``"smooth"`` φ = 1 − (3t² −
+    2t³) (continuous with its slope; these two need r₁); ``"inverse_square"`` φ = (r₀/d)²
+    (needs r₀ > 0; jumps to 0 at r₁ if one is given).
+    """
+
+    shape: str = "sphere"
+    law: str = "smooth"
+    min_distance: float = 0.0
+    max_distance: float | None = None
+    center: Any = None
+    axis: Any = None
+    half_size: Any = None
+
+    def _checked(self) -> tuple:
+        shape = _choice("shape", self.shape, FALLOFF_SHAPES)
+        law = _choice("law", self.law, FALLOFF_LAWS)
+        r0 = _checks.real("min_distance", self.min_distance)
+        r1 = _checks.real("max_distance", self.max_distance, optional=True)
+        r1 = float("inf") if r1 is None else r1
+        if not (math.isfinite(r0) and r0 >= 0):
+            raise ValueError(f"min_distance = {_checks.describe(self.min_distance)} is invalid: it must be finite and >= 0 (m)")
+        if law == "inverse_square" and r0 <= 0:
+            raise ValueError(
+                f"min_distance = {_checks.describe(self.min_distance)} is invalid: the inverse-square law needs min_distance > 0 m: φ = (min_distance/d)²"
+            )
+        if math.isnan(r1) or r1 <= r0 or (law in ("linear", "smooth") and math.isinf(r1)):
+            need = (
+                f"a {law} falloff needs a finite max_distance > min_distance" if law in ("linear", "smooth") else "it must be > min_distance (None: no limit)"
+            )
+            raise ValueError(f"max_distance = {_checks.describe(self.max_distance)} is invalid: {need} ({r0} m)")
+        center = None if self.center is None else _vec("center", self.center, "m")
+        axis = None if self.axis is None else _vec("axis", self.axis, "a direction")
+        half = None if self.half_size is None else _vec("half_size", self.half_size, "m")
+        if shape == "box" and half is None:
+            raise ValueError("half_size = None is invalid: a box falloff needs its half sizes [hx, hy, hz] (m)")
+        return shape, law, r0, r1, center, axis, half
+
+    def _binding(self, owner: str, point: list[float] | None = None, axis: list[float] | None = None) -> tuple:
+        """The engine's falloff for a force `owner` whose own point and axis are these."""
+        shape, law, r0, r1, center, own_axis, half = self._args
+        if center is None:
+            if point is None:
+                raise ValueError(f"falloff.center = None is invalid: a {owner} has no point of its own; give the falloff's center [x, y, z] (m)")
+            center = point
+        a = own_axis if own_axis is not None else (axis if axis is not None else [0.0, 0.0, 1.0])
+        return shape, law, center, a, half if half is not None else [0.0, 0.0, 0.0], r0, r1
+
+
+def _falloff(value: Any) -> Falloff | None:
+    if value is None or isinstance(value, Falloff):
+        return value
+    raise TypeError(f"falloff = {_checks.describe(value)} is invalid: it must be a kinema.Falloff or None, not {type(value).__name__}")
+
+
 @dataclass(frozen=True)
 class Attractor(_Checked):
     """Inverse-square pull toward a fixed point: F_i = −μ m_i r / (|r|² + ε²)^{3/2}, r = x_i − point.
 
     `strength` μ = G·M in m³/s², `softening` ε in m; `point` [x, y, z] or [x, y] (z = 0), m.
+    A `falloff` (``kinema.Falloff``; its centre defaults to `point`) multiplies the pull by
+    φ(x); the shaped pull has no potential energy and counts as a force that may add energy.
     """
 
     point: Any = (0.0, 0.0, 0.0)
     strength: float = 1.0
     softening: float = 0.0
+    falloff: Falloff | None = None
 
     def _checked(self) -> tuple:
-        return _vec("point", self.point, "m"), _checks.real("strength", self.strength), _checks.real("softening", self.softening)
+        point = _vec("point", self.point, "m")
+        falloff = _falloff(self.falloff)
+        shaped = None if falloff is None else falloff._binding("Attractor", point)
+        return point, _checks.real("strength", self.strength), _checks.real("softening", self.softening), shaped
 
     def _attach(self, core: Any) -> None:
-        core.add_attractor(*self._args)
+        *args, falloff = self._args
+        if falloff is None:
+            core.add_attractor(*args)
+        else:
+            core.add_attractor(*args, falloff)
 
 
 @dataclass(frozen=True)
 class Wind(_Checked):
     """A uniform wind field: F_i = b (w − v_i), drag relative to air moving at `velocity` w
-    (m/s; [x, y, z] or [x, y] meaning (x, y, 0)), `coefficient` b in kg/s."""
+    (m/s; [x, y, z] or [x, y] meaning (x, y, 0)), `coefficient` b in kg/s. A `falloff`
+    (``kinema.Falloff`` with its `center`) confines it: F_i = φ(x_i) b (w − v_i)."""
 
     velocity: Any = (1.0, 0.0, 0.0)
     coefficient: float = 1.0
+    falloff: Falloff | None = None
 
     def _checked(self) -> tuple:
-        return _vec("velocity", self.velocity, "m/s"), _checks.real("coefficient", self.coefficient)
+        falloff = _falloff(self.falloff)
+        shaped = None if falloff is None else falloff._binding("Wind")
+        return _vec("velocity", self.velocity, "m/s"), _checks.real("coefficient", self.coefficient), shaped
 
     def _attach(self, core: Any) -> None:
-        core.add_wind(*self._args)
+        *args, falloff = self._args
+        if falloff is None:
+            core.add_wind(*args)
+        else:
+            core.add_wind(*args, falloff)
+
+
+@dataclass(frozen=True)
+class Vortex(_Checked):
+    """A vortex about the axis through `point` along `axis`: a purely tangential field
+    u = U(r) θ̂, r the distance from the axis, θ̂ counter-clockwise seen from the axis' tip.
+
+    `strength` S is the tangential speed at the core `radius` R (m); `profile`:
+    ``"rankine"`` U = S r/R inside R, S R/r outside (a solid core, a free vortex around it);
+    ``"lamb_oseen"`` U = S (R/r)(1 − e^{−r²/R²})/(1 − e^{−1}) (smooth); ``"constant"``
+    U = S (Blender's vortex; R unused). Negative S turns the other way.
+
+    With `coefficient` None the field is an acceleration (S in m/s²): F_i = m_i u. With a
+    `coefficient` b (kg/s) it is air turning at U (S in m/s) that drags the particles along:
+    F_i = b (u − v_i) (Houdini's "treat as wind"). A `falloff` (``kinema.Falloff``; its
+    centre defaults to `point`, a tube's axis to `axis`) multiplies F by φ(x).
+    `point` and `axis` are [x, y, z] or [x, y] (z = 0); in a 2D world the axis is z.
+    """
+
+    point: Any = (0.0, 0.0, 0.0)
+    axis: Any = (0.0, 0.0, 1.0)
+    strength: float = 1.0
+    radius: float = 1.0
+    profile: str = "rankine"
+    coefficient: float | None = None
+    falloff: Falloff | None = None
+
+    def _checked(self) -> tuple:
+        point = _vec("point", self.point, "m")
+        axis = _vec("axis", self.axis, "a direction")
+        falloff = _falloff(self.falloff)
+        shaped = None if falloff is None else falloff._binding("Vortex", point, axis)
+        return (
+            point,
+            axis,
+            _checks.real("strength", self.strength),
+            _checks.real("radius", self.radius),
+            _choice("profile", self.profile, VORTEX_PROFILES),
+            _checks.real("coefficient", self.coefficient, optional=True),
+            shaped,
+        )
+
+    def _attach(self, core: Any) -> None:
+        axis = self._args[1]
+        if core.dim == 2 and (axis[0] != 0 or axis[1] != 0):
+            raise ValueError(
+                f"axis = {_checks.describe(self.axis)} is invalid: in a 2D world (the xy-plane) a vortex turns about z; give axis = [0, 0, 1] (or [0, 0, -1])"
+            )
+        core.add_vortex(*self._args)
+
+
+MAX_SEED = 2**63 - 1
+
+
+@dataclass(frozen=True)
+class Turbulence(_Checked):
+    """Curl-noise turbulence (Bridson, Hourihan & Nordenstam 2007): a divergence-free random
+    field u = ∇ × ψ, ψ smooth Perlin noise, so particles swirl without bunching up.
+
+    `strength` is the rms of each component of u; `scale` (m) the noise's feature size (the
+    lattice spacing: u is correlated over about `scale`); `seed` (0 to 2**63 − 1) picks the
+    field, the same seed giving the same bits. `time_scale` τ (s; None: a frozen field):
+    the field changes over about τ (its gradients turn; the correlation in time is
+    2 cos(t/τ) sin(t/2τ)/(t/τ)). `octaves` 1 to 8 add finer noise, each of half the scale and
+    `roughness` (0 to 1) times the weight of the one before. In a 2D world u comes from one
+    stream function ψ(x, y): u = (∂ψ/∂y, −∂ψ/∂x).
+
+    With `coefficient` None it is an acceleration (`strength` in m/s²): F_i = m_i u, as
+    Blender's turbulence field. With a `coefficient` b (kg/s) it is the velocity of air
+    (`strength` in m/s) that drags the particles along: F_i = b (u − v_i), as Houdini's curl
+    noise treated as wind. A `falloff` (``kinema.Falloff`` with its `center`) multiplies F
+    by φ(x).
+    """
+
+    strength: float = 1.0
+    scale: float = 1.0
+    seed: int = 0
+    time_scale: float | None = None
+    octaves: int = 1
+    roughness: float = 0.5
+    coefficient: float | None = None
+    falloff: Falloff | None = None
+
+    def _checked(self) -> tuple:
+        falloff = _falloff(self.falloff)
+        return (
+            _checks.real("strength", self.strength),
+            _checks.real("scale", self.scale),
+            _checks.integer("seed", self.seed, 0, MAX_SEED, what="the seed must be an integer from 0 to 2**63 - 1"),
+            _checks.real("time_scale", self.time_scale, optional=True),
+            _checks.integer("octaves", self.octaves, 1, 8),
+            _checks.real("roughness", self.roughness),
+            _checks.real("coefficient", self.coefficient, optional=True),
+            None if falloff is None else falloff._binding("Turbulence"),
+        )
+
+    def _attach(self, core: Any) -> None:
+        core.add_turbulence(*self._args)
 
 
 @dataclass(frozen=True)

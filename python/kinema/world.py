@@ -496,7 +496,7 @@ class World(WorldCollisions):
 
     def add(self, item: Any) -> Any:
         """Add a force (``kinema.Gravity``, ``Drag``, ``Spring``, ``Attractor``, ``Wind``,
-        ``PythonForce``) or a collider (``kinema.Plane``, ``Box``, ``SphereObstacle``,
+        ``Turbulence``, ``Vortex``, ``PythonForce``) or a collider (``kinema.Plane``, ``Box``, ``SphereObstacle``,
         ``Mesh``; this turns collisions on); returns it. A collider's ``motion`` moves it from
         then on: a ``Motion`` without a ``start`` starts now, from where the collider is
         placed (``w.colliders[k]`` is then a copy whose motion has the world's time now as its
@@ -507,7 +507,7 @@ class World(WorldCollisions):
         if attach is None:
             raise TypeError(
                 f"{type(item).__name__} is not a kinema force, collider or emitter; use kinema.Gravity, Drag, Spring, Attractor, "
-                "Wind, PythonForce, Plane, Box, SphereObstacle, Mesh, Emitter, KillBox, KillSphere or KillPlane"
+                "Wind, Turbulence, Vortex, PythonForce, Plane, Box, SphereObstacle, Mesh, Emitter, KillBox, KillSphere or KillPlane"
             )
         if isinstance(item, (Emitter, *KILL_VOLUMES)):
             attach(self)

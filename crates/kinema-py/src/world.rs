@@ -3,7 +3,9 @@
 //! `stepping.rs`; the Python force in `callbacks.rs`).
 
 use kinema::collide::{ContactRecord, Partner, Surface};
-use kinema::forces::{Attractor, Drag, Gravity, Springs, Wind};
+use kinema::forces::falloff::{Law, Shape};
+use kinema::forces::vortex::Profile;
+use kinema::forces::{Attractor, Coupling, Drag, Falloff, Gravity, Springs, Turbulence, Vortex, Wind};
 use kinema::world::KillVolume;
 use kinema::{World, WorldParams};
 use numpy::{
@@ -420,18 +422,81 @@ impl PyWorld {
         Ok(rest) // (the lengths taken from the positions, which a scene or checkpoint must keep)
     }
 
-    fn add_attractor(&mut self, point: [f64; 3], strength: f64, softening: f64) -> PyResult<()> {
+    #[pyo3(signature = (point, strength, softening, falloff=None))]
+    fn add_attractor(&mut self, point: [f64; 3], strength: f64, softening: f64, falloff: Option<FalloffArgs>) -> PyResult<()> {
         self.inner.restore_order();
-        self.inner
-            .add_force(Box::new(Attractor::new(point, strength, softening).map_err(to_py)?))
-            .map_err(to_py)
+        let attractor = Attractor::new(point, strength, softening).map_err(to_py)?;
+        let falloff = falloff_from(falloff)?;
+        self.inner.add_force(Box::new(attractor.with_falloff(falloff))).map_err(to_py)
     }
 
-    fn add_wind(&mut self, velocity: [f64; 3], coefficient: f64) -> PyResult<()> {
+    #[pyo3(signature = (velocity, coefficient, falloff=None))]
+    fn add_wind(&mut self, velocity: [f64; 3], coefficient: f64, falloff: Option<FalloffArgs>) -> PyResult<()> {
         self.inner.restore_order();
-        self.inner
-            .add_force(Box::new(Wind::new(velocity, coefficient).map_err(to_py)?))
-            .map_err(to_py)
+        let wind = Wind::new(velocity, coefficient).map_err(to_py)?;
+        let falloff = falloff_from(falloff)?;
+        self.inner.add_force(Box::new(wind.with_falloff(falloff))).map_err(to_py)
+    }
+
+    /// Adds a vortex (`kinema.Vortex`); `coefficient` None: an acceleration field.
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (point, axis, strength, radius, profile, coefficient, falloff))]
+    fn add_vortex(
+        &mut self,
+        point: [f64; 3],
+        axis: [f64; 3],
+        strength: f64,
+        radius: f64,
+        profile: &str,
+        coefficient: Option<f64>,
+        falloff: Option<FalloffArgs>,
+    ) -> PyResult<()> {
+        self.inner.restore_order();
+        let profile = Profile::from_name(profile).map_err(to_py)?;
+        let falloff = falloff_from(falloff)?;
+        let vortex = Vortex::new(
+            point,
+            axis,
+            strength,
+            radius,
+            profile,
+            Coupling::from_coefficient(coefficient),
+            falloff,
+        )
+        .map_err(to_py)?;
+        self.inner.add_force(Box::new(vortex)).map_err(to_py)
+    }
+
+    /// Adds curl-noise turbulence (`kinema.Turbulence`) in the world's dimension;
+    /// `time_scale` None freezes it, `coefficient` None makes it an acceleration field.
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (strength, scale, seed, time_scale, octaves, roughness, coefficient, falloff))]
+    fn add_turbulence(
+        &mut self,
+        strength: f64,
+        scale: f64,
+        seed: u64,
+        time_scale: Option<f64>,
+        octaves: u32,
+        roughness: f64,
+        coefficient: Option<f64>,
+        falloff: Option<FalloffArgs>,
+    ) -> PyResult<()> {
+        self.inner.restore_order();
+        let falloff = falloff_from(falloff)?;
+        let turbulence = Turbulence::new(
+            strength,
+            scale,
+            seed,
+            time_scale.unwrap_or(f64::INFINITY),
+            octaves,
+            roughness,
+            self.inner.params().dim,
+            Coupling::from_coefficient(coefficient),
+            falloff,
+        )
+        .map_err(to_py)?;
+        self.inner.add_force(Box::new(turbulence)).map_err(to_py)
     }
 
     fn add_python_force(&mut self, f: Py<PyAny>, name: String) -> PyResult<()> {
@@ -988,4 +1053,27 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     collide::register(m)?;
     m.add("SimulationDiverged", m.py().get_type::<SimulationDiverged>())?;
     Ok(())
+}
+
+/// A falloff as `kinema.Falloff` hands it over: shape, law, centre (m), axis (a tube's),
+/// half size (a box's, m), min and max distance (m; max may be inf).
+type FalloffArgs = (String, String, [f64; 3], [f64; 3], [f64; 3], f64, f64);
+
+/// The engine's falloff from its arguments (see [`FalloffArgs`]).
+fn falloff_from(args: Option<FalloffArgs>) -> PyResult<Option<Falloff>> {
+    let Some((shape, law, center, axis, half_size, min_distance, max_distance)) = args else {
+        return Ok(None);
+    };
+    let shape = match shape.as_str() {
+        "sphere" => Shape::Sphere { center },
+        "tube" => Shape::Tube { center, axis },
+        "box" => Shape::Box { center, half_size },
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "falloff.shape = {shape:?} is invalid: the falloff shape must be 'sphere', 'tube' or 'box'"
+            )))
+        }
+    };
+    let law = Law::from_name(&law).map_err(to_py)?;
+    Falloff::new(shape, law, min_distance, max_distance).map(Some).map_err(to_py)
 }

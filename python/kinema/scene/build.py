@@ -11,7 +11,7 @@ import numpy as np
 
 from ..colliders import Box, Keyframes, Mesh, Motion, Plane, SphereObstacle
 from ..emitter import Emitter, KillBox, KillPlane, KillSphere
-from ..forces import Attractor, Drag, Gravity, Spring, Wind
+from ..forces import Attractor, Drag, Falloff, Gravity, Spring, Turbulence, Vortex, Wind
 from ..world import World
 from .schema import Scene, SceneError
 from .tables import (
@@ -19,6 +19,7 @@ from .tables import (
     BoxCollider,
     DragForce,
     EmitterTable,
+    FalloffTable,
     FileBlock,
     GravityForce,
     Isotropic,
@@ -31,7 +32,9 @@ from .tables import (
     PlaneCollider,
     SpringForce,
     SteadyMotion,
+    TurbulenceForce,
     Uniform,
+    VortexForce,
     WindForce,
 )
 
@@ -281,15 +284,27 @@ def _collider(c: Any, dim: int) -> Any:
     return SphereObstacle(_v3(c.center), c.radius, **s)
 
 
+def _falloff(t: FalloffTable | None) -> Falloff | None:
+    """A force's ``falloff`` table as a ``kinema.Falloff`` (vectors of 2 meaning (x, y, 0))."""
+    if t is None:
+        return None
+    vec = {k: _v3(v) for k in ("center", "axis", "half_size") if (v := getattr(t, k)) is not None}
+    return Falloff(t.shape, t.law, t.min_distance, t.max_distance, **vec)
+
+
 def _force(f: Any, dim: int, w: World, starts: list[tuple[int, int]], blocks: list) -> Any:
     if isinstance(f, GravityForce):
         return Gravity(_v3(f.g) if f.g is not None else None)
     if isinstance(f, DragForce):
         return Drag(f.linear, f.quadratic)
     if isinstance(f, AttractorForce):
-        return Attractor(_v3(f.point), f.strength, f.softening)
+        return Attractor(_v3(f.point), f.strength, f.softening, falloff=_falloff(f.falloff))
     if isinstance(f, WindForce):
-        return Wind(_v3(f.velocity), f.coefficient)
+        return Wind(_v3(f.velocity), f.coefficient, falloff=_falloff(f.falloff))
+    if isinstance(f, TurbulenceForce):
+        return Turbulence(f.strength, f.scale, f.seed, f.time_scale, f.octaves, f.roughness, f.coefficient, _falloff(f.falloff))
+    if isinstance(f, VortexForce):
+        return Vortex(_v3(f.point), _v3(f.axis), f.strength, f.radius, f.profile, f.coefficient, _falloff(f.falloff))
     if f.rule is None:
         i, j = np.asarray(f.i, dtype=np.int64), np.asarray(f.j, dtype=np.int64)
     else:

@@ -14,7 +14,7 @@ from .. import _checks
 from ..checkpoint import load_checkpoint, save_checkpoint
 from ..colliders import Box, Keyframes, Mesh, Motion, Plane
 from ..emitter import KillBox, KillSphere
-from ..forces import Attractor, Drag, Gravity, Spring, Wind
+from ..forces import Attractor, Drag, Falloff, Gravity, Spring, Turbulence, Vortex, Wind
 from ..world import World
 from .build import _v3
 from .schema import Scene, SceneError
@@ -143,9 +143,22 @@ def to_scene(world: World) -> Scene:
         elif isinstance(f, Attractor):
             forces.append(
                 {"type": "attractor", "point": _v3(np.asarray(f.point, float).tolist()), "strength": float(f.strength), "softening": float(f.softening)}
+                | _falloff_entry(f.falloff)
             )
         elif isinstance(f, Wind):
-            forces.append({"type": "wind", "velocity": _v3(np.asarray(f.velocity, float).tolist()), "coefficient": float(f.coefficient)})
+            forces.append(
+                {"type": "wind", "velocity": _v3(np.asarray(f.velocity, float).tolist()), "coefficient": float(f.coefficient)} | _falloff_entry(f.falloff)
+            )
+        elif isinstance(f, Turbulence):
+            strength, scale, seed, time_scale, octaves, roughness, coefficient, _ = f._args
+            entry = {"type": "turbulence", "strength": strength, "scale": scale, "seed": seed, "octaves": octaves, "roughness": roughness}
+            entry |= {k: v for k, v in (("time_scale", time_scale), ("coefficient", coefficient)) if v is not None}
+            forces.append(entry | _falloff_entry(f.falloff))
+        elif isinstance(f, Vortex):
+            point, axis, strength, radius, profile, coefficient, _ = f._args
+            entry = {"type": "vortex", "point": point, "axis": axis, "strength": strength, "radius": radius, "profile": profile}
+            entry |= {} if coefficient is None else {"coefficient": coefficient}
+            forces.append(entry | _falloff_entry(f.falloff))
         elif isinstance(f, Spring):
             # The springs whose two ends live, at the ends' current indices (particles removed
             # since shifted them; a spring with a dead end died with it).
@@ -167,7 +180,7 @@ def to_scene(world: World) -> Scene:
                 spring[name] = float(arr) if arr.ndim == 0 else arr.tolist()
             forces.append(spring)
         else:
-            raise ValueError(f"{type(f).__name__} cannot be written to a scene file (only gravity, drag, spring, attractor and wind can)")
+            raise ValueError(f"{type(f).__name__} cannot be written to a scene file (only gravity, drag, spring, attractor, wind, turbulence and vortex can)")
     colliders = []
     for c in world.colliders:
         s = {k: float(v) for k, v in (("restitution", c.restitution), ("friction", c.friction)) if v is not None}
@@ -236,6 +249,19 @@ def to_scene(world: World) -> Scene:
         lines = str(e).splitlines() or [f"{_SOURCE}: not a valid scene"]
         more = f" (and {len(lines) - 1} more problems)" if len(lines) > 1 else ""
         raise SceneError(lines[0] + more) from None
+
+
+def _falloff_entry(f: Falloff | None) -> dict[str, Any]:
+    """``{"falloff": {...}}`` for a force's falloff as it was given (a centre or axis left
+    out stays the force's own), or nothing without one."""
+    if f is None:
+        return {}
+    shape, law, r0, r1, center, axis, half = f._args
+    table: dict[str, Any] = {"shape": shape, "law": law, "min_distance": r0}
+    if r1 != float("inf"):
+        table["max_distance"] = r1
+    table |= {k: v for k, v in (("center", center), ("axis", axis), ("half_size", half)) if v is not None}
+    return {"falloff": table}
 
 
 def _motion_table(m: Motion | Keyframes) -> dict[str, Any]:

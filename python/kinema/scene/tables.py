@@ -361,20 +361,59 @@ class SpringForce(_Model):
         return self
 
 
+class FalloffTable(_Model):
+    """``falloff = { shape = "sphere", law = "smooth", max_distance = 2.0 }`` on a field force
+    (``kinema.Falloff``): left out, ``center`` is the force's own point, a tube's ``axis`` a
+    vortex's axis; ``max_distance`` left out is no limit."""
+
+    shape: Literal["sphere", "tube", "box"] = "sphere"
+    law: Literal["constant", "linear", "smooth", "inverse_square"] = "smooth"
+    min_distance: NonNeg = 0.0
+    max_distance: Positive | None = None
+    center: Vec | None = None
+    axis: Vec | None = None
+    half_size: Vec | None = None
+
+
 class AttractorForce(_Model):
     type: Literal["attractor"] = "attractor"
     point: Vec = [0.0, 0.0, 0.0]
     strength: NonNeg = 1.0
     softening: NonNeg = 0.0
+    falloff: FalloffTable | None = None
 
 
 class WindForce(_Model):
     type: Literal["wind"] = "wind"
     velocity: Vec = [1.0, 0.0, 0.0]
     coefficient: NonNeg = 1.0
+    falloff: FalloffTable | None = None
 
 
-ForceItem = _typed(GravityForce, DragForce, SpringForce, AttractorForce, WindForce)
+class TurbulenceForce(_Model):
+    type: Literal["turbulence"] = "turbulence"
+    strength: NonNeg = 1.0
+    scale: Positive = 1.0
+    seed: Annotated[int, Field(ge=0, le=2**63 - 1)] = 0
+    time_scale: Positive | None = None  # left out: a frozen field
+    octaves: Annotated[int, Field(ge=1, le=8)] = 1
+    roughness: Unit = 0.5
+    coefficient: NonNeg | None = None  # left out: an acceleration field
+    falloff: FalloffTable | None = None
+
+
+class VortexForce(_Model):
+    type: Literal["vortex"] = "vortex"
+    point: Vec = [0.0, 0.0, 0.0]
+    axis: Vec = [0.0, 0.0, 1.0]
+    strength: float = 1.0
+    radius: Positive = 1.0
+    profile: Literal["rankine", "lamb_oseen", "constant"] = "rankine"
+    coefficient: NonNeg | None = None  # left out: an acceleration field
+    falloff: FalloffTable | None = None
+
+
+ForceItem = _typed(GravityForce, DragForce, SpringForce, AttractorForce, WindForce, TurbulenceForce, VortexForce)
 
 # -- [[colliders]] ----------------------------------------------------------------------------
 # A collider's `motion` (kinema.Motion, kinema.Keyframes): a steady table, or keyframes (a

@@ -5,7 +5,13 @@
 //! this is Newton's gravity of a fixed mass M with μ = G M (|F| = μ m / |r|²). The softening
 //! ε > 0 (Plummer's) caps the force near the point: |F| peaks at 2μm/(3√3 ε²), for |r| = ε/√2,
 //! and falls to zero at the point, so close passes need no tiny steps.
+//!
+//! An optional [`Falloff`] shapes the pull in space: F_i = φ(x_i) F_a(x_i), the weight φ in
+//! [0, 1] of a sphere, tube or box (Blender's force fields' falloff). A shaped attractor is
+//! no longer the gradient of a potential in general (φ F_a has a curl where ∇φ is not along
+//! r), so it has no potential energy and counts as a force that may add energy.
 
+use super::falloff::Falloff;
 use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State};
 use crate::error::{CallbackError, Error};
 
@@ -25,6 +31,8 @@ pub struct Attractor {
     pub strength: f64,
     /// Softening length ε, m (≥ 0).
     pub softening: f64,
+    /// Where it pulls: F = φ(x) F_a (`None`: everywhere, φ = 1, conservative).
+    pub falloff: Option<Falloff>,
 }
 
 impl Attractor {
@@ -35,9 +43,23 @@ impl Attractor {
             point,
             strength,
             softening,
+            falloff: None,
         };
         a.check()?;
         Ok(a)
+    }
+
+    /// The same attractor shaped by `falloff` (`None`: everywhere).
+    pub fn with_falloff(self, falloff: Option<Falloff>) -> Self {
+        Attractor { falloff, ..self }
+    }
+
+    /// The falloff's weight φ and gradient ∇φ (1/m) at `xi` (1 and 0 without one).
+    fn weight(&self, xi: &[f64]) -> (f64, [f64; 3]) {
+        match &self.falloff {
+            None => (1.0, [0.0; 3]),
+            Some(f) => f.weight_and_gradient([xi[0], xi[1], xi[2]]),
+        }
     }
 
     fn check(&self) -> Result<(), Error> {
@@ -62,7 +84,7 @@ impl Attractor {
                 "the softening length must be finite and >= 0 m",
             ));
         }
-        Ok(())
+        self.falloff.map_or(Ok(()), |f| f.check())
     }
 
     /// r = x − p and s² = |r|² + ε² for one particle.
@@ -77,7 +99,7 @@ impl Force for Attractor {
         "attractor"
     }
 
-    /// Adds −μ m_i r / s³ to each particle's force, N.
+    /// Adds −μ m_i r / s³ to each particle's force, N (times the falloff's φ(x_i)).
     fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
         check_buffers(self.name(), s, &[("f", f.len())])?;
         for ((fi, xi), m) in f.chunks_exact_mut(3).zip(s.x.chunks_exact(3)).zip(s.mass) {
@@ -85,7 +107,8 @@ impl Force for Attractor {
             if s2 == 0.0 {
                 continue; // at an unsoftened point: no direction, see the type's doc
             }
-            let c = self.strength * m / (s2 * s2.sqrt());
+            let phi = if self.falloff.is_some() { self.weight(xi).0 } else { 1.0 };
+            let c = phi * self.strength * m / (s2 * s2.sqrt());
             for k in 0..3 {
                 fi[k] -= c * r[k];
             }
@@ -98,8 +121,12 @@ impl Force for Attractor {
         self.check()
     }
 
-    /// U = −Σ μ m_i / s_i, J (−∞ for a particle exactly at an unsoftened point).
+    /// U = −Σ μ m_i / s_i, J (−∞ for a particle exactly at an unsoftened point); none
+    /// with a falloff (see the module's doc).
     fn potential_energy(&self, s: &State) -> Option<f64> {
+        if self.falloff.is_some() {
+            return None;
+        }
         let u =
             s.x.chunks_exact(3)
                 .zip(s.mass)
@@ -107,11 +134,15 @@ impl Force for Attractor {
         Some(u.sum())
     }
 
-    /// Conservative (its work is −ΔU), a function of the positions; it holds no particle
-    /// indices.
+    /// Conservative (its work is −ΔU; with a falloff, a source), a function of the
+    /// positions; it holds no particle indices.
     fn properties(&self) -> Properties {
         Properties {
-            energy: EnergyClass::Conservative,
+            energy: if self.falloff.is_some() {
+                EnergyClass::Source
+            } else {
+                EnergyClass::Conservative
+            },
             depends_on_position: true,
             depends_on_velocity: false,
             internal: false,
@@ -128,13 +159,21 @@ impl Force for Attractor {
 
     /// ω² ≤ max over movable particles of 2μ / s³: the eigenvalues of M⁻¹∂F/∂x (see
     /// [`Linearized::apply`] below) are μ (3|r|²/s² − 1)/s³ ≤ 2μ/s³ along r and −μ/s³
-    /// across it. No velocity dependence.
+    /// across it. No velocity dependence. With a falloff, ∂F/∂x = φ ∂F_a/∂x + F_a ∇φᵀ
+    /// adds |F_a/m|∞ |∇φ|₁ (the rank-one term's ∞-norm) to φ times that.
     fn rates(&self, s: &State, inv_mass: &[f64]) -> Option<Rates> {
         let mut omega_squared: f64 = 0.0;
         for (xi, w) in s.x.chunks_exact(3).zip(inv_mass) {
             if *w > 0.0 {
-                let s2 = self.offset(xi).1;
-                omega_squared = omega_squared.max(2.0 * self.strength / (s2 * s2.sqrt()));
+                let (r, s2) = self.offset(xi);
+                let (phi, g) = self.weight(xi);
+                let per_mass = self.strength / (s2 * s2.sqrt()); // |F_a/m| / |r|
+                let tilt = if s2 > 0.0 {
+                    per_mass * r.iter().fold(0.0_f64, |a, c| a.max(c.abs())) * (g[0].abs() + g[1].abs() + g[2].abs())
+                } else {
+                    0.0
+                };
+                omega_squared = omega_squared.max(phi * 2.0 * per_mass + tilt);
             }
         }
         Some(Rates {
@@ -159,6 +198,7 @@ impl Linearized for AttractorJacobian {
     /// ```
     ///
     /// Radially (dx ∥ r, ε = 0) this is +2μm/|r|³: the tidal stretching; across, −μm/|r|³.
+    /// With a falloff, F = φ F_a: (∂F/∂x)·dx = φ (∂F_a/∂x)·dx + F_a (∇φ·dx).
     fn apply(&self, s: &State, dx: &[f64], _dv: &[f64], out: &mut [f64]) {
         let a = &self.0;
         for (((oi, xi), di), m) in out
@@ -173,8 +213,10 @@ impl Linearized for AttractorJacobian {
             }
             let c = a.strength * m / (s2 * s2.sqrt());
             let along = 3.0 * (r[0] * di[0] + r[1] * di[1] + r[2] * di[2]) / s2;
+            let (phi, g) = a.weight(xi);
+            let shift = g[0] * di[0] + g[1] * di[1] + g[2] * di[2]; // ∇φ·dx
             for k in 0..3 {
-                oi[k] -= c * (di[k] - along * r[k]);
+                oi[k] -= c * (phi * (di[k] - along * r[k]) + shift * r[k]);
             }
         }
     }
@@ -249,6 +291,48 @@ mod tests {
             assert!(product(&a, &s, &[1.0, 2.0, 3.0], &[0.0; 3], &mut out, false));
             assert!(out.iter().all(|o| o.is_finite()), "{out:?}");
         }
+    }
+
+    /// Theory: with a falloff F = φ(x) F_a: a tube of inverse-square falloff about the z axis
+    /// (r₀ = 1) gives ¼ of Newton's pull at 2 m from the axis, all of it within 1 m; the
+    /// shaped force has no potential and may add energy; its Jacobian (φ ∂F_a/∂x + F_a ∇φᵀ)
+    /// matches central differences.
+    #[test]
+    fn falloff_scales_the_force() {
+        use super::super::falloff::{Law, Shape};
+        let fo = Falloff::new(
+            Shape::Tube {
+                center: [0.0; 3],
+                axis: [0.0, 0.0, 1.0],
+            },
+            Law::InverseSquare,
+            1.0,
+            f64::INFINITY,
+        )
+        .unwrap();
+        let mut a = Attractor::new([0.0; 3], 16.0, 0.0).unwrap().with_falloff(Some(fo));
+        let x = [2.0, 0.0, 0.0, 0.0, 0.5, 0.0];
+        let s = State {
+            t: 0.0,
+            x: &x,
+            v: &[0.0; 6],
+            mass: &[1.0, 1.0],
+        };
+        // Newton: μ/d² = 4 N at 2 m, times (1/2)² = 1 N; 64 N at ½ m, times 1
+        assert_eq!(forces(&mut a, &s), vec![-1.0, 0.0, 0.0, 0.0, -64.0, 0.0]);
+        assert!(a.potential_energy(&s).is_none() && a.properties().energy == EnergyClass::Source);
+        let mut rng = Rng::new(12);
+        let x = rng.vec(21, -2.0, 2.0);
+        let m = rng.vec(7, 0.5, 2.0);
+        let s = State {
+            t: 0.0,
+            x: &x,
+            v: &[0.0; 21],
+            mass: &m,
+        };
+        let fo = Falloff::new(Shape::Sphere { center: [0.5, 0.0, 0.0] }, Law::Smooth, 0.5, 2.5).unwrap();
+        let mut a = Attractor::new([0.1, 0.2, -0.1], 5.0, 0.3).unwrap().with_falloff(Some(fo));
+        assert_jacobian_matches_differences(&mut a, &s, &mut rng, 1e-6, 1e-6);
     }
 
     #[test]

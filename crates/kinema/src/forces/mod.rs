@@ -10,8 +10,12 @@ use crate::particles::check_per_particle;
 
 pub mod attractor;
 pub mod drag;
+pub mod falloff;
+pub mod field;
 pub mod gravity;
 pub mod spring;
+pub mod turbulence;
+pub mod vortex;
 pub mod wind;
 
 #[cfg(test)]
@@ -19,8 +23,12 @@ pub(crate) mod testing;
 
 pub use attractor::Attractor;
 pub use drag::Drag;
+pub use falloff::Falloff;
+pub use field::Coupling;
 pub use gravity::Gravity;
 pub use spring::Springs;
+pub use turbulence::Turbulence;
+pub use vortex::Vortex;
 pub use wind::Wind;
 
 /// What a force sees of the particles at one instant.
