@@ -129,14 +129,14 @@ def test_the_cohesion_parameters_are_checked_by_name():
     assert (w.collisions["cohesion"], w.collisions["surface_energy"]) == ("dmt", 0.1)
 
 
-def test_a_scene_file_hangs_a_ball_with_dmt_adhesion(tmp_path):
-    gamma = gamma_for(2.0 * M * G)
-    path = tmp_path / "hang.toml"
+def hanging_scene(path, cohesion, gamma, duration):
+    """A scene file of a ball touching a ceiling (R, M, E, ν of this module; e = 0.1) held by
+    `cohesion` adhesion of surface energy `gamma` (J/m²), dt = 1 µs."""
     path.write_text(
         f"""
 [world]
 dt = 1e-6
-duration = 0.02
+duration = {duration}
 
 [[particles]]
 type = "list"
@@ -157,10 +157,15 @@ model = "hertz"
 youngs_modulus = {E}
 poisson_ratio = {NU}
 restitution = 0.1
-cohesion = "dmt"
+cohesion = "{cohesion}"
 surface_energy = {gamma}
 """
     )
+    return path
+
+
+def test_a_scene_file_hangs_a_ball_with_dmt_adhesion(tmp_path):
+    path = hanging_scene(tmp_path / "hang.toml", "dmt", gamma_for(2.0 * M * G), 0.02)
     w = kinema.Scene.from_toml(path).build()
     w.step(20_000)
     assert w.contacts()["overlap"][0] > 0 and abs(w.positions[0, 2] + R) < 1e-5

@@ -24,10 +24,10 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
+from test_cohesion import NU, E, G, M, R, hanging_scene  # (the ball of DMT's tests)
 
 import kinema
 
-R, M, G, E, NU = 0.005, 1e-3, 9.81, 1e7, 0.3
 E_STAR = E / (2 * (1 - NU**2))
 
 
@@ -197,37 +197,7 @@ def test_jkr_steps_with_verlet_only_and_its_parameters_are_checked_by_name():
 
 def test_a_scene_file_hangs_a_ball_with_jkr_adhesion(tmp_path):
     gamma = gamma_for(1.05 * M * G)
-    path = tmp_path / "hang.toml"
-    path.write_text(
-        f"""
-[world]
-dt = 1e-6
-duration = 0.05
-
-[[particles]]
-type = "list"
-positions = [[0, 0, {-R + 1e-7}]]
-radius = {R}
-mass = {M}
-
-[[forces]]
-type = "gravity"
-
-[[colliders]]
-type = "plane"
-point = [0, 0, 0]
-normal = [0, 0, -1]
-
-[collisions]
-model = "hertz"
-youngs_modulus = {E}
-poisson_ratio = {NU}
-restitution = 0.1
-cohesion = "jkr"
-surface_energy = {gamma}
-"""
-    )
-    w = kinema.Scene.from_toml(path).build()
+    w = kinema.Scene.from_toml(hanging_scene(tmp_path / "hang.toml", "jkr", gamma, 0.05)).build()
     w.step(50_000)
     assert w.contacts()["overlap"][0] == pytest.approx(overlap_under(-M * G, gamma), rel=1e-6)
     assert w.to_scene().collisions.cohesion == "jkr"
