@@ -241,7 +241,10 @@ class Trajectory:
                     raise ValueError(f"{name} has shape {value.shape}; it must be (frames, particles, {width}) = {(frames, n, width)}")
                 setattr(self, name, value)
         if self.groups is not None:
-            self.groups = np.asarray(self.groups, dtype=np.int64)
+            groups = np.asarray(self.groups)
+            if groups.size and groups.dtype.kind not in "iu":
+                raise ValueError(f"groups has dtype {groups.dtype}; collision groups are integers in 0..31")
+            self.groups = groups.astype(np.int64)
             if self.groups.shape != (n,):
                 raise ValueError(f"groups has shape {self.groups.shape}; it must be (particles,) = ({n},)")
         if self.inertia is not None:
