@@ -698,7 +698,15 @@ CASES = [
     ("about box_edges", edit_json("run/about", lambda a: a.update(box_edges={"__array__": [-1.0, 0.0, 0.0], "dtype": "float64"})), "about'.box_edges"),
     ("about springs", edit_json("run/about", lambda a: a.update(springs={"__array__": [[0, -1]], "dtype": "int64"})), "about'.springs"),
     ("sets empty", set_attr("run/sets", "[]"), "'run/sets'"),
-    ("sets entry short", edit_json("run/sets", lambda s: s[0].pop()), "'run/sets'"),
+    ("sets entry short", edit_json("run/sets", lambda s: (s[0].pop(), s[0].pop())), "'run/sets'"),
+    ("sets entry long", edit_json("run/sets", lambda s: s[0].append(None)), "'run/sets'"),
+    ("sets groups 32", edit_json("run/sets", lambda s: s[1][5]["__array__"].__setitem__(0, 32)), "'run/sets'"),
+    ("sets groups negative", edit_json("run/sets", lambda s: s[-1][5]["__array__"].__setitem__(-1, -1)), "'run/sets'"),
+    ("sets groups float", edit_json("run/sets", lambda s: s[0][5].update(dtype="float64")), "'run/sets'"),
+    ("sets groups short", edit_json("run/sets", lambda s: s[1][5]["__array__"].pop()), "'run/sets'"),
+    ("sets groups null", edit_json("run/sets", lambda s: s[0].__setitem__(5, None)), "'run/sets'"),
+    ("about groups", edit_json("run/about", lambda a: a["groups"]["__array__"].__setitem__(0, 9)), "about'.groups"),
+    ("about groups null", edit_json("run/about", lambda a: a.update(groups=None)), "about'.groups"),
     ("sets ids dtype", edit_json("run/sets", lambda s: s[0][0].update(dtype="foo")), "'run/sets'"),
     ("sets ids bools", edit_json("run/sets", lambda s: s[0][0]["__array__"].__setitem__(0, True)), "'run/sets'"),
     ("sets masses negative", edit_json("run/sets", lambda s: s[1][1]["__array__"].__setitem__(0, -1.0)), "'run/sets'"),
@@ -740,6 +748,24 @@ def test_the_undamaged_checkpoint_resumes(pristine, tmp_path):
     assert len(traj.t) == 16 and world.time == pytest.approx(0.3)
     traj.save(tmp_path / "t.h5")
     assert len(kinema.load_trajectory(tmp_path / "t.h5").t) == 16
+
+
+def test_a_checkpoint_written_before_the_groups_resumes_with_group_0(pristine, tmp_path):
+    # (sets of five fields and an about without groups: what kinema wrote before it recorded them)
+    path = tmp_path / "checkpoint.ckpt"
+    shutil.copy(pristine, path)
+    with h5py.File(path, "r+") as f:
+        sets = json.loads(f["run"].attrs["sets"])
+        assert all(len(entry) == 6 for entry in sets)
+        f["run"].attrs["sets"] = json.dumps([entry[:5] for entry in sets])
+        about = json.loads(f["run"].attrs["about"])
+        del about["groups"]
+        f["run"].attrs["about"] = json.dumps(about)
+    _, old = kinema.resume_run(path)
+    _, new = kinema.resume_run(pristine)
+    assert old.groups.dtype == np.int64 and old.groups.shape == old.ids.shape and not old.groups.any()
+    np.testing.assert_array_equal(old.groups, new.groups)
+    np.testing.assert_array_equal(old.positions, new.positions)
 
 
 @pytest.mark.parametrize(

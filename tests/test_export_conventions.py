@@ -308,7 +308,7 @@ def test_kinema_export_creates_missing_folders(saved, tmp_path):
     assert (tmp_path / "c/d/run_ply/run_00000.ply").is_file()
     atoms = ase.io.read(tmp_path / "e/f/run.xyz", index=-1)
     assert atoms.pbc.tolist() == [True, True, False] and atoms.info["Origin"][:2].tolist() == [-1.0, -1.0]
-    assert (tmp_path / "g/h/run.csv").read_text().startswith("frame,time,id,x,y,z,vx,vy,vz,mass,radius\n")
+    assert (tmp_path / "g/h/run.csv").read_text().startswith("frame,time,id,x,y,z,vx,vy,vz,mass,radius,group\n")
 
 
 @pytest.mark.parametrize(

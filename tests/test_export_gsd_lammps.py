@@ -186,7 +186,8 @@ def test_lammps_dump_read_by_ase(tmp_path):
     assert text.count("ITEM: BOX BOUNDS pp pp ff\n0.0 1.0\n0.0 1.0\n0.0 1.0\n") == 6
     rows = [line.split() for line in text.splitlines() if re.fullmatch(r"\d+ 1 .*", line)]
     assert len(rows) == 30 and [r[0] for r in rows[:5]] == ["1", "2", "3", "4", "5"]  # ids 1-based
-    np.testing.assert_array_equal(np.array([r[8:] for r in rows], dtype=float)[:5], [[0.01, 1], [0.02, 2], [0.03, 3], [0.04, 4], [0.05, 5]])
+    np.testing.assert_array_equal(np.array([r[8:10] for r in rows], dtype=float)[:5], [[0.01, 1], [0.02, 2], [0.03, 3], [0.04, 4], [0.05, 5]])
+    assert [r[10:] for r in rows] == [["0"]] * 30  # the collision groups, last
 
 
 def test_lammps_dump_2d_open_space(tmp_path):

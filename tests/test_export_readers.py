@@ -358,12 +358,12 @@ def test_the_dump_layout(tmp_path, gas, flat):
     text = (tmp_path / "gas.lammpstrj").read_text()
     # each frame begins at ITEM: TIMESTEP and has N + 9 lines, as MDAnalysis reads it
     assert text.startswith(
-        "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n40\nITEM: BOX BOUNDS pp pp pp\n0.0 1.0\n0.0 1.0\n0.0 1.0\nITEM: ATOMS id type element x y z vx vy vz radius mass\n"
+        "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n40\nITEM: BOX BOUNDS pp pp pp\n0.0 1.0\n0.0 1.0\n0.0 1.0\nITEM: ATOMS id type element x y z vx vy vz radius mass group\n"
     )
     assert len(text.splitlines()) == len(gas.t) * (40 + 9) and "ITEM: TIME\n" not in text and "ITEM: UNITS" not in text
     assert "1 2 He " in text and "2 1 Ar " in text  # types 1 Ar, 2 He (sorted names); ids from 1
     # names that are not chemical symbols: no element column
-    assert "ITEM: ATOMS id type x y z vx vy vz radius mass\n" in (tmp_path / "flat.lammpstrj").read_text()
+    assert "ITEM: ATOMS id type x y z vx vy vz radius mass group\n" in (tmp_path / "flat.lammpstrj").read_text()
 
 
 @pytest.mark.parametrize("run", ["gas", "flat", "cloth"])

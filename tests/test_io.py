@@ -479,10 +479,11 @@ def test_csv_reads_back(tmp_path):
     tr = world_run()
     export(tr, tmp_path / "run.csv")
     with open(tmp_path / "run.csv") as f:
-        assert f.readline().strip() == "frame,time,id,x,y,z,vx,vy,vz,mass,radius"
+        assert f.readline().strip() == "frame,time,id,x,y,z,vx,vy,vz,mass,radius,group"
     table = np.loadtxt(tmp_path / "run.csv", delimiter=",", skiprows=1)
     f_, n = tr.positions.shape[:2]
-    assert table.shape == (f_ * n, 11)
+    assert table.shape == (f_ * n, 12)
+    np.testing.assert_array_equal(table[:, 11], np.tile(tr.groups, f_))
     np.testing.assert_array_equal(table[:, 0], np.repeat(np.arange(f_), n))
     np.testing.assert_array_equal(table[:, 1], np.repeat(tr.t, n))
     np.testing.assert_array_equal(table[:, 2], np.tile(np.arange(n), f_))

@@ -153,7 +153,7 @@ def test_ovito_reads_the_lammps_dump_spins(tmp_path, spinning):
     ovito_io = pytest.importorskip("ovito.io")
     export(spinning, tmp_path / "run.lammpstrj")
     header = (tmp_path / "run.lammpstrj").read_text().splitlines()[8]
-    assert header.endswith("radius mass omegax omegay omegaz quatw quati quatj quatk")
+    assert header.endswith("radius mass omegax omegay omegaz quatw quati quatj quatk group")
     pipeline = ovito_io.import_file(str(tmp_path / "run.lammpstrj"))
     for k in (0, len(spinning.t) - 1):
         p = pipeline.compute(k).particles
@@ -257,7 +257,7 @@ def test_usd_turns_a_point_instancer_of_balls_with_the_particles(tmp_path, spinn
 def test_numpy_reads_the_csv_spin_columns(tmp_path, spinning):
     export(spinning, tmp_path / "run.csv")
     table = np.genfromtxt(tmp_path / "run.csv", delimiter=",", names=True)
-    assert table.dtype.names[-7:] == ("wx", "wy", "wz", "qw", "qx", "qy", "qz")
+    assert table.dtype.names[-8:] == ("wx", "wy", "wz", "qw", "qx", "qy", "qz", "group")
     k = table["frame"] == 3
     np.testing.assert_array_equal(np.column_stack([table[c][k] for c in ("wx", "wy", "wz")]), spinning.angular_velocities[3])
     np.testing.assert_array_equal(np.column_stack([table[c][k] for c in ("qw", "qx", "qy", "qz")]), spinning.orientations[3])

@@ -264,7 +264,8 @@ _STREAMS = ("position", "velocity", "size", "life")  # an emitter's random strea
 _WAITING = {"x": 3, "v": 3, "spawn": 3, "m": 0, "r": 0, "death": 0, "born": 0, "life": 0}  # births held back: vectors, numbers
 _STATS_NEEDED = ("contacts", "impacts", "impulses", "solver_sweeps", "islands", "unconverged")
 _STATS_LATER = ("resting", "speculative", "bounced", "asleep", "asleep_contacts", "slept", "woke")  # (0 where absent: older checkpoints)
-_ABOUT = ("masses", "radii", "ids", "species", "colors", "springs", "dim", "dt", "method", "periodic", "box_edges", "colliders")
+_ABOUT = ("masses", "radii", "ids", "species", "colors", "groups", "springs", "dim", "dt", "method", "periodic", "box_edges", "colliders")
+_ABOUT_LATER = ("groups",)  # (absent from checkpoints written before the groups were recorded: the first set's)
 
 
 def _first_line(e: BaseException) -> str:
@@ -1041,15 +1042,17 @@ def _recorded_contacts(r: _Reader, frames: int) -> list[dict[str, np.ndarray]]:
 
 def _recorded_sets(r: _Reader, frames: int, ids_by_frame: list[np.ndarray]) -> list[tuple]:
     """The particle sets recorded (attribute `run/sets`): (ids, masses, radii, species,
-    colors) each time the particles changed, in the order the frames show them."""
+    colors, groups) each time the particles changed, in the order the frames show them. A set
+    of five (a checkpoint written before the collision groups were recorded) has every
+    particle in group 0."""
     field, raw = r.json("sets", "run")
     if not isinstance(raw, list) or not raw:
         raise r.invalid(field, raw, "it must be a list of the particle sets recorded (at least one)")
     sets = []
     for k, entry in enumerate(raw):
         at = f"{field} [{k}]"
-        if not isinstance(entry, list) or len(entry) != 5:
-            raise r.invalid(at, entry, "it must be [ids, masses, radii, species, colors]")
+        if not isinstance(entry, list) or len(entry) not in (5, 6):
+            raise r.invalid(at, entry, "it must be [ids, masses, radii, species, colors, groups] (or, written before the groups were, the first five)")
         ids = r.array(f"{at}[0] (ids)", entry[0], (None,), "int")
         n = ids.shape[0]
         r.each(f"{at}[0] (ids)", ids, ids >= 0, "ids are integers >= 0")
@@ -1064,7 +1067,11 @@ def _recorded_sets(r: _Reader, frames: int, ids_by_frame: list[np.ndarray]) -> l
         if entry[4] is not None:
             colors = r.array(f"{at}[4] (colors)", entry[4], (n, 3), "real")
             r.each(f"{at}[4] (colors)", colors, np.isnan(colors) | ((colors >= 0) & (colors <= 1)), "r g b in [0, 1] (NaN: none)")
-        sets.append((ids, masses, radii, species, colors))
+        groups = np.zeros(n, dtype=np.int64)
+        if len(entry) == 6:
+            groups = r.array(f"{at}[5] (groups)", entry[5], (n,), "int").astype(np.int64)
+            r.each(f"{at}[5] (groups)", groups, (groups >= 0) & (groups <= 31), "collision groups are integers in 0..31")
+        sets.append((ids, masses, radii, species, colors, groups))
     # the recorder adds a set whenever a frame's ids differ from the last set's
     j = 0
     for k, ids in enumerate(ids_by_frame):
@@ -1089,11 +1096,15 @@ def _recorded_about(r: _Reader, world: Any, first: tuple, describe_colliders: An
         if key not in _ABOUT:
             raise r.fail(f"{field}.{key}", f"is not one of {', '.join(_ABOUT)}")
     for key in _ABOUT:
-        if key not in about:
+        if key not in about and key not in _ABOUT_LATER:
             raise r.fail(f"{field}.{key}", "is missing")
     out: dict[str, Any] = {}
     # the particles as the first set has them
-    for k, (key, kind, width) in enumerate((("ids", "int", 0), ("masses", "real", 0), ("radii", "real", 0), ("species", "text", 0), ("colors", "real", 3))):
+    particles = (("ids", "int", 0), ("masses", "real", 0), ("radii", "real", 0), ("species", "text", 0), ("colors", "real", 3), ("groups", "int", 0))
+    for k, (key, kind, width) in enumerate(particles):
+        if key not in about:  # (an older checkpoint's: the first set's zeros)
+            out[key] = first[k]
+            continue
         value = about[key]
         n = first[0].shape[0]
         a = None if value is None else r.array(f"{field}.{key}", value, (n, 3) if width else (n,), kind)

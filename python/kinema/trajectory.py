@@ -105,7 +105,10 @@ class Trajectory:
     `compute pressure`; for hard spheres the virial route of the equation of state).
 
     About the world (`None` when unknown): `masses` (N,) kg, `radii` (N,) m, `ids`
-    (N,), `species` (N,) names (`World.add_particles(species=)`), `dim` (2 or 3), `dt` s, `method`, `periodic` (3 bools) and `box_edges`
+    (N,), `species` (N,) names (`World.add_particles(species=)`), `groups` (N,) ints, each
+    particle's collision group 0..31 (`World.groups` as recorded at the start and whenever
+    particles were born or died, the last of these; a regrouping in between is not a new
+    record; `None` for a file that does not hold them), `dim` (2 or 3), `dt` s, `method`, `periodic` (3 bools) and `box_edges`
     (3,) m, the periodic cell. `fps`: the frames per second asked of `World.run` (frame k
     is at t₀ + k/fps exactly; `step`: the steps' length where dt does not divide a frame,
     `kinema.frames`); saved in H5MD files, it is the default rate of a video of them. `colliders`: the world's colliders as plain descriptions, in
@@ -166,6 +169,7 @@ class Trajectory:
     radii: np.ndarray | None = None
     ids: np.ndarray | None = None
     species: np.ndarray | None = None
+    groups: np.ndarray | None = None
     dim: int = 3
     dt: float | None = None
     method: str | None = None
@@ -236,6 +240,13 @@ class Trajectory:
                 if value.shape != (frames, n, width):
                     raise ValueError(f"{name} has shape {value.shape}; it must be (frames, particles, {width}) = {(frames, n, width)}")
                 setattr(self, name, value)
+        if self.groups is not None:
+            groups = np.asarray(self.groups)
+            if groups.size and groups.dtype.kind not in "iu":
+                raise ValueError(f"groups has dtype {groups.dtype}; collision groups are integers in 0..31")
+            self.groups = groups.astype(np.int64)
+            if self.groups.shape != (n,):
+                raise ValueError(f"groups has shape {self.groups.shape}; it must be (particles,) = ({n},)")
         if self.inertia is not None:
             self.inertia = np.asarray(self.inertia, dtype=np.float64)
             if self.inertia.shape != (n,):
@@ -277,8 +288,8 @@ class Trajectory:
 
     def frame(self, k: int) -> dict[str, np.ndarray]:
         """The particles alive at frame `k`: `ids`, `positions`, `velocities` and, where
-        known, `angular_velocities`, `orientations`, `masses`, `radii` and `species`,
-        each with one row per live particle."""
+        known, `angular_velocities`, `orientations`, `masses`, `radii`, `species`,
+        `colors` and `groups`, each with one row per live particle."""
         live = self.alive[k]
         out = {"ids": (self.ids if self.ids is not None else np.arange(live.size))[live]}
         out["positions"], out["velocities"] = self.positions[k][live], self.velocities[k][live]
@@ -286,7 +297,7 @@ class Trajectory:
             value = getattr(self, name)
             if value is not None:
                 out[name] = value[k][live]
-        for name in ("masses", "radii", "species", "colors"):
+        for name in ("masses", "radii", "species", "colors", "groups"):
             value = getattr(self, name)
             if value is not None:
                 out[name] = value[live]
@@ -568,7 +579,7 @@ class _Recorder:
         self._expected = expected
         self._block: tuple[np.ndarray, np.ndarray] | None = None
         self.about: dict[str, Any] = {}
-        # (ids, masses, radii, species, colors) each time the set of particles changed
+        # (ids, masses, radii, species, colors, groups) each time the set of particles changed
         self.sets: list[tuple] = []
         # per frame: {"angular_velocities": (n, 3), "orientations": (n, 4)}, those the world has
         self.turning: list[dict[str, np.ndarray]] = []
@@ -587,7 +598,7 @@ class _Recorder:
             info = world._trajectory_info()
             if not self.about:
                 self.about = info
-            self.sets.append((ids, info["masses"], info["radii"], info["species"], info["colors"]))
+            self.sets.append((ids, info["masses"], info["radii"], info["species"], info["colors"], info["groups"]))
         springs = world._spring_ids  # springs added mid-run count
         self.about["springs"] = springs.copy() if springs.size else None
         d = world._diagnostics_as_pulled()
@@ -687,9 +698,12 @@ class _Recorder:
         masses, radii = np.full(n, np.nan), np.full(n, np.nan)
         species = np.full(n, "X", dtype=object) if any(s[3] is not None for s in self.sets) else None
         colors = np.full((n, 3), np.nan) if any(s[4] is not None for s in self.sets) else None
-        for ik, m, r, sp, c in self.sets:
+        groups = np.zeros(n, dtype=np.int64)
+        # each particle's group as the last set it is in has it (a particle regrouped while
+        # others were born or died; a regrouping alone makes no new set)
+        for ik, m, r, sp, c, g in self.sets:
             col = np.searchsorted(every, ik)
-            masses[col], radii[col] = m, r
+            masses[col], radii[col], groups[col] = m, r, g
             if species is not None and sp is not None:
                 species[col] = sp
             if colors is not None and c is not None:
@@ -700,6 +714,7 @@ class _Recorder:
             radii=radii,
             species=None if species is None else species.astype(str),
             colors=colors,
+            groups=groups,
         )
         return positions, velocities, alive
 

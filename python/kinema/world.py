@@ -1142,6 +1142,7 @@ class World(WorldCollisions):
             "ids": self.ids.copy(),
             "species": self.species,
             "colors": self._colors.copy() if not _unset(self._colors) and np.isfinite(self._colors).any() else None,
+            "groups": np.array(self.groups),
             "springs": self._spring_ids.copy() if self._spring_ids.size else None,
             "dim": self.dim,
             "dt": self.dt,

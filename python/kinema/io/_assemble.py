@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ._checks import available_memory, first_non_finite, gib, number
-from ._h5md_checks import edges_problem, fail, increase_problem, mass_problem, radius_problem, species_problem
+from ._h5md_checks import edges_problem, fail, group_problem, increase_problem, mass_problem, radius_problem, species_problem
 from .h5md_reader import LoadedTrajectory
 from .units import Scales
 
@@ -33,7 +33,7 @@ class RawFrame:
     has them, `ids` (n,) ints, `velocities` (n, 3), `masses` and `radii` (n,),
     `species` (n,) names, `colors` (n, 3) r g b in [0, 1], `angular_velocities` (n, 3)
     (in 1 / the file's time unit) and `orientations` (n, 4) unit quaternions (w, x, y,
-    z), `inertia` (n,) moments of inertia, the frame's `time` and `step` and its `box`. `where` names the frame in messages
+    z), `inertia` (n,) moments of inertia, `groups` (n,) collision groups (ints), the frame's `time` and `step` and its `box`. `where` names the frame in messages
     (`"frame 3"`, `"frame 3 (line 120)"`)."""
 
     positions: np.ndarray
@@ -47,6 +47,7 @@ class RawFrame:
     angular_velocities: np.ndarray | None = None
     orientations: np.ndarray | None = None
     inertia: np.ndarray | None = None
+    groups: np.ndarray | None = None
     time: float | None = None
     step: int | None = None
     box: Box | None = None
@@ -70,6 +71,8 @@ def _check_rows(path: Path, fr: RawFrame) -> None:
         raise fail(path, f"{fr.where}: {problem.replace('radius[', 'the radius of row [')}")
     if fr.species is not None and (problem := species_problem(list(fr.species))) is not None:
         raise fail(path, f"{fr.where}: {problem}")
+    if fr.groups is not None and (problem := group_problem(fr.groups)) is not None:
+        raise fail(path, f"{fr.where}: {problem.replace('group[', 'the collision group of row [')}")
     if fr.colors is not None and not ((fr.colors >= 0) & (fr.colors <= 1)).all():
         r = int(np.argmax(~((fr.colors >= 0) & (fr.colors <= 1)).all(axis=1)))
         raise fail(path, f"{fr.where}: the colour of row {r} is {fr.colors[r].tolist()}; r g b must be in [0, 1]")
@@ -96,8 +99,9 @@ def assemble(
     not in a frame); without ids every frame must hold the same number of rows, the particles
     in the same order. Velocities are `None` when no frame has them (NaN in a frame without
     them when others have them), and so are angular velocities (converted by the file's
-    time unit) and orientations; masses, radii and species are each particle's where it first
-    appears, `None` when no frame has them (so are colours). `springs` (S, 2) are the ids
+    time unit) and orientations; masses, radii, species and collision groups are each particle's where it first
+    appears, `None` when no frame has them (so are colours; a particle whose first frame has no
+    groups when others do is in group 0). `springs` (S, 2) are the ids
     at the ends of each spring, as the file names them. Times are the frames' own times, or, when the file
     has none, the frame index (0, 1, 2, ... s; `source.step` keeps the file's steps).
     The first frame's box gives `periodic`, `box_edges` and, with a periodic axis, a box
@@ -149,6 +153,7 @@ def assemble(
     species = np.full(n, "X", dtype=object) if any(fr.species is not None for fr in frames) else None
     colors = np.full((n, 3), np.nan) if any(fr.colors is not None for fr in frames) else None
     inertia = np.full(n, np.nan) if any(fr.inertia is not None for fr in frames) else None
+    groups = np.zeros(n, dtype=np.int64) if any(fr.groups is not None for fr in frames) else None
     seen = np.zeros(n, dtype=bool)  # the particles whose per-particle values are set
     for k, fr in enumerate(frames):
         col = np.searchsorted(ids, fr.ids) if by_id else np.arange(n)
@@ -161,7 +166,7 @@ def assemble(
         alive[k, col] = True
         new = ~seen[col]
         if new.any():
-            for whole, rows in ((masses, fr.masses), (radii, fr.radii), (species, fr.species), (colors, fr.colors), (inertia, fr.inertia)):
+            for whole, rows in ((masses, fr.masses), (radii, fr.radii), (species, fr.species), (colors, fr.colors), (inertia, fr.inertia), (groups, fr.groups)):
                 if whole is not None and rows is not None:
                     whole[col[new]] = np.asarray(rows)[new]
             seen[col[new]] = True
@@ -194,6 +199,7 @@ def assemble(
         angular_velocities=None if spin["angular_velocities"] is None else spin["angular_velocities"] / scales.time,
         orientations=spin["orientations"],
         inertia=None if inertia is None else inertia * scales.mass * scales.length**2,
+        groups=groups,
     )
     # a particle that has no value of its own where it first appears (another frame's column
     # had one): unknown values are refused, as a file of another program would be

@@ -568,7 +568,9 @@ class Frames:
     `alive` (F, N) bool, which particles exist at each frame (all True without births and
     deaths; positions and velocities are NaN where not); with spin `angular_velocities`
     (F, N, 3) rad/s, `orientations` (F, N, 4) unit quaternions (w, x, y, z) and
-    `inertia` (N,) kg·m², `None` where the trajectory has none."""
+    `inertia` (N,) kg·m², `None` where the trajectory has none; `groups` (N,) int64, each
+    particle's collision group (0..31, `check_frames` refuses others), `None` where the
+    trajectory has none."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -583,6 +585,7 @@ class Frames:
     angular_velocities: np.ndarray | None = None
     orientations: np.ndarray | None = None
     inertia: np.ndarray | None = None
+    groups: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -634,10 +637,24 @@ def _per_particle(traj: Any, names: tuple[str, ...], n: int, dtype: Any) -> np.n
     return None
 
 
+def _groups(traj: Any, n: int) -> np.ndarray | None:
+    """The optional collision groups (N,) of `traj` as int64, shape- and type-checked (their
+    range is `check_frames`'s); `None` where it has none."""
+    value = getattr(traj, "groups", None)
+    if value is None:
+        return None
+    a = np.asarray(value)
+    if a.shape != (n,):
+        raise ValueError(f"groups has shape {a.shape}; it must be ({n},), one collision group per particle")
+    if a.dtype.kind not in "iu" and a.size:
+        raise ValueError(f"groups has dtype {a.dtype}; collision groups are integers in 0..31")
+    return a.astype(np.int64)
+
+
 def frames_of(traj: Any) -> Frames:
     """Reads `t`, `positions`, `velocities` and the optional `masses` (or `mass`),
     `radii` (or `radius`), `ids`, `alive`, `dim`, `dt`, `method`,
-    `angular_velocities`, `orientations` and `inertia` of a
+    `angular_velocities`, `orientations`, `inertia` and `groups` of a
     trajectory-like object and checks their shapes; raises `ValueError` naming the
     attribute that is wrong."""
     t = np.asarray(traj.t, dtype=np.float64)
@@ -675,4 +692,5 @@ def frames_of(traj: Any) -> Frames:
         angular_velocities=_per_frame_rows(traj, "angular_velocities", (t.shape[0], n, 3)),
         orientations=_per_frame_rows(traj, "orientations", (t.shape[0], n, 4)),
         inertia=_per_particle(traj, ("inertia",), n, np.float64),
+        groups=_groups(traj, n),
     )

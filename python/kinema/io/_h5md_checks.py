@@ -102,6 +102,20 @@ def color_problem(a: np.ndarray) -> str | None:
     return f"has color[{i}] = [{', '.join(number(v) for v in a[i])}] (colours are r, g, b in [0, 1], or NaN: none)"
 
 
+#: Collision groups: an integer in 0..GROUPS - 1 (a bit of the engine's 32-bit masks, `World.groups`).
+GROUPS = 32
+
+
+def group_problem(a: np.ndarray) -> str | None:
+    """`"has group[2] = 40 (collision groups are integers in 0..31)"` for the first of `a`
+    (N,) outside 0..31, else `None`."""
+    bad = (a < 0) | (a >= GROUPS)
+    if not bad.any():
+        return None
+    i = int(np.argmax(bad))
+    return f"has group[{i}] = {int(a[i])} (collision groups are integers in 0..{GROUPS - 1})"
+
+
 def boundary_problem(values: list[str]) -> str | None:
     """`"has boundary 'spherical' ..."` for the first value of an H5MD box's `boundary`
     that is not one of `BOUNDARIES`, else `None`."""
@@ -196,7 +210,7 @@ def check_frames(path: Any, traj: Any, fr: Frames, float32: str | None = None, i
     reader would refuse, by the reader's rules: finite times that increase; finite positions
     and velocities where a particle exists (velocities may be all NaN: unknown, not written
     to H5MD); masses finite and > 0 kg, radii finite, >= 0 m and at most `MAX_RADIUS` (of
-    the particles that exist at some frame); species names of printable text; ids once per
+    the particles that exist at some frame); collision groups in 0..31; species names of printable text; ids once per
     frame. `float32` (a format's name) also refuses values beyond float32, which that
     format stores (they would be inf); `int32_ids` ids beyond int32. Raises
     `TrajectoryFileError` (a `ValueError`), one line: `cannot write run.h5: trajectory
@@ -236,6 +250,8 @@ def check_frames(path: Any, traj: Any, fr: Frames, float32: str | None = None, i
             "inertia",
             None if not bad.any() else f"has inertia[{int(np.argmax(bad))}] = {fr.inertia[np.argmax(bad)]!r} (moments of inertia are finite and >= 0 kg m2)",
         )
+    if fr.groups is not None:
+        refuse("groups", group_problem(np.where(exists, fr.groups, 0)))
     if fr.masses is not None:
         refuse("masses", mass_problem(np.where(exists, fr.masses, 1.0)))
     if fr.radii is not None:

@@ -25,14 +25,15 @@ def _csv_header(fr: Frames, extras: Extras) -> str:
         + ",r,g,b" * (extras.colors is not None)
         + "".join(f",{c}" for c in SPIN_CSV) * (fr.angular_velocities is not None)
         + "".join(f",{c}" for c in ORIENTATION_CSV) * (fr.orientations is not None)
+        + ",group" * (fr.groups is not None)
     )
 
 
 def _csv(fr: Frames, i: int, extras: Extras) -> str:
     """The rows of frame `i`, one per particle alive at it: frame,time,id,x,y,z,vx,vy,vz,
     then mass, radius, species (its name), r,g,b (its colour in [0, 1]), wx,wy,wz (its
-    angular velocity, rad/s) and qw,qx,qy,qz (its orientation) where the trajectory has
-    them (17 significant digits)."""
+    angular velocity, rad/s), qw,qx,qy,qz (its orientation) and group (its collision
+    group, an integer) where the trajectory has them (17 significant digits)."""
     t = repr(float(fr.t[i]))
     live = fr.live(i)
     cols = [fr.positions[i][live], fr.velocities[i][live], *(a[live][:, None] for a in (fr.masses, fr.radii) if a is not None)]
@@ -41,19 +42,20 @@ def _csv(fr: Frames, i: int, extras: Extras) -> str:
     colors = [",".join(["", *map(repr, c)]) for c in extras.colors[live].tolist()] if extras.colors is not None else [""] * live.size
     spin = [a[i][live] for a in (fr.angular_velocities, fr.orientations) if a is not None]
     turning = [",".join(["", *map(repr, w)]) for w in np.hstack(spin).tolist()] if spin else [""] * live.size
+    groups = [f",{int(g)}" for g in fr.groups[live]] if fr.groups is not None else [""] * live.size
     return "".join(
-        f"{i},{t},{int(k)}," + ",".join(map(repr, r)) + name + rgb + w + "\n"
-        for r, k, name, rgb, w in zip(table, fr.ids[live], names, colors, turning, strict=True)
+        f"{i},{t},{int(k)}," + ",".join(map(repr, r)) + name + rgb + w + g + "\n"
+        for r, k, name, rgb, w, g in zip(table, fr.ids[live], names, colors, turning, groups, strict=True)
     )
 
 
 def write_csv(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
     """Write `fr` to one CSV file at `path`; returns `[path]`.
 
-    The header `frame,time,id,x,y,z,vx,vy,vz,mass,radius,species,r,g,b,wx,wy,wz,qw,qx,qy,qz`
+    The header `frame,time,id,x,y,z,vx,vy,vz,mass,radius,species,r,g,b,wx,wy,wz,qw,qx,qy,qz,group`
     (`_csv_header`: mass and radius where the trajectory has them, species and r,g,b where
     it has species and colours, the angular velocity and the orientation where it has
-    spin), then a row per particle and frame (`_csv`), every float with 17
+    spin, group, the collision group, where it has groups), then a row per particle and frame (`_csv`), every float with 17
     significant digits (exact for float64), in SI units. The file is written under a
     temporary name and renamed at the end. `on_frame(i)` is called after frame `i` is
     written."""

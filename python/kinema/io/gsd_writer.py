@@ -50,11 +50,14 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     particles) hold the springs whose two ends are alive then; OVITO reads them as its Bonds.
     Colours (`traj.colors`): `log/particles/Color` (N, 3) float32, r g b in [0, 1] (the
     renderer's `NO_OWN_COLOR` for a particle without its own), which HOOMD's schema has no
-    place for and OVITO reads as its Color property.
+    place for and OVITO reads as its Color property. Collision groups (`traj.groups`):
+    `log/particles/collision_group` (N,) int32, each particle's group 0..31 (HOOMD's schema
+    has no free integer per particle: `typeid` is the species, `body` a rigid body's), which
+    `gsd.hoomd` reads as `frame.log["particles/collision_group"]`.
 
     Births and deaths (`alive`): a frame holds the particles alive at it only, GSD's
     `particles/N` varying from frame to frame as HOOMD's does; `typeid`, `mass`,
-    `diameter`, the colours and `log/particles/kinema/id` are those of the live
+    `diameter`, the colours, the groups and `log/particles/kinema/id` are those of the live
     particles, in the order of their ids, so a particle is followed across frames by its id
     (a frame may hold none).
 
@@ -92,6 +95,7 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     diameters = None if fr.radii is None else (2.0 * fr.radii).astype(np.float32)
     colors = particle_colors(traj, fr.n_particles)
     colors = None if colors is None else colors.astype(np.float32)
+    groups = None if fr.groups is None else fr.groups.astype(np.int32)
     springs = spring_columns(traj, fr)
     ids = fr.ids.astype(np.int64)
     inertia = None
@@ -155,6 +159,8 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
                     frame.log["particles/kinema/id"] = ids[live]
                     if colors is not None:
                         frame.log["particles/Color"] = colors[live]
+                    if groups is not None:
+                        frame.log["particles/collision_group"] = groups[live]
                     _gsd_call(path, scratch, f.append, frame)
                     on_frame(i)
             except BaseException:

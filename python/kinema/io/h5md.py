@@ -22,6 +22,8 @@ specification allows, and requires for the box; units shown for `units="SI"`, th
         mass [kg], radius [m], id      step, time, value (F, N), when known (id: always)
         color             step, time, value (F, N, 3) float64: r, g, b in [0, 1], NaN: none
                           (when the trajectory has colours)
+        collision_group   step, time, value (F, N) int32: each particle's collision group, 0..31
+                          (World.groups; when the trajectory has groups; kinema's name)
         angular_velocity  step, time, value (F, N, 3) [s-1]: each particle's ω, rad/s (a world with
                           spin; H5MD has no element for it: kinema's name)
         moment_of_inertia step, time, value (F, N) [kg m2]: about the centre (with spin; kinema's name)
@@ -70,7 +72,7 @@ Units follow the H5MD units module: a `unit` attribute (a variable-length ASCII 
 MDAnalysis reads no other) on each `value` (and `time`) dataset, written as
 space-separated factors with integer powers; `units="MD"` writes nm, ps, nm ps-1, u and
 kJ mol-1 instead of m, s, m s-1, kg and J (`/parameters/kinema` stays SI). The per-particle
-elements (species, mass, radius, id, color) and the box are time-dependent, constant over the
+elements (species, mass, radius, id, color, collision_group) and the box are time-dependent, constant over the
 frames, because znh5md (ASE's H5MD reader) reads only that form; MDAnalysis's reader and
 pyh5md read them too.
 
@@ -79,7 +81,7 @@ number of particles that varies: the arrays keep N columns, one per particle tha
 some frame, and the `id` element's value dataset gets a fill value (-1, or one less than
 the least id), which it holds where that particle does not exist; there `position`,
 `velocity`, `mass`, `radius` and `color` hold their datasets' fill value, NaN, and
-`species` and `species_index` -1. Without births and deaths no fill value is set and the
+`species`, `species_index` and `collision_group` -1. Without births and deaths no fill value is set and the
 layout is as above.
 
 `load_h5md` converts the units of what it reads to SI (`parse_unit`: "nm", "Ang",
@@ -253,7 +255,7 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     _dataset(clock, "time", *unit(fr.t, "s"), compression, time_series=True)
     # Births and deaths (H5MD's varying number of particles): the arrays keep one column per
     # particle; at a frame where it does not exist, its id is the id dataset's fill value and
-    # its other entries the fill values of theirs (NaN; species -1).
+    # its other entries the fill values of theirs (NaN; species and collision_group -1).
     changes = fr.changes_count
     alive = fr.alive if changes else None
     nan = np.nan if changes else None
@@ -292,6 +294,7 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
         ("moment_of_inertia", fr.inertia, "kg m2", np.nan),
         ("id", fr.ids, None, no_id),
         ("color", None if colors is None else np.asarray(colors, dtype=np.float64), None, np.nan),
+        ("collision_group", None if fr.groups is None else fr.groups.astype(np.int32), None, -1),
     )
     for name, a, si, fill in per_particle:
         if a is not None:
@@ -519,7 +522,8 @@ def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: st
     `species` element: the atomic number of a name that is a chemical symbol, else 0, and
     `species_index`: the index of each particle's name among the sorted names, which its
     `names` attribute holds; all 0 and no `species_index` without `species`),
-    `colors` (N, 3) r, g, b in [0, 1], NaN: none (the `color` element),
+    `colors` (N, 3) r, g, b in [0, 1], NaN: none (the `color` element), `groups` (N,)
+    ints in 0..31, each particle's collision group (the `collision_group` element),
     `colliders` (`Trajectory.colliders`' descriptions or `kinema` collider objects),
     `alive` (F, N) bool, which particles exist at each frame (births and deaths: written
     with H5MD's fill values, see the module doc), `springs` (S, 2) the ids at the ends of

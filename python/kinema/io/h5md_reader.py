@@ -25,6 +25,7 @@ from ._h5md_checks import (
     edges_problem,
     element_datasets,
     fail,
+    group_problem,
     increase_problem,
     mass_problem,
     per_frame,
@@ -60,7 +61,8 @@ class LoadedTrajectory:
     bool, which particles exist at each frame (`None` when all do: a file whose number of
     particles does not vary), `springs` (S, 2) the ids at the ends of each spring,
     `angular_velocities` (F, N, 3) rad/s, `orientations` (F, N, 4) and `inertia` (N,)
-    kg m² (a world with spin), `contact_record` (the contacts of each frame, a
+    kg m² (a world with spin), `groups` (N,) int64 each particle's collision group (kinema's
+    files; `None` in a file without them), `contact_record` (the contacts of each frame, a
     `kinema.contact_record.ContactRecord`), `collider_momentum`, `collider_normal` and
     `collider_tangential` (F, K, 3) N s, what the particles had given each collider by each
     frame. Where
@@ -103,6 +105,7 @@ class LoadedTrajectory:
     angular_velocities: np.ndarray | None = None
     orientations: np.ndarray | None = None
     inertia: np.ndarray | None = None
+    groups: np.ndarray | None = None
     contact_record: ContactRecord | None = None
     collider_momentum: np.ndarray | None = None
     collider_normal: np.ndarray | None = None
@@ -492,6 +495,7 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
         ("id", "ids", True),
         (named, "species", True),
         ("color", "colors", False),
+        ("collision_group", "groups", True),  # kinema's element
     )
     for name, attr, integer in each:
         if name is None or name not in p or (name == "id" and id_table is not None):
@@ -708,6 +712,10 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
         if attr != "colors":  # a colour may be NaN: none
             r.finite(attr, ds, a, ("particle",))
         problem = mass_problem(a) if attr == "masses" else radius_problem(a) if attr == "radii" else color_problem(a) if attr == "colors" else None
+        if attr == "groups":
+            a = np.asarray(a)
+            problem = group_problem(a)
+            a = a.astype(np.int64)
         if attr == "inertia" and (a < 0).any():
             problem = f"has inertia[{int(np.argmax(a < 0))}] = {number(a[np.argmax(a < 0)])} (moments of inertia are >= 0 kg m2)"
         if problem is not None:

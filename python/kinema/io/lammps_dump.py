@@ -78,6 +78,10 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
     quaternion, w first), LAMMPS's names, which OVITO reads as Angular Velocity and
     Orientation.
 
+    Collision groups (`traj.groups`): a last column `group`, each particle's group (an
+    integer 0..31; kinema's name: a LAMMPS dump has no column for LAMMPS's own groups), which
+    OVITO reads as a particle property `group`; `type` stays the species.
+
     Contacts (`traj.contact_record`): two more files beside `path`, as LAMMPS's `dump
     local` writes a `compute property/local` and `compute pair/local`
     (`write_contacts_local`): `<stem>_contacts.dump`, the contacts between particles, and
@@ -92,6 +96,10 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
     columns = "id type" + " element" * (elements is not None) + " x y z vx vy vz" + " radius" * (fr.radii is not None) + " mass" * (fr.masses is not None)
     spin = [a for a in (fr.angular_velocities, fr.orientations) if a is not None]
     columns += f" {SPIN_COLUMNS}" * (fr.angular_velocities is not None) + f" {ORIENTATION_COLUMNS}" * (fr.orientations is not None)
+    # the collision groups last: the columns before keep their places (kinema's name; LAMMPS's
+    # own groups are no per-atom value of a dump)
+    columns += " group" * (fr.groups is not None)
+    suffixes = np.array([f" {int(g)}" for g in fr.groups] if fr.groups is not None else [""] * fr.n_particles, dtype=object)
     _, typeid = particle_types(traj, fr.n_particles)
     ids = _lammps_ids(fr)
     prefixes = np.array(
@@ -107,7 +115,7 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
             for i in range(fr.n_frames):
                 live = fr.live(i)
                 table = np.hstack([fr.positions[i][live], fr.velocities[i][live], *(a[live] for a in per_particle), *(a[i][live] for a in spin)]).tolist()
-                rows = "".join(p + " ".join(map(repr, r)) + "\n" for p, r in zip(prefixes[live], table, strict=True))
+                rows = "".join(p + " ".join(map(repr, r)) + g + "\n" for p, r, g in zip(prefixes[live], table, suffixes[live], strict=True))
                 f.write(f"ITEM: TIMESTEP\n{int(steps[i])}\nITEM: NUMBER OF ATOMS\n{live.size}\n{bounds}ITEM: ATOMS {columns}\n{rows}")
                 on_frame(i)
         if record is not None:

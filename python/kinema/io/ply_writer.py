@@ -21,7 +21,8 @@ def _ply(fr: Frames, i: int, extras: Extras) -> bytes:
     x y z vx vy vz radius, uchar red green blue (the colour, where the trajectory has
     colours), int32 type (the index of its species in the `comment type <index> <name>`
     lines, where it has species), float32 wx wy wz (the angular velocity, rad/s) and qw qx qy
-    qz (the orientation) where it has spin, and int32 id, the types Blender's and Houdini's importers
+    qz (the orientation) where it has spin, int32 id, and int32 group (the collision
+    group, where it has groups), the types Blender's and Houdini's importers
     read (Blender keeps the other properties as point attributes and red green blue as the
     colour attribute `Col`); then, where the trajectory has springs, one edge per spring
     whose two ends are alive, int32 vertex1 vertex2 (its ends' vertex indices), which
@@ -36,6 +37,8 @@ def _ply(fr: Frames, i: int, extras: Extras) -> bytes:
     spin = [(names, a) for names, a in ((SPIN_CSV, fr.angular_velocities), (ORIENTATION_CSV, fr.orientations)) if a is not None]
     columns += [(name, "<f4") for names, _ in spin for name in names]
     columns.append(("id", "<i4"))
+    if fr.groups is not None:
+        columns.append(("group", "<i4"))
     live = fr.live(i)
     rows = np.empty(live.size, dtype=columns)
     for k, axis in enumerate("xyz"):
@@ -53,6 +56,8 @@ def _ply(fr: Frames, i: int, extras: Extras) -> bytes:
         for k, name in enumerate(names):
             rows[name] = a[i, live, k]
     rows["id"] = fr.ids[live]
+    if fr.groups is not None:
+        rows["group"] = fr.groups[live]
     edges = None if extras.springs is None else live_springs(extras.springs, fr, i).astype("<i4")
     ply_type = {"<f4": "float", "<i4": "int", "u1": "uchar"}
     header = [
@@ -77,7 +82,8 @@ def write_ply(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     `<stem>_00000.ply`, `<stem>_00001.ply`, ... (`_ply`): vertex properties x y z vx vy
     vz (float32; m, m/s), radius (float32, m), red green blue (uchar, the colour), type
     (int32, the species, named in `comment type k name` lines), wx wy wz and qw qx qy qz
-    (float32: the angular velocity, rad/s, and the orientation, with spin) and id (int32); with
+    (float32: the angular velocity, rad/s, and the orientation, with spin), id (int32) and
+    group (int32, the collision group, with groups); with
     springs, `element edge` (vertex1 vertex2), one edge per spring whose ends are alive.
     The stem is the name of `path` less its suffix where that is .ply, the whole name
     otherwise. The series is built in a temporary folder that takes the place of

@@ -24,8 +24,8 @@ _CSV_COLUMNS = ("frame", "time", "id", "x", "y", "z", "vx", "vy", "vz")
 
 def read_csv(path: Path) -> LoadedTrajectory:
     """Read a CSV kinema exported: the header `frame,time,id,x,y,z,vx,vy,vz`, then any of
-    `mass`, `radius`, `species`, `r,g,b` (the colour), `wx,wy,wz` (the angular velocity)
-    and `qw,qx,qy,qz` (the orientation), a row per particle and frame,
+    `mass`, `radius`, `species`, `r,g,b` (the colour), `wx,wy,wz` (the angular velocity),
+    `qw,qx,qy,qz` (the orientation) and `group` (the collision group), a row per particle and frame,
     SI units. Frames are the distinct `frame` numbers, in order; a frame in which no particle
     was alive has no row, so it is not read."""
     try:
@@ -34,11 +34,11 @@ def read_csv(path: Path) -> LoadedTrajectory:
         raise fail(path, f"not a text file ({e.reason} at byte {e.start}), so not a CSV") from None
     header = lines[0].strip().split(",") if lines else []
     extra = header[len(_CSV_COLUMNS) :]
-    known = {"mass", "radius", "species", "r", "g", "b", *SPIN_CSV, *ORIENTATION_CSV}
+    known = {"mass", "radius", "species", "r", "g", "b", *SPIN_CSV, *ORIENTATION_CSV, "group"}
     if tuple(header[: len(_CSV_COLUMNS)]) != _CSV_COLUMNS or not set(extra) <= known or len(set(extra)) != len(extra):
         raise fail(
             path,
-            f"a CSV whose header is not kinema's ({','.join(_CSV_COLUMNS)}[,mass][,radius][,species][,r,g,b][,wx,wy,wz][,qw,qx,qy,qz]); kinema reads back its own CSV only",
+            f"a CSV whose header is not kinema's ({','.join(_CSV_COLUMNS)}[,mass][,radius][,species][,r,g,b][,wx,wy,wz][,qw,qx,qy,qz][,group]); kinema reads back its own CSV only",
         )
     rows = [line for line in lines[1:] if line.strip()]
     width = len(header)
@@ -49,9 +49,10 @@ def read_csv(path: Path) -> LoadedTrajectory:
                 raise fail(path, f"line {r + 2}: {len(line.split(','))} values, but the header names {width} columns")
     table = np.array(words, dtype=str).reshape(len(rows), width)
     at = {name: k for k, name in enumerate(header)}
-    numbers = [k for k, name in enumerate(header) if name not in ("frame", "id", "species")]
+    numbers = [k for k, name in enumerate(header) if name not in ("frame", "id", "species", "group")]
     try:
         frame_no, ids = table[:, 0].astype(np.int64), table[:, 2].astype(np.int64)
+        groups = table[:, header.index("group")].astype(np.int64) if "group" in header else None
         values = np.zeros((len(rows), width))
         values[:, numbers] = table[:, numbers].astype(np.float64)
     except ValueError as e:
@@ -77,6 +78,7 @@ def read_csv(path: Path) -> LoadedTrajectory:
                 radii=v[:, at["radius"]] if "radius" in at else None,
                 species=table[rows_at, at["species"]].astype(object) if "species" in at else None,
                 colors=v[:, rgb] if rgb else None,
+                groups=None if groups is None else groups[rows_at],
                 angular_velocities=v[:, [at[c] for c in SPIN_CSV]] if all(c in at for c in SPIN_CSV) else None,
                 orientations=v[:, [at[c] for c in ORIENTATION_CSV]] if all(c in at for c in ORIENTATION_CSV) else None,
                 time=float(times[0]),
@@ -159,7 +161,7 @@ def read_vtk(path: Path) -> LoadedTrajectory:
     frame's time) and PolyData file (XML, inline binary or ascii, uncompressed; or the
     multi-block file of a frame with springs, its block 0), its points and the point data
     `v` (velocities), `radius`, `mass`, `id`, `type` (names: the field data
-    `type_names`), `Color`, `angular_velocity` and `orientation` (w x y z), in SI units, the
+    `type_names`), `Color`, `group` (the collision groups), `angular_velocity` and `orientation` (w x y z), in SI units, the
     units kinema writes them in. A series without kinema's `speed` point data (another
     program's) is read in the same units, with a `UnitWarning`."""
     try:
@@ -190,6 +192,7 @@ def read_vtk(path: Path) -> LoadedTrajectory:
                 radii=data["radius"].astype(np.float64) if "radius" in data else None,
                 species=data["type_names"][data["type"].astype(np.int64)] if "type" in data and "type_names" in data else None,
                 colors=data["Color"].reshape(n, 3).astype(np.float64) if "Color" in data else None,
+                groups=data["group"].astype(np.int64) if "group" in data and data["group"].dtype.kind in "iu" else None,
                 angular_velocities=data["angular_velocity"].reshape(n, 3).astype(np.float64) if "angular_velocity" in data else None,
                 orientations=data["orientation"].reshape(n, 4).astype(np.float64) if "orientation" in data else None,
                 time=time,
@@ -251,6 +254,7 @@ def _ply_frame(path: Path, file: Path, where: str) -> RawFrame:
         radii=rows["radius"].astype(np.float64) if "radius" in names else None,
         species=species,
         colors=np.stack([rows[c] for c in rgb], axis=1) / 255.0 if names.issuperset(rgb) else None,
+        groups=rows["group"].astype(np.int64) if "group" in names and rows["group"].dtype.kind in "iu" else None,
         angular_velocities=np.stack([rows[c] for c in SPIN_CSV], axis=1).astype(np.float64) if names.issuperset(SPIN_CSV) else None,
         orientations=np.stack([rows[c] for c in ORIENTATION_CSV], axis=1).astype(np.float64) if names.issuperset(ORIENTATION_CSV) else None,
         time=None if time is None else float(time),
@@ -261,7 +265,8 @@ def read_ply(folder: Path) -> LoadedTrajectory:
     """Read the PLY series kinema exported into `folder` (`<stem>_ply/`, its files
     `<stem>_00000.ply`, ... in the order of their numbers): each frame's vertices x y z, vx vy
     vz, radius and id (float32 and int32, as written), the species (`type` and the `comment
-    type <index> <name>` lines), the colour (`red green blue`, /255) and its `comment time`,
+    type <index> <name>` lines), the colour (`red green blue`, /255), the collision group
+    (`group`) and its `comment time`,
     SI units. PLY holds no masses."""
     files = sorted((p for p in folder.iterdir() if p.suffix.lower() == ".ply"), key=lambda p: (len(p.stem), p.stem))
     numbered = [p for p in files if re.search(r"_\d+$", p.stem)]

@@ -50,6 +50,14 @@ def _spin(f: Any, k: int, p: Any, own: bool) -> dict[str, np.ndarray]:
     return out
 
 
+def _groups(path: Path, chunk: np.ndarray, where: str) -> np.ndarray:
+    """The collision groups of a frame (`log/particles/collision_group`, integers)."""
+    a = np.asarray(chunk).reshape(-1)
+    if a.dtype.kind not in "iu":
+        raise fail(path, f"{where}: log/particles/collision_group holds {a.dtype} values; collision groups are integers")
+    return a.astype(np.int64)
+
+
 def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
     """Read the GSD file `path` (schema "hoomd") with `gsd.hoomd`.
 
@@ -62,8 +70,9 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
     every axis, as HOOMD's box is; a tilted box is refused). A number of particles that varies
     is read by kinema's ids (`log/particles/kinema/id`); without them it is refused.
     kinema's files also give the periodic axes (`log/kinema/periodic`: along another axis
-    the cell is the box halved), the springs (bonds of type "spring", as ids) and the
-    colours (`log/particles/Color`). Spin: `particles/orientation` as the orientations,
+    the cell is the box halved), the springs (bonds of type "spring", as ids), the
+    colours (`log/particles/Color`) and the collision groups
+    (`log/particles/collision_group`). Spin: `particles/orientation` as the orientations,
     and the angular velocities from kinema's `log/particles/kinema/omega`, else from
     HOOMD's `particles/angmom` and `moment_inertia` (a sphere's: `_spin`).
 
@@ -130,6 +139,7 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
             if typeid.size and (typeid.min() < 0 or typeid.max() >= len(types)):
                 raise fail(path, f"{where}: particles/typeid holds {int(typeid.max())}, but particles/types names {len(types)} types")
             color = _log(f, k, "particles/Color") if own else None
+            groups = _log(f, k, "particles/collision_group") if own else None
             spin = _spin(f, k, p, own)
             if ids is not None and frame.bonds.N and list(frame.bonds.types) == ["spring"]:
                 ends = np.asarray(ids, dtype=np.int64).reshape(-1)[np.asarray(frame.bonds.group, dtype=np.int64).reshape(-1, 2)]
@@ -144,6 +154,7 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
                     radii=np.asarray(p.diameter, dtype=np.float64).reshape(-1) / 2,
                     species=np.array(types, dtype=object)[typeid] if types else None,
                     colors=None if color is None else np.asarray(color, dtype=np.float64).reshape(-1, 3),
+                    groups=None if groups is None else _groups(path, groups, where),
                     **spin,
                     time=None if time is None else float(np.asarray(time).reshape(-1)[0]),
                     step=int(c.step),

@@ -116,7 +116,7 @@ def read_dump(path: Path, units: Any = None) -> LoadedTrajectory:
     and deaths), `type` as the species name (`element`, from `dump_modify element`, where
     there is one), the positions of `x y z`, else `xu yu zu`, else the scaled `xs ys zs`
     or `xsu ysu zsu` (times the box's edges), `vx vy vz`, `mass`, `radius` (or
-    `diameter` / 2); `ITEM: TIME` (the frames' times), `ITEM: TIMESTEP` (`source.step`),
+    `diameter` / 2), `group` (kinema's collision groups, 0..31); `ITEM: TIME` (the frames' times), `ITEM: TIMESTEP` (`source.step`),
     the box of `ITEM: BOX BOUNDS`, periodic where its flag is `pp` (a tilted box is
     refused). A dump whose box is periodic in z and whose z are all 0 is a 2D run."""
     lines = _text(path).splitlines()
@@ -310,6 +310,7 @@ def _dump_frame(path: Path, columns: list[str], rows: list[str], first: int, whe
         masses=col("mass") if "mass" in at else None,
         radii=radii,
         species=None if kind is None else table[:, at[kind]].astype(str).astype(object),
+        groups=col("group", np.int64) if "group" in at else None,  # kinema's collision groups
         **spin,
         time=time,
         step=step,

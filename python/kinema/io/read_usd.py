@@ -26,7 +26,7 @@ def read_usd(path: Path) -> LoadedTrajectory:
     kinema's own export (`/World` has `kinema:time`; see `usd_writer.write_usd`):
     `/World/particles` at time code k = frame k, its time `kinema:time` (s); `points`
     (m), `velocities` (m/s), `widths` / 2 (radii, m), `ids`, the primvars `mass`
-    (kg) and `species`; the colours (`displayColor`, linear, back to sRGB) of the
+    (kg), `species` and `collisionGroup` (the collision groups); the colours (`displayColor`, linear, back to sRGB) of the
     particles `kinema:colorIds` names, the others' being the speed colour map's (NaN:
     none); the springs (`kinema:springs`, id pairs); the spin of `/World/spheres` (its
     `orientationsf` and `angularVelocities`, degrees per second as rad/s). float32 values come back as the
@@ -134,6 +134,7 @@ class _Reading:
         primvars = UsdGeom.PrimvarsAPI(points)
         self.mass = primvars.GetPrimvar("mass") if kilograms is not None else None
         self.species = primvars.GetPrimvar("species")
+        self.groups = primvars.GetPrimvar("collisionGroup") if own else None  # kinema's collision groups
         self.display = points.GetDisplayColorPrimvar()
         marked = points.GetPrim().GetAttribute("kinema:colorIds") if own else None
         self.colour_ids = np.asarray(marked.Get(), dtype=np.int64) if marked and marked.HasAuthoredValue() else np.zeros(0, dtype=np.int64)
@@ -174,6 +175,9 @@ class _Reading:
         species = (
             self._values(self.species, at, n, "primvar species", where, constant=self.species.GetInterpolation() == self.constant) if self.species else None
         )
+        groups = (
+            self._values(self.groups, at, n, "primvar collisionGroup", where, constant=self.groups.GetInterpolation() == self.constant) if self.groups else None
+        )
         v = None if v is None or (n and np.isnan(v).all()) else v.astype(np.float64)  # (kinema writes NaN for unknown velocities)
         radii = None if widths is None else widths.astype(np.float64) / 2
         if not self.own:
@@ -194,6 +198,7 @@ class _Reading:
             masses=None if masses is None else masses.astype(np.float64),
             radii=radii,
             species=None if species is None else np.array([str(s) for s in species], dtype=object),
+            groups=None if groups is None else groups.astype(np.int64),
             time=time,
             step=k,
         )

@@ -165,7 +165,8 @@ def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
     standard atomic masses, as `Atoms.get_masses()` gives, with a `UnitWarning`), `radius`,
     `id` (particles followed by id: a number of rows that varies
     is read as births and deaths), the names of `type` (OVITO's and kinema's particle type),
-    else `species`, `color` (r g b in [0, 1], kinema's), `omega` (angular velocities, in 1 /
+    else `species`, `color` (r g b in [0, 1], kinema's), `group` (an integer column:
+    kinema's collision groups, 0..31), `omega` (angular velocities, in 1 /
     the time unit) and `orientation` (unit quaternions x y z w, OVITO's order, given back w
     first); the cell of `Lattice` (along the axes only) at `Origin` with `pbc`;
     `Time` (or `time`). Other columns and keys are skipped.
@@ -239,6 +240,7 @@ def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
                 radii=_first(columns, _RADII),
                 species=None if names is None else names.astype(str),
                 colors=columns["color"] if "color" in columns and columns["color"].ndim == 2 and columns["color"].shape[1] == 3 else None,
+                groups=columns["group"] if "group" in columns and columns["group"].ndim == 1 and columns["group"].dtype == np.int64 else None,
                 angular_velocities=_vectors(path, columns, "omega", 3, where),
                 orientations=None if (q := _vectors(path, columns, "orientation", 4, where)) is None else q[:, WXYZ],
                 time=time,

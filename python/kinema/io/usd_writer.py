@@ -39,7 +39,8 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
       frame, float32 as USD's point arrays are; `widths` 2r (m), `ids` (int64, Houdini's
       `id`), the primvar `id` (int32: the ids again, as Blender's importer takes them; it
       drops `ids`; left out if an id is beyond int32), the primvar `mass` (kg) where the
-      trajectory has masses and `species` (strings) where it has species names, constant.
+      trajectory has masses, `species` (strings) where it has species names and
+      `collisionGroup` (int32, each particle's collision group) where it has groups, constant.
       `displayColor` (vertex): each particle's own colour (`traj.colors`) where it has
       one, the others by speed as kinema's videos colour them (see `_Colours`), a time
       sample per frame unless all have their own. With births and deaths (`alive`) each
@@ -91,7 +92,7 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
 
     In Blender (5.0): File → Import → Universal Scene Description, then play: the Points
     prim becomes a point cloud whose positions follow the time samples, with the attributes
-    `radius`, `velocity`, `id`, `mass` and `displayColor` (not `species`: it
+    `radius`, `velocity`, `id`, `mass`, `collisionGroup` and `displayColor` (not `species`: it
     takes no strings); the springs a Curves object; the colliders meshes with their material. Blender asks at
     time code = frame, and takes the frame range but not the rate nor the point cloud's
     material (`kinema export --format blend` sets both).
@@ -229,6 +230,9 @@ class _Particles:
         if species is not None:
             attr = primvars.CreatePrimvar("species", Sdf.ValueTypeNames.StringArray, UsdGeom.Tokens.vertex)
             self.values["species"] = (attr, species, lambda a: Vt.StringArray(a.tolist()))
+        if fr.groups is not None:  # the collision groups: int32, as Blender's importer takes them
+            attr = primvars.CreatePrimvar("collisionGroup", Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.vertex)
+            self.values["collisionGroup"] = (attr, fr.groups.astype(np.int32), Vt.IntArray)
         if not self.changes:
             for attr, values, array in self.values.values():
                 attr.Set(_vt(array, values, Vt))

@@ -91,9 +91,9 @@ def _vtp(fr: Frames, i: int, extras: Extras) -> str:
     (velocity), `speed`, `radius`, `mass`, `id` (the names OVITO maps to Velocity,
     Radius, Mass and Particle Identifier; ParaView takes `v` as the active vectors),
     `type` (the index of the particle's species in the field `type_names`), `Color`
-    (r g b in [0, 1], the name OVITO maps to its Color), `angular_velocity` (rad/s) and
-    `orientation` (the unit quaternion w x y z) where the trajectory has them, the field
-    `TimeValue`."""
+    (r g b in [0, 1], the name OVITO maps to its Color), `angular_velocity` (rad/s),
+    `orientation` (the unit quaternion w x y z) and `group` (the collision group, int64)
+    where the trajectory has them, the field `TimeValue`."""
     live = fr.live(i)
     n = live.size
     x, v = fr.positions[i][live], fr.velocities[i][live]
@@ -113,6 +113,8 @@ def _vtp(fr: Frames, i: int, extras: Extras) -> str:
         point_data.append(_vtk_array("angular_velocity", fr.angular_velocities[i][live], 3))
     if fr.orientations is not None:
         point_data.append(_vtk_array("orientation", fr.orientations[i][live], 4))
+    if fr.groups is not None:
+        point_data.append(_vtk_array("group", fr.groups[live].astype(np.int64)))
     # One vertex cell per particle, so that ParaView draws the points without a filter (and
     # OVITO reads the file as particles: as many vertices as points, no other cells).
     cells = np.arange(n, dtype=np.int64)
@@ -353,8 +355,8 @@ def write_vtk(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     folder `<stem>_vtk/` with one XML PolyData file per frame, `<stem>_00000.vtp`: points
     (m) as vertex cells, point data `v` (velocity, m/s), `speed` (m/s), `radius` (m),
     `mass` (kg), `id`; float64 and int64, base64; `type` (the index of the species in
-    the field `type_names`) and `Color` (r g b in [0, 1]) where the trajectory has
-    species and colours (`_vtp`). OVITO maps `v`, `radius`, `mass`, `id` and
+    the field `type_names`), `Color` (r g b in [0, 1]) and `group` (the collision group,
+    int64) where the trajectory has species, colours and groups (`_vtp`). OVITO maps `v`, `radius`, `mass`, `id` and
     `Color` to Velocity, Radius, Mass, Particle Identifier and Color, `type` to Material
     Type. With `springs`, each frame is a multi-block `<stem>_00000.vtm` (the one the
     .pvd names) of the particles .vtp and `<stem>_springs_00000.vtp`, a line per spring

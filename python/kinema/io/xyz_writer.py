@@ -21,7 +21,7 @@ def _xyz(fr: Frames, i: int, header: str, first: list[str], after_pos: list[str]
     frame's `Time`), one row per particle alive at it: the columns of `Properties`, its
     `first` word (its type or species name), pos, its `after_pos` word (its `species`
     symbol; empty without), velo, momenta, radius, mass, masses, color, omega,
-    orientation (x y z w), id (those the trajectory has; 17 significant digits, exact
+    orientation (x y z w), id, group (those the trajectory has; 17 significant digits, exact
     float64)."""
     live = fr.live(i)
     v = fr.velocities[i][live]
@@ -40,9 +40,10 @@ def _xyz(fr: Frames, i: int, header: str, first: list[str], after_pos: list[str]
     if fr.orientations is not None:
         cols.append(fr.orientations[i][live][:, XYZW])
     pos, rest = fr.positions[i][live].tolist(), np.hstack(cols).tolist()
+    groups = [f" {int(g)}" for g in fr.groups[live]] if fr.groups is not None else [""] * live.size
     rows = "".join(
-        f"{first[c]} " + " ".join(map(repr, x)) + after_pos[c] + " " + " ".join(map(repr, r)) + f" {int(k)}\n"
-        for c, x, r, k in zip(live, pos, rest, fr.ids[live], strict=True)
+        f"{first[c]} " + " ".join(map(repr, x)) + after_pos[c] + " " + " ".join(map(repr, r)) + f" {int(k)}{g}\n"
+        for c, x, r, k, g in zip(live, pos, rest, fr.ids[live], groups, strict=True)
     )
     return f"{live.size}\n{header} Time={float(fr.t[i])!r}\n{rows}"
 
@@ -89,6 +90,10 @@ def write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     Orientation (X, Y, Z, W); ASE keeps them in `atoms.arrays["omega"]` and
     `atoms.arrays["orientation"]`. kinema's reader gives the orientation back w first.
 
+    Collision groups: a trajectory with `groups` gets a last column `group:I:1`, each
+    particle's collision group (0..31), which ASE keeps in `atoms.arrays["group"]` and
+    OVITO reads as a particle property `group`.
+
     Every float is written with 17 significant digits (exact for float64). The file is
     written under a temporary name and renamed at the end. `on_frame(i)` is called after
     frame `i` is written."""
@@ -116,6 +121,7 @@ def write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
         + ":omega:R:3" * (fr.angular_velocities is not None)
         + ":orientation:R:4" * (fr.orientations is not None)
         + ":id:I:1"
+        + ":group:I:1" * (fr.groups is not None)
     )
     cell = trajectory_cell(traj, fr)
     origin, edges, pbc = cell.lo, cell.hi - cell.lo, cell.periodic
