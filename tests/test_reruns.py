@@ -1,0 +1,137 @@
+"""Runs, resumes and sweeps run again into the same folder (issue 49): a finished run leaves no
+checkpoint that a later --resume would put in place of its files, --resume refuses a
+checkpoint of another scene or duration, a sweep's failed members are run again, and every
+failure or warning is one line."""
+
+import os
+import socket
+
+import pytest
+from typer.testing import CliRunner
+
+import kinema
+from kinema.cli import app
+
+runner = CliRunner()
+
+BALL = """
+[world]
+dim = 2
+dt = 0.01
+duration = 0.6
+fps = 20.0
+
+[[particles]]
+type = "list"
+positions = [[0, 1]]
+velocity = [0, 0]
+radius = 0.05
+
+[[forces]]
+type = "gravity"
+
+[[colliders]]
+type = "plane"
+point = [0, 0]
+normal = [0, 1]
+
+[output]
+video = false
+plot = false
+"""
+
+
+def one_error_line(res):
+    """The single line on stderr of a refused command (and no traceback, no 'unexpected')."""
+    lines = res.stderr.strip().splitlines()
+    assert res.exit_code == 2, res.output
+    assert len(lines) == 1 and lines[0].startswith("error: "), res.stderr
+    assert "Traceback" not in res.output and "unexpected" not in res.output
+    return lines[0]
+
+
+def _stopped_run(monkeypatch, scene, out, *extra):
+    """`kinema run scene --checkpoint-every 0.1` stopped (Ctrl-C) just after its first
+    checkpoint: exit 130, the checkpoint left in ``out``."""
+    import kinema.checkpoint
+
+    save = kinema.checkpoint.save_checkpoint
+
+    def save_then_stop(*args, **kwargs):
+        save(*args, **kwargs)
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as m:
+        m.setattr(kinema.checkpoint, "save_checkpoint", save_then_stop)
+        res = runner.invoke(app, ["run", str(scene), "--checkpoint-every", "0.1", "-o", str(out), *extra])
+    assert res.exit_code == 130, res.output
+    assert (out / "checkpoint.ckpt").is_file()
+
+
+def test_a_whole_run_removes_the_checkpoints_an_older_run_left(tmp_path, monkeypatch):
+    # kill -9 left the old scene's checkpoint and a staging file of it; the edited scene's
+    # whole run (no checkpoints) must not leave them for a later --resume to put back
+    scene = tmp_path / "ball.toml"
+    scene.write_text(BALL)
+    out = tmp_path / "out"
+    _stopped_run(monkeypatch, scene, out)
+    staging = out / f".checkpoint.ckpt.{socket.gethostname()}-999999999.0123abcd.part"  # its writer long gone
+    staging.write_bytes(b"half a checkpoint")
+    scene.write_text(BALL.replace("velocity = [0, 0]", "velocity = [0, 4]"))  # thrown up: apex near 0.9 m
+    res = runner.invoke(app, ["run", str(scene), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert not (out / "checkpoint.ckpt").exists() and not staging.exists()
+    assert sorted(p.name for p in out.iterdir()) == ["trajectory.h5"]
+    apex = kinema.load_trajectory(out / "trajectory.h5").positions[:, 0, 1].max()
+    assert apex > 0.8
+    # and --resume has nothing to put in place of the new trajectory
+    line = one_error_line(runner.invoke(app, ["run", str(scene), "--resume", "-o", str(out)]))
+    assert "no checkpoint to resume" in line
+    assert kinema.load_trajectory(out / "trajectory.h5").positions[:, 0, 1].max() == apex
+
+
+def test_resume_refuses_a_checkpoint_of_another_scene(tmp_path, monkeypatch):
+    scene = tmp_path / "ball.toml"
+    scene.write_text(BALL)
+    out = tmp_path / "out"
+    _stopped_run(monkeypatch, scene, out)
+    other = tmp_path / "cradle.toml"
+    other.write_text(BALL.replace("positions = [[0, 1]]", "positions = [[0, 2]]"))
+    line = one_error_line(runner.invoke(app, ["run", str(other), "--resume", "-o", str(out)]))
+    assert f"{out / 'checkpoint.ckpt'} was written by a run of the scene {scene}" in line and f"{other} differs from it" in line, line
+    assert (out / "checkpoint.ckpt").is_file() and not (out / "trajectory.h5").exists()
+    # the same scene edited in place is another scene too
+    scene.write_text(BALL.replace("radius = 0.05", "radius = 0.06"))
+    line = one_error_line(runner.invoke(app, ["run", str(scene), "--resume", "-o", str(out)]))
+    assert "differs from it" in line
+    # the same content in another file, written another way, is the same scene
+    same = tmp_path / "copy.toml"
+    same.write_text("# a comment\n" + BALL.replace("duration = 0.6", "duration = 0.60"))
+    res = runner.invoke(app, ["run", str(same), "--resume", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "resuming" in res.output and not (out / "checkpoint.ckpt").exists()
+
+
+def test_resume_refuses_another_duration_and_goes_on_to_the_runs_own(tmp_path, monkeypatch):
+    scene = tmp_path / "ball.toml"
+    scene.write_text(BALL)
+    out = tmp_path / "out"
+    _stopped_run(monkeypatch, scene, out, "--duration", "0.4")
+    line = one_error_line(runner.invoke(app, ["run", str(scene), "--resume", "--duration", "5", "-o", str(out)]))
+    assert "--duration 5 s differs from the 0.4 s of the run that wrote" in line and "checkpoint.ckpt" in line, line
+    assert (out / "checkpoint.ckpt").is_file()
+    # without --duration: the run's own 0.4 s, not the scene's 0.6 s
+    res = runner.invoke(app, ["run", str(scene), "--resume", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    t = kinema.load_trajectory(out / "trajectory.h5").t
+    assert t[-1] == pytest.approx(0.4) and len(t) == 9
+
+
+def test_a_whole_run_keeps_the_checkpoint_it_was_asked_to_keep_there(tmp_path):
+    scene = tmp_path / "ball.toml"
+    scene.write_text(BALL)
+    out = tmp_path / "out"
+    res = runner.invoke(app, ["run", str(scene), "-o", str(out), "--keep-checkpoint", str(out / "checkpoint.ckpt")])
+    assert res.exit_code == 0, res.output
+    assert (out / "checkpoint.ckpt").is_file()
+    assert os.path.getsize(out / "checkpoint.ckpt") > 0
