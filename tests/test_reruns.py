@@ -135,3 +135,58 @@ def test_a_whole_run_keeps_the_checkpoint_it_was_asked_to_keep_there(tmp_path):
     assert res.exit_code == 0, res.output
     assert (out / "checkpoint.ckpt").is_file()
     assert os.path.getsize(out / "checkpoint.ckpt") > 0
+
+
+# -- every error one line, every warning one line ---------------------------------------------
+
+
+def test_a_nan_or_infinite_corner_of_a_random_block_is_one_line_naming_it(tmp_path):
+    # (numpy's "unexpected OverflowError: Range exceeds valid bounds", exit 1)
+    base = BALL.replace('type = "list"\npositions = [[0, 1]]\nvelocity = [0, 0]', 'type = "random"\nlo = [0, 0.5]\nhi = [1, 1]\ncount = 3\nseed = 1')
+    assert 'type = "random"' in base
+    for corner, value in (("lo = [0, nan]", "[0, nan]"), ("lo = [0, -inf]", "[0, -inf]")):
+        scene = tmp_path / "nan.toml"
+        scene.write_text(base.replace("lo = [0, 0.5]", corner))
+        line = one_error_line(runner.invoke(app, ["run", str(scene), "-o", str(tmp_path / "o")]))
+        assert f"particles[0].lo: {value} is invalid: each coordinate of a corner of the box must be a finite number of metres" in line, line
+    scene.write_text(base.replace("lo = [0, 0.5]", "lo = [-1e308, 0]").replace("hi = [1, 1]", "hi = [1e308, 1]"))
+    line = one_error_line(runner.invoke(app, ["run", str(scene), "-o", str(tmp_path / "o")]))
+    assert "hi - lo must be finite" in line, line
+    assert not (tmp_path / "o").exists()
+
+
+def test_an_emitter_rate_too_large_to_count_is_one_line_in_run_and_view(tmp_path):
+    scene = tmp_path / "jet.toml"
+    scene.write_text(BALL + "\n[[emitters]]\nrate = 1e308\nspeed = 1.0\nparticle_radius = 0.01\n")
+    for command in (["run", str(scene), "-o", str(tmp_path / "o")], ["view", str(scene), "--html", str(tmp_path / "v.html")]):
+        line = one_error_line(runner.invoke(app, command))
+        assert line == f"error: {scene}: emitters[0].rate: 1e+308 is invalid: the rate must be a number of particles a second > 0 and <= 1e+15", line
+
+
+def test_view_on_a_port_in_use_is_one_line_naming_the_port(tmp_path):
+    # (the server's state was made after binding, which failed: "unexpected AttributeError: ... '_selector'")
+    scene = tmp_path / "ball.toml"
+    scene.write_text(BALL)
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        res = runner.invoke(app, ["view", str(scene), "--port", str(port), "--no-browser"])
+    assert res.exit_code == 2 and "Traceback" not in res.output and "unexpected" not in res.output, res.output
+    errors = [line for line in res.stderr.splitlines() if line.startswith("error")]
+    assert len(errors) == 1, res.stderr
+    line = errors[0]
+    assert line.startswith(f"error: --port {port}: cannot listen on 127.0.0.1:{port} (") and "in use" in line, line
+
+
+def test_view_prints_a_warning_as_one_line_without_its_source(tmp_path):
+    import subprocess
+    import sys
+
+    scene = tmp_path / "overlap.toml"
+    scene.write_text(BALL.replace("positions = [[0, 1]]", "positions = [[0, 1], [0.05, 1]]").replace("velocity = [0, 0]", "velocity = [0, 0]\nmass = 1.0"))
+    res = subprocess.run([sys.executable, "-m", "kinema", "view", str(scene), "--html", str(tmp_path / "v.html")], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    said = [line for line in res.stderr.splitlines() if "overlap" in line]
+    assert len(said) == 1 and said[0].startswith("warning: 1 overlap at the start"), res.stderr
+    assert ".py:" not in res.stderr and "PlacementWarning" not in res.stderr and "self._" not in res.stderr, res.stderr

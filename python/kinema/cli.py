@@ -167,42 +167,58 @@ def demo(
         _fail(str(e))
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """``warnings.showwarning`` of the commands: a warning is one line ``warning: ...`` on
+    stderr, as ``kinema run`` says its own, without Python's file, line and source."""
+    err_console.print(f"[yellow]warning:[/] {escape(str(message))}", highlight=False, soft_wrap=True)
+
+
 def _guarded(fn):
-    """Run a command body, turning known failures into one line and an exit code."""
+    """Run a command body, turning known failures into one line and an exit code, and each
+    warning into one line (``_one_line_warning``)."""
     import functools
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
-        import kinema
-        from kinema.scene import SceneError
+        import warnings
 
-        try:
-            return fn(*args, **kwargs)
-        except typer.Exit:
-            raise
-        except kinema.SimulationDiverged as e:
-            _fail(str(e) if "diverged" in str(e) else f"the simulation diverged: {e}", code=1)
-        except SceneError as e:  # one line per problem
-            for line in str(e).splitlines():
-                err_console.print(f"[bold red]error:[/] {escape(line)}", highlight=False, soft_wrap=True)
-            raise typer.Exit(2) from None
-        except ImportError as e:  # an optional package a format needs (usd-core): how to get it
-            _fail(str(e).strip().splitlines()[0])
-        except (ValueError, OSError) as e:  # TrajectoryFileError is a ValueError
-            text = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-            if isinstance(e, OSError) and e.filename:
-                text = f"cannot write {e.filename}: {e.strerror}"
-            _fail(text)
-        except KeyboardInterrupt:
-            _fail("interrupted; nothing was written", code=130)
-        except MemoryError:
-            _fail("out of memory: the work is too large for this machine; nothing was written")
-        except Exception as e:
-            if os.environ.get("KINEMA_DEBUG"):
-                raise
-            _fail(f"unexpected {type(e).__name__}: {e} (set KINEMA_DEBUG=1 for the traceback)", code=1)
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warning
+            return _guarded_body(fn, args, kwargs)
 
     return wrapper
+
+
+def _guarded_body(fn, args, kwargs):
+    """Runs ``fn``, turning known failures into one line and an exit code."""
+    import kinema
+    from kinema.scene import SceneError
+
+    try:
+        return fn(*args, **kwargs)
+    except typer.Exit:
+        raise
+    except kinema.SimulationDiverged as e:
+        _fail(str(e) if "diverged" in str(e) else f"the simulation diverged: {e}", code=1)
+    except SceneError as e:  # one line per problem
+        for line in str(e).splitlines():
+            err_console.print(f"[bold red]error:[/] {escape(line)}", highlight=False, soft_wrap=True)
+        raise typer.Exit(2) from None
+    except ImportError as e:  # an optional package a format needs (usd-core): how to get it
+        _fail(str(e).strip().splitlines()[0])
+    except (ValueError, OSError) as e:  # TrajectoryFileError is a ValueError
+        text = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        if isinstance(e, OSError) and e.filename:
+            text = f"cannot write {e.filename}: {e.strerror}"
+        _fail(text)
+    except KeyboardInterrupt:
+        _fail("interrupted; nothing was written", code=130)
+    except MemoryError:
+        _fail("out of memory: the work is too large for this machine; nothing was written")
+    except Exception as e:
+        if os.environ.get("KINEMA_DEBUG"):
+            raise
+        _fail(f"unexpected {type(e).__name__}: {e} (set KINEMA_DEBUG=1 for the traceback)", code=1)
 
 
 _UNITS_HELP = (

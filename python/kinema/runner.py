@@ -12,6 +12,7 @@ more than ``LIMIT_PARTICLE_STEPS`` particle-steps, ``LIMIT_PIXELS`` pixels or
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from pathlib import Path
@@ -127,7 +128,10 @@ def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video
             why += f"; {size:,} particles[{k}].positions"
         if len(scene.particles) > 1:
             why += f", the largest of {len(scene.particles)} blocks"
-    born = scene.emitted_count(seconds)
+    try:
+        born: float = scene.emitted_count(seconds)
+    except OverflowError:  # more births than a float counts (rate × duration): work no limit allows
+        born = math.inf
     if born:
         why += f"; up to {born:,} particles from {len(scene.emitters)} emitter{'s' if len(scene.emitters) > 1 else ''}"
         n += born
