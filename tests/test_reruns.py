@@ -4,6 +4,7 @@ checkpoint of another scene or duration, a sweep's failed members are run again,
 failure or warning is one line."""
 
 import os
+import shutil
 import socket
 
 import pytest
@@ -190,3 +191,76 @@ def test_view_prints_a_warning_as_one_line_without_its_source(tmp_path):
     said = [line for line in res.stderr.splitlines() if "overlap" in line]
     assert len(said) == 1 and said[0].startswith("warning: 1 overlap at the start"), res.stderr
     assert ".py:" not in res.stderr and "PlacementWarning" not in res.stderr and "self._" not in res.stderr, res.stderr
+
+
+# -- sweeps run again ------------------------------------------------------------------------
+
+
+def _full_disk_once(monkeypatch):
+    """Trajectory.save fails once as on a full disk (ENOSPC), then writes again."""
+    import errno
+
+    from kinema.trajectory import Trajectory
+
+    save = Trajectory.save
+    calls = []
+
+    def save_on_a_full_disk(self, path, *args, **kwargs):
+        calls.append(path)
+        if len(calls) == 1:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+        return save(self, path, *args, **kwargs)
+
+    monkeypatch.setattr(Trajectory, "save", save_on_a_full_disk)
+    return calls
+
+
+def test_a_sweep_member_that_failed_on_a_full_disk_is_run_again(tmp_path, monkeypatch):
+    scene = tmp_path / "ball.toml"
+    scene.write_text(BALL)
+    out = tmp_path / "s"
+    calls = _full_disk_once(monkeypatch)
+    res = runner.invoke(app, ["sweep", str(scene), "-o", str(out)])
+    assert res.exit_code == 1, res.output
+    assert "1 members, 1 failed" in res.stdout
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("failed: ") and "OSError" in lines[0] and "No space left on device" in lines[0], res.stderr
+    assert "Traceback" not in res.output
+    # the space freed, the rerun runs it (it reported the old error and skipped it)
+    again = runner.invoke(app, ["sweep", str(scene), "-o", str(out)])
+    assert again.exit_code == 0, again.output
+    assert "1 members, 0 failed" in again.stdout and len(calls) == 2
+    # and the next rerun skips it, finished
+    third = runner.invoke(app, ["sweep", str(scene), "-o", str(out)])
+    assert third.exit_code == 0 and len(calls) == 2
+
+
+def test_a_sweep_stopped_by_ctrl_c_says_which_members_were_written(tmp_path, monkeypatch):
+    import kinema.sweeps
+
+    scene = tmp_path / "ball.toml"
+    scene.write_text(BALL)
+    out = tmp_path / "s"
+
+    def one_then_ctrl_c(todo, folder, duration, measure, client, workers, progress, checkpoint_every, keys):
+        m = todo[0]
+        kinema.sweeps.run_member(m, str(folder), duration, measure, checkpoint_every, keys[m.index])
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(kinema.sweeps, "_run_all", one_then_ctrl_c)
+    res = runner.invoke(app, ["sweep", str(scene), "--vary", "world.dt=0.01,0.005,0.0025", "-o", str(out)])
+    assert res.exit_code == 130, res.output
+    lines = res.stderr.strip().splitlines()
+    first = kinema.sweeps.members(str(scene), {"world.dt": [0.01, 0.005, 0.0025]})[0].name
+    assert len(lines) == 1 and lines[0].startswith(f"error: interrupted; 1 of 3 members were written in {out / 'members'} ({first})"), res.stderr
+    assert "nothing was written" not in res.output and f"again into {out}" in lines[0]
+    assert (out / "members" / first / "trajectory.h5").is_file()
+    # stopped before any member finished
+    shutil.rmtree(out)
+
+    def ctrl_c(*args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(kinema.sweeps, "_run_all", ctrl_c)
+    res = runner.invoke(app, ["sweep", str(scene), "--vary", "world.dt=0.01,0.005", "-o", str(out)])
+    assert res.exit_code == 130 and "no member had finished: nothing was written" in res.stderr, res.output

@@ -487,15 +487,37 @@ def sweep(
             raise ValueError(f"--vary {item!r}: {e}") from None
     folder = out if out is not None else default_folder(scene)
     fn = None if measure is None else load_measure(measure)
-    result = run_sweep(
-        scene, grid, seeds=seeds, measure=fn, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every
-    )
+    try:
+        result = run_sweep(
+            scene, grid, seeds=seeds, measure=fn, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every
+        )
+    except KeyboardInterrupt:  # what was written is there: say so, and how to go on
+        _fail(_sweep_interrupted(scene, grid, seeds, duration, fn, folder), code=130)
     failed = result.failed
     console.print(f"{len(result.rows)} members, {len(failed)} failed; wrote {folder / 'summary.csv'}", highlight=False, soft_wrap=True)
-    for row in failed:
-        err_console.print(f"[bold red]failed:[/] {escape(row['member'])}: {escape(row['error'])}", highlight=False, soft_wrap=True)
+    for row in failed:  # one line each (its traceback, if any, in members/<name>/error.txt)
+        err_console.print(f"[bold red]failed:[/] {escape(row['member'])}: {escape(str(row['error']))}", highlight=False, soft_wrap=True)
     if failed:
         raise typer.Exit(1)
+
+
+def _sweep_interrupted(scene, grid, seeds, duration, measure, folder: Path) -> str:
+    """The line ``kinema sweep`` says when Ctrl-C stops it: the members finished in
+    ``folder`` (each a result.json of its key), and that a rerun goes on with the others."""
+    from .sweeps import finished_members, member_key, members
+
+    try:
+        every = members(scene, grid, seeds)
+        done = finished_members(folder, every, {m.index: member_key(m, duration, measure) for m in every})
+    except Exception:  # (the scene changed meanwhile, the folder went away)
+        return f"interrupted; the members finished before are in {folder / 'members'}; run the sweep again into {folder} to go on"
+    if not done:
+        return f"interrupted; no member had finished: nothing was written in {folder / 'members'}"
+    names = ", ".join(m.name for m in done[:5]) + (f" and {len(done) - 5} more" if len(done) > 5 else "")
+    return (
+        f"interrupted; {len(done)} of {len(every)} members were written in {folder / 'members'} ({names}); "
+        f"run the sweep again into {folder} to go on with the others (summary.csv is written when all are done)"
+    )
 
 
 @app.command(short_help="Measure a recorded packing: contacts, fabric, forces, profile.")
