@@ -152,7 +152,11 @@ def scene_digest(scene: Any) -> str:
     (``Scene.to_toml_string``), whatever the file's layout, comments or name."""
     import hashlib
 
-    return hashlib.sha256(scene.to_toml_string().encode()).hexdigest()
+    try:
+        text = scene.to_toml_string()
+    except (TypeError, ValueError):  # (a value TOML cannot write: the scene's data as Python says it)
+        text = repr(scene.to_dict())
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def _same_run(plan: dict, ckpt: Path, path: Path, scene: Any, duration: float | None) -> None:
