@@ -183,6 +183,9 @@ def _write_run(g: Any, run: dict) -> None:
         g.attrs[key] = int(run[key])
     for key in ("fps", "t0", "duration"):
         g.attrs[key] = float(run[key])
+    for key in ("scene_file", "scene_sha256"):  # the scene file the run was started from (kinema run: --resume checks it)
+        if run.get(key) is not None:
+            g.attrs[key] = str(run[key])
     t, x, v, ke, pot, p, ang, contacts, balance, lost, ids, impacts, virial, kinetic = (list(c) for c in zip(*rec.frames, strict=True))
     counts = np.array([len(i) for i in ids], dtype=np.int64)
     for name, data in (
@@ -896,7 +899,11 @@ def _run_progress(r: _Reader, dt: float, steps: int) -> dict:
             f"the run would end after {end:.3g} steps ({total - done} frames to go × {per_frame} steps from step {steps}), more than 2**53, "
             "where t = steps·dt no longer grows with every step",
         )
-    return {"frames_done": done, "frames_total": total, "per_frame": per_frame, "every": every, "fps": fps, "t0": t0, "duration": duration}
+    source = {}  # the scene file kinema run started the run from, and its scene's hash (absent from a run started in Python)
+    for key in ("scene_file", "scene_sha256"):
+        value = r.f["run"].attrs.get(key)
+        source[key] = value.decode(errors="replace") if isinstance(value, bytes) else (None if value is None else str(value))
+    return {"frames_done": done, "frames_total": total, "per_frame": per_frame, "every": every, "fps": fps, "t0": t0, "duration": duration, **source}
 
 
 def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
@@ -1192,7 +1199,9 @@ def run_plan(path: str | Path) -> dict:
     checked without building its world (for a work estimate before resuming it: `kinema
     run --resume`): `scene` (a `Scene`), `particles` now, `born` (at most, by the
     emitters until the end), `steps` taken, `time` (s), `frames_done`,
-    `frames_total`, `per_frame`, `every`, `fps`."""
+    `frames_total`, `per_frame`, `every`, `fps`, `t0`, `duration`; `scene_file` and
+    `scene_sha256`, the scene file `kinema run` started the run from and the hash of its
+    scene (`kinema.runner.scene_digest`), or None."""
     with _reading(Path(path)) as r:
         c = _scene_and_clock(r, read_ids=False)
         run = _run_progress(r, c["scene"].world.dt, c["steps"])

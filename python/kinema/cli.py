@@ -167,42 +167,58 @@ def demo(
         _fail(str(e))
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """``warnings.showwarning`` of the commands: a warning is one line ``warning: ...`` on
+    stderr, as ``kinema run`` says its own, without Python's file, line and source."""
+    err_console.print(f"[yellow]warning:[/] {escape(str(message))}", highlight=False, soft_wrap=True)
+
+
 def _guarded(fn):
-    """Run a command body, turning known failures into one line and an exit code."""
+    """Run a command body, turning known failures into one line and an exit code, and each
+    warning into one line (``_one_line_warning``)."""
     import functools
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
-        import kinema
-        from kinema.scene import SceneError
+        import warnings
 
-        try:
-            return fn(*args, **kwargs)
-        except typer.Exit:
-            raise
-        except kinema.SimulationDiverged as e:
-            _fail(str(e) if "diverged" in str(e) else f"the simulation diverged: {e}", code=1)
-        except SceneError as e:  # one line per problem
-            for line in str(e).splitlines():
-                err_console.print(f"[bold red]error:[/] {escape(line)}", highlight=False, soft_wrap=True)
-            raise typer.Exit(2) from None
-        except ImportError as e:  # an optional package a format needs (usd-core): how to get it
-            _fail(str(e).strip().splitlines()[0])
-        except (ValueError, OSError) as e:  # TrajectoryFileError is a ValueError
-            text = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-            if isinstance(e, OSError) and e.filename:
-                text = f"cannot write {e.filename}: {e.strerror}"
-            _fail(text)
-        except KeyboardInterrupt:
-            _fail("interrupted; nothing was written", code=130)
-        except MemoryError:
-            _fail("out of memory: the work is too large for this machine; nothing was written")
-        except Exception as e:
-            if os.environ.get("KINEMA_DEBUG"):
-                raise
-            _fail(f"unexpected {type(e).__name__}: {e} (set KINEMA_DEBUG=1 for the traceback)", code=1)
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warning
+            return _guarded_body(fn, args, kwargs)
 
     return wrapper
+
+
+def _guarded_body(fn, args, kwargs):
+    """Runs ``fn``, turning known failures into one line and an exit code."""
+    import kinema
+    from kinema.scene import SceneError
+
+    try:
+        return fn(*args, **kwargs)
+    except typer.Exit:
+        raise
+    except kinema.SimulationDiverged as e:
+        _fail(str(e) if "diverged" in str(e) else f"the simulation diverged: {e}", code=1)
+    except SceneError as e:  # one line per problem
+        for line in str(e).splitlines():
+            err_console.print(f"[bold red]error:[/] {escape(line)}", highlight=False, soft_wrap=True)
+        raise typer.Exit(2) from None
+    except ImportError as e:  # an optional package a format needs (usd-core): how to get it
+        _fail(str(e).strip().splitlines()[0])
+    except (ValueError, OSError) as e:  # TrajectoryFileError is a ValueError
+        text = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        if isinstance(e, OSError) and e.filename:
+            text = f"cannot write {e.filename}: {e.strerror}"
+        _fail(text)
+    except KeyboardInterrupt:
+        _fail("interrupted; nothing was written", code=130)
+    except MemoryError:
+        _fail("out of memory: the work is too large for this machine; nothing was written")
+    except Exception as e:
+        if os.environ.get("KINEMA_DEBUG"):
+            raise
+        _fail(f"unexpected {type(e).__name__}: {e} (set KINEMA_DEBUG=1 for the traceback)", code=1)
 
 
 _UNITS_HELP = (
@@ -471,15 +487,37 @@ def sweep(
             raise ValueError(f"--vary {item!r}: {e}") from None
     folder = out if out is not None else default_folder(scene)
     fn = None if measure is None else load_measure(measure)
-    result = run_sweep(
-        scene, grid, seeds=seeds, measure=fn, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every
-    )
+    try:
+        result = run_sweep(
+            scene, grid, seeds=seeds, measure=fn, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every
+        )
+    except KeyboardInterrupt:  # what was written is there: say so, and how to go on
+        _fail(_sweep_interrupted(scene, grid, seeds, duration, fn, folder), code=130)
     failed = result.failed
     console.print(f"{len(result.rows)} members, {len(failed)} failed; wrote {folder / 'summary.csv'}", highlight=False, soft_wrap=True)
-    for row in failed:
-        err_console.print(f"[bold red]failed:[/] {escape(row['member'])}: {escape(row['error'])}", highlight=False, soft_wrap=True)
+    for row in failed:  # one line each (its traceback, if any, in members/<name>/error.txt)
+        err_console.print(f"[bold red]failed:[/] {escape(row['member'])}: {escape(str(row['error']))}", highlight=False, soft_wrap=True)
     if failed:
         raise typer.Exit(1)
+
+
+def _sweep_interrupted(scene, grid, seeds, duration, measure, folder: Path) -> str:
+    """The line ``kinema sweep`` says when Ctrl-C stops it: the members finished in
+    ``folder`` (each a result.json of its key), and that a rerun goes on with the others."""
+    from .sweeps import finished_members, member_key, members
+
+    try:
+        every = members(scene, grid, seeds)
+        done = finished_members(folder, every, {m.index: member_key(m, duration, measure) for m in every})
+    except Exception:  # (the scene changed meanwhile, the folder went away)
+        return f"interrupted; the members finished before are in {folder / 'members'}; run the sweep again into {folder} to go on"
+    if not done:
+        return f"interrupted; no member had finished: nothing was written in {folder / 'members'}"
+    names = ", ".join(m.name for m in done[:5]) + (f" and {len(done) - 5} more" if len(done) > 5 else "")
+    return (
+        f"interrupted; {len(done)} of {len(every)} members were written in {folder / 'members'} ({names}); "
+        f"run the sweep again into {folder} to go on with the others (summary.csv is written when all are done)"
+    )
 
 
 @app.command(short_help="Measure a recorded packing: contacts, fabric, forces, profile.")

@@ -12,6 +12,7 @@ more than ``LIMIT_PARTICLE_STEPS`` particle-steps, ``LIMIT_PIXELS`` pixels or
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from pathlib import Path
@@ -127,7 +128,10 @@ def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video
             why += f"; {size:,} particles[{k}].positions"
         if len(scene.particles) > 1:
             why += f", the largest of {len(scene.particles)} blocks"
-    born = scene.emitted_count(seconds)
+    try:
+        born: float = scene.emitted_count(seconds)
+    except OverflowError:  # more births than a float counts (rate × duration): work no limit allows
+        born = math.inf
     if born:
         why += f"; up to {born:,} particles from {len(scene.emitters)} emitter{'s' if len(scene.emitters) > 1 else ''}"
         n += born
@@ -143,15 +147,47 @@ def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video
     return f"{particle_steps:.1e} particle-steps" + (f", {pixels:.1e} pixels of video" if pixels else "") + f", about {_size(memory)} of memory"
 
 
-def _resume_work(ckpt: Path, scene: Any, video: bool, force: bool) -> tuple[str, dict]:
+def scene_digest(scene: Any) -> str:
+    """The hash (SHA-256, hex) of a scene's content: the scene as kinema writes it
+    (``Scene.to_toml_string``), whatever the file's layout, comments or name."""
+    import hashlib
+
+    try:
+        text = scene.to_toml_string()
+    except (TypeError, ValueError):  # (a value TOML cannot write: the scene's data as Python says it)
+        text = repr(scene.to_dict())
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _same_run(plan: dict, ckpt: Path, path: Path, scene: Any, duration: float | None) -> None:
+    """Refuse (``ValueError``) to resume from ``ckpt`` a run of another scene than ``scene``
+    (read from ``path``; by content: ``scene_digest``) or of another duration than the
+    ``--duration`` given. A checkpoint of a run started in Python says no scene file: only
+    its duration is checked."""
+    if plan.get("scene_sha256") is not None and plan["scene_sha256"] != scene_digest(scene):
+        raise ValueError(
+            f"--resume: {ckpt} was written by a run of the scene {plan.get('scene_file') or '(unnamed)'} as it was then, "
+            f"and {path} differs from it; run {path} without --resume to start it afresh"
+        )
+    if duration is not None and duration != plan["duration"]:
+        raise ValueError(
+            f"--resume: --duration {duration:g} s differs from the {plan['duration']:g} s of the run that wrote {ckpt}; "
+            f"give --duration {plan['duration']:g} or none to resume it, or run without --resume to start afresh"
+        )
+
+
+def _resume_work(ckpt: Path, scene: Any, video: bool, force: bool, path: Path | None = None, duration: float | None = None) -> tuple[str, dict]:
     """Estimate the work left to the run in progress that wrote the checkpoint ``ckpt``
     (read and checked, nothing built: ``kinema.checkpoint.run_plan``) and the video of
-    ``scene`` (the scene given to ``kinema run``) at its end, refuse it when over the limits
-    unless ``force``, as ``_scene_work`` refuses a fresh run's; return the estimate in words
-    and the checkpoint's plan."""
+    ``scene`` (the scene given to ``kinema run``, read from ``path``) at its end, refuse it
+    when over the limits unless ``force``, as ``_scene_work`` refuses a fresh run's; return
+    the estimate in words and the checkpoint's plan. A checkpoint of another scene, or of
+    another duration than the ``duration`` given, is refused first (``_same_run``)."""
     from .checkpoint import run_plan
 
     plan = run_plan(ckpt)
+    if path is not None:
+        _same_run(plan, ckpt, path, scene, duration)
     left = plan["frames_total"] - plan["frames_done"]
     steps = left * plan["per_frame"]
     dt = plan["scene"].world.dt
@@ -370,11 +406,14 @@ def simulate_scene(
             raise ValueError(f"--resume: there is no checkpoint to resume in {outdir} ({ckpt.name}; a run with --checkpoint-every writes it)")
         from .checkpoint import load_run
 
-        estimate, plan = _resume_work(ckpt, sc, bool(video), force)
+        estimate, plan = _resume_work(ckpt, sc, bool(video), force, scene, duration)
+        seconds = plan["duration"]  # (without --duration: the run's own, which --duration may have set)
         world, progress = load_run(ckpt)
+        world._run_source = {k: progress[k] for k in ("scene_file", "scene_sha256") if progress.get(k) is not None}
     else:
         estimate = _scene_work(sc, scene, seconds, "world.duration" if duration is None else "--duration", bool(video), force)
         world = sc.build(source=str(scene))
+        world._run_source = {"scene_file": str(scene), "scene_sha256": scene_digest(sc)}  # written with its checkpoints
     outdir = _outdir(outdir)
     outputs = (
         ("trajectory.h5", sc.output.trajectory),
@@ -469,8 +508,9 @@ def simulate_scene(
         from .checkpoint import save_checkpoint
 
         written.append(save_checkpoint(world, keep_checkpoint))
-    if checkpoint_every is not None or resume:
-        ckpt.unlink(missing_ok=True)  # the run is whole: its files are written
+    # The run is whole, its files written: no checkpoint of this folder may outlive it (one
+    # left by an older run, even of another scene, would have --resume replace these files).
+    _remove_checkpoints(outdir, keep=keep_checkpoint)
     for path in written:
         console.print(f"wrote {path}", highlight=False, soft_wrap=True)
     return traj, written
@@ -525,6 +565,18 @@ def _remove_stale_stages(outdir: Path) -> list[Path]:
     from .io._files import remove_stale
 
     return remove_stale(outdir, ".kinema-run.")
+
+
+def _remove_checkpoints(outdir: Path, keep: Path | None = None) -> None:
+    """Remove ``outdir``/checkpoint.ckpt (unless it is ``keep``, the --keep-checkpoint asked
+    for) and the staging files (``.checkpoint.ckpt.<host>-<pid>.<random>.part``,
+    ``kinema.io._files.atomic_file``) of writers of it that are gone."""
+    from .io._files import remove_stale
+
+    ckpt = outdir / "checkpoint.ckpt"
+    if keep is None or not (ckpt.exists() and keep.exists() and os.path.samefile(ckpt, keep)):
+        ckpt.unlink(missing_ok=True)
+    remove_stale(outdir, f".{ckpt.name}.", ".part")
 
 
 def _attractors(world) -> list:

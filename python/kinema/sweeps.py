@@ -15,9 +15,10 @@ A sweep's folder::
     timings.csv              one row per member: its wall time and the worker that ran it
     summary.png              each measurement against each varied key, mean ± spread over seeds
 
-A member is finished when its ``result.json`` exists (written last, atomically) and holds the
-member's key: a sweep run again into the same folder skips the finished members whose key is
-the same and runs the others. The key (``member_key``) is a hash of what the member's row
+A member is finished when its ``result.json`` exists (written last, atomically), holds the
+member's key and no error: a sweep run again into the same folder skips the finished members
+whose key is the same and runs the others, those that failed (a full disk, a measure that
+raised) included. The key (``member_key``) is a hash of what the member's row
 depends on: its scene with its seed, the duration, the measure (its name and code) and the
 kinema version. A member whose scene, duration, measure or kinema changed is run again, its
 old trajectory, result and checkpoint replaced. A member whose worker
@@ -273,12 +274,21 @@ def member_key(member: Member, duration: float | None, measure: Callable | None)
 
 
 def _finished(where: Path, key: str) -> dict | None:
-    """The member's result.json if it holds ``key`` (else None: not run, or run for another key)."""
+    """The member's result.json if it holds ``key`` and no error (else None: not run, run
+    for another key, or failed: a failure, a full disk say, is tried again)."""
     try:
         result = read_json(where / "result.json")
     except (OSError, ValueError):
         return None
-    return result if isinstance(result, dict) and result.get("key") == key else None
+    if not (isinstance(result, dict) and result.get("key") == key):
+        return None
+    row = result.get("row")
+    return result if isinstance(row, dict) and not row.get("error") else None
+
+
+def finished_members(folder: str | Path, grid: list[Member], keys: dict[int, str]) -> list[Member]:
+    """The members of ``grid`` finished in ``folder`` (``_finished``)."""
+    return [m for m in grid if _finished(Path(folder) / "members" / m.name, keys[m.index]) is not None]
 
 
 def run_member(
@@ -343,16 +353,30 @@ def run_member(
         row["error"] = ""
         ckpt.unlink(missing_ok=True)
     except Exception as err:  # the member's failure is its result
-        row["error"] = f"{type(err).__name__}: {err}".replace("\n", " ")
-        (where / "error.txt").write_text(traceback.format_exc())
+        row["error"] = _error_line(err)
+        try:
+            (where / "error.txt").write_text(traceback.format_exc())
+        except OSError:  # (a full disk: the row says the error)
+            pass
     timing = {"wall_s": time.perf_counter() - start, "host": socket.gethostname(), "pid": os.getpid()}
-    with atomic_file(where / "result.json") as tmp:
-        tmp.write_text(to_json({"row": row, "timing": timing, "key": key}))
+    try:
+        with atomic_file(where / "result.json") as tmp:
+            tmp.write_text(to_json({"row": row, "timing": timing, "key": key}))
+    except OSError as err:  # the member is not finished: a rerun runs it again
+        row["error"] = row["error"] or _error_line(err)
     # The member's World belongs to this thread: freed here (with any cycle it is in), not
     # later by a collection on another thread of the worker, where pyo3 would refuse to drop it.
     world = traj = None
     gc.collect()
     return {"row": row, "timing": timing}
+
+
+def _error_line(err: BaseException) -> str:
+    """A member's error as the one line its row keeps (a full disk: what failed, where)."""
+    text = str(err).strip().splitlines()[0] if str(err).strip() else ""
+    if isinstance(err, OSError) and err.filename and err.strerror:
+        text = f"{err.filename}: {err.strerror}"
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
 
 
 def _plain(v: Any) -> Any:

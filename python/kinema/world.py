@@ -208,6 +208,9 @@ class World(WorldCollisions):
         self._spring_rest: dict[int, np.ndarray] = {}  # index in the forces -> each spring's rest length, m
         self._advised_at = 0  # particles when the advisor last looked
         self._placed = 0  # the colliders whose placement has been looked at (MeshPlacementWarning)
+        # kinema run's scene file and its scene's hash (scene_file, scene_sha256), written with
+        # the checkpoints of its runs: --resume refuses a checkpoint of another scene
+        self._run_source: dict[str, str] = {}
         self._new_views()
 
     # The engine is the thread's that made the world (pyo3's `unsendable`: its Python forces
@@ -825,6 +828,7 @@ class World(WorldCollisions):
             "t0": self.time,
             "duration": duration,
             "recorder": rec,
+            **self._run_source,
         }
         return self._record(run, callback, None if checkpoint is None else Path(checkpoint))
 

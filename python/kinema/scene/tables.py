@@ -33,6 +33,7 @@ MIN_FPS = 1e-6  # frames per second
 MAX_PARTICLES = 2**32 - 1  # particles in one block, and the largest particle index + 1
 MAX_SEED = 2**64 - 1
 MAX_NESTING = 32  # arrays and tables inside each other (a scene's deepest key path is 5 long)
+MAX_RATE = 1e15  # particles a second from one emitter: a million a step at dt = 1 ns, and counts of births stay exact floats for 9 s
 
 
 Vec = Annotated[list[float], Field(min_length=2, max_length=3)]
@@ -254,10 +255,20 @@ class RandomBlock(_Block):
     count: Count
     min_distance: NonNeg | None = None
 
+    # (a NaN or infinite corner, or a box wider than a float holds, was numpy's "OverflowError: Range exceeds valid bounds")
+    @field_validator("lo", "hi")
+    @classmethod
+    def _finite(cls, v: list[float]) -> list[float]:
+        if not all(math.isfinite(c) for c in v):
+            raise ValueError("each coordinate of a corner of the box must be a finite number of metres")
+        return v
+
     @model_validator(mode="after")
     def _box(self) -> RandomBlock:
         if len(self.lo) != len(self.hi) or any(a > b for a, b in zip(self.lo, self.hi, strict=False)):
             raise ValueError(f"lo = {self.lo} and hi = {self.hi}: give corners of the same length with lo <= hi")
+        if not all(math.isfinite(b - a) for a, b in zip(self.lo, self.hi, strict=False)):
+            raise ValueError(f"lo = {self.lo} and hi = {self.hi}: the box is wider than a float holds; hi - lo must be finite")
         return self
 
 
@@ -607,7 +618,15 @@ ColliderItem = _typed(PlaneCollider, BoxCollider, SphereCollider, MeshCollider)
 
 
 class EmitterTable(_Model):
-    rate: Positive
+    rate: float  # particles a second
+
+    @field_validator("rate")
+    @classmethod
+    def _rate(cls, v: float) -> float:  # (1e308 was an OverflowError counting the births)
+        if not (0 < v <= MAX_RATE):
+            raise ValueError(f"the rate must be a number of particles a second > 0 and <= {MAX_RATE:g}")
+        return v
+
     shape: Literal["point", "box", "disc", "sphere", "mesh"] = "point"
     center: Vec = [0.0, 0.0, 0.0]
     size: Vec = [0.0, 0.0, 0.0]

@@ -157,8 +157,7 @@ class ViewerServer(HTTPServer):
             raise ValueError(f"max_connections = {max_connections!r} is invalid: use an integer >= 1")
         self.idle_timeout = float(idle_timeout)
         self.max_connections = max_connections
-        super().__init__(server_address, handler)  # binds and listens (closes the socket if that fails)
-        self.socket.setblocking(False)
+        # (all of the state first: a bind that fails, the port taken, calls server_close())
         self._connections: dict[int, _Connection] = {}  # by file descriptor, oldest first
         self._selector: selectors.BaseSelector | None = None
         self._listening = False
@@ -169,6 +168,8 @@ class ViewerServer(HTTPServer):
         self._wake_r, self._wake_w = socket.socketpair()  # shutdown() writes a byte: select() returns at once
         self._wake_r.setblocking(False)
         self._wake_w.setblocking(False)
+        super().__init__(server_address, handler)  # binds and listens (closes the socket if that fails)
+        self.socket.setblocking(False)
 
     @property
     def open_connections(self) -> int:
