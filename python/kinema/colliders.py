@@ -399,15 +399,15 @@ class MeshPlacementWarning(UserWarning):
     it is added."""
 
 
+#: The largest magnitude (m) of a mesh's coordinate after its transform: the engine's triangle
+#: geometry squares cross products of edges (fourth powers of lengths), which overflow float64
+#: (1.8e308) near 1e77 m; a floor of half-width 1e78 m let a ball through. (A particle's radius
+#: may reach the contacts' GEOMETRY_LIMIT, 1e150 m: its geometry squares lengths only.)
+MESH_LIMIT = 1e75
+
 #: An open mesh is "curved" (a bowl, a cup, a chute: it has an opening) when the length of its
 #: vector area |Σ A_f n_f| is between these fractions of its area Σ A_f; a flat sheet's is all
 #: of it, a tube's or a closed surface's none.
-#: The largest magnitude (m) of a mesh's coordinate after its transform: the engine's triangle
-#: geometry squares cross products of edges (fourth powers of lengths), which overflow float64
-#: (1.8e308) near 1e77 m; a floor 1e78 m wide let a ball through. (A particle's radius may reach
-#: the contacts' GEOMETRY_LIMIT, 1e150 m: its geometry squares lengths only.)
-MESH_LIMIT = 1e75
-
 CURVED = (0.05, 0.95)
 #: The most the opening's axis may lean from the vertical (degrees) before a mesh is said to
 #: lie on its side.
