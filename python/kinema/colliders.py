@@ -182,10 +182,11 @@ class Mesh(Collider):
 
     Refused when built, a `ValueError` naming the parameter: a file and arrays both given,
     or neither; a missing file, an unknown suffix (the formats read are listed), a file that
-    cannot be read; arrays of the wrong shape; a zero or non-finite scale, rotation or
-    translation (a wrong type is a `TypeError`). The engine checks the rest when the mesh
-    is added (an index out of range, a face with a repeated vertex, no face of non-zero
-    area, a 2D world).
+    cannot be read; arrays of the wrong shape; a non-finite vertex (named at its own
+    coordinate); a zero or non-finite scale, rotation or translation (a wrong type is a
+    `TypeError`); a coordinate beyond `MESH_LIMIT` (1e75 m) after the transform. The engine
+    checks the rest when the mesh is added (an index out of range, a face with a repeated
+    vertex, no face of non-zero area, a 2D world).
     """
 
     __slots__ = (
@@ -252,10 +253,28 @@ class Mesh(Collider):
             if v.ndim != 2 or v.shape[1] != 3 or v.shape[0] == 0:
                 raise ValueError(f"vertices has shape {v.shape}; it must be (V, 3): x, y, z (m) of each vertex")
             f = _indices(faces)
+            bad = np.argwhere(~np.isfinite(v))
+            if len(bad):
+                i, k = (int(x) for x in bad[0])
+                raise ValueError(f"vertices[{i}][{k}] = {_checks.describe(v[i, k])} is invalid: a mesh's vertices must be finite, m")
             up = up or "z"
             if up == "y":
                 v = y_up_to_z_up(v)
-        v = transformed(v, s, rot, t)
+        with np.errstate(over="ignore", invalid="ignore"):
+            v = transformed(v, s, rot, t)
+        far = np.argwhere(~(np.abs(v) <= MESH_LIMIT))
+        if len(far):
+            i, k = (int(x) for x in far[0])
+            placed = (
+                ""
+                if (tuple(s) == (1.0, 1.0, 1.0) and tuple(t) == (0.0, 0.0, 0.0) and tuple(rot) == (0.0, 0.0, 0.0))
+                else " after scale, rotation and translation"
+            )
+            source = f" (file {str(path)!r})" if path is not None else ""
+            raise ValueError(
+                f"vertices[{i}][{k}] = {_checks.describe(float(v[i, k]))} m{placed}{source} is invalid: a mesh's coordinates must be finite "
+                f"and at most {MESH_LIMIT:g} m in magnitude (the contacts' triangle geometry takes fourth powers of lengths)"
+            )
         v.flags.writeable = False
         f = np.ascontiguousarray(f, dtype=np.int64)
         f.flags.writeable = False
@@ -379,6 +398,12 @@ class MeshPlacementWarning(UserWarning):
     `placement_problems`): said once per mesh, at the first `World.step` or `World.run` after
     it is added."""
 
+
+#: The largest magnitude (m) of a mesh's coordinate after its transform: the engine's triangle
+#: geometry squares cross products of edges (fourth powers of lengths), which overflow float64
+#: (1.8e308) near 1e77 m; a floor of half-width 1e78 m let a ball through. (A particle's radius
+#: may reach the contacts' GEOMETRY_LIMIT, 1e150 m: its geometry squares lengths only.)
+MESH_LIMIT = 1e75
 
 #: An open mesh is "curved" (a bowl, a cup, a chute: it has an opening) when the length of its
 #: vector area |Σ A_f n_f| is between these fractions of its area Σ A_f; a flat sheet's is all

@@ -18,9 +18,17 @@ are read so: glTF's +y is up by its specification (2.0, §3.4: "+Y is up"), USD'
 a Blender point (x, y, z) as (x, z, −y) (forward −Z, up +Y, its defaults), so reading that
 file with up_axis="y" gives back (x, y, z), exactly (a permutation and a sign: no rounding).
 
+Side files. A file a mesh names is checked as the mesh file is, before it is opened: a glTF
+buffer (its `uri`; a `data:` URI is in the file) and a USD layer's sublayers, references and
+payloads must be regular files (not a FIFO, a device, a folder) of at most
+`MAX_MESH_FILE_BYTES`, and a glTF buffer's declared `byteLength` at most its file's size. An
+OBJ's `mtllib` (materials) is not read at all: a collider has no material.
+
 A refused file is a `ValueError` of one line: `file = '<path>' is invalid: <why>` (no such
-file, a directory, a format not read (the list of those read), a file the format's reader
-cannot read, one with no triangle).
+file, a directory, a FIFO or a device, a file over `MAX_MESH_FILE_BYTES`, a format not read (the
+list of those read), a file the format's reader cannot read, one with no triangle, a face's
+vertex index outside 0 … V − 1, a side file refused as above (named with who names it), a USD
+stage's `metersPerUnit` not finite and > 0).
 """
 
 from __future__ import annotations
@@ -47,6 +55,36 @@ MESH_FORMATS = {
     "glTF": (".gltf", ".glb"),
     "USD": (".usd", ".usda", ".usdc", ".usdz"),
 }
+
+
+#: The largest mesh file, and the largest file one names (a glTF buffer, a USD layer), read: 1 GiB
+#: (tens of millions of triangles; a collider's mesh is far smaller). Refused before reading.
+MAX_MESH_FILE_BYTES = 1 << 30
+
+
+class SideFileError(ValueError):
+    """A file a mesh file names (a glTF buffer, a USD sublayer) that is refused; its message
+    says which file and who names it (`read_mesh` puts it after the mesh file's name)."""
+
+
+def checked_file(path: str | os.PathLike, what: str) -> int:
+    """The size of `path`, a file named by `what` (words: "the glTF buffer 'x.bin' named by
+    buffers[0].uri"), checked without opening it: a regular file (followed through links) of
+    at most `MAX_MESH_FILE_BYTES`; else a `SideFileError` of one line."""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise SideFileError(f"{what} does not exist ({path})") from None
+    except OSError as e:
+        raise SideFileError(f"{what} cannot be read ({e.strerror or e})") from None
+    if not stat.S_ISREG(st.st_mode):
+        from ._files import special_kind
+
+        kind = "a directory" if stat.S_ISDIR(st.st_mode) else f"a {special_kind(st.st_mode) or 'special file'}"
+        raise SideFileError(f"{what} is {kind}, not a regular file ({path})")
+    if st.st_size > MAX_MESH_FILE_BYTES:
+        raise SideFileError(f"{what} holds {st.st_size} bytes; a mesh's files are read up to {MAX_MESH_FILE_BYTES} bytes (1 GiB)")
+    return st.st_size
 
 
 def mesh_format(path: str | os.PathLike) -> str | None:
@@ -115,6 +153,10 @@ def read_mesh_axis(path: str | os.PathLike, name: str = "file", up_axis: str | N
         from ._files import special_kind
 
         raise refuse(f"is not a regular file (a {special_kind(mode) or 'special file'}); a mesh is a file")
+    try:
+        checked_file(path, "the file")
+    except SideFileError as e:
+        raise refuse(str(e).removeprefix("the file ")) from None
     if fmt == "USD":
         vertices, faces, own = _read_usd(path, refuse)
     else:
@@ -174,19 +216,97 @@ def fan(counts: np.ndarray, indices: np.ndarray) -> np.ndarray:
 def _read_trimesh(path: Path, fmt: str, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
     """OBJ, STL, PLY, glTF through trimesh, as the file has them (`process=False`: no vertex
     merged, reordered or dropped by trimesh; a scene of several meshes concatenated with its
-    nodes' transforms by `force="mesh"`)."""
+    nodes' transforms by `force="mesh"`). The file is read here (it was checked to be a
+    regular file); an OBJ is decoded as UTF-8, else Latin-1 (a comment in another encoding
+    is no reason to refuse its geometry), its `mtllib` not followed; a glTF's buffers are
+    checked (`_check_gltf_buffers`) and read through `_CheckedResolver`. A face's vertex
+    index outside 0 … V − 1 (PLY's −1 would be taken as the last vertex) is refused."""
     try:
         import trimesh
     except ImportError:
         raise ImportError(f"reading {fmt} meshes needs the trimesh package: pip install trimesh") from None
+    import io
+
     try:
-        loaded = trimesh.load(str(path), file_type=path.suffix.lower().lstrip("."), force="mesh", process=False)
+        with open(path, "rb") as f:
+            data = f.read(MAX_MESH_FILE_BYTES + 1)
+    except OSError as e:
+        raise refuse(f"cannot be read ({e.strerror or e})") from None
+    kwargs: dict[str, Any] = {}
+    if fmt == "OBJ":
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError:
+            text = data.decode("latin-1")  # (every byte is a Latin-1 character; OBJ's numbers and keywords are ASCII)
+        data = text.encode("utf-8")
+        kwargs["skip_materials"] = True
+    try:
+        if fmt == "glTF":
+            _check_gltf_buffers(path, data)
+        resolver = _checked_resolver(path)
+        loaded = trimesh.load(io.BytesIO(data), file_type=path.suffix.lower().lstrip("."), force="mesh", process=False, resolver=resolver, **kwargs)
+    except SideFileError as e:
+        raise refuse(str(e)) from None
     except Exception as e:  # trimesh's parsers raise what their input makes them raise
         text = str(e).strip().splitlines()
         raise refuse(f"cannot be read as {fmt} (trimesh: {type(e).__name__}{': ' + text[0] if text else ''})") from None
     vertices = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64).reshape(-1, 3)
     faces = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+    out = (faces < 0) | (faces >= len(vertices))
+    if out.any():
+        f, k = (int(i) for i in np.argwhere(out)[0])
+        raise refuse(
+            f"its face {f} has the vertex index {int(faces[f, k])}; a face's vertex indices are 0 … {len(vertices) - 1} (the file has {len(vertices)} vertices)"
+        )
     return vertices, faces
+
+
+def _checked_resolver(path: Path) -> Any:
+    """A trimesh resolver of the files beside `path` that checks each (`checked_file`) before
+    reading it: a FIFO would block the read, a device never end it."""
+    from trimesh.resolvers import FilePathResolver
+
+    class _CheckedResolver(FilePathResolver):
+        def get(self, name: str) -> bytes:
+            target = self.absolute(name)
+            checked_file(target, f"the file {name!r} named by {path.name}")
+            with open(target, "rb") as f:
+                return f.read(MAX_MESH_FILE_BYTES + 1)
+
+    return _CheckedResolver(str(path))
+
+
+def _check_gltf_buffers(path: Path, data: bytes) -> None:
+    """Each buffer of the glTF (`.gltf` JSON or `.glb`'s JSON chunk) `data` that names a file
+    (a `uri` not `data:`): `checked_file`, and its declared `byteLength` at most the file's
+    size. Nothing is read here; a file trimesh cannot parse is left to it."""
+    import json
+    import struct
+
+    try:
+        if data[:4] == b"glTF":
+            length, kind = struct.unpack("<II", data[12:20])
+            if kind != 0x4E4F534A:  # "JSON"
+                return
+            tree = json.loads(data[20 : 20 + length])
+        else:
+            tree = json.loads(data)
+    except (ValueError, struct.error):
+        return
+    buffers = tree.get("buffers") if isinstance(tree, dict) else None
+    for k, buffer in enumerate(buffers if isinstance(buffers, list) else []):
+        uri = buffer.get("uri") if isinstance(buffer, dict) else None
+        if not isinstance(uri, str) or uri.startswith("data:"):
+            continue
+        from urllib.parse import unquote
+
+        what = f"the glTF buffer {uri!r} (buffers[{k}].uri)"
+        size = checked_file(path.parent / unquote(uri), what)
+        declared = buffer.get("byteLength")
+        if not isinstance(declared, int) or isinstance(declared, bool) or not 0 <= declared <= size:
+            raise SideFileError(
+                f"buffers[{k}].byteLength = {declared!r} is invalid: {what} holds {size} bytes (a byteLength is an integer 0 … the file's size)"
+            )
 
 
 def _read_usd(path: Path, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -201,7 +321,7 @@ def _read_usd(path: Path, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
         from pxr import Tf, Usd, UsdGeom
     except ImportError:
         raise ImportError("reading USD meshes needs the usd-core package: pip install usd-core (or kinema[usd])") from None
-    from .read_usd import _open, _usd_reason
+    from .read_usd import _open, _usd_reason, meters_per_unit_problem
     from .units import UnitWarning
 
     try:
@@ -245,6 +365,9 @@ def _read_usd(path: Path, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
     if not parts_v:
         raise refuse("the stage holds no UsdGeom.Mesh prim with points and faces (guides left out)")
     metres = UsdGeom.GetStageMetersPerUnit(stage)
+    bad = meters_per_unit_problem(metres)
+    if bad:
+        raise refuse(bad)
     said = []
     if not UsdGeom.StageHasAuthoredMetersPerUnit(stage):
         said.append(f"the stage does not say its metersPerUnit: USD's fallback {metres!r} m (centimetres) is taken")

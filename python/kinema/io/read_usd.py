@@ -5,6 +5,8 @@ stage (its first `UsdGeom.Points` prim, in the stage's `metersPerUnit`)."""
 
 from __future__ import annotations
 
+import math
+import os
 import warnings
 from pathlib import Path
 from typing import Any
@@ -18,6 +20,17 @@ from .units import Scales, UnitWarning
 
 #: The first bytes of a binary (crate) layer and of a text layer; a .usdz is a zip ("PK").
 MAGIC_CRATE, MAGIC_TEXT = b"PXR-USDC", b"#usda"
+#: The fewest time codes per second of a stage read (a time code of 11.6 days): fewer, and a
+#: time code / timeCodesPerSecond overflows or loses the frames' order.
+MIN_TIME_CODES_PER_SECOND = 1e-6
+
+
+def meters_per_unit_problem(metres: float) -> str | None:
+    """Why a stage's `metersPerUnit` cannot be read (NaN, 0: every position 0, negative: a
+    mirrored scene), or None."""
+    if math.isfinite(metres) and metres > 0:
+        return None
+    return f"metersPerUnit = {metres!r} is invalid: it must be finite and > 0 (the metres in one of the stage's units)"
 
 
 def read_usd(path: Path) -> LoadedTrajectory:
@@ -44,8 +57,11 @@ def read_usd(path: Path) -> LoadedTrajectory:
     not Z is read as it is, with a `UnitWarning` (kinema's gravity points along -z).
 
     Raises `ImportError` naming `pip install usd-core` without it, and
-    `TrajectoryFileError` naming `path`: not a stage usd-core opens, no Points prim, an
-    attribute whose length is not the number of points."""
+    `TrajectoryFileError` naming `path`: not a stage usd-core opens, a layer it names
+    (sublayer, reference, payload) that is not a regular file (`check_layers`), no Points
+    prim, an attribute whose length is not the number of points, a `metersPerUnit` that is
+    not finite and > 0, another stage's `timeCodesPerSecond` that is not finite and at least
+    `MIN_TIME_CODES_PER_SECOND`."""
     try:
         from pxr import Tf, Usd, UsdGeom, UsdPhysics
     except ImportError:
@@ -65,6 +81,9 @@ def read_usd(path: Path) -> LoadedTrajectory:
         raise fail(path, f"holds no UsdGeom.Points prim {where}")
     points = UsdGeom.Points(prim)
     metres = UsdGeom.GetStageMetersPerUnit(stage)
+    bad = meters_per_unit_problem(metres)
+    if bad:
+        raise fail(path, bad)
     said: list[str] = []  # what the UnitWarning says
     if not own and not UsdGeom.StageHasAuthoredMetersPerUnit(stage):
         said.append(f"the stage does not say its metersPerUnit: USD's fallback {metres!r} m (centimetres) is taken")
@@ -84,6 +103,12 @@ def read_usd(path: Path) -> LoadedTrajectory:
     else:
         codes = list(points.GetPointsAttr().GetTimeSamples())
         per_second = stage.GetTimeCodesPerSecond()
+        if not (math.isfinite(per_second) and per_second >= MIN_TIME_CODES_PER_SECOND):
+            raise fail(
+                path,
+                f"timeCodesPerSecond = {per_second!r} is invalid: it must be finite and at least {MIN_TIME_CODES_PER_SECOND:g} "
+                "(a frame's time is its time code / timeCodesPerSecond, s)",
+            )
         times = [c / per_second for c in codes]
         if not codes:
             codes, times = [None], [None]  # the default values: one frame, at time 0
@@ -113,7 +138,11 @@ def _open(path: Path) -> Any:
     from .usd_writer import SUFFIXES
 
     if path.suffix.lower() in SUFFIXES:
-        return Usd.Stage.Open(str(path))
+        root = Sdf.Layer.FindOrOpen(str(path))  # (the root layer alone: nothing it names is opened)
+        if root is None:
+            return None
+        check_layers(path, root, path.parent)
+        return Usd.Stage.Open(root)
     with open(path, "rb") as f:
         head = f.read(8)
     kind = "usdc" if head.startswith(MAGIC_CRATE) else "usda" if head.startswith(MAGIC_TEXT) else None
@@ -122,7 +151,39 @@ def _open(path: Path) -> Any:
     layer = Sdf.Layer.CreateAnonymous(f"{path.stem}.{kind}")
     if not layer.Import(str(path)):
         raise fail(path, f"not a USD stage that can be read (usd-core could not read it as {kind})")
+    check_layers(path, layer, path.parent)
     return Usd.Stage.Open(layer)
+
+
+def check_layers(path: Path, layer: Any, folder: Path, seen: set[str] | None = None) -> None:
+    """Every layer `layer` names (sublayers, references, payloads), and those they name, is a
+    regular file of at most `mesh_files.MAX_MESH_FILE_BYTES`, checked before the stage is
+    composed (which would open them: a FIFO blocks the reader, a device never ends); else a
+    `TrajectoryFileError` naming `path`, the layer and who names it. `folder`: where `layer`'s
+    relative paths start. Paths inside a .usdz package are its own (read from the zip)."""
+    from pxr import Ar, Sdf
+
+    from .mesh_files import SideFileError, checked_file
+
+    seen = set() if seen is None else seen
+    for asset in layer.GetCompositionAssetDependencies():
+        if not asset or Ar.IsPackageRelativePath(asset):
+            continue
+        target = Path(asset) if os.path.isabs(asset) else folder / asset
+        key = os.path.realpath(target)
+        if key in seen:
+            continue
+        seen.add(key)
+        named_by = "the stage" if layer.anonymous or Path(layer.realPath) == Path(path).resolve() else Path(layer.realPath).name
+        try:
+            checked_file(target, f"the layer {asset!r} named by {named_by} (a sublayer, reference or payload)")
+        except SideFileError as e:
+            raise fail(path, str(e)) from None
+        if target.suffix.lower() == ".usdz":
+            continue  # (its own layers are inside the zip)
+        sub = Sdf.Layer.FindOrOpen(str(target))
+        if sub is not None:
+            check_layers(path, sub, target.parent, seen)
 
 
 class _Reading:
