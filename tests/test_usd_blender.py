@@ -163,7 +163,8 @@ def test_blender_plays_each_frame_at_its_own_frame_number(blender, name):
 
 def test_blender_reads_these_point_cloud_attributes(blender):
     # what comes through to Blender: the ids as `id` (not USD's int64 `ids`), the primvars
-    # mass and displayColor; the string primvar species is left out (Blender takes no strings)
+    # mass, displayColor and collisionGroup; the string primvar species is left out (Blender
+    # takes no strings)
     [cloud] = blender["fountain"].objects("POINTCLOUD")
     attributes = blender["fountain"].meta["objects"][cloud]["attributes"]
     assert attributes == {
@@ -173,6 +174,7 @@ def test_blender_reads_these_point_cloud_attributes(blender):
         "id": ["INT", "POINT"],
         "mass": ["FLOAT", "POINT"],
         "displayColor": ["FLOAT_COLOR", "POINT"],
+        "collisionGroup": ["INT", "POINT"],
     }
 
 
