@@ -348,8 +348,8 @@ def run_member(
     timing = {"wall_s": time.perf_counter() - start, "host": socket.gethostname(), "pid": os.getpid()}
     with atomic_file(where / "result.json") as tmp:
         tmp.write_text(to_json({"row": row, "timing": timing, "key": key}))
-    # The member's World belongs to this thread: freed here (with any cycle it is in), not
-    # later by a collection on another thread of the worker, where pyo3 would refuse to drop it.
+    # The member's World is freed here (with any cycle it is in), before the next member is
+    # made, rather than at some later collection (any thread may free it: issue 49).
     world = traj = None
     gc.collect()
     return {"row": row, "timing": timing}

@@ -63,7 +63,7 @@ struct NewParticles<'py> {
 /// other method (those given particle indices, those that change the world, the advisor, the
 /// checkpoint's carries) first puts the particles back (`restore_order`, a no-op when they
 /// are), and the engine sorts them again at its next rebuild.
-#[pyclass(name = "World", module = "kinema._core", unsendable)]
+#[pyclass(name = "World", module = "kinema._core")]
 pub struct PyWorld {
     inner: World,
 }
