@@ -7,6 +7,8 @@ trajectory files and checkpoints."""
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -361,3 +363,47 @@ def test_a_world_with_a_mesh_goes_to_a_scene_and_a_checkpoint_and_back(tmp_path,
     w.step(100)
     back.step(100)
     assert np.array_equal(w.positions, back.positions)
+
+
+# Issue 49: a mesh too large for the memory left was an abort ("memory allocation of
+# 570425360 bytes failed", exit 134: the edge table of 10⁷ triangles under a 1.5 GiB cap).
+# Every buffer the mesh sizes is allocated fallibly now: a MemoryError that names the mesh and
+# the bytes, and the process (and the world) goes on.
+TOO_LARGE = """
+import resource
+import numpy as np
+import kinema
+
+n = 1000  # a closed grid sphere of about 10⁶ triangles
+th = np.linspace(0.0, np.pi, n // 2 + 1)[1:-1]
+ph = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+T, P = np.meshgrid(th, ph, indexing="ij")
+ring = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3)
+v = np.vstack([[0.0, 0.0, 1.0], ring, [0.0, 0.0, -1.0]])
+j = np.arange(n)
+at = lambda i, j: 1 + i * n + j % n
+faces = [np.stack([np.zeros(n, int), at(0, j), at(0, j + 1)], -1)]
+for i in range(len(th) - 1):
+    faces += [np.stack([at(i, j), at(i + 1, j), at(i + 1, j + 1)], -1), np.stack([at(i, j), at(i + 1, j + 1), at(i, j + 1)], -1)]
+faces.append(np.stack([np.full(n, len(v) - 1), at(len(th) - 1, j + 1), at(len(th) - 1, j)], -1))
+mesh = kinema.Mesh(vertices=v, faces=np.vstack(faces))
+w = kinema.World(dim=3, dt=1e-3)
+w.set_collisions()
+w.add_particles(np.array([[0.0, 0.0, 2.0]]), radius=0.1)
+w.step()  # the engine's threads are started before the cap
+size = next(int(line.split()[1]) for line in open("/proc/self/status") if line.startswith("VmSize:")) * 1024
+resource.setrlimit(resource.RLIMIT_AS, (size + 40 * 2**20, resource.RLIM_INFINITY))  # 40 MiB more
+try:
+    w.add(mesh)
+except MemoryError as e:
+    print(len(mesh.faces), e)
+w.step()
+"""
+
+
+def test_a_mesh_too_large_for_the_memory_left_is_a_memory_error():
+    done = subprocess.run([sys.executable, "-c", TOO_LARGE], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    faces, message = done.stdout.strip().split(" ", 1)
+    assert "\n" not in message and done.stderr == ""
+    assert message.startswith(f"a mesh of {faces} triangles (about 100 B each while it is built) needs about 0.0"), message

@@ -364,8 +364,8 @@ def run_member(
             tmp.write_text(to_json({"row": row, "timing": timing, "key": key}))
     except OSError as err:  # the member is not finished: a rerun runs it again
         row["error"] = row["error"] or _error_line(err)
-    # The member's World belongs to this thread: freed here (with any cycle it is in), not
-    # later by a collection on another thread of the worker, where pyo3 would refuse to drop it.
+    # The member's World is freed here (with any cycle it is in), before the next member is
+    # made, rather than at some later collection (any thread may free it: issue 49).
     world = traj = None
     gc.collect()
     return {"row": row, "timing": timing}

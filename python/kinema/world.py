@@ -213,8 +213,9 @@ class World(WorldCollisions):
         self._run_source: dict[str, str] = {}
         self._new_views()
 
-    # The engine is the thread's that made the world (pyo3's `unsendable`: its Python forces
-    # and shared buffers are not thread-safe). Every use of it goes through `_core`, which
+    # The engine is the thread's that made the world (its Python forces, the `_Busy` lending
+    # and the shared views are not made for two threads at once; any thread may drop it,
+    # though: the engine is Send + Sync). Every use of it goes through `_core`, which
     # checks the thread first: from another thread, a RuntimeError that says so, where pyo3
     # would raise its PanicException (a BaseException, with a Rust backtrace).
     @property

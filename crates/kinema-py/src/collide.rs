@@ -4,6 +4,7 @@
 //! per class); every rule is the engine's, and its errors name the parameter.
 
 use kinema::collide::colliders::{check_planar, PLANE_IN_2D, SPHERE_IN_2D};
+use kinema::collide::mesh::mesh_buffer;
 use kinema::collide::{
     BoxContainer, Collider, ContactReport, Material, Motion, Partner, Plane, SphereObstacle, Surface, TriangleMesh,
 };
@@ -301,10 +302,16 @@ pub fn box_container(dim: usize, lo: &[f64], hi: &[f64], surface: Surface) -> Re
 
 /// A triangle mesh of `vertices` (m) and `faces` (vertex indices, 3 per face): the indices
 /// are checked here (a negative one, or one beyond u32, names its place), the rest by
-/// [`TriangleMesh::new`]. `inside`: particles inside a closed mesh.
-pub fn mesh(vertices: Vec<[f64; 3]>, faces: &[[i64; 3]], inside: bool, surface: Surface) -> Result<TriangleMesh, Error> {
-    let mut tris = Vec::with_capacity(faces.len());
-    for (f, face) in faces.iter().enumerate() {
+/// [`TriangleMesh::new`]. `inside`: particles inside a closed mesh. `faces` are read once,
+/// into a buffer allocated fallibly (a mesh too large is a `MemoryError`, not an abort).
+pub fn mesh(
+    vertices: Vec<[f64; 3]>,
+    faces: impl ExactSizeIterator<Item = [i64; 3]>,
+    inside: bool,
+    surface: Surface,
+) -> Result<TriangleMesh, Error> {
+    let mut tris = mesh_buffer(faces.len(), faces.len())?;
+    for (f, face) in faces.enumerate() {
         let mut t = [0u32; 3];
         for k in 0..3 {
             t[k] = u32::try_from(face[k]).map_err(|_| {
@@ -378,7 +385,7 @@ pub fn collider(d: &Description) -> Result<Collider, Error> {
         ("sphere", .., Some(center), Some(radius)) => Ok(sphere_obstacle(3, center, radius, surface)?.into()),
         ("sphere", ..) => Err(missing("center and radius")),
         ("mesh", ..) => match (&d.vertices, &d.faces) {
-            (Some(v), Some(f)) => Ok(mesh(v.clone(), f, d.inside.unwrap_or(false), surface)?.into()),
+            (Some(v), Some(f)) => Ok(mesh(v.clone(), f.iter().copied(), d.inside.unwrap_or(false), surface)?.into()),
             _ => Err(missing("vertices and faces")),
         },
         (other, ..) => Err(Error::invalid(

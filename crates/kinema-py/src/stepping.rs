@@ -71,9 +71,9 @@ pub fn step_in_slices(py: Python<'_>, inner: &mut World, n: u64) -> PyResult<()>
     let mut slice = 1u64;
     while left > 0 {
         let k = slice.min(left);
-        let world = OnThisThread(&mut *inner);
+        let world = &mut *inner;
         let start = std::time::Instant::now();
-        py.detach(move || world.advance(k)).map_err(world_err)?;
+        py.detach(move || world.advance_in_engine_order(k)).map_err(world_err)?;
         left -= k;
         py.check_signals()?;
         // the next slice: as many steps as fit in SLICE at this pace
@@ -87,19 +87,4 @@ pub fn step_in_slices(py: Python<'_>, inner: &mut World, n: u64) -> PyResult<()>
         };
     }
     Ok(())
-}
-
-/// The world, lent to the code that runs while the GIL is released. The world is
-/// `unsendable` (its Python forces are bound to this thread) and the closure runs on this
-/// same thread (`Python::detach` does not move it), so it never crosses threads.
-struct OnThisThread<'a>(&'a mut World);
-
-// SAFETY: see the type's doc: the value is used on the thread that made it, inside
-// `Python::detach`, whose `Send` bound is only there for closures that could move.
-unsafe impl Send for OnThisThread<'_> {}
-
-impl OnThisThread<'_> {
-    fn advance(self, n: u64) -> Result<(), Error> {
-        self.0.advance_in_engine_order(n)
-    }
 }

@@ -2,6 +2,7 @@
 //! collisions (conversions in `collide.rs`; stepping and SimulationDiverged in
 //! `stepping.rs`; the Python force in `callbacks.rs`).
 
+use kinema::collide::mesh::mesh_buffer;
 use kinema::collide::{ContactRecord, Partner, Surface};
 use kinema::forces::falloff::{Law, Shape};
 use kinema::forces::vortex::Profile;
@@ -63,7 +64,7 @@ struct NewParticles<'py> {
 /// other method (those given particle indices, those that change the world, the advisor, the
 /// checkpoint's carries) first puts the particles back (`restore_order`, a no-op when they
 /// are), and the engine sorts them again at its next rebuild.
-#[pyclass(name = "World", module = "kinema._core", unsendable)]
+#[pyclass(name = "World", module = "kinema._core")]
 pub struct PyWorld {
     inner: World,
 }
@@ -577,9 +578,11 @@ impl PyWorld {
                 f.ncols()
             )));
         }
-        let verts: Vec<[f64; 3]> = v.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
-        let tris: Vec<[i64; 3]> = f.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
-        let mesh = collide::mesh(verts, &tris, inside, surface).map_err(to_py)?;
+        // Buffers sized by the user, allocated fallibly: a mesh too large is a MemoryError.
+        let mut verts = mesh_buffer(v.nrows(), f.nrows()).map_err(to_py)?;
+        verts.extend(v.rows().into_iter().map(|r| [r[0], r[1], r[2]]));
+        let tris = f.rows().into_iter().map(|r| [r[0], r[1], r[2]]);
+        let mesh = collide::mesh(verts, tris, inside, surface).map_err(to_py)?;
         self.inner.add_collider(mesh).map_err(to_py)
     }
 

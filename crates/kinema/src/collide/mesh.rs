@@ -175,6 +175,54 @@ struct Near {
 /// The most triangles a leaf of the hierarchy holds.
 const LEAF: usize = 4;
 
+/// The most memory the engine takes while it builds a mesh, per triangle, bytes (a closed
+/// mesh of 4·10⁶ triangles, V ≈ F/2, measured: 93 B peak, 69 B kept; the caller's float64
+/// vertices and int64 faces are another 36 B; `docs/collisions.md`): said in the error when
+/// a mesh does not fit.
+pub const BYTES_PER_TRIANGLE: usize = 100;
+
+/// An empty buffer with room for `n` values of a mesh of `triangles` triangles, or the
+/// mesh's out-of-memory error: every buffer whose size the mesh sets is allocated through
+/// here (or `try_reserve`d), so that a mesh too large for the machine is an error, never an
+/// abort.
+pub fn mesh_buffer<T>(n: usize, triangles: usize) -> Result<Vec<T>, Error> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| mesh_too_large(triangles))?;
+    Ok(v)
+}
+
+/// The error of a mesh of `triangles` triangles that cannot be allocated.
+pub fn mesh_too_large(triangles: usize) -> Error {
+    Error::out_of_memory(
+        format!("a mesh of {triangles} triangles (about {BYTES_PER_TRIANGLE} B each while it is built)"),
+        triangles.saturating_mul(BYTES_PER_TRIANGLE),
+    )
+}
+
+/// How many nodes the hierarchy of `n` triangles has (median splits down to leaves of at
+/// most [`LEAF`]), so that its buffer is allocated once, fallibly. A level holds at most two
+/// sizes of subtree (⌊m/2⌋ and ⌈m/2⌉ of the level above's).
+fn node_count(n: usize) -> usize {
+    let mut level: SmallVec<[(usize, usize); 4]> = SmallVec::from_slice(&[(n, 1)]);
+    let mut total = 0;
+    while !level.is_empty() {
+        let mut next: SmallVec<[(usize, usize); 4]> = SmallVec::new();
+        for (size, many) in level {
+            total += many;
+            if size > LEAF {
+                for half in [size / 2, size - size / 2] {
+                    match next.iter_mut().find(|e| e.0 == half) {
+                        Some(e) => e.1 += many,
+                        None => next.push((half, many)),
+                    }
+                }
+            }
+        }
+        level = next;
+    }
+    total
+}
+
 /// The geometry of a mesh, shared by its copies (the stage, the contact force and a picture
 /// hold the same one).
 #[derive(Debug, PartialEq)]
@@ -229,7 +277,8 @@ impl TriangleMesh {
     ///
     /// Errors name the first bad value: a non-finite vertex, an index out of range, a face
     /// with a repeated vertex, no triangle of non-zero area.
-    pub fn new(vertices: Vec<[f64; 3]>, faces: Vec<[u32; 3]>, inside: bool, surface: Surface) -> Result<Self, Error> {
+    pub fn new(vertices: Vec<[f64; 3]>, mut faces: Vec<[u32; 3]>, inside: bool, surface: Surface) -> Result<Self, Error> {
+        let triangles = faces.len();
         for (v, p) in vertices.iter().enumerate() {
             if let Some((k, value)) = vec3::first_non_finite(p) {
                 return Err(Error::invalid(
@@ -262,7 +311,7 @@ impl TriangleMesh {
             let [a, b, c] = f.map(|k| vertices[k as usize]);
             vec3::cross(vec3::sub(b, a), vec3::sub(c, a))
         };
-        let mut faces: Vec<[u32; 3]> = faces.into_iter().filter(|f| vec3::norm(area(f)) > 0.0).collect();
+        faces.retain(|f| vec3::norm(area(f)) > 0.0);
         if faces.is_empty() {
             return Err(Error::invalid(
                 "faces",
@@ -270,7 +319,7 @@ impl TriangleMesh {
                 "a mesh needs at least one triangle with three distinct, non-collinear vertices",
             ));
         }
-        let (closed, edge_faces) = adjacency(&faces);
+        let (closed, edge_faces) = adjacency(&faces).ok_or_else(|| mesh_too_large(triangles))?;
         if closed {
             let volume: f64 = faces
                 .iter()
@@ -292,15 +341,14 @@ impl TriangleMesh {
                  so it is two-sided: particles stay on the side they start on",
             ));
         }
-        let normals = faces
-            .iter()
-            .map(|f| {
-                let c = area(f);
-                vec3::scale(1.0 / vec3::norm(c), c)
-            })
-            .collect();
+        let mut normals = mesh_buffer(faces.len(), triangles)?;
+        normals.extend(faces.iter().map(|f| {
+            let c = area(f);
+            vec3::scale(1.0 / vec3::norm(c), c)
+        }));
         let scale = vertices.iter().flatten().fold(0.0_f64, |m, c| m.max(c.abs()));
-        let mut valence = vec![0u32; vertices.len()];
+        let mut valence = mesh_buffer(vertices.len(), triangles)?;
+        valence.resize(vertices.len(), 0u32);
         for f in &faces {
             for &k in f {
                 valence[k as usize] += 1;
@@ -318,7 +366,7 @@ impl TriangleMesh {
             edge_faces,
             valence,
         };
-        geometry.build();
+        geometry.build().ok_or_else(|| mesh_too_large(triangles))?;
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         for &v in geometry.faces.iter().flatten() {
             let p = geometry.vertices[v as usize];
@@ -721,17 +769,24 @@ impl TriangleMesh {
 impl Geometry {
     /// Builds the hierarchy: a median split of the triangles' centroids along the longest
     /// axis of their box, down to leaves of at most [`LEAF`] triangles.
-    fn build(&mut self) {
+    /// `None`: its buffers cannot be allocated.
+    fn build(&mut self) -> Option<()> {
         let centroid = |t: u32| {
             let [a, b, c] = self.faces[t as usize].map(|k| self.vertices[k as usize]);
             [0, 1, 2].map(|k| (a[k] + b[k] + c[k]) / 3.0)
         };
-        let centroids: Vec<[f64; 3]> = (0..self.faces.len() as u32).map(centroid).collect();
-        let mut order: Vec<u32> = (0..self.faces.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * order.len() / LEAF + 1);
+        let n = self.faces.len();
+        let mut centroids: Vec<[f64; 3]> = mesh_buffer(n, n).ok()?;
+        centroids.extend((0..n as u32).map(centroid));
+        let mut order: Vec<u32> = mesh_buffer(n, n).ok()?;
+        order.extend(0..n as u32);
+        // exactly as many as `split` pushes: it never grows the buffer
+        let mut nodes = mesh_buffer(node_count(n), n).ok()?;
         self.split(&mut order, 0, &centroids, &mut nodes);
+        debug_assert_eq!(nodes.len(), node_count(n));
         self.order = order;
         self.nodes = nodes;
+        Some(())
     }
 
     fn split(&self, order: &mut [u32], start: usize, centroids: &[[f64; 3]], nodes: &mut Vec<Node>) {
@@ -861,15 +916,21 @@ impl Stack {
 }
 
 /// Whether every edge is shared by exactly two faces that run along it in opposite directions
-/// (the mesh is closed), and for each face how many faces share each of its edges.
-fn adjacency(faces: &[[u32; 3]]) -> (bool, Vec<[u8; 3]>) {
-    // per undirected edge: (uses a→b with a < b, uses b→a)
-    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(3 * faces.len() / 2);
+/// (the mesh is closed), and for each face how many faces share each of its edges; `None`:
+/// the memory for them cannot be allocated.
+fn adjacency(faces: &[[u32; 3]]) -> Option<(bool, Vec<[u8; 3]>)> {
+    // per undirected edge: (uses a→b with a < b, uses b→a); a closed mesh has 3F/2 edges, an
+    // open one up to 3F (the table grows, fallibly, beyond 3F/2)
+    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+    edges.try_reserve(3 * faces.len() / 2).ok()?;
     let key = |f: &[u32; 3], k: usize| {
         let (a, b) = (f[k], f[(k + 1) % 3]);
         ((a.min(b), a.max(b)), a < b)
     };
     for f in faces {
+        if edges.capacity() - edges.len() < 3 {
+            edges.try_reserve(edges.len().max(3)).ok()?;
+        }
         for k in 0..3 {
             let (e, up) = key(f, k);
             let e = edges.entry(e).or_default();
@@ -881,16 +942,14 @@ fn adjacency(faces: &[[u32; 3]]) -> (bool, Vec<[u8; 3]>) {
         }
     }
     let closed = edges.values().all(|&(up, down)| up == 1 && down == 1);
-    let counts = faces
-        .iter()
-        .map(|f| {
-            [0, 1, 2].map(|k| {
-                let (up, down) = edges[&key(f, k).0];
-                (up + down).min(255) as u8
-            })
+    let mut counts = mesh_buffer(faces.len(), faces.len()).ok()?;
+    counts.extend(faces.iter().map(|f| {
+        [0, 1, 2].map(|k| {
+            let (up, down) = edges[&key(f, k).0];
+            (up + down).min(255) as u8
         })
-        .collect();
-    (closed, counts)
+    }));
+    Some((closed, counts))
 }
 
 /// The point of triangle abc closest to p, and the feature it lies on (Ericson, *Real-Time

@@ -164,7 +164,7 @@ pub struct Standby {
 /// on the rates it gives ([`Force::rates`]), and how it follows the particles when the
 /// world renumbers or removes some ([`Force::reindex`]). Only `name` and `accumulate` are
 /// required; the defaults describe a force the world knows nothing about.
-pub trait Force {
+pub trait Force: Send + Sync {
     /// Short name for diagnostics and messages (`"gravity"`, `"spring"`).
     fn name(&self) -> &str;
 
@@ -225,7 +225,7 @@ pub trait Force {
 
 /// A force's Jacobian prepared at one state `s` (see [`Force::linearize`]); its methods are
 /// given the same `s` again, so that a preparation need not copy what it can read there.
-pub trait Linearized {
+pub trait Linearized: Send + Sync {
     /// Adds (∂F/∂x)·dx + (∂F/∂v)·dv to `out` (3 values per particle each).
     fn apply(&self, s: &State, dx: &[f64], dv: &[f64], out: &mut [f64]);
 

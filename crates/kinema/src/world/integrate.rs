@@ -20,8 +20,8 @@ use rayon::prelude::*;
 pub(super) enum WorldStepper {
     /// Velocity Verlet on the particles' own arrays (see [`VerletBuffers`]).
     Verlet(Box<VerletBuffers>),
-    SecondOrder(Box<dyn for<'a> Stepper<dyn SecondOrderSystem + 'a>>),
-    FirstOrder(Box<dyn for<'a> Stepper<dyn OdeSystem + 'a>>),
+    SecondOrder(Box<dyn for<'a> Stepper<dyn SecondOrderSystem + 'a> + Send + Sync>),
+    FirstOrder(Box<dyn for<'a> Stepper<dyn OdeSystem + 'a> + Send + Sync>),
     /// rk45 substeps adaptively inside each world step.
     Adaptive,
     /// implicit_euler: Baraff & Witkin's linearised step with conjugate gradients.

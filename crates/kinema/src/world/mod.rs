@@ -380,3 +380,11 @@ impl World {
         result
     }
 }
+
+// A World is Send + Sync (its forces, steppers and prepared Jacobians are bound so), so that
+// the Python binding's World may be dropped on any thread (issue 49: pyo3 leaked an
+// `unsendable` one dropped on another thread, with a message each time).
+const _: fn() = || {
+    fn send_sync<T: Send + Sync>() {}
+    send_sync::<World>();
+};

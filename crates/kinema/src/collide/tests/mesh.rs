@@ -299,3 +299,30 @@ fn the_hierarchy_finds_what_brute_force_finds() {
     }
     assert!(hits > 100, "the spheres touch the sheet: {hits}");
 }
+
+#[test]
+fn the_hierarchy_has_as_many_nodes_as_counted_so_its_buffer_never_grows() {
+    // `node_count` sizes the nodes' buffer, allocated fallibly once: `split` must push exactly
+    // that many (a push beyond it would grow the buffer infallibly, an abort when out of memory)
+    for n in (1..200).chain([1000, 4097, 99_999]) {
+        let v: Vec<[f64; 3]> = (0..n + 2).map(|k: usize| [k as f64, (k % 7 * (k % 5)) as f64, 0.0]).collect();
+        let f: Vec<[u32; 3]> = (0..n as u32).map(|k| [k, k + 1, k + 2]).collect();
+        let m = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
+        let faces = m.faces().len();
+        assert_eq!(m.geometry.nodes.len(), node_count(faces), "{faces} triangles");
+        assert_eq!(m.geometry.nodes.capacity(), node_count(faces), "{faces} triangles");
+    }
+}
+
+#[test]
+fn a_mesh_buffer_beyond_memory_is_the_meshs_out_of_memory_error() {
+    let e = mesh_buffer::<[f64; 3]>(usize::MAX / 8, 12_345).unwrap_err();
+    assert!(matches!(e, Error::OutOfMemory { .. }), "{e:?}");
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "a mesh of 12345 triangles (about {BYTES_PER_TRIANGLE} B each while it is built) needs about 0.001 GiB of memory, \
+             which cannot be allocated"
+        )
+    );
+}
