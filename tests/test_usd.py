@@ -168,6 +168,36 @@ def test_a_fountain_at_60_fps_gives_every_frame_at_its_whole_time_code(tmp_path)
     assert wrong == 0, f"{wrong} of {frames} frames wrong at whole time codes"
 
 
+def test_an_emitters_stage_starts_at_its_first_frame_with_particles(tmp_path):
+    # Blender 5.0 aborts (std::bad_alloc) exporting a point cloud of no points, which an
+    # emitter's frame 0 imports as; its timeline is the stage's range, so the range starts at
+    # the first frame with particles. Frame k stays at time code k, and every frame, the
+    # empty ones too, is a time sample that kinema's reader gives back.
+    traj = fountain()
+    assert traj.alive[0].sum() == 0 and traj.alive[1].sum() > 0
+    traj.export(tmp_path / "fountain.usdc")
+    stage = Usd.Stage.Open(str(tmp_path / "fountain.usdc"))
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1.0, len(traj.t) - 1)
+    points = UsdGeom.Points(stage.GetPrimAtPath("/World/particles"))
+    assert list(points.GetPointsAttr().GetTimeSamples()) == [float(k) for k in range(len(traj.t))]
+    assert len(points.GetPointsAttr().Get(Usd.TimeCode(0.0))) == 0
+    back = kinema.load_trajectory(tmp_path / "fountain.usdc")
+    np.testing.assert_array_equal(back.alive, traj.alive)
+    np.testing.assert_array_equal(back.t, traj.t)
+    # the last frame with particles ends it; with none alive at all, the whole run
+    x, v, alive = traj.positions.copy(), traj.velocities.copy(), traj.alive.copy()
+    alive[-3:] = False
+    x[~alive] = v[~alive] = np.nan
+    dataclasses.replace(traj, positions=x, velocities=v, alive=alive).export(tmp_path / "ends.usdc")
+    stage = Usd.Stage.Open(str(tmp_path / "ends.usdc"))
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (1.0, len(traj.t) - 4)
+    alive[:] = False
+    x[:] = v[:] = np.nan
+    dataclasses.replace(traj, positions=x, velocities=v, alive=alive).export(tmp_path / "none.usdc")
+    stage = Usd.Stage.Open(str(tmp_path / "none.usdc"))
+    assert (stage.GetStartTimeCode(), stage.GetEndTimeCode()) == (0.0, len(traj.t) - 1)
+
+
 def test_the_primvars_follow_the_live_particles(tmp_path):
     traj = fountain()
     traj.export(tmp_path / "fountain.usdc")

@@ -43,7 +43,9 @@ def main(job: dict) -> None:
         raise SystemExit(f"Blender could not import {job['usd']}")
     scene = bpy.context.scene
     scene.render.fps, scene.render.fps_base = int(job["fps"]), float(job["fps_base"])
-    scene.frame_start, scene.frame_end = 0, max(int(job["frames"]) - 1, 0)
+    # the timeline stays the stage's range, which the import set: its first and last frames
+    # with particles (an emitter's empty frame 0 left out: Blender aborts exporting a point
+    # cloud of no points), frame k at time code k
     particles = particles_material()
     springs = flat_material("kinema springs", SPRING_LINEAR)
     for ob in scene.objects:

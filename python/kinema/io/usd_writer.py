@@ -24,8 +24,9 @@ def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     """Write `fr` to one USD stage at `path`; returns `[path]`.
 
     The stage: `upAxis` Z (kinema's gravity points along -z), `metersPerUnit` 1 (kinema
-    is SI); frame k at time code k (k = 0 … F − 1: `startTimeCode` 0, `endTimeCode`
-    F − 1), `timeCodesPerSecond` = `framesPerSecond` = the rate the frames were asked at
+    is SI); frame k at time code k (k = 0 … F − 1; `startTimeCode` and `endTimeCode` the first
+    and last frames with a live particle, 0 and F − 1 without births and deaths: see
+    `_frame_range`), `timeCodesPerSecond` = `framesPerSecond` = the rate the frames were asked at
     (`_frame_rate`: `traj.fps`, 30 for `World.run(fps=30)`, which records frame k at k/30 s;
     else a common rate within 2 % of the recording's, else 1 / the median
     interval), so that a 3D application asking at whole frames, as Blender and Houdini
@@ -153,8 +154,9 @@ def _build_stage(traj: Any, fr: Frames, path: Path, staging: Path, rate: float, 
         UsdGeom.SetStageMetersPerUnit(stage, 1.0)
         stage.SetTimeCodesPerSecond(rate)
         stage.SetFramesPerSecond(rate)
-        stage.SetStartTimeCode(0.0)  # frame k at time code k
-        stage.SetEndTimeCode(float(max(fr.n_frames - 1, 0)))
+        first, last = _frame_range(fr)
+        stage.SetStartTimeCode(float(first))  # frame k at time code k, whatever the range
+        stage.SetEndTimeCode(float(last))
         world = UsdGeom.Xform.Define(stage, "/World")
         stage.SetDefaultPrim(world.GetPrim())
         time = world.GetPrim().CreateAttribute("kinema:time", Sdf.ValueTypeNames.Double)
@@ -265,6 +267,20 @@ class _Particles:
         Gf, Sdf, Usd, UsdGeom, Vt = self.pxr
         if np.all(self.lo <= self.hi):
             self.prim.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*map(float, self.lo)), Gf.Vec3f(*map(float, self.hi))]))
+
+
+def _frame_range(fr: Frames) -> tuple[int, int]:
+    """The stage's `startTimeCode` and `endTimeCode`: the first and last frames with a live
+    particle, or 0 and F − 1 where every frame or none has one. Blender 5.0 aborts
+    (`std::bad_alloc`, the whole process) exporting USD, or anything, from a point cloud of
+    no points, which is what an emitter's frame 0 imports as; its importer makes the
+    timeline the stage's range, so that exporting the animation (`export_animation`) runs
+    over frames that have particles. The time samples still cover every frame, frame k at
+    time code k, and kinema's reader gives every frame back."""
+    some = np.flatnonzero(fr.alive.any(axis=1))
+    if some.size == 0:
+        return 0, max(fr.n_frames - 1, 0)
+    return int(some[0]), int(some[-1])
 
 
 def _vt(array: Any, values: np.ndarray, Vt: Any) -> Any:
