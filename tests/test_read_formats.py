@@ -543,8 +543,10 @@ def test_lammps_files_without_units_or_in_lj_units_are_refused(tmp_path):
     lj = load(path, units={"length": 3.4e-10, "time": 2.15e-12, "mass": 6.63e-26})  # argon's σ, τ and m
     np.testing.assert_array_equal(lj.masses[0], 1.008 * 6.63e-26)
     path.write_text(DUMP.replace("ITEM: UNITS\nreal\n", "ITEM: UNITS\nlj\n"))
-    with pytest.raises(TrajectoryFileError, match=r"md\.lammpstrj: ITEM: UNITS = 'lj' is invalid: LAMMPS's lj units are reduced"):
+    with pytest.raises(TrajectoryFileError, match=r"md\.lammpstrj: the file says its units are 'lj' \(ITEM: UNITS\), LAMMPS's reduced units"):
         kinema.Trajectory.load(path)
+    # with the scales given, as for a file that does not say its units (issue 49)
+    assert load(path, units={"length": 3.4e-10, "time": 2.15e-12, "mass": 6.63e-26}).masses[0] == lj.masses[0]
 
 
 def test_a_tilted_box_is_refused(tmp_path):
