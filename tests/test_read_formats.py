@@ -216,7 +216,8 @@ def test_ase_xyz_without_masses_takes_ases_element_masses_as_ase_does(tmp_path):
 def test_an_xyz_without_masses_whose_names_are_not_elements_has_none(tmp_path):
     path = tmp_path / "grains.xyz"
     path.write_text("2\nProperties=species:S:1:pos:R:3:momenta:R:3\ngrain 0 0 0 1 0 0\nX 1 0 0 0 1 0\n")
-    back = load(path)
+    with pytest.warns(UserWarning, match=r"grains\.xyz: frame 0 \(line 1\) has momenta but no masses"):  # said, not silent (issue 49)
+        back = kinema.Trajectory.load(path)
     assert back.masses is None and np.isnan(back.velocities).all()
 
 

@@ -205,3 +205,42 @@ def test_lammps_numbers_beyond_int64_are_refused_in_one_line(tmp_path, step, ato
     path.write_text(DUMP.format(step=step, id=atom_id))
     with pytest.raises(TrajectoryFileError, match=message):
         load(path, units="si")
+
+
+def test_an_xyz_id_beyond_int64_is_refused_in_one_line(tmp_path):
+    path = tmp_path / "huge.xyz"
+    path.write_text("2\nProperties=species:S:1:pos:R:3:id:I:1 units=SI\nA 0 0 0 99999999999999999999\nA 1 0 0 2\n")
+    with pytest.raises(TrajectoryFileError, match=r"huge\.xyz: frame 0 \(line 1\), row 0: column 'id' \(integer\) has 99999999999999999999, beyond int64"):
+        load(path)
+
+
+def test_a_gsd_empty_type_name_is_refused_in_one_line(tmp_path):
+    hoomd = pytest.importorskip("gsd.hoomd")
+    path = tmp_path / "empty.gsd"
+    with hoomd.open(path, "w") as f:
+        frame = hoomd.Frame()
+        frame.particles.N = 2
+        frame.particles.types = [""]
+        frame.particles.typeid = [0, 0]
+        frame.particles.position = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]], dtype=np.float32)
+        frame.configuration.box = [10, 10, 10, 0, 0, 0]
+        f.append(frame)
+    with pytest.raises(TrajectoryFileError, match=r"empty\.gsd: frame 0: particles/types holds only empty names .*GSD type names must be non-empty"):
+        kinema.Trajectory.load(path, units="si")
+
+
+# -- 4. extended XYZ momenta without masses ----------------------------------------------------
+
+
+def test_xyz_momenta_without_masses_give_no_velocities_and_say_so_once(tmp_path):
+    path = tmp_path / "momenta.xyz"
+    frame = "2\nProperties=species:S:1:pos:R:3:momenta:R:3 units=SI\ngrain 0 0 0 1 0 0\ngrain 1 0 0 2 0 0\n"
+    path.write_text(frame * 3)
+    with pytest.warns(UserWarning, match=r"momenta\.xyz: frame 0 \(line 1\) has momenta but no masses .*so no velocities are read") as caught:
+        back = kinema.Trajectory.load(path)
+    assert len([w for w in caught if "momenta" in str(w.message)]) == 1  # once a file
+    assert np.isnan(back.velocities).all()  # unknown, as for a file without velocities
+    np.testing.assert_array_equal(back.positions[0, 1], [1.0, 0.0, 0.0])
+    # with masses they are momenta / masses
+    path.write_text(frame.replace("momenta:R:3", "momenta:R:3:masses:R:1").replace(" 0 0\n", " 0 0 2.0\n") * 3)
+    np.testing.assert_array_equal(load(path).velocities[0, :, 0], [0.5, 1.0])
