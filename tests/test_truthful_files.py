@@ -244,3 +244,21 @@ def test_xyz_momenta_without_masses_give_no_velocities_and_say_so_once(tmp_path)
     # with masses they are momenta / masses
     path.write_text(frame.replace("momenta:R:3", "momenta:R:3:masses:R:1").replace(" 0 0\n", " 0 0 2.0\n") * 3)
     np.testing.assert_array_equal(load(path).velocities[0, :, 0], [0.5, 1.0])
+
+
+# -- 5. exports of a trajectory without velocities ---------------------------------------------
+
+
+@pytest.mark.parametrize("suffix", [".xyz", ".csv", ".gsd", ".lammpstrj", ".pvd", ".ply"])
+def test_exports_without_velocities_read_back_without_them(tmp_path, suffix):
+    source = tmp_path / "novel.xyz"
+    frame = "2\nProperties=species:S:1:pos:R:3:mass:R:1:radius:R:1 units=SI Time={t}\ngrain 0 0 {t} 1.0 0.1\ngrain 1 0 0 2.0 0.1\n"
+    source.write_text(frame.format(t=0.0) + frame.format(t=0.5))
+    traj = load(source)
+    assert np.isnan(traj.velocities).all()  # unknown
+    path = tmp_path / f"run{suffix}"
+    export(traj, path)
+    back = load(path)
+    assert np.isnan(back.velocities).all()  # still unknown: no NaN columns written and refused on reading
+    np.testing.assert_allclose(back.positions, traj.positions, rtol=0, atol=1e-7)  # (GSD, PLY: float32)
+    assert (back.masses is not None) == (suffix not in (".ply",))

@@ -170,7 +170,7 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
                     positions=np.asarray(p.position, dtype=np.float64).reshape(-1, 3) + origin,
                     where=where,
                     ids=None if ids is None else np.asarray(ids, dtype=np.int64).reshape(-1),
-                    velocities=np.asarray(p.velocity, dtype=np.float64).reshape(-1, 3),
+                    velocities=None if own and _log(f, k, "kinema/velocities_unknown") is not None else np.asarray(p.velocity, dtype=np.float64).reshape(-1, 3),
                     masses=np.asarray(p.mass, dtype=np.float64).reshape(-1),
                     radii=np.asarray(p.diameter, dtype=np.float64).reshape(-1) / 2,
                     species=np.array(types, dtype=object)[typeid] if types else None,
