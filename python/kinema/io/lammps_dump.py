@@ -62,9 +62,14 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
     particle types by it, MDAnalysis reads it as the elements), radius and mass only where
     the trajectory has them. Every value is in SI units (m, m/s, kg).
 
-    No `ITEM: UNITS` or `ITEM: TIME`: MDAnalysis's reader takes the first line of each
-    frame as `ITEM: TIMESTEP` and counts a frame as N + 9 lines, and fails on either
-    ("invalid literal for int() with base 10: '0.0'"); a frame's time is TIMESTEP × dt.
+    `ITEM: UNITS` `si` before the first frame and `ITEM: TIME` (the frame's time, s) before
+    each `ITEM: TIMESTEP`, as LAMMPS's `dump_modify units yes time yes` writes them, so the
+    dump reads back with its times exactly and without `units=` (OVITO and ASE read them;
+    MDAnalysis's reader, which takes a frame's first line for `ITEM: TIMESTEP`, does not).
+    Where the species are not all chemical symbols (no `element` column), the first frame
+    also has `ITEM: ATOM TYPE LABELS K` and K rows `type name` (the data files' `Atom Type
+    Labels`), which kinema reads back as the species and OVITO and ASE skip. Unknown
+    velocities (all NaN) get no `vx vy vz` columns.
 
     Births and deaths (`alive`): each timestep lists the atoms alive at it only (`NUMBER
     OF ATOMS` varies; 0 for a frame with none), each with its own id, so a particle keeps
