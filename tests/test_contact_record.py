@@ -179,7 +179,8 @@ def test_the_lammps_export_writes_dump_local_files_as_lammps_does(tmp_path, reco
         assert lines[at] == "ITEM: TIMESTEP" and int(lines[at + 1]) == round(recorded.t[frame] / recorded.dt)
         assert lines[at + 2] == "ITEM: NUMBER OF ENTRIES"
         count = int(lines[at + 3])
-        assert lines[at + 4 : at + 8] == atoms[4:8]  # the box of the atoms' dump
+        box = atoms.index(next(a for a in atoms if a.startswith("ITEM: BOX BOUNDS")))
+        assert lines[at + 4 : at + 8] == atoms[box : box + 4]  # the box of the atoms' dump
         header = lines[at + 8].split()
         assert header[:4] == ["ITEM:", "ENTRIES", "index", "id1"] and header[4] == "id2" and "collider" not in header
         assert len(header) - 2 == 3 + sum(2 if n in vectors else 0 for n in rec.values) + len(rec.values) - 3  # index, id1, id2: no collider

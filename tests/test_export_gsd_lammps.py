@@ -180,8 +180,10 @@ def test_lammps_dump_read_by_ase(tmp_path):
         assert atoms.pbc.tolist() == [True, True, False]
         assert atoms.arrays["type"].tolist() == [1] * 5
     text = path.read_text()
-    # No ITEM: UNITS or ITEM: TIME, which MDAnalysis cannot read: the times are TIMESTEP x dt.
-    assert text.startswith("ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n5\n") and "ITEM: TIME\n" not in text and "UNITS" not in text
+    # ITEM: UNITS si (first frame) and ITEM: TIME before each TIMESTEP, as LAMMPS's
+    # `dump_modify units yes time yes` writes them: the times read back exactly (issue 49).
+    assert text.startswith("ITEM: UNITS\nsi\nITEM: TIME\n0.0\nITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n5\n") and text.count("UNITS") == 1
+    assert [float(s) for s in re.findall(r"ITEM: TIME\n(\S+)\n", text)] == traj.t.tolist()
     assert [int(s) * 0.01 for s in re.findall(r"ITEM: TIMESTEP\n(\S+)\n", text)] == pytest.approx(traj.t.tolist(), rel=1e-15)
     assert text.count("ITEM: BOX BOUNDS pp pp ff\n0.0 1.0\n0.0 1.0\n0.0 1.0\n") == 6
     rows = [line.split() for line in text.splitlines() if re.fullmatch(r"\d+ 1 .*", line)]
@@ -291,7 +293,7 @@ def test_ovito_reads_the_lammps_dump(tmp_path):
     for i in range(6):
         data = pipeline.compute(i)
         assert data.particles.count == 5
-        assert data.attributes["Timestep"] == i and "Time" not in data.attributes  # no ITEM: TIME (MDAnalysis cannot read it)
+        assert data.attributes["Timestep"] == i and data.attributes["Time"] == traj.t[i]  # ITEM: TIME
         # The file is exact (ASE reads it back bit for bit); OVITO 3.17's number parser is not
         # correctly rounded and lands up to 2 units in the last place off (15% of values).
         np.testing.assert_array_max_ulp(data.particles.positions[...], traj.positions[i], maxulp=2)

@@ -356,11 +356,13 @@ def test_the_dump_layout(tmp_path, gas, flat):
     export(gas, tmp_path / "gas.lammpstrj")
     export(flat, tmp_path / "flat.lammpstrj")
     text = (tmp_path / "gas.lammpstrj").read_text()
-    # each frame begins at ITEM: TIMESTEP and has N + 9 lines, as MDAnalysis reads it
+    # ITEM: UNITS si once, then each frame ITEM: TIME and N + 9 lines (LAMMPS's `dump_modify
+    # units yes time yes`; issue 49: the times read back exactly)
     assert text.startswith(
-        "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n40\nITEM: BOX BOUNDS pp pp pp\n0.0 1.0\n0.0 1.0\n0.0 1.0\nITEM: ATOMS id type element x y z vx vy vz radius mass group\n"
+        "ITEM: UNITS\nsi\nITEM: TIME\n0.0\nITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n40\nITEM: BOX BOUNDS pp pp pp\n0.0 1.0\n0.0 1.0\n0.0 1.0\n"
+        "ITEM: ATOMS id type element x y z vx vy vz radius mass group\n"
     )
-    assert len(text.splitlines()) == len(gas.t) * (40 + 9) and "ITEM: TIME\n" not in text and "ITEM: UNITS" not in text
+    assert len(text.splitlines()) == 2 + len(gas.t) * (40 + 11) and text.count("ITEM: UNITS") == 1
     assert "1 2 He " in text and "2 1 Ar " in text  # types 1 Ar, 2 He (sorted names); ids from 1
     # names that are not chemical symbols: no element column
     assert "ITEM: ATOMS id type x y z vx vy vz radius mass group\n" in (tmp_path / "flat.lammpstrj").read_text()
@@ -422,7 +424,7 @@ def test_ovito_reads_the_dump(tmp_path, gas):
     for k in range(len(gas.t)):
         data = pipeline.compute(k)
         p = data.particles
-        assert data.attributes["Timestep"] == round(gas.t[k] / gas.dt) and "Time" not in data.attributes
+        assert data.attributes["Timestep"] == round(gas.t[k] / gas.dt) and data.attributes["Time"] == gas.t[k]
         assert type_names(p) == gas.species.tolist()  # named by the element column
         np.testing.assert_array_max_ulp(p.positions[...], gas.positions[k], maxulp=2)  # OVITO 3.17's parser, not the file
         np.testing.assert_array_max_ulp(p["Velocity"][...], gas.velocities[k], maxulp=2)

@@ -216,7 +216,8 @@ def test_ase_xyz_without_masses_takes_ases_element_masses_as_ase_does(tmp_path):
 def test_an_xyz_without_masses_whose_names_are_not_elements_has_none(tmp_path):
     path = tmp_path / "grains.xyz"
     path.write_text("2\nProperties=species:S:1:pos:R:3:momenta:R:3\ngrain 0 0 0 1 0 0\nX 1 0 0 0 1 0\n")
-    back = load(path)
+    with pytest.warns(UserWarning, match=r"grains\.xyz: frame 0 \(line 1\) has momenta but no masses"):  # said, not silent (issue 49)
+        back = kinema.Trajectory.load(path)
     assert back.masses is None and np.isnan(back.velocities).all()
 
 
@@ -543,8 +544,10 @@ def test_lammps_files_without_units_or_in_lj_units_are_refused(tmp_path):
     lj = load(path, units={"length": 3.4e-10, "time": 2.15e-12, "mass": 6.63e-26})  # argon's σ, τ and m
     np.testing.assert_array_equal(lj.masses[0], 1.008 * 6.63e-26)
     path.write_text(DUMP.replace("ITEM: UNITS\nreal\n", "ITEM: UNITS\nlj\n"))
-    with pytest.raises(TrajectoryFileError, match=r"md\.lammpstrj: ITEM: UNITS = 'lj' is invalid: LAMMPS's lj units are reduced"):
+    with pytest.raises(TrajectoryFileError, match=r"md\.lammpstrj: the file says its units are 'lj' \(ITEM: UNITS\), LAMMPS's reduced units"):
         kinema.Trajectory.load(path)
+    # with the scales given, as for a file that does not say its units (issue 49)
+    assert load(path, units={"length": 3.4e-10, "time": 2.15e-12, "mass": 6.63e-26}).masses[0] == lj.masses[0]
 
 
 def test_a_tilted_box_is_refused(tmp_path):

@@ -152,7 +152,7 @@ def test_h5md_layout_of_the_spins(tmp_path, spinning):
 def test_ovito_reads_the_lammps_dump_spins(tmp_path, spinning):
     ovito_io = pytest.importorskip("ovito.io")
     export(spinning, tmp_path / "run.lammpstrj")
-    header = (tmp_path / "run.lammpstrj").read_text().splitlines()[8]
+    header = next(line for line in (tmp_path / "run.lammpstrj").read_text().splitlines() if line.startswith("ITEM: ATOMS"))
     assert header.endswith("radius mass omegax omegay omegaz quatw quati quatj quatk group")
     pipeline = ovito_io.import_file(str(tmp_path / "run.lammpstrj"))
     for k in (0, len(spinning.t) - 1):

@@ -600,6 +600,15 @@ class Frames:
         """Whether particles are born or die: some are not alive at some frame."""
         return not bool(self.alive.all())
 
+    @property
+    def has_velocities(self) -> bool:
+        """Whether the velocities are known: some particle that exists has one that is not
+        NaN. A trajectory read from a file without velocities has them all NaN ("unknown",
+        `Trajectory.load`); the exports then write no velocity columns, so that the file
+        reads back without velocities rather than with NaN ones."""
+        live = self.velocities[self.alive]
+        return live.size == 0 or not bool(np.isnan(live).all())
+
     def live(self, i: int) -> np.ndarray:
         """The columns (particles) alive at frame `i`, in column order (that of `ids`)."""
         return np.flatnonzero(self.alive[i])

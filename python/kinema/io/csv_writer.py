@@ -18,7 +18,8 @@ ORIENTATION_CSV = ("qw", "qx", "qy", "qz")
 
 def _csv_header(fr: Frames, extras: Extras) -> str:
     return (
-        "frame,time,id,x,y,z,vx,vy,vz"
+        "frame,time,id,x,y,z"
+        + ",vx,vy,vz" * fr.has_velocities
         + ",mass" * (fr.masses is not None)
         + ",radius" * (fr.radii is not None)
         + ",species" * (extras.names is not None)
@@ -36,7 +37,11 @@ def _csv(fr: Frames, i: int, extras: Extras) -> str:
     group, an integer) where the trajectory has them (17 significant digits)."""
     t = repr(float(fr.t[i]))
     live = fr.live(i)
-    cols = [fr.positions[i][live], fr.velocities[i][live], *(a[live][:, None] for a in (fr.masses, fr.radii) if a is not None)]
+    cols = [
+        fr.positions[i][live],
+        *([fr.velocities[i][live]] if fr.has_velocities else []),
+        *(a[live][:, None] for a in (fr.masses, fr.radii) if a is not None),
+    ]
     table = np.hstack(cols).tolist()
     names = [f",{extras.names[k]}" for k in extras.typeid[live]] if extras.names is not None else [""] * live.size
     colors = [",".join(["", *map(repr, c)]) for c in extras.colors[live].tolist()] if extras.colors is not None else [""] * live.size

@@ -133,8 +133,9 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
 
     What is written is checked first, by the rules kinema reads its own files with
     (`_h5md_checks.check_frames`): finite times that increase, finite positions and
-    velocities of the particles that exist (velocities may be all NaN: unknown, written as
-    NaN), masses finite and > 0 kg, radii finite, >= 0 m and at most 1e150 m, printable
+    velocities of the particles that exist (velocities may be all NaN: unknown, a trajectory
+    read from a file without them; then no velocity columns or properties are written, and
+    the file reads back without velocities), masses finite and > 0 kg, radii finite, >= 0 m and at most 1e150 m, printable
     species names, periodic box edges finite and > 0 m, ids once per frame; for the float32
     formats (PLY, GSD, USD) no value beyond float32 (it would be written as inf), for PLY
     ids within int32. A value that breaks them is refused before anything is written.

@@ -132,7 +132,8 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
                     p.types = types
                     p.typeid = typeid[live]
                     p.position = (fr.positions[i][live] - origin).astype(np.float32)
-                    p.velocity = fr.velocities[i][live].astype(np.float32)
+                    if fr.has_velocities:  # (unknown velocities: none, not NaN)
+                        p.velocity = fr.velocities[i][live].astype(np.float32)
                     if masses is not None:
                         p.mass = masses[live]
                     if diameters is not None:
@@ -156,6 +157,8 @@ def write_gsd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
                     frame.log["kinema/origin"] = origin.copy()
                     frame.log["kinema/time"] = np.array([fr.t[i]], dtype=np.float64)
                     frame.log["kinema/periodic"] = periodic.astype(np.uint8)
+                    if not fr.has_velocities:  # (GSD's missing velocity is 0: kinema's files say "unknown")
+                        frame.log["kinema/velocities_unknown"] = np.ones(1, dtype=np.uint8)
                     frame.log["particles/kinema/id"] = ids[live]
                     if colors is not None:
                         frame.log["particles/Color"] = colors[live]

@@ -62,9 +62,14 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
     particle types by it, MDAnalysis reads it as the elements), radius and mass only where
     the trajectory has them. Every value is in SI units (m, m/s, kg).
 
-    No `ITEM: UNITS` or `ITEM: TIME`: MDAnalysis's reader takes the first line of each
-    frame as `ITEM: TIMESTEP` and counts a frame as N + 9 lines, and fails on either
-    ("invalid literal for int() with base 10: '0.0'"); a frame's time is TIMESTEP × dt.
+    `ITEM: UNITS` `si` before the first frame and `ITEM: TIME` (the frame's time, s) before
+    each `ITEM: TIMESTEP`, as LAMMPS's `dump_modify units yes time yes` writes them, so the
+    dump reads back with its times exactly and without `units=` (OVITO and ASE read them;
+    MDAnalysis's reader, which takes a frame's first line for `ITEM: TIMESTEP`, does not).
+    Where the species are not all chemical symbols (no `element` column), the first frame
+    also has `ITEM: ATOM TYPE LABELS K` and K rows `type name` (the data files' `Atom Type
+    Labels`), which kinema reads back as the species and OVITO and ASE skip. Unknown
+    velocities (all NaN) get no `vx vy vz` columns.
 
     Births and deaths (`alive`): each timestep lists the atoms alive at it only (`NUMBER
     OF ATOMS` varies; 0 for a frame with none), each with its own id, so a particle keeps
@@ -93,14 +98,27 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
     bounds = "ITEM: BOX BOUNDS " + " ".join("pp" if p else "ff" for p in periodic) + "\n"
     bounds += "".join(f"{float(a)!r} {float(b)!r}\n" for a, b in zip(lo, hi, strict=True))
     elements = element_names(traj, fr.n_particles)
-    columns = "id type" + " element" * (elements is not None) + " x y z vx vy vz" + " radius" * (fr.radii is not None) + " mass" * (fr.masses is not None)
+    velocities = fr.has_velocities
+    columns = (
+        "id type"
+        + " element" * (elements is not None)
+        + " x y z"
+        + " vx vy vz" * velocities
+        + " radius" * (fr.radii is not None)
+        + " mass" * (fr.masses is not None)
+    )
     spin = [a for a in (fr.angular_velocities, fr.orientations) if a is not None]
     columns += f" {SPIN_COLUMNS}" * (fr.angular_velocities is not None) + f" {ORIENTATION_COLUMNS}" * (fr.orientations is not None)
     # the collision groups last: the columns before keep their places (kinema's name; LAMMPS's
     # own groups are no per-atom value of a dump)
     columns += " group" * (fr.groups is not None)
     suffixes = np.array([f" {int(g)}" for g in fr.groups] if fr.groups is not None else [""] * fr.n_particles, dtype=object)
-    _, typeid = particle_types(traj, fr.n_particles)
+    type_names, typeid = particle_types(traj, fr.n_particles)
+    # the species names where no element column carries them: LAMMPS's data-file section
+    # "Atom Type Labels" as an item of the first frame (OVITO and ASE skip it; kinema reads it)
+    labels = ""
+    if elements is None and getattr(traj, "species", None) is not None:
+        labels = f"ITEM: ATOM TYPE LABELS {len(type_names)}\n" + "".join(f"{k + 1} {name}\n" for k, name in enumerate(type_names))
     ids = _lammps_ids(fr)
     prefixes = np.array(
         [f"{int(k)} {int(t) + 1} " + (f"{elements[t]} " if elements is not None else "") for k, t in zip(ids, typeid, strict=True)], dtype=object
@@ -114,9 +132,14 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
         with out.naming(path), open(tmp, "w", encoding="ascii") as f:
             for i in range(fr.n_frames):
                 live = fr.live(i)
-                table = np.hstack([fr.positions[i][live], fr.velocities[i][live], *(a[live] for a in per_particle), *(a[i][live] for a in spin)]).tolist()
+                table = np.hstack(
+                    [fr.positions[i][live], *([fr.velocities[i][live]] if velocities else []), *(a[live] for a in per_particle), *(a[i][live] for a in spin)]
+                ).tolist()
                 rows = "".join(p + " ".join(map(repr, r)) + g + "\n" for p, r, g in zip(prefixes[live], table, suffixes[live], strict=True))
-                f.write(f"ITEM: TIMESTEP\n{int(steps[i])}\nITEM: NUMBER OF ATOMS\n{live.size}\n{bounds}ITEM: ATOMS {columns}\n{rows}")
+                head = f"ITEM: UNITS\nsi\n{labels}" if i == 0 else ""
+                f.write(
+                    f"{head}ITEM: TIME\n{float(fr.t[i])!r}\nITEM: TIMESTEP\n{int(steps[i])}\nITEM: NUMBER OF ATOMS\n{live.size}\n{bounds}ITEM: ATOMS {columns}\n{rows}"
+                )
                 on_frame(i)
         if record is not None:
             for between, target in local.items():

@@ -27,7 +27,7 @@ def _ply(fr: Frames, i: int, extras: Extras) -> bytes:
     colour attribute `Col`); then, where the trajectory has springs, one edge per spring
     whose two ends are alive, int32 vertex1 vertex2 (its ends' vertex indices), which
     Blender imports as the mesh's edges."""
-    columns = [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("vx", "<f4"), ("vy", "<f4"), ("vz", "<f4")]
+    columns = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")] + ([("vx", "<f4"), ("vy", "<f4"), ("vz", "<f4")] if fr.has_velocities else [])
     if fr.radii is not None:
         columns.append(("radius", "<f4"))
     if extras.colors is not None:
@@ -43,7 +43,8 @@ def _ply(fr: Frames, i: int, extras: Extras) -> bytes:
     rows = np.empty(live.size, dtype=columns)
     for k, axis in enumerate("xyz"):
         rows[axis] = fr.positions[i, live, k]
-        rows["v" + axis] = fr.velocities[i, live, k]
+        if fr.has_velocities:
+            rows["v" + axis] = fr.velocities[i, live, k]
     if fr.radii is not None:
         rows["radius"] = fr.radii[live]
     if extras.colors is not None:

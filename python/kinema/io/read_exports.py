@@ -19,11 +19,13 @@ from .csv_writer import ORIENTATION_CSV, SPIN_CSV
 from .h5md_reader import LoadedTrajectory
 from .units import SI, UnitWarning
 
-_CSV_COLUMNS = ("frame", "time", "id", "x", "y", "z", "vx", "vy", "vz")
+_CSV_COLUMNS = ("frame", "time", "id", "x", "y", "z")
+_CSV_VELOCITIES = ("vx", "vy", "vz")  # (left out by an export whose velocities are unknown)
 
 
 def read_csv(path: Path) -> LoadedTrajectory:
-    """Read a CSV kinema exported: the header `frame,time,id,x,y,z,vx,vy,vz`, then any of
+    """Read a CSV kinema exported: the header `frame,time,id,x,y,z,vx,vy,vz` (without
+    `vx,vy,vz` where the velocities are unknown: read as none), then any of
     `mass`, `radius`, `species`, `r,g,b` (the colour), `wx,wy,wz` (the angular velocity),
     `qw,qx,qy,qz` (the orientation) and `group` (the collision group), a row per particle and frame,
     SI units. Frames are the distinct `frame` numbers, in order; a frame in which no particle
@@ -33,12 +35,13 @@ def read_csv(path: Path) -> LoadedTrajectory:
     except UnicodeDecodeError as e:
         raise fail(path, f"not a text file ({e.reason} at byte {e.start}), so not a CSV") from None
     header = lines[0].strip().split(",") if lines else []
-    extra = header[len(_CSV_COLUMNS) :]
+    has_v = tuple(header[len(_CSV_COLUMNS) : len(_CSV_COLUMNS) + 3]) == _CSV_VELOCITIES
+    extra = header[len(_CSV_COLUMNS) + 3 * has_v :]
     known = {"mass", "radius", "species", "r", "g", "b", *SPIN_CSV, *ORIENTATION_CSV, "group"}
     if tuple(header[: len(_CSV_COLUMNS)]) != _CSV_COLUMNS or not set(extra) <= known or len(set(extra)) != len(extra):
         raise fail(
             path,
-            f"a CSV whose header is not kinema's ({','.join(_CSV_COLUMNS)}[,mass][,radius][,species][,r,g,b][,wx,wy,wz][,qw,qx,qy,qz][,group]); kinema reads back its own CSV only",
+            f"a CSV whose header is not kinema's ({','.join(_CSV_COLUMNS)}[,vx,vy,vz][,mass][,radius][,species][,r,g,b][,wx,wy,wz][,qw,qx,qy,qz][,group]); kinema reads back its own CSV only",
         )
     rows = [line for line in lines[1:] if line.strip()]
     width = len(header)
@@ -73,7 +76,7 @@ def read_csv(path: Path) -> LoadedTrajectory:
                 positions=v[:, 3:6],
                 where=f"frame {int(number)}",
                 ids=ids[rows_at],
-                velocities=v[:, 6:9],
+                velocities=v[:, 6:9] if has_v else None,
                 masses=v[:, at["mass"]] if "mass" in at else None,
                 radii=v[:, at["radius"]] if "radius" in at else None,
                 species=table[rows_at, at["species"]].astype(object) if "species" in at else None,

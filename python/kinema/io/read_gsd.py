@@ -27,6 +27,15 @@ def _log(f: Any, k: int, name: str) -> np.ndarray | None:
     return None
 
 
+def _empty_names(f: Any, k: int, name: str) -> bool:
+    """Whether the chunk `name` of frame `k` (type names, uint8 rows) is there and 0 bytes wide."""
+    for frame in (k, 0):
+        if f.file.chunk_exists(frame=frame, name=name):
+            a = f.file.read_chunk(frame=frame, name=name)
+            return a.ndim < 2 or a.shape[1] == 0
+    return False
+
+
 def _spin(f: Any, k: int, p: Any, own: bool) -> dict[str, np.ndarray]:
     """The spin of frame `k` (particles `p`) where the file has one: `orientations`
     (`particles/orientation`, HOOMD's w x y z), `inertia` (the x moment of
@@ -117,6 +126,18 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
         for k in range(count):
             try:
                 frame = f[k]
+            except IndexError:  # gsd.hoomd cannot view a chunk of strings 0 bytes wide
+                chunk = next(
+                    (
+                        n
+                        for n in ("particles/types", "bonds/types", "angles/types", "dihedrals/types", "impropers/types", "pairs/types", "constraints/types")
+                        if _empty_names(f, k, n)
+                    ),
+                    None,
+                )
+                if chunk is None:
+                    raise
+                raise fail(path, f"frame {k}: {chunk} holds only empty names (a chunk of width 0); GSD type names must be non-empty") from None
             except (RuntimeError, OSError, ValueError) as e:
                 raise fail(path, f"frame {k} cannot be read ({str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__})") from None
             where = f"frame {k}"
@@ -149,7 +170,7 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
                     positions=np.asarray(p.position, dtype=np.float64).reshape(-1, 3) + origin,
                     where=where,
                     ids=None if ids is None else np.asarray(ids, dtype=np.int64).reshape(-1),
-                    velocities=np.asarray(p.velocity, dtype=np.float64).reshape(-1, 3),
+                    velocities=None if own and _log(f, k, "kinema/velocities_unknown") is not None else np.asarray(p.velocity, dtype=np.float64).reshape(-1, 3),
                     masses=np.asarray(p.mass, dtype=np.float64).reshape(-1),
                     radii=np.asarray(p.diameter, dtype=np.float64).reshape(-1) / 2,
                     species=np.array(types, dtype=object)[typeid] if types else None,

@@ -52,6 +52,15 @@ _SECTIONS = frozenset(s.replace("\0", " ") for s in _SECTIONS)
 def _unit_scales(path: Path, stated: str | None, units: Any, how: str) -> Scales:
     """The units of a LAMMPS file: its own `stated` style (`how` it says it), which a
     `units` argument must not contradict, else `units`; neither is refused."""
+    if stated is not None and stated.lower() == "lj":
+        # LAMMPS's reduced units (σ, τ, m): the file cannot say them, the caller gives their SI values
+        if units is None or isinstance(units, str):
+            given = "" if units is None else f", not units = {units!r}"
+            raise fail(
+                path,
+                f"the file says its units are 'lj' ({how}), LAMMPS's reduced units (σ, τ, m); give units = {{length = m, time = s, mass = kg}} (--units length=M,time=S,mass=KG), their SI values{given}",
+            )
+        return scales(units, "units")
     if stated is not None:
         try:
             own = scales(stated, f"{path}: {how}")
@@ -83,6 +92,12 @@ def _words(path: Path, lines: list[str], first: int, width: int, where: str) -> 
 def _as(path: Path, words: np.ndarray, dtype: Any, name: str, where: str, first: int) -> np.ndarray:
     try:
         return words.astype(dtype)
+    except OverflowError:  # an integer beyond int64
+        for r, w in enumerate(words.reshape(len(words), -1)):
+            for v in w:
+                if not _INT64[0] <= int(v) <= _INT64[1]:
+                    raise fail(path, f"{where}, line {first + r}: column {name!r} has {str(v)[:40]}, beyond int64 ({_INT64[0]} to {_INT64[1]})") from None
+        raise
     except ValueError:
         kind = int if dtype is np.int64 else float
         for r, w in enumerate(words.reshape(len(words), -1)):
@@ -92,6 +107,22 @@ def _as(path: Path, words: np.ndarray, dtype: Any, name: str, where: str, first:
                 except ValueError:
                     raise fail(path, f"{where}, line {first + r}: column {name!r} has {str(v)!r}, not {'an integer' if kind is int else 'a number'}") from None
         raise
+
+
+_INT64 = (-(2**63), 2**63 - 1)
+
+
+def _atom_ids(path: Path, ids: np.ndarray, first: int, where: str) -> np.ndarray:
+    """LAMMPS's atom ids, which are >= 1 (LAMMPS refuses a data file with id 0 or below:
+    "Invalid atom ID in Atoms section of data file"; OVITO writes id 0): one below is refused,
+    naming its line. Returns kinema's ids, id − 1."""
+    if ids.size and ids.min() < 1:
+        bad = int(np.argmax(ids < 1))
+        raise fail(
+            path,
+            f"{where}, line {first + bad}: atom id {int(ids[bad])} is invalid: LAMMPS's atom ids are integers >= 1 (LAMMPS refuses id {int(ids[bad])} too)",
+        )
+    return ids - 1
 
 
 def _periodic_flags(path: Path, flags: list[str], where: str) -> np.ndarray:
@@ -122,6 +153,7 @@ def read_dump(path: Path, units: Any = None) -> LoadedTrajectory:
     lines = _text(path).splitlines()
     frames: list[RawFrame] = []
     stated: str | None = None
+    labels: dict[str, str] = {}
     time = step = n = box = None
     i = 0
     while i < len(lines):
@@ -136,6 +168,18 @@ def read_dump(path: Path, units: Any = None) -> LoadedTrajectory:
         if item == "UNITS":
             stated = _value(path, lines, i, str, "ITEM: UNITS")
             i += 2
+        elif item.startswith("ATOM TYPE LABELS"):
+            count = item.split()[3:]
+            if len(count) != 1 or not count[0].isdigit():
+                raise fail(path, f"line {i + 1}: ITEM: ATOM TYPE LABELS needs the number of labels after it (ITEM: ATOM TYPE LABELS 2)")
+            rows = lines[i + 1 : i + 1 + int(count[0])]
+            for r, row in enumerate(_words(path, rows, i + 2, 2, "ITEM: ATOM TYPE LABELS")):
+                if len(rows) < int(count[0]) or not re.fullmatch(SPECIES_PATTERN, row[1]):
+                    raise fail(path, f"line {i + 2 + r}: the type label {row[1][:40]!r} is invalid: a species name is one word of letters, digits and _ . + -")
+                labels[row[0]] = row[1]
+            if len(rows) < int(count[0]):
+                raise fail(path, f"line {i + 1}: the file ends before the {count[0]} type labels")
+            i += 1 + len(rows)
         elif item == "TIME":
             time = _value(path, lines, i, float, "ITEM: TIME")
             i += 2
@@ -153,7 +197,7 @@ def read_dump(path: Path, units: Any = None) -> LoadedTrajectory:
         elif item.startswith("ATOMS"):
             if n is None:
                 raise fail(path, f"{where}: ITEM: ATOMS before ITEM: NUMBER OF ATOMS")
-            frames.append(_dump_frame(path, item.split()[1:], lines[i + 1 : i + 1 + n], i + 2, where, time, step, box))
+            frames.append(_dump_frame(path, item.split()[1:], lines[i + 1 : i + 1 + n], i + 2, where, time, step, box, labels))
             if len(lines) < i + 1 + n:
                 raise fail(path, f"{where}: the file ends before the {n} atoms of the frame")
             time = step = n = None
@@ -271,14 +315,18 @@ def _value(path: Path, lines: list[str], i: int, kind: Any, item: str) -> Any:
         v = kind(text)
         if kind is float and not math.isfinite(v):
             raise ValueError
-        return v
     except ValueError:
         raise fail(
             path, f"line {i + 2}: {item} holds {text[:40]!r}, not {'an integer' if kind is int else 'a finite number' if kind is float else 'a word'}"
         ) from None
+    if kind is int and not _INT64[0] <= v <= _INT64[1]:
+        raise fail(path, f"line {i + 2}: {item} holds {text[:40]}, beyond int64 ({_INT64[0]} to {_INT64[1]})")
+    return v
 
 
-def _dump_frame(path: Path, columns: list[str], rows: list[str], first: int, where: str, time: Any, step: Any, box: Box | None) -> RawFrame:
+def _dump_frame(
+    path: Path, columns: list[str], rows: list[str], first: int, where: str, time: Any, step: Any, box: Box | None, labels: dict[str, str]
+) -> RawFrame:
     if len(set(columns)) != len(columns):
         raise fail(path, f"{where}: ITEM: ATOMS names a column twice ({' '.join(columns)})")
     table = _words(path, rows, first, len(columns), where)
@@ -305,17 +353,23 @@ def _dump_frame(path: Path, columns: list[str], rows: list[str], first: int, whe
     return RawFrame(
         positions=x,
         where=where,
-        ids=col("id", np.int64) - 1 if "id" in at else None,  # LAMMPS's ids from 1, kinema's from 0
+        ids=_atom_ids(path, col("id", np.int64), first, where) if "id" in at else None,  # LAMMPS's ids from 1, kinema's from 0
         velocities=v,
         masses=col("mass") if "mass" in at else None,
         radii=radii,
-        species=None if kind is None else table[:, at[kind]].astype(str).astype(object),
+        species=None if kind is None else _names(table[:, at[kind]], labels if kind == "type" else {}),
         groups=col("group", np.int64) if "group" in at else None,  # kinema's collision groups
         **spin,
         time=time,
         step=step,
         box=box,
     )
+
+
+def _names(words: np.ndarray, labels: dict[str, str]) -> np.ndarray:
+    """The species of a dump's `type` (or `element`) column: each type's label where
+    `ITEM: ATOM TYPE LABELS` gave one, else the word itself."""
+    return np.array([labels.get(w, w) for w in words.tolist()], dtype=object)
 
 
 # -- data files --------------------------------------------------------------------------------
@@ -495,7 +549,7 @@ def read_data(path: Path, units: Any = None, atom_style: str | None = None) -> L
     frame = RawFrame(
         positions=x,
         where="Atoms section",
-        ids=ids - 1,  # LAMMPS's ids from 1, kinema's from 0 (the dump export writes id + 1)
+        ids=_atom_ids(path, ids, first, where),  # LAMMPS's ids from 1, kinema's from 0 (the dump export writes id + 1)
         velocities=v,
         masses=masses,
         radii=radii,

@@ -107,6 +107,14 @@ def _column(path: Path, table: np.ndarray, start: int, count: int, kind: str, na
         if kind == "L":
             known = {"T": True, "True": True, "F": False, "False": False}
             return np.vectorize(lambda w: known[w], otypes=[bool])(words)
+    except OverflowError:  # an integer beyond int64
+        for r, row in enumerate(words):
+            for w in row:
+                if not -(2**63) <= int(w) <= 2**63 - 1:
+                    raise fail(
+                        path, f"{where}, row {r}: column {name!r} ({_TYPES[kind]}) has {str(w)[:40]}, beyond int64 ({-(2**63)} to {2**63 - 1})"
+                    ) from None
+        raise
     except (ValueError, KeyError):
         for r, row in enumerate(words):
             for w in row:
@@ -184,6 +192,7 @@ def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
     frames: list[RawFrame] = []
     file_units: str | None = None
     warned: list[bool] = []  # (ASE's masses said once a file)
+    warned_momenta: list[bool] = []  # (momenta without masses said once a file)
     i = 0
     while i < len(lines):
         head = lines[i].strip()
@@ -227,6 +236,15 @@ def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
         velocities = _first(columns, _VELOCITIES)
         if velocities is None and "momenta" in columns and masses is not None:
             velocities = columns["momenta"] / masses[:, None]
+        elif velocities is None and "momenta" in columns and not warned_momenta:
+            # velocities are momenta / masses: without masses there are none to read (NaN, "unknown")
+            warned_momenta.append(True)
+            warnings.warn(
+                f"{path}: {where} has momenta but no masses (no mass or masses column, and no chemical symbols in ASE's units to take ASE's masses from), "
+                "so no velocities are read (they stay unknown); add a masses column to read them",
+                UserWarning,
+                stacklevel=4,
+            )
         time = next((keys[k] for k in ("Time", "time") if k in keys), None)
         if time is not None:
             time = float(_numbers(path, time, 1, "Time", where)[0])

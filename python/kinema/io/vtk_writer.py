@@ -97,7 +97,8 @@ def _vtp(fr: Frames, i: int, extras: Extras) -> str:
     live = fr.live(i)
     n = live.size
     x, v = fr.positions[i][live], fr.velocities[i][live]
-    point_data = [_vtk_array("v", v, 3), _vtk_array("speed", np.linalg.norm(v, axis=1))]
+    # unknown velocities (all NaN): no v (the speed stays, NaN: kinema's reader knows its files by it)
+    point_data = ([_vtk_array("v", v, 3)] if fr.has_velocities else []) + [_vtk_array("speed", np.linalg.norm(v, axis=1))]
     if fr.radii is not None:
         point_data.append(_vtk_array("radius", fr.radii[live]))
     if fr.masses is not None:

@@ -24,10 +24,10 @@ def _xyz(fr: Frames, i: int, header: str, first: list[str], after_pos: list[str]
     orientation (x y z w), id, group (those the trajectory has; 17 significant digits, exact
     float64)."""
     live = fr.live(i)
-    v = fr.velocities[i][live]
+    v = fr.velocities[i][live] if fr.has_velocities else None  # unknown velocities: no velo, no momenta
     masses = None if fr.masses is None else fr.masses[live][:, None]
-    cols = [v]
-    if masses is not None:
+    cols = [np.zeros((live.size, 0))] + ([v] if v is not None else [])
+    if masses is not None and v is not None:
         cols.append(masses * v)
     if fr.radii is not None:
         cols.append(fr.radii[live][:, None])
@@ -113,8 +113,8 @@ def write_xyz(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any])
     has_m, has_r, has_c = fr.masses is not None, fr.radii is not None, extras.colors is not None
     props = (
         ("type:S:1:pos:R:3:species:S:1" if typed else "species:S:1:pos:R:3")
-        + ":velo:R:3"
-        + ":momenta:R:3" * has_m
+        + ":velo:R:3" * fr.has_velocities
+        + ":momenta:R:3" * (has_m and fr.has_velocities)
         + ":radius:R:1" * has_r
         + ":mass:R:1:masses:R:1" * has_m
         + ":color:R:3" * has_c
