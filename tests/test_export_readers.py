@@ -370,13 +370,21 @@ def test_the_dump_layout(tmp_path, gas, flat):
 
 @pytest.mark.parametrize("run", ["gas", "flat", "cloth"])
 def test_mdanalysis_reads_the_dump(tmp_path, run, request):
+    # MDAnalysis takes a frame's first line for ITEM: TIMESTEP: it reads the plain layout
+    # (plain_dump=True), and refuses the default one, whose ITEM: UNITS and ITEM: TIME
+    # LAMMPS's own dump_modify units yes time yes writes too
     mda = pytest.importorskip("MDAnalysis")
     traj = request.getfixturevalue(run)
+    export(traj, tmp_path / "full.lammpstrj")
+    with pytest.raises(ValueError, match="Failed to construct topology"):
+        mda.Universe(str(tmp_path / "full.lammpstrj"), format="LAMMPSDUMP", dt=traj.dt)
     path = tmp_path / "run.lammpstrj"
-    export(traj, path)
+    export(traj, path, plain_dump=True)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # 'Guessed all Masses', elements it does not know
-        u = mda.Universe(str(path), format="LAMMPSDUMP", dt=traj.dt)  # the topology from the dump itself
+        # the topology from the dump itself; dt the steps' length (the run's step where dt
+        # does not divide its frames: TIMESTEP counts those steps)
+        u = mda.Universe(str(path), format="LAMMPSDUMP", dt=traj.step or traj.dt)
     lo = dump_lo(path)
     assert len(u.trajectory) == len(traj.t) and len(u.atoms) == traj.positions.shape[1]
     assert u.atoms.ids.tolist() == (traj.ids + 1).tolist()  # LAMMPS's ids, from 1
@@ -390,7 +398,7 @@ def test_mdanalysis_reads_the_dump(tmp_path, run, request):
         # float32, and moved so that the box starts at 0 (MDAnalysis's convention)
         np.testing.assert_array_equal(ts.positions, (traj.positions[k].astype(np.float32).astype(np.float64) - lo).astype(np.float32))
         np.testing.assert_array_equal(ts.velocities, traj.velocities[k].astype(np.float32))
-        assert ts.time == pytest.approx(traj.t[k], rel=1e-15, abs=1e-300)  # TIMESTEP x dt
+        assert ts.time == pytest.approx(traj.t[k], rel=1e-15, abs=1e-300)  # TIMESTEP x the step
 
 
 def test_ase_reads_the_dump_in_si_units(tmp_path, gas, flat):

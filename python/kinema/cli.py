@@ -389,6 +389,13 @@ def export(
         typer.Option("--out", "-o", help="Main output file; missing folders are created (default: beside TRAJ, named as below)."),
     ] = None,
     units: Annotated[str | None, typer.Option("--units", help=_UNITS_HELP)] = None,
+    plain_dump: Annotated[
+        bool,
+        typer.Option(
+            "--plain-dump",
+            help="lammps: LAMMPS's default dump layout, without the ITEM: UNITS, ITEM: TIME and type-label items (MDAnalysis reads no dump with them).",
+        ),
+    ] = False,
 ) -> None:
     """Export a saved trajectory for other programs (TRAJ: kinema's H5MD or any file kinema
     reads, docs/files.md; the exports are in SI units).
@@ -432,7 +439,7 @@ def export(
             raise ValueError(f"-o {out}: cannot create the folder {path.parent} ({e.strerror or e})") from None
     with _progress() as bar:
         task = bar.add_task(f"writing {format}", total=len(t.t))
-        paths = write_export(t, path, format, on_frame=lambda _i: bar.advance(task))
+        paths = write_export(t, path, format, on_frame=lambda _i: bar.advance(task), plain_dump=plain_dump)
     # The main files beside PATH, then a series folder's frames as a count.
     main = [str(p) for p in paths if p.parent == path.parent]
     frames = [p for p in paths if p.parent != path.parent]

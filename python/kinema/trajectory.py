@@ -501,17 +501,18 @@ class Trajectory:
         url, _server = serve(self, **options)
         return url
 
-    def export(self, path: Any, format: str | None = None) -> list[Any]:
+    def export(self, path: Any, format: str | None = None, *, plain_dump: bool = False) -> list[Any]:
         """Write the frames for other tools: `vtk` (ParaView), `ply` (Blender, Houdini),
         `xyz` (OVITO), `csv`, `gsd`, `lammps`, `usd` or `blend` (a Blender scene, built by
         Blender, and the USD stage it plays), inferred from the suffix when
         `format` is None; returns the files written (`kinema.io.export`). Values the
         format's readers or kinema's would refuse are refused before anything is written.
         The spins go into every format, the `contact_record` into `lammps` (dump
-        local files) and `vtk` (force-chain lines)."""
+        local files) and `vtk` (force-chain lines). `plain_dump=True`: a `lammps` dump
+        without its `ITEM: UNITS`, `ITEM: TIME` and type-label items, which MDAnalysis needs."""
         from .io import export
 
-        return export(self, path, format)
+        return export(self, path, format, plain_dump=plain_dump)
 
     def plot_energy(self, ax: Any = None) -> Any:
         """Kinetic, each potential and the total energy against time, and the energy lost in

@@ -89,10 +89,12 @@ def trajectory_cell(traj: Any, fr: Frames) -> Cell:
 
 
 def frame_steps(fr: Frames) -> np.ndarray:
-    """The step number of each frame: round(t/dt) when `dt` is known and those numbers are
-    >= 0 and increase; otherwise the frame index."""
-    if fr.dt is not None and fr.dt > 0 and np.all(np.isfinite(fr.t)):
-        steps = np.rint(fr.t / fr.dt)
+    """The step number of each frame: round(t/h) when the steps' length h is known (the
+    run's `step` where dt did not divide its frames, else `dt`) and those numbers are >= 0
+    and increase; otherwise the frame index."""
+    h = fr.step if fr.step is not None else fr.dt
+    if h is not None and h > 0 and np.all(np.isfinite(fr.t)):
+        steps = np.rint(fr.t / h)
         if fr.n_frames == 0 or (steps[0] >= 0 and np.all(np.diff(steps) > 0) and steps[-1] < 2**62):
             return steps.astype(np.int64)
     return np.arange(fr.n_frames, dtype=np.int64)

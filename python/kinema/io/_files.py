@@ -570,7 +570,8 @@ class Frames:
     (F, N, 3) rad/s, `orientations` (F, N, 4) unit quaternions (w, x, y, z) and
     `inertia` (N,) kg·m², `None` where the trajectory has none; `groups` (N,) int64, each
     particle's collision group (0..31, `check_frames` refuses others), `None` where the
-    trajectory has none."""
+    trajectory has none; `step` s, the length of the run's steps where it is not `dt`
+    (`Trajectory.step`: a frame of 1/fps that dt does not divide), else `None`."""
 
     t: np.ndarray
     positions: np.ndarray
@@ -586,6 +587,7 @@ class Frames:
     orientations: np.ndarray | None = None
     inertia: np.ndarray | None = None
     groups: np.ndarray | None = None
+    step: float | None = None
 
     @property
     def n_frames(self) -> int:
@@ -696,6 +698,8 @@ def frames_of(traj: Any) -> Frames:
         ids=np.arange(n, dtype=np.int64) if ids is None else ids,
         dim=dim,
         dt=None if dt is None else float(dt),
+        # (a Trajectory's `step` is the steps' length; other objects' may be step numbers)
+        step=float(traj.step) if isinstance(getattr(traj, "step", None), float) else None,
         method=None if method is None else str(method),
         alive=alive,
         angular_velocities=_per_frame_rows(traj, "angular_velocities", (t.shape[0], n, 3)),

@@ -53,7 +53,9 @@ _TRAJECTORY_SUFFIXES = (".h5", ".hdf5", ".h5md")  # H5MD trajectories: never the
 _FLOAT32 = ("ply", "gsd", "usd", "blend")  # the formats that store particle data as float32
 
 
-def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_frame: Callable[[int], Any] | None = None) -> list[Path]:
+def export(
+    traj: Any, path: str | os.PathLike, format: str | None = None, on_frame: Callable[[int], Any] | None = None, *, plain_dump: bool = False
+) -> list[Path]:
     """Write `traj` (a `kinema.Trajectory` or any object with `t`, `positions`,
     `velocities` and optionally `masses`, `radii`, `ids`, `species`, `periodic`,
     `box_edges`, `colliders`, `springs`, `colors`) for another program; returns the
@@ -86,8 +88,11 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
     - `"lammps"` (.lammpstrj, .dump): a LAMMPS `dump custom` text file (OVITO, ASE,
       MDAnalysis, VMD): `id type element x y z vx vy vz radius mass` with ids from 1,
       `element` where every species is a chemical symbol, the box with `pp`/`ff`
-      flags, no `ITEM: UNITS` or `ITEM: TIME` (MDAnalysis cannot read them), SI units;
-      17 significant digits (see `lammps_dump.write_lammps`).
+      flags, `ITEM: UNITS si` and each frame's `ITEM: TIME` (LAMMPS's `dump_modify units
+      yes time yes`), SI units; 17 significant digits (see `lammps_dump.write_lammps`).
+      MDAnalysis reads no dump with those items, LAMMPS's own included: `plain_dump=True`
+      (`kinema export --plain-dump`) writes LAMMPS's default layout without them, which it
+      reads.
     - `"usd"` (.usd, .usda, .usdc, .usdz): Pixar's USD for Blender and Houdini, written
       with the `usd-core` package: a `UsdGeom.Points` prim with positions and velocities
       as time samples at the frame rate asked, widths 2r and ids, Z up, 1 m per unit,
@@ -172,8 +177,11 @@ def export(traj: Any, path: str | os.PathLike, format: str | None = None, on_fra
         "usd": write_usd,
         "blend": write_blend,
     }[format]
+    if plain_dump and format != "lammps":
+        raise ValueError(f"plain_dump = True is invalid for format = {format!r}: it is the LAMMPS dump's (format 'lammps')")
+    options = {"plain": plain_dump} if format == "lammps" else {}
     with os_errors_as_write_errors(path):
-        return writer(traj, fr, path, on_frame or (lambda i: None))
+        return writer(traj, fr, path, on_frame or (lambda i: None), **options)
 
 
 def suffix_format(path: str | os.PathLike) -> str | None:

@@ -45,7 +45,7 @@ def _lammps_ids(fr: Frames) -> np.ndarray:
     return ids + 1
 
 
-def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
+def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any], plain: bool = False) -> list[Path]:
     """Write `fr` to one LAMMPS text dump file at `path`, the frames one after the other, as
     LAMMPS's `dump custom` writes them; returns `[path]`.
 
@@ -69,7 +69,9 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
     Where the species are not all chemical symbols (no `element` column), the first frame
     also has `ITEM: ATOM TYPE LABELS K` and K rows `type name` (the data files' `Atom Type
     Labels`), which kinema reads back as the species and OVITO and ASE skip. Unknown
-    velocities (all NaN) get no `vx vy vz` columns.
+    velocities (all NaN) get no `vx vy vz` columns. `plain=True` leaves these three items
+    out: LAMMPS's default `dump custom` layout, the one MDAnalysis reads (kinema then reads
+    the frames' times as their TIMESTEP, unless `units=` gives the time scale).
 
     Births and deaths (`alive`): each timestep lists the atoms alive at it only (`NUMBER
     OF ATOMS` varies; 0 for a frame with none), each with its own id, so a particle keeps
@@ -136,10 +138,8 @@ def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], An
                     [fr.positions[i][live], *([fr.velocities[i][live]] if velocities else []), *(a[live] for a in per_particle), *(a[i][live] for a in spin)]
                 ).tolist()
                 rows = "".join(p + " ".join(map(repr, r)) + g + "\n" for p, r, g in zip(prefixes[live], table, suffixes[live], strict=True))
-                head = f"ITEM: UNITS\nsi\n{labels}" if i == 0 else ""
-                f.write(
-                    f"{head}ITEM: TIME\n{float(fr.t[i])!r}\nITEM: TIMESTEP\n{int(steps[i])}\nITEM: NUMBER OF ATOMS\n{live.size}\n{bounds}ITEM: ATOMS {columns}\n{rows}"
-                )
+                head = "" if plain else (f"ITEM: UNITS\nsi\n{labels}" if i == 0 else "") + f"ITEM: TIME\n{float(fr.t[i])!r}\n"
+                f.write(f"{head}ITEM: TIMESTEP\n{int(steps[i])}\nITEM: NUMBER OF ATOMS\n{live.size}\n{bounds}ITEM: ATOMS {columns}\n{rows}")
                 on_frame(i)
         if record is not None:
             for between, target in local.items():
