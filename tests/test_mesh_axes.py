@@ -165,3 +165,25 @@ def test_a_mesh_far_from_everything_is_said_once():
     w = kinema.World(dt=1e-3)
     w.add(kinema.Mesh(vertices=v, faces=f, translation=[5, 0, 0]))
     assert placement_warnings(w) == []
+
+
+def test_a_mesh_too_coarse_for_the_particles_is_said_and_a_ball_falls_through_it():
+    # A floor of two triangles, a 5 cm ball 7 cm from their seam: float64 numbers at 1e15 m
+    # are 0.125 m apart, more than the ball: it falls through (z = −4.7 m after 1 s), and
+    # the warning says so; at 1e8 m (1.5e-8 m apart) it rests at z = r and nothing is said.
+    def floor(half_width):
+        w = kinema.World(dt=1e-3)
+        w.add(kinema.Gravity())
+        v = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float) * [half_width, half_width, 1]
+        w.add(kinema.Mesh(vertices=v, faces=[[0, 1, 2], [0, 2, 3]]))
+        w.set_collisions(restitution=0.3)
+        w.add_particles([[0.3, 0.2, 0.2]], radius=0.05)
+        return w
+
+    coarse = floor(1e15)
+    said = placement_warnings(coarse, seconds=1.0)
+    assert len(said) == 1 and "it is too coarse for the particles: its coordinates reach 1e+15 m, where numbers are 0.125 m apart" in said[0]
+    assert coarse.positions[0, 2] < -1.0  # through the seam
+    fine = floor(1e8)
+    assert placement_warnings(fine, seconds=1.0) == []
+    assert fine.positions[0, 2] == pytest.approx(0.05, abs=1e-6)

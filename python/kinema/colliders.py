@@ -414,7 +414,7 @@ CURVED = (0.05, 0.95)
 SIDEWAYS_DEG = 60.0
 
 
-def placement_problems(mesh: Mesh, points: np.ndarray, regions: list[tuple[np.ndarray, np.ndarray]], g: np.ndarray) -> list[str]:
+def placement_problems(mesh: Mesh, points: np.ndarray, regions: list[tuple[np.ndarray, np.ndarray]], g: np.ndarray, radius: float | None = None) -> list[str]:
     """What is wrong with where a still mesh collider is, in words (none: []):
 
     - **far**: there is something to collide (particles at `points` (N, 3) or emitters whose
@@ -425,7 +425,13 @@ def placement_problems(mesh: Mesh, points: np.ndarray, regions: list[tuple[np.nd
       axis, the direction of Σ A_f n_f (the rim's normal, the same whichever way its faces
       are wound up to sign), leans more than 60° from the vertical: a bowl lying on its side,
       as a +y-up file read as +z-up lies. Flat sheets, tubes and closed meshes have no
-      opening and are never said to lie on their side."""
+      opening and are never said to lie on their side;
+    - **too coarse**: its coordinates reach X m, where float64 numbers are u apart (≤ X·2⁻⁵²),
+      more than `COARSE` of the smallest particle `radius` (m; None: no particles): a
+      contact's distance near its faces is then off by up to a few u, and a ball can sink
+      into it or fall through a seam between two faces (measured: a floor of two triangles
+      of half-width 1e14 m lets a 5 cm ball sink 1.7 mm, 1e15 m lets it through, 7 cm from
+      the seam; 1e13 m holds it to the last digit)."""
     v, f = mesh.vertices, mesh.faces
     lo, hi = v.min(axis=0), v.max(axis=0)
     size = float(np.linalg.norm(hi - lo))
@@ -452,7 +458,20 @@ def placement_problems(mesh: Mesh, points: np.ndarray, regions: list[tuple[np.nd
                     f"it lies on its side: the axis of its opening (the direction of its faces' area-weighted normals, "
                     f"{(axis / np.linalg.norm(axis)).round(3).tolist()}) leans {lean:.0f}° from the vertical (gravity {np.round(g, 3).tolist()} m/s²){up}"
                 )
+    reach = float(np.abs(v).max()) if v.size else 0.0
+    spacing = float(np.spacing(reach))
+    if radius is not None and radius > 0 and spacing > COARSE * radius:
+        said.append(
+            f"it is too coarse for the particles: its coordinates reach {reach:.3g} m, where numbers are {spacing:.3g} m apart, "
+            f"more than {COARSE:g} of the smallest radius ({radius:.3g} m), so contacts near its faces are off by that much and a "
+            "ball can fall through a seam: make it smaller or place it nearer the origin"
+        )
     return said
+
+
+# a mesh's float spacing at its largest coordinate may be at most this fraction of the smallest
+# particle radius (`placement_problems`)
+COARSE = 0.05
 
 
 def transformed(vertices: np.ndarray, scale: Any, rotation: Any, translation: Any) -> np.ndarray:

@@ -835,8 +835,8 @@ class World(WorldCollisions):
 
     def _look_at_meshes(self) -> None:
         """One ``MeshPlacementWarning`` for each still mesh collider added since the last look
-        that is far from every particle and emitter, or lies on its side under gravity
-        (``kinema.colliders.placement_problems``)."""
+        that is far from every particle and emitter, lies on its side under gravity, or is too
+        coarse for the smallest particle (``kinema.colliders.placement_problems``)."""
         if self._placed >= len(self._colliders):
             return
         fresh = range(self._placed, len(self._colliders))
@@ -846,8 +846,11 @@ class World(WorldCollisions):
             return
         g = first_step.gravity(self._forces, self.dim)
         regions = [_region(source.c) for source in self._emitters]
+        radii = [float(self.radii.min())] if len(self) else []
+        radii += [source.c["particle_radius"] - source.c["radius_spread"] for source in self._emitters]
+        radius = min((r for r in radii if r > 0), default=None)
         for k, mesh in meshes:
-            said = placement_problems(mesh, self._x, regions, g)
+            said = placement_problems(mesh, self._x, regions, g, radius)
             if said:
                 name = f"'{mesh.file.name}'" if mesh.file is not None else "of arrays"
                 warnings.warn(f"colliders[{k}], the mesh {name}: {'; '.join(said)}", MeshPlacementWarning, stacklevel=3)
