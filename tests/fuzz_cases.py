@@ -1270,10 +1270,12 @@ def _op(ctx: _Ctx, op: dict) -> Any:
 
 def _fault_ops() -> dict:
     """The ops of tests/fuzz_faults.py (file-system faults, special files, threads, sweeps,
-    checkpoints)."""
+    checkpoints) and tests/fuzz_readers.py (damaged files of each format, side files, the
+    CLI's resume and rerun paths)."""
     import fuzz_faults
+    import fuzz_readers
 
-    return fuzz_faults.OPS
+    return {**fuzz_faults.OPS, **fuzz_readers.OPS}
 
 
 def _run_case(case: dict) -> dict:

@@ -80,7 +80,8 @@ _COUNTER = [0]
 # Bugs these cases found, not fixed yet: a fault that is one of them is answered under "known"
 # (not a failure), unless the op says "strict" (tests/test_fuzz.py: the strict xfail test of
 # each, with its reproducer, which starts to pass when it is fixed).
-KNOWN_BUGS: dict[str, str] = {}  # (none open: the five the fault cases found are fixed, tests/test_fuzz.py FIXED_BUG_CASES)
+KNOWN_BUGS: dict[str, str] = {}  # (none open: the five the fault cases found are fixed, tests/test_fuzz.py FIXED_BUG_CASES;
+# the readers' open ones are tests/fuzz_readers.py KNOWN_READER_BUGS)
 
 
 def _known(op: dict, f: dict) -> str | None:
