@@ -70,6 +70,7 @@ TIMEOUT = float(os.environ.get("KINEMA_FUZZ_TIMEOUT", "20"))
 # examples (hypothesis would stop at the first failure and shrink it), so that two builds are
 # compared case for case in the table; the table is then the result. Never for `make test`.
 SURVEY = os.environ.get("KINEMA_FUZZ_SURVEY") == "1"
+SURVEY_LOG = os.environ.get("KINEMA_FUZZ_LOG")
 
 
 def fuzz_settings(examples: int) -> settings:
@@ -112,6 +113,10 @@ def check(case: dict, timeout: float | None = None) -> dict:
     found = findings(answer)
     if not invalid(answer):
         record(category(), _CURRENT.get("test", "?"), [kind for kind, _ in found], known_bugs(answer))
+    if found and SURVEY_LOG:
+        # (a survey's failures, each with its case, for a later look: KINEMA_FUZZ_LOG=path)
+        with open(SURVEY_LOG, "a", encoding="utf-8") as log:
+            log.write(json.dumps({"test": _CURRENT.get("test", "?"), "found": [text for _, text in found], "case": case}) + "\n")
     if found and not SURVEY:
         pytest.fail(
             "\n".join(text for _, text in found) + f"\n\ncase: {json.dumps(case)}\n\nreproducer:\n{to_python(case)}\n\nanswer: {json.dumps(answer)[:3000]}",
@@ -1954,10 +1959,9 @@ def test_a_reader_defect_of_issue_49_stays_fixed(name):
     assert call.get("type") == "TrajectoryFileError" and says in call["message"], call
 
 
-# Found by the reader generators, not fixed yet (tests/fuzz_readers.py KNOWN_READER_BUGS): the
-# first case hypothesis met of each, run strict (not answered as known). An xfail (strict: it
-# fails the suite once the bug is fixed, to be moved to READER_REGRESSIONS); not recorded in
-# the table, where the generators' cases that meet it count as "known bugs met".
+# Found by the reader generators (each a parser's raw exception on a damaged file, fixed by
+# kinema.io.readers._DAMAGE): the first case hypothesis met of each, run strict; each must now
+# end in one TrajectoryFileError naming the file.
 READER_BUG_CASES = {
     "PLY: a raw ValueError, IndexError or OverflowError not naming the file": (
         "ply",
@@ -1986,9 +1990,8 @@ READER_BUG_CASES = {
 
 
 @pytest.mark.parametrize("bug", list(READER_BUG_CASES))
-@pytest.mark.xfail(strict=True, reason="a reader bug found by the generators, not fixed yet (fuzz_readers.KNOWN_READER_BUGS)")
 def test_a_reader_bug_found_by_the_generators(bug):
-    assert bug in fuzz_readers.KNOWN_READER_BUGS
+    assert bug not in fuzz_readers.KNOWN_READER_BUGS
     fmt, file, mutations = READER_BUG_CASES[bug]
     answer = worker().run(with_base({"ops": [{"op": "reader_mutant", "format": fmt, "file": file, "mutations": mutations, "strict": True}]}))
     assert not findings(answer), json.dumps(answer)[:2000]

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ._checks import available_memory, gib
-from ._files import special_kind
+from ._files import TrajectoryFileError, special_kind
 from ._h5md_checks import fail
 from .h5md_reader import LoadedTrajectory
 
@@ -201,7 +201,29 @@ def read_trajectory(
         if e.errno is None:
             raise
         raise fail(path, f"cannot be read ({e.strerror or e})") from None
+    except TrajectoryFileError:
+        raise
+    except _DAMAGE.get(fmt, ()) as e:
+        # what a parser (numpy, base64, plyfile's layout, USD's text, gsd) raises on a damaged
+        # file that kinema's own checks did not reach first: one line naming the file
+        # (make fuzz's reader generators found each: tests/fuzz_readers.py)
+        what = str(e).splitlines()[0] if str(e) else ""
+        where = series if fmt == "ply" and series is not None else path  # (a PLY series: its folder)
+        raise fail(where, f"cannot be read: the {fmt} file is damaged ({type(e).__name__}: {what})") from None
 
+
+# The exceptions that mean a damaged file, by format, where a parser raises them past kinema's
+# own checks (ValueError covers UnicodeDecodeError and binascii.Error). Not for the formats
+# whose readers raise ValueError for a bad `units=` (XYZ, LAMMPS, GSD's ValueErrors): their
+# own checks name what they refuse.
+_DAMAGE: dict[str, tuple[type[Exception], ...]] = {
+    "csv": (ValueError, IndexError, OverflowError, KeyError),
+    "vtk": (ValueError, IndexError, OverflowError, KeyError),
+    "ply": (ValueError, IndexError, OverflowError, KeyError),
+    "usd": (ValueError, IndexError, OverflowError, KeyError, RuntimeError),  # (pxr's Tf errors are RuntimeErrors)
+    "gsd": (IndexError, OverflowError, KeyError),
+    "h5md": (UnicodeError, IndexError, OverflowError),
+}
 
 _PARTICLES_CACHE: dict[tuple, dict[str, Any]] = {}  # the last file read by particles_from
 
