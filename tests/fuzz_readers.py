@@ -236,6 +236,10 @@ def reader_mutant(ctx: Any, op: dict) -> dict:
                 faults.append(fault("wrong answer", f"{op['format']}: the unchanged files were refused: {call['message']}"))
             return {"calls": calls, "faults": faults}
         calls.append({"call": "load_trajectory", "result": "ok"})
+        try:  # what a notebook shows first: a loaded Trajectory's one-line summary
+            repr(traj)
+        except Exception as e:  # noqa: BLE001 - judged here
+            faults.append(fault("unexpected exception", f"repr of {op['format']} read back: {type(e).__name__}: {e}"))
         why = _consistent(traj)
         if why is not None:
             faults.append(fault("wrong answer", f"{op['format']} with {name} damaged read as a trajectory of {why}"))

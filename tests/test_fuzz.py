@@ -1986,6 +1986,9 @@ READER_BUG_CASES = {
         [{"kind": "number", "index": 3574, "value": "\u00e9"}, {"kind": "dup_line", "line": 6985}, {"kind": "number", "index": 176726, "value": ""}],
     ),
     "GSD: IndexError on a flipped byte": ("gsd", 131071, [{"kind": "flip", "at": 4374, "byte": 226}]),
+    # particles/N read as 1,056,964,608 (the index's chunk location moved): gsd.hoomd filled
+    # default arrays of that many rows for minutes; now read_gsd._check_counts refuses it
+    "GSD: a hang on a flipped byte (a count of a billion)": ("gsd", 0, [{"kind": "flip", "at": 304, "byte": 104}]),
 }
 
 

@@ -139,6 +139,23 @@ def test_a_loaded_trajectory_keeps_what_only_its_file_knows(tmp_path):
     np.testing.assert_array_equal(back.source.step, load_h5md(path).step)
 
 
+@pytest.mark.parametrize("name", ["run.h5", "run.gsd", "run.xyz", "run.csv", "run.lammpstrj", "run.pvd", "run.ply"])
+def test_a_loaded_trajectory_shows_itself_and_its_steps_are_the_files_numbers(tmp_path, name):
+    # A file's `step` is each frame's step number; Trajectory.step is the length of the steps
+    # where dt does not divide a frame, which no file records. Trajectory.load once put the
+    # file's numbers (an array) in Trajectory.step, and repr() of every loaded file raised
+    # TypeError (only 0-dimensional arrays can be converted to Python scalars).
+    tr = world_run()
+    path = tmp_path / name
+    tr.save(path) if name.endswith(".h5") else tr.export(path)
+    back = kinema.load_trajectory(path)
+    assert back.step is None and back.source.step.shape == (len(back.t),)
+    shown = repr(back)
+    assert shown.startswith(f"Trajectory(frames={len(tr.t)}, t=0 .. {tr.t[-1]:g} s, particles=4, dim=3") and shown.endswith(f"file={back.source.path})"), shown
+    # the total energy where the file keeps the potential energies (H5MD), else "unknown", not nan
+    assert ("energy=unknown" in shown) == (not name.endswith(".h5")) and "nan" not in shown, shown
+
+
 def test_the_fps_a_world_ran_at_is_saved_and_loaded_back(tmp_path):
     # World.run(fps=30) with dt = 1 ms records frame k at k/30 s exactly (34 steps of
     # 0.98 ms a frame: kinema.frames): the 30 asked is kept, in /parameters/kinema, as the

@@ -204,8 +204,10 @@ class Trajectory:
             rows.append(("dt", f"{self.dt:g} s"))
         if self.step is not None:
             rows.append(("step", f"{float(self.step):.6g} s"))
-        if frames:
+        if frames and np.isfinite(self.total[[0, -1]]).all():
             rows.append(("energy", f"{self.total[0]:.6g} J → {self.total[-1]:.6g} J"))
+        elif frames:  # a file without velocities or potential energies
+            rows.append(("energy", "unknown"))
         if self.source is not None:
             rows.append(("file", str(self.source.path)))
         return rows
@@ -389,7 +391,9 @@ class Trajectory:
         }
         args = {}
         for fl in fields(cls):
-            if not fl.init or fl.name == "source":
+            # a file's `step` is each frame's step number (kept in `source.step`), not the
+            # length of the steps that `Trajectory.step` is: that one no file records
+            if not fl.init or fl.name in ("source", "step"):
                 continue
             value = getattr(read, fl.name, None)
             if value is None and fl.name in unknown:

@@ -36,6 +36,33 @@ def _empty_names(f: Any, k: int, name: str) -> bool:
     return False
 
 
+# The least bytes an item of each GSD group takes in a file that gives it: a particle's
+# position (3 float32), an n-body group's particle indices (n uint32). A count beyond the
+# file's size over this is not a count the file holds (a damaged `N` chunk): gsd.hoomd would
+# fill default arrays of that many rows (a billion: minutes and gigabytes), so it is refused
+# before the frame is read.
+_ITEM_BYTES = {"particles": 12, "bonds": 8, "angles": 12, "dihedrals": 16, "impropers": 16, "constraints": 8, "pairs": 8}
+
+
+def _check_counts(f: Any, path: Path, k: int, size: int) -> None:
+    """Refuse frame `k` where a group's count (`<group>/N`, of frame `k` or else frame 0, as
+    gsd.hoomd reads it) is negative or more than a file of `size` bytes can hold."""
+    for group, least in _ITEM_BYTES.items():
+        name = f"{group}/N"
+        for frame in (k, 0):
+            if f.file.chunk_exists(frame=frame, name=name):
+                n = np.asarray(f.file.read_chunk(frame=frame, name=name)).reshape(-1)
+                if n.size != 1 or n.dtype.kind not in "iu":
+                    raise fail(path, f"frame {frame}: {name} holds {n.size} {n.dtype} values; it is one unsigned integer, the number of {group}")
+                count = int(n[0])
+                if count < 0 or count * least > size:
+                    raise fail(
+                        path,
+                        f"frame {frame}: {name} = {count}, more {group} than a file of {size} bytes can hold ({least} bytes each at least); the file is damaged",
+                    )
+                break
+
+
 def _spin(f: Any, k: int, p: Any, own: bool) -> dict[str, np.ndarray]:
     """The spin of frame `k` (particles `p`) where the file has one: `orientations`
     (`particles/orientation`, HOOMD's w x y z), `inertia` (the x moment of
@@ -123,7 +150,9 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
         frames = []
         springs: list[tuple[int, int]] = []  # the ids at the ends of kinema's springs (its bonds of type "spring")
         dim = None
+        size = path.stat().st_size
         for k in range(count):
+            _check_counts(f, path, k, size)
             try:
                 frame = f[k]
             except IndexError:  # gsd.hoomd cannot view a chunk of strings 0 bytes wide
