@@ -667,6 +667,33 @@ def test_a_world_larger_than_memory_is_a_memory_error_not_an_abort():
     assert "MemoryError the solution's 10000001 states of 100000 values needs about 7450.656 GiB" in res.stdout, res.stdout
 
 
+def test_springs_larger_than_memory_are_a_memory_error_not_an_abort():
+    # Under an address-space cap, 2·10⁷ springs between two particles were taken (as Python
+    # lists, 100 B a spring more) and the first step aborted the interpreter on the advice's
+    # Jacobian blocks ("memory allocation of 1760000000 bytes failed", exit 134). Now the
+    # room for them (kinema::forces::Springs::BYTES_PER_SPRING each) is asked for first:
+    # MemoryError naming the count, the world unchanged, Python alive.
+    code = textwrap.dedent(
+        """
+        import resource, numpy as np, kinema
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+        w = kinema.World()
+        w.add_particles([[0, 0, 0], [1, 0, 0]])
+        n = 20_000_000
+        try:
+            w.add(kinema.Spring(np.zeros(n, dtype=np.int64), np.ones(n, dtype=np.int64), k=1.0, rest_length=1.0))
+        except MemoryError as e:
+            print("MemoryError", e)
+        w.add(kinema.Spring([0], [1], k=2.0, rest_length=0.5))
+        w.step(2)
+        print("alive", len(w.forces), w.positions[1][0] < 1.0)
+        """
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr[-2000:]
+    assert "MemoryError 20000000 springs needs about 4.768 GiB" in res.stdout and "alive 1 True" in res.stdout, res.stdout
+
+
 def test_ctrl_c_stops_inside_one_long_step_and_leaves_the_step_before():
     # One step of 400 discs at 10⁴ m/s (benchmarks/impacts.py's scene) makes ~56,000 impacts
     # and takes a second or more: Ctrl-C is checked inside its impacts too. KeyboardInterrupt

@@ -111,12 +111,14 @@ class Spring(_Checked):
             raise ValueError(f"Spring: i has shape {i.shape} and j {j.shape}; they must be 1-D and equal")
         n = i.size
 
-        def per_spring(name: str, value: Any) -> list[float]:
+        def per_spring(name: str, value: Any) -> np.ndarray:
             arr = _checks.real_array(name, value)
-            return _checks.broadcast(name, arr, (n,), f"a scalar or one value per spring, ({n},)").tolist()
+            return np.ascontiguousarray(_checks.broadcast(name, arr, (n,), f"a scalar or one value per spring, ({n},)"), dtype=np.float64)
 
+        # arrays, not lists: a million springs as Python lists would take 100 B each more
         rest = None if self.rest_length is None else per_spring("rest_length", self.rest_length)
-        return i.tolist(), j.tolist(), per_spring("k", self.k), rest, per_spring("damping", self.damping)
+        ends = (np.ascontiguousarray(a, dtype=np.int64).reshape(-1) for a in (i, j))
+        return *ends, per_spring("k", self.k), rest, per_spring("damping", self.damping)
 
     def _attach(self, core: Any) -> list[float]:
         return core.add_springs(*self._args)  # the rest lengths, taken from the positions when not given

@@ -389,38 +389,57 @@ impl PyWorld {
 
     /// Adds springs; returns their rest lengths, m (those given, or the current distances).
     #[pyo3(signature = (i, j, k, rest_length, damping))]
-    fn add_springs(
+    fn add_springs<'py>(
         &mut self,
-        i: Vec<usize>,
-        j: Vec<usize>,
-        k: Vec<f64>,
-        rest_length: Option<Vec<f64>>,
-        damping: Vec<f64>,
-    ) -> PyResult<Vec<f64>> {
+        py: Python<'py>,
+        i: PyReadonlyArray1<'py, i64>,
+        j: PyReadonlyArray1<'py, i64>,
+        k: PyReadonlyArray1<'py, f64>,
+        rest_length: Option<PyReadonlyArray1<'py, f64>>,
+        damping: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         self.inner.restore_order();
+        let count = i.len();
+        // Room first (the springs' arrays, the force pass's buffers), so that a count the
+        // machine cannot hold is a MemoryError here, not an abort in a later step.
+        Springs::room(count).map_err(to_py)?;
+        let indices = |name: &str, a: &PyReadonlyArray1<'py, i64>| -> PyResult<Vec<usize>> {
+            let a = a.as_slice()?;
+            if let Some(s) = a.iter().position(|v| *v < 0) {
+                return Err(PyValueError::new_err(format!(
+                    "{name}[{s}] = {} is invalid: particle indices are >= 0",
+                    a[s]
+                )));
+            }
+            fallible(a.iter().map(|v| *v as usize), a.len(), count)
+        };
+        let values = |a: &PyReadonlyArray1<'py, f64>| -> PyResult<Vec<f64>> {
+            let a = a.as_slice()?;
+            fallible(a.iter().copied(), a.len(), count)
+        };
+        let (i, j) = (indices("i", &i)?, indices("j", &j)?);
         let rest = match rest_length {
-            Some(r) => r,
+            Some(r) => values(&r)?,
             None => {
                 // rest lengths from the current positions (a spring at rest as built)
                 let x = &self.inner.particles().x;
                 let n = self.inner.particles().len();
-                i.iter()
-                    .zip(&j)
-                    .enumerate()
-                    .map(|(s, (&a, &b))| {
-                        if a >= n || b >= n {
-                            return Err(PyValueError::new_err(format!(
-                                "spring {s} joins particles {a} and {b}, but the world has {n} particles"
-                            )));
-                        }
-                        Ok((0..3).map(|c| (x[3 * b + c] - x[3 * a + c]).powi(2)).sum::<f64>().sqrt())
-                    })
-                    .collect::<PyResult<Vec<f64>>>()?
+                let mut rest = fallible(std::iter::empty(), 0, count)?;
+                for (s, (&a, &b)) in i.iter().zip(&j).enumerate() {
+                    if a >= n || b >= n {
+                        return Err(PyValueError::new_err(format!(
+                            "spring {s} joins particles {a} and {b}, but the world has {n} particles"
+                        )));
+                    }
+                    rest.push((0..3).map(|c| (x[3 * b + c] - x[3 * a + c]).powi(2)).sum::<f64>().sqrt());
+                }
+                rest
             }
         };
-        let springs = Springs::new(i, j, k, rest.clone(), damping).map_err(to_py)?;
+        let taken = PyArray1::from_slice(py, &rest); // (the lengths taken from the positions, which a scene or checkpoint must keep)
+        let springs = Springs::new(i, j, values(&k)?, rest, values(&damping)?).map_err(to_py)?;
         self.inner.add_force(Box::new(springs)).map_err(to_py)?;
-        Ok(rest) // (the lengths taken from the positions, which a scene or checkpoint must keep)
+        Ok(taken)
     }
 
     #[pyo3(signature = (point, strength, softening, falloff=None))]
@@ -1079,4 +1098,18 @@ fn falloff_from(args: Option<FalloffArgs>) -> PyResult<Option<Falloff>> {
     };
     let law = Law::from_name(&law).map_err(to_py)?;
     Falloff::new(shape, law, min_distance, max_distance).map(Some).map_err(to_py)
+}
+
+/// `items` (`len` of them) collected into a vector whose memory was asked for first: memory
+/// the machine cannot give for `count` springs is a `MemoryError`, not an abort.
+fn fallible<T>(items: impl Iterator<Item = T>, len: usize, count: usize) -> PyResult<Vec<T>> {
+    let mut out = Vec::new();
+    if out.try_reserve_exact(len.max(count)).is_err() {
+        return Err(to_py(kinema::Error::out_of_memory(
+            format!("{count} springs"),
+            count.saturating_mul(Springs::BYTES_PER_SPRING),
+        )));
+    }
+    out.extend(items);
+    Ok(out)
 }

@@ -65,6 +65,23 @@ impl PartialEq for Scratch {
 }
 
 impl Springs {
+    /// Memory a spring takes, bytes: its ends and values (40), the force pass's buffers (an
+    /// optional tension, 32; two end entries, 8), its block of the Jacobian when the step
+    /// advice or an implicit method linearises the springs (a `SpringBlock`, 88) and the
+    /// copies made while springs are added (the arrays handed over, 40): 208, rounded up.
+    pub const BYTES_PER_SPRING: usize = 256;
+
+    /// Whether the machine can give `count` springs their memory
+    /// ([`Springs::BYTES_PER_SPRING`] each), tried once: [`Error::OutOfMemory`] where it
+    /// cannot, before anything is built (a step would abort on it otherwise).
+    pub fn room(count: usize) -> Result<(), Error> {
+        let bytes = count.saturating_mul(Self::BYTES_PER_SPRING);
+        match Vec::<u8>::new().try_reserve_exact(bytes) {
+            Ok(()) => Ok(()),
+            Err(_) => Err(Error::out_of_memory(format!("{count} springs"), bytes)),
+        }
+    }
+
     /// Springs from per-spring arrays (all of the same length): ends `i`, `j` (particle
     /// indices, i ≠ j), stiffness `k` (N/m, > 0), rest length `rest_length` (m, ≥ 0) and
     /// dashpot coefficient `damping` (N·s/m, ≥ 0), all finite. Errors name the array, the
