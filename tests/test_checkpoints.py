@@ -2,6 +2,7 @@
 that wrote it, for every integrator and both contact models, with springs, emitters,
 lifetimes, own materials and particles sorted along space."""
 
+import re
 import sys
 import warnings
 from pathlib import Path
@@ -736,6 +737,21 @@ def test_a_damaged_checkpoint_is_one_clean_error_naming_the_field(pristine, tmp_
         message = str(caught.value)
         assert "\n" not in message and message.startswith(f"{path}: ") and field in message, message
     assert issubclass(CheckpointError, kinema.io.TrajectoryFileError) and issubclass(CheckpointError, ValueError)
+
+
+def test_a_checkpoint_whose_global_heap_would_hang_hdf5_is_refused(pristine, tmp_path):
+    # (the trajectory reader's case, tests/test_io.py: one byte that would make the HDF5
+    # library loop forever on the checkpoint's strings)
+    from test_io import empty_free_space_in_the_global_heap, refusal_within_a_minute
+
+    path = tmp_path / "checkpoint.ckpt"
+    shutil.copy(pristine, path)
+    at = empty_free_space_in_the_global_heap(path)
+    for call in ("kinema.resume_run", "kinema.World.load_checkpoint"):
+        said = refusal_within_a_minute(f"import kinema\n{call}({str(path)!r})")
+        assert re.fullmatch(
+            rf"CheckpointError: {re.escape(str(path))}: not a checkpoint that can be read: .* free-space object at byte {at} has size 0 .*", said
+        ), said
 
 
 def test_the_undamaged_checkpoint_resumes(pristine, tmp_path):

@@ -485,7 +485,19 @@ def force_cases(draw):
     x = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]
     world = {"op": "world", "kwargs": {"dim": draw(st.sampled_from([2, 3])), "dt": 0.001, "method": draw(methods)}}
     ops = [world, {"op": "add_particles", "kwargs": {"position": x, "velocity": [0.1, 0.2, 0.0]}}, op, {"op": "step", "args": [draw(st.integers(1, 10))]}]
-    return {"ops": [*ops, {"op": "run", "kwargs": draw(run_kwargs)}, {"op": "inspect"}]}
+    return {"ops": [*ops, {"op": "run", "kwargs": short_run(draw(run_kwargs))}, {"op": "inspect"}]}
+
+
+def short_run(kwargs: dict) -> dict:
+    """``kwargs`` of a run, with a valid duration cut to 1000 frames where a valid fps from
+    BOUNDARY would make millions: each frame is at least one step (kinema.frames), so fps
+    2**31 for 0.01 s is 2·10⁷ steps, a long request (minutes) as a long duration is, not a
+    hang. Frame counts beyond 1e10 stay: their recording cannot be held (a MemoryError at once)."""
+    d, f = kwargs.get("duration"), kwargs.get("fps")
+    real = all(isinstance(a, int | float) and not isinstance(a, bool) and math.isfinite(a) and a > 0 for a in (d, f))
+    if real and 1e3 < d * f < 1e10:
+        kwargs = {**kwargs, "duration": 1e3 / f}
+    return kwargs
 
 
 def surface():

@@ -4,6 +4,8 @@ reads and writes that say what is wrong and leave nothing half-written behind.""
 import base64
 import os
 import shlex
+import subprocess
+import sys
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from types import SimpleNamespace
@@ -137,6 +139,47 @@ def test_a_loaded_trajectory_keeps_what_only_its_file_knows(tmp_path):
     assert (back.source.path, back.source.group, back.source.author) == (path, "balls", "Ada")
     assert back.source.creator == f"kinema {kinema.__version__}" and back.source.box_edges_by_frame is None
     np.testing.assert_array_equal(back.source.step, load_h5md(path).step)
+
+
+def refusal_within_a_minute(code):
+    """The exception `code` raises in a fresh interpreter, "Type: message" (or "none"); a
+    code that hangs fails the test after a minute instead of hanging it."""
+    wrapped = f"try:\n    {code.replace(chr(10), chr(10) + '    ')}\n    print('none')\nexcept Exception as e:\n    print(f'{{type(e).__name__}}: {{e}}')"
+    res = subprocess.run([sys.executable, "-c", wrapped], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0, res.stderr[-2000:]
+    return res.stdout.strip()
+
+
+def empty_free_space_in_the_global_heap(path):
+    """Damage the HDF5 file `path` as one flipped byte can: the free-space object of its
+    first global heap collection gets size 0, on which HDF5's heap walk
+    (H5HG__cache_heap_deserialize) loops forever. Returns that object's offset."""
+    data = bytearray(path.read_bytes())
+    start = data.find(b"GCOL")
+    assert start >= 0 and data[start + 4] == 1, "a global heap collection (vlen strings) expected"
+    end = start + int.from_bytes(data[start + 8 : start + 16], "little")
+    p = start + 16
+    while p + 16 <= end:  # object headers: index u16, refs u16, reserved u32, size u64
+        idx, size = int.from_bytes(data[p : p + 2], "little"), int.from_bytes(data[p + 8 : p + 16], "little")
+        if idx == 0:
+            data[p + 8 : p + 16] = bytes(8)
+            path.write_bytes(bytes(data))
+            return p
+        p += 16 + (size + 7) // 8 * 8
+    raise AssertionError("no free space in the collection")
+
+
+def test_a_global_heap_the_hdf5_library_would_loop_on_is_refused_before_it_reads(tmp_path):
+    # Found by `make fuzz` at full size: byte 5547 of a small trajectory set to 0 made the
+    # load hang inside HDF5 (no Ctrl-C, no timeout: one C call). kinema.io._hdf5_heaps walks
+    # the collections first, as the library does, and refuses the one that would not end.
+    path = save_h5md(world_run(), tmp_path / "run.h5")
+    at = empty_free_space_in_the_global_heap(path)
+    said = refusal_within_a_minute(f"import kinema\nkinema.load_trajectory({str(path)!r})")  # (a regression hangs: fails here)
+    assert said == "TrajectoryFileError: " + (
+        f"{path}: corrupt HDF5 file: its global heap collection at byte {path.read_bytes().find(b'GCOL')} is damaged: "
+        f"the free-space object at byte {at} has size 0 (the HDF5 library would loop on it forever)"
+    )
 
 
 @pytest.mark.parametrize("name", ["run.h5", "run.gsd", "run.xyz", "run.csv", "run.lammpstrj", "run.pvd", "run.ply"])

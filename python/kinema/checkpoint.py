@@ -54,6 +54,7 @@ from ._checks import _dtype_words, _type_words, describe
 from .contact_record import FIELDS, ContactRecord, offsets_problem
 from .frames import plan as frames_plan
 from .io._files import TrajectoryFileError
+from .io._hdf5_heaps import global_heap_problem
 from .world import MAX_WORK
 
 FORMAT = "kinema-checkpoint"
@@ -513,6 +514,12 @@ def _reading(path: Path) -> Iterator[_Reader]:
         raise CheckpointError(f"{path}: no such checkpoint file")
     if not path.is_file():
         raise CheckpointError(f"{path}: not a checkpoint file (a directory or a special file)")
+    try:
+        heaps = global_heap_problem(path)
+    except OSError as e:
+        raise CheckpointError(f"{path}: cannot be read ({_first_line(e)})") from None
+    if heaps is not None:
+        raise CheckpointError(f"{path}: not a checkpoint that can be read: {heaps}")
     try:
         f = h5py.File(path, "r")
     except Exception as e:  # (an OSError for a file that is not HDF5, or truncated)

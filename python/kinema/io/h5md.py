@@ -110,6 +110,7 @@ from ._checks import available_memory, number
 from ._files import TrajectoryFileError, frames_of, hdf5_file, os_errors_as_write_errors
 from ._h5md_checks import check_frames, edges_problem, fail, increase_problem, links_out
 from ._h5md_layout import BY_FORCE, COLLIDER_OBSERVABLES, ELEMENTS, H5MD_VERSION, OBSERVABLES, PRESSURE_UNIT, import_h5py
+from ._hdf5_heaps import global_heap_problem
 from .h5md_reader import MESH_DATASETS, MOTION_DATASETS, LoadedTrajectory, read
 from .h5md_units import from_si, parse_unit, system_of
 
@@ -643,6 +644,9 @@ def load_h5md(path: str | os.PathLike, group: str | None = None, follow_links: b
         raise fail(path, f"cannot be read ({e.strerror or e})") from None
     if not is_hdf5:
         raise fail(path, "not an HDF5 file (corrupt, or another format)")
+    heaps = global_heap_problem(path)
+    if heaps is not None:
+        raise fail(path, f"corrupt HDF5 file: {heaps}")
     try:
         with h5py.File(path, "r") as f:
             if not follow_links:
