@@ -289,3 +289,33 @@ def test_a_mesh_file_beyond_the_limit_names_the_file(tmp_path):
         kinema.Mesh(path)
     text = one_line(e)
     assert text.startswith("vertices[1][0] = 1e+300 m (file ") and str(path) in text
+
+
+@pytest.mark.parametrize("node", ["fifo", "device", "dir", "missing"])
+@pytest.mark.parametrize("series", ["ply", "pvd"])
+def test_a_frame_file_of_a_series_is_checked_before_it_is_opened(tmp_path, series, node):
+    # A PLY series (a folder of frames) and a VTK series (a .pvd naming .vtp files) name files
+    # beyond the one given: a frame that is a FIFO blocked load_trajectory for good, a device
+    # fed it without end. Each frame file is checked as the main file is: one line naming the
+    # series, the frame and what the file is.
+    w = kinema.World(dt=0.01)
+    w.add_particles([[0, 0, 0], [1, 0, 0]], radius=0.1)
+    w.run(0.03, fps=100).export(tmp_path / f"t.{series}")
+    target = sorted((tmp_path / f"t_{'ply' if series == 'ply' else 'vtk'}").iterdir())[1]
+    target.unlink()
+    if node == "fifo":
+        os.mkfifo(target)
+    elif node == "device":
+        os.mknod(target, stat.S_IFCHR | 0o600, os.makedev(1, 5))  # a private /dev/zero
+    elif node == "dir":
+        target.mkdir()
+    main = tmp_path / ("t_ply" if series == "ply" else "t.pvd")
+    if (series, node) == ("ply", "missing"):  # a folder's frames are the files there: each says its time
+        back = kinema.load_trajectory(main)
+        np.testing.assert_allclose(back.t, [0.0, 0.02, 0.03], rtol=1e-6)
+        return
+    run = finishes(f"import kinema\ntry:\n    kinema.load_trajectory({str(main)!r})\nexcept kinema.io.TrajectoryFileError as e:\n    print(e)")
+    assert run.returncode == 0, run.stderr
+    said = {"fifo": "is a FIFO, not a regular file", "device": "is a character device, not a regular file", "dir": "is a directory, not a regular file"}
+    expected = f"{main}: frame 1: its file {target.name} " + said.get(node, "does not exist")
+    assert run.stdout == expected + "\n"

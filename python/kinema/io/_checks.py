@@ -12,6 +12,11 @@ import numpy as np
 _GIB = 1 << 30
 
 
+# A text file's memory once read, per byte of file: its lines and the words of its rows as
+# NumPy strings (4 bytes a character, padded to the longest word).
+TEXT_FACTOR = 8
+
+
 def available_memory() -> int | None:
     """Bytes of memory this process can still use: the kernel's `MemAvailable` (free memory
     and what the page cache can give back), else the free pages (`SC_AVPHYS_PAGES`), and

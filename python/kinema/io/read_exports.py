@@ -6,7 +6,9 @@ values read back bit for bit, PLY's float32 as float32."""
 from __future__ import annotations
 
 import base64
+import os
 import re
+import stat
 import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -123,10 +125,34 @@ def _xml(path: Path, file: Path, where: str) -> ET.Element:
 
 
 def _inside(path: Path, folder: Path, name: str | None, where: str) -> Path:
-    """The file `name` a collection names, in `folder` or below it (never outside it)."""
+    """The file `name` a collection names, in `folder` or below it (never outside it), and a
+    regular file (`_frame_file`)."""
     if not name or Path(name).is_absolute() or ".." in Path(name).parts:
         raise fail(path, f"{where}: the file {name!r} is not a name inside the collection's folder")
-    return folder / name
+    return _frame_file(path, folder / name, where)
+
+
+def _frame_file(path: Path, file: Path, where: str) -> Path:
+    """`file`, a frame's file of the series `path`, checked before it is opened as the main
+    file is (`readers.read_trajectory`): it exists and is a regular file (followed through
+    links; a FIFO would block the reader, a device feed it without end), and its text fits
+    in the memory available."""
+    from ._checks import TEXT_FACTOR, available_memory, gib
+    from ._files import special_kind
+
+    try:
+        st = os.stat(file)
+    except FileNotFoundError:
+        raise fail(path, f"{where}: its file {file.name} does not exist") from None
+    except OSError as e:
+        raise fail(path, f"{where}: its file {file.name} cannot be read ({e.strerror or e})") from None
+    if not stat.S_ISREG(st.st_mode):
+        kind = "a directory" if stat.S_ISDIR(st.st_mode) else f"a {special_kind(st.st_mode) or 'special file'}"
+        raise fail(path, f"{where}: its file {file.name} is {kind}, not a regular file")
+    free = available_memory()
+    if free is not None and st.st_size * TEXT_FACTOR > free:
+        raise fail(path, f"{where}: its file {file.name} of {gib(st.st_size)} GiB needs about {gib(st.st_size * TEXT_FACTOR)} GiB of memory to read")
+    return file
 
 
 def _vtp(path: Path, file: Path, where: str) -> dict[str, np.ndarray]:
@@ -273,7 +299,7 @@ def read_ply(folder: Path) -> LoadedTrajectory:
     SI units. PLY holds no masses."""
     files = sorted((p for p in folder.iterdir() if p.suffix.lower() == ".ply"), key=lambda p: (len(p.stem), p.stem))
     numbered = [p for p in files if re.search(r"_\d+$", p.stem)]
-    frames = [_ply_frame(folder, p, f"frame {k} ({p.name})") for k, p in enumerate(numbered or files)]
+    frames = [_ply_frame(folder, _frame_file(folder, p, f"frame {k}"), f"frame {k} ({p.name})") for k, p in enumerate(numbered or files)]
     for k, fr in enumerate(frames):
         fr.step = k
     return assemble(folder, frames, SI, creator="kinema")

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ._checks import available_memory, gib
+from ._checks import TEXT_FACTOR, available_memory, gib
 from ._files import TrajectoryFileError, special_kind
 from ._h5md_checks import fail
 from .h5md_reader import LoadedTrajectory
@@ -36,9 +36,6 @@ _GSD = bytes.fromhex("df65df65df65df65")
 # USD's binary (crate) and text layers (read_usd.MAGIC_CRATE, MAGIC_TEXT); a .usdz, a zip
 # ("PK"), is known by its suffix only: a zip is many things
 _USD = (b"PXR-USDC", b"#usda")
-# A text file's memory once read, per byte of file: its lines and the words of its rows as
-# NumPy strings (4 bytes a character, padded to the longest word).
-_TEXT_FACTOR = 8
 
 
 def formats_read() -> str:
@@ -163,9 +160,9 @@ def read_trajectory(
         )
     if fmt in ("xyz", "lammps", "lammps-data", "csv", "vtk") and series is None:
         free = available_memory()
-        if free is not None and size * _TEXT_FACTOR > free:
+        if free is not None and size * TEXT_FACTOR > free:
             raise fail(
-                path, f"a text file of {gib(size)} GiB needs about {gib(size * _TEXT_FACTOR)} GiB of memory to read, more than the {gib(free)} GiB available"
+                path, f"a text file of {gib(size)} GiB needs about {gib(size * TEXT_FACTOR)} GiB of memory to read, more than the {gib(free)} GiB available"
             )
     try:
         if fmt == "h5md":
