@@ -178,6 +178,8 @@ def test_view_on_a_port_in_use_is_one_line_naming_the_port(tmp_path):
     assert len(errors) == 1, res.stderr
     line = errors[0]
     assert line.startswith(f"error: --port {port}: cannot listen on 127.0.0.1:{port} (") and "in use" in line, line
+    # refused before the scene is simulated (it was simulated whole first, then refused)
+    assert "simulating" not in res.output, res.output
 
 
 def test_view_prints_a_warning_as_one_line_without_its_source(tmp_path):

@@ -660,6 +660,8 @@ def view(
 
     if not 0 <= port <= 65535:
         raise ValueError(f"--port {port}: use 0 (a free port) or a port from 1 to 65535")
+    if html is None and port != 0:
+        _check_port(port)  # before a scene is simulated, not after
     if source.suffix.lower() == ".toml":
         if not source.exists():
             raise ValueError(f"{source}: no such file")
@@ -701,6 +703,20 @@ def view(
     finally:
         server.shutdown()
         server.server_close()
+
+
+def _check_port(port: int) -> None:
+    """Refuse `port` on 127.0.0.1 where it cannot be listened on (taken, or not ours to bind),
+    as the server's own bind would, by binding it once and letting it go (the server binds
+    it again moments later: a port taken in between is still refused then)."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as http.server binds
+        try:
+            probe.bind(("127.0.0.1", port))
+        except OSError as e:
+            raise ValueError(f"--port {port}: cannot listen on 127.0.0.1:{port} ({e.strerror or e})") from None
 
 
 def main() -> None:
