@@ -297,6 +297,19 @@ def test_a_run_over_the_limits_is_refused_before_any_work(tmp_path, monkeypatch)
     assert not (tmp_path / "o").exists()
 
 
+def test_an_estimate_of_countless_births_prints_no_long_numbers(tmp_path):
+    # an emitter at its highest rate for a billion seconds: 10²⁴ births, printed with all 25
+    # digits twice (999,999,999,999,999,983,222,785: float digits), and 15 digits of PiB
+    scene = small_scene(
+        tmp_path,
+        "[world]\ndim = 3\ndt = 1e7\nduration = 1e9\nfps = 1e-6\n\n[[emitters]]\nrate = 1e15\nspeed = 1.0\nparticle_radius = 0.01\n",
+        name="flood.toml",
+    )
+    line = one_error_line(runner.invoke(app, ["run", str(scene), "-o", str(tmp_path / "o")]))
+    assert "(1e+24 particles × 1,000 steps: " in line and "; up to 1e+24 particles from 1 emitter)" in line, line
+    assert "about 1.16e+14 PiB of memory" in line and max(len(w) for w in line.split(str(scene))[1].split()) < 25, line
+
+
 def test_force_runs_what_the_limits_refuse(tmp_path, monkeypatch):
     import kinema.runner
 

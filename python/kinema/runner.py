@@ -85,6 +85,8 @@ def _count(n: int, noun: str) -> str:
 def _size(n: float) -> str:
     for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
         if n < 1024 or unit == "PiB":
+            if n >= 1e6:  # (PiB beyond a million: not 15 digits in a line)
+                return f"{n:.3g} {unit}"
             return f"{n:.0f} {unit}" if unit == "B" or n >= 10 else f"{n:.1f} {unit}"
         n /= 1024
     return ""  # unreachable
@@ -103,6 +105,12 @@ def _over_limits(what: str, estimate: str, particle_steps: float, pixels: float,
         return
     limits = f"{LIMIT_PARTICLE_STEPS:.0e} particle-steps, {LIMIT_PIXELS:.0e} pixels and {_size(LIMIT_MEMORY)} of memory"
     raise ValueError(f"{what}: {estimate}, over the limits of {limits}; give --force to run it anyway")
+
+
+def _amount(x: float) -> str:
+    """A count for a message: with thousands separators up to 10¹⁵, in scientific notation
+    beyond (an emitter of 10³⁰⁰ particles a second is not 300 digits in a line)."""
+    return f"{x:,.0f}" if x < 1e15 else f"{float(x):.3g}"
 
 
 def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video: bool, force: bool) -> str:
@@ -133,13 +141,13 @@ def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video
     except OverflowError:  # more births than a float counts (rate × duration): work no limit allows
         born = math.inf
     if born:
-        why += f"; up to {born:,} particles from {len(scene.emitters)} emitter{'s' if len(scene.emitters) > 1 else ''}"
+        why += f"; up to {_amount(born)} particles from {len(scene.emitters)} emitter{'s' if len(scene.emitters) > 1 else ''}"
         n += born
     particle_steps = float(n) * steps
     pixels = (frames + 1) * scene.render.width * scene.render.height if video and n else 0.0
     memory = n * ENGINE_BYTES + (frames + 1) * n * (FRAME_BYTES + (RENDER_BYTES if pixels else 0))
     video_words = f"{frames + 1:,.0f} frames × render.width {scene.render.width} × render.height {scene.render.height}"
-    estimate = f"the run would take {particle_steps:.1e} particle-steps ({n:,} particles × {steps:,.0f} steps: {why})"
+    estimate = f"the run would take {particle_steps:.1e} particle-steps ({_amount(n)} particles × {_amount(steps)} steps: {why})"
     if pixels:
         estimate += f", {pixels:.1e} pixels of video ({video_words})"
     estimate += f" and about {_size(memory)} of memory"
