@@ -198,3 +198,27 @@ def test_a_2d_world_refuses_a_file_whose_z_is_not_0(tmp_path):
         w.add_particles_from(path)
     with pytest.raises(TrajectoryFileError):
         w.add_particles_from(tmp_path / "absent.xyz")
+
+
+@pytest.mark.parametrize("name", ["run.h5", "run.xyz", "run.gsd", "run.lammpstrj", "run.csv"])
+def test_a_files_collision_groups_are_taken_and_the_given_group_where_it_has_none(tmp_path, name):
+    # kinema writes each particle's collision group in every format; add_particles_from and a
+    # scene's file block took none of them (every particle came back in group 0, colliding
+    # with what its group had been set to pass through).
+    w = kinema.World(dt=0.01)
+    w.add_particles([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]], radius=0.1, group=[0, 3, 7])
+    traj = w.run(0.02, fps=100)
+    path = tmp_path / name
+    traj.save(path) if name.endswith(".h5") else traj.export(path)
+    back = kinema.World()
+    back.add_particles_from(path, group=5)  # (the file has them: 5 is not used)
+    np.testing.assert_array_equal(back.groups, [0, 3, 7])
+    (tmp_path / "s.toml").write_text(scene_text(f'path = "{name}"\ngroup = 5', dim=3))
+    np.testing.assert_array_equal(Scene.from_toml(tmp_path / "s.toml").build().groups, [0, 3, 7])
+    # a file without groups (a LAMMPS data file): the group given, for every particle
+    (tmp_path / "copper.data").write_text(DATA)
+    bare = kinema.World()
+    bare.add_particles_from(tmp_path / "copper.data", group=5)
+    np.testing.assert_array_equal(bare.groups, [5, 5, 5])
+    (tmp_path / "c.toml").write_text(scene_text('path = "copper.data"\ngroup = [1, 2, 3]', dim=3))
+    np.testing.assert_array_equal(Scene.from_toml(tmp_path / "c.toml").build().groups, [1, 2, 3])

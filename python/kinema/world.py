@@ -417,6 +417,7 @@ class World(WorldCollisions):
         pinned: Any = None,
         restitution: Any = None,
         friction: Any = None,
+        group: Any = 0,
     ) -> np.ndarray:
         """Add the particles of frame ``frame`` (-1: the last) of a trajectory file; returns
         their indices, as :meth:`add_particles` does.
@@ -427,10 +428,11 @@ class World(WorldCollisions):
         {"length": m, "time": s, "mass": kg}), ``format`` and ``atom_style`` as
         ``Trajectory.load`` takes them. The particles alive at that frame are added in the order
         of their ids, at their positions plus ``translate`` (a (3,) vector, m), each with the
-        file's velocity, mass, radius and species where the file has them; where it has none,
-        ``velocity`` (default 0), ``mass`` (default 1 kg), ``radius`` (default 0) and
-        ``species`` are used, checked as :meth:`add_particles` checks them, as are
-        ``pinned``, ``restitution`` and ``friction``. A 2D world takes a file whose z are 0.
+        file's velocity, mass, radius, species and collision group where the file has them
+        (kinema's files keep the groups); where it has none, ``velocity`` (default 0),
+        ``mass`` (default 1 kg), ``radius`` (default 0), ``species`` and ``group`` (default 0)
+        are used, checked as :meth:`add_particles` checks them, as are ``pinned``,
+        ``restitution`` and ``friction``. A 2D world takes a file whose z are 0.
         The file's box, colliders and springs are not added: they are the world's own."""
         from .io.readers import particles_from
 
@@ -445,7 +447,8 @@ class World(WorldCollisions):
         m = got["masses"] if got["masses"] is not None else mass
         r = got["radii"] if got["radii"] is not None else radius
         names = got["species"] if got["species"] is not None else species
-        return self.add_particles(x, v, m, r, pinned=pinned, restitution=restitution, friction=friction, species=names)
+        groups = got["groups"] if got["groups"] is not None else group
+        return self.add_particles(x, v, m, r, pinned=pinned, restitution=restitution, friction=friction, species=names, group=groups)
 
     def _add(self, x, v, m, r, p, e, mu, names, death=None, color=None, spin=None, group=None) -> np.ndarray:
         """Adds checked particles with their species names, times of death, colours, collision

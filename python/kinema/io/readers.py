@@ -235,9 +235,9 @@ def particles_from(
     """The particles of frame `frame` (an index, negative from the end: -1 the last) of the
     trajectory file `path` (any format `read_trajectory` reads, with its `units`,
     `format` and `atom_style`), in SI units, as a world takes them: `positions` (n, 3) m,
-    `velocities` (n, 3) m/s or `None` where the file has none, `masses` kg, `radii` m
-    and `species` (n,) or `None` each where the file has none, `ids` (n,): the particles
-    alive at that frame, in the order of their ids.
+    `velocities` (n, 3) m/s or `None` where the file has none, `masses` kg, `radii` m,
+    `species` and `groups` (collision groups) (n,) or `None` each where the file has none,
+    `ids` (n,): the particles alive at that frame, in the order of their ids.
 
     The last file read is kept (by its path, size and time of change and the arguments), so a
     scene that counts its particles before it builds them reads the file once. Raises
@@ -270,6 +270,7 @@ def particles_from(
         "masses": None if read.masses is None else read.masses[live],
         "radii": None if read.radii is None else read.radii[live],
         "species": None if read.species is None else np.asarray(read.species)[live],
+        "groups": None if getattr(read, "groups", None) is None else np.asarray(read.groups, dtype=np.int64)[live],
         "ids": (np.arange(n) if read.ids is None else np.asarray(read.ids))[live],
     }
     if stamp:

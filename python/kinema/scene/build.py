@@ -49,7 +49,7 @@ def build(scene: Scene, source: str = "<scene>") -> World:
         try:
             x, v, m, r, p, e, mu = _particles(block, dim)
             spin = _spin(block, len(m))
-            idx = w.add_particles(x, v, m, r, p, e, mu, species=_species(block), group=block.group, **spin)
+            idx = w.add_particles(x, v, m, r, p, e, mu, species=_species(block), group=_groups(block), **spin)
         except ValueError as err:
             raise SceneError(f"{where}: {err}") from None
         starts.append((int(idx[0]), int(idx[-1]) + 1))
@@ -190,6 +190,14 @@ def _species(block: Any) -> Any:
     if isinstance(block, FileBlock) and block.particles()["species"] is not None:
         return block.particles()["species"]
     return block.species
+
+
+def _groups(block: Any) -> Any:
+    """A block's collision groups: a file block's from its file where the file has them (as
+    `World.add_particles_from` takes them), else the block's `group`."""
+    if isinstance(block, FileBlock) and block.particles()["groups"] is not None:
+        return block.particles()["groups"]
+    return block.group
 
 
 def _particles(block: Any, dim: int) -> tuple:

@@ -293,8 +293,8 @@ FileUnits = Annotated[
 
 class FileBlock(_Block):
     """The particles of one frame of a trajectory file (``World.add_particles_from``): their
-    positions (+ ``translate``), and their velocities, masses, radii and species where the file
-    has them (else the block's own keys)."""
+    positions (+ ``translate``), and their velocities, masses, radii, species and collision
+    groups where the file has them (else the block's own keys)."""
 
     type: Literal["file"] = "file"
     path: Annotated[str, Field(min_length=1)]
