@@ -162,8 +162,12 @@ def test_a_stage_without_its_units_is_read_in_usds_centimetres_with_a_warning(tm
         back = kinema.Trajectory.load(path)
     (message,) = [str(w.message) for w in said if issubclass(w.category, UnitWarning)]
     assert "bare.usda: the stage does not say its metersPerUnit: USD's fallback 0.01 m (centimetres) is taken" in message
-    assert "its up axis is Y, kinema's is z (gravity along -z): the coordinates are read as they are" in message
-    np.testing.assert_allclose(back.positions[0], (written["x"][0] + [100.0, 0.0, -50.0]) * 0.01, rtol=1e-15)
+    assert "up axis" not in message  # (a Y-up stage is turned, as a mesh is: nothing to warn of)
+    # +y up: turned to kinema's +z up, (x, y, z) → (x, −z, y), positions and velocities
+    x = (written["x"][0] + [100.0, 0.0, -50.0]) * 0.01
+    np.testing.assert_allclose(back.positions[0], np.stack([x[:, 0], -x[:, 2], x[:, 1]], axis=1), rtol=1e-15)
+    v = written["v"][0] * 0.01
+    np.testing.assert_allclose(back.velocities[0], np.stack([v[:, 0], -v[:, 2], v[:, 1]], axis=1), rtol=1e-15)
 
 
 # -- which files are USD, and what is refused ------------------------------------------------------

@@ -54,7 +54,8 @@ def read_usd(path: Path) -> LoadedTrajectory:
     the primvar `species` where it has them; the primvar `mass` only where the stage says
     `kilogramsPerUnit` (UsdPhysics), else no masses (a `UnitWarning` says so); no colours
     (its `displayColor` is not said to be the particles' own). A stage whose up axis is
-    not Z is read as it is, with a `UnitWarning` (kinema's gravity points along -z).
+    Y is turned to kinema's +z up (gravity along -z) as the mesh reader turns a mesh:
+    (x, y, z) → (x, −z, y), exact.
 
     Raises `ImportError` naming `pip install usd-core` without it, and
     `TrajectoryFileError` naming `path`: not a stage usd-core opens, a layer it names
@@ -92,9 +93,9 @@ def read_usd(path: Path) -> LoadedTrajectory:
     kilograms = 1.0 if own else (UsdPhysics.GetStageKilogramsPerUnit(stage) if UsdPhysics.StageHasAuthoredKilogramsPerUnit(stage) else None)
     if mass_primvar and kilograms is None:
         said.append("its primvar mass is not read: the stage does not say its kilogramsPerUnit (UsdPhysics), so the masses' unit is unknown")
-    up = UsdGeom.GetStageUpAxis(stage)
-    if up != UsdGeom.Tokens.z:
-        said.append(f"its up axis is {up}, kinema's is z (gravity along -z): the coordinates are read as they are")
+    # a +y-up stage (USD's fallback, Maya's, Blender's export option) is turned to kinema's +z
+    # up as the mesh reader turns one (mesh_files.y_up_to_z_up: exact)
+    y_up = UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.y
     if said:
         warnings.warn(f"{path}: {'; '.join(said)}", UnitWarning, stacklevel=3)
     if own:
@@ -116,6 +117,9 @@ def read_usd(path: Path) -> LoadedTrajectory:
     spheres = stage.GetPrimAtPath("/World/spheres") if own else None
     reading.spheres = UsdGeom.PointInstancer(spheres) if spheres and spheres.IsA(UsdGeom.PointInstancer) else None
     frames = [reading.frame(k, code, time) for k, (code, time) in enumerate(zip(codes, times, strict=True))]
+    if y_up:
+        for fr in frames:
+            _turn_to_z_up(fr)
     springs = None
     if own:
         curves = stage.GetPrimAtPath("/World/springs")
@@ -128,6 +132,21 @@ def read_usd(path: Path) -> LoadedTrajectory:
         for i, rgb in reading.colours.items():
             out.colors[np.searchsorted(out.ids, i)] = rgb
     return out
+
+
+def _turn_to_z_up(fr: Any) -> None:
+    """Frame `fr` of a +y-up stage in kinema's +z-up axes: positions, velocities and angular
+    velocities by (x, y, z) → (x, −z, y), the +90° turn about x; orientations turned by it."""
+    from ._quaternions import multiply
+    from .mesh_files import y_up_to_z_up
+
+    for name in ("positions", "velocities", "angular_velocities"):
+        value = getattr(fr, name)
+        if value is not None:
+            setattr(fr, name, y_up_to_z_up(np.asarray(value, dtype=np.float64).reshape(-1, 3)))
+    if fr.orientations is not None:
+        half = np.sqrt(0.5)  # (cos 45°, sin 45° x): the turn as a unit quaternion, w first
+        fr.orientations = multiply(np.array([half, half, 0.0, 0.0]), np.asarray(fr.orientations, dtype=np.float64))
 
 
 def _open(path: Path) -> Any:
