@@ -407,3 +407,45 @@ def test_a_mesh_too_large_for_the_memory_left_is_a_memory_error():
     faces, message = done.stdout.strip().split(" ", 1)
     assert "\n" not in message and done.stderr == ""
     assert message.startswith(f"a mesh of {faces} triangles (about 100 B each while it is built) needs about 0.0"), message
+
+
+READ_TOO_LARGE = """
+import resource, sys
+import numpy as np
+import kinema
+
+k = 300  # a floor of 2 · 300² = 180,000 triangles as a binary STL (9 MB)
+xs = np.linspace(0.0, 1.0, k + 1)
+X, Y = np.meshgrid(xs, xs, indexing="ij")
+V = np.stack([X.ravel(), Y.ravel(), np.zeros(X.size)], 1).astype(np.float32)
+i = (np.arange(k)[:, None] * (k + 1) + np.arange(k)[None, :]).ravel()
+F = np.concatenate([np.stack([i, i + k + 1, i + 1], 1), np.stack([i + 1, i + k + 1, i + k + 2], 1)])
+rec = np.zeros(len(F), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
+rec["n"], rec["v"] = [0, 0, 1], V[F]
+path = sys.argv[1]
+with open(path, "wb") as fh:
+    fh.write(bytes(80) + np.uint32(len(F)).tobytes() + rec.tobytes())
+print(len(kinema.Mesh(path).faces), flush=True)  # (read once in full: every module the read needs is loaded)
+size = next(int(line.split()[1]) for line in open("/proc/self/status") if line.startswith("VmSize:")) * 1024
+resource.setrlimit(resource.RLIMIT_AS, (size + 20 * 2**20, resource.RLIM_INFINITY))  # 20 MiB more: 110 B a triangle
+try:
+    kinema.Mesh(path)
+except MemoryError as e:
+    print(e)
+"""
+
+
+def test_a_mesh_file_too_large_to_read_in_the_memory_left_is_a_memory_error_naming_it(tmp_path):
+    # (reading a binary STL peaks at about 760 B a triangle: trimesh's arrays and the merge of
+    # equal vertices, kinema.io.mesh_files.MESH_READ_BYTES; numpy's own MemoryError, with no
+    # message or "Unable to allocate 137. MiB for an array with shape (6000000,)", said neither
+    # the file nor why)
+    path = tmp_path / "floor.stl"
+    done = subprocess.run([sys.executable, "-c", READ_TOO_LARGE, str(path)], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    faces, message = done.stdout.strip().split("\n")
+    assert faces == "180000", done.stdout
+    assert message == (
+        f"file = {str(path)!r}: reading this mesh ({path.stat().st_size} bytes) needs more memory than is available "
+        "(about 800 B per triangle while a mesh file is read and merged)"
+    ), message

@@ -41,6 +41,11 @@ from typing import Any
 
 import numpy as np
 
+#: Memory a triangle takes while a mesh file is read (trimesh's arrays, the merge of equal
+#: vertices), bytes, at the peak: measured 760 for a binary STL floor of 2·10⁶ triangles
+#: (1.6 GB); the engine then keeps about 100 (`kinema::collide::mesh::BYTES_PER_TRIANGLE`).
+MESH_READ_BYTES = 800
+
 #: The up axes a file may be read with (`up_axis`): kinema's own, and the common other one.
 UP_AXES = ("z", "y")
 #: The formats that say their own up axis (glTF by its specification, USD by its stage's
@@ -157,11 +162,24 @@ def read_mesh_axis(path: str | os.PathLike, name: str = "file", up_axis: str | N
         checked_file(path, "the file")
     except SideFileError as e:
         raise refuse(str(e).removeprefix("the file ")) from None
-    if fmt == "USD":
-        vertices, faces, own = _read_usd(path, refuse)
-    else:
-        vertices, faces = _read_trimesh(path, fmt, refuse)
-        own = "y" if fmt == "glTF" else None
+    try:
+        if fmt == "USD":
+            vertices, faces, own = _read_usd(path, refuse)
+        else:
+            vertices, faces = _read_trimesh(path, fmt, refuse)
+            own = "y" if fmt == "glTF" else None
+        return _placed(path, fmt, vertices, faces, own, up_axis, refuse)
+    except MemoryError:
+        raise MemoryError(
+            f"{name} = {str(path)!r}: reading this mesh ({os.stat(path).st_size} bytes) needs more memory than is available "
+            f"(about {MESH_READ_BYTES} B per triangle while a mesh file is read and merged)"
+        ) from None
+
+
+def _placed(path: Path, fmt: str, vertices: Any, faces: Any, own: str | None, up_axis: str | None, refuse: Any) -> tuple[np.ndarray, np.ndarray, str]:
+    """The mesh read from `path` (format `fmt`) in kinema's axes, its vertices merged and
+    checked (the end of `read_mesh_axis`): `own` the up axis the file says, `up_axis` the one
+    given."""
     if own is not None and up_axis is not None and up_axis != own:
         said = "by the glTF specification" if fmt == "glTF" else "by its stage's upAxis"
         raise ValueError(
