@@ -76,7 +76,13 @@ def test_an_lj_dump_reads_with_the_units_option(lj_dump, tmp_path):
     out = tmp_path / "lj.csv"
     result = runner.invoke(app, ["export", str(lj_dump), "--units", "length=3.4e-10,time=2.15e-12,mass=6.6e-26", "-f", "csv", "-o", str(out)])
     assert result.exit_code == 0, result.output
-    assert out.exists()
+    np.testing.assert_allclose(load(out).t, np.array([0.0, 0.025, 0.05]) * LJ["time"], rtol=1e-15)
+    # kinema view and render take the same option (the issue: every command refused it)
+    page = tmp_path / "lj.html"
+    result = runner.invoke(app, ["view", str(lj_dump), "--units", "length=3.4e-10,time=2.15e-12,mass=6.6e-26", "--html", str(page)])
+    assert result.exit_code == 0 and page.stat().st_size > 0, result.output
+    result = runner.invoke(app, ["view", str(lj_dump), "--html", str(page)])
+    assert result.exit_code == 2 and "give units = {length = m" in result.output.replace("\n", " "), result.output
 
 
 def test_an_lj_data_file_and_dump_in_a_scene_units_table(lj_dump, tmp_path):
@@ -262,3 +268,20 @@ def test_exports_without_velocities_read_back_without_them(tmp_path, suffix):
     assert np.isnan(back.velocities).all()  # still unknown: no NaN columns written and refused on reading
     np.testing.assert_allclose(back.positions, traj.positions, rtol=0, atol=1e-7)  # (GSD, PLY: float32)
     assert (back.masses is not None) == (suffix not in (".ply",))
+
+
+def test_kinema_render_of_its_own_dump_plays_in_real_time(tmp_path):
+    # the issue's reproducer: a 0.99 s run exported as a LAMMPS dump came back with the frame
+    # index as its times (0 … 30 s), and `kinema render` made a 31 s video at 1 fps. Now the
+    # dump's ITEM: TIME reads back, and the video is 31 frames at the recording's 30 fps.
+    import imageio_ffmpeg
+
+    path = tmp_path / "run.lammpstrj"
+    export(named_run(), path)
+    video = tmp_path / "run.mp4"
+    res = runner.invoke(app, ["render", str(path), "-o", str(video), "--width", "160", "--height", "120"])
+    assert res.exit_code == 0, res.output
+    meta = imageio_ffmpeg.read_frames(str(video))
+    info = next(meta)
+    frames = sum(1 for _ in meta)
+    assert (info["fps"], frames) == (30.0, 31), (info, frames)
