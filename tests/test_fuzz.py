@@ -734,7 +734,7 @@ def test_trajectory_load_of_damaged_files(data):
     """A damaged trajectory file loads, or is refused with a TrajectoryFileError naming it."""
     damage = data.draw(damages(h5_layout()), label="damage")
     answer = check({"ops": [{"op": "trajectory", "damage": damage}]})
-    if answer["ops"][0].get("invalid"):
+    if answer.get("ops", [{}])[0].get("invalid"):  # (a survey goes on past a hang: no ops then)
         reject()  # h5py could not write this damage: not a test of kinema
 
 
