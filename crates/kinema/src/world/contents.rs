@@ -87,7 +87,7 @@ impl World {
 
     /// Removes the particles at the given indices (the user's order; repeats allowed); the
     /// others keep their order, their ids and their state. A removed particle takes with it
-    /// what the forces hold for it (springs ending on it, [`Force::remove_particles`]) and its
+    /// what the forces hold for it (springs ending on it, [`Force::reindex`]) and its
     /// own collision materials; velocity Verlet keeps the survivors' acceleration where the
     /// removal leaves it right (`carry.rs`), the other methods' caches start again; the impulse model's contacts between survivors keep their
     /// warm start (every island wakes), and the spring–dashpot force's neighbour list their

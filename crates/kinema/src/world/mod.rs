@@ -226,7 +226,8 @@ impl World {
     /// A step that would produce a non-finite state, or runaway energy, fails with
     /// [`Error::Diverged`] and leaves the world as it was before the step.
     ///
-    /// Runaway energy is checked when no force can add energy ([`Force::can_add_energy`]): the
+    /// Runaway energy is checked when no force can add energy (no force's
+    /// [`Properties::energy`](crate::forces::Properties::energy) is [`EnergyClass::Source`]): the
     /// mechanical energy E = kinetic + potential can then only fall, and what an integrator
     /// adds is an error. The reference E₀ and its scale S₀ (kinetic energy plus the
     /// magnitudes of the potential energies) are taken at the first step after the last change
