@@ -494,7 +494,7 @@ def short_run(kwargs: dict) -> dict:
     2**31 for 0.01 s is 2·10⁷ steps, a long request (minutes) as a long duration is, not a
     hang. Frame counts beyond 1e10 stay: their recording cannot be held (a MemoryError at once)."""
     d, f = kwargs.get("duration"), kwargs.get("fps")
-    real = all(isinstance(a, int | float) and not isinstance(a, bool) and math.isfinite(a) and a > 0 for a in (d, f))
+    real = all(isinstance(a, int | float) and not isinstance(a, bool) and 0 < a < 1e300 for a in (d, f))  # (an int of 2**64: no float())
     if real and 1e3 < d * f < 1e10:
         kwargs = {**kwargs, "duration": 1e3 / f}
     return kwargs

@@ -60,8 +60,10 @@ def global_heap_problem(path: Path) -> str | None:
             object_header = 2 + 2 + 4 + lengths  # H5HG_SIZEOF_OBJHDR
             start = data.find(_GCOL)
             while start >= 0:
+                if start + 8 + lengths > len(data):  # (a signature in the last bytes of a cut file)
+                    break
                 size = int.from_bytes(data[start + 8 : start + 8 + lengths], "little")
-                if data[start + 4] == 1 and data[start + 5 : start + 8] == b"\0\0\0" and _MIN_SIZE <= size <= len(data) - start:
+                if data[start + 4 : start + 8] == b"\x01\0\0\0" and _MIN_SIZE <= size <= len(data) - start:
                     end = start + size
                     p = start + header
                     while p < end and p + object_header <= end:
