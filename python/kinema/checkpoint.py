@@ -916,7 +916,7 @@ def _run_progress(r: _Reader, dt: float, steps: int) -> dict:
 def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
     """The run in progress: its progress and the frames it has recorded, every one checked
     (`World.run` records them: `kinema.trajectory._Recorder`)."""
-    from .render import _describe_colliders
+    from .collider_descriptions import _describe_colliders
     from .trajectory import Trajectory
 
     run = _run_progress(r, world.dt, steps)

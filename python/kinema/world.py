@@ -1138,7 +1138,7 @@ class World(WorldCollisions):
 
     def _trajectory_info(self) -> dict[str, Any]:
         """What a Trajectory records about the world besides its frames."""
-        from .render import _describe_colliders
+        from .collider_descriptions import _describe_colliders
 
         periodic = self.periodic
         edges = None

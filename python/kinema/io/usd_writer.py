@@ -585,7 +585,7 @@ def _bind_materials(stage: Any, pxr: tuple) -> None:
 
 def _colliders(stage: Any, traj: Any, fr: Frames, pxr: tuple) -> None:
     """The trajectory's colliders as meshes under /World/colliders (see write_usd)."""
-    from ..render.descriptions import collider_poses
+    from ..collider_descriptions import collider_poses
 
     Gf, Sdf, Usd, UsdGeom, Vt = pxr
     described = [c for c in getattr(traj, "colliders", None) or [] if isinstance(c, dict)]
