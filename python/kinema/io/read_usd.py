@@ -14,6 +14,8 @@ import numpy as np
 
 from ._assemble import RawFrame, assemble
 from ._h5md_checks import fail
+from ._usd import MAGIC_CRATE as MAGIC_CRATE  # (moved to _usd, with MAGIC_TEXT: kept here by name)
+from ._usd import MAGIC_TEXT as MAGIC_TEXT
 from ._usd import _usd_reason, meters_per_unit_problem
 from .h5md_reader import LoadedTrajectory
 from .mesh_files import _open
