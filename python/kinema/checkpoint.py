@@ -52,10 +52,10 @@ import numpy as np
 from . import _checks
 from ._checks import _dtype_words, _type_words, describe
 from .contact_record import FIELDS, ContactRecord, offsets_problem
+from .frames import MAX_WORK
 from .frames import plan as frames_plan
 from .io._files import TrajectoryFileError
 from .io._hdf5_heaps import global_heap_problem
-from .world import MAX_WORK
 
 FORMAT = "kinema-checkpoint"
 VERSION = 2  # 2: the clock's anchor and the run's t0 and duration (frames at exact times)
@@ -916,7 +916,7 @@ def _run_progress(r: _Reader, dt: float, steps: int) -> dict:
 def _read_run(r: _Reader, world: Any, time: float, steps: int) -> dict:
     """The run in progress: its progress and the frames it has recorded, every one checked
     (`World.run` records them: `kinema.trajectory._Recorder`)."""
-    from .render import _describe_colliders
+    from .collider_descriptions import _describe_colliders
     from .trajectory import Trajectory
 
     run = _run_progress(r, world.dt, steps)

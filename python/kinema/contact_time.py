@@ -27,10 +27,11 @@ and the command, docs/restitution_table.py): at 10 steps per contact e = 0.3 com
 from __future__ import annotations
 
 import math
-import warnings
 from typing import Any
 
 import numpy as np
+
+from . import _core
 
 #: Steps a contact should span at least: below, its restitution drifts (the table above).
 STEPS_PER_CONTACT = 20
@@ -82,9 +83,14 @@ def restitution_at(model: str, method: Any, steps_per_contact: float, restitutio
     """The restitution a head-on pair comes out with when its contact of ``model`` spans
     ``steps_per_contact`` steps of ``method``, for the set ``restitution`` (a pair with
     m* = 1 kg, ω₀ = 1 rad/s or k_h = 1 N/m^(3/2) at 1 m/s: the ratio depends on dt / t_c
-    alone)."""
-    from .world import World  # (world imports this module)
+    alone).
 
+    The pair is stepped by the engine (``_core.World``) itself, not by a ``kinema.World``:
+    ``kinema.first_step`` measures this while it checks a ``kinema.World``, so building one
+    here would tie this module into a circle with ``kinema.world``
+    (tests/test_no_import_circles.py). The engine gets what a ``kinema.World`` would hand it:
+    the collision settings (the engine's defaults, these changed), the two particles, and the
+    steps."""
     if model == "hertz":
         # r = 2 m each: R* = 1 m; E* = 3/4 Pa: k_h = 1; m = 2 kg each: m* = 1 kg
         radius, params = 2.0, {"youngs_modulus": 0.75 * 2 * (1 - 0.3**2), "poisson_ratio": 0.3}
@@ -93,12 +99,13 @@ def restitution_at(model: str, method: Any, steps_per_contact: float, restitutio
         radius, params = 1.0, {"stiffness": 1.0}
         t_c = contact_time(model, 1.0, _zeta(restitution))
     dt = t_c / steps_per_contact
-    w = World(dt=dt, method=method)
-    w._contact_warned = True  # (the probe itself is coarse: it does not advise)
-    w.set_collisions(model=model, restitution=restitution, **params)
+    core = _core.World(3, float(dt), method)
+    core.set_collisions({**_core.collision_defaults(), "model": model, "restitution": float(restitution), **params})
     gap = 1.5 * dt  # closed within the first two steps at 1 m/s
-    w.add_particles([[-radius - gap / 2, 0, 0], [radius + gap / 2, 0, 0]], velocity=[[0.5, 0, 0], [-0.5, 0, 0]], mass=2.0, radius=radius)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        w.step(int(3 * steps_per_contact) + 10)
-    return float(w.velocities[1, 0] - w.velocities[0, 0])
+    x = np.array([[-radius - gap / 2, 0, 0], [radius + gap / 2, 0, 0]], dtype=np.float64)
+    v = np.array([[0.5, 0, 0], [-0.5, 0, 0]], dtype=np.float64)
+    pair = {"x": x, "v": v, "mass": np.full(2, 2.0), "radius": np.full(2, radius), "pinned": np.zeros(2, dtype=bool)}
+    core.add_particles({**pair, "restitution": None, "friction": None, "group": None})
+    core.step(int(3 * steps_per_contact) + 10)
+    core.read_state(x, v)
+    return float(v[1, 0] - v[0, 0])

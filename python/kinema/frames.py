@@ -14,6 +14,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+# The most particle-steps World.run takes unless told otherwise: hours of work (5 hours at 6e6
+# particle-steps a second in a gas, days in a pile of contacts); the command line's limit too.
+# Here, with the run's plan, so that the checkpoints (resume_run) and the command line share it
+# without importing kinema.world (which re-exports it as kinema.world.MAX_WORK).
+MAX_WORK = 1e11
+
 # (1/(fps·dt) within this of a whole number counts as that number: 1/(50·0.001) is
 # 20.000000000000004 in floating point)
 _WHOLE = 1e-9

@@ -22,8 +22,8 @@ import numpy as np
 from rich.console import Console
 from rich.markup import escape
 
+from .frames import MAX_WORK
 from .frames import plan as frames_plan
-from .world import MAX_WORK
 
 console = Console()
 err_console = Console(stderr=True)

@@ -17,6 +17,7 @@ from . import _checks, _core, first_step
 from .colliders import Box, Collider, Mesh, MeshPlacementWarning, placement_problems
 from .emitter import BEHIND, KILL_VOLUMES, Emitter, EmitterWarning
 from .forces import Spring
+from .frames import MAX_WORK as MAX_WORK  # (kinema.world.MAX_WORK, World.run's default)
 from .frames import plan as frames_plan
 from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
@@ -37,10 +38,6 @@ class PlacementWarning(UserWarning):
     Deeper placements, a centre inside another particle or a collider, are refused with a
     ``ValueError`` instead."""
 
-
-# The most particle-steps World.run takes unless told otherwise: hours of work (5 hours at 6e6
-# particle-steps a second in a gas, days in a pile of contacts); the command line's limit too.
-MAX_WORK = 1e11
 
 REENTRY = (
     "the world was used while it is stepping (from one of its own forces, or another thread): "
@@ -1138,7 +1135,7 @@ class World(WorldCollisions):
 
     def _trajectory_info(self) -> dict[str, Any]:
         """What a Trajectory records about the world besides its frames."""
-        from .render import _describe_colliders
+        from .collider_descriptions import _describe_colliders
 
         periodic = self.periodic
         edges = None

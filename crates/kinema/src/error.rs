@@ -107,7 +107,7 @@ pub enum Divergence {
     NonFinite,
     /// rk45 could not finish the step: its adaptive step fell below what the time resolves.
     StepTooSmall,
-    /// rk45 took its cap of sub-steps ([`crate::world::World::RK45_SUBSTEPS`]) inside one step.
+    /// rk45 took its cap of sub-steps ([`crate::limits::RK45_SUBSTEPS`], `World::RK45_SUBSTEPS`) inside one step.
     TooManySubsteps,
     /// A particle would travel more than `limit` times the scene's extent within the step:
     /// more impacts than continuous detection follows (`collide/impulse/impacts.rs`).
@@ -139,7 +139,7 @@ impl fmt::Display for Divergence {
             Divergence::TooManySubsteps => write!(
                 f,
                 "rk45 took {} adaptive sub-steps inside this one step and stopped",
-                crate::world::World::RK45_SUBSTEPS
+                crate::limits::RK45_SUBSTEPS
             ),
             Divergence::TooFast { travel, extent, limit } => write!(
                 f,

@@ -10,6 +10,7 @@ pub mod diagnostics;
 pub mod error;
 pub mod forces;
 pub mod interrupt;
+pub mod limits;
 pub mod ode;
 pub mod particles;
 pub mod render;

@@ -1,8 +1,8 @@
 //! Particles: struct of arrays — positions, velocities, masses, radii, ids, and with spin
 //! their angular velocities and moments of inertia.
 
-use crate::collide::GEOMETRY_LIMIT;
 use crate::error::Error;
+use crate::limits::GEOMETRY_LIMIT;
 
 /// The particles of a world, one entry per particle in each array; vectors are stored
 /// flat, x y z per particle (`x[3i..3i+3]`).
@@ -52,8 +52,9 @@ pub struct Particles {
     pub group: Vec<u8>,
 }
 
-/// In a `new_of_old` map of [`Particles::retain`]: the particle was removed.
-pub const GONE: u32 = u32::MAX;
+/// In a `new_of_old` map of [`Particles::retain`]: the particle was removed (defined in
+/// [`crate::limits`], which the contacts share; kept here under its old name).
+pub use crate::limits::GONE;
 
 impl Particles {
     /// Number of particles.

@@ -504,7 +504,7 @@ def _colliders_of(tr: Any) -> list[dict[str, Any]]:
     colliders = getattr(tr, "colliders", None) or []
     if not colliders:
         return []
-    from ..render import _describe_colliders
+    from ..collider_descriptions import _describe_colliders
 
     return _describe_colliders(colliders)
 

@@ -223,8 +223,8 @@ def collider_problem(names: list[str], colliders: list[dict[str, Any]], dim: int
     reading a file needs no world module (which imports `kinema.trajectory`, which imports
     this). `save_h5md` checks what it writes with it."""
     from .. import _core
+    from ..collider_descriptions import _KIND
     from ..colliders import Box, Mesh, Plane, SphereObstacle
-    from ..render import _KIND
 
     core = _core.World(dim, 1e-3, "verlet")
     make = {"plane": Plane, "box": Box, "sphere": SphereObstacle, "mesh": Mesh}

@@ -41,6 +41,8 @@ from typing import Any
 
 import numpy as np
 
+from ._usd import MAGIC_CRATE, MAGIC_TEXT, SUFFIXES
+
 #: Memory a triangle takes while a mesh file is read (trimesh's arrays, the merge of equal
 #: vertices), bytes, at the peak: measured 760 for a binary STL floor of 2·10⁶ triangles
 #: (1.6 GB); the engine then keeps about 100 (`kinema::collide::mesh::BYTES_PER_TRIANGLE`).
@@ -327,6 +329,63 @@ def _check_gltf_buffers(path: Path, data: bytes) -> None:
             )
 
 
+def _open(path: Path) -> Any:
+    """The stage of `path`, its layers checked (`check_layers`), for both USD readers (meshes
+    here, particles in `read_usd`). usd-core tells a layer's format by its suffix only, so a file
+    named otherwise (known by its first bytes) is read into an anonymous layer of its format."""
+    from pxr import Sdf, Usd
+
+    from ._h5md_checks import fail
+
+    if path.suffix.lower() in SUFFIXES:
+        root = Sdf.Layer.FindOrOpen(str(path))  # (the root layer alone: nothing it names is opened)
+        if root is None:
+            return None
+        check_layers(path, root, path.parent)
+        return Usd.Stage.Open(root)
+    with open(path, "rb") as f:
+        head = f.read(8)
+    kind = "usdc" if head.startswith(MAGIC_CRATE) else "usda" if head.startswith(MAGIC_TEXT) else None
+    if kind is None:
+        raise fail(path, f"not a USD stage: neither a binary nor a text layer by its first bytes, and not named {', '.join(SUFFIXES)}")
+    layer = Sdf.Layer.CreateAnonymous(f"{path.stem}.{kind}")
+    if not layer.Import(str(path)):
+        raise fail(path, f"not a USD stage that can be read (usd-core could not read it as {kind})")
+    check_layers(path, layer, path.parent)
+    return Usd.Stage.Open(layer)
+
+
+def check_layers(path: Path, layer: Any, folder: Path, seen: set[str] | None = None) -> None:
+    """Every layer `layer` names (sublayers, references, payloads), and those they name, is a
+    regular file of at most `mesh_files.MAX_MESH_FILE_BYTES`, checked before the stage is
+    composed (which would open them: a FIFO blocks the reader, a device never ends); else a
+    `TrajectoryFileError` naming `path`, the layer and who names it. `folder`: where `layer`'s
+    relative paths start. Paths inside a .usdz package are its own (read from the zip)."""
+    from pxr import Ar, Sdf
+
+    from ._h5md_checks import fail
+
+    seen = set() if seen is None else seen
+    for asset in layer.GetCompositionAssetDependencies():
+        if not asset or Ar.IsPackageRelativePath(asset):
+            continue
+        target = Path(asset) if os.path.isabs(asset) else folder / asset
+        key = os.path.realpath(target)
+        if key in seen:
+            continue
+        seen.add(key)
+        named_by = "the stage" if layer.anonymous or Path(layer.realPath) == Path(path).resolve() else Path(layer.realPath).name
+        try:
+            checked_file(target, f"the layer {asset!r} named by {named_by} (a sublayer, reference or payload)")
+        except SideFileError as e:
+            raise fail(path, str(e)) from None
+        if target.suffix.lower() == ".usdz":
+            continue  # (its own layers are inside the zip)
+        sub = Sdf.Layer.FindOrOpen(str(target))
+        if sub is not None:
+            check_layers(path, sub, target.parent, seen)
+
+
 def _read_usd(path: Path, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
     """Every `UsdGeom.Mesh` prim of the stage but guides (its purpose `guide`: kinema's own
     export drew its colliders so) and kinema's exported colliders (`kinema:collider`), at the earliest time code: `points` by the prim's
@@ -339,14 +398,14 @@ def _read_usd(path: Path, refuse: Any) -> tuple[np.ndarray, np.ndarray]:
         from pxr import Tf, Usd, UsdGeom
     except ImportError:
         raise ImportError("reading USD meshes needs the usd-core package: pip install usd-core (or kinema[usd])") from None
-    from .read_usd import _open, _usd_reason, meters_per_unit_problem
+    from ._usd import _usd_reason, meters_per_unit_problem
     from .units import UnitWarning
 
     try:
         stage = _open(path)
     except Tf.ErrorException as e:
         raise refuse(f"not a USD stage that can be read ({_usd_reason(e)})") from None
-    except ValueError as e:  # read_usd's refusal of a file that is no layer
+    except ValueError as e:  # _open's refusal of a file that is no layer
         raise refuse(str(e).split(": ", 1)[-1]) from None
     if stage is None:
         raise refuse("not a USD stage that can be read")

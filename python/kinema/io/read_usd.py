@@ -6,7 +6,6 @@ stage (its first `UsdGeom.Points` prim, in the stage's `metersPerUnit`)."""
 from __future__ import annotations
 
 import math
-import os
 import warnings
 from pathlib import Path
 from typing import Any
@@ -15,22 +14,17 @@ import numpy as np
 
 from ._assemble import RawFrame, assemble
 from ._h5md_checks import fail
+from ._usd import MAGIC_CRATE as MAGIC_CRATE  # (moved to _usd, with MAGIC_TEXT: kept here by name)
+from ._usd import MAGIC_TEXT as MAGIC_TEXT
+from ._usd import _usd_reason, meters_per_unit_problem
 from .h5md_reader import LoadedTrajectory
+from .mesh_files import _open
+from .mesh_files import check_layers as check_layers  # (a stage's layers, checked as a mesh's side files)
 from .units import Scales, UnitWarning
 
-#: The first bytes of a binary (crate) layer and of a text layer; a .usdz is a zip ("PK").
-MAGIC_CRATE, MAGIC_TEXT = b"PXR-USDC", b"#usda"
 #: The fewest time codes per second of a stage read (a time code of 11.6 days): fewer, and a
 #: time code / timeCodesPerSecond overflows or loses the frames' order.
 MIN_TIME_CODES_PER_SECOND = 1e-6
-
-
-def meters_per_unit_problem(metres: float) -> str | None:
-    """Why a stage's `metersPerUnit` cannot be read (NaN, 0: every position 0, negative: a
-    mirrored scene), or None."""
-    if math.isfinite(metres) and metres > 0:
-        return None
-    return f"metersPerUnit = {metres!r} is invalid: it must be finite and > 0 (the metres in one of the stage's units)"
 
 
 def read_usd(path: Path) -> LoadedTrajectory:
@@ -147,62 +141,6 @@ def _turn_to_z_up(fr: Any) -> None:
     if fr.orientations is not None:
         half = np.sqrt(0.5)  # (cos 45°, sin 45° x): the turn as a unit quaternion, w first
         fr.orientations = multiply(np.array([half, half, 0.0, 0.0]), np.asarray(fr.orientations, dtype=np.float64))
-
-
-def _open(path: Path) -> Any:
-    """The stage of `path`. usd-core tells a layer's format by its suffix only, so a file
-    named otherwise (known by its first bytes) is read into an anonymous layer of its format."""
-    from pxr import Sdf, Usd
-
-    from .usd_writer import SUFFIXES
-
-    if path.suffix.lower() in SUFFIXES:
-        root = Sdf.Layer.FindOrOpen(str(path))  # (the root layer alone: nothing it names is opened)
-        if root is None:
-            return None
-        check_layers(path, root, path.parent)
-        return Usd.Stage.Open(root)
-    with open(path, "rb") as f:
-        head = f.read(8)
-    kind = "usdc" if head.startswith(MAGIC_CRATE) else "usda" if head.startswith(MAGIC_TEXT) else None
-    if kind is None:
-        raise fail(path, f"not a USD stage: neither a binary nor a text layer by its first bytes, and not named {', '.join(SUFFIXES)}")
-    layer = Sdf.Layer.CreateAnonymous(f"{path.stem}.{kind}")
-    if not layer.Import(str(path)):
-        raise fail(path, f"not a USD stage that can be read (usd-core could not read it as {kind})")
-    check_layers(path, layer, path.parent)
-    return Usd.Stage.Open(layer)
-
-
-def check_layers(path: Path, layer: Any, folder: Path, seen: set[str] | None = None) -> None:
-    """Every layer `layer` names (sublayers, references, payloads), and those they name, is a
-    regular file of at most `mesh_files.MAX_MESH_FILE_BYTES`, checked before the stage is
-    composed (which would open them: a FIFO blocks the reader, a device never ends); else a
-    `TrajectoryFileError` naming `path`, the layer and who names it. `folder`: where `layer`'s
-    relative paths start. Paths inside a .usdz package are its own (read from the zip)."""
-    from pxr import Ar, Sdf
-
-    from .mesh_files import SideFileError, checked_file
-
-    seen = set() if seen is None else seen
-    for asset in layer.GetCompositionAssetDependencies():
-        if not asset or Ar.IsPackageRelativePath(asset):
-            continue
-        target = Path(asset) if os.path.isabs(asset) else folder / asset
-        key = os.path.realpath(target)
-        if key in seen:
-            continue
-        seen.add(key)
-        named_by = "the stage" if layer.anonymous or Path(layer.realPath) == Path(path).resolve() else Path(layer.realPath).name
-        try:
-            checked_file(target, f"the layer {asset!r} named by {named_by} (a sublayer, reference or payload)")
-        except SideFileError as e:
-            raise fail(path, str(e)) from None
-        if target.suffix.lower() == ".usdz":
-            continue  # (its own layers are inside the zip)
-        sub = Sdf.Layer.FindOrOpen(str(target))
-        if sub is not None:
-            check_layers(path, sub, target.parent, seen)
 
 
 class _Reading:
@@ -325,9 +263,3 @@ def linear_to_srgb(c: np.ndarray) -> np.ndarray:
     `usd_writer._srgb_to_linear`; clipped to [0, 1]."""
     c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
     return np.clip(np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055), 0.0, 1.0)
-
-
-def _usd_reason(e: Exception) -> str:
-    """The last part of usd-core's several-line error ("Error in '...' at line ... : 'what'")."""
-    lines = [line.strip() for line in str(e).splitlines() if line.strip()]
-    return lines[0].rsplit(" : ", 1)[-1].strip("'") if lines else "usd-core failed"

@@ -33,7 +33,7 @@ READ_FORMATS = {
 }
 _HDF5 = b"\x89HDF\r\n\x1a\n"
 _GSD = bytes.fromhex("df65df65df65df65")
-# USD's binary (crate) and text layers (read_usd.MAGIC_CRATE, MAGIC_TEXT); a .usdz, a zip
+# USD's binary (crate) and text layers (_usd.MAGIC_CRATE, MAGIC_TEXT); a .usdz, a zip
 # ("PK"), is known by its suffix only: a zip is many things
 _USD = (b"PXR-USDC", b"#usda")
 

@@ -14,10 +14,7 @@ import numpy as np
 
 from ._cell import box_corners, spring_columns, trajectory_cell
 from ._files import FileWriteError, Frames, TrajectoryFileError, copy_into, os_errors_as_write_errors, private_folder, refuse_special_target
-
-#: The suffixes USD writes: binary crate (.usd, .usdc), text (.usda), a zip package (.usdz).
-#: USD picks a layer's format from its suffix, and refuses another.
-SUFFIXES = (".usd", ".usda", ".usdc", ".usdz")
+from ._usd import SUFFIXES  # the suffixes USD writes (kinema.io._usd, which the readers share)
 
 
 def write_usd(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any]) -> list[Path]:
@@ -588,7 +585,7 @@ def _bind_materials(stage: Any, pxr: tuple) -> None:
 
 def _colliders(stage: Any, traj: Any, fr: Frames, pxr: tuple) -> None:
     """The trajectory's colliders as meshes under /World/colliders (see write_usd)."""
-    from ..render.descriptions import collider_poses
+    from ..collider_descriptions import collider_poses
 
     Gf, Sdf, Usd, UsdGeom, Vt = pxr
     described = [c for c in getattr(traj, "colliders", None) or [] if isinstance(c, dict)]

@@ -271,7 +271,7 @@ def _collider_geometry(traj: Any, fr: Frames) -> tuple[np.ndarray, list[tuple[in
     applied (one file for the whole series)."""
     if not getattr(traj, "colliders", None):
         return None
-    from ..render import _describe_colliders
+    from ..collider_descriptions import _describe_colliders
 
     colliders = _describe_colliders(traj.colliders)
     lo, hi = _scene_bounds(traj, fr, colliders)

@@ -28,15 +28,16 @@ recording (the fps it was recorded at, else the common rate within 2 %, else its
 The package: `frames` (`render_frames`: colours, the live particles, springs, one call to
 the engine per frame), `cameras` (`Camera2D`, `Camera3D` and the default camera that
 fits the scene), `legend` (the colour bar), `descriptions` (colliders as the plain
-descriptions `Trajectory.colliders` holds, which the engine takes) and `video`
+descriptions `Trajectory.colliders` holds, which the engine takes: the names of
+`kinema.collider_descriptions`, which the trajectory files and checkpoints share) and `video`
 (`write_video`, `video_rate`, `playback_rate`: MP4 and GIF files).
 """
 
 from __future__ import annotations
 
 from .cameras import Camera2D, Camera3D
-from .descriptions import _KIND as _KIND  # kinema.io.h5md
-from .descriptions import _describe_colliders as _describe_colliders  # World, the trajectory files
+from .descriptions import _KIND as _KIND  # (kinema.collider_descriptions)
+from .descriptions import _describe_colliders as _describe_colliders  # (kinema.collider_descriptions)
 from .frames import COLORMAPS, low_end, render_frames
 from .frames import NO_OWN_COLOR as NO_OWN_COLOR
 from .frames import _trajectory_options as _trajectory_options  # Trajectory.render, kinema.runner

@@ -9,8 +9,8 @@ from collections.abc import Iterator
 import numpy as np
 
 from .. import _core
+from ..collider_descriptions import _describe_colliders, collider_poses
 from .cameras import Camera2D, Camera3D, _auto_camera, _frame_corners
-from .descriptions import _describe_colliders, collider_poses
 from .legend import _Legend
 
 #: Names accepted by ``colormap=``.

@@ -1,6 +1,8 @@
-"""Scene -> engine objects: the World a ``Scene`` describes (``Scene.build`` calls ``build``
-here), ``load_scene``. This module imports ``schema`` and ``tables``; ``schema`` imports it
-only inside ``Scene.build``, at call time."""
+"""Scene -> engine objects: the World a ``Scene`` describes (``build``, and the method
+``Scene.build``, which this module gives the class), ``load_scene``. This module imports
+``schema`` and ``tables``; neither imports it (the package does, so every ``Scene`` has its
+``build``): a scene's schema knows nothing of ``World``, and a checkpoint's reader builds its
+world by ``scene.build()`` without importing ``kinema.world``."""
 
 from __future__ import annotations
 
@@ -90,6 +92,18 @@ def build(scene: Scene, source: str = "<scene>") -> World:
         raise SceneError(f"{source}: particles: {err}") from None
     w.scene = scene
     return w
+
+
+def _build(self: Scene, source: str = "<scene>") -> World:
+    """The World this scene describes (``world.scene`` is this scene). An engine refusal
+    (a 2D scene with z ≠ 0, a spring index out of range, ...) is a ``SceneError`` naming
+    the entry."""
+    return build(self, source)
+
+
+# ``scene.build()``: given to the class here, with the World it makes (module doc)
+_build.__name__, _build.__qualname__ = "build", "Scene.build"
+Scene.build = _build  # type: ignore[attr-defined]
 
 
 def load_scene(path: str | Path) -> World:

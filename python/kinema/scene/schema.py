@@ -1,7 +1,8 @@
 """The whole scene file, ``Scene`` (read from TOML, text or a dict, validated, written back),
 ``SceneError`` and the one-line-per-problem messages made of pydantic's errors. The tables
 the scene holds are in ``kinema.scene.tables``; turning a scene into a World is
-``kinema.scene.build`` (``Scene.build`` calls it)."""
+``kinema.scene.build``, which gives ``Scene`` its ``build`` method: this module knows nothing of
+``World`` (tests/test_no_import_circles.py)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import re
 import stat
 import tomllib
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from pydantic import BaseModel, Field, ValidationError, model_validator
 
@@ -47,10 +48,6 @@ from .tables import (
     WorldTable,
     _Model,
 )
-
-if TYPE_CHECKING:
-    from ..world import World
-
 
 #: The largest scene file read, in bytes: a scene describes particles by blocks; even a list
 #: of a million positions is ~60 MB of TOML.
@@ -228,16 +225,8 @@ class Scene(_Model):
             tmp.write_text(text, encoding="utf-8")
         return path
 
-    # building ----------------------------------------------------------------------------
-    def build(self, source: str = "<scene>") -> World:
-        """The World this scene describes (``world.scene`` is this scene). An engine refusal
-        (a 2D scene with z ≠ 0, a spring index out of range, ...) is a ``SceneError`` naming
-        the entry."""
-        # The dependency goes build -> schema: build.py imports this module at its top, and this
-        # module reaches build.py only here, when a scene is built (no import circle).
-        from .build import build
-
-        return build(self, source)
+    # building: ``Scene.build`` is given to the class by ``kinema.scene.build`` (which the
+    # package imports), so that the dependency goes build -> schema and never back
 
 
 def _planar_problem(motion: Any) -> str | None:

@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from ..collider_descriptions import collider_poses
 from ..io._files import atomic_file
 from ..render import NO_OWN_COLOR
-from ..render.descriptions import collider_poses
 
 _HERE = Path(__file__).parent
 BUNDLE = _HERE / "static" / "viewer.js"

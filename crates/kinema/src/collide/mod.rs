@@ -102,10 +102,9 @@
 //! Space is described by a [`Domain`]: 2D (circles in the xy-plane) or 3D, open or
 //! periodic along any axis (the minimum image is used throughout).
 
-/// The largest length (m) or speed (m/s) the contacts' geometry accepts: it squares
-/// distances and speeds, and (r_i + r_j + margin)² must stay far from overflow (1e308).
-/// A particle's radius is refused above it; a state beyond it is a diverged step.
-pub const GEOMETRY_LIMIT: f64 = 1e150;
+/// The largest length (m) or speed (m/s) the contacts' geometry accepts (defined in
+/// [`crate::limits`], which the particles' checks share; kept here under its old name).
+pub use crate::limits::GEOMETRY_LIMIT;
 
 pub mod books;
 pub mod broad_phase;

@@ -370,13 +370,13 @@ fn retain_colliding(partners: &mut Vec<u32>, from: usize, collides: impl Fn(usiz
 
 impl NeighbourList {
     /// Follows a removal of particles (`new_of_old[i]`: particle i's new index,
-    /// [`GONE`](crate::particles::GONE) for a removed one; the survivors keep their order):
+    /// [`GONE`](crate::limits::GONE) for a removed one; the survivors keep their order):
     /// the pairs and collider candidates of the survivors stay, renumbered, with the build's
     /// positions. The list still holds what it held: every pair of survivors within reach at
     /// the build is listed (a removal takes pairs away, never adds one), and a half list
     /// stays a half one (the renumbering keeps the order of indices).
     pub(crate) fn retain_survivors(&mut self, new_of_old: &[u32]) {
-        use crate::particles::GONE;
+        use crate::limits::GONE;
         self.verified = None;
         if self.built_at.is_empty() {
             return;
@@ -517,11 +517,11 @@ impl NeighbourList {
 }
 
 /// The rows in the new numbering, particle i's being old particle `old_of_new[i]`'s row,
-/// renumbered, without the partners that are gone ([`GONE`](crate::particles::GONE) in
+/// renumbered, without the partners that are gone ([`GONE`](crate::limits::GONE) in
 /// `new_of_old`), sorted again (a full list after any renumbering; any list after a
 /// removal, which keeps the order of indices).
 fn renumbered(old: &[Rows], new_of_old: &[u32], old_of_new: &[u32]) -> Vec<Rows> {
-    use crate::particles::GONE;
+    use crate::limits::GONE;
     let n = old_of_new.len();
     let mut rows: Vec<Rows> = Vec::new();
     rows.resize_with(n.div_ceil(CHUNK), Rows::default);

@@ -178,10 +178,10 @@ impl Touches {
     }
 
     /// Particles are being removed at `time` (s; `new_of_old[i]`: particle i's index after,
-    /// [`GONE`](crate::particles::GONE) for a removed one; `id`: the ids before): each touching
+    /// [`GONE`](crate::limits::GONE) for a removed one; `id`: the ids before): each touching
     /// pair of a removed particle ends, the others are renumbered.
     pub fn renumber(&mut self, new_of_old: &[u32], time: f64, id: &[u64]) {
-        use crate::particles::GONE;
+        use crate::limits::GONE;
         if !self.on {
             return;
         }

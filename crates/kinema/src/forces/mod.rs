@@ -207,7 +207,7 @@ pub trait Force: Send + Sync {
     }
 
     /// Follows a renumbering or a removal of the particles: particle i is now particle
-    /// `new_of_old[i]`, or was removed where that is [`crate::particles::GONE`]
+    /// `new_of_old[i]`, or was removed where that is [`crate::limits::GONE`]
     /// ([`crate::World::remove_particles`]). What the force holds per particle follows (a
     /// spring with a removed end is removed). A renumbering (no `GONE`) comes only when
     /// [`Properties::renumbers`] says yes. A force without per-particle data has nothing to

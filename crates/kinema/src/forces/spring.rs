@@ -20,7 +20,8 @@ use rayon::prelude::*;
 
 use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State};
 use crate::error::{CallbackError, Error};
-use crate::particles::{retain_rows, GONE};
+use crate::limits::GONE;
+use crate::particles::retain_rows;
 use crate::vec3::dot;
 
 /// A set of damped springs between pairs of particles.

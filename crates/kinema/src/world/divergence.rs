@@ -3,9 +3,9 @@
 
 use super::forces::{contact_force, every_force_ref};
 use super::World;
-use crate::collide::GEOMETRY_LIMIT;
 use crate::error::{Divergence, Error};
 use crate::forces::State;
+use crate::limits::GEOMETRY_LIMIT;
 
 /// The energy may grow by this many times its reference scale before a step counts as a
 /// runaway (see [`World::step`]).

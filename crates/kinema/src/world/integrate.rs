@@ -72,10 +72,9 @@ pub(super) struct VerletBuffers {
 
 impl World {
     /// The most adaptive sub-steps rk45 takes inside one step of dt: a step that needs more
-    /// has a dt far beyond what its forces allow (or forces rk45 cannot follow, such as
-    /// quadratic drag chattering about v = 0 over a step of 1e10 s, which took 24 s before
-    /// stopping at the solver's 10⁷), and is refused as diverged in milliseconds instead.
-    pub const RK45_SUBSTEPS: usize = 100_000;
+    /// has a dt far beyond what its forces allow, and is refused as diverged in milliseconds
+    /// instead ([`crate::limits::RK45_SUBSTEPS`], which the errors name too).
+    pub const RK45_SUBSTEPS: usize = crate::limits::RK45_SUBSTEPS;
 
     /// Stage 1: integrate positions and velocities over one step, into `x_next`, `v_next`.
     pub(super) fn integrate(&mut self) -> Result<(), Error> {

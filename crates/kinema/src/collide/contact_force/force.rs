@@ -3,9 +3,10 @@
 //! oscillation of contacts not touching yet).
 
 use super::ContactForce;
-use crate::collide::{damping_ratio, GEOMETRY_LIMIT};
+use crate::collide::damping_ratio;
 use crate::error::{CallbackError, Error};
 use crate::forces::{EnergyClass, Force, Properties, Rates, Standby, State};
+use crate::limits::GEOMETRY_LIMIT;
 
 impl Force for ContactForce<'_> {
     fn name(&self) -> &str {

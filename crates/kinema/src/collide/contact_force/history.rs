@@ -14,7 +14,7 @@
 //! A contact that stops touching is forgotten: the next touch starts with unstretched springs
 //! (LAMMPS zeroes a neighbour's history when it stops touching).
 
-use crate::particles::GONE;
+use crate::limits::GONE;
 
 /// What a contact remembers: the stretch of its springs (see the fields).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]

@@ -454,12 +454,12 @@ impl ImpulseModel {
     }
 
     /// Particles are being removed (`new_of_old[i]`: particle i's index after,
-    /// [`GONE`](crate::particles::GONE) for a removed one): the contacts between survivors,
+    /// [`GONE`](crate::limits::GONE) for a removed one): the contacts between survivors,
     /// renumbered, with their warm starts, for [`ImpulseModel::keep_contacts`]. Every island
     /// wakes (a sleeping island's contacts join the others): what is removed may have held
     /// any of them up.
     pub fn take_contacts_renumbered(&mut self, new_of_old: &[u32]) -> KeptContacts {
-        use crate::particles::GONE;
+        use crate::limits::GONE;
         let warm = self
             .all_warm()
             .into_iter()
