@@ -12,9 +12,10 @@ pyo3::create_exception!(
     kinema,
     SimulationDiverged,
     pyo3::exceptions::PyRuntimeError,
-    "A world step produced a non-finite state or runaway energy, or rk45 could not finish it; the world keeps \
-     the state from before it. Attributes: step, time, particle, dt, advised_dt, reason ('non-finite', \
-     'runaway energy' or 'step too small')."
+    "A world step produced a non-finite state or runaway energy, rk45 could not finish it, or a particle moved \
+     too fast for the event-driven engine to follow; the world keeps the state from before it. Attributes: \
+     step, time, particle, dt, advised_dt, reason ('non-finite', 'runaway energy', 'step too small', \
+     'too many sub-steps' or 'too fast')."
 );
 
 /// Engine errors of a world: divergence gets its own exception, with its facts as attributes.
