@@ -84,7 +84,7 @@ test-python: build $(TEST_STAMP)
 	command -v lmp >/dev/null || apt-get install -y -q lammps >/dev/null || (apt-get update -q >/dev/null && apt-get install -y -q lammps >/dev/null) || echo "LAMMPS could not be installed: the tests of files LAMMPS writes will say so and skip"
 	$(PY) -m pytest -q
 
-# The fuzz suite alone, FUZZ_EXAMPLES cases per test (make test runs it with 40).
+# The fuzz suite alone, FUZZ_EXAMPLES cases per test (make test runs it with 40; 2000: 72,953 cases, 17 min).
 FUZZ_EXAMPLES ?= 2000
 
 fuzz: build
