@@ -109,6 +109,44 @@ def test_the_sorted_order_is_invisible():
     np.testing.assert_allclose(vs, vu, rtol=0, atol=1e-8)
 
 
+def test_particles_with_their_own_materials_are_sorted_with_them():
+    # Particles with their own restitution and friction: the engine sorted none of them (the
+    # stage's per-particle materials were not moved by the sort, so it was turned off). Now
+    # the materials move with their particles: the sorted gas (sorts > 0) is the unsorted one
+    # (a Python force keeps the user's order) to rounding, each particle with its own e and μ
+    # (were a material left at its old place, pairs would be damped by other particles' e).
+    code = """
+    import json
+    out = {}
+    for extra in (False, True):
+        w = gas(17, extra_force=extra)
+        n = len(w)
+        e = 0.3 + 0.6 * (np.arange(n) % 5) / 4  # 0.3 … 0.9
+        mu = 0.1 * (np.arange(n) % 3)
+        x, v, m, r = w.positions.copy(), w.velocities.copy(), w.masses.copy(), np.array(w._core.radii)
+        w = kinema.World(dt=1e-3, method="verlet")
+        w.add_particles(x, velocity=v, mass=m, radius=r, restitution=e, friction=mu)
+        w.add(kinema.Box([0, 0, 0], [17 * (1 / 0.3) ** (1 / 3)] * 3))
+        w.periodic = (True, True, True)
+        w.set_collisions(model="spring_dashpot", stiffness=2000.0, damping=50.0)
+        if extra:
+            w.add(kinema.PythonForce(lambda t, x, v: np.zeros_like(x)))
+        w.step(150)
+        w.step(150)
+        assert (w._core.sorts > 0) != extra, (extra, w._core.sorts)
+        assert w._core.particle_materials() == [(a, b) for a, b in zip(e.tolist(), mu.tolist())]
+        out[str(extra)] = [w.positions.tolist(), w.velocities.tolist()]
+    print(json.dumps(out))
+    """
+    import json
+
+    res = json.loads(_run(code, 2))
+    xs, vs = np.array(res["False"][0]), np.array(res["False"][1])
+    xu, vu = np.array(res["True"][0]), np.array(res["True"][1])
+    np.testing.assert_allclose(xs, xu, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(vs, vu, rtol=0, atol=1e-8)
+
+
 def test_a_heap_solved_on_threads_is_the_same_for_any_thread_count():
     # A block of 12·12·6 touching balls resting on a floor under gravity (e = 0.5, μ = 0.3):
     # its end-of-step contacts are one island of about 2,450 contacts, which the solver

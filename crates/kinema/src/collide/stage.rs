@@ -824,6 +824,25 @@ impl CollideStage {
         (self.material, self.particle_materials.clone())
     }
 
+    /// Moves what the stage holds per particle (their own materials: `own`, and the
+    /// materials and damping ratios made of them) to a new order of the particles
+    /// (`old_of_new[i]`: the index now of the particle that goes to place i), as
+    /// [`crate::World`] moves the particles' arrays when it sorts them along space.
+    pub fn permute_particles(&mut self, old_of_new: &[u32]) {
+        fn gather<T: Copy>(v: &mut Vec<T>, old_of_new: &[u32]) {
+            if v.len() == old_of_new.len() {
+                *v = old_of_new.iter().map(|&o| v[o as usize]).collect();
+            }
+        }
+        gather(&mut self.own, old_of_new);
+        if let Some(m) = &mut self.particle_materials {
+            gather(m, old_of_new);
+        }
+        if let Some(r) = &mut self.particle_ratios {
+            gather(r, old_of_new);
+        }
+    }
+
     /// Every contact's warm start, the sleeping islands' too (for a checkpoint).
     pub fn all_warm(&self) -> Vec<ContactRecord> {
         self.impulse.all_warm()

@@ -21,9 +21,10 @@
 //! permutations of the world), and puts the particles back ([`World::restore_order`]) only
 //! before a method that takes or gives particle indices or changes the world. An error
 //! names the user's particle. The sort runs only where every force can follow a
-//! renumbering ([`Force::can_renumber`]: a Python force cannot, and then the world keeps the
-//! user's order), with velocity Verlet, without per-particle materials and from
-//! [`SORT_MIN_PARTICLES`] particles (below, everything fits in cache anyway). Sorting changes
+//! renumbering (`Properties::renumbers`: a Python force cannot, and then the world keeps the
+//! user's order), with velocity Verlet and from [`SORT_MIN_PARTICLES`] particles (below,
+//! everything fits in cache anyway); the particles' own materials, where set, move with them
+//! (`CollideStage::permute_particles`). Sorting changes
 //! only the order in which each particle's contact forces are summed, so the state may differ
 //! from an unsorted run in the last bits; it depends on the positions alone, so it is the
 //! same for any number of threads.
@@ -83,7 +84,6 @@ impl World {
     pub(super) fn sortable(&self) -> bool {
         self.has_contact_force()
             && self.particles.len() >= SORT_MIN_PARTICLES
-            && self.collide_stage.as_ref().is_some_and(|c| c.materials_parts().1.is_none())
             && self.forces.iter().all(|f| f.properties().renumbers)
     }
 
@@ -227,7 +227,7 @@ impl World {
         gather(&mut p.inv_inertia, old_of_new, 1);
         gather(&mut self.deaths.time, old_of_new, 1);
         if let Some(stage) = &mut self.collide_stage {
-            gather(&mut stage.own, old_of_new, 1);
+            stage.permute_particles(old_of_new); // (their own materials, where set)
         }
         let mut new_of_old = vec![0u32; old_of_new.len()];
         for (new, &old) in old_of_new.iter().enumerate() {
