@@ -10,6 +10,7 @@ T_R = π r √(ρ/G) / (0.1631 ν + 0.8766), G = E / (2 (1 + ν)) (as LIGGGHTS's
 ``fix check/timestep/gran`` computes it).
 """
 
+import math
 import warnings
 
 import numpy as np
@@ -212,3 +213,18 @@ def test_the_divergence_message_advises_only_what_the_world_accepts_and_prints_t
     text = str(got.value)
     assert f"(t = {got.value.time:g} s, dt = 0.001 s)" in text
     assert "implicit_euler" not in text
+
+
+def test_the_damping_ratio_has_one_home_the_engines():
+    # ζ(e) = −ln e / √(π² + ln² e) (Schwager & Pöschel's spring–dashpot): the engine's
+    # kinema::collide::damping_ratio, which contact_time asks (it kept its own copy); the
+    # closed form at e = 0.5, critical at e = 0, none at e = 1; e outside [0, 1] refused.
+    from kinema import _core, contact_time
+
+    ln = math.log(2.0)
+    assert _core.damping_ratio(0.5) == pytest.approx(ln / math.sqrt(math.pi**2 + ln**2), rel=1e-15)
+    assert (_core.damping_ratio(0.0), _core.damping_ratio(1.0)) == (1.0, 0.0)
+    for e in (0.0, 0.1, 0.5, 0.9, 1.0):
+        assert contact_time._zeta(e) == _core.damping_ratio(e)
+    with pytest.raises(ValueError, match=r"restitution = 1\.5 is invalid: the coefficient of restitution must be in \[0, 1\]"):
+        _core.damping_ratio(1.5)

@@ -49,10 +49,9 @@ class ContactTimeWarning(UserWarning):
 
 
 def _zeta(e: float) -> float:
-    if e <= 0.0:
-        return 1.0
-    ln = abs(math.log(e))
-    return ln / math.sqrt(math.pi**2 + ln * ln)
+    """ζ(e) of the spring–dashpot contact (module doc), as the engine computes it
+    (`kinema::collide::damping_ratio`, its one home); 1 for e <= 0."""
+    return 1.0 if e <= 0.0 else _core.damping_ratio(min(float(e), 1.0))
 
 
 def contact_time(model: str, omega: float | None, zeta: float | None) -> float | None:

@@ -221,8 +221,17 @@ fn collider_poses<'py>(
     Ok(PyArray1::from_vec(py, out).reshape([at.len(), 3, 4])?)
 }
 
+/// The damping ratio ζ of the spring–dashpot contact that bounces back with restitution `e`
+/// (in [0, 1]): ζ = −ln e / √(π² + ln² e), 1 for e = 0 (`kinema::collide::damping_ratio`,
+/// the one place it is computed; `kinema.contact_time` asks it here). ValueError outside.
+#[pyfunction]
+fn damping_ratio(e: f64) -> PyResult<f64> {
+    kinema::collide::damping_ratio(e).map_err(crate::errors::to_py)
+}
+
 /// Registers the module-level functions of the collision settings.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(damping_ratio, m)?)?;
     m.add_function(wrap_pyfunction!(collider_poses, m)?)?;
     m.add_function(wrap_pyfunction!(collision_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(check_contact_model, m)?)?;
