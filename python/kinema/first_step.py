@@ -258,7 +258,7 @@ def shortest_contact(settings: dict, bodies: Bodies, colliders: list[Any], g: np
     down = g / gabs if gabs > 0 else np.zeros(3)
     speed2 = np.einsum("ij,ij->i", bodies.v, bodies.v)
     zeta = contact_time._zeta(restitution_max)
-    if model in ("spring_dashpot", "toy_linear"):
+    if model == "spring_dashpot":
         k = settings["stiffness"]
         lightest_first = np.sort(bodies.w)[::-1]
         w_pair = lightest_first[0] + (lightest_first[1] if n > 1 else 0.0)
@@ -266,8 +266,6 @@ def shortest_contact(settings: dict, bodies: Bodies, colliders: list[Any], g: np
         omega = math.sqrt(k * w_eff)
         if settings.get("damping") is not None:
             zeta = settings["damping"] / (2.0 * omega)
-        if model == "toy_linear":
-            zeta = 0.0  # no dashpot
         t_c = contact_time.contact_time(model, omega, zeta)
         what = "the stiffest spring–dashpot pair (the lightest)" if w_eff == w_pair and pairs else "the lightest particle against a collider"
         return Impact(t_c, omega, zeta, None, what)
@@ -306,7 +304,7 @@ def check(world: Any, core: Any) -> StepCheck | None:
     """The figures of the check for ``world`` (its engine ``core``), or None without a force
     model."""
     settings = core.collisions or {}
-    if settings.get("model") not in ("spring_dashpot", "hertz", "toy_linear"):
+    if settings.get("model") not in ("spring_dashpot", "hertz"):
         return None
     bodies = bodies_of(world, core)
     g = gravity(world._forces, core.dim)

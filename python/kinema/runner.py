@@ -57,7 +57,7 @@ def _counted(settings: dict, impacts: int) -> str:
     contacts last many steps), the event-driven model's impacts, each at its time, and the
     stepped impulse model's impacts found inside steps by continuous detection (those at a
     step's end are its contacts)."""
-    if settings["model"] in ("spring_dashpot", "hertz", "toy_linear"):
+    if settings["model"] in ("spring_dashpot", "hertz"):
         return _count(impacts, "contact") + " begun"
     if settings["event_driven"]:
         return _count(impacts, "impact")

@@ -58,8 +58,7 @@ class WorldCollisions:
         c_n u_n, R* = r_i r_j/(r_i + r_j), E* = E/(2(1 − ν²)) from ``youngs_modulus`` E in Pa
         and ``poisson_ratio`` ν (default 0.3), the dashpot 2 ζ √(k_n m_eff) at the current
         stiffness k_n = 4/3 E* √(R* δ) with ζ from ``restitution``: LAMMPS's
-        ``hertz/material`` with ``damping coeff_restitution``) or ``"toy_linear"`` (a toy: the
-        spring k_n δ alone, no dashpot, so every bounce is elastic; it needs ``stiffness``).
+        ``hertz/material`` with ``damping coeff_restitution``).
         ``restitution`` e ∈ [0, 1] and ``friction`` (Coulomb μ ≥ 0) are the values of every
         particle without its own. ``ccd``: find impacts at their time inside the step, so
         nothing passes through a particle or a wall however fast. ``restitution_threshold``
@@ -363,7 +362,7 @@ class WorldCollisions:
         force model (``"spring_dashpot"``, ``"hertz"``) stepped by a method other than
         ``verlet``, whose steps book nothing (the engine's rule, :meth:`collider_books`)."""
         model = (self._core.collisions or {}).get("model")
-        return model not in ("spring_dashpot", "hertz", "toy_linear") or self._core.method == "verlet"
+        return model not in ("spring_dashpot", "hertz") or self._core.method == "verlet"
 
     def stage_times(self) -> dict[str, float]:
         """Wall-clock seconds spent so far in each of the lecture notes' four stages of a step:

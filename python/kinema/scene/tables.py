@@ -684,7 +684,7 @@ _COLLISION_DEFAULTS = _core.collision_defaults()
 
 
 class CollisionsTable(_Model):
-    model: Literal["impulse", "spring_dashpot", "hertz", "toy_linear"] = _COLLISION_DEFAULTS["model"]
+    model: Literal["impulse", "spring_dashpot", "hertz"] = _COLLISION_DEFAULTS["model"]
     restitution: Unit = _COLLISION_DEFAULTS["restitution"]
     friction: NonNeg = _COLLISION_DEFAULTS["friction"]
     ccd: bool = _COLLISION_DEFAULTS["ccd"]

@@ -63,11 +63,6 @@ pub enum ContactModel {
         /// Adhesion of the touching bodies (LAMMPS's `dmt` and `jkr`; `None`: none).
         cohesion: Option<Cohesion>,
     },
-    /// A toy: a linear spring with no damping, F_n = k_n δ (an elastic bounce whatever e).
-    ToyLinear {
-        /// Normal stiffness k_n, N/m (> 0).
-        stiffness: f64,
-    },
 }
 
 /// LAMMPS's tangential sub-models with history, by name ([`TangentialArgs`]).
@@ -159,7 +154,7 @@ pub struct ModelArgs {
 impl ContactModel {
     /// The models' names, as the binding and the scene files spell them, in the order an
     /// error lists them.
-    pub const NAMES: [&'static str; 4] = ["impulse", "spring_dashpot", "hertz", "toy_linear"];
+    pub const NAMES: [&'static str; 3] = ["impulse", "spring_dashpot", "hertz"];
 
     /// Poisson's ratio of Hertz's model when none is given (glass, steel and most rocks lie
     /// within 0.2–0.3).
@@ -245,18 +240,6 @@ impl ContactModel {
                     )),
                 }
             }
-            "toy_linear" => {
-                only(&hertz, "'hertz'")?;
-                only(&[("damping", damping)], "'spring_dashpot'")?;
-                match stiffness {
-                    Some(stiffness) => Ok(ContactModel::ToyLinear { stiffness }),
-                    None => Err(Error::invalid(
-                        "stiffness",
-                        "None",
-                        "model='toy_linear' needs the contact stiffness k_n, finite and > 0 N/m",
-                    )),
-                }
-            }
             other => Err(Error::invalid(
                 "model",
                 format!("'{other}'"),
@@ -291,13 +274,6 @@ impl ContactModel {
                     youngs_modulus: Some(youngs_modulus),
                     poisson_ratio: Some(poisson_ratio),
                     cohesion,
-                    ..ModelArgs::default()
-                },
-            ),
-            ContactModel::ToyLinear { stiffness } => (
-                Self::NAMES[3],
-                ModelArgs {
-                    stiffness: Some(stiffness),
                     ..ModelArgs::default()
                 },
             ),
@@ -387,7 +363,7 @@ impl CollisionParams {
 
     /// Checks the values; the error names the parameter.
     pub fn check(&self) -> Result<Material, Error> {
-        if let ContactModel::SpringDashpot { stiffness, .. } | ContactModel::ToyLinear { stiffness } = self.model {
+        if let ContactModel::SpringDashpot { stiffness, damping } = self.model {
             if !(stiffness.is_finite() && stiffness > 0.0) {
                 return Err(Error::invalid(
                     "stiffness",
@@ -395,8 +371,6 @@ impl CollisionParams {
                     "the contact stiffness must be finite and > 0 N/m",
                 ));
             }
-        }
-        if let ContactModel::SpringDashpot { damping, .. } = self.model {
             if let Some(g) = damping {
                 if !(g.is_finite() && g >= 0.0) {
                     return Err(Error::invalid(
@@ -477,7 +451,7 @@ impl CollisionParams {
             }
         }
         match (self.model, t.kind) {
-            (ContactModel::SpringDashpot { .. } | ContactModel::ToyLinear { .. }, Some(TangentialKind::Mindlin)) => {
+            (ContactModel::SpringDashpot { .. }, Some(TangentialKind::Mindlin)) => {
                 return Err(Error::invalid(
                     "tangential",
                     "'mindlin'",
@@ -556,7 +530,6 @@ fn spring_dashpot_of(params: &CollisionParams) -> Option<SpringDashpot> {
             model.cohesion = cohesion.filter(|c| c.surface_energy() > 0.0);
             model
         }
-        ContactModel::ToyLinear { stiffness } => SpringDashpot::new(stiffness, Some(0.0)),
         ContactModel::Impulse => return None,
     };
     model.tangential = tangential_of(params);
@@ -568,11 +541,9 @@ fn spring_dashpot_of(params: &CollisionParams) -> Option<SpringDashpot> {
 fn tangential_of(params: &CollisionParams) -> Option<TangentialModel> {
     let t = params.tangential;
     let law = match (params.model, t.kind) {
-        (ContactModel::SpringDashpot { stiffness, .. } | ContactModel::ToyLinear { stiffness }, _) => {
-            TangentialLaw::LinearHistory {
-                stiffness: t.stiffness.unwrap_or(2.0 / 7.0 * stiffness),
-            }
-        }
+        (ContactModel::SpringDashpot { stiffness, .. }, _) => TangentialLaw::LinearHistory {
+            stiffness: t.stiffness.unwrap_or(2.0 / 7.0 * stiffness),
+        },
         (ContactModel::Hertz { .. }, Some(TangentialKind::LinearHistory)) => {
             TangentialLaw::LinearHistory { stiffness: t.stiffness? }
         }
@@ -957,9 +928,7 @@ impl CollideStage {
     pub fn check_placement(&mut self, p: &Particles, from: usize, user_of: Option<&[u32]>) -> Result<placement::Overlaps, Error> {
         let rule = match self.params.model {
             ContactModel::Impulse => placement::Rule::CentreInside,
-            ContactModel::SpringDashpot { .. } | ContactModel::Hertz { .. } | ContactModel::ToyLinear { .. } => {
-                placement::Rule::Coincident
-            }
+            ContactModel::SpringDashpot { .. } | ContactModel::Hertz { .. } => placement::Rule::Coincident,
         };
         let place = placement::Placed {
             x: &p.x,
