@@ -1,299 +1,48 @@
-"""Atomic writes (a temporary name, then a rename) and the frames of a trajectory-like object."""
+"""Atomic writes of series folders and of several outputs put in place together, and writes
+built apart by a library in a private folder, then copied in. The errors, the atomic write of
+one file and the temporary names are in ``kinema.io._atomic``, the checked frames of a
+trajectory-like object in ``kinema.io._frames``; this module re-exports their names."""
 
 from __future__ import annotations
 
 import contextlib
-import errno
 import os
 import re
 import secrets
 import shutil
-import stat
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-
-class TrajectoryFileError(ValueError):
-    """A trajectory file that cannot be read or written. The message is one line naming the
-    file and what is wrong with it (a command line prints it and exits with status 2)."""
-
-    __module__ = "kinema.io"
-
-
-class FileWriteError(OSError):
-    """A write the system failed: a full disk (ENOSPC), a file-size limit (EFBIG), an I/O
-    error (EIO), a permission refused while writing. The message is one line naming the file
-    and the system's reason; `errno` is the system's. The target is left as it was and no
-    temporary file remains. (A target refused before writing, such as a folder or a device,
-    is a `TrajectoryFileError`.)"""
-
-    __module__ = "kinema.io"
-
-    @classmethod
-    def of(cls, path: str | os.PathLike, e: OSError) -> FileWriteError:
-        """The error for `path` from the system's `e` (`errno`, `strerror` and
-        `filename` set as an `OSError`'s)."""
-        reason = e.strerror or str(e)
-        return cls(e.errno, reason, os.fspath(path))
-
-    def __str__(self) -> str:
-        return f"cannot write {self.filename}: {self.strerror}"
-
-
-_BOTH: dict[type, type] = {}
-
-
-def write_error(path: str | os.PathLike, code: int, reason: str) -> FileWriteError:
-    """A `FileWriteError` for `path` of errno `code` that is also the built-in `OSError`
-    subclass of that errno (`FileNotFoundError` for ENOENT, `IsADirectoryError` for
-    EISDIR, ...), as `OSError(code, ...)` would be: code that caught the built-in error
-    before it became a `FileWriteError` still catches it."""
-    builtin = type(OSError(code, reason))
-    if builtin is OSError:
-        return FileWriteError(code, reason, os.fspath(path))
-    if builtin not in _BOTH:
-        # named FileWriteError too: a traceback shows kinema.io.FileWriteError
-        _BOTH[builtin] = type("FileWriteError", (FileWriteError, builtin), {"__module__": "kinema.io", "__doc__": FileWriteError.__doc__})
-    return _BOTH[builtin](code, reason, os.fspath(path))
-
-
-@contextmanager
-def os_errors_as_write_errors(path: str | os.PathLike) -> Iterator[None]:
-    """Turns an `OSError` raised in the block that is not a `FileWriteError` yet (a name
-    too long for the file system, a folder that is not searchable, a temporary file that
-    cannot be made) into a `FileWriteError` naming `path`, of the same errno (and the
-    same built-in subclass, `write_error`): every failure of a writer's system calls is one
-    line naming the file it was asked to write."""
-    try:
-        yield
-    except FileWriteError:
-        raise
-    except OSError as e:
-        if e.errno is None:
-            raise
-        raise write_error(path, e.errno, e.strerror or str(e)) from None
-
-
-def _umask() -> int:
-    """The process's umask. Linux reports it in /proc/self/status; elsewhere it is read by
-    setting and restoring it, which briefly changes it for every thread of the process (the
-    writers below never need it: they create their files with the mode open() uses)."""
-    try:
-        with open("/proc/self/status", encoding="ascii", errors="replace") as f:
-            for line in f:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except (OSError, ValueError, IndexError):
-        pass
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-_NAME_TRIES = 100
-
-# A temporary name carries its writer: <prefix><host>-<pid>.<random><suffix>. A writer killed
-# (kill -9, power off) leaves it behind; the next writer of the same target removes it once
-# that process is gone (same host), or after a day where the name has no owner (an older
-# kinema's).
-_OWNED = re.compile(r"(?:(?P<host>[A-Za-z0-9-]*)-(?P<pid>[0-9]+)\.)?[A-Za-z0-9_]+")
-STALE_UNKNOWN_OWNER_S = 86400.0
-
-
-def host_name() -> str:
-    """This machine's name as temporary names carry it (letters, digits and '-')."""
-    import socket
-
-    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:64]
-
-
-def owner_tag() -> str:
-    """`<host>-<pid>`: what a temporary name says of the process that made it."""
-    return f"{host_name()}-{os.getpid()}"
-
-
-def alive(pid: int) -> bool:
-    """Whether process `pid` runs on this machine (another user's counts as running)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    except (OverflowError, ValueError, OSError):
-        return False
-    return True
-
-
-def remove_stale(folder: Path, prefix: str, suffix: str = "") -> list[Path]:
-    """Removes the temporary files and folders `<prefix><owner>.<random><suffix>` in
-    `folder` whose writer is gone: its process no longer runs on this host, or, with no
-    owner in the name, it is more than a day old. Those of live writers and of other hosts
-    are kept. Returns what was removed."""
-    import time
-
-    removed: list[Path] = []
-    try:
-        entries = [e for e in os.scandir(folder) if e.name.startswith(prefix) and e.name.endswith(suffix)]
-    except OSError:
-        return removed
-    host = host_name()
-    for entry in entries:
-        middle = entry.name[len(prefix) : len(entry.name) - len(suffix)]
-        m = _OWNED.fullmatch(middle)
-        if m is None:
-            continue
-        if m["pid"] is not None:
-            stale = m["host"] == host and int(m["pid"]) != os.getpid() and not alive(int(m["pid"]))
-        else:
-            try:
-                stale = time.time() - entry.stat(follow_symlinks=False).st_mtime > STALE_UNKNOWN_OWNER_S
-            except OSError:
-                stale = False
-        if stale:
-            if entry.is_dir(follow_symlinks=False):
-                shutil.rmtree(entry.path, ignore_errors=True)
-            else:
-                Path(entry.path).unlink(missing_ok=True)
-            removed.append(Path(entry.path))
-    return removed
-
-
-def _temporary_file(parent: Path, prefix: str, suffix: str) -> Path:
-    """A new empty file `<prefix><random><suffix>` in `parent`, created exclusively with
-    mode 0666 as an ordinary `open()` creates files: the kernel applies the umask (and a
-    default ACL of the folder), so 0644 under umask 022. `tempfile.mkstemp` would make it
-    0600."""
-    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_BINARY", 0)
-    for _ in range(_NAME_TRIES):
-        path = parent / f"{prefix}{owner_tag()}.{secrets.token_hex(6)}{suffix}"
-        try:
-            fd = os.open(path, flags, 0o666)
-        except FileExistsError:
-            continue
-        os.close(fd)
-        return path
-    raise FileExistsError(errno.EEXIST, "no unused temporary name", str(parent))
-
-
-def _temporary_folder(parent: Path, prefix: str, suffix: str) -> Path:
-    """A new empty folder in `parent`, made with mode 0777 as `os.mkdir` makes folders
-    (0755 under umask 022; `tempfile.mkdtemp` would make it 0700)."""
-    for _ in range(_NAME_TRIES):
-        path = parent / f"{prefix}{owner_tag()}.{secrets.token_hex(6)}{suffix}"
-        try:
-            os.mkdir(path, 0o777)
-        except FileExistsError:
-            continue
-        return path
-    raise FileExistsError(errno.EEXIST, "no unused temporary name", str(parent))
-
-
-_KINDS = (
-    (stat.S_ISCHR, "character device"),
-    (stat.S_ISBLK, "block device"),
-    (stat.S_ISFIFO, "FIFO"),
-    (stat.S_ISSOCK, "socket"),
-)
-
-
-def special_kind(mode: int) -> str | None:
-    """What a file of `st_mode` is if it is a device, a FIFO or a socket (else None)."""
-    return next((kind for test, kind in _KINDS if test(mode)), None)
-
-
-def refuse_special_target(path: str | os.PathLike) -> None:
-    """Refuses a target that exists and is not a regular file (followed through symbolic
-    links): a device, a FIFO, a socket. Every writer puts a temporary file in place of its
-    target by a rename, which would replace such a node (a save to /dev/null as root made
-    the machine's /dev/null an 80 kB file), so kinema writes only where nothing stands or a
-    regular file does, and leaves anything else untouched. Nothing is opened: a FIFO is not
-    blocked on. A directory is refused by the callers, with their own advice."""
-    path = Path(path)
-    try:
-        mode = os.stat(path).st_mode
-    except FileNotFoundError:
-        return
-    except OSError as e:  # a name too long, a loop of links, a folder not searchable
-        raise TrajectoryFileError(f"cannot write {path}: {e.strerror or e}") from None
-    kind = special_kind(mode)
-    if kind is not None:
-        raise TrajectoryFileError(f"cannot write {path}: it is a {kind}, not a regular file; kinema replaces only regular files, so give another name")
-
-
-def _writable_parent(path: Path) -> Path:
-    try:  # (is_dir raises for a name too long, ENAMETOOLONG)
-        is_dir = path.is_dir()
-        parent_is_dir = path.parent.is_dir()
-    except OSError as e:
-        raise FileWriteError.of(path, e) from None
-    if is_dir:
-        raise TrajectoryFileError(f"cannot write {path}: it is a directory; give a file name such as {path / 'run.h5'}")
-    refuse_special_target(path)
-    parent = path.parent
-    if not parent_is_dir:
-        raise TrajectoryFileError(f"cannot write {path}: the folder {parent} does not exist")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise TrajectoryFileError(f"cannot write {path}: the folder {parent} is not writable")
-    return parent
-
-
-@contextmanager
-def atomic_file(path: str | os.PathLike) -> Iterator[Path]:
-    """Yields a temporary path in the folder of `path`; when the block ends without an
-    exception the temporary file is renamed to `path` (`os.replace`, atomic on one file
-    system), otherwise it is removed and `path` is left as it was. The file gets the mode
-    an ordinary `open()` would give it (0666 less the umask). An `OSError` while writing
-    becomes a `FileWriteError` naming `path`."""
-    path = Path(path)
-    parent = _writable_parent(path)
-    remove_stale(parent, f".{path.name}.", ".part")  # left by a writer of it that was killed
-    try:
-        tmp = _temporary_file(parent, f".{path.name}.", ".part")
-    except OSError as e:
-        raise FileWriteError.of(path, e) from None
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    except BaseException as e:
-        tmp.unlink(missing_ok=True)
-        if isinstance(e, OSError) and not isinstance(e, FileWriteError):
-            raise FileWriteError.of(path, e) from None
-        raise
-
-
-@contextmanager
-def hdf5_file(path: str | os.PathLike, **options: Any) -> Iterator[Any]:
-    """Yields an `h5py.File` open for writing whose contents become `path` when the block
-    ends without an exception (written as `atomic_file` writes; `options` go to
-    `h5py.File`).
-
-    HDF5 never writes to the disk here: it builds the file in memory (h5py's file-object
-    driver on a `BytesIO`), and Python writes the finished bytes. A write that fails (a full
-    disk, a file-size limit, an I/O error) then fails in Python, as one `FileWriteError`
-    naming `path`, with the temporary file removed. Given to HDF5 itself, the failure leaves
-    objects that cannot be closed, since closing writes: their deallocation prints dozens of
-    tracebacks and the interpreter crashes at exit (h5py issues 914, 1775, 2160). The cost is
-    the file's size in memory while it is built, about what the trajectory already holds."""
-    import io
-
-    from ._h5md_layout import import_h5py
-
-    h5py = import_h5py()
-    path = Path(path)
-    _writable_parent(path)  # refused before the work of building it
-    image = io.BytesIO()
-    with h5py.File(image, "w", **options) as f:
-        yield f
-    with atomic_file(path) as tmp, open(tmp, "wb") as out:
-        out.write(image.getbuffer())
-
+from ._atomic import _BOTH as _BOTH
+from ._atomic import _KINDS as _KINDS
+from ._atomic import _NAME_TRIES as _NAME_TRIES
+from ._atomic import _OWNED as _OWNED
+from ._atomic import STALE_UNKNOWN_OWNER_S as STALE_UNKNOWN_OWNER_S
+from ._atomic import FileWriteError as FileWriteError
+from ._atomic import TrajectoryFileError as TrajectoryFileError
+from ._atomic import _temporary_file as _temporary_file
+from ._atomic import _temporary_folder as _temporary_folder
+from ._atomic import _umask as _umask
+from ._atomic import _writable_parent as _writable_parent
+from ._atomic import alive as alive
+from ._atomic import atomic_file as atomic_file
+from ._atomic import hdf5_file as hdf5_file
+from ._atomic import host_name as host_name
+from ._atomic import os_errors_as_write_errors as os_errors_as_write_errors
+from ._atomic import owner_tag as owner_tag
+from ._atomic import refuse_special_target as refuse_special_target
+from ._atomic import remove_stale as remove_stale
+from ._atomic import special_kind as special_kind
+from ._atomic import write_error as write_error
+from ._frames import Frames as Frames
+from ._frames import _groups as _groups
+from ._frames import _per_frame_rows as _per_frame_rows
+from ._frames import _per_frame_vectors as _per_frame_vectors
+from ._frames import _per_particle as _per_particle
+from ._frames import frames_of as frames_of
 
 SERIES_DIGITS = 5  # frame numbers in series file names: stem_00000.vtp
 
@@ -557,153 +306,3 @@ def atomic_outputs(path: str | os.PathLike) -> Iterator[Outputs]:
         if isinstance(e, OSError) and not isinstance(e, FileWriteError):
             raise FileWriteError.of(path, e) from None
         raise
-
-
-@dataclass(frozen=True)
-class Frames:
-    """The per-particle data of a trajectory-like object, checked and in SI units: `t`
-    (F,) s; `positions` (F, N, 3) m and `velocities` (F, N, 3) m/s (z = 0 in 2D worlds);
-    `masses` (N,) kg and `radii` (N,) m, `None` when the object has none; `ids` (N,)
-    (0..N-1 by default); `dim` 2 or 3; `dt` s and `method`, `None` when unknown;
-    `alive` (F, N) bool, which particles exist at each frame (all True without births and
-    deaths; positions and velocities are NaN where not); with spin `angular_velocities`
-    (F, N, 3) rad/s, `orientations` (F, N, 4) unit quaternions (w, x, y, z) and
-    `inertia` (N,) kg·m², `None` where the trajectory has none; `groups` (N,) int64, each
-    particle's collision group (0..31, `check_frames` refuses others), `None` where the
-    trajectory has none; `step` s, the length of the run's steps where it is not `dt`
-    (`Trajectory.step`: a frame of 1/fps that dt does not divide), else `None`."""
-
-    t: np.ndarray
-    positions: np.ndarray
-    velocities: np.ndarray
-    masses: np.ndarray | None
-    radii: np.ndarray | None
-    ids: np.ndarray
-    dim: int
-    dt: float | None
-    method: str | None
-    alive: np.ndarray
-    angular_velocities: np.ndarray | None = None
-    orientations: np.ndarray | None = None
-    inertia: np.ndarray | None = None
-    groups: np.ndarray | None = None
-    step: float | None = None
-
-    @property
-    def n_frames(self) -> int:
-        return self.t.shape[0]
-
-    @property
-    def n_particles(self) -> int:
-        return self.positions.shape[1]
-
-    @property
-    def changes_count(self) -> bool:
-        """Whether particles are born or die: some are not alive at some frame."""
-        return not bool(self.alive.all())
-
-    @property
-    def has_velocities(self) -> bool:
-        """Whether the velocities are known: some particle that exists has one that is not
-        NaN. A trajectory read from a file without velocities has them all NaN ("unknown",
-        `Trajectory.load`); the exports then write no velocity columns, so that the file
-        reads back without velocities rather than with NaN ones."""
-        live = self.velocities[self.alive]
-        return live.size == 0 or not bool(np.isnan(live).all())
-
-    def live(self, i: int) -> np.ndarray:
-        """The columns (particles) alive at frame `i`, in column order (that of `ids`)."""
-        return np.flatnonzero(self.alive[i])
-
-
-def _per_frame_vectors(traj: Any, name: str, n_frames: int) -> np.ndarray:
-    a = np.asarray(getattr(traj, name), dtype=np.float64)
-    if a.ndim != 3 or a.shape[0] != n_frames or a.shape[2] not in (2, 3):
-        raise ValueError(f"{name} has shape {a.shape}; it must be (F, N, 3) with F = {n_frames} frames")
-    if a.shape[2] == 2:
-        a = np.concatenate([a, np.zeros(a.shape[:2] + (1,))], axis=2)
-    return a
-
-
-def _per_frame_rows(traj: Any, name: str, shape: tuple[int, int, int]) -> np.ndarray | None:
-    """The optional (F, N, w) array `name` of `traj` (angular velocities, orientations),
-    shape-checked; `None` where it has none."""
-    value = getattr(traj, name, None)
-    if value is None:
-        return None
-    a = np.asarray(value, dtype=np.float64)
-    if a.shape != shape:
-        raise ValueError(f"{name} has shape {a.shape}; it must be {shape}, (F, N, {shape[2]})")
-    return a
-
-
-def _per_particle(traj: Any, names: tuple[str, ...], n: int, dtype: Any) -> np.ndarray | None:
-    for name in names:
-        value = getattr(traj, name, None)
-        if value is not None:
-            a = np.asarray(value, dtype=dtype)
-            if a.shape != (n,):
-                raise ValueError(f"{name} has shape {a.shape}; it must be ({n},), one value per particle")
-            return a
-    return None
-
-
-def _groups(traj: Any, n: int) -> np.ndarray | None:
-    """The optional collision groups (N,) of `traj` as int64, shape- and type-checked (their
-    range is `check_frames`'s); `None` where it has none."""
-    value = getattr(traj, "groups", None)
-    if value is None:
-        return None
-    a = np.asarray(value)
-    if a.shape != (n,):
-        raise ValueError(f"groups has shape {a.shape}; it must be ({n},), one collision group per particle")
-    if a.dtype.kind not in "iu" and a.size:
-        raise ValueError(f"groups has dtype {a.dtype}; collision groups are integers in 0..31")
-    return a.astype(np.int64)
-
-
-def frames_of(traj: Any) -> Frames:
-    """Reads `t`, `positions`, `velocities` and the optional `masses` (or `mass`),
-    `radii` (or `radius`), `ids`, `alive`, `dim`, `dt`, `method`,
-    `angular_velocities`, `orientations`, `inertia` and `groups` of a
-    trajectory-like object and checks their shapes; raises `ValueError` naming the
-    attribute that is wrong."""
-    t = np.asarray(traj.t, dtype=np.float64)
-    if t.ndim != 1:
-        raise ValueError(f"t has shape {t.shape}; it must be (F,), one time per frame")
-    x = _per_frame_vectors(traj, "positions", t.shape[0])
-    v = _per_frame_vectors(traj, "velocities", t.shape[0])
-    if v.shape != x.shape:
-        raise ValueError(f"velocities have shape {v.shape} but positions {x.shape}; they must match")
-    n = x.shape[1]
-    alive = getattr(traj, "alive", None)
-    alive = np.ones((t.shape[0], n), dtype=bool) if alive is None else np.asarray(alive, dtype=bool)
-    if alive.shape != (t.shape[0], n):
-        raise ValueError(f"alive has shape {alive.shape}; it must be (F, N) = {(t.shape[0], n)}, one flag per frame and particle")
-    dim = int(getattr(traj, "dim", None) or 3)
-    if dim not in (2, 3):
-        raise ValueError(f"dim = {dim} is invalid: it must be 2 or 3")
-    # NaN (a particle not alive, or velocities unknown) is no z != 0
-    if dim == 2 and (np.any(np.abs(x[..., 2]) > 0) or np.any(np.abs(v[..., 2]) > 0)):
-        raise ValueError("dim = 2 but some positions or velocities have z != 0; a 2D trajectory lies in the xy-plane")
-    ids = _per_particle(traj, ("ids", "id"), n, np.int64)
-    dt = getattr(traj, "dt", None)
-    method = getattr(traj, "method", None)
-    return Frames(
-        t=t,
-        positions=x,
-        velocities=v,
-        masses=_per_particle(traj, ("masses", "mass"), n, np.float64),
-        radii=_per_particle(traj, ("radii", "radius"), n, np.float64),
-        ids=np.arange(n, dtype=np.int64) if ids is None else ids,
-        dim=dim,
-        dt=None if dt is None else float(dt),
-        # (a Trajectory's `step` is the steps' length; other objects' may be step numbers)
-        step=float(traj.step) if isinstance(getattr(traj, "step", None), float) else None,
-        method=None if method is None else str(method),
-        alive=alive,
-        angular_velocities=_per_frame_rows(traj, "angular_velocities", (t.shape[0], n, 3)),
-        orientations=_per_frame_rows(traj, "orientations", (t.shape[0], n, 4)),
-        inertia=_per_particle(traj, ("inertia",), n, np.float64),
-        groups=_groups(traj, n),
-    )

@@ -1,164 +1,72 @@
-"""A scene file's value types and the pydantic models of its tables: [world], [[particles]],
-[[forces]], [[colliders]], [[emitters]], [[kill_volumes]], [collisions], [render], [output],
-[analysis].
+"""The pydantic models of a scene file's tables [world], [[forces]], [[emitters]],
+[[kill_volumes]], [collisions], [render], [output] and [analysis].
+The value types are in ``kinema.scene.values``, the [[particles]] blocks in
+``kinema.scene.particle_tables`` and the [[colliders]] in ``kinema.scene.collider_tables``; this
+module re-exports their names, so every table and value type is found here.
 The whole file, ``Scene``, is in ``kinema.scene.schema``, which imports this module (never the
 other way round)."""
 
 from __future__ import annotations
 
 import math
-import os
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
-from .. import _checks, _core
+from .. import _core
 from ..ode import method_names
-
-# -- value types ------------------------------------------------------------------------------
-# A callable discriminator picks one member of a union, so a wrong value gets one error (that
-# member's) rather than one per member. Tags start with "~" so they can be cut out of key paths.
-
-
-class _Model(BaseModel):
-    # strict: no str -> number, bool -> number or float -> int (TOML's 1 is an int, and
-    # pydantic's strict mode still takes an int where a float is wanted)
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, strict=True)
-
-
-# Bounds that keep the engine's arithmetic finite and its integers in range (the CLI's work
-# estimate, kinema.runner, refuses much smaller runs unless told --force).
-MIN_DT = 1e-300  # s; with MIN_FPS, 1/(fps dt) (the steps of one frame) stays finite
-MIN_FPS = 1e-6  # frames per second
-MAX_PARTICLES = 2**32 - 1  # particles in one block, and the largest particle index + 1
-MAX_SEED = 2**64 - 1
-MAX_NESTING = 32  # arrays and tables inside each other (a scene's deepest key path is 5 long)
-MAX_RATE = 1e15  # particles a second from one emitter: a million a step at dt = 1 ns, and counts of births stay exact floats for 9 s
-
-
-Vec = Annotated[list[float], Field(min_length=2, max_length=3)]
-Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
-NonNeg = Annotated[float, Field(ge=0)]
-Positive = Annotated[float, Field(gt=0)]
-SpeciesName = Annotated[str, Field(pattern=f"^{_checks.SPECIES_PATTERN}$")]  # one word, as World.add_particles takes it
-Unit = Annotated[float, Field(ge=0, le=1)]
-Index = Annotated[int, Field(ge=0, lt=MAX_PARTICLES)]
-Count = Annotated[int, Field(ge=1, le=MAX_PARTICLES)]
-Seed = Annotated[int, Field(ge=0, le=MAX_SEED)]
-Group = Annotated[int, Field(ge=0, le=_checks.GROUPS - 1, strict=True)]  # a collision group (World.add_particles' group)
-
-
-def _exact(*allowed: Any) -> Any:
-    """A before-validator for a Literal field: pydantic's strict mode still matches 2.0 to 2
-    and 0 to False; this takes only values of the listed ones' own types."""
-
-    def check(v: Any) -> Any:
-        if not any(type(v) is type(a) and v == a for a in allowed):
-            raise ValueError(f"input should be {' or '.join(repr(a) for a in allowed)}")
-        return v
-
-    return check
-
-
-class Uniform(_Model):
-    """A value drawn per particle, uniformly in [min, max], with the block's seed."""
-
-    min: float
-    max: float
-
-    @model_validator(mode="after")
-    def _ordered(self) -> Uniform:
-        if not self.min <= self.max:
-            raise ValueError(f"min = {self.min} > max = {self.max}; min must be <= max")
-        return self
-
-
-class Maxwell(_Model):
-    """Velocities from the Maxwell–Boltzmann distribution: each component normal with standard
-    deviation ``sigma`` (m/s), or sqrt(kT/m) for a thermal energy ``kT`` (J)."""
-
-    sigma: NonNeg | None = None
-    kT: NonNeg | None = None
-    seed: Seed | None = None
-    zero_momentum: bool = False
-
-    @model_validator(mode="after")
-    def _one(self) -> Maxwell:
-        if (self.sigma is None) == (self.kT is None):
-            raise ValueError("give exactly one of sigma (m/s) or kT (J)")
-        return self
-
-
-class Isotropic(_Model):
-    """Every particle at the same ``speed`` (m/s) in a direction drawn uniformly on the sphere
-    (the circle in 2D): a gas far from equilibrium, which collisions take to Maxwell–Boltzmann."""
-
-    speed: NonNeg
-    seed: Seed | None = None
-    zero_momentum: bool = False
-
-
-def _kind(v: Any) -> str:
-    if isinstance(v, (dict, BaseModel)):  # a table as read, or as a model when written back
-        return "~dict"
-    if isinstance(v, list):
-        return "~list"
-    return "~scalar"
-
-
-def _by_kind(scalar: Any, listed: Any, table: Any = None) -> Any:
-    """scalar | list | table, chosen by the value's kind (a table may be left out)."""
-    members = Annotated[scalar, Tag("~scalar")] | Annotated[listed, Tag("~list")]
-    if table is not None:
-        members = members | Annotated[table, Tag("~dict")]
-    return Annotated[members, Discriminator(_kind, custom_error_type="kind", custom_error_message="give a number or a list of numbers")]
-
-
-PerParticle = _by_kind(float, list[float], Uniform)
-
-
-def _velocity_kind(v: Any) -> str:
-    if isinstance(v, list) and v and isinstance(v[0], list):
-        return "~vectors"
-    if isinstance(v, dict) and "speed" in v or isinstance(v, Isotropic):
-        return "~speed"
-    return _kind(v)
-
-
-Velocity = Annotated[
-    Annotated[float, Tag("~scalar")]
-    | Annotated[list[float], Tag("~list")]
-    | Annotated[list[list[float]], Tag("~vectors")]
-    | Annotated[Maxwell, Tag("~dict")]
-    | Annotated[Isotropic, Tag("~speed")],
-    Discriminator(_velocity_kind),
-]  # a scalar is refused below, with a message that says what to give
-Flags = _by_kind(bool, list[bool], bool)
-Material = _by_kind(float, list[float], float)
-
-
-def _typed(*models: type[_Model]) -> Any:
-    """A union of models told apart by their ``type`` key."""
-    names = [m.model_fields["type"].default for m in models]
-
-    def tag(v: Any) -> str | None:
-        t = v.get("type") if isinstance(v, dict) else getattr(v, "type", None)
-        return f"~{t}" if t in names else None
-
-    allowed = ", ".join(repr(n) for n in names)
-    members = tuple(Annotated[m, Tag(f"~{n}")] for m, n in zip(models, names, strict=True))
-    return Annotated[
-        members[0] if len(members) == 1 else _union(members),
-        Discriminator(tag, custom_error_type="type", custom_error_message=f"type must be one of {allowed}"),
-    ]
-
-
-def _union(members: tuple) -> Any:
-    u = members[0]
-    for m in members[1:]:
-        u = u | m
-    return u
-
+from .collider_tables import BoxCollider as BoxCollider
+from .collider_tables import ColliderItem as ColliderItem
+from .collider_tables import KeyframesMotion as KeyframesMotion
+from .collider_tables import MeshCollider as MeshCollider
+from .collider_tables import MeshShape as MeshShape
+from .collider_tables import MotionItem as MotionItem
+from .collider_tables import PlaneCollider as PlaneCollider
+from .collider_tables import SphereCollider as SphereCollider
+from .collider_tables import SteadyMotion as SteadyMotion
+from .collider_tables import _all_finite as _all_finite
+from .collider_tables import _motion_kind as _motion_kind
+from .collider_tables import _Surface as _Surface
+from .particle_tables import AtomStyle as AtomStyle
+from .particle_tables import Block as Block
+from .particle_tables import FileBlock as FileBlock
+from .particle_tables import FileFormat as FileFormat
+from .particle_tables import FileUnits as FileUnits
+from .particle_tables import LatticeBlock as LatticeBlock
+from .particle_tables import ListBlock as ListBlock
+from .particle_tables import RandomBlock as RandomBlock
+from .particle_tables import ScalesTable as ScalesTable
+from .particle_tables import _Block as _Block
+from .values import MAX_NESTING as MAX_NESTING
+from .values import MAX_PARTICLES as MAX_PARTICLES
+from .values import MAX_RATE as MAX_RATE
+from .values import MAX_SEED as MAX_SEED
+from .values import MIN_DT as MIN_DT
+from .values import MIN_FPS as MIN_FPS
+from .values import Count as Count
+from .values import Flags as Flags
+from .values import Group as Group
+from .values import Index as Index
+from .values import Isotropic as Isotropic
+from .values import Material as Material
+from .values import Maxwell as Maxwell
+from .values import NonNeg as NonNeg
+from .values import PerParticle as PerParticle
+from .values import Positive as Positive
+from .values import Seed as Seed
+from .values import SpeciesName as SpeciesName
+from .values import Uniform as Uniform
+from .values import Unit as Unit
+from .values import Vec as Vec
+from .values import Vec3 as Vec3
+from .values import Velocity as Velocity
+from .values import _by_kind as _by_kind
+from .values import _exact as _exact
+from .values import _kind as _kind
+from .values import _Model as _Model
+from .values import _typed as _typed
+from .values import _union as _union
+from .values import _velocity_kind as _velocity_kind
 
 # -- [world] ----------------------------------------------------------------------------------
 
@@ -203,137 +111,6 @@ class WorldTable(_Model):
             raise ValueError(f"frames per second must be a finite number >= {MIN_FPS:g}")
         return v
 
-
-# -- [[particles]] ----------------------------------------------------------------------------
-
-
-class _Block(_Model):
-    mass: PerParticle = 1.0
-    radius: PerParticle = 0.0
-    velocity: Velocity | None = None
-    pinned: Flags = False
-    restitution: Material | None = None
-    friction: Material | None = None
-    species: SpeciesName | list[SpeciesName] | None = None
-    group: Group | list[Group] = 0
-    seed: Seed = 0
-    angular_velocity: list[float] | list[list[float]] | None = None
-    inertia: PerParticle | None = None
-
-    @field_validator("velocity")
-    @classmethod
-    def _not_scalar(cls, v: Any) -> Any:
-        if isinstance(v, float):
-            raise ValueError("give a vector [vx, vy, vz], one vector per particle, or a table {sigma = ...}, {kT = ...} or {speed = ...}")
-        return v
-
-
-class ListBlock(_Block):
-    type: Literal["list"] = "list"
-    positions: Annotated[list[Vec], Field(min_length=1)]
-
-
-class LatticeBlock(_Block):
-    type: Literal["lattice"] = "lattice"
-    origin: Vec = [0.0, 0.0, 0.0]
-    counts: Annotated[list[Count], Field(min_length=2, max_length=3)]
-    spacing: _by_kind(Positive, Annotated[list[Positive], Field(min_length=2, max_length=3)]) = 1.0
-    jitter: NonNeg = 0.0
-
-    @field_validator("counts")
-    @classmethod
-    def _size(cls, v: list[int]) -> list[int]:
-        if math.prod(v) > MAX_PARTICLES:
-            raise ValueError(f"the lattice would have {math.prod(v):,} particles, more than {MAX_PARTICLES:,}")
-        return v
-
-
-class RandomBlock(_Block):
-    type: Literal["random"] = "random"
-    lo: Vec
-    hi: Vec
-    count: Count
-    min_distance: NonNeg | None = None
-
-    # (a NaN or infinite corner, or a box wider than a float holds, was numpy's "OverflowError: Range exceeds valid bounds")
-    @field_validator("lo", "hi")
-    @classmethod
-    def _finite(cls, v: list[float]) -> list[float]:
-        if not all(math.isfinite(c) for c in v):
-            raise ValueError("each coordinate of a corner of the box must be a finite number of metres")
-        return v
-
-    @model_validator(mode="after")
-    def _box(self) -> RandomBlock:
-        if len(self.lo) != len(self.hi) or any(a > b for a, b in zip(self.lo, self.hi, strict=False)):
-            raise ValueError(f"lo = {self.lo} and hi = {self.hi}: give corners of the same length with lo <= hi")
-        if not all(math.isfinite(b - a) for a, b in zip(self.lo, self.hi, strict=False)):
-            raise ValueError(f"lo = {self.lo} and hi = {self.hi}: the box is wider than a float holds; hi - lo must be finite")
-        return self
-
-
-class ScalesTable(_Model):
-    """A file's units given as their SI values: one unit of length in m, of time in s, of mass in kg."""
-
-    length: Positive
-    time: Positive
-    mass: Positive
-
-
-# the formats a file block reads (kinema.io.readers.READ_FORMATS) and a LAMMPS data file's atom styles (read_lammps.ATOM_STYLES)
-FileFormat = Literal["h5md", "xyz", "gsd", "lammps", "lammps-data", "csv", "vtk", "ply", "usd"]
-AtomStyle = Literal["atomic", "charge", "bond", "angle", "molecular", "full", "sphere"]
-
-
-FileUnits = Annotated[
-    Annotated[str, Tag("~scalar")] | Annotated[ScalesTable, Tag("~dict")],
-    Discriminator(_kind, custom_error_type="kind", custom_error_message="give a unit style's name or a table {length = m, time = s, mass = kg}"),
-]
-
-
-class FileBlock(_Block):
-    """The particles of one frame of a trajectory file (``World.add_particles_from``): their
-    positions (+ ``translate``), and their velocities, masses, radii, species and collision
-    groups where the file has them (else the block's own keys)."""
-
-    type: Literal["file"] = "file"
-    path: Annotated[str, Field(min_length=1)]
-    frame: int = -1
-    units: FileUnits | None = None
-    format: FileFormat | None = None
-    atom_style: AtomStyle | None = None
-    translate: Vec | None = None
-    _read: dict[str, Any] | None = PrivateAttr(default=None)  # the particles read, for counting and building
-
-    @field_validator("units")
-    @classmethod
-    def _known_units(cls, v: Any) -> Any:
-        from ..io.units import scales
-
-        if isinstance(v, str):
-            try:
-                scales(v, "units")
-            except ValueError as e:
-                raise ValueError(str(e).split(" is invalid: ", 1)[-1]) from None
-        return v
-
-    def particles(self) -> dict[str, Any]:
-        """The particles the block takes from its file (``kinema.io.readers.particles_from``),
-        read once (a relative ``path``: from the working folder; ``Scene.from_toml`` makes it
-        relative to the scene file's folder). Raises ``ValueError``, one line naming ``path``
-        and why the file cannot be read."""
-        if self._read is None:
-            from ..io.readers import particles_from
-
-            units = self.units.model_dump() if isinstance(self.units, ScalesTable) else self.units
-            try:
-                self._read = particles_from(self.path, self.frame, units, format=self.format, atom_style=self.atom_style)
-            except (ValueError, TypeError) as e:
-                raise ValueError(f"path = {self.path!r}: {str(e).strip().splitlines()[0]}") from None
-        return self._read
-
-
-Block = _typed(ListBlock, LatticeBlock, RandomBlock, FileBlock)
 
 # -- [[forces]] -------------------------------------------------------------------------------
 
@@ -425,193 +202,6 @@ class VortexForce(_Model):
 
 
 ForceItem = _typed(GravityForce, DragForce, SpringForce, AttractorForce, WindForce, TurbulenceForce, VortexForce)
-
-# -- [[colliders]] ----------------------------------------------------------------------------
-# A collider's `motion` (kinema.Motion, kinema.Keyframes): a steady table, or keyframes (a
-# table with `times`), told apart by that key.
-
-
-def _all_finite(values: Any, name: str, unit: str) -> None:
-    flat = values if not values or not isinstance(values[0], list) else [c for row in values for c in row]
-    if not all(math.isfinite(c) for c in flat):
-        raise ValueError(f"{name} must be finite numbers ({unit})")
-
-
-class SteadyMotion(_Model):
-    """``motion = { velocity = [..], angular_velocity = [..], pivot = [..] }``: translation at
-    ``velocity`` (m/s) and a turn at ``angular_velocity`` (rad/s, about its direction) about
-    ``pivot`` (m, a point of the collider's placement), from ``start`` (s, on the world's
-    clock; left out: from when the collider is added, the scene's time 0)."""
-
-    velocity: Vec = [0.0, 0.0, 0.0]
-    angular_velocity: Vec3 = [0.0, 0.0, 0.0]
-    pivot: Vec = [0.0, 0.0, 0.0]
-    start: float | None = None
-
-    @field_validator("velocity", "angular_velocity", "pivot")
-    @classmethod
-    def _finite(cls, v: Any, info: Any) -> Any:
-        _all_finite(v, info.field_name, {"velocity": "m/s", "angular_velocity": "rad/s"}.get(info.field_name, "m"))
-        return v
-
-    @field_validator("start")
-    @classmethod
-    def _finite_start(cls, v: Any) -> Any:
-        if v is not None and not math.isfinite(v):
-            raise ValueError(f"start = {v} is invalid: it must be a finite time, s")
-        return v
-
-    def turns(self) -> bool:
-        return any(c != 0 for c in self.angular_velocity)
-
-
-class KeyframesMotion(_Model):
-    """``[colliders.motion]`` with ``times`` (s, strictly increasing), ``translations`` (m, one
-    per time) and ``rotations`` (degrees about the fixed x, then y, then z axis, one per time;
-    less than 180° apart about each axis from one key to the next) about ``pivot`` (m)."""
-
-    times: Annotated[list[float], Field(min_length=1)]
-    translations: list[Vec] | None = None
-    rotations: list[Vec3] | None = None
-    pivot: Vec = [0.0, 0.0, 0.0]
-
-    @field_validator("times")
-    @classmethod
-    def _increasing(cls, v: list[float]) -> list[float]:
-        for k, t in enumerate(v):
-            if not math.isfinite(t) or (k > 0 and not t > v[k - 1]):
-                raise ValueError(f"keyframe times must be finite and strictly increasing, s (times[{k}] = {t:g})")
-        return v
-
-    @field_validator("translations", "rotations", "pivot")
-    @classmethod
-    def _finite(cls, v: Any, info: Any) -> Any:
-        if v is not None:
-            _all_finite(v, info.field_name, "degrees" if info.field_name == "rotations" else "m")
-        return v
-
-    @model_validator(mode="after")
-    def _one_per_time(self) -> KeyframesMotion:
-        k = len(self.times)
-        for name in ("translations", "rotations"):
-            rows = getattr(self, name)
-            if rows is not None and len(rows) != k:
-                raise ValueError(f"{name} has {len(rows)} rows for {k} times; give one per keyframe time")
-        for j in range(1, len(self.rotations or [])):
-            step = [abs(a - b) for a, b in zip(self.rotations[j], self.rotations[j - 1], strict=True)]
-            if max(step) >= 180:
-                raise ValueError(
-                    f"rotations[{j}] is {max(step):g}° about {'xyz'[step.index(max(step))]} from rotations[{j - 1}]; between two keys a collider "
-                    "turns the shorter way (less than 180°): put keys in between"
-                )
-        return self
-
-    def turns(self) -> bool:
-        return any(c != 0 for row in self.rotations or [] for c in row)
-
-
-def _motion_kind(v: Any) -> str:
-    return "~keyframes" if (isinstance(v, dict) and "times" in v) or isinstance(v, KeyframesMotion) else "~steady"
-
-
-MotionItem = Annotated[Annotated[SteadyMotion, Tag("~steady")] | Annotated[KeyframesMotion, Tag("~keyframes")], Discriminator(_motion_kind)]
-
-
-class _Surface(_Model):
-    restitution: Unit | None = None
-    friction: NonNeg | None = None
-    motion: MotionItem | None = None
-    collides_with: list[Group] | None = None  # the collision groups it stops (None: all)
-
-
-class PlaneCollider(_Surface):
-    type: Literal["plane"] = "plane"
-    point: Vec
-    normal: Vec
-
-
-class BoxCollider(_Surface):
-    type: Literal["box"] = "box"
-    lo: Vec
-    hi: Vec
-
-    @field_validator("motion")
-    @classmethod
-    def _translates(cls, v: Any) -> Any:
-        if v is not None and v.turns():
-            turn = "angular_velocity" if isinstance(v, SteadyMotion) else "rotations"
-            raise ValueError(f"a box stays axis-aligned and can only translate ({turn} must be 0); a turning container is a mesh with inside = true")
-        return v
-
-
-class SphereCollider(_Surface):
-    type: Literal["sphere"] = "sphere"
-    center: Vec
-    radius: NonNeg
-
-
-class MeshShape(_Model):
-    """A triangle mesh's shape and placement (``kinema.Mesh``, 3D only): from ``file`` (OBJ,
-    STL, PLY, glTF, USD; a path relative to the scene file) or from ``vertices`` (m) and
-    ``faces`` (vertex indices) written in the table, whose up axis is ``up_axis`` ("z",
-    kinema's, or "y"; none: the file's own for glTF and USD, else "z"); then scaled by
-    ``scale`` (one factor or 3), rotated by ``rotation`` (degrees about the fixed x, then y,
-    then z axis) and moved by ``translation`` (m). An emitter's ``mesh``, and the mesh
-    collider's keys."""
-
-    file: Annotated[str, Field(min_length=1)] | None = None
-    vertices: Annotated[list[Vec3], Field(min_length=1)] | None = None
-    faces: Annotated[list[Annotated[list[Annotated[int, Field(ge=0, le=2**32 - 1)]], Field(min_length=3, max_length=3)]], Field(min_length=1)] | None = None
-    up_axis: Literal["z", "y"] | None = None
-    scale: _by_kind(float, Vec3) = 1.0
-    rotation: Vec3 = [0.0, 0.0, 0.0]
-    translation: Vec3 = [0.0, 0.0, 0.0]
-
-    @field_validator("file")
-    @classmethod
-    def _format(cls, v: str | None) -> str | None:
-        from ..io.mesh_files import formats_text, mesh_format
-
-        if v is not None and mesh_format(v) is None:
-            suffix = os.path.splitext(v)[1]
-            raise ValueError(f"unknown mesh format {repr(suffix) if suffix else '(no suffix)'}; the formats read are {formats_text()}")
-        return v
-
-    @field_validator("scale")
-    @classmethod
-    def _factors(cls, v: Any) -> Any:
-        if not all(math.isfinite(c) and c != 0 for c in (v if isinstance(v, list) else [v])):
-            raise ValueError("each scale factor must be finite and non-zero (a negative one mirrors)")
-        return v
-
-    @field_validator("rotation", "translation", "vertices")
-    @classmethod
-    def _finite(cls, v: Any, info: Any) -> Any:
-        rows = v if v is None or not v or not isinstance(v[0], list) else [c for row in v for c in row]
-        if rows is not None and not all(math.isfinite(c) for c in rows):
-            unit = "degrees" if info.field_name == "rotation" else "m"
-            raise ValueError(f"{info.field_name} must be finite numbers ({unit})")
-        return v
-
-    @model_validator(mode="after")
-    def _source(self) -> Any:
-        arrays = self.vertices is not None or self.faces is not None
-        if self.file is not None and arrays:
-            raise ValueError("give either file or vertices and faces, not both")
-        if self.file is None and not (self.vertices is not None and self.faces is not None):
-            raise ValueError("a mesh needs file (a mesh file beside the scene) or both vertices and faces")
-        return self
-
-
-class MeshCollider(_Surface, MeshShape):
-    """A triangle mesh collider (``kinema.Mesh``): ``MeshShape``'s keys, and ``inside``:
-    particles live inside this closed mesh (a container)."""
-
-    type: Literal["mesh"] = "mesh"
-    inside: bool = False
-
-
-ColliderItem = _typed(PlaneCollider, BoxCollider, SphereCollider, MeshCollider)
 
 # -- [[emitters]], [[kill_volumes]] ------------------------------------------------------------
 # The emitter checks its own values (kinema.Emitter); the tables check the types and names.
