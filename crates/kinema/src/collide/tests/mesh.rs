@@ -1,5 +1,7 @@
 //! The mesh collider's geometry against hand-computed cases and brute force.
 
+use super::features::closest_on_triangle;
+use super::hierarchy::node_count;
 use super::*;
 
 /// The unit cube [0, 1]³ as 12 triangles, wound `outwards` (counter-clockwise seen from

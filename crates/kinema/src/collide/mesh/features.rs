@@ -1,0 +1,267 @@
+//! The contacts of a sphere with a triangle mesh: each triangle's closest point (Ericson), and
+//! the rules of the mesh module's doc that keep a surface's true contacts only (one contact
+//! for a point seen from several triangles, an edge or vertex only in its Voronoi region of the
+//! whole surface, touches within 10° of each other merged).
+
+use super::{Feature, Side, TriangleMesh};
+use crate::collide::surface::Touch;
+use crate::vec3;
+use smallvec::SmallVec;
+
+/// Contacts whose normals differ by less than this merge (rule 3 of the mesh module's doc): cos 10°.
+const PARALLEL: f64 = 0.984_807_753_012_208;
+
+/// Rule 3 of the mesh module's doc: the touches whose normals lie within 10° of a deeper one's are
+/// one touch, with the deepest overlap and the mean of their normals weighted by how much
+/// deeper than the shallowest each is (plus 0.1 % of r, so that equal ones weigh alike).
+fn merge_parallel(kept: &mut Found, r: f64) {
+    kept.sort_by(|a, b| b.1.overlap.total_cmp(&a.1.overlap).then(a.0.cmp(&b.0)));
+    let mut out = Found::new();
+    let mut taken = vec![false; kept.len()];
+    for s in 0..kept.len() {
+        if taken[s] {
+            continue;
+        }
+        // within 10° of the deepest, then (twice) of the members' mean: a symmetric ring of
+        // normals (a cone's apex) is gathered whole whichever member seeds it
+        let mut seed = kept[s].1.normal;
+        let mut members: SmallVec<[usize; 8]> = SmallVec::new();
+        for _ in 0..3 {
+            members = (s..kept.len())
+                .filter(|&k| !taken[k] && (k == s || vec3::dot(kept[k].1.normal, seed) >= PARALLEL))
+                .collect();
+            let sum = members.iter().fold([0.0; 3], |a, &k| vec3::add(a, kept[k].1.normal));
+            seed = vec3::scale(1.0 / vec3::norm(sum), sum);
+        }
+        if members.len() == 1 {
+            taken[s] = true;
+            out.push(kept[s]);
+            continue;
+        }
+        let least = members.iter().map(|&k| kept[k].1.overlap).fold(f64::INFINITY, f64::min);
+        let mut sum = [0.0; 3];
+        for &k in &members {
+            taken[k] = true;
+            let w = kept[k].1.overlap - least + 1e-3 * r;
+            sum = vec3::add(sum, vec3::scale(w, kept[k].1.normal));
+        }
+        let (t, touch, q, feature) = kept[s];
+        out.push((
+            t,
+            Touch {
+                normal: vec3::scale(1.0 / vec3::norm(sum), sum),
+                overlap: touch.overlap,
+            },
+            q,
+            feature,
+        ));
+    }
+    out.sort_by_key(|f| f.0);
+    *kept = out;
+}
+
+/// Touches with their triangle, nearest point (m) and feature.
+pub(super) type Found = SmallVec<[(usize, Touch, [f64; 3], Feature); 4]>;
+
+/// A triangle `t` near a point p: its nearest point q, the feature q lies on, d = p − q and |d|.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Near {
+    t: usize,
+    q: [f64; 3],
+    feature: Feature,
+    d: [f64; 3],
+    len: f64,
+}
+
+impl TriangleMesh {
+    /// Triangle t's point nearest to `p` if it lies within `reach` (m) of p.
+    pub(super) fn near(&self, t: usize, p: [f64; 3], reach: f64) -> Option<Near> {
+        let g = &*self.geometry;
+        let [a, b, c] = g.faces[t].map(|k| g.vertices[k as usize]);
+        // no point of the triangle is nearer than its plane, or than its box: cheap
+        // rejections before the closest point
+        if vec3::dot(vec3::sub(p, a), g.normals[t]).abs() >= reach
+            || (0..3).any(|k| a[k].min(b[k]).min(c[k]) >= p[k] + reach || a[k].max(b[k]).max(c[k]) <= p[k] - reach)
+        {
+            return None;
+        }
+        let (q, feature) = closest_on_triangle(p, a, b, c);
+        let d = vec3::sub(p, q);
+        let len = vec3::norm(d);
+        (len < reach).then_some(Near { t, q, feature, d, len })
+    }
+
+    /// The touches of a sphere of radius `r` (m) with the triangles `near` it (all within
+    /// its reach), in their order.
+    ///
+    /// On the particles' side of the surface (always, for an open mesh) each normal points
+    /// from the triangle's nearest point to the centre (±n_face for a face): overlap r − |d|.
+    /// A centre on the wrong side of a closed mesh (pushed through it) is pushed back: each
+    /// normal points to the free side (n_face outwards for an obstacle, inwards for a
+    /// container; from the centre to an edge or vertex), overlap r + |d|. Which side the
+    /// centre is on is the nearest triangles' verdict: the sign of Σ d·n_face over those at
+    /// the least distance (on a convex edge seen from outside both say outside). A far face
+    /// of a solid thinner than the ball, behind the centre, is then no push through the solid.
+    pub(super) fn touches_of(&self, near: &[Near], r: f64) -> SmallVec<[(Touch, [f64; 3], Feature); 8]> {
+        let g = &*self.geometry;
+        let wrong_side = match self.side {
+            Side::Both => false,
+            side => {
+                let least = near.iter().fold(f64::INFINITY, |m, c| m.min(c.len));
+                let eps = 1e-10 * (g.scale + r + least);
+                let verdict: f64 = near
+                    .iter()
+                    .filter(|c| c.len <= least + eps)
+                    .map(|c| vec3::dot(c.d, g.normals[c.t]))
+                    .sum();
+                if side == Side::Outside {
+                    verdict < 0.0
+                } else {
+                    verdict > 0.0
+                }
+            }
+        };
+        near.iter()
+            .map(|c| {
+                let n = g.normals[c.t];
+                let normal = if wrong_side {
+                    match (c.feature, self.side) {
+                        (Feature::Face, Side::Inside) => vec3::scale(-1.0, n),
+                        (Feature::Face, _) => n,
+                        _ if c.len > 0.0 => vec3::scale(-1.0 / c.len, c.d),
+                        (_, Side::Inside) => vec3::scale(-1.0, n),
+                        _ => n,
+                    }
+                } else if c.feature == Feature::Face && c.len > 0.0 {
+                    // exactly ±n: d/|d| would carry the rounding of the foot q
+                    if vec3::dot(c.d, n) >= 0.0 {
+                        n
+                    } else {
+                        vec3::scale(-1.0, n)
+                    }
+                } else if c.len > 0.0 {
+                    // an edge or vertex straight above (or below) it, to the coordinates'
+                    // precision, is the face's: the normal of a flat patch's seam is then its
+                    // plane's, exactly, not tilted by the rounding of where the centre is
+                    let off = vec3::sub(c.d, vec3::scale(vec3::dot(c.d, n), n));
+                    let eps = 1e-10 * (g.scale + vec3::norm(vec3::add(c.q, c.d)) + r);
+                    if vec3::norm(off) <= eps {
+                        if vec3::dot(c.d, n) >= 0.0 {
+                            n
+                        } else {
+                            vec3::scale(-1.0, n)
+                        }
+                    } else {
+                        vec3::scale(1.0 / c.len, c.d)
+                    }
+                } else {
+                    // the centre on the surface itself: the face's normal towards the free side
+                    if self.side == Side::Inside {
+                        vec3::scale(-1.0, n)
+                    } else {
+                        n
+                    }
+                };
+                let overlap = if wrong_side { r + c.len } else { r - c.len };
+                (Touch { normal, overlap }, c.q, c.feature)
+            })
+            .collect()
+    }
+
+    /// The touches of [`TriangleMesh::for_each_touch`] with each one's triangle and closest
+    /// point (m) and feature, all in the frame the geometry was added in (`p` too).
+    pub(super) fn touches(&self, p: [f64; 3], r: f64, tolerance: f64) -> Found {
+        let reach = r + tolerance.max(0.0);
+        let (lo, hi) = ([0, 1, 2].map(|k| p[k] - reach), [0, 1, 2].map(|k| p[k] + reach));
+        let mut near: SmallVec<[Near; 8]> = SmallVec::new();
+        self.geometry.visit(lo, hi, |t| near.extend(self.near(t, p, reach)));
+        self.true_features(&mut near, p, r)
+    }
+
+    /// The touches of the triangles `near` a sphere at `p` of radius `r` (m), their true
+    /// features only (the mesh module's doc, rules 1 and 2), in the order of the triangles. Every
+    /// triangle within the reach is in `near` (each around a reported edge or vertex is: it
+    /// contains the reported point).
+    pub(super) fn true_features(&self, near: &mut [Near], p: [f64; 3], r: f64) -> Found {
+        let mut kept = Found::new();
+        if near.is_empty() {
+            return kept;
+        }
+        near.sort_unstable_by_key(|c| c.t);
+        let found = self.touches_of(near, r);
+        let eps = self.eps(p, r);
+        let g = &*self.geometry;
+        for (c, (touch, q, feature)) in near.iter().zip(found) {
+            let around = match feature {
+                Feature::Face => 1,
+                Feature::Edge(k) => g.edge_faces[c.t][k as usize] as usize,
+                Feature::Vertex(k) => g.valence[g.faces[c.t][k as usize] as usize] as usize,
+            };
+            if around > 1 {
+                // rule 2: every triangle around the edge or vertex has its nearest point there,
+                // or one of them has a nearer one and this is no contact of the surface
+                let reports = near.iter().filter(|o| vec3::norm(vec3::sub(o.q, q)) <= eps).count();
+                // rule 1: seen from another triangle
+                let seen = kept.iter().any(|k| vec3::norm(vec3::sub(k.2, q)) <= eps);
+                if reports < around || seen {
+                    continue;
+                }
+            }
+            kept.push((c.t, touch, q, feature));
+        }
+        if kept.len() > 1 {
+            merge_parallel(&mut kept, r);
+        }
+        kept
+    }
+
+    /// The length below which a point counts as in a face's plane, or two points as one, m:
+    /// the relative precision of the coordinates near `p`.
+    pub(super) fn eps(&self, p: [f64; 3], r: f64) -> f64 {
+        1e-10 * (self.geometry.scale + vec3::norm(p) + r)
+    }
+}
+
+/// The point of triangle abc closest to p, and the feature it lies on (Ericson, *Real-Time
+/// Collision Detection*, §5.1.5: p's Voronoi region among the vertices, edges and face, from
+/// the barycentric coordinates of its projection).
+pub(super) fn closest_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> ([f64; 3], Feature) {
+    let ab = vec3::sub(b, a);
+    let ac = vec3::sub(c, a);
+    let ap = vec3::sub(p, a);
+    let d1 = vec3::dot(ab, ap);
+    let d2 = vec3::dot(ac, ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, Feature::Vertex(0));
+    }
+    let bp = vec3::sub(p, b);
+    let d3 = vec3::dot(ab, bp);
+    let d4 = vec3::dot(ac, bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, Feature::Vertex(1));
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let s = d1 / (d1 - d3);
+        return (vec3::add(a, vec3::scale(s, ab)), Feature::Edge(0));
+    }
+    let cp = vec3::sub(p, c);
+    let d5 = vec3::dot(ab, cp);
+    let d6 = vec3::dot(ac, cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, Feature::Vertex(2));
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let s = d2 / (d2 - d6);
+        return (vec3::add(a, vec3::scale(s, ac)), Feature::Edge(2));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let s = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (vec3::add(b, vec3::scale(s, vec3::sub(c, b))), Feature::Edge(1));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    (vec3::add(a, vec3::add(vec3::scale(v, ab), vec3::scale(w, ac))), Feature::Face)
+}
