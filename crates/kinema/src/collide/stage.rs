@@ -286,11 +286,6 @@ impl CollideStage {
             .collect()
     }
 
-    /// The global material and the per-particle ones (if any particle has its own).
-    pub fn materials_parts(&self) -> (Material, Option<Vec<Material>>) {
-        (self.material, self.particle_materials.clone())
-    }
-
     /// Moves what the stage holds per particle (their own materials: `own`, and the
     /// materials and damping ratios made of them) to a new order of the particles
     /// (`old_of_new[i]`: the index now of the particle that goes to place i), as
