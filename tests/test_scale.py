@@ -79,6 +79,18 @@ def test_the_impulse_gas_is_the_same_for_any_thread_count():
     assert int(out[1].split()[1]) > 100, out  # the gas collides
 
 
+def sorted_and_unsorted_agree(printed: str) -> None:
+    """The runs a test printed as JSON, {"False": sorted, "True": unsorted} each [positions,
+    velocities], agree to rounding: 1e-9 m and 1e-8 m/s."""
+    import json
+
+    res = json.loads(printed)
+    xs, vs = np.array(res["False"][0]), np.array(res["False"][1])
+    xu, vu = np.array(res["True"][0]), np.array(res["True"][1])
+    np.testing.assert_allclose(xs, xu, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(vs, vu, rtol=0, atol=1e-8)
+
+
 def test_the_sorted_order_is_invisible():
     # The same gas twice: plainly, where the engine sorts its particles along a Morton curve,
     # and with a Python force (zero) that cannot follow a renumbering, where it keeps the
@@ -100,13 +112,7 @@ def test_the_sorted_order_is_invisible():
         out[str(extra)] = [w.positions.tolist(), w.velocities.tolist()]
     print(json.dumps(out))
     """
-    import json
-
-    res = json.loads(_run(code, 2))
-    xs, vs = np.array(res["False"][0]), np.array(res["False"][1])
-    xu, vu = np.array(res["True"][0]), np.array(res["True"][1])
-    np.testing.assert_allclose(xs, xu, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(vs, vu, rtol=0, atol=1e-8)
+    sorted_and_unsorted_agree(_run(code, 2))
 
 
 def test_particles_with_their_own_materials_are_sorted_with_them():
@@ -138,13 +144,7 @@ def test_particles_with_their_own_materials_are_sorted_with_them():
         out[str(extra)] = [w.positions.tolist(), w.velocities.tolist()]
     print(json.dumps(out))
     """
-    import json
-
-    res = json.loads(_run(code, 2))
-    xs, vs = np.array(res["False"][0]), np.array(res["False"][1])
-    xu, vu = np.array(res["True"][0]), np.array(res["True"][1])
-    np.testing.assert_allclose(xs, xu, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(vs, vu, rtol=0, atol=1e-8)
+    sorted_and_unsorted_agree(_run(code, 2))
 
 
 def test_a_heap_solved_on_threads_is_the_same_for_any_thread_count():
