@@ -201,3 +201,26 @@ def test_a_scene_file_hangs_a_ball_with_jkr_adhesion(tmp_path):
     w.step(50_000)
     assert w.contacts()["overlap"][0] == pytest.approx(overlap_under(-M * G, gamma), rel=1e-6)
     assert w.to_scene().collisions.cohesion == "jkr"
+
+
+@pytest.mark.parametrize("cohesion", ["dmt", "jkr"])
+def test_adhesion_given_to_a_world_that_has_a_hertz_model_acts_as_if_given_at_first(cohesion):
+    """Two touching balls that adhesion pulls together. Giving the cohesion by a second
+    `set_collisions` (the world already has Hertz's model without it) steps the same bits as
+    giving it at once: the engine keeps its neighbour list across a change of settings and
+    takes the new normal law whole (it once kept the old law's adhesion, none here, so the
+    balls stayed apart)."""
+
+    def pulled(settings_before: list[dict]) -> np.ndarray:
+        w = kinema.World(dt=1e-5)
+        w.add_particles([[0, 0, 0], [2 * R - 1e-5, 0, 0]], mass=M, radius=R)
+        for s in settings_before:
+            w.set_collisions(**s)
+        w.step(2000)
+        return w.positions
+
+    hertz = {"model": "hertz", "youngs_modulus": E, "poisson_ratio": NU}
+    adhesive = {**hertz, "cohesion": cohesion, "surface_energy": 1.0}
+    at_once, later = pulled([adhesive]), pulled([hertz, adhesive])
+    assert np.array_equal(at_once, later)
+    assert at_once[1, 0] - at_once[0, 0] < 2 * R - 1e-5  # (the pull did draw them closer)

@@ -304,7 +304,7 @@ def check(world: Any, core: Any) -> StepCheck | None:
     """The figures of the check for ``world`` (its engine ``core``), or None without a force
     model."""
     settings = core.collisions or {}
-    if settings.get("model") not in ("spring_dashpot", "hertz"):
+    if settings.get("model") not in _core.FORCE_MODELS:
         return None
     bodies = bodies_of(world, core)
     g = gravity(world._forces, core.dim)

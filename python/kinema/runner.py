@@ -22,6 +22,7 @@ import numpy as np
 from rich.console import Console
 from rich.markup import escape
 
+from . import _core
 from .frames import MAX_WORK
 from .frames import plan as frames_plan
 
@@ -57,7 +58,7 @@ def _counted(settings: dict, impacts: int) -> str:
     contacts last many steps), the event-driven model's impacts, each at its time, and the
     stepped impulse model's impacts found inside steps by continuous detection (those at a
     step's end are its contacts)."""
-    if settings["model"] in ("spring_dashpot", "hertz"):
+    if settings["model"] in _core.FORCE_MODELS:
         return _count(impacts, "contact") + " begun"
     if settings["event_driven"]:
         return _count(impacts, "impact")

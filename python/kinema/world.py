@@ -95,7 +95,7 @@ def _verlet_only(core: Any, colliders: list[Collider]) -> bool:
     only: a force model's contacts with friction somewhere, the world's, a particle's own or a
     collider's (the engine's rule: ``has_friction`` in collide/contact_force/mod.rs)."""
     settings = core.collisions or {}
-    if settings.get("model") not in ("spring_dashpot", "hertz"):
+    if settings.get("model") not in _core.FORCE_MODELS:
         return False
     own = any(mu is not None and mu > 0 for _, mu in core.particle_materials())
     return settings["friction"] > 0 or own or any((c.friction or 0) > 0 for c in colliders)
@@ -284,7 +284,7 @@ class World(WorldCollisions):
             return
         self._advice_due = False
         self._advised_at = core.len
-        contact_springs = (core.collisions or {}).get("model") in ("spring_dashpot", "hertz")
+        contact_springs = (core.collisions or {}).get("model") in _core.FORCE_MODELS
         if contact_springs and not self._contact_warned and (core.len or self._emitters):
             # a step coarser than t_c / 20 of the fastest impact the scene can produce, or than
             # 0.2 of the Rayleigh time (kinema.first_step), emitters' particles counted

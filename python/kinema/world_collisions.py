@@ -362,7 +362,7 @@ class WorldCollisions:
         force model (``"spring_dashpot"``, ``"hertz"``) stepped by a method other than
         ``verlet``, whose steps book nothing (the engine's rule, :meth:`collider_books`)."""
         model = (self._core.collisions or {}).get("model")
-        return model not in ("spring_dashpot", "hertz") or self._core.method == "verlet"
+        return model not in _core.FORCE_MODELS or self._core.method == "verlet"
 
     def stage_times(self) -> dict[str, float]:
         """Wall-clock seconds spent so far in each of the lecture notes' four stages of a step:

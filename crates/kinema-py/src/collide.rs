@@ -236,6 +236,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(collision_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(check_contact_model, m)?)?;
     m.add("CONTACT_MODELS", ContactModel::NAMES.to_vec())?;
+    m.add("FORCE_MODELS", ContactModel::FORCE_MODELS.to_vec())?;
     m.add("TANGENTIAL_MODELS", TangentialKind::NAMES.to_vec())?;
     m.add("ACCURACIES", Accuracy::NAMES.to_vec())?;
     Ok(())

@@ -272,9 +272,13 @@ KillItem = _typed(KillBoxTable, KillSphereTable, KillPlaneTable)
 # the table states the types and ranges a TOML file may hold, the engine the rest.
 _COLLISION_DEFAULTS = _core.collision_defaults()
 
+# The contact models a scene may name: the engine's list (ContactModel::NAMES), so that a new
+# model is named in one place.
+ContactModelName = Literal[tuple(_core.CONTACT_MODELS)]  # type: ignore[valid-type]
+
 
 class CollisionsTable(_Model):
-    model: Literal["impulse", "spring_dashpot", "hertz"] = _COLLISION_DEFAULTS["model"]
+    model: ContactModelName = _COLLISION_DEFAULTS["model"]
     restitution: Unit = _COLLISION_DEFAULTS["restitution"]
     friction: NonNeg = _COLLISION_DEFAULTS["friction"]
     ccd: bool = _COLLISION_DEFAULTS["ccd"]

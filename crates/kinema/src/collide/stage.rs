@@ -204,7 +204,7 @@ impl CollideStage {
         // constants are the new ones
         self.spring_dashpot = match (self.spring_dashpot.take(), spring_dashpot_of(&self.params)) {
             (Some(mut kept), Some(new)) => {
-                (kept.stiffness, kept.hertz, kept.damping) = (new.stiffness, new.hertz, new.damping);
+                (kept.normal, kept.damping) = (new.normal, new.damping);
                 if kept.tangential != new.tangential {
                     kept.forget_history();
                 }

@@ -30,7 +30,7 @@ impl ContactForce<'_> {
                     if j as usize > i {
                         let j = j as usize;
                         let found = match self.pair(i, j, x, v) {
-                            None if self.jkr.is_some() => self.held_pair(i, j, x, v, &histories.pairs, &mut lost),
+                            None if self.jkr().is_some() => self.held_pair(i, j, x, v, &histories.pairs, &mut lost),
                             found => found,
                         };
                         if let Some(contact) = found {
@@ -58,7 +58,7 @@ impl ContactForce<'_> {
         memory: &[PairSlip],
         lost: &mut f64,
     ) -> Option<Contact> {
-        let (jkr, reach) = self.jkr?;
+        let (jkr, reach) = self.jkr()?;
         pair_memory(memory, i as u32, j as u32)?;
         let r = self.radius[i] * self.radius[j] / (self.radius[i] + self.radius[j]);
         let held = pair_contact(i, j, x, v, self.radius, &self.domain, reach).filter(|c| c.overlap > -jkr.pull_off_distance(r));
@@ -127,7 +127,7 @@ impl ContactForce<'_> {
         lost: &mut f64,
         mut each: impl FnMut(&Contact),
     ) {
-        let Some((jkr, reach)) = self.jkr else {
+        let Some((jkr, reach)) = self.jkr() else {
             return self.wall_contacts(i, k, x, v, each);
         };
         let remembered = touches_of(memory, i as u32, k as u32);

@@ -71,7 +71,7 @@ impl Force for ContactForce<'_> {
             let k = self.stiffness_of(c);
             let dashpot = self.dashpot_at(c, w, k);
             // dF/dδ: k_n (Hooke); 3/2 of the secant with Hertz's δ^(3/2)
-            let tangent = if self.hertz.is_some() { 1.5 * k } else { k };
+            let tangent = self.normal.tangent_of_secant(k);
             for p in std::iter::once(c.i).chain(c.partner_particle()) {
                 k_row[p] += times * tangent;
                 c_row[p] += times * dashpot;
@@ -113,23 +113,14 @@ impl ContactForce<'_> {
         if w == 0.0 || (inv_mass.len() < 2 && self.colliders.is_empty()) {
             return None;
         }
-        let stiffness = match self.hertz {
-            None => self.stiffness,
-            Some(e_star) => {
-                let fastest = v
-                    .chunks_exact(3)
-                    .map(|c| c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
-                    .fold(0.0, f64::max)
-                    .sqrt();
-                let (u, r) = (2.0 * fastest, self.radius.iter().copied().fold(0.0, f64::max));
-                let k_h = super::law::HERTZ * e_star * r.sqrt();
-                if !(u > 0.0 && k_h > 0.0) {
-                    return None;
-                }
-                let deepest = (5.0 * u * u / (4.0 * k_h * w)).powf(0.4);
-                1.5 * k_h * deepest.sqrt()
-            }
+        let fastest = || {
+            v.chunks_exact(3)
+                .map(|c| c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
+                .fold(0.0, f64::max)
+                .sqrt()
         };
+        let r = || self.radius.iter().copied().fold(0.0, f64::max);
+        let stiffness = self.normal.impact_stiffness(|| 2.0 * fastest(), r, w)?;
         let omega_squared = stiffness * w;
         let zeta = match self.damping {
             Some(gamma) => gamma / (2.0 * omega_squared.sqrt()),

@@ -6,15 +6,9 @@ use rayon::prelude::*;
 
 use super::pairs::PassOptions;
 use super::{ContactForce, Scratch, CHUNK};
-use crate::collide::{damping_ratio, dashpot_coefficient, spring_dashpot_force, Collider, Contact, Material, Partner};
+use crate::collide::{damping_ratio, dashpot_coefficient, Collider, Contact, Material, Partner};
 use crate::error::Error;
 use crate::forces::State;
-
-/// The 4/3 of Hertz's law F = 4/3 E* √R* δ^(3/2).
-pub(super) const HERTZ: f64 = 4.0 / 3.0;
-
-/// √5 / 2: Hertz's dashpot against the linear one of the same e ([`ContactForce::dashpot_at`]).
-const HERTZ_DAMPING: f64 = 1.118_033_988_749_895;
 
 impl ContactForce<'_> {
     /// The pair forces at `s` added to `f` (N, 3 per particle), with the colliders' when
@@ -39,7 +33,7 @@ impl ContactForce<'_> {
         // the springs read as they are (`tangent.rs`); JKR's held contacts from the memory
         let turn = super::turning(
             self.tangential,
-            self.jkr.is_some(),
+            self.jkr().is_some(),
             self.omega,
             histories,
             torque_exchange,
@@ -117,72 +111,36 @@ impl ContactForce<'_> {
     }
 
     /// The force of contact `c` along its normal, N (> 0 pushes apart), or `None` when it
-    /// exerts none (not overlapping, or both sides immovable).
-    /// With its dashpot c_n, kg/s.
-    ///
-    /// With DMT adhesion (Derjaguin, Muller and Toporov 1975; LAMMPS's `dmt`) the pull-off
-    /// force F_po = 4π γ R* is taken off while the bodies overlap: F_n = 4/3 E* √R* δ^(3/2)
-    /// − c_n u_n − F_po. The contact ends at δ = 0, so a body held by it comes free under a
-    /// pull above F_po (at rest, δ → 0⁺ leaves −F_po).
-    ///
-    /// With JKR's (`cohesion.rs`) the force is F(a) − c_n u_n at the contact radius a of the
-    /// overlap δ, down to δ = −|δ_f|: the caller gives a contact apart (δ ≤ 0) only if it
-    /// touched at the last step.
+    /// exerts none (not overlapping, or both sides immovable), with its dashpot c_n, kg/s:
+    /// the normal law's ([`NormalLaw::force_parts`](super::NormalLaw::force_parts)).
     #[inline(always)]
     pub(super) fn normal_force_parts(&self, c: &Contact) -> Option<(f64, f64)> {
         let w = self.inverse_mass_sum(c);
         if c.overlap.is_nan() || w == 0.0 {
             return None;
         }
-        if let Some((jkr, _)) = self.jkr {
-            let r = self.reduced_radius(c);
-            if c.overlap <= -jkr.pull_off_distance(r) {
-                return None;
-            }
-            let a = jkr.contact_radius(r, c.overlap);
-            let dashpot = self.dashpot_at(c, w, HERTZ * jkr.e_star * a);
-            return Some((jkr.force(r, a) - dashpot * c.u_n, dashpot));
-        }
-        if c.overlap <= 0.0 {
-            return None;
-        }
-        let k = self.stiffness_of(c);
-        let dashpot = self.dashpot_at(c, w, k);
-        let force = spring_dashpot_force(k, dashpot, c.overlap, c.u_n);
-        Some((force - self.pull_off_of(c), dashpot))
+        self.normal
+            .force_parts(c.overlap, c.u_n, || self.reduced_radius(c), |k| self.dashpot_at(c, w, k))
     }
 
     /// The pull-off force of contact `c`, N: DMT's 4π γ R*, JKR's 3π γ R* (0 without
     /// adhesion).
     #[inline(always)]
     pub(super) fn pull_off_of(&self, c: &Contact) -> f64 {
-        if self.pull_off > 0.0 {
-            self.pull_off * self.reduced_radius(c)
-        } else if let Some((jkr, _)) = self.jkr {
-            jkr.pull_off_force(self.reduced_radius(c))
-        } else {
-            0.0
-        }
+        self.normal.pull_off(|| self.reduced_radius(c))
     }
 
     /// The radius of the contact disc of `c`, m: √(R* δ) (Hertz), JKR's a with its adhesion.
     #[inline]
     pub(super) fn contact_radius_of(&self, c: &Contact) -> f64 {
-        match self.jkr {
-            Some((jkr, _)) => jkr.contact_radius(self.reduced_radius(c), c.overlap),
-            None => (self.reduced_radius(c) * c.overlap).sqrt(),
-        }
+        self.normal.contact_radius(c.overlap, || self.reduced_radius(c))
     }
 
-    /// The secant stiffness F_el/δ of contact `c` at its overlap δ > 0, N/m: k_n with Hooke's
-    /// law; with Hertz's, 4/3 E* a, a the contact radius (Johnson, Contact Mechanics, §4.2:
-    /// F = 4/3 E* √R* δ^(3/2), a = √(R* δ); JKR's a with its adhesion).
+    /// The secant stiffness F_el/δ of contact `c` at its overlap δ > 0, N/m
+    /// ([`NormalLaw::secant_stiffness`](super::NormalLaw::secant_stiffness)).
     #[inline(always)]
     pub(super) fn stiffness_of(&self, c: &Contact) -> f64 {
-        match self.hertz {
-            None => self.stiffness,
-            Some(e_star) => HERTZ * e_star * self.contact_radius_of(c),
-        }
+        self.normal.secant_stiffness(c.overlap, || self.reduced_radius(c))
     }
 
     /// R* = r_i r_j / (r_i + r_j) of a pair (r_i against a collider), m.
@@ -196,23 +154,14 @@ impl ContactForce<'_> {
     }
 
     /// The elastic energy of contact `c` if it counts in the potential energy (overlapping,
-    /// or JKR's held contact, with a movable particle), J: ½ k_n δ² (Hooke), ∫ 4/3 E* √R*
-    /// δ^(3/2) dδ = 2/5 k_n δ² (Hertz, k_n the secant stiffness at δ), less F_po δ with DMT
-    /// adhesion (the work of the constant pull over the overlap); JKR's ∫₀^δ F dδ'
-    /// (`cohesion.rs`).
+    /// or JKR's held contact, with a movable particle), J
+    /// ([`NormalLaw::energy`](super::NormalLaw::energy)).
     #[inline]
     pub(super) fn spring_energy(&self, c: &Contact) -> Option<f64> {
         if self.inverse_mass_sum(c) == 0.0 {
             return None;
         }
-        if let Some((jkr, _)) = self.jkr {
-            let r = self.reduced_radius(c);
-            return (c.overlap > -jkr.pull_off_distance(r)).then(|| jkr.energy(r, jkr.contact_radius(r, c.overlap)));
-        }
-        (c.overlap > 0.0).then(|| match self.hertz {
-            None => 0.5 * self.stiffness * c.overlap * c.overlap,
-            Some(_) => 0.4 * self.stiffness_of(c) * c.overlap * c.overlap - self.pull_off_of(c) * c.overlap,
-        })
+        self.normal.energy(c.overlap, || self.reduced_radius(c))
     }
 
     /// U = Σ ½ k_n δ² at the positions of `s` (J), summed as the force evaluation sums it.
@@ -247,10 +196,9 @@ impl ContactForce<'_> {
     /// coeff_restitution` for Hertzian contacts): an approximation of the set e, which comes
     /// out the same at every impact speed (the table in docs/collisions.md).
     pub(super) fn dashpot_at(&self, c: &Contact, w: f64, k: f64) -> f64 {
-        match (self.damping, self.hertz) {
-            (Some(gamma), _) => gamma / w,
-            (None, None) => dashpot_coefficient(k, self.ratios.of(c), w),
-            (None, Some(_)) => HERTZ_DAMPING * dashpot_coefficient(k, self.ratios.of(c), w),
+        match self.damping {
+            Some(gamma) => gamma / w,
+            None => self.normal.restitution_dashpot(dashpot_coefficient(k, self.ratios.of(c), w)),
         }
     }
 }

@@ -15,7 +15,7 @@ impl ContactForce<'_> {
     /// The contacts' memory as an output reads it (`None` without friction or JKR's
     /// contacts): `histories` as it is, not stretched by a step (`tangent.rs`).
     pub(super) fn reading<'s>(&'s self, histories: &'s Histories) -> Option<Turning<'s>> {
-        (self.tangential.is_some() || self.jkr.is_some()).then_some(Turning {
+        (self.tangential.is_some() || self.jkr().is_some()).then_some(Turning {
             model: self.tangential,
             omega: self.omega,
             pairs: &histories.pairs,

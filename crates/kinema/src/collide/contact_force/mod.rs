@@ -42,6 +42,7 @@ use history::Histories;
 pub(crate) use history::{PairSlip, Slip, WallSlip};
 pub(crate) use law::particle_ratios;
 use law::DampingRatios;
+pub(crate) use normal::NormalLaw;
 use pairs::{ChunkSums, Exchange, Turning, TurningOut};
 pub use tangent::{RollingModel, TangentialLaw, TangentialModel};
 pub(crate) use verlet::{SpinKick, VerletKick};
@@ -52,6 +53,7 @@ mod force;
 mod history;
 mod law;
 mod listing;
+mod normal;
 mod pairs;
 mod stress;
 mod tangent;
@@ -60,15 +62,10 @@ mod verlet;
 /// The spring–dashpot model between calls: the law's constants and the buffers one
 /// evaluation leaves the next (the neighbour list, the grid, the exchange between chunks).
 pub(crate) struct SpringDashpot {
-    /// k_n, N/m (Hooke's law; unused with Hertz's).
-    pub stiffness: f64,
-    /// Hertz's law instead of Hooke's: the effective Young's modulus E* = E / (2 (1 − ν²)),
-    /// Pa (`law.rs`).
-    pub hertz: Option<f64>,
+    /// The normal law (`normal.rs`: Hooke's, Hertz's, with DMT's or JKR's adhesion).
+    pub normal: NormalLaw,
     /// γ_n, 1/s (`None`: the damping follows from each pair's restitution e).
     pub damping: Option<f64>,
-    /// Adhesion with Hertz's law (DMT's pull in `law.rs`, JKR's contact in `cohesion.rs`).
-    pub cohesion: Option<Cohesion>,
     /// The tangential part with memory (`tangent.rs`), when contacts have friction.
     pub tangential: Option<TangentialModel>,
     /// A fixed skin, m (tests); `None`: [`SKIN_PER_RADIUS`] times the mean radius, at each
@@ -82,11 +79,14 @@ pub(crate) struct SpringDashpot {
 impl SpringDashpot {
     /// The model with stiffness k_n (N/m) and damping rate γ_n (1/s; `None`: from e).
     pub fn new(stiffness: f64, damping: Option<f64>) -> Self {
+        Self::of(NormalLaw::Hooke { stiffness }, damping)
+    }
+
+    /// The model of normal law `normal` and damping rate γ_n (1/s; `None`: from e).
+    pub fn of(normal: NormalLaw, damping: Option<f64>) -> Self {
         SpringDashpot {
-            stiffness,
-            hertz: None,
+            normal,
             damping,
-            cohesion: None,
             tangential: None,
             skin: None,
             scratch: Mutex::new(Scratch::default()),
@@ -239,15 +239,12 @@ impl SpringDashpot {
 /// particles' radii and inverse masses, the materials, the colliders and the domain.
 pub(crate) struct ContactForce<'a> {
     model: &'a SpringDashpot,
-    stiffness: f64,
-    /// E*, Pa, with Hertz's law.
-    hertz: Option<f64>,
+    /// The normal law (`normal.rs`).
+    normal: NormalLaw,
     damping: Option<f64>,
-    /// 4π γ, N/m, with DMT adhesion: the pull-off force per unit R* (`law.rs`).
-    pull_off: f64,
-    /// JKR's contact (`cohesion.rs`), with its reach past touching: the largest pull-off
-    /// distance of a pair, m.
-    jkr: Option<(Jkr, f64)>,
+    /// How far past touching a contact can hold (JKR's largest pull-off distance of a pair),
+    /// m; 0 with the other laws.
+    reach_past_touching: f64,
     global: Material,
     own: Option<&'a [Material]>,
     /// ζ of the pair materials.
@@ -385,25 +382,12 @@ impl<'a> ContactForce<'a> {
     pub fn new(model: &'a SpringDashpot, bodies: Bodies<'a>) -> Self {
         ContactForce {
             model,
-            stiffness: model.stiffness,
-            hertz: model.hertz,
+            normal: model.normal,
             damping: model.damping,
-            pull_off: match (model.cohesion, model.hertz) {
-                (Some(Cohesion::Dmt { surface_energy }), Some(_)) => 4.0 * std::f64::consts::PI * surface_energy,
-                _ => 0.0,
-            },
-            jkr: match (model.cohesion, model.hertz) {
-                (Some(Cohesion::Jkr { surface_energy }), Some(e_star)) => {
-                    let jkr = Jkr {
-                        e_star,
-                        gamma: surface_energy,
-                    };
-                    // (R* is largest for a particle against a collider: R* = r_i)
-                    let r_max = bodies.radius.iter().fold(0.0_f64, |m, r| m.max(*r));
-                    Some((jkr, jkr.pull_off_distance(r_max)))
-                }
-                _ => None,
-            },
+            // (R* is largest for a particle against a collider: R* = r_i)
+            reach_past_touching: model
+                .normal
+                .reach_past_touching(bodies.radius.iter().fold(0.0_f64, |m, r| m.max(*r))),
             ratios: DampingRatios::new(bodies.global, bodies.own.map(|o| o.1), bodies.colliders),
             global: bodies.global,
             own: bodies.own.map(|o| o.0),
@@ -429,7 +413,14 @@ impl<'a> ContactForce<'a> {
     /// evaluation per step stretches and renews: friction's springs (`tangent.rs`), JKR's
     /// touches (`cohesion.rs`).
     pub fn has_memory(&self) -> bool {
-        self.tangential.is_some() || self.jkr.is_some()
+        self.tangential.is_some() || self.jkr().is_some()
+    }
+
+    /// JKR's contact with its reach past touching (the largest pull-off distance of a pair,
+    /// m), the one law whose contacts hold apart.
+    #[inline(always)]
+    pub(super) fn jkr(&self) -> Option<(Jkr, f64)> {
+        self.normal.jkr().map(|jkr| (jkr, self.reach_past_touching))
     }
 
     /// μ of contact `c` (`MaterialTable::pair`'s rule: √(μ_i μ_j) between particles, the
@@ -472,7 +463,7 @@ impl<'a> ContactForce<'a> {
 
     /// How far past touching a contact can hold, m: JKR's largest pull-off distance, else 0.
     fn reach_past_touching(&self) -> f64 {
-        self.jkr.map_or(0.0, |(_, d)| d)
+        self.reach_past_touching
     }
 
     /// The domain (2D/3D, periodic axes).

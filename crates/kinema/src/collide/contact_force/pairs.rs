@@ -365,7 +365,7 @@ impl ContactForce<'_> {
                     let j = j as usize;
                     let found = if self.overlaps(xi, ri, j, x) {
                         pair_contact(i, j, x, v, self.radius, &self.domain, 0.0)
-                    } else if self.jkr.is_some() {
+                    } else if self.jkr().is_some() {
                         self.held_pair(i, j, x, v, old_pairs, &mut books.lost)
                     } else {
                         None

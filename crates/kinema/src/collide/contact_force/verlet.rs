@@ -171,7 +171,7 @@ impl ContactForce<'_> {
         };
         let turn = super::turning(
             self.tangential,
-            self.jkr.is_some(),
+            self.jkr().is_some(),
             predictor,
             histories,
             torque_exchange,

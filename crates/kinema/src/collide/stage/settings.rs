@@ -3,7 +3,7 @@
 //! ([`TangentialArgs`], [`TangentialKind`]) and [`CollisionParams`] with its checks; and the
 //! spring–dashpot model they ask for. Units SI.
 
-use crate::collide::contact_force::{Cohesion, RollingModel, SpringDashpot, TangentialLaw, TangentialModel};
+use crate::collide::contact_force::{Cohesion, NormalLaw, RollingModel, SpringDashpot, TangentialLaw, TangentialModel};
 use crate::collide::shock::Accuracy;
 use crate::collide::Material;
 use crate::error::Error;
@@ -126,6 +126,10 @@ impl ContactModel {
     /// The models' names, as the binding and the scene files spell them, in the order an
     /// error lists them.
     pub const NAMES: [&'static str; 3] = ["impulse", "spring_dashpot", "hertz"];
+
+    /// The force models' names (contacts as a force of stage 1, [`SpringDashpot`]): every
+    /// model but the impulse one. Python's rules for them read this list (`_core.FORCE_MODELS`).
+    pub const FORCE_MODELS: [&'static str; 2] = [Self::NAMES[1], Self::NAMES[2]];
 
     /// Poisson's ratio of Hertz's model when none is given (glass, steel and most rocks lie
     /// within 0.2–0.3).
@@ -496,10 +500,8 @@ pub(super) fn spring_dashpot_of(params: &CollisionParams) -> Option<SpringDashpo
     let mut model = match params.model {
         ContactModel::SpringDashpot { stiffness, damping } => SpringDashpot::new(stiffness, damping),
         ContactModel::Hertz { cohesion, .. } => {
-            let mut model = SpringDashpot::new(0.0, None);
-            model.hertz = params.model.effective_modulus();
-            model.cohesion = cohesion.filter(|c| c.surface_energy() > 0.0);
-            model
+            let e_star = params.model.effective_modulus()?;
+            SpringDashpot::of(NormalLaw::hertz(e_star, cohesion), None)
         }
         ContactModel::Impulse => return None,
     };
