@@ -3,10 +3,12 @@
 //! choice, [`NormalLaw`], and everything a contact asks of it — the secant stiffness, the
 //! contact radius, the pull-off force, the elastic energy and how far apart a contact holds.
 //!
-//! A new normal law is one variant here, its arm in each method below, and its row in the
-//! settings' names (`stage/settings.rs`, [`NormalLaw::of`]'s callers); the pair pass, the
-//! damping (`law.rs`), the tangential part (`tangent.rs`) and the rates (`force.rs`) read it
-//! only through these methods.
+//! A new normal law is one variant here and its arm in each method below (every match names
+//! every law, so the compiler lists them), and its setting (`stage/settings.rs`:
+//! `ContactModel`, its name, `spring_dashpot_of`); the pair pass, the damping (`law.rs`), the
+//! tangential part (`tangent.rs`) and the rates (`force.rs`) read it only through these
+//! methods. (Checked by adding a toy law F = k δ² and taking it out: `docs/architecture.md`,
+//! "How to add".)
 //!
 //! Each method takes R*, the contact's reduced radius, as a closure: Hooke's law never needs
 //! it, and the pair pass must not pay for it there.
@@ -59,7 +61,7 @@ impl NormalLaw {
     pub fn jkr(&self) -> Option<Jkr> {
         match *self {
             NormalLaw::Jkr(jkr) => Some(jkr),
-            _ => None,
+            NormalLaw::Hooke { .. } | NormalLaw::Hertz { .. } | NormalLaw::Dmt { .. } => None,
         }
     }
 
@@ -68,7 +70,7 @@ impl NormalLaw {
     pub fn contact_radius(&self, overlap: f64, r_star: impl Fn() -> f64) -> f64 {
         match self {
             NormalLaw::Jkr(jkr) => jkr.contact_radius(r_star(), overlap),
-            _ => (r_star() * overlap).sqrt(),
+            NormalLaw::Hooke { .. } | NormalLaw::Hertz { .. } | NormalLaw::Dmt { .. } => (r_star() * overlap).sqrt(),
         }
     }
 
@@ -88,7 +90,7 @@ impl NormalLaw {
     pub fn tangent_of_secant(&self, secant: f64) -> f64 {
         match self {
             NormalLaw::Hooke { .. } => secant,
-            _ => 1.5 * secant,
+            NormalLaw::Hertz { .. } | NormalLaw::Dmt { .. } | NormalLaw::Jkr(_) => 1.5 * secant,
         }
     }
 
@@ -118,7 +120,7 @@ impl NormalLaw {
         match *self {
             NormalLaw::Dmt { pull_off, .. } => pull_off * r_star(),
             NormalLaw::Jkr(jkr) => jkr.pull_off_force(r_star()),
-            _ => 0.0,
+            NormalLaw::Hooke { .. } | NormalLaw::Hertz { .. } => 0.0,
         }
     }
 
@@ -129,7 +131,7 @@ impl NormalLaw {
     pub fn restitution_dashpot(&self, linear: f64) -> f64 {
         match self {
             NormalLaw::Hooke { .. } => linear,
-            _ => HERTZ_DAMPING * linear,
+            NormalLaw::Hertz { .. } | NormalLaw::Dmt { .. } | NormalLaw::Jkr(_) => HERTZ_DAMPING * linear,
         }
     }
 
