@@ -36,6 +36,14 @@ consistent with the others; the scene by the scene's validation): a damaged, tru
 foreign file is one `CheckpointError`, one line naming the file, the field and the value
 (see "reading, every field checked" below). `run_plan` reads what a run in progress has
 left to do without building its world, for a work estimate (`kinema run --resume`).
+
+Who owns what: the world's methods `World.save_checkpoint` and `World.load_checkpoint` are
+defined in `World` and import this module when called; it never imports `kinema.world` (it
+builds its world by `scene.build()`), so the dependency goes one way. It reads and writes a
+world only through the world's public API and its state, `World._state()` and
+`World._restore(state)` (`kinema._state.WorldState`: the engine, each particle's time of
+death and colour, the springs' end ids, the emitters, the advisor's books); a run resumed
+goes on with the world's own run loop, `World._record`.
 """
 
 from __future__ import annotations
@@ -52,6 +60,7 @@ import numpy as np
 from . import _checks
 from ._checks import _dtype_words, _type_words, describe
 from .contact_record import FIELDS, ContactRecord, offsets_problem
+from .emitter import births_until
 from .frames import MAX_WORK
 from .frames import plan as frames_plan
 from .io._files import TrajectoryFileError
@@ -68,9 +77,9 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
     from .io._files import hdf5_file
 
     path = Path(path)
-    world._push()
+    state = world._state(sync=True)  # (what was written into the views handed to the engine first)
     scene = world.to_scene()  # a PythonForce raises ValueError here, before anything is written
-    core = world._core
+    core = state.engine
     carry = core.integrator_carry()
     spin_carry = core.spin_carry()
     wall_carry = core.wall_force_carry()
@@ -93,12 +102,12 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
         f.attrs["clock_steps"] = k0
         f.attrs["clock_time"] = t0
         f.attrs["next_id"] = core.next_id
-        f.attrs["warned"] = world._warned
-        f.attrs["advised_at"] = world._advised_at
+        f.attrs["warned"] = state.warned
+        f.attrs["advised_at"] = state.advised_at
         f.create_dataset("ids", data=np.asarray(core.ids, dtype=np.uint64))
-        f.create_dataset("death", data=world._death)
-        f.create_dataset("colors", data=world._colors)
-        f.create_dataset("spring_ids", data=world._spring_ids)
+        f.create_dataset("death", data=state.death)
+        f.create_dataset("colors", data=state.colors)
+        f.create_dataset("spring_ids", data=state.spring_ids)
         f.attrs["emitters"] = json.dumps(
             [
                 {
@@ -110,7 +119,7 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
                     # exactly through JSON's shortest repr)
                     "waiting": None if s.waiting is None else {k: v.tolist() for k, v in s.waiting.items()},
                 }
-                for s in world._emitters
+                for s in state.emitters
             ]
         )
         if carry is not None:  # Verlet's a or implicit Euler's last Δv, to every bit
@@ -149,7 +158,7 @@ def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> P
             f.attrs["collision_stats"] = json.dumps(_plain(stats))
             # and what the particles gave each collider, summed and in the last step
             for part, last in (("total", False), ("last", True)):
-                for key, a in world._collider_books_as_pulled(last).items():
+                for key, a in core.collider_books(last=last).items():  # (World.collider_books, nothing written since the sync)
                     f.create_dataset(f"collider_books/{part}/{key}", data=np.asarray(a, dtype=np.float64))
             if wall_carry is not None:  # a force model's collider forces of the last step (rates)
                 for key, a in wall_carry.items():
@@ -597,17 +606,16 @@ def _load_world(r: _Reader) -> Any:
         raise _scene_error(e) from None
     except ValueError as e:
         raise r.fail("attribute 'scene'", f"cannot be built: {_first_line(e)}") from None
-    core = world._core
+    state = world._state()  # the built world's, its fields set from the file below and given back to it
+    core = state.engine
     r.engine("dataset 'ids'", core.restore_clock_and_ids, time, c["steps"], ids.tolist(), next_id)
     r.engine("attribute 'clock_steps'", core.restore_clock, *c["clock"])
     # what the Python world keeps per particle
-    _, world._death = r.reals("death", (n,), lambda a: ~np.isnan(a), "one time of death per particle, s (inf: none), not NaN")
-    _, world._colors = r.reals("colors", (n, 3), lambda a: np.isnan(a) | ((a >= 0) & (a <= 1)), "one colour per particle, r g b in [0, 1] (NaN: none)")
-    _, world._spring_ids = r.ints(
-        "spring_ids", (None, 2), 0, next_id - 1, f"the ids at the ends of each spring: integers from 0 to next_id - 1 = {next_id - 1}"
-    )
-    world._warned = r.bool_attr("warned")
-    world._advised_at = r.int_attr("advised_at", 0, _INT64_MAX, "the particles when the advisor last looked: an integer >= 0")
+    _, state.death = r.reals("death", (n,), lambda a: ~np.isnan(a), "one time of death per particle, s (inf: none), not NaN")
+    _, state.colors = r.reals("colors", (n, 3), lambda a: np.isnan(a) | ((a >= 0) & (a <= 1)), "one colour per particle, r g b in [0, 1] (NaN: none)")
+    _, state.spring_ids = r.ints("spring_ids", (None, 2), 0, next_id - 1, f"the ids at the ends of each spring: integers from 0 to next_id - 1 = {next_id - 1}")
+    state.warned = r.bool_attr("warned")
+    state.advised_at = r.int_attr("advised_at", 0, _INT64_MAX, "the particles when the advisor last looked: an integer >= 0")
     # the collision books: there exactly when collisions are on
     wall_carry = None
     if world.collision_stats() is not None:
@@ -695,11 +703,11 @@ def _load_world(r: _Reader) -> Any:
         _, at = r.reals("collision_carry/list_built_at", (n, 3), np.isfinite, "where the candidate list was built: 3 finite numbers per particle, m")
         _, skin = r.reals("collision_carry/list_skin", (), lambda a: np.isfinite(a) & (a > 0), "the candidate list's skin: a finite number > 0, m")
         built = (at.reshape(-1).tolist(), float(skin))
-    _restore_emitters(r, world, time)
+    _restore_emitters(r, state.emitters, world.dim, time)
     if orientations is not None:
         r.engine("dataset 'orientations'", core.set_orientations, np.ascontiguousarray(orientations))
-    world._advice_due = False  # the advisor had looked at this state already (its warning is in `warned`)
-    world._new_views()
+    state.advice_due = False  # the advisor had looked at this state already (its warning is in `warned`)
+    world._restore(state)  # (and the views read anew)
     # last: nothing after these may start the caches again
     r.engine("group 'collision_carry'", core.restore_collision_carry, warm)
     r.engine("dataset 'collision_carry/sleep_island'", core.restore_sleep_carry, *sleep)
@@ -776,11 +784,10 @@ def _collision_books(r: _Reader) -> dict:
     return out
 
 
-def _restore_emitters(r: _Reader, world: Any, time: float) -> None:
+def _restore_emitters(r: _Reader, sources: list[Any], dim: int, time: float) -> None:
     """Each emitter's progress and random streams (attribute `emitters`), checked, given to
-    the world's emitters."""
+    the world's emitters at work `sources` (in a `dim`-D world)."""
     field, saved = r.json("emitters")
-    sources = world._emitters
     if not isinstance(saved, list) or len(saved) != len(sources):
         raise r.invalid(field, saved, f"it must be a list of the {len(sources)} emitters' states (attribute 'scene' has {len(sources)})")
     for k, (source, state) in enumerate(zip(sources, saved, strict=True)):
@@ -798,7 +805,7 @@ def _restore_emitters(r: _Reader, world: Any, time: float) -> None:
             _check_stream(r, f"{at}.streams.{name}", streams[name])
         waiting = state.get("waiting")
         if waiting is not None:
-            waiting = _check_waiting(r, f"{at}.waiting", waiting, world.dim)
+            waiting = _check_waiting(r, f"{at}.waiting", waiting, dim)
         held = 0 if waiting is None else len(waiting["m"])
         dropped = r.integer(
             f"{at}.dropped",
@@ -1171,7 +1178,7 @@ def load_run(path: str | Path) -> tuple[Any, dict]:
     `resume_run` goes on with it."""
     with _reading(Path(path)) as r:
         world = _load_world(r)
-        return world, _read_run(r, world, world.time, world._core.steps)
+        return world, _read_run(r, world, world.time, world._state().engine.steps)
 
 
 def resume_run(path: str | Path, callback: Any = None, *, max_work: float | None = MAX_WORK) -> tuple[Any, Any]:
@@ -1190,7 +1197,7 @@ def resume_run(path: str | Path, callback: Any = None, *, max_work: float | None
     world, run = load_run(path)
     plan = frames_plan(run["duration"], world.dt, run["fps"])
     steps = (run["frames_total"] - run["frames_done"]) * run["per_frame"] + plan.tail
-    born = world._births_until(run["t0"] + run["duration"])
+    born = births_until(world._state().emitters, run["t0"] + run["duration"])
     work = float(len(world) + born) * steps
     if limit is not None and work > limit:
         whom = f"{len(world):,} particles" + (f" and up to {born:,} from the emitters" if born else "")

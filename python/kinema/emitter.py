@@ -554,6 +554,13 @@ class _Source:
         return speed[:, None] * d
 
 
+def births_until(sources: list[Any], t: float) -> int:
+    """How many particles the emitters at work ``sources`` (a world's) will add from now to
+    time ``t`` (s), those held back for their place included: a work estimate counts each
+    from the start, as the command line counts a scene's."""
+    return sum(max(0, s.due(t) - s.emitted) + (0 if s.waiting is None else len(s.waiting["m"])) for s in sources)
+
+
 @dataclass(frozen=True)
 class KillBox:
     """Removes every particle whose centre is inside the axis-aligned box [lo, hi] (m)."""
