@@ -6,10 +6,13 @@ read and written through one object.
   has to: `Scene.build`, given by `kinema.scene.build` (its module doc says why: a scene makes
   a world and a world a scene, so the schema cannot import the world without a circle).
 - The modules that write, read and export a world (`kinema.checkpoint`,
-  `kinema.scene.export`, `kinema.scene.build`) use none of the World's private attributes
-  (`world._core`, `world._death`, `world._push()`, ...) but its state accessor and the run
-  loop a resumed run goes on with: `World._state()` and `World._restore(state)`
-  (`kinema._state.WorldState`), `World._record`.
+  `kinema.scene.export`, `kinema.scene.build`), and those that read it for a step's checks,
+  add to it or run it (`kinema.first_step`, `kinema.emitter`, `kinema.runner`), use none of
+  the World's private attributes (`world._core`, `world._death`, `world._push()`, ...) but
+  its state accessor and the run loop a resumed run goes on with: `World._state()` and
+  `World._restore(state)` (`kinema._state.WorldState`), `World._record`. (The recorder of
+  `kinema.trajectory`, which the world's run loop drives, reads it through the state too, and
+  through the methods made for it: `_diagnostics_as_pulled` and the like.)
 
 The scans read the source's syntax trees; `test_the_scans_find_what_there_was` shows that both
 find what the code had before (`git show d725df4:python/kinema/scene/export.py`, and the
@@ -27,7 +30,7 @@ PACKAGE = ROOT / "python" / "kinema"
 ALLOWED_PATCHES = {("kinema.scene.build", "Scene", "build")}
 # what of a World's private names the checkpoints, the export and the builder may use
 STATE_ACCESS = {"_state", "_restore", "_record"}
-WORLD_READERS = ("checkpoint.py", "scene/export.py", "scene/build.py")
+WORLD_READERS = ("checkpoint.py", "scene/export.py", "scene/build.py", "first_step.py", "emitter.py", "runner.py")
 
 
 def _module_name(path: Path) -> str:

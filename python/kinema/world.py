@@ -4,7 +4,9 @@ any integration method of the registry, colliding with each other and with stati
 ``World`` owns its state: the engine and the Python extras it keeps per particle and per run,
 whose field table is ``kinema._state.WorldState``. ``World._state()`` and
 ``World._restore(state)`` are the one way other modules of the package read and write that
-state (the checkpoints, the scene export and builder). The scene and checkpoint methods
+state (the checkpoints, the scene export and builder, the contact-time check of
+``kinema.first_step``, the recorder of ``kinema.trajectory``, ``kinema run``); besides them,
+a resumed run goes on with the world's run loop, ``World._record``. The scene and checkpoint methods
 (``to_scene``, ``save_checkpoint``, ``load_checkpoint``, ``scene``) are the class's own,
 defined here; their bodies are in ``kinema.scene.export`` and ``kinema.checkpoint``, imported
 when called: neither imports this module (the checkpoint's reader builds its world by
@@ -531,8 +533,11 @@ class World(WorldCollisions):
                 f"{type(item).__name__} is not a kinema force, collider or emitter; use kinema.Gravity, Drag, Spring, Attractor, "
                 "Wind, Turbulence, Vortex, PythonForce, Plane, Box, SphereObstacle, Mesh, Emitter, KillBox, KillSphere or KillPlane"
             )
-        if isinstance(item, (Emitter, *KILL_VOLUMES)):
-            attach(self)
+        if isinstance(item, Emitter):
+            self._emitters.append(attach(self))  # (the emitter at work: kinema.emitter)
+            return item
+        if isinstance(item, KILL_VOLUMES):
+            self._kills.append(attach(self))
             return item
         self._push()
         if isinstance(item, Collider) and item.motion is not None:
@@ -1234,7 +1239,7 @@ class World(WorldCollisions):
         table): the engine and the Python extras the world keeps, its own objects, not copies.
         With ``sync``, what was written into the views is handed to the engine first (a bad
         value is refused whole, as at a step). Package-internal: with :meth:`_restore`, the one
-        way the checkpoints and the scene export and builder read and write a world."""
+        way the package's other modules read and write a world's state (module doc)."""
         if sync:
             self._push()
         return WorldState(
