@@ -23,9 +23,10 @@ from typing import Any
 import numpy as np
 
 
-@dataclass
+@dataclass(eq=False)
 class WorldState:
-    """A world's engine and the Python extras it keeps (module doc); N particles, S springs."""
+    """A world's engine and the Python extras it keeps (module doc); N particles, S springs.
+    (Compared by identity: its arrays and the engine have no one truth of equality.)"""
 
     # the engine's world (kinema._core.World): the particles' state to every bit, their ids,
     # the clock, the collision books and what is carried from step to step
