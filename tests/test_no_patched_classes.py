@@ -5,8 +5,9 @@ read and written through one object.
   imported from another module of the package (`World.to_scene = to_scene`), but the one that
   has to: `Scene.build`, given by `kinema.scene.build` (its module doc says why: a scene makes
   a world and a world a scene, so the schema cannot import the world without a circle).
-- The modules that write, read and export a world (`kinema.checkpoint`,
-  `kinema.scene.export`, `kinema.scene.build`), and those that read it for a step's checks,
+- The modules that write, read and export a world (`kinema.checkpoint` and its readers
+  `kinema._checkpoint_reader`, `_checkpoint_world`, `_checkpoint_run`; `kinema.scene.export`,
+  `kinema.scene.build`), and those that read it for a step's checks,
   add to it or run it (`kinema.first_step`, `kinema.emitter`, `kinema.runner`), use none of
   the World's private attributes (`world._core`, `world._death`, `world._push()`, ...) but
   its state accessor and the run loop a resumed run goes on with: `World._state()` and
@@ -30,7 +31,17 @@ PACKAGE = ROOT / "python" / "kinema"
 ALLOWED_PATCHES = {("kinema.scene.build", "Scene", "build")}
 # what of a World's private names the checkpoints, the export and the builder may use
 STATE_ACCESS = {"_state", "_restore", "_record"}
-WORLD_READERS = ("checkpoint.py", "scene/export.py", "scene/build.py", "first_step.py", "emitter.py", "runner.py")
+WORLD_READERS = (
+    "checkpoint.py",
+    "_checkpoint_reader.py",
+    "_checkpoint_world.py",
+    "_checkpoint_run.py",
+    "scene/export.py",
+    "scene/build.py",
+    "first_step.py",
+    "emitter.py",
+    "runner.py",
+)
 
 
 def _module_name(path: Path) -> str:
