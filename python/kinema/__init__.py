@@ -41,7 +41,7 @@ from . import (
     io,
     problems,
     render,
-    scene,  # importing it attaches World.to_scene
+    scene,  # importing it gives Scene its build method (kinema.scene.build)
     stability,
 )
 from ._core import __version__, _after_fork_in_child

@@ -254,10 +254,11 @@ class Emitter:
         c["seed"] = _checks.integer("seed", self.seed, 0, 2**63 - 1, what="the seed must be an integer from 0 to 2**63 - 1")
         object.__setattr__(self, "_checked", c)
 
-    def _attach(self, world: Any) -> None:
+    def _attach(self, world: Any) -> _Source:
+        """The emitter at work in ``world`` (of its ``dim``), which the world keeps (``World.add``)."""
         if world.dim == 2 and self._checked["shape"] == "mesh":
             raise ValueError("shape = 'mesh' is invalid in a 2D world: a triangle mesh is 3D only (emit from a disc, a box or a point)")
-        world._emitters.append(_Source(self, world.dim))
+        return _Source(self, world.dim)
 
 
 def _mesh_source(shape: str, mesh: Any, emit_from: Any) -> dict[str, Any]:
@@ -554,6 +555,13 @@ class _Source:
         return speed[:, None] * d
 
 
+def births_until(sources: list[Any], t: float) -> int:
+    """How many particles the emitters at work ``sources`` (a world's) will add from now to
+    time ``t`` (s), those held back for their place included: a work estimate counts each
+    from the start, as the command line counts a scene's."""
+    return sum(max(0, s.due(t) - s.emitted) + (0 if s.waiting is None else len(s.waiting["m"])) for s in sources)
+
+
 @dataclass(frozen=True)
 class KillBox:
     """Removes every particle whose centre is inside the axis-aligned box [lo, hi] (m)."""
@@ -570,8 +578,9 @@ class KillBox:
         """What the engine's deaths test (`KillVolume::Box`: lo <= x <= hi along every axis)."""
         return ("box", [float(c) for c in self.lo], [float(c) for c in self.hi])
 
-    def _attach(self, world: Any) -> None:
-        world._kills.append(self)
+    def _attach(self, world: Any) -> Any:
+        """What the world keeps of it (``World.add``): itself."""
+        return self
 
 
 @dataclass(frozen=True)
@@ -589,8 +598,9 @@ class KillSphere:
         """What the engine's deaths test (`KillVolume::Sphere`: |x - center|^2 <= radius^2)."""
         return ("sphere", [float(c) for c in self.center], float(self.radius))
 
-    def _attach(self, world: Any) -> None:
-        world._kills.append(self)
+    def _attach(self, world: Any) -> Any:
+        """What the world keeps of it (``World.add``): itself."""
+        return self
 
 
 @dataclass(frozen=True)
@@ -610,8 +620,9 @@ class KillPlane:
         """What the engine's deaths test (`KillVolume::Plane`: (x - point)·normal < 0)."""
         return ("plane", [float(c) for c in self.point], [float(c) for c in self.normal])
 
-    def _attach(self, world: Any) -> None:
-        world._kills.append(self)
+    def _attach(self, world: Any) -> Any:
+        """What the world keeps of it (``World.add``): itself."""
+        return self
 
 
 KILL_VOLUMES = (KillBox, KillSphere, KillPlane)

@@ -135,11 +135,11 @@ def bodies_of(world: Any, core: Any) -> Bodies:
     r = np.asarray(core.radii, float)
     movable = (w > 0) & (r > 0)
     idx = np.flatnonzero(movable)
-    x, v = [world._x[movable]], [world._v[movable]]
+    x, v = [world.positions[movable]], [world.velocities[movable]]
     rs, ws, labels = [r[movable]], [w[movable]], [f"particle {i}" for i in idx]
-    g = gravity(world._forces, core.dim)
+    g = gravity(world.forces, core.dim)
     up = -g / np.linalg.norm(g) if g.any() else np.zeros(3)
-    for k, source in enumerate(world._emitters):
+    for k, source in enumerate(world._state().emitters):
         c = source.c
         if c["shape"] == "mesh":  # its highest vertex (its faces, vertices and volume lie below)
             top = c["mesh_vertices"][int(np.argmax(c["mesh_vertices"] @ up))]
@@ -157,7 +157,7 @@ def bodies_of(world: Any, core: Any) -> Bodies:
             ws.append(np.full(2, 1.0 / mass))
             labels += [f"emitter {k}'s particle of r = {radius:g} m"] * 2
     pinned = (w == 0) & (r > 0)
-    return Bodies(np.concatenate(x), np.concatenate(v), np.concatenate(rs), np.concatenate(ws), labels, world._x[pinned], r[pinned])
+    return Bodies(np.concatenate(x), np.concatenate(v), np.concatenate(rs), np.concatenate(ws), labels, world.positions[pinned], r[pinned])
 
 
 def _reach(c: dict, up: np.ndarray) -> float:
@@ -307,12 +307,13 @@ def check(world: Any, core: Any) -> StepCheck | None:
     if settings.get("model") not in _core.FORCE_MODELS:
         return None
     bodies = bodies_of(world, core)
-    g = gravity(world._forces, core.dim)
+    g = gravity(world.forces, core.dim)
     own = [e for e, _ in core.particle_materials() if e is not None and not math.isnan(e)]
-    walls = [c.restitution for c in world._colliders if c.restitution is not None]
-    emitted = [s.c["restitution"] for s in world._emitters if s.c["restitution"] is not None]
+    colliders = world.colliders
+    walls = [c.restitution for c in colliders if c.restitution is not None]
+    emitted = [s.c["restitution"] for s in world._state().emitters if s.c["restitution"] is not None]
     e_max = max([settings["restitution"], *own, *walls, *emitted])
-    contact = shortest_contact(settings, bodies, world._colliders, g, core.time, core.dt, e_max)
+    contact = shortest_contact(settings, bodies, colliders, g, core.time, core.dt, e_max)
     rayleigh = None
     if settings["model"] == "hertz" and len(bodies.r):
         rayleigh = float(np.min(rayleigh_time(bodies.r, 1.0 / bodies.w, settings["youngs_modulus"], settings["poisson_ratio"])))
@@ -360,7 +361,7 @@ def _max_step(world: Any, contact: Impact) -> float:
     from .stability import max_step_oscillator
 
     try:
-        return max_step_oscillator(world._method_arg, contact.omega, min(contact.zeta, 1.0))
+        return max_step_oscillator(world._state().method, contact.omega, min(contact.zeta, 1.0))
     except ValueError:  # a method without a stability function on oscillators
         return math.inf
 

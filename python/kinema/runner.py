@@ -185,6 +185,15 @@ def _same_run(plan: dict, ckpt: Path, path: Path, scene: Any, duration: float | 
         )
 
 
+def _run_source(world: Any, source: dict[str, str]) -> None:
+    """Gives the world the scene file its run was started from and its scene's hash
+    (``scene_file``, ``scene_sha256``: its state's ``run_source``), written with its
+    checkpoints: ``--resume`` refuses a checkpoint of another scene."""
+    state = world._state()
+    state.run_source = source
+    world._restore(state)
+
+
 def _resume_work(ckpt: Path, scene: Any, video: bool, force: bool, path: Path | None = None, duration: float | None = None) -> tuple[str, dict]:
     """Estimate the work left to the run in progress that wrote the checkpoint ``ckpt``
     (read and checked, nothing built: ``kinema.checkpoint.run_plan``) and the video of
@@ -418,11 +427,11 @@ def simulate_scene(
         estimate, plan = _resume_work(ckpt, sc, bool(video), force, scene, duration)
         seconds = plan["duration"]  # (without --duration: the run's own, which --duration may have set)
         world, progress = load_run(ckpt)
-        world._run_source = {k: progress[k] for k in ("scene_file", "scene_sha256") if progress.get(k) is not None}
+        _run_source(world, {k: progress[k] for k in ("scene_file", "scene_sha256") if progress.get(k) is not None})
     else:
         estimate = _scene_work(sc, scene, seconds, "world.duration" if duration is None else "--duration", bool(video), force)
         world = sc.build(source=str(scene))
-        world._run_source = {"scene_file": str(scene), "scene_sha256": scene_digest(sc)}  # written with its checkpoints
+        _run_source(world, {"scene_file": str(scene), "scene_sha256": scene_digest(sc)})
     outdir = _outdir(outdir)
     outputs = (
         ("trajectory.h5", sc.output.trajectory),

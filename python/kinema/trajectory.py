@@ -598,13 +598,14 @@ class _Recorder:
     def add(self, world: Any) -> None:
         # What the world is (masses, radii, species, colliders, ...) is read only when its set of
         # particles changed, not at every frame; the ids are compared each frame.
-        ids = np.asarray(world._core.ids, dtype=np.int64)
+        state = world._state()  # (kinema._state.WorldState: the engine, the springs' ends)
+        ids = np.asarray(state.engine.ids, dtype=np.int64)
         if not self.sets or not np.array_equal(ids, self.sets[-1][0]):
             info = world._trajectory_info()
             if not self.about:
                 self.about = info
             self.sets.append((ids, info["masses"], info["radii"], info["species"], info["colors"], info["groups"]))
-        springs = world._spring_ids  # springs added mid-run count
+        springs = state.spring_ids  # springs added mid-run count
         self.about["springs"] = springs.copy() if springs.size else None
         d = world._diagnostics_as_pulled()
         stats = world._collision_stats_as_pulled()
@@ -623,7 +624,7 @@ class _Recorder:
         self.frames.append((*frame, contacts, balance, lost, ids, impacts, virial, kinetic))
         self.turning.append(_turning(world))
         if self.contacts:
-            self.touching.append(as_ids(world._core.contacts(), ids))
+            self.touching.append(as_ids(state.engine.contacts(), ids))
         if self.walls is not None:
             if world._books_colliders():
                 books = world._collider_books_as_pulled()
@@ -728,9 +729,9 @@ def _turning(world: Any) -> dict[str, np.ndarray]:
     """Copies of the world's angular velocities, moments of inertia (n, 1) and orientations
     now, those it has: none without spin; orientations where the engine integrates them
     (`World.orientations`)."""
-    if not world._core.spin:
+    if not world.spin:
         return {}
-    out = {"angular_velocities": world._w.copy(), "inertia": np.asarray(world._core.inertia, dtype=np.float64).reshape(-1, 1)}
+    out = {"angular_velocities": world.angular_velocities.copy(), "inertia": np.asarray(world._state().engine.inertia, dtype=np.float64).reshape(-1, 1)}
     if hasattr(type(world), "orientations"):
         out["orientations"] = np.array(world.orientations, dtype=np.float64)
     return out

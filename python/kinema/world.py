@@ -1,5 +1,16 @@
 """The particle world: particles with mass, position and velocity, moved by forces through
 any integration method of the registry, colliding with each other and with static colliders.
+
+``World`` owns its state: the engine and the Python extras it keeps per particle and per run,
+whose field table is ``kinema._state.WorldState``. ``World._state()`` and
+``World._restore(state)`` are the one way other modules of the package read and write that
+state (the checkpoints, the scene export and builder, the contact-time check of
+``kinema.first_step``, the recorder of ``kinema.trajectory``, ``kinema run``); besides them,
+a resumed run goes on with the world's run loop, ``World._record``. The scene and checkpoint methods
+(``to_scene``, ``save_checkpoint``, ``load_checkpoint``, ``scene``) are the class's own,
+defined here; their bodies are in ``kinema.scene.export`` and ``kinema.checkpoint``, imported
+when called: neither imports this module (the checkpoint's reader builds its world by
+``scene.build()``), so the dependency goes one way (tests/test_no_import_circles.py).
 """
 
 from __future__ import annotations
@@ -9,19 +20,23 @@ import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import _checks, _core, first_step
+from ._state import WorldState
 from .colliders import Box, Collider, Mesh, MeshPlacementWarning, placement_problems
-from .emitter import BEHIND, KILL_VOLUMES, Emitter, EmitterWarning
+from .emitter import BEHIND, KILL_VOLUMES, Emitter, EmitterWarning, births_until
 from .forces import Spring
 from .frames import MAX_WORK as MAX_WORK  # (kinema.world.MAX_WORK, World.run's default)
 from .frames import plan as frames_plan
 from .ode import ButcherTableau, method_names
 from .trajectory import Trajectory
 from .world_collisions import WorldCollisions
+
+if TYPE_CHECKING:
+    from .scene.schema import Scene
 
 SimulationDiverged = _core.SimulationDiverged
 
@@ -179,6 +194,11 @@ class World(WorldCollisions):
     (:attr:`ids`) that stays with it and is never given again; indices are positions in the
     current arrays and shift when particles are removed.
     """
+
+    #: The scene the world was built from (``kinema.load_scene``, ``Scene.build``, a checkpoint's
+    #: scene), which keeps its duration, fps, render, output and analysis settings for
+    #: :meth:`to_scene` and ``kinema run``; ``None`` for a world made in code.
+    scene: Scene | None = None
 
     def __init__(self, dim: int = 3, dt: float = 1e-3, method: str | ButcherTableau = "verlet", spin: bool = False):
         dim = _checks.integer("dim", dim, 2, 3, what="a world is 2D (the xy-plane) or 3D: dim must be 2 or 3")
@@ -513,8 +533,11 @@ class World(WorldCollisions):
                 f"{type(item).__name__} is not a kinema force, collider or emitter; use kinema.Gravity, Drag, Spring, Attractor, "
                 "Wind, Turbulence, Vortex, PythonForce, Plane, Box, SphereObstacle, Mesh, Emitter, KillBox, KillSphere or KillPlane"
             )
-        if isinstance(item, (Emitter, *KILL_VOLUMES)):
-            attach(self)
+        if isinstance(item, Emitter):
+            self._emitters.append(attach(self))  # (the emitter at work: kinema.emitter)
+            return item
+        if isinstance(item, KILL_VOLUMES):
+            self._kills.append(attach(self))
             return item
         self._push()
         if isinstance(item, Collider) and item.motion is not None:
@@ -804,7 +827,7 @@ class World(WorldCollisions):
         limit = _checks.real("max_work", max_work, optional=True)
         if limit is not None and not limit > 0:
             raise ValueError(f"max_work = {_checks.describe(max_work)} is invalid: it must be a number of particle-steps > 0, or None for no limit")
-        born = self._births_until(self.time + duration)
+        born = births_until(self._emitters, self.time + duration)
         n = len(self) + born
         work = float(n) * plan.steps
         if limit is not None and work > limit:
@@ -855,17 +878,9 @@ class World(WorldCollisions):
                 name = f"'{mesh.file.name}'" if mesh.file is not None else "of arrays"
                 warnings.warn(f"colliders[{k}], the mesh {name}: {'; '.join(said)}", MeshPlacementWarning, stacklevel=3)
 
-    def _births_until(self, t: float) -> int:
-        """How many particles the emitters will add from now to time ``t`` (s), those held
-        back for their place included: a work estimate counts each from the start, as the
-        command line counts a scene's."""
-        return sum(max(0, s.due(t) - s.emitted) + (0 if s.waiting is None else len(s.waiting["m"])) for s in self._emitters)
-
     def _record(self, run: dict, callback: Any, checkpoint: Path | None) -> Trajectory:
         """The frames of ``run`` from ``frames_done`` on, writing ``checkpoint`` every
         ``every`` frames (the loop of ``run``, and of a run resumed from a checkpoint)."""
-        from .checkpoint import save_checkpoint
-
         rec = run["recorder"]
         plan = frames_plan(run["duration"], self.dt, run["fps"])
         while run["frames_done"] < run["frames_total"]:
@@ -883,7 +898,7 @@ class World(WorldCollisions):
                 callback(self)
                 self._push()
             if checkpoint is not None and run["frames_done"] % run["every"] == 0 and run["frames_done"] < run["frames_total"]:
-                save_checkpoint(self, checkpoint, _run=run)
+                self.save_checkpoint(checkpoint, _run=run)
         if plan.tail:
             # a duration of no whole number of frames: on to its end, unrecorded
             try:
@@ -1182,6 +1197,81 @@ class World(WorldCollisions):
         """``collision_stats()`` for the recorder, as :meth:`_diagnostics_as_pulled`: the books of
         the steps taken, with nothing written into the views since they were read."""
         return self._core.collision_stats()
+
+    # -- scenes, checkpoints and the state ---------------------------------------------------
+    def to_scene(self) -> Scene:
+        """The scene of the world as it is now: one explicit particle list, its forces, colliders
+        and settings; duration, fps, render, output and analysis options come from :attr:`scene`
+        when the world was loaded from one. Each particle's own restitution and friction come
+        from the engine; a ``PythonForce`` cannot be written and raises ``ValueError``.
+
+        What it makes is checked to be a scene kinema reads back and builds: the particles'
+        values by the engine's rules (a mass written into ``world.masses`` as -1 is refused),
+        then the whole scene by its schema. A value that fails is a ``SceneError`` (a
+        ``ValueError``) of one line naming the key, the particle index and the value:
+        ``<world>: particles[0].mass[3]: -1.0 is invalid: masses must be finite and > 0 kg ...``.
+        (``kinema.scene.to_scene``.)"""
+        from .scene.export import to_scene
+
+        return to_scene(self)
+
+    def save_checkpoint(self, path: str | Path, _run: dict | None = None) -> Path:
+        """Write the world to ``path`` between steps, one HDF5 file that :meth:`load_checkpoint`
+        reads back into a world that goes on exactly as this one (what it holds: the module
+        ``kinema.checkpoint``), and restart its caches; returns the path. A world with a
+        ``PythonForce`` cannot be written (``ValueError``). (``_run``: the progress of
+        :meth:`run`, written by it; see ``kinema.resume_run``.)"""
+        from .checkpoint import save_checkpoint
+
+        return save_checkpoint(self, path, _run)
+
+    @staticmethod
+    def load_checkpoint(path: str | Path) -> World:
+        """The world written by :meth:`save_checkpoint` at ``path``, ready to go on. Every field is
+        checked first; a missing, damaged or foreign file is a ``kinema.checkpoint.CheckpointError``
+        (a ``ValueError``), one line naming the file, the field and the value."""
+        from .checkpoint import load_checkpoint
+
+        return load_checkpoint(path)
+
+    def _state(self, sync: bool = False) -> WorldState:
+        """The world's state beyond its public API, as one object (``kinema._state``: its field
+        table): the engine and the Python extras the world keeps, its own objects, not copies.
+        With ``sync``, what was written into the views is handed to the engine first (a bad
+        value is refused whole, as at a step). Package-internal: with :meth:`_restore`, the one
+        way the package's other modules read and write a world's state (module doc)."""
+        if sync:
+            self._push()
+        return WorldState(
+            engine=self._core,
+            death=self._death,
+            colors=self._colors,
+            spring_ids=self._spring_ids,
+            spring_rest=self._spring_rest,
+            emitters=self._emitters,
+            kills=self._kills,
+            method=self._method_arg,
+            warned=self._warned,
+            contact_warned=self._contact_warned,
+            advice_due=self._advice_due,
+            advised_at=self._advised_at,
+            placed=self._placed,
+            run_source=self._run_source,
+        )
+
+    def _restore(self, state: WorldState) -> None:
+        """Gives the world the state ``state`` (as :meth:`_state` gives it, its fields set anew:
+        a checkpoint's) and reads the views anew from its engine: views taken before no longer
+        follow the world."""
+        self._core = state.engine
+        self._death, self._colors = state.death, state.colors
+        self._spring_ids, self._spring_rest = state.spring_ids, state.spring_rest
+        self._emitters, self._kills = state.emitters, state.kills
+        self._method_arg = state.method
+        self._warned, self._contact_warned = state.warned, state.contact_warned
+        self._advice_due, self._advised_at = state.advice_due, state.advised_at
+        self._placed, self._run_source = state.placed, state.run_source
+        self._new_views()
 
     def __repr__(self) -> str:
         if isinstance(self._core, _Busy):

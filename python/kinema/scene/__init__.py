@@ -13,13 +13,13 @@ The format, key by key with units, is in docs/scenes.md.
 The package: ``tables`` (the value types and the models of the file's tables), ``schema``
 (``Scene``, the whole file, with reading, writing and ``SceneError``'s messages), ``build``
 (scene -> ``World``: ``Scene.build``, which it gives the class, and ``load_scene``) and ``export`` (world -> scene:
-``to_scene``, and the ``World`` methods it attaches on import).
+``to_scene``, the body of ``World.to_scene``).
 """
 
 from __future__ import annotations
 
 from .build import load_scene
-from .export import to_scene  # importing it attaches World.to_scene, World.scene, World.save/load_checkpoint
+from .export import to_scene
 from .schema import Scene, SceneError
 from .schema import block_size as block_size  # kinema.runner's work estimate
 from .tables import Isotropic, Maxwell, Uniform

@@ -1,8 +1,16 @@
 """Scene -> engine objects: the World a ``Scene`` describes (``build``, and the method
 ``Scene.build``, which this module gives the class), ``load_scene``. This module imports
-``schema`` and ``tables``; neither imports it (the package does, so every ``Scene`` has its
-``build``): a scene's schema knows nothing of ``World``, and a checkpoint's reader builds its
-world by ``scene.build()`` without importing ``kinema.world``."""
+``schema``, ``tables`` and ``kinema.world``; none of them imports it (the package does, so
+every ``Scene`` has its ``build``).
+
+``Scene.build`` is the one method of the package given to a class from another module, and it
+has to be: a scene makes a World (``scene.build()``) and a world makes a scene
+(``World.to_scene``, ``World.load_checkpoint``, defined in ``World``'s class body), so whichever
+of the two methods sits in its class's module, that module depends on the other class's
+(world -> scene.export -> schema, world -> checkpoint -> schema). Written in ``Scene``'s body,
+``build`` would close the circle schema -> build -> world -> schema. So the schema knows
+nothing of ``World``, and the world and the checkpoint's reader build a world by
+``scene.build()`` without importing this module (tests/test_no_import_circles.py)."""
 
 from __future__ import annotations
 
@@ -39,6 +47,7 @@ from .tables import (
     VortexForce,
     WindForce,
 )
+from .values import vec3
 
 
 def build(scene: Scene, source: str = "<scene>") -> World:
@@ -87,7 +96,7 @@ def build(scene: Scene, source: str = "<scene>") -> World:
     # Particles placed where the contacts cannot resolve them (collide/placement.rs) are the
     # scene's error, said when it is built, as every other of its values is: not at the first step.
     try:
-        w._core.check_placement()
+        w._state().engine.check_placement()
     except ValueError as err:
         raise SceneError(f"{source}: particles: {err}") from None
     w.scene = scene
@@ -101,7 +110,8 @@ def _build(self: Scene, source: str = "<scene>") -> World:
     return build(self, source)
 
 
-# ``scene.build()``: given to the class here, with the World it makes (module doc)
+# ``scene.build()``: given to the class here, with the World it makes (module doc: the one
+# method given to a class from outside it; tests/test_no_patched_classes.py)
 _build.__name__, _build.__qualname__ = "build", "Scene.build"
 Scene.build = _build  # type: ignore[attr-defined]
 
@@ -115,7 +125,7 @@ def _emitter(e: EmitterTable) -> Emitter:
     values = e.model_dump(exclude={"mesh"})
     for name in ("center", "size", "normal", "direction"):
         if values[name] is not None:
-            values[name] = _v3(values[name])
+            values[name] = vec3(values[name])
     return Emitter(**values, mesh=None if e.mesh is None else _mesh(e.mesh))
 
 
@@ -129,17 +139,13 @@ def _mesh(c: Any, **more: Any) -> Mesh:
 
 def _kill(k: Any) -> Any:
     if isinstance(k, KillBoxTable):
-        return KillBox(_v3(k.lo), _v3(k.hi))
+        return KillBox(vec3(k.lo), vec3(k.hi))
     if isinstance(k, KillSphereTable):
-        return KillSphere(_v3(k.center), k.radius)
-    return KillPlane(_v3(k.point), _v3(k.normal))
+        return KillSphere(vec3(k.center), k.radius)
+    return KillPlane(vec3(k.point), vec3(k.normal))
 
 
 # -- scene -> engine objects ------------------------------------------------------------------
-
-
-def _v3(v: list[float]) -> list[float]:
-    return [*map(float, v), 0.0][:3] if len(v) == 2 else [float(c) for c in v]
 
 
 def _rng(seed: int, stream: int) -> np.random.Generator:
@@ -150,20 +156,20 @@ def _rng(seed: int, stream: int) -> np.random.Generator:
 def _positions(block: Any, dim: int) -> np.ndarray:
     if isinstance(block, FileBlock):
         x = block.particles()["positions"]
-        return x + np.asarray(_v3(block.translate)) if block.translate is not None else x.copy()
+        return x + np.asarray(vec3(block.translate)) if block.translate is not None else x.copy()
     if isinstance(block, ListBlock):
-        return np.array([_v3(p) for p in block.positions])
+        return np.array([vec3(p) for p in block.positions])
     if isinstance(block, LatticeBlock):
         counts = [*block.counts, 1][:3]
-        spacing = np.broadcast_to(np.asarray(_v3(block.spacing) if isinstance(block.spacing, list) else block.spacing, dtype=float), (3,))
+        spacing = np.broadcast_to(np.asarray(vec3(block.spacing) if isinstance(block.spacing, list) else block.spacing, dtype=float), (3,))
         grid = np.stack(np.meshgrid(*[np.arange(c) for c in counts], indexing="ij"), axis=-1).reshape(-1, 3)
-        x = np.asarray(_v3(block.origin)) + grid * spacing
+        x = np.asarray(vec3(block.origin)) + grid * spacing
         if block.jitter > 0:
             x = x + _rng(block.seed, 0).uniform(-block.jitter, block.jitter, x.shape)
         if dim == 2:
             x[:, 2] = 0.0
         return x
-    lo, hi = np.asarray(_v3(block.lo)), np.asarray(_v3(block.hi))
+    lo, hi = np.asarray(vec3(block.lo)), np.asarray(vec3(block.hi))
     rng = _rng(block.seed, 0)
     if not block.min_distance:
         return rng.uniform(lo, hi, (block.count, 3))
@@ -249,11 +255,11 @@ def _particles(block: Any, dim: int) -> tuple:
     elif vel and isinstance(vel[0], list):
         if len(vel) != n:
             raise ValueError(f"velocity has {len(vel)} vectors for {n} particles")
-        v = np.array([_v3(u) for u in vel])
+        v = np.array([vec3(u) for u in vel])
     else:
         if len(vel) not in (2, 3):
             raise ValueError(f"velocity = {vel} is invalid: it must be a vector of 2 or 3 values")
-        v = np.broadcast_to(_v3(vel), (n, 3)).copy()
+        v = np.broadcast_to(vec3(vel), (n, 3)).copy()
     pinned = np.asarray(block.pinned, dtype=bool)
     if pinned.ndim == 1 and pinned.size != n:
         raise ValueError(f"pinned has {pinned.size} values for {n} particles")
@@ -290,43 +296,43 @@ def _motion(m: Any) -> Motion | Keyframes | None:
     if m is None:
         return None
     if isinstance(m, SteadyMotion):
-        return Motion(_v3(m.velocity), list(m.angular_velocity), _v3(m.pivot), m.start)
-    translations = None if m.translations is None else [_v3(t) for t in m.translations]
-    return Keyframes(list(m.times), translations, None if m.rotations is None else [list(r) for r in m.rotations], _v3(m.pivot))
+        return Motion(vec3(m.velocity), list(m.angular_velocity), vec3(m.pivot), m.start)
+    translations = None if m.translations is None else [vec3(t) for t in m.translations]
+    return Keyframes(list(m.times), translations, None if m.rotations is None else [list(r) for r in m.rotations], vec3(m.pivot))
 
 
 def _collider(c: Any, dim: int) -> Any:
     s = {"restitution": c.restitution, "friction": c.friction, "motion": _motion(c.motion), "collides_with": c.collides_with}
     if isinstance(c, PlaneCollider):
-        return Plane(_v3(c.point), _v3(c.normal), **s)
+        return Plane(vec3(c.point), vec3(c.normal), **s)
     if isinstance(c, BoxCollider):
         return Box(list(c.lo), list(c.hi), **s)
     if isinstance(c, MeshCollider):
         return _mesh(c, inside=c.inside, **s)
-    return SphereObstacle(_v3(c.center), c.radius, **s)
+    return SphereObstacle(vec3(c.center), c.radius, **s)
 
 
 def _falloff(t: FalloffTable | None) -> Falloff | None:
     """A force's ``falloff`` table as a ``kinema.Falloff`` (vectors of 2 meaning (x, y, 0))."""
     if t is None:
         return None
-    vec = {k: _v3(v) for k in ("center", "axis", "half_size") if (v := getattr(t, k)) is not None}
+    vec = {k: vec3(v) for k in ("center", "axis", "half_size") if (v := getattr(t, k)) is not None}
     return Falloff(t.shape, t.law, t.min_distance, t.max_distance, **vec)
 
 
 def _force(f: Any, dim: int, w: World, starts: list[tuple[int, int]], blocks: list) -> Any:
     if isinstance(f, GravityForce):
-        return Gravity(_v3(f.g) if f.g is not None else None)
+        return Gravity(vec3(f.g) if f.g is not None else None)
     if isinstance(f, DragForce):
         return Drag(f.linear, f.quadratic)
     if isinstance(f, AttractorForce):
-        return Attractor(_v3(f.point), f.strength, f.softening, falloff=_falloff(f.falloff))
+        return Attractor(vec3(f.point), f.strength, f.softening, falloff=_falloff(f.falloff))
     if isinstance(f, WindForce):
-        return Wind(_v3(f.velocity), f.coefficient, falloff=_falloff(f.falloff))
+        return Wind(vec3(f.velocity), f.coefficient, falloff=_falloff(f.falloff))
     if isinstance(f, TurbulenceForce):
         return Turbulence(f.strength, f.scale, f.seed, f.time_scale, f.octaves, f.roughness, f.coefficient, _falloff(f.falloff))
     if isinstance(f, VortexForce):
-        return Vortex(_v3(f.point), _v3(f.axis), f.strength, f.radius, f.profile, f.coefficient, _falloff(f.falloff))
+        return Vortex(vec3(f.point), vec3(f.axis), f.strength, f.radius, f.profile, f.coefficient, _falloff(f.falloff))
     if f.rule is None:
         i, j = np.asarray(f.i, dtype=np.int64), np.asarray(f.j, dtype=np.int64)
     else:

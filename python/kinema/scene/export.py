@@ -1,6 +1,8 @@
-"""World -> scene: ``to_scene`` (``world.to_scene()``), and the ``World`` attributes this
-package gives on import (``World.to_scene``, ``World.scene``, ``World.save_checkpoint``,
-``World.load_checkpoint``), so that the world module stays free of the scene format."""
+"""World -> scene: ``to_scene``, the body of ``World.to_scene`` (``world.to_scene()``, which
+imports it when called). It reads the world through its public API and its state
+(``World._state()``, ``kinema._state.WorldState``: the engine, the springs' ends and rest
+lengths, the emitters and kill volumes), and imports neither ``kinema.world`` nor the scene's
+builder: ``world -> export -> schema`` goes one way (tests/test_no_import_circles.py)."""
 
 from __future__ import annotations
 
@@ -11,14 +13,12 @@ from typing import Any
 import numpy as np
 
 from .. import _checks
-from ..checkpoint import load_checkpoint, save_checkpoint
 from ..colliders import Box, Keyframes, Mesh, Motion, Plane
 from ..emitter import KillBox, KillSphere
 from ..forces import Attractor, Drag, Falloff, Gravity, Spring, Turbulence, Vortex, Wind
-from ..world import World
-from .build import _v3
 from .schema import Scene, SceneError
 from .tables import EmitterTable
+from .values import vec3
 
 # -- world -> scene ---------------------------------------------------------------------------
 
@@ -94,8 +94,8 @@ def _check_particles(block: dict[str, Any], dim: int) -> None:
                 refuse(key, i, float(a[i]), rule)
 
 
-def to_scene(world: World) -> Scene:
-    """The scene of ``world`` as it is now: one explicit particle list, its forces, colliders
+def to_scene(world: Any) -> Scene:
+    """The scene of ``world`` (a ``kinema.World``) as it is now: one explicit particle list, its forces, colliders
     and settings; duration, fps, render, output and analysis options come from ``world.scene`` when
     the world was loaded from one. Each particle's own restitution and friction come from the
     engine; a ``PythonForce`` cannot be written and raises ``ValueError``.
@@ -105,9 +105,10 @@ def to_scene(world: World) -> Scene:
     refused), then the whole scene by its schema. A value that fails is a ``SceneError`` (a
     ``ValueError``) of one line naming the key, the particle index and the value:
     ``<world>: particles[0].mass[3]: -1.0 is invalid: masses must be finite and > 0 kg ...``."""
-    old: Scene | None = getattr(world, "scene", None)
+    old: Scene | None = world.scene
     n = len(world)
-    inverse = np.asarray(world._core.inverse_masses)
+    state = world._state()  # (as it is: what was written into the views is checked here, not handed to the engine)
+    inverse = np.asarray(state.engine.inverse_masses)
     blocks = []
     if n:
         block: dict[str, Any] = {
@@ -115,7 +116,7 @@ def to_scene(world: World) -> Scene:
             "positions": world.positions.tolist(),
             "velocity": world.velocities.tolist(),
             "mass": world.masses.tolist(),
-            "radius": list(world._core.radii),
+            "radius": list(state.engine.radii),
             "pinned": (inverse == 0).tolist(),
         }
         if world.species is not None:
@@ -125,7 +126,7 @@ def to_scene(world: World) -> Scene:
         if world.spin:
             block["angular_velocity"] = world.angular_velocities.tolist()
             block["inertia"] = world.inertia.tolist()
-        own = world._core.particle_materials()  # each particle's own values, as the engine holds them
+        own = state.engine.particle_materials()  # each particle's own values, as the engine holds them
         if len(own) == n:
             for k, name in enumerate(("restitution", "friction")):
                 arr = np.array([np.nan if m[k] is None else m[k] for m in own])
@@ -137,17 +138,17 @@ def to_scene(world: World) -> Scene:
     spring_offset = 0  # the springs' end ids, in the order the Spring forces were added
     for index, f in enumerate(world.forces):
         if isinstance(f, Gravity):
-            forces.append({"type": "gravity"} if f.g is None else {"type": "gravity", "g": _v3(np.asarray(f.g, float).tolist())})
+            forces.append({"type": "gravity"} if f.g is None else {"type": "gravity", "g": vec3(np.asarray(f.g, float).tolist())})
         elif isinstance(f, Drag):
             forces.append({"type": "drag", "linear": float(f.linear), "quadratic": float(f.quadratic)})
         elif isinstance(f, Attractor):
             forces.append(
-                {"type": "attractor", "point": _v3(np.asarray(f.point, float).tolist()), "strength": float(f.strength), "softening": float(f.softening)}
+                {"type": "attractor", "point": vec3(np.asarray(f.point, float).tolist()), "strength": float(f.strength), "softening": float(f.softening)}
                 | _falloff_entry(f.falloff)
             )
         elif isinstance(f, Wind):
             forces.append(
-                {"type": "wind", "velocity": _v3(np.asarray(f.velocity, float).tolist()), "coefficient": float(f.coefficient)} | _falloff_entry(f.falloff)
+                {"type": "wind", "velocity": vec3(np.asarray(f.velocity, float).tolist()), "coefficient": float(f.coefficient)} | _falloff_entry(f.falloff)
             )
         elif isinstance(f, Turbulence):
             strength, scale, seed, time_scale, octaves, roughness, coefficient, _ = f._args
@@ -163,7 +164,7 @@ def to_scene(world: World) -> Scene:
             # The springs whose two ends live, at the ends' current indices (particles removed
             # since shifted them; a spring with a dead end died with it).
             count = len(f._args[0])
-            ends = world._spring_ids[spring_offset : spring_offset + count]
+            ends = state.spring_ids[spring_offset : spring_offset + count]
             spring_offset += count
             ids = world.ids
             at = np.minimum(np.searchsorted(ids, ends), max(len(ids) - 1, 0))
@@ -171,7 +172,7 @@ def to_scene(world: World) -> Scene:
             i, j = at[live, 0], at[live, 1]
             rest = f.rest_length
             if rest is None:  # the lengths the engine took when the spring was added
-                rest = world._spring_rest[index]
+                rest = state.spring_rest[index]
             spring = {"type": "spring", "i": i.tolist(), "j": j.tolist()}
             for name, value in (("k", f.k), ("rest_length", rest), ("damping", f.damping)):
                 arr = np.asarray(value, dtype=float)
@@ -189,7 +190,7 @@ def to_scene(world: World) -> Scene:
         if c.collides_with is not None:
             s["collides_with"] = list(c.collides_with)
         if isinstance(c, Plane):
-            colliders.append({"type": "plane", "point": _v3(list(np.ravel(c.point))), "normal": _v3(list(np.ravel(c.normal))), **s})
+            colliders.append({"type": "plane", "point": vec3(list(np.ravel(c.point))), "normal": vec3(list(np.ravel(c.normal))), **s})
         elif isinstance(c, Box):
             colliders.append({"type": "box", "lo": np.ravel(c.lo).astype(float).tolist(), "hi": np.ravel(c.hi).astype(float).tolist(), **s})
         elif isinstance(c, Mesh):
@@ -197,9 +198,9 @@ def to_scene(world: World) -> Scene:
             # its vertices as the world has them (after the transform) and its faces
             colliders.append({"type": "mesh", **_mesh_table(c), "inside": c.inside, **s})
         else:
-            colliders.append({"type": "sphere", "center": _v3(list(np.ravel(c.center))), "radius": float(c.radius), **s})
+            colliders.append({"type": "sphere", "center": vec3(list(np.ravel(c.center))), "radius": float(c.radius), **s})
     emitters = []
-    for source in world._emitters:
+    for source in state.emitters:
         table = EmitterTable.model_fields.keys()
         e = source.emitter
         emitters.append({name: getattr(e, name) for name in table if getattr(e, name) is not None})
@@ -211,13 +212,13 @@ def to_scene(world: World) -> Scene:
         if e.mesh is not None:
             emitters[-1]["mesh"] = _mesh_table(source.c["mesh"])
     kills = []
-    for k in world._kills:
+    for k in state.kills:
         if isinstance(k, KillBox):
-            kills.append({"type": "box", "lo": _v3(list(np.ravel(k.lo))), "hi": _v3(list(np.ravel(k.hi)))})
+            kills.append({"type": "box", "lo": vec3(list(np.ravel(k.lo))), "hi": vec3(list(np.ravel(k.hi)))})
         elif isinstance(k, KillSphere):
-            kills.append({"type": "sphere", "center": _v3(list(np.ravel(k.center))), "radius": float(k.radius)})
+            kills.append({"type": "sphere", "center": vec3(list(np.ravel(k.center))), "radius": float(k.radius)})
         else:
-            kills.append({"type": "plane", "point": _v3(list(np.ravel(k.point))), "normal": _v3(list(np.ravel(k.normal)))})
+            kills.append({"type": "plane", "point": vec3(list(np.ravel(k.point))), "normal": vec3(list(np.ravel(k.normal)))})
     data: dict[str, Any] = {
         "world": {"dim": world.dim, "dt": world.dt, "method": world.method, **({"spin": True} if world.spin else {})},
         "particles": blocks,
@@ -281,9 +282,3 @@ def _motion_table(m: Motion | Keyframes) -> dict[str, Any]:
             out[name] = [list(r) for r in rows]
     out["pivot"] = list(m.pivot)
     return out
-
-
-World.to_scene = to_scene  # ``world.to_scene()``; the world module stays free of the scene format
-World.save_checkpoint = save_checkpoint  # ``world.save_checkpoint(path)`` (kinema.checkpoint)
-World.load_checkpoint = staticmethod(load_checkpoint)  # ``kinema.World.load_checkpoint(path)``
-World.scene = None  # a world made in code has no scene; ``load_scene`` sets it on the instance

@@ -226,7 +226,9 @@ class Scene(_Model):
         return path
 
     # building: ``Scene.build`` is given to the class by ``kinema.scene.build`` (which the
-    # package imports), so that the dependency goes build -> schema and never back
+    # package imports), so that the dependency goes build -> schema and never back: the world
+    # makes scenes (World.to_scene, World.load_checkpoint), so the schema cannot import it
+    # (kinema.scene.build's module doc)
 
 
 def _planar_problem(motion: Any) -> str | None:

@@ -34,6 +34,12 @@ MAX_NESTING = 32  # arrays and tables inside each other (a scene's deepest key p
 MAX_RATE = 1e15  # particles a second from one emitter: a million a step at dt = 1 ns, and counts of births stay exact floats for 9 s
 
 
+def vec3(v: list[float]) -> list[float]:
+    """A scene's vector of 2 or 3 values as 3 floats (2 values: z = 0), as the engine objects
+    take it (the builder's and the export's)."""
+    return [*map(float, v), 0.0][:3] if len(v) == 2 else [float(c) for c in v]
+
+
 Vec = Annotated[list[float], Field(min_length=2, max_length=3)]
 Vec3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 NonNeg = Annotated[float, Field(ge=0)]
