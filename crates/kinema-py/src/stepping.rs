@@ -2,8 +2,9 @@
 //! Ctrl-C checked between, and the engine's divergence as `kinema.SimulationDiverged`.
 
 use kinema::error::CallbackError;
+use kinema::world::UserOrder;
 use kinema::Divergence;
-use kinema::{Error, World};
+use kinema::Error;
 use pyo3::prelude::*;
 
 use crate::errors::to_py;
@@ -67,7 +68,7 @@ pub fn ctrl_c() -> Result<(), CallbackError> {
 const SLICE: std::time::Duration = std::time::Duration::from_millis(20);
 
 /// The body of `World.step`: slices of steps in the engine's order, Ctrl-C checked between.
-pub fn step_in_slices(py: Python<'_>, inner: &mut World, n: u64) -> PyResult<()> {
+pub fn step_in_slices(py: Python<'_>, inner: &mut UserOrder, n: u64) -> PyResult<()> {
     let mut left = n;
     let mut slice = 1u64;
     while left > 0 {

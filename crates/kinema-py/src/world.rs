@@ -7,7 +7,7 @@ use kinema::collide::{ContactRecord, Partner, Surface};
 use kinema::forces::falloff::{Law, Shape};
 use kinema::forces::vortex::Profile;
 use kinema::forces::{Attractor, Coupling, Drag, Falloff, Gravity, Springs, Turbulence, Vortex, Wind};
-use kinema::world::KillVolume;
+use kinema::world::{KillVolume, UserOrder};
 use kinema::{World, WorldParams};
 use numpy::{
     PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadwriteArray2, PyUntypedArrayMethods,
@@ -58,15 +58,17 @@ struct NewParticles<'py> {
 /// particles along space (`kinema::world::order`) and `step` leaves them so, where the
 /// world used to put them back in the user's order after every call (5 × 3N + 5N values
 /// permuted and the neighbour list renumbered, to be sorted again at the next rebuild).
-/// What Python reads every frame (positions, velocities, masses, radii, ids) is scattered
-/// into the user's order through [`World::user_of`]; `sync` compares through it and moves
-/// nothing when nothing was written; the diagnostics are sums over the engine's order. Every
-/// other method (those given particle indices, those that change the world, the advisor, the
-/// checkpoint's carries) first puts the particles back (`restore_order`, a no-op when they
-/// are), and the engine sorts them again at its next rebuild.
+/// The world is held in a [`UserOrder`], the binding's only way to it, which gives it only in
+/// the user's order: `self.inner.get()` puts the particles back first (a no-op when they
+/// are), for every method given or giving particle indices, changing the world, the advisor
+/// and the checkpoint's carries; the engine sorts them again at its next rebuild. What Python
+/// reads every frame (positions, velocities, masses, radii, ids) is gathered into the user's
+/// order through the order's maps without moving the particles (`in_user_order`,
+/// `read_state_into`); `sync` compares through them and moves nothing when nothing was
+/// written; the diagnostics are sums over the engine's order.
 #[pyclass(name = "World", module = "kinema._core")]
 pub struct PyWorld {
-    inner: World,
+    inner: UserOrder,
 }
 
 fn rows<'py>(py: Python<'py>, flat: &[f64]) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -93,15 +95,17 @@ impl PyWorld {
     #[new]
     fn new(dim: usize, dt: f64, method: Bound<'_, PyAny>) -> PyResult<Self> {
         let method = integrator_from(&method)?;
-        let mut inner = World::new(WorldParams { dt, method, dim }).map_err(world_err)?;
-        inner.set_interrupt(Some(ctrl_c));
-        Ok(Self { inner })
+        let mut world = World::new(WorldParams { dt, method, dim }).map_err(world_err)?;
+        world.set_interrupt(Some(ctrl_c));
+        Ok(Self {
+            inner: UserOrder::new(world),
+        })
     }
 
     /// Appends particles; returns (first, end) indices. `restitution` and `friction` (one per
     /// particle, NaN: the world's global value) are checked before anything is added.
     fn add_particles(&mut self, particles: NewParticles<'_>) -> PyResult<(usize, usize)> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let NewParticles {
             x,
             v,
@@ -115,12 +119,11 @@ impl PyWorld {
         let (x, v) = (flat3("position", &x)?, flat3("velocity", &v)?);
         let (mass, radius, pinned) = (mass.as_slice()?, radius.as_slice()?, pinned.as_slice()?);
         let own = collide::materials(mass.len(), restitution, friction).map_err(to_py)?;
-        let r = self
-            .inner
+        let r = world
             .add_particles_in_groups(&x, &v, mass, radius, pinned, group.as_deref())
             .map_err(world_err)?;
         if let Some((e, mu)) = own {
-            self.inner.set_particle_materials(r.start, &e, &mu).map_err(to_py)?;
+            world.set_particle_materials(r.start, &e, &mu).map_err(to_py)?;
         }
         Ok((r.start, r.end))
     }
@@ -128,14 +131,15 @@ impl PyWorld {
     /// Refuses now what the first step would: particles placed where contacts cannot resolve
     /// them (`World::check_pending_placement`).
     fn check_placement(&mut self) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.check_pending_placement().map_err(to_py)
+        self.inner.get().check_pending_placement().map_err(to_py)
     }
 
     /// A checkpoint's time, steps and ids (see `World::restore_clock_and_ids`).
     fn restore_clock_and_ids(&mut self, time: f64, steps: u64, ids: Vec<u64>, next_id: u64) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.restore_clock_and_ids(time, steps, &ids, next_id).map_err(to_py)
+        self.inner
+            .get()
+            .restore_clock_and_ids(time, steps, &ids, next_id)
+            .map_err(to_py)
     }
 
     /// A checkpoint's clock anchor (see `World::restore_clock`).
@@ -157,9 +161,9 @@ impl PyWorld {
 
     /// A checkpoint's collision books (dicts as `collision_stats` gives them).
     fn restore_collision_stats(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let (total, last) = (collide::stats_from(&total)?, collide::stats_from(&last)?);
-        self.inner.restore_collision_stats(total, last);
+        world.restore_collision_stats(total, last);
         Ok(())
     }
 
@@ -167,30 +171,26 @@ impl PyWorld {
     /// gives them (one row per collider).
     fn restore_collider_books(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
         let (total, last) = (collide::books_from(&total)?, collide::books_from(&last)?);
-        self.inner.restore_order();
-        self.inner.restore_collider_books(total, last).map_err(to_py)
+        self.inner.get().restore_collider_books(total, last).map_err(to_py)
     }
 
     /// Starts the caches again (a checkpoint's restart point).
     fn restart_caches(&mut self) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.restart_caches().map_err(to_py)
+        self.inner.get().restart_caches().map_err(to_py)
     }
 
     /// What the method carries from step to step (Verlet's a, implicit Euler's Δv), or None.
     fn integrator_carry<'py>(&mut self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
-        self.inner.restore_order();
-        self.inner.integrator_carry().map(|c| PyArray1::from_vec(py, c))
+        self.inner.get().integrator_carry().map(|c| PyArray1::from_vec(py, c))
     }
 
     fn restore_integrator_carry(&mut self, carry: Vec<f64>) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.restore_integrator_carry(carry).map_err(to_py)
+        self.inner.get().restore_integrator_carry(carry).map_err(to_py)
     }
 
     /// Verlet's angular accelerations under the contacts' torques (a checkpoint's carry).
     fn spin_carry<'py>(&mut self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
-        self.inner.spin_carry().map(|c| PyArray1::from_vec(py, c))
+        self.inner.get().spin_carry().map(|c| PyArray1::from_vec(py, c))
     }
 
     fn restore_spin_carry(&mut self, carry: Vec<f64>) -> PyResult<()> {
@@ -200,7 +200,7 @@ impl PyWorld {
     /// The force models' contact memory: ([(i, j, springs[7])], [(i, collider, normal, springs[7])]).
     #[allow(clippy::type_complexity)]
     fn contact_history(&mut self) -> (Vec<kinema::world::PairMemory>, Vec<kinema::world::WallMemory>) {
-        self.inner.contact_history()
+        self.inner.get().contact_history()
     }
 
     fn restore_contact_history(
@@ -214,8 +214,8 @@ impl PyWorld {
     /// The impulse model's contact records: (particle, partner is a collider, partner index,
     /// the solve stage's impulse, whether it carried load).
     fn collision_carry(&mut self) -> Vec<(usize, bool, usize, [f64; 3], bool)> {
-        self.inner.restore_order();
         self.inner
+            .get()
             .collision_carry()
             .into_iter()
             .map(|r| match r.other {
@@ -229,7 +229,7 @@ impl PyWorld {
     /// before the records kept it).
     #[allow(clippy::type_complexity)]
     fn restore_collision_carry(&mut self, carry: Vec<(usize, bool, usize, [f64; 3], Option<bool>)>) -> PyResult<()> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let carry = carry
             .into_iter()
             .map(|(i, collider, j, impulse, carried)| {
@@ -245,52 +245,47 @@ impl PyWorld {
                 }
             })
             .collect();
-        self.inner.restore_collision_carry(carry).map_err(to_py)
+        world.restore_collision_carry(carry).map_err(to_py)
     }
 
     /// The impulse model's candidate list's build: the positions it was built at (m, N×3)
     /// and its skin (m); None before a first build.
     fn list_carry<'py>(&mut self, py: Python<'py>) -> Option<(Bound<'py, PyArray1<f64>>, f64)> {
-        self.inner.restore_order();
         self.inner
+            .get()
             .list_carry()
             .map(|(built_at, skin)| (PyArray1::from_vec(py, built_at), skin))
     }
 
     fn restore_list_carry(&mut self, built_at: Vec<f64>, skin: f64) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.restore_list_carry(built_at, skin).map_err(to_py)
+        self.inner.get().restore_list_carry(built_at, skin).map_err(to_py)
     }
 
     /// Sleeping's carry: each particle's calm time (s) and sleeping island (-1: awake).
     fn sleep_carry<'py>(&mut self, py: Python<'py>) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>) {
-        self.inner.restore_order();
-        let (calm, island) = self.inner.sleep_carry();
+        let world = self.inner.get();
+        let (calm, island) = world.sleep_carry();
         (PyArray1::from_vec(py, calm), PyArray1::from_vec(py, island))
     }
 
     fn restore_sleep_carry(&mut self, calm: Vec<f64>, island: Vec<i64>) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.restore_sleep_carry(calm, island).map_err(to_py)
+        self.inner.get().restore_sleep_carry(calm, island).map_err(to_py)
     }
 
     /// Each particle's own (restitution, friction), None where not set; empty if none has.
     fn particle_materials(&mut self) -> Vec<(Option<f64>, Option<f64>)> {
-        self.inner.restore_order();
-        self.inner.particle_materials()
+        self.inner.get().particle_materials()
     }
 
     /// Each particle's collision group, in the user's order.
     #[getter]
     fn groups(&mut self) -> Vec<u32> {
-        self.inner.restore_order();
-        self.inner.particle_groups()
+        self.inner.get().particle_groups()
     }
 
     /// Puts particles start.. into the collision groups `group` (checked: 0..32).
     fn set_groups(&mut self, start: usize, group: Vec<u32>) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.set_particle_groups(start, &group).map_err(to_py)
+        self.inner.get().set_particle_groups(start, &group).map_err(to_py)
     }
 
     /// The collision groups' matrix as one 32-bit mask per group (bit h of row g: g and h
@@ -302,21 +297,19 @@ impl PyWorld {
 
     /// Sets the matrix from 32 masks (checked symmetric).
     fn set_group_masks(&mut self, masks: [u32; 32]) -> PyResult<()> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let masks = kinema::collide::GroupMasks::from_rows(masks).map_err(to_py)?;
-        self.inner.set_group_masks(masks).map_err(to_py)
+        world.set_group_masks(masks).map_err(to_py)
     }
 
     /// Sets whether groups a and b collide (both ways).
     fn set_group_collisions(&mut self, a: usize, b: usize, collide: bool) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.set_group_collisions(a, b, collide).map_err(to_py)
+        self.inner.get().set_group_collisions(a, b, collide).map_err(to_py)
     }
 
     /// Sets the mask of the groups collider k collides with.
     fn set_collider_mask(&mut self, k: usize, mask: u32) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.set_collider_mask(k, mask).map_err(to_py)
+        self.inner.get().set_collider_mask(k, mask).map_err(to_py)
     }
 
     /// Each collider's mask of the groups it collides with.
@@ -327,13 +320,12 @@ impl PyWorld {
 
     #[getter]
     fn next_id(&self) -> u64 {
-        self.inner.particles().next_id
+        self.inner.next_id()
     }
 
     /// Removes the particles at these indices (checked; repeats allowed).
     fn remove_particles(&mut self, indices: Vec<usize>) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.remove_particles(&indices).map_err(to_py)
+        self.inner.get().remove_particles(&indices).map_err(to_py)
     }
 
     /// Sets the deaths the engine carries out after each step: each particle's time of
@@ -376,13 +368,15 @@ impl PyWorld {
     }
 
     fn add_gravity(&mut self, g: [f64; 3]) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.add_force(Box::new(Gravity::new(g).map_err(to_py)?)).map_err(to_py)
+        self.inner
+            .get()
+            .add_force(Box::new(Gravity::new(g).map_err(to_py)?))
+            .map_err(to_py)
     }
 
     fn add_drag(&mut self, linear: f64, quadratic: f64) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner
+        let world = self.inner.get();
+        world
             .add_force(Box::new(Drag::new(linear, quadratic).map_err(to_py)?))
             .map_err(to_py)
     }
@@ -398,7 +392,7 @@ impl PyWorld {
         rest_length: Option<PyReadonlyArray1<'py, f64>>,
         damping: PyReadonlyArray1<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let count = i.len();
         // Room first (the springs' arrays, the force pass's buffers), so that a count the
         // machine cannot hold is a MemoryError here, not an abort in a later step.
@@ -422,8 +416,8 @@ impl PyWorld {
             Some(r) => values(&r)?,
             None => {
                 // rest lengths from the current positions (a spring at rest as built)
-                let x = &self.inner.particles().x;
-                let n = self.inner.particles().len();
+                let x = &world.particles().x;
+                let n = world.particles().len();
                 let mut rest = fallible(std::iter::empty(), 0, count)?;
                 for (s, (&a, &b)) in i.iter().zip(&j).enumerate() {
                     if a >= n || b >= n {
@@ -438,24 +432,24 @@ impl PyWorld {
         };
         let taken = PyArray1::from_slice(py, &rest); // (the lengths taken from the positions, which a scene or checkpoint must keep)
         let springs = Springs::new(i, j, values(&k)?, rest, values(&damping)?).map_err(to_py)?;
-        self.inner.add_force(Box::new(springs)).map_err(to_py)?;
+        world.add_force(Box::new(springs)).map_err(to_py)?;
         Ok(taken)
     }
 
     #[pyo3(signature = (point, strength, softening, falloff=None))]
     fn add_attractor(&mut self, point: [f64; 3], strength: f64, softening: f64, falloff: Option<FalloffArgs>) -> PyResult<()> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let attractor = Attractor::new(point, strength, softening).map_err(to_py)?;
         let falloff = falloff_from(falloff)?;
-        self.inner.add_force(Box::new(attractor.with_falloff(falloff))).map_err(to_py)
+        world.add_force(Box::new(attractor.with_falloff(falloff))).map_err(to_py)
     }
 
     #[pyo3(signature = (velocity, coefficient, falloff=None))]
     fn add_wind(&mut self, velocity: [f64; 3], coefficient: f64, falloff: Option<FalloffArgs>) -> PyResult<()> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let wind = Wind::new(velocity, coefficient).map_err(to_py)?;
         let falloff = falloff_from(falloff)?;
-        self.inner.add_force(Box::new(wind.with_falloff(falloff))).map_err(to_py)
+        world.add_force(Box::new(wind.with_falloff(falloff))).map_err(to_py)
     }
 
     /// Adds a vortex (`kinema.Vortex`); `coefficient` None: an acceleration field.
@@ -471,7 +465,7 @@ impl PyWorld {
         coefficient: Option<f64>,
         falloff: Option<FalloffArgs>,
     ) -> PyResult<()> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let profile = Profile::from_name(profile).map_err(to_py)?;
         let falloff = falloff_from(falloff)?;
         let vortex = Vortex::new(
@@ -484,7 +478,7 @@ impl PyWorld {
             falloff,
         )
         .map_err(to_py)?;
-        self.inner.add_force(Box::new(vortex)).map_err(to_py)
+        world.add_force(Box::new(vortex)).map_err(to_py)
     }
 
     /// Adds curl-noise turbulence (`kinema.Turbulence`) in the world's dimension;
@@ -502,7 +496,7 @@ impl PyWorld {
         coefficient: Option<f64>,
         falloff: Option<FalloffArgs>,
     ) -> PyResult<()> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let falloff = falloff_from(falloff)?;
         let turbulence = Turbulence::new(
             strength,
@@ -511,25 +505,24 @@ impl PyWorld {
             time_scale.unwrap_or(f64::INFINITY),
             octaves,
             roughness,
-            self.inner.params().dim,
+            world.params().dim,
             Coupling::from_coefficient(coefficient),
             falloff,
         )
         .map_err(to_py)?;
-        self.inner.add_force(Box::new(turbulence)).map_err(to_py)
+        world.add_force(Box::new(turbulence)).map_err(to_py)
     }
 
     fn add_python_force(&mut self, f: Py<PyAny>, name: String) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.add_force(Box::new(PythonForce { f, name })).map_err(to_py)
+        self.inner.get().add_force(Box::new(PythonForce { f, name })).map_err(to_py)
     }
 
     /// Turns collisions on, or changes their settings (every one of them), from the dict of
     /// `World.set_collisions`' keyword arguments.
     fn set_collisions(&mut self, settings: collide::CollisionArgs) -> PyResult<()> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let params = settings.params().map_err(to_py)?;
-        self.inner.set_collisions(params).map_err(to_py)
+        world.set_collisions(params).map_err(to_py)
     }
 
     /// The collision settings as set_collisions' keyword arguments, or None when off.
@@ -549,18 +542,18 @@ impl PyWorld {
         restitution: Option<f64>,
         friction: Option<f64>,
     ) -> PyResult<usize> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
-        let plane = collide::plane(self.inner.params().dim, point, normal, surface).map_err(to_py)?;
-        self.inner.add_collider(plane).map_err(to_py)
+        let plane = collide::plane(world.params().dim, point, normal, surface).map_err(to_py)?;
+        world.add_collider(plane).map_err(to_py)
     }
 
     /// Adds a box container (2 values per corner in 2D, 3 in 3D); returns its index.
     fn add_box(&mut self, lo: Vec<f64>, hi: Vec<f64>, restitution: Option<f64>, friction: Option<f64>) -> PyResult<usize> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
-        let b = collide::box_container(self.inner.params().dim, &lo, &hi, surface).map_err(to_py)?;
-        self.inner.add_collider(b).map_err(to_py)
+        let b = collide::box_container(world.params().dim, &lo, &hi, surface).map_err(to_py)?;
+        world.add_collider(b).map_err(to_py)
     }
 
     /// Adds a sphere obstacle; returns its index.
@@ -571,10 +564,10 @@ impl PyWorld {
         restitution: Option<f64>,
         friction: Option<f64>,
     ) -> PyResult<usize> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
-        let s = collide::sphere_obstacle(self.inner.params().dim, center, radius, surface).map_err(to_py)?;
-        self.inner.add_collider(s).map_err(to_py)
+        let s = collide::sphere_obstacle(world.params().dim, center, radius, surface).map_err(to_py)?;
+        world.add_collider(s).map_err(to_py)
     }
 
     /// Adds a triangle mesh (vertices V × 3, m; faces F × 3 vertex indices); returns its index.
@@ -587,7 +580,7 @@ impl PyWorld {
         restitution: Option<f64>,
         friction: Option<f64>,
     ) -> PyResult<usize> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let surface = Surface::new(restitution, friction).map_err(to_py)?;
         let (v, f) = (vertices.as_array(), faces.as_array());
         if v.ncols() != 3 || f.ncols() != 3 {
@@ -602,13 +595,12 @@ impl PyWorld {
         verts.extend(v.rows().into_iter().map(|r| [r[0], r[1], r[2]]));
         let tris = f.rows().into_iter().map(|r| [r[0], r[1], r[2]]);
         let mesh = collide::mesh(verts, tris, inside, surface).map_err(to_py)?;
-        self.inner.add_collider(mesh).map_err(to_py)
+        world.add_collider(mesh).map_err(to_py)
     }
 
     /// Makes the axes periodic with the cell of the box collider (wraps the positions).
     fn set_periodic(&mut self, axes: [bool; 3]) -> PyResult<()> {
-        self.inner.restore_order();
-        self.inner.set_periodic(axes).map_err(to_py)
+        self.inner.get().set_periodic(axes).map_err(to_py)
     }
 
     #[getter]
@@ -633,9 +625,9 @@ impl PyWorld {
         rotations: Option<Vec<[f64; 4]>>,
         start: Option<f64>,
     ) -> PyResult<()> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let motion = collide::motion(velocity, angular_velocity, pivot, times, translations, rotations, start).map_err(to_py)?;
-        self.inner.set_collider_motion(k, motion).map_err(to_py)
+        world.set_collider_motion(k, motion).map_err(to_py)
     }
 
     /// The overlaps the last placement check accepted but that the collisions will push
@@ -670,12 +662,11 @@ impl PyWorld {
     /// The contacts now (the impulse model's: of the last step's end), as arrays, with their
     /// points, forces and whether they slide.
     fn contacts<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.inner.restore_order();
-        let impulses = self
-            .inner
+        let world = self.inner.get();
+        let impulses = world
             .collision_params()
             .is_some_and(|p| p.model == kinema::world::ContactModel::Impulse);
-        let reports = self.inner.contact_reports().map_err(to_py)?;
+        let reports = world.contact_reports().map_err(to_py)?;
         collide::contacts_dict(py, &reports, impulses)
     }
 
@@ -735,7 +726,7 @@ impl PyWorld {
     /// Whether the engine holds the particles in its own order now (internal; for tests).
     #[getter]
     fn in_engine_order(&self) -> bool {
-        self.inner.user_of().is_some()
+        self.inner.in_engine_order()
     }
     #[getter]
     fn steps(&self) -> u64 {
@@ -759,31 +750,31 @@ impl PyWorld {
     }
     #[getter]
     fn len(&self) -> usize {
-        self.inner.particles().len()
+        self.inner.len()
     }
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        rows(py, &self.inner.in_user_order(&self.inner.particles().x, 3))
+        rows(py, &self.inner.in_user_order(|p| &p.x, 3))
     }
     #[getter]
     fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        rows(py, &self.inner.in_user_order(&self.inner.particles().v, 3))
+        rows(py, &self.inner.in_user_order(|p| &p.v, 3))
     }
     #[getter]
     fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().mass, 1))
+        PyArray1::from_slice(py, &self.inner.in_user_order(|p| &p.mass, 1))
     }
     #[getter]
     fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
-        PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().id, 1))
+        PyArray1::from_slice(py, &self.inner.in_user_order(|p| &p.id, 1))
     }
     #[getter]
     fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().radius, 1))
+        PyArray1::from_slice(py, &self.inner.in_user_order(|p| &p.radius, 1))
     }
     #[getter]
     fn inverse_masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().inv_mass, 1))
+        PyArray1::from_slice(py, &self.inner.in_user_order(|p| &p.inv_mass, 1))
     }
 
     /// Copies positions, velocities and masses from the caller's arrays into the world when
@@ -795,7 +786,7 @@ impl PyWorld {
         v: PyReadonlyArray2<'_, f64>,
         m: PyReadonlyArray1<'_, f64>,
     ) -> PyResult<bool> {
-        let n = self.inner.particles().len();
+        let n = self.inner.len();
         let (x, v, m) = (x.as_array(), v.as_array(), m.as_array());
         if x.shape() != [n, 3] || v.shape() != [n, 3] || m.shape() != [n] {
             return Err(PyValueError::new_err(format!(
@@ -818,14 +809,14 @@ impl PyWorld {
         if unchanged {
             return Ok(false);
         }
-        self.inner.restore_order(); // (a write: the user's order, the values checked below)
+        let world = self.inner.get(); // (a write: the user's order, the values checked below)
         for (name, arr) in [("positions", &x), ("velocities", &v)] {
             if let Some(((i, k), c)) = arr.indexed_iter().find(|(_, c)| !c.is_finite()) {
                 return Err(PyValueError::new_err(format!(
                     "{name}[{i}][{k}] = {c} is invalid: it must be finite"
                 )));
             }
-            if self.inner.params().dim == 2 {
+            if world.params().dim == 2 {
                 if let Some(i) = (0..n).find(|&i| arr[[i, 2]] != 0.0) {
                     return Err(PyValueError::new_err(format!(
                         "{name}[{i}][2] = {} is invalid: a 2D world keeps z = 0",
@@ -839,7 +830,7 @@ impl PyWorld {
                 "masses[{i}] = {c} is invalid: a mass must be finite and > 0 kg"
             )));
         }
-        let p = self.inner.particles_mut();
+        let p = world.particles_mut();
         p.x.iter_mut().zip(x.iter()).for_each(|(d, s)| *d = *s);
         for (k, (dst, src)) in p.v.iter_mut().zip(v.iter()).enumerate() {
             *dst = if p.inv_mass[k / 3] == 0.0 { 0.0 } else { *src }; // pinned particles stay at rest
@@ -855,8 +846,7 @@ impl PyWorld {
 
     /// Turns spin on or off (`World::set_spin`).
     fn set_spin(&mut self, on: bool) {
-        self.inner.restore_order();
-        self.inner.set_spin(on);
+        self.inner.get().set_spin(on);
     }
     #[getter]
     fn spin(&self) -> bool {
@@ -895,14 +885,14 @@ impl PyWorld {
     /// The moments of inertia, kg m² (N,), in the user's order (empty without spin).
     #[getter]
     fn inertia<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.inner.in_user_order(&self.inner.particles().inertia, 1))
+        PyArray1::from_slice(py, &self.inner.in_user_order(|p| &p.inertia, 1))
     }
 
     /// The orientations, unit quaternions (w, x, y, z), (N, 4), in the user's order (N = 0
     /// rows without spin).
     #[getter]
     fn orientations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let q = self.inner.in_user_order(&self.inner.particles().orientation, 4);
+        let q = self.inner.in_user_order(|p| &p.orientation, 4);
         let n = q.len() / 4;
         PyArray1::from_vec(py, q.to_vec()).reshape([n, 4])
     }
@@ -910,7 +900,7 @@ impl PyWorld {
     /// Sets the orientations of all particles ((N, 4) unit quaternions (w, x, y, z), the
     /// user's order; each normalised). Needs spin.
     fn set_orientations(&mut self, q: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
-        let n = self.inner.particles().len();
+        let n = self.inner.len();
         let q = q.as_array();
         if q.shape() != [n, 4] {
             return Err(PyValueError::new_err(format!(
@@ -925,15 +915,14 @@ impl PyWorld {
     /// Writes the angular velocities (rad/s) into the caller's (N, 3) array, in the user's
     /// order (needs spin).
     fn read_spin(&self, mut w: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
-        let p = self.inner.particles();
-        let n = p.len();
+        let n = self.inner.len();
         let mut w = w.as_array_mut();
-        if w.shape() != [n, 3] || p.omega.len() != 3 * n {
+        let omega = self.inner.in_user_order(|p| &p.omega, 3);
+        if w.shape() != [n, 3] || omega.len() != 3 * n {
             return Err(PyValueError::new_err(format!(
                 "angular velocities: a world with spin reads them into an ({n}, 3) array"
             )));
         }
-        let omega = self.inner.in_user_order(&p.omega, 3);
         w.iter_mut().zip(omega.iter()).for_each(|(d, s)| *d = *s);
         Ok(())
     }
@@ -941,7 +930,7 @@ impl PyWorld {
     /// Copies the angular velocities (rad/s, (N, 3), the user's order) into the world when
     /// they differ from its own; returns whether they did. Every value is checked first.
     fn sync_spin(&mut self, w: PyReadonlyArray2<'_, f64>) -> PyResult<bool> {
-        let n = self.inner.particles().len();
+        let n = self.inner.len();
         let w = w.as_array();
         if w.shape() != [n, 3] {
             return Err(PyValueError::new_err(format!(
@@ -949,7 +938,7 @@ impl PyWorld {
             )));
         }
         let given: Vec<f64> = w.iter().copied().collect();
-        if *self.inner.in_user_order(&self.inner.particles().omega, 3) == given[..] {
+        if *self.inner.in_user_order(|p| &p.omega, 3) == given[..] {
             return Ok(false);
         }
         // (named as the user wrote them: into the view)
@@ -967,7 +956,7 @@ impl PyWorld {
 
     /// Writes the positions and velocities into the caller's (N, 3) arrays.
     fn read_state(&self, mut x: PyReadwriteArray2<'_, f64>, mut v: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
-        let n = self.inner.particles().len();
+        let n = self.inner.len();
         let (mut x, mut v) = (x.as_array_mut(), v.as_array_mut());
         if x.shape() != [n, 3] || v.shape() != [n, 3] {
             return Err(PyValueError::new_err(format!("state arrays must have shape ({n}, 3)")));
@@ -987,15 +976,15 @@ impl PyWorld {
     /// The advisor's largest stable step (s) for `method` (a name or tableau) at the current
     /// state; inf when no step is too large.
     fn stable_step(&mut self, method: Bound<'_, PyAny>) -> PyResult<f64> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let method = integrator_from(&method)?;
-        self.inner.stable_step(&method).map_err(world_err)
+        world.stable_step(&method).map_err(world_err)
     }
 
     /// The advisor's rates at the current state, as a dict.
     fn rates<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.inner.restore_order();
-        let r = self.inner.rates().map_err(world_err)?;
+        let world = self.inner.get();
+        let r = world.rates().map_err(world_err)?;
         let out = PyDict::new(py);
         out.set_item("omega", r.omega)?;
         out.set_item("zeta", r.zeta)?;
@@ -1015,9 +1004,9 @@ impl PyWorld {
 
     /// Sets positions and velocities (both (N, 3)); method caches restart.
     fn set_state(&mut self, x: PyReadonlyArray2<'_, f64>, v: PyReadonlyArray2<'_, f64>) -> PyResult<()> {
-        self.inner.restore_order();
+        let world = self.inner.get();
         let (x, v) = (flat3("positions", &x)?, flat3("velocities", &v)?);
-        let n = self.inner.particles().len();
+        let n = world.particles().len();
         if x.len() != 3 * n || v.len() != 3 * n {
             return Err(PyValueError::new_err(format!(
                 "positions and velocities must have shape ({n}, 3)"
@@ -1026,7 +1015,7 @@ impl PyWorld {
         if let Some(i) = x.iter().chain(v.iter()).position(|c| !c.is_finite()) {
             return Err(PyValueError::new_err(format!("state value {i} is not finite")));
         }
-        let p = self.inner.particles_mut();
+        let p = world.particles_mut();
         p.x.copy_from_slice(&x);
         for (k, (dst, src)) in p.v.iter_mut().zip(v.iter()).enumerate() {
             *dst = if p.inv_mass[k / 3] == 0.0 { 0.0 } else { *src }; // pinned particles stay at rest
@@ -1035,15 +1024,15 @@ impl PyWorld {
     }
 
     fn accelerations<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.inner.restore_order();
-        let a = self.inner.accelerations().map_err(world_err)?;
+        let world = self.inner.get();
+        let a = world.accelerations().map_err(world_err)?;
         rows(py, &a)
     }
 
     /// Each particle's share of the contacts' virial (and of the kinetic tensor), N·m: (N, 3, 3).
     fn particle_stress<'py>(&mut self, py: Python<'py>, kinetic: bool) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        self.inner.restore_order();
-        let s = self.inner.particle_stress(kinetic).map_err(world_err)?;
+        let world = self.inner.get();
+        let s = world.particle_stress(kinetic).map_err(world_err)?;
         let n = s.len() / 9;
         Ok(PyArray1::from_vec(py, s).reshape([n, 3, 3])?)
     }

@@ -14,7 +14,9 @@
 //! - `carry.rs`: what a birth or death keeps of velocity Verlet's acceleration;
 //! - `deaths.rs`: the deaths (times of death, kill volumes) carried out after each step;
 //! - `checkpoint.rs`: what a checkpoint takes and gives back besides the particles' state;
-//! - `measures.rs`: diagnostics, accelerations, the advisor's rates, counters and timings.
+//! - `measures.rs`: diagnostics, accelerations, the advisor's rates, counters and timings;
+//! - `order.rs`: the particles' order in memory (sorted along space inside the steps), and
+//!   `UserOrder`, through which a caller that keeps that order between calls reaches the world.
 
 mod advisor;
 mod carry;
@@ -44,6 +46,7 @@ pub use deaths::KillVolume;
 pub use divergence::{RUNAWAY_CHECK_EVERY, RUNAWAY_FACTOR};
 pub use implicit::{CG_MAX_ITERATIONS, CG_TOLERANCE};
 pub use measures::LinearSolve;
+pub use order::UserOrder;
 
 use crate::collide::contact_force::CHUNK;
 use crate::collide::stage::CollideStage;
@@ -103,8 +106,8 @@ pub struct World {
     watch: Option<EnergyWatch>,
     /// Stages 2–4, when collisions are on.
     collide_stage: Option<CollideStage>,
-    /// The particles' order: `Some` while they are sorted along space (see `order.rs`);
-    /// `None` in the user's order.
+    /// The particles' order: `Some` while they are sorted along space (see `order.rs`; only
+    /// ever between calls inside a [`UserOrder`]); `None` in the user's order.
     sorted: Option<order::Order>,
     /// Sorts along space so far.
     sorts: u64,
@@ -251,23 +254,22 @@ impl World {
     /// Inside, with spring–dashpot contacts and velocity Verlet, the particles are kept in
     /// an order that follows space (re-sorted whenever the neighbour list is rebuilt, see
     /// `order.rs`); `advance` puts them back in the user's order before it returns, so every
-    /// method of the world, and every force, callback and file, sees the user's order.
+    /// method of the world, and every force, callback and file, sees the user's order. (A
+    /// caller that steps in slices and keeps the engine's order between them holds the world
+    /// in a [`UserOrder`].)
     pub fn advance(&mut self, n: u64) -> Result<(), Error> {
         let result = self.advance_in_engine_order(n);
         self.restore_user_order();
         result
     }
 
-    /// [`World::advance`] for a caller that advances in slices: the particles stay in the
-    /// engine's order (sorted along space) after it, for the next slice, until
-    /// [`World::restore_order`] puts them back in the user's. Every other method expects
-    /// that order (call it before them), except the reads through the maps between the two
-    /// orders ([`World::user_of`], [`World::in_user_order`], [`World::read_state_into`],
-    /// [`World::state_is`]) and [`World::diagnostics`] (sums over the engine's order).
+    /// [`World::advance`] without putting the particles back: they stay in the engine's order
+    /// (sorted along space) after it, for the next slice. Only [`UserOrder`] calls it, which
+    /// gives the world out only in the user's order again (see `order.rs`).
     ///
     /// After each step the deaths set by [`World::set_deaths`] are carried out (which puts
     /// the particles back in the user's order when someone dies).
-    pub fn advance_in_engine_order(&mut self, n: u64) -> Result<(), Error> {
+    fn advance_in_engine_order(&mut self, n: u64) -> Result<(), Error> {
         if n > 0 && self.collide_stage.as_ref().is_some_and(|s| s.params.event_driven) {
             if !self.deaths.any() {
                 return self.advance_by_events(n);
@@ -283,11 +285,6 @@ impl World {
             self.carry_out_deaths()?;
         }
         Ok(())
-    }
-
-    /// Puts the particles back in the user's order after [`World::advance_in_engine_order`].
-    pub fn restore_order(&mut self) {
-        self.restore_user_order();
     }
 
     fn step_once(&mut self) -> Result<(), Error> {

@@ -11,31 +11,46 @@
 //! of the three cell coordinates makes the code of cells near in space mostly near in value,
 //! so the particles of a cell and of its neighbours end up in a few nearby runs of memory.
 //!
-//! The permutation never shows outside the world, but it need not be undone per call:
-//! [`World::advance`] puts the particles back in the user's order before it returns (ids,
-//! positions, velocities, forces' indices), while [`World::advance_in_engine_order`] leaves
-//! them sorted, as LAMMPS keeps its sorted atoms with a tag → index map (`atom->map`). A
-//! caller that keeps the engine's order (the Python binding, between calls of `step` and
-//! the frames of `run`) reads what it shows every frame through the two maps of [`Order`]
-//! ([`World::read_state_into`], [`World::in_user_order`], [`World::state_is`]: gathers, not
-//! permutations of the world), and puts the particles back ([`World::restore_order`]) only
-//! before a method that takes or gives particle indices or changes the world. An error
-//! names the user's particle. The sort runs only where every force can follow a
-//! renumbering (`Properties::renumbers`: a Python force cannot, and then the world keeps the
-//! user's order), with velocity Verlet and from [`SORT_MIN_PARTICLES`] particles (below,
-//! everything fits in cache anyway); the particles' own materials, where set, move with them
-//! (`CollideStage::permute_particles`). Sorting changes
-//! only the order in which each particle's contact forces are summed, so the state may differ
-//! from an unsorted run in the last bits; it depends on the positions alone, so it is the
-//! same for any number of threads.
+//! The permutation never shows outside the world, and it need not be undone per call. A
+//! [`World`] itself is always in the user's order between calls: [`World::advance`] puts the
+//! particles back before it returns (ids, positions, velocities, forces' indices). A caller
+//! that steps in slices and would rather keep the engine's order between them (the Python
+//! binding, between calls of `step` and the frames of `run`), as LAMMPS keeps its sorted
+//! atoms with a tag → index map (`atom->map`), holds the world inside a [`UserOrder`]: the
+//! one way to step without putting the particles back ([`UserOrder::advance_in_engine_order`])
+//! and the one way to reach a world so stepped. It gives the world itself only in the
+//! user's order ([`UserOrder::get`] puts the particles back first, as HOOMD-blue's snapshots
+//! give its particles in tag order whatever its local order), and besides, without
+//! restoring, only what cannot show the engine's order: per-particle values gathered into the
+//! user's order through the two maps of [`Order`] ([`UserOrder::in_user_order`],
+//! [`UserOrder::read_state_into`], [`UserOrder::state_is`]: gathers, not permutations of the
+//! world), values that do not depend on it (the time, the collision books, the diagnostics'
+//! sums over the engine's order), and the few writes that map through the order or put the
+//! particles back themselves. So a method of the binding cannot forget to put them back: it
+//! has no other way in. An error names the user's particle. The sort runs only where every
+//! force can follow a renumbering (`Properties::renumbers`: a Python force cannot, and then the
+//! world keeps the user's order, so that a callback sees it), with velocity Verlet and from
+//! [`SORT_MIN_PARTICLES`] particles (below, everything fits in cache anyway); the particles'
+//! own materials, where set, move with them (`CollideStage::permute_particles`). Sorting
+//! changes only the order in which each particle's contact forces are summed, so the state
+//! may differ from an unsorted run in the last bits; it depends on the positions alone, so it
+//! is the same for any number of threads. Where the particles are put back matters to the
+//! bits the same way (the steps after sum in the user's order until the next sort), which is
+//! why [`UserOrder`] restores exactly where a caller asks for the world.
 
 use std::borrow::Cow;
 
 use rayon::prelude::*;
 
 use super::forces::contact_force;
-use super::{World, WorldStepper, CHUNK};
+use super::{Clock, ColliderBooks, CollisionParams, CollisionStats, KillVolume, LinearSolve, PairMemory, StageTimes};
+use super::{WallMemory, World, WorldParams, WorldStepper, CHUNK};
 use crate::collide::morton::morton_order;
+use crate::collide::{GroupMasks, TouchEvent};
+use crate::diagnostics::Diagnostics;
+use crate::error::Error;
+use crate::ode::stepper::Stats;
+use crate::particles::Particles;
 
 /// The particles' order while the engine keeps its own: the two maps between it and the
 /// user's, each the other's inverse.
@@ -126,17 +141,16 @@ impl World {
 
     /// Where the particles stand while the engine keeps its own order: `Some(user_of)` while
     /// they are sorted along space, `user_of[i]` being the user's index of the particle the
-    /// engine holds at index i; `None` when the two orders are one. A caller that keeps the
-    /// engine's order between calls ([`World::advance_in_engine_order`]) reads per-particle
-    /// values through it instead of putting the particles back.
-    pub fn user_of(&self) -> Option<&[u32]> {
+    /// engine holds at index i; `None` when the two orders are one (always, outside a step,
+    /// but in a [`UserOrder`]).
+    pub(super) fn user_of(&self) -> Option<&[u32]> {
         self.sorted.as_ref().map(Order::user_of)
     }
 
     /// `a` (`width` values per particle, in the engine's order) in the user's order: a copy
     /// gathered through the engine's index of each user's particle, or `a` itself when the
     /// orders are one.
-    pub fn in_user_order<'a, T: Copy + Default + Send + Sync>(&self, a: &'a [T], width: usize) -> Cow<'a, [T]> {
+    fn in_user_order<'a, T: Copy + Default + Send + Sync>(&self, a: &'a [T], width: usize) -> Cow<'a, [T]> {
         let Some(order) = &self.sorted else {
             return Cow::Borrowed(a);
         };
@@ -147,7 +161,7 @@ impl World {
 
     /// Writes the positions (m) and velocities (m/s), 3 per particle, into `x` and `v` in the
     /// user's order (which the engine need not keep: a gather, not a permutation of the world).
-    pub fn read_state_into(&self, x: &mut [f64], v: &mut [f64]) {
+    fn read_state_into(&self, x: &mut [f64], v: &mut [f64]) {
         let p = &self.particles;
         match &self.sorted {
             Some(order) => {
@@ -163,7 +177,7 @@ impl World {
 
     /// Whether `x`, `v` (3 per particle) and `m` (one per particle), in the user's order, are
     /// bit for bit the world's positions, velocities and masses (the caller's copies, unwritten).
-    pub fn state_is(&self, x: &[f64], v: &[f64], m: &[f64]) -> bool {
+    fn state_is(&self, x: &[f64], v: &[f64], m: &[f64]) -> bool {
         let p = &self.particles;
         let same = |a: &f64, b: &f64| a.to_bits() == b.to_bits();
         match &self.sorted {
@@ -239,5 +253,267 @@ impl World {
         if let Some(model) = self.spring_dashpot() {
             model.renumber(&new_of_old, old_of_new);
         }
+    }
+}
+
+/// A world that may keep the engine's order between calls (see the module doc), and gives
+/// itself only in the user's order: the type through which a caller that steps in slices
+/// (the Python binding) reaches its world, so that none of its methods can see the engine's
+/// order by forgetting to put the particles back.
+///
+/// - [`UserOrder::get`]: the world, in the user's order (the particles put back first if a
+///   step sorted them): for every method that takes or gives particle indices or
+///   per-particle values, or changes the world.
+/// - [`UserOrder::advance_in_engine_order`]: steps, leaving the particles as the steps leave
+///   them (the only way to step without putting them back: [`World::advance`] puts them back).
+/// - The rest reads or writes without putting the particles back, and so keeps the order the
+///   next step sums in: per-particle values gathered into the user's order, values that do not
+///   depend on the order, and writes that map through it or put the particles back
+///   themselves once their arguments pass their checks (each says which).
+///
+/// Where the particles are put back changes the last bits of the steps after (they sum in the
+/// user's order until the next sort), so nothing here puts them back but [`UserOrder::get`]
+/// and the writes that say they do.
+///
+/// A world outside a `UserOrder` cannot step in the engine's order:
+///
+/// ```compile_fail
+/// let mut world = kinema::World::new(kinema::WorldParams::default()).unwrap();
+/// world.advance_in_engine_order(1).unwrap(); // private: only a `UserOrder` steps so
+/// ```
+pub struct UserOrder {
+    world: World,
+}
+
+impl UserOrder {
+    /// Takes the world (in the user's order, as every [`World`] is between calls).
+    pub fn new(world: World) -> Self {
+        Self { world }
+    }
+
+    /// The world with its particles in the user's order: puts them back first if a step
+    /// sorted them (a no-op when they are).
+    pub fn get(&mut self) -> &mut World {
+        self.world.restore_user_order();
+        &mut self.world
+    }
+
+    /// Advances `n` steps ([`World::advance`]) and leaves the particles in the engine's order,
+    /// for the next slice; deaths after a step put them back themselves.
+    pub fn advance_in_engine_order(&mut self, n: u64) -> Result<(), Error> {
+        self.world.advance_in_engine_order(n)
+    }
+
+    /// Whether the particles are in the engine's order now (sorted along space).
+    pub fn in_engine_order(&self) -> bool {
+        self.world.user_of().is_some()
+    }
+
+    // -- per-particle values, gathered into the user's order --------------------------------
+
+    /// A per-particle array of the particles (`width` values per particle, or none at all,
+    /// as the orientations without spin), chosen by `field`, in the user's order: a copy
+    /// gathered through the engine's index of each user's particle, or the array itself when
+    /// the orders are one.
+    pub fn in_user_order<'a, T: Copy + Default + Send + Sync>(
+        &'a self,
+        field: impl FnOnce(&'a Particles) -> &'a [T],
+        width: usize,
+    ) -> Cow<'a, [T]> {
+        let a = field(&self.world.particles);
+        let n = self.world.particles.len();
+        assert!(
+            a.is_empty() || a.len() == width * n,
+            "a per-particle array, {width} values each"
+        );
+        self.world.in_user_order(a, width)
+    }
+
+    /// Writes the positions (m) and velocities (m/s), 3 per particle, into `x` and `v` in the
+    /// user's order.
+    pub fn read_state_into(&self, x: &mut [f64], v: &mut [f64]) {
+        self.world.read_state_into(x, v);
+    }
+
+    /// Whether `x`, `v` (3 per particle) and `m` (one per particle), in the user's order, are
+    /// bit for bit the world's positions, velocities and masses.
+    pub fn state_is(&self, x: &[f64], v: &[f64], m: &[f64]) -> bool {
+        self.world.state_is(x, v, m)
+    }
+
+    // -- values that do not depend on the order ---------------------------------------------
+
+    /// The number of particles.
+    pub fn len(&self) -> usize {
+        self.world.particles.len()
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.world.particles.is_empty()
+    }
+
+    /// The id the next particle added gets.
+    pub fn next_id(&self) -> u64 {
+        self.world.particles.next_id
+    }
+
+    /// [`World::params`].
+    pub fn params(&self) -> &WorldParams {
+        self.world.params()
+    }
+
+    /// [`World::time`].
+    pub fn time(&self) -> f64 {
+        self.world.time()
+    }
+
+    /// [`World::steps`].
+    pub fn steps(&self) -> u64 {
+        self.world.steps()
+    }
+
+    /// [`World::clock`].
+    pub fn clock(&self) -> Clock {
+        self.world.clock()
+    }
+
+    /// [`World::stats`].
+    pub fn stats(&self) -> Stats {
+        self.world.stats()
+    }
+
+    /// [`World::sorts`].
+    pub fn sorts(&self) -> u64 {
+        self.world.sorts()
+    }
+
+    /// [`World::stage_times`].
+    pub fn stage_times(&self) -> StageTimes {
+        self.world.stage_times()
+    }
+
+    /// [`World::linear_solve`].
+    pub fn linear_solve(&self) -> Option<LinearSolve> {
+        self.world.linear_solve()
+    }
+
+    /// [`World::has_spin`].
+    pub fn has_spin(&self) -> bool {
+        self.world.has_spin()
+    }
+
+    /// [`World::collision_params`].
+    pub fn collision_params(&self) -> Option<CollisionParams> {
+        self.world.collision_params()
+    }
+
+    /// [`World::group_masks`].
+    pub fn group_masks(&self) -> GroupMasks {
+        self.world.group_masks()
+    }
+
+    /// [`World::collider_masks`].
+    pub fn collider_masks(&self) -> Vec<u32> {
+        self.world.collider_masks()
+    }
+
+    /// [`World::periodic`].
+    pub fn periodic(&self) -> [bool; 3] {
+        self.world.periodic()
+    }
+
+    /// [`World::collider_books`] (one row per collider).
+    pub fn collider_books(&self, last: bool) -> Vec<ColliderBooks> {
+        self.world.collider_books(last)
+    }
+
+    /// [`World::wall_force_carry`] (one row per collider).
+    pub fn wall_force_carry(&self) -> Option<Vec<ColliderBooks>> {
+        self.world.wall_force_carry()
+    }
+
+    /// [`World::collision_stats`].
+    pub fn collision_stats(&self) -> Option<(CollisionStats, CollisionStats)> {
+        self.world.collision_stats()
+    }
+
+    /// [`World::diagnostics`], summed over the engine's order where it keeps one (totals the
+    /// same to rounding; the particles stay where they are).
+    pub fn diagnostics(&self) -> Diagnostics {
+        self.world.diagnostics()
+    }
+
+    // -- writes that leave the particles where they are --------------------------------------
+
+    /// [`World::land_at`].
+    pub fn land_at(&mut self, t1: f64, n: u64) -> Result<(), Error> {
+        self.world.land_at(t1, n)
+    }
+
+    /// [`World::restore_clock`].
+    pub fn restore_clock(&mut self, k0: u64, t0: f64) -> Result<(), Error> {
+        self.world.restore_clock(k0, t0)
+    }
+
+    /// [`World::restore_wall_force_carry`] (one row per collider).
+    pub fn restore_wall_force_carry(&mut self, carry: Option<Vec<ColliderBooks>>) {
+        self.world.restore_wall_force_carry(carry);
+    }
+
+    /// [`World::set_deaths`]: the times of death are given in the user's order and mapped
+    /// into the engine's.
+    pub fn set_deaths(&mut self, time_of_death: Option<Vec<f64>>, kills: Vec<KillVolume>) -> Result<(), Error> {
+        self.world.set_deaths(time_of_death, kills)
+    }
+
+    /// [`World::take_removed_ids`] (ids, not indices).
+    pub fn take_removed_ids(&mut self) -> Vec<u64> {
+        self.world.take_removed_ids()
+    }
+
+    /// [`World::take_placement_notice`] (a sentence naming the user's particles).
+    pub fn take_placement_notice(&mut self) -> Option<String> {
+        self.world.take_placement_notice()
+    }
+
+    /// [`World::record_contact_events`] (a switch).
+    pub fn record_contact_events(&mut self, on: bool) -> Result<(), Error> {
+        self.world.record_contact_events(on)
+    }
+
+    /// [`World::take_contact_events`]: recorded by the impulse model's steps, which never
+    /// sort the particles (only the spring–dashpot contact force does).
+    pub fn take_contact_events(&mut self) -> Vec<TouchEvent> {
+        self.world.take_contact_events()
+    }
+
+    /// [`World::set_particle_spin`], which puts the particles back itself once the range
+    /// passes its check.
+    pub fn set_particle_spin(
+        &mut self,
+        range: std::ops::Range<usize>,
+        omega: Option<&[f64]>,
+        inertia: Option<&[f64]>,
+    ) -> Result<(), Error> {
+        self.world.set_particle_spin(range, omega, inertia)
+    }
+
+    /// [`World::set_orientations`], which puts the particles back itself once the
+    /// quaternions pass their checks.
+    pub fn set_orientations(&mut self, range: std::ops::Range<usize>, q: &[f64]) -> Result<(), Error> {
+        self.world.set_orientations(range, q)
+    }
+
+    /// [`World::restore_spin_carry`], which puts the particles back itself once the carry
+    /// passes its checks.
+    pub fn restore_spin_carry(&mut self, alpha: Vec<f64>) -> Result<(), Error> {
+        self.world.restore_spin_carry(alpha)
+    }
+
+    /// [`World::restore_contact_history`], which puts the particles back itself once the
+    /// memory passes its checks.
+    pub fn restore_contact_history(&mut self, pairs: Vec<PairMemory>, walls: Vec<WallMemory>) -> Result<(), Error> {
+        self.world.restore_contact_history(pairs, walls)
     }
 }

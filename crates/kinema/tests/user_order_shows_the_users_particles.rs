@@ -1,0 +1,96 @@
+//! A world that keeps the engine's order between calls (`kinema::world::UserOrder`, as the
+//! Python binding holds it) shows only the user's order: what it gathers without moving the
+//! particles, and the world it gives, are the user's particles, index for index, and
+//! stepping in slices without putting them back gives the bits of one call that does.
+
+use kinema::collide::{BoxContainer, Surface};
+use kinema::ode::{Integrator, Method};
+use kinema::world::{CollisionParams, ContactModel, UserOrder};
+use kinema::{World, WorldParams};
+
+mod common;
+use common::Rng;
+
+/// The granular gas of `tests/test_scale.py`: 17³ = 4,913 particles (more than the engine
+/// sorts from) on a lattice in a periodic box, spring–dashpot contacts, velocity Verlet;
+/// masses and radii cycle so that a particle in the wrong place shows.
+fn gas() -> (World, Vec<f64>, Vec<f64>) {
+    let (side, a) = (17, (1.0_f64 / 0.3).cbrt());
+    let mut rng = Rng(1);
+    let (mut x, mut v, mut m, mut r) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for p in 0..side * side * side {
+        x.extend([p % side, (p / side) % side, p / (side * side)].map(|q| q as f64 * a));
+        v.extend([(); 3].map(|_| 3.4 * (rng.next() - 0.5)));
+        m.push(1.0 + (p % 3) as f64 * 0.25);
+        r.push(0.5 - (p % 2) as f64 * 0.05);
+    }
+    let mut w = World::new(WorldParams {
+        dt: 1e-3,
+        method: Integrator::Named(Method::Verlet),
+        dim: 3,
+    })
+    .unwrap();
+    let n = m.len();
+    w.add_particles(&x, &v, &m, &r, &vec![false; n]).unwrap();
+    let cell = side as f64 * a;
+    w.add_collider(BoxContainer::new([0.0; 3], [cell; 3], Surface::default()).unwrap())
+        .unwrap();
+    w.set_periodic([true; 3]).unwrap();
+    w.set_collisions(CollisionParams {
+        model: ContactModel::SpringDashpot {
+            stiffness: 2000.0,
+            damping: Some(50.0),
+        },
+        ..CollisionParams::default()
+    })
+    .unwrap();
+    (w, m, r)
+}
+
+#[test]
+fn a_world_kept_in_the_engines_order_shows_the_users() {
+    let (world, m, r) = gas();
+    let n = m.len();
+    let mut kept = UserOrder::new(world);
+    for _ in 0..10 {
+        kept.advance_in_engine_order(10).unwrap();
+    }
+    assert!(
+        kept.sorts() > 0 && kept.in_engine_order(),
+        "the gas is sorted along space between calls"
+    );
+
+    // What it gathers, without moving the particles, is the user's order ...
+    let (x, v) = (
+        kept.in_user_order(|p| &p.x, 3).into_owned(),
+        kept.in_user_order(|p| &p.v, 3).into_owned(),
+    );
+    let ids = kept.in_user_order(|p| &p.id, 1).into_owned();
+    assert_eq!(ids, (0..n as u64).collect::<Vec<_>>());
+    assert_eq!(*kept.in_user_order(|p| &p.mass, 1), m[..]);
+    assert_eq!(*kept.in_user_order(|p| &p.radius, 1), r[..]);
+    let (mut xr, mut vr) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
+    kept.read_state_into(&mut xr, &mut vr);
+    assert!(xr == x && vr == v && kept.state_is(&x, &v, &m));
+    assert!(kept.in_engine_order(), "reading moved nothing");
+
+    // ... and the same bits as one call of `World::advance`, which puts them back at its end.
+    let (mut plain, _, _) = gas();
+    plain.advance(100).unwrap();
+    assert!(plain.sorts() > 0);
+    let p = plain.particles();
+    assert!(p.x == x && p.v == v, "slices kept in the engine's order step as one call");
+
+    // The world it gives is in the user's order, index for index.
+    let world = kept.get();
+    assert!(world.particles().x == x && world.particles().id == ids);
+    assert!(!kept.in_engine_order());
+
+    // Sorted again, an index given to the world is the user's particle: removing particle 5
+    // removes the particle of id 5, wherever the engine holds it.
+    kept.advance_in_engine_order(200).unwrap();
+    assert!(kept.in_engine_order());
+    kept.get().remove_particles(&[5]).unwrap();
+    let ids = kept.in_user_order(|p| &p.id, 1).into_owned();
+    assert!(ids.len() == n - 1 && !ids.contains(&5) && ids.windows(2).all(|w| w[0] < w[1]));
+}
