@@ -124,7 +124,7 @@ def test_the_world_s_methods_are_in_its_class():
 
 def test_the_checkpoints_and_the_scene_export_use_the_world_s_state_only():
     private = world_private_names()
-    assert {"_core", "_push", "_death", "_emitters"} <= private
+    assert {"_core", "_push", "_colors", "_emitters"} <= private
     for file in WORLD_READERS:
         reaches = world_reaches((PACKAGE / file).read_text(encoding="utf-8"), private)
         assert {r.split(".")[-1].split("(")[0] for r in reaches} <= STATE_ACCESS, f"{file}: {reaches}"

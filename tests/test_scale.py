@@ -209,8 +209,9 @@ def test_the_engine_keeps_its_order_between_calls_and_python_reads_the_users():
     w.step(50)
     assert w._core.in_engine_order
     doomed = np.array([5, 600, 4000])
-    w._death = np.full(len(w), np.inf)
-    w._death[doomed] = w.time + 0.0105
+    death = np.full(len(w), np.inf)
+    death[doomed] = w.time + 0.0105
+    w._core.set_times_of_death(0, death)  # (the engine keeps the times of death: issue 50)
     gone = set(w.ids[doomed].tolist())
     w.step(20)
     assert len(w) == 17**3 - 3 and not gone & set(w.ids.tolist()), gone

@@ -31,8 +31,6 @@ class WorldState:
     # the engine's world (kinema._core.World): the particles' state to every bit, their ids,
     # the clock, the collision books and what is carried from step to step
     engine: Any
-    # (N,) each particle's time of death, s (inf: none); a read-only broadcast while none has one
-    death: np.ndarray
     # (N, 3) each particle's own colour, r g b in [0, 1] (NaN: none); a read-only broadcast while none has one
     colors: np.ndarray
     # (S, 2) int64: the ids at the two ends of each spring, the Spring forces in the order added
@@ -62,3 +60,20 @@ class WorldState:
     # the scene file `kinema run` started the world's run from and its scene's hash
     # (scene_file, scene_sha256; empty for a world run from Python), written with its checkpoints
     run_source: dict[str, str]
+    # (N,) times of death to give the world (a checkpoint's: World._restore hands them to the
+    # engine); None: the engine's stay. Read them as ``death``.
+    death_given: np.ndarray | None = None
+
+    @property
+    def death(self) -> np.ndarray:
+        """(N,) each particle's time of death, s (inf: none): those given, else the engine's,
+        which keeps them with the particles (``World::times_of_death``), read when asked (a
+        read-only broadcast of inf while no particle has one)."""
+        if self.death_given is not None:
+            return self.death_given
+        t = self.engine.times_of_death()
+        return np.broadcast_to(np.float64(np.inf), (self.engine.len,)) if t is None else t
+
+    @death.setter
+    def death(self, value: np.ndarray) -> None:
+        self.death_given = value

@@ -126,9 +126,9 @@ class _Busy:
         raise RuntimeError(REENTRY)
 
 
-# What the Python world keeps per particle besides the engine's state — each particle's time of
-# death (s, inf: none) and own colour (r, g, b; NaN: none) — is, while no particle has one, a
-# read-only broadcast of that one value: no memory per particle (32 B at 10⁶ particles each).
+# What the Python world keeps per particle besides the engine's state — each particle's own
+# colour (r, g, b; NaN: none) — is, while no particle has one, a read-only broadcast of that one
+# value: no memory per particle (24 B at 10⁶ particles). (Times of death are the engine's.)
 def _unset(a: np.ndarray) -> bool:
     """Whether ``a`` holds no particle's own value (empty, or the broadcast of the default)."""
     return a.size == 0 or a.strides[0] == 0
@@ -219,7 +219,6 @@ class World(WorldCollisions):
         # of death (inf: none), its colour (NaN: none) and the id pairs of the springs.
         self._emitters: list[Any] = []
         self._kills: list[Any] = []
-        self._death = np.empty(0)
         self._colors = np.empty((0, 3))
         self._spring_ids = np.empty((0, 2), dtype=np.int64)
         self._spring_rest: dict[int, np.ndarray] = {}  # index in the forces -> each spring's rest length, m
@@ -484,7 +483,9 @@ class World(WorldCollisions):
         if spin is not None:
             self._core.set_particle_spin(start, end, *(None if a is None else np.ascontiguousarray(a, dtype=float) for a in spin))
         self._species += names
-        self._death = _grown(self._death, n, np.inf, death)
+        if death is not None:
+            # the engine keeps them with the particles (none while no particle has one)
+            self._core.set_times_of_death(start, np.ascontiguousarray(np.broadcast_to(death, (n,)), dtype=float))
         self._colors = _grown(self._colors, n, np.nan, None if color is None else np.broadcast_to(color, (n, 3)))
         self._new_views()
         self._advice_due = True
@@ -610,13 +611,14 @@ class World(WorldCollisions):
             self._pull()
 
     def _changes_count(self) -> bool:
-        return bool(self._emitters or self._kills or (not _unset(self._death) and np.isfinite(self._death).any()))
+        return bool(self._emitters or self._kills or self._core.has_times_of_death)
 
     def _advance(self, n: int) -> None:
         """``n`` steps. With emitters, the steps run in batches up to the next step boundary at
         which a birth is due (or one at a time while a newborn waits for its place): the births
         due by a step's start are added before it (``kinema.emitter``). Deaths (times of death,
-        kill volumes) are the engine's, after each step (``World::set_deaths``). The stable-step
+        kill volumes) are the engine's, after each step (``World::set_times_of_death``,
+        ``World::set_kill_volumes``). The stable-step
         advisor looks at the newborn at the next call of :meth:`step` or the next frame of
         :meth:`run`."""
         if not self._changes_count():
@@ -668,10 +670,9 @@ class World(WorldCollisions):
         return max(k, 1)
 
     def _send_deaths(self, core: Any) -> None:
-        """Hands the engine the times of death and the kill volumes (``core``: lent by
-        :meth:`_engine`)."""
-        death = None if _unset(self._death) or not np.isfinite(self._death).any() else np.ascontiguousarray(self._death, dtype=float)
-        core.set_deaths(death, [volume._spec() for volume in self._kills])
+        """Hands the engine the kill volumes (``core``: lent by :meth:`_engine`); the times of
+        death are the engine's own (``World::set_times_of_death``)."""
+        core.set_kill_volumes([volume._spec() for volume in self._kills])
 
     def _drop_removed(self, before: np.ndarray) -> None:
         """Drops what the Python world holds for the particles the engine's deaths removed
@@ -685,7 +686,7 @@ class World(WorldCollisions):
         """Keeps what the Python world holds per particle for the particles ``keep`` (a mask
         over the particles before a removal) and reads the state anew."""
         self._species = [s for s, k in zip(self._species, keep, strict=True) if k]
-        self._death, self._colors = _kept(self._death, keep), _kept(self._colors, keep)
+        self._colors = _kept(self._colors, keep)
         self._new_views()
         self._advice_due = True
 
@@ -1244,7 +1245,6 @@ class World(WorldCollisions):
             self._push()
         return WorldState(
             engine=self._core,
-            death=self._death,
             colors=self._colors,
             spring_ids=self._spring_ids,
             spring_rest=self._spring_rest,
@@ -1264,7 +1264,10 @@ class World(WorldCollisions):
         a checkpoint's) and reads the views anew from its engine: views taken before no longer
         follow the world."""
         self._core = state.engine
-        self._death, self._colors = state.death, state.colors
+        self._colors = state.colors
+        if state.death_given is not None and (self._core.has_times_of_death or np.isfinite(state.death_given).any()):
+            self._core.set_times_of_death(0, np.ascontiguousarray(state.death_given, dtype=float))
+            state.death_given = None  # (the engine's now)
         self._spring_ids, self._spring_rest = state.spring_ids, state.spring_rest
         self._emitters, self._kills = state.emitters, state.kills
         self._method_arg = state.method

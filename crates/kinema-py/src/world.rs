@@ -338,28 +338,34 @@ impl PyWorld {
         kills: Vec<(String, [f64; 3], Bound<'_, PyAny>)>,
     ) -> PyResult<()> {
         let time_of_death = time_of_death.map(|t| t.as_array().to_vec());
-        let kills = kills
-            .into_iter()
-            .map(|(kind, a, b)| {
-                Ok(match kind.as_str() {
-                    "box" => KillVolume::Box { lo: a, hi: b.extract()? },
-                    "sphere" => KillVolume::Sphere {
-                        center: a,
-                        radius: b.extract()?,
-                    },
-                    "plane" => KillVolume::Plane {
-                        point: a,
-                        normal: b.extract()?,
-                    },
-                    other => {
-                        return Err(PyValueError::new_err(format!(
-                            "kill volume {other:?} is unknown: \"box\", \"sphere\" or \"plane\""
-                        )))
-                    }
-                })
-            })
-            .collect::<PyResult<Vec<_>>>()?;
+        let kills = kill_volumes(kills)?;
         self.inner.set_deaths(time_of_death, kills).map_err(to_py)
+    }
+
+    /// Sets the kill volumes (as `set_deaths` takes them); the times of death stay.
+    fn set_kill_volumes(&mut self, kills: Vec<(String, [f64; 3], Bound<'_, PyAny>)>) -> PyResult<()> {
+        let kills = kill_volumes(kills)?;
+        self.inner.set_kill_volumes(kills).map_err(to_py)
+    }
+
+    /// Sets the times of death (s; inf: never) of particles `start..start + len(times)` (the
+    /// user's order); the engine keeps them with the particles from then on.
+    fn set_times_of_death(&mut self, start: usize, times: PyReadonlyArray1<'_, f64>) -> PyResult<()> {
+        let times = times.as_array().to_vec();
+        self.inner.set_times_of_death(start, &times).map_err(to_py)
+    }
+
+    /// Each particle's time of death (s; inf: never) in the user's order, or None while no
+    /// particle has one.
+    fn times_of_death<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        let t = self.inner.times_of_death();
+        (!t.is_empty()).then(|| PyArray1::from_vec(py, t))
+    }
+
+    /// Whether some particle has a finite time of death.
+    #[getter]
+    fn has_times_of_death(&self) -> bool {
+        self.inner.has_times_of_death()
     }
 
     /// The ids of the particles the engine's deaths removed since the last call.
@@ -1101,4 +1107,30 @@ fn fallible<T>(items: impl Iterator<Item = T>, len: usize, count: usize) -> PyRe
     }
     out.extend(items);
     Ok(out)
+}
+
+/// The kill volumes as Python gives them: ("box", lo, hi), ("sphere", center, radius) or
+/// ("plane", point, normal).
+fn kill_volumes(kills: Vec<(String, [f64; 3], Bound<'_, PyAny>)>) -> PyResult<Vec<KillVolume>> {
+    kills
+        .into_iter()
+        .map(|(kind, a, b)| {
+            Ok(match kind.as_str() {
+                "box" => KillVolume::Box { lo: a, hi: b.extract()? },
+                "sphere" => KillVolume::Sphere {
+                    center: a,
+                    radius: b.extract()?,
+                },
+                "plane" => KillVolume::Plane {
+                    point: a,
+                    normal: b.extract()?,
+                },
+                other => {
+                    return Err(PyValueError::new_err(format!(
+                        "kill volume {other:?} is unknown: \"box\", \"sphere\" or \"plane\""
+                    )))
+                }
+            })
+        })
+        .collect::<PyResult<Vec<_>>>()
 }

@@ -158,6 +158,75 @@ impl World {
         Ok(())
     }
 
+    /// Sets the times of death (s; +∞: never) of the particles `start..start + times.len()`
+    /// (the user's order; the particles stay in the engine's where it keeps one): the world
+    /// keeps them, with the particles, from here on (a
+    /// birth adds +∞, a removal or a death drops its own, the sort moves them). While no
+    /// particle has one, none is kept (no memory per particle).
+    pub fn set_times_of_death(&mut self, start: usize, times: &[f64]) -> Result<(), Error> {
+        let n = self.particles.len();
+        if start + times.len() > n {
+            return Err(Error::invalid(
+                "time_of_death",
+                format!("{} values from particle {start}", times.len()),
+                format!("particles that exist (0..{n})"),
+            ));
+        }
+        if let Some(i) = times.iter().position(|t| t.is_nan()) {
+            return Err(Error::invalid(
+                format!("time_of_death[{}]", start + i),
+                "NaN",
+                "a time in s, or inf for none",
+            ));
+        }
+        if self.deaths.time.is_empty() && times.iter().all(|t| *t == f64::INFINITY) {
+            return Ok(());
+        }
+        self.deaths.time.resize(n, f64::INFINITY);
+        // (in the engine's order, where it keeps one: the particles stay where they are)
+        let time = &mut self.deaths.time;
+        match self.sorted.as_ref().map(super::order::Order::user_of) {
+            Some(user_of) => {
+                for (engine, &user) in user_of.iter().enumerate() {
+                    if let Some(t) = (user as usize).checked_sub(start).and_then(|k| times.get(k)) {
+                        time[engine] = *t;
+                    }
+                }
+            }
+            None => time[start..start + times.len()].copy_from_slice(times),
+        }
+        Ok(())
+    }
+
+    /// Each particle's time of death (s; +∞: never), in the user's order; empty while no
+    /// particle has one.
+    pub fn times_of_death(&self) -> Vec<f64> {
+        match self.user_of() {
+            Some(user_of) if !self.deaths.time.is_empty() => {
+                let mut t = vec![f64::INFINITY; self.deaths.time.len()];
+                for (engine, &user) in user_of.iter().enumerate() {
+                    t[user as usize] = self.deaths.time[engine];
+                }
+                t
+            }
+            _ => self.deaths.time.clone(),
+        }
+    }
+
+    /// Whether some particle has a time of death yet to come or past (a finite one).
+    pub fn has_times_of_death(&self) -> bool {
+        self.deaths.time.iter().any(|t| t.is_finite())
+    }
+
+    /// Sets the kill volumes (each checked); the times of death stay.
+    pub fn set_kill_volumes(&mut self, kills: Vec<KillVolume>) -> Result<(), Error> {
+        for k in &kills {
+            k.validate()?;
+        }
+        self.deaths.kills = kills;
+        Ok(())
+    }
+
     /// The ids of the particles the engine removed since the last call, in the order they died.
     pub fn take_removed_ids(&mut self) -> Vec<u64> {
         std::mem::take(&mut self.removed_ids)

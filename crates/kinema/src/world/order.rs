@@ -467,6 +467,26 @@ impl UserOrder {
         self.world.set_deaths(time_of_death, kills)
     }
 
+    /// [`World::times_of_death`] (a gather into the user's order).
+    pub fn times_of_death(&self) -> Vec<f64> {
+        self.world.times_of_death()
+    }
+
+    /// [`World::set_times_of_death`] (mapped into the engine's order, which stays).
+    pub fn set_times_of_death(&mut self, start: usize, times: &[f64]) -> Result<(), Error> {
+        self.world.set_times_of_death(start, times)
+    }
+
+    /// [`World::has_times_of_death`] (no order).
+    pub fn has_times_of_death(&self) -> bool {
+        self.world.has_times_of_death()
+    }
+
+    /// [`World::set_kill_volumes`] (no order).
+    pub fn set_kill_volumes(&mut self, kills: Vec<KillVolume>) -> Result<(), Error> {
+        self.world.set_kill_volumes(kills)
+    }
+
     /// [`World::take_removed_ids`] (ids, not indices).
     pub fn take_removed_ids(&mut self) -> Vec<u64> {
         self.world.take_removed_ids()
