@@ -815,38 +815,15 @@ impl PyWorld {
         if unchanged {
             return Ok(false);
         }
-        let world = self.inner.get(); // (a write: the user's order, the values checked below)
-        for (name, arr) in [("positions", &x), ("velocities", &v)] {
-            if let Some(((i, k), c)) = arr.indexed_iter().find(|(_, c)| !c.is_finite()) {
-                return Err(PyValueError::new_err(format!(
-                    "{name}[{i}][{k}] = {c} is invalid: it must be finite"
-                )));
-            }
-            if world.params().dim == 2 {
-                if let Some(i) = (0..n).find(|&i| arr[[i, 2]] != 0.0) {
-                    return Err(PyValueError::new_err(format!(
-                        "{name}[{i}][2] = {} is invalid: a 2D world keeps z = 0",
-                        arr[[i, 2]]
-                    )));
-                }
-            }
-        }
-        if let Some((i, c)) = m.iter().enumerate().find(|(_, c)| !(c.is_finite() && **c > 0.0)) {
-            return Err(PyValueError::new_err(format!(
-                "masses[{i}] = {c} is invalid: a mass must be finite and > 0 kg"
-            )));
-        }
-        let p = world.particles_mut();
-        p.x.iter_mut().zip(x.iter()).for_each(|(d, s)| *d = *s);
-        for (k, (dst, src)) in p.v.iter_mut().zip(v.iter()).enumerate() {
-            *dst = if p.inv_mass[k / 3] == 0.0 { 0.0 } else { *src }; // pinned particles stay at rest
-        }
-        for (i, mi) in m.iter().enumerate() {
-            p.mass[i] = *mi;
-            if p.inv_mass[i] != 0.0 {
-                p.inv_mass[i] = 1.0 / mi;
-            }
-        }
+        // (a write: the user's order; the values checked by the engine's one check,
+        // `kinema::particles::check_state`, nothing written if one is bad)
+        let flat = |a: numpy::ndarray::ArrayViewD<'_, f64>| a.iter().copied().collect::<Vec<f64>>();
+        let (xs, vs, ms) = (
+            flat(x.view().into_dyn()),
+            flat(v.view().into_dyn()),
+            flat(m.view().into_dyn()),
+        );
+        self.inner.get().write_state(&xs, &vs, &ms).map_err(to_py)?;
         Ok(true)
     }
 

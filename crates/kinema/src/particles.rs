@@ -99,22 +99,7 @@ impl Particles {
         check_len("velocity", v.len(), 3)?;
         check_len("radius", radius.len(), 1)?;
         check_len("pinned", pinned.len(), 1)?;
-        for (name, values) in [("position", x), ("velocity", v)] {
-            if let Some(i) = values.iter().position(|c| !c.is_finite()) {
-                return Err(Error::invalid(
-                    format!("{name}[{}][{}]", i / 3, i % 3),
-                    values[i],
-                    "coordinates must be finite",
-                ));
-            }
-        }
-        if let Some(i) = mass.iter().position(|m| !(m.is_finite() && *m > 0.0)) {
-            return Err(Error::invalid(
-                format!("mass[{i}]"),
-                mass[i],
-                "masses must be finite and > 0 kg (pin a particle to make it immovable)",
-            ));
-        }
+        check_state(["position", "velocity", "mass"], x, v, mass, None)?;
         if let Some(i) = radius.iter().position(|r| !(*r >= 0.0 && *r <= GEOMETRY_LIMIT)) {
             return Err(Error::invalid(
                 format!("radius[{i}]"),
@@ -463,4 +448,39 @@ pub fn turn_orientations(orientation: &mut [f64], omega0: &[f64], omega1: &[f64]
             q[k] = t[k] * scale;
         }
     }
+}
+
+/// The one check of the particles' state as a caller writes it: the coordinates of `x` and
+/// `v` (m, m/s; 3 per particle) finite and, in a 2D world (`dim` = `Some(2)`), with z = 0; the
+/// masses finite and > 0 kg. `names` are the three as the caller names them (`position`,
+/// `velocity`, `mass` for new particles, [`Particles::add`]; `positions`, `velocities`,
+/// `masses` for a whole state written back, `World::write_state`), and the error names the
+/// first bad value by them. (`dim` `None`: the caller checks z itself.)
+pub fn check_state(names: [&str; 3], x: &[f64], v: &[f64], mass: &[f64], dim: Option<usize>) -> Result<(), Error> {
+    for (name, values) in [(names[0], x), (names[1], v)] {
+        if let Some(i) = values.iter().position(|c| !c.is_finite()) {
+            return Err(Error::invalid(
+                format!("{name}[{}][{}]", i / 3, i % 3),
+                values[i],
+                "coordinates must be finite",
+            ));
+        }
+        if dim == Some(2) {
+            if let Some(i) = values.chunks(3).position(|c| c.len() == 3 && c[2] != 0.0) {
+                return Err(Error::invalid(
+                    format!("{name}[{i}][2]"),
+                    values[3 * i + 2],
+                    "a 2D world keeps z = 0",
+                ));
+            }
+        }
+    }
+    if let Some(i) = mass.iter().position(|m| !(m.is_finite() && *m > 0.0)) {
+        return Err(Error::invalid(
+            format!("{}[{i}]", names[2]),
+            mass[i],
+            "masses must be finite and > 0 kg (pin a particle to make it immovable)",
+        ));
+    }
+    Ok(())
 }

@@ -5,7 +5,7 @@ use super::forces::contact_force;
 use super::{ContactModel, World};
 use crate::error::Error;
 use crate::forces::Force;
-use crate::particles::Particles;
+use crate::particles::{check_state, Particles};
 
 impl World {
     /// Adds particles (see [`Particles::add`]); in 2D every z and z velocity must be 0.
@@ -36,15 +36,8 @@ impl World {
             check_groups(g, mass.len())?;
         }
         if self.params.dim == 2 {
-            for (name, values) in [("position", x), ("velocity", v)] {
-                if let Some(i) = values.chunks(3).position(|c| c.len() == 3 && c[2] != 0.0) {
-                    return Err(Error::invalid(
-                        format!("{name}[{i}][2]"),
-                        values[3 * i + 2],
-                        "a 2D world keeps z = 0",
-                    ));
-                }
-            }
+            // (z = 0 here; `Particles::add` checks the rest of the values by the same rule)
+            check_state(["position", "velocity", "mass"], x, v, mass, Some(2))?;
         }
         let range = self.particles.add(x, v, mass, radius, pinned)?;
         if let Some(g) = group.filter(|g| g.iter().any(|&g| g != 0)) {
@@ -150,6 +143,41 @@ impl World {
             model.retain_survivors(&new_of_old);
         }
         self.keep_acceleration(a);
+        Ok(())
+    }
+
+    /// Writes the whole state back (the user's order): positions `x` (m) and velocities `v`
+    /// (m/s), 3 per particle, and masses (kg), checked first by [`check_state`] (nothing is
+    /// written if a value is bad). Pinned particles stay at rest and immovable (their
+    /// velocity is written as 0, their mass kept as given with no inverse). The method caches
+    /// start again, as after [`World::particles_mut`].
+    pub fn write_state(&mut self, x: &[f64], v: &[f64], mass: &[f64]) -> Result<(), Error> {
+        let n = self.particles.len();
+        for (name, len, per) in [
+            ("positions", x.len(), 3),
+            ("velocities", v.len(), 3),
+            ("masses", mass.len(), 1),
+        ] {
+            if len != per * n {
+                return Err(Error::invalid(
+                    name,
+                    format!("{len} values"),
+                    format!("{per} per particle ({n} particles)"),
+                ));
+            }
+        }
+        check_state(["positions", "velocities", "masses"], x, v, mass, Some(self.params.dim))?;
+        let p = self.particles_mut();
+        p.x.copy_from_slice(x);
+        for (k, (dst, src)) in p.v.iter_mut().zip(v).enumerate() {
+            *dst = if p.inv_mass[k / 3] == 0.0 { 0.0 } else { *src }; // pinned particles stay at rest
+        }
+        for (i, mi) in mass.iter().enumerate() {
+            p.mass[i] = *mi;
+            if p.inv_mass[i] != 0.0 {
+                p.inv_mass[i] = 1.0 / mi;
+            }
+        }
         Ok(())
     }
 
