@@ -2,11 +2,8 @@
 //! collisions (conversions in `collide.rs`; stepping and SimulationDiverged in
 //! `stepping.rs`; the Python force in `callbacks.rs`).
 
-use kinema::collide::mesh::mesh_buffer;
-use kinema::collide::{ContactRecord, Partner, Surface};
 use kinema::forces::falloff::{Law, Shape};
-use kinema::forces::vortex::Profile;
-use kinema::forces::{Attractor, Coupling, Drag, Falloff, Gravity, Springs, Turbulence, Vortex, Wind};
+use kinema::forces::{Falloff, Springs};
 use kinema::world::{KillVolume, UserOrder};
 use kinema::{World, WorldParams};
 use numpy::{
@@ -16,11 +13,13 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::callbacks::PythonForce;
 use crate::collide;
 use crate::errors::to_py;
 use crate::ode::integrator_from;
 use crate::stepping::{ctrl_c, step_in_slices, world_err, SimulationDiverged};
+
+mod carries;
+mod contents;
 
 /// `add_particles`' arguments, read by name from the dict Python passes (`World._add`: the
 /// values already checked and converted there, contiguous float64 and bool arrays).
@@ -134,567 +133,10 @@ impl PyWorld {
         self.inner.get().check_pending_placement().map_err(to_py)
     }
 
-    /// A checkpoint's time, steps and ids (see `World::restore_clock_and_ids`).
-    fn restore_clock_and_ids(&mut self, time: f64, steps: u64, ids: Vec<u64>, next_id: u64) -> PyResult<()> {
-        self.inner
-            .get()
-            .restore_clock_and_ids(time, steps, &ids, next_id)
-            .map_err(to_py)
-    }
-
-    /// A checkpoint's clock anchor (see `World::restore_clock`).
-    fn restore_clock(&mut self, k0: u64, t0: f64) -> PyResult<()> {
-        self.inner.restore_clock(k0, t0).map_err(to_py)
-    }
-
-    /// The clock: (k0 steps, t0 s, h s, landing (k1, t1) or None) (see `World::clock`).
-    #[getter]
-    fn clock(&self) -> (u64, f64, f64, Option<(u64, f64)>) {
-        let c = self.inner.clock();
-        (c.k0, c.t0, c.h, c.landing)
-    }
-
-    /// Plans the next `n` steps to end at `t1` s exactly (see `World::land_at`).
-    fn land_at(&mut self, t1: f64, n: u64) -> PyResult<()> {
-        self.inner.land_at(t1, n).map_err(to_py)
-    }
-
-    /// A checkpoint's collision books (dicts as `collision_stats` gives them).
-    fn restore_collision_stats(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
-        let world = self.inner.get();
-        let (total, last) = (collide::stats_from(&total)?, collide::stats_from(&last)?);
-        world.restore_collision_stats(total, last);
-        Ok(())
-    }
-
-    /// A checkpoint's collider books: `total` and `last`, dicts of arrays as `collider_books`
-    /// gives them (one row per collider).
-    fn restore_collider_books(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
-        let (total, last) = (collide::books_from(&total)?, collide::books_from(&last)?);
-        self.inner.get().restore_collider_books(total, last).map_err(to_py)
-    }
-
-    /// Starts the caches again (a checkpoint's restart point).
-    fn restart_caches(&mut self) -> PyResult<()> {
-        self.inner.get().restart_caches().map_err(to_py)
-    }
-
-    /// What the method carries from step to step (Verlet's a, implicit Euler's Δv), or None.
-    fn integrator_carry<'py>(&mut self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
-        self.inner.get().integrator_carry().map(|c| PyArray1::from_vec(py, c))
-    }
-
-    fn restore_integrator_carry(&mut self, carry: Vec<f64>) -> PyResult<()> {
-        self.inner.get().restore_integrator_carry(carry).map_err(to_py)
-    }
-
-    /// Verlet's angular accelerations under the contacts' torques (a checkpoint's carry).
-    fn spin_carry<'py>(&mut self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
-        self.inner.get().spin_carry().map(|c| PyArray1::from_vec(py, c))
-    }
-
-    fn restore_spin_carry(&mut self, carry: Vec<f64>) -> PyResult<()> {
-        self.inner.restore_spin_carry(carry).map_err(to_py)
-    }
-
-    /// The force models' contact memory: ([(i, j, springs[7])], [(i, collider, normal, springs[7])]).
-    #[allow(clippy::type_complexity)]
-    fn contact_history(&mut self) -> (Vec<kinema::world::PairMemory>, Vec<kinema::world::WallMemory>) {
-        self.inner.get().contact_history()
-    }
-
-    fn restore_contact_history(
-        &mut self,
-        pairs: Vec<kinema::world::PairMemory>,
-        walls: Vec<kinema::world::WallMemory>,
-    ) -> PyResult<()> {
-        self.inner.restore_contact_history(pairs, walls).map_err(to_py)
-    }
-
-    /// The impulse model's contact records: (particle, partner is a collider, partner index,
-    /// the solve stage's impulse, whether it carried load).
-    fn collision_carry(&mut self) -> Vec<(usize, bool, usize, [f64; 3], bool)> {
-        self.inner
-            .get()
-            .collision_carry()
-            .into_iter()
-            .map(|r| match r.other {
-                Partner::Particle(j) => (r.i, false, j, r.impulse, r.carried),
-                Partner::Collider(c) => (r.i, true, c, r.impulse, r.carried),
-            })
-            .collect()
-    }
-
-    /// Gives the records back; `carried` None: taken from the impulse (a checkpoint written
-    /// before the records kept it).
-    #[allow(clippy::type_complexity)]
-    fn restore_collision_carry(&mut self, carry: Vec<(usize, bool, usize, [f64; 3], Option<bool>)>) -> PyResult<()> {
-        let world = self.inner.get();
-        let carry = carry
-            .into_iter()
-            .map(|(i, collider, j, impulse, carried)| {
-                let other = if collider {
-                    Partner::Collider(j)
-                } else {
-                    Partner::Particle(j)
-                };
-                let record = ContactRecord::loaded(i, other, impulse);
-                ContactRecord {
-                    carried: carried.unwrap_or(record.carried),
-                    ..record
-                }
-            })
-            .collect();
-        world.restore_collision_carry(carry).map_err(to_py)
-    }
-
-    /// The impulse model's candidate list's build: the positions it was built at (m, N×3)
-    /// and its skin (m); None before a first build.
-    fn list_carry<'py>(&mut self, py: Python<'py>) -> Option<(Bound<'py, PyArray1<f64>>, f64)> {
-        self.inner
-            .get()
-            .list_carry()
-            .map(|(built_at, skin)| (PyArray1::from_vec(py, built_at), skin))
-    }
-
-    fn restore_list_carry(&mut self, built_at: Vec<f64>, skin: f64) -> PyResult<()> {
-        self.inner.get().restore_list_carry(built_at, skin).map_err(to_py)
-    }
-
-    /// Sleeping's carry: each particle's calm time (s) and sleeping island (-1: awake).
-    fn sleep_carry<'py>(&mut self, py: Python<'py>) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>) {
-        let world = self.inner.get();
-        let (calm, island) = world.sleep_carry();
-        (PyArray1::from_vec(py, calm), PyArray1::from_vec(py, island))
-    }
-
-    fn restore_sleep_carry(&mut self, calm: Vec<f64>, island: Vec<i64>) -> PyResult<()> {
-        self.inner.get().restore_sleep_carry(calm, island).map_err(to_py)
-    }
-
-    /// Each particle's own (restitution, friction), None where not set; empty if none has.
-    fn particle_materials(&mut self) -> Vec<(Option<f64>, Option<f64>)> {
-        self.inner.get().particle_materials()
-    }
-
-    /// Each particle's collision group, in the user's order.
-    #[getter]
-    fn groups(&mut self) -> Vec<u32> {
-        self.inner.get().particle_groups()
-    }
-
-    /// Puts particles start.. into the collision groups `group` (checked: 0..32).
-    fn set_groups(&mut self, start: usize, group: Vec<u32>) -> PyResult<()> {
-        self.inner.get().set_particle_groups(start, &group).map_err(to_py)
-    }
-
-    /// The collision groups' matrix as one 32-bit mask per group (bit h of row g: g and h
-    /// collide).
-    #[getter]
-    fn group_masks(&self) -> Vec<u32> {
-        self.inner.group_masks().rows().to_vec()
-    }
-
-    /// Sets the matrix from 32 masks (checked symmetric).
-    fn set_group_masks(&mut self, masks: [u32; 32]) -> PyResult<()> {
-        let world = self.inner.get();
-        let masks = kinema::collide::GroupMasks::from_rows(masks).map_err(to_py)?;
-        world.set_group_masks(masks).map_err(to_py)
-    }
-
-    /// Sets whether groups a and b collide (both ways).
-    fn set_group_collisions(&mut self, a: usize, b: usize, collide: bool) -> PyResult<()> {
-        self.inner.get().set_group_collisions(a, b, collide).map_err(to_py)
-    }
-
-    /// Sets the mask of the groups collider k collides with.
-    fn set_collider_mask(&mut self, k: usize, mask: u32) -> PyResult<()> {
-        self.inner.get().set_collider_mask(k, mask).map_err(to_py)
-    }
-
-    /// Each collider's mask of the groups it collides with.
-    #[getter]
-    fn collider_masks(&self) -> Vec<u32> {
-        self.inner.collider_masks()
-    }
-
-    #[getter]
-    fn next_id(&self) -> u64 {
-        self.inner.next_id()
-    }
-
-    /// Removes the particles at these indices (checked; repeats allowed).
-    fn remove_particles(&mut self, indices: Vec<usize>) -> PyResult<()> {
-        self.inner.get().remove_particles(&indices).map_err(to_py)
-    }
-
-    /// Sets the deaths the engine carries out after each step: each particle's time of
-    /// death (s, inf: never; None: nobody dies of age) and the kill volumes, each
-    /// ("box", lo, hi), ("sphere", center, radius) or ("plane", point, normal).
-    #[pyo3(signature = (time_of_death, kills))]
-    fn set_deaths(
-        &mut self,
-        time_of_death: Option<PyReadonlyArray1<'_, f64>>,
-        kills: Vec<(String, [f64; 3], Bound<'_, PyAny>)>,
-    ) -> PyResult<()> {
-        let time_of_death = time_of_death.map(|t| t.as_array().to_vec());
-        let kills = kill_volumes(kills)?;
-        self.inner.set_deaths(time_of_death, kills).map_err(to_py)
-    }
-
-    /// Sets the kill volumes (as `set_deaths` takes them); the times of death stay.
-    fn set_kill_volumes(&mut self, kills: Vec<(String, [f64; 3], Bound<'_, PyAny>)>) -> PyResult<()> {
-        let kills = kill_volumes(kills)?;
-        self.inner.set_kill_volumes(kills).map_err(to_py)
-    }
-
-    /// Sets the times of death (s; inf: never) of particles `start..start + len(times)` (the
-    /// user's order); the engine keeps them with the particles from then on.
-    fn set_times_of_death(&mut self, start: usize, times: PyReadonlyArray1<'_, f64>) -> PyResult<()> {
-        let times = times.as_array().to_vec();
-        self.inner.set_times_of_death(start, &times).map_err(to_py)
-    }
-
-    /// Each particle's time of death (s; inf: never) in the user's order, or None while no
-    /// particle has one.
-    fn times_of_death<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
-        let t = self.inner.times_of_death();
-        (!t.is_empty()).then(|| PyArray1::from_vec(py, t))
-    }
-
-    /// Whether some particle has a finite time of death.
-    #[getter]
-    fn has_times_of_death(&self) -> bool {
-        self.inner.has_times_of_death()
-    }
-
-    /// The ids of the particles the engine's deaths removed since the last call.
-    fn take_removed_ids(&mut self) -> Vec<u64> {
-        self.inner.take_removed_ids()
-    }
-
-    fn add_gravity(&mut self, g: [f64; 3]) -> PyResult<()> {
-        self.inner
-            .get()
-            .add_force(Box::new(Gravity::new(g).map_err(to_py)?))
-            .map_err(to_py)
-    }
-
-    fn add_drag(&mut self, linear: f64, quadratic: f64) -> PyResult<()> {
-        let world = self.inner.get();
-        world
-            .add_force(Box::new(Drag::new(linear, quadratic).map_err(to_py)?))
-            .map_err(to_py)
-    }
-
-    /// Adds springs; returns their rest lengths, m (those given, or the current distances).
-    #[pyo3(signature = (i, j, k, rest_length, damping))]
-    fn add_springs<'py>(
-        &mut self,
-        py: Python<'py>,
-        i: PyReadonlyArray1<'py, i64>,
-        j: PyReadonlyArray1<'py, i64>,
-        k: PyReadonlyArray1<'py, f64>,
-        rest_length: Option<PyReadonlyArray1<'py, f64>>,
-        damping: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let world = self.inner.get();
-        let count = i.len();
-        // Room first (the springs' arrays, the force pass's buffers), so that a count the
-        // machine cannot hold is a MemoryError here, not an abort in a later step.
-        Springs::room(count).map_err(to_py)?;
-        let indices = |name: &str, a: &PyReadonlyArray1<'py, i64>| -> PyResult<Vec<usize>> {
-            let a = a.as_slice()?;
-            if let Some(s) = a.iter().position(|v| *v < 0) {
-                return Err(PyValueError::new_err(format!(
-                    "{name}[{s}] = {} is invalid: particle indices are >= 0",
-                    a[s]
-                )));
-            }
-            fallible(a.iter().map(|v| *v as usize), a.len(), count)
-        };
-        let values = |a: &PyReadonlyArray1<'py, f64>| -> PyResult<Vec<f64>> {
-            let a = a.as_slice()?;
-            fallible(a.iter().copied(), a.len(), count)
-        };
-        let (i, j) = (indices("i", &i)?, indices("j", &j)?);
-        let rest = match rest_length {
-            Some(r) => values(&r)?,
-            None => {
-                // rest lengths from the current positions (a spring at rest as built)
-                let x = &world.particles().x;
-                let n = world.particles().len();
-                let mut rest = fallible(std::iter::empty(), 0, count)?;
-                for (s, (&a, &b)) in i.iter().zip(&j).enumerate() {
-                    if a >= n || b >= n {
-                        return Err(PyValueError::new_err(format!(
-                            "spring {s} joins particles {a} and {b}, but the world has {n} particles"
-                        )));
-                    }
-                    rest.push((0..3).map(|c| (x[3 * b + c] - x[3 * a + c]).powi(2)).sum::<f64>().sqrt());
-                }
-                rest
-            }
-        };
-        let taken = PyArray1::from_slice(py, &rest); // (the lengths taken from the positions, which a scene or checkpoint must keep)
-        let springs = Springs::new(i, j, values(&k)?, rest, values(&damping)?).map_err(to_py)?;
-        world.add_force(Box::new(springs)).map_err(to_py)?;
-        Ok(taken)
-    }
-
-    #[pyo3(signature = (point, strength, softening, falloff=None))]
-    fn add_attractor(&mut self, point: [f64; 3], strength: f64, softening: f64, falloff: Option<FalloffArgs>) -> PyResult<()> {
-        let world = self.inner.get();
-        let attractor = Attractor::new(point, strength, softening).map_err(to_py)?;
-        let falloff = falloff_from(falloff)?;
-        world.add_force(Box::new(attractor.with_falloff(falloff))).map_err(to_py)
-    }
-
-    #[pyo3(signature = (velocity, coefficient, falloff=None))]
-    fn add_wind(&mut self, velocity: [f64; 3], coefficient: f64, falloff: Option<FalloffArgs>) -> PyResult<()> {
-        let world = self.inner.get();
-        let wind = Wind::new(velocity, coefficient).map_err(to_py)?;
-        let falloff = falloff_from(falloff)?;
-        world.add_force(Box::new(wind.with_falloff(falloff))).map_err(to_py)
-    }
-
-    /// Adds a vortex (`kinema.Vortex`); `coefficient` None: an acceleration field.
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (point, axis, strength, radius, profile, coefficient, falloff))]
-    fn add_vortex(
-        &mut self,
-        point: [f64; 3],
-        axis: [f64; 3],
-        strength: f64,
-        radius: f64,
-        profile: &str,
-        coefficient: Option<f64>,
-        falloff: Option<FalloffArgs>,
-    ) -> PyResult<()> {
-        let world = self.inner.get();
-        let profile = Profile::from_name(profile).map_err(to_py)?;
-        let falloff = falloff_from(falloff)?;
-        let vortex = Vortex::new(
-            point,
-            axis,
-            strength,
-            radius,
-            profile,
-            Coupling::from_coefficient(coefficient),
-            falloff,
-        )
-        .map_err(to_py)?;
-        world.add_force(Box::new(vortex)).map_err(to_py)
-    }
-
-    /// Adds curl-noise turbulence (`kinema.Turbulence`) in the world's dimension;
-    /// `time_scale` None freezes it, `coefficient` None makes it an acceleration field.
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (strength, scale, seed, time_scale, octaves, roughness, coefficient, falloff))]
-    fn add_turbulence(
-        &mut self,
-        strength: f64,
-        scale: f64,
-        seed: u64,
-        time_scale: Option<f64>,
-        octaves: u32,
-        roughness: f64,
-        coefficient: Option<f64>,
-        falloff: Option<FalloffArgs>,
-    ) -> PyResult<()> {
-        let world = self.inner.get();
-        let falloff = falloff_from(falloff)?;
-        let turbulence = Turbulence::new(
-            strength,
-            scale,
-            seed,
-            time_scale.unwrap_or(f64::INFINITY),
-            octaves,
-            roughness,
-            world.params().dim,
-            Coupling::from_coefficient(coefficient),
-            falloff,
-        )
-        .map_err(to_py)?;
-        world.add_force(Box::new(turbulence)).map_err(to_py)
-    }
-
-    fn add_python_force(&mut self, f: Py<PyAny>, name: String) -> PyResult<()> {
-        self.inner.get().add_force(Box::new(PythonForce { f, name })).map_err(to_py)
-    }
-
-    /// Turns collisions on, or changes their settings (every one of them), from the dict of
-    /// `World.set_collisions`' keyword arguments.
-    fn set_collisions(&mut self, settings: collide::CollisionArgs) -> PyResult<()> {
-        let world = self.inner.get();
-        let params = settings.params().map_err(to_py)?;
-        world.set_collisions(params).map_err(to_py)
-    }
-
-    /// The collision settings as set_collisions' keyword arguments, or None when off.
-    #[getter]
-    fn collisions<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        self.inner
-            .collision_params()
-            .map(|p| collide::params_dict(py, &p))
-            .transpose()
-    }
-
-    /// Adds a plane; returns the collider's index.
-    fn add_plane(
-        &mut self,
-        point: [f64; 3],
-        normal: [f64; 3],
-        restitution: Option<f64>,
-        friction: Option<f64>,
-    ) -> PyResult<usize> {
-        let world = self.inner.get();
-        let surface = Surface::new(restitution, friction).map_err(to_py)?;
-        let plane = collide::plane(world.params().dim, point, normal, surface).map_err(to_py)?;
-        world.add_collider(plane).map_err(to_py)
-    }
-
-    /// Adds a box container (2 values per corner in 2D, 3 in 3D); returns its index.
-    fn add_box(&mut self, lo: Vec<f64>, hi: Vec<f64>, restitution: Option<f64>, friction: Option<f64>) -> PyResult<usize> {
-        let world = self.inner.get();
-        let surface = Surface::new(restitution, friction).map_err(to_py)?;
-        let b = collide::box_container(world.params().dim, &lo, &hi, surface).map_err(to_py)?;
-        world.add_collider(b).map_err(to_py)
-    }
-
-    /// Adds a sphere obstacle; returns its index.
-    fn add_sphere_obstacle(
-        &mut self,
-        center: [f64; 3],
-        radius: f64,
-        restitution: Option<f64>,
-        friction: Option<f64>,
-    ) -> PyResult<usize> {
-        let world = self.inner.get();
-        let surface = Surface::new(restitution, friction).map_err(to_py)?;
-        let s = collide::sphere_obstacle(world.params().dim, center, radius, surface).map_err(to_py)?;
-        world.add_collider(s).map_err(to_py)
-    }
-
-    /// Adds a triangle mesh (vertices V × 3, m; faces F × 3 vertex indices); returns its index.
-    #[pyo3(signature = (vertices, faces, inside, restitution, friction))]
-    fn add_mesh(
-        &mut self,
-        vertices: PyReadonlyArray2<'_, f64>,
-        faces: PyReadonlyArray2<'_, i64>,
-        inside: bool,
-        restitution: Option<f64>,
-        friction: Option<f64>,
-    ) -> PyResult<usize> {
-        let world = self.inner.get();
-        let surface = Surface::new(restitution, friction).map_err(to_py)?;
-        let (v, f) = (vertices.as_array(), faces.as_array());
-        if v.ncols() != 3 || f.ncols() != 3 {
-            return Err(PyValueError::new_err(format!(
-                "vertices and faces must have 3 columns (x, y, z; three vertex indices), not {} and {}",
-                v.ncols(),
-                f.ncols()
-            )));
-        }
-        // Buffers sized by the user, allocated fallibly: a mesh too large is a MemoryError.
-        let mut verts = mesh_buffer(v.nrows(), f.nrows()).map_err(to_py)?;
-        verts.extend(v.rows().into_iter().map(|r| [r[0], r[1], r[2]]));
-        let tris = f.rows().into_iter().map(|r| [r[0], r[1], r[2]]);
-        let mesh = collide::mesh(verts, tris, inside, surface).map_err(to_py)?;
-        world.add_collider(mesh).map_err(to_py)
-    }
-
-    /// Makes the axes periodic with the cell of the box collider (wraps the positions).
-    fn set_periodic(&mut self, axes: [bool; 3]) -> PyResult<()> {
-        self.inner.get().set_periodic(axes).map_err(to_py)
-    }
-
-    #[getter]
-    fn periodic(&self) -> (bool, bool, bool) {
-        let [x, y, z] = self.inner.periodic();
-        (x, y, z)
-    }
-
-    /// Gives collider k a prescribed motion: steady (`velocity`, m/s; `angular_velocity`,
-    /// rad/s; about `pivot`, m), or keyframes (`times`, s; `translations`, m, K × 3;
-    /// `rotations`, unit quaternions w, x, y, z, K × 4; about `pivot`); all None: still.
-    #[pyo3(signature = (k, velocity=None, angular_velocity=None, pivot=None, times=None, translations=None, rotations=None, start=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn set_collider_motion(
-        &mut self,
-        k: usize,
-        velocity: Option<[f64; 3]>,
-        angular_velocity: Option<[f64; 3]>,
-        pivot: Option<[f64; 3]>,
-        times: Option<Vec<f64>>,
-        translations: Option<Vec<[f64; 3]>>,
-        rotations: Option<Vec<[f64; 4]>>,
-        start: Option<f64>,
-    ) -> PyResult<()> {
-        let world = self.inner.get();
-        let motion = collide::motion(velocity, angular_velocity, pivot, times, translations, rotations, start).map_err(to_py)?;
-        world.set_collider_motion(k, motion).map_err(to_py)
-    }
-
     /// The overlaps the last placement check accepted but that the collisions will push
     /// apart, as a sentence (count and deepest), once; None if there were none.
     fn take_placement_notice(&mut self) -> Option<String> {
         self.inner.take_placement_notice()
-    }
-
-    /// What the particles gave each collider over all steps (with `last`, in the last step):
-    /// {"momentum": (K, 3) N·s, "angular_momentum": (K, 3) N·m·s about the origin, "work":
-    /// (K,) J done by the collider on the particles, "normal" and "tangential": (K, 3) N·s,
-    /// the momentum's parts along and across the contacts' normals}.
-    #[pyo3(signature = (last = false))]
-    fn collider_books<'py>(&self, py: Python<'py>, last: bool) -> PyResult<Bound<'py, PyDict>> {
-        collide::books_dict(py, &self.inner.collider_books(last))
-    }
-
-    /// The force models' collider forces of the last step's Verlet pass, as rates (the keys
-    /// of `collider_books`, in N, N·m and W), which the next step's books start from; None
-    /// when none are kept (for a checkpoint).
-    fn wall_force_carry<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        self.inner.wall_force_carry().map(|b| collide::books_dict(py, &b)).transpose()
-    }
-
-    /// Sets what `wall_force_carry` gave (a checkpoint's).
-    fn restore_wall_force_carry(&mut self, carry: Bound<'_, PyDict>) -> PyResult<()> {
-        let carry = collide::books_from(&carry)?;
-        self.inner.restore_wall_force_carry(Some(carry));
-        Ok(())
-    }
-
-    /// The contacts now (the impulse model's: of the last step's end), as arrays, with their
-    /// points, forces and whether they slide.
-    fn contacts<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let world = self.inner.get();
-        let impulses = world
-            .collision_params()
-            .is_some_and(|p| p.model == kinema::world::ContactModel::Impulse);
-        let reports = world.contact_reports().map_err(to_py)?;
-        collide::contacts_dict(py, &reports, impulses)
-    }
-
-    /// Starts or stops recording begin and end of touch.
-    fn record_contact_events(&mut self, on: bool) -> PyResult<()> {
-        self.inner.record_contact_events(on).map_err(to_py)
-    }
-
-    /// The begin and end of touch events since the last call, taken out, as arrays.
-    fn contact_events<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        collide::touch_events_dict(py, &self.inner.take_contact_events())
-    }
-
-    /// {"last": ..., "total": ...} of the collision stages, or None without collisions.
-    fn collision_stats<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let Some((last, total)) = self.inner.collision_stats() else {
-            return Ok(None);
-        };
-        let out = PyDict::new(py);
-        out.set_item("last", collide::stats_dict(py, &last)?)?;
-        out.set_item("total", collide::stats_dict(py, &total)?)?;
-        Ok(Some(out))
     }
 
     /// Advances n steps; stops at the first failing one (the state before it is kept).
@@ -711,6 +153,7 @@ impl PyWorld {
     fn time(&self) -> f64 {
         self.inner.time()
     }
+
     /// Wall-clock seconds spent in each of the seed's four stages so far.
     fn stage_times<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let t = self.inner.stage_times();
@@ -724,60 +167,74 @@ impl PyWorld {
         }
         Ok(out)
     }
+
     /// How many times the engine sorted the particles along space (internal; for tests).
     #[getter]
     fn sorts(&self) -> u64 {
         self.inner.sorts()
     }
+
     /// Whether the engine holds the particles in its own order now (internal; for tests).
     #[getter]
     fn in_engine_order(&self) -> bool {
         self.inner.in_engine_order()
     }
+
     #[getter]
     fn steps(&self) -> u64 {
         self.inner.steps()
     }
+
     #[getter]
     fn nfev(&self) -> usize {
         self.inner.stats().nfev
     }
+
     #[getter]
     fn dt(&self) -> f64 {
         self.inner.params().dt
     }
+
     #[getter]
     fn dim(&self) -> usize {
         self.inner.params().dim
     }
+
     #[getter]
     fn method(&self) -> String {
         self.inner.params().method.name().to_string()
     }
+
     #[getter]
     fn len(&self) -> usize {
         self.inner.len()
     }
+
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         rows(py, &self.inner.in_user_order(|p| &p.x, 3))
     }
+
     #[getter]
     fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         rows(py, &self.inner.in_user_order(|p| &p.v, 3))
     }
+
     #[getter]
     fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.inner.in_user_order(|p| &p.mass, 1))
     }
+
     #[getter]
     fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
         PyArray1::from_slice(py, &self.inner.in_user_order(|p| &p.id, 1))
     }
+
     #[getter]
     fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.inner.in_user_order(|p| &p.radius, 1))
     }
+
     #[getter]
     fn inverse_masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         PyArray1::from_slice(py, &self.inner.in_user_order(|p| &p.inv_mass, 1))
@@ -831,6 +288,7 @@ impl PyWorld {
     fn set_spin(&mut self, on: bool) {
         self.inner.get().set_spin(on);
     }
+
     #[getter]
     fn spin(&self) -> bool {
         self.inner.has_spin()
