@@ -109,9 +109,10 @@ from ._cell import particle_types
 from ._checks import available_memory, number
 from ._files import TrajectoryFileError, frames_of, hdf5_file, os_errors_as_write_errors
 from ._h5md_checks import check_frames, edges_problem, fail, increase_problem, links_out
+from ._h5md_colliders import MESH_DATASETS, MOTION_DATASETS
 from ._h5md_layout import BY_FORCE, COLLIDER_OBSERVABLES, ELEMENTS, H5MD_VERSION, OBSERVABLES, PRESSURE_UNIT, import_h5py
 from ._hdf5_heaps import global_heap_problem
-from .h5md_reader import MESH_DATASETS, MOTION_DATASETS, LoadedTrajectory, read
+from .h5md_reader import LoadedTrajectory, read
 from .h5md_units import from_si, parse_unit, system_of
 
 __all__ = ["H5MD_VERSION", "LoadedTrajectory", "load_h5md", "parse_unit", "save_h5md"]
@@ -460,7 +461,7 @@ def _check_writable(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> Non
             )
     colliders = _colliders_of(tr)
     if colliders:
-        from .h5md_reader import collider_problem
+        from ._h5md_colliders import collider_problem
 
         problem = collider_problem([f"colliders[{k}]" for k in range(len(colliders))], colliders, fr.dim)
         if problem is not None:

@@ -2,7 +2,11 @@
 `LoadedTrajectory`, what the file holds in SI units, checking what it reads (through
 `kinema.io._h5md_checks`): shapes, types and the memory needed before any data, then the
 values. Besides the frames: the box (fixed or changing), per-particle masses, radii, ids,
-species and colours, the observables, kinema's parameters and colliders, and the springs."""
+species and colours, the observables, kinema's parameters and colliders, and the springs.
+
+The colliders are read and checked in `kinema.io._h5md_colliders` (`collider_problem`, which
+the writer checks with too, is importable from here as before), the springs and the contacts
+(pairs of particles by id) in `kinema.io._h5md_pairs`."""
 
 from __future__ import annotations
 
@@ -13,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..contact_record import FIELDS, ContactRecord, offsets_problem
+from ..contact_record import ContactRecord
 from ._checks import dtype_problem, number, shown
 from ._files import TrajectoryFileError
 from ._h5md_checks import (
@@ -36,7 +40,10 @@ from ._h5md_checks import (
     varying_ids,
     where,
 )
+from ._h5md_colliders import _read_colliders
+from ._h5md_colliders import collider_problem as collider_problem
 from ._h5md_layout import BY_FORCE, COLLIDER_OBSERVABLES, OBSERVABLES, PRESSURE_UNIT, import_h5py
+from ._h5md_pairs import _contact_datasets, _read_contacts, _read_springs
 from .h5md_units import LENGTH, MASS, TIME, parse_unit, to_si
 
 
@@ -116,135 +123,6 @@ class LoadedTrajectory:
     path: Path | None = None
 
 
-#: A mesh collider's arrays, datasets of its group (``save_h5md``), and their dtypes.
-MESH_DATASETS = {"vertices": "float64", "faces": "int64"}
-#: A moving collider's keyframe arrays, datasets of its ``motion`` group, and their shapes (K: keys).
-MOTION_DATASETS = {"times": ("K",), "translations": ("K", 3), "rotations": ("K", 4)}
-#: A motion group's attributes: 3-vectors (steady: velocity, angular_velocity; both kinds: pivot),
-#: and a steady motion's start (s), one number.
-MOTION_ATTRIBUTES = ("velocity", "angular_velocity", "pivot", "start")
-#: The collider types a file holds.
-COLLIDER_TYPES = ("plane", "box", "sphere", "mesh")
-
-
-def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
-    """The descriptions under /parameters/kinema/colliders, in index order, each checked by
-    the engine as `World.add` checks a collider (in a world of `dim` dimensions): the
-    attributes are numbers (a mesh's `inside` a bool), a mesh's `vertices` (V, 3) real
-    numbers and `faces` (F, 3) integers are datasets of its group."""
-    h5py = import_h5py()
-    group = params.get("colliders")
-    if not isinstance(group, h5py.Group):
-        return []
-    out = []
-    names = []
-    for name in sorted(group, key=lambda n: int(n) if n.isdigit() else -1):
-        g = group[name]
-        kind = g.attrs.get("type") if isinstance(g, h5py.Group) else None
-        kind = kind.decode() if isinstance(kind, bytes) else kind
-        if not name.isdigit() or not isinstance(g, h5py.Group) or not isinstance(kind, str) or kind not in COLLIDER_TYPES:
-            raise fail(
-                path, f"{g.name} is not a kinema collider (a group named by its index with type {', '.join(COLLIDER_TYPES[:-1])} or {COLLIDER_TYPES[-1]})"
-            )
-        d: dict[str, Any] = {"type": str(kind)}
-        for key, value in g.attrs.items():
-            if key == "type":
-                continue
-            a = np.asarray(value)
-            if key == "inside" and kind == "mesh":
-                if a.size != 1 or a.dtype.kind != "b":
-                    raise fail(path, f"attribute 'inside' ({g.name}) = {shown(value)} is not a bool")
-                d[key] = bool(a.reshape(()))
-                continue
-            if a.size == 0 or dtype_problem(a.dtype) is not None:
-                raise fail(path, f"attribute {key!r} ({g.name}) = {shown(value)} is not a number")
-            a = a.astype(np.float64)
-            d[key] = float(a) if a.ndim == 0 else a.tolist()
-        for key in g:
-            ds = g[key]
-            if key == "motion" and isinstance(ds, h5py.Group):
-                d["motion"] = _read_motion(path, ds)
-                continue
-            if kind != "mesh" or key not in MESH_DATASETS or not isinstance(ds, h5py.Dataset):
-                raise fail(
-                    path, f"{ds.name} is not part of a kinema collider (a mesh's group holds the datasets vertices and faces, any collider's a group motion)"
-                )
-            integer = MESH_DATASETS[key] == "int64"
-            if ds.shape is None or len(ds.shape) != 2 or ds.shape[1] != 3 or dtype_problem(ds.dtype, integer) is not None:
-                must = "integers" if integer else "real numbers"
-                raise fail(path, f"{ds.name} has shape {ds.shape} of {ds.dtype}; it must be (N, 3) {must}")
-            d[key] = np.asarray(ds[()], dtype=MESH_DATASETS[key]).tolist()
-        out.append(d)
-        names.append(g.name)
-    if out:
-        _check_colliders(path, names, out, dim)
-    return out
-
-
-def _read_motion(path: Path, g: Any) -> dict[str, Any]:
-    """A collider's `motion` group: 3-vector attributes (velocity, angular_velocity, pivot)
-    and keyframe datasets (times (K,), translations (K, 3), rotations (K, 4)), numbers of the
-    shapes said; the engine checks the rest (`collider_problem`)."""
-    h5py = import_h5py()
-    out: dict[str, Any] = {}
-    for key, value in g.attrs.items():
-        a = np.asarray(value)
-        if key not in MOTION_ATTRIBUTES or a.shape != (() if key == "start" else (3,)) or dtype_problem(a.dtype) is not None:
-            raise fail(
-                path,
-                f"attribute {key!r} ({g.name}) = {shown(value)} is not part of a motion "
-                f"(attributes {', '.join(MOTION_ATTRIBUTES[:3])}: 3 numbers each; start: one number, s)",
-            )
-        out[key] = float(a) if key == "start" else a.astype(np.float64).tolist()
-    for key in g:
-        ds = g[key]
-        shape = MOTION_DATASETS.get(key)
-        ok = shape is not None and isinstance(ds, h5py.Dataset) and ds.shape is not None and len(ds.shape) == len(shape)
-        if not (ok and all(w == "K" or w == n for n, w in zip(ds.shape, shape, strict=True)) and dtype_problem(ds.dtype) is None):
-            want = ", ".join(f"{k} {MOTION_DATASETS[k]}" for k in MOTION_DATASETS)
-            raise fail(path, f"{ds.name} is not part of a motion (its datasets are real numbers: {want}, K keys)")
-        out[key] = np.asarray(ds[()], dtype=np.float64).tolist()
-    return out
-
-
-def _check_colliders(path: Path, names: list[str], colliders: list[dict[str, Any]], dim: int) -> None:
-    """Refuses the first collider `collider_problem` finds wrong, named by its group."""
-    problem = collider_problem(names, colliders, dim)
-    if problem is not None:
-        raise fail(path, f"collider {problem}")
-
-
-def collider_problem(names: list[str], colliders: list[dict[str, Any]], dim: int) -> str | None:
-    """Adds each collider to an empty engine world of `dim` dimensions, as `World.add`
-    does: the engine's checks (finite values, a non-zero normal, hi > lo, 2 or 3 values,
-    restitution in [0, 1], ..., and a motion's: finite, times increasing, one key each, a box
-    that only translates, a 2D motion in the xy-plane); returns `"<name> (a plane): <the engine's message>"` for
-    the first it refuses, else `None`. The engine's own `World`, not `kinema.World`:
-    reading a file needs no world module (which imports `kinema.trajectory`, which imports
-    this). `save_h5md` checks what it writes with it."""
-    from .. import _core
-    from ..collider_descriptions import _KIND
-    from ..colliders import Box, Mesh, Plane, SphereObstacle
-
-    core = _core.World(dim, 1e-3, "verlet")
-    make = {"plane": Plane, "box": Box, "sphere": SphereObstacle, "mesh": Mesh}
-    for name, d in zip(names, colliders, strict=True):
-        needed = _KIND[d["type"]]
-        missing = [k for k in needed if k not in d]
-        if missing:
-            return f"{name} (a {d['type']}) has no {'dataset' if d['type'] == 'mesh' else 'attribute'} {missing[0]!r}"
-        flags = ("inside",) if d["type"] == "mesh" else ()
-        args = {k: d[k] for k in (*needed, *flags, "restitution", "friction") if k in d}
-        try:
-            k = make[d["type"]](**args)._attach(core)
-            if d.get("motion") is not None:
-                core.set_collider_motion(k, **d["motion"])
-        except (ValueError, TypeError) as e:
-            first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-            return f"{name} (a {d['type']}): {first}"
-    return None
-
-
 def _species_names(r: Any, obj: Any, index: np.ndarray) -> np.ndarray | None:
     """The species names of the particles: `names[index]` when the species element (or
     dataset) `obj` has a `names` attribute (kinema writes one), else `None` (H5MD's
@@ -284,104 +162,8 @@ def _refuse_triclinic(r: Reader, ds: Any, rows: np.ndarray, by_frame: bool) -> N
         raise r.fail(f"{where('box edges', ds)} is a triclinic box{at} (edge vectors not along the axes), which kinema does not support")
 
 
-def _read_springs(r: Reader, f: Any, p: Any, ids: np.ndarray) -> np.ndarray | None:
-    """The springs (S, 2) ids of `/connectivity/springs` (kinema's: H5MD's time-independent
-    list of pairs, whose `particles_group` is the particle group read), `None` without
-    them."""
-    h5py = import_h5py()
-    ds = f.get("connectivity/springs")
-    if not isinstance(ds, h5py.Dataset):
-        return None
-    ref = ds.attrs.get("particles_group")
-    if isinstance(ref, h5py.Reference) and ref and f[ref].name != p.name:
-        return None  # the springs of another particle group
-    s = r.numbers("springs", ds, integer=True)
-    if len(s) != 2 or s[1] != 2:
-        raise r.fail(f"{where('springs', ds)} has shape {s}; it must be (springs, 2), the ids of the two ends of each spring")
-    pairs = np.asarray(ds[()], dtype=np.int64)
-    unknown = np.setdiff1d(pairs, ids)
-    if unknown.size:
-        raise r.fail(f"{where('springs', ds)} names id {int(unknown[0])}, which is no particle's ({p.name}/id)")
-    return pairs
-
-
 TIME_INVERSE = (0, -1, 0)  # an angular velocity's dimension (rad/s)
 MOMENT_OF_INERTIA = (2, 0, 1)  # kg m2
-
-
-def _contact_datasets(r: Reader, f: Any, p: Any) -> dict[str, Any] | None:
-    """The datasets of `/contacts` (kinema's extension group: the contacts of each frame)
-    whose `particles_group` is the group read, with their units, checked before any data is
-    read: `offsets` (F + 1,) integers and one column per `FIELDS` name of as many rows as
-    the last offset (read later); `None` without them."""
-    h5py = import_h5py()
-    g = f.get("contacts")
-    if not isinstance(g, h5py.Group):
-        return None
-    ref = g.attrs.get("particles_group")
-    if isinstance(ref, h5py.Reference) and ref and f[ref].name != p.name:
-        return None  # the contacts of another particle group
-    out: dict[str, Any] = {}
-    for name in g:
-        ds = g[name]
-        if name in ("step", "time"):
-            continue
-        known = FIELDS.get(name)
-        if name != "offsets" and known is None:
-            raise r.fail(f"{ds.name} is not a column of kinema's contacts ({', '.join(['offsets', *FIELDS])})")
-        if not isinstance(ds, h5py.Dataset):
-            raise r.fail(f"{ds.name} is a group; it must be a dataset")
-        if known is not None and known.kind == "bool":
-            if ds.shape is None or ds.dtype.kind != "b":
-                raise r.fail(f"{where(name, ds)} holds {ds.dtype}; it must hold flags (bool), one per contact")
-            shape = tuple(ds.shape)
-        else:
-            shape = r.numbers(name, ds, integer=name == "offsets" or (known is not None and known.kind == "int"))
-        if known is not None and known.unit is not None:
-            out[("unit", name)] = r.unit(name, ds, parse_unit(known.unit)[1])
-        r.plan(name, ds, ds.size * 8)
-        out[name] = (ds, shape)
-    if "offsets" not in out:
-        raise r.fail(f"{g.name} has no offsets dataset (frame k's contacts are rows offsets[k] to offsets[k + 1])")
-    return out
-
-
-def _read_contacts(r: Reader, found: dict[str, Any], frames: int, ids: np.ndarray) -> ContactRecord:
-    """The contacts of `_contact_datasets`, read and checked: `offsets` one per frame and
-    one more, from 0, never decreasing; each column as many rows as the last offset, finite
-    or NaN (a column a frame did not have); `i` and `j` ids of the particles read (`j` -1:
-    a collider)."""
-    ds, shape = found["offsets"]
-    if shape != (frames + 1,):
-        raise r.fail(f"{where('offsets', ds)} has shape {shape}; it must be ({frames + 1},), one per frame and one more")
-    offsets = np.asarray(ds[()], dtype=np.int64)
-    problem = offsets_problem(offsets)
-    if problem is not None:
-        raise r.fail(f"{where('offsets', ds)} {problem}")
-    total = int(offsets[-1])
-    values = {}
-    for name, entry in found.items():
-        if name == "offsets" or isinstance(name, tuple):
-            continue
-        ds, shape = entry
-        if not shape or shape[0] != total or len(shape) > 2:
-            raise r.fail(f"{where(name, ds)} has shape {shape}; it must have {total} rows, one per contact ({where('offsets', found['offsets'][0])}[-1])")
-        a = ds[()]
-        if ("unit", name) in found:
-            a = to_si(a, found[("unit", name)])
-        if FIELDS[name].kind == "real" and np.isinf(a).any():
-            raise r.fail(f"{where(name, ds)} has an infinite value at row {int(np.argmax(np.isinf(a).reshape(len(a), -1).any(axis=1)))}")
-        values[name] = a
-    try:
-        record = ContactRecord(offsets, values)
-    except ValueError as e:
-        raise r.fail(f"{found['offsets'][0].parent.name}: {e}") from None
-    for name in ("i", "j"):
-        known = np.isin(record[name], ids) | ((record[name] == -1) if name == "j" else False)
-        if not known.all():
-            k = int(np.argmax(~known))
-            raise r.fail(f"{where(name, found[name][0])} names particle {int(record[name][k])} at row {k}, which is no particle's id")
-    return record
 
 
 # /observables read back: (name, attribute of the trajectory, a vector per frame)
