@@ -8,7 +8,8 @@ read and written through one object.
 - The modules that write, read and export a world (`kinema.checkpoint` and its readers
   `kinema._checkpoint_reader`, `_checkpoint_world`, `_checkpoint_run`; `kinema.scene.export`,
   `kinema.scene.build`), and those that read it for a step's checks,
-  add to it or run it (`kinema.first_step`, `kinema.emitter`, `kinema.runner`), use none of
+  add to it or run it (`kinema.first_step`, `kinema.emitter`, `kinema.runner` and its
+  `kinema._run_source`), use none of
   the World's private attributes (`world._core`, `world._death`, `world._push()`, ...) but
   its state accessor and the run loop a resumed run goes on with: `World._state()` and
   `World._restore(state)` (`kinema._state.WorldState`), `World._record`. (The recorder of
@@ -41,6 +42,7 @@ WORLD_READERS = (
     "first_step.py",
     "emitter.py",
     "runner.py",
+    "_run_source.py",  # (runner.py's: the run's source given to the world)
 )
 
 

@@ -10,6 +10,11 @@ Work limits: ``run``, ``view`` (of a scene) and ``render`` estimate their work b
 more than ``LIMIT_PARTICLE_STEPS`` particle-steps, ``LIMIT_PIXELS`` pixels or
 ``LIMIT_MEMORY`` bytes; more than ``MAX_STEPS`` steps are refused even with ``--force``
 (the limits and the work of running a scene are in kinema.runner).
+
+The app and most commands are here; what the commands share (one-line errors and warnings,
+``_fail`` and ``_guarded``; ``_load``, a trajectory with ``--units``; the help texts) is in
+``kinema._cli_common``, and ``kinema sweep`` and ``kinema analyze`` are in ``kinema._cli_sweep``
+and ``kinema._cli_analyze``, registered on the app below in the order the help lists them.
 """
 
 from __future__ import annotations
@@ -19,9 +24,11 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.markup import escape
 from rich.table import Table
 
+from ._cli_analyze import analyze
+from ._cli_common import _TRAJ_HELP, _UNITS_HELP, _fail, _guarded, _load
+from ._cli_sweep import sweep
 from .runner import (
     FRAME_BYTES,
     RENDER_BYTES,
@@ -35,7 +42,6 @@ from .runner import (
     _scene_work,
     _size,
     console,
-    err_console,
     save_figure_atomically,
     simulate_scene,
 )
@@ -64,12 +70,6 @@ def _options(
     version: Annotated[bool | None, typer.Option("--version", "-V", callback=_print_version, is_eager=True, help="Print the version and exit.")] = None,
 ) -> None:
     """kinema: particle systems that move by honest numerical methods."""
-
-
-def _fail(message: str, code: int = 2) -> None:
-    # (escaped: a message quotes paths and values, whose brackets are not rich markup)
-    err_console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
-    raise typer.Exit(code)
 
 
 def _split_methods(methods: str) -> list[str]:
@@ -165,104 +165,6 @@ def demo(
         run_demo(out, console)
     except OutputError as e:  # a picture that cannot be written
         _fail(str(e))
-
-
-def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    """``warnings.showwarning`` of the commands: a warning is one line ``warning: ...`` on
-    stderr, as ``kinema run`` says its own, without Python's file, line and source."""
-    err_console.print(f"[yellow]warning:[/] {escape(str(message))}", highlight=False, soft_wrap=True)
-
-
-def _guarded(fn):
-    """Run a command body, turning known failures into one line and an exit code, and each
-    warning into one line (``_one_line_warning``)."""
-    import functools
-
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        import warnings
-
-        with warnings.catch_warnings():
-            warnings.showwarning = _one_line_warning
-            return _guarded_body(fn, args, kwargs)
-
-    return wrapper
-
-
-def _guarded_body(fn, args, kwargs):
-    """Runs ``fn``, turning known failures into one line and an exit code."""
-    import kinema
-    from kinema.scene import SceneError
-
-    try:
-        return fn(*args, **kwargs)
-    except typer.Exit:
-        raise
-    except kinema.SimulationDiverged as e:
-        _fail(str(e) if "diverged" in str(e) else f"the simulation diverged: {e}", code=1)
-    except SceneError as e:  # one line per problem
-        for line in str(e).splitlines():
-            err_console.print(f"[bold red]error:[/] {escape(line)}", highlight=False, soft_wrap=True)
-        raise typer.Exit(2) from None
-    except ImportError as e:  # an optional package a format needs (usd-core): how to get it
-        _fail(str(e).strip().splitlines()[0])
-    except (ValueError, OSError) as e:  # TrajectoryFileError is a ValueError
-        text = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-        if isinstance(e, OSError) and e.filename:
-            text = f"cannot write {e.filename}: {e.strerror}"
-        _fail(text)
-    except KeyboardInterrupt:
-        _fail("interrupted; nothing was written", code=130)
-    except MemoryError:
-        _fail("out of memory: the work is too large for this machine; nothing was written")
-    except Exception as e:
-        if os.environ.get("KINEMA_DEBUG"):
-            raise
-        _fail(f"unexpected {type(e).__name__}: {e} (set KINEMA_DEBUG=1 for the traceback)", code=1)
-
-
-_UNITS_HELP = (
-    "Units of a file that does not say them (a LAMMPS dump or data file without its units, a HOOMD GSD file, an XYZ file not in ASE's units): "
-    "real, metal, si, cgs, electron, micro, nano (LAMMPS's styles), ase, or length=M,time=S,mass=KG (the file's units in SI)."
-)
-_TRAJ_HELP = (
-    "A trajectory file: H5MD (.h5), extended XYZ (.xyz), GSD (.gsd), a LAMMPS dump (.lammpstrj) or data file (.data), "
-    "a USD stage's points (.usd, .usdc, .usda, .usdz), or kinema's CSV, VTK (.pvd) or PLY series export."
-)
-
-
-def _load(path: Path, units: str | None):
-    """The trajectory in ``path``, any format kinema reads (``Trajectory.load``), with the
-    ``--units`` given: a name, or length=M,time=S,mass=KG."""
-    from .io import UnitWarning
-    from .trajectory import Trajectory
-
-    given: str | dict[str, float] | None = units
-    if units is not None and "=" in units:
-        given = {}
-        for item in units.split(","):
-            key, _, value = item.partition("=")
-            try:
-                given[key.strip()] = float(value)
-            except ValueError:
-                raise ValueError(f"--units {units!r}: {item!r} is invalid: give a name or length=M,time=S,mass=KG with numbers") from None
-    import warnings
-
-    try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", UnitWarning)
-            traj = Trajectory.load(path, units=given)
-        for w in caught:  # a UnitWarning (numbers taken in units the file does not state): one line, as runner.py says its warnings
-            if issubclass(w.category, UnitWarning):
-                err_console.print(f"[yellow]warning:[/] {escape(str(w.message))} (--units)", highlight=False, soft_wrap=True)
-            else:
-                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-        return traj
-    except ValueError as e:
-        text = str(e)
-        if text.startswith("units"):  # the units refused: said of the option
-            raise ValueError(f"--units {units!r}: {text.split(' is invalid: ', 1)[1] if ' is invalid: ' in text else text.split(': ', 1)[-1]}") from None
-        raise
 
 
 @app.command(short_help="Simulate a scene: trajectory (H5MD), video, energy plot.")
@@ -448,196 +350,9 @@ def export(
     console.print("wrote " + " and ".join(main), highlight=False, soft_wrap=True)
 
 
-@app.command(short_help="Run a parameter sweep or ensemble of a scene on Dask.")
-@_guarded
-def sweep(
-    scene: Annotated[Path, typer.Argument(help="Scene file (.toml): the base of every member.")],
-    vary: Annotated[
-        list[str] | None,
-        typer.Option("--vary", metavar="KEY=V1,V2,...", help="A scene key path and its values (TOML values); repeat for a grid."),
-    ] = None,
-    seeds: Annotated[int | None, typer.Option("--seeds", metavar="N", help="Members per point of the grid, each with its own seed (0 … N−1).", min=1)] = None,
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Sweep folder (default: out/<scene name>_sweep); rerun into it to resume.")] = None,
-    scheduler: Annotated[str | None, typer.Option("--scheduler", help="A Dask scheduler's address (tcp://host:8786); default: worker processes here.")] = None,
-    workers: Annotated[int | None, typer.Option("--workers", metavar="K", help="Local worker processes (default: the cores).", min=1)] = None,
-    duration: Annotated[float | None, typer.Option(help="Simulated time of each member, s (default: the scene's).")] = None,
-    checkpoint_every: Annotated[
-        float | None, typer.Option("--checkpoint-every", help="Each member writes a checkpoint this often (simulated s); a rerun resumes from it.")
-    ] = None,
-    measure: Annotated[
-        str | None,
-        typer.Option(
-            "--measure",
-            metavar="MODULE:FUNCTION",
-            help="A function measure(trajectory, world) -> dict whose values join each member's row: a module importable from here (the current folder first) or FILE.py.",
-        ),
-    ] = None,
-) -> None:
-    """Run a parameter sweep or ensemble on Dask: every combination of the --vary values ×
-    --seeds, each member a scene with those keys set (validated first), run, saved (H5MD)
-    and measured (and by --measure's function, as sweep(measure=...) in Python). Writes
-    summary.csv (one row per member), timings.csv and summary.png into the folder; members
-    already finished there are skipped (resume). See docs/sweeps.md."""
-    from .sweeps import default_folder, load_measure, parse_values
-    from .sweeps import sweep as run_sweep
-
-    grid = {}
-    for item in vary or []:
-        key, eq, values = item.partition("=")
-        if not eq or not key.strip():
-            raise ValueError(f"--vary {item!r}: use KEY=V1,V2,... (e.g. collisions.restitution=0.5,0.7,0.9)")
-        if key.strip() in grid:
-            raise ValueError(f"--vary {item!r}: the key {key.strip()} is varied twice; give all its values in one --vary")
-        try:
-            grid[key.strip()] = parse_values(values)
-        except ValueError as e:
-            raise ValueError(f"--vary {item!r}: {e}") from None
-    folder = out if out is not None else default_folder(scene)
-    fn = None if measure is None else load_measure(measure)
-    try:
-        result = run_sweep(
-            scene, grid, seeds=seeds, measure=fn, client=scheduler, out=folder, duration=duration, workers=workers, checkpoint_every=checkpoint_every
-        )
-    except KeyboardInterrupt:  # what was written is there: say so, and how to go on
-        _fail(_sweep_interrupted(scene, grid, seeds, duration, fn, folder), code=130)
-    failed = result.failed
-    console.print(f"{len(result.rows)} members, {len(failed)} failed; wrote {folder / 'summary.csv'}", highlight=False, soft_wrap=True)
-    for row in failed:  # one line each (its traceback, if any, in members/<name>/error.txt)
-        err_console.print(f"[bold red]failed:[/] {escape(row['member'])}: {escape(str(row['error']))}", highlight=False, soft_wrap=True)
-    if failed:
-        raise typer.Exit(1)
-
-
-def _sweep_interrupted(scene, grid, seeds, duration, measure, folder: Path) -> str:
-    """The line ``kinema sweep`` says when Ctrl-C stops it: the members finished in
-    ``folder`` (each a result.json of its key), and that a rerun goes on with the others."""
-    from .sweeps import finished_members, member_key, members
-
-    try:
-        every = members(scene, grid, seeds)
-        done = finished_members(folder, every, {m.index: member_key(m, duration, measure) for m in every})
-    except Exception:  # (the scene changed meanwhile, the folder went away)
-        return f"interrupted; the members finished before are in {folder / 'members'}; run the sweep again into {folder} to go on"
-    if not done:
-        return f"interrupted; no member had finished: nothing was written in {folder / 'members'}"
-    names = ", ".join(m.name for m in done[:5]) + (f" and {len(done) - 5} more" if len(done) > 5 else "")
-    return (
-        f"interrupted; {len(done)} of {len(every)} members were written in {folder / 'members'} ({names}); "
-        f"run the sweep again into {folder} to go on with the others (summary.csv is written when all are done)"
-    )
-
-
-@app.command(short_help="Measure a recorded packing: contacts, fabric, forces, profile.")
-@_guarded
-def analyze(
-    traj: Annotated[Path, typer.Argument(help="A trajectory file (H5MD from kinema run --record-contacts, or any file kinema reads for repose and profile).")],
-    frame: Annotated[str, typer.Option("--frame", metavar="N|-1|all", help="The frame: its number, -1 the last (default), or all (a time series too).")] = "-1",
-    measure: Annotated[
-        str, typer.Option("--measure", metavar="M1,M2,...", help="Comma-separated: coordination, fabric, forces, repose, profile (default: all).")
-    ] = "coordination,fabric,forces,repose,profile",
-    axis: Annotated[str | None, typer.Option("--axis", help="The height axis, x, y or z (default: z in 3D, y in 2D).")] = None,
-    bins: Annotated[int, typer.Option("--bins", metavar="N", help="The profile's slabs and the force histogram's bins.")] = 20,
-    cross_section: Annotated[
-        float | None,
-        typer.Option(
-            "--cross-section", metavar="A", help="The slabs' area across the axis, m² (m in 2D); default: the periodic cell's, a box's, or the pile's."
-        ),
-    ] = None,
-    json_out: Annotated[Path | None, typer.Option("--json", metavar="OUT.json", help="Also write the measures as standard JSON (NaN as null).")] = None,
-    units: Annotated[str | None, typer.Option("--units", help=_UNITS_HELP)] = None,
-) -> None:
-    """Measure a recorded packing at a frame (docs/analysis.md): the coordination number
-    (rattlers out, walls counted), the fabric tensor, the normal-force distribution, the
-    angle of repose, and the coarse-grained profile over height (density, solid fraction,
-    velocity, kinetic and contact stress, in --bins slabs). coordination, fabric and forces
-    need the contacts (kinema run --record-contacts, [output] contacts = true or an
-    [analysis] table). --frame all adds their time series and the floor's pressure.
-    --json writes the same numbers as a scene's [analysis] table writes to analysis.json."""
-    import math
-
-    from .analysis import report
-
-    names = report.parse_measures(measure, "--measure")
-    if axis is not None and axis not in report.AXES:
-        raise ValueError(f"--axis {axis!r}: use x, y or z")
-    if not 1 <= bins <= 100_000:
-        raise ValueError(f"--bins {bins}: give a number of slabs and histogram bins from 1 to 100000")
-    if cross_section is not None and not (math.isfinite(cross_section) and cross_section > 0):
-        raise ValueError(f"--cross-section {cross_section}: give the slabs' area across the axis, a finite number > 0 (m², m in 2D)")
-    if json_out is not None:
-        if json_out.is_dir():
-            raise ValueError(f"--json {json_out}: is a folder; give a file name such as {json_out / 'analysis.json'}")
-        if not json_out.parent.is_dir() if str(json_out.parent) else False:
-            raise ValueError(f"--json {json_out}: the folder {json_out.parent} does not exist")
-    t = _load(traj, units)
-    k = report.frame_index(t, frame, "--frame")
-    report.axis_index(axis, int(t.dim or 3), "--axis")
-    report.needs_contacts(t, names, "--measure", what=str(traj))
-    doc = report.analyze(t, measures=names, frame=k, axis=axis, bins=bins, cross_section=cross_section, source=traj.name)
-    table = Table(title=f"{traj}: frame {doc['frame']}, t = {doc['time']:g} s, {_count(doc['particles'], 'particle')}")
-    table.add_column("measure", no_wrap=True)
-    table.add_column("value")
-    for name, words in report.summary(doc):
-        table.add_row(name, escape(words))
-    console.print(table)
-    profile = doc["measures"].get("profile")
-    if profile is not None and "undefined" not in profile:
-        console.print(_profile_table(doc), highlight=False)
-    if "series" in doc:
-        console.print(_series_table(doc), highlight=False)
-    if json_out is not None:
-        from .io._files import FileWriteError
-
-        try:
-            path = report.write_json(doc, json_out)
-        except FileWriteError as e:
-            raise ValueError(f"--json {json_out}: {e}") from None
-        console.print(f"wrote {path}", highlight=False, soft_wrap=True)
-
-
-def _series_table(doc: dict) -> Table:
-    """The time series of ``--frame all``, one row per frame (n/a: undefined there)."""
-    series = doc["series"]
-    heads = {
-        "time": "t (s)",
-        "particles": "particles",
-        "contacts": "contacts",
-        "coordination": "Z",
-        "coordination_all": "2C/N",
-        "anisotropy": "anisotropy",
-        "mean_force": "<f_n> (N)",
-        "angle": "repose (°)",
-        "base_pressure": "base pressure (Pa)",
-    }
-    columns = [k for k in heads if isinstance(series.get(k), list)]
-    table = Table(title="over time" + ("" if isinstance(series["base_pressure"], list) else f" (base pressure: {series['base_pressure']['undefined']})"))
-    for k in columns:
-        table.add_column(heads[k], justify="right")
-    for row in zip(*(series[k] for k in columns), strict=True):
-        table.add_row(*("n/a" if v is None else str(v) if isinstance(v, int) else format(v, ".4g") for v in row))
-    return table
-
-
-def _profile_table(doc: dict) -> Table:
-    """The profile's slabs, one row each: height, density, solid fraction, the velocity and
-    the stresses along the axis (None: n/a)."""
-    from .analysis import report
-
-    p, a = doc["measures"]["profile"], report.AXES.index(doc["axis"])
-    x = doc["axis"]
-    table = Table(title=f"profile over {x} ({len(p['center'])} slabs, cross-section {doc['cross_section']:.4g}, {doc['cross_section_from']})")
-    for col in (f"{x} (m)", "density (kg/m³)", "solid fraction", f"v_{x} (m/s)", f"σ_{x}{x} kinetic (Pa)", f"σ_{x}{x} contact (Pa)"):
-        table.add_column(col, justify="right")
-
-    def cell(v, spec=".4g"):
-        return "n/a" if v is None else format(v, spec)
-
-    for k, z in enumerate(p["center"]):
-        vel = None if p["velocity"] is None or p["velocity"][k][a] is None else p["velocity"][k][a]
-        kin = None if p["kinetic_stress"] is None else p["kinetic_stress"][k][a][a]
-        con = None if p["contact_stress"] is None else p["contact_stress"][k][a][a]
-        table.add_row(cell(z), cell(p["density"][k]), cell(p["solid_fraction"][k], ".4f"), cell(vel), cell(kin), cell(con))
-    return table
+# (defined in their own modules, each given to @_guarded there: registered here, in the help's order)
+app.command(short_help="Run a parameter sweep or ensemble of a scene on Dask.")(sweep)
+app.command(short_help="Measure a recorded packing: contacts, fabric, forces, profile.")(analyze)
 
 
 @app.command(short_help="Play a trajectory or a scene in the browser (three.js).")

@@ -8,6 +8,10 @@ Work limits: ``run``, ``view`` (of a scene) and ``render`` estimate their work b
 (particles × steps, video frames × pixels, memory) and refuse, unless given ``--force``,
 more than ``LIMIT_PARTICLE_STEPS`` particle-steps, ``LIMIT_PIXELS`` pixels or
 ``LIMIT_MEMORY`` bytes; more than ``MAX_STEPS`` steps are refused even with ``--force``.
+
+The output folder's checks, its staging folders and contact_events.csv are in
+``kinema._run_outputs``; the scene a run records and the check that --resume goes on with the
+same one (``scene_digest``, importable from here too) in ``kinema._run_source``.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ from __future__ import annotations
 import math
 import os
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +28,9 @@ from rich.console import Console
 from rich.markup import escape
 
 from . import _core
+from ._run_outputs import _contact_events_csv, _outdir, _refuse_special_outputs, _remove_checkpoints, _remove_stale_stages, _stage_prefix, _writable_file
+from ._run_source import _run_source, _same_run
+from ._run_source import scene_digest as scene_digest
 from .frames import MAX_WORK
 from .frames import plan as frames_plan
 
@@ -154,44 +162,6 @@ def _scene_work(scene: Any, path: Path, seconds: float, duration_key: str, video
     estimate += f" and about {_size(memory)} of memory"
     _over_limits(str(path), estimate, particle_steps, pixels, memory, force)
     return f"{particle_steps:.1e} particle-steps" + (f", {pixels:.1e} pixels of video" if pixels else "") + f", about {_size(memory)} of memory"
-
-
-def scene_digest(scene: Any) -> str:
-    """The hash (SHA-256, hex) of a scene's content: the scene as kinema writes it
-    (``Scene.to_toml_string``), whatever the file's layout, comments or name."""
-    import hashlib
-
-    try:
-        text = scene.to_toml_string()
-    except (TypeError, ValueError):  # (a value TOML cannot write: the scene's data as Python says it)
-        text = repr(scene.to_dict())
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
-def _same_run(plan: dict, ckpt: Path, path: Path, scene: Any, duration: float | None) -> None:
-    """Refuse (``ValueError``) to resume from ``ckpt`` a run of another scene than ``scene``
-    (read from ``path``; by content: ``scene_digest``) or of another duration than the
-    ``--duration`` given. A checkpoint of a run started in Python says no scene file: only
-    its duration is checked."""
-    if plan.get("scene_sha256") is not None and plan["scene_sha256"] != scene_digest(scene):
-        raise ValueError(
-            f"--resume: {ckpt} was written by a run of the scene {plan.get('scene_file') or '(unnamed)'} as it was then, "
-            f"and {path} differs from it; run {path} without --resume to start it afresh"
-        )
-    if duration is not None and duration != plan["duration"]:
-        raise ValueError(
-            f"--resume: --duration {duration:g} s differs from the {plan['duration']:g} s of the run that wrote {ckpt}; "
-            f"give --duration {plan['duration']:g} or none to resume it, or run without --resume to start afresh"
-        )
-
-
-def _run_source(world: Any, source: dict[str, str]) -> None:
-    """Gives the world the scene file its run was started from and its scene's hash
-    (``scene_file``, ``scene_sha256``: its state's ``run_source``), written with its
-    checkpoints: ``--resume`` refuses a checkpoint of another scene."""
-    state = world._state()
-    state.run_source = source
-    world._restore(state)
 
 
 def _resume_work(ckpt: Path, scene: Any, video: bool, force: bool, path: Path | None = None, duration: float | None = None) -> tuple[str, dict]:
@@ -335,42 +305,6 @@ def _energy_plot(traj, out: Path) -> Path:
         plt.close(fig)
 
 
-def _refuse_special_outputs(outdir: Path, names: list[str]) -> None:
-    """Before any work: each output the run will move into ``outdir`` may replace only a
-    regular file (a folder, a device, a FIFO or a socket of that name is refused, untouched)."""
-    from .io._files import refuse_special_target
-
-    for name in names:
-        if (outdir / name).is_dir():
-            raise ValueError(f"-o {outdir}: {name} there is a folder; the run writes a file of that name")
-        refuse_special_target(outdir / name)
-
-
-def _writable_file(path: Path, option: str) -> None:
-    """Refuses (ValueError naming ``option``) a ``path`` that is a folder or whose folder
-    cannot be made or written; makes the folder."""
-    if path.is_dir():
-        raise ValueError(f"{option} {path}: is a folder; give a file name (e.g. {path / 'final.ckpt'})")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise ValueError(f"{option} {path}: cannot create its folder ({e.strerror})") from None
-    if not os.access(path.parent, os.W_OK | os.X_OK):
-        raise ValueError(f"{option} {path}: its folder is not writable")
-
-
-def _outdir(out: Path) -> Path:
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"-o {out}: exists and is not a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise ValueError(f"-o {out}: cannot create the folder ({e.strerror})") from None
-    if not os.access(out, os.W_OK | os.X_OK):
-        raise ValueError(f"-o {out}: the folder is not writable")
-    return out
-
-
 def simulate_scene(
     scene: Path,
     outdir: Path,
@@ -399,10 +333,63 @@ def simulate_scene(
     (``World.run(record_contacts=True)``; a resumed run keeps what its checkpoint says).
     A scene's ``[analysis]`` table: its measures of the trajectory (``kinema.analysis.report``)
     printed and written as analysis.json.
-    Returns the trajectory and the paths written."""
-    import shutil
-    import warnings
+    Returns the trajectory and the paths written.
 
+    In stages: the run made ready (``_prepared``: checked, its work estimated, the world built
+    or resumed, the folder made), said (``_announce``), simulated (``_simulate``), its books
+    said, and its files written (``_write_outputs``)."""
+    run = _prepared(scene, outdir, duration, no_video, force, checkpoint_every, resume, keep_checkpoint)
+    frames = _announce(run)
+    if checkpoint_every is not None and not (np.isfinite(checkpoint_every) and checkpoint_every > 0):
+        raise ValueError(f"--checkpoint-every {checkpoint_every}: give a finite number of simulated seconds > 0")
+    traj = _simulate(run, frames, checkpoint_every, record_contacts)
+    world = run.world
+    stats = world.collision_stats()
+    if stats is not None:
+        total = stats["total"]
+        console.print(f"{_counted(world.collisions, total['impacts'])}, {total['energy_lost']:.4g} J taken by the collisions", highlight=False)
+    for k, st in enumerate(world.emitter_stats()):
+        console.print(_emitter_summary(k, st), highlight=False, soft_wrap=True)
+    written = _write_outputs(run, traj)
+    if keep_checkpoint is not None:
+        from .checkpoint import save_checkpoint
+
+        written.append(save_checkpoint(world, keep_checkpoint))
+    # The run is whole, its files written: no checkpoint of this folder may outlive it (one
+    # left by an older run, even of another scene, would have --resume replace these files).
+    _remove_checkpoints(run.outdir, keep=keep_checkpoint)
+    for path in written:
+        console.print(f"wrote {path}", highlight=False, soft_wrap=True)
+    return traj, written
+
+
+@dataclass
+class _Run:
+    """A run of `simulate_scene` made ready (`_prepared`): its scene file and `sc`, the
+    simulated `seconds`, the `video` suffix (or False), whether contact `events` are recorded,
+    the checkpoint `ckpt` of its folder `outdir`, the work `estimate`, and the world, built or
+    (`resume`) read from the checkpoint with its `plan` and `progress`."""
+
+    scene: Path
+    sc: Any
+    world: Any
+    seconds: float
+    video: Any
+    events: bool
+    ckpt: Path
+    outdir: Path
+    estimate: str
+    resume: bool = False
+    plan: dict | None = None
+    progress: dict | None = None
+
+
+def _prepared(
+    scene: Path, outdir: Path, duration: float | None, no_video: bool, force: bool, checkpoint_every: float | None, resume: bool, keep_checkpoint: Path | None
+) -> _Run:
+    """The scene read and checked, its work estimated (refused over the limits unless
+    `force`), the world built (or read from the checkpoint to resume), the output folder made
+    with nothing in it the run could not replace, and the stale staging folders removed."""
     from .scene import Scene
 
     sc = Scene.from_toml(scene)
@@ -419,6 +406,7 @@ def simulate_scene(
     ckpt = outdir / "checkpoint.ckpt"
     if keep_checkpoint is not None:  # checked before hours of work, not after
         _writable_file(keep_checkpoint, "--keep-checkpoint")
+    plan = progress = None
     if resume:  # the checkpoint's remaining work, estimated and refused as a fresh run's, then all of it checked
         if not ckpt.is_file():
             raise ValueError(f"--resume: there is no checkpoint to resume in {outdir} ({ckpt.name}; a run with --checkpoint-every writes it)")
@@ -447,11 +435,19 @@ def simulate_scene(
         except ValueError as e:
             raise ValueError(f"[output] contact_events = true: {e}") from None
     _remove_stale_stages(outdir)
-    fps = sc.world.fps
-    if resume:
+    return _Run(scene, sc, world, seconds, video, events, ckpt, outdir, estimate, resume, plan, progress)
+
+
+def _announce(run: _Run) -> int | None:
+    """The run said in one line (and a note on its frames where they do not divide the steps);
+    returns the number of frames after t = 0 of a fresh run (None when it resumes)."""
+    world, scene, seconds, fps = run.world, run.scene, run.seconds, run.sc.world.fps
+    frames = None
+    if run.resume:
+        plan = run.plan
         console.print(
-            f"{ckpt}: resuming {scene} at t = {plan['time']:g} s, frame {plan['frames_done'] + 1:,} of {plan['frames_total'] + 1:,}: "
-            f"{_count(len(world), 'particle')}, dim {world.dim}, {world.method}, dt = {world.dt:g} s; work: {estimate}",
+            f"{run.ckpt}: resuming {scene} at t = {plan['time']:g} s, frame {plan['frames_done'] + 1:,} of {plan['frames_total'] + 1:,}: "
+            f"{_count(len(world), 'particle')}, dim {world.dim}, {world.method}, dt = {world.dt:g} s; work: {run.estimate}",
             highlight=False,
             soft_wrap=True,
         )
@@ -459,39 +455,51 @@ def simulate_scene(
         frames = int(_frames_and_steps(seconds, world.dt, fps)[0])
         console.print(
             f"{scene}: {_count(len(world), 'particle')}, dim {world.dim}, {world.method}, dt = {world.dt:g} s, {seconds:g} s, "
-            f"{_count(frames + 1, 'frame')}; work: {estimate}",
+            f"{_count(frames + 1, 'frame')}; work: {run.estimate}",
             highlight=False,
             soft_wrap=True,
         )
     note = frames_plan(seconds, world.dt, fps).note()
     if note is not None:
         console.print(f"note: {note}", highlight=False, soft_wrap=True)
-    if checkpoint_every is not None and not (np.isfinite(checkpoint_every) and checkpoint_every > 0):
-        raise ValueError(f"--checkpoint-every {checkpoint_every}: give a finite number of simulated seconds > 0")
+    return frames
+
+
+def _simulate(run: _Run, frames: int | None, checkpoint_every: float | None, record_contacts: bool) -> Any:
+    """The simulation with its progress bar (resumed from the checkpoint, or from t = 0,
+    checkpointed every `checkpoint_every` s when asked); each warning said as one line after
+    it, before an error it explains."""
+    import warnings
+
+    world, progress = run.world, run.progress
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             with _progress() as bar:
-                if resume:
+                if run.resume:
                     done, total = progress["frames_done"], progress["frames_total"]
                     task = bar.add_task("simulating (resumed)", total=total + 1, completed=done + 1)
-                    traj = world._record(progress, lambda _w: bar.advance(task), ckpt)  # (kinema.checkpoint.resume_run's loop)
+                    traj = world._record(progress, lambda _w: bar.advance(task), run.ckpt)  # (kinema.checkpoint.resume_run's loop)
                 else:
                     task = bar.add_task("simulating", total=frames + 1, completed=1)  # the frame at t = 0 is recorded first
-                    saving = {"checkpoint": ckpt, "checkpoint_every": checkpoint_every} if checkpoint_every is not None else {}
-                    contacts = record_contacts or sc.output.contacts
-                    traj = world.run(seconds, fps=fps, callback=lambda _w: bar.advance(task), max_work=None, record_contacts=contacts, **saving)
+                    saving = {"checkpoint": run.ckpt, "checkpoint_every": checkpoint_every} if checkpoint_every is not None else {}
+                    contacts = record_contacts or run.sc.output.contacts
+                    traj = world.run(
+                        run.seconds, fps=run.sc.world.fps, callback=lambda _w: bar.advance(task), max_work=None, record_contacts=contacts, **saving
+                    )
         finally:  # a StabilityWarning explains a divergence: show it before the error
             for w in caught:
                 err_console.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
-    stats = world.collision_stats()
-    if stats is not None:
-        total = stats["total"]
-        console.print(f"{_counted(world.collisions, total['impacts'])}, {total['energy_lost']:.4g} J taken by the collisions", highlight=False)
-    for k, st in enumerate(world.emitter_stats()):
-        console.print(_emitter_summary(k, st), highlight=False, soft_wrap=True)
-    # Everything is written in a hidden folder inside OUTDIR and moved into place at the end,
-    # so a failure leaves no file half-written and none of this run's files at all.
+    return traj
+
+
+def _write_outputs(run: _Run, traj: Any) -> list[Path]:
+    """The files the scene's [output] (and [analysis]) ask for, written into a hidden folder
+    inside the output folder and moved into place at the end, so that a failure leaves no
+    file half-written and none of this run's files at all; returns their paths."""
+    import shutil
+
+    sc, scene, world, video, outdir = run.sc, run.scene, run.world, run.video, run.outdir
     stage = Path(tempfile.mkdtemp(prefix=_stage_prefix(), dir=outdir))
     written: list[Path] = []
     try:
@@ -503,12 +511,12 @@ def simulate_scene(
             opts = sc.render.model_dump(exclude={"fps", "camera"})
             opts["camera"] = _camera(sc.render.camera)
             opts["attractors"] = _attractors(world)
-            _render_video(traj, stage / f"{scene.stem}.{video}", opts, sc.render.fps, "rendering", scene_fps=fps)
+            _render_video(traj, stage / f"{scene.stem}.{video}", opts, sc.render.fps, "rendering", scene_fps=sc.world.fps)
             names.append(f"{scene.stem}.{video}")
         if sc.output.plot:
             _energy_plot(traj, stage / "energy.png")
             names.append("energy.png")
-        if events:
+        if run.events:
             _contact_events_csv(world.contact_events(), stage / "contact_events.csv")
             names.append("contact_events.csv")
         if sc.analysis is not None:
@@ -522,16 +530,7 @@ def simulate_scene(
             written.append(outdir / name)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
-    if keep_checkpoint is not None:
-        from .checkpoint import save_checkpoint
-
-        written.append(save_checkpoint(world, keep_checkpoint))
-    # The run is whole, its files written: no checkpoint of this folder may outlive it (one
-    # left by an older run, even of another scene, would have --resume replace these files).
-    _remove_checkpoints(outdir, keep=keep_checkpoint)
-    for path in written:
-        console.print(f"wrote {path}", highlight=False, soft_wrap=True)
-    return traj, written
+    return written
 
 
 def _analysis_json(traj, table, out: Path, source: str | None) -> Path:
@@ -551,50 +550,6 @@ def _analysis_json(traj, table, out: Path, source: str | None) -> Path:
     for name, words in report.summary(doc):
         console.print(f"analysis: {name}: {words}", highlight=False, soft_wrap=True, markup=False)
     return report.write_json(doc, out)
-
-
-def _contact_events_csv(events: dict, out: Path) -> Path:
-    """The begin and end of touch events (``World.contact_events``) as a CSV file with a
-    header: time (s, 17 significant digits), begin (1 or 0), i and j (particle ids, j = −1
-    against a collider), collider (its index, −1 between particles), impulse (N·s)."""
-    import csv
-
-    with open(out, "w", newline="") as f:
-        rows = csv.writer(f)
-        rows.writerow(["time", "begin", "i", "j", "collider", "impulse"])
-        columns = (events[k] for k in ("time", "begin", "i", "j", "collider", "impulse"))
-        for t, b, i, j, k, p in zip(*columns, strict=True):
-            rows.writerow([repr(float(t)), int(b), int(i), int(j), int(k), repr(float(p))])
-    return out
-
-
-# A run writes into a hidden staging folder .kinema-run.<host>-<pid>.<random> in its output
-# folder; a run that is killed (kill -9, power off) leaves it behind, and the next run into the
-# folder removes it once the process that made it is gone.
-def _stage_prefix() -> str:
-    from .io._files import owner_tag
-
-    return f".kinema-run.{owner_tag()}."
-
-
-def _remove_stale_stages(outdir: Path) -> list[Path]:
-    """Remove the staging folders in ``outdir`` whose run is over (its process is gone); keep
-    those of live runs and of other hosts. Returns the folders removed."""
-    from .io._files import remove_stale
-
-    return remove_stale(outdir, ".kinema-run.")
-
-
-def _remove_checkpoints(outdir: Path, keep: Path | None = None) -> None:
-    """Remove ``outdir``/checkpoint.ckpt (unless it is ``keep``, the --keep-checkpoint asked
-    for) and the staging files (``.checkpoint.ckpt.<host>-<pid>.<random>.part``,
-    ``kinema.io._files.atomic_file``) of writers of it that are gone."""
-    from .io._files import remove_stale
-
-    ckpt = outdir / "checkpoint.ckpt"
-    if keep is None or not (ckpt.exists() and keep.exists() and os.path.samefile(ckpt, keep)):
-        ckpt.unlink(missing_ok=True)
-    remove_stale(outdir, f".{ckpt.name}.", ".part")
 
 
 def _attractors(world) -> list:

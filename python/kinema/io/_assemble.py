@@ -114,6 +114,48 @@ def assemble(
     file holds no frame or no particle."""
     if not frames:
         raise fail(path, "holds no frame")
+    ids = _particle_ids(path, frames, dim)
+    by_id = ids is not None
+    c = _columns(path, frames, ids)
+    t, steps = _times(path, frames, scales)
+    masses, radii, species, inertia, spin = c["masses"], c["radii"], c["species"], c["inertia"], c["spin"]
+    out = LoadedTrajectory(
+        t=t,
+        positions=c["positions"] * scales.length,
+        velocities=None if c["velocities"] is None else c["velocities"] * scales.velocity,
+        step=steps,
+        masses=None if masses is None else masses * scales.mass,
+        radii=None if radii is None else radii * scales.length,
+        ids=ids,
+        species=None if species is None else species.astype(str),
+        dim=dim,
+        alive=None if c["alive"].all() else c["alive"],
+        group=group,
+        author=author,
+        creator=creator,
+        path=path,
+        springs=None if springs is None or not len(springs) else np.asarray(springs, dtype=np.int64).reshape(-1, 2),
+        colors=c["colors"],
+        angular_velocities=None if spin["angular_velocities"] is None else spin["angular_velocities"] / scales.time,
+        orientations=spin["orientations"],
+        inertia=None if inertia is None else inertia * scales.mass * scales.length**2,
+        groups=c["groups"],
+    )
+    # a particle that has no value of its own where it first appears (another frame's column
+    # had one): unknown values are refused, as a file of another program would be
+    for word, a in (("masses", out.masses), ("radii", out.radii)):
+        if a is not None and np.isnan(a).any():
+            raise fail(
+                path, f"some particles have {word} and others not (particle id {int(ids[np.argmax(np.isnan(a))]) if by_id else int(np.argmax(np.isnan(a)))})"
+            )
+    _box(path, frames, scales, dim, out)
+    return out
+
+
+def _particle_ids(path: Path, frames: list[RawFrame], dim: int) -> np.ndarray | None:
+    """Each frame's values checked (`_check_rows`; z = 0 in 2D), and the ids the particles are
+    followed by: every id that appears, ascending, where every frame has ids; `None` where
+    not, when every frame must hold the same number of rows."""
     for fr in frames:
         _check_rows(path, fr)
         if dim == 2 and fr.positions.size and np.any(fr.positions[:, 2] != 0):
@@ -132,6 +174,15 @@ def assemble(
                     "(kinema reads a number of particles that changes only with an id column)",
                 )
         ids = None
+    return ids
+
+
+def _columns(path: Path, frames: list[RawFrame], ids: np.ndarray | None) -> dict:
+    """The frames' rows as one column per particle (by `ids`, or by row), in the file's units:
+    `positions`, `velocities` and the `spin` arrays (F, N, ...), NaN where a particle is not
+    in a frame, `alive` (F, N), and the per-particle values where each particle first appears
+    (None where no frame has them); refused beyond the memory available."""
+    by_id = ids is not None
     n = ids.size if by_id else frames[0].positions.shape[0]
     f = len(frames)
     if n == 0:
@@ -170,6 +221,24 @@ def assemble(
                 if whole is not None and rows is not None:
                     whole[col[new]] = np.asarray(rows)[new]
             seen[col[new]] = True
+    return {
+        "positions": positions,
+        "velocities": velocities,
+        "spin": spin,
+        "alive": alive,
+        "masses": masses,
+        "radii": radii,
+        "species": species,
+        "colors": colors,
+        "inertia": inertia,
+        "groups": groups,
+    }
+
+
+def _times(path: Path, frames: list[RawFrame], scales: Scales) -> tuple[np.ndarray, np.ndarray]:
+    """The frames' times in s (the frame index where the file has none) and steps (the
+    file's, else the frame index); every frame has a time or none has, and they increase."""
+    f = len(frames)
     times = [fr.time for fr in frames]
     missing = [k for k, t in enumerate(times) if t is None]
     if missing and len(missing) < f:
@@ -179,35 +248,13 @@ def assemble(
     if problem is not None:
         raise fail(path, f"the frames' times {problem}")
     steps = np.array([k if fr.step is None else fr.step for k, fr in enumerate(frames)], dtype=np.int64)
-    out = LoadedTrajectory(
-        t=t,
-        positions=positions * scales.length,
-        velocities=None if velocities is None else velocities * scales.velocity,
-        step=steps,
-        masses=None if masses is None else masses * scales.mass,
-        radii=None if radii is None else radii * scales.length,
-        ids=ids,
-        species=None if species is None else species.astype(str),
-        dim=dim,
-        alive=None if alive.all() else alive,
-        group=group,
-        author=author,
-        creator=creator,
-        path=path,
-        springs=None if springs is None or not len(springs) else np.asarray(springs, dtype=np.int64).reshape(-1, 2),
-        colors=colors,
-        angular_velocities=None if spin["angular_velocities"] is None else spin["angular_velocities"] / scales.time,
-        orientations=spin["orientations"],
-        inertia=None if inertia is None else inertia * scales.mass * scales.length**2,
-        groups=groups,
-    )
-    # a particle that has no value of its own where it first appears (another frame's column
-    # had one): unknown values are refused, as a file of another program would be
-    for word, a in (("masses", out.masses), ("radii", out.radii)):
-        if a is not None and np.isnan(a).any():
-            raise fail(
-                path, f"some particles have {word} and others not (particle id {int(ids[np.argmax(np.isnan(a))]) if by_id else int(np.argmax(np.isnan(a)))})"
-            )
+    return t, steps
+
+
+def _box(path: Path, frames: list[RawFrame], scales: Scales, dim: int, out: LoadedTrajectory) -> None:
+    """The frames' boxes, where every frame has one, given to `out`: the first's `periodic`
+    and `box_edges`, every frame's `box_edges_by_frame` (checked), and with a periodic axis a
+    box collider at the first box's faces (±inf on open axes)."""
     boxes = [fr.box for fr in frames]
     if boxes[0] is not None and all(b is not None for b in boxes):
         lo = np.array([b.lo for b in boxes], dtype=np.float64) * scales.length
@@ -226,4 +273,3 @@ def assemble(
             face_lo = np.where(periodic, lo[0], -np.inf)[:dim]
             face_hi = np.where(periodic, hi[0], np.inf)[:dim]
             out.colliders = [{"type": "box", "lo": face_lo.tolist(), "hi": face_hi.tolist()}]
-    return out

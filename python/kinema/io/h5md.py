@@ -90,14 +90,13 @@ reads a box that changes from frame to frame.
 
 This module writes (`save_h5md`) and opens a file to read (`load_h5md`); the reading
 itself is `kinema.io.h5md_reader` (with the checks of `kinema.io._h5md_checks`), the
-units `kinema.io.h5md_units`, what both sides share `kinema.io._h5md_layout`.
+units `kinema.io.h5md_units`, what both sides share `kinema.io._h5md_layout`, the checks
+before writing (what would not read back) `kinema.io._h5md_write_checks`.
 """
 
 from __future__ import annotations
 
 import getpass
-import math
-import numbers
 import os
 from pathlib import Path
 from typing import Any
@@ -106,12 +105,14 @@ import numpy as np
 
 from ..contact_record import FIELDS
 from ._cell import particle_types
-from ._checks import available_memory, number
+from ._checks import available_memory
 from ._files import TrajectoryFileError, frames_of, hdf5_file, os_errors_as_write_errors
-from ._h5md_checks import check_frames, edges_problem, fail, increase_problem, links_out
+from ._h5md_checks import fail, links_out
+from ._h5md_colliders import MESH_DATASETS, MOTION_DATASETS
 from ._h5md_layout import BY_FORCE, COLLIDER_OBSERVABLES, ELEMENTS, H5MD_VERSION, OBSERVABLES, PRESSURE_UNIT, import_h5py
+from ._h5md_write_checks import _check_writable, _colliders_of
 from ._hdf5_heaps import global_heap_problem
-from .h5md_reader import MESH_DATASETS, MOTION_DATASETS, LoadedTrajectory, read
+from .h5md_reader import LoadedTrajectory, read
 from .h5md_units import from_si, parse_unit, system_of
 
 __all__ = ["H5MD_VERSION", "LoadedTrajectory", "load_h5md", "parse_unit", "save_h5md"]
@@ -209,10 +210,45 @@ def _unknown(a: Any) -> bool:
 
 
 def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str | None, system: dict[str, str]) -> None:
+    """The trajectory `tr` (its checked frames `fr`) written into the open file `f` in the
+    unit `system`, part by part: the /h5md header, the particle group (box, clock, positions,
+    velocities, spins, per-particle elements), the observables, the contacts, the springs and
+    kinema's parameters (the layout of the module doc)."""
+
+    def unit(a: Any, si: str | None) -> tuple[np.ndarray, str | None]:
+        """`a` (in the SI unit `si`, or a plain number when `None`) as written: in the
+        file's unit system, with that system's unit."""
+        if si is None:
+            return np.asarray(a), None
+        return from_si(a, system[si]), system[si]
+
+    _write_header(f, author)
+    particles, clock = _write_particles(f, tr, fr, group, compression, unit)
+    _write_observables(f.create_group("observables"), tr, fr, clock, compression, unit)
+
+    record = getattr(tr, "contact_record", None)
+    if record is not None:
+        _write_contacts(f.create_group("contacts"), record, particles, clock, unit, compression)
+
+    springs = getattr(tr, "springs", None)
+    if springs is not None:
+        # H5MD's connectivity group: a time-independent list of pairs whose values are the
+        # particles' ids (the particle group has an id element), particles_group naming it.
+        pairs = np.asarray(springs, dtype=np.int64).reshape(-1, 2)
+        unknown = np.setdiff1d(pairs, fr.ids)
+        if unknown.size:
+            raise ValueError(f"springs: id {int(unknown[0])} is not the id of a particle of the trajectory")
+        ds = f.require_group("connectivity").create_dataset("springs", data=pairs)
+        ds.attrs["particles_group"] = particles.ref
+
+    _write_parameters(f, tr, fr, compression)
+
+
+def _write_header(f: Any, author: str) -> None:
+    """/h5md: the version, the author, the creator (kinema and its version), the units module."""
     from .. import __version__
 
     h5py = import_h5py()
-    string = h5py.string_dtype()
     h5md = f.create_group("h5md")
     h5md.attrs.create("version", np.array(H5MD_VERSION, dtype=np.int32))
     _fixed_string(h5md.create_group("author"), "name", author)
@@ -223,13 +259,11 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     units.attrs.create("version", np.array([1, 0], dtype=np.int32))
     units.attrs.create("system", "SI", dtype=h5py.string_dtype("ascii"))
 
-    def unit(a: Any, si: str | None) -> tuple[np.ndarray, str | None]:
-        """`a` (in the SI unit `si`, or a plain number when `None`) as written: in the
-        file's unit system, with that system's unit."""
-        if si is None:
-            return np.asarray(a), None
-        return from_si(a, system[si]), system[si]
 
+def _write_particles(f: Any, tr: Any, fr: Any, group: str, compression: str | None, unit: Any) -> tuple[Any, Any]:
+    """/particles/<group>: the box, the clock every time-dependent element shares (with the
+    positions), the velocities, the spins and the per-particle elements; returns the group
+    and the clock (its position element)."""
     # Every file is 3D: a 2D world's positions and velocities get z = 0 and its box an open z
     # axis, so that 3D readers (MDAnalysis, znh5md) read it; /parameters/kinema says dim = 2.
     d = fr.dim
@@ -258,7 +292,6 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     # particle; at a frame where it does not exist, its id is the id dataset's fill value and
     # its other entries the fill values of theirs (NaN; species and collision_group -1).
     changes = fr.changes_count
-    alive = fr.alive if changes else None
     nan = np.nan if changes else None
 
     def placed(a: np.ndarray) -> np.ndarray:  # z = 0 in 2D; NaN where a particle does not exist
@@ -279,6 +312,14 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     for name, a, si in (("angular_velocity", fr.angular_velocities, "s-1"), ("orientation", fr.orientations, None)):
         if a is not None and not _unknown(a[fr.alive]):
             _element(particles, name, *unit(a if not changes else np.where(fr.alive[..., None], a, np.nan), si), clock, compression, fill=nan)
+    _write_per_particle(particles, tr, fr, clock, compression, unit)
+    return particles, clock
+
+
+def _write_per_particle(particles: Any, tr: Any, fr: Any, clock: Any, compression: str | None, unit: Any) -> None:
+    """Each particle's species, mass, radius, moment of inertia, id, colour and collision
+    group (those the trajectory has), as time-dependent elements of one value per frame."""
+    alive = fr.alive if fr.changes_count else None
     # Species: H5MD's integers, for ASE (znh5md) the atomic number of a name that is a chemical
     # symbol, else 0 (ASE's "X"); kinema's names in species_index, each particle's index among
     # the sorted names (two names that are no element would share 0).
@@ -303,7 +344,12 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
             if name == "species_index":
                 _fixed_string(element, "names", names)  # species_index k is names[k]
 
-    obs = f.create_group("observables")
+
+def _write_observables(obs: Any, tr: Any, fr: Any, clock: Any, compression: str | None, unit: Any) -> None:
+    """/observables: the energies, momenta and impulse balance, the pressure tensor, the
+    collider books, the potential energy of each force and the total energy."""
+    d = fr.dim
+    string = import_h5py().string_dtype()
     kinetic = getattr(tr, "kinetic", None)
     potential = dict(getattr(tr, "potential", None) or {})
     for name, (attr, si) in OBSERVABLES.items():
@@ -331,26 +377,13 @@ def _write(f: Any, tr: Any, fr: Any, group: str, author: str, compression: str |
     if total is not None and not _unknown(total):
         _element(obs, "total_energy", *unit(np.asarray(total, dtype=np.float64), "J"), clock, compression)
 
-    record = getattr(tr, "contact_record", None)
-    if record is not None:
-        _write_contacts(f.create_group("contacts"), record, particles, clock, unit, compression)
 
-    springs = getattr(tr, "springs", None)
-    if springs is not None:
-        # H5MD's connectivity group: a time-independent list of pairs whose values are the
-        # particles' ids (the particle group has an id element), particles_group naming it.
-        pairs = np.asarray(springs, dtype=np.int64).reshape(-1, 2)
-        unknown = np.setdiff1d(pairs, fr.ids)
-        if unknown.size:
-            raise ValueError(f"springs: id {int(unknown[0])} is not the id of a particle of the trajectory")
-        ds = f.require_group("connectivity").create_dataset("springs", data=pairs)
-        ds.attrs["particles_group"] = particles.ref
-
-    # kinema's own parameters, in SI whatever the units of the rest: the world's dimension (a 2D
-    # world's file is 3D with z = 0), dt, the method and the colliders.
+def _write_parameters(f: Any, tr: Any, fr: Any, compression: str | None) -> None:
+    """kinema's own parameters, in SI whatever the units of the rest: the world's dimension (a
+    2D world's file is 3D with z = 0), dt, the method, the frames per second and the colliders."""
     colliders = _colliders_of(tr)
     params = f.create_group("parameters").create_group("kinema")
-    params.attrs["dim"] = np.int32(d)
+    params.attrs["dim"] = np.int32(fr.dim)
     if fr.dt is not None:
         params.attrs["dt"] = fr.dt
         params.attrs["dt_unit"] = "s"
@@ -405,108 +438,6 @@ def _write_motion(g: Any, motion: dict[str, Any]) -> None:
             g.create_dataset(key, data=np.asarray(value, dtype=np.float64))
         else:
             g.attrs.create(key, np.asarray(value, dtype=np.float64))
-
-
-def _check_writable(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
-    """Refuses, before anything is written, a trajectory that `load_h5md` would refuse to read
-    back: the values `check_frames` checks, and the box edges (finite, > 0 m on periodic
-    axes), the time step, the observables' shapes and the colliders (as the reader checks them: the engine's rules), and values
-    that the unit `system` would make infinite or times it would make equal. One line naming the file,
-    the attribute and the value (a `TrajectoryFileError`)."""
-    check_frames(path, tr, fr)
-    _check_units(path, tr, fr, system)
-    periodic, edges = getattr(tr, "periodic", None), getattr(tr, "box_edges", None)
-    flags = [] if periodic is None else [bool(p) for p in np.asarray(periodic).reshape(-1)[: fr.dim]]
-    rows = None if edges is None else np.asarray(edges, dtype=np.float64).reshape(1, -1)[:, : len(flags)]
-    if any(flags) and rows is not None and rows.shape[1] == len(flags):  # (else a ValueError of _write)
-        problem = edges_problem(np.where(flags, rows, 0.0), flags, False)
-        if problem is not None:
-            raise TrajectoryFileError(f"cannot write {path}: trajectory 'box_edges' {problem}")
-    if fr.dt is not None and not (np.isfinite(fr.dt) and fr.dt > 0):
-        raise TrajectoryFileError(f"cannot write {path}: trajectory 'dt' = {fr.dt!r} is not a positive number (the time step in s)")
-    fps = getattr(tr, "fps", None)
-    if fps is not None and (isinstance(fps, bool) or not isinstance(fps, numbers.Real) or not (math.isfinite(fps) and fps > 0)):
-        raise TrajectoryFileError(f"cannot write {path}: trajectory 'fps' = {fps!r} is not a positive number (the frames per second recorded)")
-    for attr in [a for a, _ in OBSERVABLES.values()] + ["total"]:
-        a = getattr(tr, attr, None)
-        if a is None:
-            continue
-        s = np.shape(a)
-        vector = attr in ("momentum", "angular_momentum", "impulse_balance")
-        want = (fr.n_frames, 3) if vector else (fr.n_frames,)
-        if s != want and not (vector and s == (fr.n_frames, 2)):
-            raise TrajectoryFileError(f"cannot write {path}: trajectory {attr!r} has shape {s}; it must be {want}, one value per frame")
-    pressure = getattr(tr, "pressure", None)
-    if pressure is not None and np.shape(pressure) != (fr.n_frames, 3, 3):
-        raise TrajectoryFileError(
-            f"cannot write {path}: trajectory 'pressure' has shape {np.shape(pressure)}; it must be ({fr.n_frames}, 3, 3), a tensor per frame"
-        )
-    colliders = None  # (K: the same in each)
-    for attr, _ in COLLIDER_OBSERVABLES.values():
-        a = getattr(tr, attr, None)
-        if a is None:
-            continue
-        s = np.shape(a)
-        if len(s) != 3 or s[0] != fr.n_frames or s[2] != 3 or colliders not in (None, s[1]):
-            k = "K" if colliders is None else colliders
-            raise TrajectoryFileError(
-                f"cannot write {path}: trajectory {attr!r} has shape {s}; it must be ({fr.n_frames}, {k}, 3), a vector per frame and collider"
-            )
-        colliders = s[1]
-    for name, u in (dict(getattr(tr, "potential", None) or {})).items():
-        if np.shape(u) != (fr.n_frames,):
-            raise TrajectoryFileError(
-                f"cannot write {path}: trajectory 'potential' {name!r} has shape {np.shape(u)}; it must be ({fr.n_frames},), one value per frame"
-            )
-    colliders = _colliders_of(tr)
-    if colliders:
-        from .h5md_reader import collider_problem
-
-        problem = collider_problem([f"colliders[{k}]" for k in range(len(colliders))], colliders, fr.dim)
-        if problem is not None:
-            raise TrajectoryFileError(f"cannot write {path}: trajectory {problem}")
-
-
-def _check_units(path: Path, tr: Any, fr: Any, system: dict[str, str]) -> None:
-    """Refuses values that the unit `system` makes infinite (1e300 m is 1e309 nm, beyond
-    float64) or times it makes equal (two times a float64 apart may round to one in ps)."""
-    if system["m"] == "m":
-        return
-    t = from_si(fr.t, system["s"])
-    problem = increase_problem(t)
-    if problem is not None:
-        raise TrajectoryFileError(f"cannot write {path}: trajectory 't' in {system['s']} (units 'MD') {problem}")
-    arrays = [("t", fr.t, "s"), ("positions", fr.positions, "m"), ("velocities", fr.velocities, "m s-1"), ("masses", fr.masses, "kg"), ("radii", fr.radii, "m")]
-    arrays += [("angular_velocities", fr.angular_velocities, "s-1"), ("inertia", fr.inertia, "kg m2")]
-    record = getattr(tr, "contact_record", None)
-    if record is not None:
-        arrays += [(f"contact_record {name!r}", a, FIELDS[name].unit) for name, a in record.values.items() if name in FIELDS and FIELDS[name].unit is not None]
-    arrays += [("box_edges", getattr(tr, "box_edges", None), "m"), ("total", getattr(tr, "total", None), "J")]
-    arrays += [(attr, getattr(tr, attr, None), si) for attr, si in OBSERVABLES.values() if si is not None]
-    arrays += [(f"potential {name!r}", u, "J") for name, u in (getattr(tr, "potential", None) or {}).items()]
-    arrays += [("pressure", getattr(tr, "pressure", None), PRESSURE_UNIT[fr.dim])]
-    arrays += [(attr, getattr(tr, attr, None), si) for attr, si in COLLIDER_OBSERVABLES.values()]
-    for word, a, si in arrays:
-        if a is None or np.size(a) == 0:
-            continue
-        big = np.nanmax(np.abs(np.asarray(a, dtype=np.float64)), initial=0.0)
-        with np.errstate(over="ignore"):
-            beyond = np.isfinite(big) and not np.isfinite(from_si(big, system[si]))
-        if beyond:
-            raise TrajectoryFileError(
-                f"cannot write {path}: trajectory {word!r} has a value ({number(big)} {si} in magnitude) beyond float64 in {system[si]} (units 'MD'); write it in SI"
-            )
-
-
-def _colliders_of(tr: Any) -> list[dict[str, Any]]:
-    """The trajectory's collider descriptions (`Trajectory.colliders`), checked; [] when it
-    has none."""
-    colliders = getattr(tr, "colliders", None) or []
-    if not colliders:
-        return []
-    from ..collider_descriptions import _describe_colliders
-
-    return _describe_colliders(colliders)
 
 
 def save_h5md(traj: Any, path: str | os.PathLike, group: str = "all", author: str | None = None, compression: str | None = "gzip", units: str = "SI") -> Path:

@@ -2,7 +2,13 @@
 `LoadedTrajectory`, what the file holds in SI units, checking what it reads (through
 `kinema.io._h5md_checks`): shapes, types and the memory needed before any data, then the
 values. Besides the frames: the box (fixed or changing), per-particle masses, radii, ids,
-species and colours, the observables, kinema's parameters and colliders, and the springs."""
+species and colours, the observables, kinema's parameters and colliders, and the springs.
+
+The colliders are read and checked in `kinema.io._h5md_colliders` (`collider_problem`, which
+the writer checks with too, is importable from here as before), the springs and the contacts
+(pairs of particles by id) in `kinema.io._h5md_pairs`. What the file holds is found (types,
+shapes, units and memory, before any data is read) by `kinema.io._h5md_found`; this module
+reads the data."""
 
 from __future__ import annotations
 
@@ -13,18 +19,15 @@ from typing import Any
 
 import numpy as np
 
-from ..contact_record import FIELDS, ContactRecord, offsets_problem
-from ._checks import dtype_problem, number, shown
+from ..contact_record import ContactRecord
+from ._checks import number
 from ._files import TrajectoryFileError
 from ._h5md_checks import (
     Live,
     Reader,
     as_text,
-    boundary_problem,
     color_problem,
     edges_problem,
-    element_datasets,
-    fail,
     group_problem,
     increase_problem,
     mass_problem,
@@ -33,11 +36,12 @@ from ._h5md_checks import (
     species_problem,
     triclinic_at,
     utf8,
-    varying_ids,
     where,
 )
-from ._h5md_layout import BY_FORCE, COLLIDER_OBSERVABLES, OBSERVABLES, PRESSURE_UNIT, import_h5py
-from .h5md_units import LENGTH, MASS, TIME, parse_unit, to_si
+from ._h5md_colliders import collider_problem as collider_problem
+from ._h5md_found import Found, find
+from ._h5md_pairs import _read_contacts, _read_springs
+from .h5md_units import to_si
 
 
 @dataclass
@@ -116,135 +120,6 @@ class LoadedTrajectory:
     path: Path | None = None
 
 
-#: A mesh collider's arrays, datasets of its group (``save_h5md``), and their dtypes.
-MESH_DATASETS = {"vertices": "float64", "faces": "int64"}
-#: A moving collider's keyframe arrays, datasets of its ``motion`` group, and their shapes (K: keys).
-MOTION_DATASETS = {"times": ("K",), "translations": ("K", 3), "rotations": ("K", 4)}
-#: A motion group's attributes: 3-vectors (steady: velocity, angular_velocity; both kinds: pivot),
-#: and a steady motion's start (s), one number.
-MOTION_ATTRIBUTES = ("velocity", "angular_velocity", "pivot", "start")
-#: The collider types a file holds.
-COLLIDER_TYPES = ("plane", "box", "sphere", "mesh")
-
-
-def _read_colliders(path: Path, params: Any, dim: int) -> list[dict[str, Any]]:
-    """The descriptions under /parameters/kinema/colliders, in index order, each checked by
-    the engine as `World.add` checks a collider (in a world of `dim` dimensions): the
-    attributes are numbers (a mesh's `inside` a bool), a mesh's `vertices` (V, 3) real
-    numbers and `faces` (F, 3) integers are datasets of its group."""
-    h5py = import_h5py()
-    group = params.get("colliders")
-    if not isinstance(group, h5py.Group):
-        return []
-    out = []
-    names = []
-    for name in sorted(group, key=lambda n: int(n) if n.isdigit() else -1):
-        g = group[name]
-        kind = g.attrs.get("type") if isinstance(g, h5py.Group) else None
-        kind = kind.decode() if isinstance(kind, bytes) else kind
-        if not name.isdigit() or not isinstance(g, h5py.Group) or not isinstance(kind, str) or kind not in COLLIDER_TYPES:
-            raise fail(
-                path, f"{g.name} is not a kinema collider (a group named by its index with type {', '.join(COLLIDER_TYPES[:-1])} or {COLLIDER_TYPES[-1]})"
-            )
-        d: dict[str, Any] = {"type": str(kind)}
-        for key, value in g.attrs.items():
-            if key == "type":
-                continue
-            a = np.asarray(value)
-            if key == "inside" and kind == "mesh":
-                if a.size != 1 or a.dtype.kind != "b":
-                    raise fail(path, f"attribute 'inside' ({g.name}) = {shown(value)} is not a bool")
-                d[key] = bool(a.reshape(()))
-                continue
-            if a.size == 0 or dtype_problem(a.dtype) is not None:
-                raise fail(path, f"attribute {key!r} ({g.name}) = {shown(value)} is not a number")
-            a = a.astype(np.float64)
-            d[key] = float(a) if a.ndim == 0 else a.tolist()
-        for key in g:
-            ds = g[key]
-            if key == "motion" and isinstance(ds, h5py.Group):
-                d["motion"] = _read_motion(path, ds)
-                continue
-            if kind != "mesh" or key not in MESH_DATASETS or not isinstance(ds, h5py.Dataset):
-                raise fail(
-                    path, f"{ds.name} is not part of a kinema collider (a mesh's group holds the datasets vertices and faces, any collider's a group motion)"
-                )
-            integer = MESH_DATASETS[key] == "int64"
-            if ds.shape is None or len(ds.shape) != 2 or ds.shape[1] != 3 or dtype_problem(ds.dtype, integer) is not None:
-                must = "integers" if integer else "real numbers"
-                raise fail(path, f"{ds.name} has shape {ds.shape} of {ds.dtype}; it must be (N, 3) {must}")
-            d[key] = np.asarray(ds[()], dtype=MESH_DATASETS[key]).tolist()
-        out.append(d)
-        names.append(g.name)
-    if out:
-        _check_colliders(path, names, out, dim)
-    return out
-
-
-def _read_motion(path: Path, g: Any) -> dict[str, Any]:
-    """A collider's `motion` group: 3-vector attributes (velocity, angular_velocity, pivot)
-    and keyframe datasets (times (K,), translations (K, 3), rotations (K, 4)), numbers of the
-    shapes said; the engine checks the rest (`collider_problem`)."""
-    h5py = import_h5py()
-    out: dict[str, Any] = {}
-    for key, value in g.attrs.items():
-        a = np.asarray(value)
-        if key not in MOTION_ATTRIBUTES or a.shape != (() if key == "start" else (3,)) or dtype_problem(a.dtype) is not None:
-            raise fail(
-                path,
-                f"attribute {key!r} ({g.name}) = {shown(value)} is not part of a motion "
-                f"(attributes {', '.join(MOTION_ATTRIBUTES[:3])}: 3 numbers each; start: one number, s)",
-            )
-        out[key] = float(a) if key == "start" else a.astype(np.float64).tolist()
-    for key in g:
-        ds = g[key]
-        shape = MOTION_DATASETS.get(key)
-        ok = shape is not None and isinstance(ds, h5py.Dataset) and ds.shape is not None and len(ds.shape) == len(shape)
-        if not (ok and all(w == "K" or w == n for n, w in zip(ds.shape, shape, strict=True)) and dtype_problem(ds.dtype) is None):
-            want = ", ".join(f"{k} {MOTION_DATASETS[k]}" for k in MOTION_DATASETS)
-            raise fail(path, f"{ds.name} is not part of a motion (its datasets are real numbers: {want}, K keys)")
-        out[key] = np.asarray(ds[()], dtype=np.float64).tolist()
-    return out
-
-
-def _check_colliders(path: Path, names: list[str], colliders: list[dict[str, Any]], dim: int) -> None:
-    """Refuses the first collider `collider_problem` finds wrong, named by its group."""
-    problem = collider_problem(names, colliders, dim)
-    if problem is not None:
-        raise fail(path, f"collider {problem}")
-
-
-def collider_problem(names: list[str], colliders: list[dict[str, Any]], dim: int) -> str | None:
-    """Adds each collider to an empty engine world of `dim` dimensions, as `World.add`
-    does: the engine's checks (finite values, a non-zero normal, hi > lo, 2 or 3 values,
-    restitution in [0, 1], ..., and a motion's: finite, times increasing, one key each, a box
-    that only translates, a 2D motion in the xy-plane); returns `"<name> (a plane): <the engine's message>"` for
-    the first it refuses, else `None`. The engine's own `World`, not `kinema.World`:
-    reading a file needs no world module (which imports `kinema.trajectory`, which imports
-    this). `save_h5md` checks what it writes with it."""
-    from .. import _core
-    from ..collider_descriptions import _KIND
-    from ..colliders import Box, Mesh, Plane, SphereObstacle
-
-    core = _core.World(dim, 1e-3, "verlet")
-    make = {"plane": Plane, "box": Box, "sphere": SphereObstacle, "mesh": Mesh}
-    for name, d in zip(names, colliders, strict=True):
-        needed = _KIND[d["type"]]
-        missing = [k for k in needed if k not in d]
-        if missing:
-            return f"{name} (a {d['type']}) has no {'dataset' if d['type'] == 'mesh' else 'attribute'} {missing[0]!r}"
-        flags = ("inside",) if d["type"] == "mesh" else ()
-        args = {k: d[k] for k in (*needed, *flags, "restitution", "friction") if k in d}
-        try:
-            k = make[d["type"]](**args)._attach(core)
-            if d.get("motion") is not None:
-                core.set_collider_motion(k, **d["motion"])
-        except (ValueError, TypeError) as e:
-            first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-            return f"{name} (a {d['type']}): {first}"
-    return None
-
-
 def _species_names(r: Any, obj: Any, index: np.ndarray) -> np.ndarray | None:
     """The species names of the particles: `names[index]` when the species element (or
     dataset) `obj` has a `names` attribute (kinema writes one), else `None` (H5MD's
@@ -284,390 +159,50 @@ def _refuse_triclinic(r: Reader, ds: Any, rows: np.ndarray, by_frame: bool) -> N
         raise r.fail(f"{where('box edges', ds)} is a triclinic box{at} (edge vectors not along the axes), which kinema does not support")
 
 
-def _read_springs(r: Reader, f: Any, p: Any, ids: np.ndarray) -> np.ndarray | None:
-    """The springs (S, 2) ids of `/connectivity/springs` (kinema's: H5MD's time-independent
-    list of pairs, whose `particles_group` is the particle group read), `None` without
-    them."""
-    h5py = import_h5py()
-    ds = f.get("connectivity/springs")
-    if not isinstance(ds, h5py.Dataset):
-        return None
-    ref = ds.attrs.get("particles_group")
-    if isinstance(ref, h5py.Reference) and ref and f[ref].name != p.name:
-        return None  # the springs of another particle group
-    s = r.numbers("springs", ds, integer=True)
-    if len(s) != 2 or s[1] != 2:
-        raise r.fail(f"{where('springs', ds)} has shape {s}; it must be (springs, 2), the ids of the two ends of each spring")
-    pairs = np.asarray(ds[()], dtype=np.int64)
-    unknown = np.setdiff1d(pairs, ids)
-    if unknown.size:
-        raise r.fail(f"{where('springs', ds)} names id {int(unknown[0])}, which is no particle's ({p.name}/id)")
-    return pairs
+def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTrajectory:
+    """The trajectory that the open H5MD file `f` (at `path`) holds in the particle group
+    `group` (the only one when `None`), in SI units: first what is there (types, shapes and
+    units of every dataset, and the memory they need, refused over `memory` bytes), found by
+    `kinema.io._h5md_found.find`, then the data and its values (the `_read_*` stages)."""
+    found = find(path, f, group, memory)  # (kinema.io._h5md_found)
+    r = found.r
 
-
-TIME_INVERSE = (0, -1, 0)  # an angular velocity's dimension (rad/s)
-MOMENT_OF_INERTIA = (2, 0, 1)  # kg m2
-
-
-def _contact_datasets(r: Reader, f: Any, p: Any) -> dict[str, Any] | None:
-    """The datasets of `/contacts` (kinema's extension group: the contacts of each frame)
-    whose `particles_group` is the group read, with their units, checked before any data is
-    read: `offsets` (F + 1,) integers and one column per `FIELDS` name of as many rows as
-    the last offset (read later); `None` without them."""
-    h5py = import_h5py()
-    g = f.get("contacts")
-    if not isinstance(g, h5py.Group):
-        return None
-    ref = g.attrs.get("particles_group")
-    if isinstance(ref, h5py.Reference) and ref and f[ref].name != p.name:
-        return None  # the contacts of another particle group
-    out: dict[str, Any] = {}
-    for name in g:
-        ds = g[name]
-        if name in ("step", "time"):
-            continue
-        known = FIELDS.get(name)
-        if name != "offsets" and known is None:
-            raise r.fail(f"{ds.name} is not a column of kinema's contacts ({', '.join(['offsets', *FIELDS])})")
-        if not isinstance(ds, h5py.Dataset):
-            raise r.fail(f"{ds.name} is a group; it must be a dataset")
-        if known is not None and known.kind == "bool":
-            if ds.shape is None or ds.dtype.kind != "b":
-                raise r.fail(f"{where(name, ds)} holds {ds.dtype}; it must hold flags (bool), one per contact")
-            shape = tuple(ds.shape)
-        else:
-            shape = r.numbers(name, ds, integer=name == "offsets" or (known is not None and known.kind == "int"))
-        if known is not None and known.unit is not None:
-            out[("unit", name)] = r.unit(name, ds, parse_unit(known.unit)[1])
-        r.plan(name, ds, ds.size * 8)
-        out[name] = (ds, shape)
-    if "offsets" not in out:
-        raise r.fail(f"{g.name} has no offsets dataset (frame k's contacts are rows offsets[k] to offsets[k + 1])")
+    # -- The data, and its values. ------------------------------------------------------------
+    out, live = _read_frames(found)
+    _read_per_particle(found, out, live)
+    _read_box(found, out)
+    _read_observables(found, out)
+    out.dt, out.method, out.fps, out.colliders = found.dt, found.method, found.fps, found.colliders
+    out.springs = _read_springs(r, f, found.p, out.ids if out.ids is not None else np.arange(out.positions.shape[1]))
+    if found.contacts is not None:
+        out.contact_record = _read_contacts(r, found.contacts, found.frames, out.ids if out.ids is not None else np.arange(out.positions.shape[1]))
+    author = f["h5md"].get("author")
+    creator = f["h5md"].get("creator")
+    out.author = None if author is None else as_text(author.attrs.get("name", ""))
+    if creator is not None:
+        out.creator = f"{as_text(creator.attrs.get('name', ''))} {as_text(creator.attrs.get('version', ''))}".strip()
     return out
 
 
-def _read_contacts(r: Reader, found: dict[str, Any], frames: int, ids: np.ndarray) -> ContactRecord:
-    """The contacts of `_contact_datasets`, read and checked: `offsets` one per frame and
-    one more, from 0, never decreasing; each column as many rows as the last offset, finite
-    or NaN (a column a frame did not have); `i` and `j` ids of the particles read (`j` -1:
-    a collider)."""
-    ds, shape = found["offsets"]
-    if shape != (frames + 1,):
-        raise r.fail(f"{where('offsets', ds)} has shape {shape}; it must be ({frames + 1},), one per frame and one more")
-    offsets = np.asarray(ds[()], dtype=np.int64)
-    problem = offsets_problem(offsets)
-    if problem is not None:
-        raise r.fail(f"{where('offsets', ds)} {problem}")
-    total = int(offsets[-1])
-    values = {}
-    for name, entry in found.items():
-        if name == "offsets" or isinstance(name, tuple):
-            continue
-        ds, shape = entry
-        if not shape or shape[0] != total or len(shape) > 2:
-            raise r.fail(f"{where(name, ds)} has shape {shape}; it must have {total} rows, one per contact ({where('offsets', found['offsets'][0])}[-1])")
-        a = ds[()]
-        if ("unit", name) in found:
-            a = to_si(a, found[("unit", name)])
-        if FIELDS[name].kind == "real" and np.isinf(a).any():
-            raise r.fail(f"{where(name, ds)} has an infinite value at row {int(np.argmax(np.isinf(a).reshape(len(a), -1).any(axis=1)))}")
-        values[name] = a
-    try:
-        record = ContactRecord(offsets, values)
-    except ValueError as e:
-        raise r.fail(f"{found['offsets'][0].parent.name}: {e}") from None
-    for name in ("i", "j"):
-        known = np.isin(record[name], ids) | ((record[name] == -1) if name == "j" else False)
-        if not known.all():
-            k = int(np.argmax(~known))
-            raise r.fail(f"{where(name, found[name][0])} names particle {int(record[name][k])} at row {k}, which is no particle's id")
-    return record
+def _three(a: np.ndarray) -> np.ndarray:
+    """Vectors of 2 or 3 components as 3 (z = 0)."""
+    return a if a.shape[-1] == 3 else np.concatenate([a, np.zeros(a.shape[:-1] + (3 - a.shape[-1],), dtype=a.dtype)], axis=-1)
 
 
-# /observables read back: (name, attribute of the trajectory, a vector per frame)
-_READ_OBSERVABLES = [(name, attr, attr in ("momentum", "angular_momentum", "impulse_balance")) for name, (attr, _) in OBSERVABLES.items()]
+def _in_plane(found: Found, live: Live | None, word: str, ds: Any, a: np.ndarray) -> None:
+    """Refuses, in a 2D world's file (3 coordinates), a z that is not 0 where a particle exists."""
+    if found.dim == 2 and found.shape[2] == 3:
+        z = a[..., 2] if live is None else live.masked(a)[..., 2]
+        if z.any():
+            i, k = np.unravel_index(int(np.argmax(z != 0)), z.shape)
+            raise found.r.fail(f"{where(word, ds)} has z = {number(z[i, k])} at frame {i}, particle {k}, but {found.params.name} says dim = 2 (z = 0)")
 
 
-def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTrajectory:
-    h5py = import_h5py()
-    missing = [name for name in ("h5md", "particles") if not isinstance(f.get(name), h5py.Group)]
-    if missing:
-        raise fail(path, f"a foreign HDF5 file, not H5MD: it has no /{' or /'.join(missing)} group")
-    version = np.asarray(f["h5md"].attrs.get("version", [])).reshape(-1)
-    if version.size != 2 or version[0] != 1:
-        raise fail(path, f"unsupported H5MD version {version.tolist()}; kinema reads version 1.x")
-    groups = [k for k, g in f["particles"].items() if isinstance(g, h5py.Group)]
-    if group is None:
-        if len(groups) != 1:
-            raise fail(path, f"holds {len(groups)} particle groups; choose one with group=: {', '.join(groups) or '(none)'}")
-        group = groups[0]
-    if group not in groups:
-        raise fail(path, f"has no particle group {group!r}; available: {', '.join(groups) or '(none)'}")
-    p = f["particles"][group]
-    creator = f["h5md"].get("creator")
-    r = Reader(path, None if creator is None else as_text(creator.attrs.get("name", "")))
-
-    # -- What is there: types and shapes, before any data is read. ---------------------------
-    x_ds, step_ds, t_ds = element_datasets(path, p, "position", required=True)
-    shape = r.numbers("positions", x_ds)
-    if len(shape) != 3 or shape[2] not in (2, 3):
-        raise r.fail(f"{where('positions', x_ds)} has shape {shape}; it must be (frames, particles, 3) or (frames, particles, 2)")
-    frames, n, d = shape
-    if frames == 0:
-        raise r.fail(f"0 frames: {where('positions', x_ds)} has shape {shape}")
-    if n == 0:
-        raise r.fail(f"0 particles: {where('positions', x_ds)} has shape {shape}")
-    if t_ds is None:
-        raise r.fail(f"{p.name}/position has no time dataset; kinema needs the time of each frame")
-    r.clock("times", t_ds, "positions", x_ds)
-    r.clock("steps", step_ds, "positions", x_ds, integer=True)
-    box = p.get("box")
-    if isinstance(box, h5py.Group) and "dimension" in box.attrs:
-        dimension = box.attrs["dimension"]
-        if np.asarray(dimension).size != 1 or dtype_problem(np.asarray(dimension).dtype, integer=True) or int(np.asarray(dimension).reshape(())) != d:
-            raise r.fail(f"attribute 'dimension' ({box.name}) = {shown(dimension)} but {where('positions', x_ds)} has {d} coordinates per particle")
-    units: dict[str, float] = {"positions": r.unit("positions", x_ds, LENGTH), "times": r.unit("times", t_ds, TIME)}
-
-    def vector_bytes(ds: Any, factor: float) -> int:
-        # Read, converted to float64 when the unit is not SI (in place when it is float64),
-        # and in 2D padded with z = 0 (a copy).
-        converted = factor != 1.0 and ds.dtype != np.float64
-        out = 8 if converted else ds.dtype.itemsize
-        return ds.size * ds.dtype.itemsize + (ds.size * 8 if converted else 0) + (frames * n * 3 * out if d == 2 else 0)
-
-    r.plan("positions", x_ds, vector_bytes(x_ds, units["positions"]))
-    r.plan("times", t_ds)
-    r.plan("steps", step_ds)
-
-    vel = element_datasets(path, p, "velocity")
-    if vel is not None:
-        v_ds = vel[0]
-        if r.numbers("velocities", v_ds) != shape:
-            raise r.fail(f"{where('velocities', v_ds)} has shape {v_ds.shape} but {where('positions', x_ds)} {shape}; they must match")
-        r.clock("steps", vel[1], "velocities", v_ds, integer=True)
-        if vel[2] is not None:
-            r.clock("times", vel[2], "velocities", v_ds)
-        units["velocities"] = r.unit("velocities", v_ds, (1, -1, 0))
-        r.plan("velocities", v_ds, vector_bytes(v_ds, units["velocities"]))
-
-    # Spin (kinema's elements: H5MD has none): the angular velocities and the orientations,
-    # one row per particle and frame as the positions
-    spin = {}
-    for name, attr, width, dims in (("angular_velocity", "angular_velocities", 3, TIME_INVERSE), ("orientation", "orientations", 4, None)):
-        e = element_datasets(path, p, name)
-        if e is None:
-            continue
-        ds = e[0]
-        if r.numbers(attr, ds) != (frames, n, width):
-            raise r.fail(
-                f"{where(attr, ds)} has shape {ds.shape}; it must be ({frames}, {n}, {width}), as {where('positions', x_ds)} {shape} with {width} values"
-            )
-        r.clock("steps", e[1], attr, ds, integer=True)
-        if e[2] is not None:
-            r.clock("times", e[2], attr, ds)
-        if dims is not None:
-            units[attr] = r.unit(attr, ds, dims)
-        r.plan(attr, ds, ds.size * 8 * 2)
-        spin[attr] = ds
-    contacts = _contact_datasets(r, f, p)
-
-    # A varying number of particles (births and deaths): H5MD marks the entries of a particle
-    # that does not exist at a frame by the fill value of the time-dependent id element.
-    id_table = varying_ids(path, p)
-    if id_table is not None:
-        if r.numbers("ids", id_table, True) != (frames, n):
-            raise r.fail(
-                f"{where('ids', id_table)} has shape {id_table.shape}; with a fill value (particles that come and go) it must be "
-                f"({frames}, {n}), one id per frame and particle ({where('positions', x_ds)} {shape})"
-            )
-        r.plan("ids", id_table, id_table.size * 8 * 4)  # the table, the entries present and their frames and columns
-
-    per_particle = {}  # attribute: (dataset, word, whether it is a time-dependent element's value)
-    # species: read where the file names them: kinema's species_index, each particle's index
-    # among its `names` (its species element holds atomic numbers, for ASE), or, in kinema's
-    # files before it, the species element with `names`; H5MD's own species are integers with
-    # no names, which a trajectory has no use for (znh5md writes them as floats)
-    named = next((k for k in ("species_index", "species") if k in p and "names" in p[k].attrs), None)
-    each = (
-        ("mass", "masses", False),
-        ("radius", "radii", False),
-        ("moment_of_inertia", "inertia", False),
-        ("id", "ids", True),
-        (named, "species", True),
-        ("color", "colors", False),
-        ("collision_group", "groups", True),  # kinema's element
-    )
-    for name, attr, integer in each:
-        if name is None or name not in p or (name == "id" and id_table is not None):
-            continue
-        tail = (3,) if attr == "colors" else ()  # r, g, b per particle
-        obj = p[name]
-        if isinstance(obj, h5py.Dataset):
-            if r.numbers(attr, obj, integer) != (n, *tail):
-                raise r.fail(
-                    f"{where(attr, obj)} has shape {obj.shape} but there are {n} particles ({where('positions', x_ds)} {shape}): "
-                    f"it must be {(n, *tail)}, one value per particle"
-                )
-            r.plan(attr, obj)
-            per_particle[attr] = (obj, False)
-        else:
-            obj = element_datasets(path, p, name)[0]
-            s = r.numbers(attr, obj, integer)
-            if len(s) != 2 + len(tail) or s[0] == 0 or s[1] != n or s[2:] != tail or (id_table is not None and s[0] != frames):
-                must = ", ".join(["frames", str(n), *map(str, tail)])
-                raise r.fail(f"{where(attr, obj)} has shape {s}; it must be ({must}), one value per particle ({where('positions', x_ds)} {shape})")
-            r.plan(attr, obj, (frames if id_table is not None else 1) * n * (3 if tail else 1) * obj.dtype.itemsize)
-            per_particle[attr] = (obj, True)
-        if attr in ("masses", "radii", "inertia"):
-            units[attr] = r.unit(attr, obj, {"masses": MASS, "radii": LENGTH, "inertia": MOMENT_OF_INERTIA}[attr])
-
-    # The box: edges (D,) or a (D, D) matrix of edge vectors, fixed, or time-dependent with
-    # one row per frame (a box that may change). Its boundary is "periodic" or "none" on each
-    # axis, and its edges, periodic or not, lie along the axes (kinema's box is axis-aligned).
-    periodic = None
-    edges_ds = None
-    edges_by_frame = False
-    flags: list[bool] = []
-    if isinstance(box, h5py.Group) and "boundary" in box.attrs:
-        boundary = [b.decode("utf-8", "replace") if isinstance(b, bytes) else str(b) for b in np.asarray(box.attrs["boundary"]).reshape(-1)]
-        problem = boundary_problem(boundary)
-        if problem is not None:
-            raise r.fail(f"attribute 'boundary' ({box.name}) {problem}")
-        flags = [b == "periodic" for b in boundary]
-    edges = box.get("edges") if isinstance(box, h5py.Group) else None
-    if any(flags):
-        periodic = tuple((flags + [False] * 3)[:3])
-        if isinstance(edges, h5py.Group):
-            edges_ds, edges_step, edges_time = element_datasets(path, box, "edges")
-            s = r.numbers("box edges", edges_ds)
-            if s not in ((frames, d), (frames, d, d)):
-                raise r.fail(
-                    f"{where('box edges', edges_ds)} has shape {s}; it must be ({frames}, {d}), one edge per axis at each frame of "
-                    f"{where('positions', x_ds)} {shape} (or ({frames}, {d}, {d}), edge vectors)"
-                )
-            r.clock("steps", edges_step, "box edges", edges_ds, integer=True)
-            if edges_time is not None:
-                r.clock("times", edges_time, "box edges", edges_ds)
-            edges_by_frame = True
-        elif isinstance(edges, h5py.Dataset):
-            edges_ds = edges
-            s = r.numbers("box edges", edges_ds)
-            if s not in ((d,), (d, d)):
-                raise r.fail(f"{where('box edges', edges_ds)} has shape {s}; it must be ({d},), one edge per axis (or ({d}, {d}), edge vectors)")
-        else:
-            raise r.fail(f"{box.name} has periodic boundaries ({', '.join(boundary)}) but no edges dataset")
-        units["box edges"] = r.unit("box edges", edges_ds, LENGTH)
-        r.plan("box edges", edges_ds, edges_ds.size * (edges_ds.dtype.itemsize + 8))
-    else:
-        # Open boundaries: the edges are not used, but edge vectors (a matrix per frame, or
-        # one) must still lie along the axes: kinema would drop a tilt it cannot hold.
-        by_frame = isinstance(edges, h5py.Group)  # time-dependent: (F, D, D) edge vectors; fixed: (D, D)
-        value = edges.get("value") if by_frame else edges
-        if isinstance(value, h5py.Dataset) and value.shape is not None and dtype_problem(value.dtype) is None:
-            if len(value.shape) == 2 + by_frame and value.shape[-2:] == (d, d):
-                edges_ds, edges_by_frame = value, by_frame
-                r.plan("box edges", edges_ds)
-
-    observables: dict[str, Any] = {}  # attribute or ("potential", force name): value dataset
-    obs = f.get("observables")
-    if isinstance(obs, h5py.Group):
-
-        def observable(parent: Any, name: str, vector: bool = False, required: bool = False, unit: str | None = "J") -> Any:
-            e = element_datasets(path, parent, name, required)
-            if e is None:
-                return None
-            value, step, time = e
-            s = r.numbers(name, value)
-            good = len(s) == 2 and s[1] in (2, 3) if vector else len(s) == 1
-            if not good or s[0] != frames:
-                must = f"({frames}, 3)" if vector else f"({frames},)"
-                raise r.fail(f"{where(name, value)} has shape {s}; it must be {must}, one value per frame of {where('positions', x_ds)} {shape}")
-            r.clock("steps", step, name, value, integer=True)
-            if time is not None:
-                r.clock("times", time, name, value)
-            if unit is not None:  # the kinema unit of the observable: the dimension its unit must have
-                units[value.name] = r.unit(name, value, parse_unit(unit)[1])
-            r.plan(name, value, value.size * max(8, value.dtype.itemsize))
-            return value
-
-        for name, attr, vector in _READ_OBSERVABLES:
-            observables[attr] = observable(obs, name, vector, unit=OBSERVABLES[name][1])
-        observables["total"] = observable(obs, "total_energy")
-        by_force = obs.get(BY_FORCE)
-        if isinstance(by_force, h5py.Group):
-            names = [n.decode() if isinstance(n, bytes) else str(n) for n in np.asarray(by_force.attrs.get("names", list(by_force))).reshape(-1)]
-            for name in names:
-                observables[("potential", name)] = observable(by_force, name, required=True)
-        elif "potential_energy" in obs:
-            observables[("potential", "potential")] = observable(obs, "potential_energy")
-
-    params = f.get("parameters/kinema")
-    dt = method = fps = None
-    dim = d  # kinema's dimension: a 2D world's file holds z = 0 and says dim = 2 (below)
-    colliders: list[dict[str, Any]] = []
-    if isinstance(params, h5py.Group):
-        if "dim" in params.attrs:
-            raw = params.attrs["dim"]
-            a = np.asarray(raw)
-            if a.size != 1 or dtype_problem(a.dtype, integer=True) is not None or int(a.reshape(())) not in (2, d):
-                raise r.fail(
-                    f"attribute 'dim' ({params.name}) = {shown(raw)} is not the dimension of the world (2, or {d}: {where('positions', x_ds)} has {d} coordinates)"
-                )
-            dim = int(a.reshape(()))
-        if "dt" in params.attrs:
-            raw = params.attrs["dt"]
-            a = np.asarray(raw)
-            if a.size != 1 or dtype_problem(a.dtype) is not None or not (np.isfinite(a).all() and a.reshape(()) > 0):
-                raise r.fail(f"attribute 'dt' ({params.name}) = {shown(raw)} is not a positive number (the time step in s)")
-            dt = float(a.reshape(()))
-        if "method" in params.attrs:
-            raw = utf8(params.attrs["method"])
-            if not isinstance(raw, str):
-                raise r.fail(f"attribute 'method' ({params.name}) = {shown(raw)} is not the name of an integration method")
-            method = raw
-        if "fps" in params.attrs:
-            raw = params.attrs["fps"]
-            a = np.asarray(raw)
-            if a.size != 1 or dtype_problem(a.dtype) is not None or not (np.isfinite(a).all() and a.reshape(()) > 0):
-                raise r.fail(f"attribute 'fps' ({params.name}) = {shown(raw)} is not a positive number (the frames per second recorded)")
-            fps = float(a.reshape(()))
-        colliders = _read_colliders(path, params, dim)
-    if isinstance(obs, h5py.Group) and "pressure" in obs:  # (F, 3, 3), in Pa (N m-1 in 2D)
-        value, p_step, p_time = element_datasets(path, obs, "pressure", True)
-        s = r.numbers("pressure", value)
-        if tuple(s) != (frames, 3, 3):
-            raise r.fail(f"{where('pressure', value)} has shape {s}; it must be ({frames}, 3, 3), a tensor per frame of {where('positions', x_ds)} {shape}")
-        r.clock("steps", p_step, "pressure", value, integer=True)
-        if p_time is not None:
-            r.clock("times", p_time, "pressure", value)
-        units[value.name] = r.unit("pressure", value, parse_unit(PRESSURE_UNIT[dim])[1])
-        r.plan("pressure", value, value.size * max(8, value.dtype.itemsize))
-        observables["pressure"] = value
-    colliders_k = None  # (F, K, 3) each, K the same in all: a row per collider
-    for name, (attr, si) in COLLIDER_OBSERVABLES.items():
-        if not (isinstance(obs, h5py.Group) and name in obs):
-            continue
-        value, c_step, c_time = element_datasets(path, obs, name, True)
-        s = r.numbers(name, value)
-        if len(s) != 3 or s[0] != frames or s[2] != 3 or colliders_k not in (None, s[1]):
-            k = "K" if colliders_k is None else colliders_k
-            raise r.fail(
-                f"{where(name, value)} has shape {s}; it must be ({frames}, {k}, 3), a vector per frame of {where('positions', x_ds)} {shape} and collider"
-            )
-        colliders_k = s[1]
-        r.clock("steps", c_step, name, value, integer=True)
-        if c_time is not None:
-            r.clock("times", c_time, name, value)
-        units[value.name] = r.unit(name, value, parse_unit(si)[1])
-        r.plan(name, value, value.size * max(8, value.dtype.itemsize))
-        observables[attr] = value
-
-    r.check_memory(memory)
-
-    # -- The data, and its values. ------------------------------------------------------------
-    def three(a: np.ndarray) -> np.ndarray:
-        return a if a.shape[-1] == 3 else np.concatenate([a, np.zeros(a.shape[:-1] + (3 - a.shape[-1],), dtype=a.dtype)], axis=-1)
-
+def _read_frames(found: Found) -> tuple[LoadedTrajectory, Live | None]:
+    """The frames read: times, steps, positions, velocities and spins (and, for particles
+    that come and go, which are alive at each frame: `Live`)."""
+    r, t_ds, step_ds, x_ds, vel, units = found.r, found.t_ds, found.step_ds, found.x_ds, found.vel, found.units
+    frames, n, _ = found.shape
     try:
         t = to_si(per_frame(t_ds, t_ds[()], frames, np.float64), units["times"])
         step = per_frame(step_ds, step_ds[()], frames, np.int64)
@@ -677,33 +212,32 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
     problem = increase_problem(t)
     if problem is not None:
         raise r.fail(f"{where('times', t_ds)} {problem}")
-    live = None if id_table is None else Live(r, id_table, frames, n)
-
-    def plane(word: str, ds: Any, a: np.ndarray) -> None:  # a 2D world's file: z = 0 where a particle exists
-        if dim == 2 and d == 3:
-            z = a[..., 2] if live is None else live.masked(a)[..., 2]
-            if z.any():
-                i, k = np.unravel_index(int(np.argmax(z != 0)), z.shape)
-                raise r.fail(f"{where(word, ds)} has z = {number(z[i, k])} at frame {i}, particle {k}, but {params.name} says dim = 2 (z = 0)")
+    live = None if found.id_table is None else Live(r, found.id_table, frames, n)
 
     x = to_si(x_ds[()], units["positions"])
     r.finite("positions", x_ds, x if live is None else live.masked(x), ("frame", "particle"))
-    plane("positions", x_ds, x)
+    _in_plane(found, live, "positions", x_ds, x)
     velocities = None
     if vel is not None:
         v = to_si(vel[0][()], units["velocities"])
         r.finite("velocities", vel[0], v if live is None else live.masked(v), ("frame", "particle"))
-        plane("velocities", vel[0], v)
-        velocities = three(v) if live is None else live.columns(three(v))
-    positions = three(x) if live is None else live.columns(three(x))  # 2D: z = 0 where a particle exists
-    out = LoadedTrajectory(t=t, positions=positions, velocities=velocities, step=step, dim=dim, group=group, path=path)
+        _in_plane(found, live, "velocities", vel[0], v)
+        velocities = _three(v) if live is None else live.columns(_three(v))
+    positions = _three(x) if live is None else live.columns(_three(x))  # 2D: z = 0 where a particle exists
+    out = LoadedTrajectory(t=t, positions=positions, velocities=velocities, step=step, dim=found.dim, group=found.group, path=found.path)
     if live is not None:
         out.ids, out.alive = live.ids, live.alive
-    for attr, ds in spin.items():
+    for attr, ds in found.spin.items():
         a = to_si(ds[()], units.get(attr, Fraction(1)))
         r.finite(attr, ds, a if live is None else live.masked(a), ("frame", "particle"))
         setattr(out, attr, np.asarray(a, dtype=np.float64) if live is None else live.columns(a))
-    for attr, (ds, element) in per_particle.items():
+    return out, live
+
+
+def _read_per_particle(found: Found, out: LoadedTrajectory, live: Live | None) -> None:
+    """Each particle's values read into `out`, checked (masses > 0, radii >= 0, ...)."""
+    r, units = found.r, found.units
+    for attr, (ds, element) in found.per_particle.items():
         if live is None:
             a = ds[0] if element else ds[()]
         else:  # each particle's value where it first exists
@@ -721,35 +255,35 @@ def read(path: Path, f: Any, group: str | None, memory: int | None) -> LoadedTra
         if problem is not None:
             raise r.fail(f"{where(attr, ds)} {problem}")
         if attr == "species":  # names where the file gives them (kinema's ``names``), else none
-            a = _species_names(r, p[named], np.asarray(a))
+            a = _species_names(r, found.p[found.named], np.asarray(a))
         setattr(out, attr, a)
+
+
+def _read_box(found: Found, out: LoadedTrajectory) -> None:
+    """The periodic box read into `out` (its edges at each frame), or open boundaries' edge
+    vectors checked to lie along the axes."""
+    r, edges_ds, edges_by_frame, periodic = found.r, found.edges_ds, found.edges_by_frame, found.periodic
+    frames, _, d = found.shape
     if periodic is None and edges_ds is not None:  # open boundaries with edge vectors
         rows = np.asarray(edges_ds[()])
         _refuse_triclinic(r, edges_ds, rows if edges_by_frame else rows[None], edges_by_frame)
     if periodic is not None:
-        edges = _box_edges(r, edges_ds, to_si(np.asarray(edges_ds[()], dtype=np.float64), units["box edges"]), edges_by_frame, periodic)
+        edges = _box_edges(r, edges_ds, to_si(np.asarray(edges_ds[()], dtype=np.float64), found.units["box edges"]), edges_by_frame, periodic)
         out.periodic = periodic
         out.box_edges_by_frame = np.ascontiguousarray(np.broadcast_to(np.pad(edges, [(0, 0), (0, 3 - d)]), (frames, 3)))
         out.box_edges = out.box_edges_by_frame[0].copy()
-    # Observables are read as they are: a potential energy may be -inf (a particle exactly at
-    # an unsoftened attractor point).
-    for key, ds in observables.items():
+
+
+def _read_observables(found: Found, out: LoadedTrajectory) -> None:
+    """The observables read into `out` as they are: a potential energy may be -inf (a particle
+    exactly at an unsoftened attractor point); the total energy made where the file has none."""
+    for key, ds in found.observables.items():
         if ds is None:
             continue
-        a = to_si(ds[()], units.get(ds.name, 1.0))
+        a = to_si(ds[()], found.units.get(ds.name, 1.0))
         if isinstance(key, tuple):
             out.potential[key[1]] = a
         else:
             setattr(out, key, a)
     if out.total is None and out.kinetic is not None:
         out.total = out.kinetic + sum(out.potential.values(), np.zeros_like(out.kinetic))
-    out.dt, out.method, out.fps, out.colliders = dt, method, fps, colliders
-    out.springs = _read_springs(r, f, p, out.ids if out.ids is not None else np.arange(out.positions.shape[1]))
-    if contacts is not None:
-        out.contact_record = _read_contacts(r, contacts, frames, out.ids if out.ids is not None else np.arange(out.positions.shape[1]))
-    author = f["h5md"].get("author")
-    creator = f["h5md"].get("creator")
-    out.author = None if author is None else as_text(author.attrs.get("name", ""))
-    if creator is not None:
-        out.creator = f"{as_text(creator.attrs.get('name', ''))} {as_text(creator.attrs.get('version', ''))}".strip()
-    return out

@@ -45,6 +45,8 @@ def _lammps_ids(fr: Frames) -> np.ndarray:
     return ids + 1
 
 
+# Over 100 lines (issue 50) by its docstring (48 lines): the dump's items and columns as
+# LAMMPS, ASE, OVITO and MDAnalysis read them; the code is 53 lines.
 def write_lammps(traj: Any, fr: Frames, path: Path, on_frame: Callable[[int], Any], plain: bool = False) -> list[Path]:
     """Write `fr` to one LAMMPS text dump file at `path`, the frames one after the other, as
     LAMMPS's `dump custom` writes them; returns `[path]`.

@@ -152,64 +152,76 @@ def read_gsd(path: Path, units: Any = None) -> LoadedTrajectory:
         dim = None
         size = path.stat().st_size
         for k in range(count):
-            _check_counts(f, path, k, size)
-            try:
-                frame = f[k]
-            except IndexError:  # gsd.hoomd cannot view a chunk of strings 0 bytes wide
-                chunk = next(
-                    (
-                        n
-                        for n in ("particles/types", "bonds/types", "angles/types", "dihedrals/types", "impropers/types", "pairs/types", "constraints/types")
-                        if _empty_names(f, k, n)
-                    ),
-                    None,
-                )
-                if chunk is None:
-                    raise
-                raise fail(path, f"frame {k}: {chunk} holds only empty names (a chunk of width 0); GSD type names must be non-empty") from None
-            except (RuntimeError, OSError, ValueError) as e:
-                raise fail(path, f"frame {k} cannot be read ({str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__})") from None
-            where = f"frame {k}"
-            c, p = frame.configuration, frame.particles
-            box = np.asarray(c.box, dtype=np.float64)
-            if np.any(box[3:] != 0):
-                raise fail(path, f"{where}: the box has tilt factors {box[3:].tolist()}; kinema reads boxes along the axes only")
-            dim = int(c.dimensions) if dim is None else dim
-            origin = _log(f, k, "kinema/origin") if own else None
-            origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64).reshape(3)
-            # kinema's files say which axes are periodic; along another its box is the cell
-            # doubled about its centre (room beyond the walls, gsd_writer.write_gsd)
-            flags = _log(f, k, "kinema/periodic") if own else None
-            periodic = np.array([True, True, dim == 3]) if flags is None else np.asarray(flags).reshape(3).astype(bool) & np.array([True, True, dim == 3])
-            lengths = np.where(periodic | (flags is None), 1.0, 0.5) * box[:3]
-            ids = _log(f, k, "particles/kinema/id") if own else None
-            time = _log(f, k, "kinema/time") if own else None
-            types = [str(t) for t in p.types]
-            typeid = np.asarray(p.typeid, dtype=np.int64)
-            if typeid.size and (typeid.min() < 0 or typeid.max() >= len(types)):
-                raise fail(path, f"{where}: particles/typeid holds {int(typeid.max())}, but particles/types names {len(types)} types")
-            color = _log(f, k, "particles/Color") if own else None
-            groups = _log(f, k, "particles/collision_group") if own else None
-            spin = _spin(f, k, p, own)
-            if ids is not None and frame.bonds.N and list(frame.bonds.types) == ["spring"]:
-                ends = np.asarray(ids, dtype=np.int64).reshape(-1)[np.asarray(frame.bonds.group, dtype=np.int64).reshape(-1, 2)]
-                springs.extend(map(tuple, ends.tolist()))
-            frames.append(
-                RawFrame(
-                    positions=np.asarray(p.position, dtype=np.float64).reshape(-1, 3) + origin,
-                    where=where,
-                    ids=None if ids is None else np.asarray(ids, dtype=np.int64).reshape(-1),
-                    velocities=None if own and _log(f, k, "kinema/velocities_unknown") is not None else np.asarray(p.velocity, dtype=np.float64).reshape(-1, 3),
-                    masses=np.asarray(p.mass, dtype=np.float64).reshape(-1),
-                    radii=np.asarray(p.diameter, dtype=np.float64).reshape(-1) / 2,
-                    species=np.array(types, dtype=object)[typeid] if types else None,
-                    colors=None if color is None else np.asarray(color, dtype=np.float64).reshape(-1, 3),
-                    groups=None if groups is None else _groups(path, groups, where),
-                    **spin,
-                    time=None if time is None else float(np.asarray(time).reshape(-1)[0]),
-                    step=int(c.step),
-                    box=Box(origin - lengths / 2, origin + lengths / 2, periodic),
-                )
-            )
+            raw, dim = _raw_frame(f, path, k, _frame(f, path, k, size), own, dim, springs)
+            frames.append(raw)
         creator = "kinema" if own else (f.file.application or None)
     return assemble(path, frames, unit_scales, dim=dim or 3, creator=creator, springs=list(dict.fromkeys(springs)))
+
+
+def _frame(f: Any, path: Path, k: int, size: int) -> Any:
+    """Frame `k` of the open GSD file `f` (of `size` bytes), its chunks' counts checked
+    first (`_check_counts`); a frame gsd cannot read is refused in one line."""
+    _check_counts(f, path, k, size)
+    try:
+        return f[k]
+    except IndexError:  # gsd.hoomd cannot view a chunk of strings 0 bytes wide
+        chunk = next(
+            (
+                n
+                for n in ("particles/types", "bonds/types", "angles/types", "dihedrals/types", "impropers/types", "pairs/types", "constraints/types")
+                if _empty_names(f, k, n)
+            ),
+            None,
+        )
+        if chunk is None:
+            raise
+        raise fail(path, f"frame {k}: {chunk} holds only empty names (a chunk of width 0); GSD type names must be non-empty") from None
+    except (RuntimeError, OSError, ValueError) as e:
+        raise fail(path, f"frame {k} cannot be read ({str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__})") from None
+
+
+def _raw_frame(f: Any, path: Path, k: int, frame: Any, own: bool, dim: int | None, springs: list[tuple[int, int]]) -> tuple[RawFrame, int]:
+    """The GSD `frame` (the `k`-th of `f`; `own`: a file kinema wrote) as a `RawFrame`, and
+    the file's dimension (the first frame's, `dim` once known); the ids at the ends of its
+    springs (kinema's bonds of type "spring") added to `springs`."""
+    where = f"frame {k}"
+    c, p = frame.configuration, frame.particles
+    box = np.asarray(c.box, dtype=np.float64)
+    if np.any(box[3:] != 0):
+        raise fail(path, f"{where}: the box has tilt factors {box[3:].tolist()}; kinema reads boxes along the axes only")
+    dim = int(c.dimensions) if dim is None else dim
+    origin = _log(f, k, "kinema/origin") if own else None
+    origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64).reshape(3)
+    # kinema's files say which axes are periodic; along another its box is the cell
+    # doubled about its centre (room beyond the walls, gsd_writer.write_gsd)
+    flags = _log(f, k, "kinema/periodic") if own else None
+    periodic = np.array([True, True, dim == 3]) if flags is None else np.asarray(flags).reshape(3).astype(bool) & np.array([True, True, dim == 3])
+    lengths = np.where(periodic | (flags is None), 1.0, 0.5) * box[:3]
+    ids = _log(f, k, "particles/kinema/id") if own else None
+    time = _log(f, k, "kinema/time") if own else None
+    types = [str(t) for t in p.types]
+    typeid = np.asarray(p.typeid, dtype=np.int64)
+    if typeid.size and (typeid.min() < 0 or typeid.max() >= len(types)):
+        raise fail(path, f"{where}: particles/typeid holds {int(typeid.max())}, but particles/types names {len(types)} types")
+    color = _log(f, k, "particles/Color") if own else None
+    groups = _log(f, k, "particles/collision_group") if own else None
+    spin = _spin(f, k, p, own)
+    if ids is not None and frame.bonds.N and list(frame.bonds.types) == ["spring"]:
+        ends = np.asarray(ids, dtype=np.int64).reshape(-1)[np.asarray(frame.bonds.group, dtype=np.int64).reshape(-1, 2)]
+        springs.extend(map(tuple, ends.tolist()))
+    raw = RawFrame(
+        positions=np.asarray(p.position, dtype=np.float64).reshape(-1, 3) + origin,
+        where=where,
+        ids=None if ids is None else np.asarray(ids, dtype=np.int64).reshape(-1),
+        velocities=None if own and _log(f, k, "kinema/velocities_unknown") is not None else np.asarray(p.velocity, dtype=np.float64).reshape(-1, 3),
+        masses=np.asarray(p.mass, dtype=np.float64).reshape(-1),
+        radii=np.asarray(p.diameter, dtype=np.float64).reshape(-1) / 2,
+        species=np.array(types, dtype=object)[typeid] if types else None,
+        colors=None if color is None else np.asarray(color, dtype=np.float64).reshape(-1, 3),
+        groups=None if groups is None else _groups(path, groups, where),
+        **spin,
+        time=None if time is None else float(np.asarray(time).reshape(-1)[0]),
+        step=int(c.step),
+        box=Box(origin - lengths / 2, origin + lengths / 2, periodic),
+    )
+    return raw, dim

@@ -260,6 +260,6 @@ class _Reading:
 
 def linear_to_srgb(c: np.ndarray) -> np.ndarray:
     """Linear values in [0, 1] to sRGB-encoded ones (IEC 61966-2-1), the inverse of
-    `usd_writer._srgb_to_linear`; clipped to [0, 1]."""
+    `_usd_colliders._srgb_to_linear`; clipped to [0, 1]."""
     c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
     return np.clip(np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055), 0.0, 1.0)

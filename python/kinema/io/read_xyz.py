@@ -163,6 +163,28 @@ def _ase_masses(path: Path, names: np.ndarray, warned: list[bool]) -> np.ndarray
     return np.array([atomic_masses[atomic_numbers[n]] for n in names], dtype=np.float64)
 
 
+def _frame_columns(path: Path, rows: list[str], first: int, keys: dict[str, str], where: str) -> dict[str, np.ndarray]:
+    """A frame's `rows` (the first at line `first`) as the columns its `Properties` key names
+    (`species:S:1:pos:R:3` when it names none), each parsed as its kind says; a row of
+    another width is refused, naming its line."""
+    n = len(rows)
+    props = _properties(path, keys.get("Properties", "species:S:1:pos:R:3"), where)
+    width = sum(c for _, _, c in props)
+    words = " ".join(rows).split()
+    if len(words) != n * width:
+        for r, line in enumerate(rows):
+            if len(line.split()) != width:
+                raise fail(path, f"{where}, line {first + r}: {len(line.split())} values, but Properties names {width} columns")
+    table = np.array(words, dtype=str).reshape(n, width)
+    columns: dict[str, np.ndarray] = {}
+    start = 0
+    for name, kind, count in props:
+        a = _column(path, table, start, count, kind, name, where)
+        columns[name] = a if count > 1 else a[:, 0]
+        start += count
+    return columns
+
+
 def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
     """Read the extended XYZ (or plain XYZ) file `path`.
 
@@ -211,20 +233,7 @@ def read_xyz(path: Path, units: Any = None) -> LoadedTrajectory:
             if file_units is not None and keys["units"] != file_units:
                 raise fail(path, f"{where}: units={keys['units']} but an earlier frame says units={file_units}")
             file_units = keys["units"]
-        props = _properties(path, keys.get("Properties", "species:S:1:pos:R:3"), where)
-        width = sum(c for _, _, c in props)
-        words = " ".join(lines[i + 2 : i + 2 + n]).split()
-        if len(words) != n * width:
-            for r, line in enumerate(lines[i + 2 : i + 2 + n]):
-                if len(line.split()) != width:
-                    raise fail(path, f"{where}, line {i + 3 + r}: {len(line.split())} values, but Properties names {width} columns")
-        table = np.array(words, dtype=str).reshape(n, width)
-        columns: dict[str, np.ndarray] = {}
-        start = 0
-        for name, kind, count in props:
-            a = _column(path, table, start, count, kind, name, where)
-            columns[name] = a if count > 1 else a[:, 0]
-            start += count
+        columns = _frame_columns(path, lines[i + 2 : i + 2 + n], i + 3, keys, where)
         pos = _first(columns, _POSITIONS)
         if pos is None or pos.ndim != 2 or pos.shape[1] != 3 or pos.dtype != np.float64:
             raise fail(path, f"{where}: Properties has no pos:R:3 column (the positions)")

@@ -106,8 +106,36 @@ def to_scene(world: Any) -> Scene:
     ``ValueError``) of one line naming the key, the particle index and the value:
     ``<world>: particles[0].mass[3]: -1.0 is invalid: masses must be finite and > 0 kg ...``."""
     old: Scene | None = world.scene
-    n = len(world)
     state = world._state()  # (as it is: what was written into the views is checked here, not handed to the engine)
+    data: dict[str, Any] = {
+        "world": {"dim": world.dim, "dt": world.dt, "method": world.method, **({"spin": True} if world.spin else {})},
+        "particles": _particle_blocks(world, state),
+        "forces": _force_tables(world, state),
+        "colliders": _collider_tables(world),
+        "emitters": _emitter_tables(state),
+        "kill_volumes": _kill_tables(state),
+    }
+    if old is not None:
+        data["world"].update(duration=old.world.duration, fps=old.world.fps)
+        data["render"] = old.render.model_dump(exclude_none=True)
+        data["output"] = old.output.model_dump()
+        if old.analysis is not None:
+            data["analysis"] = old.analysis.model_dump(exclude_none=True)
+    if world.collisions is not None:
+        data["collisions"] = _collision_table(world)
+    try:
+        return Scene.from_dict(data, _SOURCE)
+    except SceneError as e:  # one line per problem: the first, and how many more
+        lines = str(e).splitlines() or [f"{_SOURCE}: not a valid scene"]
+        more = f" (and {len(lines) - 1} more problems)" if len(lines) > 1 else ""
+        raise SceneError(lines[0] + more) from None
+
+
+def _particle_blocks(world: Any, state: Any) -> list[dict[str, Any]]:
+    """The world's particles as one explicit list block (none without particles): positions,
+    velocities, masses, radii, pins, and where the world has them species, groups, spins and
+    each particle's own restitution and friction; checked (`_check_particles`)."""
+    n = len(world)
     inverse = np.asarray(state.engine.inverse_masses)
     blocks = []
     if n:
@@ -134,6 +162,12 @@ def to_scene(world: Any) -> Scene:
                     block[name] = arr.tolist()
         _check_particles(block, world.dim)
         blocks.append(block)
+    return blocks
+
+
+def _force_tables(world: Any, state: Any) -> list[dict[str, Any]]:
+    """The world's forces as [[forces]] tables, in the order they were added; a force a scene
+    cannot hold (a `PythonForce`) raises `ValueError`."""
     forces = []
     spring_offset = 0  # the springs' end ids, in the order the Spring forces were added
     for index, f in enumerate(world.forces):
@@ -161,27 +195,37 @@ def to_scene(world: Any) -> Scene:
             entry |= {} if coefficient is None else {"coefficient": coefficient}
             forces.append(entry | _falloff_entry(f.falloff))
         elif isinstance(f, Spring):
-            # The springs whose two ends live, at the ends' current indices (particles removed
-            # since shifted them; a spring with a dead end died with it).
-            count = len(f._args[0])
-            ends = state.spring_ids[spring_offset : spring_offset + count]
-            spring_offset += count
-            ids = world.ids
-            at = np.minimum(np.searchsorted(ids, ends), max(len(ids) - 1, 0))
-            live = np.all(ids[at] == ends, axis=1) if len(ids) else np.zeros(count, dtype=bool)
-            i, j = at[live, 0], at[live, 1]
-            rest = f.rest_length
-            if rest is None:  # the lengths the engine took when the spring was added
-                rest = state.spring_rest[index]
-            spring = {"type": "spring", "i": i.tolist(), "j": j.tolist()}
-            for name, value in (("k", f.k), ("rest_length", rest), ("damping", f.damping)):
-                arr = np.asarray(value, dtype=float)
-                if arr.ndim and arr.size == count:
-                    arr = arr[live]
-                spring[name] = float(arr) if arr.ndim == 0 else arr.tolist()
-            forces.append(spring)
+            forces.append(_spring_table(world, state, f, index, spring_offset))
+            spring_offset += len(f._args[0])
         else:
             raise ValueError(f"{type(f).__name__} cannot be written to a scene file (only gravity, drag, spring, attractor, wind, turbulence and vortex can)")
+    return forces
+
+
+def _spring_table(world: Any, state: Any, f: Spring, index: int, spring_offset: int) -> dict[str, Any]:
+    """A `Spring` force (the `index`-th force; its ends' ids from `spring_offset` in the
+    state's `spring_ids`) as a table: the springs whose two ends live, at the ends' current
+    indices (particles removed since shifted them; a spring with a dead end died with it)."""
+    count = len(f._args[0])
+    ends = state.spring_ids[spring_offset : spring_offset + count]
+    ids = world.ids
+    at = np.minimum(np.searchsorted(ids, ends), max(len(ids) - 1, 0))
+    live = np.all(ids[at] == ends, axis=1) if len(ids) else np.zeros(count, dtype=bool)
+    i, j = at[live, 0], at[live, 1]
+    rest = f.rest_length
+    if rest is None:  # the lengths the engine took when the spring was added
+        rest = state.spring_rest[index]
+    spring = {"type": "spring", "i": i.tolist(), "j": j.tolist()}
+    for name, value in (("k", f.k), ("rest_length", rest), ("damping", f.damping)):
+        arr = np.asarray(value, dtype=float)
+        if arr.ndim and arr.size == count:
+            arr = arr[live]
+        spring[name] = float(arr) if arr.ndim == 0 else arr.tolist()
+    return spring
+
+
+def _collider_tables(world: Any) -> list[dict[str, Any]]:
+    """The world's colliders as [[colliders]] tables, with their materials, motions and groups."""
     colliders = []
     for c in world.colliders:
         s = {k: float(v) for k, v in (("restitution", c.restitution), ("friction", c.friction)) if v is not None}
@@ -199,6 +243,11 @@ def to_scene(world: Any) -> Scene:
             colliders.append({"type": "mesh", **_mesh_table(c), "inside": c.inside, **s})
         else:
             colliders.append({"type": "sphere", "center": vec3(list(np.ravel(c.center))), "radius": float(c.radius), **s})
+    return colliders
+
+
+def _emitter_tables(state: Any) -> list[dict[str, Any]]:
+    """The world's emitters (its state's) as [[emitters]] tables: each emitter's keys as given."""
     emitters = []
     for source in state.emitters:
         table = EmitterTable.model_fields.keys()
@@ -211,6 +260,11 @@ def to_scene(world: Any) -> Scene:
             emitters[-1]["color"] = np.asarray(e.color, float).tolist()
         if e.mesh is not None:
             emitters[-1]["mesh"] = _mesh_table(source.c["mesh"])
+    return emitters
+
+
+def _kill_tables(state: Any) -> list[dict[str, Any]]:
+    """The world's kill volumes (its state's) as [[kill_volumes]] tables."""
     kills = []
     for k in state.kills:
         if isinstance(k, KillBox):
@@ -219,37 +273,22 @@ def to_scene(world: Any) -> Scene:
             kills.append({"type": "sphere", "center": vec3(list(np.ravel(k.center))), "radius": float(k.radius)})
         else:
             kills.append({"type": "plane", "point": vec3(list(np.ravel(k.point))), "normal": vec3(list(np.ravel(k.normal)))})
-    data: dict[str, Any] = {
-        "world": {"dim": world.dim, "dt": world.dt, "method": world.method, **({"spin": True} if world.spin else {})},
-        "particles": blocks,
-        "forces": forces,
-        "colliders": colliders,
-        "emitters": emitters,
-        "kill_volumes": kills,
-    }
-    if old is not None:
-        data["world"].update(duration=old.world.duration, fps=old.world.fps)
-        data["render"] = old.render.model_dump(exclude_none=True)
-        data["output"] = old.output.model_dump()
-        if old.analysis is not None:
-            data["analysis"] = old.analysis.model_dump(exclude_none=True)
-    if world.collisions is not None:
-        c = {k: v for k, v in world.collisions.items() if v is not None}
-        if world.collisions.get("sleep_time", 0.5) is None:
-            c["sleep_time"] = float("inf")  # nothing sleeps (TOML has no None)
-        if any(world.periodic):
-            c["periodic"] = list(world.periodic)
-        m = world.collision_matrix
-        off = [[a, b] for a in range(len(m)) for b in range(a, len(m)) if not m[a, b]]
-        if off:
-            c["ignore_groups"] = off
-        data["collisions"] = c
-    try:
-        return Scene.from_dict(data, _SOURCE)
-    except SceneError as e:  # one line per problem: the first, and how many more
-        lines = str(e).splitlines() or [f"{_SOURCE}: not a valid scene"]
-        more = f" (and {len(lines) - 1} more problems)" if len(lines) > 1 else ""
-        raise SceneError(lines[0] + more) from None
+    return kills
+
+
+def _collision_table(world: Any) -> dict[str, Any]:
+    """The world's collision settings as the [collisions] table: sleep_time = inf where
+    nothing sleeps, the periodic axes, the pairs of groups that do not collide."""
+    c = {k: v for k, v in world.collisions.items() if v is not None}
+    if world.collisions.get("sleep_time", 0.5) is None:
+        c["sleep_time"] = float("inf")  # nothing sleeps (TOML has no None)
+    if any(world.periodic):
+        c["periodic"] = list(world.periodic)
+    m = world.collision_matrix
+    off = [[a, b] for a in range(len(m)) for b in range(a, len(m)) if not m[a, b]]
+    if off:
+        c["ignore_groups"] = off
+    return c
 
 
 def _falloff_entry(f: Falloff | None) -> dict[str, Any]:

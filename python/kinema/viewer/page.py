@@ -344,21 +344,7 @@ def pack(traj: Any, max_bytes: int, color_by: str | None = None, camera: Any = N
 
     radii = getattr(traj, "radii", None)
     radii = None if radii is None or np.size(radii) != particles else np.asarray(radii, dtype=np.float64).reshape(-1)[::ps]
-    # The live particles' box over every frame, bare (lo, hi) and with each particle's own
-    # radius (plo, phi), a block of frames at a time (no copy of all the frames).
-    lo, hi, plo, phi = (np.full(3, v) for v in (np.inf, -np.inf, np.inf, -np.inf))
-    block = max(1, 2**20 // max(positions.shape[1], 1))
-    for k in range(0, positions.shape[0], block):
-        mask = alive[k : k + block]
-        if not mask.any():
-            continue
-        live = positions[k : k + block][mask]
-        lo, hi = np.minimum(lo, live.min(axis=0)), np.maximum(hi, live.max(axis=0))
-        if radii is not None:
-            r = np.broadcast_to(np.where(radii > 0, radii, 0.0), mask.shape)[mask][:, None]
-            plo, phi = np.minimum(plo, (live - r).min(axis=0)), np.maximum(phi, (live + r).max(axis=0))
-    if not np.isfinite(lo).all():
-        lo, hi = np.zeros(3), np.ones(3)  # nothing alive anywhere
+    lo, hi, plo, phi = _live_box(positions, alive, radii)
     extent = float(np.max(hi - lo)) or 1.0
     default_radius = extent / 200.0  # as Trajectory.render draws particles without a radius
     if radii is None or not np.all(radii > 0):
@@ -400,6 +386,26 @@ def pack(traj: Any, max_bytes: int, color_by: str | None = None, camera: Any = N
         "camera": opening_view,
     }
     return Packed(meta, out_positions, speed, np.ascontiguousarray(radii, dtype="<f4"), springs, bits, _colors(traj, particles, ps))
+
+
+def _live_box(positions: np.ndarray, alive: np.ndarray, radii: np.ndarray | None) -> tuple[np.ndarray, ...]:
+    """The live particles' box over every frame, bare (lo, hi) and with each particle's own
+    radius (plo, phi), a block of frames at a time (no copy of all the frames); (0, 1) bare
+    where nothing is alive anywhere."""
+    lo, hi, plo, phi = (np.full(3, v) for v in (np.inf, -np.inf, np.inf, -np.inf))
+    block = max(1, 2**20 // max(positions.shape[1], 1))
+    for k in range(0, positions.shape[0], block):
+        mask = alive[k : k + block]
+        if not mask.any():
+            continue
+        live = positions[k : k + block][mask]
+        lo, hi = np.minimum(lo, live.min(axis=0)), np.maximum(hi, live.max(axis=0))
+        if radii is not None:
+            r = np.broadcast_to(np.where(radii > 0, radii, 0.0), mask.shape)[mask][:, None]
+            plo, phi = np.minimum(plo, (live - r).min(axis=0)), np.maximum(phi, (live + r).max(axis=0))
+    if not np.isfinite(lo).all():
+        lo, hi = np.zeros(3), np.ones(3)  # nothing alive anywhere
+    return lo, hi, plo, phi
 
 
 def bundle() -> str:
