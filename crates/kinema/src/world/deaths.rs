@@ -182,10 +182,10 @@ impl World {
         if self.deaths.time.is_empty() && times.iter().all(|t| *t == f64::INFINITY) {
             return Ok(());
         }
-        self.deaths.time.resize(n, f64::INFINITY);
+        let mut time = std::mem::take(&mut self.deaths.time);
+        time.resize(n, f64::INFINITY);
         // (in the engine's order, where it keeps one: the particles stay where they are)
-        let time = &mut self.deaths.time;
-        match self.sorted.as_ref().map(super::order::Order::user_of) {
+        match self.user_of() {
             Some(user_of) => {
                 for (engine, &user) in user_of.iter().enumerate() {
                     if let Some(t) = (user as usize).checked_sub(start).and_then(|k| times.get(k)) {
@@ -195,6 +195,7 @@ impl World {
             }
             None => time[start..start + times.len()].copy_from_slice(times),
         }
+        self.deaths.time = time;
         Ok(())
     }
 
