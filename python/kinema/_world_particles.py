@@ -6,7 +6,7 @@ the species) and hand it to ``_add``, which the emitters' births use too
 (``World._births``); ``remove_particles`` and the engine's deaths (``World._drop_removed``)
 end in ``_forget``. ``_add`` and ``_forget`` keep what the Python world holds per particle
 besides the engine's state in step with it: the species names and the colours (``_unset``,
-``_grown``, ``_kept``; ``World._trajectory_info`` reads the colours with ``_unset`` too).
+``_grown``, ``_kept``; ``kinema._world_run``'s ``_trajectory_info`` reads the colours with ``_unset`` too).
 
 Its methods use the world's engine and views (``_core``, ``_push``, ``_new_views``:
 ``kinema._world_views``) and what ``World.__init__`` sets (``_species``, ``_colors``,

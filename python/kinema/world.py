@@ -13,9 +13,11 @@ when called: neither imports this module (the checkpoint's reader builds its wor
 ``scene.build()``), so the dependency goes one way (tests/test_no_import_circles.py).
 
 The class is written in parts. This module holds ``World`` itself: its making, ``add`` and
-``set_motion``, the steps and the stable-step advisor, the scene and checkpoint methods and the
-state accessor. Its bases, each in its own module that never imports this one (the methods of
-one part call those of another through ``self``), hold the rest:
+``set_motion``, the steps (``step``, ``_advance``) and the stable-step advisor, ``run``'s
+checks and plan (its ``callback`` is typed with ``World``, which a base's module could not
+import without a circle), ``diagnostics``, the scene and checkpoint methods and the state
+accessor. Its bases, each in its own module that never imports this one (the methods of one
+part call those of another through ``self``), hold the rest:
 
 - ``kinema._world_views.WorldViews``: the engine (thread-checked, lent by ``_engine`` while it
   calls back into Python, ``_Busy`` meanwhile) and the NumPy views of its state, with the state
@@ -26,6 +28,8 @@ one part call those of another through ``self``), hold the rest:
 - ``kinema._world_births.WorldBirths``: births and deaths between steps (the emitters'
   births where there is room, the kill volumes, the deaths dropped; ``emitter_stats``), which
   ``_advance`` (here) runs its batches of steps around;
+- ``kinema._world_run.WorldRun``: the run loop (``_record``, which ``run``, here, and a
+  resumed run go on with) and what it records, and the look at new meshes before a step;
 - ``kinema.world_collisions.WorldCollisions``: the collision API.
 
 ``REENTRY`` and ``_other_thread`` (the messages of a world used while it steps, or from
@@ -45,11 +49,12 @@ import numpy as np
 from . import _checks, _core, first_step
 from ._state import WorldState
 from ._world_births import WorldBirths
-from ._world_particles import WorldParticles, _unset
+from ._world_particles import WorldParticles
+from ._world_run import WorldRun
 from ._world_views import REENTRY as REENTRY  # (kinema.world.REENTRY: the message a force meets)
 from ._world_views import WorldViews, _Busy
 from ._world_views import _other_thread as _other_thread  # (kinema.world._other_thread)
-from .colliders import Box, Collider, Mesh, MeshPlacementWarning, placement_problems
+from .colliders import Box, Collider
 from .emitter import KILL_VOLUMES, Emitter, births_until
 from .forces import Spring
 from .frames import MAX_WORK as MAX_WORK  # (kinema.world.MAX_WORK, World.run's default)
@@ -101,15 +106,7 @@ def _verlet_only(core: Any, colliders: list[Collider]) -> bool:
     return settings["friction"] > 0 or own or any((c.friction or 0) > 0 for c in colliders)
 
 
-def _region(c: dict) -> tuple[np.ndarray, np.ndarray]:
-    """The box (lo, hi) of an emitter's source (its checked values ``c``): where it gives birth."""
-    if c["shape"] == "mesh":
-        return c["mesh_box"]
-    half = np.asarray(c["size"], float) / 2.0 if c["shape"] == "box" else np.full(3, c["radius"] if c["shape"] in ("disc", "sphere") else 0.0)
-    return c["center"] - half, c["center"] + half
-
-
-class World(WorldViews, WorldParticles, WorldBirths, WorldCollisions):
+class World(WorldViews, WorldParticles, WorldBirths, WorldRun, WorldCollisions):
     """Particles, forces, an integrator, a time step and the time.
 
     ``World(dim=3, dt=1e-3, method="verlet", spin=False)``: ``dim`` 2 keeps every particle in
@@ -449,68 +446,6 @@ class World(WorldViews, WorldParticles, WorldBirths, WorldCollisions):
         }
         return self._record(run, callback, None if checkpoint is None else Path(checkpoint))
 
-    def _look_at_meshes(self) -> None:
-        """One ``MeshPlacementWarning`` for each still mesh collider added since the last look
-        that is far from every particle and emitter, lies on its side under gravity, or is too
-        coarse for the smallest particle (``kinema.colliders.placement_problems``)."""
-        if self._placed >= len(self._colliders):
-            return
-        fresh = range(self._placed, len(self._colliders))
-        self._placed = len(self._colliders)
-        meshes = [(k, self._colliders[k]) for k in fresh if isinstance(self._colliders[k], Mesh) and self._colliders[k].motion is None]
-        if not meshes:
-            return
-        g = first_step.gravity(self._forces, self.dim)
-        regions = [_region(source.c) for source in self._emitters]
-        radii = [float(self.radii.min())] if len(self) else []
-        radii += [source.c["particle_radius"] - source.c["radius_spread"] for source in self._emitters]
-        radius = min((r for r in radii if r > 0), default=None)
-        for k, mesh in meshes:
-            said = placement_problems(mesh, self._x, regions, g, radius)
-            if said:
-                name = f"'{mesh.file.name}'" if mesh.file is not None else "of arrays"
-                warnings.warn(f"colliders[{k}], the mesh {name}: {'; '.join(said)}", MeshPlacementWarning, stacklevel=3)
-
-    def _record(self, run: dict, callback: Any, checkpoint: Path | None) -> Trajectory:
-        """The frames of ``run`` from ``frames_done`` on, writing ``checkpoint`` every
-        ``every`` frames (the loop of ``run``, and of a run resumed from a checkpoint)."""
-        rec = run["recorder"]
-        plan = frames_plan(run["duration"], self.dt, run["fps"])
-        while run["frames_done"] < run["frames_total"]:
-            try:
-                if self._advice_due and self._changes_count():
-                    with self._engine() as core:
-                        self._advise(core)
-                # frame k + 1 at t0 + (k + 1)/fps exactly (kinema.frames)
-                self._land(plan.time(run["t0"], run["frames_done"] + 1), plan.per_frame)
-            finally:
-                self._pull()
-            rec.add(self)
-            run["frames_done"] += 1
-            if callback is not None:
-                callback(self)
-                self._push()
-            if checkpoint is not None and run["frames_done"] % run["every"] == 0 and run["frames_done"] < run["frames_total"]:
-                self.save_checkpoint(checkpoint, _run=run)
-        if plan.tail:
-            # a duration of no whole number of frames: on to its end, unrecorded
-            try:
-                self._land(run["t0"] + run["duration"], plan.tail)
-            finally:
-                self._pull()
-        traj = rec.finish()
-        traj.fps = float(run["fps"])  # (saved with it: a video's default rate)
-        traj.step = None if plan.divides else plan.step
-        self._tell_behind()
-        return traj
-
-    def _land(self, t1: float, n: int) -> None:
-        """``n`` steps ending at time ``t1`` (s) exactly, each (t1 − t)/n long (the engine's
-        clock: ``World::land_at``)."""
-        with self._engine() as core:
-            core.land_at(t1, n)
-        self._advance(n)
-
     # -- stability --------------------------------------------------------------------------
     def stable_step(self, method: str | ButcherTableau | None = None) -> float | dict[str, float]:
         """The largest stable time step, s, at the current state: for ``method`` (a name or a
@@ -540,34 +475,7 @@ class World(WorldViews, WorldParticles, WorldBirths, WorldCollisions):
         with self._engine() as core:
             return core.rates()
 
-    # -- state ------------------------------------------------------------------------------
-    def _trajectory_info(self) -> dict[str, Any]:
-        """What a Trajectory records about the world besides its frames."""
-        from .collider_descriptions import _describe_colliders
-
-        periodic = self.periodic
-        edges = None
-        if any(periodic):
-            box = next(c for c in self.colliders if isinstance(c, Box))
-            lo, hi = np.zeros(3), np.zeros(3)
-            lo[: len(np.ravel(box.lo))], hi[: len(np.ravel(box.hi))] = np.ravel(box.lo), np.ravel(box.hi)
-            edges = np.where(periodic, hi - lo, 0.0)
-        return {
-            "masses": self._m.copy(),
-            "radii": np.array(self._core.radii),
-            "ids": self.ids.copy(),
-            "species": self.species,
-            "colors": self._colors.copy() if not _unset(self._colors) and np.isfinite(self._colors).any() else None,
-            "groups": np.array(self.groups),
-            "springs": self._spring_ids.copy() if self._spring_ids.size else None,
-            "dim": self.dim,
-            "dt": self.dt,
-            "method": self.method,
-            "periodic": periodic if any(periodic) else None,
-            "box_edges": edges,
-            "colliders": _describe_colliders(self.colliders),
-        }
-
+    # -- the count and the diagnostics (the state as arrays: _world_views.py) ---------------
     def __len__(self) -> int:
         return self._core.len
 
@@ -579,17 +487,6 @@ class World(WorldViews, WorldParticles, WorldBirths, WorldCollisions):
         self._push()
         with self._engine() as core:
             return core.diagnostics()
-
-    def _diagnostics_as_pulled(self) -> dict:
-        """:meth:`diagnostics` right after the views were read from the engine, with nothing
-        written since (the recorder's frames): without comparing the views with the engine."""
-        with self._engine() as core:
-            return core.diagnostics()
-
-    def _collision_stats_as_pulled(self) -> dict | None:
-        """``collision_stats()`` for the recorder, as :meth:`_diagnostics_as_pulled`: the books of
-        the steps taken, with nothing written into the views since they were read."""
-        return self._core.collision_stats()
 
     # -- scenes, checkpoints and the state ---------------------------------------------------
     def to_scene(self) -> Scene:
