@@ -79,11 +79,17 @@ def patches(source: str, module: str) -> set[tuple[str, str, str]]:
 
 def world_private_names() -> set[str]:
     """The private names of a World: its methods and properties and the attributes it sets on
-    itself (`self._x = ...`), in world.py and its base's world_collisions.py."""
+    itself (`self._x = ...`), in world.py and in each of its bases of the package (the mixins
+    `WorldCollisions` of world_collisions.py, `WorldViews` of _world_views.py, ...), each read
+    from its own module's file."""
+    import inspect
+
+    from kinema.world import World
+
     names = set()
-    for file in ("world.py", "world_collisions.py"):
-        tree = ast.parse((PACKAGE / file).read_text(encoding="utf-8"))
-        for cls in (n for n in tree.body if isinstance(n, ast.ClassDef) and n.name in ("World", "WorldCollisions")):
+    for klass in (k for k in World.__mro__ if k.__module__.startswith("kinema.")):
+        tree = ast.parse(Path(inspect.getsourcefile(klass)).read_text(encoding="utf-8"))
+        for cls in (n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == klass.__name__):
             for node in ast.walk(cls):
                 if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                     names.add(node.name)

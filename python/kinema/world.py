@@ -11,14 +11,36 @@ a resumed run goes on with the world's run loop, ``World._record``. The scene an
 defined here; their bodies are in ``kinema.scene.export`` and ``kinema.checkpoint``, imported
 when called: neither imports this module (the checkpoint's reader builds its world by
 ``scene.build()``), so the dependency goes one way (tests/test_no_import_circles.py).
+
+The class is written in parts. This module holds ``World`` itself: its making, ``add`` and
+``set_motion``, the steps (``step``, ``_advance``) and the stable-step advisor, ``run``'s
+checks and plan (its ``callback`` is typed with ``World``, which a base's module could not
+import without a circle), ``diagnostics``, the scene and checkpoint methods and the state
+accessor. Its bases, each in its own module that never imports this one (the methods of one
+part call those of another through ``self``), hold the rest:
+
+- ``kinema._world_views.WorldViews``: the engine (thread-checked, lent by ``_engine`` while it
+  calls back into Python, ``_Busy`` meanwhile) and the NumPy views of its state, with the state
+  as arrays and values (``positions`` … ``forces``);
+- ``kinema._world_particles.WorldParticles``: adding and removing particles
+  (``add_particles``, ``add_particles_from``, ``remove_particles``; ``_add`` and ``_forget``,
+  which keep what the Python world holds per particle in step with the engine);
+- ``kinema._world_births.WorldBirths``: births and deaths between steps (the emitters'
+  births where there is room, the kill volumes, the deaths dropped; ``emitter_stats``), which
+  ``_advance`` (here) runs its batches of steps around;
+- ``kinema._world_run.WorldRun``: the run loop (``_record``, which ``run``, here, and a
+  resumed run go on with) and what it records, and the look at new meshes before a step;
+- ``kinema.world_collisions.WorldCollisions``: the collision API.
+
+``REENTRY`` and ``_other_thread`` (the messages of a world used while it steps, or from
+another thread) are re-exported here from ``kinema._world_views``.
 """
 
 from __future__ import annotations
 
 import threading
 import warnings
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -26,8 +48,14 @@ import numpy as np
 
 from . import _checks, _core, first_step
 from ._state import WorldState
-from .colliders import Box, Collider, Mesh, MeshPlacementWarning, placement_problems
-from .emitter import BEHIND, KILL_VOLUMES, Emitter, EmitterWarning, births_until
+from ._world_births import WorldBirths
+from ._world_particles import WorldParticles
+from ._world_run import WorldRun
+from ._world_views import REENTRY as REENTRY  # (kinema.world.REENTRY: the message a force meets)
+from ._world_views import WorldViews, _Busy
+from ._world_views import _other_thread as _other_thread  # (kinema.world._other_thread)
+from .colliders import Box, Collider
+from .emitter import KILL_VOLUMES, Emitter, births_until
 from .forces import Spring
 from .frames import MAX_WORK as MAX_WORK  # (kinema.world.MAX_WORK, World.run's default)
 from .frames import plan as frames_plan
@@ -54,19 +82,6 @@ class PlacementWarning(UserWarning):
     ``ValueError`` instead."""
 
 
-REENTRY = (
-    "the world was used while it is stepping (from one of its own forces, or another thread): "
-    "a force computes F(t, x, v) from its arguments and must leave its world alone"
-)
-
-
-def _other_thread(owner: int) -> RuntimeError:
-    return RuntimeError(
-        f"this World was made on thread {owner} and is used on thread {threading.get_ident()}: a World (its engine and its "
-        "Python forces) belongs to the thread that made it; make one per thread (or per process: kinema.sweep runs members so)"
-    )
-
-
 def _check_motion(dim: int, c: Collider, motion: Any) -> None:
     """Refuses what the engine would refuse of ``motion`` on ``c`` in a ``dim``-D world (a
     turning box, a motion out of the xy-plane in 2D), before ``c`` is added: the motion is
@@ -80,31 +95,6 @@ def _check_motion(dim: int, c: Collider, motion: Any) -> None:
     scratch.set_collider_motion(0, **motion._binding())
 
 
-def _inside(c: Collider, p: np.ndarray, t: float = 0.0) -> bool:
-    """Whether the point ``p`` (m) lies inside the collider ``c`` at time ``t`` (s): behind a
-    plane, outside a box, inside a sphere obstacle, on the wrong side of a closed mesh (the
-    rule of collide/placement.rs, without its tolerance). A moving collider is asked at the
-    point of its placement as added that is at ``p`` at ``t``: x₀ = Rᵀ (p − o) of its pose
-    [R | o] then (``_core.collider_poses``)."""
-    from .colliders import Mesh, Plane, SphereObstacle
-
-    if c.motion is not None:
-        pose = _core.collider_poses([float(t)], **c.motion._binding())[0]
-        p = np.asarray(p, float)[:3]
-        p = pose[:, :3].T @ (p - pose[:, 3])
-
-    if isinstance(c, Mesh):
-        return c._contains(p)
-    if isinstance(c, Plane):
-        n = np.ravel(np.asarray(c.normal, float))
-        return float(np.dot(p[: n.size] - np.ravel(np.asarray(c.point, float))[: n.size], n)) < 0.0
-    if isinstance(c, SphereObstacle):
-        centre = np.ravel(np.asarray(c.center, float))
-        return float(np.linalg.norm(p[: centre.size] - centre)) < float(c.radius)
-    lo, hi = np.ravel(np.asarray(c.lo, float)), np.ravel(np.asarray(c.hi, float))
-    return bool(np.any(p[: lo.size] < lo) or np.any(p[: hi.size] > hi))
-
-
 def _verlet_only(core: Any, colliders: list[Collider]) -> bool:
     """Whether the world (its engine ``core``, its ``colliders``) steps with ``method="verlet"``
     only: a force model's contacts with friction somewhere, the world's, a particle's own or a
@@ -116,47 +106,7 @@ def _verlet_only(core: Any, colliders: list[Collider]) -> bool:
     return settings["friction"] > 0 or own or any((c.friction or 0) > 0 for c in colliders)
 
 
-class _Busy:
-    """Stands in for the engine while it runs work that calls back into Python (a
-    ``PythonForce`` in a step, the advisor, ``accelerations``). The engine is borrowed for
-    that work, so any use of the world from there (reading ``time``, writing ``positions``,
-    stepping it again) would meet pyo3's bare "Already borrowed"; it meets this instead."""
-
-    def __getattr__(self, name: str) -> Any:
-        raise RuntimeError(REENTRY)
-
-
-# What the Python world keeps per particle besides the engine's state — each particle's own
-# colour (r, g, b; NaN: none) — is, while no particle has one, a read-only broadcast of that one
-# value: no memory per particle (24 B at 10⁶ particles). (Times of death are the engine's.)
-def _unset(a: np.ndarray) -> bool:
-    """Whether ``a`` holds no particle's own value (empty, or the broadcast of the default)."""
-    return a.size == 0 or a.strides[0] == 0
-
-
-def _grown(a: np.ndarray, n: int, default: float, values: Any) -> np.ndarray:
-    """``a`` with ``n`` more particles' ``values`` (None: the default ``default``)."""
-    if values is None and _unset(a):
-        return np.broadcast_to(np.float64(default), (len(a) + n, *a.shape[1:]))
-    return np.concatenate([a, np.full((n, *a.shape[1:]), default) if values is None else values])
-
-
-def _region(c: dict) -> tuple[np.ndarray, np.ndarray]:
-    """The box (lo, hi) of an emitter's source (its checked values ``c``): where it gives birth."""
-    if c["shape"] == "mesh":
-        return c["mesh_box"]
-    half = np.asarray(c["size"], float) / 2.0 if c["shape"] == "box" else np.full(3, c["radius"] if c["shape"] in ("disc", "sphere") else 0.0)
-    return c["center"] - half, c["center"] + half
-
-
-def _kept(a: np.ndarray, keep: np.ndarray) -> np.ndarray:
-    """``a`` of the particles that ``keep`` keeps."""
-    if _unset(a) and a.size:
-        return np.broadcast_to(a.flat[0], (int(keep.sum()), *a.shape[1:]))
-    return a[keep]
-
-
-class World(WorldCollisions):
+class World(WorldViews, WorldParticles, WorldBirths, WorldRun, WorldCollisions):
     """Particles, forces, an integrator, a time step and the time.
 
     ``World(dim=3, dt=1e-3, method="verlet", spin=False)``: ``dim`` 2 keeps every particle in
@@ -229,73 +179,6 @@ class World(WorldCollisions):
         self._run_source: dict[str, str] = {}
         self._new_views()
 
-    # The engine is the thread's that made the world (its Python forces, the `_Busy` lending
-    # and the shared views are not made for two threads at once; any thread may drop it,
-    # though: the engine is Send + Sync). Every use of it goes through `_core`, which
-    # checks the thread first: from another thread, a RuntimeError that says so, where pyo3
-    # would raise its PanicException (a BaseException, with a Rust backtrace).
-    @property
-    def _core(self) -> Any:
-        if threading.get_ident() != self._owner:
-            raise _other_thread(self._owner)
-        return self._engine_core
-
-    @_core.setter
-    def _core(self, core: Any) -> None:
-        self._engine_core = core
-
-    @contextmanager
-    def _engine(self) -> Iterator[Any]:
-        """The engine, lent for work that may call back into Python; meanwhile the world's own
-        methods see ``_Busy`` (the views stay readable)."""
-        core = self._core
-        if isinstance(core, _Busy):
-            raise RuntimeError(REENTRY)
-        views: list[np.ndarray] = []
-        try:  # (all inside: a Ctrl-C anywhere here still gives the engine back)
-            self._core = _Busy()
-            # The views are read-only meanwhile: a write into one from a force would be lost or
-            # kept depending on what called it (a step reads the state back after, `rates` not).
-            for a in (self._x, self._v, self._m, self._w):
-                if a.flags.writeable:
-                    a.flags.writeable = False
-                    views.append(a)
-            yield core
-        finally:
-            for a in views:
-                a.flags.writeable = True
-            self._core = core
-
-    def _new_views(self) -> None:
-        n = self._core.len
-        self._x = np.empty((n, 3))
-        self._v = np.empty((n, 3))
-        self._core.read_state(self._x, self._v)
-        self._m = np.array(self._core.masses)
-        self._w = np.zeros((n, 3) if self._core.spin else (0, 3))
-        if self._core.spin:
-            self._core.read_spin(self._w)
-
-    def _push(self) -> None:
-        """Hands what the user wrote into the views to the world (a no-op when unchanged). A
-        bad value is refused whole: the world keeps its state and the views show it again."""
-        try:
-            self._core.sync(self._x, self._v, self._m)
-            if self._core.spin:
-                self._core.sync_spin(self._w)
-        except ValueError:
-            self._pull()
-            self._m[...] = self._core.masses
-            raise
-
-    def _pull(self) -> None:
-        if self._x.shape[0] != self._core.len:  # (a Ctrl-C between a birth and its new views)
-            self._new_views()
-            return
-        self._core.read_state(self._x, self._v)
-        if self._core.spin:
-            self._core.read_spin(self._w)
-
     def _advise(self, core: Any) -> None:
         """Warns once if dt is beyond the advisor's limit for the world's method (``core``: the
         engine, lent by :meth:`_engine`; the advisor evaluates the forces)."""
@@ -344,181 +227,6 @@ class World(WorldCollisions):
             warnings.warn(text, StabilityWarning, stacklevel=3)
 
     # -- building ---------------------------------------------------------------------------
-    def add_particles(
-        self,
-        position: Any,
-        velocity: Any = None,
-        mass: Any = 1.0,
-        radius: Any = 0.0,
-        pinned: Any = None,
-        restitution: Any = None,
-        friction: Any = None,
-        species: Any = None,
-        angular_velocity: Any = None,
-        inertia: Any = None,
-        group: Any = 0,
-    ) -> np.ndarray:
-        """Add particles; returns their indices.
-
-        ``position`` (N, 3) in m (a single (3,) point adds one particle); ``velocity`` (N, 3)
-        in m/s (default 0); ``mass`` in kg and ``radius`` in m, scalars or (N,); ``pinned``
-        bool, scalar or (N,): a pinned particle never moves (inverse mass 0) nor turns.
-
-        In a world with spin: ``angular_velocity`` (N, 3) or one (3,) vector, rad/s (default
-        0; a 2D world turns about z only, so x and y must be 0); ``inertia`` the moment of
-        inertia about the centre, kg·m², a scalar or (N,) (default 2/5 m r² in 3D, 1/2 m r² in
-        2D). Either in a world without spin is a ``ValueError``.
-
-        ``restitution`` e ∈ [0, 1] and ``friction`` μ ≥ 0: each particle's own collision
-        values, scalars or (N,) (``None`` or NaN entries: the world's values of
-        :meth:`set_collisions`). A pair combines its two by Box2D's rule, e = max(e_i, e_j) and
-        μ = √(μ_i μ_j); a collider's own value overrides the particle's. Giving any turns
-        collisions on.
-
-        ``species``: a name for these particles, or one per particle (one word each: letters,
-        digits, ``_ . + -``), recorded in trajectories and written by the exports as the particle type (OVITO,
-        ASE's chemical symbol, HOOMD's types, H5MD's species); particles without one are
-        ``X`` once any particle has one.
-
-        ``group``: the particles' collision group, an integer in 0..31 or one per particle
-        (default 0): which particles and colliders they collide with is set per group
-        (:meth:`set_group_collisions`, :attr:`collision_matrix`, a collider's
-        ``collides_with``; Box2D's category bits). :attr:`groups` reads and changes them.
-
-        Nothing is coerced: numbers are real numbers (ints or floats, NumPy scalars or arrays
-        of an int or float dtype), and a bool, a complex number, a string or a date among them
-        is a ``TypeError`` naming the parameter and the value; ``pinned`` takes only bools
-        (``True``/``False``, NumPy bools), not ``'no'`` or ``0``.
-        """
-        x = np.atleast_2d(_checks.real_array("position", position))
-        if x.ndim != 2 or x.shape[1] != 3:
-            raise ValueError(f"position has shape {np.shape(position)}; it must be (N, 3) or a single (3,) point")
-        n = x.shape[0]
-        each = f"a scalar or one value per particle, ({n},)"
-        v = np.zeros_like(x) if velocity is None else np.atleast_2d(_checks.real_array("velocity", velocity))
-        v = _checks.broadcast("velocity", v, (n, 3), f"a (3,) vector or one per particle, ({n}, 3)")
-        m = _checks.broadcast("mass", _checks.real_array("mass", mass), (n,), each)
-        r = _checks.broadcast("radius", _checks.real_array("radius", radius), (n,), each)
-        p = _checks.broadcast("pinned", _checks.bool_array("pinned", False if pinned is None else pinned), (n,), each)
-        e, mu = (
-            None if a is None else _checks.broadcast(name, _checks.real_array(name, a, none_is_nan=True), (n,), each).tolist()
-            for name, a in (("restitution", restitution), ("friction", friction))
-        )
-        names = self._species_names(species, n)
-        groups = _checks.groups("group", group, n)
-        spin = None
-        if angular_velocity is not None or inertia is not None:
-            if not self._core.spin:
-                given = "angular_velocity" if angular_velocity is not None else "inertia"
-                raise ValueError(f"{given} is given, but this world has no spin: make it with kinema.World(..., spin=True)")
-            w = None if angular_velocity is None else np.atleast_2d(_checks.real_array("angular_velocity", angular_velocity))
-            w = None if w is None else _checks.broadcast("angular_velocity", w, (n, 3), f"a (3,) vector or one per particle, ({n}, 3)")
-            i = None if inertia is None else _checks.broadcast("inertia", _checks.real_array("inertia", inertia), (n,), each)
-            spin = (w, i)
-        return self._add(x, v, m, r, p, e, mu, names, spin=spin, group=groups)
-
-    def add_particles_from(
-        self,
-        path: Any,
-        frame: int = -1,
-        units: Any = None,
-        *,
-        format: str | None = None,
-        atom_style: str | None = None,
-        translate: Any = None,
-        velocity: Any = None,
-        mass: Any = 1.0,
-        radius: Any = 0.0,
-        species: Any = None,
-        pinned: Any = None,
-        restitution: Any = None,
-        friction: Any = None,
-        group: Any = 0,
-    ) -> np.ndarray:
-        """Add the particles of frame ``frame`` (-1: the last) of a trajectory file; returns
-        their indices, as :meth:`add_particles` does.
-
-        ``path``: any file ``Trajectory.load`` reads (kinema's H5MD and exports, extended XYZ,
-        GSD, a LAMMPS dump or data file; docs/files.md), read in SI units: ``units`` for a file
-        that does not say its own (a LAMMPS style such as ``"real"``, ``"ase"``, or
-        {"length": m, "time": s, "mass": kg}), ``format`` and ``atom_style`` as
-        ``Trajectory.load`` takes them. The particles alive at that frame are added in the order
-        of their ids, at their positions plus ``translate`` (a (3,) vector, m), each with the
-        file's velocity, mass, radius, species and collision group where the file has them
-        (kinema's files keep the groups); where it has none, ``velocity`` (default 0),
-        ``mass`` (default 1 kg), ``radius`` (default 0), ``species`` and ``group`` (default 0)
-        are used, checked as :meth:`add_particles` checks them, as are ``pinned``,
-        ``restitution`` and ``friction``. A 2D world takes a file whose z are 0.
-        The file's box, colliders and springs are not added: they are the world's own."""
-        from .io.readers import particles_from
-
-        got = particles_from(path, frame, units, format=format, atom_style=atom_style)
-        x = got["positions"]
-        if translate is not None:
-            shift = _checks.real_array("translate", translate)
-            if shift.shape != (3,):
-                raise ValueError(f"translate has shape {shift.shape}; it must be a (3,) vector, m")
-            x = x + shift
-        v = got["velocities"] if got["velocities"] is not None else velocity
-        m = got["masses"] if got["masses"] is not None else mass
-        r = got["radii"] if got["radii"] is not None else radius
-        names = got["species"] if got["species"] is not None else species
-        groups = got["groups"] if got["groups"] is not None else group
-        return self.add_particles(x, v, m, r, pinned=pinned, restitution=restitution, friction=friction, species=names, group=groups)
-
-    def _add(self, x, v, m, r, p, e, mu, names, death=None, color=None, spin=None, group=None) -> np.ndarray:
-        """Adds checked particles with their species names, times of death, colours, collision
-        groups (checked, (N,); None: group 0) and, in a world with spin, their (angular
-        velocities, inertias) where given."""
-        n = len(m)
-        self._push()
-        if spin is not None:
-            # checked before anything is added: a bad value adds nothing
-            self._core.check_particle_spin(*(None if a is None else np.ascontiguousarray(a, dtype=float) for a in spin))
-        arrays = {
-            k: np.ascontiguousarray(a, dtype=d) for k, a, d in (("x", x, float), ("v", v, float), ("mass", m, float), ("radius", r, float), ("pinned", p, bool))
-        }
-        given = None if group is None or not np.any(group) else np.asarray(group, dtype=np.int64).tolist()
-        start, end = self._core.add_particles({**arrays, "restitution": e, "friction": mu, "group": given})
-        if spin is not None:
-            self._core.set_particle_spin(start, end, *(None if a is None else np.ascontiguousarray(a, dtype=float) for a in spin))
-        self._species += names
-        if death is not None:
-            # the engine keeps them with the particles (none while no particle has one)
-            self._core.set_times_of_death(start, np.ascontiguousarray(np.broadcast_to(death, (n,)), dtype=float))
-        self._colors = _grown(self._colors, n, np.nan, None if color is None else np.broadcast_to(color, (n, 3)))
-        self._new_views()
-        self._advice_due = True
-        return np.arange(start, end)
-
-    def remove_particles(self, indices: Any) -> None:
-        """Remove the particles at these indices (integers, or a bool mask of length N). The
-        others keep their order, ids and state, and their indices shift down; springs ending
-        on a removed particle go with it. Views taken before no longer follow the world."""
-        n = len(self)
-        if np.asarray(indices).dtype == bool:
-            mask = _checks.bool_array("indices", indices)
-            if mask.shape != (n,):
-                raise ValueError(f"indices is a bool mask of shape {mask.shape}; it must be ({n},), one flag per particle")
-            gone = np.flatnonzero(mask)
-        else:
-            gone = _checks.index_array("indices", indices, n)
-        if gone.size == 0:
-            return
-        self._push()
-        self._core.remove_particles(gone.tolist())
-        keep = np.ones(n, dtype=bool)
-        keep[gone] = False
-        self._forget(keep)
-
-    @property
-    def ids(self) -> np.ndarray:
-        """Each particle's id (N,): given in the order particles are added, kept for life,
-        never given again (a new read-only array)."""
-        out = np.asarray(self._core.ids, dtype=np.int64)
-        out.flags.writeable = False
-        return out
-
     def add(self, item: Any) -> Any:
         """Add a force (``kinema.Gravity``, ``Drag``, ``Spring``, ``Attractor``, ``Wind``,
         ``Turbulence``, ``Vortex``, ``PythonForce``) or a collider (``kinema.Plane``, ``Box``, ``SphereObstacle``,
@@ -610,9 +318,6 @@ class World(WorldCollisions):
         finally:
             self._pull()
 
-    def _changes_count(self) -> bool:
-        return bool(self._emitters or self._kills or self._core.has_times_of_death)
-
     def _advance(self, n: int) -> None:
         """``n`` steps. With emitters, the steps run in batches up to the next step boundary at
         which a birth is due (or one at a time while a newborn waits for its place): the births
@@ -646,50 +351,6 @@ class World(WorldCollisions):
                 self._pull()
             left -= k
 
-    def _steps_before_births(self, most: int) -> int:
-        """How many steps (1 to ``most``) the engine may take before the next step boundary at
-        which some emitter has a particle due: each source's next birth time, as its own
-        ``due`` counts it at the step boundaries (the engine's clock, ``_time_at``), or 1 while one holds
-        back a particle whose place was taken."""
-        if not self._emitters:
-            return most
-        now, t = self._core.steps, self._core.time
-        h = self._core.clock[2]
-        k = most
-        for source in self._emitters:
-            if source.waiting is not None:
-                return 1
-            c = source.c
-            born = c["start"] + source.emitted / c["rate"]  # the next particle's birth time
-            if not born < c["end"] or not np.isfinite(born):
-                continue
-            s = now + max(1, int((born - t) / h) - 1)
-            while s - now < k and source.due(self._time_at(s)) <= source.emitted:
-                s += 1
-            k = min(k, s - now)
-        return max(k, 1)
-
-    def _send_deaths(self, core: Any) -> None:
-        """Hands the engine the kill volumes (``core``: lent by :meth:`_engine`); the times of
-        death are the engine's own (``World::set_times_of_death``)."""
-        core.set_kill_volumes([volume._spec() for volume in self._kills])
-
-    def _drop_removed(self, before: np.ndarray) -> None:
-        """Drops what the Python world holds for the particles the engine's deaths removed
-        (``before``: the ids the world had, in its order)."""
-        gone = np.asarray(self._core.take_removed_ids(), dtype=np.int64)
-        if gone.size == 0:
-            return
-        self._forget(~np.isin(before, gone))
-
-    def _forget(self, keep: np.ndarray) -> None:
-        """Keeps what the Python world holds per particle for the particles ``keep`` (a mask
-        over the particles before a removal) and reads the state anew."""
-        self._species = [s for s, k in zip(self._species, keep, strict=True) if k]
-        self._colors = _kept(self._colors, keep)
-        self._new_views()
-        self._advice_due = True
-
     @staticmethod
     def _notice_placement(core: Any) -> None:
         """Warns of the overlaps the engine's placement check accepted in the steps just taken
@@ -697,78 +358,6 @@ class World(WorldCollisions):
         notice = core.take_placement_notice()
         if notice:
             warnings.warn(notice, PlacementWarning, stacklevel=4)
-
-    def _births(self) -> None:
-        t = self.time
-        for source in self._emitters:
-            b = source.births(t)
-            if b is None:
-                continue
-            free = self._free_places(b["x"], b["r"], source.c["group"])
-            source.hold_back(b, ~free, t)
-            if free.any():
-                b = {key: value[free] for key, value in b.items()}
-                c, k = source.c, len(b["m"])
-                e, mu = ([c[name]] * k if c[name] is not None else None for name in ("restitution", "friction"))
-                group = np.full(k, c["group"], dtype=np.int64)
-                self._add(b["x"], b["v"], b["m"], b["r"], np.zeros(k, bool), e, mu, [c["species"] or ""] * k, b["death"], c["color"], group=group)
-        self._tell_dropped(t)
-
-    def _tell_dropped(self, t: float) -> None:
-        """One ``EmitterWarning`` for each emitter that has passed its ``end`` having dropped
-        births for lack of room (once in its life: its counts are final then)."""
-        for k, source in enumerate(self._emitters):
-            if not source.told and source.dropped and source.finished(t):
-                source.told = True
-                warnings.warn(source.shortfall(k, t), EmitterWarning, stacklevel=5)
-
-    def _tell_behind(self) -> None:
-        """At the end of a run: one ``EmitterWarning`` for each emitter not yet past its ``end``
-        whose births waiting for room are more than ``emitter.BEHIND`` of those due."""
-        t = self.time
-        for k, source in enumerate(self._emitters):
-            st = source.stats(t)
-            if not source.finished(t) and st["waiting"] > max(1.0, BEHIND * st["due"]):
-                warnings.warn(source.shortfall(k, t), EmitterWarning, stacklevel=4)
-
-    def emitter_stats(self) -> list[dict[str, Any]]:
-        """Each emitter's promise and what it kept by now, in the order they were added: a dict
-        of ``rate`` (asked, /s), ``start`` and ``until`` (s: its start, and now or its ``end``
-        if sooner), ``due`` (particles due by ``until``: start + k/rate before ``end``),
-        ``born`` (added to the world), ``waiting`` (drawn, waiting for room at the source),
-        ``dropped`` (found no room before ``end``: never born) and ``achieved_rate``
-        (born / (until − start), /s; NaN before the start). ``due`` = born + waiting + dropped
-        once the births due have been drawn (at the step boundary after their time)."""
-        return [source.stats(self.time) for source in self._emitters]
-
-    def _free_places(self, x: np.ndarray, r: np.ndarray, group: int = 0) -> np.ndarray:
-        """Which of the particles to be born at ``x`` (m) with radii ``r`` (m) in collision group
-        ``group`` overlap neither a particle of the world nor one of them before it (in order),
-        and have their centre outside every collider; the others wait (with collisions off, every
-        place is free). Particles and colliders that ``group`` does not collide with take no place."""
-        free = np.ones(len(r), bool)
-        if self.collisions is None:
-            return free
-        # a centre inside a collider is no place either (the contacts cannot push it out: collide/placement.rs)
-        t = self.time
-        masks = self._core.collider_masks
-        walls = [c for c, mask in zip(self._colliders, masks, strict=True) if mask >> group & 1]
-        free &= ~np.array([any(_inside(c, p, t) for c in walls) for p in x], dtype=bool)
-        row = self._core.group_masks[group] if self.collisions["self_collisions"] else 0
-        if row == 0:
-            return free  # the group collides with no particle
-        here, radius = self._x, np.asarray(self._core.radii)
-        if row != (1 << _checks.GROUPS) - 1:
-            near = (row >> np.asarray(self._core.groups, dtype=np.int64)) & 1 == 1
-            here, radius = here[near], radius[near]
-        own = row >> group & 1 == 1  # whether the newborns collide with each other
-        for k in range(len(r)):
-            before = free[:k] & own
-            taken = np.concatenate([here, x[:k][before]])
-            reach = np.concatenate([radius, r[:k][before]]) + r[k]
-            if taken.size and (np.einsum("ij,ij->i", taken - x[k], taken - x[k]) < reach * reach).any():
-                free[k] = False
-        return free
 
     def run(
         self,
@@ -857,76 +446,6 @@ class World(WorldCollisions):
         }
         return self._record(run, callback, None if checkpoint is None else Path(checkpoint))
 
-    def _look_at_meshes(self) -> None:
-        """One ``MeshPlacementWarning`` for each still mesh collider added since the last look
-        that is far from every particle and emitter, lies on its side under gravity, or is too
-        coarse for the smallest particle (``kinema.colliders.placement_problems``)."""
-        if self._placed >= len(self._colliders):
-            return
-        fresh = range(self._placed, len(self._colliders))
-        self._placed = len(self._colliders)
-        meshes = [(k, self._colliders[k]) for k in fresh if isinstance(self._colliders[k], Mesh) and self._colliders[k].motion is None]
-        if not meshes:
-            return
-        g = first_step.gravity(self._forces, self.dim)
-        regions = [_region(source.c) for source in self._emitters]
-        radii = [float(self.radii.min())] if len(self) else []
-        radii += [source.c["particle_radius"] - source.c["radius_spread"] for source in self._emitters]
-        radius = min((r for r in radii if r > 0), default=None)
-        for k, mesh in meshes:
-            said = placement_problems(mesh, self._x, regions, g, radius)
-            if said:
-                name = f"'{mesh.file.name}'" if mesh.file is not None else "of arrays"
-                warnings.warn(f"colliders[{k}], the mesh {name}: {'; '.join(said)}", MeshPlacementWarning, stacklevel=3)
-
-    def _record(self, run: dict, callback: Any, checkpoint: Path | None) -> Trajectory:
-        """The frames of ``run`` from ``frames_done`` on, writing ``checkpoint`` every
-        ``every`` frames (the loop of ``run``, and of a run resumed from a checkpoint)."""
-        rec = run["recorder"]
-        plan = frames_plan(run["duration"], self.dt, run["fps"])
-        while run["frames_done"] < run["frames_total"]:
-            try:
-                if self._advice_due and self._changes_count():
-                    with self._engine() as core:
-                        self._advise(core)
-                # frame k + 1 at t0 + (k + 1)/fps exactly (kinema.frames)
-                self._land(plan.time(run["t0"], run["frames_done"] + 1), plan.per_frame)
-            finally:
-                self._pull()
-            rec.add(self)
-            run["frames_done"] += 1
-            if callback is not None:
-                callback(self)
-                self._push()
-            if checkpoint is not None and run["frames_done"] % run["every"] == 0 and run["frames_done"] < run["frames_total"]:
-                self.save_checkpoint(checkpoint, _run=run)
-        if plan.tail:
-            # a duration of no whole number of frames: on to its end, unrecorded
-            try:
-                self._land(run["t0"] + run["duration"], plan.tail)
-            finally:
-                self._pull()
-        traj = rec.finish()
-        traj.fps = float(run["fps"])  # (saved with it: a video's default rate)
-        traj.step = None if plan.divides else plan.step
-        self._tell_behind()
-        return traj
-
-    def _land(self, t1: float, n: int) -> None:
-        """``n`` steps ending at time ``t1`` (s) exactly, each (t1 − t)/n long (the engine's
-        clock: ``World::land_at``)."""
-        with self._engine() as core:
-            core.land_at(t1, n)
-        self._advance(n)
-
-    def _time_at(self, k: int) -> float:
-        """The engine's time after ``k`` steps, s, as its clock computes it (the same
-        operations: ``crates/kinema/src/world/clock.rs``)."""
-        k0, t0, h, landing = self._core.clock
-        if landing is not None and k >= landing[0]:
-            return landing[1] + float(k - landing[0]) * self._core.dt
-        return t0 + float(k - k0) * h
-
     # -- stability --------------------------------------------------------------------------
     def stable_step(self, method: str | ButcherTableau | None = None) -> float | dict[str, float]:
         """The largest stable time step, s, at the current state: for ``method`` (a name or a
@@ -956,226 +475,7 @@ class World(WorldCollisions):
         with self._engine() as core:
             return core.rates()
 
-    # -- state ------------------------------------------------------------------------------
-    @property
-    def positions(self) -> np.ndarray:
-        """Positions (N, 3), m: a live view (updated by each step; writes move the particles)."""
-        return self._x
-
-    @positions.setter
-    def positions(self, value: Any) -> None:
-        self._assign(self._x, value, "positions", (len(self), 3))
-
-    @property
-    def velocities(self) -> np.ndarray:
-        """Velocities (N, 3), m/s: a live view (pinned particles keep 0)."""
-        return self._v
-
-    @velocities.setter
-    def velocities(self, value: Any) -> None:
-        self._assign(self._v, value, "velocities", (len(self), 3))
-
-    @property
-    def masses(self) -> np.ndarray:
-        """Masses (N,), kg: a live view (pinned particles keep theirs and stay pinned)."""
-        return self._m
-
-    @property
-    def radii(self) -> np.ndarray:
-        """Radii (N,), m: a new read-only array (set by ``add_particles(..., radius=...)``)."""
-        out = np.asarray(self._core.radii, dtype=np.float64)
-        out.flags.writeable = False
-        return out
-
-    @property
-    def groups(self) -> np.ndarray:
-        """Each particle's collision group (N,), an integer in 0..31 (default 0): a new
-        read-only array. Assign ``w.groups = ...`` (a group for all, or one per particle) to
-        move particles to other groups; ``add_particles(..., group=...)`` and an emitter's
-        ``group`` set them at birth. Which groups collide: :attr:`collision_matrix`."""
-        out = np.asarray(self._core.groups, dtype=np.int64)
-        out.flags.writeable = False
-        return out
-
-    @groups.setter
-    def groups(self, value: Any) -> None:
-        g = _checks.groups("groups", value, len(self))
-        self._push()
-        self._core.set_groups(0, g.tolist())
-
-    @property
-    def spin(self) -> bool:
-        """Whether the particles turn (``World(spin=True)``)."""
-        return self._core.spin
-
-    @property
-    def angular_velocities(self) -> np.ndarray:
-        """Angular velocities ω (N, 3), rad/s, in a world with spin: a live view (updated by each
-        step; writes turn the particles; pinned particles keep 0; a 2D world turns about z)."""
-        self._need_spin("angular_velocities")
-        return self._w
-
-    @angular_velocities.setter
-    def angular_velocities(self, value: Any) -> None:
-        self._need_spin("angular_velocities")
-        self._assign(self._w, value, "angular_velocities", (len(self), 3))
-
-    @property
-    def orientations(self) -> np.ndarray:
-        """Orientations (N, 4) in a world with spin: unit quaternions (w, x, y, z), the
-        identity when a particle is added, turned at each step by the rotation
-        (cos(θ/2), sin(θ/2) ω̂), θ = dt |ω̄|, of the step's mean angular velocity ω̄ (world
-        frame; exact for a steady spin: a ball that rolls at v turns by v t / ρ). A new
-        read-only array; assign an (N, 4) array to set them (each is normalised)."""
-        self._need_spin("orientations")
-        out = np.asarray(self._core.orientations)
-        out.flags.writeable = False
-        return out
-
-    @orientations.setter
-    def orientations(self, value: Any) -> None:
-        self._need_spin("orientations")
-        q = np.ascontiguousarray(_checks.real_array("orientations", value), dtype=float)
-        self._core.set_orientations(q.reshape(-1, 4) if q.ndim == 1 and q.size == 4 * len(self) else q)
-
-    @property
-    def inertia(self) -> np.ndarray:
-        """Moments of inertia about the centres (N,), kg·m², in a world with spin (a new
-        read-only array; set by ``add_particles(..., inertia=...)``)."""
-        self._need_spin("inertia")
-        out = np.asarray(self._core.inertia)
-        out.flags.writeable = False
-        return out
-
-    def _need_spin(self, name: str) -> None:
-        if not self._core.spin:
-            raise ValueError(f"{name}: this world has no spin (its particles are points with mass); make it with kinema.World(..., spin=True)")
-
-    @masses.setter
-    def masses(self, value: Any) -> None:
-        self._assign(self._m, value, "masses", (len(self),))
-
-    def _assign(self, view: np.ndarray, value: Any, name: str, shape: tuple[int, ...]) -> None:
-        if isinstance(self._core, _Busy):  # (from a force while the world steps)
-            raise RuntimeError(REENTRY)
-        new = _checks.real_array(name, value)
-        try:
-            new = np.broadcast_to(new, shape)
-        except ValueError:
-            raise ValueError(f"{name} has shape {np.shape(value)}; it must be {shape}") from None
-        old = view.copy()
-        view[...] = new
-        try:
-            self._push()
-        except ValueError:
-            view[...] = old  # nothing half-written
-            raise
-        self._pull()
-
-    @property
-    def momenta(self) -> np.ndarray:
-        """Momenta L = m v (N, 3), kg·m/s (0 for pinned particles); a new read-only array."""
-        self._push()
-        out = self._m[:, None] * self._v
-        out.flags.writeable = False
-        return out
-
-    @property
-    def accelerations(self) -> np.ndarray:
-        """Accelerations a = F/m (N, 3), m/s², under the forces now (0 for pinned particles); a
-        new read-only array."""
-        self._push()
-        with self._engine() as core:
-            out = core.accelerations()
-        out.flags.writeable = False
-        return out
-
-    def particle_stress(self, kinetic: bool = True) -> np.ndarray:
-        """Each particle's share of the stress now, (N, 3, 3) in N·m (Pa·m³: stress times
-        volume): ½ Σ_j (x_i − x_j) ⊗ F_ij over the particles it touches (the force models'
-        contact forces, tangential part included; colliders left out, as in
-        ``Trajectory.pressure``), plus m_i v_i ⊗ v_i with ``kinetic``. Summed over the
-        particles and divided by the volume (an area in 2D) it is the pressure tensor; LAMMPS's
-        ``compute stress/atom`` gives its negative. Needs the ``"spring_dashpot"`` or
-        ``"hertz"`` model (the impulse model's collisions are impulses, not forces: a
-        ``ValueError`` says so); without collisions, the kinetic part alone. A new read-only
-        array."""
-        self._push()
-        with self._engine() as core:
-            out = core.particle_stress(_checks.boolean("kinetic", kinetic))
-        out.flags.writeable = False
-        return out
-
-    @property
-    def time(self) -> float:
-        return self._core.time
-
-    @property
-    def dt(self) -> float:
-        return self._core.dt
-
-    @property
-    def method(self) -> str:
-        return self._core.method
-
-    @property
-    def dim(self) -> int:
-        return self._core.dim
-
-    @staticmethod
-    def _species_names(species: Any, n: int) -> list[str]:
-        """``species`` (None, a name, or one name per particle) as n names ("" for none)."""
-        if species is None:
-            return [""] * n
-        if isinstance(species, str):
-            given = [("species", species)]
-        elif isinstance(species, (list, tuple, np.ndarray)) and len(species) == n:
-            given = [(f"species[{k}]", name) for k, name in enumerate(np.asarray(species, dtype=object).reshape(-1).tolist())]
-        else:
-            raise TypeError(f"species = {_checks.describe(species)} is invalid: give a name (a string) or one per particle, ({n},)")
-        for label, name in given:
-            _checks.species(label, name)
-        return [species] * n if isinstance(species, str) else [name for _, name in given]
-
-    @property
-    def species(self) -> np.ndarray | None:
-        """Each particle's species name (N,), ``X`` where none was given; ``None`` when no
-        particle has one."""
-        if not any(self._species):
-            return None
-        return np.array([s or "X" for s in self._species])
-
-    @property
-    def forces(self) -> list[Any]:
-        return list(self._forces)
-
-    def _trajectory_info(self) -> dict[str, Any]:
-        """What a Trajectory records about the world besides its frames."""
-        from .collider_descriptions import _describe_colliders
-
-        periodic = self.periodic
-        edges = None
-        if any(periodic):
-            box = next(c for c in self.colliders if isinstance(c, Box))
-            lo, hi = np.zeros(3), np.zeros(3)
-            lo[: len(np.ravel(box.lo))], hi[: len(np.ravel(box.hi))] = np.ravel(box.lo), np.ravel(box.hi)
-            edges = np.where(periodic, hi - lo, 0.0)
-        return {
-            "masses": self._m.copy(),
-            "radii": np.array(self._core.radii),
-            "ids": self.ids.copy(),
-            "species": self.species,
-            "colors": self._colors.copy() if not _unset(self._colors) and np.isfinite(self._colors).any() else None,
-            "groups": np.array(self.groups),
-            "springs": self._spring_ids.copy() if self._spring_ids.size else None,
-            "dim": self.dim,
-            "dt": self.dt,
-            "method": self.method,
-            "periodic": periodic if any(periodic) else None,
-            "box_edges": edges,
-            "colliders": _describe_colliders(self.colliders),
-        }
-
+    # -- the count and the diagnostics (the state as arrays: _world_views.py) ---------------
     def __len__(self) -> int:
         return self._core.len
 
@@ -1187,17 +487,6 @@ class World(WorldCollisions):
         self._push()
         with self._engine() as core:
             return core.diagnostics()
-
-    def _diagnostics_as_pulled(self) -> dict:
-        """:meth:`diagnostics` right after the views were read from the engine, with nothing
-        written since (the recorder's frames): without comparing the views with the engine."""
-        with self._engine() as core:
-            return core.diagnostics()
-
-    def _collision_stats_as_pulled(self) -> dict | None:
-        """``collision_stats()`` for the recorder, as :meth:`_diagnostics_as_pulled`: the books of
-        the steps taken, with nothing written into the views since they were read."""
-        return self._core.collision_stats()
 
     # -- scenes, checkpoints and the state ---------------------------------------------------
     def to_scene(self) -> Scene:
