@@ -1,24 +1,7 @@
 //! kinema trajectory viewer: frames as THREE.Points with a sprite shader, the colliders and
 //! springs, an orbit camera framing the scene, a colour legend and a small UI.
 //
-// The page carries `<script type="application/json" id="kinema-data">` with the metadata
-// written by python/kinema/viewer: n (particles), frames, dim, t (times, s), bounds
-// {min, max} (m, the particles), extent {min, max} (m: the live particles with their radii
-// over every frame and the colliders' finite parts, a moving one's wherever it goes),
-// colliders (plain descriptions, 3 values per vector, ±inf bounds as null; a moving one with
-// `poses`, base64 little-endian float32, a 4×4 matrix per frame in column-major order: where
-// it is at that frame's time, x = M x₀ for a point x₀ of it as described), speedMin/speedMax (m/s, over the live particles of the
-// frames shown), idRange (the lowest and highest id shown), springCount, aliveBytes,
-// defaultRadius, note, colorBy (the colouring to open with: "speed", "id", "color", "none" or
-// null), noOwnColor (RGB bytes: what "color" draws a particle without its own colour in, the
-// renderer's NO_OWN_COLOR), camera (the view to open with, a scene's [render] camera, or
-// null: {type: "3d", eye, target, up, fovDeg} or {type: "2d", view: [xmin, ymin, xmax,
-// ymax]}), and either base64 blobs
-// (positions, speed, radii: little-endian float32; springs: int32 column pairs; alive: per
-// frame aliveBytes bytes, bit i of byte j for particle 8 j + i, absent when every particle is
-// alive throughout; colors: RGBA bytes per particle, alpha 0 for none) or `source` naming a
-// binary file served beside the page whose layout is given by `layout` ([byte offset,
-// element count] of each, null for what is absent).
+// The page's data and the URL hash's options: data.js.
 //
 // Drawn: the particles alive at the frame (the others are moved out of the clip volume by
 // the vertex shader); springs as lines between live ends; planes as a floor patch (3D) or a
@@ -39,13 +22,9 @@
 // greatest values shown, "color" each particle's own colour (noOwnColor where it has none;
 // offered when some particle has one or colorBy asks for it), "none" one plain colour.
 //
-// A URL hash `#frame=K` opens paused at frame K (used by the tests); `#frame=K&play=1` plays;
-// `rotate=1` turns the orbit camera about its target (a turntable; the benchmark draws every
-// animation frame that way).
-//
 // `window.kinemaViewer` is the page's state for tests and benchmarks: `ready`, `error`,
 // `frame` (the trajectory frame shown), `playing`, `setFrame(k)`, `stats`, the frame
-// statistics (see frameStats): `stats.snapshot()` gives animation frames run, frames drawn,
+// statistics (see frameStats in stats.js): `stats.snapshot()` gives animation frames run, frames drawn,
 // trajectory frames stepped and median frame times in ms over the last STATS_WINDOW frames;
 // `info()`, a read-only description of what is drawn (see `describe` in start: the colouring,
 // the legend, the orbit camera and its floor, ...); and `ownColours()`, the RGB bytes "color"
@@ -56,9 +35,10 @@ import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import { LineSegments2 } from "three/examples/jsm/lines/LineSegments2.js";
 import { LineSegmentsGeometry } from "three/examples/jsm/lines/LineSegmentsGeometry.js";
 import { LineMaterial } from "three/examples/jsm/lines/LineMaterial.js";
+import { decodeBase64, hashOptions, loadData } from "./data.js";
+import { frameStats } from "./stats.js";
 
 const SPEEDS = [0.25, 0.5, 1, 2, 4];
-const STATS_WINDOW = 120; // animation frames the medians are taken over (2 s at 60 Hz)
 
 // The scenery's neutral colours, those of kinema's own renderer (crates/kinema/src/render/
 // scenery.rs), so that the particles' colours keep their meaning.
@@ -206,76 +186,6 @@ void main() {
 function viridisCss(t) {
   const c = [0, 1, 2].map((ch) => VIRIDIS.reduceRight((acc, coeffs) => acc * t + coeffs[ch], 0));
   return `rgb(${c.map((x) => Math.round(255 * Math.min(1, Math.max(0, x)))).join(",")})`;
-}
-
-function decodeBase64(text) {
-  const bin = atob(text);
-  const bytes = new Uint8Array(bin.length);
-  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
-  return bytes.buffer;
-}
-
-const ARRAYS = { positions: Float32Array, speed: Float32Array, radii: Float32Array, springs: Int32Array, alive: Uint8Array, colors: Uint8Array };
-
-async function loadData() {
-  const meta = JSON.parse(document.getElementById("kinema-data").textContent);
-  const data = { meta };
-  if (meta.source) {
-    const response = await fetch(meta.source);
-    if (!response.ok) throw new Error(`${meta.source}: HTTP ${response.status}`);
-    const buffer = await response.arrayBuffer();
-    for (const [name, Type] of Object.entries(ARRAYS)) {
-      const entry = meta.layout[name];
-      data[name] = entry ? new Type(buffer, entry[0], entry[1]) : null;
-    }
-    return data;
-  }
-  for (const [name, Type] of Object.entries(ARRAYS)) data[name] = meta[name] ? new Type(decodeBase64(meta[name])) : null;
-  return data;
-}
-
-function hashOptions() {
-  const params = new URLSearchParams(location.hash.slice(1));
-  const frame = params.has("frame") ? parseInt(params.get("frame"), 10) : null;
-  return { frame: Number.isFinite(frame) ? frame : null, play: params.get("play") === "1", rotate: params.get("rotate") === "1" };
-}
-
-// Counters and the last STATS_WINDOW frame times in rings (no allocation per frame); the
-// medians are computed when read. Times in ms: `frameMs`, between consecutive animation
-// frames (1000 / frameMs is the frame rate the page reaches, at most the display's);
-// `drawMs`, the script's work in the frames that drew (setting the frame and rendering:
-// the GPU's work is not in it). A median is null before any frame was measured.
-function frameStats() {
-  const intervals = new Float64Array(STATS_WINDOW);
-  const work = new Float64Array(STATS_WINDOW);
-  const scratch = new Float64Array(STATS_WINDOW);
-  const median = (ring, count) => {
-    const m = Math.min(count, STATS_WINDOW);
-    if (m === 0) return null;
-    const sorted = scratch.subarray(0, m);
-    sorted.set(ring.subarray(0, m));
-    sorted.sort();
-    return m % 2 ? sorted[(m - 1) / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
-  };
-  const stats = {
-    ticks: 0, // animation frames run
-    draws: 0, // animation frames that drew the scene
-    steps: 0, // trajectory frames shown (each change of the shown frame)
-    tick(intervalMs) {
-      intervals[stats.ticks++ % STATS_WINDOW] = intervalMs;
-    },
-    drew(workMs) {
-      work[stats.draws++ % STATS_WINDOW] = workMs;
-    },
-    reset() {
-      stats.ticks = stats.draws = stats.steps = 0;
-    },
-    snapshot() {
-      const frameMs = median(intervals, stats.ticks);
-      return { ticks: stats.ticks, draws: stats.draws, steps: stats.steps, frameMs, fps: frameMs ? 1000 / frameMs : null, drawMs: median(work, stats.draws), window: STATS_WINDOW };
-    },
-  };
-  return stats;
 }
 
 function buildUi(root, view) {
