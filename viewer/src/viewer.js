@@ -18,9 +18,7 @@
 // renderer draws it; 2D its rectangle fitted to the canvas, centred, aspect kept. Refitted on
 // resize until the user moves the camera.
 //
-// Colourings (the menu): "speed" and "id" through viridis with a legend of the real least and
-// greatest values shown, "color" each particle's own colour (noOwnColor where it has none;
-// offered when some particle has one or colorBy asks for it), "none" one plain colour.
+// Colourings: colours.js.
 //
 // `window.kinemaViewer` is the page's state for tests and benchmarks: `ready`, `error`,
 // `frame` (the trajectory frame shown), `playing`, `setFrame(k)`, `stats`, the frame
@@ -37,8 +35,9 @@ import { LineSegmentsGeometry } from "three/examples/jsm/lines/LineSegmentsGeome
 import { LineMaterial } from "three/examples/jsm/lines/LineMaterial.js";
 import { decodeBase64, hashOptions, loadData } from "./data.js";
 import { frameStats } from "./stats.js";
-
-const SPEEDS = [0.25, 0.5, 1, 2, 4];
+import { legendValue } from "./colours.js";
+import { FRAGMENT, MESH_FRAGMENT, MESH_VERTEX, OBSTACLE_FRAGMENT, OBSTACLE_VERTEX, VERTEX } from "./shaders.js";
+import { buildUi } from "./ui.js";
 
 // The scenery's neutral colours, those of kinema's own renderer (crates/kinema/src/render/
 // scenery.rs), so that the particles' colours keep their meaning.
@@ -68,165 +67,6 @@ const FIT_MARGIN = 0.94; // the scene fills this much of the view's half-width o
 const VIEW_DIRECTION = [0.9, -1.1, 0.6]; // from the scene towards the 3D camera (z up)
 const FLOOR_TILT = Math.PI / 3; // a plane facing up within this of level is a floor the 3D orbit stays above
 const FLOOR_CLEARANCE = 0.002; // of the extent's diagonal: how far above the floor the 3D camera stays
-
-// Viridis by a degree-6 polynomial fit per channel (good to about 1/255 of the table); the
-// legend's gradient evaluates the same polynomial.
-const VIRIDIS = [
-  [0.2777273272234177, 0.005407344544966578, 0.3340998053353061],
-  [0.1050930431085774, 1.404613529898575, 1.384590162594685],
-  [-0.3308618287255563, 0.214847559468213, 0.09509516302823659],
-  [-4.634230498983486, -5.799100973351585, -19.33244095627987],
-  [6.228269936347081, 14.17993336680509, 56.69055260068105],
-  [4.776384997670288, -13.74514537774601, -65.35303263337234],
-  [-5.435455855934631, 4.645852612178535, 26.3124352495832],
-];
-const glslVec = (c) => `vec3(${c.join(", ")})`;
-
-// Where on viridis the lowest value sits: its bottom colour (luma 30) is near black on the
-// page's near-black background, so the values use the map from 0.25 up (steel blue), as
-// kinema's renderer does (kinema.render.low_end("viridis")); the legend shows that part.
-const LOW_END = 0.25;
-
-const VERTEX = /* glsl */ `
-uniform float uPixelsPerUnit;  // perspective: viewport height / (2 tan(fov/2)), pixels per metre at 1 m depth;
-                               // orthographic: pixels per metre
-uniform int uOrtho;            // 1: orthographic (the size does not depend on depth)
-uniform float uOffset;         // the value at the bottom of the ramp
-uniform float uScale;          // 1 / (the values' range)
-uniform int uMode;             // 0: one colour, 1: ramp over aValue, 2: the particle's own colour
-uniform vec3 uNoOwn;           // mode 2: the colour of a particle without its own
-attribute float aRadius;
-attribute float aValue;
-attribute vec4 aColor;         // the particle's own colour (alpha 0: none)
-attribute float aAlive;        // 0: not alive at this frame, not drawn
-varying vec3 vColor;
-
-vec3 viridis(float t) {
-  const vec3 c0 = ${glslVec(VIRIDIS[0])};
-  const vec3 c1 = ${glslVec(VIRIDIS[1])};
-  const vec3 c2 = ${glslVec(VIRIDIS[2])};
-  const vec3 c3 = ${glslVec(VIRIDIS[3])};
-  const vec3 c4 = ${glslVec(VIRIDIS[4])};
-  const vec3 c5 = ${glslVec(VIRIDIS[5])};
-  const vec3 c6 = ${glslVec(VIRIDIS[6])};
-  t = clamp(t, 0.0, 1.0);
-  return c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * (c5 + t * c6)))));
-}
-
-void main() {
-  if (aAlive < 0.5) {
-    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: nothing drawn
-    gl_PointSize = 0.0;
-    vColor = vec3(0.0);
-    return;
-  }
-  vec4 mv = modelViewMatrix * vec4(position, 1.0);
-  gl_Position = projectionMatrix * mv;
-  // A sphere of radius r at depth d covers 2 r / d * pixelsPerUnit pixels; never under 2 px.
-  float perUnit = uOrtho == 1 ? uPixelsPerUnit : uPixelsPerUnit / max(-mv.z, 1e-6);
-  gl_PointSize = max(2.0, 2.0 * aRadius * perUnit);
-  const vec3 plain = vec3(0.35, 0.65, 0.95);
-  vColor = uMode == 0 ? plain : uMode == 2 ? (aColor.a > 0.5 ? aColor.rgb : uNoOwn) : viridis(${LOW_END.toFixed(2)} + ${(1 - LOW_END).toFixed(2)} * clamp((aValue - uOffset) * uScale, 0.0, 1.0));
-}
-`;
-
-const FRAGMENT = /* glsl */ `
-varying vec3 vColor;
-void main() {
-  vec2 p = gl_PointCoord * 2.0 - 1.0;
-  float r2 = dot(p, p);
-  if (r2 > 1.0) discard;
-  // Shade as a sphere lit from the upper left: the disc's normal is (p, sqrt(1 - r2)).
-  vec3 n = vec3(p.x, -p.y, sqrt(1.0 - r2));
-  float diffuse = max(dot(n, normalize(vec3(-0.4, 0.5, 0.8))), 0.0);
-  gl_FragColor = vec4(vColor * (0.3 + 0.7 * diffuse), 1.0);
-}
-`;
-
-// Sphere obstacles, shaded as the particles are (the same light, in view space).
-const OBSTACLE_VERTEX = /* glsl */ `
-varying vec3 vNormal;
-void main() {
-  vNormal = normalize(normalMatrix * normal);
-  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
-}
-`;
-const OBSTACLE_FRAGMENT = /* glsl */ `
-uniform vec3 uColor;
-varying vec3 vNormal;
-void main() {
-  float diffuse = max(dot(normalize(vNormal), normalize(vec3(-0.4, 0.5, 0.8))), 0.0);
-  gl_FragColor = vec4(uColor * (0.3 + 0.7 * diffuse), 1.0);
-}
-`;
-
-// Triangle meshes: each triangle flat (its normal from the derivatives of the view-space
-// position across it) and turned towards the eye, so both sides are lit; translucent.
-const MESH_VERTEX = /* glsl */ `
-varying vec3 vView;
-void main() {
-  vec4 mv = modelViewMatrix * vec4(position, 1.0);
-  vView = mv.xyz;
-  gl_Position = projectionMatrix * mv;
-}
-`;
-const MESH_FRAGMENT = /* glsl */ `
-uniform vec3 uColor;
-uniform float uOpacity;
-uniform float uAmbient;
-varying vec3 vView;
-void main() {
-  vec3 n = normalize(cross(dFdx(vView), dFdy(vView)));
-  if (dot(n, vView) > 0.0) n = -n;
-  float diffuse = max(dot(n, normalize(vec3(-0.4, 0.5, 0.8))), 0.0);
-  gl_FragColor = vec4(uColor * (uAmbient + (1.0 - uAmbient) * diffuse), uOpacity);
-}
-`;
-
-function viridisCss(t) {
-  const c = [0, 1, 2].map((ch) => VIRIDIS.reduceRight((acc, coeffs) => acc * t + coeffs[ch], 0));
-  return `rgb(${c.map((x) => Math.round(255 * Math.min(1, Math.max(0, x)))).join(",")})`;
-}
-
-function buildUi(root, view) {
-  const bar = document.createElement("div");
-  bar.id = "kinema-ui";
-  bar.innerHTML = `
-    <button id="kinema-play" title="play / pause (space)">▶</button>
-    <input id="kinema-scrub" type="range" min="0" max="0" value="0" step="1">
-    <label>speed <select id="kinema-speed">${SPEEDS.map((s) => `<option value="${s}"${s === 1 ? " selected" : ""}>${s}×</option>`).join("")}</select></label>
-    <label>colour <select id="kinema-colour"><option value="speed">speed</option><option value="id">id</option><option value="color">color</option><option value="none">none</option></select></label>
-    <span id="kinema-info"></span>`;
-  root.appendChild(bar);
-  // The colour legend: what the colours mean, over the view's top right corner.
-  const legend = document.createElement("div");
-  legend.id = "kinema-legend";
-  const stops = Array.from({ length: 11 }, (_, i) => `${viridisCss(LOW_END + ((1 - LOW_END) * i) / 10)} ${i * 10}%`).join(", ");
-  legend.innerHTML = `<div id="kinema-legend-label"></div><div id="kinema-legend-bar" style="background: linear-gradient(to right, ${stops})"></div>
-    <div id="kinema-legend-ticks"><span id="kinema-legend-min"></span><span id="kinema-legend-max"></span></div>`;
-  view.appendChild(legend);
-  const get = (id) => document.getElementById(id);
-  return {
-    play: get("kinema-play"),
-    scrub: get("kinema-scrub"),
-    speed: get("kinema-speed"),
-    colour: get("kinema-colour"),
-    info: get("kinema-info"),
-    legend,
-    legendLabel: get("kinema-legend-label"),
-    legendMin: get("kinema-legend-min"),
-    legendMax: get("kinema-legend-max"),
-  };
-}
-
-// A value for the legend: an integer (ids) exactly; otherwise three significant digits (as
-// the renderer's legend) but never fewer than the integer digits (1249.7 is 1250, not 1.25e3),
-// no trailing zeros.
-function legendValue(x, integer = false) {
-  x = Number(x);
-  if (integer || Math.abs(x) >= 100) return String(Math.round(x));
-  return String(Number(x.toPrecision(3)));
-}
 
 // The smallest of 1, 2, 5 × 10^k not below x (x > 0).
 function niceStep(x) {
