@@ -10,13 +10,7 @@
 // spheres (3D) or discs (2D); triangle meshes (3D) as a translucent lit surface seen from
 // both sides, with its rim and creases as lines, so that what is inside shows. A moving
 // collider's objects sit in a group of their own whose matrix is set to its pose at the
-// frame shown (planes, boxes, spheres and meshes alike). 3D: a perspective camera looking from VIEW_DIRECTION, z up,
-// placed so that the extent and the colliders' corners fill the view at the canvas's aspect
-// ratio, its orbit kept above the floor (see keepAboveFloor); 2D: an orthographic camera on
-// the xy-plane, fitted likewise. A scene's own camera (meta.camera) replaces the fitted view:
-// 3D the pinhole at eye looking at target with its up and vertical field of view, as kinema's
-// renderer draws it; 2D its rectangle fitted to the canvas, centred, aspect kept. Refitted on
-// resize until the user moves the camera.
+// frame shown (planes, boxes, spheres and meshes alike). The camera: camera.js.
 //
 // Colourings: colours.js.
 //
@@ -29,84 +23,16 @@
 // gives each particle, read from the colour buffer drawn (see `ownColourBytes`).
 
 import * as THREE from "three";
-import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import { hashOptions, loadData } from "./data.js";
 import { frameStats } from "./stats.js";
 import { legendValue } from "./colours.js";
 import { FRAGMENT, VERTEX } from "./shaders.js";
-import { boxCorners, buildScenery, vec } from "./scenery.js";
+import { buildScenery } from "./scenery.js";
+import { buildCamera, fit as fitCamera, framing } from "./camera.js";
 import { buildUi } from "./ui.js";
 
 const SPRING_COLOR = 0xa0a0a6; // springs: lighter than the outlines (scenery.js), to show on the dark background
 const BACKGROUND = 0x101014;
-const FIT_MARGIN = 0.94; // the scene fills this much of the view's half-width or half-height
-const VIEW_DIRECTION = [0.9, -1.1, 0.6]; // from the scene towards the 3D camera (z up)
-const FLOOR_CLEARANCE = 0.002; // of the extent's diagonal: how far above the floor the 3D camera stays
-
-// Keeps the 3D orbit above the floor (height `floor`): the camera at least `clearance` over
-// it and the orbit's target not under it. OrbitControls clamps the polar angle (from +z, the
-// camera's up) to maxPolarAngle before it pans and zooms, so the limit is set from the target
-// and distance before each update, and an update whose pan or zoom still took the camera
-// below is followed by one more (no frame is drawn in between): a pan stops at the floor
-// (target and camera lifted together), an orbit or a zoom at the clearance.
-function keepAboveFloor(controls, camera, floor, clearance) {
-  const orbit = controls.update.bind(controls);
-  const limit = () => {
-    const d = Math.max(camera.position.distanceTo(controls.target), 1e-300);
-    controls.maxPolarAngle = Math.acos(Math.min(1, Math.max(-1, (floor + clearance - controls.target.z) / d)));
-  };
-  controls.minDistance = 2 * clearance; // the camera can be over the floor above a target on it
-  // OrbitControls' own handlers call this.update(), which is this from now on.
-  controls.update = (deltaTime = null) => {
-    limit();
-    let changed = orbit(deltaTime);
-    const lift = floor - controls.target.z;
-    if (lift > 0) {
-      controls.target.z += lift;
-      camera.position.z += lift;
-    }
-    if (lift > 0 || camera.position.z < floor + clearance * (1 - 1e-6)) {
-      limit();
-      changed = orbit() || changed;
-    }
-    return changed;
-  };
-}
-
-// The 3D camera's place: looking along -VIEW_DIRECTION with z up, as near as it can be with
-// every point inside the field of view (`margin` of it): for camera axes r (right), u (up),
-// f (forward), a point p is in view when |p·r − a| <= tH (p·f − c) and |p·u − b| <= tV (p·f − c),
-// the camera at a r + b u + c f. Each pair of bounds on c is largest (the camera nearest)
-// where the two meet: c = (A + B) / 2 at a = (B − A) tH / 2, A = min(p·f − p·r / tH),
-// B = min(p·f + p·r / tH), and likewise for b; the camera takes the smaller c (the other
-// direction is then centred with room to spare).
-function fitPerspective(points, fovDeg, aspect) {
-  const f = vec(VIEW_DIRECTION).normalize().negate();
-  const r = new THREE.Vector3().crossVectors(f, new THREE.Vector3(0, 0, 1)).normalize();
-  const u = new THREE.Vector3().crossVectors(r, f);
-  const tV = Math.tan(THREE.MathUtils.degToRad(fovDeg) / 2) * FIT_MARGIN;
-  const tH = tV * aspect;
-  let [ah, bh, av, bv] = [Infinity, Infinity, Infinity, Infinity];
-  let farthest = -Infinity;
-  const centre = new THREE.Vector3();
-  for (const p of points) {
-    const [pr, pu, pf] = [p.dot(r), p.dot(u), p.dot(f)];
-    ah = Math.min(ah, pf - pr / tH);
-    bh = Math.min(bh, pf + pr / tH);
-    av = Math.min(av, pf - pu / tV);
-    bv = Math.min(bv, pf + pu / tV);
-    farthest = Math.max(farthest, pf);
-    centre.add(p);
-  }
-  centre.multiplyScalar(1 / points.length);
-  const a = ((bh - ah) * tH) / 2;
-  const b = ((bv - av) * tV) / 2;
-  const c = Math.min((ah + bh) / 2, (av + bv) / 2);
-  const eye = r.clone().multiplyScalar(a).addScaledVector(u, b).addScaledVector(f, c);
-  // The orbit's target: on the axis of view, at the depth of the points' centre.
-  const depth = Math.max(centre.clone().sub(eye).dot(f), 1e-9);
-  return { eye, target: eye.clone().addScaledVector(f, depth), far: farthest - c };
-}
 
 function start({ meta, positions, speed, radii, springs, alive, colors }) {
   const n = meta.n;
@@ -127,86 +53,11 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   const scenery = new THREE.Group();
   scene.add(scenery);
   const drawn = buildScenery(meta, scenery);
-  const elo = vec(meta.extent.min);
-  const ehi = vec(meta.extent.max);
-  const centre = elo.clone().add(ehi).multiplyScalar(0.5);
-  const extent = Math.max(ehi.clone().sub(elo).length(), 1e-9);
-  // What the camera frames: the extent's corners (the particles over every frame and the
-  // colliders' finite parts) and the corners of what the colliders drew (floor patches).
-  const framed = boxCorners(elo, ehi).concat(drawn.corners);
-
-  const camera = dim === 2 ? new THREE.OrthographicCamera(-1, 1, 1, -1, extent * 1e-3, extent * 100) : new THREE.PerspectiveCamera(45, 1, extent * 1e-3, extent * 100);
-  if (dim !== 2) camera.up.set(0, 0, 1); // kinema's worlds have z up (gravity along -z)
-  // The scene's own camera ([render] camera), when it has one: the view the page opens with.
-  // Its up and field of view are set before the orbit controls are made (they orbit about up).
-  const given = meta.camera ?? null;
-  if (given && given.type === "3d" && dim !== 2) {
-    camera.up.fromArray(given.up).normalize();
-    camera.fov = given.fovDeg;
-  }
-  const controls = new OrbitControls(camera, renderer.domElement);
-  if (dim === 2) {
-    controls.enableRotate = false; // a plane seen from above; pan and zoom
-    controls.screenSpacePanning = true;
-  }
-  let userMoved = false; // the camera is refitted on resize until the user moves it
-  controls.addEventListener("start", () => (userMoved = true));
-  const floor = dim === 2 ? null : drawn.floor;
-  const clearance = FLOOR_CLEARANCE * extent;
-  if (floor !== null) keepAboveFloor(controls, camera, floor, clearance);
-
-  // Place the camera so that everything framed is in view at the canvas's aspect ratio, or
-  // where the scene's camera says.
-  function fit(aspect) {
-    if (given && given.type === "2d" && dim === 2) {
-      // The rectangle fits the canvas, centred, aspect kept (as kinema's renderer draws it).
-      const [x0, y0, x1, y1] = given.view;
-      const half = Math.max((y1 - y0) / 2, (x1 - x0) / 2 / aspect, 1e-300);
-      Object.assign(camera, { left: -half * aspect, right: half * aspect, top: half, bottom: -half, zoom: 1 });
-      const cx = (x0 + x1) / 2;
-      const cy = (y0 + y1) / 2;
-      camera.position.set(cx, cy, ehi.z + extent);
-      camera.near = extent * 1e-3;
-      camera.far = ehi.z - elo.z + 3 * extent;
-      controls.target.set(cx, cy, centre.z);
-    } else if (given && given.type === "3d" && dim !== 2) {
-      camera.aspect = aspect;
-      const eye = vec(given.eye);
-      const target = vec(given.target);
-      let far = 0;
-      for (const p of framed) far = Math.max(far, p.distanceTo(eye));
-      camera.position.copy(eye);
-      camera.near = Math.max(eye.distanceTo(target), extent) * 1e-3;
-      camera.far = 10 * Math.max(far, extent);
-      controls.target.copy(target);
-    } else if (dim === 2) {
-      let [x0, x1, y0, y1] = [Infinity, -Infinity, Infinity, -Infinity];
-      for (const p of framed) {
-        [x0, x1, y0, y1] = [Math.min(x0, p.x), Math.max(x1, p.x), Math.min(y0, p.y), Math.max(y1, p.y)];
-      }
-      const half = Math.max((y1 - y0) / 2, (x1 - x0) / 2 / aspect, 1e-9) / FIT_MARGIN;
-      Object.assign(camera, { left: -half * aspect, right: half * aspect, top: half, bottom: -half, zoom: 1 });
-      const cx = (x0 + x1) / 2;
-      const cy = (y0 + y1) / 2;
-      camera.position.set(cx, cy, ehi.z + extent);
-      camera.near = extent * 1e-3;
-      camera.far = ehi.z - elo.z + 3 * extent;
-      controls.target.set(cx, cy, centre.z);
-    } else {
-      camera.aspect = aspect;
-      const { eye, target, far } = fitPerspective(framed, camera.fov, aspect);
-      camera.position.copy(eye);
-      camera.near = Math.max(eye.distanceTo(target), extent) * 1e-3;
-      camera.far = 10 * Math.max(far, extent);
-      controls.target.copy(target);
-      // An orbit target under the floor slides along the line of sight up to it (the view is
-      // the same; the floor keeps targets out from under it).
-      const ahead = target.clone().sub(eye);
-      if (floor !== null && target.z < floor && ahead.z < 0) controls.target.copy(eye).addScaledVector(ahead, (eye.z - floor) / -ahead.z);
-    }
-    camera.updateProjectionMatrix();
-    controls.update();
-  }
+  const box = framing(meta, drawn);
+  const { centre, extent, framed } = box;
+  const cam = buildCamera(meta, renderer, drawn, box);
+  const { camera, controls, given, floor, clearance } = cam;
+  const fit = (aspect) => fitCamera(cam, aspect);
 
   // The attributes hold views into the frame data, not copies: showing frame k points
   // `position` (and `aValue` when colouring by speed) at frame k's slice and marks it for
@@ -390,7 +241,7 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   function resize() {
     const [w, h] = canvasSize();
     renderer.setSize(w, h, false);
-    if (userMoved) {
+    if (cam.userMoved) {
       if (dim === 2) {
         // Keep the height in view and widen or narrow the width.
         const half = (camera.top - camera.bottom) / 2;
