@@ -20,18 +20,18 @@
 // trajectory frames stepped and median frame times in ms over the last STATS_WINDOW frames;
 // `info()`, a read-only description of what is drawn (see `describe` in start: the colouring,
 // the legend, the orbit camera and its floor, ...); and `ownColours()`, the RGB bytes "color"
-// gives each particle, read from the colour buffer drawn (see `ownColourBytes`).
+// gives each particle, read from the colour buffer drawn (see `ownColourBytes` in particles.js).
 
 import * as THREE from "three";
 import { hashOptions, loadData } from "./data.js";
 import { frameStats } from "./stats.js";
 import { legendValue } from "./colours.js";
-import { FRAGMENT, VERTEX } from "./shaders.js";
 import { buildScenery } from "./scenery.js";
 import { buildCamera, fit as fitCamera, framing } from "./camera.js";
+import { buildParticles } from "./particles.js";
+import { buildSprings } from "./springs.js";
 import { buildUi } from "./ui.js";
 
-const SPRING_COLOR = 0xa0a0a6; // springs: lighter than the outlines (scenery.js), to show on the dark background
 const BACKGROUND = 0x101014;
 
 function start({ meta, positions, speed, radii, springs, alive, colors }) {
@@ -59,58 +59,12 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   const { camera, controls, given, floor, clearance } = cam;
   const fit = (aspect) => fitCamera(cam, aspect);
 
-  // The attributes hold views into the frame data, not copies: showing frame k points
-  // `position` (and `aValue` when colouring by speed) at frame k's slice and marks it for
-  // upload, so a step costs the upload alone (no copy, no allocation but the view).
-  const frameSlice = (data, k, width) => data.subarray(k * n * width, (k + 1) * n * width);
-  const idValues = () => Float32Array.from({ length: n }, (_, i) => (n > 1 ? i / (n - 1) : 0.5));
-  let ids = speed ? null : idValues(); // the id ramp, made when first asked for
-  const geometry = new THREE.BufferGeometry();
-  const position = new THREE.BufferAttribute(frameSlice(positions, 0, 3), 3).setUsage(THREE.DynamicDrawUsage);
-  const value = new THREE.BufferAttribute(speed ? frameSlice(speed, 0, 1) : ids, 1).setUsage(THREE.DynamicDrawUsage);
-  const radius = new THREE.BufferAttribute(radii ? radii : new Float32Array(n).fill(meta.defaultRadius), 1);
-  // Which particles are alive at the frame shown (all, without births and deaths).
-  const aliveNow = new Uint8Array(n).fill(1);
-  const aliveAttr = new THREE.BufferAttribute(aliveNow, 1).setUsage(alive ? THREE.DynamicDrawUsage : THREE.StaticDrawUsage);
-  let visible = n;
-  geometry.setAttribute("position", position);
-  geometry.setAttribute("aValue", value);
-  geometry.setAttribute("aRadius", radius);
-  geometry.setAttribute("aAlive", aliveAttr);
-  // Each particle's own colour, RGBA bytes (A 0: none), for "color": offered when some
-  // particle has one, or when the trajectory asks for it (then all may have none).
-  const offerOwn = colors !== null || meta.colorBy === "color";
-  const ownColours = colors ?? (offerOwn ? new Uint8Array(4 * n) : null);
-  if (ownColours) geometry.setAttribute("aColor", new THREE.BufferAttribute(ownColours, 4, true));
-  const noOwn = (meta.noOwnColor ?? [70, 130, 200]).map((c) => c / 255);
-  geometry.boundingSphere = new THREE.Sphere(centre, extent * 10); // frames move: never cull
-  const material = new THREE.ShaderMaterial({
-    uniforms: { uPixelsPerUnit: { value: 1 }, uOrtho: { value: dim === 2 ? 1 : 0 }, uOffset: { value: 0 }, uScale: { value: 1 }, uMode: { value: 1 }, uNoOwn: { value: new THREE.Vector3(...noOwn) } },
-    vertexShader: VERTEX,
-    fragmentShader: FRAGMENT,
-  });
-  const points = new THREE.Points(geometry, material);
-  points.frustumCulled = false;
-  scene.add(points);
+  const particles = buildParticles(meta, { positions, speed, radii, alive, colors }, centre, extent);
+  const { position, radius, aliveNow, material, noOwn, offerOwn } = particles;
+  scene.add(particles.points);
 
-  // Springs: a segment between the two ends' centres, while both are alive; the visible ones
-  // are packed at the front of the buffer and the draw range cut to them.
-  const springCount = springs ? springs.length / 2 : 0;
-  const springPositions = new Float32Array(Math.max(springCount, 1) * 6);
-  const springGeometry = new THREE.BufferGeometry();
-  const springAttr = new THREE.BufferAttribute(springPositions, 3).setUsage(THREE.DynamicDrawUsage);
-  springGeometry.setAttribute("position", springAttr);
-  springGeometry.setDrawRange(0, 0);
-  const springMaterial = new THREE.LineBasicMaterial({ color: SPRING_COLOR });
-  if (dim === 2) {
-    springMaterial.depthTest = false;
-    springMaterial.depthWrite = false;
-  }
-  const springLines = new THREE.LineSegments(springGeometry, springMaterial);
-  springLines.frustumCulled = false;
-  springLines.renderOrder = -1;
-  let springsVisible = 0;
-  if (springCount) scene.add(springLines);
+  const springLines = buildSprings(springs, dim);
+  if (springLines.count) scene.add(springLines.lines);
 
   const ui = buildUi(document.body, container);
   ui.scrub.max = String(frames - 1);
@@ -145,57 +99,6 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
     }
   }
 
-  // Point aValue at what the colouring needs at frame k and set the ramp; only colouring by
-  // speed changes from frame to frame, and "none" uploads nothing.
-  function fillColour(k) {
-    if (colouring === "speed" && speed) {
-      value.array = frameSlice(speed, k, 1);
-      value.needsUpdate = true;
-      const range = meta.speedMax - meta.speedMin;
-      material.uniforms.uOffset.value = meta.speedMin;
-      material.uniforms.uScale.value = range > 0 ? 1 / range : 0;
-      material.uniforms.uMode.value = 1;
-    } else if (colouring === "id") {
-      if (value.array !== ids) {
-        value.array = ids ??= idValues();
-        value.needsUpdate = true;
-      }
-      material.uniforms.uOffset.value = 0;
-      material.uniforms.uScale.value = 1;
-      material.uniforms.uMode.value = 1;
-    } else {
-      material.uniforms.uMode.value = colouring === "color" && ownColours ? 2 : 0;
-    }
-  }
-
-  // Which particles are alive at frame k, and the springs between live ends.
-  function fillAliveAndSprings(k, frame) {
-    if (alive) {
-      const stride = meta.aliveBytes;
-      const row = alive.subarray(k * stride, (k + 1) * stride);
-      visible = 0;
-      for (let i = 0; i < n; i++) visible += aliveNow[i] = (row[i >> 3] >> (i & 7)) & 1;
-      aliveAttr.needsUpdate = true;
-    }
-    if (springCount) {
-      let m = 0;
-      for (let s = 0; s < springCount; s++) {
-        const a = springs[2 * s];
-        const b = springs[2 * s + 1];
-        if (!aliveNow[a] || !aliveNow[b]) continue;
-        springPositions.set(frame.subarray(3 * a, 3 * a + 3), 6 * m);
-        springPositions.set(frame.subarray(3 * b, 3 * b + 3), 6 * m + 3);
-        m++;
-      }
-      springsVisible = m;
-      springGeometry.setDrawRange(0, 2 * m);
-      if (m > 0) {
-        springAttr.addUpdateRange(0, 6 * m);
-        springAttr.needsUpdate = true;
-      }
-    }
-  }
-
   // Moving colliders where they are at frame k: each one's group takes its pose.
   function placeColliders(k) {
     for (const m of drawn.moving) {
@@ -208,13 +111,13 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
     k = Math.max(0, Math.min(frames - 1, Math.round(k)));
     if (k !== state.frame) {
       placeColliders(k);
-      position.array = frameSlice(positions, k, 3);
-      position.needsUpdate = true;
-      fillAliveAndSprings(k, position.array);
-      if (colouring === "speed") fillColour(k); // id and none do not change with the frame
+      particles.place(k);
+      particles.fillAlive(k);
+      springLines.fill(position.array, aliveNow);
+      if (colouring === "speed") particles.fillColour(colouring, k); // id and none do not change with the frame
       state.stats.steps++;
       ui.scrub.value = String(k);
-      const count = alive ? `${visible.toLocaleString()} of ${n.toLocaleString()}` : n.toLocaleString();
+      const count = alive ? `${particles.visible.toLocaleString()} of ${n.toLocaleString()}` : n.toLocaleString();
       ui.info.textContent = `${count} ${n === 1 ? "particle" : "particles"} · t = ${times[k].toFixed(3)} s · frame ${k + 1}/${frames}${infoSuffix}`;
     }
     state.frame = k;
@@ -252,15 +155,6 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
     for (const m of drawn.lineMaterials) m.resolution.set(w, h);
     pointScale();
     dirty = true;
-  }
-
-  // For tests: the colour (RGB bytes) each particle's sprite is given before shading in the
-  // "color" colouring, read from the aColor buffer the GPU draws (null when not offered).
-  function ownColourBytes() {
-    const attr = geometry.getAttribute("aColor");
-    if (!attr) return null;
-    const base = noOwn.map((c) => Math.round(255 * c));
-    return Array.from({ length: n }, (_, i) => (attr.array[4 * i + 3] > 127 ? Array.from(attr.array.subarray(4 * i, 4 * i + 3)) : base));
   }
 
   // A read-only description of what is drawn at the frame shown (for tests): the colliders'
@@ -312,8 +206,8 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
       colliderCorners: drawn.corners.length,
       // Each moving collider's type and the matrix (column-major) its objects are drawn with.
       moving: drawn.moving.map((m) => ({ type: m.type, matrix: Array.from(m.group.matrix.elements) })),
-      particles: { total: n, visible },
-      springs: { total: springCount, visible: springsVisible },
+      particles: { total: n, visible: particles.visible },
+      springs: { total: springLines.count, visible: springLines.visible },
       legend: legendShown ? { shown: true, label: legendShown.label, min: legendShown.min, max: legendShown.max, text: ui.legend.innerText } : { shown: false },
       colouring: { choice: colouring, mode: material.uniforms.uMode.value, options: Array.from(ui.colour.options, (o) => o.value), noOwnColor: noOwn.map((c) => Math.round(255 * c)) },
       // The orbit: polar angle from +z (rad) and its limit, the floor's height (null: none).
@@ -355,7 +249,7 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   ui.speed.addEventListener("change", () => (playbackSpeed = Number(ui.speed.value)));
   ui.colour.addEventListener("change", () => {
     colouring = ui.colour.value;
-    fillColour(state.frame);
+    particles.fillColour(colouring, state.frame);
     setLegend();
     dirty = true;
   });
@@ -403,9 +297,9 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
     renderer.render(scene, camera);
   };
   state.info = describe;
-  state.ownColours = ownColourBytes;
+  state.ownColours = particles.ownColourBytes;
   resize();
-  fillColour(0);
+  particles.fillColour(colouring, 0);
   setLegend();
   setFrame(opts.frame ?? 0);
   setPlaying(opts.frame === null || opts.play);
