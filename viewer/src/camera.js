@@ -1,5 +1,5 @@
-// The camera: the camera framing the scene (or the scene's own) and its orbit controls, kept
-// above the floor in 3D.
+// The camera and the canvas: the camera framing the scene (or the scene's own), its orbit
+// controls kept above the floor in 3D, and the canvas following the window.
 //
 // 3D: a perspective camera looking from VIEW_DIRECTION, z up, placed so that the extent and
 // the colliders' corners fill the view at the canvas's aspect ratio, its orbit kept above the
@@ -177,4 +177,36 @@ export function fit(cam, aspect) {
   }
   camera.updateProjectionMatrix();
   controls.update();
+}
+
+// The canvas's size in CSS pixels: its container's (the window's while that has none).
+export function canvasSize(container) {
+  return [container.clientWidth || window.innerWidth, container.clientHeight || window.innerHeight];
+}
+
+// Pixels per metre for the particles' sprites (at 1 m depth in perspective).
+export function pointScale(v) {
+  const { camera } = v.cam;
+  const pixels = canvasSize(v.container)[1] * v.renderer.getPixelRatio();
+  v.particles.material.uniforms.uPixelsPerUnit.value =
+    v.dim === 2 ? (pixels * camera.zoom) / (camera.top - camera.bottom) : pixels / (2 * Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2));
+}
+
+// The canvas at the container's size: the camera refitted to it (until the user moved it;
+// then its view widened or narrowed), the lines' resolution and the sprites' scale with it.
+export function resize(v) {
+  const { camera } = v.cam;
+  const [w, h] = canvasSize(v.container);
+  v.renderer.setSize(w, h, false);
+  if (v.cam.userMoved) {
+    if (v.dim === 2) {
+      // Keep the height in view and widen or narrow the width.
+      const half = (camera.top - camera.bottom) / 2;
+      Object.assign(camera, { left: (-half * w) / h, right: (half * w) / h });
+    } else camera.aspect = w / h;
+    camera.updateProjectionMatrix();
+  } else fit(v.cam, w / h);
+  for (const m of v.drawn.lineMaterials) m.resolution.set(w, h);
+  pointScale(v);
+  v.dirty = true;
 }

@@ -321,3 +321,11 @@ export function buildScenery(meta, group) {
   const { counts, boxEdges, meshes, lineMaterials, floor } = drawing;
   return { counts, boxEdges, meshes, corners, lineMaterials, floor, moving };
 }
+
+// Moving colliders where they are at frame k: each one's group takes its pose.
+export function placeColliders(drawn, k) {
+  for (const m of drawn.moving) {
+    m.group.matrix.fromArray(m.poses, 16 * k);
+    m.group.matrixWorldNeedsUpdate = true;
+  }
+}

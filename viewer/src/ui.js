@@ -1,7 +1,8 @@
 // The controls' bar (play, the frame slider, the speed and colouring menus, the line saying
-// what is shown) and the colour legend over the view's top right corner.
+// what is shown) and the colour legend over the view's top right corner: made (buildUi), the
+// menus set for the trajectory (fillMenus), the legend of the colouring chosen (showLegend).
 
-import { LOW_END, viridisCss } from "./colours.js";
+import { LOW_END, legendValue, viridisCss } from "./colours.js";
 
 const SPEEDS = [0.25, 0.5, 1, 2, 4];
 
@@ -34,4 +35,31 @@ export function buildUi(root, view) {
     legendMin: get("kinema-legend-min"),
     legendMax: get("kinema-legend-max"),
   };
+}
+
+// The menus for this trajectory: the slider over its frames, "speed" disabled without speeds,
+// "color" only where offered (see buildParticles); the colouring the trajectory asks for (a
+// scene's [render] color_by) chosen where the page has it, else speed (id when the speeds are
+// unknown).
+export function fillMenus(ui, meta, speed, offerOwn) {
+  ui.scrub.max = String(meta.frames - 1);
+  if (!speed) ui.colour.querySelector('option[value="speed"]').disabled = true;
+  if (!offerOwn) ui.colour.querySelector('option[value="color"]').remove();
+  const offered = (v) => Array.from(ui.colour.options).some((o) => o.value === v && !o.disabled);
+  ui.colour.value = offered(meta.colorBy) ? meta.colorBy : speed ? "speed" : "id";
+}
+
+// The legend names what the colours show and the values at the ends of the ramp. Returns the
+// legend shown ({label, min, max, integer}) or null (none for this colouring).
+export function showLegend(ui, meta, colouring, speed) {
+  let legendShown = null;
+  if (colouring === "speed" && speed) legendShown = { label: "speed (m/s)", min: meta.speedMin, max: meta.speedMax };
+  else if (colouring === "id") legendShown = { label: "particle id", min: meta.idRange[0], max: meta.idRange[1], integer: true };
+  ui.legend.style.display = legendShown ? "" : "none";
+  if (legendShown) {
+    ui.legendLabel.textContent = legendShown.label;
+    ui.legendMin.textContent = legendValue(legendShown.min, legendShown.integer);
+    ui.legendMax.textContent = legendValue(legendShown.max, legendShown.integer);
+  }
+  return legendShown;
 }
