@@ -1,639 +1,57 @@
 //! kinema trajectory viewer: frames as THREE.Points with a sprite shader, the colliders and
 //! springs, an orbit camera framing the scene, a colour legend and a small UI.
 //
-// The page carries `<script type="application/json" id="kinema-data">` with the metadata
-// written by python/kinema/viewer: n (particles), frames, dim, t (times, s), bounds
-// {min, max} (m, the particles), extent {min, max} (m: the live particles with their radii
-// over every frame and the colliders' finite parts, a moving one's wherever it goes),
-// colliders (plain descriptions, 3 values per vector, ±inf bounds as null; a moving one with
-// `poses`, base64 little-endian float32, a 4×4 matrix per frame in column-major order: where
-// it is at that frame's time, x = M x₀ for a point x₀ of it as described), speedMin/speedMax (m/s, over the live particles of the
-// frames shown), idRange (the lowest and highest id shown), springCount, aliveBytes,
-// defaultRadius, note, colorBy (the colouring to open with: "speed", "id", "color", "none" or
-// null), noOwnColor (RGB bytes: what "color" draws a particle without its own colour in, the
-// renderer's NO_OWN_COLOR), camera (the view to open with, a scene's [render] camera, or
-// null: {type: "3d", eye, target, up, fovDeg} or {type: "2d", view: [xmin, ymin, xmax,
-// ymax]}), and either base64 blobs
-// (positions, speed, radii: little-endian float32; springs: int32 column pairs; alive: per
-// frame aliveBytes bytes, bit i of byte j for particle 8 j + i, absent when every particle is
-// alive throughout; colors: RGBA bytes per particle, alpha 0 for none) or `source` naming a
-// binary file served beside the page whose layout is given by `layout` ([byte offset,
-// element count] of each, null for what is absent).
+// The entry point (viewer/build.mjs bundles it with what it imports): it loads the page's
+// data, builds the scene and the controls (start) and keeps window.kinemaViewer. The parts:
+//   data.js       the page's data (the trajectory's metadata and arrays) and the URL hash's options
+//   scenery.js    the colliders drawn, in the renderer's neutral colours; vec, boxCorners
+//   particles.js  the particles as THREE.Points, their colouring
+//   springs.js    the springs as lines between live ends
+//   shaders.js    the GLSL of the particles, sphere obstacles and meshes
+//   colours.js    viridis (the "speed" and "id" colourings) and the legend's values
+//   camera.js     the camera fitted to the scene or the scene's own, the orbit above the floor, the canvas's size
+//   ui.js         the controls' bar, the colour legend, the menus
+//   playback.js   the frame shown, playing, the controls' listeners, the animation loop
+//   describe.js   window.kinemaViewer.info(): what is drawn, for the tests
+//   stats.js      the frame statistics
 //
 // Drawn: the particles alive at the frame (the others are moved out of the clip volume by
-// the vertex shader); springs as lines between live ends; planes as a floor patch (3D) or a
-// line with its solid side filled (2D); boxes as their edges less those of open faces, with
-// the walls of open faces reaching the extent, and a floor face; sphere obstacles as shaded
-// spheres (3D) or discs (2D); triangle meshes (3D) as a translucent lit surface seen from
-// both sides, with its rim and creases as lines, so that what is inside shows. A moving
-// collider's objects sit in a group of their own whose matrix is set to its pose at the
-// frame shown (planes, boxes, spheres and meshes alike). 3D: a perspective camera looking from VIEW_DIRECTION, z up,
-// placed so that the extent and the colliders' corners fill the view at the canvas's aspect
-// ratio, its orbit kept above the floor (see keepAboveFloor); 2D: an orthographic camera on
-// the xy-plane, fitted likewise. A scene's own camera (meta.camera) replaces the fitted view:
-// 3D the pinhole at eye looking at target with its up and vertical field of view, as kinema's
-// renderer draws it; 2D its rectangle fitted to the canvas, centred, aspect kept. Refitted on
-// resize until the user moves the camera.
-//
-// Colourings (the menu): "speed" and "id" through viridis with a legend of the real least and
-// greatest values shown, "color" each particle's own colour (noOwnColor where it has none;
-// offered when some particle has one or colorBy asks for it), "none" one plain colour.
-//
-// A URL hash `#frame=K` opens paused at frame K (used by the tests); `#frame=K&play=1` plays;
-// `rotate=1` turns the orbit camera about its target (a turntable; the benchmark draws every
-// animation frame that way).
+// the vertex shader); springs as lines between live ends; the colliders (see scenery.js);
+// seen by a camera fitted to the scene or the scene's own (see camera.js).
 //
 // `window.kinemaViewer` is the page's state for tests and benchmarks: `ready`, `error`,
 // `frame` (the trajectory frame shown), `playing`, `setFrame(k)`, `stats`, the frame
-// statistics (see frameStats): `stats.snapshot()` gives animation frames run, frames drawn,
+// statistics (see frameStats in stats.js): `stats.snapshot()` gives animation frames run, frames drawn,
 // trajectory frames stepped and median frame times in ms over the last STATS_WINDOW frames;
-// `info()`, a read-only description of what is drawn (see `describe` in start: the colouring,
+// `info()`, a read-only description of what is drawn (see `describe` in describe.js: the colouring,
 // the legend, the orbit camera and its floor, ...); and `ownColours()`, the RGB bytes "color"
-// gives each particle, read from the colour buffer drawn (see `ownColourBytes`).
+// gives each particle, read from the colour buffer drawn (see `ownColourBytes` in particles.js).
 
 import * as THREE from "three";
-import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
-import { LineSegments2 } from "three/examples/jsm/lines/LineSegments2.js";
-import { LineSegmentsGeometry } from "three/examples/jsm/lines/LineSegmentsGeometry.js";
-import { LineMaterial } from "three/examples/jsm/lines/LineMaterial.js";
+import { buildCamera, framing, resize } from "./camera.js";
+import { hashOptions, loadData } from "./data.js";
+import { describe } from "./describe.js";
+import { buildParticles } from "./particles.js";
+import { animate, listen, setFrame, setLegend, setPlaying } from "./playback.js";
+import { buildScenery } from "./scenery.js";
+import { buildSprings } from "./springs.js";
+import { frameStats } from "./stats.js";
+import { buildUi, fillMenus } from "./ui.js";
 
-const SPEEDS = [0.25, 0.5, 1, 2, 4];
-const STATS_WINDOW = 120; // animation frames the medians are taken over (2 s at 60 Hz)
-
-// The scenery's neutral colours, those of kinema's own renderer (crates/kinema/src/render/
-// scenery.rs), so that the particles' colours keep their meaning.
-const FLOOR_COLOR = 0xe0e0dc; // (224, 224, 220): plane floor patches, the solid side of 2D planes
-const BOX_FLOOR_COLOR = 0xd4d4ce; // (212, 212, 206): a box's floor face
-const LINE_COLOR = 0x606064; // (96, 96, 100): outlines, grid lines (faint), box edges, 2D plane lines
-const OBSTACLE_RGB = [176 / 255, 178 / 255, 184 / 255]; // sphere obstacles, shaded like the particles
-const SPRING_COLOR = 0xa0a0a6; // springs: lighter than the outlines, to show on the dark background
-// Triangle meshes: a light grey at MESH_OPACITY (the renderer's PLANE_ALPHA), lit as the
-// renderer's facets (MESH_AMBIENT of the colour where the light does not reach), without
-// writing depth (what is inside or behind shows through); its rim and the edges where its
-// faces meet at more than MESH_CREASE_DEG as lines.
-const MESH_RGB = [200 / 255, 200 / 255, 196 / 255];
-const MESH_OPACITY = 0.3;
-const MESH_AMBIENT = 0.45;
-const MESH_EDGE_COLOR = 0xa0a0a6;
-const MESH_EDGE_OPACITY = 0.6;
-const MESH_CREASE_DEG = 30;
 const BACKGROUND = 0x101014;
-// Line widths, CSS pixels (as the renderer's).
-const PATCH_OUTLINE_PX = 1.5;
-const BOX_EDGE_PX = 1.5;
-const PLANE_2D_PX = 3;
-const BOX_2D_PX = 2;
-const GRID_ALPHA = 0.25;
-const FIT_MARGIN = 0.94; // the scene fills this much of the view's half-width or half-height
-const VIEW_DIRECTION = [0.9, -1.1, 0.6]; // from the scene towards the 3D camera (z up)
-const FLOOR_TILT = Math.PI / 3; // a plane facing up within this of level is a floor the 3D orbit stays above
-const FLOOR_CLEARANCE = 0.002; // of the extent's diagonal: how far above the floor the 3D camera stays
 
-// Viridis by a degree-6 polynomial fit per channel (good to about 1/255 of the table); the
-// legend's gradient evaluates the same polynomial.
-const VIRIDIS = [
-  [0.2777273272234177, 0.005407344544966578, 0.3340998053353061],
-  [0.1050930431085774, 1.404613529898575, 1.384590162594685],
-  [-0.3308618287255563, 0.214847559468213, 0.09509516302823659],
-  [-4.634230498983486, -5.799100973351585, -19.33244095627987],
-  [6.228269936347081, 14.17993336680509, 56.69055260068105],
-  [4.776384997670288, -13.74514537774601, -65.35303263337234],
-  [-5.435455855934631, 4.645852612178535, 26.3124352495832],
-];
-const glslVec = (c) => `vec3(${c.join(", ")})`;
-
-// Where on viridis the lowest value sits: its bottom colour (luma 30) is near black on the
-// page's near-black background, so the values use the map from 0.25 up (steel blue), as
-// kinema's renderer does (kinema.render.low_end("viridis")); the legend shows that part.
-const LOW_END = 0.25;
-
-const VERTEX = /* glsl */ `
-uniform float uPixelsPerUnit;  // perspective: viewport height / (2 tan(fov/2)), pixels per metre at 1 m depth;
-                               // orthographic: pixels per metre
-uniform int uOrtho;            // 1: orthographic (the size does not depend on depth)
-uniform float uOffset;         // the value at the bottom of the ramp
-uniform float uScale;          // 1 / (the values' range)
-uniform int uMode;             // 0: one colour, 1: ramp over aValue, 2: the particle's own colour
-uniform vec3 uNoOwn;           // mode 2: the colour of a particle without its own
-attribute float aRadius;
-attribute float aValue;
-attribute vec4 aColor;         // the particle's own colour (alpha 0: none)
-attribute float aAlive;        // 0: not alive at this frame, not drawn
-varying vec3 vColor;
-
-vec3 viridis(float t) {
-  const vec3 c0 = ${glslVec(VIRIDIS[0])};
-  const vec3 c1 = ${glslVec(VIRIDIS[1])};
-  const vec3 c2 = ${glslVec(VIRIDIS[2])};
-  const vec3 c3 = ${glslVec(VIRIDIS[3])};
-  const vec3 c4 = ${glslVec(VIRIDIS[4])};
-  const vec3 c5 = ${glslVec(VIRIDIS[5])};
-  const vec3 c6 = ${glslVec(VIRIDIS[6])};
-  t = clamp(t, 0.0, 1.0);
-  return c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * (c5 + t * c6)))));
-}
-
-void main() {
-  if (aAlive < 0.5) {
-    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: nothing drawn
-    gl_PointSize = 0.0;
-    vColor = vec3(0.0);
-    return;
-  }
-  vec4 mv = modelViewMatrix * vec4(position, 1.0);
-  gl_Position = projectionMatrix * mv;
-  // A sphere of radius r at depth d covers 2 r / d * pixelsPerUnit pixels; never under 2 px.
-  float perUnit = uOrtho == 1 ? uPixelsPerUnit : uPixelsPerUnit / max(-mv.z, 1e-6);
-  gl_PointSize = max(2.0, 2.0 * aRadius * perUnit);
-  const vec3 plain = vec3(0.35, 0.65, 0.95);
-  vColor = uMode == 0 ? plain : uMode == 2 ? (aColor.a > 0.5 ? aColor.rgb : uNoOwn) : viridis(${LOW_END.toFixed(2)} + ${(1 - LOW_END).toFixed(2)} * clamp((aValue - uOffset) * uScale, 0.0, 1.0));
-}
-`;
-
-const FRAGMENT = /* glsl */ `
-varying vec3 vColor;
-void main() {
-  vec2 p = gl_PointCoord * 2.0 - 1.0;
-  float r2 = dot(p, p);
-  if (r2 > 1.0) discard;
-  // Shade as a sphere lit from the upper left: the disc's normal is (p, sqrt(1 - r2)).
-  vec3 n = vec3(p.x, -p.y, sqrt(1.0 - r2));
-  float diffuse = max(dot(n, normalize(vec3(-0.4, 0.5, 0.8))), 0.0);
-  gl_FragColor = vec4(vColor * (0.3 + 0.7 * diffuse), 1.0);
-}
-`;
-
-// Sphere obstacles, shaded as the particles are (the same light, in view space).
-const OBSTACLE_VERTEX = /* glsl */ `
-varying vec3 vNormal;
-void main() {
-  vNormal = normalize(normalMatrix * normal);
-  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
-}
-`;
-const OBSTACLE_FRAGMENT = /* glsl */ `
-uniform vec3 uColor;
-varying vec3 vNormal;
-void main() {
-  float diffuse = max(dot(normalize(vNormal), normalize(vec3(-0.4, 0.5, 0.8))), 0.0);
-  gl_FragColor = vec4(uColor * (0.3 + 0.7 * diffuse), 1.0);
-}
-`;
-
-// Triangle meshes: each triangle flat (its normal from the derivatives of the view-space
-// position across it) and turned towards the eye, so both sides are lit; translucent.
-const MESH_VERTEX = /* glsl */ `
-varying vec3 vView;
-void main() {
-  vec4 mv = modelViewMatrix * vec4(position, 1.0);
-  vView = mv.xyz;
-  gl_Position = projectionMatrix * mv;
-}
-`;
-const MESH_FRAGMENT = /* glsl */ `
-uniform vec3 uColor;
-uniform float uOpacity;
-uniform float uAmbient;
-varying vec3 vView;
-void main() {
-  vec3 n = normalize(cross(dFdx(vView), dFdy(vView)));
-  if (dot(n, vView) > 0.0) n = -n;
-  float diffuse = max(dot(n, normalize(vec3(-0.4, 0.5, 0.8))), 0.0);
-  gl_FragColor = vec4(uColor * (uAmbient + (1.0 - uAmbient) * diffuse), uOpacity);
-}
-`;
-
-function viridisCss(t) {
-  const c = [0, 1, 2].map((ch) => VIRIDIS.reduceRight((acc, coeffs) => acc * t + coeffs[ch], 0));
-  return `rgb(${c.map((x) => Math.round(255 * Math.min(1, Math.max(0, x)))).join(",")})`;
-}
-
-function decodeBase64(text) {
-  const bin = atob(text);
-  const bytes = new Uint8Array(bin.length);
-  for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
-  return bytes.buffer;
-}
-
-const ARRAYS = { positions: Float32Array, speed: Float32Array, radii: Float32Array, springs: Int32Array, alive: Uint8Array, colors: Uint8Array };
-
-async function loadData() {
-  const meta = JSON.parse(document.getElementById("kinema-data").textContent);
-  const data = { meta };
-  if (meta.source) {
-    const response = await fetch(meta.source);
-    if (!response.ok) throw new Error(`${meta.source}: HTTP ${response.status}`);
-    const buffer = await response.arrayBuffer();
-    for (const [name, Type] of Object.entries(ARRAYS)) {
-      const entry = meta.layout[name];
-      data[name] = entry ? new Type(buffer, entry[0], entry[1]) : null;
-    }
-    return data;
-  }
-  for (const [name, Type] of Object.entries(ARRAYS)) data[name] = meta[name] ? new Type(decodeBase64(meta[name])) : null;
-  return data;
-}
-
-function hashOptions() {
-  const params = new URLSearchParams(location.hash.slice(1));
-  const frame = params.has("frame") ? parseInt(params.get("frame"), 10) : null;
-  return { frame: Number.isFinite(frame) ? frame : null, play: params.get("play") === "1", rotate: params.get("rotate") === "1" };
-}
-
-// Counters and the last STATS_WINDOW frame times in rings (no allocation per frame); the
-// medians are computed when read. Times in ms: `frameMs`, between consecutive animation
-// frames (1000 / frameMs is the frame rate the page reaches, at most the display's);
-// `drawMs`, the script's work in the frames that drew (setting the frame and rendering:
-// the GPU's work is not in it). A median is null before any frame was measured.
-function frameStats() {
-  const intervals = new Float64Array(STATS_WINDOW);
-  const work = new Float64Array(STATS_WINDOW);
-  const scratch = new Float64Array(STATS_WINDOW);
-  const median = (ring, count) => {
-    const m = Math.min(count, STATS_WINDOW);
-    if (m === 0) return null;
-    const sorted = scratch.subarray(0, m);
-    sorted.set(ring.subarray(0, m));
-    sorted.sort();
-    return m % 2 ? sorted[(m - 1) / 2] : 0.5 * (sorted[m / 2 - 1] + sorted[m / 2]);
-  };
-  const stats = {
-    ticks: 0, // animation frames run
-    draws: 0, // animation frames that drew the scene
-    steps: 0, // trajectory frames shown (each change of the shown frame)
-    tick(intervalMs) {
-      intervals[stats.ticks++ % STATS_WINDOW] = intervalMs;
-    },
-    drew(workMs) {
-      work[stats.draws++ % STATS_WINDOW] = workMs;
-    },
-    reset() {
-      stats.ticks = stats.draws = stats.steps = 0;
-    },
-    snapshot() {
-      const frameMs = median(intervals, stats.ticks);
-      return { ticks: stats.ticks, draws: stats.draws, steps: stats.steps, frameMs, fps: frameMs ? 1000 / frameMs : null, drawMs: median(work, stats.draws), window: STATS_WINDOW };
-    },
-  };
-  return stats;
-}
-
-function buildUi(root, view) {
-  const bar = document.createElement("div");
-  bar.id = "kinema-ui";
-  bar.innerHTML = `
-    <button id="kinema-play" title="play / pause (space)">▶</button>
-    <input id="kinema-scrub" type="range" min="0" max="0" value="0" step="1">
-    <label>speed <select id="kinema-speed">${SPEEDS.map((s) => `<option value="${s}"${s === 1 ? " selected" : ""}>${s}×</option>`).join("")}</select></label>
-    <label>colour <select id="kinema-colour"><option value="speed">speed</option><option value="id">id</option><option value="color">color</option><option value="none">none</option></select></label>
-    <span id="kinema-info"></span>`;
-  root.appendChild(bar);
-  // The colour legend: what the colours mean, over the view's top right corner.
-  const legend = document.createElement("div");
-  legend.id = "kinema-legend";
-  const stops = Array.from({ length: 11 }, (_, i) => `${viridisCss(LOW_END + ((1 - LOW_END) * i) / 10)} ${i * 10}%`).join(", ");
-  legend.innerHTML = `<div id="kinema-legend-label"></div><div id="kinema-legend-bar" style="background: linear-gradient(to right, ${stops})"></div>
-    <div id="kinema-legend-ticks"><span id="kinema-legend-min"></span><span id="kinema-legend-max"></span></div>`;
-  view.appendChild(legend);
-  const get = (id) => document.getElementById(id);
-  return {
-    play: get("kinema-play"),
-    scrub: get("kinema-scrub"),
-    speed: get("kinema-speed"),
-    colour: get("kinema-colour"),
-    info: get("kinema-info"),
-    legend,
-    legendLabel: get("kinema-legend-label"),
-    legendMin: get("kinema-legend-min"),
-    legendMax: get("kinema-legend-max"),
-  };
-}
-
-// A value for the legend: an integer (ids) exactly; otherwise three significant digits (as
-// the renderer's legend) but never fewer than the integer digits (1249.7 is 1250, not 1.25e3),
-// no trailing zeros.
-function legendValue(x, integer = false) {
-  x = Number(x);
-  if (integer || Math.abs(x) >= 100) return String(Math.round(x));
-  return String(Number(x.toPrecision(3)));
-}
-
-// The smallest of 1, 2, 5 × 10^k not below x (x > 0).
-function niceStep(x) {
-  const p = 10 ** Math.floor(Math.log10(x));
-  const m = x / p;
-  return p * (m <= 1 ? 1 : m <= 2 ? 2 : m <= 5 ? 5 : 10);
-}
-
-const vec = (a) => new THREE.Vector3(a[0], a[1], a[2]);
-
-// The 8 corners of the box [lo, hi].
-function boxCorners(lo, hi) {
-  const out = [];
-  for (let i = 0; i < 8; i++) out.push(new THREE.Vector3(i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z));
-  return out;
-}
-
-// The colliders as three.js objects in `group`. Returns what was drawn: `counts` (objects by
-// type: a plane's floor patch or 2D line, a box, a sphere, a mesh), `boxEdges` (box edges in
-// 3D, sides in 2D), `meshes` (per mesh: its triangles and edge lines drawn and its surface's
-// material: opacity, depthWrite, double-sided), `corners` (the finite corners of what was
-// drawn: floor patches, boxes with their open bounds at the extent, spheres' and meshes'
-// bounding boxes; the camera frames them), `moving` (per moving collider: its type, the group
-// holding its objects, its poses and the indices of its corners in `corners`),
-// `lineMaterials` (their resolution follows the canvas) and `floor` (3D: the height of the
-// lowest floor, null without one: a plane facing up, less than FLOOR_TILT from level, at its
-// patch's lowest corner, or a box's closed bottom).
-function buildScenery(meta, group) {
-  const dim = meta.dim;
-  const elo = vec(meta.extent.min);
-  const ehi = vec(meta.extent.max);
-  const ecentre = elo.clone().add(ehi).multiplyScalar(0.5);
-  const esize = Math.max(ehi.clone().sub(elo).length(), 1e-9);
-  const counts = { plane: 0, box: 0, sphere: 0, mesh: 0 };
-  const meshes = [];
-  const corners = [];
-  let floor = null;
-  const floorAt = (z) => (floor = floor === null ? z : Math.min(floor, z));
-  const lineMaterials = [];
-  const moving = [];
-  let boxEdges = 0;
-  let holder = group; // where the collider being built puts its objects
-  // 2D: the scenery lies under everything, drawn first without depth.
-  const flat = (material, order = -2) => {
-    if (dim === 2) {
-      material.depthTest = false;
-      material.depthWrite = false;
-    }
-    return [material, order];
-  };
-  const add = (object, [material, order]) => {
-    object.material = material;
-    if (dim === 2) object.renderOrder = order;
-    holder.add(object);
-    return object;
-  };
-  const fatLines = (points, width) => {
-    // points: [a0, b0, a1, b1, ...] Vector3s; drawn `width` CSS pixels wide.
-    const geometry = new LineSegmentsGeometry().setPositions(points.flatMap((p) => [p.x, p.y, p.z]));
-    const material = new LineMaterial({ color: LINE_COLOR, linewidth: width });
-    lineMaterials.push(material);
-    const lines = new LineSegments2(geometry);
-    add(lines, flat(material, -1));
-    return lines;
-  };
-  const quad = (a, b, c, d, color, opacity = 1) => {
-    const geometry = new THREE.BufferGeometry().setFromPoints([a, b, c, a, c, d]);
-    const material = new THREE.MeshBasicMaterial({ color, side: THREE.DoubleSide, transparent: opacity < 1, opacity });
-    // Lines on the face (grid, outline, edges) win the depth test against it.
-    material.polygonOffset = true;
-    material.polygonOffsetFactor = 1;
-    material.polygonOffsetUnits = 1;
-    return add(new THREE.Mesh(geometry), flat(material, -3));
-  };
-
-  // One collider's objects, into `holder`.
-  const buildCollider = (c) => {
-    if (c.type === "plane") {
-      const n = vec(c.normal).normalize();
-      const p = vec(c.point);
-      if (dim === 2) {
-        // The line n·(q − p) = 0 of the normal's xy part, its solid side (against the normal)
-        // lightly filled, both reaching far past the scene.
-        const nxy = new THREE.Vector3(c.normal[0], c.normal[1], 0);
-        if (nxy.length() <= 1e-9 * vec(c.normal).length()) return;
-        nxy.normalize();
-        const t = new THREE.Vector3(-nxy.y, nxy.x, 0);
-        const foot = new THREE.Vector3(p.x, p.y, 0).addScaledVector(t, t.dot(ecentre.clone().sub(p)));
-        const reach = 1000 * esize;
-        const a = foot.clone().addScaledVector(t, -reach);
-        const b = foot.clone().addScaledVector(t, reach);
-        quad(a, b, b.clone().addScaledVector(nxy, -reach), a.clone().addScaledVector(nxy, -reach), FLOOR_COLOR, 0.3);
-        fatLines([a, b], PLANE_2D_PX);
-        counts.plane++;
-        return;
-      }
-      // A finite floor patch under the scene: the extent's box projected on the plane (along
-      // tangents t1, t2: for a horizontal floor, x and y), each side at least 0.6 of the
-      // longer one, widened by 0.15 of the longer one all round.
-      const k = [0, 1, 2].reduce((best, i) => (Math.abs(n.getComponent(i)) < Math.abs(n.getComponent(best)) ? i : best), 0);
-      const axis = new THREE.Vector3().setComponent(k, 1);
-      const t1 = new THREE.Vector3().crossVectors(n, axis).normalize();
-      const t2 = new THREE.Vector3().crossVectors(n, t1);
-      const range = [
-        [Infinity, -Infinity],
-        [Infinity, -Infinity],
-      ];
-      for (const q of boxCorners(elo, ehi)) {
-        const d = q.clone().sub(p);
-        [d.dot(t1), d.dot(t2)].forEach((x, i) => {
-          range[i][0] = Math.min(range[i][0], x);
-          range[i][1] = Math.max(range[i][1], x);
-        });
-      }
-      const longest = Math.max(range[0][1] - range[0][0], range[1][1] - range[1][0], 1e-9);
-      for (const r of range) {
-        const mid = 0.5 * (r[0] + r[1]);
-        const half = 0.5 * Math.max(r[1] - r[0], 0.6 * longest) + 0.15 * longest;
-        r[0] = mid - half;
-        r[1] = mid + half;
-      }
-      const at = (u, v) => p.clone().addScaledVector(t1, u).addScaledVector(t2, v);
-      const [[u0, u1], [v0, v1]] = range;
-      const patch = [at(u0, v0), at(u1, v0), at(u1, v1), at(u0, v1)];
-      quad(...patch, FLOOR_COLOR);
-      // The grid: lines on multiples of a 1-2-5 step (counted from the plane's point, so
-      // that they stay put), about 10 to 25 across the patch.
-      const step = niceStep(longest / 10);
-      const grid = [];
-      for (let u = Math.ceil(u0 / step) * step; u < u1 - 1e-9 * step; u += step) if (u > u0 + 1e-9 * step) grid.push(at(u, v0), at(u, v1));
-      for (let v = Math.ceil(v0 / step) * step; v < v1 - 1e-9 * step; v += step) if (v > v0 + 1e-9 * step) grid.push(at(u0, v), at(u1, v));
-      const gridMaterial = new THREE.LineBasicMaterial({ color: LINE_COLOR, transparent: true, opacity: GRID_ALPHA, depthWrite: false });
-      add(new THREE.LineSegments(new THREE.BufferGeometry().setFromPoints(grid)), [gridMaterial, -2]);
-      fatLines([0, 1, 1, 2, 2, 3, 3, 0].map((i) => patch[i]), PATCH_OUTLINE_PX);
-      corners.push(...patch);
-      if (n.z > Math.cos(FLOOR_TILT)) floorAt(Math.min(...patch.map((q) => q.z)));
-      counts.plane++;
-    } else if (c.type === "box") {
-      // Open bounds (null) reach the extent (never past the other bound).
-      const lo = [0, 1, 2].map((k) => c.lo[k] ?? (c.hi[k] !== null ? Math.min(elo.getComponent(k), c.hi[k]) : elo.getComponent(k)));
-      const hi = [0, 1, 2].map((k) => c.hi[k] ?? Math.max(ehi.getComponent(k), lo[k]));
-      const corner = (s) => new THREE.Vector3(...[0, 1, 2].map((k) => (s[k] ? hi[k] : lo[k])));
-      const finite = (k, high) => (high ? c.hi[k] : c.lo[k]) !== null;
-      const segments = [];
-      if (dim === 2) {
-        // Each side where its own bound is finite.
-        const z = 0;
-        const p = (x, y) => new THREE.Vector3(x, y, z);
-        if (finite(0, false)) segments.push(p(lo[0], lo[1]), p(lo[0], hi[1]));
-        if (finite(0, true)) segments.push(p(hi[0], lo[1]), p(hi[0], hi[1]));
-        if (finite(1, false)) segments.push(p(lo[0], lo[1]), p(hi[0], lo[1]));
-        if (finite(1, true)) segments.push(p(lo[0], hi[1]), p(hi[0], hi[1]));
-        corners.push(p(lo[0], lo[1]), p(hi[0], lo[1]), p(hi[0], hi[1]), p(lo[0], hi[1]));
-      } else {
-        // An edge along `axis` lies on two faces: it is drawn when both are closed (an open
-        // top has no rim; the walls rise to the extent).
-        for (let axis = 0; axis < 3; axis++) {
-          const b = (axis + 1) % 3;
-          const cc = (axis + 2) % 3;
-          for (const [sb, sc] of [
-            [false, false],
-            [true, false],
-            [false, true],
-            [true, true],
-          ]) {
-            if (!finite(b, sb) || !finite(cc, sc)) continue;
-            const s0 = [false, false, false];
-            s0[b] = sb;
-            s0[cc] = sc;
-            const s1 = s0.slice();
-            s1[axis] = true;
-            segments.push(corner(s0), corner(s1));
-          }
-        }
-        // The floor: the lower z face, lightly filled, when it is closed.
-        if (finite(2, false)) {
-          quad(corner([0, 0, 0]), corner([1, 0, 0]), corner([1, 1, 0]), corner([0, 1, 0]), BOX_FLOOR_COLOR);
-          floorAt(lo[2]);
-        }
-        corners.push(...boxCorners(corner([0, 0, 0]), corner([1, 1, 1])));
-      }
-      if (segments.length) fatLines(segments, dim === 2 ? BOX_2D_PX : BOX_EDGE_PX);
-      boxEdges += segments.length / 2;
-      counts.box++;
-    } else if (c.type === "sphere") {
-      const centre = vec(c.center);
-      const r = c.radius;
-      if (dim === 2) {
-        const disc = add(new THREE.Mesh(new THREE.CircleGeometry(r, 96)), flat(new THREE.MeshBasicMaterial({ color: new THREE.Color().setRGB(...OBSTACLE_RGB, THREE.SRGBColorSpace) })));
-        disc.position.set(centre.x, centre.y, 0);
-        corners.push(...boxCorners(new THREE.Vector3(centre.x - r, centre.y - r, 0), new THREE.Vector3(centre.x + r, centre.y + r, 0)));
-      } else {
-        const material = new THREE.ShaderMaterial({ uniforms: { uColor: { value: new THREE.Vector3(...OBSTACLE_RGB) } }, vertexShader: OBSTACLE_VERTEX, fragmentShader: OBSTACLE_FRAGMENT });
-        const ball = add(new THREE.Mesh(new THREE.SphereGeometry(r, 64, 32)), [material, 0]);
-        ball.position.copy(centre);
-        const d = new THREE.Vector3(r, r, r);
-        corners.push(...boxCorners(centre.clone().sub(d), centre.clone().add(d)));
-      }
-      counts.sphere++;
-    } else if (c.type === "mesh" && dim !== 2) {
-      const geometry = new THREE.BufferGeometry();
-      geometry.setAttribute("position", new THREE.BufferAttribute(new Float32Array(decodeBase64(c.vertices)), 3));
-      geometry.setIndex(new THREE.BufferAttribute(new Uint32Array(decodeBase64(c.faces)), 1));
-      const material = new THREE.ShaderMaterial({
-        uniforms: { uColor: { value: new THREE.Vector3(...MESH_RGB) }, uOpacity: { value: MESH_OPACITY }, uAmbient: { value: MESH_AMBIENT } },
-        vertexShader: MESH_VERTEX,
-        fragmentShader: MESH_FRAGMENT,
-        transparent: true,
-        depthWrite: false,
-        side: THREE.DoubleSide,
-      });
-      const surface = add(new THREE.Mesh(geometry), [material, 0]);
-      surface.name = "kinema-mesh";
-      // The rim (edges of one triangle) and the creases, drawn over the surface.
-      const edges = new THREE.EdgesGeometry(geometry, MESH_CREASE_DEG);
-      const edgeMaterial = new THREE.LineBasicMaterial({ color: MESH_EDGE_COLOR, transparent: true, opacity: MESH_EDGE_OPACITY, depthWrite: false });
-      add(new THREE.LineSegments(edges), [edgeMaterial, 0]);
-      meshes.push({
-        triangles: geometry.index.count / 3,
-        edges: edges.attributes.position.count / 2,
-        opacity: material.uniforms.uOpacity.value,
-        transparent: material.transparent,
-        depthWrite: material.depthWrite,
-        doubleSided: material.side === THREE.DoubleSide,
-      });
-      corners.push(...boxCorners(vec(c.lo), vec(c.hi)));
-      counts.mesh++;
-    }
-  };
-
-  for (const c of meta.colliders || []) {
-    holder = group;
-    let mover = null;
-    if (c.poses) {
-      // A moving collider: drawn as described, in a group placed at each frame's pose.
-      holder = new THREE.Group();
-      holder.matrixAutoUpdate = false;
-      group.add(holder);
-      mover = { type: c.type, group: holder, poses: new Float32Array(decodeBase64(c.poses)), first: corners.length, end: corners.length };
-      moving.push(mover);
-    }
-    buildCollider(c);
-    if (mover) mover.end = corners.length;
-  }
-  return { counts, boxEdges, meshes, corners, lineMaterials, floor, moving };
-}
-
-// Keeps the 3D orbit above the floor (height `floor`): the camera at least `clearance` over
-// it and the orbit's target not under it. OrbitControls clamps the polar angle (from +z, the
-// camera's up) to maxPolarAngle before it pans and zooms, so the limit is set from the target
-// and distance before each update, and an update whose pan or zoom still took the camera
-// below is followed by one more (no frame is drawn in between): a pan stops at the floor
-// (target and camera lifted together), an orbit or a zoom at the clearance.
-function keepAboveFloor(controls, camera, floor, clearance) {
-  const orbit = controls.update.bind(controls);
-  const limit = () => {
-    const d = Math.max(camera.position.distanceTo(controls.target), 1e-300);
-    controls.maxPolarAngle = Math.acos(Math.min(1, Math.max(-1, (floor + clearance - controls.target.z) / d)));
-  };
-  controls.minDistance = 2 * clearance; // the camera can be over the floor above a target on it
-  // OrbitControls' own handlers call this.update(), which is this from now on.
-  controls.update = (deltaTime = null) => {
-    limit();
-    let changed = orbit(deltaTime);
-    const lift = floor - controls.target.z;
-    if (lift > 0) {
-      controls.target.z += lift;
-      camera.position.z += lift;
-    }
-    if (lift > 0 || camera.position.z < floor + clearance * (1 - 1e-6)) {
-      limit();
-      changed = orbit() || changed;
-    }
-    return changed;
-  };
-}
-
-// The 3D camera's place: looking along -VIEW_DIRECTION with z up, as near as it can be with
-// every point inside the field of view (`margin` of it): for camera axes r (right), u (up),
-// f (forward), a point p is in view when |p·r − a| <= tH (p·f − c) and |p·u − b| <= tV (p·f − c),
-// the camera at a r + b u + c f. Each pair of bounds on c is largest (the camera nearest)
-// where the two meet: c = (A + B) / 2 at a = (B − A) tH / 2, A = min(p·f − p·r / tH),
-// B = min(p·f + p·r / tH), and likewise for b; the camera takes the smaller c (the other
-// direction is then centred with room to spare).
-function fitPerspective(points, fovDeg, aspect) {
-  const f = vec(VIEW_DIRECTION).normalize().negate();
-  const r = new THREE.Vector3().crossVectors(f, new THREE.Vector3(0, 0, 1)).normalize();
-  const u = new THREE.Vector3().crossVectors(r, f);
-  const tV = Math.tan(THREE.MathUtils.degToRad(fovDeg) / 2) * FIT_MARGIN;
-  const tH = tV * aspect;
-  let [ah, bh, av, bv] = [Infinity, Infinity, Infinity, Infinity];
-  let farthest = -Infinity;
-  const centre = new THREE.Vector3();
-  for (const p of points) {
-    const [pr, pu, pf] = [p.dot(r), p.dot(u), p.dot(f)];
-    ah = Math.min(ah, pf - pr / tH);
-    bh = Math.min(bh, pf + pr / tH);
-    av = Math.min(av, pf - pu / tV);
-    bv = Math.min(bv, pf + pu / tV);
-    farthest = Math.max(farthest, pf);
-    centre.add(p);
-  }
-  centre.multiplyScalar(1 / points.length);
-  const a = ((bh - ah) * tH) / 2;
-  const b = ((bv - av) * tV) / 2;
-  const c = Math.min((ah + bh) / 2, (av + bv) / 2);
-  const eye = r.clone().multiplyScalar(a).addScaledVector(u, b).addScaledVector(f, c);
-  // The orbit's target: on the axis of view, at the depth of the points' centre.
-  const depth = Math.max(centre.clone().sub(eye).dot(f), 1e-9);
-  return { eye, target: eye.clone().addScaledVector(f, depth), far: farthest - c };
-}
-
-function start({ meta, positions, speed, radii, springs, alive, colors }) {
-  const n = meta.n;
+// The viewer for the loaded data (see loadData): the renderer on the page's #kinema-view, the
+// scene (the colliders, the particles, the springs), the camera, the controls, then the first
+// frame drawn and the animation loop started. What the parts share is one record, `v`: the
+// trajectory's `meta`, `n`, `frames`, `times`, `dim` and its `speed` and `alive` arrays (or
+// null), the `container`, `renderer` and `scene`, what was built (`drawn`: the colliders,
+// `cam`, `particles`, `springs`, `ui`), `state` (window.kinemaViewer) and the playback's state:
+// the `colouring` chosen, `playbackSpeed`, `playbackTime` and `loopEnd`, `dirty` (the scene
+// is drawn at the next animation frame), `infoSuffix` and the `legendShown`.
+function start(data) {
+  const { meta } = data;
   const frames = meta.frames;
   const times = meta.t;
-  const dim = meta.dim;
   const container = document.getElementById("kinema-view");
 
   // No MSAA: the discs are cut out by `discard`, which multisampling does not smooth, so it
@@ -648,443 +66,65 @@ function start({ meta, positions, speed, radii, springs, alive, colors }) {
   const scenery = new THREE.Group();
   scene.add(scenery);
   const drawn = buildScenery(meta, scenery);
-  const elo = vec(meta.extent.min);
-  const ehi = vec(meta.extent.max);
-  const centre = elo.clone().add(ehi).multiplyScalar(0.5);
-  const extent = Math.max(ehi.clone().sub(elo).length(), 1e-9);
-  // What the camera frames: the extent's corners (the particles over every frame and the
-  // colliders' finite parts) and the corners of what the colliders drew (floor patches).
-  const framed = boxCorners(elo, ehi).concat(drawn.corners);
-
-  const camera = dim === 2 ? new THREE.OrthographicCamera(-1, 1, 1, -1, extent * 1e-3, extent * 100) : new THREE.PerspectiveCamera(45, 1, extent * 1e-3, extent * 100);
-  if (dim !== 2) camera.up.set(0, 0, 1); // kinema's worlds have z up (gravity along -z)
-  // The scene's own camera ([render] camera), when it has one: the view the page opens with.
-  // Its up and field of view are set before the orbit controls are made (they orbit about up).
-  const given = meta.camera ?? null;
-  if (given && given.type === "3d" && dim !== 2) {
-    camera.up.fromArray(given.up).normalize();
-    camera.fov = given.fovDeg;
-  }
-  const controls = new OrbitControls(camera, renderer.domElement);
-  if (dim === 2) {
-    controls.enableRotate = false; // a plane seen from above; pan and zoom
-    controls.screenSpacePanning = true;
-  }
-  let userMoved = false; // the camera is refitted on resize until the user moves it
-  controls.addEventListener("start", () => (userMoved = true));
-  const floor = dim === 2 ? null : drawn.floor;
-  const clearance = FLOOR_CLEARANCE * extent;
-  if (floor !== null) keepAboveFloor(controls, camera, floor, clearance);
-
-  // Place the camera so that everything framed is in view at the canvas's aspect ratio, or
-  // where the scene's camera says.
-  function fit(aspect) {
-    if (given && given.type === "2d" && dim === 2) {
-      // The rectangle fits the canvas, centred, aspect kept (as kinema's renderer draws it).
-      const [x0, y0, x1, y1] = given.view;
-      const half = Math.max((y1 - y0) / 2, (x1 - x0) / 2 / aspect, 1e-300);
-      Object.assign(camera, { left: -half * aspect, right: half * aspect, top: half, bottom: -half, zoom: 1 });
-      const cx = (x0 + x1) / 2;
-      const cy = (y0 + y1) / 2;
-      camera.position.set(cx, cy, ehi.z + extent);
-      camera.near = extent * 1e-3;
-      camera.far = ehi.z - elo.z + 3 * extent;
-      controls.target.set(cx, cy, centre.z);
-    } else if (given && given.type === "3d" && dim !== 2) {
-      camera.aspect = aspect;
-      const eye = vec(given.eye);
-      const target = vec(given.target);
-      let far = 0;
-      for (const p of framed) far = Math.max(far, p.distanceTo(eye));
-      camera.position.copy(eye);
-      camera.near = Math.max(eye.distanceTo(target), extent) * 1e-3;
-      camera.far = 10 * Math.max(far, extent);
-      controls.target.copy(target);
-    } else if (dim === 2) {
-      let [x0, x1, y0, y1] = [Infinity, -Infinity, Infinity, -Infinity];
-      for (const p of framed) {
-        [x0, x1, y0, y1] = [Math.min(x0, p.x), Math.max(x1, p.x), Math.min(y0, p.y), Math.max(y1, p.y)];
-      }
-      const half = Math.max((y1 - y0) / 2, (x1 - x0) / 2 / aspect, 1e-9) / FIT_MARGIN;
-      Object.assign(camera, { left: -half * aspect, right: half * aspect, top: half, bottom: -half, zoom: 1 });
-      const cx = (x0 + x1) / 2;
-      const cy = (y0 + y1) / 2;
-      camera.position.set(cx, cy, ehi.z + extent);
-      camera.near = extent * 1e-3;
-      camera.far = ehi.z - elo.z + 3 * extent;
-      controls.target.set(cx, cy, centre.z);
-    } else {
-      camera.aspect = aspect;
-      const { eye, target, far } = fitPerspective(framed, camera.fov, aspect);
-      camera.position.copy(eye);
-      camera.near = Math.max(eye.distanceTo(target), extent) * 1e-3;
-      camera.far = 10 * Math.max(far, extent);
-      controls.target.copy(target);
-      // An orbit target under the floor slides along the line of sight up to it (the view is
-      // the same; the floor keeps targets out from under it).
-      const ahead = target.clone().sub(eye);
-      if (floor !== null && target.z < floor && ahead.z < 0) controls.target.copy(eye).addScaledVector(ahead, (eye.z - floor) / -ahead.z);
-    }
-    camera.updateProjectionMatrix();
-    controls.update();
-  }
-
-  // The attributes hold views into the frame data, not copies: showing frame k points
-  // `position` (and `aValue` when colouring by speed) at frame k's slice and marks it for
-  // upload, so a step costs the upload alone (no copy, no allocation but the view).
-  const frameSlice = (data, k, width) => data.subarray(k * n * width, (k + 1) * n * width);
-  const idValues = () => Float32Array.from({ length: n }, (_, i) => (n > 1 ? i / (n - 1) : 0.5));
-  let ids = speed ? null : idValues(); // the id ramp, made when first asked for
-  const geometry = new THREE.BufferGeometry();
-  const position = new THREE.BufferAttribute(frameSlice(positions, 0, 3), 3).setUsage(THREE.DynamicDrawUsage);
-  const value = new THREE.BufferAttribute(speed ? frameSlice(speed, 0, 1) : ids, 1).setUsage(THREE.DynamicDrawUsage);
-  const radius = new THREE.BufferAttribute(radii ? radii : new Float32Array(n).fill(meta.defaultRadius), 1);
-  // Which particles are alive at the frame shown (all, without births and deaths).
-  const aliveNow = new Uint8Array(n).fill(1);
-  const aliveAttr = new THREE.BufferAttribute(aliveNow, 1).setUsage(alive ? THREE.DynamicDrawUsage : THREE.StaticDrawUsage);
-  let visible = n;
-  geometry.setAttribute("position", position);
-  geometry.setAttribute("aValue", value);
-  geometry.setAttribute("aRadius", radius);
-  geometry.setAttribute("aAlive", aliveAttr);
-  // Each particle's own colour, RGBA bytes (A 0: none), for "color": offered when some
-  // particle has one, or when the trajectory asks for it (then all may have none).
-  const offerOwn = colors !== null || meta.colorBy === "color";
-  const ownColours = colors ?? (offerOwn ? new Uint8Array(4 * n) : null);
-  if (ownColours) geometry.setAttribute("aColor", new THREE.BufferAttribute(ownColours, 4, true));
-  const noOwn = (meta.noOwnColor ?? [70, 130, 200]).map((c) => c / 255);
-  geometry.boundingSphere = new THREE.Sphere(centre, extent * 10); // frames move: never cull
-  const material = new THREE.ShaderMaterial({
-    uniforms: { uPixelsPerUnit: { value: 1 }, uOrtho: { value: dim === 2 ? 1 : 0 }, uOffset: { value: 0 }, uScale: { value: 1 }, uMode: { value: 1 }, uNoOwn: { value: new THREE.Vector3(...noOwn) } },
-    vertexShader: VERTEX,
-    fragmentShader: FRAGMENT,
-  });
-  const points = new THREE.Points(geometry, material);
-  points.frustumCulled = false;
-  scene.add(points);
-
-  // Springs: a segment between the two ends' centres, while both are alive; the visible ones
-  // are packed at the front of the buffer and the draw range cut to them.
-  const springCount = springs ? springs.length / 2 : 0;
-  const springPositions = new Float32Array(Math.max(springCount, 1) * 6);
-  const springGeometry = new THREE.BufferGeometry();
-  const springAttr = new THREE.BufferAttribute(springPositions, 3).setUsage(THREE.DynamicDrawUsage);
-  springGeometry.setAttribute("position", springAttr);
-  springGeometry.setDrawRange(0, 0);
-  const springMaterial = new THREE.LineBasicMaterial({ color: SPRING_COLOR });
-  if (dim === 2) {
-    springMaterial.depthTest = false;
-    springMaterial.depthWrite = false;
-  }
-  const springLines = new THREE.LineSegments(springGeometry, springMaterial);
-  springLines.frustumCulled = false;
-  springLines.renderOrder = -1;
-  let springsVisible = 0;
-  if (springCount) scene.add(springLines);
+  const box = framing(meta, drawn);
+  const cam = buildCamera(meta, renderer, drawn, box);
+  const particles = buildParticles(meta, data, box.centre, box.extent);
+  scene.add(particles.points);
+  const springs = buildSprings(data.springs, meta.dim);
+  if (springs.count) scene.add(springs.lines);
 
   const ui = buildUi(document.body, container);
-  ui.scrub.max = String(frames - 1);
-  if (!speed) ui.colour.querySelector('option[value="speed"]').disabled = true;
-  if (!offerOwn) ui.colour.querySelector('option[value="color"]').remove();
-  // The colouring the trajectory asks for (a scene's [render] color_by) where the page has it,
-  // else speed (id when the speeds are unknown).
-  const offered = (v) => Array.from(ui.colour.options).some((o) => o.value === v && !o.disabled);
-  ui.colour.value = offered(meta.colorBy) ? meta.colorBy : speed ? "speed" : "id";
+  fillMenus(ui, meta, data.speed, particles.offerOwn);
 
-  const state = window.kinemaViewer;
-  let colouring = ui.colour.value;
-  let playbackSpeed = Number(ui.speed.value);
-  let playbackTime = times[0];
-  // Playback loops from the first frame to one frame interval past the last, so that the last
-  // frame is shown as long as the others before the first comes round again.
-  const loopEnd = frames > 1 ? 2 * times[frames - 1] - times[frames - 2] : times[0];
-  let dirty = true;
-  const infoSuffix = meta.note ? ` · ${meta.note}` : "";
-  let legendShown = null;
+  const v = {
+    meta,
+    n: meta.n,
+    frames,
+    times,
+    dim: meta.dim,
+    speed: data.speed,
+    alive: data.alive,
+    container,
+    renderer,
+    scene,
+    drawn,
+    cam,
+    particles,
+    springs,
+    ui,
+    state: window.kinemaViewer,
+    colouring: ui.colour.value,
+    playbackSpeed: Number(ui.speed.value),
+    playbackTime: times[0],
+    // Playback loops from the first frame to one frame interval past the last, so that the last
+    // frame is shown as long as the others before the first comes round again.
+    loopEnd: frames > 1 ? 2 * times[frames - 1] - times[frames - 2] : times[0],
+    dirty: true,
+    infoSuffix: meta.note ? ` · ${meta.note}` : "",
+    legendShown: null,
+  };
+  listen(v);
 
-  // The legend names what the colours show and the values at the ends of the ramp.
-  function setLegend() {
-    legendShown = null;
-    if (colouring === "speed" && speed) legendShown = { label: "speed (m/s)", min: meta.speedMin, max: meta.speedMax };
-    else if (colouring === "id") legendShown = { label: "particle id", min: meta.idRange[0], max: meta.idRange[1], integer: true };
-    ui.legend.style.display = legendShown ? "" : "none";
-    if (legendShown) {
-      ui.legendLabel.textContent = legendShown.label;
-      ui.legendMin.textContent = legendValue(legendShown.min, legendShown.integer);
-      ui.legendMax.textContent = legendValue(legendShown.max, legendShown.integer);
-    }
-  }
-
-  // Point aValue at what the colouring needs at frame k and set the ramp; only colouring by
-  // speed changes from frame to frame, and "none" uploads nothing.
-  function fillColour(k) {
-    if (colouring === "speed" && speed) {
-      value.array = frameSlice(speed, k, 1);
-      value.needsUpdate = true;
-      const range = meta.speedMax - meta.speedMin;
-      material.uniforms.uOffset.value = meta.speedMin;
-      material.uniforms.uScale.value = range > 0 ? 1 / range : 0;
-      material.uniforms.uMode.value = 1;
-    } else if (colouring === "id") {
-      if (value.array !== ids) {
-        value.array = ids ??= idValues();
-        value.needsUpdate = true;
-      }
-      material.uniforms.uOffset.value = 0;
-      material.uniforms.uScale.value = 1;
-      material.uniforms.uMode.value = 1;
-    } else {
-      material.uniforms.uMode.value = colouring === "color" && ownColours ? 2 : 0;
-    }
-  }
-
-  // Which particles are alive at frame k, and the springs between live ends.
-  function fillAliveAndSprings(k, frame) {
-    if (alive) {
-      const stride = meta.aliveBytes;
-      const row = alive.subarray(k * stride, (k + 1) * stride);
-      visible = 0;
-      for (let i = 0; i < n; i++) visible += aliveNow[i] = (row[i >> 3] >> (i & 7)) & 1;
-      aliveAttr.needsUpdate = true;
-    }
-    if (springCount) {
-      let m = 0;
-      for (let s = 0; s < springCount; s++) {
-        const a = springs[2 * s];
-        const b = springs[2 * s + 1];
-        if (!aliveNow[a] || !aliveNow[b]) continue;
-        springPositions.set(frame.subarray(3 * a, 3 * a + 3), 6 * m);
-        springPositions.set(frame.subarray(3 * b, 3 * b + 3), 6 * m + 3);
-        m++;
-      }
-      springsVisible = m;
-      springGeometry.setDrawRange(0, 2 * m);
-      if (m > 0) {
-        springAttr.addUpdateRange(0, 6 * m);
-        springAttr.needsUpdate = true;
-      }
-    }
-  }
-
-  // Moving colliders where they are at frame k: each one's group takes its pose.
-  function placeColliders(k) {
-    for (const m of drawn.moving) {
-      m.group.matrix.fromArray(m.poses, 16 * k);
-      m.group.matrixWorldNeedsUpdate = true;
-    }
-  }
-
-  function setFrame(k, keepTime = false) {
-    k = Math.max(0, Math.min(frames - 1, Math.round(k)));
-    if (k !== state.frame) {
-      placeColliders(k);
-      position.array = frameSlice(positions, k, 3);
-      position.needsUpdate = true;
-      fillAliveAndSprings(k, position.array);
-      if (colouring === "speed") fillColour(k); // id and none do not change with the frame
-      state.stats.steps++;
-      ui.scrub.value = String(k);
-      const count = alive ? `${visible.toLocaleString()} of ${n.toLocaleString()}` : n.toLocaleString();
-      ui.info.textContent = `${count} ${n === 1 ? "particle" : "particles"} · t = ${times[k].toFixed(3)} s · frame ${k + 1}/${frames}${infoSuffix}`;
-    }
-    state.frame = k;
-    if (!keepTime) playbackTime = times[k];
-    dirty = true;
-  }
-
-  function setPlaying(on) {
-    state.playing = on && frames > 1;
-    ui.play.textContent = state.playing ? "❚❚" : "▶";
-  }
-
-  function canvasSize() {
-    return [container.clientWidth || window.innerWidth, container.clientHeight || window.innerHeight];
-  }
-
-  // Pixels per metre for the particles' sprites (at 1 m depth in perspective).
-  function pointScale() {
-    const pixels = canvasSize()[1] * renderer.getPixelRatio();
-    material.uniforms.uPixelsPerUnit.value =
-      dim === 2 ? (pixels * camera.zoom) / (camera.top - camera.bottom) : pixels / (2 * Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2));
-  }
-
-  function resize() {
-    const [w, h] = canvasSize();
-    renderer.setSize(w, h, false);
-    if (userMoved) {
-      if (dim === 2) {
-        // Keep the height in view and widen or narrow the width.
-        const half = (camera.top - camera.bottom) / 2;
-        Object.assign(camera, { left: (-half * w) / h, right: (half * w) / h });
-      } else camera.aspect = w / h;
-      camera.updateProjectionMatrix();
-    } else fit(w / h);
-    for (const m of drawn.lineMaterials) m.resolution.set(w, h);
-    pointScale();
-    dirty = true;
-  }
-
-  // For tests: the colour (RGB bytes) each particle's sprite is given before shading in the
-  // "color" colouring, read from the aColor buffer the GPU draws (null when not offered).
-  function ownColourBytes() {
-    const attr = geometry.getAttribute("aColor");
-    if (!attr) return null;
-    const base = noOwn.map((c) => Math.round(255 * c));
-    return Array.from({ length: n }, (_, i) => (attr.array[4 * i + 3] > 127 ? Array.from(attr.array.subarray(4 * i, 4 * i + 3)) : base));
-  }
-
-  // A read-only description of what is drawn at the frame shown (for tests): the colliders'
-  // objects by type, box edges, moving colliders' matrices, springs and particles visible, the legend, whether every
-  // visible particle (its disc) and every corner of the colliders' drawing project inside
-  // the canvas (`room`: the least distance in CSS pixels from one to the canvas's border,
-  // negative outside), and how much of the canvas the framed points span (`fill`, of its
-  // width and height).
-  function describe() {
-    camera.updateMatrixWorld();
-    const [w, h] = canvasSize();
-    const ndc = new THREE.Vector3();
-    const view = new THREE.Vector3();
-    const perPixel = dim === 2 ? (h * camera.zoom) / (camera.top - camera.bottom) : h / (2 * Math.tan(THREE.MathUtils.degToRad(camera.fov) / 2));
-    const box = [Infinity, -Infinity, Infinity, -Infinity];
-    // The disc of radius r (m) about p on the canvas: its least distance to the border.
-    const room = (p, r, span = false) => {
-      view.copy(p).applyMatrix4(camera.matrixWorldInverse);
-      if (dim !== 2 && view.z >= 0) return -Infinity; // behind the camera
-      ndc.copy(p).project(camera);
-      const px = ((ndc.x + 1) / 2) * w;
-      const py = ((1 - ndc.y) / 2) * h;
-      if (span) [box[0], box[1], box[2], box[3]] = [Math.min(box[0], px), Math.max(box[1], px), Math.min(box[2], py), Math.max(box[3], py)];
-      const rp = dim === 2 ? r * perPixel : (r * perPixel) / -view.z;
-      return Math.min(px - rp, w - px - rp, py - rp, h - py - rp);
-    };
-    let particleRoom = Infinity;
-    const p = new THREE.Vector3();
-    const frame = position.array;
-    for (let i = 0; i < n; i++) {
-      if (!aliveNow[i]) continue;
-      p.fromArray(frame, 3 * i);
-      particleRoom = Math.min(particleRoom, room(p, radius.array[i]));
-    }
-    // A moving collider's corners where it is now.
-    const placed = drawn.corners.map((c) => c.clone());
-    for (const m of drawn.moving) for (let i = m.first; i < m.end; i++) placed[i].applyMatrix4(m.group.matrix);
-    let colliderRoom = Infinity;
-    for (const c of placed) colliderRoom = Math.min(colliderRoom, room(c, 0));
-    let framedRoom = Infinity;
-    for (const c of framed) framedRoom = Math.min(framedRoom, room(c, 0, true));
-    return {
-      frame: state.frame,
-      dim,
-      canvas: { width: w, height: h },
-      colliders: { ...drawn.counts },
-      boxEdges: drawn.boxEdges,
-      meshes: drawn.meshes,
-      colliderCorners: drawn.corners.length,
-      // Each moving collider's type and the matrix (column-major) its objects are drawn with.
-      moving: drawn.moving.map((m) => ({ type: m.type, matrix: Array.from(m.group.matrix.elements) })),
-      particles: { total: n, visible },
-      springs: { total: springCount, visible: springsVisible },
-      legend: legendShown ? { shown: true, label: legendShown.label, min: legendShown.min, max: legendShown.max, text: ui.legend.innerText } : { shown: false },
-      colouring: { choice: colouring, mode: material.uniforms.uMode.value, options: Array.from(ui.colour.options, (o) => o.value), noOwnColor: noOwn.map((c) => Math.round(255 * c)) },
-      // The orbit: polar angle from +z (rad) and its limit, the floor's height (null: none).
-      camera: {
-        given: given ? given.type : null, // the scene's camera opened the view (null: fitted)
-        position: camera.position.toArray(),
-        target: controls.target.toArray(),
-        up: camera.up.toArray(),
-        fov: dim === 2 ? null : camera.fov,
-        // 2D: the xy rectangle seen (xmin, ymin, xmax, ymax); 3D: null
-        view:
-          dim === 2
-            ? [
-                camera.position.x + camera.left / camera.zoom,
-                camera.position.y + camera.bottom / camera.zoom,
-                camera.position.x + camera.right / camera.zoom,
-                camera.position.y + camera.top / camera.zoom,
-              ]
-            : null,
-        polar: controls.getPolarAngle(),
-        maxPolar: controls.maxPolarAngle,
-        floor,
-        clearance: floor === null ? null : clearance,
-      },
-      // Half a pixel of slack for rounding (Infinity: nothing to check).
-      inView: { particles: particleRoom >= -0.5, colliders: colliderRoom >= -0.5, particleRoom, colliderRoom, framedRoom },
-      fill: [(box[1] - box[0]) / w, (box[3] - box[2]) / h],
-    };
-  }
-
-  ui.play.addEventListener("click", () => {
-    if (!state.playing && state.frame >= frames - 1) setFrame(0);
-    setPlaying(!state.playing);
-  });
-  ui.scrub.addEventListener("input", () => {
-    setPlaying(false);
-    setFrame(Number(ui.scrub.value));
-  });
-  ui.speed.addEventListener("change", () => (playbackSpeed = Number(ui.speed.value)));
-  ui.colour.addEventListener("change", () => {
-    colouring = ui.colour.value;
-    fillColour(state.frame);
-    setLegend();
-    dirty = true;
-  });
-  window.addEventListener("keydown", (e) => {
-    if (e.code === "Space" && e.target.tagName !== "SELECT") {
-      e.preventDefault();
-      ui.play.click();
-    }
-  });
-  controls.addEventListener("change", () => {
-    if (dim === 2) pointScale(); // zooming an orthographic camera changes pixels per metre
-    dirty = true;
-  });
-  window.addEventListener("resize", resize);
-
-  let last = performance.now();
-  function tick(now) {
-    const begun = performance.now();
-    state.stats.tick(now - last);
-    const elapsed = Math.min((now - last) / 1000, 0.25); // a hidden tab does not jump far ahead
-    last = now;
-    if (controls.autoRotate) controls.update(elapsed);
-    if (state.playing) {
-      // Real time times the chosen speed; the shown frame is the last one at or before it.
-      playbackTime += elapsed * playbackSpeed;
-      if (playbackTime >= loopEnd) playbackTime = times[0] + (playbackTime - loopEnd);
-      let k = state.frame;
-      if (times[k] > playbackTime) k = 0;
-      while (k + 1 < frames && times[k + 1] <= playbackTime) k++;
-      if (k !== state.frame) setFrame(k, true);
-    }
-    if (dirty) {
-      renderer.render(scene, camera);
-      dirty = false;
-      state.stats.drew(performance.now() - begun);
-    }
-    requestAnimationFrame(tick);
-  }
-
+  const state = v.state;
   const opts = hashOptions();
   state.frame = -1;
   state.setFrame = (k) => {
-    setPlaying(false);
-    setFrame(k);
-    renderer.render(scene, camera);
+    setPlaying(v, false);
+    setFrame(v, k);
+    renderer.render(scene, cam.camera);
   };
-  state.info = describe;
-  state.ownColours = ownColourBytes;
-  resize();
-  fillColour(0);
-  setLegend();
-  setFrame(opts.frame ?? 0);
-  setPlaying(opts.frame === null || opts.play);
-  controls.autoRotate = opts.rotate;
-  renderer.render(scene, camera);
+  state.info = () => describe(v);
+  state.ownColours = particles.ownColourBytes;
+  resize(v);
+  particles.fillColour(v.colouring, 0);
+  setLegend(v);
+  setFrame(v, opts.frame ?? 0);
+  setPlaying(v, opts.frame === null || opts.play);
+  cam.controls.autoRotate = opts.rotate;
+  renderer.render(scene, cam.camera);
   state.stats.reset();
   state.ready = true;
-  last = performance.now();
-  requestAnimationFrame(tick);
+  animate(v);
 }
 
 window.kinemaViewer = { frame: 0, setFrame: () => {}, info: () => null, playing: false, ready: false, error: null, stats: frameStats() };
