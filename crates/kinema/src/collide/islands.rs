@@ -12,22 +12,22 @@
 //! solver colours its constraint graph: in the island's contact order each contact takes the
 //! first colour that neither of its movable particles has yet (64 colours; a contact that
 //! finds none goes to a last group visited in order, Box2D's overflow). The contacts of one
-//! colour share no movable particle, so a sweep visits the colours in turn and all the
+//! colour share no movable particle, so a pass visits the colours in turn and all the
 //! contacts of one colour at once. Such an island is swept in colour order rather than in
 //! contact order: Gauss–Seidel all the same, converging alike.
 //!
 //! Determinism: the islands, their order (by first contact) and the colours are functions of
-//! the contact list alone, each island is solved the same way on any thread (a coloured sweep
-//! gives what the same sweep gives in order), and the islands' figures are combined in island
+//! the contact list alone, each island is solved the same way on any thread (a coloured pass
+//! gives what the same pass gives in order), and the islands' figures are combined in island
 //! order. The result is bit for bit the same for any thread count.
 
 use rayon::prelude::*;
 
 use super::contact::{Contact, Partner};
+use super::passes::PassGroup;
 use super::response::{Material, MaterialTable};
 use super::soft_step::{soft_step, SoftContacts, SoftParams, SoftStats, Target};
 use super::spin::Rotation;
-use super::sweeps::SweepGroup;
 use crate::error::Error;
 use crate::vec3;
 
@@ -38,9 +38,9 @@ const COLOUR_FROM: usize = 512;
 /// Islands are handed to the threads in batches of at least this many contacts.
 const BATCH: usize = 256;
 
-/// The sweeps of an island that starts cold (no contact of it loaded in the last step), as a
+/// The passes of an island that starts cold (no contact of it loaded in the last step), as a
 /// multiple of the usual cap.
-const COLD_SWEEPS: usize = 10;
+const COLD_PASSES: usize = 10;
 
 /// The end-of-step contacts split into islands.
 #[derive(Debug, Default, Clone, PartialEq)]
@@ -180,7 +180,7 @@ pub(crate) struct EndProblem<'a> {
     pub params: SoftParams,
 }
 
-/// What the islands' solves did, combined: the most sweeps of each stage, converged if all
+/// What the islands' solves did, combined: the most passes of each stage, converged if all
 /// did, the active and bounced contacts added.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct IslandStats {
@@ -196,7 +196,7 @@ pub(crate) struct IslandStats {
 /// are moved in place by what the solve stage did. With rolling resistance, `rolls` receives
 /// each contact's angular impulse on i (N·m·s; left empty without). With shock propagation,
 /// `kicks` receives the velocity change of each particle the shock stages moved (m/s, then
-/// with spin rad/s), which no total carries (also applied by the caller).
+/// with spin rad/s), which no total holds (also applied by the caller).
 ///
 /// An island marked in `idle` (one flag per island: all its contacts idle,
 /// [`Islands::all_of`] of [`soft_step::idle`](super::soft_step::idle): no warm start, targets
@@ -239,7 +239,7 @@ pub(crate) fn solve(
         .collect();
     let any_idle = idle.iter().any(|&i| i);
     // Scattered back, and the figures combined, in island order (a contact in no island, of
-    // two immovable bodies, carries nothing).
+    // two immovable bodies, bears nothing).
     solved.fill([0.0; 3]);
     totals.fill([0.0; 3]);
     rolls.clear();
@@ -247,14 +247,14 @@ pub(crate) fn solve(
     if problem.spin.is_some() && problem.rolling > 0.0 {
         rolls.resize(totals.len(), [0.0; 3]);
     }
-    // (an idle island's soft step is one sweep of each of the solve and relax stages that
+    // (an idle island's soft step is one pass of each of the solve and relax stages that
     // changes nothing)
     let mut stats = IslandStats {
         islands: islands.len(),
         soft: SoftStats {
             converged: true,
-            sweeps: usize::from(any_idle),
-            relax_sweeps: usize::from(any_idle),
+            passes: usize::from(any_idle),
+            relax_passes: usize::from(any_idle),
             ..SoftStats::default()
         },
     };
@@ -271,10 +271,10 @@ pub(crate) fn solve(
         }
         kicks.extend(island.moved.iter().copied().zip(island.kicks));
         let (s, all) = (island.soft, &mut stats.soft);
-        all.sweeps = all.sweeps.max(s.sweeps);
+        all.passes = all.passes.max(s.passes);
         all.converged &= s.converged;
-        all.relax_sweeps = all.relax_sweeps.max(s.relax_sweeps);
-        all.restitution_sweeps = all.restitution_sweeps.max(s.restitution_sweeps);
+        all.relax_passes = all.relax_passes.max(s.relax_passes);
+        all.restitution_passes = all.restitution_passes.max(s.restitution_passes);
         all.active += s.active;
         all.bounced += s.bounced;
     }
@@ -305,7 +305,7 @@ struct Local {
     x: Vec<f64>,
     inv_mass: Vec<f64>,
     materials: Vec<Material>,
-    groups: Vec<SweepGroup>,
+    groups: Vec<PassGroup>,
     /// With spin: the particles' inverse inertias and radii.
     inv_inertia: Vec<f64>,
     radius: Vec<f64>,
@@ -359,7 +359,7 @@ impl Local {
             self.materials.extend(parts.iter().map(|&q| m[q]));
             materials = materials.with_particles(&self.materials);
         }
-        // Its contacts in the order of their sweep (by colour when coloured), on the copies.
+        // Its contacts in the order of their pass (by colour when coloured), on the copies.
         let order = colour(island, all, &self.inv_mass, local, &mut self.groups);
         self.contacts.clear();
         self.contacts.extend(order.iter().map(|&c| {
@@ -378,14 +378,14 @@ impl Local {
         let mut solved: Vec<[f64; 3]> = order.iter().map(|&c| warm[c]).collect();
         let mut totals = Vec::new();
         // An island none of whose contacts held a load in the last step (a stack placed at
-        // rest, a pile made at once) starts from nothing: it gets COLD_SWEEPS times the sweeps,
+        // rest, a pile made at once) starts from nothing: it gets COLD_PASSES times the passes,
         // so that it takes up its load in its first step instead of sinking over the next ones
         // (what sinks is booked as lost: an elastic column of 10 lost 1.5e-6 of its energy, one
         // of 30 1.7e-5). A warm island starts from the last step's totals and needs few.
         let mut params = problem.params;
         if solved.iter().all(|s| *s == [0.0; 3]) {
-            params.solve_sweeps *= COLD_SWEEPS;
-            params.relax_sweeps *= COLD_SWEEPS;
+            params.solve_passes *= COLD_PASSES;
+            params.relax_passes *= COLD_PASSES;
         }
         if let Some((r, _)) = problem.spin {
             self.inv_inertia.clear();
@@ -438,7 +438,7 @@ impl Local {
     }
 }
 
-/// The island's contacts in the order of their sweep, with its sweep groups in `groups`: in
+/// The island's contacts in the order of their pass, with its pass groups in `groups`: in
 /// list order as one group below [`COLOUR_FROM`] contacts; else colour after colour (greedy,
 /// in list order, over the movable particles: `inv_mass` of the island's particles, which
 /// `local` numbers), then the contacts that found no colour, in order.
@@ -447,11 +447,11 @@ fn colour(
     all: &[Contact],
     inv_mass: &[f64],
     local: impl Fn(usize) -> usize,
-    groups: &mut Vec<SweepGroup>,
+    groups: &mut Vec<PassGroup>,
 ) -> Vec<usize> {
     groups.clear();
     if island.len() < COLOUR_FROM {
-        groups.push(SweepGroup::in_order(0..island.len()));
+        groups.push(PassGroup::in_order(0..island.len()));
         return island.to_vec();
     }
     const OVERFLOW: usize = 64;
@@ -485,7 +485,7 @@ fn colour(
         fill[c] += 1;
     }
     for c in (0..=OVERFLOW).filter(|&c| starts[c + 1] > starts[c]) {
-        groups.push(SweepGroup {
+        groups.push(PassGroup {
             range: starts[c]..starts[c + 1],
             together: c < OVERFLOW,
         });
@@ -497,7 +497,7 @@ fn colour(
 mod tests {
     use super::super::colliders::{Collider, Plane, Surface};
     use super::*;
-    use crate::collide::sweeps::PARALLEL_COLOUR;
+    use crate::collide::passes::PARALLEL_COLOUR;
 
     fn floor() -> Vec<Collider> {
         vec![Collider::Plane(
@@ -600,7 +600,7 @@ mod tests {
         targets: &'a [Target],
         inv_mass: &'a [f64],
         floor: &'a [Collider],
-        sweeps: usize,
+        passes: usize,
     ) -> EndProblem<'a> {
         EndProblem {
             contacts,
@@ -613,8 +613,8 @@ mod tests {
             params: SoftParams {
                 h: H,
                 tolerance: 0.0,
-                solve_sweeps: sweeps,
-                relax_sweeps: sweeps,
+                solve_passes: passes,
+                relax_passes: passes,
             },
         }
     }
@@ -653,9 +653,9 @@ mod tests {
     #[test]
     fn islands_solve_what_one_solve_of_all_contacts_gives() {
         // Three small blocks (below the colouring size): solved island by island, each in list
-        // order, they give the whole list's soft step bit for bit (fixed sweeps: tolerance 0 on
+        // order, they give the whole list's soft step bit for bit (fixed passes: tolerance 0 on
         // a problem that does not converge exactly). They start cold (no warm start), so each
-        // gets COLD_SWEEPS times the sweeps.
+        // gets COLD_PASSES times the passes.
         let (mut contacts, mut v, mut x) = (Vec::new(), Vec::new(), Vec::new());
         for b in 0..3 {
             let (c, bv, bx) = block(3, 3, 2 + b, 1e-3);
@@ -683,7 +683,7 @@ mod tests {
         let mut totals = vec![[0.0; 3]; contacts.len()];
         let mut x_islands = x.clone();
         let stats = solve_every_island(&islands, &p, &mut solved, &mut totals, &v, &mut x_islands);
-        assert_eq!((stats.soft.sweeps, stats.islands), (7 * COLD_SWEEPS, 3));
+        assert_eq!((stats.soft.passes, stats.islands), (7 * COLD_PASSES, 3));
 
         let mut all_solved = vec![[0.0; 3]; contacts.len()];
         let mut all_totals = Vec::new();
@@ -697,10 +697,10 @@ mod tests {
             rolling: 0.0,
             shock: None,
         };
-        let in_order = [SweepGroup::in_order(0..contacts.len())];
+        let in_order = [PassGroup::in_order(0..contacts.len())];
         let cold = SoftParams {
-            solve_sweeps: 7 * COLD_SWEEPS,
-            relax_sweeps: 7 * COLD_SWEEPS,
+            solve_passes: 7 * COLD_PASSES,
+            relax_passes: 7 * COLD_PASSES,
             ..p.params
         };
         soft_step::<3>(
@@ -792,7 +792,7 @@ mod tests {
         let (skipped, all) = (run(&idle_islands), run(&vec![false; islands.len()]));
         assert!(skipped == all, "leaving the idle island out changed the solve");
         let (_, totals, _, _) = all;
-        assert_eq!(totals[n_block], [0.0; 3]); // the parting pair carries nothing
+        assert_eq!(totals[n_block], [0.0; 3]); // the parting pair bears nothing
         assert!(totals[n_block + 1][0] > 0.0 && totals[n_block + 2][0] > 0.0); // both closing pairs are stopped
     }
 
@@ -857,8 +857,8 @@ mod tests {
 
     #[test]
     fn shock_propagation_stops_a_deep_column_in_few_sweeps_and_the_floor_takes_its_momentum() {
-        // A plastic column of 40 unit balls landing at 1 m/s on a floor, cold, with 10 sweeps
-        // (1 × COLD_SWEEPS): Gauss–Seidel carries the floor's stop one ball per sweep, and the
+        // A plastic column of 40 unit balls landing at 1 m/s on a floor, cold, with 10 passes
+        // (1 × COLD_PASSES): Gauss–Seidel moves the floor's stop up one ball per pass, and the
         // upper balls end the step sunk into the ones below. With shock propagation every
         // ball ends at its lattice height (the closed form of a column at rest: z = k) and at
         // rest, and the momentum the shock's pushes gave the column (40 kg · 1 m/s in all,
@@ -916,7 +916,7 @@ mod tests {
         let (sunk, _, _, _, _) = run(None);
         assert!(
             sunk > 0.1 * H,
-            "without the shock the sweeps alone should leave it sunk: {sunk}"
+            "without the shock the passes alone should leave it sunk: {sunk}"
         );
         let (sunk, after, pushed, floor_took, upward) = run(Some(&accel));
         assert!(sunk < 1e-9, "{sunk}");

@@ -1,6 +1,6 @@
 //! A Verlet neighbour list with a skin: the candidate pairs of the contact searches, rebuilt
 //! only when the particles have moved far enough that something left out could touch. The
-//! spring–dashpot force tests its pairs at every evaluation; the impulse model's continuous
+//! contact force tests its pairs at every evaluation; the impulse model's continuous
 //! detection sweeps each step's paths against them (the skin then also covers the step's
 //! sweep, see `collide::events`).
 
@@ -90,7 +90,7 @@ pub(crate) struct NeighbourList {
     /// index.
     pub(crate) rows: Vec<Rows>,
     /// Whether this is a half list: particle i's row holds its partners j > i only. The
-    /// spring–dashpot force's list is one (each pair's force computed once, for both
+    /// contact force's list is one (each pair's force computed once, for both
     /// sides); the impulse model sweeps each particle against all its partners, and keeps
     /// a full one.
     pub(crate) half: bool,
@@ -109,7 +109,7 @@ pub(crate) struct NeighbourList {
     pub(crate) extent: [f64; 3],
     /// Builds so far.
     pub(crate) builds: usize,
-    /// The buffer (address, length) at which [`SpringDashpot::list_expired`](crate::collide::contact_force::SpringDashpot::list_expired) just found that
+    /// The buffer (address, length) at which [`ContactForceModel::list_expired`](crate::collide::contact_force::ContactForceModel::list_expired) just found that
     /// the list holds: the next update at that buffer, the world's force evaluation of the
     /// same step with nothing written in between, need not check again. Any update clears it.
     pub(crate) verified: Option<(usize, usize)>,
@@ -413,7 +413,7 @@ impl NeighbourList {
     /// r_i + r_k + s of it, i's position taken where the build saw it (a newborn's: where it
     /// is born), and as a candidate of every collider within s; its build position is where
     /// it is now. That is the build's own criterion against the build's positions, so the
-    /// argument of the type's doc carries over unchanged: a newborn has moved 0 since its
+    /// argument of the type's doc holds unchanged: a newborn has moved 0 since its
     /// "build", and a pair left out was at least r_i + r_k + s apart in build positions. The
     /// rounding allowance grows with the scale if the newborns lie farther out. The rows stay
     /// ascending (a newborn's index exceeds every old one), so the contacts are summed in the

@@ -1,9 +1,9 @@
 //! Placements the collide stage cannot resolve, refused before the first step that meets them.
 //!
 //! Both contact models push overlapping particles apart along the line of centres: the
-//! impulse model projects the overlap away at the end of the step, the spring–dashpot model
-//! pushes with k_n·δ. That is sound while the overlap δ = r_i + r_j − d is a fraction of the
-//! radii. It is not when the centre of one particle lies inside the other (d < max(r_i, r_j)):
+//! impulse model projects the overlap away at the end of the step, the force models
+//! (spring–dashpot, Hertz) push with k_n·δ. That is sound while the overlap δ = r_i + r_j − d
+//! is a fraction of the radii. It is not when the centre of one particle lies inside the other (d < max(r_i, r_j)):
 //! the normal (x_i − x_j)/d is then the accident of where the centres fell (undefined for
 //! coincident particles, d = 0), the push-out of a pile of them chains into a displacement of
 //! metres in one step, and every particle of a cluster of N coincident ones touches every
@@ -45,7 +45,7 @@ pub const TOLERANCE: f64 = 1e-9;
 pub enum Rule {
     /// The impulse model: a centre inside the other particle, d < max(r_i, r_j).
     CentreInside,
-    /// The spring–dashpot model: coincident centres, d ≤ TOLERANCE · (r_i + r_j).
+    /// The force models: coincident centres, d ≤ TOLERANCE · (r_i + r_j).
     Coincident,
 }
 
@@ -65,7 +65,7 @@ pub struct Placed<'a> {
 /// Overlaps a contact model resolves but that start the run with a push: particles
 /// overlapping each other, or a collider's surface, by more than [`NOTICE`] of the lengths
 /// involved. The collisions push them apart in the first steps (the impulse model removes
-/// the overlap, the spring–dashpot model pushes with k_n δ), which sets them moving: worth a
+/// the overlap, the force models push with k_n δ), which sets them moving: worth a
 /// warning, not a refusal.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overlaps {

@@ -3,7 +3,7 @@
 //!
 //! Stage 1 has moved every particle from (x₀, v₀) to (x₁, v₁) by the world's method. A
 //! contact's impulse P, taken as acting at the step's start, changes the end velocity by
-//! Δv = w P and the end position by h Δv (the velocity it leaves is carried over the whole
+//! Δv = w P and the end position by h Δv (the velocity it leaves acts over the whole
 //! step). Written for one contact, with g₁ its gap at x₁ (< 0: overlap), u₁ its normal
 //! velocity at v₁ and u its normal velocity after the solve,
 //!
@@ -28,7 +28,7 @@
 //!   relax        u ≥ 0 where the solve left them touching, u ≥ −g/h across a gap g; u_t → 0:
 //!                the velocity the solve needed to move positions is not kept (Box2D's relax)
 //!                (and at the `animation` accuracy its shock stage, as after the solve)
-//!   restitution  u⁺ = −e u⁻ for each contact that carries load and approached faster than
+//!   restitution  u⁺ = −e u⁻ for each contact that bears load and approached faster than
 //!                the threshold at the step's start (Newton's law, Box2D's restitution stage)
 //! ```
 //!
@@ -36,7 +36,7 @@
 //! that the relax finds too large shrinks again. A body resting under any method ends each
 //! step where it started, at rest: its gap is closed exactly and its velocity relaxed to 0.
 //!
-//! With spin (`collide/spin.rs`) the sweeps carry each particle's velocity and angular
+//! With spin (`collide/spin.rs`) the passes update each particle's velocity and angular
 //! velocity (6 values), the tangential targets are the contact point's velocity, and the
 //! tangential effective mass is 1/w_t. The sticking target is the same: stage 1 does not
 //! turn a particle, so the contact point's slip over the step with the solve's impulse taken
@@ -53,10 +53,10 @@
 //! resisting them, and the pile never slept. Its effective mass is 1/(k_i + k_j) (k = 1/I).
 
 use super::contact::Contact;
+use super::passes::{passes, Ends, PassGroup};
 use super::response::MaterialTable;
 use super::shock::{levels, order, Held, ShockOrder, SUPPORT_COSINE};
 use super::spin::Rotation;
-use super::sweeps::{sweeps, Ends, SweepGroup};
 use crate::error::Error;
 use crate::vec3;
 
@@ -136,24 +136,24 @@ pub(crate) const SLOP: f64 = 1e-3;
 pub(crate) struct SoftParams {
     /// The step, s.
     pub h: f64,
-    /// A sweep whose largest velocity change is at most this has converged, m/s.
+    /// A pass whose largest velocity change is at most this has converged, m/s.
     pub tolerance: f64,
-    /// Most sweeps of the solve stage.
-    pub solve_sweeps: usize,
-    /// Most sweeps of the relax and of the restitution stages.
-    pub relax_sweeps: usize,
+    /// Most passes of the solve stage.
+    pub solve_passes: usize,
+    /// Most passes of the relax and of the restitution stages.
+    pub relax_passes: usize,
 }
 
 /// What [`soft_step`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct SoftStats {
-    /// Sweeps of the solve stage, and whether its last changed nothing beyond the tolerance.
-    pub sweeps: usize,
+    /// Passes of the solve stage, and whether its last changed nothing beyond the tolerance.
+    pub passes: usize,
     pub converged: bool,
-    /// Sweeps of the relax stage, and of the restitution stage.
-    pub relax_sweeps: usize,
-    pub restitution_sweeps: usize,
-    /// Contacts that carry a nonzero impulse at the end.
+    /// Passes of the relax stage, and of the restitution stage.
+    pub relax_passes: usize,
+    pub restitution_passes: usize,
+    /// Contacts that bear a nonzero impulse at the end.
     pub active: usize,
     /// Contacts that bounced by Newton's law.
     pub bounced: usize,
@@ -178,15 +178,15 @@ pub(crate) struct SoftContacts<'a> {
 
 /// The soft step's stages (see the module's doc) on velocities `v` (N per particle: the
 /// velocity, then with spin, N = 6, the angular velocity) and positions `x` (3 per particle),
-/// updated in place, with each sweep visiting the contacts group by group (as
-/// `collide/sweeps.rs` describes: the same result on any number of threads).
+/// updated in place, with each pass visiting the contacts group by group (as
+/// `collide/passes.rs` describes: the same result on any number of threads).
 ///
 /// `solved`: each contact's starting total on entry (the last step's solve, for the warm
 /// start; zeros if none), its solve stage's total on return (the next step's warm start).
 /// `totals`: each contact's final total impulse on i, N·s (−total on a partner particle);
 /// `rolls`: with rolling resistance, its final angular impulse on i, N·m·s (−on a partner).
 /// `kicks`: with shock propagation, the velocity change of the shock stages (N per
-/// particle), which no total carries; left empty without.
+/// particle), which no total holds; left empty without.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn soft_step<const N: usize>(
     held: SoftContacts<'_>,
@@ -197,7 +197,7 @@ pub(crate) fn soft_step<const N: usize>(
     totals: &mut Vec<[f64; 3]>,
     rolls: &mut Vec<[f64; 3]>,
     kicks: &mut Vec<f64>,
-    groups: &[SweepGroup],
+    groups: &[PassGroup],
 ) -> Result<SoftStats, Error> {
     let SoftContacts {
         contacts,
@@ -236,16 +236,16 @@ pub(crate) fn soft_step<const N: usize>(
     let mut stats = SoftStats::default();
 
     // Solve: the position targets, as velocities.
-    let done = sweeps::<N, _>(
+    let done = passes::<N, _>(
         groups,
         &ends,
         v,
         &mut acc,
-        params.solve_sweeps,
+        params.solve_passes,
         params.tolerance,
         |k, a, vi, vj| rows[k].visit(vi, vj, a, targets[k].solve_n, Some(targets[k].stick_t)),
     );
-    stats.sweeps = done.sweeps;
+    stats.passes = done.passes;
     stats.converged = done.converged;
     for (k, r) in rows.iter().enumerate() {
         solved[k] = vec3::add(vec3::scale(acc[k].0, r.n), acc[k].1);
@@ -284,21 +284,21 @@ pub(crate) fn soft_step<const N: usize>(
             }
         })
         .collect();
-    let relaxed = sweeps::<N, _>(
+    let relaxed = passes::<N, _>(
         groups,
         &ends,
         v,
         &mut acc,
-        params.relax_sweeps,
+        params.relax_passes,
         params.tolerance,
         |k, a, vi, vj| rows[k].visit(vi, vj, a, relax_n[k], Some([0.0; 3])),
     );
-    stats.relax_sweeps = relaxed.sweeps;
+    stats.relax_passes = relaxed.passes;
     if let Some(s) = &shocks {
         s.run::<N>(v, kicks, params, |k| relax_n[k]);
     }
 
-    // Restitution: Newton's law on the contacts that carry load and came in fast.
+    // Restitution: Newton's law on the contacts that bear load and came in fast.
     let bouncing: Vec<Option<f64>> = targets
         .iter()
         .zip(&acc)
@@ -306,19 +306,19 @@ pub(crate) fn soft_step<const N: usize>(
         .collect();
     stats.bounced = bouncing.iter().flatten().count();
     if stats.bounced > 0 {
-        let bounced = sweeps::<N, _>(
+        let bounced = passes::<N, _>(
             groups,
             &ends,
             v,
             &mut acc,
-            params.relax_sweeps,
+            params.relax_passes,
             params.tolerance,
             |k, a, vi, vj| match bouncing[k] {
                 Some(b) => rows[k].visit(vi, vj, a, b, None),
                 None => 0.0,
             },
         );
-        stats.restitution_sweeps = bounced.sweeps;
+        stats.restitution_passes = bounced.passes;
     }
 
     totals.clear();
@@ -338,8 +338,8 @@ pub(crate) fn soft_step<const N: usize>(
     Ok(stats)
 }
 
-/// Most sweeps of a shock stage over one level's contacts.
-const SHOCK_SWEEPS: usize = 10;
+/// Most passes of a shock stage over one level's contacts.
+const SHOCK_PASSES: usize = 10;
 
 /// The shock stages of one island (`collide/shock.rs`): its contacts bottom up by level,
 /// each with its row and ends with the lower side held still.
@@ -350,7 +350,7 @@ struct Shocks {
 }
 
 impl Shocks {
-    /// The levels of the island's `n` particles from the contacts that touch (carry load
+    /// The levels of the island's `n` particles from the contacts that touch (bear load
     /// after the solve, or overlap at the step's end) and the particles' accelerations
     /// `accel` (m/s², 3 per particle), and the visits they give.
     fn new(
@@ -404,16 +404,16 @@ impl Shocks {
 
     /// One shock stage on the velocities `v` (N per particle): level by level, its support
     /// contacts swept until no visit changes more than the tolerance (at most
-    /// [`SHOCK_SWEEPS`]; a level's visits are each particle's own few supports) toward the
+    /// [`SHOCK_PASSES`]; a level's visits are each particle's own few supports) toward the
     /// normal velocity `target(k)` of contact k. Each contact's push starts from 0 and stays
     /// ≥ 0: the stage only stops what sinks into its supports, and leaves friction to the
-    /// sweeps. The velocity changes are added to `kicks`.
+    /// passes. The velocity changes are added to `kicks`.
     fn run<const N: usize>(&self, v: &mut [f64], kicks: &mut [f64], params: &SoftParams, target: impl Fn(usize) -> f64) {
         let before = v.to_vec();
         let visits = &self.order.visits;
         let mut state = vec![(0.0, [0.0; 3], [0.0; 3]); visits.len()];
         for level in self.order.starts.windows(2) {
-            for _ in 0..SHOCK_SWEEPS {
+            for _ in 0..SHOCK_PASSES {
                 let mut change: f64 = 0.0;
                 for m in level[0]..level[1] {
                     let e = &self.ends[m];
@@ -438,7 +438,7 @@ impl Shocks {
 /// solve target and its relax target (u ≥ −g/h across the gap g it ends with, else u ≥ 0).
 /// Then every visit of every stage finds λ = 0 and leaves it there, and with λ = 0 the cone
 /// holds friction and rolling resistance at 0: the contact gives nothing, moves nothing, and
-/// bounces not (the restitution stage takes only contacts that carry load). An island whose
+/// bounces not (the restitution stage takes only contacts that bear load). An island whose
 /// contacts are all idle would be solved to exactly nothing (`collide/islands.rs` leaves it
 /// out). u is computed as the visits compute it, from the same row, bit for bit; a value
 /// that is not finite is never idle (the solve decides what it does).

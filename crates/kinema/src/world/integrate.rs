@@ -200,7 +200,7 @@ impl World {
                 }
                 b.fresh = true;
             }
-            // With spring–dashpot contacts in a periodic cell, x' is wrapped into the cell in
+            // With contact forces in a periodic cell, x' is wrapped into the cell in
             // the same pass, before the force evaluation, so that the kept acceleration is
             // that of the state kept (collide's wrap then changes nothing). The impulse
             // model's continuous detection needs the unwrapped drift, and wraps after its
@@ -237,7 +237,7 @@ impl World {
                 && self
                     .collide_stage
                     .as_ref()
-                    .and_then(|s| s.spring_dashpot.as_ref().map(|m| m.list_expired(&self.x_next, &s.domain)))
+                    .and_then(|s| s.force_model.as_ref().map(|m| m.list_expired(&self.x_next, &s.domain)))
                     .unwrap_or(false)
             {
                 self.sort_along_space(&mut b.a);

@@ -1,7 +1,8 @@
-//! The spring–dashpot contact model: contacts found at every force evaluation push
-//! overlapping bodies apart with F_n = k_n δ − m_eff γ_n u_n, a force of stage 1.
+//! The contact force models (spring–dashpot and Hertz): contacts found at every force
+//! evaluation push overlapping bodies apart with F_n = k_n δ − m_eff γ_n u_n (Hertz: a
+//! stiffness that grows with the overlap), a force of stage 1.
 //!
-//! The collide stage owns the model ([`SpringDashpot`]: the law's constants and the buffers
+//! The collide stage owns the model ([`ContactForceModel`]: the law's constants and the buffers
 //! kept between evaluations, the neighbour list above all) beside the impulse model; each call
 //! sees the particles' radii and inverse masses, the materials, the colliders and the domain
 //! where they live, through a [`ContactForce`] made for it
@@ -23,7 +24,8 @@
 //!
 //! The parts: this file holds the model, the view of a call and the neighbour list's upkeep;
 //! `contacts.rs` finds the contacts (listed pairs that overlap, collider touches),
-//! `pairs.rs` the pair pass and its exchange between chunks, `law.rs` the force law, the
+//! `pairs.rs` the pair pass and its exchange between chunks, `spring_dashpot.rs` the linear
+//! law's damping for a restitution (its closed form), `law.rs` the force law, the
 //! summed forces and energy and the damping ratios, `verlet.rs` the fused Verlet
 //! force-and-kick pass, `force.rs` the [`Force`](crate::forces::Force) impl and the rates.
 
@@ -53,13 +55,14 @@ mod history;
 mod law;
 mod listing;
 mod pairs;
+pub mod spring_dashpot;
 mod stress;
 mod tangent;
 mod verlet;
 
-/// The spring–dashpot model between calls: the law's constants and the buffers one
-/// evaluation leaves the next (the neighbour list, the grid, the exchange between chunks).
-pub(crate) struct SpringDashpot {
+/// The contact force model (spring–dashpot or Hertz) between calls: the law's constants and
+/// the buffers one evaluation leaves the next (the neighbour list, the grid, the exchange between chunks).
+pub(crate) struct ContactForceModel {
     /// k_n, N/m (Hooke's law; unused with Hertz's).
     pub stiffness: f64,
     /// Hertz's law instead of Hooke's: the effective Young's modulus E* = E / (2 (1 − ν²)),
@@ -79,10 +82,10 @@ pub(crate) struct SpringDashpot {
     scratch: Mutex<Scratch>,
 }
 
-impl SpringDashpot {
+impl ContactForceModel {
     /// The model with stiffness k_n (N/m) and damping rate γ_n (1/s; `None`: from e).
     pub fn new(stiffness: f64, damping: Option<f64>) -> Self {
-        SpringDashpot {
+        ContactForceModel {
             stiffness,
             hertz: None,
             damping,
@@ -130,7 +133,7 @@ impl SpringDashpot {
         self.scratch().wall_forces.clone()
     }
 
-    /// Sets what [`SpringDashpot::wall_carry`] gave (a checkpoint's, or the same world's
+    /// Sets what [`ContactForceModel::wall_carry`] gave (a checkpoint's, or the same world's
     /// across a restart of its caches).
     pub fn set_wall_carry(&self, carry: Option<Vec<ColliderBooks>>) {
         self.scratch().wall_forces = carry;
@@ -186,7 +189,7 @@ impl SpringDashpot {
         !holds
     }
 
-    /// Forgets what [`SpringDashpot::list_expired`] found (the world calls this at the end of
+    /// Forgets what [`ContactForceModel::list_expired`] found (the world calls this at the end of
     /// each step, so that a buffer reused later is checked again).
     pub fn forget_verified(&self) {
         self.scratch().list.verified = None;
@@ -210,7 +213,8 @@ impl SpringDashpot {
         self.scratch().list.builds
     }
 }
-
+/// The contact forces (spring–dashpot or Hertz) between particles and with colliders (the DEM
+/// way), as one call sees them.
 /// Penalty contacts between particles and with colliders (the DEM way), as one call sees them.
 ///
 /// While particle i overlaps its partner by δ > 0, the pair feels F_n n on i and −F_n n on a
@@ -223,8 +227,8 @@ impl SpringDashpot {
 ///
 /// m_eff = 1/(w_i + w_j) the reduced mass and u_n the normal relative velocity. The damping
 /// ratio ζ = −ln e / √(π² + ln² e) makes the contact's damped half-oscillation bounce back with
-/// exactly the requested e ([`crate::collide::penalty`]); e is the pair's material (global,
-/// per particle, per collider, combined as in the impulse model). The spring part is
+/// exactly the requested e ([`spring_dashpot`]); e is the pair's material (global, per
+/// particle, per collider, combined as in the impulse model). The spring part is
 /// conservative, with U = Σ ½ k_n δ² over overlapping contacts; the dashpot only removes
 /// energy. No friction: tangential forces belong to the impulse model.
 ///
@@ -238,7 +242,7 @@ impl SpringDashpot {
 /// Everything here is borrowed for the call: the model's constants and buffers, the
 /// particles' radii and inverse masses, the materials, the colliders and the domain.
 pub(crate) struct ContactForce<'a> {
-    model: &'a SpringDashpot,
+    model: &'a ContactForceModel,
     stiffness: f64,
     /// E*, Pa, with Hertz's law.
     hertz: Option<f64>,
@@ -347,7 +351,7 @@ struct Scratch {
     /// check ([`ContactForce::forget_energy`]).
     pair_energy: Option<((usize, usize), f64)>,
     /// The contact books of the last fused Verlet pass, with what each collider took over
-    /// its step, until the world takes them ([`SpringDashpot::take_books`]).
+    /// its step, until the world takes them ([`ContactForceModel::take_books`]).
     books: Option<(pairs::ContactBooks, Vec<ColliderBooks>)>,
     /// The collider forces of the last fused Verlet pass, as rates (N, N·m, W in the books'
     /// fields): the start of the next step's ([`ColliderBooks`]; `None` after a change).
@@ -382,7 +386,7 @@ impl Default for Scratch {
 
 impl<'a> ContactForce<'a> {
     /// The force of `model` on `bodies`, for one call.
-    pub fn new(model: &'a SpringDashpot, bodies: Bodies<'a>) -> Self {
+    pub fn new(model: &'a ContactForceModel, bodies: Bodies<'a>) -> Self {
         ContactForce {
             model,
             stiffness: model.stiffness,

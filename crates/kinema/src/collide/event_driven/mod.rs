@@ -25,7 +25,7 @@
 //! **One event per particle** (Smallenburg, EPJE 45:22 (2022)): a particle keeps only its
 //! earliest event, in a bucketed calendar (`calendar.rs`). After an impact of i and j only
 //! their events are found again. A third particle k whose event was an impact with i is not
-//! touched: its event carries the *path* i had (the count of i's impacts), and when it comes
+//! touched: its event holds the *path* i had (the count of i's impacts), and when it comes
 //! up with a path that is no longer i's, k's event is found again from that time. That is
 //! enough: k's other partners met k no sooner than that stale event (it was k's earliest),
 //! and an earlier impact of k with i's new path is i's own earliest-event search's business.
@@ -85,7 +85,7 @@ struct Body {
     v: [f64; 3],
     /// Its path: its impacts so far.
     path: u32,
-    /// Its schedule: how often its event was found (the calendar's live entry carries the
+    /// Its schedule: how often its event was found (the calendar's live entry holds the
     /// latest).
     schedule: u32,
 }

@@ -1,7 +1,7 @@
 //! The end of an impulse-model step (stages 2–4 after the impacts, [`ImpulseModel::step`]):
 //! the contacts of the touched particles and of the piles they reach (detection), the
 //! velocity solve of Newton's law with its warm start and the overlap removed (response),
-//! each impulse onto both particles and the energy books (distribution).
+//! each impulse onto both particles and the energy lost (distribution).
 
 use super::{ImpulseModel, StageSetting};
 use crate::collide::contact::action_reaction;
@@ -17,28 +17,28 @@ use crate::error::Error;
 use crate::vec3;
 use rayon::prelude::*;
 
-/// Most sweeps of the soft step's solve stage, and of its relax and restitution stages, at
-/// the `physics` accuracy. Warm-started, a heap at rest converges in one or two sweeps a
+/// Most passes of the soft step's solve stage, and of its relax and restitution stages, at
+/// the `physics` accuracy. Warm-started, a heap at rest converges in one or two passes a
 /// step; the caps matter while it settles, and for a frictionless heap, which converges
 /// slowly. Measured on `benchmarks/piles.py` (docs/collisions.md): with caps of 100 and 30
 /// the 2D pour of 2,000 discs, the 20-row pyramid, the 60-deep column and the frictional pour
 /// of 10,000 balls all come to rest within 5 s at 1 ms; with 10 and 10 (Box2D's and
-/// Chipmunk's habit of a few sweeps a step) the 2D pour still boiled after 5 s (KE 107 J)
+/// Chipmunk's habit of a few passes a step) the 2D pour still boiled after 5 s (KE 107 J)
 /// and the frictional pour of 10,000 too (max |v| 2.4 m/s), though a frictionless demo heap
 /// ran 2.8× faster.
-const SOLVE_SWEEPS: usize = 100;
-const RELAX_SWEEPS: usize = 30;
+const SOLVE_PASSES: usize = 100;
+const RELAX_PASSES: usize = 30;
 
 /// The caps at the `animation` accuracy, where shock propagation (`collide/shock.rs`) stops
-/// each level on the one below whatever the solve's sweeps left: at 120 Hz the 2D pour
+/// each level on the one below whatever the solve's passes left: at 120 Hz the 2D pour
 /// rested at 0.64 % of r in 2.4 s with 10 and 5, at 1.1 % in 8.5 s with 100 and 30 (the
 /// 60-deep column: 0.47 % in 2.4 s, 0.24 % in 4.8 s). The relax keeps the physics grade's
 /// 30: with 5, a column with rolling resistance never came to rest (1.2 % of r, 15 cm/s
 /// after 5 s), the frictionless demo neither, and the 2D pour of seed 3 boiled (26 % of r,
 /// 0.6 m/s); with 30 all three come to rest, and no pour boils (seeds 1–3 calm at 1.3–1.7 %
 /// of r, max |v| 3–5 mm/s, but above the sleep rule's 1 %: awake after 5 s).
-const ANIMATION_SOLVE_SWEEPS: usize = 10;
-const ANIMATION_RELAX_SWEEPS: usize = RELAX_SWEEPS;
+const ANIMATION_SOLVE_PASSES: usize = 10;
+const ANIMATION_RELAX_PASSES: usize = RELAX_PASSES;
 
 /// An island sleeps only while its deepest overlap is at most this many slops (1 % of r for
 /// equal spheres): a pile rests at 0.23–0.26 % of r at 1 ms.
@@ -121,9 +121,9 @@ impl ImpulseModel {
                 });
             }
         }
-        // The colliders' contacts first: a sweep then carries what a wall holds up through
+        // The colliders' contacts first: a pass then hands what a wall holds up on through
         // the pile above it in one pass where it can (a column resting on a floor converges
-        // in a few sweeps from zero, not hundreds).
+        // in a few passes from zero, not hundreds).
         self.contacts.rotate_left(pairs);
         woke
     }
@@ -137,13 +137,13 @@ impl ImpulseModel {
             self.touched.mark(m);
             work.push(m);
         }
-        // (whole: whether each carried load is the engine's own flag from the step it fell
+        // (whole: whether each bore load is the engine's own flag from the step it fell
         // asleep in, as the awake island would have it)
         self.records.append(island.records.iter().copied());
         1
     }
 
-    /// Sleeping's books at the step's end (`collide/sleep.rs`): each awake particle's calm
+    /// Sleeping's update at the step's end (`collide/sleep.rs`): each awake particle's calm
     /// time grows by h if its speed and its displacement over the step divided by h are at
     /// most `speed` (m/s), else starts again; each island of this step's solve that rests on a
     /// collider or a pinned particle, and whose particles have all been calm for `time` s,
@@ -278,13 +278,13 @@ impl ImpulseModel {
         self.solved.clear();
         self.solved
             .extend(self.matched.iter().map(|m| m.map_or([0.0; 3], |k| records[k].impulse)));
-        // The particles in resting contact: named by a contact that carried load in the last
+        // The particles in resting contact: named by a contact that bore load in the last
         // step, or that the step would close beyond what its target allows (moving by
         // symplectic Euler, below). No impact hit them in this step.
         let euler_step = |q: usize| vec3::scale(h, vec3::get(v1, q));
         let mut resting = std::mem::take(&mut self.scratch);
         resting.reset(inv_mass.len(), false);
-        // A particle touching a resting one (within the slop, by a contact that carried no load
+        // A particle touching a resting one (within the slop, by a contact that bore no load
         // in the last step) rests too: a column placed at rest on a floor then moves as one by
         // symplectic Euler from its first step, as it will in every step after, so that the
         // first step's totals are the next step's warm start (each ball moved by the method
@@ -368,13 +368,13 @@ impl ImpulseModel {
             params: SoftParams {
                 h,
                 tolerance: VELOCITY_TOLERANCE,
-                solve_sweeps: match set.accuracy {
-                    Accuracy::Physics => SOLVE_SWEEPS,
-                    Accuracy::Animation => ANIMATION_SOLVE_SWEEPS,
+                solve_passes: match set.accuracy {
+                    Accuracy::Physics => SOLVE_PASSES,
+                    Accuracy::Animation => ANIMATION_SOLVE_PASSES,
                 },
-                relax_sweeps: match set.accuracy {
-                    Accuracy::Physics => RELAX_SWEEPS,
-                    Accuracy::Animation => ANIMATION_RELAX_SWEEPS,
+                relax_passes: match set.accuracy {
+                    Accuracy::Physics => RELAX_PASSES,
+                    Accuracy::Animation => ANIMATION_RELAX_PASSES,
                 },
             },
         };
@@ -401,7 +401,7 @@ impl ImpulseModel {
         for &(q, c) in &euler {
             vec3::add_scaled(x1, q, 1.0, c);
         }
-        // What the stage acted on, for the books: moved by symplectic Euler, or pushed.
+        // What the stage acted on, for the energy lost: moved by symplectic Euler, or pushed.
         self.acted.reset(inv_mass.len(), false);
         for &q in resting.sorted() {
             self.acted.mark(q);
@@ -420,7 +420,7 @@ impl ImpulseModel {
         }
         // The contacts the next step keeps (its warm start, and the particles it looks at
         // first). In a force-free world, a contact of an island the solve left alone, apart
-        // beyond the slop and separating, is not kept: it carries nothing, its particles move
+        // beyond the slop and separating, is not kept: it bears nothing, its particles move
         // on straight lines that part, and the next step finds the pair again if continuous
         // detection sees either of them hit or a kept contact reaches them. In a gas that is
         // nearly every contact, and the next step's work then follows the contacts that act.
@@ -450,7 +450,7 @@ impl ImpulseModel {
     }
 
     /// The mechanical energy the end-of-step stage took, J, over the particles it acted on
-    /// (moved by symplectic Euler in resting contact, or pushed by a nonzero total): each one's kinetic energy at its books' reference state minus
+    /// (moved by symplectic Euler in resting contact, or pushed by a nonzero total): each one's kinetic energy at its reference state minus
     /// now, minus the work the step's forces (`accel`: their accelerations over the step) did
     /// since: Σ ½ m (|v_b|² − |v|²) + Σ m a·(x − x_b). The reference is the step's start for a
     /// particle no impact hit, so a body held at rest books exactly 0 with every method (it
@@ -459,10 +459,10 @@ impl ImpulseModel {
     ///
     /// With spin, each one's rotational energy at its reference minus now is added,
     /// Σ ½ I (|ω_b|² − |ω|²) (stage 1 does not turn a particle: no work to subtract).
-    pub(super) fn energy_books(&self, set: &StageSetting<'_>, accel: &[f64], x1: &[f64], v1: &[f64], omega: &[f64]) -> f64 {
+    pub(super) fn energy_lost(&self, set: &StageSetting<'_>, accel: &[f64], x1: &[f64], v1: &[f64], omega: &[f64]) -> f64 {
         let (mass, inv_mass) = (set.mass, set.inv_mass);
         let mut lost = 0.0;
-        for (k, &(q, xb, vb)) in self.books.iter().enumerate() {
+        for (k, &(q, xb, vb)) in self.references.iter().enumerate() {
             if inv_mass[q] == 0.0 || !self.acted.get(q) {
                 continue;
             }
@@ -470,7 +470,7 @@ impl ImpulseModel {
             let dx = set.domain.displacement(x, xb);
             lost += 0.5 * mass[q] * (vec3::dot(vb, vb) - vec3::dot(v, v)) + mass[q] * vec3::dot(a, dx);
             if let Some(r) = set.rotation.filter(|r| r.inv_inertia[q] > 0.0) {
-                let (wb, w) = (self.books_spin[k], vec3::get(omega, q));
+                let (wb, w) = (self.references_spin[k], vec3::get(omega, q));
                 lost += 0.5 * (vec3::dot(wb, wb) - vec3::dot(w, w)) / r.inv_inertia[q];
             }
         }

@@ -1,8 +1,8 @@
 //! Continuous detection of the impulse model and its impacts in time order (stages 2–4 inside
 //! the step, [`ImpulseModel::step`]): the neighbour list made to hold for the step's sweep,
 //! each particle's first impact into the queue, the impacts popped in time order, each
-//! resolved by Newton's law and distributed at its time, and the force-free world's wake
-//! times (`wake.rs`) for the next steps.
+//! resolved by Newton's law and distributed at its time, and the force-free world's meeting
+//! times (`quiet.rs`) for the next steps.
 
 use std::time::{Duration, Instant};
 
@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use super::end_of_step::distribute;
 use super::{CollisionStats, ImpulseModel, StageSetting};
-use crate::collide::events::{swept_reach, Event, Paths, Scene, SweepBound};
+use crate::collide::events::{swept_reach, Event, Paths, Surroundings, SweepBound};
 use crate::collide::groups::Filter;
 use crate::collide::neighbour_list::{active_walls, collider_scale, ListBuild, CHUNK, SKIN_PER_RADIUS};
 use crate::collide::response::VELOCITY_TOLERANCE;
@@ -36,12 +36,12 @@ pub(super) struct Search<'s, 'a> {
     pub threshold: f64,
 }
 
-/// What continuous detection sweeps against (`collide::events::Scene`), from a [`Search`]
+/// What continuous detection sweeps against (`collide::events::Surroundings`), from a [`Search`]
 /// and the stage's own fields (a macro, not a method: the event loop holds it while it
 /// changes other fields).
-macro_rules! scene {
+macro_rules! surroundings {
     ($stage:ident, $search:expr, $reach:expr) => {
-        Scene {
+        Surroundings {
             radius: $search.set.radius,
             colliders: $search.set.colliders,
             active: $search.active,
@@ -88,8 +88,8 @@ impl ImpulseModel {
     /// |v1 − v0| for the automatic threshold (twice the largest: a body resting under gravity
     /// approaches at g h each step).
     ///
-    /// With `quiet` (a force-free step with valid wake times) the list's hold comes from the
-    /// wake's speed bound instead, with no pass (`collide/wake.rs`), and the automatic
+    /// With `quiet` (a force-free step with valid meeting times) the list's hold comes from the
+    /// meetings' speed bound instead, with no pass (`collide/quiet.rs`), and the automatic
     /// threshold and speed change are 0 (no force changes a velocity). Sets `rebuilt` when it
     /// rebuilds.
     pub(super) fn prepare(
@@ -101,7 +101,7 @@ impl ImpulseModel {
         h: f64,
         quiet: bool,
     ) -> Result<(f64, f64, f64), Error> {
-        let reach = self.wake.reach_after(h);
+        let reach = self.meetings.reach_after(h);
         let (x0, v0) = (paths.x0, paths.v0);
         // (the per-particle bounds are made by the sweep below; a quiet step has the one)
         self.bounded = false;
@@ -200,7 +200,7 @@ impl ImpulseModel {
         s: &Search<'_, '_>,
         paths: &mut Paths<'_>,
         mut reach: f64,
-        only_woken: bool,
+        only_due: bool,
         stats: &mut CollisionStats,
         omega: &mut [f64],
     ) -> Result<(Duration, Duration, Duration, bool), Error> {
@@ -208,8 +208,8 @@ impl ImpulseModel {
         let (inv_mass, mass) = (s.set.inv_mass, s.set.mass);
         let n = s.set.radius.len();
         let clock = Instant::now();
-        if only_woken {
-            self.schedule_woken(s, paths, reach);
+        if only_due {
+            self.schedule_due(s, paths, reach);
         } else {
             self.schedule_all(s, paths, 0.0, reach);
         }
@@ -223,14 +223,14 @@ impl ImpulseModel {
             let clock = Instant::now();
             let Some(event) = self.queue.pop() else { break };
             let t = event.time;
-            let scene = scene!(self, s, reach);
+            let around = surroundings!(self, s, reach);
             let partner = match event.partner {
                 Partner::Particle(j) => Some(j),
                 Partner::Collider(_) => None,
             };
             if partner.is_some_and(|j| paths.version(j) != event.partner_version) {
                 // the partner's path changed since: predicted on a path that no longer exists
-                let next = scene.earliest(paths, event.i, t, h);
+                let next = around.earliest(paths, event.i, t, h);
                 if next.touching {
                     self.touched.mark(event.i);
                 }
@@ -240,7 +240,7 @@ impl ImpulseModel {
             }
             processed += 1;
             if processed % 256 == 0 {
-                self.interrupt.poll()?; // a stop leaves the wake times invalid (see `stages`)
+                self.interrupt.poll()?; // a stop leaves the meeting times invalid (see `stages`)
             }
             if processed > cap {
                 stats.unconverged += 1;
@@ -322,10 +322,10 @@ impl ImpulseModel {
                         self.bounds[q] = self.bounds[q].max(r);
                     }
                 }
-                let scene = scene!(self, s, reach);
+                let around = surroundings!(self, s, reach);
                 for q in std::iter::once(event.i).chain(partner) {
                     if impulse.is_some() || q == event.i {
-                        let next = scene.earliest(paths, q, t, h);
+                        let next = around.earliest(paths, q, t, h);
                         if next.touching {
                             self.touched.mark(q);
                         }
@@ -342,8 +342,8 @@ impl ImpulseModel {
     /// on all threads; with `flag`, the particles touching something at `now` are marked.
     fn schedule_all(&mut self, s: &Search<'_, '_>, paths: &Paths<'_>, now: f64, reach: f64) {
         let n = s.set.radius.len();
-        let scene = scene!(self, s, reach);
-        let (mut events, touching) = scene.all_impacts(paths, now, s.h);
+        let around = surroundings!(self, s, reach);
+        let (mut events, touching) = around.all_impacts(paths, now, s.h);
         for q in touching {
             self.touched.mark(q);
         }
@@ -372,13 +372,13 @@ impl ImpulseModel {
         }
     }
 
-    /// The first impacts of the particles woken for this step only (the others are quiet:
-    /// their lines meet nothing in it, `collide/wake.rs`), into the emptied queue.
-    fn schedule_woken(&mut self, s: &Search<'_, '_>, paths: &Paths<'_>, reach: f64) {
+    /// The first impacts of the particles due in this step only (the others are quiet:
+    /// their lines meet nothing in it, `collide/quiet.rs`), into the emptied queue.
+    fn schedule_due(&mut self, s: &Search<'_, '_>, paths: &Paths<'_>, reach: f64) {
         self.queue.reset(s.set.radius.len());
-        let scene = scene!(self, s, reach);
-        for &q in &self.woken {
-            let next = scene.earliest(paths, q, 0.0, s.h);
+        let around = surroundings!(self, s, reach);
+        for &q in &self.due {
+            let next = around.earliest(paths, q, 0.0, s.h);
             if next.touching {
                 self.touched.mark(q);
             }
@@ -386,25 +386,25 @@ impl ImpulseModel {
         }
     }
 
-    /// The wake times at time `end` (world clock, s) of a force-free world in state x1, v1
-    /// (`collide/wake.rs`). `incremental` (at the end of a step that looked only at the woken
+    /// The meeting times at time `end` (world clock, s) of a force-free world in state x1, v1
+    /// (`collide/quiet.rs`). `incremental` (at the end of a step that looked only at the due
     /// particles): the times of the rest still hold, and only the particles this step looked
     /// at or changed get new ones (the bound grows by the step); otherwise all are computed
-    /// again, with the bound measured. Leaves `wake.valid` set if the list holds.
-    pub(super) fn wake_up(&mut self, set: &StageSetting<'_>, x1: &[f64], v1: &[f64], end: f64, h: f64, incremental: bool) {
+    /// again, with the bound measured. Leaves `meetings.valid` set if the list holds.
+    pub(super) fn next_meetings(&mut self, set: &StageSetting<'_>, x1: &[f64], v1: &[f64], end: f64, h: f64, incremental: bool) {
         let n = set.radius.len();
         let domain = *set.domain;
         if incremental {
-            // The touched particles (all of them have books) moved at most at the fastest
-            // speed of the step, plus what the end-of-step solve moved them by.
+            // The touched particles (all of them have reference states) moved at most at the
+            // fastest speed of the step, plus what the end-of-step solve moved them by.
             let (mut moved, mut fastest_after) = (0.0_f64, 0.0_f64);
-            for &(q, x, _) in &self.books {
+            for &(q, x, _) in &self.references {
                 moved = moved.max(vec3::norm(domain.displacement(vec3::get(x1, q), x)));
                 fastest_after = fastest_after.max(vec3::norm(vec3::get(v1, q)));
             }
-            let fastest = self.wake.vmax.max(self.fastest_hit);
-            self.wake.reach += h * fastest + moved;
-            self.wake.vmax = fastest.max(fastest_after);
+            let fastest = self.meetings.vmax.max(self.fastest_hit);
+            self.meetings.reach += h * fastest + moved;
+            self.meetings.vmax = fastest.max(fastest_after);
         } else {
             let built = &self.list.built_at;
             let (reach, vmax) = (0..n)
@@ -415,14 +415,14 @@ impl ImpulseModel {
                     (vec3::norm(d), vec3::norm(vec3::get(v1, q)))
                 })
                 .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)));
-            self.wake.reach = reach;
-            self.wake.vmax = vmax;
+            self.meetings.reach = reach;
+            self.meetings.vmax = vmax;
         }
-        if !(2.0 * self.wake.reach < self.list.allowance) {
+        if !(2.0 * self.meetings.reach < self.list.allowance) {
             return; // the list expires now: the next step rebuilds it and looks at everyone
         }
         // Meetings up to the list's expiry, and a step beyond it.
-        let horizon = self.wake.horizon(self.list.allowance) + h;
+        let horizon = self.meetings.horizon(self.list.allowance) + h;
         let active = active_walls(set.colliders, set.domain);
         let search = Search {
             set,
@@ -431,16 +431,16 @@ impl ImpulseModel {
             h,
             threshold: 0.0,
         };
-        let scene = scene!(self, search, f64::INFINITY);
-        let at = |q: usize| scene.first_meeting(x1, v1, q, horizon).map(|tau| end + tau);
+        let around = surroundings!(self, search, f64::INFINITY);
+        let at = |q: usize| around.first_meeting(x1, v1, q, horizon).map(|tau| end + tau);
         if incremental {
-            let mut involved: Vec<usize> = self.books.iter().map(|b| b.0).chain(self.woken.iter().copied()).collect();
+            let mut involved: Vec<usize> = self.references.iter().map(|b| b.0).chain(self.due.iter().copied()).collect();
             involved.sort_unstable();
             involved.dedup();
             // (each one's meeting is its own search: on all threads, set in order)
             let times: Vec<(usize, Option<f64>)> = involved.into_par_iter().with_min_len(CHUNK / 8).map(|q| (q, at(q))).collect();
             for (q, time) in times {
-                self.wake.table.set(q, time);
+                self.meetings.table.set(q, time);
             }
         } else {
             let times: Vec<(usize, f64)> = (0..n)
@@ -448,9 +448,9 @@ impl ImpulseModel {
                 .with_min_len(CHUNK)
                 .filter_map(|q| at(q).map(|t| (q, t)))
                 .collect();
-            self.wake.table.fill(n, times.into_iter());
+            self.meetings.table.fill(n, times.into_iter());
         }
-        self.wake.valid = true;
+        self.meetings.valid = true;
     }
 
     /// Rebuilds the list at the particles' positions at time t (their references moved there)
@@ -615,7 +615,7 @@ pub(crate) fn check_travel(
 fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event, h: f64) -> Option<Contact> {
     let at = paths.x_ref(e.i);
     // A moving collider stands where it will be at the step's end: the particle is seen
-    // carried by the surface's motion over the rest of the step (`events.rs`). A turning
+    // moved with the surface's motion over the rest of the step (`events.rs`). A turning
     // one's surface velocity is then that carriage's chord, (x' − x)/(h − t), the one the
     // detection's path saw: the impulse leaves the particle leaving on that path, where
     // the surface's velocity at the impact would leave it meeting the wall again at once.
@@ -623,7 +623,7 @@ fn contact_at(set: &StageSetting<'_>, paths: &Paths<'_>, e: &Event, h: f64) -> O
     let (xi, field) = match e.partner {
         Partner::Collider(k) if set.colliders[k].is_moving() => {
             let field = set.colliders[k].surface().velocity();
-            (field.carried(at, back), Some(field))
+            (field.moved_with(at, back), Some(field))
         }
         _ => (at, None),
     };

@@ -1,9 +1,9 @@
 //! The collision settings as a caller gives them: the contact model ([`ContactModel`], with
 //! its parameters by name, [`ModelArgs`]), the tangential part of the force models
 //! ([`TangentialArgs`], [`TangentialKind`]) and [`CollisionParams`] with its checks; and the
-//! spring–dashpot model they ask for. Units SI.
+//! contact force model they ask for. Units SI.
 
-use crate::collide::contact_force::{Cohesion, RollingModel, SpringDashpot, TangentialLaw, TangentialModel};
+use crate::collide::contact_force::{Cohesion, ContactForceModel, RollingModel, TangentialLaw, TangentialModel};
 use crate::collide::shock::Accuracy;
 use crate::collide::Material;
 use crate::error::Error;
@@ -15,7 +15,7 @@ pub enum ContactModel {
     Impulse,
     /// A spring–dashpot force while bodies overlap (the DEM way), integrated with the other
     /// forces in stage 1: F_n = k_n δ − m_eff γ_n u_n with γ_n from the requested e by the
-    /// damped oscillator's closed form (`collide/penalty.rs`, `damping_ratio`), or given.
+    /// damped oscillator's closed form (`collide/contact_force/spring_dashpot.rs`, `damping_ratio`), or given.
     SpringDashpot {
         /// Normal stiffness k_n, N/m (> 0).
         stiffness: f64,
@@ -491,12 +491,12 @@ impl CollisionParams {
     }
 }
 
-/// The spring–dashpot model the settings ask for: `Some` with that model.
-pub(super) fn spring_dashpot_of(params: &CollisionParams) -> Option<SpringDashpot> {
+/// The contact force model the settings ask for: `Some` with that model.
+pub(super) fn force_model_of(params: &CollisionParams) -> Option<ContactForceModel> {
     let mut model = match params.model {
-        ContactModel::SpringDashpot { stiffness, damping } => SpringDashpot::new(stiffness, damping),
+        ContactModel::SpringDashpot { stiffness, damping } => ContactForceModel::new(stiffness, damping),
         ContactModel::Hertz { cohesion, .. } => {
-            let mut model = SpringDashpot::new(0.0, None);
+            let mut model = ContactForceModel::new(0.0, None);
             model.hertz = params.model.effective_modulus();
             model.cohesion = cohesion.filter(|c| c.surface_energy() > 0.0);
             model
