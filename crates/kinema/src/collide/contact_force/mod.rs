@@ -24,9 +24,9 @@
 //!
 //! The parts: this file holds the model, the view of a call and the neighbour list's upkeep;
 //! `contacts.rs` finds the contacts (listed pairs that overlap, collider touches),
-//! `pairs.rs` the pair pass and its exchange between chunks, `spring_dashpot.rs` the linear
-//! law's damping for a restitution (its closed form), `law.rs` the force law, the
-//! summed forces and energy and the damping ratios, `verlet.rs` the fused Verlet
+//! `pairs.rs` the pair pass, `exchange.rs` its exchange between chunks, `spring_dashpot.rs`
+//! the linear law's damping for a restitution (its closed form), `law.rs` the force law,
+//! the summed forces and energy and the damping ratios, `verlet.rs` the fused Verlet
 //! force-and-kick pass, `force.rs` the [`Force`](crate::forces::Force) impl and the rates.
 
 use std::sync::{Mutex, MutexGuard};
@@ -40,16 +40,18 @@ use crate::error::Error;
 use crate::forces::State;
 pub use cohesion::Cohesion;
 use cohesion::Jkr;
+use exchange::Exchange;
 use history::Histories;
 pub(crate) use history::{PairSlip, Slip, WallSlip};
 pub(crate) use law::particle_ratios;
 use law::DampingRatios;
-use pairs::{ChunkSums, Exchange, Turning, TurningOut};
+use pairs::{ChunkSums, Turning, TurningOut};
 pub use tangent::{RollingModel, TangentialLaw, TangentialModel};
 pub(crate) use verlet::{SpinKick, VerletKick};
 
 mod cohesion;
 mod contacts;
+mod exchange;
 mod force;
 mod history;
 mod law;
