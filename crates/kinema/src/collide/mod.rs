@@ -18,7 +18,7 @@
 //!                                     others held; the step's parabolas,
 //!                                     Paths::begin() (paths.rs); then the stage list
 //!                                     ImpulseStage::ALL (impulse/mod.rs), each stage timed:
-//!     list_stage()                    prepare() (impulse/impacts.rs): the neighbour list made
+//!     list_stage()                    prepare() (impulse/list.rs): the neighbour list made
 //!                                     to hold for the step's sweep, else rebuilt at x₀ by
 //!                                     NeighbourList::update() (neighbour_list.rs) →
 //!                                     Grid::prepare(), Grid::partners_from() (broad_phase.rs);

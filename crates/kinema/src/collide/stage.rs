@@ -12,7 +12,7 @@ use crate::collide::contact_force::{particle_ratios, Bodies, ContactForce, Conta
 use crate::collide::event_driven::{unsupported_collider, EventDriven};
 use crate::collide::groups::{Filter, GroupMasks};
 use crate::collide::impulse::end_of_step::overlap_at;
-use crate::collide::impulse::impacts::check_travel;
+use crate::collide::impulse::list::check_travel;
 use crate::collide::impulse::{ImpulseModel, StageSetting};
 use crate::collide::records::ContactRecord;
 use crate::collide::spin::Rotation;
@@ -525,7 +525,7 @@ impl CollideStage {
         interrupt: &mut Interrupt,
     ) -> Result<(), Error> {
         self.domain.check_radii(&p.radius)?;
-        // As a step refuses it (`impulse/impacts.rs`, `check_travel`): a particle that would
+        // As a step refuses it (`impulse/list.rs`, `check_travel`): a particle that would
         // cross the scene more than TRAVEL_LIMIT times until t1 takes more events than any run
         // can follow (1e10 m/s in a 1 m box: 1e7 wall events a millisecond).
         // (by the largest component, which does not overflow where |v|² would: 1e200 m/s)

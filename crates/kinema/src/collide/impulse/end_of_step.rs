@@ -7,6 +7,7 @@ use super::{ImpulseModel, StageSetting};
 use crate::collide::contact::action_reaction;
 use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
+use crate::collide::marks::Marks;
 use crate::collide::neighbour_list::CHUNK;
 use crate::collide::response::{bounces, VELOCITY_TOLERANCE};
 use crate::collide::shock::Accuracy;
@@ -53,6 +54,39 @@ pub(crate) fn on_periodic_wall(c: &Contact, colliders: &[Collider], domain: &Dom
         && domain
             .periodic_box()
             .is_some_and(|p| (0..3).any(|k| p.axes()[k] && c.normal[k] != 0.0))
+}
+
+/// The most passes of the soft step's stages at `accuracy`, for a step of h s.
+fn soft_params(accuracy: Accuracy, h: f64) -> SoftParams {
+    SoftParams {
+        h,
+        tolerance: VELOCITY_TOLERANCE,
+        solve_passes: match accuracy {
+            Accuracy::Physics => SOLVE_PASSES,
+            Accuracy::Animation => ANIMATION_SOLVE_PASSES,
+        },
+        relax_passes: match accuracy {
+            Accuracy::Physics => RELAX_PASSES,
+            Accuracy::Animation => ANIMATION_RELAX_PASSES,
+        },
+    }
+}
+
+/// Contact c's i's relative velocity (`per` = 1 s: f gives velocities) or displacement over
+/// the step (`per` = h: f gives displacements) against its partner: a particle's, or a
+/// collider surface's (its velocity at the contact, over the step h times it).
+fn relative(c: &Contact, f: &dyn Fn(usize) -> [f64; 3], per: f64) -> [f64; 3] {
+    match c.partner_particle() {
+        Some(j) => vec3::sub(f(c.i), f(j)),
+        None if c.wall_velocity == [0.0; 3] => f(c.i),
+        None => vec3::sub(f(c.i), vec3::scale(per, c.wall_velocity)),
+    }
+}
+
+/// The overlap contact c may keep, m: [`SLOP`] of r_i + r_j, or of the diameter against a
+/// collider (`radius`: the particles' radii).
+fn slop(radius: &[f64], c: &Contact) -> f64 {
+    SLOP * (radius[c.i] + c.partner_particle().map_or(radius[c.i], |j| radius[j]))
 }
 
 impl ImpulseModel {
@@ -264,78 +298,27 @@ impl ImpulseModel {
         let (materials, inv_mass, domain) = (set.materials, set.inv_mass, set.domain);
         let x0 = paths.x0;
         let moved = |q: usize| domain.displacement(vec3::get(x1, q), vec3::get(x0, q));
-        // i's relative velocity (`per` = 1 s: f gives velocities) or displacement over the
-        // step (`per` = h: f gives displacements) against its partner: a particle's, or a
-        // collider surface's (its velocity at the contact, over the step h times it)
-        let rel = |c: &Contact, f: &dyn Fn(usize) -> [f64; 3], per: f64| match c.partner_particle() {
-            Some(j) => vec3::sub(f(c.i), f(j)),
-            None if c.wall_velocity == [0.0; 3] => f(c.i),
-            None => vec3::sub(f(c.i), vec3::scale(per, c.wall_velocity)),
-        };
+        let euler_step = |q: usize| vec3::scale(h, vec3::get(v1, q));
         // Each contact's warm start: its record's total, read (`collide/records.rs`).
         self.records.match_up(&self.contacts, &mut self.matched);
         let records = self.records.rows();
         self.solved.clear();
         self.solved
             .extend(self.matched.iter().map(|m| m.map_or([0.0; 3], |k| records[k].impulse)));
-        // The particles in resting contact: named by a contact that bore load in the last
-        // step, or that the step would close beyond what its target allows (moving by
-        // symplectic Euler, below). No impact hit them in this step.
-        let euler_step = |q: usize| vec3::scale(h, vec3::get(v1, q));
-        let mut resting = std::mem::take(&mut self.scratch);
-        resting.reset(inv_mass.len(), false);
-        // A particle touching a resting one (within the slop, by a contact that bore no load
-        // in the last step) rests too: a column placed at rest on a floor then moves as one by
-        // symplectic Euler from its first step, as it will in every step after, so that the
-        // first step's totals are the next step's warm start (each ball moved by the method
-        // in the first step and by Euler in the second asked the solve of the second for
-        // another load, which it took up over several steps, booking up to 1e-6 of the
-        // column's energy as lost). Such contacts are gathered here, then spread over in
-        // passes until nothing changes: as many as the chain of them is long.
-        let mut touching: Vec<(usize, usize)> = Vec::new();
-        for (c, warm) in self.contacts.iter().zip(&self.solved) {
-            let start = -c.overlap - vec3::dot(rel(c, &moved, h), c.normal);
-            let least = start.min(0.0);
-            let closes = start + vec3::dot(rel(c, &euler_step, h), c.normal) < least;
-            if *warm != [0.0; 3] || closes {
-                for q in std::iter::once(c.i).chain(c.partner_particle()) {
-                    if paths.version(q) == 0 {
-                        resting.mark(q);
-                    }
-                }
-            } else if let Some(j) = c.partner_particle() {
-                let slop = SLOP * (set.radius[c.i] + set.radius[j]);
-                if start <= slop && paths.version(c.i) == 0 && paths.version(j) == 0 {
-                    touching.push((c.i, j));
-                }
-            }
-        }
-        let mut spread = true;
-        while spread {
-            spread = false;
-            for &(i, j) in &touching {
-                if resting.get(i) != resting.get(j) {
-                    resting.mark(i);
-                    resting.mark(j);
-                    spread = true;
-                }
-            }
-        }
+        let mut resting = self.resting_particles(set, paths, h, &moved, &euler_step);
         // Each particle's displacement over the step as the solve sees it: a particle in
         // resting contact moves by symplectic Euler, as in Box2D (x = x₀ + h v: held at v = 0
         // it stays where it was, whatever the method); any other as it was integrated (the
         // method's own accuracy, an impact's exact path).
         let base = |q: usize| if resting.get(q) { euler_step(q) } else { moved(q) };
-        // the overlap a contact may keep: of r_i + r_j, or of the diameter against a collider
-        let slop = |c: &Contact| SLOP * (set.radius[c.i] + c.partner_particle().map_or(set.radius[c.i], |j| set.radius[j]));
         self.prepared.clear();
         self.prepared.extend(self.contacts.iter().map(|c| {
             let n = c.normal;
-            let start = -c.overlap - vec3::dot(rel(c, &moved, h), n);
-            let u1 = rel(c, &|q| vec3::get(v1, q), 1.0);
-            let u_pre = vec3::dot(rel(c, &|q| paths.reference_velocity(q), 1.0), n);
+            let start = -c.overlap - vec3::dot(relative(c, &moved, h), n);
+            let u1 = relative(c, &|q| vec3::get(v1, q), 1.0);
+            let u_pre = vec3::dot(relative(c, &|q| paths.reference_velocity(q), 1.0), n);
             let bounce = bounces(u_pre, threshold).then(|| -materials.pair(c).restitution() * u_pre);
-            Target::new(start, slop(c), rel(c, &base, h), u1, n, h, bounce)
+            Target::new(start, slop(set.radius, c), relative(c, &base, h), u1, n, h, bounce)
         }));
         // What moving by symplectic Euler adds to the integrated position of each particle in
         // resting contact.
@@ -365,18 +348,7 @@ impl ImpulseModel {
             spin: set.rotation.map(|r| (r, omega)),
             rolling: set.rolling_friction,
             shock: (set.accuracy == Accuracy::Animation).then_some(paths.accel),
-            params: SoftParams {
-                h,
-                tolerance: VELOCITY_TOLERANCE,
-                solve_passes: match set.accuracy {
-                    Accuracy::Physics => SOLVE_PASSES,
-                    Accuracy::Animation => ANIMATION_SOLVE_PASSES,
-                },
-                relax_passes: match set.accuracy {
-                    Accuracy::Physics => RELAX_PASSES,
-                    Accuracy::Animation => ANIMATION_RELAX_PASSES,
-                },
-            },
+            params: soft_params(set.accuracy, h),
         };
         self.islands = Islands::find_with(&self.contacts, inv_mass, &mut self.forest);
         // Each contact's check that the solve would leave it alone (most of a gas's contacts)
@@ -401,8 +373,73 @@ impl ImpulseModel {
         for &(q, c) in &euler {
             vec3::add_scaled(x1, q, 1.0, c);
         }
-        // What the stage acted on, for the energy lost: moved by symplectic Euler, or pushed.
-        self.acted.reset(inv_mass.len(), false);
+        self.mark_acted(resting, inv_mass.len());
+        self.keep_records(set.radius, &idle, force_free);
+        Ok(stats)
+    }
+
+    /// The particles in resting contact at the step's end (in the stage's scratch flags,
+    /// which [`ImpulseModel::mark_acted`] gives back): `moved` and `euler_step` give each
+    /// particle's integrated displacement over the step and the one symplectic Euler makes.
+    fn resting_particles(
+        &mut self,
+        set: &StageSetting<'_>,
+        paths: &Paths<'_>,
+        h: f64,
+        moved: &dyn Fn(usize) -> [f64; 3],
+        euler_step: &dyn Fn(usize) -> [f64; 3],
+    ) -> Marks {
+        let inv_mass = set.inv_mass;
+        // The particles in resting contact: named by a contact that bore load in the last
+        // step, or that the step would close beyond what its target allows (moving by
+        // symplectic Euler, below). No impact hit them in this step.
+        let mut resting = std::mem::take(&mut self.scratch);
+        resting.reset(inv_mass.len(), false);
+        // A particle touching a resting one (within the slop, by a contact that bore no load
+        // in the last step) rests too: a column placed at rest on a floor then moves as one by
+        // symplectic Euler from its first step, as it will in every step after, so that the
+        // first step's totals are the next step's warm start (each ball moved by the method
+        // in the first step and by Euler in the second asked the solve of the second for
+        // another load, which it took up over several steps, booking up to 1e-6 of the
+        // column's energy as lost). Such contacts are gathered here, then spread over in
+        // passes until nothing changes: as many as the chain of them is long.
+        let mut touching: Vec<(usize, usize)> = Vec::new();
+        for (c, warm) in self.contacts.iter().zip(&self.solved) {
+            let start = -c.overlap - vec3::dot(relative(c, moved, h), c.normal);
+            let least = start.min(0.0);
+            let closes = start + vec3::dot(relative(c, euler_step, h), c.normal) < least;
+            if *warm != [0.0; 3] || closes {
+                for q in std::iter::once(c.i).chain(c.partner_particle()) {
+                    if paths.version(q) == 0 {
+                        resting.mark(q);
+                    }
+                }
+            } else if let Some(j) = c.partner_particle() {
+                let slop = SLOP * (set.radius[c.i] + set.radius[j]);
+                if start <= slop && paths.version(c.i) == 0 && paths.version(j) == 0 {
+                    touching.push((c.i, j));
+                }
+            }
+        }
+        let mut spread = true;
+        while spread {
+            spread = false;
+            for &(i, j) in &touching {
+                if resting.get(i) != resting.get(j) {
+                    resting.mark(i);
+                    resting.mark(j);
+                    spread = true;
+                }
+            }
+        }
+        resting
+    }
+
+    /// Marks what the stage acted on (for the energy lost) among the `n` particles, and
+    /// gives the scratch flags `resting` back.
+    fn mark_acted(&mut self, mut resting: Marks, n: usize) {
+        // moved by symplectic Euler, or pushed
+        self.acted.reset(n, false);
         for &q in resting.sorted() {
             self.acted.mark(q);
         }
@@ -418,6 +455,11 @@ impl ImpulseModel {
                 }
             }
         }
+    }
+
+    /// The step's records from its contacts, solved totals and totals (`radius`: the
+    /// particles' radii; `idle`: each island's check that the solve left it alone).
+    fn keep_records(&mut self, radius: &[f64], idle: &[bool], force_free: bool) {
         // The contacts the next step keeps (its warm start, and the particles it looks at
         // first). In a force-free world, a contact of an island the solve left alone, apart
         // beyond the slop and separating, is not kept: it bears nothing, its particles move
@@ -431,12 +473,11 @@ impl ImpulseModel {
             for k in (0..self.islands.len()).filter(|&k| idle[k]) {
                 for &c in self.islands.island(k) {
                     let t = &self.prepared[c];
-                    kept[c] = !(t.gap > slop(&self.contacts[c]) && t.u_n >= 0.0);
+                    kept[c] = !(t.gap > slop(radius, &self.contacts[c]) && t.u_n >= 0.0);
                 }
             }
         }
         self.records.replace(&self.contacts, &self.solved, &self.totals, &kept);
-        Ok(stats)
     }
 
     /// The largest overlap of the end-of-step contacts at the positions `x1` the step leaves

@@ -8,6 +8,7 @@
 
 pub(crate) mod end_of_step;
 pub(crate) mod impacts;
+pub(crate) mod list;
 mod step;
 
 use super::books::ColliderBooks;

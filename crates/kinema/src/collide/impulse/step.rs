@@ -61,6 +61,22 @@ struct StepState {
     impacts_distribute: Duration,
 }
 
+/// The step's times: each stage's lap, and the seed's three stages from the same laps (the
+/// impacts interleave all three).
+fn collision_times(laps: [Duration; 7], step: &StepState) -> CollisionTimes {
+    let lap = |s: ImpulseStage| laps[s as usize];
+    let (respond, distribute) = (step.impacts_respond, step.impacts_distribute);
+    CollisionTimes {
+        detect: lap(ImpulseStage::List)
+            + lap(ImpulseStage::Impacts).saturating_sub(respond + distribute)
+            + lap(ImpulseStage::Contacts)
+            + lap(ImpulseStage::Meetings),
+        respond: respond + lap(ImpulseStage::Solve),
+        distribute: distribute + lap(ImpulseStage::Apply) + lap(ImpulseStage::Settle),
+        stages: laps,
+    }
+}
+
 impl ImpulseModel {
     /// Stages 2–4 of the impulse model on the step from (x0, v0) to the integrated (x1, v1),
     /// over `frame.h` s, among the colliders, materials and particles of `set`;
@@ -87,32 +103,7 @@ impl ImpulseModel {
         let mut at = Instant::now();
         self.collider_books.clear();
         self.collider_books.resize(set.colliders.len(), ColliderBooks::default());
-        // (no pass over the particles where nothing can sleep: a force-free world's step looks
-        // only at the particles due, `collide/quiet.rs`)
-        if frame.may_sleep && set.sleep_time.is_some() {
-            self.sleep.resize(x0.len() / 3);
-        } else if !self.sleep.calm.is_empty() {
-            self.sleep.wake_all();
-        }
-        // An island asleep that an awake particle meets within the step wakes first, so that
-        // the step runs for it as for the awake, from what stage 1 made of it (a body held at
-        // rest would take the impact as an immovable stack of impacts). Any other particle
-        // asleep stays where it is, at rest: what the integrator made of it is dropped
-        // (x₀ = x₁, v₀ = v₁ = 0, and its path has no acceleration).
-        let woke = if self.sleep.any() {
-            self.wake_reached(set, frame, (x0, v0), (x1, v1))?
-        } else {
-            0
-        };
-        let sleeping = self.sleep.any();
-        if sleeping {
-            // what the islands still asleep give the colliders over the step: their loads
-            self.book_sleepers(x0, set.radius, set.colliders, set.domain);
-            for q in (0..x0.len() / 3).filter(|&q| self.sleep.is_asleep(q)) {
-                x1[3 * q..3 * q + 3].copy_from_slice(&x0[3 * q..3 * q + 3]);
-                v1[3 * q..3 * q + 3].fill(0.0);
-            }
-        }
+        let (woke, sleeping) = self.sleepers(set, frame, (x0, v0), (x1, v1))?;
         // The step's paths: Verlet's own acceleration, or the parabola through x1 (the path
         // store is lent out of the model for the step, and given back whatever happens).
         let mut store = std::mem::take(&mut self.paths);
@@ -165,19 +156,48 @@ impl ImpulseModel {
         self.fitted = fitted;
         self.forced = forced;
         ran?;
-        // The seed's three stages from the same laps: the impacts interleave all three.
-        let lap = |s: ImpulseStage| laps[s as usize];
-        let (respond, distribute) = (step.impacts_respond, step.impacts_distribute);
-        let times = CollisionTimes {
-            detect: lap(ImpulseStage::List)
-                + lap(ImpulseStage::Impacts).saturating_sub(respond + distribute)
-                + lap(ImpulseStage::Contacts)
-                + lap(ImpulseStage::Meetings),
-            respond: respond + lap(ImpulseStage::Solve),
-            distribute: distribute + lap(ImpulseStage::Apply) + lap(ImpulseStage::Settle),
-            stages: laps,
-        };
+        let times = collision_times(laps, &step);
         Ok((step.changed, step.stats, times))
+    }
+
+    /// Sleeping before the stages: the sleep flags sized (or every island woken where
+    /// nothing may sleep), the islands an awake particle meets woken, the others held at rest
+    /// with their loads on the colliders. Returns the islands woken and whether any still
+    /// sleeps.
+    fn sleepers(
+        &mut self,
+        set: &StageSetting<'_>,
+        frame: &StepFrame<'_>,
+        (x0, v0): (&[f64], &[f64]),
+        (x1, v1): (&mut [f64], &mut [f64]),
+    ) -> Result<(usize, bool), Error> {
+        // (no pass over the particles where nothing can sleep: a force-free world's step looks
+        // only at the particles due, `collide/quiet.rs`)
+        if frame.may_sleep && set.sleep_time.is_some() {
+            self.sleep.resize(x0.len() / 3);
+        } else if !self.sleep.calm.is_empty() {
+            self.sleep.wake_all();
+        }
+        // An island asleep that an awake particle meets within the step wakes first, so that
+        // the step runs for it as for the awake, from what stage 1 made of it (a body held at
+        // rest would take the impact as an immovable stack of impacts). Any other particle
+        // asleep stays where it is, at rest: what the integrator made of it is dropped
+        // (x₀ = x₁, v₀ = v₁ = 0, and its path has no acceleration).
+        let woke = if self.sleep.any() {
+            self.wake_reached(set, frame, (x0, v0), (x1, v1))?
+        } else {
+            0
+        };
+        let sleeping = self.sleep.any();
+        if sleeping {
+            // what the islands still asleep give the colliders over the step: their loads
+            self.book_sleepers(x0, set.radius, set.colliders, set.domain);
+            for q in (0..x0.len() / 3).filter(|&q| self.sleep.is_asleep(q)) {
+                x1[3 * q..3 * q + 3].copy_from_slice(&x0[3 * q..3 * q + 3]);
+                v1[3 * q..3 * q + 3].fill(0.0);
+            }
+        }
+        Ok((woke, sleeping))
     }
 
     /// Wakes each island asleep that an awake movable particle meets within the step on
