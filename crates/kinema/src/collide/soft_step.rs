@@ -59,6 +59,9 @@ use super::shock::{levels, order, Held, ShockOrder, SUPPORT_COSINE};
 use super::spin::Rotation;
 use crate::error::Error;
 use crate::vec3;
+use row::Row;
+
+mod row;
 
 /// What the stage prepared for one contact (m, m/s, 3-vectors ⊥ n).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -219,20 +222,7 @@ pub(crate) fn soft_step<const N: usize>(
     let before = v.to_vec();
 
     // Warm start: each starting total projected onto λ ≥ 0 and the cone, then applied.
-    let mut acc: Vec<(f64, [f64; 3], [f64; 3])> = vec![(0.0, [0.0; 3], [0.0; 3]); contacts.len()];
-    for (k, (r, e)) in rows.iter().zip(&ends).enumerate() {
-        let start = solved[k];
-        let Some(e) = e else { continue };
-        if start == [0.0; 3] || vec3::first_non_finite(&start).is_some() {
-            continue;
-        }
-        let lambda = vec3::dot(start, r.n).max(0.0);
-        let t = r.clamp(vec3::sub(start, vec3::scale(vec3::dot(start, r.n), r.n)), lambda);
-        acc[k] = (lambda, t, [0.0; 3]);
-        let (mut vi, mut vj) = e.load::<N>(v);
-        r.apply(&mut vi, &mut vj, vec3::add(vec3::scale(lambda, r.n), t));
-        e.store(v, vi, vj);
-    }
+    let mut acc = warm_start::<N>(&rows, &ends, solved, v);
     let mut stats = SoftStats::default();
 
     // Solve: the position targets, as velocities.
@@ -247,9 +237,7 @@ pub(crate) fn soft_step<const N: usize>(
     );
     stats.passes = done.passes;
     stats.converged = done.converged;
-    for (k, r) in rows.iter().enumerate() {
-        solved[k] = vec3::add(vec3::scale(acc[k].0, r.n), acc[k].1);
-    }
+    store_solved(&rows, &acc, solved);
     // Shock: the solve's targets again, level by level bottom up, the level below held still.
     kicks.clear();
     let shocks = shock.map(|accel| {
@@ -261,29 +249,10 @@ pub(crate) fn soft_step<const N: usize>(
     }
 
     // Integrate: the positions follow the solve's velocity change over the whole step.
-    for (q, xq) in x.iter_mut().enumerate() {
-        let (p, d) = (q / 3, q % 3);
-        if inv_mass[p] > 0.0 {
-            *xq += h * (v[N * p + d] - before[N * p + d]);
-        }
-    }
+    follow_velocities::<N>(x, v, &before, inv_mass, h);
 
     // Relax: velocity targets on the gaps the solve left.
-    let relax_n: Vec<f64> = rows
-        .iter()
-        .zip(&ends)
-        .zip(targets)
-        .map(|((r, e), t)| {
-            let Some(e) = e else { return 0.0 };
-            let (vi, vj) = e.load::<N>(v);
-            let gap = t.gap + h * (vec3::dot(r.relative(&vi, &vj), r.n) - t.u_n);
-            if gap > 0.0 {
-                -gap / h
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let relax_n = relax_targets::<N>(&rows, &ends, targets, v, h);
     let relaxed = passes::<N, _>(
         groups,
         &ends,
@@ -299,11 +268,7 @@ pub(crate) fn soft_step<const N: usize>(
     }
 
     // Restitution: Newton's law on the contacts that bear load and came in fast.
-    let bouncing: Vec<Option<f64>> = targets
-        .iter()
-        .zip(&acc)
-        .map(|(t, a)| t.bounce.filter(|_| a.0 > 0.0))
-        .collect();
+    let bouncing = bouncing(targets, &acc);
     stats.bounced = bouncing.iter().flatten().count();
     if stats.bounced > 0 {
         let bounced = passes::<N, _>(
@@ -321,8 +286,92 @@ pub(crate) fn soft_step<const N: usize>(
         stats.restitution_passes = bounced.passes;
     }
 
+    final_totals::<N>(&rows, &acc, &ends, rolling, totals, rolls);
+    stats.active = totals.iter().filter(|p| **p != [0.0; 3]).count();
+    Ok(stats)
+}
+
+/// Each contact's accumulated (λ, tangential, rolling) impulses after the warm start: its
+/// starting total `solved` projected onto λ ≥ 0 and the cone, then applied to `v`.
+#[inline]
+fn warm_start<const N: usize>(rows: &[Row], ends: &[Option<Ends>], solved: &[[f64; 3]], v: &mut [f64]) -> Vec<Accumulated> {
+    let mut acc: Vec<Accumulated> = vec![(0.0, [0.0; 3], [0.0; 3]); rows.len()];
+    for (k, (r, e)) in rows.iter().zip(ends).enumerate() {
+        let start = solved[k];
+        let Some(e) = e else { continue };
+        if start == [0.0; 3] || vec3::first_non_finite(&start).is_some() {
+            continue;
+        }
+        let lambda = vec3::dot(start, r.n).max(0.0);
+        let t = r.clamp(vec3::sub(start, vec3::scale(vec3::dot(start, r.n), r.n)), lambda);
+        acc[k] = (lambda, t, [0.0; 3]);
+        let (mut vi, mut vj) = e.load::<N>(v);
+        r.apply(&mut vi, &mut vj, vec3::add(vec3::scale(lambda, r.n), t));
+        e.store(v, vi, vj);
+    }
+    acc
+}
+
+/// Each contact's solve stage total (its normal and tangential impulses) into `solved`: the
+/// next step's warm start.
+#[inline]
+fn store_solved(rows: &[Row], acc: &[Accumulated], solved: &mut [[f64; 3]]) {
+    for (k, r) in rows.iter().enumerate() {
+        solved[k] = vec3::add(vec3::scale(acc[k].0, r.n), acc[k].1);
+    }
+}
+
+/// The positions `x` moved by h times the velocity change from `before` to `v` (movable
+/// particles only).
+#[inline]
+fn follow_velocities<const N: usize>(x: &mut [f64], v: &[f64], before: &[f64], inv_mass: &[f64], h: f64) {
+    for (q, xq) in x.iter_mut().enumerate() {
+        let (p, d) = (q / 3, q % 3);
+        if inv_mass[p] > 0.0 {
+            *xq += h * (v[N * p + d] - before[N * p + d]);
+        }
+    }
+}
+
+/// The relax stage's normal velocity target of each contact: closing, at most, the gap the
+/// solve left (0 where none is left).
+#[inline]
+fn relax_targets<const N: usize>(rows: &[Row], ends: &[Option<Ends>], targets: &[Target], v: &[f64], h: f64) -> Vec<f64> {
+    rows.iter()
+        .zip(ends)
+        .zip(targets)
+        .map(|((r, e), t)| {
+            let Some(e) = e else { return 0.0 };
+            let (vi, vj) = e.load::<N>(v);
+            let gap = t.gap + h * (vec3::dot(r.relative(&vi, &vj), r.n) - t.u_n);
+            if gap > 0.0 {
+                -gap / h
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// Each contact's restitution target, for those that bear load (λ > 0) and came in fast.
+#[inline]
+fn bouncing(targets: &[Target], acc: &[Accumulated]) -> Vec<Option<f64>> {
+    targets.iter().zip(acc).map(|(t, a)| t.bounce.filter(|_| a.0 > 0.0)).collect()
+}
+
+/// Each contact's final total impulse on i into `totals` and, with rolling resistance
+/// (N = 6), its angular impulse into `rolls`.
+#[inline]
+fn final_totals<const N: usize>(
+    rows: &[Row],
+    acc: &[Accumulated],
+    ends: &[Option<Ends>],
+    rolling: f64,
+    totals: &mut Vec<[f64; 3]>,
+    rolls: &mut Vec<[f64; 3]>,
+) {
     totals.clear();
-    totals.extend(rows.iter().zip(&acc).zip(&ends).map(|((r, (lambda, t, _)), e)| match e {
+    totals.extend(rows.iter().zip(acc).zip(ends).map(|((r, (lambda, t, _)), e)| match e {
         Some(_) => vec3::add(vec3::scale(*lambda, r.n), *t),
         None => [0.0; 3],
     }));
@@ -330,13 +379,15 @@ pub(crate) fn soft_step<const N: usize>(
     if N == 6 && rolling > 0.0 {
         rolls.extend(
             acc.iter()
-                .zip(&ends)
+                .zip(ends)
                 .map(|((_, _, m), e)| if e.is_some() { *m } else { [0.0; 3] }),
         );
     }
-    stats.active = totals.iter().filter(|p| **p != [0.0; 3]).count();
-    Ok(stats)
 }
+
+/// A contact's impulses accumulated over the passes: the normal λ (N·s), the tangential and
+/// the rolling (angular) ones.
+type Accumulated = (f64, [f64; 3], [f64; 3]);
 
 /// Most passes of a shock stage over one level's contacts.
 const SHOCK_PASSES: usize = 10;
@@ -485,233 +536,4 @@ pub(crate) fn idle(
     let gap = target.gap + h * (u_n - target.u_n);
     let relax_n = if gap > 0.0 { -gap / h } else { 0.0 };
     finite && u_n >= target.solve_n && u_n >= relax_n
-}
-
-/// A contact's rolling resistance (module doc): the inverse inertias k_i, k_j (1/(kg·m²)),
-/// the angular effective mass 1/(k_i + k_j) (kg·m²), the cap μ_r R* (m; the angular
-/// impulse's bound per unit normal impulse) and R* (m). Without: all 0.
-#[derive(Clone, Copy, Default)]
-struct Roll {
-    k: [f64; 2],
-    mass: f64,
-    cap: f64,
-    r_star: f64,
-}
-
-/// A contact of [`soft_step`]: its inverse masses w (1/kg), effective mass 1/(w_i + w_j)
-/// (kg) along n and 1/w_t across (the same without spin), friction μ, normal n, whether its
-/// partner is a particle, and with spin `turn` = [ρ_i, ρ_j, k_i ρ_i, k_j ρ_j] (m, m and
-/// 1/(kg·m); `collide/spin.rs`) and its rolling resistance.
-#[derive(Clone, Copy)]
-struct Row {
-    wi: f64,
-    wj: f64,
-    mass: f64,
-    mass_t: f64,
-    turn: [f64; 4],
-    roll: Roll,
-    mu: f64,
-    n: [f64; 3],
-    has_j: bool,
-}
-
-impl Row {
-    /// The row of contact `c` with its targets, among particles of these inverse masses
-    /// (1/kg), with spin `rotation`, rolling resistance μ_r `rolling` and friction μ `mu`.
-    fn new(c: &Contact, target: &Target, inv_mass: &[f64], rotation: Option<Rotation<'_>>, rolling: f64, mu: f64) -> Row {
-        let (wi, wj) = (inv_mass[c.i], c.partner_particle().map_or(0.0, |j| inv_mass[j]));
-        let w = wi + wj;
-        let mass = if w > 0.0 { 1.0 / w } else { 0.0 };
-        // with spin: the arms, the turn per unit of n × p, and the tangential mass
-        let (turn, mass_t, roll) = match rotation {
-            Some(r) => {
-                let ((rho_i, rho_j), (ki, kj)) = (r.arms(c, target.rest), r.inverse_inertias(c));
-                let w_t = w + ki * rho_i * rho_i + kj * rho_j * rho_j;
-                let ri = r.radius[c.i];
-                let r_star = c.partner_particle().map_or(ri, |j| ri * r.radius[j] / (ri + r.radius[j]));
-                let roll = Roll {
-                    k: [ki, kj],
-                    mass: if ki + kj > 0.0 { 1.0 / (ki + kj) } else { 0.0 },
-                    cap: rolling * r_star,
-                    r_star,
-                };
-                (
-                    [rho_i, rho_j, ki * rho_i, kj * rho_j],
-                    if w_t > 0.0 { 1.0 / w_t } else { 0.0 },
-                    roll,
-                )
-            }
-            None => ([0.0; 4], mass, Roll::default()),
-        };
-        Row {
-            wi,
-            wj,
-            mass,
-            mass_t,
-            turn,
-            roll,
-            mu,
-            n: c.normal,
-            has_j: c.partner_particle().is_some(),
-        }
-    }
-
-    /// The row with one side held still (`collide/shock.rs`): its inverse mass and inertia
-    /// taken as 0, the effective masses those of the other side alone.
-    fn held(&self, held: Held) -> Row {
-        let mut r = *self;
-        match held {
-            Held::Neither => return r,
-            Held::I => (r.wi, r.turn[2], r.roll.k[0]) = (0.0, 0.0, 0.0),
-            Held::J => (r.wj, r.turn[3], r.roll.k[1]) = (0.0, 0.0, 0.0),
-        }
-        let inverse = |w: f64| if w > 0.0 { 1.0 / w } else { 0.0 };
-        let w = r.wi + r.wj;
-        r.mass = inverse(w);
-        r.mass_t = inverse(w + r.turn[2] * r.turn[0] + r.turn[3] * r.turn[1]);
-        r.roll.mass = inverse(r.roll.k[0] + r.roll.k[1]);
-        r
-    }
-
-    /// The velocity of i's contact point relative to j's: v_i − v_j, less
-    /// (ρ_i ω_i + ρ_j ω_j) × n with spin (N = 6).
-    #[inline(always)]
-    fn relative<const N: usize>(&self, vi: &[f64; N], vj: &[f64; N]) -> [f64; 3] {
-        let u = [vi[0] - vj[0], vi[1] - vj[1], vi[2] - vj[2]];
-        if N == 6 {
-            let w = std::array::from_fn(|k| self.turn[0] * vi[3 + k] + self.turn[1] * vj[3 + k]);
-            vec3::sub(u, vec3::cross(w, self.n))
-        } else {
-            u
-        }
-    }
-
-    /// The impulse p on i and −p on j, at their contact points: v_i += w_i p, v_j −= w_j p,
-    /// and with spin ω_i −= k_i ρ_i n × p, ω_j −= k_j ρ_j n × p.
-    #[inline(always)]
-    fn apply<const N: usize>(&self, vi: &mut [f64; N], vj: &mut [f64; N], p: [f64; 3]) {
-        for k in 0..3 {
-            vi[k] += self.wi * p[k];
-        }
-        if self.has_j {
-            for k in 0..3 {
-                vj[k] -= self.wj * p[k];
-            }
-        }
-        if N == 6 {
-            let np = vec3::cross(self.n, p);
-            for k in 0..3 {
-                vi[3 + k] -= self.turn[2] * np[k];
-            }
-            if self.has_j {
-                for k in 0..3 {
-                    vj[3 + k] -= self.turn[3] * np[k];
-                }
-            }
-        }
-    }
-
-    /// A tangential total clamped to the cone |t| ≤ μ λ.
-    #[inline(always)]
-    fn clamp(&self, t: [f64; 3], lambda: f64) -> [f64; 3] {
-        let (len, cap) = (vec3::norm(t), self.mu * lambda);
-        if len > cap {
-            vec3::scale(if len > 0.0 { cap / len } else { 0.0 }, t)
-        } else {
-            t
-        }
-    }
-
-    /// One visit with the totals (λ, t): the normal total that brings u_n to at least `b_n`
-    /// (clamped at 0), then, with `b_t`, the tangential total that brings the tangential
-    /// velocity to `b_t` within the cone. Returns the largest change, as a velocity (m/s).
-    #[inline(always)]
-    fn visit<const N: usize>(
-        &self,
-        vi: &mut [f64; N],
-        vj: &mut [f64; N],
-        (normal, tangent, roll): &mut (f64, [f64; 3], [f64; 3]),
-        b_n: f64,
-        b_t: Option<[f64; 3]>,
-    ) -> f64 {
-        let mut change: f64 = 0.0;
-        let u_n = vec3::dot(self.relative(vi, vj), self.n);
-        let total = (*normal - (u_n - b_n) * self.mass).max(0.0);
-        let dn = total - *normal;
-        *normal = total;
-        if dn != 0.0 {
-            change = change.max(dn.abs() / self.mass);
-            self.apply(vi, vj, vec3::scale(dn, self.n));
-        }
-        if let Some(b_t) = b_t {
-            if self.mu > 0.0 {
-                let u = self.relative(vi, vj);
-                let u_t = vec3::sub(u, vec3::scale(vec3::dot(u, self.n), self.n));
-                let old = *tangent;
-                let t = self.clamp(vec3::sub(old, vec3::scale(self.mass_t, vec3::sub(u_t, b_t))), total);
-                let dt = vec3::sub(t, old);
-                if dt != [0.0; 3] {
-                    change = change.max(vec3::norm(dt) / self.mass_t);
-                    *tangent = t;
-                    self.apply(vi, vj, dt);
-                }
-            }
-        } else if *tangent != [0.0; 3] {
-            // the restitution stage keeps the friction within the cone of a shrinking λ
-            let t = self.clamp(*tangent, total);
-            let dt = vec3::sub(t, *tangent);
-            if dt != [0.0; 3] {
-                *tangent = t;
-                self.apply(vi, vj, dt);
-            }
-        }
-        if N == 6 && self.roll.cap > 0.0 {
-            let change_roll = self.visit_roll(vi, vj, roll, total, b_t.is_some());
-            change = change.max(change_roll);
-        }
-        change
-    }
-
-    /// The rolling (and twisting) resistance's part of a visit: with `hold`, the angular
-    /// impulse M that brings the relative turning to 0 within |M| ≤ μ_r R* λ; without (the
-    /// restitution stage), M kept within the cone of a shrinking λ. Returns the change as a
-    /// velocity at R*, m/s.
-    #[inline(always)]
-    fn visit_roll<const N: usize>(
-        &self,
-        vi: &mut [f64; N],
-        vj: &mut [f64; N],
-        roll: &mut [f64; 3],
-        lambda: f64,
-        hold: bool,
-    ) -> f64 {
-        let r = self.roll;
-        let old = *roll;
-        let wanted = if hold {
-            let w: [f64; 3] = std::array::from_fn(|k| vi[3 + k] - vj[3 + k]);
-            vec3::sub(old, vec3::scale(r.mass, w))
-        } else {
-            old
-        };
-        let (len, cap) = (vec3::norm(wanted), r.cap * lambda);
-        let m = if len > cap {
-            vec3::scale(if len > 0.0 { cap / len } else { 0.0 }, wanted)
-        } else {
-            wanted
-        };
-        let dm = vec3::sub(m, old);
-        if dm == [0.0; 3] {
-            return 0.0;
-        }
-        *roll = m;
-        for k in 0..3 {
-            vi[3 + k] += r.k[0] * dm[k];
-        }
-        if self.has_j {
-            for k in 0..3 {
-                vj[3 + k] -= r.k[1] * dm[k];
-            }
-        }
-        vec3::norm(dm) / r.mass.max(f64::MIN_POSITIVE) * r.r_star
-    }
 }
