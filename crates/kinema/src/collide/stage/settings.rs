@@ -334,6 +334,14 @@ impl CollisionParams {
 
     /// Checks the values; the error names the parameter.
     pub fn check(&self) -> Result<Material, Error> {
+        self.check_model()?;
+        self.check_tangential()?;
+        self.check_solver()?;
+        Material::new(self.restitution, self.friction)
+    }
+
+    /// Checks the contact model's own parameters (the spring–dashpot's, Hertz's).
+    fn check_model(&self) -> Result<(), Error> {
         if let ContactModel::SpringDashpot { stiffness, damping } = self.model {
             if !(stiffness.is_finite() && stiffness > 0.0) {
                 return Err(Error::invalid(
@@ -386,6 +394,12 @@ impl CollisionParams {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// Checks the tangential part: set only with a force model, each value in its range, the
+    /// law's parameters those of its model.
+    fn check_tangential(&self) -> Result<(), Error> {
         let t = self.tangential;
         if self.model == ContactModel::Impulse {
             let named = t.named();
@@ -445,6 +459,12 @@ impl CollisionParams {
             }
             _ => {}
         }
+        Ok(())
+    }
+
+    /// Checks the solver's settings: the accuracy, rolling friction, the restitution
+    /// threshold, sleeping.
+    fn check_solver(&self) -> Result<(), Error> {
         if self.accuracy == Accuracy::Animation && (self.model != ContactModel::Impulse || self.event_driven) {
             return Err(Error::invalid(
                 "accuracy",
@@ -487,7 +507,7 @@ impl CollisionParams {
                 }
             }
         }
-        Material::new(self.restitution, self.friction)
+        Ok(())
     }
 }
 
