@@ -7,6 +7,7 @@
 //! - `collide.rs`: stages 2–4, `World::collide`, which runs the collide stage
 //!   (`collide::stage::CollideStage`, detection and response in `collide/`), and the
 //!   collision settings, colliders, materials and periodic axes;
+//! - `groups.rs`: the collision groups (each particle's, the matrix, the colliders' masks);
 //! - `forces.rs`: the forces of one evaluation, the world's own and the
 //!   contact force the collide stage lends (`collide/contact_force/`);
 //! - `divergence.rs`: the non-finite and runaway-energy checks that refuse a step;
@@ -28,6 +29,7 @@ mod divergence;
 mod dynamics;
 mod event_driven;
 mod forces;
+mod groups;
 mod implicit;
 mod integrate;
 mod measures;
