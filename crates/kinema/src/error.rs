@@ -237,7 +237,7 @@ fn compact(text: String) -> String {
 }
 
 /// A callback's error; an engine error that passed through a callback's signature (the
-/// spring–dashpot contact force is a `Force`, whose errors are `CallbackError`s) comes back as
+/// contact force is a `Force`, whose errors are `CallbackError`s) comes back as
 /// itself, so that the same bad input is the same error under either contact model.
 impl From<CallbackError> for Error {
     fn from(e: CallbackError) -> Self {

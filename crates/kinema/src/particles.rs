@@ -157,7 +157,7 @@ impl Particles {
         Ok(start..start + n)
     }
 
-    /// Whether the particles carry spin (angular velocities and moments of inertia).
+    /// Whether the particles have spin (angular velocities and moments of inertia).
     pub fn has_spin(&self) -> bool {
         self.inertia_factor > 0.0
     }

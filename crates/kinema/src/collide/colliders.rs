@@ -3,7 +3,7 @@
 //!
 //! A collider has infinite mass. It stays where it was added unless it is given a prescribed
 //! motion ([`super::motion`]): then the collide stage places it at each step
-//! ([`Collider::posed`]) and its [`Surface`] carries the velocity field of its surface, so
+//! ([`Collider::posed`]) and its [`Surface`] holds the velocity field of its surface, so
 //! that a particle's relative velocity against it is u_n = (v_i − u(x))·n, u(x) the
 //! surface's velocity at the contact point (0 for a still collider). Each contact's normal
 //! points into the free side (the side the particles belong to), so that an impulse +j n

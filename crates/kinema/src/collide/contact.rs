@@ -34,7 +34,7 @@ pub struct Contact {
     pub wall_velocity: [f64; 3],
 }
 
-/// What a contact carries, for output (`World::contact_report`): the contact, its point,
+/// A contact's figures, for output (`World::contact_report`): the contact, its point,
 /// and the force on particle i split along and across n (the force models' at the state;
 /// the impulse model's step impulse over dt, its mean force), and whether it slides.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -176,7 +176,7 @@ impl EventQueue {
 
 /// What detection sweeps against: the particles' radii, the colliders (with which box walls
 /// are active), the domain and the neighbour list of candidates.
-pub(crate) struct Scene<'a> {
+pub(crate) struct Surroundings<'a> {
     pub radius: &'a [f64],
     pub colliders: &'a [Collider],
     /// For each collider, whether each of its walls exists (a box's walls along periodic axes
@@ -191,11 +191,11 @@ pub(crate) struct Scene<'a> {
     /// impacts at one instant would cascade through the pile one pair at a time.
     pub slow: f64,
     /// The end-of-step contacts of the last step, sorted by (particle, partner), lower index
-    /// first for pairs, and whether each carried load (a nonzero total impulse). A pair of
+    /// first for pairs, and whether each bore load (a nonzero total impulse). A pair of
     /// them that touches and approaches is a resting contact, not an impact, and goes to the
     /// end-of-step solver: at the step's start, any of them (the approach is what the last
     /// solve left, or a pile's contact pressed by a neighbour's correction); later in the
-    /// step, the loaded ones (a body landing on a pile: its load is carried down at once,
+    /// step, the loaded ones (a body landing on a pile: its load is passed down at once,
     /// as shock propagation does, rather than by impacts cascading pair by pair).
     pub resting: &'a Records,
     /// Each particle's sleeping island or `sleep::AWAKE` (empty while none sleeps,
@@ -239,7 +239,7 @@ impl SweepBound<'_> {
     }
 }
 
-impl Scene<'_> {
+impl Surroundings<'_> {
     /// Whether particle q sleeps and no impact of this step has moved it, or (while some
     /// sleep) is pinned.
     #[inline]
@@ -276,7 +276,7 @@ pub(crate) struct Earliest {
     pub touching: bool,
 }
 
-impl Scene<'_> {
+impl Surroundings<'_> {
     /// Particle i's earliest impact after `now` within the step of length h, over its list
     /// partners, then its colliders (ties: the first found). A pair that touches at `now`
     /// and approaches faster than `slow` is an impact at `now`.
@@ -378,8 +378,8 @@ impl Scene<'_> {
         let first = walls.partition_point(|w| w.0 < i);
         for &(_, k) in walls[first..].iter().take_while(|w| w.0 == i) {
             // A moving collider stands where it will be at the step's end; the particle's
-            // path is seen from it, carried by the surface's motion over the rest of the
-            // step (`SurfaceVelocity::carried`): x + u (h − now) and v − u for a translation,
+            // path is seen from it, moved with the surface's motion over the rest of the
+            // step (`SurfaceVelocity::moved_with`): x + u (h − now) and v − u for a translation,
             // exact; for a turn, from x turned by ω (h − now) to the particle's own end point
             // on the chord between, v + (x − x')/(h − now): both ends exact, so a particle
             // inside a turning container at the step's start that ends outside crosses a
@@ -390,7 +390,7 @@ impl Scene<'_> {
                     let u = self.colliders[k].velocity_at(xi);
                     (vec3::add(xi, vec3::scale(rest, u)), vec3::sub(vi, u))
                 } else {
-                    let seen = field.carried(xi, rest);
+                    let seen = field.moved_with(xi, rest);
                     (seen, vec3::add(vi, vec3::scale(1.0 / rest, vec3::sub(xi, seen))))
                 }
             } else {
@@ -411,7 +411,7 @@ impl Scene<'_> {
             let mut near = false;
             // (a contact resting on a moving collider is left to the step's end only if the
             // end still finds it: it approaches by less than r over the rest of the step; a
-            // fast-turning container's wall that carries a particle faster is an impact)
+            // fast-turning container's wall that drives a particle faster is an impact)
             let moving = self.colliders[k].is_moving();
             let r = self.radius[i];
             self.collider_events(i, k, path, rest, margin, &mut near, |wall, tau| {
@@ -498,7 +498,7 @@ impl Scene<'_> {
     /// active wall of collider k within `rest`, u_n its normal velocity then (< 0).
     ///
     /// A mesh also sets `near` when the sphere comes within `margin` (m) of it now (the
-    /// other colliders leave that to [`Scene::touches`]).
+    /// other colliders leave that to [`Surroundings::touches`]).
     #[allow(clippy::too_many_arguments)]
     fn collider_events(
         &self,

@@ -157,34 +157,7 @@ impl TriangleMesh {
     /// with a repeated vertex, no triangle of non-zero area.
     pub fn new(vertices: Vec<[f64; 3]>, mut faces: Vec<[u32; 3]>, inside: bool, surface: Surface) -> Result<Self, Error> {
         let triangles = faces.len();
-        for (v, p) in vertices.iter().enumerate() {
-            if let Some((k, value)) = vec3::first_non_finite(p) {
-                return Err(Error::invalid(
-                    format!("vertices[{v}][{k}]"),
-                    value,
-                    "a mesh's vertices must be finite",
-                ));
-            }
-        }
-        let n = vertices.len();
-        for (f, face) in faces.iter().enumerate() {
-            for (k, &index) in face.iter().enumerate() {
-                if index as usize >= n {
-                    return Err(Error::invalid(
-                        format!("faces[{f}][{k}]"),
-                        index,
-                        format!("a face's vertex index must be below the number of vertices ({n})"),
-                    ));
-                }
-            }
-            if face[0] == face[1] || face[1] == face[2] || face[0] == face[2] {
-                return Err(Error::invalid(
-                    format!("faces[{f}]"),
-                    format!("{face:?}"),
-                    "a face needs three different vertices",
-                ));
-            }
-        }
+        check_indices(&vertices, &faces)?;
         let area = |f: &[u32; 3]| {
             let [a, b, c] = f.map(|k| vertices[k as usize]);
             vec3::cross(vec3::sub(b, a), vec3::sub(c, a))
@@ -225,13 +198,7 @@ impl TriangleMesh {
             vec3::scale(1.0 / vec3::norm(c), c)
         }));
         let scale = vertices.iter().flatten().fold(0.0_f64, |m, c| m.max(c.abs()));
-        let mut valence = mesh_buffer(vertices.len(), triangles)?;
-        valence.resize(vertices.len(), 0u32);
-        for f in &faces {
-            for &k in f {
-                valence[k as usize] += 1;
-            }
-        }
+        let valence = vertex_valence(&vertices, &faces, triangles)?;
         let mut geometry = Geometry {
             vertices,
             faces,
@@ -245,15 +212,7 @@ impl TriangleMesh {
             valence,
         };
         geometry.build().ok_or_else(|| mesh_too_large(triangles))?;
-        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-        for &v in geometry.faces.iter().flatten() {
-            let p = geometry.vertices[v as usize];
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        geometry.bounds = (lo, hi);
+        geometry.bounds = bounds(&geometry.vertices, &geometry.faces);
         let side = match (closed, inside) {
             (false, _) => Side::Both,
             (true, false) => Side::Outside,
@@ -466,6 +425,65 @@ fn ray_hits_triangle(p: [f64; 3], d: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64
         return false;
     }
     inv * vec3::dot(e2, q) > 0.0
+}
+
+/// The checks of [`TriangleMesh::new`] before any face is kept: finite vertices, faces of
+/// three different vertices in range.
+fn check_indices(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<(), Error> {
+    for (v, p) in vertices.iter().enumerate() {
+        if let Some((k, value)) = vec3::first_non_finite(p) {
+            return Err(Error::invalid(
+                format!("vertices[{v}][{k}]"),
+                value,
+                "a mesh's vertices must be finite",
+            ));
+        }
+    }
+    let n = vertices.len();
+    for (f, face) in faces.iter().enumerate() {
+        for (k, &index) in face.iter().enumerate() {
+            if index as usize >= n {
+                return Err(Error::invalid(
+                    format!("faces[{f}][{k}]"),
+                    index,
+                    format!("a face's vertex index must be below the number of vertices ({n})"),
+                ));
+            }
+        }
+        if face[0] == face[1] || face[1] == face[2] || face[0] == face[2] {
+            return Err(Error::invalid(
+                format!("faces[{f}]"),
+                format!("{face:?}"),
+                "a face needs three different vertices",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// How many faces use each vertex (a buffer sized for a mesh of `triangles`).
+fn vertex_valence(vertices: &[[f64; 3]], faces: &[[u32; 3]], triangles: usize) -> Result<Vec<u32>, Error> {
+    let mut valence = mesh_buffer(vertices.len(), triangles)?;
+    valence.resize(vertices.len(), 0u32);
+    for f in faces {
+        for &k in f {
+            valence[k as usize] += 1;
+        }
+    }
+    Ok(valence)
+}
+
+/// The box around the vertices the faces use, m.
+fn bounds(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> ([f64; 3], [f64; 3]) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for &v in faces.iter().flatten() {
+        let p = vertices[v as usize];
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
 }
 
 #[cfg(test)]

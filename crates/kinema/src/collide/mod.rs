@@ -1,6 +1,6 @@
 //! The collide stage, stages 2–4 of a world step, and its kernels: detection (the grid and
 //! the neighbour lists, continuous detection, the contacts of particle pairs and colliders)
-//! and response (impulses, the end-of-step contact solve, or spring–dashpot forces), on flat
+//! and response (impulses, the end-of-step contact solve, or contact forces), on flat
 //! particle arrays.
 //!
 //! What runs in a step of the impulse model, each function with its file (under `collide/`
@@ -18,18 +18,18 @@
 //!                                     others held; the step's parabolas,
 //!                                     Paths::begin() (paths.rs); then the stage list
 //!                                     ImpulseStage::ALL (impulse/mod.rs), each stage timed:
-//!     list_stage()                    prepare() (impulse/impacts.rs): the neighbour list made
+//!     list_stage()                    prepare() (impulse/list.rs): the neighbour list made
 //!                                     to hold for the step's sweep, else rebuilt at x₀ by
 //!                                     NeighbourList::update() (neighbour_list.rs) →
 //!                                     Grid::prepare(), Grid::partners_from() (broad_phase.rs);
-//!                                     the restitution threshold; wake_up() (impulse/impacts.rs): a
-//!                                     force-free world's wake times
+//!                                     the restitution threshold; next_meetings()
+//!                                     (impulse/impacts.rs): a force-free world's meeting times
 //!     impacts_stage()                 impacts() (impulse/impacts.rs), with ccd: every first
-//!                                     impact, Scene::all_impacts() (events.rs), into the
+//!                                     impact, Surroundings::all_impacts() (events.rs), into the
 //!                                     queue; then in time order: contact_at(),
 //!                                     restitution_impulse() (response.rs), distribute()
 //!                                     (impulse/end_of_step.rs), the two particles' next
-//!                                     impacts, Scene::earliest()
+//!                                     impacts, Surroundings::earliest()
 //!     contacts_stage()                Paths::finish() (paths.rs): hit particles end on their
 //!                                     last parabola; end_contacts() (impulse/end_of_step.rs):
 //!                                     the contacts at the step's end, breadth first from the
@@ -45,14 +45,14 @@
 //!                                     shock stages: shock.rs levels(), order()); the
 //!                                     step's records by Records::replace()
 //!     apply_stage()                   distribute() (impulse/end_of_step.rs): each total onto
-//!                                     both particles; energy_books(): the energy the stages
+//!                                     both particles; energy_lost(): the energy the stages
 //!                                     took
 //!     settle_stage()                  settle() (impulse/end_of_step.rs): calm islands fall
 //!                                     asleep; max_overlap(): the overlap left;
 //!                                     Touches::end_step() (touch.rs): begin and end of touch,
 //!                                     when recorded (the impacts were noted by Touches::hit())
-//!     wake_stage()                    wake_up() (impulse/impacts.rs): the next steps' wake
-//!                                     times
+//!     meetings_stage()                next_meetings() (impulse/impacts.rs): the next steps'
+//!                                     meeting times
 //! ```
 //!
 //! The order matters: the impacts change the paths the end-of-step contacts are found on,
@@ -61,11 +61,11 @@
 //! `World.stage_times()` (the seed's detect, respond and distribute are sums of the same
 //! laps). The deepest call of a step, to the impulse of one contact in the solve, is eight
 //! calls below `World::step_once`: `collide` → `ImpulseModel::step` → `solve` →
-//! `islands::solve` → `Local::solve` → `soft_step` → `sweeps` → `Row::visit` (the last two
+//! `islands::solve` → `Local::solve` → `soft_step` → `passes` → `Row::visit` (the last two
 //! inlined into the soft step, so that seven are frames at run time). Their cost follows what
 //! the step touched: the touched particles are flags and a list (`marks.rs`), an island
 //! whose contacts the soft step would leave alone is not solved (`soft_step::idle`), and in
-//! a force-free world a parting contact that carried nothing is not carried into the next
+//! a force-free world a parting contact that bore nothing is not kept into the next
 //! step (`end_of_step.rs`).
 //!
 //! The force models (spring–dashpot, Hertz) act in stage 1 instead, as the last of the forces
@@ -78,16 +78,16 @@
 //! └ ContactForce::accumulate()         contact_force/force.rs: the other methods → pair_pass()
 //!   both: update_list() (contact_force/mod.rs) → NeighbourList::update() (a half list);
 //!   pair_forces() (contact_force/pairs.rs): pair_contact(), normal_force_parts()
-//!   (contact_force/law.rs) → spring_dashpot_force() (penalty.rs), tangent_of() with
-//!   friction; wall_contacts() (contact_force/contacts.rs) → Collider::contact()
+//!   (contact_force/law.rs) → spring_dashpot_force() (contact_force/spring_dashpot.rs),
+//!   tangent_of() with friction; wall_contacts() (contact_force/contacts.rs) → Collider::contact()
 //! ```
 //!
 //! With `CollisionParams::event_driven`, `World::advance` runs `World::advance_by_events`
 //! (`world/event_driven.rs`, `event_driven/`) instead of these steps.
 //!
 //! The test oracles, O(N²) and plain references that the tests check these paths against
-//! (`all_pairs`, `sphere_contacts`, `collider_contacts`, `PenaltyLaw`), are in `oracles.rs`,
-//! compiled for the tests only; `tests/map.rs` checks that every function the two maps above
+//! (`all_pairs`, `sphere_contacts`, `collider_contacts`, `SpringDashpotLaw`), are in
+//! `oracles.rs`, compiled for the tests only; `tests/map.rs` checks that every function the two maps above
 //! name is defined and called outside the tests.
 //!
 //! The contacts at a step's end are discrete: they see overlaps at the end of a step, and a
@@ -125,8 +125,9 @@ pub mod narrow_phase;
 pub(crate) mod neighbour_list;
 #[cfg(test)]
 pub(crate) mod oracles;
-pub mod penalty;
+pub(crate) mod passes;
 pub(crate) mod placement;
+pub(crate) mod quiet;
 pub(crate) mod records;
 pub mod response;
 mod roots;
@@ -136,10 +137,8 @@ pub(crate) mod soft_step;
 pub mod spin;
 pub(crate) mod stage;
 pub mod surface;
-pub(crate) mod sweeps;
 pub mod toi;
 pub mod touch;
-pub(crate) mod wake;
 
 mod grid_level;
 mod paths;
@@ -147,12 +146,12 @@ mod paths;
 pub use broad_phase::Grid;
 pub use colliders::{BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};
 pub use contact::{Contact, ContactReport, Partner};
+pub use contact_force::spring_dashpot::{damping_ratio, dashpot_coefficient, spring_dashpot_force};
 pub use domain::{Domain, Periodic};
 pub use groups::{GroupMasks, GROUPS};
 pub use mesh::{Side, TriangleMesh};
 pub use motion::{Motion, Pose, SurfaceVelocity};
 pub use narrow_phase::pair_contact;
-pub use penalty::{damping_ratio, dashpot_coefficient, spring_dashpot_force};
 pub use records::ContactRecord;
 pub use response::{restitution_impulse, Impulse, Material, MaterialTable};
 pub use toi::{toi_plane, toi_sphere_obstacle, toi_spheres};

@@ -1,6 +1,6 @@
 //! Morton order: positions sorted along a Z-order curve of cells, so that particles near in
 //! space are mostly near in memory (LAMMPS's `atom_modify sort`, HOOMD-blue's SFCPackTuner).
-//! The world sorts by it for the spring–dashpot force (`world/order.rs`), the event-driven
+//! The world sorts by it for the contact force (`world/order.rs`), the event-driven
 //! path for its own arrays (`event_driven/`).
 
 use rayon::prelude::*;

@@ -97,7 +97,7 @@ impl SurfaceVelocity {
 
     /// Where a point `x` (m) near the surface `back` s before it reaches this placement is
     /// seen from this placement: the surface's motion over those `back` s, steady at this
-    /// field, carried onto x. A translation adds V back; a turn also turns x by ω back about
+    /// field, applied to x. A translation adds V back; a turn also turns x by ω back about
     /// the centre where it was then, c − V back:
     ///
     /// ```text
@@ -106,7 +106,7 @@ impl SurfaceVelocity {
     ///
     /// (for a point of the surface itself, where that point is now: the continuous detection
     /// sees a particle's path from the collider placed at the step's end through this map).
-    pub fn carried(&self, x: [f64; 3], back: f64) -> [f64; 3] {
+    pub fn moved_with(&self, x: [f64; 3], back: f64) -> [f64; 3] {
         if self.angular == [0.0; 3] {
             return vec3::add(x, vec3::scale(back, self.at(x)));
         }

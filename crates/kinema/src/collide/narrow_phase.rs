@@ -21,7 +21,7 @@ use crate::vec3;
 ///
 /// `x`, `v`: positions (m) and velocities (m/s), 3 per particle; `radius`: m. Indices must
 /// be in range (the callers' lists hold them so). Every particle pair's contact in kinema is
-/// this function's: the end-of-step contacts of the impulse model, and the spring–dashpot
+/// this function's: the end-of-step contacts of the impulse model, and the contact force
 /// force's at each evaluation.
 pub fn pair_contact(
     i: usize,

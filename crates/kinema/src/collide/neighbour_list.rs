@@ -1,6 +1,6 @@
 //! A Verlet neighbour list with a skin: the candidate pairs of the contact searches, rebuilt
 //! only when the particles have moved far enough that something left out could touch. The
-//! spring–dashpot force tests its pairs at every evaluation; the impulse model's continuous
+//! contact force tests its pairs at every evaluation; the impulse model's continuous
 //! detection sweeps each step's paths against them (the skin then also covers the step's
 //! sweep, see `collide::events`).
 
@@ -90,7 +90,7 @@ pub(crate) struct NeighbourList {
     /// index.
     pub(crate) rows: Vec<Rows>,
     /// Whether this is a half list: particle i's row holds its partners j > i only. The
-    /// spring–dashpot force's list is one (each pair's force computed once, for both
+    /// contact force's list is one (each pair's force computed once, for both
     /// sides); the impulse model sweeps each particle against all its partners, and keeps
     /// a full one.
     pub(crate) half: bool,
@@ -109,7 +109,7 @@ pub(crate) struct NeighbourList {
     pub(crate) extent: [f64; 3],
     /// Builds so far.
     pub(crate) builds: usize,
-    /// The buffer (address, length) at which [`SpringDashpot::list_expired`](crate::collide::contact_force::SpringDashpot::list_expired) just found that
+    /// The buffer (address, length) at which [`ContactForceModel::list_expired`](crate::collide::contact_force::ContactForceModel::list_expired) just found that
     /// the list holds: the next update at that buffer, the world's force evaluation of the
     /// same step with nothing written in between, need not check again. Any update clears it.
     pub(crate) verified: Option<(usize, usize)>,
@@ -203,13 +203,40 @@ impl NeighbourList {
         }
         // (no pair collides: no pair search, only the colliders' candidates)
         let searched = filter.is_none_or(|f| !f.no_pairs()) && grid.prepare(x, radius, domain, skin)?;
+        self.build_rows(grid, (x, radius), domain, filter, skin, searched)?;
+        self.collider_candidates((x, radius), colliders, domain, filter, skin);
+        self.built_at.extend_from_slice(x);
+        let largest = |a: &[f64]| a.par_iter().map(|c| c.abs()).reduce(|| 0.0, f64::max);
+        let periods = domain
+            .periodic_box()
+            .map_or(0.0, |p| (0..3).filter(|&k| p.axes()[k]).map(|k| p.period(k)).sum());
+        self.skin = skin;
+        self.reach = reach;
+        self.extent = [largest(x).max(collider_scale), periods, largest(radius)];
+        self.allowance = self.allowance_now();
+        self.builds += 1;
+        Ok(())
+    }
+
+    /// The rows of a build with `skin` (m), chunk by chunk on all threads (`searched`: the
+    /// grid is prepared for a pair search; false: no pair collides). Errors: more entries
+    /// than the list's limit.
+    fn build_rows(
+        &mut self,
+        grid: &Grid,
+        (x, radius): (&[f64], &[f64]),
+        domain: &Domain,
+        filter: Option<Filter<'_>>,
+        skin: f64,
+        searched: bool,
+    ) -> Result<(), Error> {
         // The rows, chunk by chunk on all threads; each particle's row depends on the
         // positions only, so the list is the same for any number of threads. The entries are
         // counted as they come (into a shared count every 64 particles, so the threads rarely
         // meet on it), so that a list beyond its limit stops before it exhausts the
         // machine's memory (an abort Python could not catch).
+        let n = radius.len();
         self.rows.resize_with(n.div_ceil(CHUNK), Rows::default);
-        let grid = &*grid;
         let half = self.half;
         let entries = AtomicUsize::new(0);
         let limit = self
@@ -255,6 +282,19 @@ impl NeighbourList {
             );
             return Err(Error::out_of_memory(what, limit * std::mem::size_of::<u32>()));
         }
+        Ok(())
+    }
+
+    /// The collider candidates of a build with `skin` (m): each particle within the skin of
+    /// a collider (of every moving one), in particle order.
+    fn collider_candidates(
+        &mut self,
+        (x, radius): (&[f64], &[f64]),
+        colliders: &[Collider],
+        domain: &Domain,
+        filter: Option<Filter<'_>>,
+        skin: f64,
+    ) {
         self.walls.clear();
         if !colliders.is_empty() {
             // a box whose walls all lie along periodic axes has none: no particle's candidate
@@ -278,17 +318,6 @@ impl NeighbourList {
                 }
             }
         }
-        self.built_at.extend_from_slice(x);
-        let largest = |a: &[f64]| a.par_iter().map(|c| c.abs()).reduce(|| 0.0, f64::max);
-        let periods = domain
-            .periodic_box()
-            .map_or(0.0, |p| (0..3).filter(|&k| p.axes()[k]).map(|k| p.period(k)).sum());
-        self.skin = skin;
-        self.reach = reach;
-        self.extent = [largest(x).max(collider_scale), periods, largest(radius)];
-        self.allowance = self.allowance_now();
-        self.builds += 1;
-        Ok(())
     }
 
     /// Whether there is a list and the two largest displacements since its build sum to less
@@ -325,34 +354,6 @@ impl NeighbourList {
             .reduce(|| (0.0, 0.0, false), top);
         !nan && first.sqrt() + second.sqrt() < self.allowance
     }
-
-    /// Follows a renumbering of the particles, `new_of_old[i]` the new index of particle i:
-    /// rows, partners, walls and the build's positions move with their particles (the list
-    /// stays the same list, in the new numbering).
-    pub(crate) fn renumber(&mut self, new_of_old: &[u32], old_of_new: &[u32]) {
-        self.verified = None;
-        if self.built_at.is_empty() {
-            return;
-        }
-        let old = std::mem::take(&mut self.rows);
-        if self.half {
-            self.rows = reoriented(&old, new_of_old);
-        } else {
-            self.rows = renumbered(&old, new_of_old, old_of_new);
-        }
-        for w in &mut self.walls {
-            w.0 = new_of_old[w.0] as usize;
-        }
-        self.walls.sort_unstable();
-        let built: Vec<f64> = old_of_new
-            .iter()
-            .flat_map(|&o| {
-                let o = o as usize;
-                [self.built_at[3 * o], self.built_at[3 * o + 1], self.built_at[3 * o + 2]]
-            })
-            .collect();
-        self.built_at = built;
-    }
 }
 
 /// Keeps, of `partners[from..]`, those for which `collides` holds, in their order.
@@ -369,144 +370,6 @@ fn retain_colliding(partners: &mut Vec<u32>, from: usize, collides: impl Fn(usiz
 }
 
 impl NeighbourList {
-    /// Follows a removal of particles (`new_of_old[i]`: particle i's new index,
-    /// [`GONE`](crate::limits::GONE) for a removed one; the survivors keep their order):
-    /// the pairs and collider candidates of the survivors stay, renumbered, with the build's
-    /// positions. The list still holds what it held: every pair of survivors within reach at
-    /// the build is listed (a removal takes pairs away, never adds one), and a half list
-    /// stays a half one (the renumbering keeps the order of indices).
-    pub(crate) fn retain_survivors(&mut self, new_of_old: &[u32]) {
-        use crate::limits::GONE;
-        self.verified = None;
-        if self.built_at.is_empty() {
-            return;
-        }
-        let old_of_new: Vec<u32> = (0..new_of_old.len() as u32)
-            .filter(|&o| new_of_old[o as usize] != GONE)
-            .collect();
-        let old = std::mem::take(&mut self.rows);
-        self.rows = renumbered(&old, new_of_old, &old_of_new);
-        self.walls.retain_mut(|w| match new_of_old[w.0] {
-            GONE => false,
-            k => {
-                w.0 = k as usize;
-                true
-            }
-        });
-        self.built_at = old_of_new
-            .iter()
-            .flat_map(|&o| {
-                let o = 3 * o as usize;
-                [self.built_at[o], self.built_at[o + 1], self.built_at[o + 2]]
-            })
-            .collect();
-    }
-}
-
-impl NeighbourList {
-    /// The most particles × newborns [`NeighbourList::admit`] tests one by one; more
-    /// newborns than that at once are cheaper to find by a new build on the grid.
-    pub(crate) const ADMIT_MAX_TESTS: usize = 1 << 24;
-
-    /// Follows a birth: particles `start..` of `x`, `radius` (m) are new, the others are the
-    /// list's own. Each newborn k is listed with every particle i that is within
-    /// r_i + r_k + s of it, i's position taken where the build saw it (a newborn's: where it
-    /// is born), and as a candidate of every collider within s; its build position is where
-    /// it is now. That is the build's own criterion against the build's positions, so the
-    /// argument of the type's doc carries over unchanged: a newborn has moved 0 since its
-    /// "build", and a pair left out was at least r_i + r_k + s apart in build positions. The
-    /// rounding allowance grows with the scale if the newborns lie farther out. The rows stay
-    /// ascending (a newborn's index exceeds every old one), so the contacts are summed in the
-    /// order a new build would give.
-    ///
-    /// Returns false, leaving no list (the next evaluation builds one), when there is none to
-    /// extend or the newborns are too many to test one by one ([`Self::ADMIT_MAX_TESTS`]).
-    /// With a `filter` the pairs that do not collide are left out, as a build leaves them.
-    pub(crate) fn admit(
-        &mut self,
-        x: &[f64],
-        radius: &[f64],
-        colliders: &[Collider],
-        domain: &Domain,
-        filter: Option<Filter<'_>>,
-        start: usize,
-    ) -> bool {
-        self.verified = None;
-        let n = radius.len();
-        let fresh = n - start;
-        if self.built_at.len() != 3 * start || fresh.saturating_mul(n) > Self::ADMIT_MAX_TESTS || n > u32::MAX as usize {
-            self.built_at.clear();
-            return false;
-        }
-        if fresh == 0 {
-            return true;
-        }
-        let skin = self.skin;
-        self.built_at.extend_from_slice(&x[3 * start..]);
-        let at = |i: usize, b: &[f64]| [b[3 * i], b[3 * i + 1], b[3 * i + 2]];
-        // The new pairs (i, k), i < k, k a newborn, by the row of i.
-        let mut added: Vec<(u32, u32)> = Vec::new();
-        for k in start..n {
-            let xk = at(k, &self.built_at);
-            for i in 0..k {
-                let d = domain.displacement(xk, at(i, &self.built_at));
-                let reach = radius[i] + radius[k] + skin;
-                if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach && filter.is_none_or(|f| f.pair(i, k)) {
-                    added.push((i as u32, k as u32));
-                }
-            }
-        }
-        added.sort_unstable();
-        // Each chunk's rows again, with the additions after each particle's old partners.
-        self.rows.resize_with(n.div_ceil(CHUNK), Rows::default);
-        let mut next = added.iter().peekable();
-        for (c, rows) in self.rows.iter_mut().enumerate() {
-            let first = c * CHUNK;
-            let end = ((c + 1) * CHUNK).min(n);
-            if next.peek().is_none_or(|&&(i, _)| i as usize >= end) && rows.len() == end - first {
-                continue; // nothing new in this chunk
-            }
-            let old = std::mem::take(rows);
-            rows.start.push(0);
-            for i in first..end {
-                if i - first < old.len() {
-                    rows.partners.extend_from_slice(old.of(i - first));
-                }
-                while let Some(&&(a, b)) = next.peek() {
-                    if a as usize != i {
-                        break;
-                    }
-                    rows.partners.push(b);
-                    next.next();
-                }
-                rows.start.push(rows.partners.len() as u32);
-            }
-        }
-        if !colliders.is_empty() {
-            let walled: Vec<bool> = active_walls(colliders, domain).iter().map(|a| a.iter().any(|&w| w)).collect();
-            for i in start..n {
-                for (k, c) in colliders
-                    .iter()
-                    .enumerate()
-                    .filter(|&(k, _)| walled[k] && filter.is_none_or(|f| f.wall(i, k)))
-                {
-                    let mut near = c.is_moving();
-                    if !near {
-                        c.for_each_touch(at(i, x), radius[i], skin, |_| near = true);
-                    }
-                    if near {
-                        self.walls.push((i, k));
-                    }
-                }
-            }
-        }
-        let largest = |a: &[f64]| a.iter().fold(0.0_f64, |m, c| m.max(c.abs()));
-        self.extent[0] = self.extent[0].max(largest(&x[3 * start..]));
-        self.extent[2] = self.extent[2].max(largest(&radius[start..]));
-        self.allowance = self.allowance_now();
-        true
-    }
-
     /// s − reach − 10⁻¹² scale, scale = the largest |coordinate| + the periods + 2 r_max + s
     /// (the type's doc; contacts that act up to `reach` past touching are all listed while
     /// the two largest moves sum to less than s − reach).
@@ -514,79 +377,6 @@ impl NeighbourList {
         let [coordinates, periods, r_max] = self.extent;
         self.skin - self.reach - 1e-12 * (coordinates + periods + 2.0 * r_max + self.skin)
     }
-}
-
-/// The rows in the new numbering, particle i's being old particle `old_of_new[i]`'s row,
-/// renumbered, without the partners that are gone ([`GONE`](crate::limits::GONE) in
-/// `new_of_old`), sorted again (a full list after any renumbering; any list after a
-/// removal, which keeps the order of indices).
-fn renumbered(old: &[Rows], new_of_old: &[u32], old_of_new: &[u32]) -> Vec<Rows> {
-    use crate::limits::GONE;
-    let n = old_of_new.len();
-    let mut rows: Vec<Rows> = Vec::new();
-    rows.resize_with(n.div_ceil(CHUNK), Rows::default);
-    rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
-        rows.start.clear();
-        rows.partners.clear();
-        rows.start.push(0);
-        for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-            let o = old_of_new[i] as usize;
-            let first = rows.partners.len();
-            let kept = old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]);
-            rows.partners.extend(kept.filter(|&j| j != GONE));
-            rows.partners[first..].sort_unstable();
-            rows.start.push(rows.partners.len() as u32);
-        }
-    });
-    rows
-}
-
-/// A half list's rows in the new numbering. A pair (a, b), a < b, sat in a's row; in the new
-/// numbering it belongs in the row of the lower of its two new indices, which may be b's: so
-/// the rows are made again from the pairs, by a counting sort on that lower index, and each
-/// row sorted (the same rows, in the same order, as a build at the same positions would list).
-fn reoriented(old: &[Rows], new_of_old: &[u32]) -> Vec<Rows> {
-    let n = new_of_old.len();
-    let pairs = || {
-        old.iter().enumerate().flat_map(move |(c, rows)| {
-            (0..rows.len()).flat_map(move |l| {
-                let a = new_of_old[c * CHUNK + l];
-                rows.of(l).iter().map(move |&b| {
-                    let b = new_of_old[b as usize];
-                    (a.min(b) as usize, a.max(b))
-                })
-            })
-        })
-    };
-    let mut count = vec![0u32; n];
-    for (lo, _) in pairs() {
-        count[lo] += 1;
-    }
-    // where each particle's partners start in its chunk's `partners`
-    let mut rows: Vec<Rows> = Vec::new();
-    rows.resize_with(n.div_ceil(CHUNK), Rows::default);
-    let mut cursor = vec![0u32; n];
-    for (c, rows) in rows.iter_mut().enumerate() {
-        rows.start.push(0);
-        let mut at = 0;
-        for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-            cursor[i] = at;
-            at += count[i];
-            rows.start.push(at);
-        }
-        rows.partners.resize(at as usize, 0);
-    }
-    for (lo, hi) in pairs() {
-        rows[lo / CHUNK].partners[cursor[lo] as usize] = hi;
-        cursor[lo] += 1;
-    }
-    rows.par_iter_mut().for_each(|rows| {
-        for l in 0..rows.len() {
-            let (a, b) = (rows.start[l] as usize, rows.start[l + 1] as usize);
-            rows.partners[a..b].sort_unstable();
-        }
-    });
-    rows
 }
 
 /// Which walls of each collider exist: a box's walls along periodic axes do not.
@@ -619,52 +409,8 @@ fn wall_active(domain: &Domain, plane: &Plane) -> bool {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
+mod upkeep;
 
-    #[test]
-    fn a_list_beyond_its_entry_limit_is_an_out_of_memory_error_and_no_list() {
-        // 300 particles of radius 1 within a unit cube: every one is every other's partner,
-        // 300 × 299 = 89,700 entries; a limit of 10,000 stops the build (counted every 64
-        // particles, so it stops early rather than filling all rows)
-        let n = 300;
-        let x: Vec<f64> = (0..n)
-            .flat_map(|k| [(k as f64 * 0.618) % 1.0, (k as f64 * 0.755) % 1.0, (k as f64 * 0.57) % 1.0])
-            .collect();
-        let radius = vec![1.0; n];
-        let domain = Domain::open(3).unwrap();
-        let mut grid = Grid::new();
-        let mut list = NeighbourList {
-            entry_limit: Some(10_000),
-            ..NeighbourList::default()
-        };
-        let err = list
-            .update(&mut grid, &x, &radius, &[], &domain, None, || ListBuild {
-                skin: 0.1,
-                reach: 0.0,
-                collider_scale: 0.0,
-            })
-            .unwrap_err();
-        assert!(matches!(err, Error::OutOfMemory { .. }), "{err}");
-        assert!(
-            err.to_string()
-                .starts_with("the contact list of 300 particles (over 33 neighbours per particle"),
-            "{err}"
-        );
-        assert!(
-            err.to_string().contains("within r_i + r_j + 0.100 m, the list's skin"),
-            "{err}"
-        );
-        assert!(list.rows.is_empty() && list.built_at.is_empty(), "no list is left behind");
-        list.entry_limit = None;
-        list.update(&mut grid, &x, &radius, &[], &domain, None, || ListBuild {
-            skin: 0.1,
-            reach: 0.0,
-            collider_scale: 0.0,
-        })
-        .unwrap();
-        let entries: usize = list.rows.iter().map(|r| r.partners.len()).sum();
-        assert_eq!(entries, n * (n - 1));
-    }
-}
+#[cfg(test)]
+#[path = "tests/neighbour_list.rs"]
+mod tests;

@@ -6,19 +6,19 @@
 //!   [`Grid::partners`], [`Grid::partners_from`]), from which the neighbour lists are built,
 //!   must give exactly its pairs ([`grid_pairs`] gathers them as the lists do);
 //! - [`sphere_contacts`] and [`collider_contacts`]: every contact of a list of pairs and of
-//!   the colliders, in the order of a full search (the contacts the spring–dashpot force's
+//!   the colliders, in the order of a full search (the contacts the contact force's
 //!   neighbour list finds at each evaluation must be these);
-//! - [`PenaltyLaw`]: the linear spring–dashpot law on its own, whose restitution the tests
+//! - [`SpringDashpotLaw`]: the linear spring–dashpot law on its own, whose restitution the tests
 //!   measure, and [`restitution_of_damping`], the inverse of
-//!   [`damping_ratio`](super::penalty::damping_ratio).
+//!   [`damping_ratio`](super::contact_force::spring_dashpot::damping_ratio).
 //!
 //! The tests that use them, and the test that the map of `collide/mod.rs` names only what a
 //! step calls, are included at the end (`collide/tests/`).
 
 use super::broad_phase::{check_inputs, touches, Grid};
 use super::contact::Contact;
+use super::contact_force::spring_dashpot::{damping_ratio, dashpot_coefficient, spring_dashpot_force};
 use super::domain::Domain;
-use super::penalty::{damping_ratio, dashpot_coefficient, spring_dashpot_force};
 use super::{pair_contact, Collider};
 use crate::error::Error;
 use crate::particles::check_per_particle;
@@ -168,7 +168,7 @@ pub(crate) fn collider_contacts(
 
 /// The restitution of the contact oscillator with damping ratio ζ (≥ 0):
 /// e = exp(−ζ π / √(1 − ζ²)) for ζ < 1, 0 from ζ = 1 on (no rebound). The inverse of
-/// [`damping_ratio`] (see `collide/penalty.rs` for the derivation).
+/// [`damping_ratio`] (see `collide/contact_force/spring_dashpot.rs` for the derivation).
 pub(crate) fn restitution_of_damping(zeta: f64) -> f64 {
     if zeta >= 1.0 {
         0.0
@@ -178,16 +178,16 @@ pub(crate) fn restitution_of_damping(zeta: f64) -> f64 {
 }
 
 /// A linear spring–dashpot contact law with stiffness k_n and the damping that gives a
-/// restitution e for every pair (the derivation in `collide/penalty.rs`): the law alone, on
-/// a list of contacts, whose restitution the tests measure. Its force is
+/// restitution e for every pair (the derivation in `collide/contact_force/spring_dashpot.rs`):
+/// the law alone, on a list of contacts, whose restitution the tests measure. Its force is
 /// [`spring_dashpot_force`], the one the world's contact force calls for each contact.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct PenaltyLaw {
+pub(crate) struct SpringDashpotLaw {
     stiffness: f64,
     zeta: f64,
 }
 
-impl PenaltyLaw {
+impl SpringDashpotLaw {
     /// A law of normal stiffness `stiffness` (k_n, N/m, finite, > 0) and restitution
     /// `restitution` (e ∈ [0, 1]).
     pub(crate) fn new(stiffness: f64, restitution: f64) -> Result<Self, Error> {
@@ -198,7 +198,7 @@ impl PenaltyLaw {
                 "the contact stiffness must be finite and > 0 N/m",
             ));
         }
-        Ok(PenaltyLaw {
+        Ok(SpringDashpotLaw {
             stiffness,
             zeta: damping_ratio(restitution)?,
         })
@@ -210,7 +210,7 @@ impl PenaltyLaw {
     }
 
     /// ω₀² = k_n / m_eff, 1/s², of a contact with reduced mass `m_eff` (kg). With inverse
-    /// masses, ω₀² = k_n (w_i + w_j), see [`PenaltyLaw::contact_omega_squared`].
+    /// masses, ω₀² = k_n (w_i + w_j), see [`SpringDashpotLaw::contact_omega_squared`].
     pub(crate) fn omega_squared(&self, m_eff: f64) -> f64 {
         self.stiffness / m_eff
     }
@@ -311,7 +311,7 @@ mod broad_phase_finds_every_pair;
 mod impulse_list;
 #[path = "tests/map.rs"]
 mod map;
-#[path = "tests/penalty_contacts_in_a_world.rs"]
-mod penalty_contacts_in_a_world;
-#[path = "tests/penalty_restitution_matches_request.rs"]
-mod penalty_restitution_matches_request;
+#[path = "tests/spring_dashpot_contacts_in_a_world.rs"]
+mod spring_dashpot_contacts_in_a_world;
+#[path = "tests/spring_dashpot_restitution_matches_request.rs"]
+mod spring_dashpot_restitution_matches_request;

@@ -1,9 +1,9 @@
 //! Placements the collide stage cannot resolve, refused before the first step that meets them.
 //!
 //! Both contact models push overlapping particles apart along the line of centres: the
-//! impulse model projects the overlap away at the end of the step, the spring–dashpot model
-//! pushes with k_n·δ. That is sound while the overlap δ = r_i + r_j − d is a fraction of the
-//! radii. It is not when the centre of one particle lies inside the other (d < max(r_i, r_j)):
+//! impulse model projects the overlap away at the end of the step, the force models
+//! (spring–dashpot, Hertz) push with k_n·δ. That is sound while the overlap δ = r_i + r_j − d
+//! is a fraction of the radii. It is not when the centre of one particle lies inside the other (d < max(r_i, r_j)):
 //! the normal (x_i − x_j)/d is then the accident of where the centres fell (undefined for
 //! coincident particles, d = 0), the push-out of a pile of them chains into a displacement of
 //! metres in one step, and every particle of a cluster of N coincident ones touches every
@@ -45,7 +45,7 @@ pub const TOLERANCE: f64 = 1e-9;
 pub enum Rule {
     /// The impulse model: a centre inside the other particle, d < max(r_i, r_j).
     CentreInside,
-    /// The spring–dashpot model: coincident centres, d ≤ TOLERANCE · (r_i + r_j).
+    /// The force models: coincident centres, d ≤ TOLERANCE · (r_i + r_j).
     Coincident,
 }
 
@@ -65,7 +65,7 @@ pub struct Placed<'a> {
 /// Overlaps a contact model resolves but that start the run with a push: particles
 /// overlapping each other, or a collider's surface, by more than [`NOTICE`] of the lengths
 /// involved. The collisions push them apart in the first steps (the impulse model removes
-/// the overlap, the spring–dashpot model pushes with k_n δ), which sets them moving: worth a
+/// the overlap, the force models push with k_n δ), which sets them moving: worth a
 /// warning, not a refusal.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overlaps {
@@ -85,6 +85,60 @@ struct Deepest {
     depth: f64,
 }
 
+/// What a check found so far: the placements refused (how many, the deepest) and the
+/// overlaps noticed.
+#[derive(Default)]
+struct Found {
+    count: usize,
+    deepest: Option<Deepest>,
+    shallow: Overlaps,
+    shallowest_depth: f64,
+}
+
+impl Found {
+    /// Notes a refused placement of `depth`, described by `what`: whether the count is full.
+    fn note(&mut self, depth: f64, what: &dyn Fn() -> String) -> bool {
+        self.count += 1;
+        if self.deepest.as_ref().is_none_or(|d| depth > d.depth) {
+            self.deepest = Some(Deepest { what: what(), depth });
+        }
+        self.count >= COUNT_LIMIT
+    }
+
+    /// Notices an accepted overlap of `depth`, described by `what`.
+    fn notice(&mut self, depth: f64, what: &dyn Fn() -> String) {
+        if self.shallow.count < COUNT_LIMIT {
+            self.shallow.count += 1;
+        }
+        if depth > self.shallowest_depth {
+            self.shallowest_depth = depth;
+            self.shallow.deepest = Some(what());
+        }
+    }
+
+    /// The check's answer: the error naming the deepest refused placement, else the overlaps.
+    fn result(self) -> Result<Overlaps, Error> {
+        match self.deepest {
+            None => Ok(self.shallow),
+            Some(d) => Err(Error::Placement {
+                deepest: d.what,
+                count: match self.count {
+                    1 => "the one placement".to_string(),
+                    c if c >= COUNT_LIMIT => format!("the deepest of at least {COUNT_LIMIT} placements"),
+                    c => format!("the deepest of {c} placements"),
+                },
+            }),
+        }
+    }
+}
+
+impl Placed<'_> {
+    /// The user's index of particle i.
+    fn user(&self, i: usize) -> usize {
+        self.user_of.map_or(i, |u| u[i] as usize)
+    }
+}
+
 /// Checks the particles of `place` against each other (in `domain`, periodic images
 /// included) by `rule` and against `colliders` (a centre inside a sphere obstacle, behind a
 /// plane or outside a box).
@@ -98,50 +152,34 @@ pub fn check(
     colliders: &[Collider],
     rule: Rule,
 ) -> Result<Overlaps, Error> {
-    let Placed {
-        x,
-        radius,
-        from,
-        user_of,
-        filter,
-    } = *place;
-    let n = radius.len();
     // First what the neighbour list refuses at its build, whose words say more about such a
     // crowd than its deepest pair: radii too large for the periodic cell or the box.
-    domain.check_radii(radius)?;
+    domain.check_radii(place.radius)?;
     for c in colliders {
         if let Collider::Box(b) = c {
-            b.check_fill(domain.dim(), x, radius)?;
+            b.check_fill(domain.dim(), place.x, place.radius)?;
         }
     }
-    let user = |i: usize| user_of.map_or(i, |u| u[i] as usize);
-    let mut count = 0usize;
-    let mut deepest: Option<Deepest> = None;
-    let mut note = |depth: f64, what: &dyn Fn() -> String| {
-        count += 1;
-        if deepest.as_ref().is_none_or(|d| depth > d.depth) {
-            deepest = Some(Deepest { what: what(), depth });
-        }
-        count >= COUNT_LIMIT
-    };
-    let mut full = false;
-    let mut shallow = Overlaps::default();
-    let mut shallowest_depth = 0.0;
-    let mut notice = |depth: f64, what: &dyn Fn() -> String| {
-        if shallow.count < COUNT_LIMIT {
-            shallow.count += 1;
-        }
-        if depth > shallowest_depth {
-            shallowest_depth = depth;
-            shallow.deepest = Some(what());
-        }
-    };
-    // Particles against particles: a refused pair is also a touching one (d < r_i + r_j),
-    // so the grid's partners are the candidates; a pair is looked at from its later index
-    // among those checked (i ≥ from, and j < from or j < i).
+    let mut found = Found::default();
+    let full = check_pairs(grid, place, domain, rule, &mut found)?;
+    if !full {
+        check_colliders(place, domain, colliders, &mut found);
+    }
+    found.result()
+}
+
+/// Particles against particles: a refused pair is also a touching one (d < r_i + r_j),
+/// so the grid's partners are the candidates; a pair is looked at from its later index
+/// among those checked (i ≥ from, and j < from or j < i). Whether the count of refused
+/// placements is full.
+fn check_pairs(grid: &mut Grid, place: &Placed<'_>, domain: &Domain, rule: Rule, found: &mut Found) -> Result<bool, Error> {
+    let Placed {
+        x, radius, from, filter, ..
+    } = *place;
+    let n = radius.len();
     if from < n && grid.prepare(x, radius, domain, 0.0)? {
         let mut out = Vec::new();
-        'particles: for i in from..n {
+        for i in from..n {
             out.clear();
             grid.partners(i, x, radius, domain, 0.0, &mut out);
             for &j in &out {
@@ -160,12 +198,12 @@ pub fn check(
                 };
                 let sum = radius[i] + radius[j];
                 if !refused && d < sum * (1.0 - NOTICE) {
-                    let (a, b) = if user(i) < user(j) { (i, j) } else { (j, i) };
-                    notice((sum - d) / sum, &|| {
+                    let (a, b) = if place.user(i) < place.user(j) { (i, j) } else { (j, i) };
+                    found.notice((sum - d) / sum, &|| {
                         format!(
                             "particles {} and {} overlap by {} m (radii {} and {} m)",
-                            user(a),
-                            user(b),
+                            place.user(a),
+                            place.user(b),
                             short(sum - d),
                             radius[a],
                             radius[b]
@@ -173,30 +211,35 @@ pub fn check(
                     });
                 }
                 if refused {
-                    let (a, b) = if user(i) < user(j) { (i, j) } else { (j, i) };
+                    let (a, b) = if place.user(i) < place.user(j) { (i, j) } else { (j, i) };
                     let words = || {
                         format!(
                             "particles {} and {} are {} m apart (radii {} and {} m)",
-                            user(a),
-                            user(b),
+                            place.user(a),
+                            place.user(b),
                             short(d),
                             radius[a],
                             radius[b]
                         )
                     };
-                    full = note(1.0 - d / bound.max(f64::MIN_POSITIVE), &words);
-                    if full {
-                        break 'particles;
+                    if found.note(1.0 - d / bound.max(f64::MIN_POSITIVE), &words) {
+                        return Ok(true);
                     }
                 }
             }
         }
     }
-    // Particles against colliders: the centre on the wrong side of a surface.
-    'colliders: for i in from..n {
-        if full {
-            break;
-        }
+    Ok(false)
+}
+
+/// Particles against colliders: the centre on the wrong side of a surface (refused), or
+/// the sphere into the surface (noticed).
+fn check_colliders(place: &Placed<'_>, domain: &Domain, colliders: &[Collider], found: &mut Found) {
+    let Placed {
+        x, radius, from, filter, ..
+    } = *place;
+    let n = radius.len();
+    for i in from..n {
         let p = vec3::get(x, i);
         let slack = TOLERANCE * (radius[i] + vec3::norm(p));
         for (k, c) in colliders.iter().enumerate() {
@@ -252,8 +295,8 @@ pub fn check(
                     }
                 });
                 if depth > NOTICE * radius[i] {
-                    let u = user(i);
-                    notice(depth / radius[i], &|| {
+                    let u = place.user(i);
+                    found.notice(depth / radius[i], &|| {
                         format!(
                             "particle {u} overlaps colliders[{k}] by {} m (radius {} m)",
                             short(depth),
@@ -263,25 +306,14 @@ pub fn check(
                 }
             }
             if let Some((depth, words)) = inside {
-                let u = user(i);
-                if note(depth, &|| {
+                let u = place.user(i);
+                if found.note(depth, &|| {
                     format!("particle {u}'s centre lies inside colliders[{k}] ({words})")
                 }) {
-                    break 'colliders;
+                    return;
                 }
             }
         }
-    }
-    match deepest {
-        None => Ok(shallow),
-        Some(d) => Err(Error::Placement {
-            deepest: d.what,
-            count: match count {
-                1 => "the one placement".to_string(),
-                c if c >= COUNT_LIMIT => format!("the deepest of at least {COUNT_LIMIT} placements"),
-                c => format!("the deepest of {c} placements"),
-            },
-        }),
     }
 }
 

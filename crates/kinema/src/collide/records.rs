@@ -6,9 +6,9 @@
 //! A record is made at the end of a step for each end-of-step contact the step keeps (a
 //! touching pair, a speculative one within the margin, a particle against a collider), and
 //! it holds the solve stage's total impulse of that contact (N·s, the world frame: the
-//! next step's **warm start**) and whether its final total carried load (continuous
+//! next step's **warm start**) and whether its final total bore load (continuous
 //! detection then treats an approach of the pair as a resting contact, not an impact:
-//! `events::Scene::resting`). The records survive the neighbour list's rebuilds (they
+//! `events::Surroundings::resting`). The records survive the neighbour list's rebuilds (they
 //! are keyed by particles, not by the list) and go to sleep and wake with their island
 //! (`collide/sleep.rs`); a checkpoint saves them (`World::collision_carry`); removing and
 //! adding particles renumbers them (`ImpulseModel::take_contacts_renumbered`).
@@ -24,7 +24,7 @@
 //! floor then started cold.) A key with the feature touched (Box2D's feature ids) would
 //! match a corner's contacts exactly also while its set of walls changes; measured, it
 //! did not pay: on the demo's heap (16 seeds at 60 Hz) 15 % more steps at the solve's
-//! sweep cap, 3 seeds awake after 4 s against 1 (5 seeds at 1 ms: 9 % more); a contact
+//! pass cap, 3 seeds awake after 4 s against 1 (5 seeds at 1 ms: 9 % more); a contact
 //! that a wall's changed record left cold costs less than one that an exact record
 //! pushes with the impulse of its last touch.
 //!
@@ -58,7 +58,8 @@ pub struct ContactRecord {
     /// The solve stage's total impulse on i in the last step, N·s (world frame): the warm
     /// start of the next.
     pub impulse: [f64; 3],
-    /// Whether its final total in that step was not zero (it carried load).
+    /// Whether its final total in that step was not zero (it bore load; `carried` is the name
+    /// the binding and the checkpoints use).
     pub carried: bool,
 }
 
@@ -70,8 +71,8 @@ impl ContactRecord {
     }
 
     /// The record of a contact that holds `impulse` (N·s) from its solve stage, taken to
-    /// have carried load if that is not zero (a sleeping island's record as it wakes; a
-    /// checkpoint's written before the records kept whether they carried).
+    /// have borne load if that is not zero (a sleeping island's record as it wakes; a
+    /// checkpoint's written before the records kept whether they bore load).
     pub fn loaded(i: usize, other: Partner, impulse: [f64; 3]) -> ContactRecord {
         ContactRecord {
             i,
@@ -134,12 +135,12 @@ impl Records {
     }
 
     /// Whether the pair of i and `other` has a record (without `loaded`), or one that
-    /// carried load (with). Against a collider with several records (a box's walls in a
+    /// bore load (with). Against a collider with several records (a box's walls in a
     /// corner), the record of its first feature answers: which wall an impact strikes is not
     /// in the key. (Measured on the 5 × 5 column of `benchmarks/piles.py`, deep3d at 1 ms: with
-    /// the first, 14.1 s and 2,060 steps at the sweep cap; with the last, what a search by
+    /// the first, 14.1 s and 2,060 steps at the pass cap; with the last, what a search by
     /// key used to find, 19.6 s and 2,521; with any of them, 21.3 s and 2,730: an impact on a
-    /// side wall taken as resting because the floor carries. Columns of 750 of three other
+    /// side wall taken as resting because the floor bears the load. Columns of 750 of three other
     /// seeds, 4 s: the first 6.6, 9.3 and 7.0 s, all asleep; the last 5.5, 12.3 and 11.4 s,
     /// two of them awake; the search by key 8.2, 9.2 and 10.9 s. A key with the feature
     /// would answer exactly.)

@@ -18,7 +18,7 @@
 //!
 //! Against a moving collider, v_j is its surface's velocity at the contact
 //! (`Contact::wall_velocity`): the law acts on the relative velocity, and the surface does
-//! work on the particle, which the energy books (the particles' kinetic energy lost) count.
+//! work on the particle, which the energy lost (the particles' kinetic energy lost) counts.
 //!
 //! Without spin, particles have no rotational inertia, so a tangential impulse j_t changes the
 //! tangential relative velocity u_t by (w_i + w_j) j_t, the same effective mass as along the

@@ -3,10 +3,10 @@
 //! the `animation` accuracy) visit an island's supports, bottom up, and which side of each
 //! they hold still.
 //!
-//! Projected Gauss–Seidel carries a load one contact per sweep, so a pile n contacts deep
-//! needs of the order of n² sweeps to pass its weight down to the floor; cut off earlier,
-//! each layer sinks into the one below by what the sweeps left unresolved, and a deep pile
-//! at a large step never rests (a 60-deep column at 60 Hz: 20 % of r after 5 s, the sweeps
+//! Projected Gauss–Seidel moves a load one contact per pass, so a pile n contacts deep
+//! needs of the order of n² passes to bring its weight down to the floor; cut off earlier,
+//! each layer sinks into the one below by what the passes left unresolved, and a deep pile
+//! at a large step never rests (a 60-deep column at 60 Hz: 20 % of r after 5 s, the passes
 //! at their cap of 100 in 293 of 300 steps). Shock propagation takes the pile as levels:
 //! level 0 the particles only a collider (or a pinned particle) holds up, and each other
 //! particle one level above the highest of its supports. Visiting the levels bottom up, each
@@ -16,18 +16,18 @@
 //! "Holds up" is read from the forces: partner p supports particle q across a touching
 //! contact of normal n (on q) when n points against q's acceleration a_q by more than
 //! [`SUPPORT_COSINE`] of |a_q| (under gravity: a contact within about 75° of vertical, q
-//! above). Side contacts hold nothing up and are left to the sweeps, and a particle no chain
+//! above). Side contacts hold nothing up and are left to the passes, and a particle no chain
 //! of supports from the ground reaches (a ball in flight) takes no part.
 //!
 //! The shock only pushes: each contact's push starts at 0 and stays ≥ 0 along n, with no
 //! friction, so it stops what sinks and nothing else. Holding the sides of a pile still as
 //! well (Guendelman's levels over every contact) over-constrains a packed pile: a grain wedged
-//! between its supports cannot also be pushed sideways, the sweeps of a level never
+//! between its supports cannot also be pushed sideways, the passes of a level never
 //! converged, and a 2D pour still overlapped by 41 % of r at 60 Hz.
 //!
 //! What it costs in physics: a support held still does not feel the reaction of the particle
 //! it stops, so the shock's pushes conserve no momentum (the ground takes it up), and the
-//! collider books do not see them; the energy books do (they are measured from the states).
+//! collider books do not see them; the energy lost does (it is measured from the states).
 //! It is the `animation` accuracy's part, not the `physics` grade's.
 
 use crate::error::Error;
@@ -36,12 +36,12 @@ use crate::error::Error;
 /// (docs/collisions.md, "The accuracy setting"). The step is the other half of the setting.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum Accuracy {
-    /// `physics`: momentum exchanged by action and reaction only, up to 100 sweeps of the
+    /// `physics`: momentum exchanged by action and reaction only, up to 100 passes of the
     /// solve and 30 of the relax a step; at 1 ms piles rest at 0.2–0.3 % of r.
     #[default]
     Physics,
     /// `animation`: shock propagation (`collide/shock.rs`: the pile's levels resolved bottom
-    /// up, each on the still levels below it), and up to 10 sweeps of the solve (30 of the
+    /// up, each on the still levels below it), and up to 10 passes of the solve (30 of the
     /// relax, as `Physics`). Deep piles at rest at 120 Hz within about 1 % of r, several times faster; the
     /// shock's pushes are taken up by the ground, not by the particles below.
     Animation,

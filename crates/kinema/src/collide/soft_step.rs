@@ -3,7 +3,7 @@
 //!
 //! Stage 1 has moved every particle from (x₀, v₀) to (x₁, v₁) by the world's method. A
 //! contact's impulse P, taken as acting at the step's start, changes the end velocity by
-//! Δv = w P and the end position by h Δv (the velocity it leaves is carried over the whole
+//! Δv = w P and the end position by h Δv (the velocity it leaves acts over the whole
 //! step). Written for one contact, with g₁ its gap at x₁ (< 0: overlap), u₁ its normal
 //! velocity at v₁ and u its normal velocity after the solve,
 //!
@@ -28,7 +28,7 @@
 //!   relax        u ≥ 0 where the solve left them touching, u ≥ −g/h across a gap g; u_t → 0:
 //!                the velocity the solve needed to move positions is not kept (Box2D's relax)
 //!                (and at the `animation` accuracy its shock stage, as after the solve)
-//!   restitution  u⁺ = −e u⁻ for each contact that carries load and approached faster than
+//!   restitution  u⁺ = −e u⁻ for each contact that bears load and approached faster than
 //!                the threshold at the step's start (Newton's law, Box2D's restitution stage)
 //! ```
 //!
@@ -36,7 +36,7 @@
 //! that the relax finds too large shrinks again. A body resting under any method ends each
 //! step where it started, at rest: its gap is closed exactly and its velocity relaxed to 0.
 //!
-//! With spin (`collide/spin.rs`) the sweeps carry each particle's velocity and angular
+//! With spin (`collide/spin.rs`) the passes update each particle's velocity and angular
 //! velocity (6 values), the tangential targets are the contact point's velocity, and the
 //! tangential effective mass is 1/w_t. The sticking target is the same: stage 1 does not
 //! turn a particle, so the contact point's slip over the step with the solve's impulse taken
@@ -53,12 +53,15 @@
 //! resisting them, and the pile never slept. Its effective mass is 1/(k_i + k_j) (k = 1/I).
 
 use super::contact::Contact;
+use super::passes::{passes, Ends, PassGroup};
 use super::response::MaterialTable;
 use super::shock::{levels, order, Held, ShockOrder, SUPPORT_COSINE};
 use super::spin::Rotation;
-use super::sweeps::{sweeps, Ends, SweepGroup};
 use crate::error::Error;
 use crate::vec3;
+use row::Row;
+
+mod row;
 
 /// What the stage prepared for one contact (m, m/s, 3-vectors ⊥ n).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -136,24 +139,24 @@ pub(crate) const SLOP: f64 = 1e-3;
 pub(crate) struct SoftParams {
     /// The step, s.
     pub h: f64,
-    /// A sweep whose largest velocity change is at most this has converged, m/s.
+    /// A pass whose largest velocity change is at most this has converged, m/s.
     pub tolerance: f64,
-    /// Most sweeps of the solve stage.
-    pub solve_sweeps: usize,
-    /// Most sweeps of the relax and of the restitution stages.
-    pub relax_sweeps: usize,
+    /// Most passes of the solve stage.
+    pub solve_passes: usize,
+    /// Most passes of the relax and of the restitution stages.
+    pub relax_passes: usize,
 }
 
 /// What [`soft_step`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct SoftStats {
-    /// Sweeps of the solve stage, and whether its last changed nothing beyond the tolerance.
-    pub sweeps: usize,
+    /// Passes of the solve stage, and whether its last changed nothing beyond the tolerance.
+    pub passes: usize,
     pub converged: bool,
-    /// Sweeps of the relax stage, and of the restitution stage.
-    pub relax_sweeps: usize,
-    pub restitution_sweeps: usize,
-    /// Contacts that carry a nonzero impulse at the end.
+    /// Passes of the relax stage, and of the restitution stage.
+    pub relax_passes: usize,
+    pub restitution_passes: usize,
+    /// Contacts that bear a nonzero impulse at the end.
     pub active: usize,
     /// Contacts that bounced by Newton's law.
     pub bounced: usize,
@@ -178,15 +181,15 @@ pub(crate) struct SoftContacts<'a> {
 
 /// The soft step's stages (see the module's doc) on velocities `v` (N per particle: the
 /// velocity, then with spin, N = 6, the angular velocity) and positions `x` (3 per particle),
-/// updated in place, with each sweep visiting the contacts group by group (as
-/// `collide/sweeps.rs` describes: the same result on any number of threads).
+/// updated in place, with each pass visiting the contacts group by group (as
+/// `collide/passes.rs` describes: the same result on any number of threads).
 ///
 /// `solved`: each contact's starting total on entry (the last step's solve, for the warm
 /// start; zeros if none), its solve stage's total on return (the next step's warm start).
 /// `totals`: each contact's final total impulse on i, N·s (−total on a partner particle);
 /// `rolls`: with rolling resistance, its final angular impulse on i, N·m·s (−on a partner).
 /// `kicks`: with shock propagation, the velocity change of the shock stages (N per
-/// particle), which no total carries; left empty without.
+/// particle), which no total holds; left empty without.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn soft_step<const N: usize>(
     held: SoftContacts<'_>,
@@ -197,7 +200,7 @@ pub(crate) fn soft_step<const N: usize>(
     totals: &mut Vec<[f64; 3]>,
     rolls: &mut Vec<[f64; 3]>,
     kicks: &mut Vec<f64>,
-    groups: &[SweepGroup],
+    groups: &[PassGroup],
 ) -> Result<SoftStats, Error> {
     let SoftContacts {
         contacts,
@@ -219,8 +222,81 @@ pub(crate) fn soft_step<const N: usize>(
     let before = v.to_vec();
 
     // Warm start: each starting total projected onto λ ≥ 0 and the cone, then applied.
-    let mut acc: Vec<(f64, [f64; 3], [f64; 3])> = vec![(0.0, [0.0; 3], [0.0; 3]); contacts.len()];
-    for (k, (r, e)) in rows.iter().zip(&ends).enumerate() {
+    let mut acc = warm_start::<N>(&rows, &ends, solved, v);
+    let mut stats = SoftStats::default();
+
+    // Solve: the position targets, as velocities.
+    let done = passes::<N, _>(
+        groups,
+        &ends,
+        v,
+        &mut acc,
+        params.solve_passes,
+        params.tolerance,
+        |k, a, vi, vj| rows[k].visit(vi, vj, a, targets[k].solve_n, Some(targets[k].stick_t)),
+    );
+    stats.passes = done.passes;
+    stats.converged = done.converged;
+    store_solved(&rows, &acc, solved);
+    // Shock: the solve's targets again, level by level bottom up, the level below held still.
+    kicks.clear();
+    let shocks = shock.map(|accel| {
+        kicks.resize(v.len(), 0.0);
+        Shocks::new(contacts, targets, &rows, &ends, &acc, accel, v.len() / N)
+    });
+    if let Some(s) = &shocks {
+        s.run::<N>(v, kicks, params, |k| targets[k].solve_n);
+    }
+
+    // Integrate: the positions follow the solve's velocity change over the whole step.
+    follow_velocities::<N>(x, v, &before, inv_mass, h);
+
+    // Relax: velocity targets on the gaps the solve left.
+    let relax_n = relax_targets::<N>(&rows, &ends, targets, v, h);
+    let relaxed = passes::<N, _>(
+        groups,
+        &ends,
+        v,
+        &mut acc,
+        params.relax_passes,
+        params.tolerance,
+        |k, a, vi, vj| rows[k].visit(vi, vj, a, relax_n[k], Some([0.0; 3])),
+    );
+    stats.relax_passes = relaxed.passes;
+    if let Some(s) = &shocks {
+        s.run::<N>(v, kicks, params, |k| relax_n[k]);
+    }
+
+    // Restitution: Newton's law on the contacts that bear load and came in fast.
+    let bouncing = bouncing(targets, &acc);
+    stats.bounced = bouncing.iter().flatten().count();
+    if stats.bounced > 0 {
+        let bounced = passes::<N, _>(
+            groups,
+            &ends,
+            v,
+            &mut acc,
+            params.relax_passes,
+            params.tolerance,
+            |k, a, vi, vj| match bouncing[k] {
+                Some(b) => rows[k].visit(vi, vj, a, b, None),
+                None => 0.0,
+            },
+        );
+        stats.restitution_passes = bounced.passes;
+    }
+
+    final_totals::<N>(&rows, &acc, &ends, rolling, totals, rolls);
+    stats.active = totals.iter().filter(|p| **p != [0.0; 3]).count();
+    Ok(stats)
+}
+
+/// Each contact's accumulated (λ, tangential, rolling) impulses after the warm start: its
+/// starting total `solved` projected onto λ ≥ 0 and the cone, then applied to `v`.
+#[inline]
+fn warm_start<const N: usize>(rows: &[Row], ends: &[Option<Ends>], solved: &[[f64; 3]], v: &mut [f64]) -> Vec<Accumulated> {
+    let mut acc: Vec<Accumulated> = vec![(0.0, [0.0; 3], [0.0; 3]); rows.len()];
+    for (k, (r, e)) in rows.iter().zip(ends).enumerate() {
         let start = solved[k];
         let Some(e) = e else { continue };
         if start == [0.0; 3] || vec3::first_non_finite(&start).is_some() {
@@ -233,45 +309,36 @@ pub(crate) fn soft_step<const N: usize>(
         r.apply(&mut vi, &mut vj, vec3::add(vec3::scale(lambda, r.n), t));
         e.store(v, vi, vj);
     }
-    let mut stats = SoftStats::default();
+    acc
+}
 
-    // Solve: the position targets, as velocities.
-    let done = sweeps::<N, _>(
-        groups,
-        &ends,
-        v,
-        &mut acc,
-        params.solve_sweeps,
-        params.tolerance,
-        |k, a, vi, vj| rows[k].visit(vi, vj, a, targets[k].solve_n, Some(targets[k].stick_t)),
-    );
-    stats.sweeps = done.sweeps;
-    stats.converged = done.converged;
+/// Each contact's solve stage total (its normal and tangential impulses) into `solved`: the
+/// next step's warm start.
+#[inline]
+fn store_solved(rows: &[Row], acc: &[Accumulated], solved: &mut [[f64; 3]]) {
     for (k, r) in rows.iter().enumerate() {
         solved[k] = vec3::add(vec3::scale(acc[k].0, r.n), acc[k].1);
     }
-    // Shock: the solve's targets again, level by level bottom up, the level below held still.
-    kicks.clear();
-    let shocks = shock.map(|accel| {
-        kicks.resize(v.len(), 0.0);
-        Shocks::new(contacts, targets, &rows, &ends, &acc, accel, v.len() / N)
-    });
-    if let Some(s) = &shocks {
-        s.run::<N>(v, kicks, params, |k| targets[k].solve_n);
-    }
+}
 
-    // Integrate: the positions follow the solve's velocity change over the whole step.
+/// The positions `x` moved by h times the velocity change from `before` to `v` (movable
+/// particles only).
+#[inline]
+fn follow_velocities<const N: usize>(x: &mut [f64], v: &[f64], before: &[f64], inv_mass: &[f64], h: f64) {
     for (q, xq) in x.iter_mut().enumerate() {
         let (p, d) = (q / 3, q % 3);
         if inv_mass[p] > 0.0 {
             *xq += h * (v[N * p + d] - before[N * p + d]);
         }
     }
+}
 
-    // Relax: velocity targets on the gaps the solve left.
-    let relax_n: Vec<f64> = rows
-        .iter()
-        .zip(&ends)
+/// The relax stage's normal velocity target of each contact: closing, at most, the gap the
+/// solve left (0 where none is left).
+#[inline]
+fn relax_targets<const N: usize>(rows: &[Row], ends: &[Option<Ends>], targets: &[Target], v: &[f64], h: f64) -> Vec<f64> {
+    rows.iter()
+        .zip(ends)
         .zip(targets)
         .map(|((r, e), t)| {
             let Some(e) = e else { return 0.0 };
@@ -283,46 +350,28 @@ pub(crate) fn soft_step<const N: usize>(
                 0.0
             }
         })
-        .collect();
-    let relaxed = sweeps::<N, _>(
-        groups,
-        &ends,
-        v,
-        &mut acc,
-        params.relax_sweeps,
-        params.tolerance,
-        |k, a, vi, vj| rows[k].visit(vi, vj, a, relax_n[k], Some([0.0; 3])),
-    );
-    stats.relax_sweeps = relaxed.sweeps;
-    if let Some(s) = &shocks {
-        s.run::<N>(v, kicks, params, |k| relax_n[k]);
-    }
+        .collect()
+}
 
-    // Restitution: Newton's law on the contacts that carry load and came in fast.
-    let bouncing: Vec<Option<f64>> = targets
-        .iter()
-        .zip(&acc)
-        .map(|(t, a)| t.bounce.filter(|_| a.0 > 0.0))
-        .collect();
-    stats.bounced = bouncing.iter().flatten().count();
-    if stats.bounced > 0 {
-        let bounced = sweeps::<N, _>(
-            groups,
-            &ends,
-            v,
-            &mut acc,
-            params.relax_sweeps,
-            params.tolerance,
-            |k, a, vi, vj| match bouncing[k] {
-                Some(b) => rows[k].visit(vi, vj, a, b, None),
-                None => 0.0,
-            },
-        );
-        stats.restitution_sweeps = bounced.sweeps;
-    }
+/// Each contact's restitution target, for those that bear load (λ > 0) and came in fast.
+#[inline]
+fn bouncing(targets: &[Target], acc: &[Accumulated]) -> Vec<Option<f64>> {
+    targets.iter().zip(acc).map(|(t, a)| t.bounce.filter(|_| a.0 > 0.0)).collect()
+}
 
+/// Each contact's final total impulse on i into `totals` and, with rolling resistance
+/// (N = 6), its angular impulse into `rolls`.
+#[inline]
+fn final_totals<const N: usize>(
+    rows: &[Row],
+    acc: &[Accumulated],
+    ends: &[Option<Ends>],
+    rolling: f64,
+    totals: &mut Vec<[f64; 3]>,
+    rolls: &mut Vec<[f64; 3]>,
+) {
     totals.clear();
-    totals.extend(rows.iter().zip(&acc).zip(&ends).map(|((r, (lambda, t, _)), e)| match e {
+    totals.extend(rows.iter().zip(acc).zip(ends).map(|((r, (lambda, t, _)), e)| match e {
         Some(_) => vec3::add(vec3::scale(*lambda, r.n), *t),
         None => [0.0; 3],
     }));
@@ -330,16 +379,18 @@ pub(crate) fn soft_step<const N: usize>(
     if N == 6 && rolling > 0.0 {
         rolls.extend(
             acc.iter()
-                .zip(&ends)
+                .zip(ends)
                 .map(|((_, _, m), e)| if e.is_some() { *m } else { [0.0; 3] }),
         );
     }
-    stats.active = totals.iter().filter(|p| **p != [0.0; 3]).count();
-    Ok(stats)
 }
 
-/// Most sweeps of a shock stage over one level's contacts.
-const SHOCK_SWEEPS: usize = 10;
+/// A contact's impulses accumulated over the passes: the normal λ (N·s), the tangential and
+/// the rolling (angular) ones.
+type Accumulated = (f64, [f64; 3], [f64; 3]);
+
+/// Most passes of a shock stage over one level's contacts.
+const SHOCK_PASSES: usize = 10;
 
 /// The shock stages of one island (`collide/shock.rs`): its contacts bottom up by level,
 /// each with its row and ends with the lower side held still.
@@ -350,7 +401,7 @@ struct Shocks {
 }
 
 impl Shocks {
-    /// The levels of the island's `n` particles from the contacts that touch (carry load
+    /// The levels of the island's `n` particles from the contacts that touch (bear load
     /// after the solve, or overlap at the step's end) and the particles' accelerations
     /// `accel` (m/s², 3 per particle), and the visits they give.
     fn new(
@@ -404,16 +455,16 @@ impl Shocks {
 
     /// One shock stage on the velocities `v` (N per particle): level by level, its support
     /// contacts swept until no visit changes more than the tolerance (at most
-    /// [`SHOCK_SWEEPS`]; a level's visits are each particle's own few supports) toward the
+    /// [`SHOCK_PASSES`]; a level's visits are each particle's own few supports) toward the
     /// normal velocity `target(k)` of contact k. Each contact's push starts from 0 and stays
     /// ≥ 0: the stage only stops what sinks into its supports, and leaves friction to the
-    /// sweeps. The velocity changes are added to `kicks`.
+    /// passes. The velocity changes are added to `kicks`.
     fn run<const N: usize>(&self, v: &mut [f64], kicks: &mut [f64], params: &SoftParams, target: impl Fn(usize) -> f64) {
         let before = v.to_vec();
         let visits = &self.order.visits;
         let mut state = vec![(0.0, [0.0; 3], [0.0; 3]); visits.len()];
         for level in self.order.starts.windows(2) {
-            for _ in 0..SHOCK_SWEEPS {
+            for _ in 0..SHOCK_PASSES {
                 let mut change: f64 = 0.0;
                 for m in level[0]..level[1] {
                     let e = &self.ends[m];
@@ -438,7 +489,7 @@ impl Shocks {
 /// solve target and its relax target (u ≥ −g/h across the gap g it ends with, else u ≥ 0).
 /// Then every visit of every stage finds λ = 0 and leaves it there, and with λ = 0 the cone
 /// holds friction and rolling resistance at 0: the contact gives nothing, moves nothing, and
-/// bounces not (the restitution stage takes only contacts that carry load). An island whose
+/// bounces not (the restitution stage takes only contacts that bear load). An island whose
 /// contacts are all idle would be solved to exactly nothing (`collide/islands.rs` leaves it
 /// out). u is computed as the visits compute it, from the same row, bit for bit; a value
 /// that is not finite is never idle (the solve decides what it does).
@@ -485,233 +536,4 @@ pub(crate) fn idle(
     let gap = target.gap + h * (u_n - target.u_n);
     let relax_n = if gap > 0.0 { -gap / h } else { 0.0 };
     finite && u_n >= target.solve_n && u_n >= relax_n
-}
-
-/// A contact's rolling resistance (module doc): the inverse inertias k_i, k_j (1/(kg·m²)),
-/// the angular effective mass 1/(k_i + k_j) (kg·m²), the cap μ_r R* (m; the angular
-/// impulse's bound per unit normal impulse) and R* (m). Without: all 0.
-#[derive(Clone, Copy, Default)]
-struct Roll {
-    k: [f64; 2],
-    mass: f64,
-    cap: f64,
-    r_star: f64,
-}
-
-/// A contact of [`soft_step`]: its inverse masses w (1/kg), effective mass 1/(w_i + w_j)
-/// (kg) along n and 1/w_t across (the same without spin), friction μ, normal n, whether its
-/// partner is a particle, and with spin `turn` = [ρ_i, ρ_j, k_i ρ_i, k_j ρ_j] (m, m and
-/// 1/(kg·m); `collide/spin.rs`) and its rolling resistance.
-#[derive(Clone, Copy)]
-struct Row {
-    wi: f64,
-    wj: f64,
-    mass: f64,
-    mass_t: f64,
-    turn: [f64; 4],
-    roll: Roll,
-    mu: f64,
-    n: [f64; 3],
-    has_j: bool,
-}
-
-impl Row {
-    /// The row of contact `c` with its targets, among particles of these inverse masses
-    /// (1/kg), with spin `rotation`, rolling resistance μ_r `rolling` and friction μ `mu`.
-    fn new(c: &Contact, target: &Target, inv_mass: &[f64], rotation: Option<Rotation<'_>>, rolling: f64, mu: f64) -> Row {
-        let (wi, wj) = (inv_mass[c.i], c.partner_particle().map_or(0.0, |j| inv_mass[j]));
-        let w = wi + wj;
-        let mass = if w > 0.0 { 1.0 / w } else { 0.0 };
-        // with spin: the arms, the turn per unit of n × p, and the tangential mass
-        let (turn, mass_t, roll) = match rotation {
-            Some(r) => {
-                let ((rho_i, rho_j), (ki, kj)) = (r.arms(c, target.rest), r.inverse_inertias(c));
-                let w_t = w + ki * rho_i * rho_i + kj * rho_j * rho_j;
-                let ri = r.radius[c.i];
-                let r_star = c.partner_particle().map_or(ri, |j| ri * r.radius[j] / (ri + r.radius[j]));
-                let roll = Roll {
-                    k: [ki, kj],
-                    mass: if ki + kj > 0.0 { 1.0 / (ki + kj) } else { 0.0 },
-                    cap: rolling * r_star,
-                    r_star,
-                };
-                (
-                    [rho_i, rho_j, ki * rho_i, kj * rho_j],
-                    if w_t > 0.0 { 1.0 / w_t } else { 0.0 },
-                    roll,
-                )
-            }
-            None => ([0.0; 4], mass, Roll::default()),
-        };
-        Row {
-            wi,
-            wj,
-            mass,
-            mass_t,
-            turn,
-            roll,
-            mu,
-            n: c.normal,
-            has_j: c.partner_particle().is_some(),
-        }
-    }
-
-    /// The row with one side held still (`collide/shock.rs`): its inverse mass and inertia
-    /// taken as 0, the effective masses those of the other side alone.
-    fn held(&self, held: Held) -> Row {
-        let mut r = *self;
-        match held {
-            Held::Neither => return r,
-            Held::I => (r.wi, r.turn[2], r.roll.k[0]) = (0.0, 0.0, 0.0),
-            Held::J => (r.wj, r.turn[3], r.roll.k[1]) = (0.0, 0.0, 0.0),
-        }
-        let inverse = |w: f64| if w > 0.0 { 1.0 / w } else { 0.0 };
-        let w = r.wi + r.wj;
-        r.mass = inverse(w);
-        r.mass_t = inverse(w + r.turn[2] * r.turn[0] + r.turn[3] * r.turn[1]);
-        r.roll.mass = inverse(r.roll.k[0] + r.roll.k[1]);
-        r
-    }
-
-    /// The velocity of i's contact point relative to j's: v_i − v_j, less
-    /// (ρ_i ω_i + ρ_j ω_j) × n with spin (N = 6).
-    #[inline(always)]
-    fn relative<const N: usize>(&self, vi: &[f64; N], vj: &[f64; N]) -> [f64; 3] {
-        let u = [vi[0] - vj[0], vi[1] - vj[1], vi[2] - vj[2]];
-        if N == 6 {
-            let w = std::array::from_fn(|k| self.turn[0] * vi[3 + k] + self.turn[1] * vj[3 + k]);
-            vec3::sub(u, vec3::cross(w, self.n))
-        } else {
-            u
-        }
-    }
-
-    /// The impulse p on i and −p on j, at their contact points: v_i += w_i p, v_j −= w_j p,
-    /// and with spin ω_i −= k_i ρ_i n × p, ω_j −= k_j ρ_j n × p.
-    #[inline(always)]
-    fn apply<const N: usize>(&self, vi: &mut [f64; N], vj: &mut [f64; N], p: [f64; 3]) {
-        for k in 0..3 {
-            vi[k] += self.wi * p[k];
-        }
-        if self.has_j {
-            for k in 0..3 {
-                vj[k] -= self.wj * p[k];
-            }
-        }
-        if N == 6 {
-            let np = vec3::cross(self.n, p);
-            for k in 0..3 {
-                vi[3 + k] -= self.turn[2] * np[k];
-            }
-            if self.has_j {
-                for k in 0..3 {
-                    vj[3 + k] -= self.turn[3] * np[k];
-                }
-            }
-        }
-    }
-
-    /// A tangential total clamped to the cone |t| ≤ μ λ.
-    #[inline(always)]
-    fn clamp(&self, t: [f64; 3], lambda: f64) -> [f64; 3] {
-        let (len, cap) = (vec3::norm(t), self.mu * lambda);
-        if len > cap {
-            vec3::scale(if len > 0.0 { cap / len } else { 0.0 }, t)
-        } else {
-            t
-        }
-    }
-
-    /// One visit with the totals (λ, t): the normal total that brings u_n to at least `b_n`
-    /// (clamped at 0), then, with `b_t`, the tangential total that brings the tangential
-    /// velocity to `b_t` within the cone. Returns the largest change, as a velocity (m/s).
-    #[inline(always)]
-    fn visit<const N: usize>(
-        &self,
-        vi: &mut [f64; N],
-        vj: &mut [f64; N],
-        (normal, tangent, roll): &mut (f64, [f64; 3], [f64; 3]),
-        b_n: f64,
-        b_t: Option<[f64; 3]>,
-    ) -> f64 {
-        let mut change: f64 = 0.0;
-        let u_n = vec3::dot(self.relative(vi, vj), self.n);
-        let total = (*normal - (u_n - b_n) * self.mass).max(0.0);
-        let dn = total - *normal;
-        *normal = total;
-        if dn != 0.0 {
-            change = change.max(dn.abs() / self.mass);
-            self.apply(vi, vj, vec3::scale(dn, self.n));
-        }
-        if let Some(b_t) = b_t {
-            if self.mu > 0.0 {
-                let u = self.relative(vi, vj);
-                let u_t = vec3::sub(u, vec3::scale(vec3::dot(u, self.n), self.n));
-                let old = *tangent;
-                let t = self.clamp(vec3::sub(old, vec3::scale(self.mass_t, vec3::sub(u_t, b_t))), total);
-                let dt = vec3::sub(t, old);
-                if dt != [0.0; 3] {
-                    change = change.max(vec3::norm(dt) / self.mass_t);
-                    *tangent = t;
-                    self.apply(vi, vj, dt);
-                }
-            }
-        } else if *tangent != [0.0; 3] {
-            // the restitution stage keeps the friction within the cone of a shrinking λ
-            let t = self.clamp(*tangent, total);
-            let dt = vec3::sub(t, *tangent);
-            if dt != [0.0; 3] {
-                *tangent = t;
-                self.apply(vi, vj, dt);
-            }
-        }
-        if N == 6 && self.roll.cap > 0.0 {
-            let change_roll = self.visit_roll(vi, vj, roll, total, b_t.is_some());
-            change = change.max(change_roll);
-        }
-        change
-    }
-
-    /// The rolling (and twisting) resistance's part of a visit: with `hold`, the angular
-    /// impulse M that brings the relative turning to 0 within |M| ≤ μ_r R* λ; without (the
-    /// restitution stage), M kept within the cone of a shrinking λ. Returns the change as a
-    /// velocity at R*, m/s.
-    #[inline(always)]
-    fn visit_roll<const N: usize>(
-        &self,
-        vi: &mut [f64; N],
-        vj: &mut [f64; N],
-        roll: &mut [f64; 3],
-        lambda: f64,
-        hold: bool,
-    ) -> f64 {
-        let r = self.roll;
-        let old = *roll;
-        let wanted = if hold {
-            let w: [f64; 3] = std::array::from_fn(|k| vi[3 + k] - vj[3 + k]);
-            vec3::sub(old, vec3::scale(r.mass, w))
-        } else {
-            old
-        };
-        let (len, cap) = (vec3::norm(wanted), r.cap * lambda);
-        let m = if len > cap {
-            vec3::scale(if len > 0.0 { cap / len } else { 0.0 }, wanted)
-        } else {
-            wanted
-        };
-        let dm = vec3::sub(m, old);
-        if dm == [0.0; 3] {
-            return 0.0;
-        }
-        *roll = m;
-        for k in 0..3 {
-            vi[3 + k] += r.k[0] * dm[k];
-        }
-        if self.has_j {
-            for k in 0..3 {
-                vj[3 + k] -= r.k[1] * dm[k];
-            }
-        }
-        vec3::norm(dm) / r.mass.max(f64::MIN_POSITIVE) * r.r_star
-    }
 }

@@ -8,11 +8,11 @@
 
 pub use crate::collide::books::ColliderBooks;
 pub use crate::collide::contact_force::Cohesion;
-use crate::collide::contact_force::{particle_ratios, Bodies, ContactForce, SpringDashpot};
+use crate::collide::contact_force::{particle_ratios, Bodies, ContactForce, ContactForceModel};
 use crate::collide::event_driven::{unsupported_collider, EventDriven};
 use crate::collide::groups::{Filter, GroupMasks};
 use crate::collide::impulse::end_of_step::overlap_at;
-use crate::collide::impulse::impacts::check_travel;
+use crate::collide::impulse::list::check_travel;
 use crate::collide::impulse::{ImpulseModel, StageSetting};
 use crate::collide::records::ContactRecord;
 use crate::collide::spin::Rotation;
@@ -25,13 +25,13 @@ use crate::vec3;
 pub(crate) use crate::collide::impulse::end_of_step::on_periodic_wall;
 pub use crate::collide::impulse::CollisionStats;
 pub(crate) use crate::collide::impulse::{CollisionTimes, StepFrame};
-use settings::spring_dashpot_of;
+use settings::force_model_of;
 pub use settings::{CollisionParams, ContactModel, ModelArgs, TangentialArgs, TangentialKind};
 
 mod settings;
 
 /// The largest turn a moving collider may make in one step, rad (about 5.7°). Continuous
-/// detection sees a particle's path from the collider placed at the step's end, carried there
+/// detection sees a particle's path from the collider placed at the step's end, moved there
 /// on the chord of the turn. Measured on closed cubes turning about any axis with 8–27 balls
 /// (e 0–1, μ 0–0.5, half-widths 0.4–0.8 m, 150 steps): none lost in 700 cases up to 0.12 rad a
 /// step; 3 of 150 lost between 0.15 and 0.2 rad (balls wedged in a corner at thousands of g,
@@ -53,12 +53,12 @@ pub(crate) struct CollideStage {
     pub domain: Domain,
     /// Detection and response of the impulse model, and their buffers.
     pub impulse: ImpulseModel,
-    /// The spring–dashpot model's constants and buffers, with that model
+    /// The contact force model's constants and buffers, with that model
     /// ([`CollideStage::contact_force`] lends it out with what it reads).
-    pub spring_dashpot: Option<SpringDashpot>,
+    pub force_model: Option<ContactForceModel>,
     /// Whether some particle's own material has friction (the force models' tangential part).
     own_friction: bool,
-    /// Each particle's (e, ζ) from `particle_materials`, for the spring–dashpot damping.
+    /// Each particle's (e, ζ) from `particle_materials`, for the force models' damping.
     particle_ratios: Option<Vec<(f64, f64)>>,
     pub total: CollisionStats,
     pub last: CollisionStats,
@@ -92,7 +92,7 @@ impl CollideStage {
             colliders: Vec::new(),
             domain: Domain::open(dim)?,
             impulse: ImpulseModel::new(),
-            spring_dashpot: spring_dashpot_of(&params),
+            force_model: force_model_of(&params),
             particle_ratios: None,
             total: CollisionStats::default(),
             last: CollisionStats::default(),
@@ -200,9 +200,9 @@ impl CollideStage {
     pub fn set_params(&mut self, params: CollisionParams) -> Result<(), Error> {
         self.material = params.check()?;
         self.params = params.normalised();
-        // the spring–dashpot model's list stays (it lists pairs by geometry alone); its
+        // the contact force model's list stays (it lists pairs by geometry alone); its
         // constants are the new ones
-        self.spring_dashpot = match (self.spring_dashpot.take(), spring_dashpot_of(&self.params)) {
+        self.force_model = match (self.force_model.take(), force_model_of(&self.params)) {
             (Some(mut kept), Some(new)) => {
                 (kept.normal, kept.damping) = (new.normal, new.damping);
                 if kept.tangential != new.tangential {
@@ -217,7 +217,7 @@ impl CollideStage {
         self.refresh_materials()
     }
 
-    /// Forgets the last step's contacts and figures (a step of the spring–dashpot model).
+    /// Forgets the last step's contacts and figures (a step of a force model).
     pub fn clear_step(&mut self) {
         self.impulse.detected.clear();
         self.last = CollisionStats::default();
@@ -231,7 +231,7 @@ impl CollideStage {
     /// pairs' virial.
     pub fn book_contact_force(&mut self, h: f64) {
         self.clear_step();
-        let Some((books, walls)) = self.spring_dashpot.as_ref().and_then(|m| m.take_books()) else {
+        let Some((books, walls)) = self.force_model.as_ref().and_then(|m| m.take_books()) else {
             return;
         };
         self.book_colliders(walls);
@@ -338,7 +338,7 @@ impl CollideStage {
         Ok(())
     }
 
-    /// The spring–dashpot contact force on particles of radii `radius` (m) and inverse masses
+    /// The contact force on particles of radii `radius` (m) and inverse masses
     /// `inv_mass` (1/kg), with this stage's materials, colliders and domain, for one call;
     /// `None` with the impulse model.
     pub fn contact_force<'a>(
@@ -348,7 +348,7 @@ impl CollideStage {
         omega: &'a [f64],
         group: &'a [u8],
     ) -> Option<ContactForce<'a>> {
-        let model = self.spring_dashpot.as_ref()?;
+        let model = self.force_model.as_ref()?;
         let own = self.particle_materials.as_deref().zip(self.particle_ratios.as_deref());
         Some(ContactForce::new(
             model,
@@ -469,7 +469,7 @@ impl CollideStage {
     /// events cannot run and a resting contact needs the stepped model for.
     pub fn events_refused(&self, other: Option<&str>, field: [f64; 3], p: &Particles) -> Option<String> {
         if self.params.model != ContactModel::Impulse {
-            return Some("it is a way of running the impulse model, not the spring–dashpot one".into());
+            return Some("it is a way of running the impulse model, not a force model".into());
         }
         if let Some(name) = other {
             return Some(format!(
@@ -525,7 +525,7 @@ impl CollideStage {
         interrupt: &mut Interrupt,
     ) -> Result<(), Error> {
         self.domain.check_radii(&p.radius)?;
-        // As a step refuses it (`impulse/impacts.rs`, `check_travel`): a particle that would
+        // As a step refuses it (`impulse/list.rs`, `check_travel`): a particle that would
         // cross the scene more than TRAVEL_LIMIT times until t1 takes more events than any run
         // can follow (1e10 m/s in a 1 m box: 1e7 wall events a millisecond).
         // (by the largest component, which does not overflow where |v|² would: 1e200 m/s)

@@ -19,7 +19,7 @@
 //! A ball dropped on a floor with restitution e therefore begins and ends one touch per
 //! bounce, each begin at the time of its impact (t₁ = √(2H/g), then every 2 e^k v₁/g later),
 //! until its bounces fall under the restitution threshold and it stays (a begin, no end).
-//! Each event carries the normal impulse the pair exchanged in the step (N·s, ≥ 0: the
+//! Each event holds the normal impulse the pair exchanged in the step (N·s, ≥ 0: the
 //! impacts' and the end-of-step total's normal parts), so a begin tells how hard the touch
 //! was. Particles are named by their ids (kept for life), colliders by their index.
 //!

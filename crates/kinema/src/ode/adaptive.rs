@@ -170,19 +170,9 @@ impl Adaptive {
         let mut err = vec![0.0; n];
         // f(t_{n+1}, y_{n+1}) for a pair that is not FSAL (evaluated after an accepted step).
         let mut f_new = vec![0.0; n];
-        rk.first_stage(sys, t0, y0, &mut stats)?;
-        if let Some(index) = first_non_finite(&rk.k()[0]) {
-            // f(t0, y0) itself is NaN/inf: no step can be taken.
-            let termination = Some(Termination::NonFinite { t: t0, h: 0.0, index });
-            return Ok(rec.finish(stats, termination, name));
-        }
-        let mut h = match opts.h {
-            Some(h) => h,
-            None if t_end == t0 => 0.0,
-            None => {
-                let f0 = rk.k()[0].clone();
-                initial_step(sys, y0, &f0, self.error_order, opts, &mut stats)?
-            }
+        let mut h = match self.first_step(sys, y0, opts, &mut rk, &mut stats)? {
+            Ok(h) => h,
+            Err(termination) => return Ok(rec.finish(stats, Some(termination), name)),
         };
         let mut dense_out = opts.dense_output.then(|| match self.interpolant {
             Interpolant::Dopri5 => DenseOutput::dopri5(n, t0),
@@ -194,20 +184,8 @@ impl Adaptive {
         let mut non_finite_at: Option<usize> = None;
 
         while dir * (t_end - t) > 0.0 {
-            // Smallest step: the user's h_min, and at least what the time variable can resolve
-            // at t, ten units in the last place (at t = 0 the smallest subnormal, so a step that
-            // keeps failing ends after a few hundred rejections at worst).
-            let h_min = opts.h_min.unwrap_or(0.0).max(10.0 * (t.abs().next_up() - t.abs()));
-            if stats.nsteps >= opts.max_steps {
-                termination = Some(Termination::MaxSteps { t, steps: stats.nsteps });
-                break;
-            }
-            if h.is_nan() || h < h_min {
-                termination = Some(match non_finite_at {
-                    // The last attempts failed because f or the stages produced NaN/inf: say so.
-                    Some(index) => Termination::NonFinite { t, h, index },
-                    None => Termination::StepTooSmall { t, h },
-                });
+            if let Some(stop) = limits(t, h, &stats, opts, non_finite_at) {
+                termination = Some(stop);
                 break;
             }
             if let Some(h_max) = opts.h_max {
@@ -240,18 +218,7 @@ impl Adaptive {
                 }
                 let k = rk.k();
                 let f_b = if self.fsal { &k[s - 1] } else { &f_new };
-                match self.interpolant {
-                    Interpolant::Dopri5 => rec.step(t, hs, t_b, &y_new, |theta, out| dense::dopri5(theta, hs, &y, k, out)),
-                    Interpolant::Hermite => rec.step(t, hs, t_b, &y_new, |theta, out| {
-                        dense::hermite(theta, hs, &y, &y_new, &k[0], f_b, out)
-                    }),
-                }
-                if let Some(d) = &mut dense_out {
-                    match self.interpolant {
-                        Interpolant::Dopri5 => d.push_dopri5(t_b, &y, k),
-                        Interpolant::Hermite => d.push_hermite(t_b, &y_new, f_b),
-                    }
-                }
+                self.record(&mut rec, dense_out.as_mut(), (t, hs, t_b), (&y, &y_new), (k, f_b));
                 t = t_b;
                 std::mem::swap(&mut y, &mut y_new);
                 if self.fsal {
@@ -274,6 +241,77 @@ impl Adaptive {
         sol.dense = dense_out;
         Ok(sol)
     }
+
+    /// The first stage f(t0, y0) into `rk`, and the first step: `opts.h`, else the initial
+    /// step's estimate (0 over an empty span). A non-finite f(t0, y0) ends the run before
+    /// any step (`Err` inside).
+    fn first_step(
+        &self,
+        sys: &mut dyn OdeSystem,
+        y0: &[f64],
+        opts: &SolveOptions,
+        rk: &mut ExplicitRk,
+        stats: &mut Stats,
+    ) -> Result<Result<f64, Termination>, Error> {
+        let (t0, t_end) = opts.t_span;
+        rk.first_stage(sys, t0, y0, stats)?;
+        if let Some(index) = first_non_finite(&rk.k()[0]) {
+            // f(t0, y0) itself is NaN/inf: no step can be taken.
+            return Ok(Err(Termination::NonFinite { t: t0, h: 0.0, index }));
+        }
+        Ok(Ok(match opts.h {
+            Some(h) => h,
+            None if t_end == t0 => 0.0,
+            None => {
+                let f0 = rk.k()[0].clone();
+                initial_step(sys, y0, &f0, self.error_order, opts, stats)?
+            }
+        }))
+    }
+
+    /// An accepted step from (t, y) by hs to (t_b, y_new) (stages `k`, f at the new state
+    /// `f_b`) into the recorder and the dense output, through the pair's interpolant.
+    fn record(
+        &self,
+        rec: &mut Recorder,
+        dense_out: Option<&mut DenseOutput>,
+        (t, hs, t_b): (f64, f64, f64),
+        (y, y_new): (&[f64], &[f64]),
+        (k, f_b): (&[Vec<f64>], &[f64]),
+    ) {
+        match self.interpolant {
+            Interpolant::Dopri5 => rec.step(t, hs, t_b, y_new, |theta, out| dense::dopri5(theta, hs, y, k, out)),
+            Interpolant::Hermite => rec.step(t, hs, t_b, y_new, |theta, out| {
+                dense::hermite(theta, hs, y, y_new, &k[0], f_b, out)
+            }),
+        }
+        if let Some(d) = dense_out {
+            match self.interpolant {
+                Interpolant::Dopri5 => d.push_dopri5(t_b, y, k),
+                Interpolant::Hermite => d.push_hermite(t_b, y_new, f_b),
+            }
+        }
+    }
+}
+
+/// Why the loop stops before a step from t with h, if it does: the step count reached, or a
+/// step below the smallest (the user's h_min, and at least what the time variable can
+/// resolve at t, ten units in the last place: at t = 0 the smallest subnormal, so a step
+/// that keeps failing ends after a few hundred rejections at worst), named non-finite when
+/// the last attempts failed on NaN/inf (`non_finite_at`).
+fn limits(t: f64, h: f64, stats: &Stats, opts: &SolveOptions, non_finite_at: Option<usize>) -> Option<Termination> {
+    let h_min = opts.h_min.unwrap_or(0.0).max(10.0 * (t.abs().next_up() - t.abs()));
+    if stats.nsteps >= opts.max_steps {
+        return Some(Termination::MaxSteps { t, steps: stats.nsteps });
+    }
+    if h.is_nan() || h < h_min {
+        return Some(match non_finite_at {
+            // The last attempts failed because f or the stages produced NaN/inf: say so.
+            Some(index) => Termination::NonFinite { t, h, index },
+            None => Termination::StepTooSmall { t, h },
+        });
+    }
+    None
 }
 
 #[cfg(test)]

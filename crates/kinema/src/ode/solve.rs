@@ -160,6 +160,13 @@ fn fixed_step(integrator: &Integrator, opts: &SolveOptions) -> Result<f64, Error
 }
 
 fn validate(dim: usize, block: usize, y0: &[f64], opts: &SolveOptions) -> Result<(), Error> {
+    validate_state(dim, block, y0)?;
+    validate_steps(opts)?;
+    validate_output(opts)
+}
+
+/// The initial state's checks: `dim` finite values, in blocks of `block`.
+fn validate_state(dim: usize, block: usize, y0: &[f64]) -> Result<(), Error> {
     if y0.is_empty() {
         return Err(Error::invalid("y0", "[]", "the initial state needs at least one value"));
     }
@@ -180,6 +187,12 @@ fn validate(dim: usize, block: usize, y0: &[f64], opts: &SolveOptions) -> Result
             "initial values must be finite (no NaN or inf)",
         ));
     }
+    Ok(())
+}
+
+/// The span's and the steps' checks: finite ends, h, h_max, h_min and max_steps that can
+/// cover the span.
+fn validate_steps(opts: &SolveOptions) -> Result<(), Error> {
     let (t0, t1) = opts.t_span;
     if !t0.is_finite() || !t1.is_finite() {
         return Err(Error::invalid("t_span", format!("({t0}, {t1})"), "both ends must be finite"));
@@ -235,6 +248,12 @@ fn validate(dim: usize, block: usize, y0: &[f64], opts: &SolveOptions) -> Result
             ));
         }
     }
+    Ok(())
+}
+
+/// The tolerances' and the output times' checks.
+fn validate_output(opts: &SolveOptions) -> Result<(), Error> {
+    let (t0, t1) = opts.t_span;
     if !(opts.rtol.is_finite() && opts.rtol > 0.0) {
         return Err(Error::invalid("rtol", opts.rtol, "must be a finite number > 0"));
     }
@@ -292,16 +311,7 @@ fn run_fixed<S: ?Sized>(
     // f at the start of the current step, when it is already known from the previous one.
     let mut f_a_known = false;
     // With dense_output: the grid (t, y, f) of every step boundary, for Hermite pieces.
-    let mut grid: Option<(Vec<f64>, Vec<f64>, Vec<f64>)> = opts.dense_output.then(|| (Vec::new(), Vec::new(), Vec::new()));
-    if let Some((gt, gy, gf)) = &mut grid {
-        let values = (nsteps + 1).saturating_mul(n);
-        if gt.try_reserve(nsteps + 1).is_err() || gy.try_reserve(values).is_err() || gf.try_reserve(values).is_err() {
-            return Err(Error::out_of_memory(
-                format!("the dense output's {} steps of {n} values", nsteps + 1),
-                values.saturating_mul(16),
-            ));
-        }
-    }
+    let mut grid = dense_grid(opts.dense_output, nsteps, n)?;
     for k in 0..nsteps {
         let t_a = t0 + dir * k as f64 * h;
         let t_b = if k + 1 == nsteps {
@@ -368,4 +378,21 @@ fn run_fixed<S: ?Sized>(
         sol.dense = Some(DenseOutput::hermite(n, gt, gy, gf));
     }
     Ok(sol)
+}
+
+/// The fixed-step loop's dense output grid (t, y, f at every step boundary), reserved for
+/// `nsteps` steps of `n` values, when `dense` asks for it.
+#[allow(clippy::type_complexity)]
+fn dense_grid(dense: bool, nsteps: usize, n: usize) -> Result<Option<(Vec<f64>, Vec<f64>, Vec<f64>)>, Error> {
+    let mut grid: Option<(Vec<f64>, Vec<f64>, Vec<f64>)> = dense.then(|| (Vec::new(), Vec::new(), Vec::new()));
+    if let Some((gt, gy, gf)) = &mut grid {
+        let values = (nsteps + 1).saturating_mul(n);
+        if gt.try_reserve(nsteps + 1).is_err() || gy.try_reserve(values).is_err() || gf.try_reserve(values).is_err() {
+            return Err(Error::out_of_memory(
+                format!("the dense output's {} steps of {n} values", nsteps + 1),
+                values.saturating_mul(16),
+            ));
+        }
+    }
+    Ok(grid)
 }

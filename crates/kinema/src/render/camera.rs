@@ -137,40 +137,10 @@ impl Camera {
         height: usize,
         window: [f64; 4],
     ) -> Result<(Self, [f64; 4]), Error> {
-        check_size(width, height)?;
-        check_fov(fov_y_deg)?;
-        if points.is_empty() || !points.iter().flatten().all(|c| c.is_finite()) {
-            return Err(invalid(
-                "points",
-                format!("{} points", points.len()),
-                "at least one point, finite",
-            ));
-        }
+        let dir = check_framing(points, from, fov_y_deg, (width, height), window)?;
         let (w, h) = (width as f64, height as f64);
         let [x0, y0, x1, y1] = window;
-        if !(0.0 <= x0 && x0 < x1 && x1 <= w && 0.0 <= y0 && y0 < y1 && y1 <= h) {
-            return Err(invalid(
-                "window",
-                format!("{window:?}"),
-                &format!("x0 < x1 within [0, {width}] and y0 < y1 within [0, {height}] pixels"),
-            ));
-        }
-        let n = norm(from);
-        if !(n > 0.0 && n.is_finite()) {
-            return Err(invalid("from", format!("{from:?}"), "a finite non-zero direction"));
-        }
-        let dir = scale(1.0 / n, from);
-        let world_up = if dir[0].abs() < 1e-9 && dir[1].abs() < 1e-9 {
-            [0.0, 1.0, 0.0]
-        } else {
-            [0.0, 0.0, 1.0]
-        };
-        let forward = scale(-1.0, dir);
-        let right = {
-            let r = cross(forward, world_up);
-            scale(1.0 / norm(r), r)
-        };
-        let up = cross(right, forward);
+        let (world_up, forward, right, up) = view_basis(dir);
         let f = 0.5 * h / (0.5 * fov_y_deg.to_radians()).tan();
         // The window's sides as tangents from the view axis: a along right, b along up.
         let (a0, a1) = ((x0 - 0.5 * w) / f, (x1 - 0.5 * w) / f);
@@ -192,46 +162,13 @@ impl Camera {
             })
             .collect();
         // The least distance along each axis (axis 0: x with a, axis 1: y with b).
-        let least = |k: usize, t0: f64, t1: f64| {
-            let top = local.iter().map(|q| q[k] - t1 * q[2]).fold(f64::NEG_INFINITY, f64::max);
-            let bottom = local.iter().map(|q| q[k] - t0 * q[2]).fold(f64::INFINITY, f64::min);
-            (top - bottom) / (t1 - t0)
-        };
+        let least = |k: usize, t0: f64, t1: f64| least_distance(&local, k, (t0, t1));
         let zmin = local.iter().map(|q| q[2]).fold(f64::INFINITY, f64::min);
         // Never inside the points: the eye stays in front of the nearest by a little.
         let floor = -zmin + 1e-3 * size.max(1e-9);
         let distance = least(0, a0, a1).max(least(1, b0, b1)).max(floor).max(1e-9);
         // The shift along one axis: the feasible range, then bisection to centre the extent.
-        let shift = |k: usize, t0: f64, t1: f64| {
-            let lo_s = local
-                .iter()
-                .map(|q| q[k] - t1 * (q[2] + distance))
-                .fold(f64::NEG_INFINITY, f64::max);
-            let hi_s = local
-                .iter()
-                .map(|q| q[k] - t0 * (q[2] + distance))
-                .fold(f64::INFINITY, f64::min);
-            let (mut a, mut b) = (lo_s.min(hi_s), lo_s.max(hi_s));
-            let target = t0 + t1;
-            let mid = |s: f64| {
-                let (mut u0, mut u1) = (f64::INFINITY, f64::NEG_INFINITY);
-                for q in &local {
-                    let u = (q[k] - s) / (q[2] + distance);
-                    u0 = u0.min(u);
-                    u1 = u1.max(u);
-                }
-                u0 + u1
-            };
-            for _ in 0..60 {
-                let m = 0.5 * (a + b);
-                if mid(m) > target {
-                    a = m;
-                } else {
-                    b = m;
-                }
-            }
-            0.5 * (a + b)
-        };
+        let shift = |k: usize, t0: f64, t1: f64| centring_shift(&local, k, (t0, t1), distance);
         let (sx, sy) = (shift(0, a0, a1), shift(1, b0, b1));
         let target = add(centre, add(scale(sx, right), scale(sy, up)));
         let eye = sub(target, scale(distance, forward));
@@ -477,4 +414,97 @@ fn check_fov(fov_y_deg: f64) -> Result<(), Error> {
         ));
     }
     Ok(())
+}
+
+/// The checks of [`Camera::frame_points`]' arguments: the unit direction of `from`.
+fn check_framing(
+    points: &[[f64; 3]],
+    from: [f64; 3],
+    fov_y_deg: f64,
+    (width, height): (usize, usize),
+    window: [f64; 4],
+) -> Result<[f64; 3], Error> {
+    check_size(width, height)?;
+    check_fov(fov_y_deg)?;
+    if points.is_empty() || !points.iter().flatten().all(|c| c.is_finite()) {
+        return Err(invalid(
+            "points",
+            format!("{} points", points.len()),
+            "at least one point, finite",
+        ));
+    }
+    let (w, h) = (width as f64, height as f64);
+    let [x0, y0, x1, y1] = window;
+    if !(0.0 <= x0 && x0 < x1 && x1 <= w && 0.0 <= y0 && y0 < y1 && y1 <= h) {
+        return Err(invalid(
+            "window",
+            format!("{window:?}"),
+            &format!("x0 < x1 within [0, {width}] and y0 < y1 within [0, {height}] pixels"),
+        ));
+    }
+    let n = norm(from);
+    if !(n > 0.0 && n.is_finite()) {
+        return Err(invalid("from", format!("{from:?}"), "a finite non-zero direction"));
+    }
+    Ok(scale(1.0 / n, from))
+}
+
+/// The camera basis of a view from the unit direction `dir` (from the scene towards the
+/// eye): the world's up (z, or y when looking along z), forward, right and the image's up.
+fn view_basis(dir: [f64; 3]) -> ([f64; 3], [f64; 3], [f64; 3], [f64; 3]) {
+    let world_up = if dir[0].abs() < 1e-9 && dir[1].abs() < 1e-9 {
+        [0.0, 1.0, 0.0]
+    } else {
+        [0.0, 0.0, 1.0]
+    };
+    let forward = scale(-1.0, dir);
+    let right = {
+        let r = cross(forward, world_up);
+        scale(1.0 / norm(r), r)
+    };
+    let up = cross(right, forward);
+    (world_up, forward, right, up)
+}
+
+/// The least eye distance D at which every point of `local` (camera basis, from the
+/// points' centre) fits between the window's sides (t0, t1) as tangents along axis k:
+/// (maxᵢ(xᵢ − t1 zᵢ) − minᵢ(xᵢ − t0 zᵢ)) / (t1 − t0).
+fn least_distance(local: &[[f64; 3]], k: usize, (t0, t1): (f64, f64)) -> f64 {
+    let top = local.iter().map(|q| q[k] - t1 * q[2]).fold(f64::NEG_INFINITY, f64::max);
+    let bottom = local.iter().map(|q| q[k] - t0 * q[2]).fold(f64::INFINITY, f64::min);
+    (top - bottom) / (t1 - t0)
+}
+
+/// The eye's shift along axis k at `distance` that centres the points' projected extent
+/// between the window's sides (t0, t1): the feasible range, then bisection (the extent's
+/// midpoint falls as the shift grows).
+fn centring_shift(local: &[[f64; 3]], k: usize, (t0, t1): (f64, f64), distance: f64) -> f64 {
+    let lo_s = local
+        .iter()
+        .map(|q| q[k] - t1 * (q[2] + distance))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let hi_s = local
+        .iter()
+        .map(|q| q[k] - t0 * (q[2] + distance))
+        .fold(f64::INFINITY, f64::min);
+    let (mut a, mut b) = (lo_s.min(hi_s), lo_s.max(hi_s));
+    let target = t0 + t1;
+    let mid = |s: f64| {
+        let (mut u0, mut u1) = (f64::INFINITY, f64::NEG_INFINITY);
+        for q in local {
+            let u = (q[k] - s) / (q[2] + distance);
+            u0 = u0.min(u);
+            u1 = u1.max(u);
+        }
+        u0 + u1
+    };
+    for _ in 0..60 {
+        let m = 0.5 * (a + b);
+        if mid(m) > target {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    0.5 * (a + b)
 }

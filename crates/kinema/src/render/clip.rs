@@ -11,7 +11,7 @@
 //!   ([`guard_rect`], [`clip_halfplane`]).
 
 use super::camera::{Camera, Projector};
-use crate::vec3::{norm, sub};
+use crate::vec3::{dot, norm, sub};
 
 /// Primitives are clipped to the image widened by this margin (pixels), wider than any
 /// line's antialiased reach, so that what is clipped away never touches a pixel and all
@@ -105,4 +105,9 @@ pub(crate) fn clip_where<const N: usize>(poly: &[[f64; N]], side: impl Fn([f64; 
         }
     }
     out
+}
+
+/// The part of the convex polygon `poly` (world) on the free side n·(x − q) ≥ 0 of a plane.
+pub(crate) fn clip_polygon_halfspace(poly: &[[f64; 3]], q: [f64; 3], n: [f64; 3]) -> Vec<[f64; 3]> {
+    clip_where(poly, |x| dot(sub(x, q), n))
 }

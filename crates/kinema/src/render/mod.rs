@@ -33,27 +33,30 @@
 //! `prim` (pixel-space fills, lines and mesh facets); [`extent`] (the region infinite
 //! scenery is drawn in); `frame3` (what the 3D scenery painters share: a frame's
 //! constants, the surfaces' opacity, the floor rule); [`mesh_paint`] (mesh colliders →
-//! facets and lines); [`paint`] (colliders → primitives and sprites, meshes through
-//! `mesh_paint`); `raster` (the four stages).
+//! facets and lines); `shadows` (the particles' contact shadows on the 3D floors); [`paint`]
+//! (colliders → primitives and sprites, meshes through `mesh_paint`, shadows through
+//! `shadows`); `frame` (what a frame shows, the render parameters and stats); `lines`
+//! (springs and trails → lines); `raster` (the four stages).
 
 mod camera;
 mod clip;
 pub mod colormap;
 pub mod extent;
+mod frame;
 mod frame3;
+mod lines;
 pub mod mesh_paint;
 pub mod paint;
 mod pixels;
 mod prim;
 mod raster;
+mod shadows;
 pub mod text;
 pub mod yuv;
 
 pub use camera::{Camera, Projected, FRAME_MARGIN};
 pub use colormap::{categorical, Colormap, COLORMAP_NAMES};
 pub use extent::{collider_boxes, scene_extent, Region};
+pub use frame::{Frame, RenderParams, RenderStats, Shading, MARKER_COLOR, MARKER_RIM_COLOR, MARKER_RIM_PX};
 pub use paint::Scenery;
-pub use raster::{
-    render, render_frame, render_scene, Frame, RenderParams, RenderStats, Shading, BAND_ROWS, MARKER_COLOR, MARKER_RIM_COLOR,
-    MARKER_RIM_PX,
-};
+pub use raster::{render, render_frame, render_scene, BAND_ROWS};

@@ -25,15 +25,16 @@
 //! sized by the scene's extent ([`super::extent`]).
 
 use super::camera::{invalid, Camera, Projector};
-use super::clip::{clip_halfplane, clip_polygon_near, clip_segment_near, clip_where, dot2, guard_rect, near_depth, GUARD};
+use super::clip::{clip_halfplane, clip_polygon_halfspace, clip_segment_near, dot2, guard_rect, near_depth, GUARD};
 use super::extent::{clamp_box, Region};
 pub use super::frame3::PLANE_ALPHA;
-use super::frame3::{Persp3, FLOOR_NZ};
-use super::mesh_paint::{paint_mesh, MeshFloors};
+use super::frame3::{tangents, Persp3};
+use super::mesh_paint::paint_mesh;
 use super::pixels::Sprite;
 use super::prim::{fill, line, push, Prim};
+use super::shadows::shadows;
 use crate::collide::{Collider, Pose, SurfaceVelocity};
-use crate::vec3::{add, cross, dot, norm, scale, sub};
+use crate::vec3::{add, dot, norm, scale, sub};
 use crate::Error;
 
 /// The scenery of a frame: what to draw besides the particles.
@@ -106,10 +107,7 @@ pub const OBSTACLE_COLOR: [u8; 3] = [176, 178, 184];
 /// 3D plane patches: a grey drawn at [`PLANE_ALPHA`], so that what lies behind a plane shows
 /// through it; over white one plane reads about as [`FLOOR_COLOR`], two crossing ones darker.
 pub const PLANE_COLOR: [u8; 3] = [150, 150, 142];
-/// Contact shadows on 3D floors ([`shadows`]): this colour at up to [`SHADOW_ALPHA`].
-pub const SHADOW_COLOR: [u8; 3] = [30, 30, 38];
-/// Opacity of the core of the shadow of a particle resting on a floor.
-pub const SHADOW_ALPHA: f32 = 0.55;
+pub use super::shadows::{SHADOW_ALPHA, SHADOW_COLOR};
 
 /// Line widths, pixels.
 const PATCH_OUTLINE_PX: f64 = 1.5;
@@ -152,140 +150,156 @@ pub(crate) fn paint(colliders: &[Collider], extent: Region, view: &View, particl
     if colliders.is_empty() {
         return out;
     }
-    let (w, h) = (view.width as f64, view.height as f64);
     match (*view.camera, *view.projector) {
         (Camera::Perspective { eye, up: world_up, .. }, Projector::Persp { .. }) => {
-            // Geometry nearer than this along the view axis is cut off before projecting.
-            let p3 = Persp3 {
-                proj: view.projector,
-                zn: near_depth(view.camera, view.projector),
-                w,
-                h,
-            };
-            // Each plane is drawn where it bounds the free space: the part of it on the free
-            // side of every other plane (a bowl of tilted planes shows its facets, not eight
-            // squares running through each other).
-            let planes: Vec<([f64; 3], [f64; 3])> = colliders
-                .iter()
-                .filter_map(|c| match c {
-                    Collider::Plane(p) => Some((p.point(), p.normal())),
-                    _ => None,
-                })
-                .collect();
-            // Mesh triangles spanning more depth than the smallest particle's radius (or than
-            // 1/64 of the scene's diagonal, whichever is larger: the pieces stay few) are
-            // halved, so that their depth order with the particles holds (`mesh_paint`).
-            let smallest = particles.1.iter().copied().filter(|&r| r > 0.0).fold(f64::INFINITY, f64::min);
-            let split = smallest.max(norm(sub(extent.1, extent.0)) / 64.0);
-            let mut k = 0;
-            for collider in colliders {
-                match collider {
-                    Collider::Plane(p) => {
-                        let others: Vec<([f64; 3], [f64; 3])> =
-                            planes.iter().enumerate().filter(|&(j, _)| j != k).map(|(_, &q)| q).collect();
-                        k += 1;
-                        p3.plane(&mut out.background, p.point(), p.normal(), eye, extent, &others)
-                    }
-                    Collider::Box(b) => p3.container(&mut out.background, b.lo(), b.hi(), extent, world_up),
-                    Collider::Mesh(m) => paint_mesh(&p3, m, eye, view.light, split, &mut out.ordered),
-                    Collider::Sphere(_) => {}
-                }
-            }
-            shadows(&p3, colliders, eye, particles, &mut out);
-            for collider in colliders {
-                if let Collider::Sphere(sphere) = collider {
-                    let (center, radius) = (sphere.center(), sphere.radius());
-                    if norm(sub(eye, center)) <= radius {
-                        continue; // the eye is inside: the sphere would hide the whole world
-                    }
-                    let Some(mut q) = view.projector.project(center, radius) else {
-                        continue;
-                    };
-                    // Obstacles are large, so the exact apparent radius is worth having: a
-                    // sphere of radius R at depth z seen on the axis spans f·R/√(z² − R²), i.e.
-                    // the particles' f·R/z times z/√(z² − R²).
-                    let z2r2 = q.depth * q.depth - radius * radius;
-                    q.r = if z2r2 > 0.0 { q.r * q.depth / z2r2.sqrt() } else { 1e6 };
-                    if let Some(s) = Sprite::new(q.x, q.y, q.r.max(view.min_radius_px), OBSTACLE_COLOR, view.width, view.height) {
-                        out.spheres.push((q.depth, s));
-                    }
-                }
-            }
+            paint_3d(colliders, extent, view, particles, (eye, world_up), &mut out)
         }
-        (_, Projector::Ortho { cx, cy, s }) => {
-            let to_px = |x: f64, y: f64| [cx + s * x, cy - s * y];
-            for collider in colliders {
-                match collider {
-                    Collider::Plane(plane) => {
-                        let (point, normal) = (plane.point(), plane.normal());
-                        // In the xy view a plane is the line n·(x − p) = 0 of its normal's xy
-                        // part; a plane parallel to the view (normal along z) has no line.
-                        let nxy = (normal[0] * normal[0] + normal[1] * normal[1]).sqrt();
-                        if nxy <= 1e-9 * norm(normal) {
-                            continue;
-                        }
-                        // Pixel y runs down: the pixel-space normal is (nx, −ny).
-                        let n = [normal[0] / nxy, -normal[1] / nxy];
-                        let p = to_px(point[0], point[1]);
-                        // The solid side n·(q − p) ≤ 0 of the guard rectangle, filled.
-                        let mut poly = guard_rect(w, h);
-                        poly = clip_halfplane(&poly, [-n[0], -n[1], dot2(n, p)]);
-                        push(&mut out.background, fill(poly, FLOOR_COLOR, 1.0, w, h));
-                        // The line: the foot of the image centre on it, ± more than the guard
-                        // rectangle's diagonal along its direction t = (−n_y, n_x).
-                        let t = [-n[1], n[0]];
-                        let c = [0.5 * w, 0.5 * h];
-                        let along = dot2(t, [c[0] - p[0], c[1] - p[1]]);
-                        let foot = [p[0] + along * t[0], p[1] + along * t[1]];
-                        let reach = 2.0 * (w + h + 4.0 * GUARD);
-                        let a = [foot[0] - reach * t[0], foot[1] - reach * t[1]];
-                        let b = [foot[0] + reach * t[0], foot[1] + reach * t[1]];
-                        push(&mut out.background, line(a, b, PLANE_2D_PX, LINE_COLOR, 1.0, w, h));
-                    }
-                    Collider::Box(b) => {
-                        let (lo, hi) = (b.lo(), b.hi());
-                        let (l, u) = clamp_box(lo, hi, extent);
-                        // Each side is drawn when its own bound is finite: no lid on an open top.
-                        let sides = [
-                            (lo[0].is_finite(), [l[0], l[1]], [l[0], u[1]]),
-                            (hi[0].is_finite(), [u[0], l[1]], [u[0], u[1]]),
-                            (lo[1].is_finite(), [l[0], l[1]], [u[0], l[1]]),
-                            (hi[1].is_finite(), [l[0], u[1]], [u[0], u[1]]),
-                        ];
-                        for (finite, a, b) in sides {
-                            if finite {
-                                let (a, b) = (to_px(a[0], a[1]), to_px(b[0], b[1]));
-                                push(&mut out.background, line(a, b, BOX_2D_PX, LINE_COLOR, 1.0, w, h));
-                            }
-                        }
-                    }
-                    Collider::Mesh(_) => {} // a 2D world has no meshes
-                    Collider::Sphere(sphere) => {
-                        let center = sphere.center();
-                        let p = to_px(center[0], center[1]);
-                        let r = (s * sphere.radius()).max(view.min_radius_px);
-                        if let Some(sp) = Sprite::new(p[0], p[1], r, OBSTACLE_COLOR, view.width, view.height) {
-                            out.background.push(Prim::Disc(sp));
-                        }
-                    }
-                }
-            }
-        }
+        (_, Projector::Ortho { cx, cy, s }) => paint_2d(colliders, extent, view, (cx, cy, s), &mut out),
         _ => unreachable!("a projector is made from its camera"),
     }
     out
 }
 
+/// [`paint`] through a perspective camera at `eye` (with its `world_up`): planes and boxes
+/// into the background, meshes' facets and sphere obstacles to order with the particles,
+/// the particles' shadows on the floors.
+fn paint_3d(
+    colliders: &[Collider],
+    extent: Region,
+    view: &View,
+    particles: (&[f64], &[f64]),
+    (eye, world_up): ([f64; 3], [f64; 3]),
+    out: &mut Painted,
+) {
+    let (w, h) = (view.width as f64, view.height as f64);
+    // Geometry nearer than this along the view axis is cut off before projecting.
+    let p3 = Persp3 {
+        proj: view.projector,
+        zn: near_depth(view.camera, view.projector),
+        w,
+        h,
+    };
+    // Each plane is drawn where it bounds the free space: the part of it on the free
+    // side of every other plane (a bowl of tilted planes shows its facets, not eight
+    // squares running through each other).
+    let planes: Vec<([f64; 3], [f64; 3])> = colliders
+        .iter()
+        .filter_map(|c| match c {
+            Collider::Plane(p) => Some((p.point(), p.normal())),
+            _ => None,
+        })
+        .collect();
+    // Mesh triangles spanning more depth than the smallest particle's radius (or than
+    // 1/64 of the scene's diagonal, whichever is larger: the pieces stay few) are
+    // halved, so that their depth order with the particles holds (`mesh_paint`).
+    let smallest = particles.1.iter().copied().filter(|&r| r > 0.0).fold(f64::INFINITY, f64::min);
+    let split = smallest.max(norm(sub(extent.1, extent.0)) / 64.0);
+    let mut k = 0;
+    for collider in colliders {
+        match collider {
+            Collider::Plane(p) => {
+                let others: Vec<([f64; 3], [f64; 3])> =
+                    planes.iter().enumerate().filter(|&(j, _)| j != k).map(|(_, &q)| q).collect();
+                k += 1;
+                p3.plane(&mut out.background, p.point(), p.normal(), eye, extent, &others)
+            }
+            Collider::Box(b) => p3.container(&mut out.background, b.lo(), b.hi(), extent, world_up),
+            Collider::Mesh(m) => paint_mesh(&p3, m, eye, view.light, split, &mut out.ordered),
+            Collider::Sphere(_) => {}
+        }
+    }
+    shadows(&p3, colliders, eye, particles, (&mut out.background, &mut out.ordered));
+    paint_spheres(colliders, eye, view, &mut out.spheres);
+}
+
+/// The 3D sphere obstacles, shaded spheres with their depths (none around the eye).
+fn paint_spheres(colliders: &[Collider], eye: [f64; 3], view: &View, spheres: &mut Vec<(f64, Sprite)>) {
+    for collider in colliders {
+        if let Collider::Sphere(sphere) = collider {
+            let (center, radius) = (sphere.center(), sphere.radius());
+            if norm(sub(eye, center)) <= radius {
+                continue; // the eye is inside: the sphere would hide the whole world
+            }
+            let Some(mut q) = view.projector.project(center, radius) else {
+                continue;
+            };
+            // Obstacles are large, so the exact apparent radius is worth having: a
+            // sphere of radius R at depth z seen on the axis spans f·R/√(z² − R²), i.e.
+            // the particles' f·R/z times z/√(z² − R²).
+            let z2r2 = q.depth * q.depth - radius * radius;
+            q.r = if z2r2 > 0.0 { q.r * q.depth / z2r2.sqrt() } else { 1e6 };
+            if let Some(s) = Sprite::new(q.x, q.y, q.r.max(view.min_radius_px), OBSTACLE_COLOR, view.width, view.height) {
+                spheres.push((q.depth, s));
+            }
+        }
+    }
+}
+
+/// [`paint`] through the orthographic camera of the xy-plane (pixel x = cx + s x, y = cy −
+/// s y): everything into the background, under the particles.
+fn paint_2d(colliders: &[Collider], extent: Region, view: &View, (cx, cy, s): (f64, f64, f64), out: &mut Painted) {
+    let (w, h) = (view.width as f64, view.height as f64);
+    let to_px = |x: f64, y: f64| [cx + s * x, cy - s * y];
+    for collider in colliders {
+        match collider {
+            Collider::Plane(plane) => {
+                let (point, normal) = (plane.point(), plane.normal());
+                // In the xy view a plane is the line n·(x − p) = 0 of its normal's xy
+                // part; a plane parallel to the view (normal along z) has no line.
+                let nxy = (normal[0] * normal[0] + normal[1] * normal[1]).sqrt();
+                if nxy <= 1e-9 * norm(normal) {
+                    continue;
+                }
+                // Pixel y runs down: the pixel-space normal is (nx, −ny).
+                let n = [normal[0] / nxy, -normal[1] / nxy];
+                let p = to_px(point[0], point[1]);
+                // The solid side n·(q − p) ≤ 0 of the guard rectangle, filled.
+                let mut poly = guard_rect(w, h);
+                poly = clip_halfplane(&poly, [-n[0], -n[1], dot2(n, p)]);
+                push(&mut out.background, fill(poly, FLOOR_COLOR, 1.0, w, h));
+                // The line: the foot of the image centre on it, ± more than the guard
+                // rectangle's diagonal along its direction t = (−n_y, n_x).
+                let t = [-n[1], n[0]];
+                let c = [0.5 * w, 0.5 * h];
+                let along = dot2(t, [c[0] - p[0], c[1] - p[1]]);
+                let foot = [p[0] + along * t[0], p[1] + along * t[1]];
+                let reach = 2.0 * (w + h + 4.0 * GUARD);
+                let a = [foot[0] - reach * t[0], foot[1] - reach * t[1]];
+                let b = [foot[0] + reach * t[0], foot[1] + reach * t[1]];
+                push(&mut out.background, line(a, b, PLANE_2D_PX, LINE_COLOR, 1.0, w, h));
+            }
+            Collider::Box(b) => {
+                let (lo, hi) = (b.lo(), b.hi());
+                let (l, u) = clamp_box(lo, hi, extent);
+                // Each side is drawn when its own bound is finite: no lid on an open top.
+                let sides = [
+                    (lo[0].is_finite(), [l[0], l[1]], [l[0], u[1]]),
+                    (hi[0].is_finite(), [u[0], l[1]], [u[0], u[1]]),
+                    (lo[1].is_finite(), [l[0], l[1]], [u[0], l[1]]),
+                    (hi[1].is_finite(), [l[0], u[1]], [u[0], u[1]]),
+                ];
+                for (finite, a, b) in sides {
+                    if finite {
+                        let (a, b) = (to_px(a[0], a[1]), to_px(b[0], b[1]));
+                        push(&mut out.background, line(a, b, BOX_2D_PX, LINE_COLOR, 1.0, w, h));
+                    }
+                }
+            }
+            Collider::Mesh(_) => {} // a 2D world has no meshes
+            Collider::Sphere(sphere) => {
+                let center = sphere.center();
+                let p = to_px(center[0], center[1]);
+                let r = (s * sphere.radius()).max(view.min_radius_px);
+                if let Some(sp) = Sprite::new(p[0], p[1], r, OBSTACLE_COLOR, view.width, view.height) {
+                    out.background.push(Prim::Disc(sp));
+                }
+            }
+        }
+    }
+}
+
 /// The plane and box painters (the struct is shared with [`super::mesh_paint`]).
 impl Persp3<'_> {
-    /// A planar convex polygon in world coordinates, filled.
-    fn polygon(&self, out: &mut Vec<Prim>, world: &[[f64; 3]], color: [u8; 3], alpha: f32) {
-        let cam: Vec<[f64; 3]> = world.iter().map(|&p| self.proj.camera_coords(p)).collect();
-        let front = clip_polygon_near(&cam, self.zn);
-        let px: Vec<[f64; 2]> = front.iter().map(|&c| self.proj.camera_to_pixel(c)).collect();
-        push(out, fill(px, color, alpha, self.w, self.h));
-    }
-
     /// A world segment, drawn as a line `width` pixels wide.
     fn segment(&self, out: &mut Vec<Prim>, a: [f64; 3], b: [f64; 3], width: f64, alpha: f32) {
         let (a, b) = (self.proj.camera_coords(a), self.proj.camera_coords(b));
@@ -484,11 +498,6 @@ fn nice_step(x: f64) -> f64 {
     }
 }
 
-/// The part of the convex polygon `poly` (world) on the free side n·(x − q) ≥ 0 of a plane.
-fn clip_polygon_halfspace(poly: &[[f64; 3]], q: [f64; 3], n: [f64; 3]) -> Vec<[f64; 3]> {
-    clip_where(poly, |x| dot(sub(x, q), n))
-}
-
 /// The part of the segment ab (world) on the free side of every plane (point, normal).
 fn clip_segment_halfspaces(a: [f64; 3], b: [f64; 3], planes: &[([f64; 3], [f64; 3])]) -> Option<([f64; 3], [f64; 3])> {
     let (mut s0, mut s1) = (0.0f64, 1.0f64);
@@ -507,193 +516,4 @@ fn clip_segment_halfspaces(a: [f64; 3], b: [f64; 3], planes: &[([f64; 3], [f64; 
         }
     }
     (s1 > s0).then(|| (add(a, scale(s0, sub(b, a))), add(a, scale(s1, sub(b, a)))))
-}
-
-/// A floor a particle can stand over: a plane whose normal points up (n_z ≥ [`FLOOR_NZ`] of
-/// its length), or a box's closed bottom face (only over the box's xy extent). (A mesh's
-/// floors are its triangles, [`MeshFloors`].)
-struct Floor {
-    point: [f64; 3],
-    /// Unit normal, pointing into the free side.
-    n: [f64; 3],
-    /// The xy rectangle it covers (a box's bottom), else unbounded.
-    xy: Option<([f64; 2], [f64; 2])>,
-}
-
-/// The floor a particle's shadow falls on: the drop t (m) along −z from its centre to it,
-/// the centre's distance d ≥ 0 from the floor's plane, its unit normal n (into the free
-/// side), a point of it, and the plane or box (none: a mesh's triangle).
-struct Below<'a> {
-    t: f64,
-    d: f64,
-    n: [f64; 3],
-    point: [f64; 3],
-    floor: Option<&'a Floor>,
-}
-
-/// Contact shadows: each particle above a floor darkens a soft disc of that floor straight
-/// below it (along −z, kinema's gravity), on the first floor the vertical through its centre
-/// meets. With h the gap between the particle (radius r) and the floor, the disc's radius is
-/// r + h/2 and the opacity of its core [`SHADOW_ALPHA`]·exp(−h / 2r): a ball resting on the
-/// floor sits on a dark patch, one a few radii up casts a wide faint one, and one higher
-/// than about 7 radii none. The soft edge is six concentric discs (24-gons in the floor
-/// plane) of equal opacity, spread more widely the higher the particle, each cut to its
-/// floor (a box's bottom face; a plane's part on the free side of the other planes). On a
-/// plane or a box the shadow is drawn after the scenery and before every particle (particles
-/// stand above their floors, so nothing a shadow could cover is in front of it). On a
-/// mesh's triangle (the bottom of a bowl; uncut: a fine mesh curves away from the disc by
-/// less than it can show) it joins the depth order just behind its particle, so that the
-/// mesh's facets behind it are drawn under it and those in front over it. Floors seen from
-/// below (the eye on their solid side) get none.
-fn shadows(p3: &Persp3, colliders: &[Collider], eye: [f64; 3], particles: (&[f64], &[f64]), out: &mut Painted) {
-    let (positions, radius) = particles;
-    if radius.is_empty() {
-        return;
-    }
-    let mut floors = Vec::new();
-    let mut meshes = Vec::new();
-    for c in colliders {
-        match c {
-            Collider::Plane(p) => {
-                let n = scale(1.0 / norm(p.normal()), p.normal());
-                if n[2] >= FLOOR_NZ {
-                    floors.push(Floor {
-                        point: p.point(),
-                        n,
-                        xy: None,
-                    });
-                }
-            }
-            Collider::Box(b) => {
-                let (lo, hi) = (b.lo(), b.hi());
-                if lo[2].is_finite() {
-                    floors.push(Floor {
-                        point: [0.0, 0.0, lo[2]],
-                        n: [0.0, 0.0, 1.0],
-                        xy: Some(([lo[0], lo[1]], [hi[0], hi[1]])),
-                    });
-                }
-            }
-            Collider::Mesh(m) => meshes.extend(MeshFloors::new(m)),
-            Collider::Sphere(_) => {}
-        }
-    }
-    if floors.is_empty() && meshes.is_empty() {
-        return;
-    }
-    // Each shadow is cut to its floor: a box's bottom face, or the part of a plane on the
-    // free side of the other planes (a facet of a bowl), as the floor is drawn.
-    let planes: Vec<([f64; 3], [f64; 3])> = floors.iter().filter(|f| f.xy.is_none()).map(|f| (f.point, f.n)).collect();
-    const SIDES: usize = 24;
-    const RINGS: usize = 6;
-    let mut on_mesh = Vec::new();
-    for (c, &r) in positions.chunks_exact(3).zip(radius) {
-        let c = [c[0], c[1], c[2]];
-        if !(r > 0.0) {
-            continue;
-        }
-        // The first floor below the centre along −z: the least drop t = d / n_z.
-        let mut best: Option<Below> = None;
-        for f in &floors {
-            if let Some((lo, hi)) = f.xy {
-                if c[0] < lo[0] || c[0] > hi[0] || c[1] < lo[1] || c[1] > hi[1] {
-                    continue;
-                }
-            }
-            let d = dot(sub(c, f.point), f.n);
-            if d < 0.0 {
-                continue;
-            }
-            let t = d / f.n[2];
-            if best.as_ref().is_none_or(|b| t < b.t) {
-                best = Some(Below {
-                    t,
-                    d,
-                    n: f.n,
-                    point: f.point,
-                    floor: Some(f),
-                });
-            }
-        }
-        for m in &meshes {
-            if let Some((t, n, q)) = m.below(c) {
-                if best.as_ref().is_none_or(|b| t < b.t) {
-                    best = Some(Below {
-                        t,
-                        d: t * n[2],
-                        n,
-                        point: q,
-                        floor: None,
-                    });
-                }
-            }
-        }
-        let Some(Below { t, d, n, point, floor }) = best else {
-            continue;
-        };
-        if dot(sub(eye, point), n) <= 0.0 {
-            continue; // the floor is seen from below
-        }
-        let h = (d - r).max(0.0);
-        let alpha = SHADOW_ALPHA * (-h / (2.0 * r)).exp() as f32;
-        if alpha < 0.01 {
-            continue;
-        }
-        let foot = [c[0], c[1], c[2] - t];
-        let rs = r + 0.5 * h;
-        // The soft edge: rings from (1 − b) to (1 + b) of rs, b from 0.3 (resting) to 0.7.
-        let b = 0.3 + 0.4 * h / (h + r);
-        let ring_alpha = 1.0 - (1.0 - alpha).powf(1.0 / RINGS as f32);
-        let (t1, t2) = tangents(n);
-        for ring in 0..RINGS {
-            let rr = rs * (1.0 - b + 2.0 * b * ring as f64 / (RINGS - 1) as f64);
-            let mut poly: Vec<[f64; 3]> = (0..SIDES)
-                .map(|i| {
-                    let a = std::f64::consts::TAU * i as f64 / SIDES as f64;
-                    add(foot, add(scale(rr * a.cos(), t1), scale(rr * a.sin(), t2)))
-                })
-                .collect();
-            match floor.map(|f| f.xy) {
-                Some(Some((lo, hi))) => {
-                    for (q, m) in [
-                        ([lo[0], 0.0, 0.0], [1.0, 0.0, 0.0]),
-                        ([hi[0], 0.0, 0.0], [-1.0, 0.0, 0.0]),
-                        ([0.0, lo[1], 0.0], [0.0, 1.0, 0.0]),
-                        ([0.0, hi[1], 0.0], [0.0, -1.0, 0.0]),
-                    ] {
-                        if q.iter().all(|v| v.is_finite()) {
-                            poly = clip_polygon_halfspace(&poly, q, m);
-                        }
-                    }
-                }
-                Some(None) => {
-                    for &(q, m) in &planes {
-                        if (q, m) != (point, n) {
-                            poly = clip_polygon_halfspace(&poly, q, m);
-                        }
-                    }
-                }
-                None => {}
-            }
-            if poly.len() >= 3 {
-                let layer = if floor.is_some() { &mut out.background } else { &mut on_mesh };
-                p3.polygon(layer, &poly, SHADOW_COLOR, ring_alpha);
-            }
-        }
-        // Just behind the particle in the depth order (its depth, one step further: the same
-        // zc as its sprite's), after every facet behind it.
-        let behind = p3.proj.camera_coords(c)[2].next_up();
-        out.ordered.extend(on_mesh.drain(..).map(|p| (behind, p)));
-    }
-}
-
-/// Two unit tangents of the unit normal `n`: the world axis least aligned with n, made
-/// orthogonal to it, and n × that (a horizontal plane gets the world's x and y).
-fn tangents(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
-    let k = (0..3).min_by(|&i, &j| n[i].abs().total_cmp(&n[j].abs())).unwrap_or(0);
-    let mut axis = [0.0; 3];
-    axis[k] = 1.0;
-    let v = cross(n, axis);
-    let t1 = scale(1.0 / norm(v), v);
-    (t1, cross(n, t1))
 }

@@ -78,23 +78,8 @@ impl Rates {
 /// Estimates the [`Rates`] of the forces at state `s` for particles of inverse masses
 /// `inv_mass` (0 = pinned), in `dim` dimensions.
 pub(crate) fn estimate(forces: &mut [&mut dyn Force], s: &State, inv_mass: &[f64], dim: usize) -> Result<Rates, CallbackError> {
-    // The bounds add, and hold when every force has one; the stiffest standby oscillation
-    // counts whatever the others say.
-    let mut all = ForceRates::default();
-    let mut every = true;
-    for f in forces.iter() {
-        match f.rates(s, inv_mass) {
-            Some(r) => all = all.add(r),
-            None => every = false,
-        }
-    }
-    let bound = every.then_some(all);
-    let standby = all.standby.map(|s| (s.omega_squared.sqrt(), s.zeta));
-    let mut rates = Rates {
-        bound,
-        standby,
-        ..Rates::default()
-    };
+    let mut rates = declared_rates(forces, s, inv_mass);
+    let bound = rates.bound;
     let n = s.x.len();
     // Symmetric scaling M^(−½) on free components (0 on the filtered ones). The buffers are
     // few (five of 3N values besides the Jacobian's): at 10⁶ particles each is 24 MB, and the
@@ -126,15 +111,7 @@ pub(crate) fn estimate(forces: &mut [&mut dyn Force], s: &State, inv_mass: &[f64
         Ok::<(), CallbackError>(())
     };
 
-    let skip = |b: Option<ForceRates>, damping: bool| {
-        b.is_some_and(|b| {
-            if damping {
-                b.damping_rate == 0.0
-            } else {
-                b.omega_squared == 0.0
-            }
-        })
-    };
+    let skip = known_zero;
     let mut y = vec![0.0; n];
     for velocity in [false, true] {
         if skip(bound, velocity) {
@@ -179,6 +156,38 @@ pub(crate) fn estimate(forces: &mut [&mut dyn Force], s: &State, inv_mass: &[f64
         }
     }
     Ok(rates)
+}
+
+/// The rates the forces declare at `s`: the bounds add, and hold when every force has one;
+/// the stiffest standby oscillation counts whatever the others say.
+fn declared_rates(forces: &[&mut dyn Force], s: &State, inv_mass: &[f64]) -> Rates {
+    let mut all = ForceRates::default();
+    let mut every = true;
+    for f in forces.iter() {
+        match f.rates(s, inv_mass) {
+            Some(r) => all = all.add(r),
+            None => every = false,
+        }
+    }
+    let bound = every.then_some(all);
+    let standby = all.standby.map(|s| (s.omega_squared.sqrt(), s.zeta));
+    Rates {
+        bound,
+        standby,
+        ..Rates::default()
+    }
+}
+
+/// Whether the declared bound `b` says the damping rate (`damping`) or the stiffness is 0:
+/// no power iteration is needed for it.
+fn known_zero(b: Option<ForceRates>, damping: bool) -> bool {
+    b.is_some_and(|b| {
+        if damping {
+            b.damping_rate == 0.0
+        } else {
+            b.omega_squared == 0.0
+        }
+    })
 }
 
 /// A deterministic pseudo-random number in [−1, 1) for component k (a SplitMix64 hash).

@@ -4,7 +4,7 @@
 //!
 //! A change of particles leaves the others' forces as they were when
 //!
-//! - every force but the spring–dashpot contact force acts on each particle alone
+//! - every force but the contact force acts on each particle alone
 //!   ([`Properties::per_particle`](crate::forces::Properties::per_particle): gravity, drag,
 //!   wind, an attractor; not springs, whose ends may go, nor a Python force), and
 //! - no contact joins what stays to what changes: no survivor touches a particle that dies,

@@ -129,12 +129,12 @@ impl World {
     /// and W in [`ColliderBooks`]' fields), which the next step's collider books start from;
     /// `None` when there are none (no force model, or none kept since a change).
     pub fn wall_force_carry(&self) -> Option<Vec<ColliderBooks>> {
-        self.collide_stage.as_ref()?.spring_dashpot.as_ref()?.wall_carry()
+        self.collide_stage.as_ref()?.force_model.as_ref()?.wall_carry()
     }
 
     /// Sets what [`World::wall_force_carry`] gave (a checkpoint's).
     pub fn restore_wall_force_carry(&mut self, carry: Option<Vec<ColliderBooks>>) {
-        if let Some(model) = self.collide_stage.as_ref().and_then(|c| c.spring_dashpot.as_ref()) {
+        if let Some(model) = self.collide_stage.as_ref().and_then(|c| c.force_model.as_ref()) {
             model.set_wall_carry(carry);
         }
     }

@@ -1,13 +1,13 @@
 //! Stages 2–4 of the world's step, the collide stage, as the world holds it: the step's call
 //! ([`World::collide`], which runs the impulse model's stages, `collide/impulse/step.rs`) and the user's side of it:
-//! turning collisions on, the contact model (the spring–dashpot model's force is the collide
+//! turning collisions on, the contact model (the contact force model's force is the collide
 //! stage's, lent to each evaluation: `forces.rs`), the particles' own materials, colliders, periodic axes, and what the
 //! stage found (contacts, their books).
 
 use super::integrate::WorldStepper;
 use super::{CollisionParams, CollisionStats, ContactModel, World};
 use crate::collide::stage::{CollideStage, ColliderBooks, StepFrame};
-use crate::collide::{Collider, Contact, GroupMasks, Motion, Periodic, TouchEvent};
+use crate::collide::{Collider, Contact, Motion, Periodic, TouchEvent};
 use crate::error::{Divergence, Error};
 use crate::forces::EnergyClass;
 
@@ -26,7 +26,7 @@ impl World {
             return Ok(());
         }
         if stage.params.model != ContactModel::Impulse {
-            // The spring–dashpot model acted in stage 1, as a force; what is left here is
+            // the contact force model acted in stage 1, as a force; what is left here is
             // keeping positions in the periodic cell (Verlet's drift wrapped them already,
             // before its force evaluation: a second pass would change nothing).
             stage.book_contact_force(h);
@@ -45,9 +45,9 @@ impl World {
             _ => None,
         };
         // Without forces the paths are straight lines from step to step: the stage keeps
-        // each particle's wake time and looks only at those due (collide/wake.rs). Verlet's
+        // each particle's meeting time and looks only at those due (collide/quiet.rs). Verlet's
         // force-free pass wrapped x1 into the periodic cell already.
-        // (a moving collider meets particles that stay put: no wake times, no sleep)
+        // (a moving collider meets particles that stay put: no meeting times, no sleep)
         let moving = stage.moves_within(self.time, t_end);
         let steady = self.forces.is_empty() && !moving;
         // Islands may sleep under forces that cannot pull a sleeper nobody looks at: none
@@ -99,7 +99,7 @@ impl World {
 
     /// The placement check that is due (`collide/placement.rs`), if any: before the next step,
     /// and before anything that evaluates the forces (the advisor, the accelerations), whose
-    /// spring–dashpot contact list would hold the N²/2 pairs of coincident particles.
+    /// contact force list would hold the N²/2 pairs of coincident particles.
     pub fn check_pending_placement(&mut self) -> Result<(), Error> {
         match self.placement_from {
             Some(from) => self.check_placement(from),
@@ -138,7 +138,7 @@ impl World {
     }
 
     /// Turns collisions on (or changes their settings): stages 2–4 of every step with the
-    /// impulse model, a contact force in stage 1 with the spring–dashpot model.
+    /// impulse model, a contact force in stage 1 with the force models.
     pub fn set_collisions(&mut self, params: CollisionParams) -> Result<(), Error> {
         match &mut self.collide_stage {
             Some(stage) => {
@@ -161,12 +161,12 @@ impl World {
     }
 
     /// After a change of the collision settings, colliders, materials or the domain: the
-    /// contact lists start over (the impulse model's and the spring–dashpot model's), and so
+    /// contact lists start over (the impulse model's and the contact force model's), and so
     /// do the method's caches.
     pub(super) fn contacts_changed(&mut self) {
         if let Some(stage) = &mut self.collide_stage {
             stage.forget_list();
-            if let Some(model) = &stage.spring_dashpot {
+            if let Some(model) = &stage.force_model {
                 model.forget_list();
             }
         }
@@ -227,97 +227,6 @@ impl World {
     /// no particle has its own.
     pub fn particle_materials(&self) -> Vec<(Option<f64>, Option<f64>)> {
         self.collide_stage.as_ref().map(|c| c.own.clone()).unwrap_or_default()
-    }
-
-    /// Puts particles `start..start + group.len()` into the collision groups `group` (0..32,
-    /// `collide/groups.rs`); the contact lists start over. Groups are kept with collisions off.
-    pub fn set_particle_groups(&mut self, start: usize, group: &[u32]) -> Result<(), Error> {
-        let n = self.particles.len();
-        if start + group.len() > n {
-            return Err(Error::invalid(
-                "group",
-                format!("{} values from particle {start}", group.len()),
-                format!("one collision group per particle, within the {n} particles"),
-            ));
-        }
-        super::contents::check_groups(group, group.len())?;
-        let p = &mut self.particles;
-        if p.group.is_empty() && group.iter().all(|&g| g == 0) {
-            return Ok(());
-        }
-        p.group.resize(n, 0);
-        for (k, &g) in group.iter().enumerate() {
-            p.group[start + k] = g as u8;
-        }
-        if p.group.iter().all(|&g| g == 0) {
-            p.group.clear();
-        }
-        // (a pair that collides now may overlap: the placement check looks at them again)
-        self.check_placement_from(start);
-        self.contacts_changed();
-        Ok(())
-    }
-
-    /// Each particle's collision group (all 0 unless set).
-    pub fn particle_groups(&self) -> Vec<u32> {
-        let p = &self.particles;
-        (0..p.len()).map(|i| p.group.get(i).map_or(0, |&g| g as u32)).collect()
-    }
-
-    /// Sets whether collision groups `a` and `b` collide (both ways: the matrix stays
-    /// symmetric); turns collisions on if they are off.
-    pub fn set_group_collisions(&mut self, a: usize, b: usize, collide: bool) -> Result<(), Error> {
-        let mut masks = self.group_masks();
-        masks.set(a, b, collide)?;
-        self.set_group_masks(masks)
-    }
-
-    /// The collision groups' matrix, as one mask per group (all set while collisions are off).
-    pub fn group_masks(&self) -> GroupMasks {
-        self.collide_stage.as_ref().map(|c| c.group_masks).unwrap_or_default()
-    }
-
-    /// Sets the collision groups' matrix; turns collisions on if they are off.
-    pub fn set_group_masks(&mut self, masks: GroupMasks) -> Result<(), Error> {
-        if self.collide_stage.is_none() {
-            self.set_collisions(CollisionParams::default())?;
-        }
-        let stage = self.collide_stage.as_mut().expect("collisions are on");
-        if stage.group_masks != masks {
-            stage.group_masks = masks;
-            self.contacts_changed();
-        }
-        Ok(())
-    }
-
-    /// Sets the groups collider `k` collides with (`mask`: bit g for group g).
-    pub fn set_collider_mask(&mut self, k: usize, mask: u32) -> Result<(), Error> {
-        let Some(stage) = self.collide_stage.as_mut().filter(|s| k < s.colliders.len()) else {
-            let n = self.collide_stage.as_ref().map_or(0, |s| s.colliders.len());
-            return Err(Error::invalid(
-                "collider",
-                k,
-                format!("an index below the number of colliders ({n})"),
-            ));
-        };
-        stage
-            .collider_masks
-            .resize(stage.colliders.len(), crate::collide::groups::ALL);
-        if stage.collider_masks[k] != mask {
-            stage.collider_masks[k] = mask;
-            self.check_placement_from(0);
-            self.contacts_changed();
-        }
-        Ok(())
-    }
-
-    /// Each collider's mask of the groups it collides with, in the order added.
-    pub fn collider_masks(&self) -> Vec<u32> {
-        self.collide_stage.as_ref().map_or_else(Vec::new, |s| {
-            (0..s.colliders.len())
-                .map(|k| s.collider_masks.get(k).copied().unwrap_or(crate::collide::groups::ALL))
-                .collect()
-        })
     }
 
     /// The collision settings, when collisions are on.
@@ -383,7 +292,7 @@ impl World {
     }
 
     /// Places the moving colliders where their motions have them at the step's end `t1` (s)
-    /// (the spring–dashpot force reads them there); returns whether any collider moves within
+    /// (the contact force reads them there); returns whether any collider moves within
     /// the step from the world's time.
     pub(super) fn place_moving_colliders(&mut self, t1: f64) -> Result<bool, Error> {
         let t0 = self.time;
@@ -447,7 +356,7 @@ impl World {
 
     /// The contacts found at the end of the last step, as detected: `overlap` before it was
     /// removed and `u_n` before the end-of-step impulses (impacts found inside the step by
-    /// continuous detection were already resolved). Empty with the spring–dashpot model,
+    /// continuous detection were already resolved). Empty with the force models,
     /// whose contacts live inside the force evaluations.
     pub fn contacts(&self) -> &[Contact] {
         self.collide_stage.as_ref().map_or(&[], |c| &c.impulse.detected)
@@ -483,7 +392,7 @@ impl World {
 
     /// Starts (`on`) or stops recording when pairs begin and end touching
     /// (`collide/touch.rs`): the impulse model's steps only. Started, the pairs whose last
-    /// step's contact carried an impulse count as touching already; stopped, the events not
+    /// step's contact bore an impulse count as touching already; stopped, the events not
     /// yet taken stay.
     pub fn record_contact_events(&mut self, on: bool) -> Result<(), Error> {
         let refuse = |why: &str| {

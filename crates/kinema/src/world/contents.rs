@@ -55,7 +55,7 @@ impl World {
         }
         // The state changed size; the others' contacts (their warm start, the islands asleep)
         // stay: their numbers did not change, and a newborn wakes what it touches. So do the
-        // spring–dashpot force's neighbour list (the newborns' pairs added) and, where the
+        // contact force's neighbour list (the newborns' pairs added) and, where the
         // newborns touch nothing, Verlet's acceleration (`carry.rs`).
         let kept = self.collide_stage.as_mut().map(|stage| stage.impulse.take_contacts());
         let a = self.acceleration_before_birth(range.start);
@@ -83,7 +83,7 @@ impl World {
     /// what the forces hold for it (springs ending on it, [`Force::reindex`]) and its
     /// own collision materials; velocity Verlet keeps the survivors' acceleration where the
     /// removal leaves it right (`carry.rs`), the other methods' caches start again; the impulse model's contacts between survivors keep their
-    /// warm start (every island wakes), and the spring–dashpot force's neighbour list their
+    /// warm start (every island wakes), and the contact force's neighbour list their
     /// pairs. Between steps only: the time, the step
     /// count and the collision books go on.
     pub fn remove_particles(&mut self, indices: &[usize]) -> Result<(), Error> {
@@ -138,7 +138,7 @@ impl World {
                 stage.impulse.keep_contacts(kept, self.particles.len());
             }
         }
-        // and the spring–dashpot force's neighbour list keeps the survivors' pairs
+        // and the contact force's neighbour list keeps the survivors' pairs
         if let Some(model) = self.spring_dashpot() {
             model.retain_survivors(&new_of_old);
         }
@@ -202,7 +202,7 @@ impl World {
             // (placed by hand before the first step; later writes are the user's dynamics)
             self.check_placement_from(0);
         }
-        // (radii may change: the spring–dashpot list starts over)
+        // (radii may change: the contact force list starts over)
         if let Some(model) = self.spring_dashpot() {
             model.forget_list();
         }
@@ -239,7 +239,7 @@ impl World {
         self.particles.enable_spin(factor);
     }
 
-    /// Whether the particles carry spin ([`World::set_spin`]).
+    /// Whether the particles have spin ([`World::set_spin`]).
     pub fn has_spin(&self) -> bool {
         self.particles.has_spin()
     }

@@ -1,4 +1,4 @@
-//! Deaths carried out by the engine between steps: particles whose time of death has come
+//! Deaths the engine applies between steps: particles whose time of death has come
 //! and particles inside a kill volume are removed after each step of [`World::advance`], so a
 //! world with lifetimes or kill volumes advances any number of steps in one call. Births stay
 //! with the caller (Python's emitters draw them from their own random streams, at step
@@ -122,7 +122,7 @@ impl Deaths {
 }
 
 impl World {
-    /// Sets the deaths the engine carries out after each step: `time_of_death` (s, one per
+    /// Sets the deaths the engine applies after each step: `time_of_death` (s, one per
     /// particle, in the user's order; +∞ or NaN-free values only, `None`: nobody dies of age)
     /// and the kill volumes. Particles added later live forever unless set again.
     pub fn set_deaths(&mut self, time_of_death: Option<Vec<f64>>, kills: Vec<KillVolume>) -> Result<(), Error> {
@@ -235,7 +235,7 @@ impl World {
 
     /// Removes the particles whose death has come at the current time (see the module doc);
     /// called after each step.
-    pub(super) fn carry_out_deaths(&mut self) -> Result<(), Error> {
+    pub(super) fn apply_deaths(&mut self) -> Result<(), Error> {
         if !self.deaths.any() || self.particles.is_empty() {
             return Ok(());
         }

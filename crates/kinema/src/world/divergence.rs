@@ -12,7 +12,7 @@ use crate::limits::GEOMETRY_LIMIT;
 pub const RUNAWAY_FACTOR: f64 = 1e3;
 
 /// The runaway-energy check runs at every this many steps (steps 10, 20, ...), not at every
-/// step: the energy needs a pass over the particles and, with spring–dashpot contacts, over
+/// step: the energy needs a pass over the particles and, with contact forces, over
 /// the contacts, which would cost as much as a force evaluation per step. A runaway grows
 /// over many steps, and a step that overflows is refused at once by the non-finite check.
 pub const RUNAWAY_CHECK_EVERY: u64 = 10;

@@ -1,5 +1,5 @@
 //! The forces of one evaluation: the world's own, in the order they were added, then, with the
-//! spring–dashpot model, the contact force the collide stage lends for the call
+//! force models (spring–dashpot, Hertz), the contact force the collide stage lends for the call
 //! ([`CollideStage::contact_force`]: its model with the particles' radii and inverse masses,
 //! the materials, colliders and domain where they live). The contact force comes last:
 //! Verlet's fused pass adds it after the sum of the others, the order of every evaluation.
@@ -9,7 +9,7 @@ use crate::collide::stage::CollideStage;
 use crate::forces::Force;
 use crate::particles::Particles;
 
-/// The spring–dashpot contact force on `particles` for one call (`None` without it).
+/// The contact force on `particles` for one call (`None` without it).
 pub(super) fn contact_force<'a>(stage: &'a Option<CollideStage>, particles: &'a Particles) -> Option<ContactForce<'a>> {
     stage
         .as_ref()?

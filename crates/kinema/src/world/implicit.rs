@@ -99,6 +99,35 @@ impl BaraffWitkin {
             v_out,
         } = span;
         let n = x.len();
+        self.reset_buffers(dynamics, n);
+
+        // F₀, and the products at (x₀, v₀).
+        dynamics.total_force(t, x, v)?;
+        stats.nfev += 1;
+        let s = State {
+            t,
+            x,
+            v,
+            mass: dynamics.mass,
+        };
+        let evaluations_before = self.jac.evaluations;
+        self.jac.prepare(dynamics.forces, &s, true)?;
+        self.right_hand_side(dynamics, &s, h)?;
+        self.precondition(&s, h);
+        self.conjugate_gradients(dynamics, &s, h)?;
+        stats.nfev += self.jac.evaluations - evaluations_before;
+
+        // v₁ = v₀ + Δv, x₁ = x₀ + h v₁.
+        for k in 0..n {
+            v_out[k] = v[k] + self.dv[k];
+            x_out[k] = x[k] + h * v_out[k];
+        }
+        Ok(())
+    }
+
+    /// The filter, the masses per component and the solve's buffers for n components (the
+    /// last Δv kept if it fits).
+    fn reset_buffers(&mut self, dynamics: &Dynamics<'_, '_>, n: usize) {
         free_components(dynamics.inv_mass, dynamics.dim, &mut self.free);
         self.mass.clear();
         self.mass.extend(dynamics.mass.iter().flat_map(|m| [*m; 3]));
@@ -119,43 +148,45 @@ impl BaraffWitkin {
             self.dv.clear();
             self.dv.resize(n, 0.0);
         }
+    }
 
-        // F₀, and the products at (x₀, v₀).
-        dynamics.total_force(t, x, v)?;
-        stats.nfev += 1;
-        let s = State {
-            t,
-            x,
-            v,
-            mass: dynamics.mass,
-        };
-        let evaluations_before = self.jac.evaluations;
-        self.jac.prepare(dynamics.forces, &s, true)?;
-
-        // b = h (F₀ + h ∂F/∂x v₀), filtered.
+    /// b = h (F₀ + h ∂F/∂x v₀), filtered (F₀ in `dynamics.force`, the Jacobian prepared at s).
+    fn right_hand_side(&mut self, dynamics: &mut Dynamics<'_, '_>, s: &State, h: f64) -> Result<(), CallbackError> {
+        let (v, n) = (s.v, s.x.len());
         for (hp, vk) in self.hp.iter_mut().zip(v) {
             *hp = h * vk;
         }
-        self.jac.apply(dynamics.forces, &s, &self.hp, &self.zero, &mut self.q)?;
+        self.jac.apply(dynamics.forces, s, &self.hp, &self.zero, &mut self.q)?;
         for k in 0..n {
             self.b[k] = self.free[k] * h * (dynamics.force[k] + self.q[k]);
         }
 
-        // Jacobi preconditioner: diag(A) = m − h² diag(∂F/∂x) − h diag(∂F/∂v), where known.
+        Ok(())
+    }
+
+    /// The Jacobi preconditioner diag(A) = m − h² diag(∂F/∂x) − h diag(∂F/∂v), where known
+    /// (m where not, or where that is not positive).
+    fn precondition(&mut self, s: &State, h: f64) {
         self.diag.copy_from_slice(&self.mass);
-        self.jac.add_diagonal(&s, -h * h, -h, &mut self.diag);
+        self.jac.add_diagonal(s, -h * h, -h, &mut self.diag);
         for (d, m) in self.diag.iter_mut().zip(&self.mass) {
             if !(d.is_finite() && *d > 0.0) {
                 *d = *m;
             }
         }
+    }
 
+    /// Conjugate gradients on A Δv = b from the last step's Δv, until the residual is
+    /// [`CG_TOLERANCE`] of b (or a direction is not positive definite, or the cap): Δv in
+    /// `dv`, with `iterations` and `converged`.
+    fn conjugate_gradients(&mut self, dynamics: &mut Dynamics<'_, '_>, s: &State, h: f64) -> Result<(), CallbackError> {
+        let n = s.x.len();
         // Conjugate gradients on A Δv = b from the last step's Δv.
         for (dv, f) in self.dv.iter_mut().zip(&self.free) {
             *dv *= f;
         }
         let dv = std::mem::take(&mut self.dv);
-        self.product(dynamics, &s, h, &dv)?;
+        self.product(dynamics, s, h, &dv)?;
         self.dv = dv;
         for k in 0..n {
             self.r[k] = self.b[k] - self.q[k];
@@ -188,7 +219,7 @@ impl BaraffWitkin {
             while self.iterations < cap {
                 self.iterations += 1;
                 let p = std::mem::take(&mut self.p);
-                let result = self.product(dynamics, &s, h, &p);
+                let result = self.product(dynamics, s, h, &p);
                 self.p = p;
                 result?;
                 let curvature = dot(&self.p, &self.q);
@@ -220,13 +251,6 @@ impl BaraffWitkin {
                     self.p[k] = self.z[k] + beta * self.p[k];
                 }
             }
-        }
-        stats.nfev += self.jac.evaluations - evaluations_before;
-
-        // v₁ = v₀ + Δv, x₁ = x₀ + h v₁.
-        for k in 0..n {
-            v_out[k] = v[k] + self.dv[k];
-            x_out[k] = x[k] + h * v_out[k];
         }
         Ok(())
     }

@@ -121,213 +121,14 @@ impl World {
     /// Velocity Verlet on the particles' arrays (see [`VerletBuffers`]): drift and predictor
     /// in one parallel pass, the force evaluation (after sorting the particles along space
     /// when the contact force's neighbour list must be rebuilt), the two half kicks in one
-    /// parallel pass that also finds a non-finite value.
+    /// parallel pass that also finds a non-finite value. Three variants: no force at all
+    /// ([`World::verlet_force_free`]), the contact force fused with the closing kick
+    /// ([`World::verlet_fused_kick`]), and the other forces alone ([`World::verlet_kick`]).
     fn verlet(&mut self) -> Result<(), Error> {
-        let n = 3 * self.particles.len();
-        let (t, h) = (self.time, self.step_length());
         let Some(WorldStepper::Verlet(mut b)) = self.stepper.take() else {
             unreachable!("called for verlet only")
         };
-        let contacts = self.has_contact_force();
-        let result = (|| {
-            if self.forces.is_empty() && !contacts {
-                // No force at all (a gas of the impulse model): a = a' = 0, so the drift is
-                // x + h v and both kicks add nothing. One pass instead of three, the same
-                // numbers (to the sign of a zero).
-                if !b.fresh || b.a.len() != n || b.a_next.len() != n {
-                    // zeros once; no step writes them again
-                    b.a.clear();
-                    b.a.resize(n, 0.0);
-                    b.a_next.clear();
-                    b.a_next.resize(n, 0.0);
-                    b.fresh = true;
-                }
-                // In a periodic cell x' is wrapped into it in the same pass (the collision
-                // stage is told, and wraps only what it moves itself).
-                let cell = self.collide_stage.as_ref().and_then(|c| c.domain.periodic_box());
-                let p = &self.particles;
-                let bad = self
-                    .x_next
-                    .par_chunks_mut(3 * CHUNK)
-                    .zip(self.v_next.par_chunks_mut(3 * CHUNK))
-                    .enumerate()
-                    .map(|(c, (xn, vn))| {
-                        let base = 3 * CHUNK * c;
-                        let mut bad = None;
-                        for k in 0..xn.len() {
-                            let (x, v) = (p.x[base + k], p.v[base + k]);
-                            xn[k] = x + h * v;
-                            vn[k] = v;
-                            if bad.is_none() && !xn[k].is_finite() {
-                                bad = Some(base + k);
-                            }
-                        }
-                        if let Some(cell) = cell {
-                            cell.wrap_positions_serial(xn);
-                        }
-                        bad
-                    })
-                    .flatten()
-                    .min();
-                return Ok::<_, Error>(bad);
-            }
-            if !b.fresh || b.a.len() != n {
-                b.a.resize(n, 0.0);
-                let p = &self.particles;
-                let mut contact = contact_force(&self.collide_stage, p);
-                let mut forces = every_force(&mut self.forces, contact.as_mut());
-                let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
-                dynamics.accel(t, &p.x, &p.v, &mut b.a)?;
-                self.stats.nfev += 1;
-                // and α = τ/I, where the contacts' torques turn the particles
-                if let Some(c) = contact.as_ref().filter(|c| c.has_tangential() && p.has_spin()) {
-                    let s = State {
-                        t,
-                        x: &p.x,
-                        v: &p.v,
-                        mass: &p.mass,
-                    };
-                    let mut alpha = vec![0.0; n];
-                    c.torques_at(&s, &mut alpha)?;
-                    for (q, a) in alpha.iter_mut().enumerate() {
-                        *a = if self.params.dim == 2 && q % 3 < 2 {
-                            0.0
-                        } else {
-                            *a * p.inv_inertia[q / 3]
-                        };
-                    }
-                    self.particles.alpha = alpha;
-                }
-                b.fresh = true;
-            }
-            // With spring–dashpot contacts in a periodic cell, x' is wrapped into the cell in
-            // the same pass, before the force evaluation, so that the kept acceleration is
-            // that of the state kept (collide's wrap then changes nothing). The impulse
-            // model's continuous detection needs the unwrapped drift, and wraps after its
-            // impacts.
-            let cell = self
-                .collide_stage
-                .as_ref()
-                .and_then(|c| c.domain.periodic_box())
-                .filter(|_| contacts);
-            let p = &self.particles;
-            let a = &b.a;
-            self.x_next
-                .par_chunks_mut(3 * CHUNK)
-                .zip(self.v_next.par_chunks_mut(3 * CHUNK))
-                .enumerate()
-                .for_each(|(c, (xn, vn))| {
-                    let chunk = 3 * CHUNK * c..3 * CHUNK * c + xn.len();
-                    let (x, v, a) = (&p.x[chunk.clone()], &p.v[chunk.clone()], &a[chunk]);
-                    for ((((xn, vn), x), v), a) in xn.iter_mut().zip(vn.iter_mut()).zip(x).zip(v).zip(a) {
-                        (*xn, *vn) = verlet::drift(*x, *v, *a, h);
-                    }
-                    if let Some(cell) = cell {
-                        let (lo, hi, axes) = (cell.lo(), cell.hi(), cell.axes());
-                        for q in xn.chunks_exact_mut(3) {
-                            for (k, c) in q.iter_mut().enumerate() {
-                                if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
-                                    *c = cell.wrap_coordinate(k, *c);
-                                }
-                            }
-                        }
-                    }
-                });
-            if self.sortable()
-                && self
-                    .collide_stage
-                    .as_ref()
-                    .and_then(|s| s.spring_dashpot.as_ref().map(|m| m.list_expired(&self.x_next, &s.domain)))
-                    .unwrap_or(false)
-            {
-                self.sort_along_space(&mut b.a);
-            }
-            b.a_next.resize(n, 0.0);
-            let p = &self.particles;
-            if let Some(contact) = contact_force(&self.collide_stage, p) {
-                // The contact force and the closing kick in one pass, the other forces first
-                // (and with spin under the contacts' torques, the angular kick beside).
-                let turns = contact.has_tangential() && p.has_spin();
-                if turns {
-                    b.omega_next.resize(n, 0.0);
-                    b.alpha_next.resize(n, 0.0);
-                }
-                let s1 = State {
-                    t: t + h,
-                    x: &self.x_next,
-                    v: &self.v_next,
-                    mass: &p.mass,
-                };
-                let other = if !self.forces.is_empty() {
-                    self.force.clear();
-                    self.force.resize(n, 0.0);
-                    for f in self.forces.iter_mut() {
-                        f.accumulate(&s1, &mut self.force)?;
-                    }
-                    Some(&self.force[..])
-                } else {
-                    // nothing to sum: the buffer the first acceleration used is let go
-                    self.force = Vec::new();
-                    None
-                };
-                // The pass writes a' over a and the new velocities into a_next; two swaps put
-                // a' in a_next (the next step's a once accepted) and the velocities in v_next
-                // (v' there, the predictor, becomes spare).
-                let bad = contact.force_and_kick(
-                    &s1,
-                    VerletKick {
-                        other,
-                        inv_mass: &p.inv_mass,
-                        flat: self.params.dim == 2,
-                        h,
-                        v: &p.v,
-                        a: &mut b.a,
-                        v_out: &mut b.a_next,
-                        energy: self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0,
-                        spin: turns.then(|| SpinKick {
-                            omega: &p.omega,
-                            alpha: &p.alpha,
-                            inv_inertia: &p.inv_inertia,
-                            alpha_out: &mut b.alpha_next,
-                            omega_out: &mut b.omega_next,
-                        }),
-                    },
-                )?;
-                if !turns {
-                    b.omega_next.clear();
-                }
-                std::mem::swap(&mut b.a, &mut b.a_next); // a_next = a'
-                std::mem::swap(&mut b.a, &mut self.v_next); // v_next = v(t + h); a = spare
-                self.stats.nfev += 1;
-                b.fresh = true;
-                return Ok::<_, Error>(bad);
-            }
-            let mut forces = every_force(&mut self.forces, None);
-            let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
-            dynamics.accel(t + h, &self.x_next, &self.v_next, &mut b.a_next)?;
-            self.stats.nfev += 1;
-            b.fresh = true; // a_next, the next step's a once accepted
-            let (a, a_next) = (&b.a, &b.a_next);
-            let bad = self
-                .v_next
-                .par_chunks_mut(3 * CHUNK)
-                .zip(self.x_next.par_chunks(3 * CHUNK))
-                .enumerate()
-                .map(|(c, (vn, xn))| {
-                    let base = 3 * CHUNK * c;
-                    let mut bad = None;
-                    for k in 0..vn.len() {
-                        vn[k] = verlet::kick(p.v[base + k], a[base + k], a_next[base + k], h);
-                        if bad.is_none() && !(vn[k].is_finite() && xn[k].is_finite()) {
-                            bad = Some(base + k);
-                        }
-                    }
-                    bad
-                })
-                .flatten() // (Option's own order puts None first: drop the clean chunks)
-                .min();
-            Ok::<_, Error>(bad)
-        })();
+        let result = self.verlet_step(&mut b);
         self.stepper = Some(WorldStepper::Verlet(b));
         if let Some(model) = self.spring_dashpot() {
             model.forget_verified();
@@ -336,6 +137,245 @@ impl World {
             Some(index) => Err(self.diverged(Divergence::NonFinite, Some(index / 3))),
             None => Ok(()),
         }
+    }
+
+    /// One step of velocity Verlet into `x_next`, `v_next` (the stepper's buffers `b` taken
+    /// out of the world meanwhile): the first non-finite value's index, if any.
+    #[inline]
+    fn verlet_step(&mut self, b: &mut VerletBuffers) -> Result<Option<usize>, Error> {
+        let n = 3 * self.particles.len();
+        let (t, h) = (self.time, self.step_length());
+        let contacts = self.has_contact_force();
+        if self.forces.is_empty() && !contacts {
+            return Ok(self.verlet_force_free(b, h, n));
+        }
+        if !b.fresh || b.a.len() != n {
+            self.verlet_first_accel(b, t, n)?;
+        }
+        self.verlet_drift(b, h, contacts);
+        if self.sortable()
+            && self
+                .collide_stage
+                .as_ref()
+                .and_then(|s| s.force_model.as_ref().map(|m| m.list_expired(&self.x_next, &s.domain)))
+                .unwrap_or(false)
+        {
+            self.sort_along_space(&mut b.a);
+        }
+        b.a_next.resize(n, 0.0);
+        if contacts {
+            self.verlet_fused_kick(b, t, h, n)
+        } else {
+            self.verlet_kick(b, t, h)
+        }
+    }
+
+    /// No force at all (a gas of the impulse model): a = a' = 0, so the drift is x + h v and
+    /// both kicks add nothing. One pass instead of three, the same numbers (to the sign of a
+    /// zero). The first non-finite position's index, if any.
+    #[inline]
+    fn verlet_force_free(&mut self, b: &mut VerletBuffers, h: f64, n: usize) -> Option<usize> {
+        if !b.fresh || b.a.len() != n || b.a_next.len() != n {
+            // zeros once; no step writes them again
+            b.a.clear();
+            b.a.resize(n, 0.0);
+            b.a_next.clear();
+            b.a_next.resize(n, 0.0);
+            b.fresh = true;
+        }
+        // In a periodic cell x' is wrapped into it in the same pass (the collision
+        // stage is told, and wraps only what it moves itself).
+        let cell = self.collide_stage.as_ref().and_then(|c| c.domain.periodic_box());
+        let p = &self.particles;
+        self.x_next
+            .par_chunks_mut(3 * CHUNK)
+            .zip(self.v_next.par_chunks_mut(3 * CHUNK))
+            .enumerate()
+            .map(|(c, (xn, vn))| {
+                let base = 3 * CHUNK * c;
+                let mut bad = None;
+                for k in 0..xn.len() {
+                    let (x, v) = (p.x[base + k], p.v[base + k]);
+                    xn[k] = x + h * v;
+                    vn[k] = v;
+                    if bad.is_none() && !xn[k].is_finite() {
+                        bad = Some(base + k);
+                    }
+                }
+                if let Some(cell) = cell {
+                    cell.wrap_positions_serial(xn);
+                }
+                bad
+            })
+            .flatten()
+            .min()
+    }
+
+    /// The acceleration at the current state when none is kept (the first step, or after a
+    /// change that dropped it), and α = τ/I where the contacts' torques turn the particles.
+    #[inline]
+    fn verlet_first_accel(&mut self, b: &mut VerletBuffers, t: f64, n: usize) -> Result<(), Error> {
+        b.a.resize(n, 0.0);
+        let p = &self.particles;
+        let mut contact = contact_force(&self.collide_stage, p);
+        let mut forces = every_force(&mut self.forces, contact.as_mut());
+        let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
+        dynamics.accel(t, &p.x, &p.v, &mut b.a)?;
+        self.stats.nfev += 1;
+        // and α = τ/I, where the contacts' torques turn the particles
+        if let Some(c) = contact.as_ref().filter(|c| c.has_tangential() && p.has_spin()) {
+            let s = State {
+                t,
+                x: &p.x,
+                v: &p.v,
+                mass: &p.mass,
+            };
+            let mut alpha = vec![0.0; n];
+            c.torques_at(&s, &mut alpha)?;
+            for (q, a) in alpha.iter_mut().enumerate() {
+                *a = if self.params.dim == 2 && q % 3 < 2 {
+                    0.0
+                } else {
+                    *a * p.inv_inertia[q / 3]
+                };
+            }
+            self.particles.alpha = alpha;
+        }
+        b.fresh = true;
+        Ok(())
+    }
+
+    /// Drift and predictor in one parallel pass: x' = x + h v + h²/2 a, v' = v + h a.
+    #[inline]
+    fn verlet_drift(&mut self, b: &VerletBuffers, h: f64, contacts: bool) {
+        // with contact forces in a periodic cell, x' is wrapped into the cell in
+        // the same pass, before the force evaluation, so that the kept acceleration is
+        // that of the state kept (collide's wrap then changes nothing). The impulse
+        // model's continuous detection needs the unwrapped drift, and wraps after its
+        // impacts.
+        let cell = self
+            .collide_stage
+            .as_ref()
+            .and_then(|c| c.domain.periodic_box())
+            .filter(|_| contacts);
+        let p = &self.particles;
+        let a = &b.a;
+        self.x_next
+            .par_chunks_mut(3 * CHUNK)
+            .zip(self.v_next.par_chunks_mut(3 * CHUNK))
+            .enumerate()
+            .for_each(|(c, (xn, vn))| {
+                let chunk = 3 * CHUNK * c..3 * CHUNK * c + xn.len();
+                let (x, v, a) = (&p.x[chunk.clone()], &p.v[chunk.clone()], &a[chunk]);
+                for ((((xn, vn), x), v), a) in xn.iter_mut().zip(vn.iter_mut()).zip(x).zip(v).zip(a) {
+                    (*xn, *vn) = verlet::drift(*x, *v, *a, h);
+                }
+                if let Some(cell) = cell {
+                    let (lo, hi, axes) = (cell.lo(), cell.hi(), cell.axes());
+                    for q in xn.chunks_exact_mut(3) {
+                        for (k, c) in q.iter_mut().enumerate() {
+                            if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
+                                *c = cell.wrap_coordinate(k, *c);
+                            }
+                        }
+                    }
+                }
+            });
+    }
+
+    /// The contact force and the closing kick in one pass, the other forces first (and with
+    /// spin under the contacts' torques, the angular kick beside): the first non-finite
+    /// value's index, if any.
+    #[inline]
+    fn verlet_fused_kick(&mut self, b: &mut VerletBuffers, t: f64, h: f64, n: usize) -> Result<Option<usize>, Error> {
+        let p = &self.particles;
+        let contact = contact_force(&self.collide_stage, p).expect("a force model lends its contact force");
+        let turns = contact.has_tangential() && p.has_spin();
+        if turns {
+            b.omega_next.resize(n, 0.0);
+            b.alpha_next.resize(n, 0.0);
+        }
+        let s1 = State {
+            t: t + h,
+            x: &self.x_next,
+            v: &self.v_next,
+            mass: &p.mass,
+        };
+        let other = if !self.forces.is_empty() {
+            self.force.clear();
+            self.force.resize(n, 0.0);
+            for f in self.forces.iter_mut() {
+                f.accumulate(&s1, &mut self.force)?;
+            }
+            Some(&self.force[..])
+        } else {
+            // nothing to sum: the buffer the first acceleration used is let go
+            self.force = Vec::new();
+            None
+        };
+        // The pass writes a' over a and the new velocities into a_next; two swaps put
+        // a' in a_next (the next step's a once accepted) and the velocities in v_next
+        // (v' there, the predictor, becomes spare).
+        let bad = contact.force_and_kick(
+            &s1,
+            VerletKick {
+                other,
+                inv_mass: &p.inv_mass,
+                flat: self.params.dim == 2,
+                h,
+                v: &p.v,
+                a: &mut b.a,
+                v_out: &mut b.a_next,
+                energy: self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0,
+                spin: turns.then(|| SpinKick {
+                    omega: &p.omega,
+                    alpha: &p.alpha,
+                    inv_inertia: &p.inv_inertia,
+                    alpha_out: &mut b.alpha_next,
+                    omega_out: &mut b.omega_next,
+                }),
+            },
+        )?;
+        if !turns {
+            b.omega_next.clear();
+        }
+        std::mem::swap(&mut b.a, &mut b.a_next); // a_next = a'
+        std::mem::swap(&mut b.a, &mut self.v_next); // v_next = v(t + h); a = spare
+        self.stats.nfev += 1;
+        b.fresh = true;
+        Ok(bad)
+    }
+
+    /// The other forces at the drifted state, then the two half kicks in one parallel pass
+    /// that also finds a non-finite value: the first one's index, if any.
+    #[inline]
+    fn verlet_kick(&mut self, b: &mut VerletBuffers, t: f64, h: f64) -> Result<Option<usize>, Error> {
+        let p = &self.particles;
+        let mut forces = every_force(&mut self.forces, None);
+        let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
+        dynamics.accel(t + h, &self.x_next, &self.v_next, &mut b.a_next)?;
+        self.stats.nfev += 1;
+        b.fresh = true; // a_next, the next step's a once accepted
+        let (a, a_next) = (&b.a, &b.a_next);
+        let bad = self
+            .v_next
+            .par_chunks_mut(3 * CHUNK)
+            .zip(self.x_next.par_chunks(3 * CHUNK))
+            .enumerate()
+            .map(|(c, (vn, xn))| {
+                let base = 3 * CHUNK * c;
+                let mut bad = None;
+                for k in 0..vn.len() {
+                    vn[k] = verlet::kick(p.v[base + k], a[base + k], a_next[base + k], h);
+                    if bad.is_none() && !(vn[k].is_finite() && xn[k].is_finite()) {
+                        bad = Some(base + k);
+                    }
+                }
+                bad
+            })
+            .flatten() // (Option's own order puts None first: drop the clean chunks)
+            .min();
+        Ok(bad)
     }
 
     /// Stage 1 for the other methods, on the joined state [x, v] (their steppers work on one

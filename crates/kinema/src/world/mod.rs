@@ -7,12 +7,13 @@
 //! - `collide.rs`: stages 2–4, `World::collide`, which runs the collide stage
 //!   (`collide::stage::CollideStage`, detection and response in `collide/`), and the
 //!   collision settings, colliders, materials and periodic axes;
-//! - `forces.rs`: the forces of one evaluation, the world's own and the spring–dashpot
+//! - `groups.rs`: the collision groups (each particle's, the matrix, the colliders' masks);
+//! - `forces.rs`: the forces of one evaluation, the world's own and the
 //!   contact force the collide stage lends (`collide/contact_force/`);
 //! - `divergence.rs`: the non-finite and runaway-energy checks that refuse a step;
 //! - `contents.rs`: adding and removing particles and forces;
 //! - `carry.rs`: what a birth or death keeps of velocity Verlet's acceleration;
-//! - `deaths.rs`: the deaths (times of death, kill volumes) carried out after each step;
+//! - `deaths.rs`: the deaths (times of death, kill volumes) applied after each step;
 //! - `checkpoint.rs`: what a checkpoint takes and gives back besides the particles' state;
 //! - `measures.rs`: diagnostics, accelerations, the advisor's rates, counters and timings;
 //! - `order.rs`: the particles' order in memory (sorted along space inside the steps), and
@@ -30,6 +31,7 @@ mod divergence;
 mod dynamics;
 mod event_driven;
 mod forces;
+mod groups;
 mod implicit;
 mod integrate;
 mod measures;
@@ -122,14 +124,14 @@ pub struct World {
     times: StageTimes,
     /// Asked between the stages of a step and inside long ones whether to stop (Ctrl-C).
     interrupt: Interrupt,
-    /// The deaths carried out after each step (`deaths.rs`).
+    /// The deaths applied after each step (`deaths.rs`).
     deaths: Deaths,
     /// The ids of the particles those deaths removed, until taken.
     removed_ids: Vec<u64>,
 }
 
 /// Wall-clock time spent in the seed's four stages of [`World::step`], summed over all steps.
-/// With spring–dashpot contacts the contacts are a force: all of their time is integration.
+/// with contact forces the contacts are a force: all of their time is integration.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTimes {
     /// Stage 1: integration (force evaluations included).
@@ -184,20 +186,21 @@ impl World {
         })
     }
 
-    /// The forces, in the order they were added (the spring–dashpot contact force, with that
-    /// model, is the collide stage's, not among them).
+    /// The forces, in the order they were added (the contact force, with a
+    /// force model, is the collide stage's, not among them).
     pub fn forces(&self) -> &[Box<dyn Force>] {
         &self.forces
     }
 
-    /// Whether the spring–dashpot contact force acts (collisions on with that model).
+    /// Whether the contact force acts (collisions on with a force model).
     pub(super) fn has_contact_force(&self) -> bool {
         self.spring_dashpot().is_some()
     }
 
-    /// The spring–dashpot model's constants and buffers, with that model.
-    pub(super) fn spring_dashpot(&self) -> Option<&crate::collide::contact_force::SpringDashpot> {
-        self.collide_stage.as_ref()?.spring_dashpot.as_ref()
+    /// The contact force model's constants and buffers, with a force model (still named for
+    /// the spring–dashpot model: `world/order.rs` calls it so, and is being changed apart).
+    pub(super) fn spring_dashpot(&self) -> Option<&crate::collide::contact_force::ContactForceModel> {
+        self.collide_stage.as_ref()?.force_model.as_ref()
     }
 
     /// The parameters.
@@ -251,7 +254,7 @@ impl World {
     /// Advances the world by `n` steps of [`World::step`]; stops at the first refused one,
     /// keeping the state before it.
     ///
-    /// Inside, with spring–dashpot contacts and velocity Verlet, the particles are kept in
+    /// Inside, with contact forces and velocity Verlet, the particles are kept in
     /// an order that follows space (re-sorted whenever the neighbour list is rebuilt, see
     /// `order.rs`); `advance` puts them back in the user's order before it returns, so every
     /// method of the world, and every force, callback and file, sees the user's order. (A
@@ -267,7 +270,7 @@ impl World {
     /// (sorted along space) after it, for the next slice. Only [`UserOrder`] calls it, which
     /// gives the world out only in the user's order again (see `order.rs`).
     ///
-    /// After each step the deaths set by [`World::set_deaths`] are carried out (which puts
+    /// After each step the deaths set by [`World::set_deaths`] are applied (which puts
     /// the particles back in the user's order when someone dies).
     fn advance_in_engine_order(&mut self, n: u64) -> Result<(), Error> {
         if n > 0 && self.collide_stage.as_ref().is_some_and(|s| s.params.event_driven) {
@@ -276,13 +279,13 @@ impl World {
             }
             for _ in 0..n {
                 self.advance_by_events(1)?;
-                self.carry_out_deaths()?;
+                self.apply_deaths()?;
             }
             return Ok(());
         }
         for _ in 0..n {
             self.step_once()?;
-            self.carry_out_deaths()?;
+            self.apply_deaths()?;
         }
         Ok(())
     }

@@ -43,7 +43,7 @@ impl Force for ContactForce<'_> {
 
     /// Dissipative (the spring is conservative and the dashpot dissipative), a function of
     /// positions and velocities, internal when no collider pushes; it follows a renumbering
-    /// (the world renumbers its list, [`SpringDashpot::renumber`](super::SpringDashpot::renumber):
+    /// (the world renumbers its list, [`ContactForceModel::renumber`](super::ContactForceModel::renumber):
     /// all else it reads where it lives).
     fn properties(&self) -> Properties {
         Properties {

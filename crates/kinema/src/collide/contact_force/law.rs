@@ -1,4 +1,4 @@
-//! The spring–dashpot law of [`ContactForce`]: the particles' summed forces and energies
+//! The contact force law of [`ContactForce`]: the particles' summed forces and energies
 //! (the pair pass of `pairs.rs`), the normal force and spring energy of a contact, and the
 //! damping ratios of the pair materials.
 

@@ -1,4 +1,4 @@
-//! What each contact of [`ContactForce`] carries at a state, for output (LAMMPS's
+//! What each contact of [`ContactForce`] does at a state, for output (LAMMPS's
 //! `compute pair/local`, Yade's `O.forces`): the contacts of a full search (`contacts.rs`),
 //! each with its normal force F_n n and its tangential force F_t as the next evaluation would
 //! find them (the springs read, not stretched: `tangent.rs`), whether it slides, and its point.

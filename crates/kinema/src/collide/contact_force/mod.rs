@@ -1,7 +1,8 @@
-//! The spring–dashpot contact model: contacts found at every force evaluation push
-//! overlapping bodies apart with F_n = k_n δ − m_eff γ_n u_n, a force of stage 1.
+//! The contact force models (spring–dashpot and Hertz): contacts found at every force
+//! evaluation push overlapping bodies apart with F_n = k_n δ − m_eff γ_n u_n (Hertz: a
+//! stiffness that grows with the overlap), a force of stage 1.
 //!
-//! The collide stage owns the model ([`SpringDashpot`]: the law's constants and the buffers
+//! The collide stage owns the model ([`ContactForceModel`]: the law's constants and the buffers
 //! kept between evaluations, the neighbour list above all) beside the impulse model; each call
 //! sees the particles' radii and inverse masses, the materials, the colliders and the domain
 //! where they live, through a [`ContactForce`] made for it
@@ -23,8 +24,9 @@
 //!
 //! The parts: this file holds the model, the view of a call and the neighbour list's upkeep;
 //! `contacts.rs` finds the contacts (listed pairs that overlap, collider touches),
-//! `pairs.rs` the pair pass and its exchange between chunks, `law.rs` the force law, the
-//! summed forces and energy and the damping ratios, `verlet.rs` the fused Verlet
+//! `pairs.rs` the pair pass, `exchange.rs` its exchange between chunks, `spring_dashpot.rs`
+//! the linear law's damping for a restitution (its closed form), `law.rs` the force law,
+//! the summed forces and energy and the damping ratios, `verlet.rs` the fused Verlet
 //! force-and-kick pass, `force.rs` the [`Force`](crate::forces::Force) impl and the rates.
 
 use std::sync::{Mutex, MutexGuard};
@@ -38,30 +40,33 @@ use crate::error::Error;
 use crate::forces::State;
 pub use cohesion::Cohesion;
 use cohesion::Jkr;
+use exchange::Exchange;
 use history::Histories;
 pub(crate) use history::{PairSlip, Slip, WallSlip};
 pub(crate) use law::particle_ratios;
 use law::DampingRatios;
 pub(crate) use normal::NormalLaw;
-use pairs::{ChunkSums, Exchange, Turning, TurningOut};
+use pairs::{ChunkSums, Turning, TurningOut};
 pub use tangent::{RollingModel, TangentialLaw, TangentialModel};
 pub(crate) use verlet::{SpinKick, VerletKick};
 
 mod cohesion;
 mod contacts;
+mod exchange;
 mod force;
 mod history;
 mod law;
 mod listing;
 mod normal;
 mod pairs;
+pub mod spring_dashpot;
 mod stress;
 mod tangent;
 mod verlet;
 
-/// The spring–dashpot model between calls: the law's constants and the buffers one
-/// evaluation leaves the next (the neighbour list, the grid, the exchange between chunks).
-pub(crate) struct SpringDashpot {
+/// The contact force model (spring–dashpot or Hertz) between calls: the normal law and
+/// the buffers one evaluation leaves the next (the neighbour list, the grid, the exchange between chunks).
+pub(crate) struct ContactForceModel {
     /// The normal law (`normal.rs`: Hooke's, Hertz's, with DMT's or JKR's adhesion).
     pub normal: NormalLaw,
     /// γ_n, 1/s (`None`: the damping follows from each pair's restitution e).
@@ -76,7 +81,7 @@ pub(crate) struct SpringDashpot {
     scratch: Mutex<Scratch>,
 }
 
-impl SpringDashpot {
+impl ContactForceModel {
     /// The model with stiffness k_n (N/m) and damping rate γ_n (1/s; `None`: from e).
     pub fn new(stiffness: f64, damping: Option<f64>) -> Self {
         Self::of(NormalLaw::Hooke { stiffness }, damping)
@@ -84,7 +89,7 @@ impl SpringDashpot {
 
     /// The model of normal law `normal` and damping rate γ_n (1/s; `None`: from e).
     pub fn of(normal: NormalLaw, damping: Option<f64>) -> Self {
-        SpringDashpot {
+        ContactForceModel {
             normal,
             damping,
             tangential: None,
@@ -130,7 +135,7 @@ impl SpringDashpot {
         self.scratch().wall_forces.clone()
     }
 
-    /// Sets what [`SpringDashpot::wall_carry`] gave (a checkpoint's, or the same world's
+    /// Sets what [`ContactForceModel::wall_carry`] gave (a checkpoint's, or the same world's
     /// across a restart of its caches).
     pub fn set_wall_carry(&self, carry: Option<Vec<ColliderBooks>>) {
         self.scratch().wall_forces = carry;
@@ -186,7 +191,7 @@ impl SpringDashpot {
         !holds
     }
 
-    /// Forgets what [`SpringDashpot::list_expired`] found (the world calls this at the end of
+    /// Forgets what [`ContactForceModel::list_expired`] found (the world calls this at the end of
     /// each step, so that a buffer reused later is checked again).
     pub fn forget_verified(&self) {
         self.scratch().list.verified = None;
@@ -210,7 +215,8 @@ impl SpringDashpot {
         self.scratch().list.builds
     }
 }
-
+/// The contact forces (spring–dashpot or Hertz) between particles and with colliders (the DEM
+/// way), as one call sees them.
 /// Penalty contacts between particles and with colliders (the DEM way), as one call sees them.
 ///
 /// While particle i overlaps its partner by δ > 0, the pair feels F_n n on i and −F_n n on a
@@ -223,8 +229,8 @@ impl SpringDashpot {
 ///
 /// m_eff = 1/(w_i + w_j) the reduced mass and u_n the normal relative velocity. The damping
 /// ratio ζ = −ln e / √(π² + ln² e) makes the contact's damped half-oscillation bounce back with
-/// exactly the requested e ([`crate::collide::penalty`]); e is the pair's material (global,
-/// per particle, per collider, combined as in the impulse model). The spring part is
+/// exactly the requested e ([`spring_dashpot`]); e is the pair's material (global, per
+/// particle, per collider, combined as in the impulse model). The spring part is
 /// conservative, with U = Σ ½ k_n δ² over overlapping contacts; the dashpot only removes
 /// energy. No friction: tangential forces belong to the impulse model.
 ///
@@ -238,7 +244,7 @@ impl SpringDashpot {
 /// Everything here is borrowed for the call: the model's constants and buffers, the
 /// particles' radii and inverse masses, the materials, the colliders and the domain.
 pub(crate) struct ContactForce<'a> {
-    model: &'a SpringDashpot,
+    model: &'a ContactForceModel,
     /// The normal law (`normal.rs`).
     normal: NormalLaw,
     damping: Option<f64>,
@@ -344,7 +350,7 @@ struct Scratch {
     /// check ([`ContactForce::forget_energy`]).
     pair_energy: Option<((usize, usize), f64)>,
     /// The contact books of the last fused Verlet pass, with what each collider took over
-    /// its step, until the world takes them ([`SpringDashpot::take_books`]).
+    /// its step, until the world takes them ([`ContactForceModel::take_books`]).
     books: Option<(pairs::ContactBooks, Vec<ColliderBooks>)>,
     /// The collider forces of the last fused Verlet pass, as rates (N, N·m, W in the books'
     /// fields): the start of the next step's ([`ColliderBooks`]; `None` after a change).
@@ -379,7 +385,7 @@ impl Default for Scratch {
 
 impl<'a> ContactForce<'a> {
     /// The force of `model` on `bodies`, for one call.
-    pub fn new(model: &'a SpringDashpot, bodies: Bodies<'a>) -> Self {
+    pub fn new(model: &'a ContactForceModel, bodies: Bodies<'a>) -> Self {
         ContactForce {
             model,
             normal: model.normal,

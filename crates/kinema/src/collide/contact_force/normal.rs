@@ -5,7 +5,7 @@
 //!
 //! A new normal law is one variant here and its arm in each method below (every match names
 //! every law, so the compiler lists them), and its setting (`stage/settings.rs`:
-//! `ContactModel`, its name, `spring_dashpot_of`); the pair pass, the damping (`law.rs`), the
+//! `ContactModel`, its name, `force_model_of`); the pair pass, the damping (`law.rs`), the
 //! tangential part (`tangent.rs`) and the rates (`force.rs`) read it only through these
 //! methods. (Checked by adding a toy law F = k δ² and taking it out: `docs/architecture.md`,
 //! "How to add".)

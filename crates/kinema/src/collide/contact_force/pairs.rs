@@ -23,62 +23,13 @@
 
 use rayon::prelude::*;
 
+use super::exchange::Exchange;
 use super::history::{pair_memory, wall_memory, PairSlip, Slip, WallSlip};
 use super::tangent::{Tangent, TangentialModel, Touch};
 use super::{ContactForce, CHUNK};
 use crate::collide::neighbour_list::{NeighbourList, Rows};
 use crate::collide::{pair_contact, Contact};
 use crate::vec3;
-
-/// The forces chunks send to particles of later chunks (stage 2 of the pair pass), kept
-/// between evaluations so that a pass allocates nothing once warm.
-#[derive(Default)]
-pub(super) struct Exchange {
-    /// Per chunk: (j, F n) for each contact force, N, it owes particle j of a later chunk;
-    /// after stage 1, sorted by j's chunk (stably: the order found within a chunk kept).
-    sent: Vec<Vec<(u32, [f64; 3])>>,
-    /// Per receiving chunk d: (chunk c, start, end) of what `sent[c]` owes d, ascending c.
-    inbox: Vec<Vec<(u32, u32, u32)>>,
-}
-
-impl Exchange {
-    /// Subtracts from chunk `d`'s forces `fc` (N, 3 per particle of the chunk) what the
-    /// earlier chunks sent it, in ascending order of sending chunk.
-    #[inline]
-    pub(super) fn receive(&self, d: usize, fc: &mut [f64]) {
-        let first = d * CHUNK;
-        for &(c, start, end) in &self.inbox[d] {
-            for (j, fv) in &self.sent[c as usize][start as usize..end as usize] {
-                let l = *j as usize - first;
-                for k in 0..3 {
-                    fc[3 * l + k] -= fv[k];
-                }
-            }
-        }
-    }
-
-    /// How many forces the last pass sent between chunks.
-    #[cfg(test)]
-    pub(super) fn sent_count(&self) -> usize {
-        self.sent.iter().map(Vec::len).sum()
-    }
-
-    /// Sorts each outbox by receiving chunk and indexes the runs by receiver.
-    fn index(&mut self, chunks: usize) {
-        self.sent.par_iter_mut().for_each(|s| s.sort_by_key(|e| e.0 as usize / CHUNK));
-        self.inbox.resize_with(chunks, Vec::new);
-        self.inbox.iter_mut().for_each(Vec::clear);
-        for (c, sent) in self.sent.iter().enumerate() {
-            let mut start = 0;
-            while start < sent.len() {
-                let d = sent[start].0 as usize / CHUNK;
-                let end = start + sent[start..].partition_point(|e| e.0 as usize / CHUNK == d);
-                self.inbox[d].push((c as u32, start as u32, end as u32));
-                start = end;
-            }
-        }
-    }
-}
 
 /// What stage 1 of the pair pass is asked to do besides the pair forces.
 #[derive(Clone, Copy)]
@@ -237,6 +188,61 @@ struct ChunkOut<'o> {
     walls: Option<&'o mut Vec<WallSlip>>,
 }
 
+/// Each chunk's share of a pass's outputs, side by side: its part of the force buffer and
+/// of the torques, its outboxes, its new memory (`None` where the pass writes none).
+fn chunk_outs<'o>(
+    chunks: usize,
+    forces: Option<&'o mut [f64]>,
+    exchange: &'o mut Exchange,
+    turn_out: Option<&'o mut TurningOut<'_>>,
+) -> Vec<ChunkOut<'o>> {
+    exchange.sent.resize_with(chunks, Vec::new);
+    // each chunk's outputs, side by side
+    let mut force_parts: Vec<Option<&mut [f64]>> = match forces {
+        Some(f) => f.chunks_mut(3 * CHUNK).map(Some).collect(),
+        None => (0..chunks).map(|_| None).collect(),
+    };
+    force_parts.resize_with(chunks, || None);
+    let mut torque_parts: Vec<Option<&mut [f64]>> = Vec::new();
+    let mut torque_sent: Vec<Option<&mut Vec<(u32, [f64; 3])>>> = Vec::new();
+    let mut new_pairs: Vec<Option<&mut Vec<PairSlip>>> = Vec::new();
+    let mut new_walls: Vec<Option<&mut Vec<WallSlip>>> = Vec::new();
+    if let Some(o) = turn_out {
+        if let Some((tq, ex)) = o.torque.as_mut() {
+            torque_parts = tq.chunks_mut(3 * CHUNK).map(Some).collect();
+            ex.sent.resize_with(chunks, Vec::new);
+            torque_sent = ex.sent.iter_mut().map(Some).collect();
+        }
+        if let Some((pairs, walls)) = o.memory.as_mut() {
+            pairs.resize_with(chunks, Vec::new);
+            walls.resize_with(chunks, Vec::new);
+            new_pairs = pairs.iter_mut().map(Some).collect();
+            new_walls = walls.iter_mut().map(Some).collect();
+        }
+    }
+    torque_parts.resize_with(chunks, || None);
+    torque_sent.resize_with(chunks, || None);
+    new_pairs.resize_with(chunks, || None);
+    new_walls.resize_with(chunks, || None);
+    let parts = force_parts
+        .into_iter()
+        .zip(exchange.sent.iter_mut())
+        .zip(torque_parts.into_iter().zip(torque_sent))
+        .zip(new_pairs.into_iter().zip(new_walls));
+    let mut outs: Vec<ChunkOut<'_>> = Vec::with_capacity(chunks);
+    for (((forces, sent), (torque, torque_sent)), (pairs, walls)) in parts {
+        outs.push(ChunkOut {
+            forces,
+            sent,
+            torque,
+            torque_sent,
+            pairs,
+            walls,
+        });
+    }
+    outs
+}
+
 impl ContactForce<'_> {
     /// Stage 1 of the pair pass (see the module doc) at positions `x` (m) and velocities `v`
     /// (m/s), with the list `list` (holding at `x`), and the exchange indexed for stage 2.
@@ -261,238 +267,215 @@ impl ContactForce<'_> {
     ) {
         debug_assert!(list.half, "the contact force keeps a half list");
         let chunks = list.rows.len();
-        exchange.sent.resize_with(chunks, Vec::new);
-        // each chunk's outputs, side by side
-        let mut force_parts: Vec<Option<&mut [f64]>> = match forces {
-            Some(f) => f.chunks_mut(3 * CHUNK).map(Some).collect(),
-            None => (0..chunks).map(|_| None).collect(),
-        };
-        force_parts.resize_with(chunks, || None);
         let (turn, mut turn_out) = match turning {
             Some((t, o)) => (Some(t), Some(o)),
             None => (None, None),
         };
-        let mut outs: Vec<ChunkOut<'_>> = Vec::with_capacity(chunks);
-        {
-            let mut torque_parts: Vec<Option<&mut [f64]>> = Vec::new();
-            let mut torque_sent: Vec<Option<&mut Vec<(u32, [f64; 3])>>> = Vec::new();
-            let mut new_pairs: Vec<Option<&mut Vec<PairSlip>>> = Vec::new();
-            let mut new_walls: Vec<Option<&mut Vec<WallSlip>>> = Vec::new();
-            if let Some(o) = turn_out.as_mut() {
-                if let Some((tq, ex)) = o.torque.as_mut() {
-                    torque_parts = tq.chunks_mut(3 * CHUNK).map(Some).collect();
-                    ex.sent.resize_with(chunks, Vec::new);
-                    torque_sent = ex.sent.iter_mut().map(Some).collect();
-                }
-                if let Some((pairs, walls)) = o.memory.as_mut() {
-                    pairs.resize_with(chunks, Vec::new);
-                    walls.resize_with(chunks, Vec::new);
-                    new_pairs = pairs.iter_mut().map(Some).collect();
-                    new_walls = walls.iter_mut().map(Some).collect();
-                }
-            }
-            torque_parts.resize_with(chunks, || None);
-            torque_sent.resize_with(chunks, || None);
-            new_pairs.resize_with(chunks, || None);
-            new_walls.resize_with(chunks, || None);
-            let parts = force_parts
-                .into_iter()
-                .zip(exchange.sent.iter_mut())
-                .zip(torque_parts.into_iter().zip(torque_sent))
-                .zip(new_pairs.into_iter().zip(new_walls));
-            for (((forces, sent), (torque, torque_sent)), (pairs, walls)) in parts {
-                outs.push(ChunkOut {
-                    forces,
-                    sent,
-                    torque,
-                    torque_sent,
-                    pairs,
-                    walls,
-                });
-            }
-        }
-        let chunk = |c: usize, rows: &Rows, out: ChunkOut<'_>| {
-            let ChunkOut {
-                forces: mut fc,
-                sent,
-                torque: mut tc,
-                torque_sent: mut ts,
-                pairs: mut new_pairs,
-                walls: mut new_walls,
-            } = out;
-            sent.clear();
-            let first = c * CHUNK;
-            let len = rows.len();
-            if let Some(fc) = fc.as_deref_mut() {
-                init(c, fc);
-            }
-            if let Some(tc) = tc.as_deref_mut() {
-                tc.fill(0.0);
-            }
-            if let Some(ts) = ts.as_deref_mut() {
-                ts.clear();
-            }
-            if let Some(p) = new_pairs.as_deref_mut() {
-                p.clear();
-            }
-            if let Some(w) = new_walls.as_deref_mut() {
-                w.clear();
-            }
-            // this chunk's part of the memory
-            let (old_pairs, old_walls) = match turn {
-                Some(t) => (
-                    part_of(t.pairs, first, first + len, |p| p.i),
-                    part_of(t.walls, first, first + len, |w| w.i),
-                ),
-                None => (&[][..], &[][..]),
-            };
-            // this chunk's wall candidates (sorted by particle)
-            let w0 = list.walls.partition_point(|w| w.0 < first);
-            let w1 = list.walls.partition_point(|w| w.0 < first + len);
-            let mut walls = list.walls[w0..w1].iter().peekable();
-            let mut energy = -0.0;
-            let mut bad = None;
-            let mut books = ContactBooks::default();
-            let mut wall_lost = 0.0;
-            let mut pushes = Vec::new();
-            for l in 0..len {
-                let i = first + l;
-                let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
-                if options.check_positions && bad.is_none() {
-                    bad = xi.iter().position(|c| !c.is_finite()).map(|k| 3 * i + k);
-                }
-                for &j in rows.of(l) {
-                    let j = j as usize;
-                    let found = if self.overlaps(xi, ri, j, x) {
-                        pair_contact(i, j, x, v, self.radius, &self.domain, 0.0)
-                    } else if self.jkr().is_some() {
-                        self.held_pair(i, j, x, v, old_pairs, &mut books.lost)
-                    } else {
-                        None
-                    };
-                    let Some(contact) = found else {
-                        continue;
-                    };
-                    if options.energy {
-                        if let Some(u) = self.spring_energy(&contact) {
-                            energy += u;
-                        }
-                    }
-                    let Some(fc) = fc.as_deref_mut() else { continue };
-                    let Some((force, dashpot)) = self.normal_force_parts(&contact) else {
-                        continue;
-                    };
-                    let mut fv = contact.normal.map(|n| force * n);
-                    let mut tangent = None;
-                    if let Some(t) = turn {
-                        let slip = pair_memory(old_pairs, i as u32, j as u32).unwrap_or_default();
-                        let tg = t.model.map(|m| self.tangent_of(m, t, &contact, force, dashpot, v, slip));
-                        if let Some(p) = new_pairs.as_deref_mut() {
-                            p.push(PairSlip {
-                                i: i as u32,
-                                j: j as u32,
-                                slip: tg.map_or(Slip::default(), |tg| tg.slip),
-                            });
-                        }
-                        if let Some(tg) = tg {
-                            fv = vec3::add(fv, tg.force);
-                            tangent = Some(tg);
-                        }
-                    }
-                    if let Some(h) = options.books {
-                        let arm = self.radius[i] + self.radius[j] - contact.overlap;
-                        let extra = tangent.map_or(0.0, |t| t.power);
-                        books.book(&contact, force, dashpot, Some(arm), h, extra, tangent.map(|t| t.force));
-                    }
-                    for k in 0..3 {
-                        fc[3 * l + k] += fv[k];
-                    }
-                    if j < first + len {
-                        for k in 0..3 {
-                            fc[3 * (j - first) + k] -= fv[k];
-                        }
-                    } else {
-                        sent.push((j as u32, fv));
-                    }
-                    if let (Some(tg), Some(tc)) = (tangent, tc.as_deref_mut()) {
-                        let (ti, tj) = self.torques(&contact, &tg);
-                        for k in 0..3 {
-                            tc[3 * l + k] += ti[k];
-                        }
-                        if j < first + len {
-                            for k in 0..3 {
-                                tc[3 * (j - first) + k] += tj[k];
-                            }
-                        } else if let Some(ts) = ts.as_deref_mut() {
-                            // (the receiver subtracts what it is sent)
-                            ts.push((j as u32, tj.map(|c| -c)));
-                        }
-                    }
-                }
-                let Some(fc) = fc.as_deref_mut().filter(|_| options.walls) else {
-                    continue;
-                };
-                while let Some(&(_, k)) = walls.next_if(|w| w.0 == i) {
-                    self.wall_contacts_held(i, k, x, v, old_walls, &mut wall_lost, |contact| {
-                        if let Some((force, dashpot)) = self.normal_force_parts(contact) {
-                            let mut fv = contact.normal.map(|n| force * n);
-                            let mut tangent = None;
-                            if let Some(t) = turn {
-                                let slip = wall_memory(old_walls, i as u32, k as u32, contact.normal).unwrap_or_default();
-                                let tg = t.model.map(|m| self.tangent_of(m, t, contact, force, dashpot, v, slip));
-                                if let Some(w) = new_walls.as_deref_mut() {
-                                    w.push(WallSlip {
-                                        i: i as u32,
-                                        k: k as u32,
-                                        normal: contact.normal,
-                                        slip: tg.map_or(Slip::default(), |tg| tg.slip),
-                                    });
-                                }
-                                if let Some(tg) = tg {
-                                    fv = vec3::add(fv, tg.force);
-                                    tangent = Some(tg);
-                                }
-                            }
-                            if let Some(h) = options.books {
-                                let extra = tangent.map_or(0.0, |t| t.power);
-                                books.book(contact, force, dashpot, None, h, extra, None);
-                                pushes.push(WallPush {
-                                    collider: k,
-                                    force: fv,
-                                    normal: contact.normal,
-                                    at: vec3::sub(xi, vec3::scale(ri - contact.overlap, contact.normal)),
-                                    u: contact.wall_velocity,
-                                });
-                            }
-                            for k in 0..3 {
-                                fc[3 * l + k] += fv[k];
-                            }
-                            if let (Some(tg), Some(tc)) = (tangent, tc.as_deref_mut()) {
-                                let (ti, _) = self.torques(contact, &tg);
-                                for k in 0..3 {
-                                    tc[3 * l + k] += ti[k];
-                                }
-                            }
-                        }
-                    });
-                }
-            }
-            books.lost += wall_lost;
-            ChunkSums {
-                energy,
-                bad,
-                books,
-                pushes,
-            }
-        };
+        let outs = chunk_outs(chunks, forces, exchange, turn_out.as_mut());
         outs.into_par_iter()
             .zip(list.rows.par_iter())
             .enumerate()
-            .map(|(c, (out, rows))| chunk(c, rows, out))
+            .map(|(c, (out, rows))| self.chunk_pairs(c, rows, out, (x, v), list, &init, options, turn))
             .collect_into_vec(sums);
         exchange.index(chunks);
         if let Some((_, ex)) = turn_out.and_then(|o| o.torque) {
             ex.index(chunks);
+        }
+    }
+
+    /// Stage 1 of the pair pass for chunk `c` (its list rows `rows`, its share `out` of the
+    /// outputs), at positions and velocities `xv`: see [`ContactForce::pair_forces`].
+    ///
+    /// Longer than 100 lines: it is the pass's kernel, one loop over the chunk's particles
+    /// with, inside, the loop over each one's listed partners and then over its colliders.
+    /// Each contact's force goes to the chunk's buffers through a dozen locals (the force and
+    /// torque parts, the outboxes, the new memory, the books); split into functions, each
+    /// would take most of them as arguments, for no gain in clarity, in the hottest loop of
+    /// the force models.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn chunk_pairs(
+        &self,
+        c: usize,
+        rows: &Rows,
+        out: ChunkOut<'_>,
+        (x, v): (&[f64], &[f64]),
+        list: &NeighbourList,
+        init: &(impl Fn(usize, &mut [f64]) + Sync),
+        options: PassOptions,
+        turn: Option<&Turning<'_>>,
+    ) -> ChunkSums {
+        let ChunkOut {
+            forces: mut fc,
+            sent,
+            torque: mut tc,
+            torque_sent: mut ts,
+            pairs: mut new_pairs,
+            walls: mut new_walls,
+        } = out;
+        sent.clear();
+        let first = c * CHUNK;
+        let len = rows.len();
+        if let Some(fc) = fc.as_deref_mut() {
+            init(c, fc);
+        }
+        if let Some(tc) = tc.as_deref_mut() {
+            tc.fill(0.0);
+        }
+        if let Some(ts) = ts.as_deref_mut() {
+            ts.clear();
+        }
+        if let Some(p) = new_pairs.as_deref_mut() {
+            p.clear();
+        }
+        if let Some(w) = new_walls.as_deref_mut() {
+            w.clear();
+        }
+        // this chunk's part of the memory
+        let (old_pairs, old_walls) = match turn {
+            Some(t) => (
+                part_of(t.pairs, first, first + len, |p| p.i),
+                part_of(t.walls, first, first + len, |w| w.i),
+            ),
+            None => (&[][..], &[][..]),
+        };
+        // this chunk's wall candidates (sorted by particle)
+        let w0 = list.walls.partition_point(|w| w.0 < first);
+        let w1 = list.walls.partition_point(|w| w.0 < first + len);
+        let mut walls = list.walls[w0..w1].iter().peekable();
+        let mut energy = -0.0;
+        let mut bad = None;
+        let mut books = ContactBooks::default();
+        let mut wall_lost = 0.0;
+        let mut pushes = Vec::new();
+        for l in 0..len {
+            let i = first + l;
+            let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
+            if options.check_positions && bad.is_none() {
+                bad = xi.iter().position(|c| !c.is_finite()).map(|k| 3 * i + k);
+            }
+            for &j in rows.of(l) {
+                let j = j as usize;
+                let found = if self.overlaps(xi, ri, j, x) {
+                    pair_contact(i, j, x, v, self.radius, &self.domain, 0.0)
+                } else if self.jkr().is_some() {
+                    self.held_pair(i, j, x, v, old_pairs, &mut books.lost)
+                } else {
+                    None
+                };
+                let Some(contact) = found else {
+                    continue;
+                };
+                if options.energy {
+                    if let Some(u) = self.spring_energy(&contact) {
+                        energy += u;
+                    }
+                }
+                let Some(fc) = fc.as_deref_mut() else { continue };
+                let Some((force, dashpot)) = self.normal_force_parts(&contact) else {
+                    continue;
+                };
+                let mut fv = contact.normal.map(|n| force * n);
+                let mut tangent = None;
+                if let Some(t) = turn {
+                    let slip = pair_memory(old_pairs, i as u32, j as u32).unwrap_or_default();
+                    let tg = t.model.map(|m| self.tangent_of(m, t, &contact, force, dashpot, v, slip));
+                    if let Some(p) = new_pairs.as_deref_mut() {
+                        p.push(PairSlip {
+                            i: i as u32,
+                            j: j as u32,
+                            slip: tg.map_or(Slip::default(), |tg| tg.slip),
+                        });
+                    }
+                    if let Some(tg) = tg {
+                        fv = vec3::add(fv, tg.force);
+                        tangent = Some(tg);
+                    }
+                }
+                if let Some(h) = options.books {
+                    let arm = self.radius[i] + self.radius[j] - contact.overlap;
+                    let extra = tangent.map_or(0.0, |t| t.power);
+                    books.book(&contact, force, dashpot, Some(arm), h, extra, tangent.map(|t| t.force));
+                }
+                for k in 0..3 {
+                    fc[3 * l + k] += fv[k];
+                }
+                if j < first + len {
+                    for k in 0..3 {
+                        fc[3 * (j - first) + k] -= fv[k];
+                    }
+                } else {
+                    sent.push((j as u32, fv));
+                }
+                if let (Some(tg), Some(tc)) = (tangent, tc.as_deref_mut()) {
+                    let (ti, tj) = self.torques(&contact, &tg);
+                    for k in 0..3 {
+                        tc[3 * l + k] += ti[k];
+                    }
+                    if j < first + len {
+                        for k in 0..3 {
+                            tc[3 * (j - first) + k] += tj[k];
+                        }
+                    } else if let Some(ts) = ts.as_deref_mut() {
+                        // (the receiver subtracts what it is sent)
+                        ts.push((j as u32, tj.map(|c| -c)));
+                    }
+                }
+            }
+            let Some(fc) = fc.as_deref_mut().filter(|_| options.walls) else {
+                continue;
+            };
+            while let Some(&(_, k)) = walls.next_if(|w| w.0 == i) {
+                self.wall_contacts_held(i, k, x, v, old_walls, &mut wall_lost, |contact| {
+                    if let Some((force, dashpot)) = self.normal_force_parts(contact) {
+                        let mut fv = contact.normal.map(|n| force * n);
+                        let mut tangent = None;
+                        if let Some(t) = turn {
+                            let slip = wall_memory(old_walls, i as u32, k as u32, contact.normal).unwrap_or_default();
+                            let tg = t.model.map(|m| self.tangent_of(m, t, contact, force, dashpot, v, slip));
+                            if let Some(w) = new_walls.as_deref_mut() {
+                                w.push(WallSlip {
+                                    i: i as u32,
+                                    k: k as u32,
+                                    normal: contact.normal,
+                                    slip: tg.map_or(Slip::default(), |tg| tg.slip),
+                                });
+                            }
+                            if let Some(tg) = tg {
+                                fv = vec3::add(fv, tg.force);
+                                tangent = Some(tg);
+                            }
+                        }
+                        if let Some(h) = options.books {
+                            let extra = tangent.map_or(0.0, |t| t.power);
+                            books.book(contact, force, dashpot, None, h, extra, None);
+                            pushes.push(WallPush {
+                                collider: k,
+                                force: fv,
+                                normal: contact.normal,
+                                at: vec3::sub(xi, vec3::scale(ri - contact.overlap, contact.normal)),
+                                u: contact.wall_velocity,
+                            });
+                        }
+                        for k in 0..3 {
+                            fc[3 * l + k] += fv[k];
+                        }
+                        if let (Some(tg), Some(tc)) = (tangent, tc.as_deref_mut()) {
+                            let (ti, _) = self.torques(contact, &tg);
+                            for k in 0..3 {
+                                tc[3 * l + k] += ti[k];
+                            }
+                        }
+                    }
+                });
+            }
+        }
+        books.lost += wall_lost;
+        ChunkSums {
+            energy,
+            bad,
+            books,
+            pushes,
         }
     }
 

@@ -3,6 +3,7 @@
 
 use rayon::prelude::*;
 
+use super::exchange::Exchange;
 use super::pairs::{summed_books, ChunkSums, ContactBooks, PassOptions};
 use super::{ContactForce, Scratch, CHUNK};
 use crate::collide::books::ColliderBooks;
@@ -138,13 +139,7 @@ impl ContactForce<'_> {
         // the predictor ω' = ω + h α, which the contacts see
         let mut spin = spin;
         if let Some(k) = spin.as_mut() {
-            let (omega, alpha) = (k.omega, k.alpha);
-            k.omega_out.par_chunks_mut(3 * CHUNK).enumerate().for_each(|(c, wc)| {
-                let base = 3 * CHUNK * c;
-                for (q, w) in wc.iter_mut().enumerate() {
-                    *w = omega[base + q] + h * alpha[base + q];
-                }
-            });
+            angular_predictor(k, h);
             torque.resize(s.x.len(), 0.0);
         }
         let predictor: &[f64] = match spin.as_ref() {
@@ -192,73 +187,102 @@ impl ContactForce<'_> {
             )
         });
         let bad_x = sums.iter().find_map(|c| c.bad);
-        let exchange = &*exchange;
-        let bad = a
-            .par_chunks_mut(3 * CHUNK)
-            .zip(v_out.par_chunks_mut(3 * CHUNK))
-            .enumerate()
-            .map(|(c, (ac, vc))| {
-                exchange.receive(c, vc);
-                let first = c * CHUNK;
-                let mut bad = None;
-                for (l, i) in (first..).take(ac.len() / 3).enumerate() {
-                    let w = inv_mass[i];
-                    for k in 0..3 {
-                        let q = 3 * l + k;
-                        let a_new = if flat && k == 2 { 0.0 } else { vc[q] * w };
-                        vc[q] = verlet::kick(v[3 * i + k], ac[q], a_new, h);
-                        ac[q] = a_new;
-                        if bad.is_none() && !vc[q].is_finite() {
-                            bad = Some(3 * i + k);
-                        }
-                    }
-                }
-                bad
-            })
-            .flatten() // (Option's own order puts None first: drop the clean chunks)
-            .min();
+        let bad = kick_velocities(a, v_out, exchange, (inv_mass, flat), v, h);
         // the angular kick, beside: α' = τ/I, ω ← ω + h/2 (α + α')
-        let bad_w = match spin {
-            Some(k) => {
-                let exchange = &*torque_exchange;
-                let SpinKick {
-                    omega,
-                    alpha,
-                    inv_inertia,
-                    alpha_out,
-                    omega_out,
-                } = k;
-                omega_out
-                    .par_chunks_mut(3 * CHUNK)
-                    .zip(alpha_out.par_chunks_mut(3 * CHUNK))
-                    .zip(torque.par_chunks_mut(3 * CHUNK))
-                    .enumerate()
-                    .map(|(c, ((wc, alc), tc))| {
-                        exchange.receive(c, tc);
-                        let first = c * CHUNK;
-                        let mut bad = None;
-                        for (l, i) in (first..).take(wc.len() / 3).enumerate() {
-                            let k_i = inv_inertia[i];
-                            for k in 0..3 {
-                                let q = 3 * l + k;
-                                // (a disc turns about z alone)
-                                let alpha_new = if flat && k < 2 { 0.0 } else { tc[q] * k_i };
-                                wc[q] = verlet::kick(omega[3 * i + k], alpha[3 * i + k], alpha_new, h);
-                                alc[q] = alpha_new;
-                                if bad.is_none() && !wc[q].is_finite() {
-                                    bad = Some(3 * i + k);
-                                }
-                            }
-                        }
-                        bad
-                    })
-                    .flatten()
-                    .min()
-            }
-            None => None,
-        };
+        let bad_w = spin.and_then(|k| angular_kick(k, torque, torque_exchange, flat, h));
         // the first non-finite coordinate of x', of the new velocities or angular velocities
         let bad = bad.into_iter().chain(bad_x).chain(bad_w).min();
         Ok(bad)
     }
+}
+
+/// The predictor ω' = ω + h α of `k`'s angular velocities (into `omega_out`), which the
+/// contacts see.
+#[inline]
+fn angular_predictor(k: &mut SpinKick<'_>, h: f64) {
+    let (omega, alpha) = (k.omega, k.alpha);
+    k.omega_out.par_chunks_mut(3 * CHUNK).enumerate().for_each(|(c, wc)| {
+        let base = 3 * CHUNK * c;
+        for (q, w) in wc.iter_mut().enumerate() {
+            *w = omega[base + q] + h * alpha[base + q];
+        }
+    });
+}
+
+/// The kick, chunk by chunk after each receives what earlier chunks sent (`exchange`):
+/// a'_i = F_i / m_i into `a` (which held a_i), v_i + h/2 (a_i + a'_i) into `v_out` (which held
+/// F_i), with the particles' inverse masses and `flat` (2D: a_z = 0); `v`: the velocities at
+/// the step's start. The first non-finite new velocity's index, if any.
+#[inline]
+fn kick_velocities(
+    a: &mut [f64],
+    v_out: &mut [f64],
+    exchange: &Exchange,
+    (inv_mass, flat): (&[f64], bool),
+    v: &[f64],
+    h: f64,
+) -> Option<usize> {
+    a.par_chunks_mut(3 * CHUNK)
+        .zip(v_out.par_chunks_mut(3 * CHUNK))
+        .enumerate()
+        .map(|(c, (ac, vc))| {
+            exchange.receive(c, vc);
+            let first = c * CHUNK;
+            let mut bad = None;
+            for (l, i) in (first..).take(ac.len() / 3).enumerate() {
+                let w = inv_mass[i];
+                for k in 0..3 {
+                    let q = 3 * l + k;
+                    let a_new = if flat && k == 2 { 0.0 } else { vc[q] * w };
+                    vc[q] = verlet::kick(v[3 * i + k], ac[q], a_new, h);
+                    ac[q] = a_new;
+                    if bad.is_none() && !vc[q].is_finite() {
+                        bad = Some(3 * i + k);
+                    }
+                }
+            }
+            bad
+        })
+        .flatten() // (Option's own order puts None first: drop the clean chunks)
+        .min()
+}
+
+/// The angular kick beside the kick: α' = τ/I, ω ← ω + h/2 (α + α'), chunk by chunk after
+/// each receives what earlier chunks sent of the torques (`exchange`). The first non-finite
+/// new angular velocity's index, if any.
+#[inline]
+fn angular_kick(k: SpinKick<'_>, torque: &mut [f64], exchange: &Exchange, flat: bool, h: f64) -> Option<usize> {
+    let SpinKick {
+        omega,
+        alpha,
+        inv_inertia,
+        alpha_out,
+        omega_out,
+    } = k;
+    omega_out
+        .par_chunks_mut(3 * CHUNK)
+        .zip(alpha_out.par_chunks_mut(3 * CHUNK))
+        .zip(torque.par_chunks_mut(3 * CHUNK))
+        .enumerate()
+        .map(|(c, ((wc, alc), tc))| {
+            exchange.receive(c, tc);
+            let first = c * CHUNK;
+            let mut bad = None;
+            for (l, i) in (first..).take(wc.len() / 3).enumerate() {
+                let k_i = inv_inertia[i];
+                for k in 0..3 {
+                    let q = 3 * l + k;
+                    // (a disc turns about z alone)
+                    let alpha_new = if flat && k < 2 { 0.0 } else { tc[q] * k_i };
+                    wc[q] = verlet::kick(omega[3 * i + k], alpha[3 * i + k], alpha_new, h);
+                    alc[q] = alpha_new;
+                    if bad.is_none() && !wc[q].is_finite() {
+                        bad = Some(3 * i + k);
+                    }
+                }
+            }
+            bad
+        })
+        .flatten()
+        .min()
 }

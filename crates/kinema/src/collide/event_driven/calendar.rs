@@ -10,7 +10,7 @@
 //! few events ([`Calendar::width_for`]).
 //!
 //! Each particle has one event at a time. Rescheduling a particle does not look for its old
-//! entry: the entry carries the particle's schedule version, and an entry whose version is no
+//! entry: the entry holds the particle's schedule version, and an entry whose version is no
 //! longer the particle's is dropped when it comes up (lazy deletion).
 
 use std::cmp::Ordering;

@@ -15,8 +15,9 @@
 //!   ```
 //!
 //!   (c ≤ 0 with b < 0: an overlap that still approaches, τ = 0). It is answered by the same
-//!   rule as the stepped model's impacts, [`restitution_impulse`] (Newton's u_n⁺ = −e u_n⁻,
-//!   Coulomb friction), each impulse onto both particles;
+//!   rule as the stepped model's impacts, [`restitution_impulse`](super::restitution_impulse)
+//!   (Newton's u_n⁺ = −e u_n⁻, Coulomb friction), each impulse onto both particles
+//!   (`impacts.rs`);
 //! - **a wall**: a plane (or a box collider's wall) at distance s = (x − p)·n − r, reached at
 //!   τ = s / (−v·n) when v·n < 0, answered by the same rule;
 //! - **leaving the shell**: the particle's neighbour list expires (`shells.rs`), and is made
@@ -25,7 +26,7 @@
 //! **One event per particle** (Smallenburg, EPJE 45:22 (2022)): a particle keeps only its
 //! earliest event, in a bucketed calendar (`calendar.rs`). After an impact of i and j only
 //! their events are found again. A third particle k whose event was an impact with i is not
-//! touched: its event carries the *path* i had (the count of i's impacts), and when it comes
+//! touched: its event holds the *path* i had (the count of i's impacts), and when it comes
 //! up with a path that is no longer i's, k's event is found again from that time. That is
 //! enough: k's other partners met k no sooner than that stale event (it was k's earliest),
 //! and an earlier impact of k with i's new path is i's own earliest-event search's business.
@@ -36,18 +37,17 @@
 //! particles, colliders or settings change), so a run of many frames builds the lists once.
 
 mod calendar;
+mod impacts;
 mod shells;
 
 use super::books::ColliderBooks;
 use super::colliders::Collider;
-use super::contact::{Contact, Partner};
 use super::groups::Filter;
 use super::impulse::CollisionStats;
 use super::morton::morton_order;
-use super::response::{restitution_impulse, MaterialTable};
+use super::response::MaterialTable;
 use super::roots::toi_half_space;
-use super::spin::Rotation;
-use super::Domain;
+use super::{Domain, Periodic};
 use crate::error::Error;
 use crate::interrupt::Interrupt;
 use crate::particles::Particles;
@@ -85,7 +85,7 @@ struct Body {
     v: [f64; 3],
     /// Its path: its impacts so far.
     path: u32,
-    /// Its schedule: how often its event was found (the calendar's live entry carries the
+    /// Its schedule: how often its event was found (the calendar's live entry holds the
     /// latest).
     schedule: u32,
 }
@@ -182,6 +182,62 @@ pub(crate) fn unsupported_collider(colliders: &[Collider]) -> Option<(usize, &'s
     })
 }
 
+/// The cells' range: the periodic cell along its axes, the bodies' extent elsewhere (the
+/// origin without bodies).
+fn cells_range(bodies: &[Body], cell: Option<&Periodic>) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for b in bodies {
+        for k in 0..3 {
+            lo[k] = lo[k].min(b.x[k]);
+            hi[k] = hi[k].max(b.x[k]);
+        }
+    }
+    if let Some(c) = cell {
+        for k in (0..3).filter(|&k| c.axes()[k]) {
+            lo[k] = c.lo()[k];
+            hi[k] = c.hi()[k];
+        }
+    }
+    if bodies.is_empty() {
+        lo = [0.0; 3];
+        hi = [0.0; 3];
+    }
+    (lo, hi)
+}
+
+/// The neighbour lists' shell δ (m) of `n` particles filling the cells' range `lo..hi` of a
+/// `dim`-dimensional domain, with mean and largest radii `radii` and the periodic `cell`.
+fn shell_width(
+    (lo, hi): ([f64; 3], [f64; 3]),
+    n: usize,
+    dim: usize,
+    (r_mean, r_max): (f64, f64),
+    cell: Option<&Periodic>,
+) -> f64 {
+    // (at least half the mean spacing of the particles in the space they fill: point
+    // particles, or ones far smaller than their spacing, would otherwise leave a shell of
+    // almost nothing at every move, and a step never end; the hard-sphere gas of the
+    // benchmark, φ = 0.25, has 0.64 σ there, under its 0.7 σ)
+    let room: f64 = (0..dim).map(|k| (hi[k] - lo[k]).max(0.0)).product();
+    let spacing = if n > 0 {
+        (room / n as f64).powf(1.0 / dim as f64)
+    } else {
+        0.0
+    };
+    let mut delta = (SHELL * 2.0 * r_mean).max(0.5 * spacing);
+    // the minimum image must find every partner within reach: 2 r_max + δ < L/2
+    if let Some(c) = cell {
+        for k in (0..3).filter(|&k| c.axes()[k]) {
+            delta = delta.min(0.9 * (0.5 * c.period(k) - 2.0 * r_max));
+        }
+    }
+    if delta.is_nan() || delta <= 0.0 {
+        delta = f64::MIN_POSITIVE; // point particles: the list holds touching pairs only
+    }
+    delta
+}
+
 impl EventDriven {
     /// The state of particles `p` at time `t0` (s): positions wrapped into the periodic cell,
     /// every neighbour list made, every particle's first event scheduled. The colliders must
@@ -227,45 +283,8 @@ impl EventDriven {
         });
 
         // The cells' range: the periodic cell along its axes, the particles' extent elsewhere.
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for b in &bodies {
-            for k in 0..3 {
-                lo[k] = lo[k].min(b.x[k]);
-                hi[k] = hi[k].max(b.x[k]);
-            }
-        }
-        if let Some(c) = &cell {
-            for k in (0..3).filter(|&k| c.axes()[k]) {
-                lo[k] = c.lo()[k];
-                hi[k] = c.hi()[k];
-            }
-        }
-        if n == 0 {
-            lo = [0.0; 3];
-            hi = [0.0; 3];
-        }
-        // (at least half the mean spacing of the particles in the space they fill: point
-        // particles, or ones far smaller than their spacing, would otherwise leave a shell of
-        // almost nothing at every move, and a step never end; the hard-sphere gas of the
-        // benchmark, φ = 0.25, has 0.64 σ there, under its 0.7 σ)
-        let dim = domain.dim();
-        let room: f64 = (0..dim).map(|k| (hi[k] - lo[k]).max(0.0)).product();
-        let spacing = if n > 0 {
-            (room / n as f64).powf(1.0 / dim as f64)
-        } else {
-            0.0
-        };
-        let mut delta = (SHELL * 2.0 * r_mean).max(0.5 * spacing);
-        // the minimum image must find every partner within reach: 2 r_max + δ < L/2
-        if let Some(c) = &cell {
-            for k in (0..3).filter(|&k| c.axes()[k]) {
-                delta = delta.min(0.9 * (0.5 * c.period(k) - 2.0 * r_max));
-            }
-        }
-        if delta.is_nan() || delta <= 0.0 {
-            delta = f64::MIN_POSITIVE; // point particles: the list holds touching pairs only
-        }
+        let (lo, hi) = cells_range(&bodies, cell.as_ref());
+        let delta = shell_width((lo, hi), n, domain.dim(), (r_mean, r_max), cell.as_ref());
         let centres: Vec<[f64; 3]> = bodies.iter().map(|b| b.x).collect();
         let shells = Shells::new(&centres, &radius, domain, lo, hi, delta);
         let mut state = EventDriven {
@@ -279,8 +298,14 @@ impl EventDriven {
             g,
             groups,
         };
-        // First events, then a calendar sized for them.
-        let first: Vec<(f64, Kind)> = (0..n).map(|i| state.find(i, t0, domain)).collect();
+        state.schedule_first(t0, domain);
+        state
+    }
+
+    /// Every particle's first event at `t0` (s), then a calendar sized for them.
+    fn schedule_first(&mut self, t0: f64, domain: &Domain) {
+        let n = self.bodies.len();
+        let first: Vec<(f64, Kind)> = (0..n).map(|i| self.find(i, t0, domain)).collect();
         let waits: Vec<f64> = first.iter().map(|e| e.0 - t0).filter(|w| w.is_finite()).collect();
         let mean_wait = if waits.is_empty() {
             1.0
@@ -288,11 +313,10 @@ impl EventDriven {
             waits.iter().sum::<f64>() / waits.len() as f64
         };
         let width = Calendar::<Kind>::width_for(waits.len(), mean_wait);
-        state.calendar = Calendar::new(t0, width, n.next_power_of_two().clamp(64, 1 << 20));
+        self.calendar = Calendar::new(t0, width, n.next_power_of_two().clamp(64, 1 << 20));
         for (i, e) in first.into_iter().enumerate() {
-            state.enter(i, e);
+            self.enter(i, e);
         }
-        state
     }
 
     /// Whether the state is for `n` particles at time `t` (s): what the world checks before
@@ -516,134 +540,6 @@ impl EventDriven {
         }
         best
     }
-
-    /// The impact of i and j at time `now` (s): both moved there, the impulse of
-    /// [`restitution_impulse`] given to i and its opposite to j; both paths change.
-    #[allow(clippy::too_many_arguments)]
-    fn impact_pair(
-        &mut self,
-        i: usize,
-        j: usize,
-        now: f64,
-        p: &mut Particles,
-        materials: &MaterialTable<'_>,
-        threshold: f64,
-        domain: &Domain,
-        stats: &mut CollisionStats,
-    ) {
-        for k in [i, j] {
-            self.bodies[k].move_to(now, self.g, None);
-        }
-        let (bi, bj) = (self.bodies[i], self.bodies[j]);
-        let d = domain.displacement(bi.x, bj.x);
-        let dist = vec3::norm(d);
-        if dist == 0.0 {
-            return; // coincident centres have no normal (placement refuses them)
-        }
-        let (wi, wj) = (self.order[i] as usize, self.order[j] as usize); // the world's indices
-        let contact = Contact {
-            i: wi,
-            other: Partner::Particle(wj),
-            normal: vec3::scale(1.0 / dist, d),
-            overlap: self.radius[i] + self.radius[j] - dist,
-            u_n: 0.0,
-            wall_velocity: [0.0; 3],
-        };
-        let material = materials.pair(&contact);
-        // the same rule as the stepped impacts, on the pair alone (i as 0, j as 1)
-        let v = [bi.v[0], bi.v[1], bi.v[2], bj.v[0], bj.v[1], bj.v[2]];
-        let w = [p.inv_mass[wi], p.inv_mass[wj]];
-        let pair = Contact {
-            i: 0,
-            other: Partner::Particle(1),
-            ..contact
-        };
-        // with spin, on the contact point's velocity, and both turn (`collide/spin.rs`; the
-        // world's angular velocities: nothing turns between impacts)
-        let rotation = p.has_spin().then_some(Rotation {
-            inv_inertia: &p.inv_inertia,
-            radius: &p.radius,
-        });
-        let spin = rotation.map(|r| r.of(&contact, &p.omega));
-        let Some(imp) = restitution_impulse(&pair, &v, &w, material, threshold, spin) else {
-            return;
-        };
-        if let Some(r) = rotation {
-            r.kick(&contact, contact.overlap, imp.vector, &mut p.omega);
-        }
-        let (vi, vj) = (&mut self.bodies[i].v, vec3::add(bj.v, vec3::scale(-w[1], imp.vector)));
-        *vi = vec3::add(*vi, vec3::scale(w[0], imp.vector));
-        self.bodies[j].v = vj;
-        for k in 0..3 {
-            // Σ m Δv of the two: zero by action and reaction up to rounding
-            let mut balance = 0.0;
-            if w[0] > 0.0 {
-                balance += p.mass[wi] * (self.bodies[i].v[k] - bi.v[k]);
-            }
-            if w[1] > 0.0 {
-                balance += p.mass[wj] * (self.bodies[j].v[k] - bj.v[k]);
-            }
-            stats.impulse_balance[k] += balance;
-        }
-        crate::collide::impulse::add_outer(&mut stats.virial, d, imp.vector);
-        self.bodies[i].path = self.bodies[i].path.wrapping_add(1);
-        self.bodies[j].path = self.bodies[j].path.wrapping_add(1);
-        stats.impacts += 1;
-        stats.impulses += 1;
-        stats.energy_lost += imp.energy_lost;
-    }
-
-    /// The impact of i with wall k at time `now` (s), by the same rule; the wall's collider
-    /// books what it took. Whether an impulse was given (none when i does not approach).
-    #[allow(clippy::too_many_arguments)]
-    fn impact_wall(
-        &mut self,
-        i: usize,
-        k: usize,
-        now: f64,
-        p: &mut Particles,
-        materials: &MaterialTable<'_>,
-        threshold: f64,
-        stats: &mut CollisionStats,
-        books: &mut [ColliderBooks],
-    ) -> bool {
-        let b = &mut self.bodies[i];
-        b.move_to(now, self.g, None);
-        let wall = self.walls[k];
-        let wi = self.order[i] as usize; // the world's index
-        let contact = Contact {
-            i: wi,
-            other: Partner::Collider(wall.collider),
-            normal: wall.normal,
-            overlap: self.radius[i] - vec3::dot(vec3::sub(b.x, wall.point), wall.normal),
-            u_n: 0.0,
-            wall_velocity: [0.0; 3],
-        };
-        let material = materials.pair(&contact);
-        let alone = Contact { i: 0, ..contact };
-        let rotation = p.has_spin().then_some(Rotation {
-            inv_inertia: &p.inv_inertia,
-            radius: &p.radius,
-        });
-        let spin = rotation.map(|r| r.of(&contact, &p.omega));
-        let Some(imp) = restitution_impulse(&alone, &b.v, &[p.inv_mass[wi]], material, threshold, spin) else {
-            return false;
-        };
-        if let Some(r) = rotation {
-            r.kick(&contact, contact.overlap, imp.vector, &mut p.omega);
-        }
-        b.v = vec3::add(b.v, vec3::scale(p.inv_mass[wi], imp.vector));
-        b.path = b.path.wrapping_add(1);
-        stats.impacts += 1;
-        stats.impulses += 1;
-        stats.energy_lost += imp.energy_lost;
-        if let Some(book) = books.get_mut(wall.collider) {
-            // where it touched: the sphere's point on the wall
-            let at = vec3::sub(b.x, vec3::scale(self.radius[i], wall.normal));
-            book.book(at, [0.0; 3], imp.vector, wall.normal);
-        }
-        true
-    }
 }
 
 /// The walls of the colliders: every plane, and every box wall not along a periodic axis.
@@ -679,85 +575,4 @@ fn collect_walls(colliders: &[Collider], domain: &Domain) -> Vec<Wall> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::collide::{Material, Periodic};
-
-    /// A random gas of `n` spheres (radii 0.3–0.5) in a periodic cube of side `side`,
-    /// placed apart.
-    fn gas(n: usize, side: f64, seed: u64) -> (Particles, Domain) {
-        let mut s = seed;
-        let mut next = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let mut x: Vec<f64> = Vec::new();
-        let mut radius = Vec::new();
-        let cell = Periodic::new([0.0; 3], [side; 3], [true; 3]).unwrap();
-        let domain = Domain::periodic(3, cell).unwrap();
-        while radius.len() < n {
-            let (p, r) = ([next() * side, next() * side, next() * side], 0.3 + 0.2 * next());
-            let apart = (0..radius.len()).all(|k| {
-                let d = domain.displacement(p, vec3::get(&x, k));
-                vec3::norm(d) > r + radius[k]
-            });
-            if apart {
-                x.extend_from_slice(&p);
-                radius.push(r);
-            }
-        }
-        let v: Vec<f64> = (0..3 * n).map(|_| next() - 0.5).collect();
-        let mut p = Particles::default();
-        p.add(&x, &v, &vec![1.0; n], &radius, &vec![false; n]).unwrap();
-        (p, domain)
-    }
-
-    /// The invariants the event search stands on, after thousands of events: the lists are
-    /// symmetric; every pair whose centres are within r_i + r_j + δ is listed (the module
-    /// doc's bound); every particle is within δ/2 of its centre; no two overlap.
-    #[test]
-    fn the_lists_hold_every_partner_and_no_spheres_overlap() {
-        let (mut p, domain) = gas(300, 9.0, 5);
-        let mut state = EventDriven::new(&p, &[], &domain, None, 0.0, [0.0; 3]);
-        let table = MaterialTable::uniform(Material::new(1.0, 0.0).unwrap());
-        let mut books = [];
-        let mut interrupt = Interrupt::none();
-        let mut impacts = 0;
-        for frame in 1..=20 {
-            let t = frame as f64;
-            let stats = state
-                .advance(&mut p, &table, 0.0, &domain, t, &mut books, &mut interrupt)
-                .unwrap();
-            impacts += stats.impacts;
-            let n = p.len();
-            // (each body stays at its own time: where it is at t)
-            let at: Vec<[f64; 3]> = state.bodies.iter().map(|b| b.line(t)).collect();
-            for i in 0..n {
-                let c = state.shells.centre[i];
-                let moved = vec3::norm(domain.displacement(at[i], c));
-                assert!(
-                    moved <= 0.5 * state.shells.delta * (1.0 + 1e-12),
-                    "particle {i} left its shell"
-                );
-                for j in 0..n {
-                    if i == j {
-                        continue;
-                    }
-                    let listed = state.shells.of(i).contains(&(j as u32));
-                    assert_eq!(
-                        listed,
-                        state.shells.of(j).contains(&(i as u32)),
-                        "lists of {i} and {j} differ"
-                    );
-                    let reach = state.radius[i] + state.radius[j] + state.shells.delta;
-                    if vec3::norm(domain.displacement(c, state.shells.centre[j])) < reach {
-                        assert!(listed, "{i} and {j} are within reach but not listed");
-                    }
-                    let gap = vec3::norm(domain.displacement(at[i], at[j])) - state.radius[i] - state.radius[j];
-                    assert!(gap > -1e-9, "{i} and {j} overlap by {}", -gap);
-                }
-            }
-        }
-        assert!(impacts > 1000, "{impacts} impacts");
-    }
-}
+mod tests;

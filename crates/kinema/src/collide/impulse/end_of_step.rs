@@ -1,12 +1,13 @@
 //! The end of an impulse-model step (stages 2–4 after the impacts, [`ImpulseModel::step`]):
 //! the contacts of the touched particles and of the piles they reach (detection), the
 //! velocity solve of Newton's law with its warm start and the overlap removed (response),
-//! each impulse onto both particles and the energy books (distribution).
+//! each impulse onto both particles and the energy lost (distribution).
 
 use super::{ImpulseModel, StageSetting};
 use crate::collide::contact::action_reaction;
 use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
+use crate::collide::marks::Marks;
 use crate::collide::neighbour_list::CHUNK;
 use crate::collide::response::{bounces, VELOCITY_TOLERANCE};
 use crate::collide::shock::Accuracy;
@@ -17,28 +18,28 @@ use crate::error::Error;
 use crate::vec3;
 use rayon::prelude::*;
 
-/// Most sweeps of the soft step's solve stage, and of its relax and restitution stages, at
-/// the `physics` accuracy. Warm-started, a heap at rest converges in one or two sweeps a
+/// Most passes of the soft step's solve stage, and of its relax and restitution stages, at
+/// the `physics` accuracy. Warm-started, a heap at rest converges in one or two passes a
 /// step; the caps matter while it settles, and for a frictionless heap, which converges
 /// slowly. Measured on `benchmarks/piles.py` (docs/collisions.md): with caps of 100 and 30
 /// the 2D pour of 2,000 discs, the 20-row pyramid, the 60-deep column and the frictional pour
 /// of 10,000 balls all come to rest within 5 s at 1 ms; with 10 and 10 (Box2D's and
-/// Chipmunk's habit of a few sweeps a step) the 2D pour still boiled after 5 s (KE 107 J)
+/// Chipmunk's habit of a few passes a step) the 2D pour still boiled after 5 s (KE 107 J)
 /// and the frictional pour of 10,000 too (max |v| 2.4 m/s), though a frictionless demo heap
 /// ran 2.8× faster.
-const SOLVE_SWEEPS: usize = 100;
-const RELAX_SWEEPS: usize = 30;
+const SOLVE_PASSES: usize = 100;
+const RELAX_PASSES: usize = 30;
 
 /// The caps at the `animation` accuracy, where shock propagation (`collide/shock.rs`) stops
-/// each level on the one below whatever the solve's sweeps left: at 120 Hz the 2D pour
+/// each level on the one below whatever the solve's passes left: at 120 Hz the 2D pour
 /// rested at 0.64 % of r in 2.4 s with 10 and 5, at 1.1 % in 8.5 s with 100 and 30 (the
 /// 60-deep column: 0.47 % in 2.4 s, 0.24 % in 4.8 s). The relax keeps the physics grade's
 /// 30: with 5, a column with rolling resistance never came to rest (1.2 % of r, 15 cm/s
 /// after 5 s), the frictionless demo neither, and the 2D pour of seed 3 boiled (26 % of r,
 /// 0.6 m/s); with 30 all three come to rest, and no pour boils (seeds 1–3 calm at 1.3–1.7 %
 /// of r, max |v| 3–5 mm/s, but above the sleep rule's 1 %: awake after 5 s).
-const ANIMATION_SOLVE_SWEEPS: usize = 10;
-const ANIMATION_RELAX_SWEEPS: usize = RELAX_SWEEPS;
+const ANIMATION_SOLVE_PASSES: usize = 10;
+const ANIMATION_RELAX_PASSES: usize = RELAX_PASSES;
 
 /// An island sleeps only while its deepest overlap is at most this many slops (1 % of r for
 /// equal spheres): a pile rests at 0.23–0.26 % of r at 1 ms.
@@ -53,6 +54,39 @@ pub(crate) fn on_periodic_wall(c: &Contact, colliders: &[Collider], domain: &Dom
         && domain
             .periodic_box()
             .is_some_and(|p| (0..3).any(|k| p.axes()[k] && c.normal[k] != 0.0))
+}
+
+/// The most passes of the soft step's stages at `accuracy`, for a step of h s.
+fn soft_params(accuracy: Accuracy, h: f64) -> SoftParams {
+    SoftParams {
+        h,
+        tolerance: VELOCITY_TOLERANCE,
+        solve_passes: match accuracy {
+            Accuracy::Physics => SOLVE_PASSES,
+            Accuracy::Animation => ANIMATION_SOLVE_PASSES,
+        },
+        relax_passes: match accuracy {
+            Accuracy::Physics => RELAX_PASSES,
+            Accuracy::Animation => ANIMATION_RELAX_PASSES,
+        },
+    }
+}
+
+/// Contact c's i's relative velocity (`per` = 1 s: f gives velocities) or displacement over
+/// the step (`per` = h: f gives displacements) against its partner: a particle's, or a
+/// collider surface's (its velocity at the contact, over the step h times it).
+fn relative(c: &Contact, f: &dyn Fn(usize) -> [f64; 3], per: f64) -> [f64; 3] {
+    match c.partner_particle() {
+        Some(j) => vec3::sub(f(c.i), f(j)),
+        None if c.wall_velocity == [0.0; 3] => f(c.i),
+        None => vec3::sub(f(c.i), vec3::scale(per, c.wall_velocity)),
+    }
+}
+
+/// The overlap contact c may keep, m: [`SLOP`] of r_i + r_j, or of the diameter against a
+/// collider (`radius`: the particles' radii).
+fn slop(radius: &[f64], c: &Contact) -> f64 {
+    SLOP * (radius[c.i] + c.partner_particle().map_or(radius[c.i], |j| radius[j]))
 }
 
 impl ImpulseModel {
@@ -121,9 +155,9 @@ impl ImpulseModel {
                 });
             }
         }
-        // The colliders' contacts first: a sweep then carries what a wall holds up through
+        // The colliders' contacts first: a pass then hands what a wall holds up on through
         // the pile above it in one pass where it can (a column resting on a floor converges
-        // in a few sweeps from zero, not hundreds).
+        // in a few passes from zero, not hundreds).
         self.contacts.rotate_left(pairs);
         woke
     }
@@ -137,13 +171,13 @@ impl ImpulseModel {
             self.touched.mark(m);
             work.push(m);
         }
-        // (whole: whether each carried load is the engine's own flag from the step it fell
+        // (whole: whether each bore load is the engine's own flag from the step it fell
         // asleep in, as the awake island would have it)
         self.records.append(island.records.iter().copied());
         1
     }
 
-    /// Sleeping's books at the step's end (`collide/sleep.rs`): each awake particle's calm
+    /// Sleeping's update at the step's end (`collide/sleep.rs`): each awake particle's calm
     /// time grows by h if its speed and its displacement over the step divided by h are at
     /// most `speed` (m/s), else starts again; each island of this step's solve that rests on a
     /// collider or a pinned particle, and whose particles have all been calm for `time` s,
@@ -264,78 +298,27 @@ impl ImpulseModel {
         let (materials, inv_mass, domain) = (set.materials, set.inv_mass, set.domain);
         let x0 = paths.x0;
         let moved = |q: usize| domain.displacement(vec3::get(x1, q), vec3::get(x0, q));
-        // i's relative velocity (`per` = 1 s: f gives velocities) or displacement over the
-        // step (`per` = h: f gives displacements) against its partner: a particle's, or a
-        // collider surface's (its velocity at the contact, over the step h times it)
-        let rel = |c: &Contact, f: &dyn Fn(usize) -> [f64; 3], per: f64| match c.partner_particle() {
-            Some(j) => vec3::sub(f(c.i), f(j)),
-            None if c.wall_velocity == [0.0; 3] => f(c.i),
-            None => vec3::sub(f(c.i), vec3::scale(per, c.wall_velocity)),
-        };
+        let euler_step = |q: usize| vec3::scale(h, vec3::get(v1, q));
         // Each contact's warm start: its record's total, read (`collide/records.rs`).
         self.records.match_up(&self.contacts, &mut self.matched);
         let records = self.records.rows();
         self.solved.clear();
         self.solved
             .extend(self.matched.iter().map(|m| m.map_or([0.0; 3], |k| records[k].impulse)));
-        // The particles in resting contact: named by a contact that carried load in the last
-        // step, or that the step would close beyond what its target allows (moving by
-        // symplectic Euler, below). No impact hit them in this step.
-        let euler_step = |q: usize| vec3::scale(h, vec3::get(v1, q));
-        let mut resting = std::mem::take(&mut self.scratch);
-        resting.reset(inv_mass.len(), false);
-        // A particle touching a resting one (within the slop, by a contact that carried no load
-        // in the last step) rests too: a column placed at rest on a floor then moves as one by
-        // symplectic Euler from its first step, as it will in every step after, so that the
-        // first step's totals are the next step's warm start (each ball moved by the method
-        // in the first step and by Euler in the second asked the solve of the second for
-        // another load, which it took up over several steps, booking up to 1e-6 of the
-        // column's energy as lost). Such contacts are gathered here, then spread over in
-        // passes until nothing changes: as many as the chain of them is long.
-        let mut touching: Vec<(usize, usize)> = Vec::new();
-        for (c, warm) in self.contacts.iter().zip(&self.solved) {
-            let start = -c.overlap - vec3::dot(rel(c, &moved, h), c.normal);
-            let least = start.min(0.0);
-            let closes = start + vec3::dot(rel(c, &euler_step, h), c.normal) < least;
-            if *warm != [0.0; 3] || closes {
-                for q in std::iter::once(c.i).chain(c.partner_particle()) {
-                    if paths.version(q) == 0 {
-                        resting.mark(q);
-                    }
-                }
-            } else if let Some(j) = c.partner_particle() {
-                let slop = SLOP * (set.radius[c.i] + set.radius[j]);
-                if start <= slop && paths.version(c.i) == 0 && paths.version(j) == 0 {
-                    touching.push((c.i, j));
-                }
-            }
-        }
-        let mut spread = true;
-        while spread {
-            spread = false;
-            for &(i, j) in &touching {
-                if resting.get(i) != resting.get(j) {
-                    resting.mark(i);
-                    resting.mark(j);
-                    spread = true;
-                }
-            }
-        }
+        let mut resting = self.resting_particles(set, paths, h, &moved, &euler_step);
         // Each particle's displacement over the step as the solve sees it: a particle in
         // resting contact moves by symplectic Euler, as in Box2D (x = x₀ + h v: held at v = 0
         // it stays where it was, whatever the method); any other as it was integrated (the
         // method's own accuracy, an impact's exact path).
         let base = |q: usize| if resting.get(q) { euler_step(q) } else { moved(q) };
-        // the overlap a contact may keep: of r_i + r_j, or of the diameter against a collider
-        let slop = |c: &Contact| SLOP * (set.radius[c.i] + c.partner_particle().map_or(set.radius[c.i], |j| set.radius[j]));
         self.prepared.clear();
         self.prepared.extend(self.contacts.iter().map(|c| {
             let n = c.normal;
-            let start = -c.overlap - vec3::dot(rel(c, &moved, h), n);
-            let u1 = rel(c, &|q| vec3::get(v1, q), 1.0);
-            let u_pre = vec3::dot(rel(c, &|q| paths.reference_velocity(q), 1.0), n);
+            let start = -c.overlap - vec3::dot(relative(c, &moved, h), n);
+            let u1 = relative(c, &|q| vec3::get(v1, q), 1.0);
+            let u_pre = vec3::dot(relative(c, &|q| paths.reference_velocity(q), 1.0), n);
             let bounce = bounces(u_pre, threshold).then(|| -materials.pair(c).restitution() * u_pre);
-            Target::new(start, slop(c), rel(c, &base, h), u1, n, h, bounce)
+            Target::new(start, slop(set.radius, c), relative(c, &base, h), u1, n, h, bounce)
         }));
         // What moving by symplectic Euler adds to the integrated position of each particle in
         // resting contact.
@@ -365,18 +348,7 @@ impl ImpulseModel {
             spin: set.rotation.map(|r| (r, omega)),
             rolling: set.rolling_friction,
             shock: (set.accuracy == Accuracy::Animation).then_some(paths.accel),
-            params: SoftParams {
-                h,
-                tolerance: VELOCITY_TOLERANCE,
-                solve_sweeps: match set.accuracy {
-                    Accuracy::Physics => SOLVE_SWEEPS,
-                    Accuracy::Animation => ANIMATION_SOLVE_SWEEPS,
-                },
-                relax_sweeps: match set.accuracy {
-                    Accuracy::Physics => RELAX_SWEEPS,
-                    Accuracy::Animation => ANIMATION_RELAX_SWEEPS,
-                },
-            },
+            params: soft_params(set.accuracy, h),
         };
         self.islands = Islands::find_with(&self.contacts, inv_mass, &mut self.forest);
         // Each contact's check that the solve would leave it alone (most of a gas's contacts)
@@ -401,8 +373,73 @@ impl ImpulseModel {
         for &(q, c) in &euler {
             vec3::add_scaled(x1, q, 1.0, c);
         }
-        // What the stage acted on, for the books: moved by symplectic Euler, or pushed.
-        self.acted.reset(inv_mass.len(), false);
+        self.mark_acted(resting, inv_mass.len());
+        self.keep_records(set.radius, &idle, force_free);
+        Ok(stats)
+    }
+
+    /// The particles in resting contact at the step's end (in the stage's scratch flags,
+    /// which [`ImpulseModel::mark_acted`] gives back): `moved` and `euler_step` give each
+    /// particle's integrated displacement over the step and the one symplectic Euler makes.
+    fn resting_particles(
+        &mut self,
+        set: &StageSetting<'_>,
+        paths: &Paths<'_>,
+        h: f64,
+        moved: &dyn Fn(usize) -> [f64; 3],
+        euler_step: &dyn Fn(usize) -> [f64; 3],
+    ) -> Marks {
+        let inv_mass = set.inv_mass;
+        // The particles in resting contact: named by a contact that bore load in the last
+        // step, or that the step would close beyond what its target allows (moving by
+        // symplectic Euler, below). No impact hit them in this step.
+        let mut resting = std::mem::take(&mut self.scratch);
+        resting.reset(inv_mass.len(), false);
+        // A particle touching a resting one (within the slop, by a contact that bore no load
+        // in the last step) rests too: a column placed at rest on a floor then moves as one by
+        // symplectic Euler from its first step, as it will in every step after, so that the
+        // first step's totals are the next step's warm start (each ball moved by the method
+        // in the first step and by Euler in the second asked the solve of the second for
+        // another load, which it took up over several steps, booking up to 1e-6 of the
+        // column's energy as lost). Such contacts are gathered here, then spread over in
+        // passes until nothing changes: as many as the chain of them is long.
+        let mut touching: Vec<(usize, usize)> = Vec::new();
+        for (c, warm) in self.contacts.iter().zip(&self.solved) {
+            let start = -c.overlap - vec3::dot(relative(c, moved, h), c.normal);
+            let least = start.min(0.0);
+            let closes = start + vec3::dot(relative(c, euler_step, h), c.normal) < least;
+            if *warm != [0.0; 3] || closes {
+                for q in std::iter::once(c.i).chain(c.partner_particle()) {
+                    if paths.version(q) == 0 {
+                        resting.mark(q);
+                    }
+                }
+            } else if let Some(j) = c.partner_particle() {
+                let slop = SLOP * (set.radius[c.i] + set.radius[j]);
+                if start <= slop && paths.version(c.i) == 0 && paths.version(j) == 0 {
+                    touching.push((c.i, j));
+                }
+            }
+        }
+        let mut spread = true;
+        while spread {
+            spread = false;
+            for &(i, j) in &touching {
+                if resting.get(i) != resting.get(j) {
+                    resting.mark(i);
+                    resting.mark(j);
+                    spread = true;
+                }
+            }
+        }
+        resting
+    }
+
+    /// Marks what the stage acted on (for the energy lost) among the `n` particles, and
+    /// gives the scratch flags `resting` back.
+    fn mark_acted(&mut self, mut resting: Marks, n: usize) {
+        // moved by symplectic Euler, or pushed
+        self.acted.reset(n, false);
         for &q in resting.sorted() {
             self.acted.mark(q);
         }
@@ -418,9 +455,14 @@ impl ImpulseModel {
                 }
             }
         }
+    }
+
+    /// The step's records from its contacts, solved totals and totals (`radius`: the
+    /// particles' radii; `idle`: each island's check that the solve left it alone).
+    fn keep_records(&mut self, radius: &[f64], idle: &[bool], force_free: bool) {
         // The contacts the next step keeps (its warm start, and the particles it looks at
         // first). In a force-free world, a contact of an island the solve left alone, apart
-        // beyond the slop and separating, is not kept: it carries nothing, its particles move
+        // beyond the slop and separating, is not kept: it bears nothing, its particles move
         // on straight lines that part, and the next step finds the pair again if continuous
         // detection sees either of them hit or a kept contact reaches them. In a gas that is
         // nearly every contact, and the next step's work then follows the contacts that act.
@@ -431,12 +473,11 @@ impl ImpulseModel {
             for k in (0..self.islands.len()).filter(|&k| idle[k]) {
                 for &c in self.islands.island(k) {
                     let t = &self.prepared[c];
-                    kept[c] = !(t.gap > slop(&self.contacts[c]) && t.u_n >= 0.0);
+                    kept[c] = !(t.gap > slop(radius, &self.contacts[c]) && t.u_n >= 0.0);
                 }
             }
         }
         self.records.replace(&self.contacts, &self.solved, &self.totals, &kept);
-        Ok(stats)
     }
 
     /// The largest overlap of the end-of-step contacts at the positions `x1` the step leaves
@@ -450,7 +491,7 @@ impl ImpulseModel {
     }
 
     /// The mechanical energy the end-of-step stage took, J, over the particles it acted on
-    /// (moved by symplectic Euler in resting contact, or pushed by a nonzero total): each one's kinetic energy at its books' reference state minus
+    /// (moved by symplectic Euler in resting contact, or pushed by a nonzero total): each one's kinetic energy at its reference state minus
     /// now, minus the work the step's forces (`accel`: their accelerations over the step) did
     /// since: Σ ½ m (|v_b|² − |v|²) + Σ m a·(x − x_b). The reference is the step's start for a
     /// particle no impact hit, so a body held at rest books exactly 0 with every method (it
@@ -459,10 +500,10 @@ impl ImpulseModel {
     ///
     /// With spin, each one's rotational energy at its reference minus now is added,
     /// Σ ½ I (|ω_b|² − |ω|²) (stage 1 does not turn a particle: no work to subtract).
-    pub(super) fn energy_books(&self, set: &StageSetting<'_>, accel: &[f64], x1: &[f64], v1: &[f64], omega: &[f64]) -> f64 {
+    pub(super) fn energy_lost(&self, set: &StageSetting<'_>, accel: &[f64], x1: &[f64], v1: &[f64], omega: &[f64]) -> f64 {
         let (mass, inv_mass) = (set.mass, set.inv_mass);
         let mut lost = 0.0;
-        for (k, &(q, xb, vb)) in self.books.iter().enumerate() {
+        for (k, &(q, xb, vb)) in self.references.iter().enumerate() {
             if inv_mass[q] == 0.0 || !self.acted.get(q) {
                 continue;
             }
@@ -470,7 +511,7 @@ impl ImpulseModel {
             let dx = set.domain.displacement(x, xb);
             lost += 0.5 * mass[q] * (vec3::dot(vb, vb) - vec3::dot(v, v)) + mass[q] * vec3::dot(a, dx);
             if let Some(r) = set.rotation.filter(|r| r.inv_inertia[q] > 0.0) {
-                let (wb, w) = (self.books_spin[k], vec3::get(omega, q));
+                let (wb, w) = (self.references_spin[k], vec3::get(omega, q));
                 lost += 0.5 * (vec3::dot(wb, wb) - vec3::dot(w, w)) / r.inv_inertia[q];
             }
         }

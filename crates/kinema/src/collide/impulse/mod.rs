@@ -1,5 +1,5 @@
 //! The impulse model's collision stages 2–4 over one step ([`ImpulseModel::step`], its stage list in `step.rs`): what they
-//! keep from step to step (the candidate list, the paths and the queue of impacts, the wake
+//! keep from step to step (the candidate list, the paths and the queue of impacts, the meeting
 //! times, the end-of-step contacts and their warm start), what the world tells them
 //! ([`StageSetting`], [`StepFrame`]) and what they report ([`CollisionStats`],
 //! [`CollisionTimes`]). Continuous detection and the impacts are in `impacts.rs`, the
@@ -8,6 +8,7 @@
 
 pub(crate) mod end_of_step;
 pub(crate) mod impacts;
+pub(crate) mod list;
 mod step;
 
 use super::books::ColliderBooks;
@@ -15,13 +16,13 @@ use super::events::{EventQueue, PathStore};
 use super::islands::{Forest, Islands};
 use super::marks::Marks;
 use super::neighbour_list::NeighbourList;
+use super::quiet::Meetings;
 use super::records::{ContactRecord, Records};
 use super::shock::Accuracy;
 use super::sleep::Sleep;
 use super::soft_step::{Target, SPECULATIVE};
 use super::spin::Rotation;
 use super::touch::Touches;
-use super::wake::Wake;
 use super::{Collider, Contact, Domain, Grid, MaterialTable, Partner};
 use crate::interrupt::Interrupt;
 
@@ -31,10 +32,10 @@ pub struct CollisionStats {
     /// Contacts at the end of the step (touching or overlapping pairs and particle–collider
     /// contacts).
     pub contacts: usize,
-    /// Of the contacts: those that carry an impulse at the step's end (held, pushed or
+    /// Of the contacts: those that bear an impulse at the step's end (held, pushed or
     /// bounced by the end-of-step soft step), ...
     pub resting: usize,
-    /// ... and those apart at the step's end that carried nothing (speculative: within the
+    /// ... and those apart at the step's end that bore nothing (speculative: within the
     /// margin, `collide/soft_step.rs`, SPECULATIVE).
     pub speculative: usize,
     /// End-of-step contacts that bounced by Newton's law in the soft step's restitution stage.
@@ -59,7 +60,8 @@ pub struct CollisionStats {
     pub virial: [f64; 9],
     /// The largest overlap left after the step, m.
     pub max_overlap: f64,
-    /// Sweeps of the end-of-step velocity solver (the latest step's; the most any island took).
+    /// Passes of the end-of-step velocity solver (the latest step's; the most any island took;
+    /// `solver_sweeps` is its public name, which the binding and Python read).
     pub solver_sweeps: usize,
     /// Independent groups of the end-of-step contacts, each solved on its own on one of the
     /// threads (the latest step's; `collide/islands.rs`).
@@ -122,7 +124,7 @@ pub struct CollisionTimes {
     /// Stage 3: the impulses of Newton's law (impacts, and the end-of-step solver) and the
     /// removal of overlap.
     pub respond: std::time::Duration,
-    /// Stage 4: each impulse onto both particles, the impulse balance and the energy books.
+    /// Stage 4: each impulse onto both particles, the impulse balance and the energy lost.
     pub distribute: std::time::Duration,
     /// The same time by [`ImpulseStage`], in its order.
     pub stages: [std::time::Duration; 7],
@@ -134,21 +136,21 @@ pub struct CollisionTimes {
 /// a step, in this order, because each reads what the one before it wrote.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImpulseStage {
-    /// The neighbour list holds for the step's sweep, or is rebuilt (with the wake times of
+    /// The neighbour list holds for the step's sweep, or is rebuilt (with the meeting times of
     /// a force-free world); who is looked at.
     List,
     /// Continuous detection: each impact at its time, by Newton's law, onto both particles.
     Impacts,
     /// The end-of-step contacts of the touched particles and of the piles they reach.
     Contacts,
-    /// The soft step: targets, islands, the sweeps (idle islands skipped).
+    /// The soft step: targets, islands, the passes (idle islands skipped).
     Solve,
-    /// The totals onto both particles; the energy books.
+    /// The totals onto both particles; the energy lost.
     Apply,
     /// Sleeping, the largest overlap, positions wrapped into the periodic cell.
     Settle,
-    /// The next steps' wake times (a force-free world).
-    Wake,
+    /// The next steps' meeting times (a force-free world).
+    Meetings,
 }
 
 impl ImpulseStage {
@@ -160,7 +162,7 @@ impl ImpulseStage {
         ImpulseStage::Solve,
         ImpulseStage::Apply,
         ImpulseStage::Settle,
-        ImpulseStage::Wake,
+        ImpulseStage::Meetings,
     ];
 
     /// Its name in `World.stage_times()`.
@@ -172,7 +174,8 @@ impl ImpulseStage {
             ImpulseStage::Solve => "solve",
             ImpulseStage::Apply => "apply",
             ImpulseStage::Settle => "settle",
-            ImpulseStage::Wake => "wake",
+            // ("wake": the stage's public name in `stage_times`, kept from before the rename)
+            ImpulseStage::Meetings => "wake",
         }
     }
 }
@@ -187,8 +190,8 @@ pub(crate) struct StepFrame<'a> {
     /// particle; `None`: the parabola through x₁ is taken.
     pub accel: Option<&'a [f64]>,
     /// No force acts: every path is a straight line from one step to the next, and the
-    /// impact search starts only from the particles whose wake time falls in the step
-    /// (`collide/wake.rs`).
+    /// impact search starts only from the particles whose meeting time falls in the step
+    /// (`collide/quiet.rs`).
     pub steady: bool,
     /// x₁ is already in the periodic cell (the stages wrap only what they move).
     pub wrapped: bool,
@@ -249,7 +252,7 @@ pub(crate) struct ImpulseModel {
     /// through x₁), m/s².
     pub(super) fitted: Vec<f64>,
     /// The step's accelerations by the forces when the method gives none, (v₁ − v₀)/h, for
-    /// the energy books, m/s².
+    /// the energy lost, m/s².
     pub(super) forced: Vec<f64>,
     pub(super) queue: EventQueue,
     /// Each particle's bound on its distance from its list build position for the rest of
@@ -259,11 +262,11 @@ pub(crate) struct ImpulseModel {
     /// The tests' switch that turns the bounds' check off (every candidate solved for).
     #[cfg(test)]
     pub(crate) unbounded: bool,
-    /// In a force-free world, each particle's wake time (see `collide/wake.rs`), the
-    /// particles woken in this step, whether this step rebuilt the list, and the fastest
+    /// In a force-free world, each particle's meeting time (see `collide/quiet.rs`), the
+    /// particles due in this step, whether this step rebuilt the list, and the fastest
     /// speed an impact of this step left.
-    pub(super) wake: Wake,
-    pub(super) woken: Vec<usize>,
+    pub(super) meetings: Meetings,
+    pub(super) due: Vec<usize>,
     pub(super) rebuilt: bool,
     pub(super) fastest_hit: f64,
     /// Particles that touched something at the step's start or were hit in it: the only
@@ -271,11 +274,11 @@ pub(crate) struct ImpulseModel {
     pub(super) touched: Marks,
     /// Scratch flags, one per particle, all false between uses (`end_of_step.rs`).
     pub(super) scratch: Marks,
-    /// Each touched particle's reference state for the energy books: at the step's start, or
+    /// Each touched particle's reference state for the energy lost: at the step's start, or
     /// after its impacts (x, v).
-    pub(super) books: Vec<(usize, [f64; 3], [f64; 3])>,
-    /// With spin, the angular velocity of each entry of `books` at its reference, rad/s.
-    pub(super) books_spin: Vec<[f64; 3]>,
+    pub(super) references: Vec<(usize, [f64; 3], [f64; 3])>,
+    /// With spin, the angular velocity of each entry of `references` at its reference, rad/s.
+    pub(super) references_spin: Vec<[f64; 3]>,
     pub(super) contacts: Vec<Contact>,
     /// The end-of-step contacts as detected (overlap and u_n before the response).
     pub detected: Vec<Contact>,
@@ -286,15 +289,15 @@ pub(crate) struct ImpulseModel {
     /// With rolling resistance, each end-of-step contact's final angular impulse on i,
     /// N·m·s (empty without).
     pub(super) rolls: Vec<[f64; 3]>,
-    /// With shock propagation, the end-of-step solve's velocity changes that no total carries
+    /// With shock propagation, the end-of-step solve's velocity changes that no total holds
     /// (particle, velocity then angular velocity), m/s and rad/s.
     pub(super) kicks: Vec<(usize, [f64; 6])>,
-    /// The particles the end-of-step stage acted on in this step (for the books).
+    /// The particles the end-of-step stage acted on in this step (for the energy lost).
     pub(super) acted: Marks,
     /// Each end-of-step contact's targets (`collide/soft_step.rs`).
     pub(super) prepared: Vec<Target>,
     /// The awake contacts' records: the last step's totals (the warm start) and whether each
-    /// carried load (`collide/records.rs`).
+    /// bore load (`collide/records.rs`).
     pub(super) records: Records,
     /// Each end-of-step contact's record, by index into `records` (`None`: a new contact).
     pub(super) matched: Vec<Option<usize>>,
@@ -328,7 +331,7 @@ impl ImpulseModel {
     }
 
     /// The contacts of the islands asleep, each with the impulse its last awake step's solve
-    /// gave it (N·s on i; the load it carries in each step asleep), measured at the positions
+    /// gave it (N·s on i; the load it bears in each step asleep), measured at the positions
     /// `x` (m, 3 per particle) as [`sleeping_contact`] measures them.
     pub(crate) fn sleeping_contacts(
         &self,
@@ -377,14 +380,14 @@ impl ImpulseModel {
             bounded: false,
             #[cfg(test)]
             unbounded: false,
-            wake: Wake::default(),
-            woken: Vec::new(),
+            meetings: Meetings::default(),
+            due: Vec::new(),
             rebuilt: false,
             fastest_hit: 0.0,
             touched: Marks::default(),
             scratch: Marks::default(),
-            books: Vec::new(),
-            books_spin: Vec::new(),
+            references: Vec::new(),
+            references_spin: Vec::new(),
             contacts: Vec::new(),
             detected: Vec::new(),
             totals: Vec::new(),
@@ -439,7 +442,7 @@ impl ImpulseModel {
     /// colliders or the domain changed).
     pub fn forget_list(&mut self) {
         self.list.built_at.clear();
-        self.wake.valid = false;
+        self.meetings.valid = false;
         self.records.clear();
         self.sleep.wake_all();
     }
@@ -488,7 +491,7 @@ impl ImpulseModel {
     /// and their islands asleep, taken before, stay (their numbers did not change).
     pub fn keep_contacts(&mut self, kept: KeptContacts, n: usize) {
         self.list.built_at.clear();
-        self.wake.valid = false;
+        self.meetings.valid = false;
         self.set_warm_start(kept.warm);
         self.sleep = kept.sleep;
         self.sleep.resize(n);

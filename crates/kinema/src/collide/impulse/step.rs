@@ -15,10 +15,10 @@
 //!             and of the piles they reach (waking the islands asleep they touch)
 //!   solve     the soft step's totals, island by island (warm-started from the records);
 //!             the positions follow its solve stage (`end_of_step.rs`, `solve`)
-//!   apply     each total onto both particles (and the shock stages' kicks); energy books
+//!   apply     each total onto both particles (and the shock stages' kicks); energy lost
 //!   settle    calm islands fall asleep; the largest overlap; positions into the cell;
 //!             begin and end of touch
-//!   wake      a force-free world's next wake times
+//!   meetings  a force-free world's next meeting times (timed as "wake")
 //! ```
 //!
 //! The order matters: the impacts change the paths the end-of-step contacts are found on,
@@ -52,13 +52,29 @@ struct StepState {
     threshold: f64,
     reach: f64,
     kick: f64,
-    /// A force-free step with continuous detection (the wake times hold), and whether only
-    /// the particles woken in it are searched.
+    /// A force-free step with continuous detection (the meeting times hold), and whether only
+    /// the particles due in it are searched.
     steady: bool,
-    only_woken: bool,
+    only_due: bool,
     /// The impacts stage's time spent responding and distributing (the rest is detecting).
     impacts_respond: Duration,
     impacts_distribute: Duration,
+}
+
+/// The step's times: each stage's lap, and the seed's three stages from the same laps (the
+/// impacts interleave all three).
+fn collision_times(laps: [Duration; 7], step: &StepState) -> CollisionTimes {
+    let lap = |s: ImpulseStage| laps[s as usize];
+    let (respond, distribute) = (step.impacts_respond, step.impacts_distribute);
+    CollisionTimes {
+        detect: lap(ImpulseStage::List)
+            + lap(ImpulseStage::Impacts).saturating_sub(respond + distribute)
+            + lap(ImpulseStage::Contacts)
+            + lap(ImpulseStage::Meetings),
+        respond: respond + lap(ImpulseStage::Solve),
+        distribute: distribute + lap(ImpulseStage::Apply) + lap(ImpulseStage::Settle),
+        stages: laps,
+    }
 }
 
 impl ImpulseModel {
@@ -87,8 +103,76 @@ impl ImpulseModel {
         let mut at = Instant::now();
         self.collider_books.clear();
         self.collider_books.resize(set.colliders.len(), ColliderBooks::default());
+        let (woke, sleeping) = self.sleepers(set, frame, (x0, v0), (x1, v1))?;
+        // The step's paths: Verlet's own acceleration, or the parabola through x1 (the path
+        // store is lent out of the model for the step, and given back whatever happens).
+        let mut store = std::mem::take(&mut self.paths);
+        let mut fitted = std::mem::take(&mut self.fitted);
+        let h = frame.h;
+        let accel = match frame.accel {
+            Some(a) if sleeping => {
+                fitted.clear();
+                fitted.extend_from_slice(a);
+                for q in (0..x0.len() / 3).filter(|&q| self.sleep.is_asleep(q)) {
+                    fitted[3 * q..3 * q + 3].fill(0.0);
+                }
+                &fitted
+            }
+            Some(a) => a,
+            None => fit_parabolas(&mut fitted, (x0, v0, x1), h),
+        };
+        let mut paths = Paths::begin(&mut store, x0, v0, accel);
+        // The forces' own accelerations, for the energy lost: the fitted parabola is the
+        // force for the second-order methods only (Euler's x₁ has none, symplectic Euler's twice).
+        let mut forced = std::mem::take(&mut self.forced);
+        let forces = match frame.accel {
+            Some(a) => a,
+            None => velocity_slopes(&mut forced, (v0, v1), h),
+        };
+        let mut step = StepState::default();
+        step.stats.woke = woke;
+        let mut ran = Ok(());
+        for stage in ImpulseStage::ALL {
+            let (paths, x1, v1, omega) = (&mut paths, &mut *x1, &mut *v1, &mut *omega);
+            ran = match stage {
+                ImpulseStage::List => self.list_stage(set, frame, paths, x1, v1, &mut step),
+                ImpulseStage::Impacts => self.impacts_stage(set, frame, paths, omega, &mut step),
+                ImpulseStage::Contacts => self.contacts_stage(set, frame, paths, (x1, v1, omega), &mut step),
+                ImpulseStage::Solve => self
+                    .solve(set, paths, frame.h, (v1, omega), x1, step.threshold, frame.steady)
+                    .map(|solved| self.count_solve(&solved, &mut step)),
+                ImpulseStage::Apply => self.apply_stage(set, forces, (x1, v1, omega), &mut step),
+                ImpulseStage::Settle => self.settle_stage(set, frame, paths, (x1, v1, omega), &mut step),
+                ImpulseStage::Meetings => self.meetings_stage(set, frame, x1, v1, &step),
+            };
+            if ran.is_err() {
+                break;
+            }
+            let now = Instant::now();
+            laps[stage as usize] += now - at;
+            at = now;
+        }
+        self.paths = store;
+        self.fitted = fitted;
+        self.forced = forced;
+        ran?;
+        let times = collision_times(laps, &step);
+        Ok((step.changed, step.stats, times))
+    }
+
+    /// Sleeping before the stages: the sleep flags sized (or every island woken where
+    /// nothing may sleep), the islands an awake particle meets woken, the others held at rest
+    /// with their loads on the colliders. Returns the islands woken and whether any still
+    /// sleeps.
+    fn sleepers(
+        &mut self,
+        set: &StageSetting<'_>,
+        frame: &StepFrame<'_>,
+        (x0, v0): (&[f64], &[f64]),
+        (x1, v1): (&mut [f64], &mut [f64]),
+    ) -> Result<(usize, bool), Error> {
         // (no pass over the particles where nothing can sleep: a force-free world's step looks
-        // only at the particles due, `collide/wake.rs`)
+        // only at the particles due, `collide/quiet.rs`)
         if frame.may_sleep && set.sleep_time.is_some() {
             self.sleep.resize(x0.len() / 3);
         } else if !self.sleep.calm.is_empty() {
@@ -113,71 +197,7 @@ impl ImpulseModel {
                 v1[3 * q..3 * q + 3].fill(0.0);
             }
         }
-        // The step's paths: Verlet's own acceleration, or the parabola through x1 (the path
-        // store is lent out of the model for the step, and given back whatever happens).
-        let mut store = std::mem::take(&mut self.paths);
-        let mut fitted = std::mem::take(&mut self.fitted);
-        let h = frame.h;
-        let accel = match frame.accel {
-            Some(a) if sleeping => {
-                fitted.clear();
-                fitted.extend_from_slice(a);
-                for q in (0..x0.len() / 3).filter(|&q| self.sleep.is_asleep(q)) {
-                    fitted[3 * q..3 * q + 3].fill(0.0);
-                }
-                &fitted
-            }
-            Some(a) => a,
-            None => fit_parabolas(&mut fitted, (x0, v0, x1), h),
-        };
-        let mut paths = Paths::begin(&mut store, x0, v0, accel);
-        // The forces' own accelerations, for the energy books: the fitted parabola is the
-        // force for the second-order methods only (Euler's x₁ has none, symplectic Euler's twice).
-        let mut forced = std::mem::take(&mut self.forced);
-        let forces = match frame.accel {
-            Some(a) => a,
-            None => velocity_slopes(&mut forced, (v0, v1), h),
-        };
-        let mut step = StepState::default();
-        step.stats.woke = woke;
-        let mut ran = Ok(());
-        for stage in ImpulseStage::ALL {
-            let (paths, x1, v1, omega) = (&mut paths, &mut *x1, &mut *v1, &mut *omega);
-            ran = match stage {
-                ImpulseStage::List => self.list_stage(set, frame, paths, x1, v1, &mut step),
-                ImpulseStage::Impacts => self.impacts_stage(set, frame, paths, omega, &mut step),
-                ImpulseStage::Contacts => self.contacts_stage(set, frame, paths, (x1, v1, omega), &mut step),
-                ImpulseStage::Solve => self
-                    .solve(set, paths, frame.h, (v1, omega), x1, step.threshold, frame.steady)
-                    .map(|solved| self.count_solve(&solved, &mut step)),
-                ImpulseStage::Apply => self.apply_stage(set, forces, (x1, v1, omega), &mut step),
-                ImpulseStage::Settle => self.settle_stage(set, frame, paths, (x1, v1, omega), &mut step),
-                ImpulseStage::Wake => self.wake_stage(set, frame, x1, v1, &step),
-            };
-            if ran.is_err() {
-                break;
-            }
-            let now = Instant::now();
-            laps[stage as usize] += now - at;
-            at = now;
-        }
-        self.paths = store;
-        self.fitted = fitted;
-        self.forced = forced;
-        ran?;
-        // The seed's three stages from the same laps: the impacts interleave all three.
-        let lap = |s: ImpulseStage| laps[s as usize];
-        let (respond, distribute) = (step.impacts_respond, step.impacts_distribute);
-        let times = CollisionTimes {
-            detect: lap(ImpulseStage::List)
-                + lap(ImpulseStage::Impacts).saturating_sub(respond + distribute)
-                + lap(ImpulseStage::Contacts)
-                + lap(ImpulseStage::Wake),
-            respond: respond + lap(ImpulseStage::Solve),
-            distribute: distribute + lap(ImpulseStage::Apply) + lap(ImpulseStage::Settle),
-            stages: laps,
-        };
-        Ok((step.changed, step.stats, times))
+        Ok((woke, sleeping))
     }
 
     /// Wakes each island asleep that an awake movable particle meets within the step on
@@ -251,8 +271,8 @@ impl ImpulseModel {
     }
 
     /// The list stage: the neighbour list made to hold for the step's sweep, else rebuilt at
-    /// x₀ (`impacts.rs`, `prepare`), with a force-free world's wake times; the restitution
-    /// threshold; the particles looked at: those woken (force-free), everyone awake (without
+    /// x₀ (`impacts.rs`, `prepare`), with a force-free world's meeting times; the restitution
+    /// threshold; the particles looked at: those due (force-free), everyone awake (without
     /// ccd), and those named by the last step's contacts (a resting pile is solved at every
     /// step's end, whether or not its pairs touch to the last bit).
     fn list_stage(
@@ -265,27 +285,27 @@ impl ImpulseModel {
         step: &mut StepState,
     ) -> Result<(), Error> {
         let (t0, h, n) = (frame.t0, frame.h, set.radius.len());
-        // The wake times hold only if this step ends well (an error leaves them invalid).
+        // The meeting times hold only if this step ends well (an error leaves them invalid).
         step.steady = frame.steady && set.ccd;
-        let quiet = std::mem::replace(&mut self.wake.valid, false) && step.steady;
+        let quiet = std::mem::replace(&mut self.meetings.valid, false) && step.steady;
         self.rebuilt = false;
         self.fastest_hit = 0.0;
         self.touches.begin_step();
         (step.threshold, step.reach, step.kick) = self.prepare(set, paths, x1, v1, h, quiet)?;
-        let mut only_woken = quiet && !self.rebuilt;
-        if step.steady && !only_woken {
-            // New wake times for everyone, from the step's start (one pass over all pairs,
+        let mut only_due = quiet && !self.rebuilt;
+        if step.steady && !only_due {
+            // New meeting times for everyone, from the step's start (one pass over all pairs,
             // instead of a search of this step's impacts from every particle).
-            self.wake_up(set, paths.x0, paths.v0, t0, h, false);
-            only_woken = std::mem::replace(&mut self.wake.valid, false);
+            self.next_meetings(set, paths.x0, paths.v0, t0, h, false);
+            only_due = std::mem::replace(&mut self.meetings.valid, false);
         }
         // From here `rebuilt`: the list was rebuilt inside the step.
         self.rebuilt = false;
-        self.woken.clear();
-        if only_woken {
-            self.woken = self.wake.due(t0 + h, h);
+        self.due.clear();
+        if only_due {
+            self.due = self.meetings.due(t0 + h, h);
         }
-        step.only_woken = only_woken;
+        step.only_due = only_due;
         let everyone = !set.ccd && !self.sleep.any();
         self.touched.reset(n, everyone);
         if !set.ccd && !everyone {
@@ -303,7 +323,7 @@ impl ImpulseModel {
                 }
             }
         }
-        self.books.clear();
+        self.references.clear();
         Ok(())
     }
 
@@ -327,7 +347,7 @@ impl ImpulseModel {
             h: frame.h,
             threshold: step.threshold,
         };
-        let (_, respond, distribute, any) = self.impacts(&search, paths, step.reach, step.only_woken, &mut step.stats, omega)?;
+        let (_, respond, distribute, any) = self.impacts(&search, paths, step.reach, step.only_due, &mut step.stats, omega)?;
         (step.impacts_respond, step.impacts_distribute) = (respond, distribute);
         step.changed |= any;
         Ok(())
@@ -336,7 +356,8 @@ impl ImpulseModel {
     /// The contacts stage: hit particles end on their last parabola; a sleeper hit inside the
     /// step, or touched by an awake particle at its start, wakes with its island
     /// (`collide/sleep.rs`); the contacts at the step's end of the touched particles and of
-    /// the piles they reach (`end_of_step.rs`, `end_contacts`); the books' reference states.
+    /// the piles they reach (`end_of_step.rs`, `end_contacts`); the reference states for the
+    /// energy lost.
     fn contacts_stage(
         &mut self,
         set: &StageSetting<'_>,
@@ -363,11 +384,11 @@ impl ImpulseModel {
         step.stats.woke += self.end_contacts(set, x1, v1);
         step.stats.contacts = self.contacts.len();
         self.detected.clone_from(&self.contacts);
-        // The books' reference state of each touched particle: its state at the step's start
-        // if no impact changed its path (a body at rest then books 0 whatever the method), else
-        // the integrated state after its impacts (which booked their own loss).
+        // The reference state of each touched particle (for the energy lost): its state at the
+        // step's start if no impact changed its path (a body at rest then books 0 whatever the
+        // method), else the integrated state after its impacts (which booked their own loss).
         for &q in self.touched.sorted() {
-            self.books.push(if paths.version(q) == 0 {
+            self.references.push(if paths.version(q) == 0 {
                 (q, vec3::get(paths.x0, q), vec3::get(paths.v0, q))
             } else {
                 (q, vec3::get(x1, q), vec3::get(v1, q))
@@ -375,10 +396,10 @@ impl ImpulseModel {
         }
         // (with spin, each one's angular velocity now: the step's start's, or after its
         // impacts, as above; stage 1 does not turn a particle)
-        self.books_spin.clear();
+        self.references_spin.clear();
         if set.rotation.is_some() {
-            self.books_spin
-                .extend(self.books.iter().map(|&(q, _, _)| vec3::get(omega, q)));
+            self.references_spin
+                .extend(self.references.iter().map(|&(q, _, _)| vec3::get(omega, q)));
         }
         // A pair that only touches (no overlap) and approaches faster than an impact's least
         // speed meets exactly at the step's end: its impact belongs to the next step's t = 0,
@@ -394,7 +415,7 @@ impl ImpulseModel {
     /// positions moved by its solve stage), counted.
     fn count_solve(&self, solved: &IslandStats, step: &mut StepState) {
         let stats = &mut step.stats;
-        stats.solver_sweeps = solved.soft.sweeps;
+        stats.solver_sweeps = solved.soft.passes;
         stats.unconverged = stats.unconverged.max(usize::from(!solved.soft.converged));
         stats.islands = solved.islands;
         stats.bounced = solved.soft.bounced;
@@ -410,7 +431,7 @@ impl ImpulseModel {
 
     /// The apply stage: each total onto both particles (+w_i P on i, −w_j P on j, with spin at
     /// their contact points), the rolling resistance's angular impulses, the shock stages'
-    /// kicks; the colliders' and the energy books.
+    /// kicks; the colliders' books and the energy lost.
     fn apply_stage(
         &mut self,
         set: &StageSetting<'_>,
@@ -459,7 +480,7 @@ impl ImpulseModel {
                 vec3::add_scaled(omega, q, 1.0, [kick[3], kick[4], kick[5]]);
             }
         }
-        stats.energy_lost += self.energy_books(set, forces, x1, v1, omega);
+        stats.energy_lost += self.energy_lost(set, forces, x1, v1, omega);
         Ok(())
     }
 
@@ -487,7 +508,7 @@ impl ImpulseModel {
         if let Some(p) = set.domain.periodic_box() {
             if frame.wrapped {
                 // only the touched particles moved since (the impacts, the correction)
-                for &(q, _, _) in &self.books {
+                for &(q, _, _) in &self.references {
                     p.wrap_positions_serial(&mut x1[3 * q..3 * q + 3]);
                 }
             } else {
@@ -505,9 +526,9 @@ impl ImpulseModel {
         Ok(())
     }
 
-    /// The wake stage: the next steps' wake times in a force-free world, of the particles
-    /// this step looked at, or of all (`impacts.rs`, `wake_up`).
-    fn wake_stage(
+    /// The meetings stage: the next steps' meeting times in a force-free world, of the particles
+    /// this step looked at, or of all (`impacts.rs`, `next_meetings`).
+    fn meetings_stage(
         &mut self,
         set: &StageSetting<'_>,
         frame: &StepFrame<'_>,
@@ -516,8 +537,8 @@ impl ImpulseModel {
         step: &StepState,
     ) -> Result<(), Error> {
         if step.steady {
-            let incremental = step.only_woken && !self.rebuilt;
-            self.wake_up(set, x1, v1, frame.t0 + frame.h, frame.h, incremental);
+            let incremental = step.only_due && !self.rebuilt;
+            self.next_meetings(set, x1, v1, frame.t0 + frame.h, frame.h, incremental);
         }
         Ok(())
     }

@@ -133,7 +133,7 @@ impl TriangleMesh {
                         _ => n,
                     }
                 } else if c.feature == Feature::Face && c.len > 0.0 {
-                    // exactly ±n: d/|d| would carry the rounding of the foot q
+                    // exactly ±n: d/|d| would keep the rounding of the foot q
                     if vec3::dot(c.d, n) >= 0.0 {
                         n
                     } else {

@@ -1,9 +1,9 @@
 //! The collision settings as a caller gives them: the contact model ([`ContactModel`], with
 //! its parameters by name, [`ModelArgs`]), the tangential part of the force models
 //! ([`TangentialArgs`], [`TangentialKind`]) and [`CollisionParams`] with its checks; and the
-//! spring–dashpot model they ask for. Units SI.
+//! contact force model they ask for. Units SI.
 
-use crate::collide::contact_force::{Cohesion, NormalLaw, RollingModel, SpringDashpot, TangentialLaw, TangentialModel};
+use crate::collide::contact_force::{Cohesion, ContactForceModel, NormalLaw, RollingModel, TangentialLaw, TangentialModel};
 use crate::collide::shock::Accuracy;
 use crate::collide::Material;
 use crate::error::Error;
@@ -15,7 +15,7 @@ pub enum ContactModel {
     Impulse,
     /// A spring–dashpot force while bodies overlap (the DEM way), integrated with the other
     /// forces in stage 1: F_n = k_n δ − m_eff γ_n u_n with γ_n from the requested e by the
-    /// damped oscillator's closed form (`collide/penalty.rs`, `damping_ratio`), or given.
+    /// damped oscillator's closed form (`collide/contact_force/spring_dashpot.rs`, `damping_ratio`), or given.
     SpringDashpot {
         /// Normal stiffness k_n, N/m (> 0).
         stiffness: f64,
@@ -127,7 +127,7 @@ impl ContactModel {
     /// error lists them.
     pub const NAMES: [&'static str; 3] = ["impulse", "spring_dashpot", "hertz"];
 
-    /// The force models' names (contacts as a force of stage 1, [`SpringDashpot`]): every
+    /// The force models' names (contacts as a force of stage 1, [`ContactForceModel`]): every
     /// model but the impulse one. Python's rules for them read this list (`_core.FORCE_MODELS`).
     pub const FORCE_MODELS: [&'static str; 2] = [Self::NAMES[1], Self::NAMES[2]];
 
@@ -338,6 +338,14 @@ impl CollisionParams {
 
     /// Checks the values; the error names the parameter.
     pub fn check(&self) -> Result<Material, Error> {
+        self.check_model()?;
+        self.check_tangential()?;
+        self.check_solver()?;
+        Material::new(self.restitution, self.friction)
+    }
+
+    /// Checks the contact model's own parameters (the spring–dashpot's, Hertz's).
+    fn check_model(&self) -> Result<(), Error> {
         if let ContactModel::SpringDashpot { stiffness, damping } = self.model {
             if !(stiffness.is_finite() && stiffness > 0.0) {
                 return Err(Error::invalid(
@@ -390,6 +398,12 @@ impl CollisionParams {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// Checks the tangential part: set only with a force model, each value in its range, the
+    /// law's parameters those of its model.
+    fn check_tangential(&self) -> Result<(), Error> {
         let t = self.tangential;
         if self.model == ContactModel::Impulse {
             let named = t.named();
@@ -449,6 +463,12 @@ impl CollisionParams {
             }
             _ => {}
         }
+        Ok(())
+    }
+
+    /// Checks the solver's settings: the accuracy, rolling friction, the restitution
+    /// threshold, sleeping.
+    fn check_solver(&self) -> Result<(), Error> {
         if self.accuracy == Accuracy::Animation && (self.model != ContactModel::Impulse || self.event_driven) {
             return Err(Error::invalid(
                 "accuracy",
@@ -491,17 +511,17 @@ impl CollisionParams {
                 }
             }
         }
-        Material::new(self.restitution, self.friction)
+        Ok(())
     }
 }
 
-/// The spring–dashpot model the settings ask for: `Some` with that model.
-pub(super) fn spring_dashpot_of(params: &CollisionParams) -> Option<SpringDashpot> {
+/// The contact force model the settings ask for: `Some` with that model.
+pub(super) fn force_model_of(params: &CollisionParams) -> Option<ContactForceModel> {
     let mut model = match params.model {
-        ContactModel::SpringDashpot { stiffness, damping } => SpringDashpot::new(stiffness, damping),
+        ContactModel::SpringDashpot { stiffness, damping } => ContactForceModel::new(stiffness, damping),
         ContactModel::Hertz { cohesion, .. } => {
             let e_star = params.model.effective_modulus()?;
-            SpringDashpot::of(NormalLaw::hertz(e_star, cohesion), None)
+            ContactForceModel::of(NormalLaw::hertz(e_star, cohesion), None)
         }
         ContactModel::Impulse => return None,
     };

@@ -38,7 +38,7 @@ struct Owned {
     inv_mass: Vec<f64>,
     colliders: Vec<Collider>,
     domain: Domain,
-    model: SpringDashpot,
+    model: ContactForceModel,
 }
 
 impl Owned {
@@ -53,7 +53,7 @@ impl Owned {
             inv_mass: p.inv_mass,
             colliders: p.colliders,
             domain: p.domain,
-            model: SpringDashpot::new(p.stiffness, p.damping),
+            model: ContactForceModel::new(p.stiffness, p.damping),
         }
     }
 
@@ -123,7 +123,7 @@ impl Owned {
     }
 
     /// Gives this force the list of the force it replaces after a removal, as the world's
-    /// model keeps its own ([`SpringDashpot::retain_survivors`]).
+    /// model keeps its own ([`ContactForceModel::retain_survivors`]).
     fn keep_list(&mut self, list: NeighbourList, new_of_old: &[u32]) {
         self.model.scratch().list = list;
         self.model.retain_survivors(new_of_old);

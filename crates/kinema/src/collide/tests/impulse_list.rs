@@ -194,7 +194,7 @@ fn the_sweep_bound_passes_over_only_pairs_that_meet_nothing() {
     // meet within the step, so the step must be bit for bit the one that solves every
     // candidate's time of impact. Checked on heaps of other dimensions, sizes, radii (1:1 to
     // 1:4), speeds (one particle thrown at up to 200 m/s: lists rebuilt inside a step),
-    // steps (1 ms to 1/30 s), a force-free periodic gas (one bound for all, from the wake
+    // steps (1 ms to 1/30 s), a force-free periodic gas (one bound for all, from the meeting
     // times) and piles under gravity that come to rest and fall asleep.
     let heaps = [
         (3, 300, 1.0 / 60.0, 0.03, 1.0, 2.0, 40.0, true, false, 1),

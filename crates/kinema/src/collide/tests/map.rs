@@ -529,7 +529,7 @@ fn calls(body: &[String], callee: &Named) -> bool {
 
 /// The links of `chain` (names as the maps write them, caller first) that the engine's code
 /// does not make: each name must call the next, or hand the function it calls a closure that
-/// does (the caller's caller calls it: `soft_step` hands `sweeps` the visit).
+/// does (the caller's caller calls it: `soft_step` hands `passes` the visit).
 fn broken_links(engine: &Engine, chain: &[&str]) -> Vec<String> {
     let named: Vec<Named> = chain
         .iter()

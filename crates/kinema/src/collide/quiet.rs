@@ -2,21 +2,21 @@
 //! force-free world.
 //!
 //! Without forces every particle moves on a straight line between impulses, and a line does
-//! not change from one step to the next. So each particle gets a *wake time*: the first
+//! not change from one step to the next. So each particle gets a *meeting time*: the first
 //! time its line meets (or touches) a list partner's line or a collider, computed when its
 //! line last changed. A step then starts its impact search only from the particles whose
-//! wake time falls in it; every other one is quiet, and is read only as the partner of a
+//! meeting time falls in it; every other one is quiet, and is read only as the partner of a
 //! particle being looked at. Within the step nothing else changes: an impact's two
 //! particles look for their next impacts over all their partners, quiet or not, as before.
 //!
 //! **Why that finds every impact.** Take a pair i, j whose lines meet at time T. Of the
-//! two wake times, the one computed later was computed while both lines were already the
+//! two meeting times, the one computed later was computed while both lines were already the
 //! current ones, and saw the meeting: it is at most T, so that particle is looked at in
-//! the step of T (or earlier: a stale wake time, made with a partner's old line, only wakes
-//! a particle for nothing). A particle's wake time is recomputed after every step in which
+//! the step of T (or earlier: a stale meeting time, made with a partner's old line, only makes
+//! a particle due for nothing). A particle's meeting time is recomputed after every step in which
 //! it was looked at or its line changed (an impact, the end-of-step solve), from the state
 //! at the step's end, and all of them are recomputed whenever the neighbour list is rebuilt.
-//! Times are absolute (the world's clock), and a particle is woken with a margin of a
+//! Times are absolute (the world's clock), and a particle is due with a margin of a
 //! thousandth of a step: the world's positions advance by x + h v each step, the lines from
 //! one point, and the two differ by roundings.
 //!
@@ -27,24 +27,24 @@
 //! grows by h·vmax each step (plus what the end-of-step solve moved positions by). Two
 //! particles then close by at most 2·reach, and the list holds while that is less than its
 //! skin. Meetings are searched up to the time the bound says the list expires; the rebuild
-//! at that time computes every wake time again.
+//! at that time computes every meeting time again.
 //!
 //! This is the "lazy" half of event-driven MD (Alder & Wainwright; DynamO, Smallenburg):
 //! a particle is touched only when something happens to it. The step's work is O(k log N)
-//! for k particles woken, plus the integrator's pass.
+//! for k particles due, plus the integrator's pass.
 
 use super::events::Timetable;
 
-/// A wake time is due in a step ending at `end` when it is at most end + WAKE_MARGIN h.
-const WAKE_MARGIN: f64 = 1e-3;
+/// A meeting time is due in a step ending at `end` when it is at most end + DUE_MARGIN h.
+const DUE_MARGIN: f64 = 1e-3;
 
-/// The wake times and the list's validity bound (see the module doc).
+/// The meeting times and the list's validity bound (see the module doc).
 #[derive(Debug, Default)]
-pub(crate) struct Wake {
-    /// Each particle's wake time, s of the world's clock (none: nothing until the list's
+pub(crate) struct Meetings {
+    /// Each particle's meeting time, s of the world's clock (none: nothing until the list's
     /// rebuild).
     pub table: Timetable,
-    /// Whether the wake times hold for the current state; false: the next step looks at
+    /// Whether the meeting times hold for the current state; false: the next step looks at
     /// every particle, and computes them all again at its end.
     pub valid: bool,
     /// No particle is farther than this from its position at the list's build, m (at the
@@ -54,7 +54,7 @@ pub(crate) struct Wake {
     pub vmax: f64,
 }
 
-impl Wake {
+impl Meetings {
     /// The bound on any particle's distance from its build position after another step of
     /// h s, m.
     pub fn reach_after(&self, h: f64) -> f64 {
@@ -73,10 +73,10 @@ impl Wake {
     }
 
     /// The particles due in a step of h s ending at `end` (world clock, s), ascending; their
-    /// wake times are taken (recompute them at the step's end).
+    /// meeting times are taken (recompute them at the step's end).
     pub fn due(&mut self, end: f64, h: f64) -> Vec<usize> {
         let mut due = Vec::new();
-        while let Some((i, _)) = self.table.pop_until(end + WAKE_MARGIN * h) {
+        while let Some((i, _)) = self.table.pop_until(end + DUE_MARGIN * h) {
             due.push(i);
         }
         due.sort_unstable();
@@ -90,7 +90,7 @@ mod tests {
 
     #[test]
     fn due_takes_the_times_in_the_step_and_its_margin_only_once() {
-        let mut w = Wake::default();
+        let mut w = Meetings::default();
         w.table.fill(4, [(0, 1.0005), (1, 0.5), (2, 1.002), (3, 2.0)].into_iter());
         // a step of 0.1 s ending at 1.0: margin 1e-4 s
         assert_eq!(w.due(1.0, 0.1), vec![1]);
@@ -103,14 +103,14 @@ mod tests {
 
     #[test]
     fn the_bound_grows_with_the_fastest_speed() {
-        let w = Wake {
+        let w = Meetings {
             reach: 0.05,
             vmax: 2.0,
-            ..Wake::default()
+            ..Meetings::default()
         };
         assert_eq!(w.reach_after(0.01), 0.07);
         // the list of skin 0.3 holds while 2 reach < 0.3: (0.15 − 0.05) / 2 s from now
         assert!((w.horizon(0.3) - 0.05).abs() < 1e-15);
-        assert_eq!(Wake::default().horizon(0.3), f64::MAX);
+        assert_eq!(Meetings::default().horizon(0.3), f64::MAX);
     }
 }

@@ -1,24 +1,24 @@
 //! The spring–dashpot contact law bounces a pair back with the restitution it was built for.
 //!
-//! Theory (collide/penalty.rs): with γ_n = 2ζ√(k/m_eff) and ζ = −ln e / √(π² + ln² e), the
+//! Theory (collide/contact_force/spring_dashpot.rs): with γ_n = 2ζ√(k/m_eff) and ζ = −ln e / √(π² + ln² e), the
 //! overlap obeys δ'' + γ_n δ' + ω₀² δ = 0, the contact lasts t_c = π / ω_d and the relative
 //! normal velocity leaves at −e times its arrival value, for any masses and stiffness.
 //!
 //! Measured: two unequal spheres (1 and 3 kg) meeting head-on along an oblique normal while
 //! drifting together, integrated with classical RK4 at t_c / 20000 per step, the contact
-//! found by the narrow phase and its force by `PenaltyLaw::accumulate` at every stage. The
+//! found by the narrow phase and its force by `SpringDashpotLaw::accumulate` at every stage. The
 //! measured e is within 0.5 % of the requested one, the contact lasts t_c, and the pair's
 //! momentum is conserved.
 
-use super::PenaltyLaw;
+use super::SpringDashpotLaw;
 use crate::collide::{pair_contact, Domain};
 
 const MASS: [f64; 2] = [1.0, 3.0];
 const RADIUS: [f64; 2] = [0.1, 0.2];
 
-/// y' = (v, a) for y = (x, v) of the two particles, with the penalty force of their contact;
+/// y' = (v, a) for y = (x, v) of the two particles, with the spring–dashpot force of their contact;
 /// returns whether they were in contact.
-fn rate(law: &PenaltyLaw, y: &[f64; 12], dy: &mut [f64; 12]) -> bool {
+fn rate(law: &SpringDashpotLaw, y: &[f64; 12], dy: &mut [f64; 12]) -> bool {
     let (x, v) = y.split_at(6);
     let domain = Domain::open(3).unwrap();
     let inv_mass = [1.0 / MASS[0], 1.0 / MASS[1]];
@@ -33,7 +33,7 @@ fn rate(law: &PenaltyLaw, y: &[f64; 12], dy: &mut [f64; 12]) -> bool {
     contact.is_some_and(|c| c.overlap > 0.0)
 }
 
-fn rk4_step(law: &PenaltyLaw, y: &mut [f64; 12], h: f64) -> bool {
+fn rk4_step(law: &SpringDashpotLaw, y: &mut [f64; 12], h: f64) -> bool {
     let mut k = [[0.0; 12]; 4];
     let touching = rate(law, y, &mut k[0]);
     for (s, c) in [(1, 0.5), (2, 0.5), (3, 1.0)] {
@@ -58,7 +58,7 @@ fn measured_restitution_is_within_half_a_percent() {
     let approach = 2.0; // m/s, along −n for particle 0 relative to particle 1
     let m_eff = MASS[0] * MASS[1] / (MASS[0] + MASS[1]);
     for e in [0.1, 0.5, 0.9] {
-        let law = PenaltyLaw::new(1e5, e).unwrap();
+        let law = SpringDashpotLaw::new(1e5, e).unwrap();
         let t_c = law.contact_duration(m_eff);
         let h = t_c / 20_000.0;
 
@@ -105,7 +105,7 @@ fn measured_restitution_is_within_half_a_percent() {
 #[test]
 fn the_stable_step_rate_is_k_over_the_reduced_mass() {
     // a 1 kg ball on a 3 kg ball: m_eff = 0.75 kg, ω₀² = k / m_eff; on a pinned one, k / 1 kg
-    let law = PenaltyLaw::new(3e4, 0.5).unwrap();
+    let law = SpringDashpotLaw::new(3e4, 0.5).unwrap();
     let domain = Domain::open(3).unwrap();
     let x = [0.0, 0.0, 0.29, 0.0, 0.0, 0.0];
     let c = pair_contact(0, 1, &x, &[0.0; 6], &RADIUS, &domain, 0.0).unwrap();
@@ -113,8 +113,8 @@ fn the_stable_step_rate_is_k_over_the_reduced_mass() {
     assert_eq!(law.contact_omega_squared(&c, &[1.0, 0.0]), 3e4);
     assert!((law.omega_squared(0.75) - 3e4 / 0.75).abs() < 1e-9);
     // e = 1: no damping; e = 0: critical damping and no end to the contact
-    assert_eq!(PenaltyLaw::new(3e4, 1.0).unwrap().damping_rate(0.75), 0.0);
-    let critical = PenaltyLaw::new(3e4, 0.0).unwrap();
+    assert_eq!(SpringDashpotLaw::new(3e4, 1.0).unwrap().damping_rate(0.75), 0.0);
+    let critical = SpringDashpotLaw::new(3e4, 0.0).unwrap();
     assert!((critical.damping_rate(0.75) - 2.0 * (3e4f64 / 0.75).sqrt()).abs() < 1e-9);
     assert!(critical.contact_duration(0.75).is_infinite());
 }

@@ -1,4 +1,4 @@
-//! Penalty contacts: the linear spring–dashpot (DEM) normal force, damped for a restitution.
+//! The linear spring–dashpot (DEM) normal force, damped for a restitution.
 //!
 //! Instead of an impulse, overlapping bodies feel a force along the normal while they
 //! overlap, and the integrator (stage 1 of a step) moves them apart:
@@ -59,7 +59,7 @@ pub fn damping_ratio(restitution: f64) -> Result<f64, Error> {
 /// stiffness k_n (N/m), dashpot coefficient c_n (kg/s), overlap δ (m) and normal velocity u_n
 /// (m/s, < 0 approaching). Every spring–dashpot contact in kinema is this function: the
 /// world's contact force calls it for each contact (`contact_force/law.rs`), and so does the
-/// tests' `PenaltyLaw` (`oracles.rs`), whose restitution they measure.
+/// tests' `SpringDashpotLaw` (`oracles.rs`), whose restitution they measure.
 #[inline]
 pub fn spring_dashpot_force(stiffness: f64, dashpot: f64, overlap: f64, u_n: f64) -> f64 {
     stiffness * overlap - dashpot * u_n
@@ -74,9 +74,9 @@ pub fn dashpot_coefficient(stiffness: f64, zeta: f64, inverse_mass_sum: f64) -> 
 
 #[cfg(test)]
 mod tests {
-    use super::super::contact::{Contact, Partner};
-    use super::super::oracles::{restitution_of_damping, PenaltyLaw};
     use super::*;
+    use crate::collide::contact::{Contact, Partner};
+    use crate::collide::oracles::{restitution_of_damping, SpringDashpotLaw};
 
     #[test]
     fn damping_ratio_closed_forms() {
@@ -94,13 +94,13 @@ mod tests {
         assert!(damping_ratio(0.1).unwrap() > damping_ratio(0.5).unwrap());
         let e = damping_ratio(1.5).unwrap_err().to_string();
         assert!(e.starts_with("restitution = 1.5 is invalid"), "{e}");
-        let e = PenaltyLaw::new(0.0, 0.5).unwrap_err().to_string();
+        let e = SpringDashpotLaw::new(0.0, 0.5).unwrap_err().to_string();
         assert!(e.starts_with("stiffness = 0 is invalid"), "{e}");
     }
 
     #[test]
     fn forces_are_equal_and_opposite_and_match_the_law() {
-        let law = PenaltyLaw::new(1e4, 0.5).unwrap();
+        let law = SpringDashpotLaw::new(1e4, 0.5).unwrap();
         let inv_mass = [0.5, 0.25, 0.0];
         let contacts = [
             Contact {

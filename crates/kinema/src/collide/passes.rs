@@ -1,17 +1,17 @@
-//! The sweeps of the end-of-step contact solve (`soft_step`'s velocities and positions):
+//! The passes of the end-of-step contact solve (`soft_step`'s velocities and positions):
 //! over the contacts one after the other, or, where the contacts come in colours
 //! (`collide/islands.rs`), colour by colour on all threads.
 //!
-//! A sweep visits every contact once; a visit reads and writes the N-vectors of its two
+//! A pass visits every contact once; a visit reads and writes the N-vectors of its two
 //! particles (velocities, N = 3; velocities and angular velocities, N = 6, with spin) and its
 //! own state (the totals of impulse). The
 //! contacts of one colour share no movable particle, so their visits commute: done at once,
 //! they give what they give in order, and the result cannot depend on the thread count.
 //!
-//! On threads the sweeps run as Box2D v3's solver stages do: each thread that joins takes
+//! On threads the passes run as Box2D v3's solver stages do: each thread that joins takes
 //! the next block of the current colour from a counter, visits it, counts it done, and
 //! when the colour has no block left waits (spinning) until every block is done; then the
-//! next colour. The threads are started once for all the sweeps, not once a colour (a
+//! next colour. The threads are started once for all the passes, not once a colour (a
 //! thread woken from sleep costs as much as a colour of a thousand visits). Nothing waits
 //! on a thread that has not joined: a block is counted only when a running thread takes it,
 //! so one thread alone does every block (a thread that joins late finds the colours done
@@ -22,8 +22,8 @@ use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use super::contact::Contact;
 use super::shock::Held;
 
-/// Sweeps run on all threads when a colour has at least this many contacts (below, the
-/// waits cost more than the visits; the result is the same either way). Since the sweep in
+/// Passes run on all threads when a colour has at least this many contacts (below, the
+/// waits cost more than the visits; the result is the same either way). Since the pass in
 /// order is inlined with its visit, the demo's heap (colours of 150–300 contacts) ran its
 /// 4 s in 0.44 s on 2 threads with 256 and 0.39 s with 512 (1 thread: 0.39 s), the 2D
 /// pour at the animation grade in 2.45 s with 512 and 2.68 s with 1024 (1 thread: 2.68 s).
@@ -32,19 +32,19 @@ pub(crate) const PARALLEL_COLOUR: usize = 512;
 /// The least block of contacts a thread takes at once.
 const BLOCK: usize = 32;
 
-/// Contacts that a sweep visits as one: the contacts `range` of the list, and whether they
+/// Contacts that a pass visits as one: the contacts `range` of the list, and whether they
 /// share no movable particle (`together`: a colour, visited at once on all threads) or are
 /// visited in order.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) struct SweepGroup {
+pub(crate) struct PassGroup {
     pub range: std::ops::Range<usize>,
     pub together: bool,
 }
 
-impl SweepGroup {
+impl PassGroup {
     /// The contacts `range`, visited one after the other.
     pub fn in_order(range: std::ops::Range<usize>) -> Self {
-        SweepGroup { range, together: false }
+        PassGroup { range, together: false }
     }
 }
 
@@ -103,7 +103,7 @@ impl Ends {
     /// values per particle.
     ///
     /// Each N-vector is read as one block and written back as one block ([`Ends::store`]):
-    /// the next visit of a particle often follows at once (a sweep in contact order), and its
+    /// the next visit of a particle often follows at once (a pass in contact order), and its
     /// read must find the last write whole in the store buffer. Read and written value by
     /// value or in pieces that the compiler chose differently for the two (which changed with
     /// unrelated code around them), the reads waited on the writes: the demo's solve at 1 ms
@@ -141,7 +141,7 @@ impl Ends {
     unsafe fn load_from<const N: usize>(&self, a: *const f64) -> ([f64; N], [f64; N]) {
         // one read of the N values (copied as a block, as the visit then reads them: read
         // value by value, the visit's wider loads waited on the narrow stores, and a
-        // 2-thread sweep ran 25 % slower)
+        // 2-thread pass ran 25 % slower)
         let get = |q: usize| -> [f64; N] { std::ptr::read_unaligned(a.add(N * q).cast::<[f64; N]>()) };
         (get(self.i), self.j.map_or_else(|| self.wall(), get))
     }
@@ -162,17 +162,17 @@ impl Ends {
     }
 }
 
-/// What [`sweeps`] did: the sweeps made, the largest change of the last one, and whether
+/// What [`passes`] did: the passes made, the largest change of the last one, and whether
 /// it was at most the tolerance.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Swept {
-    pub sweeps: usize,
+pub(crate) struct PassesDone {
+    pub passes: usize,
     pub last_change: f64,
     pub converged: bool,
 }
 
-/// Sweeps over the contacts, group after group (`groups` cover them in order), until a sweep
-/// changes nothing by more than `tolerance` or `most` sweeps are made: each contact k with
+/// Passes over the contacts, group after group (`groups` cover them in order), until a pass
+/// changes nothing by more than `tolerance` or `most` passes are made: each contact k with
 /// ends is visited by `visit(k, state[k], a_i, a_j)` on the N-vectors of its ends in `a`,
 /// which returns the largest change it made (≥ 0).
 ///
@@ -184,15 +184,15 @@ pub(crate) struct Swept {
 /// demo's solve at 1 ms, the same work bit for bit: 2.8 s, 3.6 s after an unrelated
 /// change, 2.5 s inlined).
 #[inline(always)]
-pub(crate) fn sweeps<const N: usize, T: Send>(
-    groups: &[SweepGroup],
+pub(crate) fn passes<const N: usize, T: Send>(
+    groups: &[PassGroup],
     ends: &[Option<Ends>],
     a: &mut [f64],
     state: &mut [T],
     most: usize,
     tolerance: f64,
     visit: impl Fn(usize, &mut T, &mut [f64; N], &mut [f64; N]) -> f64 + Sync,
-) -> Swept {
+) -> PassesDone {
     let threads = rayon::current_num_threads();
     if most > 0 && threads > 1 && groups.iter().any(|g| g.together && g.range.len() >= PARALLEL_COLOUR) {
         let run = Run {
@@ -202,12 +202,12 @@ pub(crate) fn sweeps<const N: usize, T: Send>(
         };
         return on_threads(groups, ends, a, state, run, visit);
     }
-    let mut done = Swept {
-        sweeps: 0,
+    let mut done = PassesDone {
+        passes: 0,
         last_change: 0.0,
         converged: false,
     };
-    for sweep in 1..=most {
+    for pass in 1..=most {
         let mut change: f64 = 0.0;
         for k in groups.iter().flat_map(|g| g.range.clone()) {
             let Some(e) = ends[k] else { continue };
@@ -215,8 +215,8 @@ pub(crate) fn sweeps<const N: usize, T: Send>(
             change = change.max(visit(k, &mut state[k], &mut ai, &mut aj));
             e.store(a, ai, aj);
         }
-        done = Swept {
-            sweeps: sweep,
+        done = PassesDone {
+            passes: pass,
             last_change: change,
             converged: change <= tolerance,
         };
@@ -239,7 +239,7 @@ impl<T> Copy for Shared<T> {}
 unsafe impl<T: Send> Send for Shared<T> {}
 unsafe impl<T: Send> Sync for Shared<T> {}
 
-/// How [`on_threads`] runs: at most `most` sweeps, until one changes nothing by more than
+/// How [`on_threads`] runs: at most `most` passes, until one changes nothing by more than
 /// `tolerance`, on `threads` threads.
 #[derive(Debug, Clone, Copy)]
 struct Run {
@@ -248,15 +248,15 @@ struct Run {
     threads: usize,
 }
 
-/// [`sweeps`] on all threads (see the module's doc).
+/// [`passes`] on all threads (see the module's doc).
 fn on_threads<const N: usize, T: Send>(
-    groups: &[SweepGroup],
+    groups: &[PassGroup],
     ends: &[Option<Ends>],
     a: &mut [f64],
     state: &mut [T],
     run: Run,
     visit: impl Fn(usize, &mut T, &mut [f64; N], &mut [f64; N]) -> f64 + Sync,
-) -> Swept {
+) -> PassesDone {
     let Run {
         most,
         tolerance,
@@ -275,7 +275,7 @@ fn on_threads<const N: usize, T: Send>(
             (size, len.div_ceil(size))
         })
         .collect();
-    // Per phase (sweep s, group g at s·G + g): blocks taken and done; per sweep: the largest
+    // Per phase (pass s, group g at s·G + g): blocks taken and done; per pass: the largest
     // change, as the bits of a non-negative f64 (ordered as the numbers are).
     let phases = most * groups.len();
     let taken: Vec<AtomicUsize> = (0..phases).map(|_| AtomicUsize::new(0)).collect();
@@ -335,13 +335,13 @@ fn on_threads<const N: usize, T: Send>(
         }
         work();
     });
-    // Where every thread stopped: the first sweep within the tolerance, or the last.
+    // Where every thread stopped: the first pass within the tolerance, or the last.
     let made = (0..most)
         .find(|&s| f64::from_bits(change[s].load(Ordering::Relaxed)) <= tolerance)
         .map_or(most, |s| s + 1);
     let last_change = f64::from_bits(change[made - 1].load(Ordering::Relaxed));
-    Swept {
-        sweeps: made,
+    PassesDone {
+        passes: made,
         last_change,
         converged: last_change <= tolerance,
     }
