@@ -377,5 +377,6 @@ class WorldCollisions:
         (continuous detection, each impact at its time), ``contacts`` (the end-of-step
         contacts), ``solve`` (the soft step), ``apply`` (the totals onto both particles, the
         energy books), ``settle`` (sleeping, the largest overlap, periodic wrapping) and
-        ``wake`` (a force-free world's wake times)."""
+        ``wake`` (a force-free world's meeting times: when each particle's straight line next
+        meets another's, the engine's ``meetings`` stage; the key keeps its first name)."""
         return self._core.stage_times()
