@@ -43,7 +43,35 @@ def load_world(r: Reader) -> Any:
     _, state.spring_ids = r.ints("spring_ids", (None, 2), 0, next_id - 1, f"the ids at the ends of each spring: integers from 0 to next_id - 1 = {next_id - 1}")
     state.warned = r.bool_attr("warned")
     state.advised_at = r.int_attr("advised_at", 0, INT64_MAX, "the particles when the advisor last looked: an integer >= 0")
-    # the collision books: there exactly when collisions are on
+    wall_carry = _read_books(r, world, core)
+    # what is carried from step to step
+    carry, spin_carry, orientations = _read_integrator_carry(r, world, n)
+    memory = _read_contact_history(r, world, n)
+    warm, sleep, built = _read_collision_carry(r, world, n)
+    _restore_emitters(r, state.emitters, world.dim, time)
+    if orientations is not None:
+        r.engine("dataset 'orientations'", core.set_orientations, np.ascontiguousarray(orientations))
+    state.advice_due = False  # the advisor had looked at this state already (its warning is in `warned`)
+    world._restore(state)  # (and the views read anew)
+    # last: nothing after these may start the caches again
+    r.engine("group 'collision_carry'", core.restore_collision_carry, warm)
+    r.engine("dataset 'collision_carry/sleep_island'", core.restore_sleep_carry, *sleep)
+    if built is not None:
+        r.engine("dataset 'collision_carry/list_built_at'", core.restore_list_carry, *built)
+    if carry is not None:
+        r.engine("dataset 'integrator_carry'", core.restore_integrator_carry, carry.tolist())
+    if spin_carry is not None:
+        r.engine("dataset 'spin_carry'", core.restore_spin_carry, spin_carry.tolist())
+    if wall_carry is not None:
+        r.engine("group 'collider_books/carry'", core.restore_wall_force_carry, wall_carry)
+    if memory[0] or memory[1]:
+        r.engine("group 'contact_history'", core.restore_contact_history, *memory)
+    return world
+
+
+def _read_books(r: Reader, world: Any, core: Any) -> Any:
+    """The collision books, there exactly when collisions are on, given to the engine; a force
+    model's collider forces of the last step (rates), or None."""
     wall_carry = None
     if world.collision_stats() is not None:
         books = _collision_books(r)
@@ -56,7 +84,12 @@ def load_world(r: Reader) -> Any:
         raise r.fail("attribute 'collision_stats'", "is there but attribute 'scene' has collisions off; only a world with collisions has collision books")
     elif "collider_books" in r.f:
         raise r.fail("group 'collider_books'", "is there but attribute 'scene' has collisions off; only a world with collisions has collider books")
-    # what is carried from step to step
+    return wall_carry
+
+
+def _read_integrator_carry(r: Reader, world: Any, n: int) -> tuple[Any, Any, Any]:
+    """What the method carries from step to step (Verlet's a or implicit Euler's last Δv; Verlet's
+    α with spin) and the particles' orientations, each None where there is none."""
     carry = None
     if "integrator_carry" in r.f:
         if world.method not in ("verlet", "implicit_euler"):
@@ -74,6 +107,12 @@ def load_world(r: Reader) -> Any:
         _, orientations = r.reals(
             "orientations", (n, 4), lambda a: np.isfinite(a) & (np.linalg.norm(a, axis=-1, keepdims=True) > 0), "a finite quaternion (w, x, y, z) per particle"
         )
+    return carry, spin_carry, orientations
+
+
+def _read_contact_history(r: Reader, world: Any, n: int) -> tuple[list, list]:
+    """The force models' contact memory: touching pairs (i, j, springs) and collider touches (i, k,
+    normal, springs)."""
     memory: tuple[list, list] = ([], [])
     if "contact_history" in r.f:
         r.group("contact_history")
@@ -92,6 +131,12 @@ def load_world(r: Reader) -> Any:
             list(zip(pi.tolist(), pj.tolist(), ps.tolist(), strict=True)),
             list(zip(wi.tolist(), wk.tolist(), wn.tolist(), ws.tolist(), strict=True)),
         )
+    return memory
+
+
+def _read_collision_carry(r: Reader, world: Any, n: int) -> tuple[list, list, Any]:
+    """The impulse model's warm start (each contact's totals and whether it carried load), sleep
+    (calm times, islands) and where its candidate list was built."""
     g = r.group("collision_carry")
     _, particle = r.ints("collision_carry/particle", (None,), 0, n - 1, f"the particle of each contact: an index from 0 to {n - 1}")
     k = particle.shape[0]
@@ -130,25 +175,7 @@ def load_world(r: Reader) -> Any:
         _, at = r.reals("collision_carry/list_built_at", (n, 3), np.isfinite, "where the candidate list was built: 3 finite numbers per particle, m")
         _, skin = r.reals("collision_carry/list_skin", (), lambda a: np.isfinite(a) & (a > 0), "the candidate list's skin: a finite number > 0, m")
         built = (at.reshape(-1).tolist(), float(skin))
-    _restore_emitters(r, state.emitters, world.dim, time)
-    if orientations is not None:
-        r.engine("dataset 'orientations'", core.set_orientations, np.ascontiguousarray(orientations))
-    state.advice_due = False  # the advisor had looked at this state already (its warning is in `warned`)
-    world._restore(state)  # (and the views read anew)
-    # last: nothing after these may start the caches again
-    r.engine("group 'collision_carry'", core.restore_collision_carry, warm)
-    r.engine("dataset 'collision_carry/sleep_island'", core.restore_sleep_carry, *sleep)
-    if built is not None:
-        r.engine("dataset 'collision_carry/list_built_at'", core.restore_list_carry, *built)
-    if carry is not None:
-        r.engine("dataset 'integrator_carry'", core.restore_integrator_carry, carry.tolist())
-    if spin_carry is not None:
-        r.engine("dataset 'spin_carry'", core.restore_spin_carry, spin_carry.tolist())
-    if wall_carry is not None:
-        r.engine("group 'collider_books/carry'", core.restore_wall_force_carry, wall_carry)
-    if memory[0] or memory[1]:
-        r.engine("group 'contact_history'", core.restore_contact_history, *memory)
-    return world
+    return warm, sleep, built
 
 
 # What the particles gave each collider (`World.collider_books`): each key's unit and width.

@@ -77,110 +77,141 @@ from .frames import plan as frames_plan
 def save_checkpoint(world: Any, path: str | Path, _run: dict | None = None) -> Path:
     """Write `world` to `path` (see the module doc) and restart its caches; returns the path.
     (`_run`: the progress of `World.run`, written by it; see `resume_run`.)"""
-    from . import __version__
     from .io._files import hdf5_file
 
     path = Path(path)
     state = world._state(sync=True)  # (what was written into the views handed to the engine first)
     scene = world.to_scene()  # a PythonForce raises ValueError here, before anything is written
     core = state.engine
-    carry = core.integrator_carry()
-    spin_carry = core.spin_carry()
-    wall_carry = core.wall_force_carry()
-    memory = core.contact_history()
-    warm = core.collision_carry()
-    calm, island = core.sleep_carry()
-    built = core.list_carry()
+    carries = _Carries(core)
     with hdf5_file(path) as f:
-        f.attrs["format"] = FORMAT
-        f.attrs["version"] = VERSION
-        f.attrs["kinema"] = __version__
-        f.attrs["scene"] = scene.to_toml_string()
-        f.attrs["time"] = core.time
-        f.attrs["steps"] = core.steps
-        # the clock's anchor: the time after k steps is clock_time + (k − clock_steps)·dt
-        # (frames at exact times move it: kinema.frames)
-        k0, t0, _, landing = core.clock
-        if landing is not None:
-            raise ValueError("a checkpoint between the steps of a frame cannot be written: write it at a frame (World.run's checkpoint=)")
-        f.attrs["clock_steps"] = k0
-        f.attrs["clock_time"] = t0
-        f.attrs["next_id"] = core.next_id
-        f.attrs["warned"] = state.warned
-        f.attrs["advised_at"] = state.advised_at
-        f.create_dataset("ids", data=np.asarray(core.ids, dtype=np.uint64))
-        f.create_dataset("death", data=state.death)
-        f.create_dataset("colors", data=state.colors)
-        f.create_dataset("spring_ids", data=state.spring_ids)
-        f.attrs["emitters"] = json.dumps(
-            [
-                {
-                    "emitted": s.emitted,
-                    "dropped": s.dropped,  # (born = emitted - dropped - waiting)
-                    "told": s.told,
-                    "streams": {name: g.bit_generator.state for name, g in s.rng.items()},
-                    # the births held back because their place was taken (floats round-trip
-                    # exactly through JSON's shortest repr)
-                    "waiting": None if s.waiting is None else {k: v.tolist() for k, v in s.waiting.items()},
-                }
-                for s in state.emitters
-            ]
-        )
-        if carry is not None:  # Verlet's a or implicit Euler's last Δv, to every bit
-            f.create_dataset("integrator_carry", data=carry)
-        if spin_carry is not None:  # Verlet's α under the contacts' torques
-            f.create_dataset("spin_carry", data=spin_carry)
-        if world.spin:  # how far each particle has turned
-            f.create_dataset("orientations", data=world.orientations)
-        if memory[0] or memory[1]:  # the force models' tangential springs
-            pairs, walls = memory
-            h = f.create_group("contact_history")
-            h.create_dataset("pair_i", data=np.array([p[0] for p in pairs], dtype=np.int64))
-            h.create_dataset("pair_j", data=np.array([p[1] for p in pairs], dtype=np.int64))
-            h.create_dataset("pair_springs", data=np.array([p[2] for p in pairs], dtype=float).reshape(-1, 7))
-            h.create_dataset("wall_particle", data=np.array([w[0] for w in walls], dtype=np.int64))
-            h.create_dataset("wall_collider", data=np.array([w[1] for w in walls], dtype=np.int64))
-            h.create_dataset("wall_normal", data=np.array([w[2] for w in walls], dtype=float).reshape(-1, 3))
-            h.create_dataset("wall_springs", data=np.array([w[3] for w in walls], dtype=float).reshape(-1, 7))
-        g = f.create_group("collision_carry")  # the impulse solver's warm start
-        g.create_dataset("particle", data=np.array([w[0] for w in warm], dtype=np.int64))
-        g.create_dataset("collider", data=np.array([w[1] for w in warm], dtype=bool))
-        g.create_dataset("partner", data=np.array([w[2] for w in warm], dtype=np.int64))
-        g.create_dataset("impulse", data=np.array([w[3] for w in warm], dtype=float).reshape(-1, 3))
-        # whether each carried load at the step's end (an impact on it is then a resting contact)
-        g.create_dataset("carried", data=np.array([w[4] for w in warm], dtype=bool))
-        # sleeping: each particle's calm time (s) and island (-1: awake); the islands'
-        # contacts are in the warm start above
-        g.create_dataset("sleep_calm", data=calm)
-        g.create_dataset("sleep_island", data=island)
-        if built is not None:  # where the candidate list was built, and its skin (m): the
-            # resumed run rebuilds it at the same steps, as the run that wrote it does
-            g.create_dataset("list_built_at", data=built[0].reshape(-1, 3))
-            g.create_dataset("list_skin", data=built[1])
-        stats = core.collision_stats()
-        if stats is not None:  # the collision books go on where they were
-            f.attrs["collision_stats"] = json.dumps(_plain(stats))
-            # and what the particles gave each collider, summed and in the last step
-            for part, last in (("total", False), ("last", True)):
-                for key, a in core.collider_books(last=last).items():  # (World.collider_books, nothing written since the sync)
-                    f.create_dataset(f"collider_books/{part}/{key}", data=np.asarray(a, dtype=np.float64))
-            if wall_carry is not None:  # a force model's collider forces of the last step (rates)
-                for key, a in wall_carry.items():
-                    f.create_dataset(f"collider_books/carry/{key}", data=np.asarray(a, dtype=np.float64))
+        _write_world(f, scene, state, world)
+        _write_carries(f, carries, world)
+        _write_books(f, core, carries.wall)
         if _run is not None:
             _write_run(f.create_group("run"), _run)
-    core.restart_caches()
-    core.restore_collision_carry(warm)
-    core.restore_sleep_carry(calm.tolist(), island.tolist())
-    if built is not None:
-        core.restore_list_carry(built[0].tolist(), built[1])
-    if carry is not None:
-        core.restore_integrator_carry(carry.tolist())
-    if spin_carry is not None:
-        core.restore_spin_carry(spin_carry.tolist())
-    if wall_carry is not None:
-        core.restore_wall_force_carry(wall_carry)
+    carries.give_back(core)
     return path
+
+
+class _Carries:
+    """What the engine carries from step to step, taken before the file is written and given
+    back after it (the caches restart: module doc)."""
+
+    def __init__(self, core: Any) -> None:
+        self.integrator = core.integrator_carry()
+        self.spin = core.spin_carry()
+        self.wall = core.wall_force_carry()
+        self.memory = core.contact_history()
+        self.warm = core.collision_carry()
+        self.calm, self.island = core.sleep_carry()
+        self.built = core.list_carry()
+
+    def give_back(self, core: Any) -> None:
+        core.restart_caches()
+        core.restore_collision_carry(self.warm)
+        core.restore_sleep_carry(self.calm.tolist(), self.island.tolist())
+        if self.built is not None:
+            core.restore_list_carry(self.built[0].tolist(), self.built[1])
+        if self.integrator is not None:
+            core.restore_integrator_carry(self.integrator.tolist())
+        if self.spin is not None:
+            core.restore_spin_carry(self.spin.tolist())
+        if self.wall is not None:
+            core.restore_wall_force_carry(self.wall)
+
+
+def _write_world(f: Any, scene: Any, state: Any, world: Any) -> None:
+    """The format, the scene, the clock, the ids and what the Python world keeps per particle
+    and per emitter."""
+    from . import __version__
+
+    core = state.engine
+    f.attrs["format"] = FORMAT
+    f.attrs["version"] = VERSION
+    f.attrs["kinema"] = __version__
+    f.attrs["scene"] = scene.to_toml_string()
+    f.attrs["time"] = core.time
+    f.attrs["steps"] = core.steps
+    # the clock's anchor: the time after k steps is clock_time + (k − clock_steps)·dt
+    # (frames at exact times move it: kinema.frames)
+    k0, t0, _, landing = core.clock
+    if landing is not None:
+        raise ValueError("a checkpoint between the steps of a frame cannot be written: write it at a frame (World.run's checkpoint=)")
+    f.attrs["clock_steps"] = k0
+    f.attrs["clock_time"] = t0
+    f.attrs["next_id"] = core.next_id
+    f.attrs["warned"] = state.warned
+    f.attrs["advised_at"] = state.advised_at
+    f.create_dataset("ids", data=np.asarray(core.ids, dtype=np.uint64))
+    f.create_dataset("death", data=state.death)
+    f.create_dataset("colors", data=state.colors)
+    f.create_dataset("spring_ids", data=state.spring_ids)
+    f.attrs["emitters"] = json.dumps(
+        [
+            {
+                "emitted": s.emitted,
+                "dropped": s.dropped,  # (born = emitted - dropped - waiting)
+                "told": s.told,
+                "streams": {name: g.bit_generator.state for name, g in s.rng.items()},
+                # the births held back because their place was taken (floats round-trip
+                # exactly through JSON's shortest repr)
+                "waiting": None if s.waiting is None else {k: v.tolist() for k, v in s.waiting.items()},
+            }
+            for s in state.emitters
+        ]
+    )
+    if world.spin:  # how far each particle has turned
+        f.create_dataset("orientations", data=world.orientations)
+
+
+def _write_carries(f: Any, c: _Carries, world: Any) -> None:
+    """What the engine carries from step to step, to every bit (module doc)."""
+    if c.integrator is not None:  # Verlet's a or implicit Euler's last Δv, to every bit
+        f.create_dataset("integrator_carry", data=c.integrator)
+    if c.spin is not None:  # Verlet's α under the contacts' torques
+        f.create_dataset("spin_carry", data=c.spin)
+    if c.memory[0] or c.memory[1]:  # the force models' tangential springs
+        pairs, walls = c.memory
+        h = f.create_group("contact_history")
+        h.create_dataset("pair_i", data=np.array([p[0] for p in pairs], dtype=np.int64))
+        h.create_dataset("pair_j", data=np.array([p[1] for p in pairs], dtype=np.int64))
+        h.create_dataset("pair_springs", data=np.array([p[2] for p in pairs], dtype=float).reshape(-1, 7))
+        h.create_dataset("wall_particle", data=np.array([w[0] for w in walls], dtype=np.int64))
+        h.create_dataset("wall_collider", data=np.array([w[1] for w in walls], dtype=np.int64))
+        h.create_dataset("wall_normal", data=np.array([w[2] for w in walls], dtype=float).reshape(-1, 3))
+        h.create_dataset("wall_springs", data=np.array([w[3] for w in walls], dtype=float).reshape(-1, 7))
+    warm = c.warm
+    g = f.create_group("collision_carry")  # the impulse solver's warm start
+    g.create_dataset("particle", data=np.array([w[0] for w in warm], dtype=np.int64))
+    g.create_dataset("collider", data=np.array([w[1] for w in warm], dtype=bool))
+    g.create_dataset("partner", data=np.array([w[2] for w in warm], dtype=np.int64))
+    g.create_dataset("impulse", data=np.array([w[3] for w in warm], dtype=float).reshape(-1, 3))
+    # whether each carried load at the step's end (an impact on it is then a resting contact)
+    g.create_dataset("carried", data=np.array([w[4] for w in warm], dtype=bool))
+    # sleeping: each particle's calm time (s) and island (-1: awake); the islands'
+    # contacts are in the warm start above
+    g.create_dataset("sleep_calm", data=c.calm)
+    g.create_dataset("sleep_island", data=c.island)
+    if c.built is not None:  # where the candidate list was built, and its skin (m): the
+        # resumed run rebuilds it at the same steps, as the run that wrote it does
+        g.create_dataset("list_built_at", data=c.built[0].reshape(-1, 3))
+        g.create_dataset("list_skin", data=c.built[1])
+
+
+def _write_books(f: Any, core: Any, wall_carry: Any) -> None:
+    """The collision books, and what the particles gave each collider (summed, in the last
+    step, and a force model's collider forces of the last step)."""
+    stats = core.collision_stats()
+    if stats is None:
+        return
+    f.attrs["collision_stats"] = json.dumps(_plain(stats))  # the collision books go on where they were
+    for part, last in (("total", False), ("last", True)):
+        for key, a in core.collider_books(last=last).items():  # (World.collider_books, nothing written since the sync)
+            f.create_dataset(f"collider_books/{part}/{key}", data=np.asarray(a, dtype=np.float64))
+    if wall_carry is not None:  # a force model's collider forces of the last step (rates)
+        for key, a in wall_carry.items():
+            f.create_dataset(f"collider_books/carry/{key}", data=np.asarray(a, dtype=np.float64))
 
 
 # -- writing a run in progress --------------------------------------------------------------

@@ -152,22 +152,35 @@ impl NormalLaw {
         r_star: impl Fn() -> f64,
         dashpot: impl Fn(f64) -> f64,
     ) -> Option<(f64, f64)> {
-        if let NormalLaw::Jkr(jkr) = *self {
-            let r = r_star();
-            if overlap <= -jkr.pull_off_distance(r) {
-                return None;
+        match *self {
+            // (Hooke's first: the common law, with nothing to pull; the force as it was
+            // written before the laws were one choice, bit for bit: F − 0 is F)
+            NormalLaw::Hooke { stiffness } => {
+                if overlap <= 0.0 {
+                    return None;
+                }
+                let c_n = dashpot(stiffness);
+                Some((crate::collide::spring_dashpot_force(stiffness, c_n, overlap, u_n), c_n))
             }
-            let a = jkr.contact_radius(r, overlap);
-            let c_n = dashpot(HERTZ * jkr.e_star * a);
-            return Some((jkr.force(r, a) - c_n * u_n, c_n));
+            NormalLaw::Jkr(jkr) => {
+                let r = r_star();
+                if overlap <= -jkr.pull_off_distance(r) {
+                    return None;
+                }
+                let a = jkr.contact_radius(r, overlap);
+                let c_n = dashpot(HERTZ * jkr.e_star * a);
+                Some((jkr.force(r, a) - c_n * u_n, c_n))
+            }
+            NormalLaw::Hertz { .. } | NormalLaw::Dmt { .. } => {
+                if overlap <= 0.0 {
+                    return None;
+                }
+                let k = self.secant_stiffness(overlap, &r_star);
+                let c_n = dashpot(k);
+                let force = crate::collide::spring_dashpot_force(k, c_n, overlap, u_n);
+                Some((force - self.pull_off(r_star), c_n))
+            }
         }
-        if overlap <= 0.0 {
-            return None;
-        }
-        let k = self.secant_stiffness(overlap, &r_star);
-        let c_n = dashpot(k);
-        let force = crate::collide::spring_dashpot_force(k, c_n, overlap, u_n);
-        Some((force - self.pull_off(r_star), c_n))
     }
 
     /// The elastic energy of a contact of overlap δ (m), J, if it counts (overlapping, or
