@@ -28,6 +28,7 @@ pub(crate) use crate::collide::impulse::{CollisionTimes, StepFrame};
 use settings::force_model_of;
 pub use settings::{CollisionParams, ContactModel, ModelArgs, TangentialArgs, TangentialKind};
 
+mod engines;
 mod settings;
 
 /// The largest turn a moving collider may make in one step, rad (about 5.7°). Continuous

@@ -3,7 +3,6 @@
 //! from one step to the next.
 
 use super::{ColliderBooks, CollisionStats, World, WorldStepper};
-use crate::collide::impulse::end_of_step::overlap_at;
 use crate::collide::{ContactRecord, Partner};
 use crate::error::Error;
 use crate::vec3;
@@ -129,12 +128,12 @@ impl World {
     /// and W in [`ColliderBooks`]' fields), which the next step's collider books start from;
     /// `None` when there are none (no force model, or none kept since a change).
     pub fn wall_force_carry(&self) -> Option<Vec<ColliderBooks>> {
-        self.collide_stage.as_ref()?.force_model.as_ref()?.wall_carry()
+        self.collide_stage.as_ref()?.force_model()?.wall_carry()
     }
 
     /// Sets what [`World::wall_force_carry`] gave (a checkpoint's).
     pub fn restore_wall_force_carry(&mut self, carry: Option<Vec<ColliderBooks>>) {
-        if let Some(model) = self.collide_stage.as_ref().and_then(|c| c.force_model.as_ref()) {
+        if let Some(model) = self.collide_stage.as_ref().and_then(|c| c.force_model()) {
             model.set_wall_carry(carry);
         }
     }
@@ -215,10 +214,7 @@ impl World {
     pub fn sleep_carry(&mut self) -> (Vec<f64>, Vec<i64>) {
         self.restore_user_order();
         let n = self.particles.len();
-        self.collide_stage
-            .as_ref()
-            .map(|c| c.impulse.sleep_carry(n))
-            .unwrap_or_default()
+        self.collide_stage.as_ref().map(|c| c.sleep_carry(n)).unwrap_or_default()
     }
 
     /// Gives sleeping back what [`World::sleep_carry`] took (a checkpoint's), after
@@ -256,7 +252,7 @@ impl World {
             return Err(Error::invalid("sleep_island", n, "nothing sleeps: collisions are off"));
         };
         let pinned = |q: usize| self.particles.inv_mass[q] == 0.0;
-        if let Some(w) = stage.impulse.records().iter().find(|w| match w.other {
+        if let Some(w) = stage.contact_records().iter().find(|w| match w.other {
             Partner::Particle(j) => island[w.i] != island[j] && !pinned(w.i) && !pinned(j),
             Partner::Collider(_) => false,
         }) {
@@ -266,10 +262,7 @@ impl World {
                 "a contact's two movable particles sleep in one island, or are both awake",
             ));
         }
-        let (radius, x) = (&self.particles.radius, &self.particles.x);
-        let (colliders, domain) = (&stage.colliders, stage.domain);
-        let deepest = |i: usize, other: Partner| overlap_at(radius, colliders, &domain, x, i, other);
-        stage.impulse.restore_sleep(calm, &island, deepest);
+        stage.restore_sleep(calm, &island, &self.particles.radius, &self.particles.x);
         Ok(())
     }
 

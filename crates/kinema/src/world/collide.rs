@@ -146,12 +146,12 @@ impl World {
                 if stage.params.model != ContactModel::Impulse || stage.params.event_driven {
                     // no step of the impulse model records touches now (the events not yet
                     // taken stay)
-                    stage.impulse.touches.record(false, std::iter::empty());
+                    stage.record_touches(false, std::iter::empty());
                 }
             }
             None => {
                 let mut stage = CollideStage::new(params, self.params.dim)?;
-                stage.impulse.interrupt = self.interrupt;
+                stage.set_interrupt(self.interrupt);
                 self.collide_stage = Some(stage);
                 self.check_placement_from(0);
             }
@@ -166,7 +166,7 @@ impl World {
     pub(super) fn contacts_changed(&mut self) {
         if let Some(stage) = &mut self.collide_stage {
             stage.forget_list();
-            if let Some(model) = &stage.force_model {
+            if let Some(model) = stage.force_model() {
                 model.forget_list();
             }
         }
@@ -359,7 +359,7 @@ impl World {
     /// continuous detection were already resolved). Empty with the force models,
     /// whose contacts live inside the force evaluations.
     pub fn contacts(&self) -> &[Contact] {
-        self.collide_stage.as_ref().map_or(&[], |c| &c.impulse.detected)
+        self.collide_stage.as_ref().map_or(&[], |c| c.detected())
     }
 
     /// The contacts now, each with its point, its force split along and across the normal,
@@ -419,14 +419,14 @@ impl World {
             .filter(|w| w.impulse != [0.0; 3])
             .map(|w| (w.i, w.other))
             .collect();
-        stage.impulse.touches.record(on, loaded.into_iter());
+        stage.record_touches(on, loaded.into_iter());
         Ok(())
     }
 
     /// The impulse model's candidate list's skin, m (`None`: collisions off; for the tests).
     #[cfg(test)]
     pub(crate) fn impulse_list_skin(&self) -> Option<f64> {
-        self.collide_stage.as_ref().map(|s| s.impulse.list.skin)
+        self.collide_stage.as_ref().map(|s| s.impulse_list_skin())
     }
 
     /// Turns the impact search's check of each particle's sweep bound off (for the tests:
@@ -434,7 +434,7 @@ impl World {
     #[cfg(test)]
     pub(crate) fn search_unbounded(&mut self) {
         if let Some(s) = self.collide_stage.as_mut() {
-            s.impulse.unbounded = true;
+            s.search_unbounded();
         }
     }
 
@@ -442,15 +442,13 @@ impl World {
     #[cfg(test)]
     pub(crate) fn set_impulse_list_limit(&mut self, entries: usize) {
         if let Some(s) = self.collide_stage.as_mut() {
-            s.impulse.list.entry_limit = Some(entries);
+            s.set_impulse_list_limit(entries);
         }
     }
 
     /// The begin and end of touch events recorded since the last call, in order, taken out.
     pub fn take_contact_events(&mut self) -> Vec<TouchEvent> {
-        self.collide_stage
-            .as_mut()
-            .map_or_else(Vec::new, |s| s.impulse.touches.take())
+        self.collide_stage.as_mut().map_or_else(Vec::new, |s| s.take_touch_events())
     }
 
     /// What the collision stages did in the last step, and summed over all steps; `None`
@@ -459,7 +457,7 @@ impl World {
     pub fn collision_stats(&self) -> Option<(CollisionStats, CollisionStats)> {
         self.collide_stage.as_ref().map(|c| {
             let mut last = c.last;
-            (last.asleep, last.asleep_contacts) = c.impulse.asleep();
+            (last.asleep, last.asleep_contacts) = c.asleep();
             (last, c.total)
         })
     }

@@ -2,7 +2,7 @@
 //! that changing them drops.
 
 use super::forces::contact_force;
-use super::{ContactModel, World};
+use super::World;
 use crate::error::Error;
 use crate::forces::Force;
 use crate::particles::{check_state, Particles};
@@ -57,7 +57,7 @@ impl World {
         // stay: their numbers did not change, and a newborn wakes what it touches. So do the
         // contact force's neighbour list (the newborns' pairs added) and, where the
         // newborns touch nothing, Verlet's acceleration (`carry.rs`).
-        let kept = self.collide_stage.as_mut().map(|stage| stage.impulse.take_contacts());
+        let kept = self.collide_stage.as_mut().map(|stage| stage.take_contacts());
         let a = self.acceleration_before_birth(range.start);
         self.reset_caches();
         self.check_placement_from(range.start);
@@ -68,9 +68,7 @@ impl World {
             stage.refresh_materials()?;
         }
         if let (Some(stage), Some(kept)) = (&mut self.collide_stage, kept) {
-            if stage.params.model == ContactModel::Impulse {
-                stage.impulse.keep_contacts(kept, self.particles.len());
-            }
+            stage.keep_contacts(kept, self.particles.len());
         }
         let admitted =
             contact_force(&self.collide_stage, &self.particles).is_some_and(|c| c.admit_newborns(&self.particles.x, range.start));
@@ -105,19 +103,19 @@ impl World {
         }
         // Verlet's acceleration for the survivors, where the removal leaves it right (`carry.rs`)
         let a = self.acceleration_after_removal(&keep);
-        let recording = self.collide_stage.as_ref().is_some_and(|s| s.impulse.touches.on);
+        let recording = self.collide_stage.as_ref().is_some_and(|s| s.records_touches());
         let ids_before = if recording { self.particles.id.clone() } else { Vec::new() };
         let new_of_old = self.particles.retain(&keep);
         if let Some(stage) = &mut self.collide_stage {
             // the touches of the removed end now (`collide/touch.rs`)
-            stage.impulse.touches.renumber(&new_of_old, self.time, &ids_before);
+            stage.renumber_touches(&new_of_old, self.time, &ids_before);
         }
         // The survivors' contacts keep their warm start (renumbered), as Rapier's change
         // flags keep the contacts of what did not change.
         let kept = self
             .collide_stage
             .as_mut()
-            .map(|stage| stage.impulse.take_contacts_renumbered(&new_of_old));
+            .map(|stage| stage.take_contacts_renumbered(&new_of_old));
         for v in [&mut self.x_next, &mut self.v_next] {
             crate::particles::retain_rows(v, 3, &keep);
         }
@@ -134,9 +132,7 @@ impl World {
             self.placement_from = Some(0); // (the pending newcomers were renumbered)
         }
         if let (Some(stage), Some(kept)) = (&mut self.collide_stage, kept) {
-            if stage.params.model == ContactModel::Impulse {
-                stage.impulse.keep_contacts(kept, self.particles.len());
-            }
+            stage.keep_contacts(kept, self.particles.len());
         }
         // and the contact force's neighbour list keeps the survivors' pairs
         if let Some(model) = self.spring_dashpot() {
@@ -264,7 +260,7 @@ impl World {
         self.particles.set_spin(range.clone(), omega, inertia, self.params.dim)?;
         if let (Some(_), Some(stage)) = (omega, &mut self.collide_stage) {
             // a write to the state: a sleeper's island wakes (asleep it would ignore it)
-            stage.impulse.wake_particles(range);
+            stage.wake_particles(range);
         }
         Ok(())
     }

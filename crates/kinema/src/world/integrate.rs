@@ -157,7 +157,7 @@ impl World {
             && self
                 .collide_stage
                 .as_ref()
-                .and_then(|s| s.force_model.as_ref().map(|m| m.list_expired(&self.x_next, &s.domain)))
+                .and_then(|s| s.force_model().map(|m| m.list_expired(&self.x_next, &s.domain)))
                 .unwrap_or(false)
         {
             self.sort_along_space(&mut b.a);

@@ -200,7 +200,7 @@ impl World {
     /// The contact force model's constants and buffers, with a force model (still named for
     /// the spring–dashpot model: `world/order.rs` calls it so, and is being changed apart).
     pub(super) fn spring_dashpot(&self) -> Option<&crate::collide::contact_force::ContactForceModel> {
-        self.collide_stage.as_ref()?.force_model.as_ref()
+        self.collide_stage.as_ref()?.force_model()
     }
 
     /// The parameters.
@@ -367,7 +367,7 @@ impl World {
     pub fn set_interrupt(&mut self, check: Option<fn() -> Result<(), CallbackError>>) {
         self.interrupt = Interrupt::new(check);
         if let Some(stage) = &mut self.collide_stage {
-            stage.impulse.interrupt = self.interrupt;
+            stage.set_interrupt(self.interrupt);
         }
     }
 
