@@ -8,6 +8,7 @@ mod collide;
 mod errors;
 mod ode;
 mod render;
+mod reports;
 mod stability;
 mod stepping;
 mod threads;

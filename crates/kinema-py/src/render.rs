@@ -4,12 +4,11 @@ use std::borrow::Cow;
 
 use kinema::collide::{Collider, Pose};
 use kinema::render::{
-    categorical, collider_boxes, render_frame as render_core, scene_extent, text, yuv, Camera, Colormap, Frame, Region,
-    RenderParams, Scenery,
+    collider_boxes, render_frame as render_core, scene_extent, text, yuv, Camera, Colormap, Frame, Region, RenderParams, Scenery,
 };
 use numpy::ndarray::Dimension;
 use numpy::{
-    Element, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
+    Element, PyArray1, PyArray3, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
     PyReadonlyArray4, PyUntypedArrayMethods,
 };
 use pyo3::conversion::FromPyObjectOwned;
@@ -19,6 +18,8 @@ use pyo3::types::{PyBytes, PyDict};
 
 use crate::collide::{self, Description};
 use crate::errors::to_py;
+
+mod colours;
 
 /// The array's data in C order, borrowed when it already is contiguous.
 fn data<'a, T: Element + Copy, D: Dimension>(a: &'a PyReadonlyArray<'_, T, D>) -> Cow<'a, [T]> {
@@ -284,7 +285,7 @@ impl<'py> ColourArgs<'py> {
                 }
                 let cmap = Colormap::from_name(&self.colormap).map_err(to_py)?;
                 let v = data(v);
-                let (lo, hi) = value_range(&v, self.vmin, self.vmax);
+                let (lo, hi) = colours::value_range(&v, self.vmin, self.vmax);
                 let mut out = vec![0u8; 3 * n];
                 py.detach(|| cmap.map(&v, lo, hi, &mut out)).map_err(to_py)?;
                 Ok(out)
@@ -478,44 +479,6 @@ fn render_frame<'py>(
     PyArray1::from_vec(py, image).reshape([height, width, 3])
 }
 
-/// (vmin, vmax): the given ones, or the finite minimum and maximum of the values.
-fn value_range(v: &[f64], vmin: Option<f64>, vmax: Option<f64>) -> (f64, f64) {
-    let finite = v.iter().copied().filter(|x| x.is_finite());
-    let lo = vmin.unwrap_or_else(|| finite.clone().fold(f64::INFINITY, f64::min));
-    let hi = vmax.unwrap_or_else(|| finite.fold(f64::NEG_INFINITY, f64::max));
-    if lo.is_finite() && hi.is_finite() {
-        (lo, hi)
-    } else {
-        (0.0, 1.0)
-    }
-}
-
-/// Colours of values through a named colormap: an (N, 3) uint8 array.
-#[pyfunction]
-#[pyo3(signature = (values, colormap="viridis", vmin=None, vmax=None))]
-fn colormap<'py>(
-    py: Python<'py>,
-    values: PyReadonlyArray1<'py, f64>,
-    colormap: &str,
-    vmin: Option<f64>,
-    vmax: Option<f64>,
-) -> PyResult<Bound<'py, PyArray2<u8>>> {
-    let cmap = Colormap::from_name(colormap).map_err(to_py)?;
-    let v = data(&values);
-    let (lo, hi) = value_range(&v, vmin, vmax);
-    let mut out = vec![0u8; 3 * v.len()];
-    cmap.map(&v, lo, hi, &mut out).map_err(to_py)?;
-    PyArray1::from_vec(py, out).reshape([v.len(), 3])
-}
-
-/// Categorical colours (tab10, repeating) of integer ids: an (N, 3) uint8 array.
-#[pyfunction]
-fn categorical_colors<'py>(py: Python<'py>, ids: PyReadonlyArray1<'py, u64>) -> PyResult<Bound<'py, PyArray2<u8>>> {
-    let ids = data(&ids);
-    let out: Vec<u8> = ids.iter().flat_map(|&i| categorical(i)).collect();
-    PyArray1::from_vec(py, out).reshape([ids.len(), 3])
-}
-
 /// (eye, target, up) of a perspective camera framing the box [lo, hi] seen from direction
 /// `from_` in a width × height image with vertical field of view fov_deg.
 #[pyfunction]
@@ -590,8 +553,8 @@ static NO_SCENERY: Scenery = Scenery {
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScenery>()?;
     m.add_function(wrap_pyfunction!(render_frame, m)?)?;
-    m.add_function(wrap_pyfunction!(colormap, m)?)?;
-    m.add_function(wrap_pyfunction!(categorical_colors, m)?)?;
+    m.add_function(wrap_pyfunction!(colours::colormap, m)?)?;
+    m.add_function(wrap_pyfunction!(colours::categorical_colors, m)?)?;
     m.add_function(wrap_pyfunction!(frame_box, m)?)?;
     m.add_function(wrap_pyfunction!(frame_points, m)?)?;
     m.add_function(wrap_pyfunction!(rgb_to_yuv420p, m)?)?;

@@ -8,8 +8,8 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::collide;
 use crate::errors::to_py;
+use crate::reports;
 
 use super::*;
 
@@ -43,7 +43,7 @@ impl PyWorld {
     /// A checkpoint's collision books (dicts as `collision_stats` gives them).
     fn restore_collision_stats(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
         let world = self.inner.get();
-        let (total, last) = (collide::stats_from(&total)?, collide::stats_from(&last)?);
+        let (total, last) = (reports::stats_from(&total)?, reports::stats_from(&last)?);
         world.restore_collision_stats(total, last);
         Ok(())
     }
@@ -51,7 +51,7 @@ impl PyWorld {
     /// A checkpoint's collider books: `total` and `last`, dicts of arrays as `collider_books`
     /// gives them (one row per collider).
     fn restore_collider_books(&mut self, total: Bound<'_, PyDict>, last: Bound<'_, PyDict>) -> PyResult<()> {
-        let (total, last) = (collide::books_from(&total)?, collide::books_from(&last)?);
+        let (total, last) = (reports::books_from(&total)?, reports::books_from(&last)?);
         self.inner.get().restore_collider_books(total, last).map_err(to_py)
     }
 
@@ -162,12 +162,12 @@ impl PyWorld {
     /// of `collider_books`, in N, N·m and W), which the next step's books start from; None
     /// when none are kept (for a checkpoint).
     fn wall_force_carry<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        self.inner.wall_force_carry().map(|b| collide::books_dict(py, &b)).transpose()
+        self.inner.wall_force_carry().map(|b| reports::books_dict(py, &b)).transpose()
     }
 
     /// Sets what `wall_force_carry` gave (a checkpoint's).
     fn restore_wall_force_carry(&mut self, carry: Bound<'_, PyDict>) -> PyResult<()> {
-        let carry = collide::books_from(&carry)?;
+        let carry = reports::books_from(&carry)?;
         self.inner.restore_wall_force_carry(Some(carry));
         Ok(())
     }

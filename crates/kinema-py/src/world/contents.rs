@@ -15,6 +15,7 @@ use pyo3::types::PyDict;
 use crate::callbacks::PythonForce;
 use crate::collide;
 use crate::errors::to_py;
+use crate::reports;
 
 use super::*;
 
@@ -385,7 +386,7 @@ impl PyWorld {
     /// the momentum's parts along and across the contacts' normals}.
     #[pyo3(signature = (last = false))]
     fn collider_books<'py>(&self, py: Python<'py>, last: bool) -> PyResult<Bound<'py, PyDict>> {
-        collide::books_dict(py, &self.inner.collider_books(last))
+        reports::books_dict(py, &self.inner.collider_books(last))
     }
 
     /// The contacts now (the impulse model's: of the last step's end), as arrays, with their
@@ -396,7 +397,7 @@ impl PyWorld {
             .collision_params()
             .is_some_and(|p| p.model == kinema::world::ContactModel::Impulse);
         let reports = world.contact_reports().map_err(to_py)?;
-        collide::contacts_dict(py, &reports, impulses)
+        reports::contacts_dict(py, &reports, impulses)
     }
 
     /// Starts or stops recording begin and end of touch.
@@ -406,7 +407,7 @@ impl PyWorld {
 
     /// The begin and end of touch events since the last call, taken out, as arrays.
     fn contact_events<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        collide::touch_events_dict(py, &self.inner.take_contact_events())
+        reports::touch_events_dict(py, &self.inner.take_contact_events())
     }
 
     /// {"last": ..., "total": ...} of the collision stages, or None without collisions.
@@ -415,8 +416,8 @@ impl PyWorld {
             return Ok(None);
         };
         let out = PyDict::new(py);
-        out.set_item("last", collide::stats_dict(py, &last)?)?;
-        out.set_item("total", collide::stats_dict(py, &total)?)?;
+        out.set_item("last", reports::stats_dict(py, &last)?)?;
+        out.set_item("total", reports::stats_dict(py, &total)?)?;
         Ok(Some(out))
     }
 }
