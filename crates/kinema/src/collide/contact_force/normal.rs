@@ -194,7 +194,7 @@ impl NormalLaw {
                 let r = r_star();
                 (overlap > -jkr.pull_off_distance(r)).then(|| jkr.energy(r, jkr.contact_radius(r, overlap)))
             }
-            NormalLaw::Hooke { stiffness } => (overlap > 0.0).then(|| 0.5 * stiffness * overlap * overlap),
+            NormalLaw::Hooke { stiffness } => (overlap > 0.0).then_some(0.5 * stiffness * overlap * overlap),
             NormalLaw::Hertz { .. } | NormalLaw::Dmt { .. } => (overlap > 0.0)
                 .then(|| 0.4 * self.secant_stiffness(overlap, &r_star) * overlap * overlap - self.pull_off(&r_star) * overlap),
         }
