@@ -391,9 +391,10 @@ impl<'a> ContactForce<'a> {
             normal: model.normal,
             damping: model.damping,
             // (R* is largest for a particle against a collider: R* = r_i)
+            // (the largest radius only with JKR's law: no O(N) pass at each evaluation else)
             reach_past_touching: model
                 .normal
-                .reach_past_touching(bodies.radius.iter().fold(0.0_f64, |m, r| m.max(*r))),
+                .reach_past_touching(|| bodies.radius.iter().fold(0.0_f64, |m, r| m.max(*r))),
             ratios: DampingRatios::new(bodies.global, bodies.own.map(|o| o.1), bodies.colliders),
             global: bodies.global,
             own: bodies.own.map(|o| o.0),

@@ -200,9 +200,9 @@ impl NormalLaw {
         }
     }
 
-    /// How far past touching a contact of the largest reduced radius `r_max` (m) can hold, m:
-    /// JKR's pull-off distance, else 0.
-    pub fn reach_past_touching(&self, r_max: f64) -> f64 {
-        self.jkr().map_or(0.0, |jkr| jkr.pull_off_distance(r_max))
+    /// How far past touching a contact of the largest reduced radius `r_max()` (m) can hold,
+    /// m: JKR's pull-off distance, else 0 (without asking `r_max`).
+    pub fn reach_past_touching(&self, r_max: impl Fn() -> f64) -> f64 {
+        self.jkr().map_or(0.0, |jkr| jkr.pull_off_distance(r_max()))
     }
 }
