@@ -12,7 +12,7 @@ The format, key by key with units, is in docs/scenes.md.
 
 The package: ``tables`` (the value types and the models of the file's tables), ``schema``
 (``Scene``, the whole file, with reading, writing and ``SceneError``'s messages), ``build``
-(scene -> ``World``: ``Scene.build``, which it gives the class, and ``load_scene``) and ``export`` (world -> scene:
+(scene -> ``World``: ``build``, which ``Scene.build`` calls through ``schema.BUILDERS``, and ``load_scene``) and ``export`` (world -> scene:
 ``to_scene``, the body of ``World.to_scene``).
 """
 

@@ -1,16 +1,13 @@
-"""Scene -> engine objects: the World a ``Scene`` describes (``build``, and the method
-``Scene.build``, which this module gives the class), ``load_scene``. This module imports
-``schema``, ``tables`` and ``kinema.world``; none of them imports it (the package does, so
-every ``Scene`` has its ``build``).
+"""Scene -> engine objects: the World a ``Scene`` describes (``build``, which ``Scene.build``
+calls), ``load_scene``. This module imports ``schema``, ``tables`` and ``kinema.world``; none
+of them imports it (the package does, so every ``Scene`` builds).
 
-``Scene.build`` is the one method of the package given to a class from another module, and it
-has to be: a scene makes a World (``scene.build()``) and a world makes a scene
-(``World.to_scene``, ``World.load_checkpoint``, defined in ``World``'s class body), so whichever
-of the two methods sits in its class's module, that module depends on the other class's
-(world -> scene.export -> schema, world -> checkpoint -> schema). Written in ``Scene``'s body,
-``build`` would close the circle schema -> build -> world -> schema. So the schema knows
-nothing of ``World``, and the world and the checkpoint's reader build a world by
-``scene.build()`` without importing this module (tests/test_no_import_circles.py)."""
+``Scene.build`` is written in ``Scene``'s body and calls the ``build`` this module puts in
+``schema.BUILDERS`` when it is imported: a scene makes a World and a world makes a scene
+(``World.to_scene``, ``World.load_checkpoint``), so an import of this module by the schema
+would close the circle schema -> build -> world -> scene.export -> schema (the schema's module
+doc). So the schema knows nothing of ``World``, and the world and the checkpoint's reader build
+a world by ``scene.build()`` without importing this module (tests/test_no_import_circles.py)."""
 
 from __future__ import annotations
 
@@ -23,7 +20,7 @@ from ..colliders import Box, Keyframes, Mesh, Motion, Plane, SphereObstacle
 from ..emitter import Emitter, KillBox, KillPlane, KillSphere
 from ..forces import Attractor, Drag, Falloff, Gravity, Spring, Turbulence, Vortex, Wind
 from ..world import World
-from .schema import Scene, SceneError
+from .schema import BUILDERS, Scene, SceneError
 from .tables import (
     AttractorForce,
     BoxCollider,
@@ -51,7 +48,7 @@ from .values import vec3
 
 
 def build(scene: Scene, source: str = "<scene>") -> World:
-    """The body of ``Scene.build`` (see its docstring): the World ``scene`` describes."""
+    """The World ``scene`` describes (``Scene.build``, which says what it refuses)."""
     dim = scene.world.dim
     w = World(dim=dim, dt=scene.world.dt, method=scene.world.method, spin=scene.world.spin)
     starts: list[tuple[int, int]] = []
@@ -103,17 +100,8 @@ def build(scene: Scene, source: str = "<scene>") -> World:
     return w
 
 
-def _build(self: Scene, source: str = "<scene>") -> World:
-    """The World this scene describes (``world.scene`` is this scene). An engine refusal
-    (a 2D scene with z ≠ 0, a spring index out of range, ...) is a ``SceneError`` naming
-    the entry."""
-    return build(self, source)
-
-
-# ``scene.build()``: given to the class here, with the World it makes (module doc: the one
-# method given to a class from outside it; tests/test_no_patched_classes.py)
-_build.__name__, _build.__qualname__ = "build", "Scene.build"
-Scene.build = _build  # type: ignore[attr-defined]
+# ``scene.build()`` calls this module's ``build`` (the module doc: a hook, not an import)
+BUILDERS["world"] = build
 
 
 def load_scene(path: str | Path) -> World:

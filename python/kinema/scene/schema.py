@@ -1,8 +1,16 @@
 """The whole scene file, ``Scene`` (read from TOML, text or a dict, validated, written back),
 ``SceneError`` and the one-line-per-problem messages made of pydantic's errors. The tables
 the scene holds are in ``kinema.scene.tables``; turning a scene into a World is
-``kinema.scene.build``, which gives ``Scene`` its ``build`` method: this module knows nothing of
-``World`` (tests/test_no_import_circles.py)."""
+``kinema.scene.build``'s ``build``, which ``Scene.build`` calls through the one hook below
+(``BUILDERS``): this module knows nothing of ``World`` (tests/test_no_import_circles.py).
+
+Why a hook: a scene makes a World (``scene.build()``) and a world makes a scene
+(``World.to_scene``, ``World.load_checkpoint``), so whichever of the two methods imports the
+other class's module closes the circle schema -> build -> world -> scene.export -> schema. The
+dependency is turned round instead, as a plug-in registers itself: ``kinema.scene.build``
+imports this module and puts its ``build`` in ``BUILDERS`` when it is imported (the package
+imports it, so every ``Scene`` builds); ``Scene.build`` is written here, in its class, and
+calls what is there."""
 
 from __future__ import annotations
 
@@ -48,6 +56,10 @@ from .tables import (
     WorldTable,
     _Model,
 )
+
+#: What turns a scene into a World: ``{"world": kinema.scene.build.build}``, put here by that
+#: module when it is imported (the module doc says why a hook and not an import).
+BUILDERS: dict[str, Any] = {}
 
 #: The largest scene file read, in bytes: a scene describes particles by blocks; even a list
 #: of a million positions is ~60 MB of TOML.
@@ -225,10 +237,13 @@ class Scene(_Model):
             tmp.write_text(text, encoding="utf-8")
         return path
 
-    # building: ``Scene.build`` is given to the class by ``kinema.scene.build`` (which the
-    # package imports), so that the dependency goes build -> schema and never back: the world
-    # makes scenes (World.to_scene, World.load_checkpoint), so the schema cannot import it
-    # (kinema.scene.build's module doc)
+    # building --------------------------------------------------------------------------
+    def build(self, source: str = "<scene>") -> Any:
+        """The ``kinema.World`` this scene describes (``world.scene`` is this scene). An engine
+        refusal (a 2D scene with z ≠ 0, a spring index out of range, ...) is a ``SceneError``
+        naming the entry. (``kinema.scene.build.build`` makes it: the module doc says why
+        through ``BUILDERS``.)"""
+        return BUILDERS["world"](self, source)
 
 
 def _planar_problem(motion: Any) -> str | None:
