@@ -51,7 +51,7 @@ Each name is resolved by its form:
 Deliberately not checked: the ```` ```python ```` and ```` ```toml ```` blocks (test_docs.py
 runs them), formulas (a subscript such as ``m_i`` in a text block is math), shell commands
 and other programs' names and keywords, listed in :data:`NOT_CHECKED` with why (LAMMPS's
-``rolling sds``, a sysctl setting, mkdocstrings' ``::: kinema.NAME``). The page's prose
+``dump custom``, a sysctl setting, mkdocstrings' ``::: kinema.NAME``). The page's prose
 words are not names: only its code spans are. A name is resolved where it can be found, not
 where the page says it lives (``Sleep`` beside ``collide/sleep.rs`` is found in any file).
 
@@ -92,8 +92,6 @@ UNTRACKED = {".venv/", "target/", "out/", "site/", "python/kinema/_core.abi3.so"
 NOT_CHECKED = {
     "mindlin/force": "LAMMPS's tangential model, not present in kinema",
     "mindlin_rescale": "LAMMPS's tangential model, not present in kinema",
-    "rolling sds": "LAMMPS's rolling model",
-    "twisting marshall": "LAMMPS's twisting model",
     "dump custom": "LAMMPS's command",
     "dump local": "LAMMPS's command",
     "net.core.somaxconn": "a Linux sysctl setting",

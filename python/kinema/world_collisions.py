@@ -232,6 +232,17 @@ class WorldCollisions:
         ``None`` while collisions are off."""
         return self._core.collisions
 
+    def contact_sub_models(self) -> dict[str, str] | None:
+        """The sub-models the contact force model's contacts are made of now, as LAMMPS
+        GRANULAR's ``pair granular`` names them: ``{"normal": "hertz", "damping":
+        "coeff_restitution", "tangential": "mindlin", "rolling": "sds", "twisting":
+        "marshall"}``, with the parts they have (a tangential part where some contact has
+        friction; rolling and twisting with ``rolling_friction``), in that order. ``None``
+        with the impulse model or without collisions. The table of every sub-model, with the
+        settings that choose it: ``kinema._core.CONTACT_SUB_MODELS`` (docs/collisions.md)."""
+        found = self._core.contact_sub_models()
+        return None if found is None else dict(found)
+
     @property
     def colliders(self) -> list[Collider]:
         """The colliders, in the order added (a collider's index in :meth:`contacts`)."""

@@ -235,6 +235,12 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("CONTACT_MODELS", ContactModel::NAMES.to_vec())?;
     m.add("FORCE_MODELS", ContactModel::FORCE_MODELS.to_vec())?;
     m.add("TANGENTIAL_MODELS", TangentialKind::NAMES.to_vec())?;
+    // the force models' sub-models (kind, name, LAMMPS's name, the settings that choose it)
+    let sub_models: Vec<_> = kinema::collide::SUB_MODELS
+        .iter()
+        .map(|m| (m.kind.name(), m.name, m.lammps, m.chosen_by))
+        .collect();
+    m.add("CONTACT_SUB_MODELS", sub_models)?;
     m.add("ACCURACIES", Accuracy::NAMES.to_vec())?;
     Ok(())
 }

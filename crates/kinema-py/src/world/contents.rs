@@ -284,6 +284,11 @@ impl PyWorld {
             .transpose()
     }
 
+    /// The contact force model's sub-models now, (kind, name) pairs, or None without one.
+    fn contact_sub_models(&self) -> Option<Vec<(&'static str, &'static str)>> {
+        self.inner.contact_sub_models()
+    }
+
     /// Adds a plane; returns the collider's index.
     fn add_plane(
         &mut self,

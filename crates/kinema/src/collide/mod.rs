@@ -147,6 +147,7 @@ pub use broad_phase::Grid;
 pub use colliders::{BoxContainer, Collider, Plane, SphereObstacle, Surface, Touch};
 pub use contact::{Contact, ContactReport, Partner};
 pub use contact_force::spring_dashpot::{damping_ratio, dashpot_coefficient, spring_dashpot_force};
+pub use contact_force::sub_models::{SubModel, SubModelKind, SUB_MODELS};
 pub use domain::{Domain, Periodic};
 pub use groups::{GroupMasks, GROUPS};
 pub use mesh::{Side, TriangleMesh};

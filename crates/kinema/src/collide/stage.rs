@@ -1,21 +1,23 @@
 //! The collide stage, stages 2–4 of a world step (`World::collide`, `world/collide.rs`, calls
 //! it): the collision settings
 //! ([`ContactModel`], [`CollisionParams`]; `stage/settings.rs`) and [`CollideStage`], which holds them with the
-//! colliders, the domain, the materials and the books summed over steps, and runs the impulse
-//! model's detection and response of `collide/` (`collide/impulse/`) on each step:
-//! detect collisions (continuously inside the step, then as contacts at its end), respond by
-//! Newton's restitution law, distribute each impulse onto both particles.
+//! colliders, the domain, the materials and the books summed over steps, and its contact
+//! engine, one closed choice (`stage/engines.rs`, [`Engine`]): the impulse model's detection
+//! and response of `collide/` (`collide/impulse/`) on each step — detect collisions
+//! (continuously inside the step, then as contacts at its end), respond by Newton's
+//! restitution law, distribute each impulse onto both particles —, the same law by events,
+//! or a contact force.
 
 pub use crate::collide::books::ColliderBooks;
 pub use crate::collide::contact_force::Cohesion;
-use crate::collide::contact_force::{particle_ratios, Bodies, ContactForce, ContactForceModel};
+use crate::collide::contact_force::{particle_ratios, Bodies, ContactForce};
 use crate::collide::event_driven::{unsupported_collider, EventDriven};
 use crate::collide::groups::{Filter, GroupMasks};
 use crate::collide::impulse::end_of_step::overlap_at;
 use crate::collide::impulse::list::check_travel;
 use crate::collide::impulse::{ImpulseModel, StageSetting};
-use crate::collide::records::ContactRecord;
 use crate::collide::spin::Rotation;
+use crate::collide::touch::Touches;
 use crate::collide::{placement, Collider, Contact, Domain, Material, MaterialTable, Motion, Periodic};
 use crate::error::Error;
 use crate::interrupt::Interrupt;
@@ -25,6 +27,7 @@ use crate::vec3;
 pub(crate) use crate::collide::impulse::end_of_step::on_periodic_wall;
 pub use crate::collide::impulse::CollisionStats;
 pub(crate) use crate::collide::impulse::{CollisionTimes, StepFrame};
+pub(crate) use engines::Engine;
 use settings::force_model_of;
 pub use settings::{CollisionParams, ContactModel, ModelArgs, TangentialArgs, TangentialKind};
 
@@ -39,8 +42,8 @@ mod settings;
 /// frictionless and inelastic), and more from 0.25 rad.
 pub const MAX_TURN: f64 = 0.1;
 
-/// The collision stages of a world, with their settings, colliders and books; the impulse
-/// model's buffers are its [`ImpulseModel`].
+/// The collision stages of a world, with their settings, colliders and books, and the contact
+/// engine that runs them ([`Engine`]).
 pub(crate) struct CollideStage {
     pub params: CollisionParams,
     material: Material,
@@ -52,11 +55,14 @@ pub(crate) struct CollideStage {
     particle_materials: Option<Vec<Material>>,
     pub colliders: Vec<Collider>,
     pub domain: Domain,
-    /// Detection and response of the impulse model, and their buffers.
-    pub impulse: ImpulseModel,
-    /// The contact force model's constants and buffers, with that model
-    /// ([`CollideStage::contact_force`] lends it out with what it reads).
-    pub force_model: Option<ContactForceModel>,
+    /// The contact engine, with its buffers: the impulse model stepped, run by events, or a
+    /// contact force model ([`CollideStage::contact_force`] lends that out with what it reads).
+    engine: Engine,
+    /// The touches and their events while an engine that does not record them runs (the
+    /// stepped engine holds them while it runs: `stage/engines.rs`).
+    idle_touches: Touches,
+    /// The check that may stop a step, given to each stepped engine made.
+    interrupt: Interrupt,
     /// Whether some particle's own material has friction (the force models' tangential part).
     own_friction: bool,
     /// Each particle's (e, ζ) from `particle_materials`, for the force models' damping.
@@ -71,9 +77,6 @@ pub(crate) struct CollideStage {
     pub collider_books: Vec<ColliderBooks>,
     /// What they gave each collider in the last step (the last call, event-driven).
     pub collider_last: Vec<ColliderBooks>,
-    /// The event-driven state between calls (`None`: made afresh at the next), with
-    /// `params.event_driven`.
-    events: Option<EventDriven>,
     /// Which collision groups collide with which (`collide/groups.rs`; all by default).
     pub group_masks: GroupMasks,
     /// Each collider's mask of the groups it collides with (one per collider, all by default).
@@ -92,8 +95,9 @@ impl CollideStage {
             own_friction: false,
             colliders: Vec::new(),
             domain: Domain::open(dim)?,
-            impulse: ImpulseModel::new(),
-            force_model: force_model_of(&params),
+            engine: Engine::of(&params, Interrupt::none()),
+            idle_touches: Touches::default(),
+            interrupt: Interrupt::none(),
             particle_ratios: None,
             total: CollisionStats::default(),
             last: CollisionStats::default(),
@@ -101,7 +105,6 @@ impl CollideStage {
             motions: Vec::new(),
             collider_books: Vec::new(),
             collider_last: Vec::new(),
-            events: None,
             group_masks: GroupMasks::default(),
             collider_masks: Vec::new(),
         })
@@ -201,26 +204,15 @@ impl CollideStage {
     pub fn set_params(&mut self, params: CollisionParams) -> Result<(), Error> {
         self.material = params.check()?;
         self.params = params.normalised();
-        // the contact force model's list stays (it lists pairs by geometry alone); its
-        // constants are the new ones
-        self.force_model = match (self.force_model.take(), force_model_of(&self.params)) {
-            (Some(mut kept), Some(new)) => {
-                (kept.normal, kept.damping) = (new.normal, new.damping);
-                if kept.tangential != new.tangential {
-                    kept.forget_history();
-                }
-                kept.tangential = new.tangential;
-                Some(kept)
-            }
-            (_, new) => new,
-        };
-        self.events = None;
+        self.follow_params();
         self.refresh_materials()
     }
 
     /// Forgets the last step's contacts and figures (a step of a force model).
     pub fn clear_step(&mut self) {
-        self.impulse.detected.clear();
+        if let Engine::Stepped(m) = &mut self.engine {
+            m.detected.clear();
+        }
         self.last = CollisionStats::default();
         self.collider_last.clear();
     }
@@ -232,7 +224,7 @@ impl CollideStage {
     /// pairs' virial.
     pub fn book_contact_force(&mut self, h: f64) {
         self.clear_step();
-        let Some((books, walls)) = self.force_model.as_ref().and_then(|m| m.take_books()) else {
+        let Some((books, walls)) = self.force_model().and_then(|m| m.take_books()) else {
             return;
         };
         self.book_colliders(walls);
@@ -253,13 +245,16 @@ impl CollideStage {
     /// each over h; sliding when the tangential part is at the Coulomb bound μ (J·n) (to
     /// 1e-9 of it). `x` (m, 3 per particle) and `radius` place the points.
     pub fn impulse_reports(&self, x: &[f64], radius: &[f64], h: f64) -> Vec<crate::collide::ContactReport> {
+        let Engine::Stepped(impulse) = &self.engine else {
+            return Vec::new();
+        };
         let table = MaterialTable::uniform(self.material).with_colliders(&self.colliders);
         let materials = match &self.particle_materials {
             Some(m) => table.with_particles(m),
             None => table,
         };
-        let asleep = self.impulse.sleeping_contacts(x, radius, &self.colliders, &self.domain);
-        self.impulse
+        let asleep = impulse.sleeping_contacts(x, radius, &self.colliders, &self.domain);
+        impulse
             .detected_with_totals()
             .map(|(c, p)| (*c, p))
             .chain(asleep)
@@ -306,16 +301,6 @@ impl CollideStage {
         }
     }
 
-    /// Every contact's warm start, the sleeping islands' too (for a checkpoint).
-    pub fn all_warm(&self) -> Vec<ContactRecord> {
-        self.impulse.all_warm()
-    }
-
-    /// Sets the warm start (a checkpoint's), and with it which contacts rested.
-    pub fn set_warm_start(&mut self, warm: Vec<ContactRecord>) {
-        self.impulse.set_warm_start(warm);
-    }
-
     /// Rebuilds the per-particle materials from `own` and the global value.
     pub fn refresh_materials(&mut self) -> Result<(), Error> {
         if self.own.iter().all(|(e, m)| e.is_none() && m.is_none()) {
@@ -349,7 +334,7 @@ impl CollideStage {
         omega: &'a [f64],
         group: &'a [u8],
     ) -> Option<ContactForce<'a>> {
-        let model = self.force_model.as_ref()?;
+        let model = self.force_model()?;
         let own = self.particle_materials.as_deref().zip(self.particle_ratios.as_deref());
         Some(ContactForce::new(
             model,
@@ -379,34 +364,48 @@ impl CollideStage {
         Ok(())
     }
 
-    /// Forgets the candidate list and the warm start (particles, colliders or the domain
-    /// changed).
+    /// Forgets the impulse engines' candidate list and warm start, and the event-driven
+    /// state (particles, colliders or the domain changed; the contact force model's list is
+    /// its own, `ContactForceModel::forget_list`).
     pub fn forget_list(&mut self) {
-        self.impulse.forget_list();
-        self.events = None;
+        match &mut self.engine {
+            Engine::Stepped(m) => m.forget_list(),
+            Engine::Events(e) => *e = None,
+            Engine::Force(_) => {}
+        }
     }
 
     /// Refuses particles `from` on placed where this contact model cannot resolve them
-    /// ([`placement::check`], with the impulse model's grid).
+    /// ([`placement::check`], on the stepped engine's grid or one of its own).
     pub fn check_placement(&mut self, p: &Particles, from: usize, user_of: Option<&[u32]>) -> Result<placement::Overlaps, Error> {
         let rule = match self.params.model {
             ContactModel::Impulse => placement::Rule::CentreInside,
             ContactModel::SpringDashpot { .. } | ContactModel::Hertz { .. } => placement::Rule::Coincident,
         };
-        let place = placement::Placed {
-            x: &p.x,
-            radius: &p.radius,
-            from,
-            user_of,
-            filter: Filter::of(&p.group, &self.group_masks, self.params.self_collisions, &self.collider_masks),
-        };
-        placement::check(&mut self.impulse.grid, &place, &self.domain, &self.colliders, rule)
+        self.with_placement_grid(|grid, stage| {
+            let place = placement::Placed {
+                x: &p.x,
+                radius: &p.radius,
+                from,
+                user_of,
+                filter: Filter::of(
+                    &p.group,
+                    &stage.group_masks,
+                    stage.params.self_collisions,
+                    &stage.collider_masks,
+                ),
+            };
+            placement::check(grid, &place, &stage.domain, &stage.colliders, rule)
+        })
     }
 
-    /// The impulse model, lent for a step (`World::collide` runs its
+    /// The stepped engine, lent for a step (`World::collide` runs its
     /// [`ImpulseModel::step`]), and what its stages see of the world: these settings,
-    /// colliders, domain and materials, and the particles `p`.
-    pub fn impulse_and_setting<'a>(&'a mut self, p: &'a Particles) -> (&'a mut ImpulseModel, StageSetting<'a>) {
+    /// colliders, domain and materials, and the particles `p`; `None` with another engine.
+    pub fn impulse_and_setting<'a>(&'a mut self, p: &'a Particles) -> Option<(&'a mut ImpulseModel, StageSetting<'a>)> {
+        let Engine::Stepped(impulse) = &mut self.engine else {
+            return None;
+        };
         let table = MaterialTable::uniform(self.material).with_colliders(&self.colliders);
         let set = StageSetting {
             colliders: &self.colliders,
@@ -431,7 +430,7 @@ impl CollideStage {
             accuracy: self.params.accuracy,
             filter: Filter::of(&p.group, &self.group_masks, self.params.self_collisions, &self.collider_masks),
         };
-        (&mut self.impulse, set)
+        Some((impulse, set))
     }
 
     /// What the particles gave each collider in a step (`step`, one per collider, or fewer:
@@ -449,7 +448,10 @@ impl CollideStage {
     /// Books what a step of the impulse model did (`stats`) and its time: the sums over
     /// steps, and what the particles gave each collider.
     pub fn book_step(&mut self, stats: CollisionStats, times: CollisionTimes) {
-        let step = self.impulse.collider_books.clone();
+        let step = match &self.engine {
+            Engine::Stepped(m) => m.collider_books.clone(),
+            _ => Vec::new(),
+        };
         self.book_colliders(step);
         self.times.detect += times.detect;
         self.times.respond += times.respond;
@@ -550,7 +552,7 @@ impl CollideStage {
         }
         check_travel(&self.colliders, &p.radius, &p.x, travel, fastest, span)?;
         let start = std::time::Instant::now();
-        let mut events = match self.events.take() {
+        let mut events = match self.take_events() {
             Some(e) if e.is_at(p.len(), t0, field) => e,
             _ => {
                 let filter = Filter::of(&p.group, &self.group_masks, self.params.self_collisions, &self.collider_masks);
@@ -566,7 +568,7 @@ impl CollideStage {
         let mut given = vec![ColliderBooks::default(); self.colliders.len()];
         let stats = events.advance(p, &materials, threshold, &self.domain, t1, &mut given, interrupt)?;
         self.book_colliders(given);
-        self.events = Some(events);
+        self.keep_events(events);
         self.times.detect += start.elapsed();
         self.last = stats;
         self.total.accumulate(&stats);

@@ -170,7 +170,6 @@ impl World {
         // (a list built before particles were added or removed is stale: built afresh)
         self.collide_stage
             .as_ref()?
-            .impulse
             .list_carry()
             .filter(|(built_at, _)| built_at.len() == n)
     }
@@ -197,16 +196,7 @@ impl World {
         let Some(stage) = &mut self.collide_stage else {
             return Err(Error::invalid("list_built_at", n, "no candidate list: collisions are off"));
         };
-        let radius = &self.particles.radius;
-        let filter = crate::collide::groups::Filter::of(
-            &self.particles.group,
-            &stage.group_masks,
-            stage.params.self_collisions,
-            &stage.collider_masks,
-        );
-        stage
-            .impulse
-            .restore_list(&built_at, skin, radius, &stage.colliders, &stage.domain, filter)
+        stage.restore_list(&built_at, skin, &self.particles.radius, &self.particles.group)
     }
 
     /// What sleeping carries to the next step (`collide/sleep.rs`): each particle's calm time

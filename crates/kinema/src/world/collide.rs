@@ -66,7 +66,10 @@ impl World {
             wrapped: steady && accel.is_some(),
             may_sleep,
         };
-        let (impulse, set) = stage.impulse_and_setting(p);
+        // (an event-driven world never steps: `World::advance` runs its events)
+        let Some((impulse, set)) = stage.impulse_and_setting(p) else {
+            return Ok(());
+        };
         let ran = impulse.step(&set, &frame, &p.x, &p.v, x1, v1, &mut omega);
         self.particles.omega = omega;
         let changed = match ran {
@@ -135,6 +138,14 @@ impl World {
     /// sentence with their count and the deepest), once: taken by the caller.
     pub fn take_placement_notice(&mut self) -> Option<String> {
         self.placement_notice.take()
+    }
+
+    /// The sub-models of the contact force model's contacts (kind and name, as LAMMPS
+    /// GRANULAR's `pair granular` names them: `collide/contact_force/sub_models.rs`), the
+    /// parts they have now; `None` without a force model.
+    pub fn contact_sub_models(&self) -> Option<Vec<(&'static str, &'static str)>> {
+        let force = super::forces::contact_force(&self.collide_stage, &self.particles)?;
+        Some(force.sub_models().into_iter().map(|(k, name)| (k.name(), name)).collect())
     }
 
     /// Turns collisions on (or changes their settings): stages 2–4 of every step with the

@@ -408,6 +408,11 @@ impl UserOrder {
         self.world.collision_params()
     }
 
+    /// [`World::contact_sub_models`] (no order: the laws are the same for every particle).
+    pub fn contact_sub_models(&self) -> Option<Vec<(&'static str, &'static str)>> {
+        self.world.contact_sub_models()
+    }
+
     /// [`World::group_masks`].
     pub fn group_masks(&self) -> GroupMasks {
         self.world.group_masks()

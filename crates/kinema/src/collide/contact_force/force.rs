@@ -122,19 +122,16 @@ impl ContactForce<'_> {
         let r = || self.radius.iter().copied().fold(0.0, f64::max);
         let stiffness = self.normal.impact_stiffness(|| 2.0 * fastest(), r, w)?;
         let omega_squared = stiffness * w;
-        let zeta = match self.damping {
-            Some(gamma) => gamma / (2.0 * omega_squared.sqrt()),
-            None => {
-                let e_max = self
-                    .own
-                    .into_iter()
-                    .flatten()
-                    .map(|m| m.restitution())
-                    .chain(self.colliders.iter().filter_map(|c| c.surface().restitution()))
-                    .fold(self.global.restitution(), f64::max);
-                damping_ratio(e_max).unwrap_or(0.0)
-            }
-        };
+        let zeta = self.damping.ratio_at(omega_squared, || {
+            let e_max = self
+                .own
+                .into_iter()
+                .flatten()
+                .map(|m| m.restitution())
+                .chain(self.colliders.iter().filter_map(|c| c.surface().restitution()))
+                .fold(self.global.restitution(), f64::max);
+            damping_ratio(e_max).unwrap_or(0.0)
+        });
         Some(Standby { omega_squared, zeta })
     }
 }

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::pairs::PassOptions;
 use super::{ContactForce, Scratch, CHUNK};
-use crate::collide::{damping_ratio, dashpot_coefficient, Collider, Contact, Material, Partner};
+use crate::collide::{damping_ratio, Collider, Contact, Material, Partner};
 use crate::error::Error;
 use crate::forces::State;
 
@@ -188,18 +188,12 @@ impl ContactForce<'_> {
         self.inv_mass[c.i] + c.partner_particle().map_or(0.0, |j| self.inv_mass[j])
     }
 
-    /// c_n (kg/s) of a contact with w = w_i + w_j > 0 and secant stiffness `k` (N/m):
-    /// m_eff γ_n with a given rate, else 2 ζ √(k m_eff) with ζ = −ln e / √(π² + ln² e), the
-    /// damped linear oscillator's exact rule; with Hertz's law √5/2 of that at the current k,
-    /// −√5 ln e / √(π² + ln² e) √(k m_eff) = −2 √(5/6) ln e / √(π² + ln² e) √(S m_eff) with
-    /// S = 3/2 k the tangent stiffness (Tsuji et al. 1992's form, LAMMPS's `damping
-    /// coeff_restitution` for Hertzian contacts): an approximation of the set e, which comes
-    /// out the same at every impact speed (the table in docs/collisions.md).
+    /// c_n (kg/s) of a contact with w = w_i + w_j > 0 and secant stiffness `k` (N/m): the
+    /// damping law's ([`DampingLaw::coefficient`](super::DampingLaw::coefficient), with the
+    /// damping ratio of the pair's restitution).
+    #[inline(always)]
     pub(super) fn dashpot_at(&self, c: &Contact, w: f64, k: f64) -> f64 {
-        match self.damping {
-            Some(gamma) => gamma / w,
-            None => self.normal.restitution_dashpot(dashpot_coefficient(k, self.ratios.of(c), w)),
-        }
+        self.damping.coefficient(&self.normal, w, k, || self.ratios.of(c))
     }
 }
 

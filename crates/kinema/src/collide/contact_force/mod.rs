@@ -40,6 +40,7 @@ use crate::error::Error;
 use crate::forces::State;
 pub use cohesion::Cohesion;
 use cohesion::Jkr;
+pub(crate) use damping::DampingLaw;
 use exchange::Exchange;
 use history::Histories;
 pub(crate) use history::{PairSlip, Slip, WallSlip};
@@ -47,11 +48,14 @@ pub(crate) use law::particle_ratios;
 use law::DampingRatios;
 pub(crate) use normal::NormalLaw;
 use pairs::{ChunkSums, Turning, TurningOut};
-pub use tangent::{RollingModel, TangentialLaw, TangentialModel};
+pub use rolling::RollingLaw;
+pub use tangent::{TangentialLaw, TangentialModel};
+pub use twisting::TwistingLaw;
 pub(crate) use verlet::{SpinKick, VerletKick};
 
 mod cohesion;
 mod contacts;
+mod damping;
 mod exchange;
 mod force;
 mod history;
@@ -59,19 +63,26 @@ mod law;
 mod listing;
 mod normal;
 mod pairs;
+mod rolling;
 pub mod spring_dashpot;
+mod springs;
 mod stress;
+pub mod sub_models;
 mod tangent;
+mod twisting;
 mod verlet;
 
-/// The contact force model (spring–dashpot or Hertz) between calls: the normal law and
-/// the buffers one evaluation leaves the next (the neighbour list, the grid, the exchange between chunks).
+/// The contact force model (spring–dashpot, Hertz, DMT, JKR) between calls: its laws, the
+/// sub-models LAMMPS GRANULAR composes a contact of (the table: `sub_models.rs`), and the
+/// buffers one evaluation leaves the next (the neighbour list, the grid, the exchange between
+/// chunks).
 pub(crate) struct ContactForceModel {
     /// The normal law (`normal.rs`: Hooke's, Hertz's, with DMT's or JKR's adhesion).
     pub normal: NormalLaw,
-    /// γ_n, 1/s (`None`: the damping follows from each pair's restitution e).
-    pub damping: Option<f64>,
-    /// The tangential part with memory (`tangent.rs`), when contacts have friction.
+    /// The normal dashpot (`damping.rs`: from each pair's restitution e, or a given rate).
+    pub damping: DampingLaw,
+    /// The tangential part with memory, when contacts have friction: the tangential law
+    /// (`tangent.rs`) with rolling and twisting resistance (`rolling.rs`, `twisting.rs`).
     pub tangential: Option<TangentialModel>,
     /// A fixed skin, m (tests); `None`: [`SKIN_PER_RADIUS`] times the mean radius, at each
     /// build of the list.
@@ -84,11 +95,11 @@ pub(crate) struct ContactForceModel {
 impl ContactForceModel {
     /// The model with stiffness k_n (N/m) and damping rate γ_n (1/s; `None`: from e).
     pub fn new(stiffness: f64, damping: Option<f64>) -> Self {
-        Self::of(NormalLaw::Hooke { stiffness }, damping)
+        Self::of(NormalLaw::Hooke { stiffness }, DampingLaw::of(damping))
     }
 
-    /// The model of normal law `normal` and damping rate γ_n (1/s; `None`: from e).
-    pub fn of(normal: NormalLaw, damping: Option<f64>) -> Self {
+    /// The model of normal law `normal` and damping law `damping`, without a tangential part.
+    pub fn of(normal: NormalLaw, damping: DampingLaw) -> Self {
         ContactForceModel {
             normal,
             damping,
@@ -247,7 +258,7 @@ pub(crate) struct ContactForce<'a> {
     model: &'a ContactForceModel,
     /// The normal law (`normal.rs`).
     normal: NormalLaw,
-    damping: Option<f64>,
+    damping: DampingLaw,
     /// How far past touching a contact can hold (JKR's largest pull-off distance of a pair),
     /// m; 0 with the other laws.
     reach_past_touching: f64,

@@ -4,8 +4,9 @@
 //! contact radius, the pull-off force, the elastic energy and how far apart a contact holds.
 //!
 //! A new normal law is one variant here and its arm in each method below (every match names
-//! every law, so the compiler lists them), and its setting (`stage/settings.rs`:
-//! `ContactModel`, its name, `force_model_of`); the pair pass, the damping (`law.rs`), the
+//! every law, so the compiler lists them), its row in the table of sub-models
+//! (`sub_models.rs`), and its setting (`stage/settings.rs`: `ContactModel`, its name,
+//! `force_model_of`); the pair pass, the damping (`law.rs`), the
 //! tangential part (`tangent.rs`) and the rates (`force.rs`) read it only through these
 //! methods. (Checked by adding a toy law F = k δ² and taking it out: `docs/architecture.md`,
 //! "How to add".)
@@ -40,6 +41,19 @@ pub(crate) enum NormalLaw {
 }
 
 impl NormalLaw {
+    /// The names of its variants, as `name` gives them (`sub_models.rs`).
+    pub const NAMES: [&'static str; 4] = ["hooke", "hertz", "dmt", "jkr"];
+
+    /// Its name (LAMMPS's, but `hertz` for its `hertz/material`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            NormalLaw::Hooke { .. } => Self::NAMES[0],
+            NormalLaw::Hertz { .. } => Self::NAMES[1],
+            NormalLaw::Dmt { .. } => Self::NAMES[2],
+            NormalLaw::Jkr(_) => Self::NAMES[3],
+        }
+    }
+
     /// Hertz's law of effective modulus `e_star` (Pa) with the adhesion `cohesion` (none
     /// where its surface energy is 0).
     pub fn hertz(e_star: f64, cohesion: Option<Cohesion>) -> Self {

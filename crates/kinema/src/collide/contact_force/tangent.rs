@@ -37,15 +37,9 @@
 //! and −ρ_j n × F_t on j (both turn the same way; the pair's angular momentum is kept, since
 //! the arms meet at one point).
 //!
-//! **Rolling resistance** (`rolling sds`, with rolling friction μ_r > 0): a spring on the
-//! rolling displacement, v_r = R* (ω_i − ω_j) × n (R* = r_i r_j/(r_i + r_j); r_i at a
-//! collider), stretched and turned as ξ_t is: f_r = −k_r ξ_r − γ_r v_r, |f_r| ≤ μ_r |F_n|;
-//! the couple R* n × f_r on i and its opposite on j.
-//!
-//! **Twisting resistance** (`twisting marshall`, with rolling friction): on the relative spin
-//! about the normal, Ω = (ω_i − ω_j)·n: M = −k_tw θ − γ_tw Ω, |M| ≤ μ_tw |F_n|, with
-//! Marshall's k_tw = ½ k_t a², γ_tw = ½ γ_t a², μ_tw = ⅔ a μ from the sliding contact; the
-//! couple M n on i and its opposite on j.
+//! **Rolling and twisting resistance** (with rolling friction μ_r > 0) are their own
+//! sub-models, `rolling.rs` (`rolling sds`) and `twisting.rs` (`twisting marshall`), which
+//! read the sliding contact's k_t and γ_t; [`TangentialModel`] composes the three.
 //!
 //! Only velocity Verlet steps these models (the springs stretch once per step, by the step's
 //! slip at its one force evaluation, as LAMMPS's `fix nve/sphere` does). The other force
@@ -53,6 +47,9 @@
 //! are, stretching nothing.
 
 use super::history::Slip;
+pub(super) use super::springs::Touch;
+use super::springs::{into_plane, slider, Spins};
+use super::{RollingLaw, TwistingLaw};
 use crate::vec3;
 
 /// LAMMPS's tangential sub-models with history.
@@ -71,26 +68,39 @@ pub enum TangentialLaw {
     },
 }
 
-/// The tangential part of a force model (LAMMPS's `tangential`, and with rolling friction
-/// `rolling sds` and `twisting marshall`).
+impl TangentialLaw {
+    /// The names of its variants, as `name` gives them (`sub_models.rs`).
+    pub const NAMES: [&'static str; 2] = ["linear_history", "mindlin"];
+
+    /// Its name (LAMMPS's).
+    pub fn name(&self) -> &'static str {
+        match self {
+            TangentialLaw::LinearHistory { .. } => Self::NAMES[0],
+            TangentialLaw::Mindlin { .. } => Self::NAMES[1],
+        }
+    }
+
+    /// k_t at contact radius `a` (m), N/m.
+    #[inline]
+    fn stiffness(&self, a: f64) -> f64 {
+        match *self {
+            TangentialLaw::LinearHistory { stiffness } => stiffness,
+            TangentialLaw::Mindlin { shear_modulus } => 8.0 * shear_modulus * a,
+        }
+    }
+}
+
+/// The tangential part of a force model, three of LAMMPS GRANULAR's sub-models composed:
+/// `tangential` (this file) and, with rolling friction, `rolling` and `twisting`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TangentialModel {
     pub law: TangentialLaw,
     /// x_γt ≥ 0: the tangential dashpot γ_t = x_γt c_n, a fraction of the normal one.
     pub damping: f64,
-    /// Rolling and twisting resistance (`None`: none).
-    pub rolling: Option<RollingModel>,
-}
-
-/// Rolling resistance (`rolling sds`) and with it Marshall's twisting resistance.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RollingModel {
-    /// μ_r > 0: the rolling spring's force is at most μ_r |F_n|.
-    pub friction: f64,
-    /// k_r, N/m (`None`: the contact's k_t).
-    pub stiffness: Option<f64>,
-    /// γ_r, kg/s (`None`: the contact's γ_t).
-    pub damping: Option<f64>,
+    /// Rolling resistance (`rolling.rs`; `None`: none).
+    pub rolling: Option<RollingLaw>,
+    /// Twisting resistance (`twisting.rs`; `None`: none).
+    pub twisting: Option<TwistingLaw>,
 }
 
 /// What the tangential part of one contact does now.
@@ -108,78 +118,6 @@ pub(super) struct Tangent {
     /// Whether the contact slides: its force at the Coulomb bound μ |F_n| (to 1e-9 of it,
     /// so that a spring left at the bound by the last step's slide reads as sliding).
     pub slides: bool,
-}
-
-/// One contact as the tangential law sees it.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Touch {
-    /// n, from the partner towards i.
-    pub normal: [f64; 3],
-    /// a, m: the radius of the contact disc (√(R* δ) with Hertz's law, JKR's with its
-    /// adhesion: `cohesion.rs`).
-    pub contact_radius: f64,
-    /// R*, m.
-    pub reduced_radius: f64,
-    /// u = v_i − v_j (or v_i − w), m/s.
-    pub u: [f64; 3],
-    /// ω_i and ω_j (0 at a collider), rad/s.
-    pub omega: [[f64; 3]; 2],
-    /// With a step: u and ω over it, (x(t + h) − x(t))/h (Verlet's v + h/2 a, the mean of the
-    /// velocities at the step's start and its predictor), which stretch the springs, so that
-    /// ξ is the contact point's displacement to rounding; `None`: `u`, `omega`.
-    pub moved: Option<([f64; 3], [[f64; 3]; 2])>,
-    /// ρ_i, ρ_j, m.
-    pub arms: (f64, f64),
-    /// |F_n|, N: the normal force, dashpot included (LAMMPS's Fncrit).
-    pub normal_force: f64,
-    /// c_n, kg/s.
-    pub dashpot: f64,
-    /// μ of the pair's material.
-    pub friction: f64,
-}
-
-/// ξ turned into the plane ⊥ n, its length kept (a spring of zero length stays so).
-#[inline]
-fn into_plane(xi: [f64; 3], n: [f64; 3]) -> [f64; 3] {
-    let along = vec3::dot(xi, n);
-    if along == 0.0 {
-        return xi;
-    }
-    let before = vec3::norm(xi);
-    let flat = vec3::sub(xi, vec3::scale(along, n));
-    let after = vec3::norm(flat);
-    if after > 0.0 {
-        vec3::scale(before / after, flat)
-    } else {
-        [0.0; 3]
-    }
-}
-
-/// A spring–dashpot slider, F = −k ξ − γ v with |F| ≤ cap: the force, and the stretch after
-/// a slide (set to where the force stays at the cap).
-#[inline]
-fn slider(xi: [f64; 3], v: [f64; 3], k: f64, gamma: f64, cap: f64) -> ([f64; 3], [f64; 3], bool) {
-    let f = [
-        -k * xi[0] - gamma * v[0],
-        -k * xi[1] - gamma * v[1],
-        -k * xi[2] - gamma * v[2],
-    ];
-    let size = vec3::norm(f);
-    if size <= cap {
-        return (f, xi, false);
-    }
-    if vec3::norm(xi) == 0.0 || k == 0.0 {
-        // no stretch to hold the cap with (LAMMPS: no force)
-        return ([0.0; 3], xi, true);
-    }
-    let s = cap / size;
-    let f = vec3::scale(s, f);
-    let xi = [
-        -(f[0] + gamma * v[0]) / k,
-        -(f[1] + gamma * v[1]) / k,
-        -(f[2] + gamma * v[2]) / k,
-    ];
-    (f, xi, true)
 }
 
 impl TangentialModel {
@@ -201,11 +139,7 @@ impl TangentialModel {
             Some((u, w)) => (sliding(u, w), vec3::sub(w[0], w[1])),
             None => (vt, vec3::sub(wi, wj)),
         };
-        let a = t.contact_radius;
-        let k_t = match self.law {
-            TangentialLaw::LinearHistory { stiffness } => stiffness,
-            TangentialLaw::Mindlin { shear_modulus } => 8.0 * shear_modulus * a,
-        };
+        let k_t = self.law.stiffness(t.contact_radius);
         let gamma_t = self.damping * t.dashpot;
         let mut shear = slip.shear;
         if let Some(h) = step {
@@ -228,48 +162,25 @@ impl TangentialModel {
             power,
             slides: slides || (cap > 0.0 && vec3::norm(force) >= cap * (1.0 - 1e-9)),
         };
-        if let Some(r) = &self.rolling {
-            let rel = vec3::sub(wi, wj);
-            // rolling: v_r = R* Δω × n
-            let vr = vec3::scale(t.reduced_radius, vec3::cross(rel, n));
-            let mut roll = slip.roll;
-            if let Some(h) = step {
-                let vr_step = vec3::scale(t.reduced_radius, vec3::cross(rel_step, n));
-                roll = into_plane(roll, n);
-                for k in 0..3 {
-                    roll[k] += h * vr_step[k];
-                }
-            }
-            let (k_r, gamma_r) = (r.stiffness.unwrap_or(k_t), r.damping.unwrap_or(gamma_t));
-            let (fr, roll, _) = slider(roll, vr, k_r, gamma_r, r.friction * t.normal_force);
-            // twisting (Marshall): Ω = Δω·n
-            let spin_n = vec3::dot(rel, n);
-            let mut twist = slip.twist;
-            if let Some(h) = step {
-                twist += h * vec3::dot(rel_step, n);
-            }
-            let (k_tw, gamma_tw, cap) = (
-                0.5 * k_t * a * a,
-                0.5 * gamma_t * a * a,
-                2.0 / 3.0 * a * t.friction * t.normal_force,
-            );
-            let mut m = -k_tw * twist - gamma_tw * spin_n;
-            if m.abs() > cap {
-                let sign = if spin_n > 0.0 {
-                    1.0
-                } else if spin_n < 0.0 {
-                    -1.0
-                } else {
-                    0.0
-                };
-                if k_tw > 0.0 {
-                    twist = (cap * sign - gamma_tw * spin_n) / k_tw;
-                }
-                m = -cap * sign;
-            }
-            out.couple = vec3::add(vec3::scale(t.reduced_radius, vec3::cross(n, fr)), vec3::scale(m, n));
+        // rolling and twisting resistance: a couple on i (its opposite on j)
+        let spins = Spins {
+            now: vec3::sub(wi, wj),
+            over_step: rel_step,
+        };
+        let mut couple = None;
+        if let Some(rolling) = &self.rolling {
+            let (c, roll) = rolling.at(t, &spins, slip.roll, step, k_t, gamma_t);
             out.slip.roll = roll;
+            couple = Some(c);
+        }
+        if let Some(twisting) = &self.twisting {
+            let (m, twist) = twisting.at(t, &spins, slip.twist, step, k_t, gamma_t);
             out.slip.twist = twist;
+            let about_n = vec3::scale(m, n);
+            couple = Some(couple.map_or(about_n, |c| vec3::add(c, about_n)));
+        }
+        if let Some(c) = couple {
+            out.couple = c;
         }
         out
     }
@@ -300,6 +211,7 @@ mod tests {
             law: TangentialLaw::LinearHistory { stiffness: 1e4 },
             damping: 0.0,
             rolling: None,
+            twisting: None,
         };
         // a step of slip 1e-4 m: F = −1 N, inside μ F_n = 5 N
         let t = model.at(&touch([1.0, 0.0, 0.0]), Slip::default(), Some(1e-4));

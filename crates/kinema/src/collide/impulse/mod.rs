@@ -234,6 +234,7 @@ pub(crate) struct StageSetting<'a> {
 
 /// What the stages keep of their contacts while particles are added
 /// ([`ImpulseModel::take_contacts`]).
+#[derive(Default)]
 pub(crate) struct KeptContacts {
     warm: Vec<ContactRecord>,
     sleep: Sleep,

@@ -3,7 +3,9 @@
 //! ([`TangentialArgs`], [`TangentialKind`]) and [`CollisionParams`] with its checks; and the
 //! contact force model they ask for. Units SI.
 
-use crate::collide::contact_force::{Cohesion, ContactForceModel, NormalLaw, RollingModel, TangentialLaw, TangentialModel};
+use crate::collide::contact_force::{
+    Cohesion, ContactForceModel, DampingLaw, NormalLaw, RollingLaw, TangentialLaw, TangentialModel, TwistingLaw,
+};
 use crate::collide::shock::Accuracy;
 use crate::collide::Material;
 use crate::error::Error;
@@ -46,8 +48,8 @@ pub enum TangentialKind {
 }
 
 impl TangentialKind {
-    /// The names, as the binding and the scene files spell them.
-    pub const NAMES: [&'static str; 2] = ["linear_history", "mindlin"];
+    /// The names, as the binding and the scene files spell them (the laws', `tangent.rs`).
+    pub const NAMES: [&'static str; 2] = TangentialLaw::NAMES;
 
     /// The kind named `name`.
     pub fn from_name(name: &str) -> Result<Self, Error> {
@@ -521,7 +523,7 @@ pub(super) fn force_model_of(params: &CollisionParams) -> Option<ContactForceMod
         ContactModel::SpringDashpot { stiffness, damping } => ContactForceModel::new(stiffness, damping),
         ContactModel::Hertz { cohesion, .. } => {
             let e_star = params.model.effective_modulus()?;
-            ContactForceModel::of(NormalLaw::hertz(e_star, cohesion), None)
+            ContactForceModel::of(NormalLaw::hertz(e_star, cohesion), DampingLaw::CoeffRestitution)
         }
         ContactModel::Impulse => return None,
     };
@@ -556,10 +558,12 @@ fn tangential_of(params: &CollisionParams) -> Option<TangentialModel> {
     Some(TangentialModel {
         law,
         damping: t.damping.unwrap_or(TangentialArgs::DAMPING),
-        rolling: (params.rolling_friction > 0.0).then_some(RollingModel {
+        // (rolling friction asks for both rolling and twisting resistance)
+        rolling: (params.rolling_friction > 0.0).then_some(RollingLaw::Sds {
             friction: params.rolling_friction,
             stiffness: t.rolling_stiffness,
             damping: t.rolling_damping,
         }),
+        twisting: (params.rolling_friction > 0.0).then_some(TwistingLaw::Marshall),
     })
 }
