@@ -55,7 +55,8 @@ impl Engine {
         match (params.model, params.event_driven) {
             (ContactModel::Impulse, false) => EngineKind::Stepped,
             (ContactModel::Impulse, true) => EngineKind::Events,
-            (ContactModel::SpringDashpot { .. } | ContactModel::Hertz { .. }, _) => EngineKind::Force,
+            // (every other model is a force model: a new one needs no arm here)
+            _ => EngineKind::Force,
         }
     }
 
