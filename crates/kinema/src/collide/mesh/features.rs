@@ -172,6 +172,20 @@ impl TriangleMesh {
     /// point (m) and feature, all in the frame the geometry was added in (`p` too).
     pub(super) fn touches(&self, p: [f64; 3], r: f64, tolerance: f64) -> Found {
         let reach = r + tolerance.max(0.0);
+        let mut near: SmallVec<[Near; 8]> = SmallVec::new();
+        // (past the flat nodes that give no contact: `flat.rs`; the margin is many times the
+        // rules' own tolerance)
+        let margin = 8.0 * self.eps(p, r);
+        self.geometry
+            .visit_touching(p, reach, margin, |t| near.extend(self.near(t, p, reach)));
+        self.true_features(&mut near, p, r)
+    }
+
+    /// [`TriangleMesh::touches`] searching every triangle within reach, flat nodes too (the
+    /// tests' reference for what the flat nodes leave out).
+    #[cfg(test)]
+    pub(super) fn touches_everywhere(&self, p: [f64; 3], r: f64, tolerance: f64) -> Found {
+        let reach = r + tolerance.max(0.0);
         let (lo, hi) = ([0, 1, 2].map(|k| p[k] - reach), [0, 1, 2].map(|k| p[k] + reach));
         let mut near: SmallVec<[Near; 8]> = SmallVec::new();
         self.geometry.visit(lo, hi, |t| near.extend(self.near(t, p, reach)));
@@ -192,6 +206,20 @@ impl TriangleMesh {
         let eps = self.eps(p, r);
         let g = &*self.geometry;
         for (c, (touch, q, feature)) in near.iter().zip(found) {
+            // (a point of an edge at one of its ends, to the coordinates' precision, is that
+            // vertex: its region's boundary, where the closest point's test may say either;
+            // as an edge only the two triangles along it would be asked, and a ball beside a
+            // vertex of a flat floor would touch it, tilted)
+            let feature = match feature {
+                Feature::Edge(k) => {
+                    let ends = [k as usize, (k as usize + 1) % 3];
+                    let at = |e: usize| vec3::norm(vec3::sub(q, g.vertices[g.faces[c.t][e] as usize])) <= eps;
+                    ends.into_iter()
+                        .find(|&e| at(e))
+                        .map_or(feature, |e| Feature::Vertex(e as u8))
+                }
+                other => other,
+            };
             let around = match feature {
                 Feature::Face => 1,
                 Feature::Edge(k) => g.edge_faces[c.t][k as usize] as usize,

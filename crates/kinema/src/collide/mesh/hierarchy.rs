@@ -1,15 +1,18 @@
 //! The bounding-volume hierarchy of a triangle mesh: a median split of the triangles'
 //! centroids along the longest axis of their box, down to leaves of at most four triangles,
-//! each node's box kept in f32 and rounded outwards; and its traversals, over a box and along
-//! a ray, on a stack of the thread.
+//! each node's box kept in f32 and rounded outwards, and its flat nodes (`flat.rs`); and its
+//! traversals, over a box (past the flat nodes that cannot touch), and along a ray, on a stack
+//! of the thread.
 
+use super::flat::{FLAT, FLAT_NONE};
 use super::{mesh_buffer, Geometry};
+use crate::vec3;
 use smallvec::SmallVec;
 
 /// A node of the hierarchy: a box and either two children (the left one follows the node,
 /// the right one at `right`) or `count` triangles of `order` from `start`. The box is kept in
-/// f32, rounded outwards (it only ever holds more than the triangles): 40 bytes a node
-/// rather than 64, and a traversal of a large mesh is bound by the nodes it loads.
+/// f32, rounded outwards (it only ever holds more than the triangles): 44 bytes a node
+/// rather than 68, and a traversal of a large mesh is bound by the nodes it loads.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Node {
     lo: [f32; 3],
@@ -17,6 +20,16 @@ pub(super) struct Node {
     right: u32,
     start: u32,
     count: u32,
+    /// A triangle of the one plane of a flat node (`flat.rs`), or [`FLAT_NONE`].
+    plane: u32,
+}
+
+impl Node {
+    /// Whether it is a flat node (`flat.rs`).
+    #[cfg(test)]
+    pub(super) fn is_flat(&self) -> bool {
+        self.plane != FLAT_NONE
+    }
 }
 
 /// The largest f32 at most `x` (a box's lower side, rounded outwards).
@@ -86,6 +99,43 @@ impl Geometry {
         debug_assert_eq!(nodes.len(), node_count(n));
         self.order = order;
         self.nodes = nodes;
+        drop(centroids); // (before the flat nodes' buffers: the build's peak stays the split's)
+        self.mark_flat()
+    }
+
+    /// Marks the flat nodes (`flat.rs`): a leaf whose triangles all lie inside flat patches of
+    /// one plane, a parent of two flat nodes of one plane; children come after their parent,
+    /// so one pass from the last node up. `None`: a buffer cannot be allocated.
+    fn mark_flat(&mut self) -> Option<()> {
+        let inside = self.inside_flat_patches()?;
+        for k in (0..self.nodes.len()).rev() {
+            let node = self.nodes[k];
+            let plane = if node.count > 0 {
+                let leaf = &self.order[node.start as usize..(node.start + node.count) as usize];
+                let t0 = leaf[0] as usize;
+                let one = leaf.iter().all(|&t| {
+                    let t = t as usize;
+                    inside[t] && self.same_plane(t0, self.normals[t], self.vertices[self.faces[t][0] as usize])
+                });
+                if one {
+                    t0 as u32
+                } else {
+                    FLAT_NONE
+                }
+            } else {
+                let (l, r) = (self.nodes[k + 1].plane, self.nodes[node.right as usize].plane);
+                let one = l != FLAT_NONE && r != FLAT_NONE && {
+                    let r = r as usize;
+                    self.same_plane(l as usize, self.normals[r], self.vertices[self.faces[r][0] as usize])
+                };
+                if one {
+                    l
+                } else {
+                    FLAT_NONE
+                }
+            };
+            self.nodes[k].plane = plane;
+        }
         Some(())
     }
 
@@ -107,6 +157,7 @@ impl Geometry {
             right: 0,
             start: start as u32,
             count: order.len() as u32,
+            plane: FLAT_NONE,
         });
         if order.len() <= LEAF {
             return;
@@ -135,13 +186,107 @@ impl Geometry {
         nodes[me].count = 0;
     }
 
-    /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi].
+    /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi] (the
+    /// tests' reference for the searches past the flat nodes).
+    #[cfg(test)]
     pub(super) fn visit(&self, lo: [f64; 3], hi: [f64; 3], mut each: impl FnMut(usize)) {
         let mut stack = Stack::new();
         while let Some(k) = stack.pop() {
             let node = self.nodes[k as usize];
             if (0..3).any(|a| f64::from(node.hi[a]) < lo[a] || f64::from(node.lo[a]) > hi[a]) {
                 continue;
+            }
+            if node.count > 0 {
+                for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
+                    each(t as usize);
+                }
+            } else {
+                stack.push(node.right);
+                stack.push(k + 1);
+            }
+        }
+    }
+
+    /// Calls `each(t)` with every triangle whose leaf's box overlaps the box of the sphere at
+    /// `p` of radius `reach` (m), but those of flat nodes that hold neither the foot of `p` on
+    /// their plane nor a point within `reach` of it, to within `margin` (m: `flat.rs`).
+    pub(super) fn visit_touching(&self, p: [f64; 3], reach: f64, margin: f64, mut each: impl FnMut(usize)) {
+        let (lo, hi) = (p.map(|c| c - reach), p.map(|c| c + reach));
+        // the normals of a flat node's triangles are its plane's to FLAT: over `reach` their
+        // feet lie that much apart
+        let margin = margin + 2.0 * FLAT * reach;
+        let mut stack = Stack::new();
+        while let Some(k) = stack.pop() {
+            let node = self.nodes[k as usize];
+            if (0..3).any(|a| f64::from(node.hi[a]) < lo[a] || f64::from(node.lo[a]) > hi[a]) {
+                continue;
+            }
+            if node.plane != FLAT_NONE {
+                let t = node.plane as usize;
+                let n = self.normals[t];
+                let s = vec3::dot(n, vec3::sub(p, self.vertices[self.faces[t][0] as usize]));
+                let foot = vec3::sub(p, vec3::scale(s, n));
+                if s.abs() >= reach + margin
+                    || (0..3).any(|a| f64::from(node.hi[a]) + margin < foot[a] || f64::from(node.lo[a]) - margin > foot[a])
+                {
+                    continue;
+                }
+            }
+            if node.count > 0 {
+                for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
+                    each(t as usize);
+                }
+            } else {
+                stack.push(node.right);
+                stack.push(k + 1);
+            }
+        }
+    }
+
+    /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi] of a
+    /// sphere's path, but those of flat nodes that no point of the path comes within `reach`
+    /// (m) of: the chord from `x` to `end` (m), and any path within `bulge` (m) of it, to within
+    /// `margin` (m).
+    ///
+    /// A point q of a flat node's plane lies |c − q|² = s² + |f − q|² from a centre c at
+    /// signed distance s from the plane with foot f. Along the chord s is linear, so its least
+    /// |s| is 0 if the chord crosses the plane, else the smaller of its ends'; a path within
+    /// `bulge` of the chord comes within `reach` of q only if the chord comes within `reach` +
+    /// `bulge` of it, that is only if q lies within ρ = √((reach + bulge)² − s_min²) of the
+    /// chord's feet, which run along the segment between the feet of its ends.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn visit_path(
+        &self,
+        (lo, hi): ([f64; 3], [f64; 3]),
+        (x, end): ([f64; 3], [f64; 3]),
+        bulge: f64,
+        reach: f64,
+        margin: f64,
+        mut each: impl FnMut(usize),
+    ) {
+        let reach = reach + bulge;
+        let margin = margin + 2.0 * FLAT * (reach + vec3::norm(vec3::sub(end, x)));
+        let mut stack = Stack::new();
+        while let Some(k) = stack.pop() {
+            let node = self.nodes[k as usize];
+            if (0..3).any(|a| f64::from(node.hi[a]) < lo[a] || f64::from(node.lo[a]) > hi[a]) {
+                continue;
+            }
+            if node.plane != FLAT_NONE {
+                let t = node.plane as usize;
+                let (n, a) = (self.normals[t], self.vertices[self.faces[t][0] as usize]);
+                let (s0, s1) = (vec3::dot(n, vec3::sub(x, a)), vec3::dot(n, vec3::sub(end, a)));
+                let least = if s0 * s1 <= 0.0 { 0.0 } else { s0.abs().min(s1.abs()) };
+                if least >= reach + margin {
+                    continue;
+                }
+                let rho = (reach * reach - least * least).max(0.0).sqrt() + margin;
+                let (f0, f1) = (vec3::sub(x, vec3::scale(s0, n)), vec3::sub(end, vec3::scale(s1, n)));
+                if (0..3)
+                    .any(|a| f64::from(node.hi[a]) + rho < f0[a].min(f1[a]) || f64::from(node.lo[a]) - rho > f0[a].max(f1[a]))
+                {
+                    continue;
+                }
             }
             if node.count > 0 {
                 for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {

@@ -2,7 +2,7 @@
 //! triangle while approaching it, faces on the parabola, edges and vertices on its chord over
 //! the horizon (each the first root of a quadratic, as in `toi.rs`); times in s, lengths in m.
 
-use super::features::{closest_on_triangle, Near};
+use super::features::closest_on_triangle;
 use super::{Feature, TriangleMesh};
 use crate::collide::roots::toi_half_space;
 use crate::vec3;
@@ -30,8 +30,8 @@ impl TriangleMesh {
     }
 
     /// [`TriangleMesh::toi`], and whether the sphere comes within `margin` (m) of a true
-    /// feature now ([`TriangleMesh::for_each_touch`] with that tolerance finds a touch), from
-    /// one traversal of the hierarchy (`None`: not asked, false).
+    /// feature now ([`TriangleMesh::for_each_touch`] with that tolerance finds a touch)
+    /// (`None`: not asked, false).
     pub fn toi_within(
         &self,
         x: [f64; 3],
@@ -40,6 +40,37 @@ impl TriangleMesh {
         r: f64,
         horizon: f64,
         margin: Option<f64>,
+    ) -> (bool, Option<(f64, usize)>) {
+        self.toi_search(x, v, a, r, horizon, margin, true)
+    }
+
+    /// [`TriangleMesh::toi_within`] with every triangle within reach searched, flat nodes
+    /// too (the tests' reference for what the flat nodes leave out).
+    #[cfg(test)]
+    pub(super) fn toi_everywhere(
+        &self,
+        x: [f64; 3],
+        v: [f64; 3],
+        a: [f64; 3],
+        r: f64,
+        horizon: f64,
+        margin: Option<f64>,
+    ) -> (bool, Option<(f64, usize)>) {
+        self.toi_search(x, v, a, r, horizon, margin, false)
+    }
+
+    /// [`TriangleMesh::toi_within`], past the flat nodes that cannot touch or be met when
+    /// `past_flat` (`flat.rs`), else over every triangle in reach.
+    #[allow(clippy::too_many_arguments)]
+    fn toi_search(
+        &self,
+        x: [f64; 3],
+        v: [f64; 3],
+        a: [f64; 3],
+        r: f64,
+        horizon: f64,
+        margin: Option<f64>,
+        past_flat: bool,
     ) -> (bool, Option<(f64, usize)>) {
         if horizon.is_nan() || horizon < 0.0 {
             let touching = margin.is_some_and(|m| !self.touches(self.local(x), r, m).is_empty());
@@ -53,33 +84,41 @@ impl TriangleMesh {
         let bulge = 0.125 * vec3::norm(a) * horizon * horizon;
         let lo = [0, 1, 2].map(|k| x[k].min(end[k]) - r - bulge - margin_len);
         let hi = [0, 1, 2].map(|k| x[k].max(end[k]) + r + bulge + margin_len);
-        // one traversal over the path's box: the triangles it may meet, those it touches now
-        // and those within the margin (the path's box holds the sphere's)
-        let mut candidates: SmallVec<[u32; 16]> = SmallVec::new();
-        let mut near: SmallVec<[Near; 8]> = SmallVec::new();
-        let mut within: SmallVec<[Near; 8]> = SmallVec::new();
-        g.visit(lo, hi, |t| {
-            if margin.is_some() {
-                within.extend(self.near(t, x, r + margin_len));
+        // what it touches now, and within the margin: the searches past the flat nodes that
+        // give no contact (`flat.rs`)
+        let touches = |reach: f64| {
+            #[cfg(test)]
+            if !past_flat {
+                return self.touches_everywhere(x, r, reach);
             }
+            self.touches(x, r, reach)
+        };
+        let touching = margin.is_some() && !touches(margin_len).is_empty();
+        let now = touches(0.0);
+        // the triangles the path may meet (not those touched now): over the path's box, past
+        // the flat nodes the path comes nowhere near
+        let mut candidates: SmallVec<[u32; 16]> = SmallVec::new();
+        let eps = self.eps(x, r);
+        let candidate = |t: usize| {
             // the path's distance from the plane changes by at most |v·n| T + ½ |a·n| T²: a
             // triangle whose plane stays farther than r is never met
             let n = g.normals[t];
             let s0 = vec3::dot(vec3::sub(x, g.vertices[g.faces[t][0] as usize]), n).abs();
             if s0 - r > vec3::dot(v, n).abs() * horizon + 0.5 * vec3::dot(accel, n).abs() * horizon * horizon {
-                return;
+                return None;
             }
-            match self.near(t, x, r) {
-                Some(c) => near.push(c),
-                None => candidates.push(t as u32),
-            }
-        });
-        let touching = margin.is_some() && !self.true_features(&mut within, x, r).is_empty();
-        let now = self.true_features(&mut near, x, r);
+            self.near(t, x, r).is_none().then_some(t as u32)
+        };
+        if past_flat {
+            g.visit_path((lo, hi), (x, end), bulge, r, 8.0 * eps, |t| candidates.extend(candidate(t)));
+        } else {
+            // (only the tests search everywhere)
+            #[cfg(test)]
+            g.visit(lo, hi, |t| candidates.extend(candidate(t)));
+        }
         if let Some(&(t, ..)) = now.iter().find(|f| vec3::dot(v, f.1.normal) < 0.0) {
             return (touching, Some((0.0, t)));
         }
-        let eps = self.eps(x, r);
         let faces: SmallVec<[(usize, [f64; 3]); 8]> = now.iter().filter(|f| f.3 == Feature::Face).map(|f| (f.0, f.2)).collect();
         let mut first: Option<(f64, usize)> = None;
         // (triangles touched now, true features or ghosts, are not met again: handled above)

@@ -27,7 +27,9 @@ use crate::collide::{Contact, Grid, Partner};
 use crate::error::Error;
 use crate::interrupt::Interrupt;
 
-/// The contact engine of a collide stage.
+/// The contact engine of a collide stage. (Its variants differ in size, the stepped one's
+/// buffers being held in place; a world holds one engine, so none is boxed.)
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Engine {
     /// Newton's restitution law by impulses after each integration step, stages 2–4
     /// (`collide/impulse/`): the seed's model, with its buffers kept from step to step.

@@ -328,3 +328,193 @@ fn a_mesh_buffer_beyond_memory_is_the_meshs_out_of_memory_error() {
         )
     );
 }
+
+/// A k × k grid of squares of side `cell` (two triangles each) in the plane z = `height(i, j)`
+/// of each vertex, wound counter-clockwise from +z.
+fn sheet(k: u32, cell: f64, height: impl Fn(u32, u32) -> f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let mut v = Vec::new();
+    for j in 0..=k {
+        for i in 0..=k {
+            v.push([i as f64 * cell, j as f64 * cell, height(i, j)]);
+        }
+    }
+    let mut f = Vec::new();
+    for j in 0..k {
+        for i in 0..k {
+            let a = j * (k + 1) + i;
+            f.push([a, a + 1, a + k + 2]);
+            f.push([a, a + k + 2, a + k + 1]);
+        }
+    }
+    (v, f)
+}
+
+/// The unit cube with each face cut into k × k squares of two triangles, counter-clockwise
+/// from outside (vertices repeated along the cube's edges are welded).
+fn fine_cube(k: u32) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let mut v: Vec<[f64; 3]> = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    let mut at = |p: [f64; 3]| {
+        let key = p.map(|c| (c * k as f64).round() as i64);
+        *index.entry(key).or_insert_with(|| {
+            v.push(p);
+            (v.len() - 1) as u32
+        })
+    };
+    let frames: [([f64; 3], [f64; 3], [f64; 3]); 6] = [
+        ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
+        ([0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+        ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]),
+        ([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+        ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+    ];
+    let mut f = Vec::new();
+    for (o, a, b) in frames {
+        let p = |i: u32, j: u32| {
+            let (s, u) = (i as f64 / k as f64, j as f64 / k as f64);
+            [0, 1, 2].map(|c| o[c] + s * a[c] + u * b[c])
+        };
+        for j in 0..k {
+            for i in 0..k {
+                let q = [at(p(i, j)), at(p(i + 1, j)), at(p(i + 1, j + 1)), at(p(i, j + 1))];
+                f.push([q[0], q[1], q[2]]);
+                f.push([q[0], q[2], q[3]]);
+            }
+        }
+    }
+    (v, f)
+}
+
+#[test]
+fn the_flat_nodes_leave_out_only_triangles_that_give_no_contact() {
+    // For spheres at random (many centred over vertices and seams) the search that goes past
+    // the flat nodes finds exactly what the search of every triangle within reach finds:
+    // the same triangles, touches, points and features, bit for bit. Over a flat floor, a
+    // terrace (two floors joined by a wall, a crease and a convex edge), a floor with one
+    // raised vertex, and a finely cut cube from inside and outside.
+    let floor = sheet(40, 0.025, |_, _| 0.0);
+    let terrace = sheet(40, 0.025, |i, _| if i > 20 { 0.1 } else { 0.0 });
+    let bump = sheet(40, 0.025, |i, j| if (i, j) == (13, 17) { 0.01 } else { 0.0 });
+    let cube = fine_cube(24);
+    let meshes = [
+        (
+            "floor",
+            TriangleMesh::new(floor.0, floor.1, false, Surface::default()).unwrap(),
+        ),
+        (
+            "terrace",
+            TriangleMesh::new(terrace.0, terrace.1, false, Surface::default()).unwrap(),
+        ),
+        ("bump", TriangleMesh::new(bump.0, bump.1, false, Surface::default()).unwrap()),
+        (
+            "cube inside",
+            TriangleMesh::new(cube.0.clone(), cube.1.clone(), true, Surface::default()).unwrap(),
+        ),
+        (
+            "cube outside",
+            TriangleMesh::new(cube.0, cube.1, false, Surface::default()).unwrap(),
+        ),
+    ];
+    let mut seed = 51u64;
+    let mut rnd = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for (name, m) in &meshes {
+        assert!(
+            m.geometry.nodes.iter().any(|n| n.is_flat()),
+            "{name}: a mesh of flat patches has flat nodes"
+        );
+        let (mut contacts, mut fewer) = (0, 0);
+        for case in 0..2500 {
+            let cell = 1.0 / 40.0;
+            let r = cell * [0.2, 1.0, 3.0, 12.0][case % 4] * (0.5 + rnd());
+            let mut p = [rnd() * 1.2 - 0.1, rnd() * 1.2 - 0.1, rnd() * 1.2 - 0.1];
+            if case % 3 == 0 {
+                // over a vertex, or a seam's midpoint, of the grid
+                for (c, pc) in p.iter_mut().enumerate() {
+                    *pc = (*pc / cell).round() * cell + [0.0, 0.5 * cell][case / 3 % 2] * (c == 0) as u8 as f64;
+                }
+            }
+            if !name.starts_with("cube") {
+                // near the sheet: just touching it, or overlapping it a little
+                p[2] = [0.0, 0.1][(p[0] > 0.5 && *name == "terrace") as usize] + r * (0.7 + 0.35 * rnd());
+            }
+            let tolerance = [0.0, 0.1 * r, r][case % 3];
+            let got = m.touches(p, r, tolerance);
+            let want = m.touches_everywhere(p, r, tolerance);
+            assert_eq!(got, want, "{name}: p {p:?} r {r} tolerance {tolerance}");
+            contacts += want.len();
+            let (mut visited, mut all) = (0, 0);
+            m.geometry
+                .visit_touching(p, r + tolerance, 8.0 * m.eps(p, r), |_| visited += 1);
+            let reach = r + tolerance;
+            m.geometry.visit(p.map(|c| c - reach), p.map(|c| c + reach), |_| all += 1);
+            fewer += (visited < all) as usize;
+        }
+        assert!(contacts > 1000, "{name}: the spheres touch the mesh: {contacts}");
+        assert!(fewer > 100, "{name}: the flat nodes leave triangles out: {fewer}");
+    }
+}
+
+#[test]
+fn continuous_detection_past_the_flat_nodes_meets_what_the_full_search_meets() {
+    // Spheres on random parabolas (resting, sliding, falling, rising, thrown sideways) over a
+    // floor, a terrace and a finely cut cube: the first triangle met and its time, and
+    // whether the sphere is within the margin now, are those of the search of every triangle.
+    let floor = sheet(40, 0.025, |_, _| 0.0);
+    let terrace = sheet(40, 0.025, |i, _| if i > 20 { 0.1 } else { 0.0 });
+    let cube = fine_cube(24);
+    let meshes = [
+        (
+            "floor",
+            TriangleMesh::new(floor.0, floor.1, false, Surface::default()).unwrap(),
+        ),
+        (
+            "terrace",
+            TriangleMesh::new(terrace.0, terrace.1, false, Surface::default()).unwrap(),
+        ),
+        (
+            "cube inside",
+            TriangleMesh::new(cube.0, cube.1, true, Surface::default()).unwrap(),
+        ),
+    ];
+    let mut seed = 29u64;
+    let mut rnd = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for (name, m) in &meshes {
+        let (mut met, mut touching) = (0, 0);
+        for case in 0..2500 {
+            let cell = 1.0 / 40.0;
+            let r = cell * [0.3, 1.0, 2.5][case % 3] * (0.5 + rnd());
+            let mut x = [0.05 + 0.9 * rnd(), 0.05 + 0.9 * rnd(), 0.05 + 0.9 * rnd()];
+            if !name.starts_with("cube") {
+                x[2] = [0.0, 0.1][(x[0] > 0.5 && *name == "terrace") as usize] + r * (0.9 + 0.3 * rnd());
+            } else {
+                // near a wall of the cube, from inside
+                let near = r * (0.9 + 0.3 * rnd());
+                x[case % 3] = if rnd() < 0.5 { near } else { 1.0 - near };
+            }
+            let speed = [0.0, 0.05, 1.0, 5.0][case % 4];
+            let v = [speed * (rnd() - 0.5), speed * (rnd() - 0.5), speed * (rnd() - 0.6)];
+            let a = [0.0, 0.0, -9.81 * (case % 2) as f64];
+            let horizon = [1e-3, 1e-2][case % 2];
+            let margin = [None, Some(0.0), Some(0.1 * r)][case % 3];
+            let got = m.toi_within(x, v, a, r, horizon, margin);
+            let want = m.toi_everywhere(x, v, a, r, horizon, margin);
+            assert_eq!(
+                got, want,
+                "{name}: x {x:?} v {v:?} a {a:?} r {r} horizon {horizon} margin {margin:?}"
+            );
+            met += want.1.is_some() as usize;
+            touching += want.0 as usize;
+        }
+        assert!(
+            met > 300 && touching > 100,
+            "{name}: the paths meet the mesh: {met}, touching {touching}"
+        );
+    }
+}
