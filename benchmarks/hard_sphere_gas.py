@@ -12,10 +12,16 @@ t = 10 (σ √(m/kT) units).
   events   the same world with set_collisions(..., event_driven=True): event-driven dynamics
            from frame to frame (collide/event_driven/)
 
-Peer: no event-driven code is installable from the package registries. The figure beside
-kinema's is the one issue 29 states for the best published code (Smallenburg's EDMD, one
-event per particle, neighbour lists with a shell, a bucketed calendar) on this gas on one core
-of this machine: 6.1e5 collisions per CPU-second (PUBLISHED_PER_CORE).
+Peer: Smallenburg's EDMD (github.com/FSmallenburg/EDMD, MIT licence: one event per particle,
+neighbour lists with a shell, a binary tree with a bucketed calendar), built from its sources
+by `edmd_rate` when they are here (`KINEMA_EDMD_SRC`: its checkout, or a git directory of it;
+by default the machine's mirror /work/.mirror/FSmallenburg+EDMD/repo): its `Single` program
+with the authors' Makefile flags (-Ofast -funroll-loops -march=native), set at build time to
+this gas (N = 4·ncell³ on its FCC lattice at φ = 0.25, its own Maxwell velocities at T = 1,
+no thermostat, no snapshots, run to the same t), timed as the CPU time of its process; its
+collision counter at the end over that time. Without the sources, the figure issue 29 states
+for it on one core of this machine stands in: 6.1e5 collisions per CPU-second
+(PUBLISHED_PER_CORE).
 
 Each mode runs in a fresh process, `--repeat` times, interleaved; the engine's threads are
 `--threads` (RAYON_NUM_THREADS). Timed: `World.step(steps)` after the world is built and a
@@ -98,6 +104,71 @@ def worker(ncell: int, mode: str, duration: float) -> dict:
     }
 
 
+EDMD_MIRROR = "/work/.mirror/FSmallenburg+EDMD/repo"
+
+
+def edmd_file(name: str) -> str | None:
+    """EDMD's file `Single/<name>`, from `KINEMA_EDMD_SRC` (a checkout or a git directory) or the
+    machine's mirror; None where neither is."""
+    where = os.environ.get("KINEMA_EDMD_SRC", EDMD_MIRROR)
+    path = os.path.join(where, "Single", name)
+    if os.path.exists(path):
+        with open(path, encoding="utf-8") as f:
+            return f.read()
+    res = subprocess.run(["git", "--git-dir", where, "show", f"HEAD:Single/{name}"], capture_output=True, text=True)
+    return res.stdout if res.returncode == 0 else None
+
+
+def edmd_rate(ncell: int, duration: float) -> dict | None:
+    """Collisions per CPU-second of EDMD's `Single` on this gas (module doc), or None without
+    its sources or a C compiler. Built once per setting into a temporary folder."""
+    import re
+    import resource
+    import tempfile
+
+    source = edmd_file("mdSingle.c")
+    others = {name: edmd_file(name) for name in ("mdSingle.h", "mt19937ar.c")}
+    if source is None or None in others.values():
+        return None
+    settings = {
+        r"double maxtime = [^;]*;": f"double maxtime = {duration};",
+        r"int makesnapshots = [^;]*;": "int makesnapshots = 0;",
+        r"double writeinterval = [^;]*;": f"double writeinterval = {duration / 10};",
+        r"int initialconfig = [^;]*;": "int initialconfig = 1;",
+        r"double packfrac = [^;]*;": f"double packfrac = {PHI};",
+        r"int N = [^;]*;": f"int N = {4 * ncell**3};",
+        r"const int usethermostat = [^;]*;": "const int usethermostat = 0;",
+    }
+    for pattern, value in settings.items():
+        source, count = re.subn(pattern, value, source, count=1)
+        if count != 1:
+            raise SystemExit(f"EDMD's source has no '{pattern}' to set: a newer version? (KINEMA_EDMD_SRC)")
+    with tempfile.TemporaryDirectory() as d:
+        src = os.path.join(d, "mdSingle.c")
+        with open(src, "w", encoding="utf-8") as f:
+            f.write(source)
+        for name, text in others.items():
+            with open(os.path.join(d, name), "w", encoding="utf-8") as f:
+                f.write(text)
+        build = subprocess.run(
+            ["gcc", "-Wall", "-Ofast", "-funroll-loops", "-march=native", src, "-o", os.path.join(d, "md"), "-lm"], capture_output=True, text=True
+        )
+        if build.returncode != 0:
+            print(f"EDMD did not build: {build.stderr[-500:]}", file=sys.stderr)
+            return None
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        start = time.perf_counter()
+        run = subprocess.run([os.path.join(d, "md")], capture_output=True, text=True, cwd=d)
+        wall = time.perf_counter() - start
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if run.returncode != 0:
+        raise SystemExit(f"EDMD failed:\n{run.stdout[-2000:]}")
+    counts = re.findall(r"Simtime: ([0-9.]+), Collisions: (\d+)", run.stdout)
+    collisions = int(counts[-1][1])
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return {"collisions": collisions, "cpu": cpu, "wall": wall, "rate": collisions / cpu, "t": float(counts[-1][0])}
+
+
 def enskog_collisions(n: int, duration: float) -> float:
     """Collisions expected in `duration` (Enskog: per particle ω_E, two particles a collision)."""
     side = (n * math.pi / 6.0 / PHI) ** (1.0 / 3.0)
@@ -149,9 +220,17 @@ def main() -> int:
             f"{'kinema ' + mode:<22} {coll:>11.0f} {coll / expected:>8.3f} {cpu:>8.2f} {wall:>8.2f} {rate:>11.3g} "
             f"{statistics.median(r['collisions'] / r['wall'] for r in rs):>12.3g} {max(r['energy_drift'] for r in rs):>13.2e}"
         )
-    print(f"{'published EDMD, 1 core':<22} {'':>11} {'':>8} {'':>8} {'':>8} {PUBLISHED_PER_CORE:>11.3g}")
+    edmd = [r for r in (edmd_rate(args.ncell, args.time) for _ in range(args.repeat)) if r is not None]
+    if edmd:
+        peer = statistics.median(r["rate"] for r in edmd)
+        coll = statistics.median(r["collisions"] for r in edmd)
+        print(f"{'EDMD (its sources)':<22} {coll:>11.0f} {coll / expected:>8.3f} {statistics.median(r['cpu'] for r in edmd):>8.2f} {'':>8} {peer:>11.3g}")
+        name = "EDMD"
+    else:
+        peer, name = PUBLISHED_PER_CORE, "published EDMD"
+        print(f"{'published EDMD, 1 core':<22} {'':>11} {'':>8} {'':>8} {'':>8} {PUBLISHED_PER_CORE:>11.3g}")
     for mode in modes:
-        print(f"kinema {mode} / published EDMD per CPU-second: {best[mode] / PUBLISHED_PER_CORE:.2f}×")
+        print(f"kinema {mode} / {name} per CPU-second: {best[mode] / peer:.2f}×")
     if "events" in best and args.threads == 1 and best["events"] < TARGET:
         print(f"below issue 29's target of {TARGET:.3g} collisions per CPU-second on 1 thread")
     if "steps" in best:

@@ -79,9 +79,7 @@ def settled() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     radii = rng.uniform(0.025, 0.04, N)
     per_row = int(WIDTH / 0.085)
     k = np.arange(N)
-    x = np.column_stack(
-        [0.05 + (k % per_row) * 0.085, 0.05 + (k // per_row % per_row) * 0.085, 0.05 + (k // per_row**2) * 0.085]
-    )
+    x = np.column_stack([0.05 + (k % per_row) * 0.085, 0.05 + (k // per_row % per_row) * 0.085, 0.05 + (k // per_row**2) * 0.085])
     x[:, :2] += rng.uniform(-0.003, 0.003, (N, 2))
     w = world("box", True, x, np.zeros_like(x), radii)
     w.step(1500)
@@ -151,10 +149,7 @@ def main() -> None:
     print(f"{'sleeping':10} {'box ms':>9} {'mesh ms':>9} {'mesh/box':>9}  contacts (box, mesh)")
     for name, row in table.items():
         runs = row["runs"]
-        print(
-            f"{name:10} {row['box_ms']:9.3f} {row['mesh_ms']:9.3f} {row['ratio']:9.2f}  "
-            f"{runs['box']['contacts']}, {runs['mesh']['contacts']}"
-        )
+        print(f"{name:10} {row['box_ms']:9.3f} {row['mesh_ms']:9.3f} {row['ratio']:9.2f}  {runs['box']['contacts']}, {runs['mesh']['contacts']}")
 
 
 if __name__ == "__main__":
