@@ -73,6 +73,14 @@ pub(super) struct Near {
     len: f64,
 }
 
+impl Near {
+    /// Whether its nearest point lies within `r` (m) of p: what [`TriangleMesh::near`] with
+    /// reach `r` finds.
+    pub(super) fn is_within(&self, r: f64) -> bool {
+        self.len < r
+    }
+}
+
 impl TriangleMesh {
     /// Triangle t's point nearest to `p` if it lies within `reach` (m) of p.
     pub(super) fn near(&self, t: usize, p: [f64; 3], reach: f64) -> Option<Near> {
@@ -176,14 +184,29 @@ impl TriangleMesh {
         // (past the flat nodes that give no contact: `flat.rs`; the margin is many times the
         // rules' own tolerance)
         let margin = 8.0 * self.eps(p, r);
-        self.geometry
-            .visit_touching(p, reach, margin, |t| near.extend(self.near(t, p, reach)));
+        let (lo, hi) = (p.map(|c| c - reach), p.map(|c| c + reach));
+        self.geometry.visit_past_flat(
+            lo,
+            hi,
+            |flat| flat.holds_foot(p, reach, margin),
+            |t| near.extend(self.near(t, p, reach)),
+        );
         self.true_features(&mut near, p, r)
+    }
+
+    /// Of the triangles `near` a sphere at `p` of radius `r` (m), all those within some reach
+    /// ≥ r (and maybe more that give no contact: `flat.rs`): whether it touches one of them
+    /// (within that reach), and its touches within 0. (The triangles within r are those of
+    /// `near` nearer than r: a search within r passes the flat nodes by their foot alone,
+    /// whatever the reach.)
+    pub(super) fn within_and_now(&self, near: &mut SmallVec<[Near; 8]>, p: [f64; 3], r: f64) -> (bool, Found) {
+        let mut now: SmallVec<[Near; 8]> = near.iter().filter(|c| c.is_within(r)).copied().collect();
+        let now = self.true_features(&mut now, p, r);
+        (!self.true_features(near, p, r).is_empty(), now)
     }
 
     /// [`TriangleMesh::touches`] searching every triangle within reach, flat nodes too (the
     /// tests' reference for what the flat nodes leave out).
-    #[cfg(test)]
     pub(super) fn touches_everywhere(&self, p: [f64; 3], r: f64, tolerance: f64) -> Found {
         let reach = r + tolerance.max(0.0);
         let (lo, hi) = ([0, 1, 2].map(|k| p[k] - reach), [0, 1, 2].map(|k| p[k] + reach));

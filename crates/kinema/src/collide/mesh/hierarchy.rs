@@ -1,8 +1,8 @@
 //! The bounding-volume hierarchy of a triangle mesh: a median split of the triangles'
 //! centroids along the longest axis of their box, down to leaves of at most four triangles,
 //! each node's box kept in f32 and rounded outwards, and its flat nodes (`flat.rs`); and its
-//! traversals, over a box (past the flat nodes that cannot touch), and along a ray, on a stack
-//! of the thread.
+//! traversals, over a box (past the flat nodes that cannot touch: [`Flat`]), and along a ray,
+//! on a stack of the thread.
 
 use super::flat::{FLAT, FLAT_NONE};
 use super::{mesh_buffer, Geometry};
@@ -29,6 +29,54 @@ impl Node {
     #[cfg(test)]
     pub(super) fn is_flat(&self) -> bool {
         self.plane != FLAT_NONE
+    }
+}
+
+/// A flat node as the traversals' tests see it: its plane (unit normal `n`, a point `a`) and
+/// its box [lo, hi] (m).
+pub(super) struct Flat {
+    n: [f64; 3],
+    a: [f64; 3],
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl Flat {
+    /// Whether a sphere at `p` within `reach` (m) can touch a triangle of the node, to within
+    /// `margin` (m): the foot of p on the plane lies in the box, and p within reach of the
+    /// plane (`flat.rs`: a triangle inside a flat patch touches only where it holds the foot).
+    pub(super) fn holds_foot(&self, p: [f64; 3], reach: f64, margin: f64) -> bool {
+        // the normals of a flat node's triangles are its plane's to FLAT: over `reach` their
+        // feet lie that much apart
+        let margin = margin + 2.0 * FLAT * reach;
+        let s = vec3::dot(self.n, vec3::sub(p, self.a));
+        let foot = vec3::sub(p, vec3::scale(s, self.n));
+        s.abs() < reach + margin && (0..3).all(|k| self.hi[k] + margin >= foot[k] && self.lo[k] - margin <= foot[k])
+    }
+
+    /// Whether the chord from `x` to `end` (m), or a path within `bulge` (m) of it, comes
+    /// within `reach` (m) of the node's part of the plane, to within `margin` (m).
+    ///
+    /// A point q of the plane lies |c − q|² = s² + |f − q|² from a centre c at signed distance
+    /// s from the plane with foot f. Along the chord s is linear, so its least |s| is 0 if the
+    /// chord crosses the plane, else the smaller of its ends'; a path within `bulge` of the
+    /// chord comes within `reach` of q only if the chord comes within `reach` + `bulge` of it,
+    /// that is only if q lies within ρ = √((reach + bulge)² − s_min²) of the chord's feet,
+    /// which run along the segment between the feet of its ends.
+    pub(super) fn near_path(&self, (x, end): ([f64; 3], [f64; 3]), bulge: f64, reach: f64, margin: f64) -> bool {
+        let reach = reach + bulge;
+        let margin = margin + 2.0 * FLAT * (reach + vec3::norm(vec3::sub(end, x)));
+        let (s0, s1) = (
+            vec3::dot(self.n, vec3::sub(x, self.a)),
+            vec3::dot(self.n, vec3::sub(end, self.a)),
+        );
+        let least = if s0 * s1 <= 0.0 { 0.0 } else { s0.abs().min(s1.abs()) };
+        if least >= reach + margin {
+            return false;
+        }
+        let rho = (reach * reach - least * least).max(0.0).sqrt() + margin;
+        let (f0, f1) = (vec3::sub(x, vec3::scale(s0, self.n)), vec3::sub(end, vec3::scale(s1, self.n)));
+        (0..3).all(|k| self.hi[k] + rho >= f0[k].min(f1[k]) && self.lo[k] - rho <= f0[k].max(f1[k]))
     }
 }
 
@@ -188,7 +236,6 @@ impl Geometry {
 
     /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi] (the
     /// tests' reference for the searches past the flat nodes).
-    #[cfg(test)]
     pub(super) fn visit(&self, lo: [f64; 3], hi: [f64; 3], mut each: impl FnMut(usize)) {
         let mut stack = Stack::new();
         while let Some(k) = stack.pop() {
@@ -207,14 +254,9 @@ impl Geometry {
         }
     }
 
-    /// Calls `each(t)` with every triangle whose leaf's box overlaps the box of the sphere at
-    /// `p` of radius `reach` (m), but those of flat nodes that hold neither the foot of `p` on
-    /// their plane nor a point within `reach` of it, to within `margin` (m: `flat.rs`).
-    pub(super) fn visit_touching(&self, p: [f64; 3], reach: f64, margin: f64, mut each: impl FnMut(usize)) {
-        let (lo, hi) = (p.map(|c| c - reach), p.map(|c| c + reach));
-        // the normals of a flat node's triangles are its plane's to FLAT: over `reach` their
-        // feet lie that much apart
-        let margin = margin + 2.0 * FLAT * reach;
+    /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi], but
+    /// those of the flat nodes (`flat.rs`) that `keep` turns down.
+    pub(super) fn visit_past_flat(&self, lo: [f64; 3], hi: [f64; 3], keep: impl Fn(&Flat) -> bool, mut each: impl FnMut(usize)) {
         let mut stack = Stack::new();
         while let Some(k) = stack.pop() {
             let node = self.nodes[k as usize];
@@ -223,68 +265,13 @@ impl Geometry {
             }
             if node.plane != FLAT_NONE {
                 let t = node.plane as usize;
-                let n = self.normals[t];
-                let s = vec3::dot(n, vec3::sub(p, self.vertices[self.faces[t][0] as usize]));
-                let foot = vec3::sub(p, vec3::scale(s, n));
-                if s.abs() >= reach + margin
-                    || (0..3).any(|a| f64::from(node.hi[a]) + margin < foot[a] || f64::from(node.lo[a]) - margin > foot[a])
-                {
-                    continue;
-                }
-            }
-            if node.count > 0 {
-                for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
-                    each(t as usize);
-                }
-            } else {
-                stack.push(node.right);
-                stack.push(k + 1);
-            }
-        }
-    }
-
-    /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi] of a
-    /// sphere's path, but those of flat nodes that no point of the path comes within `reach`
-    /// (m) of: the chord from `x` to `end` (m), and any path within `bulge` (m) of it, to within
-    /// `margin` (m).
-    ///
-    /// A point q of a flat node's plane lies |c − q|² = s² + |f − q|² from a centre c at
-    /// signed distance s from the plane with foot f. Along the chord s is linear, so its least
-    /// |s| is 0 if the chord crosses the plane, else the smaller of its ends'; a path within
-    /// `bulge` of the chord comes within `reach` of q only if the chord comes within `reach` +
-    /// `bulge` of it, that is only if q lies within ρ = √((reach + bulge)² − s_min²) of the
-    /// chord's feet, which run along the segment between the feet of its ends.
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn visit_path(
-        &self,
-        (lo, hi): ([f64; 3], [f64; 3]),
-        (x, end): ([f64; 3], [f64; 3]),
-        bulge: f64,
-        reach: f64,
-        margin: f64,
-        mut each: impl FnMut(usize),
-    ) {
-        let reach = reach + bulge;
-        let margin = margin + 2.0 * FLAT * (reach + vec3::norm(vec3::sub(end, x)));
-        let mut stack = Stack::new();
-        while let Some(k) = stack.pop() {
-            let node = self.nodes[k as usize];
-            if (0..3).any(|a| f64::from(node.hi[a]) < lo[a] || f64::from(node.lo[a]) > hi[a]) {
-                continue;
-            }
-            if node.plane != FLAT_NONE {
-                let t = node.plane as usize;
-                let (n, a) = (self.normals[t], self.vertices[self.faces[t][0] as usize]);
-                let (s0, s1) = (vec3::dot(n, vec3::sub(x, a)), vec3::dot(n, vec3::sub(end, a)));
-                let least = if s0 * s1 <= 0.0 { 0.0 } else { s0.abs().min(s1.abs()) };
-                if least >= reach + margin {
-                    continue;
-                }
-                let rho = (reach * reach - least * least).max(0.0).sqrt() + margin;
-                let (f0, f1) = (vec3::sub(x, vec3::scale(s0, n)), vec3::sub(end, vec3::scale(s1, n)));
-                if (0..3)
-                    .any(|a| f64::from(node.hi[a]) + rho < f0[a].min(f1[a]) || f64::from(node.lo[a]) - rho > f0[a].max(f1[a]))
-                {
+                let flat = Flat {
+                    n: self.normals[t],
+                    a: self.vertices[self.faces[t][0] as usize],
+                    lo: node.lo.map(f64::from),
+                    hi: node.hi.map(f64::from),
+                };
+                if !keep(&flat) {
                     continue;
                 }
             }

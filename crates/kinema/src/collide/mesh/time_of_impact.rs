@@ -2,7 +2,7 @@
 //! triangle while approaching it, faces on the parabola, edges and vertices on its chord over
 //! the horizon (each the first root of a quadratic, as in `toi.rs`); times in s, lengths in m.
 
-use super::features::closest_on_triangle;
+use super::features::{closest_on_triangle, Near};
 use super::{Feature, TriangleMesh};
 use crate::collide::roots::toi_half_space;
 use crate::vec3;
@@ -84,38 +84,43 @@ impl TriangleMesh {
         let bulge = 0.125 * vec3::norm(a) * horizon * horizon;
         let lo = [0, 1, 2].map(|k| x[k].min(end[k]) - r - bulge - margin_len);
         let hi = [0, 1, 2].map(|k| x[k].max(end[k]) + r + bulge + margin_len);
-        // what it touches now, and within the margin: the searches past the flat nodes that
-        // give no contact (`flat.rs`)
-        let touches = |reach: f64| {
-            #[cfg(test)]
-            if !past_flat {
-                return self.touches_everywhere(x, r, reach);
-            }
-            self.touches(x, r, reach)
-        };
-        let touching = margin.is_some() && !touches(margin_len).is_empty();
-        let now = touches(0.0);
-        // the triangles the path may meet (not those touched now): over the path's box, past
-        // the flat nodes the path comes nowhere near
-        let mut candidates: SmallVec<[u32; 16]> = SmallVec::new();
-        let eps = self.eps(x, r);
-        let candidate = |t: usize| {
+        // the triangles the path may meet: not those it touches now, nor those whose plane it
+        // never reaches, nor those of flat nodes it comes nowhere near (`flat.rs`)
+        let candidate = |t: usize, within: bool| {
             // the path's distance from the plane changes by at most |v·n| T + ½ |a·n| T²: a
             // triangle whose plane stays farther than r is never met
             let n = g.normals[t];
             let s0 = vec3::dot(vec3::sub(x, g.vertices[g.faces[t][0] as usize]), n).abs();
-            if s0 - r > vec3::dot(v, n).abs() * horizon + 0.5 * vec3::dot(accel, n).abs() * horizon * horizon {
-                return None;
-            }
-            self.near(t, x, r).is_none().then_some(t as u32)
+            let reached = s0 - r <= vec3::dot(v, n).abs() * horizon + 0.5 * vec3::dot(accel, n).abs() * horizon * horizon;
+            (reached && !within).then_some(t as u32)
         };
-        if past_flat {
-            g.visit_path((lo, hi), (x, end), bulge, r, 8.0 * eps, |t| candidates.extend(candidate(t)));
+        let mut candidates: SmallVec<[u32; 16]> = SmallVec::new();
+        let eps = self.eps(x, r);
+        let (touching, now) = if past_flat {
+            // one search for both: what it touches now and within the margin (past the flat
+            // nodes that do not hold its foot) and what its path may meet
+            let (reach, margin8) = (r + margin_len, 8.0 * eps);
+            let mut near: SmallVec<[Near; 8]> = SmallVec::new();
+            g.visit_past_flat(
+                lo,
+                hi,
+                |flat| flat.holds_foot(x, reach, margin8) || flat.near_path((x, end), bulge, r, margin8),
+                |t| {
+                    let found = self.near(t, x, reach);
+                    candidates.extend(candidate(t, found.is_some_and(|c| c.is_within(r))));
+                    near.extend(found);
+                },
+            );
+            let (within, now) = self.within_and_now(&mut near, x, r);
+            (margin.is_some() && within, now)
         } else {
-            // (only the tests search everywhere)
-            #[cfg(test)]
-            g.visit(lo, hi, |t| candidates.extend(candidate(t)));
-        }
+            // (the tests' reference: every triangle within reach)
+            g.visit(lo, hi, |t| candidates.extend(candidate(t, self.near(t, x, r).is_some())));
+            (
+                margin.is_some() && !self.touches_everywhere(x, r, margin_len).is_empty(),
+                self.touches_everywhere(x, r, 0.0),
+            )
+        };
         if let Some(&(t, ..)) = now.iter().find(|f| vec3::dot(v, f.1.normal) < 0.0) {
             return (touching, Some((0.0, t)));
         }
