@@ -377,7 +377,7 @@ impl World {
     /// touching pairs i < j, and particles touching colliders. Empty without it.
     pub fn contact_history(&mut self) -> (Vec<PairMemory>, Vec<WallMemory>) {
         self.restore_user_order();
-        let Some(model) = self.spring_dashpot() else {
+        let Some(model) = self.force_model() else {
             return (Vec::new(), Vec::new());
         };
         let (pairs, walls) = model.history();
@@ -432,7 +432,7 @@ impl World {
             }
         }
         self.restore_user_order();
-        let Some(model) = self.spring_dashpot() else {
+        let Some(model) = self.force_model() else {
             if pairs.is_empty() && walls.is_empty() {
                 return Ok(());
             }

@@ -135,7 +135,7 @@ impl World {
             stage.keep_contacts(kept, self.particles.len());
         }
         // and the contact force's neighbour list keeps the survivors' pairs
-        if let Some(model) = self.spring_dashpot() {
+        if let Some(model) = self.force_model() {
             model.retain_survivors(&new_of_old);
         }
         self.keep_acceleration(a);
@@ -199,7 +199,7 @@ impl World {
             self.check_placement_from(0);
         }
         // (radii may change: the contact force list starts over)
-        if let Some(model) = self.spring_dashpot() {
+        if let Some(model) = self.force_model() {
             model.forget_list();
         }
         &mut self.particles

@@ -110,7 +110,7 @@ impl World {
         }
         if self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0 {
             let checked = self.check_runaway();
-            if let Some(model) = self.spring_dashpot() {
+            if let Some(model) = self.force_model() {
                 model.forget_energy();
             }
             checked?;
@@ -130,7 +130,7 @@ impl World {
         };
         let result = self.verlet_step(&mut b);
         self.stepper = Some(WorldStepper::Verlet(b));
-        if let Some(model) = self.spring_dashpot() {
+        if let Some(model) = self.force_model() {
             model.forget_verified();
         }
         match result? {

@@ -194,12 +194,12 @@ impl World {
 
     /// Whether the contact force acts (collisions on with a force model).
     pub(super) fn has_contact_force(&self) -> bool {
-        self.spring_dashpot().is_some()
+        self.force_model().is_some()
     }
 
-    /// The contact force model's constants and buffers, with a force model (still named for
-    /// the spring–dashpot model: `world/order.rs` calls it so, and is being changed apart).
-    pub(super) fn spring_dashpot(&self) -> Option<&crate::collide::contact_force::ContactForceModel> {
+    /// The contact force model's constants and buffers, with a force model (spring–dashpot,
+    /// Hertz, DMT, JKR: the collide stage's `Engine::Force`).
+    pub(super) fn force_model(&self) -> Option<&crate::collide::contact_force::ContactForceModel> {
         self.collide_stage.as_ref()?.force_model()
     }
 
@@ -326,7 +326,7 @@ impl World {
                 std::mem::swap(&mut self.particles.alpha, &mut b.alpha_next);
             }
         }
-        if let Some(model) = self.spring_dashpot() {
+        if let Some(model) = self.force_model() {
             model.accept_history();
         }
         let h = self.step_length();

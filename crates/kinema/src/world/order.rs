@@ -250,7 +250,7 @@ impl World {
         for f in &mut self.forces {
             f.reindex(&new_of_old);
         }
-        if let Some(model) = self.spring_dashpot() {
+        if let Some(model) = self.force_model() {
             model.renumber(&new_of_old, old_of_new);
         }
     }
