@@ -14,6 +14,7 @@ pub mod falloff;
 pub mod field;
 pub mod gravity;
 pub mod spring;
+mod spring_pass;
 pub mod turbulence;
 pub mod vortex;
 pub mod wind;
