@@ -55,21 +55,26 @@ impl Scratch {
         });
         let Scratch { tension, start, ends } = &*self;
         f.par_chunks_mut(3 * CHUNK).enumerate().for_each(|(c, fc)| {
-            for (l, p) in (c * CHUNK..).take(fc.len() / 3).enumerate() {
-                let mut sum = [fc[3 * l], fc[3 * l + 1], fc[3 * l + 2]];
-                for &e in &ends[start[p] as usize..start[p + 1] as usize] {
-                    let g = &tension[(e >> 1) as usize];
-                    if g[3] == 0.0 {
-                        continue; // coincident ends: no force
-                    }
-                    // sum − g as sum + (−g), the same number (IEEE 754 defines the difference
-                    // so, signed zeros included); the sign bit flipped where p is the end j
-                    let flip = u64::from(e & 1) << 63;
+            let ends = Ends {
+                tension,
+                start,
+                ends,
+                first: c * CHUNK,
+            };
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx") {
+                // SAFETY: the machine has AVX (checked just above).
+                unsafe { avx::sum_chunk(&ends, fc) };
+                return;
+            }
+            for (l, fp) in fc.chunks_exact_mut(3).enumerate() {
+                let mut sum = [fp[0], fp[1], fp[2]];
+                for (g, flip) in ends.of(l) {
                     for q in 0..3 {
                         sum[q] += f64::from_bits(g[q].to_bits() ^ flip);
                     }
                 }
-                fc[3 * l..3 * l + 3].copy_from_slice(&sum);
+                fp.copy_from_slice(&sum);
             }
         });
     }
@@ -98,9 +103,33 @@ impl Scratch {
     }
 }
 
+/// The per-particle sums of one chunk of particles (from particle `first` on): the springs
+/// each ends, with their forces on end i (`tension`).
+struct Ends<'a> {
+    tension: &'a [[f64; 4]],
+    start: &'a [u32],
+    ends: &'a [u32],
+    first: usize,
+}
+
+impl Ends<'_> {
+    /// The forces of the springs that particle `first + l` ends, in spring order, each with
+    /// the sign bit to flip (where the particle is the end j: sum − g computed as
+    /// sum + (−g), the same number, since IEEE 754 defines the difference so, signed zeros
+    /// included). A spring with coincident ends is left out (no force).
+    #[inline(always)]
+    fn of(&self, l: usize) -> impl Iterator<Item = (&[f64; 4], u64)> + '_ {
+        let p = self.first + l;
+        self.ends[self.start[p] as usize..self.start[p + 1] as usize]
+            .iter()
+            .map(|&e| (&self.tension[(e >> 1) as usize], u64::from(e & 1) << 63))
+            .filter(|(g, _)| g[3] != 0.0)
+    }
+}
+
 /// The tension pass over the springs `first..first + out.len()`: [`avx::tension_chunk`]
-/// where the machine has AVX (chosen at run time), [`tension_lanes`] elsewhere; the same
-/// bits either way.
+/// where the machine has AVX (chosen at run time), [`tension`] spring by spring elsewhere;
+/// the same bits either way.
 fn tension_chunk(springs: &SpringArrays, first: usize, x: &[f64], v: &[f64], out: &mut [[f64; 4]]) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx") {
@@ -108,124 +137,125 @@ fn tension_chunk(springs: &SpringArrays, first: usize, x: &[f64], v: &[f64], out
         unsafe { avx::tension_chunk(springs, first, x, v, out) };
         return;
     }
-    tension_lanes(springs, first, x, v, out, |lanes, springs, s, block| {
-        lanes.tension(0, springs, s, block)
-    });
+    for (o, s) in out.iter_mut().zip(first..) {
+        *o = tension(springs, s, x, v);
+    }
 }
 
-/// The tension pass in blocks of [`LANES`] springs: each block's differences gathered
-/// (`Lanes::gather`), then their forces computed by `tension` (a [`Lanes::tension`]).
+/// The force on end i of spring `s`, with a fourth entry 1 (all 0 for coincident ends).
+/// With d = x_j − x_i, L = |d| = √((d_x² + d_y²) + d_z²), n = d / L and u = v_j − v_i:
+/// F_i = [k (L − L₀) + c ((u_x n_x + u_y n_y) + u_z n_z)] n, in exactly these operations
+/// (the order of `vec3::dot`); [`avx::tension4`] does the same ones four springs at a time.
 #[inline(always)]
-fn tension_lanes(
-    springs: &SpringArrays,
-    first: usize,
-    x: &[f64],
-    v: &[f64],
-    out: &mut [[f64; 4]],
-    tension: impl Fn(&Lanes, &SpringArrays, usize, &mut [[f64; 4]]),
-) {
-    let mut lanes = Lanes {
-        d: [[0.0; LANES]; 3],
-        u: [[0.0; LANES]; 3],
-    };
-    for (b, block) in out.chunks_mut(LANES).enumerate() {
-        let s = first + b * LANES;
-        lanes.gather(springs, s, x, v, block.len());
-        tension(&lanes, springs, s, block);
+fn tension(springs: &SpringArrays, s: usize, x: &[f64], v: &[f64]) -> [f64; 4] {
+    let (a, b) = (3 * springs.i[s], 3 * springs.j[s]);
+    let (xa, xb, va, vb) = (&x[a..a + 3], &x[b..b + 3], &v[a..a + 3], &v[b..b + 3]);
+    let d = [xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]];
+    let u = [vb[0] - va[0], vb[1] - va[1], vb[2] - va[2]];
+    let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if len > 0.0 {
+        let n = [d[0] / len, d[1] / len, d[2] / len];
+        let along = u[0] * n[0] + u[1] * n[1] + u[2] * n[2];
+        let t = springs.k[s] * (len - springs.rest_length[s]) + springs.damping[s] * along;
+        [t * n[0], t * n[1], t * n[2], 1.0]
+    } else {
+        [0.0; 4] // (NaN too)
     }
 }
 
-/// Springs gathered, then computed side by side, in the tension pass (a multiple of 4, the
-/// f64 of an AVX vector; the gathered block is read back long after it was written, so the
-/// vector loads need not wait for the scalar stores).
-const LANES: usize = 64;
-
-/// The differences d = x_j − x_i and u = v_j − v_i of [`LANES`] springs, coordinate by
-/// coordinate (structure of arrays, as the vector registers take them).
-struct Lanes {
-    d: [[f64; LANES]; 3],
-    u: [[f64; LANES]; 3],
-}
-
-impl Lanes {
-    /// d and u of springs `s..s + count` (count ≤ [`LANES`]).
-    #[inline(always)]
-    fn gather(&mut self, springs: &SpringArrays, s: usize, x: &[f64], v: &[f64], count: usize) {
-        for l in 0..count {
-            let (a, b) = (3 * springs.i[s + l], 3 * springs.j[s + l]);
-            let (xa, xb) = (&x[a..a + 3], &x[b..b + 3]);
-            let (va, vb) = (&v[a..a + 3], &v[b..b + 3]);
-            for q in 0..3 {
-                self.d[q][l] = xb[q] - xa[q];
-                self.u[q][l] = vb[q] - va[q];
-            }
-        }
-    }
-
-    /// The force on end i of springs `s..s + out.len()` (lanes `from..`, as gathered), into
-    /// `out` (with the fourth entry: 1, or 0 for coincident ends). With
-    /// L = |d| = √((d_x² + d_y²) + d_z²) and n = d / L:
-    /// F_i = [k (L − L₀) + c ((u_x n_x + u_y n_y) + u_z n_z)] n, in exactly these operations
-    /// (the order of `vec3::dot`); [`avx::tension4`] does the same ones four lanes at a time.
-    #[inline(always)]
-    fn tension(&self, from: usize, springs: &SpringArrays, s: usize, out: &mut [[f64; 4]]) {
-        let (d, u) = (&self.d, &self.u);
-        for (m, o) in out.iter_mut().enumerate() {
-            let (k, rest, c) = (springs.k[s + m], springs.rest_length[s + m], springs.damping[s + m]);
-            let l = from + m;
-            let len = (d[0][l] * d[0][l] + d[1][l] * d[1][l] + d[2][l] * d[2][l]).sqrt();
-            let n = [d[0][l] / len, d[1][l] / len, d[2][l] / len];
-            let along = u[0][l] * n[0] + u[1][l] * n[1] + u[2][l] * n[2];
-            let tension = k * (len - rest) + c * along;
-            *o = if len > 0.0 {
-                [tension * n[0], tension * n[1], tension * n[2], 1.0]
-            } else {
-                [0.0; 4]
-            };
-        }
-    }
-}
-
-/// The tension pass with AVX: [`Lanes::tension`] on four springs at once, the same IEEE
-/// operations in the same order lane by lane (vector square roots and divisions are
-/// correctly rounded like scalar ones, and no multiply-add is fused), so the same bits.
+/// The two passes with AVX: four springs' forces at once, and each particle's sum in one
+/// register. The same IEEE operations in the same order, lane by lane, as [`tension`] and
+/// the plain sum (vector square roots and divisions are correctly rounded like scalar ones,
+/// and no multiply-add is fused): the same bits.
 #[cfg(target_arch = "x86_64")]
 mod avx {
-    use super::{tension_lanes, Lanes, SpringArrays};
+    use super::{tension, Ends, SpringArrays};
     use std::arch::x86_64::*;
 
-    /// [`super::tension_chunk`], compiled for AVX: blocks of four springs by [`tension4`],
-    /// the few left of a block one by one.
+    /// [`super::tension_chunk`] with AVX: four springs at a time by [`gather4`] and
+    /// [`tension4`]; a group with an end at the last particle, and the few springs left at
+    /// the chunk's end, one by one.
     #[target_feature(enable = "avx")]
     pub(super) unsafe fn tension_chunk(springs: &SpringArrays, first: usize, x: &[f64], v: &[f64], out: &mut [[f64; 4]]) {
-        tension_lanes(springs, first, x, v, out, |lanes, springs, s, block| {
-            let done = block.len() / 4 * 4;
-            let (quads, rest) = block.split_at_mut(done);
-            for (q, quad) in quads.chunks_exact_mut(4).enumerate() {
-                // SAFETY: AVX is enabled here (the caller checked the machine)
-                unsafe { tension4(lanes, 4 * q, springs, s + 4 * q, quad) };
+        let whole = out.len() / 4 * 4;
+        let mut quads = out.chunks_exact_mut(4);
+        for (q, quad) in (&mut quads).enumerate() {
+            let s = first + 4 * q;
+            // SAFETY (both): AVX is enabled here (the caller checked the machine).
+            match unsafe { gather4(springs, s, x, v) } {
+                Some((d, u)) => unsafe { tension4(d, u, springs, s, quad) },
+                None => {
+                    for (o, s) in quad.iter_mut().zip(s..) {
+                        *o = tension(springs, s, x, v);
+                    }
+                }
             }
-            lanes.tension(done, springs, s + done, rest);
-        });
+        }
+        let rest = quads.into_remainder();
+        for (o, s) in rest.iter_mut().zip(first + whole..) {
+            *o = tension(springs, s, x, v);
+        }
     }
 
-    /// The forces of springs `s..s + 4`, gathered in lanes `l..l + 4`, into `out`
-    /// (4 entries), as [`Lanes::tension`].
+    /// One 4-wide load: the coordinates of particle `a` and the next one's first (ignored),
+    /// `None` for the last particle (its load would pass the end).
+    #[target_feature(enable = "avx")]
+    #[inline]
+    unsafe fn load_at(a: &[f64], p: usize) -> Option<__m256d> {
+        let a = a.get(3 * p..3 * p + 4)?;
+        // SAFETY: 4 f64 in a slice; AVX is enabled.
+        Some(unsafe { _mm256_loadu_pd(a.as_ptr()) })
+    }
+
+    /// d = x_j − x_i and u = v_j − v_i of springs `s..s + 4`, as rows (x, y, z) of four
+    /// lanes (one spring a lane); `None` where an end is the last particle.
     #[target_feature(enable = "avx")]
     #[inline]
     #[allow(unused_unsafe)] // (the arithmetic intrinsics are safe here from Rust 1.87 on)
-    unsafe fn tension4(lanes: &Lanes, l: usize, springs: &SpringArrays, s: usize, out: &mut [[f64; 4]]) {
+    unsafe fn gather4(springs: &SpringArrays, s: usize, x: &[f64], v: &[f64]) -> Option<([__m256d; 3], [__m256d; 3])> {
+        let (mut d, mut u) = ([_mm256_setzero_pd(); 4], [_mm256_setzero_pd(); 4]);
+        for l in 0..4 {
+            let (a, b) = (springs.i[s + l], springs.j[s + l]);
+            // SAFETY (all): AVX is enabled.
+            let (xa, xb) = unsafe { (load_at(x, a)?, load_at(x, b)?) };
+            let (va, vb) = unsafe { (load_at(v, a)?, load_at(v, b)?) };
+            (d[l], u[l]) = unsafe { (_mm256_sub_pd(xb, xa), _mm256_sub_pd(vb, va)) };
+        }
+        // SAFETY: AVX is enabled.
+        unsafe { Some((columns(d), columns(u))) }
+    }
+
+    /// The first three columns of the 4 × 4 matrix with rows `r`: the x, y and z of the
+    /// four springs.
+    #[target_feature(enable = "avx")]
+    #[inline]
+    #[allow(unused_unsafe)]
+    unsafe fn columns(r: [__m256d; 4]) -> [__m256d; 3] {
+        // SAFETY: AVX is enabled.
+        unsafe {
+            let (t0, t1) = (_mm256_unpacklo_pd(r[0], r[1]), _mm256_unpackhi_pd(r[0], r[1])); // x0 x1 z0 z1 | y0 y1 . .
+            let (t2, t3) = (_mm256_unpacklo_pd(r[2], r[3]), _mm256_unpackhi_pd(r[2], r[3])); // x2 x3 z2 z3 | y2 y3 . .
+            [
+                _mm256_permute2f128_pd::<0x20>(t0, t2),
+                _mm256_permute2f128_pd::<0x20>(t1, t3),
+                _mm256_permute2f128_pd::<0x31>(t0, t2),
+            ]
+        }
+    }
+
+    /// The forces of springs `s..s + 4` from their d and u (rows of four lanes) into `out`
+    /// (4 entries), as [`tension`].
+    #[target_feature(enable = "avx")]
+    #[inline]
+    #[allow(unused_unsafe)]
+    unsafe fn tension4(d: [__m256d; 3], u: [__m256d; 3], springs: &SpringArrays, s: usize, out: &mut [[f64; 4]]) {
         let load = |a: &[f64]| {
-            let a = &a[..4]; // (bounds checked here: the load below reads these 4)
-                             // SAFETY: 4 f64 in a slice; AVX is enabled.
+            let a = &a[s..s + 4]; // (bounds checked here: the load below reads these 4)
+                                  // SAFETY: 4 f64 in a slice; AVX is enabled.
             unsafe { _mm256_loadu_pd(a.as_ptr()) }
         };
-        let at = |a: &[f64; super::LANES]| load(&a[l..]);
-        let (dx, dy, dz) = (at(&lanes.d[0]), at(&lanes.d[1]), at(&lanes.d[2]));
-        let (ux, uy, uz) = (at(&lanes.u[0]), at(&lanes.u[1]), at(&lanes.u[2]));
-        let k = load(&springs.k[s..]);
-        let rest = load(&springs.rest_length[s..]);
-        let c = load(&springs.damping[s..]);
+        let (k, rest, c) = (load(springs.k), load(springs.rest_length), load(springs.damping));
+        let ([dx, dy, dz], [ux, uy, uz]) = (d, u);
         // SAFETY: arithmetic on registers; AVX is enabled.
         let rows = unsafe {
             let square = _mm256_add_pd(
@@ -260,6 +290,28 @@ mod avx {
             unsafe { _mm256_storeu_pd(o.as_mut_ptr(), row) };
         }
     }
+
+    /// The per-particle sums of one chunk of particles with AVX: x, y and z of the sum in
+    /// the first three lanes of one register (the fourth adds the flags, and is dropped),
+    /// each spring's force added with its sign bit flipped by one xor.
+    #[target_feature(enable = "avx")]
+    #[allow(unused_unsafe)]
+    pub(super) unsafe fn sum_chunk(ends: &Ends, fc: &mut [f64]) {
+        for (l, fp) in fc.chunks_exact_mut(3).enumerate() {
+            // SAFETY (all): AVX is enabled; every load reads one [f64; 4].
+            unsafe {
+                let mut sum = _mm256_set_pd(0.0, fp[2], fp[1], fp[0]);
+                for (g, flip) in ends.of(l) {
+                    let g = _mm256_loadu_pd(g.as_ptr());
+                    let flip = _mm256_castsi256_pd(_mm256_set1_epi64x(flip as i64));
+                    sum = _mm256_add_pd(sum, _mm256_xor_pd(g, flip));
+                }
+                let mut out = [0.0; 4];
+                _mm256_storeu_pd(out.as_mut_ptr(), sum);
+                fp.copy_from_slice(&out[..3]);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -269,9 +321,10 @@ mod tests {
 
     /// The pass against the one loop it stands for, bit for bit: each spring's force by the
     /// formula of the module doc, added to end i and subtracted from end j in spring order.
-    /// A random network of 1003 springs (blocks of 64 and of 4 and the few left over, on the
+    /// A random network of 1003 springs (groups of four and the few left over, on the
     /// machine's vector path and the scalar one), with coincident ends (no force), rest
-    /// length 0, and a particle at NaN (its springs add nothing either).
+    /// length 0, a particle at NaN (its springs add nothing either) and springs ending at the
+    /// last particle (the vector path's loads stop short of it).
     #[test]
     fn the_pass_is_the_plain_loop_to_the_bit() {
         let mut rng = Rng::new(7);
@@ -281,7 +334,7 @@ mod tests {
         x.copy_within(0..3, 3); // particles 0 and 1 coincide
         x[3 * 7 + 1] = f64::NAN;
         let count = 1003;
-        let (mut i, mut j) = (vec![0, 2], vec![1, 7]);
+        let (mut i, mut j) = (vec![0, 2, n - 1, 5, 9], vec![1, 7, 3, n - 1, 4]);
         while i.len() < count {
             let (a, b) = (rng.index(n), rng.index(n));
             if a != b {
@@ -319,10 +372,7 @@ mod tests {
         }
         let mut got = base.clone();
         Scratch::default().accumulate(&springs, &x, &v, &mut got);
-        let mut scalar = vec![[0.0; 4]; count];
-        tension_lanes(&springs, 0, &x, &v, &mut scalar, |lanes, springs, s, block| {
-            lanes.tension(0, springs, s, block)
-        });
+        let scalar: Vec<[f64; 4]> = (0..count).map(|s| tension(&springs, s, &x, &v)).collect();
         let mut vector = vec![[0.0; 4]; count];
         tension_chunk(&springs, 0, &x, &v, &mut vector);
         for (p, (g, e)) in got.iter().zip(&expected).enumerate() {
