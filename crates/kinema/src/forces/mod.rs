@@ -32,6 +32,11 @@ pub use turbulence::Turbulence;
 pub use vortex::Vortex;
 pub use wind::Wind;
 
+/// Particles per chunk where a pass over them runs on all threads; fewer particles than
+/// one chunk stay on the calling thread (a small world would spend more on handing the work
+/// over than on it). Each coordinate's value is the same either way.
+pub(crate) const PARALLEL_CHUNK: usize = 4096;
+
 /// What a force sees of the particles at one instant.
 #[derive(Debug, Clone, Copy)]
 pub struct State<'a> {

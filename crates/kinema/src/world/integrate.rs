@@ -379,15 +379,20 @@ impl World {
             .zip(self.x_next.par_chunks(3 * CHUNK))
             .enumerate()
             .map(|(c, (vn, xn))| {
-                let base = 3 * CHUNK * c;
-                let mut bad = None;
-                for k in 0..vn.len() {
-                    vn[k] = verlet::kick(p.v[base + k], a[base + k], a_next[base + k], h);
-                    if bad.is_none() && !(vn[k].is_finite() && xn[k].is_finite()) {
-                        bad = Some(base + k);
-                    }
+                let chunk = 3 * CHUNK * c..3 * CHUNK * c + vn.len();
+                let (v, a, a_next) = (&p.v[chunk.clone()], &a[chunk.clone()], &a_next[chunk.clone()]);
+                for (((vn, v), a), a_next) in vn.iter_mut().zip(v).zip(a).zip(a_next) {
+                    *vn = verlet::kick(*v, *a, *a_next, h);
                 }
-                bad
+                // (the check in a pass of its own, which the compiler vectorises; the search
+                // for the first bad value only where there is one)
+                let finite = |s: &[f64]| s.iter().fold(true, |all, c| all & c.is_finite());
+                if finite(vn) && finite(xn) {
+                    return None;
+                }
+                (0..vn.len())
+                    .find(|&k| !(vn[k].is_finite() && xn[k].is_finite()))
+                    .map(|k| chunk.start + k)
             })
             .flatten() // (Option's own order puts None first: drop the clean chunks)
             .min();
