@@ -192,9 +192,4 @@ impl Force for PythonForce {
     }
     // No `properties`: the default, a force the world knows nothing about, is what a
     // Python callable is (it may add energy and depend on anything).
-
-    /// A Python callable runs where Python's thread state is the caller's.
-    fn needs_calling_thread(&self) -> bool {
-        true
-    }
 }

@@ -227,15 +227,6 @@ pub trait Force: Send + Sync {
     fn uniform_acceleration(&self) -> Option<[f64; 3]> {
         None
     }
-
-    /// Whether [`Force::accumulate`] must run on the thread that steps the world: a force
-    /// that calls into a runtime with per-thread state (a Python callable: its signals,
-    /// thread-locals and objects bound to a thread). `false` (the default) lets the world run
-    /// its integration on a worker of rayon's pool (`world/integrate.rs`), which any
-    /// `Send + Sync` force allows.
-    fn needs_calling_thread(&self) -> bool {
-        false
-    }
 }
 
 /// A force's Jacobian prepared at one state `s` (see [`Force::linearize`]); its methods are

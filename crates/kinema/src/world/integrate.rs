@@ -78,14 +78,15 @@ impl World {
 
     /// Stage 1: integrate positions and velocities over one step, into `x_next`, `v_next`.
     ///
-    /// Run as one task on a worker of rayon's pool (unless a force needs the calling thread,
-    /// [`crate::forces::Force::needs_calling_thread`]): each parallel pass of the step then
+    /// Run as one task on a worker of rayon's pool (unless a force declares nothing about
+    /// itself, a user's such as a Python callable, which may need the calling thread's state:
+    /// `unknown_force`): each parallel pass of the step then
     /// starts from inside the pool. Started from outside it, every pass (four or more a step)
     /// would hand its work to the pool and put the calling thread to sleep until it is done,
     /// two thread switches each: about a fifth of a 10,000-node cloth's step. The stage polls
     /// no interrupt (Ctrl-C is checked between the stages, on the calling thread).
     pub(super) fn integrate(&mut self) -> Result<(), Error> {
-        if self.forces.iter().any(|f| f.needs_calling_thread()) {
+        if self.unknown_force {
             self.integrate_here()
         } else {
             rayon::scope(|_| self.integrate_here())
