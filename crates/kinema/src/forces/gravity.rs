@@ -7,6 +7,7 @@
 
 use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State, ZeroJacobian};
 use crate::error::{CallbackError, Error};
+use rayon::prelude::*;
 
 /// Standard gravity near the Earth's surface, m/s² (the rounded value 9.81 used throughout
 /// the engine's examples; the CGPM standard is 9.80665).
@@ -70,10 +71,20 @@ impl Force for Gravity {
     /// Adds m_i g to each particle's force, N.
     fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
         check_buffers(self.name(), s, &[("f", f.len())])?;
-        for (fi, m) in f.chunks_exact_mut(3).zip(s.mass) {
-            for (fk, gk) in fi.iter_mut().zip(self.g) {
-                *fk += m * gk;
+        let g = self.g;
+        let add = |f: &mut [f64], mass: &[f64]| {
+            for (fi, m) in f.chunks_exact_mut(3).zip(mass) {
+                for (fk, gk) in fi.iter_mut().zip(g) {
+                    *fk += m * gk;
+                }
             }
+        };
+        // on all threads for many particles (the same numbers: each is its own sum)
+        let c = super::PARALLEL_CHUNK;
+        if s.len() > c {
+            f.par_chunks_mut(3 * c).zip(s.mass.par_chunks(c)).for_each(|(f, m)| add(f, m));
+        } else {
+            add(f, s.mass);
         }
         Ok(())
     }

@@ -14,6 +14,7 @@ pub mod falloff;
 pub mod field;
 pub mod gravity;
 pub mod spring;
+mod spring_pass;
 pub mod turbulence;
 pub mod vortex;
 pub mod wind;
@@ -30,6 +31,11 @@ pub use spring::Springs;
 pub use turbulence::Turbulence;
 pub use vortex::Vortex;
 pub use wind::Wind;
+
+/// Particles per chunk where a pass over them runs on all threads; fewer particles than
+/// one chunk stay on the calling thread (a small world would spend more on handing the work
+/// over than on it). Each coordinate's value is the same either way.
+pub(crate) const PARALLEL_CHUNK: usize = 4096;
 
 /// What a force sees of the particles at one instant.
 #[derive(Debug, Clone, Copy)]

@@ -16,8 +16,7 @@
 //! exact (the force k d vanishes with d); for L₀ > 0 the force is discontinuous there and
 //! zero is the choice that adds no energy.
 
-use rayon::prelude::*;
-
+use super::spring_pass::{Scratch, SpringArrays};
 use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State};
 use crate::error::{CallbackError, Error};
 use crate::limits::GONE;
@@ -43,26 +42,6 @@ pub struct Springs {
     min_particles: usize,
     /// Buffers of the parallel force pass (not part of the springs' value).
     scratch: Scratch,
-}
-
-/// Springs per chunk of the parallel passes (fixed, so the work is split the same way for
-/// any number of threads; each particle's sum is in spring order whatever the split).
-const CHUNK: usize = 4096;
-
-/// The force pass's buffers: each spring's force on its end i (N; `None` for a spring of
-/// zero length, which has no direction), and for each particle the springs it ends, in
-/// spring order (`spring << 1 | 1` where it is the end j), compressed by particle.
-#[derive(Debug, Clone, Default)]
-struct Scratch {
-    tension: Vec<Option<[f64; 3]>>,
-    start: Vec<u32>,
-    ends: Vec<u32>,
-}
-
-impl PartialEq for Scratch {
-    fn eq(&self, _: &Self) -> bool {
-        true // buffers, not data
-    }
 }
 
 impl Springs {
@@ -294,29 +273,6 @@ impl Springs {
         [v[b] - v[a], v[b + 1] - v[a + 1], v[b + 2] - v[a + 2]]
     }
 
-    /// For each of `n` particles, the springs it ends, in spring order (a counting sort by
-    /// particle, stable): `scratch.start` and `scratch.ends`.
-    fn index_ends(&self, n: usize, scratch: &mut Scratch) {
-        let (start, ends) = (&mut scratch.start, &mut scratch.ends);
-        start.clear();
-        start.resize(n + 1, 0);
-        for p in self.i.iter().chain(&self.j) {
-            start[p + 1] += 1;
-        }
-        for p in 1..=n {
-            start[p] += start[p - 1];
-        }
-        let mut next: Vec<u32> = start[..n].to_vec();
-        ends.clear();
-        ends.resize(2 * self.len(), 0);
-        for sp in 0..self.len() {
-            for (end, p) in [(0, self.i[sp]), (1, self.j[sp])] {
-                ends[next[p] as usize] = (sp as u32) << 1 | end;
-                next[p] += 1;
-            }
-        }
-    }
-
     /// Errors (naming the first bad spring) unless every index is below `n`.
     fn check_indices(&self, n: usize) -> Result<(), Error> {
         if self.min_particles <= n {
@@ -410,45 +366,22 @@ impl Force for Springs {
     }
 
     /// Adds F_i = [k (L − L₀) + c (u·n)] n to each spring's first end and −F_i to its second.
-    /// Two passes on all threads: each spring's force (chunks of springs), then each
-    /// particle's sum over the springs it ends, in spring order (chunks of particles): the
-    /// same additions in the same order as one loop over the springs that adds the force to
-    /// end i and subtracts it from end j, so the result is the same for any number of threads.
+    /// Two passes on all threads (`spring_pass.rs`): each spring's force (chunks of springs),
+    /// then each particle's sum over the springs it ends, in spring order (chunks of
+    /// particles): the same additions in the same order as one loop over the springs that
+    /// adds the force to end i and subtracts it from end j, so the result is the same for any
+    /// number of threads.
     fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
         check_buffers(self.name(), s, &[("f", f.len())])?;
         self.check_indices(s.len())?;
-        let n = s.len();
-        let mut scratch = std::mem::take(&mut self.scratch);
-        if scratch.start.len() != n + 1 {
-            self.index_ends(n, &mut scratch);
-        }
-        scratch.tension.resize(self.len(), None);
-        let this = &*self;
-        scratch.tension.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
-            for (o, sp) in out.iter_mut().zip(c * CHUNK..) {
-                *o = this.axis(s.x, sp).map(|(n, len)| {
-                    let u = this.relative(s.v, sp);
-                    let tension = this.k[sp] * (len - this.rest_length[sp]) + this.damping[sp] * dot(u, n);
-                    [tension * n[0], tension * n[1], tension * n[2]]
-                });
-            }
-        });
-        let Scratch { tension, start, ends } = &scratch;
-        f.par_chunks_mut(3 * CHUNK).enumerate().for_each(|(c, fc)| {
-            for (l, p) in (c * CHUNK..).take(fc.len() / 3).enumerate() {
-                for &e in &ends[start[p] as usize..start[p + 1] as usize] {
-                    let Some(g) = tension[(e >> 1) as usize] else { continue };
-                    for k in 0..3 {
-                        if e & 1 == 0 {
-                            fc[3 * l + k] += g[k];
-                        } else {
-                            fc[3 * l + k] -= g[k];
-                        }
-                    }
-                }
-            }
-        });
-        self.scratch = scratch;
+        let springs = SpringArrays {
+            i: &self.i,
+            j: &self.j,
+            k: &self.k,
+            rest_length: &self.rest_length,
+            damping: &self.damping,
+        };
+        self.scratch.accumulate(&springs, s.x, s.v, f);
         Ok(())
     }
 

@@ -180,6 +180,7 @@ impl World {
     /// Adds a force, checked against the current particles.
     pub fn add_force(&mut self, force: Box<dyn Force>) -> Result<(), Error> {
         force.validate(self.particles.len())?;
+        self.unknown_force |= force.properties() == crate::forces::Properties::UNKNOWN;
         self.forces.push(force);
         self.reset_caches();
         Ok(())

@@ -1,8 +1,9 @@
 //! The particles' equations of motion, x'' = F(t, x, v) / m, and Jacobian–vector products of F.
 
 use crate::error::CallbackError;
-use crate::forces::{Force, Linearized, State};
+use crate::forces::{Force, Linearized, State, PARALLEL_CHUNK};
 use crate::ode::system::SecondOrderSystem;
+use rayon::prelude::*;
 
 /// The dynamics of the particles as a second-order system: x'' = F(t, x, v) / m.
 ///
@@ -37,8 +38,12 @@ impl<'a, 'f> Dynamics<'a, 'f> {
 
     /// Sums every force at (t, x, v) into `self.force`, N.
     pub fn total_force(&mut self, t: f64, x: &[f64], v: &[f64]) -> Result<(), CallbackError> {
-        self.force.clear();
-        self.force.resize(x.len(), 0.0);
+        if self.force.len() == x.len() && x.len() > 3 * PARALLEL_CHUNK {
+            self.force.par_chunks_mut(3 * PARALLEL_CHUNK).for_each(|c| c.fill(0.0));
+        } else {
+            self.force.clear();
+            self.force.resize(x.len(), 0.0);
+        }
         let s = State {
             t,
             x,
@@ -65,8 +70,22 @@ impl SecondOrderSystem for Dynamics<'_, '_> {
 }
 
 /// Newton's second law, a = F/m (m/s², 3 per particle) from the forces `force` (N), with
-/// 1/m = `inv_mass` (0 for pinned particles) and a_z = 0 in 2D.
+/// 1/m = `inv_mass` (0 for pinned particles) and a_z = 0 in 2D; on all threads for more than
+/// [`PARALLEL_CHUNK`] particles.
 pub(crate) fn newton(force: &[f64], inv_mass: &[f64], dim: usize, acc: &mut [f64]) {
+    if inv_mass.len() > PARALLEL_CHUNK {
+        let c = PARALLEL_CHUNK;
+        acc.par_chunks_mut(3 * c)
+            .zip(force.par_chunks(3 * c))
+            .zip(inv_mass.par_chunks(c))
+            .for_each(|((acc, force), inv_mass)| newton_serial(force, inv_mass, dim, acc));
+    } else {
+        newton_serial(force, inv_mass, dim, acc);
+    }
+}
+
+/// [`newton`] on the calling thread.
+fn newton_serial(force: &[f64], inv_mass: &[f64], dim: usize, acc: &mut [f64]) {
     for (i, inv_m) in inv_mass.iter().enumerate() {
         for k in 0..3 {
             acc[3 * i + k] = force[3 * i + k] * inv_m;

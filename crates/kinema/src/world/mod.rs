@@ -128,6 +128,10 @@ pub struct World {
     deaths: Deaths,
     /// The ids of the particles those deaths removed, until taken.
     removed_ids: Vec<u64>,
+    /// A force declares nothing about itself ([`Properties::UNKNOWN`](crate::forces::Properties::UNKNOWN):
+    /// a user's, such as a Python callable, which may need its own thread's state): stage 1
+    /// then runs on the calling thread (`integrate.rs`).
+    unknown_force: bool,
 }
 
 /// Wall-clock time spent in the seed's four stages of [`World::step`], summed over all steps.
@@ -183,6 +187,7 @@ impl World {
             interrupt: Interrupt::none(),
             deaths: Deaths::default(),
             removed_ids: Vec::new(),
+            unknown_force: false,
         })
     }
 
