@@ -70,6 +70,14 @@ pub(super) struct VerletBuffers {
     pub(super) fresh: bool,
 }
 
+/// The particles below which stage 1 runs on a worker of rayon's pool ([`World::integrate`]).
+/// Above, each of its passes is long beside a thread switch (microseconds), and it stays on
+/// the calling thread, which then allocates the step's large buffers (the contact force's
+/// neighbour list among them) itself: glibc's allocator keeps an arena per thread, and a gas
+/// of 10⁶ spheres whose stage 1 ran on whichever worker took it peaked at 757 MB, against
+/// 441 MB on the calling thread (`benchmarks/granular_gas.py --worker --ncell 100 --steps 300`).
+pub const IN_POOL_BELOW: usize = 1 << 16;
+
 impl World {
     /// The most adaptive sub-steps rk45 takes inside one step of dt: a step that needs more
     /// has a dt far beyond what its forces allow, and is refused as diverged in milliseconds
@@ -78,15 +86,15 @@ impl World {
 
     /// Stage 1: integrate positions and velocities over one step, into `x_next`, `v_next`.
     ///
-    /// Run as one task on a worker of rayon's pool (unless a force declares nothing about
-    /// itself, a user's such as a Python callable, which may need the calling thread's state:
-    /// `unknown_force`): each parallel pass of the step then
-    /// starts from inside the pool. Started from outside it, every pass (four or more a step)
-    /// would hand its work to the pool and put the calling thread to sleep until it is done,
-    /// two thread switches each: about a fifth of a 10,000-node cloth's step. The stage polls
-    /// no interrupt (Ctrl-C is checked between the stages, on the calling thread).
+    /// Below [`IN_POOL_BELOW`] particles it runs as one task on a worker of rayon's pool
+    /// (unless a force declares nothing about itself, a user's such as a Python callable,
+    /// which may need the calling thread's state: `unknown_force`): each parallel pass of the
+    /// step then starts from inside the pool. Started from outside it, every pass (four or
+    /// more a step) hands its work to the pool and puts the calling thread to sleep until it
+    /// is done, two thread switches each: about a fifth of a 10,000-node cloth's step. The
+    /// stage polls no interrupt (Ctrl-C is checked between the stages, on the calling thread).
     pub(super) fn integrate(&mut self) -> Result<(), Error> {
-        if self.unknown_force {
+        if self.unknown_force || self.particles.len() >= IN_POOL_BELOW {
             self.integrate_here()
         } else {
             rayon::scope(|_| self.integrate_here())
