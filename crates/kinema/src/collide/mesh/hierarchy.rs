@@ -236,22 +236,8 @@ impl Geometry {
 
     /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi] (the
     /// tests' reference for the searches past the flat nodes).
-    pub(super) fn visit(&self, lo: [f64; 3], hi: [f64; 3], mut each: impl FnMut(usize)) {
-        let mut stack = Stack::new();
-        while let Some(k) = stack.pop() {
-            let node = self.nodes[k as usize];
-            if (0..3).any(|a| f64::from(node.hi[a]) < lo[a] || f64::from(node.lo[a]) > hi[a]) {
-                continue;
-            }
-            if node.count > 0 {
-                for &t in &self.order[node.start as usize..(node.start + node.count) as usize] {
-                    each(t as usize);
-                }
-            } else {
-                stack.push(node.right);
-                stack.push(k + 1);
-            }
-        }
+    pub(super) fn visit(&self, lo: [f64; 3], hi: [f64; 3], each: impl FnMut(usize)) {
+        self.visit_past_flat(lo, hi, |_| true, each);
     }
 
     /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi], but
