@@ -153,7 +153,8 @@ impl Geometry {
 
     /// Marks the flat nodes (`flat.rs`): a leaf whose triangles all lie inside flat patches of
     /// one plane, a parent of two flat nodes of one plane; children come after their parent,
-    /// so one pass from the last node up. `None`: a buffer cannot be allocated.
+    /// so one pass from the last node up, and one down that gives a flat subtree its top's
+    /// triangle. `None`: a buffer cannot be allocated.
     fn mark_flat(&mut self) -> Option<()> {
         let inside = self.inside_flat_patches()?;
         for k in (0..self.nodes.len()).rev() {
@@ -183,6 +184,16 @@ impl Geometry {
                 }
             };
             self.nodes[k].plane = plane;
+        }
+        // one triangle for the plane of a whole flat subtree, its top's: a search down it
+        // reads the same plane at every level, which stays in the cache
+        for k in 0..self.nodes.len() {
+            let node = self.nodes[k];
+            if node.plane != FLAT_NONE && node.count == 0 {
+                for child in [k + 1, node.right as usize] {
+                    self.nodes[child].plane = node.plane;
+                }
+            }
         }
         Some(())
     }
