@@ -193,6 +193,13 @@ def test_an_impact_on_a_sleeping_column_of_any_depth_speed_and_step_is_the_awake
     # impact or a contact), so the two agree to the engine's resolution: a step's fall
     # g h² in position, 1e-6 of the speed in velocity. Most cases agree to the bit. Before,
     # the sleeping column stopped the ball: a difference of the order of its speed.
+    _sleeping_and_awake_agree(depth, e, mu, speed, dt, offset)
+
+
+def _sleeping_and_awake_agree(depth: int, e: float, mu: float, speed: float, dt: float, offset: float) -> None:
+    """The case of the test above: the ball met by the sleeping column and by the awake one,
+    compared through the step of the impact and the two after it."""
+
     def run(sleep: bool) -> tuple[kinema.World, int]:
         w = _column(depth, e, sleep=sleep, dt=dt, mu=mu)
         assert w.collision_stats()["last"]["asleep"] == (depth if sleep else 0)
@@ -211,3 +218,12 @@ def test_an_impact_on_a_sleeping_column_of_any_depth_speed_and_step_is_the_awake
     assert ka == kb < 100
     np.testing.assert_allclose(a.positions, b.positions, rtol=0, atol=G * dt**2)
     np.testing.assert_allclose(a.velocities, b.velocities, rtol=0, atol=1e-6 * speed)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="found by the test above (2026-11-30, on the code of issue 50's close): a ball at 5 m/s onto a sleeping column "
+    "of 3 at e = 0.248, dt = 2 ms ends 1.3e-4 m from the awake column's (over g dt^2 = 3.9e-5 m); left for the sleep work",
+)
+def test_a_ball_at_5_m_s_onto_a_sleeping_column_of_3_is_the_awake_one():
+    _sleeping_and_awake_agree(3, 0.24755176342157387, 0.0, 5.0, 0.002, 0.0)

@@ -127,11 +127,11 @@ class Recorder:
             total = stats["total"]
             contacts, balance, lost = stats["last"]["contacts"], total["impulse_balance"], total["energy_lost"]
             impacts, virial = total["impacts"], np.ravel(total["virial"])
-        x, v = self._keep(world.positions, world.velocities)
-        # Σ m v ⊗ v, row-major (the kinetic part of the pressure tensor, times the volume):
-        # in a periodic cell only, the one place a pressure is made (47 ms a frame at 10⁶
-        # particles otherwise wasted)
-        kinetic = ((v * world.masses[:, None]).T @ v).ravel() if _has_cell(self.about) else _NO_TENSOR
+        x, v = self._keep(state.engine, len(ids))
+        # Σ m v ⊗ v, row-major (the kinetic part of the pressure tensor, times the volume),
+        # summed with the diagnostics: kept in a periodic cell only, the one place a pressure
+        # is made
+        kinetic = np.array(d["kinetic_tensor"]) if _has_cell(self.about) else _NO_TENSOR
         frame = (d["t"], x, v, d["kinetic"], d["potential"], d["momentum"], d["angular_momentum"])
         self.frames.append((*frame, contacts, balance, lost, ids, impacts, virial, kinetic))
         self.turning.append(_turning(world))
@@ -144,16 +144,20 @@ class Recorder:
             else:
                 self.walls = None
 
-    def _keep(self, x: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Copies of this frame's positions and velocities: places in the block when they fit."""
+    def _keep(self, engine: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """This frame's positions and velocities of the `n` particles, read from the `engine`
+        (right after the world's views were pulled: the state the user sees) into their place
+        in the block when they fit, else into arrays of their own."""
         k = len(self.frames)
         if self._block is None and k == 0 and self._expected > 1:
-            self._block = (_prefaulted((self._expected, *x.shape)), _prefaulted((self._expected, *v.shape)))
+            self._block = (_prefaulted((self._expected, n, 3)), _prefaulted((self._expected, n, 3)))
         block = self._block
-        if block is not None and k < block[0].shape[0] and block[0].shape[1:] == x.shape:
-            block[0][k], block[1][k] = x, v
-            return block[0][k], block[1][k]
-        return x.copy(), v.copy()
+        if block is not None and k < block[0].shape[0] and block[0].shape[1] == n:
+            x, v = block[0][k], block[1][k]
+        else:
+            x, v = np.empty((n, 3)), np.empty((n, 3))
+        engine.read_state(x=x, v=v)
+        return x, v
 
     def _stacked(self, x: tuple, v: tuple) -> tuple[np.ndarray, np.ndarray]:
         """The frames as (frames, N, 3) arrays: the block itself when every frame is its place."""

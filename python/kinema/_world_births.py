@@ -161,7 +161,7 @@ class WorldBirths:
         row = self._core.group_masks[group] if self.collisions["self_collisions"] else 0
         if row == 0:
             return free  # the group collides with no particle
-        here, radius = self._x, np.asarray(self._core.radii)
+        here, radius = self.positions, np.asarray(self._core.radii)
         if row != (1 << _checks.GROUPS) - 1:
             near = (row >> np.asarray(self._core.groups, dtype=np.int64)) & 1 == 1
             here, radius = here[near], radius[near]

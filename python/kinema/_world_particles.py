@@ -184,7 +184,8 @@ class WorldParticles:
         start, end = self._core.add_particles({**arrays, "restitution": e, "friction": mu, "group": given})
         if spin is not None:
             self._core.set_particle_spin(start, end, *(None if a is None else np.ascontiguousarray(a, dtype=float) for a in spin))
-        self._species += names
+        if self._species is not None or any(names):  # (no list of N empty names while nobody names one)
+            self._species = (self._species if self._species is not None else [""] * start) + names
         if death is not None:
             # the engine keeps them with the particles (none while no particle has one)
             self._core.set_times_of_death(start, np.ascontiguousarray(np.broadcast_to(death, (n,)), dtype=float))
@@ -216,7 +217,8 @@ class WorldParticles:
     def _forget(self, keep: np.ndarray) -> None:
         """Keeps what the Python world holds per particle for the particles ``keep`` (a mask
         over the particles before a removal) and reads the state anew."""
-        self._species = [s for s, k in zip(self._species, keep, strict=True) if k]
+        if self._species is not None:
+            self._species = [s for s, k in zip(self._species, keep, strict=True) if k]
         self._colors = _kept(self._colors, keep)
         self._new_views()
         self._advice_due = True

@@ -98,7 +98,7 @@ class WorldRun:
         radii += [source.c["particle_radius"] - source.c["radius_spread"] for source in self._emitters]
         radius = min((r for r in radii if r > 0), default=None)
         for k, mesh in meshes:
-            said = placement_problems(mesh, self._x, regions, g, radius)
+            said = placement_problems(mesh, self.positions, regions, g, radius)
             if said:
                 name = f"'{mesh.file.name}'" if mesh.file is not None else "of arrays"
                 warnings.warn(f"colliders[{k}], the mesh {name}: {'; '.join(said)}", MeshPlacementWarning, stacklevel=3)
@@ -115,7 +115,7 @@ class WorldRun:
             lo[: len(np.ravel(box.lo))], hi[: len(np.ravel(box.hi))] = np.ravel(box.lo), np.ravel(box.hi)
             edges = np.where(periodic, hi - lo, 0.0)
         return {
-            "masses": self._m.copy(),
+            "masses": self.masses.copy(),
             "radii": np.array(self._core.radii),
             "ids": self.ids.copy(),
             "species": self.species,

@@ -4,9 +4,12 @@ class of ``World``, not used alone.
 - The engine (``_core``) is the thread's that made the world, checked at every use (else
   ``_other_thread``'s error); ``_engine`` lends it for work that calls back into Python, and
   meanwhile the world's own methods meet ``_Busy`` (``REENTRY``) and its views are read-only.
-- The views: ``_new_views`` makes them from the engine's state, ``_push`` hands what the user
-  wrote into them to the engine, ``_pull`` reads the engine's state into them, ``_assign``
-  writes a whole array (``w.positions = ...``).
+- The views exist while somebody looks at them: ``_view`` makes one from the engine's state at
+  the first look, ``_push`` hands what the user wrote into those that exist to the engine,
+  ``_pull`` after a step reads the engine's state into those still held outside the world
+  (a ``w.positions`` kept in a variable, or a slice of it, stays live) and drops the others
+  (a step of 10⁶ particles keeps no 56 MB of copies nobody reads), ``_new_views`` drops them
+  all (the particles changed), ``_assign`` writes a whole array (``w.positions = ...``).
 - The state as arrays and values: ``positions``, ``velocities``, ``masses``, ``ids``,
   ``radii``, ``groups``, ``spin``, ``angular_velocities``, ``orientations``, ``inertia``,
   ``momenta``, ``accelerations``, ``particle_stress``, ``time``, ``dt``, ``method``, ``dim``,
@@ -17,6 +20,7 @@ engine's state; ``kinema.world`` re-exports ``REENTRY``. Units: m, s, kg."""
 
 from __future__ import annotations
 
+import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -39,11 +43,30 @@ def _other_thread(owner: int) -> RuntimeError:
     )
 
 
+# The references `WorldViews._held` counts to a view only the world holds: the world's
+# attribute, `_held`'s local name and `getrefcount`'s argument (measured here, not assumed:
+# the count differs between Python versions' calling conventions).
+class _Probe:
+    def __init__(self) -> None:
+        self.a = np.empty(1)
+
+    def held(self) -> int:
+        a = self.a
+        return sys.getrefcount(a)
+
+
+_OWN_REFERENCES = _Probe().held()
+
+
 class _Busy:
     """Stands in for the engine while it runs work that calls back into Python (a
     ``PythonForce`` in a step, the advisor, ``accelerations``). The engine is borrowed for
     that work, so any use of the world from there (reading ``time``, writing ``positions``,
     stepping it again) would meet pyo3's bare "Already borrowed"; it meets this instead."""
+
+    def __init__(self, lent: Any = None, views: list | None = None) -> None:
+        # (set in the instance's dict: `__getattr__` is asked only for what is not there)
+        self.__dict__.update(lent=lent, views=views if views is not None else [])
 
     def __getattr__(self, name: str) -> Any:
         raise RuntimeError(REENTRY)
@@ -70,17 +93,18 @@ class WorldViews:
     @contextmanager
     def _engine(self) -> Iterator[Any]:
         """The engine, lent for work that may call back into Python; meanwhile the world's own
-        methods see ``_Busy`` (the views stay readable)."""
+        methods see ``_Busy`` (the views stay readable, and can be made while the engine is not
+        stepping: the advisor reads them)."""
         core = self._core
         if isinstance(core, _Busy):
             raise RuntimeError(REENTRY)
         views: list[np.ndarray] = []
         try:  # (all inside: a Ctrl-C anywhere here still gives the engine back)
-            self._core = _Busy()
+            self._core = _Busy(core, views)
             # The views are read-only meanwhile: a write into one from a force would be lost or
             # kept depending on what called it (a step reads the state back after, `rates` not).
             for a in (self._x, self._v, self._m, self._w):
-                if a.flags.writeable:
+                if a is not None and a.flags.writeable:
                     a.flags.writeable = False
                     views.append(a)
             yield core
@@ -89,63 +113,114 @@ class WorldViews:
                 a.flags.writeable = True
             self._core = core
 
+    # The views by name: positions, velocities, masses, angular velocities; each `None` where
+    # none exists now (nobody looked since the last step, or the particles changed since).
+    _VIEWS = ("_x", "_v", "_m", "_w")
+
     def _new_views(self) -> None:
-        n = self._core.len
-        self._x = np.empty((n, 3))
-        self._v = np.empty((n, 3))
-        self._core.read_state(self._x, self._v)
-        self._m = np.array(self._core.masses)
-        self._w = np.zeros((n, 3) if self._core.spin else (0, 3))
-        if self._core.spin:
-            self._core.read_spin(self._w)
+        """Drops every view (the particles changed): the next look makes it afresh."""
+        self._x = self._v = self._m = self._w = None
+
+    def _view(self, name: str) -> np.ndarray:
+        """The view ``name`` (one of ``_VIEWS``), made from the engine's state if none exists
+        (while the engine is lent, read-only until it is given back, as the others)."""
+        a = getattr(self, name)
+        core = self._core
+        if isinstance(core, _Busy):
+            if a is None:
+                try:
+                    a = self._made(name, core.lent)
+                except RuntimeError:  # (pyo3's borrow: read from a force while the engine steps)
+                    raise RuntimeError(REENTRY) from None
+                a.flags.writeable = False
+                core.views.append(a)
+                setattr(self, name, a)
+            return a
+        if a is None or a.shape[0] != core.len:
+            a = self._made(name, core)
+            setattr(self, name, a)
+        return a
+
+    @staticmethod
+    def _made(name: str, core: Any) -> np.ndarray:
+        """A new view ``name`` of ``core``'s state."""
+        n = core.len
+        if name == "_m":
+            return np.array(core.masses)
+        if name == "_w":
+            a = np.zeros((n, 3) if core.spin else (0, 3))
+            if core.spin:
+                core.read_spin(a)
+            return a
+        a = np.empty((n, 3))
+        core.read_state(**{"x" if name == "_x" else "v": a})
+        return a
+
+    def _held(self, name: str) -> np.ndarray | None:
+        """The view ``name`` if it exists and somebody outside the world holds it (itself or a
+        view of its memory: a slice holds its base)."""
+        a = getattr(self, name)
+        return a if a is not None and sys.getrefcount(a) > _OWN_REFERENCES else None
 
     def _push(self) -> None:
-        """Hands what the user wrote into the views to the world (a no-op when unchanged). A
-        bad value is refused whole: the world keeps its state and the views show it again."""
+        """Hands what the user wrote into the views that exist to the world (a no-op when
+        unchanged). A bad value is refused whole: the world keeps its state and the views show
+        it again."""
+        if self._x is None and self._v is None and self._m is None and self._w is None:
+            return  # (nobody looked: nothing written)
         try:
             self._core.sync(self._x, self._v, self._m)
-            if self._core.spin:
+            if self._core.spin and self._w is not None:
                 self._core.sync_spin(self._w)
         except ValueError:
-            self._pull()
-            self._m[...] = self._core.masses
+            self._pull(keep=True)
+            if self._m is not None:
+                self._m[...] = self._core.masses
             raise
 
-    def _pull(self) -> None:
-        if self._x.shape[0] != self._core.len:  # (a Ctrl-C between a birth and its new views)
+    def _pull(self, keep: bool = False) -> None:
+        """After the engine changed the state: the views held outside the world read it (they
+        are live), the others are dropped (made again at the next look); with ``keep``, every
+        view that exists reads it."""
+        n = self._core.len
+        x, v, m, w = (getattr(self, a) if keep else self._held(a) for a in self._VIEWS)
+        if any(a is not None and a.shape[0] != n for a in (x, v, m, w)):  # (a Ctrl-C between a birth and its new views)
             self._new_views()
             return
-        self._core.read_state(self._x, self._v)
-        if self._core.spin:
-            self._core.read_spin(self._w)
+        self._x, self._v, self._m, self._w = x, v, m, w  # (masses: no step changes them)
+        if x is not None or v is not None:
+            self._core.read_state(x=x, v=v)
+        if w is not None and self._core.spin:
+            self._core.read_spin(w)
 
     # -- state ------------------------------------------------------------------------------
     @property
     def positions(self) -> np.ndarray:
-        """Positions (N, 3), m: a live view (updated by each step; writes move the particles)."""
-        return self._x
+        """Positions (N, 3), m: a live view (updated by each step while it is held; writes move
+        the particles)."""
+        return self._view("_x")
 
     @positions.setter
     def positions(self, value: Any) -> None:
-        self._assign(self._x, value, "positions", (len(self), 3))
+        self._assign("_x", value, "positions", (len(self), 3))
 
     @property
     def velocities(self) -> np.ndarray:
-        """Velocities (N, 3), m/s: a live view (pinned particles keep 0)."""
-        return self._v
+        """Velocities (N, 3), m/s: a live view, as :attr:`positions` (pinned particles keep 0)."""
+        return self._view("_v")
 
     @velocities.setter
     def velocities(self, value: Any) -> None:
-        self._assign(self._v, value, "velocities", (len(self), 3))
+        self._assign("_v", value, "velocities", (len(self), 3))
 
     @property
     def masses(self) -> np.ndarray:
         """Masses (N,), kg: a live view (pinned particles keep theirs and stay pinned)."""
-        return self._m
+        return self._view("_m")
 
     @masses.setter
     def masses(self, value: Any) -> None:
-        self._assign(self._m, value, "masses", (len(self),))
+        self._assign("_m", value, "masses", (len(self),))
 
     @property
     def ids(self) -> np.ndarray:
@@ -188,12 +263,12 @@ class WorldViews:
         """Angular velocities ω (N, 3), rad/s, in a world with spin: a live view (updated by each
         step; writes turn the particles; pinned particles keep 0; a 2D world turns about z)."""
         self._need_spin("angular_velocities")
-        return self._w
+        return self._view("_w")
 
     @angular_velocities.setter
     def angular_velocities(self, value: Any) -> None:
         self._need_spin("angular_velocities")
-        self._assign(self._w, value, "angular_velocities", (len(self), 3))
+        self._assign("_w", value, "angular_velocities", (len(self), 3))
 
     @property
     def orientations(self) -> np.ndarray:
@@ -226,9 +301,10 @@ class WorldViews:
         if not self._core.spin:
             raise ValueError(f"{name}: this world has no spin (its particles are points with mass); make it with kinema.World(..., spin=True)")
 
-    def _assign(self, view: np.ndarray, value: Any, name: str, shape: tuple[int, ...]) -> None:
+    def _assign(self, view_name: str, value: Any, name: str, shape: tuple[int, ...]) -> None:
         if isinstance(self._core, _Busy):  # (from a force while the world steps)
             raise RuntimeError(REENTRY)
+        view = self._view(view_name)
         new = _checks.real_array(name, value)
         try:
             new = np.broadcast_to(new, shape)
@@ -241,13 +317,13 @@ class WorldViews:
         except ValueError:
             view[...] = old  # nothing half-written
             raise
-        self._pull()
+        self._pull(keep=True)
 
     @property
     def momenta(self) -> np.ndarray:
         """Momenta L = m v (N, 3), kg·m/s (0 for pinned particles); a new read-only array."""
         self._push()
-        out = self._m[:, None] * self._v
+        out = self.masses[:, None] * self.velocities
         out.flags.writeable = False
         return out
 
@@ -297,7 +373,7 @@ class WorldViews:
     def species(self) -> np.ndarray | None:
         """Each particle's species name (N,), ``X`` where none was given; ``None`` when no
         particle has one."""
-        if not any(self._species):
+        if self._species is None or not any(self._species):
             return None
         return np.array([s or "X" for s in self._species])
 

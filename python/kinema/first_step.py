@@ -70,15 +70,15 @@ RAYLEIGH_FRACTION = 0.2
 @dataclass(frozen=True)
 class Bodies:
     """What the check reads of the particles, one row per movable (or emitted) particle:
-    ``x`` (N, 3), m; ``v`` (N, 3), m/s; ``r`` (N,), m; ``w`` (N,), 1/kg; ``label`` (N,) how the
-    message names each ("particle 3", "emitter 0's particle of r = ..."); and the pinned
+    ``x`` (N, 3), m; ``v`` (N, 3), m/s; ``r`` (N,), m; ``w`` (N,), 1/kg; ``label`` how the
+    message names each ("particle 3", "emitter 0's particle of r = ...": ``Labels``); and the pinned
     particles, obstacles like a collider: ``fixed_x`` (P, 3), m, ``fixed_r`` (P,), m."""
 
     x: np.ndarray
     v: np.ndarray
     r: np.ndarray
     w: np.ndarray
-    label: list[str]
+    label: Labels
     fixed_x: np.ndarray
     fixed_r: np.ndarray
 
@@ -128,6 +128,23 @@ def gravity(forces: list[Any], dim: int) -> np.ndarray:
     return g
 
 
+class Labels:
+    """How the check's message names each body: ``"particle i"`` for the world's particle
+    ``i`` (made when asked: a million of them as strings were 70 MB for a message that names
+    two), then the emitters' ``extra`` names."""
+
+    def __init__(self, particles: np.ndarray, extra: list[str]) -> None:
+        self.particles, self.extra = particles, extra
+
+    def __len__(self) -> int:
+        return len(self.particles) + len(self.extra)
+
+    def __getitem__(self, k: Any) -> str:
+        k = int(k)
+        n = len(self.particles)
+        return f"particle {self.particles[k]}" if k < n else self.extra[k - n]
+
+
 def bodies_of(world: Any, core: Any) -> Bodies:
     """The world's movable particles and, for each emitter, a particle of its smallest and its
     largest radius born at the top of its shape (along −g) at its fastest speed."""
@@ -135,8 +152,10 @@ def bodies_of(world: Any, core: Any) -> Bodies:
     r = np.asarray(core.radii, float)
     movable = (w > 0) & (r > 0)
     idx = np.flatnonzero(movable)
-    x, v = [world.positions[movable]], [world.velocities[movable]]
-    rs, ws, labels = [r[movable]], [w[movable]], [f"particle {i}" for i in idx]
+    every = len(idx) == len(movable)  # (then the views themselves, not copies of them)
+    x = [world.positions if every else world.positions[movable]]
+    v = [world.velocities if every else world.velocities[movable]]
+    rs, ws, labels = [r[movable]], [w[movable]], []
     g = gravity(world.forces, core.dim)
     up = -g / np.linalg.norm(g) if g.any() else np.zeros(3)
     for k, source in enumerate(world._state().emitters):
@@ -157,7 +176,11 @@ def bodies_of(world: Any, core: Any) -> Bodies:
             ws.append(np.full(2, 1.0 / mass))
             labels += [f"emitter {k}'s particle of r = {radius:g} m"] * 2
     pinned = (w == 0) & (r > 0)
-    return Bodies(np.concatenate(x), np.concatenate(v), np.concatenate(rs), np.concatenate(ws), labels, world.positions[pinned], r[pinned])
+
+    def joined(parts: list[np.ndarray]) -> np.ndarray:
+        return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+    return Bodies(joined(x), joined(v), joined(rs), joined(ws), Labels(idx, labels), world.positions[pinned], r[pinned])
 
 
 def _reach(c: dict, up: np.ndarray) -> float:
@@ -256,7 +279,6 @@ def shortest_contact(settings: dict, bodies: Bodies, colliders: list[Any], g: np
     model = settings["model"]
     gabs = float(np.linalg.norm(g))
     down = g / gabs if gabs > 0 else np.zeros(3)
-    speed2 = np.einsum("ij,ij->i", bodies.v, bodies.v)
     zeta = contact_time._zeta(restitution_max)
     if model == "spring_dashpot":
         k = settings["stiffness"]
@@ -273,6 +295,7 @@ def shortest_contact(settings: dict, bodies: Bodies, colliders: list[Any], g: np
     # fastest speeds
     e_star = settings["youngs_modulus"] / (2.0 * (1.0 - settings["poisson_ratio"] ** 2))
     best: tuple[float, float, str] | None = None  # (t_c, u, what)
+    speed2 = np.einsum("ij,ij->i", bodies.v, bodies.v)
     free = np.sqrt(speed2)
     for name, d, s in _obstacles(bodies, colliders, down, t, dt):
         fall = np.sqrt(speed2 + 2.0 * gabs * d)

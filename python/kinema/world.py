@@ -164,7 +164,7 @@ class World(WorldViews, WorldParticles, WorldBirths, WorldRun, WorldCollisions):
         self._warned = False
         self._contact_warned = False
         self._advice_due = True
-        self._species: list[str] = []  # per particle ("": none given)
+        self._species: list[str] | None = None  # per particle ("": none given); None while no particle has one
         # Births and deaths: the emitters at work, the kill volumes, and per particle its time
         # of death (inf: none), its colour (NaN: none) and the id pairs of the springs.
         self._emitters: list[Any] = []
@@ -481,7 +481,8 @@ class World(WorldViews, WorldParticles, WorldBirths, WorldRun, WorldCollisions):
 
     def diagnostics(self) -> dict:
         """Kinetic energy (J), potential energy per conservative force (J), linear momentum
-        (kg·m/s) and angular momentum about the origin (kg·m²/s) now. With spin: ``rotational``,
+        (kg·m/s), angular momentum about the origin (kg·m²/s) and ``kinetic_tensor``, Σ m v ⊗ v
+        (J, 9 numbers, row-major: the kinetic part of the pressure tensor times the volume) now. With spin: ``rotational``,
         Σ ½ I |ω|² (J), and ``spin_angular_momentum``, Σ I ω (kg·m²/s), which
         ``angular_momentum`` includes."""
         self._push()

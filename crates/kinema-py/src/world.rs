@@ -240,47 +240,65 @@ impl PyWorld {
         PyArray1::from_slice(py, &self.inner.in_user_order(|p| &p.inv_mass, 1))
     }
 
-    /// Copies positions, velocities and masses from the caller's arrays into the world when
-    /// they differ from its own (the method caches then restart); returns whether they did.
-    /// Checks every value first: nothing is changed by a bad one.
+    /// Copies positions, velocities and masses from the caller's arrays (those given; `None`
+    /// where Python holds no view) into the world when they differ from its own (the method
+    /// caches then restart); returns whether they did. Checks every value first: nothing is
+    /// changed by a bad one.
+    #[pyo3(signature = (x=None, v=None, m=None))]
     fn sync(
         &mut self,
-        x: PyReadonlyArray2<'_, f64>,
-        v: PyReadonlyArray2<'_, f64>,
-        m: PyReadonlyArray1<'_, f64>,
+        x: Option<PyReadonlyArray2<'_, f64>>,
+        v: Option<PyReadonlyArray2<'_, f64>>,
+        m: Option<PyReadonlyArray1<'_, f64>>,
     ) -> PyResult<bool> {
         let n = self.inner.len();
-        let (x, v, m) = (x.as_array(), v.as_array(), m.as_array());
-        if x.shape() != [n, 3] || v.shape() != [n, 3] || m.shape() != [n] {
+        let flat = |a: numpy::ndarray::ArrayViewD<'_, f64>| a.iter().copied().collect::<Vec<f64>>();
+        let shape_ok = |shape: &[usize], want: &[usize]| shape == want;
+        let (x, v, m) = (
+            x.as_ref().map(|a| a.as_array()),
+            v.as_ref().map(|a| a.as_array()),
+            m.as_ref().map(|a| a.as_array()),
+        );
+        if !(x.as_ref().is_none_or(|a| shape_ok(a.shape(), &[n, 3]))
+            && v.as_ref().is_none_or(|a| shape_ok(a.shape(), &[n, 3]))
+            && m.as_ref().is_none_or(|a| shape_ok(a.shape(), &[n])))
+        {
             return Err(PyValueError::new_err(format!(
                 "positions, velocities and masses must keep their shapes ({n}, 3), ({n}, 3) and ({n},); \
                  assign new values into them instead of resizing"
             )));
         }
-        let unchanged = match (x.as_slice(), v.as_slice(), m.as_slice()) {
-            (Some(xs), Some(vs), Some(ms)) => self.inner.state_is(xs, vs, ms),
-            _ => {
-                let flat = |a: numpy::ndarray::ArrayViewD<'_, f64>| a.iter().copied().collect::<Vec<f64>>();
-                let (xs, vs, ms) = (
-                    flat(x.view().into_dyn()),
-                    flat(v.view().into_dyn()),
-                    flat(m.view().into_dyn()),
-                );
-                self.inner.state_is(&xs, &vs, &ms)
-            }
-        };
-        if unchanged {
+        // (contiguous: compared in place; else a flat copy first)
+        let xs = x.as_ref().map(|a| {
+            a.as_slice().map_or_else(
+                || std::borrow::Cow::Owned(flat(a.view().into_dyn())),
+                std::borrow::Cow::Borrowed,
+            )
+        });
+        let vs = v.as_ref().map(|a| {
+            a.as_slice().map_or_else(
+                || std::borrow::Cow::Owned(flat(a.view().into_dyn())),
+                std::borrow::Cow::Borrowed,
+            )
+        });
+        let ms = m.as_ref().map(|a| {
+            a.as_slice().map_or_else(
+                || std::borrow::Cow::Owned(flat(a.view().into_dyn())),
+                std::borrow::Cow::Borrowed,
+            )
+        });
+        if self.inner.state_is(xs.as_deref(), vs.as_deref(), ms.as_deref()) {
             return Ok(false);
         }
-        // (a write: the user's order; the values checked by the engine's one check,
-        // `kinema::particles::check_state`, nothing written if one is bad)
-        let flat = |a: numpy::ndarray::ArrayViewD<'_, f64>| a.iter().copied().collect::<Vec<f64>>();
-        let (xs, vs, ms) = (
-            flat(x.view().into_dyn()),
-            flat(v.view().into_dyn()),
-            flat(m.view().into_dyn()),
+        // (a write: the user's order, what no view holds read from the world; the values
+        // checked by the engine's one check, `kinema::particles::check_state`, nothing written
+        // if one is bad)
+        let (xw, vw, mw) = (
+            xs.map_or_else(|| self.inner.in_user_order(|p| &p.x, 3).into_owned(), |a| a.into_owned()),
+            vs.map_or_else(|| self.inner.in_user_order(|p| &p.v, 3).into_owned(), |a| a.into_owned()),
+            ms.map_or_else(|| self.inner.in_user_order(|p| &p.mass, 1).into_owned(), |a| a.into_owned()),
         );
-        self.inner.get().write_state(&xs, &vs, &ms).map_err(to_py)?;
+        self.inner.get().write_state(&xw, &vw, &mw).map_err(to_py)?;
         Ok(true)
     }
 
@@ -395,19 +413,31 @@ impl PyWorld {
         Ok(true)
     }
 
-    /// Writes the positions and velocities into the caller's (N, 3) arrays.
-    fn read_state(&self, mut x: PyReadwriteArray2<'_, f64>, mut v: PyReadwriteArray2<'_, f64>) -> PyResult<()> {
+    /// Writes the positions and velocities into the caller's (N, 3) arrays (those given).
+    #[pyo3(signature = (x=None, v=None))]
+    fn read_state(&self, x: Option<PyReadwriteArray2<'_, f64>>, v: Option<PyReadwriteArray2<'_, f64>>) -> PyResult<()> {
         let n = self.inner.len();
-        let (mut x, mut v) = (x.as_array_mut(), v.as_array_mut());
-        if x.shape() != [n, 3] || v.shape() != [n, 3] {
-            return Err(PyValueError::new_err(format!("state arrays must have shape ({n}, 3)")));
+        let mut arrays = [x, v];
+        for a in arrays.iter_mut().flatten() {
+            if a.as_array().shape() != [n, 3] {
+                return Err(PyValueError::new_err(format!("state arrays must have shape ({n}, 3)")));
+            }
         }
-        match (x.as_slice_mut(), v.as_slice_mut()) {
-            (Some(xs), Some(vs)) => self.inner.read_state_into(xs, vs),
-            _ => {
-                let (mut xs, mut vs) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
-                self.inner.read_state_into(&mut xs, &mut vs);
+        let [x, v] = &mut arrays;
+        let (mut x, mut v) = (x.as_mut().map(|a| a.as_array_mut()), v.as_mut().map(|a| a.as_array_mut()));
+        let contiguous = x.as_ref().is_none_or(|a| a.is_standard_layout()) && v.as_ref().is_none_or(|a| a.is_standard_layout());
+        if contiguous {
+            self.inner.read_state_into(
+                x.as_mut().and_then(|a| a.as_slice_mut()),
+                v.as_mut().and_then(|a| a.as_slice_mut()),
+            );
+        } else {
+            let (mut xs, mut vs) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
+            self.inner.read_state_into(Some(&mut xs), Some(&mut vs));
+            if let Some(x) = &mut x {
                 x.iter_mut().zip(&xs).for_each(|(d, s)| *d = *s);
+            }
+            if let Some(v) = &mut v {
                 v.iter_mut().zip(&vs).for_each(|(d, s)| *d = *s);
             }
         }
@@ -492,6 +522,7 @@ impl PyWorld {
         out.set_item("potential", pot)?;
         out.set_item("momentum", d.momentum.to_vec())?;
         out.set_item("angular_momentum", d.angular_momentum.to_vec())?;
+        out.set_item("kinetic_tensor", d.kinetic_tensor.to_vec())?;
         if self.inner.has_spin() {
             out.set_item("rotational", d.rotational)?;
             out.set_item("spin_angular_momentum", d.spin.to_vec())?;

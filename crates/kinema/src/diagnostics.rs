@@ -21,6 +21,9 @@ pub struct Diagnostics {
     /// With spin: the particles' own angular momentum Σ I ω, kg·m²/s (0 without; part of
     /// `angular_momentum`).
     pub spin: [f64; 3],
+    /// The kinetic tensor Σ m v ⊗ v, J (row-major 3 × 3): over a volume, the kinetic part of
+    /// the pressure tensor (`Trajectory.pressure`); its trace is twice `kinetic`.
+    pub kinetic_tensor: [f64; 9],
 }
 
 impl Diagnostics {
@@ -29,6 +32,7 @@ impl Diagnostics {
         let mut kinetic = 0.0;
         let mut p = [0.0; 3];
         let mut l = [0.0; 3];
+        let mut tensor = [0.0; 9];
         for i in 0..s.len() {
             let m = s.mass[i];
             let x = &s.x[3 * i..3 * i + 3];
@@ -41,6 +45,13 @@ impl Diagnostics {
             l[0] += m * (x[1] * v[2] - x[2] * v[1]);
             l[1] += m * (x[2] * v[0] - x[0] * v[2]);
             l[2] += m * (x[0] * v[1] - x[1] * v[0]);
+            // m v ⊗ v: the upper triangle, mirrored below
+            for (r, c) in [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)] {
+                tensor[3 * r + c] += m * v[r] * v[c];
+            }
+        }
+        for (r, c) in [(1, 0), (2, 0), (2, 1)] {
+            tensor[3 * r + c] = tensor[3 * c + r];
         }
         let potential = forces
             .iter()
@@ -54,6 +65,7 @@ impl Diagnostics {
             angular_momentum: l,
             rotational: 0.0,
             spin: [0.0; 3],
+            kinetic_tensor: tensor,
         }
     }
 

@@ -70,8 +70,15 @@ fn a_world_kept_in_the_engines_order_shows_the_users() {
     assert_eq!(*kept.in_user_order(|p| &p.mass, 1), m[..]);
     assert_eq!(*kept.in_user_order(|p| &p.radius, 1), r[..]);
     let (mut xr, mut vr) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
-    kept.read_state_into(&mut xr, &mut vr);
-    assert!(xr == x && vr == v && kept.state_is(&x, &v, &m));
+    kept.read_state_into(Some(&mut xr), Some(&mut vr));
+    assert!(xr == x && vr == v && kept.state_is(Some(&x), Some(&v), Some(&m)));
+    // one array alone reads and compares alone
+    let mut x_only = vec![0.0; x.len()];
+    kept.read_state_into(Some(&mut x_only), None);
+    assert!(x_only == x && kept.state_is(Some(&x), None, None) && kept.state_is(None, None, Some(&m)));
+    let mut v_off = v.clone();
+    v_off[4] = f64::from_bits(v_off[4].to_bits() ^ 1); // one bit of one velocity
+    assert!(!kept.state_is(None, Some(&v_off), None) && kept.state_is(Some(&x), None, Some(&m)));
     assert!(kept.in_engine_order(), "reading moved nothing");
 
     // ... and the same bits as one call of `World::advance`, which puts them back at its end.

@@ -159,42 +159,41 @@ impl World {
         Cow::Owned(out)
     }
 
-    /// Writes the positions (m) and velocities (m/s), 3 per particle, into `x` and `v` in the
-    /// user's order (which the engine need not keep: a gather, not a permutation of the world).
-    fn read_state_into(&self, x: &mut [f64], v: &mut [f64]) {
+    /// Writes the positions (m) and velocities (m/s), 3 per particle, into `x` and `v` (those
+    /// given) in the user's order (which the engine need not keep: a gather, not a permutation
+    /// of the world).
+    fn read_state_into(&self, x: Option<&mut [f64]>, v: Option<&mut [f64]>) {
         let p = &self.particles;
-        match &self.sorted {
-            Some(order) => {
-                gather_into(x, &p.x, &order.engine_of, 3);
-                gather_into(v, &p.v, &order.engine_of, 3);
-            }
-            None => {
-                x.copy_from_slice(&p.x);
-                v.copy_from_slice(&p.v);
+        for (out, own) in [(x, &p.x), (v, &p.v)] {
+            let Some(out) = out else { continue };
+            match &self.sorted {
+                Some(order) => gather_into(out, own, &order.engine_of, 3),
+                None => out.copy_from_slice(own),
             }
         }
     }
 
-    /// Whether `x`, `v` (3 per particle) and `m` (one per particle), in the user's order, are
-    /// bit for bit the world's positions, velocities and masses (the caller's copies, unwritten).
-    fn state_is(&self, x: &[f64], v: &[f64], m: &[f64]) -> bool {
+    /// Whether `x`, `v` (3 per particle) and `m` (one per particle), those given, in the
+    /// user's order, are bit for bit the world's positions, velocities and masses (the
+    /// caller's copies, unwritten).
+    fn state_is(&self, x: Option<&[f64]>, v: Option<&[f64]>, m: Option<&[f64]>) -> bool {
         let p = &self.particles;
         let same = |a: &f64, b: &f64| a.to_bits() == b.to_bits();
-        match &self.sorted {
-            Some(order) => order.engine_of.par_iter().enumerate().with_min_len(CHUNK).all(|(u, &i)| {
-                let (u, i) = (u, i as usize);
-                (0..3).all(|k| same(&x[3 * u + k], &p.x[3 * i + k]) && same(&v[3 * u + k], &p.v[3 * i + k]))
-                    && same(&m[u], &p.mass[i])
-            }),
-            None => {
-                let (x, v) = ((x, &p.x), (v, &p.v));
-                [x, v].into_iter().all(|(a, b)| {
-                    a.par_chunks(CHUNK)
-                        .zip(b.par_chunks(CHUNK))
-                        .all(|(a, b)| a.iter().zip(b).all(|(a, b)| same(a, b)))
-                }) && m.iter().zip(&p.mass).all(|(a, b)| same(a, b))
-            }
-        }
+        [(x, &p.x, 3), (v, &p.v, 3), (m, &p.mass, 1)]
+            .into_iter()
+            .all(|(given, own, width)| {
+                let Some(given) = given else { return true };
+                match &self.sorted {
+                    Some(order) => order.engine_of.par_iter().enumerate().with_min_len(CHUNK).all(|(u, &i)| {
+                        let i = i as usize;
+                        (0..width).all(|k| same(&given[width * u + k], &own[width * i + k]))
+                    }),
+                    None => given
+                        .par_chunks(CHUNK)
+                        .zip(own.par_chunks(CHUNK))
+                        .all(|(a, b)| a.iter().zip(b).all(|(a, b)| same(a, b))),
+                }
+            })
     }
 
     /// Puts the particles back in the user's order, if they are sorted.
@@ -329,15 +328,15 @@ impl UserOrder {
         self.world.in_user_order(a, width)
     }
 
-    /// Writes the positions (m) and velocities (m/s), 3 per particle, into `x` and `v` in the
-    /// user's order.
-    pub fn read_state_into(&self, x: &mut [f64], v: &mut [f64]) {
+    /// Writes the positions (m) and velocities (m/s), 3 per particle, into `x` and `v` (those
+    /// given) in the user's order.
+    pub fn read_state_into(&self, x: Option<&mut [f64]>, v: Option<&mut [f64]>) {
         self.world.read_state_into(x, v);
     }
 
-    /// Whether `x`, `v` (3 per particle) and `m` (one per particle), in the user's order, are
-    /// bit for bit the world's positions, velocities and masses.
-    pub fn state_is(&self, x: &[f64], v: &[f64], m: &[f64]) -> bool {
+    /// Whether `x`, `v` (3 per particle) and `m` (one per particle), those given, in the
+    /// user's order, are bit for bit the world's positions, velocities and masses.
+    pub fn state_is(&self, x: Option<&[f64]>, v: Option<&[f64]>, m: Option<&[f64]>) -> bool {
         self.world.state_is(x, v, m)
     }
 
