@@ -104,13 +104,30 @@ mod tests {
     fn the_kinetic_tensor_is_the_sum_of_m_v_v_and_its_trace_twice_the_kinetic_energy() {
         // m = 1, v = (1, 2, 3) and m = 2, v = (−1, 0, 2): Σ m v_r v_c by hand
         let (x, v, mass) = (vec![0.0; 6], vec![1.0, 2.0, 3.0, -1.0, 0.0, 2.0], vec![1.0, 2.0]);
-        let d = Diagnostics::measure(&State { t: 0.0, x: &x, v: &v, mass: &mass }, &[]);
+        let d = Diagnostics::measure(
+            &State {
+                t: 0.0,
+                x: &x,
+                v: &v,
+                mass: &mass,
+            },
+            &[],
+        );
         let expected = [
-            1.0 + 2.0, 2.0 + 0.0, 3.0 - 4.0, //
-            2.0 + 0.0, 4.0 + 0.0, 6.0 + 0.0, //
-            3.0 - 4.0, 6.0 + 0.0, 9.0 + 8.0,
+            1.0 + 2.0,
+            2.0 + 0.0,
+            3.0 - 4.0, //
+            2.0 + 0.0,
+            4.0 + 0.0,
+            6.0 + 0.0, //
+            3.0 - 4.0,
+            6.0 + 0.0,
+            9.0 + 8.0,
         ];
         assert_eq!(d.kinetic_tensor, expected);
-        assert_eq!(d.kinetic_tensor[0] + d.kinetic_tensor[4] + d.kinetic_tensor[8], 2.0 * d.kinetic);
+        assert_eq!(
+            d.kinetic_tensor[0] + d.kinetic_tensor[4] + d.kinetic_tensor[8],
+            2.0 * d.kinetic
+        );
     }
 }

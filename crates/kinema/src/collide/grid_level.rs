@@ -3,8 +3,17 @@
 //! box) and its cells filled by a counting sort; the cells around a point, visited slot by
 //! slot, for the pair searches.
 
+use rayon::prelude::*;
+
 use super::domain::Domain;
 use crate::vec3;
+
+/// From this many particles on, a level's build finds their cells on all threads (below, a
+/// parallel pass costs more than it saves).
+const PARALLEL_CELLS: usize = 1 << 14;
+
+/// Particles per task of that parallel pass.
+const CELL_CHUNK: usize = 4096;
 
 /// Relative widening of the cells beyond s = 2 r_max + margin.
 ///
@@ -70,11 +79,25 @@ impl Level {
         let total = self.dims.iter().product::<usize>();
         self.start.clear();
         self.start.resize(total + 1, 0);
-        for k in 0..count {
-            let i = member(k);
-            let c = self.flatten(self.cell_at(vec3::get(x, i), domain));
-            cell_of[i] = c as u32;
-            self.start[c + 1] += 1;
+        if members.is_none() && count >= PARALLEL_CELLS {
+            // every particle: the cells (a division and a wrap per axis) on all threads,
+            // each particle's alone; the counting below reads them in order
+            let level = &*self;
+            cell_of[..count].par_chunks_mut(CELL_CHUNK).enumerate().for_each(|(c, out)| {
+                for (l, o) in out.iter_mut().enumerate() {
+                    *o = level.flatten(level.cell_at(vec3::get(x, c * CELL_CHUNK + l), domain)) as u32;
+                }
+            });
+            for &c in &cell_of[..count] {
+                self.start[c as usize + 1] += 1;
+            }
+        } else {
+            for k in 0..count {
+                let i = member(k);
+                let c = self.flatten(self.cell_at(vec3::get(x, i), domain));
+                cell_of[i] = c as u32;
+                self.start[c + 1] += 1;
+            }
         }
         for c in 1..=total {
             self.start[c] += self.start[c - 1];

@@ -1,6 +1,8 @@
 //! The checks that refuse a step: a non-finite state, runaway energy (see [`World::step`]),
 //! a state beyond the collision geometry; and the error a refused step returns.
 
+use rayon::prelude::*;
+
 use super::forces::{contact_force, every_force_ref};
 use super::World;
 use crate::error::{Divergence, Error};
@@ -16,6 +18,10 @@ pub const RUNAWAY_FACTOR: f64 = 1e3;
 /// the contacts, which would cost as much as a force evaluation per step. A runaway grows
 /// over many steps, and a step that overflows is refused at once by the non-finite check.
 pub const RUNAWAY_CHECK_EVERY: u64 = 10;
+
+/// Particles per chunk of the check's kinetic energy sum (fixed: the sum's bits do not
+/// depend on the number of threads).
+const KINETIC_CHUNK: usize = 4096;
 
 /// The reference of the runaway-energy check (see [`World::step`]).
 #[derive(Debug, Clone, Copy)]
@@ -49,12 +55,22 @@ impl World {
     /// plus the magnitudes of the potentials.
     pub(super) fn energy_and_scale(&self, x: &[f64], v: &[f64]) -> (f64, f64) {
         let p = &self.particles;
+        // Σ ½ m |v|² over the movable particles: each chunk of a fixed size summed on its own
+        // thread, the chunks' sums added in order (the same bits for any number of threads)
         let kinetic: f64 = v
-            .chunks_exact(3)
-            .zip(&p.mass)
-            .zip(&p.inv_mass)
-            .filter(|(_, w)| **w > 0.0)
-            .map(|((vi, m), _)| 0.5 * m * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]))
+            .par_chunks(3 * KINETIC_CHUNK)
+            .zip(p.mass.par_chunks(KINETIC_CHUNK))
+            .zip(p.inv_mass.par_chunks(KINETIC_CHUNK))
+            .map(|((v, mass), inv_mass)| {
+                v.chunks_exact(3)
+                    .zip(mass)
+                    .zip(inv_mass)
+                    .filter(|(_, w)| **w > 0.0)
+                    .map(|((vi, m), _)| 0.5 * m * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]))
+                    .sum::<f64>()
+            })
+            .collect::<Vec<f64>>()
+            .into_iter()
             .sum();
         let s = State {
             t: self.time,

@@ -27,13 +27,14 @@ impl NeighbourList {
             w.0 = new_of_old[w.0] as usize;
         }
         self.walls.sort_unstable();
-        let built: Vec<f64> = old_of_new
-            .iter()
-            .flat_map(|&o| {
-                let o = o as usize;
-                [self.built_at[3 * o], self.built_at[3 * o + 1], self.built_at[3 * o + 2]]
-            })
-            .collect();
+        // the build's positions in the new order: a gather, on all threads
+        let mut built = vec![0.0; self.built_at.len()];
+        let from = &self.built_at;
+        built
+            .par_chunks_mut(3)
+            .zip(old_of_new.par_iter())
+            .with_min_len(CHUNK)
+            .for_each(|(b, &o)| b.copy_from_slice(&from[3 * o as usize..3 * o as usize + 3]));
         self.built_at = built;
     }
 
