@@ -6,7 +6,7 @@ use super::dynamics::Dynamics;
 use super::forces::{contact_force, every_force};
 use super::implicit::{BaraffWitkin, StepSpan};
 use super::{World, RUNAWAY_CHECK_EVERY};
-use crate::collide::contact_force::{SpinKick, VerletKick, CHUNK};
+use crate::collide::contact_force::{SpinKick, VerletKick};
 use crate::error::{Divergence, Error};
 use crate::forces::State;
 use crate::ode::explicit_rk::ExplicitRk;
@@ -69,6 +69,12 @@ pub(super) struct VerletBuffers {
     /// `a` holds the acceleration at the current state.
     pub(super) fresh: bool,
 }
+
+/// Particles per task of Verlet's per-particle passes (the drift, the kick of forces other
+/// than the contacts'): each particle's own arithmetic, so the same bits for any chunks, and
+/// small enough that a cloth of 10⁴ nodes splits evenly over two threads (2048 gave five
+/// tasks, three on one thread).
+const PASS_CHUNK: usize = 1024;
 
 /// The particles below which stage 1 runs on a worker of rayon's pool ([`World::integrate`]).
 /// Above, each of its passes is long beside a thread switch (microseconds), and it stays on
@@ -213,11 +219,11 @@ impl World {
         let cell = self.collide_stage.as_ref().and_then(|c| c.domain.periodic_box());
         let p = &self.particles;
         self.x_next
-            .par_chunks_mut(3 * CHUNK)
-            .zip(self.v_next.par_chunks_mut(3 * CHUNK))
+            .par_chunks_mut(3 * PASS_CHUNK)
+            .zip(self.v_next.par_chunks_mut(3 * PASS_CHUNK))
             .enumerate()
             .map(|(c, (xn, vn))| {
-                let base = 3 * CHUNK * c;
+                let base = 3 * PASS_CHUNK * c;
                 let mut bad = None;
                 for k in 0..xn.len() {
                     let (x, v) = (p.x[base + k], p.v[base + k]);
@@ -286,11 +292,11 @@ impl World {
         let p = &self.particles;
         let a = &b.a;
         self.x_next
-            .par_chunks_mut(3 * CHUNK)
-            .zip(self.v_next.par_chunks_mut(3 * CHUNK))
+            .par_chunks_mut(3 * PASS_CHUNK)
+            .zip(self.v_next.par_chunks_mut(3 * PASS_CHUNK))
             .enumerate()
             .for_each(|(c, (xn, vn))| {
-                let chunk = 3 * CHUNK * c..3 * CHUNK * c + xn.len();
+                let chunk = 3 * PASS_CHUNK * c..3 * PASS_CHUNK * c + xn.len();
                 let (x, v, a) = (&p.x[chunk.clone()], &p.v[chunk.clone()], &a[chunk]);
                 for ((((xn, vn), x), v), a) in xn.iter_mut().zip(vn.iter_mut()).zip(x).zip(v).zip(a) {
                     (*xn, *vn) = verlet::drift(*x, *v, *a, h);
@@ -384,11 +390,11 @@ impl World {
         let (a, a_next) = (&b.a, &b.a_next);
         let bad = self
             .v_next
-            .par_chunks_mut(3 * CHUNK)
-            .zip(self.x_next.par_chunks(3 * CHUNK))
+            .par_chunks_mut(3 * PASS_CHUNK)
+            .zip(self.x_next.par_chunks(3 * PASS_CHUNK))
             .enumerate()
             .map(|(c, (vn, xn))| {
-                let chunk = 3 * CHUNK * c..3 * CHUNK * c + vn.len();
+                let chunk = 3 * PASS_CHUNK * c..3 * PASS_CHUNK * c + vn.len();
                 let (v, a, a_next) = (&p.v[chunk.clone()], &a[chunk.clone()], &a_next[chunk.clone()]);
                 for (((vn, v), a), a_next) in vn.iter_mut().zip(v).zip(a).zip(a_next) {
                     *vn = verlet::kick(*v, *a, *a_next, h);
