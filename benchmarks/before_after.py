@@ -79,7 +79,10 @@ import numpy as np
 import kinema
 
 rng = np.random.default_rng(1)
-x = rng.uniform(-1.0, 1.0, (5000, 3))
+# 5000 of a lattice 0.11 m apart, jittered by 1 cm (uniform random places overlapped, which
+# the placement check now refuses)
+g = np.linspace(-0.95, 0.95, 18)
+x = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)[:5000] + rng.uniform(-0.01, 0.01, (5000, 3))
 w = kinema.World(dt=1e-3)
 w.add_particles(x, radius=0.01)
 w.add(kinema.Box([-1.2, -1.2, -1.2], [1.2, 1.2, 1.2]))
