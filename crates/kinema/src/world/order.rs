@@ -250,7 +250,12 @@ impl World {
             f.reindex(&new_of_old);
         }
         if let Some(model) = self.force_model() {
-            model.renumber(&new_of_old, old_of_new);
+            if step_buffers {
+                // (a sort along space: made because the list has expired, `sort_along_space`)
+                model.renumber_expired(&new_of_old);
+            } else {
+                model.renumber(&new_of_old, old_of_new);
+            }
         }
     }
 }

@@ -131,6 +131,17 @@ impl ContactForceModel {
         scratch.histories.renumber(new_of_old);
     }
 
+    /// Follows a sort made because the list has expired ([`ContactForceModel::list_expired`]:
+    /// the next evaluation builds it anew from the positions alone): the contacts' memory
+    /// follows the particles, the list is only dropped (its rows' room kept for the build).
+    /// Renumbering it was work thrown away at once: a new copy of its rows and of its build
+    /// positions at every sort.
+    pub fn renumber_expired(&self, new_of_old: &[u32]) {
+        let mut scratch = self.scratch();
+        scratch.list.expire();
+        scratch.histories.renumber(new_of_old);
+    }
+
     /// Follows a removal of particles (`new_of_old` as [`NeighbourList::retain_survivors`]
     /// takes it): the survivors' pairs stay listed, so the next evaluation need not search
     /// the grid again.

@@ -9,6 +9,13 @@ use crate::collide::groups::Filter;
 use crate::collide::{Collider, Domain};
 
 impl NeighbourList {
+    /// No list until the next build (which reads nothing of the old one: its rows' room is
+    /// kept for it).
+    pub(crate) fn expire(&mut self) {
+        self.verified = None;
+        self.built_at.clear();
+    }
+
     /// Follows a renumbering of the particles, `new_of_old[i]` the new index of particle i:
     /// rows, partners, walls and the build's positions move with their particles (the list
     /// stays the same list, in the new numbering).
