@@ -252,7 +252,6 @@ impl PyWorld {
         m: Option<PyReadonlyArray1<'_, f64>>,
     ) -> PyResult<bool> {
         let n = self.inner.len();
-        let flat = |a: numpy::ndarray::ArrayViewD<'_, f64>| a.iter().copied().collect::<Vec<f64>>();
         let shape_ok = |shape: &[usize], want: &[usize]| shape == want;
         let (x, v, m) = (
             x.as_ref().map(|a| a.as_array()),
@@ -268,25 +267,11 @@ impl PyWorld {
                  assign new values into them instead of resizing"
             )));
         }
-        // (contiguous: compared in place; else a flat copy first)
-        let xs = x.as_ref().map(|a| {
-            a.as_slice().map_or_else(
-                || std::borrow::Cow::Owned(flat(a.view().into_dyn())),
-                std::borrow::Cow::Borrowed,
-            )
-        });
-        let vs = v.as_ref().map(|a| {
-            a.as_slice().map_or_else(
-                || std::borrow::Cow::Owned(flat(a.view().into_dyn())),
-                std::borrow::Cow::Borrowed,
-            )
-        });
-        let ms = m.as_ref().map(|a| {
-            a.as_slice().map_or_else(
-                || std::borrow::Cow::Owned(flat(a.view().into_dyn())),
-                std::borrow::Cow::Borrowed,
-            )
-        });
+        let (xs, vs, ms) = (
+            x.as_ref().map(|a| values(a.view().into_dyn())),
+            v.as_ref().map(|a| values(a.view().into_dyn())),
+            m.as_ref().map(|a| values(a.view().into_dyn())),
+        );
         if self.inner.state_is(xs.as_deref(), vs.as_deref(), ms.as_deref()) {
             return Ok(false);
         }
@@ -528,6 +513,14 @@ impl PyWorld {
             out.set_item("spin_angular_momentum", d.spin.to_vec())?;
         }
         Ok(out)
+    }
+}
+
+/// The values of an array in row-major order: borrowed where it is contiguous, else copied.
+fn values<'a>(a: numpy::ndarray::ArrayViewD<'a, f64>) -> std::borrow::Cow<'a, [f64]> {
+    match a.to_slice() {
+        Some(s) => std::borrow::Cow::Borrowed(s),
+        None => std::borrow::Cow::Owned(a.iter().copied().collect()),
     }
 }
 
