@@ -191,7 +191,7 @@ impl World {
                 .and_then(|s| s.force_model().map(|m| m.list_expired(&self.x_next, &s.domain)))
                 .unwrap_or(false)
         {
-            self.sort_along_space(&mut b.a);
+            self.sort_along_space(&mut b.a, &mut b.a_next);
         }
         b.a_next.resize(n, 0.0);
         if contacts {
