@@ -34,18 +34,11 @@ The public API (everything else is private):
   docs/analysis.md)
 """
 
+import importlib as _importlib
 import os as _os
 
-from . import (
-    analysis,
-    io,
-    problems,
-    render,
-    scene,  # importing it gives Scene its build method (kinema.scene.build)
-    stability,
-)
+from . import problems, stability
 from ._core import __version__, _after_fork_in_child
-from .checkpoint import resume_run
 from .colliders import Box, Keyframes, Mesh, MeshPlacementWarning, Motion, Plane, SphereObstacle
 from .contact_time import ContactTimeWarning
 from .convergence import ConvergenceResult, convergence
@@ -62,11 +55,43 @@ from .ode import (
     solve,
     solve_second_order,
 )
-from .render import Camera2D, Camera3D, render_frames, write_video
-from .scene import Scene, SceneError, load_scene
-from .sweeps import SweepResult, sweep
 from .trajectory import Trajectory
 from .world import PlacementWarning, SimulationDiverged, StabilityWarning, World
+
+# Imported at first use (PEP 562): scene files (pydantic), checkpoints (h5py), pictures, analysis,
+# and sweeps. A script that only steps a world does not pay for them: `import kinema`
+# took 30 MB and 0.3 s with them, which at 10⁶ particles was 30 B a particle of the process's
+# peak (issue 51; README "Performance").
+_SUBMODULES = {"analysis", "io", "render", "scene", "sweeps", "checkpoint"}
+_LAZY = {
+    "resume_run": "checkpoint",
+    "Camera2D": "render",
+    "Camera3D": "render",
+    "render_frames": "render",
+    "write_video": "render",
+    "Scene": "scene",  # (importing kinema.scene gives Scene its build method: kinema.scene.build)
+    "SceneError": "scene",
+    "load_scene": "scene",
+    "SweepResult": "sweeps",
+    "sweep": "sweeps",
+}
+
+
+def __getattr__(name: str):
+    """A submodule or a name of one, imported at its first use."""
+    if name in _LAZY:
+        value = getattr(_importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    elif name in _SUBMODULES:
+        value = _importlib.import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module 'kinema' has no attribute {name!r}")
+    globals()[name] = value  # (the next look is a plain one)
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | _SUBMODULES | set(_LAZY))
+
 
 load_trajectory = Trajectory.load
 
@@ -130,5 +155,5 @@ __all__ = [
 ]
 
 # A child forked after the engine ran has none of its threads (fork copies only the thread that
-# called it); the child's forking thread builds a pool of its own (docs/performance.md, "Threads").
+# called it); the child's forking thread builds a pool of its own (docs/world.md, "Threads and processes").
 _os.register_at_fork(after_in_child=_after_fork_in_child)

@@ -1,0 +1,78 @@
+"""What the process keeps besides the engine's arrays (issue 51's memory row counts the whole
+process): what `import kinema` loads, and how the allocator gives back what a world frees.
+Each check runs in a fresh interpreter, since both are decided at import."""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import subprocess
+import sys
+
+import pytest
+
+import kinema
+
+
+def _fresh(code: str, env: dict[str, str] | None = None) -> dict:
+    """What `code` (which prints one JSON line last) prints in a fresh interpreter."""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, env={**os.environ, **(env or {})}, timeout=120)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_importing_kinema_does_not_load_the_scene_checkpoint_or_picture_libraries():
+    # pydantic (scene files) and h5py (checkpoints, trajectories) were 24 MB of every process,
+    # 24 B a particle at 10⁶ (issue 51); they load when a scene or a file is first used
+    found = _fresh(
+        "import json, sys, kinema; print(json.dumps(sorted(m for m in ('h5py', 'pydantic', 'kinema.scene', 'kinema.checkpoint', 'kinema.io', 'kinema.render') if m in sys.modules)))"
+    )
+    assert found == [], f"loaded by `import kinema`: {found}"
+
+
+def test_every_public_name_is_there_when_asked_for():
+    for name in kinema.__all__:
+        assert getattr(kinema, name) is not None, name
+    assert kinema.Scene is kinema.scene.Scene and kinema.load_scene is kinema.scene.load_scene
+    assert kinema.resume_run is kinema.checkpoint.resume_run
+    assert kinema.render_frames is kinema.render.render_frames and kinema.sweep is kinema.sweeps.sweep
+    assert callable(kinema.convergence)  # the function, not the module of the same name
+    assert hasattr(kinema.Scene, "build")  # (kinema.scene.build gives it, when the package loads)
+    assert set(kinema.__all__) <= set(dir(kinema))
+    with pytest.raises(AttributeError, match="no attribute 'not_a_name'"):
+        kinema.not_a_name  # noqa: B018
+    names = _fresh("import json; from kinema import *; print(json.dumps(sorted(k for k in dir() if not k.startswith('_'))))")
+    assert set(kinema.__all__) <= set(names) | {"__version__"}
+
+
+# glibc raises its mmap threshold to the size of each large block freed (up to 32 MiB), after
+# which large arrays come from the arenas and their room stays resident when freed: after a
+# freed 16 MiB block, a 4 MiB array is served from the heap. kinema holds the threshold at 1 MiB
+# (crates/kinema-py/src/memory.rs), unless the user set it.
+_ALLOCATIONS = """
+import ctypes, json
+import numpy as np
+import kinema
+class Info(ctypes.Structure):
+    _fields_ = [(n, ctypes.c_size_t) for n in "arena ordblks smblks hblks hblkhd usmblks fsmblks uordblks fordblks keepcost".split()]
+libc = ctypes.CDLL("libc.so.6")
+libc.mallinfo2.restype = Info
+big = np.ones(2 << 20)  # 16 MiB, mapped
+del big                 # freed: glibc's own rule raises the threshold to 16 MiB here
+mapped = libc.mallinfo2().hblkhd
+a = np.ones(1 << 19)    # 4 MiB
+print(json.dumps({"mapped": libc.mallinfo2().hblkhd - mapped}))
+"""
+
+glibc = pytest.mark.skipif(sys.platform != "linux" or platform.libc_ver()[0] != "glibc", reason="the threshold is glibc's (mallopt)")
+
+
+@glibc
+def test_large_arrays_get_their_own_mapping_after_a_large_one_was_freed():
+    assert _fresh(_ALLOCATIONS)["mapped"] >= 4 << 20
+
+
+@glibc
+def test_the_users_own_threshold_is_kept():
+    # MALLOC_MMAP_THRESHOLD_ = 64 MiB: a 4 MiB array comes from the heap, as the user asked
+    assert _fresh(_ALLOCATIONS, {"MALLOC_MMAP_THRESHOLD_": str(64 << 20)})["mapped"] == 0
