@@ -164,8 +164,8 @@ class WorldViews:
 
     def _push(self) -> None:
         """Hands what the user wrote into the views that exist to the world (a no-op when
-        unchanged). A bad value is refused whole: the world keeps its state and the views show
-        it again."""
+        unchanged), then lets go of those nobody outside holds. A bad value is refused whole: the
+        world keeps its state and the views show it again."""
         if self._x is None and self._v is None and self._m is None and self._w is None:
             return  # (nobody looked: nothing written)
         try:
@@ -177,6 +177,12 @@ class WorldViews:
             if self._m is not None:
                 self._m[...] = self._core.masses
             raise
+        # What nobody outside the world holds is let go before the engine works (made again at
+        # the next look): a passing look such as ``np.sum(w.velocities**2)`` between two steps
+        # does not stay resident while the world steps (24 MB at 10⁶ particles).
+        for name in self._VIEWS:
+            if self._held(name) is None:
+                setattr(self, name, None)
 
     def _pull(self, keep: bool = False) -> None:
         """After the engine changed the state: the views held outside the world read it (they
