@@ -139,6 +139,7 @@ pub(crate) mod stage;
 pub mod surface;
 pub mod toi;
 pub mod touch;
+pub mod velocities;
 
 mod grid_level;
 mod paths;

@@ -14,20 +14,22 @@
 
 use super::contact::{Contact, Partner};
 use super::domain::Domain;
+use super::velocities::Velocities;
 use crate::vec3;
 
 /// The contact of particles i and j if their distance is below r_i + r_j + `tolerance`
 /// (m, ≥ 0; > 0 also reports near misses, with overlap −gap < 0), else `None`.
 ///
-/// `x`, `v`: positions (m) and velocities (m/s), 3 per particle; `radius`: m. Indices must
+/// `x`: positions (m), 3 per particle; `v`: velocities (m/s, an array of 3 per particle or
+/// Verlet's predictor made when asked, `velocities.rs`); `radius`: m. Indices must
 /// be in range (the callers' lists hold them so). Every particle pair's contact in kinema is
 /// this function's: the end-of-step contacts of the impulse model, and the contact force
 /// force's at each evaluation.
-pub fn pair_contact(
+pub fn pair_contact<V: Velocities + ?Sized>(
     i: usize,
     j: usize,
     x: &[f64],
-    v: &[f64],
+    v: &V,
     radius: &[f64],
     domain: &Domain,
     tolerance: f64,
@@ -45,7 +47,7 @@ pub fn pair_contact(
     } else {
         [1.0, 0.0, 0.0]
     };
-    let u = vec3::sub(vec3::get(v, i), vec3::get(v, j));
+    let u = vec3::sub(v.at(i), v.at(j));
     Some(Contact {
         i,
         other: Partner::Particle(j),

@@ -57,7 +57,11 @@ impl WorldStepper {
 ///   v' = v + h/2 (a + a')                           (the two half kicks, one pass)
 /// ```
 ///
-/// Nothing is joined, split or copied: the accepted step swaps buffers.
+/// Nothing is joined, split or copied: the accepted step swaps buffers. Where the contact
+/// force is the only force that reads velocities, the predictor is not stored: the contacts
+/// make it from v and a where two touch (`collide/velocities.rs`, the same bits), and the
+/// step holds five arrays of 3 per particle (x, v, a, x', the force sum that becomes the new
+/// velocities), not six; `a_next` is then empty between steps.
 #[derive(Default)]
 pub(super) struct VerletBuffers {
     pub(super) a: Vec<f64>,
@@ -183,7 +187,9 @@ impl World {
         if !b.fresh || b.a.len() != n {
             self.verlet_first_accel(b, t, n)?;
         }
-        self.verlet_drift(b, h, contacts);
+        // the contacts make the predictor where they need it when no other force reads it
+        let predict = contacts && !self.forces.iter().any(|f| f.properties().depends_on_velocity);
+        self.verlet_drift(b, h, contacts, !predict);
         if self.sortable()
             && self
                 .collide_stage
@@ -191,12 +197,16 @@ impl World {
                 .and_then(|s| s.force_model().map(|m| m.list_expired(&self.x_next, &s.domain)))
                 .unwrap_or(false)
         {
-            self.sort_along_space(&mut b.a, &mut b.a_next);
+            // (the room the arrays move through: one the step writes before it reads)
+            let spare = if predict { &mut self.v_next } else { &mut b.a_next };
+            let mut spare = std::mem::take(spare);
+            self.sort_along_space(&mut b.a, &mut spare);
+            *(if predict { &mut self.v_next } else { &mut b.a_next }) = spare;
         }
-        b.a_next.resize(n, 0.0);
         if contacts {
-            self.verlet_fused_kick(b, t, h, n)
+            self.verlet_fused_kick(b, t, h, n, predict)
         } else {
+            b.a_next.resize(n, 0.0);
             self.verlet_kick(b, t, h)
         }
     }
@@ -276,9 +286,10 @@ impl World {
         Ok(())
     }
 
-    /// Drift and predictor in one parallel pass: x' = x + h v + h²/2 a, v' = v + h a.
+    /// Drift and predictor in one parallel pass: x' = x + h v + h²/2 a, and with `predictor`
+    /// v' = v + h a (else `v_next` is left as it is: the contacts make v' themselves).
     #[inline]
-    fn verlet_drift(&mut self, b: &VerletBuffers, h: f64, contacts: bool) {
+    fn verlet_drift(&mut self, b: &VerletBuffers, h: f64, contacts: bool, predictor: bool) {
         // with contact forces in a periodic cell, x' is wrapped into the cell in
         // the same pass, before the force evaluation, so that the kept acceleration is
         // that of the state kept (collide's wrap then changes nothing). The impulse
@@ -289,36 +300,47 @@ impl World {
             .as_ref()
             .and_then(|c| c.domain.periodic_box())
             .filter(|_| contacts);
-        let p = &self.particles;
-        let a = &b.a;
-        self.x_next
-            .par_chunks_mut(3 * PASS_CHUNK)
-            .zip(self.v_next.par_chunks_mut(3 * PASS_CHUNK))
-            .enumerate()
-            .for_each(|(c, (xn, vn))| {
-                let chunk = 3 * PASS_CHUNK * c..3 * PASS_CHUNK * c + xn.len();
-                let (x, v, a) = (&p.x[chunk.clone()], &p.v[chunk.clone()], &a[chunk]);
-                for ((((xn, vn), x), v), a) in xn.iter_mut().zip(vn.iter_mut()).zip(x).zip(v).zip(a) {
-                    (*xn, *vn) = verlet::drift(*x, *v, *a, h);
-                }
-                if let Some(cell) = cell {
-                    let (lo, hi, axes) = (cell.lo(), cell.hi(), cell.axes());
-                    for q in xn.chunks_exact_mut(3) {
-                        for (k, c) in q.iter_mut().enumerate() {
-                            if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
-                                *c = cell.wrap_coordinate(k, *c);
-                            }
+        let wrap = |xn: &mut [f64]| {
+            if let Some(cell) = cell {
+                let (lo, hi, axes) = (cell.lo(), cell.hi(), cell.axes());
+                for q in xn.chunks_exact_mut(3) {
+                    for (k, c) in q.iter_mut().enumerate() {
+                        if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
+                            *c = cell.wrap_coordinate(k, *c);
                         }
                     }
                 }
+            }
+        };
+        let p = &self.particles;
+        let a = &b.a;
+        let xs = self.x_next.par_chunks_mut(3 * PASS_CHUNK).enumerate();
+        if !predictor {
+            xs.for_each(|(c, xn)| {
+                let chunk = 3 * PASS_CHUNK * c..3 * PASS_CHUNK * c + xn.len();
+                let (x, v, a) = (&p.x[chunk.clone()], &p.v[chunk.clone()], &a[chunk]);
+                for (((xn, x), v), a) in xn.iter_mut().zip(x).zip(v).zip(a) {
+                    (*xn, _) = verlet::drift(*x, *v, *a, h);
+                }
+                wrap(xn);
             });
+            return;
+        }
+        xs.zip(self.v_next.par_chunks_mut(3 * PASS_CHUNK)).for_each(|((c, xn), vn)| {
+            let chunk = 3 * PASS_CHUNK * c..3 * PASS_CHUNK * c + xn.len();
+            let (x, v, a) = (&p.x[chunk.clone()], &p.v[chunk.clone()], &a[chunk]);
+            for ((((xn, vn), x), v), a) in xn.iter_mut().zip(vn.iter_mut()).zip(x).zip(v).zip(a) {
+                (*xn, *vn) = verlet::drift(*x, *v, *a, h);
+            }
+            wrap(xn);
+        });
     }
 
     /// The contact force and the closing kick in one pass, the other forces first (and with
     /// spin under the contacts' torques, the angular kick beside): the first non-finite
     /// value's index, if any.
     #[inline]
-    fn verlet_fused_kick(&mut self, b: &mut VerletBuffers, t: f64, h: f64, n: usize) -> Result<Option<usize>, Error> {
+    fn verlet_fused_kick(&mut self, b: &mut VerletBuffers, t: f64, h: f64, n: usize, predict: bool) -> Result<Option<usize>, Error> {
         let p = &self.particles;
         let contact = contact_force(&self.collide_stage, p).expect("a force model lends its contact force");
         let turns = contact.has_tangential() && p.has_spin();
@@ -326,10 +348,26 @@ impl World {
             b.omega_next.resize(n, 0.0);
             b.alpha_next.resize(n, 0.0);
         }
+        // The pass writes a' over a and the new velocities into `v_out`. With `predict` the
+        // contacts make v' from v and a (no other force reads velocities: the state's are
+        // those at the start, for its lengths), and `v_out` is `v_next`, which the drift left
+        // unwritten; `a_next` holds nothing until the swap below. Else v' is in `v_next` and
+        // `v_out` is `a_next`.
+        if predict {
+            b.a_next = Vec::new();
+            self.v_next.resize(n, 0.0); // (the room a sort moved the arrays through: the size kept)
+        } else {
+            b.a_next.resize(n, 0.0);
+        }
+        let (seen, v_out) = if predict {
+            (&p.v, &mut self.v_next)
+        } else {
+            (&self.v_next, &mut b.a_next)
+        };
         let s1 = State {
             t: t + h,
             x: &self.x_next,
-            v: &self.v_next,
+            v: seen,
             mass: &p.mass,
         };
         let other = if !self.forces.is_empty() {
@@ -344,9 +382,6 @@ impl World {
             self.force = Vec::new();
             None
         };
-        // The pass writes a' over a and the new velocities into a_next; two swaps put
-        // a' in a_next (the next step's a once accepted) and the velocities in v_next
-        // (v' there, the predictor, becomes spare).
         let bad = contact.force_and_kick(
             &s1,
             VerletKick {
@@ -356,7 +391,8 @@ impl World {
                 h,
                 v: &p.v,
                 a: &mut b.a,
-                v_out: &mut b.a_next,
+                v_out,
+                predict,
                 energy: self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0,
                 spin: turns.then(|| SpinKick {
                     omega: &p.omega,
@@ -370,8 +406,12 @@ impl World {
         if !turns {
             b.omega_next.clear();
         }
-        std::mem::swap(&mut b.a, &mut b.a_next); // a_next = a'
-        std::mem::swap(&mut b.a, &mut self.v_next); // v_next = v(t + h); a = spare
+        // a' to a_next (the next step's a once accepted); without `predict` the velocities,
+        // in a_next, to v_next (v' there becomes spare)
+        std::mem::swap(&mut b.a, &mut b.a_next);
+        if !predict {
+            std::mem::swap(&mut b.a, &mut self.v_next);
+        }
         self.stats.nfev += 1;
         b.fresh = true;
         Ok(bad)

@@ -6,6 +6,7 @@ use super::history::{pair_memory, touches_of, wall_memory, PairSlip, WallSlip};
 use super::{ContactForce, Scratch, CHUNK};
 use crate::collide::neighbour_list::NeighbourList;
 use crate::collide::stage::on_periodic_wall;
+use crate::collide::velocities::Velocities;
 use crate::collide::{pair_contact, Contact};
 use crate::error::Error;
 use crate::forces::State;
@@ -49,12 +50,12 @@ impl ContactForce<'_> {
     /// the others, and for a pair that went past it, whose contact lets go: the energy it
     /// loses is added to `lost` (J, `cohesion.rs`).
     #[cold]
-    pub(super) fn held_pair(
+    pub(super) fn held_pair<V: Velocities + ?Sized>(
         &self,
         i: usize,
         j: usize,
         x: &[f64],
-        v: &[f64],
+        v: &V,
         memory: &[PairSlip],
         lost: &mut f64,
     ) -> Option<Contact> {
@@ -117,12 +118,12 @@ impl ContactForce<'_> {
     /// (J, `cohesion.rs`).
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    pub(super) fn wall_contacts_held(
+    pub(super) fn wall_contacts_held<V: Velocities + ?Sized>(
         &self,
         i: usize,
         k: usize,
         x: &[f64],
-        v: &[f64],
+        v: &V,
         memory: &[WallSlip],
         lost: &mut f64,
         mut each: impl FnMut(&Contact),
@@ -131,7 +132,7 @@ impl ContactForce<'_> {
             return self.wall_contacts(i, k, x, v, each);
         };
         let remembered = touches_of(memory, i as u32, k as u32);
-        let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
+        let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], v.at(i));
         let (collider, r) = (&self.colliders[k], self.radius[i]);
         let mut held = 0;
         collider.for_each_touch(p, r, reach, |t| {
@@ -154,8 +155,8 @@ impl ContactForce<'_> {
     /// Calls `each` with the contacts of particle i with collider k at (x, v) (a box's walls
     /// along periodic axes left out).
     #[inline]
-    pub(super) fn wall_contacts(&self, i: usize, k: usize, x: &[f64], v: &[f64], mut each: impl FnMut(&Contact)) {
-        let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], [v[3 * i], v[3 * i + 1], v[3 * i + 2]]);
+    pub(super) fn wall_contacts<V: Velocities + ?Sized>(&self, i: usize, k: usize, x: &[f64], v: &V, mut each: impl FnMut(&Contact)) {
+        let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], v.at(i));
         let collider = &self.colliders[k];
         collider.for_each_touch(p, self.radius[i], 0.0, |t| {
             let c = collider.contact(k, t, i, p, vi, self.radius[i]);

@@ -28,6 +28,7 @@ use super::history::{pair_memory, wall_memory, PairSlip, Slip, WallSlip};
 use super::tangent::{Tangent, TangentialModel, Touch};
 use super::{ContactForce, CHUNK};
 use crate::collide::neighbour_list::{NeighbourList, Rows};
+use crate::collide::velocities::Velocities;
 use crate::collide::{pair_contact, Contact};
 use crate::vec3;
 
@@ -253,10 +254,10 @@ impl ContactForce<'_> {
     /// friction), each contact's tangential force is added to its normal one, and its
     /// torques, new memory and what chunks owe later chunks' torques go to `out`.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn pair_forces(
+    pub(super) fn pair_forces<V: Velocities + ?Sized>(
         &self,
         x: &[f64],
-        v: &[f64],
+        v: &V,
         list: &NeighbourList,
         forces: Option<&mut [f64]>,
         init: impl Fn(usize, &mut [f64]) + Sync,
@@ -294,12 +295,12 @@ impl ContactForce<'_> {
     /// the force models.
     #[inline]
     #[allow(clippy::too_many_arguments)]
-    fn chunk_pairs(
+    fn chunk_pairs<V: Velocities + ?Sized>(
         &self,
         c: usize,
         rows: &Rows,
         out: ChunkOut<'_>,
-        (x, v): (&[f64], &[f64]),
+        (x, v): (&[f64], &V),
         list: &NeighbourList,
         init: &(impl Fn(usize, &mut [f64]) + Sync),
         options: PassOptions,
@@ -483,14 +484,14 @@ impl ContactForce<'_> {
     /// kg/s) at (x, v) with the memory `slip` (`tangent.rs`).
     #[inline]
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn tangent_of(
+    pub(super) fn tangent_of<V: Velocities + ?Sized>(
         &self,
         model: TangentialModel,
         t: &Turning<'_>,
         c: &Contact,
         force: f64,
         dashpot: f64,
-        v: &[f64],
+        v: &V,
         slip: super::history::Slip,
     ) -> Tangent {
         let (u, omega) = self.relative(c, v, t.omega);
@@ -525,11 +526,11 @@ impl ContactForce<'_> {
     /// velocities `v`, and the two sides' angular velocities from `omega` (0 at a collider,
     /// and everywhere when `omega` is empty: nothing turns).
     #[inline]
-    fn relative(&self, c: &Contact, v: &[f64], omega: &[f64]) -> ([f64; 3], [[f64; 3]; 2]) {
-        let vi = vec3::get(v, c.i);
+    fn relative<V: Velocities + ?Sized>(&self, c: &Contact, v: &V, omega: &[f64]) -> ([f64; 3], [[f64; 3]; 2]) {
+        let vi = v.at(c.i);
         let turn = |q: usize| if omega.is_empty() { [0.0; 3] } else { vec3::get(omega, q) };
         match c.partner_particle() {
-            Some(j) => (vec3::sub(vi, vec3::get(v, j)), [turn(c.i), turn(j)]),
+            Some(j) => (vec3::sub(vi, v.at(j)), [turn(c.i), turn(j)]),
             None => (vec3::sub(vi, c.wall_velocity), [turn(c.i), [0.0; 3]]),
         }
     }

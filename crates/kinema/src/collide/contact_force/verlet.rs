@@ -7,6 +7,7 @@ use super::exchange::Exchange;
 use super::pairs::{summed_books, ChunkSums, ContactBooks, PassOptions};
 use super::{ContactForce, Scratch, CHUNK};
 use crate::collide::books::ColliderBooks;
+use crate::collide::velocities::Predictor;
 use crate::error::Error;
 use crate::forces::State;
 use crate::ode::verlet;
@@ -25,6 +26,10 @@ pub(crate) struct VerletKick<'a> {
     pub h: f64,
     /// The velocities at the step's start, m/s.
     pub v: &'a [f64],
+    /// Whether the contacts see Verlet's predictor v + h a made from `v` and `a` when they
+    /// need it (`collide/velocities.rs`: no array of it), or the one in the drifted state's
+    /// velocities (stored, where another force reads it too).
+    pub predict: bool,
     /// In: a_i, the accelerations at the step's start; out: a'_i, m/s².
     pub a: &'a mut [f64],
     /// Out: the new velocities, m/s.
@@ -105,7 +110,8 @@ impl ContactForce<'_> {
     ///
     /// The pair stage writes each chunk's F into its part of `v_out`; the second stage, chunk
     /// by chunk, receives what earlier chunks sent and kicks.
-    /// at the drifted state `s` (x', and the predictor v' that the dashpot sees), with
+    /// at the drifted state `s` (x', and the predictor v' that the dashpot sees: `s.v`, or made
+    /// from [`VerletKick`]'s `v` and `a` with `predict`), with
     /// [`VerletKick`]'s `v` the velocities at the step's start, `other` the other forces' sum
     /// (N; `None`: none), `inv_mass` (0 pinned) and `flat` (2D: a_z = 0). Saves the separate passes that clear the
     /// force buffer, turn it into accelerations and kick. Returns the first non-finite
@@ -119,6 +125,7 @@ impl ContactForce<'_> {
             v,
             a,
             v_out,
+            predict,
             energy,
             spin,
         } = kick;
@@ -178,7 +185,12 @@ impl ContactForce<'_> {
             None => (None, None),
         };
         let turn = turning.as_ref().zip(out);
-        self.pair_forces(x, vp, list, Some(&mut *v_out), start, options, exchange, sums, turn);
+        if predict {
+            let vp = Predictor { v, a: &*a, h };
+            self.pair_forces(x, &vp, list, Some(&mut *v_out), start, options, exchange, sums, turn);
+        } else {
+            self.pair_forces(x, vp, list, Some(&mut *v_out), start, options, exchange, sums, turn);
+        }
         scratch_books(books, wall_forces, sums, self.colliders.len(), h);
         *pair_energy = energy.then(|| {
             (
