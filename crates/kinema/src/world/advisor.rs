@@ -1,7 +1,7 @@
 //! The stable-step advisor: the stiffest rates of a world's linearised dynamics, and the
 //! largest stable time step of each method for them.
 
-use super::dynamics::{free_components, ForceJacobian};
+use super::dynamics::ForceJacobian;
 use crate::error::CallbackError;
 use crate::forces::{Force, Rates as ForceRates, State};
 use crate::ode::stability::{oscillator_max_step, StabilityFunction};
@@ -81,34 +81,37 @@ pub(crate) fn estimate(forces: &mut [&mut dyn Force], s: &State, inv_mass: &[f64
     let mut rates = declared_rates(forces, s, inv_mass);
     let bound = rates.bound;
     let n = s.x.len();
-    // Symmetric scaling M^(−½) on free components (0 on the filtered ones). The buffers are
-    // few (five of 3N values besides the Jacobian's): at 10⁶ particles each is 24 MB, and the
-    // advice runs before the first step, beside everything the step keeps.
-    let mut scale = Vec::new();
-    free_components(inv_mass, dim, &mut scale);
-    for (k, c) in scale.iter_mut().enumerate() {
-        *c *= inv_mass[k / 3].sqrt();
-    }
+    // Symmetric scaling M^(−½) on free components, 0 on the filtered ones (pinned, z in 2D):
+    // √w_i on each free component of particle i, kept per particle and filtered when read
+    // (the same numbers as a vector of 3N filters times √w). The vectors of 3N values are two,
+    // the iterate (scaled where it stands when applied: the next iterate is the product's) and
+    // the product, besides the Jacobian's and a vector of zeros that is never written (its
+    // pages are the system's zero page): at 10⁶ particles each is 24 MB, and the advice runs
+    // before the first step, beside everything the step keeps; with five, its peak was the
+    // whole run's (issue 51).
+    let root: Vec<f64> = inv_mass.iter().map(|w| w.sqrt()).collect();
+    let scale = |k: usize| {
+        if inv_mass[k / 3] > 0.0 && !(dim == 2 && k % 3 == 2) {
+            root[k / 3]
+        } else {
+            0.0
+        }
+    };
     let mut jac = ForceJacobian::default();
     jac.prepare(forces, s, false)?;
     let zero = vec![0.0; n];
-    let mut dx = vec![0.0; n];
 
-    // y = M^(−½)(−J_·)M^(−½) u for the stiffness (position) or the damping (velocity) part
-    // (the product is written into y, then scaled where it stands).
-    let mut apply = |forces: &mut [&mut dyn Force], u: &[f64], velocity: bool, y: &mut [f64]| {
-        for k in 0..n {
-            dx[k] = scale[k] * u[k];
+    // J_· M^(−½) u for the stiffness (position) or the damping (velocity) part, into y; u is
+    // M^(−½) u after it.
+    let mut apply = |forces: &mut [&mut dyn Force], u: &mut [f64], velocity: bool, y: &mut [f64]| {
+        for (k, c) in u.iter_mut().enumerate() {
+            *c *= scale(k);
         }
         if velocity {
-            jac.apply(forces, s, &zero, &dx, y)?;
+            jac.apply(forces, s, &zero, u, y)
         } else {
-            jac.apply(forces, s, &dx, &zero, y)?;
+            jac.apply(forces, s, u, &zero, y)
         }
-        for k in 0..n {
-            y[k] *= -scale[k];
-        }
-        Ok::<(), CallbackError>(())
     };
 
     let skip = known_zero;
@@ -117,9 +120,9 @@ pub(crate) fn estimate(forces: &mut [&mut dyn Force], s: &State, inv_mass: &[f64
         if skip(bound, velocity) {
             continue;
         }
-        // Power iteration from a fixed pseudo-random start (reproducible advice): for a
-        // symmetric operator ‖A u_k‖ rises monotonically to |λ|max.
-        let mut u: Vec<f64> = (0..n).map(|k| if scale[k] != 0.0 { start(k) } else { 0.0 }).collect();
+        // Power iteration on M^(−½)(−J_·)M^(−½) from a fixed pseudo-random start (reproducible
+        // advice): for a symmetric operator ‖A u_k‖ rises monotonically to |λ|max.
+        let mut u: Vec<f64> = (0..n).map(|k| if scale(k) != 0.0 { start(k) } else { 0.0 }).collect();
         let norm = dot(&u, &u).sqrt();
         if norm == 0.0 {
             break; // nothing is free to move
@@ -127,7 +130,10 @@ pub(crate) fn estimate(forces: &mut [&mut dyn Force], s: &State, inv_mass: &[f64
         u.iter_mut().for_each(|a| *a /= norm);
         let mut lambda = 0.0;
         for it in 0..MAX_ITERATIONS {
-            apply(forces, &u, velocity, &mut y)?;
+            apply(forces, &mut u, velocity, &mut y)?;
+            for (k, c) in y.iter_mut().enumerate() {
+                *c *= -scale(k);
+            }
             rates.iterations += 1;
             let next = dot(&y, &y).sqrt();
             if next == 0.0 || !next.is_finite() {
@@ -148,9 +154,9 @@ pub(crate) fn estimate(forces: &mut [&mut dyn Force], s: &State, inv_mass: &[f64
         } else {
             rates.omega = lambda.sqrt();
             if rates.omega > 0.0 {
-                // The mode's own damping, uᵀ M^(−½)(−C)M^(−½) u = 2ζω.
-                apply(forces, &u, true, &mut y)?;
-                let modal = dot(&u, &y).max(0.0);
+                // The mode's own damping, uᵀ M^(−½)(−C)M^(−½) u = (M^(−½) u)ᵀ(−C)(M^(−½) u) = 2ζω.
+                apply(forces, &mut u, true, &mut y)?;
+                let modal = (-dot(&u, &y)).max(0.0);
                 rates.zeta = modal / (2.0 * rates.omega);
             }
         }

@@ -139,10 +139,6 @@ impl ForceJacobian {
     pub fn prepare(&mut self, forces: &mut [&mut dyn Force], s: &State, definite: bool) -> Result<(), CallbackError> {
         let n = s.x.len();
         self.analytic.clear();
-        self.fp.clear();
-        self.fp.resize(n, 0.0);
-        self.xp.clear();
-        self.xp.resize(n, 0.0); // zero directions: probing adds nothing
         self.prepared.clear();
         for f in forces.iter() {
             let op = f.linearize(s, definite);
@@ -150,12 +146,14 @@ impl ForceJacobian {
             self.prepared.push(op);
         }
         self.numeric = self.analytic.iter().any(|a| !a);
+        // (the difference buffers are made when a product needs them: at 10⁶ particles each is
+        // 24 MB)
+        for b in [&mut self.xp, &mut self.vp, &mut self.fp] {
+            *b = Vec::new();
+        }
         if !self.numeric {
-            // Every force gives its own products: the difference buffers are not needed (at
-            // 10⁶ particles they are 72 MB).
-            for b in [&mut self.xp, &mut self.vp, &mut self.fp, &mut self.base] {
-                *b = Vec::new();
-            }
+            // Every force gives its own products: no base either.
+            self.base = Vec::new();
             self.scale = s.x.iter().chain(s.v).fold(0.0_f64, |a, b| a.max(b.abs()));
             return Ok(());
         }
@@ -192,25 +190,53 @@ impl ForceJacobian {
             return Ok(());
         }
         let eps = f64::EPSILON.sqrt() * (1.0 + self.scale) / size;
-        self.xp.clear();
-        self.xp.extend(s.x.iter().zip(dx).map(|(x, d)| x + eps * d));
-        self.vp.clear();
-        self.vp.extend(s.v.iter().zip(dv).map(|(v, d)| v + eps * d));
-        self.fp.fill(0.0);
-        let perturbed = State {
-            t: s.t,
-            x: &self.xp,
-            v: &self.vp,
-            mass: s.mass,
+        // The perturbed state: a direction that is zero (the stable-step advisor probes the
+        // positions and the velocities apart) leaves its half as it is (x + ε·0 = x, to the
+        // sign of a zero), with no copy.
+        let probe = |out: &mut Vec<f64>, at: &[f64], d: &[f64]| {
+            out.clear();
+            out.extend(at.iter().zip(d).map(|(a, d)| a + eps * d));
+        };
+        let moves = |d: &[f64]| d.iter().any(|c| *c != 0.0);
+        let x: &[f64] = if moves(dx) {
+            probe(&mut self.xp, s.x, dx);
+            &self.xp
+        } else {
+            self.xp = Vec::new();
+            s.x
+        };
+        let v: &[f64] = if moves(dv) {
+            probe(&mut self.vp, s.v, dv);
+            &self.vp
+        } else {
+            self.vp = Vec::new();
+            s.v
+        };
+        let perturbed = State { t: s.t, x, v, mass: s.mass };
+        // Where no force gives its own product, `out` (zeros) sums the perturbed forces
+        // itself, then becomes their difference quotient: no buffer of its own.
+        let fp = if self.prepared.iter().all(Option::is_none) {
+            self.fp = Vec::new();
+            &mut *out
+        } else {
+            self.fp.clear();
+            self.fp.resize(out.len(), 0.0);
+            &mut self.fp[..]
         };
         for (f, has) in forces.iter_mut().zip(&self.analytic) {
             if !has {
-                f.accumulate(&perturbed, &mut self.fp)?;
+                f.accumulate(&perturbed, fp)?;
             }
         }
         self.evaluations += 1;
-        for ((o, fp), f0) in out.iter_mut().zip(&self.fp).zip(&self.base) {
-            *o += (fp - f0) / eps;
+        if self.fp.is_empty() {
+            for (o, f0) in out.iter_mut().zip(&self.base) {
+                *o = (*o - f0) / eps;
+            }
+        } else {
+            for ((o, fp), f0) in out.iter_mut().zip(&self.fp).zip(&self.base) {
+                *o += (fp - f0) / eps;
+            }
         }
         Ok(())
     }
