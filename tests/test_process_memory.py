@@ -47,7 +47,7 @@ def test_every_public_name_is_there_when_asked_for():
 
 # glibc raises its mmap threshold to the size of each large block freed (up to 32 MiB), after
 # which large arrays come from the arenas and their room stays resident when freed: after a
-# freed 16 MiB block, a 4 MiB array is served from the heap. kinema holds the threshold at 1 MiB
+# freed 16 MiB block, a 4 MiB array is served from the heap. kinema holds the threshold at 2 MiB
 # (crates/kinema-py/src/memory.rs), unless the user set it.
 _ALLOCATIONS = """
 import ctypes, json
