@@ -39,6 +39,7 @@
 //! why [`UserOrder`] restores exactly where a caller asks for the world.
 
 use std::borrow::Cow;
+use std::sync::OnceLock;
 
 use rayon::prelude::*;
 
@@ -57,14 +58,34 @@ use crate::particles::Particles;
 pub(super) struct Order {
     /// `user_of[i]`: the user's index of the particle the engine holds at index i.
     user_of: Vec<u32>,
-    /// `engine_of[u]`: where the engine holds the user's particle u.
-    engine_of: Vec<u32>,
+    /// `engine_of[u]`: where the engine holds the user's particle u; made at its first use
+    /// after the sort (a world that nobody reads between its sorts, as a gas run for its
+    /// figures, never makes it: 4 B a particle).
+    engine_of: OnceLock<Vec<u32>>,
 }
 
 impl Order {
+    fn new(user_of: Vec<u32>) -> Self {
+        Order {
+            user_of,
+            engine_of: OnceLock::new(),
+        }
+    }
+
     /// `user_of[i]`: the user's index of the particle the engine holds at index i.
     pub(super) fn user_of(&self) -> &[u32] {
         &self.user_of
+    }
+
+    /// `engine_of[u]`: where the engine holds the user's particle u (`user_of`'s inverse).
+    fn engine_of(&self) -> &[u32] {
+        self.engine_of.get_or_init(|| {
+            let mut engine_of = vec![0u32; self.user_of.len()];
+            for (i, &u) in self.user_of.iter().enumerate() {
+                engine_of[u as usize] = i as u32;
+            }
+            engine_of
+        })
     }
 }
 
@@ -94,6 +115,24 @@ fn gather_through<T: Copy + Default + Send + Sync>(a: &mut Vec<T>, spare: &mut V
     spare.resize(a.len(), T::default()); // (every value is written below)
     gather_into(spare, a, old_of_new, width);
     std::mem::swap(a, spare);
+}
+
+/// `a` (one value per particle) in the new order, gathered into the front of `spare`'s room and
+/// copied back: `a` keeps its room (a room of 3 per particle for 1 would waste 2), and the
+/// sort makes no array for it (at 10⁶ particles a sort's transient arrays were the step's
+/// peak).
+fn gather_back<T: bytemuck::Pod + Send + Sync>(a: &mut [T], spare: &mut Vec<f64>, old_of_new: &[u32]) {
+    const { assert!(size_of::<T>() == size_of::<f64>(), "a value the size of a real") };
+    if a.len() != old_of_new.len() {
+        return; // not in use (an empty buffer)
+    }
+    if spare.len() < a.len() {
+        spare.resize(a.len(), 0.0);
+    }
+    // (the room's bytes as `T`s: reals, or the ids' 8-byte integers)
+    let room: &mut [T] = bytemuck::cast_slice_mut(&mut spare[..a.len()]);
+    gather_into(room, a, old_of_new, 1);
+    a.copy_from_slice(room);
 }
 
 /// `a` (`width` values per particle) in the new order.
@@ -140,16 +179,13 @@ impl World {
         if old_of_new.iter().enumerate().all(|(i, &o)| i == o as usize) {
             return; // already in order
         }
-        let user_of: Vec<u32> = match &self.sorted {
+        // the new order's map, the old one let go first
+        let user_of: Vec<u32> = match self.sorted.take() {
             Some(order) => old_of_new.par_iter().map(|&o| order.user_of[o as usize]).collect(),
             None => old_of_new.clone(),
         };
-        let mut engine_of = vec![0u32; user_of.len()];
-        for (i, &u) in user_of.iter().enumerate() {
-            engine_of[u as usize] = i as u32;
-        }
         self.permute(&old_of_new, a, spare, true);
-        self.sorted = Some(Order { user_of, engine_of });
+        self.sorted = Some(Order::new(user_of));
         self.sorts += 1;
     }
 
@@ -169,7 +205,7 @@ impl World {
             return Cow::Borrowed(a);
         };
         let mut out = vec![T::default(); a.len()];
-        gather_into(&mut out, a, &order.engine_of, width);
+        gather_into(&mut out, a, order.engine_of(), width);
         Cow::Owned(out)
     }
 
@@ -181,7 +217,7 @@ impl World {
         for (out, own) in [(x, &p.x), (v, &p.v)] {
             let Some(out) = out else { continue };
             match &self.sorted {
-                Some(order) => gather_into(out, own, &order.engine_of, 3),
+                Some(order) => gather_into(out, own, order.engine_of(), 3),
                 None => out.copy_from_slice(own),
             }
         }
@@ -198,7 +234,7 @@ impl World {
             .all(|(given, own, width)| {
                 let Some(given) = given else { return true };
                 match &self.sorted {
-                    Some(order) => order.engine_of.par_iter().enumerate().with_min_len(CHUNK).all(|(u, &i)| {
+                    Some(order) => order.engine_of().par_iter().enumerate().with_min_len(CHUNK).all(|(u, &i)| {
                         let i = i as usize;
                         (0..width).all(|k| same(&given[width * u + k], &own[width * i + k]))
                     }),
@@ -216,7 +252,8 @@ impl World {
             return;
         };
         // The user's particle u goes back to place u from where the engine holds it.
-        let old_of_new = order.engine_of;
+        order.engine_of();
+        let old_of_new = order.engine_of.into_inner().expect("made just above");
         let mut a = match &mut self.stepper {
             Some(WorldStepper::Verlet(b)) => std::mem::take(&mut b.a),
             _ => Vec::new(),
@@ -236,7 +273,7 @@ impl World {
     /// `step_buffers`, the step's `x_next`, `v_next` too (inside a step, where they hold the
     /// drifted state). The arrays of three reals a particle move through `spare`'s room (left
     /// holding the room of the last one moved: its values are not to be read), those of one
-    /// through one room of their own: each array keeps a room of its size.
+    /// through its front and back: each array keeps a room of its size.
     fn permute(&mut self, old_of_new: &[u32], a: &mut Vec<f64>, spare: &mut Vec<f64>, step_buffers: bool) {
         let p = &mut self.particles;
         let mut vectors = vec![&mut p.x, &mut p.v, a, &mut p.omega, &mut p.alpha];
@@ -246,7 +283,6 @@ impl World {
         for values in vectors {
             gather_through(values, spare, old_of_new, 3);
         }
-        let mut single = Vec::new();
         for values in [
             &mut p.mass,
             &mut p.inv_mass,
@@ -255,10 +291,10 @@ impl World {
             &mut p.inv_inertia,
             &mut self.deaths.time,
         ] {
-            gather_through(values, &mut single, old_of_new, 1);
+            gather_back(values, spare, old_of_new);
         }
         gather(&mut p.orientation, old_of_new, 4);
-        gather(&mut p.id, old_of_new, 1);
+        gather_back(&mut p.id, spare, old_of_new);
         gather(&mut p.group, old_of_new, 1);
         if let Some(stage) = &mut self.collide_stage {
             stage.permute_particles(old_of_new); // (their own materials, where set)
