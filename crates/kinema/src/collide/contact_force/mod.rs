@@ -527,7 +527,14 @@ impl<'a> ContactForce<'a> {
             reach,
             collider_scale: self.colliders.iter().map(collider_scale).fold(0.0, f64::max),
         };
-        list.update(grid, s.x, self.radius, self.colliders, &self.domain, self.filter, build)
+        let builds = list.builds;
+        list.update(grid, s.x, self.radius, self.colliders, &self.domain, self.filter, build)?;
+        if list.builds != builds {
+            // the grid serves the builds alone, every few dozen steps: its buffers go back
+            // meanwhile
+            grid.release();
+        }
+        Ok(())
     }
 }
 
