@@ -212,7 +212,12 @@ impl ForceJacobian {
             self.vp = Vec::new();
             s.v
         };
-        let perturbed = State { t: s.t, x, v, mass: s.mass };
+        let perturbed = State {
+            t: s.t,
+            x,
+            v,
+            mass: s.mass,
+        };
         // Where no force gives its own product, `out` (zeros) sums the perturbed forces
         // itself, then becomes their difference quotient: no buffer of its own.
         let fp = if self.prepared.iter().all(Option::is_none) {

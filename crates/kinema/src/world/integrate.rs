@@ -340,7 +340,14 @@ impl World {
     /// spin under the contacts' torques, the angular kick beside): the first non-finite
     /// value's index, if any.
     #[inline]
-    fn verlet_fused_kick(&mut self, b: &mut VerletBuffers, t: f64, h: f64, n: usize, predict: bool) -> Result<Option<usize>, Error> {
+    fn verlet_fused_kick(
+        &mut self,
+        b: &mut VerletBuffers,
+        t: f64,
+        h: f64,
+        n: usize,
+        predict: bool,
+    ) -> Result<Option<usize>, Error> {
         let p = &self.particles;
         let contact = contact_force(&self.collide_stage, p).expect("a force model lends its contact force");
         let turns = contact.has_tangential() && p.has_spin();

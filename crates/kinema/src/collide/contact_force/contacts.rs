@@ -155,7 +155,14 @@ impl ContactForce<'_> {
     /// Calls `each` with the contacts of particle i with collider k at (x, v) (a box's walls
     /// along periodic axes left out).
     #[inline]
-    pub(super) fn wall_contacts<V: Velocities + ?Sized>(&self, i: usize, k: usize, x: &[f64], v: &V, mut each: impl FnMut(&Contact)) {
+    pub(super) fn wall_contacts<V: Velocities + ?Sized>(
+        &self,
+        i: usize,
+        k: usize,
+        x: &[f64],
+        v: &V,
+        mut each: impl FnMut(&Contact),
+    ) {
         let (p, vi) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], v.at(i));
         let collider = &self.colliders[k];
         collider.for_each_touch(p, self.radius[i], 0.0, |t| {

@@ -838,7 +838,11 @@ fn the_fused_pass_with_the_predictor_made_where_two_touch_is_the_stored_ones_to_
     let h = 1e-4;
     let mut rng = Rng::new(5);
     let a0: Vec<f64> = (0..3 * n).map(|_| rng.uniform(-50.0, 50.0)).collect();
-    let predictor: Vec<f64> = v.iter().zip(&a0).map(|(v, a)| crate::ode::verlet::drift(0.0, *v, *a, h).1).collect();
+    let predictor: Vec<f64> = v
+        .iter()
+        .zip(&a0)
+        .map(|(v, a)| crate::ode::verlet::drift(0.0, *v, *a, h).1)
+        .collect();
     let run = |seen: &[f64], predict: bool| {
         let (mut a, mut v_out) = (a0.clone(), vec![f64::NAN; 3 * n]);
         let bad = force
