@@ -16,6 +16,8 @@
 //! exact (the force k d vanishes with d); for L₀ > 0 the force is discontinuous there and
 //! zero is the choice that adds no energy.
 
+use std::sync::{Arc, Mutex};
+
 use super::spring_pass::{Scratch, SpringArrays};
 use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State};
 use crate::error::{CallbackError, Error};
@@ -42,6 +44,37 @@ pub struct Springs {
     min_particles: usize,
     /// Buffers of the parallel force pass (not part of the springs' value).
     scratch: Scratch,
+    /// The room of the Jacobian's blocks between linearisations (not part of the value).
+    blocks: BlockRoom,
+}
+
+/// The room of the springs' Jacobian blocks, lent to each [`LinearizedSprings`] and given back
+/// when it is dropped: an implicit step linearises the springs anew, and a cloth of 59,000
+/// springs made 5 MB at each, which the system mapped and faulted in anew each time (blocks
+/// that large get a mapping of their own: `kinema-py`'s `memory.rs`), 14 % of the step.
+#[derive(Debug, Default)]
+struct BlockRoom(Arc<Mutex<Vec<SpringBlock>>>);
+
+impl BlockRoom {
+    /// The room, empty (an empty one if another holds it).
+    fn lend(&self) -> Vec<SpringBlock> {
+        let mut blocks = self.0.lock().map(|mut room| std::mem::take(&mut *room)).unwrap_or_default();
+        blocks.clear();
+        blocks
+    }
+}
+
+impl Clone for BlockRoom {
+    /// A room of its own (a clone's linearisations do not wait on the original's).
+    fn clone(&self) -> Self {
+        BlockRoom::default()
+    }
+}
+
+impl PartialEq for BlockRoom {
+    fn eq(&self, _: &Self) -> bool {
+        true // a buffer, not data
+    }
 }
 
 impl Springs {
@@ -125,6 +158,7 @@ impl Springs {
             damping,
             min_particles,
             scratch: Scratch::default(),
+            blocks: BlockRoom::default(),
         })
     }
 
@@ -307,9 +341,19 @@ struct SpringBlock {
     turn: [f64; 3],
 }
 
-/// Springs linearised at one state (see [`Force::linearize`]).
+/// Springs linearised at one state (see [`Force::linearize`]); its blocks' room goes back to
+/// the springs' [`BlockRoom`] when it is dropped.
 struct LinearizedSprings {
     blocks: Vec<SpringBlock>,
+    home: Arc<Mutex<Vec<SpringBlock>>>,
+}
+
+impl Drop for LinearizedSprings {
+    fn drop(&mut self) {
+        if let Ok(mut room) = self.home.lock() {
+            *room = std::mem::take(&mut self.blocks);
+        }
+    }
 }
 
 impl Linearized for LinearizedSprings {
@@ -475,7 +519,8 @@ impl Force for Springs {
         if check_buffers(self.name(), s, &[]).is_err() || self.check_indices(s.len()).is_err() {
             return None;
         }
-        let mut blocks = Vec::with_capacity(self.len());
+        let mut blocks = self.blocks.lend();
+        blocks.reserve(self.len());
         for sp in 0..self.len() {
             let (k, rest, c) = (self.k[sp], self.rest_length[sp], self.damping[sp]);
             let block = match self.axis(s.x, sp) {
@@ -513,7 +558,10 @@ impl Force for Springs {
             };
             blocks.push(block);
         }
-        Some(Box::new(LinearizedSprings { blocks }))
+        Some(Box::new(LinearizedSprings {
+            blocks,
+            home: Arc::clone(&self.blocks.0),
+        }))
     }
 
     /// The network's Gershgorin bounds, [`Springs::max_rates`].
