@@ -36,6 +36,7 @@ The public API (everything else is private):
 
 import importlib as _importlib
 import os as _os
+from typing import TYPE_CHECKING as _TYPE_CHECKING
 
 from . import problems, stability
 from ._core import __version__, _after_fork_in_child
@@ -75,6 +76,16 @@ _LAZY = {
     "SweepResult": "sweeps",
     "sweep": "sweeps",
 }
+
+
+if _TYPE_CHECKING:  # (what a type checker reads; at run time each is imported at first use)
+    from . import analysis, io, render, scene
+    from . import checkpoint as checkpoint
+    from . import sweeps as sweeps
+    from .checkpoint import resume_run
+    from .render import Camera2D, Camera3D, render_frames, write_video
+    from .scene import Scene, SceneError, load_scene
+    from .sweeps import SweepResult, sweep
 
 
 def __getattr__(name: str):

@@ -6,7 +6,6 @@
 mod callbacks;
 mod collide;
 mod errors;
-mod memory;
 mod ode;
 mod render;
 mod reports;
@@ -20,7 +19,6 @@ use pyo3::prelude::*;
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    memory::give_back_large_blocks();
     ode::register(m)?;
     stability::register(m)?;
     world::register(m)?;
