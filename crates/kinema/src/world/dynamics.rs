@@ -193,25 +193,8 @@ impl ForceJacobian {
         // The perturbed state: a direction that is zero (the stable-step advisor probes the
         // positions and the velocities apart) leaves its half as it is (x + ε·0 = x, to the
         // sign of a zero), with no copy.
-        let probe = |out: &mut Vec<f64>, at: &[f64], d: &[f64]| {
-            out.clear();
-            out.extend(at.iter().zip(d).map(|(a, d)| a + eps * d));
-        };
-        let moves = |d: &[f64]| d.iter().any(|c| *c != 0.0);
-        let x: &[f64] = if moves(dx) {
-            probe(&mut self.xp, s.x, dx);
-            &self.xp
-        } else {
-            self.xp = Vec::new();
-            s.x
-        };
-        let v: &[f64] = if moves(dv) {
-            probe(&mut self.vp, s.v, dv);
-            &self.vp
-        } else {
-            self.vp = Vec::new();
-            s.v
-        };
+        let x = probed(&mut self.xp, s.x, dx, eps);
+        let v = probed(&mut self.vp, s.v, dv, eps);
         let perturbed = State {
             t: s.t,
             x,
@@ -253,6 +236,17 @@ impl ForceJacobian {
             op.add_diagonal(s, cx, cv, out);
         }
     }
+}
+
+/// `at + eps d` in `room`, or `at` itself where the direction `d` is zero (its room let go).
+fn probed<'a>(room: &'a mut Vec<f64>, at: &'a [f64], d: &[f64], eps: f64) -> &'a [f64] {
+    if d.iter().all(|c| *c == 0.0) {
+        *room = Vec::new();
+        return at;
+    }
+    room.clear();
+    room.extend(at.iter().zip(d).map(|(a, d)| a + eps * d));
+    room
 }
 
 #[cfg(test)]
