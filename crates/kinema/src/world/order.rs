@@ -79,14 +79,22 @@ impl Order {
 
     /// `engine_of[u]`: where the engine holds the user's particle u (`user_of`'s inverse).
     fn engine_of(&self) -> &[u32] {
-        self.engine_of.get_or_init(|| {
-            let mut engine_of = vec![0u32; self.user_of.len()];
-            for (i, &u) in self.user_of.iter().enumerate() {
-                engine_of[u as usize] = i as u32;
-            }
-            engine_of
-        })
+        self.engine_of.get_or_init(|| inverse(&self.user_of))
     }
+
+    /// `engine_of`, the order given up for it.
+    fn into_engine_of(self) -> Vec<u32> {
+        self.engine_of.into_inner().unwrap_or_else(|| inverse(&self.user_of))
+    }
+}
+
+/// The inverse of a permutation: `out[p[i]] = i`.
+fn inverse(p: &[u32]) -> Vec<u32> {
+    let mut out = vec![0u32; p.len()];
+    for (i, &u) in p.iter().enumerate() {
+        out[u as usize] = i as u32;
+    }
+    out
 }
 
 /// The fewest particles the world sorts along space.
@@ -106,8 +114,7 @@ fn gather_into<T: Copy + Send + Sync>(out: &mut [T], a: &[T], from: &[u32], widt
 
 /// `a` (`width` values per particle) in the new order, gathered into `spare`'s room, which is
 /// left holding `a`'s old room: every array of one type moves through the same two
-/// allocations, instead of a new one for each (at 10⁶ particles each was 24 MB, and glibc's
-/// arenas kept what the sorts freed: the process grew by a third over a few sorts).
+/// allocations, instead of a new one for each (24 MB at 10⁶ particles).
 fn gather_through<T: Copy + Default + Send + Sync>(a: &mut Vec<T>, spare: &mut Vec<T>, old_of_new: &[u32], width: usize) {
     if a.len() != width * old_of_new.len() {
         return; // not in use (an empty buffer)
@@ -156,8 +163,9 @@ impl World {
 
     /// Sorts the particles along the Morton curve of the positions in `x_next` (the step's
     /// drifted state, where the neighbour list is about to be rebuilt), with Verlet's
-    /// acceleration `a`; `spare` (Verlet's `a_next`, which the step writes before it reads)
-    /// is the room the arrays move through.
+    /// acceleration `a`; `spare` (a buffer of Verlet's that the step writes before it reads:
+    /// `v_next` where the contacts make the predictor, else `a_next`) is the room the arrays
+    /// move through.
     pub(super) fn sort_along_space(&mut self, a: &mut Vec<f64>, spare: &mut Vec<f64>) {
         let (width, origin) = {
             let Some(contact) = contact_force(&self.collide_stage, &self.particles) else {
@@ -252,8 +260,7 @@ impl World {
             return;
         };
         // The user's particle u goes back to place u from where the engine holds it.
-        order.engine_of();
-        let old_of_new = order.engine_of.into_inner().expect("made just above");
+        let old_of_new = order.into_engine_of();
         let mut a = match &mut self.stepper {
             Some(WorldStepper::Verlet(b)) => std::mem::take(&mut b.a),
             _ => Vec::new(),
@@ -299,10 +306,7 @@ impl World {
         if let Some(stage) = &mut self.collide_stage {
             stage.permute_particles(old_of_new); // (their own materials, where set)
         }
-        let mut new_of_old = vec![0u32; old_of_new.len()];
-        for (new, &old) in old_of_new.iter().enumerate() {
-            new_of_old[old as usize] = new as u32;
-        }
+        let new_of_old = inverse(old_of_new);
         for f in &mut self.forces {
             f.reindex(&new_of_old);
         }
