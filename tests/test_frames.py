@@ -114,3 +114,57 @@ def test_the_plan_refuses_nothing_it_cannot_land_and_names_what_it_changed():
         w._core.land_at(1 / 30, 33)
     with pytest.raises(ValueError, match=r"time = 0 is invalid: a landing time must be finite and after the world's time"):
         w._core.land_at(0.0, 5)
+
+
+def _gas(model: str, n_side: int = 13, seed: int = 3) -> kinema.World:
+    """Spheres (more than the engine sorts along space) on a lattice of a periodic box, fast
+    enough to touch within a few frames: a contact energy at most frames."""
+    spacing = 1.05
+    g = np.arange(n_side) * spacing
+    x = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    v = np.random.default_rng(seed).uniform(-3.0, 3.0, x.shape)
+    w = kinema.World(dt=2.0**-10, method="verlet")  # 32 steps a frame at 32 fps, exactly
+    w.add_particles(x, velocity=v, radius=0.5)
+    w.add(kinema.Box([0, 0, 0], [n_side * spacing] * 3))
+    w.periodic = (True, True, True)
+    if model == "hertz_friction_walls":  # walls along z, friction and spin
+        w.periodic = (True, True, False)
+        w.set_collisions(model="hertz", youngs_modulus=2e5, restitution=0.7, friction=0.4)
+    else:
+        w.set_collisions(model="spring_dashpot", stiffness=2000.0, damping=30.0)
+    return w
+
+
+@pytest.mark.parametrize("model", ["spring_dashpot", "hertz_friction_walls"])
+@pytest.mark.filterwarnings("ignore")
+def test_a_runs_frames_hold_the_diagnostics_and_ids_read_after_each_frames_steps(model):
+    """`World.run` takes each frame's contact energy from its last step's own force pass
+    and reads the ids again only when the set of particles changed: its frames must hold, to
+    the bit, what `diagnostics()` and `ids` read after the same steps by `step` give,
+    particles added and removed by the callback included."""
+
+    def callback(w):
+        if round(w.time * 32) == 3:
+            w.add_particles([[0.3, 0.3, 2.0]], velocity=[[0.0, 0.0, 1.0]], radius=0.2)
+        if round(w.time * 32) == 6:
+            w.remove_particles([5, 17])
+
+    run_world, step_world = _gas(model), _gas(model)
+    traj = run_world.run(9 / 32, fps=32.0, callback=callback)
+    assert traj.step is None, "each frame whole steps of dt"
+    per = 32
+    expected = [step_world.diagnostics()]
+    ids = [step_world.ids.copy()]
+    for _ in range(9):
+        step_world.step(per)
+        expected.append(step_world.diagnostics())
+        ids.append(step_world.ids.copy())
+        callback(step_world)
+    assert traj.alive is not None and len(set(map(len, ids))) == 3, "the set changed twice"
+    for k, d in enumerate(expected):
+        assert traj.kinetic[k] == d["kinetic"] and np.array_equal(traj.momentum[k], d["momentum"])
+        for name, u in d["potential"].items():
+            assert traj.potential[name][k] == u, (k, name)
+        alive_ids = traj.ids[traj.alive[k]]
+        assert np.array_equal(alive_ids, ids[k]), k
+    assert max(traj.potential["contact"]) > 0, "the spheres touched"

@@ -98,6 +98,8 @@ class Recorder:
         self.about: dict[str, Any] = {}
         # (ids, masses, radii, species, colors, groups) each time the set of particles changed
         self.sets: list[tuple] = []
+        # the engine's count of changes to its set of particles when the ids were last read
+        self._membership: int | None = None
         # per frame: {"angular_velocities": (n, 3), "orientations": (n, 4)}, those the world has
         self.turning: list[dict[str, np.ndarray]] = []
         # per frame with `contacts`: World.contacts() with ids for indices
@@ -107,19 +109,28 @@ class Recorder:
         # (K: the colliders then); None for good once a frame's steps booked nothing
         self.walls: list[dict[str, np.ndarray]] | None = []
 
-    def add(self, world: Any) -> None:
+    def add(self, world: Any, diagnostics: dict | None = None) -> None:
+        """Records the world's frame now; `diagnostics`: its `World.diagnostics()` where the
+        steps that led here measured them (`World._advance`), else they are read now."""
         # What the world is (masses, radii, species, colliders, ...) is read only when its set of
         # particles changed, not at every frame; the ids are compared each frame.
         state = world._state()  # (kinema._state.WorldState: the engine, the springs' ends)
-        ids = np.asarray(state.engine.ids, dtype=np.int64)
-        if not self.sets or not np.array_equal(ids, self.sets[-1][0]):
+        # the ids are read again only when the set of particles changed (the engine's count of
+        # changes moved): at 10⁶ particles, three arrays of 8 MB a frame otherwise
+        membership = state.engine.membership
+        if self.sets and membership == self._membership:
+            ids = self.sets[-1][0]
+        else:
+            ids = np.asarray(state.engine.ids, dtype=np.int64)
+            self._membership = membership
+        if not self.sets or (ids is not self.sets[-1][0] and not np.array_equal(ids, self.sets[-1][0])):
             info = world._trajectory_info()
             if not self.about:
                 self.about = info
             self.sets.append((ids, info["masses"], info["radii"], info["species"], info["colors"], info["groups"]))
         springs = state.spring_ids  # springs added mid-run count
         self.about["springs"] = springs.copy() if springs.size else None
-        d = world._diagnostics_as_pulled()
+        d = world._diagnostics_as_pulled() if diagnostics is None else diagnostics
         stats = world._collision_stats_as_pulled()
         if stats is None:
             contacts, balance, lost, impacts, virial = 0, np.zeros(3), 0.0, 0, np.zeros(9)

@@ -52,10 +52,10 @@ class WorldRun:
                     with self._engine() as core:
                         self._advise(core)
                 # frame k + 1 at t0 + (k + 1)/fps exactly (kinema.frames)
-                self._land(plan.time(run["t0"], run["frames_done"] + 1), plan.per_frame)
+                measured = self._land(plan.time(run["t0"], run["frames_done"] + 1), plan.per_frame, measure=True)
             finally:
                 self._pull()
-            rec.add(self)
+            rec.add(self, measured)
             run["frames_done"] += 1
             if callback is not None:
                 callback(self)
@@ -74,12 +74,13 @@ class WorldRun:
         self._tell_behind()
         return traj
 
-    def _land(self, t1: float, n: int) -> None:
+    def _land(self, t1: float, n: int, measure: bool = False) -> dict | None:
         """``n`` steps ending at time ``t1`` (s) exactly, each (t1 − t)/n long (the engine's
-        clock: ``World::land_at``)."""
+        clock: ``World::land_at``); with ``measure``, the diagnostics at their end where
+        ``_advance`` gives them (else ``None``)."""
         with self._engine() as core:
             core.land_at(t1, n)
-        self._advance(n)
+        return self._advance(n, measure)
 
     def _look_at_meshes(self) -> None:
         """One ``MeshPlacementWarning`` for each still mesh collider added since the last look

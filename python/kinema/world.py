@@ -318,8 +318,10 @@ class World(WorldViews, WorldParticles, WorldBirths, WorldRun, WorldCollisions):
         finally:
             self._pull()
 
-    def _advance(self, n: int) -> None:
-        """``n`` steps. With emitters, the steps run in batches up to the next step boundary at
+    def _advance(self, n: int, measure: bool = False) -> dict | None:
+        """``n`` steps; with ``measure``, the diagnostics at their end where the steps ran in
+        one call (no births or deaths due: the contacts' energy is then summed by the last
+        step's own force pass, ``World::advance_measured``), else ``None``. With emitters, the steps run in batches up to the next step boundary at
         which a birth is due (or one at a time while a newborn waits for its place): the births
         due by a step's start are added before it (``kinema.emitter``). Deaths (times of death,
         kill volumes) are the engine's, after each step (``World::set_times_of_death``,
@@ -328,9 +330,9 @@ class World(WorldViews, WorldParticles, WorldBirths, WorldRun, WorldCollisions):
         :meth:`run`."""
         if not self._changes_count():
             with self._engine() as core:
-                core.step(n)
+                measured = core.step_measured(n) if measure else core.step(n)
                 self._notice_placement(core)
-            return
+            return measured
         left = n
         while left > 0:
             self._births()
@@ -350,6 +352,7 @@ class World(WorldViews, WorldParticles, WorldBirths, WorldRun, WorldCollisions):
                 self._drop_removed(before)
                 self._pull()
             left -= k
+        return None
 
     @staticmethod
     def _notice_placement(core: Any) -> None:

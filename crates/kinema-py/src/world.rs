@@ -2,6 +2,7 @@
 //! collisions (conversions in `collide.rs`; stepping and SimulationDiverged in
 //! `stepping.rs`; the Python force in `callbacks.rs`).
 
+use kinema::diagnostics::Diagnostics;
 use kinema::forces::falloff::{Law, Shape};
 use kinema::forces::{Falloff, Springs};
 use kinema::world::{KillVolume, UserOrder};
@@ -172,6 +173,13 @@ impl PyWorld {
     #[getter]
     fn sorts(&self) -> u64 {
         self.inner.sorts()
+    }
+
+    /// A count that moves whenever the set of particles changes, and only then (internal:
+    /// the recorder reads the ids again when it moved).
+    #[getter]
+    fn membership(&self) -> u64 {
+        self.inner.membership()
     }
 
     /// Whether the engine holds the particles in its own order now (internal; for tests).
@@ -495,25 +503,46 @@ impl PyWorld {
 
     /// Energies and momenta now, as a dict (sums over the engine's order: see `PyWorld`).
     fn diagnostics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = self.inner.diagnostics();
-        let out = PyDict::new(py);
-        out.set_item("t", d.t)?;
-        out.set_item("kinetic", d.kinetic)?;
-        let pot = PyDict::new(py);
-        for (name, u) in &d.potential {
-            let prev: f64 = pot.get_item(name)?.map(|v| v.extract()).transpose()?.unwrap_or(0.0);
-            pot.set_item(name, prev + u)?;
-        }
-        out.set_item("potential", pot)?;
-        out.set_item("momentum", d.momentum.to_vec())?;
-        out.set_item("angular_momentum", d.angular_momentum.to_vec())?;
-        out.set_item("kinetic_tensor", d.kinetic_tensor.to_vec())?;
-        if self.inner.has_spin() {
-            out.set_item("rotational", d.rotational)?;
-            out.set_item("spin_angular_momentum", d.spin.to_vec())?;
-        }
-        Ok(out)
+        diagnostics_dict(py, &self.inner.diagnostics(), self.inner.has_spin())
     }
+
+    /// `step(n)` and then `diagnostics()`, the contacts' energy summed by the last step's own
+    /// force pass rather than by a pass of its own (`World::advance_measured`): what
+    /// `World.run` records at each frame.
+    fn step_measured<'py>(&mut self, py: Python<'py>, n: u64) -> PyResult<Bound<'py, PyDict>> {
+        if n == 0 {
+            return self.diagnostics(py);
+        }
+        step_in_slices(py, &mut self.inner, n - 1)?;
+        let world = &mut self.inner;
+        let d = py
+            .detach(move || world.advance_in_engine_order_measured(1))
+            .map_err(world_err)?;
+        py.check_signals()?;
+        diagnostics_dict(py, &d, self.inner.has_spin())
+    }
+}
+
+/// A world's [`Diagnostics`] as the dict `World.diagnostics()` gives (`spin`: the rotational
+/// energy and the spins' angular momentum too).
+fn diagnostics_dict<'py>(py: Python<'py>, d: &Diagnostics, spin: bool) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    out.set_item("t", d.t)?;
+    out.set_item("kinetic", d.kinetic)?;
+    let pot = PyDict::new(py);
+    for (name, u) in &d.potential {
+        let prev: f64 = pot.get_item(name)?.map(|v| v.extract()).transpose()?.unwrap_or(0.0);
+        pot.set_item(name, prev + u)?;
+    }
+    out.set_item("potential", pot)?;
+    out.set_item("momentum", d.momentum.to_vec())?;
+    out.set_item("angular_momentum", d.angular_momentum.to_vec())?;
+    out.set_item("kinetic_tensor", d.kinetic_tensor.to_vec())?;
+    if spin {
+        out.set_item("rotational", d.rotational)?;
+        out.set_item("spin_angular_momentum", d.spin.to_vec())?;
+    }
+    Ok(out)
 }
 
 /// The values of an array in row-major order: borrowed where it is contiguous, else copied.

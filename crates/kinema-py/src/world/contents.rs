@@ -26,10 +26,16 @@ impl PyWorld {
         self.inner.get().particle_materials()
     }
 
-    /// Each particle's collision group, in the user's order.
+    /// Each particle's collision group, in the user's order (gathered: the engine may keep
+    /// its own order, which a read leaves as it is).
     #[getter]
-    fn groups(&mut self) -> Vec<u32> {
-        self.inner.get().particle_groups()
+    fn groups<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u8>> {
+        let groups = self.inner.in_user_order(|p| &p.group, 1);
+        if groups.is_empty() {
+            PyArray1::zeros(py, self.inner.len(), false) // all in group 0 (none stored)
+        } else {
+            PyArray1::from_slice(py, &groups)
+        }
     }
 
     /// Puts particles start.. into the collision groups `group` (checked: 0..32).

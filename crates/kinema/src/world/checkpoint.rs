@@ -43,6 +43,7 @@ impl World {
             }
         };
         self.particles.id.copy_from_slice(ids);
+        self.membership += 1;
         self.particles.next_id = next_id;
         Ok(())
     }

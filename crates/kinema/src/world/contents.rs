@@ -40,6 +40,7 @@ impl World {
             check_state(["position", "velocity", "mass"], x, v, mass, Some(2))?;
         }
         let range = self.particles.add(x, v, mass, radius, pinned)?;
+        self.membership += 1;
         if let Some(g) = group.filter(|g| g.iter().any(|&g| g != 0)) {
             let p = &mut self.particles;
             p.group.resize(p.len(), 0);
@@ -106,6 +107,7 @@ impl World {
         let recording = self.collide_stage.as_ref().is_some_and(|s| s.records_touches());
         let ids_before = if recording { self.particles.id.clone() } else { Vec::new() };
         let new_of_old = self.particles.retain(&keep);
+        self.membership += 1;
         if let Some(stage) = &mut self.collide_stage {
             // the touches of the removed end now (`collide/touch.rs`)
             stage.renumber_touches(&new_of_old, self.time, &ids_before);

@@ -400,7 +400,8 @@ impl World {
                 a: &mut b.a,
                 v_out,
                 predict,
-                energy: self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0,
+                energy: (self.watch.is_some() && (self.steps + 1) % RUNAWAY_CHECK_EVERY == 0)
+                    || self.energy_at == Some(self.steps + 1),
                 spin: turns.then(|| SpinKick {
                     omega: &p.omega,
                     alpha: &p.alpha,

@@ -369,6 +369,13 @@ impl UserOrder {
         self.world.advance_in_engine_order(n)
     }
 
+    /// [`World::advance_measured`], leaving the particles in the engine's order: the
+    /// diagnostics at the end of the `n` steps, summed over the engine's order (as
+    /// [`UserOrder::diagnostics`]).
+    pub fn advance_in_engine_order_measured(&mut self, n: u64) -> Result<Diagnostics, Error> {
+        self.world.advance_in_engine_order_measured(n)
+    }
+
     /// Whether the particles are in the engine's order now (sorted along space).
     pub fn in_engine_order(&self) -> bool {
         self.world.user_of().is_some()
@@ -451,6 +458,11 @@ impl UserOrder {
     /// [`World::sorts`].
     pub fn sorts(&self) -> u64 {
         self.world.sorts()
+    }
+
+    /// [`World::membership`].
+    pub fn membership(&self) -> u64 {
+        self.world.membership()
     }
 
     /// [`World::stage_times`].
