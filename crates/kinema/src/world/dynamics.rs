@@ -85,7 +85,7 @@ pub(crate) fn newton(force: &[f64], inv_mass: &[f64], dim: usize, acc: &mut [f64
 }
 
 /// [`newton`] on the calling thread.
-fn newton_serial(force: &[f64], inv_mass: &[f64], dim: usize, acc: &mut [f64]) {
+pub(crate) fn newton_serial(force: &[f64], inv_mass: &[f64], dim: usize, acc: &mut [f64]) {
     for (i, inv_m) in inv_mass.iter().enumerate() {
         for k in 0..3 {
             acc[3 * i + k] = force[3 * i + k] * inv_m;
