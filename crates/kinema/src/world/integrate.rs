@@ -435,8 +435,9 @@ impl World {
         dynamics.total_force(t + h, &self.x_next, &self.v_next)?;
         self.stats.nfev += 1;
         b.fresh = true; // a_next, the next step's a once accepted
-                        // Newton's a' = F/m and the kick in one pass (one pass and one parallel region fewer
-                        // than `Dynamics::accel` and then the kick: the same operations, the same bits)
+
+        // Newton's a' = F/m and the kick in one pass (one pass and one parallel region fewer
+        // than `Dynamics::accel` and then the kick: the same operations, the same bits)
         let (a, force, dim) = (&b.a, &self.force, self.params.dim);
         let bad = self
             .v_next

@@ -139,6 +139,9 @@ pub(super) struct ChunkSums {
     pub books: ContactBooks,
     /// With the books, the chunk's collider contact forces, particle by particle.
     pub pushes: Vec<WallPush>,
+    /// The pool thread that passed the chunk (rayon's index; `None` outside a pool): the
+    /// kick that follows runs each chunk there (`verlet.rs`, `kick_velocities`).
+    pub thread: Option<usize>,
 }
 
 /// The chunks' books summed in chunk order (the same on any number of threads).
@@ -477,6 +480,7 @@ impl ContactForce<'_> {
             bad,
             books,
             pushes,
+            thread: rayon::current_thread_index(),
         }
     }
 
