@@ -53,6 +53,7 @@ pub use tangent::{TangentialLaw, TangentialModel};
 pub use twisting::TwistingLaw;
 pub(crate) use verlet::{SpinKick, VerletKick};
 
+mod affinity;
 mod cohesion;
 mod contacts;
 mod damping;

@@ -21,8 +21,7 @@
 //! are F n and −F n exactly (both from one product, one added, one subtracted), so momentum
 //! is kept to rounding, as with the full list this replaced, which computed each pair twice.
 
-use rayon::prelude::*;
-
+use super::affinity;
 use super::exchange::Exchange;
 use super::history::{pair_memory, wall_memory, PairSlip, Slip, WallSlip};
 use super::tangent::{Tangent, TangentialModel, Touch};
@@ -139,8 +138,9 @@ pub(super) struct ChunkSums {
     pub books: ContactBooks,
     /// With the books, the chunk's collider contact forces, particle by particle.
     pub pushes: Vec<WallPush>,
-    /// The pool thread that passed the chunk (rayon's index; `None` outside a pool): the
-    /// kick that follows runs each chunk there (`verlet.rs`, `kick_velocities`).
+    /// The pool thread that passed the chunk (rayon's index): the kick that follows runs
+    /// the chunk there (`verlet.rs`, `kick_velocities`), and so does the next pass
+    /// (`affinity.rs`).
     pub thread: Option<usize>,
 }
 
@@ -276,11 +276,14 @@ impl ContactForce<'_> {
             None => (None, None),
         };
         let outs = chunk_outs(chunks, forces, exchange, turn_out.as_mut());
-        outs.into_par_iter()
-            .zip(list.rows.par_iter())
-            .enumerate()
-            .map(|(c, (out, rows))| self.chunk_pairs(c, rows, out, (x, v), list, &init, options, turn))
-            .collect_into_vec(sums);
+        // each chunk on the thread that passed it the last time (`affinity.rs`)
+        let threads = rayon::current_num_threads();
+        let homes = affinity::homes(chunks, threads, |c| sums.get(c).and_then(|s| s.thread));
+        let done = affinity::run(outs, &homes, |c, out| {
+            self.chunk_pairs(c, &list.rows[c], out, (x, v), list, &init, options, turn)
+        });
+        sums.clear();
+        sums.extend(done.into_iter().map(|(s, t)| ChunkSums { thread: Some(t), ..s }));
         exchange.index(chunks);
         if let Some((_, ex)) = turn_out.and_then(|o| o.torque) {
             ex.index(chunks);
@@ -480,7 +483,7 @@ impl ContactForce<'_> {
             bad,
             books,
             pushes,
-            thread: rayon::current_thread_index(),
+            thread: None, // (set by the caller, which knows the pool's thread)
         }
     }
 
