@@ -48,8 +48,8 @@ impl Sums {
         let mut s = Sums::default();
         for ((&m, x), v) in mass.iter().zip(x.chunks_exact(3)).zip(v.chunks_exact(3)) {
             s.kinetic += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-            for k in 0..3 {
-                s.momentum[k] += m * v[k];
+            for (pk, vk) in s.momentum.iter_mut().zip(v) {
+                *pk += m * vk;
             }
             // x × v
             s.angular[0] += m * (x[1] * v[2] - x[2] * v[1]);
@@ -66,12 +66,10 @@ impl Sums {
     /// Adds another chunk's sums.
     fn add(&mut self, other: &Sums) {
         self.kinetic += other.kinetic;
-        for k in 0..3 {
-            self.momentum[k] += other.momentum[k];
-            self.angular[k] += other.angular[k];
-        }
-        for k in 0..9 {
-            self.tensor[k] += other.tensor[k];
+        let mine = self.momentum.iter_mut().chain(&mut self.angular).chain(&mut self.tensor);
+        let theirs = other.momentum.iter().chain(&other.angular).chain(&other.tensor);
+        for (a, b) in mine.zip(theirs) {
+            *a += b;
         }
     }
 }
