@@ -155,3 +155,31 @@ fn the_membership_count_moves_when_the_set_of_particles_changes_and_only_then() 
     w.restore_clock_and_ids(0.0, 0, &ids, 10 + n as u64).unwrap();
     assert!(w.membership() > removed, "ids restored");
 }
+
+#[test]
+fn worlds_stepped_side_by_side_on_one_pool_neither_wait_for_each_other_nor_change() {
+    // The force models' passes hand each chunk to a chosen thread of the pool
+    // (`rayon::broadcast`, contact_force/affinity.rs). Worlds stepped inside that pool's own
+    // threads, several at once, must neither deadlock (a thread waiting in one world's pass
+    // still runs its share of the other's) nor step otherwise than one by one.
+    let alone: Vec<Vec<f64>> = (0..4)
+        .map(|_| {
+            let (mut w, _, _) = gas();
+            w.advance(60).unwrap();
+            w.particles().x.clone()
+        })
+        .collect();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let together: Vec<Vec<f64>> = pool.install(|| {
+        use rayon::prelude::*;
+        (0..4)
+            .into_par_iter()
+            .map(|_| {
+                let (mut w, _, _) = gas();
+                w.advance(60).unwrap();
+                w.particles().x.clone()
+            })
+            .collect()
+    });
+    assert_eq!(together, alone);
+}
