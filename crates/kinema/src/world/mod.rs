@@ -288,17 +288,11 @@ impl World {
         result
     }
 
-    /// [`World::advance`] without putting the particles back: they stay in the engine's order
-    /// (sorted along space) after it, for the next slice. Only [`UserOrder`] calls it, which
-    /// gives the world out only in the user's order again (see `order.rs`).
-    ///
-    /// After each step the deaths set by [`World::set_deaths`] are applied (which puts
-    /// the particles back in the user's order when someone dies).
     /// [`World::diagnostics`] at the end of [`World::advance`]`(n)`: the contacts' energy is
     /// summed by the last step's own force pass (Verlet with a force model: the sum the
     /// runaway check reads, the same bits as a pass of its own over the same list) instead of
     /// by another pass over every pair, a third of a step at 10⁶ particles. What
-    /// `World.run` records at each frame; `None` when a step was refused (the error).
+    /// `World.run` records at each frame; the error of a refused step, as `advance`'s.
     pub fn advance_measured(&mut self, n: u64) -> Result<Diagnostics, Error> {
         let result = self.advance_in_engine_order_measured(n);
         self.restore_user_order();
@@ -318,6 +312,12 @@ impl World {
         d
     }
 
+    /// [`World::advance`] without putting the particles back: they stay in the engine's order
+    /// (sorted along space) after it, for the next slice. Only [`UserOrder`] calls it, which
+    /// gives the world out only in the user's order again (see `order.rs`).
+    ///
+    /// After each step the deaths set by [`World::set_deaths`] are applied (which puts
+    /// the particles back in the user's order when someone dies).
     fn advance_in_engine_order(&mut self, n: u64) -> Result<(), Error> {
         if n > 0 && self.collide_stage.as_ref().is_some_and(|s| s.params.event_driven) {
             if !self.deaths.any() {

@@ -7,7 +7,8 @@
 //! the others not yet started, from the ends of their lists (work stealing by chunk, which
 //! keeps a descheduled or slower thread from holding the pass); a chunk then belongs to the
 //! thread that passed it. A chunk's work is its own and its result is kept in its place, so
-//! the bits are the same whichever thread passes it.
+//! the bits are the same whichever thread passes it. Verlet's kick after the pass takes the
+//! same homes (`verlet.rs`): each chunk's force sums are still in that core's cache.
 
 use std::sync::{Mutex, PoisonError};
 

@@ -1,10 +1,9 @@
 //! Velocity Verlet's force evaluation and closing kick fused into one parallel pass over the
 //! particles, for a world whose forces include the contact force.
 
-use std::sync::{Mutex, PoisonError};
-
 use rayon::prelude::*;
 
+use super::affinity;
 use super::exchange::Exchange;
 use super::pairs::{summed_books, ChunkSums, ContactBooks, PassOptions};
 use super::{ContactForce, Scratch, CHUNK};
@@ -232,7 +231,8 @@ fn angular_predictor(k: &mut SpinKick<'_>, h: f64) {
 /// its force sums are still in that core's cache, and on another core each of their lines
 /// crosses between the cores' caches first. Left to rayon's own split, half the chunks went
 /// to the other thread: the kick took a quarter of the 2-thread gas's time (N = 103,823)
-/// and 9 % of the 1-thread one's; on the stage-1 threads, 13 %, and the step 18 % less. The
+/// and 9 % of the 1-thread one's; on the stage-1 threads, 13 %, and the step 18 % less (this
+/// machine on a day its two cores shared little; where they share a cache, no change). The
 /// chunks' arithmetic is their own, so the bits are the same on any thread.
 #[inline]
 fn kick_velocities(
@@ -262,21 +262,13 @@ fn kick_velocities(
         }
         bad
     };
-    // each pool thread's chunks (one it did not see in stage 1, if any: by turns), handed to
-    // it by `broadcast`, which runs once on every thread of the pool, by its index
-    type Share<'a> = Vec<(usize, &'a mut [f64], &'a mut [f64])>;
-    let threads = rayon::current_num_threads();
-    let mut shares: Vec<Share<'_>> = (0..threads).map(|_| Vec::new()).collect();
-    for (c, (ac, vc)) in a.chunks_mut(3 * CHUNK).zip(v_out.chunks_mut(3 * CHUNK)).enumerate() {
-        let t = sums.get(c).and_then(|s| s.thread).unwrap_or(c) % threads;
-        shares[t].push((c, ac, vc));
-    }
-    let shares: Vec<Mutex<Share<'_>>> = shares.into_iter().map(Mutex::new).collect();
-    let firsts = rayon::broadcast(|ctx| {
-        let mut mine = shares[ctx.index()].lock().unwrap_or_else(PoisonError::into_inner);
-        mine.iter_mut().filter_map(|(c, ac, vc)| kick(*c, ac, vc)).min()
+    // (the stage-1 threads as homes, with the same stealing as stage 1: `affinity.rs`)
+    let chunks: Vec<(&mut [f64], &mut [f64])> = a.chunks_mut(3 * CHUNK).zip(v_out.chunks_mut(3 * CHUNK)).collect();
+    let homes = affinity::homes(chunks.len(), rayon::current_num_threads(), |c| {
+        sums.get(c).and_then(|s| s.thread)
     });
-    firsts.into_iter().flatten().min()
+    let firsts = affinity::run(chunks, &homes, |c, (ac, vc)| kick(c, ac, vc));
+    firsts.into_iter().filter_map(|(bad, _)| bad).min()
 }
 
 /// The angular kick beside the kick: α' = τ/I, ω ← ω + h/2 (α + α'), chunk by chunk after
