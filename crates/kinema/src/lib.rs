@@ -14,6 +14,7 @@ pub mod limits;
 pub mod ode;
 pub mod particles;
 pub mod render;
+pub mod simd;
 pub(crate) mod vec3;
 pub mod world;
 

@@ -90,6 +90,7 @@ impl Periodic {
     }
 
     /// Coordinate `c` (m) of axis `k` wrapped into [lo, hi) when the axis is periodic.
+    #[inline]
     pub fn wrap_coordinate(&self, k: usize, c: f64) -> f64 {
         if !self.axes[k] {
             return c;
@@ -106,6 +107,7 @@ impl Periodic {
     }
 
     /// The position `p` (m) wrapped into [lo, hi) along the periodic axes.
+    #[inline]
     pub fn wrap(&self, p: [f64; 3]) -> [f64; 3] {
         [
             self.wrap_coordinate(0, p[0]),

@@ -16,6 +16,8 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
+use crate::collide::domain::floor;
+
 /// One scheduled event: when, whose, which of its schedules, and what (the caller's).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Entry<T> {
@@ -99,8 +101,9 @@ impl<T: Copy> Calendar<T> {
     }
 
     /// The absolute bucket of time `t`, s.
+    #[inline(always)]
     fn bucket(&self, t: f64) -> i64 {
-        let b = ((t - self.origin) * self.inv_width).floor();
+        let b = floor((t - self.origin) * self.inv_width);
         // (saturating: a time far beyond the ring is overflow whatever its bucket)
         if b >= i64::MAX as f64 {
             i64::MAX
@@ -112,6 +115,7 @@ impl<T: Copy> Calendar<T> {
     }
 
     /// Schedules an entry (its time finite).
+    #[inline(always)]
     pub fn push(&mut self, e: Entry<T>) {
         let b = self.bucket(e.time);
         let len = self.ring.len() as i64;
@@ -128,6 +132,7 @@ impl<T: Copy> Calendar<T> {
     /// The earliest entry that `live` accepts (the particle's current version), removed from
     /// the calendar, if it is at or before `until` (s); stale entries met on the way are
     /// dropped. `None`: no live entry until then (a later one stays).
+    #[inline(always)]
     pub fn pop_until(&mut self, until: f64, live: impl Fn(&Entry<T>) -> bool) -> Option<Entry<T>> {
         loop {
             while let Some(top) = self.heap.peek() {

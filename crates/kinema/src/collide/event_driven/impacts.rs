@@ -15,6 +15,7 @@ impl EventDriven {
     /// The impact of i and j at time `now` (s): both moved there, the impulse of
     /// [`restitution_impulse`] given to i and its opposite to j; both paths change.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub(super) fn impact_pair(
         &mut self,
         i: usize,
@@ -91,6 +92,7 @@ impl EventDriven {
     /// The impact of i with wall k at time `now` (s), by the same rule; the wall's collider
     /// books what it took. Whether an impulse was given (none when i does not approach).
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub(super) fn impact_wall(
         &mut self,
         i: usize,

@@ -238,6 +238,17 @@ fn shell_width(
     delta
 }
 
+/// What [`EventDriven::advance`] takes besides the state, handed whole to its loop.
+type AdvanceArgs<'a, 'm> = (
+    &'a mut Particles,
+    &'a MaterialTable<'m>,
+    f64,
+    &'a Domain,
+    f64,
+    &'a mut [ColliderBooks],
+    &'a mut Interrupt,
+);
+
 impl EventDriven {
     /// The state of particles `p` at time `t0` (s): positions wrapped into the periodic cell,
     /// every neighbour list made, every particle's first event scheduled. The colliders must
@@ -330,6 +341,9 @@ impl EventDriven {
     /// the impacts (impacts, impulses, energy lost, impulse balance) and adds what the walls
     /// took to `walls_books` (one per collider). Stops with the interrupt's error, leaving the
     /// particles as they were at the call (the state is then of no further use).
+    ///
+    /// The loop runs on x86-64-v3's instructions where the CPU has them (`simd.rs`: the
+    /// same bits as the baseline's).
     #[allow(clippy::too_many_arguments)]
     pub fn advance(
         &mut self,
@@ -340,6 +354,37 @@ impl EventDriven {
         t1: f64,
         walls_books: &mut [ColliderBooks],
         interrupt: &mut Interrupt,
+    ) -> Result<CollisionStats, Error> {
+        let args = (p, materials, restitution_threshold, domain, t1, walls_books, interrupt);
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::v3() {
+            // SAFETY: the CPU has every feature `advance_v3` is compiled for (`simd::v3`).
+            return unsafe { self.advance_v3(args) };
+        }
+        self.advance_baseline(args)
+    }
+
+    /// [`EventDriven::advance`] on the baseline instruction set.
+    fn advance_baseline(&mut self, args: AdvanceArgs<'_, '_>) -> Result<CollisionStats, Error> {
+        self.advance_loop(args)
+    }
+
+    /// [`EventDriven::advance`] on x86-64-v3's instructions.
+    ///
+    /// # Safety
+    /// Only where the CPU has them ([`crate::simd::v3`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,movbe,popcnt,sse3,ssse3,sse4.1,sse4.2")]
+    unsafe fn advance_v3(&mut self, args: AdvanceArgs<'_, '_>) -> Result<CollisionStats, Error> {
+        self.advance_loop(args)
+    }
+
+    /// The event loop of [`EventDriven::advance`], inlined into each instruction set's
+    /// version with everything it calls on every event.
+    #[inline(always)]
+    fn advance_loop(
+        &mut self,
+        (p, materials, restitution_threshold, domain, t1, walls_books, interrupt): AdvanceArgs<'_, '_>,
     ) -> Result<CollisionStats, Error> {
         let mut stats = CollisionStats::default();
         let mut events = 0u64;
@@ -417,6 +462,7 @@ impl EventDriven {
     }
 
     /// Finds particle i's event from time `now` again and schedules it.
+    #[inline(always)]
     fn reschedule(&mut self, i: usize, now: f64, domain: &Domain) {
         let next = self.find(i, now, domain);
         self.enter(i, next);
@@ -424,6 +470,7 @@ impl EventDriven {
 
     /// Enters particle i's event (its time, s, and kind) into the calendar (a new schedule:
     /// older entries go stale).
+    #[inline(always)]
     fn enter(&mut self, i: usize, (time, what): (f64, Kind)) {
         let b = &mut self.bodies[i];
         b.schedule = b.schedule.wrapping_add(1);
@@ -439,6 +486,7 @@ impl EventDriven {
 
     /// Particle i's earliest event after `now` (s): an impact with a partner of its list or a
     /// wall, or leaving its shell (module doc).
+    #[inline(always)]
     fn find(&self, i: usize, now: f64, domain: &Domain) -> (f64, Kind) {
         if self.g == [0.0; 3] {
             self.find_in::<false>(i, now, domain)

@@ -25,6 +25,7 @@
 //! (filing by a clamped index keeps two centres closer than one edge in the same or adjacent
 //! cells: the search stays exact, it only slows for particles far outside).
 
+use crate::collide::domain::floor;
 use crate::collide::Domain;
 
 /// Per-particle neighbour lists (flat, `cap` slots a particle) and the cells of the centres.
@@ -131,18 +132,21 @@ impl Cells {
     }
 
     /// The cell coordinates of point `p` (clamped into the grid).
+    #[inline(always)]
     fn coords(&self, p: [f64; 3]) -> [usize; 3] {
         [0, 1, 2].map(|k| {
-            let c = ((p[k] - self.lo[k]) * self.inv_edge[k]).floor();
+            let c = floor((p[k] - self.lo[k]) * self.inv_edge[k]);
             c.clamp(0.0, (self.n[k] - 1) as f64) as usize
         })
     }
 
+    #[inline(always)]
     fn index(&self, c: [usize; 3]) -> usize {
         (c[2] * self.n[1] + c[1]) * self.n[0] + c[0]
     }
 
     /// Files particle i at centre `p`, taking it out of its old cell.
+    #[inline(always)]
     fn file(&mut self, i: usize, p: [f64; 3]) {
         let cell = self.index(self.coords(p));
         let old = self.cell_of[i];
@@ -188,6 +192,7 @@ impl Cells {
     /// axis wraps (0 otherwise): per axis up to 3 (cell coordinate, shift) pairs. `exact`:
     /// false when a periodic axis has fewer than 3 cells (then the shifts are not the minimum
     /// image and the caller must take it pair by pair).
+    #[inline(always)]
     fn around(&self, p: [f64; 3]) -> ([[(usize, f64); 3]; 3], [usize; 3], bool) {
         let c = self.coords(p);
         let mut span = [[(0usize, 0.0f64); 3]; 3];
@@ -223,6 +228,7 @@ impl Cells {
     /// within `reach` (m) of p: the rounded centres are tested against the reach widened by
     /// their rounding (module doc). `None` where this test cannot be exact (a periodic axis of
     /// fewer than 3 cells, or coordinates beyond 10³⁰ m): the caller tests exactly.
+    #[inline(always)]
     fn scan(&self, p: [f64; 3], reach: f64, out: &mut Vec<u32>) -> Option<()> {
         let (span, count, exact) = self.around(p);
         let big = p.iter().fold(0.0f64, |m, c| m.max(c.abs())) + self.period.iter().fold(0.0f64, |m, &l| m.max(l));
@@ -315,6 +321,7 @@ impl Shells {
 
     /// Into `found`: the particles other than i whose centres may be within r_i + r_max + δ
     /// of `at` (every partner of i centred there; module doc).
+    #[inline(always)]
     fn find_near(&self, i: usize, at: [f64; 3], r_i: f64, domain: &Domain, found: &mut Vec<u32>) {
         found.clear();
         let reach = r_i + self.r_max + self.delta;
@@ -336,6 +343,7 @@ impl Shells {
     }
 
     /// Adds j to i's list, doubling every list's room when i's is full.
+    #[inline(always)]
     fn append(&mut self, i: usize, j: u32) {
         if self.count[i] as usize == self.cap {
             let (old, cap) = (self.cap, 2 * self.cap);
@@ -351,6 +359,7 @@ impl Shells {
     }
 
     /// Takes j out of i's list (if there).
+    #[inline(always)]
     fn remove(&mut self, i: usize, j: u32) {
         let start = i * self.cap;
         let c = self.count[i] as usize;
@@ -363,6 +372,7 @@ impl Shells {
     /// Makes particle i's list again around `at` (m, wrapped): i leaves the lists of the old
     /// partners it no longer reaches and joins those of the new ones (module doc); the lists
     /// of partners it keeps (most: it moved only δ/2) are not touched.
+    #[inline(always)]
     pub fn remake(&mut self, i: usize, at: [f64; 3], radius: &[f64], domain: &Domain) {
         let mut found = std::mem::take(&mut self.scratch);
         self.centre[i] = at;

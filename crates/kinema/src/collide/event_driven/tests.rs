@@ -80,3 +80,53 @@ fn the_lists_hold_every_partner_and_no_spheres_overlap() {
     }
     assert!(impacts > 1000, "{impacts} impacts");
 }
+
+/// The loop on x86-64-v3's instructions gives the baseline's bits (`simd.rs`): two states of
+/// the same gas, with walls (a box closed along z) and a field, run through each version
+/// frame by frame, agree to the bit in every position, velocity and impact count.
+#[test]
+fn the_loop_on_either_instruction_set_gives_the_same_bits() {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if !std::arch::is_x86_feature_detected!("avx2") || !crate::simd::v3() {
+            eprintln!("skipped: this CPU (or KINEMA_SIMD) keeps the baseline only");
+            return;
+        }
+        for (g, periodic_z) in [([0.0; 3], true), ([0.0, 0.0, -0.5], false)] {
+            let (p0, _) = gas(400, 10.0, 11);
+            let cell = Periodic::new([0.0; 3], [10.0; 3], [true, true, periodic_z]).unwrap();
+            let domain = Domain::periodic(3, cell).unwrap();
+            let walls: Vec<Collider> = if periodic_z {
+                vec![]
+            } else {
+                vec![Collider::Box(
+                    crate::collide::BoxContainer::new([0.0; 3], [10.0; 3], crate::collide::Surface::default()).unwrap(),
+                )]
+            };
+            let table = MaterialTable::uniform(Material::new(0.9, 0.2).unwrap()).with_colliders(&walls);
+            let (mut pa, mut pb) = (p0.clone(), p0.clone());
+            let mut a = EventDriven::new(&pa, &walls, &domain, None, 0.0, g);
+            let mut b = EventDriven::new(&pb, &walls, &domain, None, 0.0, g);
+            let (mut books_a, mut books_b) = (
+                vec![ColliderBooks::default(); walls.len()],
+                vec![ColliderBooks::default(); walls.len()],
+            );
+            let mut interrupt = Interrupt::none();
+            let mut impacts = 0;
+            for frame in 1..=10 {
+                let t = 0.5 * frame as f64;
+                let sa = a
+                    .advance_baseline((&mut pa, &table, 0.0, &domain, t, &mut books_a, &mut interrupt))
+                    .unwrap();
+                // SAFETY: the CPU has x86-64-v3 (checked above)
+                let sb = unsafe { b.advance_v3((&mut pb, &table, 0.0, &domain, t, &mut books_b, &mut interrupt)) }.unwrap();
+                assert_eq!(sa.impacts, sb.impacts, "frame {frame}");
+                impacts += sa.impacts;
+                let bits = |v: &[f64]| v.iter().map(|c| c.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&pa.x), bits(&pb.x), "positions, frame {frame}");
+                assert_eq!(bits(&pa.v), bits(&pb.v), "velocities, frame {frame}");
+            }
+            assert!(impacts > 500, "{impacts} impacts");
+        }
+    }
+}
