@@ -43,6 +43,10 @@ pub(super) struct Shells {
     cells: Cells,
     /// A buffer for `remake`.
     scratch: Vec<u32>,
+    /// `remake`'s marks, one per particle: `stamp` on a particle found around the new
+    /// centre, `stamp + 1` once it is also found in the old list (older values: neither).
+    mark: Vec<u32>,
+    stamp: u32,
 }
 
 /// The particle of an empty lane.
@@ -252,11 +256,16 @@ impl Cells {
                             let (dx, dy, dz) = (q[0] - b.x[l], q[1] - b.y[l], q[2] - b.z[l]);
                             near[l] = dx * dx + dy * dy + dz * dz < r2;
                         }
+                        // the near lanes' ids kept in order without a branch per lane: each
+                        // written at the end, the end moved past it only if near
+                        let start = out.len();
+                        out.extend_from_slice(&b.id);
+                        let mut kept = start;
                         for l in 0..4 {
-                            if near[l] {
-                                out.push(b.id[l]);
-                            }
+                            out[kept] = b.id[l];
+                            kept += near[l] as usize;
                         }
+                        out.truncate(kept);
                         if b.id[3] == EMPTY {
                             break; // the cell's members end in this block
                         }
@@ -302,6 +311,8 @@ impl Shells {
             count: vec![0; n],
             cells,
             scratch: Vec::new(),
+            mark: vec![0; n],
+            stamp: 0,
         };
         for (i, &p) in x.iter().enumerate() {
             shells.cells.file(i, p);
@@ -378,12 +389,24 @@ impl Shells {
         self.centre[i] = at;
         self.cells.file(i, at);
         self.find_near(i, at, radius[i], domain, &mut found);
-        // old partners not found again leave; found ones not there before join
+        // old partners not found again leave; found ones not there before join (found ones
+        // marked, then those of the old list marked again: a pass over each instead of a
+        // search of one list for each member of the other)
+        self.stamp = self.stamp.wrapping_add(2);
+        if self.stamp < 2 {
+            self.mark.fill(0); // the stamps wrapped: no old mark may equal a new one
+            self.stamp = 2;
+        }
+        let (found_now, listed_too) = (self.stamp, self.stamp + 1);
+        for &j in &found {
+            self.mark[j as usize] = found_now;
+        }
         let start = i * self.cap;
         let mut k = 0;
         while k < self.count[i] as usize {
             let j = self.list[start + k];
-            if found.contains(&j) {
+            if self.mark[j as usize] == found_now {
+                self.mark[j as usize] = listed_too;
                 k += 1;
             } else {
                 self.remove(j as usize, i as u32);
@@ -392,7 +415,7 @@ impl Shells {
             }
         }
         for &j in &found {
-            if !self.of(i).contains(&j) {
+            if self.mark[j as usize] == found_now {
                 self.append(i, j);
                 self.append(j as usize, i as u32);
             }
