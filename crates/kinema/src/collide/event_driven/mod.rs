@@ -115,7 +115,7 @@ impl Body {
     }
 
     /// Moves it to time `at`, s (position wrapped into the periodic cell when `wrap`).
-    #[inline]
+    #[inline(always)]
     fn move_to(&mut self, at: f64, g: [f64; 3], domain: Option<&Domain>) {
         let x = self.at(at, g);
         self.x = match domain.and_then(|d| d.periodic_box()) {
