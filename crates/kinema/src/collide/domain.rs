@@ -19,6 +19,14 @@ pub struct Periodic {
     axes: [bool; 3],
     /// 1 / (hi − lo) on periodic axes (0 on the others), 1/m.
     inv_period: [f64; 3],
+    /// Half the period on periodic axes, +∞ on the others, m: a displacement longer than it
+    /// along an axis is not its own minimum image (one comparison on the hot path, where
+    /// the axis's flag, a subtraction and a product were).
+    half_period: [f64; 3],
+    /// The cell's bounds on periodic axes and ±∞ on the others, m: a coordinate outside them
+    /// needs wrapping (one test per coordinate, the axis's flag folded in).
+    wrap_lo: [f64; 3],
+    wrap_hi: [f64; 3],
 }
 
 impl Periodic {
@@ -45,11 +53,17 @@ impl Periodic {
             }
         }
         let inv_period = [0, 1, 2].map(|k| if axes[k] { 1.0 / (hi[k] - lo[k]) } else { 0.0 });
+        let half_period = [0, 1, 2].map(|k| if axes[k] { 0.5 * (hi[k] - lo[k]) } else { f64::INFINITY });
+        let wrap_lo = [0, 1, 2].map(|k| if axes[k] { lo[k] } else { f64::NEG_INFINITY });
+        let wrap_hi = [0, 1, 2].map(|k| if axes[k] { hi[k] } else { f64::INFINITY });
         Ok(Periodic {
             lo,
             hi,
             axes,
             inv_period,
+            half_period,
+            wrap_lo,
+            wrap_hi,
         })
     }
 
@@ -82,7 +96,8 @@ impl Periodic {
             // Within half a period, d/L rounds to 0 (0.5 itself ties to even, 0) and d stays
             // as it is: the formula's result, bit for bit, without its arithmetic. That is
             // nearly every pair of a neighbour search.
-            if self.axes[k] && d[k].abs() > 0.5 * self.period(k) {
+            // (`half_period`: 0.5·L, the same bits, or +∞ along an open axis)
+            if d[k].abs() > self.half_period[k] {
                 out[k] = d[k] - self.period(k) * nearest_integer(d[k] * self.inv_period[k]);
             }
         }
@@ -124,15 +139,15 @@ impl Periodic {
 
     /// [`Periodic::wrap_positions`] on the calling thread (for a pass that has the positions
     /// at hand already).
+    #[inline]
     pub fn wrap_positions_serial(&self, x: &mut [f64]) {
         // A coordinate already in [lo, hi) is its own wrap (floor gives 0 there): only the few
         // that left the cell in a step pay for the division and the floor.
-        let (lo, hi) = (self.lo, self.hi);
-        let axes = self.axes;
+        let (lo, hi) = (self.wrap_lo, self.wrap_hi);
         for p in x.chunks_exact_mut(3) {
             for (k, c) in p.iter_mut().enumerate() {
-                if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
-                    *c = self.wrap_coordinate(k, *c);
+                if !(*c >= lo[k] && *c < hi[k]) {
+                    *c = self.wrap_coordinate(k, *c); // (itself along an open axis)
                 }
             }
         }

@@ -302,14 +302,7 @@ impl World {
             .filter(|_| contacts);
         let wrap = |xn: &mut [f64]| {
             if let Some(cell) = cell {
-                let (lo, hi, axes) = (cell.lo(), cell.hi(), cell.axes());
-                for q in xn.chunks_exact_mut(3) {
-                    for (k, c) in q.iter_mut().enumerate() {
-                        if axes[k] && !(*c >= lo[k] && *c < hi[k]) {
-                            *c = cell.wrap_coordinate(k, *c);
-                        }
-                    }
-                }
+                cell.wrap_positions_serial(xn);
             }
         };
         let p = &self.particles;
