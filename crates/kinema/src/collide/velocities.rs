@@ -14,12 +14,24 @@ use crate::vec3;
 pub trait Velocities: Sync {
     /// Particle i's velocity, m/s.
     fn at(&self, i: usize) -> [f64; 3];
+
+    /// Asks for what [`Velocities::at`] will read of particle i to be brought into cache
+    /// (`simd::prefetch`; nothing by default).
+    #[inline(always)]
+    fn prefetch(&self, i: usize) {
+        let _ = i;
+    }
 }
 
 impl Velocities for [f64] {
     #[inline(always)]
     fn at(&self, i: usize) -> [f64; 3] {
         vec3::get(self, i)
+    }
+
+    #[inline(always)]
+    fn prefetch(&self, i: usize) {
+        crate::simd::prefetch(&self[3 * i]);
     }
 }
 
@@ -50,6 +62,12 @@ pub struct Predictor<'a> {
 }
 
 impl Velocities for Predictor<'_> {
+    #[inline(always)]
+    fn prefetch(&self, i: usize) {
+        crate::simd::prefetch(&self.v[3 * i]);
+        crate::simd::prefetch(&self.a[3 * i]);
+    }
+
     #[inline(always)]
     fn at(&self, i: usize) -> [f64; 3] {
         let (v, a) = (vec3::get(self.v, i), vec3::get(self.a, i));
