@@ -32,9 +32,9 @@ use crate::collide::{pair_contact, Contact};
 use crate::simd::prefetch;
 use crate::vec3;
 
-/// How many list entries ahead of its reads the pair pass asks for the partners' positions
-/// and radii ([`prefetch`]): about a dozen particles' rows of a gas, enough to cover a
-/// miss to memory at the pass's pace.
+/// How many list entries ahead of its reads the pair pass asks for the partners' positions,
+/// radii, inverse masses and velocities ([`prefetch`]): about a dozen particles' rows of a gas,
+/// enough to cover a miss to memory at the pass's pace (8 and 32 measured no better).
 const PREFETCH: usize = 16;
 
 /// What stage 1 of the pair pass is asked to do besides the pair forces.
@@ -361,9 +361,9 @@ impl ContactForce<'_> {
         let mut books = ContactBooks::default();
         let mut wall_lost = 0.0;
         let mut pushes = Vec::new();
-        // The partners' positions and radii PREFETCH entries ahead of the row being read:
-        // beyond a core's caches (10⁶ particles) nearly every partner's read misses, and
-        // the loop would wait for each in turn.
+        // The partners' positions, radii, inverse masses and velocities PREFETCH entries
+        // ahead of the row being read: beyond a core's caches (10⁶ particles) nearly every
+        // partner's read misses, and the loop would wait for each in turn.
         let partners = &rows.partners;
         let mut ahead = 0;
         for l in 0..len {
@@ -373,6 +373,7 @@ impl ContactForce<'_> {
                 prefetch(&x[3 * j]);
                 prefetch(&x[3 * j + 2]); // (its line may end before z)
                 prefetch(&self.radius[j]);
+                prefetch(&self.inv_mass[j]);
                 v.prefetch(j);
                 ahead += 1;
             }
