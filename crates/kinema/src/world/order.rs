@@ -52,6 +52,7 @@ use crate::diagnostics::Diagnostics;
 use crate::error::Error;
 use crate::ode::stepper::Stats;
 use crate::particles::Particles;
+use crate::simd::prefetch;
 
 /// The particles' order while the engine keeps its own: the two maps between it and the
 /// user's, each the other's inverse.
@@ -102,15 +103,26 @@ pub(crate) const SORT_MIN_PARTICLES: usize = 2 * super::CHUNK;
 
 /// `out[i]` = `a[from[i]]`, `width` values per particle (`from`: each new place's old index,
 /// as `engine_of` is for the user's order and `old_of_new` for a sort).
+///
+/// The reads are scattered (a sort's or the user's order against the engine's), so each asks
+/// for the one [`GATHER_AHEAD`] places on to be brought into cache ([`prefetch`]): at 10⁶
+/// particles nearly every read misses, and they then overlap instead of following one another.
 fn gather_into<T: Copy + Send + Sync>(out: &mut [T], a: &[T], from: &[u32], width: usize) {
-    out.par_chunks_exact_mut(width)
-        .zip(from.par_iter())
-        .with_min_len(CHUNK)
-        .for_each(|(o, &i)| {
-            let i = width * i as usize;
-            o.copy_from_slice(&a[i..i + width]);
+    out.par_chunks_mut(width * CHUNK)
+        .zip(from.par_chunks(CHUNK))
+        .for_each(|(oc, fc)| {
+            for (k, (o, &i)) in oc.chunks_exact_mut(width).zip(fc).enumerate() {
+                if let Some(&ahead) = fc.get(k + GATHER_AHEAD) {
+                    prefetch(&a[width * ahead as usize]);
+                }
+                let i = width * i as usize;
+                o.copy_from_slice(&a[i..i + width]);
+            }
         });
 }
+
+/// How many places ahead [`gather_into`] asks for its reads.
+const GATHER_AHEAD: usize = 16;
 
 /// `a` (`width` values per particle) in the new order, gathered into `spare`'s room, which is
 /// left holding `a`'s old room: every array of one type moves through the same two
