@@ -16,6 +16,13 @@ mod world;
 
 use pyo3::prelude::*;
 
+/// The instruction set the engine's hottest loops run on here: `"x86-64-v3"` or
+/// `"baseline"` (`kinema::simd`; `KINEMA_SIMD=baseline` keeps the baseline).
+#[pyfunction]
+fn simd_level() -> &'static str {
+    kinema::simd::level()
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
@@ -24,5 +31,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     world::register(m)?;
     render::register(m)?;
     threads::register(m)?;
+    m.add_function(wrap_pyfunction!(simd_level, m)?)?;
     Ok(())
 }
