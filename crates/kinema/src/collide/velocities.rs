@@ -40,12 +40,22 @@ impl<const N: usize> Velocities for [f64; N] {
     fn at(&self, i: usize) -> [f64; 3] {
         vec3::get(self, i)
     }
+
+    #[inline(always)]
+    fn prefetch(&self, i: usize) {
+        self[..].prefetch(i);
+    }
 }
 
 impl Velocities for Vec<f64> {
     #[inline(always)]
     fn at(&self, i: usize) -> [f64; 3] {
         vec3::get(self, i)
+    }
+
+    #[inline(always)]
+    fn prefetch(&self, i: usize) {
+        self[..].prefetch(i);
     }
 }
 
