@@ -16,6 +16,7 @@
 //! exact (the force k d vanishes with d); for L₀ > 0 the force is discontinuous there and
 //! zero is the choice that adds no energy.
 
+use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
 
 use super::spring_pass::{Scratch, SpringArrays};
@@ -437,15 +438,32 @@ impl Force for Springs {
     /// U = Σ ½ k (L − L₀)², J: the elastic energy. The dashpot is dissipative and has no
     /// potential, so for damped springs F ≠ −∇U while the ends move; the total energy then
     /// decays by the dashpot's work. `None` if an index is out of range.
+    ///
+    /// Summed by chunks of a fixed number of springs on all threads, the chunks' sums then
+    /// added in order: the same bits for any number of threads (and for springs that fit one
+    /// chunk, the bits of one loop). The world asks for it at every runaway check (every
+    /// tenth step): one loop over a cloth's 59k springs, on one thread, was a twentieth of
+    /// its two threads' steps.
     fn potential_energy(&self, s: &State) -> Option<f64> {
         if self.check_indices(s.len()).is_err() || s.x.len() != 3 * s.len() {
             return None;
         }
-        let u = (0..self.len()).map(|sp| {
-            let stretch = distance(s.x, self.i[sp], self.j[sp]) - self.rest_length[sp];
-            0.5 * self.k[sp] * stretch * stretch
-        });
-        Some(u.sum())
+        const CHUNK: usize = super::PARALLEL_CHUNK;
+        let sums: Vec<f64> = self
+            .i
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(c, chunk)| {
+                let springs = c * CHUNK..c * CHUNK + chunk.len();
+                springs
+                    .map(|sp| {
+                        let stretch = distance(s.x, self.i[sp], self.j[sp]) - self.rest_length[sp];
+                        0.5 * self.k[sp] * stretch * stretch
+                    })
+                    .sum::<f64>()
+            })
+            .collect();
+        Some(sums.into_iter().sum())
     }
 
     /// Internal (each spring pulls its ends equally and oppositely); conservative without
