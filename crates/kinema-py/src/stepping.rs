@@ -75,7 +75,22 @@ pub fn step_in_slices(py: Python<'_>, inner: &mut UserOrder, n: u64) -> PyResult
         let k = slice.min(left);
         let world = &mut *inner;
         let start = std::time::Instant::now();
-        py.detach(move || world.advance_in_engine_order(k)).map_err(world_err)?;
+        // A slice of several short steps runs as one task on a worker of rayon's pool, where
+        // the world allows it (`World::runs_in_pool`): the parallel passes of its steps then
+        // start from inside the pool, instead of the calling thread handing each step's work
+        // over and sleeping until it is done. The in-step Ctrl-C check finds nothing off the
+        // main thread, and needs to find nothing: each step of such a slice took under
+        // SLICE / 2, and Ctrl-C is checked after the slice. A slice of one step (a long one)
+        // stays on the calling thread, where the check inside the step sees Ctrl-C.
+        let in_pool = k > 1 && world.runs_in_pool();
+        py.detach(move || {
+            if in_pool {
+                rayon::scope(move |_| world.advance_in_engine_order(k))
+            } else {
+                world.advance_in_engine_order(k)
+            }
+        })
+        .map_err(world_err)?;
         left -= k;
         py.check_signals()?;
         // the next slice: as many steps as fit in SLICE at this pace

@@ -104,11 +104,20 @@ impl World {
     /// is done, two thread switches each: about a fifth of a 10,000-node cloth's step. The
     /// stage polls no interrupt (Ctrl-C is checked between the stages, on the calling thread).
     pub(super) fn integrate(&mut self) -> Result<(), Error> {
-        if self.unknown_force || self.particles.len() >= IN_POOL_BELOW {
-            self.integrate_here()
-        } else {
+        if self.runs_in_pool() {
             rayon::scope(|_| self.integrate_here())
+        } else {
+            self.integrate_here()
         }
+    }
+
+    /// Whether the world's work may run as one task on a worker of rayon's pool: below
+    /// [`IN_POOL_BELOW`] particles, and no force that declares nothing about itself (see
+    /// [`World::integrate`]). A caller stepping such a world many steps at once can run them
+    /// all there (the Python binding's slices of more than one step), so that no pass of
+    /// theirs starts from outside the pool.
+    pub fn runs_in_pool(&self) -> bool {
+        !self.unknown_force && self.particles.len() < IN_POOL_BELOW
     }
 
     /// [`World::integrate`] on the current thread.

@@ -381,6 +381,11 @@ impl UserOrder {
         self.world.advance_in_engine_order(n)
     }
 
+    /// [`World::runs_in_pool`].
+    pub fn runs_in_pool(&self) -> bool {
+        self.world.runs_in_pool()
+    }
+
     /// [`World::advance_measured`], leaving the particles in the engine's order: the
     /// diagnostics at the end of the `n` steps, summed over the engine's order (as
     /// [`UserOrder::diagnostics`]).
