@@ -79,9 +79,10 @@ pub fn step_in_slices(py: Python<'_>, inner: &mut UserOrder, n: u64) -> PyResult
         // the world allows it (`World::runs_in_pool`): the parallel passes of its steps then
         // start from inside the pool, instead of the calling thread handing each step's work
         // over and sleeping until it is done. The in-step Ctrl-C check finds nothing off the
-        // main thread, and needs to find nothing: each step of such a slice took under
-        // SLICE / 2, and Ctrl-C is checked after the slice. A slice of one step (a long one)
-        // stays on the calling thread, where the check inside the step sees Ctrl-C.
+        // main thread, and needs to find nothing: a slice grows past one step only after its
+        // steps took under SLICE / 4 together, and Ctrl-C is checked after each slice. A slice
+        // of one step (a long one) stays on the calling thread, where the check inside the
+        // step sees Ctrl-C.
         let in_pool = k > 1 && world.runs_in_pool();
         py.detach(move || {
             if in_pool {

@@ -184,7 +184,7 @@ mod avx {
     /// A chunk none of whose springs ends at the last particle (all but one or two chunks of
     /// a cloth) is checked once and then loaded without a check per load, two groups at a
     /// time ([`gather4_within`]; their two chains of square root, division and products side
-    /// by side): 4 % fewer steps a second on one thread for the 100 × 100 cloth of
+    /// by side): 4 % more steps a second on one thread for the 100 × 100 cloth of
     /// `benchmarks/springs.py` than group by group with the loads checked.
     #[target_feature(enable = "avx")]
     pub(super) unsafe fn tension_chunk(springs: &SpringArrays, first: usize, x: &[f64], v: &[f64], out: &mut [[f64; 4]]) {
