@@ -44,6 +44,14 @@ impl<'a, 'f> Dynamics<'a, 'f> {
             self.force.clear();
             self.force.resize(x.len(), 0.0);
         }
+        self.add_forces(t, x, v)
+    }
+
+    /// Adds every force at (t, x, v) to `self.force` (N, as long as `x`), which the caller
+    /// zeroed: [`Dynamics::total_force`] without its pass of zeros (Verlet's drift writes
+    /// them in its own pass).
+    pub fn add_forces(&mut self, t: f64, x: &[f64], v: &[f64]) -> Result<(), CallbackError> {
+        debug_assert_eq!(self.force.len(), x.len());
         let s = State {
             t,
             x,
