@@ -177,6 +177,25 @@ pub trait Force: Send + Sync {
     /// Adds this force to `f` (N, 3 per particle).
     fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError>;
 
+    /// [`Force::accumulate`], then `each(c, f_c)` on each chunk c of `chunk` particles of `f`
+    /// (`f_c`: its 3 values a particle) once this force's additions to it are done, on all
+    /// threads: work of the caller's that needs the summed force of each particle (Verlet's
+    /// kick, when this is the last force) done while the chunk is in cache. The default adds
+    /// everything, then passes the chunks; a force that sums by chunks of particles itself
+    /// may call `each` from its own pass (the springs do, for chunks of their size).
+    fn accumulate_then(
+        &mut self,
+        s: &State,
+        f: &mut [f64],
+        chunk: usize,
+        each: &(dyn Fn(usize, &mut [f64]) + Sync),
+    ) -> Result<(), CallbackError> {
+        use rayon::prelude::*;
+        self.accumulate(s, f)?;
+        f.par_chunks_mut(3 * chunk.max(1)).enumerate().for_each(|(c, fc)| each(c, fc));
+        Ok(())
+    }
+
     /// Checks the force against a world of `n` particles (indices in range, ...).
     fn validate(&self, _n: usize) -> Result<(), Error> {
         Ok(())

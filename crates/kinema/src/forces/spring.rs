@@ -426,7 +426,35 @@ impl Force for Springs {
             rest_length: &self.rest_length,
             damping: &self.damping,
         };
-        self.scratch.accumulate(&springs, s.x, s.v, f);
+        self.scratch.accumulate(&springs, s.x, s.v, f, None);
+        Ok(())
+    }
+
+    /// [`Force::accumulate`] with `each` called from the sum pass on each chunk of particles
+    /// as soon as its sums are done, where `chunk` is the pass's own chunk (else the
+    /// default: all the sums, then the chunks).
+    fn accumulate_then(
+        &mut self,
+        s: &State,
+        f: &mut [f64],
+        chunk: usize,
+        each: &(dyn Fn(usize, &mut [f64]) + Sync),
+    ) -> Result<(), CallbackError> {
+        if chunk != Scratch::SUM_CHUNK {
+            self.accumulate(s, f)?;
+            f.par_chunks_mut(3 * chunk.max(1)).enumerate().for_each(|(c, fc)| each(c, fc));
+            return Ok(());
+        }
+        check_buffers(self.name(), s, &[("f", f.len())])?;
+        self.check_indices(s.len())?;
+        let springs = SpringArrays {
+            i: &self.i,
+            j: &self.j,
+            k: &self.k,
+            rest_length: &self.rest_length,
+            damping: &self.damping,
+        };
+        self.scratch.accumulate(&springs, s.x, s.v, f, Some(each));
         Ok(())
     }
 

@@ -46,10 +46,22 @@ impl PartialEq for Scratch {
 }
 
 impl Scratch {
+    /// The sum pass's chunk of particles ([`SUM_CHUNK`]).
+    pub(super) const SUM_CHUNK: usize = SUM_CHUNK;
+
     /// Adds F_i = [k (L − L₀) + c (u·n)] n to each spring's first end and −F_i to its second
     /// in `f` (N, 3 per particle; `x`, `v` in m and m/s, 3 per particle, every index of
-    /// `springs` below their particle count).
-    pub(super) fn accumulate(&mut self, springs: &SpringArrays, x: &[f64], v: &[f64], f: &mut [f64]) {
+    /// `springs` below their particle count); then, with `each`, calls it on each chunk of
+    /// [`SUM_CHUNK`] particles of `f` as soon as that chunk's sums are done
+    /// ([`super::Force::accumulate_then`]).
+    pub(super) fn accumulate(
+        &mut self,
+        springs: &SpringArrays,
+        x: &[f64],
+        v: &[f64],
+        f: &mut [f64],
+        each: Option<&(dyn Fn(usize, &mut [f64]) + Sync)>,
+    ) {
         let n = x.len() / 3;
         if self.start.len() != n + 1 {
             self.index_ends(springs, n);
@@ -66,20 +78,9 @@ impl Scratch {
                 ends,
                 first: c * SUM_CHUNK,
             };
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx") {
-                // SAFETY: the machine has AVX (checked just above).
-                unsafe { avx::sum_chunk(&ends, fc) };
-                return;
-            }
-            for (l, fp) in fc.chunks_exact_mut(3).enumerate() {
-                let mut sum = [fp[0], fp[1], fp[2]];
-                for (g, flip) in ends.of(l) {
-                    for q in 0..3 {
-                        sum[q] += f64::from_bits(g[q].to_bits() ^ flip);
-                    }
-                }
-                fp.copy_from_slice(&sum);
+            sum_chunk(&ends, fc);
+            if let Some(each) = each {
+                each(c, fc);
             }
         });
     }
@@ -105,6 +106,26 @@ impl Scratch {
                 next[p] += 1;
             }
         }
+    }
+}
+
+/// The sums of one chunk of particles into `fc` (3 values a particle): [`avx::sum_chunk`]
+/// where the machine has AVX (chosen at run time), the plain loop elsewhere; the same bits.
+fn sum_chunk(ends: &Ends, fc: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the machine has AVX (checked just above).
+        unsafe { avx::sum_chunk(ends, fc) };
+        return;
+    }
+    for (l, fp) in fc.chunks_exact_mut(3).enumerate() {
+        let mut sum = [fp[0], fp[1], fp[2]];
+        for (g, flip) in ends.of(l) {
+            for q in 0..3 {
+                sum[q] += f64::from_bits(g[q].to_bits() ^ flip);
+            }
+        }
+        fp.copy_from_slice(&sum);
     }
 }
 
@@ -436,7 +457,7 @@ mod tests {
             }
         }
         let mut got = base.clone();
-        Scratch::default().accumulate(&springs, &x, &v, &mut got);
+        Scratch::default().accumulate(&springs, &x, &v, &mut got, None);
         let scalar: Vec<[f64; 4]> = (0..count).map(|s| tension(&springs, s, &x, &v)).collect();
         let mut vector = vec![[0.0; 4]; count];
         tension_chunk(&springs, 0, &x, &v, &mut vector);

@@ -15,6 +15,8 @@ use crate::ode::symplectic_euler::SymplecticEuler;
 use crate::ode::system::{FirstOrderForm, OdeSystem, SecondOrderSystem};
 use crate::ode::{self, verlet, Integrator, Method, MethodKind, SolveOptions};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, PoisonError};
 
 /// The stepper a world keeps between steps (so that a method's cache survives).
 pub(super) enum WorldStepper {
@@ -446,47 +448,60 @@ impl World {
         Ok(bad)
     }
 
-    /// The other forces at the drifted state, then the two half kicks in one parallel pass
-    /// that also finds a non-finite value: the first one's index, if any.
+    /// The other forces at the drifted state, then the two half kicks in the last force's own
+    /// pass, chunk by chunk as its sums are done (`Force::accumulate_then`), which also finds a
+    /// non-finite value: the first one's index, if any.
+    ///
+    /// In each chunk a' = F/m goes to `a_next` and v' = v + h/2 (a + a') is written over the
+    /// chunk's force sum, which nothing reads after; the sums' room then becomes `v_next` (and
+    /// `v_next`'s, the predictor the forces read, the next step's sums, which the drift
+    /// zeroes). The springs, added last, call the kick from their sum pass while the chunk is
+    /// in cache: one parallel pass a step fewer. The same operations as a pass of its own:
+    /// the same bits.
     #[inline]
     fn verlet_kick(&mut self, b: &mut VerletBuffers, t: f64, h: f64) -> Result<Option<usize>, Error> {
         let p = &self.particles;
+        let dim = self.params.dim;
         let mut forces = every_force(&mut self.forces, None);
-        let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
+        let Some((last, others)) = forces.split_last_mut() else {
+            unreachable!("a world without forces or contacts steps force-free")
+        };
+        let mut dynamics = Dynamics::new(others, p, dim, &mut self.force);
         dynamics.add_forces(t + h, &self.x_next, &self.v_next)?; // (zeroed by the drift)
         self.stats.nfev += 1;
         b.fresh = true; // a_next, the next step's a once accepted
 
-        // Newton's a' = F/m and the kick in one pass (one pass and one parallel region fewer
-        // than `Dynamics::accel` and then the kick: the same operations, the same bits)
-        let (a, force, dim) = (&b.a, &self.force, self.params.dim);
-        let bad = self
-            .v_next
-            .par_chunks_mut(3 * PASS_CHUNK)
-            .zip(b.a_next.par_chunks_mut(3 * PASS_CHUNK))
-            .zip(self.x_next.par_chunks(3 * PASS_CHUNK))
-            .enumerate()
-            .map(|(c, ((vn, a_next), xn))| {
-                let chunk = 3 * PASS_CHUNK * c..3 * PASS_CHUNK * c + vn.len();
-                let (v, a) = (&p.v[chunk.clone()], &a[chunk.clone()]);
-                let inv_mass = &p.inv_mass[PASS_CHUNK * c..PASS_CHUNK * c + vn.len() / 3];
-                newton_serial(&force[chunk.clone()], inv_mass, dim, a_next);
-                for (((vn, v), a), a_next) in vn.iter_mut().zip(v).zip(a).zip(&*a_next) {
-                    *vn = verlet::kick(*v, *a, *a_next, h);
+        let (a, x_next) = (&b.a, &self.x_next);
+        let a_next: Vec<Mutex<&mut [f64]>> = b.a_next.chunks_mut(3 * PASS_CHUNK).map(Mutex::new).collect();
+        let first_bad = AtomicUsize::new(usize::MAX);
+        let kick = |c: usize, f: &mut [f64]| {
+            let chunk = 3 * PASS_CHUNK * c..3 * PASS_CHUNK * c + f.len();
+            let (v, a, xn) = (&p.v[chunk.clone()], &a[chunk.clone()], &x_next[chunk.clone()]);
+            let inv_mass = &p.inv_mass[PASS_CHUNK * c..PASS_CHUNK * c + f.len() / 3];
+            let mut a_next = a_next[c].lock().unwrap_or_else(PoisonError::into_inner);
+            newton_serial(f, inv_mass, dim, &mut a_next);
+            for (((vn, v), a), a_next) in f.iter_mut().zip(v).zip(a).zip(a_next.iter()) {
+                *vn = verlet::kick(*v, *a, *a_next, h);
+            }
+            // (the check in a pass of its own, which the compiler vectorises; the search for
+            // the first bad value only where there is one)
+            let finite = |s: &[f64]| s.iter().fold(true, |all, c| all & c.is_finite());
+            if !(finite(f) && finite(xn)) {
+                if let Some(k) = (0..f.len()).find(|&k| !(f[k].is_finite() && xn[k].is_finite())) {
+                    first_bad.fetch_min(chunk.start + k, Ordering::Relaxed);
                 }
-                // (the check in a pass of its own, which the compiler vectorises; the search
-                // for the first bad value only where there is one)
-                let finite = |s: &[f64]| s.iter().fold(true, |all, c| all & c.is_finite());
-                if finite(vn) && finite(xn) {
-                    return None;
-                }
-                (0..vn.len())
-                    .find(|&k| !(vn[k].is_finite() && xn[k].is_finite()))
-                    .map(|k| chunk.start + k)
-            })
-            .flatten() // (Option's own order puts None first: drop the clean chunks)
-            .min();
-        Ok(bad)
+            }
+        };
+        let s = State {
+            t: t + h,
+            x: &self.x_next,
+            v: &self.v_next,
+            mass: &p.mass,
+        };
+        last.accumulate_then(&s, &mut self.force, PASS_CHUNK, &kick)?;
+        std::mem::swap(&mut self.force, &mut self.v_next);
+        let bad = first_bad.into_inner();
+        Ok((bad != usize::MAX).then_some(bad))
     }
 
     /// Stage 1 for the other methods, on the joined state [x, v] (their steppers work on one
