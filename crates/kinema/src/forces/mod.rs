@@ -170,6 +170,10 @@ pub struct Standby {
 /// on the rates it gives ([`Force::rates`]), and how it follows the particles when the
 /// world renumbers or removes some ([`Force::reindex`]). Only `name` and `accumulate` are
 /// required; the defaults describe a force the world knows nothing about.
+/// Work on one chunk of particles' summed forces: `(c, f_c)` with the chunk's index and its
+/// 3 values a particle ([`Force::accumulate_then`]).
+pub type ChunkWork<'a> = dyn Fn(usize, &mut [f64]) + Sync + 'a;
+
 pub trait Force: Send + Sync {
     /// Short name for diagnostics and messages (`"gravity"`, `"spring"`).
     fn name(&self) -> &str;
@@ -183,13 +187,7 @@ pub trait Force: Send + Sync {
     /// kick, when this is the last force) done while the chunk is in cache. The default adds
     /// everything, then passes the chunks; a force that sums by chunks of particles itself
     /// may call `each` from its own pass (the springs do, for chunks of their size).
-    fn accumulate_then(
-        &mut self,
-        s: &State,
-        f: &mut [f64],
-        chunk: usize,
-        each: &(dyn Fn(usize, &mut [f64]) + Sync),
-    ) -> Result<(), CallbackError> {
+    fn accumulate_then(&mut self, s: &State, f: &mut [f64], chunk: usize, each: &ChunkWork) -> Result<(), CallbackError> {
         use rayon::prelude::*;
         self.accumulate(s, f)?;
         f.par_chunks_mut(3 * chunk.max(1)).enumerate().for_each(|(c, fc)| each(c, fc));

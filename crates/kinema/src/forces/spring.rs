@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
 
 use super::spring_pass::{Scratch, SpringArrays};
-use super::{check_buffers, EnergyClass, Force, Linearized, Properties, Rates, State};
+use super::{check_buffers, ChunkWork, EnergyClass, Force, Linearized, Properties, Rates, State};
 use crate::error::{CallbackError, Error};
 use crate::limits::GONE;
 use crate::particles::retain_rows;
@@ -433,13 +433,7 @@ impl Force for Springs {
     /// [`Force::accumulate`] with `each` called from the sum pass on each chunk of particles
     /// as soon as its sums are done, where `chunk` is the pass's own chunk (else the
     /// default: all the sums, then the chunks).
-    fn accumulate_then(
-        &mut self,
-        s: &State,
-        f: &mut [f64],
-        chunk: usize,
-        each: &(dyn Fn(usize, &mut [f64]) + Sync),
-    ) -> Result<(), CallbackError> {
+    fn accumulate_then(&mut self, s: &State, f: &mut [f64], chunk: usize, each: &ChunkWork) -> Result<(), CallbackError> {
         if chunk != Scratch::SUM_CHUNK {
             self.accumulate(s, f)?;
             f.par_chunks_mut(3 * chunk.max(1)).enumerate().for_each(|(c, fc)| each(c, fc));

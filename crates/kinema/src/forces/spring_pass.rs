@@ -60,7 +60,7 @@ impl Scratch {
         x: &[f64],
         v: &[f64],
         f: &mut [f64],
-        each: Option<&(dyn Fn(usize, &mut [f64]) + Sync)>,
+        each: Option<&super::ChunkWork>,
     ) {
         let n = x.len() / 3;
         if self.start.len() != n + 1 {
