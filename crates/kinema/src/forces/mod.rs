@@ -162,18 +162,19 @@ pub struct Standby {
     pub zeta: f64,
 }
 
+/// Work on one chunk of particles' summed forces: `(c, f_c)` with the chunk's index and its
+/// 3 values a particle ([`Force::accumulate_then`]).
+pub type ChunkWork<'a> = dyn Fn(usize, &mut [f64]) + Sync + 'a;
+
 /// A force acting on the particles of a world.
 ///
 /// What every force gives: its name, its contribution ([`Force::accumulate`]), a check
 /// against the particles ([`Force::validate`]), its potential energy, what kind of force it
 /// is ([`Force::properties`]), its Jacobian prepared at a state ([`Force::linearize`]), bounds
-/// on the rates it gives ([`Force::rates`]), and how it follows the particles when the
-/// world renumbers or removes some ([`Force::reindex`]). Only `name` and `accumulate` are
-/// required; the defaults describe a force the world knows nothing about.
-/// Work on one chunk of particles' summed forces: `(c, f_c)` with the chunk's index and its
-/// 3 values a particle ([`Force::accumulate_then`]).
-pub type ChunkWork<'a> = dyn Fn(usize, &mut [f64]) + Sync + 'a;
-
+/// on the rates it gives ([`Force::rates`]), how it follows the particles when the world
+/// renumbers or removes some ([`Force::reindex`]), and its contribution with the caller's
+/// work on each chunk of particles once summed ([`Force::accumulate_then`]). Only `name` and
+/// `accumulate` are required; the defaults describe a force the world knows nothing about.
 pub trait Force: Send + Sync {
     /// Short name for diagnostics and messages (`"gravity"`, `"spring"`).
     fn name(&self) -> &str;
