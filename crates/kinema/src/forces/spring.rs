@@ -400,6 +400,25 @@ impl Linearized for LinearizedSprings {
     }
 }
 
+impl Springs {
+    /// The force pass (`spring_pass.rs`) into `f`, with `each` called on each chunk of
+    /// particles once summed ([`Force::accumulate_then`]); the buffers and indices checked
+    /// first.
+    fn pass(&mut self, s: &State, f: &mut [f64], each: Option<&ChunkWork>) -> Result<(), CallbackError> {
+        check_buffers(self.name(), s, &[("f", f.len())])?;
+        self.check_indices(s.len())?;
+        let springs = SpringArrays {
+            i: &self.i,
+            j: &self.j,
+            k: &self.k,
+            rest_length: &self.rest_length,
+            damping: &self.damping,
+        };
+        self.scratch.accumulate(&springs, s.x, s.v, f, each);
+        Ok(())
+    }
+}
+
 fn distance(x: &[f64], i: usize, j: usize) -> f64 {
     let (a, b) = (3 * i, 3 * j);
     ((x[b] - x[a]).powi(2) + (x[b + 1] - x[a + 1]).powi(2) + (x[b + 2] - x[a + 2]).powi(2)).sqrt()
@@ -417,17 +436,7 @@ impl Force for Springs {
     /// adds the force to end i and subtracts it from end j, so the result is the same for any
     /// number of threads.
     fn accumulate(&mut self, s: &State, f: &mut [f64]) -> Result<(), CallbackError> {
-        check_buffers(self.name(), s, &[("f", f.len())])?;
-        self.check_indices(s.len())?;
-        let springs = SpringArrays {
-            i: &self.i,
-            j: &self.j,
-            k: &self.k,
-            rest_length: &self.rest_length,
-            damping: &self.damping,
-        };
-        self.scratch.accumulate(&springs, s.x, s.v, f, None);
-        Ok(())
+        self.pass(s, f, None)
     }
 
     /// [`Force::accumulate`] with `each` called from the sum pass on each chunk of particles
@@ -439,17 +448,7 @@ impl Force for Springs {
             f.par_chunks_mut(3 * chunk.max(1)).enumerate().for_each(|(c, fc)| each(c, fc));
             return Ok(());
         }
-        check_buffers(self.name(), s, &[("f", f.len())])?;
-        self.check_indices(s.len())?;
-        let springs = SpringArrays {
-            i: &self.i,
-            j: &self.j,
-            k: &self.k,
-            rest_length: &self.rest_length,
-            damping: &self.damping,
-        };
-        self.scratch.accumulate(&springs, s.x, s.v, f, Some(each));
-        Ok(())
+        self.pass(s, f, Some(each))
     }
 
     /// Checks that every index is below `n`; the error names the spring and the index.
