@@ -104,6 +104,9 @@ pub struct World {
     /// particle): with those at its end they turn the orientations.
     omega_before: Vec<f64>,
     v_next: Vec<f64>,
+    /// Scratch for the forces' sum, N (3 per particle); Verlet without contacts writes the
+    /// new velocities over it in its kick and swaps its room with `v_next`, so between steps
+    /// it holds nothing to read.
     force: Vec<f64>,
     /// The energy reference of the runaway check; `None` until the next step sets it.
     watch: Option<EnergyWatch>,
