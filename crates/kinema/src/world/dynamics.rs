@@ -92,6 +92,28 @@ pub(crate) fn newton(force: &[f64], inv_mass: &[f64], dim: usize, acc: &mut [f64
     }
 }
 
+/// [`newton`] written over the forces' own room: a = F/m in place of F (the same products),
+/// so that a first acceleration needs no buffer of summed forces beside it.
+pub(crate) fn newton_in_place(force_then_acc: &mut [f64], inv_mass: &[f64], dim: usize) {
+    let serial = |fa: &mut [f64], inv_mass: &[f64]| {
+        for (fa, inv_m) in fa.chunks_exact_mut(3).zip(inv_mass) {
+            fa.iter_mut().for_each(|c| *c *= inv_m);
+            if dim == 2 {
+                fa[2] = 0.0;
+            }
+        }
+    };
+    if inv_mass.len() > PARALLEL_CHUNK {
+        let c = PARALLEL_CHUNK;
+        force_then_acc
+            .par_chunks_mut(3 * c)
+            .zip(inv_mass.par_chunks(c))
+            .for_each(|(fa, inv_mass)| serial(fa, inv_mass));
+    } else {
+        serial(force_then_acc, inv_mass);
+    }
+}
+
 /// [`newton`] on the calling thread.
 pub(crate) fn newton_serial(force: &[f64], inv_mass: &[f64], dim: usize, acc: &mut [f64]) {
     for (i, inv_m) in inv_mass.iter().enumerate() {

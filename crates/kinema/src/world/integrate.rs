@@ -2,7 +2,7 @@
 //! positions and velocities over one step (velocity Verlet on the particles' own arrays, the
 //! other methods on the joined state [x, v]).
 
-use super::dynamics::{newton_serial, Dynamics};
+use super::dynamics::{newton_in_place, newton_serial, Dynamics};
 use super::forces::{contact_force, every_force};
 use super::implicit::{BaraffWitkin, StepSpan};
 use super::{World, RUNAWAY_CHECK_EVERY};
@@ -271,8 +271,12 @@ impl World {
         let p = &self.particles;
         let mut contact = contact_force(&self.collide_stage, p);
         let mut forces = every_force(&mut self.forces, contact.as_mut());
-        let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut self.force);
-        dynamics.accel(t, &p.x, &p.v, &mut b.a)?;
+        // the forces are summed in `a` itself and divided by the masses there: no buffer of
+        // summed forces beside it (24 B a particle, which a gas of contacts alone then let
+        // go of: the top of its first step's memory)
+        let mut dynamics = Dynamics::new(&mut forces, p, self.params.dim, &mut b.a);
+        dynamics.total_force(t, &p.x, &p.v)?;
+        newton_in_place(&mut b.a, &p.inv_mass, self.params.dim);
         self.stats.nfev += 1;
         // and α = τ/I, where the contacts' torques turn the particles
         if let Some(c) = contact.as_ref().filter(|c| c.has_tangential() && p.has_spin()) {
@@ -383,11 +387,9 @@ impl World {
         // those at the start, for its lengths), and `v_out` is `v_next`, which the drift left
         // unwritten; `a_next` holds nothing until the swap below. Else v' is in `v_next` and
         // `v_out` is `a_next`.
+        // (`v_out` is sized by the contacts: they let its room go while their list is rebuilt)
         if predict {
             b.a_next = Vec::new();
-            self.v_next.resize(n, 0.0); // (the room a sort moved the arrays through: the size kept)
-        } else {
-            b.a_next.resize(n, 0.0);
         }
         let (seen, v_out) = if predict {
             (&p.v, &mut self.v_next)
