@@ -180,6 +180,10 @@ class WorldViews:
         # What nobody outside the world holds is let go before the engine works (made again at
         # the next look): a passing look such as ``np.sum(w.velocities**2)`` between two steps
         # does not stay resident while the world steps (24 MB at 10⁶ particles).
+        self._let_go()
+
+    def _let_go(self) -> None:
+        """Drops the views nobody outside the world holds (made again at the next look)."""
         for name in self._VIEWS:
             if self._held(name) is None:
                 setattr(self, name, None)
