@@ -32,7 +32,15 @@ pub(crate) fn morton(c: [u64; 3]) -> u64 {
 /// the index takes ⌈log₂ N⌉ bits and each cell coordinate B = ⌊(64 − those) / 3⌋ ≥ 10 of the
 /// rest; where the particles span more than 2^B cells the cells are widened to fit.
 pub(crate) fn morton_order(x: &[f64], origin: [f64; 3], width: f64) -> Vec<u32> {
+    morton_order_in(x, origin, width, &mut vec![0; x.len() / 3])
+}
+
+/// [`morton_order`] with its keys in `keys`' room (at least one a particle; its values are
+/// not to be read after): a caller with a buffer it writes before it reads next lends it, and
+/// the sort makes only the order (4 B a particle, not 12).
+pub(crate) fn morton_order_in(x: &[f64], origin: [f64; 3], width: f64, keys: &mut [u64]) -> Vec<u32> {
     let n = x.len() / 3;
+    let keys = &mut keys[..n];
     let index_bits = usize::BITS - n.saturating_sub(1).leading_zeros();
     let bits = ((64 - index_bits) / 3).min(MORTON_BITS);
     let top = ((1u64 << bits) - 1) as f64;
@@ -41,19 +49,18 @@ pub(crate) fn morton_order(x: &[f64], origin: [f64; 3], width: f64) -> Vec<u32> 
         .map(|p| (0..3).map(|k| p[k] - origin[k]).fold(0.0, f64::max))
         .reduce(|| 0.0, f64::max);
     let width = width.max(span / top);
-    let mut keys: Vec<u64> = x
-        .par_chunks_exact(3)
+    keys.par_iter_mut()
+        .zip(x.par_chunks_exact(3))
         .enumerate()
-        .map(|(i, p)| {
+        .for_each(|(i, (key, p))| {
             // `as u64` truncates (the floor for t ≥ 0, without `f64::floor`'s library call)
             // and saturates: below the origin is cell 0, NaN is 0, beyond the top the top.
             let cell = [0, 1, 2].map(|k| ((p[k] - origin[k]) / width).min(top) as u64);
-            morton(cell) << index_bits | i as u64
-        })
-        .collect();
+            *key = morton(cell) << index_bits | i as u64;
+        });
     keys.par_sort_unstable(); // the keys are distinct: one result for any thread count
     let mask = (1u64 << index_bits) - 1;
-    keys.into_iter().map(|k| (k & mask) as u32).collect()
+    keys.par_iter().map(|k| (k & mask) as u32).collect()
 }
 
 #[cfg(test)]

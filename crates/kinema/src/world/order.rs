@@ -46,7 +46,7 @@ use rayon::prelude::*;
 use super::forces::contact_force;
 use super::{Clock, ColliderBooks, CollisionParams, CollisionStats, KillVolume, LinearSolve, PairMemory, StageTimes};
 use super::{WallMemory, World, WorldParams, WorldStepper, CHUNK};
-use crate::collide::morton::morton_order;
+use crate::collide::morton::morton_order_in;
 use crate::collide::{GroupMasks, TouchEvent};
 use crate::diagnostics::Diagnostics;
 use crate::error::Error;
@@ -141,17 +141,29 @@ fn gather_through<T: Copy + Default + Send + Sync>(a: &mut Vec<T>, spare: &mut V
 /// sort makes no array for it (at 10⁶ particles a sort's transient arrays were the step's
 /// peak).
 fn gather_back<T: bytemuck::Pod + Send + Sync>(a: &mut [T], spare: &mut Vec<f64>, old_of_new: &[u32]) {
-    const { assert!(size_of::<T>() == size_of::<f64>(), "a value the size of a real") };
     if a.len() != old_of_new.len() {
         return; // not in use (an empty buffer)
     }
-    if spare.len() < a.len() {
-        spare.resize(a.len(), 0.0);
-    }
-    // (the room's bytes as `T`s: reals, or the ids' 8-byte integers)
-    let room: &mut [T] = bytemuck::cast_slice_mut(&mut spare[..a.len()]);
+    let room = room_in::<T>(spare, a.len());
     gather_into(room, a, old_of_new, 1);
     a.copy_from_slice(room);
+}
+
+/// The front of `spare`'s room as `n` values of `T` (the room grown to hold them where it is
+/// smaller): bytes the sort writes before it reads, as reals, the ids' 8-byte integers, the
+/// maps' 4-byte indices or the groups' bytes.
+fn room_in<T: bytemuck::Pod>(spare: &mut Vec<f64>, n: usize) -> &mut [T] {
+    const {
+        assert!(
+            size_of::<f64>() % size_of::<T>() == 0 && align_of::<T>() <= align_of::<f64>(),
+            "values that tile a real"
+        )
+    };
+    let reals = (n * size_of::<T>()).div_ceil(size_of::<f64>());
+    if spare.len() < reals {
+        spare.resize(reals, 0.0);
+    }
+    &mut bytemuck::cast_slice_mut(&mut spare[..reals])[..n]
 }
 
 /// `a` (`width` values per particle) in the new order.
@@ -195,13 +207,21 @@ impl World {
         if !(width > 0.0 && width.is_finite()) {
             return;
         }
-        let old_of_new = morton_order(&self.x_next, origin, width);
+        // (the keys, and the new map below, in `spare`'s room: the sort's only new array is
+        // the order, 4 B a particle; at 10⁶ particles its transient arrays were the peak)
+        let n = self.particles.len();
+        let old_of_new = morton_order_in(&self.x_next, origin, width, room_in(spare, n));
         if old_of_new.iter().enumerate().all(|(i, &o)| i == o as usize) {
             return; // already in order
         }
-        // the new order's map, the old one let go first
+        // the new order's map, over the old one (its inverse, if made, let go)
         let user_of: Vec<u32> = match self.sorted.take() {
-            Some(order) => old_of_new.par_iter().map(|&o| order.user_of[o as usize]).collect(),
+            Some(Order { mut user_of, .. }) => {
+                let room = room_in(spare, n);
+                gather_into(room, &user_of, &old_of_new, 1);
+                user_of.copy_from_slice(room);
+                user_of
+            }
             None => old_of_new.clone(),
         };
         self.permute(&old_of_new, a, spare, true);
@@ -314,20 +334,25 @@ impl World {
         }
         gather(&mut p.orientation, old_of_new, 4);
         gather_back(&mut p.id, spare, old_of_new);
-        gather(&mut p.group, old_of_new, 1);
+        gather_back(&mut p.group, spare, old_of_new);
         if let Some(stage) = &mut self.collide_stage {
             stage.permute_particles(old_of_new); // (their own materials, where set)
         }
-        let new_of_old = inverse(old_of_new);
+        // (the inverse in `spare`'s room, which the moves are done with)
+        let new_of_old = room_in(spare, old_of_new.len());
+        for (i, &o) in old_of_new.iter().enumerate() {
+            new_of_old[o as usize] = i as u32;
+        }
+        let new_of_old = &*new_of_old;
         for f in &mut self.forces {
-            f.reindex(&new_of_old);
+            f.reindex(new_of_old);
         }
         if let Some(model) = self.force_model() {
             if step_buffers {
                 // (a sort along space: made because the list has expired, `sort_along_space`)
-                model.renumber_expired(&new_of_old);
+                model.renumber_expired(new_of_old);
             } else {
-                model.renumber(&new_of_old, old_of_new);
+                model.renumber(new_of_old, old_of_new);
             }
         }
     }
