@@ -15,6 +15,10 @@ _Falloff = tuple[str, str, list[float], list[float], list[float], float, float]
 def _after_fork_in_child() -> None:
     """Called in a child process right after fork: the forking thread builds the child's own thread pool."""
 
+def simd_level() -> str: ...
+def give_back_memory() -> bool:
+    """Gives glibc's free memory back to the system (malloc_trim); whether it gave any."""
+
 class ButcherTableau:
     """An explicit Runge-Kutta method (A, b, c), checked when built."""
 

@@ -508,6 +508,13 @@ impl<'a> ContactForce<'a> {
 
     /// Checks the state's lengths and makes the neighbour list hold at its positions.
     fn update_list(&self, s: &State, scratch: &mut Scratch) -> Result<(), Error> {
+        self.update_list_lending(s, scratch, || ())
+    }
+
+    /// [`ContactForce::update_list`], calling `before_build` where the list is about to be
+    /// built (not where it holds): a caller with a buffer it writes before it reads next lets
+    /// it go there, and the build's grid takes its place instead of adding to it.
+    fn update_list_lending(&self, s: &State, scratch: &mut Scratch, before_build: impl FnOnce()) -> Result<(), Error> {
         let n = self.radius.len();
         for (name, len) in [("x", s.x.len()), ("v", s.v.len())] {
             if len != 3 * n {
@@ -523,10 +530,13 @@ impl<'a> ContactForce<'a> {
         // (JKR's contacts hold past touching: the list reaches that much further, and holds
         // while the particles have moved less than its skin beyond it)
         let reach = self.reach_past_touching();
-        let build = || ListBuild {
-            skin: self.skin() + reach,
-            reach,
-            collider_scale: self.colliders.iter().map(collider_scale).fold(0.0, f64::max),
+        let build = || {
+            before_build();
+            ListBuild {
+                skin: self.skin() + reach,
+                reach,
+                collider_scale: self.colliders.iter().map(collider_scale).fold(0.0, f64::max),
+            }
         };
         let builds = list.builds;
         list.update(grid, s.x, self.radius, self.colliders, &self.domain, self.filter, build)?;

@@ -33,8 +33,9 @@ pub(crate) struct VerletKick<'a> {
     pub predict: bool,
     /// In: a_i, the accelerations at the step's start; out: a'_i, m/s².
     pub a: &'a mut [f64],
-    /// Out: the new velocities, m/s.
-    pub v_out: &'a mut [f64],
+    /// Out: the new velocities, m/s (sized here: its values are not read, and where the
+    /// neighbour list is rebuilt its room is let go for the build's and made again after).
+    pub v_out: &'a mut Vec<f64>,
     /// Also sum the pair energy at the drifted positions, for the runaway check that asks
     /// for it right after ([`ContactForce::forget_energy`] drops it).
     pub energy: bool,
@@ -42,6 +43,10 @@ pub(crate) struct VerletKick<'a> {
     /// part, `tangent.rs`; `None`: nothing turns in stage 1).
     pub spin: Option<SpinKick<'a>>,
 }
+
+/// The fewest values (3 a particle) of a `VerletKick::v_out` whose room is let go while the
+/// neighbour list is rebuilt (`ContactForce::force_and_kick`): 16 MiB, ~700,000 particles.
+const LEND_FROM: usize = 1 << 21;
 
 /// Velocity Verlet for the angular velocities, beside the velocities' (LAMMPS's `fix
 /// nve/sphere`, in the same drift–predict–kick form as `VerletBuffers` in `world/integrate.rs`):
@@ -131,7 +136,19 @@ impl ContactForce<'_> {
             spin,
         } = kick;
         let mut scratch = self.scratch();
-        self.update_list(s, &mut scratch)?;
+        // Where the list is rebuilt in a large world, `v_out`'s room (24 B a particle) goes
+        // back before the build and the build's grid (~14 B a particle, let go after it) takes
+        // its place: a gas of 10⁶ spheres peaked at its builds by the grid's size over its
+        // steps. The room's pages are then touched afresh (~6,000 page faults at 10⁶, a few
+        // % of the steps between builds), which a smaller world is spared.
+        let lend = v_out.len() >= LEND_FROM;
+        self.update_list_lending(s, &mut scratch, || {
+            if lend {
+                *v_out = Vec::new();
+            }
+        })?;
+        v_out.resize(s.x.len(), 0.0);
+        let v_out = &mut v_out[..];
         let Scratch {
             list,
             sums,

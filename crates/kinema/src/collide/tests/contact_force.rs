@@ -792,7 +792,7 @@ fn the_fused_pass_keeps_the_pair_energy_the_runaway_check_asks_for_once() {
     let own = force.potential_energy(&s).unwrap();
     assert!(own > 0.0);
     let (mut a, mut v_out) = (vec![0.0; 3 * n], vec![0.0; 3 * n]);
-    let kick = |a: &'_ mut [f64], v_out: &'_ mut [f64], energy: bool| {
+    let kick = |a: &'_ mut [f64], v_out: &'_ mut Vec<f64>, energy: bool| {
         force
             .force_and_kick(
                 &s,
