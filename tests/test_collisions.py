@@ -576,6 +576,43 @@ def test_collision_stats_count_resting_and_speculative_contacts_and_the_overlap_
     assert last["max_overlap"] == pytest.approx(real, abs=1e-15)
 
 
+@pytest.mark.parametrize("floor", ["plane", "mesh"])
+def test_the_overlap_a_call_reports_is_its_last_steps_measured_at_the_positions_it_leaves(floor):
+    # The overlap left is measured at the last step of each call only (the figure anyone
+    # reads; on a fine mesh a walk down its tree per contact): 40 steps in one call must
+    # report what 39 and then 1 report, the brute-force overlap of the state they leave, and
+    # the same bits as the same 40 steps run one at a time.
+    def pile():
+        w = kinema.World(dt=1e-3)
+        x = np.array([[0.05 + 0.0205 * (k % 3), 0.05 + 0.0205 * (k // 3 % 3), 0.0105 + 0.0205 * (k // 9)] for k in range(27)])
+        w.add_particles(x, mass=0.01, radius=0.01)
+        w.add(kinema.Gravity())
+        if floor == "plane":
+            w.add(kinema.Plane([0, 0, 0], [0, 0, 1]))
+        else:
+            t = np.linspace(0.0, 0.2, 41)
+            gx, gy = np.meshgrid(t, t, indexing="xy")
+            vertices = np.column_stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)])
+            q = (np.arange(40)[:, None] * 41 + np.arange(40)[None, :]).ravel()
+            faces = np.concatenate([np.stack([q, q + 1, q + 42], -1), np.stack([q, q + 42, q + 41], -1)])
+            w.add(kinema.Mesh(vertices=vertices, faces=faces))
+        w.set_collisions(restitution=0.2, friction=0.5, sleep_time=None)
+        return w
+
+    one_call, two_calls, single = pile(), pile(), pile()
+    one_call.step(40)
+    two_calls.step(39)
+    two_calls.step(1)
+    for _ in range(40):
+        single.step(1)
+    got = [w.collision_stats()["last"]["max_overlap"] for w in (one_call, two_calls, single)]
+    assert got[0] == got[1] == got[2] > 0.0, got
+    x = one_call.positions
+    d = np.linalg.norm(x[:, None] - x[None, :], axis=-1) + np.eye(len(x))
+    real = max(float(np.max(0.02 - d)), float(np.max(0.01 - x[:, 2])))
+    assert got[0] == pytest.approx(real, abs=1e-15)
+
+
 def test_removing_a_particle_keeps_the_warm_start_of_the_contacts_that_stay():
     # A pile of 48 spheres resting in a box beside one far away that never touches them.
     # Removing the far one must leave the pile's contacts and their warm starts as they

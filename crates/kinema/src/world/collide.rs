@@ -14,8 +14,9 @@ use crate::forces::EnergyClass;
 impl World {
     /// Stages 2–4 on the integrated state in `x_next`, `v_next` (a no-op without collisions):
     /// impacts inside the step and contacts at its end get Newton's restitution impulses,
-    /// equal and opposite on the two particles (see [`CollisionParams`]).
-    pub(super) fn collide(&mut self) -> Result<(), Error> {
+    /// equal and opposite on the two particles (see [`CollisionParams`]); with
+    /// `measure_overlap`, the step's statistics measure the overlap its contacts leave.
+    pub(super) fn collide(&mut self, measure_overlap: bool) -> Result<(), Error> {
         let n = 3 * self.particles.len();
         let t_end = self.params_time_after(self.steps + 1);
         let h = self.step_length();
@@ -65,6 +66,7 @@ impl World {
             steady,
             wrapped: steady && accel.is_some(),
             may_sleep,
+            measure_overlap,
         };
         // (an event-driven world never steps: `World::advance` runs its events)
         let Some((impulse, set)) = stage.impulse_and_setting(p) else {

@@ -58,7 +58,8 @@ pub struct CollisionStats {
     /// Divided by a time and a volume it is the interactions' part of the pressure tensor
     /// (colliders excluded: `Trajectory.pressure`).
     pub virial: [f64; 9],
-    /// The largest overlap left after the step, m.
+    /// The largest overlap left after the step, m: measured at the last step of each call
+    /// that advances the world (the figure anyone reads; 0 for the steps before it).
     pub max_overlap: f64,
     /// Passes of the end-of-step velocity solver (the latest step's; the most any island took;
     /// `solver_sweeps` is its public name, which the binding and Python read).
@@ -198,6 +199,10 @@ pub(crate) struct StepFrame<'a> {
     /// Whether islands may sleep in this step: no force depends on the positions or adds
     /// energy (`collide/sleep.rs`).
     pub may_sleep: bool,
+    /// Whether the step's statistics measure the overlap the contacts leave
+    /// ([`CollisionStats::max_overlap`]; else 0): the world asks it of the last step of each
+    /// call, the one whose statistics can be read.
+    pub measure_overlap: bool,
 }
 
 /// What the stages see of the world in a step, besides its state: the colliders, the domain,

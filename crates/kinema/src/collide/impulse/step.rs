@@ -504,7 +504,9 @@ impl ImpulseModel {
         }
         stats.asleep = self.sleep.asleep();
         stats.asleep_contacts = self.sleep.contacts();
-        stats.max_overlap = self.max_overlap(set, x1).max(self.sleep.max_overlap());
+        if frame.measure_overlap {
+            stats.max_overlap = self.max_overlap(set, x1).max(self.sleep.max_overlap());
+        }
         if let Some(p) = set.domain.periodic_box() {
             if frame.wrapped {
                 // only the touched particles moved since (the impacts, the correction)
