@@ -82,13 +82,15 @@ pub(super) struct VerletBuffers {
 /// tasks, three on one thread).
 const PASS_CHUNK: usize = 1024;
 
-/// The particles below which stage 1 runs on a worker of rayon's pool ([`World::integrate`]).
-/// Above, each of its passes is long beside a thread switch (microseconds), and it stays on
-/// the calling thread, which then allocates the step's large buffers (the contact force's
-/// neighbour list among them) itself: glibc's allocator keeps an arena per thread, and a gas
-/// of 10⁶ spheres whose stage 1 ran on whichever worker took it peaked at 757 MB, against
-/// 441 MB on the calling thread (`benchmarks/granular_gas.py --worker --ncell 100 --steps 300`).
-pub const IN_POOL_BELOW: usize = 1 << 16;
+/// The particles below which stage 1 runs on a worker of rayon's pool ([`World::integrate`]),
+/// 2²² (4,194,304). Above, each of its passes is long beside a thread switch (microseconds),
+/// and it stays on the calling thread. The bound was once 2¹⁶: glibc's allocator keeps an
+/// arena per thread, and a gas of 10⁶ spheres whose stage 1 ran on whichever worker took it
+/// peaked at 757 MB against 441 MB on the calling thread, the 10⁵ gas at +19 %. The Python
+/// module's allocator now maps the large blocks wherever they are made (its `pages.rs`): the
+/// 10⁵ gas (`benchmarks/granular_gas.py`) steps 5–15 % faster in the pool at +2 % of its peak,
+/// the 10⁶ gas peaks at the same 240 B a particle.
+pub const IN_POOL_BELOW: usize = 1 << 22;
 
 impl World {
     /// The most adaptive sub-steps rk45 takes inside one step of dt: a step that needs more
