@@ -230,11 +230,11 @@ impl World {
     #[inline]
     fn verlet_force_free(&mut self, b: &mut VerletBuffers, h: f64, n: usize) -> Option<usize> {
         if !b.fresh || b.a.len() != n || b.a_next.len() != n {
-            // zeros once; no step writes them again
-            b.a.clear();
-            b.a.resize(n, 0.0);
-            b.a_next.clear();
-            b.a_next.resize(n, 0.0);
+            // zeros once; no step writes them again, so made as zero pages that the
+            // collisions' reads of a leave unwritten (48 MB of a 10⁶-sphere impulse gas,
+            // not resident)
+            b.a = vec![0.0; n];
+            b.a_next = vec![0.0; n];
             b.fresh = true;
         }
         // In a periodic cell x' is wrapped into it in the same pass (the collision
