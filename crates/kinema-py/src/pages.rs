@@ -20,8 +20,10 @@
 
 use std::alloc::{GlobalAlloc, Layout, System};
 
-/// The smallest block served by pages of its own, bytes (1 MiB: 256 pages; a block this size
-/// or larger from glibc would be mmapped too until its dynamic threshold rose).
+/// The smallest block served by pages of its own, bytes (2 MiB: 512 pages). At 1 MiB the
+/// gas of 10⁵ spheres (`benchmarks/granular_gas.py`) paid 2–5 % for its list builds' grids,
+/// made afresh each time; at 2 MiB its only large blocks are its arrays of 3 reals a particle
+/// (2.5 MB), which it keeps, and a world of 10⁶ has all of its large ones here.
 pub const LARGE: usize = 2 << 20;
 
 /// The page size every platform this module supports has at least, bytes: `mmap` returns
