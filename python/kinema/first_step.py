@@ -274,6 +274,11 @@ def _obstacles(bodies: Bodies, colliders: list[Any], down: np.ndarray, t: float,
     return out
 
 
+# The contact models whose shortest contact depends on the masses alone (a Hooke spring's
+# t_c, whatever the speed): `check` reads no positions or velocities for them.
+MASSES_ONLY = ("spring_dashpot",)
+
+
 def shortest_contact(settings: dict, bodies: Bodies, colliders: list[Any], g: np.ndarray, t: float, dt: float, restitution_max: float) -> Impact | None:
     """The shortest contact the scene can produce (module doc, stages 1 and 2), or None when
     no contact can happen (one particle and nothing fixed; Hertz: nothing moves or falls)."""
@@ -289,7 +294,7 @@ def shortest_contact(settings: dict, bodies: Bodies, colliders: list[Any], g: np
     gabs = float(np.linalg.norm(g))
     down = g / gabs if gabs > 0 else np.zeros(3)
     zeta = contact_time._zeta(restitution_max)
-    if model == "spring_dashpot":
+    if model in MASSES_ONLY:  # (the spring–dashpot)
         k = settings["stiffness"]
         lightest_first = np.sort(bodies.w)[::-1]
         w_pair = lightest_first[0] + (lightest_first[1] if n > 1 else 0.0)
@@ -338,8 +343,7 @@ def check(world: Any, core: Any) -> StepCheck | None:
     settings = core.collisions or {}
     if settings.get("model") not in _core.FORCE_MODELS:
         return None
-    # (a spring–dashpot's contact time depends on the masses alone: no positions read)
-    bodies = bodies_of(world, core, motion=settings["model"] != "spring_dashpot")
+    bodies = bodies_of(world, core, motion=settings["model"] not in MASSES_ONLY)
     g = gravity(world.forces, core.dim)
     own = [e for e, _ in core.particle_materials() if e is not None and not math.isnan(e)]
     colliders = world.colliders

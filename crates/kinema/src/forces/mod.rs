@@ -166,6 +166,13 @@ pub struct Standby {
 /// 3 values a particle ([`Force::accumulate_then`]).
 pub type ChunkWork<'a> = dyn Fn(usize, &mut [f64]) + Sync + 'a;
 
+/// `each(c, f_c)` on each chunk c of `chunk` particles of the summed forces `f`, on all
+/// threads ([`Force::accumulate_then`]'s default, after the force's whole pass).
+pub(crate) fn each_chunk(f: &mut [f64], chunk: usize, each: &ChunkWork) {
+    use rayon::prelude::*;
+    f.par_chunks_mut(3 * chunk.max(1)).enumerate().for_each(|(c, fc)| each(c, fc));
+}
+
 /// A force acting on the particles of a world.
 ///
 /// What every force gives: its name, its contribution ([`Force::accumulate`]), a check
@@ -189,9 +196,8 @@ pub trait Force: Send + Sync {
     /// everything, then passes the chunks; a force that sums by chunks of particles itself
     /// may call `each` from its own pass (the springs do, for chunks of their size).
     fn accumulate_then(&mut self, s: &State, f: &mut [f64], chunk: usize, each: &ChunkWork) -> Result<(), CallbackError> {
-        use rayon::prelude::*;
         self.accumulate(s, f)?;
-        f.par_chunks_mut(3 * chunk.max(1)).enumerate().for_each(|(c, fc)| each(c, fc));
+        each_chunk(f, chunk, each);
         Ok(())
     }
 

@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
 
 use super::spring_pass::{Scratch, SpringArrays};
-use super::{check_buffers, ChunkWork, EnergyClass, Force, Linearized, Properties, Rates, State};
+use super::{check_buffers, each_chunk, ChunkWork, EnergyClass, Force, Linearized, Properties, Rates, State};
 use crate::error::{CallbackError, Error};
 use crate::limits::GONE;
 use crate::particles::retain_rows;
@@ -445,7 +445,7 @@ impl Force for Springs {
     fn accumulate_then(&mut self, s: &State, f: &mut [f64], chunk: usize, each: &ChunkWork) -> Result<(), CallbackError> {
         if chunk != Scratch::SUM_CHUNK {
             self.accumulate(s, f)?;
-            f.par_chunks_mut(3 * chunk.max(1)).enumerate().for_each(|(c, fc)| each(c, fc));
+            each_chunk(f, chunk, each);
             return Ok(());
         }
         self.pass(s, f, Some(each))
