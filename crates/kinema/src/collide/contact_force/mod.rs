@@ -63,6 +63,7 @@ mod history;
 mod law;
 mod listing;
 mod normal;
+mod overlapping;
 mod pairs;
 mod rolling;
 pub mod spring_dashpot;

@@ -24,6 +24,7 @@
 use super::affinity;
 use super::exchange::Exchange;
 use super::history::{pair_memory, wall_memory, PairSlip, Slip, WallSlip};
+use super::overlapping::Overlapping;
 use super::tangent::{Tangent, TangentialModel, Touch};
 use super::{ContactForce, CHUNK};
 use crate::collide::neighbour_list::{NeighbourList, Rows};
@@ -361,13 +362,30 @@ impl ContactForce<'_> {
         let mut books = ContactBooks::default();
         let mut wall_lost = 0.0;
         let mut pushes = Vec::new();
+        // A law that acts on overlapping pairs alone and keeps no memory visits the particles
+        // with an overlapping pair or a collider candidate, found first in a loop of their
+        // own (`overlapping.rs`), and their overlapping pairs; the others visit every
+        // particle and test each listed pair here.
+        let plain = turn.is_none() && self.jkr().is_none();
+        let mut overlapping = Overlapping::default();
+        let (visits, start, partners) = if plain {
+            self.overlapping(rows, first, x, &list.walls[w0..w1], options.check_positions, &mut overlapping);
+            bad = overlapping.bad;
+            (
+                Visits::Some(&overlapping.visit),
+                &overlapping.start[..],
+                &overlapping.partners[..],
+            )
+        } else {
+            (Visits::All(len), &rows.start[..], &rows.partners[..])
+        };
         // The partners' positions, radii, inverse masses and velocities PREFETCH entries
         // ahead of the row being read: beyond a core's caches (10⁶ particles) nearly every
         // partner's read misses, and the loop would wait for each in turn.
-        let partners = &rows.partners;
         let mut ahead = 0;
-        for l in 0..len {
-            let end = (rows.start[l + 1] as usize + PREFETCH).min(partners.len());
+        for q in 0..visits.len() {
+            let l = visits.at(q);
+            let end = (start[q + 1] as usize + PREFETCH).min(partners.len());
             while ahead < end {
                 let j = partners[ahead] as usize;
                 prefetch(&x[3 * j]);
@@ -379,12 +397,12 @@ impl ContactForce<'_> {
             }
             let i = first + l;
             let (xi, ri) = ([x[3 * i], x[3 * i + 1], x[3 * i + 2]], self.radius[i]);
-            if options.check_positions && bad.is_none() {
+            if !plain && options.check_positions && bad.is_none() {
                 bad = xi.iter().position(|c| !c.is_finite()).map(|k| 3 * i + k);
             }
-            for &j in rows.of(l) {
+            for &j in &partners[start[q] as usize..start[q + 1] as usize] {
                 let j = j as usize;
-                let found = if self.overlaps(xi, ri, j, x) {
+                let found = if plain || self.overlaps(xi, ri, j, x) {
                     pair_contact(i, j, x, v, self.radius, &self.domain, 0.0)
                 } else if self.jkr().is_some() {
                     self.held_pair(i, j, x, v, old_pairs, &mut books.lost)
@@ -584,6 +602,31 @@ impl ContactForce<'_> {
             vec3::add(vec3::scale(-rho_i, nf), t.couple),
             vec3::sub(vec3::scale(-rho_j, nf), t.couple),
         )
+    }
+}
+
+/// The particles of a chunk the pair pass visits, by their indices l in the chunk: all
+/// `len` of them, or those listed (ascending; `overlapping.rs`).
+enum Visits<'a> {
+    All(usize),
+    Some(&'a [u32]),
+}
+
+impl Visits<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Visits::All(len) => *len,
+            Visits::Some(l) => l.len(),
+        }
+    }
+
+    /// The q-th particle visited.
+    #[inline(always)]
+    fn at(&self, q: usize) -> usize {
+        match self {
+            Visits::All(_) => q,
+            Visits::Some(l) => l[q] as usize,
+        }
     }
 }
 
