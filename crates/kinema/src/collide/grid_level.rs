@@ -63,6 +63,10 @@ pub(super) struct LevelSort<'a> {
     pub reach: f64,
 }
 
+/// The slots [`Level::append_particles`] copies at once from a run of cells (8 particles'
+/// indices, 32 bytes).
+const RUN: usize = 8;
+
 impl Level {
     /// Lays the level out for cells at least `reach` wide and sorts its particles (`members`,
     /// or all when None) into them; writes each one's cell into `cell_of`.
@@ -217,11 +221,12 @@ impl Level {
         [cell % nx, (cell / nx) % ny, cell / (nx * ny)]
     }
 
-    /// Calls `f` with every slot of the cells within `span[k]` cells of `at` along each axis
-    /// k, each cell once (a periodic axis wraps, and visits each of its cells once even when
-    /// the span covers it all).
+    /// The particles of the cells within `span[k]` cells of `at` along each axis k, each
+    /// cell once (a periodic axis wraps, and gives each of its cells once even when the span
+    /// covers it all), appended to `out`: the cells of a run along x are one run of
+    /// consecutive slots, copied whole.
     #[inline]
-    pub(super) fn visit(&self, at: [usize; 3], span: [usize; 3], mut f: impl FnMut(usize)) {
+    pub(super) fn append_particles(&self, at: [usize; 3], span: [usize; 3], out: &mut Vec<u32>) {
         let [nx, ny, _] = self.dims;
         let (xs, xn) = self.runs(0, at[0], span[0]);
         let (ys, yn) = self.runs(1, at[1], span[1]);
@@ -231,10 +236,17 @@ impl Level {
                 for &(y0, y1) in &ys[..yn] {
                     for y in y0..=y1 {
                         let row = nx * (y + ny * z);
-                        // consecutive cells along x are one run of consecutive slots
                         for &(x0, x1) in &xs[..xn] {
-                            for b in self.start[row + x0]..self.start[row + x1 + 1] {
-                                f(b as usize);
+                            let (a, b) = (self.start[row + x0] as usize, self.start[row + x1 + 1] as usize);
+                            // A run of a gas holds a few particles: RUN of them copied at once
+                            // (a copy of known length, no call, no loop to end) and the
+                            // surplus cut, where the run and the order have that many.
+                            if b - a <= RUN && a + RUN <= self.order.len() {
+                                let at = out.len();
+                                out.extend_from_slice(&self.order[a..a + RUN]);
+                                out.truncate(at + (b - a));
+                            } else {
+                                out.extend_from_slice(&self.order[a..b]);
                             }
                         }
                     }
