@@ -271,20 +271,29 @@ fn kick_velocities(
     let kick = |c: usize, ac: &mut [f64], vc: &mut [f64]| {
         exchange.receive(c, vc);
         let first = c * CHUNK;
-        let mut bad = None;
-        for (l, i) in (first..).take(ac.len() / 3).enumerate() {
-            let w = inv_mass[i];
+        let n = ac.len() / 3;
+        let (v0, w) = (&v[3 * first..3 * (first + n)], &inv_mass[first..first + n]);
+        // (a non-finite new velocity found by the bits of v − v or-ed, +0 for any finite v:
+        // no branch a coordinate, and the one found afterwards where there is one)
+        let mut nan = 0;
+        for (((a, vn), v0), &w) in ac
+            .chunks_exact_mut(3)
+            .zip(vc.chunks_exact_mut(3))
+            .zip(v0.chunks_exact(3))
+            .zip(w)
+        {
             for k in 0..3 {
-                let q = 3 * l + k;
-                let a_new = if flat && k == 2 { 0.0 } else { vc[q] * w };
-                vc[q] = verlet::kick(v[3 * i + k], ac[q], a_new, h);
-                ac[q] = a_new;
-                if bad.is_none() && !vc[q].is_finite() {
-                    bad = Some(3 * i + k);
-                }
+                let a_new = if flat && k == 2 { 0.0 } else { vn[k] * w };
+                vn[k] = verlet::kick(v0[k], a[k], a_new, h);
+                a[k] = a_new;
+                #[allow(clippy::eq_op)] // (v − v on purpose)
+                let finite = (vn[k] - vn[k]).to_bits();
+                nan |= finite;
             }
         }
-        bad
+        (nan != 0)
+            .then(|| vc.iter().position(|c| !c.is_finite()).map(|q| 3 * first + q))
+            .flatten()
     };
     // (the stage-1 threads as homes, with the same stealing as stage 1: `affinity.rs`)
     let chunks: Vec<(&mut [f64], &mut [f64])> = a.chunks_mut(3 * CHUNK).zip(v_out.chunks_mut(3 * CHUNK)).collect();
