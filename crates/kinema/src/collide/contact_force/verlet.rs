@@ -50,6 +50,9 @@ pub(crate) struct VerletKick<'a> {
 /// release build, run the smaller worlds that keep it).
 const LEND_FROM: usize = if cfg!(test) { 1 } else { 1 << 21 };
 
+/// The particles whose inverse masses the 3D kick repeats for its coordinates at a time.
+const KICK_BLOCK: usize = 64;
+
 /// Velocity Verlet for the angular velocities, beside the velocities' (LAMMPS's `fix
 /// nve/sphere`, in the same drift–predict–kick form as `VerletBuffers` in `world/integrate.rs`):
 ///
@@ -276,19 +279,44 @@ fn kick_velocities(
         // (a non-finite new velocity found by the bits of v − v or-ed, +0 for any finite v:
         // no branch a coordinate, and the one found afterwards where there is one)
         let mut nan = 0;
-        for (((a, vn), v0), &w) in ac
-            .chunks_exact_mut(3)
-            .zip(vc.chunks_exact_mut(3))
-            .zip(v0.chunks_exact(3))
-            .zip(w)
-        {
-            for k in 0..3 {
-                let a_new = if flat && k == 2 { 0.0 } else { vn[k] * w };
-                vn[k] = verlet::kick(v0[k], a[k], a_new, h);
-                a[k] = a_new;
-                #[allow(clippy::eq_op)] // (v − v on purpose)
-                let finite = (vn[k] - vn[k]).to_bits();
-                nan |= finite;
+        if flat {
+            for (((a, vn), v0), &w) in ac
+                .chunks_exact_mut(3)
+                .zip(vc.chunks_exact_mut(3))
+                .zip(v0.chunks_exact(3))
+                .zip(w)
+            {
+                for k in 0..3 {
+                    let a_new = if k == 2 { 0.0 } else { vn[k] * w };
+                    vn[k] = verlet::kick(v0[k], a[k], a_new, h);
+                    a[k] = a_new;
+                    #[allow(clippy::eq_op)] // (v − v on purpose)
+                    let finite = (vn[k] - vn[k]).to_bits();
+                    nan |= finite;
+                }
+            }
+        } else {
+            // In 3D one loop over the coordinates, each with its particle's 1/m from a
+            // block of them repeated three times: the compiler makes vector operations of it
+            // (over the particles, with three coordinates each, it did not).
+            let mut w3 = [0.0; 3 * KICK_BLOCK];
+            for (((a, vn), v0), w) in ac
+                .chunks_mut(3 * KICK_BLOCK)
+                .zip(vc.chunks_mut(3 * KICK_BLOCK))
+                .zip(v0.chunks(3 * KICK_BLOCK))
+                .zip(w.chunks(KICK_BLOCK))
+            {
+                for (w3, &w) in w3.chunks_exact_mut(3).zip(w) {
+                    w3.fill(w);
+                }
+                for (((a, vn), v0), w) in a.iter_mut().zip(vn.iter_mut()).zip(v0).zip(&w3) {
+                    let a_new = *vn * w;
+                    *vn = verlet::kick(*v0, *a, a_new, h);
+                    *a = a_new;
+                    #[allow(clippy::eq_op)] // (v − v on purpose)
+                    let finite = (*vn - *vn).to_bits();
+                    nan |= finite;
+                }
             }
         }
         (nan != 0)
