@@ -38,6 +38,11 @@ use crate::vec3;
 /// enough to cover a miss to memory at the pass's pace (8 and 32 measured no better).
 const PREFETCH: usize = 16;
 
+thread_local! {
+    /// Each pool thread's room for [`Overlapping`], kept from one chunk to the next.
+    static ROOM: std::cell::Cell<Overlapping> = std::cell::Cell::new(Overlapping::default());
+}
+
 /// What stage 1 of the pair pass is asked to do besides the pair forces.
 #[derive(Clone, Copy)]
 pub(super) struct PassOptions {
@@ -378,7 +383,8 @@ impl ContactForce<'_> {
         // pairs either way, in the same order.
         let plain = turn.is_none() && self.jkr().is_none() && !dense;
         let mut touching = 0;
-        let mut overlapping = Overlapping::default();
+        // (the room of the thread's last chunk, put back below: no allocations a chunk)
+        let mut overlapping = ROOM.take();
         let (visits, start, partners) = if plain {
             self.overlapping(rows, first, x, &list.walls[w0..w1], options.check_positions, &mut overlapping);
             bad = overlapping.bad;
@@ -529,6 +535,7 @@ impl ContactForce<'_> {
             }
         }
         books.lost += wall_lost;
+        ROOM.set(overlapping);
         ChunkSums {
             energy,
             bad,
