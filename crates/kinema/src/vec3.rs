@@ -62,7 +62,21 @@ pub(crate) fn dot_slices(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Index and value of the first non-finite entry of `a`, for error messages.
+/// Index and value of the first non-finite entry of `a`, for error messages. First whether
+/// there is one at all, by [`non_finite_bits`] or-ed over `a` (a loop without a branch, which
+/// the compiler makes vector operations of), then where, only if there is.
 pub(crate) fn first_non_finite(a: &[f64]) -> Option<(usize, f64)> {
+    if a.iter().fold(0, |bits, &c| bits | non_finite_bits(c)) == 0 {
+        return None;
+    }
     a.iter().position(|c| !c.is_finite()).map(|p| (p, a[p]))
+}
+
+/// 0 for a finite `c`, not 0 for ±∞ and NaN: the bits of c − c (+0 for a finite c, NaN
+/// else). Or-ed over many values, a test for a non-finite one without a branch a value.
+#[inline(always)]
+pub(crate) fn non_finite_bits(c: f64) -> u64 {
+    #[allow(clippy::eq_op)] // (c − c on purpose)
+    let d = c - c;
+    d.to_bits()
 }

@@ -18,6 +18,7 @@
 use super::ContactForce;
 use crate::collide::neighbour_list::Rows;
 use crate::simd::prefetch;
+use crate::vec3::first_non_finite;
 
 /// How many list entries ahead of its reads the scan asks for the partners' positions and
 /// radii ([`prefetch`]): a dozen particles' rows at the pass's 16 covered the 10⁵ gas (its
@@ -62,14 +63,8 @@ impl ContactForce<'_> {
         }
         out.bad = None;
         if check {
-            // (finite x: x − x = +0, no bit set; ±∞ and NaN give NaN: the bits of all
-            // or-ed, a loop the compiler makes vector operations of)
             let part = &x[3 * first..3 * (first + rows.len())];
-            #[allow(clippy::eq_op)] // (x − x on purpose)
-            let nan = part.iter().fold(0u64, |s, c| s | (c - c).to_bits());
-            if nan != 0 {
-                out.bad = part.iter().position(|c| !c.is_finite()).map(|k| 3 * first + k);
-            }
+            out.bad = first_non_finite(part).map(|(k, _)| 3 * first + k);
         }
     }
 

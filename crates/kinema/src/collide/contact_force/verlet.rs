@@ -12,6 +12,7 @@ use crate::collide::velocities::Predictor;
 use crate::error::Error;
 use crate::forces::State;
 use crate::ode::verlet;
+use crate::vec3::{first_non_finite, non_finite_bits};
 
 /// The rest of what [`ContactForce::force_and_kick`] needs besides the drifted state: the
 /// step's other forces, masses and size, the velocities at its start, and the buffers it
@@ -276,8 +277,8 @@ fn kick_velocities(
         let first = c * CHUNK;
         let n = ac.len() / 3;
         let (v0, w) = (&v[3 * first..3 * (first + n)], &inv_mass[first..first + n]);
-        // (a non-finite new velocity found by the bits of v − v or-ed, +0 for any finite v:
-        // no branch a coordinate, and the one found afterwards where there is one)
+        // (a non-finite new velocity found by `non_finite_bits` or-ed in the loop: no branch
+        // a coordinate, and the one found afterwards where there is one)
         let mut nan = 0;
         if flat {
             for (((a, vn), v0), &w) in ac
@@ -290,9 +291,7 @@ fn kick_velocities(
                     let a_new = if k == 2 { 0.0 } else { vn[k] * w };
                     vn[k] = verlet::kick(v0[k], a[k], a_new, h);
                     a[k] = a_new;
-                    #[allow(clippy::eq_op)] // (v − v on purpose)
-                    let finite = (vn[k] - vn[k]).to_bits();
-                    nan |= finite;
+                    nan |= non_finite_bits(vn[k]);
                 }
             }
         } else {
@@ -313,15 +312,11 @@ fn kick_velocities(
                     let a_new = *vn * w;
                     *vn = verlet::kick(*v0, *a, a_new, h);
                     *a = a_new;
-                    #[allow(clippy::eq_op)] // (v − v on purpose)
-                    let finite = (*vn - *vn).to_bits();
-                    nan |= finite;
+                    nan |= non_finite_bits(*vn);
                 }
             }
         }
-        (nan != 0)
-            .then(|| vc.iter().position(|c| !c.is_finite()).map(|q| 3 * first + q))
-            .flatten()
+        (nan != 0).then(|| first_non_finite(vc).map(|(q, _)| 3 * first + q)).flatten()
     };
     // (the stage-1 threads as homes, with the same stealing as stage 1: `affinity.rs`)
     let chunks: Vec<(&mut [f64], &mut [f64])> = a.chunks_mut(3 * CHUNK).zip(v_out.chunks_mut(3 * CHUNK)).collect();
