@@ -3,7 +3,8 @@ shape (issue 16) must leave every benchmark no slower.
 
 Each workload runs in a fresh process with ``PYTHONPATH=<tree>/python`` (so ``import kinema``
 takes that tree's package and its built ``_core``), ``--repeat`` times, alternating the two
-trees (before, after, before, ...), on ``--threads`` rayon threads. The workloads are those of
+trees in pairs whose order alternates too (before, after, after, before, ...), on
+``--threads`` rayon threads. The workloads are those of
 the benchmarks beside this file, smaller so that both builds fit a few minutes:
 
   gas        benchmarks/granular_gas.py's worker: the LAMMPS peer scene (spring–dashpot
@@ -16,7 +17,13 @@ the benchmarks beside this file, smaller so that both builds fit a few minutes:
   render     benchmarks/render.py's frames of a 3D gas (the renderer alone)
 
 The table gives each workload's median seconds in both trees and after / before (< 1: the
-second tree is faster). Timings only: nothing here fails on them.
+second tree is faster), then the spread of that ratio: run k of the after tree over run k of
+the before tree (the two ran one after the other, in the same minute of a shared machine),
+its median and quartiles over the pairs, and "noise" where the quartiles hold 1 (half the
+pairs or more on either side of no change). A machine that changes speed between minutes
+moves both runs of a pair alike; one that changes between builds does not, and two builds
+of the same code differ by a few % in their code's layout alone: give a tree twice (A/A)
+to see the spread of nothing. Timings only: nothing here fails on them.
 
     python benchmarks/before_after.py BEFORE_TREE [AFTER_TREE (default: this checkout)]
                                       [--repeat 5] [--threads 2] [--only gas,implicit]
@@ -96,6 +103,17 @@ print(json.dumps({"seconds": time.perf_counter() - start}))
 }
 
 
+def pair_ratios(before: list[float], after: list[float]) -> tuple[float, float, float]:
+    """The median and quartiles (first, third) of after[k] / before[k] over the pairs k:
+    the quartiles by `statistics.quantiles`' inclusive method (linear between the order
+    statistics, the ends the smallest and largest: 2 pairs give those two)."""
+    ratios = [a / b for b, a in zip(before, after, strict=True)]
+    if len(ratios) == 1:
+        return ratios[0], ratios[0], ratios[0]
+    q1, med, q3 = statistics.quantiles(ratios, n=4, method="inclusive")
+    return med, q1, q3
+
+
 def run(tree: Path, workload: str, threads: int) -> float:
     env = {
         **os.environ,
@@ -127,14 +145,19 @@ def main() -> int:
         if not (tree / "python" / "kinema").is_dir():
             raise SystemExit(f"{label} = {tree}: no python/kinema there (a kinema checkout with _core built)")
     print(f"before: {trees['before']}\nafter:  {trees['after']}\n{args.threads} threads, {args.repeat} runs each, interleaved\n")
-    print(f"{'workload':10} {'before s':>10} {'after s':>10} {'after/before':>13}")
+    print(f"{'workload':10} {'before s':>10} {'after s':>10} {'after/before':>13}   pairs: median [quartiles]")
     for name in names:
         times: dict[str, list[float]] = {"before": [], "after": []}
-        for _ in range(args.repeat):
-            for label, tree in trees.items():
-                times[label].append(run(tree, name, args.threads))
+        for k in range(args.repeat):
+            # (ABBA: which tree runs first alternates, so that what the first run of a pair
+            # leaves the second (warm files, a clock that ramps) falls on both alike; with
+            # the before tree always first, an A/A run of the cloth gave 0.85)
+            for label in ("before", "after") if k % 2 == 0 else ("after", "before"):
+                times[label].append(run(trees[label], name, args.threads))
         b, a = statistics.median(times["before"]), statistics.median(times["after"])
-        print(f"{name:10} {b:10.3f} {a:10.3f} {a / b:13.3f}", flush=True)
+        med, q1, q3 = pair_ratios(times["before"], times["after"])
+        verdict = "noise" if q1 <= 1.0 <= q3 else ("faster" if q3 < 1.0 else "slower")
+        print(f"{name:10} {b:10.3f} {a:10.3f} {a / b:13.3f}   {med:.3f} [{q1:.3f}, {q3:.3f}] {verdict}", flush=True)
     return 0
 
 
