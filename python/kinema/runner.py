@@ -55,7 +55,7 @@ LIMIT_PIXELS = 1e11  # frames × width × height: 16 minutes of 1080p at 30 fps;
 LIMIT_MEMORY = 8 * 2**30  # bytes
 VIDEO_FPS = (0.01, 1000.0)  # playback frames per second asked; a GIF writes the nearest of 100/d, d = 2 … 65535 (kinema.render.video_rate)
 MAX_STEPS = 10**18  # even with --force: the engine counts steps in 64 bits; 1e18 is 30 years at 1e9 steps a second
-ENGINE_BYTES = 2048  # per particle: state, the method's stages, collision grid (measured 400-800) and the contacts, bounded by design: the neighbour list keeps at most 128 entries (512 B) a particle (collide/neighbour_list.rs)
+ENGINE_BYTES = 2048  # per particle: state, the method's stages, collision grid (measured 400-800) and the contacts, bounded by design: the neighbour list keeps at most 128 entries (768 B) a particle (collide/neighbour_list.rs)
 FRAME_BYTES = 96  # per particle and recorded frame: positions and velocities (48 B), held twice while the trajectory is assembled
 RENDER_BYTES = 32  # per particle and frame while rendering: the renderer's copy of the positions, the speeds
 

@@ -122,12 +122,22 @@ pub(crate) struct NeighbourList {
 }
 
 /// The partners of one chunk's particles, compressed: particle l of the chunk has
-/// `partners[start[l]..start[l + 1]]`.
+/// `partners[start[l]..start[l + 1]]`, and `owner[k]` is the particle l whose row holds entry
+/// k (the contact force's first look reads it, `contact_force/overlapping.rs`: it loops over
+/// a chunk's entries, not its particles).
+///
+/// Made in this module alone (the builds and `upkeep.rs`'s renumberings), each ending with
+/// [`Rows::seal`], which makes `owner` from the starts; read elsewhere through
+/// [`Rows::start`], [`Rows::partners`], [`Rows::owner`] and [`Rows::of`].
 #[derive(Default)]
 pub(crate) struct Rows {
-    pub(crate) start: Vec<u32>,
-    pub(crate) partners: Vec<u32>,
+    start: Vec<u32>,
+    partners: Vec<u32>,
+    owner: Vec<u16>,
 }
+
+// (`owner` holds a chunk's particle index in 16 bits)
+const _: () = assert!(CHUNK <= 1 << 16);
 
 impl Rows {
     /// Particles in the chunk.
@@ -140,19 +150,81 @@ impl Rows {
     pub(crate) fn of(&self, l: usize) -> &[u32] {
         &self.partners[self.start[l] as usize..self.start[l + 1] as usize]
     }
+
+    /// Where each particle's row starts in [`Rows::partners`], and where the last ends.
+    pub(crate) fn start(&self) -> &[u32] {
+        &self.start
+    }
+
+    /// Every row's partners, one row after the other.
+    pub(crate) fn partners(&self) -> &[u32] {
+        &self.partners
+    }
+
+    /// For each entry of [`Rows::partners`], the chunk's particle whose row holds it.
+    pub(crate) fn owner(&self) -> &[u16] {
+        &self.owner
+    }
+
+    /// Rows with no particle yet: the first row starts at 0.
+    fn begin(&mut self) {
+        self.start.clear();
+        self.partners.clear();
+        self.owner.clear();
+        self.start.push(0);
+    }
+
+    /// Ends the row of the next particle at the partners pushed so far.
+    fn end_row(&mut self) {
+        self.start.push(self.partners.len() as u32);
+    }
+
+    /// Makes `owner` from the rows' starts, once they are all made: a mark at each row's
+    /// first entry (rows ending at the last entry or past it mark a spare place at the end),
+    /// summed, a loop without a branch a particle (most particles of a gas have zero or one
+    /// partner, and a loop over each particle's row would end at a branch the processor
+    /// cannot foresee).
+    fn seal(&mut self) {
+        let (entries, particles) = (self.partners.len(), self.len());
+        let owner = &mut self.owner;
+        owner.clear();
+        owner.resize(entries + 1, 0);
+        for &s in self.start.iter().take(particles).skip(1) {
+            owner[s as usize] += 1;
+        }
+        let mut l = 0;
+        for o in owner.iter_mut() {
+            l += *o;
+            *o = l;
+        }
+        owner.truncate(entries);
+    }
+
+    /// Rows made from each particle's partners in `rows` (tests).
+    #[cfg(test)]
+    pub(crate) fn from_rows(rows: &[Vec<u32>]) -> Rows {
+        let mut out = Rows::default();
+        out.begin();
+        for row in rows {
+            out.partners.extend_from_slice(row);
+            out.end_row();
+        }
+        out.seal();
+        out
+    }
 }
 
 impl NeighbourList {
-    /// The most entries (a particle's partner, 4 bytes) a list holds per particle: 512 B,
-    /// where a packing of spheres gives each fewer than 50 within the skin; with at least
-    /// [`Self::MIN_ENTRIES`] in all. The memory is so bounded by the particle count, as the
-    /// command line's work estimate counts it.
+    /// The most entries (a particle's partner, 4 bytes, and its row's owner, 2: [`Rows`]) a
+    /// list holds per particle: 768 B, where a packing of spheres gives each fewer than 50
+    /// within the skin; with at least [`Self::MIN_ENTRIES`] in all. The memory is so bounded
+    /// by the particle count, as the command line's work estimate counts it.
     pub(crate) const ENTRIES_PER_PARTICLE: usize = 128;
 
-    /// The fewest entries a list may hold before it stops (128 MiB): room for a few thousand
-    /// candidates a particle in scenes of 10⁴ particles, which a lattice falling at 60 Hz
-    /// needs while it falls (the 10,000-ball pour of `benchmarks/piles.py`: more than 419 a
-    /// particle, refused at 16 MiB).
+    /// The fewest entries a list may hold before it stops (192 MiB with their owners): room
+    /// for a few thousand candidates a particle in scenes of 10⁴ particles, which a lattice
+    /// falling at 60 Hz needs while it falls (the 10,000-ball pour of `benchmarks/piles.py`:
+    /// more than 419 a particle, refused at 16 MiB).
     pub(crate) const MIN_ENTRIES: usize = 1 << 25;
 
     /// Makes the list hold for positions `x` (rebuilt with `grid` if needed, with the skin
@@ -243,15 +315,13 @@ impl NeighbourList {
             .entry_limit
             .unwrap_or((Self::ENTRIES_PER_PARTICLE * n).max(Self::MIN_ENTRIES));
         self.rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
-            let (start, partners) = (&mut rows.start, &mut rows.partners);
-            start.clear();
-            partners.clear();
-            start.push(0);
+            rows.begin();
             let mut counted = 0;
             let mut over = false;
             for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
                 if searched && !over && filter.is_none_or(|f| f.mask(i) != 0) {
                     let lowest = if half { i + 1 } else { 0 };
+                    let partners = &mut rows.partners;
                     let before = partners.len();
                     grid.partners_from(i, lowest, x, radius, domain, skin, partners);
                     if let Some(f) = filter {
@@ -263,9 +333,10 @@ impl NeighbourList {
                         over = entries.fetch_add(added, Ordering::Relaxed) + added > limit;
                     }
                 }
-                start.push(partners.len() as u32);
+                rows.end_row();
             }
-            entries.fetch_add(partners.len() - counted, Ordering::Relaxed);
+            rows.seal();
+            entries.fetch_add(rows.partners.len() - counted, Ordering::Relaxed);
         });
         if entries.into_inner() > limit {
             self.rows.clear();

@@ -35,8 +35,7 @@ pub(super) struct Overlapping {
     pub visit: Vec<u32>,
     pub start: Vec<u32>,
     pub partners: Vec<u32>,
-    /// Rooms of the scan: each entry's particle l, and the overlapping entries (l, j).
-    owner: Vec<u32>,
+    /// Room of the scan: the overlapping entries (l, j).
     hits: Vec<(u32, u32)>,
     /// The chunk's first non-finite position coordinate (3 i + k), when asked.
     pub bad: Option<usize>,
@@ -74,8 +73,10 @@ impl ContactForce<'_> {
     /// The loop runs over the chunk's entries, not its particles: a particle of a gas has
     /// zero, one or a few partners, and a loop over each particle's row ended at a branch
     /// the processor could not foresee (about one missed guess a particle, ~15 cycles, where
-    /// the test itself takes a few). Each entry's particle l is read from `owner`, made
-    /// from the rows' starts without a branch: a mark at each row's first entry, summed.
+    /// the test itself takes a few). Each entry's particle l is read from the rows' own
+    /// [`Rows::owner`], made once when the rows are (made here at each pass, from the rows'
+    /// starts, the 10⁵ gas of `benchmarks/granular_gas.py` was 4–7 % slower, 10⁶ 6 %:
+    /// interleaved pairs of runs).
     #[inline(always)]
     fn scan(
         &self,
@@ -86,25 +87,12 @@ impl ContactForce<'_> {
         out: &mut Overlapping,
         image: impl Fn([f64; 3]) -> [f64; 3],
     ) {
-        let (radius, partners) = (self.radius, &rows.partners[..]);
-        let entries = partners.len();
-        // owner[k]: the chunk's particle whose row holds entry k (rows ending at the last
-        // entry or past it mark the spare place `entries`)
-        let owner = &mut out.owner;
-        owner.clear();
-        owner.resize(entries + 1, 0);
-        for &s in rows.start.iter().take(rows.len()).skip(1) {
-            owner[s as usize] += 1;
-        }
-        let mut l = 0;
-        for o in owner.iter_mut() {
-            l += *o;
-            *o = l;
-        }
+        let (radius, partners, owner) = (self.radius, rows.partners(), rows.owner());
+        assert_eq!(owner.len(), partners.len(), "the list's rows are sealed at their making");
         // the overlapping entries (l, j), in the rows' order
         let hits = &mut out.hits;
         hits.clear();
-        for (k, (&j, &l)) in partners.iter().zip(&owner[..entries]).enumerate() {
+        for (k, (&j, &l)) in partners.iter().zip(owner).enumerate() {
             if let Some(&ahead) = partners.get(k + AHEAD) {
                 prefetch(&x[3 * ahead as usize]);
                 prefetch(&radius[ahead as usize]);
@@ -115,7 +103,7 @@ impl ContactForce<'_> {
             let d = image([xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]]);
             let reach = radius[i] + radius[j] + 0.0;
             if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach {
-                hits.push((l, j as u32));
+                hits.push((l as u32, j as u32));
             }
         }
         // the particles to visit: those of the hits and the collider candidates, merged
@@ -179,8 +167,7 @@ mod tests {
                 filter: None,
             };
             let force = ContactForce::new(&model, bodies);
-            let mut rows = Rows::default();
-            rows.start.push(0);
+            let mut each = Vec::new();
             for l in 0..len {
                 let count = if l < 3 || l >= len - 4 {
                     0
@@ -193,9 +180,9 @@ mod tests {
                     .collect();
                 row.sort_unstable();
                 row.dedup();
-                rows.partners.extend(row);
-                rows.start.push(rows.partners.len() as u32);
+                each.push(row);
             }
+            let rows = Rows::from_rows(&each);
             let walls: Vec<(usize, usize)> = [5, 5, 40, len - 1].iter().map(|&l| (first + l, 0)).collect();
             let mut out = Overlapping::default();
             force.overlapping(&rows, first, &x, &walls, true, &mut out);

@@ -296,7 +296,7 @@ impl ContactForce<'_> {
         // a chunk most of whose listed pairs overlapped at the last pass tests them in its
         // own loop this time (`chunk_pairs`)
         let dense: Vec<bool> = (0..chunks)
-            .map(|c| sums.get(c).is_some_and(|s| 2 * s.touching > list.rows[c].partners.len()))
+            .map(|c| sums.get(c).is_some_and(|s| 2 * s.touching > list.rows[c].partners().len()))
             .collect();
         let done = affinity::run(outs, &homes, |c, out| {
             self.chunk_pairs(c, &list.rows[c], out, (x, v), list, &init, (options, dense[c]), turn)
@@ -394,7 +394,7 @@ impl ContactForce<'_> {
                 &overlapping.partners[..],
             )
         } else {
-            (Visits::All(len), &rows.start[..], &rows.partners[..])
+            (Visits::All(len), rows.start(), rows.partners())
         };
         // The partners' positions, radii, inverse masses and velocities PREFETCH entries
         // ahead of the row being read: beyond a core's caches (10⁶ particles) nearly every

@@ -141,7 +141,7 @@ impl NeighbourList {
                 continue; // nothing new in this chunk
             }
             let old = std::mem::take(rows);
-            rows.start.push(0);
+            rows.begin();
             for i in first..end {
                 if i - first < old.len() {
                     rows.partners.extend_from_slice(old.of(i - first));
@@ -153,8 +153,9 @@ impl NeighbourList {
                     rows.partners.push(b);
                     next.next();
                 }
-                rows.start.push(rows.partners.len() as u32);
+                rows.end_row();
             }
+            rows.seal();
         }
         if !colliders.is_empty() {
             let walled: Vec<bool> = active_walls(colliders, domain).iter().map(|a| a.iter().any(|&w| w)).collect();
@@ -192,17 +193,16 @@ fn renumbered(old: &[Rows], new_of_old: &[u32], old_of_new: &[u32]) -> Vec<Rows>
     let mut rows: Vec<Rows> = Vec::new();
     rows.resize_with(n.div_ceil(CHUNK), Rows::default);
     rows.par_iter_mut().enumerate().for_each(|(c, rows)| {
-        rows.start.clear();
-        rows.partners.clear();
-        rows.start.push(0);
+        rows.begin();
         for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
             let o = old_of_new[i] as usize;
             let first = rows.partners.len();
             let kept = old[o / CHUNK].of(o % CHUNK).iter().map(|&j| new_of_old[j as usize]);
             rows.partners.extend(kept.filter(|&j| j != GONE));
             rows.partners[first..].sort_unstable();
-            rows.start.push(rows.partners.len() as u32);
+            rows.end_row();
         }
+        rows.seal();
     });
     rows
 }
@@ -251,6 +251,7 @@ fn reoriented(old: &[Rows], new_of_old: &[u32]) -> Vec<Rows> {
             let (a, b) = (rows.start[l] as usize, rows.start[l + 1] as usize);
             rows.partners[a..b].sort_unstable();
         }
+        rows.seal();
     });
     rows
 }

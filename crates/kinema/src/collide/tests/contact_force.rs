@@ -663,6 +663,26 @@ fn a_gas_of_several_chunks_sums_each_pair_once_the_same_on_any_number_of_threads
     }
 }
 
+/// Each entry of each chunk's rows is owned by the particle whose row holds it
+/// (`Rows::owner`, which the first look of the pair pass reads instead of the rows' starts):
+/// what a build, a renumbering or an admission of newborns leaves must say so.
+fn assert_owners(list: &NeighbourList) {
+    for (c, rows) in list.rows.iter().enumerate() {
+        assert_eq!(
+            rows.owner().len(),
+            rows.partners().len(),
+            "chunk {c}: an owner for each entry"
+        );
+        for l in 0..rows.len() {
+            let (a, b) = (rows.start()[l] as usize, rows.start()[l + 1] as usize);
+            assert!(
+                rows.owner()[a..b].iter().all(|&o| o as usize == l),
+                "chunk {c}: row {l}'s entries"
+            );
+        }
+    }
+}
+
 #[test]
 fn a_renumbered_half_list_has_the_rows_of_a_build_in_the_new_order() {
     // A pair (a, b), a < b, sits in a's row; after a renumbering its lower index may be b's
@@ -683,7 +703,7 @@ fn a_renumbered_half_list_has_the_rows_of_a_build_in_the_new_order() {
     let (mut list, mut grid) = (new_list(), Grid::new());
     list.update(&mut grid, &x, &force.radius, &[], &force.domain, None, || build)
         .unwrap();
-    let entries = |l: &NeighbourList| l.rows.iter().map(|r| r.partners.len()).sum::<usize>();
+    let entries = |l: &NeighbourList| l.rows.iter().map(|r| r.partners().len()).sum::<usize>();
     assert!(entries(&list) > n / 2, "{} pairs", entries(&list));
     // a shuffle: new index of old particle i
     let mut rng = Rng::new(3);
@@ -708,9 +728,11 @@ fn a_renumbered_half_list_has_the_rows_of_a_build_in_the_new_order() {
         .unwrap();
     assert_eq!(list.rows.len(), fresh.rows.len());
     for (c, (a, b)) in list.rows.iter().zip(&fresh.rows).enumerate() {
-        assert_eq!(a.start, b.start, "chunk {c}: row lengths");
-        assert_eq!(a.partners, b.partners, "chunk {c}: partners");
+        assert_eq!(a.start(), b.start(), "chunk {c}: row lengths");
+        assert_eq!(a.partners(), b.partners(), "chunk {c}: partners");
+        assert_eq!(a.owner(), b.owner(), "chunk {c}: each entry's particle");
     }
+    assert_owners(&list);
     for (l, i) in (0..n).map(|i| (i % CHUNK, i)) {
         assert!(
             list.rows[i / CHUNK].of(l).iter().all(|&j| j as usize > i),
@@ -776,6 +798,7 @@ fn after_a_removal_the_kept_list_gives_the_forces_of_a_fresh_one_without_a_searc
     kept.accumulate(&s2, &mut fk).unwrap();
     fresh.accumulate(&s2, &mut ff).unwrap();
     assert_eq!(kept.list_builds(), builds, "no search: the kept list holds");
+    assert_owners(&kept.scratch().list);
     assert_eq!(fresh.list_builds(), 1);
     assert!(ff.iter().any(|c| *c != 0.0), "the survivors touch");
     assert_eq!(bits(&fk), bits(&ff), "the forces of a fresh list");
@@ -922,6 +945,7 @@ fn after_a_birth_the_admitted_list_gives_the_forces_of_a_fresh_one_without_a_sea
     kept.accumulate(&s, &mut fk).unwrap();
     fresh.accumulate(&s, &mut ff).unwrap();
     assert_eq!(kept.list_builds(), builds, "no search: the admitted list holds");
+    assert_owners(&kept.scratch().list);
     assert!(ff[3 * old..].iter().any(|c| *c != 0.0), "the newborns touch");
     assert_eq!(bits(&fk), bits(&ff), "the forces of a fresh list");
 

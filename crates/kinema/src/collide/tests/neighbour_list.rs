@@ -43,6 +43,6 @@ fn a_list_beyond_its_entry_limit_is_an_out_of_memory_error_and_no_list() {
         collider_scale: 0.0,
     })
     .unwrap();
-    let entries: usize = list.rows.iter().map(|r| r.partners.len()).sum();
+    let entries: usize = list.rows.iter().map(|r| r.partners().len()).sum();
     assert_eq!(entries, n * (n - 1));
 }
