@@ -278,6 +278,40 @@ def test_a_python_force_that_raises_propagates_unchanged():
     assert w.time == 0.0
 
 
+@pytest.mark.filterwarnings("ignore::kinema.StabilityWarning")
+def test_frames_written_by_the_steps_are_the_frames_read_after_them(monkeypatch):
+    # World.run's steps write each frame's positions and velocities into the recorder's block
+    # as they measure the frame's diagnostics (one pass over the engine's order, a scatter
+    # into the user's: `Recorder.room`); without the room they are read after the steps (a
+    # gather, `read_state`). A gas of spring-dashpot spheres, which the engine sorts along
+    # space: every frame the same, bit for bit, both ways.
+    from kinema._recorder import Recorder
+
+    def gas() -> kinema.World:
+        n = 16
+        i, j, k = np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij")
+        w = kinema.World(dt=1e-3, method="verlet")
+        v = np.random.default_rng(3).uniform(-0.5, 0.5, (n**3, 3))
+        w.add_particles(np.stack([i, j, k], axis=-1).reshape(-1, 3) * 1.1, velocity=v, mass=1.0, radius=0.5)
+        w.add(kinema.Box([0.0, 0.0, 0.0], [n * 1.1] * 3))
+        w.periodic = (True, True, True)
+        w.set_collisions(model="spring_dashpot", stiffness=2000.0, damping=50.0)
+        return w
+
+    rooms = []
+    room = Recorder.room
+    monkeypatch.setattr(Recorder, "room", lambda self, n: rooms.append(room(self, n)) or rooms[-1])
+    written = gas().run(0.4, fps=25.0)
+    assert sum(r is not None for r in rooms) >= 10, "each frame after the first had its room"
+    monkeypatch.setattr(Recorder, "room", lambda self, n: None)
+    w = gas()
+    read = w.run(0.4, fps=25.0)
+    assert w._core.sorts > 0, "the engine's order is not the user's"
+    for name in ("t", "positions", "velocities", "kinetic", "momentum", "angular_momentum"):
+        np.testing.assert_array_equal(getattr(written, name), getattr(read, name), err_msg=name)
+    np.testing.assert_array_equal(written.potential["contact"], read.potential["contact"])
+
+
 def test_a_large_run_records_into_a_block_the_kernel_mapped_at_once():
     # A run's frames go into one block (World.run knows how many); from 4 MiB on it is
     # mapped with MAP_POPULATE (trajectory._prefaulted) where the system has the flag. The

@@ -138,7 +138,7 @@ class Recorder:
             total = stats["total"]
             contacts, balance, lost = stats["last"]["contacts"], total["impulse_balance"], total["energy_lost"]
             impacts, virial = total["impacts"], np.ravel(total["virial"])
-        x, v = self._keep(state.engine, len(ids))
+        x, v = self._keep(state.engine, len(ids), diagnostics is not None and diagnostics.get("state") is True)
         # Σ m v ⊗ v, row-major (the kinetic part of the pressure tensor, times the volume),
         # summed with the diagnostics: kept in a periodic cell only, the one place a pressure
         # is made
@@ -155,13 +155,27 @@ class Recorder:
             else:
                 self.walls = None
 
-    def _keep(self, engine: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+    def room(self, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """The next frame's place in the block for the positions and velocities of `n`
+        particles, where it has one: the steps that lead to the frame write them there as they
+        measure its diagnostics (`World._advance`: one pass over the state, not two), and
+        `add` then keeps them as they are."""
+        k, block = len(self.frames), self._block
+        if block is not None and 0 < k < block[0].shape[0] and block[0].shape[1] == n:
+            return block[0][k], block[1][k]
+        return None
+
+    def _keep(self, engine: Any, n: int, written: bool) -> tuple[np.ndarray, np.ndarray]:
         """This frame's positions and velocities of the `n` particles, read from the `engine`
         (right after the world's views were pulled: the state the user sees) into their place
-        in the block when they fit, else into arrays of their own."""
+        in the block when they fit, else into arrays of their own; `written`: the steps wrote
+        them into their place already (`room`)."""
         k = len(self.frames)
         if self._block is None and k == 0 and self._expected > 1:
             self._block = (_prefaulted((self._expected, n, 3)), _prefaulted((self._expected, n, 3)))
+        room = self.room(n)
+        if room is not None and written:
+            return room
         block = self._block
         if block is not None and k < block[0].shape[0] and block[0].shape[1] == n:
             x, v = block[0][k], block[1][k]

@@ -52,7 +52,7 @@ class WorldRun:
                     with self._engine() as core:
                         self._advise(core)
                 # frame k + 1 at t0 + (k + 1)/fps exactly (kinema.frames)
-                measured = self._land(plan.time(run["t0"], run["frames_done"] + 1), plan.per_frame, measure=True)
+                measured = self._land(plan.time(run["t0"], run["frames_done"] + 1), plan.per_frame, measure=True, into=rec.room(len(self)))
             finally:
                 self._pull()
             rec.add(self, measured)
@@ -74,13 +74,14 @@ class WorldRun:
         self._tell_behind()
         return traj
 
-    def _land(self, t1: float, n: int, measure: bool = False) -> dict | None:
+    def _land(self, t1: float, n: int, measure: bool = False, into: tuple[np.ndarray, np.ndarray] | None = None) -> dict | None:
         """``n`` steps ending at time ``t1`` (s) exactly, each (t1 − t)/n long (the engine's
         clock: ``World::land_at``); with ``measure``, the diagnostics at their end where
-        ``_advance`` gives them (else ``None``)."""
+        ``_advance`` gives them (else ``None``), and the state written ``into`` the recorder's
+        room on the way (``_advance``)."""
         with self._engine() as core:
             core.land_at(t1, n)
-        return self._advance(n, measure)
+        return self._advance(n, measure, into)
 
     def _look_at_meshes(self) -> None:
         """One ``MeshPlacementWarning`` for each still mesh collider added since the last look

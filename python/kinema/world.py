@@ -332,10 +332,13 @@ class World(WorldViews, WorldParticles, WorldBirths, WorldRun, WorldCollisions):
         finally:
             self._pull()
 
-    def _advance(self, n: int, measure: bool = False) -> dict | None:
+    def _advance(self, n: int, measure: bool = False, into: tuple[np.ndarray, np.ndarray] | None = None) -> dict | None:
         """``n`` steps; with ``measure``, the diagnostics at their end where the steps ran in
         one call (no births or deaths due: the contacts' energy is then summed by the last
-        step's own force pass, ``World::advance_measured``), else ``None``. With emitters, the steps run in batches up to the next step boundary at
+        step's own force pass, ``World::advance_measured``), else ``None``; with ``into``
+        ((N, 3) rooms for the positions and velocities), those at the end written there by
+        the diagnostics' own pass (the dict's ``"state"`` says whether they were: a frame of
+        :meth:`run`, ``Recorder.room``). With emitters, the steps run in batches up to the next step boundary at
         which a birth is due (or one at a time while a newborn waits for its place): the births
         due by a step's start are added before it (``kinema.emitter``). Deaths (times of death,
         kill volumes) are the engine's, after each step (``World::set_times_of_death``,
@@ -344,7 +347,7 @@ class World(WorldViews, WorldParticles, WorldBirths, WorldRun, WorldCollisions):
         :meth:`run`."""
         if not self._changes_count():
             with self._engine() as core:
-                measured = core.step_measured(n) if measure else core.step(n)
+                measured = (core.step_measured(n) if into is None else core.step_measured(n, *into)) if measure else core.step(n)
                 self._notice_placement(core)
             return measured
         left = n

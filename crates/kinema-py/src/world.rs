@@ -509,17 +509,58 @@ impl PyWorld {
     /// `step(n)` and then `diagnostics()`, the contacts' energy summed by the last step's own
     /// force pass rather than by a pass of its own (`World::advance_measured`): what
     /// `World.run` records at each frame.
-    fn step_measured<'py>(&mut self, py: Python<'py>, n: u64) -> PyResult<Bound<'py, PyDict>> {
+    ///
+    /// With `x` and `v` ((N, 3) C-contiguous float64 arrays), the positions and velocities at
+    /// the end are written there too, in the user's order, by the diagnostics' own pass over
+    /// the state (what `read_state` would write: `World.run` records its frames so); the
+    /// dict's `"state"` says whether they were (not where a death in the steps changed N).
+    #[pyo3(signature = (n, x=None, v=None))]
+    fn step_measured<'py>(
+        &mut self,
+        py: Python<'py>,
+        n: u64,
+        x: Option<PyReadwriteArray2<'_, f64>>,
+        v: Option<PyReadwriteArray2<'_, f64>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (mut x, mut v) = match (x, v) {
+            (None, None) => (None, None),
+            (Some(x), Some(v)) => {
+                for (name, a) in [("x", &x), ("v", &v)] {
+                    if a.as_array().shape()[1] != 3 || !a.as_array().is_standard_layout() {
+                        return Err(PyValueError::new_err(format!(
+                            "{name} must be a C-contiguous (N, 3) float64 array"
+                        )));
+                    }
+                }
+                (Some(x), Some(v))
+            }
+            _ => {
+                return Err(PyValueError::new_err(
+                    "x and v go together: rooms for the positions and velocities",
+                ))
+            }
+        };
         if n == 0 {
-            return self.diagnostics(py);
+            let d = self.diagnostics(py)?;
+            if x.is_some() {
+                d.set_item("state", false)?;
+            }
+            return Ok(d);
         }
         step_in_slices(py, &mut self.inner, n - 1)?;
         let world = &mut self.inner;
-        let d = py
-            .detach(move || world.advance_in_engine_order_measured(1))
-            .map_err(world_err)?;
+        let rooms = x.as_mut().zip(v.as_mut()).map(|(x, v)| (x.as_slice_mut(), v.as_slice_mut()));
+        let (d, written) = match rooms {
+            Some((Ok(x), Ok(v))) => py.detach(move || world.advance_in_engine_order_measured_into(1, x, v)),
+            _ => py.detach(move || world.advance_in_engine_order_measured(1).map(|d| (d, false))),
+        }
+        .map_err(world_err)?;
         py.check_signals()?;
-        diagnostics_dict(py, &d, self.inner.has_spin())
+        let out = diagnostics_dict(py, &d, self.inner.has_spin())?;
+        if x.is_some() {
+            out.set_item("state", written)?;
+        }
+        Ok(out)
     }
 }
 

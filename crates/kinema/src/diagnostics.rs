@@ -74,6 +74,99 @@ impl Sums {
     }
 }
 
+/// Where [`Diagnostics::measure_copying`] writes the positions (m) and velocities (m/s) it
+/// reads, 3 values per particle: particle i at place `place[i]` (a permutation of 0..N: the
+/// user's index of the engine's particle i, `world/order.rs`), or at i itself without one.
+pub struct StateCopy<'a> {
+    /// Positions, m (3 N).
+    x: &'a mut [f64],
+    /// Velocities, m/s (3 N).
+    v: &'a mut [f64],
+    /// Each particle's place, a permutation of 0..N; `None`: its own index.
+    place: Option<&'a [u32]>,
+}
+
+impl<'a> StateCopy<'a> {
+    /// Particle i's position and velocity into `x` and `v` at i (3 N values each).
+    pub fn new(x: &'a mut [f64], v: &'a mut [f64]) -> Self {
+        StateCopy { x, v, place: None }
+    }
+
+    /// Particle i's position and velocity into `x` and `v` at `place[i]`. `place` must be a
+    /// permutation of 0..N (the copy's chunks write at once, trusting that no two particles
+    /// share a place): the world's order (`world/order.rs`) alone makes it.
+    pub(crate) fn placed(x: &'a mut [f64], v: &'a mut [f64], place: &'a [u32]) -> Self {
+        StateCopy {
+            x,
+            v,
+            place: Some(place),
+        }
+    }
+
+    /// The copy's rooms as pointers the chunks of `measure_copying` share, for N particles.
+    ///
+    /// Panics unless both rooms hold 3 N values and `place` (if given) N places below N.
+    fn shared(self, n: usize) -> SharedCopy<'a> {
+        assert!(
+            self.x.len() == 3 * n && self.v.len() == 3 * n,
+            "a copy of {n} particles' state needs 3 x {n} values"
+        );
+        if let Some(place) = self.place {
+            assert!(
+                place.len() == n && place.par_iter().all(|&u| (u as usize) < n),
+                "the places of {n} particles"
+            );
+        }
+        SharedCopy {
+            x: self.x.as_mut_ptr(),
+            v: self.v.as_mut_ptr(),
+            place: self.place,
+            _rooms: std::marker::PhantomData,
+        }
+    }
+}
+
+/// A [`StateCopy`] whose rooms the chunks write at once, each its own particles' places.
+struct SharedCopy<'a> {
+    x: *mut f64,
+    v: *mut f64,
+    place: Option<&'a [u32]>,
+    _rooms: std::marker::PhantomData<&'a mut [f64]>,
+}
+
+// SAFETY: the chunks write through the pointers only at their own particles' places, below 3 N
+// (`StateCopy::shared` checks), and distinct particles have distinct places (`place` is a
+// permutation: `StateCopy::placed`), so no two threads write
+// the same value and nobody reads the rooms while they are written (they are borrowed
+// mutably for 'a).
+unsafe impl Send for SharedCopy<'_> {}
+unsafe impl Sync for SharedCopy<'_> {}
+
+impl SharedCopy<'_> {
+    /// Writes the chunk of particles from `first` on (positions `x`, velocities `v`, 3 each)
+    /// at their places.
+    fn put(&self, first: usize, x: &[f64], v: &[f64]) {
+        match self.place {
+            None => unsafe {
+                // (their places are first.., contiguous)
+                std::ptr::copy_nonoverlapping(x.as_ptr(), self.x.add(3 * first), x.len());
+                std::ptr::copy_nonoverlapping(v.as_ptr(), self.v.add(3 * first), v.len());
+            },
+            Some(place) => {
+                let place = &place[first..first + x.len() / 3];
+                for ((&u, x), v) in place.iter().zip(x.chunks_exact(3)).zip(v.chunks_exact(3)) {
+                    // (u < N, checked by `StateCopy::shared`; no other chunk has u)
+                    let u = 3 * u as usize;
+                    unsafe {
+                        std::ptr::copy_nonoverlapping(x.as_ptr(), self.x.add(u), 3);
+                        std::ptr::copy_nonoverlapping(v.as_ptr(), self.v.add(u), 3);
+                    }
+                }
+            }
+        }
+    }
+}
+
 impl Diagnostics {
     /// Measures the state `s` under `forces`.
     ///
@@ -82,13 +175,28 @@ impl Diagnostics {
     /// serial sums below [`CHUNK`] particles). At 10⁶ particles: 1.4 ms on two threads, 2.9
     /// by the serial loop this replaced (a frame of `World.run` reads them once).
     pub fn measure(s: &State, forces: &[&dyn Force]) -> Self {
+        Self::measure_copying(s, forces, None)
+    }
+
+    /// [`Diagnostics::measure`], the same bits, with the positions and velocities it reads
+    /// written into `copy` on the way (`World.run`'s frame: one pass over the state instead of
+    /// the sums' pass and a copy's).
+    pub fn measure_copying(s: &State, forces: &[&dyn Force], copy: Option<StateCopy<'_>>) -> Self {
+        let n = s.mass.len();
+        let copy = copy.map(|c| c.shared(n));
         let mut total = Sums::default();
         for part in s
             .mass
             .par_chunks(CHUNK)
             .zip(s.x.par_chunks(3 * CHUNK))
             .zip(s.v.par_chunks(3 * CHUNK))
-            .map(|((mass, x), v)| Sums::of(mass, x, v))
+            .enumerate()
+            .map(|(c, ((mass, x), v))| {
+                if let Some(copy) = &copy {
+                    copy.put(c * CHUNK, x, v);
+                }
+                Sums::of(mass, x, v)
+            })
             .collect::<Vec<_>>()
         {
             total.add(&part);

@@ -136,6 +136,41 @@ fn steps_that_measure_their_end_give_the_diagnostics_read_after_them_to_the_bit(
 }
 
 #[test]
+fn steps_that_measure_their_end_and_write_their_state_give_what_a_read_after_them_gives() {
+    // `advance_in_engine_order_measured_into` (a frame of `World.run`) writes the positions
+    // and velocities in the user's order by the diagnostics' own pass over the engine's
+    // order (a scatter through the order's map); reading them after plain steps gathers
+    // them (`read_state_into`). The same values, bit for bit, and the same diagnostics.
+    let (plain, _, _) = gas();
+    let (measured, _, _) = gas();
+    let (mut plain, mut measured) = (UserOrder::new(plain), UserOrder::new(measured));
+    let n = plain.len();
+    let mut sorted = 0;
+    for k in [1, 7, 300, 3, 200] {
+        plain.advance_in_engine_order(k).unwrap();
+        let after = plain.diagnostics();
+        let (mut x, mut v) = (vec![f64::NAN; 3 * n], vec![f64::NAN; 3 * n]);
+        plain.read_state_into(Some(&mut x), Some(&mut v));
+        let (mut x1, mut v1) = (vec![f64::NAN; 3 * n], vec![f64::NAN; 3 * n]);
+        let (d, written) = measured.advance_in_engine_order_measured_into(k, &mut x1, &mut v1).unwrap();
+        assert!(written, "rooms of 3 N values are written");
+        assert_eq!(diagnostics_bits(&d), diagnostics_bits(&after), "after {k} more steps");
+        let bits = |a: &[f64]| a.iter().map(|c| c.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&x1), bits(&x), "the positions after {k} more steps");
+        assert_eq!(bits(&v1), bits(&v), "the velocities after {k} more steps");
+        sorted += usize::from(measured.in_engine_order());
+    }
+    assert!(
+        sorted >= 2,
+        "the engine's order differs from the user's: the scatter is tested"
+    );
+    // rooms of another size are not written (the diagnostics are given all the same)
+    let (mut small, mut v) = (vec![f64::NAN; 3 * (n - 1)], vec![f64::NAN; 3 * (n - 1)]);
+    let (_, written) = measured.advance_in_engine_order_measured_into(1, &mut small, &mut v).unwrap();
+    assert!(!written && small.iter().all(|c| c.is_nan()));
+}
+
+#[test]
 fn the_membership_count_moves_when_the_set_of_particles_changes_and_only_then() {
     let (world, _, _) = gas();
     let mut kept = UserOrder::new(world);

@@ -5,7 +5,7 @@ use super::dynamics::Dynamics;
 use super::forces::{contact_force, every_force, every_force_ref};
 use super::{advisor, Rates, StageTimes, World, WorldStepper};
 use crate::collide::impulse::ImpulseStage;
-use crate::diagnostics::Diagnostics;
+use crate::diagnostics::{Diagnostics, StateCopy};
 use crate::error::Error;
 use crate::forces::State;
 use crate::ode::stepper::Stats;
@@ -40,9 +40,25 @@ impl World {
 
     /// Energies and momenta now.
     pub fn diagnostics(&self) -> Diagnostics {
+        self.diagnostics_copying(None)
+    }
+
+    /// [`World::diagnostics`], the same bits, with the positions (m) and velocities (m/s)
+    /// written into `x` and `v` (3 per particle) in the user's order on the way: one pass over
+    /// the state for a frame of `World.run` (`UserOrder::advance_in_engine_order_measured`).
+    /// Panics unless `x` and `v` hold 3 N values each.
+    pub(super) fn diagnostics_and_state(&self, x: &mut [f64], v: &mut [f64]) -> Diagnostics {
+        let copy = match self.user_of() {
+            Some(user_of) => StateCopy::placed(x, v, user_of),
+            None => StateCopy::new(x, v),
+        };
+        self.diagnostics_copying(Some(copy))
+    }
+
+    fn diagnostics_copying(&self, copy: Option<StateCopy<'_>>) -> Diagnostics {
         let p = &self.particles;
         let contact = contact_force(&self.collide_stage, p);
-        let d = Diagnostics::measure(
+        let d = Diagnostics::measure_copying(
             &State {
                 t: self.time,
                 x: &p.x,
@@ -50,6 +66,7 @@ impl World {
                 mass: &p.mass,
             },
             &every_force_ref(&self.forces, contact.as_ref()),
+            copy,
         );
         if p.has_spin() {
             d.with_spin(&p.omega, &p.inertia)

@@ -303,16 +303,28 @@ impl World {
     /// by another pass over every pair, a third of a step at 10⁶ particles. What
     /// `World.run` records at each frame; the error of a refused step, as `advance`'s.
     pub fn advance_measured(&mut self, n: u64) -> Result<Diagnostics, Error> {
-        let result = self.advance_in_engine_order_measured(n);
+        let result = self.advance_in_engine_order_measured(n, None);
         self.restore_user_order();
-        result
+        result.map(|(d, _)| d)
     }
 
-    /// [`World::advance_measured`] without putting the particles back (for [`UserOrder`]).
-    pub(super) fn advance_in_engine_order_measured(&mut self, n: u64) -> Result<Diagnostics, Error> {
+    /// [`World::advance_measured`] without putting the particles back (for [`UserOrder`]);
+    /// with `state`, rooms for the positions and velocities (3 per particle), those at the
+    /// end written there in the user's order by the diagnostics' own pass, where they hold
+    /// 3 N values each then (the bool: whether they were written; a death in the steps
+    /// changes N).
+    pub(super) fn advance_in_engine_order_measured(
+        &mut self,
+        n: u64,
+        state: Option<(&mut [f64], &mut [f64])>,
+    ) -> Result<(Diagnostics, bool), Error> {
         self.energy_at = Some(self.steps + n);
         let stepped = self.advance_in_engine_order(n);
-        let d = stepped.map(|()| self.diagnostics());
+        let size = 3 * self.particles.len();
+        let d = stepped.map(|()| match state {
+            Some((x, v)) if x.len() == size && v.len() == size => (self.diagnostics_and_state(x, v), true),
+            _ => (self.diagnostics(), false),
+        });
         // kept no longer: a buffer written later is summed again
         self.energy_at = None;
         if let Some(model) = self.force_model() {

@@ -415,7 +415,21 @@ impl UserOrder {
     /// diagnostics at the end of the `n` steps, summed over the engine's order (as
     /// [`UserOrder::diagnostics`]).
     pub fn advance_in_engine_order_measured(&mut self, n: u64) -> Result<Diagnostics, Error> {
-        self.world.advance_in_engine_order_measured(n)
+        self.world.advance_in_engine_order_measured(n, None).map(|(d, _)| d)
+    }
+
+    /// [`UserOrder::advance_in_engine_order_measured`] that also writes the positions (m) and
+    /// velocities (m/s) at the end into `x` and `v` (3 per particle) in the user's order, as
+    /// [`UserOrder::read_state_into`] would, by the diagnostics' own pass over the state (a
+    /// frame of `World.run`: one pass instead of two); the bool says whether they were
+    /// written: only where they hold 3 N values each after the steps (a death changes N).
+    pub fn advance_in_engine_order_measured_into(
+        &mut self,
+        n: u64,
+        x: &mut [f64],
+        v: &mut [f64],
+    ) -> Result<(Diagnostics, bool), Error> {
+        self.world.advance_in_engine_order_measured(n, Some((x, v)))
     }
 
     /// Whether the particles are in the engine's order now (sorted along space).
