@@ -35,6 +35,8 @@ impl Node {
 /// A flat node as the traversals' tests see it: its plane (unit normal `n`, a point `a`) and
 /// its box [lo, hi] (m).
 pub(super) struct Flat {
+    /// The triangle whose plane is the node's.
+    pub(super) plane: usize,
     n: [f64; 3],
     a: [f64; 3],
     lo: [f64; 3],
@@ -75,6 +77,23 @@ impl Flat {
             return false;
         }
         let rho = (reach * reach - least * least).max(0.0).sqrt() + margin;
+        let (f0, f1) = (vec3::sub(x, vec3::scale(s0, self.n)), vec3::sub(end, vec3::scale(s1, self.n)));
+        (0..3).all(|k| self.hi[k] + rho >= f0[k].min(f1[k]) && self.lo[k] - rho <= f0[k].max(f1[k]))
+    }
+}
+
+impl Flat {
+    /// Whether the feet on the node's plane of a path within `bulge` (m) of the chord from
+    /// `x` to `end` (m) come within `margin` (m) of the node's box: the segment between the
+    /// feet of the chord's ends, widened by `bulge` (a foot moves no more than its point).
+    /// Where the sphere touches a face of this plane now, a triangle of the node can be met
+    /// first only at its face, with the path's foot inside it (`TriangleMesh::toi_within`).
+    pub(super) fn foot_path_near(&self, (x, end): ([f64; 3], [f64; 3]), bulge: f64, margin: f64) -> bool {
+        let rho = bulge + margin + 2.0 * FLAT * vec3::norm(vec3::sub(end, x));
+        let (s0, s1) = (
+            vec3::dot(self.n, vec3::sub(x, self.a)),
+            vec3::dot(self.n, vec3::sub(end, self.a)),
+        );
         let (f0, f1) = (vec3::sub(x, vec3::scale(s0, self.n)), vec3::sub(end, vec3::scale(s1, self.n)));
         (0..3).all(|k| self.hi[k] + rho >= f0[k].min(f1[k]) && self.lo[k] - rho <= f0[k].max(f1[k]))
     }
@@ -253,7 +272,13 @@ impl Geometry {
 
     /// Calls `each(t)` with every triangle whose leaf's box overlaps the box [lo, hi], but
     /// those of the flat nodes (`flat.rs`) that `keep` turns down.
-    pub(super) fn visit_past_flat(&self, lo: [f64; 3], hi: [f64; 3], keep: impl Fn(&Flat) -> bool, mut each: impl FnMut(usize)) {
+    pub(super) fn visit_past_flat(
+        &self,
+        lo: [f64; 3],
+        hi: [f64; 3],
+        mut keep: impl FnMut(&Flat) -> bool,
+        mut each: impl FnMut(usize),
+    ) {
         let mut stack = Stack::new();
         while let Some(k) = stack.pop() {
             let node = self.nodes[k as usize];
@@ -263,6 +288,7 @@ impl Geometry {
             if node.plane != FLAT_NONE {
                 let t = node.plane as usize;
                 let flat = Flat {
+                    plane: t,
                     n: self.normals[t],
                     a: self.vertices[self.faces[t][0] as usize],
                     lo: node.lo.map(f64::from),

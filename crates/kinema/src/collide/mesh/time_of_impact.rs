@@ -8,6 +8,10 @@ use crate::collide::roots::toi_half_space;
 use crate::vec3;
 use smallvec::SmallVec;
 
+/// The most planes of flat nodes passed by their feet that [`TriangleMesh::toi_within`]'s
+/// first search notes (a floor has one; more: the second search).
+const PASSED: usize = 4;
+
 impl TriangleMesh {
     /// Whether point q lies within `eps` of the plane of one of `faces` (triangle, a point of it).
     fn in_face_plane(&self, faces: &[(usize, [f64; 3])], q: [f64; 3], eps: f64) -> bool {
@@ -98,21 +102,67 @@ impl TriangleMesh {
         let eps = self.eps(x, r);
         let (touching, now) = if past_flat {
             // one search for both: what it touches now and within the margin (past the flat
-            // nodes that do not hold its foot) and what its path may meet
+            // nodes that do not hold its foot) and what its path may meet. First past the flat
+            // nodes its path's feet do not cross, too: of those it could come within reach of,
+            // the planes are noted, and the search holds where it touches a face of each now
+            // (a sphere sliding on a face meets no edge or vertex of its plane, and a face of
+            // the plane only where the path's foot lies in it: `Flat::foot_path_near`). A
+            // sphere resting on a floor of small triangles so looks at those under its foot,
+            // not at every one within its reach of the plane (√(2 r δ) at an overlap δ).
+            // Else, or where the planes are too many to note, the search again past the flat
+            // nodes it may come within reach of.
             let (reach, margin8) = (r + margin_len, 8.0 * eps);
-            let mut near: SmallVec<[Near; 8]> = SmallVec::new();
-            g.visit_past_flat(
-                lo,
-                hi,
-                |flat| flat.holds_foot(x, reach, margin8) || flat.near_path((x, end), bulge, r, margin8),
-                |t| {
-                    let found = self.near(t, x, reach);
-                    candidates.extend(candidate(t, found.is_some_and(|c| c.is_within(r))));
-                    near.extend(found);
-                },
-            );
-            let (within, now) = self.within_and_now(&mut near, x, r);
-            (margin.is_some() && within, now)
+            let mut held = None;
+            for feet_only in [true, false] {
+                candidates.clear();
+                let mut near: SmallVec<[Near; 8]> = SmallVec::new();
+                let mut passed: SmallVec<[usize; PASSED]> = SmallVec::new();
+                let mut too_many = false;
+                g.visit_past_flat(
+                    lo,
+                    hi,
+                    |flat| {
+                        if flat.holds_foot(x, reach, margin8) {
+                            return true;
+                        }
+                        if !feet_only {
+                            return flat.near_path((x, end), bulge, r, margin8);
+                        }
+                        if flat.foot_path_near((x, end), bulge, margin8) {
+                            return true;
+                        }
+                        if flat.near_path((x, end), bulge, r, margin8) {
+                            let t = flat.plane;
+                            let noted = passed
+                                .iter()
+                                .any(|&p| g.same_plane(p, g.normals[t], g.vertices[g.faces[t][0] as usize]));
+                            if !noted {
+                                too_many |= passed.len() == PASSED;
+                                if !too_many {
+                                    passed.push(t);
+                                }
+                            }
+                        }
+                        false
+                    },
+                    |t| {
+                        let found = self.near(t, x, reach);
+                        candidates.extend(candidate(t, found.is_some_and(|c| c.is_within(r))));
+                        near.extend(found);
+                    },
+                );
+                let (within, now) = self.within_and_now(&mut near, x, r);
+                let approached = now.iter().any(|f| vec3::dot(v, f.1.normal) < 0.0);
+                let face_of = |p: usize| {
+                    now.iter()
+                        .any(|f| f.3 == Feature::Face && g.same_plane(p, g.normals[f.0], g.vertices[g.faces[f.0][0] as usize]))
+                };
+                if !feet_only || approached || (!too_many && passed.iter().all(|&p| face_of(p))) {
+                    held = Some((margin.is_some() && within, now));
+                    break;
+                }
+            }
+            held.expect("the second search always holds")
         } else {
             // (the tests' reference: every triangle within reach)
             g.visit(lo, hi, |t| candidates.extend(candidate(t, self.near(t, x, r).is_some())));

@@ -460,6 +460,65 @@ fn the_flat_nodes_leave_out_only_triangles_that_give_no_contact() {
 }
 
 #[test]
+fn spheres_resting_on_a_floor_of_small_triangles_look_under_their_feet_and_meet_what_the_full_search_meets() {
+    // Spheres ten cells wide in resting contact with a floor of 2 × 40² triangles (0.25 % of
+    // r in, as a pile's balls lie), still, creeping or sliding, under gravity: their first
+    // meeting and touch are those of the search of every triangle, and the first search
+    // looks only at the flat nodes its path's feet cross (`Flat::foot_path_near`): fewer
+    // triangles than those within its reach of the plane (√(2 r δ) about the foot).
+    let floor = sheet(40, 0.025, |_, _| 0.0);
+    let m = TriangleMesh::new(floor.0, floor.1, false, Surface::default()).unwrap();
+    let mut seed = 7u64;
+    let mut rnd = || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut fewer = 0;
+    for case in 0..600 {
+        let r = 0.25 * (0.8 + 0.4 * rnd());
+        let x = [0.2 + 0.6 * rnd(), 0.2 + 0.6 * rnd(), r * (1.0 - 0.0025 * (0.5 + rnd()))];
+        let speed = [0.0, 1e-3, 0.05, 0.5][case % 4];
+        let v = [speed * (rnd() - 0.5), speed * (rnd() - 0.5), speed * (rnd() - 0.5)];
+        let (a, horizon, margin) = ([0.0, 0.0, -9.81], 1e-3, [None, Some(0.02 * r)][case % 2]);
+        let want = m.toi_everywhere(x, v, a, r, horizon, margin);
+        assert_eq!(
+            m.toi_within(x, v, a, r, horizon, margin),
+            want,
+            "x {x:?} v {v:?} r {r} margin {margin:?}"
+        );
+        // the flat nodes each search goes into (the path's box as `toi_within` makes it)
+        let end = [0, 1, 2].map(|k| x[k] + (v[k] + 0.5 * a[k] * horizon) * horizon);
+        let bulge = 0.125 * 9.81 * horizon * horizon;
+        let reach = r + margin.unwrap_or(0.0);
+        let eps8 = 8.0 * m.eps(x, r);
+        let lo = [0, 1, 2].map(|k| x[k].min(end[k]) - reach - bulge);
+        let hi = [0, 1, 2].map(|k| x[k].max(end[k]) + reach + bulge);
+        let (mut feet, mut path) = (0, 0);
+        m.geometry.visit_past_flat(
+            lo,
+            hi,
+            |f| f.holds_foot(x, reach, eps8) || f.foot_path_near((x, end), bulge, eps8),
+            |_| feet += 1,
+        );
+        m.geometry.visit_past_flat(
+            lo,
+            hi,
+            |f| f.holds_foot(x, reach, eps8) || f.near_path((x, end), bulge, r, eps8),
+            |_| path += 1,
+        );
+        assert!(
+            feet <= path,
+            "the feet's search goes into the nodes of the path's: {feet} > {path}"
+        );
+        fewer += (feet < path) as usize;
+    }
+    assert!(
+        fewer > 300,
+        "the feet's search leaves out triangles within reach: {fewer} of 600"
+    );
+}
+
+#[test]
 fn continuous_detection_past_the_flat_nodes_meets_what_the_full_search_meets() {
     // Spheres on random parabolas (resting, sliding, falling, rising, thrown sideways) over a
     // floor, a terrace and a finely cut cube: the first triangle met and its time, and
