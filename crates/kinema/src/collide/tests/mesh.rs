@@ -278,11 +278,7 @@ fn the_hierarchy_finds_what_brute_force_finds() {
         }
     }
     let m = TriangleMesh::new(v, f, false, Surface::default()).unwrap();
-    let mut seed = 7u64;
-    let mut rnd = || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = uniform(7);
     let mut hits = 0;
     for _ in 0..300 {
         let p = [rnd(), rnd(), 0.3 * rnd() - 0.15];
@@ -327,6 +323,15 @@ fn a_mesh_buffer_beyond_memory_is_the_meshs_out_of_memory_error() {
              which cannot be allocated"
         )
     );
+}
+
+/// Uniform numbers in [0, 1) from a 64-bit linear congruential generator seeded with `seed`
+/// (Knuth's MMIX constants; the top 53 bits).
+fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    }
 }
 
 /// A k × k grid of squares of side `cell` (two triangles each) in the plane z = `height(i, j)`
@@ -416,11 +421,7 @@ fn the_flat_nodes_leave_out_only_triangles_that_give_no_contact() {
             TriangleMesh::new(cube.0, cube.1, false, Surface::default()).unwrap(),
         ),
     ];
-    let mut seed = 51u64;
-    let mut rnd = || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = uniform(51);
     for (name, m) in &meshes {
         assert!(
             m.geometry.nodes.iter().any(|n| n.is_flat()),
@@ -468,11 +469,7 @@ fn spheres_resting_on_a_floor_of_small_triangles_look_under_their_feet_and_meet_
     // triangles than those within its reach of the plane (√(2 r δ) about the foot).
     let floor = sheet(40, 0.025, |_, _| 0.0);
     let m = TriangleMesh::new(floor.0, floor.1, false, Surface::default()).unwrap();
-    let mut seed = 7u64;
-    let mut rnd = || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = uniform(7);
     let mut fewer = 0;
     for case in 0..600 {
         let r = 0.25 * (0.8 + 0.4 * rnd());
@@ -540,11 +537,7 @@ fn continuous_detection_past_the_flat_nodes_meets_what_the_full_search_meets() {
             TriangleMesh::new(cube.0, cube.1, true, Surface::default()).unwrap(),
         ),
     ];
-    let mut seed = 29u64;
-    let mut rnd = || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = uniform(29);
     for (name, m) in &meshes {
         let (mut met, mut touching) = (0, 0);
         for case in 0..2500 {
