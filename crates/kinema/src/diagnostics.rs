@@ -105,40 +105,38 @@ impl<'a> StateCopy<'a> {
 
     /// The copy's rooms as pointers the chunks of `measure_copying` share, for N particles.
     ///
-    /// Panics unless both rooms hold 3 N values and `place` (if given) N places below N.
+    /// Panics unless both rooms hold 3 N values and `place` (if given) N places (each below N:
+    /// checked as it is written, `SharedCopy::put`).
     fn shared(self, n: usize) -> SharedCopy<'a> {
         assert!(
             self.x.len() == 3 * n && self.v.len() == 3 * n,
             "a copy of {n} particles' state needs 3 x {n} values"
         );
-        if let Some(place) = self.place {
-            assert!(
-                place.len() == n && place.par_iter().all(|&u| (u as usize) < n),
-                "the places of {n} particles"
-            );
-        }
+        assert!(self.place.is_none_or(|p| p.len() == n), "the places of {n} particles");
         SharedCopy {
             x: self.x.as_mut_ptr(),
             v: self.v.as_mut_ptr(),
+            n,
             place: self.place,
             _rooms: std::marker::PhantomData,
         }
     }
 }
 
-/// A [`StateCopy`] whose rooms the chunks write at once, each its own particles' places.
+/// A [`StateCopy`] whose rooms (3 `n` values each) the chunks write at once, each its own
+/// particles' places.
 struct SharedCopy<'a> {
     x: *mut f64,
     v: *mut f64,
+    n: usize,
     place: Option<&'a [u32]>,
     _rooms: std::marker::PhantomData<&'a mut [f64]>,
 }
 
-// SAFETY: the chunks write through the pointers only at their own particles' places, below 3 N
-// (`StateCopy::shared` checks), and distinct particles have distinct places (`place` is a
-// permutation: `StateCopy::placed`), so no two threads write
-// the same value and nobody reads the rooms while they are written (they are borrowed
-// mutably for 'a).
+// SAFETY: the chunks write through the pointers only at their own particles' places, each
+// below N (`SharedCopy::put` asserts it), and distinct particles have distinct places
+// (`place` is a permutation: `StateCopy::placed`), so no two threads write the same value
+// and nobody reads the rooms while they are written (they are borrowed mutably for 'a).
 unsafe impl Send for SharedCopy<'_> {}
 unsafe impl Sync for SharedCopy<'_> {}
 
@@ -155,7 +153,8 @@ impl SharedCopy<'_> {
             Some(place) => {
                 let place = &place[first..first + x.len() / 3];
                 for ((&u, x), v) in place.iter().zip(x.chunks_exact(3)).zip(v.chunks_exact(3)) {
-                    // (u < N, checked by `StateCopy::shared`; no other chunk has u)
+                    // (no other chunk has u)
+                    assert!((u as usize) < self.n, "place {u} of {} particles", self.n);
                     let u = 3 * u as usize;
                     unsafe {
                         std::ptr::copy_nonoverlapping(x.as_ptr(), self.x.add(u), 3);
