@@ -80,9 +80,10 @@ impl PartialEq for BlockRoom {
 
 impl Springs {
     /// Memory a spring takes, bytes: its ends and values (40), the force pass's buffers (an
-    /// optional tension, 32; two end entries, 8), its block of the Jacobian when the step
-    /// advice or an implicit method linearises the springs (a `SpringBlock`, 88) and the
-    /// copies made while springs are added (the arrays handed over, 40): 208, rounded up.
+    /// optional tension, 32; two end entries, 8; the springs placed by their lower end, 40),
+    /// its block of the Jacobian when the step advice or an implicit method linearises the
+    /// springs (a `SpringBlock`, 88) and the copies made while springs are added (the arrays
+    /// handed over, 40): 248, rounded up.
     pub const BYTES_PER_SPRING: usize = 256;
 
     /// Whether the machine can give `count` springs their memory
