@@ -303,6 +303,7 @@ impl Geometry {
                     each(t as usize);
                 }
             } else {
+                prefetch(&self.nodes[node.right as usize]);
                 stack.push(node.right);
                 stack.push(k + 1);
             }
@@ -341,6 +342,19 @@ impl Geometry {
             }
         }
     }
+}
+
+/// Asks the cache for `node` ahead of its use: the right child is tested only after the
+/// left one's subtree, and in a large mesh it is usually far from its parent in memory.
+#[inline(always)]
+fn prefetch(node: &Node) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch reads nothing and cannot fault; the pointer is a live reference.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>((node as *const Node).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = node;
 }
 
 /// The nodes a traversal has still to visit, on the stack of the thread (no allocation per
