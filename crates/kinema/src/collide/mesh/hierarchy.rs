@@ -6,6 +6,7 @@
 
 use super::flat::{FLAT, FLAT_NONE};
 use super::{mesh_buffer, Geometry};
+use crate::simd::prefetch;
 use crate::vec3;
 use smallvec::SmallVec;
 
@@ -303,6 +304,8 @@ impl Geometry {
                     each(t as usize);
                 }
             } else {
+                // (the right child is tested only after the left one's subtree, and in a
+                // large mesh it lies far from its parent: its line asked for now)
                 prefetch(&self.nodes[node.right as usize]);
                 stack.push(node.right);
                 stack.push(k + 1);
@@ -342,19 +345,6 @@ impl Geometry {
             }
         }
     }
-}
-
-/// Asks the cache for `node` ahead of its use: the right child is tested only after the
-/// left one's subtree, and in a large mesh it is usually far from its parent in memory.
-#[inline(always)]
-fn prefetch(node: &Node) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch reads nothing and cannot fault; the pointer is a live reference.
-    unsafe {
-        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>((node as *const Node).cast());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = node;
 }
 
 /// The nodes a traversal has still to visit, on the stack of the thread (no allocation per
