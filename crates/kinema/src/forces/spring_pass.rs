@@ -494,6 +494,17 @@ mod tests {
     use super::*;
     use crate::forces::testing::Rng;
 
+    /// The pass's view of springs given as arrays: ends, stiffness, rest length, damping.
+    fn arrays<'a>(i: &'a [usize], j: &'a [usize], k: &'a [f64], rest: &'a [f64], c: &'a [f64]) -> SpringArrays<'a> {
+        SpringArrays {
+            i,
+            j,
+            k,
+            rest_length: rest,
+            damping: c,
+        }
+    }
+
     /// The pass against the one loop it stands for, bit for bit: each spring's force by the
     /// formula of the module doc, added to end i and subtracted from end j in spring order.
     /// A random network of 1003 springs (groups of four and the few left over, on the
@@ -523,13 +534,7 @@ mod tests {
             .map(|s| if s % 5 == 0 { 0.0 } else { rng.uniform(0.2, 1.6) })
             .collect();
         let c = rng.vec(count, 0.0, 3.0);
-        let springs = SpringArrays {
-            i: &i,
-            j: &j,
-            k: &k,
-            rest_length: &rest,
-            damping: &c,
-        };
+        let springs = arrays(&i, &j, &k, &rest, &c);
         let base = rng.vec(3 * n, -5.0, 5.0); // (the other forces' sum the springs add to)
         let mut expected = base.clone();
         for s in 0..count {
@@ -597,13 +602,7 @@ mod tests {
         }
         let count = i.len();
         let (k, rest, c) = (rng.vec(count, 1.0, 2.0), rng.vec(count, 0.1, 0.2), rng.vec(count, 0.0, 1.0));
-        let springs = SpringArrays {
-            i: &i,
-            j: &j,
-            k: &k,
-            rest_length: &rest,
-            damping: &c,
-        };
+        let springs = arrays(&i, &j, &k, &rest, &c);
         let mut scratch = Scratch::default();
         scratch.place(&springs, n);
         let placed = &scratch.placed;
