@@ -225,8 +225,7 @@ impl Ends<'_> {
     /// included). A spring with coincident ends is left out (no force).
     #[inline(always)]
     fn of(&self, l: usize) -> impl Iterator<Item = (&[f64; 4], u64)> + '_ {
-        let p = self.first + l;
-        self.ends[self.start[p] as usize..self.start[p + 1] as usize]
+        self.list(l)
             .iter()
             .map(|&e| (&self.tension[(e >> 1) as usize], u64::from(e & 1) << 63))
             .filter(|(g, _)| g[3] != 0.0)
