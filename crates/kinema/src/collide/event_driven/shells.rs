@@ -91,10 +91,27 @@ impl Block {
     }
 }
 
+/// One cell of [`Cells::around`] along one axis: its coordinate, the shift of its members'
+/// images (m) and its gap to the point (m).
+#[derive(Debug, Clone, Copy, Default)]
+struct Span {
+    cell: usize,
+    shift: f64,
+    gap: f64,
+}
+
+impl Span {
+    fn new(cell: usize, shift: f64, gap: f64) -> Self {
+        Span { cell, shift, gap }
+    }
+}
+
 /// Cells of edge ≥ `edge` over [lo, lo + n·edge) along each axis. Each cell is `blocks`
 /// consecutive [`Block`]s of one flat array (x-neighbouring cells are adjacent).
 struct Cells {
     lo: [f64; 3],
+    /// The cells' edge along each axis (m) and its inverse.
+    edge: [f64; 3],
     inv_edge: [f64; 3],
     n: [usize; 3],
     /// The period along each periodic axis (0 along the others), m.
@@ -114,16 +131,19 @@ impl Cells {
     fn new(lo: [f64; 3], hi: [f64; 3], edge: f64, period: [f64; 3], particles: usize) -> Self {
         let mut n = [1usize; 3];
         let mut inv_edge = [0.0; 3];
+        let mut edges = [0.0; 3];
         for k in 0..3 {
             let span = hi[k] - lo[k];
             // at most ~8 cells a particle along all axes together: no more are useful
             let most = ((particles.max(1) as f64) * 8.0).cbrt().ceil().max(1.0);
             n[k] = ((span / edge).floor()).clamp(1.0, most) as usize;
             inv_edge[k] = if span > 0.0 { n[k] as f64 / span } else { 0.0 };
+            edges[k] = span / n[k] as f64;
         }
         let cells = n[0] * n[1] * n[2];
         Cells {
             lo,
+            edge: edges,
             inv_edge,
             n,
             period,
@@ -193,34 +213,51 @@ impl Cells {
 
     /// The cells around the cell of `p` (its own and the adjacent ones, each once) with, along
     /// each axis, the shift s (m) that makes c + s a member's image nearest to `p` when the
-    /// axis wraps (0 otherwise): per axis up to 3 (cell coordinate, shift) pairs. `exact`:
-    /// false when a periodic axis has fewer than 3 cells (then the shifts are not the minimum
-    /// image and the caller must take it pair by pair).
+    /// axis wraps (0 otherwise) and the gap (m) between p and the cell along the axis (0 for
+    /// p's own; no member of the cell is nearer than that along it, up to the rounding of
+    /// the cell's bounds): per axis up to 3 [`Span`]s. `exact`: false when a periodic axis
+    /// has fewer than 3 cells (then the shifts are not the minimum image and the caller must
+    /// take it pair by pair).
     #[inline(always)]
-    fn around(&self, p: [f64; 3]) -> ([[(usize, f64); 3]; 3], [usize; 3], bool) {
+    fn around(&self, p: [f64; 3]) -> ([[Span; 3]; 3], [usize; 3], bool) {
         let c = self.coords(p);
-        let mut span = [[(0usize, 0.0f64); 3]; 3];
+        let mut span = [[Span::default(); 3]; 3];
         let mut count = [0usize; 3];
         let mut exact = true;
         for k in 0..3 {
             let n = self.n[k];
             let l = self.period[k];
+            // p's distances to its own cell's lower and upper faces (a member of a lower cell
+            // lies below the lower face, of a higher one above the upper: clamped end cells
+            // hold members beyond the range only on their outer side)
+            let below = (p[k] - (self.lo[k] + c[k] as f64 * self.edge[k])).max(0.0);
+            let above = (self.lo[k] + (c[k] + 1) as f64 * self.edge[k] - p[k]).max(0.0);
+            let own = Span::new(c[k], 0.0, 0.0);
             if l > 0.0 && n >= 3 {
                 let left = if c[k] == 0 { (n - 1, -l) } else { (c[k] - 1, 0.0) };
                 let right = if c[k] == n - 1 { (0, l) } else { (c[k] + 1, 0.0) };
-                span[k] = [left, (c[k], 0.0), right];
+                span[k] = [Span::new(left.0, left.1, below), own, Span::new(right.0, right.1, above)];
                 count[k] = 3;
             } else if l > 0.0 {
                 exact = false;
                 for (m, s) in span[k].iter_mut().enumerate().take(n) {
-                    *s = (m, 0.0);
+                    *s = Span::new(m, 0.0, 0.0);
                 }
                 count[k] = n;
             } else {
                 let first = c[k].saturating_sub(1);
                 let last = (c[k] + 1).min(n - 1);
                 for (m, s) in (first..=last).enumerate() {
-                    span[k][m] = (s, 0.0);
+                    let gap = match s.cmp(&c[k]) {
+                        std::cmp::Ordering::Less => below,
+                        std::cmp::Ordering::Equal => 0.0,
+                        std::cmp::Ordering::Greater => above,
+                    };
+                    span[k][m] = Span {
+                        cell: s,
+                        shift: 0.0,
+                        gap,
+                    };
                 }
                 count[k] = last - first + 1;
             }
@@ -242,34 +279,51 @@ impl Cells {
         // The f32 test's error: each of the centre, p − s and the difference rounds once at
         // ≤ 2⁻²⁴ of magnitudes ≤ big + 2 reach, and the squared length's three products and two
         // sums at ≤ 2⁻²⁴ each of |d|² ≤ (reach)²: 2⁻¹⁹ (big + 2 reach) covers them with room.
-        let widened = (reach + 2f64.powi(-19) * (big + 2.0 * reach)) as f32 * (1.0 + 1e-6);
+        let slack = 2f64.powi(-19) * (big + 2.0 * reach);
+        let widened = (reach + slack) as f32 * (1.0 + 1e-6);
         let r2 = widened * widened;
-        for &(z, sz) in &span[2][..count[2]] {
-            for &(y, sy) in &span[1][..count[1]] {
-                for &(x, sx) in &span[0][..count[0]] {
-                    // the members' images are at c + s: p − (c + s) = (p − s) − c
-                    let q = [(p[0] - sx) as f32, (p[1] - sy) as f32, (p[2] - sz) as f32];
-                    let cell = self.index([x, y, z]);
-                    for b in &self.block[cell * self.blocks..(cell + 1) * self.blocks] {
-                        let mut near = [false; 4];
-                        for l in 0..4 {
-                            let (dx, dy, dz) = (q[0] - b.x[l], q[1] - b.y[l], q[2] - b.z[l]);
-                            near[l] = dx * dx + dy * dy + dz * dz < r2;
-                        }
-                        // the near lanes' ids kept in order without a branch per lane: each
-                        // written at the end, the end moved past it only if near
-                        let start = out.len();
-                        out.extend_from_slice(&b.id);
-                        let mut kept = start;
-                        for l in 0..4 {
-                            out[kept] = b.id[l];
-                            kept += near[l] as usize;
-                        }
-                        out.truncate(kept);
-                        if b.id[3] == EMPTY {
-                            break; // the cell's members end in this block
-                        }
+        // The cells that may hold a member the test below takes in: those whose gap to p is
+        // within the widened reach and the f32 test's error (a corner cell of the 27 lies
+        // beyond it about half the time, an edge cell a fifth), each with p − s, its first
+        // block asked of the cache before the first is read (the scan waits on each block's
+        // line otherwise: the cells outgrow a core's cache)
+        let far = (widened as f64 + 2.0 * slack) * (widened as f64 + 2.0 * slack);
+        let mut visit = [(0usize, [0.0f32; 3]); 27];
+        let mut visits = 0;
+        for sz in &span[2][..count[2]] {
+            for sy in &span[1][..count[1]] {
+                for sx in &span[0][..count[0]] {
+                    if sx.gap * sx.gap + sy.gap * sy.gap + sz.gap * sz.gap > far {
+                        continue;
                     }
+                    let cell = self.index([sx.cell, sy.cell, sz.cell]);
+                    crate::simd::prefetch(&self.block[cell * self.blocks]);
+                    // the members' images are at c + s: p − (c + s) = (p − s) − c
+                    let q = [(p[0] - sx.shift) as f32, (p[1] - sy.shift) as f32, (p[2] - sz.shift) as f32];
+                    visit[visits] = (cell, q);
+                    visits += 1;
+                }
+            }
+        }
+        for &(cell, q) in &visit[..visits] {
+            for b in &self.block[cell * self.blocks..(cell + 1) * self.blocks] {
+                let mut near = [false; 4];
+                for l in 0..4 {
+                    let (dx, dy, dz) = (q[0] - b.x[l], q[1] - b.y[l], q[2] - b.z[l]);
+                    near[l] = dx * dx + dy * dy + dz * dz < r2;
+                }
+                // the near lanes' ids kept in order without a branch per lane: each
+                // written at the end, the end moved past it only if near
+                let start = out.len();
+                out.extend_from_slice(&b.id);
+                let mut kept = start;
+                for l in 0..4 {
+                    out[kept] = b.id[l];
+                    kept += near[l] as usize;
+                }
+                out.truncate(kept);
+                if b.id[3] == EMPTY {
+                    break; // the cell's members end in this block
                 }
             }
         }
@@ -279,10 +333,10 @@ impl Cells {
     /// Every particle filed in the cells around `p`, for the caller's exact test.
     fn members_around(&self, p: [f64; 3], out: &mut Vec<u32>) {
         let (span, count, _) = self.around(p);
-        for &(z, _) in &span[2][..count[2]] {
-            for &(y, _) in &span[1][..count[1]] {
-                for &(x, _) in &span[0][..count[0]] {
-                    let cell = self.index([x, y, z]);
+        for sz in &span[2][..count[2]] {
+            for sy in &span[1][..count[1]] {
+                for sx in &span[0][..count[0]] {
+                    let cell = self.index([sx.cell, sy.cell, sz.cell]);
                     for b in &self.block[cell * self.blocks..(cell + 1) * self.blocks] {
                         out.extend(b.id.iter().copied().filter(|&j| j != EMPTY));
                     }
@@ -386,6 +440,11 @@ impl Shells {
     #[inline(always)]
     pub fn remake(&mut self, i: usize, at: [f64; 3], radius: &[f64], domain: &Domain) {
         let mut found = std::mem::take(&mut self.scratch);
+        // the old partners' lists, of which those i leaves lose it below, asked of the cache
+        // while the cells are searched
+        for &j in self.of(i) {
+            crate::simd::prefetch(&self.list[j as usize * self.cap]);
+        }
         self.centre[i] = at;
         self.cells.file(i, at);
         self.find_near(i, at, radius[i], domain, &mut found);
@@ -421,5 +480,61 @@ impl Shells {
             }
         }
         self.scratch = found;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `Cells::scan` finds every filed centre within the reach of a point, as the plain test
+    /// of every centre does (the minimum image where the axes wrap), though it skips the
+    /// cells whose gap to the point is beyond the reach: random centres and points in a
+    /// periodic cell, and in an open range with some beyond its ends (filed in the clamped
+    /// end cells).
+    #[test]
+    fn the_scan_finds_every_centre_within_reach() {
+        let mut seed = 99u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (lo, hi, reach) = ([0.0; 3], [10.0, 8.0, 12.0], 1.7);
+        for periodic in [false, true] {
+            let period = if periodic { hi } else { [0.0; 3] };
+            // (beyond the open range by up to 3 m on either side)
+            let spread = if periodic { 0.0 } else { 3.0 };
+            let mut point = || [0, 1, 2].map(|k| lo[k] - spread + (hi[k] - lo[k] + 2.0 * spread) * next());
+            let centres: Vec<[f64; 3]> = (0..2000).map(|_| point()).collect();
+            let mut cells = Cells::new(lo, hi, reach, period, centres.len());
+            for (i, &c) in centres.iter().enumerate() {
+                cells.file(i, c);
+            }
+            let mut found = Vec::new();
+            let mut within_reach = 0;
+            for _ in 0..1000 {
+                let p = point();
+                found.clear();
+                cells.scan(p, reach, &mut found).expect("an exact scan");
+                for (j, c) in centres.iter().enumerate() {
+                    let d = [0, 1, 2].map(|k| {
+                        let d = p[k] - c[k];
+                        if period[k] > 0.0 {
+                            d - period[k] * (d / period[k]).round()
+                        } else {
+                            d
+                        }
+                    });
+                    if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach {
+                        within_reach += 1;
+                        assert!(
+                            found.contains(&(j as u32)),
+                            "centre {j} at {c:?} is within reach of {p:?} but not found (periodic: {periodic})"
+                        );
+                    }
+                }
+            }
+            assert!(within_reach > 5000, "{within_reach} pairs within reach");
+        }
     }
 }
