@@ -63,7 +63,10 @@ pub(super) struct Calendar<T> {
     /// The bucket at which the overflow was last swept into the ring.
     swept: i64,
     heap: BinaryHeap<Entry<T>>,
+    /// The ring's buckets, a power of two of them: absolute bucket b is at slot b & `mask`
+    /// (b mod len, without a division).
     ring: Vec<Vec<Entry<T>>>,
+    mask: i64,
     /// Entries in the ring.
     in_ring: usize,
     overflow: Vec<Entry<T>>,
@@ -71,9 +74,9 @@ pub(super) struct Calendar<T> {
 
 impl<T: Copy> Calendar<T> {
     /// An empty calendar from time `origin` (s), buckets `width` s wide (> 0), `len` of them
-    /// in the ring (≥ 1).
+    /// in the ring (rounded up to a power of two).
     pub fn new(origin: f64, width: f64, len: usize) -> Self {
-        let len = len.max(1);
+        let len = len.max(1).next_power_of_two();
         Calendar {
             width,
             inv_width: 1.0 / width,
@@ -82,6 +85,7 @@ impl<T: Copy> Calendar<T> {
             swept: 0,
             heap: BinaryHeap::new(),
             ring: vec![Vec::new(); len],
+            mask: len as i64 - 1,
             in_ring: 0,
             overflow: Vec::new(),
         }
@@ -122,7 +126,7 @@ impl<T: Copy> Calendar<T> {
         if b <= self.current {
             self.heap.push(e);
         } else if b - self.current < len {
-            self.ring[b.rem_euclid(len) as usize].push(e);
+            self.ring[(b & self.mask) as usize].push(e);
             self.in_ring += 1;
         } else {
             self.overflow.push(e);
@@ -177,7 +181,7 @@ impl<T: Copy> Calendar<T> {
                 self.sweep();
             }
         }
-        let slot = self.current.rem_euclid(len) as usize;
+        let slot = (self.current & self.mask) as usize;
         self.in_ring -= self.ring[slot].len();
         let heap = &mut self.heap;
         heap.extend(self.ring[slot].drain(..));
