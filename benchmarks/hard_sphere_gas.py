@@ -23,7 +23,7 @@ collision counter at the end over that time. Without the sources, the figure iss
 for it on one core of this machine stands in: 6.1e5 collisions per CPU-second
 (PUBLISHED_PER_CORE).
 
-Each mode runs in a fresh process, `--repeat` times, interleaved; the engine's threads are
+Each mode runs in a fresh process, `--repeat` times, interleaved (EDMD in the same rounds); the engine's threads are
 `--threads` (RAYON_NUM_THREADS). Timed: `World.step(steps)` after the world is built and a
 first `step(0)`, as CPU time of the whole process (time.process_time: both threads count) and
 as wall time. Also printed: collisions, their count per particle per unit time against the
@@ -195,6 +195,10 @@ def main() -> int:
     modes = args.modes.split(",")
     env = {**os.environ, "RAYON_NUM_THREADS": str(args.threads), "OMP_NUM_THREADS": "1"}
     runs: dict[str, list[dict]] = {m: [] for m in modes}
+    # EDMD runs in the same rounds as kinema's modes, each round in turn: this machine's
+    # speed drifts by 20 % over minutes, and a peer timed after all of kinema's runs was
+    # compared with another machine
+    edmd: list[dict] = []
     for _ in range(args.repeat):
         for mode in modes:
             cmd = [sys.executable, __file__, "--worker", "--mode", mode, "--ncell", str(args.ncell), "--time", str(args.time)]
@@ -202,6 +206,9 @@ def main() -> int:
             if res.returncode != 0:
                 raise SystemExit(f"{mode} worker failed:\n{res.stderr[-3000:]}")
             runs[mode].append(json.loads(res.stdout.strip().splitlines()[-1]))
+        peer_run = edmd_rate(args.ncell, args.time)
+        if peer_run is not None:
+            edmd.append(peer_run)
 
     n = runs[modes[0]][0]["n"]
     expected = enskog_collisions(n, args.time)
@@ -220,7 +227,6 @@ def main() -> int:
             f"{'kinema ' + mode:<22} {coll:>11.0f} {coll / expected:>8.3f} {cpu:>8.2f} {wall:>8.2f} {rate:>11.3g} "
             f"{statistics.median(r['collisions'] / r['wall'] for r in rs):>12.3g} {max(r['energy_drift'] for r in rs):>13.2e}"
         )
-    edmd = [r for r in (edmd_rate(args.ncell, args.time) for _ in range(args.repeat)) if r is not None]
     if edmd:
         peer = statistics.median(r["rate"] for r in edmd)
         coll = statistics.median(r["collisions"] for r in edmd)
