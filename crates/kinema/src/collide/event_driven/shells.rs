@@ -494,11 +494,7 @@ mod tests {
     /// end cells).
     #[test]
     fn the_scan_finds_every_centre_within_reach() {
-        let mut seed = 99u64;
-        let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = super::super::tests::uniform(99);
         let (lo, hi, reach) = ([0.0; 3], [10.0, 8.0, 12.0], 1.7);
         for periodic in [false, true] {
             let period = if periodic { hi } else { [0.0; 3] };

@@ -3,14 +3,20 @@
 use super::*;
 use crate::collide::{Material, Periodic};
 
+/// Uniform numbers in [0, 1) from `seed` (Knuth's MMIX linear congruential generator, the
+/// top 53 bits): the same stream on every machine, for the module's tests.
+pub(super) fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut s = seed;
+    move || {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 /// A random gas of `n` spheres (radii 0.3–0.5) in a periodic cube of side `side`,
 /// placed apart.
 fn gas(n: usize, side: f64, seed: u64) -> (Particles, Domain) {
-    let mut s = seed;
-    let mut next = || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = uniform(seed);
     let mut x: Vec<f64> = Vec::new();
     let mut radius = Vec::new();
     let cell = Periodic::new([0.0; 3], [side; 3], [true; 3]).unwrap();
