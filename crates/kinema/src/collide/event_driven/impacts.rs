@@ -48,7 +48,7 @@ impl EventDriven {
         let material = materials.pair(&contact);
         // the same rule as the stepped impacts, on the pair alone (i as 0, j as 1)
         let v = [bi.v[0], bi.v[1], bi.v[2], bj.v[0], bj.v[1], bj.v[2]];
-        let w = [self.masses[i][1], self.masses[j][1]];
+        let w = [p.inv_mass[wi], p.inv_mass[wj]];
         let pair = Contact {
             i: 0,
             other: Partner::Particle(1),
@@ -74,10 +74,10 @@ impl EventDriven {
             // Σ m Δv of the two: zero by action and reaction up to rounding
             let mut balance = 0.0;
             if w[0] > 0.0 {
-                balance += self.masses[i][0] * (self.bodies[i].v[k] - bi.v[k]);
+                balance += p.mass[wi] * (self.bodies[i].v[k] - bi.v[k]);
             }
             if w[1] > 0.0 {
-                balance += self.masses[j][0] * (self.bodies[j].v[k] - bj.v[k]);
+                balance += p.mass[wj] * (self.bodies[j].v[k] - bj.v[k]);
             }
             stats.impulse_balance[k] += balance;
         }
@@ -123,13 +123,13 @@ impl EventDriven {
             radius: &p.radius,
         });
         let spin = rotation.map(|r| r.of(&contact, &p.omega));
-        let Some(imp) = restitution_impulse(&alone, &b.v, &[self.masses[i][1]], material, threshold, spin) else {
+        let Some(imp) = restitution_impulse(&alone, &b.v, &[p.inv_mass[wi]], material, threshold, spin) else {
             return false;
         };
         if let Some(r) = rotation {
             r.kick(&contact, contact.overlap, imp.vector, &mut p.omega);
         }
-        b.v = vec3::add(b.v, vec3::scale(self.masses[i][1], imp.vector));
+        b.v = vec3::add(b.v, vec3::scale(p.inv_mass[wi], imp.vector));
         b.path = b.path.wrapping_add(1);
         stats.impacts += 1;
         stats.impulses += 1;

@@ -159,9 +159,6 @@ pub(crate) struct EventDriven {
     order: Vec<u32>,
     /// Radii in our order, m.
     radius: Vec<f64>,
-    /// Masses and their inverses in our order, kg and 1/kg (0 for a pinned particle): an
-    /// impact reads them beside its pair's bodies, not from the world's order far away.
-    masses: Vec<[f64; 2]>,
     shells: Shells,
     /// Each particle's next event (its time and kind).
     calendar: Calendar<Kind>,
@@ -287,7 +284,6 @@ impl EventDriven {
             })
             .collect();
         let radius: Vec<f64> = order.iter().map(|&i| p.radius[i as usize]).collect();
-        let masses: Vec<[f64; 2]> = order.iter().map(|&i| [p.mass[i as usize], p.inv_mass[i as usize]]).collect();
         let mut walls = collect_walls(colliders, domain);
         let groups = filter.map(|f| {
             for w in &mut walls {
@@ -306,7 +302,6 @@ impl EventDriven {
             bodies,
             order,
             radius,
-            masses,
             shells,
             calendar: Calendar::new(t0, 1.0, 1),
             walls,
