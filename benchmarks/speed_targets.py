@@ -178,15 +178,17 @@ def main() -> int:
 
     # -- hard-sphere gas by events ---------------------------------------------------------------
     duration = 3.0 if args.quick else 10.0
-    # (kinema and EDMD in turn, run by run: the machine's speed drifts over minutes)
-    ones, edmd = [], []
+    # (kinema and EDMD in turn, and 1 and 2 threads in turn, round by round: the machine's
+    # speed drifts over minutes)
+    ones, edmd, one_walls, two_walls = [], [], [], []
     for _ in range(repeat):
         ones.append(hard_spheres(1, duration, 1))
         peer_run = hard_sphere_gas.edmd_rate(20, duration)
         if peer_run is not None:
             edmd.append(peer_run)
-    one = median(ones)
-    one_wall, two_wall = hard_spheres(1, duration, repeat, "wall"), hard_spheres(2, duration, repeat, "wall")
+        one_walls.append(hard_spheres(1, duration, 1, "wall"))
+        two_walls.append(hard_spheres(2, duration, 1, "wall"))
+    one, one_wall, two_wall = median(ones), median(one_walls), median(two_walls)
     peer, name = (median([r["rate"] for r in edmd]), "EDMD, its sources") if edmd else (hard_sphere_gas.PUBLISHED_PER_CORE, "published EDMD")
     row("hard-sphere gas, events, 1 thread", f"{one:.3g} collisions/CPU-s", f"{name} {peer:.2g} ({one / peer:.2f}x)", ">= 1.2x", one >= 1.2 * peer)
     row("hard-sphere gas, events, 2 threads", f"{two_wall:.3g} collisions/s (wall)", f"1 thread {one_wall:.3g}", "more than 1 thread", two_wall > one_wall)
