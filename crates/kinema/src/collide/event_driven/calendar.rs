@@ -211,11 +211,7 @@ mod tests {
     /// gives back exactly the live entries, in time order — what a sorted list gives.
     #[test]
     fn gives_the_live_entries_in_time_order() {
-        let mut seed = 12345u64;
-        let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = super::super::tests::uniform(12345);
         let n = 500;
         let mut cal: Calendar<()> = Calendar::new(0.0, 0.01, 16);
         let mut version = vec![0u32; n];

@@ -253,11 +253,7 @@ impl Cells {
                         std::cmp::Ordering::Equal => 0.0,
                         std::cmp::Ordering::Greater => above,
                     };
-                    span[k][m] = Span {
-                        cell: s,
-                        shift: 0.0,
-                        gap,
-                    };
+                    span[k][m] = Span::new(s, 0.0, gap);
                 }
                 count[k] = last - first + 1;
             }
