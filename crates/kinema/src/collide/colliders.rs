@@ -13,7 +13,7 @@
 //! then circles), and boxes no walls along z ([`BoxContainer::rect`]).
 
 use super::contact::{Contact, Partner};
-pub use super::mesh::{Side, TriangleMesh};
+pub use super::mesh::{NearCache, Side, TriangleMesh};
 use super::motion::{Pose, SurfaceVelocity};
 pub use super::surface::{Surface, Touch};
 use crate::error::Error;
@@ -353,6 +353,16 @@ impl Collider {
             Collider::Box(b) => b.walls().iter().filter_map(|w| w.touch(p, r, tolerance)).for_each(each),
             Collider::Sphere(s) => s.touch(p, r, tolerance).into_iter().for_each(each),
             Collider::Mesh(m) => m.for_each_touch(p, r, tolerance, each),
+        }
+    }
+
+    /// [`Collider::for_each_touch`], a mesh's from the triangles `cache` keeps near `p`
+    /// (`TriangleMesh::for_each_touch_near`: the same touches); the other colliders do not
+    /// use it.
+    pub fn for_each_touch_near(&self, p: [f64; 3], r: f64, tolerance: f64, cache: &mut NearCache, each: impl FnMut(Touch)) {
+        match self {
+            Collider::Mesh(m) => m.for_each_touch_near(p, r, tolerance, cache, each),
+            other => other.for_each_touch(p, r, tolerance, each),
         }
     }
 }

@@ -54,6 +54,7 @@ use crate::vec3;
 use hierarchy::Node;
 
 mod features;
+pub use features::NearCache;
 mod flat;
 mod hierarchy;
 mod time_of_impact;
@@ -343,6 +344,15 @@ impl TriangleMesh {
     /// per convex edge or vertex), in the order of the triangles' indices.
     pub fn for_each_touch(&self, p: [f64; 3], r: f64, tolerance: f64, mut each: impl FnMut(Touch)) {
         for (_, touch, _, _) in self.touches(self.local(p), r, tolerance) {
+            each(self.placed(touch));
+        }
+    }
+
+    /// [`TriangleMesh::for_each_touch`] from the triangles `cache` keeps around a point near
+    /// `p` (gathered again where they do not answer for it: [`NearCache`]): the same touches,
+    /// without the search down the hierarchy while a sphere stays near one place.
+    pub fn for_each_touch_near(&self, p: [f64; 3], r: f64, tolerance: f64, cache: &mut NearCache, mut each: impl FnMut(Touch)) {
+        for (_, touch, _, _) in self.touches_near(self.local(p), r, tolerance, cache) {
             each(self.placed(touch));
         }
     }

@@ -4,6 +4,7 @@
 //! each impulse onto both particles and the energy lost (distribution).
 
 use super::{ImpulseModel, StageSetting};
+use crate::collide::colliders::{NearCache, Touch};
 use crate::collide::contact::action_reaction;
 use crate::collide::events::Paths;
 use crate::collide::islands::{self, EndProblem, IslandStats, Islands};
@@ -142,12 +143,18 @@ impl ImpulseModel {
         let pairs = self.contacts.len();
         let list = &self.list;
         let contacts = &mut self.contacts;
+        // (a mesh asks the triangles it found near the particle last time, while they answer)
+        let near = &mut self.near_meshes;
+        let meshes = set.colliders.iter().any(|c| matches!(c, Collider::Mesh(_)));
+        near.resize(if meshes { list.walls.len() } else { 0 }, NearCache::default());
+        let mut spare = NearCache::default();
         for &i in self.touched.sorted() {
             let (p, vi) = (vec3::get(x1, i), vec3::get(v1, i));
             let first = list.walls.partition_point(|w| w.0 < i);
-            for &(_, k) in list.walls[first..].iter().take_while(|w| w.0 == i) {
+            for (w, &(_, k)) in list.walls[first..].iter().enumerate().take_while(|w| w.1 .0 == i) {
                 let collider = &set.colliders[k];
-                collider.for_each_touch(p, radius[i], 2.0 * SPECULATIVE * radius[i], |t| {
+                let cache = near.get_mut(first + w).unwrap_or(&mut spare);
+                collider.for_each_touch_near(p, radius[i], 2.0 * SPECULATIVE * radius[i], cache, |t| {
                     let c = collider.contact(k, t, i, p, vi, radius[i]);
                     if !on_periodic_wall(&c, set.colliders, set.domain) {
                         contacts.push(c);
@@ -486,7 +493,25 @@ impl ImpulseModel {
     pub(super) fn max_overlap(&self, set: &StageSetting<'_>, x1: &[f64]) -> f64 {
         self.contacts
             .iter()
-            .map(|c| deepest(set, x1, c.i, c.other))
+            .map(|c| match c.other {
+                // a mesh's from the triangles end_contacts kept near the particle (the same
+                // overlap: `mesh::NearCache`)
+                Partner::Collider(k) if matches!(set.colliders[k], Collider::Mesh(_)) => {
+                    let walls = &self.list.walls;
+                    let w = walls.partition_point(|&w| w < (c.i, k));
+                    let mut cache = self.near_meshes.get(w).cloned().unwrap_or_default();
+                    collider_overlap(
+                        set.colliders,
+                        set.domain,
+                        vec3::get(x1, c.i),
+                        set.radius[c.i],
+                        c.i,
+                        k,
+                        Some(&mut cache),
+                    )
+                }
+                _ => deepest(set, x1, c.i, c.other),
+            })
             .fold(0.0, f64::max)
     }
 
@@ -533,24 +558,41 @@ pub(crate) fn overlap_at(radius: &[f64], colliders: &[Collider], domain: &Domain
             let d = domain.displacement(vec3::get(x, i), vec3::get(x, j));
             radius[i] + radius[j] - vec3::norm(d)
         }
-        Partner::Collider(k) => {
-            let mut deepest: f64 = 0.0;
-            colliders[k].for_each_touch(vec3::get(x, i), radius[i], 0.0, |t| {
-                let c = Contact {
-                    i,
-                    other,
-                    normal: t.normal,
-                    overlap: t.overlap,
-                    u_n: 0.0,
-                    wall_velocity: [0.0; 3],
-                };
-                if !on_periodic_wall(&c, colliders, domain) {
-                    deepest = deepest.max(t.overlap);
-                }
-            });
-            deepest
-        }
+        Partner::Collider(k) => collider_overlap(colliders, domain, vec3::get(x, i), radius[i], i, k, None),
     }
+}
+
+/// The deepest overlap of particle i (centre `p`, radius `r`, m) with collider k, m (0 if
+/// none); with `near`, a mesh's from the triangles it keeps where they answer
+/// (`mesh::NearCache`).
+fn collider_overlap(
+    colliders: &[Collider],
+    domain: &Domain,
+    p: [f64; 3],
+    r: f64,
+    i: usize,
+    k: usize,
+    near: Option<&mut NearCache>,
+) -> f64 {
+    let mut deepest: f64 = 0.0;
+    let mut each = |t: Touch| {
+        let c = Contact {
+            i,
+            other: Partner::Collider(k),
+            normal: t.normal,
+            overlap: t.overlap,
+            u_n: 0.0,
+            wall_velocity: [0.0; 3],
+        };
+        if !on_periodic_wall(&c, colliders, domain) {
+            deepest = deepest.max(t.overlap);
+        }
+    };
+    match near {
+        Some(near) => colliders[k].for_each_touch_near(p, r, 0.0, near, &mut each),
+        None => colliders[k].for_each_touch(p, r, 0.0, &mut each),
+    }
+    deepest
 }
 
 /// Stage 4 for one impulse: J on particle i (+w_i J to its velocity) and −J on its partner

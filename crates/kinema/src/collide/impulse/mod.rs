@@ -286,6 +286,12 @@ pub(crate) struct ImpulseModel {
     /// With spin, the angular velocity of each entry of `references` at its reference, rad/s.
     pub(super) references_spin: Vec<[f64; 3]>,
     pub(super) contacts: Vec<Contact>,
+    /// Where a world has a mesh: for each entry of the list's colliders (`list.walls`, by
+    /// place), the triangles last found near that particle (`mesh::NearCache`). What an
+    /// entry keeps answers for a place and a mesh, not for a particle: one that comes to
+    /// serve another particle or collider (the list rebuilt) is gathered again where it does
+    /// not answer, never misread. Empty in a world without a mesh.
+    pub(super) near_meshes: Vec<crate::collide::colliders::NearCache>,
     /// The end-of-step contacts as detected (overlap and u_n before the response).
     pub detected: Vec<Contact>,
     /// The soft step's final totals of the end-of-step contacts, N·s.
@@ -395,6 +401,7 @@ impl ImpulseModel {
             references: Vec::new(),
             references_spin: Vec::new(),
             contacts: Vec::new(),
+            near_meshes: Vec::new(),
             detected: Vec::new(),
             totals: Vec::new(),
             solved: Vec::new(),

@@ -3,10 +3,11 @@
 //! for a point seen from several triangles, an edge or vertex only in its Voronoi region of the
 //! whole surface, touches within 10° of each other merged).
 
-use super::{Feature, Side, TriangleMesh};
+use super::{Feature, Geometry, Side, TriangleMesh};
 use crate::collide::surface::Touch;
 use crate::vec3;
 use smallvec::SmallVec;
+use std::sync::{Arc, Weak};
 
 /// Contacts whose normals differ by less than this merge (rule 3 of the mesh module's doc): cos 10°.
 const PARALLEL: f64 = 0.984_807_753_012_208;
@@ -62,6 +63,43 @@ fn merge_parallel(kept: &mut Found, r: f64) {
 
 /// Touches with their triangle, nearest point (m) and feature.
 pub(super) type Found = SmallVec<[(usize, Touch, [f64; 3], Feature); 4]>;
+
+/// How far, as a fraction of the sphere's radius, a centre may move along each axis from the
+/// point a [`NearCache`] was gathered at for its triangles to answer (1/1000: a ball resting
+/// on a floor moves far less in a step; a ball that moves more gathers again).
+const NEAR_SLACK: f64 = 1e-3;
+
+/// The triangles one search of the hierarchy found around a point, kept so that the next
+/// searches for a sphere near that point ask them alone ([`TriangleMesh::touches_near`]):
+/// a ball resting on a floor of 10⁶ triangles was searched for from the root at the end of
+/// every step (issue 51). Empty (the default) until a search fills it; it answers only for
+/// the geometry it was gathered on.
+///
+/// **Why the answer is the same, bit for bit.** The search past the flat nodes
+/// ([`TriangleMesh::touches`]) finds the same touches as the search of every triangle within
+/// reach ([`TriangleMesh::touches_everywhere`], `flat.rs`): the triangles it leaves out lie
+/// inside flat patches away from the foot and give no contact, however many of them are
+/// asked. A cache gathers, around `at`, a search past the flat nodes widened so that it holds
+/// every triangle the search from any centre p within `slack` of `at` (each axis) would ask,
+/// with any r + tolerance up to `reach`: the box and the reach grown by 2·slack (p lies at
+/// most √3·slack from `at`, and neither p's distance to a plane nor its foot moves more than
+/// p), the flat nodes' margin by the same plus the largest rounding tolerance such a search
+/// uses. So the triangles it asks lie between those of the search from p and those of the
+/// search of every triangle: the same touches.
+#[derive(Debug, Clone, Default)]
+pub struct NearCache {
+    /// The geometry searched (none while nothing is kept): held weakly, so that its
+    /// address is never another geometry's while the cache lives.
+    pub(super) geometry: Weak<Geometry>,
+    /// The point searched around, in the mesh's own frame, m.
+    pub(super) at: [f64; 3],
+    /// How far from `at` along each axis a centre may lie, m.
+    pub(super) slack: f64,
+    /// The largest r + tolerance the triangles answer for, m.
+    pub(super) reach: f64,
+    /// The triangles, in ascending order.
+    pub(super) triangles: SmallVec<[u32; 8]>,
+}
 
 /// A triangle `t` near a point p: its nearest point q, the feature q lies on, d = p − q and |d|.
 #[derive(Debug, Clone, Copy)]
@@ -192,6 +230,59 @@ impl TriangleMesh {
             |t| near.extend(self.near(t, p, reach)),
         );
         self.true_features(&mut near, p, r)
+    }
+
+    /// [`TriangleMesh::touches`] from the triangles `cache` keeps where they answer for `p`
+    /// (the mesh's frame), `r` and `tolerance` (m), else gathered again around `p` first
+    /// ([`NearCache`]): the same touches, bit for bit.
+    pub(super) fn touches_near(&self, p: [f64; 3], r: f64, tolerance: f64, cache: &mut NearCache) -> Found {
+        let reach = r + tolerance.max(0.0);
+        let answers = std::ptr::eq(cache.geometry.as_ptr(), Arc::as_ptr(&self.geometry))
+            && reach <= cache.reach
+            && (0..3).all(|k| (p[k] - cache.at[k]).abs() <= cache.slack);
+        if !answers {
+            self.gather(p, reach, NEAR_SLACK * r, cache);
+        }
+        let mut near: SmallVec<[Near; 8]> = cache
+            .triangles
+            .iter()
+            .filter_map(|&t| self.near(t as usize, p, reach))
+            .collect();
+        self.true_features(&mut near, p, r)
+    }
+
+    /// Fills `cache` with the triangles around `at` (the mesh's frame) that answer for every
+    /// centre within `slack` (m) of it along each axis and every r + tolerance up to `reach`
+    /// (m): [`NearCache`]'s widened search.
+    fn gather(&self, at: [f64; 3], reach: f64, slack: f64, cache: &mut NearCache) {
+        let g = &*self.geometry;
+        // how far a centre, its distance to a plane and its foot move within the slack (√3·slack,
+        // doubled), with the largest rounding tolerance `eps` of a search from there (r ≤ reach)
+        // twice over: the widened reach and the flat nodes' margin, 8·eps beyond it
+        let rounding = 1e-10 * (g.scale + vec3::norm(at) + 2.0 * slack + reach);
+        let wide = 2.0 * slack + 2.0 * rounding;
+        let (big, margin) = (reach + wide, 8.0 * rounding + wide);
+        cache.triangles.clear();
+        let (lo, hi) = (at.map(|c| c - big), at.map(|c| c + big));
+        let triangles = &mut cache.triangles;
+        g.visit_past_flat(
+            lo,
+            hi,
+            |flat| flat.holds_foot(at, big, margin),
+            |t| {
+                if self.near(t, at, big).is_some() {
+                    triangles.push(t as u32);
+                }
+            },
+        );
+        triangles.sort_unstable();
+        *cache = NearCache {
+            geometry: Arc::downgrade(&self.geometry),
+            at,
+            slack,
+            reach,
+            triangles: std::mem::take(triangles),
+        };
     }
 
     /// Of the triangles `near` a sphere at `p` of radius `r` (m), all those within some reach

@@ -461,6 +461,106 @@ fn the_flat_nodes_leave_out_only_triangles_that_give_no_contact() {
 }
 
 #[test]
+fn the_triangles_kept_near_a_point_answer_as_the_search_does_for_every_centre_within_their_slack() {
+    // NearCache: the touches from the triangles gathered around a point are those of the
+    // search from the root, bit for bit, for centres within the slack of that point along
+    // each axis (its corners too) and any reach up to the one gathered for; a centre beyond
+    // the slack, a larger reach or another mesh gathers again. Over a flat floor, a
+    // terrace, a floor with a raised vertex and a finely cut cube from both sides.
+    let floor = sheet(40, 0.025, |_, _| 0.0);
+    let terrace = sheet(40, 0.025, |i, _| if i > 20 { 0.1 } else { 0.0 });
+    let bump = sheet(40, 0.025, |i, j| if (i, j) == (13, 17) { 0.01 } else { 0.0 });
+    let cube = fine_cube(24);
+    let meshes = [
+        (
+            "floor",
+            TriangleMesh::new(floor.0, floor.1, false, Surface::default()).unwrap(),
+        ),
+        (
+            "terrace",
+            TriangleMesh::new(terrace.0, terrace.1, false, Surface::default()).unwrap(),
+        ),
+        ("bump", TriangleMesh::new(bump.0, bump.1, false, Surface::default()).unwrap()),
+        (
+            "cube inside",
+            TriangleMesh::new(cube.0.clone(), cube.1.clone(), true, Surface::default()).unwrap(),
+        ),
+        (
+            "cube outside",
+            TriangleMesh::new(cube.0, cube.1, false, Surface::default()).unwrap(),
+        ),
+    ];
+    let mut rnd = uniform(76);
+    let cell = 1.0 / 40.0;
+    for (name, m) in &meshes {
+        let (mut contacts, mut kept_answers) = (0, 0);
+        for case in 0..2000 {
+            let r = cell * [0.2, 1.0, 3.0, 12.0][case % 4] * (0.5 + rnd());
+            let mut p = [rnd() * 1.2 - 0.1, rnd() * 1.2 - 0.1, rnd() * 1.2 - 0.1];
+            if case % 3 == 0 {
+                for (c, pc) in p.iter_mut().enumerate() {
+                    *pc = (*pc / cell).round() * cell + [0.0, 0.5 * cell][case / 3 % 2] * (c == 0) as u8 as f64;
+                }
+            }
+            if !name.starts_with("cube") {
+                p[2] = [0.0, 0.1][(p[0] > 0.5 && *name == "terrace") as usize] + r * (0.7 + 0.35 * rnd());
+            }
+            let tolerance = [0.0, 0.1 * r, r][case % 3];
+            let mut cache = NearCache::default();
+            assert_eq!(
+                m.touches_near(p, r, tolerance, &mut cache),
+                m.touches(p, r, tolerance),
+                "{name}: gathered at {p:?}"
+            );
+            let (at, slack) = (cache.at, cache.slack);
+            assert_eq!((at, slack), (p, 1e-3 * r));
+            // centres within the slack: inside at random, on its faces, at its corners; a
+            // smaller tolerance half the time
+            for k in 0..12 {
+                let q: [f64; 3] = std::array::from_fn(|c| match k % 3 {
+                    0 => at[c] + slack * (2.0 * rnd() - 1.0),
+                    1 => at[c] + slack * if rnd() < 0.5 { -1.0 } else { 1.0 },
+                    _ => at[c] + slack * if c == k % 3 { 1.0 } else { 2.0 * rnd() - 1.0 },
+                });
+                if (0..3).any(|c| (q[c] - at[c]).abs() > slack) {
+                    continue; // (rounded past the slack's edge)
+                }
+                let t = if k % 2 == 0 { tolerance } else { tolerance * rnd() };
+                let want = m.touches(q, r, t);
+                assert_eq!(
+                    m.touches_near(q, r, t, &mut cache),
+                    want,
+                    "{name}: gathered at {p:?}, asked at {q:?}, r {r} tolerance {t}"
+                );
+                assert_eq!(
+                    cache.at, at,
+                    "{name}: a centre within the slack and a smaller reach use what is kept"
+                );
+                kept_answers += 1;
+                contacts += want.len();
+            }
+            // beyond the slack, or a larger reach: gathered again, and still the same touches
+            let far = [at[0] + 3.0 * slack, at[1], at[2]];
+            assert_eq!(m.touches_near(far, r, tolerance, &mut cache), m.touches(far, r, tolerance));
+            assert_eq!(cache.at, far, "{name}: a centre beyond the slack gathers again");
+            assert_eq!(
+                m.touches_near(far, r, tolerance + r, &mut cache),
+                m.touches(far, r, tolerance + r)
+            );
+            assert_eq!(cache.reach, r + (tolerance + r), "{name}: a larger reach gathers again");
+        }
+        assert!(contacts > 5000, "{name}: the spheres touch the mesh: {contacts}");
+        assert!(kept_answers > 10000, "{name}: the kept triangles answered: {kept_answers}");
+    }
+    // another mesh's cache is never read
+    let (a, b) = (&meshes[0].1, &meshes[1].1);
+    let mut cache = NearCache::default();
+    let p = [0.7, 0.5, 0.02];
+    a.touches_near(p, 0.03, 0.0, &mut cache);
+    assert_eq!(b.touches_near(p, 0.03, 0.0, &mut cache), b.touches(p, 0.03, 0.0));
+}
+
+#[test]
 fn spheres_resting_on_a_floor_of_small_triangles_look_under_their_feet_and_meet_what_the_full_search_meets() {
     // Spheres ten cells wide in resting contact with a floor of 2 × 40² triangles (0.25 % of
     // r in, as a pile's balls lie), still, creeping or sliding, under gravity: their first
