@@ -12,7 +12,6 @@ pub mod forces;
 pub mod interrupt;
 pub mod limits;
 pub mod ode;
-pub mod pages;
 pub mod particles;
 pub mod render;
 pub mod simd;

@@ -89,12 +89,10 @@ pub const BYTES_PER_TRIANGLE: usize = 100;
 /// An empty buffer with room for `n` values of a mesh of `triangles` triangles, or the
 /// mesh's out-of-memory error: every buffer whose size the mesh sets is allocated through
 /// here (or `try_reserve`d), so that a mesh too large for the machine is an error, never an
-/// abort. In large pages where it spans some (`crate::pages`): a search reads a large mesh's
-/// buffers at random.
+/// abort.
 pub fn mesh_buffer<T>(n: usize, triangles: usize) -> Result<Vec<T>, Error> {
     let mut v = Vec::new();
     v.try_reserve_exact(n).map_err(|_| mesh_too_large(triangles))?;
-    crate::pages::advise_large(&v);
     Ok(v)
 }
 
