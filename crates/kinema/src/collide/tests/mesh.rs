@@ -391,6 +391,43 @@ fn fine_cube(k: u32) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
     (v, f)
 }
 
+/// Meshes of flat patches with the features the flat nodes must get right: a flat floor, a
+/// terrace (two floors joined by a wall, a crease and a convex edge), a floor with one raised
+/// vertex (all 40 x 40 squares of 2.5 cm), and a finely cut cube from inside and outside.
+fn flat_patched_meshes() -> [(&'static str, TriangleMesh); 5] {
+    let floor = sheet(40, 0.025, |_, _| 0.0);
+    let terrace = sheet(40, 0.025, |i, _| if i > 20 { 0.1 } else { 0.0 });
+    let bump = sheet(40, 0.025, |i, j| if (i, j) == (13, 17) { 0.01 } else { 0.0 });
+    let cube = fine_cube(24);
+    let mesh = |(v, f): (Vec<[f64; 3]>, Vec<[u32; 3]>), inside| TriangleMesh::new(v, f, inside, Surface::default()).unwrap();
+    [
+        ("floor", mesh(floor, false)),
+        ("terrace", mesh(terrace, false)),
+        ("bump", mesh(bump, false)),
+        ("cube inside", mesh(cube.clone(), true)),
+        ("cube outside", mesh(cube, false)),
+    ]
+}
+
+/// Sphere number `case` against mesh `name` of [`flat_patched_meshes`]: its centre, radius
+/// and tolerance (m), at random from `rnd`: radii from a fifth of a grid cell to 12 cells,
+/// one case in three centred over a vertex or a seam's midpoint of the grid, a sheet's
+/// spheres just touching it or overlapping it a little; tolerance 0, r/10 or r.
+fn sphere_case(name: &str, case: usize, rnd: &mut impl FnMut() -> f64) -> ([f64; 3], f64, f64) {
+    let cell = 1.0 / 40.0;
+    let r = cell * [0.2, 1.0, 3.0, 12.0][case % 4] * (0.5 + rnd());
+    let mut p = [rnd() * 1.2 - 0.1, rnd() * 1.2 - 0.1, rnd() * 1.2 - 0.1];
+    if case % 3 == 0 {
+        for (c, pc) in p.iter_mut().enumerate() {
+            *pc = (*pc / cell).round() * cell + [0.0, 0.5 * cell][case / 3 % 2] * (c == 0) as u8 as f64;
+        }
+    }
+    if !name.starts_with("cube") {
+        p[2] = [0.0, 0.1][(p[0] > 0.5 && name == "terrace") as usize] + r * (0.7 + 0.35 * rnd());
+    }
+    (p, r, [0.0, 0.1 * r, r][case % 3])
+}
+
 #[test]
 fn the_flat_nodes_leave_out_only_triangles_that_give_no_contact() {
     // For spheres at random (many centred over vertices and seams) the search that goes past
@@ -398,29 +435,7 @@ fn the_flat_nodes_leave_out_only_triangles_that_give_no_contact() {
     // the same triangles, touches, points and features, bit for bit. Over a flat floor, a
     // terrace (two floors joined by a wall, a crease and a convex edge), a floor with one
     // raised vertex, and a finely cut cube from inside and outside.
-    let floor = sheet(40, 0.025, |_, _| 0.0);
-    let terrace = sheet(40, 0.025, |i, _| if i > 20 { 0.1 } else { 0.0 });
-    let bump = sheet(40, 0.025, |i, j| if (i, j) == (13, 17) { 0.01 } else { 0.0 });
-    let cube = fine_cube(24);
-    let meshes = [
-        (
-            "floor",
-            TriangleMesh::new(floor.0, floor.1, false, Surface::default()).unwrap(),
-        ),
-        (
-            "terrace",
-            TriangleMesh::new(terrace.0, terrace.1, false, Surface::default()).unwrap(),
-        ),
-        ("bump", TriangleMesh::new(bump.0, bump.1, false, Surface::default()).unwrap()),
-        (
-            "cube inside",
-            TriangleMesh::new(cube.0.clone(), cube.1.clone(), true, Surface::default()).unwrap(),
-        ),
-        (
-            "cube outside",
-            TriangleMesh::new(cube.0, cube.1, false, Surface::default()).unwrap(),
-        ),
-    ];
+    let meshes = flat_patched_meshes();
     let mut rnd = uniform(51);
     for (name, m) in &meshes {
         assert!(
@@ -429,20 +444,7 @@ fn the_flat_nodes_leave_out_only_triangles_that_give_no_contact() {
         );
         let (mut contacts, mut fewer) = (0, 0);
         for case in 0..2500 {
-            let cell = 1.0 / 40.0;
-            let r = cell * [0.2, 1.0, 3.0, 12.0][case % 4] * (0.5 + rnd());
-            let mut p = [rnd() * 1.2 - 0.1, rnd() * 1.2 - 0.1, rnd() * 1.2 - 0.1];
-            if case % 3 == 0 {
-                // over a vertex, or a seam's midpoint, of the grid
-                for (c, pc) in p.iter_mut().enumerate() {
-                    *pc = (*pc / cell).round() * cell + [0.0, 0.5 * cell][case / 3 % 2] * (c == 0) as u8 as f64;
-                }
-            }
-            if !name.starts_with("cube") {
-                // near the sheet: just touching it, or overlapping it a little
-                p[2] = [0.0, 0.1][(p[0] > 0.5 && *name == "terrace") as usize] + r * (0.7 + 0.35 * rnd());
-            }
-            let tolerance = [0.0, 0.1 * r, r][case % 3];
+            let (p, r, tolerance) = sphere_case(name, case, &mut rnd);
             let got = m.touches(p, r, tolerance);
             let want = m.touches_everywhere(p, r, tolerance);
             assert_eq!(got, want, "{name}: p {p:?} r {r} tolerance {tolerance}");
@@ -467,45 +469,12 @@ fn the_triangles_kept_near_a_point_answer_as_the_search_does_for_every_centre_wi
     // each axis (its corners too) and any reach up to the one gathered for; a centre beyond
     // the slack, a larger reach or another mesh gathers again. Over a flat floor, a
     // terrace, a floor with a raised vertex and a finely cut cube from both sides.
-    let floor = sheet(40, 0.025, |_, _| 0.0);
-    let terrace = sheet(40, 0.025, |i, _| if i > 20 { 0.1 } else { 0.0 });
-    let bump = sheet(40, 0.025, |i, j| if (i, j) == (13, 17) { 0.01 } else { 0.0 });
-    let cube = fine_cube(24);
-    let meshes = [
-        (
-            "floor",
-            TriangleMesh::new(floor.0, floor.1, false, Surface::default()).unwrap(),
-        ),
-        (
-            "terrace",
-            TriangleMesh::new(terrace.0, terrace.1, false, Surface::default()).unwrap(),
-        ),
-        ("bump", TriangleMesh::new(bump.0, bump.1, false, Surface::default()).unwrap()),
-        (
-            "cube inside",
-            TriangleMesh::new(cube.0.clone(), cube.1.clone(), true, Surface::default()).unwrap(),
-        ),
-        (
-            "cube outside",
-            TriangleMesh::new(cube.0, cube.1, false, Surface::default()).unwrap(),
-        ),
-    ];
+    let meshes = flat_patched_meshes();
     let mut rnd = uniform(76);
-    let cell = 1.0 / 40.0;
     for (name, m) in &meshes {
         let (mut contacts, mut kept_answers) = (0, 0);
         for case in 0..2000 {
-            let r = cell * [0.2, 1.0, 3.0, 12.0][case % 4] * (0.5 + rnd());
-            let mut p = [rnd() * 1.2 - 0.1, rnd() * 1.2 - 0.1, rnd() * 1.2 - 0.1];
-            if case % 3 == 0 {
-                for (c, pc) in p.iter_mut().enumerate() {
-                    *pc = (*pc / cell).round() * cell + [0.0, 0.5 * cell][case / 3 % 2] * (c == 0) as u8 as f64;
-                }
-            }
-            if !name.starts_with("cube") {
-                p[2] = [0.0, 0.1][(p[0] > 0.5 && *name == "terrace") as usize] + r * (0.7 + 0.35 * rnd());
-            }
-            let tolerance = [0.0, 0.1 * r, r][case % 3];
+            let (p, r, tolerance) = sphere_case(name, case, &mut rnd);
             let mut cache = NearCache::default();
             assert_eq!(
                 m.touches_near(p, r, tolerance, &mut cache),
